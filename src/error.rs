@@ -1,0 +1,162 @@
+//! Errors, with source spans for input files, and the exit codes scripts rely on.
+//!
+//! Exit codes: 0 success, 1 checked and found violations, 2 bad input (missing file,
+//! syntax, schema, value out of range), 3 a run that failed (the simulation diverged, or an
+//! output could not be written).
+
+use std::path::{Path, PathBuf};
+
+use miette::{Diagnostic, NamedSource, SourceSpan};
+use thiserror::Error;
+
+/// Exit code for bad input.
+pub const EXIT_BAD_INPUT: i32 = 2;
+/// Exit code for a run that could not finish.
+pub const EXIT_RUN_FAILED: i32 = 3;
+/// Exit code for "checked and found violations".
+pub const EXIT_VIOLATIONS: i32 = 1;
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[derive(Debug, Error, Diagnostic)]
+pub enum Error {
+    /// An input file could not be read.
+    #[error("cannot read {}: {source}", path.display())]
+    #[diagnostic(
+        code(mtsim::io),
+        help("check the path; paths inside a scenario are relative to the scenario file")
+    )]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// Bad input at a known place in a file: syntax, schema or value.
+    #[error("{}:{line}:{column}: {message}", path.display())]
+    #[diagnostic(code(mtsim::input))]
+    AtSource {
+        path: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column, in characters.
+        column: usize,
+        message: String,
+        #[source_code]
+        source_code: NamedSource<String>,
+        #[label("{label}")]
+        span: SourceSpan,
+        label: String,
+        #[help]
+        help: Option<String>,
+    },
+
+    /// Bad input with no single place in a file, such as a missing key or a command-line value.
+    #[error("{}: {message}", path.display())]
+    #[diagnostic(code(mtsim::input))]
+    Invalid {
+        path: PathBuf,
+        message: String,
+        #[help]
+        help: Option<String>,
+    },
+
+    /// A command-line argument out of range.
+    #[error("{message}")]
+    #[diagnostic(code(mtsim::usage))]
+    Usage { message: String },
+
+    /// The servo simulation became unstable.
+    #[error("simulation diverged on axis {axis} at t = {time_s:.4} s: {reason}")]
+    #[diagnostic(
+        code(mtsim::diverged),
+        help("lower the gains, raise the servo substeps, or check the drive parameters of that axis")
+    )]
+    Diverged {
+        axis: crate::axis::Axis,
+        time_s: f64,
+        reason: String,
+    },
+
+    /// An output file could not be written. Nothing partial is left behind.
+    #[error("cannot write {}: {source}", path.display())]
+    #[diagnostic(code(mtsim::write))]
+    Write {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+impl Error {
+    /// The process exit code for this error.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Error::Diverged { .. } | Error::Write { .. } => EXIT_RUN_FAILED,
+            _ => EXIT_BAD_INPUT,
+        }
+    }
+
+    /// An error at byte range `span` of `text`, the contents of `path`.
+    pub fn at(
+        path: &Path,
+        text: &str,
+        span: std::ops::Range<usize>,
+        message: impl Into<String>,
+        label: impl Into<String>,
+    ) -> Error {
+        let start = span.start.min(text.len());
+        let end = span.end.clamp(start, text.len());
+        let (line, column) = line_column(text, start);
+        Error::AtSource {
+            path: path.to_path_buf(),
+            line,
+            column,
+            message: message.into(),
+            source_code: NamedSource::new(path.display().to_string(), text.to_string()),
+            span: (start, end - start).into(),
+            label: label.into(),
+            help: None,
+        }
+    }
+
+    /// Adds a hint that says what to do.
+    pub fn with_help(mut self, text: impl Into<String>) -> Error {
+        match &mut self {
+            Error::AtSource { help, .. } | Error::Invalid { help, .. } => *help = Some(text.into()),
+            _ => {}
+        }
+        self
+    }
+
+    pub fn invalid(path: &Path, message: impl Into<String>) -> Error {
+        Error::Invalid {
+            path: path.to_path_buf(),
+            message: message.into(),
+            help: None,
+        }
+    }
+
+    pub fn usage(message: impl Into<String>) -> Error {
+        Error::Usage {
+            message: message.into(),
+        }
+    }
+}
+
+/// 1-based line and character column of byte `offset` in `text`.
+pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = &text[..floor_char_boundary(text, offset)];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    let column = before[line_start..].chars().count() + 1;
+    (line, column)
+}
+
+fn floor_char_boundary(text: &str, mut offset: usize) -> usize {
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    offset
+}

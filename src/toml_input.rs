@@ -1,0 +1,104 @@
+//! Reading TOML input files (machines, scenarios) with errors that point at the line.
+
+use std::ops::Range;
+use std::path::Path;
+
+use serde::de::DeserializeOwned;
+
+use crate::error::{Error, Result};
+
+/// Reads a whole text file.
+pub fn read_text(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|source| Error::Read {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Deserializes `text` (the contents of `path`); a syntax or schema error names the line,
+/// the column and, for an unknown key, the key.
+pub fn parse<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
+    toml::from_str(text).map_err(|e| toml_error(path, text, &e))
+}
+
+/// Converts a `toml` error into an [`Error`] at its span.
+pub fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
+    let message = e.message().trim().to_string();
+    match e.span() {
+        Some(span) => Error::at(path, text, span, message.clone(), "here")
+            .with_help("see docs/machine-format.md and docs/scenario-format.md for every key"),
+        None => Error::invalid(path, message),
+    }
+}
+
+/// Byte range of `key = ...` inside the table `[section]` of a TOML text, found by a
+/// line scan. `section` is the dotted header without brackets ("" for the top level).
+/// Used to point value errors found after deserialization at their line.
+pub fn locate_key(text: &str, section: &str, key: &str) -> Option<Range<usize>> {
+    let mut current = String::new();
+    let mut offset = 0;
+    for line in text.split_inclusive('\n') {
+        let trimmed = line.trim_start();
+        let indent = line.len() - trimmed.len();
+        if let Some(header) = trimmed.strip_prefix('[') {
+            let header = header.trim_start_matches('[');
+            if let Some(end) = header.find(']') {
+                current = header[..end].trim().replace([' ', '"'], "");
+            }
+        } else if current == section {
+            if let Some(rest) = trimmed.strip_prefix(key) {
+                if rest.trim_start().starts_with('=') {
+                    let start = offset + indent;
+                    let end = offset + line.trim_end().len();
+                    return Some(start..end);
+                }
+            }
+        }
+        offset += line.len();
+    }
+    None
+}
+
+/// An error about the value of `key` in `[section]`, pointing at its line when it can be found.
+pub fn value_error(path: &Path, text: &str, section: &str, key: &str, message: String) -> Error {
+    let full_key = if section.is_empty() {
+        key.to_string()
+    } else {
+        format!("{section}.{key}")
+    };
+    match locate_key(text, section, key) {
+        Some(span) => Error::at(path, text, span, format!("`{full_key}`: {message}"), "this value"),
+        None => Error::invalid(path, format!("`{full_key}`: {message}")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locate_key_finds_the_key_in_its_section_only() {
+        let text = "min = 1\n[axes.X]\nmin = -5\n[axes.Y]\n  min = 7\n";
+        let r = locate_key(text, "axes.Y", "min").unwrap();
+        assert_eq!(&text[r], "min = 7");
+        let r = locate_key(text, "", "min").unwrap();
+        assert_eq!(&text[r], "min = 1");
+        assert!(locate_key(text, "axes.Z", "min").is_none());
+    }
+}
+
+/// Byte range of the header line `[section]`, found by a line scan.
+pub fn locate_key_header(text: &str, section: &str) -> Option<Range<usize>> {
+    let mut offset = 0;
+    for line in text.split_inclusive('\n') {
+        let trimmed = line.trim();
+        if let Some(inner) = trimmed.strip_prefix('[').and_then(|s| s.split(']').next()) {
+            if inner.trim().replace([' ', '"'], "") == section {
+                let start = offset + (line.len() - line.trim_start().len());
+                return Some(start..start + trimmed.len());
+            }
+        }
+        offset += line.len();
+    }
+    None
+}

@@ -70,7 +70,9 @@ pub enum Error {
     #[error("simulation diverged on axis {axis} at t = {time_s:.4} s: {reason}")]
     #[diagnostic(
         code(mtsim::diverged),
-        help("lower the gains, raise the servo substeps, or check the drive parameters of that axis")
+        help(
+            "lower the gains, raise the servo substeps, or check the drive parameters of that axis"
+        )
     )]
     Diverged {
         axis: crate::axis::Axis,

@@ -4,13 +4,18 @@
 //! interpolator → per-axis servo → actual axis positions → forward kinematics → ball bar,
 //! limits monitor, collision scene → reports.
 
+pub mod analysis;
 pub mod axis;
+pub mod cone;
 pub mod error;
 pub mod gcode;
 pub mod kinematics;
 pub mod machine;
+pub mod report;
+pub mod scenario;
 pub mod scene;
 pub mod servo;
+pub mod sweep;
 pub mod toml_input;
 
 pub use axis::{Axis, AxisVec};

@@ -108,7 +108,8 @@ impl Machine {
         let Some((scenario_path, scenario_text, overrides)) = overrides else {
             return Machine::validate(path, text, file);
         };
-        let mut merged: toml::Table = toml::from_str(text).map_err(|e| toml_input::toml_error(path, text, &e))?;
+        let mut merged: toml::Table =
+            toml::from_str(text).map_err(|e| toml_input::toml_error(path, text, &e))?;
         deep_merge(&mut merged, overrides);
         let file: MachineFile = toml::Value::Table(merged).try_into().map_err(|e: toml::de::Error| {
             Error::invalid(
@@ -147,15 +148,34 @@ impl Machine {
             if !axes.contains_key(axis) {
                 return Err(Error::invalid(
                     path,
-                    format!("missing table [axes.{axis}]: the {} layout needs axes {}", file.kinematics.name(), axis_list(file.kinematics)),
+                    format!(
+                        "missing table [axes.{axis}]: the {} layout needs axes {}",
+                        file.kinematics.name(),
+                        axis_list(file.kinematics)
+                    ),
                 ));
             }
         }
-        if !(file.interpolation_period_ms.is_finite() && file.interpolation_period_ms > 0.0 && file.interpolation_period_ms <= 100.0) {
-            return Err(value_error(path, text, "", "interpolation_period_ms", "must be in (0, 100] ms".into()));
+        if !(file.interpolation_period_ms.is_finite()
+            && file.interpolation_period_ms > 0.0
+            && file.interpolation_period_ms <= 100.0)
+        {
+            return Err(value_error(
+                path,
+                text,
+                "",
+                "interpolation_period_ms",
+                "must be in (0, 100] ms".into(),
+            ));
         }
         if !file.pivot_mm.iter().all(|v| v.is_finite()) {
-            return Err(value_error(path, text, "", "pivot_mm", "must be three finite numbers (mm)".into()));
+            return Err(value_error(
+                path,
+                text,
+                "",
+                "pivot_mm",
+                "must be three finite numbers (mm)".into(),
+            ));
         }
         Ok(Machine {
             name: file.name,
@@ -185,7 +205,12 @@ impl Machine {
 }
 
 fn axis_list(layout: Layout) -> String {
-    layout.axes().iter().map(|a| a.to_string()).collect::<Vec<_>>().join(", ")
+    layout
+        .axes()
+        .iter()
+        .map(|a| a.to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn check_axis(path: &Path, text: &str, section: &str, axis: Axis, c: &AxisConfig) -> Result<()> {
@@ -194,22 +219,50 @@ fn check_axis(path: &Path, text: &str, section: &str, axis: Axis, c: &AxisConfig
         if v.is_finite() && v > 0.0 {
             Ok(())
         } else {
-            Err(value_error(path, text, section, key, format!("must be a positive number ({what}), got {v}")))
+            Err(value_error(
+                path,
+                text,
+                section,
+                key,
+                format!("must be a positive number ({what}), got {v}"),
+            ))
         }
     };
     positive("max_velocity", c.max_velocity, &format!("{unit}/min"))?;
-    positive("max_acceleration", c.max_acceleration, &format!("{unit}/s^2"))?;
+    positive(
+        "max_acceleration",
+        c.max_acceleration,
+        &format!("{unit}/s^2"),
+    )?;
     positive("max_jerk", c.max_jerk, &format!("{unit}/s^3"))?;
     for (key, v) in [("min", c.min), ("max", c.max)] {
         if !v.is_finite() {
-            return Err(value_error(path, text, section, key, format!("must be a finite number ({unit}), got {v}")));
+            return Err(value_error(
+                path,
+                text,
+                section,
+                key,
+                format!("must be a finite number ({unit}), got {v}"),
+            ));
         }
     }
     if c.min >= c.max {
-        return Err(value_error(path, text, section, "max", format!("must be greater than min ({} {unit}), got {}", c.min, c.max)));
+        return Err(value_error(
+            path,
+            text,
+            section,
+            "max",
+            format!("must be greater than min ({} {unit}), got {}", c.min, c.max),
+        ));
     }
     if c.continuous && !axis.is_rotary() {
-        return Err(value_error(path, text, section, "continuous", "only a rotary axis can be continuous".into()));
+        return Err(value_error(
+            path,
+            text,
+            section,
+            "continuous",
+            "only a rotary axis can be continuous".into(),
+        ));
     }
     crate::servo::validate(path, text, section, axis, &c.servo, &c.drive, &c.friction)
 }

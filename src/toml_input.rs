@@ -67,7 +67,13 @@ pub fn value_error(path: &Path, text: &str, section: &str, key: &str, message: S
         format!("{section}.{key}")
     };
     match locate_key(text, section, key) {
-        Some(span) => Error::at(path, text, span, format!("`{full_key}`: {message}"), "this value"),
+        Some(span) => Error::at(
+            path,
+            text,
+            span,
+            format!("`{full_key}`: {message}"),
+            "this value",
+        ),
         None => Error::invalid(path, format!("`{full_key}`: {message}")),
     }
 }

@@ -21,7 +21,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[derive(Debug, Error, Diagnostic)]
 pub enum Error {
     /// An input file could not be read.
-    #[error("cannot read {}: {source}", path.display())]
+    #[error("cannot read {}", path.display())]
     #[diagnostic(
         code(mtsim::io),
         help("check the path; paths inside a scenario are relative to the scenario file")
@@ -81,7 +81,7 @@ pub enum Error {
     },
 
     /// An output file could not be written. Nothing partial is left behind.
-    #[error("cannot write {}: {source}", path.display())]
+    #[error("cannot write {}", path.display())]
     #[diagnostic(code(mtsim::write))]
     Write {
         path: PathBuf,

@@ -57,3 +57,14 @@ pub struct Block {
     /// G43.4 tool-centre-point control active: X Y Z are the tool tip in the table frame.
     pub tcp: bool,
 }
+
+/// Placeholder until the reader lands.
+pub fn read_file(
+    path: &std::path::Path,
+    _start: AxisVec,
+) -> crate::error::Result<std::vec::IntoIter<crate::error::Result<Block>>> {
+    Err(crate::error::Error::invalid(
+        path,
+        "the G-code reader is not available yet",
+    ))
+}

@@ -6,6 +6,7 @@
 
 pub mod analysis;
 pub mod axis;
+pub mod cli;
 pub mod cone;
 pub mod error;
 pub mod gcode;

@@ -40,7 +40,7 @@ pub fn analysis_table(analysis: &Analysis) -> String {
     let mut out = String::new();
     let with_lines = analysis.axes.iter().any(|a| a.reversal_lines.is_some());
     out.push_str(&format!(
-        "{:<4} {:>12} {:>12} {:>11} {:>14}  {}\n",
+        "{:<4} {:>12} {:>12} {:>11} {:>16}  {}\n",
         "axis",
         "min",
         "max",
@@ -72,12 +72,13 @@ pub fn analysis_table(analysis: &Analysis) -> String {
             None => fmt_angles(&a.reversals_deg),
         };
         out.push_str(&format!(
-            "{:<4} {:>9.3} {unit:<3}{:>9.3} {unit:<3}{:>8.3} {unit:<3}{:>10.1} {unit:<4} {}\n",
+            "{:<4} {:>9.3} {unit:<3}{:>9.3} {unit:<3}{:>8.3} {unit:<3}{:>8.1} {:<8} {}\n",
             a.axis.to_string(),
             a.min,
             a.max,
             a.range,
             a.peak_speed_per_min,
+            format!("{unit}/min"),
             reversals
         ));
     }

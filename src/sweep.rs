@@ -242,7 +242,7 @@ fn find_coincidences(
         let v = 0.5 * (a + b);
         if let Some((spread, theta)) = spread_at(v) {
             if spread < COINCIDENCE_SPREAD_DEG {
-                let value = (v / REFINE_TOLERANCE).round() * REFINE_TOLERANCE;
+                let value = (v / REFINE_TOLERANCE).round() / REFINE_TOLERANCE.recip();
                 // Plateaus of equal spread give neighbouring minima: keep one.
                 if out
                     .last()
@@ -258,4 +258,120 @@ fn find_coincidences(
         }
     }
     out
+}
+
+impl SweepResult {
+    /// CSV: one row per (value, axis, reversal), then the coincidences.
+    pub fn to_csv(&self) -> Result<Vec<u8>> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        let err = |e: csv::Error| Error::usage(format!("cannot format the CSV: {e}"));
+        w.write_record([self.param.as_str(), "axis", "reversal_deg", "spread_deg"])
+            .map_err(err)?;
+        for row in &self.rows {
+            let spread = row
+                .spread_deg
+                .map(|s| format!("{s:.4}"))
+                .unwrap_or_default();
+            for (axis, angles) in &row.reversals_deg {
+                for a in angles {
+                    w.write_record([
+                        format!("{}", row.value),
+                        axis.clone(),
+                        format!("{a:.4}"),
+                        spread.clone(),
+                    ])
+                    .map_err(err)?;
+                }
+            }
+        }
+        for c in &self.coincidences {
+            w.write_record([
+                format!("{}", c.value),
+                "XYZ".into(),
+                format!("{:.4}", c.theta_deg),
+                format!("{:.4}", c.spread_deg),
+            ])
+            .map_err(err)?;
+        }
+        w.into_inner()
+            .map_err(|e| Error::usage(format!("cannot format the CSV: {e}")))
+    }
+
+    /// SVG like the paper's Figs. 16/17: reversal angle of X, Y and Z against the parameter,
+    /// with the coincidences circled.
+    pub fn to_svg(&self, unit: &str, title: &str) -> Result<String> {
+        use plotters::prelude::*;
+        let mut svg = String::new();
+        {
+            let (lo, hi) = match (self.rows.first(), self.rows.last()) {
+                (Some(a), Some(b)) if b.value > a.value => (a.value, b.value),
+                (Some(a), _) => (a.value - 1.0, a.value + 1.0),
+                _ => (0.0, 1.0),
+            };
+            let root = SVGBackend::with_string(&mut svg, (900, 600)).into_drawing_area();
+            let draw_err =
+                |e: &dyn std::fmt::Display| Error::usage(format!("cannot draw the plot: {e}"));
+            root.fill(&WHITE).map_err(|e| draw_err(&e))?;
+            let mut chart = ChartBuilder::on(&root)
+                .caption(title, ("sans-serif", 20))
+                .margin(15)
+                .x_label_area_size(45)
+                .y_label_area_size(60)
+                .build_cartesian_2d(lo..hi, 0.0..360.0)
+                .map_err(|e| draw_err(&e))?;
+            chart
+                .configure_mesh()
+                .x_desc(format!("{} ({unit})", self.param))
+                .y_desc("reversal angle theta (deg)")
+                .y_labels(13)
+                .draw()
+                .map_err(|e| draw_err(&e))?;
+            for (axis, color) in [("X", RED), ("Y", RGBColor(0, 150, 0)), ("Z", BLUE)] {
+                let color: RGBColor = color;
+                let points: Vec<(f64, f64)> = self
+                    .rows
+                    .iter()
+                    .flat_map(|r| {
+                        r.reversals_deg
+                            .get(axis)
+                            .into_iter()
+                            .flatten()
+                            .map(move |a| (r.value, *a))
+                    })
+                    .collect();
+                chart
+                    .draw_series(points.iter().map(|p| Circle::new(*p, 2, color.filled())))
+                    .map_err(|e| draw_err(&e))?
+                    .label(format!("{axis} reversal"))
+                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
+            }
+            chart
+                .draw_series(
+                    self.coincidences
+                        .iter()
+                        .map(|c| Circle::new((c.value, c.theta_deg), 9, BLACK.stroke_width(2))),
+                )
+                .map_err(|e| draw_err(&e))?
+                .label("X, Y, Z coincide")
+                .legend(|(x, y)| Circle::new((x + 10, y), 6, BLACK.stroke_width(2)));
+            chart
+                .draw_series(self.coincidences.iter().map(|c| {
+                    Text::new(
+                        format!("{:.1} {unit}, {:.0} deg", c.value, c.theta_deg),
+                        (c.value, (c.theta_deg + 12.0).min(350.0)),
+                        ("sans-serif", 14),
+                    )
+                }))
+                .map_err(|e| draw_err(&e))?;
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.9))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(|e| draw_err(&e))?;
+            root.present().map_err(|e| draw_err(&e))?;
+        }
+        Ok(svg)
+    }
 }

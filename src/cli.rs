@@ -1,0 +1,301 @@
+//! The `mtsim` command line: argument parsing and the commands, over the library.
+//!
+//! Exit codes: 0 success; 1 checked and found violations; 2 bad input; 3 a run that failed.
+
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+
+use clap::{Parser, Subcommand};
+use serde_json::{json, Map};
+
+use crate::analysis::{analyse_blocks, analyse_cone, Analysis};
+use crate::axis::AxisVec;
+use crate::cone::{write_program, ConePath};
+use crate::error::{Error, Result};
+use crate::report::{analysis_table, write_atomic};
+use crate::scenario::{Program, Scenario};
+use crate::sweep::{grid, sweep, SweepParam};
+
+/// Machine-tool motion simulator: five-axis cone-frustum test, servo dynamics, ball bar,
+/// axis limits and collisions.
+#[derive(Debug, Parser)]
+#[command(name = "mtsim", version, about, long_about = None)]
+#[command(
+    after_help = "Exit codes: 0 success, 1 violations found (check), 2 bad input, 3 run failed.\n\
+Scenario and machine formats: docs/scenario-format.md, docs/machine-format.md."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Write the cone-frustum NC program of a scenario (the paper's post-processor).
+    Cone {
+        /// Scenario file (TOML) with a [program.cone] table.
+        scenario: PathBuf,
+        /// Output file; standard output when omitted.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Inverse-time feed (G93) instead of the mixed-unit F per block.
+        #[arg(long)]
+        g93: bool,
+        /// Tool-centre-point program (G43.4): X Y Z are the tool tip in the table frame.
+        #[arg(long)]
+        tcp: bool,
+    },
+    /// Per axis: travel, peak speed, and the angles (or source lines) at which it reverses.
+    Analyze {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Print one JSON object instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Reversal angles against a varied placement or geometry parameter, and the
+    /// coincidences where the X, Y and Z reversals meet (the paper's Figs. 16/17).
+    Sweep {
+        /// Scenario file (TOML) with a [program.cone] table.
+        scenario: PathBuf,
+        /// The parameter to vary.
+        #[arg(long, value_enum)]
+        vary: SweepParam,
+        /// First value (mm or deg).
+        #[arg(long, allow_negative_numbers = true)]
+        from: f64,
+        /// Last value (mm or deg).
+        #[arg(long, allow_negative_numbers = true)]
+        to: f64,
+        /// Step (mm or deg).
+        #[arg(long)]
+        step: f64,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+        /// Folder for sweep-<param>.csv and sweep-<param>.svg.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
+}
+
+/// Runs the command line and returns the exit code.
+pub fn main() -> i32 {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            let code = e.exit_code();
+            eprintln!("{:?}", miette::Report::new(e));
+            code
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<i32> {
+    match cli.command {
+        Command::Cone {
+            scenario,
+            output,
+            g93,
+            tcp,
+        } => cmd_cone(&scenario, output.as_deref(), g93, tcp),
+        Command::Analyze { scenario, json } => cmd_analyze(&scenario, json),
+        Command::Sweep {
+            scenario,
+            vary,
+            from,
+            to,
+            step,
+            json,
+            output,
+        } => cmd_sweep(&scenario, vary, from, to, step, json, output.as_deref()),
+    }
+}
+
+fn cone_of(
+    scenario: &Scenario,
+    command: &str,
+) -> Result<(crate::cone::ConeTest, crate::cone::NcOptions)> {
+    match &scenario.program {
+        Program::Cone { cone, nc } => Ok((*cone, *nc)),
+        Program::File { .. } => Err(Error::invalid(
+            &scenario.path,
+            format!("`mtsim {command}` needs a generated cone program, but [program] names a file"),
+        )
+        .with_help("give the scenario a [program.cone] table instead of `file`")),
+    }
+}
+
+fn cmd_cone(path: &Path, output: Option<&Path>, g93: bool, tcp: bool) -> Result<i32> {
+    let scenario = Scenario::load(path)?;
+    let (cone, mut nc) = cone_of(&scenario, "cone")?;
+    nc.inverse_time |= g93;
+    nc.tcp |= tcp;
+    let cone_path = ConePath::new(cone, &scenario.machine);
+    let (text, _) = write_program(&cone_path, &scenario.machine.name, &nc);
+    match output {
+        Some(out) => {
+            write_atomic(out, text.as_bytes())?;
+            eprintln!("wrote {} ({} blocks)", out.display(), nc.segments);
+        }
+        None => print_stdout(&text),
+    }
+    Ok(0)
+}
+
+/// Analysis of a scenario's program: the exact path for a generated cone, the blocks for a file.
+pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
+    match &scenario.program {
+        Program::Cone { cone, nc } => Ok(analyse_cone(
+            &ConePath::new(*cone, &scenario.machine),
+            nc.feed_mm_min,
+        )),
+        Program::File { path, cone } => {
+            let blocks = crate::gcode::read_file(path, AxisVec::ZERO)?;
+            analyse_blocks(blocks, &scenario.machine, cone.as_ref())
+        }
+    }
+}
+
+fn cmd_analyze(path: &Path, as_json: bool) -> Result<i32> {
+    let scenario = Scenario::load(path)?;
+    let analysis = analyse_scenario(&scenario)?;
+    if as_json {
+        let mut axes = Map::new();
+        for a in &analysis.axes {
+            axes.insert(
+                a.axis.to_string(),
+                serde_json::to_value(a).expect("plain data serializes"),
+            );
+        }
+        let v = json!({
+            "axes": axes,
+            "min_linear_separation_deg": analysis.min_linear_separation_deg(),
+            "warnings": analysis.warnings(),
+        });
+        print_stdout(&format!(
+            "{}\n",
+            serde_json::to_string_pretty(&v).expect("plain data serializes")
+        ));
+        return Ok(0);
+    }
+    let mut out = format!("{} on {}\n", path.display(), scenario.machine.name);
+    out.push_str(&analysis_table(&analysis));
+    match analysis.closest_linear_reversals() {
+        Some((d, (a, ta), (b, tb))) => out.push_str(&format!(
+            "closest reversals of different linear axes: {a} at {ta:.2} deg and {b} at {tb:.2} deg, {d:.2} deg apart\n"
+        )),
+        None => out.push_str("fewer than two linear axes reverse\n"),
+    }
+    for w in analysis.warnings() {
+        out.push_str(&format!("warning: {w}\n"));
+    }
+    print_stdout(&out);
+    Ok(0)
+}
+
+fn cmd_sweep(
+    path: &Path,
+    param: SweepParam,
+    from: f64,
+    to: f64,
+    step: f64,
+    as_json: bool,
+    output: Option<&Path>,
+) -> Result<i32> {
+    let scenario = Scenario::load(path)?;
+    let (cone, _) = cone_of(&scenario, "sweep")?;
+    let values = grid(from, to, step)?;
+    let bar = progress_bar(values.len() as u64, "sweep");
+    let result = sweep(&scenario.machine, &cone, param, &values, &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    if let Some(dir) = output {
+        std::fs::create_dir_all(dir).map_err(|source| Error::Write {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+        let stem = format!("sweep-{}", param.name());
+        let csv_path = dir.join(format!("{stem}.csv"));
+        let svg_path = dir.join(format!("{stem}.svg"));
+        write_atomic(&csv_path, &result.to_csv()?)?;
+        let title = format!(
+            "Reversal angles vs {} (half apex {} deg, inclination {} deg, L {} mm)",
+            param.name(),
+            cone.half_apex_deg,
+            cone.inclination_deg,
+            cone.ballbar_length_mm
+        );
+        write_atomic(&svg_path, result.to_svg(param.unit(), &title)?.as_bytes())?;
+        eprintln!("wrote {} and {}", csv_path.display(), svg_path.display());
+    }
+    if as_json {
+        print_stdout(&format!(
+            "{}\n",
+            serde_json::to_string(&result).expect("plain data serializes")
+        ));
+    } else {
+        let mut out = format!(
+            "{:>10}  {:<40} {:>10}\n",
+            param.name(),
+            "X | Y | Z reversals (deg)",
+            "spread"
+        );
+        for row in &result.rows {
+            let fmt = |axis: &str| {
+                row.reversals_deg
+                    .get(axis)
+                    .map(|v| {
+                        v.iter()
+                            .map(|a| format!("{a:.2}"))
+                            .collect::<Vec<_>>()
+                            .join(" ")
+                    })
+                    .unwrap_or_default()
+            };
+            out.push_str(&format!(
+                "{:>10.3}  {:<40} {:>10}\n",
+                row.value,
+                format!("{} | {} | {}", fmt("X"), fmt("Y"), fmt("Z")),
+                row.spread_deg
+                    .map(|s| format!("{s:.3}"))
+                    .unwrap_or_else(|| "-".into())
+            ));
+        }
+        if result.coincidences.is_empty() {
+            out.push_str("no coincidence of the X, Y and Z reversals in this range\n");
+        }
+        for c in &result.coincidences {
+            out.push_str(&format!(
+                "coincidence: {} = {:.1} {}, theta = {:.2} deg (spread {:.3} deg)\n",
+                param.name(),
+                c.value,
+                param.unit(),
+                c.theta_deg,
+                c.spread_deg
+            ));
+        }
+        print_stdout(&out);
+    }
+    Ok(0)
+}
+
+/// A progress bar on stderr when it is a terminal; hidden otherwise (scripts, CI).
+pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
+        "{what} {{bar:40}} {{pos}}/{{len}} {{eta}}"
+    )) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// Prints to stdout; a closed pipe (`| head`) ends quietly instead of panicking.
+fn print_stdout(text: &str) {
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
+}

@@ -379,7 +379,7 @@ fn arc_samples(block: &Block, start: &AxisVec, end: &AxisVec) -> Vec<AxisVec> {
     else {
         return Vec::new();
     };
-    let (u, v, w) = plane_axes(plane);
+    let (u, v, w) = plane.axes();
     let (cu, cv) = (center_mm[u.index()], center_mm[v.index()]);
     let a0 = (start[v] - cv).atan2(start[u] - cu);
     let a1 = (end[v] - cv).atan2(end[u] - cu);
@@ -422,14 +422,4 @@ fn arc_axis_speed(
         prev = *p;
     }
     peak
-}
-
-/// The in-plane axes (u, v, counter-clockwise from u to v seen from +normal) and the normal axis.
-fn plane_axes(plane: crate::gcode::Plane) -> (Axis, Axis, Axis) {
-    use crate::gcode::Plane;
-    match plane {
-        Plane::XY => (Axis::X, Axis::Y, Axis::Z),
-        Plane::ZX => (Axis::Z, Axis::X, Axis::Y),
-        Plane::YZ => (Axis::Y, Axis::Z, Axis::X),
-    }
 }

@@ -68,3 +68,15 @@ pub fn read_file(
         "the G-code reader is not available yet",
     ))
 }
+
+impl Plane {
+    /// Placeholder until the reader lands: (u, v, normal).
+    pub fn axes(self) -> (crate::axis::Axis, crate::axis::Axis, crate::axis::Axis) {
+        use crate::axis::Axis;
+        match self {
+            Plane::XY => (Axis::X, Axis::Y, Axis::Z),
+            Plane::ZX => (Axis::Z, Axis::X, Axis::Y),
+            Plane::YZ => (Axis::Y, Axis::Z, Axis::X),
+        }
+    }
+}

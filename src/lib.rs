@@ -6,6 +6,7 @@
 
 pub mod analysis;
 pub mod axis;
+pub mod circle;
 pub mod cli;
 pub mod cone;
 pub mod error;
@@ -13,6 +14,7 @@ pub mod gcode;
 pub mod kinematics;
 pub mod machine;
 pub mod report;
+pub mod sampling;
 pub mod scenario;
 pub mod scene;
 pub mod servo;

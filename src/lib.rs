@@ -12,6 +12,7 @@ pub mod cone;
 pub mod error;
 pub mod gcode;
 pub mod kinematics;
+pub mod limits;
 pub mod machine;
 pub mod report;
 pub mod sampling;

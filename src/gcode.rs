@@ -493,7 +493,9 @@ fn lex_word(line: &str, start: usize) -> LineResult<Word<'_>> {
         ));
     }
     if !is_decimal(number) {
-        let what = if number.is_empty() {
+        let what = if number.is_empty() && matches!(bytes.get(i), Some(b'[' | b'#')) {
+            format!("`{letter}` is followed by an expression or macro variable (expressions and macro variables are not supported)")
+        } else if number.is_empty() {
             format!("`{letter}` has no number")
         } else {
             format!("malformed number `{number}` in `{text}`")

@@ -490,7 +490,8 @@ fn lex_word(line: &str, start: usize) -> LineResult<Word<'_>> {
             span,
             format!("unsupported word `{text}`{why}: expected one of {EXPECTED_WORDS}"),
             "unsupported word",
-        ));
+        )
+        .help("docs/gcode.md lists the supported dialect; remove the word or post-process the program without it"));
     }
     if !is_decimal(number) {
         let what = if number.is_empty() && matches!(bytes.get(i), Some(b'[' | b'#')) {
@@ -504,7 +505,8 @@ fn lex_word(line: &str, start: usize) -> LineResult<Word<'_>> {
             span,
             format!("{what}: expected a decimal number after `{letter}`, such as `{letter}1.5` or `{letter}-2`"),
             "malformed word",
-        ));
+        )
+        .help("write numbers as digits with at most one decimal point, e.g. `X-12.345`"));
     }
     let value: f64 = number.parse().map_err(|_| {
         LineError::new(

@@ -41,7 +41,11 @@ impl CircleTest {
 }
 
 /// Writes the circle program; returns it and the line of the measured full-circle block.
-pub fn write_program(circle: &CircleTest, clockwise: bool, lead_deg: f64) -> (String, MeasuredLines) {
+pub fn write_program(
+    circle: &CircleTest,
+    clockwise: bool,
+    lead_deg: f64,
+) -> (String, MeasuredLines) {
     let (u, v, _) = circle.axes();
     let plane_code = match circle.plane {
         Plane::XY => "G17",
@@ -57,7 +61,11 @@ pub fn write_program(circle: &CircleTest, clockwise: bool, lead_deg: f64) -> (St
         let mut s = String::new();
         for (axis, letter) in [(Axis::X, 'I'), (Axis::Y, 'J'), (Axis::Z, 'K')] {
             if axis == u || axis == v {
-                let _ = write!(s, " {letter}{:.4}", circle.center_mm[axis.index()] - from[axis.index()]);
+                let _ = write!(
+                    s,
+                    " {letter}{:.4}",
+                    circle.center_mm[axis.index()] - from[axis.index()]
+                );
             }
         }
         s
@@ -80,13 +88,28 @@ pub fn write_program(circle: &CircleTest, clockwise: bool, lead_deg: f64) -> (St
     ];
     let zero = circle.point(0.0);
     if lead_deg > 0.0 {
-        lines.push(format!("{arc} {}{} F{:.3}", fmt(&zero), ijk(&start), circle.feed_mm_min));
+        lines.push(format!(
+            "{arc} {}{} F{:.3}",
+            fmt(&zero),
+            ijk(&start),
+            circle.feed_mm_min
+        ));
     }
-    lines.push(format!("{arc} {}{} F{:.3} (MEASURED REVOLUTION)", fmt(&zero), ijk(&zero), circle.feed_mm_min));
+    lines.push(format!(
+        "{arc} {}{} F{:.3} (MEASURED REVOLUTION)",
+        fmt(&zero),
+        ijk(&zero),
+        circle.feed_mm_min
+    ));
     let measured = lines.len();
     if lead_deg > 0.0 {
         let end = circle.point(sign * lead_deg);
-        lines.push(format!("{arc} {}{} F{:.3}", fmt(&end), ijk(&zero), circle.feed_mm_min));
+        lines.push(format!(
+            "{arc} {}{} F{:.3}",
+            fmt(&end),
+            ijk(&zero),
+            circle.feed_mm_min
+        ));
     }
     lines.push("M30".into());
     lines.push("%".into());

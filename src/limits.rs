@@ -132,7 +132,9 @@ impl<'a> LimitsMonitor<'a> {
             Some((p, pv)) if s.time_s > p.time_s => {
                 let dt = s.time_s - p.time_s;
                 let v = (s.q - p.q) * (1.0 / dt);
-                let a = pv.filter(|_| p.block_index == s.block_index).map(|pv| (v - pv) * (1.0 / dt));
+                let a = pv
+                    .filter(|_| p.block_index == s.block_index)
+                    .map(|pv| (v - pv) * (1.0 / dt));
                 (Some(v), a)
             }
             _ => (None, None),
@@ -164,8 +166,10 @@ impl<'a> LimitsMonitor<'a> {
             }
             let checks = [
                 travel.map(|(x, lim)| (x, lim, (x - lim).abs())),
-                v.filter(|v| *v > config.max_velocity * (1.0 + SLACK)).map(|v| (v, config.max_velocity, v)),
-                a.filter(|a| *a > config.max_acceleration * (1.0 + SLACK)).map(|a| (a, config.max_acceleration, a)),
+                v.filter(|v| *v > config.max_velocity * (1.0 + SLACK))
+                    .map(|v| (v, config.max_velocity, v)),
+                a.filter(|a| *a > config.max_acceleration * (1.0 + SLACK))
+                    .map(|a| (a, config.max_acceleration, a)),
             ];
             for (k, check) in checks.into_iter().enumerate() {
                 match check {
@@ -212,7 +216,8 @@ impl<'a> LimitsMonitor<'a> {
                 }
             }
         }
-        self.violations.sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
+        self.violations
+            .sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
         let usage = self
             .tracks
             .iter()
@@ -236,7 +241,11 @@ impl<'a> LimitsMonitor<'a> {
     }
 }
 
-const KINDS: [ViolationKind; 3] = [ViolationKind::Travel, ViolationKind::Velocity, ViolationKind::Acceleration];
+const KINDS: [ViolationKind; 3] = [
+    ViolationKind::Travel,
+    ViolationKind::Velocity,
+    ViolationKind::Acceleration,
+];
 
 fn close(open: Open, kind: ViolationKind, axis: Axis) -> Violation {
     Violation {

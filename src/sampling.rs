@@ -32,7 +32,10 @@ pub fn block_duration_s(block: &Block, machine: &Machine) -> Result<f64> {
     let bad_feed = || {
         Error::invalid(
             &machine.path,
-            format!("line {}: the block has no usable F word (need F > 0)", block.line),
+            format!(
+                "line {}: the block has no usable F word (need F > 0)",
+                block.line
+            ),
         )
     };
     let minutes = match block.motion {
@@ -46,7 +49,10 @@ pub fn block_duration_s(block: &Block, machine: &Machine) -> Result<f64> {
                 .fold(0.0, f64::max));
         }
         Motion::Linear | Motion::Arc { .. } => {
-            let f = block.feed.filter(|f| f.is_finite() && *f > 0.0).ok_or_else(bad_feed)?;
+            let f = block
+                .feed
+                .filter(|f| f.is_finite() && *f > 0.0)
+                .ok_or_else(bad_feed)?;
             match block.feed_mode {
                 FeedMode::InverseTime => 1.0 / f,
                 FeedMode::PerMinute => feed_length(block) / f,
@@ -59,9 +65,14 @@ pub fn block_duration_s(block: &Block, machine: &Machine) -> Result<f64> {
 /// The length a G94 F word is divided by, mm (deg counted as mm).
 fn feed_length(block: &Block) -> f64 {
     match block.motion {
-        Motion::Arc { clockwise, plane, center_mm } => {
+        Motion::Arc {
+            clockwise,
+            plane,
+            center_mm,
+        } => {
             let (u, v, w) = plane.axes();
-            let r = (block.start[u] - center_mm[u.index()]).hypot(block.start[v] - center_mm[v.index()]);
+            let r = (block.start[u] - center_mm[u.index()])
+                .hypot(block.start[v] - center_mm[v.index()]);
             let sweep = arc_sweep_rad(block.start, block.end, center_mm, u, v, clockwise);
             (r * sweep).hypot(block.end[w] - block.start[w])
         }
@@ -69,7 +80,11 @@ fn feed_length(block: &Block) -> f64 {
             let d = block.end - block.start;
             let tip = (d[Axis::X].powi(2) + d[Axis::Y].powi(2) + d[Axis::Z].powi(2)).sqrt();
             // A pure rotary move under TCP falls back to the mixed-unit rule.
-            if tip > 0.0 { tip } else { d.mixed_norm() }
+            if tip > 0.0 {
+                tip
+            } else {
+                d.mixed_norm()
+            }
         }
         _ => (block.end - block.start).mixed_norm(),
     }
@@ -77,20 +92,39 @@ fn feed_length(block: &Block) -> f64 {
 
 /// Signed-positive sweep of an arc from start to end about the centre, rad; a full circle
 /// when start and end coincide.
-pub fn arc_sweep_rad(start: AxisVec, end: AxisVec, center: [f64; 3], u: Axis, v: Axis, clockwise: bool) -> f64 {
+pub fn arc_sweep_rad(
+    start: AxisVec,
+    end: AxisVec,
+    center: [f64; 3],
+    u: Axis,
+    v: Axis,
+    clockwise: bool,
+) -> f64 {
     let a0 = (start[v] - center[v.index()]).atan2(start[u] - center[u.index()]);
     let a1 = (end[v] - center[v.index()]).atan2(end[u] - center[u.index()]);
     let tau = std::f64::consts::TAU;
     let ccw = (a1 - a0).rem_euclid(tau);
-    let sweep = if clockwise { (tau - ccw).rem_euclid(tau) } else { ccw };
-    if sweep < 1e-12 { tau } else { sweep }
+    let sweep = if clockwise {
+        (tau - ccw).rem_euclid(tau)
+    } else {
+        ccw
+    };
+    if sweep < 1e-12 {
+        tau
+    } else {
+        sweep
+    }
 }
 
 /// Commanded machine axis positions at fraction `f` in [0, 1] of `block`.
 pub fn position_in_block(block: &Block, machine: &Machine, f: f64) -> AxisVec {
     let mut q = block.start + (block.end - block.start) * f;
     match block.motion {
-        Motion::Arc { clockwise, plane, center_mm } => {
+        Motion::Arc {
+            clockwise,
+            plane,
+            center_mm,
+        } => {
             let (u, v, _) = plane.axes();
             let (cu, cv) = (center_mm[u.index()], center_mm[v.index()]);
             let r = (block.start[u] - cu).hypot(block.start[v] - cv);
@@ -161,7 +195,11 @@ impl<I: Iterator<Item = Result<Block>>> Iterator for NominalSampler<'_, I> {
         loop {
             if let Some((block, start_s, duration_s)) = &self.current {
                 if t <= start_s + duration_s {
-                    let f = if *duration_s > 0.0 { (t - start_s) / duration_s } else { 1.0 };
+                    let f = if *duration_s > 0.0 {
+                        (t - start_s) / duration_s
+                    } else {
+                        1.0
+                    };
                     self.k += 1;
                     return Some(Ok(self.sample(block, t, f.clamp(0.0, 1.0))));
                 }
@@ -186,7 +224,8 @@ impl<I: Iterator<Item = Result<Block>>> Iterator for NominalSampler<'_, I> {
                     self.done = true;
                     let (block, s, d) = self.current.as_ref()?;
                     let last_sampled = (self.k as f64 - 1.0) * self.period_s;
-                    return (self.k == 0 || last_sampled < s + d).then(|| Ok(self.sample(block, s + d, 1.0)));
+                    return (self.k == 0 || last_sampled < s + d)
+                        .then(|| Ok(self.sample(block, s + d, 1.0)));
                 }
             }
         }

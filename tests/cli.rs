@@ -12,7 +12,11 @@ fn mtsim(args: &[&str]) -> Output {
 }
 
 fn stdout_json(out: &Output) -> serde_json::Value {
-    assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
 }
 
@@ -28,7 +32,11 @@ fn scratch(name: &str) -> PathBuf {
 fn scenario(dir: &Path, body: &str) -> String {
     let machine = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/trt-ac.toml");
     let path = dir.join("s.toml");
-    std::fs::write(&path, format!("machine = {:?}\n{body}", machine.display().to_string())).unwrap();
+    std::fs::write(
+        &path,
+        format!("machine = {:?}\n{body}", machine.display().to_string()),
+    )
+    .unwrap();
     path.display().to_string()
 }
 
@@ -40,26 +48,55 @@ fn analyze_json_gives_every_axis_with_sorted_reversals_in_0_360() {
         for key in ["min", "max", "range", "peak_speed_per_min"] {
             assert!(a[key].is_f64(), "{axis}.{key} in {a}");
         }
-        let r: Vec<f64> = a["reversals_deg"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-        assert!(r.windows(2).all(|w| w[0] <= w[1]) && r.iter().all(|t| (0.0..360.0).contains(t)), "{axis}: {r:?}");
+        let r: Vec<f64> = a["reversals_deg"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert!(
+            r.windows(2).all(|w| w[0] <= w[1]) && r.iter().all(|t| (0.0..360.0).contains(t)),
+            "{axis}: {r:?}"
+        );
     }
     // The spec's table: X reverses at 131.15 and 228.85 deg on the 15/10 cone at YT = 0.
-    let x: Vec<f64> = v["axes"]["X"]["reversals_deg"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-    assert!((x[0] - 131.15).abs() < 0.05 && (x[1] - 228.85).abs() < 0.05, "{x:?}");
+    let x: Vec<f64> = v["axes"]["X"]["reversals_deg"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert!(
+        (x[0] - 131.15).abs() < 0.05 && (x[1] - 228.85).abs() < 0.05,
+        "{x:?}"
+    );
     assert!(v["min_linear_separation_deg"].as_f64().unwrap() < 1e-6);
 }
 
 #[test]
 fn sweep_json_reports_rows_and_the_coincidence() {
     let v = stdout_json(&mtsim(&[
-        "sweep", "scenarios/cone-15-10.toml", "--vary", "center_y", "--from", "-30", "--to", "-15", "--step", "1", "--json",
+        "sweep",
+        "scenarios/cone-15-10.toml",
+        "--vary",
+        "center_y",
+        "--from",
+        "-30",
+        "--to",
+        "-15",
+        "--step",
+        "1",
+        "--json",
     ]));
     assert_eq!(v["param"], "center_y");
     assert_eq!(v["rows"].as_array().unwrap().len(), 16);
     assert!(v["rows"][0]["reversals_deg"]["X"].is_array());
     let c = &v["coincidences"][0];
     assert!((c["value"].as_f64().unwrap() - -22.3).abs() < 0.11, "{c}");
-    assert!((c["theta_deg"].as_f64().unwrap() - 147.0).abs() < 0.5, "{c}");
+    assert!(
+        (c["theta_deg"].as_f64().unwrap() - 147.0).abs() < 0.5,
+        "{c}"
+    );
     assert!(c["spread_deg"].as_f64().unwrap() < 0.5);
 }
 
@@ -67,10 +104,24 @@ fn sweep_json_reports_rows_and_the_coincidence() {
 fn sweep_writes_a_csv_and_an_svg() {
     let dir = scratch("sweep");
     let out = mtsim(&[
-        "sweep", "scenarios/cone-45-30.toml", "--vary", "center_y", "--from", "-60", "--to", "-40", "--step", "2",
-        "-o", dir.to_str().unwrap(),
+        "sweep",
+        "scenarios/cone-45-30.toml",
+        "--vary",
+        "center_y",
+        "--from",
+        "-60",
+        "--to",
+        "-40",
+        "--step",
+        "2",
+        "-o",
+        dir.to_str().unwrap(),
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let csv = std::fs::read_to_string(dir.join("sweep-center_y.csv")).unwrap();
     assert!(csv.starts_with("center_y,axis,reversal_deg,spread_deg"));
     let svg = std::fs::read_to_string(dir.join("sweep-center_y.svg")).unwrap();
@@ -81,14 +132,26 @@ fn sweep_writes_a_csv_and_an_svg() {
 fn cone_writes_360_g01_blocks_with_the_parameters_in_the_header() {
     let dir = scratch("cone");
     let nc = dir.join("cone.nc");
-    let out = mtsim(&["cone", "scenarios/cone-15-10.toml", "-o", nc.to_str().unwrap()]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = mtsim(&[
+        "cone",
+        "scenarios/cone-15-10.toml",
+        "-o",
+        nc.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = std::fs::read_to_string(&nc).unwrap();
     assert_eq!(text.lines().filter(|l| l.starts_with("G01")).count(), 360);
     assert!(text.contains("HALF APEX ANGLE 15.0000 DEG, INCLINATION 10.0000 DEG"));
     // The start point: A = alpha + beta = 25 deg, C = -90 deg (the spec).
     let start = text.lines().find(|l| l.starts_with("G00")).unwrap();
-    assert!(start.contains("A25.0000") && start.contains("C-90.0000"), "{start}");
+    assert!(
+        start.contains("A25.0000") && start.contains("C-90.0000"),
+        "{start}"
+    );
     assert!(!dir.join("cone.nc.tmp").exists());
 }
 
@@ -116,7 +179,10 @@ fn a_half_apex_angle_outside_0_90_exits_2_and_names_the_key_and_line() {
     let out = mtsim(&["analyze", &s]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("half_apex_deg") && err.contains(":3:") && err.contains("(0, 90)"), "{err}");
+    assert!(
+        err.contains("half_apex_deg") && err.contains(":3:") && err.contains("(0, 90)"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -146,12 +212,27 @@ fn a_bad_machine_override_exits_2() {
     );
     let out = mtsim(&["analyze", &s]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("max"), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("max"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 #[test]
 fn a_sweep_range_that_breaks_the_geometry_exits_2() {
-    let out = mtsim(&["sweep", "scenarios/cone-15-10.toml", "--vary", "half_apex", "--from", "80", "--to", "95", "--step", "5"]);
+    let out = mtsim(&[
+        "sweep",
+        "scenarios/cone-15-10.toml",
+        "--vary",
+        "half_apex",
+        "--from",
+        "80",
+        "--to",
+        "95",
+        "--step",
+        "5",
+    ]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("half_apex_deg"));
 }

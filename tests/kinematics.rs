@@ -70,7 +70,10 @@ fn spec_convention_a_point_on_the_table_appears_at_rx_a_rz_c_p() {
 fn spec_inverse_formulas_a_is_acos_k_and_c_is_atan2_i_j() {
     let k = Kinematics::new(Layout::TrtAc, Vector3::zeros());
     let t = unit_axis(25.0, 180.0); // leaning toward table -X, as at the cone's θ = 0
-    let pose = ToolPose { tip: Point3::new(1.0, 2.0, 3.0), axis: t };
+    let pose = ToolPose {
+        tip: Point3::new(1.0, 2.0, 3.0),
+        axis: t,
+    };
     let q = k.inverse(&pose, Branch::Primary, 0.0);
     assert!((q[Axis::A] - t.z.acos().to_degrees()).abs() < 1e-12);
     assert!((q[Axis::C] - t.x.atan2(t.y).to_degrees()).abs() < 1e-12);
@@ -80,7 +83,10 @@ fn spec_inverse_formulas_a_is_acos_k_and_c_is_atan2_i_j() {
 #[test]
 fn c_is_kept_when_the_tool_axis_is_along_the_table_z() {
     let k = Kinematics::new(Layout::TrtAc, Vector3::zeros());
-    let pose = ToolPose { tip: Point3::new(5.0, 6.0, 7.0), axis: Vector3::z() };
+    let pose = ToolPose {
+        tip: Point3::new(5.0, 6.0, 7.0),
+        axis: Vector3::z(),
+    };
     let q = k.inverse(&pose, Branch::Primary, 123.4);
     assert_eq!(q[Axis::C], 123.4);
     assert_eq!(q[Axis::A], 0.0);
@@ -93,7 +99,10 @@ fn c_is_kept_when_the_tool_axis_is_along_the_table_z() {
 #[test]
 fn the_secondary_branch_is_the_primary_with_negative_tilt_and_c_plus_180() {
     let k = Kinematics::new(Layout::TrtAc, Vector3::zeros());
-    let pose = ToolPose { tip: Point3::new(30.0, -20.0, 150.0), axis: unit_axis(40.0, 60.0) };
+    let pose = ToolPose {
+        tip: Point3::new(30.0, -20.0, 150.0),
+        axis: unit_axis(40.0, 60.0),
+    };
     let p = k.inverse(&pose, Branch::Primary, 0.0);
     let s = k.inverse(&pose, Branch::Secondary, p[Axis::C] + 180.0);
     assert!((s[Axis::A] + p[Axis::A]).abs() < 1e-12);
@@ -103,7 +112,10 @@ fn the_secondary_branch_is_the_primary_with_negative_tilt_and_c_plus_180() {
 #[test]
 fn the_three_axis_layout_is_the_identity() {
     let k = Kinematics::new(Layout::Xyz, Vector3::zeros());
-    let pose = ToolPose { tip: Point3::new(1.5, -2.5, 3.5), axis: Vector3::z() };
+    let pose = ToolPose {
+        tip: Point3::new(1.5, -2.5, 3.5),
+        axis: Vector3::z(),
+    };
     let q = k.inverse(&pose, Branch::Primary, 0.0);
     assert_eq!((q[Axis::X], q[Axis::Y], q[Axis::Z]), (1.5, -2.5, 3.5));
     assert_eq!(k.forward(&q), pose);

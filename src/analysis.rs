@@ -17,8 +17,9 @@ use serde::Serialize;
 use crate::axis::{Axis, AxisVec};
 use crate::cone::{normalize_deg, ConePath, ConeTest};
 use crate::error::Result;
-use crate::gcode::{Block, FeedMode, Motion};
+use crate::gcode::{Block, Motion};
 use crate::machine::Machine;
+use crate::sampling::{block_duration_s, position_in_block};
 
 /// Reversals of different linear axes closer than this (deg) cannot be told apart in a trace.
 pub const COINCIDENCE_WARNING_DEG: f64 = 2.0;
@@ -234,6 +235,8 @@ pub fn analyse_blocks(
     let axes = machine.axes();
     let kin = machine.kinematics;
     let mut acc: Vec<BlockAxisState> = axes.iter().map(|_| BlockAxisState::default()).collect();
+    // The position before the program is unknown, so the first block's start is not part
+    // of the program: it counts for neither the ranges nor the speeds nor the reversals.
     let mut first = true;
     for block in blocks {
         let block = block?;
@@ -241,38 +244,37 @@ pub fn analyse_blocks(
             machine_coordinates(&kin, &block, block.start),
             machine_coordinates(&kin, &block, block.end),
         );
-        if first {
+        if std::mem::take(&mut first) {
             for (s, &axis) in acc.iter_mut().zip(axes) {
-                s.extend(start[axis]);
+                s.extend(end[axis]);
             }
-            first = false;
+            continue;
         }
         let theta = cone.map(|c| c.theta_deg_of(&kin.forward(&end).tip));
-        // Block time, min: only feed moves carry an F that implies speeds.
-        let minutes = match (block.motion, block.feed_mode, block.feed) {
-            (Motion::Linear | Motion::Arc { .. }, FeedMode::PerMinute, Some(f)) if f > 0.0 => {
-                Some(path_length(&block, &start, &end) / f)
-            }
-            (Motion::Linear | Motion::Arc { .. }, FeedMode::InverseTime, Some(f)) if f > 0.0 => {
-                Some(1.0 / f)
-            }
+        // Only feed moves carry an F that implies speeds; their time is the programmed one.
+        let seconds = match block.motion {
+            Motion::Linear | Motion::Arc { .. } => Some(block_duration_s(&block, machine)?),
             _ => None,
         };
-        let arc_points = arc_samples(&block, &start, &end);
+        // Arcs and G43.4 moves are not straight in machine axes: follow them at 1/32 steps.
+        let steps = if matches!(block.motion, Motion::Arc { .. }) || block.tcp {
+            32
+        } else {
+            1
+        };
         for (s, &axis) in acc.iter_mut().zip(axes) {
-            for p in &arc_points {
-                s.extend(p[axis]);
+            let mut previous = start[axis];
+            for k in 1..=steps {
+                let x = position_in_block(&block, machine, k as f64 / steps as f64)[axis];
+                s.extend(x);
+                if let Some(t) = seconds.filter(|t| *t > 0.0) {
+                    s.peak_speed = s
+                        .peak_speed
+                        .max((x - previous).abs() / (t / steps as f64) * 60.0);
+                }
+                previous = x;
             }
-            s.extend(end[axis]);
             let d = end[axis] - start[axis];
-            if let Some(t) = minutes.filter(|t| *t > 0.0) {
-                let speed = match block.motion {
-                    // An arc moves each in-plane axis at most at the path rate.
-                    Motion::Arc { .. } => arc_axis_speed(&arc_points, &start, &end, axis, t),
-                    _ => d.abs() / t,
-                };
-                s.peak_speed = s.peak_speed.max(speed);
-            }
             s.push_increment(d, block.line, theta);
         }
     }
@@ -350,76 +352,4 @@ fn machine_coordinates(kin: &crate::kinematics::Kinematics, block: &Block, q: Ax
     out[Axis::Y] = m.y;
     out[Axis::Z] = m.z;
     out
-}
-
-/// Length a G94 F word is divided by: the mixed-unit norm for lines, the helical arc length for arcs.
-fn path_length(block: &Block, start: &AxisVec, end: &AxisVec) -> f64 {
-    match block.motion {
-        Motion::Arc { .. } => {
-            let pts = arc_samples(block, start, end);
-            let mut prev = *start;
-            let mut len = 0.0;
-            for p in pts.iter().chain(std::iter::once(end)) {
-                len += (*p - prev).mixed_norm();
-                prev = *p;
-            }
-            len
-        }
-        _ => (*end - *start).mixed_norm(),
-    }
-}
-
-/// Points along an arc block at about 1 deg spacing (excluding the end); empty for other motions.
-fn arc_samples(block: &Block, start: &AxisVec, end: &AxisVec) -> Vec<AxisVec> {
-    let Motion::Arc {
-        clockwise,
-        plane,
-        center_mm,
-    } = block.motion
-    else {
-        return Vec::new();
-    };
-    let (u, v, w) = plane.axes();
-    let (cu, cv) = (center_mm[u.index()], center_mm[v.index()]);
-    let a0 = (start[v] - cv).atan2(start[u] - cu);
-    let a1 = (end[v] - cv).atan2(end[u] - cu);
-    let radius = (start[u] - cu).hypot(start[v] - cv);
-    let mut sweep = a1 - a0;
-    if clockwise {
-        if sweep >= -1e-12 {
-            sweep -= TAU;
-        }
-    } else if sweep <= 1e-12 {
-        sweep += TAU;
-    }
-    let n = ((sweep.abs().to_degrees()).ceil() as usize).max(1);
-    (1..n)
-        .map(|k| {
-            let f = k as f64 / n as f64;
-            let a = a0 + sweep * f;
-            let mut p = *start + (*end - *start) * f;
-            p[u] = cu + radius * a.cos();
-            p[v] = cv + radius * a.sin();
-            p[w] = start[w] + (end[w] - start[w]) * f;
-            p
-        })
-        .collect()
-}
-
-fn arc_axis_speed(
-    points: &[AxisVec],
-    start: &AxisVec,
-    end: &AxisVec,
-    axis: Axis,
-    minutes: f64,
-) -> f64 {
-    let n = points.len() + 1;
-    let dt = minutes / n as f64;
-    let mut prev = *start;
-    let mut peak: f64 = 0.0;
-    for p in points.iter().chain(std::iter::once(end)) {
-        peak = peak.max((p[axis] - prev[axis]).abs() / dt);
-        prev = *p;
-    }
-    peak
 }

@@ -198,14 +198,6 @@ pub fn write_program(
     let lead_blocks = (options.lead_deg.to_radians() / step.abs()).ceil() as usize;
     let total = n + 2 * lead_blocks;
     let theta0 = -(lead_blocks as f64) * step;
-    let rotary: Vec<Axis> = path
-        .kinematics
-        .layout
-        .axes()
-        .iter()
-        .copied()
-        .filter(|a| a.is_rotary())
-        .collect();
     let axes = path.kinematics.layout.axes();
 
     let mut out = String::new();
@@ -285,12 +277,7 @@ pub fn write_program(
     let (theta_start, q_start) = samples.next().expect("at least one sample");
     let tip_start = cone.point(theta_start);
     if options.tcp {
-        // Position the rotary axes first, then switch TCP on and go to the tip.
-        let mut rot = String::new();
-        for &axis in &rotary {
-            let _ = write!(rot, " {}{}", axis, fmt_num(q_start[axis]));
-        }
-        emit(&mut out, &format!("G00{rot}"));
+        // Switch TCP on, then position tip and rotary axes in one rapid move.
         emit(&mut out, "G43.4 H1");
     }
     emit(&mut out, &format!("G00{}", coords(&q_start, &tip_start)));

@@ -196,7 +196,12 @@ fn parse_feedback(name: &str) -> Option<bool> {
 }
 
 /// Picks the key of the axis's kind: `(key, value)` of the linear or the rotary variant.
-fn pick(axis: Axis, linear: (&'static str, Option<f64>), rotary: (&'static str, Option<f64>), defaults: (f64, f64)) -> (&'static str, f64) {
+fn pick(
+    axis: Axis,
+    linear: (&'static str, Option<f64>),
+    rotary: (&'static str, Option<f64>),
+    defaults: (f64, f64),
+) -> (&'static str, f64) {
     if axis.is_rotary() {
         (rotary.0, rotary.1.unwrap_or(defaults.1))
     } else {
@@ -227,54 +232,173 @@ impl Resolved {
         Resolved {
             model: parse_model(&s.model),
             fully_closed: parse_feedback(&s.feedback),
-            fe_limit: pick(axis, ("following_error_limit_mm", s.following_error_limit_mm), ("following_error_limit_deg", s.following_error_limit_deg), (50.0, 90.0)),
-            backlash: pick(axis, ("backlash_mm", d.backlash_mm), ("backlash_deg", d.backlash_deg), (0.0, 0.0)),
-            motor_mass: pick(axis, ("motor_mass_kg", d.motor_mass_kg), ("motor_inertia_kgm2", d.motor_inertia_kgm2), (250.0, 3.0)),
-            table_mass: pick(axis, ("table_mass_kg", d.table_mass_kg), ("table_inertia_kgm2", d.table_inertia_kgm2), (500.0, 5.0)),
-            stiffness: pick(axis, ("stiffness_n_per_um", d.stiffness_n_per_um), ("stiffness_nm_per_rad", d.stiffness_nm_per_rad), (200.0, 3.0e6)),
+            fe_limit: pick(
+                axis,
+                ("following_error_limit_mm", s.following_error_limit_mm),
+                ("following_error_limit_deg", s.following_error_limit_deg),
+                (50.0, 90.0),
+            ),
+            backlash: pick(
+                axis,
+                ("backlash_mm", d.backlash_mm),
+                ("backlash_deg", d.backlash_deg),
+                (0.0, 0.0),
+            ),
+            motor_mass: pick(
+                axis,
+                ("motor_mass_kg", d.motor_mass_kg),
+                ("motor_inertia_kgm2", d.motor_inertia_kgm2),
+                (250.0, 3.0),
+            ),
+            table_mass: pick(
+                axis,
+                ("table_mass_kg", d.table_mass_kg),
+                ("table_inertia_kgm2", d.table_inertia_kgm2),
+                (500.0, 5.0),
+            ),
+            stiffness: pick(
+                axis,
+                ("stiffness_n_per_um", d.stiffness_n_per_um),
+                ("stiffness_nm_per_rad", d.stiffness_nm_per_rad),
+                (200.0, 3.0e6),
+            ),
             damping_ratio: d.damping_ratio.unwrap_or(0.05),
-            force_limit: pick(axis, ("force_limit_n", d.force_limit_n), ("torque_limit_nm", d.torque_limit_nm), (20_000.0, 1200.0)),
-            coulomb: pick(axis, ("coulomb_n", f.coulomb_n), ("coulomb_nm", f.coulomb_nm), (150.0, 15.0)),
+            force_limit: pick(
+                axis,
+                ("force_limit_n", d.force_limit_n),
+                ("torque_limit_nm", d.torque_limit_nm),
+                (20_000.0, 1200.0),
+            ),
+            coulomb: pick(
+                axis,
+                ("coulomb_n", f.coulomb_n),
+                ("coulomb_nm", f.coulomb_nm),
+                (150.0, 15.0),
+            ),
             static_ratio: f.static_ratio.unwrap_or(1.3),
-            stribeck: pick(axis, ("stribeck_velocity_mm_per_s", f.stribeck_velocity_mm_per_s), ("stribeck_velocity_deg_per_s", f.stribeck_velocity_deg_per_s), (0.5, 0.1)),
-            viscous: pick(axis, ("viscous_n_s_per_m", f.viscous_n_s_per_m), ("viscous_nm_s_per_rad", f.viscous_nm_s_per_rad), (1000.0, 5.0)),
+            stribeck: pick(
+                axis,
+                ("stribeck_velocity_mm_per_s", f.stribeck_velocity_mm_per_s),
+                ("stribeck_velocity_deg_per_s", f.stribeck_velocity_deg_per_s),
+                (0.5, 0.1),
+            ),
+            viscous: pick(
+                axis,
+                ("viscous_n_s_per_m", f.viscous_n_s_per_m),
+                ("viscous_nm_s_per_rad", f.viscous_nm_s_per_rad),
+                (1000.0, 5.0),
+            ),
         }
     }
 
     /// The first problem found, as `(table, key, message)` with table "servo", "drive" or
     /// "friction".
-    fn problem(axis: Axis, s: &ServoConfig, d: &DriveConfig, f: &FrictionConfig) -> Option<(&'static str, &'static str, String)> {
+    fn problem(
+        axis: Axis,
+        s: &ServoConfig,
+        d: &DriveConfig,
+        f: &FrictionConfig,
+    ) -> Option<(&'static str, &'static str, String)> {
         let kind = if axis.is_rotary() { "rotary" } else { "linear" };
         let other = if axis.is_rotary() { "linear" } else { "rotary" };
         // Keys of the other kind of axis.
         let foreign: [(&str, &str, Option<f64>, &str); 9] = if axis.is_rotary() {
             [
-                ("servo", "following_error_limit_mm", s.following_error_limit_mm, "following_error_limit_deg"),
+                (
+                    "servo",
+                    "following_error_limit_mm",
+                    s.following_error_limit_mm,
+                    "following_error_limit_deg",
+                ),
                 ("drive", "backlash_mm", d.backlash_mm, "backlash_deg"),
-                ("drive", "motor_mass_kg", d.motor_mass_kg, "motor_inertia_kgm2"),
-                ("drive", "table_mass_kg", d.table_mass_kg, "table_inertia_kgm2"),
-                ("drive", "stiffness_n_per_um", d.stiffness_n_per_um, "stiffness_nm_per_rad"),
+                (
+                    "drive",
+                    "motor_mass_kg",
+                    d.motor_mass_kg,
+                    "motor_inertia_kgm2",
+                ),
+                (
+                    "drive",
+                    "table_mass_kg",
+                    d.table_mass_kg,
+                    "table_inertia_kgm2",
+                ),
+                (
+                    "drive",
+                    "stiffness_n_per_um",
+                    d.stiffness_n_per_um,
+                    "stiffness_nm_per_rad",
+                ),
                 ("drive", "force_limit_n", d.force_limit_n, "torque_limit_nm"),
                 ("friction", "coulomb_n", f.coulomb_n, "coulomb_nm"),
-                ("friction", "stribeck_velocity_mm_per_s", f.stribeck_velocity_mm_per_s, "stribeck_velocity_deg_per_s"),
-                ("friction", "viscous_n_s_per_m", f.viscous_n_s_per_m, "viscous_nm_s_per_rad"),
+                (
+                    "friction",
+                    "stribeck_velocity_mm_per_s",
+                    f.stribeck_velocity_mm_per_s,
+                    "stribeck_velocity_deg_per_s",
+                ),
+                (
+                    "friction",
+                    "viscous_n_s_per_m",
+                    f.viscous_n_s_per_m,
+                    "viscous_nm_s_per_rad",
+                ),
             ]
         } else {
             [
-                ("servo", "following_error_limit_deg", s.following_error_limit_deg, "following_error_limit_mm"),
+                (
+                    "servo",
+                    "following_error_limit_deg",
+                    s.following_error_limit_deg,
+                    "following_error_limit_mm",
+                ),
                 ("drive", "backlash_deg", d.backlash_deg, "backlash_mm"),
-                ("drive", "motor_inertia_kgm2", d.motor_inertia_kgm2, "motor_mass_kg"),
-                ("drive", "table_inertia_kgm2", d.table_inertia_kgm2, "table_mass_kg"),
-                ("drive", "stiffness_nm_per_rad", d.stiffness_nm_per_rad, "stiffness_n_per_um"),
-                ("drive", "torque_limit_nm", d.torque_limit_nm, "force_limit_n"),
+                (
+                    "drive",
+                    "motor_inertia_kgm2",
+                    d.motor_inertia_kgm2,
+                    "motor_mass_kg",
+                ),
+                (
+                    "drive",
+                    "table_inertia_kgm2",
+                    d.table_inertia_kgm2,
+                    "table_mass_kg",
+                ),
+                (
+                    "drive",
+                    "stiffness_nm_per_rad",
+                    d.stiffness_nm_per_rad,
+                    "stiffness_n_per_um",
+                ),
+                (
+                    "drive",
+                    "torque_limit_nm",
+                    d.torque_limit_nm,
+                    "force_limit_n",
+                ),
                 ("friction", "coulomb_nm", f.coulomb_nm, "coulomb_n"),
-                ("friction", "stribeck_velocity_deg_per_s", f.stribeck_velocity_deg_per_s, "stribeck_velocity_mm_per_s"),
-                ("friction", "viscous_nm_s_per_rad", f.viscous_nm_s_per_rad, "viscous_n_s_per_m"),
+                (
+                    "friction",
+                    "stribeck_velocity_deg_per_s",
+                    f.stribeck_velocity_deg_per_s,
+                    "stribeck_velocity_mm_per_s",
+                ),
+                (
+                    "friction",
+                    "viscous_nm_s_per_rad",
+                    f.viscous_nm_s_per_rad,
+                    "viscous_n_s_per_m",
+                ),
             ]
         };
         for (table, key, value, instead) in foreign {
             if value.is_some() {
-                return Some((table, key, format!("is a {other}-axis key, but axis {axis} is {kind}; use `{instead}`")));
+                return Some((
+                    table,
+                    key,
+                    format!("is a {other}-axis key, but axis {axis} is {kind}; use `{instead}`"),
+                ));
             }
         }
 
@@ -284,38 +408,190 @@ impl Resolved {
         let positive = |v: f64| v.is_finite() && v > 0.0;
         let non_negative = |v: f64| v.is_finite() && v >= 0.0;
         let checks: [(bool, &'static str, &'static str, String); 21] = [
-            (r.model.is_some(), "servo", "model", format!("must be \"first-order\" or \"cascade\", got {:?}", s.model)),
-            (r.fully_closed.is_some(), "servo", "feedback", format!("must be \"semi-closed\" or \"fully-closed\", got {:?}", s.feedback)),
-            (finite_in(s.kv_per_s, 1e-3, 1e4) && s.kv_per_s > 0.0, "servo", "kv_per_s", format!("must be a positive gain in 1/s (typically 20-60), got {}", s.kv_per_s)),
-            (finite_in(s.velocity_feedforward, 0.0, 1.0), "servo", "velocity_feedforward", format!("must be a fraction in 0..=1, got {}", s.velocity_feedforward)),
-            (finite_in(s.acceleration_feedforward, 0.0, 1.0), "servo", "acceleration_feedforward", format!("must be a fraction in 0..=1, got {}", s.acceleration_feedforward)),
-            (positive(s.velocity_bandwidth_hz) && s.velocity_bandwidth_hz <= 1e5, "servo", "velocity_bandwidth_hz", format!("must be a positive frequency in Hz (typically 50-300), got {}", s.velocity_bandwidth_hz)),
-            (positive(s.velocity_integral_time_ms), "servo", "velocity_integral_time_ms", format!("must be a positive time in ms (typically 2-20), got {}", s.velocity_integral_time_ms)),
-            (finite_in(s.current_time_constant_ms, 0.0, 100.0), "servo", "current_time_constant_ms", format!("must be a time in 0..=100 ms (typically 0.1-0.5), got {}", s.current_time_constant_ms)),
-            (positive(s.servo_period_ms) && s.servo_period_ms <= 100.0, "servo", "servo_period_ms", format!("must be a period in (0, 100] ms (typically 0.125-1), got {}", s.servo_period_ms)),
-            ((1..=1000).contains(&s.substeps), "servo", "substeps", format!("must be a whole number in 1..=1000, got {}", s.substeps)),
-            (positive(r.fe_limit.1), "servo", r.fe_limit.0, format!("must be a positive distance ({unit}), got {}", r.fe_limit.1)),
-            (non_negative(r.backlash.1), "drive", r.backlash.0, format!("must be >= 0 ({unit}), got {}", r.backlash.1)),
-            (positive(r.motor_mass.1), "drive", r.motor_mass.0, format!("must be positive, got {}", r.motor_mass.1)),
-            (positive(r.table_mass.1), "drive", r.table_mass.0, format!("must be positive, got {}", r.table_mass.1)),
-            (positive(r.stiffness.1), "drive", r.stiffness.0, format!("must be positive, got {}", r.stiffness.1)),
-            (finite_in(r.damping_ratio, 0.0, 10.0), "drive", "damping_ratio", format!("must be in 0..=10 (typically 0.02-0.1), got {}", r.damping_ratio)),
-            (positive(r.force_limit.1), "drive", r.force_limit.0, format!("must be positive, got {}", r.force_limit.1)),
-            (non_negative(r.coulomb.1), "friction", r.coulomb.0, format!("must be >= 0, got {}", r.coulomb.1)),
-            (finite_in(r.static_ratio, 1.0, 100.0), "friction", "static_ratio", format!("must be Fs/Fc >= 1 (typically 1.1-1.5), got {}", r.static_ratio)),
-            (non_negative(r.stribeck.1), "friction", r.stribeck.0, format!("must be >= 0, got {}", r.stribeck.1)),
-            (non_negative(r.viscous.1), "friction", r.viscous.0, format!("must be >= 0, got {}", r.viscous.1)),
+            (
+                r.model.is_some(),
+                "servo",
+                "model",
+                format!("must be \"first-order\" or \"cascade\", got {:?}", s.model),
+            ),
+            (
+                r.fully_closed.is_some(),
+                "servo",
+                "feedback",
+                format!(
+                    "must be \"semi-closed\" or \"fully-closed\", got {:?}",
+                    s.feedback
+                ),
+            ),
+            (
+                finite_in(s.kv_per_s, 1e-3, 1e4) && s.kv_per_s > 0.0,
+                "servo",
+                "kv_per_s",
+                format!(
+                    "must be a positive gain in 1/s (typically 20-60), got {}",
+                    s.kv_per_s
+                ),
+            ),
+            (
+                finite_in(s.velocity_feedforward, 0.0, 1.0),
+                "servo",
+                "velocity_feedforward",
+                format!(
+                    "must be a fraction in 0..=1, got {}",
+                    s.velocity_feedforward
+                ),
+            ),
+            (
+                finite_in(s.acceleration_feedforward, 0.0, 1.0),
+                "servo",
+                "acceleration_feedforward",
+                format!(
+                    "must be a fraction in 0..=1, got {}",
+                    s.acceleration_feedforward
+                ),
+            ),
+            (
+                positive(s.velocity_bandwidth_hz) && s.velocity_bandwidth_hz <= 1e5,
+                "servo",
+                "velocity_bandwidth_hz",
+                format!(
+                    "must be a positive frequency in Hz (typically 50-300), got {}",
+                    s.velocity_bandwidth_hz
+                ),
+            ),
+            (
+                positive(s.velocity_integral_time_ms),
+                "servo",
+                "velocity_integral_time_ms",
+                format!(
+                    "must be a positive time in ms (typically 2-20), got {}",
+                    s.velocity_integral_time_ms
+                ),
+            ),
+            (
+                finite_in(s.current_time_constant_ms, 0.0, 100.0),
+                "servo",
+                "current_time_constant_ms",
+                format!(
+                    "must be a time in 0..=100 ms (typically 0.1-0.5), got {}",
+                    s.current_time_constant_ms
+                ),
+            ),
+            (
+                positive(s.servo_period_ms) && s.servo_period_ms <= 100.0,
+                "servo",
+                "servo_period_ms",
+                format!(
+                    "must be a period in (0, 100] ms (typically 0.125-1), got {}",
+                    s.servo_period_ms
+                ),
+            ),
+            (
+                (1..=1000).contains(&s.substeps),
+                "servo",
+                "substeps",
+                format!("must be a whole number in 1..=1000, got {}", s.substeps),
+            ),
+            (
+                positive(r.fe_limit.1),
+                "servo",
+                r.fe_limit.0,
+                format!("must be a positive distance ({unit}), got {}", r.fe_limit.1),
+            ),
+            (
+                non_negative(r.backlash.1),
+                "drive",
+                r.backlash.0,
+                format!("must be >= 0 ({unit}), got {}", r.backlash.1),
+            ),
+            (
+                positive(r.motor_mass.1),
+                "drive",
+                r.motor_mass.0,
+                format!("must be positive, got {}", r.motor_mass.1),
+            ),
+            (
+                positive(r.table_mass.1),
+                "drive",
+                r.table_mass.0,
+                format!("must be positive, got {}", r.table_mass.1),
+            ),
+            (
+                positive(r.stiffness.1),
+                "drive",
+                r.stiffness.0,
+                format!("must be positive, got {}", r.stiffness.1),
+            ),
+            (
+                finite_in(r.damping_ratio, 0.0, 10.0),
+                "drive",
+                "damping_ratio",
+                format!(
+                    "must be in 0..=10 (typically 0.02-0.1), got {}",
+                    r.damping_ratio
+                ),
+            ),
+            (
+                positive(r.force_limit.1),
+                "drive",
+                r.force_limit.0,
+                format!("must be positive, got {}", r.force_limit.1),
+            ),
+            (
+                non_negative(r.coulomb.1),
+                "friction",
+                r.coulomb.0,
+                format!("must be >= 0, got {}", r.coulomb.1),
+            ),
+            (
+                finite_in(r.static_ratio, 1.0, 100.0),
+                "friction",
+                "static_ratio",
+                format!(
+                    "must be Fs/Fc >= 1 (typically 1.1-1.5), got {}",
+                    r.static_ratio
+                ),
+            ),
+            (
+                non_negative(r.stribeck.1),
+                "friction",
+                r.stribeck.0,
+                format!("must be >= 0, got {}", r.stribeck.1),
+            ),
+            (
+                non_negative(r.viscous.1),
+                "friction",
+                r.viscous.0,
+                format!("must be >= 0, got {}", r.viscous.1),
+            ),
         ];
-        checks.into_iter().find(|c| !c.0).map(|(_, table, key, message)| (table, key, message))
+        checks
+            .into_iter()
+            .find(|c| !c.0)
+            .map(|(_, table, key, message)| (table, key, message))
     }
 }
 
 /// Checks the drive parameters of one axis; errors name the key in `[section.servo]`,
 /// `[section.drive]` or `[section.friction]` and point at its line.
-pub fn validate(path: &Path, text: &str, section: &str, axis: Axis, servo: &ServoConfig, drive: &DriveConfig, friction: &FrictionConfig) -> Result<()> {
+pub fn validate(
+    path: &Path,
+    text: &str,
+    section: &str,
+    axis: Axis,
+    servo: &ServoConfig,
+    drive: &DriveConfig,
+    friction: &FrictionConfig,
+) -> Result<()> {
     match Resolved::problem(axis, servo, drive, friction) {
         None => Ok(()),
-        Some((table, key, message)) => Err(value_error(path, text, &format!("{section}.{table}"), key, message)),
+        Some((table, key, message)) => Err(value_error(
+            path,
+            text,
+            &format!("{section}.{table}"),
+            key,
+            message,
+        )),
     }
 }
 
@@ -391,16 +667,34 @@ pub struct AxisServo {
 impl AxisServo {
     /// `axis.is_rotary()` selects deg/rad and the `*_deg`/`*_nm` keys. Starts at rest at
     /// `initial_position` (mm or deg), the backlash gap centred.
-    pub fn new(axis: Axis, servo: &ServoConfig, drive: &DriveConfig, friction: &FrictionConfig, interpolation_period_s: f64, initial_position: f64) -> Result<AxisServo> {
+    pub fn new(
+        axis: Axis,
+        servo: &ServoConfig,
+        drive: &DriveConfig,
+        friction: &FrictionConfig,
+        interpolation_period_s: f64,
+        initial_position: f64,
+    ) -> Result<AxisServo> {
         let where_ = format!("[axes.{axis}]");
         if let Some((table, key, message)) = Resolved::problem(axis, servo, drive, friction) {
-            return Err(Error::invalid(Path::new(&where_), format!("`{table}.{key}`: {message}")));
+            return Err(Error::invalid(
+                Path::new(&where_),
+                format!("`{table}.{key}`: {message}"),
+            ));
         }
         if !(interpolation_period_s.is_finite() && interpolation_period_s > 0.0) {
-            return Err(Error::invalid(Path::new(&where_), format!("the interpolation period must be positive, got {interpolation_period_s} s")));
+            return Err(Error::invalid(
+                Path::new(&where_),
+                format!(
+                    "the interpolation period must be positive, got {interpolation_period_s} s"
+                ),
+            ));
         }
         if !initial_position.is_finite() {
-            return Err(Error::invalid(Path::new(&where_), format!("the initial position must be finite, got {initial_position}")));
+            return Err(Error::invalid(
+                Path::new(&where_),
+                format!("the initial position must be finite, got {initial_position}"),
+            ));
         }
         let r = Resolved::new(axis, servo, drive, friction);
         let scale = if axis.is_rotary() { PI / 180.0 } else { 1e-3 };
@@ -413,7 +707,11 @@ impl AxisServo {
         let mt = r.table_mass.1;
         let m_total = mm + mt;
         // N/um -> N/m for linear axes; N m/rad as is for rotary ones.
-        let stiffness = if axis.is_rotary() { r.stiffness.1 } else { r.stiffness.1 * 1e6 };
+        let stiffness = if axis.is_rotary() {
+            r.stiffness.1
+        } else {
+            r.stiffness.1 * 1e6
+        };
         let damping = 2.0 * r.damping_ratio * (stiffness * mm * mt / m_total).sqrt();
         let tau = servo.current_time_constant_ms * 1e-3;
         let viscous = r.viscous.1;
@@ -478,7 +776,16 @@ impl AxisServo {
         self.setpoint = s_new;
         self.v_ff = v_ff;
 
-        let finite = [self.x_m, self.v_m, self.x_t, self.v_t, self.force, self.integral].iter().all(|v| v.is_finite());
+        let finite = [
+            self.x_m,
+            self.v_m,
+            self.x_t,
+            self.v_t,
+            self.force,
+            self.integral,
+        ]
+        .iter()
+        .all(|v| v.is_finite());
         if !finite {
             return Err(self.diverged(time_s, "the drive state is no longer finite".into()));
         }
@@ -486,8 +793,19 @@ impl AxisServo {
         let fe_motor = s_new - self.x_m;
         if fe.abs() > self.fe_limit || fe_motor.abs() > self.fe_limit {
             let unit = self.axis.unit();
-            let worst = if fe.abs() >= fe_motor.abs() { fe } else { fe_motor };
-            return Err(self.diverged(time_s, format!("following error {:.4} {unit} exceeds the limit {:.4} {unit}", worst / self.scale, self.fe_limit / self.scale)));
+            let worst = if fe.abs() >= fe_motor.abs() {
+                fe
+            } else {
+                fe_motor
+            };
+            return Err(self.diverged(
+                time_s,
+                format!(
+                    "following error {:.4} {unit} exceeds the limit {:.4} {unit}",
+                    worst / self.scale,
+                    self.fe_limit / self.scale
+                ),
+            ));
         }
         let velocity = match self.model {
             Model::FirstOrder => (self.x_t - x_t_old) * self.inv_t_ipo,
@@ -503,7 +821,11 @@ impl AxisServo {
     }
 
     fn diverged(&self, time_s: f64, reason: String) -> Error {
-        Error::Diverged { axis: self.axis, time_s, reason }
+        Error::Diverged {
+            axis: self.axis,
+            time_s,
+            reason,
+        }
     }
 
     /// First-order model over one interpolation period. Per servo period the command is
@@ -544,7 +866,11 @@ impl AxisServo {
         for j in 0..self.n_servo {
             // Controller, sampled at the start of the servo period.
             let x_cmd = s_old + (s_new - s_old) * (j as f64 / n);
-            let x_fb = if self.fully_closed { self.x_t } else { self.x_m };
+            let x_fb = if self.fully_closed {
+                self.x_t
+            } else {
+                self.x_m
+            };
             let v_meas = (self.x_m - self.x_m_tick) * inv_ts;
             self.x_m_tick = self.x_m;
             let v_cmd = self.kv * (x_cmd - x_fb) + self.kvff * v_ff;
@@ -646,7 +972,15 @@ mod tests {
     fn check(axis: Axis, text: &str) -> Result<()> {
         let parsed: Axes = toml::from_str(text).expect("test TOML parses");
         let s = &parsed.axes[&axis.to_string()];
-        validate(Path::new("m.toml"), text, &format!("axes.{axis}"), axis, &s.servo, &s.drive, &s.friction)
+        validate(
+            Path::new("m.toml"),
+            text,
+            &format!("axes.{axis}"),
+            axis,
+            &s.servo,
+            &s.drive,
+            &s.friction,
+        )
     }
 
     fn message(e: Error) -> String {
@@ -659,7 +993,16 @@ mod tests {
     #[test]
     fn defaults_are_valid_for_linear_and_rotary_axes() {
         for axis in Axis::ALL {
-            validate(Path::new("m.toml"), "", "axes.X", axis, &ServoConfig::default(), &DriveConfig::default(), &FrictionConfig::default()).unwrap();
+            validate(
+                Path::new("m.toml"),
+                "",
+                "axes.X",
+                axis,
+                &ServoConfig::default(),
+                &DriveConfig::default(),
+                &FrictionConfig::default(),
+            )
+            .unwrap();
         }
     }
 
@@ -667,26 +1010,41 @@ mod tests {
     fn a_bad_value_points_at_its_line() {
         let text = "[axes.X.servo]\nmodel = \"cascade\"\nkv_per_s = -3\n";
         let m = message(check(Axis::X, text).unwrap_err());
-        assert!(m.starts_with("3: `axes.X.servo.kv_per_s`: must be a positive gain"), "{m}");
+        assert!(
+            m.starts_with("3: `axes.X.servo.kv_per_s`: must be a positive gain"),
+            "{m}"
+        );
         let text = "[axes.X.servo]\nmodel = \"pid\"\n";
-        assert!(message(check(Axis::X, text).unwrap_err()).contains("\"first-order\" or \"cascade\""));
+        assert!(
+            message(check(Axis::X, text).unwrap_err()).contains("\"first-order\" or \"cascade\"")
+        );
         let text = "[axes.Y.servo]\nvelocity_feedforward = 1.5\n";
         assert!(message(check(Axis::Y, text).unwrap_err()).contains("fraction in 0..=1"));
         let text = "[axes.Y.friction]\nstatic_ratio = 0.8\n";
-        assert!(message(check(Axis::Y, text).unwrap_err()).starts_with("2: `axes.Y.friction.static_ratio`"));
+        assert!(message(check(Axis::Y, text).unwrap_err())
+            .starts_with("2: `axes.Y.friction.static_ratio`"));
         let text = "[axes.Y.drive]\ntable_mass_kg = 0\n";
-        assert!(message(check(Axis::Y, text).unwrap_err()).starts_with("2: `axes.Y.drive.table_mass_kg`"));
+        assert!(message(check(Axis::Y, text).unwrap_err())
+            .starts_with("2: `axes.Y.drive.table_mass_kg`"));
     }
 
     #[test]
     fn a_key_of_the_other_kind_of_axis_is_an_error() {
         let m = message(check(Axis::C, "[axes.C.drive]\nbacklash_mm = 0.01\n").unwrap_err());
-        assert!(m.contains("`axes.C.drive.backlash_mm`: is a linear-axis key") && m.contains("use `backlash_deg`"), "{m}");
+        assert!(
+            m.contains("`axes.C.drive.backlash_mm`: is a linear-axis key")
+                && m.contains("use `backlash_deg`"),
+            "{m}"
+        );
         let m = message(check(Axis::X, "[axes.X.drive]\nbacklash_deg = 0.01\n").unwrap_err());
         assert!(m.contains("use `backlash_mm`"), "{m}");
         let m = message(check(Axis::A, "[axes.A.friction]\ncoulomb_n = 10\n").unwrap_err());
         assert!(m.contains("use `coulomb_nm`"), "{m}");
-        check(Axis::A, "[axes.A.friction]\ncoulomb_nm = 10\n[axes.A.drive]\nbacklash_deg = 0.003\n").unwrap();
+        check(
+            Axis::A,
+            "[axes.A.friction]\ncoulomb_nm = 10\n[axes.A.drive]\nbacklash_deg = 0.003\n",
+        )
+        .unwrap();
     }
 
     #[test]
@@ -695,7 +1053,10 @@ mod tests {
         assert_eq!(play(-1.0, 0.0, 0.25), -0.75);
         assert_eq!(play(0.1, 0.0, 0.25), 0.0);
         assert_eq!(stribeck_bound(0.0, 100.0, 130.0, 1e-3), 130.0);
-        assert!((stribeck_bound(1e-3, 100.0, 130.0, 1e-3) - (100.0 + 30.0 / std::f64::consts::E)).abs() < 1e-12);
+        assert!(
+            (stribeck_bound(1e-3, 100.0, 130.0, 1e-3) - (100.0 + 30.0 / std::f64::consts::E)).abs()
+                < 1e-12
+        );
         assert_eq!(stribeck_bound(1.0, 100.0, 130.0, 1e-3), 100.0);
         assert_eq!(stribeck_bound(1e-9, 100.0, 130.0, 0.0), 100.0);
         assert_eq!(stribeck_bound(0.0, 0.0, 0.0, 0.0), 0.0);
@@ -704,8 +1065,19 @@ mod tests {
     /// A table held by a spring force below Fs sticks exactly; above it, it breaks away.
     #[test]
     fn stiction_holds_below_the_static_limit_and_breaks_away_above() {
-        let servo = ServoConfig { model: "cascade".into(), ..Default::default() };
-        let mut s = AxisServo::new(Axis::X, &servo, &DriveConfig::default(), &FrictionConfig::default(), 1e-3, 0.0).unwrap();
+        let servo = ServoConfig {
+            model: "cascade".into(),
+            ..Default::default()
+        };
+        let mut s = AxisServo::new(
+            Axis::X,
+            &servo,
+            &DriveConfig::default(),
+            &FrictionConfig::default(),
+            1e-3,
+            0.0,
+        )
+        .unwrap();
         // Spring pre-loaded to 0.9 Fs = 175.5 N: d = 175.5 / 2e8 m. Motor held (force cancels).
         let fs = 150.0 * 1.3;
         for (load, moves) in [(0.9 * fs, false), (1.1 * fs, true)] {
@@ -722,5 +1094,27 @@ mod tests {
             }
             assert_eq!(s.x_t != 0.0, moves, "load {load} N");
         }
+    }
+
+    /// The machine loader calls [`validate`], so a bad drive key in a machine file is
+    /// reported at its line.
+    #[test]
+    fn machine_files_report_drive_errors_at_their_line() {
+        let axis = |name: &str, extra: &str| {
+            format!("[axes.{name}]\nmin = -100\nmax = 100\nmax_velocity = 10000\nmax_acceleration = 1000\nmax_jerk = 10000\n{extra}")
+        };
+        let head = "name = \"m\"\nkinematics = \"xyz\"\n";
+        let text = format!(
+            "{head}{}{}{}",
+            axis("X", "[axes.X.servo]\nmodel = \"cascade\"\n"),
+            axis("Y", ""),
+            axis("Z", "[axes.Z.drive]\nbacklash_deg = 0.1\n")
+        );
+        let e = crate::machine::Machine::from_toml(Path::new("m.toml"), &text, None).unwrap_err();
+        let m = message(e);
+        assert!(
+            m.starts_with("24: `axes.Z.drive.backlash_deg`: is a rotary-axis key"),
+            "{m}"
+        );
     }
 }

@@ -20,7 +20,11 @@ struct Setup {
 
 fn first_order(kv: f64) -> Setup {
     Setup {
-        servo: ServoConfig { model: "first-order".into(), kv_per_s: kv, ..Default::default() },
+        servo: ServoConfig {
+            model: "first-order".into(),
+            kv_per_s: kv,
+            ..Default::default()
+        },
         drive: DriveConfig::default(),
         friction: FrictionConfig::default(),
     }
@@ -29,9 +33,16 @@ fn first_order(kv: f64) -> Setup {
 /// The default cascade drive without friction or backlash: a linear time-invariant axis.
 fn cascade_linear() -> Setup {
     Setup {
-        servo: ServoConfig { model: "cascade".into(), ..Default::default() },
+        servo: ServoConfig {
+            model: "cascade".into(),
+            ..Default::default()
+        },
         drive: DriveConfig::default(),
-        friction: FrictionConfig { coulomb_n: Some(0.0), viscous_n_s_per_m: Some(0.0), ..Default::default() },
+        friction: FrictionConfig {
+            coulomb_n: Some(0.0),
+            viscous_n_s_per_m: Some(0.0),
+            ..Default::default()
+        },
     }
 }
 
@@ -98,7 +109,10 @@ fn angle_diff(to: f64, from: f64) -> f64 {
 
 /// Samples whose nominal angle lies within [from, from + width) deg (wrapping at 360).
 fn window(s: &[Sample], from: f64, width: f64) -> Vec<Sample> {
-    s.iter().copied().filter(|p| (p.theta_deg - from).rem_euclid(360.0) < width).collect()
+    s.iter()
+        .copied()
+        .filter(|p| (p.theta_deg - from).rem_euclid(360.0) < width)
+        .collect()
 }
 
 fn median(values: &mut [f64]) -> f64 {
@@ -119,10 +133,21 @@ fn first_order_radial_error_matches_the_closed_form() {
         let cw = circle(&first_order(kv), &first_order(kv), r, feed, false);
         for run in [&ccw, &cw] {
             let m = mean(run);
-            assert!((m - closed_form_um).abs() < 0.03 * closed_form_um.abs(), "F{feed}: mean radial {m} um, expected {closed_form_um} um");
-            assert!(range(run) < 0.01 * closed_form_um.abs(), "F{feed}: radial range {} um", range(run));
+            assert!(
+                (m - closed_form_um).abs() < 0.03 * closed_form_um.abs(),
+                "F{feed}: mean radial {m} um, expected {closed_form_um} um"
+            );
+            assert!(
+                range(run) < 0.01 * closed_form_um.abs(),
+                "F{feed}: radial range {} um",
+                range(run)
+            );
         }
-        eprintln!("F{feed}: closed form {closed_form_um:.4} um, CCW {:.4} um, CW {:.4} um", mean(&ccw), mean(&cw));
+        eprintln!(
+            "F{feed}: closed form {closed_form_um:.4} um, CCW {:.4} um, CW {:.4} um",
+            mean(&ccw),
+            mean(&cw)
+        );
         assert!((mean(&ccw) - mean(&cw)).abs() < 0.01 * closed_form_um.abs());
     }
 }
@@ -156,10 +181,16 @@ fn gain_mismatch_gives_a_45_degree_ellipse_that_flips_with_direction() {
             let run = circle(&first_order(kvx), &first_order(kvy), r, feed, ccw);
             let (a, b) = fit_two_theta(&run);
             let p2p = 2.0 * a.hypot(b);
-            assert!((p2p - expected_um).abs() < 0.1 * expected_um, "r {r}, ccw {ccw}: peak-to-peak {p2p} um, expected {expected_um} um");
+            assert!(
+                (p2p - expected_um).abs() < 0.1 * expected_um,
+                "r {r}, ccw {ccw}: peak-to-peak {p2p} um, expected {expected_um} um"
+            );
             let major = (b.atan2(a).to_degrees() / 2.0).rem_euclid(180.0);
             eprintln!("r {r}, ccw {ccw}: p2p {p2p:.2} um (expected {expected_um:.2}), major axis {major:.2} deg");
-            assert!(angle_diff(major, major_deg).abs() < 5.0, "r {r}, ccw {ccw}: major axis at {major} deg, expected {major_deg}");
+            assert!(
+                angle_diff(major, major_deg).abs() < 5.0,
+                "r {r}, ccw {ccw}: major axis at {major} deg, expected {major_deg}"
+            );
         }
     }
 }
@@ -173,7 +204,9 @@ fn gain_mismatch_gives_a_45_degree_ellipse_that_flips_with_direction() {
 #[test]
 fn backlash_splits_the_circle_into_two_half_circles() {
     let (r, feed) = (50.0, 1000.0);
-    for (backlash_mm, stiffness_n_per_um, coulomb_n) in [(0.010, 200.0, 150.0), (0.010, 50.0, 250.0)] {
+    for (backlash_mm, stiffness_n_per_um, coulomb_n) in
+        [(0.010, 200.0, 150.0), (0.010, 50.0, 250.0)]
+    {
         let mut x = cascade_linear();
         x.drive.backlash_mm = Some(backlash_mm);
         x.drive.stiffness_n_per_um = Some(stiffness_n_per_um);
@@ -185,7 +218,10 @@ fn backlash_splits_the_circle_into_two_half_circles() {
             // reversals (|cos θ| small there anyway, and the transient lives there).
             let pts: Vec<(f64, f64)> = run
                 .iter()
-                .filter(|p| angle_diff(p.theta_deg, 0.0).abs() > 15.0 && angle_diff(p.theta_deg, 180.0).abs() > 15.0)
+                .filter(|p| {
+                    angle_diff(p.theta_deg, 0.0).abs() > 15.0
+                        && angle_diff(p.theta_deg, 180.0).abs() > 15.0
+                })
                 .map(|p| {
                     let t = p.theta_deg.to_radians();
                     let vx = -t.sin() * if ccw { 1.0 } else { -1.0 };
@@ -193,8 +229,12 @@ fn backlash_splits_the_circle_into_two_half_circles() {
                 })
                 .collect();
             let n = pts.len() as f64;
-            let (gm, rm) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
-            let s = pts.iter().map(|p| (p.0 - gm) * (p.1 - rm)).sum::<f64>() / pts.iter().map(|p| (p.0 - gm).powi(2)).sum::<f64>();
+            let (gm, rm) = (
+                pts.iter().map(|p| p.0).sum::<f64>() / n,
+                pts.iter().map(|p| p.1).sum::<f64>() / n,
+            );
+            let s = pts.iter().map(|p| (p.0 - gm) * (p.1 - rm)).sum::<f64>()
+                / pts.iter().map(|p| (p.0 - gm).powi(2)).sum::<f64>();
             let step = 2.0 * s;
             eprintln!("b {backlash_mm} mm, k {stiffness_n_per_um} N/um, Fc {coulomb_n} N, ccw {ccw}: step {step:.3} um, expected {expected_um:.3} um");
             assert!((step - expected_um).abs() < 0.1 * expected_um, "b {backlash_mm} mm, k {stiffness_n_per_um} N/um, Fc {coulomb_n} N, ccw {ccw}: step {step} um, expected {expected_um} um");
@@ -222,22 +262,44 @@ fn friction_makes_an_outward_spike_after_each_reversal_of_that_axis_only() {
         for reversal in [0.0, 180.0] {
             // 30 deg after the reversal in the direction of travel.
             let after = window(&run, if ccw { reversal } else { reversal - 30.0 }, 30.0);
-            let peak = after.iter().max_by(|a, b| a.radial_um.total_cmp(&b.radial_um)).unwrap();
+            let peak = after
+                .iter()
+                .max_by(|a, b| a.radial_um.total_cmp(&b.radial_um))
+                .unwrap();
             let height = peak.radial_um - baseline;
             let lead = angle_diff(peak.theta_deg, reversal) * travel;
-            assert!(height > 0.3 && height < 30.0, "ccw {ccw}: spike after {reversal} deg is {height} um");
-            assert!(lead > 0.0 && lead < 15.0, "ccw {ccw}: spike peaks {lead} deg after the reversal at {reversal} deg");
+            assert!(
+                height > 0.3 && height < 30.0,
+                "ccw {ccw}: spike after {reversal} deg is {height} um"
+            );
+            assert!(
+                lead > 0.0 && lead < 15.0,
+                "ccw {ccw}: spike peaks {lead} deg after the reversal at {reversal} deg"
+            );
             // Before the reversal the trace is still on the baseline.
-            let before = window(&run, if ccw { reversal - 30.0 } else { reversal + 1.0 }, 29.0);
-            let before_max = before.iter().map(|p| (p.radial_um - baseline).abs()).fold(0.0, f64::max);
-            assert!(before_max < 0.25 * height, "ccw {ccw}: {before_max} um before the reversal at {reversal} deg");
+            let before = window(
+                &run,
+                if ccw { reversal - 30.0 } else { reversal + 1.0 },
+                29.0,
+            );
+            let before_max = before
+                .iter()
+                .map(|p| (p.radial_um - baseline).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                before_max < 0.25 * height,
+                "ccw {ccw}: {before_max} um before the reversal at {reversal} deg"
+            );
             eprintln!("ccw {ccw}: spike {height:.3} um at {lead:.2} deg after {reversal}; baseline {baseline:.3} um; before {before_max:.3} um");
             spikes.push(height);
         }
         let smallest = spikes.iter().copied().fold(f64::MAX, f64::min);
         for y_reversal in [90.0, 270.0] {
             let near = window(&run, y_reversal - 30.0, 60.0);
-            let worst = near.iter().map(|p| (p.radial_um - baseline).abs()).fold(0.0, f64::max);
+            let worst = near
+                .iter()
+                .map(|p| (p.radial_um - baseline).abs())
+                .fold(0.0, f64::max);
             eprintln!("ccw {ccw}: near Y reversal {y_reversal}: {worst:.3} um");
             assert!(worst < 0.2 * smallest, "ccw {ccw}: {worst} um near Y's reversal at {y_reversal} deg vs spike {smallest} um");
         }
@@ -252,8 +314,15 @@ fn identical_dynamics_give_a_uniform_radial_error() {
         for feed in [1000.0, 3000.0] {
             let run = circle(&setup, &setup, 50.0, feed, true);
             let (m, g) = (mean(&run), range(&run));
-            eprintln!("{} F{feed}: mean {m:.4} um, range {g:.2e} um", setup.servo.model);
-            assert!(m < 0.0 && g < 0.02 * m.abs(), "{} F{feed}: mean {m} um, range {g} um", setup.servo.model);
+            eprintln!(
+                "{} F{feed}: mean {m:.4} um, range {g:.2e} um",
+                setup.servo.model
+            );
+            assert!(
+                m < 0.0 && g < 0.02 * m.abs(),
+                "{} F{feed}: mean {m} um, range {g} um",
+                setup.servo.model
+            );
         }
     }
 }
@@ -282,7 +351,10 @@ fn ramp_following_error_is_v_over_kv_and_feedforward_removes_it() {
     let w = 60.0f64;
     let lost_motion_deg = ((15.0 + 5.0 * w.to_radians()) / 3e6f64).to_degrees();
     for (axis, speed, lost) in [(Axis::X, v, lost_motion_mm), (Axis::C, w, lost_motion_deg)] {
-        let mut s = Setup { friction: FrictionConfig::default(), ..cascade_linear() };
+        let mut s = Setup {
+            friction: FrictionConfig::default(),
+            ..cascade_linear()
+        };
         for feedback in ["fully-closed", "semi-closed"] {
             s.servo.feedback = feedback.into();
             let extra = if feedback == "semi-closed" { lost } else { 0.0 };
@@ -290,11 +362,17 @@ fn ramp_following_error_is_v_over_kv_and_feedforward_removes_it() {
             let fe = ramp(axis, &s, speed).following_error;
             let expected = speed / 30.0 + extra;
             eprintln!("{axis} {feedback}: fe {fe:.6e}, expected {expected:.6e}");
-            assert!((fe - expected).abs() < 1e-3 * expected, "{axis} {feedback}: {fe}, expected {expected}");
+            assert!(
+                (fe - expected).abs() < 1e-3 * expected,
+                "{axis} {feedback}: {fe}, expected {expected}"
+            );
             s.servo.velocity_feedforward = 1.0;
             let fe = ramp(axis, &s, speed).following_error;
             eprintln!("{axis} {feedback} with feedforward: fe {fe:.6e}, expected {extra:.6e}");
-            assert!((fe - extra).abs() < 0.02 * lost, "{axis} {feedback} with feedforward: {fe}, expected {extra}");
+            assert!(
+                (fe - extra).abs() < 0.02 * lost,
+                "{axis} {feedback} with feedforward: {fe}, expected {extra}"
+            );
         }
     }
     // The ideal first-order loop: exactly zero with feedforward.
@@ -320,8 +398,19 @@ fn an_unstable_drive_reports_divergence_on_its_axis() {
         diverges_on_z(&s);
     }
     // A NaN setpoint is refused the same way.
-    let mut servo = AxisServo::new(Axis::B, &ServoConfig::default(), &DriveConfig::default(), &FrictionConfig::default(), T, 0.0).unwrap();
-    assert!(matches!(servo.step(f64::NAN, 0.5), Err(Error::Diverged { axis: Axis::B, .. })));
+    let mut servo = AxisServo::new(
+        Axis::B,
+        &ServoConfig::default(),
+        &DriveConfig::default(),
+        &FrictionConfig::default(),
+        T,
+        0.0,
+    )
+    .unwrap();
+    assert!(matches!(
+        servo.step(f64::NAN, 0.5),
+        Err(Error::Diverged { axis: Axis::B, .. })
+    ));
 }
 
 fn diverges_on_z(s: &Setup) {
@@ -330,7 +419,11 @@ fn diverges_on_z(s: &Setup) {
     for k in 1..=10_000 {
         let t = k as f64 * T;
         match servo.step(0.01 * t, t) {
-            Ok(state) => assert!(state.actual.is_finite() && state.following_error.is_finite() && state.motor.is_finite()),
+            Ok(state) => assert!(
+                state.actual.is_finite()
+                    && state.following_error.is_finite()
+                    && state.motor.is_finite()
+            ),
             Err(e) => {
                 outcome = Some(e);
                 break;
@@ -338,11 +431,47 @@ fn diverges_on_z(s: &Setup) {
         }
     }
     match outcome {
-        Some(Error::Diverged { axis, time_s, reason }) => {
+        Some(Error::Diverged {
+            axis,
+            time_s,
+            reason,
+        }) => {
             assert_eq!(axis, Axis::Z);
             assert!(time_s > 0.0 && !reason.is_empty());
             eprintln!("diverged at {time_s} s: {reason}");
         }
         other => panic!("expected Diverged on Z, got {other:?}"),
+    }
+}
+
+/// First-order model with backlash b: a play element between motor and table. On a ramp the
+/// loop error is v/Kv at its feedback point, and the table trails the motor by b/2: a
+/// semi-closed loop (motor encoder) shows `v/Kv + b/2` at the table, a fully-closed loop
+/// (table scale) `v/Kv` with the motor b/2 ahead.
+#[test]
+fn first_order_backlash_is_a_play_element_between_motor_and_table() {
+    let (v, b) = (1000.0 / 60.0, 0.02);
+    let mut s = first_order(30.0);
+    s.drive.backlash_mm = Some(b);
+    for (feedback, expected_fe) in [
+        ("semi-closed", v / 30.0 + b / 2.0),
+        ("fully-closed", v / 30.0),
+    ] {
+        s.servo.feedback = feedback.into();
+        let state = ramp(Axis::X, &s, v);
+        eprintln!(
+            "{feedback}: fe {:.6} mm, motor - table {:.6} mm",
+            state.following_error,
+            state.motor - state.actual
+        );
+        assert!(
+            (state.following_error - expected_fe).abs() < 1e-3 * expected_fe,
+            "{feedback}: {}",
+            state.following_error
+        );
+        assert!(
+            (state.motor - state.actual - b / 2.0).abs() < 1e-9,
+            "{feedback}"
+        );
     }
 }

@@ -475,3 +475,44 @@ fn first_order_backlash_is_a_play_element_between_motor_and_table() {
         );
     }
 }
+
+/// Spec result 5, last point: in a fully-closed loop backlash shows as a spike, larger than
+/// the friction spike alone, instead of a step: the scale on the table corrects the lost
+/// motion once the motor has crossed the gap, so the two half circles coincide again.
+#[test]
+fn fully_closed_backlash_gives_a_larger_spike_instead_of_a_step() {
+    let mut friction_only = cascade_linear();
+    friction_only.servo.feedback = "fully-closed".into();
+    friction_only.friction = FrictionConfig::default();
+    let mut with_backlash = friction_only.clone();
+    with_backlash.drive.backlash_mm = Some(0.010);
+    let mut y = cascade_linear();
+    y.servo.feedback = "fully-closed".into();
+    let spike = |x: &Setup| {
+        let run = circle(x, &y, 50.0, 1000.0, true);
+        let baseline = median(&mut run.iter().map(|p| p.radial_um).collect::<Vec<_>>());
+        let after = window(&run, 0.0, 30.0)
+            .iter()
+            .map(|p| p.radial_um - baseline)
+            .fold(f64::MIN, f64::max);
+        // Away from the reversals the trace is back on the baseline on both sides of 0 deg.
+        let settled = [window(&run, 60.0, 30.0), window(&run, 270.0, 30.0)]
+            .iter()
+            .flatten()
+            .map(|p| (p.radial_um - baseline).abs())
+            .fold(0.0, f64::max);
+        (after, settled)
+    };
+    let (friction_spike, _) = spike(&friction_only);
+    let (backlash_spike, settled) = spike(&with_backlash);
+    eprintln!("friction spike {friction_spike:.3} um, with backlash {backlash_spike:.3} um, settled within {settled:.3} um");
+    // Noticeably larger: by more than a tenth of the 10 um gap.
+    assert!(
+        backlash_spike > friction_spike + 0.1 * 10.0,
+        "{backlash_spike} vs {friction_spike}"
+    );
+    assert!(
+        settled < 0.05 * 10.0,
+        "no step: {settled} um away from the reversals"
+    );
+}

@@ -5,10 +5,12 @@
 //! limits monitor, collision scene → reports.
 
 pub mod axis;
+pub mod ballbar;
 pub mod error;
 pub mod gcode;
 pub mod kinematics;
 pub mod machine;
+pub mod plot;
 pub mod scene;
 pub mod servo;
 pub mod toml_input;

@@ -1,0 +1,1 @@
+//! Polar plot.

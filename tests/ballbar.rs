@@ -384,3 +384,81 @@ fn summary_json_has_the_contract_keys() {
     assert_eq!(spike["axis"], "X");
     assert!(spike["theta_deg"].is_number() && spike["height_um"].is_number());
 }
+
+// ---------------------------------------------------------------- polar plot
+
+#[test]
+fn the_plot_scale_is_the_smallest_1_2_5_step_that_fits() {
+    use mtsim::plot::scale_um_per_div;
+    // Four divisions each side of the nominal circle.
+    assert_eq!(scale_um_per_div(31.0), 10.0);
+    assert_eq!(scale_um_per_div(20.0), 5.0);
+    assert_eq!(scale_um_per_div(3.0), 1.0);
+    assert_eq!(scale_um_per_div(7.9), 2.0);
+    assert_eq!(scale_um_per_div(0.0), 0.1);
+    assert_eq!(scale_um_per_div(f64::NAN), 0.1);
+}
+
+#[test]
+fn the_polar_plot_is_written_atomically_and_deterministically() {
+    let spikes = |t: f64, d: Direction| friction_spike(t, 252.74, d) + friction_spike(t, 338.05, d);
+    let ccw = run_of(Direction::Ccw, |t| ellipse(t) + spikes(t, Direction::Ccw));
+    let cw = run_of(Direction::Cw, |t| {
+        -ellipse(t)
+            + 3.0
+            + spikes(t, Direction::Cw)
+            + if (90.0..270.0).contains(&t) { 2.0 } else { 0.0 }
+    });
+    let runs = [ccw, cw];
+    let reversals = cone_reversals();
+    let result = analyse(&runs, &reversals).unwrap();
+
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
+    let first = dir.join("ballbar-polar-1.svg");
+    let second = dir.join("ballbar-polar-2.svg");
+    for path in [&first, &second] {
+        mtsim::plot::write_polar_svg(path, &runs, &reversals, &result, "cone 15/10, YT -25 mm")
+            .unwrap();
+    }
+    let svg = std::fs::read_to_string(&first).unwrap();
+    assert_eq!(
+        svg,
+        std::fs::read_to_string(&second).unwrap(),
+        "renders differ"
+    );
+    assert!(
+        !dir.join("ballbar-polar-1.svg.tmp").exists(),
+        "temporary file left behind"
+    );
+    // Largest |d| about the common centre is below 40 um: 10 um/div.
+    assert!(svg.contains("scale: 10 um/div"), "no scale text");
+    let texts = svg_texts(&svg);
+    for letter in ["X", "Y", "Z", "A"] {
+        assert!(texts.iter().any(|t| t == letter), "no tick label {letter}");
+    }
+    assert!(
+        texts.iter().any(|t| t == "1 X"),
+        "the first event is not labelled with X"
+    );
+    assert!(svg.contains("H = "), "no hysteresis figure");
+}
+
+#[test]
+fn an_unwritable_plot_path_is_a_write_error() {
+    let run = run_of(Direction::Ccw, ellipse);
+    let result = analyse(std::slice::from_ref(&run), &[]).unwrap();
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("no-such-dir/plot.svg");
+    let err = mtsim::plot::write_polar_svg(&path, &[run], &[], &result, "t").unwrap_err();
+    assert!(matches!(err, mtsim::Error::Write { .. }), "{err:?}");
+}
+
+/// The contents of the SVG's text elements, trimmed.
+fn svg_texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let body = &t[t.find('>')? + 1..];
+            Some(body[..body.find("</text>")?].trim().to_string())
+        })
+        .collect()
+}

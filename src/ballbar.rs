@@ -372,14 +372,16 @@ pub struct BallbarResult {
 ///
 /// Event detection on each run's centred trace c (bins of [`BIN_DEG`]):
 /// 1. Noise sigma = 1.4826 MAD of the differences of filled neighbouring bins / sqrt 2.
-/// 2. Smooth shape: the Fourier series of c up to harmonic [`SMOOTH_ORDER`].
-/// 3. Steps, on r = c - smooth: `S(i) = median(r, right window) - median(r, left window)`,
-///    windows [`STEP_WINDOW_DEG`] wide starting [`STEP_GAP_DEG`] from i. A spike decays
-///    inside the gap, so a median barely sees it, while a step gives a trapezoid of height
-///    h centred on it. A step is a region where |S| exceeds the threshold; its position is
-///    the middle of the part above half its peak. The steps are then removed from c and
-///    step 2 and 3 repeated once, so that the smooth fit is not bent by them.
-/// 4. Spikes, on r minus the steps: residual above a running median (half-window
+/// 2. Smooth shape and steps, fitted jointly by least squares: the Fourier series up to
+///    harmonic [`SMOOTH_ORDER`] plus one jump per step (so a step does not bend the smooth
+///    fit). Steps are added greedily: in the residual r,
+///    `S(i) = median(r, right window) - median(r, left window)`, with windows
+///    [`STEP_WINDOW_DEG`] wide starting [`STEP_GAP_DEG`] from i. A spike has decayed inside
+///    the gap and a median barely sees it, while a step gives a trapezoid of height h
+///    centred on it. The largest region with |S| above the threshold becomes a step at the
+///    middle of its part above half its peak; refit; repeat until none is left. The step's
+///    height is its fitted jump.
+/// 3. Spikes: the residual of that fit minus its running median (half-window
 ///    [`BASELINE_HALF_WINDOW_DEG`]); a spike is a region above half the threshold that
 ///    reaches the threshold. The onset is where, walking back in time from the peak, the
 ///    residual falls below 10 % of the height. Spikes within 1.5 deg of a step belong to

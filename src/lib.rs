@@ -6,6 +6,7 @@
 
 pub mod analysis;
 pub mod axis;
+pub mod ballbar;
 pub mod circle;
 pub mod cli;
 pub mod cone;
@@ -14,6 +15,7 @@ pub mod gcode;
 pub mod kinematics;
 pub mod limits;
 pub mod machine;
+pub mod plot;
 pub mod report;
 pub mod sampling;
 pub mod scenario;

@@ -15,7 +15,8 @@ use std::f64::consts::TAU;
 use serde::Serialize;
 
 use crate::axis::{Axis, AxisVec};
-use crate::cone::{normalize_deg, ConePath, ConeTest};
+use crate::ballbar::CircleFrame;
+use crate::cone::{normalize_deg, ConePath};
 use crate::error::Result;
 use crate::gcode::{Block, Motion};
 use crate::machine::Machine;
@@ -225,12 +226,12 @@ fn peak_abs_derivative(path: &ConePath, grid: &[(f64, AxisVec)], axis: Axis) -> 
     f(0.5 * (a + b)).max(grid.iter().map(|(_, d)| d[axis].abs()).fold(0.0, f64::max))
 }
 
-/// Analyses the blocks of an NC program. `cone`, when given, supplies θ for the turning
-/// points (the θ of the tool tip at the block's end about the cone axis).
+/// Analyses the blocks of an NC program. `frame`, when given, supplies θ for the turning
+/// points (the θ of the tool tip at the block's end on the measured circle).
 pub fn analyse_blocks(
     blocks: impl Iterator<Item = Result<Block>>,
     machine: &Machine,
-    cone: Option<&ConeTest>,
+    frame: Option<&CircleFrame>,
 ) -> Result<Analysis> {
     let axes = machine.axes();
     let kin = machine.kinematics;
@@ -250,32 +251,29 @@ pub fn analyse_blocks(
             }
             continue;
         }
-        let theta = cone.map(|c| c.theta_deg_of(&kin.forward(&end).tip));
         // Only feed moves carry an F that implies speeds; their time is the programmed one.
         let seconds = match block.motion {
             Motion::Linear | Motion::Arc { .. } => Some(block_duration_s(&block, machine)?),
             _ => None,
         };
-        // Arcs and G43.4 moves are not straight in machine axes: follow them at 1/32 steps.
-        let steps = if matches!(block.motion, Motion::Arc { .. }) || block.tcp {
-            32
-        } else {
-            1
-        };
-        for (s, &axis) in acc.iter_mut().zip(axes) {
-            let mut previous = start[axis];
-            for k in 1..=steps {
-                let x = position_in_block(&block, machine, k as f64 / steps as f64)[axis];
-                s.extend(x);
+        // Arcs and G43.4 moves are not straight in machine axes: follow them at 1/32 steps,
+        // so that an axis turning inside a block is found too.
+        let steps = if matches!(block.motion, Motion::Arc { .. }) || block.tcp { 32 } else { 1 };
+        let mut previous = start;
+        for k in 1..=steps {
+            let q = if k == steps { end } else { position_in_block(&block, machine, k as f64 / steps as f64) };
+            for (s, &axis) in acc.iter_mut().zip(axes) {
+                let d = q[axis] - previous[axis];
+                s.extend(q[axis]);
                 if let Some(t) = seconds.filter(|t| *t > 0.0) {
-                    s.peak_speed = s
-                        .peak_speed
-                        .max((x - previous).abs() / (t / steps as f64) * 60.0);
+                    s.peak_speed = s.peak_speed.max(d.abs() / (t / steps as f64) * 60.0);
                 }
-                previous = x;
+                if let Some(turn) = s.push_increment(d, block.line, q) {
+                    let theta = frame.map(|f| f.theta_deg(&kin.forward(&turn.1).tip));
+                    s.turns.push((turn.0, theta));
+                }
             }
-            let d = end[axis] - start[axis];
-            s.push_increment(d, block.line, theta);
+            previous = q;
         }
     }
     let axes = axes
@@ -304,8 +302,8 @@ struct BlockAxisState {
     min: f64,
     max: f64,
     peak_speed: f64,
-    /// The last non-zero increment and the line and θ of the block that made it.
-    last_move: Option<(f64, usize, Option<f64>)>,
+    /// The last non-zero increment, the line of the block that made it and where it ended.
+    last_move: Option<(f64, usize, AxisVec)>,
     turns: Vec<(usize, Option<f64>)>,
 }
 
@@ -327,16 +325,18 @@ impl BlockAxisState {
         self.max = self.max.max(v);
     }
 
-    fn push_increment(&mut self, d: f64, line: usize, theta: Option<f64>) {
+    /// Records an increment `d` ending at `q`; returns the line and position of a turning
+    /// point when `d` runs against the previous non-zero increment.
+    fn push_increment(&mut self, d: f64, line: usize, q: AxisVec) -> Option<(usize, AxisVec)> {
         if d == 0.0 {
-            return;
+            return None;
         }
-        if let Some((previous, prev_line, prev_theta)) = self.last_move {
-            if previous.signum() != d.signum() {
-                self.turns.push((prev_line, prev_theta));
-            }
-        }
-        self.last_move = Some((d, line, theta));
+        let turn = self
+            .last_move
+            .filter(|(previous, _, _)| previous.signum() != d.signum())
+            .map(|(_, prev_line, prev_q)| (prev_line, prev_q));
+        self.last_move = Some((d, line, q));
+        turn
     }
 }
 

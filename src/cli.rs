@@ -10,6 +10,7 @@ use serde_json::{json, Map};
 
 use crate::analysis::{analyse_blocks, analyse_cone, Analysis};
 use crate::axis::AxisVec;
+use crate::ballbar::{CircleFrame, Direction};
 use crate::cone::{write_program, ConePath};
 use crate::error::{Error, Result};
 use crate::report::{analysis_table, write_atomic};
@@ -118,10 +119,10 @@ fn cone_of(
     command: &str,
 ) -> Result<(crate::cone::ConeTest, crate::cone::NcOptions)> {
     match &scenario.program {
-        Program::Cone { cone, nc } => Ok((*cone, *nc)),
-        Program::File { .. } => Err(Error::invalid(
+        Program::Cone { cone, nc, .. } => Ok((*cone, *nc)),
+        Program::File { .. } | Program::Circle { .. } => Err(Error::invalid(
             &scenario.path,
-            format!("`mtsim {command}` needs a generated cone program, but [program] names a file"),
+            format!("`mtsim {command}` needs a generated cone program ([program.cone])"),
         )
         .with_help("give the scenario a [program.cone] table instead of `file`")),
     }
@@ -147,13 +148,19 @@ fn cmd_cone(path: &Path, output: Option<&Path>, g93: bool, tcp: bool) -> Result<
 /// Analysis of a scenario's program: the exact path for a generated cone, the blocks for a file.
 pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
     match &scenario.program {
-        Program::Cone { cone, nc } => Ok(analyse_cone(
+        Program::Cone { cone, nc, .. } => Ok(analyse_cone(
             &ConePath::new(*cone, &scenario.machine),
             nc.feed_mm_min,
         )),
         Program::File { path, cone } => {
             let blocks = crate::gcode::read_file(path, AxisVec::ZERO)?;
-            analyse_blocks(blocks, &scenario.machine, cone.as_ref())
+            analyse_blocks(blocks, &scenario.machine, cone.map(|c| c.circle_frame()).as_ref())
+        }
+        Program::Circle { circle, directions } => {
+            let (text, _) = crate::circle::write_program(circle, directions[0] == Direction::Cw, 0.0);
+            let blocks = crate::gcode::read_str(&scenario.path, &text, AxisVec::ZERO);
+            let frame = CircleFrame::planar(circle.center_mm, circle.plane);
+            analyse_blocks(blocks, &scenario.machine, Some(&frame))
         }
     }
 }

@@ -20,6 +20,7 @@ use std::fmt::Write as _;
 use nalgebra::{Point3, Rotation3, Vector3};
 
 use crate::axis::{Axis, AxisVec};
+use crate::ballbar::CircleFrame;
 use crate::kinematics::{Branch, Kinematics, ToolPose, C_START_REFERENCE_DEG};
 use crate::machine::Machine;
 
@@ -341,11 +342,9 @@ fn sanitize(text: &str) -> String {
 }
 
 impl ConeTest {
-    /// θ of a table-frame point about the cone axis, deg in [0, 360): the inverse of
-    /// [`ConeTest::point`]'s angle, `atan2(y', x')` of `Ry(-β)ᵀ (p - O)`.
-    pub fn theta_deg_of(&self, p: &Point3<f64>) -> f64 {
-        let local = self.frame_rotation().inverse() * (p.coords - self.center_mm);
-        normalize_deg(local.y.atan2(local.x).to_degrees())
+    /// The frame of the measured circle, for θ of a table-frame point.
+    pub fn circle_frame(&self) -> CircleFrame {
+        CircleFrame::cone(self.center_mm.into(), self.inclination_deg)
     }
 }
 

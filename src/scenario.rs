@@ -8,7 +8,10 @@ use std::path::{Path, PathBuf};
 use nalgebra::Vector3;
 use serde::Deserialize;
 
+use crate::ballbar::Direction;
+use crate::circle::CircleTest;
 use crate::cone::{ConeTest, NcOptions};
+use crate::gcode::Plane;
 use crate::error::{Error, Result};
 use crate::machine::Machine;
 use crate::toml_input::{self, value_error};
@@ -20,6 +23,42 @@ struct ScenarioFile {
     program: ProgramSection,
     #[serde(default)]
     machine_overrides: Option<toml::Table>,
+    #[serde(default)]
+    simulate: SimulateSection,
+    #[serde(default)]
+    ballbar: BallbarSection,
+}
+
+/// `[simulate]`: options of `mtsim simulate`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimulateSection {
+    /// Interpolate with tool-centre-point control (the tip on the straight line in the
+    /// table frame, inverse kinematics every period) instead of joint space.
+    pub tcp: bool,
+    /// Write every n-th sample to trace.csv (1: every interpolation period).
+    pub trace_every: usize,
+    /// Path before and after the measured revolution, deg, so that the trace leaves out the
+    /// start and stop transients.
+    pub lead_deg: f64,
+}
+
+impl Default for SimulateSection {
+    fn default() -> Self {
+        SimulateSection {
+            tcp: false,
+            trace_every: 1,
+            lead_deg: 20.0,
+        }
+    }
+}
+
+/// `[ballbar]`: the virtual ball bar.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BallbarSection {
+    /// Table-side ball, table frame, mm; defaults to the cone's base centre or the circle's centre.
+    pub pivot_mm: Option<[f64; 3]>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -29,6 +68,29 @@ struct ProgramSection {
     file: Option<String>,
     /// The generated cone-frustum test; with `file`, only its geometry is used (for θ).
     cone: Option<ConeSection>,
+    /// The planar circular test (ISO 230-4).
+    circle: Option<CircleSection>,
+}
+
+/// `[program.circle]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CircleSection {
+    /// "XY", "ZX" or "YZ" (G17, G18, G19).
+    #[serde(default = "default_plane")]
+    pub plane: String,
+    pub radius_mm: f64,
+    #[serde(default = "default_feed")]
+    pub feed_mm_min: f64,
+    /// "ccw" or "cw"; see also `directions`.
+    pub direction: Option<String>,
+    /// Both directions for hysteresis: `["ccw", "cw"]`.
+    pub directions: Option<Vec<String>>,
+    pub center_mm: [f64; 3],
+}
+
+fn default_plane() -> String {
+    "XY".into()
 }
 
 /// `[program.cone]`.
@@ -49,6 +111,8 @@ pub struct ConeSection {
     /// Write a tool-centre-point (G43.4) program.
     #[serde(default)]
     pub tcp: bool,
+    /// Directions `simulate` runs: `["ccw"]` (default), `["cw"]` or `["ccw", "cw"]`.
+    pub directions: Option<Vec<String>>,
 }
 
 fn default_segments() -> usize {
@@ -61,8 +125,10 @@ fn default_feed() -> f64 {
 /// What a scenario runs.
 #[derive(Clone, Debug)]
 pub enum Program {
-    /// The generated cone-frustum test.
-    Cone { cone: ConeTest, nc: NcOptions },
+    /// The generated cone-frustum test, run in `directions` by `simulate`.
+    Cone { cone: ConeTest, nc: NcOptions, directions: Vec<Direction> },
+    /// The planar circular test.
+    Circle { circle: CircleTest, directions: Vec<Direction> },
     /// A G-code file, with the cone geometry when the scenario gives it.
     File {
         path: PathBuf,
@@ -76,6 +142,9 @@ pub struct Scenario {
     pub path: PathBuf,
     pub machine: Machine,
     pub program: Program,
+    pub simulate: SimulateSection,
+    /// Table-side ball of the virtual ball bar, table frame, mm.
+    pub ballbar_pivot_mm: Option<Vector3<f64>>,
 }
 
 impl Scenario {
@@ -104,6 +173,14 @@ impl Scenario {
                 .map(|o| (path, text.as_str(), o)),
         )?;
         let program = match (&file.program.file, &file.program.cone) {
+            _ if file.program.circle.is_some() => {
+                if file.program.file.is_some() || file.program.cone.is_some() {
+                    return Err(Error::invalid(path, "[program] takes one of `file`, [program.cone] or [program.circle]"));
+                }
+                let c = file.program.circle.as_ref().expect("checked above");
+                let (circle, directions) = validate_circle(path, &text, c)?;
+                Program::Circle { circle, directions }
+            }
             (Some(f), cone) => Program::File {
                 path: resolve(path, f),
                 cone: cone
@@ -114,7 +191,8 @@ impl Scenario {
             },
             (None, Some(c)) => {
                 let (cone, nc) = validate_cone(path, &text, c)?;
-                Program::Cone { cone, nc }
+                let directions = parse_directions(path, &text, CONE, "directions", c.directions.as_deref())?;
+                Program::Cone { cone, nc, directions }
             }
             (None, None) => {
                 return Err(Error::invalid(
@@ -124,10 +202,24 @@ impl Scenario {
                 .with_help("see docs/scenario-format.md"))
             }
         };
+        let sim = &file.simulate;
+        if sim.trace_every == 0 {
+            return Err(value_error(path, &text, "simulate", "trace_every", "must be at least 1".into()));
+        }
+        if !(sim.lead_deg.is_finite() && (0.0..=180.0).contains(&sim.lead_deg)) {
+            return Err(value_error(path, &text, "simulate", "lead_deg", format!("must be in [0, 180] deg, got {}", sim.lead_deg)));
+        }
+        if let Some(p) = file.ballbar.pivot_mm {
+            if !p.iter().all(|v| v.is_finite()) {
+                return Err(value_error(path, &text, "ballbar", "pivot_mm", "must be three finite numbers (mm)".into()));
+            }
+        }
         Ok(Scenario {
             path: path.to_path_buf(),
             machine,
             program,
+            simulate: file.simulate,
+            ballbar_pivot_mm: file.ballbar.pivot_mm.map(Vector3::from),
         })
     }
 
@@ -136,6 +228,7 @@ impl Scenario {
         match &self.program {
             Program::Cone { cone, .. } => Some(cone),
             Program::File { cone, .. } => cone.as_ref(),
+            Program::Circle { .. } => None,
         }
     }
 }
@@ -220,4 +313,62 @@ pub fn check_cone(cone: &ConeTest) -> std::result::Result<(), (&'static str, Str
         ));
     }
     Ok(())
+}
+
+const CIRCLE: &str = "program.circle";
+
+fn validate_circle(path: &Path, text: &str, c: &CircleSection) -> Result<(CircleTest, Vec<Direction>)> {
+    let err = |key: &str, message: String| value_error(path, text, CIRCLE, key, message);
+    let plane = match c.plane.to_ascii_uppercase().as_str() {
+        "XY" | "G17" => Plane::XY,
+        "ZX" | "XZ" | "G18" => Plane::ZX,
+        "YZ" | "G19" => Plane::YZ,
+        other => return Err(err("plane", format!("expected \"XY\", \"ZX\" or \"YZ\", got \"{other}\""))),
+    };
+    if !(c.radius_mm.is_finite() && c.radius_mm > 0.0) {
+        return Err(err("radius_mm", format!("must be a positive radius in mm, got {}", c.radius_mm)));
+    }
+    if !(c.feed_mm_min.is_finite() && c.feed_mm_min > 0.0) {
+        return Err(err("feed_mm_min", format!("must be a positive feed in mm/min, got {}", c.feed_mm_min)));
+    }
+    if !c.center_mm.iter().all(|v| v.is_finite()) {
+        return Err(err("center_mm", "must be three finite numbers [X, Y, Z] in mm".into()));
+    }
+    let directions = match (&c.direction, &c.directions) {
+        (Some(_), Some(_)) => return Err(err("directions", "give `direction` or `directions`, not both".into())),
+        (Some(d), None) => parse_directions(path, text, CIRCLE, "direction", Some(std::slice::from_ref(d)))?,
+        (None, d) => parse_directions(path, text, CIRCLE, "directions", d.as_deref())?,
+    };
+    let circle = CircleTest {
+        plane,
+        center_mm: c.center_mm,
+        radius_mm: c.radius_mm,
+        feed_mm_min: c.feed_mm_min,
+    };
+    Ok((circle, directions))
+}
+
+/// `["ccw", "cw"]` → directions; default `["ccw"]`; no repeats.
+fn parse_directions(path: &Path, text: &str, section: &str, key: &str, words: Option<&[String]>) -> Result<Vec<Direction>> {
+    let Some(words) = words else {
+        return Ok(vec![Direction::Ccw]);
+    };
+    let mut out = Vec::new();
+    for w in words {
+        let d = match w.to_ascii_lowercase().as_str() {
+            "ccw" => Direction::Ccw,
+            "cw" => Direction::Cw,
+            other => {
+                return Err(value_error(path, text, section, key, format!("expected \"ccw\" or \"cw\", got \"{other}\"")))
+            }
+        };
+        if out.contains(&d) || out.len() == 2 {
+            return Err(value_error(path, text, section, key, "each direction at most once".into()));
+        }
+        out.push(d);
+    }
+    if out.is_empty() {
+        return Err(value_error(path, text, section, key, "needs at least one direction".into()));
+    }
+    Ok(out)
 }

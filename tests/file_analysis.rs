@@ -41,7 +41,7 @@ fn file_analysis(m: &Machine, opts: &NcOptions) -> (Analysis, usize) {
     let (text, measured) = write_program(&path, &m.name, opts);
     let blocks = read_str(Path::new("generated.nc"), &text, AxisVec::ZERO);
     (
-        analyse_blocks(blocks, m, Some(&cone_yt25())).unwrap(),
+        analyse_blocks(blocks, m, Some(&cone_yt25().circle_frame())).unwrap(),
         measured.first,
     )
 }

@@ -7,6 +7,7 @@
 pub mod axis;
 pub mod error;
 pub mod gcode;
+pub mod interpolation;
 pub mod kinematics;
 pub mod machine;
 pub mod scene;

@@ -49,9 +49,10 @@
 //! `ρ` times the speed leaving block k with `ρ = V_{k+1}/V_k`, so a chain of blocks whose
 //! F words differ runs each block at its own F. The axis velocity jumps by
 //! `μ |ρ q'_{k+1}(0) - q'_k(1)|` (μ: exit speed of block k); this jump is limited to
-//! `corner_acceleration_share · amax_i · period` per axis, i.e. what the axis can absorb at
-//! a fraction of its acceleration within one period. That bounds `μ` at every corner. Dwells
-//! force a stop on both sides.
+//! `corner_acceleration_share · amax_i · period` per axis (default share 1: the step is taken
+//! at the axis's full acceleration within one period; half of that next to an arc or a curved
+//! TCP block, whose centripetal term may use the other half). That bounds `μ` at every
+//! corner. Dwells force a stop on both sides.
 //!
 //! # Speed profile in a block (jerk-limited S-curve)
 //!
@@ -120,7 +121,8 @@ pub struct InterpolationOptions {
     /// stop within this many blocks, so long, fast moves split into tiny blocks need more.
     pub lookahead_blocks: usize,
     /// Allowed per-axis velocity step at a block junction, as a fraction of
-    /// `max_acceleration × period` (0 < share; 0.5 leaves half the budget for the path).
+    /// `max_acceleration × period` (> 0; default 1: the step takes the full acceleration
+    /// for one period). Halved next to a curved block, whose centripetal term needs the rest.
     pub corner_acceleration_share: f64,
     /// Name of the program, used in error messages.
     pub program_path: PathBuf,
@@ -131,7 +133,7 @@ impl Default for InterpolationOptions {
         InterpolationOptions {
             force_tcp: false,
             lookahead_blocks: 256,
-            corner_acceleration_share: 0.5,
+            corner_acceleration_share: 1.0,
             program_path: PathBuf::from("program"),
         }
     }
@@ -395,6 +397,7 @@ struct JunctionEnd {
     tangent: AxisVec,
     cap: f64,
     dwell: bool,
+    curved: bool,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -765,15 +768,17 @@ impl<I: Iterator<Item = Result<Block>>> Interpolator<I> {
     /// Appends a planned block: junction limit, then the backward pass.
     fn push(&mut self, mut p: Planned, tangent_start: AxisVec, tangent_end: AxisVec) {
         let dwell = p.length == 0.0;
+        let curved = !p.path.is_straight();
         if let (Some(prev), false) = (self.last_end, dwell) {
             if !prev.dwell {
+                let share = if curved || prev.curved { 0.5 } else { 1.0 }
+                    * self.options.corner_acceleration_share;
                 let rho = p.cap / prev.cap;
                 let mut mu = prev.cap;
                 for (i, l) in self.limits.iter().enumerate() {
                     let Some(l) = l else { continue };
                     let jump = (rho * tangent_start.0[i] - prev.tangent.0[i]).abs();
-                    let allowed =
-                        self.options.corner_acceleration_share * l.acceleration * self.period_s;
+                    let allowed = share * l.acceleration * self.period_s;
                     if jump * mu > allowed {
                         mu = allowed / jump;
                     }
@@ -786,6 +791,7 @@ impl<I: Iterator<Item = Result<Block>>> Interpolator<I> {
             tangent: tangent_end,
             cap: p.cap,
             dwell,
+            curved,
         });
         p.entry_max = if dwell {
             0.0

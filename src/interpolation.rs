@@ -40,7 +40,8 @@
 //! goes to the path acceleration and half to the centripetal term, and the jerk budget is split
 //! in three: `a ≤ ½ amax/|q'|`, `v² |q''| ≤ ½ amax`, `j ≤ ⅓ jmax/|q'|`, `v³ |q'''| ≤ ⅓ jmax`,
 //! `3 |q''| v a ≤ ⅓ jmax`. `|q'|`, `|q''|`, `|q'''|` of curved blocks are the maxima of
-//! central finite differences sampled at 33 points along the block. The cruise speed `V` of a
+//! central finite differences sampled at 17 points along the block, raised by the next
+//! derivative times half the sample spacing (a bound between the samples). The cruise speed `V` of a
 //! block is the programmed speed reduced by these caps, and by nothing else.
 //!
 //! # Junctions
@@ -96,7 +97,7 @@ use nalgebra::Point3;
 use crate::axis::{Axis, AxisVec};
 use crate::error::{Error, Result};
 use crate::gcode::{Block, FeedMode, Motion, Plane};
-use crate::kinematics::Kinematics;
+use crate::kinematics::{Kinematics, Layout};
 use crate::machine::Machine;
 
 /// One commanded position of all axes.
@@ -185,10 +186,8 @@ impl BlockPath {
             q.0[arc.i1] = arc.c1 + r * sin;
         }
         if let Some(kinematics) = &self.tcp {
-            let m = kinematics.table_to_machine(&q, &Point3::new(q.0[0], q.0[1], q.0[2]));
-            q.0[0] = m.x;
-            q.0[1] = m.y;
-            q.0[2] = m.z;
+            let m = table_to_machine(kinematics, &q, [q.0[0], q.0[1], q.0[2]]);
+            q.0[..3].copy_from_slice(&m);
         }
         q
     }
@@ -206,6 +205,30 @@ impl BlockPath {
         let h = 1e-5;
         (self.at(u + h) - self.at(u - h)) * (1.0 / (2.0 * h * length))
     }
+}
+
+/// Intervals at which the derivatives of a curved block are sampled.
+const SAMPLES: usize = 16;
+
+/// `pivot + R(q) p` of [`Kinematics::table_to_machine`], written out with one `sin_cos` per
+/// angle: `R = Rx(A) Rz(C)` (trt-ac), `Ry(B) Rz(C)` (trt-bc), identity (xyz). mm and deg.
+fn table_to_machine(k: &Kinematics, q: &AxisVec, p: [f64; 3]) -> [f64; 3] {
+    let [x, y, z] = p;
+    let (x, y, z) = match k.layout {
+        Layout::Xyz => (x, y, z),
+        Layout::TrtAc | Layout::TrtBc => {
+            let (sc, cc) = q[Axis::C].to_radians().sin_cos();
+            let (x, y) = (cc * x - sc * y, sc * x + cc * y);
+            if k.layout == Layout::TrtAc {
+                let (sa, ca) = q[Axis::A].to_radians().sin_cos();
+                (x, ca * y - sa * z, sa * y + ca * z)
+            } else {
+                let (sb, cb) = q[Axis::B].to_radians().sin_cos();
+                (cb * x + sb * z, y, -sb * x + cb * z)
+            }
+        }
+    };
+    [x + k.pivot_mm.x, y + k.pivot_mm.y, z + k.pivot_mm.z]
 }
 
 /// One jerk-limited speed change from `v0` to `v1` with zero acceleration at both ends.
@@ -737,30 +760,34 @@ impl<I: Iterator<Item = Result<Block>>> Interpolator<I> {
         (p.cap, p.accel, p.jerk) = (cap, accel, jerk);
     }
 
-    /// Maxima of |dq/ds|, |d²q/ds²|, |d³q/ds³| per axis, sampled at 33 points.
+    /// Maxima of |dq/ds|, |d²q/ds²|, |d³q/ds³| per axis, sampled at `SAMPLES + 1` points.
     fn derivative_bounds(&self, path: &BlockPath, length: f64) -> ([f64; 6], [f64; 6], [f64; 6]) {
         let (mut d1, mut d2, mut d3) = ([0.0; 6], [0.0; 6], [0.0; 6]);
-        let (h1, h2, h3) = (1e-5, 1e-3, 1e-2);
-        for k in 0..=32 {
-            let u = k as f64 / 32.0;
+        // One five-point stencil per sample: h small enough for O(h²) truncation to be
+        // negligible, large enough for rounding in the third difference to stay small.
+        let h = 2e-3;
+        for k in 0..=SAMPLES {
+            let u = k as f64 / SAMPLES as f64;
             let q = path.at(u);
-            let (p1, m1) = (path.at(u + h1), path.at(u - h1));
-            let (p2, m2) = (path.at(u + h2), path.at(u - h2));
-            let (p3, m3, pp3, mm3) = (
-                path.at(u + h3),
-                path.at(u - h3),
-                path.at(u + 2.0 * h3),
-                path.at(u - 2.0 * h3),
-            );
+            let (p1, m1) = (path.at(u + h), path.at(u - h));
+            let (p2, m2) = (path.at(u + 2.0 * h), path.at(u - 2.0 * h));
             for i in 0..6 {
-                let first = (p1.0[i] - m1.0[i]) / (2.0 * h1 * length);
-                let second = (p2.0[i] - 2.0 * q.0[i] + m2.0[i]) / (h2 * h2 * length * length);
-                let third = (pp3.0[i] - 2.0 * p3.0[i] + 2.0 * m3.0[i] - mm3.0[i])
-                    / (2.0 * h3.powi(3) * length.powi(3));
+                let first = (p1.0[i] - m1.0[i]) / (2.0 * h * length);
+                let second = (p1.0[i] - 2.0 * q.0[i] + m1.0[i]) / (h * h * length * length);
+                let third = (p2.0[i] - 2.0 * p1.0[i] + 2.0 * m1.0[i] - m2.0[i])
+                    / (2.0 * h.powi(3) * length.powi(3));
                 d1[i] = f64::max(d1[i], first.abs());
                 d2[i] = f64::max(d2[i], second.abs());
                 d3[i] = f64::max(d3[i], third.abs());
             }
+        }
+        // Between samples (half a spacing Δs/2 = L/(2 SAMPLES) away) a derivative can exceed
+        // its sampled maximum by at most the next derivative times Δs/2.
+        let half_spacing = 0.5 * length / SAMPLES as f64;
+        for i in 0..6 {
+            d3[i] *= 1.1;
+            d2[i] += d3[i] * half_spacing;
+            d1[i] += d2[i] * half_spacing;
         }
         (d1, d2, d3)
     }
@@ -903,5 +930,55 @@ impl<I: Iterator<Item = Result<Block>>> Iterator for Interpolator<I> {
                 }));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn written_out_table_rotation_matches_the_kinematics_module() {
+        let q = AxisVec([0.0, 0.0, 0.0, 23.0, -41.0, 137.0]);
+        let p = Point3::new(12.5, -7.25, 88.0);
+        for layout in [Layout::Xyz, Layout::TrtAc, Layout::TrtBc] {
+            let k = Kinematics::new(layout, Vector3::new(1.0, -2.0, 3.0));
+            let expected = k.table_to_machine(&q, &p);
+            let got = table_to_machine(&k, &q, [p.x, p.y, p.z]);
+            for i in 0..3 {
+                assert!(
+                    (got[i] - expected[i]).abs() < 1e-12,
+                    "{layout:?}: {got:?} vs {expected}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn speed_change_covers_its_closed_form_distance_and_time() {
+        // 0 → 50 with a = 200, j = 2000: 50 > a²/j, so T = v/a + a/j = 0.35 s, D = 25 · 0.35.
+        let c = SpeedChange::new(0.0, 50.0, 200.0, 2000.0);
+        assert!((c.duration - 0.35).abs() < 1e-12);
+        assert!((c.position(c.duration) - 8.75).abs() < 1e-12);
+        // Triangular acceleration: 0 → 10 (< a²/j = 20): T = 2 sqrt(10/2000).
+        let c = SpeedChange::new(10.0, 0.0, 200.0, 2000.0);
+        assert!((c.duration - 2.0 * (10.0f64 / 2000.0).sqrt()).abs() < 1e-12);
+        assert!((c.position(c.duration) - 5.0 * c.duration).abs() < 1e-12);
+        // 5 → 45 with a = 100, j = 1000: t1 = a/j = 0.1 s, t2 = 40/100 - 0.1 = 0.3 s.
+        // At T/2 = 0.25 s: s(t1) = 5·0.1 + 1000·0.1³/6, then 0.15 s at a = 100 from
+        // v = 5 + 1000·0.1²/2 = 10: s = 0.6667 + 10·0.15 + 100·0.15²/2 = 3.29167.
+        let c = SpeedChange::new(5.0, 45.0, 100.0, 1000.0);
+        assert!((c.t1 - 0.1).abs() < 1e-12 && (c.t2 - 0.3).abs() < 1e-12);
+        for tau in [c.t1, c.t1 + c.t2] {
+            let (before, after) = (c.position(tau - 1e-9), c.position(tau + 1e-9));
+            assert!(
+                (after - before).abs() < 1e-7,
+                "jump at {tau}: {before} → {after}"
+            );
+        }
+        let mid = c.position(0.25);
+        let expected = 0.5 + 1000.0 * 0.001 / 6.0 + 10.0 * 0.15 + 50.0 * 0.15 * 0.15;
+        assert!((mid - expected).abs() < 1e-12, "{mid} vs {expected}");
     }
 }

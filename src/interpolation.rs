@@ -634,6 +634,12 @@ impl<I: Iterator<Item = Result<Block>>> Interpolator<I> {
         if planned.length <= 1e-12 {
             return Ok(None);
         }
+        if !planned.length.is_finite() {
+            return Err(self.block_error(
+                b.line,
+                "the move is too long to plan: check the axis positions",
+            ));
+        }
         let programmed = match b.motion {
             Motion::Rapid => f64::INFINITY,
             _ => {

@@ -12,6 +12,7 @@ pub mod cli;
 pub mod cone;
 pub mod error;
 pub mod gcode;
+pub mod interpolation;
 pub mod kinematics;
 pub mod limits;
 pub mod machine;

@@ -14,18 +14,8 @@ use crate::error::{Error, Result};
 use crate::gcode::{Block, FeedMode, Motion};
 use crate::machine::Machine;
 
-/// One sample of the commanded axis positions.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sample {
-    /// Time since the program start, s.
-    pub time_s: f64,
-    /// Source line of the block being executed.
-    pub line: usize,
-    /// Index of the block (0-based) in the program.
-    pub block_index: u64,
-    /// Commanded axis positions, mm and deg (machine axes, also under G43.4).
-    pub q: AxisVec,
-}
+/// Samples are the interpolator's setpoints: time, commanded axes, line and block.
+pub use crate::interpolation::Setpoint as Sample;
 
 /// Programmed duration of a block, s.
 pub fn block_duration_s(block: &Block, machine: &Machine) -> Result<f64> {

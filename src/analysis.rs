@@ -258,10 +258,18 @@ pub fn analyse_blocks(
         };
         // Arcs and G43.4 moves are not straight in machine axes: follow them at 1/32 steps,
         // so that an axis turning inside a block is found too.
-        let steps = if matches!(block.motion, Motion::Arc { .. }) || block.tcp { 32 } else { 1 };
+        let steps = if matches!(block.motion, Motion::Arc { .. }) || block.tcp {
+            32
+        } else {
+            1
+        };
         let mut previous = start;
         for k in 1..=steps {
-            let q = if k == steps { end } else { position_in_block(&block, machine, k as f64 / steps as f64) };
+            let q = if k == steps {
+                end
+            } else {
+                position_in_block(&block, machine, k as f64 / steps as f64)
+            };
             for (s, &axis) in acc.iter_mut().zip(axes) {
                 let d = q[axis] - previous[axis];
                 s.extend(q[axis]);

@@ -389,6 +389,18 @@ pub struct BallbarResult {
 ///
 /// Threshold: `max(NOISE_FACTOR sigma, floor)`.
 pub fn analyse(runs: &[BallbarRun], reversals: &[(Axis, Vec<f64>)]) -> Result<BallbarResult> {
+    analyse_events_of(runs, runs, reversals)
+}
+
+/// As [`analyse`], but the spikes and steps are detected in `event_runs` instead of `runs`:
+/// a simulation passes the nonlinear signature of each run (trace minus a linear twin), so
+/// that the linear response to the program is not taken for events. The figures still come
+/// from `runs`.
+pub fn analyse_events_of(
+    runs: &[BallbarRun],
+    event_runs: &[BallbarRun],
+    reversals: &[(Axis, Vec<f64>)],
+) -> Result<BallbarResult> {
     if runs.is_empty() {
         return Err(Error::usage(
             "no ball-bar run to analyse; record at least one direction",
@@ -412,8 +424,12 @@ pub fn analyse(runs: &[BallbarRun], reversals: &[(Axis, Vec<f64>)]) -> Result<Ba
             radial_min_um: rmin,
             noise_um: noise,
         });
-        events.extend(detect_events(&centred, noise, run.direction, reversals));
         raw_traces.push(raw);
+    }
+    for run in event_runs {
+        let centred = run.trace_um(true)?;
+        let noise = noise_sigma(&centred, &run.filled_mask());
+        events.extend(detect_events(&centred, noise, run.direction, reversals));
     }
     let first = |d: Direction| runs.iter().position(|r| r.direction == d);
     let hysteresis_um = match (first(Direction::Ccw), first(Direction::Cw)) {

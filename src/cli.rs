@@ -78,6 +78,22 @@ pub enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Run the program through interpolator, servo models and kinematics, and predict the
+    /// ball-bar trace: writes trace.csv, summary.json and ballbar.svg.
+    Simulate {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Output folder (created if missing).
+        #[arg(short, long, default_value = "out")]
+        output: PathBuf,
+        /// Print the summary as JSON (the contents of summary.json).
+        #[arg(long)]
+        json: bool,
+        /// Leave the wall-clock figures (realtime_factor, wall_time_s) out of summary.json
+        /// (null), so that repeated runs give byte-identical files.
+        #[arg(long)]
+        no_timing: bool,
+    },
 }
 
 /// Runs the command line and returns the exit code.
@@ -95,6 +111,12 @@ pub fn main() -> i32 {
 
 fn run(cli: Cli) -> Result<i32> {
     match cli.command {
+        Command::Simulate {
+            scenario,
+            output,
+            json,
+            no_timing,
+        } => cmd_simulate(&scenario, &output, json, !no_timing),
         Command::Cone {
             scenario,
             output,
@@ -154,10 +176,15 @@ pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
         )),
         Program::File { path, cone } => {
             let blocks = crate::gcode::read_file(path, AxisVec::ZERO)?;
-            analyse_blocks(blocks, &scenario.machine, cone.map(|c| c.circle_frame()).as_ref())
+            analyse_blocks(
+                blocks,
+                &scenario.machine,
+                cone.map(|c| c.circle_frame()).as_ref(),
+            )
         }
         Program::Circle { circle, directions } => {
-            let (text, _) = crate::circle::write_program(circle, directions[0] == Direction::Cw, 0.0);
+            let (text, _) =
+                crate::circle::write_program(circle, directions[0] == Direction::Cw, 0.0);
             let blocks = crate::gcode::read_str(&scenario.path, &text, AxisVec::ZERO);
             let frame = CircleFrame::planar(circle.center_mm, circle.plane);
             analyse_blocks(blocks, &scenario.machine, Some(&frame))
@@ -305,4 +332,91 @@ pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
 fn print_stdout(text: &str) {
     let mut out = std::io::stdout().lock();
     let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
+}
+
+fn cmd_simulate(path: &Path, out_dir: &Path, as_json: bool, timing: bool) -> Result<i32> {
+    let scenario = Scenario::load(path)?;
+    let bar = spinner("simulating");
+    let summary = crate::simulation::simulate(&scenario, out_dir, timing, &|t| {
+        bar.set_message(format!("{t:.1} s of machine time"))
+    })?;
+    bar.finish_and_clear();
+    if as_json {
+        print_stdout(&format!(
+            "{}\n",
+            serde_json::to_string_pretty(&summary).expect("plain data serializes")
+        ));
+        return Ok(0);
+    }
+    let mut out = format!(
+        "{}: {:.2} s of machine time ({} setpoints, {})\n",
+        path.display(),
+        summary.sim_time_s,
+        summary.setpoints,
+        summary
+            .directions
+            .iter()
+            .map(|d| format!("{d:?}").to_lowercase())
+            .collect::<Vec<_>>()
+            .join(" + ")
+    );
+    if let Some(rtf) = summary.realtime_factor {
+        out.push_str(&format!(
+            "real-time factor: {rtf:.0}x ({:.3} s wall)\n",
+            summary.wall_time_s.unwrap_or(0.0)
+        ));
+    }
+    match &summary.ballbar {
+        None => out.push_str(
+            "no measured circle: give the scenario a cone or circle to get ball-bar figures\n",
+        ),
+        Some(b) => {
+            out.push_str(&format!(
+                "ISO 230-4: circular deviation G = {:.2} um, radial deviation F = {:+.2} / {:+.2} um, hysteresis H = {}\n",
+                b.circular_deviation_um,
+                b.radial_max_um,
+                b.radial_min_um,
+                b.hysteresis_um.map_or("- (one direction)".to_string(), |h| format!("{h:.2} um"))
+            ));
+            if b.events.is_empty() {
+                out.push_str("no spikes or steps above noise\n");
+            } else {
+                out.push_str(&format!(
+                    "{:>4} {:>6} {:>10} {:>10} {:>6} {:>5} {:>10}\n",
+                    "run", "kind", "theta deg", "height um", "axis", "conf", "width deg"
+                ));
+                for e in &b.events {
+                    out.push_str(&format!(
+                        "{:>4} {:>6} {:>10.2} {:>10.2} {:>6} {:>5.2} {:>10.2}\n",
+                        format!("{:?}", e.direction).to_lowercase(),
+                        format!("{:?}", e.kind).to_lowercase(),
+                        e.theta_deg,
+                        e.height_um,
+                        e.axis.map_or("?".to_string(), |a| a.to_string()),
+                        e.confidence,
+                        e.width_deg
+                    ));
+                }
+            }
+        }
+    }
+    out.push_str(&format!("wrote {}\n", out_dir.display()));
+    print_stdout(&out);
+    Ok(0)
+}
+
+/// A spinner on stderr when it is a terminal; hidden otherwise.
+fn spinner(what: &str) -> indicatif::ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.set_prefix(what.to_string());
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{spinner} {prefix}: {msg} [{elapsed}]")
+    {
+        bar.set_style(style);
+    }
+    bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    bar
 }

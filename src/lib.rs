@@ -22,6 +22,7 @@ pub mod sampling;
 pub mod scenario;
 pub mod scene;
 pub mod servo;
+pub mod simulation;
 pub mod sweep;
 pub mod toml_input;
 

@@ -11,8 +11,8 @@ use serde::Deserialize;
 use crate::ballbar::Direction;
 use crate::circle::CircleTest;
 use crate::cone::{ConeTest, NcOptions};
-use crate::gcode::Plane;
 use crate::error::{Error, Result};
+use crate::gcode::Plane;
 use crate::machine::Machine;
 use crate::toml_input::{self, value_error};
 
@@ -126,9 +126,16 @@ fn default_feed() -> f64 {
 #[derive(Clone, Debug)]
 pub enum Program {
     /// The generated cone-frustum test, run in `directions` by `simulate`.
-    Cone { cone: ConeTest, nc: NcOptions, directions: Vec<Direction> },
+    Cone {
+        cone: ConeTest,
+        nc: NcOptions,
+        directions: Vec<Direction>,
+    },
     /// The planar circular test.
-    Circle { circle: CircleTest, directions: Vec<Direction> },
+    Circle {
+        circle: CircleTest,
+        directions: Vec<Direction>,
+    },
     /// A G-code file, with the cone geometry when the scenario gives it.
     File {
         path: PathBuf,
@@ -175,7 +182,10 @@ impl Scenario {
         let program = match (&file.program.file, &file.program.cone) {
             _ if file.program.circle.is_some() => {
                 if file.program.file.is_some() || file.program.cone.is_some() {
-                    return Err(Error::invalid(path, "[program] takes one of `file`, [program.cone] or [program.circle]"));
+                    return Err(Error::invalid(
+                        path,
+                        "[program] takes one of `file`, [program.cone] or [program.circle]",
+                    ));
                 }
                 let c = file.program.circle.as_ref().expect("checked above");
                 let (circle, directions) = validate_circle(path, &text, c)?;
@@ -191,8 +201,13 @@ impl Scenario {
             },
             (None, Some(c)) => {
                 let (cone, nc) = validate_cone(path, &text, c)?;
-                let directions = parse_directions(path, &text, CONE, "directions", c.directions.as_deref())?;
-                Program::Cone { cone, nc, directions }
+                let directions =
+                    parse_directions(path, &text, CONE, "directions", c.directions.as_deref())?;
+                Program::Cone {
+                    cone,
+                    nc,
+                    directions,
+                }
             }
             (None, None) => {
                 return Err(Error::invalid(
@@ -204,14 +219,32 @@ impl Scenario {
         };
         let sim = &file.simulate;
         if sim.trace_every == 0 {
-            return Err(value_error(path, &text, "simulate", "trace_every", "must be at least 1".into()));
+            return Err(value_error(
+                path,
+                &text,
+                "simulate",
+                "trace_every",
+                "must be at least 1".into(),
+            ));
         }
         if !(sim.lead_deg.is_finite() && (0.0..=180.0).contains(&sim.lead_deg)) {
-            return Err(value_error(path, &text, "simulate", "lead_deg", format!("must be in [0, 180] deg, got {}", sim.lead_deg)));
+            return Err(value_error(
+                path,
+                &text,
+                "simulate",
+                "lead_deg",
+                format!("must be in [0, 180] deg, got {}", sim.lead_deg),
+            ));
         }
         if let Some(p) = file.ballbar.pivot_mm {
             if !p.iter().all(|v| v.is_finite()) {
-                return Err(value_error(path, &text, "ballbar", "pivot_mm", "must be three finite numbers (mm)".into()));
+                return Err(value_error(
+                    path,
+                    &text,
+                    "ballbar",
+                    "pivot_mm",
+                    "must be three finite numbers (mm)".into(),
+                ));
             }
         }
         Ok(Scenario {
@@ -317,26 +350,55 @@ pub fn check_cone(cone: &ConeTest) -> std::result::Result<(), (&'static str, Str
 
 const CIRCLE: &str = "program.circle";
 
-fn validate_circle(path: &Path, text: &str, c: &CircleSection) -> Result<(CircleTest, Vec<Direction>)> {
+fn validate_circle(
+    path: &Path,
+    text: &str,
+    c: &CircleSection,
+) -> Result<(CircleTest, Vec<Direction>)> {
     let err = |key: &str, message: String| value_error(path, text, CIRCLE, key, message);
     let plane = match c.plane.to_ascii_uppercase().as_str() {
         "XY" | "G17" => Plane::XY,
         "ZX" | "XZ" | "G18" => Plane::ZX,
         "YZ" | "G19" => Plane::YZ,
-        other => return Err(err("plane", format!("expected \"XY\", \"ZX\" or \"YZ\", got \"{other}\""))),
+        other => {
+            return Err(err(
+                "plane",
+                format!("expected \"XY\", \"ZX\" or \"YZ\", got \"{other}\""),
+            ))
+        }
     };
     if !(c.radius_mm.is_finite() && c.radius_mm > 0.0) {
-        return Err(err("radius_mm", format!("must be a positive radius in mm, got {}", c.radius_mm)));
+        return Err(err(
+            "radius_mm",
+            format!("must be a positive radius in mm, got {}", c.radius_mm),
+        ));
     }
     if !(c.feed_mm_min.is_finite() && c.feed_mm_min > 0.0) {
-        return Err(err("feed_mm_min", format!("must be a positive feed in mm/min, got {}", c.feed_mm_min)));
+        return Err(err(
+            "feed_mm_min",
+            format!("must be a positive feed in mm/min, got {}", c.feed_mm_min),
+        ));
     }
     if !c.center_mm.iter().all(|v| v.is_finite()) {
-        return Err(err("center_mm", "must be three finite numbers [X, Y, Z] in mm".into()));
+        return Err(err(
+            "center_mm",
+            "must be three finite numbers [X, Y, Z] in mm".into(),
+        ));
     }
     let directions = match (&c.direction, &c.directions) {
-        (Some(_), Some(_)) => return Err(err("directions", "give `direction` or `directions`, not both".into())),
-        (Some(d), None) => parse_directions(path, text, CIRCLE, "direction", Some(std::slice::from_ref(d)))?,
+        (Some(_), Some(_)) => {
+            return Err(err(
+                "directions",
+                "give `direction` or `directions`, not both".into(),
+            ))
+        }
+        (Some(d), None) => parse_directions(
+            path,
+            text,
+            CIRCLE,
+            "direction",
+            Some(std::slice::from_ref(d)),
+        )?,
         (None, d) => parse_directions(path, text, CIRCLE, "directions", d.as_deref())?,
     };
     let circle = CircleTest {
@@ -349,7 +411,13 @@ fn validate_circle(path: &Path, text: &str, c: &CircleSection) -> Result<(Circle
 }
 
 /// `["ccw", "cw"]` → directions; default `["ccw"]`; no repeats.
-fn parse_directions(path: &Path, text: &str, section: &str, key: &str, words: Option<&[String]>) -> Result<Vec<Direction>> {
+fn parse_directions(
+    path: &Path,
+    text: &str,
+    section: &str,
+    key: &str,
+    words: Option<&[String]>,
+) -> Result<Vec<Direction>> {
     let Some(words) = words else {
         return Ok(vec![Direction::Ccw]);
     };
@@ -359,16 +427,34 @@ fn parse_directions(path: &Path, text: &str, section: &str, key: &str, words: Op
             "ccw" => Direction::Ccw,
             "cw" => Direction::Cw,
             other => {
-                return Err(value_error(path, text, section, key, format!("expected \"ccw\" or \"cw\", got \"{other}\"")))
+                return Err(value_error(
+                    path,
+                    text,
+                    section,
+                    key,
+                    format!("expected \"ccw\" or \"cw\", got \"{other}\""),
+                ))
             }
         };
         if out.contains(&d) || out.len() == 2 {
-            return Err(value_error(path, text, section, key, "each direction at most once".into()));
+            return Err(value_error(
+                path,
+                text,
+                section,
+                key,
+                "each direction at most once".into(),
+            ));
         }
         out.push(d);
     }
     if out.is_empty() {
-        return Err(value_error(path, text, section, key, "needs at least one direction".into()));
+        return Err(value_error(
+            path,
+            text,
+            section,
+            key,
+            "needs at least one direction".into(),
+        ));
     }
     Ok(out)
 }

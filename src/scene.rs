@@ -104,7 +104,16 @@ struct Part {
     local: Pose,
     /// Bound on this part's displacement (mm) per |dXYZ| (mm), |d tilt| (rad), |dC| (rad).
     motion: [f64; 3],
+    /// For the cutter: the cutter eroded by [`CUTTER_SKIN_MM`], used for the cutting pair.
+    eroded: Option<SharedShape>,
+    skin_mm: f64,
 }
+
+/// The cutter/workpiece distance is measured from the cutter eroded by this much (mm), less
+/// this much: the distance to the cutter with its rims rounded by this radius (error at most
+/// 0.42 times it, at the rims only). The flank sits tangent to the frustum, where GJK/EPA on
+/// touching shapes is slow and fragile; the eroded cutter stands off, so GJK alone answers.
+pub const CUTTER_SKIN_MM: f64 = 0.01;
 
 /// One monitored pair (indices into the parts).
 #[derive(Clone, Copy, Debug)]
@@ -150,7 +159,10 @@ impl Scene {
         tool.validate(path, "", "tool")?;
         workpiece.validate(path, "", "workpiece")?;
         if !(near_miss_mm.is_finite() && near_miss_mm >= 0.0) {
-            return Err(Error::invalid(path, format!("near-miss threshold must be a clearance >= 0 mm, got {near_miss_mm}")));
+            return Err(Error::invalid(
+                path,
+                format!("near-miss threshold must be a clearance >= 0 mm, got {near_miss_mm}"),
+            ));
         }
         let mut builder = Builder::new(machine.kinematics);
         let all_tool = groups::CUTTER | groups::TOOL | groups::BAR | groups::BALL;
@@ -158,10 +170,24 @@ impl Scene {
         // Table and cradle.
         let t = &scene.table;
         let (shape, local) = z_cylinder(t.top_z_mm - t.thickness_mm, t.top_z_mm, t.radius_mm);
-        builder.add("table", Carrier::Table, shape, local, groups::TABLE, all_tool);
+        builder.add(
+            "table",
+            Carrier::Table,
+            shape,
+            local,
+            groups::TABLE,
+            all_tool,
+        );
         for b in &scene.cradle {
             let (shape, local) = shapes::cuboid(b.center_mm, b.size_mm);
-            builder.add(&b.name, Carrier::Cradle, shape, local, groups::TABLE, all_tool);
+            builder.add(
+                &b.name,
+                Carrier::Cradle,
+                shape,
+                local,
+                groups::TABLE,
+                all_tool,
+            );
         }
 
         // Tool stack, tip at the origin, axis +Z.
@@ -169,17 +195,59 @@ impl Scene {
         let sides = groups::TABLE | groups::FIXTURE | groups::WORKPIECE;
         if ball_bar {
             let shape = SharedShape::ball(0.5 * workpiece.ball_diameter_mm);
-            builder.add("tool ball", Carrier::Tool, shape, Pose::IDENTITY, groups::BALL, sides);
+            builder.add(
+                "tool ball",
+                Carrier::Tool,
+                shape,
+                Pose::IDENTITY,
+                groups::BALL,
+                sides,
+            );
         } else {
-            let (shape, local) = z_cylinder(0.0, tool.flute_length_mm, 0.5 * tool.cutter_diameter_mm);
+            let (shape, local) =
+                z_cylinder(0.0, tool.flute_length_mm, 0.5 * tool.cutter_diameter_mm);
             builder.add("cutter", Carrier::Tool, shape, local, groups::CUTTER, sides);
+            let skin = CUTTER_SKIN_MM
+                .min(0.25 * tool.cutter_diameter_mm)
+                .min(0.25 * tool.flute_length_mm);
+            let (eroded, _) = z_cylinder(
+                skin,
+                tool.flute_length_mm - skin,
+                0.5 * tool.cutter_diameter_mm - skin,
+            );
+            if let Some(cutter) = builder.parts.last_mut() {
+                cutter.eroded = Some(eroded);
+                cutter.skin_mm = skin;
+            }
         }
         let tool_filter = sides | groups::BAR | groups::BALL;
         let shank_top = tool.flute_length_mm + tool.shank_length_mm;
-        let (shape, local) = z_cylinder(tool.flute_length_mm, shank_top, 0.5 * tool.shank_diameter_mm);
-        builder.add("shank", Carrier::Tool, shape, local, groups::TOOL, tool_filter);
-        let (shape, local) = z_cylinder(tool.holder_bottom_mm(), tool.gauge_length_mm, 0.5 * tool.holder_diameter_mm);
-        builder.add("holder", Carrier::Tool, shape, local, groups::TOOL, tool_filter);
+        let (shape, local) = z_cylinder(
+            tool.flute_length_mm,
+            shank_top,
+            0.5 * tool.shank_diameter_mm,
+        );
+        builder.add(
+            "shank",
+            Carrier::Tool,
+            shape,
+            local,
+            groups::TOOL,
+            tool_filter,
+        );
+        let (shape, local) = z_cylinder(
+            tool.holder_bottom_mm(),
+            tool.gauge_length_mm,
+            0.5 * tool.holder_diameter_mm,
+        );
+        builder.add(
+            "holder",
+            Carrier::Tool,
+            shape,
+            local,
+            groups::TOOL,
+            tool_filter,
+        );
         let sp = &scene.spindle;
         let top = tool.gauge_length_mm + sp.length_mm;
         let (shape, local) = match sp.shape {
@@ -189,7 +257,14 @@ impl Scene {
                 [sp.box_mm[0], sp.box_mm[1], sp.length_mm],
             ),
         };
-        builder.add("spindle", Carrier::Tool, shape, local, groups::TOOL, tool_filter);
+        builder.add(
+            "spindle",
+            Carrier::Tool,
+            shape,
+            local,
+            groups::TOOL,
+            tool_filter,
+        );
 
         // Workpiece.
         let cone = &workpiece.cone;
@@ -200,8 +275,17 @@ impl Scene {
             WorkpieceKind::ConeFrustum => {
                 cone.check(path)?;
                 let f = Frustum::new(cone, tool, workpiece.top_height_mm, path)?;
-                let hull = CircleHull { circles: [f.base, f.top] };
-                builder.add("workpiece", Carrier::Table, SharedShape::new(hull), Pose::IDENTITY, groups::WORKPIECE, groups::CUTTER | groups::TOOL | groups::BALL);
+                let hull = CircleHull {
+                    circles: [f.base, f.top],
+                };
+                builder.add(
+                    "workpiece",
+                    Carrier::Table,
+                    SharedShape::new(hull),
+                    Pose::IDENTITY,
+                    groups::WORKPIECE,
+                    groups::CUTTER | groups::TOOL | groups::BALL,
+                );
                 if workpiece.riser {
                     let lowest = o.z - f.base.radius * f.base.normal.x.hypot(f.base.normal.y);
                     if lowest <= t.top_z_mm {
@@ -215,8 +299,17 @@ impl Scene {
                         normal: Vector::Z,
                         radius: f.base.radius,
                     };
-                    let riser = CircleHull { circles: [f.base, foot] };
-                    builder.add("riser", Carrier::Table, SharedShape::new(riser), Pose::IDENTITY, groups::FIXTURE, all_tool);
+                    let riser = CircleHull {
+                        circles: [f.base, foot],
+                    };
+                    builder.add(
+                        "riser",
+                        Carrier::Table,
+                        SharedShape::new(riser),
+                        Pose::IDENTITY,
+                        groups::FIXTURE,
+                        all_tool,
+                    );
                 }
             }
             WorkpieceKind::BallBar => {
@@ -235,14 +328,36 @@ impl Scene {
                 }
                 let ball = SharedShape::ball(r_ball);
                 let at_o = Pose::from_translation(Vector::new(o.x, o.y, o.z));
-                builder.add("pivot ball", Carrier::Table, ball, at_o, groups::BALL, groups::TOOL | groups::CUTTER);
-                let (shape, local) = z_cylinder(t.top_z_mm, post_top, 0.5 * workpiece.post_diameter_mm);
+                builder.add(
+                    "pivot ball",
+                    Carrier::Table,
+                    ball,
+                    at_o,
+                    groups::BALL,
+                    groups::TOOL | groups::CUTTER,
+                );
+                let (shape, local) =
+                    z_cylinder(t.top_z_mm, post_top, 0.5 * workpiece.post_diameter_mm);
                 let local = Pose::from_translation(Vector::new(o.x, o.y, 0.0)) * local;
-                builder.add("post", Carrier::Table, shape, local, groups::FIXTURE, all_tool);
+                builder.add(
+                    "post",
+                    Carrier::Table,
+                    shape,
+                    local,
+                    groups::FIXTURE,
+                    all_tool,
+                );
                 let r_bar = 0.5 * workpiece.bar_diameter_mm;
                 let (shape, local) = z_cylinder(r_ball, length - r_ball, r_bar);
                 builder.bar_motion = Some(bar_motion(o, length, r_bar));
-                builder.add("bar", Carrier::Bar, shape, local, groups::BAR, sides | groups::TOOL);
+                builder.add(
+                    "bar",
+                    Carrier::Bar,
+                    shape,
+                    local,
+                    groups::BAR,
+                    sides | groups::TOOL,
+                );
                 bar = Some(BarEnds { pivot: o });
             }
         }
@@ -267,7 +382,8 @@ impl Scene {
                 body.set_position(pose, false);
             }
         }
-        self.bodies.propagate_modified_body_positions_to_colliders(&mut self.colliders);
+        self.bodies
+            .propagate_modified_body_positions_to_colliders(&mut self.colliders);
     }
 
     /// Signed distance of every monitored pair at the pose of the last [`Scene::set_axes`].
@@ -276,13 +392,11 @@ impl Scene {
             .iter()
             .map(|pair| {
                 let (a, b) = (&self.parts[pair.a], &self.parts[pair.b]);
-                let distance_mm = signed_distance(
+                let poses = (
                     self.colliders[a.handle].position(),
-                    a.shape.as_ref(),
                     self.colliders[b.handle].position(),
-                    b.shape.as_ref(),
-                    &mut None,
                 );
+                let distance_mm = pair_distance(pair, a, b, poses.0, poses.1, &mut None);
                 PairClearance {
                     bodies: self.pair_bodies(pair),
                     kind: pair.kind,
@@ -293,7 +407,10 @@ impl Scene {
     }
 
     fn pair_bodies(&self, pair: &Pair) -> [String; 2] {
-        [self.parts[pair.a].name.clone(), self.parts[pair.b].name.clone()]
+        [
+            self.parts[pair.a].name.clone(),
+            self.parts[pair.b].name.clone(),
+        ]
     }
 
     /// Poses of the table, cradle, tool and bar frames in the machine frame at `q`.
@@ -339,7 +456,12 @@ struct Frustum {
 }
 
 impl Frustum {
-    fn new(cone: &ConeSetup, tool: &ToolConfig, top_height_mm: Option<f64>, path: &std::path::Path) -> Result<Frustum> {
+    fn new(
+        cone: &ConeSetup,
+        tool: &ToolConfig,
+        top_height_mm: Option<f64>,
+        path: &std::path::Path,
+    ) -> Result<Frustum> {
         let alpha = cone.half_apex_deg.to_radians();
         let beta = cone.inclination_deg.to_radians();
         let l = cone.ballbar_length_mm;
@@ -363,8 +485,16 @@ impl Frustum {
             )));
         }
         Ok(Frustum {
-            base: Circle { centre: o, normal: axis, radius: base_radius },
-            top: Circle { centre: o + axis * height, normal: axis, radius: top_radius },
+            base: Circle {
+                centre: o,
+                normal: axis,
+                radius: base_radius,
+            },
+            top: Circle {
+                centre: o + axis * height,
+                normal: axis,
+                radius: top_radius,
+            },
         })
     }
 }
@@ -392,7 +522,8 @@ struct Builder {
 impl Builder {
     fn new(kinematics: Kinematics) -> Builder {
         let mut bodies = RigidBodySet::new();
-        let body_handles = std::array::from_fn(|_| bodies.insert(RigidBodyBuilder::kinematic_position_based()));
+        let body_handles =
+            std::array::from_fn(|_| bodies.insert(RigidBodyBuilder::kinematic_position_based()));
         Builder {
             kinematics,
             bodies,
@@ -404,14 +535,26 @@ impl Builder {
         }
     }
 
-    fn add(&mut self, name: &str, carrier: Carrier, shape: SharedShape, local: Pose, member: Group, filter: Group) {
+    fn add(
+        &mut self,
+        name: &str,
+        carrier: Carrier,
+        shape: SharedShape,
+        local: Pose,
+        member: Group,
+        filter: Group,
+    ) {
         let groups = InteractionGroups::new(member, filter, InteractionTestMode::And);
         let collider = ColliderBuilder::new(shape.clone())
             .position(local)
             .collision_groups(groups)
             .density(0.0)
             .build();
-        let handle = self.colliders.insert_with_parent(collider, self.body_handles[carrier as usize], &mut self.bodies);
+        let handle = self.colliders.insert_with_parent(
+            collider,
+            self.body_handles[carrier as usize],
+            &mut self.bodies,
+        );
         let motion = match carrier {
             Carrier::Tool => [1.0, 0.0, 0.0],
             Carrier::Bar => self.bar_motion.unwrap_or([0.0; 3]),
@@ -434,21 +577,42 @@ impl Builder {
                 }
             }
         };
-        self.parts.push(Part { name: name.to_string(), carrier, handle, shape, local, motion });
+        self.parts.push(Part {
+            name: name.to_string(),
+            carrier,
+            handle,
+            shape,
+            local,
+            motion,
+            eroded: None,
+            skin_mm: 0.0,
+        });
         self.groups.push(groups);
     }
 
-    fn finish(self, bar: Option<BarEnds>, near_miss_mm: f64, engagement_resolution_mm: f64) -> Scene {
+    fn finish(
+        self,
+        bar: Option<BarEnds>,
+        near_miss_mm: f64,
+        engagement_resolution_mm: f64,
+    ) -> Scene {
         let mut pairs = Vec::new();
         for a in 0..self.parts.len() {
             for b in a + 1..self.parts.len() {
-                if self.parts[a].carrier == self.parts[b].carrier || !self.groups[a].test(self.groups[b]) {
+                if self.parts[a].carrier == self.parts[b].carrier
+                    || !self.groups[a].test(self.groups[b])
+                {
                     continue;
                 }
                 let cutting = |x: usize, y: usize| {
-                    self.groups[x].memberships == groups::CUTTER && self.groups[y].memberships == groups::WORKPIECE
+                    self.groups[x].memberships == groups::CUTTER
+                        && self.groups[y].memberships == groups::WORKPIECE
                 };
-                let kind = if cutting(a, b) || cutting(b, a) { PairKind::Cutting } else { PairKind::Collision };
+                let kind = if cutting(a, b) || cutting(b, a) {
+                    PairKind::Cutting
+                } else {
+                    PairKind::Collision
+                };
                 pairs.push(Pair { a, b, kind });
             }
         }
@@ -467,6 +631,24 @@ impl Builder {
         scene.set_axes(&AxisVec::ZERO);
         scene
     }
+}
+
+/// Signed distance of `pair` (parts `a`, `b` at world poses `pa`, `pb`), mm. A cutting
+/// pair is measured from the eroded cutter (see [`CUTTER_SKIN_MM`]).
+fn pair_distance(
+    pair: &Pair,
+    a: &Part,
+    b: &Part,
+    pa: &Pose,
+    pb: &Pose,
+    warm: &mut Option<Vector>,
+) -> f64 {
+    if pair.kind == PairKind::Cutting {
+        let shape = |p: &Part| p.eroded.as_ref().unwrap_or(&p.shape).clone();
+        let skin = a.skin_mm + b.skin_mm;
+        return signed_distance(pa, shape(a).as_ref(), pb, shape(b).as_ref(), warm) - skin;
+    }
+    signed_distance(pa, a.shape.as_ref(), pb, b.shape.as_ref(), warm)
 }
 
 fn to_vector(v: &Vector3<f64>) -> Vector {

@@ -242,7 +242,13 @@ fn positive(path: &Path, text: &str, section: &str, key: &str, v: f64) -> Result
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(value_error(path, text, section, key, format!("must be a positive length in mm, got {v}")))
+        Err(value_error(
+            path,
+            text,
+            section,
+            key,
+            format!("must be a positive length in mm, got {v}"),
+        ))
     }
 }
 
@@ -250,7 +256,13 @@ fn finite(path: &Path, text: &str, section: &str, key: &str, values: &[f64]) -> 
     if values.iter().all(|v| v.is_finite()) {
         Ok(())
     } else {
-        Err(value_error(path, text, section, key, "must be finite numbers (mm)".into()))
+        Err(value_error(
+            path,
+            text,
+            section,
+            key,
+            "must be finite numbers (mm)".into(),
+        ))
     }
 }
 
@@ -273,21 +285,57 @@ impl SceneConfig {
         positive(path, text, "scene.spindle", "box_mm", s.box_mm[1])?;
         positive(path, text, "scene.spindle", "length_mm", s.length_mm)?;
         if !(self.near_miss_mm.is_finite() && self.near_miss_mm >= 0.0) {
-            return Err(value_error(path, text, "scene", "near_miss_mm", format!("must be a clearance >= 0 mm, got {}", self.near_miss_mm)));
+            return Err(value_error(
+                path,
+                text,
+                "scene",
+                "near_miss_mm",
+                format!("must be a clearance >= 0 mm, got {}", self.near_miss_mm),
+            ));
         }
-        positive(path, text, "scene", "engagement_resolution_mm", self.engagement_resolution_mm)
+        positive(
+            path,
+            text,
+            "scene",
+            "engagement_resolution_mm",
+            self.engagement_resolution_mm,
+        )
     }
 }
 
 impl ToolConfig {
     /// Range and consistency checks for the `[section]` table of `path`.
     pub fn validate(&self, path: &Path, text: &str, section: &str) -> Result<()> {
-        positive(path, text, section, "cutter_diameter_mm", self.cutter_diameter_mm)?;
+        positive(
+            path,
+            text,
+            section,
+            "cutter_diameter_mm",
+            self.cutter_diameter_mm,
+        )?;
         positive(path, text, section, "flute_length_mm", self.flute_length_mm)?;
-        positive(path, text, section, "shank_diameter_mm", self.shank_diameter_mm)?;
+        positive(
+            path,
+            text,
+            section,
+            "shank_diameter_mm",
+            self.shank_diameter_mm,
+        )?;
         positive(path, text, section, "shank_length_mm", self.shank_length_mm)?;
-        positive(path, text, section, "holder_diameter_mm", self.holder_diameter_mm)?;
-        positive(path, text, section, "holder_length_mm", self.holder_length_mm)?;
+        positive(
+            path,
+            text,
+            section,
+            "holder_diameter_mm",
+            self.holder_diameter_mm,
+        )?;
+        positive(
+            path,
+            text,
+            section,
+            "holder_length_mm",
+            self.holder_length_mm,
+        )?;
         positive(path, text, section, "gauge_length_mm", self.gauge_length_mm)?;
         if self.holder_bottom_mm() <= 0.0 {
             return Err(value_error(path, text, section, "holder_length_mm", format!(
@@ -312,9 +360,21 @@ impl WorkpieceConfig {
         if let Some(h) = self.top_height_mm {
             positive(path, text, section, "top_height_mm", h)?;
         }
-        positive(path, text, section, "ball_diameter_mm", self.ball_diameter_mm)?;
+        positive(
+            path,
+            text,
+            section,
+            "ball_diameter_mm",
+            self.ball_diameter_mm,
+        )?;
         positive(path, text, section, "bar_diameter_mm", self.bar_diameter_mm)?;
-        positive(path, text, section, "post_diameter_mm", self.post_diameter_mm)
+        positive(
+            path,
+            text,
+            section,
+            "post_diameter_mm",
+            self.post_diameter_mm,
+        )
     }
 }
 

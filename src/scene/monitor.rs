@@ -19,7 +19,7 @@
 use parry3d_f64::math::{Pose, Vector};
 use serde::Serialize;
 
-use super::{signed_distance, PairKind, Scene};
+use super::{PairKind, Scene};
 use crate::axis::{Axis, AxisVec};
 use crate::machine::Machine;
 
@@ -76,7 +76,9 @@ pub struct SceneReport {
 
 impl SceneReport {
     pub fn collisions(&self) -> impl Iterator<Item = &SceneEvent> {
-        self.events.iter().filter(|e| e.kind == EventKind::Collision)
+        self.events
+            .iter()
+            .filter(|e| e.kind == EventKind::Collision)
     }
 
     pub fn near_misses(&self) -> impl Iterator<Item = &SceneEvent> {
@@ -93,6 +95,8 @@ struct Sample {
 }
 
 struct PairState {
+    /// Bound on the pair's approach (mm) per |dXYZ| (mm), |d tilt| (rad), |dC| (rad).
+    weights: [f64; 3],
     /// Motion bound allowed before the next query, mm.
     slack: f64,
     /// Motion bound accumulated since the last query, mm.
@@ -129,6 +133,10 @@ impl SceneMonitor {
             .pairs
             .iter()
             .map(|pair| PairState {
+                weights: {
+                    let (wa, wb) = (scene.parts[pair.a].motion, scene.parts[pair.b].motion);
+                    [wa[0] + wb[0], wa[1] + wb[1], wa[2] + wb[2]]
+                },
                 slack: 0.0,
                 moved: 0.0,
                 last_mm: f64::INFINITY,
@@ -170,24 +178,28 @@ impl SceneMonitor {
             return;
         }
         self.samples += 1;
-        let now = Sample { time_s, theta_deg, line, q: *q };
+        let now = Sample {
+            time_s,
+            theta_deg,
+            line,
+            q: *q,
+        };
         let step = self.prev.map(|prev| self.motion(&prev.q, q));
         let mut poses: Option<[Pose; 4]> = None;
         for i in 0..self.states.len() {
-            let pair = self.scene.pairs[i];
+            let state = &mut self.states[i];
             let pair_step = match step {
                 Some(s) => {
-                    let (wa, wb) = (self.scene.parts[pair.a].motion, self.scene.parts[pair.b].motion);
-                    (0..3).map(|k| (wa[k] + wb[k]) * s[k]).sum::<f64>()
+                    state.weights[0] * s[0] + state.weights[1] * s[1] + state.weights[2] * s[2]
                 }
                 None => f64::INFINITY,
             };
-            let state = &mut self.states[i];
             let moved_before = state.moved;
             state.moved += pair_step;
             if state.moved < state.slack {
                 continue;
             }
+            let pair = self.scene.pairs[i];
             let poses = poses.get_or_insert_with(|| self.scene.body_poses(q));
             let state = &mut self.states[i];
             let d = measure(&self.scene, i, poses, &mut state.warm);
@@ -214,7 +226,8 @@ impl SceneMonitor {
                 self.events.push(event);
             }
         }
-        self.events.sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
+        self.events
+            .sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
         SceneReport {
             events: self.events,
             engagement: self.engagement,
@@ -228,14 +241,24 @@ impl SceneMonitor {
     fn motion(&self, a: &AxisVec, b: &AxisVec) -> [f64; 3] {
         let d = *b - *a;
         let lin = (d[Axis::X].powi(2) + d[Axis::Y].powi(2) + d[Axis::Z].powi(2)).sqrt();
-        let tilt = self.scene.tilt_axis.map_or(0.0, |t| d[t].abs().to_radians());
+        let tilt = self
+            .scene
+            .tilt_axis
+            .map_or(0.0, |t| d[t].abs().to_radians());
         [lin, tilt, d[Axis::C].abs().to_radians()]
     }
 
     /// Conservative advancement of pair `i` along the interval `a -> b`, whose motion bound
     /// is `bound` mm, from a clearance lower bound `start` at `a`. Returns the fraction of
     /// the interval at which contact is found.
-    fn advance(&mut self, i: usize, a: &AxisVec, b: &AxisVec, start: f64, bound: f64) -> Option<f64> {
+    fn advance(
+        &mut self,
+        i: usize,
+        a: &AxisVec,
+        b: &AxisVec,
+        start: f64,
+        bound: f64,
+    ) -> Option<f64> {
         let mut s = start / bound;
         let mut warm = self.states[i].warm;
         for _ in 0..MAX_ADVANCE_STEPS {
@@ -340,5 +363,5 @@ fn measure(scene: &Scene, i: usize, poses: &[Pose; 4], warm: &mut Option<Vector>
     let (a, b) = (&scene.parts[pair.a], &scene.parts[pair.b]);
     let pose_a = poses[a.carrier as usize] * a.local;
     let pose_b = poses[b.carrier as usize] * b.local;
-    signed_distance(&pose_a, a.shape.as_ref(), &pose_b, b.shape.as_ref(), warm)
+    super::pair_distance(&pair, a, b, &pose_a, &pose_b, warm)
 }

@@ -10,9 +10,9 @@ use parry3d_f64::bounding_volume::{Aabb, BoundingSphere};
 use parry3d_f64::mass_properties::MassProperties;
 use parry3d_f64::math::{Pose, Real, Rotation, Vector};
 use parry3d_f64::query::details::contact_support_map_support_map_with_params;
+use parry3d_f64::query::details::local_ray_intersection_with_support_map_with_params;
 use parry3d_f64::query::gjk::{GJKResult, VoronoiSimplex};
 use parry3d_f64::query::point::local_point_projection_on_support_map;
-use parry3d_f64::query::details::local_ray_intersection_with_support_map_with_params;
 use parry3d_f64::query::{PointProjection, PointQuery, Ray, RayCast, RayIntersection};
 use parry3d_f64::shape::{FeatureId, Shape, ShapeType, SharedShape, SupportMap, TypedShape};
 
@@ -172,7 +172,14 @@ impl Shape for CircleHull {
 }
 
 /// Signed distance between two convex shapes, mm: the clearance when apart, minus the
-/// penetration depth when overlapping (GJK, then EPA inside).
+/// penetration depth when overlapping.
+///
+/// Apart, GJK gives the clearance. Overlapping, EPA gives a depth `p` and normal `n`; EPA is
+/// unreliable when the overlap is a near-tangent line contact (the cutter's flank on the
+/// frustum), so the result is checked: shape 2 moved out by `p + m` along `n` must stand
+/// off by `m`. If not, the depth is taken as the smallest translation along `n` (or along
+/// the warm-start normal) that separates the shapes, found by bisection with GJK; that is
+/// an upper bound on the true depth, and equals it along the true contact normal.
 ///
 /// `warm_start` is a direction in shape 1's local frame from the previous query of the
 /// same pair; it is replaced by this query's contact normal.
@@ -187,17 +194,88 @@ pub fn signed_distance(
         unreachable!("every scene shape is convex with a support map");
     };
     let pos12 = pose1.inv_mul(pose2);
-    let mut simplex = VoronoiSimplex::new();
-    let init = warm_start.filter(|d| d.is_finite() && d.length_squared() > 0.0);
-    match contact_support_map_support_map_with_params(&pos12, g1, g2, 1e12, &mut simplex, init) {
-        GJKResult::ClosestPoints(p1, p2, normal) => {
-            *warm_start = Some(normal);
-            (p2 - p1).dot(normal)
-        }
-        // GJK and EPA both failed: the shapes overlap with a negligible depth.
-        _ => {
-            *warm_start = None;
-            0.0
+    let previous = warm_start.filter(|d| d.is_finite() && d.length_squared() > 0.0);
+    let Some((distance, normal)) = gjk_epa(&pos12, g1, g2, previous) else {
+        *warm_start = None;
+        return 0.0;
+    };
+    if distance >= 0.0 {
+        *warm_start = Some(normal);
+        return distance;
+    }
+    let depth = -distance;
+    if (clearance_after_shift(&pos12, g1, g2, normal, depth + PROBE_MM) - PROBE_MM).abs() <= 1e-6 {
+        *warm_start = Some(normal);
+        return distance;
+    }
+    let mut best = (
+        directional_depth(&pos12, g1, g2, normal, depth + PROBE_MM),
+        normal,
+    );
+    if let Some(n) = previous.and_then(|n| n.try_normalize()) {
+        let along = directional_depth(&pos12, g1, g2, n, best.0);
+        if along < best.0 {
+            best = (along, n);
         }
     }
+    *warm_start = Some(best.1);
+    -best.0
+}
+
+/// Stand-off used to check an EPA depth, mm.
+const PROBE_MM: f64 = 1e-3;
+
+/// GJK, then EPA when the shapes overlap: (signed distance, unit normal out of shape 1 in
+/// its local frame).
+fn gjk_epa(
+    pos12: &Pose,
+    g1: &dyn SupportMap,
+    g2: &dyn SupportMap,
+    init: Option<Vector>,
+) -> Option<(f64, Vector)> {
+    let mut simplex = VoronoiSimplex::new();
+    match contact_support_map_support_map_with_params(pos12, g1, g2, 1e12, &mut simplex, init) {
+        GJKResult::ClosestPoints(p1, p2, normal) => Some(((p2 - p1).dot(normal), normal)),
+        _ => None,
+    }
+}
+
+/// Clearance (0 if still overlapping) after moving shape 2 by `shift` along `n` (shape 1's
+/// local frame).
+fn clearance_after_shift(
+    pos12: &Pose,
+    g1: &dyn SupportMap,
+    g2: &dyn SupportMap,
+    n: Vector,
+    shift: f64,
+) -> f64 {
+    let moved = Pose::from_translation(n * shift) * *pos12;
+    match gjk_epa(&moved, g1, g2, Some(n)) {
+        Some((d, _)) => d.max(0.0),
+        None => 0.0,
+    }
+}
+
+/// Smallest translation of shape 2 along `n` that separates the shapes, searched in
+/// `[0, upper]` to 1e-9 mm (returns `upper` if even that does not separate them).
+fn directional_depth(
+    pos12: &Pose,
+    g1: &dyn SupportMap,
+    g2: &dyn SupportMap,
+    n: Vector,
+    upper: f64,
+) -> f64 {
+    let (mut lo, mut hi) = (0.0, upper);
+    if clearance_after_shift(pos12, g1, g2, n, hi) <= 0.0 {
+        return upper;
+    }
+    while hi - lo > 1e-9 {
+        let mid = 0.5 * (lo + hi);
+        if clearance_after_shift(pos12, g1, g2, n, mid) > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
 }

@@ -157,6 +157,7 @@ impl Machine {
         if !file.pivot_mm.iter().all(|v| v.is_finite()) {
             return Err(value_error(path, text, "", "pivot_mm", "must be three finite numbers (mm)".into()));
         }
+        crate::scene::validate_machine_tables(path, text, &file.scene, &file.tool)?;
         Ok(Machine {
             name: file.name,
             path: path.to_path_buf(),

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use mtsim::machine::Machine;
 use mtsim::scene::{
-    z_cylinder, ConeSetup, EventKind, PairKind, Scene, SceneMonitor, ToolConfig, WorkpieceConfig,
+    z_cylinder, ConeSetup, PairKind, Scene, SceneMonitor, ToolConfig, WorkpieceConfig,
     WorkpieceKind,
 };
 use mtsim::{Axis, AxisVec};
@@ -112,10 +112,10 @@ fn holder_meets_the_frustum_top_where_the_stack_lengths_say() {
     let tool = ToolConfig::default();
     let mut scene = Scene::new(&m, &tool, &upright_frustum(), 2.0).unwrap();
     let x = beside_frustum_x(&tool);
-    // Top face at table z = 200 + 30; the holder's bottom is gauge - holder length above the tip.
-    let contact_z = 230.0 + (tool.gauge_length_mm - tool.holder_length_mm);
-    let contact_z = contact_z - 2.0 * (tool.gauge_length_mm - tool.holder_length_mm); // tip below the face
-    assert_eq!(contact_z, 230.0 - 80.0);
+    // The top face is at table z = 200 + 30 (= machine z, as A = C = 0 and the pivot is at
+    // the origin); the holder's bottom face is gauge - holder length = 80 mm above the tip,
+    // so it lands on the top face when the tip is 80 mm below it.
+    let contact_z = 230.0 - (tool.gauge_length_mm - tool.holder_length_mm);
     for gap in [0.5, 1.0, 5.0] {
         let d = distance(
             &mut scene,
@@ -420,14 +420,26 @@ fn scene_tables_reject_unknown_keys_and_bad_lengths() {
         .to_string();
     assert!(err.contains("radius"), "{err}");
     let bad = format!("{text}[tool]\ncutter_diameter_mm = -4.0\n");
-    let m = Machine::from_toml(Path::new("m.toml"), &bad, None).unwrap();
-    let err = mtsim::scene::validate_machine_tables(&m.path, &bad, &m.scene, &m.tool)
+    let err = Machine::from_toml(Path::new("m.toml"), &bad, None)
         .unwrap_err()
         .to_string();
+    let line = bad
+        .lines()
+        .position(|l| l.starts_with("cutter_diameter_mm"))
+        .unwrap()
+        + 1;
     assert!(
-        err.contains("m.toml:") && err.contains("cutter_diameter_mm") && err.contains("positive"),
+        err.starts_with(&format!("m.toml:{line}:"))
+            && err.contains("cutter_diameter_mm")
+            && err.contains("positive"),
         "{err}"
     );
+    let short_shank = format!("{text}[tool]\nshank_length_mm = 10.0\n");
+    let err = Machine::from_toml(Path::new("m.toml"), &short_shank, None)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("do not reach the holder"), "{err}");
+    let m = Machine::from_toml(Path::new("m.toml"), text, None).unwrap();
     let nan_cone = WorkpieceConfig {
         cone: ConeSetup {
             half_apex_deg: f64::NAN,
@@ -436,5 +448,55 @@ fn scene_tables_reject_unknown_keys_and_bad_lengths() {
         ..WorkpieceConfig::default()
     };
     assert!(Scene::new(&m, &ToolConfig::default(), &nan_cone, 2.0).is_err());
-    let _ = EventKind::Collision;
+    assert!(Scene::new(
+        &m,
+        &ToolConfig::default(),
+        &WorkpieceConfig::default(),
+        f64::NAN
+    )
+    .is_err());
+}
+
+#[test]
+fn ball_bar_pairs_join_the_balls_to_the_bar_and_run_clean_on_both_cones() {
+    let m = machine("");
+    for (alpha, beta) in [(15.0, 10.0), (45.0, 30.0)] {
+        let cone = ConeSetup {
+            half_apex_deg: alpha,
+            inclination_deg: beta,
+            center_mm: [0.0, 0.0, 200.0],
+            ballbar_length_mm: 100.0,
+        };
+        let workpiece = WorkpieceConfig {
+            kind: WorkpieceKind::BallBar,
+            cone,
+            ..WorkpieceConfig::default()
+        };
+        let mut scene = Scene::new(&m, &m.tool, &workpiece, 2.0).unwrap();
+        let names = scene.pair_names();
+        let has = |a: &str, b: &str| {
+            names
+                .iter()
+                .any(|n| (n[0] == a && n[1] == b) || (n[0] == b && n[1] == a))
+        };
+        assert!(has("bar", "holder") && has("bar", "spindle") && has("bar", "table"));
+        assert!(has("tool ball", "table") && has("holder", "pivot ball"));
+        assert!(
+            !has("bar", "pivot ball") && !has("bar", "tool ball") && !has("shank", "tool ball")
+        );
+        assert!(!names.iter().any(|n| n.contains(&"cutter".to_string())));
+        let mut c = 0.0;
+        for step in 0..=360 {
+            let at = cone_axes(&cone, step as f64, c);
+            c = at[Axis::C];
+            scene.set_axes(&at);
+            for pair in scene.clearances() {
+                assert_eq!(pair.kind, PairKind::Collision);
+                assert!(
+                    pair.distance_mm > 2.0,
+                    "{alpha}/{beta} at {step} deg: {pair:?}"
+                );
+            }
+        }
+    }
 }

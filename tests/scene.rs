@@ -278,8 +278,33 @@ fn run_cone(alpha: f64, beta: f64) {
         report.engagement
     );
     assert!(
-        report.queries < report.samples,
+        report.queries < report.samples / 5,
         "conservative advancement should skip most samples"
+    );
+
+    // Collision pairs alone (engagement tracking off): about one query per 40 samples or fewer.
+    let collisions_only = machine("[scene]\nengagement_resolution_mm = 1e9\n");
+    let mut monitor = SceneMonitor::new(
+        Scene::new(&collisions_only, &m.tool, &workpiece, 2.0).unwrap(),
+        &m,
+    );
+    let mut c = 0.0;
+    for k in 0..=samples {
+        let at = cone_axes(&cone, 360.0 * k as f64 / samples as f64, c);
+        c = at[Axis::C];
+        monitor.push(k as f64 * 1e-3, None, k, &at);
+    }
+    let report = monitor.finish();
+    eprintln!(
+        "{alpha}/{beta} collision pairs only: {} queries",
+        report.queries
+    );
+    assert!(report.events.is_empty());
+    assert!(
+        report.queries < report.samples / 40,
+        "{} queries for {} samples",
+        report.queries,
+        report.samples
     );
 }
 

@@ -51,7 +51,7 @@ impl Default for SceneConfig {
             ],
             spindle: SpindleConfig::default(),
             near_miss_mm: 2.0,
-            engagement_resolution_mm: 0.5,
+            engagement_resolution_mm: 1.0,
         }
     }
 }

@@ -177,6 +177,7 @@ impl Machine {
                 "must be three finite numbers (mm)".into(),
             ));
         }
+        crate::scene::validate_machine_tables(path, text, &file.scene, &file.tool)?;
         Ok(Machine {
             name: file.name,
             path: path.to_path_buf(),

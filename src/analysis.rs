@@ -276,7 +276,7 @@ pub fn analyse_blocks(
                 if let Some(t) = seconds.filter(|t| *t > 0.0) {
                     s.peak_speed = s.peak_speed.max(d.abs() / (t / steps as f64) * 60.0);
                 }
-                if let Some(turn) = s.push_increment(d, block.line, q) {
+                if let Some(turn) = s.push_increment(d, q[axis], block.line, q) {
                     let theta = frame.map(|f| f.theta_deg(&kin.forward(&turn.1).tip));
                     s.turns.push((turn.0, theta));
                 }
@@ -304,14 +304,20 @@ pub fn analyse_blocks(
     Ok(Analysis { axes })
 }
 
+/// A turn counts once the axis has come back this far from its extreme, mm or deg: smaller
+/// wiggles (a G43.4 block near a reversal, the NC program's 0.1 um rounding) are not
+/// reversals. With no deadband this is the block rule: block k's end is a turning point when
+/// the increments of block k and of the next block that moves the axis have opposite signs.
+pub const REVERSAL_DEADBAND: f64 = 1e-3;
+
 /// Running state of one axis over the blocks.
 #[derive(Debug)]
 struct BlockAxisState {
     min: f64,
     max: f64,
     peak_speed: f64,
-    /// The last non-zero increment, the line of the block that made it and where it ended.
-    last_move: Option<(f64, usize, AxisVec)>,
+    /// Direction of travel (+1 or -1) and the extreme reached in it: value, line, position.
+    travel: Option<(f64, f64, usize, AxisVec)>,
     turns: Vec<(usize, Option<f64>)>,
 }
 
@@ -321,7 +327,7 @@ impl Default for BlockAxisState {
             min: f64::INFINITY,
             max: f64::NEG_INFINITY,
             peak_speed: 0.0,
-            last_move: None,
+            travel: None,
             turns: Vec::new(),
         }
     }
@@ -333,18 +339,31 @@ impl BlockAxisState {
         self.max = self.max.max(v);
     }
 
-    /// Records an increment `d` ending at `q`; returns the line and position of a turning
-    /// point when `d` runs against the previous non-zero increment.
-    fn push_increment(&mut self, d: f64, line: usize, q: AxisVec) -> Option<(usize, AxisVec)> {
+    /// Records a move of `d` to `x` (at `q`, in a block of `line`); returns the line and
+    /// position of a turning point once the axis has come back past the deadband.
+    fn push_increment(
+        &mut self,
+        d: f64,
+        x: f64,
+        line: usize,
+        q: AxisVec,
+    ) -> Option<(usize, AxisVec)> {
         if d == 0.0 {
             return None;
         }
-        let turn = self
-            .last_move
-            .filter(|(previous, _, _)| previous.signum() != d.signum())
-            .map(|(_, prev_line, prev_q)| (prev_line, prev_q));
-        self.last_move = Some((d, line, q));
-        turn
+        let Some((direction, extreme, ext_line, ext_q)) = self.travel else {
+            self.travel = Some((d.signum(), x, line, q));
+            return None;
+        };
+        if (x - extreme) * direction > 0.0 {
+            self.travel = Some((direction, x, line, q));
+            None
+        } else if (extreme - x).abs() > REVERSAL_DEADBAND {
+            self.travel = Some((-direction, x, line, q));
+            Some((ext_line, ext_q))
+        } else {
+            None
+        }
     }
 }
 

@@ -380,3 +380,33 @@ fn machine_coordinates(kin: &crate::kinematics::Kinematics, block: &Block, q: Ax
     out[Axis::Z] = m.z;
     out
 }
+
+/// The exact analysis of a planar circle of radius r at feed F: the plane's first axis u
+/// (at r cos θ) reverses at 0 and 180 deg, the second v (at r sin θ) at 90 and 270 deg; both
+/// span the centre ± r and peak at F. Other axes stand still.
+pub fn analyse_circle(circle: &crate::circle::CircleTest, axes: &[Axis]) -> Analysis {
+    let (u, v, _) = circle.plane.axes();
+    let axes = axes
+        .iter()
+        .map(|&axis| {
+            let c = circle.center_mm.get(axis.index()).copied().unwrap_or(0.0);
+            let (reversals_deg, r, speed) = if axis == u {
+                (vec![0.0, 180.0], circle.radius_mm, circle.feed_mm_min)
+            } else if axis == v {
+                (vec![90.0, 270.0], circle.radius_mm, circle.feed_mm_min)
+            } else {
+                (Vec::new(), 0.0, 0.0)
+            };
+            AxisMotion {
+                axis,
+                min: c - r,
+                max: c + r,
+                range: 2.0 * r,
+                peak_speed_per_min: speed,
+                reversals_deg,
+                reversal_lines: None,
+            }
+        })
+        .collect();
+    Analysis { axes }
+}

@@ -10,7 +10,6 @@ use serde_json::{json, Map};
 
 use crate::analysis::{analyse_blocks, analyse_cone, Analysis};
 use crate::axis::AxisVec;
-use crate::ballbar::{CircleFrame, Direction};
 use crate::cone::{write_program, ConePath};
 use crate::error::{Error, Result};
 use crate::report::{analysis_table, write_atomic};
@@ -182,12 +181,8 @@ pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
                 cone.map(|c| c.circle_frame()).as_ref(),
             )
         }
-        Program::Circle { circle, directions } => {
-            let (text, _) =
-                crate::circle::write_program(circle, directions[0] == Direction::Cw, 0.0);
-            let blocks = crate::gcode::read_str(&scenario.path, &text, AxisVec::ZERO);
-            let frame = CircleFrame::planar(circle.center_mm, circle.plane);
-            analyse_blocks(blocks, &scenario.machine, Some(&frame))
+        Program::Circle { circle, .. } => {
+            Ok(crate::analysis::analyse_circle(circle, scenario.machine.axes()))
         }
     }
 }

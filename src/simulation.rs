@@ -18,7 +18,7 @@ use std::time::Instant;
 use nalgebra::{Point3, Vector3};
 use serde::Serialize;
 
-use crate::analysis::{analyse_blocks, analyse_cone, Analysis};
+use crate::analysis::{analyse_blocks, analyse_circle, analyse_cone, Analysis};
 use crate::axis::{Axis, AxisVec};
 use crate::ballbar::{
     analyse_events_of, deviation_mm, BallbarResult, BallbarRun, CircleFrame, Direction,
@@ -411,12 +411,7 @@ fn plan(scenario: &Scenario) -> Result<(Vec<RunPlan>, Option<BallbarSetup>, Anal
             // The circle is programmed in machine coordinates, with any rotary axes at zero.
             let center_table = Vector3::from(circle.center_mm) - machine.kinematics.pivot_mm;
             let frame = CircleFrame::planar(center_table.into(), circle.plane);
-            let (text, _) = circle::write_program(circle, false, 0.0);
-            let analysis = analyse_blocks(
-                gcode::read_str(&scenario.path, &text, AxisVec::ZERO),
-                machine,
-                Some(&frame),
-            )?;
+            let analysis = analyse_circle(circle, machine.axes());
             let setup = BallbarSetup {
                 frame,
                 pivot_table_mm: pivot_override.unwrap_or(Point3::from(center_table)),

@@ -181,9 +181,10 @@ pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
                 cone.map(|c| c.circle_frame()).as_ref(),
             )
         }
-        Program::Circle { circle, .. } => {
-            Ok(crate::analysis::analyse_circle(circle, scenario.machine.axes()))
-        }
+        Program::Circle { circle, .. } => Ok(crate::analysis::analyse_circle(
+            circle,
+            scenario.machine.axes(),
+        )),
     }
 }
 

@@ -236,3 +236,107 @@ fn a_sweep_range_that_breaks_the_geometry_exits_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("half_apex_deg"));
 }
+
+#[test]
+fn simulate_writes_the_trace_summary_and_plot_and_repeats_byte_for_byte() {
+    let (a, b) = (scratch("sim-a"), scratch("sim-b"));
+    for dir in [&a, &b] {
+        let out = mtsim(&[
+            "simulate",
+            "scenarios/circle-iso230-4.toml",
+            "-o",
+            dir.to_str().unwrap(),
+            "--no-timing",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    for file in ["trace.csv", "summary.json", "ballbar.svg"] {
+        let (x, y) = (
+            std::fs::read(a.join(file)).unwrap(),
+            std::fs::read(b.join(file)).unwrap(),
+        );
+        assert!(x == y, "{file} differs between two runs");
+    }
+    let v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(a.join("summary.json")).unwrap()).unwrap();
+    assert!(v["sim_time_s"].as_f64().unwrap() > 0.0);
+    assert!(
+        v["realtime_factor"].is_null(),
+        "--no-timing leaves the timing out"
+    );
+    let bb = &v["ballbar"];
+    for key in [
+        "circular_deviation_um",
+        "radial_max_um",
+        "radial_min_um",
+        "hysteresis_um",
+    ] {
+        assert!(bb[key].is_f64(), "{key}: {bb}");
+    }
+    let spike = &bb["spikes"][0];
+    assert!(
+        spike["theta_deg"].is_f64() && spike["height_um"].is_f64() && spike["axis"].is_string()
+    );
+    assert!(["spike", "step"].contains(&spike["kind"].as_str().unwrap()));
+    let header = std::fs::read_to_string(a.join("trace.csv"))
+        .unwrap()
+        .lines()
+        .next()
+        .unwrap()
+        .to_string();
+    for col in ["theta_deg", "deviation_um", "deviation_centred_um"] {
+        assert!(header.split(',').any(|c| c == col), "{header}");
+    }
+    assert!(!a.join("trace.csv.tmp").exists() && !a.join("trace.csv.raw.tmp").exists());
+}
+
+#[test]
+fn simulate_reports_the_real_time_factor_by_default() {
+    let dir = scratch("sim-rtf");
+    let out = mtsim(&[
+        "simulate",
+        "scenarios/cone-45-30.toml",
+        "-o",
+        dir.to_str().unwrap(),
+        "--json",
+    ]);
+    let v = stdout_json(&out);
+    assert!(v["realtime_factor"].as_f64().unwrap() > 0.0);
+    assert!(
+        v["hysteresis_um"].is_null() || v["ballbar"]["hysteresis_um"].is_null(),
+        "one direction: H is null"
+    );
+}
+
+#[test]
+fn a_diverging_servo_exits_3_and_names_the_axis() {
+    // A velocity loop far too fast for its 1 ms period rings up past the drive's 0.5 mm alarm.
+    let dir = scratch("diverge");
+    let s = scenario(
+        &dir,
+        "[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 200.0]\nballbar_length_mm = 100.0\n\
+         [machine_overrides.axes.Y.servo]\nvelocity_bandwidth_hz = 3000.0\nservo_period_ms = 1.0\nfollowing_error_limit_mm = 0.5\n",
+    );
+    let out = mtsim(&["simulate", &s, "-o", dir.join("out").to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(err.contains("axis Y"), "{err}");
+    assert!(!dir.join("out/trace.csv").exists(), "no partial trace");
+}
+
+#[test]
+fn a_bad_direction_exits_2_and_names_the_key() {
+    let dir = scratch("direction");
+    let s = scenario(
+        &dir,
+        "[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 200.0]\nballbar_length_mm = 100.0\ndirections = [\"up\"]\n",
+    );
+    let out = mtsim(&["simulate", &s, "-o", dir.join("out").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("directions") && err.contains(":7:"), "{err}");
+}

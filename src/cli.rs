@@ -77,6 +77,23 @@ pub enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Does the program fit the machine? Axis travel, velocity and acceleration on every
+    /// sample, and collisions between table, workpiece, tool, holder and spindle.
+    /// Exit code 0 when clean, 1 when violations were found.
+    Check {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+        /// Check the actual axis positions of the servo simulation (catches overshoot)
+        /// instead of the commanded ones.
+        #[arg(long)]
+        dynamics: bool,
+        /// Near-miss clearance, mm (default: the scenario's [check] or the machine's [scene]).
+        #[arg(long)]
+        near_miss: Option<f64>,
+    },
     /// Run the program through interpolator, servo models and kinematics, and predict the
     /// ball-bar trace: writes trace.csv, summary.json and ballbar.svg.
     Simulate {
@@ -110,6 +127,12 @@ pub fn main() -> i32 {
 
 fn run(cli: Cli) -> Result<i32> {
     match cli.command {
+        Command::Check {
+            scenario,
+            json,
+            dynamics,
+            near_miss,
+        } => cmd_check(&scenario, json, dynamics, near_miss),
         Command::Simulate {
             scenario,
             output,
@@ -415,4 +438,39 @@ fn spinner(what: &str) -> indicatif::ProgressBar {
     }
     bar.enable_steady_tick(std::time::Duration::from_millis(120));
     bar
+}
+
+fn cmd_check(path: &Path, as_json: bool, dynamics: bool, near_miss_mm: Option<f64>) -> Result<i32> {
+    if let Some(d) = near_miss_mm {
+        if !(d.is_finite() && d >= 0.0) {
+            return Err(Error::usage(format!(
+                "--near-miss {d}: expected a clearance >= 0 mm"
+            )));
+        }
+    }
+    let scenario = Scenario::load(path)?;
+    let report = crate::check::check(
+        &scenario,
+        &crate::check::CheckOptions {
+            dynamics,
+            near_miss_mm,
+        },
+    )?;
+    let code = if report.is_clean() {
+        0
+    } else {
+        crate::error::EXIT_VIOLATIONS
+    };
+    if as_json {
+        print_stdout(&format!(
+            "{}\n",
+            serde_json::to_string_pretty(&report).expect("plain data serializes")
+        ));
+        return Ok(code);
+    }
+    print_stdout(&crate::report::check_table(
+        &report,
+        &path.display().to_string(),
+    ));
+    Ok(code)
 }

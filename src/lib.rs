@@ -7,6 +7,7 @@
 pub mod analysis;
 pub mod axis;
 pub mod ballbar;
+pub mod check;
 pub mod circle;
 pub mod cli;
 pub mod cone;

@@ -95,7 +95,7 @@ pub struct LimitsMonitor<'a> {
     machine: &'a Machine,
     theta_of: &'a dyn Fn(&AxisVec) -> Option<f64>,
     tracks: Vec<Track>,
-    /// The previous sample and its velocity (per s) when it had one.
+    /// The previous sample and its velocity (per s) when it had one inside its block.
     previous: Option<(Sample, Option<AxisVec>)>,
     violations: Vec<Violation>,
 }
@@ -204,7 +204,11 @@ impl<'a> LimitsMonitor<'a> {
                 }
             }
         }
-        self.previous = Some((*s, velocity));
+        let in_block = self
+            .previous
+            .as_ref()
+            .is_some_and(|(p, _)| p.block_index == s.block_index);
+        self.previous = Some((*s, velocity.filter(|_| in_block)));
     }
 
     /// The per-axis usage and the violations, in the order they started.

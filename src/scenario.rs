@@ -14,6 +14,7 @@ use crate::cone::{ConeTest, NcOptions};
 use crate::error::{Error, Result};
 use crate::gcode::Plane;
 use crate::machine::Machine;
+use crate::scene::{ConeSetup, ToolConfig, WorkpieceConfig, WorkpieceKind};
 use crate::toml_input::{self, value_error};
 
 #[derive(Clone, Debug, Deserialize)]
@@ -27,6 +28,31 @@ struct ScenarioFile {
     simulate: SimulateSection,
     #[serde(default)]
     ballbar: BallbarSection,
+    /// What stands on the table; defaults to the cone frustum for a cone program.
+    workpiece: Option<WorkpieceConfig>,
+    /// The tool, replacing the machine file's `[tool]`.
+    tool: Option<ToolConfig>,
+    #[serde(default)]
+    check: CheckSection,
+}
+
+/// `[check]`: options of `mtsim check`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CheckSection {
+    /// Near-miss clearance, mm; the machine's `[scene] near_miss_mm` when absent.
+    pub near_miss_mm: Option<f64>,
+    /// Check collisions in the scene (false: axis limits only).
+    pub collisions: bool,
+}
+
+impl Default for CheckSection {
+    fn default() -> Self {
+        CheckSection {
+            near_miss_mm: None,
+            collisions: true,
+        }
+    }
 }
 
 /// `[simulate]`: options of `mtsim simulate`.
@@ -152,6 +178,11 @@ pub struct Scenario {
     pub simulate: SimulateSection,
     /// Table-side ball of the virtual ball bar, table frame, mm.
     pub ballbar_pivot_mm: Option<Vector3<f64>>,
+    /// What stands on the table, with the cone filled in from the program.
+    pub workpiece: WorkpieceConfig,
+    /// The tool in the spindle (the scenario's, else the machine's).
+    pub tool: ToolConfig,
+    pub check: CheckSection,
 }
 
 impl Scenario {
@@ -247,12 +278,61 @@ impl Scenario {
                 ));
             }
         }
+        if let Some(w) = &file.workpiece {
+            w.validate(path, &text, "workpiece")?;
+        }
+        if let Some(t) = &file.tool {
+            t.validate(path, &text, "tool")?;
+        }
+        if let Some(d) = file.check.near_miss_mm {
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(value_error(
+                    path,
+                    &text,
+                    "check",
+                    "near_miss_mm",
+                    format!("must be a clearance >= 0 mm, got {d}"),
+                ));
+            }
+        }
+        let cone = match &program {
+            Program::Cone { cone, .. } => Some(*cone),
+            Program::File { cone, .. } => *cone,
+            Program::Circle { .. } => None,
+        };
+        let mut workpiece = file.workpiece.clone().unwrap_or_else(|| WorkpieceConfig {
+            kind: if cone.is_some() {
+                WorkpieceKind::ConeFrustum
+            } else {
+                WorkpieceKind::None
+            },
+            ..WorkpieceConfig::default()
+        });
+        if let Some(c) = cone {
+            workpiece.cone = ConeSetup {
+                half_apex_deg: c.half_apex_deg,
+                inclination_deg: c.inclination_deg,
+                center_mm: c.center_mm.into(),
+                ballbar_length_mm: c.ballbar_length_mm,
+            };
+        } else if workpiece.kind != WorkpieceKind::None {
+            return Err(value_error(
+                path,
+                &text,
+                "workpiece",
+                "kind",
+                "a cone-frustum or ball-bar workpiece needs a [program.cone]".into(),
+            ));
+        }
         Ok(Scenario {
             path: path.to_path_buf(),
+            tool: file.tool.unwrap_or_else(|| machine.tool.clone()),
             machine,
             program,
             simulate: file.simulate,
             ballbar_pivot_mm: file.ballbar.pivot_mm.map(Vector3::from),
+            workpiece,
+            check: file.check,
         })
     }
 

@@ -69,6 +69,12 @@ pub struct SceneReport {
     pub events: Vec<SceneEvent>,
     pub engagement: Vec<EngagementSummary>,
     pub near_miss_mm: f64,
+    /// Smallest clearance measured between any collision pair, mm (negative: penetration).
+    /// Queries come more often the closer a pair gets, so below `near_miss_mm` it is the
+    /// clearance at a sample; above it, the true minimum lies between `near_miss_mm` and it.
+    pub min_clearance_mm: f64,
+    /// The pair of the smallest clearance.
+    pub min_clearance_bodies: Option<[String; 2]>,
     pub samples: u64,
     /// Geometric (signed-distance) queries made.
     pub queries: u64,
@@ -118,6 +124,8 @@ pub struct SceneMonitor {
     engagement: Vec<EngagementSummary>,
     samples: u64,
     queries: u64,
+    min_clearance_mm: f64,
+    min_clearance_pair: Option<usize>,
 }
 
 /// Sub-steps of conservative advancement inside one sample interval, at most.
@@ -163,6 +171,8 @@ impl SceneMonitor {
             engagement,
             samples: 0,
             queries: 0,
+            min_clearance_mm: f64::INFINITY,
+            min_clearance_pair: None,
         }
     }
 
@@ -232,6 +242,10 @@ impl SceneMonitor {
             events: self.events,
             engagement: self.engagement,
             near_miss_mm: self.scene.near_miss_mm,
+            min_clearance_mm: self.min_clearance_mm,
+            min_clearance_bodies: self
+                .min_clearance_pair
+                .map(|i| self.scene.pair_bodies(&self.scene.pairs[i])),
             samples: self.samples,
             queries: self.queries,
         }
@@ -318,6 +332,10 @@ impl SceneMonitor {
             return;
         }
         state.slack = d - threshold;
+        if d < self.min_clearance_mm {
+            self.min_clearance_mm = d;
+            self.min_clearance_pair = Some(i);
+        }
         let kind = if d <= 0.0 {
             Some(EventKind::Collision)
         } else if d < threshold {

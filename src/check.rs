@@ -22,6 +22,9 @@ use crate::scenario::{Program, Scenario};
 use crate::scene::{EngagementSummary, EventKind, Scene, SceneMonitor, WorkpieceKind};
 use crate::servo::AxisServo;
 
+/// Longest time the drives are given to settle after the last setpoint, s.
+pub const SETTLE_S: f64 = 2.0;
+
 /// How to check.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CheckOptions {
@@ -121,12 +124,37 @@ pub fn check(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport>
                     )
                 })
                 .collect::<Result<Vec<_>>>()?;
+            let mut last = None;
             for sp in setpoints {
                 let mut sp = sp?;
+                last = Some(sp);
                 for (servo, &a) in servos.iter_mut().zip(axes) {
                     sp.q[a] = servo.step(sp.q[a], sp.time_s)?.actual;
                 }
                 visit(&sp);
+            }
+            // The setpoints end at rest, the axes not yet: hold the last setpoint until every
+            // axis has settled (following error below 0.1 um or 0.1 mdeg and at rest), for at
+            // most SETTLE_S, so that an overshoot at the end is checked too.
+            if let Some(end) = last {
+                let period = machine.interpolation_period_s;
+                for k in 1..=(SETTLE_S / period).round() as u64 {
+                    let mut sp = Setpoint {
+                        time_s: end.time_s + k as f64 * period,
+                        ..end
+                    };
+                    let mut settled = true;
+                    for (servo, &a) in servos.iter_mut().zip(axes) {
+                        let state = servo.step(end.q[a], sp.time_s)?;
+                        sp.q[a] = state.actual;
+                        settled &=
+                            state.following_error.abs() < 1e-4 && state.velocity.abs() < 1e-3;
+                    }
+                    visit(&sp);
+                    if settled {
+                        break;
+                    }
+                }
             }
         }
     } else {

@@ -250,7 +250,8 @@ fn friction_on_one_axis_marks_the_cone_trace_at_that_axis_reversals_and_nowhere_
                 "{axis}: {e:?}"
             );
         }
-        // The main spike of each reversal peaks just after it, in the direction of travel.
+        // The main mark of each reversal (a spike, or a step where the lost motion dominates
+        // along the bar) lies just after it, in the direction of travel.
         for dir in [
             mtsim::ballbar::Direction::Ccw,
             mtsim::ballbar::Direction::Cw,
@@ -258,20 +259,16 @@ fn friction_on_one_axis_marks_the_cone_trace_at_that_axis_reversals_and_nowhere_
             for r in &revs {
                 let main = events
                     .iter()
-                    .filter(|e| {
-                        e.direction == dir
-                            && e.kind == EventKind::Spike
-                            && angular_distance_deg(e.peak_deg, *r) < 3.0
-                    })
+                    .filter(|e| e.direction == dir && angular_distance_deg(e.peak_deg, *r) < 3.0)
                     .max_by(|a, b| a.height_um.abs().total_cmp(&b.height_um.abs()))
-                    .unwrap_or_else(|| panic!("{axis} {dir:?}: no spike at {r}: {events:?}"));
+                    .unwrap_or_else(|| panic!("{axis} {dir:?}: no mark at {r}: {events:?}"));
                 let after = match dir {
                     mtsim::ballbar::Direction::Ccw => main.peak_deg - r,
                     mtsim::ballbar::Direction::Cw => r - main.peak_deg,
                 };
                 assert!(
                     after > 0.0 && after < 3.0,
-                    "{axis} {dir:?}: spike peak at {} for a reversal at {r}",
+                    "{axis} {dir:?}: mark at {} for a reversal at {r}",
                     main.peak_deg
                 );
                 assert!(

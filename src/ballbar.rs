@@ -522,12 +522,27 @@ fn median(buf: &mut [f64]) -> f64 {
     *m
 }
 
-/// Median of `v[start..start + len]`, indices taken around the circle.
-fn circular_median(v: &[f64], start: isize, len: usize, buf: &mut Vec<f64>) -> f64 {
+/// For every i, the median of `v[i + offset .. i + offset + len]` (indices around the
+/// circle; the upper median for even `len`), as [`median`] gives it. The window is kept
+/// sorted and slid one bin at a time: one removal and one insertion per bin.
+fn running_circular_median(v: &[f64], offset: isize, len: usize) -> Vec<f64> {
     let n = v.len() as isize;
-    buf.clear();
-    buf.extend((0..len as isize).map(|k| v[(start + k).rem_euclid(n) as usize]));
-    median(buf)
+    let at = |k: isize| v[k.rem_euclid(n) as usize];
+    let mut window: Vec<f64> = (0..len as isize).map(|k| at(offset + k)).collect();
+    window.sort_by(f64::total_cmp);
+    let mut out = Vec::with_capacity(v.len());
+    for i in 0..n {
+        if i > 0 {
+            let leaving = at(i - 1 + offset);
+            let pos = window.partition_point(|x| x.total_cmp(&leaving).is_lt());
+            window.remove(pos);
+            let entering = at(i + offset + len as isize - 1);
+            let pos = window.partition_point(|x| x.total_cmp(&entering).is_lt());
+            window.insert(pos, entering);
+        }
+        out.push(window[len / 2]);
+    }
+    out
 }
 
 /// Noise standard deviation from the differences of neighbouring filled bins, um.
@@ -590,13 +605,9 @@ fn fit_shape(v: &[f64], step_indices: &[usize]) -> (Vec<f64>, Vec<f64>) {
 /// The far-window step statistic `S(i) = median(right) - median(left)` at each boundary.
 fn step_statistic(r: &[f64]) -> Vec<f64> {
     let (gap, width) = (bins(STEP_GAP_DEG) as isize, bins(STEP_WINDOW_DEG));
-    let mut buf = Vec::with_capacity(width);
-    (0..r.len() as isize)
-        .map(|i| {
-            circular_median(r, i + gap, width, &mut buf)
-                - circular_median(r, i - gap - width as isize, width, &mut buf)
-        })
-        .collect()
+    let right = running_circular_median(r, gap, width);
+    let left = running_circular_median(r, -gap - width as isize, width);
+    right.iter().zip(&left).map(|(a, b)| a - b).collect()
 }
 
 /// The position of the largest step in `s` above `threshold`: the middle of the part of its
@@ -683,12 +694,8 @@ fn detect_events(
 
     // Spikes above a running median.
     let half = bins(BASELINE_HALF_WINDOW_DEG) as isize;
-    let mut buf = Vec::with_capacity(2 * half as usize + 1);
-    let res: Vec<f64> = (0..n as isize)
-        .map(|i| {
-            flat[i as usize] - circular_median(&flat, i - half, 2 * half as usize + 1, &mut buf)
-        })
-        .collect();
+    let baseline = running_circular_median(&flat, -half, 2 * half as usize + 1);
+    let res: Vec<f64> = flat.iter().zip(&baseline).map(|(f, b)| f - b).collect();
     let threshold = (NOISE_FACTOR * noise).max(SPIKE_FLOOR_UM);
     let angle = |i: usize| i as f64 * BIN_DEG;
     let centre = |i: usize| (i as f64 + 0.5) * BIN_DEG;

@@ -99,29 +99,32 @@ fn fmt_angles(angles: &[f64]) -> String {
 /// for |v| < 1e12 (round half away from zero on the scaled value), without the formatting
 /// machinery: the trace writes twenty numbers per millisecond of machine time.
 pub fn push_fixed(out: &mut String, v: f64, decimals: u32) {
-    let scale = 10f64.powi(decimals as i32);
-    let scaled = (v * scale).round();
-    if !scaled.is_finite() || scaled.abs() >= 9.0e15 {
+    const SCALE: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
+    let scaled = SCALE.get(decimals as usize).map(|s| (v * s).round());
+    let Some(scaled) = scaled.filter(|s| s.is_finite() && s.abs() < 9.0e15) else {
         let _ = std::fmt::Write::write_fmt(out, format_args!("{v:.*}", decimals as usize));
         return;
-    }
+    };
+    // Digits from the right into a small buffer, then one append.
+    let mut buf = [0u8; 24];
+    let mut pos = buf.len();
     let mut n = scaled.abs() as u64;
-    if scaled < 0.0 && n != 0 {
-        out.push('-');
-    }
-    let mut digits = [0u8; 24];
-    let mut len = 0;
-    while n > 0 || len <= decimals as usize {
-        digits[len] = b'0' + (n % 10) as u8;
-        n /= 10;
-        len += 1;
-    }
-    for i in (0..len).rev() {
-        out.push(digits[i] as char);
-        if i == decimals as usize && decimals > 0 {
-            out.push('.');
+    let mut written = 0;
+    while n > 0 || written <= decimals {
+        if written == decimals && decimals > 0 {
+            pos -= 1;
+            buf[pos] = b'.';
         }
+        pos -= 1;
+        buf[pos] = b'0' + (n % 10) as u8;
+        n /= 10;
+        written += 1;
     }
+    if scaled < 0.0 {
+        pos -= 1;
+        buf[pos] = b'-';
+    }
+    out.push_str(std::str::from_utf8(&buf[pos..]).expect("ASCII digits"));
 }
 
 #[cfg(test)]

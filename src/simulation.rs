@@ -11,7 +11,7 @@
 
 use std::fmt::Write as _;
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -115,14 +115,13 @@ pub fn simulate(
         let _ = write!(header, ",{a}_cmd_{u},{a}_act_{u},{a}_ferr_{u}");
     }
     header.push_str(",nonlinear_um,deviation_um");
-    writeln!(raw, "{header}").map_err(write_err(&raw_path))?;
 
     let started = Instant::now();
     let mut runs = Vec::new();
     let mut signatures = Vec::new();
     let mut sim_time_s = 0.0;
     let mut setpoints = 0u64;
-    let mut line_buf = String::new();
+    let mut row: Vec<f64> = Vec::with_capacity(6 + 3 * axes.len());
     let kin = machine.kinematics;
     for plan in &plans {
         let blocks: Box<dyn Iterator<Item = Result<Block>>> = match &plan.source {
@@ -214,23 +213,26 @@ pub fn simulate(
             run.push(theta, dev_um);
             signature.push(theta, nonlinear_um);
             if k % scenario.simulate.trace_every == 0 {
-                line_buf.clear();
-                line_buf.push_str(direction_name(plan.direction));
-                for (v, d) in [(t, 4), (sp.line as f64, 0), (theta, 4)] {
-                    line_buf.push(',');
-                    push_fixed(&mut line_buf, v, d);
-                }
+                // Binary now, text once the centring is known (see `complete_trace`).
+                row.clear();
+                row.extend_from_slice(&[
+                    if plan.direction == Direction::Cw {
+                        1.0
+                    } else {
+                        0.0
+                    },
+                    t,
+                    sp.line as f64,
+                    theta,
+                ]);
                 for &a in axes {
-                    for (v, d) in [(sp.q[a], 6), (actual[a], 6), (ferr[a], 7)] {
-                        line_buf.push(',');
-                        push_fixed(&mut line_buf, v, d);
-                    }
+                    row.extend_from_slice(&[sp.q[a], actual[a], ferr[a]]);
                 }
-                for v in [nonlinear_um, dev_um] {
-                    line_buf.push(',');
-                    push_fixed(&mut line_buf, v, 4);
+                row.extend_from_slice(&[nonlinear_um, dev_um]);
+                for v in &row {
+                    raw.write_all(&v.to_le_bytes())
+                        .map_err(write_err(&raw_path))?;
                 }
-                writeln!(raw, "{line_buf}").map_err(write_err(&raw_path))?;
             }
         }
         sim_time_s += last_t;
@@ -250,7 +252,7 @@ pub fn simulate(
     } else {
         Some(analyse_events_of(&runs, &signatures, &reversals)?)
     };
-    complete_trace(&raw_path, &trace_path, &runs)?;
+    complete_trace(&raw_path, &trace_path, &header, axes.len(), &runs)?;
     let _ = std::fs::remove_file(&raw_path);
     if let Some(result) = &ballbar {
         let title = plot_title(scenario);
@@ -272,13 +274,6 @@ pub fn simulate(
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
     crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;
     Ok(summary)
-}
-
-fn direction_name(d: Direction) -> &'static str {
-    match d {
-        Direction::Ccw => "ccw",
-        Direction::Cw => "cw",
-    }
 }
 
 fn plot_title(scenario: &Scenario) -> String {
@@ -308,9 +303,15 @@ fn plot_title(scenario: &Scenario) -> String {
     }
 }
 
-/// Copies the raw trace, appending the centred deviation `dL - (r0 + a cos θ + b sin θ)` of
-/// each row's run, to `trace.csv` (atomically).
-fn complete_trace(raw_path: &Path, trace_path: &Path, runs: &[BallbarRun]) -> Result<()> {
+/// Writes `trace.csv` (atomically) from the binary rows of the raw trace, appending the
+/// centred deviation `dL - (r0 + a cos θ + b sin θ)` of each row's run.
+fn complete_trace(
+    raw_path: &Path,
+    trace_path: &Path,
+    header: &str,
+    n_axes: usize,
+    runs: &[BallbarRun],
+) -> Result<()> {
     let tmp = temporary_path(trace_path);
     let read_err = |source| Error::Write {
         path: raw_path.to_path_buf(),
@@ -320,37 +321,50 @@ fn complete_trace(raw_path: &Path, trace_path: &Path, runs: &[BallbarRun]) -> Re
         path: tmp.clone(),
         source,
     };
-    let reader = BufReader::new(File::open(raw_path).map_err(read_err)?);
+    let mut reader = BufReader::new(File::open(raw_path).map_err(read_err)?);
     let mut out = BufWriter::new(File::create(&tmp).map_err(write_err)?);
-    let centring = |dir: &str| {
+    writeln!(out, "{header},deviation_centred_um").map_err(write_err)?;
+    let centring = |d: Direction| {
         runs.iter()
-            .find(|r| direction_name(r.direction()) == dir)
+            .find(|r| r.direction() == d)
             .map(|r| r.centring())
     };
-    let (ccw, cw) = (centring("ccw"), centring("cw"));
-    for (i, line) in reader.lines().enumerate() {
-        let line = line.map_err(read_err)?;
-        if i == 0 {
-            writeln!(out, "{line},deviation_centred_um").map_err(write_err)?;
-            continue;
+    let (ccw, cw) = (centring(Direction::Ccw), centring(Direction::Cw));
+    let width = 6 + 3 * n_axes;
+    let mut bytes = vec![0u8; 8 * width];
+    let mut line = String::new();
+    loop {
+        match reader.read_exact(&mut bytes) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => break,
+            Err(e) => return Err(read_err(e)),
         }
-        let mut fields = line.split(',');
-        let dir = fields.next().unwrap_or_default();
-        let theta: f64 = fields
-            .nth(2)
-            .and_then(|t| t.parse().ok())
-            .unwrap_or(f64::NAN);
-        let dev: f64 = line
-            .rsplit(',')
-            .next()
-            .and_then(|d| d.parse().ok())
-            .unwrap_or(f64::NAN);
-        let c = if dir == "cw" { cw } else { ccw };
+        let v: Vec<f64> = bytes
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
+            .collect();
+        let cw_row = v[0] == 1.0;
+        let (theta, dev) = (v[3], v[width - 1]);
+        let c = if cw_row { cw } else { ccw };
         let centred = c.map_or(dev, |c| dev - c.offset_um(theta));
-        let mut row = line;
-        row.push(',');
-        push_fixed(&mut row, centred, 4);
-        writeln!(out, "{row}").map_err(write_err)?;
+        line.clear();
+        line.push_str(if cw_row { "cw" } else { "ccw" });
+        for (value, decimals) in [(v[1], 4), (v[2], 0), (theta, 4)] {
+            line.push(',');
+            push_fixed(&mut line, value, decimals);
+        }
+        for k in 0..n_axes {
+            for (j, decimals) in [6, 6, 7].into_iter().enumerate() {
+                line.push(',');
+                push_fixed(&mut line, v[4 + 3 * k + j], decimals);
+            }
+        }
+        for value in [v[width - 2], dev, centred] {
+            line.push(',');
+            push_fixed(&mut line, value, 4);
+        }
+        line.push('\n');
+        out.write_all(line.as_bytes()).map_err(write_err)?;
     }
     out.flush().map_err(write_err)?;
     drop(out);

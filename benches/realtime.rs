@@ -1,0 +1,184 @@
+//! Release-mode benchmark of the pipeline, run by `cargo bench --bench realtime`.
+//!
+//! Reports, for the bundled `cone-15-10` scenario:
+//! - `simulate` with every nonlinearity on (dry friction and backlash on all five axes): the
+//!   real-time factor, simulated machine seconds per wall second, on one core;
+//! - peak memory (VmHWM) of `mtsim simulate` for a program of 1 and of 20 revolutions, to
+//!   show that memory stays flat as the program grows;
+//! - `check` with collisions on at 1 ms sampling: the real-time factor, samples per second
+//!   and the geometric queries made.
+//!
+//! It prints figures; it asserts nothing (timing is not a test).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+use mtsim::check::{check, CheckOptions};
+use mtsim::scenario::Scenario;
+use mtsim::simulation::simulate;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mtsim-bench-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The 15/10 cone with dry friction and backlash on every axis.
+fn all_nonlinear(dir: &Path) -> PathBuf {
+    let mut s = std::fs::read_to_string(root().join("scenarios/cone-15-10.toml")).unwrap();
+    s = s.replace("../machines/", &format!("{}/machines/", root().display()));
+    for a in ["X", "Y", "Z"] {
+        s += &format!("[machine_overrides.axes.{a}.drive]\nbacklash_mm = 0.003\n[machine_overrides.axes.{a}.friction]\ncoulomb_n = 200.0\n");
+    }
+    for a in ["A", "C"] {
+        s += &format!("[machine_overrides.axes.{a}.drive]\nbacklash_deg = 0.002\n[machine_overrides.axes.{a}.friction]\ncoulomb_nm = 20.0\n");
+    }
+    let path = dir.join("nonlinear.toml");
+    std::fs::write(&path, s).unwrap();
+    path
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Peak resident memory of a child `mtsim` run, kB, polled from /proc.
+fn peak_rss_kb(args: &[&str]) -> Option<u64> {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mtsim"))
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .ok()?;
+    let status = format!("/proc/{}/status", child.id());
+    let mut peak = None;
+    loop {
+        if let Ok(text) = std::fs::read_to_string(&status) {
+            if let Some(kb) = text
+                .lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse().ok())
+            {
+                peak = Some(kb);
+            }
+        }
+        if child.try_wait().ok()?.is_some() {
+            return peak;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+}
+
+/// A G-code file of `revolutions` turns of the 15/10 cone (360 blocks each), C continuous.
+fn long_program(dir: &Path, revolutions: usize) -> PathBuf {
+    let base =
+        std::fs::read_to_string(root().join("scenarios/programs/cone-15-10-yt25.nc")).unwrap();
+    let moves: Vec<&str> = base.lines().filter(|l| l.starts_with("G01")).collect();
+    let mut out = String::new();
+    for l in base.lines().take_while(|l| !l.starts_with("G01")) {
+        out.push_str(l);
+        out.push('\n');
+    }
+    for r in 0..revolutions {
+        for m in &moves {
+            // Shift C by a full turn per revolution so that the axis keeps turning one way.
+            let words: Vec<String> = m
+                .split_whitespace()
+                .map(|w| match w.strip_prefix('C') {
+                    Some(v) if !w.starts_with("(") => {
+                        format!("C{:.4}", v.parse::<f64>().unwrap() - 360.0 * r as f64)
+                    }
+                    _ => w.to_string(),
+                })
+                .collect();
+            out.push_str(&words.join(" "));
+            out.push('\n');
+        }
+    }
+    out.push_str("M30\n");
+    let nc = dir.join(format!("long-{revolutions}.nc"));
+    std::fs::write(&nc, out).unwrap();
+    let scenario = dir.join(format!("long-{revolutions}.toml"));
+    std::fs::write(
+        &scenario,
+        format!(
+            "machine = {:?}\n[program]\nfile = {:?}\n[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, -25.0, 200.0]\nballbar_length_mm = 100.0\n[simulate]\ntrace_every = 1000\n",
+            root().join("machines/trt-ac.toml").display().to_string(),
+            nc.display().to_string()
+        ),
+    )
+    .unwrap();
+    scenario
+}
+
+fn main() {
+    let dir = scratch("run");
+
+    // 1. simulate, all nonlinearities on.
+    let scenario = Scenario::load(&all_nonlinear(&dir)).unwrap();
+    let mut rtf = Vec::new();
+    let mut sim_time = 0.0;
+    for _ in 0..5 {
+        let t = Instant::now();
+        let s = simulate(&scenario, &dir.join("out"), false, &|_| {}).unwrap();
+        let wall = t.elapsed().as_secs_f64();
+        sim_time = s.sim_time_s;
+        rtf.push(s.sim_time_s / wall);
+    }
+    println!(
+        "simulate cone-15-10, friction + backlash on X Y Z A C (with the linear twin and a 1 ms trace): {:.2} s machine time; real-time factor median {:.0}x, best {:.0}x (5 runs)",
+        sim_time,
+        median(rtf.clone()),
+        rtf.iter().cloned().fold(0.0, f64::max)
+    );
+
+    // 2. memory against program length.
+    for revolutions in [1, 20] {
+        let s = long_program(&dir, revolutions);
+        let out = dir.join(format!("out-long-{revolutions}"));
+        let t = Instant::now();
+        let kb = peak_rss_kb(&[
+            "simulate",
+            s.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--no-timing",
+        ]);
+        println!(
+            "simulate a {revolutions}-revolution file program ({} blocks): peak memory {} kB, {:.2} s wall",
+            revolutions * 360,
+            kb.map_or("unknown".into(), |k| k.to_string()),
+            t.elapsed().as_secs_f64()
+        );
+    }
+
+    // 3. check, collisions on, 1 ms sampling.
+    let scenario = Scenario::load(&root().join("scenarios/cone-15-10.toml")).unwrap();
+    let mut rates = Vec::new();
+    let mut report = None;
+    for _ in 0..20 {
+        let t = Instant::now();
+        let r = check(&scenario, &CheckOptions::default()).unwrap();
+        rates.push(r.sim_time_s / t.elapsed().as_secs_f64());
+        report = Some(r);
+    }
+    let r = report.unwrap();
+    let rtf = median(rates.clone());
+    println!(
+        "check cone-15-10 (limits + collisions, 1 ms): {} samples over {:.2} s; real-time factor median {:.0}x, best {:.0}x; {:.2} M samples/s; {} geometric queries ({:.3} per sample)",
+        r.samples,
+        r.sim_time_s,
+        rtf,
+        rates.iter().cloned().fold(0.0, f64::max),
+        r.samples as f64 * rtf / r.sim_time_s / 1e6,
+        r.scene_queries.unwrap_or(0),
+        r.scene_queries.unwrap_or(0) as f64 / r.samples as f64
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

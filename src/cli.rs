@@ -58,24 +58,32 @@ pub enum Command {
     Sweep {
         /// Scenario file (TOML) with a [program.cone] table.
         scenario: PathBuf,
-        /// The parameter to vary.
-        #[arg(long, value_enum)]
-        vary: SweepParam,
+        /// The parameter to vary: center_x, center_y, center_z, half_apex, inclination or
+        /// ballbar_length; with --feasibility two of them, comma-separated (center_x,center_y).
+        #[arg(long, value_delimiter = ',', num_args = 1)]
+        vary: Vec<SweepParam>,
         /// First value (mm or deg).
-        #[arg(long, allow_negative_numbers = true)]
-        from: f64,
+        /// With two parameters, one value for both or two comma-separated values.
+        #[arg(long, allow_hyphen_values = true, value_delimiter = ',', num_args = 1)]
+        from: Vec<f64>,
         /// Last value (mm or deg).
-        #[arg(long, allow_negative_numbers = true)]
-        to: f64,
+        #[arg(long, allow_hyphen_values = true, value_delimiter = ',', num_args = 1)]
+        to: Vec<f64>,
         /// Step (mm or deg).
         #[arg(long)]
-        step: f64,
+        #[arg(long, value_delimiter = ',', num_args = 1)]
+        step: Vec<f64>,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
-        /// Folder for sweep-<param>.csv and sweep-<param>.svg.
+        /// Folder for sweep-<param>.csv and sweep-<param>.svg (placement.csv and
+        /// placement.svg with --feasibility).
         #[arg(short, long)]
         output: Option<PathBuf>,
+        /// The placement map: run `check` on a grid of two parameters (cone positions) and
+        /// map the smallest margin across travel limits and clearances.
+        #[arg(long)]
+        feasibility: bool,
     },
     /// Does the program fit the machine? Axis travel, velocity and acceleration on every
     /// sample, and collisions between table, workpiece, tool, holder and spindle.
@@ -154,7 +162,33 @@ fn run(cli: Cli) -> Result<i32> {
             step,
             json,
             output,
-        } => cmd_sweep(&scenario, vary, from, to, step, json, output.as_deref()),
+            feasibility,
+        } => {
+            if feasibility {
+                cmd_placement(&scenario, &vary, &from, &to, &step, json, output.as_deref())
+            } else {
+                let one = |v: &[f64], what: &str| match v {
+                    [x] => Ok(*x),
+                    _ => Err(Error::usage(format!(
+                        "--{what} takes one value without --feasibility"
+                    ))),
+                };
+                let [param] = vary[..] else {
+                    return Err(Error::usage(
+                        "--vary takes one parameter without --feasibility (two with it)",
+                    ));
+                };
+                cmd_sweep(
+                    &scenario,
+                    param,
+                    one(&from, "from")?,
+                    one(&to, "to")?,
+                    one(&step, "step")?,
+                    json,
+                    output.as_deref(),
+                )
+            }
+        }
     }
 }
 
@@ -473,4 +507,73 @@ fn cmd_check(path: &Path, as_json: bool, dynamics: bool, near_miss_mm: Option<f6
         &path.display().to_string(),
     ));
     Ok(code)
+}
+
+fn cmd_placement(
+    path: &Path,
+    vary: &[SweepParam],
+    from: &[f64],
+    to: &[f64],
+    step: &[f64],
+    as_json: bool,
+    output: Option<&Path>,
+) -> Result<i32> {
+    let [px, py] = vary[..] else {
+        return Err(Error::usage(
+            "--feasibility needs two parameters: --vary center_x,center_y",
+        ));
+    };
+    let pick = |v: &[f64], i: usize| v.get(i).or(v.first()).copied().unwrap_or(f64::NAN);
+    let xs = grid(pick(from, 0), pick(to, 0), pick(step, 0))?;
+    let ys = grid(pick(from, 1), pick(to, 1), pick(step, 1))?;
+    let scenario = Scenario::load(path)?;
+    let bar = progress_bar((xs.len() * ys.len()) as u64, "placement");
+    let map = crate::placement::placement_map(&scenario, [px, py], &xs, &ys, &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    if let Some(dir) = output {
+        std::fs::create_dir_all(dir).map_err(|source| Error::Write {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+        write_atomic(&dir.join("placement.csv"), &map.to_csv()?)?;
+        let title = format!(
+            "Where the test fits: {} (smallest margin, mm)",
+            scenario.path.display()
+        );
+        write_atomic(&dir.join("placement.svg"), map.to_svg(&title)?.as_bytes())?;
+        eprintln!(
+            "wrote {} and {}",
+            dir.join("placement.csv").display(),
+            dir.join("placement.svg").display()
+        );
+    }
+    if as_json {
+        print_stdout(&format!(
+            "{}\n",
+            serde_json::to_string(&map).expect("plain data serializes")
+        ));
+        return Ok(0);
+    }
+    let fitting = map.cells.iter().filter(|c| c.fits).count();
+    let mut out = format!("{} of {} placements fit\n", fitting, map.cells.len());
+    match map.fitting_range() {
+        Some(((x0, x1), (y0, y1))) => out.push_str(&format!(
+            "fitting range: {} {x0} .. {x1} mm, {} {y0} .. {y1} mm\n",
+            map.params[0], map.params[1]
+        )),
+        None => out.push_str("no placement on this grid fits\n"),
+    }
+    if let Some(best) = map
+        .cells
+        .iter()
+        .filter(|c| c.fits)
+        .max_by(|a, b| a.margin_mm.total_cmp(&b.margin_mm))
+    {
+        out.push_str(&format!(
+            "largest margin: {:.1} mm at ({}, {}), limited by {}\n",
+            best.margin_mm, best.x, best.y, best.limiting
+        ));
+    }
+    print_stdout(&out);
+    Ok(0)
 }

@@ -17,6 +17,7 @@ pub mod interpolation;
 pub mod kinematics;
 pub mod limits;
 pub mod machine;
+pub mod placement;
 pub mod plot;
 pub mod report;
 pub mod sampling;

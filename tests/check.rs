@@ -287,3 +287,48 @@ fn bad_input_exits_2() {
     let out = mtsim(&["check", "scenarios/cone-15-10.toml", "--near-miss", "-1"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn the_placement_map_marks_where_the_cone_fits_and_what_limits_it() {
+    // The 45/30 cone: at the C axis the tool needs Y down to -293.185 mm (the spec's range),
+    // inside the -350 mm travel; 300 mm off the axis along -Y it cannot fit.
+    let dir = scratch("placement");
+    let out = mtsim(&[
+        "sweep",
+        "scenarios/cone-45-30.toml",
+        "--feasibility",
+        "--vary",
+        "center_x,center_y",
+        "--from",
+        "0,-300",
+        "--to",
+        "0,0",
+        "--step",
+        "1,300",
+        "--json",
+        "-o",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let cells = v["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 2);
+    let at = |y: f64| cells.iter().find(|c| c["y"].as_f64() == Some(y)).unwrap();
+    assert_eq!(at(0.0)["fits"], true, "{}", at(0.0));
+    // The margin at the axis is the smaller of the Y travel margin (350 - 293.185) and the
+    // smallest clearance; it is positive.
+    let m = at(0.0)["margin_mm"].as_f64().unwrap();
+    assert!(m > 0.0 && m <= 350.0 - 293.185 + 1e-6, "{m}");
+    assert_eq!(at(-300.0)["fits"], false);
+    assert_eq!(at(-300.0)["limiting"], "Y travel");
+    assert!(at(-300.0)["margin_mm"].as_f64().unwrap() < 0.0);
+    let svg = std::fs::read_to_string(dir.join("placement.svg")).unwrap();
+    assert!(svg.contains("does not fit") && svg.contains("margin"));
+    assert!(std::fs::read_to_string(dir.join("placement.csv"))
+        .unwrap()
+        .starts_with("center_x,center_y,margin_mm,fits"));
+}

@@ -20,7 +20,7 @@ use crate::limits::{AxisUsage, LimitsMonitor, Violation, ViolationKind};
 use crate::sampling::NominalSampler;
 use crate::scenario::{Program, Scenario};
 use crate::scene::{EngagementSummary, EventKind, Scene, SceneMonitor, WorkpieceKind};
-use crate::servo::AxisServo;
+use crate::simulation::machine_servos;
 
 /// Longest time the drives are given to settle after the last setpoint, s.
 pub const SETTLE_S: f64 = 2.0;
@@ -110,20 +110,7 @@ pub fn check(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport>
         let mut setpoints = Interpolator::new(blocks, machine, options)?.peekable();
         if let Some(first) = setpoints.peek().and_then(|s| s.as_ref().ok()).map(|s| s.q) {
             let axes = machine.axes();
-            let mut servos = axes
-                .iter()
-                .map(|&a| {
-                    let c = machine.axis(a);
-                    AxisServo::new(
-                        a,
-                        &c.servo,
-                        &c.drive,
-                        &c.friction,
-                        machine.interpolation_period_s,
-                        first[a],
-                    )
-                })
-                .collect::<Result<Vec<_>>>()?;
+            let mut servos = machine_servos(machine, &first, false)?;
             let mut last = None;
             for sp in setpoints {
                 let mut sp = sp?;

@@ -28,6 +28,7 @@ use crate::cone::{self, ConePath, MeasuredLines, NcOptions};
 use crate::error::{Error, Result};
 use crate::gcode::{self, Block};
 use crate::interpolation::{InterpolationOptions, Interpolator};
+use crate::machine::Machine;
 use crate::report::{push_fixed, temporary_path};
 use crate::scenario::{Program, Scenario};
 use crate::servo::AxisServo;
@@ -146,37 +147,10 @@ pub fn simulate(
             }
             None => continue,
         };
-        let mut servos = axes
-            .iter()
-            .map(|&a| {
-                let c = machine.axis(a);
-                AxisServo::new(
-                    a,
-                    &c.servo,
-                    &c.drive,
-                    &c.friction,
-                    machine.interpolation_period_s,
-                    first[a],
-                )
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let mut servos = machine_servos(machine, &first, false)?;
         // The linear twin: the same drives without dry friction and backlash, stepped on the
         // same setpoints. Trace minus twin is what the nonlinearities alone do to the trace.
-        let mut twins = axes
-            .iter()
-            .map(|&a| {
-                let c = machine.axis(a);
-                let (drive, friction) = (c.drive.without_backlash(a), c.friction.viscous_only(a));
-                AxisServo::new(
-                    a,
-                    &c.servo,
-                    &drive,
-                    &friction,
-                    machine.interpolation_period_s,
-                    first[a],
-                )
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let mut twins = machine_servos(machine, &first, true)?;
         let mut run = BallbarRun::new(plan.direction);
         let mut signature = BallbarRun::new(plan.direction);
         let run_start_s = sim_time_s;
@@ -274,6 +248,31 @@ pub fn simulate(
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
     crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;
     Ok(summary)
+}
+
+/// One servo per machine axis, at rest at `q`; with `linear`, the linear twins: the same
+/// drives without dry friction and backlash.
+pub fn machine_servos(machine: &Machine, q: &AxisVec, linear: bool) -> Result<Vec<AxisServo>> {
+    machine
+        .axes()
+        .iter()
+        .map(|&a| {
+            let c = machine.axis(a);
+            let period = machine.interpolation_period_s;
+            if linear {
+                AxisServo::new(
+                    a,
+                    &c.servo,
+                    &c.drive.without_backlash(a),
+                    &c.friction.viscous_only(a),
+                    period,
+                    q[a],
+                )
+            } else {
+                AxisServo::new(a, &c.servo, &c.drive, &c.friction, period, q[a])
+            }
+        })
+        .collect()
 }
 
 fn plot_title(scenario: &Scenario) -> String {

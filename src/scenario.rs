@@ -67,6 +67,9 @@ pub struct SimulateSection {
     /// Path before and after the measured revolution, deg, so that the trace leaves out the
     /// start and stop transients.
     pub lead_deg: f64,
+    /// For a file program: the source lines (first, last) whose blocks the ball bar
+    /// measures; every block after the first when absent.
+    pub measure_lines: Option<[usize; 2]>,
 }
 
 impl Default for SimulateSection {
@@ -75,6 +78,7 @@ impl Default for SimulateSection {
             tcp: false,
             trace_every: 1,
             lead_deg: 20.0,
+            measure_lines: None,
         }
     }
 }
@@ -266,6 +270,11 @@ impl Scenario {
                 "lead_deg",
                 format!("must be in [0, 180] deg, got {}", sim.lead_deg),
             ));
+        }
+        if let Some([a, b]) = sim.measure_lines {
+            if a == 0 || b < a {
+                return Err(value_error(path, &text, "simulate", "measure_lines", format!("expected [first, last] source lines with 1 <= first <= last, got [{a}, {b}]")));
+            }
         }
         if let Some(p) = file.ballbar.pivot_mm {
             if !p.iter().all(|v| v.is_finite()) {

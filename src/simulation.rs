@@ -439,10 +439,14 @@ fn plan(scenario: &Scenario) -> Result<(Vec<RunPlan>, Option<BallbarSetup>, Anal
                 machine,
                 frame.as_ref(),
             )?;
+            let measured = scenario
+                .simulate
+                .measure_lines
+                .map(|[first, last]| MeasuredLines { first, last });
             let plans = vec![RunPlan {
                 direction: Direction::Ccw,
                 source: ProgramSource::File(path.clone()),
-                measured: None,
+                measured,
             }];
             let setup = cone.map(|c| BallbarSetup {
                 frame: c.circle_frame(),

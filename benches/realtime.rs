@@ -158,27 +158,46 @@ fn main() {
         );
     }
 
-    // 3. check, collisions on, 1 ms sampling.
-    let scenario = Scenario::load(&root().join("scenarios/cone-15-10.toml")).unwrap();
-    let mut rates = Vec::new();
-    let mut report = None;
-    for _ in 0..20 {
-        let t = Instant::now();
-        let r = check(&scenario, &CheckOptions::default()).unwrap();
-        rates.push(r.sim_time_s / t.elapsed().as_secs_f64());
-        report = Some(r);
+    // 3. check at 1 ms sampling: collisions with cutter engagement (the default), collisions
+    // without engagement tracking, and axis limits alone.
+    let base = std::fs::read_to_string(root().join("scenarios/cone-15-10.toml"))
+        .unwrap()
+        .replace("../machines/", &format!("{}/machines/", root().display()));
+    let variants = [
+        (
+            "limits + collisions + cutter engagement (1 mm)",
+            String::new(),
+        ),
+        (
+            "limits + collisions, engagement off",
+            "[machine_overrides.scene]\nengagement_resolution_mm = 1e9\n".to_string(),
+        ),
+        ("limits only", "[check]\ncollisions = false\n".to_string()),
+    ];
+    for (name, extra) in variants {
+        let path = dir.join("check.toml");
+        std::fs::write(&path, format!("{base}{extra}")).unwrap();
+        let scenario = Scenario::load(&path).unwrap();
+        let mut rates = Vec::new();
+        let mut report = None;
+        for _ in 0..20 {
+            let t = Instant::now();
+            let r = check(&scenario, &CheckOptions::default()).unwrap();
+            rates.push(r.sim_time_s / t.elapsed().as_secs_f64());
+            report = Some(r);
+        }
+        let r = report.unwrap();
+        let rtf = median(rates.clone());
+        println!(
+            "check cone-15-10, {name}: {} samples over {:.2} s; real-time factor median {:.0}x, best {:.0}x; {:.2} M samples/s; {} geometric queries ({:.3} per sample)",
+            r.samples,
+            r.sim_time_s,
+            rtf,
+            rates.iter().cloned().fold(0.0, f64::max),
+            r.samples as f64 * rtf / r.sim_time_s / 1e6,
+            r.scene_queries.unwrap_or(0),
+            r.scene_queries.unwrap_or(0) as f64 / r.samples as f64
+        );
     }
-    let r = report.unwrap();
-    let rtf = median(rates.clone());
-    println!(
-        "check cone-15-10 (limits + collisions, 1 ms): {} samples over {:.2} s; real-time factor median {:.0}x, best {:.0}x; {:.2} M samples/s; {} geometric queries ({:.3} per sample)",
-        r.samples,
-        r.sim_time_s,
-        rtf,
-        rates.iter().cloned().fold(0.0, f64::max),
-        r.samples as f64 * rtf / r.sim_time_s / 1e6,
-        r.scene_queries.unwrap_or(0),
-        r.scene_queries.unwrap_or(0) as f64 / r.samples as f64
-    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -56,14 +56,12 @@ pub fn block_duration_s(block: &Block, machine: &Machine) -> Result<f64> {
 fn feed_length(block: &Block) -> f64 {
     match block.motion {
         Motion::Arc {
-            clockwise,
-            plane,
-            center_mm,
+            plane, center_mm, ..
         } => {
             let (u, v, w) = plane.axes();
             let r = (block.start[u] - center_mm[u.index()])
                 .hypot(block.start[v] - center_mm[v.index()]);
-            let sweep = arc_sweep_rad(block.start, block.end, center_mm, u, v, clockwise);
+            let sweep = block.arc_sweep_rad().unwrap_or(0.0).abs();
             (r * sweep).hypot(block.end[w] - block.start[w])
         }
         _ if block.tcp => {
@@ -80,47 +78,19 @@ fn feed_length(block: &Block) -> f64 {
     }
 }
 
-/// Signed-positive sweep of an arc from start to end about the centre, rad; a full circle
-/// when start and end coincide.
-pub fn arc_sweep_rad(
-    start: AxisVec,
-    end: AxisVec,
-    center: [f64; 3],
-    u: Axis,
-    v: Axis,
-    clockwise: bool,
-) -> f64 {
-    let a0 = (start[v] - center[v.index()]).atan2(start[u] - center[u.index()]);
-    let a1 = (end[v] - center[v.index()]).atan2(end[u] - center[u.index()]);
-    let tau = std::f64::consts::TAU;
-    let ccw = (a1 - a0).rem_euclid(tau);
-    let sweep = if clockwise {
-        (tau - ccw).rem_euclid(tau)
-    } else {
-        ccw
-    };
-    if sweep < 1e-12 {
-        tau
-    } else {
-        sweep
-    }
-}
-
 /// Commanded machine axis positions at fraction `f` in [0, 1] of `block`.
 pub fn position_in_block(block: &Block, machine: &Machine, f: f64) -> AxisVec {
     let mut q = block.start + (block.end - block.start) * f;
     match block.motion {
         Motion::Arc {
-            clockwise,
-            plane,
-            center_mm,
+            plane, center_mm, ..
         } => {
             let (u, v, _) = plane.axes();
             let (cu, cv) = (center_mm[u.index()], center_mm[v.index()]);
             let r = (block.start[u] - cu).hypot(block.start[v] - cv);
             let a0 = (block.start[v] - cv).atan2(block.start[u] - cu);
-            let sweep = arc_sweep_rad(block.start, block.end, center_mm, u, v, clockwise);
-            let a = a0 + if clockwise { -sweep } else { sweep } * f;
+            // The reader's signed sweep: negative for G02, ±2π for a full circle.
+            let a = a0 + block.arc_sweep_rad().unwrap_or(0.0) * f;
             q[u] = cu + r * a.cos();
             q[v] = cv + r * a.sin();
         }

@@ -15,8 +15,8 @@ use std::process::Command;
 use std::time::Instant;
 
 use mtsim::check::{check, CheckOptions};
-use mtsim::scenario::Scenario;
-use mtsim::simulation::simulate;
+use mtsim::input::scenario::Scenario;
+use mtsim::study::simulate::simulate;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -9,6 +9,8 @@ use std::path::{Path, PathBuf};
 use miette::{Diagnostic, NamedSource, SourceSpan};
 use thiserror::Error;
 
+pub use ngc::line_column;
+
 /// Exit code for bad input.
 pub const EXIT_BAD_INPUT: i32 = 2;
 /// Exit code for a run that could not finish.
@@ -75,7 +77,7 @@ pub enum Error {
         )
     )]
     Diverged {
-        axis: crate::axis::Axis,
+        axis: crate::Axis,
         time_s: f64,
         reason: String,
     },
@@ -146,19 +148,18 @@ impl Error {
     }
 }
 
-/// 1-based line and character column of byte `offset` in `text`.
-pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
-    let offset = offset.min(text.len());
-    let before = &text[..floor_char_boundary(text, offset)];
-    let line = before.matches('\n').count() + 1;
-    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-    let column = before[line_start..].chars().count() + 1;
-    (line, column)
-}
-
-fn floor_char_boundary(text: &str, mut offset: usize) -> usize {
-    while !text.is_char_boundary(offset) {
-        offset -= 1;
+/// A G-code reader error becomes a diagnostic that shows the line with its caret.
+impl From<ngc::Error> for Error {
+    fn from(e: ngc::Error) -> Error {
+        match e {
+            ngc::Error::Read { path, source } => Error::Read { path, source },
+            ngc::Error::Syntax(s) => {
+                let error = Error::at(&s.path, &s.text, s.span, s.message, s.label);
+                match s.help {
+                    Some(help) => error.with_help(help),
+                    None => error,
+                }
+            }
+        }
     }
-    offset
 }

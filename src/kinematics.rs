@@ -22,7 +22,7 @@
 use nalgebra::{Point3, Rotation3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::axis::{Axis, AxisVec};
+use crate::{Axis, AxisVec};
 
 /// The layout of a machine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

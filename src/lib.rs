@@ -1,32 +1,49 @@
-//! mtsim: a machine-tool motion simulator with servo dynamics.
+//! mtsim: a machine-tool motion simulator with servo dynamics, for the five-axis
+//! cone-frustum test (NAS 979, ISO 10791-7) and its ball-bar version (ISO 10791-6).
 //!
-//! The data flow is one-way: program source (G-code file or generator) → blocks →
-//! interpolator → per-axis servo → actual axis positions → forward kinematics → ball bar,
-//! limits monitor, collision scene → reports.
+//! # The pipeline
+//!
+//! ```text
+//! program ─► motion ─► drive ─► measure, check ─► report
+//!  moves     setpoints  actual    ball bar,        CSV, JSON,
+//!                       axes      limits, scene    SVG
+//! ```
+//!
+//! Data flows one way and streams; [`pipeline::run`] connects the stages and hands every
+//! [`pipeline::Sample`] to a set of [`pipeline::Sink`]s. Beside it, [`input`] reads the plain
+//! configuration of every stage, [`study`] runs whole studies (reversal analysis, simulate,
+//! sweeps, placement maps) and [`cli`] is the command line. `docs/architecture.md` says
+//! where each concept lives.
+//!
+//! | module | role | main items |
+//! |---|---|---|
+//! | [`input`] | machine and scenario files | [`input::Machine`], [`input::Scenario`], [`input::ConeTest`] |
+//! | [`program`] | NC program → canonical moves | [`program::Move`], [`program::scenario_run`], [`program::cone::ConeProgram`] |
+//! | [`motion`] | moves → setpoints | [`motion::Interpolator`], [`motion::NominalSampler`] |
+//! | [`drive`] | setpoints → actual positions | [`drive::AxisServo`], [`drive::Drives`] |
+//! | [`pipeline`] | the stages connected | [`pipeline::run`], [`pipeline::Sink`] |
+//! | [`measure`] | the virtual ball bar | [`measure::BallbarSink`], [`measure::ballbar::analyse`] |
+//! | [`check`] | limits and collisions | [`check::check`], [`check::limits::LimitsMonitor`], [`check::scene::Scene`] |
+//! | [`report`] | files | [`report::trace::TraceSink`], [`report::polar`], [`report::write_atomic`] |
+//! | [`study`] | runs and studies | [`study::reversals`], [`study::simulate::simulate`], [`study::sweep`], [`study::placement`] |
+//! | [`cli`] | the `mtsim` command | [`cli::main`] |
+//! | [`kinematics`] | forward and inverse kinematics | [`kinematics::Kinematics`] |
+//!
+//! The G-code reader is the `ngc` crate of this workspace; its axis types are re-exported
+//! here. Positions are mm and deg at every interface, SI inside the servo models.
 
-pub mod analysis;
-pub mod axis;
-pub mod ballbar;
 pub mod check;
-pub mod circle;
 pub mod cli;
-pub mod cone;
+pub mod drive;
 pub mod error;
-pub mod gcode;
-pub mod interpolation;
+pub mod input;
 pub mod kinematics;
-pub mod limits;
-pub mod machine;
-pub mod placement;
-pub mod plot;
+pub mod measure;
+pub mod motion;
+pub mod pipeline;
+pub mod program;
 pub mod report;
-pub mod sampling;
-pub mod scenario;
-pub mod scene;
-pub mod servo;
-pub mod simulation;
-pub mod sweep;
-pub mod toml_input;
+pub mod study;
 
-pub use axis::{Axis, AxisVec};
 pub use error::{Error, Result};
+pub use ngc::{Axis, AxisVec, Plane};

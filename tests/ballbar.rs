@@ -1,10 +1,11 @@
 //! The virtual ball bar against independently computed values.
 
-use mtsim::ballbar::{
-    analyse, deviation_mm, BallbarRun, CircleFrame, Direction, EventKind, TraceEvent,
-};
-use mtsim::gcode::Plane;
+use mtsim::input::Direction;
 use mtsim::kinematics::{Kinematics, Layout};
+use mtsim::measure::ballbar::{
+    analyse, deviation_mm, BallbarRun, CircleFrame, EventKind, TraceEvent,
+};
+use mtsim::Plane;
 use mtsim::{Axis, AxisVec};
 use nalgebra::{Point3, Vector3};
 
@@ -389,7 +390,7 @@ fn summary_json_has_the_contract_keys() {
 
 #[test]
 fn the_plot_scale_is_the_smallest_1_2_5_step_that_fits() {
-    use mtsim::plot::scale_um_per_div;
+    use mtsim::report::polar::scale_um_per_div;
     // Four divisions each side of the nominal circle.
     assert_eq!(scale_um_per_div(31.0), 10.0);
     assert_eq!(scale_um_per_div(20.0), 5.0);
@@ -417,8 +418,14 @@ fn the_polar_plot_is_written_atomically_and_deterministically() {
     let first = dir.join("ballbar-polar-1.svg");
     let second = dir.join("ballbar-polar-2.svg");
     for path in [&first, &second] {
-        mtsim::plot::write_polar_svg(path, &runs, &reversals, &result, "cone 15/10, YT -25 mm")
-            .unwrap();
+        mtsim::report::polar::write_polar_svg(
+            path,
+            &runs,
+            &reversals,
+            &result,
+            "cone 15/10, YT -25 mm",
+        )
+        .unwrap();
     }
     let svg = std::fs::read_to_string(&first).unwrap();
     assert_eq!(
@@ -448,7 +455,7 @@ fn an_unwritable_plot_path_is_a_write_error() {
     let run = run_of(Direction::Ccw, ellipse);
     let result = analyse(std::slice::from_ref(&run), &[]).unwrap();
     let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("no-such-dir/plot.svg");
-    let err = mtsim::plot::write_polar_svg(&path, &[run], &[], &result, "t").unwrap_err();
+    let err = mtsim::report::polar::write_polar_svg(&path, &[run], &[], &result, "t").unwrap_err();
     assert!(matches!(err, mtsim::Error::Write { .. }), "{err:?}");
 }
 

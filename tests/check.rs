@@ -212,9 +212,16 @@ fn the_near_miss_threshold_is_honoured() {
                 .iter()
                 .all(|x| x["worst"].as_f64().unwrap() < smallest + 0.5)
     );
-    assert!(nm
-        .iter()
-        .any(|x| (x["worst"].as_f64().unwrap() - smallest).abs() < 1e-9));
+    // Below the threshold the pair is measured at every sample, so the worst near miss is
+    // at most the clean run's smallest clearance (an upper bound from sparser queries) and
+    // within the 1 um that 1 ms sampling allows of it.
+    assert!(
+        nm.iter().any(|x| {
+            let worst = x["worst"].as_f64().unwrap();
+            worst <= smallest + 1e-9 && smallest - worst < 1e-3
+        }),
+        "smallest {smallest}, near misses {nm:?}"
+    );
     let (code, v) = check("nm-below", CONE_15_10, None, &["--near-miss", &below]);
     assert_eq!(code, 0, "{v}");
 }

@@ -3,10 +3,11 @@
 
 use std::path::Path;
 
-use mtsim::analysis::{analyse_cone, angular_distance_deg, Analysis};
-use mtsim::cone::{ConePath, ConeTest};
-use mtsim::machine::Machine;
-use mtsim::sweep::{grid, sweep, SweepParam};
+use mtsim::input::machine::Machine;
+use mtsim::input::ConeTest;
+use mtsim::program::cone::ConePath;
+use mtsim::study::reversals::{analyse_cone, angular_distance_deg, Analysis};
+use mtsim::study::sweep::{grid, sweep, SweepParam};
 use mtsim::Axis;
 use nalgebra::Vector3;
 

@@ -4,11 +4,13 @@
 
 use std::path::Path;
 
-use mtsim::analysis::{analyse_blocks, analyse_cone, angular_distance_deg, Analysis};
-use mtsim::cone::{write_program, ConePath, ConeTest, NcOptions};
-use mtsim::gcode::read_str;
-use mtsim::machine::Machine;
-use mtsim::{Axis, AxisVec};
+use mtsim::input::machine::Machine;
+use mtsim::input::{ConeTest, NcOptions};
+use mtsim::measure::CircleFrame;
+use mtsim::program::cone::{write_program, ConePath};
+use mtsim::program::file::read_str;
+use mtsim::study::reversals::{analyse_cone, analyse_moves, angular_distance_deg, Analysis};
+use mtsim::Axis;
 use nalgebra::Vector3;
 
 fn machine() -> Machine {
@@ -39,9 +41,9 @@ fn options(inverse_time: bool, tcp: bool) -> NcOptions {
 fn file_analysis(m: &Machine, opts: &NcOptions) -> (Analysis, usize) {
     let path = ConePath::new(cone_yt25(), m);
     let (text, measured) = write_program(&path, &m.name, opts);
-    let blocks = read_str(Path::new("generated.nc"), &text, AxisVec::ZERO);
+    let blocks = read_str(Path::new("generated.nc"), &text);
     (
-        analyse_blocks(blocks, m, Some(&cone_yt25().circle_frame())).unwrap(),
+        analyse_moves(blocks, m, Some(&CircleFrame::of_cone(&cone_yt25()))).unwrap(),
         measured.first,
     )
 }

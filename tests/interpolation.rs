@@ -3,10 +3,11 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
-use mtsim::gcode::{Block, FeedMode, Motion, Plane};
-use mtsim::interpolation::{InterpolationOptions, Interpolator, Setpoint};
+use mtsim::input::machine::Machine;
 use mtsim::kinematics::{Branch, ToolPose, C_START_REFERENCE_DEG};
-use mtsim::machine::Machine;
+use mtsim::motion::interpolation::{InterpolationOptions, Interpolator, Setpoint};
+use mtsim::program::{FeedMode, Motion, Move};
+use mtsim::Plane;
 use mtsim::{Axis, AxisVec, Result};
 use nalgebra::{Point3, Rotation3, Vector3};
 
@@ -55,8 +56,8 @@ fn q(values: &[f64]) -> AxisVec {
     v
 }
 
-fn block(line: usize, motion: Motion, start: AxisVec, end: AxisVec, feed: Option<f64>) -> Block {
-    Block {
+fn block(line: usize, motion: Motion, start: AxisVec, end: AxisVec, feed: Option<f64>) -> Move {
+    Move {
         line,
         motion,
         start,
@@ -67,12 +68,12 @@ fn block(line: usize, motion: Motion, start: AxisVec, end: AxisVec, feed: Option
     }
 }
 
-fn g01(line: usize, start: AxisVec, end: AxisVec, feed: f64) -> Block {
+fn g01(line: usize, start: AxisVec, end: AxisVec, feed: f64) -> Move {
     block(line, Motion::Linear, start, end, Some(feed))
 }
 
 /// A chain of G01 blocks through `points` with one feed per block.
-fn chain(points: &[AxisVec], feeds: &[f64]) -> Vec<Block> {
+fn chain(points: &[AxisVec], feeds: &[f64]) -> Vec<Move> {
     points
         .windows(2)
         .zip(feeds)
@@ -81,7 +82,7 @@ fn chain(points: &[AxisVec], feeds: &[f64]) -> Vec<Block> {
         .collect()
 }
 
-fn run_with(blocks: Vec<Block>, machine: &Machine, options: InterpolationOptions) -> Vec<Setpoint> {
+fn run_with(blocks: Vec<Move>, machine: &Machine, options: InterpolationOptions) -> Vec<Setpoint> {
     let interpolator =
         Interpolator::new(blocks.into_iter().map(Ok), machine, options).expect("program plans");
     interpolator
@@ -89,7 +90,7 @@ fn run_with(blocks: Vec<Block>, machine: &Machine, options: InterpolationOptions
         .expect("program runs")
 }
 
-fn run(blocks: Vec<Block>, machine: &Machine) -> Vec<Setpoint> {
+fn run(blocks: Vec<Move>, machine: &Machine) -> Vec<Setpoint> {
     run_with(blocks, machine, InterpolationOptions::default())
 }
 
@@ -295,7 +296,7 @@ fn a_chain_within_all_limits_runs_every_block_at_its_programmed_feed() {
 /// The cone-frustum program of the spec (15/10, centre (0, 0, 200), L = 100, F = 1000):
 /// one G01 per degree with the mixed-unit F words. Returns the blocks and their
 /// programmed times, s.
-fn cone_frustum_program(m: &Machine, alpha_deg: f64, beta_deg: f64) -> (Vec<Block>, Vec<f64>) {
+fn cone_frustum_program(m: &Machine, alpha_deg: f64, beta_deg: f64) -> (Vec<Move>, Vec<f64>) {
     let (alpha, beta, len, feed) = (alpha_deg.to_radians(), beta_deg.to_radians(), 100.0, 1000.0);
     let origin = Vector3::new(0.0, 0.0, 200.0);
     let tilt = Rotation3::from_axis_angle(&Vector3::y_axis(), -beta);
@@ -377,9 +378,9 @@ fn inverse_time_blocks_take_one_over_f_minutes() {
     let m = xyz_machine(Lim(10000.0, 1000.0, 20000.0));
     let points: Vec<AxisVec> = (0..=5).map(|k| q(&[10.0 * k as f64, 0.0])).collect();
     // F 60 /min: 1 s per 10 mm block (10 mm/s, the same speed on every block).
-    let blocks: Vec<Block> = chain(&points, &[60.0; 5])
+    let blocks: Vec<Move> = chain(&points, &[60.0; 5])
         .into_iter()
-        .map(|b| Block {
+        .map(|b| Move {
             feed_mode: FeedMode::InverseTime,
             ..b
         })
@@ -561,7 +562,7 @@ fn tcp_keeps_the_tool_tip_on_the_chord_where_joint_interpolation_leaves_it() {
     );
 
     // TCP mode: the same move keeps the tip at (100, 0, 0) on the table.
-    let tcp = Block {
+    let tcp = Move {
         tcp: true,
         ..g01(
             1,
@@ -581,7 +582,7 @@ fn tcp_keeps_the_tool_tip_on_the_chord_where_joint_interpolation_leaves_it() {
         Vector3::new(100.0, 0.0, 0.0),
         Vector3::new(100.0, 20.0, 10.0),
     );
-    let tcp = Block {
+    let tcp = Move {
         tcp: true,
         ..g01(
             1,
@@ -762,7 +763,7 @@ fn an_empty_program_gives_no_setpoints() {
     assert!(run(vec![], &m).is_empty());
 }
 
-fn first_error(blocks: Vec<Block>, options: InterpolationOptions) -> String {
+fn first_error(blocks: Vec<Move>, options: InterpolationOptions) -> String {
     let m = xyz_machine(Lim(10000.0, 1000.0, 20000.0));
     match Interpolator::new(blocks.into_iter().map(Ok), &m, options) {
         Err(e) => e.to_string(),
@@ -783,7 +784,7 @@ fn a_move_without_feed_is_an_error_that_names_its_line() {
     );
     let message = first_error(vec![g01(3, a, b, 0.0)], InterpolationOptions::default());
     assert!(message.contains("line 3"), "{message}");
-    let inverse = Block {
+    let inverse = Move {
         feed_mode: FeedMode::InverseTime,
         ..block(4, Motion::Linear, a, b, None)
     };

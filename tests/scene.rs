@@ -3,11 +3,11 @@
 
 use std::path::Path;
 
-use mtsim::machine::Machine;
-use mtsim::scene::{
+use mtsim::check::scene::{
     z_cylinder, ConeSetup, PairKind, Scene, SceneMonitor, ToolConfig, WorkpieceConfig,
     WorkpieceKind,
 };
+use mtsim::input::machine::Machine;
 use mtsim::{Axis, AxisVec};
 
 /// A trt-ac machine with its pivot at the machine origin; `extra` holds `[scene]`/`[tool]`.

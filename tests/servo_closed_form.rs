@@ -4,7 +4,8 @@
 
 use std::f64::consts::PI;
 
-use mtsim::servo::{AxisServo, DriveConfig, FrictionConfig, ServoConfig};
+use mtsim::drive::AxisServo;
+use mtsim::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
 use mtsim::{Axis, Error};
 
 /// Interpolation period, s.
@@ -328,7 +329,7 @@ fn identical_dynamics_give_a_uniform_radial_error() {
 }
 
 /// Runs a ramp at `speed` units/s for 2 s from rest and returns the final state.
-fn ramp(axis: Axis, s: &Setup, speed: f64) -> mtsim::servo::ServoState {
+fn ramp(axis: Axis, s: &Setup, speed: f64) -> mtsim::drive::ServoState {
     let mut servo = AxisServo::new(axis, &s.servo, &s.drive, &s.friction, T, 10.0).unwrap();
     let mut last = None;
     for k in 1..=2000 {

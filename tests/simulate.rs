@@ -4,10 +4,10 @@
 
 use std::path::{Path, PathBuf};
 
-use mtsim::analysis::angular_distance_deg;
-use mtsim::ballbar::EventKind;
-use mtsim::scenario::Scenario;
-use mtsim::simulation::{simulate, SimulationSummary};
+use mtsim::input::scenario::Scenario;
+use mtsim::measure::ballbar::EventKind;
+use mtsim::study::reversals::angular_distance_deg;
+use mtsim::study::simulate::{simulate, SimulationSummary};
 
 fn machine(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -252,10 +252,7 @@ fn friction_on_one_axis_marks_the_cone_trace_at_that_axis_reversals_and_nowhere_
         }
         // The main mark of each reversal (a spike, or a step where the lost motion dominates
         // along the bar) lies just after it, in the direction of travel.
-        for dir in [
-            mtsim::ballbar::Direction::Ccw,
-            mtsim::ballbar::Direction::Cw,
-        ] {
+        for dir in [mtsim::input::Direction::Ccw, mtsim::input::Direction::Cw] {
             for r in &revs {
                 let main = events
                     .iter()
@@ -263,8 +260,8 @@ fn friction_on_one_axis_marks_the_cone_trace_at_that_axis_reversals_and_nowhere_
                     .max_by(|a, b| a.height_um.abs().total_cmp(&b.height_um.abs()))
                     .unwrap_or_else(|| panic!("{axis} {dir:?}: no mark at {r}: {events:?}"));
                 let after = match dir {
-                    mtsim::ballbar::Direction::Ccw => main.peak_deg - r,
-                    mtsim::ballbar::Direction::Cw => r - main.peak_deg,
+                    mtsim::input::Direction::Ccw => main.peak_deg - r,
+                    mtsim::input::Direction::Cw => r - main.peak_deg,
                 };
                 assert!(
                     after > 0.0 && after < 3.0,

@@ -1,0 +1,39 @@
+//! `ngc`: a G-code (RS274/NGC, Fanuc-family) reader that keeps every number exact and every
+//! bit of modal state, and emits canonical moves.
+//!
+//! ```text
+//! program text ─► tokenizer (words, comments, file:line:column)
+//!              ─► modal interpreter (units, distance mode, plane, feed mode, TCP)
+//!              ─► canonical moves (absolute axis positions, mm and deg)
+//! ```
+//!
+//! The crate depends on nothing of the simulator that uses it: a canonical [`Move`] is the
+//! narrow interface between reading a program and moving a machine, as LinuxCNC's
+//! canonical machining calls are. Reading streams one line at a time, so memory does not
+//! grow with the program.
+//!
+//! ```
+//! use std::path::Path;
+//! use ngc::{read_str, AxisVec, Axis, Motion};
+//!
+//! let program = "G21 G90 G94\nG01 X10 Y-2.5 F600\nM30\n";
+//! let moves: Vec<_> = read_str(Path::new("demo.nc"), program, AxisVec::ZERO)
+//!     .collect::<Result<_, _>>()
+//!     .unwrap();
+//! assert_eq!(moves.len(), 1);
+//! assert_eq!(moves[0].motion, Motion::Linear);
+//! assert_eq!(moves[0].end[Axis::Y], -2.5);
+//! assert_eq!(moves[0].feed, Some(600.0));
+//! ```
+
+mod axis;
+mod canon;
+mod error;
+mod reader;
+
+pub use axis::{Axis, AxisVec, Plane};
+pub use canon::{FeedMode, Motion, Move, FULL_CIRCLE_TOLERANCE_MM};
+pub use error::{line_column, Error, Result, Syntax};
+pub use reader::{
+    read_file, read_str, Moves, Source, StrSource, ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH,
+};

@@ -1,0 +1,275 @@
+//! The limits monitor: travel, velocity and acceleration of every axis, checked on every
+//! sample (not only at block ends), with violations merged into intervals.
+//!
+//! Velocity and acceleration are finite differences of the samples:
+//! `v_k = (q_k - q_{k-1}) / Δt` and `a_k = (v_k - v_{k-1}) / Δt`. At programmed timing a
+//! junction between two straight blocks is a step in velocity, which no real controller
+//! executes (its planner rounds the corner), so acceleration is taken only from three
+//! samples inside one block: it then catches arcs, G43.4 moves and what the servo does.
+
+use serde::Serialize;
+
+use crate::error::Result;
+use crate::input::machine::Machine;
+use crate::pipeline::{Sample, Sink};
+use crate::{Axis, AxisVec};
+
+/// The kind of a violation, as scripts read it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ViolationKind {
+    Travel,
+    Velocity,
+    Acceleration,
+    Collision,
+    NearMiss,
+}
+
+/// One violation: an interval of samples over which a limit is exceeded.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Violation {
+    pub kind: ViolationKind,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis: Option<Axis>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bodies: Option<[String; 2]>,
+    /// θ of the first and last sample in violation, deg (null without a cone or circle).
+    pub theta_start_deg: Option<f64>,
+    pub theta_end_deg: Option<f64>,
+    /// Time of the first and last sample in violation, s.
+    pub time_start_s: f64,
+    pub time_end_s: f64,
+    /// Source line of the block of the first sample in violation.
+    pub line: usize,
+    /// The worst value: position (mm, deg), speed (per min), acceleration (per s²),
+    /// penetration depth or smallest clearance (mm).
+    pub worst: f64,
+    /// The limit exceeded, in the unit of `worst`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub limit: Option<f64>,
+}
+
+/// How much of an axis a program uses.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct AxisUsage {
+    #[serde(skip)]
+    pub axis: Axis,
+    /// Used range, mm or deg.
+    pub min: f64,
+    pub max: f64,
+    /// Travel limits, mm or deg.
+    pub limit_min: f64,
+    pub limit_max: f64,
+    /// Smallest distance to a travel limit (negative when exceeded); null for a continuous axis.
+    pub margin: Option<f64>,
+    /// Highest speed, mm/min or deg/min, and its limit.
+    pub peak_velocity_per_min: f64,
+    pub velocity_limit_per_min: f64,
+    /// Highest acceleration, mm/s² or deg/s², and its limit.
+    pub peak_acceleration_per_s2: f64,
+    pub acceleration_limit_per_s2: f64,
+}
+
+/// A violation being extended sample by sample.
+#[derive(Clone, Debug)]
+struct Open {
+    first: (f64, Option<f64>, usize),
+    last: (f64, Option<f64>),
+    worst: f64,
+    limit: f64,
+    /// How far past the limit `worst` is: |position - limit|, or the speed or acceleration.
+    severity: f64,
+}
+
+#[derive(Clone, Debug)]
+struct Track {
+    axis: Axis,
+    min: f64,
+    max: f64,
+    peak_v: f64,
+    peak_a: f64,
+    open: [Option<Open>; 3],
+}
+
+/// Checks every sample against the machine's limits; O(1) memory plus the violations found.
+pub struct LimitsMonitor<'a> {
+    machine: &'a Machine,
+    theta_of: &'a dyn Fn(&AxisVec) -> Option<f64>,
+    tracks: Vec<Track>,
+    /// The previous sample and its velocity (per s) when it had one inside its block.
+    previous: Option<(Sample, Option<AxisVec>)>,
+    violations: Vec<Violation>,
+}
+
+/// Relative slack on velocity and acceleration limits for rounding in finite differences.
+const SLACK: f64 = 1e-9;
+
+impl<'a> LimitsMonitor<'a> {
+    /// `theta_of` gives the θ of a sample's commanded position (only asked for samples in violation).
+    pub fn new(machine: &'a Machine, theta_of: &'a dyn Fn(&AxisVec) -> Option<f64>) -> Self {
+        let tracks = machine
+            .axes()
+            .iter()
+            .map(|&axis| Track {
+                axis,
+                min: f64::INFINITY,
+                max: f64::NEG_INFINITY,
+                peak_v: 0.0,
+                peak_a: 0.0,
+                open: [None, None, None],
+            })
+            .collect();
+        LimitsMonitor {
+            machine,
+            theta_of,
+            tracks,
+            previous: None,
+            violations: Vec::new(),
+        }
+    }
+
+    pub fn push(&mut self, s: &Sample) {
+        let (velocity, acceleration) = match &self.previous {
+            Some((p, pv)) if s.time_s > p.time_s => {
+                let dt = s.time_s - p.time_s;
+                let v = (s.actual - p.actual) * (1.0 / dt);
+                let a = pv
+                    .filter(|_| p.block_index == s.block_index)
+                    .map(|pv| (v - pv) * (1.0 / dt));
+                (Some(v), a)
+            }
+            _ => (None, None),
+        };
+        let mut theta: Option<Option<f64>> = None;
+        for i in 0..self.tracks.len() {
+            let axis = self.tracks[i].axis;
+            let config = self.machine.axis(axis);
+            let x = s.actual[axis];
+            let track = &mut self.tracks[i];
+            track.min = track.min.min(x);
+            track.max = track.max.max(x);
+            let travel = if config.continuous {
+                None
+            } else if x > config.max {
+                Some((x, config.max))
+            } else if x < config.min {
+                Some((x, config.min))
+            } else {
+                None
+            };
+            let v = velocity.map(|v| v[axis].abs() * 60.0);
+            let a = acceleration.map(|a| a[axis].abs());
+            if let Some(v) = v {
+                track.peak_v = track.peak_v.max(v);
+            }
+            if let Some(a) = a {
+                track.peak_a = track.peak_a.max(a);
+            }
+            let checks = [
+                travel.map(|(x, lim)| (x, lim, (x - lim).abs())),
+                v.filter(|v| *v > config.max_velocity * (1.0 + SLACK))
+                    .map(|v| (v, config.max_velocity, v)),
+                a.filter(|a| *a > config.max_acceleration * (1.0 + SLACK))
+                    .map(|a| (a, config.max_acceleration, a)),
+            ];
+            for (k, check) in checks.into_iter().enumerate() {
+                match check {
+                    Some((value, limit, severity)) => {
+                        let th = *theta.get_or_insert_with(|| (self.theta_of)(&s.actual));
+                        let track = &mut self.tracks[i];
+                        match &mut track.open[k] {
+                            Some(open) => {
+                                open.last = (s.time_s, th);
+                                if severity > open.severity {
+                                    open.worst = value;
+                                    open.limit = limit;
+                                    open.severity = severity;
+                                }
+                            }
+                            None => {
+                                track.open[k] = Some(Open {
+                                    first: (s.time_s, th, s.line),
+                                    last: (s.time_s, th),
+                                    worst: value,
+                                    limit,
+                                    severity,
+                                })
+                            }
+                        }
+                    }
+                    None => {
+                        if let Some(open) = self.tracks[i].open[k].take() {
+                            self.violations.push(close(open, KINDS[k], axis));
+                        }
+                    }
+                }
+            }
+        }
+        let in_block = self
+            .previous
+            .as_ref()
+            .is_some_and(|(p, _)| p.block_index == s.block_index);
+        self.previous = Some((*s, velocity.filter(|_| in_block)));
+    }
+
+    /// The per-axis usage and the violations, in the order they started.
+    pub fn finish(mut self) -> (Vec<AxisUsage>, Vec<Violation>) {
+        for track in &mut self.tracks {
+            for (k, open) in track.open.iter_mut().enumerate() {
+                if let Some(open) = open.take() {
+                    self.violations.push(close(open, KINDS[k], track.axis));
+                }
+            }
+        }
+        self.violations
+            .sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
+        let usage = self
+            .tracks
+            .iter()
+            .map(|t| {
+                let c = self.machine.axis(t.axis);
+                AxisUsage {
+                    axis: t.axis,
+                    min: t.min,
+                    max: t.max,
+                    limit_min: c.min,
+                    limit_max: c.max,
+                    margin: (!c.continuous).then(|| (t.min - c.min).min(c.max - t.max)),
+                    peak_velocity_per_min: t.peak_v,
+                    velocity_limit_per_min: c.max_velocity,
+                    peak_acceleration_per_s2: t.peak_a,
+                    acceleration_limit_per_s2: c.max_acceleration,
+                }
+            })
+            .collect();
+        (usage, self.violations)
+    }
+}
+
+const KINDS: [ViolationKind; 3] = [
+    ViolationKind::Travel,
+    ViolationKind::Velocity,
+    ViolationKind::Acceleration,
+];
+
+fn close(open: Open, kind: ViolationKind, axis: Axis) -> Violation {
+    Violation {
+        kind,
+        axis: Some(axis),
+        bodies: None,
+        theta_start_deg: open.first.1,
+        theta_end_deg: open.last.1,
+        time_start_s: open.first.0,
+        time_end_s: open.last.0,
+        line: open.first.2,
+        worst: open.worst,
+        limit: Some(open.limit),
+    }
+}
+
+impl Sink for LimitsMonitor<'_> {
+    fn push(&mut self, sample: &Sample) -> Result<()> {
+        LimitsMonitor::push(self, sample);
+        Ok(())
+    }
+}

@@ -1,0 +1,187 @@
+//! `mtsim check`: does the program fit the machine? Travel, velocity and acceleration of
+//! every axis on every sample, and collisions and near misses in the scene, continuously.
+//!
+//! The program is sampled at its programmed timing ([`crate::sampling`]), which is what it
+//! demands of the machine; with `dynamics` the samples are instead the actual axis positions
+//! from the interpolator and the servo models, so that overshoot past a limit is caught too.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use crate::check::limits::{AxisUsage, LimitsMonitor, Violation, ViolationKind};
+use crate::check::scene::{EngagementSummary, EventKind, Scene, SceneMonitor};
+use crate::error::Result;
+use crate::input::program::Direction;
+use crate::input::scenario::{Program, Scenario};
+use crate::measure::CircleFrame;
+use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
+use crate::program;
+use crate::AxisVec;
+
+pub use crate::pipeline::SETTLE_S;
+
+/// How to check.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CheckOptions {
+    /// Check the actual axis positions of the servo simulation instead of the commanded ones.
+    pub dynamics: bool,
+    /// Near-miss clearance, mm; the scenario's (or the machine's) when `None`.
+    pub near_miss_mm: Option<f64>,
+}
+
+/// What `check` found.
+#[derive(Clone, Debug, Serialize)]
+pub struct CheckReport {
+    /// In the order they started.
+    pub violations: Vec<Violation>,
+    /// Per axis: the used range against the travel, with the margin, and peak velocity and
+    /// acceleration against the limits.
+    pub axes: BTreeMap<String, AxisUsage>,
+    /// Samples checked (one per interpolation period).
+    pub samples: u64,
+    /// Machine time covered, s.
+    pub sim_time_s: f64,
+    /// Geometric queries made by the collision scene (null without a scene).
+    pub scene_queries: Option<u64>,
+    /// Cutter engagement in the workpiece, per cutting pair.
+    pub engagement: Vec<EngagementSummary>,
+    /// Smallest clearance between bodies that must not touch, mm, and the pair.
+    pub min_clearance_mm: Option<f64>,
+    pub min_clearance_bodies: Option<[String; 2]>,
+    /// Whether the samples were the actual (servo) positions.
+    pub dynamics: bool,
+}
+
+impl CheckReport {
+    pub fn is_clean(&self) -> bool {
+        self.violations.is_empty()
+    }
+}
+
+/// The collision scene as a sink: each sample's axis positions, with its θ.
+struct SceneSink<'a> {
+    monitor: SceneMonitor,
+    theta_of: &'a dyn Fn(&AxisVec) -> Option<f64>,
+}
+
+impl Sink for SceneSink<'_> {
+    fn push(&mut self, s: &Sample) -> Result<()> {
+        let theta = (self.theta_of)(&s.actual);
+        self.monitor.push(s.time_s, theta, s.line, &s.actual);
+        Ok(())
+    }
+}
+
+/// Checks a scenario's program against its machine. A cone or circle is checked as the
+/// generator writes it: one revolution, counter-clockwise, with no lead.
+pub fn check(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport> {
+    let machine = &scenario.machine;
+    let kin = machine.kinematics;
+    let frame = theta_frame(scenario);
+    let run = program::scenario_run(scenario, Direction::Ccw, 0.0)?;
+    // The position before the program is unknown (the reader assumes zero), so the first
+    // move, which brings the machine to the program's start, is not checked: sampling
+    // starts at its end.
+    let moves = Box::new(run.moves.skip(1));
+    let theta_of = move |q: &AxisVec| frame.map(|f| f.theta_deg(&kin.forward(q).tip));
+    let mut limits = LimitsMonitor::new(machine, &theta_of);
+    let mut scene = match scenario.check.collisions {
+        false => None,
+        true => {
+            let near_miss = options.near_miss_mm.unwrap_or(
+                scenario
+                    .check
+                    .near_miss_mm
+                    .unwrap_or(machine.scene.near_miss_mm),
+            );
+            Some(SceneSink {
+                monitor: SceneMonitor::new(
+                    Scene::new(machine, &scenario.tool, &scenario.workpiece, near_miss)?,
+                    machine,
+                ),
+                theta_of: &theta_of,
+            })
+        }
+    };
+    let timing = if options.dynamics {
+        Timing::Planned {
+            twins: false,
+            settle: true,
+        }
+    } else {
+        Timing::Programmed
+    };
+    let run_options = RunOptions {
+        timing,
+        force_tcp: scenario.simulate.tcp,
+        start_time_s: 0.0,
+        program_path: scenario.path.clone(),
+    };
+    let stats = {
+        let mut sinks: Vec<&mut dyn Sink> = vec![&mut limits];
+        if let Some(scene) = scene.as_mut() {
+            sinks.push(scene);
+        }
+        pipeline::run(moves, machine, &run_options, &mut sinks, &|_| {})?
+    };
+    let (samples, last_time) = (stats.samples, stats.end_time_s);
+    let scene = scene.map(|s| s.monitor);
+    let (usage, mut violations) = limits.finish();
+    let mut scene_queries = None;
+    let mut engagement = Vec::new();
+    let (mut min_clearance_mm, mut min_clearance_bodies) = (None, None);
+    if let Some(scene) = scene {
+        let report = scene.finish();
+        scene_queries = Some(report.queries);
+        engagement = report.engagement;
+        min_clearance_mm = report
+            .min_clearance_mm
+            .is_finite()
+            .then_some(report.min_clearance_mm);
+        min_clearance_bodies = report.min_clearance_bodies;
+        for e in report.events {
+            let (kind, limit) = match e.kind {
+                EventKind::Collision => (ViolationKind::Collision, None),
+                EventKind::NearMiss => (ViolationKind::NearMiss, Some(report.near_miss_mm)),
+            };
+            violations.push(Violation {
+                kind,
+                axis: None,
+                bodies: Some(e.bodies),
+                theta_start_deg: e.theta_start_deg,
+                theta_end_deg: e.theta_end_deg,
+                time_start_s: e.time_start_s,
+                time_end_s: e.time_end_s,
+                line: e.line,
+                worst: e.worst_mm,
+                limit,
+            });
+        }
+        violations.sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
+    }
+    Ok(CheckReport {
+        violations,
+        axes: usage.into_iter().map(|u| (u.axis.to_string(), u)).collect(),
+        samples,
+        sim_time_s: last_time,
+        scene_queries,
+        engagement,
+        min_clearance_mm,
+        min_clearance_bodies,
+        dynamics: options.dynamics,
+    })
+}
+
+/// The frame that gives θ: the measured circle of a cone or circle test, if any.
+fn theta_frame(scenario: &Scenario) -> Option<CircleFrame> {
+    match &scenario.program {
+        Program::Cone { cone, .. } => Some(CircleFrame::of_cone(cone)),
+        Program::Circle { circle, .. } => {
+            let center =
+                nalgebra::Vector3::from(circle.center_mm) - scenario.machine.kinematics.pivot_mm;
+            Some(CircleFrame::planar(center.into(), circle.plane))
+        }
+        Program::File { cone, .. } => cone.map(|c| CircleFrame::of_cone(&c)),
+    }
+}

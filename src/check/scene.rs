@@ -1,0 +1,662 @@
+//! Collision scene: table, cradle, workpiece (cone frustum or ball bar), tool stack and
+//! spindle, posed by forward kinematics from the axis positions.
+//!
+//! Frames are those of [`crate::kinematics`]: a body fixed to the table sits at
+//! `m = pivot + R(q) p`; a cradle body at `m = pivot + R_tilt(q) p` (no C); the tool stack
+//! at `m = (X, Y, Z) + p` with the tool axis along +Z and the tip at the origin of its frame.
+//! The ball bar is posed from both ends: its origin at the pivot ball (fixed to the table)
+//! and its +Z toward the tool ball (at the tool tip).
+//!
+//! The bodies are rapier kinematic rigid bodies whose colliders carry [`InteractionGroups`]
+//! that encode which parts may touch (see [`groups`]); every collider pair the groups allow
+//! is monitored. A cutter/workpiece pair is *cutting* (its depth is engagement); every
+//! other pair is a *collision* pair. Distances are parry GJK/EPA queries on exact convex
+//! shapes (see [`shapes`]). The streaming, conservative-advancement check is in
+//! [`monitor`].
+
+pub mod monitor;
+pub mod shapes;
+
+use nalgebra::{Rotation3, UnitQuaternion, Vector3};
+use parry3d_f64::math::{Pose, Rotation, Vector};
+use parry3d_f64::shape::SharedShape;
+use rapier3d_f64::dynamics::{RigidBodyBuilder, RigidBodyHandle, RigidBodySet};
+use rapier3d_f64::geometry::{
+    ColliderBuilder, ColliderHandle, ColliderSet, Group, InteractionGroups, InteractionTestMode,
+};
+use serde::Serialize;
+
+pub use crate::input::scene::{
+    ConeSetup, CradleBox, SceneConfig, SpindleConfig, SpindleShape, TableConfig, ToolConfig,
+    WorkpieceConfig, WorkpieceKind,
+};
+pub use monitor::{EngagementSummary, EventKind, SceneEvent, SceneMonitor, SceneReport};
+pub use shapes::{signed_distance, z_cylinder, Circle, CircleHull};
+
+use crate::error::{Error, Result};
+use crate::input::machine::Machine;
+use crate::kinematics::Kinematics;
+use crate::{Axis, AxisVec};
+
+/// Collision groups. A pair of colliders is monitored when each one's membership meets the
+/// other's filter (rapier's `InteractionTestMode::And`).
+///
+/// | part                          | member of  | filter (may touch)                          |
+/// |-------------------------------|------------|---------------------------------------------|
+/// | table, cradle boxes           | TABLE      | CUTTER, TOOL, BAR, BALL                     |
+/// | riser, ball-bar post          | FIXTURE    | CUTTER, TOOL, BAR, BALL                     |
+/// | frustum                       | WORKPIECE  | CUTTER, TOOL, BALL                          |
+/// | cutter                        | CUTTER     | TABLE, FIXTURE, WORKPIECE                   |
+/// | shank, holder, spindle        | TOOL       | TABLE, FIXTURE, WORKPIECE, BAR, BALL        |
+/// | bar                           | BAR        | TABLE, FIXTURE, TOOL                        |
+/// | pivot ball                    | BALL       | TOOL, CUTTER                                |
+/// | tool ball                     | BALL       | TABLE, FIXTURE, WORKPIECE                   |
+///
+/// So parts on one body never pair, the balls are joined to the bar, and the tool ball is
+/// joined to the shank.
+pub mod groups {
+    use rapier3d_f64::geometry::Group;
+    pub const TABLE: Group = Group::GROUP_1;
+    pub const FIXTURE: Group = Group::GROUP_2;
+    pub const WORKPIECE: Group = Group::GROUP_3;
+    pub const CUTTER: Group = Group::GROUP_4;
+    pub const TOOL: Group = Group::GROUP_5;
+    pub const BAR: Group = Group::GROUP_6;
+    pub const BALL: Group = Group::GROUP_7;
+}
+
+/// What carries a part, and so how it is posed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Carrier {
+    Table = 0,
+    Cradle = 1,
+    Tool = 2,
+    Bar = 3,
+}
+
+/// Whether touching is cutting or a collision.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PairKind {
+    /// Cutter against workpiece: the depth is engagement.
+    Cutting,
+    /// Anything else.
+    Collision,
+}
+
+/// The signed distance of one monitored pair at the current pose.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PairClearance {
+    pub bodies: [String; 2],
+    pub kind: PairKind,
+    /// Clearance, mm; negative = penetration depth.
+    pub distance_mm: f64,
+}
+
+/// One collider of the scene.
+struct Part {
+    name: String,
+    carrier: Carrier,
+    handle: ColliderHandle,
+    shape: SharedShape,
+    /// Pose in the carrier's frame.
+    local: Pose,
+    /// Bound on this part's displacement (mm) per |dXYZ| (mm), |d tilt| (rad), |dC| (rad).
+    motion: [f64; 3],
+    /// For the cutter: the cutter eroded by [`CUTTER_SKIN_MM`], used for the cutting pair.
+    eroded: Option<SharedShape>,
+    skin_mm: f64,
+}
+
+/// The cutter/workpiece distance is measured from the cutter eroded by this much (mm), less
+/// this much: the distance to the cutter with its rims rounded by this radius (error at most
+/// 0.42 times it, at the rims only). The flank sits tangent to the frustum, where GJK/EPA on
+/// touching shapes is slow and fragile; the eroded cutter stands off, so GJK alone answers.
+pub const CUTTER_SKIN_MM: f64 = 0.01;
+
+/// One monitored pair (indices into the parts).
+#[derive(Clone, Copy, Debug)]
+struct Pair {
+    a: usize,
+    b: usize,
+    kind: PairKind,
+}
+
+/// The bar between the balls: pivot-ball centre in the table frame, mm.
+#[derive(Clone, Copy, Debug)]
+struct BarEnds {
+    pivot: Vector3<f64>,
+}
+
+/// The collision scene of one machine, tool and workpiece.
+pub struct Scene {
+    kinematics: Kinematics,
+    tilt_axis: Option<Axis>,
+    bodies: RigidBodySet,
+    colliders: ColliderSet,
+    body_handles: [RigidBodyHandle; 4],
+    parts: Vec<Part>,
+    pairs: Vec<Pair>,
+    bar: Option<BarEnds>,
+    near_miss_mm: f64,
+    engagement_resolution_mm: f64,
+}
+
+impl Scene {
+    /// Builds the scene of `machine` (its `[scene]` geometry) with `tool` and `workpiece`.
+    /// `near_miss_mm` is the clearance below which a collision pair is a near miss.
+    pub fn new(
+        machine: &Machine,
+        tool: &ToolConfig,
+        workpiece: &WorkpieceConfig,
+        near_miss_mm: f64,
+    ) -> Result<Scene> {
+        let path = machine.path.as_path();
+        let scene = &machine.scene;
+        // Values come from files that may not have been validated with their text.
+        scene.validate(path, "")?;
+        tool.validate(path, "", "tool")?;
+        workpiece.validate(path, "", "workpiece")?;
+        if !(near_miss_mm.is_finite() && near_miss_mm >= 0.0) {
+            return Err(Error::invalid(
+                path,
+                format!("near-miss threshold must be a clearance >= 0 mm, got {near_miss_mm}"),
+            ));
+        }
+        let mut builder = Builder::new(machine.kinematics);
+        let all_tool = groups::CUTTER | groups::TOOL | groups::BAR | groups::BALL;
+
+        // Table and cradle.
+        let t = &scene.table;
+        let (shape, local) = z_cylinder(t.top_z_mm - t.thickness_mm, t.top_z_mm, t.radius_mm);
+        builder.add(
+            "table",
+            Carrier::Table,
+            shape,
+            local,
+            groups::TABLE,
+            all_tool,
+        );
+        for b in &scene.cradle {
+            let (shape, local) = shapes::cuboid(b.center_mm, b.size_mm);
+            builder.add(
+                &b.name,
+                Carrier::Cradle,
+                shape,
+                local,
+                groups::TABLE,
+                all_tool,
+            );
+        }
+
+        // Tool stack, tip at the origin, axis +Z.
+        let ball_bar = workpiece.kind == WorkpieceKind::BallBar;
+        let sides = groups::TABLE | groups::FIXTURE | groups::WORKPIECE;
+        if ball_bar {
+            let shape = SharedShape::ball(0.5 * workpiece.ball_diameter_mm);
+            builder.add(
+                "tool ball",
+                Carrier::Tool,
+                shape,
+                Pose::IDENTITY,
+                groups::BALL,
+                sides,
+            );
+        } else {
+            let (shape, local) =
+                z_cylinder(0.0, tool.flute_length_mm, 0.5 * tool.cutter_diameter_mm);
+            builder.add("cutter", Carrier::Tool, shape, local, groups::CUTTER, sides);
+            let skin = CUTTER_SKIN_MM
+                .min(0.25 * tool.cutter_diameter_mm)
+                .min(0.25 * tool.flute_length_mm);
+            let (eroded, _) = z_cylinder(
+                skin,
+                tool.flute_length_mm - skin,
+                0.5 * tool.cutter_diameter_mm - skin,
+            );
+            if let Some(cutter) = builder.parts.last_mut() {
+                cutter.eroded = Some(eroded);
+                cutter.skin_mm = skin;
+            }
+        }
+        let tool_filter = sides | groups::BAR | groups::BALL;
+        let shank_top = tool.flute_length_mm + tool.shank_length_mm;
+        let (shape, local) = z_cylinder(
+            tool.flute_length_mm,
+            shank_top,
+            0.5 * tool.shank_diameter_mm,
+        );
+        builder.add(
+            "shank",
+            Carrier::Tool,
+            shape,
+            local,
+            groups::TOOL,
+            tool_filter,
+        );
+        let (shape, local) = z_cylinder(
+            tool.holder_bottom_mm(),
+            tool.gauge_length_mm,
+            0.5 * tool.holder_diameter_mm,
+        );
+        builder.add(
+            "holder",
+            Carrier::Tool,
+            shape,
+            local,
+            groups::TOOL,
+            tool_filter,
+        );
+        let sp = &scene.spindle;
+        let top = tool.gauge_length_mm + sp.length_mm;
+        let (shape, local) = match sp.shape {
+            SpindleShape::Cylinder => z_cylinder(tool.gauge_length_mm, top, 0.5 * sp.diameter_mm),
+            SpindleShape::Box => shapes::cuboid(
+                [0.0, 0.0, 0.5 * (tool.gauge_length_mm + top)],
+                [sp.box_mm[0], sp.box_mm[1], sp.length_mm],
+            ),
+        };
+        builder.add(
+            "spindle",
+            Carrier::Tool,
+            shape,
+            local,
+            groups::TOOL,
+            tool_filter,
+        );
+
+        // Workpiece.
+        let cone = &workpiece.cone;
+        let o = Vector3::from(cone.center_mm);
+        let mut bar = None;
+        match workpiece.kind {
+            WorkpieceKind::None => {}
+            WorkpieceKind::ConeFrustum => {
+                cone.check(path)?;
+                let f = Frustum::new(cone, tool, workpiece.top_height_mm, path)?;
+                let hull = CircleHull {
+                    circles: [f.base, f.top],
+                };
+                builder.add(
+                    "workpiece",
+                    Carrier::Table,
+                    SharedShape::new(hull),
+                    Pose::IDENTITY,
+                    groups::WORKPIECE,
+                    groups::CUTTER | groups::TOOL | groups::BALL,
+                );
+                if workpiece.riser {
+                    let lowest = o.z - f.base.radius * f.base.normal.x.hypot(f.base.normal.y);
+                    if lowest <= t.top_z_mm {
+                        return Err(Error::invalid(path, format!(
+                            "the cone's base circle reaches down to z = {lowest:.3} mm in the table frame, at or below the table top ({} mm): raise the cone centre or lower scene.table.top_z_mm",
+                            t.top_z_mm
+                        )));
+                    }
+                    let foot = Circle {
+                        centre: Vector::new(o.x, o.y, t.top_z_mm),
+                        normal: Vector::Z,
+                        radius: f.base.radius,
+                    };
+                    let riser = CircleHull {
+                        circles: [f.base, foot],
+                    };
+                    builder.add(
+                        "riser",
+                        Carrier::Table,
+                        SharedShape::new(riser),
+                        Pose::IDENTITY,
+                        groups::FIXTURE,
+                        all_tool,
+                    );
+                }
+            }
+            WorkpieceKind::BallBar => {
+                cone.check(path)?;
+                let r_ball = 0.5 * workpiece.ball_diameter_mm;
+                let length = cone.ballbar_length_mm;
+                if length <= 2.0 * r_ball {
+                    return Err(Error::invalid(path, format!("the ball-bar length ({length} mm) must exceed the ball diameter ({} mm)", workpiece.ball_diameter_mm)));
+                }
+                let post_top = o.z - r_ball;
+                if post_top <= t.top_z_mm {
+                    return Err(Error::invalid(path, format!(
+                        "the pivot ball at z = {} mm in the table frame does not clear the table top ({} mm): raise the cone centre or lower scene.table.top_z_mm",
+                        o.z, t.top_z_mm
+                    )));
+                }
+                let ball = SharedShape::ball(r_ball);
+                let at_o = Pose::from_translation(Vector::new(o.x, o.y, o.z));
+                builder.add(
+                    "pivot ball",
+                    Carrier::Table,
+                    ball,
+                    at_o,
+                    groups::BALL,
+                    groups::TOOL | groups::CUTTER,
+                );
+                let (shape, local) =
+                    z_cylinder(t.top_z_mm, post_top, 0.5 * workpiece.post_diameter_mm);
+                let local = Pose::from_translation(Vector::new(o.x, o.y, 0.0)) * local;
+                builder.add(
+                    "post",
+                    Carrier::Table,
+                    shape,
+                    local,
+                    groups::FIXTURE,
+                    all_tool,
+                );
+                let r_bar = 0.5 * workpiece.bar_diameter_mm;
+                let (shape, local) = z_cylinder(r_ball, length - r_ball, r_bar);
+                builder.bar_motion = Some(bar_motion(o, length, r_bar));
+                builder.add(
+                    "bar",
+                    Carrier::Bar,
+                    shape,
+                    local,
+                    groups::BAR,
+                    sides | groups::TOOL,
+                );
+                bar = Some(BarEnds { pivot: o });
+            }
+        }
+        Ok(builder.finish(bar, near_miss_mm, scene.engagement_resolution_mm))
+    }
+
+    /// The near-miss threshold, mm.
+    pub fn near_miss_mm(&self) -> f64 {
+        self.near_miss_mm
+    }
+
+    /// Names of the monitored pairs, in the order [`Scene::clearances`] reports them.
+    pub fn pair_names(&self) -> Vec<[String; 2]> {
+        self.pairs.iter().map(|p| self.pair_bodies(p)).collect()
+    }
+
+    /// Poses every body by forward kinematics at `q` (mm, deg).
+    pub fn set_axes(&mut self, q: &AxisVec) {
+        let poses = self.body_poses(q);
+        for (handle, pose) in self.body_handles.iter().zip(poses) {
+            if let Some(body) = self.bodies.get_mut(*handle) {
+                body.set_position(pose, false);
+            }
+        }
+        self.bodies
+            .propagate_modified_body_positions_to_colliders(&mut self.colliders);
+    }
+
+    /// Signed distance of every monitored pair at the pose of the last [`Scene::set_axes`].
+    pub fn clearances(&mut self) -> Vec<PairClearance> {
+        self.pairs
+            .iter()
+            .map(|pair| {
+                let (a, b) = (&self.parts[pair.a], &self.parts[pair.b]);
+                let poses = (
+                    self.colliders[a.handle].position(),
+                    self.colliders[b.handle].position(),
+                );
+                let distance_mm = pair_distance(pair, a, b, poses.0, poses.1, &mut None);
+                PairClearance {
+                    bodies: self.pair_bodies(pair),
+                    kind: pair.kind,
+                    distance_mm,
+                }
+            })
+            .collect()
+    }
+
+    fn pair_bodies(&self, pair: &Pair) -> [String; 2] {
+        [
+            self.parts[pair.a].name.clone(),
+            self.parts[pair.b].name.clone(),
+        ]
+    }
+
+    /// Poses of the table, cradle, tool and bar frames in the machine frame at `q`.
+    fn body_poses(&self, q: &AxisVec) -> [Pose; 4] {
+        let k = &self.kinematics;
+        let pivot = k.pivot_mm;
+        let r_table = k.table_rotation(q);
+        let mut tilt_only = *q;
+        tilt_only[Axis::C] = 0.0;
+        let r_cradle = k.table_rotation(&tilt_only);
+        let tip = Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
+        let table = to_pose(&r_table, &pivot);
+        let cradle = to_pose(&r_cradle, &pivot);
+        let tool = Pose::from_translation(to_vector(&tip));
+        let bar = match &self.bar {
+            Some(ends) => {
+                let a = pivot + r_table * ends.pivot;
+                let dir = to_vector(&(tip - a));
+                let rotation = match dir.try_normalize() {
+                    Some(d) => Rotation::from_rotation_arc(Vector::Z, d),
+                    None => Rotation::IDENTITY,
+                };
+                Pose::from_parts(to_vector(&a), rotation)
+            }
+            None => Pose::IDENTITY,
+        };
+        [table, cradle, tool, bar]
+    }
+}
+
+/// The frustum of the machining test: the path cone offset one cutter radius inward.
+///
+/// In the cone frame (axis a = Ry(-beta) z through O) the tool tip runs on the circle of
+/// radius `L cos(alpha)` at height `L sin(alpha)`, with the tool axis along the generatrix
+/// of the path cone (apex at height `L / sin(alpha)`, half angle alpha). The cutter's flank
+/// (radius R) is tangent to the cone of the same half angle whose surface lies R inside,
+/// measured perpendicular to the generatrix: its apex is `R / sin(alpha)` lower, so its
+/// radius at height z is `((L - R) / sin(alpha) - z) tan(alpha)` and the base radius is
+/// `(L - R) / cos(alpha)`.
+struct Frustum {
+    base: Circle,
+    top: Circle,
+}
+
+impl Frustum {
+    fn new(
+        cone: &ConeSetup,
+        tool: &ToolConfig,
+        top_height_mm: Option<f64>,
+        path: &std::path::Path,
+    ) -> Result<Frustum> {
+        let alpha = cone.half_apex_deg.to_radians();
+        let beta = cone.inclination_deg.to_radians();
+        let l = cone.ballbar_length_mm;
+        let r = 0.5 * tool.cutter_diameter_mm;
+        if l <= r {
+            return Err(Error::invalid(path, format!("the ball-bar length ({l} mm) must exceed the cutter radius ({r} mm) for the frustum to exist")));
+        }
+        let axis = Vector::new(-beta.sin(), 0.0, beta.cos());
+        let o = Vector::from_array(cone.center_mm);
+        let base_radius = (l - r) / alpha.cos();
+        // Default: halfway between the measured circle's plane and the top of the flank
+        // contact, keeping the shank's lower rim clear of the top face.
+        let height = top_height_mm.unwrap_or_else(|| {
+            l * alpha.sin() + 0.5 * (tool.flute_length_mm * alpha.cos() - r * alpha.sin())
+        });
+        let top_radius = base_radius - height * alpha.tan();
+        if top_radius <= 0.0 {
+            return Err(Error::invalid(path, format!(
+                "workpiece.top_height_mm = {height} mm reaches past the frustum's apex at {:.3} mm: lower it",
+                base_radius / alpha.tan()
+            )));
+        }
+        Ok(Frustum {
+            base: Circle {
+                centre: o,
+                normal: axis,
+                radius: base_radius,
+            },
+            top: Circle {
+                centre: o + axis * height,
+                normal: axis,
+                radius: top_radius,
+            },
+        })
+    }
+}
+
+/// Displacement weights of the bar, whose ends move independently: with `a` the pivot end
+/// and `b` the tool end, a point of the bar (within `L + r` of `a`) moves at most
+/// `|da| + (L + r) |d dir|`, and `|d dir| <= 2 (|da| + |db|) / L`; `|db| = |dXYZ|`,
+/// `|da| <= |O| |d tilt| + rho_O |dC|`.
+fn bar_motion(o: Vector3<f64>, length: f64, r_bar: f64) -> [f64; 3] {
+    let k = 1.0 + 2.0 * (length + r_bar) / length;
+    [k, k * o.norm(), k * o.x.hypot(o.y)]
+}
+
+/// Collects parts and derives the monitored pairs from their groups.
+struct Builder {
+    kinematics: Kinematics,
+    bodies: RigidBodySet,
+    colliders: ColliderSet,
+    body_handles: [RigidBodyHandle; 4],
+    parts: Vec<Part>,
+    groups: Vec<InteractionGroups>,
+    bar_motion: Option<[f64; 3]>,
+}
+
+impl Builder {
+    fn new(kinematics: Kinematics) -> Builder {
+        let mut bodies = RigidBodySet::new();
+        let body_handles =
+            std::array::from_fn(|_| bodies.insert(RigidBodyBuilder::kinematic_position_based()));
+        Builder {
+            kinematics,
+            bodies,
+            colliders: ColliderSet::new(),
+            body_handles,
+            parts: Vec::new(),
+            groups: Vec::new(),
+            bar_motion: None,
+        }
+    }
+
+    fn add(
+        &mut self,
+        name: &str,
+        carrier: Carrier,
+        shape: SharedShape,
+        local: Pose,
+        member: Group,
+        filter: Group,
+    ) {
+        let groups = InteractionGroups::new(member, filter, InteractionTestMode::And);
+        let collider = ColliderBuilder::new(shape.clone())
+            .position(local)
+            .collision_groups(groups)
+            .density(0.0)
+            .build();
+        let handle = self.colliders.insert_with_parent(
+            collider,
+            self.body_handles[carrier as usize],
+            &mut self.bodies,
+        );
+        let motion = match carrier {
+            Carrier::Tool => [1.0, 0.0, 0.0],
+            Carrier::Bar => self.bar_motion.unwrap_or([0.0; 3]),
+            Carrier::Table | Carrier::Cradle => {
+                // Points at distance |p| from the pivot and rho from the C axis move at
+                // most |p| |d tilt| + rho |dC| (cradle parts do not turn with C).
+                let aabb = shape.compute_aabb(&local);
+                let (mut far, mut rho) = (0.0f64, 0.0f64);
+                for i in 0..8 {
+                    let x = if i & 1 == 0 { aabb.mins.x } else { aabb.maxs.x };
+                    let y = if i & 2 == 0 { aabb.mins.y } else { aabb.maxs.y };
+                    let z = if i & 4 == 0 { aabb.mins.z } else { aabb.maxs.z };
+                    far = far.max((x * x + y * y + z * z).sqrt());
+                    rho = rho.max(x.hypot(y));
+                }
+                if carrier == Carrier::Table {
+                    [0.0, far, rho]
+                } else {
+                    [0.0, far, 0.0]
+                }
+            }
+        };
+        self.parts.push(Part {
+            name: name.to_string(),
+            carrier,
+            handle,
+            shape,
+            local,
+            motion,
+            eroded: None,
+            skin_mm: 0.0,
+        });
+        self.groups.push(groups);
+    }
+
+    fn finish(
+        self,
+        bar: Option<BarEnds>,
+        near_miss_mm: f64,
+        engagement_resolution_mm: f64,
+    ) -> Scene {
+        let mut pairs = Vec::new();
+        for a in 0..self.parts.len() {
+            for b in a + 1..self.parts.len() {
+                if self.parts[a].carrier == self.parts[b].carrier
+                    || !self.groups[a].test(self.groups[b])
+                {
+                    continue;
+                }
+                let cutting = |x: usize, y: usize| {
+                    self.groups[x].memberships == groups::CUTTER
+                        && self.groups[y].memberships == groups::WORKPIECE
+                };
+                let kind = if cutting(a, b) || cutting(b, a) {
+                    PairKind::Cutting
+                } else {
+                    PairKind::Collision
+                };
+                pairs.push(Pair { a, b, kind });
+            }
+        }
+        let mut scene = Scene {
+            tilt_axis: self.kinematics.layout.tilt_axis(),
+            kinematics: self.kinematics,
+            bodies: self.bodies,
+            colliders: self.colliders,
+            body_handles: self.body_handles,
+            parts: self.parts,
+            pairs,
+            bar,
+            near_miss_mm,
+            engagement_resolution_mm,
+        };
+        scene.set_axes(&AxisVec::ZERO);
+        scene
+    }
+}
+
+/// Signed distance of `pair` (parts `a`, `b` at world poses `pa`, `pb`), mm. A cutting
+/// pair is measured from the eroded cutter (see [`CUTTER_SKIN_MM`]).
+fn pair_distance(
+    pair: &Pair,
+    a: &Part,
+    b: &Part,
+    pa: &Pose,
+    pb: &Pose,
+    warm: &mut Option<Vector>,
+) -> f64 {
+    if pair.kind == PairKind::Cutting {
+        let shape = |p: &Part| p.eroded.as_ref().unwrap_or(&p.shape).clone();
+        let skin = a.skin_mm + b.skin_mm;
+        return signed_distance(pa, shape(a).as_ref(), pb, shape(b).as_ref(), warm) - skin;
+    }
+    signed_distance(pa, a.shape.as_ref(), pb, b.shape.as_ref(), warm)
+}
+
+fn to_vector(v: &Vector3<f64>) -> Vector {
+    Vector::new(v.x, v.y, v.z)
+}
+
+/// nalgebra rotation and translation → parry (glam) pose.
+fn to_pose(r: &Rotation3<f64>, t: &Vector3<f64>) -> Pose {
+    let q = UnitQuaternion::from_rotation_matrix(r);
+    let c = q.coords; // (i, j, k, w)
+    Pose::from_parts(to_vector(t), Rotation::from_xyzw(c.x, c.y, c.z, c.w))
+}

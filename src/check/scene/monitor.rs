@@ -1,0 +1,385 @@
+//! Continuous collision checking over a stream of samples, by conservative advancement.
+//!
+//! Between two samples the axes are taken to move linearly. A point of a part then moves at
+//! most `w_lin |dXYZ| + w_tilt |d tilt| + w_c |dC|` (angles in rad), with lever arms `w`
+//! fixed when the scene is built (1 for the tool stack; the largest distance from the pivot
+//! and from the C axis for table parts), so two parts approach each other by at most the
+//! sum of their bounds. After a query measures the clearance `d` of a pair, no query of
+//! that pair is needed until the accumulated bound reaches `d - near_miss`: until then the
+//! pair can neither touch nor come nearer than the threshold, at a sample or between
+//! samples. When a query is due and the bound over the last interval exceeds the sum of the
+//! clearances at its ends, contact may have happened inside it: the interval is advanced
+//! conservatively (step `s += d / bound`) to find it. A pair within the threshold is
+//! measured at every sample. The cutter/workpiece pair is re-measured once the bound
+//! reaches `max(d, engagement resolution)`, so its reported depth is within that
+//! resolution of the true maximum.
+//!
+//! Memory does not grow with the number of samples: one state per pair, plus the events.
+
+use parry3d_f64::math::{Pose, Vector};
+use serde::Serialize;
+
+use super::{PairKind, Scene};
+use crate::input::machine::Machine;
+use crate::{Axis, AxisVec};
+
+/// Kind of a reported event.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EventKind {
+    /// Contact or penetration (signed distance <= 0).
+    Collision,
+    /// Clearance in (0, near-miss threshold).
+    NearMiss,
+}
+
+/// One span of samples over which a pair stayed in one kind of event.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SceneEvent {
+    pub kind: EventKind,
+    pub bodies: [String; 2],
+    pub time_start_s: f64,
+    pub time_end_s: f64,
+    pub theta_start_deg: Option<f64>,
+    pub theta_end_deg: Option<f64>,
+    /// Program line of the first sample.
+    pub line: usize,
+    /// Collision: largest penetration depth, mm (>= 0). Near miss: smallest clearance, mm.
+    pub worst_mm: f64,
+}
+
+/// Cutter engagement over the run, for one cutting pair.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EngagementSummary {
+    pub bodies: [String; 2],
+    /// Largest measured depth of the cutter in the workpiece, mm (0 if it never touched);
+    /// the true maximum exceeds it by at most `resolution_mm`.
+    pub max_depth_mm: f64,
+    pub max_depth_time_s: Option<f64>,
+    pub max_depth_theta_deg: Option<f64>,
+    /// Smallest measured signed distance, mm (negative = depth).
+    pub min_distance_mm: f64,
+    pub resolution_mm: f64,
+}
+
+/// What a [`SceneMonitor`] found.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SceneReport {
+    /// In order of start time.
+    pub events: Vec<SceneEvent>,
+    pub engagement: Vec<EngagementSummary>,
+    pub near_miss_mm: f64,
+    /// Smallest clearance measured between any collision pair, mm (negative: penetration).
+    /// Queries come more often the closer a pair gets, so below `near_miss_mm` it is the
+    /// clearance at a sample; above it, the true minimum lies between `near_miss_mm` and it.
+    pub min_clearance_mm: f64,
+    /// The pair of the smallest clearance.
+    pub min_clearance_bodies: Option<[String; 2]>,
+    pub samples: u64,
+    /// Geometric (signed-distance) queries made.
+    pub queries: u64,
+}
+
+impl SceneReport {
+    pub fn collisions(&self) -> impl Iterator<Item = &SceneEvent> {
+        self.events
+            .iter()
+            .filter(|e| e.kind == EventKind::Collision)
+    }
+
+    pub fn near_misses(&self) -> impl Iterator<Item = &SceneEvent> {
+        self.events.iter().filter(|e| e.kind == EventKind::NearMiss)
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Sample {
+    time_s: f64,
+    theta_deg: Option<f64>,
+    line: usize,
+    q: AxisVec,
+}
+
+struct PairState {
+    /// Bound on the pair's approach (mm) per |dXYZ| (mm), |d tilt| (rad), |dC| (rad).
+    weights: [f64; 3],
+    /// Motion bound allowed before the next query, mm.
+    slack: f64,
+    /// Motion bound accumulated since the last query, mm.
+    moved: f64,
+    /// Last measured signed distance, mm.
+    last_mm: f64,
+    warm: Option<Vector>,
+    open: Option<SceneEvent>,
+    /// Index into the engagement summaries for a cutting pair.
+    engagement: Option<usize>,
+}
+
+/// Consumes samples and reports collisions, near misses and engagement.
+pub struct SceneMonitor {
+    scene: Scene,
+    states: Vec<PairState>,
+    prev: Option<Sample>,
+    events: Vec<SceneEvent>,
+    engagement: Vec<EngagementSummary>,
+    samples: u64,
+    queries: u64,
+    min_clearance_mm: f64,
+    min_clearance_pair: Option<usize>,
+}
+
+/// Sub-steps of conservative advancement inside one sample interval, at most.
+const MAX_ADVANCE_STEPS: usize = 64;
+/// Clearance below which advancement inside an interval declares contact, mm.
+const CONTACT_TOLERANCE_MM: f64 = 1e-6;
+
+impl SceneMonitor {
+    /// `machine` is the one the scene was built for (its axes define the sample vector).
+    pub fn new(scene: Scene, _machine: &Machine) -> SceneMonitor {
+        let mut engagement = Vec::new();
+        let states = scene
+            .pairs
+            .iter()
+            .map(|pair| PairState {
+                weights: {
+                    let (wa, wb) = (scene.parts[pair.a].motion, scene.parts[pair.b].motion);
+                    [wa[0] + wb[0], wa[1] + wb[1], wa[2] + wb[2]]
+                },
+                slack: 0.0,
+                moved: 0.0,
+                last_mm: f64::INFINITY,
+                warm: None,
+                open: None,
+                engagement: (pair.kind == PairKind::Cutting).then(|| {
+                    engagement.push(EngagementSummary {
+                        bodies: scene.pair_bodies(pair),
+                        max_depth_mm: 0.0,
+                        max_depth_time_s: None,
+                        max_depth_theta_deg: None,
+                        min_distance_mm: f64::INFINITY,
+                        resolution_mm: scene.engagement_resolution_mm,
+                    });
+                    engagement.len() - 1
+                }),
+            })
+            .collect();
+        SceneMonitor {
+            scene,
+            states,
+            prev: None,
+            events: Vec::new(),
+            engagement,
+            samples: 0,
+            queries: 0,
+            min_clearance_mm: f64::INFINITY,
+            min_clearance_pair: None,
+        }
+    }
+
+    /// Geometric queries so far.
+    pub fn queries(&self) -> u64 {
+        self.queries
+    }
+
+    /// One sample: time (s), angle on the nominal path (deg) if any, program line, axis
+    /// positions (mm, deg). Samples with non-finite positions are ignored.
+    pub fn push(&mut self, time_s: f64, theta_deg: Option<f64>, line: usize, q: &AxisVec) {
+        if !q.is_finite() || !time_s.is_finite() {
+            return;
+        }
+        self.samples += 1;
+        let now = Sample {
+            time_s,
+            theta_deg,
+            line,
+            q: *q,
+        };
+        let step = self.prev.map(|prev| self.motion(&prev.q, q));
+        let mut poses: Option<[Pose; 4]> = None;
+        for i in 0..self.states.len() {
+            let state = &mut self.states[i];
+            let pair_step = match step {
+                Some(s) => {
+                    state.weights[0] * s[0] + state.weights[1] * s[1] + state.weights[2] * s[2]
+                }
+                None => f64::INFINITY,
+            };
+            let moved_before = state.moved;
+            state.moved += pair_step;
+            if state.moved < state.slack {
+                continue;
+            }
+            let pair = self.scene.pairs[i];
+            let poses = poses.get_or_insert_with(|| self.scene.body_poses(q));
+            let state = &mut self.states[i];
+            let d = measure(&self.scene, i, poses, &mut state.warm);
+            self.queries += 1;
+
+            // Contact strictly between the previous sample and this one?
+            if let (Some(prev), PairKind::Collision) = (self.prev, pair.kind) {
+                let start_bound = state.last_mm - moved_before;
+                if start_bound > 0.0 && d > 0.0 && start_bound + d < pair_step {
+                    if let Some(s) = self.advance(i, &prev.q, q, start_bound, pair_step) {
+                        self.record_contact_between(i, &prev, &now, s);
+                    }
+                }
+            }
+            self.classify(i, &now, d);
+        }
+        self.prev = Some(now);
+    }
+
+    /// Ends the run.
+    pub fn finish(mut self) -> SceneReport {
+        for state in &mut self.states {
+            if let Some(event) = state.open.take() {
+                self.events.push(event);
+            }
+        }
+        self.events
+            .sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
+        SceneReport {
+            events: self.events,
+            engagement: self.engagement,
+            near_miss_mm: self.scene.near_miss_mm,
+            min_clearance_mm: self.min_clearance_mm,
+            min_clearance_bodies: self
+                .min_clearance_pair
+                .map(|i| self.scene.pair_bodies(&self.scene.pairs[i])),
+            samples: self.samples,
+            queries: self.queries,
+        }
+    }
+
+    /// |dXYZ| (mm), |d tilt| (rad), |dC| (rad) between two samples.
+    fn motion(&self, a: &AxisVec, b: &AxisVec) -> [f64; 3] {
+        let d = *b - *a;
+        let lin = (d[Axis::X].powi(2) + d[Axis::Y].powi(2) + d[Axis::Z].powi(2)).sqrt();
+        let tilt = self
+            .scene
+            .tilt_axis
+            .map_or(0.0, |t| d[t].abs().to_radians());
+        [lin, tilt, d[Axis::C].abs().to_radians()]
+    }
+
+    /// Conservative advancement of pair `i` along the interval `a -> b`, whose motion bound
+    /// is `bound` mm, from a clearance lower bound `start` at `a`. Returns the fraction of
+    /// the interval at which contact is found.
+    fn advance(
+        &mut self,
+        i: usize,
+        a: &AxisVec,
+        b: &AxisVec,
+        start: f64,
+        bound: f64,
+    ) -> Option<f64> {
+        let mut s = start / bound;
+        let mut warm = self.states[i].warm;
+        for _ in 0..MAX_ADVANCE_STEPS {
+            if s >= 1.0 {
+                return None;
+            }
+            let q = *a + (*b - *a) * s;
+            let poses = self.scene.body_poses(&q);
+            let d = measure(&self.scene, i, &poses, &mut warm);
+            self.queries += 1;
+            if d <= CONTACT_TOLERANCE_MM {
+                return Some(s);
+            }
+            s += d / bound;
+        }
+        None
+    }
+
+    fn record_contact_between(&mut self, i: usize, prev: &Sample, now: &Sample, s: f64) {
+        let time = prev.time_s + s * (now.time_s - prev.time_s);
+        let theta = match (prev.theta_deg, now.theta_deg) {
+            (Some(a), Some(b)) => Some(a + s * (b - a)),
+            (_, b) => b,
+        };
+        let bodies = self.scene.pair_bodies(&self.scene.pairs[i]);
+        if let Some(open) = self.states[i].open.take() {
+            self.events.push(open);
+        }
+        self.events.push(SceneEvent {
+            kind: EventKind::Collision,
+            bodies,
+            time_start_s: time,
+            time_end_s: time,
+            theta_start_deg: theta,
+            theta_end_deg: theta,
+            line: now.line,
+            worst_mm: 0.0,
+        });
+    }
+
+    /// Updates pair `i`'s event and query schedule with the clearance `d` measured at `now`.
+    fn classify(&mut self, i: usize, now: &Sample, d: f64) {
+        let threshold = self.scene.near_miss_mm;
+        let resolution = self.scene.engagement_resolution_mm;
+        let state = &mut self.states[i];
+        state.last_mm = d;
+        state.moved = 0.0;
+        if let Some(e) = state.engagement {
+            state.slack = d.max(resolution);
+            let summary = &mut self.engagement[e];
+            summary.min_distance_mm = summary.min_distance_mm.min(d);
+            if -d > summary.max_depth_mm {
+                summary.max_depth_mm = -d;
+                summary.max_depth_time_s = Some(now.time_s);
+                summary.max_depth_theta_deg = now.theta_deg;
+            }
+            return;
+        }
+        state.slack = d - threshold;
+        if d < self.min_clearance_mm {
+            self.min_clearance_mm = d;
+            self.min_clearance_pair = Some(i);
+        }
+        let kind = if d <= 0.0 {
+            Some(EventKind::Collision)
+        } else if d < threshold {
+            Some(EventKind::NearMiss)
+        } else {
+            None
+        };
+        let worst = |kind: EventKind| match kind {
+            EventKind::Collision => -d,
+            EventKind::NearMiss => d,
+        };
+        match (&mut state.open, kind) {
+            (Some(open), Some(k)) if open.kind == k => {
+                open.time_end_s = now.time_s;
+                open.theta_end_deg = now.theta_deg;
+                open.worst_mm = match k {
+                    EventKind::Collision => open.worst_mm.max(-d),
+                    EventKind::NearMiss => open.worst_mm.min(d),
+                };
+            }
+            (_, kind) => {
+                if let Some(open) = state.open.take() {
+                    self.events.push(open);
+                }
+                state.open = kind.map(|k| SceneEvent {
+                    kind: k,
+                    bodies: self.scene.pair_bodies(&self.scene.pairs[i]),
+                    time_start_s: now.time_s,
+                    time_end_s: now.time_s,
+                    theta_start_deg: now.theta_deg,
+                    theta_end_deg: now.theta_deg,
+                    line: now.line,
+                    worst_mm: worst(k),
+                });
+            }
+        }
+    }
+}
+
+/// Signed distance of pair `i` with the bodies at `poses`.
+fn measure(scene: &Scene, i: usize, poses: &[Pose; 4], warm: &mut Option<Vector>) -> f64 {
+    let pair = scene.pairs[i];
+    let (a, b) = (&scene.parts[pair.a], &scene.parts[pair.b]);
+    let pose_a = poses[a.carrier as usize] * a.local;
+    let pose_b = poses[b.carrier as usize] * b.local;
+    super::pair_distance(&pair, a, b, &pose_a, &pose_b, warm)
+}

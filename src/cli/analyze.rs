@@ -1,0 +1,105 @@
+//! `mtsim analyze`: per axis, travel, peak speed and the reversal angles or lines.
+
+use std::path::Path;
+
+use serde_json::{json, Map};
+
+use super::print_stdout;
+use crate::error::Result;
+use crate::input::scenario::Scenario;
+use crate::study::reversals::{analyse_scenario, Analysis};
+
+pub fn run(path: &Path, as_json: bool) -> Result<i32> {
+    let scenario = Scenario::load(path)?;
+    let analysis = analyse_scenario(&scenario)?;
+    if as_json {
+        let mut axes = Map::new();
+        for a in &analysis.axes {
+            axes.insert(
+                a.axis.to_string(),
+                serde_json::to_value(a).expect("plain data serializes"),
+            );
+        }
+        let v = json!({
+            "axes": axes,
+            "min_linear_separation_deg": analysis.min_linear_separation_deg(),
+            "warnings": analysis.warnings(),
+        });
+        print_stdout(&format!(
+            "{}\n",
+            serde_json::to_string_pretty(&v).expect("plain data serializes")
+        ));
+        return Ok(0);
+    }
+    let mut out = format!("{} on {}\n", path.display(), scenario.machine.name);
+    out.push_str(&analysis_table(&analysis));
+    match analysis.closest_linear_reversals() {
+        Some((d, (a, ta), (b, tb))) => out.push_str(&format!(
+            "closest reversals of different linear axes: {a} at {ta:.2} deg and {b} at {tb:.2} deg, {d:.2} deg apart\n"
+        )),
+        None => out.push_str("fewer than two linear axes reverse\n"),
+    }
+    for w in analysis.warnings() {
+        out.push_str(&format!("warning: {w}\n"));
+    }
+    print_stdout(&out);
+    Ok(0)
+}
+
+/// The per-axis table of `mtsim analyze`.
+pub fn analysis_table(analysis: &Analysis) -> String {
+    let mut out = String::new();
+    let with_lines = analysis.axes.iter().any(|a| a.reversal_lines.is_some());
+    out.push_str(&format!(
+        "{:<4} {:>12} {:>12} {:>11} {:>16}  {}\n",
+        "axis",
+        "min",
+        "max",
+        "range",
+        "peak speed/min",
+        if with_lines {
+            "reversals (source lines; deg)"
+        } else {
+            "reversals (deg)"
+        }
+    ));
+    for a in &analysis.axes {
+        let unit = a.axis.unit();
+        let reversals = match &a.reversal_lines {
+            Some(lines) if lines.is_empty() => "none".to_string(),
+            Some(lines) => {
+                let l = lines
+                    .iter()
+                    .map(|l| format!("line {l}"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                if a.reversals_deg.is_empty() {
+                    l
+                } else {
+                    format!("{l}; {}", fmt_angles(&a.reversals_deg))
+                }
+            }
+            None if a.reversals_deg.is_empty() => "none".to_string(),
+            None => fmt_angles(&a.reversals_deg),
+        };
+        out.push_str(&format!(
+            "{:<4} {:>9.3} {unit:<3}{:>9.3} {unit:<3}{:>8.3} {unit:<3}{:>8.1} {:<8} {}\n",
+            a.axis.to_string(),
+            a.min,
+            a.max,
+            a.range,
+            a.peak_speed_per_min,
+            format!("{unit}/min"),
+            reversals
+        ));
+    }
+    out
+}
+
+fn fmt_angles(angles: &[f64]) -> String {
+    angles
+        .iter()
+        .map(|t| format!("{t:.2}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}

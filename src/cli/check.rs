@@ -1,0 +1,133 @@
+//! `mtsim check`: limits and collisions; exit 1 on violations.
+
+use std::path::Path;
+
+use super::print_stdout;
+use crate::check::limits::ViolationKind;
+use crate::check::{check, CheckOptions, CheckReport};
+use crate::error::{Error, Result, EXIT_VIOLATIONS};
+use crate::input::scenario::Scenario;
+
+pub fn run(path: &Path, as_json: bool, dynamics: bool, near_miss_mm: Option<f64>) -> Result<i32> {
+    if let Some(d) = near_miss_mm {
+        if !(d.is_finite() && d >= 0.0) {
+            return Err(Error::usage(format!(
+                "--near-miss {d}: expected a clearance >= 0 mm"
+            )));
+        }
+    }
+    let scenario = Scenario::load(path)?;
+    let report = check(
+        &scenario,
+        &CheckOptions {
+            dynamics,
+            near_miss_mm,
+        },
+    )?;
+    let code = if report.is_clean() {
+        0
+    } else {
+        EXIT_VIOLATIONS
+    };
+    if as_json {
+        print_stdout(&format!(
+            "{}\n",
+            serde_json::to_string_pretty(&report).expect("plain data serializes")
+        ));
+        return Ok(code);
+    }
+    print_stdout(&check_table(&report, &path.display().to_string()));
+    Ok(code)
+}
+
+/// The text report of `mtsim check`.
+pub fn check_table(report: &CheckReport, name: &str) -> String {
+    let mut out = format!(
+        "{name}: {} samples, {:.2} s of machine time, {} positions{}\n",
+        report.samples,
+        report.sim_time_s,
+        if report.dynamics {
+            "actual (servo)"
+        } else {
+            "commanded"
+        },
+        report
+            .scene_queries
+            .map_or(String::new(), |q| format!(", {q} geometric queries"))
+    );
+    out.push_str(&format!(
+        "{:<4} {:>21} {:>21} {:>11} {:>23} {:>23}\n",
+        "axis", "used", "available", "margin", "peak velocity/limit", "peak accel./limit"
+    ));
+    for (axis, u) in &report.axes {
+        let unit = if "ABC".contains(axis.as_str()) {
+            "deg"
+        } else {
+            "mm"
+        };
+        out.push_str(&format!(
+            "{axis:<4} {:>9.3}..{:<9.3} {:>9.3}..{:<9.3} {:>11} {:>11.0}/{:<11.0} {:>11.0}/{:<11.0}\n",
+            u.min,
+            u.max,
+            u.limit_min,
+            u.limit_max,
+            u.margin.map_or("continuous".to_string(), |m| format!("{m:.3} {unit}")),
+            u.peak_velocity_per_min,
+            u.velocity_limit_per_min,
+            u.peak_acceleration_per_s2,
+            u.acceleration_limit_per_s2,
+        ));
+    }
+    if let (Some(c), Some(b)) = (report.min_clearance_mm, &report.min_clearance_bodies) {
+        out.push_str(&format!(
+            "smallest clearance: {c:.3} mm ({} / {})\n",
+            b[0], b[1]
+        ));
+    }
+    for e in &report.engagement {
+        out.push_str(&format!(
+            "cutting: {} in {}, deepest {:.4} mm\n",
+            e.bodies[0], e.bodies[1], e.max_depth_mm
+        ));
+    }
+    if report.violations.is_empty() {
+        out.push_str("clean: no violations\n");
+        return out;
+    }
+    out.push_str(&format!("{} violation(s):\n", report.violations.len()));
+    for v in &report.violations {
+        let what = match (&v.axis, &v.bodies) {
+            (Some(a), _) => a.to_string(),
+            (_, Some(b)) => format!("{} / {}", b[0], b[1]),
+            _ => String::new(),
+        };
+        let span = match (v.theta_start_deg, v.theta_end_deg) {
+            (Some(a), Some(b)) => format!("theta {a:.2}..{b:.2} deg"),
+            _ => format!("t {:.3}..{:.3} s", v.time_start_s, v.time_end_s),
+        };
+        let worst = match v.kind {
+            ViolationKind::Collision => format!("penetration {:.3} mm", v.worst),
+            ViolationKind::NearMiss => format!(
+                "clearance {:.3} mm (threshold {:.1})",
+                v.worst,
+                v.limit.unwrap_or(0.0)
+            ),
+            _ => {
+                let limit = v.limit.unwrap_or(f64::NAN);
+                format!(
+                    "worst {:.3}, limit {:.3}, excess {:.3}",
+                    v.worst,
+                    limit,
+                    (v.worst - limit).abs()
+                )
+            }
+        };
+        out.push_str(&format!(
+            "  {:<12} {:<28} {span}, line {}: {worst}\n",
+            format!("{:?}", v.kind).to_lowercase(),
+            what,
+            v.line
+        ));
+    }
+    out
+}

@@ -1,0 +1,78 @@
+//! `mtsim simulate`: the whole pipeline into the ball bar; trace, summary and plot files.
+
+use std::path::Path;
+
+use super::{print_stdout, spinner};
+use crate::error::Result;
+use crate::input::scenario::Scenario;
+
+pub fn run(path: &Path, out_dir: &Path, as_json: bool, timing: bool) -> Result<i32> {
+    let scenario = Scenario::load(path)?;
+    let bar = spinner("simulating");
+    let summary = crate::study::simulate::simulate(&scenario, out_dir, timing, &|t| {
+        bar.set_message(format!("{t:.1} s of machine time"))
+    })?;
+    bar.finish_and_clear();
+    if as_json {
+        print_stdout(&format!(
+            "{}\n",
+            serde_json::to_string_pretty(&summary).expect("plain data serializes")
+        ));
+        return Ok(0);
+    }
+    let mut out = format!(
+        "{}: {:.2} s of machine time ({} setpoints, {})\n",
+        path.display(),
+        summary.sim_time_s,
+        summary.setpoints,
+        summary
+            .directions
+            .iter()
+            .map(|d| format!("{d:?}").to_lowercase())
+            .collect::<Vec<_>>()
+            .join(" + ")
+    );
+    if let Some(rtf) = summary.realtime_factor {
+        out.push_str(&format!(
+            "real-time factor: {rtf:.0}x ({:.3} s wall)\n",
+            summary.wall_time_s.unwrap_or(0.0)
+        ));
+    }
+    match &summary.ballbar {
+        None => out.push_str(
+            "no measured circle: give the scenario a cone or circle to get ball-bar figures\n",
+        ),
+        Some(b) => {
+            out.push_str(&format!(
+                "ISO 230-4: circular deviation G = {:.2} um, radial deviation F = {:+.2} / {:+.2} um, hysteresis H = {}\n",
+                b.circular_deviation_um,
+                b.radial_max_um,
+                b.radial_min_um,
+                b.hysteresis_um.map_or("- (one direction)".to_string(), |h| format!("{h:.2} um"))
+            ));
+            if b.events.is_empty() {
+                out.push_str("no spikes or steps above noise\n");
+            } else {
+                out.push_str(&format!(
+                    "{:>4} {:>6} {:>10} {:>10} {:>6} {:>5} {:>10}\n",
+                    "run", "kind", "theta deg", "height um", "axis", "conf", "width deg"
+                ));
+                for e in &b.events {
+                    out.push_str(&format!(
+                        "{:>4} {:>6} {:>10.2} {:>10.2} {:>6} {:>5.2} {:>10.2}\n",
+                        format!("{:?}", e.direction).to_lowercase(),
+                        format!("{:?}", e.kind).to_lowercase(),
+                        e.theta_deg,
+                        e.height_um,
+                        e.axis.map_or("?".to_string(), |a| a.to_string()),
+                        e.confidence,
+                        e.width_deg
+                    ));
+                }
+            }
+        }
+    }
+    out.push_str(&format!("wrote {}\n", out_dir.display()));
+    print_stdout(&out);
+    Ok(0)
+}

@@ -1,0 +1,73 @@
+//! The drives of one machine: one [`AxisServo`] per axis, stepped together.
+
+use super::servo::AxisServo;
+use crate::error::Result;
+use crate::input::machine::Machine;
+use crate::{Axis, AxisVec};
+
+/// Every axis of a machine at the end of one interpolation period.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DrivesState {
+    /// Table-side positions, mm and deg.
+    pub actual: AxisVec,
+    /// Setpoint minus actual, mm and deg.
+    pub following_error: AxisVec,
+    /// Every axis within 0.1 um (0.1 mdeg) of its setpoint and below 1 um/s (1 mdeg/s).
+    pub settled: bool,
+}
+
+/// One servo per machine axis.
+#[derive(Clone, Debug)]
+pub struct Drives {
+    axes: &'static [Axis],
+    servos: Vec<AxisServo>,
+}
+
+impl Drives {
+    /// The machine's drives at rest at `q`. With `linear`, its linear twins: the same drives
+    /// without dry friction and backlash, whose response is what the nonlinearities are
+    /// measured against.
+    pub fn new(machine: &Machine, q: &AxisVec, linear: bool) -> Result<Drives> {
+        let period = machine.interpolation_period_s;
+        let servos = machine
+            .axes()
+            .iter()
+            .map(|&a| {
+                let c = machine.axis(a);
+                if linear {
+                    AxisServo::new(
+                        a,
+                        &c.servo,
+                        &c.drive.without_backlash(a),
+                        &c.friction.viscous_only(a),
+                        period,
+                        q[a],
+                    )
+                } else {
+                    AxisServo::new(a, &c.servo, &c.drive, &c.friction, period, q[a])
+                }
+            })
+            .collect::<Result<_>>()?;
+        Ok(Drives {
+            axes: machine.axes(),
+            servos,
+        })
+    }
+
+    /// Steps every axis through one interpolation period towards `setpoint`, which it should
+    /// reach at `time_s`.
+    pub fn step(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<DrivesState> {
+        let mut state = DrivesState {
+            actual: *setpoint,
+            following_error: AxisVec::ZERO,
+            settled: true,
+        };
+        for (servo, &a) in self.servos.iter_mut().zip(self.axes) {
+            let s = servo.step(setpoint[a], time_s)?;
+            state.actual[a] = s.actual;
+            state.following_error[a] = s.following_error;
+            state.settled &= s.following_error.abs() < 1e-4 && s.velocity.abs() < 1e-3;
+        }
+        Ok(state)
+    }
+}

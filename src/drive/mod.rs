@@ -1,0 +1,9 @@
+//! **drive** — stage 3: setpoints in, actual axis positions out.
+//! Inputs: one setpoint per interpolation period for every axis, and each axis's drive configuration from `input`.
+//! Outputs: the table-side (actual) position and following error of every axis, from per-axis servo models.
+
+pub mod drives;
+pub mod servo;
+
+pub use drives::{Drives, DrivesState};
+pub use servo::{AxisServo, ServoState};

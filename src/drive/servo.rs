@@ -1,0 +1,477 @@
+//! Per-axis servo drive models: the closed position loop of one machine axis, from the
+//! interpolator's setpoint stream to the actual table position.
+//!
+//! Two models share one interface, [`AxisServo`]:
+//!
+//! * **first-order** — a P position loop around an ideal inner loop. The axis moves at
+//!   exactly `v = Kv (x_cmd - x_fb) + k_vff dx_cmd/dt`, so its transfer function is
+//!   `G(s) = Kv / (s + Kv)` without feedforward. The loop is integrated in closed form over each
+//!   servo period (the command is linear in time there), so it is exact. Friction has no
+//!   effect (the ideal inner loop rejects it); backlash `b` is a play element between motor and
+//!   table: the table moves only when the motor pushes it at either end of the gap.
+//! * **cascade** — a sampled P position loop, a sampled PI velocity loop on the motor
+//!   velocity, a first-order current-loop lag with a force limit, and two-mass mechanics
+//!   (motor side `m_m`, table side `m_t`) joined by a spring `k` and a damper `c` with the
+//!   backlash dead zone `dz(d)`, and Stribeck friction with stiction on the table:
+//!
+//!   ```text
+//!   v_cmd  = Kv (x_cmd - x_fb) + k_vff v_ff
+//!   F_cmd  = sat( Kp (v_cmd - v_meas) + Kp/Ti ∫(v_cmd - v_meas) dt + k_aff m_tot a_ff )
+//!   τ dF/dt = F_cmd - F
+//!   m_m dv_m/dt = F - F_s,        F_s = k dz(x_m - x_t) + c (v_m - v_t)   (in contact)
+//!   m_t dv_t/dt = F_s - F_f,      F_f = (Fc + (Fs - Fc) exp(-(v_t/vs)^2)) sign(v_t) + Fv v_t
+//!   dz(d) = d - sign(d) b/2 for |d| > b/2, else 0
+//!   ```
+//!
+//!   `x_fb` is the motor position (semi-closed loop) or the table position (fully-closed
+//!   loop); `v_meas` is the motor encoder's position difference over one servo period.
+//!   `Kp = 2π f_v m_tot` sets the velocity-loop bandwidth `f_v` for the rigid axis.
+//!
+//! **Setpoints and feedforward.** Setpoint `s_k` is where the axis should be at the end of
+//! interpolation period `k`. During that period the command is the straight line from
+//! `s_{k-1}` to `s_k`, sampled at each servo tick. The feedforward velocity and acceleration
+//! come from the setpoint stream by finite differences, as in a real drive:
+//! `v_ff = (s_k - s_{k-1}) / T_ipo` (exactly the slope of the fine-interpolated command) and
+//! `a_ff = (v_ff,k - v_ff,k-1) / T_ipo`.
+//!
+//! **Integration.** The controller runs once per servo period and holds its force command
+//! (zero-order hold). The mechanics take `substeps` steps of `h = T_servo / substeps` per
+//! servo period with semi-implicit (symplectic) Euler: forces from the positions at the start
+//! of the step, then velocities, then positions from the new velocities. The current-loop lag
+//! is advanced exactly, `F += (F_cmd - F)(1 - exp(-h/τ))`. It is stable while
+//! `h sqrt(k / min(m_m, m_t)) < 2`; the defaults give about 0.06.
+//!
+//! **Stiction.** Friction on the table is treated implicitly, as a force bounded by
+//! `g(v) = Fc + (Fs - Fc) exp(-(v/vs)^2)` (which is `Fs` at rest). Each step first asks which
+//! friction force would bring the table exactly to rest at the end of the step,
+//! `F_stop = -(m_t v_t / h + F_s)`. If `|F_stop| <= g(v_t)` the table sticks: friction takes
+//! that value and the new velocity is exactly zero. Otherwise the table slips with friction
+//! `g(v_t)` opposing the motion, `clamp(F_stop, -g, g)`, and viscous friction enters
+//! implicitly through the divisor `m_t + h Fv`. Friction can therefore never reverse the
+//! velocity within a step, a resting table stays at rest until the spring force exceeds `Fs`
+//! (breakaway), and there is no chattering about zero velocity nor any stiff step-size limit
+//! from the friction law. With `coulomb = 0` there is no dry friction at all.
+//!
+//! **Units.** Positions are mm (linear) or deg (rotary) at the interface. Inside, everything
+//! is SI: m, kg, N, N/m for linear axes, rad, kg m^2, N m, N m/rad for rotary ones.
+//!
+//! **Divergence.** After every interpolation period the state must be finite and the
+//! following error (of table and motor) within `following_error_limit_mm`/`_deg`; otherwise
+//! [`AxisServo::step`] returns [`Error::Diverged`]. No NaN ever leaves this module.
+
+use std::f64::consts::PI;
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::input::drive::{DriveConfig, FrictionConfig, Model, Resolved, ServoConfig};
+use crate::Axis;
+
+/// The state of one axis at the end of an interpolation period.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ServoState {
+    /// Table-side position, mm or deg.
+    pub actual: f64,
+    /// Setpoint minus actual, mm or deg.
+    pub following_error: f64,
+    /// Motor-side position in table coordinates, mm or deg.
+    pub motor: f64,
+    /// Table velocity, mm/s or deg/s.
+    pub velocity: f64,
+    /// Motor force (N) or torque (N m); 0 in the first-order model.
+    pub force: f64,
+}
+
+/// One axis's servo drive, stepped once per interpolation period. Allocation-free.
+#[derive(Clone, Debug)]
+pub struct AxisServo {
+    axis: Axis,
+    model: Model,
+    fully_closed: bool,
+    /// SI units per interface unit: m/mm or rad/deg.
+    scale: f64,
+    /// Inverse of the interpolation period, 1/s.
+    inv_t_ipo: f64,
+    /// Servo periods per interpolation period, and the servo period, s.
+    n_servo: usize,
+    t_servo: f64,
+    n_sub: usize,
+    /// Mechanics substep, s.
+    h: f64,
+    kv: f64,
+    kvff: f64,
+    /// `k_aff * m_total`, kg or kg m^2.
+    aff_mass: f64,
+    /// Velocity-loop P gain, N/(m/s) or N m/(rad/s), and `Kp T_servo / Ti`.
+    kp: f64,
+    ki_ts: f64,
+    /// `1 - exp(-h/τ)` of the current loop.
+    current_alpha: f64,
+    force_limit: f64,
+    /// `h / m_m`, `m_t / h`, `1 / (m_t + h Fv)`.
+    h_over_mm: f64,
+    mt_over_h: f64,
+    inv_mt_plus_h_fv: f64,
+    mt: f64,
+    stiffness: f64,
+    damping: f64,
+    half_backlash: f64,
+    coulomb: f64,
+    static_friction: f64,
+    /// Stribeck velocity, m/s or rad/s (0: plain stiction).
+    stribeck: f64,
+    /// `exp(-Kv T_servo)` for the first-order model.
+    decay: f64,
+    /// Divergence bound, SI.
+    fe_limit: f64,
+    // State, SI.
+    setpoint: f64,
+    v_ff: f64,
+    x_m: f64,
+    v_m: f64,
+    x_t: f64,
+    v_t: f64,
+    force: f64,
+    integral: f64,
+    x_m_tick: f64,
+}
+
+impl AxisServo {
+    /// `axis.is_rotary()` selects deg/rad and the `*_deg`/`*_nm` keys. Starts at rest at
+    /// `initial_position` (mm or deg), the backlash gap centred.
+    pub fn new(
+        axis: Axis,
+        servo: &ServoConfig,
+        drive: &DriveConfig,
+        friction: &FrictionConfig,
+        interpolation_period_s: f64,
+        initial_position: f64,
+    ) -> Result<AxisServo> {
+        let where_ = format!("[axes.{axis}]");
+        if let Some((table, key, message)) = Resolved::problem(axis, servo, drive, friction) {
+            return Err(Error::invalid(
+                Path::new(&where_),
+                format!("`{table}.{key}`: {message}"),
+            ));
+        }
+        if !(interpolation_period_s.is_finite() && interpolation_period_s > 0.0) {
+            return Err(Error::invalid(
+                Path::new(&where_),
+                format!(
+                    "the interpolation period must be positive, got {interpolation_period_s} s"
+                ),
+            ));
+        }
+        if !initial_position.is_finite() {
+            return Err(Error::invalid(
+                Path::new(&where_),
+                format!("the initial position must be finite, got {initial_position}"),
+            ));
+        }
+        let r = Resolved::new(axis, servo, drive, friction);
+        let scale = if axis.is_rotary() { PI / 180.0 } else { 1e-3 };
+        let t_ipo = interpolation_period_s;
+        let n_servo = ((t_ipo / (servo.servo_period_ms * 1e-3)).round() as usize).max(1);
+        let t_servo = t_ipo / n_servo as f64;
+        let n_sub = servo.substeps as usize;
+        let h = t_servo / n_sub as f64;
+        let mm = r.motor_mass.1;
+        let mt = r.table_mass.1;
+        let m_total = mm + mt;
+        // N/um -> N/m for linear axes; N m/rad as is for rotary ones.
+        let stiffness = if axis.is_rotary() {
+            r.stiffness.1
+        } else {
+            r.stiffness.1 * 1e6
+        };
+        let damping = 2.0 * r.damping_ratio * (stiffness * mm * mt / m_total).sqrt();
+        let tau = servo.current_time_constant_ms * 1e-3;
+        let viscous = r.viscous.1;
+        let kp = 2.0 * PI * servo.velocity_bandwidth_hz * m_total;
+        let state = initial_position * scale;
+        Ok(AxisServo {
+            axis,
+            model: r.model.unwrap_or(Model::Cascade),
+            fully_closed: r.fully_closed.unwrap_or(false),
+            scale,
+            inv_t_ipo: 1.0 / t_ipo,
+            n_servo,
+            t_servo,
+            n_sub,
+            h,
+            kv: servo.kv_per_s,
+            kvff: servo.velocity_feedforward,
+            aff_mass: servo.acceleration_feedforward * m_total,
+            kp,
+            ki_ts: kp * t_servo / (servo.velocity_integral_time_ms * 1e-3),
+            current_alpha: if tau > 0.0 { -(-h / tau).exp_m1() } else { 1.0 },
+            force_limit: r.force_limit.1,
+            h_over_mm: h / mm,
+            mt_over_h: mt / h,
+            inv_mt_plus_h_fv: 1.0 / (mt + h * viscous),
+            mt,
+            stiffness,
+            damping,
+            half_backlash: 0.5 * r.backlash.1 * scale,
+            coulomb: r.coulomb.1,
+            static_friction: r.coulomb.1 * r.static_ratio,
+            stribeck: r.stribeck.1 * scale,
+            decay: (-servo.kv_per_s * t_servo).exp(),
+            fe_limit: r.fe_limit.1 * scale,
+            setpoint: state,
+            v_ff: 0.0,
+            x_m: state,
+            v_m: 0.0,
+            x_t: state,
+            v_t: 0.0,
+            force: 0.0,
+            integral: 0.0,
+            x_m_tick: state,
+        })
+    }
+
+    /// Advances one interpolation period towards `setpoint` (mm or deg), reached by the
+    /// command at the end of the period; `time_s` is for error messages.
+    pub fn step(&mut self, setpoint: f64, time_s: f64) -> Result<ServoState> {
+        if !setpoint.is_finite() {
+            return Err(self.diverged(time_s, format!("the setpoint is not finite ({setpoint})")));
+        }
+        let s_new = setpoint * self.scale;
+        let s_old = self.setpoint;
+        let v_ff = (s_new - s_old) * self.inv_t_ipo;
+        let a_ff = (v_ff - self.v_ff) * self.inv_t_ipo;
+        let x_t_old = self.x_t;
+        match self.model {
+            Model::FirstOrder => self.step_first_order(s_old, s_new, v_ff),
+            Model::Cascade => self.step_cascade(s_old, s_new, v_ff, a_ff),
+        }
+        self.setpoint = s_new;
+        self.v_ff = v_ff;
+
+        let finite = [
+            self.x_m,
+            self.v_m,
+            self.x_t,
+            self.v_t,
+            self.force,
+            self.integral,
+        ]
+        .iter()
+        .all(|v| v.is_finite());
+        if !finite {
+            return Err(self.diverged(time_s, "the drive state is no longer finite".into()));
+        }
+        let fe = s_new - self.x_t;
+        let fe_motor = s_new - self.x_m;
+        if fe.abs() > self.fe_limit || fe_motor.abs() > self.fe_limit {
+            let unit = self.axis.unit();
+            let worst = if fe.abs() >= fe_motor.abs() {
+                fe
+            } else {
+                fe_motor
+            };
+            return Err(self.diverged(
+                time_s,
+                format!(
+                    "following error {:.4} {unit} exceeds the limit {:.4} {unit}",
+                    worst / self.scale,
+                    self.fe_limit / self.scale
+                ),
+            ));
+        }
+        let velocity = match self.model {
+            Model::FirstOrder => (self.x_t - x_t_old) * self.inv_t_ipo,
+            Model::Cascade => self.v_t,
+        };
+        Ok(ServoState {
+            actual: self.x_t / self.scale,
+            following_error: fe / self.scale,
+            motor: self.x_m / self.scale,
+            velocity: velocity / self.scale,
+            force: self.force,
+        })
+    }
+
+    fn diverged(&self, time_s: f64, reason: String) -> Error {
+        Error::Diverged {
+            axis: self.axis,
+            time_s,
+            reason,
+        }
+    }
+
+    /// First-order model over one interpolation period. Per servo period the command is
+    /// linear, `x_cmd' = v_ff`, so the motor error `e = x_cmd - x_m` obeys
+    /// `e' = (1 - k_vff) v_ff - Kv e` and `e(T) = e_inf + (e(0) - e_inf) exp(-Kv T)` with
+    /// `e_inf = (1 - k_vff) v_ff / Kv` exactly. The table follows through the play element.
+    /// With a fully-closed loop and backlash the loop closes over the play, which is not
+    /// linear: it is then integrated with explicit Euler substeps.
+    fn step_first_order(&mut self, s_old: f64, s_new: f64, v_ff: f64) {
+        let n = self.n_servo as f64;
+        if self.fully_closed && self.half_backlash > 0.0 {
+            let steps = self.n_servo * self.n_sub;
+            for i in 0..steps {
+                let x_cmd = s_old + (s_new - s_old) * (i as f64 / steps as f64);
+                let v = self.kv * (x_cmd - self.x_t) + self.kvff * v_ff;
+                self.x_m += v * self.h;
+                self.x_t = play(self.x_m, self.x_t, self.half_backlash);
+            }
+            return;
+        }
+        let e_inf = (1.0 - self.kvff) * v_ff / self.kv;
+        for j in 1..=self.n_servo {
+            let x_cmd = s_old + (s_new - s_old) * (j as f64 / n);
+            let e0 = x_cmd - v_ff * self.t_servo - self.x_m;
+            let e1 = e_inf + (e0 - e_inf) * self.decay;
+            self.x_m = x_cmd - e1;
+            self.x_t = play(self.x_m, self.x_t, self.half_backlash);
+        }
+        self.v_m = v_ff;
+    }
+
+    /// Cascade model over one interpolation period: `n_servo` controller ticks, each followed
+    /// by `n_sub` mechanics substeps under the held force command.
+    fn step_cascade(&mut self, s_old: f64, s_new: f64, v_ff: f64, a_ff: f64) {
+        let n = self.n_servo as f64;
+        let inv_ts = 1.0 / self.t_servo;
+        let f_ff = self.aff_mass * a_ff;
+        for j in 0..self.n_servo {
+            // Controller, sampled at the start of the servo period.
+            let x_cmd = s_old + (s_new - s_old) * (j as f64 / n);
+            let x_fb = if self.fully_closed {
+                self.x_t
+            } else {
+                self.x_m
+            };
+            let v_meas = (self.x_m - self.x_m_tick) * inv_ts;
+            self.x_m_tick = self.x_m;
+            let v_cmd = self.kv * (x_cmd - x_fb) + self.kvff * v_ff;
+            let ev = v_cmd - v_meas;
+            let integral = self.integral + self.ki_ts * ev;
+            let f_unlimited = self.kp * ev + integral + f_ff;
+            let f_cmd = f_unlimited.clamp(-self.force_limit, self.force_limit);
+            // Anti-windup: do not integrate further into the force limit.
+            if f_unlimited.abs() <= self.force_limit || (f_unlimited > 0.0) != (ev > 0.0) {
+                self.integral = integral;
+            }
+            for _ in 0..self.n_sub {
+                self.substep(f_cmd);
+            }
+        }
+    }
+
+    /// One semi-implicit Euler step of the current loop and the two masses.
+    #[inline]
+    fn substep(&mut self, f_cmd: f64) {
+        let d = self.x_m - self.x_t;
+        let dv = self.v_m - self.v_t;
+        let hb = self.half_backlash;
+        let f_spring = if hb > 0.0 {
+            // A contact pushes but never pulls: the damper cannot make the force change sign.
+            if d > hb {
+                (self.stiffness * (d - hb) + self.damping * dv).max(0.0)
+            } else if d < -hb {
+                (self.stiffness * (d + hb) + self.damping * dv).min(0.0)
+            } else {
+                0.0
+            }
+        } else {
+            self.stiffness * d + self.damping * dv
+        };
+        self.force += (f_cmd - self.force) * self.current_alpha;
+        self.v_m += (self.force - f_spring) * self.h_over_mm;
+        // Implicit friction (see the module docs): stick if the force needed to stop the
+        // table within this step is below the friction bound, else slip against the bound.
+        let bound = self.friction_bound(self.v_t);
+        let f_stop = -(self.mt_over_h * self.v_t + f_spring);
+        let f_friction = f_stop.clamp(-bound, bound);
+        self.v_t = (self.mt * self.v_t + self.h * (f_spring + f_friction)) * self.inv_mt_plus_h_fv;
+        self.x_m += self.h * self.v_m;
+        self.x_t += self.h * self.v_t;
+    }
+
+    /// Magnitude bound of dry friction at table velocity `v`:
+    /// `g(v) = Fc + (Fs - Fc) exp(-(v/vs)^2)`, which is `Fs` at rest.
+    #[inline]
+    fn friction_bound(&self, v: f64) -> f64 {
+        stribeck_bound(v, self.coulomb, self.static_friction, self.stribeck)
+    }
+}
+
+/// `Fc + (Fs - Fc) exp(-(v/vs)^2)`; with `vs = 0`, `Fs` at rest and `Fc` in motion.
+#[inline]
+fn stribeck_bound(v: f64, fc: f64, fs: f64, vs: f64) -> f64 {
+    if fs == fc || v == 0.0 {
+        return fs;
+    }
+    if vs <= 0.0 {
+        return fc;
+    }
+    let u = v / vs;
+    let u2 = u * u;
+    if u2 > 40.0 {
+        fc
+    } else {
+        fc + (fs - fc) * (-u2).exp()
+    }
+}
+
+/// Play (backlash) element: the table at `x_t` stays put until the motor at `x_m` pushes it
+/// at either end of the gap of half-width `half`.
+#[inline]
+fn play(x_m: f64, x_t: f64, half: f64) -> f64 {
+    x_t.clamp(x_m - half, x_m + half)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dead_zone_play_and_stribeck_bound_follow_their_definitions() {
+        assert_eq!(play(1.0, 0.0, 0.25), 0.75);
+        assert_eq!(play(-1.0, 0.0, 0.25), -0.75);
+        assert_eq!(play(0.1, 0.0, 0.25), 0.0);
+        assert_eq!(stribeck_bound(0.0, 100.0, 130.0, 1e-3), 130.0);
+        assert!(
+            (stribeck_bound(1e-3, 100.0, 130.0, 1e-3) - (100.0 + 30.0 / std::f64::consts::E)).abs()
+                < 1e-12
+        );
+        assert_eq!(stribeck_bound(1.0, 100.0, 130.0, 1e-3), 100.0);
+        assert_eq!(stribeck_bound(1e-9, 100.0, 130.0, 0.0), 100.0);
+        assert_eq!(stribeck_bound(0.0, 0.0, 0.0, 0.0), 0.0);
+    }
+
+    /// A table held by a spring force below Fs sticks exactly; above it, it breaks away.
+    #[test]
+    fn stiction_holds_below_the_static_limit_and_breaks_away_above() {
+        let servo = ServoConfig {
+            model: "cascade".into(),
+            ..Default::default()
+        };
+        let mut s = AxisServo::new(
+            Axis::X,
+            &servo,
+            &DriveConfig::default(),
+            &FrictionConfig::default(),
+            1e-3,
+            0.0,
+        )
+        .unwrap();
+        // Spring pre-loaded to 0.9 Fs = 175.5 N: d = 175.5 / 2e8 m. Motor held (force cancels).
+        let fs = 150.0 * 1.3;
+        for (load, moves) in [(0.9 * fs, false), (1.1 * fs, true)] {
+            s.x_t = 0.0;
+            s.v_t = 0.0;
+            s.v_m = 0.0;
+            s.x_m = load / s.stiffness;
+            for _ in 0..10 {
+                let x_m = s.x_m;
+                s.force = load;
+                s.substep(load);
+                s.x_m = x_m;
+                s.v_m = 0.0;
+            }
+            assert_eq!(s.x_t != 0.0, moves, "load {load} N");
+        }
+    }
+}

@@ -1,0 +1,697 @@
+//! Drive configuration: `[axes.X.servo]`, `[axes.X.drive]` and `[axes.X.friction]` of a
+//! machine file, with the defaults of a mid-size machining centre, resolved per axis kind
+//! and validated. The models that run these parameters are in `crate::drive`.
+
+use std::path::Path;
+
+use serde::Deserialize;
+
+use crate::error::Result;
+use crate::input::toml_text::value_error;
+use crate::Axis;
+
+/// `[axes.X.servo]`: the controller — loops, feedforward, feedback, timing.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ServoConfig {
+    /// "first-order" (P loop, ideal inner loop) or "cascade" (P/PI/current loop, two masses).
+    pub model: String,
+    /// Position-loop gain Kv, 1/s. Default 30.
+    pub kv_per_s: f64,
+    /// Velocity feedforward, fraction 0..1. Default 0.
+    pub velocity_feedforward: f64,
+    /// Acceleration feedforward, fraction 0..1 (cascade only). Default 0.
+    pub acceleration_feedforward: f64,
+    /// Position feedback: "semi-closed" (motor encoder) or "fully-closed" (table scale).
+    pub feedback: String,
+    /// Velocity-loop bandwidth f_v, Hz: `Kp = 2π f_v m_total`. Default 60.
+    pub velocity_bandwidth_hz: f64,
+    /// Velocity-loop integral time Ti, ms. Default 10.
+    pub velocity_integral_time_ms: f64,
+    /// Current-loop time constant τ, ms; 0 is an ideal current loop. Default 0.2.
+    pub current_time_constant_ms: f64,
+    /// Servo (position and velocity loop) period, ms; rounded so that a whole number of
+    /// servo periods fits one interpolation period. Default 0.25.
+    pub servo_period_ms: f64,
+    /// Mechanics integration substeps per servo period. Default 2 (h = 125 us: ω h ≈ 0.14
+    /// for the default drive; the cone trace moves by < 0.02 um against 4 substeps).
+    pub substeps: u32,
+    /// Following error beyond which a linear axis counts as diverged, mm. Default 50.
+    pub following_error_limit_mm: Option<f64>,
+    /// Following error beyond which a rotary axis counts as diverged, deg. Default 90.
+    pub following_error_limit_deg: Option<f64>,
+}
+
+impl Default for ServoConfig {
+    fn default() -> Self {
+        ServoConfig {
+            model: "first-order".into(),
+            kv_per_s: 30.0,
+            velocity_feedforward: 0.0,
+            acceleration_feedforward: 0.0,
+            feedback: "semi-closed".into(),
+            velocity_bandwidth_hz: 60.0,
+            velocity_integral_time_ms: 10.0,
+            current_time_constant_ms: 0.2,
+            servo_period_ms: 0.25,
+            substeps: 2,
+            following_error_limit_mm: None,
+            following_error_limit_deg: None,
+        }
+    }
+}
+
+/// `[axes.X.drive]`: the mechanics between motor and table (cascade model; the first-order
+/// model uses only the backlash). Linear axes take the `_mm`/`_kg`/`_n` keys, rotary axes the
+/// `_deg`/`_kgm2`/`_nm` keys; a key of the other kind is an error. Unset keys take the
+/// defaults of a mid-size machining centre: a preloaded ball-screw axis, or a direct-drive
+/// rotary table.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DriveConfig {
+    /// Backlash of a linear axis, mm. Default 0 (preloaded nut).
+    pub backlash_mm: Option<f64>,
+    /// Backlash of a rotary axis, deg. Default 0 (direct drive; worm tables: 0.001-0.006).
+    pub backlash_deg: Option<f64>,
+    /// Motor-side mass (rotor and screw inertia reflected through the lead), kg. Default 250.
+    pub motor_mass_kg: Option<f64>,
+    /// Motor-side inertia of a rotary axis, kg m^2. Default 3.
+    pub motor_inertia_kgm2: Option<f64>,
+    /// Table-side mass (table, saddle, workpiece), kg. Default 500.
+    pub table_mass_kg: Option<f64>,
+    /// Table-side inertia of a rotary axis, kg m^2. Default 5.
+    pub table_inertia_kgm2: Option<f64>,
+    /// Axial stiffness between motor and table of a linear axis, N/um. Default 200.
+    pub stiffness_n_per_um: Option<f64>,
+    /// Torsional stiffness of a rotary axis, N m/rad. Default 3e6.
+    pub stiffness_nm_per_rad: Option<f64>,
+    /// Damping ratio of the motor-table mode, `c = 2 ζ sqrt(k m_m m_t / (m_m + m_t))`.
+    /// Default 0.05.
+    pub damping_ratio: Option<f64>,
+    /// Motor force limit of a linear axis, N. Default 20000.
+    pub force_limit_n: Option<f64>,
+    /// Motor torque limit of a rotary axis, N m. Default 1200.
+    pub torque_limit_nm: Option<f64>,
+}
+
+/// `[axes.X.friction]`: friction on the table side (cascade model only).
+/// `F = (Fc + (Fs - Fc) exp(-(v/vs)^2)) sign(v) + Fv v` with stiction `|F| <= Fs` at rest.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FrictionConfig {
+    /// Coulomb friction Fc of a linear axis, N; 0 removes dry friction. Default 150.
+    pub coulomb_n: Option<f64>,
+    /// Coulomb friction Fc of a rotary axis, N m; 0 removes dry friction. Default 15.
+    pub coulomb_nm: Option<f64>,
+    /// Static over Coulomb friction, Fs/Fc >= 1. Default 1.3.
+    pub static_ratio: Option<f64>,
+    /// Stribeck velocity vs of a linear axis, mm/s; 0 gives a plain stiction jump. Default 0.5.
+    pub stribeck_velocity_mm_per_s: Option<f64>,
+    /// Stribeck velocity vs of a rotary axis, deg/s. Default 0.1.
+    pub stribeck_velocity_deg_per_s: Option<f64>,
+    /// Viscous friction Fv of a linear axis, N per m/s. Default 1000.
+    pub viscous_n_s_per_m: Option<f64>,
+    /// Viscous friction Fv of a rotary axis, N m per rad/s. Default 5.
+    pub viscous_nm_s_per_rad: Option<f64>,
+}
+
+/// The two servo models.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Model {
+    FirstOrder,
+    Cascade,
+}
+
+fn parse_model(name: &str) -> Option<Model> {
+    match name {
+        "first-order" => Some(Model::FirstOrder),
+        "cascade" => Some(Model::Cascade),
+        _ => None,
+    }
+}
+
+fn parse_feedback(name: &str) -> Option<bool> {
+    match name {
+        "semi-closed" => Some(false),
+        "fully-closed" => Some(true),
+        _ => None,
+    }
+}
+
+/// Picks the key of the axis's kind: `(key, value)` of the linear or the rotary variant.
+fn pick(
+    axis: Axis,
+    linear: (&'static str, Option<f64>),
+    rotary: (&'static str, Option<f64>),
+    defaults: (f64, f64),
+) -> (&'static str, f64) {
+    if axis.is_rotary() {
+        (rotary.0, rotary.1.unwrap_or(defaults.1))
+    } else {
+        (linear.0, linear.1.unwrap_or(defaults.0))
+    }
+}
+
+/// Every parameter of one axis, resolved for its kind, in interface units as written
+/// (mm, deg, N, N m, ...), each with the key it came from.
+pub struct Resolved {
+    pub model: Option<Model>,
+    pub fully_closed: Option<bool>,
+    pub fe_limit: (&'static str, f64),
+    pub backlash: (&'static str, f64),
+    pub motor_mass: (&'static str, f64),
+    pub table_mass: (&'static str, f64),
+    pub stiffness: (&'static str, f64),
+    pub damping_ratio: f64,
+    pub force_limit: (&'static str, f64),
+    pub coulomb: (&'static str, f64),
+    pub static_ratio: f64,
+    pub stribeck: (&'static str, f64),
+    pub viscous: (&'static str, f64),
+}
+
+impl Resolved {
+    pub fn new(axis: Axis, s: &ServoConfig, d: &DriveConfig, f: &FrictionConfig) -> Resolved {
+        Resolved {
+            model: parse_model(&s.model),
+            fully_closed: parse_feedback(&s.feedback),
+            fe_limit: pick(
+                axis,
+                ("following_error_limit_mm", s.following_error_limit_mm),
+                ("following_error_limit_deg", s.following_error_limit_deg),
+                (50.0, 90.0),
+            ),
+            backlash: pick(
+                axis,
+                ("backlash_mm", d.backlash_mm),
+                ("backlash_deg", d.backlash_deg),
+                (0.0, 0.0),
+            ),
+            motor_mass: pick(
+                axis,
+                ("motor_mass_kg", d.motor_mass_kg),
+                ("motor_inertia_kgm2", d.motor_inertia_kgm2),
+                (250.0, 3.0),
+            ),
+            table_mass: pick(
+                axis,
+                ("table_mass_kg", d.table_mass_kg),
+                ("table_inertia_kgm2", d.table_inertia_kgm2),
+                (500.0, 5.0),
+            ),
+            stiffness: pick(
+                axis,
+                ("stiffness_n_per_um", d.stiffness_n_per_um),
+                ("stiffness_nm_per_rad", d.stiffness_nm_per_rad),
+                (200.0, 3.0e6),
+            ),
+            damping_ratio: d.damping_ratio.unwrap_or(0.05),
+            force_limit: pick(
+                axis,
+                ("force_limit_n", d.force_limit_n),
+                ("torque_limit_nm", d.torque_limit_nm),
+                (20_000.0, 1200.0),
+            ),
+            coulomb: pick(
+                axis,
+                ("coulomb_n", f.coulomb_n),
+                ("coulomb_nm", f.coulomb_nm),
+                (150.0, 15.0),
+            ),
+            static_ratio: f.static_ratio.unwrap_or(1.3),
+            stribeck: pick(
+                axis,
+                ("stribeck_velocity_mm_per_s", f.stribeck_velocity_mm_per_s),
+                ("stribeck_velocity_deg_per_s", f.stribeck_velocity_deg_per_s),
+                (0.5, 0.1),
+            ),
+            viscous: pick(
+                axis,
+                ("viscous_n_s_per_m", f.viscous_n_s_per_m),
+                ("viscous_nm_s_per_rad", f.viscous_nm_s_per_rad),
+                (1000.0, 5.0),
+            ),
+        }
+    }
+
+    /// The first problem found, as `(table, key, message)` with table "servo", "drive" or
+    /// "friction".
+    pub fn problem(
+        axis: Axis,
+        s: &ServoConfig,
+        d: &DriveConfig,
+        f: &FrictionConfig,
+    ) -> Option<(&'static str, &'static str, String)> {
+        let kind = if axis.is_rotary() { "rotary" } else { "linear" };
+        let other = if axis.is_rotary() { "linear" } else { "rotary" };
+        // Keys of the other kind of axis.
+        let foreign: [(&str, &str, Option<f64>, &str); 9] = if axis.is_rotary() {
+            [
+                (
+                    "servo",
+                    "following_error_limit_mm",
+                    s.following_error_limit_mm,
+                    "following_error_limit_deg",
+                ),
+                ("drive", "backlash_mm", d.backlash_mm, "backlash_deg"),
+                (
+                    "drive",
+                    "motor_mass_kg",
+                    d.motor_mass_kg,
+                    "motor_inertia_kgm2",
+                ),
+                (
+                    "drive",
+                    "table_mass_kg",
+                    d.table_mass_kg,
+                    "table_inertia_kgm2",
+                ),
+                (
+                    "drive",
+                    "stiffness_n_per_um",
+                    d.stiffness_n_per_um,
+                    "stiffness_nm_per_rad",
+                ),
+                ("drive", "force_limit_n", d.force_limit_n, "torque_limit_nm"),
+                ("friction", "coulomb_n", f.coulomb_n, "coulomb_nm"),
+                (
+                    "friction",
+                    "stribeck_velocity_mm_per_s",
+                    f.stribeck_velocity_mm_per_s,
+                    "stribeck_velocity_deg_per_s",
+                ),
+                (
+                    "friction",
+                    "viscous_n_s_per_m",
+                    f.viscous_n_s_per_m,
+                    "viscous_nm_s_per_rad",
+                ),
+            ]
+        } else {
+            [
+                (
+                    "servo",
+                    "following_error_limit_deg",
+                    s.following_error_limit_deg,
+                    "following_error_limit_mm",
+                ),
+                ("drive", "backlash_deg", d.backlash_deg, "backlash_mm"),
+                (
+                    "drive",
+                    "motor_inertia_kgm2",
+                    d.motor_inertia_kgm2,
+                    "motor_mass_kg",
+                ),
+                (
+                    "drive",
+                    "table_inertia_kgm2",
+                    d.table_inertia_kgm2,
+                    "table_mass_kg",
+                ),
+                (
+                    "drive",
+                    "stiffness_nm_per_rad",
+                    d.stiffness_nm_per_rad,
+                    "stiffness_n_per_um",
+                ),
+                (
+                    "drive",
+                    "torque_limit_nm",
+                    d.torque_limit_nm,
+                    "force_limit_n",
+                ),
+                ("friction", "coulomb_nm", f.coulomb_nm, "coulomb_n"),
+                (
+                    "friction",
+                    "stribeck_velocity_deg_per_s",
+                    f.stribeck_velocity_deg_per_s,
+                    "stribeck_velocity_mm_per_s",
+                ),
+                (
+                    "friction",
+                    "viscous_nm_s_per_rad",
+                    f.viscous_nm_s_per_rad,
+                    "viscous_n_s_per_m",
+                ),
+            ]
+        };
+        for (table, key, value, instead) in foreign {
+            if value.is_some() {
+                return Some((
+                    table,
+                    key,
+                    format!("is a {other}-axis key, but axis {axis} is {kind}; use `{instead}`"),
+                ));
+            }
+        }
+
+        let r = Resolved::new(axis, s, d, f);
+        let unit = axis.unit();
+        let finite_in = |v: f64, lo: f64, hi: f64| v.is_finite() && (lo..=hi).contains(&v);
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+        let checks: [(bool, &'static str, &'static str, String); 21] = [
+            (
+                r.model.is_some(),
+                "servo",
+                "model",
+                format!("must be \"first-order\" or \"cascade\", got {:?}", s.model),
+            ),
+            (
+                r.fully_closed.is_some(),
+                "servo",
+                "feedback",
+                format!(
+                    "must be \"semi-closed\" or \"fully-closed\", got {:?}",
+                    s.feedback
+                ),
+            ),
+            (
+                finite_in(s.kv_per_s, 1e-3, 1e4) && s.kv_per_s > 0.0,
+                "servo",
+                "kv_per_s",
+                format!(
+                    "must be a positive gain in 1/s (typically 20-60), got {}",
+                    s.kv_per_s
+                ),
+            ),
+            (
+                finite_in(s.velocity_feedforward, 0.0, 1.0),
+                "servo",
+                "velocity_feedforward",
+                format!(
+                    "must be a fraction in 0..=1, got {}",
+                    s.velocity_feedforward
+                ),
+            ),
+            (
+                finite_in(s.acceleration_feedforward, 0.0, 1.0),
+                "servo",
+                "acceleration_feedforward",
+                format!(
+                    "must be a fraction in 0..=1, got {}",
+                    s.acceleration_feedforward
+                ),
+            ),
+            (
+                positive(s.velocity_bandwidth_hz) && s.velocity_bandwidth_hz <= 1e5,
+                "servo",
+                "velocity_bandwidth_hz",
+                format!(
+                    "must be a positive frequency in Hz (typically 50-300), got {}",
+                    s.velocity_bandwidth_hz
+                ),
+            ),
+            (
+                positive(s.velocity_integral_time_ms),
+                "servo",
+                "velocity_integral_time_ms",
+                format!(
+                    "must be a positive time in ms (typically 2-20), got {}",
+                    s.velocity_integral_time_ms
+                ),
+            ),
+            (
+                finite_in(s.current_time_constant_ms, 0.0, 100.0),
+                "servo",
+                "current_time_constant_ms",
+                format!(
+                    "must be a time in 0..=100 ms (typically 0.1-0.5), got {}",
+                    s.current_time_constant_ms
+                ),
+            ),
+            (
+                positive(s.servo_period_ms) && s.servo_period_ms <= 100.0,
+                "servo",
+                "servo_period_ms",
+                format!(
+                    "must be a period in (0, 100] ms (typically 0.125-1), got {}",
+                    s.servo_period_ms
+                ),
+            ),
+            (
+                (1..=1000).contains(&s.substeps),
+                "servo",
+                "substeps",
+                format!("must be a whole number in 1..=1000, got {}", s.substeps),
+            ),
+            (
+                positive(r.fe_limit.1),
+                "servo",
+                r.fe_limit.0,
+                format!("must be a positive distance ({unit}), got {}", r.fe_limit.1),
+            ),
+            (
+                non_negative(r.backlash.1),
+                "drive",
+                r.backlash.0,
+                format!("must be >= 0 ({unit}), got {}", r.backlash.1),
+            ),
+            (
+                positive(r.motor_mass.1),
+                "drive",
+                r.motor_mass.0,
+                format!("must be positive, got {}", r.motor_mass.1),
+            ),
+            (
+                positive(r.table_mass.1),
+                "drive",
+                r.table_mass.0,
+                format!("must be positive, got {}", r.table_mass.1),
+            ),
+            (
+                positive(r.stiffness.1),
+                "drive",
+                r.stiffness.0,
+                format!("must be positive, got {}", r.stiffness.1),
+            ),
+            (
+                finite_in(r.damping_ratio, 0.0, 10.0),
+                "drive",
+                "damping_ratio",
+                format!(
+                    "must be in 0..=10 (typically 0.02-0.1), got {}",
+                    r.damping_ratio
+                ),
+            ),
+            (
+                positive(r.force_limit.1),
+                "drive",
+                r.force_limit.0,
+                format!("must be positive, got {}", r.force_limit.1),
+            ),
+            (
+                non_negative(r.coulomb.1),
+                "friction",
+                r.coulomb.0,
+                format!("must be >= 0, got {}", r.coulomb.1),
+            ),
+            (
+                finite_in(r.static_ratio, 1.0, 100.0),
+                "friction",
+                "static_ratio",
+                format!(
+                    "must be Fs/Fc >= 1 (typically 1.1-1.5), got {}",
+                    r.static_ratio
+                ),
+            ),
+            (
+                non_negative(r.stribeck.1),
+                "friction",
+                r.stribeck.0,
+                format!("must be >= 0, got {}", r.stribeck.1),
+            ),
+            (
+                non_negative(r.viscous.1),
+                "friction",
+                r.viscous.0,
+                format!("must be >= 0, got {}", r.viscous.1),
+            ),
+        ];
+        checks
+            .into_iter()
+            .find(|c| !c.0)
+            .map(|(_, table, key, message)| (table, key, message))
+    }
+}
+
+/// Checks the drive parameters of one axis; errors name the key in `[section.servo]`,
+/// `[section.drive]` or `[section.friction]` and point at its line.
+pub fn validate(
+    path: &Path,
+    text: &str,
+    section: &str,
+    axis: Axis,
+    servo: &ServoConfig,
+    drive: &DriveConfig,
+    friction: &FrictionConfig,
+) -> Result<()> {
+    match Resolved::problem(axis, servo, drive, friction) {
+        None => Ok(()),
+        Some((table, key, message)) => Err(value_error(
+            path,
+            text,
+            &format!("{section}.{table}"),
+            key,
+            message,
+        )),
+    }
+}
+
+impl DriveConfig {
+    /// The same drive with the backlash closed: what the drive would do if it were linear.
+    pub fn without_backlash(&self, axis: Axis) -> DriveConfig {
+        let mut d = self.clone();
+        if axis.is_rotary() {
+            d.backlash_deg = Some(0.0);
+        } else {
+            d.backlash_mm = Some(0.0);
+        }
+        d
+    }
+
+    /// Backlash, mm or deg, with the default for the axis's kind (0).
+    pub fn backlash(&self, axis: Axis) -> f64 {
+        if axis.is_rotary() {
+            self.backlash_deg
+        } else {
+            self.backlash_mm
+        }
+        .unwrap_or(0.0)
+    }
+}
+
+impl FrictionConfig {
+    /// The same friction without its dry part (Coulomb, static, Stribeck): viscous only,
+    /// which is linear in velocity.
+    pub fn viscous_only(&self, axis: Axis) -> FrictionConfig {
+        let mut f = self.clone();
+        if axis.is_rotary() {
+            f.coulomb_nm = Some(0.0);
+        } else {
+            f.coulomb_n = Some(0.0);
+        }
+        f
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::Error;
+
+    #[derive(Deserialize)]
+    struct Axes {
+        axes: std::collections::BTreeMap<String, Sections>,
+    }
+    #[derive(Deserialize)]
+    struct Sections {
+        #[serde(default)]
+        servo: ServoConfig,
+        #[serde(default)]
+        drive: DriveConfig,
+        #[serde(default)]
+        friction: FrictionConfig,
+    }
+
+    fn check(axis: Axis, text: &str) -> Result<()> {
+        let parsed: Axes = toml::from_str(text).expect("test TOML parses");
+        let s = &parsed.axes[&axis.to_string()];
+        validate(
+            Path::new("m.toml"),
+            text,
+            &format!("axes.{axis}"),
+            axis,
+            &s.servo,
+            &s.drive,
+            &s.friction,
+        )
+    }
+
+    fn message(e: Error) -> String {
+        match e {
+            Error::AtSource { line, message, .. } => format!("{line}: {message}"),
+            other => other.to_string(),
+        }
+    }
+
+    #[test]
+    fn defaults_are_valid_for_linear_and_rotary_axes() {
+        for axis in Axis::ALL {
+            validate(
+                Path::new("m.toml"),
+                "",
+                "axes.X",
+                axis,
+                &ServoConfig::default(),
+                &DriveConfig::default(),
+                &FrictionConfig::default(),
+            )
+            .unwrap();
+        }
+    }
+
+    #[test]
+    fn a_bad_value_points_at_its_line() {
+        let text = "[axes.X.servo]\nmodel = \"cascade\"\nkv_per_s = -3\n";
+        let m = message(check(Axis::X, text).unwrap_err());
+        assert!(
+            m.starts_with("3: `axes.X.servo.kv_per_s`: must be a positive gain"),
+            "{m}"
+        );
+        let text = "[axes.X.servo]\nmodel = \"pid\"\n";
+        assert!(
+            message(check(Axis::X, text).unwrap_err()).contains("\"first-order\" or \"cascade\"")
+        );
+        let text = "[axes.Y.servo]\nvelocity_feedforward = 1.5\n";
+        assert!(message(check(Axis::Y, text).unwrap_err()).contains("fraction in 0..=1"));
+        let text = "[axes.Y.friction]\nstatic_ratio = 0.8\n";
+        assert!(message(check(Axis::Y, text).unwrap_err())
+            .starts_with("2: `axes.Y.friction.static_ratio`"));
+        let text = "[axes.Y.drive]\ntable_mass_kg = 0\n";
+        assert!(message(check(Axis::Y, text).unwrap_err())
+            .starts_with("2: `axes.Y.drive.table_mass_kg`"));
+    }
+
+    #[test]
+    fn a_key_of_the_other_kind_of_axis_is_an_error() {
+        let m = message(check(Axis::C, "[axes.C.drive]\nbacklash_mm = 0.01\n").unwrap_err());
+        assert!(
+            m.contains("`axes.C.drive.backlash_mm`: is a linear-axis key")
+                && m.contains("use `backlash_deg`"),
+            "{m}"
+        );
+        let m = message(check(Axis::X, "[axes.X.drive]\nbacklash_deg = 0.01\n").unwrap_err());
+        assert!(m.contains("use `backlash_mm`"), "{m}");
+        let m = message(check(Axis::A, "[axes.A.friction]\ncoulomb_n = 10\n").unwrap_err());
+        assert!(m.contains("use `coulomb_nm`"), "{m}");
+        check(
+            Axis::A,
+            "[axes.A.friction]\ncoulomb_nm = 10\n[axes.A.drive]\nbacklash_deg = 0.003\n",
+        )
+        .unwrap();
+    }
+
+    /// The machine loader calls [`validate`], so a bad drive key in a machine file is
+    /// reported at its line.
+    #[test]
+    fn machine_files_report_drive_errors_at_their_line() {
+        let axis = |name: &str, extra: &str| {
+            format!("[axes.{name}]\nmin = -100\nmax = 100\nmax_velocity = 10000\nmax_acceleration = 1000\nmax_jerk = 10000\n{extra}")
+        };
+        let head = "name = \"m\"\nkinematics = \"xyz\"\n";
+        let text = format!(
+            "{head}{}{}{}",
+            axis("X", "[axes.X.servo]\nmodel = \"cascade\"\n"),
+            axis("Y", ""),
+            axis("Z", "[axes.Z.drive]\nbacklash_deg = 0.1\n")
+        );
+        let e = crate::input::machine::Machine::from_toml(Path::new("m.toml"), &text, None)
+            .unwrap_err();
+        let m = message(e);
+        assert!(
+            m.starts_with("24: `axes.Z.drive.backlash_deg`: is a rotary-axis key"),
+            "{m}"
+        );
+    }
+}

@@ -1,0 +1,281 @@
+//! Machine description files (TOML): layout, axis limits and per-axis drive parameters.
+//!
+//! Every key and its unit is documented in `docs/machine-format.md`. Unknown keys are
+//! errors that name the key and its line.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use nalgebra::Vector3;
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
+use crate::input::scene::{SceneConfig, ToolConfig};
+use crate::input::toml_text::{self, value_error};
+use crate::kinematics::{Kinematics, Layout};
+use crate::Axis;
+
+/// A machine file as written.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MachineFile {
+    /// Free text.
+    pub name: String,
+    /// "xyz", "trt-ac" or "trt-bc".
+    pub kinematics: Layout,
+    /// Machine coordinates of the pivot (where the rotary axes cross), mm.
+    #[serde(default)]
+    pub pivot_mm: [f64; 3],
+    /// Interpolator period, ms.
+    #[serde(default = "default_interpolation_period_ms")]
+    pub interpolation_period_ms: f64,
+    /// One table per axis, keyed by letter: `[axes.X]`.
+    pub axes: BTreeMap<String, AxisConfig>,
+    /// Collision-scene geometry of the machine.
+    #[serde(default)]
+    pub scene: SceneConfig,
+    /// The tool in the spindle.
+    #[serde(default)]
+    pub tool: ToolConfig,
+}
+
+fn default_interpolation_period_ms() -> f64 {
+    1.0
+}
+
+/// Limits and drive parameters of one axis. Linear axes in mm, rotary axes in deg.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisConfig {
+    /// Lower travel limit, mm or deg.
+    pub min: f64,
+    /// Upper travel limit, mm or deg.
+    pub max: f64,
+    /// A rotary axis that turns without end; `min`/`max` are then not travel limits.
+    #[serde(default)]
+    pub continuous: bool,
+    /// Velocity limit, mm/min or deg/min.
+    pub max_velocity: f64,
+    /// Acceleration limit, mm/s^2 or deg/s^2.
+    pub max_acceleration: f64,
+    /// Jerk limit, mm/s^3 or deg/s^3.
+    pub max_jerk: f64,
+    #[serde(default)]
+    pub servo: ServoConfig,
+    #[serde(default)]
+    pub drive: DriveConfig,
+    #[serde(default)]
+    pub friction: FrictionConfig,
+}
+
+impl AxisConfig {
+    /// True when `value` (mm or deg) lies within the travel, or the axis is continuous.
+    pub fn within_travel(&self, value: f64) -> bool {
+        self.continuous || (self.min..=self.max).contains(&value)
+    }
+}
+
+/// A validated machine.
+#[derive(Clone, Debug)]
+pub struct Machine {
+    pub name: String,
+    /// The file it came from.
+    pub path: PathBuf,
+    pub kinematics: Kinematics,
+    /// Interpolator period, s.
+    pub interpolation_period_s: f64,
+    axes: BTreeMap<Axis, AxisConfig>,
+    pub scene: SceneConfig,
+    pub tool: ToolConfig,
+}
+
+impl Machine {
+    /// Loads and validates a machine file.
+    pub fn load(path: &Path) -> Result<Machine> {
+        let text = toml_text::read_text(path)?;
+        Machine::from_toml(path, &text, None)
+    }
+
+    /// Parses `text` (the contents of `path`), deep-merging `overrides` over it first.
+    /// Errors in the overrides are reported against `overrides.0`, the scenario file.
+    pub fn from_toml(
+        path: &Path,
+        text: &str,
+        overrides: Option<(&Path, &str, &toml::Table)>,
+    ) -> Result<Machine> {
+        let file: MachineFile = toml_text::parse(path, text)?;
+        let Some((scenario_path, scenario_text, overrides)) = overrides else {
+            return Machine::validate(path, text, file);
+        };
+        let mut merged: toml::Table =
+            toml::from_str(text).map_err(|e| toml_text::toml_error(path, text, &e))?;
+        deep_merge(&mut merged, overrides);
+        let file: MachineFile = toml::Value::Table(merged).try_into().map_err(|e: toml::de::Error| {
+            Error::invalid(
+                scenario_path,
+                format!("[machine_overrides] does not fit the machine format: {}", e.message().trim()),
+            )
+            .with_help("[machine_overrides] takes the same keys as a machine file; see docs/machine-format.md")
+        })?;
+        // Range errors in overridden values point at the scenario file.
+        Machine::validate(scenario_path, scenario_text, file)
+    }
+
+    fn validate(path: &Path, text: &str, file: MachineFile) -> Result<Machine> {
+        let mut axes = BTreeMap::new();
+        for (name, config) in file.axes {
+            let section = format!("axes.{name}");
+            let axis = match name.chars().collect::<Vec<_>>().as_slice() {
+                [c] => Axis::from_letter(*c),
+                _ => None,
+            };
+            let Some(axis) = axis.filter(|a| file.kinematics.axes().contains(a)) else {
+                let message = format!(
+                    "the {} layout has no axis `{name}`; expected one of {}",
+                    file.kinematics.name(),
+                    axis_list(file.kinematics)
+                );
+                return Err(match toml_text::locate_key_header(text, &section) {
+                    Some(span) => Error::at(path, text, span, message, "unknown axis"),
+                    None => Error::invalid(path, message),
+                });
+            };
+            check_axis(path, text, &section, axis, &config)?;
+            axes.insert(axis, config);
+        }
+        for axis in file.kinematics.axes() {
+            if !axes.contains_key(axis) {
+                return Err(Error::invalid(
+                    path,
+                    format!(
+                        "missing table [axes.{axis}]: the {} layout needs axes {}",
+                        file.kinematics.name(),
+                        axis_list(file.kinematics)
+                    ),
+                ));
+            }
+        }
+        if !(file.interpolation_period_ms.is_finite()
+            && file.interpolation_period_ms > 0.0
+            && file.interpolation_period_ms <= 100.0)
+        {
+            return Err(value_error(
+                path,
+                text,
+                "",
+                "interpolation_period_ms",
+                "must be in (0, 100] ms".into(),
+            ));
+        }
+        if !file.pivot_mm.iter().all(|v| v.is_finite()) {
+            return Err(value_error(
+                path,
+                text,
+                "",
+                "pivot_mm",
+                "must be three finite numbers (mm)".into(),
+            ));
+        }
+        crate::input::scene::validate_machine_tables(path, text, &file.scene, &file.tool)?;
+        Ok(Machine {
+            name: file.name,
+            path: path.to_path_buf(),
+            kinematics: Kinematics::new(file.kinematics, Vector3::from(file.pivot_mm)),
+            interpolation_period_s: file.interpolation_period_ms * 1e-3,
+            axes,
+            scene: file.scene,
+            tool: file.tool,
+        })
+    }
+
+    /// The axes of this machine, in X Y Z A B C order.
+    pub fn axes(&self) -> &'static [Axis] {
+        self.kinematics.layout.axes()
+    }
+
+    /// Configuration of `axis`; panics if the machine has no such axis (a programming error:
+    /// every axis of the layout is checked present on load).
+    pub fn axis(&self, axis: Axis) -> &AxisConfig {
+        &self.axes[&axis]
+    }
+
+    pub fn has_axis(&self, axis: Axis) -> bool {
+        self.axes.contains_key(&axis)
+    }
+}
+
+fn axis_list(layout: Layout) -> String {
+    layout
+        .axes()
+        .iter()
+        .map(|a| a.to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn check_axis(path: &Path, text: &str, section: &str, axis: Axis, c: &AxisConfig) -> Result<()> {
+    let unit = axis.unit();
+    let positive = |key: &str, v: f64, what: &str| {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(value_error(
+                path,
+                text,
+                section,
+                key,
+                format!("must be a positive number ({what}), got {v}"),
+            ))
+        }
+    };
+    positive("max_velocity", c.max_velocity, &format!("{unit}/min"))?;
+    positive(
+        "max_acceleration",
+        c.max_acceleration,
+        &format!("{unit}/s^2"),
+    )?;
+    positive("max_jerk", c.max_jerk, &format!("{unit}/s^3"))?;
+    for (key, v) in [("min", c.min), ("max", c.max)] {
+        if !v.is_finite() {
+            return Err(value_error(
+                path,
+                text,
+                section,
+                key,
+                format!("must be a finite number ({unit}), got {v}"),
+            ));
+        }
+    }
+    if c.min >= c.max {
+        return Err(value_error(
+            path,
+            text,
+            section,
+            "max",
+            format!("must be greater than min ({} {unit}), got {}", c.min, c.max),
+        ));
+    }
+    if c.continuous && !axis.is_rotary() {
+        return Err(value_error(
+            path,
+            text,
+            section,
+            "continuous",
+            "only a rotary axis can be continuous".into(),
+        ));
+    }
+    crate::input::drive::validate(path, text, section, axis, &c.servo, &c.drive, &c.friction)
+}
+
+/// Merges `overlay` into `base`: tables merge key by key, any other value replaces.
+pub fn deep_merge(base: &mut toml::Table, overlay: &toml::Table) {
+    for (key, value) in overlay {
+        match (base.get_mut(key), value) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => deep_merge(b, o),
+            _ => {
+                base.insert(key.clone(), value.clone());
+            }
+        }
+    }
+}

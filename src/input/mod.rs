@@ -1,0 +1,14 @@
+//! **input** — the plain configuration of every stage, read from TOML and validated.
+//! Inputs: machine files, scenario files (paths relative to the scenario), `[machine_overrides]`.
+//! Outputs: plain values — [`Machine`], [`Scenario`], drive, scene, tool and test parameters; imports no stage.
+
+pub mod drive;
+pub mod machine;
+pub mod program;
+pub mod scenario;
+pub mod scene;
+pub mod toml_text;
+
+pub use machine::{AxisConfig, Machine};
+pub use program::{CircleTest, ConeTest, Direction, MeasuredLines, NcOptions};
+pub use scenario::{Program, Scenario};

@@ -1,0 +1,547 @@
+//! Scenario files (TOML): a machine, a program (generated or a G-code file) and options.
+//!
+//! Paths are relative to the scenario file; absolute paths work too. Unknown keys are
+//! errors that name the key and its line. See `docs/scenario-format.md`.
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::Vector3;
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::input::machine::Machine;
+use crate::input::program::{CircleTest, ConeTest, Direction, NcOptions};
+use crate::input::scene::{ConeSetup, ToolConfig, WorkpieceConfig, WorkpieceKind};
+use crate::input::toml_text::{self, value_error};
+use crate::Plane;
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScenarioFile {
+    machine: String,
+    program: ProgramSection,
+    #[serde(default)]
+    machine_overrides: Option<toml::Table>,
+    #[serde(default)]
+    simulate: SimulateSection,
+    #[serde(default)]
+    ballbar: BallbarSection,
+    /// What stands on the table; defaults to the cone frustum for a cone program.
+    workpiece: Option<WorkpieceConfig>,
+    /// The tool, replacing the machine file's `[tool]`.
+    tool: Option<ToolConfig>,
+    #[serde(default)]
+    check: CheckSection,
+}
+
+/// `[check]`: options of `mtsim check`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CheckSection {
+    /// Near-miss clearance, mm; the machine's `[scene] near_miss_mm` when absent.
+    pub near_miss_mm: Option<f64>,
+    /// Check collisions in the scene (false: axis limits only).
+    pub collisions: bool,
+}
+
+impl Default for CheckSection {
+    fn default() -> Self {
+        CheckSection {
+            near_miss_mm: None,
+            collisions: true,
+        }
+    }
+}
+
+/// `[simulate]`: options of `mtsim simulate`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimulateSection {
+    /// Interpolate with tool-centre-point control (the tip on the straight line in the
+    /// table frame, inverse kinematics every period) instead of joint space.
+    pub tcp: bool,
+    /// Write every n-th sample to trace.csv (1: every interpolation period).
+    pub trace_every: usize,
+    /// Path before and after the measured revolution, deg, so that the trace leaves out the
+    /// start and stop transients.
+    pub lead_deg: f64,
+    /// For a file program: the source lines (first, last) whose blocks the ball bar
+    /// measures; every block after the first when absent.
+    pub measure_lines: Option<[usize; 2]>,
+}
+
+impl Default for SimulateSection {
+    fn default() -> Self {
+        SimulateSection {
+            tcp: false,
+            trace_every: 1,
+            lead_deg: 20.0,
+            measure_lines: None,
+        }
+    }
+}
+
+/// `[ballbar]`: the virtual ball bar.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BallbarSection {
+    /// Table-side ball, table frame, mm; defaults to the cone's base centre or the circle's centre.
+    pub pivot_mm: Option<[f64; 3]>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProgramSection {
+    /// A G-code file.
+    file: Option<String>,
+    /// The generated cone-frustum test; with `file`, only its geometry is used (for θ).
+    cone: Option<ConeSection>,
+    /// The planar circular test (ISO 230-4).
+    circle: Option<CircleSection>,
+}
+
+/// `[program.circle]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CircleSection {
+    /// "XY", "ZX" or "YZ" (G17, G18, G19).
+    #[serde(default = "default_plane")]
+    pub plane: String,
+    pub radius_mm: f64,
+    #[serde(default = "default_feed")]
+    pub feed_mm_min: f64,
+    /// "ccw" or "cw"; see also `directions`.
+    pub direction: Option<String>,
+    /// Both directions for hysteresis: `["ccw", "cw"]`.
+    pub directions: Option<Vec<String>>,
+    pub center_mm: [f64; 3],
+}
+
+fn default_plane() -> String {
+    "XY".into()
+}
+
+/// `[program.cone]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConeSection {
+    pub half_apex_deg: f64,
+    pub inclination_deg: f64,
+    pub center_mm: [f64; 3],
+    pub ballbar_length_mm: f64,
+    #[serde(default = "default_segments")]
+    pub segments: usize,
+    #[serde(default = "default_feed")]
+    pub feed_mm_min: f64,
+    /// Write G93 inverse-time feed.
+    #[serde(default)]
+    pub inverse_time: bool,
+    /// Write a tool-centre-point (G43.4) program.
+    #[serde(default)]
+    pub tcp: bool,
+    /// Directions `simulate` runs: `["ccw"]` (default), `["cw"]` or `["ccw", "cw"]`.
+    pub directions: Option<Vec<String>>,
+}
+
+fn default_segments() -> usize {
+    360
+}
+fn default_feed() -> f64 {
+    1000.0
+}
+
+/// What a scenario runs.
+#[derive(Clone, Debug)]
+pub enum Program {
+    /// The generated cone-frustum test, run in `directions` by `simulate`.
+    Cone {
+        cone: ConeTest,
+        nc: NcOptions,
+        directions: Vec<Direction>,
+    },
+    /// The planar circular test.
+    Circle {
+        circle: CircleTest,
+        directions: Vec<Direction>,
+    },
+    /// A G-code file, with the cone geometry when the scenario gives it.
+    File {
+        path: PathBuf,
+        cone: Option<ConeTest>,
+    },
+}
+
+/// A loaded, validated scenario.
+#[derive(Clone, Debug)]
+pub struct Scenario {
+    pub path: PathBuf,
+    pub machine: Machine,
+    pub program: Program,
+    pub simulate: SimulateSection,
+    /// Table-side ball of the virtual ball bar, table frame, mm.
+    pub ballbar_pivot_mm: Option<Vector3<f64>>,
+    /// What stands on the table, with the cone filled in from the program.
+    pub workpiece: WorkpieceConfig,
+    /// The tool in the spindle (the scenario's, else the machine's).
+    pub tool: ToolConfig,
+    pub check: CheckSection,
+}
+
+impl Scenario {
+    pub fn load(path: &Path) -> Result<Scenario> {
+        let text = toml_text::read_text(path)?;
+        let file: ScenarioFile = toml_text::parse(path, &text)?;
+        let machine_path = resolve(path, &file.machine);
+        let machine_text = toml_text::read_text(&machine_path).map_err(|e| match e {
+            Error::Read { source, .. } => value_error(
+                path,
+                &text,
+                "",
+                "machine",
+                format!(
+                    "cannot read machine file {}: {source}",
+                    machine_path.display()
+                ),
+            ),
+            other => other,
+        })?;
+        let machine = Machine::from_toml(
+            &machine_path,
+            &machine_text,
+            file.machine_overrides
+                .as_ref()
+                .map(|o| (path, text.as_str(), o)),
+        )?;
+        let program = match (&file.program.file, &file.program.cone) {
+            _ if file.program.circle.is_some() => {
+                if file.program.file.is_some() || file.program.cone.is_some() {
+                    return Err(Error::invalid(
+                        path,
+                        "[program] takes one of `file`, [program.cone] or [program.circle]",
+                    ));
+                }
+                let c = file.program.circle.as_ref().expect("checked above");
+                let (circle, directions) = validate_circle(path, &text, c)?;
+                Program::Circle { circle, directions }
+            }
+            (Some(f), cone) => Program::File {
+                path: resolve(path, f),
+                cone: cone
+                    .as_ref()
+                    .map(|c| validate_cone(path, &text, c))
+                    .transpose()?
+                    .map(|(c, _)| c),
+            },
+            (None, Some(c)) => {
+                let (cone, nc) = validate_cone(path, &text, c)?;
+                let directions =
+                    parse_directions(path, &text, CONE, "directions", c.directions.as_deref())?;
+                Program::Cone {
+                    cone,
+                    nc,
+                    directions,
+                }
+            }
+            (None, None) => {
+                return Err(Error::invalid(
+                    path,
+                    "[program] needs `file = \"...\"` or a [program.cone] table",
+                )
+                .with_help("see docs/scenario-format.md"))
+            }
+        };
+        let sim = &file.simulate;
+        if sim.trace_every == 0 {
+            return Err(value_error(
+                path,
+                &text,
+                "simulate",
+                "trace_every",
+                "must be at least 1".into(),
+            ));
+        }
+        if !(sim.lead_deg.is_finite() && (0.0..=180.0).contains(&sim.lead_deg)) {
+            return Err(value_error(
+                path,
+                &text,
+                "simulate",
+                "lead_deg",
+                format!("must be in [0, 180] deg, got {}", sim.lead_deg),
+            ));
+        }
+        if let Some([a, b]) = sim.measure_lines {
+            if a == 0 || b < a {
+                return Err(value_error(path, &text, "simulate", "measure_lines", format!("expected [first, last] source lines with 1 <= first <= last, got [{a}, {b}]")));
+            }
+        }
+        if let Some(p) = file.ballbar.pivot_mm {
+            if !p.iter().all(|v| v.is_finite()) {
+                return Err(value_error(
+                    path,
+                    &text,
+                    "ballbar",
+                    "pivot_mm",
+                    "must be three finite numbers (mm)".into(),
+                ));
+            }
+        }
+        if let Some(w) = &file.workpiece {
+            w.validate(path, &text, "workpiece")?;
+        }
+        if let Some(t) = &file.tool {
+            t.validate(path, &text, "tool")?;
+        }
+        if let Some(d) = file.check.near_miss_mm {
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(value_error(
+                    path,
+                    &text,
+                    "check",
+                    "near_miss_mm",
+                    format!("must be a clearance >= 0 mm, got {d}"),
+                ));
+            }
+        }
+        let cone = match &program {
+            Program::Cone { cone, .. } => Some(*cone),
+            Program::File { cone, .. } => *cone,
+            Program::Circle { .. } => None,
+        };
+        let mut workpiece = file.workpiece.clone().unwrap_or_else(|| WorkpieceConfig {
+            kind: if cone.is_some() {
+                WorkpieceKind::ConeFrustum
+            } else {
+                WorkpieceKind::None
+            },
+            ..WorkpieceConfig::default()
+        });
+        if let Some(c) = cone {
+            workpiece.cone = ConeSetup {
+                half_apex_deg: c.half_apex_deg,
+                inclination_deg: c.inclination_deg,
+                center_mm: c.center_mm.into(),
+                ballbar_length_mm: c.ballbar_length_mm,
+            };
+        } else if workpiece.kind != WorkpieceKind::None {
+            return Err(value_error(
+                path,
+                &text,
+                "workpiece",
+                "kind",
+                "a cone-frustum or ball-bar workpiece needs a [program.cone]".into(),
+            ));
+        }
+        Ok(Scenario {
+            path: path.to_path_buf(),
+            tool: file.tool.unwrap_or_else(|| machine.tool.clone()),
+            machine,
+            program,
+            simulate: file.simulate,
+            ballbar_pivot_mm: file.ballbar.pivot_mm.map(Vector3::from),
+            workpiece,
+            check: file.check,
+        })
+    }
+
+    /// The cone geometry, if the scenario has one.
+    pub fn cone(&self) -> Option<&ConeTest> {
+        match &self.program {
+            Program::Cone { cone, .. } => Some(cone),
+            Program::File { cone, .. } => cone.as_ref(),
+            Program::Circle { .. } => None,
+        }
+    }
+}
+
+/// A path from a scenario, relative to the scenario's folder unless absolute.
+pub fn resolve(scenario: &Path, relative: &str) -> PathBuf {
+    let p = Path::new(relative);
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        scenario.parent().unwrap_or(Path::new(".")).join(p)
+    }
+}
+
+const CONE: &str = "program.cone";
+
+fn validate_cone(path: &Path, text: &str, c: &ConeSection) -> Result<(ConeTest, NcOptions)> {
+    let err = |key: &str, message: String| value_error(path, text, CONE, key, message);
+    let cone = ConeTest {
+        half_apex_deg: c.half_apex_deg,
+        inclination_deg: c.inclination_deg,
+        center_mm: Vector3::from(c.center_mm),
+        ballbar_length_mm: c.ballbar_length_mm,
+    };
+    check_cone(&cone).map_err(|(key, message)| err(key, message))?;
+    if !(3..=1_000_000).contains(&c.segments) {
+        return Err(err(
+            "segments",
+            format!("must be between 3 and 1000000 blocks, got {}", c.segments),
+        ));
+    }
+    if !(c.feed_mm_min.is_finite() && c.feed_mm_min > 0.0) {
+        return Err(err(
+            "feed_mm_min",
+            format!("must be a positive feed in mm/min, got {}", c.feed_mm_min),
+        ));
+    }
+    let nc = NcOptions {
+        segments: c.segments,
+        feed_mm_min: c.feed_mm_min,
+        inverse_time: c.inverse_time,
+        tcp: c.tcp,
+        lead_deg: 0.0,
+        clockwise: false,
+    };
+    Ok((cone, nc))
+}
+
+/// Checks the cone geometry; on failure gives the offending key and what was expected.
+pub fn check_cone(cone: &ConeTest) -> std::result::Result<(), (&'static str, String)> {
+    if !(cone.half_apex_deg > 0.0 && cone.half_apex_deg < 90.0) {
+        return Err((
+            "half_apex_deg",
+            format!(
+                "the half apex angle must be in (0, 90) deg, got {}",
+                cone.half_apex_deg
+            ),
+        ));
+    }
+    if !(cone.inclination_deg > -90.0 && cone.inclination_deg < 90.0) {
+        return Err((
+            "inclination_deg",
+            format!(
+                "the inclination must be in (-90, 90) deg, got {}",
+                cone.inclination_deg
+            ),
+        ));
+    }
+    if !cone.center_mm.iter().all(|v| v.is_finite()) {
+        return Err((
+            "center_mm",
+            "must be three finite numbers [XT, YT, ZT] in mm".into(),
+        ));
+    }
+    if !(cone.ballbar_length_mm.is_finite() && cone.ballbar_length_mm > 0.0) {
+        return Err((
+            "ballbar_length_mm",
+            format!(
+                "must be a positive length in mm, got {}",
+                cone.ballbar_length_mm
+            ),
+        ));
+    }
+    Ok(())
+}
+
+const CIRCLE: &str = "program.circle";
+
+fn validate_circle(
+    path: &Path,
+    text: &str,
+    c: &CircleSection,
+) -> Result<(CircleTest, Vec<Direction>)> {
+    let err = |key: &str, message: String| value_error(path, text, CIRCLE, key, message);
+    let plane = match c.plane.to_ascii_uppercase().as_str() {
+        "XY" | "G17" => Plane::XY,
+        "ZX" | "XZ" | "G18" => Plane::ZX,
+        "YZ" | "G19" => Plane::YZ,
+        other => {
+            return Err(err(
+                "plane",
+                format!("expected \"XY\", \"ZX\" or \"YZ\", got \"{other}\""),
+            ))
+        }
+    };
+    if !(c.radius_mm.is_finite() && c.radius_mm > 0.0) {
+        return Err(err(
+            "radius_mm",
+            format!("must be a positive radius in mm, got {}", c.radius_mm),
+        ));
+    }
+    if !(c.feed_mm_min.is_finite() && c.feed_mm_min > 0.0) {
+        return Err(err(
+            "feed_mm_min",
+            format!("must be a positive feed in mm/min, got {}", c.feed_mm_min),
+        ));
+    }
+    if !c.center_mm.iter().all(|v| v.is_finite()) {
+        return Err(err(
+            "center_mm",
+            "must be three finite numbers [X, Y, Z] in mm".into(),
+        ));
+    }
+    let directions = match (&c.direction, &c.directions) {
+        (Some(_), Some(_)) => {
+            return Err(err(
+                "directions",
+                "give `direction` or `directions`, not both".into(),
+            ))
+        }
+        (Some(d), None) => parse_directions(
+            path,
+            text,
+            CIRCLE,
+            "direction",
+            Some(std::slice::from_ref(d)),
+        )?,
+        (None, d) => parse_directions(path, text, CIRCLE, "directions", d.as_deref())?,
+    };
+    let circle = CircleTest {
+        plane,
+        center_mm: c.center_mm,
+        radius_mm: c.radius_mm,
+        feed_mm_min: c.feed_mm_min,
+    };
+    Ok((circle, directions))
+}
+
+/// `["ccw", "cw"]` → directions; default `["ccw"]`; no repeats.
+fn parse_directions(
+    path: &Path,
+    text: &str,
+    section: &str,
+    key: &str,
+    words: Option<&[String]>,
+) -> Result<Vec<Direction>> {
+    let Some(words) = words else {
+        return Ok(vec![Direction::Ccw]);
+    };
+    let mut out = Vec::new();
+    for w in words {
+        let d = match w.to_ascii_lowercase().as_str() {
+            "ccw" => Direction::Ccw,
+            "cw" => Direction::Cw,
+            other => {
+                return Err(value_error(
+                    path,
+                    text,
+                    section,
+                    key,
+                    format!("expected \"ccw\" or \"cw\", got \"{other}\""),
+                ))
+            }
+        };
+        if out.contains(&d) || out.len() == 2 {
+            return Err(value_error(
+                path,
+                text,
+                section,
+                key,
+                "each direction at most once".into(),
+            ));
+        }
+        out.push(d);
+    }
+    if out.is_empty() {
+        return Err(value_error(
+            path,
+            text,
+            section,
+            key,
+            "needs at least one direction".into(),
+        ));
+    }
+    Ok(out)
+}

@@ -1,0 +1,784 @@
+//! The virtual ball bar: deviation, the angle theta, streamed runs, ISO 230-4 figures, and
+//! spike and step detection with attribution to the reversing axis.
+//!
+//! # Deviation
+//!
+//! One ball sits at `pivot` on the table (table frame T), the other at the tool tip. With
+//! actual axis positions q, both are expressed in the machine frame M:
+//!
+//! ```text
+//! p_tool  = (X, Y, Z)                         (actual tool tip)
+//! p_pivot = pivot_M + R(q) pivot              (Kinematics::table_to_machine)
+//! dL      = |p_tool - p_pivot| - L            (mm)
+//! ```
+//!
+//! # Theta
+//!
+//! A [`CircleFrame`] holds the measured circle's frame in the table frame: an origin o and a
+//! rotation R whose columns are the frame's axes. A table point p has frame coordinates
+//! `v = R^T (p - o)` and `theta = atan2(v_y, v_x)` in [0, 360) deg: counter-clockwise from the
+//! frame's +X seen from its +Z. The cone frame is `o = O`, `R = Ry(-beta)`; a planar circle
+//! in G17/G18/G19 uses the plane's two axes in G-code order (X→Y, Z→X, Y→Z).
+//!
+//! # Runs and centring
+//!
+//! A [`BallbarRun`] keeps, in O(1) memory in the number of samples, fixed bins of
+//! [`BIN_DEG`] and the normal-equation sums of the least-squares fit
+//! `dL = r0 + a cos theta + b sin theta`. Each bin holds its sample count and the sums of
+//! dL, cos theta and sin theta, so the *centred* bin mean
+//! `(sum dL - a sum cos - b sum sin) / n` is exact for the samples it holds. Empty bins are
+//! filled by linear interpolation between their filled neighbours (around the circle).
+//!
+//! # Figures (ISO 230-4), on the binned trace
+//!
+//! - G, circular deviation: max - min of the centred trace `dL - a cos - b sin`.
+//! - F, radial deviation: max and min of the raw trace dL (relative to the nominal length).
+//! - H, circular hysteresis: max over theta of `|dL_ccw - dL_cw|`. Both runs share one
+//!   pivot, so this is the difference about a common centre.
+//!
+//! # Events
+//!
+//! See [`analyse`]: steps are persistent level changes found with far, robust windows; spikes
+//! are short excursions above a smooth local baseline; each is attributed to the axis whose
+//! reversal angle is nearest to its onset.
+
+use nalgebra::{DMatrix, DVector, Matrix3, Point3, Rotation3, Vector3};
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::input::program::{ConeTest, Direction};
+use crate::kinematics::Kinematics;
+use crate::Plane;
+use crate::{Axis, AxisVec};
+
+/// Width of one theta bin, deg.
+pub const BIN_DEG: f64 = 0.05;
+/// Number of theta bins in one revolution.
+pub const N_BINS: usize = 7200;
+/// Largest angular gap between filled bins a run may have, deg.
+pub const MAX_GAP_DEG: f64 = 10.0;
+/// Highest harmonic of the smooth shape removed before looking for events.
+pub const SMOOTH_ORDER: usize = 6;
+/// Half-width of the running-median baseline for spikes, deg.
+pub const BASELINE_HALF_WINDOW_DEG: f64 = 5.0;
+/// Steps: the level on each side is the median over a window this far from the step, deg...
+pub const STEP_GAP_DEG: f64 = 3.0;
+/// ...and this wide, deg.
+pub const STEP_WINDOW_DEG: f64 = 6.0;
+/// Events must exceed this many noise standard deviations...
+pub const NOISE_FACTOR: f64 = 6.0;
+/// ...and at least this height for a spike, um...
+pub const SPIKE_FLOOR_UM: f64 = 0.5;
+/// ...or this height for a step, um.
+pub const STEP_FLOOR_UM: f64 = 1.0;
+/// Standard uncertainty of an event's onset angle, deg, used for the attribution confidence.
+pub const ONSET_SIGMA_DEG: f64 = 0.5;
+/// An event farther than this from every reversal angle is attributed to no axis, deg.
+pub const ATTRIBUTION_MAX_DEG: f64 = 3.0;
+
+/// Ball-bar deviation `|p_tool - p_pivot| - L`, mm, both balls in the machine frame.
+///
+/// `q_actual`: actual axis positions (mm, deg); the tool tip is its (X, Y, Z).
+/// `pivot_table_mm`: the table ball, table frame, mm. `length_mm`: nominal bar length L.
+pub fn deviation_mm(
+    kin: &Kinematics,
+    q_actual: &AxisVec,
+    pivot_table_mm: &Point3<f64>,
+    length_mm: f64,
+) -> f64 {
+    let tool = Point3::new(q_actual[Axis::X], q_actual[Axis::Y], q_actual[Axis::Z]);
+    let pivot = kin.table_to_machine(q_actual, pivot_table_mm);
+    (tool - pivot).norm() - length_mm
+}
+
+/// The measured circle's frame in the table frame: origin (mm) and orientation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CircleFrame {
+    /// Origin, table frame, mm.
+    pub origin_mm: Vector3<f64>,
+    /// Frame axes as columns, in table coordinates.
+    pub rotation: Rotation3<f64>,
+}
+
+impl CircleFrame {
+    /// The cone frame: origin O = `center_mm` (table frame), rotated by `Ry(-inclination)`.
+    pub fn cone(center_mm: [f64; 3], inclination_deg: f64) -> Self {
+        CircleFrame {
+            origin_mm: Vector3::from(center_mm),
+            rotation: Rotation3::from_axis_angle(&Vector3::y_axis(), -inclination_deg.to_radians()),
+        }
+    }
+
+    /// A circle in `plane` about `center_mm`; theta runs from the plane's first axis toward
+    /// its second (XY: X→Y, ZX: Z→X, YZ: Y→Z), counter-clockwise seen from the normal.
+    pub fn planar(center_mm: [f64; 3], plane: Plane) -> Self {
+        let (x, y, z) = match plane {
+            Plane::XY => (Vector3::x(), Vector3::y(), Vector3::z()),
+            Plane::ZX => (Vector3::z(), Vector3::x(), Vector3::y()),
+            Plane::YZ => (Vector3::y(), Vector3::z(), Vector3::x()),
+        };
+        CircleFrame {
+            origin_mm: Vector3::from(center_mm),
+            rotation: Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, y, z])),
+        }
+    }
+
+    /// The measured circle of a cone-frustum test.
+    pub fn of_cone(cone: &ConeTest) -> Self {
+        CircleFrame::cone(cone.center_mm.into(), cone.inclination_deg)
+    }
+
+    /// Theta of a table-frame point, deg in [0, 360).
+    pub fn theta_deg(&self, p_table: &Point3<f64>) -> f64 {
+        let v = self.rotation.inverse() * (p_table.coords - self.origin_mm);
+        wrap_360(v.y.atan2(v.x).to_degrees())
+    }
+}
+
+/// Least-squares centring `dL = r0 + a cos theta + b sin theta`, um.
+///
+/// (a, b) is the set-up offset of the pivot from the circle's centre, projected on the
+/// frame's X and Y; r0 is the mean length error.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Centring {
+    pub r0_um: f64,
+    pub a_um: f64,
+    pub b_um: f64,
+}
+
+impl Centring {
+    /// The fit at `theta_deg`, without r0, um.
+    pub fn offset_um(&self, theta_deg: f64) -> f64 {
+        let t = theta_deg.to_radians();
+        self.a_um * t.cos() + self.b_um * t.sin()
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct Bin {
+    n: u64,
+    sum_um: f64,
+    sum_cos: f64,
+    sum_sin: f64,
+}
+
+/// One direction of a ball-bar test, streamed: fixed bins plus the centring sums.
+#[derive(Clone, Debug)]
+pub struct BallbarRun {
+    direction: Direction,
+    bins: Vec<Bin>,
+    /// Normal-equation sums: `sum phi phi^T` and `sum phi dL`, phi = (1, cos, sin).
+    normal: Matrix3<f64>,
+    rhs: Vector3<f64>,
+    samples: u64,
+    rejected: u64,
+}
+
+impl BallbarRun {
+    pub fn new(direction: Direction) -> Self {
+        BallbarRun {
+            direction,
+            bins: vec![Bin::default(); N_BINS],
+            normal: Matrix3::zeros(),
+            rhs: Vector3::zeros(),
+            samples: 0,
+            rejected: 0,
+        }
+    }
+
+    pub fn direction(&self) -> Direction {
+        self.direction
+    }
+
+    /// Adds one sample: theta on the nominal path (deg, any range) and dL (um).
+    /// Non-finite samples are counted in [`BallbarRun::rejected`] and otherwise ignored.
+    pub fn push(&mut self, theta_deg: f64, deviation_um: f64) {
+        if !theta_deg.is_finite() || !deviation_um.is_finite() {
+            self.rejected += 1;
+            return;
+        }
+        let t = wrap_360(theta_deg);
+        let (s, c) = t.to_radians().sin_cos();
+        let bin = &mut self.bins[bin_index(t)];
+        bin.n += 1;
+        bin.sum_um += deviation_um;
+        bin.sum_cos += c;
+        bin.sum_sin += s;
+        let phi = Vector3::new(1.0, c, s);
+        self.normal += phi * phi.transpose();
+        self.rhs += phi * deviation_um;
+        self.samples += 1;
+    }
+
+    /// Samples accepted so far.
+    pub fn samples(&self) -> u64 {
+        self.samples
+    }
+
+    /// Non-finite samples ignored so far.
+    pub fn rejected(&self) -> u64 {
+        self.rejected
+    }
+
+    /// The least-squares centring. With fewer than three distinct angles the fit is
+    /// singular and only r0 (the mean) is returned.
+    pub fn centring(&self) -> Centring {
+        if self.samples == 0 {
+            return Centring::default();
+        }
+        match self.normal.try_inverse() {
+            Some(inv) if self.normal.determinant().abs() > 1e-9 * (self.samples as f64).powi(3) => {
+                let x = inv * self.rhs;
+                Centring {
+                    r0_um: x[0],
+                    a_um: x[1],
+                    b_um: x[2],
+                }
+            }
+            _ => Centring {
+                r0_um: self.rhs[0] / self.samples as f64,
+                ..Centring::default()
+            },
+        }
+    }
+
+    /// The binned trace over one revolution: `N_BINS` values, um, at bin centres
+    /// `(i + 0.5) BIN_DEG`; raw dL, or with `a cos + b sin` removed when `centred`.
+    /// Empty bins are interpolated. Errors when the samples leave a gap over
+    /// [`MAX_GAP_DEG`].
+    pub fn trace_um(&self, centred: bool) -> Result<Vec<f64>> {
+        let fit = if centred {
+            self.centring()
+        } else {
+            Centring::default()
+        };
+        let means: Vec<Option<f64>> = self
+            .bins
+            .iter()
+            .map(|b| {
+                (b.n > 0)
+                    .then(|| (b.sum_um - fit.a_um * b.sum_cos - fit.b_um * b.sum_sin) / b.n as f64)
+            })
+            .collect();
+        self.fill(&means)
+    }
+
+    /// Which bins hold at least one sample.
+    fn filled_mask(&self) -> Vec<bool> {
+        self.bins.iter().map(|b| b.n > 0).collect()
+    }
+
+    fn fill(&self, means: &[Option<f64>]) -> Result<Vec<f64>> {
+        let filled: Vec<usize> = (0..N_BINS).filter(|&i| means[i].is_some()).collect();
+        let direction = match self.direction {
+            Direction::Ccw => "CCW",
+            Direction::Cw => "CW",
+        };
+        if filled.len() < 3 {
+            return Err(Error::usage(format!(
+                "the {direction} ball-bar run holds {} usable samples; push samples over one \
+                 full revolution of the measured circle",
+                self.samples
+            )));
+        }
+        let mut out = vec![0.0; N_BINS];
+        for (k, &i) in filled.iter().enumerate() {
+            let j = filled[(k + 1) % filled.len()];
+            let gap = (j + N_BINS - i - 1) % N_BINS + 1; // bins from i to j, going up
+            if gap as f64 * BIN_DEG > MAX_GAP_DEG {
+                return Err(Error::usage(format!(
+                    "the {direction} ball-bar run has no samples between theta {:.2} and {:.2} \
+                     deg; push samples over one full revolution (gaps up to {MAX_GAP_DEG} deg \
+                     are interpolated)",
+                    (i as f64 + 0.5) * BIN_DEG,
+                    (j as f64 + 0.5) * BIN_DEG
+                )));
+            }
+            let (yi, yj) = (means[i].unwrap_or(0.0), means[j].unwrap_or(0.0));
+            for s in 0..gap {
+                out[(i + s) % N_BINS] = yi + (yj - yi) * s as f64 / gap as f64;
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// Spike or step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EventKind {
+    /// A short excursion that returns to the baseline.
+    Spike,
+    /// A persistent level change.
+    Step,
+}
+
+/// A spike or step found in a centred trace.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct TraceEvent {
+    /// Onset angle, deg: where the event leaves the baseline (a step's position).
+    pub theta_deg: f64,
+    /// Angle of the peak (spike) or the step position, deg.
+    pub peak_deg: f64,
+    /// Height, um: a spike's signed peak above the baseline; a step's signed level change in
+    /// the direction of travel.
+    pub height_um: f64,
+    /// Full width at half height, deg (0 for a step).
+    pub width_deg: f64,
+    pub kind: EventKind,
+    pub direction: Direction,
+    /// The axis whose reversal angle is nearest the onset (within [`ATTRIBUTION_MAX_DEG`]).
+    pub axis: Option<Axis>,
+    /// 0..1: the Gaussian likelihood share of that axis among all axes' nearest reversals
+    /// (onset uncertainty [`ONSET_SIGMA_DEG`]) and "no axis" at [`ATTRIBUTION_MAX_DEG`].
+    pub confidence: f64,
+}
+
+/// Figures of one run.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct RunFigures {
+    pub direction: Direction,
+    pub samples: u64,
+    pub centring: Centring,
+    pub circular_deviation_um: f64,
+    pub radial_max_um: f64,
+    pub radial_min_um: f64,
+    /// Noise standard deviation estimated from the binned trace, um.
+    pub noise_um: f64,
+}
+
+/// The ISO 230-4 figures and the events of one test.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BallbarResult {
+    /// G: the largest over the runs, um.
+    pub circular_deviation_um: f64,
+    /// F max: the largest over the runs, um.
+    pub radial_max_um: f64,
+    /// F min: the smallest over the runs, um.
+    pub radial_min_um: f64,
+    /// H between the first CCW and the first CW run, um; None with one direction.
+    pub hysteresis_um: Option<f64>,
+    /// Spikes and steps of all runs, by run then theta.
+    #[serde(rename = "spikes")]
+    pub events: Vec<TraceEvent>,
+    pub runs: Vec<RunFigures>,
+}
+
+/// Computes G, F, H and the events. `reversals`: each axis's analytic reversal angles, deg.
+///
+/// Event detection on each run's centred trace c (bins of [`BIN_DEG`]):
+/// 1. Noise sigma = 1.4826 MAD of the differences of filled neighbouring bins / sqrt 2.
+/// 2. Smooth shape and steps, fitted jointly by least squares: the Fourier series up to
+///    harmonic [`SMOOTH_ORDER`] plus one jump per step (so a step does not bend the smooth
+///    fit). Steps are added greedily: in the residual r,
+///    `S(i) = median(r, right window) - median(r, left window)`, with windows
+///    [`STEP_WINDOW_DEG`] wide starting [`STEP_GAP_DEG`] from i. A spike has decayed inside
+///    the gap and a median barely sees it, while a step gives a trapezoid of height h
+///    centred on it. The largest region with |S| above the threshold becomes a step at the
+///    middle of its part above half its peak; refit; repeat until none is left. The step's
+///    height is its fitted jump.
+/// 3. Spikes: the residual of that fit minus its running median (half-window
+///    [`BASELINE_HALF_WINDOW_DEG`]); a spike is a region above half the threshold that
+///    reaches the threshold. The onset is where, walking back in time from the peak, the
+///    residual falls below 10 % of the height. Spikes within 1.5 deg of a step belong to
+///    it and are not reported.
+///
+/// Threshold: `max(NOISE_FACTOR sigma, floor)`.
+pub fn analyse(runs: &[BallbarRun], reversals: &[(Axis, Vec<f64>)]) -> Result<BallbarResult> {
+    analyse_events_of(runs, runs, reversals)
+}
+
+/// As [`analyse`], but the spikes and steps are detected in `event_runs` instead of `runs`:
+/// a simulation passes the nonlinear signature of each run (trace minus a linear twin), so
+/// that the linear response to the program is not taken for events. The figures still come
+/// from `runs`.
+pub fn analyse_events_of(
+    runs: &[BallbarRun],
+    event_runs: &[BallbarRun],
+    reversals: &[(Axis, Vec<f64>)],
+) -> Result<BallbarResult> {
+    if runs.is_empty() {
+        return Err(Error::usage(
+            "no ball-bar run to analyse; record at least one direction",
+        ));
+    }
+    let mut figures = Vec::with_capacity(runs.len());
+    let mut events = Vec::new();
+    let mut raw_traces = Vec::with_capacity(runs.len());
+    for run in runs {
+        let raw = run.trace_um(false)?;
+        let centred = run.trace_um(true)?;
+        let noise = noise_sigma(&centred, &run.filled_mask());
+        let (cmin, cmax) = min_max(&centred);
+        let (rmin, rmax) = min_max(&raw);
+        figures.push(RunFigures {
+            direction: run.direction,
+            samples: run.samples,
+            centring: run.centring(),
+            circular_deviation_um: cmax - cmin,
+            radial_max_um: rmax,
+            radial_min_um: rmin,
+            noise_um: noise,
+        });
+        raw_traces.push(raw);
+    }
+    for run in event_runs {
+        let centred = run.trace_um(true)?;
+        let noise = noise_sigma(&centred, &run.filled_mask());
+        events.extend(detect_events(&centred, noise, run.direction, reversals));
+    }
+    let first = |d: Direction| runs.iter().position(|r| r.direction == d);
+    let hysteresis_um = match (first(Direction::Ccw), first(Direction::Cw)) {
+        (Some(i), Some(j)) => Some(
+            raw_traces[i]
+                .iter()
+                .zip(&raw_traces[j])
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max),
+        ),
+        _ => None,
+    };
+    Ok(BallbarResult {
+        circular_deviation_um: figures
+            .iter()
+            .map(|f| f.circular_deviation_um)
+            .fold(f64::NEG_INFINITY, f64::max),
+        radial_max_um: figures
+            .iter()
+            .map(|f| f.radial_max_um)
+            .fold(f64::NEG_INFINITY, f64::max),
+        radial_min_um: figures
+            .iter()
+            .map(|f| f.radial_min_um)
+            .fold(f64::INFINITY, f64::min),
+        hysteresis_um,
+        events,
+        runs: figures,
+    })
+}
+
+/// The axis whose reversal angle is nearest `theta_deg`, and the confidence (see
+/// [`TraceEvent::confidence`]).
+pub fn attribute(theta_deg: f64, reversals: &[(Axis, Vec<f64>)]) -> (Option<Axis>, f64) {
+    let weight = |d: f64| (-0.5 * (d / ONSET_SIGMA_DEG).powi(2)).exp();
+    let mut best: Option<(Axis, f64)> = None;
+    let mut total = weight(ATTRIBUTION_MAX_DEG);
+    for (axis, angles) in reversals {
+        let Some(d) = angles
+            .iter()
+            .filter(|a| a.is_finite())
+            .map(|&a| angle_distance_deg(theta_deg, a))
+            .min_by(f64::total_cmp)
+        else {
+            continue;
+        };
+        total += weight(d);
+        if best.is_none_or(|(_, bd)| d < bd) {
+            best = Some((*axis, d));
+        }
+    }
+    match best {
+        Some((axis, d)) if d <= ATTRIBUTION_MAX_DEG => (Some(axis), weight(d) / total),
+        _ => (None, 0.0),
+    }
+}
+
+/// Unsigned angle between two directions, deg in [0, 180].
+pub fn angle_distance_deg(a: f64, b: f64) -> f64 {
+    ((a - b + 180.0).rem_euclid(360.0) - 180.0).abs()
+}
+
+fn wrap_360(deg: f64) -> f64 {
+    let t = deg.rem_euclid(360.0);
+    if t >= 360.0 {
+        0.0
+    } else {
+        t
+    }
+}
+
+fn bin_index(theta_deg: f64) -> usize {
+    ((theta_deg / BIN_DEG) as usize).min(N_BINS - 1)
+}
+
+fn bins(deg: f64) -> usize {
+    (deg / BIN_DEG).round() as usize
+}
+
+fn min_max(v: &[f64]) -> (f64, f64) {
+    v.iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+            (lo.min(x), hi.max(x))
+        })
+}
+
+fn median(buf: &mut [f64]) -> f64 {
+    let mid = buf.len() / 2;
+    let (_, m, _) = buf.select_nth_unstable_by(mid, f64::total_cmp);
+    *m
+}
+
+/// For every i, the median of `v[i + offset .. i + offset + len]` (indices around the
+/// circle; the upper median for even `len`), as [`median`] gives it. The window is kept
+/// sorted and slid one bin at a time: one removal and one insertion per bin.
+fn running_circular_median(v: &[f64], offset: isize, len: usize) -> Vec<f64> {
+    let n = v.len() as isize;
+    let at = |k: isize| v[k.rem_euclid(n) as usize];
+    let mut window: Vec<f64> = (0..len as isize).map(|k| at(offset + k)).collect();
+    window.sort_by(f64::total_cmp);
+    let mut out = Vec::with_capacity(v.len());
+    for i in 0..n {
+        if i > 0 {
+            let leaving = at(i - 1 + offset);
+            let pos = window.partition_point(|x| x.total_cmp(&leaving).is_lt());
+            window.remove(pos);
+            let entering = at(i + offset + len as isize - 1);
+            let pos = window.partition_point(|x| x.total_cmp(&entering).is_lt());
+            window.insert(pos, entering);
+        }
+        out.push(window[len / 2]);
+    }
+    out
+}
+
+/// Noise standard deviation from the differences of neighbouring filled bins, um.
+fn noise_sigma(trace: &[f64], filled: &[bool]) -> f64 {
+    let idx: Vec<usize> = (0..trace.len()).filter(|&i| filled[i]).collect();
+    let mut diffs: Vec<f64> = idx
+        .iter()
+        .zip(idx.iter().cycle().skip(1))
+        .map(|(&i, &j)| (trace[j] - trace[i]).abs())
+        .collect();
+    if diffs.is_empty() {
+        return 0.0;
+    }
+    1.4826 * median(&mut diffs) / 2f64.sqrt()
+}
+
+/// A step at the boundary before bin `index` (angle `index * BIN_DEG`), height in
+/// increasing theta, um.
+#[derive(Clone, Copy, Debug)]
+struct Step {
+    index: usize,
+    height_um: f64,
+}
+
+/// The smooth shape plus the steps, fitted jointly by least squares to the trace `v`:
+/// the Fourier series up to [`SMOOTH_ORDER`] and, per step at bin k, the basis
+/// `u_k(i) = [i >= k] - i/N` (a unit jump at k, made periodic by a ramp). Returns the fit
+/// and the step heights (um, in the order of `step_indices`).
+fn fit_shape(v: &[f64], step_indices: &[usize]) -> (Vec<f64>, Vec<f64>) {
+    let n = v.len();
+    let p = 1 + 2 * SMOOTH_ORDER + step_indices.len();
+    let column = |i: usize, j: usize| -> f64 {
+        if j == 0 {
+            1.0
+        } else if j <= 2 * SMOOTH_ORDER {
+            let k = j.div_ceil(2);
+            let angle = 2.0 * std::f64::consts::PI * ((k * i) % n) as f64 / n as f64;
+            if j % 2 == 1 {
+                angle.cos()
+            } else {
+                angle.sin()
+            }
+        } else {
+            let k = step_indices[j - 1 - 2 * SMOOTH_ORDER];
+            f64::from(u8::from(i >= k)) - i as f64 / n as f64
+        }
+    };
+    let a = DMatrix::from_fn(n, p, column);
+    let b = DVector::from_column_slice(v);
+    let at = a.transpose();
+    let x = match (&at * &a).cholesky() {
+        Some(ch) => ch.solve(&(&at * &b)),
+        None => DVector::zeros(p),
+    };
+    let fit = (&a * &x).iter().copied().collect();
+    let heights = x.iter().skip(1 + 2 * SMOOTH_ORDER).copied().collect();
+    (fit, heights)
+}
+
+/// The far-window step statistic `S(i) = median(right) - median(left)` at each boundary.
+fn step_statistic(r: &[f64]) -> Vec<f64> {
+    let (gap, width) = (bins(STEP_GAP_DEG) as isize, bins(STEP_WINDOW_DEG));
+    let right = running_circular_median(r, gap, width);
+    let left = running_circular_median(r, -gap - width as isize, width);
+    right.iter().zip(&left).map(|(a, b)| a - b).collect()
+}
+
+/// The position of the largest step in `s` above `threshold`: the middle of the part of its
+/// region above half its peak.
+fn largest_step(s: &[f64], threshold: f64) -> Option<usize> {
+    let mut best: Option<(f64, usize)> = None;
+    for sign in [1.0, -1.0] {
+        for region in circular_regions(s.len(), |i| sign * s[i] > threshold) {
+            let peak = region
+                .iter()
+                .map(|&i| sign * s[i])
+                .fold(f64::NEG_INFINITY, f64::max);
+            let upper: Vec<usize> = (0..region.len())
+                .filter(|&k| sign * s[region[k]] >= 0.5 * peak)
+                .collect();
+            let index = region[(upper[0] + upper[upper.len() - 1]) / 2];
+            if best.is_none_or(|(p, _)| peak > p) {
+                best = Some((peak, index));
+            }
+        }
+    }
+    best.map(|(_, index)| index)
+}
+
+/// Greedy step search: fit the smooth shape and the steps found so far, look for the
+/// largest remaining step in the residual, add it, refit; until none is above `threshold`.
+/// Returns the steps (sorted by index) and the final joint fit.
+fn find_steps(c: &[f64], threshold: f64) -> (Vec<Step>, Vec<f64>) {
+    const MAX_STEPS: usize = 16;
+    let mut indices: Vec<usize> = Vec::new();
+    let (mut fit, mut heights) = fit_shape(c, &indices);
+    while indices.len() < MAX_STEPS {
+        let r: Vec<f64> = c.iter().zip(&fit).map(|(x, f)| x - f).collect();
+        let Some(index) = largest_step(&step_statistic(&r), threshold) else {
+            break;
+        };
+        let taken = indices.iter().any(|&k| {
+            angle_distance_deg(k as f64 * BIN_DEG, index as f64 * BIN_DEG) < STEP_GAP_DEG
+        });
+        if taken {
+            break;
+        }
+        indices.push(index);
+        (fit, heights) = fit_shape(c, &indices);
+    }
+    let mut steps: Vec<Step> = indices
+        .into_iter()
+        .zip(heights)
+        .map(|(index, height_um)| Step { index, height_um })
+        .collect();
+    steps.sort_by_key(|s| s.index);
+    (steps, fit)
+}
+
+/// Contiguous runs (around the circle) of indices where `inside(i)`; each as a list of
+/// indices in increasing order from its start.
+fn circular_regions(n: usize, inside: impl Fn(usize) -> bool) -> Vec<Vec<usize>> {
+    let Some(start) = (0..n).find(|&i| !inside(i)) else {
+        return Vec::new();
+    };
+    let mut regions = Vec::new();
+    let mut current: Vec<usize> = Vec::new();
+    for k in 1..=n {
+        let i = (start + k) % n;
+        if inside(i) {
+            current.push(i);
+        } else if !current.is_empty() {
+            regions.push(std::mem::take(&mut current));
+        }
+    }
+    regions
+}
+
+fn detect_events(
+    c: &[f64],
+    noise: f64,
+    direction: Direction,
+    reversals: &[(Axis, Vec<f64>)],
+) -> Vec<TraceEvent> {
+    let n = c.len();
+    let step_threshold = (NOISE_FACTOR * noise).max(STEP_FLOOR_UM);
+    let (steps, fit) = find_steps(c, step_threshold);
+    let flat: Vec<f64> = c.iter().zip(&fit).map(|(x, f)| x - f).collect();
+
+    // Spikes above a running median.
+    let half = bins(BASELINE_HALF_WINDOW_DEG) as isize;
+    let baseline = running_circular_median(&flat, -half, 2 * half as usize + 1);
+    let res: Vec<f64> = flat.iter().zip(&baseline).map(|(f, b)| f - b).collect();
+    let threshold = (NOISE_FACTOR * noise).max(SPIKE_FLOOR_UM);
+    let angle = |i: usize| i as f64 * BIN_DEG;
+    let centre = |i: usize| (i as f64 + 0.5) * BIN_DEG;
+    // Walking back in time: CCW runs came from lower theta.
+    let back: isize = match direction {
+        Direction::Ccw => -1,
+        Direction::Cw => 1,
+    };
+    let at = |i: isize| res[i.rem_euclid(n as isize) as usize];
+    let mut events = Vec::new();
+    for sign in [1.0, -1.0] {
+        for region in circular_regions(n, |i| sign * res[i] > 0.5 * threshold) {
+            let Some(&peak) = region
+                .iter()
+                .max_by(|&&i, &&j| (sign * res[i]).total_cmp(&(sign * res[j])))
+            else {
+                continue;
+            };
+            let height = res[peak];
+            if sign * height < threshold {
+                continue;
+            }
+            let near_step = steps.iter().any(|s| {
+                region
+                    .iter()
+                    .any(|&i| angle_distance_deg(centre(i), angle(s.index)) < 1.5)
+            });
+            if near_step {
+                continue;
+            }
+            // Onset: walk back in time while above 10 % of the height (at most 5 deg).
+            let floor = 0.1 * sign * height;
+            let mut first = peak as isize;
+            for _ in 0..bins(5.0) {
+                if sign * at(first + back) <= floor {
+                    break;
+                }
+                first += back;
+            }
+            let first = first.rem_euclid(n as isize) as usize;
+            let onset = match direction {
+                Direction::Ccw => angle(first),
+                Direction::Cw => angle((first + 1) % n),
+            };
+            // Full width at half height, contiguous around the peak.
+            let above = |i: isize| sign * at(i) >= 0.5 * sign * height;
+            let mut width = 1;
+            let mut k = 1;
+            while k < n as isize && above(peak as isize + k) {
+                width += 1;
+                k += 1;
+            }
+            k = 1;
+            while k < n as isize && above(peak as isize - k) {
+                width += 1;
+                k += 1;
+            }
+            let (axis, confidence) = attribute(onset, reversals);
+            events.push(TraceEvent {
+                theta_deg: onset,
+                peak_deg: centre(peak),
+                height_um: height,
+                width_deg: width as f64 * BIN_DEG,
+                kind: EventKind::Spike,
+                direction,
+                axis,
+                confidence,
+            });
+        }
+    }
+    for s in &steps {
+        let theta = angle(s.index);
+        let (axis, confidence) = attribute(theta, reversals);
+        events.push(TraceEvent {
+            theta_deg: theta,
+            peak_deg: theta,
+            height_um: match direction {
+                Direction::Ccw => s.height_um,
+                Direction::Cw => -s.height_um,
+            },
+            width_deg: 0.0,
+            kind: EventKind::Step,
+            direction,
+            axis,
+            confidence,
+        });
+    }
+    events.sort_by(|a, b| a.theta_deg.total_cmp(&b.theta_deg));
+    events
+}

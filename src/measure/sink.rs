@@ -1,0 +1,103 @@
+//! The virtual ball bar as a pipeline sink.
+//!
+//! The bar joins the table ball (fixed in the table frame) to the tool ball (the tool tip).
+//! For each sample in the measured revolution it reads
+//!
+//! ```text
+//! θ       = angle of the commanded tool tip on the measured circle (nominal path)
+//! dL      = |p_tool(q_actual) − p_pivot(q_actual)| − L                       (um)
+//! dL_nl   = dL − dL(q_linear)     what the nonlinearities alone (friction, backlash) add
+//! ```
+//!
+//! The figures come from `dL`; spikes and steps from `dL_nl`, so that the linear response to
+//! the program (the lag ellipse, the ripple of short blocks) is not taken for them.
+
+use nalgebra::Point3;
+
+use super::ballbar::{deviation_mm, BallbarRun, CircleFrame};
+use crate::error::Result;
+use crate::input::program::{Direction, MeasuredLines};
+use crate::kinematics::Kinematics;
+use crate::pipeline::{Sample, Sink};
+
+/// The virtual ball bar of a test on one machine.
+#[derive(Clone, Copy, Debug)]
+pub struct BarGeometry {
+    pub kinematics: Kinematics,
+    /// The measured circle, for θ.
+    pub frame: CircleFrame,
+    /// Table-side ball, table frame, mm.
+    pub pivot_table_mm: Point3<f64>,
+    /// Nominal bar length L, mm.
+    pub length_mm: f64,
+}
+
+/// What the bar reads at one sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BarReading {
+    /// θ of the commanded tool tip, deg in [0, 360).
+    pub theta_deg: f64,
+    /// dL, um.
+    pub deviation_um: f64,
+    /// dL minus the linear twin's dL, um.
+    pub nonlinear_um: f64,
+}
+
+impl BarGeometry {
+    pub fn read(&self, s: &Sample) -> BarReading {
+        let kin = &self.kinematics;
+        let dev = |q| deviation_mm(kin, q, &self.pivot_table_mm, self.length_mm) * 1e3;
+        let deviation_um = dev(&s.actual);
+        BarReading {
+            theta_deg: self.frame.theta_deg(&kin.forward(&s.commanded).tip),
+            deviation_um,
+            nonlinear_um: deviation_um - dev(&s.linear),
+        }
+    }
+}
+
+/// Whether a sample is in the measured revolution: on the measured lines, or, when none
+/// are given, anywhere after the first move (which only brings the machine to the start).
+pub fn is_measured(s: &Sample, measured: Option<MeasuredLines>) -> bool {
+    match measured {
+        Some(m) => (m.first..=m.last).contains(&s.line),
+        None => s.block_index >= 1,
+    }
+}
+
+/// One direction of a ball-bar test: the trace and its nonlinear signature, in θ bins.
+#[derive(Clone, Debug)]
+pub struct BallbarSink {
+    geometry: BarGeometry,
+    measured: Option<MeasuredLines>,
+    /// dL against θ.
+    pub run: BallbarRun,
+    /// dL_nl against θ.
+    pub signature: BallbarRun,
+}
+
+impl BallbarSink {
+    pub fn new(
+        geometry: BarGeometry,
+        direction: Direction,
+        measured: Option<MeasuredLines>,
+    ) -> BallbarSink {
+        BallbarSink {
+            geometry,
+            measured,
+            run: BallbarRun::new(direction),
+            signature: BallbarRun::new(direction),
+        }
+    }
+}
+
+impl Sink for BallbarSink {
+    fn push(&mut self, s: &Sample) -> Result<()> {
+        if is_measured(s, self.measured) {
+            let r = self.geometry.read(s);
+            self.run.push(r.theta_deg, r.deviation_um);
+            self.signature.push(r.theta_deg, r.nonlinear_um);
+        }
+        Ok(())
+    }
+}

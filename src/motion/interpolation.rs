@@ -1,0 +1,991 @@
+//! Interpolator with look-ahead feed planning: blocks in, setpoints every interpolation
+//! period out.
+//!
+//! # Path and path speed
+//!
+//! Every motion block is a path `q(u)`, `u ∈ [0, 1]`, in axis space (mm and deg), walked at
+//! a path speed `v = ds/dt` where `s = u L` and `L` is the block's path length:
+//!
+//! - **G01 / G00 in joint space**: `q(u) = q0 + u d`, `L = |d|` with deg counted as mm
+//!   (the mixed-unit length of a controller without tool-centre-point control,
+//!   [`AxisVec::mixed_norm`]). The programmed feed F (mm/min) is the rate of `s`, so the block
+//!   time at F is `L / F`.
+//! - **G93** (inverse time): the block time is `1 / F` min, i.e. a path speed `F L`.
+//! - **G00**: no F; the path speed is capped by the axis velocity limits only, so the axis
+//!   with the largest `|d_i| / vmax_i` runs at its `vmax_i` and all axes arrive together
+//!   (`T = max_i |d_i| / vmax_i` at cruise).
+//! - **G02/G03**: the plane axes follow the circle (a spiral if the start and end radii
+//!   differ by rounding), the third linear axis and any rotary axes move linearly in `u`
+//!   (helix). `L = sqrt(arc² + Δ²)` where Δ collects the other axes' travel; F is the rate of
+//!   `s` (for a planar arc, the tangential feed).
+//! - **TCP** (`block.tcp` from G43.4, or [`InterpolationOptions::force_tcp`]): the block's X Y
+//!   Z are the tool tip `p` in the table frame. `p(u)` is the straight line (or the arc) in the
+//!   table frame, the rotary axes move linearly in `u`, and every period the machine axes are
+//!   `xyz = Kinematics::table_to_machine(q_rotary(u), p(u))`. `L` is the tool-tip path length,
+//!   so F is the tool-tip feed relative to the table; for a pure rotary move (`|Δp| = 0`) the
+//!   mixed rule over the rotary axes is used instead.
+//!
+//! # Limits along the path
+//!
+//! With `q' = dq/ds`, `q'' = d²q/ds²`, `q''' = d³q/ds³`, the axis velocity, acceleration and
+//! jerk are
+//!
+//! ```text
+//! q̇ = q' v,   q̈ = q' a + q'' v²,   q⃛ = q' j + 3 q'' v a + q''' v³
+//! ```
+//!
+//! (a, j: path acceleration and jerk). For a straight block (`q'' = 0`) the path limits are
+//! exact: `v ≤ min_i vmax_i/|q'_i|`, `a ≤ min_i amax_i/|q'_i|`, `j ≤ min_i jmax_i/|q'_i|`.
+//! For a curved block (arc, or TCP with rotary motion) half of each axis's acceleration budget
+//! goes to the path acceleration and half to the centripetal term, and the jerk budget is split
+//! in three: `a ≤ ½ amax/|q'|`, `v² |q''| ≤ ½ amax`, `j ≤ ⅓ jmax/|q'|`, `v³ |q'''| ≤ ⅓ jmax`,
+//! `3 |q''| v a ≤ ⅓ jmax`. `|q'|`, `|q''|`, `|q'''|` of curved blocks are the maxima of
+//! central finite differences sampled at 17 points along the block, raised by the next
+//! derivative times half the sample spacing (a bound between the samples). The cruise speed `V` of a
+//! block is the programmed speed reduced by these caps, and by nothing else.
+//!
+//! # Junctions
+//!
+//! Path speed may jump at a block boundary: the path speed entering block k+1 is
+//! `ρ` times the speed leaving block k with `ρ = V_{k+1}/V_k`, so a chain of blocks whose
+//! F words differ runs each block at its own F. The axis velocity jumps by
+//! `μ |ρ q'_{k+1}(0) - q'_k(1)|` (μ: exit speed of block k); this jump is limited to
+//! `corner_acceleration_share · amax_i · period` per axis (default share 1: the step is taken
+//! at the axis's full acceleration within one period; half of that next to an arc or a curved
+//! TCP block, whose centripetal term may use the other half). That bounds `μ` at every
+//! corner. Dwells force a stop on both sides.
+//!
+//! # Speed profile in a block (jerk-limited S-curve)
+//!
+//! Inside a block the path speed goes from the entry speed `vs` up (or down) to a peak `vp`,
+//! cruises, and goes to the exit speed `ve`; each speed change is the jerk-limited S-curve
+//! with zero acceleration at both ends (`a(t)` a trapezoid or triangle):
+//!
+//! ```text
+//! Δv ≤ a²/j:  T(Δv) = 2 sqrt(Δv/j)          (jerk phases only, peak acceleration sqrt(j Δv))
+//! Δv > a²/j:  T(Δv) = Δv/a + a/j            (jerk, constant a for Δv/a - a/j, jerk)
+//! distance D(v0, v1) = (v0 + v1)/2 · T(|v1 - v0|)   (the profile is point-symmetric)
+//! ```
+//!
+//! `vp = V` if `D(vs, V) + D(V, ve) ≤ L`, else `vp` solves `D(vs, vp) + D(vp, ve) = L`
+//! (bisection; the left side grows with vp). From rest to rest with `V` reached this gives the
+//! textbook double-S time `T = L/V + V/a + a/j`.
+//!
+//! # Look-ahead
+//!
+//! The planner keeps a window of `lookahead_blocks` blocks that have not started. The last
+//! block of the window must end at rest, so the machine can always stop. A backward pass
+//! gives each block its largest entry speed from which it can still reach the next block's
+//! entry; a forward step at the start of each block picks the largest feasible exit. The
+//! feasibility test uses the monotone bound `D̄(v0, v1) = max(v0, v1) T(|v1 - v0|) ≥ D`
+//! (the true `D` is not monotone in the end speed: slowing from v to v/3 takes longer than
+//! stopping), so any exit between what the backward pass assumed and what the window now
+//! allows is reachable. The backward pass stops at the first block whose entry limit does
+//! not change, so planning is amortised O(1) per block. Memory is bounded by the window.
+//!
+//! Not modelled: corner blending (corners are passed at a limited speed, with a velocity
+//! step of bounded size in one period; the jerk at that step is not limited), acceleration
+//! carried across block boundaries (each block's speed changes start and end at zero path
+//! acceleration), travel limits (checked downstream).
+
+use std::collections::VecDeque;
+use std::f64::consts::TAU;
+use std::path::PathBuf;
+
+use nalgebra::Point3;
+
+use crate::error::{Error, Result};
+use crate::input::machine::Machine;
+use crate::kinematics::{Kinematics, Layout};
+use crate::program::{FeedMode, Motion, Move};
+use crate::Plane;
+use crate::{Axis, AxisVec};
+
+/// One commanded position of all axes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Setpoint {
+    /// Time since the first setpoint, s. Exactly `n · period`.
+    pub time_s: f64,
+    /// Commanded axis positions, machine coordinates, mm and deg.
+    pub q: AxisVec,
+    /// Source line of the block being executed.
+    pub line: usize,
+    /// 0-based position of that block in the input stream.
+    pub block_index: u64,
+}
+
+/// Settings of the interpolator.
+#[derive(Clone, Debug)]
+pub struct InterpolationOptions {
+    /// Treat every G01/G02/G03 block as tool-centre-point controlled (as if G43.4 were on).
+    pub force_tcp: bool,
+    /// Blocks planned ahead of the one executing (at least 1). The machine must be able to
+    /// stop within this many blocks, so long, fast moves split into tiny blocks need more.
+    pub lookahead_blocks: usize,
+    /// Allowed per-axis velocity step at a block junction, as a fraction of
+    /// `max_acceleration × period` (> 0; default 1: the step takes the full acceleration
+    /// for one period). Halved next to a curved block, whose centripetal term needs the rest.
+    pub corner_acceleration_share: f64,
+    /// Name of the program, used in error messages.
+    pub program_path: PathBuf,
+}
+
+impl Default for InterpolationOptions {
+    fn default() -> Self {
+        InterpolationOptions {
+            force_tcp: false,
+            lookahead_blocks: 256,
+            corner_acceleration_share: 1.0,
+            program_path: PathBuf::from("program"),
+        }
+    }
+}
+
+/// Limits of one axis in per-second units: units/s, units/s², units/s³.
+#[derive(Clone, Copy, Debug)]
+struct AxisLimits {
+    velocity: f64,
+    acceleration: f64,
+    jerk: f64,
+}
+
+/// Arc geometry in the plane axes `(i0, i1)`; angle measured from i0 toward i1.
+#[derive(Clone, Copy, Debug)]
+struct ArcGeometry {
+    i0: usize,
+    i1: usize,
+    /// Centre, mm.
+    c0: f64,
+    c1: f64,
+    /// Start radius and its change over the block, mm.
+    r0: f64,
+    dr: f64,
+    /// Start angle and signed sweep, rad.
+    theta0: f64,
+    sweep: f64,
+}
+
+/// The geometric path of a block, `q(u)` for `u ∈ [0, 1]` (formulas extend beyond).
+#[derive(Clone, Copy, Debug)]
+struct BlockPath {
+    start: AxisVec,
+    delta: AxisVec,
+    arc: Option<ArcGeometry>,
+    /// Some: X Y Z of `start + u delta` (or of the arc) are the tool tip in the table frame.
+    tcp: Option<Kinematics>,
+}
+
+impl BlockPath {
+    fn at(&self, u: f64) -> AxisVec {
+        let mut q = AxisVec(std::array::from_fn(|i| {
+            self.start.0[i] + self.delta.0[i] * u
+        }));
+        if let Some(arc) = &self.arc {
+            let (sin, cos) = (arc.theta0 + arc.sweep * u).sin_cos();
+            let r = arc.r0 + arc.dr * u;
+            q.0[arc.i0] = arc.c0 + r * cos;
+            q.0[arc.i1] = arc.c1 + r * sin;
+        }
+        if let Some(kinematics) = &self.tcp {
+            let m = table_to_machine(kinematics, &q, [q.0[0], q.0[1], q.0[2]]);
+            q.0[..3].copy_from_slice(&m);
+        }
+        q
+    }
+
+    /// True when `q(u)` is a straight line in axis space.
+    fn is_straight(&self) -> bool {
+        self.arc.is_none() && (self.tcp.is_none() || (3..6).all(|i| self.delta.0[i] == 0.0))
+    }
+
+    /// `dq/ds` at `u` for a block of length `length` (central difference, exact for lines).
+    fn tangent(&self, u: f64, length: f64) -> AxisVec {
+        if self.is_straight() {
+            return (self.at(1.0) - self.at(0.0)) * (1.0 / length);
+        }
+        let h = 1e-5;
+        (self.at(u + h) - self.at(u - h)) * (1.0 / (2.0 * h * length))
+    }
+}
+
+/// Intervals at which the derivatives of a curved block are sampled.
+const SAMPLES: usize = 16;
+
+/// `pivot + R(q) p` of [`Kinematics::table_to_machine`], written out with one `sin_cos` per
+/// angle: `R = Rx(A) Rz(C)` (trt-ac), `Ry(B) Rz(C)` (trt-bc), identity (xyz). mm and deg.
+fn table_to_machine(k: &Kinematics, q: &AxisVec, p: [f64; 3]) -> [f64; 3] {
+    let [x, y, z] = p;
+    let (x, y, z) = match k.layout {
+        Layout::Xyz => (x, y, z),
+        Layout::TrtAc | Layout::TrtBc => {
+            let (sc, cc) = q[Axis::C].to_radians().sin_cos();
+            let (x, y) = (cc * x - sc * y, sc * x + cc * y);
+            if k.layout == Layout::TrtAc {
+                let (sa, ca) = q[Axis::A].to_radians().sin_cos();
+                (x, ca * y - sa * z, sa * y + ca * z)
+            } else {
+                let (sb, cb) = q[Axis::B].to_radians().sin_cos();
+                (cb * x + sb * z, y, -sb * x + cb * z)
+            }
+        }
+    };
+    [x + k.pivot_mm.x, y + k.pivot_mm.y, z + k.pivot_mm.z]
+}
+
+/// One jerk-limited speed change from `v0` to `v1` with zero acceleration at both ends.
+#[derive(Clone, Copy, Debug, Default)]
+struct SpeedChange {
+    v0: f64,
+    v1: f64,
+    /// Signed jerk of the first phase, path units/s³.
+    jerk: f64,
+    /// Duration of each jerk phase and of the constant-acceleration phase, s.
+    t1: f64,
+    t2: f64,
+    duration: f64,
+    distance: f64,
+}
+
+/// Duration of a speed change of `dv >= 0` under acceleration `a` and jerk `j`.
+fn change_time(dv: f64, a: f64, j: f64) -> f64 {
+    if dv * j <= a * a {
+        2.0 * (dv / j).sqrt()
+    } else {
+        dv / a + a / j
+    }
+}
+
+/// Exact distance of the speed change `v0 → v1`.
+fn change_distance(v0: f64, v1: f64, a: f64, j: f64) -> f64 {
+    0.5 * (v0 + v1) * change_time((v1 - v0).abs(), a, j)
+}
+
+/// Monotone upper bound on [`change_distance`]: `max(v0, v1) T`.
+fn change_distance_bound(v0: f64, v1: f64, a: f64, j: f64) -> f64 {
+    v0.max(v1) * change_time((v1 - v0).abs(), a, j)
+}
+
+impl SpeedChange {
+    fn new(v0: f64, v1: f64, a: f64, j: f64) -> SpeedChange {
+        let dv = (v1 - v0).abs();
+        if dv == 0.0 {
+            return SpeedChange {
+                v0,
+                v1,
+                ..SpeedChange::default()
+            };
+        }
+        let (t1, t2) = if dv * j <= a * a {
+            ((dv / j).sqrt(), 0.0)
+        } else {
+            (a / j, dv / a - a / j)
+        };
+        let duration = 2.0 * t1 + t2;
+        SpeedChange {
+            v0,
+            v1,
+            jerk: j.copysign(v1 - v0),
+            t1,
+            t2,
+            duration,
+            distance: 0.5 * (v0 + v1) * duration,
+        }
+    }
+
+    /// Distance travelled `tau` s into the change.
+    fn position(&self, tau: f64) -> f64 {
+        let j = self.jerk;
+        if tau < self.t1 {
+            self.v0 * tau + j * tau * tau * tau / 6.0
+        } else if tau < self.t1 + self.t2 {
+            let t1 = self.t1;
+            let u = tau - t1;
+            let a = j * t1;
+            self.v0 * t1
+                + j * t1 * t1 * t1 / 6.0
+                + (self.v0 + 0.5 * j * t1 * t1) * u
+                + 0.5 * a * u * u
+        } else {
+            let r = (self.duration - tau).max(0.0);
+            self.distance - (self.v1 * r - j * r * r * r / 6.0)
+        }
+    }
+}
+
+/// Speed profile of one block: change to `vp`, cruise, change to the exit speed.
+#[derive(Clone, Copy, Debug, Default)]
+struct Profile {
+    up: SpeedChange,
+    cruise_speed: f64,
+    cruise_time: f64,
+    down: SpeedChange,
+    duration: f64,
+}
+
+impl Profile {
+    /// Profile over `length` from `vs` to `ve` with cruise cap `cap` (all path units).
+    fn new(vs: f64, ve: f64, cap: f64, length: f64, a: f64, j: f64) -> Profile {
+        let total = |vp: f64| change_distance(vs, vp, a, j) + change_distance(vp, ve, a, j);
+        let floor = vs.max(ve);
+        let vp = if cap <= floor {
+            floor
+        } else if total(cap) <= length {
+            cap
+        } else {
+            bisect(floor, cap, |vp| total(vp) <= length)
+        };
+        let up = SpeedChange::new(vs, vp, a, j);
+        let down = SpeedChange::new(vp, ve, a, j);
+        let rest = length - up.distance - down.distance;
+        let cruise_time = if rest > 0.0 && vp > 0.0 {
+            rest / vp
+        } else {
+            0.0
+        };
+        Profile {
+            up,
+            cruise_speed: vp,
+            cruise_time,
+            down,
+            duration: up.duration + cruise_time + down.duration,
+        }
+    }
+
+    /// Distance travelled `tau` s into the block.
+    fn position(&self, tau: f64) -> f64 {
+        if tau < self.up.duration {
+            return self.up.position(tau);
+        }
+        let tau = tau - self.up.duration;
+        if tau < self.cruise_time {
+            return self.up.distance + self.cruise_speed * tau;
+        }
+        let cruise = self.cruise_speed * self.cruise_time;
+        self.up.distance
+            + cruise
+            + self
+                .down
+                .position((tau - self.cruise_time).min(self.down.duration))
+    }
+}
+
+/// Largest `x` in `[lo, hi]` with `feasible(x)`, given `feasible(lo)` and monotonicity.
+fn bisect(mut lo: f64, mut hi: f64, feasible: impl Fn(f64) -> bool) -> f64 {
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if feasible(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// Highest speed `≤ cap` reachable from (or able to reach) `v` within `length`,
+/// by the monotone bound [`change_distance_bound`].
+fn reach(v: f64, length: f64, cap: f64, a: f64, j: f64) -> f64 {
+    if cap <= v || change_distance_bound(v, cap, a, j) <= length {
+        cap
+    } else {
+        bisect(v, cap, |x| change_distance_bound(v, x, a, j) <= length)
+    }
+}
+
+/// A block ready to run, with its limits and look-ahead state. Speeds in path units/s.
+#[derive(Clone, Copy, Debug)]
+struct Planned {
+    line: usize,
+    index: u64,
+    path: BlockPath,
+    /// Path length, mm (deg counted as mm for mixed moves); 0 for a dwell.
+    length: f64,
+    dwell_s: f64,
+    /// Cruise speed, path acceleration, path jerk limits.
+    cap: f64,
+    accel: f64,
+    jerk: f64,
+    /// Largest entry speed the junction allows, and entry / previous exit speed ratio.
+    entry_cap: f64,
+    rho: f64,
+    /// Largest entry speed from which the rest of the window is feasible.
+    entry_max: f64,
+}
+
+/// The end of the last planned block, for the next junction.
+#[derive(Clone, Copy, Debug)]
+struct JunctionEnd {
+    tangent: AxisVec,
+    cap: f64,
+    dwell: bool,
+    curved: bool,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Active {
+    planned: Planned,
+    profile: Profile,
+    /// Start time of the block, s.
+    t0: f64,
+}
+
+/// Turns blocks into setpoints every interpolation period; see the module documentation.
+///
+/// Yields `Err` once (then ends) when a block cannot be run; errors in the first
+/// `lookahead_blocks` blocks are already returned by [`Interpolator::new`].
+pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
+    blocks: I,
+    input_done: bool,
+    pending_error: Option<Error>,
+    limits: [Option<AxisLimits>; 6],
+    kinematics: Kinematics,
+    period_s: f64,
+    options: InterpolationOptions,
+    window: VecDeque<Planned>,
+    last_end: Option<JunctionEnd>,
+    next_index: u64,
+    active: Option<Active>,
+    /// Exit speed committed for the active block.
+    last_exit: f64,
+    step: u64,
+    done: bool,
+}
+
+impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
+    /// Plans the first `options.lookahead_blocks` blocks of `blocks` for `machine`.
+    pub fn new(blocks: I, machine: &Machine, options: InterpolationOptions) -> Result<Self> {
+        if options.lookahead_blocks == 0 {
+            return Err(Error::usage("lookahead_blocks must be at least 1"));
+        }
+        let share = options.corner_acceleration_share;
+        if !(share.is_finite() && share > 0.0) {
+            return Err(Error::usage(format!(
+                "corner_acceleration_share must be a positive number, got {share}"
+            )));
+        }
+        let mut limits = [None; 6];
+        for &axis in machine.axes() {
+            let c = machine.axis(axis);
+            limits[axis.index()] = Some(AxisLimits {
+                velocity: c.max_velocity / 60.0,
+                acceleration: c.max_acceleration,
+                jerk: c.max_jerk,
+            });
+        }
+        let mut interpolator = Interpolator {
+            blocks,
+            input_done: false,
+            pending_error: None,
+            limits,
+            kinematics: machine.kinematics,
+            period_s: machine.interpolation_period_s,
+            window: VecDeque::with_capacity(options.lookahead_blocks + 1),
+            options,
+            last_end: None,
+            next_index: 0,
+            active: None,
+            last_exit: 0.0,
+            step: 0,
+            done: false,
+        };
+        interpolator.fill();
+        match interpolator.pending_error.take() {
+            Some(e) => Err(e),
+            None => Ok(interpolator),
+        }
+    }
+
+    fn block_error(&self, line: usize, message: impl std::fmt::Display) -> Error {
+        Error::invalid(
+            &self.options.program_path,
+            format!("line {line}: {message}"),
+        )
+    }
+
+    /// Reads blocks until the window holds `lookahead_blocks + 1` of them.
+    fn fill(&mut self) {
+        while !self.input_done && self.window.len() <= self.options.lookahead_blocks {
+            let index = self.next_index;
+            match self.blocks.next() {
+                None => self.input_done = true,
+                Some(Err(e)) => {
+                    self.pending_error = Some(e);
+                    self.input_done = true;
+                }
+                Some(Ok(block)) => {
+                    self.next_index += 1;
+                    match self.plan(&block, index) {
+                        Ok(Some((planned, start, end))) => self.push(planned, start, end),
+                        Ok(None) => {}
+                        Err(e) => {
+                            self.pending_error = Some(e);
+                            self.input_done = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Geometry and limits of one block; `None` for a block without motion.
+    /// Also returns the tangents `dq/ds` at its start and end.
+    fn plan(&self, b: &Move, index: u64) -> Result<Option<(Planned, AxisVec, AxisVec)>> {
+        if !b.start.is_finite() || !b.end.is_finite() {
+            return Err(self.block_error(b.line, "an axis position is not a finite number"));
+        }
+        for axis in Axis::ALL {
+            if self.limits[axis.index()].is_none() && b.end[axis] != b.start[axis] {
+                return Err(self.block_error(
+                    b.line,
+                    format!(
+                        "the block moves axis {axis}, which this machine ({}) does not have",
+                        self.kinematics.layout.name()
+                    ),
+                ));
+            }
+        }
+        let tcp = (b.tcp || self.options.force_tcp).then_some(self.kinematics);
+        let mut planned = Planned {
+            line: b.line,
+            index,
+            path: BlockPath {
+                start: b.start,
+                delta: b.end - b.start,
+                arc: None,
+                tcp,
+            },
+            length: 0.0,
+            dwell_s: 0.0,
+            cap: 0.0,
+            accel: 0.0,
+            jerk: 0.0,
+            entry_cap: 0.0,
+            rho: 1.0,
+            entry_max: 0.0,
+        };
+        let rotary_norm = (3..6)
+            .map(|i| planned.path.delta.0[i].powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let mixed = |path_xyz: f64| (path_xyz * path_xyz + rotary_norm * rotary_norm).sqrt();
+        let tip_or_mixed = |path_xyz: f64| {
+            if path_xyz > 1e-12 {
+                path_xyz
+            } else {
+                rotary_norm
+            }
+        };
+        let d = planned.path.delta;
+        let linear_norm = (d.0[0] * d.0[0] + d.0[1] * d.0[1] + d.0[2] * d.0[2]).sqrt();
+        match b.motion {
+            Motion::Dwell { seconds } => {
+                if !(seconds.is_finite() && seconds >= 0.0) {
+                    return Err(self.block_error(
+                        b.line,
+                        format!("G04 dwell must be a finite time >= 0 s, got {seconds}"),
+                    ));
+                }
+                planned.path.delta = AxisVec::ZERO;
+                planned.path.tcp = None;
+                planned.dwell_s = seconds;
+                return Ok(Some((planned, AxisVec::ZERO, AxisVec::ZERO)));
+            }
+            Motion::Rapid => {
+                // G00 runs in joint space even under TCP: convert tip to machine coordinates.
+                if let Some(k) = tcp {
+                    let to_machine = |q: &AxisVec| {
+                        let mut m = *q;
+                        let p = k.table_to_machine(q, &Point3::new(q.0[0], q.0[1], q.0[2]));
+                        (m.0[0], m.0[1], m.0[2]) = (p.x, p.y, p.z);
+                        m
+                    };
+                    planned.path.start = to_machine(&b.start);
+                    planned.path.delta = to_machine(&b.end) - planned.path.start;
+                    planned.path.tcp = None;
+                }
+                planned.length = planned.path.delta.mixed_norm();
+            }
+            Motion::Linear => {
+                planned.length = if tcp.is_some() {
+                    tip_or_mixed(linear_norm)
+                } else {
+                    mixed(linear_norm)
+                };
+            }
+            Motion::Arc {
+                clockwise,
+                plane,
+                center_mm,
+            } => {
+                let arc = self.arc_geometry(b, clockwise, plane, center_mm)?;
+                let i2 = 3 - arc.i0 - arc.i1;
+                let arc_len = arc.sweep.abs() * (arc.r0 + 0.5 * arc.dr).abs();
+                let helix = arc_len.hypot(d.0[i2]);
+                planned.path.arc = Some(arc);
+                planned.length = if tcp.is_some() {
+                    tip_or_mixed(helix)
+                } else {
+                    mixed(helix)
+                };
+            }
+        }
+        if planned.length <= 1e-12 {
+            return Ok(None);
+        }
+        if !planned.length.is_finite() {
+            return Err(self.block_error(
+                b.line,
+                "the move is too long to plan: check the axis positions",
+            ));
+        }
+        let programmed = match b.motion {
+            Motion::Rapid => f64::INFINITY,
+            _ => {
+                let feed = b.feed.unwrap_or(0.0);
+                if !(feed.is_finite() && feed > 0.0) {
+                    let what = match b.feed_mode {
+                        FeedMode::PerMinute => "a feed rate: program an F word > 0 (mm/min)",
+                        FeedMode::InverseTime => {
+                            "an inverse-time feed: under G93 program an F word > 0 (1/min) on every move"
+                        }
+                    };
+                    return Err(self.block_error(b.line, format!("the move needs {what}")));
+                }
+                match b.feed_mode {
+                    FeedMode::PerMinute => feed / 60.0,
+                    FeedMode::InverseTime => feed * planned.length / 60.0,
+                }
+            }
+        };
+        self.apply_limits(&mut planned, programmed);
+        if !(planned.cap.is_finite()
+            && planned.cap > 0.0
+            && planned.accel > 0.0
+            && planned.jerk > 0.0)
+            || !(planned.accel.is_finite() && planned.jerk.is_finite())
+        {
+            return Err(self.block_error(
+                b.line,
+                "the move has no finite speed: check the axis positions and the feed",
+            ));
+        }
+        let start = planned.path.tangent(0.0, planned.length);
+        let end = planned.path.tangent(1.0, planned.length);
+        Ok(Some((planned, start, end)))
+    }
+
+    fn arc_geometry(
+        &self,
+        b: &Move,
+        clockwise: bool,
+        plane: Plane,
+        c: [f64; 3],
+    ) -> Result<ArcGeometry> {
+        if !c.iter().all(|v| v.is_finite()) {
+            return Err(self.block_error(b.line, "the arc centre is not a finite number"));
+        }
+        let (i0, i1) = match plane {
+            Plane::XY => (0, 1),
+            Plane::ZX => (2, 0),
+            Plane::YZ => (1, 2),
+        };
+        let (s0, s1) = (b.start.0[i0] - c[i0], b.start.0[i1] - c[i1]);
+        let (e0, e1) = (b.end.0[i0] - c[i0], b.end.0[i1] - c[i1]);
+        let (r0, r1) = (s0.hypot(s1), e0.hypot(e1));
+        if r0 <= 1e-9 || r1 <= 1e-9 {
+            return Err(self.block_error(
+                b.line,
+                "the arc has zero radius: the centre is on its start or end point",
+            ));
+        }
+        if (r0 - r1).abs() > 1e-3_f64.max(1e-6 * r0) {
+            return Err(self.block_error(
+                b.line,
+                format!(
+                    "the arc end is not on the circle: start radius {r0:.6} mm, end radius {r1:.6} mm; check I J K or R"
+                ),
+            ));
+        }
+        // Sweep in (0, 2π] in the arc's own direction; start = end is a full circle.
+        let theta0 = s1.atan2(s0);
+        let ccw = e1.atan2(e0) - theta0;
+        let mut sweep = if clockwise { -ccw } else { ccw }.rem_euclid(TAU);
+        if sweep <= 1e-12 * TAU {
+            sweep = TAU;
+        }
+        if clockwise {
+            sweep = -sweep;
+        }
+        Ok(ArcGeometry {
+            i0,
+            i1,
+            c0: c[i0],
+            c1: c[i1],
+            r0,
+            dr: r1 - r0,
+            theta0,
+            sweep,
+        })
+    }
+
+    /// Cruise cap and path acceleration and jerk limits from the axis limits.
+    fn apply_limits(&self, p: &mut Planned, programmed: f64) {
+        let (mut cap, mut accel, mut jerk) = (programmed, f64::INFINITY, f64::INFINITY);
+        let present = |i: usize| self.limits[i].map(|l| (i, l));
+        if p.path.is_straight() {
+            let t = p.path.tangent(0.0, p.length);
+            for (i, l) in (0..6).filter_map(present) {
+                let d = t.0[i].abs();
+                if d > 0.0 {
+                    cap = cap.min(l.velocity / d);
+                    accel = accel.min(l.acceleration / d);
+                    jerk = jerk.min(l.jerk / d);
+                }
+            }
+        } else {
+            let (d1, d2, d3) = self.derivative_bounds(&p.path, p.length);
+            for (i, l) in (0..6).filter_map(present) {
+                if d1[i] > 0.0 {
+                    cap = cap.min(l.velocity / d1[i]);
+                    accel = accel.min(0.5 * l.acceleration / d1[i]);
+                    jerk = jerk.min(l.jerk / (3.0 * d1[i]));
+                }
+            }
+            for (i, l) in (0..6).filter_map(present) {
+                if d2[i] > 0.0 {
+                    cap = cap.min((0.5 * l.acceleration / d2[i]).sqrt());
+                    cap = cap.min(l.jerk / (9.0 * d2[i] * accel));
+                }
+                if d3[i] > 0.0 {
+                    cap = cap.min((l.jerk / (3.0 * d3[i])).cbrt());
+                }
+            }
+        }
+        (p.cap, p.accel, p.jerk) = (cap, accel, jerk);
+    }
+
+    /// Maxima of |dq/ds|, |d²q/ds²|, |d³q/ds³| per axis, sampled at `SAMPLES + 1` points.
+    fn derivative_bounds(&self, path: &BlockPath, length: f64) -> ([f64; 6], [f64; 6], [f64; 6]) {
+        let (mut d1, mut d2, mut d3) = ([0.0; 6], [0.0; 6], [0.0; 6]);
+        // One five-point stencil per sample: h small enough for O(h²) truncation to be
+        // negligible, large enough for rounding in the third difference to stay small.
+        let h = 2e-3;
+        for k in 0..=SAMPLES {
+            let u = k as f64 / SAMPLES as f64;
+            let q = path.at(u);
+            let (p1, m1) = (path.at(u + h), path.at(u - h));
+            let (p2, m2) = (path.at(u + 2.0 * h), path.at(u - 2.0 * h));
+            for i in 0..6 {
+                let first = (p1.0[i] - m1.0[i]) / (2.0 * h * length);
+                let second = (p1.0[i] - 2.0 * q.0[i] + m1.0[i]) / (h * h * length * length);
+                let third = (p2.0[i] - 2.0 * p1.0[i] + 2.0 * m1.0[i] - m2.0[i])
+                    / (2.0 * h.powi(3) * length.powi(3));
+                d1[i] = f64::max(d1[i], first.abs());
+                d2[i] = f64::max(d2[i], second.abs());
+                d3[i] = f64::max(d3[i], third.abs());
+            }
+        }
+        // Between samples (half a spacing Δs/2 = L/(2 SAMPLES) away) a derivative can exceed
+        // its sampled maximum by at most the next derivative times Δs/2.
+        let half_spacing = 0.5 * length / SAMPLES as f64;
+        for i in 0..6 {
+            d3[i] *= 1.1;
+            d2[i] += d3[i] * half_spacing;
+            d1[i] += d2[i] * half_spacing;
+        }
+        (d1, d2, d3)
+    }
+
+    /// Appends a planned block: junction limit, then the backward pass.
+    fn push(&mut self, mut p: Planned, tangent_start: AxisVec, tangent_end: AxisVec) {
+        let dwell = p.length == 0.0;
+        let curved = !p.path.is_straight();
+        if let (Some(prev), false) = (self.last_end, dwell) {
+            if !prev.dwell {
+                let share = if curved || prev.curved { 0.5 } else { 1.0 }
+                    * self.options.corner_acceleration_share;
+                let rho = p.cap / prev.cap;
+                let mut mu = prev.cap;
+                for (i, l) in self.limits.iter().enumerate() {
+                    let Some(l) = l else { continue };
+                    let jump = (rho * tangent_start.0[i] - prev.tangent.0[i]).abs();
+                    let allowed = share * l.acceleration * self.period_s;
+                    if jump * mu > allowed {
+                        mu = allowed / jump;
+                    }
+                }
+                p.rho = rho;
+                p.entry_cap = rho * mu;
+            }
+        }
+        self.last_end = Some(JunctionEnd {
+            tangent: tangent_end,
+            cap: p.cap,
+            dwell,
+            curved,
+        });
+        p.entry_max = if dwell {
+            0.0
+        } else {
+            reach(0.0, p.length, p.entry_cap.min(p.cap), p.accel, p.jerk)
+        };
+        self.window.push_back(p);
+        // Backward pass: raise the entry limits the new block allows, stop when unchanged.
+        for k in (0..self.window.len() - 1).rev() {
+            let next = self.window[k + 1];
+            let exit = next.entry_max / next.rho;
+            let b = &mut self.window[k];
+            let entry = if b.length == 0.0 {
+                0.0
+            } else {
+                reach(
+                    exit.min(b.cap),
+                    b.length,
+                    b.entry_cap.min(b.cap),
+                    b.accel,
+                    b.jerk,
+                )
+            };
+            if entry == b.entry_max {
+                break;
+            }
+            b.entry_max = entry;
+        }
+    }
+
+    /// Starts the next block at time `t0`; false when the program is finished.
+    fn activate(&mut self, t0: f64) -> bool {
+        self.fill();
+        let Some(p) = self.window.pop_front() else {
+            return false;
+        };
+        let profile = if p.length == 0.0 {
+            self.last_exit = 0.0;
+            Profile {
+                duration: p.dwell_s,
+                ..Profile::default()
+            }
+        } else {
+            let entry = (p.rho * self.last_exit).min(p.entry_max);
+            let exit_max = self
+                .window
+                .front()
+                .map_or(0.0, |n| n.entry_max / n.rho)
+                .min(p.cap);
+            let exit = reach(entry, p.length, exit_max, p.accel, p.jerk);
+            self.last_exit = exit;
+            Profile::new(entry, exit, p.cap, p.length, p.accel, p.jerk)
+        };
+        self.active = Some(Active {
+            planned: p,
+            profile,
+            t0,
+        });
+        true
+    }
+}
+
+impl<I: Iterator<Item = Result<Move>>> Iterator for Interpolator<I> {
+    type Item = Result<Setpoint>;
+
+    fn next(&mut self) -> Option<Result<Setpoint>> {
+        if self.done {
+            return None;
+        }
+        let t = self.step as f64 * self.period_s;
+        loop {
+            if let Some(a) = &self.active {
+                if t < a.t0 + a.profile.duration {
+                    let p = &a.planned;
+                    let u = if p.length > 0.0 {
+                        (a.profile.position(t - a.t0) / p.length).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    };
+                    self.step += 1;
+                    return Some(Ok(Setpoint {
+                        time_s: t,
+                        q: p.path.at(u),
+                        line: p.line,
+                        block_index: p.index,
+                    }));
+                }
+            }
+            let t0 = self
+                .active
+                .as_ref()
+                .map_or(0.0, |a| a.t0 + a.profile.duration);
+            let started = self.activate(t0);
+            if let Some(e) = self.pending_error.take() {
+                self.done = true;
+                return Some(Err(e));
+            }
+            if !started {
+                self.done = true;
+                // At rest at the last end point.
+                let a = self.active.as_ref()?;
+                let p = &a.planned;
+                let u = if p.length > 0.0 { 1.0 } else { 0.0 };
+                return Some(Ok(Setpoint {
+                    time_s: t,
+                    q: p.path.at(u),
+                    line: p.line,
+                    block_index: p.index,
+                }));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn written_out_table_rotation_matches_the_kinematics_module() {
+        let q = AxisVec([0.0, 0.0, 0.0, 23.0, -41.0, 137.0]);
+        let p = Point3::new(12.5, -7.25, 88.0);
+        for layout in [Layout::Xyz, Layout::TrtAc, Layout::TrtBc] {
+            let k = Kinematics::new(layout, Vector3::new(1.0, -2.0, 3.0));
+            let expected = k.table_to_machine(&q, &p);
+            let got = table_to_machine(&k, &q, [p.x, p.y, p.z]);
+            for i in 0..3 {
+                assert!(
+                    (got[i] - expected[i]).abs() < 1e-12,
+                    "{layout:?}: {got:?} vs {expected}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn speed_change_covers_its_closed_form_distance_and_time() {
+        // 0 → 50 with a = 200, j = 2000: 50 > a²/j, so T = v/a + a/j = 0.35 s, D = 25 · 0.35.
+        let c = SpeedChange::new(0.0, 50.0, 200.0, 2000.0);
+        assert!((c.duration - 0.35).abs() < 1e-12);
+        assert!((c.position(c.duration) - 8.75).abs() < 1e-12);
+        // Triangular acceleration: 0 → 10 (< a²/j = 20): T = 2 sqrt(10/2000).
+        let c = SpeedChange::new(10.0, 0.0, 200.0, 2000.0);
+        assert!((c.duration - 2.0 * (10.0f64 / 2000.0).sqrt()).abs() < 1e-12);
+        assert!((c.position(c.duration) - 5.0 * c.duration).abs() < 1e-12);
+        // 5 → 45 with a = 100, j = 1000: t1 = a/j = 0.1 s, t2 = 40/100 - 0.1 = 0.3 s.
+        // At T/2 = 0.25 s: s(t1) = 5·0.1 + 1000·0.1³/6, then 0.15 s at a = 100 from
+        // v = 5 + 1000·0.1²/2 = 10: s = 0.6667 + 10·0.15 + 100·0.15²/2 = 3.29167.
+        let c = SpeedChange::new(5.0, 45.0, 100.0, 1000.0);
+        assert!((c.t1 - 0.1).abs() < 1e-12 && (c.t2 - 0.3).abs() < 1e-12);
+        for tau in [c.t1, c.t1 + c.t2] {
+            let (before, after) = (c.position(tau - 1e-9), c.position(tau + 1e-9));
+            assert!(
+                (after - before).abs() < 1e-7,
+                "jump at {tau}: {before} → {after}"
+            );
+        }
+        let mid = c.position(0.25);
+        let expected = 0.5 + 1000.0 * 0.001 / 6.0 + 10.0 * 0.15 + 50.0 * 0.15 * 0.15;
+        assert!((mid - expected).abs() < 1e-12, "{mid} vs {expected}");
+    }
+}

@@ -1,0 +1,9 @@
+//! **motion** — stage 2: canonical moves in, setpoints out.
+//! Inputs: a stream of [`crate::program::Move`]s and the machine's axis limits.
+//! Outputs: commanded axis positions every interpolation period — planned (jerk-limited look-ahead) or at programmed timing.
+
+pub mod interpolation;
+pub mod sampling;
+
+pub use interpolation::{InterpolationOptions, Interpolator, Setpoint};
+pub use sampling::NominalSampler;

@@ -1,0 +1,193 @@
+//! Sampling a program at its programmed timing, for the limits and collision checks.
+//!
+//! Each block takes the time its words ask for: `sqrt(Σ d²)/F` in G94 (deg counted as mm,
+//! the controller without tool-centre-point control), the tool-tip chord over F in G43.4,
+//! `1/F` in G93, `max |d|/v_max` for G00, the arc length over F for G02/G03, P or X for G04.
+//! No feed planning: what the program demands is what is checked. Samples fall every
+//! `period_s` on one global clock, so the stream is uniform across block boundaries.
+//! Memory is O(1): one block at a time.
+
+use nalgebra::Point3;
+
+use crate::error::{Error, Result};
+use crate::input::machine::Machine;
+use crate::program::{FeedMode, Motion, Move};
+use crate::{Axis, AxisVec};
+
+/// Samples are the interpolator's setpoints: time, commanded axes, line and block.
+pub use crate::motion::interpolation::Setpoint as Sample;
+
+/// Programmed duration of a block, s.
+pub fn block_duration_s(block: &Move, machine: &Machine) -> Result<f64> {
+    let bad_feed = || {
+        Error::invalid(
+            &machine.path,
+            format!(
+                "line {}: the block has no usable F word (need F > 0)",
+                block.line
+            ),
+        )
+    };
+    let minutes = match block.motion {
+        Motion::Dwell { seconds } => return Ok(seconds.max(0.0)),
+        Motion::Rapid => {
+            let d = block.end - block.start;
+            return Ok(machine
+                .axes()
+                .iter()
+                .map(|&a| d[a].abs() / (machine.axis(a).max_velocity / 60.0))
+                .fold(0.0, f64::max));
+        }
+        Motion::Linear | Motion::Arc { .. } => {
+            let f = block
+                .feed
+                .filter(|f| f.is_finite() && *f > 0.0)
+                .ok_or_else(bad_feed)?;
+            match block.feed_mode {
+                FeedMode::InverseTime => 1.0 / f,
+                FeedMode::PerMinute => feed_length(block) / f,
+            }
+        }
+    };
+    Ok(minutes * 60.0)
+}
+
+/// The length a G94 F word is divided by, mm (deg counted as mm).
+fn feed_length(block: &Move) -> f64 {
+    match block.motion {
+        Motion::Arc {
+            plane, center_mm, ..
+        } => {
+            let (u, v, w) = plane.axes();
+            let r = (block.start[u] - center_mm[u.index()])
+                .hypot(block.start[v] - center_mm[v.index()]);
+            let sweep = block.arc_sweep_rad().unwrap_or(0.0).abs();
+            (r * sweep).hypot(block.end[w] - block.start[w])
+        }
+        _ if block.tcp => {
+            let d = block.end - block.start;
+            let tip = (d[Axis::X].powi(2) + d[Axis::Y].powi(2) + d[Axis::Z].powi(2)).sqrt();
+            // A pure rotary move under TCP falls back to the mixed-unit rule.
+            if tip > 0.0 {
+                tip
+            } else {
+                d.mixed_norm()
+            }
+        }
+        _ => (block.end - block.start).mixed_norm(),
+    }
+}
+
+/// Commanded machine axis positions at fraction `f` in [0, 1] of `block`.
+pub fn position_in_block(block: &Move, machine: &Machine, f: f64) -> AxisVec {
+    let mut q = block.start + (block.end - block.start) * f;
+    match block.motion {
+        Motion::Arc {
+            plane, center_mm, ..
+        } => {
+            let (u, v, _) = plane.axes();
+            let (cu, cv) = (center_mm[u.index()], center_mm[v.index()]);
+            let r = (block.start[u] - cu).hypot(block.start[v] - cv);
+            let a0 = (block.start[v] - cv).atan2(block.start[u] - cu);
+            // The reader's signed sweep: negative for G02, ±2π for a full circle.
+            let a = a0 + block.arc_sweep_rad().unwrap_or(0.0) * f;
+            q[u] = cu + r * a.cos();
+            q[v] = cv + r * a.sin();
+        }
+        _ if block.tcp => {
+            // X Y Z are the tool tip in the table frame, moving on the straight line.
+            let tip = Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
+            let m = machine.kinematics.table_to_machine(&q, &tip);
+            q[Axis::X] = m.x;
+            q[Axis::Y] = m.y;
+            q[Axis::Z] = m.z;
+        }
+        _ => {}
+    }
+    q
+}
+
+/// Streams [`Sample`]s every `period_s` through a block stream at programmed timing; the
+/// last sample is the program's end point at its end time.
+pub struct NominalSampler<'m, I> {
+    blocks: I,
+    machine: &'m Machine,
+    period_s: f64,
+    /// The block being sampled, its start time and duration, s.
+    current: Option<(Move, f64, f64)>,
+    block_index: u64,
+    /// Index of the next sample on the clock.
+    k: u64,
+    done: bool,
+}
+
+impl<'m, I: Iterator<Item = Result<Move>>> NominalSampler<'m, I> {
+    pub fn new(blocks: I, machine: &'m Machine, period_s: f64) -> Self {
+        NominalSampler {
+            blocks,
+            machine,
+            period_s,
+            current: None,
+            block_index: 0,
+            k: 0,
+            done: false,
+        }
+    }
+
+    fn sample(&self, block: &Move, time_s: f64, f: f64) -> Sample {
+        Sample {
+            time_s,
+            line: block.line,
+            block_index: self.block_index - 1,
+            q: position_in_block(block, self.machine, f),
+        }
+    }
+}
+
+impl<I: Iterator<Item = Result<Move>>> Iterator for NominalSampler<'_, I> {
+    type Item = Result<Sample>;
+
+    fn next(&mut self) -> Option<Result<Sample>> {
+        if self.done {
+            return None;
+        }
+        let t = self.k as f64 * self.period_s;
+        loop {
+            if let Some((block, start_s, duration_s)) = &self.current {
+                if t <= start_s + duration_s {
+                    let f = if *duration_s > 0.0 {
+                        (t - start_s) / duration_s
+                    } else {
+                        1.0
+                    };
+                    self.k += 1;
+                    return Some(Ok(self.sample(block, t, f.clamp(0.0, 1.0))));
+                }
+            }
+            let start_s = self.current.as_ref().map_or(0.0, |(_, s, d)| s + d);
+            match self.blocks.next() {
+                Some(Ok(block)) => match block_duration_s(&block, self.machine) {
+                    Ok(d) => {
+                        self.current = Some((block, start_s, d));
+                        self.block_index += 1;
+                    }
+                    Err(e) => {
+                        self.done = true;
+                        return Some(Err(e));
+                    }
+                },
+                Some(Err(e)) => {
+                    self.done = true;
+                    return Some(Err(e));
+                }
+                None => {
+                    self.done = true;
+                    let (block, s, d) = self.current.as_ref()?;
+                    let last_sampled = (self.k as f64 - 1.0) * self.period_s;
+                    return (self.k == 0 || last_sampled < s + d)
+                        .then(|| Ok(self.sample(block, s + d, 1.0)));
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,158 @@
+//! The planar circular test (ISO 230-4) program generator: G02/G03 with lead-in and lead-out
+//! arcs, as canonical moves or text.
+//!
+//! The tool tip starts on the circle `lead_deg` before θ = 0, runs an arc into θ = 0, one
+//! full circle (the measured revolution, one block), and an arc out of θ = 0. θ is measured
+//! counter-clockwise from the plane's first axis (X in G17, Z in G18, Y in G19), seen from
+//! the plane's positive normal; a clockwise run goes through θ decreasing.
+
+use std::fmt::Write as _;
+
+use crate::input::program::{CircleTest, MeasuredLines};
+use crate::program::{FeedMode, Motion, Move};
+use crate::{Axis, AxisVec, Plane};
+
+/// The circle program as canonical moves: a G00 to the start `lead_deg` before θ = 0, the
+/// lead-in arc, the measured full circle (one block) and the lead-out arc. Line numbers are
+/// those of the text [`write_program`] writes.
+#[derive(Clone, Debug)]
+pub struct CircleProgram {
+    circle: CircleTest,
+    clockwise: bool,
+    lead_deg: f64,
+    header: [String; 4],
+}
+
+impl CircleProgram {
+    pub fn new(circle: &CircleTest, clockwise: bool, lead_deg: f64) -> CircleProgram {
+        let plane_code = match circle.plane {
+            Plane::XY => "G17",
+            Plane::ZX => "G18",
+            Plane::YZ => "G19",
+        };
+        CircleProgram {
+            circle: *circle,
+            clockwise,
+            lead_deg,
+            header: [
+                "%".to_string(),
+                "O2001 (MTSIM CIRCULAR TEST, ISO 230-4)".to_string(),
+                format!(
+                    "(CENTRE {:.4} {:.4} {:.4} MM, RADIUS {:.4} MM, FEED {:.1} MM/MIN, {}, LEAD {:.1} DEG)",
+                    circle.center_mm[0],
+                    circle.center_mm[1],
+                    circle.center_mm[2],
+                    circle.radius_mm,
+                    circle.feed_mm_min,
+                    if clockwise { "CW" } else { "CCW" },
+                    lead_deg
+                ),
+                format!("G21 G90 G94 {plane_code}"),
+            ],
+        }
+    }
+
+    /// The line of the measured full-circle block.
+    pub fn measured(&self) -> MeasuredLines {
+        let line = self.header.len() + 2 + usize::from(self.lead_deg > 0.0);
+        MeasuredLines {
+            first: line,
+            last: line,
+        }
+    }
+
+    /// The moves, in order.
+    pub fn moves(&self) -> impl Iterator<Item = Move> {
+        let c = self.circle;
+        let sign = if self.clockwise { -1.0 } else { 1.0 };
+        let at = |theta_deg: f64| {
+            let p = c.point(theta_deg);
+            AxisVec([p[0], p[1], p[2], 0.0, 0.0, 0.0])
+        };
+        let start = at(-sign * self.lead_deg);
+        let zero = at(0.0);
+        let mut ends = vec![(Motion::Rapid, start)];
+        let arc = Motion::Arc {
+            clockwise: self.clockwise,
+            plane: c.plane,
+            center_mm: c.center_mm,
+        };
+        if self.lead_deg > 0.0 {
+            ends.push((arc, zero));
+        }
+        ends.push((arc, zero));
+        if self.lead_deg > 0.0 {
+            ends.push((arc, at(sign * self.lead_deg)));
+        }
+        let first_line = self.header.len() + 1;
+        let mut previous = AxisVec::ZERO;
+        ends.into_iter().enumerate().map(move |(k, (motion, end))| {
+            let mv = Move {
+                line: first_line + k,
+                motion,
+                start: previous,
+                end,
+                feed: (motion != Motion::Rapid).then_some(c.feed_mm_min),
+                feed_mode: FeedMode::PerMinute,
+                tcp: false,
+            };
+            previous = end;
+            mv
+        })
+    }
+}
+
+/// Writes the circle program as text; returns it and the line of the measured full-circle
+/// block. Words are the [`CircleProgram`]'s moves rounded to 4 decimals.
+pub fn write_program(
+    circle: &CircleTest,
+    clockwise: bool,
+    lead_deg: f64,
+) -> (String, MeasuredLines) {
+    let program = CircleProgram::new(circle, clockwise, lead_deg);
+    let measured = program.measured();
+    let (u, v, _) = circle.axes();
+    let mut text = program.header.join("\n");
+    text.push('\n');
+    for mv in program.moves() {
+        let e = &mv.end;
+        match mv.motion {
+            Motion::Arc { center_mm, .. } => {
+                let code = if clockwise { "G02" } else { "G03" };
+                let _ = write!(
+                    text,
+                    "{code} X{:.4} Y{:.4} Z{:.4}",
+                    e[Axis::X],
+                    e[Axis::Y],
+                    e[Axis::Z]
+                );
+                // I J K: the centre relative to the block's start point, in the plane's axes.
+                for (axis, letter) in [(Axis::X, 'I'), (Axis::Y, 'J'), (Axis::Z, 'K')] {
+                    if axis == u || axis == v {
+                        let _ = write!(
+                            text,
+                            " {letter}{:.4}",
+                            center_mm[axis.index()] - mv.start[axis]
+                        );
+                    }
+                }
+                let _ = write!(text, " F{:.3}", circle.feed_mm_min);
+                if mv.line == measured.first {
+                    text.push_str(" (MEASURED REVOLUTION)");
+                }
+            }
+            _ => {
+                let _ = write!(
+                    text,
+                    "G00 X{:.4} Y{:.4} Z{:.4}",
+                    e[Axis::X],
+                    e[Axis::Y],
+                    e[Axis::Z]
+                );
+            }
+        }
+        text.push('\n');
+    }
+    text.push_str("M30\n%\n");
+    (text, measured)
+}

@@ -1,0 +1,326 @@
+//! The cone-frustum program generator (the paper's post-processor): the cone path on one
+//! machine by inverse kinematics, and one G01 block per chord, as canonical moves or text.
+//!
+//! The geometry (P(θ), the apex, the tool axis) is [`ConeTest`]'s, in `crate::input`.
+
+use std::f64::consts::TAU;
+use std::fmt::Write as _;
+
+use crate::input::machine::Machine;
+use crate::input::program::{ConeTest, MeasuredLines, NcOptions};
+use crate::kinematics::{Branch, Kinematics, C_START_REFERENCE_DEG};
+use crate::program::{FeedMode, Motion, Move};
+use crate::{Axis, AxisVec};
+
+/// The cone path on one machine: axis positions as functions of θ on one IK branch.
+#[derive(Clone, Copy, Debug)]
+pub struct ConePath {
+    pub cone: ConeTest,
+    pub kinematics: Kinematics,
+    pub branch: Branch,
+}
+
+impl ConePath {
+    /// Chooses the IK branch: the spec's (tilt >= 0) unless the machine's tilt limits
+    /// exclude it and the other branch fits.
+    pub fn new(cone: ConeTest, machine: &Machine) -> ConePath {
+        let kinematics = machine.kinematics;
+        let mut path = ConePath {
+            cone,
+            kinematics,
+            branch: Branch::Primary,
+        };
+        if let Some(tilt) = kinematics.layout.tilt_axis() {
+            let limits = machine.axis(tilt);
+            let fits = |path: &ConePath| {
+                (0..360).all(|k| {
+                    limits.within_travel(path.axes_near((k as f64).to_radians(), 0.0)[tilt])
+                })
+            };
+            if !fits(&path) {
+                let other = ConePath {
+                    branch: Branch::Secondary,
+                    ..path
+                };
+                if fits(&other) {
+                    path = other;
+                }
+            }
+        }
+        path
+    }
+
+    /// Axis positions at `theta_rad`, with C unwrapped nearest `reference_c_deg`.
+    pub fn axes_near(&self, theta_rad: f64, reference_c_deg: f64) -> AxisVec {
+        self.kinematics
+            .inverse(&self.cone.pose(theta_rad), self.branch, reference_c_deg)
+    }
+
+    /// Axis positions at θ = 0, with C in the spec's atan2 range.
+    pub fn start(&self) -> AxisVec {
+        self.axes_near(0.0, C_START_REFERENCE_DEG)
+    }
+
+    /// Axis positions at `n + 1` equally spaced θ from `theta0_rad` over `span_rad`, C kept
+    /// continuous from the start value.
+    pub fn sampled(
+        self,
+        theta0_rad: f64,
+        span_rad: f64,
+        n: usize,
+    ) -> impl Iterator<Item = (f64, AxisVec)> {
+        let mut previous_c = self.axes_near(theta0_rad, C_START_REFERENCE_DEG)[Axis::C];
+        (0..=n).map(move |k| {
+            let theta = theta0_rad + span_rad * k as f64 / n as f64;
+            let q = self.axes_near(theta, previous_c);
+            previous_c = q[Axis::C];
+            (theta, q)
+        })
+    }
+
+    /// dq/dθ at `theta_rad` (mm/rad and deg/rad), by the fourth-order central difference
+    /// `q' = (q(θ-2h) - 8q(θ-h) + 8q(θ+h) - q(θ+2h)) / 12h` with h = 1e-3 rad on the exact
+    /// path (truncation ~h⁴q⁽⁵⁾/30 ≈ 1e-11, far below the 0.01 deg the analysis needs).
+    pub fn derivative(&self, theta_rad: f64) -> AxisVec {
+        const H: f64 = 1e-3;
+        let c0 = self.axes_near(theta_rad, 0.0)[Axis::C];
+        let q = |dt: f64| self.axes_near(theta_rad + dt, c0);
+        (q(-2.0 * H) - q(-H) * 8.0 + q(H) * 8.0 - q(2.0 * H)) * (1.0 / (12.0 * H))
+    }
+}
+
+/// One generated block: its canonical move, and the θ it reaches, rad.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConeBlock {
+    pub theta_rad: f64,
+    pub mv: Move,
+}
+
+/// The cone-frustum program (the paper's post-processor), as canonical moves.
+///
+/// Each G01 block moves the tool ball along one chord of the circle. Without TCP the F word
+/// is the mixed-unit rate `sqrt(dX² + dY² + dZ² + dA² + dC²) / dt` with `dt = chord / F`;
+/// with G93 it is `1 / dt`; with TCP (G43.4) X Y Z are the tool tip in the table frame and F
+/// is the tip feed. Line numbers are those of the text [`write_program`] writes, so a
+/// generated run and the same program read from its file report the same lines.
+#[derive(Clone, Debug)]
+pub struct ConeProgram {
+    path: ConePath,
+    options: NcOptions,
+    /// Comment and modal lines before the first move.
+    header: Vec<String>,
+    /// θ step per block, rad (negative when clockwise).
+    step_rad: f64,
+    theta0_rad: f64,
+    /// G01 blocks, lead-in and lead-out included.
+    total: usize,
+    measured: MeasuredLines,
+}
+
+impl ConeProgram {
+    pub fn new(path: &ConePath, machine_name: &str, options: &NcOptions) -> ConeProgram {
+        let cone = &path.cone;
+        let n = options.segments;
+        let step_rad = TAU / n as f64 * if options.clockwise { -1.0 } else { 1.0 };
+        let lead_blocks = (options.lead_deg.to_radians() / step_rad.abs()).ceil() as usize;
+        let feed_kind = if options.tcp {
+            "TOOL-TIP FEED WITH G43.4"
+        } else if options.inverse_time {
+            "INVERSE TIME G93"
+        } else {
+            "MIXED-UNIT F PER BLOCK"
+        };
+        let mut header = vec![
+            "%".to_string(),
+            "O1001 (MTSIM CONE-FRUSTUM TEST, NAS 979 / ISO 10791-7)".to_string(),
+            format!("(MACHINE: {})", sanitize(machine_name)),
+            format!(
+                "(HALF APEX ANGLE {:.4} DEG, INCLINATION {:.4} DEG)",
+                cone.half_apex_deg, cone.inclination_deg
+            ),
+            format!(
+                "(BASE CENTRE XT {:.4} YT {:.4} ZT {:.4} MM, BALL BAR LENGTH {:.4} MM)",
+                cone.center_mm.x, cone.center_mm.y, cone.center_mm.z, cone.ballbar_length_mm
+            ),
+            format!(
+                "(CIRCLE RADIUS {:.4} MM, DIAMETER {:.4} MM, HEIGHT {:.4} MM)",
+                cone.radius_mm(),
+                2.0 * cone.radius_mm(),
+                cone.height_mm()
+            ),
+            format!(
+                "(SEGMENTS {n}, FEED {:.1} MM/MIN, {feed_kind}, {}, LEAD {:.1} DEG, {:?} BRANCH)",
+                options.feed_mm_min,
+                if options.clockwise { "CW" } else { "CCW" },
+                options.lead_deg,
+                path.branch
+            ),
+            if options.inverse_time && !options.tcp {
+                "G21 G90 G93 G17"
+            } else {
+                "G21 G90 G94 G17"
+            }
+            .to_string(),
+        ];
+        if options.tcp {
+            // Switch TCP on, then position tip and rotary axes in one rapid move.
+            header.push("G43.4 H1".to_string());
+        }
+        // The G00 block is the line after the header; G01 block j follows it at +1+j.
+        let rapid_line = header.len() + 1;
+        ConeProgram {
+            path: *path,
+            options: *options,
+            header,
+            step_rad,
+            theta0_rad: -(lead_blocks as f64) * step_rad,
+            total: n + 2 * lead_blocks,
+            measured: MeasuredLines {
+                first: rapid_line + 1 + lead_blocks,
+                last: rapid_line + lead_blocks + n,
+            },
+        }
+    }
+
+    /// The lines of the measured revolution.
+    pub fn measured(&self) -> MeasuredLines {
+        self.measured
+    }
+
+    /// The blocks, streamed: a G00 to the start, then one G01 per chord.
+    pub fn blocks(&self) -> impl Iterator<Item = ConeBlock> {
+        let path = self.path;
+        let cone = path.cone;
+        let options = self.options;
+        let axes = path.kinematics.layout.axes();
+        let rapid_line = self.header.len() + 1;
+        let chord = 2.0 * cone.radius_mm() * (self.step_rad.abs() / 2.0).sin();
+        let dt_min = chord / options.feed_mm_min;
+        let feed_mode = if options.inverse_time && !options.tcp {
+            FeedMode::InverseTime
+        } else {
+            FeedMode::PerMinute
+        };
+        // The program's words: X Y Z are the tool tip under TCP, else the machine axes.
+        let words = move |q: &AxisVec, theta: f64| {
+            let tip = cone.point(theta);
+            let mut end = AxisVec::ZERO;
+            for &axis in axes {
+                end[axis] = if options.tcp && !axis.is_rotary() {
+                    tip[axis.index()]
+                } else {
+                    q[axis]
+                };
+            }
+            end
+        };
+        let (mut previous, mut q_prev) = (AxisVec::ZERO, AxisVec::ZERO);
+        let mut feed = None;
+        path.sampled(
+            self.theta0_rad,
+            self.step_rad * self.total as f64,
+            self.total,
+        )
+        .enumerate()
+        .map(move |(k, (theta, q))| {
+            let end = words(&q, theta);
+            let motion = if k == 0 {
+                Motion::Rapid
+            } else {
+                feed = Some(if options.tcp {
+                    options.feed_mm_min
+                } else if options.inverse_time {
+                    1.0 / dt_min
+                } else {
+                    (q - q_prev).mixed_norm() / dt_min
+                });
+                Motion::Linear
+            };
+            let mv = Move {
+                line: rapid_line + k,
+                motion,
+                start: previous,
+                end,
+                feed,
+                feed_mode,
+                tcp: options.tcp,
+            };
+            previous = end;
+            q_prev = q;
+            ConeBlock {
+                theta_rad: theta,
+                mv,
+            }
+        })
+    }
+
+    /// The canonical moves alone.
+    pub fn moves(&self) -> impl Iterator<Item = Move> {
+        self.blocks().map(|b| b.mv)
+    }
+}
+
+/// Writes the cone-frustum NC program as text and tells which lines hold the measured
+/// revolution: the [`ConeProgram`]'s moves, each word rounded to 4 decimals (0.1 um,
+/// 0.0001 deg) and F to 3.
+pub fn write_program(
+    path: &ConePath,
+    machine_name: &str,
+    options: &NcOptions,
+) -> (String, MeasuredLines) {
+    let program = ConeProgram::new(path, machine_name, options);
+    let axes = path.kinematics.layout.axes();
+    let mut out = String::new();
+    for line in &program.header {
+        out.push_str(line);
+        out.push('\n');
+    }
+    for block in program.blocks() {
+        let mv = &block.mv;
+        out.push_str(if mv.motion == Motion::Rapid {
+            "G00"
+        } else {
+            "G01"
+        });
+        for &axis in axes {
+            let _ = write!(out, " {}{}", axis, fmt_num(mv.end[axis]));
+        }
+        if let Some(f) = mv.feed {
+            let _ = write!(out, " F{f:.3} (THETA {:.3})", block.theta_rad.to_degrees());
+        }
+        out.push('\n');
+    }
+    if options.tcp {
+        out.push_str("G49\n");
+    }
+    out.push_str("M30\n%\n");
+    (out, program.measured())
+}
+
+/// A number as an NC word value: 4 decimals (0.1 um, 0.0001 deg), no "-0".
+fn fmt_num(v: f64) -> String {
+    let s = format!("{v:.4}");
+    if s.trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        "0.0000".to_string()
+    } else {
+        s
+    }
+}
+
+/// Parentheses end an NC comment, so they cannot appear inside one.
+fn sanitize(text: &str) -> String {
+    text.replace(['(', ')'], " ").to_uppercase()
+}
+
+/// An angle in deg brought into [0, 360); values within 1e-9 deg below 360 become 0.
+pub fn normalize_deg(angle_deg: f64) -> f64 {
+    let a = angle_deg.rem_euclid(360.0);
+    if a > 360.0 - 1e-9 {
+        0.0
+    } else {
+        a
+    }
+}

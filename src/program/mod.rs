@@ -1,0 +1,68 @@
+//! **program** — stage 1: NC programs in, canonical moves out.
+//! Inputs: a G-code file (read by the `ngc` crate) or a generated test (cone, circle) from `input`.
+//! Outputs: a stream of canonical [`Move`]s, absolute axis positions in mm and deg, one block at a time.
+
+pub mod circle;
+pub mod cone;
+pub mod file;
+
+use crate::error::Result;
+use crate::input::program::{Direction, MeasuredLines, NcOptions};
+use crate::input::scenario::{Program, Scenario};
+
+pub use ngc::{FeedMode, Motion, Move};
+
+/// A stream of canonical moves; yields at most one error, then stops.
+pub type Moves<'a> = Box<dyn Iterator<Item = Result<Move>> + 'a>;
+
+/// One program to run: its moves and the lines of its measured revolution.
+pub struct Run<'a> {
+    pub direction: Direction,
+    pub moves: Moves<'a>,
+    /// Lines whose samples the ball bar measures; `None`: every move after the first.
+    pub measured: Option<MeasuredLines>,
+}
+
+/// The program a scenario runs in `direction`, with `lead_deg` of extra path before and after
+/// the measured revolution of a generated test. Generators feed their moves straight in; a
+/// file is read as it streams (and runs in the direction it was written).
+pub fn scenario_run(
+    scenario: &Scenario,
+    direction: Direction,
+    lead_deg: f64,
+) -> Result<Run<'static>> {
+    let machine = &scenario.machine;
+    let clockwise = direction == Direction::Cw;
+    Ok(match &scenario.program {
+        Program::Cone { cone, nc, .. } => {
+            let path = cone::ConePath::new(*cone, machine);
+            let options = NcOptions {
+                lead_deg,
+                clockwise,
+                ..*nc
+            };
+            let program = cone::ConeProgram::new(&path, &machine.name, &options);
+            Run {
+                direction,
+                measured: Some(program.measured()),
+                moves: Box::new(program.moves().map(Ok)),
+            }
+        }
+        Program::Circle { circle, .. } => {
+            let program = circle::CircleProgram::new(circle, clockwise, lead_deg);
+            Run {
+                direction,
+                measured: Some(program.measured()),
+                moves: Box::new(program.moves().map(Ok)),
+            }
+        }
+        Program::File { path, .. } => Run {
+            direction: Direction::Ccw,
+            measured: scenario
+                .simulate
+                .measure_lines
+                .map(|[first, last]| MeasuredLines { first, last }),
+            moves: file::read_file(path)?,
+        },
+    })
+}

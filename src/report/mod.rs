@@ -1,0 +1,11 @@
+//! **report** — sinks and writers: results in, files out.
+//! Inputs: samples (the trace), ball-bar results, check reports.
+//! Outputs: CSV, JSON and SVG files, each written completely or not at all (temporary file, then rename).
+
+pub mod files;
+pub mod fixed;
+pub mod polar;
+pub mod trace;
+
+pub use files::{temporary_path, write_atomic};
+pub use fixed::push_fixed;

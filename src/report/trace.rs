@@ -1,0 +1,196 @@
+//! `trace.csv`: one row per traced sample, as a pipeline sink.
+//!
+//! Columns: direction, time, line, θ, then per axis the commanded and actual position and
+//! the following error, then the nonlinear signature, the deviation dL and the centred
+//! deviation `dL - (a cos θ + b sin θ)`. The centring is the least-squares fit of the whole
+//! run, known only at its end, so rows go to a binary temporary file first and `trace.csv`
+//! is written from it, line by line, when the runs are done: memory stays flat, and
+//! `trace.csv` appears only when complete. A run that fails leaves no temporary file.
+
+use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+use super::files::temporary_path;
+use super::fixed::push_fixed;
+use crate::error::{Error, Result};
+use crate::input::program::{Direction, MeasuredLines};
+use crate::measure::{is_measured, BallbarRun, BarGeometry};
+use crate::pipeline::{Sample, Sink};
+use crate::Axis;
+
+/// Writes the trace of every run of a simulation.
+pub struct TraceSink {
+    raw: Option<BufWriter<File>>,
+    raw_path: PathBuf,
+    trace_path: PathBuf,
+    axes: &'static [Axis],
+    geometry: Option<BarGeometry>,
+    every: u64,
+    direction: Direction,
+    measured: Option<MeasuredLines>,
+    row: Vec<f64>,
+}
+
+fn write_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+    move |source| Error::Write {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+impl TraceSink {
+    /// A trace of `axes` into `trace_path`, every `every`-th sample of the measured
+    /// revolution; without a ball bar (`geometry` None) the trace has its header only.
+    pub fn create(
+        trace_path: &Path,
+        axes: &'static [Axis],
+        geometry: Option<BarGeometry>,
+        every: u64,
+    ) -> Result<TraceSink> {
+        let raw_path = trace_path.with_extension("csv.raw.tmp");
+        let file = File::create(&raw_path).map_err(write_error(&raw_path))?;
+        Ok(TraceSink {
+            raw: Some(BufWriter::new(file)),
+            raw_path,
+            trace_path: trace_path.to_path_buf(),
+            axes,
+            geometry,
+            every: every.max(1),
+            direction: Direction::Ccw,
+            measured: None,
+            row: Vec::with_capacity(6 + 3 * axes.len()),
+        })
+    }
+
+    /// The next run's direction and measured lines.
+    pub fn start_run(&mut self, direction: Direction, measured: Option<MeasuredLines>) {
+        self.direction = direction;
+        self.measured = measured;
+    }
+
+    /// Writes `trace.csv` (atomically) from the raw rows, centring each row with the fit of
+    /// its direction's run.
+    pub fn finish(mut self, runs: &[BallbarRun]) -> Result<()> {
+        if let Some(mut raw) = self.raw.take() {
+            raw.flush().map_err(write_error(&self.raw_path))?;
+        }
+        let mut header = String::from("direction,time_s,line,theta_deg");
+        for a in self.axes {
+            let u = a.unit();
+            let _ = write!(header, ",{a}_cmd_{u},{a}_act_{u},{a}_ferr_{u}");
+        }
+        header.push_str(",nonlinear_um,deviation_um,deviation_centred_um");
+        complete(
+            &self.raw_path,
+            &self.trace_path,
+            &header,
+            self.axes.len(),
+            runs,
+        )
+    }
+}
+
+impl Drop for TraceSink {
+    fn drop(&mut self) {
+        // Finished or failed, the raw rows are not kept.
+        self.raw = None;
+        let _ = std::fs::remove_file(&self.raw_path);
+    }
+}
+
+impl Sink for TraceSink {
+    fn push(&mut self, s: &Sample) -> Result<()> {
+        let Some(geometry) = &self.geometry else {
+            return Ok(());
+        };
+        if s.index % self.every != 0 || !is_measured(s, self.measured) {
+            return Ok(());
+        }
+        let r = geometry.read(s);
+        let row = &mut self.row;
+        row.clear();
+        let cw = if self.direction == Direction::Cw {
+            1.0
+        } else {
+            0.0
+        };
+        row.extend_from_slice(&[cw, s.time_s, s.line as f64, r.theta_deg]);
+        for &a in self.axes {
+            row.extend_from_slice(&[s.commanded[a], s.actual[a], s.following_error[a]]);
+        }
+        row.extend_from_slice(&[r.nonlinear_um, r.deviation_um]);
+        let raw = self.raw.as_mut().expect("open until finished");
+        for v in row.iter() {
+            raw.write_all(&v.to_le_bytes())
+                .map_err(write_error(&self.raw_path))?;
+        }
+        Ok(())
+    }
+}
+
+/// Writes `trace_path` from the binary rows in `raw_path`, appending the centred deviation
+/// `dL - (a cos θ + b sin θ)` of each row's run.
+fn complete(
+    raw_path: &Path,
+    trace_path: &Path,
+    header: &str,
+    n_axes: usize,
+    runs: &[BallbarRun],
+) -> Result<()> {
+    let tmp = temporary_path(trace_path);
+    let read_err = write_error(raw_path);
+    let write_err = write_error(&tmp);
+    let mut reader = BufReader::new(File::open(raw_path).map_err(&read_err)?);
+    let mut out = BufWriter::new(File::create(&tmp).map_err(&write_err)?);
+    writeln!(out, "{header}").map_err(&write_err)?;
+    let centring = |d: Direction| {
+        runs.iter()
+            .find(|r| r.direction() == d)
+            .map(|r| r.centring())
+    };
+    let (ccw, cw) = (centring(Direction::Ccw), centring(Direction::Cw));
+    let width = 6 + 3 * n_axes;
+    let mut bytes = vec![0u8; 8 * width];
+    let mut v = vec![0.0; width];
+    let mut line = String::new();
+    loop {
+        match reader.read_exact(&mut bytes) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => break,
+            Err(e) => {
+                let _ = std::fs::remove_file(&tmp);
+                return Err(read_err(e));
+            }
+        }
+        for (x, c) in v.iter_mut().zip(bytes.chunks_exact(8)) {
+            *x = f64::from_le_bytes(c.try_into().expect("8 bytes"));
+        }
+        let cw_row = v[0] == 1.0;
+        let (theta, dev) = (v[3], v[width - 1]);
+        let c = if cw_row { cw } else { ccw };
+        let centred = c.map_or(dev, |c| dev - c.offset_um(theta));
+        line.clear();
+        line.push_str(if cw_row { "cw" } else { "ccw" });
+        for (value, decimals) in [(v[1], 4), (v[2], 0), (theta, 4)] {
+            line.push(',');
+            push_fixed(&mut line, value, decimals);
+        }
+        for k in 0..n_axes {
+            for (j, decimals) in [6, 6, 7].into_iter().enumerate() {
+                line.push(',');
+                push_fixed(&mut line, v[4 + 3 * k + j], decimals);
+            }
+        }
+        for value in [v[width - 2], dev, centred] {
+            line.push(',');
+            push_fixed(&mut line, value, 4);
+        }
+        line.push('\n');
+        out.write_all(line.as_bytes()).map_err(&write_err)?;
+    }
+    out.flush().map_err(&write_err)?;
+    drop(out);
+    std::fs::rename(&tmp, trace_path).map_err(write_error(trace_path))
+}

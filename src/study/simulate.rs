@@ -1,0 +1,203 @@
+//! `mtsim simulate`: the whole pipeline into the virtual ball bar.
+//!
+//! For each direction: program (generated or file) → canonical moves → interpolator →
+//! servo per axis (and its linear twin) → sinks: the ball bar ([`BallbarSink`]) and the
+//! trace ([`TraceSink`]). The reversal study runs beside the pipeline, on the program alone;
+//! its angles are what the marks in the trace are attributed to. Memory does not grow with
+//! the program: moves and setpoints are consumed as they come, the ball bar keeps fixed θ
+//! bins, and the trace goes to disk as it is made.
+
+use std::path::Path;
+use std::time::Instant;
+
+use nalgebra::{Point3, Vector3};
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::input::program::Direction;
+use crate::input::scenario::{Program, Scenario};
+use crate::measure::ballbar::{analyse_events_of, BallbarResult};
+use crate::measure::{BallbarSink, BarGeometry, CircleFrame};
+use crate::pipeline::{self, RunOptions, Sink, Timing};
+use crate::program;
+use crate::report::trace::TraceSink;
+use crate::study::reversals::analyse_scenario;
+use crate::Axis;
+
+/// What a simulation found.
+#[derive(Clone, Debug, Serialize)]
+pub struct SimulationSummary {
+    /// Simulated machine time over all runs, s.
+    pub sim_time_s: f64,
+    /// Simulated seconds per wall-clock second (null with `--no-timing`).
+    pub realtime_factor: Option<f64>,
+    /// Wall-clock time of the simulation, s (null with `--no-timing`).
+    pub wall_time_s: Option<f64>,
+    /// Interpolation periods simulated.
+    pub setpoints: u64,
+    /// The ball-bar figures and events; null when the program has no measured circle.
+    pub ballbar: Option<BallbarResult>,
+    /// Each axis's reversal angles from the analysis, deg (what the spikes are attributed to).
+    pub reversals_deg: std::collections::BTreeMap<String, Vec<f64>>,
+    /// The directions run.
+    pub directions: Vec<Direction>,
+}
+
+/// Files a simulation writes into its output folder.
+pub const TRACE_FILE: &str = "trace.csv";
+pub const SUMMARY_FILE: &str = "summary.json";
+pub const PLOT_FILE: &str = "ballbar.svg";
+
+/// Runs the scenario and writes `trace.csv`, `summary.json` and `ballbar.svg` to `out_dir`.
+/// `progress` is told the simulated time, s, now and then.
+pub fn simulate(
+    scenario: &Scenario,
+    out_dir: &Path,
+    timing: bool,
+    progress: &dyn Fn(f64),
+) -> Result<SimulationSummary> {
+    let machine = &scenario.machine;
+    let analysis = analyse_scenario(scenario)?;
+    let reversals: Vec<(Axis, Vec<f64>)> = analysis
+        .axes
+        .iter()
+        .map(|a| (a.axis, a.reversals_deg.clone()))
+        .collect();
+    let geometry = bar_geometry(scenario);
+    let directions = match &scenario.program {
+        Program::Cone { directions, .. } | Program::Circle { directions, .. } => directions.clone(),
+        Program::File { .. } => vec![Direction::Ccw],
+    };
+    std::fs::create_dir_all(out_dir).map_err(|source| Error::Write {
+        path: out_dir.to_path_buf(),
+        source,
+    })?;
+    let mut trace = TraceSink::create(
+        &out_dir.join(TRACE_FILE),
+        machine.axes(),
+        geometry,
+        scenario.simulate.trace_every as u64,
+    )?;
+
+    let started = Instant::now();
+    let (mut runs, mut signatures) = (Vec::new(), Vec::new());
+    let mut sim_time_s = 0.0;
+    let mut setpoints = 0u64;
+    for &direction in &directions {
+        let run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
+        trace.start_run(direction, run.measured);
+        let mut ballbar = geometry.map(|g| BallbarSink::new(g, direction, run.measured));
+        let options = RunOptions {
+            timing: Timing::Planned {
+                twins: true,
+                settle: false,
+            },
+            force_tcp: scenario.simulate.tcp,
+            start_time_s: sim_time_s,
+            program_path: scenario.path.clone(),
+        };
+        let stats = {
+            let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(2);
+            if let Some(b) = ballbar.as_mut() {
+                sinks.push(b);
+                sinks.push(&mut trace);
+            }
+            pipeline::run(run.moves, machine, &options, &mut sinks, progress)?
+        };
+        sim_time_s = stats.end_time_s;
+        setpoints += stats.samples;
+        if let Some(b) = ballbar {
+            runs.push(b.run);
+            signatures.push(b.signature);
+        }
+    }
+
+    // Figures from the trace; spikes and steps from the nonlinear signature.
+    let ballbar = if runs.is_empty() {
+        None
+    } else {
+        Some(analyse_events_of(&runs, &signatures, &reversals)?)
+    };
+    trace.finish(&runs)?;
+    if let Some(result) = &ballbar {
+        let title = plot_title(scenario);
+        crate::report::polar::write_polar_svg(
+            &out_dir.join(PLOT_FILE),
+            &runs,
+            &reversals,
+            result,
+            &title,
+        )?;
+    }
+    let wall = started.elapsed().as_secs_f64();
+    let summary = SimulationSummary {
+        sim_time_s,
+        realtime_factor: timing.then(|| sim_time_s / wall.max(1e-9)),
+        wall_time_s: timing.then_some(wall),
+        setpoints,
+        ballbar,
+        reversals_deg: reversals
+            .iter()
+            .map(|(a, r)| (a.to_string(), r.clone()))
+            .collect(),
+        directions,
+    };
+    let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
+    crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;
+    Ok(summary)
+}
+
+/// The virtual ball bar of a scenario: the cone's or circle's measured circle, the table
+/// ball at its centre (or where `[ballbar] pivot_mm` puts it); none for a file program
+/// without a cone.
+pub fn bar_geometry(scenario: &Scenario) -> Option<BarGeometry> {
+    let kinematics = scenario.machine.kinematics;
+    let pivot_override = scenario.ballbar_pivot_mm.map(Point3::from);
+    let cone_bar = |c: &crate::input::program::ConeTest| BarGeometry {
+        kinematics,
+        frame: CircleFrame::of_cone(c),
+        pivot_table_mm: pivot_override.unwrap_or(Point3::from(c.center_mm)),
+        length_mm: c.ballbar_length_mm,
+    };
+    match &scenario.program {
+        Program::Cone { cone, .. } => Some(cone_bar(cone)),
+        Program::Circle { circle, .. } => {
+            // The circle is programmed in machine coordinates, with any rotary axes at zero.
+            let center_table = Vector3::from(circle.center_mm) - kinematics.pivot_mm;
+            Some(BarGeometry {
+                kinematics,
+                frame: CircleFrame::planar(center_table.into(), circle.plane),
+                pivot_table_mm: pivot_override.unwrap_or(Point3::from(center_table)),
+                length_mm: circle.radius_mm,
+            })
+        }
+        Program::File { cone, .. } => cone.as_ref().map(cone_bar),
+    }
+}
+
+fn plot_title(scenario: &Scenario) -> String {
+    let name = scenario
+        .path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    match &scenario.program {
+        Program::Cone { cone, nc, .. } => format!(
+            "{name}: cone {}/{} deg, O ({}, {}, {}) mm, L {} mm, F{}",
+            cone.half_apex_deg,
+            cone.inclination_deg,
+            cone.center_mm.x,
+            cone.center_mm.y,
+            cone.center_mm.z,
+            cone.ballbar_length_mm,
+            nc.feed_mm_min
+        ),
+        Program::Circle { circle, .. } => {
+            format!(
+                "{name}: circle r {} mm, F{} ({:?})",
+                circle.radius_mm, circle.feed_mm_min, circle.plane
+            )
+        }
+        Program::File { path, .. } => format!("{name}: {}", path.display()),
+    }
+}

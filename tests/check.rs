@@ -1,39 +1,17 @@
 //! `mtsim check` against answers known in advance: windows computed from the path itself,
 //! block times from the words, and the exit codes scripts rely on.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn mtsim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mtsim"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mtsim-check-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn trt_ac() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("machines/trt-ac.toml")
-        .display()
-        .to_string()
-}
+use common::{mtsim, scratch, stdout_json, trt_ac, write_scenario, CONE_15_10};
 
 /// Runs `check --json` on a scenario body (and an NC program, if any); returns exit code and JSON.
 fn check(name: &str, body: &str, nc: Option<&str>, extra: &[&str]) -> (i32, serde_json::Value) {
-    let dir = scratch(name);
+    let dir = scratch("check", name);
     if let Some(nc) = nc {
         std::fs::write(dir.join("p.nc"), nc).unwrap();
     }
-    let path = dir.join("s.toml");
-    std::fs::write(&path, format!("machine = {:?}\n{body}", trt_ac())).unwrap();
+    let path = write_scenario(&dir, &trt_ac(), body);
     let mut args = vec!["check", path.to_str().unwrap(), "--json"];
     args.extend_from_slice(extra);
     let out = mtsim(&args);
@@ -54,8 +32,6 @@ fn violations<'a>(v: &'a serde_json::Value, kind: &str) -> Vec<&'a serde_json::V
         .filter(|x| x["kind"] == kind)
         .collect()
 }
-
-const CONE_15_10: &str = "[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 200.0]\nballbar_length_mm = 100.0\n";
 
 /// X(θ) of the 15/10 cone at O = (0, 0, 200), L = 100, written out from the spec:
 /// X = (Rz(C) P).x with C = atan2(i, j) of t = unit(apex - P).
@@ -299,7 +275,7 @@ fn bad_input_exits_2() {
 fn the_placement_map_marks_where_the_cone_fits_and_what_limits_it() {
     // The 45/30 cone: at the C axis the tool needs Y down to -293.185 mm (the spec's range),
     // inside the -350 mm travel; 300 mm off the axis along -Y it cannot fit.
-    let dir = scratch("placement");
+    let dir = scratch("check", "placement");
     let out = mtsim(&[
         "sweep",
         "scenarios/cone-45-30.toml",
@@ -316,12 +292,7 @@ fn the_placement_map_marks_where_the_cone_fits_and_what_limits_it() {
         "-o",
         dir.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = stdout_json(&out);
     let cells = v["cells"].as_array().unwrap();
     assert_eq!(cells.len(), 2);
     let at = |y: f64| cells.iter().find(|c| c["y"].as_f64() == Some(y)).unwrap();

@@ -1,43 +1,12 @@
 //! The command line as scripts use it: JSON shapes, exit codes and error messages.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn mtsim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mtsim"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the binary runs")
-}
+use common::{mtsim, scratch, stdout_json, trt_ac, write_scenario, CONE_15_10};
 
-fn stdout_json(out: &Output) -> serde_json::Value {
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
-}
-
-/// A scratch folder for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mtsim-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// Writes a scenario for the bundled trt-ac machine with `cone` as the [program.cone] body.
-fn scenario(dir: &Path, body: &str) -> String {
-    let machine = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/trt-ac.toml");
-    let path = dir.join("s.toml");
-    std::fs::write(
-        &path,
-        format!("machine = {:?}\n{body}", machine.display().to_string()),
-    )
-    .unwrap();
-    path.display().to_string()
+/// Writes a scenario for the bundled trt-ac machine with `body` after its `machine =` line.
+fn scenario(dir: &std::path::Path, body: &str) -> String {
+    write_scenario(dir, &trt_ac(), body).display().to_string()
 }
 
 #[test]
@@ -102,7 +71,7 @@ fn sweep_json_reports_rows_and_the_coincidence() {
 
 #[test]
 fn sweep_writes_a_csv_and_an_svg() {
-    let dir = scratch("sweep");
+    let dir = scratch("cli", "sweep");
     let out = mtsim(&[
         "sweep",
         "scenarios/cone-45-30.toml",
@@ -130,7 +99,7 @@ fn sweep_writes_a_csv_and_an_svg() {
 
 #[test]
 fn cone_writes_360_g01_blocks_with_the_parameters_in_the_header() {
-    let dir = scratch("cone");
+    let dir = scratch("cli", "cone");
     let nc = dir.join("cone.nc");
     let out = mtsim(&[
         "cone",
@@ -164,8 +133,8 @@ fn a_missing_scenario_exits_2_and_names_the_file() {
 
 #[test]
 fn an_unknown_key_exits_2_and_names_the_key_and_line() {
-    let dir = scratch("unknown");
-    let s = scenario(&dir, "[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 200.0]\nballbar_length_mm = 100.0\nfeed_rate = 3.0\n");
+    let dir = scratch("cli", "unknown");
+    let s = scenario(&dir, &format!("{CONE_15_10}feed_rate = 3.0\n"));
     let out = mtsim(&["analyze", &s]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
@@ -174,7 +143,7 @@ fn an_unknown_key_exits_2_and_names_the_key_and_line() {
 
 #[test]
 fn a_half_apex_angle_outside_0_90_exits_2_and_names_the_key_and_line() {
-    let dir = scratch("apex");
+    let dir = scratch("cli", "apex");
     let s = scenario(&dir, "[program.cone]\nhalf_apex_deg = 95.0\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 200.0]\nballbar_length_mm = 100.0\n");
     let out = mtsim(&["analyze", &s]);
     assert_eq!(out.status.code(), Some(2));
@@ -187,7 +156,7 @@ fn a_half_apex_angle_outside_0_90_exits_2_and_names_the_key_and_line() {
 
 #[test]
 fn nan_and_syntax_errors_exit_2_without_a_panic() {
-    let dir = scratch("nan");
+    let dir = scratch("cli", "nan");
     for body in [
         "[program.cone]\nhalf_apex_deg = nan\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 200.0]\nballbar_length_mm = 100.0\n",
         "[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, nan, 200.0]\nballbar_length_mm = 100.0\n",
@@ -205,10 +174,10 @@ fn nan_and_syntax_errors_exit_2_without_a_panic() {
 
 #[test]
 fn a_bad_machine_override_exits_2() {
-    let dir = scratch("override");
+    let dir = scratch("cli", "override");
     let s = scenario(
         &dir,
-        "[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 200.0]\nballbar_length_mm = 100.0\n[machine_overrides.axes.X]\nmin = 500.0\n",
+        &format!("{CONE_15_10}[machine_overrides.axes.X]\nmin = 500.0\n"),
     );
     let out = mtsim(&["analyze", &s]);
     assert_eq!(out.status.code(), Some(2));
@@ -239,7 +208,7 @@ fn a_sweep_range_that_breaks_the_geometry_exits_2() {
 
 #[test]
 fn simulate_writes_the_trace_summary_and_plot_and_repeats_byte_for_byte() {
-    let (a, b) = (scratch("sim-a"), scratch("sim-b"));
+    let (a, b) = (scratch("cli", "sim-a"), scratch("cli", "sim-b"));
     for dir in [&a, &b] {
         let out = mtsim(&[
             "simulate",
@@ -296,7 +265,7 @@ fn simulate_writes_the_trace_summary_and_plot_and_repeats_byte_for_byte() {
 
 #[test]
 fn simulate_reports_the_real_time_factor_by_default() {
-    let dir = scratch("sim-rtf");
+    let dir = scratch("cli", "sim-rtf");
     let out = mtsim(&[
         "simulate",
         "scenarios/cone-45-30.toml",
@@ -315,11 +284,10 @@ fn simulate_reports_the_real_time_factor_by_default() {
 #[test]
 fn a_diverging_servo_exits_3_and_names_the_axis() {
     // A velocity loop far too fast for its 1 ms period rings up past the drive's 0.5 mm alarm.
-    let dir = scratch("diverge");
+    let dir = scratch("cli", "diverge");
     let s = scenario(
         &dir,
-        "[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 200.0]\nballbar_length_mm = 100.0\n\
-         [machine_overrides.axes.Y.servo]\nvelocity_bandwidth_hz = 3000.0\nservo_period_ms = 1.0\nfollowing_error_limit_mm = 0.5\n",
+        &format!("{CONE_15_10}[machine_overrides.axes.Y.servo]\nvelocity_bandwidth_hz = 3000.0\nservo_period_ms = 1.0\nfollowing_error_limit_mm = 0.5\n"),
     );
     let out = mtsim(&["simulate", &s, "-o", dir.join("out").to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr);
@@ -330,11 +298,8 @@ fn a_diverging_servo_exits_3_and_names_the_axis() {
 
 #[test]
 fn a_bad_direction_exits_2_and_names_the_key() {
-    let dir = scratch("direction");
-    let s = scenario(
-        &dir,
-        "[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 200.0]\nballbar_length_mm = 100.0\ndirections = [\"up\"]\n",
-    );
+    let dir = scratch("cli", "direction");
+    let s = scenario(&dir, &format!("{CONE_15_10}directions = [\"up\"]\n"));
     let out = mtsim(&["simulate", &s, "-o", dir.join("out").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);

@@ -1,27 +1,18 @@
 //! The cone-frustum analysis against every row of the reference tables in
 //! `shared/spec/cone-frustum.md` (values from Kato et al., Trans. JSME C 77 (2011)).
 
-use std::path::Path;
-
 use mtsim::input::machine::Machine;
-use mtsim::input::ConeTest;
 use mtsim::program::cone::ConePath;
 use mtsim::study::reversals::{analyse_cone, angular_distance_deg, Analysis};
 use mtsim::study::sweep::{grid, sweep, SweepParam};
 use mtsim::Axis;
-use nalgebra::Vector3;
+
+mod common;
+
+use common::cone;
 
 fn trt_ac() -> Machine {
-    Machine::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/trt-ac.toml")).unwrap()
-}
-
-fn cone(alpha: f64, beta: f64, yt: f64, length: f64) -> ConeTest {
-    ConeTest {
-        half_apex_deg: alpha,
-        inclination_deg: beta,
-        center_mm: Vector3::new(0.0, yt, 200.0),
-        ballbar_length_mm: length,
-    }
+    common::load_trt_ac()
 }
 
 fn analyse(alpha: f64, beta: f64, yt: f64) -> Analysis {

@@ -11,19 +11,15 @@ use mtsim::program::cone::{write_program, ConePath};
 use mtsim::program::file::read_str;
 use mtsim::study::reversals::{analyse_cone, analyse_moves, angular_distance_deg, Analysis};
 use mtsim::Axis;
-use nalgebra::Vector3;
+
+mod common;
 
 fn machine() -> Machine {
-    Machine::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/trt-ac.toml")).unwrap()
+    common::load_trt_ac()
 }
 
 fn cone_yt25() -> ConeTest {
-    ConeTest {
-        half_apex_deg: 15.0,
-        inclination_deg: 10.0,
-        center_mm: Vector3::new(0.0, -25.0, 200.0),
-        ballbar_length_mm: 100.0,
-    }
+    common::cone(15.0, 10.0, -25.0, 100.0)
 }
 
 fn options(inverse_time: bool, tcp: bool) -> NcOptions {
@@ -160,17 +156,11 @@ fn the_mixed_unit_f_word_is_the_five_axis_length_over_the_chord_time() {
 
 #[test]
 fn a_file_scenario_reports_reversal_lines_in_json() {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_mtsim"))
-        .args(["analyze", "scenarios/file-cone-15-10-yt25.toml", "--json"])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = common::stdout_json(&common::mtsim(&[
+        "analyze",
+        "scenarios/file-cone-15-10-yt25.toml",
+        "--json",
+    ]));
     let lines = v["axes"]["X"]["reversal_lines"].as_array().unwrap();
     assert_eq!(lines.len(), 2);
     let deg = v["axes"]["X"]["reversals_deg"].as_array().unwrap();

@@ -9,24 +9,13 @@ use mtsim::measure::ballbar::EventKind;
 use mtsim::study::reversals::angular_distance_deg;
 use mtsim::study::simulate::{simulate, SimulationSummary};
 
-fn machine(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("machines")
-        .join(name)
-        .display()
-        .to_string()
-}
+mod common;
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mtsim-sim-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::{machine, scenario_text, scratch};
 
 /// Writes and runs a scenario; returns the summary and the output folder.
 fn run(name: &str, body: &str) -> (SimulationSummary, PathBuf) {
-    let dir = scratch(name);
+    let dir = scratch("sim", name);
     let path = dir.join("scenario.toml");
     std::fs::write(&path, body).unwrap();
     let scenario = Scenario::load(&path).unwrap();
@@ -48,9 +37,9 @@ fn first_order(axes: &[&str], kv: &[f64], ff: f64) -> String {
 }
 
 fn circle(feed: f64, directions: &str, overrides: &str) -> String {
-    format!(
-        "machine = {:?}\n[program.circle]\nplane = \"XY\"\nradius_mm = 50.0\nfeed_mm_min = {feed}\ndirections = {directions}\ncenter_mm = [0.0, 0.0, 0.0]\n{overrides}",
-        machine("vmc-3axis.toml")
+    scenario_text(
+        &machine("vmc-3axis"),
+        &format!("[program.circle]\nplane = \"XY\"\nradius_mm = 50.0\nfeed_mm_min = {feed}\ndirections = {directions}\ncenter_mm = [0.0, 0.0, 0.0]\n{overrides}"),
     )
 }
 
@@ -197,9 +186,9 @@ fn backlash_on_x_in_a_semi_closed_loop_steps_the_trace_by_b_plus_2ff_over_k_at_x
 /// The 15/10 cone half-way between the coincidences, both directions, with dry friction
 /// only on `faulty` (N) and none elsewhere.
 fn cone_with_friction(faulty: Option<(&str, f64)>) -> String {
-    let mut s = format!(
-        "machine = {:?}\n[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, -49.8, 200.0]\nballbar_length_mm = 100.0\ndirections = [\"ccw\", \"cw\"]\n",
-        machine("trt-ac.toml")
+    let mut s = scenario_text(
+        &common::trt_ac(),
+        "[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, -49.8, 200.0]\nballbar_length_mm = 100.0\ndirections = [\"ccw\", \"cw\"]\n",
     );
     for a in ["X", "Y", "Z", "A", "C"] {
         let key = if "AC".contains(a) {

@@ -1,7 +1,7 @@
 //! `mtsim check`: does the program fit the machine? Travel, velocity and acceleration of
 //! every axis on every sample, and collisions and near misses in the scene, continuously.
 //!
-//! The program is sampled at its programmed timing ([`crate::sampling`]), which is what it
+//! The program is sampled at its programmed timing ([`crate::motion::sampling`]), which is what it
 //! demands of the machine; with `dynamics` the samples are instead the actual axis positions
 //! from the interpolator and the servo models, so that overshoot past a limit is caught too.
 

@@ -1,6 +1,6 @@
-//! The `mtsim` command line: argument parsing and the commands, over the library.
-//!
-//! Exit codes: 0 success; 1 checked and found violations; 2 bad input; 3 a run that failed.
+//! **cli** — the `mtsim` command line, one file per command, thin over the library.
+//! Inputs: command-line arguments and the scenario files they name.
+//! Outputs: tables or JSON on stdout, files, and exit codes: 0 success, 1 violations found, 2 bad input, 3 a run that failed.
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -100,7 +100,7 @@ pub enum Command {
         /// instead of the commanded ones.
         #[arg(long)]
         dynamics: bool,
-        /// Near-miss clearance, mm (default: the scenario's [check] or the machine's [scene]).
+        /// Near-miss clearance, mm (default: `near_miss_mm` of the scenario's `[check]`, else the machine's `[scene]`).
         #[arg(long)]
         near_miss: Option<f64>,
     },

@@ -5,7 +5,7 @@ use std::path::Path;
 use super::{cone_of, print_stdout, progress_bar};
 use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
-use crate::report::write_atomic;
+use crate::report::{create_dir, write_atomic};
 use crate::study::sweep::{grid, sweep as sweep_reversals, SweepParam};
 
 pub fn sweep(
@@ -24,10 +24,7 @@ pub fn sweep(
     let result = sweep_reversals(&scenario.machine, &cone, param, &values, &|| bar.inc(1))?;
     bar.finish_and_clear();
     if let Some(dir) = output {
-        std::fs::create_dir_all(dir).map_err(|source| Error::Write {
-            path: dir.to_path_buf(),
-            source,
-        })?;
+        create_dir(dir)?;
         let stem = format!("sweep-{}", param.name());
         let csv_path = dir.join(format!("{stem}.csv"));
         let svg_path = dir.join(format!("{stem}.svg"));
@@ -116,10 +113,7 @@ pub fn placement(
         crate::study::placement::placement_map(&scenario, [px, py], &xs, &ys, &|| bar.inc(1))?;
     bar.finish_and_clear();
     if let Some(dir) = output {
-        std::fs::create_dir_all(dir).map_err(|source| Error::Write {
-            path: dir.to_path_buf(),
-            source,
-        })?;
+        create_dir(dir)?;
         write_atomic(&dir.join("placement.csv"), &map.to_csv()?)?;
         let title = format!(
             "Where the test fits: {} (smallest margin, mm)",

@@ -7,5 +7,5 @@ pub mod fixed;
 pub mod polar;
 pub mod trace;
 
-pub use files::{temporary_path, write_atomic};
+pub use files::{create_dir, temporary_path, write_atomic};
 pub use fixed::push_fixed;

@@ -13,13 +13,14 @@ use std::time::Instant;
 use nalgebra::{Point3, Vector3};
 use serde::Serialize;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario};
 use crate::measure::ballbar::{analyse_events_of, BallbarResult};
 use crate::measure::{BallbarSink, BarGeometry, CircleFrame};
 use crate::pipeline::{self, RunOptions, Sink, Timing};
 use crate::program;
+use crate::report::create_dir;
 use crate::report::trace::TraceSink;
 use crate::study::reversals::analyse_scenario;
 use crate::Axis;
@@ -68,10 +69,7 @@ pub fn simulate(
         Program::Cone { directions, .. } | Program::Circle { directions, .. } => directions.clone(),
         Program::File { .. } => vec![Direction::Ccw],
     };
-    std::fs::create_dir_all(out_dir).map_err(|source| Error::Write {
-        path: out_dir.to_path_buf(),
-        source,
-    })?;
+    create_dir(out_dir)?;
     let mut trace = TraceSink::create(
         &out_dir.join(TRACE_FILE),
         machine.axes(),

@@ -14,8 +14,7 @@ use crate::input::machine::Machine;
 use crate::program::{FeedMode, Motion, Move};
 use crate::{Axis, AxisVec};
 
-/// Samples are the interpolator's setpoints: time, commanded axes, line and block.
-pub use crate::motion::interpolation::Setpoint as Sample;
+use crate::motion::interpolation::Setpoint;
 
 /// Programmed duration of a block, s.
 pub fn block_duration_s(block: &Move, machine: &Machine) -> Result<f64> {
@@ -107,7 +106,7 @@ pub fn position_in_block(block: &Move, machine: &Machine, f: f64) -> AxisVec {
     q
 }
 
-/// Streams [`Sample`]s every `period_s` through a block stream at programmed timing; the
+/// Streams [`Setpoint`]s every `period_s` through a block stream at programmed timing; the
 /// last sample is the program's end point at its end time.
 pub struct NominalSampler<'m, I> {
     blocks: I,
@@ -134,8 +133,8 @@ impl<'m, I: Iterator<Item = Result<Move>>> NominalSampler<'m, I> {
         }
     }
 
-    fn sample(&self, block: &Move, time_s: f64, f: f64) -> Sample {
-        Sample {
+    fn sample(&self, block: &Move, time_s: f64, f: f64) -> Setpoint {
+        Setpoint {
             time_s,
             line: block.line,
             block_index: self.block_index - 1,
@@ -145,9 +144,9 @@ impl<'m, I: Iterator<Item = Result<Move>>> NominalSampler<'m, I> {
 }
 
 impl<I: Iterator<Item = Result<Move>>> Iterator for NominalSampler<'_, I> {
-    type Item = Result<Sample>;
+    type Item = Result<Setpoint>;
 
-    fn next(&mut self) -> Option<Result<Sample>> {
+    fn next(&mut self) -> Option<Result<Setpoint>> {
         if self.done {
             return None;
         }

@@ -850,7 +850,8 @@ impl Interp {
             .filter_map(|&a| get(a.letter()).map(|w| (a, w)))
             .collect();
         // 6. Non-modal codes that use axis words.
-        let mut axes_used = false;
+        // G43.1 takes its Z as the tool length, not as a move.
+        let mut axes_used = g.iter().any(|(c, _)| *c == GCode::ToolLength(1));
         if let Some((nm, w)) = nonmodal {
             if nm != NonModal::Dwell && nm != NonModal::G53 {
                 axes_used = true;

@@ -46,11 +46,18 @@ fn runs_to_an_end(text: &str, dialect: Dialect) {
 }
 
 fn cases() -> u32 {
-    std::env::var("NGC_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(256)
+    std::env::var("NGC_FUZZ_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(256)
 }
 
 fn dialects() -> impl Strategy<Value = Dialect> {
-    prop_oneof![Just(Dialect::Linuxcnc), Just(Dialect::Fanuc), Just(Dialect::Haas)]
+    prop_oneof![
+        Just(Dialect::Linuxcnc),
+        Just(Dialect::Fanuc),
+        Just(Dialect::Haas)
+    ]
 }
 
 proptest! {

@@ -24,6 +24,9 @@ fn main() {
             std::process::exit(2)
         });
     }
+    if let Some(dirs) = std::env::var_os("NGC_PATH") {
+        options.search_path = std::env::split_paths(&dirs).collect();
+    }
     let moves = match read_file_with(Path::new(file), &options) {
         Ok(m) => m,
         Err(e) => {

@@ -534,7 +534,16 @@ impl Interp {
                             g.remove(k);
                         }
                     }
-                    if let Some((_, other)) = g.iter().find(|(c, _)| c.group() == code.group()) {
+                    // LinuxCNC: G4 is non-modal (group 0) and may share a block with G0-G3.
+                    let dwell_pair = |a: GCode, b: GCode| {
+                        dialect == Dialect::Linuxcnc
+                            && (a == GCode::NonModal(NonModal::Dwell))
+                                != (b == GCode::NonModal(NonModal::Dwell))
+                    };
+                    if let Some((_, other)) = g
+                        .iter()
+                        .find(|(c, _)| c.group() == code.group() && !dwell_pair(*c, code))
+                    {
                         return Err(LineError::new(word.span(), format!("`{}` and `{}` are in the same modal group: expected at most one per block", &line[other.span()], &line[word.span()]), "second code of the group").help("split them into two blocks"));
                     }
                     if !g.push((code, *word)) {
@@ -719,8 +728,9 @@ impl Interp {
         // 4. Dwell.
         if let Some((NonModal::Dwell, w)) = nonmodal {
             let x_is_time = if dialect.is_fanuc_family() { "" } else { "X" };
+            let with_motion = g.iter().any(|(c, _)| matches!(c, GCode::Motion(Some(_))));
             for letter in ['X', 'Y', 'Z', 'A', 'B', 'C', 'I', 'J', 'K', 'R'] {
-                if letter == 'X' && x_is_time.is_empty() {
+                if (letter == 'X' && x_is_time.is_empty()) || with_motion {
                     continue;
                 }
                 if let Some(aw) = get(letter) {
@@ -1161,6 +1171,12 @@ impl Interp {
         p: Option<Word>,
         x: Option<Word>,
     ) -> LineResult<f64> {
+        // In LinuxCNC X is an axis word, never a dwell time.
+        let x = if self.dialect == Dialect::Linuxcnc {
+            None
+        } else {
+            x
+        };
         let (seconds, w) = match (p, x, self.dialect) {
             (Some(p), None, Dialect::Linuxcnc) => (p.value, p),
             (Some(p), None, Dialect::Fanuc) => (p.value / 1000.0, p),

@@ -1701,8 +1701,11 @@ impl Interp {
                     // LinuxCNC 2.9 (interp_arc.cc): fails when the difference exceeds
                     // 0.001 mm (0.00005 in) and 0.1 % of the radius... see docs/gcode.md.
                     Dialect::Linuxcnc => {
-                        let abs_tol = if self.inch { 0.00005 * MM_PER_INCH } else { 0.001 };
-                        (diff <= abs_tol || diff / r_start <= 0.001 && diff <= 0.5 * scale.max(1.0), format!("{abs_tol} mm, or 0.1 % of the radius"))
+                        // Measured with rs274 2.9 (docs/gcode.md): an error only when the
+                        // difference exceeds both 0.02·√2 mm (0.002·√2 in under G20) and
+                        // 0.1 % of the start radius.
+                        let abs_tol = std::f64::consts::SQRT_2 * if self.inch { 0.002 * MM_PER_INCH } else { 0.02 };
+                        (diff <= abs_tol || diff / r_start <= 0.001, format!("{abs_tol:.4} mm or 0.1 % of the radius"))
                     }
                     _ => (diff <= ARC_RADIUS_TOLERANCE_MM, format!("{ARC_RADIUS_TOLERANCE_MM} mm")),
                 };

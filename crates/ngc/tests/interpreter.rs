@@ -500,3 +500,21 @@ fn linuxcnc_arc_radius_tolerance_matches_rs274() {
     assert!(fanuc_arc(0.0009));
     assert!(!fanuc_arc(0.0011));
 }
+
+#[test]
+fn post_processor_control_codes_are_accepted() {
+    // Fanuc G05.1 Q1 (AI contour control) and G08 P1 (look-ahead): no effect on moves.
+    assert_eq!(xyz(&fanuc("G05.1 Q1\nG08 P1\nG0 X1\n")[0]), [1.0, 0.0, 0.0]);
+    // Haas G187 E sets the blending tolerance; G103 P is accepted.
+    let m = moves_with("G187 P1 E0.01\nG103 P15\nG0 X1\n", &opts(Dialect::Haas));
+    assert_eq!(
+        m[0].path,
+        PathControl::Blend {
+            tolerance_mm: Some(0.01),
+            naive_cam_mm: None
+        }
+    );
+    // M70 saves, M72 restores the modal state (here G91 back to G90).
+    let m = cnc("M70\nG91\nG0 X1\nM72\nG0 X5\n");
+    assert_eq!(xyz(&m[1]), [5.0, 0.0, 0.0]);
+}

@@ -8,7 +8,13 @@ use crate::check::{check, CheckOptions, CheckReport};
 use crate::error::{Error, Result, EXIT_VIOLATIONS};
 use crate::input::scenario::Scenario;
 
-pub fn run(path: &Path, as_json: bool, dynamics: bool, near_miss_mm: Option<f64>) -> Result<i32> {
+pub fn run(
+    path: &Path,
+    as_json: bool,
+    dynamics: bool,
+    near_miss_mm: Option<f64>,
+    html: Option<&Path>,
+) -> Result<i32> {
     if let Some(d) = near_miss_mm {
         if !(d.is_finite() && d >= 0.0) {
             return Err(Error::usage(format!(
@@ -29,6 +35,11 @@ pub fn run(path: &Path, as_json: bool, dynamics: bool, near_miss_mm: Option<f64>
     } else {
         EXIT_VIOLATIONS
     };
+    if let Some(file) = html {
+        let value = serde_json::to_value(&report).expect("plain data serializes");
+        let page = crate::report::html::render_check_page(&path.display().to_string(), &value);
+        crate::report::write_atomic(file, page.as_bytes())?;
+    }
     if as_json {
         print_stdout(&format!(
             "{}\n",

@@ -15,6 +15,7 @@ use crate::study::sweep::SweepParam;
 mod analyze;
 mod check;
 mod cone;
+mod report;
 mod simulate;
 mod sweep;
 
@@ -103,6 +104,20 @@ pub enum Command {
         /// Near-miss clearance, mm (default: `near_miss_mm` of the scenario's `[check]`, else the machine's `[scene]`).
         #[arg(long)]
         near_miss: Option<f64>,
+        /// Also write an HTML report of the check to this file.
+        #[arg(long, value_name = "FILE")]
+        html: Option<PathBuf>,
+    },
+    /// Write report.html into each run folder (what `simulate -o` wrote): one
+    /// self-contained page with the test parameters, the plots, figures, marks, diagnoses
+    /// and the limits summary. Inline SVG and CSS, no network, no JavaScript.
+    Report {
+        /// Run folders.
+        #[arg(required = true)]
+        run_dirs: Vec<PathBuf>,
+        /// Date of the test for the report (YYYY-MM-DD); default: the one the run recorded.
+        #[arg(long)]
+        date: Option<String>,
     },
     /// Run the program through interpolator, servo models and kinematics, and predict the
     /// ball-bar trace: writes trace.csv, summary.json and ballbar.svg.
@@ -119,6 +134,9 @@ pub enum Command {
         /// (null), so that repeated runs give byte-identical files.
         #[arg(long)]
         no_timing: bool,
+        /// Also write report.html into the output folder (see `mtsim report`).
+        #[arg(long)]
+        html: bool,
     },
 }
 
@@ -142,13 +160,16 @@ fn run(cli: Cli) -> Result<i32> {
             json,
             dynamics,
             near_miss,
-        } => check::run(&scenario, json, dynamics, near_miss),
+            html,
+        } => check::run(&scenario, json, dynamics, near_miss, html.as_deref()),
         Command::Simulate {
             scenario,
             output,
             json,
             no_timing,
-        } => simulate::run(&scenario, &output, json, !no_timing),
+            html,
+        } => simulate::run(&scenario, &output, json, !no_timing, html),
+        Command::Report { run_dirs, date } => report::run(&run_dirs, date.as_deref()),
         Command::Cone {
             scenario,
             output,

@@ -142,6 +142,17 @@ pub fn simulate(
     };
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
     crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;
+    // The test parameters (ISO 230-4) for the report; the date only with timing, so that
+    // `--no-timing` runs stay byte-identical.
+    let test = crate::report::test_info::TestParameters::of(
+        scenario,
+        timing.then(crate::report::test_info::today_utc),
+    )?;
+    let json = serde_json::to_string_pretty(&test).expect("plain data serializes");
+    crate::report::write_atomic(
+        &out_dir.join(crate::report::test_info::TEST_FILE),
+        format!("{json}\n").as_bytes(),
+    )?;
     Ok(summary)
 }
 

@@ -16,6 +16,9 @@ pub fn run(path: &Path, out_dir: &Path, as_json: bool, timing: bool, html: bool)
         bar.set_message(format!("{t:.1} s of machine time"))
     })?;
     bar.finish_and_clear();
+    for w in &summary.warnings {
+        eprintln!("warning: {w}");
+    }
     // Travel, velocity, acceleration and collisions, as `check` finds them (commanded
     // positions): written beside the trace for the report, and told on stderr.
     let checked = check(

@@ -87,3 +87,248 @@ fn measuring_from_the_first_feed_block_warns_that_one_spot_dominates_g() {
     assert!(err.contains("one spot dominates G"), "{err}");
     assert!(err.contains("θ = 0.0°") || err.contains("θ = 359"), "{err}");
 }
+
+/// A scenario in `dir` running the G-code `program` on the three-axis machine.
+fn file_scenario(dir: &std::path::Path, program: &str) -> String {
+    std::fs::write(dir.join("p.nc"), program).unwrap();
+    let s = dir.join("s.toml");
+    std::fs::write(
+        &s,
+        format!(
+            "machine = \"{}\"\n[program]\nfile = \"p.nc\"\n",
+            common::machine("vmc-3axis")
+        ),
+    )
+    .unwrap();
+    s.display().to_string()
+}
+
+#[test]
+fn programs_without_motion_or_with_absurd_moves_exit_2_with_file_line_column() {
+    let x308 = format!("G01 X1{} F100\n", "0".repeat(308));
+    let cases: [(&str, &str, &str); 4] = [
+        ("empty", "", "p.nc:1:1: the program has no motion"),
+        (
+            "no-motion",
+            "G21 G90\nG00 X0 Y0\nM30\n",
+            "p.nc:1:1: the program has no motion",
+        ),
+        ("x308", &x308, "p.nc:1:5: this move takes X 1.0e308 mm"),
+        // 1000 mm of X on an 800 mm travel (-400 .. 400): longer than the envelope.
+        (
+            "long",
+            "G00 X0\nG01 X-1000 F1000\n",
+            "p.nc:2:5: this move takes X 1000 mm",
+        ),
+    ];
+    for (name, program, expected) in cases {
+        let dir = scratch("usability", name);
+        let s = file_scenario(&dir, program);
+        for command in ["analyze", "check", "simulate"] {
+            let started = std::time::Instant::now();
+            let out = common::mtsim_plain(
+                &dir,
+                &[command, &s, "-o", "out"][..if command == "simulate" { 4 } else { 2 }],
+            );
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{name} {command}: {err}");
+            assert!(err.contains(expected), "{name} {command}: {err}");
+            assert!(
+                err.len() < 4000,
+                "{name} {command}: no 300-digit numbers in the message"
+            );
+            assert!(
+                started.elapsed().as_secs() < 20,
+                "{name} {command}: refused before sampling"
+            );
+        }
+        assert!(
+            !dir.join("out/trace.csv").exists(),
+            "{name}: no empty outputs"
+        );
+    }
+}
+
+#[test]
+fn simulate_reports_a_travel_overrun_as_check_does() {
+    // X to 500 mm on a -400 .. 400 mm axis: within the envelope's length, beyond its end.
+    let dir = scratch("usability", "overrun");
+    let s = file_scenario(&dir, "G00 X0 Y0 Z100\nG01 X500 F6000\n");
+    let check = mtsim(&["check", &s, "--json"]);
+    assert_eq!(check.status.code(), Some(1));
+    let out = mtsim(&["simulate", &s, "-o", dir.join("out").to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("does not fit the machine") && err.contains("travel"),
+        "{err}"
+    );
+    assert!(err.contains("limit 400.000, excess 100.000"), "{err}");
+    let checked: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("out/check.json")).unwrap()).unwrap();
+    assert_eq!(checked["axes"]["X"]["max"].as_f64(), Some(500.0));
+    // --quiet keeps stderr free of the warning, not the exit code.
+    let quiet = mtsim(&[
+        "simulate",
+        &s,
+        "-o",
+        dir.join("out").to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(quiet.status.code(), Some(1));
+    assert!(
+        quiet.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&quiet.stderr)
+    );
+}
+
+#[test]
+fn negative_option_values_parse_and_get_a_range_error() {
+    let out = mtsim(&["check", "scenarios/cone-15-10.toml", "--near-miss", "-5"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr)
+        .contains("--near-miss -5: expected a clearance >= 0 mm"));
+    let out = mtsim(&[
+        "sweep",
+        "scenarios/cone-15-10.toml",
+        "--vary",
+        "center_y",
+        "--from",
+        "-10",
+        "--to",
+        "10",
+        "--step",
+        "-1",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("step > 0"));
+}
+
+#[test]
+fn a_near_miss_over_the_whole_run_is_reported_as_the_whole_run() {
+    // 50 mm is more than the shank ever stands off the cone (18 mm): one span, the whole run.
+    let out = mtsim(&["check", "scenarios/cone-15-10.toml", "--near-miss", "50"]);
+    assert_eq!(out.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.contains("nearmiss") && l.contains("shank / workpiece"))
+        .unwrap();
+    assert!(line.contains("the whole run, t 0.000.."), "{line}");
+    // The table says its units, and explains the cutting.
+    assert!(
+        text.contains("unit") && text.contains("(/min)") && text.contains("(/s²)"),
+        "{text}"
+    );
+    assert!(text.contains("expected, not a violation"), "{text}");
+}
+
+#[test]
+fn completions_and_a_man_page_are_generated() {
+    let bash = mtsim(&["completions", "bash"]);
+    assert!(bash.status.success());
+    let bash = String::from_utf8_lossy(&bash.stdout);
+    for sub in ["simulate", "check", "report", "sweep"] {
+        assert!(bash.contains(sub), "bash completion lacks {sub}");
+    }
+    let man = mtsim(&["man"]);
+    assert!(man.status.success());
+    let man = String::from_utf8_lossy(&man.stdout);
+    assert!(
+        man.contains(".TH mtsim 1") && man.contains("SUBCOMMANDS"),
+        "{man}"
+    );
+    assert_eq!(mtsim(&["completions", "tcsh"]).status.code(), Some(2));
+}
+
+#[test]
+fn a_killed_run_leaves_no_temporary_file_after_the_next_run() {
+    let dir = scratch("usability", "stale");
+    let out_dir = dir.join("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    // What a run killed mid-trace leaves: the raw rows and half-written outputs.
+    for stale in [
+        "trace.csv.raw.tmp",
+        "summary.json.tmp",
+        "ballbar.svg.tmp",
+        "report.html.tmp",
+    ] {
+        std::fs::write(out_dir.join(stale), b"").unwrap();
+    }
+    std::fs::write(out_dir.join("notes.tmp"), b"mine").unwrap();
+    let out = mtsim(&[
+        "simulate",
+        "scenarios/circle-iso230-4.toml",
+        "-o",
+        out_dir.to_str().unwrap(),
+        "--no-timing",
+        "--html",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let left: Vec<String> = std::fs::read_dir(&out_dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert_eq!(left, ["notes.tmp"], "only the user's own file stays");
+}
+
+#[test]
+fn every_file_the_repository_points_to_exists() {
+    // Paths like `docs/model.md` or `../machines/trt-ac.toml` in the machine, scenario and
+    // doc files and the sources must name files in the repository (`path/to/...` examples
+    // aside; the tests name missing files on purpose and are not scanned).
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = vec![root.join("README.md")];
+    for folder in ["machines", "scenarios", "docs", "src", "crates/ngc/src"] {
+        let mut stack = vec![root.join(folder)];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap() {
+                let p = e.unwrap().path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else if p
+                    .extension()
+                    .is_some_and(|x| ["md", "toml", "rs"].contains(&x.to_str().unwrap()))
+                {
+                    files.push(p);
+                }
+            }
+        }
+    }
+    let mut missing = Vec::new();
+    for file in &files {
+        let text = std::fs::read_to_string(file).unwrap();
+        for token in text.split(|c: char| c.is_whitespace() || "`\"'()[]<>,;:*".contains(c)) {
+            let token = token.trim_end_matches('.');
+            let is_path = token.contains('/')
+                && !token.contains("://")
+                && !token.contains('{')
+                && [".md", ".toml", ".nc"].iter().any(|e| token.ends_with(e))
+                && !token.starts_with("/tmp")
+                && !token.starts_with("path/to/")
+                && !token.contains("...");
+            if !is_path {
+                continue;
+            }
+            let here = file.parent().unwrap().join(token.trim_start_matches('/'));
+            let from_root = root.join(token.trim_start_matches('/'));
+            if !(here.exists() || from_root.exists()) {
+                missing.push(format!(
+                    "{}: {token}",
+                    file.strip_prefix(root).unwrap().display()
+                ));
+            }
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "pointers to files that are not in the repository:\n{}",
+        missing.join("\n")
+    );
+}

@@ -6,7 +6,6 @@ use super::print_stdout;
 use crate::check::limits::ViolationKind;
 use crate::check::{check, CheckOptions, CheckReport};
 use crate::error::{Error, Result, EXIT_VIOLATIONS};
-use crate::input::scenario::Scenario;
 
 pub fn run(
     path: &Path,
@@ -22,7 +21,7 @@ pub fn run(
             )));
         }
     }
-    let scenario = Scenario::load(path)?;
+    let scenario = super::load_scenario(path)?;
     let report = check(
         &scenario,
         &CheckOptions {
@@ -67,8 +66,14 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
             .map_or(String::new(), |q| format!(", {q} geometric queries"))
     );
     out.push_str(&format!(
-        "{:<4} {:>21} {:>21} {:>11} {:>23} {:>23}\n",
-        "axis", "used", "available", "margin", "peak velocity/limit", "peak accel./limit"
+        "{:<4} {:<4} {:>21} {:>21} {:>11} {:>27} {:>23}\n",
+        "axis",
+        "unit",
+        "used",
+        "travel",
+        "margin",
+        "peak/limit velocity (/min)",
+        "peak/limit accel. (/s²)"
     ));
     for (axis, u) in &report.axes {
         let unit = if "ABC".contains(axis.as_str()) {
@@ -77,12 +82,12 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
             "mm"
         };
         out.push_str(&format!(
-            "{axis:<4} {:>9.3}..{:<9.3} {:>9.3}..{:<9.3} {:>11} {:>11.0}/{:<11.0} {:>11.0}/{:<11.0}\n",
+            "{axis:<4} {unit:<4} {:>9.3}..{:<9.3} {:>9.3}..{:<9.3} {:>11} {:>15.0}/{:<11.0} {:>11.0}/{:<11.0}\n",
             u.min,
             u.max,
             u.limit_min,
             u.limit_max,
-            u.margin.map_or("continuous".to_string(), |m| format!("{m:.3} {unit}")),
+            u.margin.map_or("continuous".to_string(), |m| format!("{m:.3}")),
             u.peak_velocity_per_min,
             u.velocity_limit_per_min,
             u.peak_acceleration_per_s2,
@@ -97,7 +102,9 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
     }
     for e in &report.engagement {
         out.push_str(&format!(
-            "cutting: {} in {}, deepest {:.4} mm\n",
+            "cutting: {} in {}, deepest {:.4} mm (expected, not a violation: the test cuts the \
+             workpiece; without tool-centre-point control the tip sags into the nominal surface \
+             between block end points, by an amount that falls with the square of the block length)\n",
             e.bodies[0], e.bodies[1], e.max_depth_mm
         ));
     }
@@ -112,9 +119,19 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
             (_, Some(b)) => format!("{} / {}", b[0], b[1]),
             _ => String::new(),
         };
+        let time = if v.time_end_s > v.time_start_s {
+            format!("t {:.3}..{:.3} s", v.time_start_s, v.time_end_s)
+        } else {
+            format!("t {:.3} s (one sample)", v.time_start_s)
+        };
+        let whole_run = v.time_start_s <= 0.0 && v.time_end_s >= report.sim_time_s;
         let span = match (v.theta_start_deg, v.theta_end_deg) {
-            (Some(a), Some(b)) => format!("theta {a:.2}..{b:.2} deg"),
-            _ => format!("t {:.3}..{:.3} s", v.time_start_s, v.time_end_s),
+            _ if whole_run => format!("the whole run, {time}"),
+            (Some(a), Some(b)) if v.time_end_s > v.time_start_s => {
+                format!("θ {a:.2}..{b:.2} deg, {time}")
+            }
+            (Some(a), _) => format!("θ {a:.2} deg, {time}"),
+            _ => time,
         };
         let worst = match v.kind {
             ViolationKind::Collision => format!("penetration {:.3} mm", v.worst),

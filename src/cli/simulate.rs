@@ -5,20 +5,32 @@ use std::path::Path;
 use super::{print_stdout, spinner};
 use crate::check::{check, CheckOptions};
 use crate::error::{Result, EXIT_VIOLATIONS};
-use crate::input::scenario::Scenario;
 use crate::report::html::CHECK_FILE;
 use crate::report::write_atomic;
 
 pub fn run(path: &Path, out_dir: &Path, as_json: bool, timing: bool, html: bool) -> Result<i32> {
-    let scenario = Scenario::load(path)?;
+    let scenario = super::load_scenario(path)?;
     let bar = spinner("simulating");
     let summary = crate::study::simulate::simulate(&scenario, out_dir, timing, &|t| {
         bar.set_message(format!("{t:.1} s of machine time"))
     })?;
     bar.finish_and_clear();
     for w in &summary.warnings {
-        eprintln!("warning: {w}");
+        super::warn(w);
     }
+    super::detail(
+        1,
+        &format!(
+            "simulated {:.2} s of machine time in {} interpolation periods; wrote {}, {}, {}, {} and {}",
+            summary.sim_time_s,
+            summary.setpoints,
+            crate::study::simulate::TRACE_FILE,
+            crate::study::simulate::SUMMARY_FILE,
+            crate::study::simulate::PLOT_FILE,
+            crate::report::test_info::TEST_FILE,
+            CHECK_FILE
+        ),
+    );
     // Travel, velocity, acceleration and collisions, as `check` finds them (commanded
     // positions): written beside the trace for the report, and told on stderr.
     let checked = check(
@@ -30,13 +42,17 @@ pub fn run(path: &Path, out_dir: &Path, as_json: bool, timing: bool, html: bool)
     )?;
     let json = serde_json::to_string_pretty(&checked).expect("plain data serializes");
     write_atomic(&out_dir.join(CHECK_FILE), format!("{json}\n").as_bytes())?;
+    super::detail(
+        2,
+        &super::check::check_table(&checked, &path.display().to_string()),
+    );
     let code = if checked.is_clean() {
         0
     } else {
-        eprint!(
-            "warning: the program does not fit the machine (exit code 1); `mtsim check` says:\n{}",
+        super::warn(&format!(
+            "the program does not fit the machine (exit code 1); `mtsim check` says:\n{}",
             super::check::check_table(&checked, &path.display().to_string())
-        );
+        ));
         EXIT_VIOLATIONS
     };
     if html {

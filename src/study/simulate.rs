@@ -75,6 +75,18 @@ pub fn simulate(
         Program::File { .. } => vec![Direction::Ccw],
     };
     create_dir(out_dir)?;
+    // What a killed run into this folder left behind.
+    crate::report::files::remove_stale_temporaries(
+        out_dir,
+        &[
+            TRACE_FILE,
+            SUMMARY_FILE,
+            PLOT_FILE,
+            crate::report::test_info::TEST_FILE,
+            crate::report::html::CHECK_FILE,
+            crate::report::html::REPORT_FILE,
+        ],
+    )?;
     let mut trace = TraceSink::create(
         &out_dir.join(TRACE_FILE),
         machine.axes(),

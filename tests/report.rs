@@ -425,3 +425,154 @@ fn every_bundled_scenario_report_renders_in_headless_chromium() {
         }
     }
 }
+
+// ---- the plots of the studies -------------------------------------------------------
+
+/// (x, y, text) of every `<text>` element of an SVG plotters wrote.
+fn svg_texts(svg: &str) -> Vec<(f64, f64, String)> {
+    let mut out = Vec::new();
+    let mut rest = svg;
+    while let Some(i) = rest.find("<text ") {
+        rest = &rest[i..];
+        let head_end = rest.find('>').unwrap();
+        let head = &rest[..head_end];
+        let attr = |name: &str| -> f64 {
+            let key = format!(" {name}=\"");
+            let a = head.find(&key).unwrap() + key.len();
+            head[a..a + head[a..].find('"').unwrap()].parse().unwrap()
+        };
+        let end = rest.find("</text>").unwrap();
+        out.push((
+            attr("x"),
+            attr("y"),
+            rest[head_end + 1..end].trim().to_string(),
+        ));
+        rest = &rest[end..];
+    }
+    out
+}
+
+#[test]
+fn the_sweep_plot_names_its_axis_in_words_and_keeps_the_legend_off_the_points() {
+    let dir = scratch("report", "sweep");
+    let out = mtsim(&[
+        "sweep",
+        "scenarios/cone-15-10.toml",
+        "--vary",
+        "center_y",
+        "--from",
+        "-40",
+        "--to",
+        "0",
+        "--step",
+        "2",
+        "-o",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(dir.join("sweep-center_y.svg")).unwrap();
+    let texts = svg_texts(&svg);
+    let has = |t: &str| texts.iter().any(|(_, _, s)| s == t);
+    assert!(has("cone centre Y, table frame (mm)"), "x axis in words");
+    assert!(has("reversal angle θ (deg)"));
+    assert!(!texts.iter().any(|(_, _, s)| s == "center_y (mm)"));
+    // The legend entries sit in the strip above the plot; every point lies below it.
+    let legend_y: Vec<f64> = texts
+        .iter()
+        .filter(|(_, _, s)| s.ends_with(" reversal") || s.contains("meet at"))
+        .map(|t| t.1)
+        .collect();
+    assert_eq!(legend_y.len(), 4, "X, Y, Z and the coincidence: {texts:?}");
+    let strip = legend_y.iter().fold(0.0f64, |m, y| m.max(*y)) + 8.0;
+    let mut points = 0;
+    for c in svg.split("<circle ").skip(1) {
+        let cy: f64 = c
+            .split("cy=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            cy > strip,
+            "a point at y {cy} under the legend (strip to {strip})"
+        );
+        points += 1;
+    }
+    assert!(points > 40, "{points} points");
+}
+
+#[test]
+fn the_placement_map_tells_fit_cells_apart_and_marks_the_scenario_and_the_table() {
+    let dir = scratch("report", "placement");
+    let out = mtsim(&[
+        "sweep",
+        "scenarios/cone-15-10.toml",
+        "--feasibility",
+        "--vary",
+        "center_x,center_y",
+        "--from",
+        "-100",
+        "--to",
+        "100",
+        "--step",
+        "50",
+        "-o",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.code() == Some(0) || out.status.code() == Some(1));
+    let svg = std::fs::read_to_string(dir.join("placement.svg")).unwrap();
+    let csv = std::fs::read_to_string(dir.join("placement.csv")).unwrap();
+    // Distinct margins (to 1 µm) of the cells that fit, from the CSV ...
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let (m, f) = (
+        header.iter().position(|h| h.starts_with("margin")).unwrap(),
+        header.iter().position(|h| *h == "fits").unwrap(),
+    );
+    let mut margins: Vec<i64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|c| c[f] == "true")
+        .map(|c| (c[m].parse::<f64>().unwrap() * 1e3).round() as i64)
+        .collect();
+    margins.sort_unstable();
+    margins.dedup();
+    assert!(margins.len() >= 3, "{margins:?}");
+    // ... each get their own colour: the map has as many cell colours (rects of one cell size).
+    let cell_fills: std::collections::BTreeSet<&str> = svg
+        .split("<rect ")
+        .skip(2)
+        .filter(|r| r.contains("width=\"") && !r.contains("width=\"30\""))
+        .filter_map(|r| r.split("fill=\"").nth(1).and_then(|s| s.split('"').next()))
+        .filter(|fill| *fill != "#C8C8C8")
+        .collect();
+    assert!(
+        cell_fills.len() >= margins.len(),
+        "{} colours for {} margins",
+        cell_fills.len(),
+        margins.len()
+    );
+    let texts = svg_texts(&svg);
+    assert!(
+        texts.iter().any(|t| t.2 == "scenario"),
+        "the scenario's position"
+    );
+    assert!(texts
+        .iter()
+        .any(|t| t.2 == "cone centre X, table frame (mm)"));
+    // The table edge: a polyline of many points (a circle of the table radius).
+    assert!(
+        svg.split("<polyline").any(|p| p
+            .split("points=\"")
+            .nth(1)
+            .is_some_and(|pts| pts.split(' ').count() > 60)),
+        "no table outline"
+    );
+}

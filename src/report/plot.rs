@@ -92,6 +92,8 @@ pub struct Chart {
     pub y_label: String,
     /// The x range; the series' extent when None.
     pub x_range: Option<(f64, f64)>,
+    /// The y range; the series' extent (padded) when None.
+    pub y_range: Option<(f64, f64)>,
     /// Tick every this much on x (None: plotters' choice).
     pub x_tick: Option<f64>,
     pub series: Vec<Series>,
@@ -109,6 +111,7 @@ impl Chart {
             x_label: x_label.to_string(),
             y_label: y_label.to_string(),
             x_range: None,
+            y_range: None,
             x_tick: None,
             series: Vec::new(),
             markers: Vec::new(),
@@ -150,7 +153,7 @@ impl Chart {
         let pad = ((y1 - y0) * 0.08)
             .max(1e-9 * y0.abs().max(y1.abs()))
             .max(1e-12);
-        let (y0, y1) = (y0 - pad, y1 + pad);
+        let (y0, y1) = self.y_range.unwrap_or((y0 - pad, y1 + pad));
 
         let mut svg = String::new();
         {

@@ -483,7 +483,7 @@ fn the_sweep_plot_names_its_axis_in_words_and_keeps_the_legend_off_the_points() 
     // The legend entries sit in the strip above the plot; every point lies below it.
     let legend_y: Vec<f64> = texts
         .iter()
-        .filter(|(_, _, s)| s.ends_with(" reversal") || s.contains("meet at"))
+        .filter(|(_, _, s)| s.ends_with(" reversal") || s.contains("coincide at"))
         .map(|t| t.1)
         .collect();
     assert_eq!(legend_y.len(), 4, "X, Y, Z and the coincidence: {texts:?}");

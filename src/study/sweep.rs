@@ -346,7 +346,7 @@ impl SweepResult {
             });
             chart.series.push(Series {
                 label: format!(
-                    "{}: X, Y, Z meet at {:.1} {unit}, θ {:.0}°",
+                    "{}: X, Y, Z coincide at {:.1} {unit}, θ {:.0}°",
                     i + 1,
                     c.value,
                     c.theta_deg

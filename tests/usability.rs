@@ -332,3 +332,32 @@ fn every_file_the_repository_points_to_exists() {
         missing.join("\n")
     );
 }
+
+#[test]
+fn the_cutting_depth_on_clean_cones_is_the_sag_between_blocks_and_falls_as_one_over_n_squared() {
+    // Joint-space interpolation between the program's end points lets the tip sag off the
+    // cone by ~ c·(Δθ)²: twice the segments, a quarter of the depth. The same sag draws the
+    // block-period sawtooth on the polar plot.
+    let dir = scratch("usability", "sag");
+    let depth = |segments: usize| -> f64 {
+        let s = dir.join(format!("s{segments}.toml"));
+        std::fs::write(
+            &s,
+            format!(
+                "machine = \"{}\"\n[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\n\
+                 center_mm = [0.0, -25.0, 200.0]\nballbar_length_mm = 100.0\nsegments = {segments}\n",
+                common::trt_ac()
+            ),
+        )
+        .unwrap();
+        let v = stdout_json(&mtsim(&["check", s.to_str().unwrap(), "--json"]));
+        v["engagement"][0]["max_depth_mm"].as_f64().unwrap()
+    };
+    let (d360, d720) = (depth(360), depth(720));
+    assert!(d360 > 0.005 && d360 < 0.05, "{d360} mm");
+    let ratio = d360 / d720;
+    assert!(
+        (3.5..4.5).contains(&ratio),
+        "depth ratio {ratio} ({d360} / {d720} mm)"
+    );
+}

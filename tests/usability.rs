@@ -361,3 +361,42 @@ fn the_cutting_depth_on_clean_cones_is_the_sag_between_blocks_and_falls_as_one_o
         "depth ratio {ratio} ({d360} / {d720} mm)"
     );
 }
+
+#[test]
+fn stderr_is_silent_without_a_terminal_and_says_more_with_v() {
+    // The tests' stderr is a pipe: no progress bar, no spinner, nothing at all on a clean run.
+    let dir = scratch("usability", "quiet");
+    let out_dir = dir.join("out");
+    let plain = mtsim(&[
+        "simulate",
+        "scenarios/circle-iso230-4.toml",
+        "-o",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(plain.status.success());
+    assert!(
+        plain.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&plain.stderr)
+    );
+    let check = mtsim(&["check", "scenarios/circle-iso230-4.toml"]);
+    assert!(
+        check.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    let verbose = mtsim(&[
+        "-v",
+        "simulate",
+        "scenarios/circle-iso230-4.toml",
+        "-o",
+        out_dir.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&verbose.stderr);
+    assert!(
+        err.contains("interpolation periods") && err.contains("test.json"),
+        "{err}"
+    );
+    let verbose = mtsim(&["check", "-v", "scenarios/circle-iso230-4.toml"]);
+    assert!(String::from_utf8_lossy(&verbose.stderr).contains("checked "));
+}

@@ -22,6 +22,8 @@ pub fn run(
         }
     }
     let scenario = super::load_scenario(path)?;
+    let bar = super::spinner("checking");
+    let started = std::time::Instant::now();
     let report = check(
         &scenario,
         &CheckOptions {
@@ -29,6 +31,15 @@ pub fn run(
             near_miss_mm,
         },
     )?;
+    bar.finish_and_clear();
+    super::detail(
+        1,
+        &format!(
+            "checked {} samples in {:.3} s wall",
+            report.samples,
+            started.elapsed().as_secs_f64()
+        ),
+    );
     let code = if report.is_clean() {
         0
     } else {

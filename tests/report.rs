@@ -468,6 +468,7 @@ fn the_sweep_plot_names_its_axis_in_words_and_keeps_the_legend_off_the_points() 
         "2",
         "-o",
         dir.to_str().unwrap(),
+        "--html",
     ]);
     assert!(
         out.status.success(),
@@ -475,6 +476,10 @@ fn the_sweep_plot_names_its_axis_in_words_and_keeps_the_legend_off_the_points() 
         String::from_utf8_lossy(&out.stderr)
     );
     let svg = std::fs::read_to_string(dir.join("sweep-center_y.svg")).unwrap();
+    // `--html`: the study page holds the plot inline and links the files.
+    let page = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert!(page.contains("data-plot=\"sweep-center_y\"") && !page.contains("<script"));
+    assert!(page.contains("<a href=\"sweep-center_y.csv\">"));
     let texts = svg_texts(&svg);
     let has = |t: &str| texts.iter().any(|(_, _, s)| s == t);
     assert!(has("cone centre Y, table frame (mm)"), "x axis in words");

@@ -97,6 +97,9 @@ pub enum Command {
         /// map the smallest margin across travel limits and clearances.
         #[arg(long)]
         feasibility: bool,
+        /// Also write report.html into the output folder (needs --output).
+        #[arg(long, requires = "output")]
+        html: bool,
     },
     /// Does the program fit the machine? Axis travel, velocity and acceleration on every
     /// sample, and collisions between table, workpiece, tool, holder and spindle.
@@ -162,7 +165,22 @@ pub enum Command {
 /// Runs the command line and returns the exit code.
 pub fn main() -> i32 {
     let cli = Cli::parse();
-    match run(cli) {
+    // `sweep --html`: the study page of the output folder, once the sweep has written it.
+    let sweep_html = match &cli.command {
+        Command::Sweep {
+            html: true,
+            output: Some(dir),
+            ..
+        } => Some(dir.clone()),
+        _ => None,
+    };
+    let result = run(cli).and_then(|code| {
+        if let Some(dir) = &sweep_html {
+            crate::report::html::write_report(dir, None)?;
+        }
+        Ok(code)
+    });
+    match result {
         Ok(code) => code,
         Err(e) => {
             let code = e.exit_code();
@@ -257,6 +275,7 @@ fn run(cli: Cli) -> Result<i32> {
             json,
             output,
             feasibility,
+            ..
         } => {
             if feasibility {
                 sweep::placement(&scenario, &vary, &from, &to, &step, json, output.as_deref())

@@ -1031,8 +1031,66 @@ pub fn render(folder: &RunFolder, date: Option<&str>) -> Result<String> {
     Ok(h)
 }
 
-/// Reads `dir`, writes `dir/report.html` atomically and returns its path.
+/// The plots a `sweep` folder holds: (file name, SVG text) of `placement.svg` and
+/// `sweep-*.svg`, and every CSV, JSON and SVG file for the links.
+fn study_files(dir: &Path) -> (Vec<(String, String)>, Vec<String>) {
+    let mut files: Vec<String> = std::fs::read_dir(dir)
+        .map(|r| {
+            r.filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| [".csv", ".json", ".svg"].iter().any(|x| n.ends_with(x)))
+                .collect()
+        })
+        .unwrap_or_default();
+    files.sort();
+    let svgs = files
+        .iter()
+        .filter(|n| *n == "placement.svg" || (n.starts_with("sweep-") && n.ends_with(".svg")))
+        .filter_map(|n| Some((n.clone(), std::fs::read_to_string(dir.join(n)).ok()?)))
+        .collect();
+    (svgs, files)
+}
+
+/// The page of a `sweep` output folder: its plots and links.
+pub fn render_study(dir: &Path, svgs: &[(String, String)], files: &[String]) -> String {
+    let mut h = format!(
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
+         <title>mtsim study: {0}</title>\n<style>{CSS}</style>\n</head>\n<body>\n\
+         <h1>mtsim study: {0}</h1>\n",
+        esc(&dir.display().to_string())
+    );
+    for (name, svg) in svgs {
+        let title = if name == "placement.svg" {
+            "Placement map: where the test fits".to_string()
+        } else {
+            format!("Reversal angles: {}", name.trim_end_matches(".svg"))
+        };
+        let _ = writeln!(h, "<h2>{}</h2>", esc(&title));
+        h.push_str(&inline_svg(svg, name.trim_end_matches(".svg")));
+    }
+    h.push_str("<h2 id=\"files\">Files</h2>\n<ul class=\"files\">\n");
+    for f in files {
+        let _ = writeln!(h, "<li><a href=\"{0}\">{0}</a></li>", esc(f));
+    }
+    let _ = write!(
+        h,
+        "</ul>\n<p class=\"note\">Made by mtsim {}.</p>\n</body>\n</html>\n",
+        env!("CARGO_PKG_VERSION")
+    );
+    h
+}
+
+/// Reads `dir`, writes `dir/report.html` atomically and returns its path. A folder `sweep`
+/// wrote (no summary.json, but sweep or placement plots) gets the study page.
 pub fn write_report(dir: &Path, date: Option<&str>) -> Result<PathBuf> {
+    if !dir.join("summary.json").exists() {
+        let (svgs, files) = study_files(dir);
+        if !svgs.is_empty() {
+            let path = dir.join(REPORT_FILE);
+            super::write_atomic(&path, render_study(dir, &svgs, &files).as_bytes())?;
+            return Ok(path);
+        }
+    }
     let folder = RunFolder::read(dir)?;
     let html = render(&folder, date)?;
     let path = dir.join(REPORT_FILE);

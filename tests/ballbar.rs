@@ -437,15 +437,20 @@ fn the_polar_plot_is_written_atomically_and_deterministically() {
         !dir.join("ballbar-polar-1.svg.tmp").exists(),
         "temporary file left behind"
     );
-    // Largest |d| about the common centre is below 40 um: 10 um/div.
-    assert!(svg.contains("scale: 10 um/div"), "no scale text");
+    // Largest |d| about the common centre is below 40 µm: 10 µm per division, and the
+    // rings say so, from -40 to +40 µm.
+    assert!(svg.contains("scale: 10 µm per division"), "no scale text");
+    assert!(!svg.contains(" um"), "µm, never um");
     let texts = svg_texts(&svg);
     for letter in ["X", "Y", "Z", "A"] {
         assert!(texts.iter().any(|t| t == letter), "no tick label {letter}");
     }
+    for ring in ["+40 µm", "+10 µm", "0 µm", "−10 µm", "−40 µm"] {
+        assert!(texts.iter().any(|t| t == ring), "no ring label {ring}");
+    }
     assert!(
-        texts.iter().any(|t| t == "1 X"),
-        "the first event is not labelled with X"
+        texts.iter().any(|t| t == "1"),
+        "the first event is not numbered"
     );
     assert!(svg.contains("H = "), "no hysteresis figure");
 }

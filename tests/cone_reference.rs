@@ -1,5 +1,5 @@
 //! The cone-frustum analysis against every row of the reference tables in
-//! `shared/spec/cone-frustum.md` (values from Kato et al., Trans. JSME C 77 (2011)).
+//! the project's cone-frustum specification (values from Kato et al., Trans. JSME C 77 (2011)).
 
 use mtsim::input::machine::Machine;
 use mtsim::program::cone::ConePath;

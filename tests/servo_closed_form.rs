@@ -1,4 +1,4 @@
-//! The servo models against the closed-form results of `spec/servo-and-ballbar.md`:
+//! The servo models against the closed-form results of `docs/servo.md`:
 //! two axes X and Y drive a planar circle (ISO 230-4), and the radial deviation of the actual
 //! positions is compared with what the theory predicts.
 

@@ -6,11 +6,10 @@ use serde_json::{json, Map};
 
 use super::print_stdout;
 use crate::error::Result;
-use crate::input::scenario::Scenario;
 use crate::study::reversals::{analyse_scenario, Analysis};
 
 pub fn run(path: &Path, as_json: bool) -> Result<i32> {
-    let scenario = Scenario::load(path)?;
+    let scenario = super::load_scenario(path)?;
     let analysis = analyse_scenario(&scenario)?;
     if as_json {
         let mut axes = Map::new();

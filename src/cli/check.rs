@@ -6,9 +6,14 @@ use super::print_stdout;
 use crate::check::limits::ViolationKind;
 use crate::check::{check, CheckOptions, CheckReport};
 use crate::error::{Error, Result, EXIT_VIOLATIONS};
-use crate::input::scenario::Scenario;
 
-pub fn run(path: &Path, as_json: bool, dynamics: bool, near_miss_mm: Option<f64>) -> Result<i32> {
+pub fn run(
+    path: &Path,
+    as_json: bool,
+    dynamics: bool,
+    near_miss_mm: Option<f64>,
+    html: Option<&Path>,
+) -> Result<i32> {
     if let Some(d) = near_miss_mm {
         if !(d.is_finite() && d >= 0.0) {
             return Err(Error::usage(format!(
@@ -16,7 +21,9 @@ pub fn run(path: &Path, as_json: bool, dynamics: bool, near_miss_mm: Option<f64>
             )));
         }
     }
-    let scenario = Scenario::load(path)?;
+    let scenario = super::load_scenario(path)?;
+    let bar = super::spinner("checking");
+    let started = std::time::Instant::now();
     let report = check(
         &scenario,
         &CheckOptions {
@@ -24,11 +31,25 @@ pub fn run(path: &Path, as_json: bool, dynamics: bool, near_miss_mm: Option<f64>
             near_miss_mm,
         },
     )?;
+    bar.finish_and_clear();
+    super::detail(
+        1,
+        &format!(
+            "checked {} samples in {:.3} s wall",
+            report.samples,
+            started.elapsed().as_secs_f64()
+        ),
+    );
     let code = if report.is_clean() {
         0
     } else {
         EXIT_VIOLATIONS
     };
+    if let Some(file) = html {
+        let value = serde_json::to_value(&report).expect("plain data serializes");
+        let page = crate::report::html::render_check_page(&path.display().to_string(), &value);
+        crate::report::write_atomic(file, page.as_bytes())?;
+    }
     if as_json {
         print_stdout(&format!(
             "{}\n",
@@ -56,8 +77,14 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
             .map_or(String::new(), |q| format!(", {q} geometric queries"))
     );
     out.push_str(&format!(
-        "{:<4} {:>21} {:>21} {:>11} {:>23} {:>23}\n",
-        "axis", "used", "available", "margin", "peak velocity/limit", "peak accel./limit"
+        "{:<4} {:<4} {:>21} {:>21} {:>11} {:>27} {:>23}\n",
+        "axis",
+        "unit",
+        "used",
+        "travel",
+        "margin",
+        "peak/limit velocity (/min)",
+        "peak/limit accel. (/s²)"
     ));
     for (axis, u) in &report.axes {
         let unit = if "ABC".contains(axis.as_str()) {
@@ -66,12 +93,12 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
             "mm"
         };
         out.push_str(&format!(
-            "{axis:<4} {:>9.3}..{:<9.3} {:>9.3}..{:<9.3} {:>11} {:>11.0}/{:<11.0} {:>11.0}/{:<11.0}\n",
+            "{axis:<4} {unit:<4} {:>9.3}..{:<9.3} {:>9.3}..{:<9.3} {:>11} {:>15.0}/{:<11.0} {:>11.0}/{:<11.0}\n",
             u.min,
             u.max,
             u.limit_min,
             u.limit_max,
-            u.margin.map_or("continuous".to_string(), |m| format!("{m:.3} {unit}")),
+            u.margin.map_or("continuous".to_string(), |m| format!("{m:.3}")),
             u.peak_velocity_per_min,
             u.velocity_limit_per_min,
             u.peak_acceleration_per_s2,
@@ -86,7 +113,9 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
     }
     for e in &report.engagement {
         out.push_str(&format!(
-            "cutting: {} in {}, deepest {:.4} mm\n",
+            "cutting: {} in {}, deepest {:.4} mm (expected, not a violation: the test cuts the \
+             workpiece; without tool-centre-point control the tip sags into the nominal surface \
+             between block end points, by an amount that falls with the square of the block length)\n",
             e.bodies[0], e.bodies[1], e.max_depth_mm
         ));
     }
@@ -101,9 +130,19 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
             (_, Some(b)) => format!("{} / {}", b[0], b[1]),
             _ => String::new(),
         };
+        let time = if v.time_end_s > v.time_start_s {
+            format!("t {:.3}..{:.3} s", v.time_start_s, v.time_end_s)
+        } else {
+            format!("t {:.3} s (one sample)", v.time_start_s)
+        };
+        let whole_run = v.time_start_s <= 0.0 && v.time_end_s >= report.sim_time_s;
         let span = match (v.theta_start_deg, v.theta_end_deg) {
-            (Some(a), Some(b)) => format!("theta {a:.2}..{b:.2} deg"),
-            _ => format!("t {:.3}..{:.3} s", v.time_start_s, v.time_end_s),
+            _ if whole_run => format!("the whole run, {time}"),
+            (Some(a), Some(b)) if v.time_end_s > v.time_start_s => {
+                format!("θ {a:.2}..{b:.2} deg, {time}")
+            }
+            (Some(a), _) => format!("θ {a:.2} deg, {time}"),
+            _ => time,
         };
         let worst = match v.kind {
             ViolationKind::Collision => format!("penetration {:.3} mm", v.worst),

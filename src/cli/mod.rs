@@ -15,6 +15,7 @@ use crate::study::sweep::SweepParam;
 mod analyze;
 mod check;
 mod cone;
+mod report;
 mod simulate;
 mod sweep;
 
@@ -29,6 +30,12 @@ Scenario and machine formats: docs/scenario-format.md, docs/machine-format.md."
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+    /// No progress bars and no warnings on stderr (errors still go there).
+    #[arg(short, long, global = true)]
+    pub quiet: bool,
+    /// More detail on stderr: what each stage did and how long it took (-vv: more).
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    pub verbose: u8,
 }
 
 #[derive(Debug, Subcommand)]
@@ -71,9 +78,13 @@ pub enum Command {
         /// Last value (mm or deg).
         #[arg(long, allow_hyphen_values = true, value_delimiter = ',', num_args = 1)]
         to: Vec<f64>,
-        /// Step (mm or deg).
-        #[arg(long)]
-        #[arg(long, value_delimiter = ',', num_args = 1)]
+        /// Step (mm or deg), > 0.
+        #[arg(
+            long,
+            allow_negative_numbers = true,
+            value_delimiter = ',',
+            num_args = 1
+        )]
         step: Vec<f64>,
         /// Print one JSON object.
         #[arg(long)]
@@ -86,6 +97,9 @@ pub enum Command {
         /// map the smallest margin across travel limits and clearances.
         #[arg(long)]
         feasibility: bool,
+        /// Also write report.html into the output folder (needs --output).
+        #[arg(long, requires = "output")]
+        html: bool,
     },
     /// Does the program fit the machine? Axis travel, velocity and acceleration on every
     /// sample, and collisions between table, workpiece, tool, holder and spindle.
@@ -101,8 +115,24 @@ pub enum Command {
         #[arg(long)]
         dynamics: bool,
         /// Near-miss clearance, mm (default: `near_miss_mm` of the scenario's `[check]`, else the machine's `[scene]`).
-        #[arg(long)]
+        /// A near miss is a span of samples in which two bodies that must not touch are closer
+        /// than this but not touching; each span is listed once, with its smallest clearance.
+        #[arg(long, allow_negative_numbers = true)]
         near_miss: Option<f64>,
+        /// Also write an HTML report of the check to this file.
+        #[arg(long, value_name = "FILE")]
+        html: Option<PathBuf>,
+    },
+    /// Write report.html into each run folder (what `simulate -o` wrote): one
+    /// self-contained page with the test parameters, the plots, figures, marks, diagnoses
+    /// and the limits summary. Inline SVG and CSS, no network, no JavaScript.
+    Report {
+        /// Run folders.
+        #[arg(required = true)]
+        run_dirs: Vec<PathBuf>,
+        /// Date of the test for the report (YYYY-MM-DD); default: the one the run recorded.
+        #[arg(long)]
+        date: Option<String>,
     },
     /// Run the program through interpolator, servo models and kinematics, and predict the
     /// ball-bar trace: writes trace.csv, summary.json and ballbar.svg.
@@ -119,13 +149,38 @@ pub enum Command {
         /// (null), so that repeated runs give byte-identical files.
         #[arg(long)]
         no_timing: bool,
+        /// Also write report.html into the output folder (see `mtsim report`).
+        #[arg(long)]
+        html: bool,
     },
+    /// Print a shell completion script: `mtsim completions bash > /etc/bash_completion.d/mtsim`.
+    Completions {
+        /// The shell: bash, elvish, fish, powershell or zsh.
+        shell: clap_complete::Shell,
+    },
+    /// Print the man page (roff): `mtsim man > mtsim.1; man ./mtsim.1`.
+    Man,
 }
 
 /// Runs the command line and returns the exit code.
 pub fn main() -> i32 {
     let cli = Cli::parse();
-    match run(cli) {
+    // `sweep --html`: the study page of the output folder, once the sweep has written it.
+    let sweep_html = match &cli.command {
+        Command::Sweep {
+            html: true,
+            output: Some(dir),
+            ..
+        } => Some(dir.clone()),
+        _ => None,
+    };
+    let result = run(cli).and_then(|code| {
+        if let Some(dir) = &sweep_html {
+            crate::report::html::write_report(dir, None)?;
+        }
+        Ok(code)
+    });
+    match result {
         Ok(code) => code,
         Err(e) => {
             let code = e.exit_code();
@@ -135,20 +190,75 @@ pub fn main() -> i32 {
     }
 }
 
+/// `--quiet` and `-v`, for the whole process.
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+static VERBOSE: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
+
+/// Whether `--quiet` was given.
+pub(crate) fn quiet() -> bool {
+    QUIET.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// The `-v` count.
+pub(crate) fn verbosity() -> u8 {
+    VERBOSE.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// A warning on stderr, unless `--quiet`.
+pub(crate) fn warn(text: &str) {
+    if !quiet() {
+        eprintln!("warning: {text}");
+    }
+}
+
+/// Detail on stderr with `-v` (level 1) or `-vv` (level 2).
+pub(crate) fn detail(level: u8, text: &str) {
+    if verbosity() >= level && !quiet() {
+        eprintln!("{text}");
+    }
+}
+
 fn run(cli: Cli) -> Result<i32> {
+    QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
+    VERBOSE.store(cli.verbose, std::sync::atomic::Ordering::Relaxed);
     match cli.command {
+        Command::Completions { shell } => {
+            let mut out = Vec::new();
+            clap_complete::generate(
+                shell,
+                &mut <Cli as clap::CommandFactory>::command(),
+                "mtsim",
+                &mut out,
+            );
+            print_stdout(&String::from_utf8_lossy(&out));
+            Ok(0)
+        }
+        Command::Man => {
+            let mut out = Vec::new();
+            clap_mangen::Man::new(<Cli as clap::CommandFactory>::command())
+                .render(&mut out)
+                .map_err(|source| Error::Write {
+                    path: PathBuf::from("<stdout>"),
+                    source,
+                })?;
+            print_stdout(&String::from_utf8_lossy(&out));
+            Ok(0)
+        }
         Command::Check {
             scenario,
             json,
             dynamics,
             near_miss,
-        } => check::run(&scenario, json, dynamics, near_miss),
+            html,
+        } => check::run(&scenario, json, dynamics, near_miss, html.as_deref()),
         Command::Simulate {
             scenario,
             output,
             json,
             no_timing,
-        } => simulate::run(&scenario, &output, json, !no_timing),
+            html,
+        } => simulate::run(&scenario, &output, json, !no_timing, html),
+        Command::Report { run_dirs, date } => report::run(&run_dirs, date.as_deref()),
         Command::Cone {
             scenario,
             output,
@@ -165,6 +275,7 @@ fn run(cli: Cli) -> Result<i32> {
             json,
             output,
             feasibility,
+            ..
         } => {
             if feasibility {
                 sweep::placement(&scenario, &vary, &from, &to, &step, json, output.as_deref())
@@ -206,9 +317,19 @@ fn cone_of(scenario: &Scenario, command: &str) -> Result<(ConeTest, NcOptions)> 
     }
 }
 
+/// Loads a scenario and, for a G-code file program, checks the file against the machine
+/// (motion present, no move beyond the travel envelope) before anything is sampled.
+pub(crate) fn load_scenario(path: &std::path::Path) -> Result<Scenario> {
+    let scenario = Scenario::load(path)?;
+    if let Program::File { path: file, .. } = &scenario.program {
+        crate::program::validate::validate_file(file, &scenario.machine)?;
+    }
+    Ok(scenario)
+}
+
 /// A progress bar on stderr when it is a terminal; hidden otherwise (scripts, CI).
 pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
-    if !std::io::stderr().is_terminal() {
+    if quiet() || !std::io::stderr().is_terminal() {
         return indicatif::ProgressBar::hidden();
     }
     let bar = indicatif::ProgressBar::new(len);
@@ -228,7 +349,7 @@ pub(crate) fn print_stdout(text: &str) {
 
 /// A spinner on stderr when it is a terminal; hidden otherwise.
 pub(crate) fn spinner(what: &str) -> indicatif::ProgressBar {
-    if !std::io::stderr().is_terminal() {
+    if quiet() || !std::io::stderr().is_terminal() {
         return indicatif::ProgressBar::hidden();
     }
     let bar = indicatif::ProgressBar::new_spinner();

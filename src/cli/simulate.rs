@@ -3,22 +3,67 @@
 use std::path::Path;
 
 use super::{print_stdout, spinner};
-use crate::error::Result;
-use crate::input::scenario::Scenario;
+use crate::check::{check, CheckOptions};
+use crate::error::{Result, EXIT_VIOLATIONS};
+use crate::report::html::CHECK_FILE;
+use crate::report::write_atomic;
 
-pub fn run(path: &Path, out_dir: &Path, as_json: bool, timing: bool) -> Result<i32> {
-    let scenario = Scenario::load(path)?;
+pub fn run(path: &Path, out_dir: &Path, as_json: bool, timing: bool, html: bool) -> Result<i32> {
+    let scenario = super::load_scenario(path)?;
     let bar = spinner("simulating");
     let summary = crate::study::simulate::simulate(&scenario, out_dir, timing, &|t| {
         bar.set_message(format!("{t:.1} s of machine time"))
     })?;
     bar.finish_and_clear();
+    for w in &summary.warnings {
+        super::warn(w);
+    }
+    super::detail(
+        1,
+        &format!(
+            "simulated {:.2} s of machine time in {} interpolation periods; wrote {}, {}, {}, {} and {}",
+            summary.sim_time_s,
+            summary.setpoints,
+            crate::study::simulate::TRACE_FILE,
+            crate::study::simulate::SUMMARY_FILE,
+            crate::study::simulate::PLOT_FILE,
+            crate::report::test_info::TEST_FILE,
+            CHECK_FILE
+        ),
+    );
+    // Travel, velocity, acceleration and collisions, as `check` finds them (commanded
+    // positions): written beside the trace for the report, and told on stderr.
+    let checked = check(
+        &scenario,
+        &CheckOptions {
+            dynamics: false,
+            near_miss_mm: None,
+        },
+    )?;
+    let json = serde_json::to_string_pretty(&checked).expect("plain data serializes");
+    write_atomic(&out_dir.join(CHECK_FILE), format!("{json}\n").as_bytes())?;
+    super::detail(
+        2,
+        &super::check::check_table(&checked, &path.display().to_string()),
+    );
+    let code = if checked.is_clean() {
+        0
+    } else {
+        super::warn(&format!(
+            "the program does not fit the machine (exit code 1); `mtsim check` says:\n{}",
+            super::check::check_table(&checked, &path.display().to_string())
+        ));
+        EXIT_VIOLATIONS
+    };
+    if html {
+        crate::report::html::write_report(out_dir, None)?;
+    }
     if as_json {
         print_stdout(&format!(
             "{}\n",
             serde_json::to_string_pretty(&summary).expect("plain data serializes")
         ));
-        return Ok(0);
+        return Ok(code);
     }
     let mut out = format!(
         "{}: {:.2} s of machine time ({} setpoints, {})\n",
@@ -44,18 +89,18 @@ pub fn run(path: &Path, out_dir: &Path, as_json: bool, timing: bool) -> Result<i
         ),
         Some(b) => {
             out.push_str(&format!(
-                "ISO 230-4: circular deviation G = {:.2} um, radial deviation F = {:+.2} / {:+.2} um, hysteresis H = {}\n",
+                "ISO 230-4: circular deviation G = {:.2} µm, radial deviation F = {:+.2} / {:+.2} µm, hysteresis H = {}\n",
                 b.circular_deviation_um,
                 b.radial_max_um,
                 b.radial_min_um,
-                b.hysteresis_um.map_or("- (one direction)".to_string(), |h| format!("{h:.2} um"))
+                b.hysteresis_um.map_or("- (one direction)".to_string(), |h| format!("{h:.2} µm"))
             ));
             if b.events.is_empty() {
                 out.push_str("no spikes or steps above noise\n");
             } else {
                 out.push_str(&format!(
                     "{:>4} {:>6} {:>10} {:>10} {:>6} {:>5} {:>10}\n",
-                    "run", "kind", "theta deg", "height um", "axis", "conf", "width deg"
+                    "run", "kind", "θ (deg)", "height (µm)", "axis", "conf.", "width (deg)"
                 ));
                 for e in &b.events {
                     out.push_str(&format!(
@@ -72,7 +117,11 @@ pub fn run(path: &Path, out_dir: &Path, as_json: bool, timing: bool) -> Result<i
             }
         }
     }
-    out.push_str(&format!("wrote {}\n", out_dir.display()));
+    out.push_str(&format!(
+        "wrote {}{}\n",
+        out_dir.display(),
+        if html { " (report.html)" } else { "" }
+    ));
     print_stdout(&out);
-    Ok(0)
+    Ok(code)
 }

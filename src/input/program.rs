@@ -2,7 +2,7 @@
 //! options of the program generator. Plain values with their closed-form geometry; the
 //! generators that turn them into canonical moves are in `crate::program`.
 //!
-//! Cone geometry, from `shared/spec/cone-frustum.md` (α half apex angle, β inclination,
+//! Cone geometry, from `docs/model.md` (α half apex angle, β inclination,
 //! O base-circle centre in the table frame, L ball-bar length):
 //!
 //! ```text

@@ -169,7 +169,7 @@ pub enum WorkpieceKind {
     None,
 }
 
-/// The cone test's geometry as plain numbers (see `/work/shared/spec/cone-frustum.md`).
+/// The cone test's geometry as plain numbers (see `docs/model.md`).
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ConeSetup {

@@ -3,6 +3,7 @@
 //! Outputs: the deviation trace in θ bins, ISO 230-4 figures (G, F, H), and spikes and steps attributed to axes.
 
 pub mod ballbar;
+pub mod settle;
 pub mod sink;
 
 pub use crate::input::program::Direction;

@@ -5,6 +5,7 @@
 pub mod circle;
 pub mod cone;
 pub mod file;
+pub mod validate;
 
 use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines, NcOptions};

@@ -41,3 +41,30 @@ pub fn create_dir(dir: &Path) -> Result<()> {
         source,
     })
 }
+
+/// Removes the temporary files a killed run left in `dir` (`<name>.tmp` and
+/// `<stem>.csv.raw.tmp` for each of `outputs`), so that an interrupted run leaves nothing
+/// behind once the next run into the same folder starts. Other files are not touched.
+pub fn remove_stale_temporaries(dir: &Path, outputs: &[&str]) -> Result<()> {
+    for name in outputs {
+        let path = dir.join(name);
+        let mut candidates = vec![temporary_path(&path)];
+        if let Some(ext) = path.extension() {
+            let mut raw = ext.to_os_string();
+            raw.push(".raw.tmp");
+            candidates.push(path.with_extension(raw));
+        }
+        for tmp in candidates {
+            match std::fs::remove_file(&tmp) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(Error::Write {
+                        path: tmp,
+                        source: e,
+                    })
+                }
+                _ => {}
+            }
+        }
+    }
+    Ok(())
+}

@@ -4,7 +4,10 @@
 
 pub mod files;
 pub mod fixed;
+pub mod html;
+pub mod plot;
 pub mod polar;
+pub mod test_info;
 pub mod trace;
 
 pub use files::{create_dir, temporary_path, write_atomic};

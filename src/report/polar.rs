@@ -1,15 +1,16 @@
 //! The ball-bar polar plot (SVG).
 //!
 //! The nominal circle is drawn at a fixed radius `R_PX`; a deviation d (um) at angle theta
-//! is drawn at radius `R_PX + d * DIV_PX / scale`, where `scale` (um per division) is the
+//! is drawn at radius `R_PX + d * DIV_PX / scale`, where `scale` (µm per division) is the
 //! smallest of 1, 2, 5 x 10^k that keeps the largest |d| within `DIVS` divisions. Theta runs
 //! counter-clockwise from the right, as seen from the circle frame's +Z.
 //!
 //! Every run is drawn about the *common* centre (the mean of the runs' least-squares
 //! centrings), so the gap between CW and CCW traces is the hysteresis. Each axis's analytic
 //! reversal angles are radial ticks outside the grid, labelled with the axis letter; each
-//! detected event is a numbered marker on its trace, labelled with its axis and listed in
-//! the table on the right.
+//! detected event is a ring on its trace, numbered on a circle outside the grid (the numbers
+//! spread apart in angle so that they never overlap) and listed in the table on the right.
+//! Each grid circle carries the deviation it stands for, in µm.
 //!
 //! The file is rendered in memory, written to `<path>.tmp` and renamed, so a reader never
 //! sees a partial plot. The output depends only on the input (no time stamps).
@@ -71,7 +72,7 @@ fn direction_name(direction: Direction) -> &'static str {
     }
 }
 
-/// The smallest of 1, 2, 5 x 10^k um per division (at least 0.1) that keeps
+/// The smallest of 1, 2, 5 x 10^k µm per division (at least 0.1) that keeps
 /// `max_abs_um` within `DIVS` divisions.
 pub fn scale_um_per_div(max_abs_um: f64) -> f64 {
     let need = if max_abs_um.is_finite() {
@@ -261,38 +262,76 @@ pub fn render_polar_svg(
             .map_err(err)?;
         }
 
-        // Events: numbered markers on their trace.
-        let mut placed: Vec<f64> = Vec::new();
+        // Ring values: the deviation each grid circle stands for, µm, along the 75° ray
+        // (between two spokes, clear of the θ labels).
+        for k in -(DIVS as i32)..=(DIVS as i32) {
+            let value = k as f64 * scale;
+            let label = if k == 0 {
+                "0 µm".to_string()
+            } else {
+                format!(
+                    "{}{} µm",
+                    if k > 0 { "+" } else { "−" },
+                    fmt_scale(value.abs())
+                )
+            };
+            root.draw(&Text::new(
+                label,
+                at(R_PX + k as f64 * DIV_PX + 4.0, 75.0),
+                font(11.0, &RGBColor(110, 110, 110), HPos::Left),
+            ))
+            .map_err(err)?;
+        }
+
+        // Events: a ring on the trace, and its number on a circle outside the grid and the
+        // reversal ticks (where no trace runs), the
+        // numbers pushed apart in angle (plot::spread_labels) so that none overlap, each
+        // joined to its ring by a leader line.
+        let label_r = R_PX + DIVS * DIV_PX + 62.0;
+        let mut marks: Vec<(usize, f64, f64, RGBColor)> = Vec::new(); // (number, θ, r, colour)
         for (number, event) in result.events.iter().enumerate() {
             let Some((_, trace)) = traces.iter().find(|(d, _)| *d == event.direction) else {
                 continue;
             };
-            let bin = ((event.peak_deg.rem_euclid(360.0) / BIN_DEG) as usize).min(trace.len() - 1);
-            let r = radius(trace[bin]);
+            let theta = event.peak_deg.rem_euclid(360.0);
+            let bin = ((theta / BIN_DEG) as usize).min(trace.len() - 1);
             let colour = event.axis.map_or(BLACK, axis_colour);
-            root.draw(&Circle::new(
-                at(r, event.peak_deg),
-                4,
-                colour.stroke_width(2),
+            marks.push((number + 1, theta, radius(trace[bin]), colour));
+        }
+        marks.sort_by(|a, b| a.1.total_cmp(&b.1));
+        // Cut the circle at its widest empty arc, so that the spreading needs no wrap.
+        let cut = if marks.len() > 1 {
+            let mut best = (marks[0].1 + 360.0 - marks[marks.len() - 1].1, 0);
+            for i in 1..marks.len() {
+                let gap = marks[i].1 - marks[i - 1].1;
+                if gap > best.0 {
+                    best = (gap, i);
+                }
+            }
+            best.1
+        } else {
+            0
+        };
+        marks.rotate_left(cut);
+        let base = marks.first().map_or(0.0, |m| m.1);
+        let unwrapped: Vec<f64> = marks
+            .iter()
+            .map(|m| base + (m.1 - base).rem_euclid(360.0))
+            .collect();
+        let gap_deg = (18.0 / label_r).to_degrees();
+        let spread = super::plot::spread_labels(&unwrapped, gap_deg);
+        for ((number, theta, r, colour), label_theta) in marks.iter().zip(spread) {
+            root.draw(&Circle::new(at(*r, *theta), 4, colour.stroke_width(2)))
+                .map_err(err)?;
+            root.draw(&PathElement::new(
+                vec![at(*r, *theta), at(label_r - 9.0, label_theta)],
+                colour.mix(0.5).stroke_width(1),
             ))
             .map_err(err)?;
-            let crowd = placed
-                .iter()
-                .filter(|&&p| crate::measure::ballbar::angle_distance_deg(p, event.peak_deg) < 6.0)
-                .count();
-            placed.push(event.peak_deg);
-            let label = format!(
-                "{} {}",
-                number + 1,
-                event
-                    .axis
-                    .map_or("?".to_string(), |a| a.letter().to_string())
-            );
-            let label_r = r - 20.0 - 16.0 * crowd as f64;
             root.draw(&Text::new(
-                label,
-                at(label_r, event.peak_deg),
-                font(13.0, &colour, HPos::Center),
+                number.to_string(),
+                at(label_r, label_theta),
+                font(13.0, colour, HPos::Center),
             ))
             .map_err(err)?;
         }
@@ -307,16 +346,16 @@ pub fn render_polar_svg(
         };
         line(title.to_string(), 20.0, &root).map_err(err)?;
         let mut figures = format!(
-            "G = {:.2} um,  F max = {:.2} um,  F min = {:.2} um",
+            "G = {:.2} µm,  F max = {:.2} µm,  F min = {:.2} µm",
             result.circular_deviation_um, result.radial_max_um, result.radial_min_um
         );
         if let Some(h) = result.hysteresis_um {
-            let _ = write!(figures, ",  H = {h:.2} um");
+            let _ = write!(figures, ",  H = {h:.2} µm");
         }
         line(figures, 15.0, &root).map_err(err)?;
         line(
             format!(
-                "scale: {} um/div (nominal circle in black)",
+                "scale: {} µm per division (nominal circle in black)",
                 fmt_scale(scale)
             ),
             15.0,
@@ -382,7 +421,7 @@ pub fn render_polar_svg(
                 })
                 .collect()
         };
-        let header = ["#", "axis", "kind", "theta", "um", "run", "conf"].map(String::from);
+        let header = ["#", "axis", "kind", "θ", "µm", "run", "conf."].map(String::from);
         for cell in row(header, &black, y) {
             root.draw(&cell).map_err(err)?;
         }

@@ -33,9 +33,26 @@ pub struct PlacementCell {
 pub struct PlacementMap {
     pub params: [String; 2],
     pub cells: Vec<PlacementCell>,
+    /// The scenario's own values of the two parameters (its cone), marked on the map.
+    pub scenario_at: [f64; 2],
+    /// Radius of the rotary table, mm (its outline is drawn when both parameters are
+    /// centre coordinates in the table plane).
+    pub table_radius_mm: f64,
 }
 
 /// Checks the scenario's cone at every (x, y) of the grid, in parallel.
+/// The value of `param` in `cone` (mm or deg).
+fn value_of(param: SweepParam, cone: &crate::input::program::ConeTest) -> f64 {
+    match param {
+        SweepParam::CenterX => cone.center_mm.x,
+        SweepParam::CenterY => cone.center_mm.y,
+        SweepParam::CenterZ => cone.center_mm.z,
+        SweepParam::HalfApex => cone.half_apex_deg,
+        SweepParam::Inclination => cone.inclination_deg,
+        SweepParam::BallbarLength => cone.ballbar_length_mm,
+    }
+}
+
 pub fn placement_map(
     scenario: &Scenario,
     params: [SweepParam; 2],
@@ -104,6 +121,8 @@ pub fn placement_map(
     Ok(PlacementMap {
         params: [params[0].name().to_string(), params[1].name().to_string()],
         cells,
+        scenario_at: [value_of(params[0], cone), value_of(params[1], cone)],
+        table_radius_mm: scenario.machine.scene.table.radius_mm,
     })
 }
 
@@ -151,7 +170,8 @@ impl PlacementMap {
         Some((r(&|c| c.x), r(&|c| c.y)))
     }
 
-    /// SVG heat map: one cell per grid point, coloured by margin; cells that do not fit are
+    /// SVG heat map: one cell per grid point, coloured by the rank of its margin among the
+    /// fit cells, with the scenario's position ringed and the table edge drawn; cells that do not fit are
     /// hatched grey with a cross.
     pub fn to_svg(&self, title: &str) -> Result<String> {
         use plotters::prelude::*;
@@ -174,12 +194,33 @@ impl PlacementMap {
         let (hx, hy) = (half(&xs), half(&ys));
         let (x0, x1) = (xs[0] - hx, xs[xs.len() - 1] + hx);
         let (y0, y1) = (ys[0] - hy, ys[ys.len() - 1] + hy);
-        let top = self
+        // The colour scale: by rank among the distinct margins of the cells that fit
+        // (to 1 µm), so that any two fit cells with different margins differ in colour,
+        // however close the margins (a linear scale let one large clearance wash out the rest).
+        let mut levels: Vec<f64> = self
             .cells
             .iter()
-            .filter(|c| c.fits)
-            .map(|c| c.margin_mm)
-            .fold(1.0_f64, f64::max);
+            .filter(|c| c.fits && c.margin_mm.is_finite())
+            .map(|c| (c.margin_mm * 1e3).round() / 1e3)
+            .collect();
+        levels.sort_by(f64::total_cmp);
+        levels.dedup();
+        let rank = |m: f64| -> f64 {
+            let m = (m * 1e3).round() / 1e3;
+            let i = levels.partition_point(|&l| l < m);
+            if levels.len() > 1 {
+                i as f64 / (levels.len() - 1) as f64
+            } else {
+                1.0
+            }
+        };
+        let level_at = |t: f64| -> f64 {
+            if levels.is_empty() {
+                0.0
+            } else {
+                levels[((t * (levels.len() - 1) as f64).round() as usize).min(levels.len() - 1)]
+            }
+        };
         let mut svg = String::new();
         {
             let root = SVGBackend::with_string(&mut svg, (900, 700)).into_drawing_area();
@@ -195,15 +236,12 @@ impl PlacementMap {
             chart
                 .configure_mesh()
                 .disable_mesh()
-                .x_desc(format!("{} (mm, table frame)", self.params[0]))
-                .y_desc(format!("{} (mm, table frame)", self.params[1]))
+                .x_desc(axis_title(&self.params[0]))
+                .y_desc(axis_title(&self.params[1]))
                 .draw()
                 .map_err(|e| draw_err(&e))?;
-            let colour = |m: f64| {
-                // Red (no margin) through yellow to green (the largest margin on the map).
-                let t = (m / top).clamp(0.0, 1.0);
-                HSLColor(t * 0.33, 0.75, 0.5)
-            };
+            let colour_at = |t: f64| HSLColor(t.clamp(0.0, 1.0) * 0.66, 0.75, 0.5);
+            let colour = |m: f64| colour_at(rank(m));
             chart
                 .draw_series(self.cells.iter().map(|c| {
                     let style = if c.fits {
@@ -226,28 +264,76 @@ impl PlacementMap {
                     ]
                 }))
                 .map_err(|e| draw_err(&e))?;
+            // The table outline (a circle about the C axis), when the map is of the centre's
+            // X and Y, and the scenario's own position.
+            if self.params[0] == "center_x" && self.params[1] == "center_y" {
+                let r = self.table_radius_mm;
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        (0..=360)
+                            .map(|k| {
+                                let t = (k as f64).to_radians();
+                                (r * t.cos(), r * t.sin())
+                            })
+                            .filter(|&(x, y)| x >= x0 && x <= x1 && y >= y0 && y <= y1)
+                            .collect::<Vec<_>>(),
+                        BLACK.stroke_width(2),
+                    )))
+                    .map_err(|e| draw_err(&e))?
+                    .label("table edge");
+            }
+            let [sx, sy] = self.scenario_at;
+            if sx >= x0 && sx <= x1 && sy >= y0 && sy <= y1 {
+                chart
+                    .draw_series([
+                        Circle::new((sx, sy), 8, BLACK.stroke_width(3)),
+                        Circle::new((sx, sy), 2, BLACK.filled()),
+                    ])
+                    .map_err(|e| draw_err(&e))?;
+                chart
+                    .draw_series(std::iter::once(Text::new(
+                        "scenario",
+                        (sx, sy),
+                        ("sans-serif", 13).into_font().color(&BLACK),
+                    )))
+                    .map_err(|e| draw_err(&e))?;
+            }
+            // Outline of the mapped area.
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)],
+                    BLACK.stroke_width(1),
+                )))
+                .map_err(|e| draw_err(&e))?;
             // Legend: the colour scale and the cross.
             let lg = legend.margin(60, 60, 10, 10);
             let (_, h) = lg.dim_in_pixel();
             for k in 0..100 {
-                let m = top * (1.0 - k as f64 / 100.0);
+                let t = 1.0 - k as f64 / 100.0;
                 let y = (k as f64 / 100.0 * (h as f64 - 80.0)) as i32 + 30;
                 lg.draw(&Rectangle::new(
                     [(0, y), (30, y + (h as i32 - 80) / 100 + 1)],
-                    colour(m).filled(),
+                    colour_at(t).filled(),
                 ))
                 .map_err(|e| draw_err(&e))?;
             }
-            lg.draw(&Text::new("margin", (0, 5), ("sans-serif", 14)))
+            lg.draw(&Text::new("margin (mm)", (0, 5), ("sans-serif", 14)))
                 .map_err(|e| draw_err(&e))?;
+            for t in [1.0, 0.75, 0.5, 0.25, 0.0] {
+                let y = ((1.0 - t) * (h as f64 - 80.0)) as i32 + 30;
+                lg.draw(&Text::new(
+                    format!("{:.3}", level_at(t)),
+                    (35, y - 5),
+                    ("sans-serif", 12),
+                ))
+                .map_err(|e| draw_err(&e))?;
+            }
             lg.draw(&Text::new(
-                format!("{top:.0} mm"),
-                (35, 25),
-                ("sans-serif", 12),
+                "(rank scale)",
+                (0, h as i32 - 48),
+                ("sans-serif", 11),
             ))
             .map_err(|e| draw_err(&e))?;
-            lg.draw(&Text::new("0 mm", (35, h as i32 - 55), ("sans-serif", 12)))
-                .map_err(|e| draw_err(&e))?;
             lg.draw(&Rectangle::new(
                 [(0, h as i32 - 35), (30, h as i32 - 15)],
                 RGBColor(200, 200, 200).filled(),
@@ -263,4 +349,14 @@ impl PlacementMap {
         }
         Ok(svg)
     }
+}
+
+/// A placement parameter in words, with its unit.
+fn axis_title(param: &str) -> String {
+    let unit = if matches!(param, "half_apex" | "inclination") {
+        "deg"
+    } else {
+        "mm"
+    };
+    format!("{} ({unit})", crate::study::sweep::param_words(param))
 }

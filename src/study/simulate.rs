@@ -17,6 +17,7 @@ use crate::error::Result;
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario};
 use crate::measure::ballbar::{analyse_events_of, BallbarResult};
+use crate::measure::settle::SettleGate;
 use crate::measure::{BallbarSink, BarGeometry, CircleFrame};
 use crate::pipeline::{self, RunOptions, Sink, Timing};
 use crate::program;
@@ -42,6 +43,10 @@ pub struct SimulationSummary {
     pub reversals_deg: std::collections::BTreeMap<String, Vec<f64>>,
     /// The directions run.
     pub directions: Vec<Direction>,
+    /// What the user should know about the figures (a trimmed transient, one spot that
+    /// dominates G); left out when there is none.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub warnings: Vec<String>,
 }
 
 /// Files a simulation writes into its output folder.
@@ -70,6 +75,18 @@ pub fn simulate(
         Program::File { .. } => vec![Direction::Ccw],
     };
     create_dir(out_dir)?;
+    // What a killed run into this folder left behind.
+    crate::report::files::remove_stale_temporaries(
+        out_dir,
+        &[
+            TRACE_FILE,
+            SUMMARY_FILE,
+            PLOT_FILE,
+            crate::report::test_info::TEST_FILE,
+            crate::report::html::CHECK_FILE,
+            crate::report::html::REPORT_FILE,
+        ],
+    )?;
     let mut trace = TraceSink::create(
         &out_dir.join(TRACE_FILE),
         machine.axes(),
@@ -81,6 +98,7 @@ pub fn simulate(
     let (mut runs, mut signatures) = (Vec::new(), Vec::new());
     let mut sim_time_s = 0.0;
     let mut setpoints = 0u64;
+    let mut warnings = Vec::new();
     for &direction in &directions {
         let run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
         trace.start_run(direction, run.measured);
@@ -94,13 +112,39 @@ pub fn simulate(
             start_time_s: sim_time_s,
             program_path: scenario.path.clone(),
         };
+        // A file program measured from its first feed block: keep the start-up transient
+        // (the rapid still settling) out of the measured revolution.
+        let gate_transient = matches!(scenario.program, Program::File { .. })
+            && scenario.simulate.measure_lines.is_none();
         let stats = {
             let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(2);
             if let Some(b) = ballbar.as_mut() {
                 sinks.push(b);
                 sinks.push(&mut trace);
             }
-            pipeline::run(run.moves, machine, &options, &mut sinks, progress)?
+            match geometry.filter(|_| gate_transient && !sinks.is_empty()) {
+                Some(g) => {
+                    let mut gate = SettleGate::new(
+                        sinks,
+                        run.measured,
+                        Box::new(move |s| g.read(s).theta_deg),
+                    );
+                    let stats = {
+                        let mut gated: [&mut dyn Sink; 1] = [&mut gate];
+                        pipeline::run(run.moves, machine, &options, &mut gated, progress)?
+                    };
+                    if gate.skipped_samples > 0 {
+                        warnings.push(format!(
+                            "the file program has no measure_lines: the first {:.2} deg of the measured revolution \
+                             ({} samples, the start-up transient) were left out until the axes settled; \
+                             set [simulate] measure_lines to measure chosen blocks instead",
+                            gate.skipped_deg, gate.skipped_samples
+                        ));
+                    }
+                    stats
+                }
+                None => pipeline::run(run.moves, machine, &options, &mut sinks, progress)?,
+            }
         };
         sim_time_s = stats.end_time_s;
         setpoints += stats.samples;
@@ -127,6 +171,22 @@ pub fn simulate(
             &title,
         )?;
     }
+    // One spot that makes most of G (a transient, a spike) is worth a word.
+    for run in &runs {
+        let dev = run.trace_um(true)?;
+        let theta: Vec<f64> = (0..dev.len())
+            .map(|i| (i as f64 + 0.5) * crate::measure::ballbar::BIN_DEG)
+            .collect();
+        if let Some((g, rest, spot)) = crate::report::html::g_without_peak(&theta, &dev, 5.0) {
+            if g > 0.0 && rest < 0.5 * g {
+                warnings.push(format!(
+                    "one spot dominates G in the {} run: G = {g:.2} µm, {:.2} µm without ±5° around θ = {spot:.1}°",
+                    format!("{:?}", run.direction()).to_uppercase(),
+                    rest
+                ));
+            }
+        }
+    }
     let wall = started.elapsed().as_secs_f64();
     let summary = SimulationSummary {
         sim_time_s,
@@ -139,9 +199,21 @@ pub fn simulate(
             .map(|(a, r)| (a.to_string(), r.clone()))
             .collect(),
         directions,
+        warnings,
     };
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
     crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;
+    // The test parameters (ISO 230-4) for the report; the date only with timing, so that
+    // `--no-timing` runs stay byte-identical.
+    let test = crate::report::test_info::TestParameters::of(
+        scenario,
+        timing.then(crate::report::test_info::today_utc),
+    )?;
+    let json = serde_json::to_string_pretty(&test).expect("plain data serializes");
+    crate::report::write_atomic(
+        &out_dir.join(crate::report::test_info::TEST_FILE),
+        format!("{json}\n").as_bytes(),
+    )?;
     Ok(summary)
 }
 

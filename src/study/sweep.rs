@@ -299,80 +299,76 @@ impl SweepResult {
     }
 
     /// SVG like the paper's Figs. 16/17: reversal angle of X, Y and Z against the parameter,
-    /// with the coincidences circled.
+    /// with the coincidences ringed and numbered; drawn by the one plotting layer
+    /// ([`crate::report::plot`]), the legend above the plot so that it covers no point.
     pub fn to_svg(&self, unit: &str, title: &str) -> Result<String> {
-        use plotters::prelude::*;
-        let mut svg = String::new();
-        {
-            let (lo, hi) = match (self.rows.first(), self.rows.last()) {
-                (Some(a), Some(b)) if b.value > a.value => (a.value, b.value),
-                (Some(a), _) => (a.value - 1.0, a.value + 1.0),
-                _ => (0.0, 1.0),
-            };
-            let root = SVGBackend::with_string(&mut svg, (900, 600)).into_drawing_area();
-            let draw_err =
-                |e: &dyn std::fmt::Display| Error::usage(format!("cannot draw the plot: {e}"));
-            root.fill(&WHITE).map_err(|e| draw_err(&e))?;
-            let mut chart = ChartBuilder::on(&root)
-                .caption(title, ("sans-serif", 20))
-                .margin(15)
-                .x_label_area_size(45)
-                .y_label_area_size(60)
-                .build_cartesian_2d(lo..hi, 0.0..360.0)
-                .map_err(|e| draw_err(&e))?;
-            chart
-                .configure_mesh()
-                .x_desc(format!("{} ({unit})", self.param))
-                .y_desc("reversal angle theta (deg)")
-                .y_labels(13)
-                .draw()
-                .map_err(|e| draw_err(&e))?;
-            for (axis, color) in [("X", RED), ("Y", RGBColor(0, 150, 0)), ("Z", BLUE)] {
-                let color: RGBColor = color;
-                let points: Vec<(f64, f64)> = self
+        use crate::report::plot::{axis_colour, Chart, Mark, Series};
+        let mut chart = Chart::new(
+            title,
+            &format!("{} ({unit})", param_words(&self.param)),
+            "reversal angle θ (deg)",
+            900,
+            620,
+        );
+        chart.y_range = Some((0.0, 360.0));
+        if let (Some(a), Some(b)) = (self.rows.first(), self.rows.last()) {
+            chart.x_range = Some(if b.value > a.value {
+                (a.value, b.value)
+            } else {
+                (a.value - 1.0, a.value + 1.0)
+            });
+        }
+        for axis in [Axis::X, Axis::Y, Axis::Z] {
+            let name = axis.to_string();
+            chart.series.push(Series {
+                label: format!("{name} reversal"),
+                colour: axis_colour(axis),
+                points: self
                     .rows
                     .iter()
                     .flat_map(|r| {
                         r.reversals_deg
-                            .get(axis)
+                            .get(&name)
                             .into_iter()
                             .flatten()
                             .map(move |a| (r.value, *a))
                     })
-                    .collect();
-                chart
-                    .draw_series(points.iter().map(|p| Circle::new(*p, 2, color.filled())))
-                    .map_err(|e| draw_err(&e))?
-                    .label(format!("{axis} reversal"))
-                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
-            }
-            chart
-                .draw_series(
-                    self.coincidences
-                        .iter()
-                        .map(|c| Circle::new((c.value, c.theta_deg), 9, BLACK.stroke_width(2))),
-                )
-                .map_err(|e| draw_err(&e))?
-                .label("X, Y, Z coincide")
-                .legend(|(x, y)| Circle::new((x + 10, y), 6, BLACK.stroke_width(2)));
-            chart
-                .draw_series(self.coincidences.iter().map(|c| {
-                    Text::new(
-                        format!("{:.1} {unit}, {:.0} deg", c.value, c.theta_deg),
-                        (c.value, (c.theta_deg + 12.0).min(350.0)),
-                        ("sans-serif", 14),
-                    )
-                }))
-                .map_err(|e| draw_err(&e))?;
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.9))
-                .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .map_err(|e| draw_err(&e))?;
-            root.present().map_err(|e| draw_err(&e))?;
+                    .collect(),
+                dots: true,
+            });
         }
-        Ok(svg)
+        for (i, c) in self.coincidences.iter().enumerate() {
+            chart.marks.push(Mark {
+                x: c.value,
+                y: c.theta_deg,
+                label: format!("{}", i + 1),
+                colour: plotters::style::RGBColor(0, 0, 0),
+            });
+            chart.series.push(Series {
+                label: format!(
+                    "{}: X, Y, Z coincide at {:.1} {unit}, θ {:.0}°",
+                    i + 1,
+                    c.value,
+                    c.theta_deg
+                ),
+                colour: plotters::style::RGBColor(0, 0, 0),
+                points: Vec::new(),
+                dots: true,
+            });
+        }
+        chart.to_svg()
+    }
+}
+
+/// A sweep parameter in words, for axis titles.
+pub fn param_words(name: &str) -> &str {
+    match name {
+        "center_x" => "cone centre X, table frame",
+        "center_y" => "cone centre Y, table frame",
+        "center_z" => "cone centre Z, table frame",
+        "half_apex" => "cone half apex angle",
+        "inclination" => "cone inclination",
+        "ballbar_length" => "ball-bar length",
+        other => other,
     }
 }

@@ -1,0 +1,48 @@
+//! `mtsim report`: report.html for each run folder.
+
+use std::path::PathBuf;
+
+use super::print_stdout;
+use crate::error::{Error, Result};
+
+/// Checks a `--date` value: YYYY-MM-DD.
+pub fn check_date(date: &str) -> Result<()> {
+    let b = date.as_bytes();
+    let digits = |r: std::ops::Range<usize>| b[r].iter().all(u8::is_ascii_digit);
+    let ok = b.len() == 10
+        && b[4] == b'-'
+        && b[7] == b'-'
+        && digits(0..4)
+        && digits(5..7)
+        && digits(8..10);
+    let month: u32 = if ok {
+        date[5..7].parse().unwrap_or(0)
+    } else {
+        0
+    };
+    let day: u32 = if ok {
+        date[8..10].parse().unwrap_or(0)
+    } else {
+        0
+    };
+    if ok && (1..=12).contains(&month) && (1..=31).contains(&day) {
+        Ok(())
+    } else {
+        Err(Error::usage(format!(
+            "--date {date}: expected a date as YYYY-MM-DD, e.g. 2026-11-23"
+        )))
+    }
+}
+
+pub fn run(dirs: &[PathBuf], date: Option<&str>) -> Result<i32> {
+    if let Some(d) = date {
+        check_date(d)?;
+    }
+    let mut out = String::new();
+    for dir in dirs {
+        let path = crate::report::html::write_report(dir, date)?;
+        out.push_str(&format!("wrote {}\n", path.display()));
+    }
+    print_stdout(&out);
+    Ok(0)
+}

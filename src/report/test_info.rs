@@ -1,0 +1,265 @@
+//! `test.json`: the test parameters ISO 230-4 (clause 5.2, "test parameters") asks a
+//! circular-test report to state, taken from the scenario a run was made from.
+//!
+//! Machine, test and its geometry, feed, directions, plane and position, start and overshoot
+//! arcs, compensation state (feedforward and backlash per axis), sample period, date, mtsim
+//! version and a hash of the inputs. The hash is FNV-1a 64 over the bytes of the scenario,
+//! machine and program files, so two runs with the same hash ran the same inputs.
+//!
+//! The date is the only wall-clock figure: it is recorded only when asked for (`date`
+//! argument), so that `simulate --no-timing` stays byte-identical between runs.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::Result;
+use crate::input::scenario::{Program, Scenario};
+
+/// The test parameters of one run.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct TestParameters {
+    /// Machine name and file.
+    pub machine: String,
+    pub machine_file: String,
+    /// Kinematic layout ("trt-ac", ...).
+    pub kinematics: String,
+    /// "cone frustum (ISO 10791-6 / NAS 979)", "circular test (ISO 230-4)" or "G-code file".
+    pub test: String,
+    /// The scenario file.
+    pub scenario: String,
+    /// The G-code file, for a file program.
+    pub program_file: Option<String>,
+    /// Geometry in words: radius, or cone half apex, inclination and bar length.
+    pub geometry: String,
+    /// Ball-bar (measured circle) radius, mm.
+    pub radius_mm: Option<f64>,
+    /// Programmed contouring feed, mm/min.
+    pub feed_mm_min: Option<f64>,
+    /// Directions run ("ccw", "cw").
+    pub directions: Vec<String>,
+    /// Measuring plane (circle) or cone inclination plane, and the centre position, mm.
+    pub plane: String,
+    pub position_mm: Option<[f64; 3]>,
+    /// Start arc (before the measured revolution) and overshoot arc (after it), deg.
+    pub start_arc_deg: Option<f64>,
+    pub overshoot_arc_deg: Option<f64>,
+    /// The measured blocks of a file program, source lines (first, last), when set.
+    pub measure_lines: Option<[usize; 2]>,
+    /// Per axis: servo model, Kv, feedforward and backlash (compensation state).
+    pub compensation: Vec<String>,
+    /// Interpolation (sample) period, ms, and every how many samples the trace keeps.
+    pub sample_period_ms: f64,
+    pub trace_every: usize,
+    /// Tool-centre-point interpolation.
+    pub tcp: bool,
+    /// Date of the test (YYYY-MM-DD), when recorded.
+    pub date: Option<String>,
+    /// mtsim version.
+    pub mtsim_version: String,
+    /// FNV-1a 64 of the scenario, machine and program files, hex.
+    pub scenario_hash: String,
+}
+
+/// The file `test.json` in a run folder.
+pub const TEST_FILE: &str = "test.json";
+
+/// FNV-1a, 64 bit: a small, stable hash (not for security).
+pub fn fnv1a64(chunks: &[&[u8]]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for chunk in chunks {
+        for &b in *chunk {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        // Separate the files, so that moving bytes between them changes the hash.
+        h ^= 0xff;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// Today's date, UTC, as YYYY-MM-DD (civil calendar from the Unix day number).
+pub fn today_utc() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    civil_date((secs / 86_400) as i64)
+}
+
+/// The proleptic Gregorian date of Unix day `days` (H. Hinnant's `civil_from_days`).
+pub fn civil_date(days: i64) -> String {
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!("{y:04}-{m:02}-{d:02}")
+}
+
+fn read_or_empty(path: &Path) -> Vec<u8> {
+    std::fs::read(path).unwrap_or_default()
+}
+
+fn axis_unit(axis: crate::Axis) -> &'static str {
+    if axis.is_rotary() {
+        "deg"
+    } else {
+        "mm"
+    }
+}
+
+impl TestParameters {
+    /// The parameters of `scenario`; `date` as given (None: not recorded).
+    pub fn of(scenario: &Scenario, date: Option<String>) -> Result<TestParameters> {
+        let machine = &scenario.machine;
+        let kinematics = serde_json::to_value(machine.kinematics.layout)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
+        let sim = &scenario.simulate;
+        let lead = Some(sim.lead_deg);
+        let dirs = |d: &[crate::input::program::Direction]| {
+            d.iter()
+                .map(|d| format!("{d:?}").to_lowercase())
+                .collect::<Vec<_>>()
+        };
+        let cone_geometry = |c: &crate::input::program::ConeTest| {
+            format!(
+                "cone frustum, half apex {} deg, inclination {} deg, ball bar {} mm (circle radius {:.3} mm)",
+                c.half_apex_deg,
+                c.inclination_deg,
+                c.ballbar_length_mm,
+                c.radius_mm()
+            )
+        };
+        let mut program_file = None;
+        let (test, geometry, radius_mm, feed, directions, plane, position, start, overshoot) =
+            match &scenario.program {
+                Program::Cone {
+                    cone,
+                    nc,
+                    directions,
+                } => (
+                    "cone frustum (ISO 10791-6 ball-bar version of NAS 979)".to_string(),
+                    cone_geometry(cone),
+                    Some(cone.radius_mm()),
+                    Some(nc.feed_mm_min),
+                    dirs(directions),
+                    format!(
+                        "circle plane inclined {} deg about the table X axis",
+                        cone.inclination_deg
+                    ),
+                    Some([cone.center_mm.x, cone.center_mm.y, cone.center_mm.z]),
+                    lead,
+                    lead,
+                ),
+                Program::Circle { circle, directions } => (
+                    "circular test (ISO 230-4)".to_string(),
+                    format!("circle, radius {} mm", circle.radius_mm),
+                    Some(circle.radius_mm),
+                    Some(circle.feed_mm_min),
+                    dirs(directions),
+                    format!("{:?}", circle.plane),
+                    Some(circle.center_mm),
+                    lead,
+                    lead,
+                ),
+                Program::File { path, cone } => {
+                    program_file = Some(path.display().to_string());
+                    (
+                        "G-code file".to_string(),
+                        cone.as_ref()
+                            .map_or("as programmed".to_string(), cone_geometry),
+                        cone.as_ref().map(|c| c.radius_mm()),
+                        None,
+                        vec!["ccw".to_string()],
+                        cone.as_ref().map_or("as programmed".to_string(), |c| {
+                            format!(
+                                "circle plane inclined {} deg about the table X axis",
+                                c.inclination_deg
+                            )
+                        }),
+                        cone.as_ref()
+                            .map(|c| [c.center_mm.x, c.center_mm.y, c.center_mm.z]),
+                        None,
+                        None,
+                    )
+                }
+            };
+        let compensation = machine
+            .axes()
+            .iter()
+            .map(|&axis| {
+                let a = machine.axis(axis);
+                let unit = axis_unit(axis);
+                let backlash = if axis.is_rotary() {
+                    a.drive.backlash_deg
+                } else {
+                    a.drive.backlash_mm
+                }
+                .unwrap_or(0.0);
+                format!(
+                    "{axis}: {} servo, Kv {} 1/s, velocity feedforward {:.0} %, acceleration feedforward {:.0} %, {} feedback, backlash {backlash} {unit} (not compensated)",
+                    a.servo.model,
+                    a.servo.kv_per_s,
+                    100.0 * a.servo.velocity_feedforward,
+                    100.0 * a.servo.acceleration_feedforward,
+                    a.servo.feedback,
+                )
+            })
+            .collect();
+        let mut files = vec![read_or_empty(&scenario.path), read_or_empty(&machine.path)];
+        if let Program::File { path, .. } = &scenario.program {
+            files.push(read_or_empty(path));
+        }
+        let chunks: Vec<&[u8]> = files.iter().map(Vec::as_slice).collect();
+        Ok(TestParameters {
+            machine: machine.name.clone(),
+            machine_file: machine.path.display().to_string(),
+            kinematics,
+            test,
+            scenario: scenario.path.display().to_string(),
+            program_file,
+            geometry,
+            radius_mm,
+            feed_mm_min: feed,
+            directions,
+            plane,
+            position_mm: position,
+            start_arc_deg: start,
+            overshoot_arc_deg: overshoot,
+            measure_lines: sim.measure_lines,
+            compensation,
+            sample_period_ms: machine.interpolation_period_s * 1e3,
+            trace_every: sim.trace_every,
+            tcp: sim.tcp,
+            date,
+            mtsim_version: env!("CARGO_PKG_VERSION").to_string(),
+            scenario_hash: format!("{:016x}", fnv1a64(&chunks)),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn civil_dates_of_known_days() {
+        assert_eq!(civil_date(0), "1970-01-01");
+        // 2000-03-01 is day 11017; 2024-02-29 is day 19782.
+        assert_eq!(civil_date(11_017), "2000-03-01");
+        assert_eq!(civil_date(19_782), "2024-02-29");
+    }
+
+    #[test]
+    fn fnv_of_the_empty_input_is_the_offset_basis() {
+        assert_eq!(fnv1a64(&[]), 0xcbf2_9ce4_8422_2325);
+        assert_ne!(fnv1a64(&[b"ab", b"c"]), fnv1a64(&[b"a", b"bc"]));
+    }
+}

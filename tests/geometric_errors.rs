@@ -1,0 +1,324 @@
+//! Geometric errors of the rotary axes (shared/spec/geometric-errors.md): closed forms, and
+//! an independent implementation of the spec against `mtsim simulate`.
+//!
+//! The reference below is written from the spec's equations alone (its own Rodrigues
+//! rotation, its own chain); it calls nothing of mtsim's kinematics.
+
+mod common;
+
+use std::path::Path;
+
+use mtsim::kinematics::error_table::{ErrorTable, PositionErrors};
+use mtsim::kinematics::{Kinematics, Layout, LocationErrors, LocationParam as P};
+use mtsim::measure::ballbar::deviation_mm;
+use mtsim::{Axis, AxisVec};
+use nalgebra::{Point3, Vector3};
+
+// ---------- the independent reference: the spec's equations, nothing else ----------
+
+type V = [f64; 3];
+
+fn sub(a: V, b: V) -> V {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn add(a: V, b: V) -> V {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+fn dot(a: V, b: V) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: V, b: V) -> V {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn scale(a: V, s: f64) -> V {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+fn norm(a: V) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// Rodrigues: rotate `x` by `theta` (rad) about unit `u`, right-hand rule.
+fn rodrigues(u: V, theta: f64, x: V) -> V {
+    let (s, c) = theta.sin_cos();
+    add(
+        add(scale(x, c), scale(cross(u, x), s)),
+        scale(u, dot(u, x) * (1.0 - c)),
+    )
+}
+
+/// One rotary axis's actual line per the spec: point p = pivot + position errors, direction
+/// u = unit(n + eps × n). Errors in um and urad.
+struct Line {
+    p: V,
+    u: V,
+}
+
+fn line(n: V, pivot: V, pos_um: V, rot_urad: V) -> Line {
+    let e = cross(scale(rot_urad, 1e-6), n);
+    let u = add(n, e);
+    Line {
+        p: add(pivot, scale(pos_um, 1e-3)),
+        u: scale(u, 1.0 / norm(u)),
+    }
+}
+
+fn turn(l: &Line, deg: f64, x: V) -> V {
+    add(rodrigues(l.u, deg.to_radians(), sub(x, l.p)), l.p)
+}
+
+/// Spec errors by name (um / urad); absent = 0.
+fn e(errors: &[(&str, f64)], name: &str) -> f64 {
+    errors
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map_or(0.0, |(_, v)| *v)
+}
+
+/// Machine coordinates of table point `x_table` (relative to the pivot) at tilt `t` and
+/// `c` (deg): m = T_tilt(t) T_C(c) (pivot + x).
+fn reference_table_point(
+    bc: bool,
+    pivot: V,
+    errors: &[(&str, f64)],
+    t: f64,
+    c: f64,
+    x_table: V,
+) -> V {
+    let g = |n| e(errors, n);
+    let tilt = if bc {
+        line(
+            [0.0, 1.0, 0.0],
+            pivot,
+            [g("EX0B"), 0.0, g("EZ0B")],
+            [g("EA0B"), 0.0, g("EC0B")],
+        )
+    } else {
+        line(
+            [1.0, 0.0, 0.0],
+            pivot,
+            [0.0, g("EY0A"), g("EZ0A")],
+            [0.0, g("EB0A"), g("EC0A")],
+        )
+    };
+    let cl = line(
+        [0.0, 0.0, 1.0],
+        pivot,
+        [g("EX0C"), g("EY0C"), 0.0],
+        [g("EA0C"), g("EB0C"), 0.0],
+    );
+    turn(&tilt, t, turn(&cl, c, add(pivot, x_table)))
+}
+
+// ---------- closed forms ----------
+
+fn q(x: f64, y: f64, z: f64, tilt: (Axis, f64), c: f64) -> AxisVec {
+    let mut q = AxisVec::ZERO;
+    q[Axis::X] = x;
+    q[Axis::Y] = y;
+    q[Axis::Z] = z;
+    q[tilt.0] = tilt.1;
+    q[Axis::C] = c;
+    q
+}
+
+/// A C-axis centre offset e, a ball on the C axis and a tool ball on a horizontal circle of
+/// radius L about it (C turning with theta, A = 0): dL = e_x − e_x cos θ − e_y sin θ, a
+/// once-per-revolution sinusoid of amplitude |e| on a circle centred on C.
+#[test]
+fn c_axis_offset_gives_a_once_per_revolution_sinusoid() {
+    let pivot = Vector3::new(10.0, -20.0, 30.0);
+    let (ex, ey) = (8.0, -5.0); // um
+    let k = Kinematics::new(Layout::TrtAc, pivot).with_location_errors(
+        LocationErrors::default()
+            .with(P::EX0C, ex)
+            .with(P::EY0C, ey),
+    );
+    let (l, h) = (100.0, 80.0);
+    for i in 0..36 {
+        let th = i as f64 * 10.0;
+        let (s, c) = th.to_radians().sin_cos();
+        let qq = q(
+            pivot.x + l * c,
+            pivot.y + l * s,
+            pivot.z + h,
+            (Axis::A, 0.0),
+            th,
+        );
+        let dl_um = deviation_mm(&k, &qq, &Point3::new(0.0, 0.0, h), l) * 1e3;
+        let expected = ex - ex * c - ey * s;
+        // first order: the neglected term is |delta|^2 / 2L ~ 2e-3 um
+        assert!(
+            (dl_um - expected).abs() < 5e-3,
+            "theta {th}: {dl_um} um against {expected} um"
+        );
+    }
+}
+
+/// A tilt of the C axis (EA0C, EB0C) seen by a ball at height h on the C axis adds
+/// h (EB0C, −EA0C) to the centre offset (to first order: error ~ h eps^2).
+#[test]
+fn c_axis_tilt_at_ball_height_adds_to_the_offset() {
+    let (ex, ey, ea, eb) = (3.0, 2.0, -15.0, 25.0); // um, urad
+    let h = 200.0;
+    let tilted = Kinematics::new(Layout::TrtAc, Vector3::zeros()).with_location_errors(
+        LocationErrors::default()
+            .with(P::EX0C, ex)
+            .with(P::EY0C, ey)
+            .with(P::EA0C, ea)
+            .with(P::EB0C, eb),
+    );
+    // the same with the tilt folded into the offset: e + h (EB0C, -EA0C), um = mm * urad
+    let offset = Kinematics::new(Layout::TrtAc, Vector3::zeros()).with_location_errors(
+        LocationErrors::default()
+            .with(P::EX0C, ex + h * eb * 1e-3)
+            .with(P::EY0C, ey - h * ea * 1e-3),
+    );
+    let ball = Point3::new(0.0, 0.0, h);
+    for (a, c) in [(0.0, 0.0), (0.0, 90.0), (20.0, 137.0), (45.0, -250.0)] {
+        let qq = q(0.0, 0.0, 0.0, (Axis::A, a), c);
+        let d =
+            tilted.actual_table_to_machine(&qq, &ball) - offset.actual_table_to_machine(&qq, &ball);
+        // horizontal parts agree; the tilt alone also lifts the ball by ~h eps^2
+        assert!(d.norm() < 1e-6, "A {a} C {c}: differ by {} mm", d.norm());
+    }
+}
+
+/// The C-axis offset moves a table point by exactly R_A (I − R_C) e (exact, no linearisation).
+#[test]
+fn c_axis_offset_moves_the_table_by_the_closed_form() {
+    let e = Vector3::new(0.012, -0.007, 0.0); // mm
+    let k = Kinematics::new(Layout::TrtAc, Vector3::zeros()).with_location_errors(
+        LocationErrors::default()
+            .with(P::EX0C, e.x * 1e3)
+            .with(P::EY0C, e.y * 1e3),
+    );
+    let p = Point3::new(30.0, -40.0, 120.0);
+    for (a, c) in [(10.0, 30.0), (-20.0, 200.0), (75.0, -45.0)] {
+        let qq = q(0.0, 0.0, 0.0, (Axis::A, a), c);
+        let ra = nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), f64::to_radians(a));
+        let rc = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), f64::to_radians(c));
+        let expected = ra * (e - rc * e);
+        let got = k.actual_table_to_machine(&qq, &p) - k.table_to_machine(&qq, &p);
+        assert!((got - expected).norm() < 1e-12, "{got} vs {expected}");
+    }
+}
+
+/// An A-axis offset (EY0A, EZ0A) moves every table point by (I − R_A) p_A; an A-axis tilt
+/// (EB0A, EC0A) moves a point at height h on the C axis by h (EB0A (cos A − 1) + EC0A sin A)
+/// along X (first order).
+#[test]
+fn a_axis_errors_follow_their_closed_forms() {
+    let (ey, ez, eb, ec) = (6.0, -4.0, 20.0, -30.0);
+    let h = 150.0;
+    let k = Kinematics::new(Layout::TrtAc, Vector3::zeros()).with_location_errors(
+        LocationErrors::default()
+            .with(P::EY0A, ey)
+            .with(P::EZ0A, ez)
+            .with(P::EB0A, eb)
+            .with(P::EC0A, ec),
+    );
+    let ball = Point3::new(0.0, 0.0, h);
+    for a in [5.0_f64, 25.0, 60.0, -30.0] {
+        let qq = q(0.0, 0.0, 0.0, (Axis::A, a), 33.0);
+        let (s, c) = a.to_radians().sin_cos();
+        let p = Vector3::new(0.0, ey, ez) * 1e-3;
+        let ra = nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), a.to_radians());
+        let offset_part = p - ra * p;
+        let tilt_part = Vector3::new(h * (eb * (c - 1.0) + ec * s) * 1e-6, 0.0, 0.0);
+        let got = k.actual_table_to_machine(&qq, &ball) - k.table_to_machine(&qq, &ball);
+        let d = got - offset_part - tilt_part;
+        // first order: the neglected terms are ~ h eps^2 ~ 2e-7 mm
+        assert!(d.norm() < 1e-6, "A {a}: off by {} mm", d.norm());
+    }
+}
+
+/// The mtsim chain equals the independent reference for every layout and parameter.
+#[test]
+fn actual_chain_equals_the_reference_for_every_parameter() {
+    let pivot = [5.0, -7.0, 11.0];
+    for (layout, tilt, bc) in [
+        (Layout::TrtAc, Axis::A, false),
+        (Layout::TrtBc, Axis::B, true),
+    ] {
+        for param in P::ALL
+            .into_iter()
+            .filter(|p| layout.axes().contains(&p.axis()))
+        {
+            let v = 37.0;
+            let k = Kinematics::new(layout, Vector3::from(pivot))
+                .with_location_errors(LocationErrors::default().with(param, v));
+            let x = [40.0, -25.0, 150.0];
+            for (t, c) in [(17.0, 211.0), (-40.0, -75.0)] {
+                let got =
+                    k.actual_table_to_machine(&q(0.0, 0.0, 0.0, (tilt, t), c), &Point3::from(x));
+                let want = reference_table_point(bc, pivot, &[(param.name(), v)], t, c, x);
+                let d = norm(sub([got.x, got.y, got.z], want));
+                assert!(d < 1e-10, "{} at {t}/{c}: {d} mm", param.name());
+            }
+        }
+    }
+}
+
+// ---------- position-dependent errors ----------
+
+#[test]
+fn error_table_interpolates_per_direction_and_wraps_a_full_turn() {
+    let text = "# worm gear of C\n0 0.000 0.002\n90 0.004 0.006\n180 0 0.002 # half turn\n270 -0.004 -0.002\n360 0 0.002\n";
+    let t = ErrorTable::parse(Path::new("c.comp"), text, true).unwrap();
+    assert!((t.error_at(45.0, true) - 0.002).abs() < 1e-15);
+    assert!((t.error_at(45.0, false) - 0.004).abs() < 1e-15);
+    // periodic: 405 deg is 45 deg, -315 deg too
+    assert!((t.error_at(405.0, true) - 0.002).abs() < 1e-15);
+    assert!((t.error_at(-315.0, true) - 0.002).abs() < 1e-15);
+    // a linear axis holds the end values
+    let x = ErrorTable::parse(
+        Path::new("x.comp"),
+        "-100 -0.01 -0.012\n100 0.01 0.008\n",
+        false,
+    )
+    .unwrap();
+    assert_eq!(x.error_at(-500.0, true), -0.01);
+    assert_eq!(x.error_at(500.0, false), 0.008);
+    assert!((x.error_at(50.0, true) - 0.005).abs() < 1e-15);
+}
+
+#[test]
+fn error_table_follows_the_direction_of_motion() {
+    let x = ErrorTable::parse(
+        Path::new("x.comp"),
+        "0 0.001 -0.001\n10 0.001 -0.001\n",
+        false,
+    )
+    .unwrap();
+    let mut pe = PositionErrors::new([(Axis::X, &x)]);
+    let at = |v: f64| {
+        let mut q = AxisVec::ZERO;
+        q[Axis::X] = v;
+        q
+    };
+    assert_eq!(pe.apply(&at(1.0))[Axis::X], 1.001); // forward before the first move
+    assert_eq!(pe.apply(&at(2.0))[Axis::X], 2.001);
+    assert_eq!(pe.apply(&at(1.5))[Axis::X], 1.499); // reversed
+    assert_eq!(pe.apply(&at(1.5))[Axis::X], 1.499); // at rest: keeps the direction
+    assert_eq!(pe.apply_mean(&at(1.5))[Axis::X], 1.5);
+}
+
+#[test]
+fn bad_error_tables_name_the_line() {
+    for (text, needle) in [
+        ("0 0 0\n10 x 0\n", ":2:"),
+        ("0 0 0\n10 0\n", ":2:"),
+        ("0 0 0\n", "at least two"),
+        ("0 0 0\n10 0 0\n5 0 0\n", "ascend"),
+        ("0 0 0 0\n", "three numbers"),
+        ("0 0 NaN\n1 0 0\n", "finite"),
+    ] {
+        let err = ErrorTable::parse(Path::new("t.comp"), text, false).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains(needle), "{text:?}: {msg}");
+    }
+}

@@ -226,6 +226,14 @@ impl Machine {
         &self.axes[&axis]
     }
 
+    /// Mutable configuration of `axis` (for what-if runs such as `fit`); panics like
+    /// [`Machine::axis`].
+    pub fn axis_mut(&mut self, axis: Axis) -> &mut AxisConfig {
+        self.axes
+            .get_mut(&axis)
+            .expect("every axis of the layout is present")
+    }
+
     pub fn has_axis(&self, axis: Axis) -> bool {
         self.axes.contains_key(&axis)
     }

@@ -326,3 +326,67 @@ fn a_bad_measured_trace_names_its_line() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("one --measured"));
 }
+
+/// On the BC machine, with 4 um of X backlash hidden as well: `--backlash` recovers it, and
+/// the backlash of Z (perpendicular to the bar) and of C (which never reverses in a cone)
+/// is reported as unseen, not given a value.
+#[test]
+fn backlash_is_fitted_where_the_bar_sees_it_on_a_bc_machine() {
+    let dir = common::scratch("fit", "bc-backlash");
+    let hidden = [
+        ("EX0B", 6.0),
+        ("EZ0B", -9.0),
+        ("EA0B", 25.0),
+        ("EC0B", -30.0),
+        ("EX0C", 8.0),
+        ("EY0C", -5.0),
+    ];
+    let mut text = std::fs::read_to_string(common::machine("trt-bc")).unwrap();
+    let nominal = dir.join("nominal.toml");
+    std::fs::write(&nominal, &text).unwrap();
+    text.push_str("\n[axes.X.drive]\nbacklash_mm = 0.004\n[location_errors]\n");
+    for (n, v) in hidden {
+        text.push_str(&format!("{n}_{} = {v}\n", unit(n)));
+    }
+    let truth = dir.join("truth.toml");
+    std::fs::write(&truth, &text).unwrap();
+    let mut pairs = Vec::new();
+    for (i, c) in [(15.0, 10.0, 200.0), (45.0, 30.0, 200.0)]
+        .iter()
+        .enumerate()
+    {
+        let s_true = scenario(&dir, &format!("true{i}"), &truth, *c, "");
+        let measured = measure(&dir, &format!("m{i}"), &s_true, 0.1, 21 + i as u64);
+        pairs.push((
+            scenario(&dir, &format!("fit{i}"), &nominal, *c, ""),
+            measured,
+        ));
+    }
+    let out = dir.join("fit");
+    let mut args = vec!["fit".to_string()];
+    for (s, m) in &pairs {
+        args.extend([
+            s.display().to_string(),
+            "--measured".into(),
+            m.display().to_string(),
+        ]);
+    }
+    args.extend([
+        "-o".into(),
+        out.display().to_string(),
+        "--json".into(),
+        "--backlash".into(),
+    ]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let fit = common::stdout_json(&common::mtsim(&args));
+    for (name, v) in &hidden[..4] {
+        assert_recovered(&fit, name, *v);
+    }
+    assert_recovered(&fit, "backlash_X", 4.0);
+    assert!((param(&fit, "backlash_X")["value"].as_f64().unwrap() - 4.0).abs() < 0.2);
+    for unseen in ["backlash_Z", "backlash_C"] {
+        let p = param(&fit, unseen);
+        assert_eq!(p["identifiable"], false, "{p}");
+        assert!(p["value"].is_null());
+    }
+}

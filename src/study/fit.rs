@@ -30,6 +30,10 @@
 //! the machine-file fragment carries each inseparable combination in the remaining
 //! parameter (a C-axis offset "as seen at the ball height", for example).
 //!
+//! A parameter that moves the traces by less than [`MIN_VISIBILITY`] (RMS, per unit) is not
+//! seen at all (the backlash of an axis perpendicular to the bar, for example) and is a null
+//! direction on its own.
+//!
 //! Standard errors: `σ² = |r|² / (n − rank)`, `Cov = σ² D⁻¹ V_r Σ_r⁻² V_rᵀ D⁻¹`.
 //!
 //! # What to measure next
@@ -59,6 +63,9 @@ use crate::{Axis, AxisVec};
 /// Singular values below this fraction of the largest (of the column-scaled sensitivity
 /// matrix) span the null space: numerically exact degeneracies, not merely weak ones.
 pub const NULL_TOLERANCE: f64 = 1e-6;
+/// Smallest RMS change of the traces, um per unit of a parameter (um, urad, mdeg, 1/s),
+/// for the parameter to count as seen at all.
+pub const MIN_VISIBILITY: f64 = 0.01;
 /// Entries of a null direction below this fraction of its largest (column-scaled) are
 /// rounding noise and dropped.
 const NULL_ENTRY: f64 = 1e-4;
@@ -635,8 +642,20 @@ pub fn fit(
             jac.set_column(j, &col);
         }
         let d = Decomposition::new(&jac);
+        // The recorded motion belongs to the servo parameters of `x_sim`; until the next
+        // simulation their changes enter linearly, through their columns.
+        let x_sim = x.clone();
+        let servo_part = |x: &DVector<f64>| -> DVector<f64> {
+            let mut dx = x - &x_sim;
+            for (j, p) in params.iter().enumerate() {
+                if !matches!(p, Param::Backlash(_) | Param::Gain(_)) {
+                    dx[j] = 0.0;
+                }
+            }
+            &jac * dx
+        };
         for _ in 0..4 {
-            let r = &y - model(&runs, &x)?;
+            let r = &y - model(&runs, &x)? - servo_part(&x);
             x += d.solve(&r);
         }
         decomposition = Some(d);
@@ -731,7 +750,7 @@ pub fn fit(
 
     let fragment = fragment_text(&params, &estimates, &identifiable, &unidentifiable, layout);
     let suggestion = if d.null_dim() > 0 {
-        suggest(inputs, &params, d.null_dim())?
+        suggest(inputs, &params)?
     } else {
         None
     };
@@ -805,10 +824,19 @@ struct Decomposition {
 impl Decomposition {
     fn new(j: &DMatrix<f64>) -> Decomposition {
         let np = j.ncols();
+        let rows = j.nrows().max(1) as f64;
+        let mut js = j.clone();
+        // A parameter that moves the traces by less than MIN_VISIBILITY (RMS, per unit) is
+        // not seen by these tests: its column is dropped and it joins the null space.
+        for c in 0..np {
+            if js.column(c).norm() / rows.sqrt() < MIN_VISIBILITY {
+                js.column_mut(c).fill(0.0);
+            }
+        }
         let scale = DVector::from_iterator(
             np,
             (0..np).map(|c| {
-                let n = j.column(c).norm();
+                let n = js.column(c).norm();
                 if n > 0.0 {
                     n
                 } else {
@@ -816,7 +844,6 @@ impl Decomposition {
                 }
             }),
         );
-        let mut js = j.clone();
         for c in 0..np {
             let s = scale[c];
             js.column_mut(c).scale_mut(1.0 / s);
@@ -959,7 +986,11 @@ fn describe_null(row: &DVector<f64>, pivot: usize, params: &[Param]) -> NullDire
     }
     let piv = &params[pivot];
     let description = match others.as_slice() {
-        [] => format!("{} does not change the traces at all", piv.name()),
+        [] => format!(
+            "{} does not change the traces measurably (less than {MIN_VISIBILITY} um RMS per {}): these tests do not see it",
+            piv.name(),
+            piv.unit()
+        ),
         [(j, c)] => {
             // Invariant: other − c · pivot is what the traces see.
             let other = &params[*j];
@@ -1034,11 +1065,7 @@ fn fragment_text(
 }
 
 /// Scores candidate extra cone tests by the null space they leave (geometric part only).
-fn suggest(
-    inputs: &[(Scenario, MeasuredTrace)],
-    params: &[Param],
-    null_now: usize,
-) -> Result<Option<Suggestion>> {
+fn suggest(inputs: &[(Scenario, MeasuredTrace)], params: &[Param]) -> Result<Option<Suggestion>> {
     let Some((base, cone)) = inputs.iter().find_map(|(s, _)| match &s.program {
         Program::Cone { cone, .. } => Some((s, *cone)),
         _ => None,
@@ -1129,10 +1156,7 @@ fn suggest(
             ..cone
         });
     }
-    let mut best: Option<(usize, f64, ConeTest)> = None;
-    for c in candidates {
-        let extra = sens(&with_cone(c))?;
-        let all: Vec<&DMatrix<f64>> = blocks.iter().chain(std::iter::once(&extra)).collect();
+    let stack = |all: &[&DMatrix<f64>]| -> Decomposition {
         let rows: usize = all.iter().map(|b| b.nrows()).sum();
         let nl = loc_params.len();
         let mut j = DMatrix::zeros(rows, nl + all.len());
@@ -1143,7 +1167,18 @@ fn suggest(
             j.view_mut((r0, nl + k), (b.nrows(), 1)).fill(1.0);
             r0 += b.nrows();
         }
-        let d = Decomposition::new(&j);
+        Decomposition::new(&j)
+    };
+    // The location errors the present tests leave inseparable.
+    let null_now = stack(&blocks.iter().collect::<Vec<_>>()).null_dim();
+    if null_now == 0 {
+        return Ok(None);
+    }
+    let mut best: Option<(usize, f64, ConeTest)> = None;
+    for c in candidates {
+        let extra = sens(&with_cone(c))?;
+        let all: Vec<&DMatrix<f64>> = blocks.iter().chain(std::iter::once(&extra)).collect();
+        let d = stack(&all);
         let smallest = d
             .relative
             .get(d.rank.saturating_sub(1))

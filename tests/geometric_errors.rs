@@ -650,3 +650,77 @@ fn worm_gear_error_of_the_tilting_axis_gives_the_closed_form_ripple() {
         "closed form off by {worst} um (peak {peak} um)"
     );
 }
+
+/// `analyze` reports the geometric errors' share of the trace; it equals the reference's
+/// trace on the exact cone path (spec inverse kinematics, written out here).
+#[test]
+fn analyze_reports_the_geometric_trace_of_the_reference() {
+    let dir = common::scratch("geo", "analyze");
+    let errors = [
+        ("EX0C", 8.0),
+        ("EY0C", -5.0),
+        ("EZ0A", 10.0),
+        ("EC0A", -30.0),
+        ("EA0C", 12.0),
+    ];
+    let mut text = std::fs::read_to_string(common::trt_ac()).unwrap();
+    text.push_str("\n[location_errors]\n");
+    for (n, v) in errors {
+        let unit = if matches!(n.as_bytes()[1], b'X' | b'Y' | b'Z') {
+            "um"
+        } else {
+            "urad"
+        };
+        text.push_str(&format!("{n}_{unit} = {v}\n"));
+    }
+    std::fs::write(dir.join("m.toml"), text).unwrap();
+    let (alpha, beta, o, l) = (15.0_f64, 10.0_f64, [0.0, -25.0, 200.0], 100.0);
+    let body = format!(
+        "[program.cone]\nhalf_apex_deg = {alpha}\ninclination_deg = {beta}\ncenter_mm = [{}, {}, {}]\nballbar_length_mm = {l}\nsegments = 720\n",
+        o[0], o[1], o[2]
+    );
+    let s = common::write_scenario(&dir, "m.toml", &body);
+    let v = common::stdout_json(&common::mtsim(&["analyze", s.to_str().unwrap(), "--json"]));
+    let g = &v["geometric_trace"];
+    // The reference on the exact path: P(θ), t = unit(apex − P), A = acos(t_z),
+    // C = atan2(t_x, t_y) (spec), tool in the machine frame = Rx(A) Rz(C) P.
+    let (a, b) = (alpha.to_radians(), beta.to_radians());
+    let ry = |v: V| {
+        [
+            v[0] * b.cos() - v[2] * b.sin(),
+            v[1],
+            v[0] * b.sin() + v[2] * b.cos(),
+        ]
+    };
+    let apex = add(o, ry([0.0, 0.0, l / a.sin()]));
+    let (mut lo, mut hi) = (f64::MAX, f64::MIN);
+    for i in 0..1440 {
+        let th = (i as f64 * 0.25).to_radians();
+        let p = add(
+            o,
+            ry([l * a.cos() * th.cos(), l * a.cos() * th.sin(), l * a.sin()]),
+        );
+        let t = scale(sub(apex, p), 1.0 / norm(sub(apex, p)));
+        let (ta, tc) = (t[2].acos().to_degrees(), t[0].atan2(t[1]).to_degrees());
+        let tool = reference_table_point(false, [0.0; 3], &[], ta, tc, p);
+        let ball = reference_table_point(false, [0.0; 3], &errors, ta, tc, o);
+        let dl_um = (norm(sub(tool, ball)) - l) * 1e3;
+        lo = lo.min(dl_um);
+        hi = hi.max(dl_um);
+    }
+    let (glo, ghi) = (g["min_um"].as_f64().unwrap(), g["max_um"].as_f64().unwrap());
+    println!("reference {lo:.3} .. {hi:.3} um, analyze {glo:.3} .. {ghi:.3} um");
+    assert!(hi - lo > 10.0);
+    assert!(
+        (glo - lo).abs() < 0.05 && (ghi - hi).abs() < 0.05,
+        "analyze {glo}..{ghi} against {lo}..{hi}"
+    );
+    // A perfect machine reports none.
+    let plain = common::write_scenario(&dir, &common::trt_ac(), &body);
+    let v = common::stdout_json(&common::mtsim(&[
+        "analyze",
+        plain.to_str().unwrap(),
+        "--json",
+    ]));
+    assert!(v["geometric_trace"].is_null());
+}

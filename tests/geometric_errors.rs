@@ -724,3 +724,34 @@ fn analyze_reports_the_geometric_trace_of_the_reference() {
     ]));
     assert!(v["geometric_trace"].is_null());
 }
+
+/// `check` acts on the real pose: a pitch error of +10 um on X pushes the cone's X extreme
+/// (67.093 mm, spec table) past a limit 5 um beyond it; without the table the program fits.
+#[test]
+fn check_sees_the_pitch_error_at_the_travel_limit() {
+    let dir = common::scratch("geo", "check-limit");
+    std::fs::write(dir.join("x.comp"), "-500 0.010 0.010\n500 0.010 0.010\n").unwrap();
+    let base = std::fs::read_to_string(common::trt_ac()).unwrap();
+    std::fs::write(dir.join("plain.toml"), &base).unwrap();
+    std::fs::write(
+        dir.join("pitch.toml"),
+        format!("{base}\n[error_tables]\nX = \"x.comp\"\n"),
+    )
+    .unwrap();
+    let body = format!(
+        "{}[machine_overrides.axes.X]\nmax = 67.098\n[check]\ncollisions = false\n",
+        common::CONE_15_10
+    );
+    let mut codes = Vec::new();
+    for m in ["plain", "pitch"] {
+        let sub_dir = dir.join(m);
+        std::fs::create_dir_all(&sub_dir).unwrap();
+        let s = common::write_scenario(&sub_dir, &format!("../{m}.toml"), &body);
+        let out = common::mtsim(&["check", s.to_str().unwrap(), "--json"]);
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_default();
+        codes.push((out.status.code(), v["violations"].to_string()));
+    }
+    assert_eq!(codes[0].0, Some(0), "plain: {:?}", codes[0]);
+    assert_eq!(codes[1].0, Some(1), "pitch: {:?}", codes[1]);
+    assert!(codes[1].1.contains("\"X\""), "{:?}", codes[1]);
+}

@@ -53,11 +53,12 @@ pub fn run(
     }
     for t in &report.traces {
         out.push_str(&format!(
-            "{}: residual RMS {:.3} um (trace RMS {:.3} um), bar offset {:+.3} um\n",
+            "{}: residual RMS {:.3} um (trace RMS {:.3} um), bar offset {}\n",
             t.measured.display(),
             t.residual_rms_um,
             t.measured_rms_um,
             t.bar_offset_um
+                .map_or("not separable".to_string(), |b| format!("{b:+.3} um"))
         ));
     }
     for n in &report.unidentifiable {

@@ -390,3 +390,60 @@ fn backlash_is_fitted_where_the_bar_sees_it_on_a_bc_machine() {
         assert!(p["value"].is_null());
     }
 }
+
+/// Servo gain mismatch: X at kv 27/s against 30/s on the others (an oval in the trace);
+/// `--servo-gain` recovers it with the location errors, and reports kv of Z (perpendicular
+/// to the bar) and of C (which turns the ball about itself) as unseen.
+#[test]
+fn servo_gain_mismatch_is_recovered() {
+    let dir = common::scratch("fit", "gain");
+    let truth = machine(&dir, "truth", &HIDDEN);
+    let text = std::fs::read_to_string(&truth).unwrap();
+    let marker = "[axes.X.servo]\nmodel = \"cascade\"\nkv_per_s = 30.0";
+    assert!(
+        text.contains(marker),
+        "the bundled machine changed; adapt this test"
+    );
+    std::fs::write(
+        &truth,
+        text.replacen(
+            marker,
+            "[axes.X.servo]\nmodel = \"cascade\"\nkv_per_s = 27.0",
+            1,
+        ),
+    )
+    .unwrap();
+    let nominal = machine(&dir, "nominal", &[]);
+    let mut args = vec!["fit".to_string()];
+    for (i, c) in [(15.0, 10.0, 200.0), (45.0, 30.0, 200.0)]
+        .iter()
+        .enumerate()
+    {
+        let s_true = scenario(&dir, &format!("true{i}"), &truth, *c, "");
+        let measured = measure(&dir, &format!("m{i}"), &s_true, 0.1, 31 + i as u64);
+        let s = scenario(&dir, &format!("fit{i}"), &nominal, *c, "");
+        args.extend([
+            s.display().to_string(),
+            "--measured".into(),
+            measured.display().to_string(),
+        ]);
+    }
+    args.extend([
+        "-o".into(),
+        dir.join("fit").display().to_string(),
+        "--json".into(),
+        "--servo-gain".into(),
+    ]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let fit = common::stdout_json(&common::mtsim(&args));
+    for (name, v) in &HIDDEN[..4] {
+        assert_recovered(&fit, name, *v);
+    }
+    let kv = |n: &str| param(&fit, n)["value"].as_f64().unwrap();
+    assert!((kv("kv_X") - 27.0).abs() < 0.05, "kv_X {}", kv("kv_X"));
+    assert!((kv("kv_Y") - 30.0).abs() < 0.05, "kv_Y {}", kv("kv_Y"));
+    assert!((kv("kv_A") - 30.0).abs() < 0.05, "kv_A {}", kv("kv_A"));
+    for unseen in ["kv_Z", "kv_C"] {
+        assert_eq!(param(&fit, unseen)["identifiable"], false);
+    }
+}

@@ -18,8 +18,22 @@
 //! spec's formula) and -X for B. The primary branch has tilt >= 0; the secondary branch has
 //! tilt <= 0 and C + 180 deg. C is unwrapped to stay continuous with the previous value,
 //! and kept when i = j = 0, where it is free.
+//!
+//! # Nominal and actual
+//!
+//! The controller plans with the nominal chain above ([`Kinematics::table_to_machine`],
+//! [`Kinematics::inverse`]). The machine moves with its actual chain, which carries the
+//! ISO 230-7 location errors of the rotary axes ([`location`]):
+//! [`Kinematics::actual_table_to_machine`] and [`Kinematics::actual_table_pose`]. Position
+//! errors along the axes (pitch and worm-gear error, [`error_table`]) act on the axis
+//! positions themselves, before the kinematics.
 
-use nalgebra::{Point3, Rotation3, Vector3};
+pub mod error_table;
+pub mod location;
+
+pub use location::{AxisLine, LocationErrors, LocationParam};
+
+use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::{Axis, AxisVec};
@@ -91,6 +105,8 @@ pub struct Kinematics {
     pub layout: Layout,
     /// Machine coordinates of the pivot (table-frame origin), mm.
     pub pivot_mm: Vector3<f64>,
+    /// Location errors of the rotary axes; they act only on the actual chain.
+    pub location_errors: LocationErrors,
 }
 
 /// Below this horizontal length of the tool axis, C is free and kept.
@@ -98,7 +114,63 @@ const C_FREE_EPS: f64 = 1e-12;
 
 impl Kinematics {
     pub fn new(layout: Layout, pivot_mm: Vector3<f64>) -> Kinematics {
-        Kinematics { layout, pivot_mm }
+        Kinematics {
+            layout,
+            pivot_mm,
+            location_errors: LocationErrors::default(),
+        }
+    }
+
+    /// The same machine with location errors on its rotary axes.
+    pub fn with_location_errors(mut self, errors: LocationErrors) -> Kinematics {
+        self.location_errors = errors;
+        self
+    }
+
+    /// The actual line of rotary `axis`, at the home pose, in its parent's frame.
+    pub fn actual_line(&self, axis: Axis) -> AxisLine {
+        AxisLine::actual(axis, &self.pivot_mm, &self.location_errors)
+    }
+
+    /// The actual pose of the cradle (the part the tilting axis carries) at `q`: maps a
+    /// point given relative to the pivot at home to the machine frame, `T_tilt(tilt) (pivot + p)`.
+    pub fn actual_cradle_pose(&self, q: &AxisVec) -> Isometry3<f64> {
+        let home = Isometry3::from_parts(Translation3::from(self.pivot_mm), Default::default());
+        match self.layout.tilt_axis() {
+            Some(tilt) => self.actual_line(tilt).turn(q[tilt]) * home,
+            None => home,
+        }
+    }
+
+    /// The actual pose of the table at `q`: maps a table-frame point p to the machine
+    /// frame, `m = T_tilt(tilt) T_C(C) (pivot + p)`. The nominal pose when all location
+    /// errors are zero.
+    pub fn actual_table_pose(&self, q: &AxisVec) -> Isometry3<f64> {
+        let home = Isometry3::from_parts(Translation3::from(self.pivot_mm), Default::default());
+        match self.layout.tilt_axis() {
+            None => home,
+            Some(tilt) => {
+                self.actual_line(tilt).turn(q[tilt])
+                    * self.actual_line(Axis::C).turn(q[Axis::C])
+                    * home
+            }
+        }
+    }
+
+    /// Machine coordinates of a table-frame point at actual axis positions `q`, through the
+    /// actual (errored) chain `T_tilt(tilt) T_C(C) (pivot + p)`.
+    pub fn actual_table_to_machine(&self, q: &AxisVec, p: &Point3<f64>) -> Point3<f64> {
+        if self.location_errors.is_zero() {
+            return self.table_to_machine(q, p);
+        }
+        let x = Point3::from(self.pivot_mm + p.coords);
+        match self.layout.tilt_axis() {
+            None => x,
+            Some(tilt) => {
+                let on_c = self.actual_line(Axis::C).turn_point(q[Axis::C], &x);
+                self.actual_line(tilt).turn_point(q[tilt], &on_c)
+            }
+        }
     }
 
     /// R(q): rotates table-frame vectors into the machine frame.

@@ -25,9 +25,9 @@
 //! | [`measure`] | the virtual ball bar | [`measure::BallbarSink`], [`measure::ballbar::analyse`] |
 //! | [`check`] | limits and collisions | [`check::check`], [`check::limits::LimitsMonitor`], [`check::scene::Scene`] |
 //! | [`report`] | files | [`report::trace::TraceSink`], [`report::polar`], [`report::write_atomic`] |
-//! | [`study`] | runs and studies | [`study::reversals`], [`study::simulate::simulate`], [`study::sweep`], [`study::placement`] |
+//! | [`study`] | runs and studies | [`study::reversals`], [`study::simulate::simulate`], [`study::sweep`], [`study::placement`], [`study::fit`] |
 //! | [`cli`] | the `mtsim` command | [`cli::main`] |
-//! | [`kinematics`] | forward and inverse kinematics | [`kinematics::Kinematics`] |
+//! | [`kinematics`] | forward and inverse kinematics, geometric errors | [`kinematics::Kinematics`], [`kinematics::LocationErrors`] |
 //!
 //! The G-code reader is the `ngc` crate of this workspace; its axis types are re-exported
 //! here. Positions are mm and deg at every interface, SI inside the servo models.

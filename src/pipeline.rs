@@ -34,12 +34,14 @@ pub struct Sample {
     pub block_index: u64,
     /// The setpoint, mm and deg.
     pub commanded: AxisVec,
-    /// The table-side axis positions, mm and deg (the setpoint under programmed timing).
+    /// The table-side axis positions, mm and deg (the setpoint under programmed timing),
+    /// with each axis's position error (pitch, worm gear: `machine.geometry.tables`) added
+    /// for its direction of motion.
     pub actual: AxisVec,
     /// `commanded - actual` as the drives report it, mm and deg.
     pub following_error: AxisVec,
-    /// The linear twin's actual positions (the drives without dry friction and backlash);
-    /// `actual` when no twin runs.
+    /// The linear twin's actual positions (the drives without dry friction and backlash),
+    /// with the direction-free (mean) part of the position errors; `actual` when no twin runs.
     pub linear: AxisVec,
 }
 
@@ -100,6 +102,8 @@ pub fn run(
         samples: 0,
         end_time_s: t0,
     };
+    // Position-dependent errors of the axes (pitch, worm gear), for their direction of motion.
+    let mut position_errors = machine.geometry.position_errors();
     let mut emit = |sample: &Sample, stats: &mut RunStats| -> Result<()> {
         for sink in sinks.iter_mut() {
             sink.push(sample)?;
@@ -117,15 +121,16 @@ pub fn run(
                 NominalSampler::new(moves, machine, machine.interpolation_period_s).enumerate()
             {
                 let s = s?;
+                let actual = position_errors.apply(&s.q);
                 let sample = Sample {
                     index: k as u64,
                     time_s: t0 + s.time_s,
                     line: s.line,
                     block_index: s.block_index,
                     commanded: s.q,
-                    actual: s.q,
+                    actual,
                     following_error: AxisVec::ZERO,
-                    linear: s.q,
+                    linear: position_errors.apply_mean(&s.q),
                 };
                 emit(&sample, &mut stats)?;
             }
@@ -158,9 +163,10 @@ pub fn run(
                 let sp = sp?;
                 let t = t0 + sp.time_s;
                 let state = drives.step(&sp.q, t)?;
+                let actual = position_errors.apply(&state.actual);
                 let twin = match linear.as_mut() {
-                    Some(d) => d.step(&sp.q, t)?.actual,
-                    None => state.actual,
+                    Some(d) => position_errors.apply_mean(&d.step(&sp.q, t)?.actual),
+                    None => actual,
                 };
                 let sample = Sample {
                     index: k as u64,
@@ -168,7 +174,7 @@ pub fn run(
                     line: sp.line,
                     block_index: sp.block_index,
                     commanded: sp.q,
-                    actual: state.actual,
+                    actual,
                     following_error: state.following_error,
                     linear: twin,
                 };
@@ -182,14 +188,15 @@ pub fn run(
                 for k in 1..=(SETTLE_S / period).round() as u64 {
                     let t = end.time_s + k as f64 * period;
                     let state = drives.step(&end.commanded, t)?;
+                    let actual = position_errors.apply(&state.actual);
                     let twin = match linear.as_mut() {
-                        Some(d) => d.step(&end.commanded, t)?.actual,
-                        None => state.actual,
+                        Some(d) => position_errors.apply_mean(&d.step(&end.commanded, t)?.actual),
+                        None => actual,
                     };
                     let sample = Sample {
                         index: end.index + k,
                         time_s: t,
-                        actual: state.actual,
+                        actual,
                         following_error: state.following_error,
                         linear: twin,
                         ..end

@@ -414,15 +414,17 @@ impl Scene {
 
     /// Poses of the table, cradle, tool and bar frames in the machine frame at `q`.
     fn body_poses(&self, q: &AxisVec) -> [Pose; 4] {
+        // The actual chain (location errors included): the real pose of table and cradle.
         let k = &self.kinematics;
-        let pivot = k.pivot_mm;
-        let r_table = k.table_rotation(q);
-        let mut tilt_only = *q;
-        tilt_only[Axis::C] = 0.0;
-        let r_cradle = k.table_rotation(&tilt_only);
+        let table_iso = k.actual_table_pose(q);
+        let cradle_iso = k.actual_cradle_pose(q);
+        let pivot = table_iso.translation.vector;
+        let r_table = table_iso.rotation.to_rotation_matrix();
+        let r_cradle = cradle_iso.rotation.to_rotation_matrix();
+        let cradle_origin = cradle_iso.translation.vector;
         let tip = Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
         let table = to_pose(&r_table, &pivot);
-        let cradle = to_pose(&r_cradle, &pivot);
+        let cradle = to_pose(&r_cradle, &cradle_origin);
         let tool = Pose::from_translation(to_vector(&tip));
         let bar = match &self.bar {
             Some(ends) => {

@@ -11,6 +11,7 @@ use crate::study::reversals::{analyse_scenario, Analysis};
 pub fn run(path: &Path, as_json: bool) -> Result<i32> {
     let scenario = super::load_scenario(path)?;
     let analysis = analyse_scenario(&scenario)?;
+    let geometric = crate::study::geometry::geometric_trace(&scenario)?;
     if as_json {
         let mut axes = Map::new();
         for a in &analysis.axes {
@@ -23,6 +24,7 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
             "axes": axes,
             "min_linear_separation_deg": analysis.min_linear_separation_deg(),
             "warnings": analysis.warnings(),
+            "geometric_trace": geometric,
         });
         print_stdout(&format!(
             "{}\n",
@@ -37,6 +39,12 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
             "closest reversals of different linear axes: {a} at {ta:.2} deg and {b} at {tb:.2} deg, {d:.2} deg apart\n"
         )),
         None => out.push_str("fewer than two linear axes reverse\n"),
+    }
+    if let Some(g) = geometric {
+        out.push_str(&format!(
+            "geometric errors alone (programmed path): ball-bar trace {:+.2} .. {:+.2} um, {:.2} um after centring (their share of G)\n",
+            g.min_um, g.max_um, g.circular_deviation_um
+        ));
     }
     for w in analysis.warnings() {
         out.push_str(&format!("warning: {w}\n"));

@@ -16,6 +16,7 @@ mod analyze;
 mod check;
 mod cone;
 mod report;
+mod fit;
 mod simulate;
 mod sweep;
 
@@ -160,6 +161,32 @@ pub enum Command {
     },
     /// Print the man page (roff): `mtsim man > mtsim.1; man ./mtsim.1`.
     Man,
+    /// Identify the location errors of the rotary axes from measured ball-bar traces:
+    /// `mtsim fit A.toml --measured a.csv [B.toml --measured b.csv ...] -o DIR`. Writes
+    /// fit.json, location-errors.toml and fit.svg; names what the tests cannot separate.
+    Fit {
+        /// Scenario files (TOML), one per measured trace, in order.
+        #[arg(required = true)]
+        scenarios: Vec<PathBuf>,
+        /// Measured trace (CSV: theta_deg, deviation_um, optional direction), one per scenario.
+        #[arg(long, required = true)]
+        measured: Vec<PathBuf>,
+        /// Output folder (created if missing).
+        #[arg(short, long, default_value = "fit")]
+        output: PathBuf,
+        /// Also fit the table ball's placement error on the table, per trace.
+        #[arg(long)]
+        setup: bool,
+        /// Also fit each axis's backlash (re-simulates the servo models).
+        #[arg(long)]
+        backlash: bool,
+        /// Also fit each axis's position-loop gain kv (servo mismatch).
+        #[arg(long)]
+        servo_gain: bool,
+        /// Print fit.json to standard output.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 /// Runs the command line and returns the exit code.
@@ -266,6 +293,25 @@ fn run(cli: Cli) -> Result<i32> {
             tcp,
         } => cone::run(&scenario, output.as_deref(), g93, tcp),
         Command::Analyze { scenario, json } => analyze::run(&scenario, json),
+        Command::Fit {
+            scenarios,
+            measured,
+            output,
+            setup,
+            backlash,
+            servo_gain,
+            json,
+        } => fit::run(
+            &scenarios,
+            &measured,
+            &output,
+            crate::study::fit::FitOptions {
+                setup,
+                backlash,
+                servo_gain,
+            },
+            json,
+        ),
         Command::Sweep {
             scenario,
             vary,

@@ -11,6 +11,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
+use crate::input::geometry_errors::{self, GeometryErrors};
 use crate::input::scene::{SceneConfig, ToolConfig};
 use crate::input::toml_text::{self, value_error};
 use crate::kinematics::{Kinematics, Layout};
@@ -48,6 +49,13 @@ pub struct MachineFile {
     /// G30 reference position, machine X Y Z A B C (mm, deg); zero when absent.
     #[serde(default)]
     pub g30_mm: [f64; 6],
+    // --- geometric errors (input/geometry_errors.rs) ---
+    /// ISO 230-7 location errors of the rotary axes: `EX0C_um = 8.0`.
+    #[serde(default)]
+    pub location_errors: BTreeMap<String, f64>,
+    /// Position-error table files per axis (LinuxCNC compensation format): `C = "c.comp"`.
+    #[serde(default)]
+    pub error_tables: BTreeMap<String, String>,
 }
 
 fn default_interpolation_period_ms() -> f64 {
@@ -102,6 +110,8 @@ pub struct Machine {
     pub dialect: ngc::Dialect,
     /// G28 and G30 reference positions, machine X Y Z A B C (mm, deg).
     pub reference_mm: [[f64; 6]; 2],
+    /// Geometric errors; the location errors are also in `kinematics`.
+    pub geometry: GeometryErrors,
 }
 
 impl Machine {
@@ -120,7 +130,13 @@ impl Machine {
     ) -> Result<Machine> {
         let file: MachineFile = toml_text::parse(path, text)?;
         let Some((scenario_path, scenario_text, overrides)) = overrides else {
-            return Machine::validate(path, text, file);
+            return Machine::validate(path, text, file, path);
+        };
+        // Error-table paths are relative to the file that names them.
+        let tables_file = if overrides.contains_key("error_tables") {
+            scenario_path
+        } else {
+            path
         };
         let mut merged: toml::Table =
             toml::from_str(text).map_err(|e| toml_text::toml_error(path, text, &e))?;
@@ -133,10 +149,10 @@ impl Machine {
             .with_help("[machine_overrides] takes the same keys as a machine file; see docs/machine-format.md")
         })?;
         // Range errors in overridden values point at the scenario file.
-        Machine::validate(scenario_path, scenario_text, file)
+        Machine::validate(scenario_path, scenario_text, file, tables_file)
     }
 
-    fn validate(path: &Path, text: &str, file: MachineFile) -> Result<Machine> {
+    fn validate(path: &Path, text: &str, file: MachineFile, tables_file: &Path) -> Result<Machine> {
         let mut axes = BTreeMap::new();
         for (name, config) in file.axes {
             let section = format!("axes.{name}");
@@ -192,10 +208,20 @@ impl Machine {
             ));
         }
         crate::input::scene::validate_machine_tables(path, text, &file.scene, &file.tool)?;
+        let geometry = geometry_errors::validate(
+            path,
+            text,
+            file.kinematics,
+            &file.location_errors,
+            &file.error_tables,
+            tables_file.parent().unwrap_or(Path::new(".")),
+        )?;
         Ok(Machine {
             name: file.name,
             path: path.to_path_buf(),
-            kinematics: Kinematics::new(file.kinematics, Vector3::from(file.pivot_mm)),
+            kinematics: Kinematics::new(file.kinematics, Vector3::from(file.pivot_mm))
+                .with_location_errors(geometry.location),
+            geometry,
             interpolation_period_s: file.interpolation_period_ms * 1e-3,
             axes,
             scene: file.scene,
@@ -214,6 +240,14 @@ impl Machine {
     /// every axis of the layout is checked present on load).
     pub fn axis(&self, axis: Axis) -> &AxisConfig {
         &self.axes[&axis]
+    }
+
+    /// Mutable configuration of `axis` (for what-if runs such as `fit`); panics like
+    /// [`Machine::axis`].
+    pub fn axis_mut(&mut self, axis: Axis) -> &mut AxisConfig {
+        self.axes
+            .get_mut(&axis)
+            .expect("every axis of the layout is present")
     }
 
     pub fn has_axis(&self, axis: Axis) -> bool {

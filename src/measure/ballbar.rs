@@ -8,7 +8,8 @@
 //!
 //! ```text
 //! p_tool  = (X, Y, Z)                         (actual tool tip)
-//! p_pivot = pivot_M + R(q) pivot              (Kinematics::table_to_machine)
+//! p_pivot = T_tilt(q) T_C(q) (pivot_M + pivot) (Kinematics::actual_table_to_machine: the
+//!                                             actual chain, with the location errors)
 //! dL      = |p_tool - p_pivot| - L            (mm)
 //! ```
 //!
@@ -76,7 +77,8 @@ pub const ONSET_SIGMA_DEG: f64 = 0.5;
 /// An event farther than this from every reversal angle is attributed to no axis, deg.
 pub const ATTRIBUTION_MAX_DEG: f64 = 3.0;
 
-/// Ball-bar deviation `|p_tool - p_pivot| - L`, mm, both balls in the machine frame.
+/// Ball-bar deviation `|p_tool - p_pivot| - L`, mm, both balls in the machine frame; the
+/// table ball is moved by the actual chain (location errors included).
 ///
 /// `q_actual`: actual axis positions (mm, deg); the tool tip is its (X, Y, Z).
 /// `pivot_table_mm`: the table ball, table frame, mm. `length_mm`: nominal bar length L.
@@ -87,7 +89,7 @@ pub fn deviation_mm(
     length_mm: f64,
 ) -> f64 {
     let tool = Point3::new(q_actual[Axis::X], q_actual[Axis::Y], q_actual[Axis::Z]);
-    let pivot = kin.table_to_machine(q_actual, pivot_table_mm);
+    let pivot = kin.actual_table_to_machine(q_actual, pivot_table_mm);
     (tool - pivot).norm() - length_mm
 }
 

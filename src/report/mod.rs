@@ -3,6 +3,7 @@
 //! Outputs: CSV, JSON and SVG files, each written completely or not at all (temporary file, then rename).
 
 pub mod files;
+pub mod fit_plot;
 pub mod fixed;
 pub mod html;
 pub mod plot;

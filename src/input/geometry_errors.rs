@@ -1,0 +1,134 @@
+//! The geometric errors of a machine file: `[location_errors]` (ISO 230-7 location errors of
+//! the rotary axes) and `[error_tables]` (per-axis position-error tables in LinuxCNC's
+//! compensation-file format). The value types and the math live in
+//! [`crate::kinematics::location`] and [`crate::kinematics::error_table`].
+//!
+//! ```toml
+//! [location_errors]
+//! EX0C_um = 8.0        # C-axis line offset along X, um
+//! EA0C_urad = -15.0    # C-axis line tilt about X, urad
+//!
+//! [error_tables]
+//! C = "c-worm.comp"    # path relative to the file that names it
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::input::toml_text::{self, value_error};
+use crate::kinematics::error_table::{ErrorTable, PositionErrors};
+use crate::kinematics::{Layout, LocationErrors, LocationParam};
+use crate::Axis;
+
+/// Largest location error accepted, um or urad (1 mm, 1 mrad): beyond it the small-error
+/// conventions of ISO 230-7 no longer describe the machine.
+pub const MAX_LOCATION_ERROR: f64 = 1000.0;
+
+/// A machine's geometric errors, validated.
+#[derive(Clone, Debug, Default)]
+pub struct GeometryErrors {
+    pub location: LocationErrors,
+    /// Position-error table per axis.
+    pub tables: BTreeMap<Axis, ErrorTable>,
+}
+
+impl GeometryErrors {
+    /// A fresh applicator of the error tables for one run.
+    pub fn position_errors(&self) -> PositionErrors {
+        PositionErrors::new(self.tables.iter().map(|(a, t)| (*a, t)))
+    }
+}
+
+/// Validates `[location_errors]` and `[error_tables]` of a machine of `layout` (the file
+/// `path` with contents `text`); table files are read relative to `tables_dir`.
+pub fn validate(
+    path: &Path,
+    text: &str,
+    layout: Layout,
+    location: &BTreeMap<String, f64>,
+    tables: &BTreeMap<String, String>,
+    tables_dir: &Path,
+) -> Result<GeometryErrors> {
+    let section = "location_errors";
+    let mut errors = LocationErrors::default();
+    for (key, &value) in location {
+        let Some(param) = LocationParam::from_key(key) else {
+            let known: Vec<String> = LocationParam::ALL
+                .into_iter()
+                .filter(|p| layout.axes().contains(&p.axis()))
+                .map(|p| p.key())
+                .collect();
+            return Err(value_error(
+                path,
+                text,
+                section,
+                key,
+                format!(
+                    "unknown location error; expected one of {} (ISO 230-7 names with a unit \
+                     suffix _um or _urad)",
+                    known.join(", ")
+                ),
+            ));
+        };
+        if !layout.axes().contains(&param.axis()) {
+            return Err(value_error(
+                path,
+                text,
+                section,
+                key,
+                format!(
+                    "the {} layout has no {} axis; remove this key",
+                    layout.name(),
+                    param.axis()
+                ),
+            ));
+        }
+        if !(value.is_finite() && value.abs() <= MAX_LOCATION_ERROR) {
+            return Err(value_error(
+                path,
+                text,
+                section,
+                key,
+                format!(
+                    "must be a finite number within ±{MAX_LOCATION_ERROR} {}, got {value}",
+                    param.unit()
+                ),
+            ));
+        }
+        errors.set(param, value);
+    }
+    let mut out = BTreeMap::new();
+    for (name, file) in tables {
+        let axis = match name.chars().collect::<Vec<_>>().as_slice() {
+            [c] => Axis::from_letter(*c),
+            _ => None,
+        };
+        let Some(axis) = axis.filter(|a| layout.axes().contains(a)) else {
+            return Err(value_error(
+                path,
+                text,
+                "error_tables",
+                name,
+                format!("the {} layout has no axis `{name}`", layout.name()),
+            ));
+        };
+        let table_path = tables_dir.join(file);
+        let table_text = toml_text::read_text(&table_path).map_err(|e| match e {
+            Error::Read { .. } => value_error(
+                path,
+                text,
+                "error_tables",
+                name,
+                format!("cannot read the error table {}", table_path.display()),
+            ),
+            other => other,
+        })?;
+        let table = ErrorTable::parse(&table_path, &table_text, axis.is_rotary())?;
+        out.insert(axis, table);
+    }
+    Ok(GeometryErrors {
+        location: errors,
+        tables: out,
+    })
+}

@@ -1,0 +1,234 @@
+//! ISO 230-7 location errors of the rotary axes, and the actual (errored) table pose.
+//!
+//! Each rotary axis R turns about an actual line that differs slightly from its nominal
+//! one. The line is given at the home pose (all axes at zero) in the frame of R's parent:
+//! the machine frame for the tilting axis (A or B), the frame the tilting axis carries for
+//! the table axis C. Nominal lines pass through the pivot.
+//!
+//! | axis | nominal n | position errors (um) | orientation errors (urad) |
+//! |---|---|---|---|
+//! | A | (1, 0, 0) | EY0A, EZ0A | EB0A, EC0A |
+//! | B | (0, 1, 0) | EX0B, EZ0B | EA0B, EC0B |
+//! | C | (0, 0, 1) | EX0C, EY0C | EA0C, EB0C |
+//!
+//! ```text
+//! p_R = pivot + (EX0R, EY0R, EZ0R)                  a point on the actual line
+//! u_R = unit(n + (EA0R, EB0R, EC0R) × n)            its direction
+//! T_R(θ) x = Rot(u_R, θ) (x − p_R) + p_R            turning by θ (Rodrigues, exact)
+//! m = T_tilt(tilt) T_C(C) x                         a table point x (home pose, machine
+//!                                                   coordinates) in the machine frame
+//! ```
+//!
+//! For C this gives u_C ≈ (EB0C, −EA0C, 1); for A, u_A ≈ (1, EC0A, −EB0A). With all errors
+//! zero, m is the nominal `pivot + R(q) p` of [`super::Kinematics::table_to_machine`].
+
+use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
+use serde::Serialize;
+
+use crate::Axis;
+
+/// One location-error parameter. Position errors are in um, orientation errors in urad.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[allow(clippy::upper_case_acronyms)]
+pub enum LocationParam {
+    EY0A,
+    EZ0A,
+    EB0A,
+    EC0A,
+    EX0B,
+    EZ0B,
+    EA0B,
+    EC0B,
+    EX0C,
+    EY0C,
+    EA0C,
+    EB0C,
+}
+
+impl LocationParam {
+    /// Every parameter, in table order (A, B, C; positions before orientations).
+    pub const ALL: [LocationParam; 12] = [
+        LocationParam::EY0A,
+        LocationParam::EZ0A,
+        LocationParam::EB0A,
+        LocationParam::EC0A,
+        LocationParam::EX0B,
+        LocationParam::EZ0B,
+        LocationParam::EA0B,
+        LocationParam::EC0B,
+        LocationParam::EX0C,
+        LocationParam::EY0C,
+        LocationParam::EA0C,
+        LocationParam::EB0C,
+    ];
+
+    /// "EX0C".
+    pub fn name(self) -> &'static str {
+        use LocationParam::*;
+        match self {
+            EY0A => "EY0A",
+            EZ0A => "EZ0A",
+            EB0A => "EB0A",
+            EC0A => "EC0A",
+            EX0B => "EX0B",
+            EZ0B => "EZ0B",
+            EA0B => "EA0B",
+            EC0B => "EC0B",
+            EX0C => "EX0C",
+            EY0C => "EY0C",
+            EA0C => "EA0C",
+            EB0C => "EB0C",
+        }
+    }
+
+    /// The rotary axis the parameter belongs to.
+    pub fn axis(self) -> Axis {
+        match self.name().as_bytes()[3] {
+            b'A' => Axis::A,
+            b'B' => Axis::B,
+            _ => Axis::C,
+        }
+    }
+
+    /// True for a position error (um), false for an orientation error (urad).
+    pub fn is_position(self) -> bool {
+        matches!(self.name().as_bytes()[1], b'X' | b'Y' | b'Z')
+    }
+
+    /// "um" or "urad".
+    pub fn unit(self) -> &'static str {
+        if self.is_position() {
+            "um"
+        } else {
+            "urad"
+        }
+    }
+
+    /// The machine-file key: "EX0C_um", "EA0C_urad".
+    pub fn key(self) -> String {
+        format!("{}_{}", self.name(), self.unit())
+    }
+
+    /// The parameter a machine-file key names, if any.
+    pub fn from_key(key: &str) -> Option<LocationParam> {
+        LocationParam::ALL.into_iter().find(|p| p.key() == key)
+    }
+
+    /// Index of the error component: 0 = X, 1 = Y, 2 = Z (translation along, or rotation
+    /// about, that machine axis).
+    fn component(self) -> usize {
+        match self.name().as_bytes()[1] {
+            b'X' | b'A' => 0,
+            b'Y' | b'B' => 1,
+            _ => 2,
+        }
+    }
+
+    pub fn index(self) -> usize {
+        LocationParam::ALL
+            .iter()
+            .position(|p| *p == self)
+            .expect("in ALL")
+    }
+}
+
+/// The location errors of a machine's rotary axes; zero for a perfect machine.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LocationErrors {
+    /// Indexed by [`LocationParam::index`]: um or urad.
+    values: [f64; 12],
+}
+
+impl LocationErrors {
+    pub fn get(&self, p: LocationParam) -> f64 {
+        self.values[p.index()]
+    }
+
+    pub fn set(&mut self, p: LocationParam, value: f64) {
+        self.values[p.index()] = value;
+    }
+
+    /// With `p` set to `value`.
+    pub fn with(mut self, p: LocationParam, value: f64) -> LocationErrors {
+        self.set(p, value);
+        self
+    }
+
+    pub fn is_zero(&self) -> bool {
+        self.values.iter().all(|v| *v == 0.0)
+    }
+
+    /// The non-zero parameters and their values.
+    pub fn nonzero(&self) -> Vec<(LocationParam, f64)> {
+        LocationParam::ALL
+            .into_iter()
+            .filter(|p| self.get(*p) != 0.0)
+            .map(|p| (p, self.get(p)))
+            .collect()
+    }
+
+    /// Position offset of `axis`'s line, mm (machine X, Y, Z components).
+    fn offset_mm(&self, axis: Axis) -> Vector3<f64> {
+        let mut v = Vector3::zeros();
+        for p in LocationParam::ALL.into_iter().filter(|p| p.axis() == axis) {
+            if p.is_position() {
+                v[p.component()] += self.get(p) * 1e-3;
+            }
+        }
+        v
+    }
+
+    /// Small-rotation vector (EA0R, EB0R, EC0R) of `axis`'s line, rad.
+    fn rotation_rad(&self, axis: Axis) -> Vector3<f64> {
+        let mut v = Vector3::zeros();
+        for p in LocationParam::ALL.into_iter().filter(|p| p.axis() == axis) {
+            if !p.is_position() {
+                v[p.component()] += self.get(p) * 1e-6;
+            }
+        }
+        v
+    }
+}
+
+/// The line a rotary axis actually turns about, at the home pose, in its parent's frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisLine {
+    /// A point on the line, machine coordinates at home, mm.
+    pub point_mm: Vector3<f64>,
+    /// Unit direction (right-hand rule for positive angles).
+    pub direction: Unit<Vector3<f64>>,
+}
+
+impl AxisLine {
+    /// The actual line of rotary `axis`: `p = pivot + e`, `u = unit(n + ε × n)`.
+    pub fn actual(axis: Axis, pivot_mm: &Vector3<f64>, errors: &LocationErrors) -> AxisLine {
+        let n = match axis {
+            Axis::A => Vector3::x(),
+            Axis::B => Vector3::y(),
+            _ => Vector3::z(),
+        };
+        let eps = errors.rotation_rad(axis);
+        AxisLine {
+            point_mm: pivot_mm + errors.offset_mm(axis),
+            direction: Unit::new_normalize(n + eps.cross(&n)),
+        }
+    }
+
+    /// `T(θ)`: the rigid motion of turning by `angle_deg` about this line,
+    /// `x ↦ Rot(u, θ)(x − p) + p`.
+    pub fn turn(&self, angle_deg: f64) -> Isometry3<f64> {
+        let r = Rotation3::from_axis_angle(&self.direction, angle_deg.to_radians());
+        let t = self.point_mm - r * self.point_mm;
+        Isometry3::from_parts(
+            Translation3::from(t),
+            UnitQuaternion::from_rotation_matrix(&r),
+        )
+    }
+
+    /// The image of `x` (mm) under [`AxisLine::turn`], with the rotation matrix applied
+    /// directly (no quaternion round trip).
+    pub fn turn_point(&self, angle_deg: f64, x: &Point3<f64>) -> Point3<f64> {
+        let r = Rotation3::from_axis_angle(&self.direction, angle_deg.to_radians());
+        Point3::from(r * (x.coords - self.point_mm) + self.point_mm)
+    }
+}

@@ -91,13 +91,23 @@ impl BallbarSink {
     }
 }
 
+impl BallbarSink {
+    /// The bar's reading of `s` when it is in the measured revolution (None otherwise),
+    /// after taking it into the run: for a trace that records the same reading.
+    pub fn take(&mut self, s: &Sample) -> Option<BarReading> {
+        if !is_measured(s, self.measured) {
+            return None;
+        }
+        let r = self.geometry.read(s);
+        self.run.push(r.theta_deg, r.deviation_um);
+        self.signature.push(r.theta_deg, r.nonlinear_um);
+        Some(r)
+    }
+}
+
 impl Sink for BallbarSink {
     fn push(&mut self, s: &Sample) -> Result<()> {
-        if is_measured(s, self.measured) {
-            let r = self.geometry.read(s);
-            self.run.push(r.theta_deg, r.deviation_um);
-            self.signature.push(r.theta_deg, r.nonlinear_um);
-        }
+        self.take(s);
         Ok(())
     }
 }

@@ -16,7 +16,7 @@ use super::files::temporary_path;
 use super::fixed::push_fixed_bytes;
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
-use crate::measure::{is_measured, BallbarRun, BarGeometry};
+use crate::measure::{is_measured, BallbarRun, BarGeometry, BarReading};
 use crate::pipeline::{Sample, Sink};
 use crate::Axis;
 
@@ -109,6 +109,17 @@ impl Sink for TraceSink {
             return Ok(());
         }
         let r = geometry.read(s);
+        self.push_reading(s, &r)
+    }
+}
+
+impl TraceSink {
+    /// Records `s` with the ball bar's reading `r` of it (already taken by the ball bar, so
+    /// the kinematics run once per sample); skips samples between every `every`-th one.
+    pub fn push_reading(&mut self, s: &Sample, r: &BarReading) -> Result<()> {
+        if self.geometry.is_none() || s.index % self.every != 0 {
+            return Ok(());
+        }
         let row = &mut self.row;
         row.clear();
         let cw = if self.direction == Direction::Cw {

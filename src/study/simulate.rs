@@ -18,7 +18,7 @@ use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario};
 use crate::measure::ballbar::{analyse_events_of, BallbarResult};
 use crate::measure::{BallbarSink, BarGeometry, CircleFrame};
-use crate::pipeline::{self, RunOptions, Sink, Timing};
+use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
 use crate::report::create_dir;
 use crate::report::trace::TraceSink;
@@ -95,10 +95,13 @@ pub fn simulate(
             program_path: scenario.path.clone(),
         };
         let stats = {
-            let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(2);
-            if let Some(b) = ballbar.as_mut() {
-                sinks.push(b);
-                sinks.push(&mut trace);
+            let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(1);
+            let mut measure = ballbar.as_mut().map(|ballbar| BarAndTrace {
+                ballbar,
+                trace: &mut trace,
+            });
+            if let Some(m) = measure.as_mut() {
+                sinks.push(m);
             }
             pipeline::run(run.moves, machine, &options, &mut sinks, progress)?
         };
@@ -143,6 +146,21 @@ pub fn simulate(
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
     crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;
     Ok(summary)
+}
+
+/// The ball bar and the trace of its readings, as one sink: the bar reads each sample once.
+struct BarAndTrace<'a> {
+    ballbar: &'a mut BallbarSink,
+    trace: &'a mut TraceSink,
+}
+
+impl Sink for BarAndTrace<'_> {
+    fn push(&mut self, s: &Sample) -> Result<()> {
+        match self.ballbar.take(s) {
+            Some(r) => self.trace.push_reading(s, &r),
+            None => Ok(()),
+        }
+    }
 }
 
 /// The virtual ball bar of a scenario: the cone's or circle's measured circle, the table

@@ -25,8 +25,17 @@ pub fn push_fixed_bytes(out: &mut Vec<u8>, v: f64, decimals: u32) {
     }
 }
 
+/// Pairs of decimal digits "00" to "99".
+const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
 /// Writes the digits of `v` right-aligned into `buf` and returns where they start; None
 /// when the fast path does not apply (too many decimals, |v| too large, not finite).
+/// The integer `round(|v| 10^decimals)` is written two digits at a time, then the point
+/// is put in front of its last `decimals` digits.
 #[inline]
 fn digits(buf: &mut [u8; 24], v: f64, decimals: u32) -> Option<usize> {
     const SCALE: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
@@ -34,24 +43,42 @@ fn digits(buf: &mut [u8; 24], v: f64, decimals: u32) -> Option<usize> {
     if !(scaled.is_finite() && scaled.abs() < 9.0e15) {
         return None;
     }
-    let mut pos = buf.len();
+    // Digits of n right-aligned in tmp, at least decimals + 1 of them.
+    let mut tmp = [b'0'; 24];
+    let mut pos = tmp.len();
     let mut n = scaled.abs() as u64;
-    let mut written = 0;
-    while n > 0 || written <= decimals {
-        if written == decimals && decimals > 0 {
-            pos -= 1;
-            buf[pos] = b'.';
-        }
-        pos -= 1;
-        buf[pos] = b'0' + (n % 10) as u8;
-        n /= 10;
-        written += 1;
+    while n >= 100 {
+        let r = 2 * (n % 100) as usize;
+        n /= 100;
+        pos -= 2;
+        tmp[pos..pos + 2].copy_from_slice(&PAIRS[r..r + 2]);
     }
+    if n >= 10 {
+        let r = 2 * n as usize;
+        pos -= 2;
+        tmp[pos..pos + 2].copy_from_slice(&PAIRS[r..r + 2]);
+    } else {
+        pos -= 1;
+        tmp[pos] = b'0' + n as u8;
+    }
+    let d = decimals as usize;
+    pos = pos.min(tmp.len() - d - 1);
+    // Into buf, right-aligned: fraction, point, integer part, sign.
+    let mut at = buf.len();
+    if d > 0 {
+        at -= d;
+        buf[at..].copy_from_slice(&tmp[tmp.len() - d..]);
+        at -= 1;
+        buf[at] = b'.';
+    }
+    let int = &tmp[pos..tmp.len() - d];
+    at -= int.len();
+    buf[at..at + int.len()].copy_from_slice(int);
     if scaled < 0.0 {
-        pos -= 1;
-        buf[pos] = b'-';
+        at -= 1;
+        buf[at] = b'-';
     }
-    Some(pos)
+    Some(at)
 }
 
 /// `x.round()` (half away from zero) for |x| < 2^53 by integer truncation, exact there
@@ -106,6 +133,11 @@ mod tests {
     #[test]
     fn push_fixed_matches_the_standard_formatting() {
         for &v in &[
+            10.0,
+            99.5,
+            100.0,
+            -1234567.891,
+            987654321.123456,
             0.0,
             -0.0,
             1.5,

@@ -14,14 +14,43 @@ pub fn push_fixed(out: &mut String, v: f64, decimals: u32) {
 }
 
 /// [`push_fixed`] into a byte buffer (ASCII), allocation-free once the buffer has room: the
-/// form the trace writer uses, one line buffer per row.
+/// form the trace writer uses, one line buffer per row. The digits go straight to their
+/// place at the end of `out`.
 pub fn push_fixed_bytes(out: &mut Vec<u8>, v: f64, decimals: u32) {
-    let mut buf = [0u8; 24];
-    match digits(&mut buf, v, decimals) {
-        Some(pos) => out.extend_from_slice(&buf[pos..]),
-        None => {
-            let _ = std::io::Write::write_fmt(out, format_args!("{v:.*}", decimals as usize));
+    const SCALE: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
+    let scaled = SCALE
+        .get(decimals as usize)
+        .map(|s| round_half_away(v * s))
+        .filter(|s| s.is_finite() && s.abs() < 9.0e15);
+    let Some(scaled) = scaled else {
+        let _ = std::io::Write::write_fmt(out, format_args!("{v:.*}", decimals as usize));
+        return;
+    };
+    let mut n = scaled.abs() as u64;
+    let d = decimals as usize;
+    let n_digits = (n.checked_ilog10().unwrap_or(0) as usize + 1).max(d + 1);
+    let negative = scaled < 0.0;
+    let len = negative as usize + n_digits + (d > 0) as usize;
+    let start = out.len();
+    out.resize(start + len, b'0');
+    let field = &mut out[start..];
+    if negative {
+        field[0] = b'-';
+    }
+    // Right to left, two digits at a time, stepping over the point.
+    let point = if d > 0 { len - d - 1 } else { usize::MAX };
+    if d > 0 {
+        field[point] = b'.';
+    }
+    let mut at = len;
+    while n > 0 {
+        let (digit, rest) = ((n % 10) as u8, n / 10);
+        at -= 1;
+        if at == point {
+            at -= 1;
         }
+        field[at] = b'0' + digit;
+        n = rest;
     }
 }
 
@@ -167,6 +196,13 @@ mod tests {
                     want
                 };
                 assert_eq!(s, want, "{v} with {d} decimals");
+                let mut bytes = b"x,".to_vec();
+                push_fixed_bytes(&mut bytes, v, d);
+                assert_eq!(
+                    &bytes[2..],
+                    want.as_bytes(),
+                    "{v} with {d} decimals (bytes)"
+                );
             }
         }
     }

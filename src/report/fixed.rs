@@ -26,32 +26,64 @@ pub fn push_fixed_bytes(out: &mut Vec<u8>, v: f64, decimals: u32) {
         let _ = std::io::Write::write_fmt(out, format_args!("{v:.*}", decimals as usize));
         return;
     };
-    let mut n = scaled.abs() as u64;
+    const POW10: [u64; 10] = [
+        1,
+        10,
+        100,
+        1_000,
+        10_000,
+        100_000,
+        1_000_000,
+        10_000_000,
+        100_000_000,
+        1_000_000_000,
+    ];
+    let n = scaled.abs() as u64;
     let d = decimals as usize;
-    let n_digits = (n.checked_ilog10().unwrap_or(0) as usize + 1).max(d + 1);
+    let (mut int, mut frac) = (n / POW10[d], n % POW10[d]);
+    let int_digits = int.checked_ilog10().map_or(1, |l| l as usize + 1);
     let negative = scaled < 0.0;
-    let len = negative as usize + n_digits + (d > 0) as usize;
+    let len = negative as usize + int_digits + if d > 0 { d + 1 } else { 0 };
     let start = out.len();
     out.resize(start + len, b'0');
     let field = &mut out[start..];
     if negative {
         field[0] = b'-';
     }
-    // Right to left, two digits at a time, stepping over the point.
-    let point = if d > 0 { len - d - 1 } else { usize::MAX };
-    if d > 0 {
-        field[point] = b'.';
-    }
+    // Right to left, two digits per division: the fraction (zero-padded to d digits),
+    // the point, the integer part.
     let mut at = len;
-    while n > 0 {
-        let (digit, rest) = ((n % 10) as u8, n / 10);
-        at -= 1;
-        if at == point {
-            at -= 1;
-        }
-        field[at] = b'0' + digit;
-        n = rest;
+    let mut left = d;
+    while left >= 2 {
+        let r = 2 * (frac % 100) as usize;
+        frac /= 100;
+        at -= 2;
+        field[at..at + 2].copy_from_slice(&PAIRS[r..r + 2]);
+        left -= 2;
     }
+    if left == 1 {
+        at -= 1;
+        field[at] = b'0' + (frac % 10) as u8;
+    }
+    if d > 0 {
+        at -= 1;
+        field[at] = b'.';
+    }
+    while int >= 100 {
+        let r = 2 * (int % 100) as usize;
+        int /= 100;
+        at -= 2;
+        field[at..at + 2].copy_from_slice(&PAIRS[r..r + 2]);
+    }
+    if int >= 10 {
+        let r = 2 * int as usize;
+        at -= 2;
+        field[at..at + 2].copy_from_slice(&PAIRS[r..r + 2]);
+    } else {
+        at -= 1;
+        field[at] = b'0' + int as u8;
+    }
+    debug_assert_eq!(at, negative as usize);
 }
 
 /// Pairs of decimal digits "00" to "99".

@@ -151,7 +151,7 @@ fn long_program(dir: &Path, revolutions: usize) -> PathBuf {
 fn main() {
     let dir = scratch("run");
 
-    let smoke = std::env::var_os("MTSIM_BENCH_SMOKE").is_some();
+    let smoke = std::env::var("MTSIM_BENCH_SMOKE").is_ok_and(|v| !v.is_empty() && v != "0");
     let runs = if smoke { 1 } else { 7 };
 
     // 1. simulate, all nonlinearities on: full trace, decimated, off; fine against coarse.

@@ -14,6 +14,7 @@
 
 use nalgebra::Point3;
 
+use super::attribution::{bar_sensitivity, SensitivityMap};
 use super::ballbar::{deviation_mm, BallbarRun, CircleFrame};
 use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines};
@@ -74,6 +75,8 @@ pub struct BallbarSink {
     pub run: BallbarRun,
     /// dL_nl against θ.
     pub signature: BallbarRun,
+    /// The bar's sensitivity ∂L/∂q to every axis against θ, at the commanded positions.
+    pub sensitivity: SensitivityMap,
 }
 
 impl BallbarSink {
@@ -87,6 +90,7 @@ impl BallbarSink {
             measured,
             run: BallbarRun::new(direction),
             signature: BallbarRun::new(direction),
+            sensitivity: SensitivityMap::default(),
         }
     }
 }
@@ -97,6 +101,18 @@ impl Sink for BallbarSink {
             let r = self.geometry.read(s);
             self.run.push(r.theta_deg, r.deviation_um);
             self.signature.push(r.theta_deg, r.nonlinear_um);
+            if self.sensitivity.wants(r.theta_deg) {
+                let g = &self.geometry;
+                let axes = g.kinematics.layout.axes();
+                let s_q = bar_sensitivity(
+                    &g.kinematics,
+                    axes,
+                    &s.commanded,
+                    &g.pivot_table_mm,
+                    g.length_mm,
+                );
+                self.sensitivity.set(r.theta_deg, s_q);
+            }
         }
         Ok(())
     }

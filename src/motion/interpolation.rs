@@ -80,8 +80,10 @@
 //! feasibility test uses the monotone bound `D̄(v0, v1) = max(v0, v1) T(|v1 - v0|) ≥ D`
 //! (the true `D` is not monotone in the end speed: slowing from v to v/3 takes longer than
 //! stopping), so any exit between what the backward pass assumed and what the window now
-//! allows is reachable. The backward pass stops at the first block whose entry limit does
-//! not change, so planning is amortised O(1) per block. Memory is bounded by the window.
+//! allows is reachable. Backward passes run once per `lookahead_blocks / 2` new blocks; each
+//! stops at the first older block whose entry limit rises by less than a relative 1e-12, and
+//! `reach` is in closed form, so planning is amortised O(1) per block even when the stopping
+//! distance spans the whole window (fine segments). Memory is bounded by the window.
 //!
 //! Not modelled: corner blending (corners are passed at a limited speed, with a velocity
 //! step of bounded size in one period; the jerk at that step is not limited), acceleration
@@ -386,13 +388,52 @@ fn bisect(mut lo: f64, mut hi: f64, feasible: impl Fn(f64) -> bool) -> f64 {
 }
 
 /// Highest speed `≤ cap` reachable from (or able to reach) `v` within `length`,
-/// by the monotone bound [`change_distance_bound`].
+/// by the monotone bound [`change_distance_bound`], in closed form.
+///
+/// For `x > v` the bound is `x T(x - v)`, increasing in `x`; `x` solves `x T(x - v) = L`:
+///
+/// ```text
+/// x - v > a²/j:  x (x - v)/a + x a/j = L   →  x = (-(a²/j - v) + sqrt((a²/j - v)² + 4 a L)) / 2
+/// x - v ≤ a²/j:  2 x sqrt((x - v)/j) = L   →  x³ - v x² - j L²/4 = 0
+/// ```
+///
+/// The cubic has one real root above `v` (Cardano with `x = y + v/3`, `y³ + p y + q = 0`,
+/// `p = -v²/3`, `q = -2v³/27 - jL²/4`, discriminant `(q/2)² + (p/3)³ ≥ 0`; the root is
+/// `y = w + v²/(9w)` with `w = cbrt(-q/2 + sqrt(disc))`, written so that nothing cancels),
+/// polished by one Newton step.
 fn reach(v: f64, length: f64, cap: f64, a: f64, j: f64) -> f64 {
     if cap <= v || change_distance_bound(v, cap, a, j) <= length {
-        cap
-    } else {
-        bisect(v, cap, |x| change_distance_bound(v, x, a, j) <= length)
+        return cap;
     }
+    let knee = a * a / j;
+    let b = knee - v;
+    let x = 0.5 * (-b + (b * b + 4.0 * a * length).sqrt());
+    let x = if x - v > knee {
+        x
+    } else {
+        let c = 0.25 * j * length * length;
+        let half_q = v * v * v / 27.0 + 0.5 * c;
+        let disc = (half_q * half_q - (v * v / 9.0).powi(3)).max(0.0);
+        let w = (half_q + disc.sqrt()).cbrt();
+        let mut x = if w > 0.0 { w + v * v / (9.0 * w) } else { 0.0 } + v / 3.0;
+        let f = x * x * (x - v) - c;
+        let df = x * (3.0 * x - 2.0 * v);
+        if df > 0.0 {
+            x -= f / df;
+        }
+        x
+    };
+    // Rounding may leave the root a hair outside [v, cap] or its bound a hair above length.
+    let mut x = x.clamp(v, cap);
+    while x > v && change_distance_bound(v, x, a, j) > length {
+        x = (x - x.abs() * 4.0 * f64::EPSILON).max(v);
+    }
+    x
+}
+
+/// Blocks appended between two backward passes: half the look-ahead (at least 1).
+fn pass_batch(options: &InterpolationOptions) -> usize {
+    (options.lookahead_blocks / 2).max(1)
 }
 
 /// A block ready to run, with its limits and look-ahead state. Speeds in path units/s.
@@ -445,6 +486,8 @@ pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     period_s: f64,
     options: InterpolationOptions,
     window: VecDeque<Planned>,
+    /// Blocks appended since the last backward pass.
+    unpassed: usize,
     last_end: Option<JunctionEnd>,
     next_index: u64,
     active: Option<Active>,
@@ -482,7 +525,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             limits,
             kinematics: machine.kinematics,
             period_s: machine.interpolation_period_s,
-            window: VecDeque::with_capacity(options.lookahead_blocks + 1),
+            window: VecDeque::with_capacity(options.lookahead_blocks + pass_batch(&options) + 1),
+            unpassed: 0,
             options,
             last_end: None,
             next_index: 0,
@@ -506,8 +550,12 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     }
 
     /// Reads blocks until the window holds `lookahead_blocks + 1` of them.
+    /// Backward passes run once per [`pass_batch`] new blocks (and when the input ends), so
+    /// the window holds up to `lookahead_blocks + pass_batch` blocks and at least
+    /// `lookahead_blocks + 1` planned ones when a block starts.
     fn fill(&mut self) {
-        while !self.input_done && self.window.len() <= self.options.lookahead_blocks {
+        let batch = pass_batch(&self.options);
+        while !self.input_done && self.window.len() <= self.options.lookahead_blocks + batch - 1 {
             let index = self.next_index;
             match self.blocks.next() {
                 None => self.input_done = true,
@@ -527,6 +575,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                     }
                 }
             }
+        }
+        if self.unpassed > 0 && (self.input_done || self.unpassed >= batch) {
+            self.backward_pass();
         }
     }
 
@@ -833,8 +884,25 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             reach(0.0, p.length, p.entry_cap.min(p.cap), p.accel, p.jerk)
         };
         self.window.push_back(p);
-        // Backward pass: raise the entry limits the new block allows, stop when unchanged.
-        for k in (0..self.window.len() - 1).rev() {
+        self.unpassed += 1;
+        if self.unpassed >= pass_batch(&self.options) {
+            self.backward_pass();
+        }
+    }
+
+    /// Raises the entry limits that the blocks appended since the last pass allow, from the
+    /// end of the window back. It stops at the first block whose limit rises by less than a
+    /// relative 1e-12 (including one already at its own cap, which cannot rise) once it is
+    /// past the new blocks: every limit
+    /// is feasible at all times (a block not yet passed assumes a stop at its own end), so a
+    /// pass left early is only conservative. Cost: at most the window per pass, one pass per
+    /// [`pass_batch`] blocks, so O(1) amortised per block.
+    fn backward_pass(&mut self) {
+        // The new blocks and the one before them (which assumed a stop at its end) are
+        // always recomputed; earlier ones only while the limits keep rising.
+        let fresh_from = self.window.len().saturating_sub(self.unpassed + 1);
+        self.unpassed = 0;
+        for k in (0..self.window.len().saturating_sub(1)).rev() {
             let next = self.window[k + 1];
             let exit = next.entry_max / next.rho;
             let b = &mut self.window[k];
@@ -849,10 +917,10 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                     b.jerk,
                 )
             };
-            if entry == b.entry_max {
+            if entry <= b.entry_max * (1.0 + 1e-12) && k < fresh_from {
                 break;
             }
-            b.entry_max = entry;
+            b.entry_max = entry.max(b.entry_max);
         }
     }
 
@@ -959,6 +1027,30 @@ mod tests {
                     "{layout:?}: {got:?} vs {expected}"
                 );
             }
+        }
+    }
+
+    /// The closed-form `reach` against bisection of its defining inequality, on both sides of
+    /// the knee `a²/j` and from rest.
+    #[test]
+    fn closed_form_reach_matches_bisection() {
+        let cases = [
+            (0.0, 0.001, 1e9, 3000.0, 50000.0),
+            (0.0, 5.0, 1e9, 3000.0, 50000.0),
+            (10.0, 0.01, 1e9, 3000.0, 50000.0),
+            (16.7, 0.0044, 40.0, 1200.0, 20000.0),
+            (0.3, 200.0, 1e9, 100.0, 1000.0),
+            (50.0, 1e-6, 1e9, 2.0, 5.0),
+            (2.0, 3.0, 2.5, 100.0, 1000.0),
+        ];
+        for (v, length, cap, a, j) in cases {
+            let got = reach(v, length, cap, a, j);
+            let want = bisect(v, cap, |x| change_distance_bound(v, x, a, j) <= length);
+            assert!(
+                (got - want).abs() <= 1e-12 * want.max(1.0),
+                "reach({v}, {length}, {cap}, {a}, {j}) = {got}, bisection {want}"
+            );
+            assert!(change_distance_bound(v, got, a, j) <= length || got == v);
         }
     }
 

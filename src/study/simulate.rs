@@ -46,6 +46,10 @@ pub struct SimulationSummary {
     pub reversal_sites: Vec<ReversalSite>,
     /// The directions run.
     pub directions: Vec<Direction>,
+    /// Each axis's lost motion at a reversal (ISO 230-2 B, mm or deg) and its parts.
+    pub reversal_values: std::collections::BTreeMap<String, crate::drive::ReversalValue>,
+    /// Renishaw-style diagnostics from the trace; null without a measured circle.
+    pub diagnostics: Option<crate::study::diagnose::Diagnostics>,
 }
 
 /// Files a simulation writes into its output folder.
@@ -170,6 +174,14 @@ pub fn simulate(
     let study = run_ballbar(scenario, Some(&mut trace), progress)?;
     let ballbar = study.result()?;
     let (runs, reversals) = (&study.runs, &study.reversals);
+    let circle = match &scenario.program {
+        Program::Circle { circle, .. } => Some(circle),
+        _ => None,
+    };
+    let diagnostics = ballbar
+        .as_ref()
+        .map(|b| crate::study::diagnose::diagnose(b, runs, circle))
+        .transpose()?;
     trace.finish(runs)?;
     if let Some(result) = &ballbar {
         let title = plot_title(scenario);
@@ -195,10 +207,34 @@ pub fn simulate(
             .collect(),
         reversal_sites: study.sites.clone(),
         directions: study.directions.clone(),
+        reversal_values: reversal_values(&scenario.machine)?,
+        diagnostics,
     };
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
     crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;
     Ok(summary)
+}
+
+/// Each axis's reversal value from its drive configuration, by axis letter.
+pub fn reversal_values(
+    machine: &crate::input::Machine,
+) -> Result<std::collections::BTreeMap<String, crate::drive::ReversalValue>> {
+    machine
+        .axes()
+        .iter()
+        .map(|&a| {
+            let c = machine.axis(a);
+            let servo = crate::drive::AxisServo::new(
+                a,
+                &c.servo,
+                &c.drive,
+                &c.friction,
+                machine.interpolation_period_s,
+                0.0,
+            )?;
+            Ok((a.to_string(), servo.reversal_value()))
+        })
+        .collect()
 }
 
 /// The virtual ball bar of a scenario: the cone's or circle's measured circle, the table

@@ -96,7 +96,10 @@ fn scale_squareness_and_cyclic_errors_are_estimated_from_the_trace() {
         .iter()
         .find(|c| c.axis == "X")
         .expect("cyclic error on X");
-    println!("cyclic: {x:?}");
+    println!(
+        "scale {} ppm, squareness {} urad, cyclic {x:?}",
+        d.scale_mismatch_ppm, d.squareness_urad
+    );
     assert!(close(x.pitch_mm, 10.0, 0.01), "{x:?}");
     assert!(close(x.amplitude_um, 2.0, 0.10), "{x:?}");
     assert!(d.cyclic.iter().all(|c| c.axis != "Y"), "{:?}", d.cyclic);

@@ -138,6 +138,11 @@ pub struct ReversalSite {
     pub axis: Axis,
     pub theta_deg: f64,
     pub sensitivity: Option<f64>,
+    /// The slow zone about the reversal, where the axis moves slower than its Stribeck
+    /// velocity (velocity-weakening friction: stick-slip): from this angle up by
+    /// `zone_span_deg`, deg. A point (span 0) when unknown.
+    pub zone_from_deg: f64,
+    pub zone_span_deg: f64,
 }
 
 impl ReversalSite {
@@ -155,6 +160,8 @@ impl ReversalSite {
                     axis: *axis,
                     theta_deg,
                     sensitivity: None,
+                    zone_from_deg: theta_deg,
+                    zone_span_deg: 0.0,
                 })
             })
             .collect()
@@ -187,6 +194,13 @@ pub fn distance_to_arc_deg(theta_deg: f64, from_deg: f64, span_deg: f64) -> f64 
     }
 }
 
+/// Distance between two arcs (each from an angle up by a span), deg: 0 when they overlap.
+pub fn arc_distance_deg(a_from: f64, a_span: f64, b_from: f64, b_span: f64) -> f64 {
+    distance_to_arc_deg(a_from, b_from, b_span)
+        .min(distance_to_arc_deg(a_from + a_span, b_from, b_span))
+        .min(distance_to_arc_deg(b_from, a_from, a_span))
+}
+
 /// Attributes a mark that covers the arc from `from_deg` up by `span_deg` (its onset to its
 /// peak, in increasing θ): a reversal inside the arc is at distance 0 (see the module docs).
 pub fn attribute_arc(from_deg: f64, span_deg: f64, sites: &[ReversalSite]) -> Attribution {
@@ -197,7 +211,7 @@ pub fn attribute_arc(from_deg: f64, span_deg: f64, sites: &[ReversalSite]) -> At
         .iter()
         .filter(|s| s.visible() && s.theta_deg.is_finite())
     {
-        let d = distance_to_arc_deg(site.theta_deg, from_deg, span_deg);
+        let d = arc_distance_deg(site.zone_from_deg, site.zone_span_deg, from_deg, span_deg);
         let s = site.sensitivity.unwrap_or(1.0);
         match nearest.iter_mut().find(|(a, _, _)| *a == site.axis) {
             Some(n) if d < n.1 => *n = (site.axis, d, s),
@@ -278,20 +292,42 @@ fn bin_of(theta_deg: f64) -> usize {
     ((t / super::ballbar::BIN_DEG) as usize).min(super::ballbar::N_BINS - 1)
 }
 
-/// Sites for each axis's reversal angles, with the normalised sensitivity from `map`.
+/// Sites for each axis's reversal angles, with the normalised sensitivity from `map` and,
+/// given the commanded speeds `speed` (mm/s, deg/s per bin) and each axis's Stribeck
+/// velocity `slow(axis)`, the slow zone: the bins about the reversal where the axis moves
+/// slower than that, at most [`MAX_ZONE_DEG`] each way.
 pub fn sites_from_map(
     reversals: &[(Axis, Vec<f64>)],
     map: &SensitivityMap,
     length_mm: f64,
+    speed: Option<(&SensitivityMap, &dyn Fn(Axis) -> f64)>,
 ) -> Vec<ReversalSite> {
     let mut sites = ReversalSite::unweighted(reversals);
     for site in &mut sites {
         site.sensitivity = map
             .at(site.theta_deg)
             .map(|s| normalised_sensitivity(site.axis, s[site.axis], length_mm));
+        if let Some((speed, slow)) = speed {
+            let limit = slow(site.axis);
+            let step = super::ballbar::BIN_DEG;
+            let reach = (MAX_ZONE_DEG / step) as usize;
+            let slow_at = |theta: f64| speed.at(theta).is_some_and(|v| v[site.axis].abs() < limit);
+            let walk = |sign: f64| {
+                (1..=reach)
+                    .take_while(|&k| slow_at(site.theta_deg + sign * k as f64 * step))
+                    .count() as f64
+                    * step
+            };
+            let (before, after) = (walk(-1.0), walk(1.0));
+            site.zone_from_deg = site.theta_deg - before;
+            site.zone_span_deg = before + after;
+        }
     }
     sites
 }
+
+/// Largest extent of a slow zone on either side of its reversal, deg.
+pub const MAX_ZONE_DEG: f64 = 15.0;
 
 #[cfg(test)]
 mod tests {
@@ -302,6 +338,8 @@ mod tests {
             axis,
             theta_deg,
             sensitivity: Some(s),
+            zone_from_deg: theta_deg,
+            zone_span_deg: 0.0,
         }
     }
 

@@ -77,6 +77,10 @@ pub struct BallbarSink {
     pub signature: BallbarRun,
     /// The bar's sensitivity ∂L/∂q to every axis against θ, at the commanded positions.
     pub sensitivity: SensitivityMap,
+    /// Commanded axis speeds against θ, mm/s or deg/s.
+    pub speed: SensitivityMap,
+    /// The previous sample's time (s) and commanded positions.
+    previous: Option<(f64, crate::AxisVec)>,
 }
 
 impl BallbarSink {
@@ -91,12 +95,15 @@ impl BallbarSink {
             run: BallbarRun::new(direction),
             signature: BallbarRun::new(direction),
             sensitivity: SensitivityMap::default(),
+            speed: SensitivityMap::default(),
+            previous: None,
         }
     }
 }
 
 impl Sink for BallbarSink {
     fn push(&mut self, s: &Sample) -> Result<()> {
+        let previous = self.previous.replace((s.time_s, s.commanded));
         if is_measured(s, self.measured) {
             let r = self.geometry.read(s);
             self.run.push(r.theta_deg, r.deviation_um);
@@ -112,6 +119,12 @@ impl Sink for BallbarSink {
                     g.length_mm,
                 );
                 self.sensitivity.set(r.theta_deg, s_q);
+            }
+            if let Some((t0, q0)) = previous.filter(|(t0, _)| s.time_s > *t0) {
+                if self.speed.wants(r.theta_deg) {
+                    self.speed
+                        .set(r.theta_deg, (s.commanded - q0) * (1.0 / (s.time_s - t0)));
+                }
             }
         }
         Ok(())

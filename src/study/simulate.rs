@@ -103,7 +103,8 @@ pub fn run_ballbar(
         Program::Cone { directions, .. } | Program::Circle { directions, .. } => directions.clone(),
         Program::File { .. } => vec![Direction::Ccw],
     };
-    let (mut runs, mut signatures, mut maps) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut runs, mut signatures, mut maps, mut speeds) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut sim_time_s = 0.0;
     let mut setpoints = 0u64;
     for &direction in &directions {
@@ -137,11 +138,30 @@ pub fn run_ballbar(
             runs.push(b.run);
             signatures.push(b.signature);
             maps.push(b.sensitivity);
+            speeds.push(b.speed);
         }
     }
     // The bar's sensitivity is a property of the nominal pose at θ: the first run's map.
+    // Each axis's Stribeck velocity bounds its slow zone about a reversal (a cascade axis
+    // with dry friction; otherwise the zone is the reversal itself).
+    let stribeck = |a: Axis| -> f64 {
+        let c = machine.axis(a);
+        let r = crate::input::drive::Resolved::new(a, &c.servo, &c.drive, &c.friction);
+        if r.coulomb.1 > 0.0 && r.model != Some(crate::input::drive::Model::FirstOrder) {
+            r.stribeck.1
+        } else {
+            0.0
+        }
+    };
     let sites = match (maps.first(), geometry) {
-        (Some(map), Some(g)) => sites_from_map(&reversals, map, g.length_mm),
+        (Some(map), Some(g)) => sites_from_map(
+            &reversals,
+            map,
+            g.length_mm,
+            speeds
+                .first()
+                .map(|s| (s, &stribeck as &dyn Fn(Axis) -> f64)),
+        ),
         _ => ReversalSite::unweighted(&reversals),
     };
     Ok(BallbarStudy {

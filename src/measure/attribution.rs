@@ -23,9 +23,11 @@
 //!
 //! A mark is matched against the *sensitive* reversals (normalised sensitivity at least
 //! [`SENSITIVITY_MIN`]):
-//! - a reversal's distance to the mark is its distance to the arc the mark covers from its
-//!   onset to its peak, 0 inside it (friction marks can lead the reversal slightly: the
-//!   Stribeck rise of friction as the axis slows down); a step is a point;
+//! - a reversal has a *slow zone*: the arc about it where the axis moves slower than its
+//!   Stribeck velocity (velocity-weakening friction, stick-slip), so that its friction marks
+//!   can come before and after the reversal itself ([`sites_from_map`]);
+//! - a reversal's distance to the mark is the distance between its slow zone and the arc
+//!   the mark covers from its onset to its peak, 0 when they overlap; a step is a point;
 //! - each axis's distance `d_a` is that of its nearest sensitive reversal;
 //! - the candidates are the axes with `d_a <= ATTRIBUTION_MAX_DEG` and
 //!   `d_a <= d_min + TIE_DEG`: reversals closer together than the onset can be located

@@ -46,7 +46,7 @@ fn run(direction: Direction, e: &Errors) -> BallbarRun {
     };
     for k in 0..36_000 {
         let t = (k as f64 * 0.01).to_radians();
-        let (u, v) = (R * t.cos(), R * t.sin());
+        let u = R * t.cos();
         // The exact steady state of a first-order loop G = 1/(1 + sT) on u = R cos ωt:
         // amplitude 1/sqrt(1 + (ωT)²), phase lag atan(ωT), in the run's direction.
         let w = V / R;

@@ -62,6 +62,7 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
+use super::presliding::{Presliding, ReversalValue};
 use crate::error::{Error, Result};
 use crate::input::drive::{DriveConfig, FrictionConfig, Model, Resolved, ServoConfig};
 use crate::Axis;
@@ -133,6 +134,10 @@ pub struct AxisServo {
     force: f64,
     integral: f64,
     x_m_tick: f64,
+    /// Pre-sliding (Dahl) friction on the table, replacing the Coulomb/stiction law.
+    presliding: Option<Presliding>,
+    /// The axis's lost motion at a reversal, mm or deg.
+    reversal: ReversalValue,
     /// The exact affine map of one interpolation period in the linear regime (cascade
     /// model); None for the first-order model or when switched off.
     exact: Option<Box<PeriodMap>>,
@@ -285,6 +290,26 @@ impl AxisServo {
             force: 0.0,
             integral: 0.0,
             x_m_tick: state,
+            presliding: (r.presliding.1 > 0.0 && r.coulomb.1 > 0.0).then(|| {
+                let unit = if axis.is_rotary() { scale } else { 1e-6 };
+                Presliding::new(
+                    r.coulomb.1,
+                    r.presliding.1 * unit,
+                    mt,
+                    r.presliding_damping_ratio,
+                )
+            }),
+            reversal: ReversalValue::new(
+                r.backlash.1,
+                r.coulomb.1,
+                stiffness * scale,
+                if axis.is_rotary() {
+                    r.presliding.1
+                } else {
+                    r.presliding.1 * 1e-3
+                },
+                r.fully_closed.unwrap_or(false),
+            ),
             exact: None,
             periods_exact: 0,
             periods_substepped: 0,
@@ -365,6 +390,9 @@ impl AxisServo {
     /// or None (near rest, in the Stribeck zone, inside the backlash gap, near the force
     /// limit). `dv_margin` is the velocity change the period may bring.
     fn linear_regime(&self, x: &[f64; N_STATE], dv_margin: f64) -> Option<(f64, f64)> {
+        if self.presliding.is_some() {
+            return None; // the bristle has its own state
+        }
         let [x_m, v_m, x_t, v_t, force, _, _] = *x;
         if force.abs() > 0.5 * self.force_limit {
             return None;
@@ -435,6 +463,11 @@ impl AxisServo {
         self.integral = y[5];
         self.x_m_tick = y[6] + s_old;
         true
+    }
+
+    /// The lost motion this axis shows at a reversal (ISO 230-2 B and its parts), mm or deg.
+    pub fn reversal_value(&self) -> ReversalValue {
+        self.reversal
     }
 
     /// Advances one interpolation period towards `setpoint` (mm or deg), reached by the
@@ -596,6 +629,9 @@ impl AxisServo {
         self.v_t = (self.mt * self.v_t + self.h * (f_spring + f_friction)) * self.inv_mt_plus_h_fv;
         self.x_m += self.h * self.v_m;
         self.x_t += self.h * self.v_t;
+        if let Some(p) = self.presliding.as_mut() {
+            p.advance(self.h * self.v_t, self.h);
+        }
     }
 
     /// Dry friction on the table over the next substep, N or N m, given the spring force on
@@ -606,6 +642,9 @@ impl AxisServo {
     /// ([`AxisServo::linear_regime`]).
     #[inline]
     fn table_friction(&self, f_spring: f64) -> f64 {
+        if let Some(p) = &self.presliding {
+            return p.force();
+        }
         let bound = self.friction_bound(self.v_t);
         let f_stop = -(self.mt_over_h * self.v_t + f_spring);
         f_stop.clamp(-bound, bound)

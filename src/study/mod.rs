@@ -2,6 +2,7 @@
 //! Inputs: scenarios; the pipeline and its sinks; the analytic cone path.
 //! Outputs: reversal analyses, `simulate` runs with their files, sweeps over a parameter and placement maps.
 
+pub mod diagnose;
 pub mod feed;
 pub mod placement;
 pub mod reversals;

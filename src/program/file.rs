@@ -1,21 +1,21 @@
 //! G-code files, read by the `ngc` interpreter crate, as a stream of canonical moves.
 //!
-//! The reader starts from all axes at zero: the machine position before a program runs is
-//! not known, so the first move only brings the machine to the program's start.
+//! The scenario's reader options (dialect, machine axes, tools, work offsets, subroutine
+//! path, user M codes) go to the interpreter unchanged; `Options::default()` starts from all
+//! axes at zero, as the machine position before a program runs is not known.
 
 use std::path::Path;
 
 use super::Moves;
 use crate::error::Result;
-use crate::AxisVec;
 
-/// Streams the moves of the file at `path`; memory does not grow with its length.
-pub fn read_file(path: &Path) -> Result<Moves<'static>> {
-    let moves = ngc::read_file(path, AxisVec::ZERO)?;
+/// Streams the moves of the file at `path`; memory does not grow with the number of moves.
+pub fn read_file(path: &Path, options: &ngc::Options) -> Result<Moves<'static>> {
+    let moves = ngc::read_file_with(path, options)?;
     Ok(Box::new(moves.map(|m| m.map_err(Into::into))))
 }
 
-/// Streams the moves of `text`, reported as the contents of `path`.
+/// Streams the moves of `text`, reported as the contents of `path`, with default options.
 pub fn read_str<'a>(path: &'a Path, text: &'a str) -> Moves<'a> {
-    Box::new(ngc::read_str(path, text, AxisVec::ZERO).map(|m| m.map_err(Into::into)))
+    Box::new(ngc::read_str(path, text, ngc::AxisVec::ZERO).map(|m| m.map_err(Into::into)))
 }

@@ -62,6 +62,7 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
+use super::presliding::{Presliding, ReversalValue};
 use crate::error::{Error, Result};
 use crate::input::drive::{DriveConfig, FrictionConfig, Model, Resolved, ServoConfig};
 use crate::Axis;
@@ -133,6 +134,69 @@ pub struct AxisServo {
     force: f64,
     integral: f64,
     x_m_tick: f64,
+    /// Pre-sliding (Dahl) friction on the table, replacing the Coulomb/stiction law.
+    presliding: Option<Presliding>,
+    /// The axis's lost motion at a reversal, mm or deg.
+    reversal: ReversalValue,
+    /// The exact affine map of one interpolation period in the linear regime (cascade
+    /// model); None for the first-order model or when switched off.
+    exact: Option<Box<PeriodMap>>,
+    /// Interpolation periods advanced by the affine map, and by substeps.
+    periods_exact: u64,
+    periods_substepped: u64,
+}
+
+/// Number of state variables of the cascade model: `x_m v_m x_t v_t F ∫ x_m,tick`.
+const N_STATE: usize = 7;
+
+/// One interpolation period of the cascade model in its linear regime, as an affine map of
+/// the state (positions relative to the previous setpoint `s_{k-1}`):
+///
+/// ```text
+/// x⁺ = M x + b_Δs Δs + b_ff F_ff + b_fr F_fr + b_off off
+/// ```
+///
+/// with `Δs = s_k - s_{k-1}`, `F_ff = k_aff m_tot a_ff`, the table friction `F_fr` held
+/// constant (`-Fc sign(v_t)` while the table slips faster than the Stribeck zone, 0 without
+/// dry friction) and the spring's contact offset `off` (`±b/2` while one side of the
+/// backlash is in contact, 0 without backlash). Inside that regime the substep model is
+/// linear in `(x, Δs, F_ff, F_fr, off)`, so its period map *is* this affine map: the columns
+/// are the substep model run once on each unit vector (see [`AxisServo::linear_period`]).
+/// The result equals the substeps up to rounding, at one 7×7 product per period instead of
+/// `n_servo · substeps` steps.
+#[derive(Clone, Debug)]
+struct PeriodMap {
+    m: [[f64; N_STATE]; N_STATE],
+    ds: [f64; N_STATE],
+    f_ff: [f64; N_STATE],
+    friction: [f64; N_STATE],
+    offset: [f64; N_STATE],
+}
+
+impl PeriodMap {
+    #[inline]
+    fn apply(
+        &self,
+        x: &[f64; N_STATE],
+        ds: f64,
+        f_ff: f64,
+        friction: f64,
+        offset: f64,
+    ) -> [f64; N_STATE] {
+        let mut out = [0.0; N_STATE];
+        for (i, o) in out.iter_mut().enumerate() {
+            let row = &self.m[i];
+            let mut acc = self.ds[i] * ds
+                + self.f_ff[i] * f_ff
+                + self.friction[i] * friction
+                + self.offset[i] * offset;
+            for j in 0..N_STATE {
+                acc += row[j] * x[j];
+            }
+            *o = acc;
+        }
+        out
+    }
 }
 
 impl AxisServo {
@@ -226,7 +290,184 @@ impl AxisServo {
             force: 0.0,
             integral: 0.0,
             x_m_tick: state,
-        })
+            presliding: (r.presliding.1 > 0.0 && r.coulomb.1 > 0.0).then(|| {
+                let unit = if axis.is_rotary() { scale } else { 1e-6 };
+                Presliding::new(
+                    r.coulomb.1,
+                    r.presliding.1 * unit,
+                    mt,
+                    r.presliding_damping_ratio,
+                )
+            }),
+            reversal: ReversalValue::new(
+                r.backlash.1,
+                r.coulomb.1,
+                stiffness * scale,
+                if axis.is_rotary() {
+                    r.presliding.1
+                } else {
+                    r.presliding.1 * 1e-3
+                },
+                r.fully_closed.unwrap_or(false),
+            ),
+            exact: None,
+            periods_exact: 0,
+            periods_substepped: 0,
+        }
+        .with_exact_map(true))
+    }
+
+    /// Switches the exact affine period map of the linear regime on (the default) or off
+    /// (every period by substeps, the reference the map is tested against).
+    pub fn with_exact_map(mut self, on: bool) -> AxisServo {
+        self.exact = (on && self.model == Model::Cascade).then(|| Box::new(self.period_map()));
+        self
+    }
+
+    /// Interpolation periods advanced so far by the exact map and by substeps.
+    pub fn period_counts(&self) -> (u64, u64) {
+        (self.periods_exact, self.periods_substepped)
+    }
+
+    /// Builds [`PeriodMap`] by running [`AxisServo::linear_period`] on each unit input.
+    fn period_map(&self) -> PeriodMap {
+        let zero = [0.0; N_STATE];
+        let mut m = [[0.0; N_STATE]; N_STATE];
+        for j in 0..N_STATE {
+            let mut e = zero;
+            e[j] = 1.0;
+            let col = self.linear_period(e, 0.0, 0.0, 0.0, 0.0);
+            for i in 0..N_STATE {
+                m[i][j] = col[i];
+            }
+        }
+        PeriodMap {
+            m,
+            ds: self.linear_period(zero, 1.0, 0.0, 0.0, 0.0),
+            f_ff: self.linear_period(zero, 0.0, 1.0, 0.0, 0.0),
+            friction: self.linear_period(zero, 0.0, 0.0, 1.0, 0.0),
+            offset: self.linear_period(zero, 0.0, 0.0, 0.0, 1.0),
+        }
+    }
+
+    /// The cascade model over one interpolation period with its nonlinearities frozen: no
+    /// force limit, table friction the constant `friction`, the spring `k (d - offset) +
+    /// c Δv` without its contact clamp. Positions relative to `s_{k-1}`. The same arithmetic
+    /// as [`AxisServo::step_cascade`] and [`AxisServo::substep`] in the regime they agree.
+    fn linear_period(
+        &self,
+        x: [f64; N_STATE],
+        ds: f64,
+        f_ff: f64,
+        friction: f64,
+        offset: f64,
+    ) -> [f64; N_STATE] {
+        let [mut x_m, mut v_m, mut x_t, mut v_t, mut force, mut integral, mut x_m_tick] = x;
+        let n = self.n_servo as f64;
+        let inv_ts = 1.0 / self.t_servo;
+        let v_ff = ds * self.inv_t_ipo;
+        for j in 0..self.n_servo {
+            let x_cmd = ds * (j as f64 / n);
+            let x_fb = if self.fully_closed { x_t } else { x_m };
+            let v_meas = (x_m - x_m_tick) * inv_ts;
+            x_m_tick = x_m;
+            let ev = self.kv * (x_cmd - x_fb) + self.kvff * v_ff - v_meas;
+            integral += self.ki_ts * ev;
+            let f_cmd = self.kp * ev + integral + f_ff;
+            for _ in 0..self.n_sub {
+                let f_spring = self.stiffness * (x_m - x_t - offset) + self.damping * (v_m - v_t);
+                force += (f_cmd - force) * self.current_alpha;
+                v_m += (force - f_spring) * self.h_over_mm;
+                v_t = (self.mt * v_t + self.h * (f_spring + friction)) * self.inv_mt_plus_h_fv;
+                x_m += self.h * v_m;
+                x_t += self.h * v_t;
+            }
+        }
+        [x_m, v_m, x_t, v_t, force, integral, x_m_tick]
+    }
+
+    /// The frozen friction force and contact offset of the linear regime the state is in,
+    /// or None (near rest, in the Stribeck zone, inside the backlash gap, near the force
+    /// limit). `dv_margin` is the velocity change the period may bring.
+    fn linear_regime(&self, x: &[f64; N_STATE], dv_margin: f64) -> Option<(f64, f64)> {
+        if self.presliding.is_some() {
+            return None; // the bristle has its own state
+        }
+        let [x_m, v_m, x_t, v_t, force, _, _] = *x;
+        if force.abs() > 0.5 * self.force_limit {
+            return None;
+        }
+        let d = x_m - x_t;
+        let hb = self.half_backlash;
+        let offset = if hb > 0.0 {
+            let side = d.signum();
+            let f_spring = self.stiffness * (d - side * hb) + self.damping * (v_m - v_t);
+            // In contact, pushing, and not about to open the gap.
+            if d.abs() <= hb || side * f_spring <= 0.0 {
+                return None;
+            }
+            side * hb
+        } else {
+            0.0
+        };
+        let friction = if self.coulomb == 0.0 && self.static_friction == 0.0 {
+            0.0
+        } else {
+            // Slipping, outside the Stribeck zone (g(v) = Fc exactly), by a margin.
+            let zone = self.stribeck * 40f64.sqrt();
+            if v_t.abs() <= zone + dv_margin || v_t == 0.0 {
+                return None;
+            }
+            let f_spring = self.stiffness * (d - offset) + self.damping * (v_m - v_t);
+            let side = v_t.signum();
+            if side * (self.mt_over_h * v_t + f_spring) <= self.coulomb {
+                return None;
+            }
+            -side * self.coulomb
+        };
+        Some((friction, offset))
+    }
+
+    /// One period by the exact map when the state is in a linear regime at both its ends;
+    /// false (state untouched) otherwise.
+    fn try_exact_period(&mut self, s_old: f64, s_new: f64, f_ff: f64) -> bool {
+        let Some(map) = self.exact.as_deref() else {
+            return false;
+        };
+        let x = [
+            self.x_m - s_old,
+            self.v_m,
+            self.x_t - s_old,
+            self.v_t,
+            self.force,
+            self.integral,
+            self.x_m_tick - s_old,
+        ];
+        // Velocity may change by about what the command's velocity does over the period.
+        let dv_guess = ((s_new - s_old) * self.inv_t_ipo - self.v_ff).abs();
+        let Some((friction, offset)) = self.linear_regime(&x, dv_guess) else {
+            return false;
+        };
+        let y = map.apply(&x, s_new - s_old, f_ff, friction, offset);
+        let dv = (y[3] - x[3]).abs().max(dv_guess);
+        if self.linear_regime(&y, dv) != Some((friction, offset))
+            || self.linear_regime(&x, dv) != Some((friction, offset))
+        {
+            return false;
+        }
+        self.x_m = y[0] + s_old;
+        self.v_m = y[1];
+        self.x_t = y[2] + s_old;
+        self.v_t = y[3];
+        self.force = y[4];
+        self.integral = y[5];
+        self.x_m_tick = y[6] + s_old;
+        true
+    }
+
+    /// The lost motion this axis shows at a reversal (ISO 230-2 B and its parts), mm or deg.
+    pub fn reversal_value(&self) -> ReversalValue {
+        self.reversal
     }
 
     /// Advances one interpolation period towards `setpoint` (mm or deg), reached by the
@@ -331,9 +572,14 @@ impl AxisServo {
     /// Cascade model over one interpolation period: `n_servo` controller ticks, each followed
     /// by `n_sub` mechanics substeps under the held force command.
     fn step_cascade(&mut self, s_old: f64, s_new: f64, v_ff: f64, a_ff: f64) {
+        let f_ff = self.aff_mass * a_ff;
+        if self.try_exact_period(s_old, s_new, f_ff) {
+            self.periods_exact += 1;
+            return;
+        }
+        self.periods_substepped += 1;
         let n = self.n_servo as f64;
         let inv_ts = 1.0 / self.t_servo;
-        let f_ff = self.aff_mass * a_ff;
         for j in 0..self.n_servo {
             // Controller, sampled at the start of the servo period.
             let x_cmd = s_old + (s_new - s_old) * (j as f64 / n);
@@ -379,14 +625,29 @@ impl AxisServo {
         };
         self.force += (f_cmd - self.force) * self.current_alpha;
         self.v_m += (self.force - f_spring) * self.h_over_mm;
-        // Implicit friction (see the module docs): stick if the force needed to stop the
-        // table within this step is below the friction bound, else slip against the bound.
-        let bound = self.friction_bound(self.v_t);
-        let f_stop = -(self.mt_over_h * self.v_t + f_spring);
-        let f_friction = f_stop.clamp(-bound, bound);
+        let f_friction = self.table_friction(f_spring);
         self.v_t = (self.mt * self.v_t + self.h * (f_spring + f_friction)) * self.inv_mt_plus_h_fv;
         self.x_m += self.h * self.v_m;
         self.x_t += self.h * self.v_t;
+        if let Some(p) = self.presliding.as_mut() {
+            p.advance(self.h * self.v_t, self.h);
+        }
+    }
+
+    /// Dry friction on the table over the next substep, N or N m, given the spring force on
+    /// it: the friction hook. Implicit (see the module docs): stick if the force needed to
+    /// stop the table within this step is below the friction bound, else slip against the
+    /// bound. A friction model with its own state (e.g. pre-sliding) goes here; the exact
+    /// period map then applies only where this is the constant `-Fc sign(v_t)`
+    /// ([`AxisServo::linear_regime`]).
+    #[inline]
+    fn table_friction(&self, f_spring: f64) -> f64 {
+        if let Some(p) = &self.presliding {
+            return p.force();
+        }
+        let bound = self.friction_bound(self.v_t);
+        let f_stop = -(self.mt_over_h * self.v_t + f_spring);
+        f_stop.clamp(-bound, bound)
     }
 
     /// Magnitude bound of dry friction at table velocity `v`:

@@ -113,6 +113,15 @@ pub struct FrictionConfig {
     pub viscous_n_s_per_m: Option<f64>,
     /// Viscous friction Fv of a rotary axis, N m per rad/s. Default 5.
     pub viscous_nm_s_per_rad: Option<f64>,
+    /// Pre-sliding displacement δ = Fc/σ0 of a linear axis, um (typically 1-5): the elastic
+    /// travel at which the guides' and screw's bristles carry Fc. Set, it replaces the
+    /// Coulomb/stiction law by the Dahl bristle model (`crate::drive::presliding`).
+    /// Default 0 (off).
+    pub presliding_um: Option<f64>,
+    /// Pre-sliding angle δ of a rotary axis, deg (typically 0.0003-0.001). Default 0 (off).
+    pub presliding_deg: Option<f64>,
+    /// Damping ratio of the bristle on the table mass, `σ1 = 2 ζ sqrt(σ0 m_t)`. Default 1.
+    pub presliding_damping_ratio: Option<f64>,
 }
 
 /// The two servo models.
@@ -168,6 +177,9 @@ pub struct Resolved {
     pub static_ratio: f64,
     pub stribeck: (&'static str, f64),
     pub viscous: (&'static str, f64),
+    /// Pre-sliding displacement δ, um or deg (0: off).
+    pub presliding: (&'static str, f64),
+    pub presliding_damping_ratio: f64,
 }
 
 impl Resolved {
@@ -231,6 +243,13 @@ impl Resolved {
                 ("viscous_nm_s_per_rad", f.viscous_nm_s_per_rad),
                 (1000.0, 5.0),
             ),
+            presliding: pick(
+                axis,
+                ("presliding_um", f.presliding_um),
+                ("presliding_deg", f.presliding_deg),
+                (0.0, 0.0),
+            ),
+            presliding_damping_ratio: f.presliding_damping_ratio.unwrap_or(1.0),
         }
     }
 
@@ -245,7 +264,7 @@ impl Resolved {
         let kind = if axis.is_rotary() { "rotary" } else { "linear" };
         let other = if axis.is_rotary() { "linear" } else { "rotary" };
         // Keys of the other kind of axis.
-        let foreign: [(&str, &str, Option<f64>, &str); 9] = if axis.is_rotary() {
+        let foreign: [(&str, &str, Option<f64>, &str); 10] = if axis.is_rotary() {
             [
                 (
                     "servo",
@@ -285,6 +304,12 @@ impl Resolved {
                     "viscous_n_s_per_m",
                     f.viscous_n_s_per_m,
                     "viscous_nm_s_per_rad",
+                ),
+                (
+                    "friction",
+                    "presliding_um",
+                    f.presliding_um,
+                    "presliding_deg",
                 ),
             ]
         } else {
@@ -333,6 +358,12 @@ impl Resolved {
                     f.viscous_nm_s_per_rad,
                     "viscous_n_s_per_m",
                 ),
+                (
+                    "friction",
+                    "presliding_deg",
+                    f.presliding_deg,
+                    "presliding_um",
+                ),
             ]
         };
         for (table, key, value, instead) in foreign {
@@ -350,7 +381,7 @@ impl Resolved {
         let finite_in = |v: f64, lo: f64, hi: f64| v.is_finite() && (lo..=hi).contains(&v);
         let positive = |v: f64| v.is_finite() && v > 0.0;
         let non_negative = |v: f64| v.is_finite() && v >= 0.0;
-        let checks: [(bool, &'static str, &'static str, String); 21] = [
+        let checks: [(bool, &'static str, &'static str, String); 23] = [
             (
                 r.model.is_some(),
                 "servo",
@@ -507,6 +538,34 @@ impl Resolved {
                 r.viscous.0,
                 format!("must be >= 0, got {}", r.viscous.1),
             ),
+            (
+                finite_in(
+                    r.presliding.1,
+                    0.0,
+                    if axis.is_rotary() { 1.0 } else { 1000.0 },
+                ),
+                "friction",
+                r.presliding.0,
+                format!(
+                    "must be a displacement >= 0 ({}; 0 is off, typically {}), got {}",
+                    if axis.is_rotary() { "deg" } else { "um" },
+                    if axis.is_rotary() {
+                        "0.0003-0.001"
+                    } else {
+                        "1-5"
+                    },
+                    r.presliding.1
+                ),
+            ),
+            (
+                finite_in(r.presliding_damping_ratio, 0.0, 10.0),
+                "friction",
+                "presliding_damping_ratio",
+                format!(
+                    "must be in 0..=10 (typically 0.5-1), got {}",
+                    r.presliding_damping_ratio
+                ),
+            ),
         ];
         checks
             .into_iter()
@@ -568,8 +627,10 @@ impl FrictionConfig {
         let mut f = self.clone();
         if axis.is_rotary() {
             f.coulomb_nm = Some(0.0);
+            f.presliding_deg = None;
         } else {
             f.coulomb_n = Some(0.0);
+            f.presliding_um = None;
         }
         f
     }

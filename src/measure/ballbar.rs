@@ -46,6 +46,7 @@
 use nalgebra::{DMatrix, DVector, Matrix3, Point3, Rotation3, Vector3};
 use serde::Serialize;
 
+use super::attribution::{attribute_arc, attribute_to_sites, AxisSet, ReversalSite};
 use crate::error::{Error, Result};
 use crate::input::program::{ConeTest, Direction};
 use crate::kinematics::Kinematics;
@@ -72,10 +73,7 @@ pub const NOISE_FACTOR: f64 = 6.0;
 pub const SPIKE_FLOOR_UM: f64 = 0.5;
 /// ...or this height for a step, um.
 pub const STEP_FLOOR_UM: f64 = 1.0;
-/// Standard uncertainty of an event's onset angle, deg, used for the attribution confidence.
-pub const ONSET_SIGMA_DEG: f64 = 0.5;
-/// An event farther than this from every reversal angle is attributed to no axis, deg.
-pub const ATTRIBUTION_MAX_DEG: f64 = 3.0;
+pub use super::attribution::{ATTRIBUTION_MAX_DEG, ONSET_SIGMA_DEG};
 
 /// Ball-bar deviation `|p_tool - p_pivot| - L`, mm, both balls in the machine frame; the
 /// table ball is moved by the actual chain (location errors included).
@@ -327,13 +325,22 @@ pub struct TraceEvent {
     pub height_um: f64,
     /// Full width at half height, deg (0 for a step).
     pub width_deg: f64,
+    /// The arc the mark covers from its first onset to its last peak, deg: more than the
+    /// width for a train of spikes (stick-slip or ringing after a reversal), 0 for a step.
+    pub extent_deg: f64,
     pub kind: EventKind,
     pub direction: Direction,
-    /// The axis whose reversal angle is nearest the onset (within [`ATTRIBUTION_MAX_DEG`]).
+    /// The leading axis: the one whose reversal (where the bar can see it) is nearest the
+    /// onset, within [`ATTRIBUTION_MAX_DEG`]; see [`super::attribution`].
     pub axis: Option<Axis>,
-    /// 0..1: the Gaussian likelihood share of that axis among all axes' nearest reversals
-    /// (onset uncertainty [`ONSET_SIGMA_DEG`]) and "no axis" at [`ATTRIBUTION_MAX_DEG`].
+    /// 0..1: the Gaussian likelihood share of that axis among all sensitive axes' nearest
+    /// reversals (onset uncertainty [`ONSET_SIGMA_DEG`]) and "no axis" at [`ATTRIBUTION_MAX_DEG`].
     pub confidence: f64,
+    /// Every axis the mark may come from: those reversing within the tie tolerance of the
+    /// leading one, where the bar can see them (the leading axis included).
+    pub candidates: AxisSet,
+    /// More than one candidate: the trace cannot tell these axes apart here.
+    pub ambiguous: bool,
 }
 
 /// Figures of one run.
@@ -382,8 +389,8 @@ pub struct BallbarResult {
 /// 3. Spikes: the residual of that fit minus its running median (half-window
 ///    [`BASELINE_HALF_WINDOW_DEG`]); a spike is a region above half the threshold that
 ///    reaches the threshold. The onset is where, walking back in time from the peak, the
-///    residual falls below 10 % of the height. Spikes within 1.5 deg of a step belong to
-///    it and are not reported.
+///    residual falls below 10 % of the height. Spikes within 1.5 deg of a step at least as
+///    high belong to it and are not reported; a smaller step never hides a larger spike.
 ///
 /// Threshold: `max(NOISE_FACTOR sigma, floor)`.
 pub fn analyse(runs: &[BallbarRun], reversals: &[(Axis, Vec<f64>)]) -> Result<BallbarResult> {
@@ -398,6 +405,16 @@ pub fn analyse_events_of(
     runs: &[BallbarRun],
     event_runs: &[BallbarRun],
     reversals: &[(Axis, Vec<f64>)],
+) -> Result<BallbarResult> {
+    analyse_events_at(runs, event_runs, &ReversalSite::unweighted(reversals))
+}
+
+/// As [`analyse_events_of`], with each reversal's bar sensitivity known: marks are
+/// attributed only to axes the bar can see there ([`super::attribution`]).
+pub fn analyse_events_at(
+    runs: &[BallbarRun],
+    event_runs: &[BallbarRun],
+    sites: &[ReversalSite],
 ) -> Result<BallbarResult> {
     if runs.is_empty() {
         return Err(Error::usage(
@@ -427,7 +444,7 @@ pub fn analyse_events_of(
     for run in event_runs {
         let centred = run.trace_um(true)?;
         let noise = noise_sigma(&centred, &run.filled_mask());
-        events.extend(detect_events(&centred, noise, run.direction, reversals));
+        events.extend(detect_events(&centred, noise, run.direction, sites));
     }
     let first = |d: Direction| runs.iter().position(|r| r.direction == d);
     let hysteresis_um = match (first(Direction::Ccw), first(Direction::Cw)) {
@@ -459,30 +476,11 @@ pub fn analyse_events_of(
     })
 }
 
-/// The axis whose reversal angle is nearest `theta_deg`, and the confidence (see
-/// [`TraceEvent::confidence`]).
+/// The leading axis for a mark at `theta_deg` and its confidence, all reversals taken as
+/// visible to the bar (see [`super::attribution::attribute_to_sites`]).
 pub fn attribute(theta_deg: f64, reversals: &[(Axis, Vec<f64>)]) -> (Option<Axis>, f64) {
-    let weight = |d: f64| (-0.5 * (d / ONSET_SIGMA_DEG).powi(2)).exp();
-    let mut best: Option<(Axis, f64)> = None;
-    let mut total = weight(ATTRIBUTION_MAX_DEG);
-    for (axis, angles) in reversals {
-        let Some(d) = angles
-            .iter()
-            .filter(|a| a.is_finite())
-            .map(|&a| angle_distance_deg(theta_deg, a))
-            .min_by(f64::total_cmp)
-        else {
-            continue;
-        };
-        total += weight(d);
-        if best.is_none_or(|(_, bd)| d < bd) {
-            best = Some((*axis, d));
-        }
-    }
-    match best {
-        Some((axis, d)) if d <= ATTRIBUTION_MAX_DEG => (Some(axis), weight(d) / total),
-        _ => (None, 0.0),
-    }
+    let a = attribute_to_sites(theta_deg, &ReversalSite::unweighted(reversals));
+    (a.axis, a.confidence)
 }
 
 /// Unsigned angle between two directions, deg in [0, 180].
@@ -600,12 +598,44 @@ fn fit_shape(v: &[f64], step_indices: &[usize]) -> (Vec<f64>, Vec<f64>) {
     (fit, heights)
 }
 
+/// The far-window statistic at one boundary `k`: `median(right) - median(left)`.
+fn far_window_jump(r: &[f64], k: usize) -> f64 {
+    let n = r.len() as isize;
+    let (gap, width) = (bins(STEP_GAP_DEG) as isize, bins(STEP_WINDOW_DEG) as isize);
+    let window = |from: isize| -> f64 {
+        let mut w: Vec<f64> = (from..from + width)
+            .map(|i| r[(k as isize + i).rem_euclid(n) as usize])
+            .collect();
+        median(&mut w)
+    };
+    window(gap) - window(-gap - width)
+}
+
 /// The far-window step statistic `S(i) = median(right) - median(left)` at each boundary.
 fn step_statistic(r: &[f64]) -> Vec<f64> {
     let (gap, width) = (bins(STEP_GAP_DEG) as isize, bins(STEP_WINDOW_DEG));
     let right = running_circular_median(r, gap, width);
     let left = running_circular_median(r, -gap - width as isize, width);
     right.iter().zip(&left).map(|(a, b)| a - b).collect()
+}
+
+/// Every step in `s` above `threshold`: (peak of its region, the middle of the part of the
+/// region above half its peak).
+fn all_steps(s: &[f64], threshold: f64) -> Vec<(f64, usize)> {
+    let mut out = Vec::new();
+    for sign in [1.0, -1.0] {
+        for region in circular_regions(s.len(), |i| sign * s[i] > threshold) {
+            let peak = region
+                .iter()
+                .map(|&i| sign * s[i])
+                .fold(f64::NEG_INFINITY, f64::max);
+            let upper: Vec<usize> = (0..region.len())
+                .filter(|&k| sign * s[region[k]] >= 0.5 * peak)
+                .collect();
+            out.push((peak, region[(upper[0] + upper[upper.len() - 1]) / 2]));
+        }
+    }
+    out
 }
 
 /// The position of the largest step in `s` above `threshold`: the middle of the part of its
@@ -633,15 +663,36 @@ fn largest_step(s: &[f64], threshold: f64) -> Option<usize> {
 /// Greedy step search: fit the smooth shape and the steps found so far, look for the
 /// largest remaining step in the residual, add it, refit; until none is above `threshold`.
 /// Returns the steps (sorted by index) and the final joint fit.
-fn find_steps(c: &[f64], threshold: f64) -> (Vec<Step>, Vec<f64>) {
+fn find_steps(c: &[f64], threshold: f64, anchors: &[usize]) -> (Vec<Step>, Vec<f64>) {
     const MAX_STEPS: usize = 16;
+    if !anchors.is_empty() {
+        return anchored_steps(c, threshold, anchors);
+    }
+    // First every region of the statistic at once (steps 10-20 deg apart each have their
+    // own plateau, and fitting them together keeps the smooth shape from bending into
+    // them), then greedily whatever the joint fit leaves.
+    let (fit0, _) = fit_shape(c, &[]);
+    let r0: Vec<f64> = c.iter().zip(&fit0).map(|(x, f)| x - f).collect();
+    let stat = step_statistic(&r0);
     let mut indices: Vec<usize> = Vec::new();
+    let mut found = all_steps(&stat, threshold);
+    found.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for (_, index) in found {
+        let index = refine_step(&r0, index);
+        let taken = indices.iter().any(|&k| {
+            angle_distance_deg(k as f64 * BIN_DEG, index as f64 * BIN_DEG) < STEP_GAP_DEG
+        });
+        if !taken && indices.len() < MAX_STEPS {
+            indices.push(index);
+        }
+    }
     let (mut fit, mut heights) = fit_shape(c, &indices);
     while indices.len() < MAX_STEPS {
         let r: Vec<f64> = c.iter().zip(&fit).map(|(x, f)| x - f).collect();
         let Some(index) = largest_step(&step_statistic(&r), threshold) else {
             break;
         };
+        let index = refine_step(&r, index);
         let taken = indices.iter().any(|&k| {
             angle_distance_deg(k as f64 * BIN_DEG, index as f64 * BIN_DEG) < STEP_GAP_DEG
         });
@@ -651,6 +702,7 @@ fn find_steps(c: &[f64], threshold: f64) -> (Vec<Step>, Vec<f64>) {
         indices.push(index);
         (fit, heights) = fit_shape(c, &indices);
     }
+    eliminate_weak_steps(c, threshold, &mut indices, &mut fit, &mut heights);
     let mut steps: Vec<Step> = indices
         .into_iter()
         .zip(heights)
@@ -658,6 +710,164 @@ fn find_steps(c: &[f64], threshold: f64) -> (Vec<Step>, Vec<f64>) {
         .collect();
     steps.sort_by_key(|s| s.index);
     (steps, fit)
+}
+
+/// Steps where the axes reverse: lost motion changes the level only at a reversal, so with
+/// the reversal angles known, a step is looked for at each (`anchors`, bins), placed by
+/// [`refine_step`] within [`STEP_GAP_DEG`] of it, fitted jointly with the smooth shape, and
+/// kept if it stands out ([`eliminate_weak_steps`]). Anchors closer than [`STEP_GAP_DEG`]
+/// share one step.
+fn anchored_steps(c: &[f64], threshold: f64, anchors: &[usize]) -> (Vec<Step>, Vec<f64>) {
+    let (fit0, _) = fit_shape(c, &[]);
+    let r0: Vec<f64> = c.iter().zip(&fit0).map(|(x, f)| x - f).collect();
+    let mut indices: Vec<usize> = Vec::new();
+    for &a in anchors {
+        let index = refine_step(&r0, a);
+        let taken = indices.iter().any(|&k| {
+            angle_distance_deg(k as f64 * BIN_DEG, index as f64 * BIN_DEG) < STEP_GAP_DEG
+        });
+        if !taken {
+            indices.push(index);
+        }
+    }
+    let (mut fit, mut heights) = fit_shape(c, &indices);
+    eliminate_weak_steps(c, threshold, &mut indices, &mut fit, &mut heights);
+    let mut steps: Vec<Step> = indices
+        .into_iter()
+        .zip(heights)
+        .map(|(index, height_um)| Step { index, height_um })
+        .collect();
+    steps.sort_by_key(|s| s.index);
+    (steps, fit)
+}
+
+/// Backward elimination of steps that do not stand out once the others are fitted.
+fn eliminate_weak_steps(
+    c: &[f64],
+    threshold: f64,
+    indices: &mut Vec<usize>,
+    fit: &mut Vec<f64>,
+    heights: &mut Vec<f64>,
+) {
+    // Backward elimination: a step must still stand out when the others are fitted. With
+    // the residual r of the joint fit, step k is tested in r + h_k u_k (its own jump put
+    // back) by the far-window statistic at its index; the weakest below the threshold is
+    // dropped and the rest refitted, until all stand.
+    loop {
+        let r: Vec<f64> = c.iter().zip(fit.iter()).map(|(x, f)| x - f).collect();
+        let n = c.len();
+        let weakest = indices
+            .iter()
+            .zip(heights.iter())
+            .enumerate()
+            .map(|(j, (&k, &h))| {
+                let with: Vec<f64> = (0..n)
+                    .map(|i| r[i] + h * (f64::from(u8::from(i >= k)) - i as f64 / n as f64))
+                    .collect();
+                (j, far_window_jump(&with, k).abs().min(h.abs()))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match weakest {
+            Some((j, strength)) if strength < threshold => {
+                indices.remove(j);
+                (*fit, *heights) = fit_shape(c, indices);
+            }
+            _ => break,
+        }
+    }
+}
+
+/// The best position of a step found near bin `near` in the residual `r`: the split of the
+/// window `near ± (STEP_GAP_DEG + STEP_WINDOW_DEG)` into two constant levels that explains the
+/// most of its variance, `max_k n_l n_r / n (mean_r - mean_l)²`, with k within
+/// `near ± STEP_GAP_DEG` (the far-window statistic locates a step only to a few degrees when a
+/// spike sits on it).
+fn refine_step(r: &[f64], near: usize) -> usize {
+    let n = r.len() as isize;
+    let w = bins(STEP_GAP_DEG + STEP_WINDOW_DEG) as isize;
+    let reach = bins(STEP_GAP_DEG) as isize;
+    let at = |k: isize| r[(near as isize + k).rem_euclid(n) as usize];
+    let total: f64 = (-w..w).map(at).sum();
+    let len = (2 * w) as f64;
+    let (mut left, mut best) = (0.0, (f64::NEG_INFINITY, 0isize));
+    for k in -w + 1..w {
+        left += at(k - 1);
+        let n_l = (k + w) as f64;
+        let n_r = len - n_l;
+        let d = (total - left) / n_r - left / n_l;
+        let score = n_l * n_r / len * d * d;
+        if (-reach..=reach).contains(&k) && score > best.0 {
+            best = (score, k);
+        }
+    }
+    (near as isize + best.1).rem_euclid(n) as usize
+}
+
+/// Spikes whose peaks follow each other within this are one mark: a train (stick-slip of
+/// an axis creeping through its reversal, or ringing after it), deg.
+pub const TRAIN_GAP_DEG: f64 = 3.0;
+
+/// Merges trains of spikes into one mark each (see [`TRAIN_GAP_DEG`]): the largest spike's
+/// peak, height and width, the onset of the first in the direction of travel, the extent
+/// from the earliest to the latest angle of the train; attributed over that arc.
+fn merge_trains(mut spikes: Vec<TraceEvent>, sites: &[ReversalSite]) -> Vec<TraceEvent> {
+    if spikes.is_empty() {
+        return spikes;
+    }
+    spikes.sort_by(|a, b| a.peak_deg.total_cmp(&b.peak_deg));
+    let m = spikes.len();
+    let gap_after =
+        |i: usize| (spikes[(i + 1) % m].peak_deg - spikes[i].peak_deg).rem_euclid(360.0);
+    // Start at a spike preceded by a gap (if every gap is small, the train is the circle).
+    let start = (0..m)
+        .find(|&i| m == 1 || gap_after((i + m - 1) % m) > TRAIN_GAP_DEG)
+        .unwrap_or(0);
+    let mut trains: Vec<Vec<usize>> = Vec::new();
+    for k in 0..m {
+        let i = (start + k) % m;
+        if k == 0 || gap_after((i + m - 1) % m) > TRAIN_GAP_DEG {
+            trains.push(vec![i]);
+        } else {
+            trains.last_mut().expect("started").push(i);
+        }
+    }
+    trains
+        .into_iter()
+        .map(|train| {
+            let main = *train
+                .iter()
+                .max_by(|&&a, &&b| {
+                    spikes[a]
+                        .height_um
+                        .abs()
+                        .total_cmp(&spikes[b].height_um.abs())
+                })
+                .expect("non-empty");
+            let mut e = spikes[main];
+            // Angles of the train measured from a point before it.
+            let base = spikes[train[0]].peak_deg - 10.0;
+            let off = |a: f64| (a - base).rem_euclid(360.0);
+            let (lo, hi) = train
+                .iter()
+                .flat_map(|&i| [off(spikes[i].theta_deg), off(spikes[i].peak_deg)])
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+                    (l.min(x), h.max(x))
+                });
+            e.theta_deg = match e.direction {
+                Direction::Ccw => wrap_360(base + off(spikes[train[0]].theta_deg)),
+                Direction::Cw => {
+                    wrap_360(base + off(spikes[*train.last().expect("non-empty")].theta_deg))
+                }
+            };
+            e.extent_deg = hi - lo;
+            let who = attribute_arc(wrap_360(base + lo), hi - lo, sites);
+            e.axis = who.axis;
+            e.confidence = who.confidence;
+            e.candidates = who.candidates;
+            e.ambiguous = who.candidates.len() > 1;
+            e
+        })
+        .collect()
 }
 
 /// Contiguous runs (around the circle) of indices where `inside(i)`; each as a list of
@@ -683,11 +893,19 @@ fn detect_events(
     c: &[f64],
     noise: f64,
     direction: Direction,
-    reversals: &[(Axis, Vec<f64>)],
+    sites: &[ReversalSite],
 ) -> Vec<TraceEvent> {
     let n = c.len();
     let step_threshold = (NOISE_FACTOR * noise).max(STEP_FLOOR_UM);
-    let (steps, fit) = find_steps(c, step_threshold);
+    // With the reversal angles known (and visible to the bar), steps are looked for there.
+    let mut anchors: Vec<usize> = sites
+        .iter()
+        .filter(|s| s.visible() && s.theta_deg.is_finite())
+        .map(|s| bin_index(wrap_360(s.theta_deg)))
+        .collect();
+    anchors.sort_unstable();
+    anchors.dedup();
+    let (steps, fit) = find_steps(c, step_threshold, &anchors);
     let flat: Vec<f64> = c.iter().zip(&fit).map(|(x, f)| x - f).collect();
 
     // Spikes above a running median.
@@ -704,6 +922,7 @@ fn detect_events(
     };
     let at = |i: isize| res[i.rem_euclid(n as isize) as usize];
     let mut events = Vec::new();
+    let mut spikes = Vec::new();
     for sign in [1.0, -1.0] {
         for region in circular_regions(n, |i| sign * res[i] > 0.5 * threshold) {
             let Some(&peak) = region
@@ -716,10 +935,13 @@ fn detect_events(
             if sign * height < threshold {
                 continue;
             }
+            // A spike next to a step is the step's own transient only if the step is larger:
+            // a step never hides a larger spike.
             let near_step = steps.iter().any(|s| {
-                region
-                    .iter()
-                    .any(|&i| angle_distance_deg(centre(i), angle(s.index)) < 1.5)
+                s.height_um.abs() >= sign * height
+                    && region
+                        .iter()
+                        .any(|&i| angle_distance_deg(centre(i), angle(s.index)) < 1.5)
             });
             if near_step {
                 continue;
@@ -751,22 +973,25 @@ fn detect_events(
                 width += 1;
                 k += 1;
             }
-            let (axis, confidence) = attribute(onset, reversals);
-            events.push(TraceEvent {
+            spikes.push(TraceEvent {
                 theta_deg: onset,
                 peak_deg: centre(peak),
                 height_um: height,
                 width_deg: width as f64 * BIN_DEG,
+                extent_deg: 0.0,
                 kind: EventKind::Spike,
                 direction,
-                axis,
-                confidence,
+                axis: None,
+                confidence: 0.0,
+                candidates: AxisSet::EMPTY,
+                ambiguous: false,
             });
         }
     }
+    events.extend(merge_trains(spikes, sites));
     for s in &steps {
         let theta = angle(s.index);
-        let (axis, confidence) = attribute(theta, reversals);
+        let who = attribute_to_sites(theta, sites);
         events.push(TraceEvent {
             theta_deg: theta,
             peak_deg: theta,
@@ -775,10 +1000,13 @@ fn detect_events(
                 Direction::Cw => -s.height_um,
             },
             width_deg: 0.0,
+            extent_deg: 0.0,
             kind: EventKind::Step,
             direction,
-            axis,
-            confidence,
+            axis: who.axis,
+            confidence: who.confidence,
+            candidates: who.candidates,
+            ambiguous: who.candidates.len() > 1,
         });
     }
     events.sort_by(|a, b| a.theta_deg.total_cmp(&b.theta_deg));

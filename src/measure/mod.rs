@@ -2,6 +2,7 @@
 //! Inputs: [`crate::pipeline::Sample`]s, the measured circle's frame, the bar's pivot and length, each axis's reversal angles.
 //! Outputs: the deviation trace in θ bins, ISO 230-4 figures (G, F, H), and spikes and steps attributed to axes.
 
+pub mod attribution;
 pub mod ballbar;
 pub mod settle;
 pub mod sink;

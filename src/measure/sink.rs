@@ -14,6 +14,7 @@
 
 use nalgebra::Point3;
 
+use super::attribution::{bar_sensitivity, SensitivityMap};
 use super::ballbar::{deviation_mm, BallbarRun, CircleFrame};
 use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines};
@@ -74,6 +75,12 @@ pub struct BallbarSink {
     pub run: BallbarRun,
     /// dL_nl against θ.
     pub signature: BallbarRun,
+    /// The bar's sensitivity ∂L/∂q to every axis against θ, at the commanded positions.
+    pub sensitivity: SensitivityMap,
+    /// Commanded axis speeds against θ, mm/s or deg/s.
+    pub speed: SensitivityMap,
+    /// The previous sample's time (s) and commanded positions.
+    previous: Option<(f64, crate::AxisVec)>,
 }
 
 impl BallbarSink {
@@ -87,17 +94,49 @@ impl BallbarSink {
             measured,
             run: BallbarRun::new(direction),
             signature: BallbarRun::new(direction),
+            sensitivity: SensitivityMap::default(),
+            speed: SensitivityMap::default(),
+            previous: None,
         }
+    }
+}
+
+impl BallbarSink {
+    /// The bar's reading of `s` when it is in the measured revolution (None otherwise),
+    /// after taking it into the run: for a trace that records the same reading.
+    pub fn take(&mut self, s: &Sample) -> Option<BarReading> {
+        let previous = self.previous.replace((s.time_s, s.commanded));
+        if !is_measured(s, self.measured) {
+            return None;
+        }
+        let r = self.geometry.read(s);
+        self.run.push(r.theta_deg, r.deviation_um);
+        self.signature.push(r.theta_deg, r.nonlinear_um);
+        if self.sensitivity.wants(r.theta_deg) {
+            let g = &self.geometry;
+            let axes = g.kinematics.layout.axes();
+            let s_q = bar_sensitivity(
+                &g.kinematics,
+                axes,
+                &s.commanded,
+                &g.pivot_table_mm,
+                g.length_mm,
+            );
+            self.sensitivity.set(r.theta_deg, s_q);
+        }
+        if let Some((t0, q0)) = previous.filter(|(t0, _)| s.time_s > *t0) {
+            if self.speed.wants(r.theta_deg) {
+                self.speed
+                    .set(r.theta_deg, (s.commanded - q0) * (1.0 / (s.time_s - t0)));
+            }
+        }
+        Some(r)
     }
 }
 
 impl Sink for BallbarSink {
     fn push(&mut self, s: &Sample) -> Result<()> {
-        if is_measured(s, self.measured) {
-            let r = self.geometry.read(s);
-            self.run.push(r.theta_deg, r.deviation_um);
-            self.signature.push(r.theta_deg, r.nonlinear_um);
-        }
+        self.take(s);
         Ok(())
     }
 }

@@ -80,8 +80,10 @@
 //! feasibility test uses the monotone bound `D̄(v0, v1) = max(v0, v1) T(|v1 - v0|) ≥ D`
 //! (the true `D` is not monotone in the end speed: slowing from v to v/3 takes longer than
 //! stopping), so any exit between what the backward pass assumed and what the window now
-//! allows is reachable. The backward pass stops at the first block whose entry limit does
-//! not change, so planning is amortised O(1) per block. Memory is bounded by the window.
+//! allows is reachable. Backward passes run once per `lookahead_blocks / 2` new blocks; each
+//! stops at the first older block whose entry limit rises by less than a relative 1e-12, and
+//! `reach` is in closed form, so planning is amortised O(1) per block even when the stopping
+//! distance spans the whole window (fine segments). Memory is bounded by the window.
 //!
 //! Not modelled: corner blending (corners are passed at a limited speed, with a velocity
 //! step of bounded size in one period; the jerk at that step is not limited), acceleration
@@ -97,7 +99,7 @@ use nalgebra::Point3;
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::kinematics::{Kinematics, Layout};
-use crate::program::{FeedMode, Motion, Move};
+use crate::program::{FeedMode, Motion, Move, PathControl};
 use crate::Plane;
 use crate::{Axis, AxisVec};
 
@@ -128,6 +130,36 @@ pub struct InterpolationOptions {
     pub corner_acceleration_share: f64,
     /// Name of the program, used in error messages.
     pub program_path: PathBuf,
+    /// Keep a [`FeedLimit`] for every feed block that runs slower than its F word
+    /// ([`Interpolator::take_feed_limits`]); off by default (memory would grow with them).
+    pub record_feed_limits: bool,
+}
+
+/// Which axis limit holds a block's feed below its F word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LimitKind {
+    /// The axis's maximum velocity: `v ≤ vmax_i / |q'_i|`.
+    Velocity,
+    /// The axis's maximum acceleration through the path's curvature: `v² |q''_i| ≤ ½ amax_i`.
+    Acceleration,
+    /// The axis's maximum jerk through the path's curvature.
+    Jerk,
+}
+
+/// A feed block planned below its programmed speed: the feed held to the machine.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct FeedLimit {
+    /// Source line and 0-based position of the block.
+    pub line: usize,
+    pub block_index: u64,
+    /// The axis whose limit binds, and which limit.
+    pub axis: Axis,
+    pub limit: LimitKind,
+    /// The programmed path speed and the cruise speed the block is planned at, per minute in
+    /// path units (mm, deg counted as mm in mixed moves, the tool tip under TCP).
+    pub programmed_per_min: f64,
+    pub planned_per_min: f64,
 }
 
 impl Default for InterpolationOptions {
@@ -137,6 +169,7 @@ impl Default for InterpolationOptions {
             lookahead_blocks: 256,
             corner_acceleration_share: 1.0,
             program_path: PathBuf::from("program"),
+            record_feed_limits: false,
         }
     }
 }
@@ -386,13 +419,52 @@ fn bisect(mut lo: f64, mut hi: f64, feasible: impl Fn(f64) -> bool) -> f64 {
 }
 
 /// Highest speed `≤ cap` reachable from (or able to reach) `v` within `length`,
-/// by the monotone bound [`change_distance_bound`].
+/// by the monotone bound [`change_distance_bound`], in closed form.
+///
+/// For `x > v` the bound is `x T(x - v)`, increasing in `x`; `x` solves `x T(x - v) = L`:
+///
+/// ```text
+/// x - v > a²/j:  x (x - v)/a + x a/j = L   →  x = (-(a²/j - v) + sqrt((a²/j - v)² + 4 a L)) / 2
+/// x - v ≤ a²/j:  2 x sqrt((x - v)/j) = L   →  x³ - v x² - j L²/4 = 0
+/// ```
+///
+/// The cubic has one real root above `v` (Cardano with `x = y + v/3`, `y³ + p y + q = 0`,
+/// `p = -v²/3`, `q = -2v³/27 - jL²/4`, discriminant `(q/2)² + (p/3)³ ≥ 0`; the root is
+/// `y = w + v²/(9w)` with `w = cbrt(-q/2 + sqrt(disc))`, written so that nothing cancels),
+/// polished by one Newton step.
 fn reach(v: f64, length: f64, cap: f64, a: f64, j: f64) -> f64 {
     if cap <= v || change_distance_bound(v, cap, a, j) <= length {
-        cap
-    } else {
-        bisect(v, cap, |x| change_distance_bound(v, x, a, j) <= length)
+        return cap;
     }
+    let knee = a * a / j;
+    let b = knee - v;
+    let x = 0.5 * (-b + (b * b + 4.0 * a * length).sqrt());
+    let x = if x - v > knee {
+        x
+    } else {
+        let c = 0.25 * j * length * length;
+        let half_q = v * v * v / 27.0 + 0.5 * c;
+        let disc = (half_q * half_q - (v * v / 9.0).powi(3)).max(0.0);
+        let w = (half_q + disc.sqrt()).cbrt();
+        let mut x = if w > 0.0 { w + v * v / (9.0 * w) } else { 0.0 } + v / 3.0;
+        let f = x * x * (x - v) - c;
+        let df = x * (3.0 * x - 2.0 * v);
+        if df > 0.0 {
+            x -= f / df;
+        }
+        x
+    };
+    // Rounding may leave the root a hair outside [v, cap] or its bound a hair above length.
+    let mut x = x.clamp(v, cap);
+    while x > v && change_distance_bound(v, x, a, j) > length {
+        x = (x - x.abs() * 4.0 * f64::EPSILON).max(v);
+    }
+    x
+}
+
+/// Blocks appended between two backward passes: half the look-ahead (at least 1).
+fn pass_batch(options: &InterpolationOptions) -> usize {
+    (options.lookahead_blocks / 2).max(1)
 }
 
 /// A block ready to run, with its limits and look-ahead state. Speeds in path units/s.
@@ -404,6 +476,12 @@ struct Planned {
     /// Path length, mm (deg counted as mm for mixed moves); 0 for a dwell.
     length: f64,
     dwell_s: f64,
+    /// How the block joins the next (G61, G61.1, G64 P Q).
+    path_control: PathControl,
+    /// Programmed path speed, path units/s (infinite for G00), and the axis limit that holds
+    /// the cruise speed below it.
+    programmed: f64,
+    limited_by: Option<(Axis, LimitKind)>,
     /// Cruise speed, path acceleration, path jerk limits.
     cap: f64,
     accel: f64,
@@ -422,6 +500,8 @@ struct JunctionEnd {
     cap: f64,
     dwell: bool,
     curved: bool,
+    /// The block's path-control mode: how it joins the next.
+    path: PathControl,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -445,6 +525,9 @@ pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     period_s: f64,
     options: InterpolationOptions,
     window: VecDeque<Planned>,
+    /// Blocks appended since the last backward pass.
+    unpassed: usize,
+    feed_limits: Option<Vec<FeedLimit>>,
     last_end: Option<JunctionEnd>,
     next_index: u64,
     active: Option<Active>,
@@ -482,7 +565,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             limits,
             kinematics: machine.kinematics,
             period_s: machine.interpolation_period_s,
-            window: VecDeque::with_capacity(options.lookahead_blocks + 1),
+            window: VecDeque::with_capacity(options.lookahead_blocks + pass_batch(&options) + 1),
+            unpassed: 0,
+            feed_limits: options.record_feed_limits.then(Vec::new),
             options,
             last_end: None,
             next_index: 0,
@@ -506,8 +591,12 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     }
 
     /// Reads blocks until the window holds `lookahead_blocks + 1` of them.
+    /// Backward passes run once per [`pass_batch`] new blocks (and when the input ends), so
+    /// the window holds up to `lookahead_blocks + pass_batch` blocks and at least
+    /// `lookahead_blocks + 1` planned ones when a block starts.
     fn fill(&mut self) {
-        while !self.input_done && self.window.len() <= self.options.lookahead_blocks {
+        let batch = pass_batch(&self.options);
+        while !self.input_done && self.window.len() <= self.options.lookahead_blocks + batch - 1 {
             let index = self.next_index;
             match self.blocks.next() {
                 None => self.input_done = true,
@@ -518,7 +607,10 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 Some(Ok(block)) => {
                     self.next_index += 1;
                     match self.plan(&block, index) {
-                        Ok(Some((planned, start, end))) => self.push(planned, start, end),
+                        Ok(Some((planned, start, end))) => {
+                            self.record(&planned);
+                            self.push(planned, start, end)
+                        }
                         Ok(None) => {}
                         Err(e) => {
                             self.pending_error = Some(e);
@@ -528,6 +620,37 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 }
             }
         }
+        if self.unpassed > 0 && (self.input_done || self.unpassed >= batch) {
+            self.backward_pass();
+        }
+    }
+
+    /// Notes a feed block held below its F word (when recording).
+    fn record(&mut self, p: &Planned) {
+        if let (Some(log), Some((axis, limit)), true) = (
+            self.feed_limits.as_mut(),
+            p.limited_by,
+            p.programmed.is_finite(),
+        ) {
+            log.push(FeedLimit {
+                line: p.line,
+                block_index: p.index,
+                axis,
+                limit,
+                programmed_per_min: p.programmed * 60.0,
+                planned_per_min: p.cap * 60.0,
+            });
+        }
+    }
+
+    /// The feed limits noted since the last call, in block order (empty unless
+    /// [`InterpolationOptions::record_feed_limits`]). Blocks are planned up to
+    /// `lookahead_blocks` ahead of the setpoints.
+    pub fn take_feed_limits(&mut self) -> Vec<FeedLimit> {
+        self.feed_limits
+            .as_mut()
+            .map(std::mem::take)
+            .unwrap_or_default()
     }
 
     /// Geometry and limits of one block; `None` for a block without motion.
@@ -559,6 +682,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             },
             length: 0.0,
             dwell_s: 0.0,
+            path_control: b.path,
+            programmed: f64::INFINITY,
+            limited_by: None,
             cap: 0.0,
             accel: 0.0,
             jerk: 0.0,
@@ -731,16 +857,24 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         })
     }
 
-    /// Cruise cap and path acceleration and jerk limits from the axis limits.
+    /// Cruise cap and path acceleration and jerk limits from the axis limits; notes the axis
+    /// and limit that hold the cap below the programmed speed.
     fn apply_limits(&self, p: &mut Planned, programmed: f64) {
         let (mut cap, mut accel, mut jerk) = (programmed, f64::INFINITY, f64::INFINITY);
+        let mut by = None;
+        let mut lower = |cap: &mut f64, value: f64, i: usize, kind: LimitKind| {
+            if value < *cap {
+                *cap = value;
+                by = Some((Axis::ALL[i], kind));
+            }
+        };
         let present = |i: usize| self.limits[i].map(|l| (i, l));
         if p.path.is_straight() {
             let t = p.path.tangent(0.0, p.length);
             for (i, l) in (0..6).filter_map(present) {
                 let d = t.0[i].abs();
                 if d > 0.0 {
-                    cap = cap.min(l.velocity / d);
+                    lower(&mut cap, l.velocity / d, i, LimitKind::Velocity);
                     accel = accel.min(l.acceleration / d);
                     jerk = jerk.min(l.jerk / d);
                 }
@@ -749,22 +883,30 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             let (d1, d2, d3) = self.derivative_bounds(&p.path, p.length);
             for (i, l) in (0..6).filter_map(present) {
                 if d1[i] > 0.0 {
-                    cap = cap.min(l.velocity / d1[i]);
+                    lower(&mut cap, l.velocity / d1[i], i, LimitKind::Velocity);
                     accel = accel.min(0.5 * l.acceleration / d1[i]);
                     jerk = jerk.min(l.jerk / (3.0 * d1[i]));
                 }
             }
             for (i, l) in (0..6).filter_map(present) {
                 if d2[i] > 0.0 {
-                    cap = cap.min((0.5 * l.acceleration / d2[i]).sqrt());
-                    cap = cap.min(l.jerk / (9.0 * d2[i] * accel));
+                    let centripetal = (0.5 * l.acceleration / d2[i]).sqrt();
+                    lower(&mut cap, centripetal, i, LimitKind::Acceleration);
+                    lower(&mut cap, l.jerk / (9.0 * d2[i] * accel), i, LimitKind::Jerk);
                 }
                 if d3[i] > 0.0 {
-                    cap = cap.min((l.jerk / (3.0 * d3[i])).cbrt());
+                    lower(
+                        &mut cap,
+                        (l.jerk / (3.0 * d3[i])).cbrt(),
+                        i,
+                        LimitKind::Jerk,
+                    );
                 }
             }
         }
         (p.cap, p.accel, p.jerk) = (cap, accel, jerk);
+        p.programmed = programmed;
+        p.limited_by = by;
     }
 
     /// Maxima of |dq/ds|, |d²q/ds²|, |d³q/ds³| per axis, sampled at `SAMPLES + 1` points.
@@ -817,6 +959,31 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                         mu = allowed / jump;
                     }
                 }
+                let jump = tangent_start * rho - prev.tangent;
+                let xyz_jump = (jump.0[0].powi(2) + jump.0[1].powi(2) + jump.0[2].powi(2)).sqrt();
+                match prev.path {
+                    // G61.1: every move ends at rest.
+                    PathControl::ExactStop => mu = 0.0,
+                    // G61: stop at every corner that is not collinear.
+                    PathControl::ExactPath => {
+                        let unit = |t: AxisVec| t * (1.0 / t.mixed_norm().max(f64::MIN_POSITIVE));
+                        if (unit(tangent_start) - unit(prev.tangent)).mixed_norm() > 1e-9 {
+                            mu = 0.0;
+                        }
+                    }
+                    // G64 P: the fine-interpolated command cuts the corner by at most
+                    // (T/4) |Δw| (Δw: the XYZ velocity jump); keep that within P.
+                    PathControl::Blend {
+                        tolerance_mm: Some(tol),
+                        ..
+                    } if tol.is_finite() && tol >= 0.0 => {
+                        let allowed = 4.0 * tol / self.period_s;
+                        if xyz_jump * mu > allowed {
+                            mu = allowed / xyz_jump;
+                        }
+                    }
+                    PathControl::Blend { .. } => {}
+                }
                 p.rho = rho;
                 p.entry_cap = rho * mu;
             }
@@ -826,6 +993,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             cap: p.cap,
             dwell,
             curved,
+            path: p.path_control,
         });
         p.entry_max = if dwell {
             0.0
@@ -833,8 +1001,25 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             reach(0.0, p.length, p.entry_cap.min(p.cap), p.accel, p.jerk)
         };
         self.window.push_back(p);
-        // Backward pass: raise the entry limits the new block allows, stop when unchanged.
-        for k in (0..self.window.len() - 1).rev() {
+        self.unpassed += 1;
+        if self.unpassed >= pass_batch(&self.options) {
+            self.backward_pass();
+        }
+    }
+
+    /// Raises the entry limits that the blocks appended since the last pass allow, from the
+    /// end of the window back. It stops at the first block whose limit rises by less than a
+    /// relative 1e-12 (including one already at its own cap, which cannot rise) once it is
+    /// past the new blocks: every limit
+    /// is feasible at all times (a block not yet passed assumes a stop at its own end), so a
+    /// pass left early is only conservative. Cost: at most the window per pass, one pass per
+    /// [`pass_batch`] blocks, so O(1) amortised per block.
+    fn backward_pass(&mut self) {
+        // The new blocks and the one before them (which assumed a stop at its end) are
+        // always recomputed; earlier ones only while the limits keep rising.
+        let fresh_from = self.window.len().saturating_sub(self.unpassed + 1);
+        self.unpassed = 0;
+        for k in (0..self.window.len().saturating_sub(1)).rev() {
             let next = self.window[k + 1];
             let exit = next.entry_max / next.rho;
             let b = &mut self.window[k];
@@ -849,10 +1034,10 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                     b.jerk,
                 )
             };
-            if entry == b.entry_max {
+            if entry <= b.entry_max * (1.0 + 1e-12) && k < fresh_from {
                 break;
             }
-            b.entry_max = entry;
+            b.entry_max = entry.max(b.entry_max);
         }
     }
 
@@ -959,6 +1144,30 @@ mod tests {
                     "{layout:?}: {got:?} vs {expected}"
                 );
             }
+        }
+    }
+
+    /// The closed-form `reach` against bisection of its defining inequality, on both sides of
+    /// the knee `a²/j` and from rest.
+    #[test]
+    fn closed_form_reach_matches_bisection() {
+        let cases = [
+            (0.0, 0.001, 1e9, 3000.0, 50000.0),
+            (0.0, 5.0, 1e9, 3000.0, 50000.0),
+            (10.0, 0.01, 1e9, 3000.0, 50000.0),
+            (16.7, 0.0044, 40.0, 1200.0, 20000.0),
+            (0.3, 200.0, 1e9, 100.0, 1000.0),
+            (50.0, 1e-6, 1e9, 2.0, 5.0),
+            (2.0, 3.0, 2.5, 100.0, 1000.0),
+        ];
+        for (v, length, cap, a, j) in cases {
+            let got = reach(v, length, cap, a, j);
+            let want = bisect(v, cap, |x| change_distance_bound(v, x, a, j) <= length);
+            assert!(
+                (got - want).abs() <= 1e-12 * want.max(1.0),
+                "reach({v}, {length}, {cap}, {a}, {j}) = {got}, bisection {want}"
+            );
+            assert!(change_distance_bound(v, got, a, j) <= length || got == v);
         }
     }
 

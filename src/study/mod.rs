@@ -4,6 +4,8 @@
 
 pub mod fit;
 pub mod geometry;
+pub mod diagnose;
+pub mod feed;
 pub mod placement;
 pub mod reversals;
 pub mod simulate;

@@ -16,10 +16,11 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario};
-use crate::measure::ballbar::{analyse_events_of, BallbarResult};
+use crate::measure::attribution::{sites_from_map, ReversalSite};
+use crate::measure::ballbar::{analyse_events_at, BallbarResult};
 use crate::measure::settle::SettleGate;
 use crate::measure::{BallbarSink, BarGeometry, CircleFrame};
-use crate::pipeline::{self, RunOptions, Sink, Timing};
+use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
 use crate::report::create_dir;
 use crate::report::trace::TraceSink;
@@ -41,8 +42,15 @@ pub struct SimulationSummary {
     pub ballbar: Option<BallbarResult>,
     /// Each axis's reversal angles from the analysis, deg (what the spikes are attributed to).
     pub reversals_deg: std::collections::BTreeMap<String, Vec<f64>>,
+    /// Every reversal with the bar's normalised sensitivity to its axis there (see
+    /// `measure::attribution`); marks are attributed only where it is at least 0.05.
+    pub reversal_sites: Vec<ReversalSite>,
     /// The directions run.
     pub directions: Vec<Direction>,
+    /// Each axis's lost motion at a reversal (ISO 230-2 B, mm or deg) and its parts.
+    pub reversal_values: std::collections::BTreeMap<String, crate::drive::ReversalValue>,
+    /// Renishaw-style diagnostics from the trace; null without a measured circle.
+    pub diagnostics: Option<crate::study::diagnose::Diagnostics>,
     /// What the user should know about the figures (a trimmed transient, one spot that
     /// dominates G); left out when there is none.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
@@ -54,14 +62,42 @@ pub const TRACE_FILE: &str = "trace.csv";
 pub const SUMMARY_FILE: &str = "summary.json";
 pub const PLOT_FILE: &str = "ballbar.svg";
 
-/// Runs the scenario and writes `trace.csv`, `summary.json` and `ballbar.svg` to `out_dir`.
-/// `progress` is told the simulated time, s, now and then.
-pub fn simulate(
+/// The ball-bar runs of a scenario, without any file written.
+#[derive(Clone, Debug)]
+pub struct BallbarStudy {
+    /// Each direction's trace.
+    pub runs: Vec<crate::measure::BallbarRun>,
+    /// Each direction's nonlinear signature (trace minus the linear twin's).
+    pub signatures: Vec<crate::measure::BallbarRun>,
+    /// Every axis reversal with the bar's sensitivity to that axis there.
+    pub sites: Vec<ReversalSite>,
+    /// Each axis's reversal angles from the analysis, deg.
+    pub reversals: Vec<(Axis, Vec<f64>)>,
+    pub sim_time_s: f64,
+    pub setpoints: u64,
+    pub directions: Vec<Direction>,
+    /// What the user should know about the figures (a trimmed start-up transient).
+    pub warnings: Vec<String>,
+}
+
+impl BallbarStudy {
+    /// Figures from the trace; spikes and steps from the nonlinear signature, attributed
+    /// to the axes the bar can see at each reversal. None without a measured circle.
+    pub fn result(&self) -> Result<Option<BallbarResult>> {
+        if self.runs.is_empty() {
+            return Ok(None);
+        }
+        analyse_events_at(&self.runs, &self.signatures, &self.sites).map(Some)
+    }
+}
+
+/// Runs every direction of the scenario through the pipeline into the virtual ball bar
+/// (and into `trace`, when given). `progress` is told the simulated time now and then.
+pub fn run_ballbar(
     scenario: &Scenario,
-    out_dir: &Path,
-    timing: bool,
+    mut trace: Option<&mut TraceSink>,
     progress: &dyn Fn(f64),
-) -> Result<SimulationSummary> {
+) -> Result<BallbarStudy> {
     let machine = &scenario.machine;
     let analysis = analyse_scenario(scenario)?;
     let reversals: Vec<(Axis, Vec<f64>)> = analysis
@@ -74,34 +110,16 @@ pub fn simulate(
         Program::Cone { directions, .. } | Program::Circle { directions, .. } => directions.clone(),
         Program::File { .. } => vec![Direction::Ccw],
     };
-    create_dir(out_dir)?;
-    // What a killed run into this folder left behind.
-    crate::report::files::remove_stale_temporaries(
-        out_dir,
-        &[
-            TRACE_FILE,
-            SUMMARY_FILE,
-            PLOT_FILE,
-            crate::report::test_info::TEST_FILE,
-            crate::report::html::CHECK_FILE,
-            crate::report::html::REPORT_FILE,
-        ],
-    )?;
-    let mut trace = TraceSink::create(
-        &out_dir.join(TRACE_FILE),
-        machine.axes(),
-        geometry,
-        scenario.simulate.trace_every as u64,
-    )?;
-
-    let started = Instant::now();
-    let (mut runs, mut signatures) = (Vec::new(), Vec::new());
+    let (mut runs, mut signatures, mut maps, mut speeds) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut sim_time_s = 0.0;
     let mut setpoints = 0u64;
     let mut warnings = Vec::new();
     for &direction in &directions {
         let run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
-        trace.start_run(direction, run.measured);
+        if let Some(t) = trace.as_deref_mut() {
+            t.start_run(direction, run.measured);
+        }
         let mut ballbar = geometry.map(|g| BallbarSink::new(g, direction, run.measured));
         let options = RunOptions {
             timing: Timing::Planned {
@@ -117,10 +135,13 @@ pub fn simulate(
         let gate_transient = matches!(scenario.program, Program::File { .. })
             && scenario.simulate.measure_lines.is_none();
         let stats = {
-            let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(2);
-            if let Some(b) = ballbar.as_mut() {
-                sinks.push(b);
-                sinks.push(&mut trace);
+            let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(1);
+            let mut measure = ballbar.as_mut().map(|ballbar| BarAndTrace {
+                ballbar,
+                trace: trace.as_deref_mut(),
+            });
+            if let Some(m) = measure.as_mut() {
+                sinks.push(m);
             }
             match geometry.filter(|_| gate_transient && !sinks.is_empty()) {
                 Some(g) => {
@@ -151,28 +172,98 @@ pub fn simulate(
         if let Some(b) = ballbar {
             runs.push(b.run);
             signatures.push(b.signature);
+            maps.push(b.sensitivity);
+            speeds.push(b.speed);
         }
     }
-
-    // Figures from the trace; spikes and steps from the nonlinear signature.
-    let ballbar = if runs.is_empty() {
-        None
-    } else {
-        Some(analyse_events_of(&runs, &signatures, &reversals)?)
+    // The bar's sensitivity is a property of the nominal pose at θ: the first run's map.
+    // Each axis's Stribeck velocity bounds its slow zone about a reversal (a cascade axis
+    // with dry friction; otherwise the zone is the reversal itself).
+    let stribeck = |a: Axis| -> f64 {
+        let c = machine.axis(a);
+        let r = crate::input::drive::Resolved::new(a, &c.servo, &c.drive, &c.friction);
+        if r.coulomb.1 > 0.0 && r.model != Some(crate::input::drive::Model::FirstOrder) {
+            r.stribeck.1
+        } else {
+            0.0
+        }
     };
-    trace.finish(&runs)?;
+    let sites = match (maps.first(), geometry) {
+        (Some(map), Some(g)) => sites_from_map(
+            &reversals,
+            map,
+            g.length_mm,
+            speeds
+                .first()
+                .map(|s| (s, &stribeck as &dyn Fn(Axis) -> f64)),
+        ),
+        _ => ReversalSite::unweighted(&reversals),
+    };
+    Ok(BallbarStudy {
+        runs,
+        signatures,
+        sites,
+        reversals,
+        sim_time_s,
+        setpoints,
+        directions,
+        warnings,
+    })
+}
+
+/// Runs the scenario and writes `trace.csv`, `summary.json` and `ballbar.svg` to `out_dir`.
+/// `progress` is told the simulated time, s, now and then.
+pub fn simulate(
+    scenario: &Scenario,
+    out_dir: &Path,
+    timing: bool,
+    progress: &dyn Fn(f64),
+) -> Result<SimulationSummary> {
+    create_dir(out_dir)?;
+    // What a killed run into this folder left behind.
+    crate::report::files::remove_stale_temporaries(
+        out_dir,
+        &[
+            TRACE_FILE,
+            SUMMARY_FILE,
+            PLOT_FILE,
+            crate::report::test_info::TEST_FILE,
+            crate::report::html::CHECK_FILE,
+            crate::report::html::REPORT_FILE,
+        ],
+    )?;
+    let mut trace = TraceSink::create(
+        &out_dir.join(TRACE_FILE),
+        scenario.machine.axes(),
+        bar_geometry(scenario),
+        scenario.simulate.trace_every as u64,
+    )?;
+    let started = Instant::now();
+    let study = run_ballbar(scenario, Some(&mut trace), progress)?;
+    let ballbar = study.result()?;
+    let (runs, reversals) = (&study.runs, &study.reversals);
+    let mut warnings = study.warnings.clone();
+    let circle = match &scenario.program {
+        Program::Circle { circle, .. } => Some(circle),
+        _ => None,
+    };
+    let diagnostics = ballbar
+        .as_ref()
+        .map(|b| crate::study::diagnose::diagnose(b, runs, circle))
+        .transpose()?;
+    trace.finish(runs)?;
     if let Some(result) = &ballbar {
         let title = plot_title(scenario);
         crate::report::polar::write_polar_svg(
             &out_dir.join(PLOT_FILE),
-            &runs,
-            &reversals,
+            runs,
+            reversals,
             result,
             &title,
         )?;
     }
     // One spot that makes most of G (a transient, a spike) is worth a word.
-    for run in &runs {
+    for run in runs {
         let dev = run.trace_um(true)?;
         let theta: Vec<f64> = (0..dev.len())
             .map(|i| (i as f64 + 0.5) * crate::measure::ballbar::BIN_DEG)
@@ -188,17 +279,21 @@ pub fn simulate(
         }
     }
     let wall = started.elapsed().as_secs_f64();
+    let sim_time_s = study.sim_time_s;
     let summary = SimulationSummary {
         sim_time_s,
         realtime_factor: timing.then(|| sim_time_s / wall.max(1e-9)),
         wall_time_s: timing.then_some(wall),
-        setpoints,
+        setpoints: study.setpoints,
         ballbar,
         reversals_deg: reversals
             .iter()
             .map(|(a, r)| (a.to_string(), r.clone()))
             .collect(),
-        directions,
+        reversal_sites: study.sites.clone(),
+        directions: study.directions.clone(),
+        reversal_values: reversal_values(&scenario.machine)?,
+        diagnostics,
         warnings,
     };
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
@@ -215,6 +310,43 @@ pub fn simulate(
         format!("{json}\n").as_bytes(),
     )?;
     Ok(summary)
+}
+
+/// The ball bar and the trace of its readings, as one sink: the bar reads each sample once.
+struct BarAndTrace<'a> {
+    ballbar: &'a mut BallbarSink,
+    trace: Option<&'a mut TraceSink>,
+}
+
+impl Sink for BarAndTrace<'_> {
+    fn push(&mut self, s: &Sample) -> Result<()> {
+        match (self.ballbar.take(s), self.trace.as_deref_mut()) {
+            (Some(r), Some(trace)) => trace.push_reading(s, &r),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Each axis's reversal value from its drive configuration, by axis letter.
+pub fn reversal_values(
+    machine: &crate::input::Machine,
+) -> Result<std::collections::BTreeMap<String, crate::drive::ReversalValue>> {
+    machine
+        .axes()
+        .iter()
+        .map(|&a| {
+            let c = machine.axis(a);
+            let servo = crate::drive::AxisServo::new(
+                a,
+                &c.servo,
+                &c.drive,
+                &c.friction,
+                machine.interpolation_period_s,
+                0.0,
+            )?;
+            Ok((a.to_string(), servo.reversal_value()))
+        })
+        .collect()
 }
 
 /// The virtual ball bar of a scenario: the cone's or circle's measured circle, the table

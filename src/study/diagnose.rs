@@ -1,0 +1,329 @@
+//! Ball-bar diagnostics in the Renishaw sense: which machine error a trace shows, and how
+//! large, estimated from the trace.
+//!
+//! # Circle tests (ISO 230-4), plane axes u → v, radius r, both directions
+//!
+//! With `dL(θ)` the raw radial deviation of each run, its Fourier terms are fitted by least
+//! squares (on full-circle bins they are orthogonal): `dL = r0 + a1 cos θ + b1 sin θ +
+//! a2 cos 2θ + b2 sin 2θ + ...`. The errors and their closed-form signatures:
+//!
+//! ```text
+//! scale ε_u, ε_v (u_act = (1 + ε_u) u):  dL = r (ε_u cos²θ + ε_v sin²θ)
+//!                                        => a2 = r (ε_u - ε_v) / 2, same in both directions
+//! squareness α (u_act = u + α v):        dL = r α cos θ sin θ => b2 = r α / 2, both directions
+//! servo mismatch (lags T_u = 1/Kv_u, T_v): dL = ± (v/2)(T_u - T_v) sin 2θ
+//!                                        => b2 flips with the direction: + for CCW
+//! ```
+//!
+//! so, with `⟨·⟩` the mean over the two directions and `Δ` half their difference (CCW − CW):
+//! `scale mismatch ε_u - ε_v = 2 ⟨a2⟩ / r` (ppm), `squareness α = 2 ⟨b2⟩ / r` (µrad, positive
+//! when the u axis leans toward +v), `servo mismatch T_u - T_v = 2 Δb2 / v` (ms), its
+//! peak-to-peak `v |T_u - T_v|`.
+//!
+//! **Cyclic error** of pitch p along axis u (a screw's pitch error) adds
+//! `e(u) cos θ` with `e(u) = A cos(2π u / p + φ)`, `u = r cos θ`: after removing the Fourier
+//! terms up to order 2, the amplitude A is fitted on the basis
+//! `{cos(2π u/p) cos θ, sin(2π u/p) cos θ}` (and `sin θ` for v) for pitches on a grid, and
+//! the pitch explaining the most is reported when A is above [`CYCLIC_FLOOR_UM`].
+//!
+//! # Every test (circle or cone)
+//!
+//! Backlash and reversal spikes per axis and direction come from the attributed marks:
+//! each step or spike whose candidates hold a single axis is that axis's; the ambiguous ones
+//! are listed with all their candidates.
+
+use serde::Serialize;
+
+use crate::error::Result;
+use crate::input::program::{CircleTest, Direction};
+use crate::measure::ballbar::{BallbarResult, EventKind, BIN_DEG};
+use crate::measure::BallbarRun;
+
+/// A cyclic error below this amplitude is not reported, um.
+pub const CYCLIC_FLOOR_UM: f64 = 0.2;
+/// Pitch grid for the cyclic-error search: from, to (mm) and the relative step (a pitch
+/// resolves to about `p / 4r` relative, 0.005 for r = 50 mm at p = 1 mm).
+pub const CYCLIC_PITCH_MM: (f64, f64, f64) = (1.0, 40.0, 0.002);
+
+impl Harmonics {
+    /// The fit at bin `i`, um.
+    pub fn at(&self, i: usize) -> f64 {
+        let t = ((i as f64 + 0.5) * BIN_DEG).to_radians();
+        self.r0
+            + self.a1 * t.cos()
+            + self.b1 * t.sin()
+            + self.a2 * (2.0 * t).cos()
+            + self.b2 * (2.0 * t).sin()
+    }
+}
+
+/// Fourier coefficients of one run's raw trace up to order 2, um.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Harmonics {
+    pub r0: f64,
+    pub a1: f64,
+    pub b1: f64,
+    pub a2: f64,
+    pub b2: f64,
+}
+
+/// A cyclic error along one axis.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CyclicError {
+    pub axis: String,
+    pub pitch_mm: f64,
+    pub amplitude_um: f64,
+}
+
+/// The circle-test diagnostics.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CircleDiagnostics {
+    /// `ε_u - ε_v`, ppm.
+    pub scale_mismatch_ppm: f64,
+    /// α, µrad: positive when the first plane axis leans toward the second.
+    pub squareness_urad: f64,
+    /// `T_u - T_v = 1/Kv_u - 1/Kv_v`, ms.
+    pub servo_mismatch_ms: f64,
+    /// Peak-to-peak of the servo-mismatch oval, `v |T_u - T_v|`, um.
+    pub servo_mismatch_pp_um: f64,
+    /// Cyclic errors found, per plane axis.
+    pub cyclic: Vec<CyclicError>,
+    /// Per run: the fitted harmonics.
+    pub harmonics: Vec<(Direction, Harmonics)>,
+}
+
+/// One attributed reversal mark.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct AxisMark {
+    /// The axis, or the ambiguous candidates joined by "/".
+    pub axis: String,
+    pub direction: Direction,
+    pub theta_deg: f64,
+    /// Step: the level change in the direction of travel; spike: its signed height, um.
+    pub height_um: f64,
+}
+
+/// What the trace says about the machine.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Diagnostics {
+    /// Backlash (and lost motion) steps, per axis and direction.
+    pub backlash: Vec<AxisMark>,
+    /// Reversal spikes, per axis and direction.
+    pub reversal_spikes: Vec<AxisMark>,
+    /// For a planar circle test.
+    pub circle: Option<CircleDiagnostics>,
+}
+
+/// The marks of a ball-bar result, split into steps and spikes, by axis.
+pub fn marks(result: &BallbarResult) -> (Vec<AxisMark>, Vec<AxisMark>) {
+    let (mut steps, mut spikes) = (Vec::new(), Vec::new());
+    for e in &result.events {
+        if e.candidates.is_empty() {
+            continue;
+        }
+        let m = AxisMark {
+            axis: e.candidates.to_string(),
+            direction: e.direction,
+            theta_deg: e.theta_deg,
+            height_um: e.height_um,
+        };
+        match e.kind {
+            EventKind::Step => steps.push(m),
+            EventKind::Spike => spikes.push(m),
+        }
+    }
+    (steps, spikes)
+}
+
+/// Fourier terms up to order 2 of a full-circle trace in bins of [`BIN_DEG`].
+pub fn harmonics(trace: &[f64]) -> Harmonics {
+    let n = trace.len() as f64;
+    let mut h = Harmonics::default();
+    for (i, &y) in trace.iter().enumerate() {
+        let t = ((i as f64 + 0.5) * BIN_DEG).to_radians();
+        h.r0 += y / n;
+        h.a1 += 2.0 * y * t.cos() / n;
+        h.b1 += 2.0 * y * t.sin() / n;
+        h.a2 += 2.0 * y * (2.0 * t).cos() / n;
+        h.b2 += 2.0 * y * (2.0 * t).sin() / n;
+    }
+    h
+}
+
+/// The circle diagnostics of `runs` (raw traces) of `circle`.
+pub fn diagnose_circle(runs: &[BallbarRun], circle: &CircleTest) -> Result<CircleDiagnostics> {
+    let r_mm = circle.radius_mm;
+    let v_mm_s = circle.feed_mm_min / 60.0;
+    let traces: Vec<Vec<f64>> = runs
+        .iter()
+        .map(|run| run.trace_um(false))
+        .collect::<Result<_>>()?;
+    let n = traces.first().map_or(0, |t| t.len());
+    let mean_trace: Vec<f64> = (0..n)
+        .map(|i| traces.iter().map(|t| t[i]).sum::<f64>() / traces.len() as f64)
+        .collect();
+    let (u, v, _) = circle.axes();
+    // The cyclic terms are not orthogonal to the harmonics (cos(z cos θ) cos θ holds every
+    // even harmonic): alternate between the two fits, three times.
+    let mut cyclic_signal = vec![0.0; n];
+    let mut found: Vec<(bool, Cyclic)> = Vec::new();
+    for pass in 0..3 {
+        let h = harmonics(
+            &mean_trace
+                .iter()
+                .zip(&cyclic_signal)
+                .map(|(y, c)| y - c)
+                .collect::<Vec<f64>>(),
+        );
+        let mut residual: Vec<f64> = mean_trace
+            .iter()
+            .enumerate()
+            .map(|(i, &y)| y - h.at(i))
+            .collect();
+        cyclic_signal = vec![0.0; n];
+        let previous = std::mem::take(&mut found);
+        for use_cos in [true, false] {
+            // The full pitch search once; then around the pitch found.
+            let grid = match previous.iter().find(|(k, _)| *k == use_cos) {
+                Some((_, c)) if pass > 0 => (c.pitch_mm * 0.99, c.pitch_mm * 1.01, 0.0005),
+                _ => CYCLIC_PITCH_MM,
+            };
+            if let Some(c) = cyclic_error(&residual, r_mm, use_cos, grid) {
+                for (i, r) in residual.iter_mut().enumerate() {
+                    let s = c.at(i, r_mm, use_cos);
+                    *r -= s;
+                    cyclic_signal[i] += s;
+                }
+                found.push((use_cos, c));
+            }
+        }
+    }
+    let mut cyclic = Vec::new();
+    for (use_cos, c) in &found {
+        if c.amplitude_um >= CYCLIC_FLOOR_UM {
+            cyclic.push(CyclicError {
+                axis: if *use_cos { u } else { v }.to_string(),
+                pitch_mm: c.pitch_mm,
+                amplitude_um: c.amplitude_um,
+            });
+        }
+    }
+    let per_run: Vec<(Direction, Harmonics)> = runs
+        .iter()
+        .zip(&traces)
+        .map(|(run, t)| {
+            let clean: Vec<f64> = t.iter().zip(&cyclic_signal).map(|(y, c)| y - c).collect();
+            (run.direction(), harmonics(&clean))
+        })
+        .collect();
+    let mean = |f: &dyn Fn(&Harmonics) -> f64| {
+        per_run.iter().map(|(_, h)| f(h)).sum::<f64>() / per_run.len().max(1) as f64
+    };
+    let (a2, b2) = (mean(&|h| h.a2), mean(&|h| h.b2));
+    // Half the CCW - CW difference of b2 (0 with one direction).
+    let b2_of = |d: Direction| per_run.iter().find(|(x, _)| *x == d).map(|(_, h)| h.b2);
+    let flip = match (b2_of(Direction::Ccw), b2_of(Direction::Cw)) {
+        (Some(ccw), Some(cw)) => 0.5 * (ccw - cw),
+        _ => 0.0,
+    };
+    // um / mm = 1e-3: ε in ppm is 2 a2 / r * 1e3; α in µrad likewise.
+    let servo_mismatch_s = 2.0 * flip * 1e-3 / v_mm_s;
+    Ok(CircleDiagnostics {
+        scale_mismatch_ppm: 2.0 * a2 / r_mm * 1e3,
+        squareness_urad: 2.0 * b2 / r_mm * 1e3,
+        servo_mismatch_ms: servo_mismatch_s * 1e3,
+        servo_mismatch_pp_um: v_mm_s * servo_mismatch_s.abs() * 1e3,
+        cyclic,
+        harmonics: per_run,
+    })
+}
+
+/// The best pitch (mm) and amplitude (um) of a cyclic error along the axis at `r cos θ`
+/// (`use_cos`) or `r sin θ`, projected on the bar by the same factor; least squares on
+/// `{cos(2π q/p) w, sin(2π q/p) w}` over the geometric pitch grid `(from, to, relative step)`.
+fn cyclic_error(
+    residual: &[f64],
+    r_mm: f64,
+    use_cos: bool,
+    (from, to, step): (f64, f64, f64),
+) -> Option<Cyclic> {
+    let geometry: Vec<(f64, f64)> = (0..residual.len())
+        .map(|i| {
+            let t = ((i as f64 + 0.5) * BIN_DEG).to_radians();
+            if use_cos {
+                (r_mm * t.cos(), t.cos())
+            } else {
+                (r_mm * t.sin(), t.sin())
+            }
+        })
+        .collect();
+    let mut best: Option<(f64, Cyclic)> = None; // (explained, fit)
+    let steps = ((to / from).ln() / step.ln_1p()).ceil() as i32;
+    for k in 0..=steps {
+        let p = from * (1.0 + step).powi(k);
+        // 2x2 normal equations.
+        let (mut cc, mut cs, mut ss, mut cy, mut sy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for (&(q, w), &y) in geometry.iter().zip(residual) {
+            let (s, c) = (std::f64::consts::TAU * q / p).sin_cos();
+            let (c, s) = (c * w, s * w);
+            cc += c * c;
+            cs += c * s;
+            ss += s * s;
+            cy += c * y;
+            sy += s * y;
+        }
+        let det = cc * ss - cs * cs;
+        if det.abs() < 1e-12 {
+            continue;
+        }
+        let a = (ss * cy - cs * sy) / det;
+        let b = (cc * sy - cs * cy) / det;
+        let explained = a * cy + b * sy;
+        if best.is_none_or(|(e, _)| explained > e) {
+            best = Some((
+                explained,
+                Cyclic {
+                    pitch_mm: p,
+                    amplitude_um: a.hypot(b),
+                    cos_um: a,
+                    sin_um: b,
+                },
+            ));
+        }
+    }
+    best.map(|(_, c)| c)
+}
+
+/// A fitted cyclic term: `(c cos(2π q/p) + s sin(2π q/p)) w` with q, w as in [`cyclic_error`].
+#[derive(Clone, Copy, Debug)]
+struct Cyclic {
+    pitch_mm: f64,
+    amplitude_um: f64,
+    cos_um: f64,
+    sin_um: f64,
+}
+
+impl Cyclic {
+    /// The term at bin `i`, um.
+    fn at(&self, i: usize, r_mm: f64, use_cos: bool) -> f64 {
+        let t = ((i as f64 + 0.5) * BIN_DEG).to_radians();
+        let w = if use_cos { t.cos() } else { t.sin() };
+        let (s, c) = (std::f64::consts::TAU * r_mm * w / self.pitch_mm).sin_cos();
+        (self.cos_um * c + self.sin_um * s) * w
+    }
+}
+
+/// The diagnostics of a ball-bar test: marks per axis for every test, and the circle
+/// figures when `circle` is given.
+pub fn diagnose(
+    result: &BallbarResult,
+    runs: &[BallbarRun],
+    circle: Option<&CircleTest>,
+) -> Result<Diagnostics> {
+    let (backlash, reversal_spikes) = marks(result);
+    Ok(Diagnostics {
+        backlash,
+        reversal_spikes,
+        circle: circle.map(|c| diagnose_circle(runs, c)).transpose()?,
+    })
+}

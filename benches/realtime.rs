@@ -1,13 +1,17 @@
 //! Release-mode benchmark of the pipeline, run by `cargo bench --bench realtime`.
 //!
-//! Reports, for the bundled `cone-15-10` scenario:
-//! - `simulate` with every nonlinearity on (dry friction and backlash on all five axes): the
-//!   real-time factor, simulated machine seconds per wall second, on one core;
+//! Prints, in one run, for the bundled `cone-15-10` scenario with every nonlinearity on (dry
+//! friction and backlash on all five axes, the linear twin beside it):
+//! - `simulate` real-time factors (simulated machine seconds per CPU second of the running
+//!   thread, so that other load on the machine does not count) with the full 1 ms trace,
+//!   the trace decimated to one row per second, and the trace off (header only);
+//! - the same cone in 36,000 segments against its 360 segments (fine/coarse ratio);
 //! - peak memory (VmHWM) of `mtsim simulate` for a program of 1 and of 20 revolutions, to
 //!   show that memory stays flat as the program grows;
 //! - `check` with collisions on at 1 ms sampling: the real-time factor, samples per second
 //!   and the geometric queries made.
 //!
+//! `MTSIM_BENCH_SMOKE=1` runs each simulate case once and skips the rest (a CI smoke run).
 //! It prints figures; it asserts nothing (timing is not a test).
 
 use std::path::{Path, PathBuf};
@@ -17,6 +21,33 @@ use std::time::Instant;
 use mtsim::check::{check, CheckOptions};
 use mtsim::input::scenario::Scenario;
 use mtsim::study::simulate::simulate;
+
+/// CPU time of the calling thread, s (`/proc/thread-self/schedstat`, ns on the CPU); falls
+/// back to wall time where that file does not exist.
+fn cpu_now() -> f64 {
+    static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|t| t.split_whitespace().next()?.parse::<f64>().ok())
+        .map(|ns| ns * 1e-9)
+        .unwrap_or_else(|| START.get_or_init(Instant::now).elapsed().as_secs_f64())
+}
+
+/// Median and best real-time factor of `runs` simulations of `scenario` (CPU time).
+fn simulate_rtf(scenario: &Path, out: &Path, runs: usize) -> (f64, f64, f64) {
+    let scenario = Scenario::load(scenario).unwrap();
+    let mut rtf = Vec::new();
+    let mut sim_time = 0.0;
+    for _ in 0..runs {
+        let t = cpu_now();
+        let s = simulate(&scenario, out, false, &|_| {}).unwrap();
+        let cpu = cpu_now() - t;
+        sim_time = s.sim_time_s;
+        rtf.push(s.sim_time_s / cpu.max(1e-9));
+    }
+    let best = rtf.iter().cloned().fold(0.0, f64::max);
+    (sim_time, median(rtf), best)
+}
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -120,23 +151,49 @@ fn long_program(dir: &Path, revolutions: usize) -> PathBuf {
 fn main() {
     let dir = scratch("run");
 
-    // 1. simulate, all nonlinearities on.
-    let scenario = Scenario::load(&all_nonlinear(&dir)).unwrap();
-    let mut rtf = Vec::new();
-    let mut sim_time = 0.0;
-    for _ in 0..5 {
-        let t = Instant::now();
-        let s = simulate(&scenario, &dir.join("out"), false, &|_| {}).unwrap();
-        let wall = t.elapsed().as_secs_f64();
-        sim_time = s.sim_time_s;
-        rtf.push(s.sim_time_s / wall);
+    let smoke = std::env::var_os("MTSIM_BENCH_SMOKE").is_some();
+    let runs = if smoke { 1 } else { 7 };
+
+    // 1. simulate, all nonlinearities on: full trace, decimated, off; fine against coarse.
+    let base = all_nonlinear(&dir);
+    let text = std::fs::read_to_string(&base).unwrap();
+    let variant = |name: &str, extra: &str, segments: usize| {
+        let path = dir.join(format!("{name}.toml"));
+        let body = text.replace("segments = 360", &format!("segments = {segments}"));
+        std::fs::write(&path, format!("{body}{extra}")).unwrap();
+        path
+    };
+    let cases = [
+        ("full 1 ms trace", variant("full", "", 360)),
+        (
+            "trace decimated to 1 s",
+            variant("decimated", "[simulate]\ntrace_every = 1000\n", 360),
+        ),
+        (
+            "trace off",
+            variant("off", "[simulate]\ntrace_every = 1000000000000\n", 360),
+        ),
+        ("36,000 segments, full trace", variant("fine", "", 36_000)),
+    ];
+    let mut full_rtf = 0.0;
+    for (name, path) in &cases {
+        let (sim_time, med, best) = simulate_rtf(path, &dir.join("out"), runs);
+        let ratio = if name.starts_with("36,000") {
+            format!("; 360/36,000-segment time ratio {:.2}", full_rtf / med)
+        } else {
+            String::new()
+        };
+        if *name == "full 1 ms trace" {
+            full_rtf = med;
+        }
+        println!(
+            "simulate cone-15-10, friction + backlash on X Y Z A C, linear twin, {name}: {sim_time:.2} s machine time; real-time factor (per CPU second) median {med:.0}x, best {best:.0}x ({runs} runs){ratio}"
+        );
     }
-    println!(
-        "simulate cone-15-10, friction + backlash on X Y Z A C (with the linear twin and a 1 ms trace): {:.2} s machine time; real-time factor median {:.0}x, best {:.0}x (5 runs)",
-        sim_time,
-        median(rtf.clone()),
-        rtf.iter().cloned().fold(0.0, f64::max)
-    );
+    if smoke {
+        let _ = std::fs::remove_dir_all(&dir);
+        return;
+    }
 
     // 2. memory against program length.
     for revolutions in [1, 20] {

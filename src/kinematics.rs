@@ -19,7 +19,7 @@
 //! tilt <= 0 and C + 180 deg. C is unwrapped to stay continuous with the previous value,
 //! and kept when i = j = 0, where it is free.
 
-use nalgebra::{Point3, Rotation3, Vector3};
+use nalgebra::{Matrix3, Point3, Rotation3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::{Axis, AxisVec};
@@ -103,16 +103,21 @@ impl Kinematics {
 
     /// R(q): rotates table-frame vectors into the machine frame.
     pub fn table_rotation(&self, q: &AxisVec) -> Rotation3<f64> {
-        let c = Rotation3::from_axis_angle(&Vector3::z_axis(), q[Axis::C].to_radians());
-        match self.layout {
-            Layout::Xyz => Rotation3::identity(),
+        // Written out with one sin_cos per angle (the ball bar reads it three times a sample):
+        // Rx(A) Rz(C) and Ry(B) Rz(C).
+        let (sc, cc) = q[Axis::C].to_radians().sin_cos();
+        let m = match self.layout {
+            Layout::Xyz => return Rotation3::identity(),
             Layout::TrtAc => {
-                Rotation3::from_axis_angle(&Vector3::x_axis(), q[Axis::A].to_radians()) * c
+                let (sa, ca) = q[Axis::A].to_radians().sin_cos();
+                Matrix3::new(cc, -sc, 0.0, ca * sc, ca * cc, -sa, sa * sc, sa * cc, ca)
             }
             Layout::TrtBc => {
-                Rotation3::from_axis_angle(&Vector3::y_axis(), q[Axis::B].to_radians()) * c
+                let (sb, cb) = q[Axis::B].to_radians().sin_cos();
+                Matrix3::new(cb * cc, -cb * sc, sb, sc, cc, 0.0, -sb * cc, sb * sc, cb)
             }
-        }
+        };
+        Rotation3::from_matrix_unchecked(m)
     }
 
     /// Machine coordinates of a table-frame point at axis positions `q`.

@@ -7,11 +7,13 @@ use serde_json::{json, Map};
 use super::print_stdout;
 use crate::error::Result;
 use crate::input::scenario::Scenario;
+use crate::study::feed::{feed_limits, FeedReport};
 use crate::study::reversals::{analyse_scenario, Analysis};
 
 pub fn run(path: &Path, as_json: bool) -> Result<i32> {
     let scenario = Scenario::load(path)?;
     let analysis = analyse_scenario(&scenario)?;
+    let feed = feed_limits(&scenario)?;
     if as_json {
         let mut axes = Map::new();
         for a in &analysis.axes {
@@ -24,6 +26,7 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
             "axes": axes,
             "min_linear_separation_deg": analysis.min_linear_separation_deg(),
             "warnings": analysis.warnings(),
+            "feed_limits": feed,
         });
         print_stdout(&format!(
             "{}\n",
@@ -39,6 +42,7 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
         )),
         None => out.push_str("fewer than two linear axes reverse\n"),
     }
+    out.push_str(&feed_table(&feed));
     for w in analysis.warnings() {
         out.push_str(&format!("warning: {w}\n"));
     }
@@ -91,6 +95,48 @@ pub fn analysis_table(analysis: &Analysis) -> String {
             a.peak_speed_per_min,
             format!("{unit}/min"),
             reversals
+        ));
+    }
+    out
+}
+
+/// Blocks printed in the feed-limit list before it is cut short.
+const FEED_LINES_SHOWN: usize = 20;
+
+/// Where the machine holds the feed below the programmed one, and by which axis.
+pub fn feed_table(feed: &FeedReport) -> String {
+    if feed.blocks.is_empty() {
+        return format!(
+            "feed: every one of the {} feed blocks runs at its programmed F\n",
+            feed.feed_blocks
+        );
+    }
+    let by_axis = feed
+        .limited_by_axis
+        .iter()
+        .map(|(a, n)| format!("{a} {n}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let mut out = format!(
+        "feed held to the machine in {} of {} feed blocks (by axis: {by_axis})\n",
+        feed.blocks.len(),
+        feed.feed_blocks
+    );
+    for b in feed.blocks.iter().take(FEED_LINES_SHOWN) {
+        let kind = match b.limit {
+            crate::motion::interpolation::LimitKind::Velocity => "velocity",
+            crate::motion::interpolation::LimitKind::Acceleration => "acceleration",
+            crate::motion::interpolation::LimitKind::Jerk => "jerk",
+        };
+        out.push_str(&format!(
+            "  line {}: F{:.1} -> {:.1}/min, {} {kind} limit\n",
+            b.line, b.programmed_per_min, b.planned_per_min, b.axis
+        ));
+    }
+    if feed.blocks.len() > FEED_LINES_SHOWN {
+        out.push_str(&format!(
+            "  ... and {} more (all of them with --json)\n",
+            feed.blocks.len() - FEED_LINES_SHOWN
         ));
     }
     out

@@ -101,32 +101,42 @@ impl BallbarSink {
     }
 }
 
-impl Sink for BallbarSink {
-    fn push(&mut self, s: &Sample) -> Result<()> {
+impl BallbarSink {
+    /// The bar's reading of `s` when it is in the measured revolution (None otherwise),
+    /// after taking it into the run: for a trace that records the same reading.
+    pub fn take(&mut self, s: &Sample) -> Option<BarReading> {
         let previous = self.previous.replace((s.time_s, s.commanded));
-        if is_measured(s, self.measured) {
-            let r = self.geometry.read(s);
-            self.run.push(r.theta_deg, r.deviation_um);
-            self.signature.push(r.theta_deg, r.nonlinear_um);
-            if self.sensitivity.wants(r.theta_deg) {
-                let g = &self.geometry;
-                let axes = g.kinematics.layout.axes();
-                let s_q = bar_sensitivity(
-                    &g.kinematics,
-                    axes,
-                    &s.commanded,
-                    &g.pivot_table_mm,
-                    g.length_mm,
-                );
-                self.sensitivity.set(r.theta_deg, s_q);
-            }
-            if let Some((t0, q0)) = previous.filter(|(t0, _)| s.time_s > *t0) {
-                if self.speed.wants(r.theta_deg) {
-                    self.speed
-                        .set(r.theta_deg, (s.commanded - q0) * (1.0 / (s.time_s - t0)));
-                }
+        if !is_measured(s, self.measured) {
+            return None;
+        }
+        let r = self.geometry.read(s);
+        self.run.push(r.theta_deg, r.deviation_um);
+        self.signature.push(r.theta_deg, r.nonlinear_um);
+        if self.sensitivity.wants(r.theta_deg) {
+            let g = &self.geometry;
+            let axes = g.kinematics.layout.axes();
+            let s_q = bar_sensitivity(
+                &g.kinematics,
+                axes,
+                &s.commanded,
+                &g.pivot_table_mm,
+                g.length_mm,
+            );
+            self.sensitivity.set(r.theta_deg, s_q);
+        }
+        if let Some((t0, q0)) = previous.filter(|(t0, _)| s.time_s > *t0) {
+            if self.speed.wants(r.theta_deg) {
+                self.speed
+                    .set(r.theta_deg, (s.commanded - q0) * (1.0 / (s.time_s - t0)));
             }
         }
+        Some(r)
+    }
+}
+
+impl Sink for BallbarSink {
+    fn push(&mut self, s: &Sample) -> Result<()> {
+        self.take(s);
         Ok(())
     }
 }

@@ -99,7 +99,7 @@ use nalgebra::Point3;
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::kinematics::{Kinematics, Layout};
-use crate::program::{FeedMode, Motion, Move};
+use crate::program::{FeedMode, Motion, Move, PathControl};
 use crate::Plane;
 use crate::{Axis, AxisVec};
 
@@ -130,6 +130,36 @@ pub struct InterpolationOptions {
     pub corner_acceleration_share: f64,
     /// Name of the program, used in error messages.
     pub program_path: PathBuf,
+    /// Keep a [`FeedLimit`] for every feed block that runs slower than its F word
+    /// ([`Interpolator::take_feed_limits`]); off by default (memory would grow with them).
+    pub record_feed_limits: bool,
+}
+
+/// Which axis limit holds a block's feed below its F word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LimitKind {
+    /// The axis's maximum velocity: `v ≤ vmax_i / |q'_i|`.
+    Velocity,
+    /// The axis's maximum acceleration through the path's curvature: `v² |q''_i| ≤ ½ amax_i`.
+    Acceleration,
+    /// The axis's maximum jerk through the path's curvature.
+    Jerk,
+}
+
+/// A feed block planned below its programmed speed: the feed held to the machine.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct FeedLimit {
+    /// Source line and 0-based position of the block.
+    pub line: usize,
+    pub block_index: u64,
+    /// The axis whose limit binds, and which limit.
+    pub axis: Axis,
+    pub limit: LimitKind,
+    /// The programmed path speed and the cruise speed the block is planned at, per minute in
+    /// path units (mm, deg counted as mm in mixed moves, the tool tip under TCP).
+    pub programmed_per_min: f64,
+    pub planned_per_min: f64,
 }
 
 impl Default for InterpolationOptions {
@@ -139,6 +169,7 @@ impl Default for InterpolationOptions {
             lookahead_blocks: 256,
             corner_acceleration_share: 1.0,
             program_path: PathBuf::from("program"),
+            record_feed_limits: false,
         }
     }
 }
@@ -445,6 +476,12 @@ struct Planned {
     /// Path length, mm (deg counted as mm for mixed moves); 0 for a dwell.
     length: f64,
     dwell_s: f64,
+    /// How the block joins the next (G61, G61.1, G64 P Q).
+    path_control: PathControl,
+    /// Programmed path speed, path units/s (infinite for G00), and the axis limit that holds
+    /// the cruise speed below it.
+    programmed: f64,
+    limited_by: Option<(Axis, LimitKind)>,
     /// Cruise speed, path acceleration, path jerk limits.
     cap: f64,
     accel: f64,
@@ -463,6 +500,8 @@ struct JunctionEnd {
     cap: f64,
     dwell: bool,
     curved: bool,
+    /// The block's path-control mode: how it joins the next.
+    path: PathControl,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -488,6 +527,7 @@ pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     window: VecDeque<Planned>,
     /// Blocks appended since the last backward pass.
     unpassed: usize,
+    feed_limits: Option<Vec<FeedLimit>>,
     last_end: Option<JunctionEnd>,
     next_index: u64,
     active: Option<Active>,
@@ -527,6 +567,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             period_s: machine.interpolation_period_s,
             window: VecDeque::with_capacity(options.lookahead_blocks + pass_batch(&options) + 1),
             unpassed: 0,
+            feed_limits: options.record_feed_limits.then(Vec::new),
             options,
             last_end: None,
             next_index: 0,
@@ -566,7 +607,10 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 Some(Ok(block)) => {
                     self.next_index += 1;
                     match self.plan(&block, index) {
-                        Ok(Some((planned, start, end))) => self.push(planned, start, end),
+                        Ok(Some((planned, start, end))) => {
+                            self.record(&planned);
+                            self.push(planned, start, end)
+                        }
                         Ok(None) => {}
                         Err(e) => {
                             self.pending_error = Some(e);
@@ -579,6 +623,34 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         if self.unpassed > 0 && (self.input_done || self.unpassed >= batch) {
             self.backward_pass();
         }
+    }
+
+    /// Notes a feed block held below its F word (when recording).
+    fn record(&mut self, p: &Planned) {
+        if let (Some(log), Some((axis, limit)), true) = (
+            self.feed_limits.as_mut(),
+            p.limited_by,
+            p.programmed.is_finite(),
+        ) {
+            log.push(FeedLimit {
+                line: p.line,
+                block_index: p.index,
+                axis,
+                limit,
+                programmed_per_min: p.programmed * 60.0,
+                planned_per_min: p.cap * 60.0,
+            });
+        }
+    }
+
+    /// The feed limits noted since the last call, in block order (empty unless
+    /// [`InterpolationOptions::record_feed_limits`]). Blocks are planned up to
+    /// `lookahead_blocks` ahead of the setpoints.
+    pub fn take_feed_limits(&mut self) -> Vec<FeedLimit> {
+        self.feed_limits
+            .as_mut()
+            .map(std::mem::take)
+            .unwrap_or_default()
     }
 
     /// Geometry and limits of one block; `None` for a block without motion.
@@ -610,6 +682,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             },
             length: 0.0,
             dwell_s: 0.0,
+            path_control: b.path,
+            programmed: f64::INFINITY,
+            limited_by: None,
             cap: 0.0,
             accel: 0.0,
             jerk: 0.0,
@@ -782,16 +857,24 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         })
     }
 
-    /// Cruise cap and path acceleration and jerk limits from the axis limits.
+    /// Cruise cap and path acceleration and jerk limits from the axis limits; notes the axis
+    /// and limit that hold the cap below the programmed speed.
     fn apply_limits(&self, p: &mut Planned, programmed: f64) {
         let (mut cap, mut accel, mut jerk) = (programmed, f64::INFINITY, f64::INFINITY);
+        let mut by = None;
+        let mut lower = |cap: &mut f64, value: f64, i: usize, kind: LimitKind| {
+            if value < *cap {
+                *cap = value;
+                by = Some((Axis::ALL[i], kind));
+            }
+        };
         let present = |i: usize| self.limits[i].map(|l| (i, l));
         if p.path.is_straight() {
             let t = p.path.tangent(0.0, p.length);
             for (i, l) in (0..6).filter_map(present) {
                 let d = t.0[i].abs();
                 if d > 0.0 {
-                    cap = cap.min(l.velocity / d);
+                    lower(&mut cap, l.velocity / d, i, LimitKind::Velocity);
                     accel = accel.min(l.acceleration / d);
                     jerk = jerk.min(l.jerk / d);
                 }
@@ -800,22 +883,30 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             let (d1, d2, d3) = self.derivative_bounds(&p.path, p.length);
             for (i, l) in (0..6).filter_map(present) {
                 if d1[i] > 0.0 {
-                    cap = cap.min(l.velocity / d1[i]);
+                    lower(&mut cap, l.velocity / d1[i], i, LimitKind::Velocity);
                     accel = accel.min(0.5 * l.acceleration / d1[i]);
                     jerk = jerk.min(l.jerk / (3.0 * d1[i]));
                 }
             }
             for (i, l) in (0..6).filter_map(present) {
                 if d2[i] > 0.0 {
-                    cap = cap.min((0.5 * l.acceleration / d2[i]).sqrt());
-                    cap = cap.min(l.jerk / (9.0 * d2[i] * accel));
+                    let centripetal = (0.5 * l.acceleration / d2[i]).sqrt();
+                    lower(&mut cap, centripetal, i, LimitKind::Acceleration);
+                    lower(&mut cap, l.jerk / (9.0 * d2[i] * accel), i, LimitKind::Jerk);
                 }
                 if d3[i] > 0.0 {
-                    cap = cap.min((l.jerk / (3.0 * d3[i])).cbrt());
+                    lower(
+                        &mut cap,
+                        (l.jerk / (3.0 * d3[i])).cbrt(),
+                        i,
+                        LimitKind::Jerk,
+                    );
                 }
             }
         }
         (p.cap, p.accel, p.jerk) = (cap, accel, jerk);
+        p.programmed = programmed;
+        p.limited_by = by;
     }
 
     /// Maxima of |dq/ds|, |d²q/ds²|, |d³q/ds³| per axis, sampled at `SAMPLES + 1` points.
@@ -868,6 +959,31 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                         mu = allowed / jump;
                     }
                 }
+                let jump = tangent_start * rho - prev.tangent;
+                let xyz_jump = (jump.0[0].powi(2) + jump.0[1].powi(2) + jump.0[2].powi(2)).sqrt();
+                match prev.path {
+                    // G61.1: every move ends at rest.
+                    PathControl::ExactStop => mu = 0.0,
+                    // G61: stop at every corner that is not collinear.
+                    PathControl::ExactPath => {
+                        let unit = |t: AxisVec| t * (1.0 / t.mixed_norm().max(f64::MIN_POSITIVE));
+                        if (unit(tangent_start) - unit(prev.tangent)).mixed_norm() > 1e-9 {
+                            mu = 0.0;
+                        }
+                    }
+                    // G64 P: the fine-interpolated command cuts the corner by at most
+                    // (T/4) |Δw| (Δw: the XYZ velocity jump); keep that within P.
+                    PathControl::Blend {
+                        tolerance_mm: Some(tol),
+                        ..
+                    } if tol.is_finite() && tol >= 0.0 => {
+                        let allowed = 4.0 * tol / self.period_s;
+                        if xyz_jump * mu > allowed {
+                            mu = allowed / xyz_jump;
+                        }
+                    }
+                    PathControl::Blend { .. } => {}
+                }
                 p.rho = rho;
                 p.entry_cap = rho * mu;
             }
@@ -877,6 +993,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             cap: p.cap,
             dwell,
             curved,
+            path: p.path_control,
         });
         p.entry_max = if dwell {
             0.0

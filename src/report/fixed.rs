@@ -4,32 +4,134 @@
 /// for |v| < 1e12 (round half away from zero on the scaled value), without the formatting
 /// machinery: the trace writes twenty numbers per millisecond of machine time.
 pub fn push_fixed(out: &mut String, v: f64, decimals: u32) {
+    let mut buf = [0u8; 24];
+    match digits(&mut buf, v, decimals) {
+        Some(pos) => out.push_str(std::str::from_utf8(&buf[pos..]).expect("ASCII digits")),
+        None => {
+            let _ = std::fmt::Write::write_fmt(out, format_args!("{v:.*}", decimals as usize));
+        }
+    }
+}
+
+/// [`push_fixed`] into a byte buffer (ASCII), allocation-free once the buffer has room: the
+/// form the trace writer uses, one line buffer per row. The digits go straight to their
+/// place at the end of `out`.
+pub fn push_fixed_bytes(out: &mut Vec<u8>, v: f64, decimals: u32) {
     const SCALE: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
-    let scaled = SCALE.get(decimals as usize).map(|s| (v * s).round());
-    let Some(scaled) = scaled.filter(|s| s.is_finite() && s.abs() < 9.0e15) else {
-        let _ = std::fmt::Write::write_fmt(out, format_args!("{v:.*}", decimals as usize));
+    let scaled = SCALE
+        .get(decimals as usize)
+        .map(|s| round_half_away(v * s))
+        .filter(|s| s.is_finite() && s.abs() < 9.0e15);
+    let Some(scaled) = scaled else {
+        let _ = std::io::Write::write_fmt(out, format_args!("{v:.*}", decimals as usize));
         return;
     };
-    // Digits from the right into a small buffer, then one append.
-    let mut buf = [0u8; 24];
-    let mut pos = buf.len();
     let mut n = scaled.abs() as u64;
-    let mut written = 0;
-    while n > 0 || written <= decimals {
-        if written == decimals && decimals > 0 {
-            pos -= 1;
-            buf[pos] = b'.';
+    let d = decimals as usize;
+    let n_digits = (n.checked_ilog10().unwrap_or(0) as usize + 1).max(d + 1);
+    let negative = scaled < 0.0;
+    let len = negative as usize + n_digits + (d > 0) as usize;
+    let start = out.len();
+    out.resize(start + len, b'0');
+    let field = &mut out[start..];
+    if negative {
+        field[0] = b'-';
+    }
+    // Right to left, two digits at a time, stepping over the point.
+    let point = if d > 0 { len - d - 1 } else { usize::MAX };
+    if d > 0 {
+        field[point] = b'.';
+    }
+    let mut at = len;
+    while n > 0 {
+        let (digit, rest) = ((n % 10) as u8, n / 10);
+        at -= 1;
+        if at == point {
+            at -= 1;
         }
-        pos -= 1;
-        buf[pos] = b'0' + (n % 10) as u8;
-        n /= 10;
-        written += 1;
+        field[at] = b'0' + digit;
+        n = rest;
     }
+}
+
+/// Pairs of decimal digits "00" to "99".
+const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
+/// Writes the digits of `v` right-aligned into `buf` and returns where they start; None
+/// when the fast path does not apply (too many decimals, |v| too large, not finite).
+/// The integer `round(|v| 10^decimals)` is written two digits at a time, then the point
+/// is put in front of its last `decimals` digits.
+#[inline]
+fn digits(buf: &mut [u8; 24], v: f64, decimals: u32) -> Option<usize> {
+    const SCALE: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
+    let scaled = round_half_away(v * SCALE.get(decimals as usize)?);
+    if !(scaled.is_finite() && scaled.abs() < 9.0e15) {
+        return None;
+    }
+    // Digits of n right-aligned in tmp, at least decimals + 1 of them.
+    let mut tmp = [b'0'; 24];
+    let mut pos = tmp.len();
+    let mut n = scaled.abs() as u64;
+    while n >= 100 {
+        let r = 2 * (n % 100) as usize;
+        n /= 100;
+        pos -= 2;
+        tmp[pos..pos + 2].copy_from_slice(&PAIRS[r..r + 2]);
+    }
+    if n >= 10 {
+        let r = 2 * n as usize;
+        pos -= 2;
+        tmp[pos..pos + 2].copy_from_slice(&PAIRS[r..r + 2]);
+    } else {
+        pos -= 1;
+        tmp[pos] = b'0' + n as u8;
+    }
+    let d = decimals as usize;
+    pos = pos.min(tmp.len() - d - 1);
+    // Into buf, right-aligned: fraction, point, integer part, sign.
+    let mut at = buf.len();
+    if d > 0 {
+        at -= d;
+        buf[at..].copy_from_slice(&tmp[tmp.len() - d..]);
+        at -= 1;
+        buf[at] = b'.';
+    }
+    let int = &tmp[pos..tmp.len() - d];
+    at -= int.len();
+    buf[at..at + int.len()].copy_from_slice(int);
     if scaled < 0.0 {
-        pos -= 1;
-        buf[pos] = b'-';
+        at -= 1;
+        buf[at] = b'-';
     }
-    out.push_str(std::str::from_utf8(&buf[pos..]).expect("ASCII digits"));
+    Some(at)
+}
+
+/// `x.round()` (half away from zero) for |x| < 2^53 by integer truncation, exact there
+/// (`x - trunc(x)` is exact), without a libm call; other values pass through `f64::round`.
+#[inline]
+fn round_half_away(x: f64) -> f64 {
+    if !(x.abs() < 9.0e15) {
+        return x.round();
+    }
+    let t = x as i64;
+    let frac = x - t as f64;
+    let r = if frac >= 0.5 {
+        t + 1
+    } else if frac <= -0.5 {
+        t - 1
+    } else {
+        t
+    };
+    // Keep the sign of a value that rounds to zero from below, as f64::round does.
+    if r == 0 && x.is_sign_negative() {
+        -0.0
+    } else {
+        r as f64
+    }
 }
 
 #[cfg(test)]
@@ -37,8 +139,34 @@ mod tests {
     use super::*;
 
     #[test]
+    fn integer_rounding_matches_f64_round() {
+        for x in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -2.5,
+            0.499_999_999_999_999_9,
+            1e15 + 0.5,
+            -7.3,
+        ] {
+            let (a, b) = (round_half_away(x), x.round());
+            assert!(
+                a == b && a.is_sign_negative() == b.is_sign_negative(),
+                "{x}: {a} vs {b}"
+            );
+        }
+    }
+
+    #[test]
     fn push_fixed_matches_the_standard_formatting() {
         for &v in &[
+            10.0,
+            99.5,
+            100.0,
+            -1234567.891,
+            987654321.123456,
             0.0,
             -0.0,
             1.5,
@@ -68,6 +196,13 @@ mod tests {
                     want
                 };
                 assert_eq!(s, want, "{v} with {d} decimals");
+                let mut bytes = b"x,".to_vec();
+                push_fixed_bytes(&mut bytes, v, d);
+                assert_eq!(
+                    &bytes[2..],
+                    want.as_bytes(),
+                    "{v} with {d} decimals (bytes)"
+                );
             }
         }
     }

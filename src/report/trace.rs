@@ -13,10 +13,10 @@ use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
 use super::files::temporary_path;
-use super::fixed::push_fixed;
+use super::fixed::push_fixed_bytes;
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
-use crate::measure::{is_measured, BallbarRun, BarGeometry};
+use crate::measure::{is_measured, BallbarRun, BarGeometry, BarReading};
 use crate::pipeline::{Sample, Sink};
 use crate::Axis;
 
@@ -109,6 +109,17 @@ impl Sink for TraceSink {
             return Ok(());
         }
         let r = geometry.read(s);
+        self.push_reading(s, &r)
+    }
+}
+
+impl TraceSink {
+    /// Records `s` with the ball bar's reading `r` of it (already taken by the ball bar, so
+    /// the kinematics run once per sample); skips samples between every `every`-th one.
+    pub fn push_reading(&mut self, s: &Sample, r: &BarReading) -> Result<()> {
+        if self.geometry.is_none() || s.index % self.every != 0 {
+            return Ok(());
+        }
         let row = &mut self.row;
         row.clear();
         let cw = if self.direction == Direction::Cw {
@@ -154,7 +165,7 @@ fn complete(
     let width = 6 + 3 * n_axes;
     let mut bytes = vec![0u8; 8 * width];
     let mut v = vec![0.0; width];
-    let mut line = String::new();
+    let mut line: Vec<u8> = Vec::with_capacity(32 * width);
     loop {
         match reader.read_exact(&mut bytes) {
             Ok(()) => {}
@@ -171,24 +182,25 @@ fn complete(
         let (theta, dev) = (v[3], v[width - 1]);
         let c = if cw_row { cw } else { ccw };
         let centred = c.map_or(dev, |c| dev - c.offset_um(theta));
+        // The row is formatted once into one reused buffer: no allocation per value.
         line.clear();
-        line.push_str(if cw_row { "cw" } else { "ccw" });
+        line.extend_from_slice(if cw_row { b"cw" } else { b"ccw" });
         for (value, decimals) in [(v[1], 4), (v[2], 0), (theta, 4)] {
-            line.push(',');
-            push_fixed(&mut line, value, decimals);
+            line.push(b',');
+            push_fixed_bytes(&mut line, value, decimals);
         }
         for k in 0..n_axes {
             for (j, decimals) in [6, 6, 7].into_iter().enumerate() {
-                line.push(',');
-                push_fixed(&mut line, v[4 + 3 * k + j], decimals);
+                line.push(b',');
+                push_fixed_bytes(&mut line, v[4 + 3 * k + j], decimals);
             }
         }
         for value in [v[width - 2], dev, centred] {
-            line.push(',');
-            push_fixed(&mut line, value, 4);
+            line.push(b',');
+            push_fixed_bytes(&mut line, value, 4);
         }
-        line.push('\n');
-        out.write_all(line.as_bytes()).map_err(&write_err)?;
+        line.push(b'\n');
+        out.write_all(&line).map_err(&write_err)?;
     }
     out.flush().map_err(&write_err)?;
     drop(out);

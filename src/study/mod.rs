@@ -3,6 +3,7 @@
 //! Outputs: reversal analyses, `simulate` runs with their files, sweeps over a parameter and placement maps.
 
 pub mod diagnose;
+pub mod feed;
 pub mod placement;
 pub mod reversals;
 pub mod simulate;

@@ -19,7 +19,7 @@ use crate::input::scenario::{Program, Scenario};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
 use crate::measure::ballbar::{analyse_events_at, BallbarResult};
 use crate::measure::{BallbarSink, BarGeometry, CircleFrame};
-use crate::pipeline::{self, RunOptions, Sink, Timing};
+use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
 use crate::report::create_dir;
 use crate::report::trace::TraceSink;
@@ -123,12 +123,13 @@ pub fn run_ballbar(
             program_path: scenario.path.clone(),
         };
         let stats = {
-            let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(2);
-            if let Some(b) = ballbar.as_mut() {
-                sinks.push(b);
-                if let Some(t) = trace.as_deref_mut() {
-                    sinks.push(t);
-                }
+            let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(1);
+            let mut measure = ballbar.as_mut().map(|ballbar| BarAndTrace {
+                ballbar,
+                trace: trace.as_deref_mut(),
+            });
+            if let Some(m) = measure.as_mut() {
+                sinks.push(m);
             }
             pipeline::run(run.moves, machine, &options, &mut sinks, progress)?
         };
@@ -255,6 +256,21 @@ pub fn reversal_values(
             Ok((a.to_string(), servo.reversal_value()))
         })
         .collect()
+}
+
+/// The ball bar and the trace of its readings, as one sink: the bar reads each sample once.
+struct BarAndTrace<'a> {
+    ballbar: &'a mut BallbarSink,
+    trace: Option<&'a mut TraceSink>,
+}
+
+impl Sink for BarAndTrace<'_> {
+    fn push(&mut self, s: &Sample) -> Result<()> {
+        match (self.ballbar.take(s), self.trace.as_deref_mut()) {
+            (Some(r), Some(t)) => t.push_reading(s, &r),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// The virtual ball bar of a scenario: the cone's or circle's measured circle, the table

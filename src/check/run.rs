@@ -59,16 +59,14 @@ impl CheckReport {
     }
 }
 
-/// The collision scene as a sink: each sample's axis positions, with its θ.
-struct SceneSink<'a> {
+/// The collision scene as a sink: each sample's axis positions (θ computed where reported).
+struct SceneSink {
     monitor: SceneMonitor,
-    theta_of: &'a dyn Fn(&AxisVec) -> Option<f64>,
 }
 
-impl Sink for SceneSink<'_> {
+impl Sink for SceneSink {
     fn push(&mut self, s: &Sample) -> Result<()> {
-        let theta = (self.theta_of)(&s.actual);
-        self.monitor.push(s.time_s, theta, s.line, &s.actual);
+        self.monitor.push_at(s.time_s, s.line, &s.actual);
         Ok(())
     }
 }
@@ -99,8 +97,8 @@ pub fn check(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport>
                 monitor: SceneMonitor::new(
                     Scene::new(machine, &scenario.tool, &scenario.workpiece, near_miss)?,
                     machine,
-                ),
-                theta_of: &theta_of,
+                )
+                .with_theta(Box::new(theta_of)),
             })
         }
     };

@@ -92,13 +92,23 @@ impl SceneReport {
     }
 }
 
+/// θ of a sample: given with it, or computed from its axis positions when it is reported.
+#[derive(Clone, Copy, Debug)]
+enum Theta {
+    Known(Option<f64>),
+    At(AxisVec),
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Sample {
     time_s: f64,
-    theta_deg: Option<f64>,
+    theta: Theta,
     line: usize,
     q: AxisVec,
 }
+
+/// θ (deg) of the nominal path at axis positions (mm, deg), if the program has one.
+pub type ThetaFn = Box<dyn Fn(&AxisVec) -> Option<f64> + Send + Sync>;
 
 struct PairState {
     /// Bound on the pair's approach (mm) per |dXYZ| (mm), |d tilt| (rad), |dC| (rad).
@@ -111,6 +121,8 @@ struct PairState {
     last_mm: f64,
     warm: Option<Vector>,
     open: Option<SceneEvent>,
+    /// θ of the last sample of the open event (resolved when it closes).
+    open_end: Theta,
     /// Index into the engagement summaries for a cutting pair.
     engagement: Option<usize>,
 }
@@ -126,6 +138,7 @@ pub struct SceneMonitor {
     queries: u64,
     min_clearance_mm: f64,
     min_clearance_pair: Option<usize>,
+    theta_of: Option<ThetaFn>,
 }
 
 /// Sub-steps of conservative advancement inside one sample interval, at most.
@@ -150,6 +163,7 @@ impl SceneMonitor {
                 last_mm: f64::INFINITY,
                 warm: None,
                 open: None,
+                open_end: Theta::Known(None),
                 engagement: (pair.kind == PairKind::Cutting).then(|| {
                     engagement.push(EngagementSummary {
                         bodies: scene.pair_bodies(pair),
@@ -173,6 +187,21 @@ impl SceneMonitor {
             queries: 0,
             min_clearance_mm: f64::INFINITY,
             min_clearance_pair: None,
+            theta_of: None,
+        }
+    }
+
+    /// Gives the monitor θ as a function of the axis positions, for [`SceneMonitor::push_at`]:
+    /// θ is then computed only for the samples it reports.
+    pub fn with_theta(mut self, theta_of: ThetaFn) -> SceneMonitor {
+        self.theta_of = Some(theta_of);
+        self
+    }
+
+    fn theta(&self, t: Theta) -> Option<f64> {
+        match t {
+            Theta::Known(v) => v,
+            Theta::At(q) => self.theta_of.as_ref().and_then(|f| f(&q)),
         }
     }
 
@@ -184,13 +213,23 @@ impl SceneMonitor {
     /// One sample: time (s), angle on the nominal path (deg) if any, program line, axis
     /// positions (mm, deg). Samples with non-finite positions are ignored.
     pub fn push(&mut self, time_s: f64, theta_deg: Option<f64>, line: usize, q: &AxisVec) {
+        self.push_sample(time_s, Theta::Known(theta_deg), line, q);
+    }
+
+    /// One sample whose θ is computed, when needed, by the function of
+    /// [`SceneMonitor::with_theta`] (none without it).
+    pub fn push_at(&mut self, time_s: f64, line: usize, q: &AxisVec) {
+        self.push_sample(time_s, Theta::At(*q), line, q);
+    }
+
+    fn push_sample(&mut self, time_s: f64, theta: Theta, line: usize, q: &AxisVec) {
         if !q.is_finite() || !time_s.is_finite() {
             return;
         }
         self.samples += 1;
         let now = Sample {
             time_s,
-            theta_deg,
+            theta,
             line,
             q: *q,
         };
@@ -231,10 +270,8 @@ impl SceneMonitor {
 
     /// Ends the run.
     pub fn finish(mut self) -> SceneReport {
-        for state in &mut self.states {
-            if let Some(event) = state.open.take() {
-                self.events.push(event);
-            }
+        for i in 0..self.states.len() {
+            self.close_open(i);
         }
         self.events
             .sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
@@ -293,14 +330,12 @@ impl SceneMonitor {
 
     fn record_contact_between(&mut self, i: usize, prev: &Sample, now: &Sample, s: f64) {
         let time = prev.time_s + s * (now.time_s - prev.time_s);
-        let theta = match (prev.theta_deg, now.theta_deg) {
+        let theta = match (self.theta(prev.theta), self.theta(now.theta)) {
             (Some(a), Some(b)) => Some(a + s * (b - a)),
             (_, b) => b,
         };
         let bodies = self.scene.pair_bodies(&self.scene.pairs[i]);
-        if let Some(open) = self.states[i].open.take() {
-            self.events.push(open);
-        }
+        self.close_open(i);
         self.events.push(SceneEvent {
             kind: EventKind::Collision,
             bodies,
@@ -311,6 +346,14 @@ impl SceneMonitor {
             line: now.line,
             worst_mm: 0.0,
         });
+    }
+
+    /// Ends pair `i`'s open event, if any, resolving its last θ.
+    fn close_open(&mut self, i: usize) {
+        if let Some(mut event) = self.states[i].open.take() {
+            event.theta_end_deg = self.theta(self.states[i].open_end);
+            self.events.push(event);
+        }
     }
 
     /// Updates pair `i`'s event and query schedule with the clearance `d` measured at `now`.
@@ -327,7 +370,10 @@ impl SceneMonitor {
             if -d > summary.max_depth_mm {
                 summary.max_depth_mm = -d;
                 summary.max_depth_time_s = Some(now.time_s);
-                summary.max_depth_theta_deg = now.theta_deg;
+                summary.max_depth_theta_deg = match now.theta {
+                    Theta::Known(v) => v,
+                    Theta::At(q) => self.theta_of.as_ref().and_then(|f| f(&q)),
+                };
             }
             return;
         }
@@ -350,23 +396,24 @@ impl SceneMonitor {
         match (&mut state.open, kind) {
             (Some(open), Some(k)) if open.kind == k => {
                 open.time_end_s = now.time_s;
-                open.theta_end_deg = now.theta_deg;
+                state.open_end = now.theta;
                 open.worst_mm = match k {
                     EventKind::Collision => open.worst_mm.max(-d),
                     EventKind::NearMiss => open.worst_mm.min(d),
                 };
             }
             (_, kind) => {
-                if let Some(open) = state.open.take() {
-                    self.events.push(open);
-                }
+                self.close_open(i);
+                let theta = self.theta(now.theta);
+                let state = &mut self.states[i];
+                state.open_end = Theta::Known(theta);
                 state.open = kind.map(|k| SceneEvent {
                     kind: k,
                     bodies: self.scene.pair_bodies(&self.scene.pairs[i]),
                     time_start_s: now.time_s,
                     time_end_s: now.time_s,
-                    theta_start_deg: now.theta_deg,
-                    theta_end_deg: now.theta_deg,
+                    theta_start_deg: theta,
+                    theta_end_deg: theta,
                     line: now.line,
                     worst_mm: worst(k),
                 });

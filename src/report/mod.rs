@@ -1,9 +1,10 @@
 //! **report** — sinks and writers: results in, files out.
 //! Inputs: samples (the trace), ball-bar results, check reports.
-//! Outputs: CSV, JSON and SVG files, each written completely or not at all (temporary file, then rename).
+//! Outputs: CSV, JSON, Parquet and SVG files, each written completely or not at all (temporary file, then rename).
 
 pub mod files;
 pub mod fixed;
+pub mod parquet;
 pub mod polar;
 pub mod trace;
 

@@ -74,6 +74,20 @@ impl Sink for SceneSink {
 /// Checks a scenario's program against its machine. A cone or circle is checked as the
 /// generator writes it: one revolution, counter-clockwise, with no lead.
 pub fn check(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport> {
+    check_with(scenario, options, false)
+}
+
+/// [`check`] with the scene queried for every pair at every sample, no motion bound
+/// skipping any: the slow, unoptimised reference the bounded check is tested against.
+pub fn check_reference(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport> {
+    check_with(scenario, options, true)
+}
+
+fn check_with(
+    scenario: &Scenario,
+    options: &CheckOptions,
+    exhaustive: bool,
+) -> Result<CheckReport> {
     let machine = &scenario.machine;
     let kin = machine.kinematics;
     let frame = theta_frame(scenario);
@@ -99,6 +113,12 @@ pub fn check(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport>
                     machine,
                 )
                 .with_theta(Box::new(theta_of)),
+            })
+            .map(|mut sink| {
+                if exhaustive {
+                    sink.monitor = sink.monitor.with_relative_bounds(false).exhaustive();
+                }
+                sink
             })
         }
     };

@@ -14,13 +14,28 @@
 //! reaches `max(d, engagement resolution)`, so its reported depth is within that
 //! resolution of the true maximum.
 //!
+//! A pair of a tool part and a part on the table (or cradle) has a second, tighter bound:
+//! the motion of the tool relative to that frame. With `u = tip - pivot` (machine frame),
+//! R the table (or cradle) rotation and `p` a tool point (|p| <= P from the tip), the point
+//! is at `y = R^T (u + p)` in the table frame. Over an interval whose rotations change by
+//! `Ω = |Δ tilt| + |ΔC|` (rad; `|Δ tilt|` for the cradle), with the axes linear in between,
+//! `|R^T' v| <= Ω |v|` and `|R^T'' v| <= Ω² |v|`, so `|y''| <= 2 Ω |Δu| + Ω² (U + P)`
+//! (`U` the larger `|u|` at the ends), and the path length of `y` is at most its chord plus
+//! `sup |y''|`:
+//! `|Δy| <= |Δ(R^T u)| + Ω P + 2 Ω |Δu| + Ω² (U + P)`.
+//! The tip's chord in the table frame is what the cone test keeps small (the table turns
+//! under the tool), so this bound is several times tighter than the lever arms; the
+//! monitor uses the smaller of the two.
+//!
 //! Memory does not grow with the number of samples: one state per pair, plus the events.
 
+use nalgebra::Vector3;
 use parry3d_f64::math::{Pose, Vector};
 use serde::Serialize;
 
-use super::{PairKind, Scene};
+use super::{Carrier, PairKind, Scene};
 use crate::input::machine::Machine;
+use crate::kinematics::Kinematics;
 use crate::{Axis, AxisVec};
 
 /// Kind of a reported event.
@@ -113,6 +128,9 @@ pub type ThetaFn = Box<dyn Fn(&AxisVec) -> Option<f64> + Send + Sync>;
 struct PairState {
     /// Bound on the pair's approach (mm) per |dXYZ| (mm), |d tilt| (rad), |dC| (rad).
     weights: [f64; 3],
+    /// For a tool part against a table (0) or cradle (1) part: that frame and the tool
+    /// part's reach P from the tip, mm (the relative-motion bound).
+    relative: Option<(usize, f64)>,
     /// Motion bound allowed before the next query, mm.
     slack: f64,
     /// Motion bound accumulated since the last query, mm.
@@ -139,6 +157,12 @@ pub struct SceneMonitor {
     min_clearance_mm: f64,
     min_clearance_pair: Option<usize>,
     theta_of: Option<ThetaFn>,
+    /// The tool tip relative to the pivot in the table and cradle frames, and |tip - pivot|,
+    /// at the previous sample (when a pair uses the relative bound).
+    prev_relative: Option<([Vector3<f64>; 2], f64)>,
+    uses_relative: bool,
+    /// Query every pair at every sample (the reference the bounds are tested against).
+    exhaustive: bool,
 }
 
 /// Sub-steps of conservative advancement inside one sample interval, at most.
@@ -157,6 +181,31 @@ impl SceneMonitor {
                 weights: {
                     let (wa, wb) = (scene.parts[pair.a].motion, scene.parts[pair.b].motion);
                     [wa[0] + wb[0], wa[1] + wb[1], wa[2] + wb[2]]
+                },
+                relative: {
+                    let (a, b) = (&scene.parts[pair.a], &scene.parts[pair.b]);
+                    let (tool, other) = if a.carrier == Carrier::Tool {
+                        (a, b)
+                    } else {
+                        (b, a)
+                    };
+                    let frame = match other.carrier {
+                        Carrier::Table => Some(0),
+                        Carrier::Cradle => Some(1),
+                        _ => None,
+                    };
+                    frame.filter(|_| tool.carrier == Carrier::Tool).map(|f| {
+                        let aabb = tool.shape.compute_aabb(&tool.local);
+                        let reach = (0..8)
+                            .map(|i| {
+                                let x = if i & 1 == 0 { aabb.mins.x } else { aabb.maxs.x };
+                                let y = if i & 2 == 0 { aabb.mins.y } else { aabb.maxs.y };
+                                let z = if i & 4 == 0 { aabb.mins.z } else { aabb.maxs.z };
+                                (x * x + y * y + z * z).sqrt()
+                            })
+                            .fold(0.0, f64::max);
+                        (f, reach)
+                    })
                 },
                 slack: 0.0,
                 moved: 0.0,
@@ -188,7 +237,24 @@ impl SceneMonitor {
             min_clearance_mm: f64::INFINITY,
             min_clearance_pair: None,
             theta_of: None,
+            prev_relative: None,
+            uses_relative: false,
+            exhaustive: false,
         }
+        .with_relative_bounds(true)
+    }
+
+    /// Whether tool/table pairs use the relative-motion bound as well (on by default).
+    pub fn with_relative_bounds(mut self, on: bool) -> SceneMonitor {
+        self.uses_relative = on && self.states.iter().any(|s| s.relative.is_some());
+        self
+    }
+
+    /// Queries every pair at every sample, with no bound skipping any: slow, the reference
+    /// that the bounded monitor is tested against.
+    pub fn exhaustive(mut self) -> SceneMonitor {
+        self.exhaustive = true;
+        self
     }
 
     /// Gives the monitor θ as a function of the axis positions, for [`SceneMonitor::push_at`]:
@@ -234,18 +300,42 @@ impl SceneMonitor {
             q: *q,
         };
         let step = self.prev.map(|prev| self.motion(&prev.q, q));
+        // Relative motion of the tip in the table and cradle frames: chord and Ω per frame,
+        // |Δu| and U.
+        let mut relative: Option<([(f64, f64); 2], f64, f64)> = None;
+        if self.uses_relative {
+            let u =
+                Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]) - self.scene.kinematics.pivot_mm;
+            let now = in_table_frames(&self.scene.kinematics, q, u);
+            let u_norm = u.norm();
+            if let (Some((before, u_before)), Some(s)) = (self.prev_relative, step) {
+                let omega = [s[1] + s[2], s[1]];
+                relative = Some((
+                    [0, 1].map(|f| ((now[f] - before[f]).norm(), omega[f])),
+                    s[0],
+                    u_norm.max(u_before),
+                ));
+            }
+            self.prev_relative = Some((now, u_norm));
+        }
         let mut poses: Option<[Pose; 4]> = None;
         for i in 0..self.states.len() {
             let state = &mut self.states[i];
-            let pair_step = match step {
+            let mut pair_step = match step {
                 Some(s) => {
                     state.weights[0] * s[0] + state.weights[1] * s[1] + state.weights[2] * s[2]
                 }
                 None => f64::INFINITY,
             };
+            if let (Some((frames, du, u_max)), Some((f, reach))) = (relative, state.relative) {
+                let (chord, omega) = frames[f];
+                let bound =
+                    chord + omega * reach + 2.0 * omega * du + omega * omega * (u_max + reach);
+                pair_step = pair_step.min(bound);
+            }
             let moved_before = state.moved;
             state.moved += pair_step;
-            if state.moved < state.slack {
+            if state.moved < state.slack && !self.exhaustive {
                 continue;
             }
             let pair = self.scene.pairs[i];
@@ -429,4 +519,56 @@ fn measure(scene: &Scene, i: usize, poses: &[Pose; 4], warm: &mut Option<Vector>
     let pose_a = poses[a.carrier as usize] * a.local;
     let pose_b = poses[b.carrier as usize] * b.local;
     super::pair_distance(&pair, a, b, &pose_a, &pose_b, warm)
+}
+
+/// `u` (machine frame) in the table frame, `R_C^T R_tilt^T u`, and in the cradle frame,
+/// `R_tilt^T u` ([`Kinematics::table_rotation`] written out, two `sin_cos`).
+fn in_table_frames(k: &Kinematics, q: &AxisVec, u: Vector3<f64>) -> [Vector3<f64>; 2] {
+    use crate::kinematics::Layout;
+    let cradle = match k.layout {
+        Layout::Xyz => return [u, u],
+        Layout::TrtAc => {
+            let (s, c) = q[Axis::A].to_radians().sin_cos();
+            Vector3::new(u.x, c * u.y + s * u.z, -s * u.y + c * u.z)
+        }
+        Layout::TrtBc => {
+            let (s, c) = q[Axis::B].to_radians().sin_cos();
+            Vector3::new(c * u.x - s * u.z, u.y, s * u.x + c * u.z)
+        }
+    };
+    let (s, c) = q[Axis::C].to_radians().sin_cos();
+    let table = Vector3::new(
+        c * cradle.x + s * cradle.y,
+        -s * cradle.x + c * cradle.y,
+        cradle.z,
+    );
+    [table, cradle]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::Layout;
+
+    #[test]
+    fn the_frames_written_out_equal_the_table_rotation() {
+        for layout in [Layout::Xyz, Layout::TrtAc, Layout::TrtBc] {
+            let k = Kinematics {
+                layout,
+                pivot_mm: Vector3::new(5.0, -3.0, 100.0),
+            };
+            let mut q = AxisVec::ZERO;
+            q[Axis::A] = 23.0;
+            q[Axis::B] = -37.0;
+            q[Axis::C] = 211.0;
+            let u = Vector3::new(12.0, -250.0, 80.0);
+            let [table, cradle] = in_table_frames(&k, &q, u);
+            let mut tilt = q;
+            tilt[Axis::C] = 0.0;
+            assert!((table - k.table_rotation(&q).transpose() * u).norm() < 1e-12);
+            if layout != Layout::Xyz {
+                assert!((cradle - k.table_rotation(&tilt).transpose() * u).norm() < 1e-12);
+            }
+        }
+    }
 }

@@ -10,7 +10,7 @@
 //!   reference's (true, at samples) minimum lies between the threshold and the bounded one;
 //! - engagement depth: within the engagement resolution, never above the reference.
 
-use mtsim::check::{check, check_reference, CheckOptions};
+use mtsim::check::{check_reference, check_with, CheckOptions, SceneQueries};
 use mtsim::input::scenario::Scenario;
 
 fn scenario(name: &str, extra: &str) -> Scenario {
@@ -28,8 +28,27 @@ fn scenario(name: &str, extra: &str) -> Scenario {
 
 fn agree(name: &str, extra: &str, options: CheckOptions) -> (usize, f64) {
     let s = scenario(name, extra);
-    let fast = check(&s, &options).unwrap();
     let slow = check_reference(&s, &options).unwrap();
+    let mut result = (0, 0.0);
+    for mode in [SceneQueries::Bounded, SceneQueries::BoundedRelative] {
+        result = agree_with(
+            name,
+            extra,
+            &s,
+            &slow,
+            check_with(&s, &options, mode).unwrap(),
+        );
+    }
+    result
+}
+
+fn agree_with(
+    name: &str,
+    extra: &str,
+    s: &Scenario,
+    slow: &mtsim::check::CheckReport,
+    fast: mtsim::check::CheckReport,
+) -> (usize, f64) {
     let what = format!("{name} {extra:?}");
     assert_eq!(fast.samples, slow.samples, "{what}");
     assert_eq!(
@@ -39,7 +58,7 @@ fn agree(name: &str, extra: &str, options: CheckOptions) -> (usize, f64) {
         fast.violations,
         slow.violations
     );
-    for (a, b) in fast.violations.iter().zip(&slow.violations) {
+    for (a, b) in fast.violations.iter().zip(slow.violations.iter()) {
         assert_eq!(
             (a.kind, a.axis, &a.bodies, a.line),
             (b.kind, b.axis, &b.bodies, b.line),
@@ -86,7 +105,7 @@ fn agree(name: &str, extra: &str, options: CheckOptions) -> (usize, f64) {
         (Some(f), Some(r)) => assert!(r >= near_miss - 1e-9 && f >= r - 1e-9, "{what}: {f} vs {r}"),
         (f, r) => assert_eq!(f.is_some(), r.is_some(), "{what}"),
     }
-    for (a, b) in fast.engagement.iter().zip(&slow.engagement) {
+    for (a, b) in fast.engagement.iter().zip(slow.engagement.iter()) {
         assert!(a.max_depth_mm <= b.max_depth_mm + 1e-9, "{what}");
         assert!(
             b.max_depth_mm - a.max_depth_mm <= a.resolution_mm,

@@ -74,19 +74,31 @@ impl Sink for SceneSink {
 /// Checks a scenario's program against its machine. A cone or circle is checked as the
 /// generator writes it: one revolution, counter-clockwise, with no lead.
 pub fn check(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport> {
-    check_with(scenario, options, false)
+    check_with(scenario, options, SceneQueries::Bounded)
 }
 
 /// [`check`] with the scene queried for every pair at every sample, no motion bound
 /// skipping any: the slow, unoptimised reference the bounded check is tested against.
 pub fn check_reference(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport> {
-    check_with(scenario, options, true)
+    check_with(scenario, options, SceneQueries::Every)
 }
 
-fn check_with(
+/// When the collision scene is queried.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneQueries {
+    /// Conservative advancement on lever-arm bounds (what [`check`] does).
+    Bounded,
+    /// The same, with the tighter relative-motion bound for tool/table pairs as well.
+    BoundedRelative,
+    /// Every pair at every sample.
+    Every,
+}
+
+/// [`check`] with the scene queried as `queries` says.
+pub fn check_with(
     scenario: &Scenario,
     options: &CheckOptions,
-    exhaustive: bool,
+    queries: SceneQueries,
 ) -> Result<CheckReport> {
     let machine = &scenario.machine;
     let kin = machine.kinematics;
@@ -115,8 +127,12 @@ fn check_with(
                 .with_theta(Box::new(theta_of)),
             })
             .map(|mut sink| {
-                if exhaustive {
-                    sink.monitor = sink.monitor.with_relative_bounds(false).exhaustive();
+                match queries {
+                    SceneQueries::Bounded => {}
+                    SceneQueries::BoundedRelative => {
+                        sink.monitor = sink.monitor.with_relative_bounds(true)
+                    }
+                    SceneQueries::Every => sink.monitor = sink.monitor.exhaustive(),
                 }
                 sink
             })

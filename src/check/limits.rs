@@ -74,16 +74,34 @@ pub struct AxisUsage {
 #[derive(Clone, Debug)]
 struct Open {
     first: (f64, Option<f64>, usize),
-    last: (f64, Option<f64>),
+    /// Time and position of the last sample in violation; its θ is computed at close.
+    last: (f64, AxisVec),
     worst: f64,
     limit: f64,
     /// How far past the limit `worst` is: |position - limit|, or the speed or acceleration.
     severity: f64,
 }
 
+/// One axis's limits, flat: no map look-up per sample.
+#[derive(Clone, Copy, Debug)]
+struct Limits {
+    /// Index into [`AxisVec`].
+    index: usize,
+    continuous: bool,
+    min: f64,
+    max: f64,
+    /// mm/min or deg/min, and the same with the rounding slack, mm/min or deg/min.
+    max_velocity: f64,
+    velocity_trip: f64,
+    /// mm/s² or deg/s², and the same with the rounding slack.
+    max_acceleration: f64,
+    acceleration_trip: f64,
+}
+
 #[derive(Clone, Debug)]
 struct Track {
     axis: Axis,
+    limits: Limits,
     min: f64,
     max: f64,
     peak_v: f64,
@@ -105,18 +123,32 @@ pub struct LimitsMonitor<'a> {
 const SLACK: f64 = 1e-9;
 
 impl<'a> LimitsMonitor<'a> {
-    /// `theta_of` gives the θ of a sample's commanded position (only asked for samples in violation).
+    /// `theta_of` gives the θ of a sample's commanded position (only asked for the first
+    /// and last sample of each violation).
     pub fn new(machine: &'a Machine, theta_of: &'a dyn Fn(&AxisVec) -> Option<f64>) -> Self {
         let tracks = machine
             .axes()
             .iter()
-            .map(|&axis| Track {
-                axis,
-                min: f64::INFINITY,
-                max: f64::NEG_INFINITY,
-                peak_v: 0.0,
-                peak_a: 0.0,
-                open: [None, None, None],
+            .map(|&axis| {
+                let c = machine.axis(axis);
+                Track {
+                    axis,
+                    limits: Limits {
+                        index: axis.index(),
+                        continuous: c.continuous,
+                        min: c.min,
+                        max: c.max,
+                        max_velocity: c.max_velocity,
+                        velocity_trip: c.max_velocity * (1.0 + SLACK),
+                        max_acceleration: c.max_acceleration,
+                        acceleration_trip: c.max_acceleration * (1.0 + SLACK),
+                    },
+                    min: f64::INFINITY,
+                    max: f64::NEG_INFINITY,
+                    peak_v: 0.0,
+                    peak_a: 0.0,
+                    open: [None, None, None],
+                }
             })
             .collect();
         LimitsMonitor {
@@ -141,65 +173,62 @@ impl<'a> LimitsMonitor<'a> {
             _ => (None, None),
         };
         let mut theta: Option<Option<f64>> = None;
-        for i in 0..self.tracks.len() {
-            let axis = self.tracks[i].axis;
-            let config = self.machine.axis(axis);
-            let x = s.actual[axis];
-            let track = &mut self.tracks[i];
+        for track in self.tracks.iter_mut() {
+            let l = track.limits;
+            let x = s.actual.0[l.index];
             track.min = track.min.min(x);
             track.max = track.max.max(x);
-            let travel = if config.continuous {
+            let travel = if l.continuous {
                 None
-            } else if x > config.max {
-                Some((x, config.max))
-            } else if x < config.min {
-                Some((x, config.min))
+            } else if x > l.max {
+                Some((x, l.max, x - l.max))
+            } else if x < l.min {
+                Some((x, l.min, l.min - x))
             } else {
                 None
             };
-            let v = velocity.map(|v| v[axis].abs() * 60.0);
-            let a = acceleration.map(|a| a[axis].abs());
-            if let Some(v) = v {
+            let mut speed = None;
+            if let Some(v) = &velocity {
+                let v = v.0[l.index].abs() * 60.0;
                 track.peak_v = track.peak_v.max(v);
+                speed = (v > l.velocity_trip).then_some((v, l.max_velocity, v));
             }
-            if let Some(a) = a {
+            let mut accel = None;
+            if let Some(a) = &acceleration {
+                let a = a.0[l.index].abs();
                 track.peak_a = track.peak_a.max(a);
+                accel = (a > l.acceleration_trip).then_some((a, l.max_acceleration, a));
             }
-            let checks = [
-                travel.map(|(x, lim)| (x, lim, (x - lim).abs())),
-                v.filter(|v| *v > config.max_velocity * (1.0 + SLACK))
-                    .map(|v| (v, config.max_velocity, v)),
-                a.filter(|a| *a > config.max_acceleration * (1.0 + SLACK))
-                    .map(|a| (a, config.max_acceleration, a)),
-            ];
+            let checks = [travel, speed, accel];
+            if checks.iter().all(Option::is_none) && track.open.iter().all(Option::is_none) {
+                continue;
+            }
             for (k, check) in checks.into_iter().enumerate() {
                 match check {
-                    Some((value, limit, severity)) => {
-                        let th = *theta.get_or_insert_with(|| (self.theta_of)(&s.actual));
-                        let track = &mut self.tracks[i];
-                        match &mut track.open[k] {
-                            Some(open) => {
-                                open.last = (s.time_s, th);
-                                if severity > open.severity {
-                                    open.worst = value;
-                                    open.limit = limit;
-                                    open.severity = severity;
-                                }
-                            }
-                            None => {
-                                track.open[k] = Some(Open {
-                                    first: (s.time_s, th, s.line),
-                                    last: (s.time_s, th),
-                                    worst: value,
-                                    limit,
-                                    severity,
-                                })
+                    Some((value, limit, severity)) => match &mut track.open[k] {
+                        Some(open) => {
+                            open.last = (s.time_s, s.actual);
+                            if severity > open.severity {
+                                open.worst = value;
+                                open.limit = limit;
+                                open.severity = severity;
                             }
                         }
-                    }
+                        None => {
+                            let th = *theta.get_or_insert_with(|| (self.theta_of)(&s.actual));
+                            track.open[k] = Some(Open {
+                                first: (s.time_s, th, s.line),
+                                last: (s.time_s, s.actual),
+                                worst: value,
+                                limit,
+                                severity,
+                            })
+                        }
+                    },
                     None => {
-                        if let Some(open) = self.tracks[i].open[k].take() {
-                            self.violations.push(close(open, KINDS[k], axis));
+                        if let Some(open) = track.open[k].take() {
+                            self.violations
+                                .push(close(open, KINDS[k], track.axis, self.theta_of));
                         }
                     }
                 }
@@ -217,7 +246,8 @@ impl<'a> LimitsMonitor<'a> {
         for track in &mut self.tracks {
             for (k, open) in track.open.iter_mut().enumerate() {
                 if let Some(open) = open.take() {
-                    self.violations.push(close(open, KINDS[k], track.axis));
+                    self.violations
+                        .push(close(open, KINDS[k], track.axis, self.theta_of));
                 }
             }
         }
@@ -252,13 +282,18 @@ const KINDS: [ViolationKind; 3] = [
     ViolationKind::Acceleration,
 ];
 
-fn close(open: Open, kind: ViolationKind, axis: Axis) -> Violation {
+fn close(
+    open: Open,
+    kind: ViolationKind,
+    axis: Axis,
+    theta_of: &dyn Fn(&AxisVec) -> Option<f64>,
+) -> Violation {
     Violation {
         kind,
         axis: Some(axis),
         bodies: None,
         theta_start_deg: open.first.1,
-        theta_end_deg: open.last.1,
+        theta_end_deg: theta_of(&open.last.1),
         time_start_s: open.first.0,
         time_end_s: open.last.0,
         line: open.first.2,

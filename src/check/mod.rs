@@ -6,4 +6,4 @@ pub mod limits;
 pub mod run;
 pub mod scene;
 
-pub use run::{check, CheckOptions, CheckReport};
+pub use run::{check, check_reference, check_with, CheckOptions, CheckReport, SceneQueries};

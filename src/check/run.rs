@@ -59,16 +59,14 @@ impl CheckReport {
     }
 }
 
-/// The collision scene as a sink: each sample's axis positions, with its θ.
-struct SceneSink<'a> {
+/// The collision scene as a sink: each sample's axis positions (θ computed where reported).
+struct SceneSink {
     monitor: SceneMonitor,
-    theta_of: &'a dyn Fn(&AxisVec) -> Option<f64>,
 }
 
-impl Sink for SceneSink<'_> {
+impl Sink for SceneSink {
     fn push(&mut self, s: &Sample) -> Result<()> {
-        let theta = (self.theta_of)(&s.actual);
-        self.monitor.push(s.time_s, theta, s.line, &s.actual);
+        self.monitor.push_at(s.time_s, s.line, &s.actual);
         Ok(())
     }
 }
@@ -76,6 +74,32 @@ impl Sink for SceneSink<'_> {
 /// Checks a scenario's program against its machine. A cone or circle is checked as the
 /// generator writes it: one revolution, counter-clockwise, with no lead.
 pub fn check(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport> {
+    check_with(scenario, options, SceneQueries::Bounded)
+}
+
+/// [`check`] with the scene queried for every pair at every sample, no motion bound
+/// skipping any: the slow, unoptimised reference the bounded check is tested against.
+pub fn check_reference(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport> {
+    check_with(scenario, options, SceneQueries::Every)
+}
+
+/// When the collision scene is queried.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneQueries {
+    /// Conservative advancement on lever-arm bounds (what [`check`] does).
+    Bounded,
+    /// The same, with the tighter relative-motion bound for tool/table pairs as well.
+    BoundedRelative,
+    /// Every pair at every sample.
+    Every,
+}
+
+/// [`check`] with the scene queried as `queries` says.
+pub fn check_with(
+    scenario: &Scenario,
+    options: &CheckOptions,
+    queries: SceneQueries,
+) -> Result<CheckReport> {
     let machine = &scenario.machine;
     let kin = machine.kinematics;
     let frame = theta_frame(scenario);
@@ -99,8 +123,18 @@ pub fn check(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport>
                 monitor: SceneMonitor::new(
                     Scene::new(machine, &scenario.tool, &scenario.workpiece, near_miss)?,
                     machine,
-                ),
-                theta_of: &theta_of,
+                )
+                .with_theta(Box::new(theta_of)),
+            })
+            .map(|mut sink| {
+                match queries {
+                    SceneQueries::Bounded => {}
+                    SceneQueries::BoundedRelative => {
+                        sink.monitor = sink.monitor.with_relative_bounds(true)
+                    }
+                    SceneQueries::Every => sink.monitor = sink.monitor.exhaustive(),
+                }
+                sink
             })
         }
     };

@@ -10,13 +10,16 @@ use clap::{Parser, Subcommand};
 use crate::error::{Error, Result};
 use crate::input::program::{ConeTest, NcOptions};
 use crate::input::scenario::{Program, Scenario};
+use crate::study::shard::Shard;
 use crate::study::sweep::SweepParam;
 
 mod analyze;
+mod batch;
 mod check;
 mod cone;
-mod report;
 mod fit;
+mod merge;
+mod report;
 mod simulate;
 mod sweep;
 
@@ -101,7 +104,18 @@ pub enum Command {
         /// Also write report.html into the output folder (needs --output).
         #[arg(long, requires = "output")]
         html: bool,
+        /// Run only shard K of N (1 <= K <= N) of the work list and write
+        /// <output>/<name>.shard-K-of-N.json; join the N shards with `mtsim merge`.
+        #[arg(long, value_name = "K/N")]
+        shard: Option<Shard>,
     },
+    /// Many scenarios (or programs) in parallel: one row per scenario with the analyze,
+    /// check and (with --simulate) simulate figures, in batch.csv and batch.parquet.
+    /// Exit code 1 when a scenario has violations or fails.
+    Batch(batch::BatchArgs),
+    /// Join the shard files of one `sweep`, `sweep --feasibility` or `batch` run into the
+    /// files the unsharded run writes, byte for byte.
+    Merge(merge::MergeArgs),
     /// Does the program fit the machine? Axis travel, velocity and acceleration on every
     /// sample, and collisions between table, workpiece, tool, holder and spindle.
     /// Exit code 0 when clean, 1 when violations were found.
@@ -321,10 +335,20 @@ fn run(cli: Cli) -> Result<i32> {
             json,
             output,
             feasibility,
+            shard,
             ..
         } => {
             if feasibility {
-                sweep::placement(&scenario, &vary, &from, &to, &step, json, output.as_deref())
+                sweep::placement(
+                    &scenario,
+                    &vary,
+                    &from,
+                    &to,
+                    &step,
+                    json,
+                    output.as_deref(),
+                    shard,
+                )
             } else {
                 let one = |v: &[f64], what: &str| match v {
                     [x] => Ok(*x),
@@ -345,9 +369,12 @@ fn run(cli: Cli) -> Result<i32> {
                     one(&step, "step")?,
                     json,
                     output.as_deref(),
+                    shard,
                 )
             }
         }
+        Command::Batch(args) => batch::run(&args),
+        Command::Merge(args) => merge::run(&args),
     }
 }
 

@@ -2,12 +2,40 @@
 
 use std::path::Path;
 
+use serde::{Deserialize, Serialize};
+
 use super::{cone_of, print_stdout, progress_bar};
 use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
 use crate::report::{create_dir, write_atomic};
-use crate::study::sweep::{grid, sweep as sweep_reversals, SweepParam};
+use crate::study::placement::{placement_cells, PlacementMap};
+use crate::study::shard::{Shard, ShardFile};
+use crate::study::sweep::{grid, sweep_part, SweepParam, SweepResult};
 
+/// What identifies a sweep, and what its outputs show besides the rows.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct SweepHeader {
+    pub scenario: String,
+    pub param: SweepParam,
+    /// --from, --to, --step.
+    pub grid: [f64; 3],
+    /// Half apex (deg), inclination (deg) and ball-bar length (mm) of the cone, for the title.
+    pub cone: [f64; 3],
+}
+
+/// Tells where a shard went (stdout stays empty: the study is printed by `mtsim merge`).
+fn wrote_shard(path: &Path) {
+    eprintln!(
+        "wrote {}: join the shards with `mtsim merge`",
+        path.display()
+    );
+}
+
+fn shard_dir(output: Option<&Path>) -> Result<&Path> {
+    output.ok_or_else(|| Error::usage("--shard needs -o DIR, the folder for the shard file"))
+}
+
+#[allow(clippy::too_many_arguments)]
 pub fn sweep(
     path: &Path,
     param: SweepParam,
@@ -16,28 +44,66 @@ pub fn sweep(
     step: f64,
     as_json: bool,
     output: Option<&Path>,
+    shard: Option<Shard>,
 ) -> Result<i32> {
     let scenario = Scenario::load(path)?;
     let (cone, _) = cone_of(&scenario, "sweep")?;
     let values = grid(from, to, step)?;
-    let bar = progress_bar(values.len() as u64, "sweep");
-    let result = sweep_reversals(&scenario.machine, &cone, param, &values, &|| bar.inc(1))?;
+    let header = SweepHeader {
+        scenario: path.display().to_string(),
+        param,
+        grid: [from, to, step],
+        cone: [
+            cone.half_apex_deg,
+            cone.inclination_deg,
+            cone.ballbar_length_mm,
+        ],
+    };
+    let range = shard.unwrap_or(Shard::WHOLE).range(values.len());
+    let bar = progress_bar(range.len() as u64, "sweep");
+    let part = sweep_part(&scenario.machine, &cone, param, &values, range, &|| {
+        bar.inc(1)
+    })?;
     bar.finish_and_clear();
+    if let Some(shard) = shard {
+        let file = ShardFile::new("sweep", shard, values.len(), header, part);
+        wrote_shard(&file.write(shard_dir(output)?, &format!("sweep-{}", param.name()))?);
+        return Ok(0);
+    }
+    let result = SweepResult::join(param.name(), vec![part]);
+    emit_sweep(&header, &result, as_json, output)
+}
+
+/// Writes a sweep's files and prints it: the same for a whole run and for merged shards.
+pub(crate) fn emit_sweep(
+    header: &SweepHeader,
+    result: &SweepResult,
+    as_json: bool,
+    output: Option<&Path>,
+) -> Result<i32> {
+    let param = header.param;
     if let Some(dir) = output {
         create_dir(dir)?;
         let stem = format!("sweep-{}", param.name());
         let csv_path = dir.join(format!("{stem}.csv"));
+        let parquet_path = dir.join(format!("{stem}.parquet"));
         let svg_path = dir.join(format!("{stem}.svg"));
         write_atomic(&csv_path, &result.to_csv()?)?;
+        write_atomic(&parquet_path, &result.to_parquet()?)?;
         let title = format!(
             "Reversal angles vs {} (half apex {} deg, inclination {} deg, L {} mm)",
             param.name(),
-            cone.half_apex_deg,
-            cone.inclination_deg,
-            cone.ballbar_length_mm
+            header.cone[0],
+            header.cone[1],
+            header.cone[2]
         );
         write_atomic(&svg_path, result.to_svg(param.unit(), &title)?.as_bytes())?;
-        eprintln!("wrote {} and {}", csv_path.display(), svg_path.display());
+        eprintln!(
+            "wrote {}, {} and {}",
+            csv_path.display(),
+            parquet_path.display(),
+            svg_path.display()
+        );
     }
     if as_json {
         print_stdout(&format!(
@@ -90,6 +156,20 @@ pub fn sweep(
     Ok(0)
 }
 
+/// What identifies a placement map.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct PlacementHeader {
+    pub scenario: String,
+    pub params: [SweepParam; 2],
+    /// Per parameter: from, to, step.
+    pub grid: [[f64; 3]; 2],
+    /// The scenario's own values of the two parameters, marked on the map.
+    pub scenario_at: [f64; 2],
+    /// Radius of the rotary table, mm (its outline on the map).
+    pub table_radius_mm: f64,
+}
+
+#[allow(clippy::too_many_arguments)]
 pub fn placement(
     path: &Path,
     vary: &[SweepParam],
@@ -98,6 +178,7 @@ pub fn placement(
     step: &[f64],
     as_json: bool,
     output: Option<&Path>,
+    shard: Option<Shard>,
 ) -> Result<i32> {
     let [px, py] = vary[..] else {
         return Err(Error::usage(
@@ -108,21 +189,54 @@ pub fn placement(
     let xs = grid(pick(from, 0), pick(to, 0), pick(step, 0))?;
     let ys = grid(pick(from, 1), pick(to, 1), pick(step, 1))?;
     let scenario = Scenario::load(path)?;
-    let bar = progress_bar((xs.len() * ys.len()) as u64, "placement");
-    let map =
-        crate::study::placement::placement_map(&scenario, [px, py], &xs, &ys, &|| bar.inc(1))?;
+    let (scenario_at, table_radius_mm) =
+        crate::study::placement::scenario_marks(&scenario, [px, py]);
+    let header = PlacementHeader {
+        scenario: scenario.path.display().to_string(),
+        params: [px, py],
+        grid: [0, 1].map(|i| [pick(from, i), pick(to, i), pick(step, i)]),
+        scenario_at,
+        table_radius_mm,
+    };
+    let n = xs.len() * ys.len();
+    let range = shard.unwrap_or(Shard::WHOLE).range(n);
+    let bar = progress_bar(range.len() as u64, "placement");
+    let cells = placement_cells(&scenario, [px, py], &xs, &ys, range, &|| bar.inc(1))?;
     bar.finish_and_clear();
+    if let Some(shard) = shard {
+        let file = ShardFile::new("placement", shard, n, header, cells);
+        wrote_shard(&file.write(shard_dir(output)?, "placement")?);
+        return Ok(0);
+    }
+    let map = PlacementMap {
+        params: [px.name().to_string(), py.name().to_string()],
+        cells,
+        scenario_at: header.scenario_at,
+        table_radius_mm: header.table_radius_mm,
+    };
+    emit_placement(&header, &map, as_json, output)
+}
+
+/// Writes a placement map's files and prints it: the same for a whole run and for merged shards.
+pub(crate) fn emit_placement(
+    header: &PlacementHeader,
+    map: &PlacementMap,
+    as_json: bool,
+    output: Option<&Path>,
+) -> Result<i32> {
     if let Some(dir) = output {
         create_dir(dir)?;
         write_atomic(&dir.join("placement.csv"), &map.to_csv()?)?;
+        write_atomic(&dir.join("placement.parquet"), &map.to_parquet()?)?;
         let title = format!(
             "Where the test fits: {} (smallest margin, mm)",
-            scenario.path.display()
+            header.scenario
         );
         write_atomic(&dir.join("placement.svg"), map.to_svg(&title)?.as_bytes())?;
         eprintln!(
-            "wrote {} and {}",
+            "wrote {}, {} and {}",
             dir.join("placement.csv").display(),
+            dir.join("placement.parquet").display(),
             dir.join("placement.svg").display()
         );
     }

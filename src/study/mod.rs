@@ -1,12 +1,14 @@
 //! **study** — beside the pipeline: whole runs and many runs.
 //! Inputs: scenarios; the pipeline and its sinks; the analytic cone path.
-//! Outputs: reversal analyses, `simulate` runs with their files, sweeps over a parameter and placement maps.
+//! Outputs: reversal analyses, `simulate` runs with their files, sweeps, placement maps and batches, whole or in shards.
 
-pub mod fit;
-pub mod geometry;
+pub mod batch;
 pub mod diagnose;
 pub mod feed;
+pub mod fit;
+pub mod geometry;
 pub mod placement;
 pub mod reversals;
+pub mod shard;
 pub mod simulate;
 pub mod sweep;

@@ -7,7 +7,7 @@
 //! does not fit, whatever its margin.
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::check::{check, CheckOptions};
 use crate::error::{Error, Result};
@@ -15,11 +15,12 @@ use crate::input::scenario::{check_cone, Program, Scenario};
 use crate::study::sweep::SweepParam;
 
 /// One grid cell.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PlacementCell {
     pub x: f64,
     pub y: f64,
-    /// Smallest margin, mm (negative: exceeded).
+    /// Smallest margin, mm (negative: exceeded); infinite (JSON null) when nothing bounds it.
+    #[serde(deserialize_with = "null_is_infinite")]
     pub margin_mm: f64,
     /// No violation of any kind.
     pub fits: bool,
@@ -27,6 +28,11 @@ pub struct PlacementCell {
     pub limiting: String,
     /// Violations found.
     pub violations: usize,
+}
+
+/// JSON writes an infinite margin as null; read null back as +inf.
+fn null_is_infinite<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -60,6 +66,36 @@ pub fn placement_map(
     ys: &[f64],
     progress: &(dyn Fn() + Sync),
 ) -> Result<PlacementMap> {
+    let n = xs.len() * ys.len();
+    let cells = placement_cells(scenario, params, xs, ys, 0..n, progress)?;
+    let (scenario_at, table_radius_mm) = scenario_marks(scenario, params);
+    Ok(PlacementMap {
+        params: [params[0].name().to_string(), params[1].name().to_string()],
+        cells,
+        scenario_at,
+        table_radius_mm,
+    })
+}
+
+/// What the map marks besides its cells: the scenario's own values of the two parameters
+/// (zero without a cone) and the rotary table's radius, mm.
+pub fn scenario_marks(scenario: &Scenario, params: [SweepParam; 2]) -> ([f64; 2], f64) {
+    let at = match &scenario.program {
+        Program::Cone { cone, .. } => [value_of(params[0], cone), value_of(params[1], cone)],
+        _ => [0.0, 0.0],
+    };
+    (at, scenario.machine.scene.table.radius_mm)
+}
+
+/// The cells `range` of the grid (row by row in y, x fastest): one shard of the map.
+pub fn placement_cells(
+    scenario: &Scenario,
+    params: [SweepParam; 2],
+    xs: &[f64],
+    ys: &[f64],
+    range: std::ops::Range<usize>,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Vec<PlacementCell>> {
     let Program::Cone { cone, .. } = &scenario.program else {
         return Err(Error::invalid(
             &scenario.path,
@@ -78,7 +114,7 @@ pub fn placement_map(
             ))
         })?;
     }
-    let cells = points
+    points[range]
         .par_iter()
         .map(|&(x, y)| {
             let mut s = scenario.clone();
@@ -117,16 +153,43 @@ pub fn placement_map(
                 violations: report.violations.len(),
             })
         })
-        .collect::<Result<Vec<_>>>()?;
-    Ok(PlacementMap {
-        params: [params[0].name().to_string(), params[1].name().to_string()],
-        cells,
-        scenario_at: [value_of(params[0], cone), value_of(params[1], cone)],
-        table_radius_mm: scenario.machine.scene.table.radius_mm,
-    })
+        .collect::<Result<Vec<_>>>()
 }
 
 impl PlacementMap {
+    /// The CSV table as Parquet: `<param x>`, `<param y>`, `margin_mm` (full precision),
+    /// `fits`, `violations`, `limiting`.
+    pub fn to_parquet(&self) -> Result<Vec<u8>> {
+        use crate::report::parquet::{Column, Table};
+        let c = &self.cells;
+        Table::new()
+            .with(
+                &self.params[0],
+                Column::F64(c.iter().map(|c| Some(c.x)).collect()),
+            )
+            .with(
+                &self.params[1],
+                Column::F64(c.iter().map(|c| Some(c.y)).collect()),
+            )
+            .with(
+                "margin_mm",
+                Column::F64(c.iter().map(|c| Some(c.margin_mm)).collect()),
+            )
+            .with(
+                "fits",
+                Column::Bool(c.iter().map(|c| Some(c.fits)).collect()),
+            )
+            .with(
+                "violations",
+                Column::U64(c.iter().map(|c| Some(c.violations as u64)).collect()),
+            )
+            .with(
+                "limiting",
+                Column::Str(c.iter().map(|c| Some(c.limiting.clone())).collect()),
+            )
+            .to_parquet()
+    }
+
     pub fn to_csv(&self) -> Result<Vec<u8>> {
         let mut w = csv::Writer::from_writer(Vec::new());
         let err = |e: csv::Error| Error::usage(format!("cannot format the CSV: {e}"));

@@ -7,7 +7,7 @@
 //! [`COINCIDENCE_SPREAD_DEG`], refined by golden-section search to [`REFINE_TOLERANCE`].
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
@@ -23,7 +23,7 @@ pub const COINCIDENCE_SPREAD_DEG: f64 = 0.5;
 pub const REFINE_TOLERANCE: f64 = 0.1;
 
 /// The parameter a sweep varies.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
 #[value(rename_all = "snake_case")]
 pub enum SweepParam {
@@ -70,7 +70,7 @@ impl SweepParam {
 }
 
 /// One row of a sweep.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SweepRow {
     pub value: f64,
     /// Reversal angles per axis, deg.
@@ -80,7 +80,7 @@ pub struct SweepRow {
 }
 
 /// A parameter value at which the X, Y and Z reversal angles meet.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Coincidence {
     pub value: f64,
     /// The mean angle of the closest triple, deg.
@@ -112,6 +112,14 @@ pub fn grid(from: f64, to: f64, step: f64) -> Result<Vec<f64>> {
     Ok((0..=n).map(|k| from + step * k as f64).collect())
 }
 
+/// One shard's part of a sweep: its rows, and the coincidences found at its rows before
+/// neighbouring ones are merged ([`SweepResult::join`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SweepPart {
+    pub rows: Vec<SweepRow>,
+    pub candidates: Vec<Coincidence>,
+}
+
 /// Reversal analysis of `cone` with `param` at each value of `values`, in parallel.
 /// `progress` is called once per finished value (from any thread).
 pub fn sweep(
@@ -121,6 +129,21 @@ pub fn sweep(
     values: &[f64],
     progress: &(dyn Fn() + Sync),
 ) -> Result<SweepResult> {
+    let part = sweep_part(machine, cone, param, values, 0..values.len(), progress)?;
+    Ok(SweepResult::join(param.name(), vec![part]))
+}
+
+/// The rows `range` of a sweep over `values` (one shard of it), in parallel. A coincidence
+/// is a local minimum over neighbouring rows, so the rows just outside `range` are analysed
+/// too (not returned): each shard finds exactly the coincidences of its rows.
+pub fn sweep_part(
+    machine: &Machine,
+    cone: &ConeTest,
+    param: SweepParam,
+    values: &[f64],
+    range: std::ops::Range<usize>,
+    progress: &(dyn Fn() + Sync),
+) -> Result<SweepPart> {
     for &v in values {
         check_cone(&param.apply(cone, v)).map_err(|(key, message)| {
             Error::usage(format!(
@@ -129,11 +152,20 @@ pub fn sweep(
             ))
         })?;
     }
-    let rows: Vec<SweepRow> = values
+    let halo = range.start.saturating_sub(1)..(range.end + 1).min(values.len());
+    let halo = if range.is_empty() {
+        range.clone()
+    } else {
+        halo
+    };
+    let rows: Vec<SweepRow> = values[halo.clone()]
         .par_iter()
-        .map(|&value| {
+        .enumerate()
+        .map(|(k, &value)| {
             let analysis = analyse_at(machine, cone, param, value);
-            progress();
+            if range.contains(&(halo.start + k)) {
+                progress();
+            }
             SweepRow {
                 value,
                 reversals_deg: analysis
@@ -145,12 +177,37 @@ pub fn sweep(
             }
         })
         .collect();
-    let coincidences = find_coincidences(machine, cone, param, &rows);
-    Ok(SweepResult {
-        param: param.name().to_string(),
-        rows,
-        coincidences,
+    let own = range.start - halo.start..range.end - halo.start;
+    let candidates = find_coincidences(machine, cone, param, &rows, own.clone());
+    Ok(SweepPart {
+        rows: rows[own].to_vec(),
+        candidates,
     })
+}
+
+impl SweepResult {
+    /// The sweep from its parts in order: rows concatenated; of neighbouring coincidences
+    /// (plateaus of equal spread give several minima) the first is kept.
+    pub fn join(param: &str, parts: Vec<SweepPart>) -> SweepResult {
+        let mut rows = Vec::new();
+        let mut coincidences: Vec<Coincidence> = Vec::new();
+        for part in parts {
+            rows.extend(part.rows);
+            for c in part.candidates {
+                if coincidences
+                    .last()
+                    .is_none_or(|l| (l.value - c.value).abs() > 2.0 * REFINE_TOLERANCE)
+                {
+                    coincidences.push(c);
+                }
+            }
+        }
+        SweepResult {
+            param: param.to_string(),
+            rows,
+            coincidences,
+        }
+    }
 }
 
 fn analyse_at(machine: &Machine, cone: &ConeTest, param: SweepParam, value: f64) -> Analysis {
@@ -200,68 +257,90 @@ fn arc_spread(mut angles: [f64; 3]) -> (f64, f64) {
     (spread, (start + spread / 2.0).rem_euclid(360.0))
 }
 
+/// Coincidence candidates at the rows `own` of `rows` (in order, not yet de-duplicated),
+/// refined in parallel.
 fn find_coincidences(
     machine: &Machine,
     cone: &ConeTest,
     param: SweepParam,
     rows: &[SweepRow],
+    own: std::ops::Range<usize>,
 ) -> Vec<Coincidence> {
     let spread_at = |v: f64| linear_spread(&analyse_at(machine, cone, param, v));
-    let mut out = Vec::new();
-    for i in 0..rows.len() {
-        let Some(s) = rows[i].spread_deg else {
-            continue;
-        };
-        let left = i.checked_sub(1).and_then(|j| rows[j].spread_deg);
-        let right = rows.get(i + 1).and_then(|r| r.spread_deg);
-        if left.is_some_and(|l| l < s) || right.is_some_and(|r| r < s) {
-            continue;
-        }
-        // Bracket the minimum by the neighbours, then golden-section search in it.
-        let lo = rows[i.saturating_sub(1)].value;
-        let hi = rows[(i + 1).min(rows.len() - 1)].value;
-        let (mut a, mut b) = (lo, hi);
-        let g = 0.5 * (5f64.sqrt() - 1.0);
-        let f = |v: f64| spread_at(v).map_or(f64::INFINITY, |(s, _)| s);
-        let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
-        let (mut fc, mut fd) = (f(c), f(d));
-        while b - a > REFINE_TOLERANCE / 10.0 {
-            if fc < fd {
-                b = d;
-                d = c;
-                fd = fc;
-                c = b - g * (b - a);
-                fc = f(c);
-            } else {
-                a = c;
-                c = d;
-                fc = fd;
-                d = a + g * (b - a);
-                fd = f(d);
+    let found: Vec<Option<Coincidence>> = own
+        .into_par_iter()
+        .map(|i| {
+            let s = rows[i].spread_deg?;
+            let left = i.checked_sub(1).and_then(|j| rows[j].spread_deg);
+            let right = rows.get(i + 1).and_then(|r| r.spread_deg);
+            if left.is_some_and(|l| l < s) || right.is_some_and(|r| r < s) {
+                return None;
             }
-        }
-        let v = 0.5 * (a + b);
-        if let Some((spread, theta)) = spread_at(v) {
-            if spread < COINCIDENCE_SPREAD_DEG {
-                let value = (v / REFINE_TOLERANCE).round() / REFINE_TOLERANCE.recip();
-                // Plateaus of equal spread give neighbouring minima: keep one.
-                if out
-                    .last()
-                    .is_none_or(|c: &Coincidence| (c.value - value).abs() > 2.0 * REFINE_TOLERANCE)
-                {
-                    out.push(Coincidence {
-                        value,
-                        theta_deg: theta,
-                        spread_deg: spread,
-                    });
+            // Bracket the minimum by the neighbours, then golden-section search in it.
+            let lo = rows[i.saturating_sub(1)].value;
+            let hi = rows[(i + 1).min(rows.len() - 1)].value;
+            let (mut a, mut b) = (lo, hi);
+            let g = 0.5 * (5f64.sqrt() - 1.0);
+            let f = |v: f64| spread_at(v).map_or(f64::INFINITY, |(s, _)| s);
+            let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
+            let (mut fc, mut fd) = (f(c), f(d));
+            while b - a > REFINE_TOLERANCE / 10.0 {
+                if fc < fd {
+                    b = d;
+                    d = c;
+                    fd = fc;
+                    c = b - g * (b - a);
+                    fc = f(c);
+                } else {
+                    a = c;
+                    c = d;
+                    fc = fd;
+                    d = a + g * (b - a);
+                    fd = f(d);
                 }
             }
-        }
-    }
-    out
+            let v = 0.5 * (a + b);
+            let (spread, theta) = spread_at(v)?;
+            (spread < COINCIDENCE_SPREAD_DEG).then(|| Coincidence {
+                value: (v / REFINE_TOLERANCE).round() / REFINE_TOLERANCE.recip(),
+                theta_deg: theta,
+                spread_deg: spread,
+            })
+        })
+        .collect();
+    found.into_iter().flatten().collect()
 }
 
 impl SweepResult {
+    /// The CSV table as Parquet: columns `<param>`, `axis`, `reversal_deg`, `spread_deg`
+    /// (null where the CSV cell is empty), full precision.
+    pub fn to_parquet(&self) -> Result<Vec<u8>> {
+        use crate::report::parquet::{Column, Table};
+        let (mut value, mut axis, mut reversal, mut spread) = (vec![], vec![], vec![], vec![]);
+        for row in &self.rows {
+            for (a, angles) in &row.reversals_deg {
+                for r in angles {
+                    value.push(Some(row.value));
+                    axis.push(Some(a.clone()));
+                    reversal.push(Some(*r));
+                    spread.push(row.spread_deg);
+                }
+            }
+        }
+        for c in &self.coincidences {
+            value.push(Some(c.value));
+            axis.push(Some("XYZ".to_string()));
+            reversal.push(Some(c.theta_deg));
+            spread.push(Some(c.spread_deg));
+        }
+        Table::new()
+            .with(&self.param, Column::F64(value))
+            .with("axis", Column::Str(axis))
+            .with("reversal_deg", Column::F64(reversal))
+            .with("spread_deg", Column::F64(spread))
+            .to_parquet()
+    }
+
     /// CSV: one row per (value, axis, reversal), then the coincidences.
     pub fn to_csv(&self) -> Result<Vec<u8>> {
         let mut w = csv::Writer::from_writer(Vec::new());

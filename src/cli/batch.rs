@@ -1,0 +1,142 @@
+//! `mtsim batch`: many scenarios in parallel, one row each, whole or one shard.
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::{print_stdout, progress_bar};
+use crate::error::{Error, Result};
+use crate::report::{create_dir, write_atomic};
+use crate::study::batch::{run_scenario, to_csv, to_parquet, BatchRow};
+use crate::study::shard::{Shard, ShardFile};
+
+#[derive(Debug, clap::Args)]
+pub struct BatchArgs {
+    /// Scenario files (TOML).
+    pub scenarios: Vec<PathBuf>,
+    /// A file listing scenario files, one a line (relative to the list's folder; blank
+    /// lines and lines starting with # are skipped); they come before the ones given as arguments.
+    #[arg(long, value_name = "FILE")]
+    pub list: Option<PathBuf>,
+    /// Output folder: batch.csv and batch.parquet (or the shard file with --shard).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Simulate each scenario too (ball-bar G, F, H), writing its files to
+    /// <output>/runs/<n>-<name>/.
+    #[arg(long)]
+    pub simulate: bool,
+    /// Run only shard K of N (1 <= K <= N) of the scenarios and write
+    /// <output>/batch.shard-K-of-N.json; join the N shards with `mtsim merge`.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<Shard>,
+    /// Print the rows as one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// What identifies a batch: its work list and whether it simulates.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct BatchHeader {
+    pub scenarios: Vec<String>,
+    pub simulate: bool,
+}
+
+pub fn run(args: &BatchArgs) -> Result<i32> {
+    let mut work: Vec<(String, PathBuf)> = Vec::new();
+    if let Some(list) = &args.list {
+        let text = std::fs::read_to_string(list)
+            .map_err(|e| Error::usage(format!("cannot read the list {}: {e}", list.display())))?;
+        let base = list.parent().unwrap_or(Path::new(""));
+        for line in text.lines().map(str::trim) {
+            if !line.is_empty() && !line.starts_with('#') {
+                work.push((line.to_string(), base.join(line)));
+            }
+        }
+    }
+    for s in &args.scenarios {
+        work.push((s.display().to_string(), s.clone()));
+    }
+    if work.is_empty() {
+        return Err(Error::usage(
+            "mtsim batch needs scenario files: give them as arguments or with --list FILE",
+        ));
+    }
+    let header = BatchHeader {
+        scenarios: work.iter().map(|(s, _)| s.clone()).collect(),
+        simulate: args.simulate,
+    };
+    let range = args.shard.unwrap_or(Shard::WHOLE).range(work.len());
+    let bar = progress_bar(range.len() as u64, "batch");
+    let output = &args.output;
+    let rows: Vec<BatchRow> = range
+        .into_par_iter()
+        .map(|i| {
+            let (listed, path) = &work[i];
+            let dir = args.simulate.then(|| {
+                let stem = path.file_stem().map(|s| s.to_string_lossy().to_string());
+                output
+                    .join("runs")
+                    .join(format!("{:04}-{}", i + 1, stem.unwrap_or_default()))
+            });
+            let row = run_scenario(listed, path, dir.as_deref());
+            bar.inc(1);
+            row
+        })
+        .collect();
+    bar.finish_and_clear();
+    if let Some(shard) = args.shard {
+        let file = ShardFile::new("batch", shard, work.len(), header, rows);
+        let path = file.write(output, "batch")?;
+        eprintln!(
+            "wrote {}: join the shards with `mtsim merge`",
+            path.display()
+        );
+        return Ok(0);
+    }
+    emit(&rows, args.json, output)
+}
+
+/// Writes batch.csv and batch.parquet and prints the rows: the same for a whole run and for
+/// merged shards. Exit code 1 when any scenario failed or has violations.
+pub(crate) fn emit(rows: &[BatchRow], as_json: bool, output: &Path) -> Result<i32> {
+    create_dir(output)?;
+    let (csv, parquet) = (output.join("batch.csv"), output.join("batch.parquet"));
+    write_atomic(&csv, &to_csv(rows)?)?;
+    write_atomic(&parquet, &to_parquet(rows)?)?;
+    eprintln!("wrote {} and {}", csv.display(), parquet.display());
+    if as_json {
+        let json = serde_json::json!({ "rows": rows });
+        print_stdout(&format!("{json}\n"));
+    } else {
+        let mut out = format!(
+            "{:<40} {:>10} {:>12} {:>14}  {}\n",
+            "scenario", "violations", "margin", "clearance mm", "G um"
+        );
+        let f = |v: Option<f64>, p: usize| v.map_or("-".to_string(), |v| format!("{v:.p$}"));
+        for r in rows {
+            match &r.error {
+                Some(e) => out.push_str(&format!("{:<40} error: {e}\n", r.scenario)),
+                None => out.push_str(&format!(
+                    "{:<40} {:>10} {:>12} {:>14}  {}\n",
+                    r.scenario,
+                    r.violations.unwrap_or(0),
+                    match (&r.min_margin, &r.min_margin_axis) {
+                        (Some(m), Some(a)) => format!("{m:.3} {a}"),
+                        _ => "-".to_string(),
+                    },
+                    f(r.min_clearance_mm, 3),
+                    f(r.circular_deviation_um, 2)
+                )),
+            }
+        }
+        let clean = rows.iter().filter(|r| r.is_clean()).count();
+        out.push_str(&format!("{clean} of {} scenarios run clean\n", rows.len()));
+        print_stdout(&out);
+    }
+    Ok(if rows.iter().all(BatchRow::is_clean) {
+        0
+    } else {
+        1
+    })
+}

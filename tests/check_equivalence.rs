@@ -100,9 +100,18 @@ fn agree_with(
         );
     }
     let near_miss = s.check.near_miss_mm.unwrap_or(s.machine.scene.near_miss_mm);
+    // GJK is warm-started from the pair's previous query, and the two paths query different
+    // samples, so the same pose can come back a few tenths of a µm apart (seen: 0.28 µm at
+    // 18 mm on cone-15-10-yt25 once the scene used the actual kinematic chain).
+    const GJK_MM: f64 = 1e-3;
     match (fast.min_clearance_mm, slow.min_clearance_mm) {
-        (Some(f), Some(r)) if r < near_miss => assert!((f - r).abs() <= 1e-9, "{what}: {f} vs {r}"),
-        (Some(f), Some(r)) => assert!(r >= near_miss - 1e-9 && f >= r - 1e-9, "{what}: {f} vs {r}"),
+        (Some(f), Some(r)) if r < near_miss => {
+            assert!((f - r).abs() <= GJK_MM, "{what}: {f} vs {r}")
+        }
+        (Some(f), Some(r)) => assert!(
+            r >= near_miss - GJK_MM && f >= r - GJK_MM,
+            "{what}: {f} vs {r}"
+        ),
         (f, r) => assert_eq!(f.is_some(), r.is_some(), "{what}"),
     }
     for (a, b) in fast.engagement.iter().zip(slow.engagement.iter()) {

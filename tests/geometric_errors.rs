@@ -1,4 +1,4 @@
-//! Geometric errors of the rotary axes (shared/spec/geometric-errors.md): closed forms, and
+//! Geometric errors of the rotary axes (docs/geometric-errors.md): closed forms, and
 //! an independent implementation of the spec against `mtsim simulate`.
 //!
 //! The reference below is written from the spec's equations alone (its own Rodrigues

@@ -65,6 +65,7 @@ fn block(line: usize, motion: Motion, start: AxisVec, end: AxisVec, feed: Option
         feed,
         feed_mode: FeedMode::PerMinute,
         tcp: false,
+        ..Move::default()
     }
 }
 

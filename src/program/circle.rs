@@ -95,6 +95,7 @@ impl CircleProgram {
                 feed: (motion != Motion::Rapid).then_some(c.feed_mm_min),
                 feed_mode: FeedMode::PerMinute,
                 tcp: false,
+                ..Move::default()
             };
             previous = end;
             mv

@@ -244,6 +244,7 @@ impl ConeProgram {
                 feed,
                 feed_mode,
                 tcp: options.tcp,
+                ..Move::default()
             };
             previous = end;
             q_prev = q;

@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines, NcOptions};
 use crate::input::scenario::{Program, Scenario};
 
-pub use ngc::{FeedMode, Motion, Move};
+pub use ngc::{FeedMode, Motion, Move, MoveKind, PathControl};
 
 /// A stream of canonical moves; yields at most one error, then stops.
 pub type Moves<'a> = Box<dyn Iterator<Item = Result<Move>> + 'a>;

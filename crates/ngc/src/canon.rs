@@ -30,6 +30,67 @@ pub enum Motion {
     Dwell { seconds: f64 },
 }
 
+/// The kind of a canonical move, as `mtsim blocks` prints it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MoveKind {
+    /// G00 and every traverse the interpreter makes at rapid (G28, G53 G00, cycle retracts).
+    Rapid,
+    /// Straight feed move (G01, cycle feeds).
+    Feed,
+    /// Circular or helical feed move (G02/G03).
+    Arc,
+    /// Dwell (G04, cycle dwells).
+    Dwell,
+}
+
+impl MoveKind {
+    /// `rapid`, `feed`, `arc` or `dwell`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            MoveKind::Rapid => "rapid",
+            MoveKind::Feed => "feed",
+            MoveKind::Arc => "arc",
+            MoveKind::Dwell => "dwell",
+        }
+    }
+}
+
+/// Path-control mode (LinuxCNC group 13): how consecutive moves join.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PathControl {
+    /// G61: exact path. The tool follows the programmed corners exactly (it slows to a stop
+    /// at a corner that is not tangent); no blending.
+    ExactPath,
+    /// G61.1: exact stop. Every move ends at rest.
+    ExactStop,
+    /// G64: blending. Corners may be rounded by at most `tolerance_mm` (G64 P, `None`: as
+    /// fast as possible, any deviation the planner needs); collinear short moves may be merged
+    /// within `naive_cam_mm` (G64 Q, `None`: no merging).
+    Blend {
+        tolerance_mm: Option<f64>,
+        naive_cam_mm: Option<f64>,
+    },
+}
+
+impl PathControl {
+    /// G64 without P or Q: LinuxCNC's default.
+    pub const BLEND: PathControl = PathControl::Blend {
+        tolerance_mm: None,
+        naive_cam_mm: None,
+    };
+
+    /// True for G61 and G61.1: the planner must not round corners.
+    pub const fn is_exact(self) -> bool {
+        !matches!(self, PathControl::Blend { .. })
+    }
+}
+
+impl Default for PathControl {
+    fn default() -> PathControl {
+        PathControl::BLEND
+    }
+}
+
 /// How F is read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FeedMode {
@@ -40,7 +101,11 @@ pub enum FeedMode {
 }
 
 /// One canonical move: an executable block with modal state resolved. Positions are
-/// absolute, mm and deg.
+/// absolute machine coordinates, mm and deg: work offsets (G54-G59.3, G92, G52) and the
+/// tool length offset (G43) are already applied, so `end` is where the machine axes go.
+///
+/// Build one with struct-update syntax so that fields added later keep code compiling:
+/// `Move { line, motion, start, end, feed: Some(600.0), ..Move::default() }`.
 ///
 /// This is the narrow interface between reading a program and moving the machine (the
 /// role of LinuxCNC's canonical machining calls): generators emit it too.
@@ -59,9 +124,44 @@ pub struct Move {
     pub feed_mode: FeedMode,
     /// G43.4 tool-centre-point control active: X Y Z are the tool tip in the table frame.
     pub tcp: bool,
+    /// Active tool number (the T of the last M6 or M61 Q), 0 for no tool.
+    pub tool: u32,
+    /// Tool length offset in effect along Z, mm (G43 H, G43.1, G43.2; 0 after G49). Already
+    /// added to `end[Z]`; under TCP it is the tool length the kinematics use.
+    pub tool_length_mm: f64,
+    /// Path-control mode in effect for this move: how it joins the next.
+    pub path: PathControl,
+}
+
+impl Default for Move {
+    /// A rapid of length zero at the origin, line 0, no feed, no tool, G64 blending.
+    fn default() -> Move {
+        Move {
+            line: 0,
+            motion: Motion::Rapid,
+            start: AxisVec::ZERO,
+            end: AxisVec::ZERO,
+            feed: None,
+            feed_mode: FeedMode::PerMinute,
+            tcp: false,
+            tool: 0,
+            tool_length_mm: 0.0,
+            path: PathControl::BLEND,
+        }
+    }
 }
 
 impl Move {
+    /// What kind of move this is: rapid, feed, arc or dwell.
+    pub const fn kind(&self) -> MoveKind {
+        match self.motion {
+            Motion::Rapid => MoveKind::Rapid,
+            Motion::Linear => MoveKind::Feed,
+            Motion::Arc { .. } => MoveKind::Arc,
+            Motion::Dwell { .. } => MoveKind::Dwell,
+        }
+    }
+
     /// Signed sweep angle of an arc block, rad: positive counter-clockwise (G03), negative
     /// clockwise (G02), magnitude in (0, 2π]; ±2π for a full circle. `None` for other
     /// motions.

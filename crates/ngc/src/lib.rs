@@ -32,7 +32,7 @@ mod error;
 mod reader;
 
 pub use axis::{Axis, AxisVec, Plane};
-pub use canon::{FeedMode, Motion, Move, FULL_CIRCLE_TOLERANCE_MM};
+pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
 pub use error::{line_column, Error, Result, Syntax};
 pub use reader::{
     read_file, read_str, Moves, Source, StrSource, ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH,

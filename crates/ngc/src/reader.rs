@@ -949,6 +949,7 @@ impl Modal {
                 feed: self.feed,
                 feed_mode: self.feed_mode,
                 tcp: self.tcp,
+                ..Move::default()
             },
             end,
         ))
@@ -1004,6 +1005,7 @@ impl Modal {
             feed: self.feed,
             feed_mode: self.feed_mode,
             tcp: self.tcp,
+            ..Move::default()
         })
     }
 

@@ -111,6 +111,7 @@ fn json_and_table_hold_the_same_rows() {
     assert_eq!(rows[3]["line"], 6);
     assert_eq!(rows[7]["c"], 90.0);
     assert!(rows[0]["feed_mm_min"].is_null());
+    assert_eq!(rows[0]["tool"], 0);
 
     let table = String::from_utf8(blocks(&s, &[]).stdout).unwrap();
     assert_eq!(table.lines().count(), 9, "{table}");

@@ -43,22 +43,20 @@ pub struct BlockRow {
     pub feed_mm_min: Option<f64>,
     /// Dwell time, s; null for other moves.
     pub dwell_s: Option<f64>,
-    /// Active tool number; null when the program has selected none.
-    pub tool: Option<u32>,
+    /// Active tool number (the T of the last tool change), 0 for no tool.
+    pub tool: u32,
 }
 
 impl BlockRow {
     pub fn of(m: &Move) -> BlockRow {
         let e = m.end;
-        let (kind, dwell_s) = match m.motion {
-            Motion::Rapid => ("rapid", None),
-            Motion::Linear => ("feed", None),
-            Motion::Arc { .. } => ("arc", None),
-            Motion::Dwell { seconds } => ("dwell", Some(seconds)),
+        let dwell_s = match m.motion {
+            Motion::Dwell { seconds } => Some(seconds),
+            _ => None,
         };
         BlockRow {
             line: m.line,
-            kind,
+            kind: m.kind().name(),
             x: e[Axis::X],
             y: e[Axis::Y],
             z: e[Axis::Z],
@@ -67,7 +65,7 @@ impl BlockRow {
             c: e[Axis::C],
             feed_mm_min: feed_mm_min(m),
             dwell_s,
-            tool: None,
+            tool: m.tool,
         }
     }
 }
@@ -133,7 +131,7 @@ fn csv_row(r: &BlockRow) -> String {
         r.c,
         opt(r.feed_mm_min),
         opt(r.dwell_s),
-        opt(r.tool)
+        r.tool
     )
 }
 
@@ -152,16 +150,7 @@ fn table_row(r: &BlockRow) -> String {
     };
     format!(
         "{:>6} {:<5} {:>12.4} {:>12.4} {:>12.4} {:>10.4} {:>10.4} {:>10.4} {:>11} {:>4}\n",
-        r.line,
-        r.kind,
-        r.x,
-        r.y,
-        r.z,
-        r.a,
-        r.b,
-        r.c,
-        feed,
-        r.tool.map_or("-".to_string(), |t| t.to_string())
+        r.line, r.kind, r.x, r.y, r.z, r.a, r.b, r.c, feed, r.tool
     )
 }
 

@@ -18,13 +18,6 @@ use std::time::Duration;
 
 use common::{machine, mtsim_plain, rs274, scratch};
 
-/// End points must agree within this, mm or deg (the figure).
-const END_TOLERANCE: f64 = 1e-4;
-
-/// rs274 prints 4 decimals in program units: a feed printed in in/min is known to
-/// ±0.00005 in/min = ±0.00127 mm/min.
-const FEED_TOLERANCE_MM_MIN: f64 = 1.5e-3;
-
 fn data(dir: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/data")
@@ -43,28 +36,15 @@ fn programs(dir: &Path) -> Vec<PathBuf> {
     v
 }
 
-/// A move as `mtsim blocks --csv` prints it.
-#[derive(Debug)]
-struct Row {
-    line: usize,
-    kind: String,
-    end: [f64; 6],
-    feed: Option<f64>,
-    dwell: Option<f64>,
-}
-
 /// Runs `mtsim blocks --csv` on `program` (on an A/C machine, or B/C when the program has
 /// B words); the rows, or the error text.
-fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<Row>, String> {
+fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<rs274::Row>, String> {
     let text = std::fs::read_to_string(program).unwrap();
-    let uses_b = text.lines().any(|l| {
-        let code = l.split(['(', ';']).next().unwrap_or("");
-        code.to_ascii_uppercase().contains('B')
-            && !code.to_ascii_uppercase().contains("SUB")
-            && !code.to_ascii_uppercase().contains("BREAK")
-            && !code.to_ascii_uppercase().contains("ABS")
+    let machine_path = machine(if rs274::uses_b_axis(&text) {
+        "trt-bc"
+    } else {
+        "trt-ac"
     });
-    let machine_path = machine(if uses_b { "trt-bc" } else { "trt-ac" });
     let scenario = work.join("s.toml");
     std::fs::write(
         &scenario,
@@ -78,22 +58,9 @@ fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<Row>, String> {
     if !out.status.success() {
         return Err(String::from_utf8_lossy(&out.stderr).into_owned());
     }
-    let csv = String::from_utf8(out.stdout).unwrap();
-    let num = |s: &str| (!s.is_empty()).then(|| s.parse::<f64>().unwrap());
-    Ok(csv
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            Row {
-                line: f[0].parse().unwrap(),
-                kind: f[1].to_string(),
-                end: std::array::from_fn(|i| f[2 + i].parse().unwrap()),
-                feed: num(f[8]),
-                dwell: num(f[9]),
-            }
-        })
-        .collect())
+    Ok(rs274::parse_blocks_csv(
+        &String::from_utf8(out.stdout).unwrap(),
+    ))
 }
 
 /// Compares one program; `Err` says how the two interpreters differ.
@@ -109,63 +76,7 @@ fn compare(rs274: &Path, program: &Path, tools_inch: &Path) -> Result<usize, Str
     }
     let ours = mtsim_blocks(program, &work)?;
     let _ = std::fs::remove_dir_all(&work);
-    // A G0/G1 block without axis words: rs274 emits a move of length zero, mtsim none
-    // (docs/rs274.md). Such moves are left out on both sides.
-    let moving = |kind: &str, end: &[f64; 6], prev: &mut [f64; 6]| {
-        let keep = !matches!(kind, "rapid" | "feed") || end != prev;
-        *prev = *end;
-        keep
-    };
-    let mut prev = [0.0; 6];
-    let rs_moves: Vec<_> = rs
-        .moves
-        .into_iter()
-        .filter(|m| moving(m.kind, &m.end, &mut prev))
-        .collect();
-    let mut prev = [0.0; 6];
-    let ours: Vec<_> = ours
-        .into_iter()
-        .filter(|m| moving(&m.kind, &m.end, &mut prev))
-        .collect();
-    let axes = ["X", "Y", "Z", "A", "B", "C"];
-    for (k, (r, m)) in rs_moves.iter().zip(&ours).enumerate() {
-        let at = format!(
-            "move {} (rs274 call {}, mtsim line {})",
-            k + 1,
-            r.call,
-            m.line
-        );
-        if r.kind != m.kind {
-            return Err(format!("{at}: rs274 {} but mtsim {}", r.kind, m.kind));
-        }
-        for i in 0..6 {
-            let d = (r.end[i] - m.end[i]).abs();
-            if !(d <= END_TOLERANCE) {
-                return Err(format!(
-                    "{at}: {} is {} in rs274 but {} in mtsim (difference {d:.3e})",
-                    axes[i], r.end[i], m.end[i]
-                ));
-            }
-        }
-        if let (Some(a), Some(b)) = (r.feed_mm_min, m.feed) {
-            if !((a - b).abs() <= FEED_TOLERANCE_MM_MIN) {
-                return Err(format!("{at}: feed {a} mm/min in rs274 but {b} in mtsim"));
-            }
-        }
-        if let (Some(a), Some(b)) = (r.dwell_s, m.dwell) {
-            if !((a - b).abs() <= 1e-4) {
-                return Err(format!("{at}: dwell {a} s in rs274 but {b} s in mtsim"));
-            }
-        }
-    }
-    if rs_moves.len() != ours.len() {
-        return Err(format!(
-            "rs274 makes {} moves but mtsim {}",
-            rs_moves.len(),
-            ours.len()
-        ));
-    }
-    Ok(ours.len())
+    rs274::compare_moves(rs.moves, ours)
 }
 
 /// The inch tool table rs274 reads, written from the mm one mtsim reads.

@@ -286,3 +286,156 @@ pub fn tool_table_to_inch(mm: &str) -> String {
     }
     out
 }
+
+/// Runs `cmd` for at most `timeout`: its exit code (`None` when it was killed for taking
+/// too long), stdout and stderr.
+pub fn run_timed(cmd: &mut Command, timeout: Duration) -> (Option<i32>, String, String) {
+    let dir = std::env::temp_dir().join(format!(
+        "mtsim-timed-{}-{:?}",
+        std::process::id(),
+        std::thread::current().id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (out, err) = (dir.join("stdout"), dir.join("stderr"));
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(std::fs::File::create(&out).unwrap())
+        .stderr(std::fs::File::create(&err).unwrap())
+        .spawn()
+        .expect("the command starts");
+    let started = Instant::now();
+    let code = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            // A signal (a crash) has no code: report it as -1.
+            break Some(s.code().unwrap_or(-1));
+        }
+        if started.elapsed() > timeout {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    };
+    let read =
+        |p: &Path| String::from_utf8_lossy(&std::fs::read(p).unwrap_or_default()).into_owned();
+    let result = (code, read(&out), read(&err));
+    let _ = std::fs::remove_dir_all(&dir);
+    result
+}
+
+/// A move as `mtsim blocks --csv` prints it.
+#[derive(Debug)]
+pub struct Row {
+    pub line: usize,
+    pub kind: String,
+    pub end: [f64; 6],
+    pub feed: Option<f64>,
+    pub dwell: Option<f64>,
+}
+
+/// Parses the output of `mtsim blocks --csv`.
+pub fn parse_blocks_csv(csv: &str) -> Vec<Row> {
+    let num = |s: &str| (!s.is_empty()).then(|| s.parse::<f64>().unwrap());
+    csv.lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            Row {
+                line: f[0].parse().unwrap(),
+                kind: f[1].to_string(),
+                end: std::array::from_fn(|i| f[2 + i].parse().unwrap()),
+                feed: num(f[8]),
+                dwell: num(f[9]),
+            }
+        })
+        .collect()
+}
+
+/// Whether the G-code `text` has B words (outside comments), so that it needs a B axis.
+pub fn uses_b_axis(text: &str) -> bool {
+    text.lines().any(|l| {
+        let code = l
+            .split(['(', ';'])
+            .next()
+            .unwrap_or("")
+            .to_ascii_uppercase();
+        // A B followed by a number, an expression or a parameter, not inside a name.
+        let b = code.as_bytes();
+        (0..b.len()).any(|i| {
+            b[i] == b'B'
+                && (i == 0 || !b[i - 1].is_ascii_alphabetic())
+                && b.get(i + 1).is_some_and(|c| {
+                    c.is_ascii_digit() || matches!(c, b'-' | b'+' | b'.' | b'[' | b'#' | b' ')
+                })
+                && !code[i..].starts_with("BREAK")
+        })
+    })
+}
+
+/// End points within this, mm or deg (issue 9).
+pub const END_TOLERANCE: f64 = 1e-4;
+
+/// rs274 prints 4 decimals in program units: a feed printed in in/min is known to
+/// ±0.00005 in/min = ±0.00127 mm/min.
+pub const FEED_TOLERANCE_MM_MIN: f64 = 1.5e-3;
+
+/// Compares rs274's moves with mtsim's rows: the same kinds in the same order, end points
+/// within [`END_TOLERANCE`], feeds within [`FEED_TOLERANCE_MM_MIN`] and dwells within
+/// 1e-4 s. Moves of length zero from a G0/G1 block without axis words are left out on both
+/// sides (rs274 emits them, mtsim does not; docs/rs274.md). Returns the moves compared.
+pub fn compare_moves(rs: Vec<RsMove>, ours: Vec<Row>) -> Result<usize, String> {
+    let moving = |kind: &str, end: &[f64; 6], prev: &mut [f64; 6]| {
+        let keep = !matches!(kind, "rapid" | "feed") || end != prev;
+        *prev = *end;
+        keep
+    };
+    let mut prev = [0.0; 6];
+    let rs: Vec<_> = rs
+        .into_iter()
+        .filter(|m| moving(m.kind, &m.end, &mut prev))
+        .collect();
+    let mut prev = [0.0; 6];
+    let ours: Vec<_> = ours
+        .into_iter()
+        .filter(|m| moving(&m.kind, &m.end, &mut prev))
+        .collect();
+    let axes = ["X", "Y", "Z", "A", "B", "C"];
+    for (k, (r, m)) in rs.iter().zip(&ours).enumerate() {
+        let at = format!(
+            "move {} (rs274 call {}, mtsim line {})",
+            k + 1,
+            r.call,
+            m.line
+        );
+        if r.kind != m.kind {
+            return Err(format!("{at}: rs274 {} but mtsim {}", r.kind, m.kind));
+        }
+        for i in 0..6 {
+            let d = (r.end[i] - m.end[i]).abs();
+            if !(d <= END_TOLERANCE) {
+                return Err(format!(
+                    "{at}: {} is {} in rs274 but {} in mtsim (difference {d:.3e})",
+                    axes[i], r.end[i], m.end[i]
+                ));
+            }
+        }
+        if let (Some(a), Some(b)) = (r.feed_mm_min, m.feed) {
+            if !((a - b).abs() <= FEED_TOLERANCE_MM_MIN) {
+                return Err(format!("{at}: feed {a} mm/min in rs274 but {b} in mtsim"));
+            }
+        }
+        if let (Some(a), Some(b)) = (r.dwell_s, m.dwell) {
+            if !((a - b).abs() <= 1e-4) {
+                return Err(format!("{at}: dwell {a} s in rs274 but {b} s in mtsim"));
+            }
+        }
+    }
+    if rs.len() != ours.len() {
+        return Err(format!(
+            "rs274 makes {} moves but mtsim {}",
+            rs.len(),
+            ours.len()
+        ));
+    }
+    Ok(ours.len())
+}

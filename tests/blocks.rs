@@ -138,3 +138,48 @@ fn an_unreadable_program_exits_2_with_file_line_and_column() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("p.ngc:1:5"));
     assert!(out.stdout.is_empty());
 }
+
+#[test]
+fn a_tool_centre_point_program_is_printed_in_machine_axes() {
+    // The same cone written plainly (machine axes) and as a G43.4 program (the tool tip in
+    // the table frame): `blocks` must give the same machine axes for both.
+    let rows = |tcp: bool| -> Vec<Vec<f64>> {
+        let dir = scratch("blocks", &format!("cone-tcp-{tcp}"));
+        let path = dir.join("s.toml");
+        std::fs::write(
+            &path,
+            format!(
+                "machine = {:?}\n{}segments = 36\ntcp = {tcp}\n",
+                trt_ac(),
+                common::CONE_15_10
+            ),
+        )
+        .unwrap();
+        let out = blocks(&path, &["--csv"]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout)
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| {
+                l.split(',')
+                    .skip(2)
+                    .take(6)
+                    .map(|v| v.parse().unwrap())
+                    .collect()
+            })
+            .collect()
+    };
+    let (plain, tcp) = (rows(false), rows(true));
+    assert_eq!(plain.len(), tcp.len());
+    assert!(plain.len() >= 36);
+    for (p, t) in plain.iter().zip(&tcp) {
+        for (a, b) in p.iter().zip(t) {
+            assert!((a - b).abs() < 1e-3, "{p:?} vs {t:?}");
+        }
+    }
+}

@@ -11,8 +11,10 @@ use std::path::Path;
 use serde::Serialize;
 
 use crate::error::Result;
+use crate::input::machine::Machine;
 use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
+use crate::motion::sampling::position_in_block;
 use crate::program::{self, FeedMode, Motion, Move};
 use crate::Axis;
 
@@ -48,8 +50,15 @@ pub struct BlockRow {
 }
 
 impl BlockRow {
-    pub fn of(m: &Move) -> BlockRow {
-        let e = m.end;
+    /// The row of `m` on `machine`. Under tool-centre-point control (G43.4) the move's
+    /// X Y Z are the tool tip in the table frame; the row gives the machine axes that put
+    /// the tip there, as the pipeline samples them.
+    pub fn of(m: &Move, machine: &Machine) -> BlockRow {
+        let e = if m.tcp {
+            position_in_block(m, machine, 1.0)
+        } else {
+            m.end
+        };
         let dwell_s = match m.motion {
             Motion::Dwell { seconds } => Some(seconds),
             _ => None,
@@ -167,7 +176,7 @@ pub fn run(path: &Path, format: Format) -> Result<i32> {
         Format::Json => {
             let rows = run
                 .moves
-                .map(|m| m.map(|m| BlockRow::of(&m)))
+                .map(|m| m.map(|m| BlockRow::of(&m, &scenario.machine)))
                 .collect::<Result<Vec<_>>>()?;
             let json = serde_json::to_string_pretty(&rows).expect("plain data serializes");
             write(&format!("{json}\n"));
@@ -182,7 +191,7 @@ pub fn run(path: &Path, format: Format) -> Result<i32> {
                 // On an error the rows before it stay printed (the writer flushes on drop).
                 let m = m?;
                 if open {
-                    open = write(&row(&BlockRow::of(&m)));
+                    open = write(&row(&BlockRow::of(&m, &scenario.machine)));
                 }
             }
         }

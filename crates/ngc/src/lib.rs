@@ -29,11 +29,20 @@
 mod axis;
 mod canon;
 mod error;
+mod expr;
+mod interp;
+mod lex;
+mod options;
 mod reader;
 
 pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
 pub use error::{line_column, Error, Result, Syntax};
+pub use options::{
+    parse_tool_table, parse_var_file, work_offset_parameter, Dialect, Options, Tool, UserM,
+    G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
+};
 pub use reader::{
-    read_file, read_str, Moves, Source, StrSource, ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH,
+    read_file, read_file_with, read_str, read_str_with, Moves, Notice, ARC_RADIUS_TOLERANCE_MM,
+    MM_PER_INCH,
 };

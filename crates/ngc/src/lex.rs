@@ -1,0 +1,289 @@
+//! The tokenizer: one source line into words and parameter assignments.
+//!
+//! Plain numbers are read without touching the parameter store, so programs without
+//! parameters or expressions pay nothing for them. A word's value may also be `[expr]`,
+//! `#param` or a function (`X[#1+2]`, `Y#<_y>`, `Z-SIN[30]`).
+
+use std::ops::Range;
+
+use crate::expr::{function_at, Eval, ExprError, Param, Params};
+
+/// Word letters the reader knows.
+pub const EXPECTED_WORDS: &str = "G M N F S T X Y Z A B C I J K R P Q L H D E";
+
+/// An error on one line; `span` is a byte range in that line.
+#[derive(Debug)]
+pub struct LineError {
+    pub span: Range<usize>,
+    pub message: String,
+    pub label: String,
+    pub help: Option<String>,
+}
+
+impl LineError {
+    pub fn new(span: Range<usize>, message: impl Into<String>, label: impl Into<String>) -> Self {
+        LineError {
+            span,
+            message: message.into(),
+            label: label.into(),
+            help: None,
+        }
+    }
+
+    pub fn help(mut self, help: impl Into<String>) -> Self {
+        self.help = Some(help.into());
+        self
+    }
+}
+
+impl From<ExprError> for LineError {
+    fn from(e: ExprError) -> LineError {
+        LineError::new(e.span, e.message, e.label)
+    }
+}
+
+pub type LineResult<T> = std::result::Result<T, LineError>;
+
+/// One word: a letter and its value.
+#[derive(Clone, Copy, Debug)]
+pub struct Word<'l> {
+    /// Upper-case letter.
+    pub letter: char,
+    pub value: f64,
+    /// The number as written, or "" when the value was computed.
+    pub number: &'l str,
+    /// Letter through value, bytes in the line.
+    pub span: (usize, usize),
+}
+
+impl Word<'_> {
+    pub fn span(&self) -> Range<usize> {
+        self.span.0..self.span.1
+    }
+
+    /// True when the value came from an expression or parameter.
+    pub fn computed(&self) -> bool {
+        self.number.is_empty()
+    }
+}
+
+/// What a source line holds.
+pub enum Lexed<'l> {
+    /// Nothing but blanks and comments, or a deleted block.
+    Nothing,
+    /// A `%` line.
+    Percent,
+    Words {
+        words: Vec<Word<'l>>,
+        assigns: Vec<(Param, f64)>,
+    },
+}
+
+pub fn is_blank(c: u8) -> bool {
+    c == b' ' || c == b'\t'
+}
+
+/// Splits a line into words and assignments, dropping comments.
+pub fn lex<'l>(line: &'l str, params: &Params, fanuc: bool) -> LineResult<Lexed<'l>> {
+    let bytes = line.as_bytes();
+    let mut i = 0;
+    while i < bytes.len() && is_blank(bytes[i]) {
+        i += 1;
+    }
+    let percent = bytes.get(i) == Some(&b'%');
+    if percent {
+        i += 1;
+    } else if bytes.get(i) == Some(&b'/') {
+        // Block delete with the optional-block-skip switch on: the block is not executed.
+        return Ok(Lexed::Nothing);
+    }
+    let mut words = Vec::new();
+    let mut assigns = Vec::new();
+    while i < bytes.len() {
+        let c = bytes[i];
+        if is_blank(c) {
+            i += 1;
+        } else if c == b'(' {
+            match line[i + 1..].find(')') {
+                Some(close) => i += close + 2,
+                None => {
+                    return Err(LineError::new(
+                        i..line.len(),
+                        "unclosed comment: expected `)` before the end of the line",
+                        "this comment is not closed",
+                    )
+                    .help("close the comment with `)` on the same line"))
+                }
+            }
+        } else if c == b';' {
+            break;
+        } else if c == b'/' {
+            return Err(LineError::new(
+                i..i + 1,
+                "block delete `/` in the middle of a block: expected it only at the start",
+                "block delete here",
+            )
+            .help("move `/` to the start of the line to skip the whole block"));
+        } else if c == b'%' {
+            return Err(LineError::new(
+                i..i + 1,
+                "`%` inside a block: expected `%` alone on its own line",
+                "unexpected `%`",
+            ));
+        } else if c == b'#' {
+            let mut e = Eval {
+                line,
+                i,
+                params,
+                fanuc,
+            };
+            let p = e.param()?;
+            e.skip_blanks();
+            if line.as_bytes().get(e.i) != Some(&b'=') {
+                return Err(LineError::new(
+                    i..e.i,
+                    format!(
+                        "parameter `{}` outside a word: expected `=` and a value to assign",
+                        &line[i..e.i]
+                    ),
+                    "expected `=`",
+                ));
+            }
+            e.i += 1;
+            let v = if fanuc { e.binary(0)? } else { e.value()? };
+            if !v.is_finite() {
+                return Err(LineError::new(i..e.i, "value is not finite", "not finite"));
+            }
+            assigns.push((p, v));
+            i = e.i;
+        } else if c.is_ascii_alphabetic() {
+            let w = lex_word(line, i, params, fanuc)?;
+            i = w.span.1;
+            words.push(w);
+        } else {
+            let (ch, span) = char_at(line, i);
+            return Err(LineError::new(
+                span,
+                format!(
+                    "unexpected character `{}`: expected a word (one of {EXPECTED_WORDS} followed by a number), a comment `( )` or `;`",
+                    ch.escape_debug()
+                ),
+                "unexpected character",
+            ));
+        }
+    }
+    if percent {
+        if let Some(word) = words.first() {
+            return Err(LineError::new(
+                word.span(),
+                "word on a `%` line: expected `%` alone on its line",
+                "move this word to its own line",
+            ));
+        }
+        return Ok(Lexed::Percent);
+    }
+    if words.is_empty() && assigns.is_empty() {
+        Ok(Lexed::Nothing)
+    } else {
+        Ok(Lexed::Words { words, assigns })
+    }
+}
+
+/// The character at byte `i` of `line` and its byte range.
+pub fn char_at(line: &str, i: usize) -> (char, Range<usize>) {
+    let c = line[i..].chars().next().unwrap_or(' ');
+    (c, i..i + c.len_utf8())
+}
+
+/// Reads the word whose letter is at byte `start`. Blanks between the letter and the number
+/// are allowed; the number is `[+-]digits[.digits]` with at least one digit, or a value.
+fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> LineResult<Word<'l>> {
+    let bytes = line.as_bytes();
+    let letter = (bytes[start] as char).to_ascii_uppercase();
+    let mut i = start + 1;
+    while i < bytes.len() && is_blank(bytes[i]) {
+        i += 1;
+    }
+    let number_start = i;
+    while i < bytes.len() && matches!(bytes[i], b'0'..=b'9' | b'.' | b'+' | b'-') {
+        i += 1;
+    }
+    let number = &line[number_start..i];
+    let span = start..if number.is_empty() { start + 1 } else { i };
+    let text = &line[span.clone()];
+    if !"GMNOFSTXYZABCIJKRPQLHDE".contains(letter) {
+        let why = match letter {
+            'U' | 'V' | 'W' => {
+                " (secondary axes U V W are not supported; use G91 for incremental moves)"
+            }
+            _ => "",
+        };
+        return Err(LineError::new(
+            span,
+            format!("unsupported word `{text}`{why}: expected one of {EXPECTED_WORDS}"),
+            "unsupported word",
+        )
+        .help("docs/gcode.md lists the supported dialect; remove the word or post-process the program without it"));
+    }
+    // A computed value: `[`, `#`, a sign before either, or a function name.
+    let sign_then =
+        |k: usize| matches!(bytes.get(k), Some(b'[' | b'#')) || function_at(line, k).is_some();
+    let computed = (number.is_empty() && (sign_then(number_start)))
+        || ((number == "-" || number == "+") && sign_then(i));
+    if computed {
+        let mut e = Eval {
+            line,
+            i: number_start,
+            params,
+            fanuc,
+        };
+        let value = e.value()?;
+        return Ok(Word {
+            letter,
+            value,
+            number: "",
+            span: (start, e.i),
+        });
+    }
+    if !is_decimal(number) {
+        let what = if number.is_empty() {
+            format!("`{letter}` has no number")
+        } else {
+            format!("malformed number `{number}` in `{text}`")
+        };
+        return Err(LineError::new(
+            span,
+            format!("{what}: expected a decimal number after `{letter}`, such as `{letter}1.5` or `{letter}-2`"),
+            "malformed word",
+        )
+        .help("write numbers as digits with at most one decimal point, e.g. `X-12.345`"));
+    }
+    let value: f64 = number.parse().map_err(|_| {
+        LineError::new(
+            span.clone(),
+            format!("malformed number `{number}`: expected a decimal number"),
+            "malformed number",
+        )
+    })?;
+    if !value.is_finite() {
+        return Err(LineError::new(
+            span,
+            format!("number `{number}` is too large: expected a finite value"),
+            "too large",
+        ));
+    }
+    Ok(Word {
+        letter,
+        value,
+        number,
+        span: (start, span.end),
+    })
+}
+
+/// `[+-]? digits* ( . digits* )?` with at least one digit.
+pub fn is_decimal(s: &str) -> bool {
+    let s = s.strip_prefix(['+', '-']).unwrap_or(s);
+    let (int, frac) = s.split_once('.').unwrap_or((s, ""));
+    let digits = |p: &str| p.bytes().all(|b| b.is_ascii_digit());
+    digits(int) && digits(frac) && int.len() + frac.len() > 0
+}

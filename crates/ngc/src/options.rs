@@ -1,0 +1,211 @@
+//! What the reader needs to know about the machine and the job: dialect, axes, tools, work
+//! offsets and parameters, subroutine search path, user M codes, limits.
+//!
+//! Parsers for LinuxCNC's tool table (`.tbl`) and parameter file (`.var`) live here too.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+use crate::axis::{Axis, AxisVec};
+
+/// The control whose G-code language a program is written in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
+pub enum Dialect {
+    /// LinuxCNC 2.9 RS274/NGC: G4 P in s, o-word subroutines, `#<named>` parameters.
+    Linuxcnc,
+    /// The default (what mtsim writes itself): Fanuc 0i/30i family: G4 P in ms (X in s), M98/M99 O-number subprograms, macro B
+    /// (`IF [..] GOTO n`, `WHILE [..] DO m`), G43.4/G43.5 TCP.
+    #[default]
+    Fanuc,
+    /// Haas NGC: Fanuc-style with G4 P in s when it has a decimal point (ms otherwise) and
+    /// G234 for TCP.
+    Haas,
+}
+
+impl Dialect {
+    /// `linuxcnc`, `fanuc` or `haas`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Dialect::Linuxcnc => "linuxcnc",
+            Dialect::Fanuc => "fanuc",
+            Dialect::Haas => "haas",
+        }
+    }
+
+    /// True for the Fanuc family (Fanuc, Haas): macro B syntax, M98/M99.
+    pub const fn is_fanuc_family(self) -> bool {
+        matches!(self, Dialect::Fanuc | Dialect::Haas)
+    }
+}
+
+/// One tool of the tool table, mm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Tool {
+    /// T number.
+    pub number: u32,
+    /// Length offset along Z, mm (LinuxCNC `Z`).
+    pub length_mm: f64,
+    /// Diameter, mm (LinuxCNC `D`).
+    pub diameter_mm: f64,
+}
+
+/// What a user M code (M100-M199, or a remapped code such as M428) does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
+pub enum UserM {
+    /// Switch tool-centre-point control on (as LinuxCNC's xyzac-trt M428).
+    TcpOn,
+    /// Switch tool-centre-point control off (M429).
+    TcpOff,
+    /// Accept and do nothing (no notice).
+    Ignore,
+}
+
+/// Reader options. `Options::default()` reads Fanuc-family programs on a six-axis machine from
+/// all axes at zero, with no tools, all offsets zero.
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub dialect: Dialect,
+    /// The axes the machine has; a word for any other axis is an error.
+    pub axes: Vec<Axis>,
+    /// Machine position before the program runs, mm and deg.
+    pub start: AxisVec,
+    /// The tool table. Empty: any T and H is accepted, with length zero.
+    pub tools: Vec<Tool>,
+    /// Initial numbered parameters (from a `.var` file, work offsets, G28/G30 positions).
+    pub parameters: Vec<(u32, f64)>,
+    /// Folders searched, in order, for `o<name> call` subroutine files `name.ngc` and Fanuc
+    /// `M98 P<n>` programs `O<n>.nc`.
+    pub search_path: Vec<PathBuf>,
+    /// User M codes mapped to an effect; other M100-M199 are accepted with a notice.
+    pub user_m: HashMap<u32, UserM>,
+    /// Tool-centre-point control on from the start (LinuxCNC configurations whose
+    /// kinematics are always in TCP mode).
+    pub tcp: bool,
+    /// Loop iterations (backward jumps of every kind) allowed in one run.
+    pub max_iterations: u64,
+    /// Subroutine nesting allowed.
+    pub max_call_depth: usize,
+}
+
+/// Default limit on loop iterations per program run.
+pub const MAX_ITERATIONS: u64 = 1_000_000;
+/// Default limit on subroutine nesting.
+pub const MAX_CALL_DEPTH: usize = 64;
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            dialect: Dialect::Fanuc,
+            axes: Axis::ALL.to_vec(),
+            start: AxisVec::ZERO,
+            tools: Vec::new(),
+            parameters: Vec::new(),
+            search_path: Vec::new(),
+            user_m: HashMap::new(),
+            tcp: false,
+            max_iterations: MAX_ITERATIONS,
+            max_call_depth: MAX_CALL_DEPTH,
+        }
+    }
+}
+
+/// Parameter number of work coordinate system `n` (1 = G54 ... 9 = G59.3), axis X.
+pub const fn work_offset_parameter(n: u32) -> u32 {
+    5201 + 20 * n
+}
+
+/// Parameter number of the G28 reference position, axis X (machine coordinates).
+pub const G28_PARAMETER: u32 = 5161;
+/// Parameter number of the G30 reference position, axis X.
+pub const G30_PARAMETER: u32 = 5181;
+
+impl Options {
+    /// Sets work offset `n` (1 = G54 ... 9 = G59.3), mm and deg.
+    pub fn set_work_offset(&mut self, n: u32, offset: AxisVec) {
+        let base = work_offset_parameter(n);
+        for axis in Axis::ALL {
+            self.parameters
+                .push((base + axis.index() as u32, offset[axis]));
+        }
+    }
+
+    /// Sets the G28 (`g30 = false`) or G30 reference position, machine mm and deg.
+    pub fn set_reference(&mut self, g30: bool, position: AxisVec) {
+        let base = if g30 { G30_PARAMETER } else { G28_PARAMETER };
+        for axis in Axis::ALL {
+            self.parameters
+                .push((base + axis.index() as u32, position[axis]));
+        }
+    }
+}
+
+/// Parses a LinuxCNC parameter file: lines `number value`, blank lines ignored.
+/// Errors give the 1-based line and what was expected.
+pub fn parse_var_file(text: &str) -> Result<Vec<(u32, f64)>, (usize, String)> {
+    let mut out = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let mut parts = line.split_whitespace();
+        let Some(first) = parts.next() else { continue };
+        let number = first.parse::<u32>().ok().filter(|n| (1..=5601).contains(n));
+        let value = parts
+            .next()
+            .and_then(|v| v.parse::<f64>().ok())
+            .filter(|v| v.is_finite());
+        match (number, value) {
+            (Some(n), Some(v)) => out.push((n, v)),
+            _ => {
+                return Err((
+                    k + 1,
+                    format!("`{line}`: expected a parameter number 1-5601 and a finite value"),
+                ))
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Parses a LinuxCNC tool table: lines `T<n> P<pocket> Z<length> D<diameter> ;comment`,
+/// other words (X Y A B C U V W I J Q) accepted and ignored. Lengths are taken in mm.
+pub fn parse_tool_table(text: &str) -> Result<Vec<Tool>, (usize, String)> {
+    let mut out = Vec::new();
+    for (k, raw) in text.lines().enumerate() {
+        let line = raw.split(';').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let mut tool = Tool {
+            number: u32::MAX,
+            length_mm: 0.0,
+            diameter_mm: 0.0,
+        };
+        for word in line.split_whitespace() {
+            let mut chars = word.chars();
+            let letter = chars.next().unwrap_or(' ').to_ascii_uppercase();
+            let value = chars.as_str().parse::<f64>().ok().filter(|v| v.is_finite());
+            let bad = || {
+                (
+                    k + 1,
+                    format!("`{word}` in `{raw}`: expected a letter and a number such as `Z+10.0`"),
+                )
+            };
+            let value = value.ok_or_else(bad)?;
+            match letter {
+                'T' if value >= 0.0 && value.fract() == 0.0 => tool.number = value as u32,
+                'Z' => tool.length_mm = value,
+                'D' => tool.diameter_mm = value,
+                'P' | 'X' | 'Y' | 'A' | 'B' | 'C' | 'U' | 'V' | 'W' | 'I' | 'J' | 'Q' => {}
+                _ => return Err(bad()),
+            }
+        }
+        if tool.number == u32::MAX {
+            return Err((k + 1, format!("`{raw}`: expected a tool number `T<n>`")));
+        }
+        out.push(tool);
+    }
+    Ok(out)
+}

@@ -49,8 +49,9 @@ fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<rs274::Row>, String> 
     std::fs::write(
         &scenario,
         format!(
-            "machine = {machine_path:?}\n[program]\nfile = {:?}\n",
-            program.display().to_string()
+            "machine = {machine_path:?}\n[program]\nfile = {:?}\ndialect = \"linuxcnc\"\ntool_table = {:?}\n",
+            program.display().to_string(),
+            data("conformance").join("tool.tbl").display().to_string()
         ),
     )
     .unwrap();

@@ -98,6 +98,14 @@ struct ProgramSection {
     cone: Option<ConeSection>,
     /// The planar circular test (ISO 230-4).
     circle: Option<CircleSection>,
+    /// G-code dialect of `file`: "linuxcnc", "fanuc" (default) or "haas".
+    dialect: Option<String>,
+    /// LinuxCNC tool table (`.tbl`, lengths in mm) for T, M6 and G43 H.
+    tool_table: Option<String>,
+    /// LinuxCNC parameter file (`.var`): work offsets, G28/G30 positions, parameters.
+    var_file: Option<String>,
+    /// Folders searched for `o<name> call` subroutine files, in order.
+    subroutine_path: Option<Vec<String>>,
 }
 
 /// `[program.circle]`.
@@ -185,6 +193,10 @@ pub struct Scenario {
     /// The tool in the spindle (the scenario's, else the machine's).
     pub tool: ToolConfig,
     pub check: CheckSection,
+    /// How a G-code `file` is read: dialect, the machine's axes, tools, parameters and
+    /// subroutine path (`[program]` keys `dialect`, `tool_table`, `var_file`,
+    /// `subroutine_path`).
+    pub reader: ngc::Options,
 }
 
 impl Scenario {
@@ -250,6 +262,7 @@ impl Scenario {
                 .with_help("see docs/scenario-format.md"))
             }
         };
+        let reader = reader_options(path, &text, &file.program, &machine)?;
         let sim = &file.simulate;
         if sim.trace_every == 0 {
             return Err(value_error(
@@ -340,6 +353,7 @@ impl Scenario {
             ballbar_pivot_mm: file.ballbar.pivot_mm.map(Vector3::from),
             workpiece,
             check: file.check,
+            reader,
         })
     }
 
@@ -354,6 +368,74 @@ impl Scenario {
 }
 
 /// A path from a scenario, relative to the scenario's folder unless absolute.
+/// The reader options of `[program]`: dialect, the machine's axes, the tool table, the
+/// parameter file and the subroutine path, files relative to the scenario.
+fn reader_options(
+    path: &Path,
+    text: &str,
+    program: &ProgramSection,
+    machine: &Machine,
+) -> Result<ngc::Options> {
+    let mut options = ngc::Options {
+        axes: machine.axes().to_vec(),
+        ..ngc::Options::default()
+    };
+    if let Some(d) = &program.dialect {
+        options.dialect =
+            match d.as_str() {
+                "linuxcnc" => ngc::Dialect::Linuxcnc,
+                "fanuc" => ngc::Dialect::Fanuc,
+                "haas" => ngc::Dialect::Haas,
+                other => return Err(value_error(
+                    path,
+                    text,
+                    "program",
+                    "dialect",
+                    format!(
+                        "unknown dialect {other:?}: expected \"linuxcnc\", \"fanuc\" or \"haas\""
+                    ),
+                )),
+            };
+    }
+    // A file named by `key`, read whole; its parse errors name the file and line.
+    let read = |key: &str, name: &str| -> Result<(PathBuf, String)> {
+        let file = resolve(path, name);
+        match std::fs::read_to_string(&file) {
+            Ok(t) => Ok((file, t)),
+            Err(e) => Err(value_error(
+                path,
+                text,
+                "program",
+                key,
+                format!("cannot read {}: {e}", file.display()),
+            )),
+        }
+    };
+    let at_line = |file: &Path, body: &str, (line, message): (usize, String)| {
+        let start: usize = body
+            .split_inclusive('\n')
+            .take(line - 1)
+            .map(str::len)
+            .sum();
+        let end = body[start.min(body.len())..]
+            .find('\n')
+            .map_or(body.len(), |n| start + n);
+        Error::at(file, body, start..end, message, "this line")
+    };
+    if let Some(name) = &program.tool_table {
+        let (file, body) = read("tool_table", name)?;
+        options.tools = ngc::parse_tool_table(&body).map_err(|e| at_line(&file, &body, e))?;
+    }
+    if let Some(name) = &program.var_file {
+        let (file, body) = read("var_file", name)?;
+        options.parameters = ngc::parse_var_file(&body).map_err(|e| at_line(&file, &body, e))?;
+    }
+    if let Some(dirs) = &program.subroutine_path {
+        options.search_path = dirs.iter().map(|d| resolve(path, d)).collect();
+    }
+    Ok(options)
+}
+
 pub fn resolve(scenario: &Path, relative: &str) -> PathBuf {
     let p = Path::new(relative);
     if p.is_absolute() {

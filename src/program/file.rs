@@ -15,10 +15,13 @@ pub fn read_file(path: &Path) -> Result<Moves<'static>> {
     Ok(Box::new(moves.map(|m| m.map_err(Into::into))))
 }
 
-/// Streams the moves of the file at `path` for a machine with `axes`: a move of any other
-/// axis is an error at its line (a word for an axis the machine lacks is never dropped).
-pub fn read_file_for(path: &Path, axes: &'static [Axis]) -> Result<Moves<'static>> {
-    let moves = read_file(path)?;
+/// Streams the moves of the file at `path` as `options` say (dialect, tools, parameters,
+/// subroutine path), for a machine with `options.axes`: a move of any other axis is an
+/// error at its line (a word for an axis the machine lacks is never dropped, nor is a
+/// move an offset makes on it).
+pub fn read_file_with(path: &Path, options: &ngc::Options) -> Result<Moves<'static>> {
+    let moves = ngc::read_file_with(path, options)?.map(|m| m.map_err(Error::from));
+    let axes = options.axes.clone();
     let path = path.to_path_buf();
     let mut failed = false;
     Ok(Box::new(moves.map_while(move |m| {
@@ -39,7 +42,7 @@ pub fn read_file_for(path: &Path, axes: &'static [Axis]) -> Result<Moves<'static
             None => Some(Ok(m)),
             Some(axis) => {
                 failed = true;
-                Some(Err(missing_axis(&path, m.line, axis, axes)))
+                Some(Err(missing_axis(&path, m.line, axis, &axes)))
             }
         }
     })))

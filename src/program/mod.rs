@@ -62,7 +62,7 @@ pub fn scenario_run(
                 .simulate
                 .measure_lines
                 .map(|[first, last]| MeasuredLines { first, last }),
-            moves: file::read_file_for(path, machine.axes())?,
+            moves: file::read_file_with(path, &scenario.reader)?,
         },
     })
 }

@@ -77,7 +77,7 @@ fn compare(rs274: &Path, program: &Path, tools_inch: &Path) -> Result<usize, Str
     }
     let ours = mtsim_blocks(program, &work)?;
     let _ = std::fs::remove_dir_all(&work);
-    rs274::compare_moves(rs.moves, ours)
+    rs274::compare_moves(rs.moves, ours, false)
 }
 
 /// The inch tool table rs274 reads, written from the mm one mtsim reads.

@@ -381,12 +381,12 @@ fn reader_options(
         ..ngc::Options::default()
     };
     if let Some(d) = &program.dialect {
-        options.dialect =
-            match d.as_str() {
-                "linuxcnc" => ngc::Dialect::Linuxcnc,
-                "fanuc" => ngc::Dialect::Fanuc,
-                "haas" => ngc::Dialect::Haas,
-                other => return Err(value_error(
+        options.dialect = match d.as_str() {
+            "linuxcnc" => ngc::Dialect::Linuxcnc,
+            "fanuc" => ngc::Dialect::Fanuc,
+            "haas" => ngc::Dialect::Haas,
+            other => {
+                return Err(value_error(
                     path,
                     text,
                     "program",
@@ -394,8 +394,9 @@ fn reader_options(
                     format!(
                         "unknown dialect {other:?}: expected \"linuxcnc\", \"fanuc\" or \"haas\""
                     ),
-                )),
-            };
+                ))
+            }
+        };
     }
     // A file named by `key`, read whole; its parse errors name the file and line.
     let read = |key: &str, name: &str| -> Result<(PathBuf, String)> {

@@ -55,6 +55,10 @@ pub struct RsMove {
     pub center: Option<[f64; 3]>,
     /// The 1-based output line of the call, for messages.
     pub call: usize,
+    /// How far the printed figures may be from the exact ones, mm: half a unit of the 4th
+    /// decimal of the position and of each offset added to it, in the units each was
+    /// printed in (0.00005 in = 0.00127 mm per figure under G20).
+    pub rounding_mm: f64,
 }
 
 /// What one rs274 run gave.
@@ -76,13 +80,39 @@ pub fn run(
     work: &Path,
     timeout: Duration,
 ) -> RsRun {
+    run_with(rs274, program, tool_table_inch, &[], work, timeout)
+}
+
+/// [`run`] with `[RS274NGC]SUBROUTINE_PATH` set to `subroutine_path` (through an INI file).
+pub fn run_with(
+    rs274: &Path,
+    program: &Path,
+    tool_table_inch: &Path,
+    subroutine_path: &[PathBuf],
+    work: &Path,
+    timeout: Duration,
+) -> RsRun {
     std::fs::create_dir_all(work).unwrap();
     let var = work.join("p.var");
     std::fs::write(&var, "").unwrap();
     let out = work.join("out.txt");
     let err = work.join("err.txt");
     let _ = std::fs::remove_file(&out);
-    let mut child = Command::new(rs274)
+    let mut cmd = Command::new(rs274);
+    if !subroutine_path.is_empty() {
+        let ini = work.join("rs274.ini");
+        let dirs: Vec<String> = subroutine_path
+            .iter()
+            .map(|d| d.display().to_string())
+            .collect();
+        std::fs::write(
+            &ini,
+            format!("[RS274NGC]\nSUBROUTINE_PATH = {}\n", dirs.join(":")),
+        )
+        .unwrap();
+        cmd.arg("-i").arg(ini);
+    }
+    let mut child = cmd
         .env("HOME", work)
         .arg("-t")
         .arg(tool_table_inch)
@@ -137,6 +167,8 @@ pub fn parse(text: &str) -> Vec<RsMove> {
     let mut g92 = [0.0; 6];
     let mut rot_deg = 0.0f64;
     let mut tlo = [0.0; 6];
+    // Half a unit of the last printed decimal of each offset, mm.
+    let (mut g5x_r, mut g92_r, mut tlo_r) = (0.0, 0.0, 0.0);
     let mut feed = Some(0.0);
     let mut per_rev = false;
     let mut plane = "XY";
@@ -163,10 +195,19 @@ pub fn parse(text: &str) -> Vec<RsMove> {
             "USE_LENGTH_UNITS" => {
                 units = if args.contains("INCHES") { 25.4 } else { 1.0 };
             }
-            "SET_G5X_OFFSET" => g5x = to_mm(&numbers(args)[1..], units),
-            "SET_G92_OFFSET" => g92 = to_mm(&numbers(args), units),
+            "SET_G5X_OFFSET" => {
+                g5x = to_mm(&numbers(args)[1..], units);
+                g5x_r = 5e-5 * units;
+            }
+            "SET_G92_OFFSET" => {
+                g92 = to_mm(&numbers(args), units);
+                g92_r = 5e-5 * units;
+            }
             "SET_XY_ROTATION" => rot_deg = numbers(args)[0],
-            "USE_TOOL_LENGTH_OFFSET" => tlo = to_mm(&numbers(args), units),
+            "USE_TOOL_LENGTH_OFFSET" => {
+                tlo = to_mm(&numbers(args), units);
+                tlo_r = 5e-5 * units;
+            }
             "SET_FEED_MODE" => per_rev = numbers(args).get(1) == Some(&1.0),
             "SET_FEED_RATE" => {
                 feed = Some(numbers(args)[0] * units);
@@ -195,6 +236,7 @@ pub fn parse(text: &str) -> Vec<RsMove> {
                     dwell_s: None,
                     center: None,
                     call: k + 1,
+                    rounding_mm: 5e-5 * units + g5x_r + g92_r + tlo_r,
                 });
             }
             "ARC_FEED" => {
@@ -223,13 +265,13 @@ pub fn parse(text: &str) -> Vec<RsMove> {
                     dwell_s: None,
                     center: Some([center[0], center[1], center[2]]),
                     call: k + 1,
+                    rounding_mm: 5e-5 * units + g5x_r + g92_r + tlo_r,
                 });
             }
             "DWELL" => {
-                let last = moves.last().map_or_else(
-                    || machine([0.0; 6], &g5x, &g92, &tlo, rot_deg),
-                    |m: &RsMove| m.end,
-                );
+                // The machine stays where the last move left it (at machine zero before
+                // any move), whatever offsets changed since.
+                let last = moves.last().map_or([0.0; 6], |m: &RsMove| m.end);
                 moves.push(RsMove {
                     kind: "dwell",
                     end: last,
@@ -237,6 +279,7 @@ pub fn parse(text: &str) -> Vec<RsMove> {
                     dwell_s: Some(numbers(args)[0]),
                     center: None,
                     call: k + 1,
+                    rounding_mm: moves.last().map_or(0.0, |m: &RsMove| m.rounding_mm),
                 });
             }
             "STRAIGHT_PROBE" | "RIGID_TAP" => {
@@ -247,6 +290,7 @@ pub fn parse(text: &str) -> Vec<RsMove> {
                     dwell_s: None,
                     center: None,
                     call: k + 1,
+                    rounding_mm: 0.0,
                 });
             }
             _ => {}
@@ -259,6 +303,12 @@ pub fn parse(text: &str) -> Vec<RsMove> {
 /// diameter words (X Y Z A B C U V W D I J and so on stay as they are for angles: only
 /// X Y Z U V W D are lengths) divided by 25.4.
 pub fn tool_table_to_inch(mm: &str) -> String {
+    scale_tool_table(mm, 1.0 / 25.4)
+}
+
+/// A LinuxCNC tool table with its lengths (X Y Z U V W D) multiplied by `factor`.
+pub fn scale_tool_table(table: &str, factor: f64) -> String {
+    let mm = table;
     let mut out = String::new();
     for line in mm.lines() {
         let (body, comment) = match line.find(';') {
@@ -271,7 +321,7 @@ pub fn tool_table_to_inch(mm: &str) -> String {
                 let (letter, number) = w.split_at(1);
                 match (letter.to_ascii_uppercase().as_str(), number.parse::<f64>()) {
                     ("X" | "Y" | "Z" | "U" | "V" | "W" | "D", Ok(v)) => {
-                        format!("{letter}{:.10}", v / 25.4)
+                        format!("{letter}{:.10}", v * factor)
                     }
                     _ => w.to_string(),
                 }
@@ -383,7 +433,15 @@ pub const FEED_TOLERANCE_MM_MIN: f64 = 1.5e-3;
 /// within [`END_TOLERANCE`], feeds within [`FEED_TOLERANCE_MM_MIN`] and dwells within
 /// 1e-4 s. Moves of length zero from a G0/G1 block without axis words are left out on both
 /// sides (rs274 emits them, mtsim does not; docs/rs274.md). Returns the moves compared.
-pub fn compare_moves(rs: Vec<RsMove>, ours: Vec<Row>) -> Result<usize, String> {
+///
+/// `printed_resolution`: widen the end-point tolerance by [`RsMove::rounding_mm`], for
+/// programs whose figures are not exact to rs274's 4 printed decimals (inch programs with
+/// more decimals, computed positions). The conformance programs are exact and use 1e-4 mm.
+pub fn compare_moves(
+    rs: Vec<RsMove>,
+    ours: Vec<Row>,
+    printed_resolution: bool,
+) -> Result<usize, String> {
     let moving = |kind: &str, end: &[f64; 6], prev: &mut [f64; 6]| {
         let keep = !matches!(kind, "rapid" | "feed") || end != prev;
         *prev = *end;
@@ -410,9 +468,21 @@ pub fn compare_moves(rs: Vec<RsMove>, ours: Vec<Row>) -> Result<usize, String> {
         if r.kind != m.kind {
             return Err(format!("{at}: rs274 {} but mtsim {}", r.kind, m.kind));
         }
+        let tolerance = END_TOLERANCE
+            + if printed_resolution {
+                r.rounding_mm
+            } else {
+                0.0
+            };
         for i in 0..6 {
+            // Rotary axes are printed in degrees, never scaled.
+            let tolerance = if i < 3 {
+                tolerance
+            } else {
+                END_TOLERANCE + if printed_resolution { 5e-5 } else { 0.0 }
+            };
             let d = (r.end[i] - m.end[i]).abs();
-            if !(d <= END_TOLERANCE) {
+            if !(d <= tolerance) {
                 return Err(format!(
                     "{at}: {} is {} in rs274 but {} in mtsim (difference {d:.3e})",
                     axes[i], r.end[i], m.end[i]

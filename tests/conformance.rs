@@ -49,7 +49,7 @@ fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<rs274::Row>, String> 
     std::fs::write(
         &scenario,
         format!(
-            "machine = {machine_path:?}\n[program]\nfile = {:?}\ndialect = \"linuxcnc\"\ntool_table = {:?}\n",
+            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\ntool_table = {:?}\n",
             program.display().to_string(),
             data("conformance").join("tool.tbl").display().to_string()
         ),

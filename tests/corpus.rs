@@ -158,7 +158,7 @@ fn run_one(path: &Path, k: usize, setup: &Setup) -> Outcome {
     std::fs::write(
         &scenario,
         format!(
-            "machine = {machine_path:?}\n[program]\nfile = {:?}\ndialect = \"linuxcnc\"\n{tools}subroutine_path = [{}]\n[check]\ncollisions = false\n",
+            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\n{tools}subroutine_path = [{}]\n[check]\ncollisions = false\n",
             path.display().to_string(),
             dir_list.join(", ")
         ),

@@ -38,6 +38,16 @@ pub struct MachineFile {
     /// The tool in the spindle.
     #[serde(default)]
     pub tool: ToolConfig,
+    /// G-code dialect of this machine's control, the default for its scenarios:
+    /// "linuxcnc", "fanuc" (default) or "haas".
+    #[serde(default)]
+    pub dialect: ngc::Dialect,
+    /// G28 reference position, machine X Y Z A B C (mm, deg); zero when absent.
+    #[serde(default)]
+    pub g28_mm: [f64; 6],
+    /// G30 reference position, machine X Y Z A B C (mm, deg); zero when absent.
+    #[serde(default)]
+    pub g30_mm: [f64; 6],
 }
 
 fn default_interpolation_period_ms() -> f64 {
@@ -88,6 +98,10 @@ pub struct Machine {
     axes: BTreeMap<Axis, AxisConfig>,
     pub scene: SceneConfig,
     pub tool: ToolConfig,
+    /// Default G-code dialect of the control.
+    pub dialect: ngc::Dialect,
+    /// G28 and G30 reference positions, machine X Y Z A B C (mm, deg).
+    pub reference_mm: [[f64; 6]; 2],
 }
 
 impl Machine {
@@ -186,6 +200,8 @@ impl Machine {
             axes,
             scene: file.scene,
             tool: file.tool,
+            dialect: file.dialect,
+            reference_mm: [file.g28_mm, file.g30_mm],
         })
     }
 

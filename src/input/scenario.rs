@@ -32,6 +32,30 @@ struct ScenarioFile {
     tool: Option<ToolConfig>,
     #[serde(default)]
     check: CheckSection,
+    #[serde(default)]
+    reader: ReaderSection,
+}
+
+/// `[reader]`: how a G-code program file is read (docs/gcode.md).
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReaderSection {
+    /// "linuxcnc", "fanuc" or "haas"; the machine file's `dialect` when absent.
+    pub dialect: Option<ngc::Dialect>,
+    /// LinuxCNC tool table (`.tbl`, lengths in mm), relative to the scenario.
+    pub tool_table: Option<String>,
+    /// Tools given inline: `tools = [{ number = 1, length_mm = 50.0, diameter_mm = 6.0 }]`.
+    pub tools: Vec<ngc::Tool>,
+    /// LinuxCNC parameter file (`.var`), relative to the scenario: work offsets, G28/G30.
+    pub var_file: Option<String>,
+    /// Work offsets by code, X Y Z A B C in mm and deg: `G54 = [100, 50, -200, 0, 0, 0]`.
+    pub work_offsets: std::collections::BTreeMap<String, [f64; 6]>,
+    /// Folders searched for `o<name> call` and `M98 P<n>` subprogram files.
+    pub subroutine_path: Vec<String>,
+    /// User M codes: `M428 = "tcp-on"`, `M429 = "tcp-off"`, `M101 = "ignore"`.
+    pub user_m_codes: std::collections::BTreeMap<String, ngc::UserM>,
+    /// Tool-centre-point control on from the start (LinuxCNC TCP kinematics).
+    pub tcp: bool,
 }
 
 /// `[check]`: options of `mtsim check`.
@@ -98,14 +122,6 @@ struct ProgramSection {
     cone: Option<ConeSection>,
     /// The planar circular test (ISO 230-4).
     circle: Option<CircleSection>,
-    /// G-code dialect of `file`: "linuxcnc", "fanuc" (default) or "haas".
-    dialect: Option<String>,
-    /// LinuxCNC tool table (`.tbl`, lengths in mm) for T, M6 and G43 H.
-    tool_table: Option<String>,
-    /// LinuxCNC parameter file (`.var`): work offsets, G28/G30 positions, parameters.
-    var_file: Option<String>,
-    /// Folders searched for `o<name> call` subroutine files, in order.
-    subroutine_path: Option<Vec<String>>,
 }
 
 /// `[program.circle]`.
@@ -193,9 +209,7 @@ pub struct Scenario {
     /// The tool in the spindle (the scenario's, else the machine's).
     pub tool: ToolConfig,
     pub check: CheckSection,
-    /// How a G-code `file` is read: dialect, the machine's axes, tools, parameters and
-    /// subroutine path (`[program]` keys `dialect`, `tool_table`, `var_file`,
-    /// `subroutine_path`).
+    /// How a program file is read: dialect, axes, tools, offsets, search path.
     pub reader: ngc::Options,
 }
 
@@ -262,7 +276,6 @@ impl Scenario {
                 .with_help("see docs/scenario-format.md"))
             }
         };
-        let reader = reader_options(path, &text, &file.program, &machine)?;
         let sim = &file.simulate;
         if sim.trace_every == 0 {
             return Err(value_error(
@@ -344,7 +357,9 @@ impl Scenario {
                 "a cone-frustum or ball-bar workpiece needs a [program.cone]".into(),
             ));
         }
+        let reader = reader_options(path, &text, &file.reader, &machine)?;
         Ok(Scenario {
+            reader,
             path: path.to_path_buf(),
             tool: file.tool.unwrap_or_else(|| machine.tool.clone()),
             machine,
@@ -353,7 +368,6 @@ impl Scenario {
             ballbar_pivot_mm: file.ballbar.pivot_mm.map(Vector3::from),
             workpiece,
             check: file.check,
-            reader,
         })
     }
 
@@ -368,73 +382,104 @@ impl Scenario {
 }
 
 /// A path from a scenario, relative to the scenario's folder unless absolute.
-/// The reader options of `[program]`: dialect, the machine's axes, the tool table, the
-/// parameter file and the subroutine path, files relative to the scenario.
+/// The reader options of a scenario: its `[reader]` over the machine's defaults.
 fn reader_options(
     path: &Path,
     text: &str,
-    program: &ProgramSection,
+    r: &ReaderSection,
     machine: &Machine,
 ) -> Result<ngc::Options> {
-    let mut options = ngc::Options {
+    let mut o = ngc::Options {
+        dialect: r.dialect.unwrap_or(machine.dialect),
         axes: machine.axes().to_vec(),
+        tcp: r.tcp,
         ..ngc::Options::default()
     };
-    if let Some(d) = &program.dialect {
-        options.dialect = match d.as_str() {
-            "linuxcnc" => ngc::Dialect::Linuxcnc,
-            "fanuc" => ngc::Dialect::Fanuc,
-            "haas" => ngc::Dialect::Haas,
-            other => {
-                return Err(value_error(
-                    path,
-                    text,
-                    "program",
-                    "dialect",
-                    format!(
-                        "unknown dialect {other:?}: expected \"linuxcnc\", \"fanuc\" or \"haas\""
-                    ),
-                ))
-            }
-        };
-    }
-    // A file named by `key`, read whole; its parse errors name the file and line.
-    let read = |key: &str, name: &str| -> Result<(PathBuf, String)> {
-        let file = resolve(path, name);
-        match std::fs::read_to_string(&file) {
-            Ok(t) => Ok((file, t)),
+    o.set_reference(false, ngc::AxisVec(machine.reference_mm[0]));
+    o.set_reference(true, ngc::AxisVec(machine.reference_mm[1]));
+    let read = |key: &str, file: &str| -> Result<(PathBuf, String)> {
+        let p = resolve(path, file);
+        match std::fs::read_to_string(&p) {
+            Ok(t) => Ok((p, t)),
             Err(e) => Err(value_error(
                 path,
                 text,
-                "program",
+                "reader",
                 key,
-                format!("cannot read {}: {e}", file.display()),
+                format!("cannot read {}: {e}", p.display()),
             )),
         }
     };
-    let at_line = |file: &Path, body: &str, (line, message): (usize, String)| {
-        let start: usize = body
-            .split_inclusive('\n')
-            .take(line - 1)
-            .map(str::len)
-            .sum();
-        let end = body[start.min(body.len())..]
-            .find('\n')
-            .map_or(body.len(), |n| start + n);
-        Error::at(file, body, start..end, message, "this line")
-    };
-    if let Some(name) = &program.tool_table {
-        let (file, body) = read("tool_table", name)?;
-        options.tools = ngc::parse_tool_table(&body).map_err(|e| at_line(&file, &body, e))?;
+    if let Some(file) = &r.var_file {
+        let (p, t) = read("var_file", file)?;
+        let params = ngc::parse_var_file(&t).map_err(|(line, m)| Error::Invalid {
+            path: p.clone(),
+            message: format!("line {line}: {m}"),
+            help: Some("a LinuxCNC .var file has lines `number value`".into()),
+        })?;
+        o.parameters.extend(params);
     }
-    if let Some(name) = &program.var_file {
-        let (file, body) = read("var_file", name)?;
-        options.parameters = ngc::parse_var_file(&body).map_err(|e| at_line(&file, &body, e))?;
+    for (code, offset) in &r.work_offsets {
+        let n = match code.to_ascii_uppercase().as_str() {
+            "G54" => 1,
+            "G55" => 2,
+            "G56" => 3,
+            "G57" => 4,
+            "G58" => 5,
+            "G59" => 6,
+            "G59.1" => 7,
+            "G59.2" => 8,
+            "G59.3" => 9,
+            _ => {
+                return Err(value_error(
+                    path,
+                    text,
+                    "reader.work_offsets",
+                    code,
+                    "expected one of G54 G55 G56 G57 G58 G59 G59.1 G59.2 G59.3".into(),
+                ))
+            }
+        };
+        if offset.iter().any(|v| !v.is_finite()) {
+            return Err(value_error(
+                path,
+                text,
+                "reader.work_offsets",
+                code,
+                "expected finite numbers".into(),
+            ));
+        }
+        o.set_work_offset(n, ngc::AxisVec(*offset));
     }
-    if let Some(dirs) = &program.subroutine_path {
-        options.search_path = dirs.iter().map(|d| resolve(path, d)).collect();
+    if let Some(file) = &r.tool_table {
+        let (p, t) = read("tool_table", file)?;
+        let tools = ngc::parse_tool_table(&t).map_err(|(line, m)| Error::Invalid {
+            path: p.clone(),
+            message: format!("line {line}: {m}"),
+            help: Some("a LinuxCNC tool table has lines `T1 P1 Z+50.0 D6.0 ;comment`".into()),
+        })?;
+        o.tools.extend(tools);
     }
-    Ok(options)
+    o.tools.extend(r.tools.iter().copied());
+    o.search_path = r.subroutine_path.iter().map(|d| resolve(path, d)).collect();
+    for (code, effect) in &r.user_m_codes {
+        let n = code
+            .trim_start_matches(['M', 'm'])
+            .parse::<u32>()
+            .ok()
+            .filter(|n| *n >= 100);
+        let Some(n) = n else {
+            return Err(value_error(
+                path,
+                text,
+                "reader.user_m_codes",
+                code,
+                "expected a user M code of 100 or more, such as M428".into(),
+            ));
+        };
+        o.user_m.insert(n, *effect);
+    }
+    Ok(o)
 }
 
 pub fn resolve(scenario: &Path, relative: &str) -> PathBuf {

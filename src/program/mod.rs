@@ -62,7 +62,7 @@ pub fn scenario_run(
                 .simulate
                 .measure_lines
                 .map(|[first, last]| MeasuredLines { first, last }),
-            moves: file::read_file_with(path, &scenario.reader)?,
+            moves: file::read_file(path, &scenario.reader)?,
         },
     })
 }

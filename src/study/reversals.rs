@@ -237,7 +237,7 @@ pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
             nc.feed_mm_min,
         )),
         Program::File { path, cone } => analyse_moves(
-            file::read_file_with(path, &scenario.reader)?,
+            file::read_file(path, &scenario.reader)?,
             &scenario.machine,
             cone.map(|c| CircleFrame::of_cone(&c)).as_ref(),
         ),

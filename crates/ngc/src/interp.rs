@@ -516,6 +516,16 @@ impl Interp {
             match word.letter {
                 'G' => {
                     let code = GCode::parse(word, line, dialect)?;
+                    // LinuxCNC accepts G80 beside G00/G01 (`G80 G0 Z10`): the cancel is implied.
+                    let g80 = GCode::Motion(None);
+                    if code == g80 && g.iter().any(|(c, _)| matches!(c, GCode::Motion(Some(_)))) {
+                        continue;
+                    }
+                    if let Some(k) = g.iter().position(|(c, _)| *c == g80) {
+                        if matches!(code, GCode::Motion(Some(_))) {
+                            g.remove(k);
+                        }
+                    }
                     if let Some((_, other)) = g.iter().find(|(c, _)| c.group() == code.group()) {
                         return Err(LineError::new(word.span(), format!("`{}` and `{}` are in the same modal group: expected at most one per block", &line[other.span()], &line[word.span()]), "second code of the group").help("split them into two blocks"));
                     }
@@ -840,7 +850,8 @@ impl Interp {
             .filter_map(|&a| get(a.letter()).map(|w| (a, w)))
             .collect();
         // 6. Non-modal codes that use axis words.
-        let mut axes_used = false;
+        // G43.1 takes its Z as the tool length, not as a move.
+        let mut axes_used = g.iter().any(|(c, _)| *c == GCode::ToolLength(1));
         if let Some((nm, w)) = nonmodal {
             if nm != NonModal::Dwell && nm != NonModal::G53 {
                 axes_used = true;
@@ -1389,7 +1400,12 @@ impl Interp {
                 "no Q",
             ));
         }
-        if (repeats as f64) * (((r - bottom) / delta.max(1e-9)).min(1e9) + 4.0) > 1e7 {
+        let pecks = if matches!(code, 730 | 830) {
+            ((r - bottom) / delta.max(1e-9)).min(1e9)
+        } else {
+            0.0
+        };
+        if (repeats as f64) * (pecks + 4.0) > 1e7 {
             return Err(LineError::new(at, "canned cycle would make more than 10^7 moves: expected a larger Q or fewer repeats", "too many moves"));
         }
         let dwell = self.cycle_p.unwrap_or(0.0);
@@ -1489,10 +1505,8 @@ impl Interp {
                         end,
                         exact,
                     );
-                    go(self, queue, &mut cur, Motion::Linear, pu, pv, r);
-                    if clear != r {
-                        go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
-                    }
+                    // LinuxCNC feeds straight back to the clearance plane (checked with rs274).
+                    go(self, queue, &mut cur, Motion::Linear, pu, pv, clear);
                 }
             }
             old = clear;

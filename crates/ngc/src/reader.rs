@@ -310,6 +310,7 @@ pub struct Moves {
     max_call_depth: usize,
     finished: bool,
     percent_seen: bool,
+    language_checked: bool,
     notices: Vec<Notice>,
 }
 
@@ -338,6 +339,7 @@ impl Moves {
             max_call_depth: options.max_call_depth,
             finished: false,
             percent_seen: false,
+            language_checked: false,
             notices: Vec::new(),
         }
     }
@@ -1040,8 +1042,48 @@ impl Moves {
         ))
     }
 
+    /// Refuses a program written in another control's language: Heidenhain conversational
+    /// (`BEGIN PGM`) or Siemens Sinumerik (`TRAORI`, `CYCLE800`), before any move.
+    fn foreign_language(&self) -> Option<Error> {
+        let text = &self.programs[0].text;
+        let first = text.lines().position(|l| !l.trim().is_empty())?;
+        let line = text.lines().nth(first)?;
+        let start = text.lines().take(first).map(|l| l.len() + 1).sum::<usize>();
+        let c = Cursor {
+            file: 0,
+            offset: start.min(text.len()),
+            line: first + 1,
+        };
+        let trimmed = line.trim_start();
+        let at = line.len() - trimmed.len();
+        if trimmed.to_ascii_uppercase().starts_with("BEGIN PGM") {
+            return Some(self.error_at(c, LineError::new(at..line.len(), "this is a Heidenhain conversational (Klartext) program: expected G-code in the RS274/NGC, Fanuc or Haas language", "Heidenhain conversational").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
+        }
+        for token in ["TRAORI", "traori", "Traori", "CYCLE800", "cycle800"] {
+            if let Some(k) = text.find(token) {
+                let line_start = text[..k].rfind('\n').map_or(0, |n| n + 1);
+                let line_no = text[..line_start].matches('\n').count() + 1;
+                let c = Cursor {
+                    file: 0,
+                    offset: line_start,
+                    line: line_no,
+                };
+                let col = k - line_start;
+                return Some(self.error_at(c, LineError::new(col..col + token.len(), format!("`{token}` is Siemens Sinumerik: this program is in the Siemens language, expected G-code in the RS274/NGC, Fanuc or Haas language"), "Siemens Sinumerik").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
+            }
+        }
+        None
+    }
+
     /// Reads on until a move is queued, the program ends, or an error.
     fn step(&mut self) -> Result<()> {
+        if !self.language_checked {
+            self.language_checked = true;
+            if let Some(e) = self.foreign_language() {
+                self.finished = true;
+                return Err(e);
+            }
+        }
         let Some((line, next)) = self.line_at(self.cursor) else {
             if let Some(f) = self.frames.last() {
                 if self.programs[f.start.file].text.is_empty() || f.start.file != 0 {

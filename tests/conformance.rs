@@ -152,3 +152,85 @@ fn every_pending_program_is_explained_and_valid_linuxcnc() {
         agree.join(" ")
     );
 }
+
+/// Programs LinuxCNC refuses (tests/data/conformance-errors): rs274 stops with an error,
+/// and `mtsim blocks` must exit 2 too, naming the same source line when rs274 shows it,
+/// after the same moves.
+#[test]
+fn mtsim_refuses_what_rs274_refuses_at_the_same_line() {
+    let programs = programs(&data("conformance-errors"));
+    assert!(programs.len() >= 15, "found {}", programs.len());
+    let Some(rs274) = rs274::require("conformance (refusals)") else {
+        return;
+    };
+    let work = scratch("conformance", "errors-tools");
+    let tools = inch_tool_table(&work);
+    let mut failures = Vec::new();
+    for p in &programs {
+        let name = p.file_name().unwrap().to_string_lossy().into_owned();
+        let w = scratch("conformance-errors", &name);
+        let rs = rs274::run(&rs274, p, &tools, &w, Duration::from_secs(10));
+        if rs.ok {
+            failures.push(format!(
+                "{name}: rs274 accepts it (the program must be an error)"
+            ));
+            continue;
+        }
+        // rs274 prints the message, then the offending block: find its line.
+        let text = std::fs::read_to_string(p).unwrap();
+        let shown = rs
+            .stderr
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .last();
+        // A search for an o-word that runs into the end of the file names its line instead.
+        let from_line = rs
+            .stderr
+            .split("from line: ")
+            .nth(1)
+            .and_then(|t| t.split_whitespace().next()?.parse::<usize>().ok());
+        let rs_line = from_line.or_else(|| {
+            shown.and_then(|s| text.lines().position(|l| l.trim() == s).map(|k| k + 1))
+        });
+        let scenario = w.join("s.toml");
+        std::fs::write(
+            &scenario,
+            format!(
+                "machine = {:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\n",
+                machine("trt-ac"),
+                p.display().to_string()
+            ),
+        )
+        .unwrap();
+        let out = mtsim_plain(&w, &["blocks", scenario.to_str().unwrap(), "--csv"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if out.status.code() != Some(2) {
+            failures.push(format!(
+                "{name}: rs274 refuses it ({}) but mtsim exits {:?}",
+                rs.stderr.trim().replace('\n', " / "),
+                out.status.code()
+            ));
+            continue;
+        }
+        if let Some(line) = rs_line {
+            if !stderr.contains(&format!("{name}:{line}:")) {
+                failures.push(format!(
+                    "{name}: rs274 stops at line {line}, mtsim elsewhere: {stderr}"
+                ));
+                continue;
+            }
+        }
+        let ours = rs274::parse_blocks_csv(&String::from_utf8_lossy(&out.stdout));
+        if let Err(e) = rs274::compare_moves(rs.moves, ours, false) {
+            failures.push(format!("{name}: moves before the error differ: {e}"));
+        }
+        let _ = std::fs::remove_dir_all(&w);
+    }
+    eprintln!(
+        "conformance-errors: mtsim refuses {} of {} programs rs274 refuses, at the same line",
+        programs.len() - failures.len(),
+        programs.len()
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}

@@ -24,6 +24,9 @@ fn main() {
             std::process::exit(2)
         });
     }
+    if let Some(dirs) = std::env::var_os("NGC_PATH") {
+        options.search_path = std::env::split_paths(&dirs).collect();
+    }
     let moves = match read_file_with(Path::new(file), &options) {
         Ok(m) => m,
         Err(e) => {
@@ -31,6 +34,13 @@ fn main() {
             std::process::exit(2)
         }
     };
+    if std::env::var_os("NGC_COUNT").is_some() {
+        let t = std::time::Instant::now();
+        let n = moves.filter(|m| m.is_ok()).count();
+        let s = t.elapsed().as_secs_f64();
+        println!("{n} moves in {s:.3} s: {:.0} blocks/s", n as f64 / s);
+        return;
+    }
     for m in moves {
         match m {
             Ok(m) => {

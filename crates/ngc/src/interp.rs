@@ -509,8 +509,16 @@ impl Interp {
         path: &Path,
     ) -> LineResult<Stop> {
         let dialect = self.dialect;
-        let mut g: Vec<(GCode, Word)> = Vec::new();
-        let mut m: Vec<(u32, Word)> = Vec::new();
+        let mut g: Small<(GCode, Word), 16> = Small::new((GCode::Motion(None), Word::EMPTY));
+        let mut m: Small<(u32, Word), 16> = Small::new((0, Word::EMPTY));
+        if words.len() > 64 {
+            let w = words[64];
+            return Err(LineError::new(
+                w.span(),
+                "more than 64 words in a block: expected a shorter block",
+                "too many words",
+            ));
+        }
         let mut single: [Option<Word>; 26] = [None; 26];
         for word in words {
             match word.letter {
@@ -526,10 +534,25 @@ impl Interp {
                             g.remove(k);
                         }
                     }
-                    if let Some((_, other)) = g.iter().find(|(c, _)| c.group() == code.group()) {
+                    // LinuxCNC: G4 is non-modal (group 0) and may share a block with G0-G3.
+                    let dwell_pair = |a: GCode, b: GCode| {
+                        dialect == Dialect::Linuxcnc
+                            && (a == GCode::NonModal(NonModal::Dwell))
+                                != (b == GCode::NonModal(NonModal::Dwell))
+                    };
+                    if let Some((_, other)) = g
+                        .iter()
+                        .find(|(c, _)| c.group() == code.group() && !dwell_pair(*c, code))
+                    {
                         return Err(LineError::new(word.span(), format!("`{}` and `{}` are in the same modal group: expected at most one per block", &line[other.span()], &line[word.span()]), "second code of the group").help("split them into two blocks"));
                     }
-                    g.push((code, *word));
+                    if !g.push((code, *word)) {
+                        return Err(LineError::new(
+                            word.span(),
+                            "more than 16 G codes in a block: expected at most one per modal group",
+                            "too many G codes",
+                        ));
+                    }
                 }
                 'M' => {
                     let code = integer(word, line)? as u32;
@@ -539,7 +562,13 @@ impl Interp {
                     {
                         return Err(LineError::new(word.span(), format!("`{}` and `{}` are in the same group: expected at most one per block", &line[other.span()], &line[word.span()]), "second code of the group"));
                     }
-                    m.push((code, *word));
+                    if !m.push((code, *word)) {
+                        return Err(LineError::new(
+                            word.span(),
+                            "more than 16 M codes in a block: expected fewer",
+                            "too many M codes",
+                        ));
+                    }
                 }
                 'O' => {
                     return Err(LineError::new(
@@ -579,12 +608,12 @@ impl Interp {
         let mut stop = Stop::None;
 
         // 1. Units (so that F reads in them), feed mode, F, S.
-        for &(c, _) in &g {
+        for &(c, _) in g.iter() {
             if let GCode::Units(inch) = c {
                 self.inch = inch;
             }
         }
-        for &(c, _) in &g {
+        for &(c, _) in g.iter() {
             if let GCode::Feed(mode) = c {
                 if mode != self.feed_mode {
                     self.feed = None;
@@ -624,7 +653,7 @@ impl Interp {
             self.next_tool = n;
         }
         let mut tcp_m = None;
-        for &(code, w) in &m {
+        for &(code, w) in m.iter() {
             match code {
                 6 => self.tool = self.next_tool,
                 61 => {
@@ -678,7 +707,7 @@ impl Interp {
             self.tcp = on;
         }
         // 3. M70-M73: modal state.
-        for &(code, w) in &m {
+        for &(code, w) in m.iter() {
             match code {
                 70 => self.saved = Some(Box::new(self.save())),
                 71 => self.saved = None,
@@ -699,8 +728,9 @@ impl Interp {
         // 4. Dwell.
         if let Some((NonModal::Dwell, w)) = nonmodal {
             let x_is_time = if dialect.is_fanuc_family() { "" } else { "X" };
+            let with_motion = g.iter().any(|(c, _)| matches!(c, GCode::Motion(Some(_))));
             for letter in ['X', 'Y', 'Z', 'A', 'B', 'C', 'I', 'J', 'K', 'R'] {
-                if letter == 'X' && x_is_time.is_empty() {
+                if (letter == 'X' && x_is_time.is_empty()) || with_motion {
                     continue;
                 }
                 if let Some(aw) = get(letter) {
@@ -727,7 +757,7 @@ impl Interp {
         }
         // 5. Plane, units, tool length, coordinate system, path control, distance, retract.
         let mut tcp_on = false;
-        for &(c, w) in &g {
+        for &(c, w) in g.iter() {
             match c {
                 GCode::Plane(p) => self.plane = p,
                 GCode::Units(inch) => self.inch = inch,
@@ -844,11 +874,18 @@ impl Interp {
             self.motion = mm;
         }
         let dwell_x = dialect.is_fanuc_family() && matches!(nonmodal, Some((NonModal::Dwell, _)));
-        let axis_words: Vec<(Axis, Word)> = Axis::ALL
-            .iter()
-            .filter(|&&a| !(dwell_x && a == Axis::X))
-            .filter_map(|&a| get(a.letter()).map(|w| (a, w)))
-            .collect();
+        // Fixed buffers, no allocation per block.
+        let mut axis_buf = [(Axis::X, Word::EMPTY); 6];
+        let mut n_axes = 0;
+        for a in Axis::ALL {
+            if let Some(w) = get(a.letter()) {
+                if !(dwell_x && a == Axis::X) {
+                    axis_buf[n_axes] = (a, w);
+                    n_axes += 1;
+                }
+            }
+        }
+        let axis_words = &axis_buf[..n_axes];
         // 6. Non-modal codes that use axis words.
         // G43.1 takes its Z as the tool length, not as a move.
         let mut axes_used = g.iter().any(|(c, _)| *c == GCode::ToolLength(1));
@@ -879,7 +916,7 @@ impl Interp {
                             }
                         }
                     } else {
-                        for (a, _) in &axis_words {
+                        for (a, _) in axis_words {
                             home[*a] = self.params.numbered[base + a.index()];
                         }
                     }
@@ -917,7 +954,7 @@ impl Interp {
                             n[5211 + k] = 0.0;
                         }
                     }
-                    for (a, wd) in &axis_words {
+                    for (a, wd) in axis_words {
                         let v = wd.value * if a.is_rotary() { 1.0 } else { scale };
                         let k = a.index();
                         let g5x = n[coord_parameter(self.coord) + k];
@@ -953,10 +990,15 @@ impl Interp {
             }
         }
         // 7. Motion.
-        let arc_words: Vec<Word> = ['I', 'J', 'K', 'R']
-            .iter()
-            .filter_map(|&l| get(l))
-            .collect();
+        let mut arc_buf = [Word::EMPTY; 4];
+        let mut n_arc = 0;
+        for l in ['I', 'J', 'K', 'R'] {
+            if let Some(w) = get(l) {
+                arc_buf[n_arc] = w;
+                n_arc += 1;
+            }
+        }
+        let arc_words = &arc_buf[..n_arc];
         let g53 = matches!(nonmodal, Some((NonModal::G53, _)));
         if !axes_used
             && (!axis_words.is_empty()
@@ -1044,7 +1086,7 @@ impl Interp {
             }
         }
         // 8. Program flow M codes.
-        for &(code, w) in &m {
+        for &(code, w) in m.iter() {
             match code {
                 2 | 30 => return Ok(Stop::End),
                 98 => {
@@ -1129,6 +1171,12 @@ impl Interp {
         p: Option<Word>,
         x: Option<Word>,
     ) -> LineResult<f64> {
+        // In LinuxCNC X is an axis word, never a dwell time.
+        let x = if self.dialect == Dialect::Linuxcnc {
+            None
+        } else {
+            x
+        };
         let (seconds, w) = match (p, x, self.dialect) {
             (Some(p), None, Dialect::Linuxcnc) => (p.value, p),
             (Some(p), None, Dialect::Fanuc) => (p.value / 1000.0, p),
@@ -1623,6 +1671,41 @@ impl Interp {
                 Ok(center)
             }
         }
+    }
+}
+
+/// A vector of at most `N` copies, on the stack.
+struct Small<T: Copy, const N: usize> {
+    items: [T; N],
+    len: usize,
+}
+
+impl<T: Copy, const N: usize> Small<T, N> {
+    fn new(fill: T) -> Self {
+        Small {
+            items: [fill; N],
+            len: 0,
+        }
+    }
+    /// False when full.
+    fn push(&mut self, t: T) -> bool {
+        if self.len == N {
+            return false;
+        }
+        self.items[self.len] = t;
+        self.len += 1;
+        true
+    }
+    fn remove(&mut self, k: usize) {
+        self.items.copy_within(k + 1..self.len, k);
+        self.len -= 1;
+    }
+}
+
+impl<T: Copy, const N: usize> std::ops::Deref for Small<T, N> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        &self.items[..self.len]
     }
 }
 

@@ -57,6 +57,14 @@ pub struct Word<'l> {
 }
 
 impl Word<'_> {
+    /// A placeholder for fixed buffers.
+    pub const EMPTY: Word<'static> = Word {
+        letter: ' ',
+        value: 0.0,
+        number: "",
+        span: (0, 0),
+    };
+
     pub fn span(&self) -> Range<usize> {
         self.span.0..self.span.1
     }

@@ -89,7 +89,7 @@ struct Cursor {
 
 struct Program {
     path: PathBuf,
-    text: String,
+    text: std::rc::Rc<str>,
     /// `o<name> sub` → the line after it; built on the first call that needs it.
     subs: Option<HashMap<String, Cursor>>,
 }
@@ -250,13 +250,16 @@ fn macro_line(line: &str) -> Option<(Macro, usize, usize)> {
     while k < b.len() && b[k].is_ascii_alphabetic() {
         k += 1;
     }
-    let m = match line[i..k].to_ascii_uppercase().as_str() {
-        "IF" => Macro::If,
-        "WHILE" => Macro::While,
-        "END" => Macro::End,
-        "GOTO" => Macro::Goto,
-        _ => return None,
-    };
+    let word = &line[i..k];
+    let m = [
+        ("IF", Macro::If),
+        ("WHILE", Macro::While),
+        ("END", Macro::End),
+        ("GOTO", Macro::Goto),
+    ]
+    .into_iter()
+    .find(|(w, _)| word.eq_ignore_ascii_case(w))?
+    .1;
     Some((m, i, k))
 }
 
@@ -319,7 +322,7 @@ impl Moves {
         Moves {
             programs: vec![Program {
                 path: path.to_path_buf(),
-                text,
+                text: text.into(),
                 subs: None,
             }],
             cursor: Cursor {
@@ -374,7 +377,7 @@ impl Moves {
 
     fn error_at(&self, c: Cursor, err: LineError) -> Error {
         let program = &self.programs[c.file];
-        let text = program.text.clone();
+        let text = program.text.to_string();
         let start = c.offset.min(text.len());
         let mut span = start + err.span.start..start + err.span.end;
         span.end = span.end.min(text.len());
@@ -513,7 +516,7 @@ impl Moves {
                     let text = String::from_utf8_lossy(&bytes).into_owned();
                     self.programs.push(Program {
                         path,
-                        text,
+                        text: text.into(),
                         subs: None,
                     });
                     let file = self.programs.len() - 1;
@@ -1097,10 +1100,13 @@ impl Moves {
             return Ok(());
         };
         let here = self.cursor;
-        // Borrow-free copy of the line (lines are short).
-        let line = line.to_string();
+        let len = line.len();
+        // Share the text (a reference count, no copy) so the line can be borrowed while the
+        // interpreter changes state.
+        let text = std::rc::Rc::clone(&self.programs[here.file].text);
+        let line = &text[here.offset..here.offset + len];
         self.cursor = next;
-        self.line(&line, here, next).map_err(|e| {
+        self.line(line, here, next).map_err(|e| {
             self.finished = true;
             self.error_at(here, e)
         })
@@ -1124,7 +1130,7 @@ impl Moves {
             }
             _ => {}
         }
-        if b.contains(&b'#') || b.contains(&b'[') {
+        if b.iter().any(|&c| c == b'#' || c == b'[') {
             self.interp.refresh_system_parameters();
         }
         let lexed = lex(line, &self.interp.params, self.dialect.is_fanuc_family())?;

@@ -454,3 +454,13 @@ fn other_controls_languages_are_refused_at_their_first_line() {
         "no move before the refusal"
     );
 }
+
+#[test]
+fn linuxcnc_g4_shares_a_block_with_a_rapid_and_x_stays_an_axis() {
+    // LinuxCNC's skeleton.ngc: `G04 P.001 G0 X1.0 Y1.0` dwells 1 ms, then moves.
+    let m = cnc("G04 P.001 G0 X1.0 Y1.0\n");
+    assert_eq!(m[0].motion, Motion::Dwell { seconds: 0.001 });
+    assert_eq!(xyz(&m[1]), [1.0, 1.0, 0.0]);
+    let (_, _, msg) = error_with("G1 G4 P1\n", &opts(Dialect::Fanuc));
+    assert!(msg.contains("same modal group"), "{msg}");
+}

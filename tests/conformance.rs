@@ -49,9 +49,10 @@ fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<rs274::Row>, String> 
     std::fs::write(
         &scenario,
         format!(
-            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\ntool_table = {:?}\n",
+            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\ntool_table = {:?}\nsubroutine_path = [{:?}]\n",
             program.display().to_string(),
-            data("conformance").join("tool.tbl").display().to_string()
+            data("conformance").join("tool.tbl").display().to_string(),
+            data("conformance-subs").display().to_string()
         ),
     )
     .unwrap();
@@ -68,7 +69,15 @@ fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<rs274::Row>, String> 
 fn compare(rs274: &Path, program: &Path, tools_inch: &Path) -> Result<usize, String> {
     let name = program.file_stem().unwrap().to_string_lossy().into_owned();
     let work = scratch("conformance", &name);
-    let rs = rs274::run(rs274, program, tools_inch, &work, Duration::from_secs(10));
+    // File subroutines come from tests/data/conformance-subs, for both interpreters.
+    let rs = rs274::run_with(
+        rs274,
+        program,
+        tools_inch,
+        &[data("conformance-subs")],
+        &work,
+        Duration::from_secs(10),
+    );
     if !rs.ok {
         return Err(format!(
             "rs274 does not accept it (fix the program): {}",

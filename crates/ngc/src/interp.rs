@@ -509,6 +509,11 @@ impl Interp {
         path: &Path,
     ) -> LineResult<Stop> {
         let dialect = self.dialect;
+        if dialect.is_fanuc_family() {
+            if let Some(g65) = words.iter().find(|w| w.letter == 'G' && w.value == 65.0) {
+                return self.g65(line, words, *g65);
+            }
+        }
         let mut g: Small<(GCode, Word), 16> = Small::new((GCode::Motion(None), Word::EMPTY));
         let mut m: Small<(u32, Word), 16> = Small::new((0, Word::EMPTY));
         if words.len() > 64 {
@@ -1004,12 +1009,12 @@ impl Interp {
             && (!axis_words.is_empty()
                 || (!arc_words.is_empty() && !matches!(self.motion, Some(MotionMode::Cycle(_)))))
         {
-            let first = axis_words
-                .iter()
-                .map(|(_, w)| *w)
-                .chain(arc_words.iter().copied())
-                .min_by_key(|w| w.span.0)
-                .map_or(0..0, |w| w.span());
+            let mut first = usize::MAX..usize::MAX;
+            for w in axis_words.iter().map(|(_, w)| w).chain(arc_words.iter()) {
+                if w.span.0 < first.start {
+                    first = w.span();
+                }
+            }
             let Some(mode) = self.motion else {
                 return Err(LineError::new(first, "axis word with no motion mode: expected G00, G01, G02 or G03 in this or an earlier block", "no motion mode"));
             };
@@ -1119,6 +1124,68 @@ impl Interp {
             }
         }
         Ok(stop)
+    }
+
+    /// Fanuc `G65 P<program> [L<count>] <arguments>`: a macro call with its own locals;
+    /// argument specification I (A→#1, B→#2, C→#3, I→#4, J→#5, K→#6, D→#7, E→#8, F→#9,
+    /// H→#11, M→#13, Q→#17, R→#18, S→#19, T→#20, U→#21, V→#22, W→#23, X→#24, Y→#25, Z→#26).
+    fn g65(&mut self, line: &str, words: &[Word], g65: Word) -> LineResult<Stop> {
+        let mut args = vec![0.0; 33];
+        let mut program = None;
+        let mut repeats = 1;
+        for w in words {
+            let slot = match w.letter {
+                'P' => {
+                    program = Some(integer(w, line)?);
+                    continue;
+                }
+                'L' => {
+                    repeats = integer(w, line)?.max(1);
+                    continue;
+                }
+                'N' => continue,
+                'G' if w.span == g65.span => continue,
+                'A' => 1,
+                'B' => 2,
+                'C' => 3,
+                'I' => 4,
+                'J' => 5,
+                'K' => 6,
+                'D' => 7,
+                'E' => 8,
+                'F' => 9,
+                'H' => 11,
+                'M' => 13,
+                'Q' => 17,
+                'R' => 18,
+                'S' => 19,
+                'T' => 20,
+                'U' => 21,
+                'V' => 22,
+                'W' => 23,
+                'X' => 24,
+                'Y' => 25,
+                'Z' => 26,
+                _ => {
+                    return Err(LineError::new(w.span(), format!("`{}` in a G65 block: expected P, L and arguments A-Z (not G, L, N, O, P)", &line[w.span()]), "not a G65 argument"));
+                }
+            };
+            args[slot - 1] = w.value;
+        }
+        let Some(p) = program else {
+            return Err(LineError::new(
+                g65.span(),
+                "G65 without P: expected `G65 P<program number>`",
+                "no P",
+            ));
+        };
+        Ok(Stop::Call {
+            label: p.to_string(),
+            repeats,
+            args,
+            locals: true,
+            span: g65.span(),
+        })
     }
 
     /// A word no code of the block (or the modal motion) uses is an error, never dropped.

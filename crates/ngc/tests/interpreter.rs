@@ -464,3 +464,11 @@ fn linuxcnc_g4_shares_a_block_with_a_rapid_and_x_stays_an_axis() {
     let (_, _, msg) = error_with("G1 G4 P1\n", &opts(Dialect::Fanuc));
     assert!(msg.contains("same modal group"), "{msg}");
 }
+
+#[test]
+fn fanuc_g65_passes_arguments_as_local_variables() {
+    // G65 P9010 A2 X5: #1 = 2, #24 = 5 inside O9010; the caller's #1 is untouched.
+    let text = "#1 = 7\nG65 P9010 A2 X5\nG0 Z#1\nM30\nO9010\nG0 X[#24 * #1] Y#1\nM99\n";
+    let ends: Vec<[f64; 3]> = fanuc(text).iter().map(xyz).collect();
+    assert_eq!(ends, [[10.0, 2.0, 0.0], [10.0, 2.0, 7.0]]);
+}

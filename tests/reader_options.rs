@@ -1,0 +1,112 @@
+//! The scenario's `[reader]` section reaches the interpreter: dialect, tools (inline and
+//! LinuxCNC `.tbl`), `.var` parameters, work offsets, user M codes, and the machine's axes.
+
+mod common;
+
+use std::path::Path;
+
+use common::{scratch, trt_ac, write_scenario};
+use mtsim::input::scenario::Scenario;
+use mtsim::program::file::read_file;
+use mtsim::Axis;
+
+fn ends(scenario: &Scenario, program: &Path) -> Result<Vec<[f64; 6]>, String> {
+    read_file(program, &scenario.reader)
+        .map_err(|e| e.to_string())?
+        .map(|m| {
+            m.map(|m| Axis::ALL.map(|a| m.end[a]))
+                .map_err(|e| e.to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn work_offsets_tools_and_parameters_come_from_the_scenario() {
+    let dir = scratch("reader", "offsets");
+    std::fs::write(
+        dir.join("tools.tbl"),
+        "T1 P1 Z+50.0 D6.0 ;end mill\nT2 P2 Z+80 D10\n",
+    )
+    .unwrap();
+    // #5241-#5243: G55 = (1, 2, 3); #5161-#5163: G28 position (0, 0, 300).
+    std::fs::write(dir.join("sim.var"), "5241 1\n5242 2\n5243 3\n5163 300\n").unwrap();
+    std::fs::write(
+        dir.join("p.ngc"),
+        "G21 G90\nT1 M6 G43 H1\nG0 X10 Y20 Z30\nG55 G0 X0 Y0 Z0\nT2 M6 G43\nG0 Z0\nM428\nG28\nM2\n",
+    )
+    .unwrap();
+    let scenario_path = write_scenario(
+        &dir,
+        &trt_ac(),
+        r#"
+[program]
+file = "p.ngc"
+
+[reader]
+dialect = "linuxcnc"
+tool_table = "tools.tbl"
+var_file = "sim.var"
+work_offsets = { G54 = [100.0, 50.0, -200.0, 0.0, 0.0, 0.0] }
+user_m_codes = { M428 = "tcp-on" }
+"#,
+    );
+    let scenario = Scenario::load(&scenario_path).unwrap();
+    assert_eq!(scenario.reader.dialect, ngc::Dialect::Linuxcnc);
+    let got = ends(&scenario, &dir.join("p.ngc")).unwrap();
+    assert_eq!(
+        got,
+        [
+            // G54 (100, 50, -200) + tool 1 length 50 on Z.
+            [110.0, 70.0, -120.0, 0.0, 0.0, 0.0],
+            // G55 (1, 2, 3) + 50.
+            [1.0, 2.0, 53.0, 0.0, 0.0, 0.0],
+            // Tool 2: 3 + 80.
+            [1.0, 2.0, 83.0, 0.0, 0.0, 0.0],
+            // G28 with no words: every axis of the machine to the .var position.
+            [0.0, 0.0, 300.0, 0.0, 0.0, 0.0],
+        ]
+    );
+}
+
+#[test]
+fn a_word_for_an_axis_the_machine_lacks_is_an_error() {
+    let dir = scratch("reader", "axes");
+    std::fs::write(dir.join("p.nc"), "G0 X1\nG0 B10\n").unwrap();
+    let scenario = Scenario::load(&write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"p.nc\"\n",
+    ))
+    .unwrap();
+    let err = ends(&scenario, &dir.join("p.nc")).unwrap_err();
+    assert!(
+        err.contains("p.nc:2:4") && err.contains("no B axis"),
+        "{err}"
+    );
+}
+
+#[test]
+fn bad_reader_keys_are_input_errors() {
+    let dir = scratch("reader", "bad");
+    std::fs::write(dir.join("p.nc"), "G0 X1\n").unwrap();
+    let bad = write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"p.nc\"\n[reader]\nuser_m_codes = { M5 = \"tcp-on\" }\n",
+    );
+    let err = Scenario::load(&bad).unwrap_err().to_string();
+    assert!(err.contains("user M code of 100 or more"), "{err}");
+    let bad = write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"p.nc\"\n[reader]\nwork_offsets = { G60 = [0, 0, 0, 0, 0, 0] }\n",
+    );
+    let err = Scenario::load(&bad).unwrap_err().to_string();
+    assert!(err.contains("G54 G55"), "{err}");
+    let bad = write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"siemens\"\n",
+    );
+    assert!(Scenario::load(&bad).is_err());
+}

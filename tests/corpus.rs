@@ -18,7 +18,7 @@ use common::{machine, rs274, scratch};
 
 /// Fraction of standalone programs that `analyze` and `check` read, at least. The issue's
 /// goal is 0.90; this is the figure reached so far (raise it as the reader grows).
-const READ_FLOOR: f64 = 0.37;
+const READ_FLOOR: f64 = 0.43;
 
 /// Longest a single `analyze` or `check` may take before it counts as a hang.
 const TIMEOUT: Duration = Duration::from_secs(30);
@@ -118,6 +118,12 @@ fn known_difference(name: &str) -> Option<&'static str> {
         .map(|(_, why)| *why)
 }
 
+/// The user M codes of LinuxCNC's table-rotary-tilting sample configurations
+/// (`xyzac-trt.ini`: `REMAP = M428` switches to the tool-centre-point kinematics, M429 back
+/// to identity, M430 to user kinematics), as a scenario would map them.
+const USER_M_CODES: &str =
+    "user_m_codes = { M428 = \"tcp-on\", M429 = \"tcp-off\", M430 = \"ignore\" }";
+
 /// What happened to one program.
 #[derive(Debug, Default)]
 struct Outcome {
@@ -174,7 +180,7 @@ fn run_one(path: &Path, k: usize, setup: &Setup) -> Outcome {
     std::fs::write(
         &scenario,
         format!(
-            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\n{tools}subroutine_path = [{}]\n[check]\ncollisions = false\n",
+            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\n{tools}subroutine_path = [{}]\n{USER_M_CODES}\n[check]\ncollisions = false\n",
             path.display().to_string(),
             dir_list.join(", ")
         ),

@@ -102,10 +102,15 @@ enum GCode {
     CoordExtended,
     Path(u32),
     Retract(bool),
+    /// Fanuc G05.1 (AI contour control, Q) and G08 (look-ahead, P); Haas G103 (block
+    /// look-ahead, P): accepted, no effect on the canonical moves. Haas G187 (P accuracy
+    /// level, E corner tolerance) sets the blending tolerance.
+    Control(u32),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Group {
+    Control,
     Motion,
     NonModal,
     Plane,
@@ -137,6 +142,7 @@ impl GCode {
             GCode::Coord(_) | GCode::CoordExtended => Group::Coord,
             GCode::Path(_) => Group::Path,
             GCode::Retract(_) => Group::Retract,
+            GCode::Control(_) => Group::Control,
         }
     }
 
@@ -212,6 +218,8 @@ impl GCode {
             930 => GCode::Feed(FeedRead::InverseTime),
             940 => GCode::Feed(FeedRead::PerMinute),
             950 => GCode::Feed(FeedRead::PerRevolution),
+            51 | 80 if fanuc => GCode::Control(code as u32),
+            1030 | 1870 if dialect == Dialect::Haas => GCode::Control(code as u32),
             980 => GCode::Retract(false),
             990 => GCode::Retract(true),
             434 | 435 => return Err(unsupported(" (LinuxCNC has no G43.4; TCP is switched by the scenario option or a user M code such as M428)", "map the TCP M codes in the scenario (user_m_codes)")),
@@ -851,6 +859,14 @@ impl Interp {
                 GCode::Distance(abs) => self.absolute = abs,
                 GCode::ArcDistance(abs) => self.arc_absolute = abs,
                 GCode::Retract(r) => self.retract_r = r,
+                GCode::Control(1870) => {
+                    // Haas G187: E is the corner rounding tolerance; without E, the
+                    // control's default (no tolerance given).
+                    self.path = PathControl::Blend {
+                        tolerance_mm: get('E').map(|e| e.value * self.scale()),
+                        naive_cam_mm: None,
+                    };
+                }
                 _ => {}
             }
         }
@@ -1210,10 +1226,10 @@ impl Interp {
         let dwell_cycle = matches!(motion, Some(MotionMode::Cycle(820 | 860 | 890)));
         let g10 = has_g(&|c| matches!(c, GCode::NonModal(NonModal::G10)));
         let checks: [(char, bool, &str); 5] = [
-            ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended)) || g10 || dwell_cycle || has_m(&[62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, M62-M66 or M98"),
-            ('Q', has_g(&|c| matches!(c, GCode::Path(4))) || peck || has_m(&[61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, M61 or M66-M68"),
+            ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, M62-M66 or M98"),
+            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || has_m(&[61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, M61 or M66-M68"),
             ('L', g10 || cycle || has_m(&[66, 98]), "`L` with no code that uses it: expected L only with G10, a canned cycle, M66 or M98"),
-            ('E', has_m(&[66, 67, 68]), "`E` with no code that uses it: expected E only with M66-M68"),
+            ('E', has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with M66-M68"),
             ('D', false, "`D` (cutter radius compensation is not supported yet): expected no D word"),
         ];
         for (letter, ok, message) in checks {
@@ -1701,8 +1717,11 @@ impl Interp {
                     // LinuxCNC 2.9 (interp_arc.cc): fails when the difference exceeds
                     // 0.001 mm (0.00005 in) and 0.1 % of the radius... see docs/gcode.md.
                     Dialect::Linuxcnc => {
-                        let abs_tol = if self.inch { 0.00005 * MM_PER_INCH } else { 0.001 };
-                        (diff <= abs_tol || diff / r_start <= 0.001 && diff <= 0.5 * scale.max(1.0), format!("{abs_tol} mm, or 0.1 % of the radius"))
+                        // Measured with rs274 2.9 (docs/gcode.md): an error only when the
+                        // difference exceeds both 0.02·√2 mm (0.002·√2 in under G20) and
+                        // 0.1 % of the start radius.
+                        let abs_tol = std::f64::consts::SQRT_2 * if self.inch { 0.002 * MM_PER_INCH } else { 0.02 };
+                        (diff <= abs_tol || diff / r_start <= 0.001, format!("{abs_tol:.4} mm or 0.1 % of the radius"))
                     }
                     _ => (diff <= ARC_RADIUS_TOLERANCE_MM, format!("{ARC_RADIUS_TOLERANCE_MM} mm")),
                 };

@@ -382,6 +382,13 @@ impl Moves {
         let mut span = start + err.span.start..start + err.span.end;
         span.end = span.end.min(text.len());
         span.start = span.start.min(span.end);
+        // Keep the span on character boundaries (a label may end inside `é`).
+        while !text.is_char_boundary(span.start) {
+            span.start -= 1;
+        }
+        while !text.is_char_boundary(span.end) {
+            span.end += 1;
+        }
         let (line, column) = line_column(&text, span.start);
         Error::Syntax(Box::new(Syntax {
             path: program.path.clone(),

@@ -472,3 +472,49 @@ fn fanuc_g65_passes_arguments_as_local_variables() {
     let ends: Vec<[f64; 3]> = fanuc(text).iter().map(xyz).collect();
     assert_eq!(ends, [[10.0, 2.0, 0.0], [10.0, 2.0, 7.0]]);
 }
+
+#[test]
+fn linuxcnc_arc_radius_tolerance_matches_rs274() {
+    // Bisected with rs274 2.9: G3 from (R, 0) about the origin to (-(R + d), 0).
+    let arc = |r: f64, d: f64, units: &str| {
+        let text = format!("{units} F100\nG0 X{r} Y0\nG3 X-{} Y0 I-{r} J0\n", r + d);
+        read_str_with(Path::new("t.ngc"), &text, &opts(Dialect::Linuxcnc)).all(|m| m.is_ok())
+    };
+    assert!(arc(10.0, 0.0282, "G21"));
+    assert!(!arc(10.0, 0.0283, "G21"));
+    assert!(arc(100.0, 0.09, "G21"), "0.09 % of the radius");
+    assert!(!arc(100.0, 0.11, "G21"));
+    assert!(arc(1000.0, 0.9, "G21"));
+    assert!(!arc(1000.0, 1.1, "G21"));
+    assert!(arc(1.0, 0.0028, "G20"));
+    assert!(!arc(1.0, 0.00285, "G20"));
+    // Fanuc family: 0.001 mm.
+    let fanuc_arc = |d: f64| {
+        read_str_with(
+            Path::new("t"),
+            &format!("F100\nG0 X10 Y0\nG3 X-{} Y0 I-10 J0\n", 10.0 + d),
+            &opts(Dialect::Fanuc),
+        )
+        .all(|m| m.is_ok())
+    };
+    assert!(fanuc_arc(0.0009));
+    assert!(!fanuc_arc(0.0011));
+}
+
+#[test]
+fn post_processor_control_codes_are_accepted() {
+    // Fanuc G05.1 Q1 (AI contour control) and G08 P1 (look-ahead): no effect on moves.
+    assert_eq!(xyz(&fanuc("G05.1 Q1\nG08 P1\nG0 X1\n")[0]), [1.0, 0.0, 0.0]);
+    // Haas G187 E sets the blending tolerance; G103 P is accepted.
+    let m = moves_with("G187 P1 E0.01\nG103 P15\nG0 X1\n", &opts(Dialect::Haas));
+    assert_eq!(
+        m[0].path,
+        PathControl::Blend {
+            tolerance_mm: Some(0.01),
+            naive_cam_mm: None
+        }
+    );
+    // M70 saves, M72 restores the modal state (here G91 back to G90).
+    let m = cnc("M70\nG91\nG0 X1\nM72\nG0 X5\n");
+    assert_eq!(xyz(&m[1]), [5.0, 0.0, 0.0]);
+}

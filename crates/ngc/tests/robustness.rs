@@ -37,8 +37,17 @@ fn runs_to_an_end(text: &str, dialect: Dialect) {
     let mut errors = 0;
     for m in read_str_with(Path::new("fuzz.ngc"), text, &options(dialect)) {
         n += 1;
-        if m.is_err() {
+        if let Err(e) = m {
             errors += 1;
+            if let ngc::Error::Syntax(s) = e {
+                // The span can be shown: it lies on character boundaries of the text.
+                assert!(
+                    s.text.get(s.span.clone()).is_some(),
+                    "span {:?} in {:?}",
+                    s.span,
+                    s.text
+                );
+            }
         }
         assert!(n < cap, "more than {cap} moves: the reader did not stop");
     }

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 /// The rs274 binary, if installed (`RS274` overrides the path).
 pub fn binary() -> Option<PathBuf> {
     if let Ok(p) = std::env::var("RS274") {
-        return Some(PathBuf::from(p));
+        return Some(PathBuf::from(p)).filter(|p| p.is_file());
     }
     let path = std::env::var_os("PATH")?;
     std::env::split_paths(&path)

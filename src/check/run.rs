@@ -14,10 +14,11 @@ use crate::check::scene::{EngagementSummary, EventKind, Scene, SceneMonitor};
 use crate::error::Result;
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario};
+use crate::kinematics::Kinematics;
 use crate::measure::CircleFrame;
 use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
-use crate::AxisVec;
+use crate::{Axis, AxisVec};
 
 pub use crate::pipeline::SETTLE_S;
 
@@ -104,10 +105,11 @@ pub fn check_with(
     let kin = machine.kinematics;
     let frame = theta_frame(scenario);
     let run = program::scenario_run(scenario, Direction::Ccw, 0.0)?;
-    // The position before the program is unknown (the reader assumes zero), so the first
-    // move, which brings the machine to the program's start, is not checked: sampling
-    // starts at its end.
-    let moves = Box::new(run.moves.skip(1));
+    // The position before the program is unknown (the reader assumes zero), so the path of
+    // the first move, which brings the machine to the program's start, is not checked:
+    // sampling starts at its end, which must lie within the machine's reach like every
+    // other point. A reader error, wherever it comes, passes through and ends the check.
+    let moves = Box::new(from_first_end(run.moves, kin));
     let theta_of = move |q: &AxisVec| frame.map(|f| f.theta_deg(&kin.forward(q).tip));
     let mut limits = LimitsMonitor::new(machine, &theta_of);
     let mut scene = match scenario.check.collisions {
@@ -205,6 +207,34 @@ pub fn check_with(
         min_clearance_bodies,
         dynamics: options.dynamics,
     })
+}
+
+/// `moves` with the first move replaced by a standstill at its end (a dwell of 0 s at the
+/// machine axis positions of its end point), so that the program's start point is sampled
+/// and checked but not the unknown path to it. Errors pass through unchanged.
+fn from_first_end<'a>(moves: program::Moves<'a>, kin: Kinematics) -> program::Moves<'a> {
+    let mut first = true;
+    Box::new(moves.map(move |m| {
+        if !std::mem::take(&mut first) {
+            return m;
+        }
+        m.map(|m| {
+            let mut end = m.end;
+            if m.tcp {
+                // X Y Z are the tool tip in the table frame.
+                let tip = nalgebra::Point3::new(end[Axis::X], end[Axis::Y], end[Axis::Z]);
+                let q = kin.table_to_machine(&m.end, &tip);
+                (end[Axis::X], end[Axis::Y], end[Axis::Z]) = (q.x, q.y, q.z);
+            }
+            program::Move {
+                motion: program::Motion::Dwell { seconds: 0.0 },
+                start: end,
+                end,
+                tcp: false,
+                ..m
+            }
+        })
+    }))
 }
 
 /// The frame that gives θ: the measured circle of a cone or circle test, if any.

@@ -119,6 +119,11 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
             e.bodies[0], e.bodies[1], e.max_depth_mm
         ));
     }
+    if report.violations.is_empty() && report.samples == 0 {
+        // Nothing was checked: say so rather than "clean".
+        out.push_str("nothing checked: the program has no moves\n");
+        return out;
+    }
     if report.violations.is_empty() {
         out.push_str("clean: no violations\n");
         return out;

@@ -15,6 +15,7 @@ use crate::study::sweep::SweepParam;
 
 mod analyze;
 mod batch;
+mod blocks;
 mod check;
 mod cone;
 mod fit;
@@ -63,6 +64,18 @@ pub enum Command {
         /// Scenario file (TOML).
         scenario: PathBuf,
         /// Print one JSON object instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The interpreter's canonical output: one row per move with its source line, kind
+    /// (rapid, feed, arc, dwell), end point in machine coordinates, feed and tool.
+    Blocks {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Print CSV (exact numbers) instead of the table.
+        #[arg(long, conflicts_with = "json")]
+        csv: bool,
+        /// Print one JSON array instead of the table.
         #[arg(long)]
         json: bool,
     },
@@ -325,6 +338,18 @@ fn run(cli: Cli) -> Result<i32> {
                 servo_gain,
             },
             json,
+        ),
+        Command::Blocks {
+            scenario,
+            csv,
+            json,
+        } => blocks::run(
+            &scenario,
+            match (csv, json) {
+                (true, _) => blocks::Format::Csv,
+                (_, true) => blocks::Format::Json,
+                _ => blocks::Format::Table,
+            },
         ),
         Command::Sweep {
             scenario,

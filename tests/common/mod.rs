@@ -2,6 +2,8 @@
 
 #![allow(dead_code)]
 
+pub mod rs274;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

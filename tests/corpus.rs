@@ -132,6 +132,9 @@ struct Outcome {
     check: Option<i32>,
     panicked: bool,
     clean_unread: bool,
+    /// Read to the end and refused by both commands only because nothing moves (exit 2,
+    /// "the program has no motion": a tool-change or parameter demo).
+    motion_free: bool,
     first_error: String,
     /// `Some(Ok(moves))` when rs274 and mtsim both read it and agree.
     compared: Option<Result<usize, String>>,
@@ -139,11 +142,19 @@ struct Outcome {
 
 impl Outcome {
     fn read(&self) -> bool {
-        self.analyze == Some(0) && matches!(self.check, Some(0 | 1))
+        (self.analyze == Some(0) && matches!(self.check, Some(0 | 1))) || self.motion_free
     }
     fn hung(&self) -> bool {
         self.analyze.is_none() || self.check.is_none()
     }
+}
+
+/// A diagnostic with miette's line wrapping and gutter removed.
+fn unwrapped(err: &str) -> String {
+    err.replace('│', " ")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 fn mtsim(args: &[&str]) -> (Option<i32>, String, String) {
@@ -198,6 +209,11 @@ fn run_one(path: &Path, k: usize, setup: &Setup) -> Outcome {
         panicked: crashed(analyze, &a_err) || crashed(check, &c_err),
         // A verdict of "clean" when either command could not read the program.
         clean_unread: c_out.contains("clean") && (analyze != Some(0) || check != Some(0)),
+        motion_free: [(analyze, &a_err), (check, &c_err)]
+            .iter()
+            .all(|(code, err)| {
+                *code == Some(2) && unwrapped(err).contains("the program has no motion")
+            }),
         first_error: a_err
             .lines()
             .chain(c_err.lines())

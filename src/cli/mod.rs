@@ -420,7 +420,7 @@ fn cone_of(scenario: &Scenario, command: &str) -> Result<(ConeTest, NcOptions)> 
 pub(crate) fn load_scenario(path: &std::path::Path) -> Result<Scenario> {
     let scenario = Scenario::load(path)?;
     if let Program::File { path: file, .. } = &scenario.program {
-        crate::program::validate::validate_file(file, &scenario.machine)?;
+        crate::program::validate::validate_file(file, &scenario.machine, &scenario.reader)?;
     }
     Ok(scenario)
 }

@@ -13,7 +13,7 @@
 
 use std::path::Path;
 
-use super::file::read_str;
+use super::file::read_file;
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::Axis;
@@ -46,14 +46,15 @@ fn word_span(text: &str, line: usize, axis: Axis) -> std::ops::Range<usize> {
     start..start + line_text.len()
 }
 
-/// Checks the G-code file at `path` against `machine` (see the module doc).
-pub fn validate_file(path: &Path, machine: &Machine) -> Result<()> {
+/// Checks the G-code file at `path`, read with the scenario's reader `options`, against
+/// `machine` (see the module doc).
+pub fn validate_file(path: &Path, machine: &Machine, options: &ngc::Options) -> Result<()> {
     let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
         path: path.to_path_buf(),
         source,
     })?;
     let mut moving = false;
-    for m in read_str(path, &text) {
+    for m in read_file(path, options)? {
         let m = m?;
         for &axis in machine.axes() {
             let (from, to) = (m.start[axis], m.end[axis]);

@@ -122,9 +122,15 @@ fn a_program_without_moves_is_not_called_clean() {
     );
     let out = run(&["check"], &s);
     let (stdout, stderr) = text(&out);
-    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    // A motion-free program is bad input (exit 2, docs/cli.md), never "clean".
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(!stdout.contains("clean"), "{stdout}");
-    assert!(stdout.contains("nothing checked"), "{stdout}");
+    let message = stderr
+        .replace('│', " ")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert!(message.contains("the program has no motion"), "{stderr}");
 }
 
 #[test]

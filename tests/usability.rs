@@ -400,3 +400,34 @@ fn stderr_is_silent_without_a_terminal_and_says_more_with_v() {
     let verbose = mtsim(&["check", "-v", "scenarios/circle-iso230-4.toml"]);
     assert!(String::from_utf8_lossy(&verbose.stderr).contains("checked "));
 }
+
+#[test]
+fn quiet_sweep_and_batch_write_their_files_without_a_word() {
+    let dir = scratch("usability", "quiet-sweep");
+    let out = mtsim(&[
+        "--quiet",
+        "sweep",
+        "scenarios/cone-15-10.toml",
+        "--vary",
+        "center_y",
+        "--from",
+        "-10",
+        "--to",
+        "0",
+        "--step",
+        "5",
+        "-o",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(std::fs::read_dir(&dir).unwrap().count() >= 3);
+}

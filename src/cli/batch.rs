@@ -88,10 +88,10 @@ pub fn run(args: &BatchArgs) -> Result<i32> {
     if let Some(shard) = args.shard {
         let file = ShardFile::new("batch", shard, work.len(), header, rows);
         let path = file.write(output, "batch")?;
-        eprintln!(
+        super::note(&format!(
             "wrote {}: join the shards with `mtsim merge`",
             path.display()
-        );
+        ));
         return Ok(0);
     }
     emit(&rows, args.json, output)
@@ -104,7 +104,11 @@ pub(crate) fn emit(rows: &[BatchRow], as_json: bool, output: &Path) -> Result<i3
     let (csv, parquet) = (output.join("batch.csv"), output.join("batch.parquet"));
     write_atomic(&csv, &to_csv(rows)?)?;
     write_atomic(&parquet, &to_parquet(rows)?)?;
-    eprintln!("wrote {} and {}", csv.display(), parquet.display());
+    super::note(&format!(
+        "wrote {} and {}",
+        csv.display(),
+        parquet.display()
+    ));
     if as_json {
         let json = serde_json::json!({ "rows": rows });
         print_stdout(&format!("{json}\n"));

@@ -18,7 +18,7 @@ pub fn run(path: &Path, output: Option<&Path>, g93: bool, tcp: bool) -> Result<i
     match output {
         Some(out) => {
             write_atomic(out, text.as_bytes())?;
-            eprintln!("wrote {} ({} blocks)", out.display(), nc.segments);
+            super::note(&format!("wrote {} ({} blocks)", out.display(), nc.segments));
         }
         None => print_stdout(&text),
     }

@@ -265,6 +265,13 @@ pub(crate) fn warn(text: &str) {
     }
 }
 
+/// A note on stderr (which files were written), unless `--quiet`.
+pub(crate) fn note(text: &str) {
+    if !quiet() {
+        eprintln!("{text}");
+    }
+}
+
 /// Detail on stderr with `-v` (level 1) or `-vv` (level 2).
 pub(crate) fn detail(level: u8, text: &str) {
     if verbosity() >= level && !quiet() {

@@ -25,10 +25,10 @@ pub(crate) struct SweepHeader {
 
 /// Tells where a shard went (stdout stays empty: the study is printed by `mtsim merge`).
 fn wrote_shard(path: &Path) {
-    eprintln!(
+    super::note(&format!(
         "wrote {}: join the shards with `mtsim merge`",
         path.display()
-    );
+    ));
 }
 
 fn shard_dir(output: Option<&Path>) -> Result<&Path> {
@@ -98,12 +98,12 @@ pub(crate) fn emit_sweep(
             header.cone[2]
         );
         write_atomic(&svg_path, result.to_svg(param.unit(), &title)?.as_bytes())?;
-        eprintln!(
+        super::note(&format!(
             "wrote {}, {} and {}",
             csv_path.display(),
             parquet_path.display(),
             svg_path.display()
-        );
+        ));
     }
     if as_json {
         print_stdout(&format!(
@@ -233,12 +233,12 @@ pub(crate) fn emit_placement(
             header.scenario
         );
         write_atomic(&dir.join("placement.svg"), map.to_svg(&title)?.as_bytes())?;
-        eprintln!(
+        super::note(&format!(
             "wrote {}, {} and {}",
             dir.join("placement.csv").display(),
             dir.join("placement.parquet").display(),
             dir.join("placement.svg").display()
-        );
+        ));
     }
     if as_json {
         print_stdout(&format!(

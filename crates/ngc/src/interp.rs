@@ -11,6 +11,7 @@ use std::path::Path;
 use crate::axis::{Axis, AxisVec, Plane};
 use crate::canon::{FeedMode, Motion, Move, PathControl, FULL_CIRCLE_TOLERANCE_MM};
 use crate::expr::{Param, Params};
+use crate::frame::{self, Frame, Mat3, RotaryTable};
 use crate::lex::{LineError, LineResult, Word, EXPECTED_WORDS};
 use crate::options::{Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER};
 use crate::reader::{Notice, ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
@@ -106,11 +107,20 @@ enum GCode {
     /// look-ahead, P): accepted, no effect on the canonical moves. Haas G187 (P accuracy
     /// level, E corner tolerance) sets the blending tolerance.
     Control(u32),
+    /// Fanuc G68.2 (true, tilted work plane) and G69 (false, cancel).
+    Tilt(bool),
+    /// Fanuc G53.1: rotary axes to the tilted plane.
+    AlignRotary,
+    /// Haas G254 (true, dynamic work offset) and G255 (false).
+    Dwo(bool),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Group {
     Control,
+    Tilt,
+    AlignRotary,
+    Dwo,
     Motion,
     NonModal,
     Plane,
@@ -143,6 +153,9 @@ impl GCode {
             GCode::Path(_) => Group::Path,
             GCode::Retract(_) => Group::Retract,
             GCode::Control(_) => Group::Control,
+            GCode::Tilt(_) => Group::Tilt,
+            GCode::AlignRotary => Group::AlignRotary,
+            GCode::Dwo(_) => Group::Dwo,
         }
     }
 
@@ -220,12 +233,19 @@ impl GCode {
             950 => GCode::Feed(FeedRead::PerRevolution),
             51 | 80 if fanuc => GCode::Control(code as u32),
             1030 | 1870 if dialect == Dialect::Haas => GCode::Control(code as u32),
+            682 if fanuc => GCode::Tilt(true),
+            690 if fanuc => GCode::Tilt(false),
+            531 if fanuc => GCode::AlignRotary,
+            2540 if dialect == Dialect::Haas => GCode::Dwo(true),
+            2550 if dialect == Dialect::Haas => GCode::Dwo(false),
             980 => GCode::Retract(false),
             990 => GCode::Retract(true),
             434 | 435 => return Err(unsupported(" (LinuxCNC has no G43.4; TCP is switched by the scenario option or a user M code such as M428)", "map the TCP M codes in the scenario (user_m_codes)")),
             2340 => return Err(unsupported(" (G234 is Haas TCP)", "set dialect = \"haas\"")),
             410 | 420 | 411 | 421 => return Err(unsupported(" (cutter radius compensation is not supported yet)", "post-process the program with the tool radius applied; G40 (cancel) is accepted")),
-            680..=689 | 690 | 531 | 2540 | 2550 => return Err(unsupported(" (coordinate rotation and tilted working planes are not supported yet)", "post-process the program to machine axis positions")),
+            682 | 690 | 531 => return Err(unsupported(" (G68.2, G53.1 and G69 are Fanuc and Haas codes)", "set dialect = \"fanuc\" or \"haas\"")),
+            2540 | 2550 => return Err(unsupported(" (G254/G255 are Haas dynamic work offsets)", "set dialect = \"haas\"")),
+            680..=689 => return Err(unsupported(" (2D coordinate rotation G68 and other G68.x are not supported; G68.2 is)", "post-process the program without G68")),
             760 | 840 | 870 | 880 => return Err(unsupported(" (this canned cycle is not supported; G73 G81 G82 G83 G85 G86 G89 are)", "")),
             _ => return Err(unsupported("", "")),
         })
@@ -267,6 +287,11 @@ pub struct Interp {
     user_m: HashMap<u32, UserM>,
     noticed: Vec<u32>,
     saved: Option<Box<Saved>>,
+    /// G68.2 feature frame: origin in work coordinates (mm) and rotation `R_f`.
+    tilt: Option<([f64; 3], Mat3)>,
+    /// Haas G254: the work offset follows the rotary table.
+    dwo: bool,
+    table: Option<RotaryTable>,
 }
 
 /// Parameter of extended work offset P n (G54.1 Pn, G154 Pn), axis X.
@@ -324,6 +349,9 @@ impl Interp {
             user_m: o.user_m.clone(),
             noticed: Vec::new(),
             saved: None,
+            tilt: None,
+            dwo: false,
+            table: o.table,
         };
         i.parameters_changed();
         i
@@ -356,10 +384,38 @@ impl Interp {
     fn program_position(&self) -> AxisVec {
         let mut p = self.pos - self.offset;
         p[Axis::Z] -= self.tool_length_mm;
+        if let Some(f) = self.frame() {
+            let pp = f.to_program(self.tip(), &self.offset, &self.pos);
+            for a in Axis::LINEAR {
+                p[a] = pp[a.index()];
+            }
+        }
         for a in Axis::LINEAR {
             p[a] /= self.scale();
         }
         p
+    }
+
+    /// The program-to-machine map while G68.2 or G254 is active.
+    fn frame(&self) -> Option<Frame> {
+        if self.tilt.is_none() && !self.dwo {
+            return None;
+        }
+        let (origin_mm, rotation) = self.tilt.unwrap_or(([0.0; 3], frame::IDENTITY));
+        Some(Frame {
+            origin_mm,
+            rotation,
+            table: self.table,
+        })
+    }
+
+    /// Machine X Y Z of the controlled point without the tool length offset, mm.
+    fn tip(&self) -> [f64; 3] {
+        [
+            self.pos[Axis::X],
+            self.pos[Axis::Y],
+            self.pos[Axis::Z] - self.tool_length_mm,
+        ]
     }
 
     /// Writes the read-only system parameters (positions, tool, work system) before a line
@@ -867,8 +923,67 @@ impl Interp {
                         naive_cam_mm: None,
                     };
                 }
+                GCode::Tilt(true) => {
+                    for letter in ['A', 'B', 'C', 'R'] {
+                        if let Some(x) = get(letter) {
+                            return Err(LineError::new(x.span(), format!("`{}` in a G68.2 block: expected only X Y Z (origin) and I J K (Euler angles)", &line[x.span()]), "not a G68.2 word"));
+                        }
+                    }
+                    let v = |l: char| get(l).map_or(0.0, |w| w.value);
+                    let scale = self.scale();
+                    let origin = [v('X') * scale, v('Y') * scale, v('Z') * scale];
+                    self.tilt = Some((origin, frame::euler_zxz(v('I'), v('J'), v('K'))));
+                }
+                GCode::Tilt(false) => self.tilt = None,
+                GCode::Dwo(on) => {
+                    if on && self.table.is_none() {
+                        return Err(LineError::new(w.span(), "G254 on a machine without a rotary table: expected a table-table AC or BC machine", "no rotary table"));
+                    }
+                    self.dwo = on;
+                }
                 _ => {}
             }
+        }
+        if let Some((_, w)) = g.iter().find(|(c, _)| *c == GCode::AlignRotary) {
+            let (Some((_, rf)), Some(table)) = (self.tilt, self.table) else {
+                return Err(LineError::new(
+                    w.span(),
+                    if self.tilt.is_none() {
+                        "G53.1 with no tilted plane: expected G68.2 in this or an earlier block"
+                    } else {
+                        "G53.1 on a machine without a rotary table: expected a table-table AC or BC machine"
+                    },
+                    "nothing to align",
+                ));
+            };
+            if !g.iter().any(|(c, _)| *c == GCode::Tilt(true)) {
+                if let Some(a) = Axis::ALL.iter().find_map(|a| get(a.letter())) {
+                    return Err(LineError::new(
+                        a.span(),
+                        "axis word in a G53.1 block: expected G53.1 alone",
+                        "axis word with G53.1",
+                    )
+                    .help("move in the next block"));
+                }
+            }
+            let (tilt, c) = table.align([rf[0][2], rf[1][2], rf[2][2]], self.pos[Axis::C]);
+            let start = self.pos;
+            let mut end = start;
+            end[table.tilt] = tilt;
+            end[Axis::C] = c;
+            self.emit(queue, line_no, Motion::Rapid, start, end, self.path);
+            self.pos = end;
+        }
+        if self.tcp && self.frame().is_some() {
+            let w = g.first().map_or(Word::EMPTY, |(_, w)| *w);
+            return Err(LineError::new(
+                w.span(),
+                "tool-centre-point control with G68.2 or G254 active: expected one at a time",
+                "TCP in a tilted frame",
+            )
+            .help(
+                "cancel G68.2 with G69 (G254 with G255) before G43.4/G234, or TCP with G49 first",
+            ));
         }
         if let Some(h) = get('H') {
             let used = g.iter().any(|(c, _)| {
@@ -909,7 +1024,9 @@ impl Interp {
         let axis_words = &axis_buf[..n_axes];
         // 6. Non-modal codes that use axis words.
         // G43.1 takes its Z as the tool length, not as a move.
-        let mut axes_used = g.iter().any(|(c, _)| *c == GCode::ToolLength(1));
+        let mut axes_used = g
+            .iter()
+            .any(|(c, _)| *c == GCode::ToolLength(1) || *c == GCode::Tilt(true));
         if let Some((nm, w)) = nonmodal {
             if nm != NonModal::Dwell && nm != NonModal::G53 {
                 axes_used = true;
@@ -956,6 +1073,17 @@ impl Interp {
                     for a in Axis::ALL {
                         self.params.numbered[base + a.index()] = self.pos[a];
                     }
+                }
+                NonModal::G92 | NonModal::G52 if self.frame().is_some() => {
+                    return Err(LineError::new(
+                        w.span(),
+                        format!(
+                            "`{}` with G68.2 or G254 active: not supported",
+                            &line[w.span()]
+                        ),
+                        "offset in a tilted frame",
+                    )
+                    .help("set G92/G52 before G68.2 or G254"));
                 }
                 NonModal::G92 | NonModal::G52 => {
                     if axis_words.is_empty() {
@@ -1081,6 +1209,14 @@ impl Interp {
                 }
             }
             let start = self.pos;
+            if self.frame().is_some() && matches!(mode, MotionMode::Cycle(_)) {
+                return Err(LineError::new(
+                    at,
+                    "canned cycle with G68.2 or G254 active: not supported yet",
+                    "cycle in a tilted frame",
+                )
+                .help("post the holes as G00/G01 moves"));
+            }
             match mode {
                 MotionMode::Cycle(code) => {
                     self.cycle(line, code, &get, line_no, queue, first)?;
@@ -1090,6 +1226,9 @@ impl Interp {
                     let motion = match mode {
                         MotionMode::Rapid => Motion::Rapid,
                         MotionMode::Linear => Motion::Linear,
+                        MotionMode::Arc { clockwise } if self.frame().is_some() => {
+                            self.tilted_arc(line, &get, &words, clockwise, target, at.clone())?
+                        }
                         MotionMode::Arc { clockwise } => {
                             let center_mm =
                                 self.arc_center(line, &get, &words, clockwise, start, target)?;
@@ -1305,6 +1444,30 @@ impl Interp {
 
     /// The machine target of axis words (program coordinates, or machine with G53).
     fn target(&self, axis_words: &[(Axis, Word)], g53: bool) -> AxisVec {
+        if let (Some(f), false) = (self.frame(), g53) {
+            // Program X Y Z in the feature / table-fixed frame; rotary words as usual.
+            let mut p = f.to_program(self.tip(), &self.offset, &self.pos);
+            let mut target = self.pos;
+            for &(a, w) in axis_words {
+                if a.is_rotary() {
+                    target[a] = if self.absolute {
+                        w.value + self.offset[a]
+                    } else {
+                        self.pos[a] + w.value
+                    };
+                } else {
+                    let v = w.value * self.scale();
+                    let k = a.index();
+                    p[k] = if self.absolute { v } else { p[k] + v };
+                }
+            }
+            let m = f.to_machine(p, &self.offset, &target);
+            for a in Axis::LINEAR {
+                target[a] = m[a.index()];
+            }
+            target[Axis::Z] += self.tool_length_mm;
+            return target;
+        }
         let mut target = self.pos;
         for &(a, w) in axis_words {
             let v = if a.is_rotary() {
@@ -1647,6 +1810,50 @@ impl Interp {
         Ok(())
     }
 
+    /// An arc in the plane of a G68.2 or G254 frame: the centre is found in program
+    /// coordinates, then mapped to the machine plane its normal turns into (the program
+    /// plane must map onto G17, G18 or G19 of the machine; clockwise flips when the normal
+    /// turns to the machine axis's negative direction).
+    fn tilted_arc<'l>(
+        &self,
+        line: &str,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        words: &[Word],
+        clockwise: bool,
+        target: AxisVec,
+        at: std::ops::Range<usize>,
+    ) -> LineResult<Motion> {
+        let f = self.frame().expect("called with a frame");
+        if Axis::ALL[3..].iter().any(|&a| target[a] != self.pos[a]) {
+            return Err(LineError::new(at, "arc that turns a rotary axis with G68.2 or G254 active: expected the rotary axes still during G02/G03", "rotary arc in a tilted frame"));
+        }
+        let mut tip_end = [target[Axis::X], target[Axis::Y], target[Axis::Z]];
+        tip_end[2] -= self.tool_length_mm;
+        let ps = f.to_program(self.tip(), &self.offset, &self.pos);
+        let pe = f.to_program(tip_end, &self.offset, &target);
+        let (mut s, mut e) = (AxisVec::ZERO, AxisVec::ZERO);
+        for k in 0..3 {
+            s.0[k] = ps[k];
+            e.0[k] = pe[k];
+        }
+        let c = self.arc_center(line, get, words, clockwise, s, e)?;
+        let (_, _, n) = self.plane.axes();
+        let mut normal = [0.0; 3];
+        normal[n.index()] = 1.0;
+        let mn = frame::apply(&f.direction_rotation(&target), normal);
+        let Some(k) = (0..3).find(|&k| mn[k].abs() > 1.0 - 1e-9) else {
+            return Err(LineError::new(at, format!("arc in a tilted plane whose normal is ({:.4}, {:.4}, {:.4}) in machine axes: expected it along X, Y or Z", mn[0], mn[1], mn[2]), "oblique arc plane").help("position the rotary axes with G53.1 first, or post the arc as lines"));
+        };
+        let plane = [Plane::YZ, Plane::ZX, Plane::XY][k];
+        let mut center_mm = f.to_machine(c, &self.offset, &target);
+        center_mm[2] += self.tool_length_mm;
+        Ok(Motion::Arc {
+            clockwise: clockwise != (mn[k] < 0.0),
+            plane,
+            center_mm,
+        })
+    }
+
     /// The absolute arc centre `[X, Y, Z]`, machine mm, from I J K or R.
     ///
     /// For R, with chord length d from s to e and midpoint m, the centre lies at distance
@@ -1702,7 +1909,9 @@ impl Interp {
             (None, (None, None)) => Err(LineError::new(block_span, format!("arc without a centre: expected {} {} (centre offsets from the start) or R (radius)", letter(u), letter(v)), "no centre")),
             (None, (i, j)) => {
                 let (cu, cv) = if self.arc_absolute {
-                    let base = |a: Axis| self.offset[a] + if a == Axis::Z { self.tool_length_mm } else { 0.0 };
+                    // In a tilted frame, start and end are program coordinates already.
+                    let tilted = self.frame().is_some();
+                    let base = |a: Axis| if tilted { 0.0 } else { self.offset[a] + if a == Axis::Z { self.tool_length_mm } else { 0.0 } };
                     (i.map_or(su, |w| w.value * scale + base(u)), j.map_or(sv, |w| w.value * scale + base(v)))
                 } else {
                     (su + i.map_or(0.0, |w| w.value * scale), sv + j.map_or(0.0, |w| w.value * scale))

@@ -30,6 +30,7 @@ mod axis;
 mod canon;
 mod error;
 mod expr;
+mod frame;
 mod interp;
 mod lex;
 mod options;
@@ -38,6 +39,7 @@ mod reader;
 pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
 pub use error::{line_column, Error, Result, Syntax};
+pub use frame::RotaryTable;
 pub use options::{
     parse_tool_table, parse_var_file, work_offset_parameter, Dialect, Options, Tool, UserM,
     G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,

@@ -392,12 +392,12 @@ fn unsupported_constructs_are_reported_at_their_word() {
             1,
             "unsupported code `G84`",
         ),
-        ("G17 G68 X0 Y0 R30\n", 1, 5, "`G68` (coordinate rotation"),
+        ("G17 G68 X0 Y0 R30\n", 1, 5, "`G68` (2D coordinate rotation"),
         (
-            "G68.2 X0 Y0 Z0 I0 J45 K0\n",
+            "G68.2 X0 Y0 Z0 I0 J45 K0\nG53.1\n",
+            2,
             1,
-            1,
-            "`G68.2` (coordinate rotation",
+            "G53.1 on a machine without a rotary table",
         ),
         ("G41 X0 Y0\n", 1, 1, "`G41` (cutter radius compensation"),
         (

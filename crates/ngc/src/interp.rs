@@ -14,7 +14,7 @@ use crate::expr::{Param, Params};
 use crate::frame::{self, Frame, Mat3, RotaryTable};
 use crate::lex::{LineError, LineResult, Word, EXPECTED_WORDS};
 use crate::options::{Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER};
-use crate::reader::{Notice, ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
+use crate::reader::{Notice, ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
 
 /// What the reader must do after a block.
 pub enum Stop {
@@ -1932,7 +1932,7 @@ impl Interp {
                         let abs_tol = std::f64::consts::SQRT_2 * if self.inch { 0.002 * MM_PER_INCH } else { 0.02 };
                         (diff <= abs_tol || diff / r_start <= 0.001, format!("{abs_tol:.4} mm or 0.1 % of the radius"))
                     }
-                    _ => (diff <= ARC_RADIUS_TOLERANCE_MM, format!("{ARC_RADIUS_TOLERANCE_MM} mm")),
+                    _ => (diff <= FANUC_ARC_RADIUS_TOLERANCE_MM, format!("{FANUC_ARC_RADIUS_TOLERANCE_MM} mm")),
                 };
                 if !ok {
                     return Err(LineError::new(block_span, format!("arc radius at the start is {r_start:.6} mm but at the end {r_end:.6} mm: expected them to agree within {rule}"), "inconsistent arc")

@@ -46,5 +46,5 @@ pub use options::{
 };
 pub use reader::{
     read_file, read_file_with, read_str, read_str_with, Moves, Notice, ARC_RADIUS_TOLERANCE_MM,
-    MM_PER_INCH,
+    FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH,
 };

@@ -10,6 +10,7 @@ use std::path::Path;
 
 use crate::axis::{Axis, AxisVec, Plane};
 use crate::canon::{FeedMode, Motion, Move, PathControl, FULL_CIRCLE_TOLERANCE_MM};
+use crate::comp;
 use crate::expr::{Param, Params};
 use crate::frame::{self, Frame, Mat3, RotaryTable};
 use crate::lex::{LineError, LineResult, Word, EXPECTED_WORDS};
@@ -201,6 +202,10 @@ impl GCode {
             300 => GCode::NonModal(NonModal::G30),
             301 => GCode::NonModal(NonModal::G30_1),
             400 => GCode::CutterComp(0),
+            410 => GCode::CutterComp(1),
+            420 => GCode::CutterComp(2),
+            411 if !fanuc => GCode::CutterComp(3),
+            421 if !fanuc => GCode::CutterComp(4),
             430 => GCode::ToolLength(0),
             431 if !fanuc => GCode::ToolLength(1),
             432 if !fanuc => GCode::ToolLength(2),
@@ -242,7 +247,6 @@ impl GCode {
             990 => GCode::Retract(true),
             434 | 435 => return Err(unsupported(" (LinuxCNC has no G43.4; TCP is switched by the scenario option or a user M code such as M428)", "map the TCP M codes in the scenario (user_m_codes)")),
             2340 => return Err(unsupported(" (G234 is Haas TCP)", "set dialect = \"haas\"")),
-            410 | 420 | 411 | 421 => return Err(unsupported(" (cutter radius compensation is not supported yet)", "post-process the program with the tool radius applied; G40 (cancel) is accepted")),
             682 | 690 | 531 => return Err(unsupported(" (G68.2, G53.1 and G69 are Fanuc and Haas codes)", "set dialect = \"fanuc\" or \"haas\"")),
             2540 | 2550 => return Err(unsupported(" (G254/G255 are Haas dynamic work offsets)", "set dialect = \"haas\"")),
             680..=689 => return Err(unsupported(" (2D coordinate rotation G68 and other G68.x are not supported; G68.2 is)", "post-process the program without G68")),
@@ -292,6 +296,12 @@ pub struct Interp {
     /// Haas G254: the work offset follows the rotary table.
     dwo: bool,
     table: Option<RotaryTable>,
+    /// Cutter radius compensation: tool on the left (G41), radius mm.
+    comp: Option<(bool, f64)>,
+    /// The compensated element waiting for the next one.
+    held: Option<comp::Held>,
+    /// Compensated X Y of the last move when it differs from `pos` (after G40).
+    comp_actual: Option<[f64; 2]>,
 }
 
 /// Parameter of extended work offset P n (G54.1 Pn, G154 Pn), axis X.
@@ -352,6 +362,9 @@ impl Interp {
             tilt: None,
             dwo: false,
             table: o.table,
+            comp: None,
+            held: None,
+            comp_actual: None,
         };
         i.parameters_changed();
         i
@@ -529,15 +542,42 @@ impl Interp {
     }
 
     fn emit(
-        &self,
+        &mut self,
         queue: &mut VecDeque<Move>,
         line: usize,
         motion: Motion,
-        start: AxisVec,
-        end: AxisVec,
+        mut start: AxisVec,
+        mut end: AxisVec,
         path: PathControl,
     ) {
         let (feed, feed_mode) = self.feed_out();
+        if let Some(h) = &mut self.held {
+            // Waits with the held element (a plunge or a dwell under compensation).
+            h.after.push(Move {
+                line,
+                motion,
+                start,
+                end,
+                feed,
+                feed_mode,
+                tcp: self.tcp,
+                tool: self.tool,
+                tool_length_mm: self.tool_length_mm,
+                path,
+            });
+            return;
+        }
+        if let Some(xy) = self.comp_actual {
+            start[Axis::X] = xy[0];
+            start[Axis::Y] = xy[1];
+            if end[Axis::X] == self.pos[Axis::X] && end[Axis::Y] == self.pos[Axis::Y] {
+                // Not moving in X Y: stays at the compensated point.
+                end[Axis::X] = xy[0];
+                end[Axis::Y] = xy[1];
+            } else {
+                self.comp_actual = None;
+            }
+        }
         queue.push_back(Move {
             line,
             motion,
@@ -830,7 +870,51 @@ impl Interp {
             match c {
                 GCode::Plane(p) => self.plane = p,
                 GCode::Units(inch) => self.inch = inch,
-                GCode::CutterComp(_) => {}
+                GCode::CutterComp(0) => {
+                    self.comp = None;
+                    self.comp_exit(queue);
+                }
+                GCode::CutterComp(k) => {
+                    if self.comp.is_some() {
+                        return Err(LineError::new(w.span(), "cutter radius compensation turned on while it is on: expected G40 first", "compensation already on"));
+                    }
+                    if self.plane != Plane::XY {
+                        return Err(LineError::new(
+                            w.span(),
+                            "cutter radius compensation outside G17: expected the XY plane (G17)",
+                            "not G17",
+                        ));
+                    }
+                    if self.frame().is_some() {
+                        return Err(LineError::new(
+                            w.span(),
+                            "cutter radius compensation with G68.2 or G254 active: not supported",
+                            "compensation in a tilted frame",
+                        ));
+                    }
+                    let d = get('D');
+                    let diameter = if k >= 3 {
+                        let d = d.ok_or_else(|| {
+                            LineError::new(
+                                w.span(),
+                                format!("`{}` without D: expected D<diameter>", &line[w.span()]),
+                                "no D",
+                            )
+                        })?;
+                        d.value * self.scale()
+                    } else {
+                        let n = d.map_or(self.tool, |d| d.value.round() as u32);
+                        self.tool_entry(n, &d.unwrap_or(w))?.diameter_mm
+                    };
+                    if diameter < 0.0 {
+                        return Err(LineError::new(
+                            w.span(),
+                            "negative cutter diameter: expected D of zero or more",
+                            "negative",
+                        ));
+                    }
+                    self.comp = Some((k % 2 == 1, diameter / 2.0));
+                }
                 GCode::ToolLength(kind) => {
                     let h = get('H');
                     match kind {
@@ -1036,6 +1120,21 @@ impl Interp {
                     }
                 }
             }
+            if self.comp.is_some()
+                && matches!(
+                    nm,
+                    NonModal::G28 | NonModal::G30 | NonModal::G92 | NonModal::G52
+                )
+            {
+                return Err(LineError::new(
+                    w.span(),
+                    format!(
+                        "`{}` with cutter radius compensation on: expected G40 first",
+                        &line[w.span()]
+                    ),
+                    "not with compensation",
+                ));
+            }
             match nm {
                 NonModal::G10 => self.g10(line, &w, &get, &axis_words)?,
                 NonModal::G28 | NonModal::G30 => {
@@ -1209,6 +1308,11 @@ impl Interp {
                 }
             }
             let start = self.pos;
+            if self.comp.is_some()
+                && (g53 || matches!(mode, MotionMode::Cycle(_)) || self.plane != Plane::XY)
+            {
+                return Err(LineError::new(at, "G53, a canned cycle or a plane other than G17 with cutter radius compensation on: expected G40 first", "not with compensation"));
+            }
             if self.frame().is_some() && matches!(mode, MotionMode::Cycle(_)) {
                 return Err(LineError::new(
                     at,
@@ -1240,7 +1344,12 @@ impl Interp {
                         }
                         MotionMode::Cycle(_) => unreachable!("handled above"),
                     };
-                    self.emit(queue, line_no, motion, start, target, self.path);
+                    if self.comp.is_some() {
+                        self.comp_element(queue, line_no, motion, start, target)
+                            .map_err(|m| LineError::new(at, m, "cutter compensation"))?;
+                    } else {
+                        self.emit(queue, line_no, motion, start, target, self.path);
+                    }
                     self.pos = target;
                 }
             }
@@ -1248,7 +1357,10 @@ impl Interp {
         // 8. Program flow M codes.
         for &(code, w) in m.iter() {
             match code {
-                2 | 30 => return Ok(Stop::End),
+                2 | 30 => {
+                    self.finish(queue);
+                    return Ok(Stop::End);
+                }
                 98 => {
                     let p = get('P').ok_or_else(|| {
                         LineError::new(
@@ -1369,7 +1481,7 @@ impl Interp {
             ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || has_m(&[61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, M61 or M66-M68"),
             ('L', g10 || cycle || has_m(&[66, 98]), "`L` with no code that uses it: expected L only with G10, a canned cycle, M66 or M98"),
             ('E', has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with M66-M68"),
-            ('D', false, "`D` (cutter radius compensation is not supported yet): expected no D word"),
+            ('D', has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),
         ];
         for (letter, ok, message) in checks {
             if let Some(w) = get(letter) {
@@ -1706,7 +1818,7 @@ impl Interp {
         let rapid_delta = 0.010 * MM_PER_INCH; // LinuxCNC's G73/G83 clearance, 0.010 in.
         let exact = PathControl::ExactPath;
         let mut cur = self.pos;
-        let go = |me: &Interp,
+        let go = |me: &mut Interp,
                   queue: &mut VecDeque<Move>,
                   cur: &mut AxisVec,
                   motion: Motion,
@@ -1807,6 +1919,143 @@ impl Interp {
         }
         self.pos = cur;
         let _ = line;
+        Ok(())
+    }
+
+    /// The end of the program: a held compensated element ends as at G40.
+    pub fn finish(&mut self, queue: &mut VecDeque<Move>) {
+        self.comp_exit(queue);
+    }
+
+    /// Drops the held element (after an error).
+    pub fn discard(&mut self) {
+        self.held = None;
+    }
+
+    /// Pushes a held element ending at `end`, with the moves that wait with it.
+    fn release(&mut self, queue: &mut VecDeque<Move>, mut h: comp::Held, end: [f64; 2]) -> AxisVec {
+        comp::set_end(&mut h.mv, end);
+        let mut last = h.mv.end;
+        queue.push_back(h.mv);
+        for mut m in h.after {
+            comp::set_start(&mut m, end);
+            comp::set_end(&mut m, end);
+            last = m.end;
+            queue.push_back(m);
+        }
+        last
+    }
+
+    /// G40 (or the end): the held element ends at `c + r n(t₁)`.
+    fn comp_exit(&mut self, queue: &mut VecDeque<Move>) {
+        let Some(h) = self.held.take() else { return };
+        let left = self.comp.map_or(h.left, |c| c.0);
+        let n = comp::normal(left, h.tangent);
+        let end = [h.end[0] + h.radius * n[0], h.end[1] + h.radius * n[1]];
+        self.release(queue, h, end);
+        self.comp_actual = Some(end);
+    }
+
+    /// An X Y move under cutter radius compensation: joins the held element to this one.
+    fn comp_element(
+        &mut self,
+        queue: &mut VecDeque<Move>,
+        line_no: usize,
+        motion: Motion,
+        start: AxisVec,
+        target: AxisVec,
+    ) -> Result<(), String> {
+        let (left, r) = self.comp.expect("compensation on");
+        let s = [start[Axis::X], start[Axis::Y]];
+        let e = [target[Axis::X], target[Axis::Y]];
+        if s == e && matches!(motion, Motion::Arc { .. }) {
+            return Err("full circle under cutter radius compensation: not supported yet; expected it split into two arcs".into());
+        }
+        if s == e {
+            // No X Y motion: waits with the held element (or runs at the current point).
+            self.emit(queue, line_no, motion, start, target, self.path);
+            return Ok(());
+        }
+        let is_line = !matches!(motion, Motion::Arc { .. });
+        let t_start = comp::tangent(&motion, s, e, false);
+        let t_end = comp::tangent(&motion, s, e, true);
+        if let Motion::Arc {
+            clockwise,
+            center_mm,
+            ..
+        } = motion
+        {
+            let radius = (s[0] - center_mm[0]).hypot(s[1] - center_mm[1]);
+            // The tool is inside the arc for G41 counter-clockwise and G42 clockwise.
+            let inside = left != clockwise;
+            if inside && radius <= r {
+                return Err(format!("arc of radius {radius:.4} mm with a tool of radius {r:.4} mm on its inside: expected a tool smaller than the arc (LinuxCNC: tool radius not less than arc radius with comp)"));
+            }
+        }
+        let (feed, feed_mode) = self.feed_out();
+        let new_start = match self.held.take() {
+            None => {
+                if !is_line {
+                    return Err("arc as the entry move of cutter radius compensation: expected a straight entry move after G41/G42".into());
+                }
+                self.comp_actual.take().unwrap_or(s)
+            }
+            Some(h) => {
+                let join = comp::join(left, r, h.end, h.tangent, h.line, t_start, is_line)?;
+                match join {
+                    comp::Join::Meet { end } => {
+                        self.release(queue, h, end);
+                        end
+                    }
+                    comp::Join::Arc { p1, p2, corner } => {
+                        let last = self.release(queue, h, p1);
+                        let mut end = last;
+                        end[Axis::X] = p2[0];
+                        end[Axis::Y] = p2[1];
+                        queue.push_back(Move {
+                            line: line_no,
+                            motion: Motion::Arc {
+                                clockwise: left,
+                                plane: Plane::XY,
+                                center_mm: [corner[0], corner[1], last[Axis::Z]],
+                            },
+                            start: last,
+                            end,
+                            feed,
+                            feed_mode,
+                            tcp: self.tcp,
+                            tool: self.tool,
+                            tool_length_mm: self.tool_length_mm,
+                            path: self.path,
+                        });
+                        p2
+                    }
+                }
+            }
+        };
+        let mut mv = Move {
+            line: line_no,
+            motion,
+            start,
+            end: target,
+            feed,
+            feed_mode,
+            tcp: self.tcp,
+            tool: self.tool,
+            tool_length_mm: self.tool_length_mm,
+            path: self.path,
+        };
+        comp::set_start(&mut mv, new_start);
+        self.comp_actual = None;
+        self.held = Some(comp::Held {
+            mv,
+            end: e,
+            tangent: t_end,
+            line: is_line,
+            left,
+            radius: r,
+            after: Vec::new(),
+        });
         Ok(())
     }
 

@@ -28,6 +28,7 @@
 
 mod axis;
 mod canon;
+mod comp;
 mod error;
 mod expr;
 mod frame;

@@ -320,6 +320,8 @@ pub struct Moves {
     max_iterations: u64,
     max_call_depth: usize,
     finished: bool,
+    /// The interpreter's held moves have been released (or dropped after an error).
+    flushed: bool,
     percent_seen: bool,
     language_checked: bool,
     notices: Vec<Notice>,
@@ -349,6 +351,7 @@ impl Moves {
             max_iterations: options.max_iterations,
             max_call_depth: options.max_call_depth,
             finished: false,
+            flushed: false,
             percent_seen: false,
             language_checked: false,
             notices: Vec::new(),
@@ -1236,10 +1239,18 @@ impl Iterator for Moves {
                 return Some(Ok(m));
             }
             if self.finished {
+                if !self.flushed {
+                    // A compensated element still held ends as at G40.
+                    self.flushed = true;
+                    self.interp.finish(&mut self.queue);
+                    continue;
+                }
                 return None;
             }
             if let Err(e) = self.step() {
                 self.queue.clear();
+                self.interp.discard();
+                self.flushed = true;
                 return Some(Err(e));
             }
         }

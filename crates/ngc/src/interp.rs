@@ -2002,6 +2002,15 @@ impl Interp {
             }
             Some(h) => {
                 let join = comp::join(left, r, h.end, h.tangent, h.line, t_start, is_line)?;
+                let held_end = match join {
+                    comp::Join::Meet { end } => end,
+                    comp::Join::Arc { p1, .. } => p1,
+                };
+                let (hs, t) = ([h.mv.start[Axis::X], h.mv.start[Axis::Y]], h.tangent);
+                if h.line && (held_end[0] - hs[0]) * t[0] + (held_end[1] - hs[1]) * t[1] < -1e-9 {
+                    // As rs274: the compensated line would run backwards.
+                    return Err("straight feed in a concave corner cannot be reached by the tool without gouging: expected a line longer than the tool radius".into());
+                }
                 match join {
                     comp::Join::Meet { end } => {
                         self.release(queue, h, end);

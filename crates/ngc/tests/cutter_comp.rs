@@ -7,6 +7,10 @@ use std::path::Path;
 
 use ngc::{read_str_with, Axis, Dialect, Error, Motion, MoveKind, Options, Tool};
 
+const G41_LINES: &str = "G21 G17 G90 G40\nT1 M6\nG0 X-20 Y-20\nG41 D1 G1 X0 Y0 F100\nG1 X50 Y0\nG1 X50 Y30\nG1 X20 Y30\nG1 X0 Y0\nG40 G1 X-20 Y-20\nM2\n";
+const G42_ARCS: &str = "G21 G17 G90 G40\nT1 M6\nG0 X-30 Y0 Z5\nG42 D1 G1 X-20 Y0 F100\nG1 Z-2\nG2 X0 Y20 I20 J0\nG1 X30 Y20\nG2 X40 Y10 I0 J-10\nG1 X40 Y-10\nG1 X-20 Y-10\nG40 G0 X-40 Y-20\nM2\n";
+const G41_1_BUMP: &str = "G21 G17 G90\nG0 X0 Y-20\nG41.1 D8 G1 X0 Y0 F200\nG1 X20 Y0\nG3 X40 Y0 I10 J0\nG1 X40 Y30\nG1 X0 Y30\nG1 X0 Y0\nG40 G1 X-10 Y-10\nM2\n";
+
 fn opts() -> Options {
     Options {
         dialect: Dialect::Linuxcnc,
@@ -65,10 +69,7 @@ use MoveKind::{Arc, Feed, Rapid};
 
 #[test]
 fn g41_lines_convex_entry_corner_and_concave_corners_match_rs274() {
-    let m = moves(
-        "G21 G17 G90 G40\nT1 M6\nG0 X-20 Y-20\nG41 D1 G1 X0 Y0 F100\nG1 X50 Y0\nG1 X50 Y30\n\
-         G1 X20 Y30\nG1 X0 Y0\nG40 G1 X-20 Y-20\nM2\n",
-    );
+    let m = moves(G41_LINES);
     assert_eq!(
         rows(&m),
         [
@@ -93,11 +94,7 @@ fn g41_lines_convex_entry_corner_and_concave_corners_match_rs274() {
 
 #[test]
 fn g42_with_arcs_a_plunge_and_convex_corners_matches_rs274() {
-    let m = moves(
-        "G21 G17 G90 G40\nT1 M6\nG0 X-30 Y0 Z5\nG42 D1 G1 X-20 Y0 F100\nG1 Z-2\n\
-         G2 X0 Y20 I20 J0\nG1 X30 Y20\nG2 X40 Y10 I0 J-10\nG1 X40 Y-10\nG1 X-20 Y-10\n\
-         G40 G0 X-40 Y-20\nM2\n",
-    );
+    let m = moves(G42_ARCS);
     assert_eq!(
         rows(&m),
         [
@@ -121,10 +118,7 @@ fn g42_with_arcs_a_plunge_and_convex_corners_matches_rs274() {
 #[test]
 fn g41_1_takes_the_diameter_from_d_and_matches_rs274() {
     // D8: radius 4. The G3 bump around (30, 0) has the tool outside (radius 14).
-    let m = moves(
-        "G21 G17 G90\nG0 X0 Y-20\nG41.1 D8 G1 X0 Y0 F200\nG1 X20 Y0\nG3 X40 Y0 I10 J0\n\
-         G1 X40 Y30\nG1 X0 Y30\nG1 X0 Y0\nG40 G1 X-10 Y-10\nM2\n",
-    );
+    let m = moves(G41_1_BUMP);
     assert_eq!(
         rows(&m),
         [
@@ -176,4 +170,95 @@ fn compensation_refuses_what_it_cannot_do() {
     assert!(msg.contains("canned cycle"), "{msg}");
     let (_, msg) = err("T1 M6\nG41 D1 G1 X0 Y0 F100\nX10\nX0\n");
     assert!(msg.contains("reverses"), "{msg}");
+    // rs274: "Straight feed in concave corner cannot be reached by the tool without
+    // gouging", at the block after the 3 mm step (the step's compensated line, from (15, 5)
+    // to (15, 3), would run backwards).
+    let (line, msg) = err("T1 M6\nG0 X-20 Y0\nG41 D1 G1 X0 Y0 F100\nX20\nY3\nX40\n");
+    assert_eq!(line, 6);
+    assert!(msg.contains("gouging"), "{msg}");
+}
+
+/// The same three programs through `rs274` itself when it is installed (CI installs it):
+/// every canonical end point and arc centre agrees within rs274's 4-decimal rounding.
+#[test]
+fn the_programs_agree_with_rs274_when_it_is_installed() {
+    let rs274 = Path::new("/usr/bin/rs274");
+    if !rs274.exists() {
+        if std::env::var_os("CI").is_some() {
+            panic!("rs274 is missing but CI is set: install linuxcnc-uspace");
+        }
+        eprintln!("skipped: /usr/bin/rs274 not installed (Debian package linuxcnc-uspace)");
+        return;
+    }
+    for (k, text) in [G41_LINES, G42_ARCS, G41_1_BUMP].iter().enumerate() {
+        let dir = std::env::temp_dir().join(format!("ngc-cutter-comp-{}-{k}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("p.var"), "").unwrap();
+        // rs274 reads tool-table diameters in inches: 10 mm.
+        std::fs::write(dir.join("tool.tbl"), "T1 P1 D0.39370078740157477 Z0\n").unwrap();
+        std::fs::write(dir.join("p.ngc"), text).unwrap();
+        let status = std::process::Command::new(rs274)
+            .current_dir(&dir)
+            .env("HOME", &dir)
+            .args([
+                "-t", "tool.tbl", "-v", "p.var", "-n", "2", "-g", "p.ngc", "out.txt",
+            ])
+            .stdin(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .status()
+            .unwrap();
+        assert!(status.success(), "rs274 failed on program {k}");
+        let out = std::fs::read_to_string(dir.join("out.txt")).unwrap();
+        let mut theirs = Vec::new();
+        for line in out.lines() {
+            let Some(open) = line.find('(') else { continue };
+            let name = line[..open].split_whitespace().last().unwrap_or("");
+            let args: Vec<f64> = line[open + 1..line.len() - 1]
+                .split(',')
+                .filter_map(|a| a.trim().parse().ok())
+                .collect();
+            match name {
+                "STRAIGHT_TRAVERSE" | "STRAIGHT_FEED" => {
+                    theirs.push(([args[0], args[1], args[2]], None))
+                }
+                "ARC_FEED" => theirs.push((
+                    [args[0], args[1], args[5]],
+                    Some(([args[2], args[3]], args[4] < 0.0)),
+                )),
+                _ => {}
+            }
+        }
+        let ours = moves(text);
+        assert_eq!(ours.len(), theirs.len(), "program {k}: {out}");
+        for (m, (end, arc)) in ours.iter().zip(&theirs) {
+            for (a, want) in [Axis::X, Axis::Y, Axis::Z].iter().zip(end) {
+                assert!(
+                    (m.end[*a] - want).abs() < 1e-4,
+                    "program {k} line {}: {:?} vs {end:?}",
+                    m.line,
+                    m.end
+                );
+            }
+            match (m.motion, arc) {
+                (
+                    Motion::Arc {
+                        clockwise,
+                        center_mm,
+                        ..
+                    },
+                    Some((c, cw)),
+                ) => {
+                    assert_eq!(clockwise, *cw, "program {k} line {}", m.line);
+                    assert!(
+                        (center_mm[0] - c[0]).abs() < 1e-4 && (center_mm[1] - c[1]).abs() < 1e-4
+                    );
+                }
+                (Motion::Arc { .. }, None) | (_, Some(_)) => {
+                    panic!("program {k} line {}: arc mismatch", m.line)
+                }
+                _ => {}
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

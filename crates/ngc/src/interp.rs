@@ -2001,13 +2001,19 @@ impl Interp {
                 self.comp_actual.take().unwrap_or(s)
             }
             Some(h) => {
-                let join = comp::join(left, r, h.end, h.tangent, h.line, t_start, is_line)?;
+                let center = match motion {
+                    Motion::Arc { center_mm, .. } => Some([center_mm[0], center_mm[1]]),
+                    _ => None,
+                };
+                let join = comp::join(left, r, h.end, h.tangent, h.center, t_start, center)?;
                 let held_end = match join {
                     comp::Join::Meet { end } => end,
                     comp::Join::Arc { p1, .. } => p1,
                 };
                 let (hs, t) = ([h.mv.start[Axis::X], h.mv.start[Axis::Y]], h.tangent);
-                if h.line && (held_end[0] - hs[0]) * t[0] + (held_end[1] - hs[1]) * t[1] < -1e-9 {
+                if h.center.is_none()
+                    && (held_end[0] - hs[0]) * t[0] + (held_end[1] - hs[1]) * t[1] < -1e-9
+                {
                     // As rs274: the compensated line would run backwards.
                     return Err("straight feed in a concave corner cannot be reached by the tool without gouging: expected a line longer than the tool radius".into());
                 }
@@ -2060,7 +2066,10 @@ impl Interp {
             mv,
             end: e,
             tangent: t_end,
-            line: is_line,
+            center: match motion {
+                Motion::Arc { center_mm, .. } => Some([center_mm[0], center_mm[1]]),
+                _ => None,
+            },
             left,
             radius: r,
             after: Vec::new(),

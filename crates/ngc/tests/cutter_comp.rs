@@ -10,6 +10,8 @@ use ngc::{read_str_with, Axis, Dialect, Error, Motion, MoveKind, Options, Tool};
 const G41_LINES: &str = "G21 G17 G90 G40\nT1 M6\nG0 X-20 Y-20\nG41 D1 G1 X0 Y0 F100\nG1 X50 Y0\nG1 X50 Y30\nG1 X20 Y30\nG1 X0 Y0\nG40 G1 X-20 Y-20\nM2\n";
 const G42_ARCS: &str = "G21 G17 G90 G40\nT1 M6\nG0 X-30 Y0 Z5\nG42 D1 G1 X-20 Y0 F100\nG1 Z-2\nG2 X0 Y20 I20 J0\nG1 X30 Y20\nG2 X40 Y10 I0 J-10\nG1 X40 Y-10\nG1 X-20 Y-10\nG40 G0 X-40 Y-20\nM2\n";
 const G41_1_BUMP: &str = "G21 G17 G90\nG0 X0 Y-20\nG41.1 D8 G1 X0 Y0 F200\nG1 X20 Y0\nG3 X40 Y0 I10 J0\nG1 X40 Y30\nG1 X0 Y30\nG1 X0 Y0\nG40 G1 X-10 Y-10\nM2\n";
+const CONCAVE_LINE_ARC: &str = "G21 G17 G90\nT1 M6\nG0 X0 Y-20\nG41 D1 G1 X0 Y0 F100\nG1 X30 Y0\nG2 X30 Y40 I20 J20\nG1 X30 Y60\nG1 X0 Y60\nG40 G1 X-10 Y70\nM2\n";
+const CONCAVE_ARC_ARC: &str = "G21 G17 G90\nT1 M6\nG0 X-10 Y-20\nG41 D1 G1 X0 Y0 F100\nG2 X20 Y0 I10 J0\nG2 X30 Y-10 I0 J-10\nG1 X30 Y-30\nG40 G1 X40 Y-40\nM2\n";
 
 fn opts() -> Options {
     Options {
@@ -137,6 +139,40 @@ fn g41_1_takes_the_diameter_from_d_and_matches_rs274() {
 }
 
 #[test]
+fn concave_corners_with_arcs_meet_where_the_offset_paths_cross_as_in_rs274() {
+    // Line (1, 0) into the R28.284 clockwise arc about (50, 20) turning 135 deg left; the
+    // tool (left of a clockwise arc) is outside it: offset radius 33.284. The offset line
+    // y = 5 meets that circle at x = 50 - sqrt(33.284² - 15²) = 20.2873, and the offset
+    // line x = 25 of the next move at y = 20 + sqrt(33.284² - 25²) = 41.9737.
+    assert_eq!(
+        rows(&moves(CONCAVE_LINE_ARC)),
+        [
+            (Rapid, [0.0, -20.0, 0.0], None),
+            (Feed, [-5.0, 0.0, 0.0], None),
+            (Arc, [0.0, 5.0, 0.0], Some(([0.0, 0.0], true))),
+            (Feed, [20.2873, 5.0, 0.0], None),
+            (Arc, [25.0, 41.9737, 0.0], Some(([50.0, 20.0], true))),
+            (Feed, [25.0, 55.0, 0.0], None),
+            (Feed, [0.0, 55.0, 0.0], None),
+            (Feed, [-10.0, 70.0, 0.0], None),
+        ]
+    );
+    // Two clockwise R10 arcs meeting at a 90 deg concave corner: offset circles of radius
+    // 15 about (10, 0) and (20, -10) cross at (24.3541, 4.3541) (rs274).
+    assert_eq!(
+        rows(&moves(CONCAVE_ARC_ARC)),
+        [
+            (Rapid, [-10.0, -20.0, 0.0], None),
+            (Feed, [-4.9443, 1.2918, 0.0], None),
+            (Arc, [24.3541, 4.3541, 0.0], Some(([10.0, 0.0], true))),
+            (Arc, [35.0, -10.0, 0.0], Some(([20.0, -10.0], true))),
+            (Feed, [35.0, -30.0, 0.0], None),
+            (Feed, [40.0, -40.0, 0.0], None),
+        ]
+    );
+}
+
+#[test]
 fn the_program_end_closes_compensation_like_g40() {
     // No G40: the last move still ends 5 mm left of its direction (+X): (10, 5).
     let m = moves("T1 M6\nG41 D1 G1 X0 Y0 F100\nX10\nM2\n");
@@ -190,7 +226,16 @@ fn the_programs_agree_with_rs274_when_it_is_installed() {
         eprintln!("skipped: /usr/bin/rs274 not installed (Debian package linuxcnc-uspace)");
         return;
     }
-    for (k, text) in [G41_LINES, G42_ARCS, G41_1_BUMP].iter().enumerate() {
+    for (k, text) in [
+        G41_LINES,
+        G42_ARCS,
+        G41_1_BUMP,
+        CONCAVE_LINE_ARC,
+        CONCAVE_ARC_ARC,
+    ]
+    .iter()
+    .enumerate()
+    {
         let dir = std::env::temp_dir().join(format!("ngc-cutter-comp-{}-{k}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(dir.join("p.var"), "").unwrap();

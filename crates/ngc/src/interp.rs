@@ -1008,6 +1008,11 @@ impl Interp {
                     };
                 }
                 GCode::Tilt(true) => {
+                    if let Some((_, mw)) =
+                        g.iter().find(|(c, _)| matches!(c, GCode::Motion(Some(_))))
+                    {
+                        return Err(LineError::new(mw.span(), format!("`{}` in a G68.2 block: expected G68.2 in a block of its own (its X Y Z are the plane's origin)", &line[mw.span()]), "motion with G68.2").help("move in the next block"));
+                    }
                     for letter in ['A', 'B', 'C', 'R'] {
                         if let Some(x) = get(letter) {
                             return Err(LineError::new(x.span(), format!("`{}` in a G68.2 block: expected only X Y Z (origin) and I J K (Euler angles)", &line[x.span()]), "not a G68.2 word"));
@@ -1135,6 +1140,18 @@ impl Interp {
                     "not with compensation",
                 ));
             }
+            if self.frame().is_some() && matches!(nm, NonModal::G92 | NonModal::G52 | NonModal::G10)
+            {
+                return Err(LineError::new(
+                    w.span(),
+                    format!(
+                        "`{}` with G68.2 or G254 active: not supported",
+                        &line[w.span()]
+                    ),
+                    "offset in a tilted frame",
+                )
+                .help("set offsets before G68.2 or G254"));
+            }
             match nm {
                 NonModal::G10 => self.g10(line, &w, &get, &axis_words)?,
                 NonModal::G28 | NonModal::G30 => {
@@ -1172,17 +1189,6 @@ impl Interp {
                     for a in Axis::ALL {
                         self.params.numbered[base + a.index()] = self.pos[a];
                     }
-                }
-                NonModal::G92 | NonModal::G52 if self.frame().is_some() => {
-                    return Err(LineError::new(
-                        w.span(),
-                        format!(
-                            "`{}` with G68.2 or G254 active: not supported",
-                            &line[w.span()]
-                        ),
-                        "offset in a tilted frame",
-                    )
-                    .help("set G92/G52 before G68.2 or G254"));
                 }
                 NonModal::G92 | NonModal::G52 => {
                     if axis_words.is_empty() {

@@ -200,6 +200,10 @@ fn tilted_frames_refuse_what_they_cannot_do() {
     assert!(msg.contains("rotary table"), "{msg}");
     let (_, msg) = error("G68.2 I0 J90 K0\n", &opts(Dialect::Linuxcnc, None));
     assert!(msg.contains("G68.2"), "{msg}");
+    let (_, msg) = error("G68.2 X10 I0 J90 K0 G1 F100\n", &fanuc);
+    assert!(msg.contains("block of its own"), "{msg}");
+    let (_, msg) = error("G68.2 J90\nG10 L2 P1 X5\n", &fanuc);
+    assert!(msg.contains("G68.2 or G254 active"), "{msg}");
     let (_, msg) = error("G68.2 I0 J90 K0 C10\n", &fanuc);
     assert!(msg.contains("G68.2 block"), "{msg}");
     // J45 without G53.1: the G17 normal is oblique in the machine; an arc there is refused.

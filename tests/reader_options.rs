@@ -110,3 +110,69 @@ fn bad_reader_keys_are_input_errors() {
     );
     assert!(Scenario::load(&bad).is_err());
 }
+
+#[test]
+fn tilted_planes_and_dynamic_work_offsets_use_the_machine_kinematics() {
+    use mtsim::kinematics::{Branch, ToolPose};
+    use nalgebra::{Point3, Vector3};
+    let dir = scratch("reader", "tilted");
+    let kin = common::load_trt_ac().kinematics;
+    // Haas G254 on the trt-ac machine: the programmed point (10, 5, 2) rides on the table,
+    // so after A30 C90 it is where mtsim's own forward chain puts that table point.
+    std::fs::write(dir.join("g254.nc"), "G254\nG0 X10 Y5 Z2\nA30 C90\nM30\n").unwrap();
+    let scenario = Scenario::load(&write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"g254.nc\"\n\n[reader]\ndialect = \"haas\"\n",
+    ))
+    .unwrap();
+    let got = ends(&scenario, &dir.join("g254.nc")).unwrap();
+    let mut q = mtsim::AxisVec::ZERO;
+    q[Axis::A] = 30.0;
+    q[Axis::C] = 90.0;
+    let m = kin.table_to_machine(&q, &Point3::new(10.0, 5.0, 2.0));
+    for (k, want) in [m.x, m.y, m.z, 30.0, 0.0, 90.0].iter().enumerate() {
+        assert!((got[1][k] - want).abs() < 1e-9, "{:?} vs {m:?}", got[1]);
+    }
+    // Fanuc G68.2 I30 J40 K0 then G53.1: the feature Z axis Rz(30) Rx(40) e_z =
+    // (sin30 sin40, -cos30 sin40, cos40) becomes the tool axis, as mtsim's inverse
+    // kinematics positions A and C for that tool axis.
+    std::fs::write(
+        dir.join("g682.nc"),
+        "G68.2 X0 Y0 Z0 I30 J40 K0\nG53.1\nM30\n",
+    )
+    .unwrap();
+    let scenario = Scenario::load(&write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"g682.nc\"\n\n[reader]\ndialect = \"fanuc\"\n",
+    ))
+    .unwrap();
+    let got = ends(&scenario, &dir.join("g682.nc")).unwrap();
+    let (s30, c30, s40, c40) = (
+        0.5,
+        3f64.sqrt() / 2.0,
+        40f64.to_radians().sin(),
+        40f64.to_radians().cos(),
+    );
+    let pose = ToolPose {
+        tip: Point3::origin(),
+        axis: Vector3::new(s30 * s40, -c30 * s40, c40),
+    };
+    let want = kin.inverse(&pose, Branch::Primary, 0.0);
+    assert!(
+        (got[0][3] - want[Axis::A]).abs() < 1e-9,
+        "{:?} vs {want:?}",
+        got[0]
+    );
+    assert!(
+        (got[0][5] - want[Axis::C]).abs() < 1e-9,
+        "{:?} vs {want:?}",
+        got[0]
+    );
+    assert!(
+        (got[0][3] - 40.0).abs() < 1e-9,
+        "A = J for a tilt about X: {:?}",
+        got[0]
+    );
+}

@@ -393,6 +393,14 @@ fn reader_options(
         dialect: r.dialect.unwrap_or(machine.dialect),
         axes: machine.axes().to_vec(),
         tcp: r.tcp,
+        table: machine
+            .kinematics
+            .layout
+            .tilt_axis()
+            .map(|tilt| ngc::RotaryTable {
+                tilt,
+                pivot_mm: machine.kinematics.pivot_mm.into(),
+            }),
         ..ngc::Options::default()
     };
     o.set_reference(false, ngc::AxisVec(machine.reference_mm[0]));

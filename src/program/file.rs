@@ -1,7 +1,8 @@
 //! G-code files, read by the `ngc` interpreter crate, as a stream of canonical moves.
 //!
 //! The scenario's reader options (dialect, machine axes, tools, work offsets, subroutine
-//! path, user M codes) go to the interpreter unchanged; `Options::default()` starts from all
+//! path, user M codes, and the machine's rotary table for G68.2/G53.1 and G254) go to the
+//! interpreter unchanged; `Options::default()` starts from all
 //! axes at zero, as the machine position before a program runs is not known.
 
 use std::path::Path;

@@ -10,10 +10,12 @@ use std::path::Path;
 
 use crate::axis::{Axis, AxisVec, Plane};
 use crate::canon::{FeedMode, Motion, Move, PathControl, FULL_CIRCLE_TOLERANCE_MM};
+use crate::comp;
 use crate::expr::{Param, Params};
+use crate::frame::{self, Frame, Mat3, RotaryTable};
 use crate::lex::{LineError, LineResult, Word, EXPECTED_WORDS};
 use crate::options::{Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER};
-use crate::reader::{Notice, ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
+use crate::reader::{Notice, ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
 
 /// What the reader must do after a block.
 pub enum Stop {
@@ -106,11 +108,20 @@ enum GCode {
     /// look-ahead, P): accepted, no effect on the canonical moves. Haas G187 (P accuracy
     /// level, E corner tolerance) sets the blending tolerance.
     Control(u32),
+    /// Fanuc G68.2 (true, tilted work plane) and G69 (false, cancel).
+    Tilt(bool),
+    /// Fanuc G53.1: rotary axes to the tilted plane.
+    AlignRotary,
+    /// Haas G254 (true, dynamic work offset) and G255 (false).
+    Dwo(bool),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Group {
     Control,
+    Tilt,
+    AlignRotary,
+    Dwo,
     Motion,
     NonModal,
     Plane,
@@ -143,6 +154,9 @@ impl GCode {
             GCode::Path(_) => Group::Path,
             GCode::Retract(_) => Group::Retract,
             GCode::Control(_) => Group::Control,
+            GCode::Tilt(_) => Group::Tilt,
+            GCode::AlignRotary => Group::AlignRotary,
+            GCode::Dwo(_) => Group::Dwo,
         }
     }
 
@@ -188,6 +202,10 @@ impl GCode {
             300 => GCode::NonModal(NonModal::G30),
             301 => GCode::NonModal(NonModal::G30_1),
             400 => GCode::CutterComp(0),
+            410 => GCode::CutterComp(1),
+            420 => GCode::CutterComp(2),
+            411 if !fanuc => GCode::CutterComp(3),
+            421 if !fanuc => GCode::CutterComp(4),
             430 => GCode::ToolLength(0),
             431 if !fanuc => GCode::ToolLength(1),
             432 if !fanuc => GCode::ToolLength(2),
@@ -220,12 +238,18 @@ impl GCode {
             950 => GCode::Feed(FeedRead::PerRevolution),
             51 | 80 if fanuc => GCode::Control(code as u32),
             1030 | 1870 if dialect == Dialect::Haas => GCode::Control(code as u32),
+            682 if fanuc => GCode::Tilt(true),
+            690 if fanuc => GCode::Tilt(false),
+            531 if fanuc => GCode::AlignRotary,
+            2540 if dialect == Dialect::Haas => GCode::Dwo(true),
+            2550 if dialect == Dialect::Haas => GCode::Dwo(false),
             980 => GCode::Retract(false),
             990 => GCode::Retract(true),
             434 | 435 => return Err(unsupported(" (LinuxCNC has no G43.4; TCP is switched by the scenario option or a user M code such as M428)", "map the TCP M codes in the scenario (user_m_codes)")),
             2340 => return Err(unsupported(" (G234 is Haas TCP)", "set dialect = \"haas\"")),
-            410 | 420 | 411 | 421 => return Err(unsupported(" (cutter radius compensation is not supported yet)", "post-process the program with the tool radius applied; G40 (cancel) is accepted")),
-            680..=689 | 690 | 531 | 2540 | 2550 => return Err(unsupported(" (coordinate rotation and tilted working planes are not supported yet)", "post-process the program to machine axis positions")),
+            682 | 690 | 531 => return Err(unsupported(" (G68.2, G53.1 and G69 are Fanuc and Haas codes)", "set dialect = \"fanuc\" or \"haas\"")),
+            2540 | 2550 => return Err(unsupported(" (G254/G255 are Haas dynamic work offsets)", "set dialect = \"haas\"")),
+            680..=689 => return Err(unsupported(" (2D coordinate rotation G68 and other G68.x are not supported; G68.2 is)", "post-process the program without G68")),
             760 | 840 | 870 | 880 => return Err(unsupported(" (this canned cycle is not supported; G73 G81 G82 G83 G85 G86 G89 are)", "")),
             _ => return Err(unsupported("", "")),
         })
@@ -267,6 +291,17 @@ pub struct Interp {
     user_m: HashMap<u32, UserM>,
     noticed: Vec<u32>,
     saved: Option<Box<Saved>>,
+    /// G68.2 feature frame: origin in work coordinates (mm) and rotation `R_f`.
+    tilt: Option<([f64; 3], Mat3)>,
+    /// Haas G254: the work offset follows the rotary table.
+    dwo: bool,
+    table: Option<RotaryTable>,
+    /// Cutter radius compensation: tool on the left (G41), radius mm.
+    comp: Option<(bool, f64)>,
+    /// The compensated element waiting for the next one.
+    held: Option<comp::Held>,
+    /// Compensated X Y of the last move when it differs from `pos` (after G40).
+    comp_actual: Option<[f64; 2]>,
 }
 
 /// Parameter of extended work offset P n (G54.1 Pn, G154 Pn), axis X.
@@ -324,6 +359,12 @@ impl Interp {
             user_m: o.user_m.clone(),
             noticed: Vec::new(),
             saved: None,
+            tilt: None,
+            dwo: false,
+            table: o.table,
+            comp: None,
+            held: None,
+            comp_actual: None,
         };
         i.parameters_changed();
         i
@@ -356,10 +397,38 @@ impl Interp {
     fn program_position(&self) -> AxisVec {
         let mut p = self.pos - self.offset;
         p[Axis::Z] -= self.tool_length_mm;
+        if let Some(f) = self.frame() {
+            let pp = f.to_program(self.tip(), &self.offset, &self.pos);
+            for a in Axis::LINEAR {
+                p[a] = pp[a.index()];
+            }
+        }
         for a in Axis::LINEAR {
             p[a] /= self.scale();
         }
         p
+    }
+
+    /// The program-to-machine map while G68.2 or G254 is active.
+    fn frame(&self) -> Option<Frame> {
+        if self.tilt.is_none() && !self.dwo {
+            return None;
+        }
+        let (origin_mm, rotation) = self.tilt.unwrap_or(([0.0; 3], frame::IDENTITY));
+        Some(Frame {
+            origin_mm,
+            rotation,
+            table: self.table,
+        })
+    }
+
+    /// Machine X Y Z of the controlled point without the tool length offset, mm.
+    fn tip(&self) -> [f64; 3] {
+        [
+            self.pos[Axis::X],
+            self.pos[Axis::Y],
+            self.pos[Axis::Z] - self.tool_length_mm,
+        ]
     }
 
     /// Writes the read-only system parameters (positions, tool, work system) before a line
@@ -473,15 +542,42 @@ impl Interp {
     }
 
     fn emit(
-        &self,
+        &mut self,
         queue: &mut VecDeque<Move>,
         line: usize,
         motion: Motion,
-        start: AxisVec,
-        end: AxisVec,
+        mut start: AxisVec,
+        mut end: AxisVec,
         path: PathControl,
     ) {
         let (feed, feed_mode) = self.feed_out();
+        if let Some(h) = &mut self.held {
+            // Waits with the held element (a plunge or a dwell under compensation).
+            h.after.push(Move {
+                line,
+                motion,
+                start,
+                end,
+                feed,
+                feed_mode,
+                tcp: self.tcp,
+                tool: self.tool,
+                tool_length_mm: self.tool_length_mm,
+                path,
+            });
+            return;
+        }
+        if let Some(xy) = self.comp_actual {
+            start[Axis::X] = xy[0];
+            start[Axis::Y] = xy[1];
+            if end[Axis::X] == self.pos[Axis::X] && end[Axis::Y] == self.pos[Axis::Y] {
+                // Not moving in X Y: stays at the compensated point.
+                end[Axis::X] = xy[0];
+                end[Axis::Y] = xy[1];
+            } else {
+                self.comp_actual = None;
+            }
+        }
         queue.push_back(Move {
             line,
             motion,
@@ -774,7 +870,51 @@ impl Interp {
             match c {
                 GCode::Plane(p) => self.plane = p,
                 GCode::Units(inch) => self.inch = inch,
-                GCode::CutterComp(_) => {}
+                GCode::CutterComp(0) => {
+                    self.comp = None;
+                    self.comp_exit(queue);
+                }
+                GCode::CutterComp(k) => {
+                    if self.comp.is_some() {
+                        return Err(LineError::new(w.span(), "cutter radius compensation turned on while it is on: expected G40 first", "compensation already on"));
+                    }
+                    if self.plane != Plane::XY {
+                        return Err(LineError::new(
+                            w.span(),
+                            "cutter radius compensation outside G17: expected the XY plane (G17)",
+                            "not G17",
+                        ));
+                    }
+                    if self.frame().is_some() {
+                        return Err(LineError::new(
+                            w.span(),
+                            "cutter radius compensation with G68.2 or G254 active: not supported",
+                            "compensation in a tilted frame",
+                        ));
+                    }
+                    let d = get('D');
+                    let diameter = if k >= 3 {
+                        let d = d.ok_or_else(|| {
+                            LineError::new(
+                                w.span(),
+                                format!("`{}` without D: expected D<diameter>", &line[w.span()]),
+                                "no D",
+                            )
+                        })?;
+                        d.value * self.scale()
+                    } else {
+                        let n = d.map_or(self.tool, |d| d.value.round() as u32);
+                        self.tool_entry(n, &d.unwrap_or(w))?.diameter_mm
+                    };
+                    if diameter < 0.0 {
+                        return Err(LineError::new(
+                            w.span(),
+                            "negative cutter diameter: expected D of zero or more",
+                            "negative",
+                        ));
+                    }
+                    self.comp = Some((k % 2 == 1, diameter / 2.0));
+                }
                 GCode::ToolLength(kind) => {
                     let h = get('H');
                     match kind {
@@ -867,8 +1007,72 @@ impl Interp {
                         naive_cam_mm: None,
                     };
                 }
+                GCode::Tilt(true) => {
+                    if let Some((_, mw)) =
+                        g.iter().find(|(c, _)| matches!(c, GCode::Motion(Some(_))))
+                    {
+                        return Err(LineError::new(mw.span(), format!("`{}` in a G68.2 block: expected G68.2 in a block of its own (its X Y Z are the plane's origin)", &line[mw.span()]), "motion with G68.2").help("move in the next block"));
+                    }
+                    for letter in ['A', 'B', 'C', 'R'] {
+                        if let Some(x) = get(letter) {
+                            return Err(LineError::new(x.span(), format!("`{}` in a G68.2 block: expected only X Y Z (origin) and I J K (Euler angles)", &line[x.span()]), "not a G68.2 word"));
+                        }
+                    }
+                    let v = |l: char| get(l).map_or(0.0, |w| w.value);
+                    let scale = self.scale();
+                    let origin = [v('X') * scale, v('Y') * scale, v('Z') * scale];
+                    self.tilt = Some((origin, frame::euler_zxz(v('I'), v('J'), v('K'))));
+                }
+                GCode::Tilt(false) => self.tilt = None,
+                GCode::Dwo(on) => {
+                    if on && self.table.is_none() {
+                        return Err(LineError::new(w.span(), "G254 on a machine without a rotary table: expected a table-table AC or BC machine", "no rotary table"));
+                    }
+                    self.dwo = on;
+                }
                 _ => {}
             }
+        }
+        if let Some((_, w)) = g.iter().find(|(c, _)| *c == GCode::AlignRotary) {
+            let (Some((_, rf)), Some(table)) = (self.tilt, self.table) else {
+                return Err(LineError::new(
+                    w.span(),
+                    if self.tilt.is_none() {
+                        "G53.1 with no tilted plane: expected G68.2 in this or an earlier block"
+                    } else {
+                        "G53.1 on a machine without a rotary table: expected a table-table AC or BC machine"
+                    },
+                    "nothing to align",
+                ));
+            };
+            if !g.iter().any(|(c, _)| *c == GCode::Tilt(true)) {
+                if let Some(a) = Axis::ALL.iter().find_map(|a| get(a.letter())) {
+                    return Err(LineError::new(
+                        a.span(),
+                        "axis word in a G53.1 block: expected G53.1 alone",
+                        "axis word with G53.1",
+                    )
+                    .help("move in the next block"));
+                }
+            }
+            let (tilt, c) = table.align([rf[0][2], rf[1][2], rf[2][2]], self.pos[Axis::C]);
+            let start = self.pos;
+            let mut end = start;
+            end[table.tilt] = tilt;
+            end[Axis::C] = c;
+            self.emit(queue, line_no, Motion::Rapid, start, end, self.path);
+            self.pos = end;
+        }
+        if self.tcp && self.frame().is_some() {
+            let w = g.first().map_or(Word::EMPTY, |(_, w)| *w);
+            return Err(LineError::new(
+                w.span(),
+                "tool-centre-point control with G68.2 or G254 active: expected one at a time",
+                "TCP in a tilted frame",
+            )
+            .help(
+                "cancel G68.2 with G69 (G254 with G255) before G43.4/G234, or TCP with G49 first",
+            ));
         }
         if let Some(h) = get('H') {
             let used = g.iter().any(|(c, _)| {
@@ -909,7 +1113,9 @@ impl Interp {
         let axis_words = &axis_buf[..n_axes];
         // 6. Non-modal codes that use axis words.
         // G43.1 takes its Z as the tool length, not as a move.
-        let mut axes_used = g.iter().any(|(c, _)| *c == GCode::ToolLength(1));
+        let mut axes_used = g
+            .iter()
+            .any(|(c, _)| *c == GCode::ToolLength(1) || *c == GCode::Tilt(true));
         if let Some((nm, w)) = nonmodal {
             if nm != NonModal::Dwell && nm != NonModal::G53 {
                 axes_used = true;
@@ -918,6 +1124,33 @@ impl Interp {
                         return Err(LineError::new(mw.span(), format!("`{}` and `{}` both use the axis words: expected them in separate blocks", &line[w.span()], &line[mw.span()]), "axis words used twice"));
                     }
                 }
+            }
+            if self.comp.is_some()
+                && matches!(
+                    nm,
+                    NonModal::G28 | NonModal::G30 | NonModal::G92 | NonModal::G52
+                )
+            {
+                return Err(LineError::new(
+                    w.span(),
+                    format!(
+                        "`{}` with cutter radius compensation on: expected G40 first",
+                        &line[w.span()]
+                    ),
+                    "not with compensation",
+                ));
+            }
+            if self.frame().is_some() && matches!(nm, NonModal::G92 | NonModal::G52 | NonModal::G10)
+            {
+                return Err(LineError::new(
+                    w.span(),
+                    format!(
+                        "`{}` with G68.2 or G254 active: not supported",
+                        &line[w.span()]
+                    ),
+                    "offset in a tilted frame",
+                )
+                .help("set offsets before G68.2 or G254"));
             }
             match nm {
                 NonModal::G10 => self.g10(line, &w, &get, &axis_words)?,
@@ -1081,6 +1314,19 @@ impl Interp {
                 }
             }
             let start = self.pos;
+            if self.comp.is_some()
+                && (g53 || matches!(mode, MotionMode::Cycle(_)) || self.plane != Plane::XY)
+            {
+                return Err(LineError::new(at, "G53, a canned cycle or a plane other than G17 with cutter radius compensation on: expected G40 first", "not with compensation"));
+            }
+            if self.frame().is_some() && matches!(mode, MotionMode::Cycle(_)) {
+                return Err(LineError::new(
+                    at,
+                    "canned cycle with G68.2 or G254 active: not supported yet",
+                    "cycle in a tilted frame",
+                )
+                .help("post the holes as G00/G01 moves"));
+            }
             match mode {
                 MotionMode::Cycle(code) => {
                     self.cycle(line, code, &get, line_no, queue, first)?;
@@ -1090,6 +1336,9 @@ impl Interp {
                     let motion = match mode {
                         MotionMode::Rapid => Motion::Rapid,
                         MotionMode::Linear => Motion::Linear,
+                        MotionMode::Arc { clockwise } if self.frame().is_some() => {
+                            self.tilted_arc(line, &get, &words, clockwise, target, at.clone())?
+                        }
                         MotionMode::Arc { clockwise } => {
                             let center_mm =
                                 self.arc_center(line, &get, &words, clockwise, start, target)?;
@@ -1101,7 +1350,12 @@ impl Interp {
                         }
                         MotionMode::Cycle(_) => unreachable!("handled above"),
                     };
-                    self.emit(queue, line_no, motion, start, target, self.path);
+                    if self.comp.is_some() {
+                        self.comp_element(queue, line_no, motion, start, target)
+                            .map_err(|m| LineError::new(at, m, "cutter compensation"))?;
+                    } else {
+                        self.emit(queue, line_no, motion, start, target, self.path);
+                    }
                     self.pos = target;
                 }
             }
@@ -1109,7 +1363,10 @@ impl Interp {
         // 8. Program flow M codes.
         for &(code, w) in m.iter() {
             match code {
-                2 | 30 => return Ok(Stop::End),
+                2 | 30 => {
+                    self.finish(queue);
+                    return Ok(Stop::End);
+                }
                 98 => {
                     let p = get('P').ok_or_else(|| {
                         LineError::new(
@@ -1230,7 +1487,7 @@ impl Interp {
             ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || has_m(&[61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, M61 or M66-M68"),
             ('L', g10 || cycle || has_m(&[66, 98]), "`L` with no code that uses it: expected L only with G10, a canned cycle, M66 or M98"),
             ('E', has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with M66-M68"),
-            ('D', false, "`D` (cutter radius compensation is not supported yet): expected no D word"),
+            ('D', has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),
         ];
         for (letter, ok, message) in checks {
             if let Some(w) = get(letter) {
@@ -1305,6 +1562,30 @@ impl Interp {
 
     /// The machine target of axis words (program coordinates, or machine with G53).
     fn target(&self, axis_words: &[(Axis, Word)], g53: bool) -> AxisVec {
+        if let (Some(f), false) = (self.frame(), g53) {
+            // Program X Y Z in the feature / table-fixed frame; rotary words as usual.
+            let mut p = f.to_program(self.tip(), &self.offset, &self.pos);
+            let mut target = self.pos;
+            for &(a, w) in axis_words {
+                if a.is_rotary() {
+                    target[a] = if self.absolute {
+                        w.value + self.offset[a]
+                    } else {
+                        self.pos[a] + w.value
+                    };
+                } else {
+                    let v = w.value * self.scale();
+                    let k = a.index();
+                    p[k] = if self.absolute { v } else { p[k] + v };
+                }
+            }
+            let m = f.to_machine(p, &self.offset, &target);
+            for a in Axis::LINEAR {
+                target[a] = m[a.index()];
+            }
+            target[Axis::Z] += self.tool_length_mm;
+            return target;
+        }
         let mut target = self.pos;
         for &(a, w) in axis_words {
             let v = if a.is_rotary() {
@@ -1543,7 +1824,7 @@ impl Interp {
         let rapid_delta = 0.010 * MM_PER_INCH; // LinuxCNC's G73/G83 clearance, 0.010 in.
         let exact = PathControl::ExactPath;
         let mut cur = self.pos;
-        let go = |me: &Interp,
+        let go = |me: &mut Interp,
                   queue: &mut VecDeque<Move>,
                   cur: &mut AxisVec,
                   motion: Motion,
@@ -1647,6 +1928,205 @@ impl Interp {
         Ok(())
     }
 
+    /// The end of the program: a held compensated element ends as at G40.
+    pub fn finish(&mut self, queue: &mut VecDeque<Move>) {
+        self.comp_exit(queue);
+    }
+
+    /// Drops the held element (after an error).
+    pub fn discard(&mut self) {
+        self.held = None;
+    }
+
+    /// Pushes a held element ending at `end`, with the moves that wait with it.
+    fn release(&mut self, queue: &mut VecDeque<Move>, mut h: comp::Held, end: [f64; 2]) -> AxisVec {
+        comp::set_end(&mut h.mv, end);
+        let mut last = h.mv.end;
+        queue.push_back(h.mv);
+        for mut m in h.after {
+            comp::set_start(&mut m, end);
+            comp::set_end(&mut m, end);
+            last = m.end;
+            queue.push_back(m);
+        }
+        last
+    }
+
+    /// G40 (or the end): the held element ends at `c + r n(t₁)`.
+    fn comp_exit(&mut self, queue: &mut VecDeque<Move>) {
+        let Some(h) = self.held.take() else { return };
+        let left = self.comp.map_or(h.left, |c| c.0);
+        let n = comp::normal(left, h.tangent);
+        let end = [h.end[0] + h.radius * n[0], h.end[1] + h.radius * n[1]];
+        self.release(queue, h, end);
+        self.comp_actual = Some(end);
+    }
+
+    /// An X Y move under cutter radius compensation: joins the held element to this one.
+    fn comp_element(
+        &mut self,
+        queue: &mut VecDeque<Move>,
+        line_no: usize,
+        motion: Motion,
+        start: AxisVec,
+        target: AxisVec,
+    ) -> Result<(), String> {
+        let (left, r) = self.comp.expect("compensation on");
+        let s = [start[Axis::X], start[Axis::Y]];
+        let e = [target[Axis::X], target[Axis::Y]];
+        if s == e && matches!(motion, Motion::Arc { .. }) {
+            return Err("full circle under cutter radius compensation: not supported yet; expected it split into two arcs".into());
+        }
+        if s == e {
+            // No X Y motion: waits with the held element (or runs at the current point).
+            self.emit(queue, line_no, motion, start, target, self.path);
+            return Ok(());
+        }
+        let is_line = !matches!(motion, Motion::Arc { .. });
+        let t_start = comp::tangent(&motion, s, e, false);
+        let t_end = comp::tangent(&motion, s, e, true);
+        if let Motion::Arc {
+            clockwise,
+            center_mm,
+            ..
+        } = motion
+        {
+            let radius = (s[0] - center_mm[0]).hypot(s[1] - center_mm[1]);
+            // The tool is inside the arc for G41 counter-clockwise and G42 clockwise.
+            let inside = left != clockwise;
+            if inside && radius <= r {
+                return Err(format!("arc of radius {radius:.4} mm with a tool of radius {r:.4} mm on its inside: expected a tool smaller than the arc (LinuxCNC: tool radius not less than arc radius with comp)"));
+            }
+        }
+        let (feed, feed_mode) = self.feed_out();
+        let new_start = match self.held.take() {
+            None => {
+                if !is_line {
+                    return Err("arc as the entry move of cutter radius compensation: expected a straight entry move after G41/G42".into());
+                }
+                self.comp_actual.take().unwrap_or(s)
+            }
+            Some(h) => {
+                let center = match motion {
+                    Motion::Arc { center_mm, .. } => Some([center_mm[0], center_mm[1]]),
+                    _ => None,
+                };
+                let join = comp::join(left, r, h.end, h.tangent, h.center, t_start, center)?;
+                let held_end = match join {
+                    comp::Join::Meet { end } => end,
+                    comp::Join::Arc { p1, .. } => p1,
+                };
+                let (hs, t) = ([h.mv.start[Axis::X], h.mv.start[Axis::Y]], h.tangent);
+                if h.center.is_none()
+                    && (held_end[0] - hs[0]) * t[0] + (held_end[1] - hs[1]) * t[1] < -1e-9
+                {
+                    // As rs274: the compensated line would run backwards.
+                    return Err("straight feed in a concave corner cannot be reached by the tool without gouging: expected a line longer than the tool radius".into());
+                }
+                match join {
+                    comp::Join::Meet { end } => {
+                        self.release(queue, h, end);
+                        end
+                    }
+                    comp::Join::Arc { p1, p2, corner } => {
+                        let last = self.release(queue, h, p1);
+                        let mut end = last;
+                        end[Axis::X] = p2[0];
+                        end[Axis::Y] = p2[1];
+                        queue.push_back(Move {
+                            line: line_no,
+                            motion: Motion::Arc {
+                                clockwise: left,
+                                plane: Plane::XY,
+                                center_mm: [corner[0], corner[1], last[Axis::Z]],
+                            },
+                            start: last,
+                            end,
+                            feed,
+                            feed_mode,
+                            tcp: self.tcp,
+                            tool: self.tool,
+                            tool_length_mm: self.tool_length_mm,
+                            path: self.path,
+                        });
+                        p2
+                    }
+                }
+            }
+        };
+        let mut mv = Move {
+            line: line_no,
+            motion,
+            start,
+            end: target,
+            feed,
+            feed_mode,
+            tcp: self.tcp,
+            tool: self.tool,
+            tool_length_mm: self.tool_length_mm,
+            path: self.path,
+        };
+        comp::set_start(&mut mv, new_start);
+        self.comp_actual = None;
+        self.held = Some(comp::Held {
+            mv,
+            end: e,
+            tangent: t_end,
+            center: match motion {
+                Motion::Arc { center_mm, .. } => Some([center_mm[0], center_mm[1]]),
+                _ => None,
+            },
+            left,
+            radius: r,
+            after: Vec::new(),
+        });
+        Ok(())
+    }
+
+    /// An arc in the plane of a G68.2 or G254 frame: the centre is found in program
+    /// coordinates, then mapped to the machine plane its normal turns into (the program
+    /// plane must map onto G17, G18 or G19 of the machine; clockwise flips when the normal
+    /// turns to the machine axis's negative direction).
+    fn tilted_arc<'l>(
+        &self,
+        line: &str,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        words: &[Word],
+        clockwise: bool,
+        target: AxisVec,
+        at: std::ops::Range<usize>,
+    ) -> LineResult<Motion> {
+        let f = self.frame().expect("called with a frame");
+        if Axis::ALL[3..].iter().any(|&a| target[a] != self.pos[a]) {
+            return Err(LineError::new(at, "arc that turns a rotary axis with G68.2 or G254 active: expected the rotary axes still during G02/G03", "rotary arc in a tilted frame"));
+        }
+        let mut tip_end = [target[Axis::X], target[Axis::Y], target[Axis::Z]];
+        tip_end[2] -= self.tool_length_mm;
+        let ps = f.to_program(self.tip(), &self.offset, &self.pos);
+        let pe = f.to_program(tip_end, &self.offset, &target);
+        let (mut s, mut e) = (AxisVec::ZERO, AxisVec::ZERO);
+        for k in 0..3 {
+            s.0[k] = ps[k];
+            e.0[k] = pe[k];
+        }
+        let c = self.arc_center(line, get, words, clockwise, s, e)?;
+        let (_, _, n) = self.plane.axes();
+        let mut normal = [0.0; 3];
+        normal[n.index()] = 1.0;
+        let mn = frame::apply(&f.direction_rotation(&target), normal);
+        let Some(k) = (0..3).find(|&k| mn[k].abs() > 1.0 - 1e-9) else {
+            return Err(LineError::new(at, format!("arc in a tilted plane whose normal is ({:.4}, {:.4}, {:.4}) in machine axes: expected it along X, Y or Z", mn[0], mn[1], mn[2]), "oblique arc plane").help("position the rotary axes with G53.1 first, or post the arc as lines"));
+        };
+        let plane = [Plane::YZ, Plane::ZX, Plane::XY][k];
+        let mut center_mm = f.to_machine(c, &self.offset, &target);
+        center_mm[2] += self.tool_length_mm;
+        Ok(Motion::Arc {
+            clockwise: clockwise != (mn[k] < 0.0),
+            plane,
+            center_mm,
+        })
+    }
+
     /// The absolute arc centre `[X, Y, Z]`, machine mm, from I J K or R.
     ///
     /// For R, with chord length d from s to e and midpoint m, the centre lies at distance
@@ -1702,7 +2182,9 @@ impl Interp {
             (None, (None, None)) => Err(LineError::new(block_span, format!("arc without a centre: expected {} {} (centre offsets from the start) or R (radius)", letter(u), letter(v)), "no centre")),
             (None, (i, j)) => {
                 let (cu, cv) = if self.arc_absolute {
-                    let base = |a: Axis| self.offset[a] + if a == Axis::Z { self.tool_length_mm } else { 0.0 };
+                    // In a tilted frame, start and end are program coordinates already.
+                    let tilted = self.frame().is_some();
+                    let base = |a: Axis| if tilted { 0.0 } else { self.offset[a] + if a == Axis::Z { self.tool_length_mm } else { 0.0 } };
                     (i.map_or(su, |w| w.value * scale + base(u)), j.map_or(sv, |w| w.value * scale + base(v)))
                 } else {
                     (su + i.map_or(0.0, |w| w.value * scale), sv + j.map_or(0.0, |w| w.value * scale))
@@ -1723,7 +2205,7 @@ impl Interp {
                         let abs_tol = std::f64::consts::SQRT_2 * if self.inch { 0.002 * MM_PER_INCH } else { 0.02 };
                         (diff <= abs_tol || diff / r_start <= 0.001, format!("{abs_tol:.4} mm or 0.1 % of the radius"))
                     }
-                    _ => (diff <= ARC_RADIUS_TOLERANCE_MM, format!("{ARC_RADIUS_TOLERANCE_MM} mm")),
+                    _ => (diff <= FANUC_ARC_RADIUS_TOLERANCE_MM, format!("{FANUC_ARC_RADIUS_TOLERANCE_MM} mm")),
                 };
                 if !ok {
                     return Err(LineError::new(block_span, format!("arc radius at the start is {r_start:.6} mm but at the end {r_end:.6} mm: expected them to agree within {rule}"), "inconsistent arc")

@@ -28,8 +28,10 @@
 
 mod axis;
 mod canon;
+mod comp;
 mod error;
 mod expr;
+mod frame;
 mod interp;
 mod lex;
 mod options;
@@ -38,11 +40,12 @@ mod reader;
 pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
 pub use error::{line_column, Error, Result, Syntax};
+pub use frame::RotaryTable;
 pub use options::{
     parse_tool_table, parse_var_file, work_offset_parameter, Dialect, Options, Tool, UserM,
     G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
 };
 pub use reader::{
     read_file, read_file_with, read_str, read_str_with, Moves, Notice, ARC_RADIUS_TOLERANCE_MM,
-    MM_PER_INCH,
+    FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH,
 };

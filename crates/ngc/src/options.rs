@@ -7,6 +7,7 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 
 use crate::axis::{Axis, AxisVec};
+use crate::frame::RotaryTable;
 
 /// The control whose G-code language a program is written in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -90,6 +91,9 @@ pub struct Options {
     pub max_iterations: u64,
     /// Subroutine nesting allowed.
     pub max_call_depth: usize,
+    /// The machine's rotary table (table-table AC or BC), for G68.2/G53.1 and G254; `None`
+    /// on a three-axis machine, where G53.1 and G254 are errors.
+    pub table: Option<RotaryTable>,
 }
 
 /// Default limit on loop iterations per program run.
@@ -110,6 +114,7 @@ impl Default for Options {
             tcp: false,
             max_iterations: MAX_ITERATIONS,
             max_call_depth: MAX_CALL_DEPTH,
+            table: None,
         }
     }
 }

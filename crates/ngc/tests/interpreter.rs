@@ -488,17 +488,22 @@ fn linuxcnc_arc_radius_tolerance_matches_rs274() {
     assert!(!arc(1000.0, 1.1, "G21"));
     assert!(arc(1.0, 0.0028, "G20"));
     assert!(!arc(1.0, 0.00285, "G20"));
-    // Fanuc family: 0.001 mm.
-    let fanuc_arc = |d: f64| {
+    // Fanuc family: 0.01 mm (docs/gcode.md). The Haas UMC-750 of issue 9 accepts an NX
+    // post's inch arcs whose radii differ by up to 4.9 µm = 0.000193 in.
+    let fanuc_arc = |d: f64, units: &str, dialect: Dialect| {
         read_str_with(
             Path::new("t"),
-            &format!("F100\nG0 X10 Y0\nG3 X-{} Y0 I-10 J0\n", 10.0 + d),
-            &opts(Dialect::Fanuc),
+            &format!("{units} F100\nG0 X10 Y0\nG3 X-{} Y0 I-10 J0\n", 10.0 + d),
+            &opts(dialect),
         )
         .all(|m| m.is_ok())
     };
-    assert!(fanuc_arc(0.0009));
-    assert!(!fanuc_arc(0.0011));
+    assert!(fanuc_arc(0.0049, "G21", Dialect::Fanuc));
+    assert!(fanuc_arc(0.000193, "G20", Dialect::Haas));
+    assert!(fanuc_arc(0.0099, "G21", Dialect::Haas));
+    assert!(!fanuc_arc(0.0101, "G21", Dialect::Fanuc));
+    // 0.0004 in = 10.16 µm.
+    assert!(!fanuc_arc(0.0004, "G20", Dialect::Haas));
 }
 
 #[test]

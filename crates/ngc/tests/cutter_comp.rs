@@ -1,0 +1,309 @@
+//! Cutter radius compensation G41/G42/G41.1/G42.1/G40 in the XY plane. The expected end
+//! points were recorded from LinuxCNC 2.9's `rs274` run on the same programs (tool table
+//! `T1 P1 D0.39370078740157477` = 10 mm diameter, as rs274 reads the table in inches;
+//! output rounded to 1e-4 mm), and the simple ones are checked by hand in the comments.
+
+use std::path::Path;
+
+use ngc::{read_str_with, Axis, Dialect, Error, Motion, MoveKind, Options, Tool};
+
+const G41_LINES: &str = "G21 G17 G90 G40\nT1 M6\nG0 X-20 Y-20\nG41 D1 G1 X0 Y0 F100\nG1 X50 Y0\nG1 X50 Y30\nG1 X20 Y30\nG1 X0 Y0\nG40 G1 X-20 Y-20\nM2\n";
+const G42_ARCS: &str = "G21 G17 G90 G40\nT1 M6\nG0 X-30 Y0 Z5\nG42 D1 G1 X-20 Y0 F100\nG1 Z-2\nG2 X0 Y20 I20 J0\nG1 X30 Y20\nG2 X40 Y10 I0 J-10\nG1 X40 Y-10\nG1 X-20 Y-10\nG40 G0 X-40 Y-20\nM2\n";
+const G41_1_BUMP: &str = "G21 G17 G90\nG0 X0 Y-20\nG41.1 D8 G1 X0 Y0 F200\nG1 X20 Y0\nG3 X40 Y0 I10 J0\nG1 X40 Y30\nG1 X0 Y30\nG1 X0 Y0\nG40 G1 X-10 Y-10\nM2\n";
+const CONCAVE_LINE_ARC: &str = "G21 G17 G90\nT1 M6\nG0 X0 Y-20\nG41 D1 G1 X0 Y0 F100\nG1 X30 Y0\nG2 X30 Y40 I20 J20\nG1 X30 Y60\nG1 X0 Y60\nG40 G1 X-10 Y70\nM2\n";
+const CONCAVE_ARC_ARC: &str = "G21 G17 G90\nT1 M6\nG0 X-10 Y-20\nG41 D1 G1 X0 Y0 F100\nG2 X20 Y0 I10 J0\nG2 X30 Y-10 I0 J-10\nG1 X30 Y-30\nG40 G1 X40 Y-40\nM2\n";
+
+fn opts() -> Options {
+    Options {
+        dialect: Dialect::Linuxcnc,
+        tools: vec![Tool {
+            number: 1,
+            length_mm: 0.0,
+            diameter_mm: 10.0,
+        }],
+        ..Options::default()
+    }
+}
+
+fn moves(text: &str) -> Vec<ngc::Move> {
+    let m: Vec<ngc::Move> = read_str_with(Path::new("t.ngc"), text, &opts())
+        .collect::<Result<_, _>>()
+        .unwrap_or_else(|e| panic!("expected the program to read, got: {e}"));
+    // The compensated path is continuous: every move starts where the previous one ended.
+    for w in m.windows(2) {
+        assert_eq!(w[1].start, w[0].end, "discontinuity at line {}", w[1].line);
+    }
+    m
+}
+
+/// (kind, X, Y, Z, arc centre X Y and clockwise), rounded to 1e-4 as rs274 prints.
+type Row = (MoveKind, [f64; 3], Option<([f64; 2], bool)>);
+
+fn rows(m: &[ngc::Move]) -> Vec<Row> {
+    let r = |v: f64| {
+        let x = (v * 1e4).round() / 1e4;
+        if x == 0.0 {
+            0.0
+        } else {
+            x
+        }
+    };
+    m.iter()
+        .map(|m| {
+            let arc = match m.motion {
+                Motion::Arc {
+                    clockwise,
+                    center_mm,
+                    ..
+                } => Some(([r(center_mm[0]), r(center_mm[1])], clockwise)),
+                _ => None,
+            };
+            (
+                m.kind(),
+                [r(m.end[Axis::X]), r(m.end[Axis::Y]), r(m.end[Axis::Z])],
+                arc,
+            )
+        })
+        .collect()
+}
+
+use MoveKind::{Arc, Feed, Rapid};
+
+#[test]
+fn g41_lines_convex_entry_corner_and_concave_corners_match_rs274() {
+    let m = moves(G41_LINES);
+    assert_eq!(
+        rows(&m),
+        [
+            (Rapid, [-20.0, -20.0, 0.0], None),
+            // Entry: the end offset 5 mm left of the entry direction (1, 1)/√2:
+            // 5 (-1, 1)/√2 = (-3.5355, 3.5355).
+            (Feed, [-3.5355, 3.5355, 0.0], None),
+            // Right turn with the tool on the left: convex, an arc about the corner (0, 0),
+            // clockwise, to 5 mm left of +X.
+            (Arc, [0.0, 5.0, 0.0], Some(([0.0, 0.0], true))),
+            // Left turns: concave, the offset lines y = 5 and x = 45 meet at (45, 5).
+            (Feed, [45.0, 5.0, 0.0], None),
+            (Feed, [45.0, 25.0, 0.0], None),
+            (Feed, [22.6759, 25.0, 0.0], None),
+            // Last compensated move before G40: 5 mm left of (0, 0) along (-2, -3)/√13.
+            (Feed, [4.1603, -2.7735, 0.0], None),
+            // Exit move: uncompensated.
+            (Feed, [-20.0, -20.0, 0.0], None),
+        ]
+    );
+}
+
+#[test]
+fn g42_with_arcs_a_plunge_and_convex_corners_matches_rs274() {
+    let m = moves(G42_ARCS);
+    assert_eq!(
+        rows(&m),
+        [
+            (Rapid, [-30.0, 0.0, 5.0], None),
+            (Feed, [-20.0, -5.0, 5.0], None),
+            // The plunge waits at the compensated point.
+            (Feed, [-20.0, -5.0, -2.0], None),
+            (Arc, [-15.0, 0.0, -2.0], Some(([-20.0, 0.0], false))),
+            // The R20 clockwise arc with the tool on its inside: R15.
+            (Arc, [0.0, 15.0, -2.0], Some(([0.0, 0.0], true))),
+            (Feed, [30.0, 15.0, -2.0], None),
+            // The R10 clockwise arc with the tool outside: R15.
+            (Arc, [35.0, 10.0, -2.0], Some(([30.0, 10.0], true))),
+            (Feed, [35.0, -5.0, -2.0], None),
+            (Feed, [-20.0, -5.0, -2.0], None),
+            (Rapid, [-40.0, -20.0, -2.0], None),
+        ]
+    );
+}
+
+#[test]
+fn g41_1_takes_the_diameter_from_d_and_matches_rs274() {
+    // D8: radius 4. The G3 bump around (30, 0) has the tool outside (radius 14).
+    let m = moves(G41_1_BUMP);
+    assert_eq!(
+        rows(&m),
+        [
+            (Rapid, [0.0, -20.0, 0.0], None),
+            (Feed, [-4.0, 0.0, 0.0], None),
+            (Arc, [0.0, 4.0, 0.0], Some(([0.0, 0.0], true))),
+            (Feed, [20.0, 4.0, 0.0], None),
+            (Arc, [24.0, 0.0, 0.0], Some(([20.0, 0.0], true))),
+            (Arc, [36.0, 0.0, 0.0], Some(([30.0, 0.0], false))),
+            (Feed, [36.0, 26.0, 0.0], None),
+            (Feed, [4.0, 26.0, 0.0], None),
+            (Feed, [4.0, 0.0, 0.0], None),
+            (Feed, [-10.0, -10.0, 0.0], None),
+        ]
+    );
+}
+
+#[test]
+fn concave_corners_with_arcs_meet_where_the_offset_paths_cross_as_in_rs274() {
+    // Line (1, 0) into the R28.284 clockwise arc about (50, 20) turning 135 deg left; the
+    // tool (left of a clockwise arc) is outside it: offset radius 33.284. The offset line
+    // y = 5 meets that circle at x = 50 - sqrt(33.284² - 15²) = 20.2873, and the offset
+    // line x = 25 of the next move at y = 20 + sqrt(33.284² - 25²) = 41.9737.
+    assert_eq!(
+        rows(&moves(CONCAVE_LINE_ARC)),
+        [
+            (Rapid, [0.0, -20.0, 0.0], None),
+            (Feed, [-5.0, 0.0, 0.0], None),
+            (Arc, [0.0, 5.0, 0.0], Some(([0.0, 0.0], true))),
+            (Feed, [20.2873, 5.0, 0.0], None),
+            (Arc, [25.0, 41.9737, 0.0], Some(([50.0, 20.0], true))),
+            (Feed, [25.0, 55.0, 0.0], None),
+            (Feed, [0.0, 55.0, 0.0], None),
+            (Feed, [-10.0, 70.0, 0.0], None),
+        ]
+    );
+    // Two clockwise R10 arcs meeting at a 90 deg concave corner: offset circles of radius
+    // 15 about (10, 0) and (20, -10) cross at (24.3541, 4.3541) (rs274).
+    assert_eq!(
+        rows(&moves(CONCAVE_ARC_ARC)),
+        [
+            (Rapid, [-10.0, -20.0, 0.0], None),
+            (Feed, [-4.9443, 1.2918, 0.0], None),
+            (Arc, [24.3541, 4.3541, 0.0], Some(([10.0, 0.0], true))),
+            (Arc, [35.0, -10.0, 0.0], Some(([20.0, -10.0], true))),
+            (Feed, [35.0, -30.0, 0.0], None),
+            (Feed, [40.0, -40.0, 0.0], None),
+        ]
+    );
+}
+
+#[test]
+fn the_program_end_closes_compensation_like_g40() {
+    // No G40: the last move still ends 5 mm left of its direction (+X): (10, 5).
+    let m = moves("T1 M6\nG41 D1 G1 X0 Y0 F100\nX10\nM2\n");
+    assert_eq!(rows(&m).last().unwrap().1, [10.0, 5.0, 0.0]);
+    let m = moves("T1 M6\nG41 D1 G1 X0 Y0 F100\nX10\n");
+    assert_eq!(rows(&m).last().unwrap().1, [10.0, 5.0, 0.0]);
+}
+
+#[test]
+fn compensation_refuses_what_it_cannot_do() {
+    let err = |text: &str| {
+        let e = read_str_with(Path::new("t.ngc"), text, &opts())
+            .find_map(|m| m.err())
+            .unwrap_or_else(|| panic!("expected an error in {text:?}"));
+        match e {
+            Error::Syntax(s) => (s.line, s.message),
+            other => panic!("expected a syntax error, got {other:?}"),
+        }
+    };
+    let (line, msg) = err("T1 M6\nG0 X0 Y0\nG41 D1 G2 X20 Y0 I10 F100\n");
+    assert_eq!(line, 3);
+    assert!(msg.contains("entry move"), "{msg}");
+    // Tool radius 5 inside an R4 counter-clockwise arc with G41.
+    let (_, msg) = err("T1 M6\nG41 D1 G1 X0 Y0 F100\nX10\nG3 X18 Y0 I4 J0\n");
+    assert!(msg.contains("inside"), "{msg}");
+    let (_, msg) = err("G1 X0 D1 F100\n");
+    assert!(msg.contains("`D` with no code"), "{msg}");
+    let (_, msg) = err("T1 M6\nG41 D1\nG42 D1\n");
+    assert!(msg.contains("while it is on"), "{msg}");
+    let (_, msg) = err("T1 M6\nG41 D1 G1 X0 Y0 F100\nG81 X5 Y5 Z-1 R1\n");
+    assert!(msg.contains("canned cycle"), "{msg}");
+    let (_, msg) = err("T1 M6\nG41 D1 G1 X0 Y0 F100\nX10\nX0\n");
+    assert!(msg.contains("reverses"), "{msg}");
+    // rs274: "Straight feed in concave corner cannot be reached by the tool without
+    // gouging", at the block after the 3 mm step (the step's compensated line, from (15, 5)
+    // to (15, 3), would run backwards).
+    let (line, msg) = err("T1 M6\nG0 X-20 Y0\nG41 D1 G1 X0 Y0 F100\nX20\nY3\nX40\n");
+    assert_eq!(line, 6);
+    assert!(msg.contains("gouging"), "{msg}");
+}
+
+/// The same three programs through `rs274` itself when it is installed (CI installs it):
+/// every canonical end point and arc centre agrees within rs274's 4-decimal rounding.
+#[test]
+fn the_programs_agree_with_rs274_when_it_is_installed() {
+    let rs274 = Path::new("/usr/bin/rs274");
+    if !rs274.exists() {
+        if std::env::var_os("CI").is_some() {
+            panic!("rs274 is missing but CI is set: install linuxcnc-uspace");
+        }
+        eprintln!("skipped: /usr/bin/rs274 not installed (Debian package linuxcnc-uspace)");
+        return;
+    }
+    for (k, text) in [
+        G41_LINES,
+        G42_ARCS,
+        G41_1_BUMP,
+        CONCAVE_LINE_ARC,
+        CONCAVE_ARC_ARC,
+    ]
+    .iter()
+    .enumerate()
+    {
+        let dir = std::env::temp_dir().join(format!("ngc-cutter-comp-{}-{k}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("p.var"), "").unwrap();
+        // rs274 reads tool-table diameters in inches: 10 mm.
+        std::fs::write(dir.join("tool.tbl"), "T1 P1 D0.39370078740157477 Z0\n").unwrap();
+        std::fs::write(dir.join("p.ngc"), text).unwrap();
+        let status = std::process::Command::new(rs274)
+            .current_dir(&dir)
+            .env("HOME", &dir)
+            .args([
+                "-t", "tool.tbl", "-v", "p.var", "-n", "2", "-g", "p.ngc", "out.txt",
+            ])
+            .stdin(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .status()
+            .unwrap();
+        assert!(status.success(), "rs274 failed on program {k}");
+        let out = std::fs::read_to_string(dir.join("out.txt")).unwrap();
+        let mut theirs = Vec::new();
+        for line in out.lines() {
+            let Some(open) = line.find('(') else { continue };
+            let name = line[..open].split_whitespace().last().unwrap_or("");
+            let args: Vec<f64> = line[open + 1..line.len() - 1]
+                .split(',')
+                .filter_map(|a| a.trim().parse().ok())
+                .collect();
+            match name {
+                "STRAIGHT_TRAVERSE" | "STRAIGHT_FEED" => {
+                    theirs.push(([args[0], args[1], args[2]], None))
+                }
+                "ARC_FEED" => theirs.push((
+                    [args[0], args[1], args[5]],
+                    Some(([args[2], args[3]], args[4] < 0.0)),
+                )),
+                _ => {}
+            }
+        }
+        let ours = moves(text);
+        assert_eq!(ours.len(), theirs.len(), "program {k}: {out}");
+        for (m, (end, arc)) in ours.iter().zip(&theirs) {
+            for (a, want) in [Axis::X, Axis::Y, Axis::Z].iter().zip(end) {
+                assert!(
+                    (m.end[*a] - want).abs() < 1e-4,
+                    "program {k} line {}: {:?} vs {end:?}",
+                    m.line,
+                    m.end
+                );
+            }
+            match (m.motion, arc) {
+                (
+                    Motion::Arc {
+                        clockwise,
+                        center_mm,
+                        ..
+                    },
+                    Some((c, cw)),
+                ) => {
+                    assert_eq!(clockwise, *cw, "program {k} line {}", m.line);
+                    assert!(
+                        (center_mm[0] - c[0]).abs() < 1e-4 && (center_mm[1] - c[1]).abs() < 1e-4
+                    );
+                }
+                (Motion::Arc { .. }, None) | (_, Some(_)) => {
+                    panic!("program {k} line {}: arc mismatch", m.line)
+                }
+                _ => {}
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

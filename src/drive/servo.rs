@@ -520,7 +520,12 @@ impl AxisServo {
             (-regime.0 * self.friction_bound(v0), 0.0, 0)
         } else {
             let u = v0.abs() * exact.inv_stribeck;
-            let slope = 2.0 * exact.delta_friction * u * exact.inv_stribeck * (-(u * u)).exp();
+            // Beyond u² = 40 the substep model's g(v) is Fc exactly (see `stribeck_bound`).
+            let slope = if u * u > 40.0 {
+                0.0
+            } else {
+                2.0 * exact.delta_friction * u * exact.inv_stribeck * (-(u * u)).exp()
+            };
             let index = ((slope / exact.slope_step).round() as usize).min(SLOPE_STEPS);
             (-regime.0 * self.friction_bound(v0), slope, index)
         };
@@ -528,7 +533,7 @@ impl AxisServo {
         let map = &exact.maps[index];
         let y = map.apply(&x, s_new - s_old, f_ff, f0 - grid_slope * v0, regime.1);
         let dv = 2.0 * (y[3] - x[3]).abs().max(dv_guess);
-        if exact.slope_step > 0.0 {
+        if exact.slope_step > 0.0 && (v0.abs() - dv) * exact.inv_stribeck <= 40f64.sqrt() {
             // e_F = |c - cᵢ| Δv + ½ max|f''| Δv².
             let u_low = (v0.abs() - dv).max(0.0) * exact.inv_stribeck;
             let k = if u_low >= 1.23 {

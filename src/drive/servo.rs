@@ -509,7 +509,9 @@ impl AxisServo {
         ];
         // Velocity may change by about what the command's velocity does over the period.
         let dv_guess = ((s_new - s_old) * self.inv_t_ipo - self.v_ff).abs();
-        let Some(regime) = self.linear_regime(&x, dv_guess) else {
+        // The end-point check below asks for at least twice this margin at x: ask it now, so
+        // that x needs no second check unless the period's own velocity change is larger.
+        let Some(regime) = self.linear_regime(&x, 2.0 * dv_guess) else {
             return false;
         };
         let v0 = x[3];
@@ -547,7 +549,8 @@ impl AxisServo {
                 return false;
             }
         }
-        if self.linear_regime(&y, dv) != Some(regime) || self.linear_regime(&x, dv) != Some(regime)
+        if self.linear_regime(&y, dv) != Some(regime)
+            || (dv > 2.0 * dv_guess && self.linear_regime(&x, dv) != Some(regime))
         {
             return false;
         }

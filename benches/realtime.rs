@@ -11,7 +11,8 @@
 //! - `check` with collisions on at 1 ms sampling: the real-time factor, samples per second
 //!   and the geometric queries made.
 //!
-//! `MTSIM_BENCH_SMOKE=1` runs each simulate case once and skips the rest (a CI smoke run).
+//! `MTSIM_BENCH_SMOKE=1` runs each simulate case once and skips the rest (a CI smoke run);
+//! `MTSIM_BENCH_ONLY=off` runs only the simulate cases whose name contains `off`.
 //! It prints figures; it asserts nothing (timing is not a test).
 
 use std::path::{Path, PathBuf};
@@ -176,7 +177,12 @@ fn main() {
         ("36,000 segments, full trace", variant("fine", "", 36_000)),
     ];
     let mut full_rtf = 0.0;
-    for (name, path) in &cases {
+    // `MTSIM_BENCH_ONLY=off` runs only the cases whose name contains `off` (for profiling).
+    let only = std::env::var("MTSIM_BENCH_ONLY").unwrap_or_default();
+    for (name, path) in cases
+        .iter()
+        .filter(|(name, _)| name.contains(only.as_str()))
+    {
         let (sim_time, med, best) = simulate_rtf(path, &dir.join("out"), runs);
         let ratio = if name.starts_with("36,000") {
             format!("; 360/36,000-segment time ratio {:.2}", full_rtf / med)

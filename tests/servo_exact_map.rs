@@ -137,3 +137,39 @@ fn force_saturation_falls_back_to_substeps() {
         "fe {fe} mm, share {share}"
     );
 }
+
+/// A slow axis that never leaves its Stribeck zone, as Z on the 15/10 cone: `10 sin(ω t)` mm
+/// with a peak speed of 1.6 mm/s against the zone's `√40 · 0.5 = 3.2` mm/s, so the dry
+/// friction `Fc + (Fs - Fc) exp(-(v/vs)²)` changes with the speed all the time. The maps for a
+/// grid of friction slopes (linearised about each period's start speed) agree with the
+/// substeps within a nanometre and take most periods; near the reversals, where the table
+/// sticks, the substeps run.
+#[test]
+fn slow_axis_inside_its_stribeck_zone_agrees_within_a_nanometre() {
+    let friction = FrictionConfig {
+        coulomb_n: Some(200.0),
+        stribeck_velocity_mm_per_s: Some(0.5),
+        ..Default::default()
+    };
+    let drive = DriveConfig {
+        backlash_mm: Some(0.003),
+        ..Default::default()
+    };
+    let w = 0.16;
+    for (ff, closed) in [(0.0, false), (0.8, true)] {
+        let (worst, fe, share) = compare(
+            Axis::Z,
+            &cascade(ff, closed),
+            &drive,
+            &friction,
+            std::f64::consts::TAU / w,
+            |t| 10.0 * (w * t).sin(),
+        );
+        assert!(worst < 1e-6, "ff {ff}: {worst} mm apart (fe {fe} mm)");
+        assert!(
+            fe > 1e-4,
+            "ff {ff}: the test must load the axis, fe {fe} mm"
+        );
+        assert!(share > 0.8, "ff {ff}: map used in {share} of the periods");
+    }
+}

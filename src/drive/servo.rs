@@ -138,9 +138,9 @@ pub struct AxisServo {
     presliding: Option<Presliding>,
     /// The axis's lost motion at a reversal, mm or deg.
     reversal: ReversalValue,
-    /// The exact affine map of one interpolation period in the linear regime (cascade
+    /// The exact affine maps of one interpolation period in the linear regime (cascade
     /// model); None for the first-order model or when switched off.
-    exact: Option<Box<PeriodMap>>,
+    exact: Option<Box<ExactMaps>>,
     /// Interpolation periods advanced by the affine map, and by substeps.
     periods_exact: u64,
     periods_substepped: u64,
@@ -153,25 +153,63 @@ const N_STATE: usize = 7;
 /// the state (positions relative to the previous setpoint `s_{k-1}`):
 ///
 /// ```text
-/// x⁺ = M x + b_Δs Δs + b_ff F_ff + b_fr F_fr + b_off off
+/// x⁺ = M(c) x + b_Δs Δs + b_ff F_ff + b_fr F_fr + b_off off
 /// ```
 ///
-/// with `Δs = s_k - s_{k-1}`, `F_ff = k_aff m_tot a_ff`, the table friction `F_fr` held
-/// constant (`-Fc sign(v_t)` while the table slips faster than the Stribeck zone, 0 without
-/// dry friction) and the spring's contact offset `off` (`±b/2` while one side of the
-/// backlash is in contact, 0 without backlash). Inside that regime the substep model is
-/// linear in `(x, Δs, F_ff, F_fr, off)`, so its period map *is* this affine map: the columns
-/// are the substep model run once on each unit vector (see [`AxisServo::linear_period`]).
-/// The result equals the substeps up to rounding, at one 7×7 product per period instead of
-/// `n_servo · substeps` steps.
+/// with `Δs = s_k - s_{k-1}`, `F_ff = k_aff m_tot a_ff`, the table's dry friction affine in
+/// its velocity, `F_fr + c v_t` (see [`ExactMaps`]; `F_fr = -Fc sign(v_t)`, `c = 0` while the
+/// table slips faster than the Stribeck zone, both 0 without dry friction) and the spring's
+/// contact offset `off` (`±b/2` while one side of the backlash is in contact, 0 without
+/// backlash). Inside that regime the substep model is linear in `(x, Δs, F_ff, F_fr, off)`,
+/// so its period map *is* this affine map: the columns are the substep model run once on
+/// each unit vector (see [`AxisServo::linear_period`]). The result equals the substeps up to
+/// rounding, at one 7×7 product per period instead of `n_servo · substeps` steps.
 #[derive(Clone, Debug)]
 struct PeriodMap {
-    m: [[f64; N_STATE]; N_STATE],
-    ds: [f64; N_STATE],
-    f_ff: [f64; N_STATE],
-    friction: [f64; N_STATE],
-    offset: [f64; N_STATE],
+    /// Columns of `[M | b_Δs | b_ff | b_fr | b_off]`, each padded to 8 so that the product
+    /// is a sum of whole-column vector operations.
+    cols: [[f64; 8]; N_INPUT],
 }
+
+/// Inputs of [`PeriodMap`]: the state, `Δs`, `F_ff`, `F_fr`, `off`.
+const N_INPUT: usize = N_STATE + 4;
+
+/// The period maps of one axis for a grid of friction slopes, so that the map also applies
+/// while the table slips *inside* its Stribeck zone, where the dry friction
+/// `f(v) = -sign(v) g(|v|)` is a smooth function of the table velocity:
+///
+/// ```text
+/// f(v) = f(v₀) + c (v - v₀) + ½ f''(ξ) (v - v₀)²,   c = f'(v₀) = 2 (Fs - Fc) |v₀| / vs² exp(-(v₀/vs)²)
+/// ```
+///
+/// about the velocity `v₀` at the start of the period. The substep model evaluates `f` at each
+/// substep's start velocity; the map with slope `cᵢ` (the grid point nearest `c`, `0 ≤ c ≤
+/// c_max = √2 (Fs - Fc) e^{-1/2} / vs`) evaluates `f(v₀) + cᵢ (v - v₀)` instead. The friction
+/// force differs by at most
+///
+/// ```text
+/// e_F = |c - cᵢ| Δv + ½ max|f''| Δv²,   |f''| ≤ (Fs - Fc) / vs² · k(u),  k = max|(4u² - 2) e^{-u²}|
+/// ```
+///
+/// over the period, with `Δv` the largest velocity change in it (bounded by twice what the
+/// period's end points and the command's velocity change show, `k = 2` near rest and
+/// `(4u² - 2) e^{-u²}` for `u = |v|/vs ≥ 1.23`, where it falls). A period takes the map only if
+/// `e_F ≤ 10⁻⁵ Fs`; a force error that small moves a loaded axis by picometres. Without a
+/// Stribeck zone (`vs = 0` or `Fs = Fc`) the grid is the single slope 0 and the map is exact.
+#[derive(Clone, Debug)]
+struct ExactMaps {
+    maps: Vec<PeriodMap>,
+    /// Grid spacing of the slopes, N/(m/s) or N m/(rad/s) (0 with a single map).
+    slope_step: f64,
+    /// `Fs - Fc` and `1 / vs` (0 without a Stribeck zone).
+    delta_friction: f64,
+    inv_stribeck: f64,
+    /// Accepted friction force error, N or N m.
+    tolerance: f64,
+}
+
+/// Slope grid intervals of [`ExactMaps`].
+const SLOPE_STEPS: usize = 64;
 
 impl PeriodMap {
     #[inline]
@@ -183,19 +221,16 @@ impl PeriodMap {
         friction: f64,
         offset: f64,
     ) -> [f64; N_STATE] {
-        let mut out = [0.0; N_STATE];
-        for (i, o) in out.iter_mut().enumerate() {
-            let row = &self.m[i];
-            let mut acc = self.ds[i] * ds
-                + self.f_ff[i] * f_ff
-                + self.friction[i] * friction
-                + self.offset[i] * offset;
-            for j in 0..N_STATE {
-                acc += row[j] * x[j];
+        let input = [
+            x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff, friction, offset,
+        ];
+        let mut acc = [0.0; 8];
+        for (col, &u) in self.cols.iter().zip(&input) {
+            for (a, c) in acc.iter_mut().zip(col) {
+                *a += c * u;
             }
-            *o = acc;
         }
-        out
+        [acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]]
     }
 }
 
@@ -320,8 +355,35 @@ impl AxisServo {
     /// Switches the exact affine period map of the linear regime on (the default) or off
     /// (every period by substeps, the reference the map is tested against).
     pub fn with_exact_map(mut self, on: bool) -> AxisServo {
-        self.exact = (on && self.model == Model::Cascade).then(|| Box::new(self.period_map()));
+        self.exact = (on && self.model == Model::Cascade).then(|| Box::new(self.exact_maps()));
         self
+    }
+
+    /// The period maps over the slope grid of [`ExactMaps`].
+    fn exact_maps(&self) -> ExactMaps {
+        let delta = self.static_friction - self.coulomb;
+        let stribeck_zone =
+            self.presliding.is_none() && self.coulomb > 0.0 && delta > 0.0 && self.stribeck > 0.0;
+        if !stribeck_zone {
+            return ExactMaps {
+                maps: vec![self.period_map(0.0)],
+                slope_step: 0.0,
+                delta_friction: 0.0,
+                inv_stribeck: 0.0,
+                tolerance: 0.0,
+            };
+        }
+        let c_max = std::f64::consts::SQRT_2 * delta * (-0.5f64).exp() / self.stribeck;
+        let step = c_max / SLOPE_STEPS as f64;
+        ExactMaps {
+            maps: (0..=SLOPE_STEPS)
+                .map(|i| self.period_map(i as f64 * step))
+                .collect(),
+            slope_step: step,
+            delta_friction: delta,
+            inv_stribeck: 1.0 / self.stribeck,
+            tolerance: 1e-5 * self.static_friction,
+        }
     }
 
     /// Interpolation periods advanced so far by the exact map and by substeps.
@@ -329,29 +391,27 @@ impl AxisServo {
         (self.periods_exact, self.periods_substepped)
     }
 
-    /// Builds [`PeriodMap`] by running [`AxisServo::linear_period`] on each unit input.
-    fn period_map(&self) -> PeriodMap {
-        let zero = [0.0; N_STATE];
-        let mut m = [[0.0; N_STATE]; N_STATE];
-        for j in 0..N_STATE {
-            let mut e = zero;
-            e[j] = 1.0;
-            let col = self.linear_period(e, 0.0, 0.0, 0.0, 0.0);
-            for i in 0..N_STATE {
-                m[i][j] = col[i];
+    /// Builds [`PeriodMap`] for friction slope `slope` by running
+    /// [`AxisServo::linear_period`] on each unit input.
+    fn period_map(&self, slope: f64) -> PeriodMap {
+        let mut cols = [[0.0; 8]; N_INPUT];
+        for (j, col) in cols.iter_mut().enumerate() {
+            let mut x = [0.0; N_STATE];
+            let mut u = [0.0; 4];
+            if j < N_STATE {
+                x[j] = 1.0;
+            } else {
+                u[j - N_STATE] = 1.0;
             }
+            let y = self.linear_period(x, u[0], u[1], u[2], u[3], slope);
+            col[..N_STATE].copy_from_slice(&y);
         }
-        PeriodMap {
-            m,
-            ds: self.linear_period(zero, 1.0, 0.0, 0.0, 0.0),
-            f_ff: self.linear_period(zero, 0.0, 1.0, 0.0, 0.0),
-            friction: self.linear_period(zero, 0.0, 0.0, 1.0, 0.0),
-            offset: self.linear_period(zero, 0.0, 0.0, 0.0, 1.0),
-        }
+        PeriodMap { cols }
     }
 
     /// The cascade model over one interpolation period with its nonlinearities frozen: no
-    /// force limit, table friction the constant `friction`, the spring `k (d - offset) +
+    /// force limit, table friction `friction + slope v_t` (at each substep's start
+    /// velocity, as the substep model evaluates it), the spring `k (d - offset) +
     /// c Δv` without its contact clamp. Positions relative to `s_{k-1}`. The same arithmetic
     /// as [`AxisServo::step_cascade`] and [`AxisServo::substep`] in the regime they agree.
     fn linear_period(
@@ -361,6 +421,7 @@ impl AxisServo {
         f_ff: f64,
         friction: f64,
         offset: f64,
+        slope: f64,
     ) -> [f64; N_STATE] {
         let [mut x_m, mut v_m, mut x_t, mut v_t, mut force, mut integral, mut x_m_tick] = x;
         let n = self.n_servo as f64;
@@ -378,7 +439,8 @@ impl AxisServo {
                 let f_spring = self.stiffness * (x_m - x_t - offset) + self.damping * (v_m - v_t);
                 force += (f_cmd - force) * self.current_alpha;
                 v_m += (force - f_spring) * self.h_over_mm;
-                v_t = (self.mt * v_t + self.h * (f_spring + friction)) * self.inv_mt_plus_h_fv;
+                v_t = (self.mt * v_t + self.h * (f_spring + (friction + slope * v_t)))
+                    * self.inv_mt_plus_h_fv;
                 x_m += self.h * v_m;
                 x_t += self.h * v_t;
             }
@@ -386,9 +448,9 @@ impl AxisServo {
         [x_m, v_m, x_t, v_t, force, integral, x_m_tick]
     }
 
-    /// The frozen friction force and contact offset of the linear regime the state is in,
-    /// or None (near rest, in the Stribeck zone, inside the backlash gap, near the force
-    /// limit). `dv_margin` is the velocity change the period may bring.
+    /// The direction of slip (0 without dry friction) and the contact offset of the linear
+    /// regime the state is in, or None (near rest or sticking, inside the backlash gap, near
+    /// the force limit). `dv_margin` is the velocity change the period may bring.
     fn linear_regime(&self, x: &[f64; N_STATE], dv_margin: f64) -> Option<(f64, f64)> {
         if self.presliding.is_some() {
             return None; // the bristle has its own state
@@ -410,28 +472,30 @@ impl AxisServo {
         } else {
             0.0
         };
-        let friction = if self.coulomb == 0.0 && self.static_friction == 0.0 {
+        let side = if self.coulomb == 0.0 && self.static_friction == 0.0 {
             0.0
         } else {
-            // Slipping, outside the Stribeck zone (g(v) = Fc exactly), by a margin.
-            let zone = self.stribeck * 40f64.sqrt();
-            if v_t.abs() <= zone + dv_margin || v_t == 0.0 {
+            // Slipping, clear of rest by the margin, friction at its bound against the motion.
+            if v_t.abs() <= dv_margin || v_t == 0.0 {
                 return None;
             }
             let f_spring = self.stiffness * (d - offset) + self.damping * (v_m - v_t);
             let side = v_t.signum();
-            if side * (self.mt_over_h * v_t + f_spring) <= self.coulomb {
+            if side * (self.mt_over_h * v_t + f_spring)
+                <= self.friction_bound(v_t) + self.mt_over_h * dv_margin
+            {
                 return None;
             }
-            -side * self.coulomb
+            side
         };
-        Some((friction, offset))
+        Some((side, offset))
     }
 
-    /// One period by the exact map when the state is in a linear regime at both its ends;
-    /// false (state untouched) otherwise.
+    /// One period by the exact map when the state is in a linear regime at both its ends and
+    /// the friction's linearisation error is within tolerance ([`ExactMaps`]); false (state
+    /// untouched) otherwise.
     fn try_exact_period(&mut self, s_old: f64, s_new: f64, f_ff: f64) -> bool {
-        let Some(map) = self.exact.as_deref() else {
+        let Some(exact) = self.exact.as_deref() else {
             return false;
         };
         let x = [
@@ -445,13 +509,48 @@ impl AxisServo {
         ];
         // Velocity may change by about what the command's velocity does over the period.
         let dv_guess = ((s_new - s_old) * self.inv_t_ipo - self.v_ff).abs();
-        let Some((friction, offset)) = self.linear_regime(&x, dv_guess) else {
+        // The end-point check below asks for at least twice this margin at x: ask it now, so
+        // that x needs no second check unless the period's own velocity change is larger.
+        let Some(regime) = self.linear_regime(&x, 2.0 * dv_guess) else {
             return false;
         };
-        let y = map.apply(&x, s_new - s_old, f_ff, friction, offset);
-        let dv = (y[3] - x[3]).abs().max(dv_guess);
-        if self.linear_regime(&y, dv) != Some((friction, offset))
-            || self.linear_regime(&x, dv) != Some((friction, offset))
+        let v0 = x[3];
+        // Friction at v0 and its slope there (0 outside a Stribeck zone), the grid slope.
+        let (f0, slope, index) = if regime.0 == 0.0 {
+            (0.0, 0.0, 0)
+        } else if exact.slope_step == 0.0 {
+            (-regime.0 * self.friction_bound(v0), 0.0, 0)
+        } else {
+            let u = v0.abs() * exact.inv_stribeck;
+            // Beyond u² = 40 the substep model's g(v) is Fc exactly (see `stribeck_bound`).
+            let slope = if u * u > 40.0 {
+                0.0
+            } else {
+                2.0 * exact.delta_friction * u * exact.inv_stribeck * (-(u * u)).exp()
+            };
+            let index = ((slope / exact.slope_step).round() as usize).min(SLOPE_STEPS);
+            (-regime.0 * self.friction_bound(v0), slope, index)
+        };
+        let grid_slope = index as f64 * exact.slope_step;
+        let map = &exact.maps[index];
+        let y = map.apply(&x, s_new - s_old, f_ff, f0 - grid_slope * v0, regime.1);
+        let dv = 2.0 * (y[3] - x[3]).abs().max(dv_guess);
+        if exact.slope_step > 0.0 && (v0.abs() - dv) * exact.inv_stribeck <= 40f64.sqrt() {
+            // e_F = |c - cᵢ| Δv + ½ max|f''| Δv².
+            let u_low = (v0.abs() - dv).max(0.0) * exact.inv_stribeck;
+            let k = if u_low >= 1.23 {
+                (4.0 * u_low * u_low - 2.0) * (-(u_low * u_low)).exp()
+            } else {
+                2.0
+            };
+            let curvature = exact.delta_friction * exact.inv_stribeck * exact.inv_stribeck * k;
+            let error = (slope - grid_slope).abs() * dv + 0.5 * curvature * dv * dv;
+            if error > exact.tolerance {
+                return false;
+            }
+        }
+        if self.linear_regime(&y, dv) != Some(regime)
+            || (dv > 2.0 * dv_guess && self.linear_regime(&x, dv) != Some(regime))
         {
             return false;
         }

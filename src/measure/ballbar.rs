@@ -570,16 +570,24 @@ struct Step {
 fn fit_shape(v: &[f64], step_indices: &[usize]) -> (Vec<f64>, Vec<f64>) {
     let n = v.len();
     let p = 1 + 2 * SMOOTH_ORDER + step_indices.len();
+    // cos and sin of 2π m / n, once per m rather than once per harmonic and bin.
+    let trig: Vec<(f64, f64)> = (0..n)
+        .map(|m| {
+            let angle = 2.0 * std::f64::consts::PI * m as f64 / n as f64;
+            let (sin, cos) = angle.sin_cos();
+            (cos, sin)
+        })
+        .collect();
     let column = |i: usize, j: usize| -> f64 {
         if j == 0 {
             1.0
         } else if j <= 2 * SMOOTH_ORDER {
             let k = j.div_ceil(2);
-            let angle = 2.0 * std::f64::consts::PI * ((k * i) % n) as f64 / n as f64;
+            let (cos, sin) = trig[(k * i) % n];
             if j % 2 == 1 {
-                angle.cos()
+                cos
             } else {
-                angle.sin()
+                sin
             }
         } else {
             let k = step_indices[j - 1 - 2 * SMOOTH_ORDER];

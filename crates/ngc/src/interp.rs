@@ -716,7 +716,10 @@ impl Interp {
         self.unused_words(line, &g, &m, &get)?;
         let mut stop = Stop::None;
 
-        // 1. Units (so that F reads in them), feed mode, F, S.
+        // 1. Units, feed mode, F, S. LinuxCNC sets F before G20/G21 (its order of
+        // execution), so there `G20 F60` from metric is 60 mm/min; the Fanuc family reads
+        // F in the block's new units.
+        let scale_before_units = self.scale();
         for &(c, _) in g.iter() {
             if let GCode::Units(inch) = c {
                 self.inch = inch;
@@ -741,6 +744,7 @@ impl Interp {
             }
             self.feed = Some(match self.feed_mode {
                 FeedRead::InverseTime => f.value,
+                _ if self.dialect == Dialect::Linuxcnc => f.value * scale_before_units,
                 _ => f.value * self.scale(),
             });
             feed_word = Some(f);

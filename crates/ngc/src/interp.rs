@@ -1487,8 +1487,8 @@ impl Interp {
         let dwell_cycle = matches!(motion, Some(MotionMode::Cycle(820 | 860 | 890)));
         let g10 = has_g(&|c| matches!(c, GCode::NonModal(NonModal::G10)));
         let checks: [(char, bool, &str); 5] = [
-            ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, M62-M66 or M98"),
-            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || has_m(&[61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, M61 or M66-M68"),
+            ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, M19, M50-M53, M62-M66 or M98"),
+            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, M19, M61 or M66-M68"),
             ('L', g10 || cycle || has_m(&[66, 98]), "`L` with no code that uses it: expected L only with G10, a canned cycle, M66 or M98"),
             ('E', has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with M66-M68"),
             ('D', has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),

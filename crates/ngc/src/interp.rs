@@ -1842,6 +1842,17 @@ impl Interp {
             me.emit(queue, line_no, motion, *cur, t, exact);
             *cur = t;
         };
+        // The dwell at the hole bottom (G82, G86, G89): P seconds where the tool stands.
+        let dwell_at = |me: &mut Interp, queue: &mut VecDeque<Move>, at: AxisVec| {
+            me.emit(
+                queue,
+                line_no,
+                Motion::Dwell { seconds: dwell },
+                at,
+                at,
+                exact,
+            );
+        };
         let mut old = old_n;
         if old < r {
             go(
@@ -1870,15 +1881,7 @@ impl Interp {
                 }
                 820 | 860 => {
                     go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
-                    let end = cur;
-                    self.emit(
-                        queue,
-                        line_no,
-                        Motion::Dwell { seconds: dwell },
-                        end,
-                        end,
-                        exact,
-                    );
+                    dwell_at(self, queue, cur);
                     go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
                 }
                 830 | 730 => {
@@ -1912,15 +1915,7 @@ impl Interp {
                 _ => {
                     // G89
                     go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
-                    let end = cur;
-                    self.emit(
-                        queue,
-                        line_no,
-                        Motion::Dwell { seconds: dwell },
-                        end,
-                        end,
-                        exact,
-                    );
+                    dwell_at(self, queue, cur);
                     // LinuxCNC feeds straight back to the clearance plane (checked with rs274).
                     go(self, queue, &mut cur, Motion::Linear, pu, pv, clear);
                 }

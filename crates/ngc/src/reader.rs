@@ -6,12 +6,15 @@
 //!                └► lex (words, assignments) ─► interp (modal state) ─► Move queue
 //! ```
 //!
-//! A program file is read into memory once (jumps need it) and subroutine files are loaded
-//! once; moves are streamed, never collected, so memory does not grow with the number of
-//! moves.
+//! A program file is streamed line by line through a fixed buffer: jumps (loops, calls,
+//! GOTO) seek back to a byte offset, as LinuxCNC re-reads its file by offset, and the
+//! subroutine index keeps offsets, not text. Subroutine files are loaded once. Moves are
+//! streamed, never collected, so memory grows neither with the file nor with the moves.
 
 use std::collections::{HashMap, VecDeque};
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 
 use crate::axis::AxisVec;
 use crate::canon::Move;
@@ -67,22 +70,71 @@ pub fn read_str(path: &Path, text: &str, start: AxisVec) -> Moves {
     )
 }
 
-/// Streams the moves of the file at `path`.
+/// Streams the moves of the file at `path`, reading it line by line (memory does not grow
+/// with the file).
 pub fn read_file_with(path: &Path, options: &Options) -> Result<Moves> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Read {
+    let read_error = |source| Error::Read {
         path: path.to_path_buf(),
         source,
-    })?;
-    let text = match String::from_utf8(bytes) {
-        Ok(t) => t,
-        Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
     };
-    Ok(Moves::new(path, text, options))
+    let file = std::fs::File::open(path).map_err(read_error)?;
+    let len = file.metadata().map_err(read_error)?.len();
+    let source = Source::File(FileLines {
+        reader: BufReader::with_capacity(FILE_BUFFER_BYTES, file),
+        pos: 0,
+        len,
+    });
+    Ok(Moves::new(path, source, options))
 }
 
 /// Streams the moves of `text`, reported as the contents of `path`.
 pub fn read_str_with(path: &Path, text: &str, options: &Options) -> Moves {
-    Moves::new(path, text.to_string(), options)
+    Moves::new(path, Source::Text(text.into()), options)
+}
+
+/// Read buffer of a streamed program file, bytes.
+const FILE_BUFFER_BYTES: usize = 64 * 1024;
+
+/// The text of a program: in memory (a string, a subroutine file), or a file read line by
+/// line at byte offsets.
+enum Source {
+    Text(Rc<str>),
+    File(FileLines),
+}
+
+/// A program file read through a buffer; `pos` is the byte offset of the next unread byte.
+struct FileLines {
+    reader: BufReader<std::fs::File>,
+    pos: u64,
+    len: u64,
+}
+
+impl FileLines {
+    /// Reads the line at byte `offset` into `buf` (without its `\n` or `\r\n`; invalid
+    /// UTF-8 replaced); returns the bytes it takes in the file, 0 at the end.
+    fn read_line(&mut self, offset: usize, buf: &mut String) -> std::io::Result<usize> {
+        let offset = offset as u64;
+        if offset != self.pos {
+            // Within the buffer when jumping back a little (a loop), a real seek otherwise.
+            self.reader.seek_relative(offset as i64 - self.pos as i64)?;
+            self.pos = offset;
+        }
+        let mut bytes = std::mem::take(buf).into_bytes();
+        bytes.clear();
+        let n = self.reader.read_until(b'\n', &mut bytes)?;
+        self.pos += n as u64;
+        if bytes.last() == Some(&b'\n') {
+            bytes.pop();
+            if bytes.last() == Some(&b'\r') {
+                bytes.pop();
+            }
+        }
+        *buf = match String::from_utf8(bytes) {
+            Ok(s) => s,
+            Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
+        };
+        Ok(n)
+    }
 }
 
 /// A place in one of the loaded program texts.
@@ -97,7 +149,7 @@ struct Cursor {
 
 struct Program {
     path: PathBuf,
-    text: std::rc::Rc<str>,
+    source: Source,
     /// `o<name> sub` → the line after it; built on the first call that needs it.
     subs: Option<HashMap<String, Cursor>>,
 }
@@ -325,14 +377,18 @@ pub struct Moves {
     percent_seen: bool,
     language_checked: bool,
     notices: Vec<Notice>,
+    /// The current line of a streamed file.
+    buf: String,
+    /// A read error of a streamed file, reported by the next step.
+    io_error: Option<std::io::Error>,
 }
 
 impl Moves {
-    fn new(path: &Path, text: String, options: &Options) -> Moves {
+    fn new(path: &Path, source: Source, options: &Options) -> Moves {
         Moves {
             programs: vec![Program {
                 path: path.to_path_buf(),
-                text: text.into(),
+                source,
                 subs: None,
             }],
             cursor: Cursor {
@@ -355,6 +411,8 @@ impl Moves {
             percent_seen: false,
             language_checked: false,
             notices: Vec::new(),
+            buf: String::new(),
+            io_error: None,
         }
     }
 
@@ -364,18 +422,30 @@ impl Moves {
         &self.notices
     }
 
-    /// The line at `c`, and the cursor of the next line; `None` at the end of the text.
-    fn line_at(&self, c: Cursor) -> Option<(&str, Cursor)> {
-        let text = &self.programs[c.file].text;
-        if c.offset >= text.len() {
-            return None;
-        }
-        let rest = &text[c.offset..];
-        let (raw, len) = match rest.find('\n') {
-            Some(n) => (&rest[..n], n + 1),
-            None => (rest, rest.len()),
+    /// The line at `c`, and the cursor of the next line; `None` at the end of the text (or
+    /// on a read error, kept in `io_error`).
+    fn line_at(&mut self, c: Cursor) -> Option<(&str, Cursor)> {
+        let (line, len) = match &mut self.programs[c.file].source {
+            Source::Text(text) => {
+                if c.offset >= text.len() {
+                    return None;
+                }
+                let rest = &text[c.offset..];
+                let (raw, len) = match rest.bytes().position(|b| b == b'\n') {
+                    Some(n) => (&rest[..n], n + 1),
+                    None => (rest, rest.len()),
+                };
+                (raw.strip_suffix('\r').unwrap_or(raw), len)
+            }
+            Source::File(f) => match f.read_line(c.offset, &mut self.buf) {
+                Ok(0) => return None,
+                Ok(len) => (self.buf.as_str(), len),
+                Err(e) => {
+                    self.io_error = Some(e);
+                    return None;
+                }
+            },
         };
-        let line = raw.strip_suffix('\r').unwrap_or(raw);
         Some((
             line,
             Cursor {
@@ -386,10 +456,50 @@ impl Moves {
         ))
     }
 
-    fn error_at(&self, c: Cursor, err: LineError) -> Error {
+    /// The whole text of program `file` and the byte offset of 1-based `line` in it, for an
+    /// error message; a streamed file is read again (only on this error path). If it cannot
+    /// be, the text is `line_text` alone at its own line number.
+    fn error_text(&self, c: Cursor, line_text: &str) -> (String, usize) {
         let program = &self.programs[c.file];
-        let text = program.text.to_string();
-        let start = c.offset.min(text.len());
+        match &program.source {
+            Source::Text(text) => (text.to_string(), c.offset.min(text.len())),
+            Source::File(_) => match std::fs::read(&program.path) {
+                Ok(bytes) => {
+                    let text = match String::from_utf8(bytes) {
+                        Ok(t) => t,
+                        Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
+                    };
+                    let start = if c.line <= 1 {
+                        0
+                    } else {
+                        text.bytes()
+                            .enumerate()
+                            .filter(|&(_, b)| b == b'\n')
+                            .nth(c.line - 2)
+                            .map_or(text.len(), |(i, _)| i + 1)
+                    };
+                    (text, start)
+                }
+                Err(_) => {
+                    let mut text = "\n".repeat(c.line.saturating_sub(1));
+                    let start = text.len();
+                    text.push_str(line_text);
+                    (text, start)
+                }
+            },
+        }
+    }
+
+    fn error_at(&self, c: Cursor, err: LineError, line_text: &str) -> Error {
+        let (text, start) = self.error_text(c, line_text);
+        self.syntax_in(c.file, &text, start, err)
+    }
+
+    /// A syntax error at `err.span` of the line starting at byte `start` of `text`, the text
+    /// of program `file`.
+    fn syntax_in(&self, file: usize, text: &str, start: usize, err: LineError) -> Error {
+        let program = &self.programs[file];
+        let text = text.to_string();
         let mut span = start + err.span.start..start + err.span.end;
         span.end = span.end.min(text.len());
         span.start = span.start.min(span.end);
@@ -534,7 +644,7 @@ impl Moves {
                     let text = String::from_utf8_lossy(&bytes).into_owned();
                     self.programs.push(Program {
                         path,
-                        text: text.into(),
+                        source: Source::Text(text.into()),
                         subs: None,
                     });
                     let file = self.programs.len() - 1;
@@ -1065,8 +1175,26 @@ impl Moves {
 
     /// Refuses a program written in another control's language: Heidenhain conversational
     /// (`BEGIN PGM`) or Siemens Sinumerik (`TRAORI`, `CYCLE800`), before any move.
-    fn foreign_language(&self) -> Option<Error> {
-        let text = &self.programs[0].text;
+    fn foreign_language(&mut self) -> Option<Error> {
+        // A cheap screen first, so that a streamed file is read whole only when it fails.
+        let suspect = match &self.programs[0].source {
+            Source::Text(text) => may_be_foreign(text.as_bytes()) || self.first_line_heidenhain(),
+            Source::File(_) => {
+                self.first_line_heidenhain()
+                    || file_may_be_foreign(&self.programs[0].path).unwrap_or(false)
+            }
+        };
+        if !suspect {
+            return None;
+        }
+        let text: Rc<str> = match &self.programs[0].source {
+            Source::Text(text) => Rc::clone(text),
+            Source::File(_) => {
+                let bytes = std::fs::read(&self.programs[0].path).ok()?;
+                String::from_utf8_lossy(&bytes).into()
+            }
+        };
+        let text = &text;
         let first = text.lines().position(|l| !l.trim().is_empty())?;
         let line = text.lines().nth(first)?;
         let start = text.lines().take(first).map(|l| l.len() + 1).sum::<usize>();
@@ -1078,7 +1206,7 @@ impl Moves {
         let trimmed = line.trim_start();
         let at = line.len() - trimmed.len();
         if trimmed.to_ascii_uppercase().starts_with("BEGIN PGM") {
-            return Some(self.error_at(c, LineError::new(at..line.len(), "this is a Heidenhain conversational (Klartext) program: expected G-code in the RS274/NGC, Fanuc or Haas language", "Heidenhain conversational").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
+            return Some(self.syntax_in(c.file, text, c.offset, LineError::new(at..line.len(), "this is a Heidenhain conversational (Klartext) program: expected G-code in the RS274/NGC, Fanuc or Haas language", "Heidenhain conversational").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
         }
         for token in ["TRAORI", "traori", "Traori", "CYCLE800", "cycle800"] {
             if let Some(k) = text.find(token) {
@@ -1090,10 +1218,27 @@ impl Moves {
                     line: line_no,
                 };
                 let col = k - line_start;
-                return Some(self.error_at(c, LineError::new(col..col + token.len(), format!("`{token}` is Siemens Sinumerik: this program is in the Siemens language, expected G-code in the RS274/NGC, Fanuc or Haas language"), "Siemens Sinumerik").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
+                return Some(self.syntax_in(c.file, text, c.offset, LineError::new(col..col + token.len(), format!("`{token}` is Siemens Sinumerik: this program is in the Siemens language, expected G-code in the RS274/NGC, Fanuc or Haas language"), "Siemens Sinumerik").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
             }
         }
         None
+    }
+
+    /// The first line with more than blanks starts with `BEGIN PGM` (Heidenhain).
+    fn first_line_heidenhain(&mut self) -> bool {
+        let mut c = Cursor {
+            file: 0,
+            offset: 0,
+            line: 1,
+        };
+        while let Some((line, next)) = self.line_at(c) {
+            let t = line.trim();
+            if !t.is_empty() {
+                return t.len() >= 9 && t.as_bytes()[..9].eq_ignore_ascii_case(b"BEGIN PGM");
+            }
+            c = next;
+        }
+        false
     }
 
     /// Reads on until a move is queued, the program ends, or an error.
@@ -1105,9 +1250,17 @@ impl Moves {
                 return Err(e);
             }
         }
-        let Some((line, next)) = self.line_at(self.cursor) else {
+        let here = self.cursor;
+        let Some((line, next)) = self.line_at(here) else {
+            if let Some(e) = self.io_error.take() {
+                self.finished = true;
+                return Err(Error::Read {
+                    path: self.programs[here.file].path.clone(),
+                    source: e,
+                });
+            }
             if let Some(f) = self.frames.last() {
-                if self.programs[f.start.file].text.is_empty() || f.start.file != 0 {
+                if self.programs[f.start.file].is_empty() || f.start.file != 0 {
                     // A Fanuc subprogram file without M99 returns at its end.
                     if self.dialect.is_fanuc_family() && self.ret(None) {
                         return Ok(());
@@ -1117,17 +1270,35 @@ impl Moves {
             self.finished = true;
             return Ok(());
         };
-        let here = self.cursor;
         let len = line.len();
-        // Share the text (a reference count, no copy) so the line can be borrowed while the
-        // interpreter changes state.
-        let text = std::rc::Rc::clone(&self.programs[here.file].text);
-        let line = &text[here.offset..here.offset + len];
+        // Own the line while the interpreter changes state: share the text (a reference
+        // count, no copy), or take the file's line buffer (given back below).
+        let owner = match &self.programs[here.file].source {
+            Source::Text(text) => LineOwner::Shared(Rc::clone(text)),
+            Source::File(_) => LineOwner::Buffer(std::mem::take(&mut self.buf)),
+        };
+        let line = match &owner {
+            LineOwner::Shared(text) => &text[here.offset..here.offset + len],
+            LineOwner::Buffer(buf) => buf.as_str(),
+        };
         self.cursor = next;
-        self.line(line, here, next).map_err(|e| {
+        let result = self.line(line, here, next).map_err(|e| {
             self.finished = true;
-            self.error_at(here, e)
-        })
+            self.error_at(here, e, line)
+        });
+        if let LineOwner::Buffer(buf) = owner {
+            self.buf = buf;
+        }
+        if result.is_ok() {
+            if let Some(e) = self.io_error.take() {
+                self.finished = true;
+                return Err(Error::Read {
+                    path: self.programs[here.file].path.clone(),
+                    source: e,
+                });
+            }
+        }
+        result
     }
 
     fn line(&mut self, line: &str, here: Cursor, next: Cursor) -> LineResult<()> {
@@ -1215,6 +1386,69 @@ impl Moves {
                 Ok(())
             }
         }
+    }
+}
+
+/// The line being interpreted, owned apart from the reader's state.
+enum LineOwner {
+    Shared(Rc<str>),
+    Buffer(String),
+}
+
+impl Program {
+    fn is_empty(&self) -> bool {
+        match &self.source {
+            Source::Text(text) => text.is_empty(),
+            Source::File(f) => f.len == 0,
+        }
+    }
+}
+
+/// Siemens Sinumerik words [`foreign_language`](Moves::foreign_language) refuses.
+const SIEMENS_TOKENS: [&str; 5] = ["TRAORI", "traori", "Traori", "CYCLE800", "cycle800"];
+
+/// True when `bytes` may hold a Siemens token: a screen that reads 32 bytes at a time
+/// (vectorised) and looks closer only where a block has a `T` or `C`.
+fn may_be_foreign(bytes: &[u8]) -> bool {
+    let mut k = 0;
+    for block in bytes.chunks(32) {
+        let any = block.iter().fold(false, |a, &b| {
+            let l = b | 0x20;
+            a | (l == b't') | (l == b'c')
+        });
+        if any {
+            for i in k..k + block.len() {
+                if SIEMENS_TOKENS
+                    .iter()
+                    .any(|t| bytes[i..].starts_with(t.as_bytes()))
+                {
+                    return true;
+                }
+            }
+        }
+        k += block.len();
+    }
+    false
+}
+
+/// [`may_be_foreign`] over a file, read in fixed chunks that overlap by a token's length.
+fn file_may_be_foreign(path: &Path) -> std::io::Result<bool> {
+    const KEEP: usize = 7;
+    let mut file = std::fs::File::open(path)?;
+    let mut buf = vec![0u8; FILE_BUFFER_BYTES + KEEP];
+    let mut kept = 0;
+    loop {
+        let n = file.read(&mut buf[kept..])?;
+        if n == 0 {
+            return Ok(false);
+        }
+        let end = kept + n;
+        if may_be_foreign(&buf[..end]) {
+            return Ok(true);
+        }
+        let keep = KEEP.min(end);
+        buf.copy_within(end - keep..end, 0);
+        kept = keep;
     }
 }
 

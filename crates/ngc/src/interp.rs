@@ -618,8 +618,8 @@ impl Interp {
                 return self.g65(line, words, *g65);
             }
         }
-        let mut g: Small<(GCode, Word), 16> = Small::new((GCode::Motion(None), Word::EMPTY));
-        let mut m: Small<(u32, Word), 16> = Small::new((0, Word::EMPTY));
+        let mut g: Small<(GCode, Word), 16> = Small::new();
+        let mut m: Small<(u32, Word), 16> = Small::new();
         if words.len() > 64 {
             let w = words[64];
             return Err(LineError::new(
@@ -628,8 +628,10 @@ impl Interp {
                 "too many words",
             ));
         }
-        let mut single: [Option<Word>; 26] = [None; 26];
-        for word in words {
+        // Per letter, the index in `words` of its word (`NONE`: not in this block).
+        const NONE: u8 = u8::MAX;
+        let mut single = [NONE; 26];
+        for (k, word) in words.iter().enumerate() {
             match word.letter {
                 'G' => {
                     let code = GCode::parse(word, line, dialect)?;
@@ -688,14 +690,18 @@ impl Interp {
                 }
                 letter => {
                     let slot = &mut single[(letter as u8 - b'A') as usize];
-                    if let Some(first) = slot {
+                    if let Some(first) = words.get(*slot as usize) {
                         return Err(LineError::new(word.span(), format!("repeated `{letter}` word (first `{}`): expected each of {EXPECTED_WORDS} at most once per block, apart from G and M", &line[first.span()]), "repeated word"));
                     }
-                    *slot = Some(*word);
+                    *slot = k as u8;
                 }
             }
         }
-        let get = |l: char| single[(l as u8 - b'A') as usize];
+        let get = |l: char| {
+            words
+                .get(single[(l as u8 - b'A') as usize] as usize)
+                .copied()
+        };
         for a in Axis::ALL {
             if let Some(w) = get(a.letter()) {
                 if !self.axes[a.index()] {
@@ -2241,16 +2247,17 @@ impl Interp {
     }
 }
 
-/// A vector of at most `N` copies, on the stack.
+/// A vector of at most `N` copies, on the stack. Its slots are not initialised until
+/// pushed: filling them cost more than the rest of a plain G01 block.
 struct Small<T: Copy, const N: usize> {
-    items: [T; N],
+    items: [std::mem::MaybeUninit<T>; N],
     len: usize,
 }
 
 impl<T: Copy, const N: usize> Small<T, N> {
-    fn new(fill: T) -> Self {
+    fn new() -> Self {
         Small {
-            items: [fill; N],
+            items: [const { std::mem::MaybeUninit::uninit() }; N],
             len: 0,
         }
     }
@@ -2259,7 +2266,7 @@ impl<T: Copy, const N: usize> Small<T, N> {
         if self.len == N {
             return false;
         }
-        self.items[self.len] = t;
+        self.items[self.len] = std::mem::MaybeUninit::new(t);
         self.len += 1;
         true
     }
@@ -2272,7 +2279,9 @@ impl<T: Copy, const N: usize> Small<T, N> {
 impl<T: Copy, const N: usize> std::ops::Deref for Small<T, N> {
     type Target = [T];
     fn deref(&self) -> &[T] {
-        &self.items[..self.len]
+        // SAFETY: `push` wrote items 0..len (and `remove` keeps them written), and
+        // `MaybeUninit<T>` has the layout of `T`.
+        unsafe { std::slice::from_raw_parts(self.items.as_ptr().cast::<T>(), self.len) }
     }
 }
 

@@ -93,6 +93,18 @@ pub fn is_blank(c: u8) -> bool {
 
 /// Splits a line into words and assignments, dropping comments.
 pub fn lex<'l>(line: &'l str, params: &Params, fanuc: bool) -> LineResult<Lexed<'l>> {
+    lex_with(line, params, fanuc, Vec::new())
+}
+
+/// [`lex`], with the words collected in `words` (cleared first): the reader hands the
+/// same buffer back for every block, so that a block costs no allocation.
+pub fn lex_with<'l>(
+    line: &'l str,
+    params: &Params,
+    fanuc: bool,
+    mut words: Vec<Word<'l>>,
+) -> LineResult<Lexed<'l>> {
+    words.clear();
     let bytes = line.as_bytes();
     let mut i = 0;
     while i < bytes.len() && is_blank(bytes[i]) {
@@ -105,7 +117,6 @@ pub fn lex<'l>(line: &'l str, params: &Params, fanuc: bool) -> LineResult<Lexed<
         // Block delete with the optional-block-skip switch on: the block is not executed.
         return Ok(Lexed::Nothing);
     }
-    let mut words = Vec::new();
     let mut assigns = Vec::new();
     while i < bytes.len() {
         let c = bytes[i];
@@ -205,6 +216,9 @@ pub fn char_at(line: &str, i: usize) -> (char, Range<usize>) {
 
 /// Reads the word whose letter is at byte `start`. Blanks between the letter and the number
 /// are allowed; the number is `[+-]digits[.digits]` with at least one digit, or a value.
+/// (Inlined: its result is large, and moving it through memory cost a store-forwarding
+/// stall per word.)
+#[inline(always)]
 fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> LineResult<Word<'l>> {
     let bytes = line.as_bytes();
     let letter = (bytes[start] as char).to_ascii_uppercase();
@@ -219,7 +233,7 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let number = &line[number_start..i];
     let span = start..if number.is_empty() { start + 1 } else { i };
     let text = &line[span.clone()];
-    if !"GMNOFSTXYZABCIJKRPQLHDE".contains(letter) {
+    if KNOWN_LETTERS >> (letter as u32 - 'A' as u32) & 1 == 0 {
         let why = match letter {
             'U' | 'V' | 'W' => {
                 " (secondary axes U V W are not supported; use G91 for incremental moves)"
@@ -251,6 +265,15 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
             value,
             number: "",
             span: (start, e.i),
+        });
+    }
+    // The common case, a plain decimal number, read and checked in one pass.
+    if let Some(value) = fast_decimal(number.as_bytes()) {
+        return Ok(Word {
+            letter,
+            value,
+            number,
+            span: (start, span.end),
         });
     }
     if !is_decimal(number) {
@@ -286,6 +309,63 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
         number,
         span: (start, span.end),
     })
+}
+
+/// Word letters (`A` = bit 0) that [`lex_word`] accepts.
+const KNOWN_LETTERS: u32 = letter_mask("GMNOFSTXYZABCIJKRPQLHDE");
+
+const fn letter_mask(letters: &str) -> u32 {
+    let b = letters.as_bytes();
+    let mut mask = 0;
+    let mut i = 0;
+    while i < b.len() {
+        mask |= 1 << (b[i] - b'A');
+        i += 1;
+    }
+    mask
+}
+
+/// Exact powers of ten, `10^k` for `k` ≤ 22 (the largest exactly representable in f64).
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// The value of a decimal `[+-]? digits* ( . digits* )?` (at least one digit), when it is
+/// quick to get exactly; `None` for anything else, which the caller reads the slow way.
+///
+/// With the digits as an integer `m` and `f` digits after the point, the value is
+/// `m / 10^f`. When `m ≤ 2^53` and `f ≤ 22`, both `m` and `10^f` are exact f64, and IEEE
+/// division rounds their exact quotient correctly (Clinger's fast path), so the result is
+/// the same f64 as `str::parse` gives: the correctly rounded value of the decimal.
+#[inline]
+pub fn fast_decimal(b: &[u8]) -> Option<f64> {
+    let (negative, digits) = match b.first() {
+        Some(b'-') => (true, &b[1..]),
+        Some(b'+') => (false, &b[1..]),
+        _ => (false, b),
+    };
+    if digits.is_empty() || digits.len() > 19 {
+        return None;
+    }
+    let mut m: u64 = 0;
+    let mut point = None;
+    for (k, &c) in digits.iter().enumerate() {
+        match c {
+            b'0'..=b'9' => m = m * 10 + (c - b'0') as u64,
+            b'.' if point.is_none() => point = Some(k),
+            _ => return None,
+        }
+    }
+    let fraction = match point {
+        Some(k) => digits.len() - k - 1,
+        None => 0,
+    };
+    if digits.len() == 1 && point.is_some() || m > 1 << 53 || fraction > 22 {
+        return None;
+    }
+    let v = m as f64 / POW10[fraction];
+    Some(if negative { -v } else { v })
 }
 
 /// `[+-]? digits* ( . digits* )?` with at least one digit.

@@ -167,7 +167,7 @@ fn table_row(r: &BlockRow) -> String {
 /// printed as the generator emits it: one revolution, counter-clockwise, with no lead.
 pub fn run(path: &Path, format: Format) -> Result<i32> {
     let scenario = Scenario::load(path)?;
-    let run = program::scenario_run(&scenario, Direction::Ccw, 0.0)?;
+    let run = program::scenario_run_unchecked(&scenario, Direction::Ccw)?;
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     // A closed pipe (`| head`) ends the output quietly.

@@ -422,14 +422,12 @@ fn cone_of(scenario: &Scenario, command: &str) -> Result<(ConeTest, NcOptions)> 
     }
 }
 
-/// Loads a scenario and, for a G-code file program, checks the file against the machine
-/// (motion present, no move beyond the travel envelope) before anything is sampled.
+/// Loads a scenario. A G-code file program is checked against the machine (motion
+/// present, no move beyond the travel envelope) as its moves stream into the run
+/// (`program::validate::checked`), not in a pass of its own; outputs are written only at
+/// the end, so a bad move near the end still leaves none.
 pub(crate) fn load_scenario(path: &std::path::Path) -> Result<Scenario> {
-    let scenario = Scenario::load(path)?;
-    if let Program::File { path: file, .. } = &scenario.program {
-        crate::program::validate::validate_file(file, &scenario.machine, &scenario.reader)?;
-    }
-    Ok(scenario)
+    Scenario::load(path)
 }
 
 /// A progress bar on stderr when it is a terminal; hidden otherwise (scripts, CI).

@@ -26,7 +26,9 @@ pub struct Run<'a> {
 
 /// The program a scenario runs in `direction`, with `lead_deg` of extra path before and after
 /// the measured revolution of a generated test. Generators feed their moves straight in; a
-/// file is read as it streams (and runs in the direction it was written).
+/// file is read as it streams (and runs in the direction it was written), checked against
+/// the machine as it streams ([`validate::checked`]: no motion or an absurd move is bad
+/// input).
 pub fn scenario_run(
     scenario: &Scenario,
     direction: Direction,
@@ -63,7 +65,23 @@ pub fn scenario_run(
                 .simulate
                 .measure_lines
                 .map(|[first, last]| MeasuredLines { first, last }),
-            moves: file::read_file(path, &scenario.reader)?,
+            moves: validate::checked(path, machine, file::read_file(path, &scenario.reader)?),
         },
     })
+}
+
+/// The program a scenario runs, as [`scenario_run`], with a file's moves as the interpreter
+/// gives them, unchecked against the machine (`mtsim blocks` prints them all).
+pub fn scenario_run_unchecked(scenario: &Scenario, direction: Direction) -> Result<Run<'static>> {
+    match &scenario.program {
+        Program::File { path, .. } => Ok(Run {
+            direction: Direction::Ccw,
+            measured: scenario
+                .simulate
+                .measure_lines
+                .map(|[first, last]| MeasuredLines { first, last }),
+            moves: file::read_file(path, &scenario.reader)?,
+        }),
+        _ => scenario_run(scenario, direction, 0.0),
+    }
 }

@@ -1,4 +1,4 @@
-//! A G-code file checked against the machine before anything is sampled.
+//! A G-code file checked against the machine as it streams, before a bad move is sampled.
 //!
 //! Two kinds of program cannot be simulated or checked meaningfully, and are bad input
 //! (exit code 2, with file:line:column):
@@ -11,9 +11,10 @@
 //! A target outside the travel but within the envelope's length is not bad input: it is
 //! a travel violation, which `check` and `simulate` report with exit code 1.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::file::read_file;
+use super::{Move, Moves};
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::Axis;
@@ -47,66 +48,109 @@ fn word_span(text: &str, line: usize, axis: Axis) -> std::ops::Range<usize> {
 }
 
 /// Checks the G-code file at `path`, read with the scenario's reader `options`, against
-/// `machine` (see the module doc).
+/// `machine` (see the module doc): the whole file, as [`checked`] streams it.
 pub fn validate_file(path: &Path, machine: &Machine, options: &ngc::Options) -> Result<()> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let mut moving = false;
-    for m in read_file(path, options)? {
-        let m = m?;
-        for &axis in machine.axes() {
-            let (from, to) = (m.start[axis], m.end[axis]);
+    for m in checked(path, machine, read_file(path, options)?) {
+        m?;
+    }
+    Ok(())
+}
+
+/// The moves of the G-code file at `path`, checked against `machine` as they stream (see
+/// the module doc): the first move that fails is an error in place of the move, and a
+/// stream that ends without motion ends with an error. Nothing is collected; the file's
+/// text is read again only to show an error.
+pub fn checked(path: &Path, machine: &Machine, moves: Moves<'static>) -> Moves<'static> {
+    let limits = machine
+        .axes()
+        .iter()
+        .map(|&axis| {
             let config = machine.axis(axis);
-            let unit = if axis.is_rotary() { "deg" } else { "mm" };
+            let envelope = if config.continuous {
+                360.0 * MAX_ROTARY_TURNS
+            } else {
+                config.max - config.min
+            };
+            (axis, envelope, config.min, config.max)
+        })
+        .collect();
+    Box::new(Checked {
+        path: path.to_path_buf(),
+        limits,
+        moves,
+        moving: false,
+        done: false,
+    })
+}
+
+/// The stream of [`checked`].
+struct Checked {
+    path: PathBuf,
+    /// Per machine axis: envelope (mm or deg), travel min and max.
+    limits: Vec<(Axis, f64, f64, f64)>,
+    moves: Moves<'static>,
+    moving: bool,
+    done: bool,
+}
+
+impl Checked {
+    /// The file's text, for an error message.
+    fn text(&self) -> String {
+        std::fs::read(&self.path)
+            .map(|b| String::from_utf8_lossy(&b).into_owned())
+            .unwrap_or_default()
+    }
+
+    fn check(&mut self, m: &Move) -> Result<()> {
+        for &(axis, envelope, min, max) in &self.limits {
+            let (from, to) = (m.start[axis], m.end[axis]);
+            let length = (to - from).abs();
+            if to.is_finite() && length <= envelope {
+                if length > 1e-9 {
+                    self.moving = true;
+                }
+                continue;
+            }
+            let text = self.text();
             let span = word_span(&text, m.line, axis);
             if !to.is_finite() {
                 return Err(Error::at(
-                    path,
+                    &self.path,
                     &text,
                     span,
                     format!("{axis} is not a finite number"),
                     "not finite",
                 ));
             }
-            let length = (to - from).abs();
-            let envelope = if config.continuous {
-                360.0 * MAX_ROTARY_TURNS
-            } else {
-                config.max - config.min
-            };
-            if length > envelope {
-                return Err(Error::at(
-                    path,
-                    &text,
-                    span,
-                    format!(
-                        "this move takes {axis} {} {unit} (from {} to {}), longer than the machine's \
-                         whole {axis} travel of {} {unit} ({} .. {})",
-                        fmt_len(length),
-                        fmt_len(from),
-                        fmt_len(to),
-                        envelope,
-                        config.min,
-                        config.max
-                    ),
-                    "beyond the travel envelope",
-                )
-                .with_help(format!(
-                    "expected {axis} within {} .. {} {unit}; check the units (G20 inch / G21 mm) and the digits",
-                    config.min, config.max
-                )));
-            }
-            if length > 1e-9 {
-                moving = true;
-            }
+            let unit = if axis.is_rotary() { "deg" } else { "mm" };
+            return Err(Error::at(
+                &self.path,
+                &text,
+                span,
+                format!(
+                    "this move takes {axis} {} {unit} (from {} to {}), longer than the machine's \
+                     whole {axis} travel of {} {unit} ({} .. {})",
+                    fmt_len(length),
+                    fmt_len(from),
+                    fmt_len(to),
+                    envelope,
+                    min,
+                    max
+                ),
+                "beyond the travel envelope",
+            )
+            .with_help(format!(
+                "expected {axis} within {min} .. {max} {unit}; check the units (G20 inch / G21 mm) and the digits"
+            )));
         }
+        Ok(())
     }
-    if !moving {
+
+    fn no_motion(&self) -> Error {
+        let text = self.text();
         let last = text.trim_end().len();
-        return Err(Error::at(
-            path,
+        Error::at(
+            &self.path,
             &text,
             0..last.min(text.find('\n').unwrap_or(last)),
             "the program has no motion: no G00, G01, G02 or G03 move changes an axis position",
@@ -114,9 +158,29 @@ pub fn validate_file(path: &Path, machine: &Machine, options: &ngc::Options) -> 
         )
         .with_help(
             "give the scenario a program with moves, or a [program.cone] / [program.circle] table",
-        ));
+        )
     }
-    Ok(())
+}
+
+impl Iterator for Checked {
+    type Item = Result<Move>;
+
+    fn next(&mut self) -> Option<Result<Move>> {
+        if self.done {
+            return None;
+        }
+        let item = match self.moves.next() {
+            Some(Ok(m)) => self.check(&m).map(|()| m),
+            Some(Err(e)) => Err(e),
+            None if self.moving => {
+                self.done = true;
+                return None;
+            }
+            None => Err(self.no_motion()),
+        };
+        self.done = item.is_err();
+        Some(item)
+    }
 }
 
 /// A length without hundreds of digits: 500, 1.0e308.

@@ -237,7 +237,11 @@ pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
             nc.feed_mm_min,
         )),
         Program::File { path, cone } => analyse_moves(
-            file::read_file(path, &scenario.reader)?,
+            crate::program::validate::checked(
+                path,
+                &scenario.machine,
+                file::read_file(path, &scenario.reader)?,
+            ),
             &scenario.machine,
             cone.map(|c| CircleFrame::of_cone(&c)).as_ref(),
         ),

@@ -1211,18 +1211,21 @@ impl Moves {
         if trimmed.to_ascii_uppercase().starts_with("BEGIN PGM") {
             return Some(self.syntax_in(c.file, text, c.offset, LineError::new(at..line.len(), "this is a Heidenhain conversational (Klartext) program: expected G-code in the RS274/NGC, Fanuc or Haas language", "Heidenhain conversational").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
         }
-        for token in ["TRAORI", "traori", "Traori", "CYCLE800", "cycle800"] {
-            if let Some(k) = text.find(token) {
-                let line_start = text[..k].rfind('\n').map_or(0, |n| n + 1);
-                let line_no = text[..line_start].matches('\n').count() + 1;
-                let c = Cursor {
-                    file: 0,
-                    offset: line_start,
-                    line: line_no,
-                };
-                let col = k - line_start;
-                return Some(self.syntax_in(c.file, text, c.offset, LineError::new(col..col + token.len(), format!("`{token}` is Siemens Sinumerik: this program is in the Siemens language, expected G-code in the RS274/NGC, Fanuc or Haas language"), "Siemens Sinumerik").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
-            }
+        // The first Siemens word in the file.
+        let first = SIEMENS_TOKENS
+            .iter()
+            .filter_map(|&t| text.find(t).map(|k| (k, t)))
+            .min();
+        if let Some((k, token)) = first {
+            let line_start = text[..k].rfind('\n').map_or(0, |n| n + 1);
+            let line_no = text[..line_start].matches('\n').count() + 1;
+            let c = Cursor {
+                file: 0,
+                offset: line_start,
+                line: line_no,
+            };
+            let col = k - line_start;
+            return Some(self.syntax_in(c.file, text, c.offset, LineError::new(col..col + token.len(), format!("`{token}` is Siemens Sinumerik: this program is in the Siemens language, expected G-code in the RS274/NGC, Fanuc or Haas language"), "Siemens Sinumerik").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
         }
         None
     }

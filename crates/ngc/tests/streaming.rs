@@ -175,6 +175,15 @@ fn a_siemens_word_far_down_a_file_is_refused_before_any_move() {
         }
         other => panic!("expected the Siemens refusal first, got {other:?}"),
     }
+    // The first Siemens word in the file is the one shown.
+    std::fs::write(&path, "G0 X1\nCYCLE800(0)\nG0 X2\nTRAORI\n").unwrap();
+    match read_file_with(&path, &Options::default()).unwrap().next() {
+        Some(Err(Error::Syntax(s))) => {
+            assert_eq!((s.line, s.column), (2, 1));
+            assert!(s.message.contains("`CYCLE800`"), "{}", s.message);
+        }
+        other => panic!("expected the Siemens refusal, got {other:?}"),
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

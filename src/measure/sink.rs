@@ -110,8 +110,13 @@ impl BallbarSink {
             return None;
         }
         let r = self.geometry.read(s);
-        self.run.push(r.theta_deg, r.deviation_um);
-        self.signature.push(r.theta_deg, r.nonlinear_um);
+        BallbarRun::push_pair(
+            &mut self.run,
+            &mut self.signature,
+            r.theta_deg,
+            r.deviation_um,
+            r.nonlinear_um,
+        );
         if self.sensitivity.wants(r.theta_deg) {
             let g = &self.geometry;
             let axes = g.kinematics.layout.axes();

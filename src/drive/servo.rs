@@ -187,8 +187,10 @@ struct Regime {
     /// Direction of slip (0 without dry friction) and contact offset of the spring, SI.
     side: f64,
     offset: f64,
+    /// Dry friction on the table: the margins below apply.
+    dry: bool,
     /// `|v_t|`, the push on the table against friction `sign(v_t) (m_t v_t / h + F_spring)`,
-    /// the friction bound `g(v_t)` and `m_t / h` (∞, ∞, 0, 0 without dry friction).
+    /// the friction bound `g(v_t)` and `m_t / h`.
     speed: f64,
     push: f64,
     bound: f64,
@@ -200,7 +202,8 @@ impl Regime {
     /// clear of rest and keeps slipping (`push > g + m_t dv / h`).
     #[inline]
     fn admits(&self, dv_margin: f64) -> bool {
-        !(self.speed <= dv_margin || self.push <= self.bound + self.mt_over_h * dv_margin)
+        !self.dry
+            || !(self.speed <= dv_margin || self.push <= self.bound + self.mt_over_h * dv_margin)
     }
 
     /// The same regime (the same map inputs).
@@ -253,6 +256,9 @@ struct ExactMaps {
     inv_stribeck: f64,
     /// Accepted friction force error, N or N m.
     tolerance: f64,
+    /// No dry friction, backlash or pre-sliding (a linear twin): the single map applies
+    /// whenever the force stays within half its limit at both ends of the period.
+    lti: bool,
 }
 
 /// Slope grid intervals of [`ExactMaps`].
@@ -440,6 +446,11 @@ impl AxisServo {
                 delta_friction: 0.0,
                 inv_stribeck: 0.0,
                 tolerance: 0.0,
+                // What `linear_regime` finds for such an axis: side 0 and offset 0 always.
+                lti: self.presliding.is_none()
+                    && !(self.half_backlash > 0.0)
+                    && self.coulomb == 0.0
+                    && self.static_friction == 0.0,
             };
         }
         let c_max = std::f64::consts::SQRT_2 * delta * (-0.5f64).exp() / self.stribeck;
@@ -450,6 +461,7 @@ impl AxisServo {
             delta_friction: delta,
             inv_stribeck: 1.0 / self.stribeck,
             tolerance: 1e-5 * self.static_friction,
+            lti: false,
         }
     }
 
@@ -519,6 +531,7 @@ impl AxisServo {
     /// gap, near the force limit): the direction of slip (0 without dry friction) and the
     /// contact offset, with what [`Regime::admits`] needs to tell whether the regime holds
     /// through a velocity change `dv_margin` of the period.
+    #[inline(always)]
     fn linear_regime(&self, x: &[f64; N_STATE]) -> Option<Regime> {
         if self.presliding.is_some() {
             return None; // the bristle has its own state
@@ -544,8 +557,9 @@ impl AxisServo {
             return Some(Regime {
                 side: 0.0,
                 offset,
-                speed: f64::INFINITY,
-                push: f64::INFINITY,
+                dry: false,
+                speed: 0.0,
+                push: 0.0,
                 bound: 0.0,
                 mt_over_h: 0.0,
             });
@@ -560,11 +574,47 @@ impl AxisServo {
         Some(Regime {
             side,
             offset,
+            dry: true,
             speed: v_t.abs(),
             push: side * (self.mt_over_h * v_t + f_spring),
             bound: self.friction_bound_cached(v_t),
             mt_over_h: self.mt_over_h,
         })
+    }
+
+    /// [`AxisServo::try_exact_period`] for an axis without dry friction and backlash: its
+    /// only regime condition is the force within half its limit at both ends (the same
+    /// decisions and the same arithmetic as the general path, without its friction terms).
+    #[inline]
+    fn try_lti_period(&mut self, s_old: f64, s_new: f64, f_ff: f64) -> bool {
+        let limit = 0.5 * self.force_limit;
+        if self.force.abs() > limit {
+            return false;
+        }
+        let Some(map) = self.exact.as_deref().and_then(|e| e.maps[0].get()) else {
+            return false;
+        };
+        let x = [
+            self.x_m - s_old,
+            self.v_m,
+            self.x_t - s_old,
+            self.v_t,
+            self.force,
+            self.integral,
+            self.x_m_tick - s_old,
+        ];
+        let y = map.apply(&x, s_new - s_old, f_ff, 0.0, 0.0);
+        if y[4].abs() > limit {
+            return false;
+        }
+        self.x_m = y[0] + s_old;
+        self.v_m = y[1];
+        self.x_t = y[2] + s_old;
+        self.v_t = y[3];
+        self.force = y[4];
+        self.integral = y[5];
+        self.x_m_tick = y[6] + s_old;
+        true
     }
 
     /// [`AxisServo::friction_bound`] through `bound_cache`.
@@ -586,6 +636,9 @@ impl AxisServo {
         let Some(exact) = self.exact.as_deref() else {
             return false;
         };
+        if exact.lti {
+            return self.try_lti_period(s_old, s_new, f_ff);
+        }
         let x = [
             self.x_m - s_old,
             self.v_m,

@@ -16,7 +16,7 @@ pub fn push_fixed(out: &mut String, v: f64, decimals: u32) {
 /// [`push_fixed`] into a byte buffer (ASCII), allocation-free once the buffer has room: the
 /// form the trace writer uses, one line buffer per row. The digits are written right to
 /// left into a small stack buffer, two per division by a constant, and appended at once.
-#[inline]
+#[inline(always)]
 pub fn push_fixed_bytes(out: &mut Vec<u8>, v: f64, decimals: u32) {
     const SCALE: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
     let d = decimals as usize;
@@ -40,9 +40,12 @@ pub fn push_fixed_bytes(out: &mut Vec<u8>, v: f64, decimals: u32) {
             (n / p, n % p)
         }
     };
-    // At most 16 integer digits (|scaled| < 9e15), the point, 9 decimals and the sign.
-    let mut buf = [b'0'; 32];
-    let mut at = buf.len();
+    // At most 16 integer digits (|scaled| < 9e15), the point, 9 decimals and the sign: 27
+    // bytes, right-aligned at FIELD_END; a fixed 32 bytes from the first digit are appended
+    // (a copy of known length, no library call) and the excess cut off again.
+    const FIELD_END: usize = 32;
+    let mut buf = [b'0'; 2 * FIELD_END];
+    let mut at = FIELD_END;
     // Right to left: the fraction (zero-padded to d digits), the point, the integer part.
     let mut left = d;
     while left >= 2 {
@@ -81,7 +84,10 @@ pub fn push_fixed_bytes(out: &mut Vec<u8>, v: f64, decimals: u32) {
         at -= 1;
         buf[at] = b'-';
     }
-    out.extend_from_slice(&buf[at..]);
+    let len = out.len() + (FIELD_END - at);
+    let field: &[u8; FIELD_END] = buf[at..at + FIELD_END].try_into().expect("32 bytes");
+    out.extend_from_slice(field);
+    out.truncate(len);
 }
 
 /// Pairs of decimal digits "00" to "99".

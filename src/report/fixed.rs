@@ -48,6 +48,18 @@ pub fn push_fixed_bytes(out: &mut Vec<u8>, v: f64, decimals: u32) {
     let mut at = FIELD_END;
     // Right to left: the fraction (zero-padded to d digits), the point, the integer part.
     let mut left = d;
+    // Four digits per division of the long dependency chain, their two pairs apart.
+    while left >= 4 {
+        let four = (frac % 10_000) as u32;
+        frac /= 10_000;
+        let (hi, lo) = (2 * (four / 100) as usize, 2 * (four % 100) as usize);
+        at -= 4;
+        buf[at] = PAIRS[hi];
+        buf[at + 1] = PAIRS[hi + 1];
+        buf[at + 2] = PAIRS[lo];
+        buf[at + 3] = PAIRS[lo + 1];
+        left -= 4;
+    }
     while left >= 2 {
         let r = 2 * (frac % 100) as usize;
         frac /= 100;

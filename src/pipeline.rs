@@ -165,7 +165,7 @@ pub fn run(
                 let state = drives.step(&sp.q, t)?;
                 let actual = position_errors.apply(&state.actual);
                 let twin = match linear.as_mut() {
-                    Some(d) => position_errors.apply_mean(&d.step(&sp.q, t)?.actual),
+                    Some(d) => position_errors.apply_mean(&d.step_actual(&sp.q, t)?),
                     None => actual,
                 };
                 let sample = Sample {
@@ -190,7 +190,7 @@ pub fn run(
                     let state = drives.step(&end.commanded, t)?;
                     let actual = position_errors.apply(&state.actual);
                     let twin = match linear.as_mut() {
-                        Some(d) => position_errors.apply_mean(&d.step(&end.commanded, t)?.actual),
+                        Some(d) => position_errors.apply_mean(&d.step_actual(&end.commanded, t)?),
                         None => actual,
                     };
                     let sample = Sample {

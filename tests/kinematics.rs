@@ -120,3 +120,37 @@ fn the_three_axis_layout_is_the_identity() {
     assert_eq!((q[Axis::X], q[Axis::Y], q[Axis::Z]), (1.5, -2.5, 3.5));
     assert_eq!(k.forward(&q), pose);
 }
+
+proptest! {
+    /// The ball bar's rotations near the commanded pose: sin and cos of `r + δ` from those of
+    /// `r` agree with `sin_cos` to a few ulp (|δ| up to 0.01 rad by the series, beyond it by
+    /// `sin_cos` itself), so the bar length moves by less than 1e-13 mm.
+    #[test]
+    fn sin_cos_near_a_reference_angle_match_sin_cos(r in -7.0f64..7.0, d in -0.02f64..0.02) {
+        let (s, c) = mtsim::kinematics::add_small_angle(r + d, r, r.sin_cos());
+        let (s_ref, c_ref) = (r + d).sin_cos();
+        prop_assert!((s - s_ref).abs() <= 1e-15, "sin: {s} vs {s_ref}");
+        prop_assert!((c - c_ref).abs() <= 1e-15, "cos: {c} vs {c_ref}");
+    }
+
+    /// The rotation from those sines and cosines is the table rotation at the pose.
+    #[test]
+    fn rotation_near_the_command_is_the_table_rotation(
+        a in -120.0f64..120.0, c in -720.0f64..720.0, da in -0.05f64..0.05, dc in -0.05f64..0.05
+    ) {
+        for layout in [Layout::TrtAc, Layout::TrtBc] {
+            let k = kin(layout);
+            let tilt = layout.tilt_axis().unwrap();
+            let mut q = AxisVec::ZERO;
+            q[tilt] = a;
+            q[Axis::C] = c;
+            let mut near = q;
+            near[tilt] += da;
+            near[Axis::C] += dc;
+            let at = k.rotary_sin_cos(&q);
+            let r = k.rotation_of(&k.rotary_sin_cos_near(&near, &q, &at));
+            let p = Vector3::new(100.0, -60.0, 200.0);
+            prop_assert!((r * p - k.table_rotation(&near) * p).norm() < 1e-12);
+        }
+    }
+}

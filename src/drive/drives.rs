@@ -63,11 +63,23 @@ impl Drives {
             settled: true,
         };
         for (servo, &a) in self.servos.iter_mut().zip(self.axes) {
-            let s = servo.step(setpoint[a], time_s)?;
-            state.actual[a] = s.actual;
-            state.following_error[a] = s.following_error;
-            state.settled &= s.following_error.abs() < 1e-4 && s.velocity.abs() < 1e-3;
+            servo.advance(setpoint[a], time_s)?;
+            let fe = servo.following_error();
+            state.actual[a] = servo.actual();
+            state.following_error[a] = fe;
+            state.settled &= fe.abs() < 1e-4 && servo.velocity().abs() < 1e-3;
         }
         Ok(state)
+    }
+
+    /// [`Drives::step`] for the actual positions alone (mm and deg), as the linear twins
+    /// need them.
+    pub fn step_actual(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<AxisVec> {
+        let mut actual = *setpoint;
+        for (servo, &a) in self.servos.iter_mut().zip(self.axes) {
+            servo.advance(setpoint[a], time_s)?;
+            actual[a] = servo.actual();
+        }
+        Ok(actual)
     }
 }

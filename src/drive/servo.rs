@@ -59,6 +59,7 @@
 //! following error (of table and motor) within `following_error_limit_mm`/`_deg`; otherwise
 //! [`AxisServo::step`] returns [`Error::Diverged`]. No NaN ever leaves this module.
 
+use std::cell::{Cell, OnceCell};
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -141,6 +142,12 @@ pub struct AxisServo {
     /// The exact affine maps of one interpolation period in the linear regime (cascade
     /// model); None for the first-order model or when switched off.
     exact: Option<Box<ExactMaps>>,
+    /// The last friction bound the regime check computed, `(v, g(v))`: the check at a
+    /// period's end and the one at the next period's start see the same table velocity, so
+    /// `g` (an `exp`) is evaluated once for both.
+    bound_cache: Cell<(f64, f64)>,
+    /// Table velocity after the last period, SI (first-order: its mean over the period).
+    velocity_si: f64,
     /// Interpolation periods advanced by the affine map, and by substeps.
     periods_exact: u64,
     periods_substepped: u64,
@@ -174,6 +181,48 @@ struct PeriodMap {
 /// Inputs of [`PeriodMap`]: the state, `Δs`, `F_ff`, `F_fr`, `off`.
 const N_INPUT: usize = N_STATE + 4;
 
+/// A linear regime of the cascade model at one state ([`AxisServo::linear_regime`]).
+#[derive(Clone, Copy, Debug)]
+struct Regime {
+    /// Direction of slip (0 without dry friction) and contact offset of the spring, SI.
+    side: f64,
+    offset: f64,
+    /// Dry friction on the table: the margins below apply.
+    dry: bool,
+    /// `|v_t|`, the push on the table against friction `sign(v_t) (m_t v_t / h + F_spring)`,
+    /// the friction bound `g(v_t)` and `m_t / h`.
+    speed: f64,
+    push: f64,
+    bound: f64,
+    mt_over_h: f64,
+}
+
+impl Regime {
+    /// Whether the regime holds through a velocity change of `dv_margin`: the table stays
+    /// clear of rest and keeps slipping (`push > g + m_t dv / h`).
+    #[inline]
+    fn admits(&self, dv_margin: f64) -> bool {
+        !self.dry
+            || !(self.speed <= dv_margin || self.push <= self.bound + self.mt_over_h * dv_margin)
+    }
+
+    /// The same regime (the same map inputs).
+    #[inline]
+    fn same(&self, other: &Regime) -> bool {
+        self.side == other.side && self.offset == other.offset
+    }
+}
+
+/// `x.round()` for `x ≥ 0` (halves away from zero), at most `max`; written out because
+/// `f64::round` is a library call on baseline x86-64.
+#[inline]
+fn round_index(x: f64, max: usize) -> usize {
+    let x = x.min(max as f64 + 1.0);
+    let i = x as usize; // truncates; NaN gives 0 as `round` would
+    let i = if x - i as f64 >= 0.5 { i + 1 } else { i };
+    i.min(max)
+}
+
 /// The period maps of one axis for a grid of friction slopes, so that the map also applies
 /// while the table slips *inside* its Stribeck zone, where the dry friction
 /// `f(v) = -sign(v) g(|v|)` is a smooth function of the table velocity:
@@ -198,7 +247,8 @@ const N_INPUT: usize = N_STATE + 4;
 /// Stribeck zone (`vs = 0` or `Fs = Fc`) the grid is the single slope 0 and the map is exact.
 #[derive(Clone, Debug)]
 struct ExactMaps {
-    maps: Vec<PeriodMap>,
+    /// The map of grid slope `i · slope_step`, built when a period first needs it.
+    maps: Vec<OnceCell<PeriodMap>>,
     /// Grid spacing of the slopes, N/(m/s) or N m/(rad/s) (0 with a single map).
     slope_step: f64,
     /// `Fs - Fc` and `1 / vs` (0 without a Stribeck zone).
@@ -206,6 +256,9 @@ struct ExactMaps {
     inv_stribeck: f64,
     /// Accepted friction force error, N or N m.
     tolerance: f64,
+    /// No dry friction, backlash or pre-sliding (a linear twin): the single map applies
+    /// whenever the force stays within half its limit at both ends of the period.
+    lti: bool,
 }
 
 /// Slope grid intervals of [`ExactMaps`].
@@ -224,13 +277,33 @@ impl PeriodMap {
         let input = [
             x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff, friction, offset,
         ];
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX, checked at run time just above.
+            return unsafe { self.product_avx(&input) };
+        }
+        self.product(&input)
+    }
+
+    /// The product, column by column (the same multiplications and additions in the same
+    /// order whatever the vector width, so the result does not depend on the CPU).
+    #[inline(always)]
+    fn product(&self, input: &[f64; N_INPUT]) -> [f64; N_STATE] {
         let mut acc = [0.0; 8];
-        for (col, &u) in self.cols.iter().zip(&input) {
+        for (col, &u) in self.cols.iter().zip(input) {
             for (a, c) in acc.iter_mut().zip(col) {
                 *a += c * u;
             }
         }
         [acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]]
+    }
+
+    /// [`PeriodMap::product`] on 4-wide vectors (AVX; no FMA, whose single rounding would
+    /// change the result), chosen at run time so that the build stays portable.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn product_avx(&self, input: &[f64; N_INPUT]) -> [f64; N_STATE] {
+        self.product(input)
     }
 }
 
@@ -346,6 +419,8 @@ impl AxisServo {
                 r.fully_closed.unwrap_or(false),
             ),
             exact: None,
+            bound_cache: Cell::new((0.0, r.coulomb.1 * r.static_ratio)),
+            velocity_si: 0.0,
             periods_exact: 0,
             periods_substepped: 0,
         }
@@ -366,23 +441,27 @@ impl AxisServo {
             self.presliding.is_none() && self.coulomb > 0.0 && delta > 0.0 && self.stribeck > 0.0;
         if !stribeck_zone {
             return ExactMaps {
-                maps: vec![self.period_map(0.0)],
+                maps: vec![OnceCell::from(self.period_map(0.0))],
                 slope_step: 0.0,
                 delta_friction: 0.0,
                 inv_stribeck: 0.0,
                 tolerance: 0.0,
+                // What `linear_regime` finds for such an axis: side 0 and offset 0 always.
+                lti: self.presliding.is_none()
+                    && !(self.half_backlash > 0.0)
+                    && self.coulomb == 0.0
+                    && self.static_friction == 0.0,
             };
         }
         let c_max = std::f64::consts::SQRT_2 * delta * (-0.5f64).exp() / self.stribeck;
         let step = c_max / SLOPE_STEPS as f64;
         ExactMaps {
-            maps: (0..=SLOPE_STEPS)
-                .map(|i| self.period_map(i as f64 * step))
-                .collect(),
+            maps: (0..=SLOPE_STEPS).map(|_| OnceCell::new()).collect(),
             slope_step: step,
             delta_friction: delta,
             inv_stribeck: 1.0 / self.stribeck,
             tolerance: 1e-5 * self.static_friction,
+            lti: false,
         }
     }
 
@@ -448,10 +527,12 @@ impl AxisServo {
         [x_m, v_m, x_t, v_t, force, integral, x_m_tick]
     }
 
-    /// The direction of slip (0 without dry friction) and the contact offset of the linear
-    /// regime the state is in, or None (near rest or sticking, inside the backlash gap, near
-    /// the force limit). `dv_margin` is the velocity change the period may bring.
-    fn linear_regime(&self, x: &[f64; N_STATE], dv_margin: f64) -> Option<(f64, f64)> {
+    /// The linear regime the state is in, or None (near rest or sticking, inside the backlash
+    /// gap, near the force limit): the direction of slip (0 without dry friction) and the
+    /// contact offset, with what [`Regime::admits`] needs to tell whether the regime holds
+    /// through a velocity change `dv_margin` of the period.
+    #[inline(always)]
+    fn linear_regime(&self, x: &[f64; N_STATE]) -> Option<Regime> {
         if self.presliding.is_some() {
             return None; // the bristle has its own state
         }
@@ -472,23 +553,80 @@ impl AxisServo {
         } else {
             0.0
         };
-        let side = if self.coulomb == 0.0 && self.static_friction == 0.0 {
-            0.0
-        } else {
-            // Slipping, clear of rest by the margin, friction at its bound against the motion.
-            if v_t.abs() <= dv_margin || v_t == 0.0 {
-                return None;
-            }
-            let f_spring = self.stiffness * (d - offset) + self.damping * (v_m - v_t);
-            let side = v_t.signum();
-            if side * (self.mt_over_h * v_t + f_spring)
-                <= self.friction_bound(v_t) + self.mt_over_h * dv_margin
-            {
-                return None;
-            }
-            side
+        if self.coulomb == 0.0 && self.static_friction == 0.0 {
+            return Some(Regime {
+                side: 0.0,
+                offset,
+                dry: false,
+                speed: 0.0,
+                push: 0.0,
+                bound: 0.0,
+                mt_over_h: 0.0,
+            });
+        }
+        // Slipping (the margins are checked by `admits`), friction at its bound against
+        // the motion.
+        if v_t == 0.0 {
+            return None;
+        }
+        let f_spring = self.stiffness * (d - offset) + self.damping * (v_m - v_t);
+        let side = v_t.signum();
+        Some(Regime {
+            side,
+            offset,
+            dry: true,
+            speed: v_t.abs(),
+            push: side * (self.mt_over_h * v_t + f_spring),
+            bound: self.friction_bound_cached(v_t),
+            mt_over_h: self.mt_over_h,
+        })
+    }
+
+    /// [`AxisServo::try_exact_period`] for an axis without dry friction and backlash: its
+    /// only regime condition is the force within half its limit at both ends (the same
+    /// decisions and the same arithmetic as the general path, without its friction terms).
+    #[inline]
+    fn try_lti_period(&mut self, s_old: f64, s_new: f64, f_ff: f64) -> bool {
+        let limit = 0.5 * self.force_limit;
+        if self.force.abs() > limit {
+            return false;
+        }
+        let Some(map) = self.exact.as_deref().and_then(|e| e.maps[0].get()) else {
+            return false;
         };
-        Some((side, offset))
+        let x = [
+            self.x_m - s_old,
+            self.v_m,
+            self.x_t - s_old,
+            self.v_t,
+            self.force,
+            self.integral,
+            self.x_m_tick - s_old,
+        ];
+        let y = map.apply(&x, s_new - s_old, f_ff, 0.0, 0.0);
+        if y[4].abs() > limit {
+            return false;
+        }
+        self.x_m = y[0] + s_old;
+        self.v_m = y[1];
+        self.x_t = y[2] + s_old;
+        self.v_t = y[3];
+        self.force = y[4];
+        self.integral = y[5];
+        self.x_m_tick = y[6] + s_old;
+        true
+    }
+
+    /// [`AxisServo::friction_bound`] through `bound_cache`.
+    #[inline]
+    fn friction_bound_cached(&self, v: f64) -> f64 {
+        let (v_cached, g) = self.bound_cache.get();
+        if v_cached.to_bits() == v.to_bits() {
+            return g;
+        }
+        let g = self.friction_bound(v);
+        self.bound_cache.set((v, g));
+        g
     }
 
     /// One period by the exact map when the state is in a linear regime at both its ends and
@@ -498,6 +636,9 @@ impl AxisServo {
         let Some(exact) = self.exact.as_deref() else {
             return false;
         };
+        if exact.lti {
+            return self.try_lti_period(s_old, s_new, f_ff);
+        }
         let x = [
             self.x_m - s_old,
             self.v_m,
@@ -511,15 +652,18 @@ impl AxisServo {
         let dv_guess = ((s_new - s_old) * self.inv_t_ipo - self.v_ff).abs();
         // The end-point check below asks for at least twice this margin at x: ask it now, so
         // that x needs no second check unless the period's own velocity change is larger.
-        let Some(regime) = self.linear_regime(&x, 2.0 * dv_guess) else {
+        let Some(regime) = self.linear_regime(&x) else {
             return false;
         };
+        if !regime.admits(2.0 * dv_guess) {
+            return false;
+        }
         let v0 = x[3];
         // Friction at v0 and its slope there (0 outside a Stribeck zone), the grid slope.
-        let (f0, slope, index) = if regime.0 == 0.0 {
+        let (f0, slope, index) = if regime.side == 0.0 {
             (0.0, 0.0, 0)
         } else if exact.slope_step == 0.0 {
-            (-regime.0 * self.friction_bound(v0), 0.0, 0)
+            (-regime.side * regime.bound, 0.0, 0)
         } else {
             let u = v0.abs() * exact.inv_stribeck;
             // Beyond u² = 40 the substep model's g(v) is Fc exactly (see `stribeck_bound`).
@@ -528,12 +672,12 @@ impl AxisServo {
             } else {
                 2.0 * exact.delta_friction * u * exact.inv_stribeck * (-(u * u)).exp()
             };
-            let index = ((slope / exact.slope_step).round() as usize).min(SLOPE_STEPS);
-            (-regime.0 * self.friction_bound(v0), slope, index)
+            let index = round_index(slope / exact.slope_step, SLOPE_STEPS);
+            (-regime.side * regime.bound, slope, index)
         };
         let grid_slope = index as f64 * exact.slope_step;
-        let map = &exact.maps[index];
-        let y = map.apply(&x, s_new - s_old, f_ff, f0 - grid_slope * v0, regime.1);
+        let map = exact.maps[index].get_or_init(|| self.period_map(grid_slope));
+        let y = map.apply(&x, s_new - s_old, f_ff, f0 - grid_slope * v0, regime.offset);
         let dv = 2.0 * (y[3] - x[3]).abs().max(dv_guess);
         if exact.slope_step > 0.0 && (v0.abs() - dv) * exact.inv_stribeck <= 40f64.sqrt() {
             // e_F = |c - cᵢ| Δv + ½ max|f''| Δv².
@@ -549,10 +693,12 @@ impl AxisServo {
                 return false;
             }
         }
-        if self.linear_regime(&y, dv) != Some(regime)
-            || (dv > 2.0 * dv_guess && self.linear_regime(&x, dv) != Some(regime))
-        {
+        if dv > 2.0 * dv_guess && !regime.admits(dv) {
             return false;
+        }
+        match self.linear_regime(&y) {
+            Some(end) if end.same(&regime) && end.admits(dv) => {}
+            _ => return false,
         }
         self.x_m = y[0] + s_old;
         self.v_m = y[1];
@@ -572,6 +718,43 @@ impl AxisServo {
     /// Advances one interpolation period towards `setpoint` (mm or deg), reached by the
     /// command at the end of the period; `time_s` is for error messages.
     pub fn step(&mut self, setpoint: f64, time_s: f64) -> Result<ServoState> {
+        self.advance(setpoint, time_s)?;
+        Ok(self.state())
+    }
+
+    /// The state at the end of the last period.
+    pub fn state(&self) -> ServoState {
+        ServoState {
+            actual: self.actual(),
+            following_error: self.following_error(),
+            motor: self.x_m / self.scale,
+            velocity: self.velocity(),
+            force: self.force,
+        }
+    }
+
+    /// Table-side position at the end of the last period, mm or deg.
+    #[inline]
+    pub fn actual(&self) -> f64 {
+        self.x_t / self.scale
+    }
+
+    /// Setpoint minus actual at the end of the last period, mm or deg.
+    #[inline]
+    pub fn following_error(&self) -> f64 {
+        (self.setpoint - self.x_t) / self.scale
+    }
+
+    /// Table velocity at the end of the last period, mm/s or deg/s (first-order model: the
+    /// mean over the period).
+    #[inline]
+    pub fn velocity(&self) -> f64 {
+        self.velocity_si / self.scale
+    }
+
+    /// [`AxisServo::step`] without forming its [`ServoState`] (read what is needed with
+    /// [`AxisServo::actual`] and the like: each is a division).
+    pub fn advance(&mut self, setpoint: f64, time_s: f64) -> Result<()> {
         if !setpoint.is_finite() {
             return Err(self.diverged(time_s, format!("the setpoint is not finite ({setpoint})")));
         }
@@ -618,17 +801,11 @@ impl AxisServo {
                 ),
             ));
         }
-        let velocity = match self.model {
+        self.velocity_si = match self.model {
             Model::FirstOrder => (self.x_t - x_t_old) * self.inv_t_ipo,
             Model::Cascade => self.v_t,
         };
-        Ok(ServoState {
-            actual: self.x_t / self.scale,
-            following_error: fe / self.scale,
-            motor: self.x_m / self.scale,
-            velocity: velocity / self.scale,
-            force: self.force,
-        })
+        Ok(())
     }
 
     fn diverged(&self, time_s: f64, reason: String) -> Error {

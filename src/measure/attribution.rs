@@ -71,13 +71,22 @@ pub fn bar_sensitivity(
     length_mm: f64,
 ) -> AxisVec {
     let mut s = AxisVec::ZERO;
+    // The table ball moves with the rotary axes only: one evaluation serves the linear ones
+    // (the same arithmetic as `deviation_mm`).
+    let pivot = kin.actual_table_to_machine(q, pivot_table_mm);
+    let linear =
+        |q: &AxisVec| (Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]) - pivot).norm() - length_mm;
     for &a in axes {
         let (mut up, mut down) = (*q, *q);
         up[a] += DIFF_STEP;
         down[a] -= DIFF_STEP;
-        s[a] = (deviation_mm(kin, &up, pivot_table_mm, length_mm)
-            - deviation_mm(kin, &down, pivot_table_mm, length_mm))
-            / (2.0 * DIFF_STEP);
+        let difference = if a.is_rotary() {
+            deviation_mm(kin, &up, pivot_table_mm, length_mm)
+                - deviation_mm(kin, &down, pivot_table_mm, length_mm)
+        } else {
+            linear(&up) - linear(&down)
+        };
+        s[a] = difference / (2.0 * DIFF_STEP);
     }
     s
 }

@@ -199,6 +199,37 @@ impl BallbarRun {
         }
         let t = wrap_360(theta_deg);
         let (s, c) = t.to_radians().sin_cos();
+        self.add(t, s, c, deviation_um);
+    }
+
+    /// `a.push(θ, dev_a); b.push(θ, dev_b)` (the trace and its signature), with the θ terms
+    /// computed once.
+    pub fn push_pair(
+        a: &mut BallbarRun,
+        b: &mut BallbarRun,
+        theta_deg: f64,
+        dev_a_um: f64,
+        dev_b_um: f64,
+    ) {
+        if !theta_deg.is_finite() {
+            a.rejected += 1;
+            b.rejected += 1;
+            return;
+        }
+        let t = wrap_360(theta_deg);
+        let (s, c) = t.to_radians().sin_cos();
+        for (run, dev) in [(a, dev_a_um), (b, dev_b_um)] {
+            if dev.is_finite() {
+                run.add(t, s, c, dev);
+            } else {
+                run.rejected += 1;
+            }
+        }
+    }
+
+    /// Adds a finite sample at wrapped `t` (deg) with `sin t`, `cos t`.
+    #[inline]
+    fn add(&mut self, t: f64, s: f64, c: f64, deviation_um: f64) {
         let bin = &mut self.bins[bin_index(t)];
         bin.n += 1;
         bin.sum_um += deviation_um;

@@ -20,6 +20,7 @@ use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines};
 use crate::kinematics::Kinematics;
 use crate::pipeline::{Sample, Sink};
+use crate::{Axis, AxisVec};
 
 /// The virtual ball bar of a test on one machine.
 #[derive(Clone, Copy, Debug)]
@@ -47,10 +48,29 @@ pub struct BarReading {
 impl BarGeometry {
     pub fn read(&self, s: &Sample) -> BarReading {
         let kin = &self.kinematics;
-        let dev = |q| deviation_mm(kin, q, &self.pivot_table_mm, self.length_mm) * 1e3;
+        if !kin.location_errors.is_zero() {
+            let dev = |q| deviation_mm(kin, q, &self.pivot_table_mm, self.length_mm) * 1e3;
+            let deviation_um = dev(&s.actual);
+            return BarReading {
+                theta_deg: self.frame.theta_deg(&kin.forward(&s.commanded).tip),
+                deviation_um,
+                nonlinear_um: deviation_um - dev(&s.linear),
+            };
+        }
+        // The actual and the twin's poses are within a following error of the commanded one:
+        // their rotations from its sines and cosines (one `sin_cos` per angle and sample).
+        let at_command = kin.rotary_sin_cos(&s.commanded);
+        let dev = |q: &AxisVec| {
+            let r = kin.rotation_of(&kin.rotary_sin_cos_near(q, &s.commanded, &at_command));
+            let pivot = Point3::from(kin.pivot_mm + r * self.pivot_table_mm.coords);
+            let tool = Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
+            ((tool - pivot).norm() - self.length_mm) * 1e3
+        };
         let deviation_um = dev(&s.actual);
         BarReading {
-            theta_deg: self.frame.theta_deg(&kin.forward(&s.commanded).tip),
+            theta_deg: self
+                .frame
+                .theta_deg(&kin.forward_with(&s.commanded, &at_command).tip),
             deviation_um,
             nonlinear_um: deviation_um - dev(&s.linear),
         }
@@ -110,8 +130,13 @@ impl BallbarSink {
             return None;
         }
         let r = self.geometry.read(s);
-        self.run.push(r.theta_deg, r.deviation_um);
-        self.signature.push(r.theta_deg, r.nonlinear_um);
+        BallbarRun::push_pair(
+            &mut self.run,
+            &mut self.signature,
+            r.theta_deg,
+            r.deviation_um,
+            r.nonlinear_um,
+        );
         if self.sensitivity.wants(r.theta_deg) {
             let g = &self.geometry;
             let axes = g.kinematics.layout.axes();

@@ -14,76 +14,92 @@ pub fn push_fixed(out: &mut String, v: f64, decimals: u32) {
 }
 
 /// [`push_fixed`] into a byte buffer (ASCII), allocation-free once the buffer has room: the
-/// form the trace writer uses, one line buffer per row. The digits go straight to their
-/// place at the end of `out`.
+/// form the trace writer uses, one line buffer per row. The digits are written right to
+/// left into a small stack buffer, two per division by a constant, and appended at once.
+#[inline(always)]
 pub fn push_fixed_bytes(out: &mut Vec<u8>, v: f64, decimals: u32) {
     const SCALE: [f64; 10] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
+    let d = decimals as usize;
     let scaled = SCALE
-        .get(decimals as usize)
+        .get(d)
         .map(|s| round_half_away(v * s))
         .filter(|s| s.is_finite() && s.abs() < 9.0e15);
     let Some(scaled) = scaled else {
         let _ = std::io::Write::write_fmt(out, format_args!("{v:.*}", decimals as usize));
         return;
     };
-    const POW10: [u64; 10] = [
-        1,
-        10,
-        100,
-        1_000,
-        10_000,
-        100_000,
-        1_000_000,
-        10_000_000,
-        100_000_000,
-        1_000_000_000,
-    ];
     let n = scaled.abs() as u64;
-    let d = decimals as usize;
-    let (mut int, mut frac) = (n / POW10[d], n % POW10[d]);
-    let int_digits = int.checked_ilog10().map_or(1, |l| l as usize + 1);
-    let negative = scaled < 0.0;
-    let len = negative as usize + int_digits + if d > 0 { d + 1 } else { 0 };
-    let start = out.len();
-    out.resize(start + len, b'0');
-    let field = &mut out[start..];
-    if negative {
-        field[0] = b'-';
-    }
-    // Right to left, two digits per division: the fraction (zero-padded to d digits),
-    // the point, the integer part.
-    let mut at = len;
+    // Integer part and fraction; the trace's decimal counts divide by constants.
+    let (mut int, mut frac) = match d {
+        0 => (n, 0),
+        4 => (n / 10_000, n % 10_000),
+        6 => (n / 1_000_000, n % 1_000_000),
+        7 => (n / 10_000_000, n % 10_000_000),
+        _ => {
+            let p = 10u64.pow(decimals);
+            (n / p, n % p)
+        }
+    };
+    // At most 16 integer digits (|scaled| < 9e15), the point, 9 decimals and the sign: 27
+    // bytes, right-aligned at FIELD_END; a fixed 32 bytes from the first digit are appended
+    // (a copy of known length, no library call) and the excess cut off again.
+    const FIELD_END: usize = 32;
+    let mut buf = [b'0'; 2 * FIELD_END];
+    let mut at = FIELD_END;
+    // Right to left: the fraction (zero-padded to d digits), the point, the integer part.
     let mut left = d;
+    // Four digits per division of the long dependency chain, their two pairs apart.
+    while left >= 4 {
+        let four = (frac % 10_000) as u32;
+        frac /= 10_000;
+        let (hi, lo) = (2 * (four / 100) as usize, 2 * (four % 100) as usize);
+        at -= 4;
+        buf[at] = PAIRS[hi];
+        buf[at + 1] = PAIRS[hi + 1];
+        buf[at + 2] = PAIRS[lo];
+        buf[at + 3] = PAIRS[lo + 1];
+        left -= 4;
+    }
     while left >= 2 {
         let r = 2 * (frac % 100) as usize;
         frac /= 100;
         at -= 2;
-        field[at..at + 2].copy_from_slice(&PAIRS[r..r + 2]);
+        buf[at] = PAIRS[r];
+        buf[at + 1] = PAIRS[r + 1];
         left -= 2;
     }
     if left == 1 {
         at -= 1;
-        field[at] = b'0' + (frac % 10) as u8;
+        buf[at] = b'0' + (frac % 10) as u8;
     }
     if d > 0 {
         at -= 1;
-        field[at] = b'.';
+        buf[at] = b'.';
     }
     while int >= 100 {
         let r = 2 * (int % 100) as usize;
         int /= 100;
         at -= 2;
-        field[at..at + 2].copy_from_slice(&PAIRS[r..r + 2]);
+        buf[at] = PAIRS[r];
+        buf[at + 1] = PAIRS[r + 1];
     }
     if int >= 10 {
         let r = 2 * int as usize;
         at -= 2;
-        field[at..at + 2].copy_from_slice(&PAIRS[r..r + 2]);
+        buf[at] = PAIRS[r];
+        buf[at + 1] = PAIRS[r + 1];
     } else {
         at -= 1;
-        field[at] = b'0' + int as u8;
+        buf[at] = b'0' + int as u8;
     }
-    debug_assert_eq!(at, negative as usize);
+    if scaled < 0.0 {
+        at -= 1;
+        buf[at] = b'-';
+    }
+    let len = out.len() + (FIELD_END - at);
+    let field: &[u8; FIELD_END] = buf[at..at + FIELD_END].try_into().expect("32 bytes");
+    out.extend_from_slice(field);
+    out.truncate(len);
 }
 
 /// Pairs of decimal digits "00" to "99".

@@ -6,6 +6,9 @@
 //! run, known only at its end, so rows go to a binary temporary file first and `trace.csv`
 //! is written from it, line by line, when the runs are done: memory stays flat, and
 //! `trace.csv` appears only when complete. A run that fails leaves no temporary file.
+//! The first [`RAW_IN_MEMORY`] bytes of raw rows (about 50,000 rows of five axes) stay in
+//! memory and reach the disk only when a longer trace spills over: memory stays bounded,
+//! and a trace of one cone never makes the round trip through the file.
 
 use std::fmt::Write as _;
 use std::fs::File;
@@ -20,8 +23,14 @@ use crate::measure::{is_measured, BallbarRun, BarGeometry, BarReading};
 use crate::pipeline::{Sample, Sink};
 use crate::Axis;
 
+/// Raw rows held in memory before they spill to the temporary file, bytes.
+pub const RAW_IN_MEMORY: usize = 8 << 20;
+
 /// Writes the trace of every run of a simulation.
 pub struct TraceSink {
+    /// Raw rows not yet spilled (at most [`RAW_IN_MEMORY`] bytes).
+    held: Vec<u8>,
+    /// The temporary file, once the rows spilled over.
     raw: Option<BufWriter<File>>,
     raw_path: PathBuf,
     trace_path: PathBuf,
@@ -50,9 +59,9 @@ impl TraceSink {
         every: u64,
     ) -> Result<TraceSink> {
         let raw_path = trace_path.with_extension("csv.raw.tmp");
-        let file = File::create(&raw_path).map_err(write_error(&raw_path))?;
         Ok(TraceSink {
-            raw: Some(BufWriter::new(file)),
+            held: Vec::new(),
+            raw: None,
             raw_path,
             trace_path: trace_path.to_path_buf(),
             axes,
@@ -73,8 +82,12 @@ impl TraceSink {
     /// Writes `trace.csv` (atomically) from the raw rows, centring each row with the fit of
     /// its direction's run.
     pub fn finish(mut self, runs: &[BallbarRun]) -> Result<()> {
+        let spilled = self.raw.is_some();
         if let Some(mut raw) = self.raw.take() {
-            raw.flush().map_err(write_error(&self.raw_path))?;
+            raw.write_all(&self.held)
+                .and_then(|()| raw.flush())
+                .map_err(write_error(&self.raw_path))?;
+            self.held = Vec::new();
         }
         let mut header = String::from("direction,time_s,line,theta_deg");
         for a in self.axes {
@@ -82,13 +95,26 @@ impl TraceSink {
             let _ = write!(header, ",{a}_cmd_{u},{a}_act_{u},{a}_ferr_{u}");
         }
         header.push_str(",nonlinear_um,deviation_um,deviation_centred_um");
-        complete(
-            &self.raw_path,
-            &self.trace_path,
-            &header,
-            self.axes.len(),
-            runs,
-        )
+        if spilled {
+            let file = File::open(&self.raw_path).map_err(write_error(&self.raw_path))?;
+            complete(
+                &mut BufReader::new(file),
+                &self.raw_path,
+                &self.trace_path,
+                &header,
+                self.axes.len(),
+                runs,
+            )
+        } else {
+            complete(
+                &mut &self.held[..],
+                &self.raw_path,
+                &self.trace_path,
+                &header,
+                self.axes.len(),
+                runs,
+            )
+        }
     }
 }
 
@@ -132,18 +158,35 @@ impl TraceSink {
             row.extend_from_slice(&[s.commanded[a], s.actual[a], s.following_error[a]]);
         }
         row.extend_from_slice(&[r.nonlinear_um, r.deviation_um]);
-        let raw = self.raw.as_mut().expect("open until finished");
         for v in row.iter() {
-            raw.write_all(&v.to_le_bytes())
-                .map_err(write_error(&self.raw_path))?;
+            self.held.extend_from_slice(&v.to_le_bytes());
         }
+        if self.held.len() >= RAW_IN_MEMORY {
+            self.spill()?;
+        }
+        Ok(())
+    }
+
+    /// Moves the held rows to the temporary file (created on the first spill).
+    fn spill(&mut self) -> Result<()> {
+        let raw = match self.raw.as_mut() {
+            Some(raw) => raw,
+            None => {
+                let file = File::create(&self.raw_path).map_err(write_error(&self.raw_path))?;
+                self.raw.insert(BufWriter::new(file))
+            }
+        };
+        raw.write_all(&self.held)
+            .map_err(write_error(&self.raw_path))?;
+        self.held.clear();
         Ok(())
     }
 }
 
-/// Writes `trace_path` from the binary rows in `raw_path`, appending the centred deviation
-/// `dL - (a cos θ + b sin θ)` of each row's run.
+/// Writes `trace_path` from the binary rows read from `reader` (held rows, or the file at
+/// `raw_path`), appending the centred deviation `dL - (a cos θ + b sin θ)` of each row's run.
 fn complete(
+    reader: &mut dyn Read,
     raw_path: &Path,
     trace_path: &Path,
     header: &str,
@@ -153,7 +196,6 @@ fn complete(
     let tmp = temporary_path(trace_path);
     let read_err = write_error(raw_path);
     let write_err = write_error(&tmp);
-    let mut reader = BufReader::new(File::open(raw_path).map_err(&read_err)?);
     let mut out = BufWriter::new(File::create(&tmp).map_err(&write_err)?);
     writeln!(out, "{header}").map_err(&write_err)?;
     let centring = |d: Direction| {

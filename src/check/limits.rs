@@ -114,9 +114,21 @@ pub struct LimitsMonitor<'a> {
     machine: &'a Machine,
     theta_of: &'a dyn Fn(&AxisVec) -> Option<f64>,
     tracks: Vec<Track>,
-    /// The previous sample and its velocity (per s) when it had one inside its block.
-    previous: Option<(Sample, Option<AxisVec>)>,
+    previous: Option<Previous>,
+    /// Violations open (being extended).
+    open: usize,
     violations: Vec<Violation>,
+}
+
+/// What the next sample needs of the previous one.
+#[derive(Clone, Copy, Debug)]
+struct Previous {
+    time_s: f64,
+    block_index: u64,
+    /// Positions, mm and deg.
+    q: [f64; 6],
+    /// Velocity per s, when the sample had one inside its block.
+    v: Option<[f64; 6]>,
 }
 
 /// Relative slack on velocity and acceleration limits for rounding in finite differences.
@@ -156,28 +168,74 @@ impl<'a> LimitsMonitor<'a> {
             theta_of,
             tracks,
             previous: None,
+            open: 0,
             violations: Vec::new(),
         }
     }
 
+    /// One sample. The common case (no limit crossed, none open) is a pass over flat
+    /// per-axis arrays; a crossing, or an open violation, takes [`LimitsMonitor::track`].
     pub fn push(&mut self, s: &Sample) {
+        let x = &s.actual.0;
+        let mut clear = self.open == 0;
         let (velocity, acceleration) = match &self.previous {
-            Some((p, pv)) if s.time_s > p.time_s => {
-                let dt = s.time_s - p.time_s;
-                let v = (s.actual - p.actual) * (1.0 / dt);
-                let a = pv
-                    .filter(|_| p.block_index == s.block_index)
-                    .map(|pv| (v - pv) * (1.0 / dt));
+            Some(p) if s.time_s > p.time_s => {
+                // As `(actual - previous) * (1 / dt)`, element by element: the same rounding.
+                let k = 1.0 / (s.time_s - p.time_s);
+                let mut v = [0.0; 6];
+                for i in 0..6 {
+                    v[i] = (x[i] - p.q[i]) * k;
+                }
+                let a = p.v.filter(|_| p.block_index == s.block_index).map(|pv| {
+                    let mut a = [0.0; 6];
+                    for i in 0..6 {
+                        a[i] = (v[i] - pv[i]) * k;
+                    }
+                    a
+                });
                 (Some(v), a)
             }
             _ => (None, None),
         };
+        for track in self.tracks.iter_mut() {
+            let l = &track.limits;
+            let xi = x[l.index];
+            track.min = track.min.min(xi);
+            track.max = track.max.max(xi);
+            clear &= l.continuous || (xi <= l.max && xi >= l.min);
+            if let Some(v) = &velocity {
+                let v = v[l.index].abs() * 60.0;
+                track.peak_v = track.peak_v.max(v);
+                clear &= v <= l.velocity_trip;
+            }
+            if let Some(a) = &acceleration {
+                let a = a[l.index].abs();
+                track.peak_a = track.peak_a.max(a);
+                clear &= a <= l.acceleration_trip;
+            }
+        }
+        if !clear {
+            self.track(s, velocity.as_ref(), acceleration.as_ref());
+        }
+        let in_block = self
+            .previous
+            .as_ref()
+            .is_some_and(|p| p.block_index == s.block_index);
+        self.previous = Some(Previous {
+            time_s: s.time_s,
+            block_index: s.block_index,
+            q: *x,
+            v: velocity.filter(|_| in_block),
+        });
+    }
+
+    /// Opens, extends and closes the violations of sample `s` (velocity per s and
+    /// acceleration per s² when it has them).
+    fn track(&mut self, s: &Sample, velocity: Option<&[f64; 6]>, acceleration: Option<&[f64; 6]>) {
         let mut theta: Option<Option<f64>> = None;
         for track in self.tracks.iter_mut() {
             let l = track.limits;
             let x = s.actual.0[l.index];
-            track.min = track.min.min(x);
-            track.max = track.max.max(x);
             let travel = if l.continuous {
                 None
             } else if x > l.max {
@@ -187,18 +245,12 @@ impl<'a> LimitsMonitor<'a> {
             } else {
                 None
             };
-            let mut speed = None;
-            if let Some(v) = &velocity {
-                let v = v.0[l.index].abs() * 60.0;
-                track.peak_v = track.peak_v.max(v);
-                speed = (v > l.velocity_trip).then_some((v, l.max_velocity, v));
-            }
-            let mut accel = None;
-            if let Some(a) = &acceleration {
-                let a = a.0[l.index].abs();
-                track.peak_a = track.peak_a.max(a);
-                accel = (a > l.acceleration_trip).then_some((a, l.max_acceleration, a));
-            }
+            let speed = velocity
+                .map(|v| v[l.index].abs() * 60.0)
+                .and_then(|v| (v > l.velocity_trip).then_some((v, l.max_velocity, v)));
+            let accel = acceleration
+                .map(|a| a[l.index].abs())
+                .and_then(|a| (a > l.acceleration_trip).then_some((a, l.max_acceleration, a)));
             let checks = [travel, speed, accel];
             if checks.iter().all(Option::is_none) && track.open.iter().all(Option::is_none) {
                 continue;
@@ -216,6 +268,7 @@ impl<'a> LimitsMonitor<'a> {
                         }
                         None => {
                             let th = *theta.get_or_insert_with(|| (self.theta_of)(&s.actual));
+                            self.open += 1;
                             track.open[k] = Some(Open {
                                 first: (s.time_s, th, s.line),
                                 last: (s.time_s, s.actual),
@@ -227,6 +280,7 @@ impl<'a> LimitsMonitor<'a> {
                     },
                     None => {
                         if let Some(open) = track.open[k].take() {
+                            self.open -= 1;
                             self.violations
                                 .push(close(open, KINDS[k], track.axis, self.theta_of));
                         }
@@ -234,11 +288,6 @@ impl<'a> LimitsMonitor<'a> {
                 }
             }
         }
-        let in_block = self
-            .previous
-            .as_ref()
-            .is_some_and(|(p, _)| p.block_index == s.block_index);
-        self.previous = Some((*s, velocity.filter(|_| in_block)));
     }
 
     /// The per-axis usage and the violations, in the order they started.

@@ -14,6 +14,7 @@
 //! shapes (see [`shapes`]). The streaming, conservative-advancement check is in
 //! [`monitor`].
 
+pub mod frustum;
 pub mod monitor;
 pub mod shapes;
 
@@ -106,6 +107,41 @@ struct Part {
     /// For the cutter: the cutter eroded by [`CUTTER_SKIN_MM`], used for the cutting pair.
     eroded: Option<SharedShape>,
     skin_mm: f64,
+    /// The part as a shape [`frustum::signed_distance`] takes, in the part's local frame
+    /// (filled in by [`Builder::finish`]; for the cutter, of the eroded shape).
+    analytic: Option<Analytic>,
+}
+
+/// A part whose distance to a frustum has a certified closed-form query.
+#[derive(Clone, Copy, Debug)]
+enum Analytic {
+    /// A coaxial two-circle hull, in the part's local frame.
+    Frustum(frustum::Frustum),
+    /// A parry cylinder (axis along its local Y): half height and radius, mm.
+    Cylinder(f64, f64),
+}
+
+impl Analytic {
+    fn of(shape: &SharedShape) -> Option<Analytic> {
+        if let Some(c) = shape.as_cylinder() {
+            return Some(Analytic::Cylinder(c.half_height, c.radius));
+        }
+        let hull = shape.as_shape::<CircleHull>()?;
+        let [c0, c1] = hull.circles;
+        if c0.normal.cross(c1.normal).length() > 1e-12 {
+            return None;
+        }
+        frustum::Frustum::from_circles(c0.centre, c0.radius, c1.centre, c1.radius, c0.normal)
+            .map(Analytic::Frustum)
+    }
+}
+
+/// Warm starts of one pair's queries: GJK's direction, and the certifying direction of
+/// [`frustum::signed_distance`].
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Warm {
+    gjk: Option<Vector>,
+    normal: Option<Vector>,
 }
 
 /// The cutter/workpiece distance is measured from the cutter eroded by this much (mm), less
@@ -395,7 +431,7 @@ impl Scene {
                     self.colliders[a.handle].position(),
                     self.colliders[b.handle].position(),
                 );
-                let distance_mm = pair_distance(pair, a, b, poses.0, poses.1, &mut None);
+                let distance_mm = pair_distance(pair, a, b, poses.0, poses.1, &mut Warm::default());
                 PairClearance {
                     bodies: self.pair_bodies(pair),
                     kind: pair.kind,
@@ -587,6 +623,7 @@ impl Builder {
             motion,
             eroded: None,
             skin_mm: 0.0,
+            analytic: None,
         });
         self.groups.push(groups);
     }
@@ -597,12 +634,14 @@ impl Builder {
         near_miss_mm: f64,
         engagement_resolution_mm: f64,
     ) -> Scene {
+        let mut parts = self.parts;
+        for part in &mut parts {
+            part.analytic = Analytic::of(part.eroded.as_ref().unwrap_or(&part.shape));
+        }
         let mut pairs = Vec::new();
-        for a in 0..self.parts.len() {
-            for b in a + 1..self.parts.len() {
-                if self.parts[a].carrier == self.parts[b].carrier
-                    || !self.groups[a].test(self.groups[b])
-                {
+        for a in 0..parts.len() {
+            for b in a + 1..parts.len() {
+                if parts[a].carrier == parts[b].carrier || !self.groups[a].test(self.groups[b]) {
                     continue;
                 }
                 let cutting = |x: usize, y: usize| {
@@ -623,7 +662,7 @@ impl Builder {
             bodies: self.bodies,
             colliders: self.colliders,
             body_handles: self.body_handles,
-            parts: self.parts,
+            parts,
             pairs,
             bar,
             near_miss_mm,
@@ -635,21 +674,40 @@ impl Builder {
 }
 
 /// Signed distance of `pair` (parts `a`, `b` at world poses `pa`, `pb`), mm. A cutting
-/// pair is measured from the eroded cutter (see [`CUTTER_SKIN_MM`]).
-fn pair_distance(
-    pair: &Pair,
-    a: &Part,
-    b: &Part,
-    pa: &Pose,
-    pb: &Pose,
-    warm: &mut Option<Vector>,
-) -> f64 {
+/// pair is measured from the eroded cutter (see [`CUTTER_SKIN_MM`]). A cylinder against a
+/// frustum takes the certified closed form ([`frustum::signed_distance`]) when its bounds
+/// meet, and parry's GJK/EPA ([`signed_distance`]) otherwise.
+fn pair_distance(pair: &Pair, a: &Part, b: &Part, pa: &Pose, pb: &Pose, warm: &mut Warm) -> f64 {
+    let skin = if pair.kind == PairKind::Cutting {
+        a.skin_mm + b.skin_mm
+    } else {
+        0.0
+    };
+    let analytic = match (a.analytic, b.analytic) {
+        (Some(Analytic::Frustum(f)), Some(Analytic::Cylinder(h, r))) => Some((f, pa, h, r, pb)),
+        (Some(Analytic::Cylinder(h, r)), Some(Analytic::Frustum(f))) => Some((f, pb, h, r, pa)),
+        _ => None,
+    };
+    if let Some((f, frustum_pose, half_height, radius, cylinder_pose)) = analytic {
+        // The cylinder in the frustum's frame; parry's cylinder axis is its local Y.
+        let rel = frustum_pose.inv_mul(cylinder_pose);
+        let cylinder = frustum::Cylinder {
+            c: rel.translation,
+            t: rel.rotation * Vector::Y,
+            half_height,
+            radius,
+        };
+        if let Some((d, n)) = frustum::signed_distance(&f, &cylinder, warm.normal) {
+            warm.normal = Some(n);
+            return d - skin;
+        }
+        warm.normal = None;
+    }
     if pair.kind == PairKind::Cutting {
         let shape = |p: &Part| p.eroded.as_ref().unwrap_or(&p.shape).clone();
-        let skin = a.skin_mm + b.skin_mm;
-        return signed_distance(pa, shape(a).as_ref(), pb, shape(b).as_ref(), warm) - skin;
+        return signed_distance(pa, shape(a).as_ref(), pb, shape(b).as_ref(), &mut warm.gjk) - skin;
     }
-    signed_distance(pa, a.shape.as_ref(), pb, b.shape.as_ref(), warm)
+    signed_distance(pa, a.shape.as_ref(), pb, b.shape.as_ref(), &mut warm.gjk)
 }
 
 fn to_vector(v: &Vector3<f64>) -> Vector {

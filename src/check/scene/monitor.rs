@@ -30,10 +30,10 @@
 //! Memory does not grow with the number of samples: one state per pair, plus the events.
 
 use nalgebra::Vector3;
-use parry3d_f64::math::{Pose, Vector};
+use parry3d_f64::math::Pose;
 use serde::Serialize;
 
-use super::{Carrier, PairKind, Scene};
+use super::{Carrier, PairKind, Scene, Warm};
 use crate::input::machine::Machine;
 use crate::kinematics::Kinematics;
 use crate::{Axis, AxisVec};
@@ -137,7 +137,7 @@ struct PairState {
     moved: f64,
     /// Last measured signed distance, mm.
     last_mm: f64,
-    warm: Option<Vector>,
+    warm: Warm,
     open: Option<SceneEvent>,
     /// θ of the last sample of the open event (resolved when it closes).
     open_end: Theta,
@@ -210,7 +210,7 @@ impl SceneMonitor {
                 slack: 0.0,
                 moved: 0.0,
                 last_mm: f64::INFINITY,
-                warm: None,
+                warm: Warm::default(),
                 open: None,
                 open_end: Theta::Known(None),
                 engagement: (pair.kind == PairKind::Cutting).then(|| {
@@ -514,7 +514,7 @@ impl SceneMonitor {
 }
 
 /// Signed distance of pair `i` with the bodies at `poses`.
-fn measure(scene: &Scene, i: usize, poses: &[Pose; 4], warm: &mut Option<Vector>) -> f64 {
+fn measure(scene: &Scene, i: usize, poses: &[Pose; 4], warm: &mut Warm) -> f64 {
     let pair = scene.pairs[i];
     let (a, b) = (&scene.parts[pair.a], &scene.parts[pair.b]);
     let pose_a = poses[a.carrier as usize] * a.local;

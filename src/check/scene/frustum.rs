@@ -1,0 +1,325 @@
+//! Certified signed distance between a cylinder (a tool part) and a frustum (the cone
+//! workpiece), without GJK: two bounds that must meet.
+//!
+//! Both shapes are solids of revolution. The frustum `F` has base centre `O`, unit axis `a`,
+//! height `H` and radii `r0` (base) and `r1` (top); in the half plane of a point `x`,
+//! `ζ = (x - O)·a`, `ρ = |x - O - ζ a|`, its cross-section is the trapezoid
+//! `0 <= ζ <= H, 0 <= ρ <= r0 + (r1 - r0) ζ / H`, so the signed distance `sd_F(x)` of a point
+//! is the 2-D signed distance of `(ζ, ρ)` to that trapezoid (closed form). The cylinder `C`
+//! has centre `c`, unit axis `t`, half height `h` and radius `R`.
+//!
+//! The signed distance of the pair (clearance, or minus the penetration depth, i.e. the
+//! minimum translation distance) is `sd = -min_{|n|=1} h_{C-F}(n)`, with the support
+//! functions
+//! `h_C(n) = n·c + h |n·t| + R sqrt(1 - (n·t)^2)` and
+//! `h_F(w) = max_i (w·O_i + r_i sqrt(1 - (w·a)^2))` (`O_0 = O`, `O_1 = O + H a`).
+//! Hence, for **any** unit `n`, `L(n) = -h_C(n) - h_F(-n) <= sd` (a separating-axis bound),
+//! and for **any** point `x` of `C`, `U(x) = sd_F(x) >= sd` (a point of C is at least as
+//! deep as C must be moved; apart, it is at least as far). The query alternates: `x` = the
+//! point of lowest `sd_F` on the cylinder's flank line facing along `n` (closed form on the
+//! frustum's lateral face, where `sd_F = m·(ζ, ρ) - m·(0, r0)` and `ρ(s)` is a hyperbola in
+//! the line parameter; golden section otherwise), then `n` = minus the frustum's outward
+//! normal at the point nearest `x`. It returns `L` once `U - L <=` [`CERTIFY_MM`], and
+//! `None` otherwise (the caller then asks parry): what it returns is within `CERTIFY_MM` of
+//! the exact signed distance, and never above it.
+
+use parry3d_f64::math::Vector;
+
+/// Largest gap between the bounds for a certified answer, mm.
+pub const CERTIFY_MM: f64 = 1e-6;
+
+/// Alternations before giving up (the caller falls back to GJK/EPA).
+const MAX_ROUNDS: usize = 8;
+
+/// A frustum in its own frame: base centre, unit axis, height and radii (mm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frustum {
+    pub o: Vector,
+    pub a: Vector,
+    pub h: f64,
+    pub r0: f64,
+    pub r1: f64,
+    /// A unit vector perpendicular to `a` (the radial direction of points on the axis).
+    perp: Vector,
+    /// Outward unit normal of the lateral side in the (ζ, ρ) plane, and `m·(0, r0)`.
+    m: (f64, f64),
+    m_offset: f64,
+}
+
+/// A cylinder: centre, unit axis, half height and radius (mm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cylinder {
+    pub c: Vector,
+    pub t: Vector,
+    pub half_height: f64,
+    pub radius: f64,
+}
+
+impl Frustum {
+    /// The frustum between two coaxial circles (centres `o0`, `o1`, radii `r0`, `r1`, unit
+    /// normal `n`), or `None` when they are not coaxial and parallel or do not span a height.
+    pub fn from_circles(o0: Vector, r0: f64, o1: Vector, r1: f64, n: Vector) -> Option<Frustum> {
+        let n = n.try_normalize()?;
+        let d = o1 - o0;
+        let h = d.dot(n);
+        let tol = 1e-12 * (1.0 + o0.length() + o1.length());
+        if h.abs() <= tol || (d - n * h).length() > tol || !(r0 >= 0.0 && r1 >= 0.0) {
+            return None;
+        }
+        let (o, a, h, r0, r1) = if h > 0.0 {
+            (o0, n, h, r0, r1)
+        } else {
+            (o1, -n, -h, r1, r0)
+        };
+        let perp = a.any_orthonormal_vector();
+        let len = h.hypot(r1 - r0);
+        let m = ((r0 - r1) / len, h / len);
+        Some(Frustum {
+            o,
+            a,
+            h,
+            r0,
+            r1,
+            perp,
+            m,
+            m_offset: m.1 * r0,
+        })
+    }
+
+    /// Signed distance of point `x` to the frustum, mm, and the outward unit normal of the
+    /// nearest boundary feature.
+    pub fn point_sd(&self, x: Vector) -> (f64, Vector) {
+        let v = x - self.o;
+        let z = v.dot(self.a);
+        let radial = v - self.a * z;
+        let rho = radial.length();
+        let e = if rho > 1e-12 { radial / rho } else { self.perp };
+        let (sd, (nz, nr)) = self.sd_2d(z, rho);
+        (sd, self.a * nz + e * nr)
+    }
+
+    /// Signed distance of `(ζ, ρ)` (ρ >= 0) to the trapezoid, and the outward normal there.
+    fn sd_2d(&self, z: f64, rho: f64) -> (f64, (f64, f64)) {
+        let (h, r0, r1) = (self.h, self.r0, self.r1);
+        let lateral = self.m.0 * z + self.m.1 * rho - self.m_offset;
+        if z >= 0.0 && z <= h && lateral <= 0.0 {
+            // Inside: the nearest face.
+            let mut best = (z, (-1.0, 0.0));
+            if h - z < best.0 {
+                best = (h - z, (1.0, 0.0));
+            }
+            if -lateral < best.0 {
+                best = (-lateral, self.m);
+            }
+            return (-best.0, best.1);
+        }
+        // Outside: the nearest of the three edges of the half-plane boundary.
+        let segments = [
+            ((0.0, 0.0), (0.0, r0)),
+            ((0.0, r0), (h, r1)),
+            ((h, 0.0), (h, r1)),
+        ];
+        let mut best = (f64::INFINITY, (0.0, 0.0));
+        for ((ax, ay), (bx, by)) in segments {
+            let (dx, dy) = (bx - ax, by - ay);
+            let l2 = dx * dx + dy * dy;
+            let u = if l2 > 0.0 {
+                (((z - ax) * dx + (rho - ay) * dy) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let (px, py) = (z - (ax + u * dx), rho - (ay + u * dy));
+            let d2 = px * px + py * py;
+            if d2 < best.0 {
+                best = (d2, (px, py));
+            }
+        }
+        let d = best.0.sqrt();
+        let normal = if d > 0.0 {
+            (best.1 .0 / d, best.1 .1 / d)
+        } else {
+            self.m
+        };
+        (d, normal)
+    }
+
+    /// `h_F(w)`, the support function, for unit `w`.
+    fn support(&self, w: Vector) -> f64 {
+        let wa = w.dot(self.a);
+        let s = (1.0 - wa * wa).max(0.0).sqrt();
+        let base = w.dot(self.o);
+        (base + self.r0 * s).max(base + wa * self.h + self.r1 * s)
+    }
+}
+
+impl Cylinder {
+    /// `h_C(n)` for unit `n`.
+    fn support(&self, n: Vector) -> f64 {
+        let nt = n.dot(self.t);
+        n.dot(self.c) + self.half_height * nt.abs() + self.radius * (1.0 - nt * nt).max(0.0).sqrt()
+    }
+}
+
+/// The separating-axis lower bound `L(n) = -h_C(n) - h_F(-n)` for unit `n` (C toward F).
+fn lower_bound(f: &Frustum, c: &Cylinder, n: Vector) -> f64 {
+    -c.support(n) - f.support(-n)
+}
+
+/// Certified signed distance of cylinder `c` and frustum `f` (mm, within [`CERTIFY_MM`] and
+/// never above it), with the unit direction from C toward F that certifies it; `None` when
+/// the bounds do not meet (a rim or end face against a rim, say). `warm` is that direction
+/// from a previous query of the pair, if any.
+pub fn signed_distance(f: &Frustum, c: &Cylinder, warm: Option<Vector>) -> Option<(f64, Vector)> {
+    let mut n = match warm.and_then(|w| w.try_normalize()) {
+        Some(n) => n,
+        None => -f.point_sd(c.c).1,
+    };
+    let mut best_lower = f64::NEG_INFINITY;
+    let mut best_n = n;
+    for _ in 0..MAX_ROUNDS {
+        let lower = lower_bound(f, c, n);
+        if lower > best_lower {
+            (best_lower, best_n) = (lower, n);
+        }
+        // The flank line of C facing along n: x(s) = c + s t + R u, |s| <= half height.
+        let u = (n - c.t * n.dot(c.t)).try_normalize()?;
+        let base = c.c + u * c.radius;
+        let (upper, normal) = line_minimum(f, base, c.t, c.half_height);
+        let n_next = -normal;
+        // Also the nearest direction across the flank (n·t = 0), which is the exact one for
+        // a contact inside the flank: off it, h_C grows by h |n·t|.
+        let across = (n_next - c.t * n_next.dot(c.t)).try_normalize();
+        for candidate in [Some(n_next), across].into_iter().flatten() {
+            let lower = lower_bound(f, c, candidate);
+            if lower > best_lower {
+                (best_lower, best_n) = (lower, candidate);
+            }
+        }
+        if upper - best_lower <= CERTIFY_MM {
+            return Some((best_lower, best_n));
+        }
+        n = n_next;
+    }
+    None
+}
+
+/// The smallest `sd_F` on the segment `base + s t`, `|s| <= h`, and the frustum's outward
+/// normal nearest that point. `sd_F` is convex along a line (the signed distance to a
+/// convex set); on the lateral face it is `m_ζ ζ(s) + m_ρ ρ(s) - m·(0, r0)` with `ζ` linear
+/// and `ρ(s) = sqrt(A s² + 2 B s + C)`, whose stationary point solves
+/// `A s + B = κ sqrt(D / (A - κ²))`, `κ = -m_ζ (t·a) / m_ρ`, `D = A C - B²`.
+fn line_minimum(f: &Frustum, base: Vector, t: Vector, h: f64) -> (f64, Vector) {
+    let at = |s: f64| f.point_sd(base + t * s);
+    let mut best = at(-h);
+    let mut best_s = -h;
+    let end = at(h);
+    if end.0 < best.0 {
+        (best, best_s) = (end, h);
+    }
+    let v = base - f.o;
+    let tau = t.dot(f.a);
+    let r0 = v - f.a * v.dot(f.a);
+    let tp = t - f.a * tau;
+    let (a2, b, c2) = (tp.dot(tp), r0.dot(tp), r0.dot(r0));
+    let kappa = -f.m.0 * tau / f.m.1;
+    let mut interior = None;
+    if a2 > kappa * kappa && a2 > 1e-15 {
+        let d = (a2 * c2 - b * b).max(0.0);
+        let s = (-b + kappa * (d / (a2 - kappa * kappa)).sqrt()) / a2;
+        if s > -h && s < h {
+            interior = Some(s);
+        }
+    }
+    if let Some(s) = interior {
+        let mid = at(s);
+        if mid.0 < best.0 {
+            (best, best_s) = (mid, s);
+        }
+    }
+    // The closed form is exact where the lateral face is nearest; elsewhere (a rim or a
+    // flat face nearest) refine by golden section on the convex function.
+    let lateral_nearest = {
+        let (nz, nr) = f.m;
+        let normal = best.1;
+        let x = base + t * best_s;
+        let v = x - f.o;
+        let radial = v - f.a * v.dot(f.a);
+        let e = radial.try_normalize().unwrap_or(f.perp);
+        (normal.dot(f.a) - nz).abs() < 1e-12 && (normal.dot(e) - nr).abs() < 1e-12
+    };
+    if lateral_nearest {
+        return best;
+    }
+    let (mut lo, mut hi) = (-h, h);
+    const G: f64 = 0.618_033_988_749_894_8;
+    let mut x1 = hi - G * (hi - lo);
+    let mut x2 = lo + G * (hi - lo);
+    let (mut f1, mut f2) = (at(x1), at(x2));
+    while hi - lo > 1e-7 {
+        if f1.0 <= f2.0 {
+            hi = x2;
+            (x2, f2) = (x1, f1);
+            x1 = hi - G * (hi - lo);
+            f1 = at(x1);
+        } else {
+            lo = x1;
+            (x1, f1) = (x2, f2);
+            x2 = lo + G * (hi - lo);
+            f2 = at(x2);
+        }
+    }
+    for candidate in [f1, f2] {
+        if candidate.0 < best.0 {
+            best = candidate;
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn upright() -> Frustum {
+        Frustum::from_circles(
+            Vector::new(0.0, 0.0, 0.0),
+            50.0,
+            Vector::new(0.0, 0.0, 40.0),
+            30.0,
+            Vector::Z,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn a_point_beside_the_lateral_face_is_at_its_perpendicular_distance() {
+        let f = upright();
+        // Lateral line from (0, 50) to (40, 30): unit normal (20, 40)/sqrt(2000).
+        // (ζ, ρ) = (24, 42): (24, 42 - 50)·(20, 40)/√2000 past the line through (0, 50).
+        let (sd, n) = f.point_sd(Vector::new(42.0, 0.0, 24.0));
+        let expected = (24.0 * 20.0 - 8.0 * 40.0) / 2000f64.sqrt();
+        assert!((sd - expected).abs() < 1e-12, "{sd} {expected}");
+        assert!((n - Vector::new(40.0, 0.0, 20.0).normalize()).length() < 1e-12);
+        // Inside, nearest the base.
+        let (sd, n) = f.point_sd(Vector::new(0.0, 10.0, 1.0));
+        assert!((sd + 1.0).abs() < 1e-12 && (n + Vector::Z).length() < 1e-12);
+    }
+
+    #[test]
+    fn a_cylinder_lying_on_the_flank_touches_it() {
+        let f = upright();
+        // Generatrix at azimuth 0: from (50, 0, 0) to (30, 0, 40); outward normal (2, 0, 1)/√5.
+        let g = Vector::new(-20.0, 0.0, 40.0).normalize();
+        let nrm = Vector::new(40.0, 0.0, 20.0).normalize();
+        for gap in [3.0, 0.0, -0.25] {
+            let c = Cylinder {
+                c: Vector::new(40.0, 0.0, 20.0) + nrm * (5.0 + gap),
+                t: g,
+                half_height: 10.0,
+                radius: 5.0,
+            };
+            let (sd, _) = signed_distance(&f, &c, None).expect("certified");
+            assert!((sd - gap).abs() < 1e-7, "{sd} vs {gap}");
+        }
+    }
+}

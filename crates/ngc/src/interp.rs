@@ -692,8 +692,10 @@ impl Interp {
                 }
             }
         }
+        // G41.1/G42.1 take the diameter itself in D.
+        let d_diameter = g.iter().any(|(c, _)| matches!(c, GCode::CutterComp(3 | 4)));
         for letter in ['N', 'T', 'H', 'D', 'L'] {
-            if let Some(word) = get(letter) {
+            if let Some(word) = get(letter).filter(|_| letter != 'D' || !d_diameter) {
                 integer(&word, line)?;
             }
         }

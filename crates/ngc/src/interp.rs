@@ -761,7 +761,14 @@ impl Interp {
                 6 if self.comp.is_some() => {
                     return Err(LineError::new(w.span(), "cannot change tools with cutter radius compensation on: expected G40 first", "tool change under compensation"));
                 }
-                6 => self.tool = self.next_tool,
+                6 => {
+                    self.tool = self.next_tool;
+                    // LinuxCNC resynchronises after a tool change: the program point
+                    // becomes where the tool is (the compensated point after G40).
+                    if let Some(p) = self.comp_out.take() {
+                        self.pos = p;
+                    }
+                }
                 61 => {
                     let Some(q) = get('Q') else {
                         return Err(LineError::new(

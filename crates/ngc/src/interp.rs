@@ -274,6 +274,8 @@ pub struct Interp {
     spindle_rpm: f64,
     tcp: bool,
     tools: HashMap<u32, Tool>,
+    /// Lathe tool orientations by tool number (tool table Q).
+    orientations: HashMap<u32, u32>,
     table_given: bool,
     tool: u32,
     next_tool: u32,
@@ -344,6 +346,7 @@ impl Interp {
             spindle_rpm: 0.0,
             tcp: o.tcp,
             tools: o.tools.iter().map(|t| (t.number, *t)).collect(),
+            orientations: o.tool_orientations.iter().copied().collect(),
             table_given: !o.tools.is_empty(),
             tool: 0,
             next_tool: 0,
@@ -922,6 +925,10 @@ impl Interp {
                         d.value * self.scale()
                     } else {
                         let n = d.map_or(self.tool, |d| d.value.round() as u32);
+                        orientation = self.orientations.get(&n).copied().unwrap_or(0);
+                        if self.plane != Plane::ZX && !matches!(orientation, 0 | 9) {
+                            return Err(LineError::new(w.span(), format!("`{}` with a lathe tool (orientation {orientation}) but the plane is not G18: expected G18", &line[w.span()]), "not G18"));
+                        }
                         self.tool_entry(n, &d.unwrap_or(w))?.diameter_mm
                     };
                     // A negative diameter puts the tool on the other side (LinuxCNC).

@@ -342,3 +342,63 @@ fn the_programs_agree_with_rs274_when_it_is_installed() {
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// A lathe profile under G18 with tools whose orientation comes from the tool table (Q2 and
+/// Q7, nose radius 0.8 and 0.4 mm): compensation runs on the nose centre and every move sent
+/// out is shifted to the tool's control point (orientation 2: X − r, Z − r; 7: Z − r).
+/// Expected: rs274 with the same tool table (tests/data/conformance/comp_lathe_tool_table_q.ngc).
+#[test]
+fn lathe_tools_compensate_the_nose_centre_and_shift_by_their_orientation() {
+    let table = "T4 P4 D1.6 Q2\nT5 P5 D0.8 Q7\n";
+    let o = Options {
+        dialect: Dialect::Linuxcnc,
+        tools: ngc::parse_tool_table(table).unwrap(),
+        tool_orientations: ngc::parse_tool_orientations(table).unwrap(),
+        ..Options::default()
+    };
+    assert_eq!(o.tool_orientations, [(4, 2), (5, 7)]);
+    let (line, msg) = ngc::parse_tool_orientations("T1 D1\nT2 D1 Q12\n").unwrap_err();
+    assert_eq!(line, 2);
+    assert!(msg.contains("Q0 to Q9"), "{msg}");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../tests/data/conformance/comp_lathe_tool_table_q.ngc"),
+    )
+    .unwrap();
+    let m: Vec<ngc::Move> = read_str_with(Path::new("t.ngc"), &text, &o)
+        .collect::<Result<_, _>>()
+        .unwrap();
+    let r = |v: f64| (v * 1e4).round() / 1e4 + 0.0;
+    // (X, Z) of each end and (X, Z) of each arc centre, as rs274 prints them.
+    let got: Vec<([f64; 2], Option<[f64; 2]>)> = m
+        .iter()
+        .map(|m| {
+            let c = match m.motion {
+                Motion::Arc { center_mm, .. } => Some([r(center_mm[0]), r(center_mm[2])]),
+                _ => None,
+            };
+            ([r(m.end[Axis::X]), r(m.end[Axis::Z])], c)
+        })
+        .collect();
+    let expected: [([f64; 2], Option<[f64; 2]>); 18] = [
+        ([8.0, 0.0], None),
+        ([1.7, -1.6], None),
+        ([-1.6, 1.7], Some([1.7, 1.7])),
+        ([-1.6, 24.2], None),
+        ([-6.8, 29.4], Some([-6.8, 24.2])),
+        ([-13.6, 36.2], Some([-6.8, 36.2])),
+        ([-13.6, 43.2], None),
+        ([8.0, 44.0], None),
+        ([8.0, 46.0], None),
+        ([-8.0, 46.0], None),
+        ([-10.0, 46.0], None),
+        ([-12.9, 43.1], Some([-10.0, 43.1])),
+        ([-12.9, 36.6], None),
+        ([-5.9839, 30.2], Some([-6.5, 36.5791])),
+        ([-0.4, 24.6], Some([-6.0, 24.6])),
+        ([-0.4, 2.1], None),
+        ([2.5, -0.8], Some([2.5, 2.1])),
+        ([8.0, 0.0], None),
+    ];
+    assert_eq!(got, expected);
+}

@@ -461,12 +461,16 @@ fn reader_options(
     }
     if let Some(file) = &r.tool_table {
         let (p, t) = read("tool_table", file)?;
-        let tools = ngc::parse_tool_table(&t).map_err(|(line, m)| Error::Invalid {
+        let invalid = |(line, m): (usize, String)| Error::Invalid {
             path: p.clone(),
             message: format!("line {line}: {m}"),
             help: Some("a LinuxCNC tool table has lines `T1 P1 Z+50.0 D6.0 ;comment`".into()),
-        })?;
+        };
+        let tools = ngc::parse_tool_table(&t).map_err(invalid)?;
         o.tools.extend(tools);
+        // Lathe tools: the orientation Q, for cutter compensation under G18.
+        let orientations = ngc::parse_tool_orientations(&t).map_err(invalid)?;
+        o.tool_orientations.extend(orientations);
     }
     o.tools.extend(r.tools.iter().copied());
     o.search_path = r.subroutine_path.iter().map(|d| resolve(path, d)).collect();

@@ -274,6 +274,8 @@ pub struct Interp {
     spindle_rpm: f64,
     tcp: bool,
     tools: HashMap<u32, Tool>,
+    /// Lathe tool orientations by tool number (tool table Q).
+    orientations: HashMap<u32, u32>,
     table_given: bool,
     tool: u32,
     next_tool: u32,
@@ -296,12 +298,12 @@ pub struct Interp {
     /// Haas G254: the work offset follows the rotary table.
     dwo: bool,
     table: Option<RotaryTable>,
-    /// Cutter radius compensation: tool on the left (G41), radius mm.
-    comp: Option<(bool, f64)>,
-    /// The compensated element waiting for the next one.
-    held: Option<comp::Held>,
-    /// Compensated X Y of the last move when it differs from `pos` (after G40).
-    comp_actual: Option<[f64; 2]>,
+    /// Cutter radius compensation (G41/G42 to G40) and its queued moves.
+    comp: Option<comp::Comp>,
+    /// Where the tool is after G40 when it differs from `pos` (the next move starts there).
+    comp_out: Option<AxisVec>,
+    /// The move after G40 must be straight (LinuxCNC's `arc_not_allowed`).
+    arc_not_allowed: bool,
 }
 
 /// Parameter of extended work offset P n (G54.1 Pn, G154 Pn), axis X.
@@ -344,6 +346,7 @@ impl Interp {
             spindle_rpm: 0.0,
             tcp: o.tcp,
             tools: o.tools.iter().map(|t| (t.number, *t)).collect(),
+            orientations: o.tool_orientations.iter().copied().collect(),
             table_given: !o.tools.is_empty(),
             tool: 0,
             next_tool: 0,
@@ -363,8 +366,8 @@ impl Interp {
             dwo: false,
             table: o.table,
             comp: None,
-            held: None,
-            comp_actual: None,
+            comp_out: None,
+            arc_not_allowed: false,
         };
         i.parameters_changed();
         i
@@ -546,39 +549,12 @@ impl Interp {
         queue: &mut VecDeque<Move>,
         line: usize,
         motion: Motion,
-        mut start: AxisVec,
-        mut end: AxisVec,
+        start: AxisVec,
+        end: AxisVec,
         path: PathControl,
     ) {
         let (feed, feed_mode) = self.feed_out();
-        if let Some(h) = &mut self.held {
-            // Waits with the held element (a plunge or a dwell under compensation).
-            h.after.push(Move {
-                line,
-                motion,
-                start,
-                end,
-                feed,
-                feed_mode,
-                tcp: self.tcp,
-                tool: self.tool,
-                tool_length_mm: self.tool_length_mm,
-                path,
-            });
-            return;
-        }
-        if let Some(xy) = self.comp_actual {
-            start[Axis::X] = xy[0];
-            start[Axis::Y] = xy[1];
-            if end[Axis::X] == self.pos[Axis::X] && end[Axis::Y] == self.pos[Axis::Y] {
-                // Not moving in X Y: stays at the compensated point.
-                end[Axis::X] = xy[0];
-                end[Axis::Y] = xy[1];
-            } else {
-                self.comp_actual = None;
-            }
-        }
-        queue.push_back(Move {
+        let mut mv = Move {
             line,
             motion,
             start,
@@ -589,7 +565,22 @@ impl Interp {
             tool: self.tool,
             tool_length_mm: self.tool_length_mm,
             path,
-        });
+        };
+        if let Some(c) = &mut self.comp {
+            // A dwell under compensation waits behind the queued moves.
+            c.dwell(mv, queue);
+            return;
+        }
+        if let Some(p) = self.comp_out {
+            // The first move after G40 starts where the compensated path ended.
+            mv.start = p;
+            if matches!(motion, Motion::Dwell { .. }) {
+                mv.end = p;
+            } else {
+                self.comp_out = None;
+            }
+        }
+        queue.push_back(mv);
     }
 
     fn feed_out(&self) -> (Option<f64>, FeedMode) {
@@ -710,8 +701,10 @@ impl Interp {
                 }
             }
         }
+        // G41.1/G42.1 take the diameter itself in D.
+        let d_diameter = g.iter().any(|(c, _)| matches!(c, GCode::CutterComp(3 | 4)));
         for letter in ['N', 'T', 'H', 'D', 'L'] {
-            if let Some(word) = get(letter) {
+            if let Some(word) = get(letter).filter(|_| letter != 'D' || !d_diameter) {
                 integer(&word, line)?;
             }
         }
@@ -774,7 +767,17 @@ impl Interp {
         let mut tcp_m = None;
         for &(code, w) in m.iter() {
             match code {
-                6 => self.tool = self.next_tool,
+                6 if self.comp.is_some() => {
+                    return Err(LineError::new(w.span(), "cannot change tools with cutter radius compensation on: expected G40 first", "tool change under compensation"));
+                }
+                6 => {
+                    self.tool = self.next_tool;
+                    // LinuxCNC resynchronises after a tool change: the program point
+                    // becomes where the tool is (the compensated point after G40).
+                    if let Some(p) = self.comp_out.take() {
+                        self.pos = p;
+                    }
+                }
                 61 => {
                     let Some(q) = get('Q') else {
                         return Err(LineError::new(
@@ -881,18 +884,18 @@ impl Interp {
                 GCode::Plane(p) => self.plane = p,
                 GCode::Units(inch) => self.inch = inch,
                 GCode::CutterComp(0) => {
-                    self.comp = None;
-                    self.comp_exit(queue);
+                    self.comp_exit(queue)
+                        .map_err(|m| LineError::new(w.span(), m, "cutter compensation"))?;
                 }
                 GCode::CutterComp(k) => {
                     if self.comp.is_some() {
                         return Err(LineError::new(w.span(), "cutter radius compensation turned on while it is on: expected G40 first", "compensation already on"));
                     }
-                    if self.plane != Plane::XY {
+                    if self.plane == Plane::YZ {
                         return Err(LineError::new(
                             w.span(),
-                            "cutter radius compensation outside G17: expected the XY plane (G17)",
-                            "not G17",
+                            "cutter radius compensation in G19: expected the XY plane (G17) or, for a lathe, the ZX plane (G18)",
+                            "not G17 or G18",
                         ));
                     }
                     if self.frame().is_some() {
@@ -903,6 +906,20 @@ impl Interp {
                         ));
                     }
                     let d = get('D');
+                    let mut orientation = 0;
+                    if let (true, Some(l)) = (k >= 3, get('L')) {
+                        if self.plane != Plane::ZX {
+                            return Err(LineError::new(l.span(), format!("`{}` with L (lathe tool orientation) but the plane is not G18: expected G18", &line[w.span()]), "not G18"));
+                        }
+                        if !(0.0..=9.0).contains(&l.value) || l.value.fract() != 0.0 {
+                            return Err(LineError::new(
+                                l.span(),
+                                "lathe tool orientation out of range: expected L0 to L9",
+                                "not 0-9",
+                            ));
+                        }
+                        orientation = l.value as u32;
+                    }
                     let diameter = if k >= 3 {
                         let d = d.ok_or_else(|| {
                             LineError::new(
@@ -914,16 +931,23 @@ impl Interp {
                         d.value * self.scale()
                     } else {
                         let n = d.map_or(self.tool, |d| d.value.round() as u32);
+                        orientation = self.orientations.get(&n).copied().unwrap_or(0);
+                        if self.plane != Plane::ZX && !matches!(orientation, 0 | 9) {
+                            return Err(LineError::new(w.span(), format!("`{}` with a lathe tool (orientation {orientation}) but the plane is not G18: expected G18", &line[w.span()]), "not G18"));
+                        }
                         self.tool_entry(n, &d.unwrap_or(w))?.diameter_mm
                     };
-                    if diameter < 0.0 {
-                        return Err(LineError::new(
-                            w.span(),
-                            "negative cutter diameter: expected D of zero or more",
-                            "negative",
-                        ));
-                    }
-                    self.comp = Some((k % 2 == 1, diameter / 2.0));
+                    // A negative diameter puts the tool on the other side (LinuxCNC).
+                    let left = (k % 2 == 1) != (diameter < 0.0);
+                    self.comp = Some(comp::Comp::new(
+                        left,
+                        diameter.abs() / 2.0,
+                        orientation,
+                        self.plane,
+                        self.pos,
+                        self.comp_out.unwrap_or(self.pos),
+                        self.scale(),
+                    ));
                 }
                 GCode::ToolLength(kind) => {
                     let h = get('H');
@@ -1324,10 +1348,17 @@ impl Interp {
                 }
             }
             let start = self.pos;
-            if self.comp.is_some()
-                && (g53 || matches!(mode, MotionMode::Cycle(_)) || self.plane != Plane::XY)
-            {
-                return Err(LineError::new(at, "G53, a canned cycle or a plane other than G17 with cutter radius compensation on: expected G40 first", "not with compensation"));
+            if self.comp.as_ref().is_some_and(|c| {
+                g53 || matches!(mode, MotionMode::Cycle(_)) || self.plane != c.plane
+            }) {
+                return Err(LineError::new(at, "G53, a canned cycle or a change of plane with cutter radius compensation on: expected G40 first", "not with compensation"));
+            }
+            match mode {
+                MotionMode::Arc { .. } if self.arc_not_allowed => {
+                    return Err(LineError::new(at, "the move just after exiting cutter compensation mode must be straight, not an arc: expected a G00 or G01 move after G40", "arc after G40"));
+                }
+                MotionMode::Rapid | MotionMode::Linear => self.arc_not_allowed = false,
+                _ => {}
             }
             if self.frame().is_some() && matches!(mode, MotionMode::Cycle(_)) {
                 return Err(LineError::new(
@@ -1495,7 +1526,7 @@ impl Interp {
         let checks: [(char, bool, &str); 5] = [
             ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, M19, M50-M53, M62-M66 or M98"),
             ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, M19, M61 or M66-M68"),
-            ('L', g10 || cycle || has_m(&[66, 98]), "`L` with no code that uses it: expected L only with G10, a canned cycle, M66 or M98"),
+            ('L', g10 || cycle || has_m(&[66, 98]) || has_g(&|c| matches!(c, GCode::CutterComp(3 | 4))), "`L` with no code that uses it: expected L only with G10, a canned cycle, G41.1/G42.1, M66 or M98"),
             ('E', has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with M66-M68"),
             ('D', has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),
         ];
@@ -1933,41 +1964,33 @@ impl Interp {
         Ok(())
     }
 
-    /// The end of the program: a held compensated element ends as at G40.
+    /// The end of the program: the queued compensated moves end as at G40.
     pub fn finish(&mut self, queue: &mut VecDeque<Move>) {
-        self.comp_exit(queue);
+        // As LinuxCNC's M2: the queue ends at the compensated point; a gouge found there
+        // was already reported with the move that made it.
+        let _ = self.comp_exit(queue);
     }
 
-    /// Drops the held element (after an error).
+    /// Drops the queued compensated moves (after an error).
     pub fn discard(&mut self) {
-        self.held = None;
+        self.comp = None;
     }
 
-    /// Pushes a held element ending at `end`, with the moves that wait with it.
-    fn release(&mut self, queue: &mut VecDeque<Move>, mut h: comp::Held, end: [f64; 2]) -> AxisVec {
-        comp::set_end(&mut h.mv, end);
-        let mut last = h.mv.end;
-        queue.push_back(h.mv);
-        for mut m in h.after {
-            comp::set_start(&mut m, end);
-            comp::set_end(&mut m, end);
-            last = m.end;
-            queue.push_back(m);
+    /// G40: the queued moves end at the compensated point, where the next move starts.
+    fn comp_exit(&mut self, queue: &mut VecDeque<Move>) -> Result<(), String> {
+        let Some(mut c) = self.comp.take() else {
+            return Ok(());
+        };
+        let was_on = c.radius > 0.0 && c.started();
+        let out = c.off(queue)?;
+        if was_on {
+            self.arc_not_allowed = true;
         }
-        last
+        self.comp_out = (out != self.pos).then_some(out);
+        Ok(())
     }
 
-    /// G40 (or the end): the held element ends at `c + r n(t₁)`.
-    fn comp_exit(&mut self, queue: &mut VecDeque<Move>) {
-        let Some(h) = self.held.take() else { return };
-        let left = self.comp.map_or(h.left, |c| c.0);
-        let n = comp::normal(left, h.tangent);
-        let end = [h.end[0] + h.radius * n[0], h.end[1] + h.radius * n[1]];
-        self.release(queue, h, end);
-        self.comp_actual = Some(end);
-    }
-
-    /// An X Y move under cutter radius compensation: joins the held element to this one.
+    /// A move under cutter radius compensation, as programmed from `start` to `target`.
     fn comp_element(
         &mut self,
         queue: &mut VecDeque<Move>,
@@ -1976,90 +1999,8 @@ impl Interp {
         start: AxisVec,
         target: AxisVec,
     ) -> Result<(), String> {
-        let (left, r) = self.comp.expect("compensation on");
-        let s = [start[Axis::X], start[Axis::Y]];
-        let e = [target[Axis::X], target[Axis::Y]];
-        if s == e && matches!(motion, Motion::Arc { .. }) {
-            return Err("full circle under cutter radius compensation: not supported yet; expected it split into two arcs".into());
-        }
-        if s == e {
-            // No X Y motion: waits with the held element (or runs at the current point).
-            self.emit(queue, line_no, motion, start, target, self.path);
-            return Ok(());
-        }
-        let is_line = !matches!(motion, Motion::Arc { .. });
-        let t_start = comp::tangent(&motion, s, e, false);
-        let t_end = comp::tangent(&motion, s, e, true);
-        if let Motion::Arc {
-            clockwise,
-            center_mm,
-            ..
-        } = motion
-        {
-            let radius = (s[0] - center_mm[0]).hypot(s[1] - center_mm[1]);
-            // The tool is inside the arc for G41 counter-clockwise and G42 clockwise.
-            let inside = left != clockwise;
-            if inside && radius <= r {
-                return Err(format!("arc of radius {radius:.4} mm with a tool of radius {r:.4} mm on its inside: expected a tool smaller than the arc (LinuxCNC: tool radius not less than arc radius with comp)"));
-            }
-        }
         let (feed, feed_mode) = self.feed_out();
-        let new_start = match self.held.take() {
-            None => {
-                if !is_line {
-                    return Err("arc as the entry move of cutter radius compensation: expected a straight entry move after G41/G42".into());
-                }
-                self.comp_actual.take().unwrap_or(s)
-            }
-            Some(h) => {
-                let center = match motion {
-                    Motion::Arc { center_mm, .. } => Some([center_mm[0], center_mm[1]]),
-                    _ => None,
-                };
-                let join = comp::join(left, r, h.end, h.tangent, h.center, t_start, center)?;
-                let held_end = match join {
-                    comp::Join::Meet { end } => end,
-                    comp::Join::Arc { p1, .. } => p1,
-                };
-                let (hs, t) = ([h.mv.start[Axis::X], h.mv.start[Axis::Y]], h.tangent);
-                if h.center.is_none()
-                    && (held_end[0] - hs[0]) * t[0] + (held_end[1] - hs[1]) * t[1] < -1e-9
-                {
-                    // As rs274: the compensated line would run backwards.
-                    return Err("straight feed in a concave corner cannot be reached by the tool without gouging: expected a line longer than the tool radius".into());
-                }
-                match join {
-                    comp::Join::Meet { end } => {
-                        self.release(queue, h, end);
-                        end
-                    }
-                    comp::Join::Arc { p1, p2, corner } => {
-                        let last = self.release(queue, h, p1);
-                        let mut end = last;
-                        end[Axis::X] = p2[0];
-                        end[Axis::Y] = p2[1];
-                        queue.push_back(Move {
-                            line: line_no,
-                            motion: Motion::Arc {
-                                clockwise: left,
-                                plane: Plane::XY,
-                                center_mm: [corner[0], corner[1], last[Axis::Z]],
-                            },
-                            start: last,
-                            end,
-                            feed,
-                            feed_mode,
-                            tcp: self.tcp,
-                            tool: self.tool,
-                            tool_length_mm: self.tool_length_mm,
-                            path: self.path,
-                        });
-                        p2
-                    }
-                }
-            }
-        };
-        let mut mv = Move {
+        let mv = Move {
             line: line_no,
             motion,
             start,
@@ -2071,21 +2012,16 @@ impl Interp {
             tool_length_mm: self.tool_length_mm,
             path: self.path,
         };
-        comp::set_start(&mut mv, new_start);
-        self.comp_actual = None;
-        self.held = Some(comp::Held {
-            mv,
-            end: e,
-            tangent: t_end,
-            center: match motion {
-                Motion::Arc { center_mm, .. } => Some([center_mm[0], center_mm[1]]),
-                _ => None,
-            },
-            left,
-            radius: r,
-            after: Vec::new(),
-        });
-        Ok(())
+        let c = self.comp.as_mut().expect("compensation on");
+        if c.radius == 0.0 {
+            // LinuxCNC compensates nothing for a tool of radius zero.
+            c.pass(mv, queue);
+            return Ok(());
+        }
+        match motion {
+            Motion::Arc { .. } => c.arc(mv, queue),
+            _ => c.straight(mv, queue),
+        }
     }
 
     /// An arc in the plane of a G68.2 or G254 frame: the centre is found in program

@@ -42,8 +42,8 @@ pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLER
 pub use error::{line_column, Error, Result, Syntax};
 pub use frame::RotaryTable;
 pub use options::{
-    parse_tool_table, parse_var_file, work_offset_parameter, Dialect, Options, Tool, UserM,
-    G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
+    parse_tool_orientations, parse_tool_table, parse_var_file, work_offset_parameter, Dialect,
+    Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
 };
 pub use reader::{
     read_file, read_file_with, read_str, read_str_with, Moves, Notice, ARC_RADIUS_TOLERANCE_MM,

@@ -77,6 +77,9 @@ pub struct Options {
     pub start: AxisVec,
     /// The tool table. Empty: any T and H is accepted, with length zero.
     pub tools: Vec<Tool>,
+    /// Lathe tool orientations (LinuxCNC tool table `Q`, 1-9) by tool number; a tool not
+    /// listed is a mill tool (orientation 0). Used by cutter compensation under G18.
+    pub tool_orientations: Vec<(u32, u32)>,
     /// Initial numbered parameters (from a `.var` file, work offsets, G28/G30 positions).
     pub parameters: Vec<(u32, f64)>,
     /// Folders searched, in order, for `o<name> call` subroutine files `name.ngc` and Fanuc
@@ -108,6 +111,7 @@ impl Default for Options {
             axes: Axis::ALL.to_vec(),
             start: AxisVec::ZERO,
             tools: Vec::new(),
+            tool_orientations: Vec::new(),
             parameters: Vec::new(),
             search_path: Vec::new(),
             user_m: HashMap::new(),
@@ -211,6 +215,37 @@ pub fn parse_tool_table(text: &str) -> Result<Vec<Tool>, (usize, String)> {
             return Err((k + 1, format!("`{raw}`: expected a tool number `T<n>`")));
         }
         out.push(tool);
+    }
+    Ok(out)
+}
+
+/// The lathe tool orientations (`Q` words, 1-9) of a LinuxCNC tool table, by tool number;
+/// tools without Q are left out. Errors as [`parse_tool_table`], plus a Q outside 0-9.
+pub fn parse_tool_orientations(text: &str) -> Result<Vec<(u32, u32)>, (usize, String)> {
+    let tools = parse_tool_table(text)?;
+    let mut out = Vec::new();
+    let mut k = 0;
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.split(';').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let number = tools[k].number;
+        k += 1;
+        for word in line.split_whitespace() {
+            if let Some(q) = word.strip_prefix(['Q', 'q']) {
+                let q: f64 = q.parse().unwrap_or(f64::NAN);
+                if !(0.0..=9.0).contains(&q) || q.fract() != 0.0 {
+                    return Err((
+                        n + 1,
+                        format!("`{word}` in `{raw}`: expected a lathe tool orientation Q0 to Q9"),
+                    ));
+                }
+                if q != 0.0 {
+                    out.push((number, q as u32));
+                }
+            }
+        }
     }
     Ok(out)
 }

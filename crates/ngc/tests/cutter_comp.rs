@@ -175,10 +175,42 @@ fn concave_corners_with_arcs_meet_where_the_offset_paths_cross_as_in_rs274() {
 #[test]
 fn the_program_end_closes_compensation_like_g40() {
     // No G40: the last move still ends 5 mm left of its direction (+X): (10, 5).
-    let m = moves("T1 M6\nG41 D1 G1 X0 Y0 F100\nX10\nM2\n");
+    let m = moves("T1 M6\nG0 X-10 Y-10\nG41 D1 G1 X0 Y0 F100\nX10\nM2\n");
     assert_eq!(rows(&m).last().unwrap().1, [10.0, 5.0, 0.0]);
-    let m = moves("T1 M6\nG41 D1 G1 X0 Y0 F100\nX10\n");
+    let m = moves("T1 M6\nG0 X-10 Y-10\nG41 D1 G1 X0 Y0 F100\nX10\n");
     assert_eq!(rows(&m).last().unwrap().1, [10.0, 5.0, 0.0]);
+}
+
+#[test]
+fn after_g40_a_move_without_x_y_returns_to_the_programmed_point() {
+    // rs274: after G40 the current point is the programmed one, so `G1 Z-5` runs from the
+    // compensated (10, 5) back to (10, 0).
+    let m = moves("T1 M6\nG0 X-10 Y-10\nG41 D1 G1 X0 Y0 F100\nX10\nG40\nG1 Z-5\nX20\nM2\n");
+    let r = rows(&m);
+    assert_eq!(r[r.len() - 2].1, [10.0, 0.0, -5.0]);
+    assert_eq!(r[r.len() - 1].1, [20.0, 0.0, -5.0]);
+}
+
+#[test]
+fn an_arc_entry_move_keeps_the_end_one_radius_off_and_finds_a_new_centre() {
+    // G41 with a clockwise R10 arc from (0, 0) to (20, 0): the tool is outside, so the end
+    // moves 5 mm away from the centre (10, 0) to (25, 0); the arc from (0, 0) to (25, 0)
+    // through the same centre line has its centre at (12.5, 0) (rs274).
+    let m = moves("T1 M6\nG0 X0 Y0\nG41 D1 G2 X20 Y0 I10 F100\nM2\n");
+    assert_eq!(
+        rows(&m)[1],
+        (Arc, [25.0, 0.0, 0.0], Some(([12.5, 0.0], true)))
+    );
+}
+
+#[test]
+fn a_half_turn_goes_round_the_end_as_in_rs274() {
+    // X10 then back to X0 with G41: a 180 deg convex corner, an arc about (10, 0) from
+    // (10, 5) to (10, -5), then the line back at Y -5 (rs274).
+    let m = moves("T1 M6\nG0 X-10 Y-10\nG41 D1 G1 X0 Y0 F100\nX10\nX0\nM2\n");
+    let r = rows(&m);
+    assert_eq!(r[4], (Arc, [10.0, -5.0, 0.0], Some(([10.0, 0.0], true))));
+    assert_eq!(r[5], (Feed, [0.0, -5.0, 0.0], None));
 }
 
 #[test]
@@ -192,20 +224,23 @@ fn compensation_refuses_what_it_cannot_do() {
             other => panic!("expected a syntax error, got {other:?}"),
         }
     };
-    let (line, msg) = err("T1 M6\nG0 X0 Y0\nG41 D1 G2 X20 Y0 I10 F100\n");
+    // rs274: "Length of cutter compensation entry move is not greater than the tool radius".
+    let (line, msg) = err("T1 M6\nG0 X0 Y0\nG41 D1 G1 X3 Y0 F100\n");
     assert_eq!(line, 3);
     assert!(msg.contains("entry move"), "{msg}");
     // Tool radius 5 inside an R4 counter-clockwise arc with G41.
-    let (_, msg) = err("T1 M6\nG41 D1 G1 X0 Y0 F100\nX10\nG3 X18 Y0 I4 J0\n");
-    assert!(msg.contains("inside"), "{msg}");
+    let (_, msg) = err("T1 M6\nG0 X-10 Y-10\nG41 D1 G1 X0 Y0 F100\nX10\nG3 X18 Y0 I4 J0\n");
+    assert!(msg.contains("arc radius"), "{msg}");
     let (_, msg) = err("G1 X0 D1 F100\n");
     assert!(msg.contains("`D` with no code"), "{msg}");
     let (_, msg) = err("T1 M6\nG41 D1\nG42 D1\n");
     assert!(msg.contains("while it is on"), "{msg}");
-    let (_, msg) = err("T1 M6\nG41 D1 G1 X0 Y0 F100\nG81 X5 Y5 Z-1 R1\n");
+    let (_, msg) = err("T1 M6\nG0 X-10 Y-10\nG41 D1 G1 X0 Y0 F100\nG81 X5 Y5 Z-1 R1\n");
     assert!(msg.contains("canned cycle"), "{msg}");
-    let (_, msg) = err("T1 M6\nG41 D1 G1 X0 Y0 F100\nX10\nX0\n");
-    assert!(msg.contains("reverses"), "{msg}");
+    // rs274: "The move just after exiting cutter compensation mode must be straight".
+    let (line, msg) = err("T1 M6\nG0 X-10 Y-10\nG41 D1 G1 X0 Y0 F100\nX10\nG40\nG2 X20 Y0 R5\n");
+    assert_eq!(line, 6);
+    assert!(msg.contains("must be straight"), "{msg}");
     // rs274: "Straight feed in concave corner cannot be reached by the tool without
     // gouging", at the block after the 3 mm step (the step's compensated line, from (15, 5)
     // to (15, 3), would run backwards).
@@ -306,4 +341,64 @@ fn the_programs_agree_with_rs274_when_it_is_installed() {
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
+}
+
+/// A lathe profile under G18 with tools whose orientation comes from the tool table (Q2 and
+/// Q7, nose radius 0.8 and 0.4 mm): compensation runs on the nose centre and every move sent
+/// out is shifted to the tool's control point (orientation 2: X − r, Z − r; 7: Z − r).
+/// Expected: rs274 with the same tool table (tests/data/conformance/comp_lathe_tool_table_q.ngc).
+#[test]
+fn lathe_tools_compensate_the_nose_centre_and_shift_by_their_orientation() {
+    let table = "T4 P4 D1.6 Q2\nT5 P5 D0.8 Q7\n";
+    let o = Options {
+        dialect: Dialect::Linuxcnc,
+        tools: ngc::parse_tool_table(table).unwrap(),
+        tool_orientations: ngc::parse_tool_orientations(table).unwrap(),
+        ..Options::default()
+    };
+    assert_eq!(o.tool_orientations, [(4, 2), (5, 7)]);
+    let (line, msg) = ngc::parse_tool_orientations("T1 D1\nT2 D1 Q12\n").unwrap_err();
+    assert_eq!(line, 2);
+    assert!(msg.contains("Q0 to Q9"), "{msg}");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../tests/data/conformance/comp_lathe_tool_table_q.ngc"),
+    )
+    .unwrap();
+    let m: Vec<ngc::Move> = read_str_with(Path::new("t.ngc"), &text, &o)
+        .collect::<Result<_, _>>()
+        .unwrap();
+    let r = |v: f64| (v * 1e4).round() / 1e4 + 0.0;
+    // (X, Z) of each end and (X, Z) of each arc centre, as rs274 prints them.
+    let got: Vec<([f64; 2], Option<[f64; 2]>)> = m
+        .iter()
+        .map(|m| {
+            let c = match m.motion {
+                Motion::Arc { center_mm, .. } => Some([r(center_mm[0]), r(center_mm[2])]),
+                _ => None,
+            };
+            ([r(m.end[Axis::X]), r(m.end[Axis::Z])], c)
+        })
+        .collect();
+    let expected: [([f64; 2], Option<[f64; 2]>); 18] = [
+        ([8.0, 0.0], None),
+        ([1.7, -1.6], None),
+        ([-1.6, 1.7], Some([1.7, 1.7])),
+        ([-1.6, 24.2], None),
+        ([-6.8, 29.4], Some([-6.8, 24.2])),
+        ([-13.6, 36.2], Some([-6.8, 36.2])),
+        ([-13.6, 43.2], None),
+        ([8.0, 44.0], None),
+        ([8.0, 46.0], None),
+        ([-8.0, 46.0], None),
+        ([-10.0, 46.0], None),
+        ([-12.9, 43.1], Some([-10.0, 43.1])),
+        ([-12.9, 36.6], None),
+        ([-5.9839, 30.2], Some([-6.5, 36.5791])),
+        ([-0.4, 24.6], Some([-6.0, 24.6])),
+        ([-0.4, 2.1], None),
+        ([2.5, -0.8], Some([2.5, 2.1])),
+        ([8.0, 0.0], None),
+    ];
+    assert_eq!(got, expected);
 }

@@ -401,10 +401,10 @@ fn unsupported_constructs_are_reported_at_their_word() {
         ),
         ("G41.1 D5\n", 1, 1, "unsupported code `G41.1`"),
         (
-            "G1 F100\nG18 G42 X0\n",
+            "G1 F100\nG19 G42 X0\n",
             2,
             5,
-            "cutter radius compensation outside G17",
+            "cutter radius compensation in G19",
         ),
         ("G1 U5\n", 1, 4, "`U5` (secondary axes"),
         ("M10\n", 1, 1, "unsupported code `M10`"),

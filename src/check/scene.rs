@@ -373,6 +373,49 @@ impl Scene {
         self.pairs.iter().map(|p| self.pair_bodies(p)).collect()
     }
 
+    /// Puts `tool` in the spindle, its tip `tip_below_mm` below the tool body's origin (the
+    /// Z point, where the tip of the tool the scene was built with sits): the cutter, shank
+    /// and holder take its dimensions; the spindle stays. A ball-bar scene has no cutter and
+    /// keeps its tool ball at the Z point, so only its shank and holder change. The caller
+    /// validates `tool` (see [`ToolConfig::for_table_tool`]).
+    pub fn set_tool(&mut self, tool: &ToolConfig, tip_below_mm: f64) {
+        let shift = Pose::from_translation(Vector::new(0.0, 0.0, -tip_below_mm));
+        let body = *self.bodies[self.body_handles[Carrier::Tool as usize]].position();
+        let flutes = tool.flute_length_mm;
+        let shank_top = flutes + tool.shank_length_mm;
+        for part in &mut self.parts {
+            if part.carrier != Carrier::Tool {
+                continue;
+            }
+            let (shape, local) = match part.name.as_str() {
+                "cutter" => z_cylinder(0.0, flutes, 0.5 * tool.cutter_diameter_mm),
+                "shank" => z_cylinder(flutes, shank_top, 0.5 * tool.shank_diameter_mm),
+                "holder" => z_cylinder(
+                    tool.holder_bottom_mm(),
+                    tool.gauge_length_mm,
+                    0.5 * tool.holder_diameter_mm,
+                ),
+                _ => continue,
+            };
+            if part.eroded.is_some() {
+                let skin = CUTTER_SKIN_MM
+                    .min(0.25 * tool.cutter_diameter_mm)
+                    .min(0.25 * flutes);
+                let (eroded, _) =
+                    z_cylinder(skin, flutes - skin, 0.5 * tool.cutter_diameter_mm - skin);
+                part.eroded = Some(eroded);
+                part.skin_mm = skin;
+            }
+            part.shape = shape.clone();
+            part.local = shift * local;
+            if let Some(collider) = self.colliders.get_mut(part.handle) {
+                collider.set_shape(shape);
+                collider.set_position_wrt_parent(part.local);
+                collider.set_position(body * part.local);
+            }
+        }
+    }
+
     /// Poses every body by forward kinematics at `q` (mm, deg).
     pub fn set_axes(&mut self, q: &AxisVec) {
         let poses = self.body_poses(q);

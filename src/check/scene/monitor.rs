@@ -272,6 +272,34 @@ impl SceneMonitor {
         }
     }
 
+    /// Changes the tool in the spindle between two samples ([`Scene::set_tool`]). The parts
+    /// changed shape, so no clearance measured before holds: every pair is measured at the
+    /// next sample, and no contact is searched for back across the change. The tool parts'
+    /// reach from the tip (for the relative bound) is taken again.
+    pub fn set_tool(&mut self, tool: &super::ToolConfig, tip_below_mm: f64) {
+        self.scene.set_tool(tool, tip_below_mm);
+        for (i, state) in self.states.iter_mut().enumerate() {
+            state.slack = 0.0;
+            state.moved = 0.0;
+            state.last_mm = 0.0;
+            state.warm = None;
+            if let Some((frame, _)) = state.relative {
+                let pair = self.scene.pairs[i];
+                let (a, b) = (&self.scene.parts[pair.a], &self.scene.parts[pair.b]);
+                let tool = if a.carrier == Carrier::Tool { a } else { b };
+                let aabb = tool.shape.compute_aabb(&tool.local);
+                let reach = [aabb.mins, aabb.maxs]
+                    .iter()
+                    .flat_map(|x| [aabb.mins, aabb.maxs].map(|y| (x.x, y.y)))
+                    .flat_map(|(x, y)| {
+                        [aabb.mins.z, aabb.maxs.z].map(|z| (x * x + y * y + z * z).sqrt())
+                    })
+                    .fold(0.0, f64::max);
+                state.relative = Some((frame, reach));
+            }
+        }
+    }
+
     /// Geometric queries so far.
     pub fn queries(&self) -> u64 {
         self.queries

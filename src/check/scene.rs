@@ -35,7 +35,7 @@ pub use shapes::{signed_distance, z_cylinder, Circle, CircleHull};
 
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
-use crate::kinematics::Kinematics;
+use crate::kinematics::{Kinematics, Layout};
 use crate::{Axis, AxisVec};
 
 /// Collision groups. A pair of colliders is monitored when each one's membership meets the
@@ -348,7 +348,7 @@ impl Scene {
                 );
                 let r_bar = 0.5 * workpiece.bar_diameter_mm;
                 let (shape, local) = z_cylinder(r_ball, length - r_ball, r_bar);
-                builder.bar_motion = Some(bar_motion(o, length, r_bar));
+                builder.bar_motion = Some(bar_motion(machine.kinematics.layout, o, length, r_bar));
                 builder.add(
                     "bar",
                     Carrier::Bar,
@@ -547,9 +547,22 @@ impl Frustum {
 /// and `b` the tool end, a point of the bar (within `L + r` of `a`) moves at most
 /// `|da| + (L + r) |d dir|`, and `|d dir| <= 2 (|da| + |db|) / L`; `|db| = |dXYZ|`,
 /// `|da| <= |O| |d tilt| + rho_O |dC|`.
-fn bar_motion(o: Vector3<f64>, length: f64, r_bar: f64) -> [f64; 3] {
+fn bar_motion(layout: Layout, o: Vector3<f64>, length: f64, r_bar: f64) -> [f64; 3] {
     let k = 1.0 + 2.0 * (length + r_bar) / length;
-    [k, k * o.norm(), k * o.x.hypot(o.y)]
+    [
+        k,
+        k * o.norm(),
+        k * from_table_axis(layout, [o.x, o.y, o.z]),
+    ]
+}
+
+/// Distance of table point `p` (mm) from the table axis: C (the table's Z), or A (its X)
+/// for trt-ab.
+fn from_table_axis(layout: Layout, p: [f64; 3]) -> f64 {
+    match layout.table_axis() {
+        Some(Axis::A) => p[1].hypot(p[2]),
+        _ => p[0].hypot(p[1]),
+    }
 }
 
 /// Collects parts and derives the monitored pairs from their groups.
@@ -612,7 +625,7 @@ impl Builder {
                     let y = if i & 2 == 0 { aabb.mins.y } else { aabb.maxs.y };
                     let z = if i & 4 == 0 { aabb.mins.z } else { aabb.maxs.z };
                     far = far.max((x * x + y * y + z * z).sqrt());
-                    rho = rho.max(x.hypot(y));
+                    rho = rho.max(from_table_axis(self.kinematics.layout, [x, y, z]));
                 }
                 if carrier == Carrier::Table {
                     [0.0, far, rho]

@@ -275,3 +275,29 @@ fn a_b_beyond_the_samples_travel_is_a_travel_violation_and_a_c_word_is_refused()
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("has no C axis"), "{err}");
 }
+
+#[test]
+fn the_cone_test_on_the_dual_rotary_table_tilts_b_by_alpha_plus_and_minus_beta() {
+    // 15/10 cone: at θ = 0 the tool leans α + β = 25 deg toward table -X, at θ = 180 deg
+    // α - β = 5 deg toward +X. On trt-ab the tool axis t gives B = asin(t_x): -25 and +5.
+    // At θ = 90 deg, t = Ry(-β) (0, -sin α, cos α), so A = atan2(sin α, cos β cos α).
+    let dir = scratch("trt-ab", "cone");
+    std::fs::write(
+        dir.join("s.toml"),
+        format!(
+            "machine = {:?}\n[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 100.0]\nballbar_length_mm = 100.0\nfeed_mm_min = 500.0\n[check]\ncollisions = false\n",
+            linuxcnc_machine("xyzab-tdr")
+        ),
+    )
+    .unwrap();
+    let out = common::mtsim_plain(&dir, &["check", "s.toml", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let b = &v["axes"]["B"];
+    assert!((b["min"].as_f64().unwrap() + 25.0).abs() < 1e-6, "{b}");
+    assert!((b["max"].as_f64().unwrap() - 5.0).abs() < 1e-3, "{b}");
+    let (al, be) = (15f64.to_radians(), 10f64.to_radians());
+    let a90 = al.sin().atan2(be.cos() * al.cos()).to_degrees();
+    let a_max = v["axes"]["A"]["max"].as_f64().unwrap();
+    // |A| peaks near θ = 90 deg, a little above its value there.
+    assert!(a_max >= a90 - 1e-3 && a_max < a90 + 0.1, "{a_max} vs {a90}");
+}

@@ -8,8 +8,27 @@
 //! A point p fixed to the table appears in the machine frame at
 //!
 //! ```text
-//! m = pivot + R(q) p,   R = Rx(A) Rz(C)  (trt-ac)   or   R = Ry(B) Rz(C)  (trt-bc)
+//! m = pivot + R(q) p,   R = Rx(A) Rz(C)  (trt-ac),   Ry(B) Rz(C)  (trt-bc),
+//!                       R = Ry(-B) Rx(-A)  (trt-ab)
 //! ```
+//!
+//! trt-ac and trt-bc turn the table by +A (+B, +C) about +X (+Y, +Z), as LinuxCNC's
+//! xyzac-trt and xyzbc-trt kinematics do (the opposite of the ISO directions, as LinuxCNC
+//! notes). trt-ab is LinuxCNC's table-dual-rotary machine (`xyzab_tdr_kins`): B tilts a
+//! cradle about Y, A turns the table about the cradle's X axis, both in the conventional
+//! directions (the table turns by -A and -B, so the tool turns by +A and +B relative to the
+//! work). Its kinematics, written out with `(sa, ca) = sin/cos A`, `(sb, cb) = sin/cos B`:
+//!
+//! ```text
+//!                     | cb   sa sb   -ca sb |
+//! R = Ry(-B) Rx(-A) = | 0    ca       sa    |
+//!                     | sb  -sa cb    ca cb |
+//! ```
+//!
+//! which is the matrix of `xyzab_tdr_kins`' inverse (work to joints) with its offsets zero.
+//! That component also has an offset of the A axis from the B axis along Z (`z-offset`, -10
+//! mm in the sample configuration); mtsim's axes cross at the pivot, so that offset is not
+//! modelled (its `x-offset`, along A, does not change the kinematics at all).
 //!
 //! Inverse kinematics, for a tool tip p and unit tool axis t = (i, j, k) in the table frame
 //! (t points from the tip toward the spindle): the tilt must carry t onto +Z, and a rotation
@@ -18,6 +37,11 @@
 //! spec's formula) and -X for B. The primary branch has tilt >= 0; the secondary branch has
 //! tilt <= 0 and C + 180 deg. C is unwrapped to stay continuous with the previous value,
 //! and kept when i = j = 0, where it is free.
+//!
+//! For trt-ab, `R t = z` means `Rx(-A) t = Ry(B) z = (sin B, 0, cos B)`: so `B = asin(i)`
+//! and A turns (j, k) onto (0, cos B), `A = atan2(-j, k)` (primary branch, |B| <= 90 deg).
+//! The secondary branch is `B = 180 deg - B`, `A + 180 deg`. A is unwrapped like C and
+//! kept when j = k = 0 (tool along the table's X axis, B = ±90 deg).
 //!
 //! # Nominal and actual
 //!
@@ -50,6 +74,10 @@ pub enum Layout {
     /// Tilting rotary table: B tilts about Y, C turns the table about its own Z.
     #[serde(rename = "trt-bc")]
     TrtBc,
+    /// Table dual rotary (LinuxCNC xyzab-tdr): B tilts a cradle about Y, A turns the table
+    /// about the cradle's X; conventional directions (see the module docs).
+    #[serde(rename = "trt-ab")]
+    TrtAb,
 }
 
 impl Layout {
@@ -59,6 +87,7 @@ impl Layout {
             Layout::Xyz => &[Axis::X, Axis::Y, Axis::Z],
             Layout::TrtAc => &[Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::C],
             Layout::TrtBc => &[Axis::X, Axis::Y, Axis::Z, Axis::B, Axis::C],
+            Layout::TrtAb => &[Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::B],
         }
     }
 
@@ -68,6 +97,25 @@ impl Layout {
             Layout::Xyz => None,
             Layout::TrtAc => Some(Axis::A),
             Layout::TrtBc => Some(Axis::B),
+            Layout::TrtAb => Some(Axis::B),
+        }
+    }
+
+    /// The axis that turns the table on the cradle, if any: C, or A for trt-ab.
+    pub fn table_axis(self) -> Option<Axis> {
+        match self {
+            Layout::Xyz => None,
+            Layout::TrtAc | Layout::TrtBc => Some(Axis::C),
+            Layout::TrtAb => Some(Axis::A),
+        }
+    }
+
+    /// +1 when a positive rotary command turns the table positively about its axis line's
+    /// direction (+X for A, +Y for B, +Z for C), -1 when negatively (trt-ab).
+    pub fn table_turn_sign(self) -> f64 {
+        match self {
+            Layout::TrtAb => -1.0,
+            _ => 1.0,
         }
     }
 
@@ -76,6 +124,7 @@ impl Layout {
             Layout::Xyz => "xyz",
             Layout::TrtAc => "trt-ac",
             Layout::TrtBc => "trt-bc",
+            Layout::TrtAb => "trt-ab",
         }
     }
 }
@@ -136,24 +185,26 @@ impl Kinematics {
     /// point given relative to the pivot at home to the machine frame, `T_tilt(tilt) (pivot + p)`.
     pub fn actual_cradle_pose(&self, q: &AxisVec) -> Isometry3<f64> {
         let home = Isometry3::from_parts(Translation3::from(self.pivot_mm), Default::default());
+        let sign = self.layout.table_turn_sign();
         match self.layout.tilt_axis() {
-            Some(tilt) => self.actual_line(tilt).turn(q[tilt]) * home,
+            Some(tilt) => self.actual_line(tilt).turn(sign * q[tilt]) * home,
             None => home,
         }
     }
 
     /// The actual pose of the table at `q`: maps a table-frame point p to the machine
-    /// frame, `m = T_tilt(tilt) T_C(C) (pivot + p)`. The nominal pose when all location
-    /// errors are zero.
+    /// frame, `m = T_tilt(tilt) T_C(C) (pivot + p)` (for trt-ab `T_B(-B) T_A(-A)`). The
+    /// nominal pose when all location errors are zero.
     pub fn actual_table_pose(&self, q: &AxisVec) -> Isometry3<f64> {
         let home = Isometry3::from_parts(Translation3::from(self.pivot_mm), Default::default());
-        match self.layout.tilt_axis() {
-            None => home,
-            Some(tilt) => {
-                self.actual_line(tilt).turn(q[tilt])
-                    * self.actual_line(Axis::C).turn(q[Axis::C])
+        let sign = self.layout.table_turn_sign();
+        match (self.layout.tilt_axis(), self.layout.table_axis()) {
+            (Some(tilt), Some(table)) => {
+                self.actual_line(tilt).turn(sign * q[tilt])
+                    * self.actual_line(table).turn(sign * q[table])
                     * home
             }
+            _ => home,
         }
     }
 
@@ -164,12 +215,13 @@ impl Kinematics {
             return self.table_to_machine(q, p);
         }
         let x = Point3::from(self.pivot_mm + p.coords);
-        match self.layout.tilt_axis() {
-            None => x,
-            Some(tilt) => {
-                let on_c = self.actual_line(Axis::C).turn_point(q[Axis::C], &x);
-                self.actual_line(tilt).turn_point(q[tilt], &on_c)
+        let sign = self.layout.table_turn_sign();
+        match (self.layout.tilt_axis(), self.layout.table_axis()) {
+            (Some(tilt), Some(table)) => {
+                let on_table = self.actual_line(table).turn_point(sign * q[table], &x);
+                self.actual_line(tilt).turn_point(sign * q[tilt], &on_table)
             }
+            _ => x,
         }
     }
 
@@ -178,12 +230,14 @@ impl Kinematics {
         self.rotation_of(&self.rotary_sin_cos(q))
     }
 
-    /// Sine and cosine of C and of the tilt at `q` ([`RotarySinCos`]).
+    /// Sine and cosine of the table axis (C, or A for trt-ab) and of the tilt at `q`
+    /// ([`RotarySinCos`]).
     #[inline]
     pub fn rotary_sin_cos(&self, q: &AxisVec) -> RotarySinCos {
         let tilt = self.layout.tilt_axis().map_or(0.0, |t| q[t]);
+        let table = self.layout.table_axis().map_or(0.0, |t| q[t]);
         RotarySinCos {
-            c: q[Axis::C].to_radians().sin_cos(),
+            c: table.to_radians().sin_cos(),
             tilt: tilt.to_radians().sin_cos(),
         }
     }
@@ -206,7 +260,7 @@ impl Kinematics {
             Some(a) => add_small_angle(q[a].to_radians(), reference[a].to_radians(), sc),
         };
         RotarySinCos {
-            c: angle(Some(Axis::C), at.c),
+            c: angle(self.layout.table_axis(), at.c),
             tilt: angle(tilt, at.tilt),
         }
     }
@@ -215,10 +269,16 @@ impl Kinematics {
     #[inline]
     pub fn rotation_of(&self, angles: &RotarySinCos) -> Rotation3<f64> {
         // Written out with one sin_cos per angle (the ball bar reads it three times a sample):
-        // Rx(A) Rz(C) and Ry(B) Rz(C).
+        // Rx(A) Rz(C), Ry(B) Rz(C) and Ry(-B) Rx(-A).
         let (sc, cc) = angles.c;
         let m = match self.layout {
             Layout::Xyz => return Rotation3::identity(),
+            Layout::TrtAb => {
+                // For trt-ab the table axis (the `c` slot) is A.
+                let (sa, ca) = (sc, cc);
+                let (sb, cb) = angles.tilt;
+                Matrix3::new(cb, sa * sb, -ca * sb, 0.0, ca, sa, sb, -sa * cb, ca * cb)
+            }
             Layout::TrtAc => {
                 let (sa, ca) = angles.tilt;
                 Matrix3::new(cc, -sc, 0.0, ca * sc, ca * cc, -sa, sa * sc, sa * cc, ca)
@@ -254,9 +314,28 @@ impl Kinematics {
 
     /// Inverse kinematics on `branch`, with C unwrapped near `previous_c_deg` (and kept
     /// there when the tool axis is along the table's Z). `axis` need not be normalized.
+    /// For trt-ab the table axis is A: `previous_c_deg` is then the previous A.
     pub fn inverse(&self, pose: &ToolPose, branch: Branch, previous_c_deg: f64) -> AxisVec {
         let mut q = AxisVec::ZERO;
-        if let Some(tilt_axis) = self.layout.tilt_axis() {
+        if self.layout == Layout::TrtAb {
+            let t = pose.axis.normalize();
+            let b = t.x.clamp(-1.0, 1.0).asin().to_degrees();
+            let a = if t.y.hypot(t.z) < C_FREE_EPS {
+                previous_c_deg
+            } else {
+                let a = (-t.y).atan2(t.z).to_degrees();
+                let a = match branch {
+                    Branch::Primary => a,
+                    Branch::Secondary => a + 180.0,
+                };
+                unwrap_near(a, previous_c_deg)
+            };
+            q[Axis::B] = match branch {
+                Branch::Primary => b,
+                Branch::Secondary => 180.0 - b,
+            };
+            q[Axis::A] = a;
+        } else if let Some(tilt_axis) = self.layout.tilt_axis() {
             let t = pose.axis.normalize();
             let tilt = t.z.clamp(-1.0, 1.0).acos().to_degrees();
             // Direction (angle about Z) that t's horizontal part must be turned to by C.
@@ -285,7 +364,8 @@ impl Kinematics {
     }
 }
 
-/// `(sin, cos)` of C and of the tilting axis (A or B; 0 without one), as
+/// `(sin, cos)` of the table axis (`c`: C, or A for trt-ab) and of the tilting axis (A or
+/// B; 0 without one), as
 /// [`Kinematics::rotation_of`] takes them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RotarySinCos {

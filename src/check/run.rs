@@ -5,12 +5,14 @@
 //! demands of the machine; with `dynamics` the samples are instead the actual axis positions
 //! from the interpolator and the servo models, so that overshoot past a limit is caught too.
 
-use std::collections::BTreeMap;
+use std::cell::RefCell;
+use std::collections::{BTreeMap, VecDeque};
+use std::rc::Rc;
 
 use serde::Serialize;
 
 use crate::check::limits::{AxisUsage, LimitsMonitor, Violation, ViolationKind};
-use crate::check::scene::{EngagementSummary, EventKind, Scene, SceneMonitor};
+use crate::check::scene::{EngagementSummary, EventKind, Scene, SceneMonitor, ToolConfig};
 use crate::error::Result;
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario};
@@ -60,16 +62,79 @@ impl CheckReport {
     }
 }
 
-/// The collision scene as a sink: each sample's axis positions (θ computed where reported).
+/// Tool changes read from the move stream ahead of the samples: (block index, tool number).
+type ToolChanges = Rc<RefCell<VecDeque<(u64, u32)>>>;
+
+/// The collision scene as a sink: each sample's axis positions (θ computed where reported),
+/// with the tool in the spindle changed when the samples reach the block that changed it.
 struct SceneSink {
     monitor: SceneMonitor,
+    changes: ToolChanges,
+    /// Stack and tip offset below the Z point (mm) of each tool-table tool.
+    stacks: BTreeMap<u32, (ToolConfig, f64)>,
+    /// The scenario's `[tool]`: tool 0 and tools not in the table.
+    reference: ToolConfig,
+    active: u32,
 }
 
 impl Sink for SceneSink {
     fn push(&mut self, s: &Sample) -> Result<()> {
+        loop {
+            let next = self.changes.borrow().front().copied();
+            match next {
+                Some((index, tool)) if index <= s.block_index => {
+                    self.changes.borrow_mut().pop_front();
+                    if tool != self.active {
+                        self.active = tool;
+                        match self.stacks.get(&tool) {
+                            Some((stack, below)) => self.monitor.set_tool(stack, *below),
+                            None => self.monitor.set_tool(&self.reference, 0.0),
+                        }
+                    }
+                }
+                _ => break,
+            }
+        }
         self.monitor.push_at(s.time_s, s.line, &s.actual);
         Ok(())
     }
+}
+
+/// The scene stack of every tool of the scenario's tool table (see
+/// [`ToolConfig::for_table_tool`]) with its tip offset below the Z point, mm.
+fn tool_stacks(scenario: &Scenario) -> Result<BTreeMap<u32, (ToolConfig, f64)>> {
+    let mut stacks = BTreeMap::new();
+    for t in &scenario.reader.tools {
+        let shape = scenario
+            .tool_shapes
+            .get(&t.number)
+            .copied()
+            .unwrap_or_default();
+        let stack = scenario.tool.for_table_tool(
+            &scenario.path,
+            t.number,
+            t.length_mm,
+            t.diameter_mm,
+            &shape,
+        )?;
+        stacks.insert(t.number, (stack, t.length_mm));
+    }
+    Ok(stacks)
+}
+
+/// `moves` unchanged, noting in `changes` the index of each move whose tool differs from
+/// the one before (the first move's tool when it is not 0).
+fn note_tool_changes<'a>(moves: program::Moves<'a>, changes: ToolChanges) -> program::Moves<'a> {
+    let (mut index, mut active) = (0u64, 0u32);
+    Box::new(moves.inspect(move |m| {
+        if let Ok(m) = m {
+            if m.tool != active {
+                active = m.tool;
+                changes.borrow_mut().push_back((index, m.tool));
+            }
+            index += 1;
+        }
+    }))
 }
 
 /// Checks a scenario's program against its machine. A cone or circle is checked as the
@@ -109,7 +174,11 @@ pub fn check_with(
     // the first move, which brings the machine to the program's start, is not checked:
     // sampling starts at its end, which must lie within the machine's reach like every
     // other point. A reader error, wherever it comes, passes through and ends the check.
-    let moves = Box::new(from_first_end(run.moves, kin));
+    let changes = ToolChanges::default();
+    let mut moves = from_first_end(run.moves, kin);
+    if scenario.check.collisions {
+        moves = note_tool_changes(moves, changes.clone());
+    }
     let theta_of = move |q: &AxisVec| frame.map(|f| f.theta_deg(&kin.forward(q).tip));
     let mut limits = LimitsMonitor::new(machine, &theta_of);
     let mut scene = match scenario.check.collisions {
@@ -127,6 +196,10 @@ pub fn check_with(
                     machine,
                 )
                 .with_theta(Box::new(theta_of)),
+                changes,
+                stacks: tool_stacks(scenario)?,
+                reference: scenario.tool.clone(),
+                active: 0,
             })
             .map(|mut sink| {
                 match queries {

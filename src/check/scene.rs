@@ -36,7 +36,7 @@ pub use shapes::{signed_distance, z_cylinder, Circle, CircleHull};
 
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
-use crate::kinematics::Kinematics;
+use crate::kinematics::{Kinematics, Layout};
 use crate::{Axis, AxisVec};
 
 /// Collision groups. A pair of colliders is monitored when each one's membership meets the
@@ -384,7 +384,7 @@ impl Scene {
                 );
                 let r_bar = 0.5 * workpiece.bar_diameter_mm;
                 let (shape, local) = z_cylinder(r_ball, length - r_ball, r_bar);
-                builder.bar_motion = Some(bar_motion(o, length, r_bar));
+                builder.bar_motion = Some(bar_motion(machine.kinematics.layout, o, length, r_bar));
                 builder.add(
                     "bar",
                     Carrier::Bar,
@@ -407,6 +407,49 @@ impl Scene {
     /// Names of the monitored pairs, in the order [`Scene::clearances`] reports them.
     pub fn pair_names(&self) -> Vec<[String; 2]> {
         self.pairs.iter().map(|p| self.pair_bodies(p)).collect()
+    }
+
+    /// Puts `tool` in the spindle, its tip `tip_below_mm` below the tool body's origin (the
+    /// Z point, where the tip of the tool the scene was built with sits): the cutter, shank
+    /// and holder take its dimensions; the spindle stays. A ball-bar scene has no cutter and
+    /// keeps its tool ball at the Z point, so only its shank and holder change. The caller
+    /// validates `tool` (see [`ToolConfig::for_table_tool`]).
+    pub fn set_tool(&mut self, tool: &ToolConfig, tip_below_mm: f64) {
+        let shift = Pose::from_translation(Vector::new(0.0, 0.0, -tip_below_mm));
+        let body = *self.bodies[self.body_handles[Carrier::Tool as usize]].position();
+        let flutes = tool.flute_length_mm;
+        let shank_top = flutes + tool.shank_length_mm;
+        for part in &mut self.parts {
+            if part.carrier != Carrier::Tool {
+                continue;
+            }
+            let (shape, local) = match part.name.as_str() {
+                "cutter" => z_cylinder(0.0, flutes, 0.5 * tool.cutter_diameter_mm),
+                "shank" => z_cylinder(flutes, shank_top, 0.5 * tool.shank_diameter_mm),
+                "holder" => z_cylinder(
+                    tool.holder_bottom_mm(),
+                    tool.gauge_length_mm,
+                    0.5 * tool.holder_diameter_mm,
+                ),
+                _ => continue,
+            };
+            if part.eroded.is_some() {
+                let skin = CUTTER_SKIN_MM
+                    .min(0.25 * tool.cutter_diameter_mm)
+                    .min(0.25 * flutes);
+                let (eroded, _) =
+                    z_cylinder(skin, flutes - skin, 0.5 * tool.cutter_diameter_mm - skin);
+                part.eroded = Some(eroded);
+                part.skin_mm = skin;
+            }
+            part.shape = shape.clone();
+            part.local = shift * local;
+            if let Some(collider) = self.colliders.get_mut(part.handle) {
+                collider.set_shape(shape);
+                collider.set_position_wrt_parent(part.local);
+                collider.set_position(body * part.local);
+            }
+        }
     }
 
     /// Poses every body by forward kinematics at `q` (mm, deg).
@@ -540,9 +583,22 @@ impl Frustum {
 /// and `b` the tool end, a point of the bar (within `L + r` of `a`) moves at most
 /// `|da| + (L + r) |d dir|`, and `|d dir| <= 2 (|da| + |db|) / L`; `|db| = |dXYZ|`,
 /// `|da| <= |O| |d tilt| + rho_O |dC|`.
-fn bar_motion(o: Vector3<f64>, length: f64, r_bar: f64) -> [f64; 3] {
+fn bar_motion(layout: Layout, o: Vector3<f64>, length: f64, r_bar: f64) -> [f64; 3] {
     let k = 1.0 + 2.0 * (length + r_bar) / length;
-    [k, k * o.norm(), k * o.x.hypot(o.y)]
+    [
+        k,
+        k * o.norm(),
+        k * from_table_axis(layout, [o.x, o.y, o.z]),
+    ]
+}
+
+/// Distance of table point `p` (mm) from the table axis: C (the table's Z), or A (its X)
+/// for trt-ab.
+fn from_table_axis(layout: Layout, p: [f64; 3]) -> f64 {
+    match layout.table_axis() {
+        Some(Axis::A) => p[1].hypot(p[2]),
+        _ => p[0].hypot(p[1]),
+    }
 }
 
 /// Collects parts and derives the monitored pairs from their groups.
@@ -605,7 +661,7 @@ impl Builder {
                     let y = if i & 2 == 0 { aabb.mins.y } else { aabb.maxs.y };
                     let z = if i & 4 == 0 { aabb.mins.z } else { aabb.maxs.z };
                     far = far.max((x * x + y * y + z * z).sqrt());
-                    rho = rho.max(x.hypot(y));
+                    rho = rho.max(from_table_axis(self.kinematics.layout, [x, y, z]));
                 }
                 if carrier == Carrier::Table {
                     [0.0, far, rho]

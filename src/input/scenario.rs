@@ -11,7 +11,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::input::program::{CircleTest, ConeTest, Direction, NcOptions};
-use crate::input::scene::{ConeSetup, ToolConfig, WorkpieceConfig, WorkpieceKind};
+use crate::input::scene::{ConeSetup, ToolConfig, ToolShape, WorkpieceConfig, WorkpieceKind};
 use crate::input::toml_text::{self, value_error};
 use crate::Plane;
 
@@ -44,8 +44,9 @@ pub struct ReaderSection {
     pub dialect: Option<ngc::Dialect>,
     /// LinuxCNC tool table (`.tbl`, lengths in mm), relative to the scenario.
     pub tool_table: Option<String>,
-    /// Tools given inline: `tools = [{ number = 1, length_mm = 50.0, diameter_mm = 6.0 }]`.
-    pub tools: Vec<ngc::Tool>,
+    /// Tools given inline: `tools = [{ number = 1, length_mm = 50.0, diameter_mm = 6.0 }]`,
+    /// each optionally with its holder and flutes (see [`ToolEntry`]).
+    pub tools: Vec<ToolEntry>,
     /// LinuxCNC parameter file (`.var`), relative to the scenario: work offsets, G28/G30.
     pub var_file: Option<String>,
     /// Work offsets by code, X Y Z A B C in mm and deg: `G54 = [100, 50, -200, 0, 0, 0]`.
@@ -56,6 +57,33 @@ pub struct ReaderSection {
     pub user_m_codes: std::collections::BTreeMap<String, ngc::UserM>,
     /// Tool-centre-point control on from the start (LinuxCNC TCP kinematics).
     pub tcp: bool,
+}
+
+/// One inline tool of `[reader] tools`: the tool table's number, length offset (mm, the
+/// `.tbl` `Z`) and diameter (mm, `D`), and optionally the collision scene's flute length,
+/// shank and holder (docs/scene.md).
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolEntry {
+    pub number: u32,
+    pub length_mm: f64,
+    pub diameter_mm: f64,
+    pub flute_length_mm: Option<f64>,
+    pub shank_diameter_mm: Option<f64>,
+    pub holder_diameter_mm: Option<f64>,
+    pub holder_length_mm: Option<f64>,
+}
+
+impl ToolEntry {
+    /// The scene geometry this entry gives beyond length and diameter.
+    pub fn shape(&self) -> ToolShape {
+        ToolShape {
+            flute_length_mm: self.flute_length_mm,
+            shank_diameter_mm: self.shank_diameter_mm,
+            holder_diameter_mm: self.holder_diameter_mm,
+            holder_length_mm: self.holder_length_mm,
+        }
+    }
 }
 
 /// `[check]`: options of `mtsim check`.
@@ -211,6 +239,8 @@ pub struct Scenario {
     pub check: CheckSection,
     /// How a program file is read: dialect, axes, tools, offsets, search path.
     pub reader: ngc::Options,
+    /// Scene geometry of inline tools beyond length and diameter, by tool number.
+    pub tool_shapes: std::collections::BTreeMap<u32, ToolShape>,
 }
 
 impl Scenario {
@@ -358,8 +388,15 @@ impl Scenario {
             ));
         }
         let reader = reader_options(path, &text, &file.reader, &machine)?;
+        let tool_shapes = file
+            .reader
+            .tools
+            .iter()
+            .map(|t| (t.number, t.shape()))
+            .collect();
         Ok(Scenario {
             reader,
+            tool_shapes,
             path: path.to_path_buf(),
             tool: file.tool.unwrap_or_else(|| machine.tool.clone()),
             machine,
@@ -472,7 +509,11 @@ fn reader_options(
         let orientations = ngc::parse_tool_orientations(&t).map_err(invalid)?;
         o.tool_orientations.extend(orientations);
     }
-    o.tools.extend(r.tools.iter().copied());
+    o.tools.extend(r.tools.iter().map(|t| ngc::Tool {
+        number: t.number,
+        length_mm: t.length_mm,
+        diameter_mm: t.diameter_mm,
+    }));
     o.search_path = r.subroutine_path.iter().map(|d| resolve(path, d)).collect();
     for (code, effect) in &r.user_m_codes {
         let n = code

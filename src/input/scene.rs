@@ -157,6 +157,68 @@ impl ToolConfig {
     }
 }
 
+/// Geometry a scenario's inline tool (`[reader] tools = [...]`) may give beyond the tool
+/// table's length and diameter, mm. Absent keys come from the scenario's `[tool]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ToolShape {
+    pub flute_length_mm: Option<f64>,
+    pub shank_diameter_mm: Option<f64>,
+    pub holder_diameter_mm: Option<f64>,
+    pub holder_length_mm: Option<f64>,
+}
+
+impl ToolConfig {
+    /// The stack of tool `number` of the tool table, whose length offset is `length_mm` (the
+    /// table's `Z`) and diameter `diameter_mm` (`D`), this stack (the scenario's `[tool]`)
+    /// being the tool of length offset 0. `path` names the file for errors.
+    ///
+    /// The spindle does not move when the tool changes, and a length offset L says how much
+    /// further the tip reaches below the Z point than this tool's tip does (G43 H adds L to
+    /// the Z axis, so that the tip lands on the programmed Z). So the new tool's tip sits L
+    /// below this one's and its gauge length is `gauge_length_mm + L`. The holder is this
+    /// one's unless `shape` gives it. The cutter has diameter D (this one's when D <= 0) and
+    /// this one's flute length, cut to the stick-out below the holder; a plain shank of the
+    /// cutter's diameter runs from the flutes up to the gauge line.
+    pub fn for_table_tool(
+        &self,
+        path: &Path,
+        number: u32,
+        length_mm: f64,
+        diameter_mm: f64,
+        shape: &ToolShape,
+    ) -> Result<ToolConfig> {
+        let gauge = self.gauge_length_mm + length_mm;
+        let holder_length = shape.holder_length_mm.unwrap_or(self.holder_length_mm);
+        let stick_out = gauge - holder_length;
+        if !(stick_out > 0.0) {
+            return Err(Error::invalid(path, format!(
+                "tool T{number}: its length offset {length_mm} mm gives a gauge length of {gauge} mm (the [tool]'s {} mm plus the offset), which the {holder_length} mm holder does not fit: tool lengths are offsets from the [tool], whose tip is the Z point; lengthen [tool] gauge_length_mm or give the tool a shorter holder_length_mm",
+                self.gauge_length_mm
+            )));
+        }
+        let cutter = if diameter_mm > 0.0 {
+            diameter_mm
+        } else {
+            self.cutter_diameter_mm
+        };
+        let flutes = shape
+            .flute_length_mm
+            .unwrap_or(self.flute_length_mm.min(stick_out));
+        let stack = ToolConfig {
+            cutter_diameter_mm: cutter,
+            flute_length_mm: flutes,
+            shank_diameter_mm: shape.shank_diameter_mm.unwrap_or(cutter),
+            shank_length_mm: gauge - flutes,
+            holder_diameter_mm: shape.holder_diameter_mm.unwrap_or(self.holder_diameter_mm),
+            holder_length_mm: holder_length,
+            gauge_length_mm: gauge,
+        };
+        stack
+            .validate(path, "", &format!("tool T{number}"))
+            .map(|_| stack)
+    }
+}
+
 /// What stands on the table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]

@@ -3,7 +3,7 @@
 //! Each rotary axis R turns about an actual line that differs slightly from its nominal
 //! one. The line is given at the home pose (all axes at zero) in the frame of R's parent:
 //! the machine frame for the tilting axis (A or B), the frame the tilting axis carries for
-//! the table axis C. Nominal lines pass through the pivot.
+//! the table axis (C; A on trt-ab). Nominal lines pass through the pivot.
 //!
 //! | axis | nominal n | position errors (um) | orientation errors (urad) |
 //! |---|---|---|---|
@@ -17,6 +17,7 @@
 //! T_R(θ) x = Rot(u_R, θ) (x − p_R) + p_R            turning by θ (Rodrigues, exact)
 //! m = T_tilt(tilt) T_C(C) x                         a table point x (home pose, machine
 //!                                                   coordinates) in the machine frame
+//! m = T_B(−B) T_A(−A) x                             the same on trt-ab (table turns by −A, −B)
 //! ```
 //!
 //! For C this gives u_C ≈ (EB0C, −EA0C, 1); for A, u_A ≈ (1, EC0A, −EB0A). With all errors

@@ -250,6 +250,10 @@ fn table_to_machine(k: &Kinematics, q: &AxisVec, p: [f64; 3]) -> [f64; 3] {
     let [x, y, z] = p;
     let (x, y, z) = match k.layout {
         Layout::Xyz => (x, y, z),
+        Layout::TrtAb => {
+            let m = k.table_rotation(q) * nalgebra::Vector3::new(x, y, z);
+            (m.x, m.y, m.z)
+        }
         Layout::TrtAc | Layout::TrtBc => {
             let (sc, cc) = q[Axis::C].to_radians().sin_cos();
             let (x, y) = (cc * x - sc * y, sc * x + cc * y);
@@ -1134,7 +1138,7 @@ mod tests {
     fn written_out_table_rotation_matches_the_kinematics_module() {
         let q = AxisVec([0.0, 0.0, 0.0, 23.0, -41.0, 137.0]);
         let p = Point3::new(12.5, -7.25, 88.0);
-        for layout in [Layout::Xyz, Layout::TrtAc, Layout::TrtBc] {
+        for layout in [Layout::Xyz, Layout::TrtAc, Layout::TrtBc, Layout::TrtAb] {
             let k = Kinematics::new(layout, Vector3::new(1.0, -2.0, 3.0));
             let expected = k.table_to_machine(&q, &p);
             let got = table_to_machine(&k, &q, [p.x, p.y, p.z]);

@@ -69,11 +69,13 @@ impl ConePath {
         span_rad: f64,
         n: usize,
     ) -> impl Iterator<Item = (f64, AxisVec)> {
-        let mut previous_c = self.axes_near(theta0_rad, C_START_REFERENCE_DEG)[Axis::C];
+        // The table axis: C, or A on a trt-ab machine.
+        let table = self.kinematics.layout.table_axis().unwrap_or(Axis::C);
+        let mut previous_c = self.axes_near(theta0_rad, C_START_REFERENCE_DEG)[table];
         (0..=n).map(move |k| {
             let theta = theta0_rad + span_rad * k as f64 / n as f64;
             let q = self.axes_near(theta, previous_c);
-            previous_c = q[Axis::C];
+            previous_c = q[table];
             (theta, q)
         })
     }
@@ -83,7 +85,8 @@ impl ConePath {
     /// path (truncation ~h⁴q⁽⁵⁾/30 ≈ 1e-11, far below the 0.01 deg the analysis needs).
     pub fn derivative(&self, theta_rad: f64) -> AxisVec {
         const H: f64 = 1e-3;
-        let c0 = self.axes_near(theta_rad, 0.0)[Axis::C];
+        let c0 =
+            self.axes_near(theta_rad, 0.0)[self.kinematics.layout.table_axis().unwrap_or(Axis::C)];
         let q = |dt: f64| self.axes_near(theta_rad + dt, c0);
         (q(-2.0 * H) - q(-H) * 8.0 + q(H) * 8.0 - q(2.0 * H)) * (1.0 / (12.0 * H))
     }

@@ -696,8 +696,13 @@ impl Interp {
         for a in Axis::ALL {
             if let Some(w) = get(a.letter()) {
                 if !self.axes[a.index()] {
-                    return Err(LineError::new(w.span(), format!("`{}`: this machine has no {} axis", &line[w.span()], a.letter()), "axis not on this machine")
-                        .help("check the program is for this machine; a word for a missing axis is never dropped"));
+                    let has: Vec<String> = Axis::ALL
+                        .iter()
+                        .filter(|b| self.axes[b.index()])
+                        .map(|b| b.letter().to_string())
+                        .collect();
+                    return Err(LineError::new(w.span(), format!("`{}`: this machine has no {} axis (it has {})", &line[w.span()], a.letter(), has.join(" ")), "axis not on this machine")
+                        .help(format!("run the program with a machine whose layout has a {} axis, or check the program is for this machine (a six-axis robot pose X Y Z A B C fits no machine mtsim models); a word for a missing axis is never dropped", a.letter())));
                 }
             }
         }

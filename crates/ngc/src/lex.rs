@@ -236,7 +236,7 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     if KNOWN_LETTERS >> (letter as u32 - 'A' as u32) & 1 == 0 {
         let why = match letter {
             'U' | 'V' | 'W' => {
-                " (secondary axes U V W are not supported; use G91 for incremental moves)"
+                " (secondary axes U V W are not supported: mtsim's machines have X Y Z A B C, so a foam cutter's U V or a quill's W cannot be simulated; for a lathe's incremental U W write G91 with X Z)"
             }
             _ => "",
         };

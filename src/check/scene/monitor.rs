@@ -272,6 +272,34 @@ impl SceneMonitor {
         }
     }
 
+    /// Changes the tool in the spindle between two samples ([`Scene::set_tool`]). The parts
+    /// changed shape, so no clearance measured before holds: every pair is measured at the
+    /// next sample, and no contact is searched for back across the change. The tool parts'
+    /// reach from the tip (for the relative bound) is taken again.
+    pub fn set_tool(&mut self, tool: &super::ToolConfig, tip_below_mm: f64) {
+        self.scene.set_tool(tool, tip_below_mm);
+        for (i, state) in self.states.iter_mut().enumerate() {
+            state.slack = 0.0;
+            state.moved = 0.0;
+            state.last_mm = 0.0;
+            state.warm = None;
+            if let Some((frame, _)) = state.relative {
+                let pair = self.scene.pairs[i];
+                let (a, b) = (&self.scene.parts[pair.a], &self.scene.parts[pair.b]);
+                let tool = if a.carrier == Carrier::Tool { a } else { b };
+                let aabb = tool.shape.compute_aabb(&tool.local);
+                let reach = [aabb.mins, aabb.maxs]
+                    .iter()
+                    .flat_map(|x| [aabb.mins, aabb.maxs].map(|y| (x.x, y.y)))
+                    .flat_map(|(x, y)| {
+                        [aabb.mins.z, aabb.maxs.z].map(|z| (x * x + y * y + z * z).sqrt())
+                    })
+                    .fold(0.0, f64::max);
+                state.relative = Some((frame, reach));
+            }
+        }
+    }
+
     /// Geometric queries so far.
     pub fn queries(&self) -> u64 {
         self.queries
@@ -387,7 +415,13 @@ impl SceneMonitor {
             .scene
             .tilt_axis
             .map_or(0.0, |t| d[t].abs().to_radians());
-        [lin, tilt, d[Axis::C].abs().to_radians()]
+        let table = self
+            .scene
+            .kinematics
+            .layout
+            .table_axis()
+            .map_or(0.0, |t| d[t].abs().to_radians());
+        [lin, tilt, table]
     }
 
     /// Conservative advancement of pair `i` along the interval `a -> b`, whose motion bound
@@ -528,6 +562,18 @@ fn in_table_frames(k: &Kinematics, q: &AxisVec, u: Vector3<f64>) -> [Vector3<f64
     use crate::kinematics::Layout;
     let cradle = match k.layout {
         Layout::Xyz => return [u, u],
+        Layout::TrtAb => {
+            // Ry(-B)^T u, then Rx(-A)^T.
+            let (sb, cb) = q[Axis::B].to_radians().sin_cos();
+            let cradle = Vector3::new(cb * u.x + sb * u.z, u.y, -sb * u.x + cb * u.z);
+            let (sa, ca) = q[Axis::A].to_radians().sin_cos();
+            let table = Vector3::new(
+                cradle.x,
+                ca * cradle.y - sa * cradle.z,
+                sa * cradle.y + ca * cradle.z,
+            );
+            return [table, cradle];
+        }
         Layout::TrtAc => {
             let (s, c) = q[Axis::A].to_radians().sin_cos();
             Vector3::new(u.x, c * u.y + s * u.z, -s * u.y + c * u.z)
@@ -553,7 +599,7 @@ mod tests {
 
     #[test]
     fn the_frames_written_out_equal_the_table_rotation() {
-        for layout in [Layout::Xyz, Layout::TrtAc, Layout::TrtBc] {
+        for layout in [Layout::Xyz, Layout::TrtAc, Layout::TrtBc, Layout::TrtAb] {
             let k = Kinematics::new(layout, Vector3::new(5.0, -3.0, 100.0));
             let mut q = AxisVec::ZERO;
             q[Axis::A] = 23.0;
@@ -562,7 +608,7 @@ mod tests {
             let u = Vector3::new(12.0, -250.0, 80.0);
             let [table, cradle] = in_table_frames(&k, &q, u);
             let mut tilt = q;
-            tilt[Axis::C] = 0.0;
+            tilt[layout.table_axis().unwrap_or(Axis::C)] = 0.0;
             assert!((table - k.table_rotation(&q).transpose() * u).norm() < 1e-12);
             if layout != Layout::Xyz {
                 assert!((cradle - k.table_rotation(&tilt).transpose() * u).norm() < 1e-12);

@@ -457,8 +457,8 @@ pub const FEED_TOLERANCE_MM_MIN: f64 = 1.5e-3;
 
 /// Compares rs274's moves with mtsim's rows: the same kinds in the same order, end points
 /// within [`END_TOLERANCE`], feeds within [`FEED_TOLERANCE_MM_MIN`] and dwells within
-/// 1e-4 s. Moves of length zero from a G0/G1 block without axis words are left out on both
-/// sides (rs274 emits them, mtsim does not; docs/rs274.md). Returns the moves compared.
+/// 1e-4 s. Moves of length zero (within 1e-9 mm) are left out on both sides (rs274 emits
+/// them for a G0/G1 block without axis words, mtsim does not; docs/rs274.md). Returns the moves compared.
 ///
 /// `printed_resolution`: widen the end-point tolerance by [`RsMove::rounding_mm`], for
 /// programs whose figures are not exact to rs274's 4 printed decimals (inch programs with
@@ -469,7 +469,10 @@ pub fn compare_moves(
     printed_resolution: bool,
 ) -> Result<usize, String> {
     let moving = |kind: &str, end: &[f64; 6], prev: &mut [f64; 6]| {
-        let keep = !matches!(kind, "rapid" | "feed") || end != prev;
+        // Zero length within 1e-9 mm: a computed end point (`Z[#1 + .65]`) may differ from
+        // the previous one by the rounding of the last bit only.
+        let moved = end.iter().zip(prev.iter()).any(|(a, b)| !((a - b).abs() <= 1e-9));
+        let keep = !matches!(kind, "rapid" | "feed") || moved;
         *prev = *end;
         keep
     };

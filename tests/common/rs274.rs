@@ -471,7 +471,10 @@ pub fn compare_moves(
     let moving = |kind: &str, end: &[f64; 6], prev: &mut [f64; 6]| {
         // Zero length within 1e-9 mm: a computed end point (`Z[#1 + .65]`) may differ from
         // the previous one by the rounding of the last bit only.
-        let moved = end.iter().zip(prev.iter()).any(|(a, b)| !((a - b).abs() <= 1e-9));
+        let moved = end
+            .iter()
+            .zip(prev.iter())
+            .any(|(a, b)| !((a - b).abs() <= 1e-9));
         let keep = !matches!(kind, "rapid" | "feed") || moved;
         *prev = *end;
         keep

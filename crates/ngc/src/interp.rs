@@ -65,7 +65,8 @@ enum MotionMode {
     },
     /// Canned cycle G73, G81-G89: the code ×10.
     Cycle(u32),
-    /// Lathe motion (LinuxCNC): G33 (330), G33.1 (331), G76 (760); crates/ngc/src/lathe.rs.
+    /// Lathe motion (LinuxCNC): G33 (330), G33.1 (331), G76 (760); crates/ngc/src/lathe.rs;
+    /// G70 (700), G71 (710, 711, 712), G72 (720, 721, 722): crates/ngc/src/g7x.rs.
     Lathe(u32),
 }
 
@@ -247,7 +248,9 @@ impl GCode {
             940 => GCode::Feed(FeedRead::PerMinute),
             950 => GCode::Feed(FeedRead::PerRevolution),
             70 | 80 if dialect == Dialect::Linuxcnc => GCode::Diameter(code == 70.0),
-            330 | 331 | 760 if dialect == Dialect::Linuxcnc => {
+            330 | 331 | 760 | 700 | 710 | 711 | 712 | 720 | 721 | 722
+                if dialect == Dialect::Linuxcnc =>
+            {
                 GCode::Motion(Some(Lathe(code as u32)))
             }
             51 | 80 if fanuc => GCode::Control(code as u32),
@@ -264,7 +267,7 @@ impl GCode {
             682 | 690 | 531 => return Err(unsupported(" (G68.2, G53.1 and G69 are Fanuc and Haas codes)", "set dialect = \"fanuc\" or \"haas\"")),
             2540 | 2550 => return Err(unsupported(" (G254/G255 are Haas dynamic work offsets)", "set dialect = \"haas\"")),
             680..=689 => return Err(unsupported(" (2D coordinate rotation G68 and other G68.x are not supported; G68.2 is)", "post-process the program without G68")),
-            330 | 331 | 760 | 70 => return Err(unsupported(" (G7, G33, G33.1 and G76 are read in the LinuxCNC dialect)", "set dialect = \"linuxcnc\"")),
+            330 | 331 | 760 | 70 | 700..=722 => return Err(unsupported(" (G7, G33, G33.1, G70-G72 and G76 are read in the LinuxCNC dialect)", "set dialect = \"linuxcnc\"")),
             840 | 870 | 880 => return Err(unsupported(" (this canned cycle is not supported; G73 G81 G82 G83 G85 G86 G89 are)", "")),
             _ => return Err(unsupported("", "")),
         })
@@ -293,6 +296,8 @@ pub struct Interp {
     diameter: bool,
     /// This block's G7 (true) or G8 (false) when it changed the mode (G76 reads it).
     diameter_switched: Option<bool>,
+    /// A G70-G72 block waiting for the reader to read its profile subroutine.
+    pub g7x: Option<Box<lathe::G7xRequest>>,
     tcp: bool,
     tools: HashMap<u32, Tool>,
     table_given: bool,
@@ -366,6 +371,7 @@ impl Interp {
             spindle_turning: false,
             diameter: false,
             diameter_switched: None,
+            g7x: None,
             tcp: o.tcp,
             tools: o.tools.iter().map(|t| (t.number, *t)).collect(),
             table_given: !o.tools.is_empty(),
@@ -766,7 +772,18 @@ impl Interp {
                 }
             }
         }
+        let block_motion = g
+            .iter()
+            .find_map(|(c, _)| match c {
+                GCode::Motion(mm) => Some(*mm),
+                _ => None,
+            })
+            .unwrap_or(self.motion);
+        let g7x_block = matches!(block_motion, Some(MotionMode::Lathe(700..=722)));
         for letter in ['N', 'T', 'H', 'D', 'L'] {
+            if letter == 'D' && g7x_block {
+                continue;
+            }
             if let Some(word) = get(letter) {
                 integer(&word, line)?;
             }
@@ -1401,7 +1418,10 @@ impl Interp {
             let start = self.pos;
             if self.comp.is_some()
                 && (g53
-                    || matches!(mode, MotionMode::Cycle(_) | MotionMode::Lathe(_))
+                    || matches!(
+                        mode,
+                        MotionMode::Cycle(_) | MotionMode::Lathe(330 | 331 | 760 | 710..=722)
+                    )
                     || self.plane != Plane::XY)
             {
                 return Err(LineError::new(at, "G53, a canned cycle or a plane other than G17 with cutter radius compensation on: expected G40 first", "not with compensation"));
@@ -1577,12 +1597,13 @@ impl Interp {
         let dwell_cycle = matches!(motion, Some(MotionMode::Cycle(820 | 860 | 890)));
         let g10 = has_g(&|c| matches!(c, GCode::NonModal(NonModal::G10)));
         let thread = motion == Some(MotionMode::Lathe(760));
+        let g7x = matches!(motion, Some(MotionMode::Lathe(700..=722)));
         let checks: [(char, bool, &str); 5] = [
-            ('P', thread || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, G76, M19, M50-M53, M62-M66 or M98"),
-            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || thread || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, G76, M19, M61 or M66-M68"),
+            ('P', thread || g7x || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, G76, M19, M50-M53, M62-M66 or M98"),
+            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || thread || g7x || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, G76, M19, M61 or M66-M68"),
             ('L', g10 || cycle || thread || has_m(&[66, 98]), "`L` with no code that uses it: expected L only with G10, a canned cycle, G76, M66 or M98"),
-            ('E', thread || has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with G76 and M66-M68"),
-            ('D', has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),
+            ('E', thread || g7x || has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with G76 and M66-M68"),
+            ('D', g7x || has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),
         ];
         for (letter, ok, message) in checks {
             if let Some(w) = get(letter) {

@@ -19,6 +19,7 @@ use std::collections::VecDeque;
 use super::{Interp, MotionMode};
 use crate::axis::Axis;
 use crate::canon::{FeedMode, Motion, Move};
+use crate::g7x::{self, Seg, C};
 use crate::lex::{LineError, LineResult, Word};
 use crate::AxisVec;
 
@@ -27,6 +28,7 @@ pub(super) fn takes_arc_word(mode: MotionMode, letter: char) -> bool {
     match mode {
         MotionMode::Lathe(330 | 331) => letter == 'K',
         MotionMode::Lathe(760) => matches!(letter, 'I' | 'J' | 'K' | 'R'),
+        MotionMode::Lathe(700..=722) => matches!(letter, 'I' | 'R'),
         _ => false,
     }
 }
@@ -196,6 +198,9 @@ impl Interp {
         at: std::ops::Range<usize>,
         target: AxisVec,
     ) -> LineResult<()> {
+        if code >= 700 {
+            return self.g7x_request(code, get, line_no, queue, at, target);
+        }
         let name = match code {
             330 => "G33",
             331 => "G33.1",
@@ -482,5 +487,354 @@ mod tests {
                 pitch: taper_pitch
             }
         );
+    }
+}
+
+/// Whether G71/G72 extend a profile that ends short of the start X (Z) by a line to it, as
+/// later LinuxCNC versions do; rs274 2.9 does not (measured), so this stays off.
+const EXTEND_PROFILE: bool = false;
+
+/// A G70/G71/G72 block: its words and the profile read so far from the subroutine Q.
+#[derive(Clone, Debug)]
+pub struct G7xRequest {
+    /// 700, 710, 711, 712, 720, 721, 722.
+    code: u32,
+    /// The subroutine: `o<Q> sub` (Q rounded), `None` once its call has started.
+    label: Option<String>,
+    line_no: usize,
+    span: std::ops::Range<usize>,
+    /// The block's X Z (program units, `z + i·x`): the cycle's start point.
+    xz: C,
+    d: f64,
+    e: f64,
+    i: f64,
+    p: f64,
+    r: f64,
+    /// Machine position after the rapid to the start, and whether G91 was in effect.
+    home: AxisVec,
+    incremental: bool,
+    /// The profile's current point (program units).
+    at: C,
+    profile: Vec<Seg>,
+}
+
+impl Interp {
+    /// A G70-G72 block (LinuxCNC 2.9 `convert_g7x`): checks it, makes the rapid to its X Z
+    /// (cutter compensation off), and leaves it in `self.g7x`; the reader then runs the
+    /// profile subroutine Q, whose blocks come to [`Interp::g7x_profile_line`] instead of
+    /// moving the machine, and calls [`Interp::g7x_run`] when it returns.
+    #[allow(clippy::too_many_arguments)]
+    fn g7x_request<'l>(
+        &mut self,
+        code: u32,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        line_no: usize,
+        queue: &mut VecDeque<Move>,
+        at: std::ops::Range<usize>,
+        target: AxisVec,
+    ) -> LineResult<()> {
+        let name = format!("G{}.{}", code / 10, code % 10);
+        let q = get('Q').ok_or_else(|| {
+            LineError::new(
+                at.clone(),
+                format!("{name} without Q: expected Q<n>, the number of the subroutine `o<n> sub` that holds the profile"),
+                "no Q",
+            )
+        })?;
+        if self.comp.is_some() && code != 700 {
+            return Err(LineError::new(
+                at,
+                format!("{name} with cutter compensation on: expected G40 first (only G70 may be compensated)"),
+                "compensation",
+            ));
+        }
+        if self.plane != crate::axis::Plane::ZX {
+            return Err(LineError::new(
+                at,
+                format!("{name} outside G18: expected the lathe plane ZX (G18)"),
+                "not G18",
+            )
+            .help("select G18 before the cycle"));
+        }
+        let i = get('I').map_or(1.0, |w| w.value);
+        if !(i > 0.0) {
+            return Err(LineError::new(
+                at,
+                format!("{name}: expected I (the depth of cut) greater than zero"),
+                "I not positive",
+            ));
+        }
+        // The rapid to the block's X Z, without compensation.
+        let comp = self.comp.take();
+        let start = self.pos;
+        let path = self.path;
+        self.emit(queue, line_no, Motion::Rapid, start, target, path);
+        self.comp = comp;
+        self.pos = target;
+        self.motion = Some(MotionMode::Rapid);
+        let p = self.program_position();
+        let xz = C {
+            re: p[Axis::Z],
+            im: p[Axis::X],
+        };
+        let value = |l: char, default: f64| get(l).map_or(default, |w| w.value);
+        self.g7x = Some(Box::new(G7xRequest {
+            code,
+            label: Some(format!("{}", q.value.round() as i64)),
+            line_no,
+            span: at,
+            xz,
+            d: value('D', 0.0),
+            e: value('E', 0.0),
+            i,
+            p: value('P', 1.0),
+            r: value('R', 0.5),
+            home: target,
+            incremental: !self.absolute,
+            at: xz,
+            profile: Vec::new(),
+        }));
+        Ok(())
+    }
+
+    /// The label of the profile subroutine to call, once, after the G70-G72 block.
+    pub fn g7x_label(&mut self) -> Option<String> {
+        self.g7x.as_mut().and_then(|r| r.label.take())
+    }
+
+    /// One block of the profile subroutine, read as LinuxCNC reads it: G0/G1 add a line,
+    /// G2/G3 an arc (I K absolute, or incremental under G91.1; or R), A a fillet and C a
+    /// chamfer at its end; X Z absolute (incremental under G91); nothing is executed. The
+    /// current point (`#5420`, `#<_x>`) follows the profile.
+    pub fn g7x_profile_line(&mut self, line: &str, words: &[Word]) -> LineResult<()> {
+        let Some(mut req) = self.g7x.take() else {
+            return Ok(());
+        };
+        let result = self.profile_line(&mut req, line, words);
+        self.g7x = Some(req);
+        result
+    }
+
+    fn profile_line(&mut self, req: &mut G7xRequest, line: &str, words: &[Word]) -> LineResult<()> {
+        let get = |l: char| words.iter().find(|w| w.letter == l);
+        let span_of = |w: &Word| w.span();
+        let block_span = words.first().map_or(0..line.len(), span_of);
+        for w in words.iter().filter(|w| w.letter == 'G') {
+            let code = (w.value * 10.0).round() as u32;
+            self.motion = match code {
+                0 => Some(MotionMode::Rapid),
+                10 => Some(MotionMode::Linear),
+                20 => Some(MotionMode::Arc { clockwise: true }),
+                30 => Some(MotionMode::Arc { clockwise: false }),
+                _ => continue,
+            };
+        }
+        let start = req.at;
+        let mut end = if req.incremental {
+            C { re: 0.0, im: 0.0 }
+        } else {
+            start
+        };
+        let half = if self.diameter { 0.5 } else { 1.0 };
+        if let Some(x) = get('X') {
+            end.im = x.value * half;
+        }
+        if let Some(z) = get('Z') {
+            end.re = z.value;
+        }
+        if req.incremental {
+            end = end + start;
+        }
+        let mut center = C { re: 0.0, im: 0.0 };
+        if let Some(i) = get('I') {
+            center.im = i.value;
+        }
+        if let Some(k) = get('K') {
+            center.re = k.value;
+        }
+        if start == end {
+            return Ok(());
+        }
+        let mode = self.motion;
+        match mode {
+            Some(MotionMode::Rapid | MotionMode::Linear) => {
+                req.profile.push(Seg::line(start, end));
+            }
+            Some(MotionMode::Arc { clockwise }) => {
+                if let Some(r) = get('R') {
+                    if get('I').is_some() || get('K').is_some() {
+                        return Err(LineError::new(
+                            span_of(r),
+                            "arc in a G70-G72 profile with both R and I or K: expected one",
+                            "R and I K",
+                        ));
+                    }
+                    let r = r.value;
+                    let chord = end - start;
+                    let h = ((r * r - chord.norm() / 4.0) / chord.norm()).sqrt();
+                    let d = C { re: 0.0, im: h } * chord;
+                    center = (start + end) / 2.0;
+                    center = if clockwise { center - d } else { center + d };
+                } else {
+                    if get('I').is_none() && get('K').is_none() {
+                        return Err(LineError::new(
+                            block_span,
+                            "arc in a G70-G72 profile without I K or R: expected either",
+                            "no centre",
+                        ));
+                    }
+                    if !self.arc_absolute {
+                        center = center + start;
+                    }
+                }
+                req.profile.push(Seg::arc(!clockwise, start, center, end));
+            }
+            _ => {}
+        }
+        if matches!(
+            mode,
+            Some(MotionMode::Rapid | MotionMode::Linear | MotionMode::Arc { .. })
+        ) {
+            match (get('A'), get('C')) {
+                (Some(_), Some(c)) => {
+                    return Err(LineError::new(
+                        span_of(c),
+                        "both A and C on a corner of a G70-G72 profile: expected a fillet (A) or a chamfer (C)",
+                        "A and C",
+                    ))
+                }
+                (Some(a), None) => req.profile.push(Seg::fillet(a.value, end)),
+                (None, Some(c)) => req.profile.push(Seg::chamfer(c.value, end)),
+                (None, None) => {}
+            }
+        }
+        req.at = end;
+        // The current point follows the profile (`#<_x>` in the next block).
+        let scale = self.scale();
+        self.pos[Axis::X] = end.im * scale + self.offset[Axis::X];
+        self.pos[Axis::Z] = end.re * scale + self.offset[Axis::Z] + self.tool_length_mm;
+        Ok(())
+    }
+
+    /// Cuts the profile read (LinuxCNC's `do_g70`, `do_g71`, `do_g72`), emitting its moves
+    /// as G0/G1/G2/G3 blocks of the cycle's line.
+    pub fn g7x_run(&mut self, queue: &mut VecDeque<Move>) -> LineResult<()> {
+        let Some(req) = self.g7x.take() else {
+            return Ok(());
+        };
+        self.pos = req.home;
+        let name = format!("G{}.{}", req.code / 10, req.code % 10);
+        let fail = |m: String| {
+            LineError::new(req.span.clone(), format!("{name}: {m}"), "lathe cycle")
+                .help("check the profile subroutine Q (LinuxCNC's rules for G70-G72)")
+        };
+        // LinuxCNC does nothing with a profile of one move or none.
+        if req.profile.len() <= 1 {
+            return Ok(());
+        }
+        let mut segs = req.profile.clone();
+        let dfront = segs[0].end() - segs[0].start();
+        let last = segs[segs.len() - 1];
+        let dback = last.end() - last.start();
+        let start = req.at;
+        let (x, z) = (req.xz.im, req.xz.re);
+        let moves: Vec<(g7x::Out, bool)> = match req.code {
+            700 => g7x::Profile::new(segs)
+                .g70(req.xz, req.d, req.e, req.p)
+                .map_err(fail)?,
+            c => {
+                let g72 = c >= 720;
+                if EXTEND_PROFILE
+                    && !g72
+                    && dback.re.abs() > 0.0
+                    && dfront.im * (x - start.im) < 0.0
+                {
+                    segs.push(Seg::line(
+                        start,
+                        C {
+                            re: start.re,
+                            im: x,
+                        },
+                    ));
+                }
+                if EXTEND_PROFILE && g72 && dback.im.abs() > 0.0 && dfront.re * (z - start.re) < 0.0
+                {
+                    segs.push(Seg::line(
+                        start,
+                        C {
+                            re: z,
+                            im: start.im,
+                        },
+                    ));
+                }
+                g7x::Profile::new(segs)
+                    .g71(
+                        g72,
+                        c % 10,
+                        req.xz,
+                        C { re: 0.0, im: 0.0 },
+                        req.d,
+                        req.i,
+                        req.r,
+                    )
+                    .map_err(fail)?
+                    .into_iter()
+                    .map(|o| (o, false))
+                    .collect()
+            }
+        };
+        let scale = self.scale();
+        let to_machine = |p: C, s: &Interp| {
+            let mut m = s.pos;
+            m[Axis::X] = p.im * scale + s.offset[Axis::X];
+            m[Axis::Z] = p.re * scale + s.offset[Axis::Z] + s.tool_length_mm;
+            m
+        };
+        for (mv, uncompensated) in moves {
+            let start = self.pos;
+            let (motion, target) = match mv {
+                g7x::Out::Rapid(p) => (Motion::Rapid, to_machine(p, self)),
+                g7x::Out::Feed(p) => (Motion::Linear, to_machine(p, self)),
+                g7x::Out::Arc { ccw, center, end } => {
+                    let target = to_machine(end, self);
+                    // LinuxCNC skips an arc that ends where the tool is (within 1e-4).
+                    let same = |a: Axis| ((target[a] - start[a]) / scale).abs() < 1e-4;
+                    if same(Axis::X) && same(Axis::Z) {
+                        continue;
+                    }
+                    let c = to_machine(center, self);
+                    (
+                        Motion::Arc {
+                            clockwise: !ccw,
+                            plane: self.plane,
+                            center_mm: [c[Axis::X], c[Axis::Y], c[Axis::Z]],
+                        },
+                        target,
+                    )
+                }
+            };
+            if motion != Motion::Rapid && (self.feed.is_none() || self.feed == Some(0.0)) {
+                return Err(fail(
+                    "feed move with no feed programmed: expected an F word before the cycle".into(),
+                ));
+            }
+            self.motion = Some(match motion {
+                Motion::Rapid => MotionMode::Rapid,
+                Motion::Linear => MotionMode::Linear,
+                Motion::Arc { clockwise, .. } => MotionMode::Arc { clockwise },
+                Motion::Dwell { .. } => unreachable!("no dwell in a cycle"),
+            });
+            let path = self.path;
+            if self.comp.is_some() && !uncompensated {
+                self.comp_element(queue, req.line_no, motion, start, target)
+                    .map_err(|m| LineError::new(req.span.clone(), m, "cutter compensation"))?;
+            } else {
+                let comp = self.comp.take();
+                self.emit(queue, req.line_no, motion, start, target, path);
+                self.comp = comp;
+            }
+            self.pos = target;
+        }
+        Ok(())
     }
 }

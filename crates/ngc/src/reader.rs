@@ -325,6 +325,9 @@ pub struct Moves {
     percent_seen: bool,
     language_checked: bool,
     notices: Vec<Notice>,
+    /// Reading the profile of a G70-G72 block: the call depth to return to, and the
+    /// cycle's line.
+    g7x_capture: Option<(usize, Cursor)>,
 }
 
 impl Moves {
@@ -355,6 +358,7 @@ impl Moves {
             percent_seen: false,
             language_checked: false,
             notices: Vec::new(),
+            g7x_capture: None,
         }
     }
 
@@ -1127,7 +1131,18 @@ impl Moves {
         self.line(line, here, next).map_err(|e| {
             self.finished = true;
             self.error_at(here, e)
-        })
+        })?;
+        if let Some((depth, at)) = self.g7x_capture {
+            if self.frames.len() <= depth {
+                // The profile subroutine returned: cut it.
+                self.g7x_capture = None;
+                self.interp.g7x_run(&mut self.queue).map_err(|e| {
+                    self.finished = true;
+                    self.error_at(at, e)
+                })?;
+            }
+        }
+        Ok(())
     }
 
     fn line(&mut self, line: &str, here: Cursor, next: Cursor) -> LineResult<()> {
@@ -1172,6 +1187,9 @@ impl Moves {
                 if words.is_empty() {
                     return Ok(());
                 }
+                if self.g7x_capture.is_some() {
+                    return self.interp.g7x_profile_line(line, &words);
+                }
                 let stop = self.interp.block(
                     line,
                     &words,
@@ -1180,6 +1198,14 @@ impl Moves {
                     &mut self.notices,
                     &self.programs[here.file].path,
                 )?;
+                if let Some(label) = self.interp.g7x_label() {
+                    // G70-G72: run the profile subroutine (o-word flow and parameters
+                    // as usual) with its blocks captured as the profile, not executed.
+                    let depth = self.frames.len();
+                    self.call(&label, &[], true, 1, next, 0..line.len())?;
+                    self.g7x_capture = Some((depth, here));
+                    return Ok(());
+                }
                 match stop {
                     Stop::None => {}
                     Stop::End => self.finished = true,

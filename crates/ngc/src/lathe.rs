@@ -198,7 +198,7 @@ impl Interp {
         at: std::ops::Range<usize>,
         target: AxisVec,
     ) -> LineResult<()> {
-        if code >= 700 {
+        if (700..=722).contains(&code) {
             return self.g7x_request(code, get, line_no, queue, at, target);
         }
         let name = match code {

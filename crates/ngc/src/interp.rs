@@ -17,6 +17,10 @@ use crate::lex::{LineError, LineResult, Word, EXPECTED_WORDS};
 use crate::options::{Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER};
 use crate::reader::{Notice, ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
 
+/// Lathe codes (G33, G33.1, G76): a child module, so it reads the modal state directly.
+#[path = "lathe.rs"]
+mod lathe;
+
 /// What the reader must do after a block.
 pub enum Stop {
     None,
@@ -61,6 +65,9 @@ enum MotionMode {
     },
     /// Canned cycle G73, G81-G89: the code ×10.
     Cycle(u32),
+    /// Lathe motion (LinuxCNC): G33 (330), G33.1 (331), G76 (760); crates/ngc/src/lathe.rs;
+    /// G70 (700), G71 (710, 711, 712), G72 (720, 721, 722): crates/ngc/src/g7x.rs.
+    Lathe(u32),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -114,6 +121,8 @@ enum GCode {
     AlignRotary,
     /// Haas G254 (true, dynamic work offset) and G255 (false).
     Dwo(bool),
+    /// LinuxCNC G7 (true: X words are diameters) and G8 (false: radii).
+    Diameter(bool),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -134,6 +143,7 @@ enum Group {
     Coord,
     Path,
     Retract,
+    Diameter,
 }
 
 impl GCode {
@@ -157,6 +167,7 @@ impl GCode {
             GCode::Tilt(_) => Group::Tilt,
             GCode::AlignRotary => Group::AlignRotary,
             GCode::Dwo(_) => Group::Dwo,
+            GCode::Diameter(_) => Group::Diameter,
         }
     }
 
@@ -236,6 +247,12 @@ impl GCode {
             930 => GCode::Feed(FeedRead::InverseTime),
             940 => GCode::Feed(FeedRead::PerMinute),
             950 => GCode::Feed(FeedRead::PerRevolution),
+            70 | 80 if dialect == Dialect::Linuxcnc => GCode::Diameter(code == 70.0),
+            330 | 331 | 760 | 700 | 710 | 711 | 712 | 720 | 721 | 722
+                if dialect == Dialect::Linuxcnc =>
+            {
+                GCode::Motion(Some(Lathe(code as u32)))
+            }
             51 | 80 if fanuc => GCode::Control(code as u32),
             1030 | 1870 if dialect == Dialect::Haas => GCode::Control(code as u32),
             682 if fanuc => GCode::Tilt(true),
@@ -250,7 +267,8 @@ impl GCode {
             682 | 690 | 531 => return Err(unsupported(" (G68.2, G53.1 and G69 are Fanuc and Haas codes)", "set dialect = \"fanuc\" or \"haas\"")),
             2540 | 2550 => return Err(unsupported(" (G254/G255 are Haas dynamic work offsets)", "set dialect = \"haas\"")),
             680..=689 => return Err(unsupported(" (2D coordinate rotation G68 and other G68.x are not supported; G68.2 is)", "post-process the program without G68")),
-            760 | 840 | 870 | 880 => return Err(unsupported(" (this canned cycle is not supported; G73 G81 G82 G83 G85 G86 G89 are)", "")),
+            330 | 331 | 760 | 70 | 700..=722 => return Err(unsupported(" (G7, G33, G33.1, G70-G72 and G76 are read in the LinuxCNC dialect)", "set dialect = \"linuxcnc\"")),
+            840 | 870 | 880 => return Err(unsupported(" (this canned cycle is not supported; G73 G81 G82 G83 G85 G86 G89 are)", "")),
             _ => return Err(unsupported("", "")),
         })
     }
@@ -272,6 +290,14 @@ pub struct Interp {
     /// F as programmed (program units per minute or per revolution, or 1/min).
     feed: Option<f64>,
     spindle_rpm: f64,
+    /// M3 or M4 in effect (M5, M6, M2/M30 stop it, as rs274 does by default).
+    spindle_turning: bool,
+    /// G7: X words are diameters (LinuxCNC lathe mode); G8 (default): radii.
+    diameter: bool,
+    /// This block's G7 (true) or G8 (false) when it changed the mode (G76 reads it).
+    diameter_switched: Option<bool>,
+    /// A G70-G72 block waiting for the reader to read its profile subroutine.
+    pub g7x: Option<Box<lathe::G7xRequest>>,
     tcp: bool,
     tools: HashMap<u32, Tool>,
     /// Lathe tool orientations by tool number (tool table Q).
@@ -344,6 +370,10 @@ impl Interp {
             inch: false,
             feed: None,
             spindle_rpm: 0.0,
+            spindle_turning: false,
+            diameter: false,
+            diameter_switched: None,
+            g7x: None,
             tcp: o.tcp,
             tools: o.tools.iter().map(|t| (t.number, *t)).collect(),
             orientations: o.tool_orientations.iter().copied().collect(),
@@ -469,6 +499,9 @@ impl Interp {
                 },
         );
         g.insert("_rpm".into(), self.spindle_rpm);
+        g.insert("_lathe_diameter_mode".into(), t(self.diameter));
+        g.insert("_lathe_radius_mode".into(), t(!self.diameter));
+        g.insert("_spindle_on".into(), t(self.spindle_turning));
         g.insert(
             "_coord_system".into(),
             match self.coord {
@@ -492,7 +525,7 @@ impl Interp {
                 Some(MotionMode::Linear) => 10.0,
                 Some(MotionMode::Arc { clockwise: true }) => 20.0,
                 Some(MotionMode::Arc { .. }) => 30.0,
-                Some(MotionMode::Cycle(c)) => c as f64,
+                Some(MotionMode::Cycle(c) | MotionMode::Lathe(c)) => c as f64,
                 None => 800.0,
             },
         );
@@ -553,7 +586,22 @@ impl Interp {
         end: AxisVec,
         path: PathControl,
     ) {
-        let (feed, feed_mode) = self.feed_out();
+        let feed = self.feed_out();
+        self.emit_with_feed(queue, line, motion, start, end, path, feed);
+    }
+
+    /// [`Interp::emit`] with the feed given (spindle-synchronised moves: pitch × S).
+    #[allow(clippy::too_many_arguments)]
+    fn emit_with_feed(
+        &mut self,
+        queue: &mut VecDeque<Move>,
+        line: usize,
+        motion: Motion,
+        start: AxisVec,
+        end: AxisVec,
+        path: PathControl,
+        (feed, feed_mode): (Option<f64>, FeedMode),
+    ) {
         let mut mv = Move {
             line,
             motion,
@@ -688,10 +736,32 @@ impl Interp {
                 }
             }
         }
+        // G7 (this block's or in effect): X words are diameters, everywhere X is read
+        // (motion, G10, G92), as LinuxCNC halves them.
+        self.diameter_switched = None;
+        for &(c, _) in g.iter() {
+            if let GCode::Diameter(d) = c {
+                if d != self.diameter {
+                    self.diameter_switched = Some(d);
+                }
+            }
+        }
+        for &(c, _) in g.iter() {
+            if let GCode::Diameter(d) = c {
+                self.diameter = d;
+            }
+        }
+        let halve_x = self.diameter;
         let get = |l: char| {
             words
                 .get(single[(l as u8 - b'A') as usize] as usize)
                 .copied()
+                .map(|mut w| {
+                    if halve_x && l == 'X' {
+                        w.value /= 2.0;
+                    }
+                    w
+                })
         };
         for a in Axis::ALL {
             if let Some(w) = get(a.letter()) {
@@ -708,7 +778,18 @@ impl Interp {
         }
         // G41.1/G42.1 take the diameter itself in D.
         let d_diameter = g.iter().any(|(c, _)| matches!(c, GCode::CutterComp(3 | 4)));
+        let block_motion = g
+            .iter()
+            .find_map(|(c, _)| match c {
+                GCode::Motion(mm) => Some(*mm),
+                _ => None,
+            })
+            .unwrap_or(self.motion);
+        let g7x_block = matches!(block_motion, Some(MotionMode::Lathe(700..=722)));
         for letter in ['N', 'T', 'H', 'D', 'L'] {
+            if letter == 'D' && g7x_block {
+                continue;
+            }
             if let Some(word) = get(letter).filter(|_| letter != 'D' || !d_diameter) {
                 integer(&word, line)?;
             }
@@ -777,6 +858,8 @@ impl Interp {
                 }
                 6 => {
                     self.tool = self.next_tool;
+                    // rs274's default: the spindle stops for a tool change.
+                    self.spindle_turning = false;
                     // LinuxCNC resynchronises after a tool change: the program point
                     // becomes where the tool is (the compensated point after G40).
                     if let Some(p) = self.comp_out.take() {
@@ -832,6 +915,14 @@ impl Interp {
         }
         if let Some(on) = tcp_m {
             self.tcp = on;
+        }
+        // After M6 (LinuxCNC's order of execution): M3/M4 start the spindle, M5 stops it.
+        for &(code, _) in m.iter() {
+            match code {
+                3 | 4 => self.spindle_turning = true,
+                5 => self.spindle_turning = false,
+                _ => {}
+            }
         }
         // 3. M70-M73: modal state.
         for &(code, w) in m.iter() {
@@ -1117,7 +1208,14 @@ impl Interp {
             let used = g.iter().any(|(c, _)| {
                 matches!(c, GCode::ToolLength(_) | GCode::Tcp(true))
                     || matches!(c, GCode::NonModal(NonModal::G10))
-            });
+            }) || g
+                .iter()
+                .find_map(|(c, _)| match c {
+                    GCode::Motion(mm) => Some(*mm),
+                    _ => None,
+                })
+                .unwrap_or(self.motion)
+                == Some(MotionMode::Lathe(760));
             if !used {
                 return Err(LineError::new(
                     h.span(),
@@ -1307,10 +1405,10 @@ impl Interp {
                 return Err(LineError::new(first, "axis word with no motion mode: expected G00, G01, G02 or G03 in this or an earlier block", "no motion mode"));
             };
             if !matches!(mode, MotionMode::Arc { .. }) {
-                if let Some(w) = arc_words
-                    .iter()
-                    .find(|w| !(matches!(mode, MotionMode::Cycle(_)) && w.letter == 'R'))
-                {
+                if let Some(w) = arc_words.iter().find(|w| {
+                    !(matches!(mode, MotionMode::Cycle(_)) && w.letter == 'R')
+                        && !lathe::takes_arc_word(mode, w.letter)
+                }) {
                     return Err(LineError::new(
                         w.span(),
                         format!(
@@ -1338,7 +1436,7 @@ impl Interp {
             let at = motion_code
                 .and_then(|(_, w)| Some(w.span()))
                 .unwrap_or(first.clone());
-            if mode != MotionMode::Rapid {
+            if !matches!(mode, MotionMode::Rapid | MotionMode::Lathe(_)) {
                 match self.feed_mode {
                     FeedRead::InverseTime if feed_word.is_none() => {
                         return Err(LineError::new(at, "feed move in G93 (inverse time) without F: expected an F word in every G01/G02/G03 block", "no F in this block").help("add F = 1 / (block time in minutes) to this block"));
@@ -1354,7 +1452,10 @@ impl Interp {
             }
             let start = self.pos;
             if self.comp.as_ref().is_some_and(|c| {
-                g53 || matches!(mode, MotionMode::Cycle(_)) || self.plane != c.plane
+                g53 || matches!(
+                    mode,
+                    MotionMode::Cycle(_) | MotionMode::Lathe(330 | 331 | 760 | 710..=722)
+                ) || self.plane != c.plane
             }) {
                 return Err(LineError::new(at, "G53, a canned cycle or a change of plane with cutter radius compensation on: expected G40 first", "not with compensation"));
             }
@@ -1365,7 +1466,8 @@ impl Interp {
                 MotionMode::Rapid | MotionMode::Linear => self.arc_not_allowed = false,
                 _ => {}
             }
-            if self.frame().is_some() && matches!(mode, MotionMode::Cycle(_)) {
+            if self.frame().is_some() && matches!(mode, MotionMode::Cycle(_) | MotionMode::Lathe(_))
+            {
                 return Err(LineError::new(
                     at,
                     "canned cycle with G68.2 or G254 active: not supported yet",
@@ -1376,6 +1478,10 @@ impl Interp {
             match mode {
                 MotionMode::Cycle(code) => {
                     self.cycle(line, code, &get, line_no, queue, first)?;
+                }
+                MotionMode::Lathe(code) => {
+                    let target = self.target(&axis_words, g53);
+                    self.lathe(line, code, &get, line_no, queue, at.clone(), target)?;
                 }
                 _ => {
                     let target = self.target(&axis_words, g53);
@@ -1394,7 +1500,9 @@ impl Interp {
                                 center_mm,
                             }
                         }
-                        MotionMode::Cycle(_) => unreachable!("handled above"),
+                        MotionMode::Cycle(_) | MotionMode::Lathe(_) => {
+                            unreachable!("handled above")
+                        }
                     };
                     if self.comp.is_some() {
                         self.comp_element(queue, line_no, motion, start, target)
@@ -1528,12 +1636,14 @@ impl Interp {
         let peck = matches!(motion, Some(MotionMode::Cycle(730 | 830)));
         let dwell_cycle = matches!(motion, Some(MotionMode::Cycle(820 | 860 | 890)));
         let g10 = has_g(&|c| matches!(c, GCode::NonModal(NonModal::G10)));
+        let thread = motion == Some(MotionMode::Lathe(760));
+        let g7x = matches!(motion, Some(MotionMode::Lathe(700..=722)));
         let checks: [(char, bool, &str); 5] = [
-            ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, M19, M50-M53, M62-M66 or M98"),
-            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, M19, M61 or M66-M68"),
-            ('L', g10 || cycle || has_m(&[66, 98]) || has_g(&|c| matches!(c, GCode::CutterComp(3 | 4))), "`L` with no code that uses it: expected L only with G10, a canned cycle, G41.1/G42.1, M66 or M98"),
-            ('E', has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with M66-M68"),
-            ('D', has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),
+            ('P', thread || g7x || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, G76, M19, M50-M53, M62-M66 or M98"),
+            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || thread || g7x || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, G76, M19, M61 or M66-M68"),
+            ('L', g10 || cycle || thread || has_m(&[66, 98]) || has_g(&|c| matches!(c, GCode::CutterComp(3 | 4))), "`L` with no code that uses it: expected L only with G10, a canned cycle, G41.1/G42.1, G76, M66 or M98"),
+            ('E', thread || g7x || has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with G76 and M66-M68"),
+            ('D', g7x || has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),
         ];
         for (letter, ok, message) in checks {
             if let Some(w) = get(letter) {

@@ -32,6 +32,7 @@ mod comp;
 mod error;
 mod expr;
 mod frame;
+mod g7x;
 mod interp;
 mod lex;
 mod options;

@@ -383,6 +383,9 @@ pub struct Moves {
     words: Vec<Word<'static>>,
     /// A read error of a streamed file, reported by the next step.
     io_error: Option<std::io::Error>,
+    /// Reading the profile of a G70-G72 block: the call depth to return to, and the
+    /// cycle's line.
+    g7x_capture: Option<(usize, Cursor)>,
 }
 
 impl Moves {
@@ -416,6 +419,7 @@ impl Moves {
             buf: String::new(),
             words: Vec::new(),
             io_error: None,
+            g7x_capture: None,
         }
     }
 
@@ -1304,7 +1308,19 @@ impl Moves {
                 });
             }
         }
-        result
+        result?;
+        if let Some((depth, at)) = self.g7x_capture {
+            if self.frames.len() <= depth {
+                // The profile subroutine returned: cut it.
+                self.g7x_capture = None;
+                self.interp.g7x_run(&mut self.queue).map_err(|e| {
+                    self.finished = true;
+                    // The cycle's line is read again from its program for the message.
+                    self.error_at(at, e, "")
+                })?;
+            }
+        }
+        Ok(())
     }
 
     fn line(&mut self, line: &str, here: Cursor, next: Cursor) -> LineResult<()> {
@@ -1357,6 +1373,9 @@ impl Moves {
                     self.words = reuse(words);
                     return Ok(());
                 }
+                if self.g7x_capture.is_some() {
+                    return self.interp.g7x_profile_line(line, &words);
+                }
                 let stop = self.interp.block(
                     line,
                     &words,
@@ -1365,6 +1384,14 @@ impl Moves {
                     &mut self.notices,
                     &self.programs[here.file].path,
                 )?;
+                if let Some(label) = self.interp.g7x_label() {
+                    // G70-G72: run the profile subroutine (o-word flow and parameters
+                    // as usual) with its blocks captured as the profile, not executed.
+                    let depth = self.frames.len();
+                    self.call(&label, &[], true, 1, next, 0..line.len())?;
+                    self.g7x_capture = Some((depth, here));
+                    return Ok(());
+                }
                 match stop {
                     Stop::None => {}
                     Stop::End => self.finished = true,

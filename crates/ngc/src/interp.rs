@@ -15,6 +15,7 @@ use crate::expr::{Param, Params};
 use crate::frame::{self, Frame, Mat3, RotaryTable};
 use crate::lex::{LineError, LineResult, Word, EXPECTED_WORDS};
 use crate::options::{Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER};
+use crate::polar::Polar;
 use crate::reader::{Notice, ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
 
 /// What the reader must do after a block.
@@ -288,6 +289,10 @@ pub struct Interp {
     cycle_z: Option<f64>,
     cycle_q: Option<f64>,
     cycle_p: Option<f64>,
+    /// Initial level of the canned cycles in a row (machine coordinate along the plane's
+    /// normal, mm): LinuxCNC keeps it from the first cycle block until a motion that is not
+    /// a cycle, so G98 returns there and G91 measures R from it.
+    cycle_initial: Option<f64>,
     user_m: HashMap<u32, UserM>,
     noticed: Vec<u32>,
     saved: Option<Box<Saved>>,
@@ -351,11 +356,13 @@ impl Interp {
             coord: 1,
             offset: AxisVec::ZERO,
             path: PathControl::BLEND,
-            retract_r: false,
+            // LinuxCNC starts in G99 (rs274's initial retract mode is the R plane).
+            retract_r: o.dialect == Dialect::Linuxcnc,
             cycle_r: None,
             cycle_z: None,
             cycle_q: None,
             cycle_p: None,
+            cycle_initial: None,
             user_m: o.user_m.clone(),
             noticed: Vec::new(),
             saved: None,
@@ -628,7 +635,7 @@ impl Interp {
                 "too many words",
             ));
         }
-        let mut single: [Option<Word>; 26] = [None; 26];
+        let mut single: [Option<Word>; 28] = [None; 28];
         for word in words {
             match word.letter {
                 'G' => {
@@ -687,7 +694,7 @@ impl Interp {
                     ));
                 }
                 letter => {
-                    let slot = &mut single[(letter as u8 - b'A') as usize];
+                    let slot = &mut single[slot(letter)];
                     if let Some(first) = slot {
                         return Err(LineError::new(word.span(), format!("repeated `{letter}` word (first `{}`): expected each of {EXPECTED_WORDS} at most once per block, apart from G and M", &line[first.span()]), "repeated word"));
                     }
@@ -695,7 +702,7 @@ impl Interp {
                 }
             }
         }
-        let get = |l: char| single[(l as u8 - b'A') as usize];
+        let get = |l: char| single[slot(l)];
         for a in Axis::ALL {
             if let Some(w) = get(a.letter()) {
                 if !self.axes[a.index()] {
@@ -1101,7 +1108,20 @@ impl Interp {
                 // A new cycle forgets nothing LinuxCNC keeps; G80 ends the cycle.
             }
             self.motion = mm;
+            if !matches!(mm, Some(MotionMode::Cycle(_))) {
+                self.cycle_initial = None;
+            }
         }
+        // Polar words `@` `^` become X Y words here, after the block's units and work system
+        // took effect; in a G91 canned cycle they step each repeat (see `cycle`).
+        let polar_word = get('@').or(get('^'));
+        let mut polar_cycle = false;
+        if let Some(pw) = polar_word {
+            let mut resolved = single;
+            polar_cycle = self.polar_words(line, &pw, &get, nonmodal, &mut resolved)?;
+            single = resolved;
+        }
+        let get = |l: char| single[slot(l)];
         let dwell_x = dialect.is_fanuc_family() && matches!(nonmodal, Some((NonModal::Dwell, _)));
         // Fixed buffers, no allocation per block.
         let mut axis_buf = [(Axis::X, Word::EMPTY); 6];
@@ -1260,9 +1280,10 @@ impl Interp {
         let g53 = matches!(nonmodal, Some((NonModal::G53, _)));
         if !axes_used
             && (!axis_words.is_empty()
+                || polar_cycle
                 || (!arc_words.is_empty() && !matches!(self.motion, Some(MotionMode::Cycle(_)))))
         {
-            let mut first = usize::MAX..usize::MAX;
+            let mut first = polar_word.map_or(usize::MAX..usize::MAX, |w| w.span());
             for w in axis_words.iter().map(|(_, w)| w).chain(arc_words.iter()) {
                 if w.span.0 < first.start {
                     first = w.span();
@@ -1463,6 +1484,86 @@ impl Interp {
             locals: true,
             span: g65.span(),
         })
+    }
+
+    /// Checks the polar words of a block (LinuxCNC `enhance_block`, `find_ends`) and turns
+    /// them into X and Y words in `single`. Returns true when they are left for a G91 canned
+    /// cycle to apply at each repeat.
+    fn polar_words<'l>(
+        &self,
+        line: &str,
+        pw: &Word<'l>,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        nonmodal: Option<(NonModal, Word<'l>)>,
+        single: &mut [Option<Word<'l>>; 28],
+    ) -> LineResult<bool> {
+        let err = |m: &str| LineError::new(pw.span(), m.to_string(), "polar coordinate");
+        if self.dialect != Dialect::Linuxcnc {
+            return Err(err(
+                "polar coordinates `@` `^` in a Fanuc-family program: expected X and Y",
+            )
+            .help("polar coordinates are a LinuxCNC feature; set dialect = \"linuxcnc\""));
+        }
+        if let Some(xy) = get('X').or(get('Y')) {
+            return Err(LineError::new(
+                xy.span(),
+                format!(
+                    "`{}` with polar coordinates: expected either X Y or `@` `^`",
+                    &line[xy.span()]
+                ),
+                "X or Y with polar",
+            ));
+        }
+        if self.plane != Plane::XY {
+            return Err(err(
+                "polar coordinates outside G17: expected the XY plane (G17)",
+            ));
+        }
+        if !self.axes[Axis::X.index()] || !self.axes[Axis::Y.index()] {
+            return Err(err("polar coordinates on a machine without X and Y axes"));
+        }
+        if self.frame().is_some() {
+            return Err(err(
+                "polar coordinates with G68.2 or G254 active: not supported",
+            ));
+        }
+        match nonmodal {
+            Some((NonModal::G53, _)) => {
+                return Err(err("polar coordinates with G53: expected program coordinates (LinuxCNC: \"Cannot use polar coordinates with G53\")"));
+            }
+            Some((NonModal::G10 | NonModal::G92 | NonModal::G52, w)) => {
+                return Err(err(&format!(
+                    "polar coordinates with `{}`: expected `@` `^` only for a move",
+                    &line[w.span()]
+                )));
+            }
+            _ => {}
+        }
+        let polar = Polar {
+            radius: get('@').map(|w| w.value),
+            angle_deg: get('^').map(|w| w.value),
+        };
+        if !self.absolute && matches!(self.motion, Some(MotionMode::Cycle(_))) && nonmodal.is_none()
+        {
+            return Ok(true);
+        }
+        let p = self.program_position();
+        let cur = [p[Axis::X], p[Axis::Y]];
+        let xy = if self.absolute {
+            polar.absolute(cur)
+        } else {
+            polar.incremental(cur)
+        }
+        .map_err(err)?;
+        for (k, letter) in ['X', 'Y'].into_iter().enumerate() {
+            single[slot(letter)] = Some(Word {
+                letter,
+                value: if self.absolute { xy[k] } else { xy[k] - cur[k] },
+                number: "",
+                span: pw.span,
+            });
+        }
+        Ok(false)
     }
 
     /// A word no code of the block (or the modal motion) uses is an error, never dropped.
@@ -1781,7 +1882,7 @@ impl Interp {
             }
         };
         // Everything in machine coordinates along n, and for u v.
-        let old_n = self.pos[n];
+        let old_n = *self.cycle_initial.get_or_insert(self.pos[n]);
         let (r, bottom, du, dv, mut pu, mut pv);
         if self.absolute {
             r = r_prog + self.offset[n] + tlo(n);
@@ -1853,6 +1954,9 @@ impl Interp {
                 exact,
             );
         };
+        // LinuxCNC's CYCLE_MACRO: the first hole is approached at the current level (when
+        // above R), the next ones at the clear level.
+        let mut current = self.pos[n];
         let mut old = old_n;
         if old < r {
             go(
@@ -1865,14 +1969,33 @@ impl Interp {
                 r,
             );
             old = r;
+            current = r;
         }
         let clear = if self.retract_r { r } else { old };
-        for _ in 0..repeats {
+        let polar = Polar {
+            radius: get('@').map(|w| w.value),
+            angle_deg: get('^').map(|w| w.value),
+        };
+        for k in 0..repeats {
             pu += du;
             pv += dv;
-            go(self, queue, &mut cur, Motion::Rapid, pu, pv, old);
-            if old != r {
+            if !self.absolute && polar.is_some() {
+                // G91 polar: each repeat turns (and moves out) about the work origin.
+                let (ox, oy) = (self.offset[Axis::X], self.offset[Axis::Y]);
+                let xy = polar
+                    .cycle_step([(pu - ox) / scale, (pv - oy) / scale])
+                    .map_err(|m| LineError::new(at.clone(), m, "polar coordinate"))?;
+                pu = xy[0] * scale + ox;
+                pv = xy[1] * scale + oy;
+            }
+            if k == 0 && current > r {
+                go(self, queue, &mut cur, Motion::Rapid, pu, pv, current);
                 go(self, queue, &mut cur, Motion::Rapid, pu, pv, r);
+            } else {
+                go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
+                if clear > r {
+                    go(self, queue, &mut cur, Motion::Rapid, pu, pv, r);
+                }
             }
             match code {
                 810 => {
@@ -1920,7 +2043,6 @@ impl Interp {
                     go(self, queue, &mut cur, Motion::Linear, pu, pv, clear);
                 }
             }
-            old = clear;
         }
         self.pos = cur;
         let _ = line;
@@ -2278,6 +2400,15 @@ impl<T: Copy, const N: usize> std::ops::Deref for Small<T, N> {
 
 /// M-code groups (LinuxCNC's modal groups 4, 6, 7, 8, 9, 10); two of one group may not
 /// share a block.
+/// Index of a word letter in a block's table of single words: A-Z, then `@` and `^`.
+fn slot(letter: char) -> usize {
+    match letter {
+        '@' => 26,
+        '^' => 27,
+        l => (l as u8 - b'A') as usize,
+    }
+}
+
 fn m_group(code: u32) -> Option<u8> {
     Some(match code {
         0 | 1 | 2 | 30 | 60 | 98 | 99 => 4,

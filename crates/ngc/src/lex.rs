@@ -9,7 +9,7 @@ use std::ops::Range;
 use crate::expr::{function_at, Eval, ExprError, Param, Params};
 
 /// Word letters the reader knows.
-pub const EXPECTED_WORDS: &str = "G M N F S T X Y Z A B C I J K R P Q L H D E";
+pub const EXPECTED_WORDS: &str = "G M N F S T X Y Z A B C I J K R P Q L H D E @ ^";
 
 /// An error on one line; `span` is a byte range in that line.
 #[derive(Debug)]
@@ -164,7 +164,8 @@ pub fn lex<'l>(line: &'l str, params: &Params, fanuc: bool) -> LineResult<Lexed<
             }
             assigns.push((p, v));
             i = e.i;
-        } else if c.is_ascii_alphabetic() {
+        } else if c.is_ascii_alphabetic() || c == b'@' || c == b'^' {
+            // `@` and `^`: LinuxCNC polar radius and angle.
             let w = lex_word(line, i, params, fanuc)?;
             i = w.span.1;
             words.push(w);
@@ -219,7 +220,7 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let number = &line[number_start..i];
     let span = start..if number.is_empty() { start + 1 } else { i };
     let text = &line[span.clone()];
-    if !"GMNOFSTXYZABCIJKRPQLHDE".contains(letter) {
+    if !"GMNOFSTXYZABCIJKRPQLHDE@^".contains(letter) {
         let why = match letter {
             'U' | 'V' | 'W' => {
                 " (secondary axes U V W are not supported; use G91 for incremental moves)"

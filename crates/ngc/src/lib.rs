@@ -35,6 +35,7 @@ mod frame;
 mod interp;
 mod lex;
 mod options;
+mod polar;
 mod reader;
 
 pub use axis::{Axis, AxisVec, Plane};

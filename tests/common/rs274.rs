@@ -282,7 +282,36 @@ pub fn parse(text: &str) -> Vec<RsMove> {
                     rounding_mm: moves.last().map_or(0.0, |m: &RsMove| m.rounding_mm),
                 });
             }
-            "STRAIGHT_PROBE" | "RIGID_TAP" => {
+            "STRAIGHT_PROBE" => {
+                // A feed move to the probe point; then rs274's world model (saicanon.cc)
+                // backs the probe off 0.254 mm (0.01 in) towards the start along X Y Z and
+                // goes on from there without printing a call: that back-off is a feed move
+                // here, as in mtsim (docs/gcode.md, probing).
+                let start = moves.last().map_or([0.0; 6], |m: &RsMove| m.end);
+                let end = machine(to_mm(&numbers(args), units), &g5x, &g92, &tlo, rot_deg);
+                let rounding_mm = 5e-5 * units + g5x_r + g92_r + tlo_r;
+                let feed_mm_min = (!per_rev).then_some(feed).flatten();
+                let probe = |end: [f64; 6]| RsMove {
+                    kind: "feed",
+                    end,
+                    feed_mm_min,
+                    dwell_s: None,
+                    center: None,
+                    call: k + 1,
+                    rounding_mm,
+                };
+                moves.push(probe(end));
+                let d: [f64; 3] = std::array::from_fn(|i| start[i] - end[i]);
+                let distance = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                if distance > 0.0 {
+                    let mut back = end;
+                    for i in 0..3 {
+                        back[i] += 0.254 * d[i] / distance;
+                    }
+                    moves.push(probe(back));
+                }
+            }
+            "RIGID_TAP" => {
                 moves.push(RsMove {
                     kind: "unsupported",
                     end: [f64::NAN; 6],

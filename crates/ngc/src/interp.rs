@@ -16,6 +16,7 @@ use crate::frame::{self, Frame, Mat3, RotaryTable};
 use crate::lex::{LineError, LineResult, Word, EXPECTED_WORDS};
 use crate::options::{Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER};
 use crate::polar::Polar;
+use crate::probe;
 use crate::reader::{Notice, ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
 
 /// What the reader must do after a block.
@@ -62,6 +63,8 @@ enum MotionMode {
     },
     /// Canned cycle G73, G81-G89: the code ×10.
     Cycle(u32),
+    /// Straight probe G38.2-G38.5 (LinuxCNC): the code ×10 (see `probe.rs`).
+    Probe(u32),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -224,6 +227,7 @@ impl GCode {
             611 => GCode::Path(1),
             640 => GCode::Path(4),
             730 => GCode::Motion(Some(Cycle(730))),
+            382..=385 if dialect == Dialect::Linuxcnc => GCode::Motion(Some(Probe(code as u32))),
             800 => GCode::Motion(None),
             810 | 820 | 830 | 850 | 860 | 890 => GCode::Motion(Some(Cycle(code as u32))),
             900 => GCode::Distance(true),
@@ -496,7 +500,7 @@ impl Interp {
                 Some(MotionMode::Linear) => 10.0,
                 Some(MotionMode::Arc { clockwise: true }) => 20.0,
                 Some(MotionMode::Arc { .. }) => 30.0,
-                Some(MotionMode::Cycle(c)) => c as f64,
+                Some(MotionMode::Cycle(c) | MotionMode::Probe(c)) => c as f64,
                 None => 800.0,
             },
         );
@@ -1103,6 +1107,16 @@ impl Interp {
             GCode::Motion(mm) => Some((*mm, *w)),
             _ => None,
         });
+        if let Some((Some(MotionMode::Probe(_)), w)) = motion_code {
+            let any_axis = Axis::ALL.iter().any(|a| get(a.letter()).is_some());
+            if !any_axis && get('@').is_none() && get('^').is_none() {
+                return Err(LineError::new(
+                    w.span(),
+                    format!("`{}` without axis words: expected the probe point (LinuxCNC: \"All axes missing with motion code\")", &line[w.span()]),
+                    "no probe point",
+                ));
+            }
+        }
         if let Some((mm, _)) = motion_code {
             if mm != self.motion || !matches!(mm, Some(MotionMode::Cycle(_))) {
                 // A new cycle forgets nothing LinuxCNC keeps; G80 ends the cycle.
@@ -1324,6 +1338,19 @@ impl Interp {
             let at = motion_code
                 .and_then(|(_, w)| Some(w.span()))
                 .unwrap_or(first.clone());
+            if let MotionMode::Probe(_) = mode {
+                // LinuxCNC's convert_probe checks, in its order.
+                let refuse = if self.feed_mode == FeedRead::InverseTime {
+                    Some("probe move in G93 (inverse time): expected G94 (LinuxCNC: \"Cannot probe with zero feed rate\")")
+                } else if self.comp.is_some() {
+                    Some("probe move with cutter radius compensation on: expected G40 first (LinuxCNC: \"Cannot probe with cutter radius comp on\")")
+                } else {
+                    None
+                };
+                if let Some(m) = refuse {
+                    return Err(LineError::new(at, m, "not a probe"));
+                }
+            }
             if mode != MotionMode::Rapid {
                 match self.feed_mode {
                     FeedRead::InverseTime if feed_word.is_none() => {
@@ -1356,6 +1383,11 @@ impl Interp {
                 MotionMode::Cycle(code) => {
                     self.cycle(line, code, &get, line_no, queue, first)?;
                 }
+                MotionMode::Probe(code) => {
+                    let target = self.target(&axis_words, g53);
+                    self.probe(queue, line_no, code, start, target)
+                        .map_err(|m| LineError::new(at, m, "probe move"))?;
+                }
                 _ => {
                     let target = self.target(&axis_words, g53);
                     let motion = match mode {
@@ -1373,7 +1405,9 @@ impl Interp {
                                 center_mm,
                             }
                         }
-                        MotionMode::Cycle(_) => unreachable!("handled above"),
+                        MotionMode::Cycle(_) | MotionMode::Probe(_) => {
+                            unreachable!("handled above")
+                        }
                     };
                     if self.comp.is_some() {
                         self.comp_element(queue, line_no, motion, start, target)
@@ -1484,6 +1518,38 @@ impl Interp {
             locals: true,
             span: g65.span(),
         })
+    }
+
+    /// A straight probe G38.2-G38.5 from `start` to `target` (machine coordinates) as
+    /// rs274 standalone runs it: a feed move, the back-off, the probe parameters
+    /// (`probe.rs`).
+    fn probe(
+        &mut self,
+        queue: &mut VecDeque<Move>,
+        line_no: usize,
+        code: u32,
+        start: AxisVec,
+        target: AxisVec,
+    ) -> Result<(), &'static str> {
+        if start == target {
+            // G38.2/G38.4 must move to make contact; G38.3/G38.5 just do nothing.
+            if code == 382 || code == 384 {
+                return Err("G38.2/G38.4 to the start point: expected a probe move (LinuxCNC: \"Start point too close to probe point\")");
+            }
+        } else {
+            self.emit(queue, line_no, Motion::Linear, start, target, self.path);
+        }
+        self.pos = target;
+        let at_target = self.program_position();
+        for (k, v) in probe::parameters(at_target).into_iter().enumerate() {
+            self.params.numbered[probe::FIRST_PARAMETER + k] = v;
+        }
+        let back = probe::backoff(start, target);
+        if back != target {
+            self.emit(queue, line_no, Motion::Linear, target, back, self.path);
+            self.pos = back;
+        }
+        Ok(())
     }
 
     /// Checks the polar words of a block (LinuxCNC `enhance_block`, `find_ends`) and turns

@@ -36,6 +36,7 @@ mod interp;
 mod lex;
 mod options;
 mod polar;
+mod probe;
 mod reader;
 
 pub use axis::{Axis, AxisVec, Plane};

@@ -311,6 +311,20 @@ pub fn parse(text: &str) -> Vec<RsMove> {
                     moves.push(probe(back));
                 }
             }
+            "NURBS_FEED" => {
+                // G5, G5.1, G5.3: rs274 prints no point (`NURBS_FEED(n, ...)`); LinuxCNC's
+                // motion canon cuts the curve into biarcs. `compare_moves` matches it with
+                // the run of mtsim arcs and feeds of one source line.
+                moves.push(RsMove {
+                    kind: "spline",
+                    end: [f64::NAN; 6],
+                    feed_mm_min: None,
+                    dwell_s: None,
+                    center: None,
+                    call: k + 1,
+                    rounding_mm: 0.0,
+                });
+            }
             "RIGID_TAP" => {
                 moves.push(RsMove {
                     kind: "unsupported",
@@ -403,7 +417,7 @@ pub fn run_timed(cmd: &mut Command, timeout: Duration) -> (Option<i32>, String, 
 }
 
 /// A move as `mtsim blocks --csv` prints it.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Row {
     pub line: usize,
     pub kind: String,
@@ -487,6 +501,33 @@ pub fn compare_moves(
         .filter(|m| moving(&m.kind, &m.end, &mut prev))
         .collect();
     let axes = ["X", "Y", "Z", "A", "B", "C"];
+    // A spline (rs274 `NURBS_FEED`, no end point printed) stands for the run of mtsim's
+    // arcs and feeds from one source line; its end shows in the moves after it.
+    let mut merged = Vec::with_capacity(ours.len());
+    let mut j = 0;
+    for r in &rs {
+        if r.kind == "spline" {
+            let Some(first) = ours.get(j) else { break };
+            while ours
+                .get(j)
+                .is_some_and(|m| m.line == first.line && matches!(m.kind.as_str(), "arc" | "feed"))
+            {
+                j += 1;
+            }
+            merged.push(Row {
+                line: first.line,
+                kind: "spline".into(),
+                end: [f64::NAN; 6],
+                feed: None,
+                dwell: None,
+            });
+        } else if let Some(m) = ours.get(j) {
+            merged.push(m.clone());
+            j += 1;
+        }
+    }
+    merged.extend(ours[j.min(ours.len())..].iter().cloned());
+    let ours = merged;
     for (k, (r, m)) in rs.iter().zip(&ours).enumerate() {
         let at = format!(
             "move {} (rs274 call {}, mtsim line {})",
@@ -504,6 +545,9 @@ pub fn compare_moves(
                 0.0
             };
         for i in 0..6 {
+            if r.kind == "spline" {
+                break;
+            }
             // Rotary axes are printed in degrees, never scaled.
             let tolerance = if i < 3 {
                 tolerance

@@ -18,6 +18,7 @@ use crate::options::{Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER
 use crate::polar::Polar;
 use crate::probe;
 use crate::reader::{Notice, ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
+use crate::spline;
 
 /// What the reader must do after a block.
 pub enum Stop {
@@ -65,6 +66,8 @@ enum MotionMode {
     Cycle(u32),
     /// Straight probe G38.2-G38.5 (LinuxCNC): the code ×10 (see `probe.rs`).
     Probe(u32),
+    /// Splines G5 (50), G5.1 (51), NURBS G5.2 (52) (LinuxCNC, see `spline.rs`).
+    Spline(u32),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -118,6 +121,8 @@ enum GCode {
     AlignRotary,
     /// Haas G254 (true, dynamic work offset) and G255 (false).
     Dwo(bool),
+    /// LinuxCNC G5.3: the end of a NURBS (G5.2) block sequence; motion group.
+    NurbsEnd,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -143,7 +148,7 @@ enum Group {
 impl GCode {
     fn group(self) -> Group {
         match self {
-            GCode::Motion(_) => Group::Motion,
+            GCode::Motion(_) | GCode::NurbsEnd => Group::Motion,
             // G4 cannot share a block with a motion code: P and X would be ambiguous.
             GCode::NonModal(NonModal::Dwell) => Group::Motion,
             GCode::NonModal(_) => Group::NonModal,
@@ -228,6 +233,8 @@ impl GCode {
             640 => GCode::Path(4),
             730 => GCode::Motion(Some(Cycle(730))),
             382..=385 if dialect == Dialect::Linuxcnc => GCode::Motion(Some(Probe(code as u32))),
+            50..=52 if dialect == Dialect::Linuxcnc => GCode::Motion(Some(Spline(code as u32))),
+            53 if dialect == Dialect::Linuxcnc => GCode::NurbsEnd,
             800 => GCode::Motion(None),
             810 | 820 | 830 | 850 | 860 | 890 => GCode::Motion(Some(Cycle(code as u32))),
             900 => GCode::Distance(true),
@@ -297,6 +304,11 @@ pub struct Interp {
     /// normal, mm): LinuxCNC keeps it from the first cycle block until a motion that is not
     /// a cycle, so G98 returns there and G91 measures R from it.
     cycle_initial: Option<f64>,
+    /// G5: (I, J) for a following G5 without them, -(P, Q) of the last G5 (program units).
+    spline_ij: [f64; 2],
+    /// G5.2: the NURBS control points so far (program X Y, weight) and the order.
+    nurbs: Vec<spline::ControlPoint>,
+    nurbs_order: usize,
     user_m: HashMap<u32, UserM>,
     noticed: Vec<u32>,
     saved: Option<Box<Saved>>,
@@ -367,6 +379,9 @@ impl Interp {
             cycle_q: None,
             cycle_p: None,
             cycle_initial: None,
+            spline_ij: [0.0; 2],
+            nurbs: Vec::new(),
+            nurbs_order: 3,
             user_m: o.user_m.clone(),
             noticed: Vec::new(),
             saved: None,
@@ -501,6 +516,7 @@ impl Interp {
                 Some(MotionMode::Arc { clockwise: true }) => 20.0,
                 Some(MotionMode::Arc { .. }) => 30.0,
                 Some(MotionMode::Cycle(c) | MotionMode::Probe(c)) => c as f64,
+                Some(MotionMode::Spline(c)) => c as f64,
                 None => 800.0,
             },
         );
@@ -1117,6 +1133,7 @@ impl Interp {
                 ));
             }
         }
+        let previous_motion = self.motion;
         if let Some((mm, _)) = motion_code {
             if mm != self.motion || !matches!(mm, Some(MotionMode::Cycle(_))) {
                 // A new cycle forgets nothing LinuxCNC keeps; G80 ends the cycle.
@@ -1292,6 +1309,26 @@ impl Interp {
         }
         let arc_words = &arc_buf[..n_arc];
         let g53 = matches!(nonmodal, Some((NonModal::G53, _)));
+        // NURBS: G5.2 blocks collect control points, G5.3 moves along them.
+        let nurbs_end = g
+            .iter()
+            .find(|(c, _)| *c == GCode::NurbsEnd)
+            .map(|(_, w)| *w);
+        if nurbs_end.is_some() || self.motion == Some(MotionMode::Spline(52)) {
+            let g52 = motion_code.map(|(_, w)| w);
+            if self.nurbs_block(
+                line,
+                &get,
+                nurbs_end,
+                g52,
+                previous_motion,
+                axis_words,
+                line_no,
+                queue,
+            )? {
+                axes_used = true;
+            }
+        }
         if !axes_used
             && (!axis_words.is_empty()
                 || polar_cycle
@@ -1307,10 +1344,10 @@ impl Interp {
                 return Err(LineError::new(first, "axis word with no motion mode: expected G00, G01, G02 or G03 in this or an earlier block", "no motion mode"));
             };
             if !matches!(mode, MotionMode::Arc { .. }) {
-                if let Some(w) = arc_words
-                    .iter()
-                    .find(|w| !(matches!(mode, MotionMode::Cycle(_)) && w.letter == 'R'))
-                {
+                if let Some(w) = arc_words.iter().find(|w| {
+                    !(matches!(mode, MotionMode::Cycle(_)) && w.letter == 'R')
+                        && !(matches!(mode, MotionMode::Spline(_)) && matches!(w.letter, 'I' | 'J'))
+                }) {
                     return Err(LineError::new(
                         w.span(),
                         format!(
@@ -1383,6 +1420,10 @@ impl Interp {
                 MotionMode::Cycle(code) => {
                     self.cycle(line, code, &get, line_no, queue, first)?;
                 }
+                MotionMode::Spline(code) => {
+                    let target = self.target(&axis_words, g53);
+                    self.spline(line, code, &get, line_no, queue, start, target, at)?;
+                }
                 MotionMode::Probe(code) => {
                     let target = self.target(&axis_words, g53);
                     self.probe(queue, line_no, code, start, target)
@@ -1405,7 +1446,7 @@ impl Interp {
                                 center_mm,
                             }
                         }
-                        MotionMode::Cycle(_) | MotionMode::Probe(_) => {
+                        MotionMode::Cycle(_) | MotionMode::Probe(_) | MotionMode::Spline(_) => {
                             unreachable!("handled above")
                         }
                     };
@@ -1518,6 +1559,193 @@ impl Interp {
             locals: true,
             span: g65.span(),
         })
+    }
+
+    /// Emits the pieces of a spline (program coordinates) as feed moves and arcs.
+    fn spline_pieces(
+        &mut self,
+        queue: &mut VecDeque<Move>,
+        line_no: usize,
+        pieces: &[spline::Piece],
+    ) {
+        let scale = self.scale();
+        let (ox, oy) = (self.offset[Axis::X], self.offset[Axis::Y]);
+        for piece in pieces {
+            let start = self.pos;
+            let mut end = start;
+            let e = piece.end();
+            end[Axis::X] = e[0] * scale + ox;
+            end[Axis::Y] = e[1] * scale + oy;
+            let motion = match *piece {
+                spline::Piece::Line { .. } => Motion::Linear,
+                spline::Piece::Arc { center, ccw, .. } => Motion::Arc {
+                    clockwise: !ccw,
+                    plane: Plane::XY,
+                    center_mm: [
+                        center[0] * scale + ox,
+                        center[1] * scale + oy,
+                        start[Axis::Z],
+                    ],
+                },
+            };
+            self.emit(queue, line_no, motion, start, end, self.path);
+            self.pos = end;
+        }
+    }
+
+    /// The checks LinuxCNC's `convert_spline` makes, shared by G5, G5.1 and G5.2.
+    fn spline_checks<'l>(
+        &self,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        at: &std::ops::Range<usize>,
+    ) -> LineResult<()> {
+        let err = |m: &str| Err(LineError::new(at.clone(), m.to_string(), "spline"));
+        if self.comp.is_some() {
+            return err("spline with cutter radius compensation on: expected G40 first (LinuxCNC: \"Cannot convert spline with cutter radius compensation\")");
+        }
+        if self.plane != Plane::XY {
+            return err("spline outside G17: expected the XY plane (LinuxCNC: \"Splines must be in the XY plane\")");
+        }
+        if self.feed_mode == FeedRead::InverseTime {
+            return err("spline in G93 (inverse time): not supported, expected G94");
+        }
+        if let Some(w) = ['Z', 'A', 'B', 'C'].into_iter().find_map(|l| get(l)) {
+            return Err(LineError::new(w.span(), "axis word other than X Y in a spline block: expected X and Y only (LinuxCNC: \"Splines may not have motion in Z, A, B, or C\")", "not a spline axis"));
+        }
+        Ok(())
+    }
+
+    /// G5 (cubic) or G5.1 (quadratic) from `start` to `target` (machine coordinates).
+    #[allow(clippy::too_many_arguments)]
+    fn spline<'l>(
+        &mut self,
+        line: &str,
+        code: u32,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        line_no: usize,
+        queue: &mut VecDeque<Move>,
+        start: AxisVec,
+        target: AxisVec,
+        at: std::ops::Range<usize>,
+    ) -> LineResult<()> {
+        self.spline_checks(get, &at)?;
+        let _ = line;
+        let scale = self.scale();
+        let prog = |p: AxisVec, a: Axis| (p[a] - self.offset[a]) / scale;
+        let s = [prog(start, Axis::X), prog(start, Axis::Y)];
+        let e = [prog(target, Axis::X), prog(target, Axis::Y)];
+        let (i, j) = (get('I').map(|w| w.value), get('J').map(|w| w.value));
+        let err = |m: &str| Err(LineError::new(at.clone(), m.to_string(), "spline"));
+        let pieces = if code == 51 {
+            let (Some(i), Some(j)) = (i, j) else {
+                return err("G5.1 without I and J: expected both (LinuxCNC: \"Must specify both I and J with G5.1\")");
+            };
+            spline::pieces(&spline::quadratic(s, [i, j], e), 3)
+        } else {
+            let ij = match (i, j) {
+                (Some(i), Some(j)) => [i, j],
+                (None, None) => self.spline_ij,
+                _ => return err("G5 with only one of I and J: expected both, or neither after a G5 (LinuxCNC: \"Must specify both I and J, or neither\")"),
+            };
+            let (Some(p), Some(q)) = (get('P').map(|w| w.value), get('Q').map(|w| w.value)) else {
+                return err("G5 without P and Q: expected both (LinuxCNC: \"Must specify both P and Q with G5\")");
+            };
+            self.spline_ij = [-p, -q];
+            spline::pieces(&spline::cubic(s, ij, e, [p, q]), 4)
+        };
+        self.spline_pieces(queue, line_no, &pieces);
+        // The end is the programmed point exactly.
+        self.pos = target;
+        Ok(())
+    }
+
+    /// A G5.2 block (a control point) or a G5.3 block (the NURBS move). True when the
+    /// block's axis words are used up.
+    #[allow(clippy::too_many_arguments)]
+    fn nurbs_block<'l>(
+        &mut self,
+        line: &str,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        nurbs_end: Option<Word<'l>>,
+        g52: Option<Word<'l>>,
+        previous_motion: Option<MotionMode>,
+        axis_words: &[(Axis, Word<'l>)],
+        line_no: usize,
+        queue: &mut VecDeque<Move>,
+    ) -> LineResult<bool> {
+        let at = nurbs_end
+            .or(g52)
+            .or(axis_words.first().map(|(_, w)| *w))
+            .map_or(0..0, |w| w.span());
+        let err = |m: &str| Err(LineError::new(at.clone(), m.to_string(), "NURBS"));
+        if let Some(w) = nurbs_end {
+            if previous_motion != Some(MotionMode::Spline(52)) {
+                return err("G5.3 without G5.2 first: expected G5.2 control points before it (LinuxCNC: \"Cannot use G5.3 without G5.2 first\")");
+            }
+            if let Some((_, a)) = axis_words.first() {
+                return Err(LineError::new(
+                    a.span(),
+                    format!("`{}` in a G5.3 block: expected G5.3 alone", &line[a.span()]),
+                    "axis word with G5.3",
+                ));
+            }
+            if self.nurbs.len() < self.nurbs_order {
+                return Err(LineError::new(w.span(), format!("NURBS with {} control points: expected at least the order L = {} (LinuxCNC: \"You must specify a number of control points at least equal to the order\")", self.nurbs.len(), self.nurbs_order), "too few control points"));
+            }
+            let cps = std::mem::take(&mut self.nurbs);
+            let pieces = spline::pieces(&cps, self.nurbs_order);
+            self.spline_pieces(queue, line_no, &pieces);
+            self.motion = None;
+            return Ok(true);
+        }
+        if g52.is_none() && axis_words.is_empty() {
+            return Ok(false);
+        }
+        self.spline_checks(get, &at)?;
+        let (x, y) = (get('X'), get('Y'));
+        if x.is_some() != y.is_some() {
+            return err("G5.2 control point with only one of X and Y: expected both (LinuxCNC: \"You must specify both X and Y coordinates for Control Points\")");
+        }
+        let p = get('P').map(|w| w.value);
+        if previous_motion != Some(MotionMode::Spline(52)) {
+            self.nurbs.clear();
+        }
+        if x.is_none() && p.is_some_and(|p| p > 0.0) && !self.nurbs.is_empty() {
+            return err("G5.2 with P and no X Y after the first control point (LinuxCNC: \"Can specify P without X and Y only for the first control point\")");
+        }
+        if x.is_some() && !p.is_some_and(|p| p > 0.0) {
+            return err("G5.2 control point without a positive weight P: expected P > 0 (LinuxCNC: \"Must specify positive weight P for every Control Point\")");
+        }
+        if self.feed.is_none() {
+            return err("NURBS with no feed programmed: expected an F word");
+        }
+        let scale = self.scale();
+        if self.nurbs.is_empty() {
+            let cur = self.program_position();
+            self.nurbs.push(spline::ControlPoint {
+                x: cur[Axis::X],
+                y: cur[Axis::Y],
+                w: if x.is_none() { p.unwrap_or(1.0) } else { 1.0 },
+            });
+            self.nurbs_order = 3;
+        }
+        if let Some(l) = get('L') {
+            if l.value > 3.0 {
+                self.nurbs_order = l.value.round() as usize;
+            }
+        }
+        if x.is_some() {
+            let t = self.target(axis_words, false);
+            self.nurbs.push(spline::ControlPoint {
+                x: (t[Axis::X] - self.offset[Axis::X]) / scale,
+                y: (t[Axis::Y] - self.offset[Axis::Y]) / scale,
+                w: p.unwrap_or(1.0),
+            });
+        }
+        if self.nurbs.len() > 10_000 {
+            return err("more than 10000 NURBS control points: expected G5.3 before");
+        }
+        Ok(true)
     }
 
     /// A straight probe G38.2-G38.5 from `start` to `target` (machine coordinates) as
@@ -1651,12 +1879,14 @@ impl Interp {
             .unwrap_or(self.motion);
         let cycle = matches!(motion, Some(MotionMode::Cycle(_)));
         let peck = matches!(motion, Some(MotionMode::Cycle(730 | 830)));
+        let cubic = matches!(motion, Some(MotionMode::Spline(50)));
+        let nurbs = matches!(motion, Some(MotionMode::Spline(52)));
         let dwell_cycle = matches!(motion, Some(MotionMode::Cycle(820 | 860 | 890)));
         let g10 = has_g(&|c| matches!(c, GCode::NonModal(NonModal::G10)));
         let checks: [(char, bool, &str); 5] = [
-            ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, M19, M50-M53, M62-M66 or M98"),
-            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, M19, M61 or M66-M68"),
-            ('L', g10 || cycle || has_m(&[66, 98]), "`L` with no code that uses it: expected L only with G10, a canned cycle, M66 or M98"),
+            ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || cubic || nurbs || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89, M19, M50-M53, M62-M66 or M98"),
+            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || cubic || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G5, G64, G73/G83, M19, M61 or M66-M68"),
+            ('L', g10 || cycle || nurbs || has_m(&[66, 98]), "`L` with no code that uses it: expected L only with G10, G5.2, a canned cycle, M66 or M98"),
             ('E', has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with M66-M68"),
             ('D', has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),
         ];

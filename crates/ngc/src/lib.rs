@@ -38,6 +38,7 @@ mod options;
 mod polar;
 mod probe;
 mod reader;
+mod spline;
 
 pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};

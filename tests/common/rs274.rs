@@ -309,8 +309,40 @@ pub fn parse(text: &str) -> Vec<RsMove> {
                 });
             }
             "STRAIGHT_PROBE" => {
+                // A feed move to the probe point; then rs274's world model (saicanon.cc)
+                // backs the probe off 0.254 mm (0.01 in) towards the start along X Y Z and
+                // goes on from there without printing a call: that back-off is a feed move
+                // here, as in mtsim (docs/gcode.md, probing).
+                let start = moves.last().map_or([0.0; 6], |m: &RsMove| m.end);
+                let end = machine(to_mm(&numbers(args), units), &g5x, &g92, &tlo, rot_deg);
+                let rounding_mm = 5e-5 * units + g5x_r + g92_r + tlo_r;
+                let feed_mm_min = (!per_rev).then_some(feed).flatten();
+                let probe = |end: [f64; 6]| RsMove {
+                    kind: "feed",
+                    end,
+                    feed_mm_min,
+                    dwell_s: None,
+                    center: None,
+                    call: k + 1,
+                    rounding_mm,
+                };
+                moves.push(probe(end));
+                let d: [f64; 3] = std::array::from_fn(|i| start[i] - end[i]);
+                let distance = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                if distance > 0.0 {
+                    let mut back = end;
+                    for i in 0..3 {
+                        back[i] += 0.254 * d[i] / distance;
+                    }
+                    moves.push(probe(back));
+                }
+            }
+            "NURBS_FEED" => {
+                // G5, G5.1, G5.3: rs274 prints no point (`NURBS_FEED(n, ...)`); LinuxCNC's
+                // motion canon cuts the curve into biarcs. `compare_moves` matches it with
+                // the run of mtsim arcs and feeds of one source line.
                 moves.push(RsMove {
-                    kind: "unsupported",
+                    kind: "spline",
                     end: [f64::NAN; 6],
                     feed_mm_min: None,
                     dwell_s: None,
@@ -400,7 +432,7 @@ pub fn run_timed(cmd: &mut Command, timeout: Duration) -> (Option<i32>, String, 
 }
 
 /// A move as `mtsim blocks --csv` prints it.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Row {
     pub line: usize,
     pub kind: String,
@@ -490,6 +522,33 @@ pub fn compare_moves(
         .filter(|m| moving(&m.kind, &m.end, &mut prev))
         .collect();
     let axes = ["X", "Y", "Z", "A", "B", "C"];
+    // A spline (rs274 `NURBS_FEED`, no end point printed) stands for the run of mtsim's
+    // arcs and feeds from one source line; its end shows in the moves after it.
+    let mut merged = Vec::with_capacity(ours.len());
+    let mut j = 0;
+    for r in &rs {
+        if r.kind == "spline" {
+            let Some(first) = ours.get(j) else { break };
+            while ours
+                .get(j)
+                .is_some_and(|m| m.line == first.line && matches!(m.kind.as_str(), "arc" | "feed"))
+            {
+                j += 1;
+            }
+            merged.push(Row {
+                line: first.line,
+                kind: "spline".into(),
+                end: [f64::NAN; 6],
+                feed: None,
+                dwell: None,
+            });
+        } else if let Some(m) = ours.get(j) {
+            merged.push(m.clone());
+            j += 1;
+        }
+    }
+    merged.extend(ours[j.min(ours.len())..].iter().cloned());
+    let ours = merged;
     for (k, (r, m)) in rs.iter().zip(&ours).enumerate() {
         let at = format!(
             "move {} (rs274 call {}, mtsim line {})",
@@ -507,6 +566,9 @@ pub fn compare_moves(
                 0.0
             };
         for i in 0..6 {
+            if r.kind == "spline" {
+                break;
+            }
             // Rotary axes are printed in degrees, never scaled.
             let tolerance = if i < 3 {
                 tolerance

@@ -15,7 +15,10 @@ use crate::expr::{Param, Params};
 use crate::frame::{self, Frame, Mat3, RotaryTable};
 use crate::lex::{LineError, LineResult, Word, EXPECTED_WORDS};
 use crate::options::{Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER};
+use crate::polar::Polar;
+use crate::probe;
 use crate::reader::{Notice, ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
+use crate::spline;
 
 /// Lathe codes (G33, G33.1, G76): a child module, so it reads the modal state directly.
 #[path = "lathe.rs"]
@@ -68,6 +71,10 @@ enum MotionMode {
     /// Lathe motion (LinuxCNC): G33 (330), G33.1 (331), G76 (760); crates/ngc/src/lathe.rs;
     /// G70 (700), G71 (710, 711, 712), G72 (720, 721, 722): crates/ngc/src/g7x.rs.
     Lathe(u32),
+    /// Straight probe G38.2-G38.5 (LinuxCNC): the code ×10 (see `probe.rs`).
+    Probe(u32),
+    /// Splines G5 (50), G5.1 (51), NURBS G5.2 (52) (LinuxCNC, see `spline.rs`).
+    Spline(u32),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -123,6 +130,8 @@ enum GCode {
     Dwo(bool),
     /// LinuxCNC G7 (true: X words are diameters) and G8 (false: radii).
     Diameter(bool),
+    /// LinuxCNC G5.3: the end of a NURBS (G5.2) block sequence; motion group.
+    NurbsEnd,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -149,7 +158,7 @@ enum Group {
 impl GCode {
     fn group(self) -> Group {
         match self {
-            GCode::Motion(_) => Group::Motion,
+            GCode::Motion(_) | GCode::NurbsEnd => Group::Motion,
             // G4 cannot share a block with a motion code: P and X would be ambiguous.
             GCode::NonModal(NonModal::Dwell) => Group::Motion,
             GCode::NonModal(_) => Group::NonModal,
@@ -234,6 +243,9 @@ impl GCode {
             611 => GCode::Path(1),
             640 => GCode::Path(4),
             730 => GCode::Motion(Some(Cycle(730))),
+            382..=385 if dialect == Dialect::Linuxcnc => GCode::Motion(Some(Probe(code as u32))),
+            50..=52 if dialect == Dialect::Linuxcnc => GCode::Motion(Some(Spline(code as u32))),
+            53 if dialect == Dialect::Linuxcnc => GCode::NurbsEnd,
             800 => GCode::Motion(None),
             810 | 820 | 830 | 850 | 860 | 890 => GCode::Motion(Some(Cycle(code as u32))),
             900 => GCode::Distance(true),
@@ -316,6 +328,15 @@ pub struct Interp {
     cycle_z: Option<f64>,
     cycle_q: Option<f64>,
     cycle_p: Option<f64>,
+    /// Initial level of the canned cycles in a row (machine coordinate along the plane's
+    /// normal, mm): LinuxCNC keeps it from the first cycle block until a motion that is not
+    /// a cycle, so G98 returns there and G91 measures R from it.
+    cycle_initial: Option<f64>,
+    /// G5: (I, J) for a following G5 without them, -(P, Q) of the last G5 (program units).
+    spline_ij: [f64; 2],
+    /// G5.2: the NURBS control points so far (program X Y, weight) and the order.
+    nurbs: Vec<spline::ControlPoint>,
+    nurbs_order: usize,
     user_m: HashMap<u32, UserM>,
     noticed: Vec<u32>,
     saved: Option<Box<Saved>>,
@@ -384,11 +405,16 @@ impl Interp {
             coord: 1,
             offset: AxisVec::ZERO,
             path: PathControl::BLEND,
-            retract_r: false,
+            // LinuxCNC starts in G99 (rs274's initial retract mode is the R plane).
+            retract_r: o.dialect == Dialect::Linuxcnc,
             cycle_r: None,
             cycle_z: None,
             cycle_q: None,
             cycle_p: None,
+            cycle_initial: None,
+            spline_ij: [0.0; 2],
+            nurbs: Vec::new(),
+            nurbs_order: 3,
             user_m: o.user_m.clone(),
             noticed: Vec::new(),
             saved: None,
@@ -525,7 +551,8 @@ impl Interp {
                 Some(MotionMode::Linear) => 10.0,
                 Some(MotionMode::Arc { clockwise: true }) => 20.0,
                 Some(MotionMode::Arc { .. }) => 30.0,
-                Some(MotionMode::Cycle(c) | MotionMode::Lathe(c)) => c as f64,
+                Some(MotionMode::Cycle(c) | MotionMode::Lathe(c) | MotionMode::Probe(c)) => c as f64,
+                Some(MotionMode::Spline(c)) => c as f64,
                 None => 800.0,
             },
         );
@@ -667,9 +694,10 @@ impl Interp {
                 "too many words",
             ));
         }
-        // Per letter, the index in `words` of its word (`NONE`: not in this block).
+        // Per letter, the index in `words` of its word (`NONE`: not in this block); `@` and
+        // `^` after Z (see `slot`).
         const NONE: u8 = u8::MAX;
-        let mut single = [NONE; 26];
+        let mut single = [NONE; 28];
         for (k, word) in words.iter().enumerate() {
             match word.letter {
                 'G' => {
@@ -728,7 +756,7 @@ impl Interp {
                     ));
                 }
                 letter => {
-                    let slot = &mut single[(letter as u8 - b'A') as usize];
+                    let slot = &mut single[slot(letter)];
                     if let Some(first) = words.get(*slot as usize) {
                         return Err(LineError::new(word.span(), format!("repeated `{letter}` word (first `{}`): expected each of {EXPECTED_WORDS} at most once per block, apart from G and M", &line[first.span()]), "repeated word"));
                     }
@@ -754,7 +782,7 @@ impl Interp {
         let halve_x = self.diameter;
         let get = |l: char| {
             words
-                .get(single[(l as u8 - b'A') as usize] as usize)
+                .get(single[slot(l)] as usize)
                 .copied()
                 .map(|mut w| {
                     if halve_x && l == 'X' {
@@ -1229,12 +1257,39 @@ impl Interp {
             GCode::Motion(mm) => Some((*mm, *w)),
             _ => None,
         });
+        if let Some((Some(MotionMode::Probe(_)), w)) = motion_code {
+            let any_axis = Axis::ALL.iter().any(|a| get(a.letter()).is_some());
+            if !any_axis && get('@').is_none() && get('^').is_none() {
+                return Err(LineError::new(
+                    w.span(),
+                    format!("`{}` without axis words: expected the probe point (LinuxCNC: \"All axes missing with motion code\")", &line[w.span()]),
+                    "no probe point",
+                ));
+            }
+        }
+        let previous_motion = self.motion;
         if let Some((mm, _)) = motion_code {
             if mm != self.motion || !matches!(mm, Some(MotionMode::Cycle(_))) {
                 // A new cycle forgets nothing LinuxCNC keeps; G80 ends the cycle.
             }
             self.motion = mm;
+            if !matches!(mm, Some(MotionMode::Cycle(_))) {
+                self.cycle_initial = None;
+            }
         }
+        // Polar words `@` `^` become X Y words here, after the block's units and work system
+        // took effect; in a G91 canned cycle they step each repeat (see `cycle`).
+        let polar_word = get('@').or(get('^'));
+        let mut polar_cycle = false;
+        let mut polar_xy: [Option<Word>; 2] = [None, None];
+        if let Some(pw) = polar_word {
+            polar_cycle = self.polar_words(line, &pw, &get, nonmodal, &mut polar_xy)?;
+        }
+        let get = |l: char| match (l, polar_xy) {
+            ('X', [Some(x), _]) => Some(x),
+            ('Y', [_, Some(y)]) => Some(y),
+            _ => get(l),
+        };
         let dwell_x = dialect.is_fanuc_family() && matches!(nonmodal, Some((NonModal::Dwell, _)));
         // Fixed buffers, no allocation per block.
         let mut axis_buf = [(Axis::X, Word::EMPTY); 6];
@@ -1391,11 +1446,32 @@ impl Interp {
         }
         let arc_words = &arc_buf[..n_arc];
         let g53 = matches!(nonmodal, Some((NonModal::G53, _)));
+        // NURBS: G5.2 blocks collect control points, G5.3 moves along them.
+        let nurbs_end = g
+            .iter()
+            .find(|(c, _)| *c == GCode::NurbsEnd)
+            .map(|(_, w)| *w);
+        if nurbs_end.is_some() || self.motion == Some(MotionMode::Spline(52)) {
+            let g52 = motion_code.map(|(_, w)| w);
+            if self.nurbs_block(
+                line,
+                &get,
+                nurbs_end,
+                g52,
+                previous_motion,
+                axis_words,
+                line_no,
+                queue,
+            )? {
+                axes_used = true;
+            }
+        }
         if !axes_used
             && (!axis_words.is_empty()
+                || polar_cycle
                 || (!arc_words.is_empty() && !matches!(self.motion, Some(MotionMode::Cycle(_)))))
         {
-            let mut first = usize::MAX..usize::MAX;
+            let mut first = polar_word.map_or(usize::MAX..usize::MAX, |w| w.span());
             for w in axis_words.iter().map(|(_, w)| w).chain(arc_words.iter()) {
                 if w.span.0 < first.start {
                     first = w.span();
@@ -1408,6 +1484,7 @@ impl Interp {
                 if let Some(w) = arc_words.iter().find(|w| {
                     !(matches!(mode, MotionMode::Cycle(_)) && w.letter == 'R')
                         && !lathe::takes_arc_word(mode, w.letter)
+                        && !(matches!(mode, MotionMode::Spline(_)) && matches!(w.letter, 'I' | 'J'))
                 }) {
                     return Err(LineError::new(
                         w.span(),
@@ -1436,6 +1513,19 @@ impl Interp {
             let at = motion_code
                 .and_then(|(_, w)| Some(w.span()))
                 .unwrap_or(first.clone());
+            if let MotionMode::Probe(_) = mode {
+                // LinuxCNC's convert_probe checks, in its order.
+                let refuse = if self.feed_mode == FeedRead::InverseTime {
+                    Some("probe move in G93 (inverse time): expected G94 (LinuxCNC: \"Cannot probe with zero feed rate\")")
+                } else if self.comp.is_some() {
+                    Some("probe move with cutter radius compensation on: expected G40 first (LinuxCNC: \"Cannot probe with cutter radius comp on\")")
+                } else {
+                    None
+                };
+                if let Some(m) = refuse {
+                    return Err(LineError::new(at, m, "not a probe"));
+                }
+            }
             if !matches!(mode, MotionMode::Rapid | MotionMode::Lathe(_)) {
                 match self.feed_mode {
                     FeedRead::InverseTime if feed_word.is_none() => {
@@ -1483,6 +1573,15 @@ impl Interp {
                     let target = self.target(&axis_words, g53);
                     self.lathe(line, code, &get, line_no, queue, at.clone(), target)?;
                 }
+                MotionMode::Spline(code) => {
+                    let target = self.target(&axis_words, g53);
+                    self.spline(line, code, &get, line_no, queue, start, target, at)?;
+                }
+                MotionMode::Probe(code) => {
+                    let target = self.target(&axis_words, g53);
+                    self.probe(queue, line_no, code, start, target)
+                        .map_err(|m| LineError::new(at, m, "probe move"))?;
+                }
                 _ => {
                     let target = self.target(&axis_words, g53);
                     let motion = match mode {
@@ -1500,7 +1599,10 @@ impl Interp {
                                 center_mm,
                             }
                         }
-                        MotionMode::Cycle(_) | MotionMode::Lathe(_) => {
+                        MotionMode::Cycle(_)
+                        | MotionMode::Lathe(_)
+                        | MotionMode::Probe(_)
+                        | MotionMode::Spline(_) => {
                             unreachable!("handled above")
                         }
                     };
@@ -1615,6 +1717,305 @@ impl Interp {
         })
     }
 
+    /// Emits the pieces of a spline (program coordinates) as feed moves and arcs.
+    fn spline_pieces(
+        &mut self,
+        queue: &mut VecDeque<Move>,
+        line_no: usize,
+        pieces: &[spline::Piece],
+    ) {
+        let scale = self.scale();
+        let (ox, oy) = (self.offset[Axis::X], self.offset[Axis::Y]);
+        for piece in pieces {
+            let start = self.pos;
+            let mut end = start;
+            let e = piece.end();
+            end[Axis::X] = e[0] * scale + ox;
+            end[Axis::Y] = e[1] * scale + oy;
+            let motion = match *piece {
+                spline::Piece::Line { .. } => Motion::Linear,
+                spline::Piece::Arc { center, ccw, .. } => Motion::Arc {
+                    clockwise: !ccw,
+                    plane: Plane::XY,
+                    center_mm: [
+                        center[0] * scale + ox,
+                        center[1] * scale + oy,
+                        start[Axis::Z],
+                    ],
+                },
+            };
+            self.emit(queue, line_no, motion, start, end, self.path);
+            self.pos = end;
+        }
+    }
+
+    /// The checks LinuxCNC's `convert_spline` makes, shared by G5, G5.1 and G5.2.
+    fn spline_checks<'l>(
+        &self,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        at: &std::ops::Range<usize>,
+    ) -> LineResult<()> {
+        let err = |m: &str| Err(LineError::new(at.clone(), m.to_string(), "spline"));
+        if self.comp.is_some() {
+            return err("spline with cutter radius compensation on: expected G40 first (LinuxCNC: \"Cannot convert spline with cutter radius compensation\")");
+        }
+        if self.plane != Plane::XY {
+            return err("spline outside G17: expected the XY plane (LinuxCNC: \"Splines must be in the XY plane\")");
+        }
+        if self.feed_mode == FeedRead::InverseTime {
+            return err("spline in G93 (inverse time): not supported, expected G94");
+        }
+        if let Some(w) = ['Z', 'A', 'B', 'C'].into_iter().find_map(|l| get(l)) {
+            return Err(LineError::new(w.span(), "axis word other than X Y in a spline block: expected X and Y only (LinuxCNC: \"Splines may not have motion in Z, A, B, or C\")", "not a spline axis"));
+        }
+        Ok(())
+    }
+
+    /// G5 (cubic) or G5.1 (quadratic) from `start` to `target` (machine coordinates).
+    #[allow(clippy::too_many_arguments)]
+    fn spline<'l>(
+        &mut self,
+        line: &str,
+        code: u32,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        line_no: usize,
+        queue: &mut VecDeque<Move>,
+        start: AxisVec,
+        target: AxisVec,
+        at: std::ops::Range<usize>,
+    ) -> LineResult<()> {
+        self.spline_checks(get, &at)?;
+        let _ = line;
+        let scale = self.scale();
+        let prog = |p: AxisVec, a: Axis| (p[a] - self.offset[a]) / scale;
+        let s = [prog(start, Axis::X), prog(start, Axis::Y)];
+        let e = [prog(target, Axis::X), prog(target, Axis::Y)];
+        let (i, j) = (get('I').map(|w| w.value), get('J').map(|w| w.value));
+        let err = |m: &str| Err(LineError::new(at.clone(), m.to_string(), "spline"));
+        let pieces = if code == 51 {
+            let (Some(i), Some(j)) = (i, j) else {
+                return err("G5.1 without I and J: expected both (LinuxCNC: \"Must specify both I and J with G5.1\")");
+            };
+            spline::pieces(&spline::quadratic(s, [i, j], e), 3)
+        } else {
+            let ij = match (i, j) {
+                (Some(i), Some(j)) => [i, j],
+                (None, None) => self.spline_ij,
+                _ => return err("G5 with only one of I and J: expected both, or neither after a G5 (LinuxCNC: \"Must specify both I and J, or neither\")"),
+            };
+            let (Some(p), Some(q)) = (get('P').map(|w| w.value), get('Q').map(|w| w.value)) else {
+                return err("G5 without P and Q: expected both (LinuxCNC: \"Must specify both P and Q with G5\")");
+            };
+            self.spline_ij = [-p, -q];
+            spline::pieces(&spline::cubic(s, ij, e, [p, q]), 4)
+        };
+        self.spline_pieces(queue, line_no, &pieces);
+        // The end is the programmed point exactly.
+        self.pos = target;
+        Ok(())
+    }
+
+    /// A G5.2 block (a control point) or a G5.3 block (the NURBS move). True when the
+    /// block's axis words are used up.
+    #[allow(clippy::too_many_arguments)]
+    fn nurbs_block<'l>(
+        &mut self,
+        line: &str,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        nurbs_end: Option<Word<'l>>,
+        g52: Option<Word<'l>>,
+        previous_motion: Option<MotionMode>,
+        axis_words: &[(Axis, Word<'l>)],
+        line_no: usize,
+        queue: &mut VecDeque<Move>,
+    ) -> LineResult<bool> {
+        let at = nurbs_end
+            .or(g52)
+            .or(axis_words.first().map(|(_, w)| *w))
+            .map_or(0..0, |w| w.span());
+        let err = |m: &str| Err(LineError::new(at.clone(), m.to_string(), "NURBS"));
+        if let Some(w) = nurbs_end {
+            if previous_motion != Some(MotionMode::Spline(52)) {
+                return err("G5.3 without G5.2 first: expected G5.2 control points before it (LinuxCNC: \"Cannot use G5.3 without G5.2 first\")");
+            }
+            if let Some((_, a)) = axis_words.first() {
+                return Err(LineError::new(
+                    a.span(),
+                    format!("`{}` in a G5.3 block: expected G5.3 alone", &line[a.span()]),
+                    "axis word with G5.3",
+                ));
+            }
+            if self.nurbs.len() < self.nurbs_order {
+                return Err(LineError::new(w.span(), format!("NURBS with {} control points: expected at least the order L = {} (LinuxCNC: \"You must specify a number of control points at least equal to the order\")", self.nurbs.len(), self.nurbs_order), "too few control points"));
+            }
+            let cps = std::mem::take(&mut self.nurbs);
+            let pieces = spline::pieces(&cps, self.nurbs_order);
+            self.spline_pieces(queue, line_no, &pieces);
+            self.motion = None;
+            return Ok(true);
+        }
+        if g52.is_none() && axis_words.is_empty() {
+            return Ok(false);
+        }
+        self.spline_checks(get, &at)?;
+        let (x, y) = (get('X'), get('Y'));
+        if x.is_some() != y.is_some() {
+            return err("G5.2 control point with only one of X and Y: expected both (LinuxCNC: \"You must specify both X and Y coordinates for Control Points\")");
+        }
+        let p = get('P').map(|w| w.value);
+        if previous_motion != Some(MotionMode::Spline(52)) {
+            self.nurbs.clear();
+        }
+        if x.is_none() && p.is_some_and(|p| p > 0.0) && !self.nurbs.is_empty() {
+            return err("G5.2 with P and no X Y after the first control point (LinuxCNC: \"Can specify P without X and Y only for the first control point\")");
+        }
+        if x.is_some() && !p.is_some_and(|p| p > 0.0) {
+            return err("G5.2 control point without a positive weight P: expected P > 0 (LinuxCNC: \"Must specify positive weight P for every Control Point\")");
+        }
+        if self.feed.is_none() {
+            return err("NURBS with no feed programmed: expected an F word");
+        }
+        let scale = self.scale();
+        if self.nurbs.is_empty() {
+            let cur = self.program_position();
+            self.nurbs.push(spline::ControlPoint {
+                x: cur[Axis::X],
+                y: cur[Axis::Y],
+                w: if x.is_none() { p.unwrap_or(1.0) } else { 1.0 },
+            });
+            self.nurbs_order = 3;
+        }
+        if let Some(l) = get('L') {
+            if l.value > 3.0 {
+                self.nurbs_order = l.value.round() as usize;
+            }
+        }
+        if x.is_some() {
+            let t = self.target(axis_words, false);
+            self.nurbs.push(spline::ControlPoint {
+                x: (t[Axis::X] - self.offset[Axis::X]) / scale,
+                y: (t[Axis::Y] - self.offset[Axis::Y]) / scale,
+                w: p.unwrap_or(1.0),
+            });
+        }
+        if self.nurbs.len() > 10_000 {
+            return err("more than 10000 NURBS control points: expected G5.3 before");
+        }
+        Ok(true)
+    }
+
+    /// A straight probe G38.2-G38.5 from `start` to `target` (machine coordinates) as
+    /// rs274 standalone runs it: a feed move, the back-off, the probe parameters
+    /// (`probe.rs`).
+    fn probe(
+        &mut self,
+        queue: &mut VecDeque<Move>,
+        line_no: usize,
+        code: u32,
+        start: AxisVec,
+        target: AxisVec,
+    ) -> Result<(), &'static str> {
+        if start == target {
+            // G38.2/G38.4 must move to make contact; G38.3/G38.5 just do nothing.
+            if code == 382 || code == 384 {
+                return Err("G38.2/G38.4 to the start point: expected a probe move (LinuxCNC: \"Start point too close to probe point\")");
+            }
+        } else {
+            self.emit(queue, line_no, Motion::Linear, start, target, self.path);
+        }
+        self.pos = target;
+        let at_target = self.program_position();
+        for (k, v) in probe::parameters(at_target).into_iter().enumerate() {
+            self.params.numbered[probe::FIRST_PARAMETER + k] = v;
+        }
+        let back = probe::backoff(start, target);
+        if back != target {
+            self.emit(queue, line_no, Motion::Linear, target, back, self.path);
+            self.pos = back;
+        }
+        Ok(())
+    }
+
+    /// Checks the polar words of a block (LinuxCNC `enhance_block`, `find_ends`) and turns
+    /// them into X and Y words in `single`. Returns true when they are left for a G91 canned
+    /// cycle to apply at each repeat.
+    fn polar_words<'l>(
+        &self,
+        line: &str,
+        pw: &Word<'l>,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        nonmodal: Option<(NonModal, Word<'l>)>,
+        xy_out: &mut [Option<Word<'l>>; 2],
+    ) -> LineResult<bool> {
+        let err = |m: &str| LineError::new(pw.span(), m.to_string(), "polar coordinate");
+        if self.dialect != Dialect::Linuxcnc {
+            return Err(err(
+                "polar coordinates `@` `^` in a Fanuc-family program: expected X and Y",
+            )
+            .help("polar coordinates are a LinuxCNC feature; set dialect = \"linuxcnc\""));
+        }
+        if let Some(xy) = get('X').or(get('Y')) {
+            return Err(LineError::new(
+                xy.span(),
+                format!(
+                    "`{}` with polar coordinates: expected either X Y or `@` `^`",
+                    &line[xy.span()]
+                ),
+                "X or Y with polar",
+            ));
+        }
+        if self.plane != Plane::XY {
+            return Err(err(
+                "polar coordinates outside G17: expected the XY plane (G17)",
+            ));
+        }
+        if !self.axes[Axis::X.index()] || !self.axes[Axis::Y.index()] {
+            return Err(err("polar coordinates on a machine without X and Y axes"));
+        }
+        if self.frame().is_some() {
+            return Err(err(
+                "polar coordinates with G68.2 or G254 active: not supported",
+            ));
+        }
+        match nonmodal {
+            Some((NonModal::G53, _)) => {
+                return Err(err("polar coordinates with G53: expected program coordinates (LinuxCNC: \"Cannot use polar coordinates with G53\")"));
+            }
+            Some((NonModal::G10 | NonModal::G92 | NonModal::G52, w)) => {
+                return Err(err(&format!(
+                    "polar coordinates with `{}`: expected `@` `^` only for a move",
+                    &line[w.span()]
+                )));
+            }
+            _ => {}
+        }
+        let polar = Polar {
+            radius: get('@').map(|w| w.value),
+            angle_deg: get('^').map(|w| w.value),
+        };
+        if !self.absolute && matches!(self.motion, Some(MotionMode::Cycle(_))) && nonmodal.is_none()
+        {
+            return Ok(true);
+        }
+        let p = self.program_position();
+        let cur = [p[Axis::X], p[Axis::Y]];
+        let xy = if self.absolute {
+            polar.absolute(cur)
+        } else {
+            polar.incremental(cur)
+        }
+        .map_err(err)?;
+        for (k, letter) in ['X', 'Y'].into_iter().enumerate() {
+            xy_out[k] = Some(Word {
+                letter,
+                value: if self.absolute { xy[k] } else { xy[k] - cur[k] },
+                number: "",
+                span: pw.span,
+            });
+        }
+        Ok(false)
+    }
+
     /// A word no code of the block (or the modal motion) uses is an error, never dropped.
     fn unused_words<'l>(
         &self,
@@ -1634,14 +2035,16 @@ impl Interp {
             .unwrap_or(self.motion);
         let cycle = matches!(motion, Some(MotionMode::Cycle(_)));
         let peck = matches!(motion, Some(MotionMode::Cycle(730 | 830)));
+        let cubic = matches!(motion, Some(MotionMode::Spline(50)));
+        let nurbs = matches!(motion, Some(MotionMode::Spline(52)));
         let dwell_cycle = matches!(motion, Some(MotionMode::Cycle(820 | 860 | 890)));
         let g10 = has_g(&|c| matches!(c, GCode::NonModal(NonModal::G10)));
         let thread = motion == Some(MotionMode::Lathe(760));
         let g7x = matches!(motion, Some(MotionMode::Lathe(700..=722)));
         let checks: [(char, bool, &str); 5] = [
-            ('P', thread || g7x || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, G76, M19, M50-M53, M62-M66 or M98"),
-            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || thread || g7x || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G64, G73/G83, G76, M19, M61 or M66-M68"),
-            ('L', g10 || cycle || thread || has_m(&[66, 98]) || has_g(&|c| matches!(c, GCode::CutterComp(3 | 4))), "`L` with no code that uses it: expected L only with G10, a canned cycle, G41.1/G42.1, G76, M66 or M98"),
+            ('P', thread || g7x || cubic || nurbs || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89, G76, M19, M50-M53, M62-M66 or M98"),
+            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || thread || g7x || cubic || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G5, G64, G73/G83, G76, M19, M61 or M66-M68"),
+            ('L', g10 || cycle || thread || nurbs || has_m(&[66, 98]) || has_g(&|c| matches!(c, GCode::CutterComp(3 | 4))), "`L` with no code that uses it: expected L only with G10, G5.2, a canned cycle, G41.1/G42.1, G76, M66 or M98"),
             ('E', thread || g7x || has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with G76 and M66-M68"),
             ('D', g7x || has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),
         ];
@@ -1933,7 +2336,7 @@ impl Interp {
             }
         };
         // Everything in machine coordinates along n, and for u v.
-        let old_n = self.pos[n];
+        let old_n = *self.cycle_initial.get_or_insert(self.pos[n]);
         let (r, bottom, du, dv, mut pu, mut pv);
         if self.absolute {
             r = r_prog + self.offset[n] + tlo(n);
@@ -2005,6 +2408,9 @@ impl Interp {
                 exact,
             );
         };
+        // LinuxCNC's CYCLE_MACRO: the first hole is approached at the current level (when
+        // above R), the next ones at the clear level.
+        let mut current = self.pos[n];
         let mut old = old_n;
         if old < r {
             go(
@@ -2017,14 +2423,33 @@ impl Interp {
                 r,
             );
             old = r;
+            current = r;
         }
         let clear = if self.retract_r { r } else { old };
-        for _ in 0..repeats {
+        let polar = Polar {
+            radius: get('@').map(|w| w.value),
+            angle_deg: get('^').map(|w| w.value),
+        };
+        for k in 0..repeats {
             pu += du;
             pv += dv;
-            go(self, queue, &mut cur, Motion::Rapid, pu, pv, old);
-            if old != r {
+            if !self.absolute && polar.is_some() {
+                // G91 polar: each repeat turns (and moves out) about the work origin.
+                let (ox, oy) = (self.offset[Axis::X], self.offset[Axis::Y]);
+                let xy = polar
+                    .cycle_step([(pu - ox) / scale, (pv - oy) / scale])
+                    .map_err(|m| LineError::new(at.clone(), m, "polar coordinate"))?;
+                pu = xy[0] * scale + ox;
+                pv = xy[1] * scale + oy;
+            }
+            if k == 0 && current > r {
+                go(self, queue, &mut cur, Motion::Rapid, pu, pv, current);
                 go(self, queue, &mut cur, Motion::Rapid, pu, pv, r);
+            } else {
+                go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
+                if clear > r {
+                    go(self, queue, &mut cur, Motion::Rapid, pu, pv, r);
+                }
             }
             match code {
                 810 => {
@@ -2072,7 +2497,6 @@ impl Interp {
                     go(self, queue, &mut cur, Motion::Linear, pu, pv, clear);
                 }
             }
-            old = clear;
         }
         self.pos = cur;
         let _ = line;
@@ -2338,6 +2762,15 @@ impl<T: Copy, const N: usize> std::ops::Deref for Small<T, N> {
 
 /// M-code groups (LinuxCNC's modal groups 4, 6, 7, 8, 9, 10); two of one group may not
 /// share a block.
+/// Index of a word letter in a block's table of single words: A-Z, then `@` and `^`.
+fn slot(letter: char) -> usize {
+    match letter {
+        '@' => 26,
+        '^' => 27,
+        l => (l as u8 - b'A') as usize,
+    }
+}
+
 fn m_group(code: u32) -> Option<u8> {
     Some(match code {
         0 | 1 | 2 | 30 | 60 | 98 | 99 => 4,

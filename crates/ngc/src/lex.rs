@@ -9,7 +9,7 @@ use std::ops::Range;
 use crate::expr::{function_at, Eval, ExprError, Param, Params};
 
 /// Word letters the reader knows.
-pub const EXPECTED_WORDS: &str = "G M N F S T X Y Z A B C I J K R P Q L H D E";
+pub const EXPECTED_WORDS: &str = "G M N F S T X Y Z A B C I J K R P Q L H D E @ ^";
 
 /// An error on one line; `span` is a byte range in that line.
 #[derive(Debug)]
@@ -175,7 +175,8 @@ pub fn lex_with<'l>(
             }
             assigns.push((p, v));
             i = e.i;
-        } else if c.is_ascii_alphabetic() {
+        } else if c.is_ascii_alphabetic() || c == b'@' || c == b'^' {
+            // `@` and `^`: LinuxCNC polar radius and angle.
             let w = lex_word(line, i, params, fanuc)?;
             i = w.span.1;
             words.push(w);
@@ -233,7 +234,12 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let number = &line[number_start..i];
     let span = start..if number.is_empty() { start + 1 } else { i };
     let text = &line[span.clone()];
-    if KNOWN_LETTERS >> (letter as u32 - 'A' as u32) & 1 == 0 {
+    let known = match letter {
+        // LinuxCNC polar radius and angle.
+        '@' | '^' => true,
+        _ => KNOWN_LETTERS >> (letter as u32 - 'A' as u32) & 1 != 0,
+    };
+    if !known {
         let why = match letter {
             'U' | 'V' | 'W' => {
                 " (secondary axes U V W are not supported: mtsim's machines have X Y Z A B C, so a foam cutter's U V or a quill's W cannot be simulated; for a lathe's incremental U W write G91 with X Z)"

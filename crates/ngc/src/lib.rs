@@ -36,7 +36,10 @@ mod g7x;
 mod interp;
 mod lex;
 mod options;
+mod polar;
+mod probe;
 mod reader;
+mod spline;
 
 pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};

@@ -164,7 +164,7 @@ pub fn lex<'l>(line: &'l str, params: &Params, fanuc: bool) -> LineResult<Lexed<
             }
             assigns.push((p, v));
             i = e.i;
-        } else if c.is_ascii_alphabetic() {
+        } else if c.is_ascii_alphabetic() || (c == b'$' && !fanuc) {
             let w = lex_word(line, i, params, fanuc)?;
             i = w.span.1;
             words.push(w);
@@ -219,7 +219,7 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let number = &line[number_start..i];
     let span = start..if number.is_empty() { start + 1 } else { i };
     let text = &line[span.clone()];
-    if !"GMNOFSTXYZABCIJKRPQLHDE".contains(letter) {
+    if !"GMNOFSTXYZABCIJKRPQLHDE$".contains(letter) {
         let why = match letter {
             'U' | 'V' | 'W' => {
                 " (secondary axes U V W are not supported; use G91 for incremental moves)"

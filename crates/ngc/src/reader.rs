@@ -18,8 +18,9 @@ use crate::canon::Move;
 use crate::error::{line_column, Error, Result, Syntax};
 use crate::expr::{Eval, Param};
 use crate::interp::{Interp, Stop};
-use crate::lex::{is_blank, lex, Lexed, LineError, LineResult};
+use crate::lex::{is_blank, lex, Lexed, LineError, LineResult, Word};
 use crate::options::{Dialect, Options};
+use crate::remap::{Remap, RemapCode};
 
 /// Millimetres per inch (exact by definition).
 pub const MM_PER_INCH: f64 = 25.4;
@@ -301,6 +302,17 @@ struct Frame {
     locals: bool,
     /// M73: restore the modal state on return.
     restore: Option<Box<crate::interp::Saved>>,
+    /// The remap (index) this call executes, and the rest of its block to run on return.
+    remap: Option<usize>,
+    resume: Option<Resume>,
+}
+
+/// The words of a block left to run after a remapped code's subroutine returns.
+struct Resume {
+    here: Cursor,
+    len: usize,
+    /// Letter, value, the number's byte range in the line, the word's span.
+    words: Vec<(char, f64, std::ops::Range<usize>, (usize, usize))>,
 }
 
 /// The canonical moves of a program, in order. Yields `Err` at most once, then `None`; stops
@@ -325,6 +337,12 @@ pub struct Moves {
     percent_seen: bool,
     language_checked: bool,
     notices: Vec<Notice>,
+    remaps: Vec<Remap>,
+    /// An active group-1 remapped code (index) and the call depth it was set at.
+    modal_remap: Option<(usize, usize)>,
+    /// A block's words to run before the next line (after a remap returned).
+    resume: Option<Resume>,
+    remaps_noticed: Vec<usize>,
 }
 
 impl Moves {
@@ -355,6 +373,10 @@ impl Moves {
             percent_seen: false,
             language_checked: false,
             notices: Vec::new(),
+            remaps: options.remaps.clone(),
+            modal_remap: None,
+            resume: None,
+            remaps_noticed: Vec::new(),
         }
     }
 
@@ -602,6 +624,8 @@ impl Moves {
             start,
             locals,
             restore: None,
+            remap: None,
+            resume: None,
         });
         self.cursor = start;
         Ok(())
@@ -630,6 +654,7 @@ impl Moves {
         if let Some(saved) = frame.restore {
             self.interp.restore(&saved);
         }
+        self.resume = frame.resume;
         self.loops.truncate(frame.loops);
         self.ifs.truncate(frame.ifs);
         let p = &mut self.interp.params;
@@ -1105,6 +1130,25 @@ impl Moves {
                 return Err(e);
             }
         }
+        if let Some(r) = self.resume.take() {
+            let text = std::rc::Rc::clone(&self.programs[r.here.file].text);
+            let line = &text[r.here.offset..r.here.offset + r.len];
+            let words: Vec<Word> = r
+                .words
+                .iter()
+                .map(|(letter, value, number, span)| Word {
+                    letter: *letter,
+                    value: *value,
+                    number: &line[number.clone()],
+                    span: *span,
+                })
+                .collect();
+            let next = self.cursor;
+            return self.run_block(line, &words, r.here, next).map_err(|e| {
+                self.finished = true;
+                self.error_at(r.here, e)
+            });
+        }
         let Some((line, next)) = self.line_at(self.cursor) else {
             if let Some(f) = self.frames.last() {
                 if self.programs[f.start.file].text.is_empty() || f.start.file != 0 {
@@ -1172,9 +1216,126 @@ impl Moves {
                 if words.is_empty() {
                     return Ok(());
                 }
+                if !self.remaps.is_empty() {
+                    let depth = self.frames.len();
+                    let busy: Vec<usize> = self.frames.iter().filter_map(|f| f.remap).collect();
+                    let modal = self.modal_remap.filter(|m| m.1 == depth).map(|m| m.0);
+                    if let Some(s) = crate::remap::split(&self.remaps, &words, line, modal, &busy)?
+                    {
+                        return self.run_remap(line, &words, s, here, next);
+                    }
+                    if modal.is_some() && words.iter().any(|w| w.letter == 'G') {
+                        // Any other motion-group code ends the remapped motion mode.
+                        if crate::remap::split(&self.remaps, &words, line, None, &[]).is_ok() {
+                            let motion = words.iter().any(|w| {
+                                w.letter == 'G'
+                                    && crate::remap::ends_modal_remap(
+                                        (w.value * 10.0).round() as u32
+                                    )
+                            });
+                            if motion {
+                                self.modal_remap = None;
+                            }
+                        }
+                    }
+                }
+                self.run_block(line, &words, here, next)
+            }
+        }
+    }
+
+    /// Runs a block with a remapped code: the words before it, the handler, and (on return,
+    /// or at once for an accepted Python handler) the words after it.
+    fn run_remap(
+        &mut self,
+        line: &str,
+        words: &[Word],
+        s: crate::remap::Split,
+        here: Cursor,
+        next: Cursor,
+    ) -> LineResult<()> {
+        let remap = self.remaps[s.remap].clone();
+        let name = &line[s.span.clone()];
+        if let Some(handler) = remap.prolog.as_ref().or(remap.epilog.as_ref()) {
+            return Err(LineError::new(s.span.clone(), format!("`{name}` is remapped ({}) with the Python prolog/epilog `{handler}` around its subroutine: mtsim runs no Python, and such handlers set the parameters the subroutine reads", remap.origin), "Python remap")
+                .help("remap the code without prolog= and epilog=, or remove it from the program"));
+        }
+        let pick = |idx: &[usize]| idx.iter().map(|&k| words[k]).collect::<Vec<_>>();
+        let before = pick(&s.before);
+        if !before.is_empty() {
+            self.run_block(line, &before, here, next)?;
+        }
+        if matches!(remap.code, RemapCode::G(_)) {
+            self.modal_remap = Some((s.remap, self.frames.len()));
+        }
+        let after = pick(&s.after);
+        let Some(label) = &remap.ngc else {
+            if let Some(why) = &remap.python_motion {
+                return Err(LineError::new(s.span.clone(), format!("`{name}` is remapped ({}) to the Python function `{}`: {why}; mtsim runs no Python", remap.origin, remap.python.as_deref().unwrap_or("")), "Python remap")
+                    .help("remap it to an o-word subroutine (ngc=), or remove it from the program"));
+            }
+            if !self.remaps_noticed.contains(&s.remap) {
+                self.remaps_noticed.push(s.remap);
+                self.notices.push(Notice { path: self.programs[here.file].path.clone(), line: here.line, message: format!("{} is remapped ({}) to the Python function `{}`, which does not move the machine: accepted and not run", remap.code, remap.origin, remap.python.as_deref().unwrap_or("")) });
+            }
+            return if after.is_empty() {
+                Ok(())
+            } else {
+                self.run_block(line, &after, here, next)
+            };
+        };
+        let positional: Vec<f64> = if remap.positional() {
+            remap
+                .letters()
+                .map(|(l, _)| s.args.iter().find(|a| a.0 == l).map_or(0.0, |a| a.1))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        self.call(label, &positional, true, 1, next, s.span.clone())?;
+        if !remap.positional() {
+            if let Some(locals) = self.interp.params.locals.last_mut() {
+                for (letter, v) in &s.args {
+                    locals.insert(letter.to_ascii_lowercase().to_string(), *v);
+                }
+            }
+        }
+        let base = line.as_ptr() as usize;
+        let frame = self.frames.last_mut().expect("just called");
+        frame.remap = Some(s.remap);
+        if !after.is_empty() {
+            frame.resume = Some(Resume {
+                here,
+                len: line.len(),
+                words: after
+                    .iter()
+                    .map(|w| {
+                        let at = if w.number.is_empty() {
+                            0
+                        } else {
+                            w.number.as_ptr() as usize - base
+                        };
+                        (w.letter, w.value, at..at + w.number.len(), w.span)
+                    })
+                    .collect(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Interprets one block's words and follows its stop (end, call, return).
+    fn run_block(
+        &mut self,
+        line: &str,
+        words: &[Word],
+        here: Cursor,
+        next: Cursor,
+    ) -> LineResult<()> {
+        {
+            {
                 let stop = self.interp.block(
                     line,
-                    &words,
+                    words,
                     here.line,
                     &mut self.queue,
                     &mut self.notices,

@@ -468,11 +468,9 @@ fn reader_options(
         &r.tool_table,
         config.as_ref().and_then(|c| c.tool_table.as_ref()),
     ) {
-        let t = std::fs::read_to_string(p).map_err(|e| Error::Invalid {
-            path: p.clone(),
-            message: format!("cannot read the configuration's [EMCIO]TOOL_TABLE: {e}"),
-            help: None,
-        })?;
+        // LinuxCNC starts with an empty tool table when the file does not exist (the
+        // sample configurations name tables the configuration picker copies in).
+        let t = std::fs::read_to_string(p).unwrap_or_default();
         let tools = ngc::parse_tool_table(&t).map_err(|(line, m)| Error::Invalid {
             path: p.clone(),
             message: format!("line {line}: {m}"),

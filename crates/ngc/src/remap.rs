@@ -414,17 +414,9 @@ pub(crate) fn split(
             continue;
         }
         if group1 && "XYZABC".contains(w.letter) {
-            return Err(LineError::new(
-                w.span(),
-                format!(
-                    "`{}` is not an argument of the remapped `{}` (argspec={}, {})",
-                    &line[w.span()],
-                    remap.code,
-                    remap.argspec,
-                    remap.origin
-                ),
-                "not in argspec",
-            ));
+            // The handler reads the block's axis words itself (LinuxCNC: `blocks[..].x_number`),
+            // argspec or not; they never move the machine as a G0/G1 would.
+            continue;
         }
         let early = match w.letter {
             'F' | 'S' | 'T' | '$' | 'N' => true,

@@ -20,7 +20,7 @@ use crate::expr::{Eval, Param};
 use crate::interp::{Interp, Stop};
 use crate::lex::{is_blank, lex, Lexed, LineError, LineResult, Word};
 use crate::options::{Dialect, Options};
-use crate::remap::{Remap, RemapCode};
+use crate::remap::Remap;
 
 /// Millimetres per inch (exact by definition).
 pub const MM_PER_INCH: f64 = 25.4;
@@ -338,8 +338,6 @@ pub struct Moves {
     language_checked: bool,
     notices: Vec<Notice>,
     remaps: Vec<Remap>,
-    /// An active group-1 remapped code (index) and the call depth it was set at.
-    modal_remap: Option<(usize, usize)>,
     /// A block's words to run before the next line (after a remap returned).
     resume: Option<Resume>,
     remaps_noticed: Vec<usize>,
@@ -374,7 +372,6 @@ impl Moves {
             language_checked: false,
             notices: Vec::new(),
             remaps: options.remaps.clone(),
-            modal_remap: None,
             resume: None,
             remaps_noticed: Vec::new(),
         }
@@ -1217,26 +1214,9 @@ impl Moves {
                     return Ok(());
                 }
                 if !self.remaps.is_empty() {
-                    let depth = self.frames.len();
                     let busy: Vec<usize> = self.frames.iter().filter_map(|f| f.remap).collect();
-                    let modal = self.modal_remap.filter(|m| m.1 == depth).map(|m| m.0);
-                    if let Some(s) = crate::remap::split(&self.remaps, &words, line, modal, &busy)?
-                    {
+                    if let Some(s) = crate::remap::split(&self.remaps, &words, line, &busy)? {
                         return self.run_remap(line, &words, s, here, next);
-                    }
-                    if modal.is_some() && words.iter().any(|w| w.letter == 'G') {
-                        // Any other motion-group code ends the remapped motion mode.
-                        if crate::remap::split(&self.remaps, &words, line, None, &[]).is_ok() {
-                            let motion = words.iter().any(|w| {
-                                w.letter == 'G'
-                                    && crate::remap::ends_modal_remap(
-                                        (w.value * 10.0).round() as u32
-                                    )
-                            });
-                            if motion {
-                                self.modal_remap = None;
-                            }
-                        }
                     }
                 }
                 self.run_block(line, &words, here, next)
@@ -1264,9 +1244,6 @@ impl Moves {
         let before = pick(&s.before);
         if !before.is_empty() {
             self.run_block(line, &before, here, next)?;
-        }
-        if matches!(remap.code, RemapCode::G(_)) {
-            self.modal_remap = Some((s.remap, self.frames.len()));
         }
         let after = pick(&s.after);
         let Some(label) = &remap.ngc else {

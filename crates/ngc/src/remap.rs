@@ -5,8 +5,9 @@
 //! words as named local parameters: `#<p> = 1`, `#<q> = 2`. Argspec letters: upper case
 //! required, lower case optional (passed only when present, so `EXISTS[#<q>]` tells),
 //! `@` passes them positionally instead (`#1`, `#2` ... in argspec order, 0 when absent),
-//! `>` requires a feed > 0 and `^` a spindle speed > 0. A G code remapped in modal group 1
-//! becomes the motion mode: later blocks with axis words call it again.
+//! `>` and `^` (feed, speed > 0) are not checked. The motion mode after an `ngc=` remap is
+//! whatever its subroutine left, as rs274 does (a remapped G code is not re-invoked by later
+//! blocks with axis words alone).
 //!
 //! mtsim runs no Python: a remap with only `python=`/`py=` is accepted (with a notice) when
 //! the function's source shows no effect on motion, otherwise refused, naming it.
@@ -320,23 +321,15 @@ pub(crate) struct Split {
     /// coolant, tool change come before user M codes; motion and stops after).
     pub before: Vec<usize>,
     pub after: Vec<usize>,
-    /// The remapped code's word (the first argument word when re-invoked modally).
+    /// The remapped code's word.
     pub span: std::ops::Range<usize>,
 }
 
-/// G codes (tenths) of LinuxCNC's modal group 1 and those using axis words otherwise: a
-/// block with one of them does not re-invoke a modal remapped motion code.
-pub(crate) fn ends_modal_remap(tenths: u32) -> bool {
-    matches!(tenths, 0 | 10 | 20 | 30 | 50..=53 | 100 | 280 | 300 | 330 | 331 | 382..=385 | 520 | 730 | 740 | 760 | 800..=899 | 920)
-}
-
-/// The remapped code of a block, if any: its own G or M word, or (when `modal` names an
-/// active group-1 remap) axis words alone. Remaps in `busy` (being executed) run built in.
+/// The remapped code of a block, if any. Remaps in `busy` (being executed) run built in.
 pub(crate) fn split(
     remaps: &[Remap],
     words: &[crate::lex::Word],
     line: &str,
-    modal: Option<usize>,
     busy: &[usize],
 ) -> crate::lex::LineResult<Option<Split>> {
     use crate::lex::LineError;
@@ -352,34 +345,15 @@ pub(crate) fn split(
     let found = words.iter().enumerate().find_map(|(k, w)| {
         let code = code_of(w)?;
         let r = (0..remaps.len()).find(|&r| remaps[r].code == code && !busy.contains(&r))?;
-        Some((Some(k), r))
+        Some((k, r))
     });
-    let (at, r) = match found {
-        Some(f) => f,
-        None => {
-            let Some(r) = modal.filter(|r| !busy.contains(r)) else {
-                return Ok(None);
-            };
-            let axis = words.iter().any(|w| "XYZABC".contains(w.letter));
-            let other = words.iter().any(|w| {
-                w.letter == 'G'
-                    && matches!(code_of(w), Some(RemapCode::G(t)) if ends_modal_remap(t))
-            });
-            if !axis || other {
-                return Ok(None);
-            }
-            (None, r)
-        }
+    let Some((k, r)) = found else {
+        return Ok(None);
     };
     let remap = &remaps[r];
-    let span = match at {
-        Some(k) => words[k].span(),
-        None => words[0].span(),
-    };
+    let span = words[k].span();
     let mut used = vec![false; words.len()];
-    if let Some(k) = at {
-        used[k] = true;
-    }
+    used[k] = true;
     let mut args = Vec::new();
     for (letter, required) in remap.letters() {
         match words
@@ -437,4 +411,60 @@ pub(crate) fn split(
         after,
         span,
     }))
+}
+
+#[cfg(test)]
+mod calls {
+    use crate::{read_str_with, Axis, Dialect, Options};
+    use std::path::Path;
+
+    /// `M401 P10 Q5` with `argspec=Pq` gives the subroutine `#<p> = 10` and `#<q> = 5`;
+    /// with `@Pq` they arrive as `#1`, `#2`; the block's own move runs after the call.
+    #[test]
+    fn arguments_reach_the_subroutine_as_named_or_positional_parameters() {
+        let dir = std::env::temp_dir().join(format!("ngc-remap-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("m401.ngc"), "o<m401> sub\nG1 X[#<p> * 2] F100\no1 if [EXISTS[#<q>]]\nG1 Y#<q>\no1 endif\no<m401> endsub\n").unwrap();
+        std::fs::write(
+            dir.join("m402.ngc"),
+            "o<m402> sub\nG0 X#1 Y#2\no<m402> endsub\n",
+        )
+        .unwrap();
+        let o = Options {
+            dialect: Dialect::Linuxcnc,
+            search_path: vec![dir.clone()],
+            remaps: vec![
+                super::parse_remap("M401 argspec=Pq ngc=m401", "t.ini:1".into()).unwrap(),
+                super::parse_remap("M402 argspec=@Pq ngc=m402", "t.ini:2".into()).unwrap(),
+            ],
+            ..Options::default()
+        };
+        let program = "G21 G90\nM401 P10\nM401 P3 Q5\nG0 Z3 M402 P1.5\nM2\n";
+        let moves: Vec<_> = read_str_with(Path::new("p.ngc"), program, &o)
+            .collect::<Result<_, _>>()
+            .unwrap();
+        let ends: Vec<[f64; 3]> = moves
+            .iter()
+            .map(|m| [m.end[Axis::X], m.end[Axis::Y], m.end[Axis::Z]])
+            .collect();
+        // X = 2·P; Y = Q only when Q is given; Q absent under @ is 0; then the block's G0 Z3.
+        assert_eq!(
+            ends,
+            [
+                [20.0, 0.0, 0.0],
+                [6.0, 0.0, 0.0],
+                [6.0, 5.0, 0.0],
+                [1.5, 0.0, 0.0],
+                [1.5, 0.0, 3.0]
+            ]
+        );
+        let missing = read_str_with(Path::new("p.ngc"), "M401 Q1\n", &o)
+            .find_map(|r| r.err())
+            .unwrap();
+        assert!(
+            missing.to_string().contains("needs a `P` word"),
+            "{missing}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

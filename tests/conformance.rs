@@ -46,13 +46,23 @@ fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<rs274::Row>, String> 
         "trt-ac"
     });
     let scenario = work.join("s.toml");
+    // A program with a configuration beside it (`name.ini`) reads its subroutine path and
+    // remaps from there; the explicit tool_table takes precedence over the ini's.
+    let ini = program.with_extension("ini");
+    let paths = if ini.is_file() {
+        format!("linuxcnc_ini = {:?}\n", ini.display().to_string())
+    } else {
+        format!(
+            "subroutine_path = [{:?}]\n",
+            data("conformance-subs").display().to_string()
+        )
+    };
     std::fs::write(
         &scenario,
         format!(
-            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\ntool_table = {:?}\nsubroutine_path = [{:?}]\n",
+            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\ntool_table = {:?}\n{paths}",
             program.display().to_string(),
             data("conformance").join("tool.tbl").display().to_string(),
-            data("conformance-subs").display().to_string()
         ),
     )
     .unwrap();
@@ -69,15 +79,30 @@ fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<rs274::Row>, String> 
 fn compare(rs274: &Path, program: &Path, tools_inch: &Path) -> Result<usize, String> {
     let name = program.file_stem().unwrap().to_string_lossy().into_owned();
     let work = scratch("conformance", &name);
-    // File subroutines come from tests/data/conformance-subs, for both interpreters.
-    let rs = rs274::run_with(
-        rs274,
-        program,
-        tools_inch,
-        &[data("conformance-subs")],
-        &work,
-        Duration::from_secs(10),
-    );
+    // File subroutines come from tests/data/conformance-subs, for both interpreters;
+    // a program's own configuration `name.ini` is given to both.
+    let ini = program.with_extension("ini");
+    let rs = if ini.is_file() {
+        rs274::run_in_config(
+            rs274,
+            program,
+            &ini,
+            &data("conformance"),
+            tools_inch,
+            "",
+            &work,
+            Duration::from_secs(10),
+        )
+    } else {
+        rs274::run_with(
+            rs274,
+            program,
+            tools_inch,
+            &[data("conformance-subs")],
+            &work,
+            Duration::from_secs(10),
+        )
+    };
     if !rs.ok {
         return Err(format!(
             "rs274 does not accept it (fix the program): {}",

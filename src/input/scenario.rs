@@ -57,6 +57,11 @@ pub struct ReaderSection {
     pub user_m_codes: std::collections::BTreeMap<String, ngc::UserM>,
     /// Tool-centre-point control on from the start (LinuxCNC TCP kinematics).
     pub tcp: bool,
+    /// A LinuxCNC configuration, relative to the scenario: its tool table, parameter file,
+    /// subroutine and user M paths and remaps, unless the keys above give them.
+    pub linuxcnc_ini: Option<String>,
+    /// HAL pin values for `#<_hal[pin.name]>`: `{ "plasmac.cut-feed-rate" = 3000.0 }`.
+    pub hal_pins: std::collections::BTreeMap<String, f64>,
 }
 
 /// One inline tool of `[reader] tools`: the tool table's number, length offset (mm, the
@@ -455,6 +460,92 @@ fn reader_options(
             )),
         }
     };
+    let config = match &r.linuxcnc_ini {
+        Some(file) => {
+            let p = resolve(path, file);
+            let ini_error = |e: ngc::IniError| {
+                Error::Invalid {
+                path: e.path.clone(),
+                message: e.to_string(),
+                help: Some(format!(
+                    "the LinuxCNC configuration given by the scenario's [reader] linuxcnc_ini = {file:?}"
+                )),
+            }
+            };
+            Some(
+                ngc::Ini::read(&p)
+                    .and_then(|ini| ini.config())
+                    .map_err(ini_error)?,
+            )
+        }
+        None => None,
+    };
+    // Lengths in a configuration's files are in its machine units.
+    let units_mm = if config.as_ref().is_some_and(|c| c.inch) {
+        ngc::MM_PER_INCH
+    } else {
+        1.0
+    };
+    if let (None, Some(p)) = (
+        &r.var_file,
+        config.as_ref().and_then(|c| c.parameter_file.as_ref()),
+    ) {
+        // LinuxCNC starts from all zeros when the parameter file does not exist yet.
+        if let Ok(t) = std::fs::read_to_string(p) {
+            let mut params = ngc::parse_var_file(&t).map_err(|(line, m)| Error::Invalid {
+                path: p.clone(),
+                message: format!("line {line}: {m}"),
+                help: Some("a LinuxCNC .var file has lines `number value`".into()),
+            })?;
+            ngc::scale_parameter_lengths(&mut params, units_mm);
+            o.parameters.extend(params);
+        }
+    }
+    if let (None, Some(p)) = (
+        &r.tool_table,
+        config.as_ref().and_then(|c| c.tool_table.as_ref()),
+    ) {
+        // LinuxCNC starts with an empty tool table when the file does not exist (the
+        // sample configurations name tables the configuration picker copies in).
+        let t = std::fs::read_to_string(p).unwrap_or_default();
+        let tools = ngc::parse_tool_table(&t).map_err(|(line, m)| Error::Invalid {
+            path: p.clone(),
+            message: format!("line {line}: {m}"),
+            help: Some("a LinuxCNC tool table has lines `T1 P1 Z+50.0 D6.0 ;comment`".into()),
+        })?;
+        o.tools.extend(tools.into_iter().map(|t| ngc::Tool {
+            length_mm: t.length_mm * units_mm,
+            diameter_mm: t.diameter_mm * units_mm,
+            ..t
+        }));
+    }
+    if let Some(c) = &config {
+        o.search_path = c.subroutine_path.clone();
+        o.user_m_path = c.user_m_path.clone();
+        // An explicit user_m_codes entry replaces the configuration's remap of that code.
+        o.remaps = c
+            .remaps
+            .iter()
+            .filter(|m| {
+                !r.user_m_codes
+                    .keys()
+                    .any(|k| format!("{}", m.code).eq_ignore_ascii_case(k))
+            })
+            .cloned()
+            .collect();
+    }
+    for (pin, v) in &r.hal_pins {
+        if !v.is_finite() {
+            return Err(value_error(
+                path,
+                text,
+                "reader.hal_pins",
+                pin,
+                "expected a finite number".into(),
+            ));
+        }
+        o.hal_pins.push((pin.clone(), *v));
+    }
     if let Some(file) = &r.var_file {
         let (p, t) = read("var_file", file)?;
         let params = ngc::parse_var_file(&t).map_err(|(line, m)| Error::Invalid {
@@ -514,7 +605,9 @@ fn reader_options(
         length_mm: t.length_mm,
         diameter_mm: t.diameter_mm,
     }));
-    o.search_path = r.subroutine_path.iter().map(|d| resolve(path, d)).collect();
+    if config.is_none() || !r.subroutine_path.is_empty() {
+        o.search_path = r.subroutine_path.iter().map(|d| resolve(path, d)).collect();
+    }
     for (code, effect) in &r.user_m_codes {
         let n = code
             .trim_start_matches(['M', 'm'])

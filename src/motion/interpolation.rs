@@ -831,7 +831,10 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 "the arc has zero radius: the centre is on its start or end point",
             ));
         }
-        if (r0 - r1).abs() > 1e-3_f64.max(1e-6 * r0) {
+        // The reader already held the radii to its dialect's rule (LinuxCNC under G20: up to
+        // 0.002·√2 in or 0.1 % of the radius, docs/gcode.md); this only refuses what no
+        // dialect accepts, so `analyze` and `check` agree on what they read.
+        if (r0 - r1).abs() > (std::f64::consts::SQRT_2 * 0.002 * 25.4).max(1e-3 * r0) {
             return Err(self.block_error(
                 b.line,
                 format!(

@@ -83,6 +83,26 @@ pub fn run(
     run_with(rs274, program, tool_table_inch, &[], work, timeout)
 }
 
+/// [`run`] in a LinuxCNC configuration: rs274 gets the INI file `ini` (written by the
+/// caller, e.g. a configuration's own with some keys left out), runs in `cwd` (the
+/// configuration's folder, which relative paths in it are taken from, as LinuxCNC does),
+/// and starts from the parameters `var_inch` (a `.var` file's text, lengths in inches).
+pub fn run_in_config(
+    rs274: &Path,
+    program: &Path,
+    ini: &Path,
+    cwd: &Path,
+    tool_table_inch: &Path,
+    var_inch: &str,
+    work: &Path,
+    timeout: Duration,
+) -> RsRun {
+    std::fs::create_dir_all(work).unwrap();
+    let mut cmd = Command::new(rs274);
+    cmd.arg("-i").arg(ini).current_dir(cwd);
+    run_cmd(cmd, program, tool_table_inch, var_inch, work, timeout)
+}
+
 /// [`run`] with `[RS274NGC]SUBROUTINE_PATH` set to `subroutine_path` (through an INI file).
 pub fn run_with(
     rs274: &Path,
@@ -93,11 +113,6 @@ pub fn run_with(
     timeout: Duration,
 ) -> RsRun {
     std::fs::create_dir_all(work).unwrap();
-    let var = work.join("p.var");
-    std::fs::write(&var, "").unwrap();
-    let out = work.join("out.txt");
-    let err = work.join("err.txt");
-    let _ = std::fs::remove_file(&out);
     let mut cmd = Command::new(rs274);
     if !subroutine_path.is_empty() {
         let ini = work.join("rs274.ini");
@@ -112,6 +127,22 @@ pub fn run_with(
         .unwrap();
         cmd.arg("-i").arg(ini);
     }
+    run_cmd(cmd, program, tool_table_inch, "", work, timeout)
+}
+
+fn run_cmd(
+    mut cmd: Command,
+    program: &Path,
+    tool_table_inch: &Path,
+    var_inch: &str,
+    work: &Path,
+    timeout: Duration,
+) -> RsRun {
+    let var = work.join("p.var");
+    std::fs::write(&var, var_inch).unwrap();
+    let out = work.join("out.txt");
+    let err = work.join("err.txt");
+    let _ = std::fs::remove_file(&out);
     let mut child = cmd
         .env("HOME", work)
         .arg("-t")

@@ -174,8 +174,12 @@ impl<'a> Eval<'a> {
                     None => Err(self.err(
                         start..self.i,
                         format!(
-                            "parameter `{}` is not defined: expected it set before it is read",
-                            &self.line[start..self.i]
+                            "parameter `{}` is not defined: expected it set before it is read{}",
+                            &self.line[start..self.i],
+                            match &p {
+                                Param::Named(n) if n.starts_with("_hal[") => " (a HAL pin: give its value in the scenario, `[reader] hal_pins = { \"pin.name\" = 1.0 }`)",
+                                _ => "",
+                            }
                         ),
                         "undefined parameter",
                     )),

@@ -338,6 +338,7 @@ pub struct Interp {
     nurbs: Vec<spline::ControlPoint>,
     nurbs_order: usize,
     user_m: HashMap<u32, UserM>,
+    user_m_path: Vec<std::path::PathBuf>,
     noticed: Vec<u32>,
     saved: Option<Box<Saved>>,
     /// G68.2 feature frame: origin in work coordinates (mm) and rotation `R_f`.
@@ -374,6 +375,13 @@ impl Interp {
             params.set(&Param::Numbered(n as usize), v);
         }
         params.numbered[5220] = 1.0;
+        for (pin, v) in &o.hal_pins {
+            let name: String = pin.chars().filter(|c| !c.is_whitespace()).collect();
+            params.set(
+                &Param::Named(format!("_hal[{}]", name.to_ascii_lowercase())),
+                *v,
+            );
+        }
         let mut axes = [false; 6];
         for a in &o.axes {
             axes[a.index()] = true;
@@ -416,6 +424,7 @@ impl Interp {
             nurbs: Vec::new(),
             nurbs_order: 3,
             user_m: o.user_m.clone(),
+            user_m_path: o.user_m_path.clone(),
             noticed: Vec::new(),
             saved: None,
             tilt: None,
@@ -698,8 +707,21 @@ impl Interp {
         // `^` after Z (see `slot`).
         const NONE: u8 = u8::MAX;
         let mut single = [NONE; 28];
+        let mut spindle_select = None;
         for (k, word) in words.iter().enumerate() {
             match word.letter {
+                // LinuxCNC `$n`: the spindle M3/M4/M5/M19/S act on (one spindle simulated).
+                '$' => {
+                    // `$-1`: all spindles (with M5).
+                    let ok = word.value.fract() == 0.0 && (-1.0..=8.0).contains(&word.value);
+                    if !ok || spindle_select.replace(*word).is_some() {
+                        return Err(LineError::new(
+                            word.span(),
+                            "expected one spindle selector `$-1`-`$8` per block",
+                            "spindle selector",
+                        ));
+                    }
+                }
                 'G' => {
                     let code = GCode::parse(word, line, dialect)?;
                     // LinuxCNC accepts G80 beside G00/G01 (`G80 G0 Z10`): the cancel is implied.
@@ -791,6 +813,18 @@ impl Interp {
                     w
                 })
         };
+        if let Some(w) = spindle_select {
+            if get('S').is_none() && !m.iter().any(|(c, _)| matches!(c, 3 | 4 | 5 | 19)) {
+                return Err(LineError::new(
+                    w.span(),
+                    format!(
+                        "`{}` with no spindle code: expected `$` only with M3, M4, M5, M19 or S",
+                        &line[w.span()]
+                    ),
+                    "$ not used",
+                ));
+            }
+        }
         for a in Axis::ALL {
             if let Some(w) = get(a.letter()) {
                 if !self.axes[a.index()] {
@@ -929,9 +963,21 @@ impl Interp {
                     Some(UserM::TcpOff) => tcp_m = Some(false),
                     Some(UserM::Ignore) => {}
                     None if (100..=199).contains(&code) => {
+                        let file = self
+                            .user_m_path
+                            .iter()
+                            .map(|d| d.join(format!("M{code}")))
+                            .find(|p| p.is_file());
+                        if file.is_none() && !self.user_m_path.is_empty() {
+                            return Err(LineError::new(w.span(), format!("user code `{}` has no program `M{code}` on the configuration's USER_M_PATH or PROGRAM_PREFIX: LinuxCNC refuses it (unknown M code)", &line[w.span()]), "no user M program")
+                                .help("add the M program to the configuration, or map the code in the scenario's user_m_codes"));
+                        }
                         if !self.noticed.contains(&code) && self.noticed.len() < 100 {
                             self.noticed.push(code);
-                            notices.push(Notice { path: path.to_path_buf(), line: line_no, message: format!("user code M{code} accepted and ignored (map it in the scenario's user_m_codes to give it an effect)") });
+                            let what = file.map_or(String::new(), |f| {
+                                format!(" (runs {}, an external program)", f.display())
+                            });
+                            notices.push(Notice { path: path.to_path_buf(), line: line_no, message: format!("user code M{code}{what} accepted and ignored (map it in the scenario's user_m_codes to give it an effect)") });
                         }
                     }
                     None => {
@@ -2041,9 +2087,13 @@ impl Interp {
         let g10 = has_g(&|c| matches!(c, GCode::NonModal(NonModal::G10)));
         let thread = motion == Some(MotionMode::Lathe(760));
         let g7x = matches!(motion, Some(MotionMode::Lathe(700..=722)));
+        // LinuxCNC passes P and Q to user M codes (M100-M199 programs, mapped codes).
+        let user = m
+            .iter()
+            .any(|(c, _)| (100..=199).contains(c) || self.user_m.contains_key(c));
         let checks: [(char, bool, &str); 5] = [
-            ('P', thread || g7x || cubic || nurbs || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89, G76, M19, M50-M53, M62-M66 or M98"),
-            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || thread || g7x || cubic || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G5, G64, G73/G83, G76, M19, M61 or M66-M68"),
+            ('P', thread || g7x || cubic || nurbs || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]) || user, "`P` with no code that uses it: expected P only with G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89, G76, M19, M50-M53, M62-M66, M98 or a user M code"),
+            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || thread || g7x || cubic || has_m(&[19, 61, 66, 67, 68]) || user, "`Q` with no code that uses it: expected Q only with G5, G64, G73/G83, G76, M19, M61, M66-M68 or a user M code"),
             ('L', g10 || cycle || thread || nurbs || has_m(&[66, 98]) || has_g(&|c| matches!(c, GCode::CutterComp(3 | 4))), "`L` with no code that uses it: expected L only with G10, G5.2, a canned cycle, G41.1/G42.1, G76, M66 or M98"),
             ('E', thread || g7x || has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with G76 and M66-M68"),
             ('D', g7x || has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),

@@ -175,8 +175,8 @@ pub fn lex_with<'l>(
             }
             assigns.push((p, v));
             i = e.i;
-        } else if c.is_ascii_alphabetic() || c == b'@' || c == b'^' {
-            // `@` and `^`: LinuxCNC polar radius and angle.
+        } else if c.is_ascii_alphabetic() || c == b'@' || c == b'^' || (c == b'$' && !fanuc) {
+            // `@` and `^`: LinuxCNC polar radius and angle; `$`: its spindle selector.
             let w = lex_word(line, i, params, fanuc)?;
             i = w.span.1;
             words.push(w);
@@ -235,8 +235,8 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let span = start..if number.is_empty() { start + 1 } else { i };
     let text = &line[span.clone()];
     let known = match letter {
-        // LinuxCNC polar radius and angle.
-        '@' | '^' => true,
+        // LinuxCNC polar radius and angle, and the spindle selector.
+        '@' | '^' | '$' => true,
         _ => KNOWN_LETTERS >> (letter as u32 - 'A' as u32) & 1 != 0,
     };
     if !known {

@@ -33,6 +33,7 @@ mod error;
 mod expr;
 mod frame;
 mod g7x;
+mod ini;
 mod interp;
 mod lex;
 mod options;
@@ -40,11 +41,13 @@ mod polar;
 mod probe;
 mod reader;
 mod spline;
+mod remap;
 
 pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
 pub use error::{line_column, Error, Result, Syntax};
 pub use frame::RotaryTable;
+pub use ini::{scale_parameter_lengths, Ini, IniEntry, IniError, LinuxcncConfig};
 pub use options::{
     parse_tool_orientations, parse_tool_table, parse_var_file, work_offset_parameter, Dialect,
     Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
@@ -53,3 +56,4 @@ pub use reader::{
     read_file, read_file_with, read_str, read_str_with, Moves, Notice, ARC_RADIUS_TOLERANCE_MM,
     FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH,
 };
+pub use remap::{parse_remap, Remap, RemapCode};

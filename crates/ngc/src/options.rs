@@ -97,6 +97,13 @@ pub struct Options {
     /// The machine's rotary table (table-table AC or BC), for G68.2/G53.1 and G254; `None`
     /// on a three-axis machine, where G53.1 and G254 are errors.
     pub table: Option<RotaryTable>,
+    /// LinuxCNC remapped codes (`[RS274NGC]REMAP`, crate::remap).
+    pub remaps: Vec<crate::remap::Remap>,
+    /// HAL pin values read by `#<_hal[pin.name]>`.
+    pub hal_pins: Vec<(String, f64)>,
+    /// Folders of LinuxCNC user M programs (`M100`-`M199` files); when not empty, a user M
+    /// code with no file there is an error, as in LinuxCNC.
+    pub user_m_path: Vec<PathBuf>,
 }
 
 /// Default limit on loop iterations per program run.
@@ -119,6 +126,9 @@ impl Default for Options {
             max_iterations: MAX_ITERATIONS,
             max_call_depth: MAX_CALL_DEPTH,
             table: None,
+            remaps: Vec::new(),
+            hal_pins: Vec::new(),
+            user_m_path: Vec::new(),
         }
     }
 }

@@ -23,6 +23,7 @@ use crate::expr::{Eval, Param};
 use crate::interp::{Interp, Stop};
 use crate::lex::{is_blank, lex, lex_with, Lexed, LineError, LineResult, Word};
 use crate::options::{Dialect, Options};
+use crate::remap::Remap;
 
 /// Millimetres per inch (exact by definition).
 pub const MM_PER_INCH: f64 = 25.4;
@@ -353,6 +354,18 @@ struct Frame {
     locals: bool,
     /// M73: restore the modal state on return.
     restore: Option<Box<crate::interp::Saved>>,
+    /// The remap (index) this call executes, and the rest of its block to run on return.
+    remap: Option<usize>,
+    resume: Option<Resume>,
+}
+
+/// The words of a block left to run after a remapped code's subroutine returns.
+struct Resume {
+    here: Cursor,
+    /// The block's text (a streamed file keeps no text to slice).
+    line: String,
+    /// Letter, value, the number's byte range in the line, the word's span.
+    words: Vec<(char, f64, std::ops::Range<usize>, (usize, usize))>,
 }
 
 /// The canonical moves of a program, in order. Yields `Err` at most once, then `None`; stops
@@ -386,6 +399,10 @@ pub struct Moves {
     /// Reading the profile of a G70-G72 block: the call depth to return to, and the
     /// cycle's line.
     g7x_capture: Option<(usize, Cursor)>,
+    remaps: Vec<Remap>,
+    /// A block's words to run before the next line (after a remap returned).
+    resume: Option<Resume>,
+    remaps_noticed: Vec<usize>,
 }
 
 impl Moves {
@@ -420,6 +437,9 @@ impl Moves {
             words: Vec::new(),
             io_error: None,
             g7x_capture: None,
+            remaps: options.remaps.clone(),
+            resume: None,
+            remaps_noticed: Vec::new(),
         }
     }
 
@@ -719,6 +739,8 @@ impl Moves {
             start,
             locals,
             restore: None,
+            remap: None,
+            resume: None,
         });
         self.cursor = start;
         Ok(())
@@ -747,6 +769,7 @@ impl Moves {
         if let Some(saved) = frame.restore {
             self.interp.restore(&saved);
         }
+        self.resume = frame.resume;
         self.loops.truncate(frame.loops);
         self.ifs.truncate(frame.ifs);
         let p = &mut self.interp.params;
@@ -1260,6 +1283,24 @@ impl Moves {
                 return Err(e);
             }
         }
+        if let Some(r) = self.resume.take() {
+            let line = r.line.as_str();
+            let words: Vec<Word> = r
+                .words
+                .iter()
+                .map(|(letter, value, number, span)| Word {
+                    letter: *letter,
+                    value: *value,
+                    number: &line[number.clone()],
+                    span: *span,
+                })
+                .collect();
+            let next = self.cursor;
+            return self.run_block(line, &words, r.here, next).map_err(|e| {
+                self.finished = true;
+                self.error_at(r.here, e, line)
+            });
+        }
         let here = self.cursor;
         let Some((line, next)) = self.line_at(here) else {
             if let Some(e) = self.io_error.take() {
@@ -1374,60 +1415,159 @@ impl Moves {
                     return Ok(());
                 }
                 if self.g7x_capture.is_some() {
-                    return self.interp.g7x_profile_line(line, &words);
+                    let result = self.interp.g7x_profile_line(line, &words);
+                    self.words = reuse(words);
+                    return result;
                 }
-                let stop = self.interp.block(
-                    line,
-                    &words,
-                    here.line,
-                    &mut self.queue,
-                    &mut self.notices,
-                    &self.programs[here.file].path,
-                )?;
-                if let Some(label) = self.interp.g7x_label() {
-                    // G70-G72: run the profile subroutine (o-word flow and parameters
-                    // as usual) with its blocks captured as the profile, not executed.
-                    let depth = self.frames.len();
-                    self.call(&label, &[], true, 1, next, 0..line.len())?;
-                    self.g7x_capture = Some((depth, here));
-                    return Ok(());
-                }
-                match stop {
-                    Stop::None => {}
-                    Stop::End => self.finished = true,
-                    Stop::Call {
-                        label,
-                        repeats,
-                        args,
-                        locals,
-                        span,
-                    } => {
-                        self.call(&label, &args, locals, repeats, next, span)?;
-                    }
-                    Stop::Return { span } => {
-                        if !self.ret(None) {
-                            if self.dialect.is_fanuc_family() {
-                                // M99 in the main program: end (a real control would restart it).
-                                self.finished = true;
-                            } else {
-                                return Err(LineError::new(
-                                    span,
-                                    "M99 outside a subprogram",
-                                    "no subprogram",
-                                ));
-                            }
-                        }
-                    }
-                    Stop::SaveForReturn(saved) => {
-                        if let Some(f) = self.frames.last_mut() {
-                            f.restore = Some(saved);
-                        }
-                    }
-                }
+                let remap = if self.remaps.is_empty() {
+                    None
+                } else {
+                    let busy: Vec<usize> = self.frames.iter().filter_map(|f| f.remap).collect();
+                    crate::remap::split(&self.remaps, &words, line, &busy)?
+                };
+                let result = match remap {
+                    Some(s) => self.run_remap(line, &words, s, here, next),
+                    None => self.run_block(line, &words, here, next),
+                };
                 self.words = reuse(words);
-                Ok(())
+                result
             }
         }
+    }
+
+    /// Runs a block with a remapped code: the words before it, the handler, and (on return,
+    /// or at once for an accepted Python handler) the words after it.
+    fn run_remap(
+        &mut self,
+        line: &str,
+        words: &[Word],
+        s: crate::remap::Split,
+        here: Cursor,
+        next: Cursor,
+    ) -> LineResult<()> {
+        let remap = self.remaps[s.remap].clone();
+        let name = &line[s.span.clone()];
+        if let Some(handler) = remap.prolog.as_ref().or(remap.epilog.as_ref()) {
+            return Err(LineError::new(s.span.clone(), format!("`{name}` is remapped ({}) with the Python prolog/epilog `{handler}` around its subroutine: mtsim runs no Python, and such handlers set the parameters the subroutine reads", remap.origin), "Python remap")
+                .help("remap the code without prolog= and epilog=, or remove it from the program"));
+        }
+        let pick = |idx: &[usize]| idx.iter().map(|&k| words[k]).collect::<Vec<_>>();
+        let before = pick(&s.before);
+        if !before.is_empty() {
+            self.run_block(line, &before, here, next)?;
+        }
+        let after = pick(&s.after);
+        let Some(label) = &remap.ngc else {
+            if let Some(why) = &remap.python_motion {
+                return Err(LineError::new(s.span.clone(), format!("`{name}` is remapped ({}) to the Python function `{}`: {why}; mtsim runs no Python", remap.origin, remap.python.as_deref().unwrap_or("")), "Python remap")
+                    .help("remap it to an o-word subroutine (ngc=), or remove it from the program"));
+            }
+            if !self.remaps_noticed.contains(&s.remap) {
+                self.remaps_noticed.push(s.remap);
+                self.notices.push(Notice { path: self.programs[here.file].path.clone(), line: here.line, message: format!("{} is remapped ({}) to the Python function `{}`, which does not move the machine: accepted and not run", remap.code, remap.origin, remap.python.as_deref().unwrap_or("")) });
+            }
+            return if after.is_empty() {
+                Ok(())
+            } else {
+                self.run_block(line, &after, here, next)
+            };
+        };
+        let positional: Vec<f64> = if remap.positional() {
+            remap
+                .letters()
+                .map(|(l, _)| s.args.iter().find(|a| a.0 == l).map_or(0.0, |a| a.1))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        self.call(label, &positional, true, 1, next, s.span.clone())?;
+        if !remap.positional() {
+            if let Some(locals) = self.interp.params.locals.last_mut() {
+                for (letter, v) in &s.args {
+                    locals.insert(letter.to_ascii_lowercase().to_string(), *v);
+                }
+            }
+        }
+        let base = line.as_ptr() as usize;
+        let frame = self.frames.last_mut().expect("just called");
+        frame.remap = Some(s.remap);
+        if !after.is_empty() {
+            frame.resume = Some(Resume {
+                here,
+                line: line.to_string(),
+                words: after
+                    .iter()
+                    .map(|w| {
+                        let at = if w.number.is_empty() {
+                            0
+                        } else {
+                            w.number.as_ptr() as usize - base
+                        };
+                        (w.letter, w.value, at..at + w.number.len(), w.span)
+                    })
+                    .collect(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Interprets one block's words and follows its stop (end, call, return).
+    fn run_block(
+        &mut self,
+        line: &str,
+        words: &[Word],
+        here: Cursor,
+        next: Cursor,
+    ) -> LineResult<()> {
+        let stop = self.interp.block(
+            line,
+            words,
+            here.line,
+            &mut self.queue,
+            &mut self.notices,
+            &self.programs[here.file].path,
+        )?;
+        if let Some(label) = self.interp.g7x_label() {
+            // G70-G72: run the profile subroutine (o-word flow and parameters
+            // as usual) with its blocks captured as the profile, not executed.
+            let depth = self.frames.len();
+            self.call(&label, &[], true, 1, next, 0..line.len())?;
+            self.g7x_capture = Some((depth, here));
+            return Ok(());
+        }
+        match stop {
+            Stop::None => {}
+            Stop::End => self.finished = true,
+            Stop::Call {
+                label,
+                repeats,
+                args,
+                locals,
+                span,
+            } => {
+                self.call(&label, &args, locals, repeats, next, span)?;
+            }
+            Stop::Return { span } => {
+                if !self.ret(None) {
+                    if self.dialect.is_fanuc_family() {
+                        // M99 in the main program: end (a real control would restart it).
+                        self.finished = true;
+                    } else {
+                        return Err(LineError::new(
+                            span,
+                            "M99 outside a subprogram",
+                            "no subprogram",
+                        ));
+                    }
+                }
+            }
+            Stop::SaveForReturn(saved) => {
+                if let Some(f) = self.frames.last_mut() {
+                    f.restore = Some(saved);
+                }
+            }
+        }
+        Ok(())
     }
 }
 

@@ -1,0 +1,470 @@
+//! LinuxCNC remapped codes (`[RS274NGC]REMAP`, LinuxCNC manual "Remap: extending G code").
+//!
+//! `REMAP = M400 modalgroup=10 argspec=Pq ngc=m400` makes `M400 P1 Q2` call the o-word
+//! subroutine `o<m400>` (file `m400.ngc` on the subroutine path) with the block's argspec
+//! words as named local parameters: `#<p> = 1`, `#<q> = 2`. Argspec letters: upper case
+//! required, lower case optional (passed only when present, so `EXISTS[#<q>]` tells),
+//! `@` passes them positionally instead (`#1`, `#2` ... in argspec order, 0 when absent),
+//! `>` and `^` (feed, speed > 0) are not checked. The motion mode after an `ngc=` remap is
+//! whatever its subroutine left, as rs274 does (a remapped G code is not re-invoked by later
+//! blocks with axis words alone).
+//!
+//! mtsim runs no Python: a remap with only `python=`/`py=` is accepted (with a notice) when
+//! the function's source shows no effect on motion, otherwise refused, naming it.
+//! `prolog=`/`epilog=` Python handlers around an `ngc=` subroutine are skipped with a notice.
+
+use std::path::{Path, PathBuf};
+
+/// The code a remap replaces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RemapCode {
+    /// G code, in tenths (G84.2 → 842).
+    G(u32),
+    M(u32),
+}
+
+impl std::fmt::Display for RemapCode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RemapCode::G(t) if t % 10 == 0 => write!(f, "G{}", t / 10),
+            RemapCode::G(t) => write!(f, "G{}.{}", t / 10, t % 10),
+            RemapCode::M(n) => write!(f, "M{n}"),
+        }
+    }
+}
+
+/// One `REMAP` line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Remap {
+    pub code: RemapCode,
+    /// LinuxCNC modal group: 1 (motion) for G codes, 5-10 for M codes (10 by default).
+    pub modal_group: u8,
+    /// Word letters passed to the handler (see the module doc).
+    pub argspec: String,
+    /// The o-word subroutine called.
+    pub ngc: Option<String>,
+    /// The Python function called (`python=` or `py=`), when there is no `ngc=`.
+    pub python: Option<String>,
+    /// Python prolog/epilog handlers (skipped).
+    pub prolog: Option<String>,
+    pub epilog: Option<String>,
+    /// Where the remap is defined, `file:line`, for messages.
+    pub origin: String,
+    /// For a Python-only remap: why it cannot be simulated (it moves the machine, or its
+    /// source was not found); `None` when it has no effect on motion.
+    pub python_motion: Option<String>,
+}
+
+impl Remap {
+    /// Argspec letters (upper case) the handler takes, required first flag.
+    pub fn letters(&self) -> impl Iterator<Item = (char, bool)> + '_ {
+        self.argspec
+            .chars()
+            .filter(|c| c.is_ascii_alphabetic())
+            .map(|c| (c.to_ascii_uppercase(), c.is_ascii_uppercase()))
+    }
+
+    /// `@` in the argspec: positional arguments.
+    pub fn positional(&self) -> bool {
+        self.argspec.contains('@')
+    }
+}
+
+/// Parses the value of a `REMAP` line (`M400 modalgroup=10 argspec=Pq ngc=m400`).
+pub fn parse_remap(value: &str, origin: String) -> Result<Remap, String> {
+    let mut parts = value.split_whitespace();
+    let code_text = parts
+        .next()
+        .ok_or("empty REMAP: expected a code such as `M400`")?;
+    let upper = code_text.to_ascii_uppercase();
+    let number = |s: &str| s.parse::<f64>().ok().filter(|v| v.is_finite() && *v >= 0.0);
+    let code = match (upper.chars().next(), number(&upper[1..])) {
+        (Some('G'), Some(v)) if (v * 10.0).fract().abs() < 1e-9 => {
+            RemapCode::G((v * 10.0).round() as u32)
+        }
+        (Some('M'), Some(v)) if v.fract() == 0.0 => RemapCode::M(v as u32),
+        _ => {
+            return Err(format!(
+                "`{code_text}`: mtsim remaps G and M codes only (such as `G84.2` or `M400`); T, S and F remaps are not supported"
+            ))
+        }
+    };
+    let mut r = Remap {
+        code,
+        modal_group: if matches!(code, RemapCode::G(_)) {
+            1
+        } else {
+            10
+        },
+        argspec: String::new(),
+        ngc: None,
+        python: None,
+        prolog: None,
+        epilog: None,
+        origin,
+        python_motion: None,
+    };
+    for part in parts {
+        let Some((key, v)) = part.split_once('=') else {
+            return Err(format!(
+                "`{part}`: expected `key=value` (modalgroup argspec ngc python prolog epilog)"
+            ));
+        };
+        match key.to_ascii_lowercase().as_str() {
+            "modalgroup" => {
+                r.modal_group = v
+                    .parse()
+                    .map_err(|_| format!("`{part}`: expected a modal group number"))?
+            }
+            "argspec" => {
+                if let Some(c) = v
+                    .chars()
+                    .find(|c| !(c.is_ascii_alphabetic() || "@^>-".contains(*c)))
+                {
+                    return Err(format!(
+                        "`{part}`: unexpected `{c}`: expected word letters, `@`, `^` or `>`"
+                    ));
+                }
+                r.argspec = v.to_string();
+            }
+            "ngc" => r.ngc = Some(v.to_string()),
+            "python" | "py" => r.python = Some(v.to_string()),
+            "prolog" => r.prolog = Some(v.to_string()),
+            "epilog" => r.epilog = Some(v.to_string()),
+            _ => {
+                return Err(format!(
+                    "`{part}`: unknown key: expected modalgroup argspec ngc python prolog epilog"
+                ))
+            }
+        }
+    }
+    let allowed: &[u8] = match code {
+        RemapCode::G(_) => &[1],
+        RemapCode::M(_) => &[5, 6, 7, 8, 9, 10],
+    };
+    if !allowed.contains(&r.modal_group) {
+        return Err(format!(
+            "modalgroup={} for {code}: LinuxCNC remaps G codes in group 1 and M codes in groups 5-10",
+            r.modal_group
+        ));
+    }
+    if r.ngc.is_none() && r.python.is_none() {
+        return Err(format!(
+            "{code} has neither `ngc=` nor `python=`: expected the handler"
+        ));
+    }
+    Ok(r)
+}
+
+/// Calls in a Python remap body that move the machine or change where it goes.
+const MOTION_CALLS: &[&str] = &[
+    "execute(",
+    "STRAIGHT_TRAVERSE",
+    "STRAIGHT_FEED",
+    "ARC_FEED",
+    "STRAIGHT_PROBE",
+    "RIGID_TAP",
+    "CHANGE_TOOL",
+    "USE_TOOL_LENGTH_OFFSET",
+    "SET_G5X_OFFSET",
+    "SET_G92_OFFSET",
+    "SET_XY_ROTATION",
+    "USE_LENGTH_UNITS",
+];
+
+/// Whether Python function `name` (found as `def name(` in a `.py` file of `dirs`) has an
+/// effect on motion: `None` when its body calls none of [`MOTION_CALLS`], otherwise why not.
+pub fn python_motion(dirs: &[PathBuf], name: &str) -> Option<String> {
+    for dir in dirs {
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            continue;
+        };
+        let mut files: Vec<PathBuf> = entries
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| p.extension().is_some_and(|e| e == "py"))
+            .collect();
+        files.sort();
+        for file in files {
+            let Ok(text) = std::fs::read_to_string(&file) else {
+                continue;
+            };
+            if let Some(body) = function_body(&text, name) {
+                return MOTION_CALLS.iter().find(|c| body.contains(*c)).map(|c| {
+                    format!(
+                        "it moves the machine (`{}` in {})",
+                        c.trim_end_matches('('),
+                        file.display()
+                    )
+                });
+            }
+        }
+    }
+    Some(format!(
+        "its source (`def {name}(`) was not found on the [PYTHON] path"
+    ))
+}
+
+/// The indented body of `def name(` in Python source `text`.
+fn function_body<'t>(text: &'t str, name: &str) -> Option<&'t str> {
+    let head = format!("def {name}(");
+    let mut offset = 0;
+    let mut start = None;
+    let mut indent = 0;
+    for line in text.split_inclusive('\n') {
+        let trimmed = line.trim_start();
+        let this_indent = line.len() - trimmed.len();
+        match start {
+            None if trimmed.starts_with(&head) => {
+                start = Some(offset + line.len());
+                indent = this_indent;
+            }
+            Some(s)
+                if !trimmed.trim().is_empty()
+                    && !trimmed.starts_with('#')
+                    && this_indent <= indent =>
+            {
+                return Some(&text[s..offset]);
+            }
+            _ => {}
+        }
+        offset += line.len();
+    }
+    start.map(|s| &text[s..])
+}
+
+/// The folders of a configuration's `[PYTHON]` section: `PATH_PREPEND`, `PATH_APPEND` and
+/// the folder of `TOPLEVEL`, relative to `ini_dir`.
+pub fn python_dirs(ini: &crate::ini::Ini) -> Vec<PathBuf> {
+    let mut dirs = Vec::new();
+    for key in ["PATH_PREPEND", "PATH_APPEND"] {
+        for e in ini.all("PYTHON", key) {
+            dirs.extend(
+                e.value
+                    .split(':')
+                    .filter(|s| !s.trim().is_empty())
+                    .map(|s| ini.resolve(s)),
+            );
+        }
+    }
+    if let Some(e) = ini.get("PYTHON", "TOPLEVEL") {
+        dirs.push(
+            ini.resolve(&e.value)
+                .parent()
+                .map_or_else(|| ini.dir().to_path_buf(), Path::to_path_buf),
+        );
+    }
+    dirs
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_the_manual_examples() {
+        let r = parse_remap(
+            "M400  modalgroup=10 argspec=Pq ngc=m400",
+            "demo.ini:66".into(),
+        )
+        .unwrap();
+        assert_eq!(r.code, RemapCode::M(400));
+        assert_eq!(r.modal_group, 10);
+        assert_eq!(r.letters().collect::<Vec<_>>(), [('P', true), ('Q', false)]);
+        assert!(!r.positional());
+        assert_eq!(r.ngc.as_deref(), Some("m400"));
+        let r = parse_remap(
+            "G84.3 argspec=xyzq prolog=cycle_prolog ngc=g843 epilog=cycle_epilog modalgroup=1",
+            String::new(),
+        )
+        .unwrap();
+        assert_eq!(
+            (r.code, r.code.to_string()),
+            (RemapCode::G(843), "G84.3".into())
+        );
+        assert_eq!(r.prolog.as_deref(), Some("cycle_prolog"));
+        let r = parse_remap("G70 modalgroup=1 py=queuebuster", String::new()).unwrap();
+        assert_eq!(
+            (r.code.to_string(), r.python.as_deref()),
+            ("G70".into(), Some("queuebuster"))
+        );
+        assert!(parse_remap("M410 argspec=@Pq ngc=m410", String::new())
+            .unwrap()
+            .positional());
+        assert!(parse_remap("T prolog=p ngc=prepare", String::new()).is_err());
+        assert!(parse_remap("M400 modalgroup=1 ngc=m400", String::new()).is_err());
+        assert!(parse_remap("M400 argspec=P", String::new()).is_err());
+        assert!(parse_remap("M400 colour=red ngc=x", String::new()).is_err());
+    }
+
+    #[test]
+    fn python_bodies_are_read_to_their_end() {
+        let src = "import x\n\ndef queuebuster(self, **words):\n    yield INTERP_EXECUTE_FINISH\n\n\ndef involute(self, **words):\n    # comment\n    self.execute(\"G1 X1\")\n    return INTERP_OK\n";
+        assert_eq!(
+            function_body(src, "queuebuster").unwrap().trim(),
+            "yield INTERP_EXECUTE_FINISH"
+        );
+        assert!(function_body(src, "involute").unwrap().contains("execute("));
+        assert!(function_body(src, "missing").is_none());
+    }
+}
+
+/// How a block with a remapped code runs: the words before the call, the call, the words
+/// after it. Indices are into the block's words.
+#[derive(Debug)]
+pub(crate) struct Split {
+    /// Index into the remaps.
+    pub remap: usize,
+    /// Argspec words present, upper-case letter and value, in argspec order.
+    pub args: Vec<(char, f64)>,
+    /// Words executed before the handler (LinuxCNC's order of execution: F S T, spindle,
+    /// coolant, tool change come before user M codes; motion and stops after).
+    pub before: Vec<usize>,
+    pub after: Vec<usize>,
+    /// The remapped code's word.
+    pub span: std::ops::Range<usize>,
+}
+
+/// The remapped code of a block, if any. Remaps in `busy` (being executed) run built in.
+pub(crate) fn split(
+    remaps: &[Remap],
+    words: &[crate::lex::Word],
+    line: &str,
+    busy: &[usize],
+) -> crate::lex::LineResult<Option<Split>> {
+    use crate::lex::LineError;
+    let code_of = |w: &crate::lex::Word| {
+        let tenths = w.value * 10.0;
+        let exact = (tenths - tenths.round()).abs() < 1e-6 && w.value >= 0.0;
+        match w.letter {
+            'G' if exact => Some(RemapCode::G(tenths.round() as u32)),
+            'M' if exact && w.value.fract() == 0.0 => Some(RemapCode::M(w.value as u32)),
+            _ => None,
+        }
+    };
+    let found = words.iter().enumerate().find_map(|(k, w)| {
+        let code = code_of(w)?;
+        let r = (0..remaps.len()).find(|&r| remaps[r].code == code && !busy.contains(&r))?;
+        Some((k, r))
+    });
+    let Some((k, r)) = found else {
+        return Ok(None);
+    };
+    let remap = &remaps[r];
+    let span = words[k].span();
+    let mut used = vec![false; words.len()];
+    used[k] = true;
+    let mut args = Vec::new();
+    for (letter, required) in remap.letters() {
+        match words
+            .iter()
+            .position(|w| w.letter == letter && !matches!(letter, 'G' | 'M'))
+        {
+            Some(k) => {
+                used[k] = true;
+                args.push((letter, words[k].value));
+            }
+            None if required => {
+                return Err(LineError::new(
+                    span.clone(),
+                    format!(
+                        "`{}` needs a `{letter}` word: its remap ({}, argspec={}) requires it",
+                        &line[span.clone()],
+                        remap.origin,
+                        remap.argspec
+                    ),
+                    format!("no {letter}"),
+                ))
+            }
+            None => {}
+        }
+    }
+    let is_stop =
+        |w: &crate::lex::Word| w.letter == 'M' && matches!(w.value as u32, 0 | 1 | 2 | 30 | 60);
+    let group1 = matches!(remap.code, RemapCode::G(_));
+    let (mut before, mut after) = (Vec::new(), Vec::new());
+    for (k, w) in words.iter().enumerate() {
+        if used[k] {
+            continue;
+        }
+        if group1 && "XYZABC".contains(w.letter) {
+            // The handler reads the block's axis words itself (LinuxCNC: `blocks[..].x_number`),
+            // argspec or not; they never move the machine as a G0/G1 would.
+            continue;
+        }
+        let early = match w.letter {
+            'F' | 'S' | 'T' | '$' | 'N' => true,
+            'M' => !is_stop(w),
+            'G' => matches!(code_of(w), Some(RemapCode::G(930 | 940 | 950))),
+            _ => false,
+        };
+        if is_stop(w) || !(early || group1) {
+            after.push(k);
+        } else {
+            before.push(k);
+        }
+    }
+    Ok(Some(Split {
+        remap: r,
+        args,
+        before,
+        after,
+        span,
+    }))
+}
+
+#[cfg(test)]
+mod calls {
+    use crate::{read_str_with, Axis, Dialect, Options};
+    use std::path::Path;
+
+    /// `M401 P10 Q5` with `argspec=Pq` gives the subroutine `#<p> = 10` and `#<q> = 5`;
+    /// with `@Pq` they arrive as `#1`, `#2`; the block's own move runs after the call.
+    #[test]
+    fn arguments_reach_the_subroutine_as_named_or_positional_parameters() {
+        let dir = std::env::temp_dir().join(format!("ngc-remap-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("m401.ngc"), "o<m401> sub\nG1 X[#<p> * 2] F100\no1 if [EXISTS[#<q>]]\nG1 Y#<q>\no1 endif\no<m401> endsub\n").unwrap();
+        std::fs::write(
+            dir.join("m402.ngc"),
+            "o<m402> sub\nG0 X#1 Y#2\no<m402> endsub\n",
+        )
+        .unwrap();
+        let o = Options {
+            dialect: Dialect::Linuxcnc,
+            search_path: vec![dir.clone()],
+            remaps: vec![
+                super::parse_remap("M401 argspec=Pq ngc=m401", "t.ini:1".into()).unwrap(),
+                super::parse_remap("M402 argspec=@Pq ngc=m402", "t.ini:2".into()).unwrap(),
+            ],
+            ..Options::default()
+        };
+        let program = "G21 G90\nM401 P10\nM401 P3 Q5\nG0 Z3 M402 P1.5\nM2\n";
+        let moves: Vec<_> = read_str_with(Path::new("p.ngc"), program, &o)
+            .collect::<Result<_, _>>()
+            .unwrap();
+        let ends: Vec<[f64; 3]> = moves
+            .iter()
+            .map(|m| [m.end[Axis::X], m.end[Axis::Y], m.end[Axis::Z]])
+            .collect();
+        // X = 2·P; Y = Q only when Q is given; Q absent under @ is 0; then the block's G0 Z3.
+        assert_eq!(
+            ends,
+            [
+                [20.0, 0.0, 0.0],
+                [6.0, 0.0, 0.0],
+                [6.0, 5.0, 0.0],
+                [1.5, 0.0, 0.0],
+                [1.5, 0.0, 3.0]
+            ]
+        );
+        let missing = read_str_with(Path::new("p.ngc"), "M401 Q1\n", &o)
+            .find_map(|r| r.err())
+            .unwrap();
+        assert!(
+            missing.to_string().contains("needs a `P` word"),
+            "{missing}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

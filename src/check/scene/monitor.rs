@@ -282,7 +282,7 @@ impl SceneMonitor {
             state.slack = 0.0;
             state.moved = 0.0;
             state.last_mm = 0.0;
-            state.warm = None;
+            state.warm = Warm::default();
             if let Some((frame, _)) = state.relative {
                 let pair = self.scene.pairs[i];
                 let (a, b) = (&self.scene.parts[pair.a], &self.scene.parts[pair.b]);

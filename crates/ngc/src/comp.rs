@@ -511,7 +511,7 @@ impl Comp {
                 // A lathe tool first moves its control point to the nose centre.
                 let first = Move {
                     motion: Motion::Linear,
-                    end: self.cur,
+                    end: self.corner_end(&mv.end, c),
                     ..mv.clone()
                 };
                 self.push(first, Kind::Line { dir: [0.0, 0.0] });

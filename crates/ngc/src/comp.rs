@@ -511,7 +511,7 @@ impl Comp {
                 // A lathe tool first moves its control point to the nose centre.
                 let first = Move {
                     motion: Motion::Linear,
-                    end: self.cur,
+                    end: self.corner_end(&mv.end, c),
                     ..mv.clone()
                 };
                 self.push(first, Kind::Line { dir: [0.0, 0.0] });
@@ -675,5 +675,35 @@ fn mv_arc_placeholder() -> Motion {
         clockwise: false,
         plane: Plane::XY,
         center_mm: [0.0; 3],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn find_turn_sweeps_in_the_direction_of_the_turn() {
+        let c = [0.0, 0.0];
+        // A quarter turn from +x to +y: +π/2 counter-clockwise, -3π/2 clockwise.
+        assert!((find_turn([1.0, 0.0], c, 1, [0.0, 1.0]) - FRAC_PI_2).abs() < 1e-12);
+        assert!((find_turn([1.0, 0.0], c, -1, [0.0, 1.0]) + 1.5 * PI).abs() < 1e-12);
+        // Start = end: a full turn either way.
+        assert!((find_turn([1.0, 0.0], c, 1, [1.0, 0.0]) - TAU).abs() < 1e-12);
+        assert!((find_turn([1.0, 0.0], c, -1, [1.0, 0.0]) + TAU).abs() < 1e-12);
+    }
+
+    #[test]
+    fn lathe_origin_moves_by_the_nose_radius_by_orientation() {
+        let mut c = Comp::new(true, 0.5, 2, Plane::ZX, AxisVec::ZERO, AxisVec::ZERO, 1.0);
+        // (a, b) = (Z, X): orientation 2 takes r off both X and Z.
+        assert_eq!(c.lathe_origin([10.0, 4.0]), [9.5, 3.5]);
+        c.orientation = 4;
+        assert_eq!(c.lathe_origin([10.0, 4.0]), [10.5, 4.5]);
+        c.orientation = 9;
+        assert_eq!(c.lathe_origin([10.0, 4.0]), [10.0, 4.0]);
+        c.plane = Plane::XY;
+        c.orientation = 2;
+        assert_eq!(c.lathe_origin([10.0, 4.0]), [10.0, 4.0]);
     }
 }

@@ -651,8 +651,13 @@ impl Interp {
             path,
         };
         if let Some(c) = &mut self.comp {
-            // A dwell under compensation waits behind the queued moves.
-            c.dwell(mv, queue);
+            // A dwell under compensation waits behind the queued moves; any other move
+            // made here runs as programmed after them.
+            if matches!(motion, Motion::Dwell { .. }) {
+                c.dwell(mv, queue);
+            } else {
+                c.pass(mv, queue);
+            }
             return;
         }
         if let Some(p) = self.comp_out {

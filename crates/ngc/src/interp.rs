@@ -1400,11 +1400,23 @@ impl Interp {
                         }
                         MotionMode::Cycle(_) => unreachable!("handled above"),
                     };
+                    let turns = match (get('P'), motion) {
+                        (Some(p), Motion::Arc { .. }) => turns(line, &p, self.feed_mode)?,
+                        _ => 1,
+                    };
+                    if self.comp.is_some() && turns > 1 {
+                        return Err(LineError::new(at, "an arc of several turns (P) under cutter radius compensation: not supported", "turns with compensation"));
+                    }
                     if self.comp.is_some() {
                         self.comp_element(queue, line_no, motion, start, target)
                             .map_err(|m| LineError::new(at, m, "cutter compensation"))?;
                     } else {
-                        self.emit(queue, line_no, motion, start, target, self.path);
+                        let mut from = start;
+                        for end in crate::turns::full_turn_ends(motion, start, target, turns) {
+                            self.emit(queue, line_no, motion, from, end, self.path);
+                            from = end;
+                        }
+                        self.emit(queue, line_no, motion, from, target, self.path);
                     }
                     self.pos = target;
                 }
@@ -1531,13 +1543,16 @@ impl Interp {
         let cycle = matches!(motion, Some(MotionMode::Cycle(_)));
         let peck = matches!(motion, Some(MotionMode::Cycle(730 | 830)));
         let dwell_cycle = matches!(motion, Some(MotionMode::Cycle(820 | 860 | 890)));
+        // LinuxCNC G2/G3 P<turns>.
+        let arc_turns =
+            self.dialect == Dialect::Linuxcnc && matches!(motion, Some(MotionMode::Arc { .. }));
         let g10 = has_g(&|c| matches!(c, GCode::NonModal(NonModal::G10)));
         // LinuxCNC passes P and Q to user M codes (M100-M199 programs, mapped codes).
         let user = m
             .iter()
             .any(|(c, _)| (100..=199).contains(c) || self.user_m.contains_key(c));
         let checks: [(char, bool, &str); 5] = [
-            ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]) || user, "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, M19, M50-M53, M62-M66, M98 or a user M code"),
+            ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]) || user || arc_turns, "`P` with no code that uses it: expected P only with G04, G10, G64, G54.1, G82/G86/G89, M19, M50-M53, M62-M66, M98, G02/G03 (turns) or a user M code"),
             ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || has_m(&[19, 61, 66, 67, 68]) || user, "`Q` with no code that uses it: expected Q only with G64, G73/G83, M19, M61, M66-M68 or a user M code"),
             ('L', g10 || cycle || has_m(&[66, 98]), "`L` with no code that uses it: expected L only with G10, a canned cycle, M66 or M98"),
             ('E', has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with M66-M68"),
@@ -2363,4 +2378,26 @@ fn integer(word: &Word, line: &str) -> LineResult<u64> {
         return Err(bad());
     }
     Ok(word.value as u64)
+}
+
+/// The number of turns of a LinuxCNC `G2`/`G3 ... P<n>` arc: a whole number from 1.
+fn turns(line: &str, p: &Word, feed_mode: FeedRead) -> LineResult<u32> {
+    if p.value.fract() != 0.0 || !(1.0..=10_000.0).contains(&p.value) {
+        return Err(LineError::new(
+            p.span(),
+            format!(
+                "`{}`: expected a whole number of turns from 1",
+                &line[p.span()]
+            ),
+            "turns",
+        ));
+    }
+    if p.value > 1.0 && matches!(feed_mode, FeedRead::InverseTime) {
+        return Err(LineError::new(
+            p.span(),
+            "an arc of several turns under G93 inverse-time feed: not supported",
+            "turns under G93",
+        ));
+    }
+    Ok(p.value as u32)
 }

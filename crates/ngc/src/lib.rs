@@ -38,6 +38,7 @@ mod lex;
 mod options;
 mod reader;
 mod remap;
+mod turns;
 
 pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};

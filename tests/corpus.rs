@@ -18,7 +18,7 @@ use common::{machine, rs274, scratch};
 
 /// Fraction of standalone programs that `analyze` and `check` read, at least. The issue's
 /// goal is 0.90; this is the figure reached so far (raise it as the reader grows).
-const READ_FLOOR: f64 = 0.64;
+const READ_FLOOR: f64 = 0.65;
 
 /// Longest a single `analyze` or `check` may take before it counts as a hang.
 const TIMEOUT: Duration = Duration::from_secs(30);
@@ -104,12 +104,22 @@ fn search_path(program: &Path, sub_dirs: &[PathBuf]) -> Vec<PathBuf> {
 
 /// Sample programs whose moves are known to differ from rs274's, with the reason; listed
 /// here they are reported, not failed. A program that differs and is not listed fails.
-const KNOWN_DIFFERENCES: &[(&str, &str)] = &[(
-    "ncfiles/skeleton.ngc",
-    "`T1 M06 G43 H1` in one block: rs274 keeps the program Z, so the next move without Z \
+const KNOWN_DIFFERENCES: &[(&str, &str)] = &[
+    (
+        "ncfiles/skeleton.ngc",
+        "`T1 M06 G43 H1` in one block: rs274 keeps the program Z, so the next move without Z \
      moves the machine by the tool length; mtsim keeps the machine Z \
      (tests/data/conformance-pending/m6_g43_same_block.ngc)",
-)];
+    ),
+    (
+        "remap/rack-toolchange/nc_files/tcdemo.ngc",
+        "rs274 standalone starts with `#<_current_pocket>` = 1 and tool 0 in the spindle \
+     (checked: `(debug,#<_current_pocket>)` before any T prints 1), so the rack_change \
+     subroutine unloads pocket 1 at the first M6; mtsim starts with pocket 0 for the empty \
+     spindle and skips the unload (docs/gcode.md, remaps); after the first change the 47 \
+     moves and dwells of both agree exactly",
+    ),
+];
 
 fn known_difference(name: &str) -> Option<&'static str> {
     KNOWN_DIFFERENCES

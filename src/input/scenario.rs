@@ -435,11 +435,13 @@ fn reader_options(
                 )),
             }
             };
-            Some(
-                ngc::Ini::read(&p)
-                    .and_then(|ini| ini.config())
-                    .map_err(ini_error)?,
-            )
+            let ini = ngc::Ini::read(&p).map_err(ini_error)?;
+            // `#<_ini[section]key>`: the numeric values.
+            o.ini_values.extend(ini.entries.iter().filter_map(|e| {
+                let v = e.value.parse::<f64>().ok().filter(|v| v.is_finite())?;
+                Some((format!("{}]{}", e.section, e.key), v))
+            }));
+            Some(ini.config().map_err(ini_error)?)
         }
         None => None,
     };
@@ -471,6 +473,7 @@ fn reader_options(
         // LinuxCNC starts with an empty tool table when the file does not exist (the
         // sample configurations name tables the configuration picker copies in).
         let t = std::fs::read_to_string(p).unwrap_or_default();
+        o.pockets.extend(ngc::tool_pockets(&t));
         let tools = ngc::parse_tool_table(&t).map_err(|(line, m)| Error::Invalid {
             path: p.clone(),
             message: format!("line {line}: {m}"),
@@ -552,6 +555,7 @@ fn reader_options(
     }
     if let Some(file) = &r.tool_table {
         let (p, t) = read("tool_table", file)?;
+        o.pockets.extend(ngc::tool_pockets(&t));
         let tools = ngc::parse_tool_table(&t).map_err(|(line, m)| Error::Invalid {
             path: p.clone(),
             message: format!("line {line}: {m}"),

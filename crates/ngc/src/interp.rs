@@ -277,6 +277,10 @@ pub struct Interp {
     table_given: bool,
     tool: u32,
     next_tool: u32,
+    /// A T word has selected `next_tool` since the last tool change (LinuxCNC's
+    /// `selected_pocket >= 0`).
+    tool_selected: bool,
+    pockets: HashMap<u32, u32>,
     tool_length_mm: f64,
     /// Active work system: 1 = G54 ... 9 = G59.3, 10+ = G54.1 P1...
     coord: u32,
@@ -326,6 +330,12 @@ impl Interp {
             params.set(&Param::Numbered(n as usize), v);
         }
         params.numbered[5220] = 1.0;
+        for (key, v) in &o.ini_values {
+            params.set(
+                &Param::Named(format!("_ini[{}", key.to_ascii_lowercase())),
+                *v,
+            );
+        }
         for (pin, v) in &o.hal_pins {
             let name: String = pin.chars().filter(|c| !c.is_whitespace()).collect();
             params.set(
@@ -366,6 +376,8 @@ impl Interp {
             cycle_p: None,
             user_m: o.user_m.clone(),
             user_m_path: o.user_m_path.clone(),
+            tool_selected: false,
+            pockets: o.pockets.iter().copied().collect(),
             noticed: Vec::new(),
             saved: None,
             tilt: None,
@@ -440,6 +452,28 @@ impl Interp {
         ]
     }
 
+    /// LinuxCNC stdglue's `change_prolog` parameters: tool in the spindle, selected tool,
+    /// their pockets; `None` when no tool is prepared ("M6: no tool prepared").
+    pub fn tool_change_parameters(&mut self) -> Option<[(&'static str, f64); 4]> {
+        if !self.tool_selected {
+            return None;
+        }
+        self.refresh_system_parameters();
+        let g = &self.params.globals;
+        Some([
+            ("tool_in_spindle", self.tool as f64),
+            ("selected_tool", self.next_tool as f64),
+            ("current_pocket", g["_current_pocket"]),
+            ("selected_pocket", g["_selected_pocket"]),
+        ])
+    }
+
+    /// The tool change of stdglue's `change_epilog` (M6 without the G43).
+    pub fn complete_tool_change(&mut self) {
+        self.tool = self.next_tool;
+        self.tool_selected = false;
+    }
+
     /// Writes the read-only system parameters (positions, tool, work system) before a line
     /// that reads parameters.
     pub fn refresh_system_parameters(&mut self) {
@@ -465,6 +499,23 @@ impl Interp {
         g.insert("_incremental".into(), t(!self.absolute));
         g.insert("_current_tool".into(), self.tool as f64);
         g.insert("_selected_tool".into(), self.next_tool as f64);
+        let pocket = |t: u32| self.pockets.get(&t).map_or(t as f64, |p| *p as f64);
+        g.insert(
+            "_current_pocket".into(),
+            if self.tool == 0 {
+                0.0
+            } else {
+                pocket(self.tool)
+            },
+        );
+        g.insert(
+            "_selected_pocket".into(),
+            if self.tool_selected {
+                pocket(self.next_tool)
+            } else {
+                -1.0
+            },
+        );
         g.insert(
             "_feed".into(),
             self.feed.unwrap_or(0.0)
@@ -798,6 +849,7 @@ impl Interp {
             let n = t.value.round() as u32;
             self.tool_entry(n, &t)?;
             self.next_tool = n;
+            self.tool_selected = true;
         }
         let mut tcp_m = None;
         for &(code, w) in m.iter() {

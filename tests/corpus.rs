@@ -209,9 +209,9 @@ fn config_for(program: &Path) -> Option<PathBuf> {
 /// the program's first material comment (`(o=0, ... fr=3000, ...)`), else of QtPlasmaC's
 /// default material (`qtplasmac_handler.py`: `round(4000 * unitsPerMm)`, 4000 mm/min or
 /// 157 in/min).
-fn hal_pins(program: &Path, text: &str) -> String {
+fn plasmac_pins(program: &Path, text: &str) -> Vec<(String, f64)> {
     if !text.contains("_hal[plasmac.") {
-        return String::new();
+        return Vec::new();
     }
     let from_comment = text.lines().find_map(|l| {
         let at = l.find("fr=")?;
@@ -226,7 +226,97 @@ fn hal_pins(program: &Path, text: &str) -> String {
         .file_name()
         .is_some_and(|n| n.to_string_lossy().starts_with("imperial"));
     let fr = from_comment.unwrap_or(if imperial { 157.0 } else { 4000.0 });
-    format!("hal_pins = {{ \"plasmac.cut-feed-rate\" = {fr:?} }}\n")
+    vec![("plasmac.cut-feed-rate".into(), fr)]
+}
+
+/// The HAL pins a program reads (`#<_hal[name]>`, lower case) with the value its
+/// configuration gives them at start: a pin's `setp`, else the value of the signal it is
+/// on (`net :sig a b`): the initial value (`<initval>`) of a PyVCP scale or spinbox
+/// (`pyvcp.<halpin>-f`) on that signal, else the signal's `sets`. HAL commands come from
+/// `[HAL]HALCMD` and the `[HAL]HALFILE`/`POSTGUI_HALFILE` files in the configuration's
+/// folder, PyVCP panels from `[DISPLAY]PYVCP`.
+fn config_pins(ini: &ngc::Ini, text: &str) -> Vec<(String, f64)> {
+    let lower = text.to_ascii_lowercase();
+    let needed: Vec<&str> = lower
+        .match_indices("_hal[")
+        .filter_map(|(i, _)| lower[i + 5..].split(']').next())
+        .collect();
+    if needed.is_empty() {
+        return Vec::new();
+    }
+    let mut commands: Vec<String> = ini.all("HAL", "HALCMD").map(|e| e.value.clone()).collect();
+    for key in ["HALFILE", "POSTGUI_HALFILE"] {
+        for e in ini.all("HAL", key) {
+            if let Ok(t) = std::fs::read_to_string(ini.resolve(&e.value)) {
+                commands.extend(t.lines().map(str::to_string));
+            }
+        }
+    }
+    let (mut signal_of, mut setp, mut sets) = (
+        std::collections::HashMap::new(),
+        std::collections::HashMap::new(),
+        std::collections::HashMap::new(),
+    );
+    for c in &commands {
+        let w: Vec<&str> = c
+            .split('#')
+            .next()
+            .unwrap_or("")
+            .split_whitespace()
+            .collect();
+        match w.as_slice() {
+            ["net", sig, rest @ ..] => {
+                for pin in rest.iter().filter(|p| !p.starts_with(['<', '='])) {
+                    signal_of.insert(pin.to_ascii_lowercase(), sig.to_string());
+                }
+            }
+            ["setp", pin, v] => {
+                if let Ok(v) = v.parse::<f64>() {
+                    setp.insert(pin.to_ascii_lowercase(), v);
+                }
+            }
+            ["sets", sig, v] => {
+                if let Ok(v) = v.parse::<f64>() {
+                    sets.insert(sig.to_string(), v);
+                }
+            }
+            _ => {}
+        }
+    }
+    // PyVCP widgets: `<halpin>"name"</halpin>` then `<initval>v</initval>`.
+    let mut pyvcp = std::collections::HashMap::new();
+    if let Some(xml) = ini
+        .get("DISPLAY", "PYVCP")
+        .and_then(|e| std::fs::read_to_string(ini.resolve(&e.value)).ok())
+    {
+        let mut pin = None;
+        for part in xml.split('<') {
+            if let Some(v) = part.strip_prefix("halpin>") {
+                pin = Some(v.trim().trim_matches('"').to_ascii_lowercase());
+            } else if let (Some(v), Some(p)) = (part.strip_prefix("initval>"), &pin) {
+                if let Ok(v) = v.trim().parse::<f64>() {
+                    pyvcp.insert(format!("pyvcp.{p}-f"), v);
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for name in needed {
+        let value = setp.get(name).copied().or_else(|| {
+            let sig = signal_of.get(name)?;
+            signal_of
+                .iter()
+                .filter(|(_, s)| *s == sig)
+                .find_map(|(p, _)| pyvcp.get(p).copied())
+                .or_else(|| sets.get(sig).copied())
+        });
+        if let Some(v) = value {
+            if !out.iter().any(|(n, _): &(String, f64)| n == name) {
+                out.push((name.to_string(), v));
+            }
+        }
+    }
+    out
 }
 
 /// The machine for a program: `machines/linuxcnc/<ini-stem>.toml` when the project has
@@ -412,7 +502,18 @@ fn run_in_config(
             "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\nlinuxcnc_ini = {:?}\n{user_m}{}[check]\ncollisions = false\n",
             path.display().to_string(),
             ini.path.display().to_string(),
-            hal_pins(path, text),
+            {
+                let pins: Vec<String> = plasmac_pins(path, text)
+                    .into_iter()
+                    .chain(config_pins(ini, text))
+                    .map(|(p, v)| format!("{p:?} = {v:?}"))
+                    .collect();
+                if pins.is_empty() {
+                    String::new()
+                } else {
+                    format!("hal_pins = {{ {} }}\n", pins.join(", "))
+                }
+            },
         ),
     )
     .unwrap();

@@ -385,9 +385,28 @@ struct Outcome {
     first_error: String,
     /// `Some(Ok(moves))` when rs274 and mtsim both read it and agree.
     compared: Option<Result<usize, String>>,
+    /// rs274's last message when it refuses the program in the same configuration.
+    reference_refuses: Option<String>,
 }
 
 impl Outcome {
+    /// Records rs274's run: compared when both read the program, or its refusal.
+    fn reference(&mut self, run: rs274::RsRun, s: &str) {
+        if !run.ok {
+            // Its error comes last (the Python plugin may echo code before it).
+            let first = run
+                .stderr
+                .lines()
+                .map(str::trim)
+                .rfind(|l| !l.is_empty() && *l != "executing")
+                .unwrap_or("no output")
+                .to_string();
+            self.reference_refuses = Some(first);
+        } else if self.read() {
+            self.compared = Some(compare(run, s));
+        }
+    }
+
     fn read(&self) -> bool {
         (self.analyze == Some(0) && matches!(self.check, Some(0 | 1))) || self.motion_free
     }
@@ -447,11 +466,9 @@ fn run_one(path: &Path, k: usize, setup: &Setup) -> Outcome {
     .unwrap();
     let s = scenario.to_str().unwrap();
     let mut o = outcome(path, s);
-    if let (true, Some((rs274_bin, tools))) = (o.read(), &setup.rs274) {
+    if let Some((rs274_bin, tools)) = &setup.rs274 {
         let run = rs274::run_with(rs274_bin, path, tools, &dirs, &work.join("rs"), TIMEOUT);
-        if run.ok {
-            o.compared = Some(compare(run, s));
-        }
+        o.reference(run, s);
     }
     let _ = std::fs::remove_dir_all(&work);
     o
@@ -519,7 +536,7 @@ fn run_in_config(
     .unwrap();
     let s = scenario.to_str().unwrap();
     let mut o = outcome(path, s);
-    if let (true, Some((rs274_bin, _))) = (o.read(), &setup.rs274) {
+    if let Some((rs274_bin, _)) = &setup.rs274 {
         let rs_ini = work.join("rs274.ini");
         std::fs::write(&rs_ini, rs274_ini(ini, &kins)).unwrap();
         // rs274 reads lengths in inches (docs/rs274.md); the configuration's are in its
@@ -558,9 +575,7 @@ fn run_in_config(
             &work.join("rs"),
             TIMEOUT,
         );
-        if run.ok {
-            o.compared = Some(compare(run, s));
-        }
+        o.reference(run, s);
     }
     let _ = std::fs::remove_dir_all(work);
     o
@@ -612,6 +627,7 @@ fn outcome(path: &Path, s: &str) -> Outcome {
             unwrapped(&lines.join(" "))
         },
         compared: None,
+        reference_refuses: None,
     }
 }
 
@@ -729,12 +745,25 @@ fn linuxcnc_sample_programs_never_panic_hang_or_pass_unread() {
         compared.len() - disagree.len(),
         known.len()
     );
+    let both_refuse: Vec<_> = outcomes
+        .iter()
+        .filter(|o| !o.read() && o.reference_refuses.is_some())
+        .collect();
+    eprintln!(
+        "of the {} programs mtsim does not read, rs274 in the same configuration refuses {} too",
+        n - read.len(),
+        both_refuse.len()
+    );
     for o in &outcomes {
         eprintln!(
-            "  {:<5} {}  {}",
+            "  {:<5} {}  {}{}",
             if o.read() { "read" } else { "no" },
             o.name,
-            o.first_error
+            o.first_error,
+            match (&o.reference_refuses, o.read()) {
+                (Some(r), false) => format!(" [rs274 refuses too: {r}]"),
+                _ => String::new(),
+            }
         );
     }
     assert!(panics.is_empty(), "panics: {panics:?}");

@@ -172,9 +172,27 @@ fn run_cmd(
     };
     let stderr = std::fs::read_to_string(&err).unwrap_or_default();
     let text = std::fs::read_to_string(&out).unwrap_or_default();
+    // The Python plugin of a configuration echoes the ini's `[PYTHON]` code
+    // (`file.ini:N: executing '...'`, possibly over several lines) and its start-up: not
+    // messages about the program.
+    let mut in_echo = false;
     let messages: Vec<&str> = stderr
         .lines()
-        .filter(|l| !l.trim().is_empty() && l.trim() != "executing")
+        .filter(|l| {
+            let t = l.trim();
+            if in_echo {
+                in_echo = !t.ends_with('\'');
+                return false;
+            }
+            if t.contains(": executing '") {
+                in_echo = !t.ends_with('\'');
+                return false;
+            }
+            !(t.is_empty()
+                || t == "executing"
+                || t.starts_with("PythonPlugin:")
+                || t.starts_with("is_callable("))
+        })
         .collect();
     RsRun {
         moves: parse(&text),

@@ -176,3 +176,64 @@ fn tilted_planes_and_dynamic_work_offsets_use_the_machine_kinematics() {
         got[0]
     );
 }
+
+/// `linuxcnc_ini`: an inch configuration's tool table and parameter file are converted to
+/// mm, its subroutine path and remaps apply, its numeric values are `#<_ini[...]>`, HAL
+/// pins come from `hal_pins`; an explicit scenario key takes precedence over the ini's.
+#[test]
+fn a_linuxcnc_configuration_gives_tools_parameters_paths_and_remaps() {
+    let dir = scratch("reader", "ini");
+    std::fs::create_dir_all(dir.join("cfg/subs")).unwrap();
+    std::fs::write(
+        dir.join("cfg/mill.ini"),
+        "[TRAJ]\nLINEAR_UNITS = inch\n[EMCIO]\nTOOL_TABLE = mill.tbl\n[RS274NGC]\n\
+         PARAMETER_FILE = mill.var\nSUBROUTINE_PATH = subs\n\
+         REMAP = M401 modalgroup=10 argspec=P ngc=m401\n[PARK]\nZ = 2.5\n",
+    )
+    .unwrap();
+    // Tool 1: 2 in long; G54 X = 1 in (#5221).
+    std::fs::write(dir.join("cfg/mill.tbl"), "T1 P1 Z2.0 D0.25\n").unwrap();
+    std::fs::write(dir.join("cfg/mill.var"), "5221 1.0\n").unwrap();
+    std::fs::write(
+        dir.join("cfg/subs/m401.ngc"),
+        "o<m401> sub\nG0 Y[#<p> + #<_ini[park]z> + #<_hal[spindle.0.at-speed]>]\no<m401> endsub\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("p.ngc"),
+        "G21 G90\nT1 M6 G43 H1\nG0 X0 Y0 Z0\nM401 P4\nM2\n",
+    )
+    .unwrap();
+    let scenario = |extra: &str| {
+        let path = write_scenario(
+            &dir,
+            &trt_ac(),
+            &format!(
+                "[program]\nfile = \"p.ngc\"\n[reader]\ndialect = \"linuxcnc\"\nlinuxcnc_ini = \"cfg/mill.ini\"\nhal_pins = {{ \"spindle.0.at-speed\" = 1.0 }}\n{extra}"
+            ),
+        );
+        Scenario::load(&path).unwrap()
+    };
+    let got = ends(&scenario(""), &dir.join("p.ngc")).unwrap();
+    // X: G54 1 in = 25.4 mm; Z: tool length 2 in = 50.8 mm; Y: P + 2.5 + 1 (mm, G21).
+    assert_eq!(
+        got,
+        [
+            [25.4, 0.0, 50.8, 0.0, 0.0, 0.0],
+            [25.4, 7.5, 50.8, 0.0, 0.0, 0.0]
+        ]
+    );
+    // A scenario tool table replaces the configuration's.
+    std::fs::write(dir.join("mm.tbl"), "T1 P1 Z10.0\n").unwrap();
+    let got = ends(&scenario("tool_table = \"mm.tbl\"\n"), &dir.join("p.ngc")).unwrap();
+    assert_eq!(got[0], [25.4, 0.0, 10.0, 0.0, 0.0, 0.0]);
+    // An unreadable configuration names the file and line.
+    std::fs::write(dir.join("cfg/mill.ini"), "[TRAJ]\nthis is not a key\n").unwrap();
+    let path = write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"p.ngc\"\n[reader]\nlinuxcnc_ini = \"cfg/mill.ini\"\n",
+    );
+    let err = Scenario::load(&path).unwrap_err().to_string();
+    assert!(err.contains("mill.ini:2:"), "{err}");
+}

@@ -472,11 +472,13 @@ fn reader_options(
                 )),
             }
             };
-            Some(
-                ngc::Ini::read(&p)
-                    .and_then(|ini| ini.config())
-                    .map_err(ini_error)?,
-            )
+            let ini = ngc::Ini::read(&p).map_err(ini_error)?;
+            // `#<_ini[section]key>`: the numeric values.
+            o.ini_values.extend(ini.entries.iter().filter_map(|e| {
+                let v = e.value.parse::<f64>().ok().filter(|v| v.is_finite())?;
+                Some((format!("{}]{}", e.section, e.key), v))
+            }));
+            Some(ini.config().map_err(ini_error)?)
         }
         None => None,
     };
@@ -508,6 +510,7 @@ fn reader_options(
         // LinuxCNC starts with an empty tool table when the file does not exist (the
         // sample configurations name tables the configuration picker copies in).
         let t = std::fs::read_to_string(p).unwrap_or_default();
+        o.pockets.extend(ngc::tool_pockets(&t));
         let tools = ngc::parse_tool_table(&t).map_err(|(line, m)| Error::Invalid {
             path: p.clone(),
             message: format!("line {line}: {m}"),
@@ -518,6 +521,14 @@ fn reader_options(
             diameter_mm: t.diameter_mm * units_mm,
             ..t
         }));
+        // Lathe tools: the orientation Q, for cutter compensation under G18.
+        let orientations =
+            ngc::parse_tool_orientations(&t).map_err(|(line, m)| Error::Invalid {
+                path: p.clone(),
+                message: format!("line {line}: {m}"),
+                help: Some("a lathe tool's orientation is `Q1` to `Q9`".into()),
+            })?;
+        o.tool_orientations.extend(orientations);
     }
     if let Some(c) = &config {
         o.search_path = c.subroutine_path.clone();
@@ -589,6 +600,7 @@ fn reader_options(
     }
     if let Some(file) = &r.tool_table {
         let (p, t) = read("tool_table", file)?;
+        o.pockets.extend(ngc::tool_pockets(&t));
         let invalid = |(line, m): (usize, String)| Error::Invalid {
             path: p.clone(),
             message: format!("line {line}: {m}"),

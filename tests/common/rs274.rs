@@ -172,9 +172,27 @@ fn run_cmd(
     };
     let stderr = std::fs::read_to_string(&err).unwrap_or_default();
     let text = std::fs::read_to_string(&out).unwrap_or_default();
+    // The Python plugin of a configuration echoes the ini's `[PYTHON]` code
+    // (`file.ini:N: executing '...'`, possibly over several lines) and its start-up: not
+    // messages about the program.
+    let mut in_echo = false;
     let messages: Vec<&str> = stderr
         .lines()
-        .filter(|l| !l.trim().is_empty() && l.trim() != "executing")
+        .filter(|l| {
+            let t = l.trim();
+            if in_echo {
+                in_echo = !t.ends_with('\'');
+                return false;
+            }
+            if t.contains(": executing '") {
+                in_echo = !t.ends_with('\'');
+                return false;
+            }
+            !(t.is_empty()
+                || t == "executing"
+                || t.starts_with("PythonPlugin:")
+                || t.starts_with("is_callable("))
+        })
         .collect();
     RsRun {
         moves: parse(&text),
@@ -314,10 +332,47 @@ pub fn parse(text: &str) -> Vec<RsMove> {
                 c[second] = n[3];
                 let (p, c) = (to_mm(&p, units), to_mm(&c, units));
                 let mut center = machine(c, &g5x, &g92, &tlo, rot_deg);
+                let end = machine(p, &g5x, &g92, &tlo, rot_deg);
+                // `rotation` n (sign: +1 counter-clockwise): |n| − 1 full turns before the
+                // arc, which mtsim emits as moves of their own. With the one-turn sweep θ₁
+                // and θ = θ₁ + 2π(|n| − 1), after turn k the in-plane axes are back at the
+                // start and the others at start + (end − start)·2πk/θ.
+                let turns = n[4].abs().round() as usize;
+                if turns > 1 {
+                    let start = moves.last().map_or([0.0; 6], |m: &RsMove| m.end);
+                    let angle =
+                        |q: &[f64; 6]| (q[second] - center[second]).atan2(q[first] - center[first]);
+                    let tau = std::f64::consts::TAU;
+                    let mut sweep = (angle(&end) - angle(&start)) * n[4].signum();
+                    while sweep <= 1e-12 {
+                        sweep += tau;
+                    }
+                    let total = sweep + tau * (turns - 1) as f64;
+                    for t in 1..turns {
+                        let f = tau * t as f64 / total;
+                        let mut q: [f64; 6] =
+                            std::array::from_fn(|i| start[i] + (end[i] - start[i]) * f);
+                        q[first] = start[first];
+                        q[second] = start[second];
+                        moves.push(RsMove {
+                            kind: "arc",
+                            end: q,
+                            feed_mm_min: (!per_rev).then_some(feed).flatten(),
+                            dwell_s: None,
+                            center: Some({
+                                let mut c = center;
+                                c[normal] = f64::NAN;
+                                [c[0], c[1], c[2]]
+                            }),
+                            call: k + 1,
+                            rounding_mm: 5e-5 * units + g5x_r + g92_r + tlo_r,
+                        });
+                    }
+                }
                 center[normal] = f64::NAN;
                 moves.push(RsMove {
                     kind: "arc",
-                    end: machine(p, &g5x, &g92, &tlo, rot_deg),
+                    end,
                     feed_mm_min: (!per_rev).then_some(feed).flatten(),
                     dwell_s: None,
                     center: Some([center[0], center[1], center[2]]),

@@ -317,6 +317,10 @@ pub struct Interp {
     table_given: bool,
     tool: u32,
     next_tool: u32,
+    /// A T word has selected `next_tool` since the last tool change (LinuxCNC's
+    /// `selected_pocket >= 0`).
+    tool_selected: bool,
+    pockets: HashMap<u32, u32>,
     tool_length_mm: f64,
     /// Active work system: 1 = G54 ... 9 = G59.3, 10+ = G54.1 P1...
     coord: u32,
@@ -375,6 +379,12 @@ impl Interp {
             params.set(&Param::Numbered(n as usize), v);
         }
         params.numbered[5220] = 1.0;
+        for (key, v) in &o.ini_values {
+            params.set(
+                &Param::Named(format!("_ini[{}", key.to_ascii_lowercase())),
+                *v,
+            );
+        }
         for (pin, v) in &o.hal_pins {
             let name: String = pin.chars().filter(|c| !c.is_whitespace()).collect();
             params.set(
@@ -425,6 +435,8 @@ impl Interp {
             nurbs_order: 3,
             user_m: o.user_m.clone(),
             user_m_path: o.user_m_path.clone(),
+            tool_selected: false,
+            pockets: o.pockets.iter().copied().collect(),
             noticed: Vec::new(),
             saved: None,
             tilt: None,
@@ -499,6 +511,28 @@ impl Interp {
         ]
     }
 
+    /// LinuxCNC stdglue's `change_prolog` parameters: tool in the spindle, selected tool,
+    /// their pockets; `None` when no tool is prepared ("M6: no tool prepared").
+    pub fn tool_change_parameters(&mut self) -> Option<[(&'static str, f64); 4]> {
+        if !self.tool_selected {
+            return None;
+        }
+        self.refresh_system_parameters();
+        let g = &self.params.globals;
+        Some([
+            ("tool_in_spindle", self.tool as f64),
+            ("selected_tool", self.next_tool as f64),
+            ("current_pocket", g["_current_pocket"]),
+            ("selected_pocket", g["_selected_pocket"]),
+        ])
+    }
+
+    /// The tool change of stdglue's `change_epilog` (M6 without the G43).
+    pub fn complete_tool_change(&mut self) {
+        self.tool = self.next_tool;
+        self.tool_selected = false;
+    }
+
     /// Writes the read-only system parameters (positions, tool, work system) before a line
     /// that reads parameters.
     pub fn refresh_system_parameters(&mut self) {
@@ -524,6 +558,23 @@ impl Interp {
         g.insert("_incremental".into(), t(!self.absolute));
         g.insert("_current_tool".into(), self.tool as f64);
         g.insert("_selected_tool".into(), self.next_tool as f64);
+        let pocket = |t: u32| self.pockets.get(&t).map_or(t as f64, |p| *p as f64);
+        g.insert(
+            "_current_pocket".into(),
+            if self.tool == 0 {
+                0.0
+            } else {
+                pocket(self.tool)
+            },
+        );
+        g.insert(
+            "_selected_pocket".into(),
+            if self.tool_selected {
+                pocket(self.next_tool)
+            } else {
+                -1.0
+            },
+        );
         g.insert(
             "_feed".into(),
             self.feed.unwrap_or(0.0)
@@ -916,6 +967,7 @@ impl Interp {
             let n = t.value.round() as u32;
             self.tool_entry(n, &t)?;
             self.next_tool = n;
+            self.tool_selected = true;
         }
         let mut tcp_m = None;
         for &(code, w) in m.iter() {
@@ -1657,11 +1709,23 @@ impl Interp {
                             unreachable!("handled above")
                         }
                     };
+                    let turns = match (get('P'), motion) {
+                        (Some(p), Motion::Arc { .. }) => turns(line, &p, self.feed_mode)?,
+                        _ => 1,
+                    };
+                    if self.comp.is_some() && turns > 1 {
+                        return Err(LineError::new(at, "an arc of several turns (P) under cutter radius compensation: not supported", "turns with compensation"));
+                    }
                     if self.comp.is_some() {
                         self.comp_element(queue, line_no, motion, start, target)
                             .map_err(|m| LineError::new(at, m, "cutter compensation"))?;
                     } else {
-                        self.emit(queue, line_no, motion, start, target, self.path);
+                        let mut from = start;
+                        for end in crate::turns::full_turn_ends(motion, start, target, turns) {
+                            self.emit(queue, line_no, motion, from, end, self.path);
+                            from = end;
+                        }
+                        self.emit(queue, line_no, motion, from, target, self.path);
                     }
                     self.pos = target;
                 }
@@ -2089,6 +2153,9 @@ impl Interp {
         let cubic = matches!(motion, Some(MotionMode::Spline(50)));
         let nurbs = matches!(motion, Some(MotionMode::Spline(52)));
         let dwell_cycle = matches!(motion, Some(MotionMode::Cycle(820 | 860 | 890)));
+        // LinuxCNC G2/G3 P<turns>.
+        let arc_turns =
+            self.dialect == Dialect::Linuxcnc && matches!(motion, Some(MotionMode::Arc { .. }));
         let g10 = has_g(&|c| matches!(c, GCode::NonModal(NonModal::G10)));
         let thread = motion == Some(MotionMode::Lathe(760));
         let g7x = matches!(motion, Some(MotionMode::Lathe(700..=722)));
@@ -2097,7 +2164,7 @@ impl Interp {
             .iter()
             .any(|(c, _)| (100..=199).contains(c) || self.user_m.contains_key(c));
         let checks: [(char, bool, &str); 5] = [
-            ('P', thread || g7x || cubic || nurbs || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]) || user, "`P` with no code that uses it: expected P only with G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89, G76, M19, M50-M53, M62-M66, M98 or a user M code"),
+            ('P', thread || g7x || cubic || nurbs || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]) || user || arc_turns, "`P` with no code that uses it: expected P only with G02/G03 (turns), G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89, G76, M19, M50-M53, M62-M66, M98 or a user M code"),
             ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || thread || g7x || cubic || has_m(&[19, 61, 66, 67, 68]) || user, "`Q` with no code that uses it: expected Q only with G5, G64, G73/G83, G76, M19, M61, M66-M68 or a user M code"),
             ('L', g10 || cycle || thread || nurbs || has_m(&[66, 98]) || has_g(&|c| matches!(c, GCode::CutterComp(3 | 4))), "`L` with no code that uses it: expected L only with G10, G5.2, a canned cycle, G41.1/G42.1, G76, M66 or M98"),
             ('E', thread || g7x || has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with G76 and M66-M68"),
@@ -2861,4 +2928,26 @@ fn integer(word: &Word, line: &str) -> LineResult<u64> {
         return Err(bad());
     }
     Ok(word.value as u64)
+}
+
+/// The number of turns of a LinuxCNC `G2`/`G3 ... P<n>` arc: a whole number from 1.
+fn turns(line: &str, p: &Word, feed_mode: FeedRead) -> LineResult<u32> {
+    if p.value.fract() != 0.0 || !(1.0..=10_000.0).contains(&p.value) {
+        return Err(LineError::new(
+            p.span(),
+            format!(
+                "`{}`: expected a whole number of turns from 1",
+                &line[p.span()]
+            ),
+            "turns",
+        ));
+    }
+    if p.value > 1.0 && matches!(feed_mode, FeedRead::InverseTime) {
+        return Err(LineError::new(
+            p.span(),
+            "an arc of several turns under G93 inverse-time feed: not supported",
+            "turns under G93",
+        ));
+    }
+    Ok(p.value as u32)
 }

@@ -42,6 +42,7 @@ mod probe;
 mod reader;
 mod spline;
 mod remap;
+mod turns;
 
 pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
@@ -49,8 +50,8 @@ pub use error::{line_column, Error, Result, Syntax};
 pub use frame::RotaryTable;
 pub use ini::{scale_parameter_lengths, Ini, IniEntry, IniError, LinuxcncConfig};
 pub use options::{
-    parse_tool_orientations, parse_tool_table, parse_var_file, work_offset_parameter, Dialect,
-    Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
+    parse_tool_orientations, parse_tool_table, parse_var_file, tool_pockets, work_offset_parameter,
+    Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
 };
 pub use reader::{
     read_file, read_file_with, read_str, read_str_with, Moves, Notice, ARC_RADIUS_TOLERANCE_MM,

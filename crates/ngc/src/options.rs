@@ -104,6 +104,11 @@ pub struct Options {
     /// Folders of LinuxCNC user M programs (`M100`-`M199` files); when not empty, a user M
     /// code with no file there is an error, as in LinuxCNC.
     pub user_m_path: Vec<PathBuf>,
+    /// Numeric configuration values read by `#<_ini[section]key>`: ("section]key", value).
+    pub ini_values: Vec<(String, f64)>,
+    /// Tool pockets (tool number, pocket `P` of the tool table), for `#<_current_pocket>`
+    /// and `#<_selected_pocket>`.
+    pub pockets: Vec<(u32, u32)>,
 }
 
 /// Default limit on loop iterations per program run.
@@ -129,6 +134,8 @@ impl Default for Options {
             remaps: Vec::new(),
             hal_pins: Vec::new(),
             user_m_path: Vec::new(),
+            ini_values: Vec::new(),
+            pockets: Vec::new(),
         }
     }
 }
@@ -186,6 +193,21 @@ pub fn parse_var_file(text: &str) -> Result<Vec<(u32, f64)>, (usize, String)> {
         }
     }
     Ok(out)
+}
+
+/// The pockets of a LinuxCNC tool table: (tool `T`, pocket `P`) of each line that has both.
+pub fn tool_pockets(text: &str) -> Vec<(u32, u32)> {
+    let word = |line: &str, l: char| {
+        line.split_whitespace()
+            .find(|w| w.starts_with([l, l.to_ascii_lowercase()]))
+            .and_then(|w| w[1..].parse::<f64>().ok())
+            .filter(|v| *v >= 0.0 && v.fract() == 0.0 && *v < 1e9)
+            .map(|v| v as u32)
+    };
+    text.lines()
+        .map(|l| l.split(';').next().unwrap_or(""))
+        .filter_map(|l| Some((word(l, 'T')?, word(l, 'P')?)))
+        .collect()
 }
 
 /// Parses a LinuxCNC tool table: lines `T<n> P<pocket> Z<length> D<diameter> ;comment`,

@@ -23,7 +23,7 @@ use crate::expr::{Eval, Param};
 use crate::interp::{Interp, Stop};
 use crate::lex::{is_blank, lex, lex_with, Lexed, LineError, LineResult, Word};
 use crate::options::{Dialect, Options};
-use crate::remap::Remap;
+use crate::remap::{Remap, RemapCode};
 
 /// Millimetres per inch (exact by definition).
 pub const MM_PER_INCH: f64 = 25.4;
@@ -357,6 +357,8 @@ struct Frame {
     /// The remap (index) this call executes, and the rest of its block to run on return.
     remap: Option<usize>,
     resume: Option<Resume>,
+    /// stdglue `change_epilog` runs on return (an M6 remap).
+    change_epilog: bool,
 }
 
 /// The words of a block left to run after a remapped code's subroutine returns.
@@ -403,6 +405,9 @@ pub struct Moves {
     /// A block's words to run before the next line (after a remap returned).
     resume: Option<Resume>,
     remaps_noticed: Vec<usize>,
+    /// An error raised on return from a remap (stdglue change_epilog), reported at the
+    /// next line.
+    abort: Option<String>,
 }
 
 impl Moves {
@@ -440,6 +445,7 @@ impl Moves {
             remaps: options.remaps.clone(),
             resume: None,
             remaps_noticed: Vec::new(),
+            abort: None,
         }
     }
 
@@ -741,6 +747,7 @@ impl Moves {
             restore: None,
             remap: None,
             resume: None,
+            change_epilog: false,
         });
         self.cursor = start;
         Ok(())
@@ -770,6 +777,18 @@ impl Moves {
             self.interp.restore(&saved);
         }
         self.resume = frame.resume;
+        if frame.change_epilog {
+            // stdglue change_epilog: a positive return value completes the change; the
+            // others abort the program (M6 aborted), which mtsim reports as an error.
+            if value.is_some_and(|v| v > 0.0) {
+                self.interp.complete_tool_change();
+            } else {
+                self.abort = Some(format!(
+                    "M6 aborted: the tool-change subroutine returned {} (stdglue change_epilog expects a value > 0)",
+                    value.map_or("no value".into(), |v| v.to_string())
+                ));
+            }
+        }
         self.loops.truncate(frame.loops);
         self.ifs.truncate(frame.ifs);
         let p = &mut self.interp.params;
@@ -1283,6 +1302,14 @@ impl Moves {
                 return Err(e);
             }
         }
+        if let Some(message) = self.abort.take() {
+            self.finished = true;
+            return Err(self.error_at(
+                self.cursor,
+                LineError::new(0..0, message, "tool change aborted"),
+                "",
+            ));
+        }
         if let Some(r) = self.resume.take() {
             let line = r.line.as_str();
             let words: Vec<Word> = r
@@ -1447,7 +1474,17 @@ impl Moves {
     ) -> LineResult<()> {
         let remap = self.remaps[s.remap].clone();
         let name = &line[s.span.clone()];
-        if let Some(handler) = remap.prolog.as_ref().or(remap.epilog.as_ref()) {
+        // LinuxCNC's stdglue M6 handlers are known: `change_prolog` passes the tool and
+        // pocket parameters, `change_epilog` changes the tool when the subroutine returns a
+        // positive value. Other Python handlers cannot be run.
+        let stdglue_change = remap.code == RemapCode::M(6)
+            && remap.prolog.as_deref() == Some("change_prolog")
+            && remap.epilog.as_deref() == Some("change_epilog")
+            && remap.ngc.is_some();
+        if let (false, Some(handler)) = (
+            stdglue_change,
+            remap.prolog.as_ref().or(remap.epilog.as_ref()),
+        ) {
             return Err(LineError::new(s.span.clone(), format!("`{name}` is remapped ({}) with the Python prolog/epilog `{handler}` around its subroutine: mtsim runs no Python, and such handlers set the parameters the subroutine reads", remap.origin), "Python remap")
                 .help("remap the code without prolog= and epilog=, or remove it from the program"));
         }
@@ -1480,7 +1517,20 @@ impl Moves {
         } else {
             Vec::new()
         };
+        let change = if stdglue_change {
+            let Some(p) = self.interp.tool_change_parameters() else {
+                return Err(LineError::new(s.span.clone(), format!("`{name}`: no tool prepared (stdglue change_prolog, {}): expected a T word before it", remap.origin), "no tool prepared"));
+            };
+            Some(p)
+        } else {
+            None
+        };
         self.call(label, &positional, true, 1, next, s.span.clone())?;
+        if let (Some(p), Some(locals)) = (change, self.interp.params.locals.last_mut()) {
+            for (k, v) in p {
+                locals.insert(k.to_string(), v);
+            }
+        }
         if !remap.positional() {
             if let Some(locals) = self.interp.params.locals.last_mut() {
                 for (letter, v) in &s.args {
@@ -1491,6 +1541,7 @@ impl Moves {
         let base = line.as_ptr() as usize;
         let frame = self.frames.last_mut().expect("just called");
         frame.remap = Some(s.remap);
+        frame.change_epilog = stdglue_change;
         if !after.is_empty() {
             frame.resume = Some(Resume {
                 here,

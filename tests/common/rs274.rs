@@ -258,6 +258,48 @@ pub fn parse(text: &str) -> Vec<RsMove> {
                 let (p, c) = (to_mm(&p, units), to_mm(&c, units));
                 let mut center = machine(c, &g5x, &g92, &tlo, rot_deg);
                 center[normal] = f64::NAN;
+                let end = machine(p, &g5x, &g92, &tlo, rot_deg);
+                // |rotation| > 1: that many - 1 extra full turns on the same helix. They
+                // come first here, as in mtsim: after k turns the tool is back at the start
+                // in the plane, the other axes moved by 2πk / (total angle) of their way.
+                let turns = (n[4].abs() as usize).saturating_sub(1);
+                if turns > 0 {
+                    let start = moves.last().map_or([0.0; 6], |m: &RsMove| m.end);
+                    let angle =
+                        |q: &[f64; 6]| (q[second] - center[second]).atan2(q[first] - center[first]);
+                    let tau = std::f64::consts::TAU;
+                    let mut sweep = angle(&end) - angle(&start);
+                    let same =
+                        (end[first] - start[first]).hypot(end[second] - start[second]) < 1e-9;
+                    if n[4] < 0.0 {
+                        while sweep >= 0.0 || same && sweep > -tau {
+                            sweep -= tau;
+                        }
+                    } else {
+                        while sweep <= 0.0 || same && sweep < tau {
+                            sweep += tau;
+                        }
+                    }
+                    let total = sweep.abs() + tau * turns as f64;
+                    for t in 1..=turns {
+                        let f = tau * t as f64 / total;
+                        let mut q = start;
+                        for i in 0..6 {
+                            if i != first && i != second {
+                                q[i] = start[i] + (end[i] - start[i]) * f;
+                            }
+                        }
+                        moves.push(RsMove {
+                            kind: "arc",
+                            end: q,
+                            feed_mm_min: (!per_rev).then_some(feed).flatten(),
+                            dwell_s: None,
+                            center: Some([center[0], center[1], center[2]]),
+                            call: k + 1,
+                            rounding_mm: 5e-5 * units + g5x_r + g92_r + tlo_r,
+                        });
+                    }
+                }
                 moves.push(RsMove {
                     kind: "arc",
                     end: machine(p, &g5x, &g92, &tlo, rot_deg),

@@ -1450,9 +1450,12 @@ impl Interp {
                             unreachable!("handled above")
                         }
                     };
+                    let turns = self.arc_turns(&get, &motion, at.clone())?;
                     if self.comp.is_some() {
                         self.comp_element(queue, line_no, motion, start, target)
                             .map_err(|m| LineError::new(at, m, "cutter compensation"))?;
+                    } else if turns > 0 {
+                        self.arc_with_turns(queue, line_no, motion, start, target, turns);
                     } else {
                         self.emit(queue, line_no, motion, start, target, self.path);
                     }
@@ -1559,6 +1562,87 @@ impl Interp {
             locals: true,
             span: g65.span(),
         })
+    }
+
+    /// Extra full turns of a G02/G03 block: P - 1 (LinuxCNC: P turns, P1 the default).
+    fn arc_turns<'l>(
+        &self,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        motion: &Motion,
+        at: std::ops::Range<usize>,
+    ) -> LineResult<u64> {
+        let (Some(p), Motion::Arc { .. }) = (get('P'), motion) else {
+            return Ok(0);
+        };
+        let err = |m: &str| Err(LineError::new(p.span(), m.to_string(), "turns"));
+        if p.value != p.value.round() {
+            return err("P (turns) of G02/G03 not an integer: expected P1, P2, ... (LinuxCNC: \"P value not an integer with M19 G2 or G3\")");
+        }
+        if p.value < 1.0 {
+            return err("P (turns) of G02/G03 below 1: expected P1 or greater (LinuxCNC: \"P value should be 1 or greater with G2 or G3\")");
+        }
+        if p.value > 10_000.0 {
+            return err("P (turns) of G02/G03 above 10000: expected fewer turns");
+        }
+        let turns = p.value as u64 - 1;
+        if turns > 0 {
+            let refuse = if self.comp.is_some() {
+                Some("G02/G03 with P above 1 under cutter radius compensation: not supported")
+            } else if self.feed_mode == FeedRead::InverseTime {
+                Some("G02/G03 with P above 1 in G93 (inverse time): not supported, expected G94")
+            } else if self.frame().is_some() {
+                Some("G02/G03 with P above 1 with G68.2 or G254 active: not supported")
+            } else {
+                None
+            };
+            if let Some(m) = refuse {
+                return Err(LineError::new(at, m, "turns"));
+            }
+        }
+        Ok(turns)
+    }
+
+    /// An arc with `turns` extra full turns: the full circles first, then the programmed
+    /// arc, on one helix: the axes off the plane (and A B C) move in proportion to the
+    /// angle, `Δ·2π/(|θ| + 2π·turns)` per full circle, where θ is the programmed arc's sweep.
+    fn arc_with_turns(
+        &mut self,
+        queue: &mut VecDeque<Move>,
+        line_no: usize,
+        motion: Motion,
+        start: AxisVec,
+        target: AxisVec,
+        turns: u64,
+    ) {
+        let probe = Move {
+            line: line_no,
+            motion,
+            start,
+            end: target,
+            feed: None,
+            feed_mode: FeedMode::PerMinute,
+            tcp: false,
+            tool: 0,
+            tool_length_mm: 0.0,
+            path: self.path,
+        };
+        let sweep = probe.arc_sweep_rad().unwrap_or(0.0).abs();
+        let tau = std::f64::consts::TAU;
+        let total = sweep + tau * turns as f64;
+        let (u, v, _) = self.plane.axes();
+        let mut from = start;
+        for k in 1..=turns {
+            let f = tau * k as f64 / total;
+            let mut to = start;
+            for a in Axis::ALL {
+                if a != u && a != v {
+                    to[a] = start[a] + (target[a] - start[a]) * f;
+                }
+            }
+            self.emit(queue, line_no, motion, from, to, self.path);
+            from = to;
+        }
+        self.emit(queue, line_no, motion, from, target, self.path);
     }
 
     /// Emits the pieces of a spline (program coordinates) as feed moves and arcs.
@@ -1882,9 +1966,10 @@ impl Interp {
         let cubic = matches!(motion, Some(MotionMode::Spline(50)));
         let nurbs = matches!(motion, Some(MotionMode::Spline(52)));
         let dwell_cycle = matches!(motion, Some(MotionMode::Cycle(820 | 860 | 890)));
+        let arc_turns = matches!(motion, Some(MotionMode::Arc { .. }));
         let g10 = has_g(&|c| matches!(c, GCode::NonModal(NonModal::G10)));
         let checks: [(char, bool, &str); 5] = [
-            ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || cubic || nurbs || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89, M19, M50-M53, M62-M66 or M98"),
+            ('P', has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || cubic || nurbs || arc_turns || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]), "`P` with no code that uses it: expected P only with G02/G03 (turns), G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89, M19, M50-M53, M62-M66 or M98"),
             ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || cubic || has_m(&[19, 61, 66, 67, 68]), "`Q` with no code that uses it: expected Q only with G5, G64, G73/G83, M19, M61 or M66-M68"),
             ('L', g10 || cycle || nurbs || has_m(&[66, 98]), "`L` with no code that uses it: expected L only with G10, G5.2, a canned cycle, M66 or M98"),
             ('E', has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with M66-M68"),

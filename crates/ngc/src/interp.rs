@@ -1301,7 +1301,12 @@ impl Interp {
         // 7. Motion.
         let mut arc_buf = [Word::EMPTY; 4];
         let mut n_arc = 0;
+        // M19 R is the spindle orientation angle, not an arc radius.
+        let m19 = m.iter().any(|(c, _)| *c == 19);
         for l in ['I', 'J', 'K', 'R'] {
+            if l == 'R' && m19 {
+                continue;
+            }
             if let Some(w) = get(l) {
                 arc_buf[n_arc] = w;
                 n_arc += 1;

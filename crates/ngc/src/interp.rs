@@ -326,6 +326,9 @@ pub struct Interp {
     coord: u32,
     /// Work offset + G92, machine minus program (before the tool length), cached.
     offset: AxisVec,
+    /// LinuxCNC rotation of the active work system about Z (G10 L2 R), deg, cached, with
+    /// its work offset and the G92 offset in X Y, mm: machine = rot(program + g92) + g5x.
+    rotation: Option<(f64, [f64; 2], [f64; 2])>,
     path: PathControl,
     retract_r: bool,
     cycle_r: Option<f64>,
@@ -422,6 +425,7 @@ impl Interp {
             tool_length_mm: 0.0,
             coord: 1,
             offset: AxisVec::ZERO,
+            rotation: None,
             path: PathControl::BLEND,
             // LinuxCNC starts in G99 (rs274's initial retract mode is the R plane).
             retract_r: o.dialect == Dialect::Linuxcnc,
@@ -463,6 +467,16 @@ impl Interp {
             };
             self.offset[a] = self.params.numbered.get(base + k).copied().unwrap_or(0.0) + g92;
         }
+        let r = if self.coord <= 9 {
+            self.params.numbered[base + 9]
+        } else {
+            0.0
+        };
+        self.rotation = (r != 0.0).then(|| {
+            let n = &self.params.numbered;
+            let g92 = |k: usize| if g92_on { n[5211 + k] } else { 0.0 };
+            (r, [n[base], n[base + 1]], [g92(0), g92(1)])
+        });
     }
 
     fn scale(&self) -> f64 {
@@ -477,6 +491,11 @@ impl Interp {
     fn program_position(&self) -> AxisVec {
         let mut p = self.pos - self.offset;
         p[Axis::Z] -= self.tool_length_mm;
+        if self.rotation.is_some() {
+            let xy = self.xy_to_program([self.pos[Axis::X], self.pos[Axis::Y]]);
+            p[Axis::X] = xy[0];
+            p[Axis::Y] = xy[1];
+        }
         if let Some(f) = self.frame() {
             let pp = f.to_program(self.tip(), &self.offset, &self.pos);
             for a in Axis::LINEAR {
@@ -487,6 +506,37 @@ impl Interp {
             p[a] /= self.scale();
         }
         p
+    }
+
+    /// Program X Y (mm) to machine X Y: `rot(p + g92, R) + g5x` (LinuxCNC
+    /// `rotate_and_offset_pos`), or `p + offset` without a rotation.
+    fn xy_to_machine(&self, p: [f64; 2]) -> [f64; 2] {
+        match self.rotation {
+            None => [p[0] + self.offset[Axis::X], p[1] + self.offset[Axis::Y]],
+            Some((r, g5x, g92)) => {
+                let q = rotate_deg([p[0] + g92[0], p[1] + g92[1]], r);
+                [q[0] + g5x[0], q[1] + g5x[1]]
+            }
+        }
+    }
+
+    /// Machine X Y (mm) to program X Y (mm): the inverse of [`Interp::xy_to_machine`].
+    fn xy_to_program(&self, m: [f64; 2]) -> [f64; 2] {
+        match self.rotation {
+            None => [m[0] - self.offset[Axis::X], m[1] - self.offset[Axis::Y]],
+            Some((r, g5x, g92)) => {
+                let q = rotate_deg([m[0] - g5x[0], m[1] - g5x[1]], -r);
+                [q[0] - g92[0], q[1] - g92[1]]
+            }
+        }
+    }
+
+    /// A program X Y increment (mm) as a machine increment.
+    fn xy_increment(&self, v: [f64; 2]) -> [f64; 2] {
+        match self.rotation {
+            None => v,
+            Some((r, ..)) => rotate_deg(v, r),
+        }
     }
 
     /// The program-to-machine map while G68.2 or G254 is active.
@@ -1486,6 +1536,20 @@ impl Interp {
                     }
                 }
                 NonModal::G92 | NonModal::G52 => {
+                    if self.rotation.is_some()
+                        && axis_words
+                            .iter()
+                            .any(|(a, _)| matches!(a, Axis::X | Axis::Y))
+                    {
+                        return Err(LineError::new(
+                            w.span(),
+                            format!(
+                                "`{}` X Y in a rotated work system (G10 L2 R): not supported yet",
+                                &line[w.span()]
+                            ),
+                            "rotated work system",
+                        ));
+                    }
                     if axis_words.is_empty() {
                         return Err(LineError::new(
                             w.span(),
@@ -1541,7 +1605,12 @@ impl Interp {
         // 7. Motion.
         let mut arc_buf = [Word::EMPTY; 4];
         let mut n_arc = 0;
+        // M19 R is the spindle orientation angle, not an arc radius.
+        let m19 = m.iter().any(|(c, _)| *c == 19);
         for l in ['I', 'J', 'K', 'R'] {
+            if l == 'R' && m19 {
+                continue;
+            }
             if let Some(w) = get(l) {
                 arc_buf[n_arc] = w;
                 n_arc += 1;
@@ -1659,6 +1728,18 @@ impl Interp {
                 MotionMode::Rapid | MotionMode::Linear => self.arc_not_allowed = false,
                 _ => {}
             }
+            if self.rotation.is_some()
+                && !g53
+                && (matches!(mode, MotionMode::Cycle(_) | MotionMode::Lathe(_))
+                    || (matches!(mode, MotionMode::Arc { .. }) && self.plane != Plane::XY))
+            {
+                return Err(LineError::new(
+                    at,
+                    "canned cycle, or arc outside G17, in a rotated work system (G10 L2 R): not supported yet",
+                    "rotated work system",
+                )
+                .help("cancel the rotation with G10 L2 P0 R0 first"));
+            }
             if self.frame().is_some() && matches!(mode, MotionMode::Cycle(_) | MotionMode::Lathe(_))
             {
                 return Err(LineError::new(
@@ -1715,6 +1796,9 @@ impl Interp {
                     };
                     if self.comp.is_some() && turns > 1 {
                         return Err(LineError::new(at, "an arc of several turns (P) under cutter radius compensation: not supported", "turns with compensation"));
+                    }
+                    if self.frame().is_some() && turns > 1 {
+                        return Err(LineError::new(at, "an arc of several turns (P) with G68.2 or G254 active: not supported", "turns in a tilted frame"));
                     }
                     if self.comp.is_some() {
                         self.comp_element(queue, line_no, motion, start, target)
@@ -1840,24 +1924,23 @@ impl Interp {
         pieces: &[spline::Piece],
     ) {
         let scale = self.scale();
-        let (ox, oy) = (self.offset[Axis::X], self.offset[Axis::Y]);
         for piece in pieces {
             let start = self.pos;
             let mut end = start;
             let e = piece.end();
-            end[Axis::X] = e[0] * scale + ox;
-            end[Axis::Y] = e[1] * scale + oy;
+            let e = self.xy_to_machine([e[0] * scale, e[1] * scale]);
+            end[Axis::X] = e[0];
+            end[Axis::Y] = e[1];
             let motion = match *piece {
                 spline::Piece::Line { .. } => Motion::Linear,
-                spline::Piece::Arc { center, ccw, .. } => Motion::Arc {
-                    clockwise: !ccw,
-                    plane: Plane::XY,
-                    center_mm: [
-                        center[0] * scale + ox,
-                        center[1] * scale + oy,
-                        start[Axis::Z],
-                    ],
-                },
+                spline::Piece::Arc { center, ccw, .. } => {
+                    let c = self.xy_to_machine([center[0] * scale, center[1] * scale]);
+                    Motion::Arc {
+                        clockwise: !ccw,
+                        plane: Plane::XY,
+                        center_mm: [c[0], c[1], start[Axis::Z]],
+                    }
+                }
             };
             self.emit(queue, line_no, motion, start, end, self.path);
             self.pos = end;
@@ -1902,9 +1985,11 @@ impl Interp {
         self.spline_checks(get, &at)?;
         let _ = line;
         let scale = self.scale();
-        let prog = |p: AxisVec, a: Axis| (p[a] - self.offset[a]) / scale;
-        let s = [prog(start, Axis::X), prog(start, Axis::Y)];
-        let e = [prog(target, Axis::X), prog(target, Axis::Y)];
+        let prog = |p: AxisVec| {
+            let q = self.xy_to_program([p[Axis::X], p[Axis::Y]]);
+            [q[0] / scale, q[1] / scale]
+        };
+        let (s, e) = (prog(start), prog(target));
         let (i, j) = (get('I').map(|w| w.value), get('J').map(|w| w.value));
         let err = |m: &str| Err(LineError::new(at.clone(), m.to_string(), "spline"));
         let pieces = if code == 51 {
@@ -2007,9 +2092,10 @@ impl Interp {
         }
         if x.is_some() {
             let t = self.target(axis_words, false);
+            let q = self.xy_to_program([t[Axis::X], t[Axis::Y]]);
             self.nurbs.push(spline::ControlPoint {
-                x: (t[Axis::X] - self.offset[Axis::X]) / scale,
-                y: (t[Axis::Y] - self.offset[Axis::Y]) / scale,
+                x: q[0] / scale,
+                y: q[1] / scale,
                 w: p.unwrap_or(1.0),
             });
         }
@@ -2268,7 +2354,32 @@ impl Interp {
             return target;
         }
         let mut target = self.pos;
+        if let (Some(_), false) = (self.rotation, g53) {
+            // A rotated work system (G10 L2 R): X Y words in the rotated frame.
+            let scale = self.scale();
+            let word = |l: Axis| {
+                axis_words
+                    .iter()
+                    .find(|(a, _)| *a == l)
+                    .map(|(_, w)| w.value * scale)
+            };
+            let (x, y) = (word(Axis::X), word(Axis::Y));
+            if x.is_some() || y.is_some() {
+                let xy = if self.absolute {
+                    let p = self.xy_to_program([self.pos[Axis::X], self.pos[Axis::Y]]);
+                    self.xy_to_machine([x.unwrap_or(p[0]), y.unwrap_or(p[1])])
+                } else {
+                    let d = self.xy_increment([x.unwrap_or(0.0), y.unwrap_or(0.0)]);
+                    [self.pos[Axis::X] + d[0], self.pos[Axis::Y] + d[1]]
+                };
+                target[Axis::X] = xy[0];
+                target[Axis::Y] = xy[1];
+            }
+        }
         for &(a, w) in axis_words {
+            if self.rotation.is_some() && !g53 && matches!(a, Axis::X | Axis::Y) {
+                continue;
+            }
             let v = if a.is_rotary() {
                 w.value
             } else {
@@ -2336,17 +2447,34 @@ impl Interp {
                         "out of range",
                     ));
                 }
+                let coord = if pn == 0.0 { self.coord } else { pn as u32 };
+                let base = coord_parameter(coord);
                 if let Some(r) = get('R') {
-                    if r.value != 0.0 {
+                    if r.value != 0.0
+                        && (self.dialect != Dialect::Linuxcnc || l.value.round() as u32 != 2)
+                    {
                         return Err(LineError::new(
                             r.span(),
-                            "rotated work systems (G10 R) are not supported yet: expected R0",
+                            "rotated work systems: expected R only with G10 L2 in the linuxcnc dialect",
                             "rotation",
                         ));
                     }
+                    if self.dialect == Dialect::Linuxcnc && coord <= 9 {
+                        self.params.numbered[base + 9] = r.value;
+                    }
                 }
-                let coord = if pn == 0.0 { self.coord } else { pn as u32 };
-                let base = coord_parameter(coord);
+                if l.value.round() as u32 == 20
+                    && self.params.numbered[base + 9] != 0.0
+                    && axis_words
+                        .iter()
+                        .any(|(a, _)| matches!(a, Axis::X | Axis::Y))
+                {
+                    return Err(LineError::new(
+                        l.span(),
+                        "G10 L20 X Y on a rotated work system: not supported, expected G10 L2",
+                        "rotation",
+                    ));
+                }
                 let g92_on = self.params.numbered[5210] != 0.0;
                 for (a, wd) in axis_words {
                     let k = a.index();
@@ -2783,7 +2911,17 @@ impl Interp {
             }
             (None, (None, None)) => Err(LineError::new(block_span, format!("arc without a centre: expected {} {} (centre offsets from the start) or R (radius)", letter(u), letter(v)), "no centre")),
             (None, (i, j)) => {
-                let (cu, cv) = if self.arc_absolute {
+                let (cu, cv) = if self.rotation.is_some() && self.frame().is_none() {
+                    // A rotated work system: only G17 arcs (checked by the caller).
+                    let c = if self.arc_absolute {
+                        let p = self.xy_to_program([su, sv]);
+                        self.xy_to_machine([i.map_or(p[0], |w| w.value * scale), j.map_or(p[1], |w| w.value * scale)])
+                    } else {
+                        let d = self.xy_increment([i.map_or(0.0, |w| w.value * scale), j.map_or(0.0, |w| w.value * scale)]);
+                        [su + d[0], sv + d[1]]
+                    };
+                    (c[0], c[1])
+                } else if self.arc_absolute {
                     // In a tilted frame, start and end are program coordinates already.
                     let tilted = self.frame().is_some();
                     let base = |a: Axis| if tilted { 0.0 } else { self.offset[a] + if a == Axis::Z { self.tool_length_mm } else { 0.0 } };
@@ -2884,6 +3022,12 @@ impl<T: Copy, const N: usize> std::ops::Deref for Small<T, N> {
 
 /// M-code groups (LinuxCNC's modal groups 4, 6, 7, 8, 9, 10); two of one group may not
 /// share a block.
+/// `v` turned counter-clockwise by `deg` about the origin.
+fn rotate_deg(v: [f64; 2], deg: f64) -> [f64; 2] {
+    let (s, c) = deg.to_radians().sin_cos();
+    [v[0] * c - v[1] * s, v[0] * s + v[1] * c]
+}
+
 /// Index of a word letter in a block's table of single words: A-Z, then `@` and `^`.
 fn slot(letter: char) -> usize {
     match letter {

@@ -74,13 +74,30 @@ pub fn bar_sensitivity(
     // The table ball moves with the rotary axes only: one evaluation serves the linear ones
     // (the same arithmetic as `deviation_mm`).
     let pivot = kin.actual_table_to_machine(q, pivot_table_mm);
+    let base = kin.rotary_sin_cos(q);
     let linear =
         |q: &AxisVec| (Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]) - pivot).norm() - length_mm;
     for &a in axes {
         let (mut up, mut down) = (*q, *q);
         up[a] += DIFF_STEP;
         down[a] -= DIFF_STEP;
-        let difference = if a.is_rotary() {
+        let difference = if a.is_rotary() && kin.location_errors.is_zero() {
+            // Only the perturbed angle's sine and cosine change: the other one's are shared
+            // (the arithmetic of `deviation_mm` on the nominal chain, term for term).
+            let rotated = |q: &AxisVec| {
+                let mut angles = base;
+                let sc = q[a].to_radians().sin_cos();
+                if a == Axis::C {
+                    angles.c = sc;
+                } else {
+                    angles.tilt = sc;
+                }
+                let r = kin.rotation_of(&angles);
+                let pivot = Point3::from(kin.pivot_mm + r * pivot_table_mm.coords);
+                (Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]) - pivot).norm() - length_mm
+            };
+            rotated(&up) - rotated(&down)
+        } else if a.is_rotary() {
             deviation_mm(kin, &up, pivot_table_mm, length_mm)
                 - deviation_mm(kin, &down, pivot_table_mm, length_mm)
         } else {

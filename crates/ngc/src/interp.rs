@@ -1440,7 +1440,11 @@ impl Interp {
                     self.cycle(line, code, &get, line_no, queue, first)?;
                 }
                 MotionMode::Lathe(code) => {
+                    // G70-G72 first rapid to their X Z read as absolute, even in G91.
+                    let absolute = self.absolute;
+                    self.absolute |= (700..=722).contains(&code);
                     let target = self.target(&axis_words, g53);
+                    self.absolute = absolute;
                     self.lathe(line, code, &get, line_no, queue, at.clone(), target)?;
                 }
                 _ => {

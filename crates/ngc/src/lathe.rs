@@ -564,7 +564,19 @@ impl Interp {
                 "I not positive",
             ));
         }
-        // The rapid to the block's X Z, without compensation.
+        // The cycle's start: the block's X Z, added to the current point under G91.
+        let p0 = self.program_position();
+        let coordinate = |l: char, a: Axis| match get(l) {
+            Some(w) if self.absolute => w.value,
+            Some(w) => p0[a] + w.value,
+            None => p0[a],
+        };
+        let xz = C {
+            re: coordinate('Z', Axis::Z),
+            im: coordinate('X', Axis::X),
+        };
+        // The rapid to the block's X Z taken as absolute (LinuxCNC switches to G90 first),
+        // without compensation.
         let comp = self.comp.take();
         let start = self.pos;
         let path = self.path;
@@ -572,11 +584,6 @@ impl Interp {
         self.comp = comp;
         self.pos = target;
         self.motion = Some(MotionMode::Rapid);
-        let p = self.program_position();
-        let xz = C {
-            re: p[Axis::Z],
-            im: p[Axis::X],
-        };
         let value = |l: char, default: f64| get(l).map_or(default, |w| w.value);
         self.g7x = Some(Box::new(G7xRequest {
             code,
@@ -803,6 +810,19 @@ impl Interp {
                         continue;
                     }
                     let c = to_machine(center, self);
+                    // convert_arc's check of the radii at both ends (docs/gcode.md).
+                    let r1 = (start[Axis::X] - c[Axis::X]).hypot(start[Axis::Z] - c[Axis::Z]);
+                    let r2 = (target[Axis::X] - c[Axis::X]).hypot(target[Axis::Z] - c[Axis::Z]);
+                    let abs_tol = std::f64::consts::SQRT_2
+                        * if self.inch {
+                            0.002 * crate::reader::MM_PER_INCH
+                        } else {
+                            0.02
+                        };
+                    let diff = (r1 - r2).abs();
+                    if !(diff <= abs_tol || diff / r1 <= 0.001) {
+                        return Err(fail(format!("an arc of the cycle has radius {r1:.4} mm at its start but {r2:.4} mm at its end: expected them to agree (check the profile's arcs)")));
+                    }
                     (
                         Motion::Arc {
                             clockwise: !ccw,

@@ -490,6 +490,14 @@ mod tests {
     }
 }
 
+/// `G70`, `G71.1`, ... for the code ×10.
+fn cycle_name(code: u32) -> String {
+    match code % 10 {
+        0 => format!("G{}", code / 10),
+        k => format!("G{}.{k}", code / 10),
+    }
+}
+
 /// Whether G71/G72 extend a profile that ends short of the start X (Z) by a line to it, as
 /// later LinuxCNC versions do; rs274 2.9 does not (measured), so this stays off.
 const EXTEND_PROFILE: bool = false;
@@ -533,7 +541,7 @@ impl Interp {
         at: std::ops::Range<usize>,
         target: AxisVec,
     ) -> LineResult<()> {
-        let name = format!("G{}.{}", code / 10, code % 10);
+        let name = cycle_name(code);
         let q = get('Q').ok_or_else(|| {
             LineError::new(
                 at.clone(),
@@ -730,7 +738,7 @@ impl Interp {
             return Ok(());
         };
         self.pos = req.home;
-        let name = format!("G{}.{}", req.code / 10, req.code % 10);
+        let name = cycle_name(req.code);
         let fail = |m: String| {
             LineError::new(req.span.clone(), format!("{name}: {m}"), "lathe cycle")
                 .help("check the profile subroutine Q (LinuxCNC's rules for G70-G72)")

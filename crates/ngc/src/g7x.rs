@@ -627,8 +627,11 @@ fn corner_finish(seg: &mut Seg, prev: &mut Seg, next: &mut Seg) -> R<C> {
     Ok(center)
 }
 
-/// The most steps an offset or a roughing cycle may take before it is called a hang.
-const MAX_STEPS: usize = 1_000_000;
+/// The most steps an offset or a roughing cycle (layers) may take before it is refused.
+const MAX_STEPS: usize = 100_000;
+
+/// The most finishing passes (G70 P).
+pub(crate) const MAX_PASSES: f64 = 10_000.0;
 
 /// A profile and the cycle's frame (`flip_state`, layer depth, escape).
 #[derive(Clone, Debug)]
@@ -739,6 +742,9 @@ impl Profile {
             }
         }
         self.segs.retain(|s| !(s.radius() < 1e-3));
+        if self.segs.is_empty() {
+            return Err("the profile has no moves of any length".into());
+        }
         Ok(())
     }
 
@@ -852,6 +858,9 @@ impl Profile {
         self.monotonic()?;
         let fs = self.flip_state;
         let mut out = Vec::new();
+        if !(p <= MAX_PASSES) {
+            return Err(format!("P{p} passes: expected at most {MAX_PASSES}"));
+        }
         let passes = p as i64;
         for pass in (1..=passes).rev() {
             let distance = (pass - 1) as f64 * (d - e) / p + e;
@@ -892,6 +901,9 @@ impl Profile {
         self.do_finish()?;
         self.monotonic()?;
         self.add_distance(d)?;
+        if self.segs.len() < 2 {
+            return Err("the offset profile vanished".into());
+        }
         self.segs.iter_mut().for_each(|s| s.shift(shift));
         let fs = self.flip_state;
         self.delta = i.max(2.0 * TOL);
@@ -936,7 +948,12 @@ impl Profile {
         while p < n {
             *steps += 1;
             if *steps > MAX_STEPS {
-                return Err("the roughing passes do not end".into());
+                return Err(format!(
+                    "more than {MAX_STEPS} roughing layers: expected a larger I"
+                ));
+            }
+            if !((x - TOL - loc.im) / self.delta < MAX_STEPS as f64) {
+                return Err("too many roughing layers: expected a larger I".into());
             }
             while x - TOL > loc.im {
                 x -= self.delta;

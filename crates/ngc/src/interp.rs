@@ -955,7 +955,10 @@ impl Interp {
             .unwrap_or(self.motion);
         let g7x_block = matches!(block_motion, Some(MotionMode::Lathe(700..=722)));
         for letter in ['N', 'T', 'H', 'D', 'L'] {
-            if letter == 'D' && g7x_block {
+            // D is a length for G70-G72 and for G41.1/G42.1 (a diameter), a number elsewhere.
+            let d_length =
+                g7x_block || g.iter().any(|(c, _)| matches!(c, GCode::CutterComp(3 | 4)));
+            if letter == 'D' && d_length {
                 continue;
             }
             if let Some(word) = get(letter).filter(|_| letter != 'D' || !d_diameter) {
@@ -1754,7 +1757,11 @@ impl Interp {
                     self.cycle(line, code, &get, line_no, queue, first)?;
                 }
                 MotionMode::Lathe(code) => {
+                    // G70-G72 first rapid to their X Z read as absolute, even in G91.
+                    let absolute = self.absolute;
+                    self.absolute |= (700..=722).contains(&code);
                     let target = self.target(&axis_words, g53);
+                    self.absolute = absolute;
                     self.lathe(line, code, &get, line_no, queue, at.clone(), target)?;
                 }
                 MotionMode::Spline(code) => {

@@ -490,6 +490,14 @@ mod tests {
     }
 }
 
+/// `G70`, `G71.1`, ... for the code ×10.
+fn cycle_name(code: u32) -> String {
+    match code % 10 {
+        0 => format!("G{}", code / 10),
+        k => format!("G{}.{k}", code / 10),
+    }
+}
+
 /// Whether G71/G72 extend a profile that ends short of the start X (Z) by a line to it, as
 /// later LinuxCNC versions do; rs274 2.9 does not (measured), so this stays off.
 const EXTEND_PROFILE: bool = false;
@@ -533,7 +541,7 @@ impl Interp {
         at: std::ops::Range<usize>,
         target: AxisVec,
     ) -> LineResult<()> {
-        let name = format!("G{}.{}", code / 10, code % 10);
+        let name = cycle_name(code);
         let q = get('Q').ok_or_else(|| {
             LineError::new(
                 at.clone(),
@@ -564,7 +572,19 @@ impl Interp {
                 "I not positive",
             ));
         }
-        // The rapid to the block's X Z, without compensation.
+        // The cycle's start: the block's X Z, added to the current point under G91.
+        let p0 = self.program_position();
+        let coordinate = |l: char, a: Axis| match get(l) {
+            Some(w) if self.absolute => w.value,
+            Some(w) => p0[a] + w.value,
+            None => p0[a],
+        };
+        let xz = C {
+            re: coordinate('Z', Axis::Z),
+            im: coordinate('X', Axis::X),
+        };
+        // The rapid to the block's X Z taken as absolute (LinuxCNC switches to G90 first),
+        // without compensation.
         let comp = self.comp.take();
         let start = self.pos;
         let path = self.path;
@@ -572,11 +592,6 @@ impl Interp {
         self.comp = comp;
         self.pos = target;
         self.motion = Some(MotionMode::Rapid);
-        let p = self.program_position();
-        let xz = C {
-            re: p[Axis::Z],
-            im: p[Axis::X],
-        };
         let value = |l: char, default: f64| get(l).map_or(default, |w| w.value);
         self.g7x = Some(Box::new(G7xRequest {
             code,
@@ -723,7 +738,7 @@ impl Interp {
             return Ok(());
         };
         self.pos = req.home;
-        let name = format!("G{}.{}", req.code / 10, req.code % 10);
+        let name = cycle_name(req.code);
         let fail = |m: String| {
             LineError::new(req.span.clone(), format!("{name}: {m}"), "lathe cycle")
                 .help("check the profile subroutine Q (LinuxCNC's rules for G70-G72)")
@@ -803,6 +818,19 @@ impl Interp {
                         continue;
                     }
                     let c = to_machine(center, self);
+                    // convert_arc's check of the radii at both ends (docs/gcode.md).
+                    let r1 = (start[Axis::X] - c[Axis::X]).hypot(start[Axis::Z] - c[Axis::Z]);
+                    let r2 = (target[Axis::X] - c[Axis::X]).hypot(target[Axis::Z] - c[Axis::Z]);
+                    let abs_tol = std::f64::consts::SQRT_2
+                        * if self.inch {
+                            0.002 * crate::reader::MM_PER_INCH
+                        } else {
+                            0.02
+                        };
+                    let diff = (r1 - r2).abs();
+                    if !(diff <= abs_tol || diff / r1 <= 0.001) {
+                        return Err(fail(format!("an arc of the cycle has radius {r1:.4} mm at its start but {r2:.4} mm at its end: expected them to agree (check the profile's arcs)")));
+                    }
                     (
                         Motion::Arc {
                             clockwise: !ccw,

@@ -1379,12 +1379,15 @@ impl Moves {
         result?;
         if let Some((depth, at)) = self.g7x_capture {
             if self.frames.len() <= depth {
-                // The profile subroutine returned: cut it.
+                // The profile subroutine returned: cut it. Like rs274, an error points at
+                // the subroutine's last line and names the cycle's line.
                 self.g7x_capture = None;
-                self.interp.g7x_run(&mut self.queue).map_err(|e| {
+                self.interp.g7x_run(&mut self.queue).map_err(|mut e| {
                     self.finished = true;
-                    // The cycle's line is read again from its program for the message.
-                    self.error_at(at, e, "")
+                    e.message = format!("{} (the cycle at line {})", e.message, at.line);
+                    e.span = 0..len;
+                    // The line is read again from its program for the message.
+                    self.error_at(here, e, "")
                 })?;
             }
         }

@@ -87,3 +87,97 @@ fn synchronised_motion_needs_the_spindle_and_a_pitch() {
         .to_string();
     assert!(fanuc.contains("G33"), "{fanuc}");
 }
+
+/// G71 on a shoulder (approach to X4 Z1, the diameter X4 to Z-10, the face out to X10),
+/// from X10 Z2 with layers I2 and escape R0.5, no allowance. Worked out by hand: layers at
+/// X10, 8, 6 start on the approach line `Z = 1 + (X - 4)/6`, feed to the face at Z-10,
+/// escape by R in X and Z at 45°, rapid back to R before the layer start and to it; then the
+/// profile itself (X4 from Z1 to Z-10, the face to X10).
+#[test]
+fn g71_roughs_a_shoulder_in_layers_then_follows_the_profile() {
+    let m = moves(
+        "G21 G18 F100\nO1 SUB\nG0 X4 Z1\nG1 Z-10\nG1 X10\nO1 ENDSUB\nG0 X10 Z2\nG71 Q1 X10 Z2 I2 R0.5\nM2\n",
+    );
+    let got: Vec<(MoveKind, f64, f64)> = m
+        .iter()
+        .map(|m| (m.kind(), m.end[Axis::X], m.end[Axis::Z]))
+        // Moves of length zero (rapids to where the tool is) carry nothing.
+        .filter(|&(_, x, z)| x.is_finite() && z.is_finite())
+        .collect();
+    let (r, f) = (MoveKind::Rapid, MoveKind::Feed);
+    let mut want = vec![(r, 10.0, 2.0)];
+    for x in [10.0, 8.0, 6.0] {
+        let z0 = 1.0 + (x - 4.0) / 6.0;
+        want.extend([
+            (r, x, z0),
+            (f, x, -10.0),
+            (r, x + 0.5, -9.5),
+            (r, x + 0.5, z0 - 0.5),
+            (r, x, z0),
+        ]);
+    }
+    want.extend([(r, 4.0, 1.0), (f, 4.0, -10.0), (f, 10.0, -10.0)]);
+    // Drop repeated points (the cycle's first rapids go to where the tool already is).
+    let dedup = |v: &[(MoveKind, f64, f64)]| {
+        let mut out: Vec<(MoveKind, f64, f64)> = Vec::new();
+        for &p in v {
+            if out
+                .last()
+                .is_none_or(|q| (q.1 - p.1).abs() + (q.2 - p.2).abs() > 1e-9)
+            {
+                out.push(p);
+            }
+        }
+        out
+    };
+    let (got, want) = (dedup(&got), dedup(&want));
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(&want) {
+        assert_eq!(g.0, w.0, "{got:?}");
+        assert!(
+            (g.1 - w.1).abs() < 1e-9 && (g.2 - w.2).abs() < 1e-9,
+            "{g:?} vs {w:?}"
+        );
+    }
+}
+
+/// G70 with P2 from D1 to E0 cuts at distances (n-1)(D-E)/P + E for n = 2, 1: 0.5 mm off
+/// the profile, then on it. Profile: approach to X4 Z1, X4 to Z-10, the face out to X10; the
+/// stock is outside and to +Z, so the first pass runs at X4.5 down to Z-9.5 and out along
+/// the face at Z-9.5; the second on the profile itself. Each pass starts with a rapid to
+/// the cycle's X Z and one to the (offset) approach point.
+#[test]
+fn g70_passes_step_from_d_to_e() {
+    let m = moves(
+        "G21 G18 F100\nO1 SUB\nG0 X4 Z1\nG1 Z-10\nG1 X10\nO1 ENDSUB\nG0 X12 Z2\nG70 Q1 X12 Z2 D1 E0 P2\nM2\n",
+    );
+    let got: Vec<(MoveKind, f64, f64)> = m
+        .iter()
+        .skip(1)
+        .map(|m| (m.kind(), m.end[Axis::X], m.end[Axis::Z]))
+        .collect();
+    let (r, f) = (MoveKind::Rapid, MoveKind::Feed);
+    let want = [
+        (r, 12.0, 2.0),
+        (r, 12.0, 2.0),
+        (r, 4.5, 1.0),
+        (f, 4.5, -9.5),
+        (f, 10.0, -9.5),
+        (r, 12.0, 2.0),
+        (r, 4.0, 1.0),
+        (f, 4.0, -10.0),
+        (f, 10.0, -10.0),
+    ];
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(&want) {
+        assert_eq!(g.0, w.0, "{got:?}");
+        assert!(
+            (g.1 - w.1).abs() < 1e-9 && (g.2 - w.2).abs() < 1e-9,
+            "{g:?} vs {w:?}"
+        );
+    }
+    // Roughing needs a Q and an I above zero.
+    assert!(error("G18 F100\nG71 X1 Z1\n").contains("without Q"));
+    assert!(error("G18 F100\nG71 Q1 X1 Z1 I0\n").contains("I (the depth of cut)"));
+    assert!(error("G17 F100\nG71 Q1 X1 Z1\n").contains("G18"));
+}

@@ -160,10 +160,17 @@ impl GCode {
         }
     }
 
+    // Inlined: the large result read back from memory after a call stalled every block.
+    #[inline(always)]
     fn parse(word: &Word, line: &str, dialect: Dialect) -> LineResult<GCode> {
         let text = &line[word.span()];
         let tenths = word.value * 10.0;
-        let code = tenths.round();
+        // `round` without the call to libm: the same code for every value accepted below.
+        let code = if tenths >= 0.0 {
+            (tenths + 0.5) as i64 as f64
+        } else {
+            tenths.round()
+        };
         let unsupported = |why: &str, help: &str| {
             LineError::new(
                 word.span(),
@@ -1110,17 +1117,15 @@ impl Interp {
         }
         let dwell_x = dialect.is_fanuc_family() && matches!(nonmodal, Some((NonModal::Dwell, _)));
         // Fixed buffers, no allocation per block.
-        let mut axis_buf = [(Axis::X, Word::EMPTY); 6];
-        let mut n_axes = 0;
+        let mut axis_buf: Small<(Axis, Word), 6> = Small::new();
         for a in Axis::ALL {
             if let Some(w) = get(a.letter()) {
                 if !(dwell_x && a == Axis::X) {
-                    axis_buf[n_axes] = (a, w);
-                    n_axes += 1;
+                    axis_buf.push((a, w));
                 }
             }
         }
-        let axis_words = &axis_buf[..n_axes];
+        let axis_words = &axis_buf[..];
         // 6. Non-modal codes that use axis words.
         // G43.1 takes its Z as the tool length, not as a move.
         let mut axes_used = g
@@ -2262,6 +2267,7 @@ impl<T: Copy, const N: usize> Small<T, N> {
         }
     }
     /// False when full.
+    #[inline]
     fn push(&mut self, t: T) -> bool {
         if self.len == N {
             return false;

@@ -97,7 +97,9 @@ pub fn lex<'l>(line: &'l str, params: &Params, fanuc: bool) -> LineResult<Lexed<
 }
 
 /// [`lex`], with the words collected in `words` (cleared first): the reader hands the
-/// same buffer back for every block, so that a block costs no allocation.
+/// same buffer back for every block, so that a block costs no allocation. (Inlined into
+/// the reader: its large result read back from memory after a call cost a stall a line.)
+#[inline(always)]
 pub fn lex_with<'l>(
     line: &'l str,
     params: &Params,

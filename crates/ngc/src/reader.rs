@@ -121,7 +121,23 @@ impl FileLines {
         }
         let mut bytes = std::mem::take(buf).into_bytes();
         bytes.clear();
-        let n = self.reader.read_until(b'\n', &mut bytes)?;
+        let mut n = 0;
+        loop {
+            let available = self.reader.fill_buf()?;
+            if available.is_empty() {
+                break;
+            }
+            let (take, end) = match newline(available) {
+                Some(k) => (k + 1, true),
+                None => (available.len(), false),
+            };
+            bytes.extend_from_slice(&available[..take]);
+            self.reader.consume(take);
+            n += take;
+            if end {
+                break;
+            }
+        }
         self.pos += n as u64;
         if bytes.last() == Some(&b'\n') {
             bytes.pop();
@@ -434,7 +450,7 @@ impl Moves {
                     return None;
                 }
                 let rest = &text[c.offset..];
-                let (raw, len) = match rest.bytes().position(|b| b == b'\n') {
+                let (raw, len) = match newline(rest.as_bytes()) {
                     Some(n) => (&rest[..n], n + 1),
                     None => (rest, rest.len()),
                 };
@@ -1424,6 +1440,29 @@ impl Program {
             Source::File(f) => f.len == 0,
         }
     }
+}
+
+/// The index of the first `\n` in `bytes`: 32 bytes at a time (the compare and the mask
+/// vectorise), as lines are short and `memchr`'s set-up cost more than the search.
+#[inline]
+fn newline(bytes: &[u8]) -> Option<usize> {
+    let mut chunks = bytes.chunks_exact(32);
+    let mut i = 0;
+    for chunk in &mut chunks {
+        let mask = chunk
+            .iter()
+            .enumerate()
+            .fold(0u32, |m, (k, &b)| m | ((b == b'\n') as u32) << k);
+        if mask != 0 {
+            return Some(i + mask.trailing_zeros() as usize);
+        }
+        i += 32;
+    }
+    chunks
+        .remainder()
+        .iter()
+        .position(|&b| b == b'\n')
+        .map(|k| i + k)
 }
 
 /// Siemens Sinumerik words [`foreign_language`](Moves::foreign_language) refuses.

@@ -1484,6 +1484,13 @@ impl Interp {
         m: &[(u32, Word<'l>)],
         get: &dyn Fn(char) -> Option<Word<'l>>,
     ) -> LineResult<()> {
+        // Most blocks have none of the words checked here: skip building the checks.
+        if ['P', 'Q', 'L', 'E', 'D']
+            .into_iter()
+            .all(|l| get(l).is_none())
+        {
+            return Ok(());
+        }
         let has_g = |f: &dyn Fn(&GCode) -> bool| g.iter().any(|(c, _)| f(c));
         let has_m = |codes: &[u32]| m.iter().any(|(c, _)| codes.contains(c));
         let motion = g

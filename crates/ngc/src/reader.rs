@@ -1342,7 +1342,10 @@ impl Moves {
             _ => {}
         }
         // (A fold without an early exit: vectorised.)
-        if b.iter().fold(false, |a, &c| a | (c == b'#') | (c == b'[')) {
+        if b.iter()
+            .fold(0u8, |a, &c| a | (c == b'#') as u8 | (c == b'[') as u8)
+            != 0
+        {
             self.interp.refresh_system_parameters();
         }
         let words = reuse(std::mem::take(&mut self.words));

@@ -234,7 +234,7 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let number = &line[number_start..i];
     let span = start..if number.is_empty() { start + 1 } else { i };
     let text = &line[span.clone()];
-    if KNOWN_LETTERS >> (letter as u32 - 'A' as u32) & 1 == 0 {
+    if !known_letter(letter) {
         let why = match letter {
             'U' | 'V' | 'W' => {
                 " (secondary axes U V W are not supported; use G91 for incremental moves)"
@@ -312,18 +312,33 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     })
 }
 
-/// Word letters (`A` = bit 0) that [`lex_word`] accepts.
-const KNOWN_LETTERS: u32 = letter_mask("GMNOFSTXYZABCIJKRPQLHDE");
+/// Word letters that [`lex_word`] accepts.
+const WORD_LETTERS: &str = "GMNOFSTXYZABCIJKRPQLHDE";
+
+/// [`WORD_LETTERS`] `A` to `Z` as bits (`A` = bit 0).
+const KNOWN_LETTERS: u32 = letter_mask(WORD_LETTERS);
 
 const fn letter_mask(letters: &str) -> u32 {
     let b = letters.as_bytes();
     let mut mask = 0;
     let mut i = 0;
     while i < b.len() {
-        mask |= 1 << (b[i] - b'A');
+        if b[i].is_ascii_uppercase() {
+            mask |= 1 << (b[i] - b'A');
+        }
         i += 1;
     }
     mask
+}
+
+/// `letter` is one of [`WORD_LETTERS`]: a bit test for `A` to `Z`, a search otherwise.
+#[inline]
+fn known_letter(letter: char) -> bool {
+    if letter.is_ascii_uppercase() {
+        KNOWN_LETTERS >> (letter as u32 - 'A' as u32) & 1 == 1
+    } else {
+        WORD_LETTERS.contains(letter)
+    }
 }
 
 /// Exact powers of ten, `10^k` for `k` ≤ 22 (the largest exactly representable in f64).

@@ -180,10 +180,17 @@ impl GCode {
         }
     }
 
+    // Inlined: the large result read back from memory after a call stalled every block.
+    #[inline(always)]
     fn parse(word: &Word, line: &str, dialect: Dialect) -> LineResult<GCode> {
         let text = &line[word.span()];
         let tenths = word.value * 10.0;
-        let code = tenths.round();
+        // `round` without the call to libm: the same code for every value accepted below.
+        let code = if tenths >= 0.0 {
+            (tenths + 0.5) as i64 as f64
+        } else {
+            tenths.round()
+        };
         let unsupported = |why: &str, help: &str| {
             LineError::new(
                 word.span(),
@@ -1448,17 +1455,15 @@ impl Interp {
         };
         let dwell_x = dialect.is_fanuc_family() && matches!(nonmodal, Some((NonModal::Dwell, _)));
         // Fixed buffers, no allocation per block.
-        let mut axis_buf = [(Axis::X, Word::EMPTY); 6];
-        let mut n_axes = 0;
+        let mut axis_buf: Small<(Axis, Word), 6> = Small::new();
         for a in Axis::ALL {
             if let Some(w) = get(a.letter()) {
                 if !(dwell_x && a == Axis::X) {
-                    axis_buf[n_axes] = (a, w);
-                    n_axes += 1;
+                    axis_buf.push((a, w));
                 }
             }
         }
-        let axis_words = &axis_buf[..n_axes];
+        let axis_words = &axis_buf[..];
         // 6. Non-modal codes that use axis words.
         // G43.1 takes its Z as the tool length, not as a move.
         let mut axes_used = g
@@ -2232,6 +2237,13 @@ impl Interp {
         m: &[(u32, Word<'l>)],
         get: &dyn Fn(char) -> Option<Word<'l>>,
     ) -> LineResult<()> {
+        // Most blocks have none of the words checked here: skip building the checks.
+        if ['P', 'Q', 'L', 'E', 'D']
+            .into_iter()
+            .all(|l| get(l).is_none())
+        {
+            return Ok(());
+        }
         let has_g = |f: &dyn Fn(&GCode) -> bool| g.iter().any(|(c, _)| f(c));
         let has_m = |codes: &[u32]| m.iter().any(|(c, _)| codes.contains(c));
         let motion = g
@@ -3004,6 +3016,7 @@ impl<T: Copy, const N: usize> Small<T, N> {
         }
     }
     /// False when full.
+    #[inline]
     fn push(&mut self, t: T) -> bool {
         if self.len == N {
             return false;

@@ -97,7 +97,9 @@ pub fn lex<'l>(line: &'l str, params: &Params, fanuc: bool) -> LineResult<Lexed<
 }
 
 /// [`lex`], with the words collected in `words` (cleared first): the reader hands the
-/// same buffer back for every block, so that a block costs no allocation.
+/// same buffer back for every block, so that a block costs no allocation. (Inlined into
+/// the reader: its large result read back from memory after a call cost a stall a line.)
+#[inline(always)]
 pub fn lex_with<'l>(
     line: &'l str,
     params: &Params,
@@ -228,18 +230,12 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
         i += 1;
     }
     let number_start = i;
-    while i < bytes.len() && matches!(bytes[i], b'0'..=b'9' | b'.' | b'+' | b'-') {
-        i += 1;
-    }
+    let (end, fast) = scan_number(bytes, i);
+    i = end;
     let number = &line[number_start..i];
     let span = start..if number.is_empty() { start + 1 } else { i };
     let text = &line[span.clone()];
-    let known = match letter {
-        // LinuxCNC polar radius and angle, and the spindle selector.
-        '@' | '^' | '$' => true,
-        _ => KNOWN_LETTERS >> (letter as u32 - 'A' as u32) & 1 != 0,
-    };
-    if !known {
+    if !known_letter(letter) {
         let why = match letter {
             'U' | 'V' | 'W' => {
                 " (secondary axes U V W are not supported: mtsim's machines have X Y Z A B C, so a foam cutter's U V or a quill's W cannot be simulated; for a lathe's incremental U W write G91 with X Z)"
@@ -274,7 +270,7 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
         });
     }
     // The common case, a plain decimal number, read and checked in one pass.
-    if let Some(value) = fast_decimal(number.as_bytes()) {
+    if let Some(value) = fast {
         return Ok(Word {
             letter,
             value,
@@ -317,18 +313,34 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     })
 }
 
-/// Word letters (`A` = bit 0) that [`lex_word`] accepts.
-const KNOWN_LETTERS: u32 = letter_mask("GMNOFSTXYZABCIJKRPQLHDE");
+/// Word letters that [`lex_word`] accepts.
+const WORD_LETTERS: &str = "GMNOFSTXYZABCIJKRPQLHDE";
+
+/// [`WORD_LETTERS`] `A` to `Z` as bits (`A` = bit 0).
+const KNOWN_LETTERS: u32 = letter_mask(WORD_LETTERS);
 
 const fn letter_mask(letters: &str) -> u32 {
     let b = letters.as_bytes();
     let mut mask = 0;
     let mut i = 0;
     while i < b.len() {
-        mask |= 1 << (b[i] - b'A');
+        if b[i].is_ascii_uppercase() {
+            mask |= 1 << (b[i] - b'A');
+        }
         i += 1;
     }
     mask
+}
+
+/// `letter` is one of [`WORD_LETTERS`]: a bit test for `A` to `Z`, a search otherwise.
+#[inline]
+fn known_letter(letter: char) -> bool {
+    if letter.is_ascii_uppercase() {
+        KNOWN_LETTERS >> (letter as u32 - 'A' as u32) & 1 == 1
+    } else {
+        // LinuxCNC polar radius `@` and angle `^`, and the spindle selector `$`.
+        WORD_LETTERS.contains(letter) || matches!(letter, '@' | '^' | '$')
+    }
 }
 
 /// Exact powers of ten, `10^k` for `k` ≤ 22 (the largest exactly representable in f64).
@@ -337,41 +349,52 @@ const POW10: [f64; 23] = [
     1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
 ];
 
-/// The value of a decimal `[+-]? digits* ( . digits* )?` (at least one digit), when it is
-/// quick to get exactly; `None` for anything else, which the caller reads the slow way.
+/// The end of the number that starts at byte `start` (the run of `0-9 . + -` there), and
+/// its value when it is a plain decimal `[+-]? digits* ( . digits* )?` (at least one digit)
+/// that is quick to read exactly; `None` for anything else, which the caller reads the
+/// slow way. One pass over the bytes.
 ///
 /// With the digits as an integer `m` and `f` digits after the point, the value is
 /// `m / 10^f`. When `m ≤ 2^53` and `f ≤ 22`, both `m` and `10^f` are exact f64, and IEEE
 /// division rounds their exact quotient correctly (Clinger's fast path), so the result is
 /// the same f64 as `str::parse` gives: the correctly rounded value of the decimal.
 #[inline]
-pub fn fast_decimal(b: &[u8]) -> Option<f64> {
-    let (negative, digits) = match b.first() {
-        Some(b'-') => (true, &b[1..]),
-        Some(b'+') => (false, &b[1..]),
-        _ => (false, b),
-    };
-    if digits.is_empty() || digits.len() > 19 {
-        return None;
+fn scan_number(b: &[u8], start: usize) -> (usize, Option<f64>) {
+    let mut i = start;
+    let negative = b.get(i) == Some(&b'-');
+    if negative || b.get(i) == Some(&b'+') {
+        i += 1;
     }
+    let digits_start = i;
     let mut m: u64 = 0;
     let mut point = None;
-    for (k, &c) in digits.iter().enumerate() {
-        match c {
-            b'0'..=b'9' => m = m * 10 + (c - b'0') as u64,
-            b'.' if point.is_none() => point = Some(k),
-            _ => return None,
+    while i < b.len() {
+        let c = b[i];
+        let d = c.wrapping_sub(b'0');
+        if d < 10 {
+            // Wraps only past 19 digits, which are refused below.
+            m = m.wrapping_mul(10).wrapping_add(d as u64);
+        } else if c == b'.' && point.is_none() {
+            point = Some(i);
+        } else {
+            break;
         }
+        i += 1;
     }
-    let fraction = match point {
-        Some(k) => digits.len() - k - 1,
-        None => 0,
-    };
-    if digits.len() == 1 && point.is_some() || m > 1 << 53 || fraction > 22 {
-        return None;
+    let mut end = i;
+    while end < b.len() && matches!(b[end], b'0'..=b'9' | b'.' | b'+' | b'-') {
+        end += 1;
+    }
+    let n = i - digits_start;
+    if end != i || n == 0 || n > 19 || (n == 1 && point.is_some()) {
+        return (end, None);
+    }
+    let fraction = point.map_or(0, |p| i - p - 1);
+    if m > 1 << 53 || fraction > 22 {
+        return (end, None);
     }
     let v = m as f64 / POW10[fraction];
-    Some(if negative { -v } else { v })
+    (end, Some(if negative { -v } else { v }))
 }
 
 /// `[+-]? digits* ( . digits* )?` with at least one digit.

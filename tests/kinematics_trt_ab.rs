@@ -242,7 +242,7 @@ fn a_tool_centre_point_program_on_the_sample_keeps_the_tip_on_the_table_point() 
     let out = check_on_tdr(
         "tcp",
         "G21 G90 G17\nG1 F1000 X0 Y0 Z50\nG1 A45 B30\nG1 A90 B-60\nM2\n",
-        "tcp = true",
+        "tcp = true\n[check]\ncollisions = false",
     );
     let v = stdout_json(&out);
     assert_eq!(v["violations"].as_array().unwrap().len(), 0, "{v}");
@@ -304,8 +304,8 @@ fn the_cone_test_on_the_dual_rotary_table_tilts_b_by_alpha_plus_and_minus_beta()
 
 #[test]
 fn the_bounded_collision_check_finds_what_the_exhaustive_one_finds_as_the_table_tumbles_about_a() {
-    // The tip 130 mm above the pivot while the table (radius 100 mm, 60 mm thick) tumbles
-    // about A: its rim comes within 40 mm of the tip twice a turn and recedes. The
+    // The tip 130 mm above the pivot while a table about Z (radius 100 mm, 60 mm thick, in
+    // place of the sample's faceplate) tumbles about A: its rim comes within 40 mm of the tip twice a turn and recedes. The
     // monitor's motion bound for table parts must count |dA| (the table axis of trt-ab, in
     // place of C): the bounded check then reports exactly the exhaustive check's events.
     use mtsim::check::{check_reference, check_with, CheckOptions, SceneQueries};
@@ -319,7 +319,9 @@ fn the_bounded_collision_check_finds_what_the_exhaustive_one_finds_as_the_table_
     std::fs::write(
         dir.join("s.toml"),
         format!(
-            "machine = {:?}\n[program]\nfile = \"p.ngc\"\n[check]\nnear_miss_mm = 40.0\n",
+            "machine = {:?}\n[program]\nfile = \"p.ngc\"\n[check]\nnear_miss_mm = 40.0\n\
+             [machine_overrides.scene]\ncradle = []\n\
+             [machine_overrides.scene.table]\naxis = \"z\"\nradius_mm = 100.0\nthickness_mm = 60.0\n",
             linuxcnc_machine("xyzab-tdr")
         ),
     )
@@ -364,4 +366,31 @@ fn the_bounded_collision_check_finds_what_the_exhaustive_one_finds_as_the_table_
         r >= expected - 1e-9 && r < expected + 0.01,
         "{r} vs {expected}"
     );
+}
+
+#[test]
+fn the_samples_faceplate_stands_below_the_tool_until_b_turns_it_face_up() {
+    // The faceplate (radius 50 mm, 18 mm thick, face through the pivot toward +X) and the
+    // rotary A base (top at z = 50 mm, out to x = -10 mm) at B = 0; the 20 mm cutter's flat
+    // end 80 mm above the pivot, on the pivot's X: both are 80 - 50 = 30 mm below it. B = 90
+    // turns the face up to the pivot's height (80 mm below the tip) and the base away.
+    let dir = scratch("trt-ab", "faceplate");
+    std::fs::write(
+        dir.join("p.ngc"),
+        "G21 G90\nG0 X-50 Y-50 Z-20\nG4 P0.2\nG1 F1200 B90\nG1 A180\nM2\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("s.toml"),
+        format!(
+            "machine = {:?}\n[program]\nfile = \"p.ngc\"\n",
+            linuxcnc_machine("xyzab-tdr")
+        ),
+    )
+    .unwrap();
+    let out = common::mtsim_plain(&dir, &["check", "s.toml", "--json"]);
+    let v = stdout_json(&out);
+    assert_eq!(v["violations"].as_array().unwrap().len(), 0, "{v}");
+    let r = v["min_clearance_mm"].as_f64().unwrap();
+    assert!((r - 30.0).abs() < 1e-6, "{r} {}", v["min_clearance_bodies"]);
 }

@@ -394,3 +394,26 @@ fn the_samples_faceplate_stands_below_the_tool_until_b_turns_it_face_up() {
     let r = v["min_clearance_mm"].as_f64().unwrap();
     assert!((r - 30.0).abs() < 1e-6, "{r} {}", v["min_clearance_bodies"]);
 }
+
+#[test]
+fn a_trt_ab_machine_takes_location_errors_of_a_and_b_and_refuses_c() {
+    let dir = scratch("trt-ab", "location");
+    std::fs::write(dir.join("p.ngc"), "G21 G90\nG0 X0 Y0 Z50\nG0 A90\nM2\n").unwrap();
+    let scenario = |keys: &str| {
+        std::fs::write(
+            dir.join("s.toml"),
+            format!(
+                "machine = {:?}\n[program]\nfile = \"p.ngc\"\n[machine_overrides.location_errors]\n{keys}\n",
+                linuxcnc_machine("xyzab-tdr")
+            ),
+        )
+        .unwrap();
+        mtsim::input::scenario::Scenario::load(&dir.join("s.toml"))
+    };
+    let s = scenario("EZ0A_um = 25.0\nEX0B_um = -10.0").unwrap();
+    let e = s.machine.kinematics.location_errors;
+    assert_eq!(e.get(LocationParam::EZ0A), 25.0);
+    assert_eq!(e.get(LocationParam::EX0B), -10.0);
+    let message = scenario("EX0C_um = 5.0").unwrap_err().to_string();
+    assert!(message.contains("no C axis"), "{message}");
+}

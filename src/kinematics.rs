@@ -296,6 +296,23 @@ impl Kinematics {
         Point3::from(self.pivot_mm + self.table_rotation(q) * p.coords)
     }
 
+    /// Machine coordinates of the Z point for a tool-centre-point position: `xyz` is the
+    /// tip in the table frame with the tool length offset `tool_length_mm` (L) added to its
+    /// Z, as the reader adds it. The tip is `(x, y, z - L)` and the machine's Z point sits L
+    /// above it along the tool axis (machine +Z): `pivot + R(q) (x, y, z - L) + (0, 0, L)`,
+    /// as LinuxCNC's TCP kinematics take their tool offset.
+    pub fn tcp_to_machine(
+        &self,
+        q: &AxisVec,
+        xyz: &Point3<f64>,
+        tool_length_mm: f64,
+    ) -> Point3<f64> {
+        let tip = Point3::new(xyz.x, xyz.y, xyz.z - tool_length_mm);
+        let mut m = self.table_to_machine(q, &tip);
+        m.z += tool_length_mm;
+        m
+    }
+
     /// Forward kinematics: axis positions → tool tip and tool axis in the table frame.
     pub fn forward(&self, q: &AxisVec) -> ToolPose {
         self.forward_with(q, &self.rotary_sin_cos(q))

@@ -242,7 +242,7 @@ fn a_tool_centre_point_program_on_the_sample_keeps_the_tip_on_the_table_point() 
     let out = check_on_tdr(
         "tcp",
         "G21 G90 G17\nG1 F1000 X0 Y0 Z50\nG1 A45 B30\nG1 A90 B-60\nM2\n",
-        "tcp = true",
+        "tcp = true\n[check]\ncollisions = false",
     );
     let v = stdout_json(&out);
     assert_eq!(v["violations"].as_array().unwrap().len(), 0, "{v}");
@@ -300,4 +300,120 @@ fn the_cone_test_on_the_dual_rotary_table_tilts_b_by_alpha_plus_and_minus_beta()
     let a_max = v["axes"]["A"]["max"].as_f64().unwrap();
     // |A| peaks near θ = 90 deg, a little above its value there.
     assert!(a_max >= a90 - 1e-3 && a_max < a90 + 0.1, "{a_max} vs {a90}");
+}
+
+#[test]
+fn the_bounded_collision_check_finds_what_the_exhaustive_one_finds_as_the_table_tumbles_about_a() {
+    // The tip 130 mm above the pivot while a table about Z (radius 100 mm, 60 mm thick, in
+    // place of the sample's faceplate) tumbles about A: its rim comes within 40 mm of the tip twice a turn and recedes. The
+    // monitor's motion bound for table parts must count |dA| (the table axis of trt-ab, in
+    // place of C): the bounded check then reports exactly the exhaustive check's events.
+    use mtsim::check::{check_reference, check_with, CheckOptions, SceneQueries};
+    use mtsim::input::scenario::Scenario;
+    let dir = scratch("trt-ab", "tumble");
+    std::fs::write(
+        dir.join("p.ngc"),
+        "G21 G90\nG0 X-50 Y-50 Z30\nG1 F1500 A180\nG1 A360 B20\nG1 A200 B-20\nM2\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("s.toml"),
+        format!(
+            "machine = {:?}\n[program]\nfile = \"p.ngc\"\n[check]\nnear_miss_mm = 40.0\n\
+             [machine_overrides.scene]\ncradle = []\n\
+             [machine_overrides.scene.table]\naxis = \"z\"\nradius_mm = 100.0\nthickness_mm = 60.0\n",
+            linuxcnc_machine("xyzab-tdr")
+        ),
+    )
+    .unwrap();
+    let s = Scenario::load(&dir.join("s.toml")).unwrap();
+    let options = CheckOptions::default();
+    let slow = check_reference(&s, &options).unwrap();
+    let near: Vec<_> = slow
+        .violations
+        .iter()
+        .filter(|v| v.bodies.is_some())
+        .collect();
+    assert!(
+        !near.is_empty() && near.iter().all(|v| v.time_start_s > 0.0),
+        "the rim must come near mid-run: {:#?}",
+        slow.violations
+    );
+    for mode in [SceneQueries::Bounded, SceneQueries::BoundedRelative] {
+        let fast = check_with(&s, &options, mode).unwrap();
+        assert!(fast.scene_queries < slow.scene_queries, "{mode:?}");
+        assert_eq!(fast.violations.len(), slow.violations.len(), "{mode:?}");
+        for (a, b) in fast.violations.iter().zip(&slow.violations) {
+            assert_eq!((a.kind, &a.bodies, a.line), (b.kind, &b.bodies, b.line));
+            assert_eq!(
+                (a.time_start_s, a.time_end_s),
+                (b.time_start_s, b.time_end_s)
+            );
+            assert!((a.worst - b.worst).abs() <= 1e-9, "{a:?} {b:?}");
+        }
+        let (f, r) = (
+            fast.min_clearance_mm.unwrap(),
+            slow.min_clearance_mm.unwrap(),
+        );
+        assert!((f - r).abs() <= 1e-9, "{mode:?}: {f} vs {r}");
+    }
+    // The nearest approach is the table's bottom rim, the farthest part from the A axis
+    // (hypot(100, 60) mm), passing under the tip 130 mm above that axis: 13.381 mm (to the
+    // sampling: the A step per 1 ms sample moves the rim by 0.003 mm).
+    let r = slow.min_clearance_mm.unwrap();
+    let expected = 130.0 - 100f64.hypot(60.0);
+    assert!(
+        r >= expected - 1e-9 && r < expected + 0.01,
+        "{r} vs {expected}"
+    );
+}
+
+#[test]
+fn the_samples_faceplate_stands_below_the_tool_until_b_turns_it_face_up() {
+    // The faceplate (radius 50 mm, 18 mm thick, face through the pivot toward +X) and the
+    // rotary A base (top at z = 50 mm, out to x = -10 mm) at B = 0; the 20 mm cutter's flat
+    // end 80 mm above the pivot, on the pivot's X: both are 80 - 50 = 30 mm below it. B = 90
+    // turns the face up to the pivot's height (80 mm below the tip) and the base away.
+    let dir = scratch("trt-ab", "faceplate");
+    std::fs::write(
+        dir.join("p.ngc"),
+        "G21 G90\nG0 X-50 Y-50 Z-20\nG4 P0.2\nG1 F1200 B90\nG1 A180\nM2\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("s.toml"),
+        format!(
+            "machine = {:?}\n[program]\nfile = \"p.ngc\"\n",
+            linuxcnc_machine("xyzab-tdr")
+        ),
+    )
+    .unwrap();
+    let out = common::mtsim_plain(&dir, &["check", "s.toml", "--json"]);
+    let v = stdout_json(&out);
+    assert_eq!(v["violations"].as_array().unwrap().len(), 0, "{v}");
+    let r = v["min_clearance_mm"].as_f64().unwrap();
+    assert!((r - 30.0).abs() < 1e-6, "{r} {}", v["min_clearance_bodies"]);
+}
+
+#[test]
+fn a_trt_ab_machine_takes_location_errors_of_a_and_b_and_refuses_c() {
+    let dir = scratch("trt-ab", "location");
+    std::fs::write(dir.join("p.ngc"), "G21 G90\nG0 X0 Y0 Z50\nG0 A90\nM2\n").unwrap();
+    let scenario = |keys: &str| {
+        std::fs::write(
+            dir.join("s.toml"),
+            format!(
+                "machine = {:?}\n[program]\nfile = \"p.ngc\"\n[machine_overrides.location_errors]\n{keys}\n",
+                linuxcnc_machine("xyzab-tdr")
+            ),
+        )
+        .unwrap();
+        mtsim::input::scenario::Scenario::load(&dir.join("s.toml"))
+    };
+    let s = scenario("EZ0A_um = 25.0\nEX0B_um = -10.0").unwrap();
+    let e = s.machine.kinematics.location_errors;
+    assert_eq!(e.get(LocationParam::EZ0A), 25.0);
+    assert_eq!(e.get(LocationParam::EX0B), -10.0);
+    let message = scenario("EX0C_um = 5.0").unwrap_err().to_string();
+    assert!(message.contains("no C axis"), "{message}");
 }

@@ -187,3 +187,39 @@ fn a_tool_whose_tip_would_sit_inside_the_holder_is_refused_with_what_to_do() {
         "{message}"
     );
 }
+
+#[test]
+fn under_tcp_the_tool_length_lies_along_the_tool_axis_not_the_tables_z() {
+    // trt-ac, pivot at the origin. T1 is 30 mm long; G43.4 H1 puts its tip on table
+    // (0, 0, 20). At A = 90 deg Rx(90) takes table +Z to machine -Y, so the tip is at
+    // machine (0, -20, 0) and the Z point 30 mm above it along the spindle: (0, -20, 30).
+    // Over the move Y = -20 sin A and Z = 20 cos A + 30.
+    let dir = scratch("tool-change", "tcp-length");
+    std::fs::write(
+        dir.join("p.nc"),
+        "G21 G90\nT1 M6\nG43.4 H1\nG1 F500 X0 Y0 Z20 A0 C0\nG1 A90\nG49\nM30\n",
+    )
+    .unwrap();
+    let text = format!(
+        "machine = {:?}\n[program]\nfile = \"p.nc\"\n[reader]\ntools = [{{ number = 1, length_mm = 30.0, diameter_mm = 10.0 }}]\n[check]\ncollisions = false\n",
+        machine("trt-ac")
+    );
+    std::fs::write(dir.join("s.toml"), text).unwrap();
+    let scenario = Scenario::load(&dir.join("s.toml")).unwrap();
+    let r = check(&scenario, &CheckOptions::default()).unwrap();
+    let (y, z) = (&r.axes["Y"], &r.axes["Z"]);
+    assert!((y.min + 20.0).abs() < 1e-6 && y.max.abs() < 1e-6, "{y:?}");
+    assert!(
+        (z.min - 30.0).abs() < 1e-6 && (z.max - 50.0).abs() < 1e-6,
+        "{z:?}"
+    );
+    // The interpolator and servos (check --dynamics) reach the same end, settled.
+    let options = CheckOptions {
+        dynamics: true,
+        ..CheckOptions::default()
+    };
+    let r = check(&scenario, &options).unwrap();
+    let (y, z) = (&r.axes["Y"], &r.axes["Z"]);
+    assert!((y.min + 20.0).abs() < 0.01, "{y:?}");
+    assert!((z.min - 30.0).abs() < 0.01, "{z:?}");
+}

@@ -296,7 +296,7 @@ fn from_first_end<'a>(moves: program::Moves<'a>, kin: Kinematics) -> program::Mo
             if m.tcp {
                 // X Y Z are the tool tip in the table frame.
                 let tip = nalgebra::Point3::new(end[Axis::X], end[Axis::Y], end[Axis::Z]);
-                let q = kin.table_to_machine(&m.end, &tip);
+                let q = kin.tcp_to_machine(&m.end, &tip, m.tool_length_mm);
                 (end[Axis::X], end[Axis::Y], end[Axis::Z]) = (q.x, q.y, q.z);
             }
             program::Move {

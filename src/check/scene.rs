@@ -28,8 +28,8 @@ use rapier3d_f64::geometry::{
 use serde::Serialize;
 
 pub use crate::input::scene::{
-    ConeSetup, CradleBox, SceneConfig, SpindleConfig, SpindleShape, TableConfig, ToolConfig,
-    WorkpieceConfig, WorkpieceKind,
+    ConeSetup, CradleBox, SceneConfig, SpindleConfig, SpindleShape, TableAxis, TableConfig,
+    ToolConfig, WorkpieceConfig, WorkpieceKind,
 };
 pub use monitor::{EngagementSummary, EventKind, SceneEvent, SceneMonitor, SceneReport};
 pub use shapes::{signed_distance, z_cylinder, Circle, CircleHull};
@@ -205,6 +205,21 @@ impl Scene {
         // Table and cradle.
         let t = &scene.table;
         let (shape, local) = z_cylinder(t.top_z_mm - t.thickness_mm, t.top_z_mm, t.radius_mm);
+        let local = match t.axis {
+            TableAxis::Z => local,
+            // Ry(90 deg) takes the cylinder's +Z to +X.
+            TableAxis::X => {
+                Pose::from_parts(
+                    Vector::ZERO,
+                    Rotation::from_rotation_arc(Vector::Z, Vector::X),
+                ) * local
+            }
+        };
+        let stands_on_top = workpiece.kind == WorkpieceKind::BallBar
+            || (workpiece.kind == WorkpieceKind::ConeFrustum && workpiece.riser);
+        if t.axis != TableAxis::Z && stands_on_top {
+            return Err(Error::invalid(path, "a riser or ball-bar post stands on a table about Z, but scene.table.axis is \"x\" (a faceplate): set workpiece.riser = false, or use a table about Z"));
+        }
         builder.add(
             "table",
             Carrier::Table,

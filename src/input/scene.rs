@@ -56,14 +56,28 @@ impl Default for SceneConfig {
     }
 }
 
-/// `[scene.table]`: a cylinder about the table frame's Z axis (the C axis).
+/// `[scene.table]`: a cylinder about the table frame's Z axis (the C axis), or about its X
+/// axis (a faceplate on A, as on LinuxCNC's table-dual-rotary sample).
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TableConfig {
-    /// Height of the top surface in the table frame, mm.
+    /// Height of the top surface in the table frame, mm (along X for a faceplate).
     pub top_z_mm: f64,
     pub radius_mm: f64,
     pub thickness_mm: f64,
+    /// The table's axis in the table frame.
+    pub axis: TableAxis,
+}
+
+/// The axis a table's cylinder turns about, in the table frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TableAxis {
+    /// A rotary table about Z (C), its top face up.
+    #[default]
+    Z,
+    /// A faceplate about X (A), its face toward +X.
+    X,
 }
 
 impl Default for TableConfig {
@@ -72,6 +86,7 @@ impl Default for TableConfig {
             top_z_mm: 0.0,
             radius_mm: 200.0,
             thickness_mm: 60.0,
+            axis: TableAxis::Z,
         }
     }
 }

@@ -21,7 +21,8 @@
 //! - **TCP** (`block.tcp` from G43.4, or [`InterpolationOptions::force_tcp`]): the block's X Y
 //!   Z are the tool tip `p` in the table frame. `p(u)` is the straight line (or the arc) in the
 //!   table frame, the rotary axes move linearly in `u`, and every period the machine axes are
-//!   `xyz = Kinematics::table_to_machine(q_rotary(u), p(u))`. `L` is the tool-tip path length,
+//!   `xyz = Kinematics::tcp_to_machine(q_rotary(u), p(u), L_tool)` (the tool length offset
+//!   along the tool axis). `L` is the tool-tip path length,
 //!   so F is the tool-tip feed relative to the table; for a pure rotary move (`|Δp| = 0`) the
 //!   mixed rule over the rotary axes is used instead.
 //!
@@ -206,6 +207,9 @@ struct BlockPath {
     arc: Option<ArcGeometry>,
     /// Some: X Y Z of `start + u delta` (or of the arc) are the tool tip in the table frame.
     tcp: Option<Kinematics>,
+    /// Tool length offset under TCP, mm: included in Z, applied along the tool axis
+    /// ([`Kinematics::tcp_to_machine`]).
+    tool_length_mm: f64,
 }
 
 impl BlockPath {
@@ -220,7 +224,9 @@ impl BlockPath {
             q.0[arc.i1] = arc.c1 + r * sin;
         }
         if let Some(kinematics) = &self.tcp {
-            let m = table_to_machine(kinematics, &q, [q.0[0], q.0[1], q.0[2]]);
+            let l = self.tool_length_mm;
+            let mut m = table_to_machine(kinematics, &q, [q.0[0], q.0[1], q.0[2] - l]);
+            m[2] += l;
             q.0[..3].copy_from_slice(&m);
         }
         q
@@ -683,6 +689,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 delta: b.end - b.start,
                 arc: None,
                 tcp,
+                tool_length_mm: b.tool_length_mm,
             },
             length: 0.0,
             dwell_s: 0.0,
@@ -728,7 +735,11 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 if let Some(k) = tcp {
                     let to_machine = |q: &AxisVec| {
                         let mut m = *q;
-                        let p = k.table_to_machine(q, &Point3::new(q.0[0], q.0[1], q.0[2]));
+                        let p = k.tcp_to_machine(
+                            q,
+                            &Point3::new(q.0[0], q.0[1], q.0[2]),
+                            b.tool_length_mm,
+                        );
                         (m.0[0], m.0[1], m.0[2]) = (p.x, p.y, p.z);
                         m
                     };

@@ -96,7 +96,9 @@ pub fn position_in_block(block: &Move, machine: &Machine, f: f64) -> AxisVec {
         _ if block.tcp => {
             // X Y Z are the tool tip in the table frame, moving on the straight line.
             let tip = Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
-            let m = machine.kinematics.table_to_machine(&q, &tip);
+            let m = machine
+                .kinematics
+                .tcp_to_machine(&q, &tip, block.tool_length_mm);
             q[Axis::X] = m.x;
             q[Axis::Y] = m.y;
             q[Axis::Z] = m.z;

@@ -668,7 +668,9 @@ impl Interp {
                 Some(MotionMode::Linear) => 10.0,
                 Some(MotionMode::Arc { clockwise: true }) => 20.0,
                 Some(MotionMode::Arc { .. }) => 30.0,
-                Some(MotionMode::Cycle(c) | MotionMode::Lathe(c) | MotionMode::Probe(c)) => c as f64,
+                Some(MotionMode::Cycle(c) | MotionMode::Lathe(c) | MotionMode::Probe(c)) => {
+                    c as f64
+                }
                 Some(MotionMode::Spline(c)) => c as f64,
                 None => 800.0,
             },
@@ -916,15 +918,12 @@ impl Interp {
         }
         let halve_x = self.diameter;
         let get = |l: char| {
-            words
-                .get(single[slot(l)] as usize)
-                .copied()
-                .map(|mut w| {
-                    if halve_x && l == 'X' {
-                        w.value /= 2.0;
-                    }
-                    w
-                })
+            words.get(single[slot(l)] as usize).copied().map(|mut w| {
+                if halve_x && l == 'X' {
+                    w.value /= 2.0;
+                }
+                w
+            })
         };
         if let Some(w) = spindle_select {
             if get('S').is_none() && !m.iter().any(|(c, _)| matches!(c, 3 | 4 | 5 | 19)) {
@@ -998,14 +997,16 @@ impl Interp {
         }
         let mut feed_word = None;
         if let Some(f) = get('F') {
-            if f.value <= 0.0 {
+            if f.value < 0.0 {
                 return Err(LineError::new(
                     f.span(),
-                    format!("`{}`: expected a feed greater than zero", &line[f.span()]),
-                    "feed not positive",
+                    format!("`{}`: expected a feed of zero or more", &line[f.span()]),
+                    "negative feed",
                 ));
             }
-            self.feed = Some(match self.feed_mode {
+            // F0 is accepted, as LinuxCNC does (a subroutine may restore a saved F of 0);
+            // a feed move at F0 is then refused like one with no F at all.
+            self.feed = (f.value > 0.0).then(|| match self.feed_mode {
                 FeedRead::InverseTime => f.value,
                 _ if self.dialect == Dialect::Linuxcnc => f.value * scale_before_units,
                 _ => f.value * self.scale(),
@@ -1715,7 +1716,7 @@ impl Interp {
                         return Err(LineError::new(at, "feed per revolution (G95) with the spindle speed zero: expected an S word", "no S"));
                     }
                     _ if self.feed.is_none() || self.feed == Some(0.0) => {
-                        return Err(LineError::new(at, "feed move with no feed programmed: expected an F word (mm/min) in this or an earlier block", "no F in effect").help("add F, e.g. `F1000` for 1000 mm/min"));
+                        return Err(LineError::new(at, "feed move with no feed programmed (or F0): expected a positive F word (mm/min) in this or an earlier block", "no F in effect").help("add F, e.g. `F1000` for 1000 mm/min"));
                     }
                     _ => {}
                 }
@@ -1810,7 +1811,11 @@ impl Interp {
                         return Err(LineError::new(at, "an arc of several turns (P) under cutter radius compensation: not supported", "turns with compensation"));
                     }
                     if self.frame().is_some() && turns > 1 {
-                        return Err(LineError::new(at, "an arc of several turns (P) with G68.2 or G254 active: not supported", "turns in a tilted frame"));
+                        return Err(LineError::new(
+                            at,
+                            "an arc of several turns (P) with G68.2 or G254 active: not supported",
+                            "turns in a tilted frame",
+                        ));
                     }
                     if self.comp.is_some() {
                         self.comp_element(queue, line_no, motion, start, target)

@@ -471,7 +471,10 @@ fn words_in_the_wrong_place_or_twice_are_errors() {
         ("G4 P1 X1\n", 1, 7, "both P and X"),
         ("G4 Y1\n", 1, 4, "`Y1` in a G04 block"),
         ("G4 P-5\n", 1, 4, "negative dwell"),
-        ("G1 X1 F0\n", 1, 7, "expected a feed greater than zero"),
+        // F0 sets no feed, as in LinuxCNC ("Cannot do G1 with zero feed rate").
+        ("G1 X1 F0\n", 1, 1, "no feed programmed (or F0)"),
+        ("G0 X1 F0\nG1 X2\n", 2, 1, "no feed programmed (or F0)"),
+        ("G1 X1 F-1\n", 1, 7, "expected a feed of zero or more"),
         ("S-100\n", 1, 1, "negative spindle speed"),
     ];
     for &(text, line, column, needle) in cases {

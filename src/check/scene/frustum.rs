@@ -196,11 +196,24 @@ pub fn signed_distance(f: &Frustum, c: &Cylinder, warm: Option<Vector>) -> Optio
         // The flank line of C facing along n: x(s) = c + s t + R u, |s| <= half height.
         let u = unit_across(n, c.t)?;
         let base = c.c + u * c.radius;
-        let (mut upper, normal) = line_minimum(f, base, c.t, c.half_height);
-        if upper - best_lower > CERTIFY_MM {
-            // Overlapping at a rim, a point of C is shallower than C must move: try the
-            // points of F on its generatrix facing C (a rim point is one of them).
-            upper = upper.min(generatrix_minimum(f, c, -n));
+        // Cheap bounds first (closed form and end points), then the refinements: golden
+        // section along C's flank line, and the points of F on its generatrix facing C
+        // (overlapping at a rim, a point of C is shallower than C must move; a rim point of
+        // F is not).
+        let (mut upper, mut normal) = line_minimum(f, base, c.t, c.half_height, false);
+        let certified = |upper: f64, lower: f64, n: Vector| {
+            let n = unit_across(n, c.t).map_or(lower, |a| lower.max(lower_bound(f, c, a)));
+            upper - n.max(lower_bound(f, c, -normal)) <= CERTIFY_MM
+        };
+        if !certified(upper, best_lower, -normal) {
+            upper = upper.min(generatrix_minimum(f, c, -n, false));
+            if !certified(upper, best_lower, -normal) {
+                let refined = line_minimum(f, base, c.t, c.half_height, true);
+                if refined.0 < upper {
+                    (upper, normal) = refined;
+                }
+                upper = upper.min(generatrix_minimum(f, c, -n, true));
+            }
         }
         let n_next = -normal;
         // Also the nearest direction across the flank (n·t = 0), which is the exact one for
@@ -232,13 +245,26 @@ fn cylinder_sd(c: &Cylinder, y: Vector) -> f64 {
 /// The smallest `sd_C` on the frustum's generatrix farthest along `w` (from the base rim to
 /// the top rim): an upper bound on the pair's signed distance like any point of F, and the
 /// one that certifies an overlap at a rim (`sd_C` is convex along the segment).
-fn generatrix_minimum(f: &Frustum, c: &Cylinder, w: Vector) -> f64 {
+fn generatrix_minimum(f: &Frustum, c: &Cylinder, w: Vector, refine: bool) -> f64 {
     let Some(e) = unit_across(w, f.a) else {
         return f64::INFINITY;
     };
     let (p0, p1) = (f.o + e * f.r0, f.o + f.a * f.h + e * f.r1);
     let at = |s: f64| cylinder_sd(c, p0 + (p1 - p0) * s);
-    golden(at, 0.0, 1.0, 1e-9).min(at(0.0)).min(at(1.0))
+    let mut ends = at(0.0).min(at(1.0));
+    // On C's flank, sd_C = (distance to C's axis) - R, least where the generatrix passes
+    // nearest the axis: s = (b e - d·w) / (|d|² - b²), b = d·t, e = t·w, w = p0 - c.
+    let (d, w) = (p1 - p0, p0 - c.c);
+    let b = d.dot(c.t);
+    let denom = d.dot(d) - b * b;
+    if denom > 1e-12 * d.dot(d) {
+        let s = ((b * c.t.dot(w) - d.dot(w)) / denom).clamp(0.0, 1.0);
+        ends = ends.min(at(s));
+    }
+    match refine {
+        true => golden(at, 0.0, 1.0, 1e-9).min(ends),
+        false => ends,
+    }
 }
 
 /// Minimum of a convex function on `[lo, hi]` by golden section, to `tol` in the argument.
@@ -268,7 +294,7 @@ fn golden(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64, tol: f64) -> f64 {
 /// convex set); on the lateral face it is `m_ζ ζ(s) + m_ρ ρ(s) - m·(0, r0)` with `ζ` linear
 /// and `ρ(s) = sqrt(A s² + 2 B s + C)`, whose stationary point solves
 /// `A s + B = κ sqrt(D / (A - κ²))`, `κ = -m_ζ (t·a) / m_ρ`, `D = A C - B²`.
-fn line_minimum(f: &Frustum, base: Vector, t: Vector, h: f64) -> (f64, Vector) {
+fn line_minimum(f: &Frustum, base: Vector, t: Vector, h: f64, refine: bool) -> (f64, Vector) {
     let at = |s: f64| f.point_sd(base + t * s);
     let mut best = at(-h);
     let mut best_s = -h;
@@ -305,7 +331,7 @@ fn line_minimum(f: &Frustum, base: Vector, t: Vector, h: f64) -> (f64, Vector) {
         let e = unit_across(x - f.o, f.a).unwrap_or(f.perp);
         (normal.dot(f.a) - nz).abs() < 1e-12 && (normal.dot(e) - nr).abs() < 1e-12
     };
-    if lateral_nearest {
+    if lateral_nearest || !refine {
         return best;
     }
     let (mut lo, mut hi) = (-h, h);

@@ -304,6 +304,9 @@ fn the_closed_form_cylinder_to_frustum_distance_agrees_with_gjk_on_random_poses(
                 );
             }
             worst = worst.max(diff / allowed);
+            if diff > allowed {
+                println!("DBG o {:?} axis {:?} r0 {r0} r1 {r1} height {height} c {:?} t {:?} half {half} radius {radius}", o.to_array(), axis.to_array(), centre.to_array(), t.to_array());
+            }
             assert!(
                 diff <= allowed,
                 "case {case}: closed form {d} mm, GJK {reference} mm"

@@ -174,7 +174,7 @@ impl<'a> LimitsMonitor<'a> {
     }
 
     /// One sample. The common case (no limit crossed, none open) is a pass over flat
-    /// per-axis arrays; a crossing, or an open violation, takes [`LimitsMonitor::track`].
+    /// per-axis arrays; a crossing, or an open violation, takes `LimitsMonitor::track`.
     pub fn push(&mut self, s: &Sample) {
         let x = &s.actual.0;
         let mut clear = self.open == 0;

@@ -11,7 +11,8 @@
 //! that encode which parts may touch (see [`groups`]); every collider pair the groups allow
 //! is monitored. A cutter/workpiece pair is *cutting* (its depth is engagement); every
 //! other pair is a *collision* pair. Distances are parry GJK/EPA queries on exact convex
-//! shapes (see [`shapes`]). The streaming, conservative-advancement check is in
+//! shapes (see [`shapes`]), except a cylinder against the frustum, which has a certified
+//! closed form ([`frustum`]). The streaming, conservative-advancement check is in
 //! [`monitor`].
 
 pub mod frustum;

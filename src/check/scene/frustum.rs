@@ -31,6 +31,17 @@ pub const CERTIFY_MM: f64 = 1e-6;
 /// Alternations before giving up (the caller falls back to GJK/EPA).
 const MAX_ROUNDS: usize = 8;
 
+/// The unit component of `v` perpendicular to unit `axis`, when it is long enough to have a
+/// direction (a near-parallel `v` leaves only rounding noise, which is not perpendicular).
+fn unit_across(v: Vector, axis: Vector) -> Option<Vector> {
+    let p = v - axis * v.dot(axis);
+    if p.length() <= 1e-9 * v.length() {
+        return None;
+    }
+    let u = p.normalize();
+    Some((u - axis * u.dot(axis)).normalize())
+}
+
 /// A frustum in its own frame: base centre, unit axis, height and radii (mm).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frustum {
@@ -93,7 +104,7 @@ impl Frustum {
         let z = v.dot(self.a);
         let radial = v - self.a * z;
         let rho = radial.length();
-        let e = if rho > 1e-12 { radial / rho } else { self.perp };
+        let e = unit_across(v, self.a).unwrap_or(self.perp);
         let (sd, (nz, nr)) = self.sd_2d(z, rho);
         (sd, self.a * nz + e * nr)
     }
@@ -162,6 +173,7 @@ impl Cylinder {
 
 /// The separating-axis lower bound `L(n) = -h_C(n) - h_F(-n)` for unit `n` (C toward F).
 fn lower_bound(f: &Frustum, c: &Cylinder, n: Vector) -> f64 {
+    let n = n.normalize();
     -c.support(n) - f.support(-n)
 }
 
@@ -182,13 +194,31 @@ pub fn signed_distance(f: &Frustum, c: &Cylinder, warm: Option<Vector>) -> Optio
             (best_lower, best_n) = (lower, n);
         }
         // The flank line of C facing along n: x(s) = c + s t + R u, |s| <= half height.
-        let u = (n - c.t * n.dot(c.t)).try_normalize()?;
+        let u = unit_across(n, c.t)?;
         let base = c.c + u * c.radius;
-        let (upper, normal) = line_minimum(f, base, c.t, c.half_height);
+        // Cheap bounds first (closed form and end points), then the refinements: golden
+        // section along C's flank line, and the points of F on its generatrix facing C
+        // (overlapping at a rim, a point of C is shallower than C must move; a rim point of
+        // F is not).
+        let (mut upper, mut normal) = line_minimum(f, base, c.t, c.half_height, false);
+        let certified = |upper: f64, lower: f64, n: Vector| {
+            let n = unit_across(n, c.t).map_or(lower, |a| lower.max(lower_bound(f, c, a)));
+            upper - n.max(lower_bound(f, c, -normal)) <= CERTIFY_MM
+        };
+        if !certified(upper, best_lower, -normal) {
+            upper = upper.min(generatrix_minimum(f, c, -n, false));
+            if !certified(upper, best_lower, -normal) {
+                let refined = line_minimum(f, base, c.t, c.half_height, true);
+                if refined.0 < upper {
+                    (upper, normal) = refined;
+                }
+                upper = upper.min(generatrix_minimum(f, c, -n, true));
+            }
+        }
         let n_next = -normal;
         // Also the nearest direction across the flank (n·t = 0), which is the exact one for
         // a contact inside the flank: off it, h_C grows by h |n·t|.
-        let across = (n_next - c.t * n_next.dot(c.t)).try_normalize();
+        let across = unit_across(n_next, c.t);
         for candidate in [Some(n_next), across].into_iter().flatten() {
             let lower = lower_bound(f, c, candidate);
             if lower > best_lower {
@@ -203,12 +233,68 @@ pub fn signed_distance(f: &Frustum, c: &Cylinder, warm: Option<Vector>) -> Optio
     None
 }
 
+/// Signed distance of point `y` to the cylinder: the 2-D box distance of (axial, radial).
+fn cylinder_sd(c: &Cylinder, y: Vector) -> f64 {
+    let v = y - c.c;
+    let z = v.dot(c.t);
+    let rho = (v - c.t * z).length();
+    let (dz, dr) = (z.abs() - c.half_height, rho - c.radius);
+    dz.max(dr).min(0.0) + dz.max(0.0).hypot(dr.max(0.0))
+}
+
+/// The smallest `sd_C` on the frustum's generatrix farthest along `w` (from the base rim to
+/// the top rim): an upper bound on the pair's signed distance like any point of F, and the
+/// one that certifies an overlap at a rim (`sd_C` is convex along the segment).
+fn generatrix_minimum(f: &Frustum, c: &Cylinder, w: Vector, refine: bool) -> f64 {
+    let Some(e) = unit_across(w, f.a) else {
+        return f64::INFINITY;
+    };
+    let (p0, p1) = (f.o + e * f.r0, f.o + f.a * f.h + e * f.r1);
+    let at = |s: f64| cylinder_sd(c, p0 + (p1 - p0) * s);
+    let mut ends = at(0.0).min(at(1.0));
+    // On C's flank, sd_C = (distance to C's axis) - R, least where the generatrix passes
+    // nearest the axis: s = (b e - d·w) / (|d|² - b²), b = d·t, e = t·w, w = p0 - c.
+    let (d, w) = (p1 - p0, p0 - c.c);
+    let b = d.dot(c.t);
+    let denom = d.dot(d) - b * b;
+    if denom > 1e-12 * d.dot(d) {
+        let s = ((b * c.t.dot(w) - d.dot(w)) / denom).clamp(0.0, 1.0);
+        ends = ends.min(at(s));
+    }
+    match refine {
+        true => golden(at, 0.0, 1.0, 1e-9).min(ends),
+        false => ends,
+    }
+}
+
+/// Minimum of a convex function on `[lo, hi]` by golden section, to `tol` in the argument.
+fn golden(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64, tol: f64) -> f64 {
+    const G: f64 = 0.618_033_988_749_894_8;
+    let mut x1 = hi - G * (hi - lo);
+    let mut x2 = lo + G * (hi - lo);
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    while hi - lo > tol {
+        if f1 <= f2 {
+            hi = x2;
+            (x2, f2) = (x1, f1);
+            x1 = hi - G * (hi - lo);
+            f1 = f(x1);
+        } else {
+            lo = x1;
+            (x1, f1) = (x2, f2);
+            x2 = lo + G * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    f1.min(f2)
+}
+
 /// The smallest `sd_F` on the segment `base + s t`, `|s| <= h`, and the frustum's outward
 /// normal nearest that point. `sd_F` is convex along a line (the signed distance to a
 /// convex set); on the lateral face it is `m_ζ ζ(s) + m_ρ ρ(s) - m·(0, r0)` with `ζ` linear
 /// and `ρ(s) = sqrt(A s² + 2 B s + C)`, whose stationary point solves
 /// `A s + B = κ sqrt(D / (A - κ²))`, `κ = -m_ζ (t·a) / m_ρ`, `D = A C - B²`.
-fn line_minimum(f: &Frustum, base: Vector, t: Vector, h: f64) -> (f64, Vector) {
+fn line_minimum(f: &Frustum, base: Vector, t: Vector, h: f64, refine: bool) -> (f64, Vector) {
     let at = |s: f64| f.point_sd(base + t * s);
     let mut best = at(-h);
     let mut best_s = -h;
@@ -242,12 +328,10 @@ fn line_minimum(f: &Frustum, base: Vector, t: Vector, h: f64) -> (f64, Vector) {
         let (nz, nr) = f.m;
         let normal = best.1;
         let x = base + t * best_s;
-        let v = x - f.o;
-        let radial = v - f.a * v.dot(f.a);
-        let e = radial.try_normalize().unwrap_or(f.perp);
+        let e = unit_across(x - f.o, f.a).unwrap_or(f.perp);
         (normal.dot(f.a) - nz).abs() < 1e-12 && (normal.dot(e) - nr).abs() < 1e-12
     };
-    if lateral_nearest {
+    if lateral_nearest || !refine {
         return best;
     }
     let (mut lo, mut hi) = (-h, h);

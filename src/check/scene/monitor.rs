@@ -135,6 +135,8 @@ struct PairState {
     slack: f64,
     /// Motion bound accumulated since the last query, mm.
     moved: f64,
+    /// The motion sums ([`SceneMonitor`]'s `sum`) up to which `moved` is brought.
+    synced: [f64; 3],
     /// Last measured signed distance, mm.
     last_mm: f64,
     warm: Warm,
@@ -163,6 +165,12 @@ pub struct SceneMonitor {
     uses_relative: bool,
     /// Query every pair at every sample (the reference the bounds are tested against).
     exhaustive: bool,
+    /// Running sums of |dXYZ| (mm), |d tilt| and |dC| (rad) over the samples so far.
+    sum: [f64; 3],
+    /// The largest weight of any pair per component: `σ = w_max · sum` grows at least as
+    /// fast as any pair's bound, so no pair is due before `σ` reaches `next_due`.
+    w_max: [f64; 3],
+    next_due: f64,
 }
 
 /// Sub-steps of conservative advancement inside one sample interval, at most.
@@ -209,6 +217,7 @@ impl SceneMonitor {
                 },
                 slack: 0.0,
                 moved: 0.0,
+                synced: [0.0; 3],
                 last_mm: f64::INFINITY,
                 warm: Warm::default(),
                 open: None,
@@ -225,7 +234,8 @@ impl SceneMonitor {
                     engagement.len() - 1
                 }),
             })
-            .collect();
+            .collect::<Vec<PairState>>();
+        let states_w: Vec<[f64; 3]> = states.iter().map(|s| s.weights).collect();
         SceneMonitor {
             scene,
             states,
@@ -240,6 +250,9 @@ impl SceneMonitor {
             prev_relative: None,
             uses_relative: false,
             exhaustive: false,
+            sum: [0.0; 3],
+            w_max: [0, 1, 2].map(|k| states_max(&states_w, k)),
+            next_due: f64::NEG_INFINITY,
         }
     }
 
@@ -347,9 +360,27 @@ impl SceneMonitor {
             }
             self.prev_relative = Some((now, u_norm));
         }
+        // Sample by sample only the sums advance; the pairs are visited once σ reaches the
+        // earliest time one of them may be due.
+        let prev_sum = self.sum;
+        if let Some(s) = step {
+            for k in 0..3 {
+                self.sum[k] += s[k];
+            }
+        }
+        let sigma = dot3(&self.w_max, &self.sum);
+        if step.is_some() && !self.exhaustive && !self.uses_relative && sigma < self.next_due {
+            self.prev = Some(now);
+            return;
+        }
         let mut poses: Option<[Pose; 4]> = None;
         for i in 0..self.states.len() {
             let state = &mut self.states[i];
+            if step.is_some() {
+                let behind = [0, 1, 2].map(|k| prev_sum[k] - state.synced[k]);
+                state.moved += dot3(&state.weights, &behind);
+            }
+            state.synced = self.sum;
             let mut pair_step = match step {
                 Some(s) => {
                     state.weights[0] * s[0] + state.weights[1] * s[1] + state.weights[2] * s[2]
@@ -384,6 +415,12 @@ impl SceneMonitor {
             }
             self.classify(i, &now, d);
         }
+        self.next_due = self
+            .states
+            .iter()
+            // Less a rounding allowance on the sums.
+            .map(|s| sigma + (s.slack - s.moved) - 1e-12 * (1.0 + sigma))
+            .fold(f64::INFINITY, f64::min);
         self.prev = Some(now);
     }
 
@@ -488,6 +525,7 @@ impl SceneMonitor {
         let state = &mut self.states[i];
         state.last_mm = d;
         state.moved = 0.0;
+        state.synced = self.sum;
         if let Some(e) = state.engagement {
             state.slack = d.max(resolution);
             let summary = &mut self.engagement[e];
@@ -545,6 +583,14 @@ impl SceneMonitor {
             }
         }
     }
+}
+
+fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn states_max(weights: &[[f64; 3]], k: usize) -> f64 {
+    weights.iter().map(|w| w[k]).fold(0.0, f64::max)
 }
 
 /// Signed distance of pair `i` with the bodies at `poses`.

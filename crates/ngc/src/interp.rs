@@ -668,7 +668,9 @@ impl Interp {
                 Some(MotionMode::Linear) => 10.0,
                 Some(MotionMode::Arc { clockwise: true }) => 20.0,
                 Some(MotionMode::Arc { .. }) => 30.0,
-                Some(MotionMode::Cycle(c) | MotionMode::Lathe(c) | MotionMode::Probe(c)) => c as f64,
+                Some(MotionMode::Cycle(c) | MotionMode::Lathe(c) | MotionMode::Probe(c)) => {
+                    c as f64
+                }
                 Some(MotionMode::Spline(c)) => c as f64,
                 None => 800.0,
             },
@@ -916,15 +918,12 @@ impl Interp {
         }
         let halve_x = self.diameter;
         let get = |l: char| {
-            words
-                .get(single[slot(l)] as usize)
-                .copied()
-                .map(|mut w| {
-                    if halve_x && l == 'X' {
-                        w.value /= 2.0;
-                    }
-                    w
-                })
+            words.get(single[slot(l)] as usize).copied().map(|mut w| {
+                if halve_x && l == 'X' {
+                    w.value /= 2.0;
+                }
+                w
+            })
         };
         if let Some(w) = spindle_select {
             if get('S').is_none() && !m.iter().any(|(c, _)| matches!(c, 3 | 4 | 5 | 19)) {
@@ -1810,7 +1809,11 @@ impl Interp {
                         return Err(LineError::new(at, "an arc of several turns (P) under cutter radius compensation: not supported", "turns with compensation"));
                     }
                     if self.frame().is_some() && turns > 1 {
-                        return Err(LineError::new(at, "an arc of several turns (P) with G68.2 or G254 active: not supported", "turns in a tilted frame"));
+                        return Err(LineError::new(
+                            at,
+                            "an arc of several turns (P) with G68.2 or G254 active: not supported",
+                            "turns in a tilted frame",
+                        ));
                     }
                     if self.comp.is_some() {
                         self.comp_element(queue, line_no, motion, start, target)

@@ -40,8 +40,8 @@ mod options;
 mod polar;
 mod probe;
 mod reader;
-mod spline;
 mod remap;
+mod spline;
 mod turns;
 
 pub use axis::{Axis, AxisVec, Plane};

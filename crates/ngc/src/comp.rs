@@ -172,6 +172,12 @@ impl Comp {
         self.queue.push(Queued { mv, kind });
     }
 
+    /// Sets the compensated current point's (a, b) to `p`'s, the third axis kept, as
+    /// rs274 does when a G70 profile read moves its current point (`settings->current_x/z`).
+    pub fn set_current(&mut self, p: AxisVec) {
+        self.cur = with_ab(self.plane, self.cur, ab(self.plane, &p));
+    }
+
     /// The entry move has been made.
     pub fn started(&self) -> bool {
         !self.first

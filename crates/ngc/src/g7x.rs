@@ -835,9 +835,10 @@ impl Profile {
         Ok(())
     }
 
-    /// G70 from `start` (`z + i·x`): P passes from distance D to E. The first move of each
-    /// pass is flagged (`true`): LinuxCNC makes it with cutter compensation off.
-    pub fn g70(mut self, start: C, d: f64, e: f64, p: f64) -> R<Vec<(Out, bool)>> {
+    /// G70 from `start` (`z + i·x`): P passes from distance D to E, each a rapid to `start`,
+    /// a rapid to the offset profile's start, then the offset profile. rs274 2.9 (the
+    /// version measured) sends every one of them through cutter compensation when it is on.
+    pub fn g70(mut self, start: C, d: f64, e: f64, p: f64) -> R<Vec<Out>> {
         *self.segs[0].sp() = start;
         let mut path = self.clone();
         path.segs.remove(0);
@@ -866,18 +867,15 @@ impl Profile {
             let distance = (pass - 1) as f64 * (d - e) / p + e;
             let mut path = self.clone();
             path.add_distance(distance)?;
-            out.push((Out::Rapid(path.segs[0].start()), true));
-            out.push((Out::Rapid(path.segs[0].end()), false));
+            out.push(Out::Rapid(path.segs[0].start()));
+            out.push(Out::Rapid(path.segs[0].end()));
             let mut drawn = Vec::new();
             for s in &path.segs[1..] {
                 s.draw(&mut drawn);
             }
-            out.extend(drawn.into_iter().map(|o| (o, false)));
+            out.extend(drawn);
         }
-        Ok(out
-            .into_iter()
-            .map(|(o, first)| (Profile::unswap(fs, o), first))
-            .collect())
+        Ok(out.into_iter().map(|o| Profile::unswap(fs, o)).collect())
     }
 
     /// G71 (`rotate` false) or G72 (true): `cycle` 0 all, 1 no pockets (.1), 2 only the

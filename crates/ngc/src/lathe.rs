@@ -583,13 +583,17 @@ impl Interp {
             re: coordinate('Z', Axis::Z),
             im: coordinate('X', Axis::X),
         };
-        // The rapid to the block's X Z taken as absolute (LinuxCNC switches to G90 first),
-        // without compensation.
-        let comp = self.comp.take();
+        // The rapid to the block's X Z taken as absolute (LinuxCNC switches to G90 first);
+        // under G70 with cutter compensation on, rs274 2.9 compensates it like any G0 (the
+        // entry move when it is the first; measured).
         let start = self.pos;
-        let path = self.path;
-        self.emit(queue, line_no, Motion::Rapid, start, target, path);
-        self.comp = comp;
+        if self.comp.is_some() {
+            self.comp_element(queue, line_no, Motion::Rapid, start, target)
+                .map_err(|m| LineError::new(at.clone(), m, "cutter compensation"))?;
+        } else {
+            let path = self.path;
+            self.emit(queue, line_no, Motion::Rapid, start, target, path);
+        }
         self.pos = target;
         self.motion = Some(MotionMode::Rapid);
         let value = |l: char, default: f64| get(l).map_or(default, |w| w.value);
@@ -738,6 +742,18 @@ impl Interp {
             return Ok(());
         };
         self.pos = req.home;
+        if self.comp.is_some() {
+            // rs274 2.9 leaves its current point where the profile read ended, and under
+            // compensation that point is the compensated one (`comp_get_current`): the next
+            // move is compensated from there (measured on lathe_g70_71_demo.ngc).
+            let scale = self.scale();
+            let mut end = self.pos;
+            end[Axis::X] = req.at.im * scale + self.offset[Axis::X];
+            end[Axis::Z] = req.at.re * scale + self.offset[Axis::Z] + self.tool_length_mm;
+            if let Some(comp) = self.comp.as_mut() {
+                comp.set_current(end);
+            }
+        }
         let name = cycle_name(req.code);
         let fail = |m: String| {
             LineError::new(req.span.clone(), format!("{name}: {m}"), "lathe cycle")
@@ -753,7 +769,7 @@ impl Interp {
         let dback = last.end() - last.start();
         let start = req.at;
         let (x, z) = (req.xz.im, req.xz.re);
-        let moves: Vec<(g7x::Out, bool)> = match req.code {
+        let moves: Vec<g7x::Out> = match req.code {
             700 => g7x::Profile::new(segs)
                 .g70(req.xz, req.d, req.e, req.p)
                 .map_err(fail)?,
@@ -793,9 +809,6 @@ impl Interp {
                         req.r,
                     )
                     .map_err(fail)?
-                    .into_iter()
-                    .map(|o| (o, false))
-                    .collect()
             }
         };
         let scale = self.scale();
@@ -805,7 +818,7 @@ impl Interp {
             m[Axis::Z] = p.re * scale + s.offset[Axis::Z] + s.tool_length_mm;
             m
         };
-        for (mv, uncompensated) in moves {
+        for mv in moves {
             let start = self.pos;
             let (motion, target) = match mv {
                 g7x::Out::Rapid(p) => (Motion::Rapid, to_machine(p, self)),
@@ -853,7 +866,7 @@ impl Interp {
                 Motion::Dwell { .. } => unreachable!("no dwell in a cycle"),
             });
             let path = self.path;
-            if self.comp.is_some() && !uncompensated {
+            if self.comp.is_some() {
                 self.comp_element(queue, req.line_no, motion, start, target)
                     .map_err(|m| LineError::new(req.span.clone(), m, "cutter compensation"))?;
             } else {

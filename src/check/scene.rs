@@ -460,6 +460,8 @@ impl Scene {
             }
             part.shape = shape.clone();
             part.local = shift * local;
+            // The closed-form distance takes the new cylinder's dimensions.
+            part.analytic = Analytic::of(part.eroded.as_ref().unwrap_or(&part.shape));
             if let Some(collider) = self.colliders.get_mut(part.handle) {
                 collider.set_shape(shape);
                 collider.set_position_wrt_parent(part.local);

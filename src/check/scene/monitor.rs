@@ -291,9 +291,12 @@ impl SceneMonitor {
     /// reach from the tip (for the relative bound) is taken again.
     pub fn set_tool(&mut self, tool: &super::ToolConfig, tip_below_mm: f64) {
         self.scene.set_tool(tool, tip_below_mm);
+        // Every pair is due at the next sample (no lazy skip past the change).
+        self.next_due = f64::NEG_INFINITY;
         for (i, state) in self.states.iter_mut().enumerate() {
             state.slack = 0.0;
             state.moved = 0.0;
+            state.synced = self.sum;
             state.last_mm = 0.0;
             state.warm = Warm::default();
             if let Some((frame, _)) = state.relative {

@@ -680,23 +680,17 @@ fn all_steps(s: &[f64], threshold: f64) -> Vec<(f64, usize)> {
 /// The position of the largest step in `s` above `threshold`: the middle of the part of its
 /// region above half its peak.
 fn largest_step(s: &[f64], threshold: f64) -> Option<usize> {
-    let mut best: Option<(f64, usize)> = None;
-    for sign in [1.0, -1.0] {
-        for region in circular_regions(s.len(), |i| sign * s[i] > threshold) {
-            let peak = region
-                .iter()
-                .map(|&i| sign * s[i])
-                .fold(f64::NEG_INFINITY, f64::max);
-            let upper: Vec<usize> = (0..region.len())
-                .filter(|&k| sign * s[region[k]] >= 0.5 * peak)
-                .collect();
-            let index = region[(upper[0] + upper[upper.len() - 1]) / 2];
+    // The first of the highest peaks, in the order `all_steps` finds them.
+    all_steps(s, threshold)
+        .into_iter()
+        .fold(None::<(f64, usize)>, |best, (peak, index)| {
             if best.is_none_or(|(p, _)| peak > p) {
-                best = Some((peak, index));
+                Some((peak, index))
+            } else {
+                best
             }
-        }
-    }
-    best.map(|(_, index)| index)
+        })
+        .map(|(_, index)| index)
 }
 
 /// Greedy step search: fit the smooth shape and the steps found so far, look for the

@@ -175,9 +175,11 @@ impl Ini {
                 message: format!("REMAP = {}: {m}", e.value),
             })?;
             if r.ngc.is_none() {
-                r.python_motion =
-                    crate::remap::python_motion(&python, r.python.as_deref().unwrap_or(""));
+                let f = r.python.as_deref().unwrap_or("");
+                r.python_motion = crate::remap::python_motion(&python, f);
+                r.python_keeps_motion = crate::remap::python_keeps_motion(&python, f);
             }
+            crate::remap::check_handlers(&python, &mut r);
             remaps.push(r);
         }
         let mut user_m_path = self.search_path("RS274NGC", "USER_M_PATH");

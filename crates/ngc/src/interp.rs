@@ -590,6 +590,48 @@ impl Interp {
         self.tool_selected = false;
     }
 
+    /// What LinuxCNC's stdglue handlers read of the interpreter (crate::stdglue).
+    pub(crate) fn glue_view(&self) -> crate::stdglue::View {
+        crate::stdglue::View {
+            plane: self.plane,
+            feed_zero: self.feed.is_none(),
+            inverse_time: self.feed_mode == FeedRead::InverseTime,
+            comp_on: self.comp.is_some(),
+        }
+    }
+
+    /// The pocket of tool `n` (`find_tool_pocket`): `None` when a tool table is given
+    /// without it.
+    pub(crate) fn glue_pocket(&self, n: u32) -> Option<f64> {
+        (n == 0 || !self.table_given || self.tools.contains_key(&n))
+            .then(|| self.pockets.get(&n).map_or(n as f64, |p| *p as f64))
+    }
+
+    /// Commits a stdglue epilog (`SELECT_TOOL`, `CHANGE_TOOL_NUMBER`, spindle speed, feed
+    /// rate in program units).
+    pub(crate) fn glue_commit(&mut self, c: &crate::stdglue::Commit) {
+        use crate::stdglue::Commit;
+        match *c {
+            Commit::SelectTool { tool, prepared } => {
+                self.next_tool = tool;
+                self.tool_selected = prepared;
+            }
+            Commit::ChangeTool => self.complete_tool_change(),
+            Commit::SetToolNumber(n) => {
+                self.tool = n;
+                self.next_tool = n;
+            }
+            Commit::Speed(rpm) => self.spindle_rpm = rpm,
+            Commit::Feed(f) => {
+                self.feed = (f > 0.0).then(|| match self.feed_mode {
+                    FeedRead::InverseTime => f,
+                    _ => f * self.scale(),
+                })
+            }
+            Commit::None | Commit::KeepMotion => {}
+        }
+    }
+
     /// Writes the read-only system parameters (positions, tool, work system) before a line
     /// that reads parameters.
     pub fn refresh_system_parameters(&mut self) {

@@ -42,6 +42,7 @@ mod probe;
 mod reader;
 mod remap;
 mod spline;
+mod stdglue;
 mod turns;
 
 pub use axis::{Axis, AxisVec, Plane};

@@ -23,7 +23,7 @@ use crate::expr::{Eval, Param};
 use crate::interp::{Interp, Stop};
 use crate::lex::{is_blank, lex, lex_with, Lexed, LineError, LineResult, Word};
 use crate::options::{Dialect, Options};
-use crate::remap::{Remap, RemapCode};
+use crate::remap::Remap;
 
 /// Millimetres per inch (exact by definition).
 pub const MM_PER_INCH: f64 = 25.4;
@@ -373,8 +373,19 @@ struct Frame {
     /// The remap (index) this call executes, and the rest of its block to run on return.
     remap: Option<usize>,
     resume: Option<Resume>,
-    /// stdglue `change_epilog` runs on return (an M6 remap).
-    change_epilog: bool,
+    /// The stdglue epilog to run on return (crate::stdglue).
+    epilog: Option<Box<Epilog>>,
+}
+
+/// A stdglue epilog waiting for its remap's subroutine to return.
+struct Epilog {
+    handler: crate::stdglue::Handler,
+    remap: usize,
+    /// The subroutine used the built-in code (LinuxCNC `builtin_used`).
+    builtin_used: bool,
+    /// The remapped block and code, for errors.
+    here: Cursor,
+    span: std::ops::Range<usize>,
 }
 
 /// The words of a block left to run after a remapped code's subroutine returns.
@@ -421,9 +432,15 @@ pub struct Moves {
     /// A block's words to run before the next line (after a remap returned).
     resume: Option<Resume>,
     remaps_noticed: Vec<usize>,
-    /// An error raised on return from a remap (stdglue change_epilog), reported at the
-    /// next line.
-    abort: Option<String>,
+    /// An error raised on return from a remap (a stdglue epilog), reported at the
+    /// remapped block's code.
+    abort: Option<(Cursor, std::ops::Range<usize>, String)>,
+    /// A stdglue epilog's commit, made before the rest of the remapped block runs.
+    commit: Option<crate::stdglue::Commit>,
+    /// A remapped cycle that is the motion mode: blocks with axis words call it again.
+    modal_remap: Option<usize>,
+    /// stdglue cycle_prolog's sticky words.
+    sticky: crate::stdglue::Sticky,
 }
 
 impl Moves {
@@ -462,6 +479,9 @@ impl Moves {
             resume: None,
             remaps_noticed: Vec::new(),
             abort: None,
+            commit: None,
+            modal_remap: None,
+            sticky: Default::default(),
         }
     }
 
@@ -763,7 +783,7 @@ impl Moves {
             restore: None,
             remap: None,
             resume: None,
-            change_epilog: false,
+            epilog: None,
         });
         self.cursor = start;
         Ok(())
@@ -782,6 +802,32 @@ impl Moves {
             return true;
         }
         let frame = self.frames.pop().expect("checked");
+        if let Some(e) = &frame.epilog {
+            // The epilog reads the subroutine's parameters before they go.
+            let p = &self.interp.params;
+            let locals = p.locals.last();
+            let remap = &self.remaps[e.remap];
+            let result = crate::stdglue::epilog(
+                e.handler,
+                remap.code,
+                remap.ngc.as_deref().unwrap_or(""),
+                value,
+                e.builtin_used,
+                &|k| locals.and_then(|l| l.get(k).copied()),
+                &|n| p.numbered.get(n).copied().unwrap_or(0.0),
+            );
+            match result {
+                Ok(crate::stdglue::Commit::KeepMotion) => self.modal_remap = Some(e.remap),
+                Ok(c) => self.commit = Some(c),
+                Err(m) => {
+                    self.abort = Some((
+                        e.here,
+                        e.span.clone(),
+                        format!("{m} (stdglue {}, {})", e.handler.name(), remap.origin),
+                    ))
+                }
+            }
+        }
         if frame.locals {
             let p = &mut self.interp.params;
             for (k, v) in frame.saved.iter().enumerate() {
@@ -793,18 +839,6 @@ impl Moves {
             self.interp.restore(&saved);
         }
         self.resume = frame.resume;
-        if frame.change_epilog {
-            // stdglue change_epilog: a positive return value completes the change; the
-            // others abort the program (M6 aborted), which mtsim reports as an error.
-            if value.is_some_and(|v| v > 0.0) {
-                self.interp.complete_tool_change();
-            } else {
-                self.abort = Some(format!(
-                    "M6 aborted: the tool-change subroutine returned {} (stdglue change_epilog expects a value > 0)",
-                    value.map_or("no value".into(), |v| v.to_string())
-                ));
-            }
-        }
         self.loops.truncate(frame.loops);
         self.ifs.truncate(frame.ifs);
         let p = &mut self.interp.params;
@@ -1318,13 +1352,12 @@ impl Moves {
                 return Err(e);
             }
         }
-        if let Some(message) = self.abort.take() {
+        if let Some((here, span, message)) = self.abort.take() {
             self.finished = true;
-            return Err(self.error_at(
-                self.cursor,
-                LineError::new(0..0, message, "tool change aborted"),
-                "",
-            ));
+            return Err(self.error_at(here, LineError::new(span, message, "remap epilog"), ""));
+        }
+        if let Some(c) = self.commit.take() {
+            self.interp.glue_commit(&c);
         }
         if let Some(r) = self.resume.take() {
             let line = r.line.as_str();
@@ -1339,7 +1372,19 @@ impl Moves {
                 })
                 .collect();
             let next = self.cursor;
-            return self.run_block(line, &words, r.here, next).map_err(|e| {
+            // The rest of the block may hold further remapped codes (`S300 M3 F50` with S
+            // and F remapped: F, then S, then M3).
+            let split = if self.remaps.is_empty() {
+                Ok(None)
+            } else {
+                let busy: Vec<usize> = self.frames.iter().filter_map(|f| f.remap).collect();
+                crate::remap::split(&self.remaps, &words, line, &busy, None)
+            };
+            let result = split.and_then(|s| match s {
+                Some(s) => self.run_remap(line, &words, s, r.here, next),
+                None => self.run_block(line, &words, r.here, next),
+            });
+            return result.map_err(|e| {
                 self.finished = true;
                 self.error_at(r.here, e, line)
             });
@@ -1472,7 +1517,21 @@ impl Moves {
                     None
                 } else {
                     let busy: Vec<usize> = self.frames.iter().filter_map(|f| f.remap).collect();
-                    crate::remap::split(&self.remaps, &words, line, &busy)?
+                    if !busy.is_empty() && crate::remap::uses_builtin(&self.remaps, &words, &busy) {
+                        if let Some(e) = self
+                            .frames
+                            .iter_mut()
+                            .rev()
+                            .find(|f| f.remap.is_some())
+                            .and_then(|f| f.epilog.as_mut())
+                        {
+                            e.builtin_used = true;
+                        }
+                    }
+                    if self.modal_remap.is_some() && crate::remap::sets_motion(&words) {
+                        self.modal_remap = None;
+                    }
+                    crate::remap::split(&self.remaps, &words, line, &busy, self.modal_remap)?
                 };
                 let result = match remap {
                     Some(s) => self.run_remap(line, &words, s, here, next),
@@ -1495,21 +1554,22 @@ impl Moves {
         next: Cursor,
     ) -> LineResult<()> {
         let remap = self.remaps[s.remap].clone();
-        let name = &line[s.span.clone()];
-        // LinuxCNC's stdglue M6 handlers are known: `change_prolog` passes the tool and
-        // pocket parameters, `change_epilog` changes the tool when the subroutine returns a
-        // positive value. Other Python handlers cannot be run.
-        let stdglue_change = remap.code == RemapCode::M(6)
-            && remap.prolog.as_deref() == Some("change_prolog")
-            && remap.epilog.as_deref() == Some("change_epilog")
-            && remap.ngc.is_some();
-        if let (false, Some(handler)) = (
-            stdglue_change,
-            remap.prolog.as_ref().or(remap.epilog.as_ref()),
-        ) {
-            return Err(LineError::new(s.span.clone(), format!("`{name}` is remapped ({}) with the Python prolog/epilog `{handler}` around its subroutine: mtsim runs no Python, and such handlers set the parameters the subroutine reads", remap.origin), "Python remap")
-                .help("remap the code without prolog= and epilog=, or remove it from the program"));
+        let name = if s.explicit {
+            line[s.span.clone()].to_string()
+        } else {
+            format!(
+                "{} (the modal cycle, called again by axis words)",
+                remap.code
+            )
+        };
+        // Python prolog/epilog handlers: LinuxCNC's stdglue ones are emulated
+        // (crate::stdglue); others cannot be run.
+        if let Some(why) = &remap.handlers_refused {
+            return Err(LineError::new(s.span.clone(), format!("`{name}` is remapped ({}) with Python prolog/epilog handlers around its subroutine: {why}; mtsim runs no Python, and such handlers set the parameters the subroutine reads", remap.origin), "Python remap")
+                .help("remap the code with LinuxCNC's stdglue handlers or without prolog= and epilog=, or remove it from the program"));
         }
+        let glue = |h: &Option<String>| h.as_deref().and_then(crate::stdglue::Handler::named);
+        let (prolog, epilog) = (glue(&remap.prolog), glue(&remap.epilog));
         let pick = |idx: &[usize]| idx.iter().map(|&k| words[k]).collect::<Vec<_>>();
         let before = pick(&s.before);
         if !before.is_empty() {
@@ -1525,6 +1585,9 @@ impl Moves {
                 self.remaps_noticed.push(s.remap);
                 self.notices.push(Notice { path: self.programs[here.file].path.clone(), line: here.line, message: format!("{} is remapped ({}) to the Python function `{}`, which does not move the machine: accepted and not run", remap.code, remap.origin, remap.python.as_deref().unwrap_or("")) });
             }
+            if remap.python_keeps_motion {
+                self.modal_remap = Some(s.remap);
+            }
             return if after.is_empty() {
                 Ok(())
             } else {
@@ -1539,20 +1602,43 @@ impl Moves {
         } else {
             Vec::new()
         };
-        let change = if stdglue_change {
-            let Some(p) = self.interp.tool_change_parameters() else {
-                return Err(LineError::new(s.span.clone(), format!("`{name}`: no tool prepared (stdglue change_prolog, {}): expected a T word before it", remap.origin), "no tool prepared"));
-            };
-            Some(p)
-        } else {
-            None
+        let set = match prolog {
+            None => Vec::new(),
+            Some(h) => {
+                let change = if h == crate::stdglue::Handler::ChangeProlog {
+                    self.interp.tool_change_parameters()
+                } else {
+                    None
+                };
+                let interp = &self.interp;
+                let call = crate::stdglue::Call {
+                    code: remap.code,
+                    value: s.value,
+                    q: s.q,
+                    words: &s.args,
+                    explicit: s.explicit,
+                    cycle_typeerror: remap.cycle_prolog_typeerror,
+                };
+                crate::stdglue::prolog(
+                    h,
+                    &call,
+                    s.remap,
+                    interp.glue_view(),
+                    &mut self.sticky,
+                    &|n| interp.glue_pocket(n),
+                    &|n| interp.params.numbered.get(n).copied().unwrap_or(0.0),
+                    change,
+                )
+                .map_err(|m| {
+                    LineError::new(
+                        s.span.clone(),
+                        format!("`{name}`: {m} (stdglue {}, {})", h.name(), remap.origin),
+                        "remap prolog",
+                    )
+                })?
+            }
         };
         self.call(label, &positional, true, 1, next, s.span.clone())?;
-        if let (Some(p), Some(locals)) = (change, self.interp.params.locals.last_mut()) {
-            for (k, v) in p {
-                locals.insert(k.to_string(), v);
-            }
-        }
         if !remap.positional() {
             if let Some(locals) = self.interp.params.locals.last_mut() {
                 for (letter, v) in &s.args {
@@ -1560,10 +1646,23 @@ impl Moves {
                 }
             }
         }
+        if let Some(locals) = self.interp.params.locals.last_mut() {
+            for (k, v) in set {
+                locals.insert(k, v);
+            }
+        }
         let base = line.as_ptr() as usize;
         let frame = self.frames.last_mut().expect("just called");
         frame.remap = Some(s.remap);
-        frame.change_epilog = stdglue_change;
+        frame.epilog = epilog.map(|handler| {
+            Box::new(Epilog {
+                handler,
+                remap: s.remap,
+                builtin_used: false,
+                here,
+                span: s.span.clone(),
+            })
+        });
         if !after.is_empty() {
             frame.resume = Some(Resume {
                 here,

@@ -1378,7 +1378,7 @@ impl Moves {
                 Ok(None)
             } else {
                 let busy: Vec<usize> = self.frames.iter().filter_map(|f| f.remap).collect();
-                crate::remap::split(&self.remaps, &words, line, &busy, None)
+                crate::remap::split(&self.remaps, &words, line, &busy, self.modal_remap)
             };
             let result = split.and_then(|s| match s {
                 Some(s) => self.run_remap(line, &words, s, r.here, next),

@@ -620,6 +620,9 @@ pub(crate) fn split(
                 _ => u8::MAX,
             };
             word_step < step
+        } else if step == 30 {
+            // A remapped stop (M0 M1 M60) comes last: the block's motion first.
+            true
         } else {
             match w.letter {
                 'F' | 'S' | 'T' | '$' | 'N' => true,
@@ -732,5 +735,38 @@ mod modal {
             .unwrap();
         assert_eq!(ends, [[1.0, 0.0], [5.0, 0.0], [5.0, 6.0]]);
         assert!(moves.notices()[0].message.contains("`g842`"));
+    }
+}
+
+#[cfg(test)]
+mod stops {
+    use crate::{read_str_with, Axis, Dialect, Options};
+    use std::path::Path;
+
+    /// A remapped M0 (group 4, the extend-builtins example) runs after the block's motion,
+    /// as the built-in stop would; inside its subroutine `M0` is the built-in stop.
+    #[test]
+    fn a_remapped_stop_runs_after_the_blocks_motion() {
+        let dir = std::env::temp_dir().join(format!("ngc-remap-m0-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("extend_m0.ngc"),
+            "o<extend_m0> sub\nG0 Z9\nM0\no<extend_m0> endsub\n",
+        )
+        .unwrap();
+        let o = Options {
+            dialect: Dialect::Linuxcnc,
+            search_path: vec![dir.clone()],
+            remaps: vec![
+                super::parse_remap("M0 modalgroup=4 ngc=extend_m0", String::new()).unwrap(),
+            ],
+            ..Options::default()
+        };
+        let ends: Vec<[f64; 2]> = read_str_with(Path::new("p.ngc"), "G0 X1 M0\nG0 X2\n", &o)
+            .map(|m| m.map(|m| [m.end[Axis::X], m.end[Axis::Z]]))
+            .collect::<Result<_, _>>()
+            .unwrap();
+        assert_eq!(ends, [[1.0, 0.0], [1.0, 9.0], [2.0, 9.0]]);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -471,8 +471,8 @@ fn refuse_what_the_layout_cannot_give(
         Some("the cone-frustum test's ball bar ([program.cone])")
     } else if file.program.circle.is_some() {
         Some("the circular test's ball bar ([program.circle])")
-    } else if file.reader.tcp {
-        Some("tool-centre-point control ([reader] tcp)")
+    } else if file.reader.tcp || file.simulate.tcp {
+        Some("tool-centre-point control (TCP: [reader] tcp or [simulate] tcp)")
     } else {
         None
     };

@@ -276,33 +276,55 @@ fn a_lathe_reads_x_and_z_refuses_y_and_checks_its_travel() {
 
 #[test]
 fn a_fourth_axis_part_point_under_tcp_follows_rx_of_a() {
-    // Millturn in mill mode, pivot 0: under TCP the tip stays on part point (0, 0, -100)
-    // while A turns 0 -> 60, so Y = 100 sin A (max 86.6025 at A = 60) and
-    // Z = -100 cos A (from -100 to -50).
+    // Millturn in mill mode, pivot (-290, 0, -160): under TCP the tip stays on part point
+    // (0, 0, 60) while A turns 0 -> 60, so X = -290, Y = -60 sin A (min -51.9615 at
+    // A = 60) and Z = -160 + 60 cos A (from -100 to -130).
     let out = run(
         "millturn-tcp",
         "millturn",
-        "G21 G90\nG1 F1000 X0 Y0 Z-100\nG1 A60\nM2\n",
+        "G21 G90\nG1 F1000 X0 Y0 Z60\nG1 A60\nM2\n",
         "[reader]\ntcp = true\n[check]\ncollisions = false",
         &["check", "--json"],
     );
     let v = stdout_json(&out);
     let (y, z) = (&v["axes"]["Y"], &v["axes"]["Z"]);
-    let y_max = 100.0 * 60f64.to_radians().sin();
-    assert!((y["max"].as_f64().unwrap() - y_max).abs() < 1e-6, "{y}");
-    assert!((z["min"].as_f64().unwrap() + 100.0).abs() < 1e-6, "{z}");
-    assert!((z["max"].as_f64().unwrap() + 50.0).abs() < 1e-6, "{z}");
-    // The collision scene on: the chuck turns with A; the check runs to a verdict.
-    let scene = run(
-        "millturn-scene",
+    let y_min = -60.0 * 60f64.to_radians().sin();
+    assert!((y["min"].as_f64().unwrap() - y_min).abs() < 1e-6, "{y}");
+    assert!((z["max"].as_f64().unwrap() + 100.0).abs() < 1e-6, "{z}");
+    assert!((z["min"].as_f64().unwrap() + 130.0).abs() < 1e-6, "{z}");
+    assert!(
+        (v["axes"]["X"]["max"].as_f64().unwrap() + 290.0).abs() < 1e-9,
+        "{v}"
+    );
+}
+
+#[test]
+fn a_fourth_axis_chuck_turns_with_a_in_the_collision_scene() {
+    // The stand-in chuck: radius 50 about the A line (Y = 0, Z = -160), face at X = -290
+    // toward +X, 60 thick. A tool tip 20 mm in front of the face clears it while A turns;
+    // a tip on the A line 10 mm behind the face is inside the chuck.
+    let clear = run(
+        "millturn-clear",
         "millturn",
-        "G21 G90\nG0 X0 Y0 Z-10\nG1 F1000 A90\nM2\n",
+        "G21 G90\nG0 X-270 Y0 Z-160\nG1 F1000 A90\nM2\n",
         "",
         &["check"],
     );
-    assert!(
-        matches!(scene.status.code(), Some(0 | 1)),
-        "{}",
-        String::from_utf8_lossy(&scene.stderr)
+    assert_eq!(
+        clear.status.code(),
+        Some(0),
+        "{}{}",
+        String::from_utf8_lossy(&clear.stdout),
+        String::from_utf8_lossy(&clear.stderr)
     );
+    let inside = run(
+        "millturn-inside",
+        "millturn",
+        "G21 G90\nG0 X-300 Y0 Z-160\nG1 F1000 A90\nM2\n",
+        "",
+        &["check"],
+    );
+    let text = String::from_utf8_lossy(&inside.stdout);
+    assert_eq!(inside.status.code(), Some(1), "{text}");
+    assert!(text.contains("collision"), "{text}");
 }

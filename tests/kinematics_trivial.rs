@@ -10,7 +10,7 @@ use std::path::Path;
 
 use common::{scratch, stdout_json};
 use mtsim::input::machine::Machine;
-use mtsim::kinematics::{Branch, Kinematics, Layout, ToolPose};
+use mtsim::kinematics::{Branch, Kinematics, Layout, LocationErrors, LocationParam, ToolPose};
 use mtsim::{Axis, AxisVec};
 use nalgebra::{Point3, Vector3};
 
@@ -52,6 +52,24 @@ fn a_fourth_axis_turns_a_part_point_about_x_as_rx_of_a() {
         let iso = k.actual_table_pose(&a(deg));
         let via_pose = (iso * p).coords - pivot;
         assert!((via_pose - m).norm() < 1e-12, "A {deg}: {via_pose:?}");
+    }
+}
+
+#[test]
+fn a_fourth_axis_line_offset_in_z_moves_a_turned_point_by_twice_the_offset() {
+    // EZ0A = 100 um: the A line runs 0.1 mm above the pivot. The pivot point itself,
+    // turned 180 deg about that line, lands 0.2 mm above the pivot; at 90 deg it lands at
+    // (0, 0.1, 0.1) from the pivot (Rx(90) takes -Z to +Y about the line's point).
+    let pivot = Vector3::new(0.0, 0.0, -160.0);
+    let k = Kinematics::new(Layout::Xyza, pivot)
+        .with_location_errors(LocationErrors::default().with(LocationParam::EZ0A, 100.0));
+    let origin = Point3::origin();
+    for (deg, expected) in [(180.0, [0.0, 0.0, 0.2]), (90.0, [0.0, 0.1, 0.1])] {
+        let m = k.actual_table_to_machine(&a(deg), &origin).coords - pivot;
+        assert!(
+            (m - Vector3::from(expected)).norm() < 1e-12,
+            "A {deg}: {m:?}"
+        );
     }
 }
 

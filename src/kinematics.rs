@@ -43,6 +43,20 @@
 //! The secondary branch is `B = 180 deg - B`, `A + 180 deg`. A is unwrapped like C and
 //! kept when j = k = 0 (tool along the table's X axis, B = ±90 deg).
 //!
+//! # Trivial kinematics (LinuxCNC `trivkins`: each axis is its own joint)
+//!
+//! - xz (a lathe, COORDINATES = X Z): `m = (X, 0, Z)`, no rotaries.
+//! - xyza (a fourth axis, COORDINATES = X Y Z A): A turns the part about the machine's X
+//!   axis through the pivot, `R = Rx(A)`, in the same direction as trt-ac's A (a point at
+//!   radius r on +Y goes to `(0, r cos A, r sin A)`). It has no cradle; A is its table axis.
+//!   The tool axis stays +Z: a tool axis t in the part frame is reached by
+//!   `A = atan2(j, k)` when `i = 0`.
+//! - xyzabc (six world coordinates, as LinuxCNC plans a robot's: puma, melfa): `R = I`,
+//!   the tool tip is the world X Y Z. A B C are the tool's orientation in the world, but the
+//!   robot's joints are not modelled, so nothing that needs the tool's orientation or the
+//!   joint motion is given: TCP, the ball bar and the collision scene are refused
+//!   ([`Layout::rotaries_unmodelled`]).
+//!
 //! # Nominal and actual
 //!
 //! The controller plans with the nominal chain above ([`Kinematics::table_to_machine`],
@@ -78,6 +92,19 @@ pub enum Layout {
     /// about the cradle's X; conventional directions (see the module docs).
     #[serde(rename = "trt-ab")]
     TrtAb,
+    /// Two linear axes X and Z (a lathe, LinuxCNC `trivkins coordinates=xz`): the tool tip
+    /// at (X, 0, Z).
+    #[serde(rename = "xz")]
+    Xz,
+    /// Three linear axes and a fourth axis A (LinuxCNC `trivkins`, COORDINATES = X Y Z A):
+    /// A turns the part about the machine's X axis through the pivot, `R = Rx(A)`.
+    #[serde(rename = "xyza")]
+    Xyza,
+    /// Six independent world axes X Y Z A B C, as LinuxCNC plans a robot's world
+    /// coordinates (puma, melfa): A B C are coordinates with no modelled chain (the
+    /// robot's joints are not modelled), so TCP, a ball bar and collisions are refused.
+    #[serde(rename = "xyzabc")]
+    Xyzabc,
 }
 
 impl Layout {
@@ -88,26 +115,44 @@ impl Layout {
             Layout::TrtAc => &[Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::C],
             Layout::TrtBc => &[Axis::X, Axis::Y, Axis::Z, Axis::B, Axis::C],
             Layout::TrtAb => &[Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::B],
+            Layout::Xz => &[Axis::X, Axis::Z],
+            Layout::Xyza => &[Axis::X, Axis::Y, Axis::Z, Axis::A],
+            Layout::Xyzabc => &Axis::ALL,
         }
     }
 
     /// The tilting axis, if any.
     pub fn tilt_axis(self) -> Option<Axis> {
         match self {
-            Layout::Xyz => None,
+            Layout::Xyz | Layout::Xz | Layout::Xyza | Layout::Xyzabc => None,
             Layout::TrtAc => Some(Axis::A),
             Layout::TrtBc => Some(Axis::B),
             Layout::TrtAb => Some(Axis::B),
         }
     }
 
-    /// The axis that turns the table on the cradle, if any: C, or A for trt-ab.
+    /// The axis that turns the table on the cradle, if any: C, or A for trt-ab and xyza
+    /// (which has no cradle: A turns the part about the machine's X).
     pub fn table_axis(self) -> Option<Axis> {
         match self {
-            Layout::Xyz => None,
+            Layout::Xyz | Layout::Xz | Layout::Xyzabc => None,
             Layout::TrtAc | Layout::TrtBc => Some(Axis::C),
-            Layout::TrtAb => Some(Axis::A),
+            Layout::TrtAb | Layout::Xyza => Some(Axis::A),
         }
+    }
+
+    /// True when the rotary axes are world coordinates with no modelled kinematic chain
+    /// (xyzabc): then nothing that needs the tool's orientation or the machine's joints
+    /// (TCP, a ball bar through the servo models, the collision scene) can be computed.
+    pub fn rotaries_unmodelled(self) -> bool {
+        self == Layout::Xyzabc
+    }
+
+    /// True when the collision scene (a milling tool along +Z, a table, a cradle) models
+    /// this machine: not a lathe (xz: a turning tool and chuck) nor xyzabc (the tool's
+    /// orientation is not modelled).
+    pub fn has_collision_scene(self) -> bool {
+        !matches!(self, Layout::Xz | Layout::Xyzabc)
     }
 
     /// +1 when a positive rotary command turns the table positively about its axis line's
@@ -125,6 +170,9 @@ impl Layout {
             Layout::TrtAc => "trt-ac",
             Layout::TrtBc => "trt-bc",
             Layout::TrtAb => "trt-ab",
+            Layout::Xz => "xz",
+            Layout::Xyza => "xyza",
+            Layout::Xyzabc => "xyzabc",
         }
     }
 }
@@ -204,6 +252,7 @@ impl Kinematics {
                     * self.actual_line(table).turn(sign * q[table])
                     * home
             }
+            (None, Some(table)) => self.actual_line(table).turn(sign * q[table]) * home,
             _ => home,
         }
     }
@@ -221,6 +270,7 @@ impl Kinematics {
                 let on_table = self.actual_line(table).turn_point(sign * q[table], &x);
                 self.actual_line(tilt).turn_point(sign * q[tilt], &on_table)
             }
+            (None, Some(table)) => self.actual_line(table).turn_point(sign * q[table], &x),
             _ => x,
         }
     }
@@ -272,7 +322,13 @@ impl Kinematics {
         // Rx(A) Rz(C), Ry(B) Rz(C) and Ry(-B) Rx(-A).
         let (sc, cc) = angles.c;
         let m = match self.layout {
-            Layout::Xyz => return Rotation3::identity(),
+            // xyzabc's rotaries carry no modelled chain: its tool tip is the world X Y Z.
+            Layout::Xyz | Layout::Xz | Layout::Xyzabc => return Rotation3::identity(),
+            Layout::Xyza => {
+                // Rx(A); the table axis (the `c` slot) is A.
+                let (sa, ca) = (sc, cc);
+                Matrix3::new(1.0, 0.0, 0.0, 0.0, ca, -sa, 0.0, sa, ca)
+            }
             Layout::TrtAb => {
                 // For trt-ab the table axis (the `c` slot) is A.
                 let (sa, ca) = (sc, cc);
@@ -352,6 +408,15 @@ impl Kinematics {
                 Branch::Secondary => 180.0 - b,
             };
             q[Axis::A] = a;
+        } else if self.layout == Layout::Xyza {
+            // Rx(A) t = z: t = Rx(-A) z = (0, sin A, cos A), so A = atan2(j, k) (reached
+            // exactly only when i = 0: a fourth axis cannot tilt the tool about Y).
+            let t = pose.axis.normalize();
+            q[Axis::A] = if t.y.hypot(t.z) < C_FREE_EPS {
+                previous_c_deg
+            } else {
+                unwrap_near(t.y.atan2(t.z).to_degrees(), previous_c_deg)
+            };
         } else if let Some(tilt_axis) = self.layout.tilt_axis() {
             let t = pose.axis.normalize();
             let tilt = t.z.clamp(-1.0, 1.0).acos().to_degrees();

@@ -71,6 +71,19 @@ pub fn validate(
                 ),
             ));
         };
+        if layout.rotaries_unmodelled() {
+            return Err(value_error(
+                path,
+                text,
+                section,
+                key,
+                format!(
+                    "the {} layout's rotaries are world coordinates with no modelled axis lines, \
+                     so they carry no location errors; remove this key",
+                    layout.name()
+                ),
+            ));
+        }
         if !layout.axes().contains(&param.axis()) {
             return Err(value_error(
                 path,

@@ -392,6 +392,7 @@ impl Scenario {
                 "a cone-frustum or ball-bar workpiece needs a [program.cone]".into(),
             ));
         }
+        refuse_what_the_layout_cannot_give(path, &file, &program, &machine)?;
         let reader = reader_options(path, &text, &file.reader, &machine)?;
         let tool_shapes = file
             .reader
@@ -420,6 +421,72 @@ impl Scenario {
             Program::File { cone, .. } => cone.as_ref(),
             Program::Circle { .. } => None,
         }
+    }
+}
+
+/// Refuses, with what to do instead, what a machine's layout cannot give: the generated
+/// cone-frustum test needs a tilting rotary table; a machine whose rotaries are world
+/// coordinates with no modelled chain (xyzabc, a robot's world axes) has no ball bar,
+/// circle or cone test, tool-centre-point control or collision scene.
+fn refuse_what_the_layout_cannot_give(
+    path: &Path,
+    file: &ScenarioFile,
+    program: &Program,
+    machine: &Machine,
+) -> Result<()> {
+    let layout = machine.kinematics.layout;
+    if matches!(program, Program::Cone { .. }) && layout.tilt_axis().is_none() {
+        return Err(Error::invalid(
+            path,
+            format!(
+                "[program.cone] needs a machine with a tilting rotary table, but {} has the {} layout",
+                machine.path.display(),
+                layout.name()
+            ),
+        )
+        .with_help("use a trt-ac, trt-bc or trt-ab machine (machines/trt-ac.toml), or a G-code `file`"));
+    }
+    if file.check.collisions && !layout.has_collision_scene() {
+        return Err(Error::invalid(
+            path,
+            format!(
+                "the collision scene ([check] collisions = true, the default) cannot be computed on {} ({} layout): {}",
+                machine.path.display(),
+                layout.name(),
+                if layout.rotaries_unmodelled() {
+                    "its A B C are world coordinates (a robot's, as LinuxCNC plans them) with no modelled kinematic chain, so the tool's orientation is unknown"
+                } else {
+                    "the scene models a milling tool along +Z, not a lathe's turning tool and chuck"
+                }
+            ),
+        )
+        .with_help("set [check] collisions = false: axis limits are still checked"));
+    }
+    if !layout.rotaries_unmodelled() {
+        return Ok(());
+    }
+    let asked = if file.ballbar.pivot_mm.is_some() {
+        Some("a ball bar ([ballbar] pivot_mm)")
+    } else if file.program.cone.is_some() {
+        Some("the cone-frustum test's ball bar ([program.cone])")
+    } else if file.program.circle.is_some() {
+        Some("the circular test's ball bar ([program.circle])")
+    } else if file.reader.tcp || file.simulate.tcp {
+        Some("tool-centre-point control (TCP: [reader] tcp or [simulate] tcp)")
+    } else {
+        None
+    };
+    match asked {
+        Some(what) => Err(Error::invalid(
+            path,
+            format!(
+                "{what} cannot be computed on {} ({} layout): its A B C are world coordinates (a robot's, as LinuxCNC plans them) with no modelled kinematic chain or joints",
+                machine.path.display(),
+                layout.name()
+            ),
+        )
+        .with_help("leave out [ballbar], [program.cone], [program.circle] and TCP: axis limits, timing and the trace are computed on the world axes")),
+        None => Ok(()),
     }
 }
 

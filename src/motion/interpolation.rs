@@ -255,8 +255,8 @@ const SAMPLES: usize = 16;
 fn table_to_machine(k: &Kinematics, q: &AxisVec, p: [f64; 3]) -> [f64; 3] {
     let [x, y, z] = p;
     let (x, y, z) = match k.layout {
-        Layout::Xyz => (x, y, z),
-        Layout::TrtAb => {
+        Layout::Xyz | Layout::Xz | Layout::Xyzabc => (x, y, z),
+        Layout::TrtAb | Layout::Xyza => {
             let m = k.table_rotation(q) * nalgebra::Vector3::new(x, y, z);
             (m.x, m.y, m.z)
         }
@@ -681,6 +681,15 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             }
         }
         let tcp = (b.tcp || self.options.force_tcp).then_some(self.kinematics);
+        if tcp.is_some() && self.kinematics.layout.rotaries_unmodelled() {
+            return Err(self.block_error(
+                b.line,
+                format!(
+                    "the block asks for tool-centre-point control (TCP), which this machine ({}) cannot give: its A B C are world coordinates with no modelled kinematic chain; expected no TCP (G43.4 or a `tcp-on` user M code) on this machine",
+                    self.kinematics.layout.name()
+                ),
+            ));
+        }
         let mut planned = Planned {
             line: b.line,
             index,
@@ -1152,7 +1161,15 @@ mod tests {
     fn written_out_table_rotation_matches_the_kinematics_module() {
         let q = AxisVec([0.0, 0.0, 0.0, 23.0, -41.0, 137.0]);
         let p = Point3::new(12.5, -7.25, 88.0);
-        for layout in [Layout::Xyz, Layout::TrtAc, Layout::TrtBc, Layout::TrtAb] {
+        for layout in [
+            Layout::Xyz,
+            Layout::TrtAc,
+            Layout::TrtBc,
+            Layout::TrtAb,
+            Layout::Xz,
+            Layout::Xyza,
+            Layout::Xyzabc,
+        ] {
             let k = Kinematics::new(layout, Vector3::new(1.0, -2.0, 3.0));
             let expected = k.table_to_machine(&q, &p);
             let got = table_to_machine(&k, &q, [p.x, p.y, p.z]);

@@ -8,6 +8,9 @@
 //!   target that is not a finite number. Sampled at 1 ms, `G01 X1e308` would take longer
 //!   than the universe is old; it is refused before the first sample.
 //!
+//! - a move under tool-centre-point control on a machine whose rotaries have no modelled
+//!   chain (xyzabc).
+//!
 //! A target outside the travel but within the envelope's length is not bad input: it is
 //! a travel violation, which `check` and `simulate` report with exit code 1.
 
@@ -76,6 +79,7 @@ pub fn checked(path: &Path, machine: &Machine, moves: Moves<'static>) -> Moves<'
         .collect();
     Box::new(Checked {
         path: path.to_path_buf(),
+        no_tcp: machine.kinematics.layout.rotaries_unmodelled(),
         limits,
         moves,
         moving: false,
@@ -86,6 +90,8 @@ pub fn checked(path: &Path, machine: &Machine, moves: Moves<'static>) -> Moves<'
 /// The stream of [`checked`].
 struct Checked {
     path: PathBuf,
+    /// The machine cannot give tool-centre-point control (xyzabc: no modelled chain).
+    no_tcp: bool,
     /// Per machine axis: envelope (mm or deg), travel min and max.
     limits: Vec<(Axis, f64, f64, f64)>,
     moves: Moves<'static>,
@@ -102,6 +108,25 @@ impl Checked {
     }
 
     fn check(&mut self, m: &Move) -> Result<()> {
+        if self.no_tcp && m.tcp {
+            let text = self.text();
+            let start = text
+                .split_inclusive('\n')
+                .take(m.line.saturating_sub(1))
+                .map(str::len)
+                .sum::<usize>();
+            let len = text[start..].lines().next().unwrap_or("").len();
+            return Err(Error::at(
+                &self.path,
+                &text,
+                start..start + len,
+                "this move runs under tool-centre-point control (TCP), which this machine (xyzabc \
+                 layout) cannot give: its A B C are world coordinates with no modelled kinematic \
+                 chain",
+                "TCP on",
+            )
+            .with_help("leave TCP off on this machine (no G43.4, no `tcp-on` user M code)"));
+        }
         for &(axis, envelope, min, max) in &self.limits {
             let (from, to) = (m.start[axis], m.end[axis]);
             let length = (to - from).abs();

@@ -610,7 +610,12 @@ fn measure(scene: &Scene, i: usize, poses: &[Pose; 4], warm: &mut Warm) -> f64 {
 fn in_table_frames(k: &Kinematics, q: &AxisVec, u: Vector3<f64>) -> [Vector3<f64>; 2] {
     use crate::kinematics::Layout;
     let cradle = match k.layout {
-        Layout::Xyz => return [u, u],
+        Layout::Xyz | Layout::Xz | Layout::Xyzabc => return [u, u],
+        Layout::Xyza => {
+            // Rx(A)^T u; no cradle.
+            let (s, c) = q[Axis::A].to_radians().sin_cos();
+            return [Vector3::new(u.x, c * u.y + s * u.z, -s * u.y + c * u.z), u];
+        }
         Layout::TrtAb => {
             // Ry(-B)^T u, then Rx(-A)^T.
             let (sb, cb) = q[Axis::B].to_radians().sin_cos();
@@ -648,7 +653,15 @@ mod tests {
 
     #[test]
     fn the_frames_written_out_equal_the_table_rotation() {
-        for layout in [Layout::Xyz, Layout::TrtAc, Layout::TrtBc, Layout::TrtAb] {
+        for layout in [
+            Layout::Xyz,
+            Layout::TrtAc,
+            Layout::TrtBc,
+            Layout::TrtAb,
+            Layout::Xz,
+            Layout::Xyza,
+            Layout::Xyzabc,
+        ] {
             let k = Kinematics::new(layout, Vector3::new(5.0, -3.0, 100.0));
             let mut q = AxisVec::ZERO;
             q[Axis::A] = 23.0;

@@ -18,7 +18,7 @@ use common::{machine, rs274, scratch};
 
 /// Fraction of standalone programs that `analyze` and `check` read, at least. The issue's
 /// goal is 0.90; this is the figure reached so far (raise it as the reader grows).
-const READ_FLOOR: f64 = 0.89;
+const READ_FLOOR: f64 = 0.90;
 
 /// Longest a single `analyze` or `check` may take before it counts as a hang.
 const TIMEOUT: Duration = Duration::from_secs(30);

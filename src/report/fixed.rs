@@ -125,13 +125,23 @@ pub fn push_fixed_bytes_const<const D: u32>(out: &mut Vec<u8>, v: f64) {
         push_fixed_bytes(out, v, D);
         return;
     }
-    let scaled = round_half_away(v * SCALE[d]);
+    // `round_half_away` in integers: `r` is the rounded scaled value, negative exactly
+    // where `push_fixed_bytes` writes a sign (a value that rounds to -0 has none).
+    let x = v * SCALE[d];
     // Not finite or too large: NaN fails the comparison too.
-    if !(scaled.abs() < 9.0e15) {
+    if !(x.abs() < 9.0e15) {
         let _ = std::io::Write::write_fmt(out, format_args!("{v:.*}", d));
         return;
     }
-    let n = scaled.abs() as u64;
+    let t = x as i64;
+    let f = x - t as f64;
+    let r = t + (f >= 0.5) as i64 - (f <= -0.5) as i64;
+    let n = r.unsigned_abs();
+    if n >= 9_000_000_000_000_000 {
+        let _ = std::io::Write::write_fmt(out, format_args!("{v:.*}", d));
+        return;
+    }
+    let negative = r < 0;
     let (mut int, mut frac) = (n / POW[d], n % POW[d]);
     const FIELD_END: usize = 32;
     let mut buf = [b'0'; 2 * FIELD_END];
@@ -180,7 +190,7 @@ pub fn push_fixed_bytes_const<const D: u32>(out: &mut Vec<u8>, v: f64) {
         at -= 1;
         buf[at] = b'0' + int as u8;
     }
-    if scaled < 0.0 {
+    if negative {
         at -= 1;
         buf[at] = b'-';
     }

@@ -652,8 +652,7 @@ impl AxisServo {
         if v_cached.to_bits() == v.to_bits() {
             return (g, decay);
         }
-        let (g, decay) =
-            stribeck_bound_decay(v, self.coulomb, self.static_friction, self.stribeck);
+        let (g, decay) = stribeck_bound_decay(v, self.coulomb, self.static_friction, self.stribeck);
         self.bound_cache.set((v, g, decay));
         (g, decay)
     }
@@ -807,7 +806,60 @@ impl AxisServo {
         }
         self.setpoint = s_new;
         self.v_ff = v_ff;
+        self.end_period(s_new, x_t_old, time_s)
+    }
 
+    /// [`AxisServo::advance`] for a linear twin (no dry friction, backlash or pre-sliding,
+    /// cascade model) with its period map inlined into the caller: the same arithmetic, the
+    /// same state and the same checks as `advance`, which it falls back to (state untouched)
+    /// wherever the map does not apply; any other axis goes to `advance` at once.
+    #[inline(always)]
+    pub fn advance_twin(&mut self, setpoint: f64, time_s: f64) -> Result<()> {
+        let limit = 0.5 * self.force_limit;
+        let map = match self.exact.as_deref() {
+            Some(exact) if exact.lti && setpoint.is_finite() && self.force.abs() <= limit => {
+                exact.maps[0].get()
+            }
+            _ => None,
+        };
+        let Some(map) = map else {
+            return self.advance(setpoint, time_s);
+        };
+        let s_new = setpoint * self.scale;
+        let s_old = self.setpoint;
+        let v_ff = (s_new - s_old) * self.inv_t_ipo;
+        let a_ff = (v_ff - self.v_ff) * self.inv_t_ipo;
+        let f_ff = self.aff_mass * a_ff;
+        let x = [
+            self.x_m - s_old,
+            self.v_m,
+            self.x_t - s_old,
+            self.v_t,
+            self.force,
+            self.integral,
+            self.x_m_tick - s_old,
+        ];
+        let y = map.apply_without_friction(&x, s_new - s_old, f_ff);
+        if y[4].abs() > limit {
+            return self.advance(setpoint, time_s);
+        }
+        let x_t_old = self.x_t;
+        self.x_m = y[0] + s_old;
+        self.v_m = y[1];
+        self.x_t = y[2] + s_old;
+        self.v_t = y[3];
+        self.force = y[4];
+        self.integral = y[5];
+        self.x_m_tick = y[6] + s_old;
+        self.periods_exact += 1;
+        self.setpoint = s_new;
+        self.v_ff = v_ff;
+        self.end_period(s_new, x_t_old, time_s)
+    }
+
+    /// The divergence checks after a period and the velocity it leaves.
+    #[inline(always)]
+    fn end_period(&mut self, s_new: f64, x_t_old: f64, time_s: f64) -> Result<()> {
         // `v - v` is 0 for a finite v and NaN otherwise: the sum is 0 exactly when every
         // state variable is finite (one comparison instead of six).
         let probe = (self.x_m - self.x_m)

@@ -318,7 +318,15 @@ mod tests {
             // Values from 1e-9 to 1e13 of both signs, halves, zeros, non-finite.
             x = (x * 7.31 + 0.37).fract();
             let v = (x - 0.5) * 10f64.powi(k % 23 - 9);
-            for v in [v, -v, (v * 1e4).round() / 1e4 + 0.5e-4, 0.0, -0.0, f64::NAN, 1e300] {
+            for v in [
+                v,
+                -v,
+                (v * 1e4).round() / 1e4 + 0.5e-4,
+                0.0,
+                -0.0,
+                f64::NAN,
+                1e300,
+            ] {
                 both::<0>(v);
                 both::<4>(v);
                 both::<6>(v);

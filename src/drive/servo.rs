@@ -945,6 +945,7 @@ impl AxisServo {
 
     /// Cascade model over one interpolation period: `n_servo` controller ticks, each followed
     /// by `n_sub` mechanics substeps under the held force command.
+    #[inline(always)]
     fn step_cascade(&mut self, s_old: f64, s_new: f64, v_ff: f64, a_ff: f64) {
         let f_ff = self.aff_mass * a_ff;
         if self.try_exact_period(s_old, s_new, f_ff) {

@@ -12,7 +12,8 @@
 //!   and the geometric queries made.
 //!
 //! `MTSIM_BENCH_SMOKE=1` runs each simulate case once and skips the rest (a CI smoke run);
-//! `MTSIM_BENCH_ONLY=off` runs only the simulate cases whose name contains `off`.
+//! `MTSIM_BENCH_ONLY=off` runs only the simulate cases whose name contains `off`;
+//! `MTSIM_BENCH_RUNS=N` runs each simulate case N times (for profiling).
 //! It prints figures; it asserts nothing (timing is not a test).
 
 use std::path::{Path, PathBuf};
@@ -153,7 +154,10 @@ fn main() {
     let dir = scratch("run");
 
     let smoke = std::env::var("MTSIM_BENCH_SMOKE").is_ok_and(|v| !v.is_empty() && v != "0");
-    let runs = if smoke { 1 } else { 7 };
+    let runs = std::env::var("MTSIM_BENCH_RUNS")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(if smoke { 1 } else { 7 });
 
     // 1. simulate, all nonlinearities on: full trace, decimated, off; fine against coarse.
     let base = all_nonlinear(&dir);

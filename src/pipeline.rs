@@ -179,7 +179,9 @@ pub fn run(
                     linear: twin,
                 };
                 emit(&sample, &mut stats)?;
-                last = Some(sample);
+                if settle {
+                    last = Some(sample);
+                }
             }
             // The setpoints end at rest, the axes not yet: hold the last setpoint until
             // every axis has settled, for at most SETTLE_S.

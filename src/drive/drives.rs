@@ -73,11 +73,11 @@ impl Drives {
     }
 
     /// [`Drives::step`] for the actual positions alone (mm and deg), as the linear twins
-    /// need them.
+    /// need them (with their period map inlined: [`AxisServo::advance_twin`]).
     pub fn step_actual(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<AxisVec> {
         let mut actual = *setpoint;
         for (servo, &a) in self.servos.iter_mut().zip(self.axes) {
-            servo.advance(setpoint[a], time_s)?;
+            servo.advance_twin(setpoint[a], time_s)?;
             actual[a] = servo.actual();
         }
         Ok(actual)

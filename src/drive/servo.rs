@@ -145,7 +145,10 @@ pub struct AxisServo {
     /// The last friction bound the regime check computed, `(v, g(v))`: the check at a
     /// period's end and the one at the next period's start see the same table velocity, so
     /// `g` (an `exp`) is evaluated once for both.
-    bound_cache: Cell<(f64, f64)>,
+    bound_cache: Cell<(f64, f64, f64)>,
+    /// The regime found at the end of the last period, when that period took the map (the
+    /// start of the next one).
+    carried_regime: Option<Regime>,
     /// Table velocity after the last period, SI (first-order: its mean over the period).
     velocity_si: f64,
     /// Interpolation periods advanced by the affine map, and by substeps.
@@ -194,6 +197,9 @@ struct Regime {
     speed: f64,
     push: f64,
     bound: f64,
+    /// `exp(-(v_t/vs)²)` where the bound needed it (0 beyond the Stribeck cut-off), for
+    /// the friction's slope.
+    decay: f64,
     mt_over_h: f64,
 }
 
@@ -265,7 +271,7 @@ struct ExactMaps {
 const SLOPE_STEPS: usize = 64;
 
 impl PeriodMap {
-    #[inline]
+    #[inline(always)]
     fn apply(
         &self,
         x: &[f64; N_STATE],
@@ -277,18 +283,34 @@ impl PeriodMap {
         let input = [
             x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff, friction, offset,
         ];
+        self.dispatch(&input)
+    }
+
+    /// [`PeriodMap::apply`] without friction and contact offset (both 0): the map's first
+    /// nine columns. The same result as `apply(x, ds, f_ff, 0.0, 0.0)`: adding `c · 0 = ±0`
+    /// to a sum leaves it unchanged unless the sum is `-0`, which a sum that starts at `+0`
+    /// never is.
+    #[inline(always)]
+    fn apply_without_friction(&self, x: &[f64; N_STATE], ds: f64, f_ff: f64) -> [f64; N_STATE] {
+        let input = [x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff];
+        self.dispatch(&input)
+    }
+
+    #[inline(always)]
+    fn dispatch<const N: usize>(&self, input: &[f64; N]) -> [f64; N_STATE] {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU has AVX, checked at run time just above.
-            return unsafe { self.product_avx(&input) };
+            return unsafe { self.product_avx(input) };
         }
-        self.product(&input)
+        self.product(input)
     }
 
     /// The product, column by column (the same multiplications and additions in the same
-    /// order whatever the vector width, so the result does not depend on the CPU).
+    /// order whatever the vector width, so the result does not depend on the CPU), over the
+    /// first `N` columns.
     #[inline(always)]
-    fn product(&self, input: &[f64; N_INPUT]) -> [f64; N_STATE] {
+    fn product<const N: usize>(&self, input: &[f64; N]) -> [f64; N_STATE] {
         let mut acc = [0.0; 8];
         for (col, &u) in self.cols.iter().zip(input) {
             for (a, c) in acc.iter_mut().zip(col) {
@@ -302,7 +324,7 @@ impl PeriodMap {
     /// change the result), chosen at run time so that the build stays portable.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    unsafe fn product_avx(&self, input: &[f64; N_INPUT]) -> [f64; N_STATE] {
+    unsafe fn product_avx<const N: usize>(&self, input: &[f64; N]) -> [f64; N_STATE] {
         self.product(input)
     }
 }
@@ -419,7 +441,8 @@ impl AxisServo {
                 r.fully_closed.unwrap_or(false),
             ),
             exact: None,
-            bound_cache: Cell::new((0.0, r.coulomb.1 * r.static_ratio)),
+            bound_cache: Cell::new((0.0, r.coulomb.1 * r.static_ratio, 1.0)),
+            carried_regime: None,
             velocity_si: 0.0,
             periods_exact: 0,
             periods_substepped: 0,
@@ -543,7 +566,8 @@ impl AxisServo {
         let d = x_m - x_t;
         let hb = self.half_backlash;
         let offset = if hb > 0.0 {
-            let side = d.signum();
+            // d ≠ 0 wherever `side` is used (|d| > hb below).
+            let side = if d < 0.0 { -1.0 } else { 1.0 };
             let f_spring = self.stiffness * (d - side * hb) + self.damping * (v_m - v_t);
             // In contact, pushing, and not about to open the gap.
             if d.abs() <= hb || side * f_spring <= 0.0 {
@@ -561,6 +585,7 @@ impl AxisServo {
                 speed: 0.0,
                 push: 0.0,
                 bound: 0.0,
+                decay: 0.0,
                 mt_over_h: 0.0,
             });
         }
@@ -570,14 +595,16 @@ impl AxisServo {
             return None;
         }
         let f_spring = self.stiffness * (d - offset) + self.damping * (v_m - v_t);
-        let side = v_t.signum();
+        let side = if v_t < 0.0 { -1.0 } else { 1.0 }; // v_t ≠ 0 here
+        let (bound, decay) = self.friction_bound_cached(v_t);
         Some(Regime {
             side,
             offset,
             dry: true,
             speed: v_t.abs(),
             push: side * (self.mt_over_h * v_t + f_spring),
-            bound: self.friction_bound_cached(v_t),
+            bound,
+            decay,
             mt_over_h: self.mt_over_h,
         })
     }
@@ -603,7 +630,7 @@ impl AxisServo {
             self.integral,
             self.x_m_tick - s_old,
         ];
-        let y = map.apply(&x, s_new - s_old, f_ff, 0.0, 0.0);
+        let y = map.apply_without_friction(&x, s_new - s_old, f_ff);
         if y[4].abs() > limit {
             return false;
         }
@@ -617,16 +644,17 @@ impl AxisServo {
         true
     }
 
-    /// [`AxisServo::friction_bound`] through `bound_cache`.
-    #[inline]
-    fn friction_bound_cached(&self, v: f64) -> f64 {
-        let (v_cached, g) = self.bound_cache.get();
+    /// [`AxisServo::friction_bound`] through `bound_cache`, with the `exp(-(v/vs)²)` it
+    /// took (see [`stribeck_bound_decay`]).
+    #[inline(always)]
+    fn friction_bound_cached(&self, v: f64) -> (f64, f64) {
+        let (v_cached, g, decay) = self.bound_cache.get();
         if v_cached.to_bits() == v.to_bits() {
-            return g;
+            return (g, decay);
         }
-        let g = self.friction_bound(v);
-        self.bound_cache.set((v, g));
-        g
+        let (g, decay) = stribeck_bound_decay(v, self.coulomb, self.static_friction, self.stribeck);
+        self.bound_cache.set((v, g, decay));
+        (g, decay)
     }
 
     /// One period by the exact map when the state is in a linear regime at both its ends and
@@ -652,8 +680,15 @@ impl AxisServo {
         let dv_guess = ((s_new - s_old) * self.inv_t_ipo - self.v_ff).abs();
         // The end-point check below asks for at least twice this margin at x: ask it now, so
         // that x needs no second check unless the period's own velocity change is larger.
-        let Some(regime) = self.linear_regime(&x) else {
-            return false;
+        // The previous period's end check, when it took the map: the same state, so the
+        // same regime (its spring force from the positions relative to the previous
+        // setpoint, which can differ from these in the last bit).
+        let regime = match self.carried_regime.take() {
+            Some(regime) => regime,
+            None => match self.linear_regime(&x) {
+                Some(regime) => regime,
+                None => return false,
+            },
         };
         if !regime.admits(2.0 * dv_guess) {
             return false;
@@ -666,12 +701,9 @@ impl AxisServo {
             (-regime.side * regime.bound, 0.0, 0)
         } else {
             let u = v0.abs() * exact.inv_stribeck;
-            // Beyond u² = 40 the substep model's g(v) is Fc exactly (see `stribeck_bound`).
-            let slope = if u * u > 40.0 {
-                0.0
-            } else {
-                2.0 * exact.delta_friction * u * exact.inv_stribeck * (-(u * u)).exp()
-            };
+            // The exp of the friction bound at v0 (0 beyond u² = 40, where the substep
+            // model's g(v) is Fc exactly: see `stribeck_bound`).
+            let slope = 2.0 * exact.delta_friction * u * exact.inv_stribeck * regime.decay;
             let index = round_index(slope / exact.slope_step, SLOPE_STEPS);
             (-regime.side * regime.bound, slope, index)
         };
@@ -680,24 +712,28 @@ impl AxisServo {
         let y = map.apply(&x, s_new - s_old, f_ff, f0 - grid_slope * v0, regime.offset);
         let dv = 2.0 * (y[3] - x[3]).abs().max(dv_guess);
         if exact.slope_step > 0.0 && (v0.abs() - dv) * exact.inv_stribeck <= 40f64.sqrt() {
-            // e_F = |c - cᵢ| Δv + ½ max|f''| Δv².
-            let u_low = (v0.abs() - dv).max(0.0) * exact.inv_stribeck;
-            let k = if u_low >= 1.23 {
-                (4.0 * u_low * u_low - 2.0) * (-(u_low * u_low)).exp()
-            } else {
-                2.0
+            // e_F = |c - cᵢ| Δv + ½ max|f''| Δv², with k = max|f''| vs² / (Fs - Fc) ≤ 2:
+            // first with k = 2 (e_F grows with k, in floating point too), the exp of the
+            // sharper k only when that bound is not enough.
+            let error = |k: f64| {
+                let curvature = exact.delta_friction * exact.inv_stribeck * exact.inv_stribeck * k;
+                (slope - grid_slope).abs() * dv + 0.5 * curvature * dv * dv
             };
-            let curvature = exact.delta_friction * exact.inv_stribeck * exact.inv_stribeck * k;
-            let error = (slope - grid_slope).abs() * dv + 0.5 * curvature * dv * dv;
-            if error > exact.tolerance {
-                return false;
+            if error(2.0) > exact.tolerance {
+                let u_low = (v0.abs() - dv).max(0.0) * exact.inv_stribeck;
+                if u_low < 1.23
+                    || error((4.0 * u_low * u_low - 2.0) * (-(u_low * u_low)).exp())
+                        > exact.tolerance
+                {
+                    return false;
+                }
             }
         }
         if dv > 2.0 * dv_guess && !regime.admits(dv) {
             return false;
         }
         match self.linear_regime(&y) {
-            Some(end) if end.same(&regime) && end.admits(dv) => {}
+            Some(end) if end.same(&regime) && end.admits(dv) => self.carried_regime = Some(end),
             _ => return false,
         }
         self.x_m = y[0] + s_old;
@@ -754,6 +790,7 @@ impl AxisServo {
 
     /// [`AxisServo::step`] without forming its [`ServoState`] (read what is needed with
     /// [`AxisServo::actual`] and the like: each is a division).
+    #[inline]
     pub fn advance(&mut self, setpoint: f64, time_s: f64) -> Result<()> {
         if !setpoint.is_finite() {
             return Err(self.diverged(time_s, format!("the setpoint is not finite ({setpoint})")));
@@ -769,37 +806,75 @@ impl AxisServo {
         }
         self.setpoint = s_new;
         self.v_ff = v_ff;
+        self.end_period(s_new, x_t_old, time_s)
+    }
 
-        let finite = [
-            self.x_m,
+    /// [`AxisServo::advance`] for a linear twin (no dry friction, backlash or pre-sliding,
+    /// cascade model) with its period map inlined into the caller: the same arithmetic, the
+    /// same state and the same checks as `advance`, which it falls back to (state untouched)
+    /// wherever the map does not apply; any other axis goes to `advance` at once.
+    #[inline(always)]
+    pub fn advance_twin(&mut self, setpoint: f64, time_s: f64) -> Result<()> {
+        let limit = 0.5 * self.force_limit;
+        let map = match self.exact.as_deref() {
+            Some(exact) if exact.lti && setpoint.is_finite() && self.force.abs() <= limit => {
+                exact.maps[0].get()
+            }
+            _ => None,
+        };
+        let Some(map) = map else {
+            return self.advance(setpoint, time_s);
+        };
+        let s_new = setpoint * self.scale;
+        let s_old = self.setpoint;
+        let v_ff = (s_new - s_old) * self.inv_t_ipo;
+        let a_ff = (v_ff - self.v_ff) * self.inv_t_ipo;
+        let f_ff = self.aff_mass * a_ff;
+        let x = [
+            self.x_m - s_old,
             self.v_m,
-            self.x_t,
+            self.x_t - s_old,
             self.v_t,
             self.force,
             self.integral,
-        ]
-        .iter()
-        .all(|v| v.is_finite());
-        if !finite {
+            self.x_m_tick - s_old,
+        ];
+        let y = map.apply_without_friction(&x, s_new - s_old, f_ff);
+        if y[4].abs() > limit {
+            return self.advance(setpoint, time_s);
+        }
+        let x_t_old = self.x_t;
+        self.x_m = y[0] + s_old;
+        self.v_m = y[1];
+        self.x_t = y[2] + s_old;
+        self.v_t = y[3];
+        self.force = y[4];
+        self.integral = y[5];
+        self.x_m_tick = y[6] + s_old;
+        self.periods_exact += 1;
+        self.setpoint = s_new;
+        self.v_ff = v_ff;
+        self.end_period(s_new, x_t_old, time_s)
+    }
+
+    /// The divergence checks after a period and the velocity it leaves.
+    #[inline(always)]
+    fn end_period(&mut self, s_new: f64, x_t_old: f64, time_s: f64) -> Result<()> {
+        // `v - v` is 0 for a finite v and NaN otherwise: the sum is 0 exactly when every
+        // state variable is finite (one comparison instead of six).
+        let probe = (self.x_m - self.x_m)
+            + (self.v_m - self.v_m)
+            + (self.x_t - self.x_t)
+            + (self.v_t - self.v_t)
+            + (self.force - self.force)
+            + (self.integral - self.integral);
+        if probe != 0.0 {
             return Err(self.diverged(time_s, "the drive state is no longer finite".into()));
         }
         let fe = s_new - self.x_t;
         let fe_motor = s_new - self.x_m;
         if fe.abs() > self.fe_limit || fe_motor.abs() > self.fe_limit {
-            let unit = self.axis.unit();
-            let worst = if fe.abs() >= fe_motor.abs() {
-                fe
-            } else {
-                fe_motor
-            };
-            return Err(self.diverged(
-                time_s,
-                format!(
-                    "following error {:.4} {unit} exceeds the limit {:.4} {unit}",
-                    worst / self.scale,
-                    self.fe_limit / self.scale
-                ),
-            ));
+            return Err(self.following_error_exceeded(time_s, fe, fe_motor));
         }
         self.velocity_si = match self.model {
             Model::FirstOrder => (self.x_t - x_t_old) * self.inv_t_ipo,
@@ -808,6 +883,29 @@ impl AxisServo {
         Ok(())
     }
 
+    #[cold]
+    #[inline(never)]
+    fn following_error_exceeded(&self, time_s: f64, fe: f64, fe_motor: f64) -> Error {
+        {
+            let unit = self.axis.unit();
+            let worst = if fe.abs() >= fe_motor.abs() {
+                fe
+            } else {
+                fe_motor
+            };
+            self.diverged(
+                time_s,
+                format!(
+                    "following error {:.4} {unit} exceeds the limit {:.4} {unit}",
+                    worst / self.scale,
+                    self.fe_limit / self.scale
+                ),
+            )
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
     fn diverged(&self, time_s: f64, reason: String) -> Error {
         Error::Diverged {
             axis: self.axis,
@@ -847,12 +945,20 @@ impl AxisServo {
 
     /// Cascade model over one interpolation period: `n_servo` controller ticks, each followed
     /// by `n_sub` mechanics substeps under the held force command.
+    #[inline(always)]
     fn step_cascade(&mut self, s_old: f64, s_new: f64, v_ff: f64, a_ff: f64) {
         let f_ff = self.aff_mass * a_ff;
         if self.try_exact_period(s_old, s_new, f_ff) {
             self.periods_exact += 1;
             return;
         }
+        self.substep_period(s_old, s_new, v_ff, f_ff);
+    }
+
+    /// [`AxisServo::step_cascade`] by substeps, where the exact map does not apply (kept out
+    /// of line: the map takes 95-100 % of the periods).
+    #[inline(never)]
+    fn substep_period(&mut self, s_old: f64, s_new: f64, v_ff: f64, f_ff: f64) {
         self.periods_substepped += 1;
         let n = self.n_servo as f64;
         let inv_ts = 1.0 / self.t_servo;
@@ -937,18 +1043,26 @@ impl AxisServo {
 /// `Fc + (Fs - Fc) exp(-(v/vs)^2)`; with `vs = 0`, `Fs` at rest and `Fc` in motion.
 #[inline]
 fn stribeck_bound(v: f64, fc: f64, fs: f64, vs: f64) -> f64 {
+    stribeck_bound_decay(v, fc, fs, vs).0
+}
+
+/// [`stribeck_bound`] and the `exp(-(v/vs)²)` it took (1 at rest, 0 beyond the cut-off
+/// `(v/vs)² > 40`, where the bound is `Fc` exactly; unused without a Stribeck zone).
+#[inline]
+fn stribeck_bound_decay(v: f64, fc: f64, fs: f64, vs: f64) -> (f64, f64) {
     if fs == fc || v == 0.0 {
-        return fs;
+        return (fs, 1.0);
     }
     if vs <= 0.0 {
-        return fc;
+        return (fc, 0.0);
     }
     let u = v / vs;
     let u2 = u * u;
     if u2 > 40.0 {
-        fc
+        (fc, 0.0)
     } else {
-        fc + (fs - fc) * (-u2).exp()
+        let decay = (-u2).exp();
+        (fc + (fs - fc) * decay, decay)
     }
 }
 

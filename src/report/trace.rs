@@ -16,7 +16,7 @@ use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
 use super::files::temporary_path;
-use super::fixed::push_fixed_bytes;
+use super::fixed::push_fixed_bytes_const;
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::measure::{is_measured, BallbarRun, BarGeometry, BarReading};
@@ -158,8 +158,10 @@ impl TraceSink {
             row.extend_from_slice(&[s.commanded[a], s.actual[a], s.following_error[a]]);
         }
         row.extend_from_slice(&[r.nonlinear_um, r.deviation_um]);
-        for v in row.iter() {
-            self.held.extend_from_slice(&v.to_le_bytes());
+        let start = self.held.len();
+        self.held.resize(start + 8 * row.len(), 0);
+        for (bytes, v) in self.held[start..].chunks_exact_mut(8).zip(row.iter()) {
+            bytes.copy_from_slice(&v.to_le_bytes());
         }
         if self.held.len() >= RAW_IN_MEMORY {
             self.spill()?;
@@ -196,7 +198,8 @@ fn complete(
     let tmp = temporary_path(trace_path);
     let read_err = write_error(raw_path);
     let write_err = write_error(&tmp);
-    let mut out = BufWriter::new(File::create(&tmp).map_err(&write_err)?);
+    // Large writes: a 7 MB trace in a few system calls instead of one per 8 kB.
+    let mut out = BufWriter::with_capacity(1 << 20, File::create(&tmp).map_err(&write_err)?);
     writeln!(out, "{header}").map_err(&write_err)?;
     let centring = |d: Direction| {
         runs.iter()
@@ -227,19 +230,23 @@ fn complete(
         // The row is formatted once into one reused buffer: no allocation per value.
         line.clear();
         line.extend_from_slice(if cw_row { b"cw" } else { b"ccw" });
-        for (value, decimals) in [(v[1], 4), (v[2], 0), (theta, 4)] {
-            line.push(b',');
-            push_fixed_bytes(&mut line, value, decimals);
-        }
-        for k in 0..n_axes {
-            for (j, decimals) in [6, 6, 7].into_iter().enumerate() {
+        // Each column's decimal count known at compile time (unrolled digit loops).
+        macro_rules! field {
+            ($value:expr, $decimals:literal) => {
                 line.push(b',');
-                push_fixed_bytes(&mut line, v[4 + 3 * k + j], decimals);
-            }
+                push_fixed_bytes_const::<$decimals>(&mut line, $value);
+            };
+        }
+        field!(v[1], 4);
+        field!(v[2], 0);
+        field!(theta, 4);
+        for axis in v[4..width - 2].chunks_exact(3) {
+            field!(axis[0], 6);
+            field!(axis[1], 6);
+            field!(axis[2], 7);
         }
         for value in [v[width - 2], dev, centred] {
-            line.push(b',');
-            push_fixed_bytes(&mut line, value, 4);
+            field!(value, 4);
         }
         line.push(b'\n');
         out.write_all(&line).map_err(&write_err)?;

@@ -142,7 +142,9 @@ impl Analytic {
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Warm {
     gjk: Option<Vector>,
-    normal: Option<Vector>,
+    /// The certifying direction and the cylinder's centre it was found at, in the frustum's
+    /// frame.
+    normal: Option<(Vector, Vector)>,
 }
 
 /// The cutter/workpiece distance is measured from the cutter eroded by this much (mm), less
@@ -771,8 +773,12 @@ fn pair_distance(pair: &Pair, a: &Part, b: &Part, pa: &Pose, pb: &Pose, warm: &m
             half_height,
             radius,
         };
-        if let Some((d, n)) = frustum::signed_distance(&f, &cylinder, warm.normal) {
-            warm.normal = Some(n);
+        // The frustum is symmetric about its axis: the direction found last time, turned
+        // about the axis as far as the cylinder's centre has turned since, is nearly the
+        // one that certifies now (the table turns under the tool on the cone test).
+        let start = warm.normal.map(|(n, c)| f.turned(n, c, cylinder.c));
+        if let Some((d, n)) = frustum::signed_distance(&f, &cylinder, start) {
+            warm.normal = Some((n, cylinder.c));
             return d - skin;
         }
         warm.normal = None;

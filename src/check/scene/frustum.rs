@@ -97,6 +97,20 @@ impl Frustum {
         })
     }
 
+    /// Unit `n` turned about the axis by the angle from point `from` to point `to` (their
+    /// azimuths about the axis): `n_a a + (n·e) e' + (n·(a × e)) (a × e')`, with `e`, `e'`
+    /// the unit radial directions of `from` and `to`. `n` itself when either is on the axis.
+    pub fn turned(&self, n: Vector, from: Vector, to: Vector) -> Vector {
+        let (Some(e), Some(e2)) = (
+            unit_across(from - self.o, self.a),
+            unit_across(to - self.o, self.a),
+        ) else {
+            return n;
+        };
+        let (b, b2) = (self.a.cross(e), self.a.cross(e2));
+        self.a * n.dot(self.a) + e2 * n.dot(e) + b2 * n.dot(b)
+    }
+
     /// Signed distance of point `x` to the frustum, mm, and the outward unit normal of the
     /// nearest boundary feature.
     pub fn point_sd(&self, x: Vector) -> (f64, Vector) {

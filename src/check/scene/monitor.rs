@@ -139,6 +139,9 @@ struct PairState {
     synced: [f64; 3],
     /// Last measured signed distance, mm.
     last_mm: f64,
+    /// The value of σ before which the pair cannot be due (see [`SceneMonitor`]'s
+    /// `next_due`).
+    due: f64,
     warm: Warm,
     open: Option<SceneEvent>,
     /// θ of the last sample of the open event (resolved when it closes).
@@ -171,6 +174,9 @@ pub struct SceneMonitor {
     /// fast as any pair's bound, so no pair is due before `σ` reaches `next_due`.
     w_max: [f64; 3],
     next_due: f64,
+    /// Indices into the axis vector of the tilt axis and the table (C) axis.
+    tilt_index: Option<usize>,
+    table_index: Option<usize>,
 }
 
 /// Sub-steps of conservative advancement inside one sample interval, at most.
@@ -219,6 +225,7 @@ impl SceneMonitor {
                 moved: 0.0,
                 synced: [0.0; 3],
                 last_mm: f64::INFINITY,
+                due: f64::NEG_INFINITY,
                 warm: Warm::default(),
                 open: None,
                 open_end: Theta::Known(None),
@@ -236,6 +243,8 @@ impl SceneMonitor {
             })
             .collect::<Vec<PairState>>();
         let states_w: Vec<[f64; 3]> = states.iter().map(|s| s.weights).collect();
+        let tilt_index = scene.tilt_axis.map(Axis::index);
+        let table_index = scene.kinematics.layout.table_axis().map(Axis::index);
         SceneMonitor {
             scene,
             states,
@@ -253,6 +262,8 @@ impl SceneMonitor {
             sum: [0.0; 3],
             w_max: [0, 1, 2].map(|k| states_max(&states_w, k)),
             next_due: f64::NEG_INFINITY,
+            tilt_index,
+            table_index,
         }
     }
 
@@ -298,6 +309,7 @@ impl SceneMonitor {
             state.moved = 0.0;
             state.synced = self.sum;
             state.last_mm = 0.0;
+            state.due = f64::NEG_INFINITY;
             state.warm = Warm::default();
             if let Some((frame, _)) = state.relative {
                 let pair = self.scene.pairs[i];
@@ -334,7 +346,9 @@ impl SceneMonitor {
     }
 
     fn push_sample(&mut self, time_s: f64, theta: Theta, line: usize, q: &AxisVec) {
-        if !q.is_finite() || !time_s.is_finite() {
+        // Written on the flat arrays: the `AxisVec` operators are not inlined across crates,
+        // and this runs on every sample.
+        if !(time_s.is_finite() && q.0.iter().all(|v| v.is_finite())) {
             return;
         }
         self.samples += 1;
@@ -344,7 +358,7 @@ impl SceneMonitor {
             line,
             q: *q,
         };
-        let step = self.prev.map(|prev| self.motion(&prev.q, q));
+        let step = self.prev.as_ref().map(|prev| self.motion(&prev.q, q));
         // Relative motion of the tip in the table and cradle frames: chord and Ω per frame,
         // |Δu| and U.
         let mut relative: Option<([(f64, f64); 2], f64, f64)> = None;
@@ -377,8 +391,17 @@ impl SceneMonitor {
             return;
         }
         let mut poses: Option<[Pose; 4]> = None;
+        // A visit brings up to date only the pairs that may be due (σ past their own due
+        // value); the others keep their sums behind until a later visit.
+        let lazy = step.is_some() && !self.exhaustive && !self.uses_relative;
+        let allowance = 1e-12 * (1.0 + sigma);
+        let mut next_due = f64::INFINITY;
         for i in 0..self.states.len() {
             let state = &mut self.states[i];
+            if lazy && sigma < state.due {
+                next_due = next_due.min(state.due);
+                continue;
+            }
             if step.is_some() {
                 let behind = [0, 1, 2].map(|k| prev_sum[k] - state.synced[k]);
                 state.moved += dot3(&state.weights, &behind);
@@ -399,6 +422,9 @@ impl SceneMonitor {
             let moved_before = state.moved;
             state.moved += pair_step;
             if state.moved < state.slack && !self.exhaustive {
+                // Less a rounding allowance on the sums.
+                state.due = sigma + (state.slack - state.moved) - allowance;
+                next_due = next_due.min(state.due);
                 continue;
             }
             let pair = self.scene.pairs[i];
@@ -417,13 +443,11 @@ impl SceneMonitor {
                 }
             }
             self.classify(i, &now, d);
+            let state = &mut self.states[i];
+            state.due = sigma + (state.slack - state.moved) - allowance;
+            next_due = next_due.min(state.due);
         }
-        self.next_due = self
-            .states
-            .iter()
-            // Less a rounding allowance on the sums.
-            .map(|s| sigma + (s.slack - s.moved) - 1e-12 * (1.0 + sigma))
-            .fold(f64::INFINITY, f64::min);
+        self.next_due = next_due;
         self.prev = Some(now);
     }
 
@@ -448,19 +472,13 @@ impl SceneMonitor {
     }
 
     /// |dXYZ| (mm), |d tilt| (rad), |dC| (rad) between two samples.
+    #[inline]
     fn motion(&self, a: &AxisVec, b: &AxisVec) -> [f64; 3] {
-        let d = *b - *a;
-        let lin = (d[Axis::X].powi(2) + d[Axis::Y].powi(2) + d[Axis::Z].powi(2)).sqrt();
-        let tilt = self
-            .scene
-            .tilt_axis
-            .map_or(0.0, |t| d[t].abs().to_radians());
-        let table = self
-            .scene
-            .kinematics
-            .layout
-            .table_axis()
-            .map_or(0.0, |t| d[t].abs().to_radians());
+        let (a, b) = (&a.0, &b.0);
+        let d = |i: usize| b[i] - a[i];
+        let lin = (d(0).powi(2) + d(1).powi(2) + d(2).powi(2)).sqrt();
+        let tilt = self.tilt_index.map_or(0.0, |t| d(t).abs().to_radians());
+        let table = self.table_index.map_or(0.0, |t| d(t).abs().to_radians());
         [lin, tilt, table]
     }
 

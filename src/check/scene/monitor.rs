@@ -30,10 +30,9 @@
 //! Memory does not grow with the number of samples: one state per pair, plus the events.
 
 use nalgebra::Vector3;
-use parry3d_f64::math::Pose;
 use serde::Serialize;
 
-use super::{Carrier, PairKind, Scene, Warm};
+use super::{BodyPoses, Carrier, PairKind, Scene, Warm};
 use crate::input::machine::Machine;
 use crate::kinematics::Kinematics;
 use crate::{Axis, AxisVec};
@@ -139,9 +138,6 @@ struct PairState {
     synced: [f64; 3],
     /// Last measured signed distance, mm.
     last_mm: f64,
-    /// The value of σ before which the pair cannot be due (see [`SceneMonitor`]'s
-    /// `next_due`).
-    due: f64,
     warm: Warm,
     open: Option<SceneEvent>,
     /// θ of the last sample of the open event (resolved when it closes).
@@ -170,13 +166,33 @@ pub struct SceneMonitor {
     exhaustive: bool,
     /// Running sums of |dXYZ| (mm), |d tilt| and |dC| (rad) over the samples so far.
     sum: [f64; 3],
-    /// The largest weight of any pair per component: `σ = w_max · sum` grows at least as
-    /// fast as any pair's bound, so no pair is due before `σ` reaches `next_due`.
+    /// The largest weight of any pair but the hot ones per component: `σ = w_max · sum`
+    /// grows at least as fast as their bounds, so none is due before `σ` reaches `next_due`.
     w_max: [f64; 3],
     next_due: f64,
+    /// Per pair, the value of σ before which it cannot be due (kept apart from the pair
+    /// states so that a visit scans one short array). A hot pair's is +∞: σ does not wait
+    /// for it, and every full visit visits it.
+    dues: Vec<f64>,
+    is_hot: Vec<bool>,
+    /// The cutting pairs, whose slack is short (the engagement resolution): each sample
+    /// checks their own bound instead of letting `w_max`, which grows several times faster
+    /// than theirs, call a visit every few samples.
+    hot: Vec<usize>,
     /// Indices into the axis vector of the tilt axis and the table (C) axis.
     tilt_index: Option<usize>,
     table_index: Option<usize>,
+}
+
+/// What every pair visited at one sample shares: the motion over the last interval (|dXYZ|
+/// mm, |d tilt| and |dC| rad), the sums before it, the relative-motion terms, σ and its
+/// rounding allowance.
+struct Visit {
+    step: Option<[f64; 3]>,
+    prev_sum: [f64; 3],
+    relative: Option<([(f64, f64); 2], f64, f64)>,
+    sigma: f64,
+    allowance: f64,
 }
 
 /// Sub-steps of conservative advancement inside one sample interval, at most.
@@ -225,7 +241,6 @@ impl SceneMonitor {
                 moved: 0.0,
                 synced: [0.0; 3],
                 last_mm: f64::INFINITY,
-                due: f64::NEG_INFINITY,
                 warm: Warm::default(),
                 open: None,
                 open_end: Theta::Known(None),
@@ -242,7 +257,15 @@ impl SceneMonitor {
                 }),
             })
             .collect::<Vec<PairState>>();
-        let states_w: Vec<[f64; 3]> = states.iter().map(|s| s.weights).collect();
+        let hot: Vec<usize> = (0..states.len())
+            .filter(|&i| scene.pairs[i].kind == PairKind::Cutting)
+            .collect();
+        // σ only has to outgrow the pairs that are not hot.
+        let states_w: Vec<[f64; 3]> = (0..states.len())
+            .filter(|i| !hot.contains(i))
+            .map(|i| states[i].weights)
+            .collect();
+        let n_pairs = states.len();
         let tilt_index = scene.tilt_axis.map(Axis::index);
         let table_index = scene.kinematics.layout.table_axis().map(Axis::index);
         SceneMonitor {
@@ -262,6 +285,9 @@ impl SceneMonitor {
             sum: [0.0; 3],
             w_max: [0, 1, 2].map(|k| states_max(&states_w, k)),
             next_due: f64::NEG_INFINITY,
+            dues: vec![f64::NEG_INFINITY; n_pairs],
+            is_hot: (0..n_pairs).map(|i| hot.contains(&i)).collect(),
+            hot,
             tilt_index,
             table_index,
         }
@@ -304,12 +330,12 @@ impl SceneMonitor {
         self.scene.set_tool(tool, tip_below_mm);
         // Every pair is due at the next sample (no lazy skip past the change).
         self.next_due = f64::NEG_INFINITY;
+        self.dues.fill(f64::NEG_INFINITY);
         for (i, state) in self.states.iter_mut().enumerate() {
             state.slack = 0.0;
             state.moved = 0.0;
             state.synced = self.sum;
             state.last_mm = 0.0;
-            state.due = f64::NEG_INFINITY;
             state.warm = Warm::default();
             if let Some((frame, _)) = state.relative {
                 let pair = self.scene.pairs[i];
@@ -386,69 +412,96 @@ impl SceneMonitor {
             }
         }
         let sigma = dot3(&self.w_max, &self.sum);
-        if step.is_some() && !self.exhaustive && !self.uses_relative && sigma < self.next_due {
+        let allowance = 1e-12 * (1.0 + sigma);
+        let lazy = step.is_some() && !self.exhaustive && !self.uses_relative;
+        if lazy && sigma < self.next_due && !self.hot_due(allowance) {
             self.prev = Some(now);
             return;
         }
-        let mut poses: Option<[Pose; 4]> = None;
-        // A visit brings up to date only the pairs that may be due (σ past their own due
-        // value); the others keep their sums behind until a later visit.
-        let lazy = step.is_some() && !self.exhaustive && !self.uses_relative;
-        let allowance = 1e-12 * (1.0 + sigma);
-        let mut next_due = f64::INFINITY;
-        for i in 0..self.states.len() {
-            let state = &mut self.states[i];
-            if lazy && sigma < state.due {
-                next_due = next_due.min(state.due);
-                continue;
+        let mut poses = BodyPoses::new(q);
+        let visit = Visit {
+            step,
+            prev_sum,
+            relative,
+            sigma,
+            allowance,
+        };
+        if lazy && sigma < self.next_due {
+            // Only a hot pair may be due: the others keep their sums and their σ.
+            for h in 0..self.hot.len() {
+                self.visit(self.hot[h], &visit, &mut poses, &now);
             }
-            if step.is_some() {
-                let behind = [0, 1, 2].map(|k| prev_sum[k] - state.synced[k]);
-                state.moved += dot3(&state.weights, &behind);
-            }
-            state.synced = self.sum;
-            let mut pair_step = match step {
-                Some(s) => {
-                    state.weights[0] * s[0] + state.weights[1] * s[1] + state.weights[2] * s[2]
+        } else {
+            // A full visit brings up to date only the pairs that may be due (σ past their
+            // own due value, and the hot pairs); the others keep their sums behind until a
+            // later visit.
+            let mut next_due = f64::INFINITY;
+            for i in 0..self.states.len() {
+                if !(lazy && sigma < self.dues[i]) || self.is_hot[i] {
+                    self.visit(i, &visit, &mut poses, &now);
                 }
-                None => f64::INFINITY,
-            };
-            if let (Some((frames, du, u_max)), Some((f, reach))) = (relative, state.relative) {
-                let (chord, omega) = frames[f];
-                let bound =
-                    chord + omega * reach + 2.0 * omega * du + omega * omega * (u_max + reach);
-                pair_step = pair_step.min(bound);
+                if self.dues[i] < next_due {
+                    next_due = self.dues[i];
+                }
             }
-            let moved_before = state.moved;
-            state.moved += pair_step;
-            if state.moved < state.slack && !self.exhaustive {
-                // Less a rounding allowance on the sums.
-                state.due = sigma + (state.slack - state.moved) - allowance;
-                next_due = next_due.min(state.due);
-                continue;
-            }
+            self.next_due = next_due;
+        }
+        self.prev = Some(now);
+    }
+
+    /// Brings pair `i` up to date at sample `now` and queries it when it is due.
+    fn visit(&mut self, i: usize, v: &Visit, poses: &mut BodyPoses, now: &Sample) {
+        let q = &now.q;
+        let state = &mut self.states[i];
+        if v.step.is_some() {
+            let behind = [0, 1, 2].map(|k| v.prev_sum[k] - state.synced[k]);
+            state.moved += dot3(&state.weights, &behind);
+        }
+        state.synced = self.sum;
+        let mut pair_step = match v.step {
+            Some(s) => state.weights[0] * s[0] + state.weights[1] * s[1] + state.weights[2] * s[2],
+            None => f64::INFINITY,
+        };
+        if let (Some((frames, du, u_max)), Some((f, reach))) = (v.relative, state.relative) {
+            let (chord, omega) = frames[f];
+            let bound = chord + omega * reach + 2.0 * omega * du + omega * omega * (u_max + reach);
+            pair_step = pair_step.min(bound);
+        }
+        let moved_before = state.moved;
+        state.moved += pair_step;
+        if state.moved >= state.slack || self.exhaustive {
             let pair = self.scene.pairs[i];
-            let poses = poses.get_or_insert_with(|| self.scene.body_poses(q));
-            let state = &mut self.states[i];
             let d = measure(&self.scene, i, poses, &mut state.warm);
             self.queries += 1;
-
             // Contact strictly between the previous sample and this one?
             if let (Some(prev), PairKind::Collision) = (self.prev, pair.kind) {
-                let start_bound = state.last_mm - moved_before;
+                let start_bound = self.states[i].last_mm - moved_before;
                 if start_bound > 0.0 && d > 0.0 && start_bound + d < pair_step {
                     if let Some(s) = self.advance(i, &prev.q, q, start_bound, pair_step) {
-                        self.record_contact_between(i, &prev, &now, s);
+                        self.record_contact_between(i, &prev, now, s);
                     }
                 }
             }
-            self.classify(i, &now, d);
-            let state = &mut self.states[i];
-            state.due = sigma + (state.slack - state.moved) - allowance;
-            next_due = next_due.min(state.due);
+            self.classify(i, now, d);
         }
-        self.next_due = next_due;
-        self.prev = Some(now);
+        // σ does not wait for a hot pair (its own bound is checked at every sample). Less a
+        // rounding allowance on the sums.
+        let state = &self.states[i];
+        self.dues[i] = match self.is_hot[i] {
+            true => f64::INFINITY,
+            false => v.sigma + (state.slack - state.moved) - v.allowance,
+        };
+    }
+
+    /// Whether a hot pair may be due at this sample: its own bound since its last visit,
+    /// `moved + w·(S - S_synced)`, against its slack (less `allowance` for rounding).
+    #[inline]
+    fn hot_due(&self, allowance: f64) -> bool {
+        self.hot.iter().any(|&i| {
+            let s = &self.states[i];
+            let behind = [0, 1, 2].map(|k| self.sum[k] - s.synced[k]);
+            s.moved + dot3(&s.weights, &behind) >= s.slack - allowance
+        })
     }
 
     /// Ends the run.
@@ -500,8 +553,7 @@ impl SceneMonitor {
                 return None;
             }
             let q = *a + (*b - *a) * s;
-            let poses = self.scene.body_poses(&q);
-            let d = measure(&self.scene, i, &poses, &mut warm);
+            let d = measure(&self.scene, i, &mut BodyPoses::new(&q), &mut warm);
             self.queries += 1;
             if d <= CONTACT_TOLERANCE_MM {
                 return Some(s);
@@ -615,11 +667,11 @@ fn states_max(weights: &[[f64; 3]], k: usize) -> f64 {
 }
 
 /// Signed distance of pair `i` with the bodies at `poses`.
-fn measure(scene: &Scene, i: usize, poses: &[Pose; 4], warm: &mut Warm) -> f64 {
+fn measure(scene: &Scene, i: usize, poses: &mut BodyPoses, warm: &mut Warm) -> f64 {
     let pair = scene.pairs[i];
     let (a, b) = (&scene.parts[pair.a], &scene.parts[pair.b]);
-    let pose_a = poses[a.carrier as usize] * a.local;
-    let pose_b = poses[b.carrier as usize] * b.local;
+    let pose_a = scene.body_pose(a.carrier as usize, poses) * a.local;
+    let pose_b = scene.body_pose(b.carrier as usize, poses) * b.local;
     super::pair_distance(&pair, a, b, &pose_a, &pose_b, warm)
 }
 

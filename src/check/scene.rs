@@ -609,6 +609,21 @@ impl Scene {
         p
     }
 
+    /// [`warm_bounds`] of pair `i` at the sample of `poses`.
+    pub(crate) fn warm_bounds(
+        &self,
+        i: usize,
+        poses: &mut BodyPoses,
+        warm: &Warm,
+    ) -> Option<(f64, f64)> {
+        warm.normal?;
+        let pair = self.pairs[i];
+        let (a, b) = (&self.parts[pair.a], &self.parts[pair.b]);
+        let pose_a = self.body_pose(a.carrier as usize, poses) * a.local;
+        let pose_b = self.body_pose(b.carrier as usize, poses) * b.local;
+        warm_bounds(&pair, a, b, &pose_a, &pose_b, warm)
+    }
+
     /// Poses of the table, cradle, tool and bar frames in the machine frame at `q`.
     fn body_poses(&self, q: &AxisVec) -> [Pose; 4] {
         let mut poses = BodyPoses::new(q);
@@ -864,6 +879,41 @@ fn pair_distance(pair: &Pair, a: &Part, b: &Part, pa: &Pose, pb: &Pose, warm: &m
         return signed_distance(pa, shape(a).as_ref(), pb, shape(b).as_ref(), &mut warm.gjk) - skin;
     }
     signed_distance(pa, a.shape.as_ref(), pb, b.shape.as_ref(), &mut warm.gjk)
+}
+
+/// Certified bounds `lo <= sd <= hi` (mm) on the signed distance of a cylinder/frustum pair
+/// (`pair`, parts `a`, `b` at world poses `pa`, `pb`) from its warm start alone
+/// ([`frustum::bounds`] at the last certifying direction, turned with the cylinder about the
+/// frustum's axis): a few support evaluations instead of a query. `None` without a warm
+/// start or for other shapes. The skin of a cutting pair is taken off as in
+/// [`pair_distance`], whose answer lies within these bounds.
+fn warm_bounds(
+    pair: &Pair,
+    a: &Part,
+    b: &Part,
+    pa: &Pose,
+    pb: &Pose,
+    warm: &Warm,
+) -> Option<(f64, f64)> {
+    let (n, from) = warm.normal?;
+    let (f, frustum_pose, half_height, radius, cylinder_pose) = match (a.analytic, b.analytic) {
+        (Some(Analytic::Frustum(f)), Some(Analytic::Cylinder(h, r))) => (f, pa, h, r, pb),
+        (Some(Analytic::Cylinder(h, r)), Some(Analytic::Frustum(f))) => (f, pb, h, r, pa),
+        _ => return None,
+    };
+    let rel = frustum_pose.inv_mul(cylinder_pose);
+    let cylinder = frustum::Cylinder {
+        c: rel.translation,
+        t: rel.rotation * Vector::Y,
+        half_height,
+        radius,
+    };
+    let skin = match pair.kind {
+        PairKind::Cutting => a.skin_mm + b.skin_mm,
+        PairKind::Collision => 0.0,
+    };
+    let (lo, hi) = frustum::bounds(&f, &cylinder, f.turned(n, from, cylinder.c))?;
+    Some((lo - skin, hi - skin))
 }
 
 fn to_vector(v: &Vector3<f64>) -> Vector {

@@ -469,6 +469,30 @@ impl SceneMonitor {
         }
         let moved_before = state.moved;
         state.moved += pair_step;
+        if let (Some(e), false, true) = (
+            state.engagement,
+            self.exhaustive,
+            state.moved >= state.slack,
+        ) {
+            // A cutting pair whose warm-start bounds show that the query could change
+            // nothing: no new deepest engagement or smallest distance (`lo` at or above the
+            // smallest so far), and a slack of the resolution (`hi` within it). The query's
+            // certified answer lies in `[lo, hi]`, so the report and the schedule are those
+            // the query would give; it counts as one.
+            let resolution = self.scene.engagement_resolution_mm;
+            if let Some((lo, hi)) = self.scene.warm_bounds(i, poses, &state.warm) {
+                if lo >= self.engagement[e].min_distance_mm && hi <= resolution {
+                    self.queries += 1;
+                    state.last_mm = lo;
+                    state.moved = 0.0;
+                    state.synced = self.sum;
+                    state.slack = resolution;
+                    self.dues[i] = f64::INFINITY;
+                    return;
+                }
+            }
+        }
+        let state = &mut self.states[i];
         if state.moved >= state.slack || self.exhaustive {
             let pair = self.scene.pairs[i];
             let d = measure(&self.scene, i, poses, &mut state.warm);

@@ -101,14 +101,24 @@ impl Frustum {
     /// azimuths about the axis): `n_a a + (n·e) e' + (n·(a × e)) (a × e')`, with `e`, `e'`
     /// the unit radial directions of `from` and `to`. `n` itself when either is on the axis.
     pub fn turned(&self, n: Vector, from: Vector, to: Vector) -> Vector {
-        let (Some(e), Some(e2)) = (
-            unit_across(from - self.o, self.a),
-            unit_across(to - self.o, self.a),
-        ) else {
+        // With the radial parts p, p' unnormalised: one square root for both lengths.
+        let a = self.a;
+        let (v, v2) = (from - self.o, to - self.o);
+        let (p, p2) = (v - a * v.dot(a), v2 - a * v2.dot(a));
+        let l2 = p.length_squared() * p2.length_squared();
+        if !(l2 > 1e-36 * (1.0 + v.length_squared() * v2.length_squared())) {
             return n;
-        };
-        let (b, b2) = (self.a.cross(e), self.a.cross(e2));
-        self.a * n.dot(self.a) + e2 * n.dot(e) + b2 * n.dot(b)
+        }
+        let k = 1.0 / l2.sqrt();
+        a * n.dot(a) + (p2 * n.dot(p) + a.cross(p2) * n.dot(a.cross(p))) * k
+    }
+
+    /// Signed distance of point `x` to the frustum, mm (the value of [`Frustum::point_sd`]
+    /// without its normal).
+    pub fn point_sd_only(&self, x: Vector) -> f64 {
+        let v = x - self.o;
+        let z = v.dot(self.a);
+        self.sd_2d(z, (v - self.a * z).length()).0
     }
 
     /// Signed distance of point `x` to the frustum, mm, and the outward unit normal of the
@@ -254,14 +264,19 @@ pub fn signed_distance(f: &Frustum, c: &Cylinder, warm: Option<Vector>) -> Optio
 /// near the certifying direction (a warm start). `None` for `n` along C's axis.
 pub fn bounds(f: &Frustum, c: &Cylinder, n: Vector) -> Option<(f64, f64)> {
     let n = n.try_normalize()?;
-    let u = unit_across(n, c.t)?;
-    let s = if n.dot(c.t) >= 0.0 {
+    let nt = n.dot(c.t);
+    let across = n - c.t * nt;
+    let len = across.length();
+    if len <= 1e-9 {
+        return None;
+    }
+    let s = if nt >= 0.0 {
         c.half_height
     } else {
         -c.half_height
     };
-    let x = c.c + c.t * s + u * c.radius;
-    Some((lower_bound(f, c, n), f.point_sd(x).0))
+    let x = c.c + c.t * s + across * (c.radius / len);
+    Some((lower_bound(f, c, n), f.point_sd_only(x)))
 }
 
 /// Signed distance of point `y` to the cylinder: the 2-D box distance of (axial, radial).

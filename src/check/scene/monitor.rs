@@ -27,6 +27,14 @@
 //! under the tool), so this bound is several times tighter than the lever arms; the
 //! monitor uses the smaller of the two when [`SceneMonitor::with_relative_bounds`] is on.
 //!
+//! Sample by sample only the running sums of the axis motions advance. The collision pairs
+//! are visited when `σ = w_max · sums` reaches the smallest value at which one of them may
+//! be due; the cutting pairs ("hot": their slack is the engagement resolution) check their
+//! own bound at every sample. When the cutting pair is due, two certified bounds from the
+//! last certifying direction (turned with the table about the frustum's axis) often show
+//! that the full query could change nothing in the report or the schedule, and it is not
+//! made (`Scene::warm_bounds`, docs/scene.md).
+//!
 //! Memory does not grow with the number of samples: one state per pair, plus the events.
 
 use nalgebra::Vector3;

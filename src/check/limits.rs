@@ -102,11 +102,25 @@ struct Limits {
 struct Track {
     axis: Axis,
     limits: Limits,
-    min: f64,
-    max: f64,
-    peak_v: f64,
-    peak_a: f64,
     open: [Option<Open>; 3],
+}
+
+/// The per-sample state and limits of all six axis slots, flat (one lane per entry of
+/// [`AxisVec`]): the common case is then a few vector operations. A slot with no axis, or
+/// a limit that does not apply (the travel of a continuous axis), has an infinite limit.
+#[derive(Clone, Debug)]
+struct Lanes {
+    /// Travel limits, mm or deg.
+    lo: [f64; 6],
+    hi: [f64; 6],
+    /// Velocity and acceleration trips (limits with the rounding slack).
+    v_trip: [f64; 6],
+    a_trip: [f64; 6],
+    /// Used range, peak speed (per min) and peak acceleration (per s²) so far.
+    min: [f64; 6],
+    max: [f64; 6],
+    peak_v: [f64; 6],
+    peak_a: [f64; 6],
 }
 
 /// Checks every sample against the machine's limits; O(1) memory plus the violations found.
@@ -114,6 +128,7 @@ pub struct LimitsMonitor<'a> {
     machine: &'a Machine,
     theta_of: &'a dyn Fn(&AxisVec) -> Option<f64>,
     tracks: Vec<Track>,
+    lanes: Lanes,
     previous: Option<Previous>,
     /// Violations open (being extended).
     open: usize,
@@ -127,8 +142,9 @@ struct Previous {
     block_index: u64,
     /// Positions, mm and deg.
     q: [f64; 6],
-    /// Velocity per s, when the sample had one inside its block.
-    v: Option<[f64; 6]>,
+    /// Velocity per s, when the sample had one inside its block (`has_v`).
+    v: [f64; 6],
+    has_v: bool,
 }
 
 /// Relative slack on velocity and acceleration limits for rounding in finite differences.
@@ -155,18 +171,33 @@ impl<'a> LimitsMonitor<'a> {
                         max_acceleration: c.max_acceleration,
                         acceleration_trip: c.max_acceleration * (1.0 + SLACK),
                     },
-                    min: f64::INFINITY,
-                    max: f64::NEG_INFINITY,
-                    peak_v: 0.0,
-                    peak_a: 0.0,
                     open: [None, None, None],
                 }
             })
-            .collect();
+            .collect::<Vec<Track>>();
+        let mut lanes = Lanes {
+            lo: [f64::NEG_INFINITY; 6],
+            hi: [f64::INFINITY; 6],
+            v_trip: [f64::INFINITY; 6],
+            a_trip: [f64::INFINITY; 6],
+            min: [f64::INFINITY; 6],
+            max: [f64::NEG_INFINITY; 6],
+            peak_v: [0.0; 6],
+            peak_a: [0.0; 6],
+        };
+        for t in &tracks {
+            let (l, i) = (&t.limits, t.limits.index);
+            if !l.continuous {
+                (lanes.lo[i], lanes.hi[i]) = (l.min, l.max);
+            }
+            lanes.v_trip[i] = l.velocity_trip;
+            lanes.a_trip[i] = l.acceleration_trip;
+        }
         LimitsMonitor {
             machine,
             theta_of,
             tracks,
+            lanes,
             previous: None,
             open: 0,
             violations: Vec::new(),
@@ -178,54 +209,59 @@ impl<'a> LimitsMonitor<'a> {
     pub fn push(&mut self, s: &Sample) {
         let x = &s.actual.0;
         let mut clear = self.open == 0;
-        let (velocity, acceleration) = match &self.previous {
-            Some(p) if s.time_s > p.time_s => {
+        // Plain arrays and flags rather than `Option<[f64; 6]>`, which costs copies.
+        let (mut v, mut a) = ([0.0; 6], [0.0; 6]);
+        let (mut has_v, mut has_a, mut in_block) = (false, false, false);
+        if let Some(p) = &self.previous {
+            in_block = p.block_index == s.block_index;
+            if s.time_s > p.time_s {
                 // As `(actual - previous) * (1 / dt)`, element by element: the same rounding.
                 let k = 1.0 / (s.time_s - p.time_s);
-                let mut v = [0.0; 6];
                 for i in 0..6 {
                     v[i] = (x[i] - p.q[i]) * k;
                 }
-                let a = p.v.filter(|_| p.block_index == s.block_index).map(|pv| {
-                    let mut a = [0.0; 6];
+                has_v = true;
+                if p.has_v && in_block {
                     for i in 0..6 {
-                        a[i] = (v[i] - pv[i]) * k;
+                        a[i] = (v[i] - p.v[i]) * k;
                     }
-                    a
-                });
-                (Some(v), a)
-            }
-            _ => (None, None),
-        };
-        for track in self.tracks.iter_mut() {
-            let l = &track.limits;
-            let xi = x[l.index];
-            track.min = track.min.min(xi);
-            track.max = track.max.max(xi);
-            clear &= l.continuous || (xi <= l.max && xi >= l.min);
-            if let Some(v) = &velocity {
-                let v = v[l.index].abs() * 60.0;
-                track.peak_v = track.peak_v.max(v);
-                clear &= v <= l.velocity_trip;
-            }
-            if let Some(a) = &acceleration {
-                let a = a[l.index].abs();
-                track.peak_a = track.peak_a.max(a);
-                clear &= a <= l.acceleration_trip;
+                    has_a = true;
+                }
             }
         }
+        // Every lane, axis or not: a NaN or a lane past its (infinite) limit only sends the
+        // sample to `track`, which checks the axes themselves.
+        let n = &mut self.lanes;
+        let mut inside = [true; 6];
+        for i in 0..6 {
+            n.min[i] = n.min[i].min(x[i]);
+            n.max[i] = n.max[i].max(x[i]);
+            inside[i] = x[i] <= n.hi[i] && x[i] >= n.lo[i];
+        }
+        if has_v {
+            for i in 0..6 {
+                let v = v[i].abs() * 60.0;
+                n.peak_v[i] = n.peak_v[i].max(v);
+                inside[i] &= v <= n.v_trip[i];
+            }
+        }
+        if has_a {
+            for i in 0..6 {
+                let a = a[i].abs();
+                n.peak_a[i] = n.peak_a[i].max(a);
+                inside[i] &= a <= n.a_trip[i];
+            }
+        }
+        clear &= inside.iter().all(|&b| b);
         if !clear {
-            self.track(s, velocity.as_ref(), acceleration.as_ref());
+            self.track(s, has_v.then_some(&v), has_a.then_some(&a));
         }
-        let in_block = self
-            .previous
-            .as_ref()
-            .is_some_and(|p| p.block_index == s.block_index);
         self.previous = Some(Previous {
             time_s: s.time_s,
             block_index: s.block_index,
             q: *x,
-            v: velocity.filter(|_| in_block),
+            v,
+            has_v: has_v && in_block,
         });
     }
 
@@ -307,16 +343,18 @@ impl<'a> LimitsMonitor<'a> {
             .iter()
             .map(|t| {
                 let c = self.machine.axis(t.axis);
+                let i = t.limits.index;
+                let (min, max) = (self.lanes.min[i], self.lanes.max[i]);
                 AxisUsage {
                     axis: t.axis,
-                    min: t.min,
-                    max: t.max,
+                    min,
+                    max,
                     limit_min: c.min,
                     limit_max: c.max,
-                    margin: (!c.continuous).then(|| (t.min - c.min).min(c.max - t.max)),
-                    peak_velocity_per_min: t.peak_v,
+                    margin: (!c.continuous).then(|| (min - c.min).min(c.max - max)),
+                    peak_velocity_per_min: self.lanes.peak_v[i],
                     velocity_limit_per_min: c.max_velocity,
-                    peak_acceleration_per_s2: t.peak_a,
+                    peak_acceleration_per_s2: self.lanes.peak_a[i],
                     acceleration_limit_per_s2: c.max_acceleration,
                 }
             })

@@ -19,7 +19,7 @@ pub mod frustum;
 pub mod monitor;
 pub mod shapes;
 
-use nalgebra::{Rotation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use parry3d_f64::math::{Pose, Rotation, Vector};
 use parry3d_f64::shape::SharedShape;
 use rapier3d_f64::dynamics::{RigidBodyBuilder, RigidBodyHandle, RigidBodySet};
@@ -37,7 +37,7 @@ pub use shapes::{signed_distance, z_cylinder, Circle, CircleHull};
 
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
-use crate::kinematics::{Kinematics, Layout};
+use crate::kinematics::{AxisLine, Kinematics, Layout};
 use crate::{Axis, AxisVec};
 
 /// Collision groups. A pair of colliders is monitored when each one's membership meets the
@@ -142,7 +142,9 @@ impl Analytic {
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Warm {
     gjk: Option<Vector>,
-    normal: Option<Vector>,
+    /// The certifying direction and the cylinder's centre it was found at, in the frustum's
+    /// frame.
+    normal: Option<(Vector, Vector)>,
 }
 
 /// The cutter/workpiece distance is measured from the cutter eroded by this much (mm), less
@@ -165,9 +167,71 @@ struct BarEnds {
     pivot: Vector3<f64>,
 }
 
+/// The table chain, taken once from the kinematics for posing the bodies: the actual
+/// lines (location errors included) of the tilting axis and of the table axis, with their
+/// indices into the axis vector, and the sign of a positive turn.
+#[derive(Clone, Copy, Debug)]
+struct Chain {
+    axes: Option<((usize, AxisLine), (usize, AxisLine))>,
+    sign: f64,
+    pivot: Vector3<f64>,
+}
+
+impl Chain {
+    fn of(k: &Kinematics) -> Chain {
+        let line = |a: Axis| (a.index(), k.actual_line(a));
+        Chain {
+            axes: match (k.layout.tilt_axis(), k.layout.table_axis()) {
+                (Some(tilt), Some(table)) => Some((line(tilt), line(table))),
+                _ => None,
+            },
+            sign: k.layout.table_turn_sign(),
+            pivot: k.pivot_mm,
+        }
+    }
+
+    /// `T(θ)` of [`AxisLine::turn`], built from the quaternion directly.
+    fn turn(line: &AxisLine, angle_deg: f64) -> Isometry3<f64> {
+        let r = UnitQuaternion::from_axis_angle(&line.direction, angle_deg.to_radians());
+        Isometry3::from_parts(Translation3::from(line.point_mm - r * line.point_mm), r)
+    }
+
+    /// The cradle and the table poses at `q` ([`Kinematics::actual_cradle_pose`] and
+    /// [`Kinematics::actual_table_pose`], sharing the tilt).
+    fn poses(&self, q: &AxisVec) -> (Isometry3<f64>, Isometry3<f64>) {
+        let home = Isometry3::from_parts(Translation3::from(self.pivot), Default::default());
+        match &self.axes {
+            Some(((tilt, tilt_line), (table, table_line))) => {
+                let t = Chain::turn(tilt_line, self.sign * q.0[*tilt]);
+                let c = Chain::turn(table_line, self.sign * q.0[*table]);
+                (t * home, t * c * home)
+            }
+            None => (home, home),
+        }
+    }
+}
+
+/// The body poses of one sample, each computed when first asked for.
+pub(crate) struct BodyPoses<'a> {
+    q: &'a AxisVec,
+    chain: Option<(Isometry3<f64>, Isometry3<f64>)>,
+    poses: [Option<Pose>; 4],
+}
+
+impl<'a> BodyPoses<'a> {
+    pub(crate) fn new(q: &'a AxisVec) -> BodyPoses<'a> {
+        BodyPoses {
+            q,
+            chain: None,
+            poses: [None; 4],
+        }
+    }
+}
+
 /// The collision scene of one machine, tool and workpiece.
 pub struct Scene {
     kinematics: Kinematics,
+    chain: Chain,
     tilt_axis: Option<Axis>,
     bodies: RigidBodySet,
     colliders: ColliderSet,
@@ -509,33 +573,61 @@ impl Scene {
         ]
     }
 
+    /// The pose of body `carrier` (in the machine frame) at the sample of `poses`.
+    pub(crate) fn body_pose(&self, carrier: usize, poses: &mut BodyPoses) -> Pose {
+        if let Some(p) = poses.poses[carrier] {
+            return p;
+        }
+        let q = poses.q;
+        let (cradle, table) = *poses.chain.get_or_insert_with(|| self.chain.poses(q));
+        let pose = |iso: &Isometry3<f64>| {
+            let c = iso.rotation.coords; // (i, j, k, w)
+            Pose::from_parts(
+                to_vector(&iso.translation.vector),
+                Rotation::from_xyzw(c.x, c.y, c.z, c.w),
+            )
+        };
+        let tip = Vector3::new(q.0[0], q.0[1], q.0[2]);
+        let p = match carrier {
+            0 => pose(&table),
+            1 => pose(&cradle),
+            2 => Pose::from_translation(to_vector(&tip)),
+            _ => match &self.bar {
+                Some(ends) => {
+                    let a = table.translation.vector + table.rotation * ends.pivot;
+                    let dir = to_vector(&(tip - a));
+                    let rotation = match dir.try_normalize() {
+                        Some(d) => Rotation::from_rotation_arc(Vector::Z, d),
+                        None => Rotation::IDENTITY,
+                    };
+                    Pose::from_parts(to_vector(&a), rotation)
+                }
+                None => Pose::IDENTITY,
+            },
+        };
+        poses.poses[carrier] = Some(p);
+        p
+    }
+
+    /// [`warm_bounds`] of pair `i` at the sample of `poses`.
+    pub(crate) fn warm_bounds(
+        &self,
+        i: usize,
+        poses: &mut BodyPoses,
+        warm: &Warm,
+    ) -> Option<(f64, f64)> {
+        warm.normal?;
+        let pair = self.pairs[i];
+        let (a, b) = (&self.parts[pair.a], &self.parts[pair.b]);
+        let pose_a = self.body_pose(a.carrier as usize, poses) * a.local;
+        let pose_b = self.body_pose(b.carrier as usize, poses) * b.local;
+        warm_bounds(&pair, a, b, &pose_a, &pose_b, warm)
+    }
+
     /// Poses of the table, cradle, tool and bar frames in the machine frame at `q`.
     fn body_poses(&self, q: &AxisVec) -> [Pose; 4] {
-        // The actual chain (location errors included): the real pose of table and cradle.
-        let k = &self.kinematics;
-        let table_iso = k.actual_table_pose(q);
-        let cradle_iso = k.actual_cradle_pose(q);
-        let pivot = table_iso.translation.vector;
-        let r_table = table_iso.rotation.to_rotation_matrix();
-        let r_cradle = cradle_iso.rotation.to_rotation_matrix();
-        let cradle_origin = cradle_iso.translation.vector;
-        let tip = Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
-        let table = to_pose(&r_table, &pivot);
-        let cradle = to_pose(&r_cradle, &cradle_origin);
-        let tool = Pose::from_translation(to_vector(&tip));
-        let bar = match &self.bar {
-            Some(ends) => {
-                let a = pivot + r_table * ends.pivot;
-                let dir = to_vector(&(tip - a));
-                let rotation = match dir.try_normalize() {
-                    Some(d) => Rotation::from_rotation_arc(Vector::Z, d),
-                    None => Rotation::IDENTITY,
-                };
-                Pose::from_parts(to_vector(&a), rotation)
-            }
-            None => Pose::IDENTITY,
-        };
-        [table, cradle, tool, bar]
+        let mut poses = BodyPoses::new(q);
+        [0, 1, 2, 3].map(|carrier| self.body_pose(carrier, &mut poses))
     }
 }
 
@@ -731,6 +823,7 @@ impl Builder {
             }
         }
         let mut scene = Scene {
+            chain: Chain::of(&self.kinematics),
             tilt_axis: self.kinematics.layout.tilt_axis(),
             kinematics: self.kinematics,
             bodies: self.bodies,
@@ -771,8 +864,12 @@ fn pair_distance(pair: &Pair, a: &Part, b: &Part, pa: &Pose, pb: &Pose, warm: &m
             half_height,
             radius,
         };
-        if let Some((d, n)) = frustum::signed_distance(&f, &cylinder, warm.normal) {
-            warm.normal = Some(n);
+        // The frustum is symmetric about its axis: the direction found last time, turned
+        // about the axis as far as the cylinder's centre has turned since, is nearly the
+        // one that certifies now (the table turns under the tool on the cone test).
+        let start = warm.normal.map(|(n, c)| f.turned(n, c, cylinder.c));
+        if let Some((d, n)) = frustum::signed_distance(&f, &cylinder, start) {
+            warm.normal = Some((n, cylinder.c));
             return d - skin;
         }
         warm.normal = None;
@@ -784,13 +881,41 @@ fn pair_distance(pair: &Pair, a: &Part, b: &Part, pa: &Pose, pb: &Pose, warm: &m
     signed_distance(pa, a.shape.as_ref(), pb, b.shape.as_ref(), &mut warm.gjk)
 }
 
-fn to_vector(v: &Vector3<f64>) -> Vector {
-    Vector::new(v.x, v.y, v.z)
+/// Certified bounds `lo <= sd <= hi` (mm) on the signed distance of a cylinder/frustum pair
+/// (`pair`, parts `a`, `b` at world poses `pa`, `pb`) from its warm start alone
+/// ([`frustum::bounds`] at the last certifying direction, turned with the cylinder about the
+/// frustum's axis): a few support evaluations instead of a query. `None` without a warm
+/// start or for other shapes. The skin of a cutting pair is taken off as in
+/// [`pair_distance`], whose answer lies within these bounds.
+fn warm_bounds(
+    pair: &Pair,
+    a: &Part,
+    b: &Part,
+    pa: &Pose,
+    pb: &Pose,
+    warm: &Warm,
+) -> Option<(f64, f64)> {
+    let (n, from) = warm.normal?;
+    let (f, frustum_pose, half_height, radius, cylinder_pose) = match (a.analytic, b.analytic) {
+        (Some(Analytic::Frustum(f)), Some(Analytic::Cylinder(h, r))) => (f, pa, h, r, pb),
+        (Some(Analytic::Cylinder(h, r)), Some(Analytic::Frustum(f))) => (f, pb, h, r, pa),
+        _ => return None,
+    };
+    let rel = frustum_pose.inv_mul(cylinder_pose);
+    let cylinder = frustum::Cylinder {
+        c: rel.translation,
+        t: rel.rotation * Vector::Y,
+        half_height,
+        radius,
+    };
+    let skin = match pair.kind {
+        PairKind::Cutting => a.skin_mm + b.skin_mm,
+        PairKind::Collision => 0.0,
+    };
+    let (lo, hi) = frustum::bounds(&f, &cylinder, f.turned(n, from, cylinder.c))?;
+    Some((lo - skin, hi - skin))
 }
 
-/// nalgebra rotation and translation → parry (glam) pose.
-fn to_pose(r: &Rotation3<f64>, t: &Vector3<f64>) -> Pose {
-    let q = UnitQuaternion::from_rotation_matrix(r);
-    let c = q.coords; // (i, j, k, w)
-    Pose::from_parts(to_vector(t), Rotation::from_xyzw(c.x, c.y, c.z, c.w))
+fn to_vector(v: &Vector3<f64>) -> Vector {
+    Vector::new(v.x, v.y, v.z)
 }

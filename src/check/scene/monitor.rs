@@ -27,13 +27,20 @@
 //! under the tool), so this bound is several times tighter than the lever arms; the
 //! monitor uses the smaller of the two when [`SceneMonitor::with_relative_bounds`] is on.
 //!
+//! Sample by sample only the running sums of the axis motions advance. The collision pairs
+//! are visited when `σ = w_max · sums` reaches the smallest value at which one of them may
+//! be due; the cutting pairs ("hot": their slack is the engagement resolution) check their
+//! own bound at every sample. When the cutting pair is due, two certified bounds from the
+//! last certifying direction (turned with the table about the frustum's axis) often show
+//! that the full query could change nothing in the report or the schedule, and it is not
+//! made (`Scene::warm_bounds`, docs/scene.md).
+//!
 //! Memory does not grow with the number of samples: one state per pair, plus the events.
 
 use nalgebra::Vector3;
-use parry3d_f64::math::Pose;
 use serde::Serialize;
 
-use super::{Carrier, PairKind, Scene, Warm};
+use super::{BodyPoses, Carrier, PairKind, Scene, Warm};
 use crate::input::machine::Machine;
 use crate::kinematics::Kinematics;
 use crate::{Axis, AxisVec};
@@ -167,10 +174,33 @@ pub struct SceneMonitor {
     exhaustive: bool,
     /// Running sums of |dXYZ| (mm), |d tilt| and |dC| (rad) over the samples so far.
     sum: [f64; 3],
-    /// The largest weight of any pair per component: `σ = w_max · sum` grows at least as
-    /// fast as any pair's bound, so no pair is due before `σ` reaches `next_due`.
+    /// The largest weight of any pair but the hot ones per component: `σ = w_max · sum`
+    /// grows at least as fast as their bounds, so none is due before `σ` reaches `next_due`.
     w_max: [f64; 3],
     next_due: f64,
+    /// Per pair, the value of σ before which it cannot be due (kept apart from the pair
+    /// states so that a visit scans one short array). A hot pair's is +∞: σ does not wait
+    /// for it, and every full visit visits it.
+    dues: Vec<f64>,
+    is_hot: Vec<bool>,
+    /// The cutting pairs, whose slack is short (the engagement resolution): each sample
+    /// checks their own bound instead of letting `w_max`, which grows several times faster
+    /// than theirs, call a visit every few samples.
+    hot: Vec<usize>,
+    /// Indices into the axis vector of the tilt axis and the table (C) axis.
+    tilt_index: Option<usize>,
+    table_index: Option<usize>,
+}
+
+/// What every pair visited at one sample shares: the motion over the last interval (|dXYZ|
+/// mm, |d tilt| and |dC| rad), the sums before it, the relative-motion terms, σ and its
+/// rounding allowance.
+struct Visit {
+    step: Option<[f64; 3]>,
+    prev_sum: [f64; 3],
+    relative: Option<([(f64, f64); 2], f64, f64)>,
+    sigma: f64,
+    allowance: f64,
 }
 
 /// Sub-steps of conservative advancement inside one sample interval, at most.
@@ -235,7 +265,17 @@ impl SceneMonitor {
                 }),
             })
             .collect::<Vec<PairState>>();
-        let states_w: Vec<[f64; 3]> = states.iter().map(|s| s.weights).collect();
+        let hot: Vec<usize> = (0..states.len())
+            .filter(|&i| scene.pairs[i].kind == PairKind::Cutting)
+            .collect();
+        // σ only has to outgrow the pairs that are not hot.
+        let states_w: Vec<[f64; 3]> = (0..states.len())
+            .filter(|i| !hot.contains(i))
+            .map(|i| states[i].weights)
+            .collect();
+        let n_pairs = states.len();
+        let tilt_index = scene.tilt_axis.map(Axis::index);
+        let table_index = scene.kinematics.layout.table_axis().map(Axis::index);
         SceneMonitor {
             scene,
             states,
@@ -253,6 +293,11 @@ impl SceneMonitor {
             sum: [0.0; 3],
             w_max: [0, 1, 2].map(|k| states_max(&states_w, k)),
             next_due: f64::NEG_INFINITY,
+            dues: vec![f64::NEG_INFINITY; n_pairs],
+            is_hot: (0..n_pairs).map(|i| hot.contains(&i)).collect(),
+            hot,
+            tilt_index,
+            table_index,
         }
     }
 
@@ -293,6 +338,7 @@ impl SceneMonitor {
         self.scene.set_tool(tool, tip_below_mm);
         // Every pair is due at the next sample (no lazy skip past the change).
         self.next_due = f64::NEG_INFINITY;
+        self.dues.fill(f64::NEG_INFINITY);
         for (i, state) in self.states.iter_mut().enumerate() {
             state.slack = 0.0;
             state.moved = 0.0;
@@ -334,7 +380,9 @@ impl SceneMonitor {
     }
 
     fn push_sample(&mut self, time_s: f64, theta: Theta, line: usize, q: &AxisVec) {
-        if !q.is_finite() || !time_s.is_finite() {
+        // Written on the flat arrays: the `AxisVec` operators are not inlined across crates,
+        // and this runs on every sample.
+        if !(time_s.is_finite() && q.0.iter().all(|v| v.is_finite())) {
             return;
         }
         self.samples += 1;
@@ -344,7 +392,7 @@ impl SceneMonitor {
             line,
             q: *q,
         };
-        let step = self.prev.map(|prev| self.motion(&prev.q, q));
+        let step = self.prev.as_ref().map(|prev| self.motion(&prev.q, q));
         // Relative motion of the tip in the table and cradle frames: chord and Ω per frame,
         // |Δu| and U.
         let mut relative: Option<([(f64, f64); 2], f64, f64)> = None;
@@ -372,59 +420,120 @@ impl SceneMonitor {
             }
         }
         let sigma = dot3(&self.w_max, &self.sum);
-        if step.is_some() && !self.exhaustive && !self.uses_relative && sigma < self.next_due {
+        let allowance = 1e-12 * (1.0 + sigma);
+        let lazy = step.is_some() && !self.exhaustive && !self.uses_relative;
+        if lazy && sigma < self.next_due && !self.hot_due(allowance) {
             self.prev = Some(now);
             return;
         }
-        let mut poses: Option<[Pose; 4]> = None;
-        for i in 0..self.states.len() {
-            let state = &mut self.states[i];
-            if step.is_some() {
-                let behind = [0, 1, 2].map(|k| prev_sum[k] - state.synced[k]);
-                state.moved += dot3(&state.weights, &behind);
+        let mut poses = BodyPoses::new(q);
+        let visit = Visit {
+            step,
+            prev_sum,
+            relative,
+            sigma,
+            allowance,
+        };
+        if lazy && sigma < self.next_due {
+            // Only a hot pair may be due: the others keep their sums and their σ.
+            for h in 0..self.hot.len() {
+                self.visit(self.hot[h], &visit, &mut poses, &now);
             }
-            state.synced = self.sum;
-            let mut pair_step = match step {
-                Some(s) => {
-                    state.weights[0] * s[0] + state.weights[1] * s[1] + state.weights[2] * s[2]
+        } else {
+            // A full visit brings up to date only the pairs that may be due (σ past their
+            // own due value, and the hot pairs); the others keep their sums behind until a
+            // later visit.
+            let mut next_due = f64::INFINITY;
+            for i in 0..self.states.len() {
+                if !(lazy && sigma < self.dues[i]) || self.is_hot[i] {
+                    self.visit(i, &visit, &mut poses, &now);
                 }
-                None => f64::INFINITY,
-            };
-            if let (Some((frames, du, u_max)), Some((f, reach))) = (relative, state.relative) {
-                let (chord, omega) = frames[f];
-                let bound =
-                    chord + omega * reach + 2.0 * omega * du + omega * omega * (u_max + reach);
-                pair_step = pair_step.min(bound);
+                if self.dues[i] < next_due {
+                    next_due = self.dues[i];
+                }
             }
-            let moved_before = state.moved;
-            state.moved += pair_step;
-            if state.moved < state.slack && !self.exhaustive {
-                continue;
+            self.next_due = next_due;
+        }
+        self.prev = Some(now);
+    }
+
+    /// Brings pair `i` up to date at sample `now` and queries it when it is due.
+    fn visit(&mut self, i: usize, v: &Visit, poses: &mut BodyPoses, now: &Sample) {
+        let q = &now.q;
+        let state = &mut self.states[i];
+        if v.step.is_some() {
+            let behind = [0, 1, 2].map(|k| v.prev_sum[k] - state.synced[k]);
+            state.moved += dot3(&state.weights, &behind);
+        }
+        state.synced = self.sum;
+        let mut pair_step = match v.step {
+            Some(s) => state.weights[0] * s[0] + state.weights[1] * s[1] + state.weights[2] * s[2],
+            None => f64::INFINITY,
+        };
+        if let (Some((frames, du, u_max)), Some((f, reach))) = (v.relative, state.relative) {
+            let (chord, omega) = frames[f];
+            let bound = chord + omega * reach + 2.0 * omega * du + omega * omega * (u_max + reach);
+            pair_step = pair_step.min(bound);
+        }
+        let moved_before = state.moved;
+        state.moved += pair_step;
+        if let (Some(e), false, true) = (
+            state.engagement,
+            self.exhaustive,
+            state.moved >= state.slack,
+        ) {
+            // A cutting pair whose warm-start bounds show that the query could change
+            // nothing: no new deepest engagement or smallest distance (`lo` at or above the
+            // smallest so far), and a slack of the resolution (`hi` within it). The query's
+            // certified answer lies in `[lo, hi]`, so the report and the schedule are those
+            // the query would give; it counts as one.
+            let resolution = self.scene.engagement_resolution_mm;
+            if let Some((lo, hi)) = self.scene.warm_bounds(i, poses, &state.warm) {
+                if lo >= self.engagement[e].min_distance_mm && hi <= resolution {
+                    self.queries += 1;
+                    state.last_mm = lo;
+                    state.moved = 0.0;
+                    state.synced = self.sum;
+                    state.slack = resolution;
+                    self.dues[i] = f64::INFINITY;
+                    return;
+                }
             }
+        }
+        let state = &mut self.states[i];
+        if state.moved >= state.slack || self.exhaustive {
             let pair = self.scene.pairs[i];
-            let poses = poses.get_or_insert_with(|| self.scene.body_poses(q));
-            let state = &mut self.states[i];
             let d = measure(&self.scene, i, poses, &mut state.warm);
             self.queries += 1;
-
             // Contact strictly between the previous sample and this one?
             if let (Some(prev), PairKind::Collision) = (self.prev, pair.kind) {
-                let start_bound = state.last_mm - moved_before;
+                let start_bound = self.states[i].last_mm - moved_before;
                 if start_bound > 0.0 && d > 0.0 && start_bound + d < pair_step {
                     if let Some(s) = self.advance(i, &prev.q, q, start_bound, pair_step) {
-                        self.record_contact_between(i, &prev, &now, s);
+                        self.record_contact_between(i, &prev, now, s);
                     }
                 }
             }
-            self.classify(i, &now, d);
+            self.classify(i, now, d);
         }
-        self.next_due = self
-            .states
-            .iter()
-            // Less a rounding allowance on the sums.
-            .map(|s| sigma + (s.slack - s.moved) - 1e-12 * (1.0 + sigma))
-            .fold(f64::INFINITY, f64::min);
-        self.prev = Some(now);
+        // σ does not wait for a hot pair (its own bound is checked at every sample). Less a
+        // rounding allowance on the sums.
+        let state = &self.states[i];
+        self.dues[i] = match self.is_hot[i] {
+            true => f64::INFINITY,
+            false => v.sigma + (state.slack - state.moved) - v.allowance,
+        };
+    }
+
+    /// Whether a hot pair may be due at this sample: its own bound since its last visit,
+    /// `moved + w·(S - S_synced)`, against its slack (less `allowance` for rounding).
+    #[inline]
+    fn hot_due(&self, allowance: f64) -> bool {
+        self.hot.iter().any(|&i| {
+            let s = &self.states[i];
+            let behind = [0, 1, 2].map(|k| self.sum[k] - s.synced[k]);
+            s.moved + dot3(&s.weights, &behind) >= s.slack - allowance
+        })
     }
 
     /// Ends the run.
@@ -448,19 +557,13 @@ impl SceneMonitor {
     }
 
     /// |dXYZ| (mm), |d tilt| (rad), |dC| (rad) between two samples.
+    #[inline]
     fn motion(&self, a: &AxisVec, b: &AxisVec) -> [f64; 3] {
-        let d = *b - *a;
-        let lin = (d[Axis::X].powi(2) + d[Axis::Y].powi(2) + d[Axis::Z].powi(2)).sqrt();
-        let tilt = self
-            .scene
-            .tilt_axis
-            .map_or(0.0, |t| d[t].abs().to_radians());
-        let table = self
-            .scene
-            .kinematics
-            .layout
-            .table_axis()
-            .map_or(0.0, |t| d[t].abs().to_radians());
+        let (a, b) = (&a.0, &b.0);
+        let d = |i: usize| b[i] - a[i];
+        let lin = (d(0).powi(2) + d(1).powi(2) + d(2).powi(2)).sqrt();
+        let tilt = self.tilt_index.map_or(0.0, |t| d(t).abs().to_radians());
+        let table = self.table_index.map_or(0.0, |t| d(t).abs().to_radians());
         [lin, tilt, table]
     }
 
@@ -482,8 +585,7 @@ impl SceneMonitor {
                 return None;
             }
             let q = *a + (*b - *a) * s;
-            let poses = self.scene.body_poses(&q);
-            let d = measure(&self.scene, i, &poses, &mut warm);
+            let d = measure(&self.scene, i, &mut BodyPoses::new(&q), &mut warm);
             self.queries += 1;
             if d <= CONTACT_TOLERANCE_MM {
                 return Some(s);
@@ -597,11 +699,11 @@ fn states_max(weights: &[[f64; 3]], k: usize) -> f64 {
 }
 
 /// Signed distance of pair `i` with the bodies at `poses`.
-fn measure(scene: &Scene, i: usize, poses: &[Pose; 4], warm: &mut Warm) -> f64 {
+fn measure(scene: &Scene, i: usize, poses: &mut BodyPoses, warm: &mut Warm) -> f64 {
     let pair = scene.pairs[i];
     let (a, b) = (&scene.parts[pair.a], &scene.parts[pair.b]);
-    let pose_a = poses[a.carrier as usize] * a.local;
-    let pose_b = poses[b.carrier as usize] * b.local;
+    let pose_a = scene.body_pose(a.carrier as usize, poses) * a.local;
+    let pose_b = scene.body_pose(b.carrier as usize, poses) * b.local;
     super::pair_distance(&pair, a, b, &pose_a, &pose_b, warm)
 }
 

@@ -822,6 +822,9 @@ impl Interp {
         // `^` after Z (see `slot`).
         const NONE: u8 = u8::MAX;
         let mut single = [NONE; 28];
+        // The same as bits (`1 << slot`): a plain `G01 X Y F` block skips each check of a
+        // feature whose letters it has not (one test instead of a lookup per letter).
+        let mut present = 0u32;
         let mut spindle_select = None;
         for (k, word) in words.iter().enumerate() {
             match word.letter {
@@ -841,7 +844,9 @@ impl Interp {
                     let code = GCode::parse(word, line, dialect)?;
                     // LinuxCNC accepts G80 beside G00/G01 (`G80 G0 Z10`): the cancel is implied.
                     let g80 = GCode::Motion(None);
-                    if code == g80 && g.iter().any(|(c, _)| matches!(c, GCode::Motion(Some(_)))) {
+                    if matches!(code, GCode::Motion(None))
+                        && g.iter().any(|(c, _)| matches!(c, GCode::Motion(Some(_))))
+                    {
                         continue;
                     }
                     if let Some(k) = g.iter().position(|(c, _)| *c == g80) {
@@ -898,6 +903,7 @@ impl Interp {
                         return Err(LineError::new(word.span(), format!("repeated `{letter}` word (first `{}`): expected each of {EXPECTED_WORDS} at most once per block, apart from G and M", &line[first.span()]), "repeated word"));
                     }
                     *slot = k as u8;
+                    present |= 1 << self::slot(letter);
                 }
             }
         }
@@ -937,7 +943,16 @@ impl Interp {
                 ));
             }
         }
-        for a in Axis::ALL {
+        let missing_axes = Axis::ALL
+            .iter()
+            .filter(|a| !self.axes[a.index()])
+            .fold(0, |m, a| m | 1 << slot(a.letter()));
+        let check: &[Axis] = if present & missing_axes != 0 {
+            &Axis::ALL
+        } else {
+            &[]
+        };
+        for &a in check {
             if let Some(w) = get(a.letter()) {
                 if !self.axes[a.index()] {
                     let has: Vec<String> = Axis::ALL
@@ -960,7 +975,12 @@ impl Interp {
             })
             .unwrap_or(self.motion);
         let g7x_block = matches!(block_motion, Some(MotionMode::Lathe(700..=722)));
-        for letter in ['N', 'T', 'H', 'D', 'L'] {
+        let integers: &[char] = if present & const { letters(&['N', 'T', 'H', 'D', 'L']) } != 0 {
+            &['N', 'T', 'H', 'D', 'L']
+        } else {
+            &[]
+        };
+        for &letter in integers {
             // D is a length for G70-G72 and for G41.1/G42.1 (a diameter), a number elsewhere.
             let d_length =
                 g7x_block || g.iter().any(|(c, _)| matches!(c, GCode::CutterComp(3 | 4)));
@@ -975,7 +995,9 @@ impl Interp {
             GCode::NonModal(n) => Some((*n, *w)),
             _ => None,
         });
-        self.unused_words(line, &g, &m, &get)?;
+        if present & const { letters(&['P', 'Q', 'L', 'E', 'D']) } != 0 {
+            self.unused_words(line, &g, &m, &get)?;
+        }
         let mut stop = Stop::None;
 
         // 1. Units, feed mode, F, S. LinuxCNC sets F before G20/G21 (its order of
@@ -1355,7 +1377,7 @@ impl Interp {
                 _ => {}
             }
         }
-        if let Some((_, w)) = g.iter().find(|(c, _)| *c == GCode::AlignRotary) {
+        if let Some((_, w)) = g.iter().find(|(c, _)| matches!(c, GCode::AlignRotary)) {
             let (Some((_, rf)), Some(table)) = (self.tilt, self.table) else {
                 return Err(LineError::new(
                     w.span(),
@@ -1443,27 +1465,49 @@ impl Interp {
         }
         // Polar words `@` `^` become X Y words here, after the block's units and work system
         // took effect; in a G91 canned cycle they step each repeat (see `cycle`).
-        let polar_word = get('@').or(get('^'));
+        let polar_word = if present & const { letters(&['@', '^']) } != 0 {
+            get('@').or(get('^'))
+        } else {
+            None
+        };
         let mut polar_cycle = false;
-        let mut polar_xy: [Option<Word>; 2] = [None, None];
-        if let Some(pw) = polar_word {
-            polar_cycle = self.polar_words(line, &pw, &get, nonmodal, &mut polar_xy)?;
-        }
-        // By reference: copying the pair into each call cost about a tenth of the read.
-        let polar = &polar_xy;
-        let get = |l: char| match l {
-            'X' if polar[0].is_some() => polar[0],
-            'Y' if polar[1].is_some() => polar[1],
+        // Only a polar block builds the pair: even filling it with `None` on every block
+        // cost a store-forwarding stall (a 4-byte tag written, 48 bytes read back).
+        let mut polar_xy: [Option<Word>; 2];
+        let polar = match polar_word {
+            Some(pw) => {
+                polar_xy = [None, None];
+                polar_cycle = self.polar_words(line, &pw, &get, nonmodal, &mut polar_xy)?;
+                // By reference: copying the pair into each call cost a tenth of the read.
+                Some(&polar_xy)
+            }
+            None => None,
+        };
+        let get = |l: char| match (l, polar) {
+            ('X', Some([Some(x), _])) => Some(*x),
+            ('Y', Some([_, Some(y)])) => Some(*y),
             _ => get(l),
         };
         let dwell_x = dialect.is_fanuc_family() && matches!(nonmodal, Some((NonModal::Dwell, _)));
-        // Fixed buffers, no allocation per block.
+        // Fixed buffers, no allocation per block. The words are copied from the block's
+        // (written long before), not from `get`'s result (a stall per word).
         let mut axis_buf: Small<(Axis, Word), 6> = Small::new();
         for a in Axis::ALL {
-            if let Some(w) = get(a.letter()) {
-                if !(dwell_x && a == Axis::X) {
-                    axis_buf.push((a, w));
+            let k = slot(a.letter());
+            let w = match (a, polar) {
+                (Axis::X, Some([Some(x), _])) => *x,
+                (Axis::Y, Some([_, Some(y)])) => *y,
+                _ if present >> k & 1 == 1 => {
+                    let mut w = words[single[k] as usize];
+                    if halve_x && a == Axis::X {
+                        w.value /= 2.0;
+                    }
+                    w
                 }
+                _ => continue,
+            };
+            if !(dwell_x && a == Axis::X) {
+                axis_buf.push((a, w));
             }
         }
         let axis_words = &axis_buf[..];
@@ -1471,7 +1515,7 @@ impl Interp {
         // G43.1 takes its Z as the tool length, not as a move.
         let mut axes_used = g
             .iter()
-            .any(|(c, _)| *c == GCode::ToolLength(1) || *c == GCode::Tilt(true));
+            .any(|(c, _)| matches!(c, GCode::ToolLength(1) | GCode::Tilt(true)));
         if let Some((nm, w)) = nonmodal {
             if nm != NonModal::Dwell && nm != NonModal::G53 {
                 axes_used = true;
@@ -1618,7 +1662,12 @@ impl Interp {
         let mut n_arc = 0;
         // M19 R is the spindle orientation angle, not an arc radius.
         let m19 = m.iter().any(|(c, _)| *c == 19);
-        for l in ['I', 'J', 'K', 'R'] {
+        let arc_letters: &[char] = if present & const { letters(&['I', 'J', 'K', 'R']) } != 0 {
+            &['I', 'J', 'K', 'R']
+        } else {
+            &[]
+        };
+        for &l in arc_letters {
             if l == 'R' && m19 {
                 continue;
             }
@@ -1632,7 +1681,7 @@ impl Interp {
         // NURBS: G5.2 blocks collect control points, G5.3 moves along them.
         let nurbs_end = g
             .iter()
-            .find(|(c, _)| *c == GCode::NurbsEnd)
+            .find(|(c, _)| matches!(c, GCode::NurbsEnd))
             .map(|(_, w)| *w);
         if nurbs_end.is_some() || self.motion == Some(MotionMode::Spline(52)) {
             let g52 = motion_code.map(|(_, w)| w);
@@ -1805,8 +1854,11 @@ impl Interp {
                             unreachable!("handled above")
                         }
                     };
-                    let turns = match (get('P'), motion) {
-                        (Some(p), Motion::Arc { .. }) => turns(line, &p, self.feed_mode)?,
+                    let turns = match motion {
+                        Motion::Arc { .. } => match get('P') {
+                            Some(p) => turns(line, &p, self.feed_mode)?,
+                            None => 1,
+                        },
                         _ => 1,
                     };
                     if self.comp.is_some() && turns > 1 {
@@ -3056,12 +3108,23 @@ fn rotate_deg(v: [f64; 2], deg: f64) -> [f64; 2] {
 }
 
 /// Index of a word letter in a block's table of single words: A-Z, then `@` and `^`.
-fn slot(letter: char) -> usize {
+const fn slot(letter: char) -> usize {
     match letter {
         '@' => 26,
         '^' => 27,
         l => (l as u8 - b'A') as usize,
     }
+}
+
+/// The bits (`1 << slot`) of `letters`.
+const fn letters(letters: &[char]) -> u32 {
+    let mut mask = 0;
+    let mut k = 0;
+    while k < letters.len() {
+        mask |= 1 << slot(letters[k]);
+        k += 1;
+    }
+    mask
 }
 
 fn m_group(code: u32) -> Option<u8> {

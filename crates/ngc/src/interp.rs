@@ -1493,21 +1493,22 @@ impl Interp {
         // (written long before), not from `get`'s result (a stall per word).
         let mut axis_buf: Small<(Axis, Word), 6> = Small::new();
         for a in Axis::ALL {
+            let mut halve = false;
             let k = slot(a.letter());
+            // A reference: a value here was assembled in pieces on the stack and read
+            // back whole into the buffer, a store-forwarding stall per word.
             let w = match (a, polar) {
-                (Axis::X, Some([Some(x), _])) => *x,
-                (Axis::Y, Some([_, Some(y)])) => *y,
+                (Axis::X, Some([Some(x), _])) => x,
+                (Axis::Y, Some([_, Some(y)])) => y,
                 _ if present >> k & 1 == 1 => {
-                    let mut w = words[single[k] as usize];
-                    if halve_x && a == Axis::X {
-                        w.value /= 2.0;
-                    }
-                    w
+                    // X is a diameter under G7.
+                    halve = halve_x && a == Axis::X;
+                    &words[single[k] as usize]
                 }
                 _ => continue,
             };
             if !(dwell_x && a == Axis::X) {
-                axis_buf.push((a, w));
+                axis_buf.push_axis(a, w, halve);
             }
         }
         let axis_words = &axis_buf[..];
@@ -3087,6 +3088,26 @@ impl<T: Copy, const N: usize> Small<T, N> {
     fn remove(&mut self, k: usize) {
         self.items.copy_within(k + 1..self.len, k);
         self.len -= 1;
+    }
+}
+
+impl<'l> Small<(Axis, Word<'l>), 6> {
+    /// Pushes `(axis, *word)`, the value halved when `halve`, written field by field:
+    /// a whole tuple built first was assembled on the stack in pieces and read back in
+    /// larger ones, a store-forwarding stall per axis word of every block.
+    #[inline(always)]
+    fn push_axis(&mut self, axis: Axis, word: &Word<'l>, halve: bool) {
+        let slot = self.items[self.len].as_mut_ptr();
+        // SAFETY: `slot` points to an item of `items` (indexing checked `len` < 6); both
+        // fields are written here, so the item is initialised before `len` counts it.
+        unsafe {
+            std::ptr::addr_of_mut!((*slot).0).write(axis);
+            std::ptr::addr_of_mut!((*slot).1).write(*word);
+            if halve {
+                (*slot).1.value /= 2.0;
+            }
+        }
+        self.len += 1;
     }
 }
 

@@ -224,7 +224,8 @@ pub fn char_at(line: &str, i: usize) -> (char, Range<usize>) {
 #[inline(always)]
 fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> LineResult<Word<'l>> {
     let bytes = line.as_bytes();
-    let letter = (bytes[start] as char).to_ascii_uppercase();
+    // An ASCII letter, `@`, `^` or `$` (the caller's test).
+    let letter = bytes[start].to_ascii_uppercase() as char;
     let mut i = start + 1;
     while i < bytes.len() && is_blank(bytes[i]) {
         i += 1;
@@ -233,6 +234,16 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let (end, fast) = scan_number(bytes, i);
     i = end;
     let number = &line[number_start..i];
+    // The common case, a plain decimal number (so not a computed value), read and checked
+    // in one pass: nothing more to look at.
+    if let (Some(value), true) = (fast, known_letter(letter)) {
+        return Ok(Word {
+            letter,
+            value,
+            number,
+            span: (start, i),
+        });
+    }
     let span = start..if number.is_empty() { start + 1 } else { i };
     let text = &line[span.clone()];
     if !known_letter(letter) {
@@ -267,15 +278,6 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
             value,
             number: "",
             span: (start, e.i),
-        });
-    }
-    // The common case, a plain decimal number, read and checked in one pass.
-    if let Some(value) = fast {
-        return Ok(Word {
-            letter,
-            value,
-            number,
-            span: (start, span.end),
         });
     }
     if !is_decimal(number) {

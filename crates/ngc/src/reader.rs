@@ -146,9 +146,15 @@ impl FileLines {
                 bytes.pop();
             }
         }
-        *buf = match String::from_utf8(bytes) {
-            Ok(s) => s,
-            Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
+        *buf = if bytes.is_ascii() {
+            // SAFETY: ASCII is UTF-8. (A G-code line is nearly always ASCII, and this word-
+            // at-a-time test is a fraction of the general validation's cost on short lines.)
+            unsafe { String::from_utf8_unchecked(bytes) }
+        } else {
+            match String::from_utf8(bytes) {
+                Ok(s) => s,
+                Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
+            }
         };
         Ok(n)
     }
@@ -326,6 +332,10 @@ fn macro_line(line: &str) -> Option<(Macro, usize, usize)> {
     let mut k = i;
     while k < b.len() && b[k].is_ascii_alphabetic() {
         k += 1;
+    }
+    if k - i < 2 {
+        // A word letter and its number (`G1`): the common case, no keyword.
+        return None;
     }
     let word = &line[i..k];
     let m = [
@@ -1479,7 +1489,9 @@ impl Moves {
                     None => self.run_block(line, &words, here, next),
                 };
                 self.words = reuse(words);
-                result
+                // Not `result`: that copied the whole (large) result on every block.
+                result?;
+                Ok(())
             }
         }
     }

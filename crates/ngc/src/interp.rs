@@ -183,7 +183,12 @@ impl GCode {
     // Inlined: the large result read back from memory after a call stalled every block.
     #[inline(always)]
     fn parse(word: &Word, line: &str, dialect: Dialect) -> LineResult<GCode> {
-        let text = &line[word.span()];
+        // The codes of nearly every block, as written in most programs.
+        match word.number {
+            "1" | "01" => return Ok(GCode::Motion(Some(MotionMode::Linear))),
+            "0" | "00" => return Ok(GCode::Motion(Some(MotionMode::Rapid))),
+            _ => {}
+        }
         let tenths = word.value * 10.0;
         // `round` without the call to libm: the same code for every value accepted below.
         let code = if tenths >= 0.0 {
@@ -192,6 +197,7 @@ impl GCode {
             tenths.round()
         };
         let unsupported = |why: &str, help: &str| {
+            let text = &line[word.span()];
             LineError::new(
                 word.span(),
                 format!("unsupported code `{text}`{why}"),
@@ -1877,7 +1883,14 @@ impl Interp {
                             .map_err(|m| LineError::new(at, m, "cutter compensation"))?;
                     } else {
                         let mut from = start;
-                        for end in crate::turns::full_turn_ends(motion, start, target, turns) {
+                        // (Only for several turns: passing the points by value cost a
+                        // stall on every block.)
+                        let ends = if turns > 1 {
+                            crate::turns::full_turn_ends(motion, start, target, turns)
+                        } else {
+                            Vec::new()
+                        };
+                        for end in ends {
                             self.emit(queue, line_no, motion, from, end, self.path);
                             from = end;
                         }

@@ -754,6 +754,23 @@ impl Interp {
         path: PathControl,
         (feed, feed_mode): (Option<f64>, FeedMode),
     ) {
+        if self.comp.is_none() && self.comp_out.is_none() {
+            // Built in the queue: a move built on the stack in pieces and then copied in
+            // (in 64-byte loads) stalled on every block.
+            queue.push_back(Move {
+                line,
+                motion,
+                start,
+                end,
+                feed,
+                feed_mode,
+                tcp: self.tcp,
+                tool: self.tool,
+                tool_length_mm: self.tool_length_mm,
+                path,
+            });
+            return;
+        }
         let mut mv = Move {
             line,
             motion,

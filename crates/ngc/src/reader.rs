@@ -120,11 +120,22 @@ impl FileLines {
             self.reader.seek_relative(offset as i64 - self.pos as i64)?;
             self.pos = offset;
         }
-        let mut bytes = std::mem::take(buf).into_bytes();
+        // The line is read into `buf`'s own bytes, in place: a `String` taken apart and put
+        // back was stored in pieces and read back whole by the caller at once, a
+        // store-forwarding stall on every line.
+        // SAFETY: `buf` holds UTF-8 again before this returns: on an error it is emptied,
+        // and the bytes read are checked (or replaced) below.
+        let bytes = unsafe { buf.as_mut_vec() };
         bytes.clear();
         let mut n = 0;
         loop {
-            let available = self.reader.fill_buf()?;
+            let available = match self.reader.fill_buf() {
+                Ok(available) => available,
+                Err(e) => {
+                    bytes.clear();
+                    return Err(e);
+                }
+            };
             if available.is_empty() {
                 break;
             }
@@ -146,16 +157,12 @@ impl FileLines {
                 bytes.pop();
             }
         }
-        *buf = if bytes.is_ascii() {
-            // SAFETY: ASCII is UTF-8. (A G-code line is nearly always ASCII, and this word-
-            // at-a-time test is a fraction of the general validation's cost on short lines.)
-            unsafe { String::from_utf8_unchecked(bytes) }
-        } else {
-            match String::from_utf8(bytes) {
-                Ok(s) => s,
-                Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
-            }
-        };
+        // ASCII is UTF-8; a G-code line nearly always is, and this word-at-a-time test is a
+        // fraction of the general validation's cost on short lines.
+        if !bytes.is_ascii() && std::str::from_utf8(bytes).is_err() {
+            let valid = String::from_utf8_lossy(bytes).into_owned();
+            *buf = valid;
+        }
         Ok(n)
     }
 }
@@ -1387,7 +1394,10 @@ impl Moves {
             LineOwner::Shared(text) => &text[here.offset..here.offset + len],
             LineOwner::Buffer(buf) => buf.as_str(),
         };
-        self.cursor = next;
+        // Field by field: the cursor was just stored in pieces, and a copy of it whole read
+        // them back at once (a store-forwarding stall per line). The file is the same.
+        self.cursor.offset = next.offset;
+        self.cursor.line = next.line;
         let result = self.line(line, here, next).map_err(|e| {
             self.finished = true;
             self.error_at(here, e, line)

@@ -2485,7 +2485,18 @@ impl Interp {
                 target[Axis::Y] = xy[1];
             }
         }
-        for &(a, w) in axis_words {
+        // Axis by axis (constant indices, so `target` stays in registers): stored by each
+        // word's axis and returned whole, it was read back in pieces larger than written,
+        // a store-forwarding stall on every block. The words are in `Axis::ALL` order, as
+        // the block collects them.
+        debug_assert!(axis_words
+            .windows(2)
+            .all(|p| p[0].0.index() < p[1].0.index()));
+        let mut words = axis_words.iter().peekable();
+        for a in Axis::ALL {
+            let Some(&(_, w)) = words.next_if(|(b, _)| *b == a) else {
+                continue;
+            };
             if self.rotation.is_some() && !g53 && matches!(a, Axis::X | Axis::Y) {
                 continue;
             }

@@ -825,6 +825,9 @@ impl Interp {
         notices: &mut Vec<Notice>,
         path: &Path,
     ) -> LineResult<Stop> {
+        if self.plain_move(words, line_no, queue) {
+            return Ok(Stop::None);
+        }
         let dialect = self.dialect;
         if dialect.is_fanuc_family() {
             if let Some(g65) = words.iter().find(|w| w.letter == 'G' && w.value == 65.0) {
@@ -1954,6 +1957,106 @@ impl Interp {
             }
         }
         Ok(stop)
+    }
+
+    /// The block when it is a plain move: at most one `G0`/`G1` (written `0`, `00`, `1` or
+    /// `01`), axis words of this machine's axes, at most one of each, and `F`, in a plain
+    /// modal state (no cutter compensation, tilted or rotated frame, or diameter mode; a
+    /// modal G0 or G1 when the block has no G word). It is interpreted as
+    /// [`Interp::block`] would, step for step (feed, motion mode, target, move), without the
+    /// checks and lookups of every other feature: most blocks of most programs. Returns
+    /// false, having changed nothing, for any other block, and for one the general path
+    /// would refuse (a negative F, a feed move with no feed), which then reports the error.
+    fn plain_move(&mut self, words: &[Word], line_no: usize, queue: &mut VecDeque<Move>) -> bool {
+        if self.comp.is_some()
+            || self.diameter
+            || self.rotation.is_some()
+            || self.tilt.is_some()
+            || self.dwo
+        {
+            return false;
+        }
+        const NONE: u8 = u8::MAX;
+        let mut axis_at = [NONE; 6];
+        let (mut g, mut f) = (None, None);
+        for (k, w) in words.iter().enumerate() {
+            let axis = match w.letter {
+                'G' if g.is_none() => {
+                    g = Some(match w.number {
+                        "1" | "01" => MotionMode::Linear,
+                        "0" | "00" => MotionMode::Rapid,
+                        _ => return false,
+                    });
+                    continue;
+                }
+                'F' if f.is_none() => {
+                    f = Some(w);
+                    continue;
+                }
+                'X' => Axis::X,
+                'Y' => Axis::Y,
+                'Z' => Axis::Z,
+                'A' => Axis::A,
+                'B' => Axis::B,
+                'C' => Axis::C,
+                _ => return false,
+            };
+            if axis_at[axis.index()] != NONE || !self.axes[axis.index()] {
+                return false;
+            }
+            axis_at[axis.index()] = k as u8;
+        }
+        let mode = match (g, self.motion) {
+            (Some(mode), _) => mode,
+            (None, Some(mode @ (MotionMode::Rapid | MotionMode::Linear))) => mode,
+            _ => return false,
+        };
+        if axis_at == [NONE; 6] {
+            return false;
+        }
+        let feed = match f {
+            Some(f) if f.value < 0.0 => return false,
+            // (No G20/G21 here: the scale before and after the block's units is the same.)
+            Some(f) => (f.value > 0.0).then(|| match self.feed_mode {
+                FeedRead::InverseTime => f.value,
+                _ => f.value * self.scale(),
+            }),
+            None => self.feed,
+        };
+        if mode == MotionMode::Linear {
+            let refused = match self.feed_mode {
+                FeedRead::InverseTime if f.is_none() => true,
+                FeedRead::PerRevolution if self.spindle_rpm == 0.0 => true,
+                _ => feed.is_none() || feed == Some(0.0),
+            };
+            if refused {
+                return false;
+            }
+        }
+        self.diameter_switched = None;
+        if f.is_some() {
+            self.feed = feed;
+        }
+        if g.is_some() {
+            self.motion = Some(mode);
+            self.cycle_initial = None;
+        }
+        self.arc_not_allowed = false;
+        let mut axis_words: Small<(Axis, Word), 6> = Small::new();
+        for a in Axis::ALL {
+            if let Some(w) = words.get(axis_at[a.index()] as usize) {
+                axis_words.push_axis(a, w, false);
+            }
+        }
+        let start = self.pos;
+        let target = self.target(&axis_words, false);
+        let motion = match mode {
+            MotionMode::Linear => Motion::Linear,
+            _ => Motion::Rapid,
+        };
+        self.emit(queue, line_no, motion, start, target, self.path);
+        self.pos = target;
+        true
     }
 
     /// Fanuc `G65 P<program> [L<count>] <arguments>`: a macro call with its own locals;

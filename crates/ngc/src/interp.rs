@@ -183,7 +183,12 @@ impl GCode {
     // Inlined: the large result read back from memory after a call stalled every block.
     #[inline(always)]
     fn parse(word: &Word, line: &str, dialect: Dialect) -> LineResult<GCode> {
-        let text = &line[word.span()];
+        // The codes of nearly every block, as written in most programs.
+        match word.number {
+            "1" | "01" => return Ok(GCode::Motion(Some(MotionMode::Linear))),
+            "0" | "00" => return Ok(GCode::Motion(Some(MotionMode::Rapid))),
+            _ => {}
+        }
         let tenths = word.value * 10.0;
         // `round` without the call to libm: the same code for every value accepted below.
         let code = if tenths >= 0.0 {
@@ -192,6 +197,7 @@ impl GCode {
             tenths.round()
         };
         let unsupported = |why: &str, help: &str| {
+            let text = &line[word.span()];
             LineError::new(
                 word.span(),
                 format!("unsupported code `{text}`{why}"),
@@ -790,6 +796,23 @@ impl Interp {
         path: PathControl,
         (feed, feed_mode): (Option<f64>, FeedMode),
     ) {
+        if self.comp.is_none() && self.comp_out.is_none() {
+            // Built in the queue: a move built on the stack in pieces and then copied in
+            // (in 64-byte loads) stalled on every block.
+            queue.push_back(Move {
+                line,
+                motion,
+                start,
+                end,
+                feed,
+                feed_mode,
+                tcp: self.tcp,
+                tool: self.tool,
+                tool_length_mm: self.tool_length_mm,
+                path,
+            });
+            return;
+        }
         let mut mv = Move {
             line,
             motion,
@@ -844,6 +867,9 @@ impl Interp {
         notices: &mut Vec<Notice>,
         path: &Path,
     ) -> LineResult<Stop> {
+        if self.plain_move(words, line_no, queue) {
+            return Ok(Stop::None);
+        }
         let dialect = self.dialect;
         if dialect.is_fanuc_family() {
             if let Some(g65) = words.iter().find(|w| w.letter == 'G' && w.value == 65.0) {
@@ -864,6 +890,9 @@ impl Interp {
         // `^` after Z (see `slot`).
         const NONE: u8 = u8::MAX;
         let mut single = [NONE; 28];
+        // The same as bits (`1 << slot`): a plain `G01 X Y F` block skips each check of a
+        // feature whose letters it has not (one test instead of a lookup per letter).
+        let mut present = 0u32;
         let mut spindle_select = None;
         for (k, word) in words.iter().enumerate() {
             match word.letter {
@@ -883,7 +912,9 @@ impl Interp {
                     let code = GCode::parse(word, line, dialect)?;
                     // LinuxCNC accepts G80 beside G00/G01 (`G80 G0 Z10`): the cancel is implied.
                     let g80 = GCode::Motion(None);
-                    if code == g80 && g.iter().any(|(c, _)| matches!(c, GCode::Motion(Some(_)))) {
+                    if matches!(code, GCode::Motion(None))
+                        && g.iter().any(|(c, _)| matches!(c, GCode::Motion(Some(_))))
+                    {
                         continue;
                     }
                     if let Some(k) = g.iter().position(|(c, _)| *c == g80) {
@@ -940,6 +971,7 @@ impl Interp {
                         return Err(LineError::new(word.span(), format!("repeated `{letter}` word (first `{}`): expected each of {EXPECTED_WORDS} at most once per block, apart from G and M", &line[first.span()]), "repeated word"));
                     }
                     *slot = k as u8;
+                    present |= 1 << self::slot(letter);
                 }
             }
         }
@@ -979,7 +1011,16 @@ impl Interp {
                 ));
             }
         }
-        for a in Axis::ALL {
+        let missing_axes = Axis::ALL
+            .iter()
+            .filter(|a| !self.axes[a.index()])
+            .fold(0, |m, a| m | 1 << slot(a.letter()));
+        let check: &[Axis] = if present & missing_axes != 0 {
+            &Axis::ALL
+        } else {
+            &[]
+        };
+        for &a in check {
             if let Some(w) = get(a.letter()) {
                 if !self.axes[a.index()] {
                     let has: Vec<String> = Axis::ALL
@@ -1002,7 +1043,12 @@ impl Interp {
             })
             .unwrap_or(self.motion);
         let g7x_block = matches!(block_motion, Some(MotionMode::Lathe(700..=722)));
-        for letter in ['N', 'T', 'H', 'D', 'L'] {
+        let integers: &[char] = if present & const { letters(&['N', 'T', 'H', 'D', 'L']) } != 0 {
+            &['N', 'T', 'H', 'D', 'L']
+        } else {
+            &[]
+        };
+        for &letter in integers {
             // D is a length for G70-G72 and for G41.1/G42.1 (a diameter), a number elsewhere.
             let d_length =
                 g7x_block || g.iter().any(|(c, _)| matches!(c, GCode::CutterComp(3 | 4)));
@@ -1017,7 +1063,9 @@ impl Interp {
             GCode::NonModal(n) => Some((*n, *w)),
             _ => None,
         });
-        self.unused_words(line, &g, &m, &get)?;
+        if present & const { letters(&['P', 'Q', 'L', 'E', 'D']) } != 0 {
+            self.unused_words(line, &g, &m, &get)?;
+        }
         let mut stop = Stop::None;
 
         // 1. Units, feed mode, F, S. LinuxCNC sets F before G20/G21 (its order of
@@ -1397,7 +1445,7 @@ impl Interp {
                 _ => {}
             }
         }
-        if let Some((_, w)) = g.iter().find(|(c, _)| *c == GCode::AlignRotary) {
+        if let Some((_, w)) = g.iter().find(|(c, _)| matches!(c, GCode::AlignRotary)) {
             let (Some((_, rf)), Some(table)) = (self.tilt, self.table) else {
                 return Err(LineError::new(
                     w.span(),
@@ -1485,27 +1533,50 @@ impl Interp {
         }
         // Polar words `@` `^` become X Y words here, after the block's units and work system
         // took effect; in a G91 canned cycle they step each repeat (see `cycle`).
-        let polar_word = get('@').or(get('^'));
+        let polar_word = if present & const { letters(&['@', '^']) } != 0 {
+            get('@').or(get('^'))
+        } else {
+            None
+        };
         let mut polar_cycle = false;
-        let mut polar_xy: [Option<Word>; 2] = [None, None];
-        if let Some(pw) = polar_word {
-            polar_cycle = self.polar_words(line, &pw, &get, nonmodal, &mut polar_xy)?;
-        }
-        // By reference: copying the pair into each call cost about a tenth of the read.
-        let polar = &polar_xy;
-        let get = |l: char| match l {
-            'X' if polar[0].is_some() => polar[0],
-            'Y' if polar[1].is_some() => polar[1],
+        // Only a polar block builds the pair: even filling it with `None` on every block
+        // cost a store-forwarding stall (a 4-byte tag written, 48 bytes read back).
+        let mut polar_xy: [Option<Word>; 2];
+        let polar = match polar_word {
+            Some(pw) => {
+                polar_xy = [None, None];
+                polar_cycle = self.polar_words(line, &pw, &get, nonmodal, &mut polar_xy)?;
+                // By reference: copying the pair into each call cost a tenth of the read.
+                Some(&polar_xy)
+            }
+            None => None,
+        };
+        let get = |l: char| match (l, polar) {
+            ('X', Some([Some(x), _])) => Some(*x),
+            ('Y', Some([_, Some(y)])) => Some(*y),
             _ => get(l),
         };
         let dwell_x = dialect.is_fanuc_family() && matches!(nonmodal, Some((NonModal::Dwell, _)));
-        // Fixed buffers, no allocation per block.
+        // Fixed buffers, no allocation per block. The words are copied from the block's
+        // (written long before), not from `get`'s result (a stall per word).
         let mut axis_buf: Small<(Axis, Word), 6> = Small::new();
         for a in Axis::ALL {
-            if let Some(w) = get(a.letter()) {
-                if !(dwell_x && a == Axis::X) {
-                    axis_buf.push((a, w));
+            let mut halve = false;
+            let k = slot(a.letter());
+            // A reference: a value here was assembled in pieces on the stack and read
+            // back whole into the buffer, a store-forwarding stall per word.
+            let w = match (a, polar) {
+                (Axis::X, Some([Some(x), _])) => x,
+                (Axis::Y, Some([_, Some(y)])) => y,
+                _ if present >> k & 1 == 1 => {
+                    // X is a diameter under G7.
+                    halve = halve_x && a == Axis::X;
+                    &words[single[k] as usize]
                 }
+                _ => continue,
+            };
+            if !(dwell_x && a == Axis::X) {
+                axis_buf.push_axis(a, w, halve);
             }
         }
         let axis_words = &axis_buf[..];
@@ -1513,7 +1584,7 @@ impl Interp {
         // G43.1 takes its Z as the tool length, not as a move.
         let mut axes_used = g
             .iter()
-            .any(|(c, _)| *c == GCode::ToolLength(1) || *c == GCode::Tilt(true));
+            .any(|(c, _)| matches!(c, GCode::ToolLength(1) | GCode::Tilt(true)));
         if let Some((nm, w)) = nonmodal {
             if nm != NonModal::Dwell && nm != NonModal::G53 {
                 axes_used = true;
@@ -1660,7 +1731,12 @@ impl Interp {
         let mut n_arc = 0;
         // M19 R is the spindle orientation angle, not an arc radius.
         let m19 = m.iter().any(|(c, _)| *c == 19);
-        for l in ['I', 'J', 'K', 'R'] {
+        let arc_letters: &[char] = if present & const { letters(&['I', 'J', 'K', 'R']) } != 0 {
+            &['I', 'J', 'K', 'R']
+        } else {
+            &[]
+        };
+        for &l in arc_letters {
             if l == 'R' && m19 {
                 continue;
             }
@@ -1674,7 +1750,7 @@ impl Interp {
         // NURBS: G5.2 blocks collect control points, G5.3 moves along them.
         let nurbs_end = g
             .iter()
-            .find(|(c, _)| *c == GCode::NurbsEnd)
+            .find(|(c, _)| matches!(c, GCode::NurbsEnd))
             .map(|(_, w)| *w);
         if nurbs_end.is_some() || self.motion == Some(MotionMode::Spline(52)) {
             let g52 = motion_code.map(|(_, w)| w);
@@ -1847,8 +1923,11 @@ impl Interp {
                             unreachable!("handled above")
                         }
                     };
-                    let turns = match (get('P'), motion) {
-                        (Some(p), Motion::Arc { .. }) => turns(line, &p, self.feed_mode)?,
+                    let turns = match motion {
+                        Motion::Arc { .. } => match get('P') {
+                            Some(p) => turns(line, &p, self.feed_mode)?,
+                            None => 1,
+                        },
                         _ => 1,
                     };
                     if self.comp.is_some() && turns > 1 {
@@ -1866,7 +1945,14 @@ impl Interp {
                             .map_err(|m| LineError::new(at, m, "cutter compensation"))?;
                     } else {
                         let mut from = start;
-                        for end in crate::turns::full_turn_ends(motion, start, target, turns) {
+                        // (Only for several turns: passing the points by value cost a
+                        // stall on every block.)
+                        let ends = if turns > 1 {
+                            crate::turns::full_turn_ends(motion, start, target, turns)
+                        } else {
+                            Vec::new()
+                        };
+                        for end in ends {
                             self.emit(queue, line_no, motion, from, end, self.path);
                             from = end;
                         }
@@ -1913,6 +1999,106 @@ impl Interp {
             }
         }
         Ok(stop)
+    }
+
+    /// The block when it is a plain move: at most one `G0`/`G1` (written `0`, `00`, `1` or
+    /// `01`), axis words of this machine's axes, at most one of each, and `F`, in a plain
+    /// modal state (no cutter compensation, tilted or rotated frame, or diameter mode; a
+    /// modal G0 or G1 when the block has no G word). It is interpreted as
+    /// [`Interp::block`] would, step for step (feed, motion mode, target, move), without the
+    /// checks and lookups of every other feature: most blocks of most programs. Returns
+    /// false, having changed nothing, for any other block, and for one the general path
+    /// would refuse (a negative F, a feed move with no feed), which then reports the error.
+    fn plain_move(&mut self, words: &[Word], line_no: usize, queue: &mut VecDeque<Move>) -> bool {
+        if self.comp.is_some()
+            || self.diameter
+            || self.rotation.is_some()
+            || self.tilt.is_some()
+            || self.dwo
+        {
+            return false;
+        }
+        const NONE: u8 = u8::MAX;
+        let mut axis_at = [NONE; 6];
+        let (mut g, mut f) = (None, None);
+        for (k, w) in words.iter().enumerate() {
+            let axis = match w.letter {
+                'G' if g.is_none() => {
+                    g = Some(match w.number {
+                        "1" | "01" => MotionMode::Linear,
+                        "0" | "00" => MotionMode::Rapid,
+                        _ => return false,
+                    });
+                    continue;
+                }
+                'F' if f.is_none() => {
+                    f = Some(w);
+                    continue;
+                }
+                'X' => Axis::X,
+                'Y' => Axis::Y,
+                'Z' => Axis::Z,
+                'A' => Axis::A,
+                'B' => Axis::B,
+                'C' => Axis::C,
+                _ => return false,
+            };
+            if axis_at[axis.index()] != NONE || !self.axes[axis.index()] {
+                return false;
+            }
+            axis_at[axis.index()] = k as u8;
+        }
+        let mode = match (g, self.motion) {
+            (Some(mode), _) => mode,
+            (None, Some(mode @ (MotionMode::Rapid | MotionMode::Linear))) => mode,
+            _ => return false,
+        };
+        if axis_at == [NONE; 6] {
+            return false;
+        }
+        let feed = match f {
+            Some(f) if f.value < 0.0 => return false,
+            // (No G20/G21 here: the scale before and after the block's units is the same.)
+            Some(f) => (f.value > 0.0).then(|| match self.feed_mode {
+                FeedRead::InverseTime => f.value,
+                _ => f.value * self.scale(),
+            }),
+            None => self.feed,
+        };
+        if mode == MotionMode::Linear {
+            let refused = match self.feed_mode {
+                FeedRead::InverseTime if f.is_none() => true,
+                FeedRead::PerRevolution if self.spindle_rpm == 0.0 => true,
+                _ => feed.is_none() || feed == Some(0.0),
+            };
+            if refused {
+                return false;
+            }
+        }
+        self.diameter_switched = None;
+        if f.is_some() {
+            self.feed = feed;
+        }
+        if g.is_some() {
+            self.motion = Some(mode);
+            self.cycle_initial = None;
+        }
+        self.arc_not_allowed = false;
+        let mut axis_words: Small<(Axis, Word), 6> = Small::new();
+        for a in Axis::ALL {
+            if let Some(w) = words.get(axis_at[a.index()] as usize) {
+                axis_words.push_axis(a, w, false);
+            }
+        }
+        let start = self.pos;
+        let target = self.target(&axis_words, false);
+        let motion = match mode {
+            MotionMode::Linear => Motion::Linear,
+            _ => Motion::Rapid,
+        };
+        self.emit(queue, line_no, motion, start, target, self.path);
+        self.pos = target;
+        true
     }
 
     /// Fanuc `G65 P<program> [L<count>] <arguments>`: a macro call with its own locals;
@@ -2444,7 +2630,18 @@ impl Interp {
                 target[Axis::Y] = xy[1];
             }
         }
-        for &(a, w) in axis_words {
+        // Axis by axis (constant indices, so `target` stays in registers): stored by each
+        // word's axis and returned whole, it was read back in pieces larger than written,
+        // a store-forwarding stall on every block. The words are in `Axis::ALL` order, as
+        // the block collects them.
+        debug_assert!(axis_words
+            .windows(2)
+            .all(|p| p[0].0.index() < p[1].0.index()));
+        let mut words = axis_words.iter().peekable();
+        for a in Axis::ALL {
+            let Some(&(_, w)) = words.next_if(|(b, _)| *b == a) else {
+                continue;
+            };
             if self.rotation.is_some() && !g53 && matches!(a, Axis::X | Axis::Y) {
                 continue;
             }
@@ -3080,6 +3277,26 @@ impl<T: Copy, const N: usize> Small<T, N> {
     }
 }
 
+impl<'l> Small<(Axis, Word<'l>), 6> {
+    /// Pushes `(axis, *word)`, the value halved when `halve`, written field by field:
+    /// a whole tuple built first was assembled on the stack in pieces and read back in
+    /// larger ones, a store-forwarding stall per axis word of every block.
+    #[inline(always)]
+    fn push_axis(&mut self, axis: Axis, word: &Word<'l>, halve: bool) {
+        let slot = self.items[self.len].as_mut_ptr();
+        // SAFETY: `slot` points to an item of `items` (indexing checked `len` < 6); both
+        // fields are written here, so the item is initialised before `len` counts it.
+        unsafe {
+            std::ptr::addr_of_mut!((*slot).0).write(axis);
+            std::ptr::addr_of_mut!((*slot).1).write(*word);
+            if halve {
+                (*slot).1.value /= 2.0;
+            }
+        }
+        self.len += 1;
+    }
+}
+
 impl<T: Copy, const N: usize> std::ops::Deref for Small<T, N> {
     type Target = [T];
     fn deref(&self) -> &[T] {
@@ -3098,12 +3315,23 @@ fn rotate_deg(v: [f64; 2], deg: f64) -> [f64; 2] {
 }
 
 /// Index of a word letter in a block's table of single words: A-Z, then `@` and `^`.
-fn slot(letter: char) -> usize {
+const fn slot(letter: char) -> usize {
     match letter {
         '@' => 26,
         '^' => 27,
         l => (l as u8 - b'A') as usize,
     }
+}
+
+/// The bits (`1 << slot`) of `letters`.
+const fn letters(letters: &[char]) -> u32 {
+    let mut mask = 0;
+    let mut k = 0;
+    while k < letters.len() {
+        mask |= 1 << slot(letters[k]);
+        k += 1;
+    }
+    mask
 }
 
 fn m_group(code: u32) -> Option<u8> {

@@ -224,7 +224,8 @@ pub fn char_at(line: &str, i: usize) -> (char, Range<usize>) {
 #[inline(always)]
 fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> LineResult<Word<'l>> {
     let bytes = line.as_bytes();
-    let letter = (bytes[start] as char).to_ascii_uppercase();
+    // An ASCII letter, `@`, `^` or `$` (the caller's test).
+    let letter = bytes[start].to_ascii_uppercase() as char;
     let mut i = start + 1;
     while i < bytes.len() && is_blank(bytes[i]) {
         i += 1;
@@ -233,6 +234,16 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let (end, fast) = scan_number(bytes, i);
     i = end;
     let number = &line[number_start..i];
+    // The common case, a plain decimal number (so not a computed value), read and checked
+    // in one pass: nothing more to look at.
+    if let (Some(value), true) = (fast, known_letter(letter)) {
+        return Ok(Word {
+            letter,
+            value,
+            number,
+            span: (start, i),
+        });
+    }
     let span = start..if number.is_empty() { start + 1 } else { i };
     let text = &line[span.clone()];
     if !known_letter(letter) {
@@ -267,15 +278,6 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
             value,
             number: "",
             span: (start, e.i),
-        });
-    }
-    // The common case, a plain decimal number, read and checked in one pass.
-    if let Some(value) = fast {
-        return Ok(Word {
-            letter,
-            value,
-            number,
-            span: (start, span.end),
         });
     }
     if !is_decimal(number) {
@@ -365,6 +367,10 @@ fn scan_number(b: &[u8], start: usize) -> (usize, Option<f64>) {
     if negative || b.get(i) == Some(&b'+') {
         i += 1;
     }
+    if let Some(read) = scan_short_decimal(b, i) {
+        let (end, v) = read;
+        return (end, Some(if negative { -v } else { v }));
+    }
     let digits_start = i;
     let mut m: u64 = 0;
     let mut point = None;
@@ -397,10 +403,141 @@ fn scan_number(b: &[u8], start: usize) -> (usize, Option<f64>) {
     (end, Some(if negative { -v } else { v }))
 }
 
+/// [`scan_number`]'s common case, without a loop or a branch per byte: at most 7 digits,
+/// then (or not) a point and at most 7 digits, each part read from an 8-byte window of the
+/// line (so the byte after it is in the window too). Returns the end and the value (no
+/// sign), or `None` for anything else (a number near the end of the line, more digits, a
+/// run of `0-9 . + -` that goes on), which the byte loop reads.
+///
+/// A number of `k` ≤ 7 digits at the start of a window: its digits are the window's bytes
+/// minus `'0'`, shifted up by `8 - k` bytes (so that zeros lead), then combined in pairs,
+/// fours and eight by three multiplications (Lemire's eight-digit method). With `f` digits
+/// after the point, `m = int · 10^f + frac` is the same integer as the byte loop's, and the
+/// value `m / 10^f` is the same division.
+#[inline(always)]
+fn scan_short_decimal(b: &[u8], i: usize) -> Option<(usize, f64)> {
+    const POW10_INT: [u64; 8] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000];
+    let w = window(b, i)?;
+    let n_int = leading_digits(w);
+    if n_int == 8 {
+        return None;
+    }
+    let after = i + n_int;
+    match b[after] {
+        b'.' => {
+            let w2 = window(b, after + 1)?;
+            let n_frac = leading_digits(w2);
+            let end = after + 1 + n_frac;
+            if n_frac == 8 || n_int + n_frac == 0 || continues_number(b[end]) {
+                return None;
+            }
+            let m = digits_value(w, n_int) * POW10_INT[n_frac] + digits_value(w2, n_frac);
+            // (m < 10^14 < 2^53: exact.)
+            Some((end, m as f64 / POW10[n_frac]))
+        }
+        c if n_int > 0 && !continues_number(c) => Some((after, digits_value(w, n_int) as f64)),
+        _ => None,
+    }
+}
+
+/// `c` continues a run of `0-9 . + -` (a number the fast paths do not read).
+#[inline(always)]
+fn continues_number(c: u8) -> bool {
+    matches!(c, b'0'..=b'9' | b'.' | b'+' | b'-')
+}
+
+/// Bytes `b[i..i + 8]` as a little-endian word (the first byte lowest), if there are 8.
+#[inline(always)]
+fn window(b: &[u8], i: usize) -> Option<u64> {
+    let chunk: [u8; 8] = b.get(i..i + 8)?.try_into().ok()?;
+    Some(u64::from_le_bytes(chunk))
+}
+
+/// How many of the first bytes of `w` are the digits `0`-`9` (0-8).
+#[inline(always)]
+fn leading_digits(w: u64) -> usize {
+    const ONES: u64 = 0x0101_0101_0101_0101;
+    // Digit bytes become 0-9. A byte of `a` is above 9 when its high bit is set, or its
+    // low 7 bits plus 0x76 reach 0x80 (at most 0xf5: no carry into the next byte).
+    let a = w ^ (ONES * b'0' as u64);
+    let above_9 = (((a & (ONES * 0x7f)) + ONES * 0x76) | a) & (ONES * 0x80);
+    (above_9.trailing_zeros() / 8) as usize
+}
+
+/// The value of the first `k` (0-7) bytes of `w`, all digits.
+#[inline(always)]
+fn digits_value(w: u64, k: usize) -> u64 {
+    if k == 0 {
+        return 0;
+    }
+    let v = (w & 0x0F0F_0F0F_0F0F_0F0F) << (8 * (8 - k));
+    let v = v.wrapping_mul(10).wrapping_add(v >> 8);
+    (v & 0x0000_00FF_0000_00FF)
+        .wrapping_mul(100 + (1_000_000 << 32))
+        .wrapping_add(((v >> 16) & 0x0000_00FF_0000_00FF).wrapping_mul(1 + (10_000 << 32)))
+        >> 32
+}
+
 /// `[+-]? digits* ( . digits* )?` with at least one digit.
 pub fn is_decimal(s: &str) -> bool {
     let s = s.strip_prefix(['+', '-']).unwrap_or(s);
     let (int, frac) = s.split_once('.').unwrap_or((s, ""));
     let digits = |p: &str| p.bytes().all(|b| b.is_ascii_digit());
     digits(int) && digits(frac) && int.len() + frac.len() > 0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::scan_number;
+
+    /// Every plain decimal of 0-9 digits before and after the point, each with a sign or
+    /// not, followed by what may end a number (or continue it): the end is the end of the
+    /// run of `0-9 . + -`, and a value, when given, is `str::parse`'s of that run, which is
+    /// a plain decimal; a plain decimal of at most 15 digits always gets one.
+    #[test]
+    fn numbers_read_in_8_byte_windows_end_and_round_as_the_byte_loop() {
+        let digits = "1234567890";
+        for n_int in 0..=9 {
+            for n_frac in 0..=9 {
+                for point in [false, true] {
+                    if !point && n_frac > 0 || n_int + n_frac == 0 {
+                        continue;
+                    }
+                    let number = format!(
+                        "{}{}{}",
+                        &digits[..n_int],
+                        if point { "." } else { "" },
+                        &digits[10 - n_frac..]
+                    );
+                    for sign in ["", "-", "+"] {
+                        for tail in ["", " ", " X1.5 Y2", "X", "+1", ".5", "-", ";(c)  "] {
+                            let text = format!("{sign}{number}{tail}");
+                            let b = text.as_bytes();
+                            let run = b
+                                .iter()
+                                .skip(sign.len())
+                                .take_while(|c| matches!(c, b'0'..=b'9' | b'.' | b'+' | b'-'))
+                                .count();
+                            let (end, value) = scan_number(b, 0);
+                            assert_eq!(end, sign.len() + run, "end of {text:?}");
+                            let run_text = &text[sign.len()..sign.len() + run];
+                            let n_digits = run_text.bytes().filter(u8::is_ascii_digit).count();
+                            let plain = n_digits > 0
+                                && run_text.bytes().all(|c| c.is_ascii_digit() || c == b'.')
+                                && run_text.matches('.').count() <= 1;
+                            match value {
+                                Some(v) => {
+                                    assert!(plain, "{text:?} read as {v}");
+                                    let expected: f64 =
+                                        format!("{sign}{run_text}").parse().unwrap();
+                                    assert_eq!(v.to_bits(), expected.to_bits(), "{text:?}");
+                                }
+                                None => assert!(!plain || n_digits > 15, "{text:?} not read"),
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

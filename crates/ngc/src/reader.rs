@@ -120,11 +120,22 @@ impl FileLines {
             self.reader.seek_relative(offset as i64 - self.pos as i64)?;
             self.pos = offset;
         }
-        let mut bytes = std::mem::take(buf).into_bytes();
+        // The line is read into `buf`'s own bytes, in place: a `String` taken apart and put
+        // back was stored in pieces and read back whole by the caller at once, a
+        // store-forwarding stall on every line.
+        // SAFETY: `buf` holds UTF-8 again before this returns: on an error it is emptied,
+        // and the bytes read are checked (or replaced) below.
+        let bytes = unsafe { buf.as_mut_vec() };
         bytes.clear();
         let mut n = 0;
         loop {
-            let available = self.reader.fill_buf()?;
+            let available = match self.reader.fill_buf() {
+                Ok(available) => available,
+                Err(e) => {
+                    bytes.clear();
+                    return Err(e);
+                }
+            };
             if available.is_empty() {
                 break;
             }
@@ -146,10 +157,12 @@ impl FileLines {
                 bytes.pop();
             }
         }
-        *buf = match String::from_utf8(bytes) {
-            Ok(s) => s,
-            Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
-        };
+        // ASCII is UTF-8; a G-code line nearly always is, and this word-at-a-time test is a
+        // fraction of the general validation's cost on short lines.
+        if !bytes.is_ascii() && std::str::from_utf8(bytes).is_err() {
+            let valid = String::from_utf8_lossy(bytes).into_owned();
+            *buf = valid;
+        }
         Ok(n)
     }
 }
@@ -327,6 +340,10 @@ fn macro_line(line: &str) -> Option<(Macro, usize, usize)> {
     while k < b.len() && b[k].is_ascii_alphabetic() {
         k += 1;
     }
+    if k - i < 2 {
+        // A word letter and its number (`G1`): the common case, no keyword.
+        return None;
+    }
     let word = &line[i..k];
     let m = [
         ("IF", Macro::If),
@@ -492,7 +509,9 @@ impl Moves {
     }
 
     /// The line at `c`, and the cursor of the next line; `None` at the end of the text (or
-    /// on a read error, kept in `io_error`).
+    /// on a read error, kept in `io_error`). (Inlined: the cursor returned through memory
+    /// and read back at once stalled every line.)
+    #[inline(always)]
     fn line_at(&mut self, c: Cursor) -> Option<(&str, Cursor)> {
         let (line, len) = match &mut self.programs[c.file].source {
             Source::Text(text) => {
@@ -1420,7 +1439,10 @@ impl Moves {
             LineOwner::Shared(text) => &text[here.offset..here.offset + len],
             LineOwner::Buffer(buf) => buf.as_str(),
         };
-        self.cursor = next;
+        // Field by field: the cursor was just stored in pieces, and a copy of it whole read
+        // them back at once (a store-forwarding stall per line). The file is the same.
+        self.cursor.offset = next.offset;
+        self.cursor.line = next.line;
         let result = self.line(line, here, next).map_err(|e| {
             self.finished = true;
             self.error_at(here, e, line)
@@ -1473,11 +1495,7 @@ impl Moves {
             }
             _ => {}
         }
-        // (A fold without an early exit: vectorised.)
-        if b.iter()
-            .fold(0u8, |a, &c| a | (c == b'#') as u8 | (c == b'[') as u8)
-            != 0
-        {
+        if has_hash_or_bracket(b) {
             self.interp.refresh_system_parameters();
         }
         let words = reuse(std::mem::take(&mut self.words));
@@ -1538,7 +1556,9 @@ impl Moves {
                     None => self.run_block(line, &words, here, next),
                 };
                 self.words = reuse(words);
-                result
+                // Not `result`: that copied the whole (large) result on every block.
+                result?;
+                Ok(())
             }
         }
     }
@@ -1792,6 +1812,26 @@ fn newline(bytes: &[u8]) -> Option<usize> {
         .map(|k| i + k)
 }
 
+/// True when `bytes` holds a `#` or a `[`, 8 bytes at a time as in [`newline`] (a zero
+/// byte of the word XOR eight `#`s, or of the word XOR eight `[`s). On lines this short a
+/// vectorised fold spent more in its set-up and reduction than in the search.
+#[inline]
+fn has_hash_or_bracket(bytes: &[u8]) -> bool {
+    const ONES: u64 = 0x0101_0101_0101_0101;
+    const HIGHS: u64 = 0x8080_8080_8080_8080;
+    let zero = |v: u64| v.wrapping_sub(ONES) & !v & HIGHS;
+    let mut chunks = bytes.chunks_exact(8);
+    for chunk in &mut chunks {
+        let mut word = [0u8; 8];
+        word.copy_from_slice(chunk);
+        let w = u64::from_le_bytes(word);
+        if zero(w ^ (ONES * b'#' as u64)) | zero(w ^ (ONES * b'[' as u64)) != 0 {
+            return true;
+        }
+    }
+    chunks.remainder().iter().any(|&c| c == b'#' || c == b'[')
+}
+
 /// Siemens Sinumerik words [`foreign_language`](Moves::foreign_language) refuses.
 const SIEMENS_TOKENS: [&str; 5] = ["TRAORI", "traori", "Traori", "CYCLE800", "cycle800"];
 
@@ -1874,6 +1914,29 @@ impl Iterator for Moves {
                 self.interp.discard();
                 self.flushed = true;
                 return Some(Err(e));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::has_hash_or_bracket;
+
+    #[test]
+    fn a_hash_or_bracket_is_found_at_every_place_of_every_short_line() {
+        // Bytes next to `#` (0x23) and `[` (0x5b), and ones whose difference from them
+        // borrows across bytes in the 8-byte test.
+        let filler = b"G1X-0.5\"$ZZ\\\x01\xff";
+        for len in 0..=24 {
+            let line: Vec<u8> = (0..len).map(|k| filler[k % filler.len()]).collect();
+            assert!(!has_hash_or_bracket(&line), "{len}: none in {line:?}");
+            for at in 0..len {
+                for c in [b'#', b'['] {
+                    let mut with = line.clone();
+                    with[at] = c;
+                    assert!(has_hash_or_bracket(&with), "{} at {at} of {len}", c as char);
+                }
             }
         }
     }

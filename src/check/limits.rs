@@ -126,9 +126,9 @@ struct Previous {
     time_s: f64,
     block_index: u64,
     /// Positions, mm and deg.
-    q: [f64; 6],
+    q: [f64; 9],
     /// Velocity per s, when the sample had one inside its block.
-    v: Option<[f64; 6]>,
+    v: Option<[f64; 9]>,
 }
 
 /// Relative slack on velocity and acceleration limits for rounding in finite differences.
@@ -182,13 +182,13 @@ impl<'a> LimitsMonitor<'a> {
             Some(p) if s.time_s > p.time_s => {
                 // As `(actual - previous) * (1 / dt)`, element by element: the same rounding.
                 let k = 1.0 / (s.time_s - p.time_s);
-                let mut v = [0.0; 6];
-                for i in 0..6 {
+                let mut v = [0.0; 9];
+                for i in 0..9 {
                     v[i] = (x[i] - p.q[i]) * k;
                 }
                 let a = p.v.filter(|_| p.block_index == s.block_index).map(|pv| {
-                    let mut a = [0.0; 6];
-                    for i in 0..6 {
+                    let mut a = [0.0; 9];
+                    for i in 0..9 {
                         a[i] = (v[i] - pv[i]) * k;
                     }
                     a
@@ -231,7 +231,7 @@ impl<'a> LimitsMonitor<'a> {
 
     /// Opens, extends and closes the violations of sample `s` (velocity per s and
     /// acceleration per s² when it has them).
-    fn track(&mut self, s: &Sample, velocity: Option<&[f64; 6]>, acceleration: Option<&[f64; 6]>) {
+    fn track(&mut self, s: &Sample, velocity: Option<&[f64; 9]>, acceleration: Option<&[f64; 9]>) {
         let mut theta: Option<Option<f64>> = None;
         for track in self.tracks.iter_mut() {
             let l = track.limits;

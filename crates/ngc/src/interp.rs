@@ -297,7 +297,7 @@ impl GCode {
 pub struct Interp {
     pub params: Params,
     dialect: Dialect,
-    axes: [bool; 6],
+    axes: [bool; 9],
     /// Machine position of the controlled point, mm and deg.
     pos: AxisVec,
     motion: Option<MotionMode>,
@@ -402,7 +402,7 @@ impl Interp {
                 *v,
             );
         }
-        let mut axes = [false; 6];
+        let mut axes = [false; 9];
         for a in &o.axes {
             axes[a.index()] = true;
         }
@@ -509,8 +509,10 @@ impl Interp {
                 p[a] = pp[a.index()];
             }
         }
-        for a in Axis::LINEAR {
-            p[a] /= self.scale();
+        for a in Axis::ALL {
+            if !a.is_rotary() {
+                p[a] /= self.scale();
+            }
         }
         p
     }
@@ -1247,6 +1249,19 @@ impl Interp {
                                 if kind == 4 { -t.length_mm } else { t.length_mm };
                         }
                         1 => {
+                            // LinuxCNC offsets any axis by its word; mtsim applies a tool
+                            // length along Z only, so another axis word is refused, not dropped.
+                            if let Some(o) = Axis::ALL
+                                .iter()
+                                .filter(|a| **a != Axis::Z)
+                                .find_map(|a| get(a.letter()))
+                            {
+                                return Err(LineError::new(
+                                    o.span(),
+                                    format!("`{}` in a G43.1 block: expected only Z (mtsim applies the tool length offset along Z only)", &line[o.span()]),
+                                    "offset not along Z",
+                                ));
+                            }
                             let z = get('Z').ok_or_else(|| {
                                 LineError::new(
                                     w.span(),
@@ -1458,7 +1473,7 @@ impl Interp {
         };
         let dwell_x = dialect.is_fanuc_family() && matches!(nonmodal, Some((NonModal::Dwell, _)));
         // Fixed buffers, no allocation per block.
-        let mut axis_buf: Small<(Axis, Word), 6> = Small::new();
+        let mut axis_buf: Small<(Axis, Word), 9> = Small::new();
         for a in Axis::ALL {
             if let Some(w) = get(a.letter()) {
                 if !(dwell_x && a == Axis::X) {
@@ -2356,15 +2371,21 @@ impl Interp {
     /// The machine target of axis words (program coordinates, or machine with G53).
     fn target(&self, axis_words: &[(Axis, Word)], g53: bool) -> AxisVec {
         if let (Some(f), false) = (self.frame(), g53) {
-            // Program X Y Z in the feature / table-fixed frame; rotary words as usual.
+            // Program X Y Z in the feature / table-fixed frame; rotary (and U V W) words as
+            // usual.
             let mut p = f.to_program(self.tip(), &self.offset, &self.pos);
             let mut target = self.pos;
             for &(a, w) in axis_words {
-                if a.is_rotary() {
-                    target[a] = if self.absolute {
-                        w.value + self.offset[a]
+                if a.is_rotary() || a.is_secondary() {
+                    let v = if a.is_rotary() {
+                        w.value
                     } else {
-                        self.pos[a] + w.value
+                        w.value * self.scale()
+                    };
+                    target[a] = if self.absolute {
+                        v + self.offset[a]
+                    } else {
+                        self.pos[a] + v
                     };
                 } else {
                     let v = w.value * self.scale();
@@ -2567,6 +2588,24 @@ impl Interp {
         let (u, v, n) = self.plane.axes();
         let scale = self.scale();
         let at = first.clone();
+        // The hole is placed by the plane's axes; another axis word would be lost.
+        if let Some(w) = Axis::ALL
+            .iter()
+            .filter(|a| ![u, v, n].contains(a))
+            .find_map(|a| get(a.letter()))
+        {
+            return Err(LineError::new(
+                w.span(),
+                format!(
+                    "`{}` in a canned cycle: expected only {} {} {} (LinuxCNC: \"Cannot put an A in canned cycle\")",
+                    &line[w.span()],
+                    u.letter(),
+                    v.letter(),
+                    n.letter()
+                ),
+                "axis word in a cycle",
+            ));
+        }
         if let Some(r) = get('R') {
             self.cycle_r = Some(r.value * scale);
         }
@@ -2853,7 +2892,7 @@ impl Interp {
         at: std::ops::Range<usize>,
     ) -> LineResult<Motion> {
         let f = self.frame().expect("called with a frame");
-        if Axis::ALL[3..].iter().any(|&a| target[a] != self.pos[a]) {
+        if Axis::XYZABC[3..].iter().any(|&a| target[a] != self.pos[a]) {
             return Err(LineError::new(at, "arc that turns a rotary axis with G68.2 or G254 active: expected the rotary axes still during G02/G03", "rotary arc in a tilted frame"));
         }
         let mut tip_end = [target[Axis::X], target[Axis::Y], target[Axis::Z]];

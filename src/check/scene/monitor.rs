@@ -610,7 +610,9 @@ fn measure(scene: &Scene, i: usize, poses: &[Pose; 4], warm: &mut Warm) -> f64 {
 fn in_table_frames(k: &Kinematics, q: &AxisVec, u: Vector3<f64>) -> [Vector3<f64>; 2] {
     use crate::kinematics::Layout;
     let cradle = match k.layout {
-        Layout::Xyz | Layout::Xz | Layout::Xyzabc => return [u, u],
+        Layout::Xyz | Layout::Xz | Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw => {
+            return [u, u]
+        }
         Layout::Xyza => {
             // Rx(A)^T u; no cradle.
             let (s, c) = q[Axis::A].to_radians().sin_cos();

@@ -940,16 +940,17 @@ impl Interp {
             }
         }
         for a in Axis::ALL {
+            if self.axes[a.index()] {
+                continue;
+            }
             if let Some(w) = get(a.letter()) {
-                if !self.axes[a.index()] {
-                    let has: Vec<String> = Axis::ALL
-                        .iter()
-                        .filter(|b| self.axes[b.index()])
-                        .map(|b| b.letter().to_string())
-                        .collect();
-                    return Err(LineError::new(w.span(), format!("`{}`: this machine has no {} axis (it has {})", &line[w.span()], a.letter(), has.join(" ")), "axis not on this machine")
-                        .help(format!("run the program with a machine whose layout has a {} axis, or check the program is for this machine (a six-axis robot pose X Y Z A B C fits no machine mtsim models); a word for a missing axis is never dropped", a.letter())));
-                }
+                let has: Vec<String> = Axis::ALL
+                    .iter()
+                    .filter(|b| self.axes[b.index()])
+                    .map(|b| b.letter().to_string())
+                    .collect();
+                return Err(LineError::new(w.span(), format!("`{}`: this machine has no {} axis (it has {})", &line[w.span()], a.letter(), has.join(" ")), "axis not on this machine")
+                    .help(format!("run the program with a machine whose layout has a {} axis, or check the program is for this machine (a six-axis robot pose X Y Z A B C fits no machine mtsim models); a word for a missing axis is never dropped", a.letter())));
             }
         }
         // G41.1/G42.1 take the diameter itself in D.
@@ -1473,8 +1474,12 @@ impl Interp {
         };
         let dwell_x = dialect.is_fanuc_family() && matches!(nonmodal, Some((NonModal::Dwell, _)));
         // Fixed buffers, no allocation per block.
+        // (Only the machine's axes: a word for another one was refused above.)
         let mut axis_buf: Small<(Axis, Word), 9> = Small::new();
         for a in Axis::ALL {
+            if !self.axes[a.index()] {
+                continue;
+            }
             if let Some(w) = get(a.letter()) {
                 if !(dwell_x && a == Axis::X) {
                     axis_buf.push((a, w));
@@ -3062,7 +3067,7 @@ impl<T: Copy, const N: usize> Small<T, N> {
         }
     }
     /// False when full.
-    #[inline]
+    #[inline(always)]
     fn push(&mut self, t: T) -> bool {
         if self.len == N {
             return false;

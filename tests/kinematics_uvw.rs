@@ -314,3 +314,31 @@ fn what_the_u_v_w_layouts_cannot_give_is_refused_with_exit_2() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("`V2`: this machine has no V axis"), "{err}");
 }
+
+#[test]
+fn rs274_standalone_refuses_u_v_w_so_it_cannot_be_the_reference() {
+    // docs/gcode.md and docs/rs274.md rely on this: LinuxCNC's standalone interpreter has
+    // the axis mask X Y Z A B C and prints six coordinates per call, so programs with U V
+    // W words are checked against hand-worked values, not against rs274.
+    let Some(rs274) = common::rs274::require("rs274_standalone_refuses_u_v_w") else {
+        return;
+    };
+    let dir = scratch("uvw", "rs274");
+    let (program, tools) = (dir.join("p.ngc"), dir.join("t.tbl"));
+    std::fs::write(&program, "G21 G90\nG0 X1 U2\nM2\n").unwrap();
+    std::fs::write(&tools, "").unwrap();
+    let run = common::rs274::run(
+        &rs274,
+        &program,
+        &tools,
+        &dir.join("rs"),
+        std::time::Duration::from_secs(30),
+    );
+    assert!(!run.ok && !run.timed_out, "{}", run.stderr);
+    assert!(
+        run.stderr.contains("Bad character 'u' used"),
+        "{}",
+        run.stderr
+    );
+    assert!(run.moves.is_empty(), "{:?}", run.moves);
+}

@@ -1170,6 +1170,8 @@ mod tests {
             Layout::Xz,
             Layout::Xyza,
             Layout::Xyzabc,
+            Layout::Xyuv,
+            Layout::Xyzabcuvw,
         ] {
             let k = Kinematics::new(layout, Vector3::new(1.0, -2.0, 3.0));
             let expected = k.table_to_machine(&q, &p);

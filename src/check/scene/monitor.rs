@@ -663,6 +663,8 @@ mod tests {
             Layout::Xz,
             Layout::Xyza,
             Layout::Xyzabc,
+            Layout::Xyuv,
+            Layout::Xyzabcuvw,
         ] {
             let k = Kinematics::new(layout, Vector3::new(5.0, -3.0, 100.0));
             let mut q = AxisVec::ZERO;

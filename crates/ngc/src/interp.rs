@@ -2550,6 +2550,15 @@ impl Interp {
                 self.parameters_changed();
             }
             1 | 10 => {
+                // A tool has a length along Z and a diameter: an offset along another axis
+                // (LinuxCNC's lathe X, or U V W) is refused rather than dropped.
+                if let Some((_, o)) = axis_words.iter().find(|(a, _)| *a != Axis::Z) {
+                    return Err(LineError::new(
+                        o.span(),
+                        format!("`{}` in a G10 L1/L10 block: expected only Z (the tool length) and R (the radius); mtsim's tools have no offset along other axes", &line[o.span()]),
+                        "tool offset not along Z",
+                    ));
+                }
                 let n = pn as u32;
                 let mut tool = self.tools.get(&n).copied().unwrap_or(Tool {
                     number: n,

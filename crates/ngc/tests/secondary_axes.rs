@@ -219,11 +219,18 @@ fn words_that_would_be_lost_are_refused() {
         message.contains("`U5` in a canned cycle: expected only X Y Z"),
         "{message}"
     );
-    // mtsim's tool length offset is along Z only.
+    // mtsim's tool length offset is along Z only (LinuxCNC's G43.1 takes any axis).
     let (_, column, message) = error("G43.1 Z1 W2\n", &nine());
     assert_eq!(column, 10);
     assert!(
         message.contains("`W2` in a G43.1 block: expected only Z"),
+        "{message}"
+    );
+    // And so are its tools: G10 L1 sets a length along Z and a radius.
+    let (_, column, message) = error("G10 L1 P1 Z5 W2\n", &nine());
+    assert_eq!(column, 14);
+    assert!(
+        message.contains("`W2` in a G10 L1/L10 block: expected only Z"),
         "{message}"
     );
 }

@@ -248,3 +248,33 @@ fn a_probe_sets_the_u_v_w_probe_parameters() {
         [5.0, 6.0, 7.0]
     );
 }
+
+#[test]
+fn cutter_compensation_offsets_the_plane_and_keeps_u_v_w() {
+    // A left-compensated (G41.1, diameter 2: radius 1) counter-clockwise square from (0, 0):
+    // every corner turns left, inside the path, so the offset lines y = 1, x = 9, y = 9 meet
+    // at (9, 1) and (9, 9). U V W are not in the plane: they end where the words say.
+    let m = moves(
+        "G21 G90 G17\nG0 X0 Y0\nG41.1 D2\nG1 X10 Y0 U5 F100\nG1 X10 Y10 U7\nG1 X0 Y10 W3\nG40\nG0 X-5 Y-5 U0\n",
+        &nine(),
+    );
+    let r = |v: f64| (v * 1e9).round() / 1e9 + 0.0;
+    let xy: Vec<[f64; 2]> = m
+        .iter()
+        .map(|m| [r(m.end[Axis::X]), r(m.end[Axis::Y])])
+        .collect();
+    assert_eq!(
+        xy,
+        [[0.0, 0.0], [9.0, 1.0], [9.0, 9.0], [0.0, 9.0], [-5.0, -5.0]]
+    );
+    assert_eq!(
+        uvw(&m),
+        [
+            [0.0, 0.0, 0.0],
+            [5.0, 0.0, 0.0],
+            [7.0, 0.0, 0.0],
+            [7.0, 0.0, 3.0],
+            [0.0, 0.0, 3.0],
+        ]
+    );
+}

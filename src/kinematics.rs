@@ -56,6 +56,15 @@
 //!   robot's joints are not modelled, so nothing that needs the tool's orientation or the
 //!   joint motion is given: TCP, the ball bar and the collision scene are refused
 //!   ([`Layout::rotaries_unmodelled`]).
+//! - xyuv (a hot-wire foam cutter, LinuxCNC `trivkins coordinates=xyuv`): X Y move one end
+//!   of the wire, U V (parallel to X Y) the other; `R = I`, the tool tip is `(X, Y, 0)`.
+//! - xyzabcuvw (nine world coordinates, LinuxCNC's axis_9axis): `R = I`, the tool tip is
+//!   X Y Z; A B C as for xyzabc.
+//!
+//!   U V W are linear axes of their own (mm) with no place in the tool pose: a wire's far
+//!   end, a second carriage. So where the tool's pose must be known (TCP, the ball bar, the
+//!   collision scene) these layouts are refused ([`Layout::has_secondary_axes`]); axis
+//!   limits, timing, the servo models and the trace run on every axis.
 //!
 //! # Nominal and actual
 //!
@@ -105,6 +114,14 @@ pub enum Layout {
     /// robot's joints are not modelled), so TCP, a ball bar and collisions are refused.
     #[serde(rename = "xyzabc")]
     Xyzabc,
+    /// Four independent linear axes X Y U V (a hot-wire foam cutter, LinuxCNC `trivkins
+    /// coordinates=xyuv`): X Y carry one end of the wire, U V the other.
+    #[serde(rename = "xyuv")]
+    Xyuv,
+    /// Nine independent world axes X Y Z A B C U V W (LinuxCNC's axis_9axis, trivkins):
+    /// A B C as in xyzabc, U V W linear axes parallel to X Y Z.
+    #[serde(rename = "xyzabcuvw")]
+    Xyzabcuvw,
 }
 
 impl Layout {
@@ -117,14 +134,21 @@ impl Layout {
             Layout::TrtAb => &[Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::B],
             Layout::Xz => &[Axis::X, Axis::Z],
             Layout::Xyza => &[Axis::X, Axis::Y, Axis::Z, Axis::A],
-            Layout::Xyzabc => &Axis::ALL,
+            Layout::Xyzabc => &Axis::XYZABC,
+            Layout::Xyuv => &[Axis::X, Axis::Y, Axis::U, Axis::V],
+            Layout::Xyzabcuvw => &Axis::ALL,
         }
     }
 
     /// The tilting axis, if any.
     pub fn tilt_axis(self) -> Option<Axis> {
         match self {
-            Layout::Xyz | Layout::Xz | Layout::Xyza | Layout::Xyzabc => None,
+            Layout::Xyz
+            | Layout::Xz
+            | Layout::Xyza
+            | Layout::Xyzabc
+            | Layout::Xyuv
+            | Layout::Xyzabcuvw => None,
             Layout::TrtAc => Some(Axis::A),
             Layout::TrtBc => Some(Axis::B),
             Layout::TrtAb => Some(Axis::B),
@@ -135,7 +159,7 @@ impl Layout {
     /// (which has no cradle: A turns the part about the machine's X).
     pub fn table_axis(self) -> Option<Axis> {
         match self {
-            Layout::Xyz | Layout::Xz | Layout::Xyzabc => None,
+            Layout::Xyz | Layout::Xz | Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw => None,
             Layout::TrtAc | Layout::TrtBc => Some(Axis::C),
             Layout::TrtAb | Layout::Xyza => Some(Axis::A),
         }
@@ -145,14 +169,38 @@ impl Layout {
     /// (xyzabc): then nothing that needs the tool's orientation or the machine's joints
     /// (TCP, a ball bar through the servo models, the collision scene) can be computed.
     pub fn rotaries_unmodelled(self) -> bool {
-        self == Layout::Xyzabc
+        matches!(self, Layout::Xyzabc | Layout::Xyzabcuvw)
+    }
+
+    /// True when the layout has secondary linear axes U V W (xyuv, xyzabcuvw): axes with no
+    /// place in the tool pose (a foam cutter's far wire end), so nothing that needs the
+    /// tool's pose (TCP, a ball bar, the collision scene) can be computed.
+    pub fn has_secondary_axes(self) -> bool {
+        matches!(self, Layout::Xyuv | Layout::Xyzabcuvw)
+    }
+
+    /// Why the tool's pose is unknown on this layout (so TCP, a ball bar and the collision
+    /// scene are refused), for messages; `None` when it is modelled.
+    pub fn tool_pose_unmodelled(self) -> Option<&'static str> {
+        match self {
+            Layout::Xyzabc => Some(
+                "its A B C are world coordinates (a robot's, as LinuxCNC plans them) with no modelled kinematic chain",
+            ),
+            Layout::Xyuv => Some(
+                "its U V are linear axes with no place in the tool pose (a foam cutter's far wire end)",
+            ),
+            Layout::Xyzabcuvw => Some(
+                "its A B C are world coordinates with no modelled kinematic chain and its U V W linear axes with no place in the tool pose",
+            ),
+            _ => None,
+        }
     }
 
     /// True when the collision scene (a milling tool along +Z, a table, a cradle) models
     /// this machine: not a lathe (xz: a turning tool and chuck) nor xyzabc (the tool's
     /// orientation is not modelled).
     pub fn has_collision_scene(self) -> bool {
-        !matches!(self, Layout::Xz | Layout::Xyzabc)
+        !matches!(self, Layout::Xz | Layout::Xyzabc) && !self.has_secondary_axes()
     }
 
     /// +1 when a positive rotary command turns the table positively about its axis line's
@@ -173,6 +221,8 @@ impl Layout {
             Layout::Xz => "xz",
             Layout::Xyza => "xyza",
             Layout::Xyzabc => "xyzabc",
+            Layout::Xyuv => "xyuv",
+            Layout::Xyzabcuvw => "xyzabcuvw",
         }
     }
 }
@@ -323,7 +373,9 @@ impl Kinematics {
         let (sc, cc) = angles.c;
         let m = match self.layout {
             // xyzabc's rotaries carry no modelled chain: its tool tip is the world X Y Z.
-            Layout::Xyz | Layout::Xz | Layout::Xyzabc => return Rotation3::identity(),
+            Layout::Xyz | Layout::Xz | Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw => {
+                return Rotation3::identity()
+            }
             Layout::Xyza => {
                 // Rx(A); the table axis (the `c` slot) is A.
                 let (sa, ca) = (sc, cc);

@@ -18,7 +18,7 @@ use common::{machine, rs274, scratch};
 
 /// Fraction of standalone programs that `analyze` and `check` read, at least. The issue's
 /// goal is 0.90; this is the figure reached so far (raise it as the reader grows).
-const READ_FLOOR: f64 = 0.90;
+const READ_FLOOR: f64 = 0.91;
 
 /// Longest a single `analyze` or `check` may take before it counts as a hang.
 const TIMEOUT: Duration = Duration::from_secs(30);
@@ -706,11 +706,12 @@ fn run_in_config(
             })
         })
         .collect();
-    // On a machine of trivial kinematics (xz, xyz, xyza, xyzabc: the world coordinates are
-    // planned either way) the remaps run as written, their offsets and M codes included,
-    // with `motion.switchkins-type` at its start value 0; only the switch is not modelled.
+    // On a machine of trivial kinematics (xz, xyz, xyza, xyzabc, xyuv, xyzabcuvw: the world
+    // coordinates are planned either way) the remaps run as written, their offsets and M
+    // codes included, with `motion.switchkins-type` at its start value 0; only the switch is
+    // not modelled.
     let trivial = std::fs::read_to_string(machine_path).is_ok_and(|m| {
-        ["xz", "xyz", "xyza", "xyzabc"]
+        ["xz", "xyz", "xyza", "xyzabc", "xyuv", "xyzabcuvw"]
             .iter()
             .any(|l| m.contains(&format!("kinematics = \"{l}\"")))
     });

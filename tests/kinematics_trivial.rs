@@ -107,7 +107,7 @@ fn trivial_layouts_have_their_axes_and_no_tilt() {
     assert_eq!(Layout::Xyza.table_axis(), Some(Axis::A));
     // xyzabc's tool tip is the world X Y Z whatever A B C are.
     let k = Kinematics::new(Layout::Xyzabc, Vector3::zeros());
-    let q = AxisVec([10.0, -20.0, 30.0, 45.0, -60.0, 170.0]);
+    let q = AxisVec::xyzabc([10.0, -20.0, 30.0, 45.0, -60.0, 170.0]);
     assert_eq!(k.forward(&q).tip, Point3::new(10.0, -20.0, 30.0));
 }
 

@@ -14,7 +14,7 @@ fn ends(scenario: &Scenario, program: &Path) -> Result<Vec<[f64; 6]>, String> {
     read_file(program, &scenario.reader)
         .map_err(|e| e.to_string())?
         .map(|m| {
-            m.map(|m| Axis::ALL.map(|a| m.end[a]))
+            m.map(|m| Axis::XYZABC.map(|a| m.end[a]))
                 .map_err(|e| e.to_string())
         })
         .collect()

@@ -105,22 +105,25 @@ struct Track {
     open: [Option<Open>; 3],
 }
 
-/// The per-sample state and limits of all six axis slots, flat (one lane per entry of
+/// Lanes per sample: one per entry of [`AxisVec`] (X Y Z A B C U V W).
+const LANES: usize = 9;
+
+/// The per-sample state and limits of all nine axis slots (`LANES`), flat (one lane per entry of
 /// [`AxisVec`]): the common case is then a few vector operations. A slot with no axis, or
 /// a limit that does not apply (the travel of a continuous axis), has an infinite limit.
 #[derive(Clone, Debug)]
 struct Lanes {
     /// Travel limits, mm or deg.
-    lo: [f64; 6],
-    hi: [f64; 6],
+    lo: [f64; LANES],
+    hi: [f64; LANES],
     /// Velocity and acceleration trips (limits with the rounding slack).
-    v_trip: [f64; 6],
-    a_trip: [f64; 6],
+    v_trip: [f64; LANES],
+    a_trip: [f64; LANES],
     /// Used range, peak speed (per min) and peak acceleration (per s²) so far.
-    min: [f64; 6],
-    max: [f64; 6],
-    peak_v: [f64; 6],
-    peak_a: [f64; 6],
+    min: [f64; LANES],
+    max: [f64; LANES],
+    peak_v: [f64; LANES],
+    peak_a: [f64; LANES],
 }
 
 /// Checks every sample against the machine's limits; O(1) memory plus the violations found.
@@ -141,9 +144,9 @@ struct Previous {
     time_s: f64,
     block_index: u64,
     /// Positions, mm and deg.
-    q: [f64; 6],
+    q: [f64; LANES],
     /// Velocity per s, when the sample had one inside its block (`has_v`).
-    v: [f64; 6],
+    v: [f64; LANES],
     has_v: bool,
 }
 
@@ -176,14 +179,14 @@ impl<'a> LimitsMonitor<'a> {
             })
             .collect::<Vec<Track>>();
         let mut lanes = Lanes {
-            lo: [f64::NEG_INFINITY; 6],
-            hi: [f64::INFINITY; 6],
-            v_trip: [f64::INFINITY; 6],
-            a_trip: [f64::INFINITY; 6],
-            min: [f64::INFINITY; 6],
-            max: [f64::NEG_INFINITY; 6],
-            peak_v: [0.0; 6],
-            peak_a: [0.0; 6],
+            lo: [f64::NEG_INFINITY; LANES],
+            hi: [f64::INFINITY; LANES],
+            v_trip: [f64::INFINITY; LANES],
+            a_trip: [f64::INFINITY; LANES],
+            min: [f64::INFINITY; LANES],
+            max: [f64::NEG_INFINITY; LANES],
+            peak_v: [0.0; LANES],
+            peak_a: [0.0; LANES],
         };
         for t in &tracks {
             let (l, i) = (&t.limits, t.limits.index);
@@ -209,20 +212,20 @@ impl<'a> LimitsMonitor<'a> {
     pub fn push(&mut self, s: &Sample) {
         let x = &s.actual.0;
         let mut clear = self.open == 0;
-        // Plain arrays and flags rather than `Option<[f64; 6]>`, which costs copies.
-        let (mut v, mut a) = ([0.0; 6], [0.0; 6]);
+        // Plain arrays and flags rather than `Option<[f64; LANES]>`, which costs copies.
+        let (mut v, mut a) = ([0.0; LANES], [0.0; LANES]);
         let (mut has_v, mut has_a, mut in_block) = (false, false, false);
         if let Some(p) = &self.previous {
             in_block = p.block_index == s.block_index;
             if s.time_s > p.time_s {
                 // As `(actual - previous) * (1 / dt)`, element by element: the same rounding.
                 let k = 1.0 / (s.time_s - p.time_s);
-                for i in 0..6 {
+                for i in 0..LANES {
                     v[i] = (x[i] - p.q[i]) * k;
                 }
                 has_v = true;
                 if p.has_v && in_block {
-                    for i in 0..6 {
+                    for i in 0..LANES {
                         a[i] = (v[i] - p.v[i]) * k;
                     }
                     has_a = true;
@@ -232,21 +235,21 @@ impl<'a> LimitsMonitor<'a> {
         // Every lane, axis or not: a NaN or a lane past its (infinite) limit only sends the
         // sample to `track`, which checks the axes themselves.
         let n = &mut self.lanes;
-        let mut inside = [true; 6];
-        for i in 0..6 {
+        let mut inside = [true; LANES];
+        for i in 0..LANES {
             n.min[i] = n.min[i].min(x[i]);
             n.max[i] = n.max[i].max(x[i]);
             inside[i] = x[i] <= n.hi[i] && x[i] >= n.lo[i];
         }
         if has_v {
-            for i in 0..6 {
+            for i in 0..LANES {
                 let v = v[i].abs() * 60.0;
                 n.peak_v[i] = n.peak_v[i].max(v);
                 inside[i] &= v <= n.v_trip[i];
             }
         }
         if has_a {
-            for i in 0..6 {
+            for i in 0..LANES {
                 let a = a[i].abs();
                 n.peak_a[i] = n.peak_a[i].max(a);
                 inside[i] &= a <= n.a_trip[i];
@@ -267,7 +270,7 @@ impl<'a> LimitsMonitor<'a> {
 
     /// Opens, extends and closes the violations of sample `s` (velocity per s and
     /// acceleration per s² when it has them).
-    fn track(&mut self, s: &Sample, velocity: Option<&[f64; 6]>, acceleration: Option<&[f64; 6]>) {
+    fn track(&mut self, s: &Sample, velocity: Option<&[f64; 9]>, acceleration: Option<&[f64; 9]>) {
         let mut theta: Option<Option<f64>> = None;
         for track in self.tracks.iter_mut() {
             let l = track.limits;

@@ -3,7 +3,8 @@
 //!
 //! Table and CSV stream one row per move, so memory does not grow with the program; JSON
 //! is one array, built in memory. A program the reader cannot read ends the output with
-//! exit code 2 and the reader's message (file:line:column) on stderr.
+//! exit code 2 and the reader's message (file:line:column) on stderr. On a machine with
+//! any of U V W their end points follow as three more columns (keys), after `tool`.
 
 use std::io::Write;
 use std::path::Path;
@@ -47,6 +48,13 @@ pub struct BlockRow {
     pub dwell_s: Option<f64>,
     /// Active tool number (the T of the last tool change), 0 for no tool.
     pub tool: u32,
+    /// End point of U V W, mm, on a machine that has any of them; absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub u: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub v: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub w: Option<f64>,
 }
 
 impl BlockRow {
@@ -63,6 +71,8 @@ impl BlockRow {
             Motion::Dwell { seconds } => Some(seconds),
             _ => None,
         };
+        let uvw = machine.axes().iter().any(|a| a.is_secondary());
+        let secondary = |a: Axis| uvw.then_some(e[a]);
         BlockRow {
             line: m.line,
             kind: m.kind().name(),
@@ -75,13 +85,17 @@ impl BlockRow {
             feed_mm_min: feed_mm_min(m),
             dwell_s,
             tool: m.tool,
+            u: secondary(Axis::U),
+            v: secondary(Axis::V),
+            w: secondary(Axis::W),
         }
     }
 }
 
 /// The path feed of a feed move, mm/min. Under G93 (inverse time, F in 1/min) it is F times
 /// the block's length, as LinuxCNC's interpreter converts it: the XYZ length (for an arc,
-/// `hypot(r·|sweep|, axial travel)`), or when X Y Z do not move, the A B C length in deg.
+/// `hypot(r·|sweep|, axial travel)`), or when X Y Z do not move the U V W length, or
+/// when those do not move either the A B C length in deg.
 pub fn feed_mm_min(m: &Move) -> Option<f64> {
     if matches!(m.motion, Motion::Rapid | Motion::Dwell { .. }) {
         return None;
@@ -93,11 +107,12 @@ pub fn feed_mm_min(m: &Move) -> Option<f64> {
     })
 }
 
-/// Length of a feed move as LinuxCNC counts it for inverse time: mm of X Y Z, or deg of
-/// A B C when X Y Z stay.
+/// Length of a feed move as LinuxCNC counts it for inverse time: mm of X Y Z, or mm of
+/// U V W when X Y Z stay, or deg of A B C when those stay too.
 fn block_length(m: &Move) -> f64 {
     let d = m.end - m.start;
     let rotary = (d[Axis::A].powi(2) + d[Axis::B].powi(2) + d[Axis::C].powi(2)).sqrt();
+    let secondary = (d[Axis::U].powi(2) + d[Axis::V].powi(2) + d[Axis::W].powi(2)).sqrt();
     let linear = match (m.motion, m.arc_sweep_rad()) {
         (
             Motion::Arc {
@@ -113,13 +128,26 @@ fn block_length(m: &Move) -> f64 {
     };
     if linear > 0.0 {
         linear
+    } else if secondary > 0.0 {
+        secondary
     } else {
         rotary
     }
 }
 
-/// CSV header, in the order of [`BlockRow`].
+/// CSV header, in the order of [`BlockRow`] (followed by [`CSV_HEADER_UVW`] on a machine
+/// with U V W).
 pub const CSV_HEADER: &str = "line,kind,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg,feed_mm_min,dwell_s,tool";
+/// The CSV columns of U V W, after [`CSV_HEADER`]'s.
+pub const CSV_HEADER_UVW: &str = ",u_mm,v_mm,w_mm";
+
+/// `,u,v,w` of a row that has them, for the CSV.
+fn uvw_csv(r: &BlockRow) -> String {
+    match (r.u, r.v, r.w) {
+        (Some(u), Some(v), Some(w)) => format!(",{u},{v},{w}"),
+        _ => String::new(),
+    }
+}
 
 fn opt<T: ToString>(v: Option<T>) -> String {
     v.map_or(String::new(), |v| v.to_string())
@@ -129,7 +157,7 @@ fn csv_row(r: &BlockRow) -> String {
     // f64 Display is the shortest text that reads back to the same number: exact, and
     // byte-identical between runs.
     format!(
-        "{},{},{},{},{},{},{},{},{},{},{}\n",
+        "{},{},{},{},{},{},{},{},{},{},{}{}\n",
         r.line,
         r.kind,
         r.x,
@@ -140,15 +168,20 @@ fn csv_row(r: &BlockRow) -> String {
         r.c,
         opt(r.feed_mm_min),
         opt(r.dwell_s),
-        r.tool
+        r.tool,
+        uvw_csv(r)
     )
 }
 
-fn table_header() -> String {
-    format!(
-        "{:>6} {:<5} {:>12} {:>12} {:>12} {:>10} {:>10} {:>10} {:>11} {:>4}\n",
+fn table_header(uvw: bool) -> String {
+    let mut h = format!(
+        "{:>6} {:<5} {:>12} {:>12} {:>12} {:>10} {:>10} {:>10} {:>11} {:>4}",
         "line", "kind", "X mm", "Y mm", "Z mm", "A deg", "B deg", "C deg", "feed mm/min", "tool"
-    )
+    );
+    if uvw {
+        h += &format!(" {:>12} {:>12} {:>12}", "U mm", "V mm", "W mm");
+    }
+    h + "\n"
 }
 
 fn table_row(r: &BlockRow) -> String {
@@ -157,8 +190,12 @@ fn table_row(r: &BlockRow) -> String {
         (None, Some(s)) => format!("{s:.4} s"),
         (None, None) => "-".to_string(),
     };
+    let uvw = match (r.u, r.v, r.w) {
+        (Some(u), Some(v), Some(w)) => format!(" {u:>12.4} {v:>12.4} {w:>12.4}"),
+        _ => String::new(),
+    };
     format!(
-        "{:>6} {:<5} {:>12.4} {:>12.4} {:>12.4} {:>10.4} {:>10.4} {:>10.4} {:>11} {:>4}\n",
+        "{:>6} {:<5} {:>12.4} {:>12.4} {:>12.4} {:>10.4} {:>10.4} {:>10.4} {:>11} {:>4}{uvw}\n",
         r.line, r.kind, r.x, r.y, r.z, r.a, r.b, r.c, feed, r.tool
     )
 }
@@ -182,9 +219,11 @@ pub fn run(path: &Path, format: Format) -> Result<i32> {
             write(&format!("{json}\n"));
         }
         Format::Csv | Format::Table => {
+            let uvw = scenario.machine.axes().iter().any(|a| a.is_secondary());
             let (header, row): (String, fn(&BlockRow) -> String) = match format {
+                Format::Csv if uvw => (format!("{CSV_HEADER}{CSV_HEADER_UVW}\n"), csv_row),
                 Format::Csv => (format!("{CSV_HEADER}\n"), csv_row),
-                _ => (table_header(), table_row),
+                _ => (table_header(uvw), table_row),
             };
             let mut open = write(&header);
             for m in run.moves {

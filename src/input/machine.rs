@@ -43,10 +43,10 @@ pub struct MachineFile {
     /// "linuxcnc", "fanuc" (default) or "haas".
     #[serde(default)]
     pub dialect: ngc::Dialect,
-    /// G28 reference position, machine X Y Z A B C (mm, deg); zero when absent.
+    /// G28 reference position, machine X Y Z A B C (mm, deg); zero when absent (U V W: 0).
     #[serde(default)]
     pub g28_mm: [f64; 6],
-    /// G30 reference position, machine X Y Z A B C (mm, deg); zero when absent.
+    /// G30 reference position, machine X Y Z A B C (mm, deg); zero when absent (U V W: 0).
     #[serde(default)]
     pub g30_mm: [f64; 6],
     // --- geometric errors (input/geometry_errors.rs) ---
@@ -108,7 +108,7 @@ pub struct Machine {
     pub tool: ToolConfig,
     /// Default G-code dialect of the control.
     pub dialect: ngc::Dialect,
-    /// G28 and G30 reference positions, machine X Y Z A B C (mm, deg).
+    /// G28 and G30 reference positions, machine X Y Z A B C (mm, deg); U V W at 0.
     pub reference_mm: [[f64; 6]; 2],
     /// Geometric errors; the location errors are also in `kinematics`.
     pub geometry: GeometryErrors,
@@ -231,7 +231,7 @@ impl Machine {
         })
     }
 
-    /// The axes of this machine, in X Y Z A B C order.
+    /// The axes of this machine, in X Y Z A B C U V W order.
     pub fn axes(&self) -> &'static [Axis] {
         self.kinematics.layout.axes()
     }

@@ -453,18 +453,18 @@ fn refuse_what_the_layout_cannot_give(
                 "the collision scene ([check] collisions = true, the default) cannot be computed on {} ({} layout): {}",
                 machine.path.display(),
                 layout.name(),
-                if layout.rotaries_unmodelled() {
-                    "its A B C are world coordinates (a robot's, as LinuxCNC plans them) with no modelled kinematic chain, so the tool's orientation is unknown"
+                if let Some(why) = layout.tool_pose_unmodelled() {
+                    format!("{why}, so the tool's pose is unknown")
                 } else {
-                    "the scene models a milling tool along +Z, not a lathe's turning tool and chuck"
+                    "the scene models a milling tool along +Z, not a lathe's turning tool and chuck".to_string()
                 }
             ),
         )
         .with_help("set [check] collisions = false: axis limits are still checked"));
     }
-    if !layout.rotaries_unmodelled() {
+    let Some(why) = layout.tool_pose_unmodelled() else {
         return Ok(());
-    }
+    };
     let asked = if file.ballbar.pivot_mm.is_some() {
         Some("a ball bar ([ballbar] pivot_mm)")
     } else if file.program.cone.is_some() {
@@ -480,12 +480,12 @@ fn refuse_what_the_layout_cannot_give(
         Some(what) => Err(Error::invalid(
             path,
             format!(
-                "{what} cannot be computed on {} ({} layout): its A B C are world coordinates (a robot's, as LinuxCNC plans them) with no modelled kinematic chain or joints",
+                "{what} cannot be computed on {} ({} layout): {why}",
                 machine.path.display(),
                 layout.name()
             ),
         )
-        .with_help("leave out [ballbar], [program.cone], [program.circle] and TCP: axis limits, timing and the trace are computed on the world axes")),
+        .with_help("leave out [ballbar], [program.cone], [program.circle] and TCP: axis limits, timing and the trace are computed on every axis")),
         None => Ok(()),
     }
 }
@@ -512,8 +512,8 @@ fn reader_options(
             }),
         ..ngc::Options::default()
     };
-    o.set_reference(false, ngc::AxisVec(machine.reference_mm[0]));
-    o.set_reference(true, ngc::AxisVec(machine.reference_mm[1]));
+    o.set_reference(false, ngc::AxisVec::xyzabc(machine.reference_mm[0]));
+    o.set_reference(true, ngc::AxisVec::xyzabc(machine.reference_mm[1]));
     let read = |key: &str, file: &str| -> Result<(PathBuf, String)> {
         let p = resolve(path, file);
         match std::fs::read_to_string(&p) {
@@ -663,7 +663,7 @@ fn reader_options(
                 "expected finite numbers".into(),
             ));
         }
-        o.set_work_offset(n, ngc::AxisVec(*offset));
+        o.set_work_offset(n, ngc::AxisVec::xyzabc(*offset));
     }
     if let Some(file) = &r.tool_table {
         let (p, t) = read("tool_table", file)?;

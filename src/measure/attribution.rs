@@ -118,9 +118,9 @@ pub fn normalised_sensitivity(axis: Axis, s: f64, length_mm: f64) -> f64 {
     }
 }
 
-/// A set of axes, serialized as a list of letters in X Y Z A B C order.
+/// A set of axes, serialized as a list of letters in X Y Z A B C U V W order.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct AxisSet(u8);
+pub struct AxisSet(u16);
 
 impl AxisSet {
     pub const EMPTY: AxisSet = AxisSet(0);

@@ -255,7 +255,7 @@ const SAMPLES: usize = 16;
 fn table_to_machine(k: &Kinematics, q: &AxisVec, p: [f64; 3]) -> [f64; 3] {
     let [x, y, z] = p;
     let (x, y, z) = match k.layout {
-        Layout::Xyz | Layout::Xz | Layout::Xyzabc => (x, y, z),
+        Layout::Xyz | Layout::Xz | Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw => (x, y, z),
         Layout::TrtAb | Layout::Xyza => {
             let m = k.table_rotation(q) * nalgebra::Vector3::new(x, y, z);
             (m.x, m.y, m.z)
@@ -530,7 +530,7 @@ pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     blocks: I,
     input_done: bool,
     pending_error: Option<Error>,
-    limits: [Option<AxisLimits>; 6],
+    limits: [Option<AxisLimits>; 9],
     kinematics: Kinematics,
     period_s: f64,
     options: InterpolationOptions,
@@ -559,7 +559,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 "corner_acceleration_share must be a positive number, got {share}"
             )));
         }
-        let mut limits = [None; 6];
+        let mut limits = [None; 9];
         for &axis in machine.axes() {
             let c = machine.axis(axis);
             limits[axis.index()] = Some(AxisLimits {
@@ -681,11 +681,11 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             }
         }
         let tcp = (b.tcp || self.options.force_tcp).then_some(self.kinematics);
-        if tcp.is_some() && self.kinematics.layout.rotaries_unmodelled() {
+        if let (Some(_), Some(why)) = (tcp, self.kinematics.layout.tool_pose_unmodelled()) {
             return Err(self.block_error(
                 b.line,
                 format!(
-                    "the block asks for tool-centre-point control (TCP), which this machine ({}) cannot give: its A B C are world coordinates with no modelled kinematic chain; expected no TCP (G43.4 or a `tcp-on` user M code) on this machine",
+                    "the block asks for tool-centre-point control (TCP), which this machine ({}) cannot give: {why}; expected no TCP (G43.4 or a `tcp-on` user M code) on this machine",
                     self.kinematics.layout.name()
                 ),
             ));
@@ -712,7 +712,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             rho: 1.0,
             entry_max: 0.0,
         };
-        let rotary_norm = (3..6)
+        // A B C (deg counted as mm) and U V W (mm): the axes besides the tool tip's X Y Z.
+        let rotary_norm = (3..9)
             .map(|i| planned.path.delta.0[i].powi(2))
             .sum::<f64>()
             .sqrt();
@@ -898,7 +899,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         let present = |i: usize| self.limits[i].map(|l| (i, l));
         if p.path.is_straight() {
             let t = p.path.tangent(0.0, p.length);
-            for (i, l) in (0..6).filter_map(present) {
+            for (i, l) in (0..9).filter_map(present) {
                 let d = t.0[i].abs();
                 if d > 0.0 {
                     lower(&mut cap, l.velocity / d, i, LimitKind::Velocity);
@@ -908,14 +909,14 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             }
         } else {
             let (d1, d2, d3) = self.derivative_bounds(&p.path, p.length);
-            for (i, l) in (0..6).filter_map(present) {
+            for (i, l) in (0..9).filter_map(present) {
                 if d1[i] > 0.0 {
                     lower(&mut cap, l.velocity / d1[i], i, LimitKind::Velocity);
                     accel = accel.min(0.5 * l.acceleration / d1[i]);
                     jerk = jerk.min(l.jerk / (3.0 * d1[i]));
                 }
             }
-            for (i, l) in (0..6).filter_map(present) {
+            for (i, l) in (0..9).filter_map(present) {
                 if d2[i] > 0.0 {
                     let centripetal = (0.5 * l.acceleration / d2[i]).sqrt();
                     lower(&mut cap, centripetal, i, LimitKind::Acceleration);
@@ -937,8 +938,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     }
 
     /// Maxima of |dq/ds|, |d²q/ds²|, |d³q/ds³| per axis, sampled at `SAMPLES + 1` points.
-    fn derivative_bounds(&self, path: &BlockPath, length: f64) -> ([f64; 6], [f64; 6], [f64; 6]) {
-        let (mut d1, mut d2, mut d3) = ([0.0; 6], [0.0; 6], [0.0; 6]);
+    fn derivative_bounds(&self, path: &BlockPath, length: f64) -> ([f64; 9], [f64; 9], [f64; 9]) {
+        let (mut d1, mut d2, mut d3) = ([0.0; 9], [0.0; 9], [0.0; 9]);
         // One five-point stencil per sample: h small enough for O(h²) truncation to be
         // negligible, large enough for rounding in the third difference to stay small.
         let h = 2e-3;
@@ -947,7 +948,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             let q = path.at(u);
             let (p1, m1) = (path.at(u + h), path.at(u - h));
             let (p2, m2) = (path.at(u + 2.0 * h), path.at(u - 2.0 * h));
-            for i in 0..6 {
+            for i in 0..9 {
                 let first = (p1.0[i] - m1.0[i]) / (2.0 * h * length);
                 let second = (p1.0[i] - 2.0 * q.0[i] + m1.0[i]) / (h * h * length * length);
                 let third = (p2.0[i] - 2.0 * p1.0[i] + 2.0 * m1.0[i] - m2.0[i])
@@ -960,7 +961,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         // Between samples (half a spacing Δs/2 = L/(2 SAMPLES) away) a derivative can exceed
         // its sampled maximum by at most the next derivative times Δs/2.
         let half_spacing = 0.5 * length / SAMPLES as f64;
-        for i in 0..6 {
+        for i in 0..9 {
             d3[i] *= 1.1;
             d2[i] += d3[i] * half_spacing;
             d1[i] += d2[i] * half_spacing;
@@ -1159,7 +1160,7 @@ mod tests {
 
     #[test]
     fn written_out_table_rotation_matches_the_kinematics_module() {
-        let q = AxisVec([0.0, 0.0, 0.0, 23.0, -41.0, 137.0]);
+        let q = AxisVec::xyzabc([0.0, 0.0, 0.0, 23.0, -41.0, 137.0]);
         let p = Point3::new(12.5, -7.25, 88.0);
         for layout in [
             Layout::Xyz,
@@ -1169,6 +1170,8 @@ mod tests {
             Layout::Xz,
             Layout::Xyza,
             Layout::Xyzabc,
+            Layout::Xyuv,
+            Layout::Xyzabcuvw,
         ] {
             let k = Kinematics::new(layout, Vector3::new(1.0, -2.0, 3.0));
             let expected = k.table_to_machine(&q, &p);

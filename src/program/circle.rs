@@ -67,7 +67,7 @@ impl CircleProgram {
         let sign = if self.clockwise { -1.0 } else { 1.0 };
         let at = |theta_deg: f64| {
             let p = c.point(theta_deg);
-            AxisVec([p[0], p[1], p[2], 0.0, 0.0, 0.0])
+            AxisVec::xyzabc([p[0], p[1], p[2], 0.0, 0.0, 0.0])
         };
         let start = at(-sign * self.lead_deg);
         let zero = at(0.0);

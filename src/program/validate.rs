@@ -79,7 +79,11 @@ pub fn checked(path: &Path, machine: &Machine, moves: Moves<'static>) -> Moves<'
         .collect();
     Box::new(Checked {
         path: path.to_path_buf(),
-        no_tcp: machine.kinematics.layout.rotaries_unmodelled(),
+        no_tcp: machine
+            .kinematics
+            .layout
+            .tool_pose_unmodelled()
+            .map(|why| (machine.kinematics.layout.name(), why)),
         limits,
         moves,
         moving: false,
@@ -90,8 +94,9 @@ pub fn checked(path: &Path, machine: &Machine, moves: Moves<'static>) -> Moves<'
 /// The stream of [`checked`].
 struct Checked {
     path: PathBuf,
-    /// The machine cannot give tool-centre-point control (xyzabc: no modelled chain).
-    no_tcp: bool,
+    /// The machine cannot give tool-centre-point control (xyzabc: no modelled chain; U V W
+    /// layouts): its layout's name and why.
+    no_tcp: Option<(&'static str, &'static str)>,
     /// Per machine axis: envelope (mm or deg), travel min and max.
     limits: Vec<(Axis, f64, f64, f64)>,
     moves: Moves<'static>,
@@ -108,7 +113,7 @@ impl Checked {
     }
 
     fn check(&mut self, m: &Move) -> Result<()> {
-        if self.no_tcp && m.tcp {
+        if let (Some((layout, why)), true) = (self.no_tcp, m.tcp) {
             let text = self.text();
             let start = text
                 .split_inclusive('\n')
@@ -120,9 +125,10 @@ impl Checked {
                 &self.path,
                 &text,
                 start..start + len,
-                "this move runs under tool-centre-point control (TCP), which this machine (xyzabc \
-                 layout) cannot give: its A B C are world coordinates with no modelled kinematic \
-                 chain",
+                format!(
+                    "this move runs under tool-centre-point control (TCP), which this machine \
+                     ({layout} layout) cannot give: {why}"
+                ),
                 "TCP on",
             )
             .with_help("leave TCP off on this machine (no G43.4, no `tcp-on` user M code)"));

@@ -55,6 +55,9 @@ fn axis_colour(axis: Axis) -> RGBColor {
         Axis::A => RGBColor(140, 90, 40),
         Axis::B => RGBColor(0, 130, 140),
         Axis::C => RGBColor(90, 90, 90),
+        Axis::U => RGBColor(200, 60, 120),
+        Axis::V => RGBColor(90, 110, 200),
+        Axis::W => RGBColor(160, 150, 30),
     }
 }
 

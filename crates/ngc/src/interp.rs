@@ -303,7 +303,7 @@ impl GCode {
 pub struct Interp {
     pub params: Params,
     dialect: Dialect,
-    axes: [bool; 6],
+    axes: [bool; 9],
     /// Machine position of the controlled point, mm and deg.
     pos: AxisVec,
     motion: Option<MotionMode>,
@@ -408,7 +408,7 @@ impl Interp {
                 *v,
             );
         }
-        let mut axes = [false; 6];
+        let mut axes = [false; 9];
         for a in &o.axes {
             axes[a.index()] = true;
         }
@@ -515,8 +515,10 @@ impl Interp {
                 p[a] = pp[a.index()];
             }
         }
-        for a in Axis::LINEAR {
-            p[a] /= self.scale();
+        for a in Axis::ALL {
+            if !a.is_rotary() {
+                p[a] /= self.scale();
+            }
         }
         p
     }
@@ -1022,15 +1024,13 @@ impl Interp {
         };
         for &a in check {
             if let Some(w) = get(a.letter()) {
-                if !self.axes[a.index()] {
-                    let has: Vec<String> = Axis::ALL
-                        .iter()
-                        .filter(|b| self.axes[b.index()])
-                        .map(|b| b.letter().to_string())
-                        .collect();
-                    return Err(LineError::new(w.span(), format!("`{}`: this machine has no {} axis (it has {})", &line[w.span()], a.letter(), has.join(" ")), "axis not on this machine")
-                        .help(format!("run the program with a machine whose layout has a {} axis, or check the program is for this machine (a six-axis robot pose X Y Z A B C fits no machine mtsim models); a word for a missing axis is never dropped", a.letter())));
-                }
+                let has: Vec<String> = Axis::ALL
+                    .iter()
+                    .filter(|b| self.axes[b.index()])
+                    .map(|b| b.letter().to_string())
+                    .collect();
+                return Err(LineError::new(w.span(), format!("`{}`: this machine has no {} axis (it has {})", &line[w.span()], a.letter(), has.join(" ")), "axis not on this machine")
+                    .help(format!("run the program with a machine whose layout has a {} axis, or check the program is for this machine (a six-axis robot pose X Y Z A B C fits no machine mtsim models); a word for a missing axis is never dropped", a.letter())));
             }
         }
         // G41.1/G42.1 take the diameter itself in D.
@@ -1337,6 +1337,19 @@ impl Interp {
                                 if kind == 4 { -t.length_mm } else { t.length_mm };
                         }
                         1 => {
+                            // LinuxCNC offsets any axis by its word; mtsim applies a tool
+                            // length along Z only, so another axis word is refused, not dropped.
+                            if let Some(o) = Axis::ALL
+                                .iter()
+                                .filter(|a| **a != Axis::Z)
+                                .find_map(|a| get(a.letter()))
+                            {
+                                return Err(LineError::new(
+                                    o.span(),
+                                    format!("`{}` in a G43.1 block: expected only Z (mtsim applies the tool length offset along Z only)", &line[o.span()]),
+                                    "offset not along Z",
+                                ));
+                            }
                             let z = get('Z').ok_or_else(|| {
                                 LineError::new(
                                     w.span(),
@@ -1559,7 +1572,7 @@ impl Interp {
         let dwell_x = dialect.is_fanuc_family() && matches!(nonmodal, Some((NonModal::Dwell, _)));
         // Fixed buffers, no allocation per block. The words are copied from the block's
         // (written long before), not from `get`'s result (a stall per word).
-        let mut axis_buf: Small<(Axis, Word), 6> = Small::new();
+        let mut axis_buf: Small<(Axis, Word), 9> = Small::new();
         for a in Axis::ALL {
             let mut halve = false;
             let k = slot(a.letter());
@@ -2584,15 +2597,21 @@ impl Interp {
     /// The machine target of axis words (program coordinates, or machine with G53).
     fn target(&self, axis_words: &[(Axis, Word)], g53: bool) -> AxisVec {
         if let (Some(f), false) = (self.frame(), g53) {
-            // Program X Y Z in the feature / table-fixed frame; rotary words as usual.
+            // Program X Y Z in the feature / table-fixed frame; rotary (and U V W) words as
+            // usual.
             let mut p = f.to_program(self.tip(), &self.offset, &self.pos);
             let mut target = self.pos;
             for &(a, w) in axis_words {
-                if a.is_rotary() {
-                    target[a] = if self.absolute {
-                        w.value + self.offset[a]
+                if a.is_rotary() || a.is_secondary() {
+                    let v = if a.is_rotary() {
+                        w.value
                     } else {
-                        self.pos[a] + w.value
+                        w.value * self.scale()
+                    };
+                    target[a] = if self.absolute {
+                        v + self.offset[a]
+                    } else {
+                        self.pos[a] + v
                     };
                 } else {
                     let v = w.value * self.scale();
@@ -2763,6 +2782,15 @@ impl Interp {
                 self.parameters_changed();
             }
             1 | 10 => {
+                // A tool has a length along Z and a diameter: an offset along another axis
+                // (LinuxCNC's lathe X, or U V W) is refused rather than dropped.
+                if let Some((_, o)) = axis_words.iter().find(|(a, _)| *a != Axis::Z) {
+                    return Err(LineError::new(
+                        o.span(),
+                        format!("`{}` in a G10 L1/L10 block: expected only Z (the tool length) and R (the radius); mtsim's tools have no offset along other axes", &line[o.span()]),
+                        "tool offset not along Z",
+                    ));
+                }
                 let n = pn as u32;
                 let mut tool = self.tools.get(&n).copied().unwrap_or(Tool {
                     number: n,
@@ -2806,6 +2834,24 @@ impl Interp {
         let (u, v, n) = self.plane.axes();
         let scale = self.scale();
         let at = first.clone();
+        // The hole is placed by the plane's axes; another axis word would be lost.
+        if let Some(w) = Axis::ALL
+            .iter()
+            .filter(|a| ![u, v, n].contains(a))
+            .find_map(|a| get(a.letter()))
+        {
+            return Err(LineError::new(
+                w.span(),
+                format!(
+                    "`{}` in a canned cycle: expected only {} {} {} (LinuxCNC: \"Cannot put an A in canned cycle\")",
+                    &line[w.span()],
+                    u.letter(),
+                    v.letter(),
+                    n.letter()
+                ),
+                "axis word in a cycle",
+            ));
+        }
         if let Some(r) = get('R') {
             self.cycle_r = Some(r.value * scale);
         }
@@ -3092,7 +3138,7 @@ impl Interp {
         at: std::ops::Range<usize>,
     ) -> LineResult<Motion> {
         let f = self.frame().expect("called with a frame");
-        if Axis::ALL[3..].iter().any(|&a| target[a] != self.pos[a]) {
+        if Axis::XYZABC[3..].iter().any(|&a| target[a] != self.pos[a]) {
             return Err(LineError::new(at, "arc that turns a rotary axis with G68.2 or G254 active: expected the rotary axes still during G02/G03", "rotary arc in a tilted frame"));
         }
         let mut tip_end = [target[Axis::X], target[Axis::Y], target[Axis::Z]];
@@ -3262,7 +3308,7 @@ impl<T: Copy, const N: usize> Small<T, N> {
         }
     }
     /// False when full.
-    #[inline]
+    #[inline(always)]
     fn push(&mut self, t: T) -> bool {
         if self.len == N {
             return false;
@@ -3277,14 +3323,14 @@ impl<T: Copy, const N: usize> Small<T, N> {
     }
 }
 
-impl<'l> Small<(Axis, Word<'l>), 6> {
+impl<'l, const N: usize> Small<(Axis, Word<'l>), N> {
     /// Pushes `(axis, *word)`, the value halved when `halve`, written field by field:
     /// a whole tuple built first was assembled on the stack in pieces and read back in
     /// larger ones, a store-forwarding stall per axis word of every block.
     #[inline(always)]
     fn push_axis(&mut self, axis: Axis, word: &Word<'l>, halve: bool) {
         let slot = self.items[self.len].as_mut_ptr();
-        // SAFETY: `slot` points to an item of `items` (indexing checked `len` < 6); both
+        // SAFETY: `slot` points to an item of `items` (indexing checked `len` < N); both
         // fields are written here, so the item is initialised before `len` counts it.
         unsafe {
             std::ptr::addr_of_mut!((*slot).0).write(axis);

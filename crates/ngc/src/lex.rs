@@ -9,7 +9,7 @@ use std::ops::Range;
 use crate::expr::{function_at, Eval, ExprError, Param, Params};
 
 /// Word letters the reader knows.
-pub const EXPECTED_WORDS: &str = "G M N F S T X Y Z A B C I J K R P Q L H D E @ ^";
+pub const EXPECTED_WORDS: &str = "G M N F S T X Y Z A B C U V W I J K R P Q L H D E @ ^";
 
 /// An error on one line; `span` is a byte range in that line.
 #[derive(Debug)]
@@ -247,15 +247,9 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let span = start..if number.is_empty() { start + 1 } else { i };
     let text = &line[span.clone()];
     if !known_letter(letter) {
-        let why = match letter {
-            'U' | 'V' | 'W' => {
-                " (secondary axes U V W are not supported: mtsim's machines have X Y Z A B C, so a foam cutter's U V or a quill's W cannot be simulated; for a lathe's incremental U W write G91 with X Z)"
-            }
-            _ => "",
-        };
         return Err(LineError::new(
             span,
-            format!("unsupported word `{text}`{why}: expected one of {EXPECTED_WORDS}"),
+            format!("unsupported word `{text}`: expected one of {EXPECTED_WORDS}"),
             "unsupported word",
         )
         .help("docs/gcode.md lists the supported dialect; remove the word or post-process the program without it"));
@@ -316,7 +310,7 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
 }
 
 /// Word letters that [`lex_word`] accepts.
-const WORD_LETTERS: &str = "GMNOFSTXYZABCIJKRPQLHDE";
+const WORD_LETTERS: &str = "GMNOFSTXYZABCUVWIJKRPQLHDE";
 
 /// [`WORD_LETTERS`] `A` to `Z` as bits (`A` = bit 0).
 const KNOWN_LETTERS: u32 = letter_mask(WORD_LETTERS);

@@ -66,7 +66,8 @@ pub enum UserM {
     Ignore,
 }
 
-/// Reader options. `Options::default()` reads Fanuc-family programs on a six-axis machine from
+/// Reader options. `Options::default()` reads Fanuc-family programs on a six-axis machine
+/// (X Y Z A B C: a U V W word is an error until `axes` lists them) from
 /// all axes at zero, with no tools, all offsets zero.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -120,7 +121,7 @@ impl Default for Options {
     fn default() -> Options {
         Options {
             dialect: Dialect::Fanuc,
-            axes: Axis::ALL.to_vec(),
+            axes: Axis::XYZABC.to_vec(),
             start: AxisVec::ZERO,
             tools: Vec::new(),
             tool_orientations: Vec::new(),

@@ -14,7 +14,7 @@
 //!    and the program goes on from `p`, as rs274's current position does (it is a second
 //!    feed move in mtsim; rs274 prints no call for it);
 //! 3. the probe parameters hold the programmed point in the work system and units active
-//!    at the probe: `#5061`-`#5066` = X Y Z A B C of `t`, `#5067`-`#5069` (U V W) = 0, and
+//!    at the probe: `#5061`-`#5069` = X Y Z A B C U V W of `t`, and
 //!    `#5070` = 0 (not tripped). A loop that waits for `#5070` to become 0 therefore ends
 //!    after its first probe; any other loop is bounded by the interpreter's iteration limit.
 //!
@@ -31,7 +31,7 @@ pub const BACKOFF_MM: f64 = 0.254;
 pub const FIRST_PARAMETER: usize = 5061;
 
 /// Where the probe stands after backing off from `target` towards `start` (machine
-/// coordinates, mm and deg; X Y Z move, A B C stay at the target).
+/// coordinates, mm and deg; X Y Z move, A B C U V W stay at the target).
 pub fn backoff(start: AxisVec, target: AxisVec) -> AxisVec {
     let d: [f64; 3] = std::array::from_fn(|k| start[Axis::LINEAR[k]] - target[Axis::LINEAR[k]]);
     let distance = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
@@ -45,7 +45,7 @@ pub fn backoff(start: AxisVec, target: AxisVec) -> AxisVec {
 }
 
 /// The values of `#5061`-`#5070` after a probe to `target_program` (program coordinates,
-/// program units and deg): X Y Z A B C, U V W = 0, tripped = 0.
+/// program units and deg): X Y Z A B C U V W, tripped = 0.
 pub fn parameters(target_program: AxisVec) -> [f64; 10] {
     let mut v = [0.0; 10];
     for a in Axis::ALL {

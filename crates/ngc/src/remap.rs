@@ -604,7 +604,7 @@ pub(crate) fn split(
         if used[k] {
             continue;
         }
-        if group1 && "XYZABC".contains(w.letter) {
+        if group1 && "XYZABCUVW".contains(w.letter) {
             // The handler reads the block's axis words itself (LinuxCNC: `blocks[..].x_number`),
             // argspec or not; they never move the machine as a G0/G1 would.
             continue;

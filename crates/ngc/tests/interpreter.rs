@@ -78,7 +78,7 @@ fn parameters_are_read_before_the_line_sets_them() {
 #[test]
 fn system_parameters_report_position_tool_and_work_system() {
     let mut o = opts(Dialect::Linuxcnc);
-    o.set_work_offset(2, AxisVec([10.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
+    o.set_work_offset(2, AxisVec::xyzabc([10.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
     // After G55 G0 X5 the program X is 5 (machine 15); #5420 reads 5, #5220 reads 2.
     let m = moves_with("G55 G0 X5\nG0 Y#5420 Z#5220\nG0 X#<_x>\n", &o);
     assert_eq!(xyz(&m[0]), [15.0, 0.0, 0.0]);
@@ -225,7 +225,7 @@ M99
 #[test]
 fn work_offsets_g92_g52_g53_and_g10_give_machine_coordinates() {
     let mut o = opts(Dialect::Linuxcnc);
-    o.set_work_offset(1, AxisVec([100.0, 50.0, -200.0, 0.0, 0.0, 0.0]));
+    o.set_work_offset(1, AxisVec::xyzabc([100.0, 50.0, -200.0, 0.0, 0.0, 0.0]));
     let text = "\
 G0 X1 Y2 Z3
 G55 G0 X1
@@ -259,7 +259,7 @@ G0 X0 Y0 Z0
 #[test]
 fn g28_goes_through_the_intermediate_point_to_the_stored_position() {
     let mut o = opts(Dialect::Linuxcnc);
-    o.set_reference(false, AxisVec([0.0, 0.0, 100.0, 0.0, 0.0, 0.0]));
+    o.set_reference(false, AxisVec::xyzabc([0.0, 0.0, 100.0, 0.0, 0.0, 0.0]));
     let m = moves_with(
         "G0 X10 Y10 Z10\nG28 Z20\nG0 X5\nG28.1\nG0 X0 Y0 Z0\nG28\n",
         &o,

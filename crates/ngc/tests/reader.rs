@@ -57,7 +57,7 @@ fn assert_error(text: &str, line: usize, column: usize, needle: &str) {
 }
 
 fn xyz(x: f64, y: f64, z: f64) -> AxisVec {
-    AxisVec([x, y, z, 0.0, 0.0, 0.0])
+    AxisVec::xyzabc([x, y, z, 0.0, 0.0, 0.0])
 }
 
 fn center(block: &Move) -> [f64; 3] {
@@ -99,7 +99,7 @@ fn modal_state_carries_over_between_blocks() {
     assert_eq!(b[1].start, xyz(1.0, 0.0, 0.0));
     assert_eq!(b[1].end, xyz(1.0, 2.0, 0.0));
     assert_eq!(b[3].end, xyz(4.0, 2.0, 3.0));
-    assert_eq!(b[4].end, AxisVec([4.0, 2.0, 3.0, 10.0, 0.0, -20.0]));
+    assert_eq!(b[4].end, AxisVec::xyzabc([4.0, 2.0, 3.0, 10.0, 0.0, -20.0]));
     assert!(b.iter().all(|b| b.feed == Some(500.0)));
     assert!(b
         .iter()
@@ -112,7 +112,7 @@ fn modal_state_carries_over_between_blocks() {
 
 #[test]
 fn incremental_moves_accumulate_on_every_axis_from_the_start_position() {
-    let start = AxisVec([100.0, 0.0, 0.0, 0.0, 0.0, 350.0]);
+    let start = AxisVec::xyzabc([100.0, 0.0, 0.0, 0.0, 0.0, 350.0]);
     let b = read_from("G91 G1 X0.1 C5 F100\nX0.1 C5\nX0.1 C5\nG90 X0\n", start);
     assert_eq!(b.len(), 4);
     assert_eq!(b[0].start, start);
@@ -126,7 +126,7 @@ fn incremental_moves_accumulate_on_every_axis_from_the_start_position() {
 #[test]
 fn inch_words_are_converted_to_mm_and_rotary_words_stay_in_degrees() {
     let b = read("G20 G1 X1 Y0.5 C90 F10\nG91 Z-2\nG21 G90 X1\n");
-    assert_eq!(b[0].end, AxisVec([25.4, 12.7, 0.0, 0.0, 0.0, 90.0]));
+    assert_eq!(b[0].end, AxisVec::xyzabc([25.4, 12.7, 0.0, 0.0, 0.0, 90.0]));
     assert_eq!(b[0].feed, Some(254.0), "F 10 in/min is 254 mm/min");
     assert_eq!(b[1].end.0[2], -50.8);
     assert_eq!(b[2].end.0[0], 1.0, "G21 reads mm again");
@@ -326,7 +326,7 @@ fn a_file_with_tcp_and_inverse_time_reads_block_by_block() {
     assert_eq!(lines, [8, 10, 11, 12, 13, 15]);
     assert_eq!(b[0].end, xyz(0.0, 0.0, 50.0));
     assert!(!b[0].tcp && b[1].tcp && b[4].tcp && !b[5].tcp);
-    assert_eq!(b[2].end, AxisVec([10.0, 0.0, 10.0, 5.0, 0.0, 90.0]));
+    assert_eq!(b[2].end, AxisVec::xyzabc([10.0, 0.0, 10.0, 5.0, 0.0, 90.0]));
     assert_eq!(
         (b[2].feed_mode, b[2].feed),
         (FeedMode::InverseTime, Some(2.5))
@@ -406,7 +406,7 @@ fn unsupported_constructs_are_reported_at_their_word() {
             5,
             "cutter radius compensation in G19",
         ),
-        ("G1 U5\n", 1, 4, "`U5` (secondary axes"),
+        ("G1 U5\n", 1, 4, "`U5`: this machine has no U axis"),
         ("M10\n", 1, 1, "unsupported code `M10`"),
         ("G05\n", 1, 1, "unsupported code `G05`"),
         ("G1.5\n", 1, 1, "unsupported code `G1.5`"),

@@ -39,7 +39,7 @@ fn error(text: &str, o: &Options) -> (usize, String) {
 
 /// End X Y Z A B C rounded to 1e-9.
 fn end(m: &ngc::Move) -> [f64; 6] {
-    m.end.0.map(|v| {
+    m.end.to_xyzabc().map(|v| {
         let r = (v * 1e9).round() / 1e9;
         if r == 0.0 {
             0.0
@@ -70,7 +70,7 @@ fn g68_2_euler_angles_are_zxz_and_the_origin_is_in_work_coordinates() {
     // I90 J90 K0: Rz(90) Rx(90) e_z = Rz(90) (0, -1, 0) = (1, 0, 0): program Z is machine X.
     // Origin (10, 20, 30) in G54, which is (100, 0, -50) in the machine.
     let mut o = opts(Dialect::Fanuc, None);
-    o.set_work_offset(1, ngc::AxisVec([100.0, 0.0, -50.0, 0.0, 0.0, 0.0]));
+    o.set_work_offset(1, ngc::AxisVec::xyzabc([100.0, 0.0, -50.0, 0.0, 0.0, 0.0]));
     let m = moves("G54 G68.2 X10 Y20 Z30 I90 J90 K0\nG0 X0 Y0 Z0\nZ4\n", &o);
     assert_eq!(end(&m[0]), [110.0, 20.0, -20.0, 0.0, 0.0, 0.0]);
     assert_eq!(end(&m[1]), [114.0, 20.0, -20.0, 0.0, 0.0, 0.0]);
@@ -120,7 +120,7 @@ fn g254_with_c_at_90_degrees_turns_a_program_x_move_into_machine_y() {
     // d = (10, 0, -20) from the pivot; at C = 90, Rz(90) d = (0, 10, -20), so the machine
     // goes to (100, 60, -20).
     let mut o = opts(Dialect::Haas, ac([100.0, 50.0, 0.0]));
-    o.set_work_offset(1, ngc::AxisVec([100.0, 50.0, -20.0, 0.0, 0.0, 0.0]));
+    o.set_work_offset(1, ngc::AxisVec::xyzabc([100.0, 50.0, -20.0, 0.0, 0.0, 0.0]));
     let m = moves(
         "G54 G254\nG0 X10 Y0 Z0\nC90\nG1 X13 F100\nG255\nG0 X0\n",
         &o,

@@ -712,7 +712,9 @@ fn measure(scene: &Scene, i: usize, poses: &mut BodyPoses, warm: &mut Warm) -> f
 fn in_table_frames(k: &Kinematics, q: &AxisVec, u: Vector3<f64>) -> [Vector3<f64>; 2] {
     use crate::kinematics::Layout;
     let cradle = match k.layout {
-        Layout::Xyz | Layout::Xz | Layout::Xyzabc => return [u, u],
+        Layout::Xyz | Layout::Xz | Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw => {
+            return [u, u]
+        }
         Layout::Xyza => {
             // Rx(A)^T u; no cradle.
             let (s, c) = q[Axis::A].to_radians().sin_cos();
@@ -763,6 +765,8 @@ mod tests {
             Layout::Xz,
             Layout::Xyza,
             Layout::Xyzabc,
+            Layout::Xyuv,
+            Layout::Xyzabcuvw,
         ] {
             let k = Kinematics::new(layout, Vector3::new(5.0, -3.0, 100.0));
             let mut q = AxisVec::ZERO;

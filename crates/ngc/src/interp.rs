@@ -1023,6 +1023,9 @@ impl Interp {
             &[]
         };
         for &a in check {
+            if self.axes[a.index()] {
+                continue;
+            }
             if let Some(w) = get(a.letter()) {
                 let has: Vec<String> = Axis::ALL
                     .iter()
@@ -2032,7 +2035,7 @@ impl Interp {
             return false;
         }
         const NONE: u8 = u8::MAX;
-        let mut axis_at = [NONE; 6];
+        let mut axis_at = [NONE; 9];
         let (mut g, mut f) = (None, None);
         for (k, w) in words.iter().enumerate() {
             let axis = match w.letter {
@@ -2066,7 +2069,7 @@ impl Interp {
             (None, Some(mode @ (MotionMode::Rapid | MotionMode::Linear))) => mode,
             _ => return false,
         };
-        if axis_at == [NONE; 6] {
+        if axis_at == [NONE; 9] {
             return false;
         }
         let feed = match f {
@@ -2097,7 +2100,7 @@ impl Interp {
             self.cycle_initial = None;
         }
         self.arc_not_allowed = false;
-        let mut axis_words: Small<(Axis, Word), 6> = Small::new();
+        let mut axis_words: Small<(Axis, Word), 9> = Small::new();
         for a in Axis::ALL {
             if let Some(w) = words.get(axis_at[a.index()] as usize) {
                 axis_words.push_axis(a, w, false);

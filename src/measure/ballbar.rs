@@ -152,6 +152,12 @@ impl Centring {
         let t = theta_deg.to_radians();
         self.a_um * t.cos() + self.b_um * t.sin()
     }
+
+    /// [`Centring::offset_um`] from `(sin θ, cos θ)` (the same bits for θ in [0, 360)).
+    #[inline]
+    pub fn offset_um_at(&self, (sin, cos): (f64, f64)) -> f64 {
+        self.a_um * cos + self.b_um * sin
+    }
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -211,13 +217,27 @@ impl BallbarRun {
         dev_a_um: f64,
         dev_b_um: f64,
     ) {
+        let sin_cos = theta_sin_cos(theta_deg);
+        BallbarRun::push_pair_at(a, b, theta_deg, sin_cos, dev_a_um, dev_b_um);
+    }
+
+    /// [`BallbarRun::push_pair`] with `sin_cos` = [`theta_sin_cos`]`(theta_deg)` already
+    /// known (the ball bar's reading carries it, for the trace too).
+    pub fn push_pair_at(
+        a: &mut BallbarRun,
+        b: &mut BallbarRun,
+        theta_deg: f64,
+        sin_cos: (f64, f64),
+        dev_a_um: f64,
+        dev_b_um: f64,
+    ) {
         if !theta_deg.is_finite() {
             a.rejected += 1;
             b.rejected += 1;
             return;
         }
         let t = wrap_360(theta_deg);
-        let (s, c) = t.to_radians().sin_cos();
+        let (s, c) = sin_cos;
         for (run, dev) in [(a, dev_a_um), (b, dev_b_um)] {
             if dev.is_finite() {
                 run.add(t, s, c, dev);
@@ -517,6 +537,13 @@ pub fn attribute(theta_deg: f64, reversals: &[(Axis, Vec<f64>)]) -> (Option<Axis
 /// Unsigned angle between two directions, deg in [0, 180].
 pub fn angle_distance_deg(a: f64, b: f64) -> f64 {
     ((a - b + 180.0).rem_euclid(360.0) - 180.0).abs()
+}
+
+/// `(sin θ, cos θ)` of θ in deg, wrapped to [0, 360) first: the terms a run adds per sample
+/// and [`Centring::offset_um`] evaluates.
+#[inline]
+pub fn theta_sin_cos(theta_deg: f64) -> (f64, f64) {
+    wrap_360(theta_deg).to_radians().sin_cos()
 }
 
 fn wrap_360(deg: f64) -> f64 {

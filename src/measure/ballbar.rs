@@ -546,8 +546,18 @@ pub fn theta_sin_cos(theta_deg: f64) -> (f64, f64) {
     wrap_360(theta_deg).to_radians().sin_cos()
 }
 
+#[inline]
 fn wrap_360(deg: f64) -> f64 {
-    let t = deg.rem_euclid(360.0);
+    // `rem_euclid` (an `fmod` call) only outside (-360, 360): inside, `deg % 360` is `deg`
+    // exactly, so the result is `deg`, or `deg + 360` for a negative one (the same bits;
+    // -0 stays -0 as `fmod` keeps it).
+    let t = if (0.0..360.0).contains(&deg) {
+        deg
+    } else if deg > -360.0 && deg < 0.0 {
+        deg + 360.0
+    } else {
+        deg.rem_euclid(360.0)
+    };
     if t >= 360.0 {
         0.0
     } else {
@@ -1071,4 +1081,65 @@ fn detect_events(
     }
     events.sort_by(|a, b| a.theta_deg.total_cmp(&b.theta_deg));
     events
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The in-range shortcuts of `wrap_360` give the bits of the plain `rem_euclid` form.
+    #[test]
+    fn wrap_360_matches_rem_euclid_bit_for_bit() {
+        let reference = |deg: f64| {
+            let t = deg.rem_euclid(360.0);
+            if t >= 360.0 {
+                0.0
+            } else {
+                t
+            }
+        };
+        let mut values = vec![
+            0.0,
+            -0.0,
+            360.0,
+            -360.0,
+            720.0,
+            -720.0,
+            359.99999999999994,
+            -1e-300,
+            -5e-324,
+            1e-300,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for k in 0..20_000 {
+            let x = (k as f64 - 10_000.0) * 0.0731 + 1e-9 * k as f64;
+            values.extend([x, x.next_up(), x.next_down(), -x]);
+        }
+        for v in values {
+            assert_eq!(
+                wrap_360(v).to_bits(),
+                reference(v).to_bits(),
+                "wrap_360({v:e})"
+            );
+        }
+    }
+
+    /// The sine and cosine a reading carries give the centring's bits.
+    #[test]
+    fn offset_from_carried_sin_cos_is_the_offset() {
+        let c = Centring {
+            a_um: 1.234567,
+            b_um: -7.654321,
+            r0_um: 0.0,
+        };
+        for k in 0..3600 {
+            let theta = k as f64 * 0.1 + 0.013;
+            assert_eq!(
+                c.offset_um_at(theta_sin_cos(theta)).to_bits(),
+                c.offset_um(theta).to_bits()
+            );
+        }
+    }
 }

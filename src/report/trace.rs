@@ -192,8 +192,8 @@ impl TraceSink {
 
 /// Writes `trace_path` from the binary rows read from `reader` (held rows, or the file at
 /// `raw_path`), appending the centred deviation `dL - (a cos θ + b sin θ)` of each row's run.
-fn complete(
-    reader: &mut dyn Read,
+fn complete<R: Read>(
+    reader: &mut R,
     raw_path: &Path,
     trace_path: &Path,
     header: &str,

@@ -646,23 +646,31 @@ fn fit_shape(v: &[f64], step_indices: &[usize]) -> (Vec<f64>, Vec<f64>) {
             (cos, sin)
         })
         .collect();
-    let column = |i: usize, j: usize| -> f64 {
-        if j == 0 {
-            1.0
-        } else if j <= 2 * SMOOTH_ORDER {
-            let k = j.div_ceil(2);
-            let (cos, sin) = trig[(k * i) % n];
-            if j % 2 == 1 {
-                cos
-            } else {
-                sin
+    // Columns: 1, then cos and sin of harmonic k (2k - 1 and 2k, entry i at the table's
+    // (k i) mod n, stepped by k rather than divided), then the steps.
+    let mut a = DMatrix::<f64>::zeros(n, p);
+    a.column_mut(0).fill(1.0);
+    for k in 1..=SMOOTH_ORDER {
+        let step = if n > 0 { k % n } else { 0 };
+        let (cos_column, rest) = a.as_mut_slice()[(2 * k - 1) * n..].split_at_mut(n);
+        let mut m = 0;
+        for (c, s) in cos_column.iter_mut().zip(&mut rest[..n]) {
+            (*c, *s) = trig[m];
+            m += step;
+            if m >= n {
+                m -= n;
             }
-        } else {
-            let k = step_indices[j - 1 - 2 * SMOOTH_ORDER];
-            f64::from(u8::from(i >= k)) - i as f64 / n as f64
         }
-    };
-    let a = DMatrix::from_fn(n, p, column);
+    }
+    for (s, &k) in step_indices.iter().enumerate() {
+        for (i, x) in a
+            .column_mut(1 + 2 * SMOOTH_ORDER + s)
+            .iter_mut()
+            .enumerate()
+        {
+            *x = f64::from(u8::from(i >= k)) - i as f64 / n as f64;
+        }
+    }
     let b = DVector::from_column_slice(v);
     let at = a.transpose();
     let x = match (&at * &a).cholesky() {

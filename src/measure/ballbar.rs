@@ -591,7 +591,21 @@ fn median(buf: &mut [f64]) -> f64 {
 /// sorted and slid one bin at a time: one removal and one insertion per bin.
 fn running_circular_median(v: &[f64], offset: isize, len: usize) -> Vec<f64> {
     let n = v.len() as isize;
-    let at = |k: isize| v[k.rem_euclid(n) as usize];
+    // `k.rem_euclid(n)` without a division for k within a turn of [0, n).
+    let at = |k: isize| {
+        let i = if k < 0 {
+            k + n
+        } else if k >= n {
+            k - n
+        } else {
+            k
+        };
+        v[if (0..n).contains(&i) {
+            i
+        } else {
+            k.rem_euclid(n)
+        } as usize]
+    };
     let mut window: Vec<f64> = (0..len as isize).map(|k| at(offset + k)).collect();
     window.sort_by(f64::total_cmp);
     let mut out = Vec::with_capacity(v.len());

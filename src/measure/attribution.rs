@@ -43,7 +43,7 @@ use nalgebra::Point3;
 use serde::{Serialize, Serializer};
 
 use super::ballbar::{angle_distance_deg, deviation_mm};
-use crate::kinematics::Kinematics;
+use crate::kinematics::{Kinematics, RotarySinCos};
 use crate::{Axis, AxisVec};
 
 /// Standard uncertainty of an event's onset angle, deg.
@@ -70,11 +70,37 @@ pub fn bar_sensitivity(
     pivot_table_mm: &Point3<f64>,
     length_mm: f64,
 ) -> AxisVec {
+    bar_sensitivity_at(
+        kin,
+        axes,
+        q,
+        &kin.rotary_sin_cos(q),
+        pivot_table_mm,
+        length_mm,
+    )
+}
+
+/// [`bar_sensitivity`] with the sines and cosines of the rotary angles at `q` already known
+/// (`base`, as [`Kinematics::rotary_sin_cos`] gives them): the ball bar has them from its
+/// reading of the same sample.
+pub fn bar_sensitivity_at(
+    kin: &Kinematics,
+    axes: &[Axis],
+    q: &AxisVec,
+    base: &RotarySinCos,
+    pivot_table_mm: &Point3<f64>,
+    length_mm: f64,
+) -> AxisVec {
     let mut s = AxisVec::ZERO;
+    let base = *base;
     // The table ball moves with the rotary axes only: one evaluation serves the linear ones
-    // (the same arithmetic as `deviation_mm`).
-    let pivot = kin.actual_table_to_machine(q, pivot_table_mm);
-    let base = kin.rotary_sin_cos(q);
+    // (the same arithmetic as `deviation_mm`; on the nominal chain that of
+    // `Kinematics::table_to_machine`, from the sines and cosines at hand).
+    let pivot = if kin.location_errors.is_zero() {
+        Point3::from(kin.pivot_mm + kin.rotation_of(&base) * pivot_table_mm.coords)
+    } else {
+        kin.actual_table_to_machine(q, pivot_table_mm)
+    };
     let linear =
         |q: &AxisVec| (Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]) - pivot).norm() - length_mm;
     for &a in axes {

@@ -152,6 +152,12 @@ impl Centring {
         let t = theta_deg.to_radians();
         self.a_um * t.cos() + self.b_um * t.sin()
     }
+
+    /// [`Centring::offset_um`] from `(sin θ, cos θ)` (the same bits for θ in [0, 360)).
+    #[inline]
+    pub fn offset_um_at(&self, (sin, cos): (f64, f64)) -> f64 {
+        self.a_um * cos + self.b_um * sin
+    }
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -211,13 +217,27 @@ impl BallbarRun {
         dev_a_um: f64,
         dev_b_um: f64,
     ) {
+        let sin_cos = theta_sin_cos(theta_deg);
+        BallbarRun::push_pair_at(a, b, theta_deg, sin_cos, dev_a_um, dev_b_um);
+    }
+
+    /// [`BallbarRun::push_pair`] with `sin_cos` = [`theta_sin_cos`]`(theta_deg)` already
+    /// known (the ball bar's reading carries it, for the trace too).
+    pub fn push_pair_at(
+        a: &mut BallbarRun,
+        b: &mut BallbarRun,
+        theta_deg: f64,
+        sin_cos: (f64, f64),
+        dev_a_um: f64,
+        dev_b_um: f64,
+    ) {
         if !theta_deg.is_finite() {
             a.rejected += 1;
             b.rejected += 1;
             return;
         }
         let t = wrap_360(theta_deg);
-        let (s, c) = t.to_radians().sin_cos();
+        let (s, c) = sin_cos;
         for (run, dev) in [(a, dev_a_um), (b, dev_b_um)] {
             if dev.is_finite() {
                 run.add(t, s, c, dev);
@@ -519,8 +539,25 @@ pub fn angle_distance_deg(a: f64, b: f64) -> f64 {
     ((a - b + 180.0).rem_euclid(360.0) - 180.0).abs()
 }
 
+/// `(sin θ, cos θ)` of θ in deg, wrapped to [0, 360) first: the terms a run adds per sample
+/// and [`Centring::offset_um`] evaluates.
+#[inline]
+pub fn theta_sin_cos(theta_deg: f64) -> (f64, f64) {
+    wrap_360(theta_deg).to_radians().sin_cos()
+}
+
+#[inline]
 fn wrap_360(deg: f64) -> f64 {
-    let t = deg.rem_euclid(360.0);
+    // `rem_euclid` (an `fmod` call) only outside (-360, 360): inside, `deg % 360` is `deg`
+    // exactly, so the result is `deg`, or `deg + 360` for a negative one (the same bits;
+    // -0 stays -0 as `fmod` keeps it).
+    let t = if (0.0..360.0).contains(&deg) {
+        deg
+    } else if deg > -360.0 && deg < 0.0 {
+        deg + 360.0
+    } else {
+        deg.rem_euclid(360.0)
+    };
     if t >= 360.0 {
         0.0
     } else {
@@ -554,7 +591,21 @@ fn median(buf: &mut [f64]) -> f64 {
 /// sorted and slid one bin at a time: one removal and one insertion per bin.
 fn running_circular_median(v: &[f64], offset: isize, len: usize) -> Vec<f64> {
     let n = v.len() as isize;
-    let at = |k: isize| v[k.rem_euclid(n) as usize];
+    // `k.rem_euclid(n)` without a division for k within a turn of [0, n).
+    let at = |k: isize| {
+        let i = if k < 0 {
+            k + n
+        } else if k >= n {
+            k - n
+        } else {
+            k
+        };
+        v[if (0..n).contains(&i) {
+            i
+        } else {
+            k.rem_euclid(n)
+        } as usize]
+    };
     let mut window: Vec<f64> = (0..len as isize).map(|k| at(offset + k)).collect();
     window.sort_by(f64::total_cmp);
     let mut out = Vec::with_capacity(v.len());
@@ -609,23 +660,31 @@ fn fit_shape(v: &[f64], step_indices: &[usize]) -> (Vec<f64>, Vec<f64>) {
             (cos, sin)
         })
         .collect();
-    let column = |i: usize, j: usize| -> f64 {
-        if j == 0 {
-            1.0
-        } else if j <= 2 * SMOOTH_ORDER {
-            let k = j.div_ceil(2);
-            let (cos, sin) = trig[(k * i) % n];
-            if j % 2 == 1 {
-                cos
-            } else {
-                sin
+    // Columns: 1, then cos and sin of harmonic k (2k - 1 and 2k, entry i at the table's
+    // (k i) mod n, stepped by k rather than divided), then the steps.
+    let mut a = DMatrix::<f64>::zeros(n, p);
+    a.column_mut(0).fill(1.0);
+    for k in 1..=SMOOTH_ORDER {
+        let step = if n > 0 { k % n } else { 0 };
+        let (cos_column, rest) = a.as_mut_slice()[(2 * k - 1) * n..].split_at_mut(n);
+        let mut m = 0;
+        for (c, s) in cos_column.iter_mut().zip(&mut rest[..n]) {
+            (*c, *s) = trig[m];
+            m += step;
+            if m >= n {
+                m -= n;
             }
-        } else {
-            let k = step_indices[j - 1 - 2 * SMOOTH_ORDER];
-            f64::from(u8::from(i >= k)) - i as f64 / n as f64
         }
-    };
-    let a = DMatrix::from_fn(n, p, column);
+    }
+    for (s, &k) in step_indices.iter().enumerate() {
+        for (i, x) in a
+            .column_mut(1 + 2 * SMOOTH_ORDER + s)
+            .iter_mut()
+            .enumerate()
+        {
+            *x = f64::from(u8::from(i >= k)) - i as f64 / n as f64;
+        }
+    }
     let b = DVector::from_column_slice(v);
     let at = a.transpose();
     let x = match (&at * &a).cholesky() {
@@ -1044,4 +1103,65 @@ fn detect_events(
     }
     events.sort_by(|a, b| a.theta_deg.total_cmp(&b.theta_deg));
     events
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The in-range shortcuts of `wrap_360` give the bits of the plain `rem_euclid` form.
+    #[test]
+    fn wrap_360_matches_rem_euclid_bit_for_bit() {
+        let reference = |deg: f64| {
+            let t = deg.rem_euclid(360.0);
+            if t >= 360.0 {
+                0.0
+            } else {
+                t
+            }
+        };
+        let mut values = vec![
+            0.0,
+            -0.0,
+            360.0,
+            -360.0,
+            720.0,
+            -720.0,
+            359.99999999999994,
+            -1e-300,
+            -5e-324,
+            1e-300,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for k in 0..20_000 {
+            let x = (k as f64 - 10_000.0) * 0.0731 + 1e-9 * k as f64;
+            values.extend([x, x.next_up(), x.next_down(), -x]);
+        }
+        for v in values {
+            assert_eq!(
+                wrap_360(v).to_bits(),
+                reference(v).to_bits(),
+                "wrap_360({v:e})"
+            );
+        }
+    }
+
+    /// The sine and cosine a reading carries give the centring's bits.
+    #[test]
+    fn offset_from_carried_sin_cos_is_the_offset() {
+        let c = Centring {
+            a_um: 1.234567,
+            b_um: -7.654321,
+            r0_um: 0.0,
+        };
+        for k in 0..3600 {
+            let theta = k as f64 * 0.1 + 0.013;
+            assert_eq!(
+                c.offset_um_at(theta_sin_cos(theta)).to_bits(),
+                c.offset_um(theta).to_bits()
+            );
+        }
+    }
 }

@@ -14,11 +14,11 @@
 
 use nalgebra::Point3;
 
-use super::attribution::{bar_sensitivity, SensitivityMap};
-use super::ballbar::{deviation_mm, BallbarRun, CircleFrame};
+use super::attribution::{bar_sensitivity_at, SensitivityMap};
+use super::ballbar::{deviation_mm, theta_sin_cos, BallbarRun, CircleFrame};
 use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines};
-use crate::kinematics::Kinematics;
+use crate::kinematics::{Kinematics, RotarySinCos};
 use crate::pipeline::{Sample, Sink};
 use crate::{Axis, AxisVec};
 
@@ -43,19 +43,30 @@ pub struct BarReading {
     pub deviation_um: f64,
     /// dL minus the linear twin's dL, um.
     pub nonlinear_um: f64,
+    /// `(sin θ, cos θ)` ([`theta_sin_cos`]): the run's terms and the trace's centring.
+    pub theta_sin_cos: (f64, f64),
 }
 
 impl BarGeometry {
     pub fn read(&self, s: &Sample) -> BarReading {
+        self.read_at(s).0
+    }
+
+    /// [`BarGeometry::read`], with the sines and cosines of the commanded rotary angles
+    /// when it took them (the nominal chain), for the sensitivity map of the same sample.
+    fn read_at(&self, s: &Sample) -> (BarReading, Option<RotarySinCos>) {
         let kin = &self.kinematics;
         if !kin.location_errors.is_zero() {
             let dev = |q| deviation_mm(kin, q, &self.pivot_table_mm, self.length_mm) * 1e3;
             let deviation_um = dev(&s.actual);
-            return BarReading {
-                theta_deg: self.frame.theta_deg(&kin.forward(&s.commanded).tip),
+            let theta_deg = self.frame.theta_deg(&kin.forward(&s.commanded).tip);
+            let reading = BarReading {
+                theta_deg,
                 deviation_um,
                 nonlinear_um: deviation_um - dev(&s.linear),
+                theta_sin_cos: theta_sin_cos(theta_deg),
             };
+            return (reading, None);
         }
         // The actual and the twin's poses are within a following error of the commanded one:
         // their rotations from its sines and cosines (one `sin_cos` per angle and sample).
@@ -67,13 +78,16 @@ impl BarGeometry {
             ((tool - pivot).norm() - self.length_mm) * 1e3
         };
         let deviation_um = dev(&s.actual);
-        BarReading {
-            theta_deg: self
-                .frame
-                .theta_deg(&kin.forward_with(&s.commanded, &at_command).tip),
+        let theta_deg = self
+            .frame
+            .theta_deg(&kin.forward_with(&s.commanded, &at_command).tip);
+        let reading = BarReading {
+            theta_deg,
             deviation_um,
             nonlinear_um: deviation_um - dev(&s.linear),
-        }
+            theta_sin_cos: theta_sin_cos(theta_deg),
+        };
+        (reading, Some(at_command))
     }
 }
 
@@ -129,21 +143,25 @@ impl BallbarSink {
         if !is_measured(s, self.measured) {
             return None;
         }
-        let r = self.geometry.read(s);
-        BallbarRun::push_pair(
+        let (r, at_command) = self.geometry.read_at(s);
+        BallbarRun::push_pair_at(
             &mut self.run,
             &mut self.signature,
             r.theta_deg,
+            r.theta_sin_cos,
             r.deviation_um,
             r.nonlinear_um,
         );
         if self.sensitivity.wants(r.theta_deg) {
             let g = &self.geometry;
             let axes = g.kinematics.layout.axes();
-            let s_q = bar_sensitivity(
-                &g.kinematics,
+            let kin = &g.kinematics;
+            let base = at_command.unwrap_or_else(|| kin.rotary_sin_cos(&s.commanded));
+            let s_q = bar_sensitivity_at(
+                kin,
                 axes,
                 &s.commanded,
+                &base,
                 &g.pivot_table_mm,
                 g.length_mm,
             );

@@ -26,6 +26,10 @@ use crate::Axis;
 /// Raw rows held in memory before they spill to the temporary file, bytes.
 pub const RAW_IN_MEMORY: usize = 8 << 20;
 
+/// Raw columns besides the three per axis: direction, time, line, θ, sin θ, cos θ (so that
+/// the centring needs no second `sin_cos`), the nonlinear signature, dL.
+const RAW_FIXED_COLUMNS: usize = 8;
+
 /// Writes the trace of every run of a simulation.
 pub struct TraceSink {
     /// Raw rows not yet spilled (at most [`RAW_IN_MEMORY`] bytes).
@@ -69,7 +73,7 @@ impl TraceSink {
             every: every.max(1),
             direction: Direction::Ccw,
             measured: None,
-            row: Vec::with_capacity(6 + 3 * axes.len()),
+            row: Vec::with_capacity(RAW_FIXED_COLUMNS + 3 * axes.len()),
         })
     }
 
@@ -153,7 +157,8 @@ impl TraceSink {
         } else {
             0.0
         };
-        row.extend_from_slice(&[cw, s.time_s, s.line as f64, r.theta_deg]);
+        let (sin, cos) = r.theta_sin_cos;
+        row.extend_from_slice(&[cw, s.time_s, s.line as f64, r.theta_deg, sin, cos]);
         for &a in self.axes {
             row.extend_from_slice(&[s.commanded[a], s.actual[a], s.following_error[a]]);
         }
@@ -187,8 +192,8 @@ impl TraceSink {
 
 /// Writes `trace_path` from the binary rows read from `reader` (held rows, or the file at
 /// `raw_path`), appending the centred deviation `dL - (a cos θ + b sin θ)` of each row's run.
-fn complete(
-    reader: &mut dyn Read,
+fn complete<R: Read>(
+    reader: &mut R,
     raw_path: &Path,
     trace_path: &Path,
     header: &str,
@@ -207,7 +212,7 @@ fn complete(
             .map(|r| r.centring())
     };
     let (ccw, cw) = (centring(Direction::Ccw), centring(Direction::Cw));
-    let width = 6 + 3 * n_axes;
+    let width = RAW_FIXED_COLUMNS + 3 * n_axes;
     let mut bytes = vec![0u8; 8 * width];
     let mut v = vec![0.0; width];
     let mut line: Vec<u8> = Vec::with_capacity(32 * width);
@@ -226,7 +231,8 @@ fn complete(
         let cw_row = v[0] == 1.0;
         let (theta, dev) = (v[3], v[width - 1]);
         let c = if cw_row { cw } else { ccw };
-        let centred = c.map_or(dev, |c| dev - c.offset_um(theta));
+        // `offset_um(θ)` from the sine and cosine the ball bar took (the same bits).
+        let centred = c.map_or(dev, |c| dev - c.offset_um_at((v[4], v[5])));
         // The row is formatted once into one reused buffer: no allocation per value.
         line.clear();
         line.extend_from_slice(if cw_row { b"cw" } else { b"ccw" });
@@ -240,7 +246,7 @@ fn complete(
         field!(v[1], 4);
         field!(v[2], 0);
         field!(theta, 4);
-        for axis in v[4..width - 2].chunks_exact(3) {
+        for axis in v[6..width - 2].chunks_exact(3) {
             field!(axis[0], 6);
             field!(axis[1], 6);
             field!(axis[2], 7);

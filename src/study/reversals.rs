@@ -191,6 +191,11 @@ fn reversal_roots(path: &ConePath, grid: &[(f64, AxisVec)], axis: Axis) -> Vec<f
         let (mut lo, mut hi, s_lo) = (t0, t1, d0.signum());
         for _ in 0..60 {
             let mid = 0.5 * (lo + hi);
+            // lo and hi adjacent floats: mid is one of them, and neither moves any more (lo
+            // keeps the sign s_lo, hi the other), so the remaining iterations change nothing.
+            if mid == lo || mid == hi {
+                break;
+            }
             if path.derivative(mid)[axis].signum() == s_lo {
                 lo = mid;
             } else {

@@ -237,21 +237,23 @@ impl<'a> LimitsMonitor<'a> {
         let n = &mut self.lanes;
         let mut inside = [true; LANES];
         for i in 0..LANES {
-            n.min[i] = n.min[i].min(x[i]);
-            n.max[i] = n.max[i].max(x[i]);
+            // `a < b ? a : b` (one minpd/maxpd): a NaN sample keeps the old extreme, as
+            // `f64::min`/`max` do, without their NaN fix-up.
+            n.min[i] = if x[i] < n.min[i] { x[i] } else { n.min[i] };
+            n.max[i] = if x[i] > n.max[i] { x[i] } else { n.max[i] };
             inside[i] = x[i] <= n.hi[i] && x[i] >= n.lo[i];
         }
         if has_v {
             for i in 0..LANES {
                 let v = v[i].abs() * 60.0;
-                n.peak_v[i] = n.peak_v[i].max(v);
+                n.peak_v[i] = if v > n.peak_v[i] { v } else { n.peak_v[i] };
                 inside[i] &= v <= n.v_trip[i];
             }
         }
         if has_a {
             for i in 0..LANES {
                 let a = a[i].abs();
-                n.peak_a[i] = n.peak_a[i].max(a);
+                n.peak_a[i] = if a > n.peak_a[i] { a } else { n.peak_a[i] };
                 inside[i] &= a <= n.a_trip[i];
             }
         }

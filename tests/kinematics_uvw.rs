@@ -8,34 +8,14 @@ mod common;
 
 use std::path::Path;
 
-use common::{scratch, stdout_json};
+use common::{linuxcnc_machine, scratch, stdout_json};
 use mtsim::input::machine::Machine;
 use mtsim::kinematics::{Kinematics, Layout};
 use mtsim::{Axis, AxisVec};
 use nalgebra::{Point3, Vector3};
 
-fn linuxcnc_machine(stem: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("machines/linuxcnc")
-        .join(format!("{stem}.toml"))
-        .display()
-        .to_string()
-}
-
 fn run(name: &str, machine: &str, program: &str, body: &str, cmd: &[&str]) -> std::process::Output {
-    let dir = scratch("uvw", name);
-    std::fs::write(dir.join("p.ngc"), program).unwrap();
-    std::fs::write(
-        dir.join("s.toml"),
-        format!(
-            "machine = {:?}\n[program]\nfile = \"p.ngc\"\n{body}\n",
-            linuxcnc_machine(machine)
-        ),
-    )
-    .unwrap();
-    let mut args = cmd.to_vec();
-    args.insert(1, "s.toml");
-    common::mtsim_plain(&dir, &args)
+    common::run_on_linuxcnc_machine("uvw", name, machine, program, body, cmd)
 }
 
 const NO_COLLISIONS: &str = "[check]\ncollisions = false";

@@ -98,3 +98,38 @@ pub fn write_scenario(dir: &Path, machine: &str, body: &str) -> PathBuf {
     std::fs::write(&path, scenario_text(machine, body)).unwrap();
     path
 }
+
+/// The path of a LinuxCNC sample machine file, `machines/linuxcnc/<stem>.toml`.
+pub fn linuxcnc_machine(stem: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("machines/linuxcnc")
+        .join(format!("{stem}.toml"))
+        .display()
+        .to_string()
+}
+
+/// Runs `mtsim CMD s.toml ARGS..` (`cmd` = `[CMD, ARGS..]`) in a scratch folder
+/// `<prefix>-<name>` holding `program` as `p.ngc` and a scenario on the LinuxCNC sample
+/// machine `machine` with the extra TOML `body`.
+pub fn run_on_linuxcnc_machine(
+    prefix: &str,
+    name: &str,
+    machine: &str,
+    program: &str,
+    body: &str,
+    cmd: &[&str],
+) -> Output {
+    let dir = scratch(prefix, name);
+    std::fs::write(dir.join("p.ngc"), program).unwrap();
+    std::fs::write(
+        dir.join("s.toml"),
+        format!(
+            "machine = {:?}\n[program]\nfile = \"p.ngc\"\n{body}\n",
+            linuxcnc_machine(machine)
+        ),
+    )
+    .unwrap();
+    let mut args = cmd.to_vec();
+    args.insert(1, "s.toml");
+    mtsim_plain(&dir, &args)
+}

@@ -78,6 +78,7 @@ fn feed_length(block: &Move) -> f64 {
 }
 
 /// Commanded machine axis positions at fraction `f` in [0, 1] of `block`.
+#[inline]
 pub fn position_in_block(block: &Move, machine: &Machine, f: f64) -> AxisVec {
     let mut q = block.start + (block.end - block.start) * f;
     match block.motion {
@@ -135,6 +136,7 @@ impl<'m, I: Iterator<Item = Result<Move>>> NominalSampler<'m, I> {
         }
     }
 
+    #[inline]
     fn sample(&self, block: &Move, time_s: f64, f: f64) -> Setpoint {
         Setpoint {
             time_s,
@@ -148,6 +150,7 @@ impl<'m, I: Iterator<Item = Result<Move>>> NominalSampler<'m, I> {
 impl<I: Iterator<Item = Result<Move>>> Iterator for NominalSampler<'_, I> {
     type Item = Result<Setpoint>;
 
+    #[inline]
     fn next(&mut self) -> Option<Result<Setpoint>> {
         if self.done {
             return None;

@@ -164,6 +164,9 @@ pub struct SceneMonitor {
     prev: Option<Sample>,
     events: Vec<SceneEvent>,
     engagement: Vec<EngagementSummary>,
+    /// Per engagement summary, θ and the axis positions of its deepest sample so far: θ is
+    /// computed once, at the end, not at every new deepest sample.
+    deepest_at: Vec<Option<(Theta, AxisVec)>>,
     samples: u64,
     queries: u64,
     min_clearance_mm: f64,
@@ -284,6 +287,7 @@ impl SceneMonitor {
             states,
             prev: None,
             events: Vec::new(),
+            deepest_at: vec![None; engagement.len()],
             engagement,
             samples: 0,
             queries: 0,
@@ -543,6 +547,11 @@ impl SceneMonitor {
         }
         self.events
             .sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
+        for (summary, deepest) in self.engagement.iter_mut().zip(&self.deepest_at) {
+            if let Some((theta, q)) = deepest {
+                summary.max_depth_theta_deg = resolve_theta(&self.theta_of, *theta, q);
+            }
+        }
         SceneReport {
             events: self.events,
             engagement: self.engagement,
@@ -642,7 +651,7 @@ impl SceneMonitor {
             if -d > summary.max_depth_mm {
                 summary.max_depth_mm = -d;
                 summary.max_depth_time_s = Some(now.time_s);
-                summary.max_depth_theta_deg = resolve_theta(&self.theta_of, now.theta, &now.q);
+                self.deepest_at[e] = Some((now.theta, now.q));
             }
             return;
         }

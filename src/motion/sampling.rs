@@ -78,33 +78,50 @@ fn feed_length(block: &Move) -> f64 {
 }
 
 /// Commanded machine axis positions at fraction `f` in [0, 1] of `block`.
+#[inline]
 pub fn position_in_block(block: &Move, machine: &Machine, f: f64) -> AxisVec {
-    let mut q = block.start + (block.end - block.start) * f;
+    let q = block.start + (block.end - block.start) * f;
+    // The straight line in machine axes stays inline (it runs on every sample of most
+    // programs); an arc or a TCP move takes its own function.
     match block.motion {
-        Motion::Arc {
-            plane, center_mm, ..
-        } => {
-            let (u, v, _) = plane.axes();
-            let (cu, cv) = (center_mm[u.index()], center_mm[v.index()]);
-            let r = (block.start[u] - cu).hypot(block.start[v] - cv);
-            let a0 = (block.start[v] - cv).atan2(block.start[u] - cu);
-            // The reader's signed sweep: negative for G02, ±2π for a full circle.
-            let a = a0 + block.arc_sweep_rad().unwrap_or(0.0) * f;
-            q[u] = cu + r * a.cos();
-            q[v] = cv + r * a.sin();
-        }
-        _ if block.tcp => {
-            // X Y Z are the tool tip in the table frame, moving on the straight line.
-            let tip = Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
-            let m = machine
-                .kinematics
-                .tcp_to_machine(&q, &tip, block.tool_length_mm);
-            q[Axis::X] = m.x;
-            q[Axis::Y] = m.y;
-            q[Axis::Z] = m.z;
-        }
-        _ => {}
+        Motion::Arc { .. } => on_arc(block, q, f),
+        _ if block.tcp => under_tcp(block, machine, q),
+        _ => q,
     }
+}
+
+/// [`position_in_block`] on an arc: `q` the straight-line interpolation, whose arc-plane
+/// coordinates are replaced by the point on the arc.
+#[inline(never)]
+fn on_arc(block: &Move, mut q: AxisVec, f: f64) -> AxisVec {
+    let Motion::Arc {
+        plane, center_mm, ..
+    } = block.motion
+    else {
+        return q;
+    };
+    let (u, v, _) = plane.axes();
+    let (cu, cv) = (center_mm[u.index()], center_mm[v.index()]);
+    let r = (block.start[u] - cu).hypot(block.start[v] - cv);
+    let a0 = (block.start[v] - cv).atan2(block.start[u] - cu);
+    // The reader's signed sweep: negative for G02, ±2π for a full circle.
+    let a = a0 + block.arc_sweep_rad().unwrap_or(0.0) * f;
+    q[u] = cu + r * a.cos();
+    q[v] = cv + r * a.sin();
+    q
+}
+
+/// [`position_in_block`] under TCP: X Y Z of `q` are the tool tip in the table frame,
+/// moving on the straight line; they become the machine's.
+#[inline(never)]
+fn under_tcp(block: &Move, machine: &Machine, mut q: AxisVec) -> AxisVec {
+    let tip = Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
+    let m = machine
+        .kinematics
+        .tcp_to_machine(&q, &tip, block.tool_length_mm);
+    q[Axis::X] = m.x;
+    q[Axis::Y] = m.y;
+    q[Axis::Z] = m.z;
     q
 }
 
@@ -135,6 +152,7 @@ impl<'m, I: Iterator<Item = Result<Move>>> NominalSampler<'m, I> {
         }
     }
 
+    #[inline]
     fn sample(&self, block: &Move, time_s: f64, f: f64) -> Setpoint {
         Setpoint {
             time_s,
@@ -148,6 +166,7 @@ impl<'m, I: Iterator<Item = Result<Move>>> NominalSampler<'m, I> {
 impl<I: Iterator<Item = Result<Move>>> Iterator for NominalSampler<'_, I> {
     type Item = Result<Setpoint>;
 
+    #[inline]
     fn next(&mut self) -> Option<Result<Setpoint>> {
         if self.done {
             return None;

@@ -114,11 +114,13 @@ impl SceneReport {
     }
 }
 
-/// θ of a sample: given with it, or computed from its axis positions when it is reported.
+/// θ of a sample: given with it, or computed from its axis positions (the sample's `q`)
+/// when it is reported. Small, so that a sample is not passed around with its axis
+/// vector twice.
 #[derive(Clone, Copy, Debug)]
 enum Theta {
     Known(Option<f64>),
-    At(AxisVec),
+    OfQ,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -148,8 +150,9 @@ struct PairState {
     last_mm: f64,
     warm: Warm,
     open: Option<SceneEvent>,
-    /// θ of the last sample of the open event (resolved when it closes).
-    open_end: Theta,
+    /// θ of the last sample of the open event, with its axis positions (resolved when it
+    /// closes).
+    open_end: (Theta, AxisVec),
     /// Index into the engagement summaries for a cutting pair.
     engagement: Option<usize>,
 }
@@ -161,6 +164,9 @@ pub struct SceneMonitor {
     prev: Option<Sample>,
     events: Vec<SceneEvent>,
     engagement: Vec<EngagementSummary>,
+    /// Per engagement summary, θ and the axis positions of its deepest sample so far: θ is
+    /// computed once, at the end, not at every new deepest sample.
+    deepest_at: Vec<Option<(Theta, AxisVec)>>,
     samples: u64,
     queries: u64,
     min_clearance_mm: f64,
@@ -251,7 +257,7 @@ impl SceneMonitor {
                 last_mm: f64::INFINITY,
                 warm: Warm::default(),
                 open: None,
-                open_end: Theta::Known(None),
+                open_end: (Theta::Known(None), AxisVec::ZERO),
                 engagement: (pair.kind == PairKind::Cutting).then(|| {
                     engagement.push(EngagementSummary {
                         bodies: scene.pair_bodies(pair),
@@ -281,6 +287,7 @@ impl SceneMonitor {
             states,
             prev: None,
             events: Vec::new(),
+            deepest_at: vec![None; engagement.len()],
             engagement,
             samples: 0,
             queries: 0,
@@ -323,11 +330,8 @@ impl SceneMonitor {
         self
     }
 
-    fn theta(&self, t: Theta) -> Option<f64> {
-        match t {
-            Theta::Known(v) => v,
-            Theta::At(q) => self.theta_of.as_ref().and_then(|f| f(&q)),
-        }
+    fn theta(&self, t: Theta, q: &AxisVec) -> Option<f64> {
+        resolve_theta(&self.theta_of, t, q)
     }
 
     /// Changes the tool in the spindle between two samples ([`Scene::set_tool`]). The parts
@@ -376,7 +380,7 @@ impl SceneMonitor {
     /// One sample whose θ is computed, when needed, by the function of
     /// [`SceneMonitor::with_theta`] (none without it).
     pub fn push_at(&mut self, time_s: f64, line: usize, q: &AxisVec) {
-        self.push_sample(time_s, Theta::At(*q), line, q);
+        self.push_sample(time_s, Theta::OfQ, line, q);
     }
 
     fn push_sample(&mut self, time_s: f64, theta: Theta, line: usize, q: &AxisVec) {
@@ -543,6 +547,11 @@ impl SceneMonitor {
         }
         self.events
             .sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
+        for (summary, deepest) in self.engagement.iter_mut().zip(&self.deepest_at) {
+            if let Some((theta, q)) = deepest {
+                summary.max_depth_theta_deg = resolve_theta(&self.theta_of, *theta, q);
+            }
+        }
         SceneReport {
             events: self.events,
             engagement: self.engagement,
@@ -597,7 +606,10 @@ impl SceneMonitor {
 
     fn record_contact_between(&mut self, i: usize, prev: &Sample, now: &Sample, s: f64) {
         let time = prev.time_s + s * (now.time_s - prev.time_s);
-        let theta = match (self.theta(prev.theta), self.theta(now.theta)) {
+        let theta = match (
+            self.theta(prev.theta, &prev.q),
+            self.theta(now.theta, &now.q),
+        ) {
             (Some(a), Some(b)) => Some(a + s * (b - a)),
             (_, b) => b,
         };
@@ -618,7 +630,8 @@ impl SceneMonitor {
     /// Ends pair `i`'s open event, if any, resolving its last θ.
     fn close_open(&mut self, i: usize) {
         if let Some(mut event) = self.states[i].open.take() {
-            event.theta_end_deg = self.theta(self.states[i].open_end);
+            let (theta, q) = self.states[i].open_end;
+            event.theta_end_deg = self.theta(theta, &q);
             self.events.push(event);
         }
     }
@@ -638,10 +651,7 @@ impl SceneMonitor {
             if -d > summary.max_depth_mm {
                 summary.max_depth_mm = -d;
                 summary.max_depth_time_s = Some(now.time_s);
-                summary.max_depth_theta_deg = match now.theta {
-                    Theta::Known(v) => v,
-                    Theta::At(q) => self.theta_of.as_ref().and_then(|f| f(&q)),
-                };
+                self.deepest_at[e] = Some((now.theta, now.q));
             }
             return;
         }
@@ -664,7 +674,7 @@ impl SceneMonitor {
         match (&mut state.open, kind) {
             (Some(open), Some(k)) if open.kind == k => {
                 open.time_end_s = now.time_s;
-                state.open_end = now.theta;
+                state.open_end = (now.theta, now.q);
                 open.worst_mm = match k {
                     EventKind::Collision => open.worst_mm.max(-d),
                     EventKind::NearMiss => open.worst_mm.min(d),
@@ -672,9 +682,9 @@ impl SceneMonitor {
             }
             (_, kind) => {
                 self.close_open(i);
-                let theta = self.theta(now.theta);
+                let theta = self.theta(now.theta, &now.q);
                 let state = &mut self.states[i];
-                state.open_end = Theta::Known(theta);
+                state.open_end = (Theta::Known(theta), now.q);
                 state.open = kind.map(|k| SceneEvent {
                     kind: k,
                     bodies: self.scene.pair_bodies(&self.scene.pairs[i]),
@@ -687,6 +697,14 @@ impl SceneMonitor {
                 });
             }
         }
+    }
+}
+
+/// θ of a sample with axis positions `q`: `t` when known, else `theta_of(q)` (none without).
+fn resolve_theta(theta_of: &Option<ThetaFn>, t: Theta, q: &AxisVec) -> Option<f64> {
+    match t {
+        Theta::Known(v) => v,
+        Theta::OfQ => theta_of.as_ref().and_then(|f| f(q)),
     }
 }
 

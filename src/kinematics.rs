@@ -125,6 +125,19 @@ pub enum Layout {
 }
 
 impl Layout {
+    /// Every layout.
+    pub const ALL: [Layout; 9] = [
+        Layout::Xyz,
+        Layout::TrtAc,
+        Layout::TrtBc,
+        Layout::TrtAb,
+        Layout::Xz,
+        Layout::Xyza,
+        Layout::Xyzabc,
+        Layout::Xyuv,
+        Layout::Xyzabcuvw,
+    ];
+
     /// The axes a machine of this layout has, in order.
     pub fn axes(self) -> &'static [Axis] {
         match self {

@@ -1162,17 +1162,7 @@ mod tests {
     fn written_out_table_rotation_matches_the_kinematics_module() {
         let q = AxisVec::xyzabc([0.0, 0.0, 0.0, 23.0, -41.0, 137.0]);
         let p = Point3::new(12.5, -7.25, 88.0);
-        for layout in [
-            Layout::Xyz,
-            Layout::TrtAc,
-            Layout::TrtBc,
-            Layout::TrtAb,
-            Layout::Xz,
-            Layout::Xyza,
-            Layout::Xyzabc,
-            Layout::Xyuv,
-            Layout::Xyzabcuvw,
-        ] {
+        for layout in Layout::ALL {
             let k = Kinematics::new(layout, Vector3::new(1.0, -2.0, 3.0));
             let expected = k.table_to_machine(&q, &p);
             let got = table_to_machine(&k, &q, [p.x, p.y, p.z]);

@@ -775,17 +775,7 @@ mod tests {
 
     #[test]
     fn the_frames_written_out_equal_the_table_rotation() {
-        for layout in [
-            Layout::Xyz,
-            Layout::TrtAc,
-            Layout::TrtBc,
-            Layout::TrtAb,
-            Layout::Xz,
-            Layout::Xyza,
-            Layout::Xyzabc,
-            Layout::Xyuv,
-            Layout::Xyzabcuvw,
-        ] {
+        for layout in Layout::ALL {
             let k = Kinematics::new(layout, Vector3::new(5.0, -3.0, 100.0));
             let mut q = AxisVec::ZERO;
             q[Axis::A] = 23.0;

@@ -30,7 +30,7 @@ pub fn push_fixed_bytes(out: &mut Vec<u8>, v: f64, decimals: u32) {
     };
     let n = scaled.abs() as u64;
     // Integer part and fraction; the trace's decimal counts divide by constants.
-    let (mut int, mut frac) = match d {
+    let (int, frac) = match d {
         0 => (n, 0),
         4 => (n / 10_000, n % 10_000),
         6 => (n / 1_000_000, n % 1_000_000),
@@ -40,66 +40,7 @@ pub fn push_fixed_bytes(out: &mut Vec<u8>, v: f64, decimals: u32) {
             (n / p, n % p)
         }
     };
-    // At most 16 integer digits (|scaled| < 9e15), the point, 9 decimals and the sign: 27
-    // bytes, right-aligned at FIELD_END; a fixed 32 bytes from the first digit are appended
-    // (a copy of known length, no library call) and the excess cut off again.
-    const FIELD_END: usize = 32;
-    let mut buf = [b'0'; 2 * FIELD_END];
-    let mut at = FIELD_END;
-    // Right to left: the fraction (zero-padded to d digits), the point, the integer part.
-    let mut left = d;
-    // Four digits per division of the long dependency chain, their two pairs apart.
-    while left >= 4 {
-        let four = (frac % 10_000) as u32;
-        frac /= 10_000;
-        let (hi, lo) = (2 * (four / 100) as usize, 2 * (four % 100) as usize);
-        at -= 4;
-        buf[at] = PAIRS[hi];
-        buf[at + 1] = PAIRS[hi + 1];
-        buf[at + 2] = PAIRS[lo];
-        buf[at + 3] = PAIRS[lo + 1];
-        left -= 4;
-    }
-    while left >= 2 {
-        let r = 2 * (frac % 100) as usize;
-        frac /= 100;
-        at -= 2;
-        buf[at] = PAIRS[r];
-        buf[at + 1] = PAIRS[r + 1];
-        left -= 2;
-    }
-    if left == 1 {
-        at -= 1;
-        buf[at] = b'0' + (frac % 10) as u8;
-    }
-    if d > 0 {
-        at -= 1;
-        buf[at] = b'.';
-    }
-    while int >= 100 {
-        let r = 2 * (int % 100) as usize;
-        int /= 100;
-        at -= 2;
-        buf[at] = PAIRS[r];
-        buf[at + 1] = PAIRS[r + 1];
-    }
-    if int >= 10 {
-        let r = 2 * int as usize;
-        at -= 2;
-        buf[at] = PAIRS[r];
-        buf[at + 1] = PAIRS[r + 1];
-    } else {
-        at -= 1;
-        buf[at] = b'0' + int as u8;
-    }
-    if scaled < 0.0 {
-        at -= 1;
-        buf[at] = b'-';
-    }
-    let len = out.len() + (FIELD_END - at);
-    let field: &[u8; FIELD_END] = buf[at..at + FIELD_END].try_into().expect("32 bytes");
-    out.extend_from_slice(field);
-    out.truncate(len);
+    append_field(out, int, frac, d, scaled < 0.0);
 }
 
 /// [`push_fixed_bytes`] with the number of decimals known at compile time (the trace's
@@ -141,12 +82,22 @@ pub fn push_fixed_bytes_const<const D: u32>(out: &mut Vec<u8>, v: f64) {
         let _ = std::io::Write::write_fmt(out, format_args!("{v:.*}", d));
         return;
     }
-    let negative = r < 0;
-    let (mut int, mut frac) = (n / POW[d], n % POW[d]);
+    append_field(out, n / POW[d], n % POW[d], d, r < 0);
+}
+
+/// Appends `int.frac` with `d` fraction digits (`frac` < 10^d), with a sign when
+/// `negative`: the shared tail of [`push_fixed_bytes`] and [`push_fixed_bytes_const`].
+#[inline(always)]
+fn append_field(out: &mut Vec<u8>, mut int: u64, mut frac: u64, d: usize, negative: bool) {
+    // At most 16 integer digits (|scaled| < 9e15), the point, 9 decimals and the sign: 27
+    // bytes, right-aligned at FIELD_END; a fixed 32 bytes from the first digit are appended
+    // (a copy of known length, no library call) and the excess cut off again.
     const FIELD_END: usize = 32;
     let mut buf = [b'0'; 2 * FIELD_END];
     let mut at = FIELD_END;
+    // Right to left: the fraction (zero-padded to d digits), the point, the integer part.
     let mut left = d;
+    // Four digits per division of the long dependency chain, their two pairs apart.
     while left >= 4 {
         let four = (frac % 10_000) as u32;
         frac /= 10_000;

@@ -77,6 +77,7 @@
 
 pub mod error_table;
 pub mod location;
+pub mod trig;
 
 pub use location::{AxisLine, LocationErrors, LocationParam};
 
@@ -350,8 +351,8 @@ impl Kinematics {
         let tilt = self.layout.tilt_axis().map_or(0.0, |t| q[t]);
         let table = self.layout.table_axis().map_or(0.0, |t| q[t]);
         RotarySinCos {
-            c: table.to_radians().sin_cos(),
-            tilt: tilt.to_radians().sin_cos(),
+            c: trig::sin_cos_deg(table),
+            tilt: trig::sin_cos_deg(tilt),
         }
     }
 

@@ -57,6 +57,25 @@ impl Drives {
     /// Steps every axis through one interpolation period towards `setpoint`, which it should
     /// reach at `time_s`.
     pub fn step(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<DrivesState> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX, checked at run time just above.
+            return unsafe { self.step_avx(setpoint, time_s) };
+        }
+        self.step_inline(setpoint, time_s)
+    }
+
+    /// [`Drives::step`] compiled for AVX, every axis's period inlined into one function (no
+    /// FMA, whose single rounding would change the result: the arithmetic is the same
+    /// whatever the vector width).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn step_avx(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<DrivesState> {
+        self.step_inline(setpoint, time_s)
+    }
+
+    #[inline(always)]
+    fn step_inline(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<DrivesState> {
         let mut state = DrivesState {
             actual: *setpoint,
             following_error: AxisVec::ZERO,
@@ -75,6 +94,23 @@ impl Drives {
     /// [`Drives::step`] for the actual positions alone (mm and deg), as the linear twins
     /// need them (with their period map inlined: [`AxisServo::advance_twin`]).
     pub fn step_actual(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<AxisVec> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX, checked at run time just above.
+            return unsafe { self.step_actual_avx(setpoint, time_s) };
+        }
+        self.step_actual_inline(setpoint, time_s)
+    }
+
+    /// [`Drives::step_actual`] compiled for AVX (see [`Drives::step_avx`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn step_actual_avx(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<AxisVec> {
+        self.step_actual_inline(setpoint, time_s)
+    }
+
+    #[inline(always)]
+    fn step_actual_inline(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<AxisVec> {
         let mut actual = *setpoint;
         for (servo, &a) in self.servos.iter_mut().zip(self.axes) {
             servo.advance_twin(setpoint[a], time_s)?;

@@ -298,11 +298,8 @@ impl PeriodMap {
 
     #[inline(always)]
     fn dispatch<const N: usize>(&self, input: &[f64; N]) -> [f64; N_STATE] {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU has AVX, checked at run time just above.
-            return unsafe { self.product_avx(input) };
-        }
+        // Inlined into its caller, which picks the vector width: `Drives` runs every axis in
+        // one AVX-enabled function where the CPU has AVX (see `Drives::step`).
         self.product(input)
     }
 
@@ -318,14 +315,6 @@ impl PeriodMap {
             }
         }
         [acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]]
-    }
-
-    /// [`PeriodMap::product`] on 4-wide vectors (AVX; no FMA, whose single rounding would
-    /// change the result), chosen at run time so that the build stays portable.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn product_avx<const N: usize>(&self, input: &[f64; N]) -> [f64; N_STATE] {
-        self.product(input)
     }
 }
 
@@ -612,7 +601,7 @@ impl AxisServo {
     /// [`AxisServo::try_exact_period`] for an axis without dry friction and backlash: its
     /// only regime condition is the force within half its limit at both ends (the same
     /// decisions and the same arithmetic as the general path, without its friction terms).
-    #[inline]
+    #[inline(always)]
     fn try_lti_period(&mut self, s_old: f64, s_new: f64, f_ff: f64) -> bool {
         let limit = 0.5 * self.force_limit;
         if self.force.abs() > limit {
@@ -660,6 +649,7 @@ impl AxisServo {
     /// One period by the exact map when the state is in a linear regime at both its ends and
     /// the friction's linearisation error is within tolerance ([`ExactMaps`]); false (state
     /// untouched) otherwise.
+    #[inline(always)]
     fn try_exact_period(&mut self, s_old: f64, s_new: f64, f_ff: f64) -> bool {
         let Some(exact) = self.exact.as_deref() else {
             return false;
@@ -790,7 +780,7 @@ impl AxisServo {
 
     /// [`AxisServo::step`] without forming its [`ServoState`] (read what is needed with
     /// [`AxisServo::actual`] and the like: each is a division).
-    #[inline]
+    #[inline(always)]
     pub fn advance(&mut self, setpoint: f64, time_s: f64) -> Result<()> {
         if !setpoint.is_finite() {
             return Err(self.diverged(time_s, format!("the setpoint is not finite ({setpoint})")));

@@ -53,17 +53,54 @@ impl ConeTest {
 
     /// P(θ): the tool-side ball centre (tool tip) at `theta_rad`, table frame, mm.
     pub fn point(&self, theta_rad: f64) -> Point3<f64> {
-        let (s, c) = theta_rad.sin_cos();
-        let r = self.radius_mm();
-        Point3::from(
-            self.center_mm + self.frame_rotation() * Vector3::new(r * c, r * s, self.height_mm()),
-        )
+        self.poses().point(theta_rad)
     }
 
     /// The cone apex, table frame, mm.
     pub fn apex(&self) -> Point3<f64> {
+        self.poses().apex
+    }
+
+    /// Tool tip and tool axis (toward the apex) at `theta_rad`.
+    pub fn pose(&self, theta_rad: f64) -> ToolPose {
+        self.poses().pose(theta_rad)
+    }
+
+    /// The constants of [`ConeTest::pose`], for a path that asks for many poses.
+    pub fn poses(&self) -> ConePoses {
+        let rotation = self.frame_rotation();
         let l = self.ballbar_length_mm / self.half_apex_deg.to_radians().sin();
-        Point3::from(self.center_mm + self.frame_rotation() * Vector3::new(0.0, 0.0, l))
+        ConePoses {
+            center_mm: self.center_mm,
+            rotation,
+            radius_mm: self.radius_mm(),
+            height_mm: self.height_mm(),
+            apex: Point3::from(self.center_mm + rotation * Vector3::new(0.0, 0.0, l)),
+        }
+    }
+}
+
+/// The poses of a cone-frustum test ([`ConeTest::poses`]): its frame, measured circle and
+/// apex, so that a pose costs one `sin_cos`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConePoses {
+    /// Base-circle centre O, table frame, mm.
+    center_mm: Vector3<f64>,
+    /// `Ry(-β)`.
+    rotation: Rotation3<f64>,
+    /// `r = L cos α` and `h = L sin α`, mm.
+    radius_mm: f64,
+    height_mm: f64,
+    /// `O + Ry(-β) (0, 0, L / sin α)`, table frame, mm.
+    pub apex: Point3<f64>,
+}
+
+impl ConePoses {
+    /// `P(θ) = O + Ry(-β) (r cos θ, r sin θ, h)`, table frame, mm.
+    pub fn point(&self, theta_rad: f64) -> Point3<f64> {
+        let (s, c) = theta_rad.sin_cos();
+        let r = self.radius_mm;
+        Point3::from(self.center_mm + self.rotation * Vector3::new(r * c, r * s, self.height_mm))
     }
 
     /// Tool tip and tool axis (toward the apex) at `theta_rad`.
@@ -71,7 +108,7 @@ impl ConeTest {
         let tip = self.point(theta_rad);
         ToolPose {
             tip,
-            axis: (self.apex() - tip).normalize(),
+            axis: (self.apex - tip).normalize(),
         }
     }
 }

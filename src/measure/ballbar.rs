@@ -149,8 +149,8 @@ pub struct Centring {
 impl Centring {
     /// The fit at `theta_deg`, without r0, um.
     pub fn offset_um(&self, theta_deg: f64) -> f64 {
-        let t = theta_deg.to_radians();
-        self.a_um * t.cos() + self.b_um * t.sin()
+        let (sin, cos) = crate::kinematics::trig::sin_cos_deg(theta_deg);
+        self.a_um * cos + self.b_um * sin
     }
 
     /// [`Centring::offset_um`] from `(sin θ, cos θ)` (the same bits for θ in [0, 360)).
@@ -543,7 +543,7 @@ pub fn angle_distance_deg(a: f64, b: f64) -> f64 {
 /// and [`Centring::offset_um`] evaluates.
 #[inline]
 pub fn theta_sin_cos(theta_deg: f64) -> (f64, f64) {
-    wrap_360(theta_deg).to_radians().sin_cos()
+    crate::kinematics::trig::sin_cos_deg(wrap_360(theta_deg))
 }
 
 #[inline]

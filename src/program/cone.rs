@@ -7,7 +7,7 @@ use std::f64::consts::TAU;
 use std::fmt::Write as _;
 
 use crate::input::machine::Machine;
-use crate::input::program::{ConeTest, MeasuredLines, NcOptions};
+use crate::input::program::{ConePoses, ConeTest, MeasuredLines, NcOptions};
 use crate::kinematics::{Branch, Kinematics, C_START_REFERENCE_DEG};
 use crate::program::{FeedMode, Motion, Move};
 use crate::{Axis, AxisVec};
@@ -18,6 +18,8 @@ pub struct ConePath {
     pub cone: ConeTest,
     pub kinematics: Kinematics,
     pub branch: Branch,
+    /// `cone`'s constants, for its poses.
+    poses: ConePoses,
 }
 
 impl ConePath {
@@ -29,6 +31,7 @@ impl ConePath {
             cone,
             kinematics,
             branch: Branch::Primary,
+            poses: cone.poses(),
         };
         if let Some(tilt) = kinematics.layout.tilt_axis() {
             let limits = machine.axis(tilt);
@@ -53,7 +56,7 @@ impl ConePath {
     /// Axis positions at `theta_rad`, with C unwrapped nearest `reference_c_deg`.
     pub fn axes_near(&self, theta_rad: f64, reference_c_deg: f64) -> AxisVec {
         self.kinematics
-            .inverse(&self.cone.pose(theta_rad), self.branch, reference_c_deg)
+            .inverse(&self.poses.pose(theta_rad), self.branch, reference_c_deg)
     }
 
     /// Axis positions at θ = 0, with C in the spec's atan2 range.

@@ -49,6 +49,7 @@ use serde::Serialize;
 use super::attribution::{attribute_arc, attribute_to_sites, AxisSet, ReversalSite};
 use crate::error::{Error, Result};
 use crate::input::program::{ConeTest, Direction};
+use crate::kinematics::trig::sin_cos_deg;
 use crate::kinematics::Kinematics;
 use crate::Plane;
 use crate::{Axis, AxisVec};
@@ -149,7 +150,7 @@ pub struct Centring {
 impl Centring {
     /// The fit at `theta_deg`, without r0, um.
     pub fn offset_um(&self, theta_deg: f64) -> f64 {
-        let (sin, cos) = crate::kinematics::trig::sin_cos_deg(theta_deg);
+        let (sin, cos) = sin_cos_deg(theta_deg);
         self.a_um * cos + self.b_um * sin
     }
 
@@ -543,7 +544,7 @@ pub fn angle_distance_deg(a: f64, b: f64) -> f64 {
 /// and [`Centring::offset_um`] evaluates.
 #[inline]
 pub fn theta_sin_cos(theta_deg: f64) -> (f64, f64) {
-    crate::kinematics::trig::sin_cos_deg(wrap_360(theta_deg))
+    sin_cos_deg(wrap_360(theta_deg))
 }
 
 #[inline]
@@ -649,50 +650,111 @@ struct Step {
 /// the Fourier series up to [`SMOOTH_ORDER`] and, per step at bin k, the basis
 /// `u_k(i) = [i >= k] - i/N` (a unit jump at k, made periodic by a ramp). Returns the fit
 /// and the step heights (um, in the order of `step_indices`).
+///
+/// The normal equations `AᵀA x = Aᵀv` are formed in closed form and in one pass over the
+/// bins, without A (n × p). With `f_j` the Fourier columns, `u_s(i) = [i ≥ k_s] - i/n`,
+/// `S_j(k) = Σ_{i≥k} f_j(i)`, `M_j = Σ_i i f_j(i)`, `T(k) = Σ_{i≥k} i` and `Q = Σ_i i²`:
+///
+/// ```text
+/// Σ f_j f_l = n (j = l = 0), n/2 (j = l > 0), 0 otherwise   (orthogonal on the grid, 2K < n)
+/// Σ f_j u_s = S_j(k_s) - M_j / n
+/// Σ u_s u_t = (n - max(k_s, k_t)) - (T(k_s) + T(k_t)) / n + Q / n²
+/// Σ u_s v   = S_v(k_s) - M_v / n
+/// ```
 fn fit_shape(v: &[f64], step_indices: &[usize]) -> (Vec<f64>, Vec<f64>) {
     let n = v.len();
-    let p = 1 + 2 * SMOOTH_ORDER + step_indices.len();
-    // cos and sin of 2π m / n, once per m rather than once per harmonic and bin.
+    // The traces have N_BINS bins: far more than the harmonics need for orthogonality.
+    debug_assert!(n > 2 * SMOOTH_ORDER);
+    let fourier = 1 + 2 * SMOOTH_ORDER;
+    let p = fourier + step_indices.len();
+    // cos and sin of 360° m / n, once per m rather than once per harmonic and bin.
     let trig: Vec<(f64, f64)> = (0..n)
         .map(|m| {
-            let angle = 2.0 * std::f64::consts::PI * m as f64 / n as f64;
-            let (sin, cos) = angle.sin_cos();
+            let (sin, cos) = sin_cos_deg(360.0 * m as f64 / n as f64);
             (cos, sin)
         })
         .collect();
-    // Columns: 1, then cos and sin of harmonic k (2k - 1 and 2k, entry i at the table's
-    // (k i) mod n, stepped by k rather than divided), then the steps.
-    let mut a = DMatrix::<f64>::zeros(n, p);
-    a.column_mut(0).fill(1.0);
-    for k in 1..=SMOOTH_ORDER {
-        let step = if n > 0 { k % n } else { 0 };
-        let (cos_column, rest) = a.as_mut_slice()[(2 * k - 1) * n..].split_at_mut(n);
+    // The Fourier part of row i of A: 1, then cos and sin of harmonic k (entry (k i) mod n).
+    let row = |i: usize, r: &mut [f64; 1 + 2 * SMOOTH_ORDER]| {
+        r[0] = 1.0;
         let mut m = 0;
-        for (c, s) in cos_column.iter_mut().zip(&mut rest[..n]) {
-            (*c, *s) = trig[m];
-            m += step;
+        for k in 1..=SMOOTH_ORDER {
+            m += i; // (k i) mod n: both terms below n
             if m >= n {
                 m -= n;
             }
+            (r[2 * k - 1], r[2 * k]) = trig[m];
+        }
+    };
+    // Steps by decreasing bin, for the suffix sums S(k) of one backward pass.
+    let mut order: Vec<usize> = (0..step_indices.len()).collect();
+    order.sort_by_key(|&s| std::cmp::Reverse(step_indices[s]));
+    let mut suffix = vec![[0.0; 1 + 2 * SMOOTH_ORDER]; step_indices.len()];
+    let mut suffix_v = vec![0.0; step_indices.len()];
+    let (mut sum, mut moment) = ([0.0; 1 + 2 * SMOOTH_ORDER], [0.0; 1 + 2 * SMOOTH_ORDER]);
+    let (mut sum_v, mut moment_v) = (0.0, 0.0);
+    let mut atb_fourier = [0.0; 1 + 2 * SMOOTH_ORDER];
+    let mut r = [0.0; 1 + 2 * SMOOTH_ORDER];
+    let mut next = 0;
+    for i in (0..n).rev() {
+        row(i, &mut r);
+        let (vi, fi) = (v[i], i as f64);
+        for j in 0..fourier {
+            sum[j] += r[j];
+            moment[j] += fi * r[j];
+            atb_fourier[j] += r[j] * vi;
+        }
+        sum_v += vi;
+        moment_v += fi * vi;
+        while next < order.len() && step_indices[order[next]] >= i {
+            // k_s = i (k_s beyond the last bin sums nothing: it is recorded before any row).
+            if step_indices[order[next]] == i {
+                suffix[order[next]] = sum;
+                suffix_v[order[next]] = sum_v;
+            }
+            next += 1;
         }
     }
-    for (s, &k) in step_indices.iter().enumerate() {
-        for (i, x) in a
-            .column_mut(1 + 2 * SMOOTH_ORDER + s)
-            .iter_mut()
-            .enumerate()
-        {
-            *x = f64::from(u8::from(i >= k)) - i as f64 / n as f64;
-        }
+    let nf = n as f64;
+    let tail = |k: usize| (nf * (nf - 1.0) - k as f64 * (k as f64 - 1.0)) / 2.0; // T(k)
+    let q = (nf - 1.0) * nf * (2.0 * nf - 1.0) / 6.0;
+    let mut ata = DMatrix::<f64>::zeros(p, p);
+    let mut atb = DVector::<f64>::zeros(p);
+    for j in 0..fourier {
+        ata[(j, j)] = if j == 0 { nf } else { 0.5 * nf };
+        atb[j] = atb_fourier[j];
     }
-    let b = DVector::from_column_slice(v);
-    let at = a.transpose();
-    let x = match (&at * &a).cholesky() {
-        Some(ch) => ch.solve(&(&at * &b)),
+    for (s, &ks) in step_indices.iter().enumerate() {
+        let cs = fourier + s;
+        for j in 0..fourier {
+            let g = suffix[s][j] - moment[j] / nf;
+            ata[(j, cs)] = g;
+            ata[(cs, j)] = g;
+        }
+        for (t, &kt) in step_indices.iter().enumerate() {
+            let inside = nf - ks.max(kt).min(n) as f64;
+            ata[(cs, fourier + t)] =
+                inside - (tail(ks.min(n)) + tail(kt.min(n))) / nf + q / (nf * nf);
+        }
+        atb[cs] = suffix_v[s] - moment_v / nf;
+    }
+    let x = match ata.cholesky() {
+        Some(ch) => ch.solve(&atb),
         None => DVector::zeros(p),
     };
-    let fit = (&a * &x).iter().copied().collect();
-    let heights = x.iter().skip(1 + 2 * SMOOTH_ORDER).copied().collect();
+    let fit = (0..n)
+        .map(|i| {
+            row(i, &mut r);
+            let smooth: f64 = r.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
+            let steps: f64 = step_indices
+                .iter()
+                .zip(x.iter().skip(fourier))
+                .map(|(&k, h)| (f64::from(u8::from(i >= k)) - i as f64 / nf) * h)
+                .sum();
+            smooth + steps
+        })
+        .collect();
+    let heights = x.iter().skip(fourier).copied().collect();
     (fit, heights)
 }
 

@@ -91,6 +91,8 @@ pub struct AxisServo {
     fully_closed: bool,
     /// SI units per interface unit: m/mm or rad/deg.
     scale: f64,
+    /// `1 / scale`: interface units per SI unit (a product where the outputs are read).
+    inv_scale: f64,
     /// Inverse of the interpolation period, 1/s.
     inv_t_ipo: f64,
     /// Servo periods per interpolation period, and the servo period, s.
@@ -257,6 +259,8 @@ struct ExactMaps {
     maps: Vec<OnceCell<PeriodMap>>,
     /// Grid spacing of the slopes, N/(m/s) or N m/(rad/s) (0 with a single map).
     slope_step: f64,
+    /// `1 / slope_step` (0 with a single map).
+    inv_slope_step: f64,
     /// `Fs - Fc` and `1 / vs` (0 without a Stribeck zone).
     delta_friction: f64,
     inv_stribeck: f64,
@@ -376,6 +380,7 @@ impl AxisServo {
             model: r.model.unwrap_or(Model::Cascade),
             fully_closed: r.fully_closed.unwrap_or(false),
             scale,
+            inv_scale: 1.0 / scale,
             inv_t_ipo: 1.0 / t_ipo,
             n_servo,
             t_servo,
@@ -455,6 +460,7 @@ impl AxisServo {
             return ExactMaps {
                 maps: vec![OnceCell::from(self.period_map(0.0))],
                 slope_step: 0.0,
+                inv_slope_step: 0.0,
                 delta_friction: 0.0,
                 inv_stribeck: 0.0,
                 tolerance: 0.0,
@@ -470,6 +476,7 @@ impl AxisServo {
         ExactMaps {
             maps: (0..=SLOPE_STEPS).map(|_| OnceCell::new()).collect(),
             slope_step: step,
+            inv_slope_step: 1.0 / step,
             delta_friction: delta,
             inv_stribeck: 1.0 / self.stribeck,
             tolerance: 1e-5 * self.static_friction,
@@ -694,7 +701,7 @@ impl AxisServo {
             // The exp of the friction bound at v0 (0 beyond u² = 40, where the substep
             // model's g(v) is Fc exactly: see `stribeck_bound`).
             let slope = 2.0 * exact.delta_friction * u * exact.inv_stribeck * regime.decay;
-            let index = round_index(slope / exact.slope_step, SLOPE_STEPS);
+            let index = round_index(slope * exact.inv_slope_step, SLOPE_STEPS);
             (-regime.side * regime.bound, slope, index)
         };
         let grid_slope = index as f64 * exact.slope_step;
@@ -753,7 +760,7 @@ impl AxisServo {
         ServoState {
             actual: self.actual(),
             following_error: self.following_error(),
-            motor: self.x_m / self.scale,
+            motor: self.x_m * self.inv_scale,
             velocity: self.velocity(),
             force: self.force,
         }
@@ -762,24 +769,24 @@ impl AxisServo {
     /// Table-side position at the end of the last period, mm or deg.
     #[inline]
     pub fn actual(&self) -> f64 {
-        self.x_t / self.scale
+        self.x_t * self.inv_scale
     }
 
     /// Setpoint minus actual at the end of the last period, mm or deg.
     #[inline]
     pub fn following_error(&self) -> f64 {
-        (self.setpoint - self.x_t) / self.scale
+        (self.setpoint - self.x_t) * self.inv_scale
     }
 
     /// Table velocity at the end of the last period, mm/s or deg/s (first-order model: the
     /// mean over the period).
     #[inline]
     pub fn velocity(&self) -> f64 {
-        self.velocity_si / self.scale
+        self.velocity_si * self.inv_scale
     }
 
     /// [`AxisServo::step`] without forming its [`ServoState`] (read what is needed with
-    /// [`AxisServo::actual`] and the like: each is a division).
+    /// [`AxisServo::actual`] and the like: each is a product).
     #[inline(always)]
     pub fn advance(&mut self, setpoint: f64, time_s: f64) -> Result<()> {
         if !setpoint.is_finite() {

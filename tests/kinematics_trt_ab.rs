@@ -417,3 +417,46 @@ fn a_trt_ab_machine_takes_location_errors_of_a_and_b_and_refuses_c() {
     let message = scenario("EX0C_um = 5.0").unwrap_err().to_string();
     assert!(message.contains("no C axis"), "{message}");
 }
+
+/// The bar's sensitivity to each axis on trt-ab, against a central difference of the bar
+/// length written out here: `L(q) = |(X, Y, Z) - (pivot + R(q) p)|`, with `R` the product of
+/// LinuxCNC's `xyzab_tdr_kins` rotations (`table_rotation`). The table axis is A on this
+/// layout: its sine and cosine go where C's go on trt-ac.
+#[test]
+fn the_bar_sensitivity_to_a_and_b_is_the_derivative_of_the_bar_length() {
+    use mtsim::measure::attribution::bar_sensitivity;
+    let kin = tdr();
+    let pivot_table = Point3::new(20.0, -30.0, 40.0);
+    let mut at = q(25.0, -35.0);
+    at[Axis::X] = 60.0;
+    at[Axis::Y] = 10.0;
+    at[Axis::Z] = 80.0;
+    let length = |q: &AxisVec| {
+        let pivot = Vector3::from(ROT_POINT) + kin.table_rotation(q) * pivot_table.coords;
+        (Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]) - pivot).norm()
+    };
+    let bar = length(&at);
+    let s = bar_sensitivity(
+        &kin,
+        &[Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::B],
+        &at,
+        &pivot_table,
+        bar,
+    );
+    for axis in [Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::B] {
+        let h = 1e-3;
+        let (mut up, mut down) = (at, at);
+        up[axis] += h;
+        down[axis] -= h;
+        let expected = (length(&up) - length(&down)) / (2.0 * h);
+        assert!(
+            (s[axis] - expected).abs() < 1e-6,
+            "{axis}: {} against {expected}",
+            s[axis]
+        );
+        assert!(
+            expected.abs() > 1e-3,
+            "{axis} must move the bar for the test to bite"
+        );
+    }
+}

@@ -43,6 +43,7 @@ use nalgebra::Point3;
 use serde::{Serialize, Serializer};
 
 use super::ballbar::{angle_distance_deg, deviation_mm};
+use crate::kinematics::trig::sin_cos_deg;
 use crate::kinematics::{Kinematics, RotarySinCos};
 use crate::{Axis, AxisVec};
 
@@ -112,8 +113,9 @@ pub fn bar_sensitivity_at(
             // (the arithmetic of `deviation_mm` on the nominal chain, term for term).
             let rotated = |q: &AxisVec| {
                 let mut angles = base;
-                let sc = q[a].to_radians().sin_cos();
-                if a == Axis::C {
+                let sc = sin_cos_deg(q[a]);
+                // The table axis (C, or A on trt-ab and xyza) fills the `c` slot.
+                if Some(a) == kin.layout.table_axis() {
                     angles.c = sc;
                 } else {
                     angles.tilt = sc;

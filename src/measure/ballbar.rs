@@ -134,6 +134,22 @@ impl CircleFrame {
         let v = self.rotation.inverse() * (p_table.coords - self.origin_mm);
         wrap_360(v.y.atan2(v.x).to_degrees())
     }
+
+    /// [`CircleFrame::theta_deg`] with `(sin θ, cos θ)` from the point's own coordinates in
+    /// the circle's plane, `(y, x) / √(x² + y²)` (from [`theta_sin_cos`] where the point is on
+    /// the circle's axis).
+    #[inline]
+    pub fn theta_deg_sin_cos(&self, p_table: &Point3<f64>) -> (f64, (f64, f64)) {
+        let v = self.rotation.inverse() * (p_table.coords - self.origin_mm);
+        let theta = wrap_360(v.y.atan2(v.x).to_degrees());
+        let r = (v.x * v.x + v.y * v.y).sqrt();
+        if r > 0.0 && r.is_finite() {
+            let inv = 1.0 / r;
+            (theta, (v.y * inv, v.x * inv))
+        } else {
+            (theta, theta_sin_cos(theta))
+        }
+    }
 }
 
 /// Least-squares centring `dL = r0 + a cos theta + b sin theta`, um.
@@ -742,19 +758,23 @@ fn fit_shape(v: &[f64], step_indices: &[usize]) -> (Vec<f64>, Vec<f64>) {
         Some(ch) => ch.solve(&atb),
         None => DVector::zeros(p),
     };
+    // The steps' part of the fit, Σ_s h_s u_s(i) = Σ_{k_s ≤ i} h_s - (i/n) Σ_s h_s: the first
+    // sum grows as i passes each k_s (in `order`, reversed to increasing bins).
+    let heights: Vec<f64> = x.iter().skip(fourier).copied().collect();
+    let total: f64 = heights.iter().sum();
+    let mut passed = 0.0;
+    let mut pending = order.iter().rev().peekable();
     let fit = (0..n)
         .map(|i| {
             row(i, &mut r);
             let smooth: f64 = r.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
-            let steps: f64 = step_indices
-                .iter()
-                .zip(x.iter().skip(fourier))
-                .map(|(&k, h)| (f64::from(u8::from(i >= k)) - i as f64 / nf) * h)
-                .sum();
-            smooth + steps
+            while let Some(&&s) = pending.peek().filter(|&&&s| step_indices[s] <= i) {
+                passed += heights[s];
+                pending.next();
+            }
+            smooth + (passed - i as f64 / nf * total)
         })
         .collect();
-    let heights = x.iter().skip(fourier).copied().collect();
     (fit, heights)
 }
 

@@ -15,7 +15,7 @@
 use nalgebra::Point3;
 
 use super::attribution::{bar_sensitivity_at, SensitivityMap};
-use super::ballbar::{deviation_mm, theta_sin_cos, BallbarRun, CircleFrame};
+use super::ballbar::{deviation_mm, BallbarRun, CircleFrame};
 use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines};
 use crate::kinematics::{Kinematics, RotarySinCos};
@@ -43,7 +43,8 @@ pub struct BarReading {
     pub deviation_um: f64,
     /// dL minus the linear twin's dL, um.
     pub nonlinear_um: f64,
-    /// `(sin θ, cos θ)` ([`theta_sin_cos`]): the run's terms and the trace's centring.
+    /// `(sin θ, cos θ)` ([`CircleFrame::theta_deg_sin_cos`]): the run's terms and the
+    /// trace's centring.
     pub theta_sin_cos: (f64, f64),
 }
 
@@ -59,12 +60,13 @@ impl BarGeometry {
         if !kin.location_errors.is_zero() {
             let dev = |q| deviation_mm(kin, q, &self.pivot_table_mm, self.length_mm) * 1e3;
             let deviation_um = dev(&s.actual);
-            let theta_deg = self.frame.theta_deg(&kin.forward(&s.commanded).tip);
+            let (theta_deg, theta_sin_cos) =
+                self.frame.theta_deg_sin_cos(&kin.forward(&s.commanded).tip);
             let reading = BarReading {
                 theta_deg,
                 deviation_um,
                 nonlinear_um: deviation_um - dev(&s.linear),
-                theta_sin_cos: theta_sin_cos(theta_deg),
+                theta_sin_cos,
             };
             return (reading, None);
         }
@@ -78,14 +80,14 @@ impl BarGeometry {
             ((tool - pivot).norm() - self.length_mm) * 1e3
         };
         let deviation_um = dev(&s.actual);
-        let theta_deg = self
+        let (theta_deg, theta_sin_cos) = self
             .frame
-            .theta_deg(&kin.forward_with(&s.commanded, &at_command).tip);
+            .theta_deg_sin_cos(&kin.forward_with(&s.commanded, &at_command).tip);
         let reading = BarReading {
             theta_deg,
             deviation_um,
             nonlinear_um: deviation_um - dev(&s.linear),
-            theta_sin_cos: theta_sin_cos(theta_deg),
+            theta_sin_cos,
         };
         (reading, Some(at_command))
     }

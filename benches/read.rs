@@ -11,7 +11,9 @@
 //! (interpreting and printing its canonical calls to a file, as docs/rs274.md runs it).
 //! Wall and CPU time are printed (CPU: this thread for the reader, the child process for
 //! the others; the fair figure when the machine is shared) and the ratios; the goal is
-//! the reader ≥ 20× faster than rs274. `MTSIM_BENCH_VS_ONLY=1` skips the criterion part.
+//! the reader ≥ 20× faster than rs274. `MTSIM_BENCH_VS_ONLY=1` skips the criterion part;
+//! `MTSIM_BENCH_SMOKE=1` skips it too and reads a 100,000-block file once each (a CI smoke
+//! run: every reader still runs and agrees on the block count).
 
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
@@ -88,10 +90,21 @@ fn read(c: &mut Criterion) {
     group.finish();
 }
 
-/// Blocks of the file read by both mtsim and rs274.
-const BIG_BLOCKS: usize = 1_000_000;
+/// Blocks of the file read by both mtsim and rs274 (a tenth in a smoke run).
+fn big_blocks() -> usize {
+    if smoke() {
+        100_000
+    } else {
+        1_000_000
+    }
+}
 
-/// A G01 file of [`BIG_BLOCKS`] blocks, X Y Z with 4 decimals and a varying F, as the
+/// `MTSIM_BENCH_SMOKE` is set (and not 0).
+fn smoke() -> bool {
+    std::env::var("MTSIM_BENCH_SMOKE").is_ok_and(|v| !v.is_empty() && v != "0")
+}
+
+/// A G01 file of [`big_blocks`] blocks, X Y Z with 4 decimals and a varying F, as the
 /// measurement in docs/rs274.md §5.
 fn write_big_file(path: &Path) {
     use std::io::Write;
@@ -105,7 +118,7 @@ fn write_big_file(path: &Path) {
             .wrapping_add(1_442_695_040_888_963_407);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
-    for _ in 0..BIG_BLOCKS {
+    for _ in 0..big_blocks() {
         writeln!(
             out,
             "G1 X{:.4} Y{:.4} Z{:.4} F{:.1}",
@@ -154,7 +167,7 @@ fn best_of(runs: usize, cpu: fn() -> Option<f64>, mut f: impl FnMut()) -> (f64, 
 
 /// `  name  wall s  (M blocks/s)  cpu s  (M blocks/s)`.
 fn line(name: &str, (wall, cpu): (f64, Option<f64>)) {
-    let rate = |s: f64| BIG_BLOCKS as f64 / s / 1e6;
+    let rate = |s: f64| big_blocks() as f64 / s / 1e6;
     match cpu {
         Some(c) => println!(
             "  {name:<26} wall {wall:>7.3} s {:>6.2} M blocks/s   cpu {c:>7.3} s {:>6.2} M blocks/s",
@@ -179,12 +192,16 @@ fn versus_rs274() {
     let program = dir.join("big.ngc");
     write_big_file(&program);
     let mb = std::fs::metadata(&program).unwrap().len() as f64 / 1e6;
-    println!("\n1M-block G01 file ({mb:.1} MB), best of 3 (rs274: of 2), wall and CPU time:");
+    let (runs, rs_runs) = if smoke() { (1, 1) } else { (3, 2) };
+    println!(
+        "\n{}k-block G01 file ({mb:.1} MB), best of {runs} (rs274: of {rs_runs}), wall and CPU time:",
+        big_blocks() / 1000
+    );
 
-    let reader = best_of(3, thread_cpu_s, || {
+    let reader = best_of(runs, thread_cpu_s, || {
         let moves = ngc::read_file(&program, AxisVec::ZERO).unwrap();
         let n = moves.map(|m| black_box(m.unwrap())).count();
-        assert_eq!(n, BIG_BLOCKS);
+        assert_eq!(n, big_blocks());
     });
     line("ngc::read_file", reader);
 
@@ -198,7 +215,7 @@ fn versus_rs274() {
         ),
     )
     .unwrap();
-    let blocks = best_of(3, children_cpu_s, || {
+    let blocks = best_of(runs, children_cpu_s, || {
         let status = Command::new(env!("CARGO_BIN_EXE_mtsim"))
             .args(["blocks", scenario.to_str().unwrap(), "--csv"])
             .stdout(std::fs::File::create(dir.join("blocks.csv")).unwrap())
@@ -214,7 +231,7 @@ fn versus_rs274() {
             let var = dir.join("p.var");
             let tools = dir.join("tool.tbl");
             std::fs::write(&tools, "").unwrap();
-            let rs = best_of(2, children_cpu_s, || {
+            let rs = best_of(rs_runs, children_cpu_s, || {
                 std::fs::write(&var, "").unwrap();
                 let status = Command::new(&rs274)
                     .env("HOME", &dir)
@@ -262,7 +279,7 @@ fn versus_rs274() {
 criterion_group!(benches, read);
 
 fn main() {
-    if std::env::var_os("MTSIM_BENCH_VS_ONLY").is_none() {
+    if std::env::var_os("MTSIM_BENCH_VS_ONLY").is_none() && !smoke() {
         benches();
         Criterion::default().configure_from_args().final_summary();
     }

@@ -221,6 +221,20 @@ impl Regime {
     }
 }
 
+/// Whether the state variables the divergence check covers (all but `x_m,tick`, which is
+/// an earlier `x_m`) are finite. `v - v` is 0 for a finite v and NaN otherwise: the sum is
+/// 0 exactly when every one is finite (one comparison instead of six).
+#[inline(always)]
+fn all_finite(x: &[f64; N_STATE]) -> bool {
+    let probe = (x[0] - x[0])
+        + (x[1] - x[1])
+        + (x[2] - x[2])
+        + (x[3] - x[3])
+        + (x[4] - x[4])
+        + (x[5] - x[5]);
+    probe == 0.0
+}
+
 /// `x.round()` for `x ≥ 0` (halves away from zero), at most `max`; written out because
 /// `f64::round` is a library call on baseline x86-64.
 #[inline]
@@ -627,7 +641,7 @@ impl AxisServo {
             self.x_m_tick - s_old,
         ];
         let y = map.apply_without_friction(&x, s_new - s_old, f_ff);
-        if y[4].abs() > limit {
+        if y[4].abs() > limit || !all_finite(&y) {
             return false;
         }
         self.x_m = y[0] + s_old;
@@ -707,6 +721,9 @@ impl AxisServo {
         let grid_slope = index as f64 * exact.slope_step;
         let map = exact.maps[index].get_or_init(|| self.period_map(grid_slope));
         let y = map.apply(&x, s_new - s_old, f_ff, f0 - grid_slope * v0, regime.offset);
+        if !all_finite(&y) {
+            return false; // the substeps find it too, and end_period reports it
+        }
         let dv = 2.0 * (y[3] - x[3]).abs().max(dv_guess);
         if exact.slope_step > 0.0 && (v0.abs() - dv) * exact.inv_stribeck <= 40f64.sqrt() {
             // e_F = |c - cᵢ| Δv + ½ max|f''| Δv², with k = max|f''| vs² / (Fs - Fc) ≤ 2:
@@ -797,13 +814,16 @@ impl AxisServo {
         let v_ff = (s_new - s_old) * self.inv_t_ipo;
         let a_ff = (v_ff - self.v_ff) * self.inv_t_ipo;
         let x_t_old = self.x_t;
-        match self.model {
-            Model::FirstOrder => self.step_first_order(s_old, s_new, v_ff),
+        let mapped = match self.model {
+            Model::FirstOrder => {
+                self.step_first_order(s_old, s_new, v_ff);
+                false
+            }
             Model::Cascade => self.step_cascade(s_old, s_new, v_ff, a_ff),
-        }
+        };
         self.setpoint = s_new;
         self.v_ff = v_ff;
-        self.end_period(s_new, x_t_old, time_s)
+        self.end_period(s_new, x_t_old, time_s, mapped)
     }
 
     /// [`AxisServo::advance`] for a linear twin (no dry friction, backlash or pre-sliding,
@@ -837,7 +857,7 @@ impl AxisServo {
             self.x_m_tick - s_old,
         ];
         let y = map.apply_without_friction(&x, s_new - s_old, f_ff);
-        if y[4].abs() > limit {
+        if y[4].abs() > limit || !all_finite(&y) {
             return self.advance(setpoint, time_s);
         }
         let x_t_old = self.x_t;
@@ -851,21 +871,32 @@ impl AxisServo {
         self.periods_exact += 1;
         self.setpoint = s_new;
         self.v_ff = v_ff;
-        self.end_period(s_new, x_t_old, time_s)
+        self.end_period(s_new, x_t_old, time_s, true)
     }
 
     /// The divergence checks after a period and the velocity it leaves.
     #[inline(always)]
-    fn end_period(&mut self, s_new: f64, x_t_old: f64, time_s: f64) -> Result<()> {
-        // `v - v` is 0 for a finite v and NaN otherwise: the sum is 0 exactly when every
-        // state variable is finite (one comparison instead of six).
-        let probe = (self.x_m - self.x_m)
-            + (self.v_m - self.v_m)
-            + (self.x_t - self.x_t)
-            + (self.v_t - self.v_t)
-            + (self.force - self.force)
-            + (self.integral - self.integral);
-        if probe != 0.0 {
+    /// `finite_checked`: the period's map already checked its result ([`all_finite`] on
+    /// the values in registers, before storing them: reading them back from the state, two
+    /// 8-byte stores as one 16-byte load, stalled store forwarding).
+    fn end_period(
+        &mut self,
+        s_new: f64,
+        x_t_old: f64,
+        time_s: f64,
+        finite_checked: bool,
+    ) -> Result<()> {
+        if !finite_checked
+            && !all_finite(&[
+                self.x_m,
+                self.v_m,
+                self.x_t,
+                self.v_t,
+                self.force,
+                self.integral,
+                0.0,
+            ])
+        {
             return Err(self.diverged(time_s, "the drive state is no longer finite".into()));
         }
         let fe = s_new - self.x_t;
@@ -943,13 +974,15 @@ impl AxisServo {
     /// Cascade model over one interpolation period: `n_servo` controller ticks, each followed
     /// by `n_sub` mechanics substeps under the held force command.
     #[inline(always)]
-    fn step_cascade(&mut self, s_old: f64, s_new: f64, v_ff: f64, a_ff: f64) {
+    /// True when the exact map took the period (its result checked finite).
+    fn step_cascade(&mut self, s_old: f64, s_new: f64, v_ff: f64, a_ff: f64) -> bool {
         let f_ff = self.aff_mass * a_ff;
         if self.try_exact_period(s_old, s_new, f_ff) {
             self.periods_exact += 1;
-            return;
+            return true;
         }
         self.substep_period(s_old, s_new, v_ff, f_ff);
+        false
     }
 
     /// [`AxisServo::step_cascade`] by substeps, where the exact map does not apply (kept out

@@ -34,24 +34,12 @@ pub enum Error {
         source: std::io::Error,
     },
 
-    /// Bad input at a known place in a file: syntax, schema or value.
-    #[error("{}:{line}:{column}: {message}", path.display())]
-    #[diagnostic(code(mtsim::input))]
-    AtSource {
-        path: PathBuf,
-        /// 1-based line.
-        line: usize,
-        /// 1-based column, in characters.
-        column: usize,
-        message: String,
-        #[source_code]
-        source_code: NamedSource<String>,
-        #[label("{label}")]
-        span: SourceSpan,
-        label: String,
-        #[help]
-        help: Option<String>,
-    },
+    /// Bad input at a known place in a file: syntax, schema or value (boxed: every
+    /// `Result` of the pipeline carries this enum, and its setpoints and samples are
+    /// copied by value once per period).
+    #[error(transparent)]
+    #[diagnostic(transparent)]
+    AtSource(Box<SourceError>),
 
     /// Bad input with no single place in a file, such as a missing key or a command-line value.
     #[error("{}: {message}", path.display())]
@@ -92,6 +80,26 @@ pub enum Error {
     },
 }
 
+/// [`Error::AtSource`]: bad input at a known place in a file.
+#[derive(Debug, Error, Diagnostic)]
+#[error("{}:{line}:{column}: {message}", path.display())]
+#[diagnostic(code(mtsim::input))]
+pub struct SourceError {
+    pub path: PathBuf,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column, in characters.
+    pub column: usize,
+    pub message: String,
+    #[source_code]
+    pub source_code: NamedSource<String>,
+    #[label("{label}")]
+    pub span: SourceSpan,
+    pub label: String,
+    #[help]
+    pub help: Option<String>,
+}
+
 impl Error {
     /// The process exit code for this error.
     pub fn exit_code(&self) -> i32 {
@@ -112,7 +120,7 @@ impl Error {
         let start = span.start.min(text.len());
         let end = span.end.clamp(start, text.len());
         let (line, column) = line_column(text, start);
-        Error::AtSource {
+        Error::AtSource(Box::new(SourceError {
             path: path.to_path_buf(),
             line,
             column,
@@ -121,13 +129,14 @@ impl Error {
             span: (start, end - start).into(),
             label: label.into(),
             help: None,
-        }
+        }))
     }
 
     /// Adds a hint that says what to do.
     pub fn with_help(mut self, text: impl Into<String>) -> Error {
         match &mut self {
-            Error::AtSource { help, .. } | Error::Invalid { help, .. } => *help = Some(text.into()),
+            Error::AtSource(e) => e.help = Some(text.into()),
+            Error::Invalid { help, .. } => *help = Some(text.into()),
             _ => {}
         }
         self

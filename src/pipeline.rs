@@ -16,6 +16,7 @@ use std::path::PathBuf;
 use crate::drive::Drives;
 use crate::error::Result;
 use crate::input::machine::Machine;
+use crate::kinematics::error_table::PositionErrors;
 use crate::motion::interpolation::{InterpolationOptions, Interpolator};
 use crate::motion::sampling::NominalSampler;
 use crate::program::Moves;
@@ -141,70 +142,63 @@ pub fn run(
                 program_path: options.program_path.clone(),
                 ..InterpolationOptions::default()
             };
-            let mut setpoints = Interpolator::new(moves, machine, interpolation)?.peekable();
-            let first = match setpoints.peek() {
-                Some(Ok(sp)) => sp.q,
-                Some(Err(_)) => {
-                    return Err(setpoints
-                        .next()
-                        .expect("peeked")
-                        .expect_err("peeked an error"))
-                }
-                None => return Ok(stats),
+            // One setpoint at a time, moved as little as possible (no `Peekable` or
+            // `Enumerate` layers: each is another copy of the setpoint and its `Result`).
+            let mut setpoints = Interpolator::new(moves, machine, interpolation)?;
+            let Some(first) = setpoints.next().transpose()? else {
+                return Ok(stats);
             };
-            let mut drives = Drives::new(machine, &first, false)?;
+            let mut drives = Drives::new(machine, &first.q, false)?;
             let mut linear = if twins {
-                Some(Drives::new(machine, &first, true)?)
+                Some(Drives::new(machine, &first.q, true)?)
             } else {
                 None
             };
-            let mut last = None;
-            for (k, sp) in setpoints.enumerate() {
-                let sp = sp?;
-                let t = t0 + sp.time_s;
-                let state = drives.step(&sp.q, t)?;
-                let actual = position_errors.apply(&state.actual);
-                let twin = match linear.as_mut() {
-                    Some(d) => position_errors.apply_mean(&d.step_actual(&sp.q, t)?),
-                    None => actual,
-                };
-                let sample = Sample {
-                    index: k as u64,
-                    time_s: t,
-                    line: sp.line,
-                    block_index: sp.block_index,
-                    commanded: sp.q,
-                    actual,
-                    following_error: state.following_error,
-                    linear: twin,
-                };
+            // One sample for the whole run, its vectors written in place by the drives.
+            let mut sample = Sample {
+                index: 0,
+                time_s: t0 + first.time_s,
+                line: first.line,
+                block_index: first.block_index,
+                commanded: first.q,
+                actual: first.q,
+                following_error: AxisVec::ZERO,
+                linear: first.q,
+            };
+            let mut next = Some(first);
+            let mut k = 0u64;
+            while let Some(sp) = next {
+                sample.index = k;
+                sample.time_s = t0 + sp.time_s;
+                sample.line = sp.line;
+                sample.block_index = sp.block_index;
+                sample.commanded = sp.q;
+                drive_sample(
+                    &mut sample,
+                    &mut drives,
+                    linear.as_mut(),
+                    &mut position_errors,
+                )?;
                 emit(&sample, &mut stats)?;
-                if settle {
-                    last = Some(sample);
-                }
+                next = setpoints.next().transpose()?;
+                k += 1;
             }
             // The setpoints end at rest, the axes not yet: hold the last setpoint until
             // every axis has settled, for at most SETTLE_S.
-            if let (true, Some(end)) = (settle, last) {
+            if settle {
                 let period = machine.interpolation_period_s;
+                let (end_index, end_time_s) = (sample.index, sample.time_s);
                 for k in 1..=(SETTLE_S / period).round() as u64 {
-                    let t = end.time_s + k as f64 * period;
-                    let state = drives.step(&end.commanded, t)?;
-                    let actual = position_errors.apply(&state.actual);
-                    let twin = match linear.as_mut() {
-                        Some(d) => position_errors.apply_mean(&d.step_actual(&end.commanded, t)?),
-                        None => actual,
-                    };
-                    let sample = Sample {
-                        index: end.index + k,
-                        time_s: t,
-                        actual,
-                        following_error: state.following_error,
-                        linear: twin,
-                        ..end
-                    };
+                    sample.index = end_index + k;
+                    sample.time_s = end_time_s + k as f64 * period;
+                    let settled = drive_sample(
+                        &mut sample,
+                        &mut drives,
+                        linear.as_mut(),
+                        &mut position_errors,
+                    )?;
                     emit(&sample, &mut stats)?;
-                    if state.settled {
+                    if settled {
                         break;
                     }
                 }
@@ -212,4 +206,35 @@ pub fn run(
         }
     }
     Ok(stats)
+}
+
+/// One interpolation period of the drives (and of their linear twins) towards
+/// `sample.commanded`, reached at `sample.time_s`, written into the sample's actual,
+/// following-error and linear vectors with the position errors applied. Returns whether
+/// every axis has settled.
+#[inline]
+fn drive_sample(
+    sample: &mut Sample,
+    drives: &mut Drives,
+    twins: Option<&mut Drives>,
+    errors: &mut PositionErrors,
+) -> Result<bool> {
+    // Axes without a drive stay at their setpoint.
+    sample.actual = sample.commanded;
+    let settled = drives.step_into(
+        &sample.commanded,
+        sample.time_s,
+        &mut sample.actual,
+        &mut sample.following_error,
+    )?;
+    errors.apply_in_place(&mut sample.actual);
+    match twins {
+        Some(d) => {
+            sample.linear = sample.commanded;
+            d.step_actual_into(&sample.commanded, sample.time_s, &mut sample.linear)?;
+            errors.apply_mean_in_place(&mut sample.linear);
+        }
+        None => sample.linear = sample.actual,
+    }
+    Ok(settled)
 }

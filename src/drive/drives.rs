@@ -57,65 +57,120 @@ impl Drives {
     /// Steps every axis through one interpolation period towards `setpoint`, which it should
     /// reach at `time_s`.
     pub fn step(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<DrivesState> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU has AVX, checked at run time just above.
-            return unsafe { self.step_avx(setpoint, time_s) };
-        }
-        self.step_inline(setpoint, time_s)
-    }
-
-    /// [`Drives::step`] compiled for AVX, every axis's period inlined into one function (no
-    /// FMA, whose single rounding would change the result: the arithmetic is the same
-    /// whatever the vector width).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn step_avx(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<DrivesState> {
-        self.step_inline(setpoint, time_s)
-    }
-
-    #[inline(always)]
-    fn step_inline(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<DrivesState> {
         let mut state = DrivesState {
             actual: *setpoint,
             following_error: AxisVec::ZERO,
             settled: true,
         };
+        state.settled = self.step_into(
+            setpoint,
+            time_s,
+            &mut state.actual,
+            &mut state.following_error,
+        )?;
+        Ok(state)
+    }
+
+    /// [`Drives::step`] into the caller's vectors: each driven axis's entry of `actual`
+    /// (mm, deg) and `following_error` is written, the others are left as they are. Returns
+    /// whether every axis has settled ([`DrivesState::settled`]). Written in place, entry by
+    /// entry, so that nothing reads a whole vector back right after its entries were stored
+    /// (a stalled store forward).
+    pub fn step_into(
+        &mut self,
+        setpoint: &AxisVec,
+        time_s: f64,
+        actual: &mut AxisVec,
+        following_error: &mut AxisVec,
+    ) -> Result<bool> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX, checked at run time just above.
+            return unsafe { self.step_avx(setpoint, time_s, actual, following_error) };
+        }
+        self.step_inline(setpoint, time_s, actual, following_error)
+    }
+
+    /// [`Drives::step_into`] compiled for AVX, every axis's period inlined into one function
+    /// (no FMA, whose single rounding would change the result: the arithmetic is the same
+    /// whatever the vector width).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn step_avx(
+        &mut self,
+        setpoint: &AxisVec,
+        time_s: f64,
+        actual: &mut AxisVec,
+        following_error: &mut AxisVec,
+    ) -> Result<bool> {
+        self.step_inline(setpoint, time_s, actual, following_error)
+    }
+
+    #[inline(always)]
+    fn step_inline(
+        &mut self,
+        setpoint: &AxisVec,
+        time_s: f64,
+        actual: &mut AxisVec,
+        following_error: &mut AxisVec,
+    ) -> Result<bool> {
+        let mut settled = true;
         for (servo, &a) in self.servos.iter_mut().zip(self.axes) {
             servo.advance(setpoint[a], time_s)?;
             let fe = servo.following_error();
-            state.actual[a] = servo.actual();
-            state.following_error[a] = fe;
-            state.settled &= fe.abs() < 1e-4 && servo.velocity().abs() < 1e-3;
+            actual[a] = servo.actual();
+            following_error[a] = fe;
+            settled &= fe.abs() < 1e-4 && servo.velocity().abs() < 1e-3;
         }
-        Ok(state)
+        Ok(settled)
     }
 
     /// [`Drives::step`] for the actual positions alone (mm and deg), as the linear twins
     /// need them (with their period map inlined: [`AxisServo::advance_twin`]).
     pub fn step_actual(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<AxisVec> {
+        let mut actual = *setpoint;
+        self.step_actual_into(setpoint, time_s, &mut actual)?;
+        Ok(actual)
+    }
+
+    /// [`Drives::step_actual`] into `actual`, entry by entry (see [`Drives::step_into`]).
+    pub fn step_actual_into(
+        &mut self,
+        setpoint: &AxisVec,
+        time_s: f64,
+        actual: &mut AxisVec,
+    ) -> Result<()> {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU has AVX, checked at run time just above.
-            return unsafe { self.step_actual_avx(setpoint, time_s) };
+            return unsafe { self.step_actual_avx(setpoint, time_s, actual) };
         }
-        self.step_actual_inline(setpoint, time_s)
+        self.step_actual_inline(setpoint, time_s, actual)
     }
 
-    /// [`Drives::step_actual`] compiled for AVX (see [`Drives::step_avx`]).
+    /// [`Drives::step_actual_into`] compiled for AVX (see [`Drives::step_avx`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    unsafe fn step_actual_avx(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<AxisVec> {
-        self.step_actual_inline(setpoint, time_s)
+    unsafe fn step_actual_avx(
+        &mut self,
+        setpoint: &AxisVec,
+        time_s: f64,
+        actual: &mut AxisVec,
+    ) -> Result<()> {
+        self.step_actual_inline(setpoint, time_s, actual)
     }
 
     #[inline(always)]
-    fn step_actual_inline(&mut self, setpoint: &AxisVec, time_s: f64) -> Result<AxisVec> {
-        let mut actual = *setpoint;
+    fn step_actual_inline(
+        &mut self,
+        setpoint: &AxisVec,
+        time_s: f64,
+        actual: &mut AxisVec,
+    ) -> Result<()> {
         for (servo, &a) in self.servos.iter_mut().zip(self.axes) {
             servo.advance_twin(setpoint[a], time_s)?;
             actual[a] = servo.actual();
         }
-        Ok(actual)
+        Ok(())
     }
 }

@@ -671,7 +671,7 @@ mod tests {
 
     fn message(e: Error) -> String {
         match e {
-            Error::AtSource { line, message, .. } => format!("{line}: {message}"),
+            Error::AtSource(e) => format!("{}: {}", e.line, e.message),
             other => other.to_string(),
         }
     }

@@ -211,20 +211,35 @@ impl PositionErrors {
     /// with a table moves by its error for the direction it is moving in.
     pub fn apply(&mut self, q: &crate::AxisVec) -> crate::AxisVec {
         let mut out = *q;
-        for (axis, table, dir) in &mut self.tables {
-            let forward = dir.update(q[*axis]);
-            out[*axis] += table.error_at(q[*axis], forward);
-        }
+        self.apply_in_place(&mut out);
         out
+    }
+
+    /// [`PositionErrors::apply`] on `q` itself (one table per axis, so each table reads its
+    /// own axis before changing it).
+    #[inline]
+    pub fn apply_in_place(&mut self, q: &mut crate::AxisVec) {
+        for (axis, table, dir) in &mut self.tables {
+            let v = q[*axis];
+            let forward = dir.update(v);
+            q[*axis] = v + table.error_at(v, forward);
+        }
     }
 
     /// As [`PositionErrors::apply`] with the mean of the forward and reverse errors (no
     /// direction, no state): the direction-free part of the tables.
     pub fn apply_mean(&self, q: &crate::AxisVec) -> crate::AxisVec {
         let mut out = *q;
-        for (axis, table, _) in &self.tables {
-            out[*axis] += table.mean_error_at(q[*axis]);
-        }
+        self.apply_mean_in_place(&mut out);
         out
+    }
+
+    /// [`PositionErrors::apply_mean`] on `q` itself.
+    #[inline]
+    pub fn apply_mean_in_place(&self, q: &mut crate::AxisVec) {
+        for (axis, table, _) in &self.tables {
+            let v = q[*axis];
+            q[*axis] = v + table.mean_error_at(v);
+        }
     }
 }

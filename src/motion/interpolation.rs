@@ -1104,11 +1104,40 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
 impl<I: Iterator<Item = Result<Move>>> Iterator for Interpolator<I> {
     type Item = Result<Setpoint>;
 
+    /// The setpoint within the active block inline (so that it is built in place, not
+    /// copied out of a call); the block change out of line.
+    #[inline]
     fn next(&mut self) -> Option<Result<Setpoint>> {
         if self.done {
             return None;
         }
         let t = self.step as f64 * self.period_s;
+        if let Some(a) = &self.active {
+            if t < a.t0 + a.profile.duration {
+                let p = &a.planned;
+                let u = if p.length > 0.0 {
+                    (a.profile.position(t - a.t0) / p.length).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                self.step += 1;
+                return Some(Ok(Setpoint {
+                    time_s: t,
+                    q: p.path.at(u),
+                    line: p.line,
+                    block_index: p.index,
+                }));
+            }
+        }
+        self.next_after_block(t)
+    }
+}
+
+impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
+    /// [`Iterator::next`] where the active block has ended at time `t`: activates the next
+    /// one (its first setpoint), or ends at rest at the last end point.
+    #[inline(never)]
+    fn next_after_block(&mut self, t: f64) -> Option<Result<Setpoint>> {
         loop {
             if let Some(a) = &self.active {
                 if t < a.t0 + a.profile.duration {

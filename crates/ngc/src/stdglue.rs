@@ -375,9 +375,13 @@ mod tests {
     struct Subs(PathBuf);
 
     impl Subs {
+        /// Each call has its own folder: tests that share a tag run in parallel, and one's
+        /// drop must not remove the other's files.
         fn new(tag: &str, files: &[(&str, &str)]) -> Subs {
-            let dir =
-                std::env::temp_dir().join(format!("ngc-stdglue-{tag}-{}", std::process::id()));
+            static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+            let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let dir = std::env::temp_dir()
+                .join(format!("ngc-stdglue-{tag}-{}-{call}", std::process::id()));
             std::fs::create_dir_all(&dir).unwrap();
             for (name, text) in files {
                 std::fs::write(dir.join(name), text).unwrap();

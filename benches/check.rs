@@ -10,8 +10,10 @@
 //! second and the geometric queries made. It asserts nothing (timing is not a test).
 //!
 //! `MTSIM_BENCH_RUNS=N` sets the runs per case (default 15, medians); `MTSIM_BENCH_SMOKE=1`
-//! runs each case once, one check each (for `valgrind --tool=callgrind`); `MTSIM_BENCH_ONLY=45-30` runs only the cases whose name contains
-//! that text (the name is `scenario, variant`).
+//! runs each case once over 20 ms of CPU (for CI); `MTSIM_BENCH_ONCE=1` makes each
+//! measurement one check (for `valgrind --tool=callgrind`); `MTSIM_BENCH_MIN_CPU_S=S` sets the
+//! CPU time a measurement spans (default 0.1 s); `MTSIM_BENCH_ONLY=45-30` runs only the cases
+//! whose name contains that text (the name is `scenario, variant`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -34,8 +36,13 @@ fn cpu_now() -> f64 {
         .unwrap_or_else(|| START.get_or_init(Instant::now).elapsed().as_secs_f64())
 }
 
-/// CPU time one measurement spans at least, s.
+/// CPU time one measurement spans at least, s (`MTSIM_BENCH_MIN_CPU_S` overrides it): the
+/// clock advances in scheduler ticks of 4 ms, so 0.1 s reads to about ±4 %.
 const MIN_CPU_S: f64 = 0.1;
+
+/// CPU time one measurement of a smoke run spans at least, s: several ticks, so that even
+/// the fastest case (under 2 ms a check) gets a finite, if coarse, figure.
+const SMOKE_MIN_CPU_S: f64 = 0.02;
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -89,6 +96,14 @@ fn main() {
             .and_then(|v| v.parse().ok())
             .unwrap_or(15)
     };
+    // `MTSIM_BENCH_ONCE=1`: one check per measurement, to count its instructions under
+    // callgrind.
+    let once = std::env::var("MTSIM_BENCH_ONCE").is_ok_and(|v| !v.is_empty() && v != "0");
+    let min_cpu_s = match std::env::var("MTSIM_BENCH_MIN_CPU_S") {
+        Ok(v) => v.parse().expect("MTSIM_BENCH_MIN_CPU_S: seconds"),
+        Err(_) if smoke => SMOKE_MIN_CPU_S,
+        Err(_) => MIN_CPU_S,
+    };
     let only = std::env::var("MTSIM_BENCH_ONLY").unwrap_or_default();
     let mut cases: Vec<(String, PathBuf)> = Vec::new();
     for name in [
@@ -128,9 +143,7 @@ fn main() {
             loop {
                 r = check(&scenario, &CheckOptions::default()).unwrap();
                 n += 1;
-                // A smoke run checks once (and so counts the instructions of one check
-                // under callgrind).
-                if smoke || cpu_now() - t >= MIN_CPU_S {
+                if once || cpu_now() - t >= min_cpu_s {
                     break;
                 }
             }

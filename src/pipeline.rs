@@ -117,25 +117,14 @@ pub fn run(
         Ok(())
     };
     match options.timing {
-        Timing::Programmed => {
-            for (k, s) in
-                NominalSampler::new(moves, machine, machine.interpolation_period_s).enumerate()
-            {
-                let s = s?;
-                let actual = position_errors.apply(&s.q);
-                let sample = Sample {
-                    index: k as u64,
-                    time_s: t0 + s.time_s,
-                    line: s.line,
-                    block_index: s.block_index,
-                    commanded: s.q,
-                    actual,
-                    following_error: AxisVec::ZERO,
-                    linear: position_errors.apply_mean(&s.q),
-                };
-                emit(&sample, &mut stats)?;
-            }
-        }
+        Timing::Programmed => run_programmed(
+            moves,
+            machine,
+            t0,
+            &mut position_errors,
+            &mut emit,
+            &mut stats,
+        )?,
         Timing::Planned { twins, settle } => {
             let interpolation = InterpolationOptions {
                 force_tcp: options.force_tcp,
@@ -237,4 +226,78 @@ fn drive_sample(
         None => sample.linear = sample.actual,
     }
     Ok(settled)
+}
+
+/// The emitter of [`run`]: hands a sample to every sink and counts it.
+type Emit<'e> = dyn FnMut(&Sample, &mut RunStats) -> Result<()> + 'e;
+
+/// [`Timing::Programmed`]: the moves sampled at their programmed timing, one sample for
+/// the whole run written field by field (a sample built anew and moved is a copy whose loads
+/// wait on the stores just made).
+fn run_programmed(
+    moves: Moves<'_>,
+    machine: &Machine,
+    t0: f64,
+    errors: &mut PositionErrors,
+    emit: &mut Emit<'_>,
+    stats: &mut RunStats,
+) -> Result<()> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU has AVX, checked at run time just above.
+        return unsafe { run_programmed_avx(moves, machine, t0, errors, emit, stats) };
+    }
+    run_programmed_inline(moves, machine, t0, errors, emit, stats)
+}
+
+/// [`run_programmed`] compiled for AVX: the sample's positions are then written 32 bytes
+/// at a time, as the limits monitor (AVX) reads them; 16-byte stores read back by a
+/// 32-byte load stall store forwarding. No FMA: the figures are those of the plain build.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn run_programmed_avx(
+    moves: Moves<'_>,
+    machine: &Machine,
+    t0: f64,
+    errors: &mut PositionErrors,
+    emit: &mut Emit<'_>,
+    stats: &mut RunStats,
+) -> Result<()> {
+    run_programmed_inline(moves, machine, t0, errors, emit, stats)
+}
+
+#[inline(always)]
+fn run_programmed_inline(
+    moves: Moves<'_>,
+    machine: &Machine,
+    t0: f64,
+    errors: &mut PositionErrors,
+    emit: &mut Emit<'_>,
+    stats: &mut RunStats,
+) -> Result<()> {
+    let mut sample = Sample {
+        index: 0,
+        time_s: t0,
+        line: 0,
+        block_index: 0,
+        commanded: AxisVec::ZERO,
+        actual: AxisVec::ZERO,
+        following_error: AxisVec::ZERO,
+        linear: AxisVec::ZERO,
+    };
+    let mut sampler = NominalSampler::new(moves, machine, machine.interpolation_period_s);
+    let mut k = 0u64;
+    while let Some(at) = sampler.next_into(&mut sample.commanded)? {
+        sample.index = k;
+        sample.time_s = t0 + at.time_s;
+        sample.line = at.line;
+        sample.block_index = at.block_index;
+        sample.actual = sample.commanded;
+        errors.apply_in_place(&mut sample.actual);
+        sample.linear = sample.commanded;
+        errors.apply_mean_in_place(&mut sample.linear);
+        emit(&sample, stats)?;
+        k += 1;
+    }
+    Ok(())
 }

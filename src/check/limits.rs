@@ -107,6 +107,10 @@ struct Track {
 
 /// Lanes per sample: one per entry of [`AxisVec`] (X Y Z A B C U V W).
 const LANES: usize = 9;
+const _: () = assert!(
+    LANES == 9,
+    "LimitsMonitor::push_inline passes lanes 0..8, then 8"
+);
 
 /// The per-sample state and limits of all nine axis slots (`LANES`), flat (one lane per entry of
 /// [`AxisVec`]): the common case is then a few vector operations. A slot with no axis, or
@@ -132,15 +136,17 @@ pub struct LimitsMonitor<'a> {
     theta_of: &'a dyn Fn(&AxisVec) -> Option<f64>,
     tracks: Vec<Track>,
     lanes: Lanes,
-    previous: Option<Previous>,
+    previous: Previous,
     /// Violations open (being extended).
     open: usize,
     violations: Vec<Violation>,
 }
 
-/// What the next sample needs of the previous one.
+/// What the next sample needs of the previous one, written in place.
 #[derive(Clone, Copy, Debug)]
 struct Previous {
+    /// Whether there was a previous sample (the rest is meaningless before).
+    valid: bool,
     time_s: f64,
     block_index: u64,
     /// Positions, mm and deg.
@@ -201,73 +207,87 @@ impl<'a> LimitsMonitor<'a> {
             theta_of,
             tracks,
             lanes,
-            previous: None,
+            previous: Previous {
+                valid: false,
+                time_s: 0.0,
+                block_index: 0,
+                q: [0.0; LANES],
+                v: [0.0; LANES],
+                has_v: false,
+            },
             open: 0,
             violations: Vec::new(),
         }
     }
 
-    /// One sample. The common case (no limit crossed, none open) is a pass over flat
+    /// One sample. The common case (no limit crossed, none open) is one pass over flat
     /// per-axis arrays; a crossing, or an open violation, takes `LimitsMonitor::track`.
     pub fn push(&mut self, s: &Sample) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX, checked at run time just above.
+            return unsafe { self.push_avx(s) };
+        }
+        self.push_inline(s)
+    }
+
+    /// [`LimitsMonitor::push`] compiled for AVX (four lanes per instruction; no FMA, so the
+    /// figures are those of the plain build).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn push_avx(&mut self, s: &Sample) {
+        self.push_inline(s)
+    }
+
+    #[inline(always)]
+    fn push_inline(&mut self, s: &Sample) {
         let x = &s.actual.0;
-        let mut clear = self.open == 0;
-        // Plain arrays and flags rather than `Option<[f64; LANES]>`, which costs copies.
+        let p = &mut self.previous;
+        // A velocity needs an earlier sample, an acceleration also a velocity of the same
+        // block. Where one does not apply its factor is 0, so that it is 0 in every lane
+        // (NaN where the positions are not finite): it raises no peak and trips nothing, and
+        // the pass stays free of branches.
+        let in_block = p.valid && p.block_index == s.block_index;
+        let has_v = p.valid && s.time_s > p.time_s;
+        let has_a = has_v && p.has_v && in_block;
+        // As `(actual - previous) * (1 / dt)`, element by element: the same rounding.
+        let k = 1.0 / (s.time_s - p.time_s);
+        let (kv, ka) = (if has_v { k } else { 0.0 }, if has_a { k } else { 0.0 });
         let (mut v, mut a) = ([0.0; LANES], [0.0; LANES]);
-        let (mut has_v, mut has_a, mut in_block) = (false, false, false);
-        if let Some(p) = &self.previous {
-            in_block = p.block_index == s.block_index;
-            if s.time_s > p.time_s {
-                // As `(actual - previous) * (1 / dt)`, element by element: the same rounding.
-                let k = 1.0 / (s.time_s - p.time_s);
-                for i in 0..LANES {
-                    v[i] = (x[i] - p.q[i]) * k;
-                }
-                has_v = true;
-                if p.has_v && in_block {
-                    for i in 0..LANES {
-                        a[i] = (v[i] - p.v[i]) * k;
-                    }
-                    has_a = true;
-                }
-            }
-        }
-        // Every lane, axis or not: a NaN or a lane past its (infinite) limit only sends the
-        // sample to `track`, which checks the axes themselves.
         let n = &mut self.lanes;
-        let mut inside = [true; LANES];
-        for i in 0..LANES {
-            // `a < b ? a : b` (one minpd/maxpd): a NaN sample keeps the old extreme, as
-            // `f64::min`/`max` do, without their NaN fix-up.
-            n.min[i] = if x[i] < n.min[i] { x[i] } else { n.min[i] };
-            n.max[i] = if x[i] > n.max[i] { x[i] } else { n.max[i] };
-            inside[i] = x[i] <= n.hi[i] && x[i] >= n.lo[i];
+        // Whether a lane is outside a limit, or not a number: every lane is checked, axis or
+        // not (a slot with no axis has infinite limits), and `track` sorts them out.
+        let mut lane = |i: usize| -> bool {
+            let xi = x[i];
+            v[i] = (xi - p.q[i]) * kv;
+            a[i] = (v[i] - p.v[i]) * ka;
+            p.q[i] = xi;
+            p.v[i] = v[i];
+            // `f64::min`/`max`: a NaN sample keeps the old extreme. (Written as `a < b ? a :
+            // b`, the select becomes a store only where the value changed, which is a
+            // masked store, slow on AMD.)
+            n.min[i] = n.min[i].min(xi);
+            n.max[i] = n.max[i].max(xi);
+            let speed = v[i].abs() * 60.0;
+            n.peak_v[i] = n.peak_v[i].max(speed);
+            let accel = a[i].abs();
+            n.peak_a[i] = n.peak_a[i].max(accel);
+            !((xi <= n.hi[i]) & (xi >= n.lo[i]) & (speed <= n.v_trip[i]) & (accel <= n.a_trip[i]))
+        };
+        // Eight lanes as two full vectors, the ninth on its own: a loop of nine is
+        // vectorised with masked loads and stores, which are slow.
+        let mut outside = false;
+        for i in 0..8 {
+            outside |= lane(i);
         }
-        if has_v {
-            for i in 0..LANES {
-                let v = v[i].abs() * 60.0;
-                n.peak_v[i] = if v > n.peak_v[i] { v } else { n.peak_v[i] };
-                inside[i] &= v <= n.v_trip[i];
-            }
-        }
-        if has_a {
-            for i in 0..LANES {
-                let a = a[i].abs();
-                n.peak_a[i] = if a > n.peak_a[i] { a } else { n.peak_a[i] };
-                inside[i] &= a <= n.a_trip[i];
-            }
-        }
-        clear &= inside.iter().all(|&b| b);
-        if !clear {
+        outside |= lane(8);
+        p.valid = true;
+        p.time_s = s.time_s;
+        p.block_index = s.block_index;
+        p.has_v = has_v && in_block;
+        if outside || self.open != 0 {
             self.track(s, has_v.then_some(&v), has_a.then_some(&a));
         }
-        self.previous = Some(Previous {
-            time_s: s.time_s,
-            block_index: s.block_index,
-            q: *x,
-            v,
-            has_v: has_v && in_block,
-        });
     }
 
     /// Opens, extends and closes the violations of sample `s` (velocity per s and

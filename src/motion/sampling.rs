@@ -90,6 +90,22 @@ pub fn position_in_block(block: &Move, machine: &Machine, f: f64) -> AxisVec {
     }
 }
 
+/// [`position_in_block`] into `q`, the straight line in machine axes lane by lane (the
+/// same arithmetic as `start + (end - start) * f`).
+#[inline(always)]
+fn position_in_block_into(block: &Move, machine: &Machine, f: f64, q: &mut AxisVec) {
+    match block.motion {
+        Motion::Arc { .. } => *q = position_in_block(block, machine, f),
+        _ if block.tcp => *q = position_in_block(block, machine, f),
+        _ => {
+            let (a, b) = (&block.start.0, &block.end.0);
+            for i in 0..a.len() {
+                q.0[i] = a[i] + (b[i] - a[i]) * f;
+            }
+        }
+    }
+}
+
 /// [`position_in_block`] on an arc: `q` the straight-line interpolation, whose arc-plane
 /// coordinates are replaced by the point on the arc.
 #[inline(never)]
@@ -166,8 +182,77 @@ impl<'m, I: Iterator<Item = Result<Move>>> NominalSampler<'m, I> {
 impl<I: Iterator<Item = Result<Move>>> Iterator for NominalSampler<'_, I> {
     type Item = Result<Setpoint>;
 
-    #[inline]
     fn next(&mut self) -> Option<Result<Setpoint>> {
+        let mut q = AxisVec::ZERO;
+        match self.next_into(&mut q) {
+            Ok(Some(at)) => Some(Ok(Setpoint {
+                time_s: at.time_s,
+                q,
+                line: at.line,
+                block_index: at.block_index,
+            })),
+            Ok(None) => None,
+            Err(e) => Some(Err(e)),
+        }
+    }
+}
+
+impl<I: Iterator<Item = Result<Move>>> NominalSampler<'_, I> {
+    /// [`Iterator::next`] with the positions written into `q` (mm, deg): the sample's time
+    /// and place, or `None` at the end. The sample within the current block is inline, where
+    /// the caller keeps its positions (and compiled as the caller is: see
+    /// `pipeline::run_programmed`), and is written straight into them (a setpoint returned
+    /// in an `Option<Result<_>>` is copied through the stack); the block change is out of
+    /// line.
+    #[inline(always)]
+    pub fn next_into(&mut self, q: &mut AxisVec) -> Result<Option<SampleAt>> {
+        if let (false, Some((block, start_s, duration_s))) = (self.done, &self.current) {
+            let t = self.k as f64 * self.period_s;
+            if t <= start_s + duration_s {
+                let f = if *duration_s > 0.0 {
+                    (t - start_s) / duration_s
+                } else {
+                    1.0
+                };
+                self.k += 1;
+                position_in_block_into(block, self.machine, f.clamp(0.0, 1.0), q);
+                return Ok(Some(SampleAt {
+                    time_s: t,
+                    line: block.line,
+                    block_index: self.block_index - 1,
+                }));
+            }
+        }
+        match self.next_after_block() {
+            Some(Ok(s)) => {
+                *q = s.q;
+                Ok(Some(SampleAt {
+                    time_s: s.time_s,
+                    line: s.line,
+                    block_index: s.block_index,
+                }))
+            }
+            Some(Err(e)) => Err(e),
+            None => Ok(None),
+        }
+    }
+}
+
+/// When and where a sample of [`NominalSampler::next_into`] is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleAt {
+    /// s from the program's start.
+    pub time_s: f64,
+    /// Source line and 0-based index of the block.
+    pub line: usize,
+    pub block_index: u64,
+}
+
+impl<I: Iterator<Item = Result<Move>>> NominalSampler<'_, I> {
+    /// [`Iterator::next`] where the current block has ended (or none has begun): the next
+    /// block's first sample, or the program's end point.
+    #[inline(never)]
+    fn next_after_block(&mut self) -> Option<Result<Setpoint>> {
         if self.done {
             return None;
         }

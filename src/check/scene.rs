@@ -19,7 +19,7 @@ pub mod frustum;
 pub mod monitor;
 pub mod shapes;
 
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use parry3d_f64::math::{Pose, Rotation, Vector};
 use parry3d_f64::shape::SharedShape;
 use rapier3d_f64::dynamics::{RigidBodyBuilder, RigidBodyHandle, RigidBodySet};
@@ -37,6 +37,7 @@ pub use shapes::{signed_distance, z_cylinder, Circle, CircleHull};
 
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
+use crate::kinematics::trig::sin_cos_deg;
 use crate::kinematics::{AxisLine, Kinematics, Layout};
 use crate::{Axis, AxisVec};
 
@@ -190,9 +191,15 @@ impl Chain {
         }
     }
 
-    /// `T(θ)` of [`AxisLine::turn`], built from the quaternion directly.
+    /// `T(θ)` of [`AxisLine::turn`], built from the quaternion directly:
+    /// `r = (cos θ/2, sin θ/2 · d)`, the half angle's sine and cosine reduced exactly in
+    /// degrees ([`sin_cos_deg`]).
     fn turn(line: &AxisLine, angle_deg: f64) -> Isometry3<f64> {
-        let r = UnitQuaternion::from_axis_angle(&line.direction, angle_deg.to_radians());
+        let (s, c) = sin_cos_deg(0.5 * angle_deg);
+        let r = UnitQuaternion::new_unchecked(Quaternion::from_parts(
+            c,
+            line.direction.into_inner() * s,
+        ));
         Isometry3::from_parts(Translation3::from(line.point_mm - r * line.point_mm), r)
     }
 

@@ -222,6 +222,7 @@ impl<'a> LimitsMonitor<'a> {
 
     /// One sample. The common case (no limit crossed, none open) is one pass over flat
     /// per-axis arrays; a crossing, or an open violation, takes `LimitsMonitor::track`.
+    #[inline]
     pub fn push(&mut self, s: &Sample) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {

@@ -75,14 +75,30 @@ struct SceneSink {
     /// The scenario's `[tool]`: tool 0 and tools not in the table.
     reference: ToolConfig,
     active: u32,
+    /// The block index whose tool changes were applied last (`u64::MAX`: none yet). Move
+    /// `k` is read before any sample of block `k`, so no change at or before `k` can arrive
+    /// once the samples of `k` have begun: the queue is looked at once per block.
+    changes_applied_at: u64,
 }
 
 impl Sink for SceneSink {
     fn push(&mut self, s: &Sample) -> Result<()> {
+        if s.block_index != self.changes_applied_at {
+            self.changes_applied_at = s.block_index;
+            self.apply_tool_changes(s.block_index);
+        }
+        self.monitor.push_at(s.time_s, s.line, &s.actual);
+        Ok(())
+    }
+}
+
+impl SceneSink {
+    /// Puts in the spindle the tool of the last change noted at or before `block_index`.
+    fn apply_tool_changes(&mut self, block_index: u64) {
         loop {
             let next = self.changes.borrow().front().copied();
             match next {
-                Some((index, tool)) if index <= s.block_index => {
+                Some((index, tool)) if index <= block_index => {
                     self.changes.borrow_mut().pop_front();
                     if tool != self.active {
                         self.active = tool;
@@ -95,8 +111,6 @@ impl Sink for SceneSink {
                 _ => break,
             }
         }
-        self.monitor.push_at(s.time_s, s.line, &s.actual);
-        Ok(())
     }
 }
 
@@ -200,6 +214,7 @@ pub fn check_with(
                 stacks: tool_stacks(scenario)?,
                 reference: scenario.tool.clone(),
                 active: 0,
+                changes_applied_at: u64::MAX,
             })
             .map(|mut sink| {
                 match queries {

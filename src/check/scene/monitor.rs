@@ -390,12 +390,6 @@ impl SceneMonitor {
             return;
         }
         self.samples += 1;
-        let now = Sample {
-            time_s,
-            theta,
-            line,
-            q: *q,
-        };
         let step = self.prev.as_ref().map(|prev| self.motion(&prev.q, q));
         // Relative motion of the tip in the table and cradle frames: chord and Ω per frame,
         // |Δu| and U.
@@ -426,10 +420,23 @@ impl SceneMonitor {
         let sigma = dot3(&self.w_max, &self.sum);
         let allowance = 1e-12 * (1.0 + sigma);
         let lazy = step.is_some() && !self.exhaustive && !self.uses_relative;
+        // The sample is built where it is kept (a copy built first and moved into `prev`
+        // cost a second 104-byte copy on every sample).
         if lazy && sigma < self.next_due && !self.hot_due(allowance) {
-            self.prev = Some(now);
+            self.prev = Some(Sample {
+                time_s,
+                theta,
+                line,
+                q: *q,
+            });
             return;
         }
+        let now = Sample {
+            time_s,
+            theta,
+            line,
+            q: *q,
+        };
         let mut poses = BodyPoses::new(q);
         let visit = Visit {
             step,
@@ -448,13 +455,28 @@ impl SceneMonitor {
             // own due value, and the hot pairs); the others keep their sums behind until a
             // later visit.
             let mut next_due = f64::INFINITY;
-            for i in 0..self.states.len() {
-                if !(lazy && sigma < self.dues[i]) || self.is_hot[i] {
-                    self.visit(i, &visit, &mut poses, &now);
+            let n = self.states.len();
+            let mut i = 0;
+            while i < n {
+                // The pairs not due are skipped in a tight loop over the flat arrays (most
+                // of them on most visits), keeping the earliest due value.
+                {
+                    let (dues, is_hot) = (&self.dues[..n], &self.is_hot[..n]);
+                    while i < n && lazy && sigma < dues[i] && !is_hot[i] {
+                        if dues[i] < next_due {
+                            next_due = dues[i];
+                        }
+                        i += 1;
+                    }
                 }
+                if i == n {
+                    break;
+                }
+                self.visit(i, &visit, &mut poses, &now);
                 if self.dues[i] < next_due {
                     next_due = self.dues[i];
                 }
+                i += 1;
             }
             self.next_due = next_due;
         }

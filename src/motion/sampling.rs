@@ -208,14 +208,9 @@ impl<I: Iterator<Item = Result<Move>>> NominalSampler<'_, I> {
     pub fn next_into(&mut self, q: &mut AxisVec) -> Result<Option<SampleAt>> {
         if let (false, Some((block, start_s, duration_s))) = (self.done, &self.current) {
             let t = self.k as f64 * self.period_s;
-            if t <= start_s + duration_s {
-                let f = if *duration_s > 0.0 {
-                    (t - start_s) / duration_s
-                } else {
-                    1.0
-                };
+            if let Some(f) = fraction_of_block(t, *start_s, *duration_s) {
                 self.k += 1;
-                position_in_block_into(block, self.machine, f.clamp(0.0, 1.0), q);
+                position_in_block_into(block, self.machine, f, q);
                 return Ok(Some(SampleAt {
                     time_s: t,
                     line: block.line,
@@ -236,6 +231,22 @@ impl<I: Iterator<Item = Result<Move>>> NominalSampler<'_, I> {
             None => Ok(None),
         }
     }
+}
+
+/// The fraction `f = (t - t₀) / T` in `[0, 1]` of the block that starts at `t₀ =
+/// start_s` and lasts `T = duration_s` reached at time `t` (s), or `None` once `t` is past
+/// its end (a block of no duration is all at its end, `f = 1`).
+#[inline(always)]
+fn fraction_of_block(t: f64, start_s: f64, duration_s: f64) -> Option<f64> {
+    if !(t <= start_s + duration_s) {
+        return None;
+    }
+    let f = if duration_s > 0.0 {
+        (t - start_s) / duration_s
+    } else {
+        1.0
+    };
+    Some(f.clamp(0.0, 1.0))
 }
 
 /// When and where a sample of [`NominalSampler::next_into`] is.
@@ -259,14 +270,9 @@ impl<I: Iterator<Item = Result<Move>>> NominalSampler<'_, I> {
         let t = self.k as f64 * self.period_s;
         loop {
             if let Some((block, start_s, duration_s)) = &self.current {
-                if t <= start_s + duration_s {
-                    let f = if *duration_s > 0.0 {
-                        (t - start_s) / duration_s
-                    } else {
-                        1.0
-                    };
+                if let Some(f) = fraction_of_block(t, *start_s, *duration_s) {
                     self.k += 1;
-                    return Some(Ok(self.sample(block, t, f.clamp(0.0, 1.0))));
+                    return Some(Ok(self.sample(block, t, f)));
                 }
             }
             let start_s = self.current.as_ref().map_or(0.0, |(_, s, d)| s + d);
@@ -294,5 +300,86 @@ impl<I: Iterator<Item = Result<Move>>> NominalSampler<'_, I> {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(n: usize, start: [f64; 3], end: [f64; 3], feed_mm_per_min: f64) -> Move {
+        let v = |p: [f64; 3]| AxisVec::xyzabc([p[0], p[1], p[2], 0.0, 0.0, 0.0]);
+        Move {
+            line: n,
+            motion: Motion::Linear,
+            start: v(start),
+            end: v(end),
+            feed: Some(feed_mm_per_min),
+            feed_mode: FeedMode::PerMinute,
+            ..Move::default()
+        }
+    }
+
+    /// Two G1 blocks at their programmed feed, sampled on one global grid `t = k p`: 10 mm
+    /// along X at F700 (T₁ = 6/7 s) then 5 mm along Y at F300 (T₂ = 1 s). Each sample is
+    /// at `start + (end - start) (t - t₀) / T` of the block holding `t`, with a last sample
+    /// at the end point `T₁ + T₂`, which is off the grid. `next` and `next_into` agree.
+    #[test]
+    fn samples_lie_on_the_global_grid_along_each_block_and_end_at_the_end_point() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/vmc-3axis.toml");
+        let machine = Machine::load(&path).unwrap();
+        let p = machine.interpolation_period_s;
+        assert_eq!(p, 1e-3);
+        let blocks = [
+            line(7, [0.0; 3], [10.0, 0.0, 0.0], 700.0),
+            line(8, [10.0, 0.0, 0.0], [10.0, 5.0, 0.0], 300.0),
+        ];
+        let (t1, t2) = (6.0 / 7.0, 1.0);
+        let expected = |t: f64| -> (usize, u64, [f64; 2]) {
+            if t <= t1 {
+                (7, 0, [10.0 * t / t1, 0.0])
+            } else {
+                (8, 1, [10.0, 5.0 * (t - t1) / t2])
+            }
+        };
+        let setpoints: Vec<Setpoint> =
+            NominalSampler::new(blocks.clone().into_iter().map(Ok), &machine, p)
+                .map(|s| s.unwrap())
+                .collect();
+        // 0, p, ..., 1857 p on the grid (1.857 s <= T₁ + T₂ = 1.857142... s), then the end.
+        assert_eq!(setpoints.len(), 1858 + 1);
+        for (k, s) in setpoints.iter().enumerate() {
+            let t = if k < 1858 { k as f64 * p } else { t1 + t2 };
+            let (line, block, [x, y]) = expected(t);
+            assert!(
+                (s.time_s - t).abs() < 1e-12,
+                "sample {k}: t = {} s, expected {t} s",
+                s.time_s
+            );
+            assert_eq!(
+                (s.line, s.block_index),
+                (line, block),
+                "sample {k} at {t} s"
+            );
+            assert!(
+                (s.q[Axis::X] - x).abs() < 1e-9 && (s.q[Axis::Y] - y).abs() < 1e-9,
+                "sample {k} at {t} s: ({}, {}), expected ({x}, {y})",
+                s.q[Axis::X],
+                s.q[Axis::Y]
+            );
+        }
+        let mut sampler = NominalSampler::new(blocks.into_iter().map(Ok), &machine, p);
+        let mut q = AxisVec::ZERO;
+        for s in &setpoints {
+            let at = sampler
+                .next_into(&mut q)
+                .unwrap()
+                .expect("as many samples as next");
+            assert_eq!(
+                (at.time_s, at.line, at.block_index, q),
+                (s.time_s, s.line, s.block_index, s.q)
+            );
+        }
+        assert_eq!(sampler.next_into(&mut q).unwrap(), None);
     }
 }

@@ -261,27 +261,56 @@ pub fn analyse_moves(
     machine: &Machine,
     frame: Option<&CircleFrame>,
 ) -> Result<Analysis> {
-    let axes = machine.axes();
-    let kin = machine.kinematics;
-    let mut acc: Vec<BlockAxisState> = axes.iter().map(|_| BlockAxisState::default()).collect();
-    // The position before the program is unknown, so the first block's start is not part
-    // of the program: it counts for neither the ranges nor the speeds nor the reversals.
-    let mut first = true;
+    let mut analysis = MoveAnalysis::new(machine, frame.copied());
     for block in blocks {
-        let block = block?;
+        analysis.push(&block?)?;
+    }
+    Ok(analysis.finish())
+}
+
+/// [`analyse_moves`] one move at a time, so that it can ride along another pass over the
+/// same moves (`simulate` of a file program reads the file once for both).
+pub struct MoveAnalysis<'m> {
+    machine: &'m Machine,
+    frame: Option<CircleFrame>,
+    acc: Vec<BlockAxisState>,
+    /// The position before the program is unknown, so the first block's start is not part
+    /// of the program: it counts for neither the ranges nor the speeds nor the reversals.
+    first: bool,
+}
+
+impl<'m> MoveAnalysis<'m> {
+    pub fn new(machine: &'m Machine, frame: Option<CircleFrame>) -> Self {
+        MoveAnalysis {
+            machine,
+            frame,
+            acc: machine
+                .axes()
+                .iter()
+                .map(|_| BlockAxisState::default())
+                .collect(),
+            first: true,
+        }
+    }
+
+    /// The next move of the program.
+    pub fn push(&mut self, block: &Move) -> Result<()> {
+        let (machine, frame, acc) = (self.machine, self.frame.as_ref(), &mut self.acc);
+        let axes = machine.axes();
+        let kin = machine.kinematics;
         let (start, end) = (
-            machine_coordinates(&kin, &block, block.start),
-            machine_coordinates(&kin, &block, block.end),
+            machine_coordinates(&kin, block, block.start),
+            machine_coordinates(&kin, block, block.end),
         );
-        if std::mem::take(&mut first) {
+        if std::mem::take(&mut self.first) {
             for (s, &axis) in acc.iter_mut().zip(axes) {
                 s.extend(end[axis]);
             }
-            continue;
+            return Ok(());
         }
         // Only feed moves carry an F that implies speeds; their time is the programmed one.
         let seconds = match block.motion {
-            Motion::Linear | Motion::Arc { .. } => Some(block_duration_s(&block, machine)?),
+            Motion::Linear | Motion::Arc { .. } => Some(block_duration_s(block, machine)?),
             _ => None,
         };
         // Arcs and G43.4 moves are not straight in machine axes: follow them at 1/32 steps,
@@ -296,7 +325,7 @@ pub fn analyse_moves(
             let q = if k == steps {
                 end
             } else {
-                position_in_block(&block, machine, k as f64 / steps as f64)
+                position_in_block(block, machine, k as f64 / steps as f64)
             };
             for (s, &axis) in acc.iter_mut().zip(axes) {
                 let d = q[axis] - previous[axis];
@@ -311,25 +340,31 @@ pub fn analyse_moves(
             }
             previous = q;
         }
+        Ok(())
     }
-    let axes = axes
-        .iter()
-        .zip(acc)
-        .map(|(&axis, s)| {
-            let mut reversals_deg: Vec<f64> = s.turns.iter().filter_map(|(_, t)| *t).collect();
-            reversals_deg.sort_by(f64::total_cmp);
-            AxisMotion {
-                axis,
-                min: s.min,
-                max: s.max,
-                range: s.max - s.min,
-                peak_speed_per_min: s.peak_speed,
-                reversals_deg,
-                reversal_lines: Some(s.turns.iter().map(|(l, _)| *l).collect()),
-            }
-        })
-        .collect();
-    Ok(Analysis { axes })
+
+    /// The analysis of the moves pushed so far.
+    pub fn finish(self) -> Analysis {
+        let axes = self.machine.axes();
+        let axes = axes
+            .iter()
+            .zip(self.acc)
+            .map(|(&axis, s)| {
+                let mut reversals_deg: Vec<f64> = s.turns.iter().filter_map(|(_, t)| *t).collect();
+                reversals_deg.sort_by(f64::total_cmp);
+                AxisMotion {
+                    axis,
+                    min: s.min,
+                    max: s.max,
+                    range: s.max - s.min,
+                    peak_speed_per_min: s.peak_speed,
+                    reversals_deg,
+                    reversal_lines: Some(s.turns.iter().map(|(l, _)| *l).collect()),
+                }
+            })
+            .collect();
+        Analysis { axes }
+    }
 }
 
 /// A turn counts once the axis has come back this far from its extreme, mm or deg: smaller

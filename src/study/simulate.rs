@@ -7,7 +7,9 @@
 //! the program: moves and setpoints are consumed as they come, the ball bar keeps fixed θ
 //! bins, and the trace goes to disk as it is made.
 
+use std::cell::RefCell;
 use std::path::Path;
+use std::rc::Rc;
 use std::time::Instant;
 
 use nalgebra::{Point3, Vector3};
@@ -24,7 +26,7 @@ use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
 use crate::report::create_dir;
 use crate::report::trace::TraceSink;
-use crate::study::reversals::analyse_scenario;
+use crate::study::reversals::{analyse_scenario, MoveAnalysis};
 use crate::Axis;
 
 /// What a simulation found.
@@ -99,12 +101,15 @@ pub fn run_ballbar(
     progress: &dyn Fn(f64),
 ) -> Result<BallbarStudy> {
     let machine = &scenario.machine;
-    let analysis = analyse_scenario(scenario)?;
-    let reversals: Vec<(Axis, Vec<f64>)> = analysis
-        .axes
-        .iter()
-        .map(|a| (a.axis, a.reversals_deg.clone()))
-        .collect();
+    // The reversal analysis of a file program rides along its one run (the file is read
+    // once for both); a generated program's has its own closed form, computed first.
+    let (mut analysis, along) = match &scenario.program {
+        Program::File { cone, .. } => {
+            let frame = cone.map(|c| CircleFrame::of_cone(&c));
+            (None, Some(Rc::new(RefCell::new(MoveAnalysis::new(machine, frame)))))
+        }
+        _ => (Some(analyse_scenario(scenario)?), None),
+    };
     let geometry = bar_geometry(scenario);
     let directions = match &scenario.program {
         Program::Cone { directions, .. } | Program::Circle { directions, .. } => directions.clone(),
@@ -116,7 +121,15 @@ pub fn run_ballbar(
     let mut setpoints = 0u64;
     let mut warnings = Vec::new();
     for &direction in &directions {
-        let run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
+        let mut run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
+        if let Some(along) = &along {
+            let along = Rc::clone(along);
+            run.moves = Box::new(run.moves.map(move |m| {
+                let m = m?;
+                along.borrow_mut().push(&m)?;
+                Ok(m)
+            }));
+        }
         if let Some(t) = trace.as_deref_mut() {
             t.start_run(direction, run.measured);
         }
@@ -176,6 +189,15 @@ pub fn run_ballbar(
             speeds.push(b.speed);
         }
     }
+    if let Some(along) = along {
+        let done = std::mem::replace(&mut *along.borrow_mut(), MoveAnalysis::new(machine, None));
+        analysis = Some(done.finish());
+    }
+    let reversals: Vec<(Axis, Vec<f64>)> = analysis
+        .iter()
+        .flat_map(|a| &a.axes)
+        .map(|a| (a.axis, a.reversals_deg.clone()))
+        .collect();
     // The bar's sensitivity is a property of the nominal pose at θ: the first run's map.
     // Each axis's Stribeck velocity bounds its slow zone about a reversal (a cascade axis
     // with dry friction; otherwise the zone is the reversal itself).

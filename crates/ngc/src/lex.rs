@@ -125,7 +125,8 @@ pub fn lex_with<'l>(
         if is_blank(c) {
             i += 1;
         } else if c == b'(' {
-            match line[i + 1..].find(')') {
+            // A byte search: `)` is ASCII, so it cannot sit inside a multi-byte character.
+            match bytes[i + 1..].iter().position(|&b| b == b')') {
                 Some(close) => i += close + 2,
                 None => {
                     return Err(LineError::new(

@@ -1835,26 +1835,45 @@ fn has_hash_or_bracket(bytes: &[u8]) -> bool {
 /// Siemens Sinumerik words [`foreign_language`](Moves::foreign_language) refuses.
 const SIEMENS_TOKENS: [&str; 5] = ["TRAORI", "traori", "Traori", "CYCLE800", "cycle800"];
 
-/// True when `bytes` may hold a Siemens token: a screen that reads 32 bytes at a time
-/// (vectorised) and looks closer only where a block has a `T` or `C`.
+/// True when `bytes` may hold a Siemens token. Every token begins with `tra` or `cyc` in
+/// one case or the other, so the screen folds each run of 64 start positions, branch free
+/// (vectorised), for those three letters (case folded: `b | 0x20`), and looks closer only
+/// where one begins. Letters alone (a `T` or `C` word, a comment) do not stop it: a
+/// five-axis program has a `C` on nearly every line.
 fn may_be_foreign(bytes: &[u8]) -> bool {
+    const SHORTEST: usize = 6;
+    if bytes.len() < SHORTEST {
+        return false;
+    }
+    // Start positions `0..starts` have the two bytes after them.
+    let starts = bytes.len() - 2;
     let mut k = 0;
-    for block in bytes.chunks(64) {
-        let hits = block.iter().fold(0u8, |a, &b| {
-            let l = b | 0x20;
-            a | (l == b't') as u8 | (l == b'c') as u8
-        });
-        if hits != 0 {
-            for i in k..k + block.len() {
-                if SIEMENS_TOKENS
+    while k < starts {
+        let end = (k + 64).min(starts);
+        let (first, second, third) = (
+            &bytes[k..end],
+            &bytes[k + 1..end + 1],
+            &bytes[k + 2..end + 2],
+        );
+        let hit = first
+            .iter()
+            .zip(second)
+            .zip(third)
+            .fold(false, |hit, ((&x, &y), &z)| {
+                let (x, y, z) = (x | 0x20, y | 0x20, z | 0x20);
+                hit | ((x == b't') & (y == b'r') & (z == b'a'))
+                    | ((x == b'c') & (y == b'y') & (z == b'c'))
+            });
+        if hit
+            && (k..end).any(|i| {
+                SIEMENS_TOKENS
                     .iter()
                     .any(|t| bytes[i..].starts_with(t.as_bytes()))
-                {
-                    return true;
-                }
-            }
+            })
+        {
+            return true;
         }
-        k += block.len();
+        k = end;
     }
     false
 }
@@ -1921,7 +1940,35 @@ impl Iterator for Moves {
 
 #[cfg(test)]
 mod tests {
-    use super::has_hash_or_bracket;
+    use super::{has_hash_or_bracket, may_be_foreign, SIEMENS_TOKENS};
+
+    /// Every Siemens token at every offset (across the 64-position runs) of five-axis lines
+    /// is found; the same lines without one, full of `T`, `C`, `tra`- and `cyc`-words that
+    /// are not tokens, are not.
+    #[test]
+    fn the_siemens_screen_finds_every_token_at_every_offset_and_nothing_else() {
+        let clean = "G01 X0.0072 C-90.0061 F559.386 (THETA 0.010 CENTRE TRACE CYCLE 80)\nT1 M6\n";
+        let clean = clean.repeat(3);
+        assert!(!may_be_foreign(clean.as_bytes()));
+        for token in SIEMENS_TOKENS {
+            for at in 0..=clean.len() {
+                let mut text = clean.clone();
+                text.insert_str(at, token);
+                assert!(may_be_foreign(text.as_bytes()), "{token} at {at}");
+                // A token cut short is not one.
+                let mut text = clean.clone();
+                text.insert_str(at, &token[..token.len() - 1]);
+                text.insert(at + token.len() - 1, ' ');
+                assert!(
+                    !may_be_foreign(text.as_bytes()),
+                    "{token} cut short at {at}"
+                );
+            }
+        }
+        for short in ["", "T", "TRAOR", "cycle8"] {
+            assert!(!may_be_foreign(short.as_bytes()), "{short:?}");
+        }
+    }
 
     #[test]
     fn a_hash_or_bracket_is_found_at_every_place_of_every_short_line() {

@@ -5,7 +5,9 @@
 //! - `simulate` real-time factors (simulated machine seconds per CPU second of the running
 //!   thread, so that other load on the machine does not count) with the full 1 ms trace,
 //!   the trace decimated to one row per second, and the trace off (header only);
-//! - the same cone in 36,000 segments against its 360 segments (fine/coarse ratio);
+//! - the same cone in 36,000 segments against its 360 segments (fine/coarse ratio), as
+//!   generated moves and as the G-code file the post-processor writes (read by the
+//!   interpreter, as a user's fine-segment program is);
 //! - peak memory (VmHWM) of `mtsim simulate` for a program of 1 and of 20 revolutions, to
 //!   show that memory stays flat as the program grows;
 //! - `check` with collisions on at 1 ms sampling: the real-time factor (per CPU second of
@@ -108,6 +110,42 @@ fn peak_rss_kb(args: &[&str]) -> Option<u64> {
     }
 }
 
+/// A scenario that runs the cone of `nonlinear` (the text of [`all_nonlinear`]'s scenario)
+/// in `segments` blocks as the G-code file the post-processor writes, with the same machine
+/// overrides.
+fn cone_file_scenario(dir: &Path, nonlinear: &str, segments: usize) -> PathBuf {
+    use mtsim::input::scenario::Program;
+    let generated = dir.join(format!("generated-{segments}.toml"));
+    let body = nonlinear.replace("segments = 360", &format!("segments = {segments}"));
+    std::fs::write(&generated, &body).unwrap();
+    let scenario = Scenario::load(&generated).unwrap();
+    let Program::Cone { cone, nc, .. } = &scenario.program else {
+        panic!("the bench's scenario is a generated cone");
+    };
+    let path = mtsim::program::cone::ConePath::new(*cone, &scenario.machine);
+    let (program, _) = mtsim::program::cone::write_program(&path, &scenario.machine.name, nc);
+    let nc_path = dir.join(format!("cone-{segments}.nc"));
+    std::fs::write(&nc_path, program).unwrap();
+    let machine_line = body.lines().find(|l| l.starts_with("machine")).unwrap();
+    let overrides = &body[body.find("[machine_overrides").unwrap()..];
+    let file = dir.join(format!("file-{segments}.toml"));
+    std::fs::write(
+        &file,
+        format!(
+            "{machine_line}\n[program]\nfile = {:?}\n[program.cone]\nhalf_apex_deg = {:?}\ninclination_deg = {:?}\ncenter_mm = [{:?}, {:?}, {:?}]\nballbar_length_mm = {:?}\n{overrides}",
+            nc_path.display().to_string(),
+            cone.half_apex_deg,
+            cone.inclination_deg,
+            cone.center_mm[0],
+            cone.center_mm[1],
+            cone.center_mm[2],
+            cone.ballbar_length_mm,
+        ),
+    )
+    .unwrap();
+    file
+}
+
 /// A G-code file of `revolutions` turns of the 15/10 cone (360 blocks each), C continuous.
 fn long_program(dir: &Path, revolutions: usize) -> PathBuf {
     let base =
@@ -198,6 +236,17 @@ fn main() {
         }
         println!(
             "simulate cone-15-10, friction + backlash on X Y Z A C, linear twin, {name}: {sim_time:.2} s machine time; real-time factor (per CPU second) median {med:.0}x, best {best:.0}x ({runs} runs){ratio}"
+        );
+    }
+    // The same two cones as G-code files, full trace: the interpreter reads every block.
+    if only.is_empty() || "file".contains(only.as_str()) {
+        let coarse = cone_file_scenario(&dir, &text, 360);
+        let fine = cone_file_scenario(&dir, &text, 36_000);
+        let (coarse_time, coarse_med, _) = simulate_rtf(&coarse, &dir.join("out"), runs);
+        let (fine_time, fine_med, fine_best) = simulate_rtf(&fine, &dir.join("out"), runs);
+        println!(
+            "simulate cone-15-10 as a G-code file, friction + backlash on X Y Z A C, linear twin, full trace: 360 blocks {coarse_time:.2} s machine time, median {coarse_med:.0}x; 36,000 blocks {fine_time:.2} s, median {fine_med:.0}x, best {fine_best:.0}x ({runs} runs); 360/36,000-block time ratio {:.2}",
+            coarse_med / fine_med
         );
     }
     if smoke {

@@ -106,7 +106,10 @@ pub fn run_ballbar(
     let (mut analysis, along) = match &scenario.program {
         Program::File { cone, .. } => {
             let frame = cone.map(|c| CircleFrame::of_cone(&c));
-            (None, Some(Rc::new(RefCell::new(MoveAnalysis::new(machine, frame)))))
+            (
+                None,
+                Some(Rc::new(RefCell::new(MoveAnalysis::new(machine, frame)))),
+            )
         }
         _ => (Some(analyse_scenario(scenario)?), None),
     };

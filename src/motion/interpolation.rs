@@ -570,6 +570,29 @@ struct Active {
     t0: f64,
 }
 
+impl Active {
+    /// The setpoint at time `t` (s) if the block is still running then: the path at
+    /// `u = s(t - t₀) / L`, clamped to `[0, 1]` (0 for a block of no length).
+    #[inline(always)]
+    fn setpoint_at(&self, t: f64) -> Option<Setpoint> {
+        if !(t < self.t0 + self.profile.duration) {
+            return None;
+        }
+        let p = &self.planned;
+        let u = if p.length > 0.0 {
+            (self.profile.position(t - self.t0) / p.length).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        Some(Setpoint {
+            time_s: t,
+            q: p.path.at(u),
+            line: p.line,
+            block_index: p.index,
+        })
+    }
+}
+
 /// Turns blocks into setpoints every interpolation period; see the module documentation.
 ///
 /// Yields `Err` once (then ends) when a block cannot be run; errors in the first
@@ -1155,22 +1178,9 @@ impl<I: Iterator<Item = Result<Move>>> Iterator for Interpolator<I> {
             return None;
         }
         let t = self.step as f64 * self.period_s;
-        if let Some(a) = &self.active {
-            if t < a.t0 + a.profile.duration {
-                let p = &a.planned;
-                let u = if p.length > 0.0 {
-                    (a.profile.position(t - a.t0) / p.length).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                self.step += 1;
-                return Some(Ok(Setpoint {
-                    time_s: t,
-                    q: p.path.at(u),
-                    line: p.line,
-                    block_index: p.index,
-                }));
-            }
+        if let Some(setpoint) = self.active.as_ref().and_then(|a| a.setpoint_at(t)) {
+            self.step += 1;
+            return Some(Ok(setpoint));
         }
         self.next_after_block(t)
     }
@@ -1182,22 +1192,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     #[inline(never)]
     fn next_after_block(&mut self, t: f64) -> Option<Result<Setpoint>> {
         loop {
-            if let Some(a) = &self.active {
-                if t < a.t0 + a.profile.duration {
-                    let p = &a.planned;
-                    let u = if p.length > 0.0 {
-                        (a.profile.position(t - a.t0) / p.length).clamp(0.0, 1.0)
-                    } else {
-                        0.0
-                    };
-                    self.step += 1;
-                    return Some(Ok(Setpoint {
-                        time_s: t,
-                        q: p.path.at(u),
-                        line: p.line,
-                        block_index: p.index,
-                    }));
-                }
+            if let Some(setpoint) = self.active.as_ref().and_then(|a| a.setpoint_at(t)) {
+                self.step += 1;
+                return Some(Ok(setpoint));
             }
             let t0 = self
                 .active

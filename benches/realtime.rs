@@ -14,7 +14,8 @@
 //!   the running thread, like `simulate`), samples per second and the geometric queries made.
 //!
 //! `MTSIM_BENCH_SMOKE=1` runs each simulate case once and skips the rest (a CI smoke run);
-//! `MTSIM_BENCH_ONLY=off` runs only the simulate cases whose name contains `off`;
+//! `MTSIM_BENCH_ONLY=off` runs only the simulate cases whose name contains `off`
+//! (`file-fine`: the 36,000-block file alone);
 //! `MTSIM_BENCH_RUNS=N` runs each simulate case N times (for profiling).
 //! It prints figures; it asserts nothing (timing is not a test).
 
@@ -239,10 +240,15 @@ fn main() {
         );
     }
     // The same two cones as G-code files, full trace: the interpreter reads every block.
-    if only.is_empty() || "file".contains(only.as_str()) {
+    // `MTSIM_BENCH_ONLY=file-fine` runs the 36,000-block file alone (for profiling).
+    if only.is_empty() || "file".contains(only.as_str()) || only == "file-fine" {
         let coarse = cone_file_scenario(&dir, &text, 360);
         let fine = cone_file_scenario(&dir, &text, 36_000);
-        let (coarse_time, coarse_med, _) = simulate_rtf(&coarse, &dir.join("out"), runs);
+        let (coarse_time, coarse_med, _) = if only == "file-fine" {
+            (f64::NAN, f64::NAN, f64::NAN)
+        } else {
+            simulate_rtf(&coarse, &dir.join("out"), runs)
+        };
         let (fine_time, fine_med, fine_best) = simulate_rtf(&fine, &dir.join("out"), runs);
         println!(
             "simulate cone-15-10 as a G-code file, friction + backlash on X Y Z A C, linear twin, full trace: 360 blocks {coarse_time:.2} s machine time, median {coarse_med:.0}x; 36,000 blocks {fine_time:.2} s, median {fine_med:.0}x, best {fine_best:.0}x ({runs} runs); 360/36,000-block time ratio {:.2}",

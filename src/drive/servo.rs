@@ -181,6 +181,11 @@ struct PeriodMap {
     /// Columns of `[M | b_Δs | b_ff | b_fr | b_off]`, each padded to 8 so that the product
     /// is a sum of whole-column vector operations.
     cols: [[f64; 8]; N_INPUT],
+    /// The same affine map to the table velocity at the start of each substep after the
+    /// first (the velocities the substep model evaluates the friction at), 8 substeps per
+    /// block of columns, in the same layout; lanes past the last substep repeat `v_t` at the
+    /// period's start. Empty for a map without a Stribeck zone (no friction slope to check).
+    substep_velocities: Vec<[[f64; 8]; N_INPUT]>,
 }
 
 /// Inputs of [`PeriodMap`]: the state, `Δs`, `F_ff`, `F_fr`, `off`.
@@ -262,9 +267,11 @@ fn round_index(x: f64, max: usize) -> usize {
 /// e_F = |c - cᵢ| Δv + ½ max|f''| Δv²,   |f''| ≤ (Fs - Fc) / vs² · k(u),  k = max|(4u² - 2) e^{-u²}|
 /// ```
 ///
-/// over the period, with `Δv` the largest velocity change in it (bounded by twice what the
-/// period's end points and the command's velocity change show, `k = 2` near rest and
-/// `(4u² - 2) e^{-u²}` for `u = |v|/vs ≥ 1.23`, where it falls). A period takes the map only if
+/// over the period, with `Δv` the largest velocity change in it (first bounded by twice what
+/// the period's end points and the command's velocity change show; where that is not enough,
+/// `max_j |v_j - v₀|` over the substeps' own start velocities, each affine in the map's inputs:
+/// [`PeriodMap::largest_substep_velocity_change`]), `k = 2` near rest and
+/// `(4u² - 2) e^{-u²}` for `u = |v|/vs ≥ 1.23`, where it falls. A period takes the map only if
 /// `e_F ≤ 10⁻⁵ Fs`; a force error that small moves a loaded axis by picometres. Without a
 /// Stribeck zone (`vs = 0` or `Fs = Fc`) the grid is the single slope 0 and the map is exact.
 #[derive(Clone, Debug)]
@@ -326,14 +333,46 @@ impl PeriodMap {
     /// first `N` columns.
     #[inline(always)]
     fn product<const N: usize>(&self, input: &[f64; N]) -> [f64; N_STATE] {
-        let mut acc = [0.0; 8];
-        for (col, &u) in self.cols.iter().zip(input) {
-            for (a, c) in acc.iter_mut().zip(col) {
-                *a += c * u;
-            }
-        }
+        let acc = column_product(&self.cols, input);
         [acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]]
     }
+
+    /// `max_j |v_j - v₀|` over the table velocities `v_j` at the substep starts of the
+    /// period (`v₀ = x[3]`, the first), for the inputs of [`PeriodMap::apply`]: the largest
+    /// velocity change at which the substep model evaluates the friction in this period.
+    /// Out of line: only periods whose cheap bound fails ask for it.
+    #[inline(never)]
+    fn largest_substep_velocity_change(
+        &self,
+        x: &[f64; N_STATE],
+        ds: f64,
+        f_ff: f64,
+        friction: f64,
+        offset: f64,
+    ) -> f64 {
+        let input = [
+            x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff, friction, offset,
+        ];
+        let mut largest = 0.0f64;
+        for cols in &self.substep_velocities {
+            for v in column_product(cols, &input) {
+                largest = largest.max((v - x[3]).abs());
+            }
+        }
+        largest
+    }
+}
+
+/// `Σ_j cols[j] u_j`, 8 lanes: one multiply and one add per column and lane, in column order.
+#[inline(always)]
+fn column_product<const N: usize>(cols: &[[f64; 8]; N_INPUT], input: &[f64; N]) -> [f64; 8] {
+    let mut acc = [0.0; 8];
+    for (col, &u) in cols.iter().zip(input) {
+        for (a, c) in acc.iter_mut().zip(col) {
+            *a += c * u;
+        }
+    }
+    acc
 }
 
 impl AxisServo {
@@ -472,7 +511,7 @@ impl AxisServo {
             self.presliding.is_none() && self.coulomb > 0.0 && delta > 0.0 && self.stribeck > 0.0;
         if !stribeck_zone {
             return ExactMaps {
-                maps: vec![OnceCell::from(self.period_map(0.0))],
+                maps: vec![OnceCell::from(self.period_map(0.0, false))],
                 slope_step: 0.0,
                 inv_slope_step: 0.0,
                 delta_friction: 0.0,
@@ -504,9 +543,17 @@ impl AxisServo {
     }
 
     /// Builds [`PeriodMap`] for friction slope `slope` by running
-    /// [`AxisServo::linear_period`] on each unit input.
-    fn period_map(&self, slope: f64) -> PeriodMap {
+    /// [`AxisServo::linear_period`] on each unit input; with `substep_velocities`, also the
+    /// map to the table velocity at each substep start after the first.
+    fn period_map(&self, slope: f64, substep_velocities: bool) -> PeriodMap {
         let mut cols = [[0.0; 8]; N_INPUT];
+        let n_mid = if substep_velocities {
+            self.n_servo * self.n_sub - 1
+        } else {
+            0
+        };
+        let mut velocity_cols = vec![[[0.0; 8]; N_INPUT]; n_mid.div_ceil(8)];
+        let mut mids = Vec::with_capacity(n_mid + 1);
         for (j, col) in cols.iter_mut().enumerate() {
             let mut x = [0.0; N_STATE];
             let mut u = [0.0; 4];
@@ -515,10 +562,23 @@ impl AxisServo {
             } else {
                 u[j - N_STATE] = 1.0;
             }
-            let y = self.linear_period(x, u[0], u[1], u[2], u[3], slope);
+            mids.clear();
+            let y = self.linear_period(x, u[0], u[1], u[2], u[3], slope, &mut mids);
             col[..N_STATE].copy_from_slice(&y);
+            for (block, lanes) in velocity_cols.iter_mut().enumerate() {
+                for (lane, c) in lanes[j].iter_mut().enumerate() {
+                    // Past the last substep: v_t at the period's start (column 3).
+                    *c = match mids.get(block * 8 + lane) {
+                        Some(&v) if block * 8 + lane < n_mid => v,
+                        _ => f64::from(j == 3),
+                    };
+                }
+            }
         }
-        PeriodMap { cols }
+        PeriodMap {
+            cols,
+            substep_velocities: velocity_cols,
+        }
     }
 
     /// The cascade model over one interpolation period with its nonlinearities frozen: no
@@ -526,6 +586,8 @@ impl AxisServo {
     /// velocity, as the substep model evaluates it), the spring `k (d - offset) +
     /// c Δv` without its contact clamp. Positions relative to `s_{k-1}`. The same arithmetic
     /// as [`AxisServo::step_cascade`] and [`AxisServo::substep`] in the regime they agree.
+    /// Pushes the table velocity after each substep onto `velocities`.
+    #[allow(clippy::too_many_arguments)]
     fn linear_period(
         &self,
         x: [f64; N_STATE],
@@ -534,6 +596,7 @@ impl AxisServo {
         friction: f64,
         offset: f64,
         slope: f64,
+        velocities: &mut Vec<f64>,
     ) -> [f64; N_STATE] {
         let [mut x_m, mut v_m, mut x_t, mut v_t, mut force, mut integral, mut x_m_tick] = x;
         let n = self.n_servo as f64;
@@ -555,6 +618,7 @@ impl AxisServo {
                     * self.inv_mt_plus_h_fv;
                 x_m += self.h * v_m;
                 x_t += self.h * v_t;
+                velocities.push(v_t);
             }
         }
         [x_m, v_m, x_t, v_t, force, integral, x_m_tick]
@@ -719,8 +783,9 @@ impl AxisServo {
             (-regime.side * regime.bound, slope, index)
         };
         let grid_slope = index as f64 * exact.slope_step;
-        let map = exact.maps[index].get_or_init(|| self.period_map(grid_slope));
-        let y = map.apply(&x, s_new - s_old, f_ff, f0 - grid_slope * v0, regime.offset);
+        let map = exact.maps[index].get_or_init(|| self.period_map(grid_slope, true));
+        let friction = f0 - grid_slope * v0;
+        let y = map.apply(&x, s_new - s_old, f_ff, friction, regime.offset);
         if !all_finite(&y) {
             return false; // the substeps find it too, and end_period reports it
         }
@@ -729,18 +794,33 @@ impl AxisServo {
             // e_F = |c - cᵢ| Δv + ½ max|f''| Δv², with k = max|f''| vs² / (Fs - Fc) ≤ 2:
             // first with k = 2 (e_F grows with k, in floating point too), the exp of the
             // sharper k only when that bound is not enough.
-            let error = |k: f64| {
-                let curvature = exact.delta_friction * exact.inv_stribeck * exact.inv_stribeck * k;
-                (slope - grid_slope).abs() * dv + 0.5 * curvature * dv * dv
-            };
-            if error(2.0) > exact.tolerance {
-                let u_low = (v0.abs() - dv).max(0.0) * exact.inv_stribeck;
-                if u_low < 1.23
-                    || error((4.0 * u_low * u_low - 2.0) * exp_neg(-(u_low * u_low)))
-                        > exact.tolerance
-                {
-                    return false;
+            let within = |dv: f64| {
+                let error = |k: f64| {
+                    let curvature =
+                        exact.delta_friction * exact.inv_stribeck * exact.inv_stribeck * k;
+                    (slope - grid_slope).abs() * dv + 0.5 * curvature * dv * dv
+                };
+                if error(2.0) <= exact.tolerance {
+                    return true;
                 }
+                let u_low = (v0.abs() - dv).max(0.0) * exact.inv_stribeck;
+                u_low >= 1.23
+                    && error((4.0 * u_low * u_low - 2.0) * exp_neg(-(u_low * u_low)))
+                        <= exact.tolerance
+            };
+            // First with Δv bounded from the end points and the command; where that is not
+            // enough (a command whose velocity jumps from period to period, such as the
+            // rounded positions of a fine-segment file), with the substeps' own velocities.
+            if !within(dv)
+                && !within(map.largest_substep_velocity_change(
+                    &x,
+                    s_new - s_old,
+                    f_ff,
+                    friction,
+                    regime.offset,
+                ))
+            {
+                return false;
             }
         }
         if dv > 2.0 * dv_guess && !regime.admits(dv) {

@@ -240,10 +240,27 @@ impl BlockPath {
     /// `dq/ds` at `u` for a block of length `length` (central difference, exact for lines).
     fn tangent(&self, u: f64, length: f64) -> AxisVec {
         if self.is_straight() {
+            if self.arc.is_none() && self.tcp.is_none() {
+                // `at(1) - at(0)` written out (`start + delta · 1 - (start + delta · 0)`):
+                // the same bits without two path evaluations.
+                let d = AxisVec(std::array::from_fn(|i| {
+                    (self.start.0[i] + self.delta.0[i]) - self.start.0[i]
+                }));
+                return d * (1.0 / length);
+            }
             return (self.at(1.0) - self.at(0.0)) * (1.0 / length);
         }
         let h = 1e-5;
         (self.at(u + h) - self.at(u - h)) * (1.0 / (2.0 * h * length))
+    }
+
+    /// `dq/ds` at the start and at the end of the block (the same for a straight one).
+    fn end_tangents(&self, length: f64) -> (AxisVec, AxisVec) {
+        if self.is_straight() {
+            let t = self.tangent(0.0, length);
+            return (t, t);
+        }
+        (self.tangent(0.0, length), self.tangent(1.0, length))
     }
 }
 
@@ -551,6 +568,9 @@ struct Planned {
     entry_max: f64,
 }
 
+/// A block planned on its own, with `dq/ds` at its start and at its end.
+type PlannedBlock = (Planned, AxisVec, AxisVec);
+
 /// The end of the last planned block, for the next junction.
 #[derive(Clone, Copy, Debug)]
 struct JunctionEnd {
@@ -599,6 +619,11 @@ impl Active {
 /// `lookahead_blocks` blocks are already returned by [`Interpolator::new`].
 pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     blocks: I,
+    /// Blocks read from `blocks` and planned on their own (limits, tangents), not yet in the
+    /// window: read [`pass_batch`] at a time (see [`Interpolator::next_planned`]);
+    /// `blocks_done` once `blocks` has ended or failed.
+    read_ahead: VecDeque<Result<Option<PlannedBlock>>>,
+    blocks_done: bool,
     input_done: bool,
     pending_error: Option<Error>,
     limits: [Option<AxisLimits>; 9],
@@ -641,6 +666,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         }
         let mut interpolator = Interpolator {
             blocks,
+            read_ahead: VecDeque::with_capacity(pass_batch(&options)),
+            blocks_done: false,
             input_done: false,
             pending_error: None,
             limits,
@@ -678,32 +705,55 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     fn fill(&mut self) {
         let batch = pass_batch(&self.options);
         while !self.input_done && self.window.len() <= self.options.lookahead_blocks + batch - 1 {
-            let index = self.next_index;
-            match self.blocks.next() {
+            match self.next_planned(batch) {
                 None => self.input_done = true,
                 Some(Err(e)) => {
                     self.pending_error = Some(e);
                     self.input_done = true;
                 }
-                Some(Ok(block)) => {
-                    self.next_index += 1;
-                    match self.plan(&block, index) {
-                        Ok(Some((planned, start, end))) => {
-                            self.record(&planned);
-                            self.push(planned, start, end)
-                        }
-                        Ok(None) => {}
-                        Err(e) => {
-                            self.pending_error = Some(e);
-                            self.input_done = true;
-                        }
-                    }
+                Some(Ok(Some((planned, start, end)))) => {
+                    self.record(&planned);
+                    self.push(planned, start, end)
                 }
+                Some(Ok(None)) => {}
             }
         }
         if self.unpassed > 0 && (self.input_done || self.unpassed >= batch) {
             self.backward_pass();
         }
+    }
+
+    /// The next block of the program with its own plan ([`Interpolator::plan`], which
+    /// depends on the block alone), read and planned `batch` at a time. With short blocks
+    /// one is needed per interpolation period or so, between the drives' samples; read one
+    /// at a time, the reader's code (interpreter, validation) and the planner's found the
+    /// instruction cache cold on every block. Reading stops at the first error, where the
+    /// interpolator stops. Only when blocks are read changes (at most `batch` blocks early),
+    /// not what is planned: the window and its backward passes are the same.
+    fn next_planned(&mut self, batch: usize) -> Option<Result<Option<PlannedBlock>>> {
+        if self.read_ahead.is_empty() && !self.blocks_done {
+            for _ in 0..batch {
+                let planned = match self.blocks.next() {
+                    None => {
+                        self.blocks_done = true;
+                        break;
+                    }
+                    Some(Err(e)) => Err(e),
+                    Some(Ok(block)) => {
+                        let index = self.next_index;
+                        self.next_index += 1;
+                        self.plan(&block, index)
+                    }
+                };
+                let failed = planned.is_err();
+                self.read_ahead.push_back(planned);
+                if failed {
+                    self.blocks_done = true;
+                    break;
+                }
+            }
+        }
+        self.read_ahead.pop_front()
     }
 
     /// Notes a feed block held below its F word (when recording).
@@ -736,7 +786,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
 
     /// Geometry and limits of one block; `None` for a block without motion.
     /// Also returns the tangents `dq/ds` at its start and end.
-    fn plan(&self, b: &Move, index: u64) -> Result<Option<(Planned, AxisVec, AxisVec)>> {
+    fn plan(&self, b: &Move, index: u64) -> Result<Option<PlannedBlock>> {
         if !b.start.is_finite() || !b.end.is_finite() {
             return Err(self.block_error(b.line, "an axis position is not a finite number"));
         }
@@ -882,7 +932,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 }
             }
         };
-        self.apply_limits(&mut planned, programmed);
+        let (start, end) = planned.path.end_tangents(planned.length);
+        self.apply_limits(&mut planned, programmed, start);
         if !(planned.cap.is_finite()
             && planned.cap > 0.0
             && planned.accel > 0.0
@@ -894,8 +945,6 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 "the move has no finite speed: check the axis positions and the feed",
             ));
         }
-        let start = planned.path.tangent(0.0, planned.length);
-        let end = planned.path.tangent(1.0, planned.length);
         Ok(Some((planned, start, end)))
     }
 
@@ -958,7 +1007,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
 
     /// Cruise cap and path acceleration and jerk limits from the axis limits; notes the axis
     /// and limit that hold the cap below the programmed speed.
-    fn apply_limits(&self, p: &mut Planned, programmed: f64) {
+    /// `tangent_start`: `dq/ds` at the block's start (all of it for a straight block).
+    fn apply_limits(&self, p: &mut Planned, programmed: f64, tangent_start: AxisVec) {
         let (mut cap, mut accel, mut jerk) = (programmed, f64::INFINITY, f64::INFINITY);
         let mut by = None;
         let mut lower = |cap: &mut f64, value: f64, i: usize, kind: LimitKind| {
@@ -969,7 +1019,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         };
         let present = |i: usize| self.limits[i].map(|l| (i, l));
         if p.path.is_straight() {
-            let t = p.path.tangent(0.0, p.length);
+            let t = tangent_start;
             for (i, l) in (0..9).filter_map(present) {
                 let d = t.0[i].abs();
                 if d > 0.0 {

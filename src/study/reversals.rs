@@ -414,16 +414,18 @@ impl BlockAxisState {
         if d == 0.0 {
             return None;
         }
-        let Some((direction, extreme, ext_line, ext_q)) = self.travel else {
+        // By reference: the position is copied only where it changes (most blocks).
+        let Some((direction, extreme, ext_line, ext_q)) = &mut self.travel else {
             self.travel = Some((d.signum(), x, line, q));
             return None;
         };
-        if (x - extreme) * direction > 0.0 {
-            self.travel = Some((direction, x, line, q));
+        if (x - *extreme) * *direction > 0.0 {
+            (*extreme, *ext_line, *ext_q) = (x, line, q);
             None
-        } else if (extreme - x).abs() > REVERSAL_DEADBAND {
-            self.travel = Some((-direction, x, line, q));
-            Some((ext_line, ext_q))
+        } else if (*extreme - x).abs() > REVERSAL_DEADBAND {
+            let turn = (*ext_line, *ext_q);
+            (*direction, *extreme, *ext_line, *ext_q) = (-*direction, x, line, q);
+            Some(turn)
         } else {
             None
         }

@@ -205,15 +205,17 @@ struct BlockPath {
     start: AxisVec,
     delta: AxisVec,
     arc: Option<ArcGeometry>,
-    /// Some: X Y Z of `start + u delta` (or of the arc) are the tool tip in the table frame.
-    tcp: Option<Kinematics>,
+    /// X Y Z of `start + u delta` (or of the arc) are the tool tip in the table frame of the
+    /// interpolator's kinematics (passed to the methods that need it: a block is copied
+    /// several times on its way and holds no copy of them).
+    tcp: bool,
     /// Tool length offset under TCP, mm: included in Z, applied along the tool axis
     /// ([`Kinematics::tcp_to_machine`]).
     tool_length_mm: f64,
 }
 
 impl BlockPath {
-    fn at(&self, u: f64) -> AxisVec {
+    fn at(&self, u: f64, kinematics: &Kinematics) -> AxisVec {
         let mut q = AxisVec(std::array::from_fn(|i| {
             self.start.0[i] + self.delta.0[i] * u
         }));
@@ -223,7 +225,7 @@ impl BlockPath {
             q.0[arc.i0] = arc.c0 + r * cos;
             q.0[arc.i1] = arc.c1 + r * sin;
         }
-        if let Some(kinematics) = &self.tcp {
+        if self.tcp {
             let l = self.tool_length_mm;
             let mut m = table_to_machine(kinematics, &q, [q.0[0], q.0[1], q.0[2] - l]);
             m[2] += l;
@@ -234,13 +236,13 @@ impl BlockPath {
 
     /// True when `q(u)` is a straight line in axis space.
     fn is_straight(&self) -> bool {
-        self.arc.is_none() && (self.tcp.is_none() || (3..6).all(|i| self.delta.0[i] == 0.0))
+        self.arc.is_none() && (!self.tcp || (3..6).all(|i| self.delta.0[i] == 0.0))
     }
 
     /// `dq/ds` at `u` for a block of length `length` (central difference, exact for lines).
-    fn tangent(&self, u: f64, length: f64) -> AxisVec {
+    fn tangent(&self, u: f64, length: f64, kinematics: &Kinematics) -> AxisVec {
         if self.is_straight() {
-            if self.arc.is_none() && self.tcp.is_none() {
+            if self.arc.is_none() && !self.tcp {
                 // `at(1) - at(0)` written out (`start + delta · 1 - (start + delta · 0)`):
                 // the same bits without two path evaluations.
                 let d = AxisVec(std::array::from_fn(|i| {
@@ -248,19 +250,22 @@ impl BlockPath {
                 }));
                 return d * (1.0 / length);
             }
-            return (self.at(1.0) - self.at(0.0)) * (1.0 / length);
+            return (self.at(1.0, kinematics) - self.at(0.0, kinematics)) * (1.0 / length);
         }
         let h = 1e-5;
-        (self.at(u + h) - self.at(u - h)) * (1.0 / (2.0 * h * length))
+        (self.at(u + h, kinematics) - self.at(u - h, kinematics)) * (1.0 / (2.0 * h * length))
     }
 
     /// `dq/ds` at the start and at the end of the block (the same for a straight one).
-    fn end_tangents(&self, length: f64) -> (AxisVec, AxisVec) {
+    fn end_tangents(&self, length: f64, kinematics: &Kinematics) -> (AxisVec, AxisVec) {
         if self.is_straight() {
-            let t = self.tangent(0.0, length);
+            let t = self.tangent(0.0, length, kinematics);
             return (t, t);
         }
-        (self.tangent(0.0, length), self.tangent(1.0, length))
+        (
+            self.tangent(0.0, length, kinematics),
+            self.tangent(1.0, length, kinematics),
+        )
     }
 }
 
@@ -594,7 +599,7 @@ impl Active {
     /// The setpoint at time `t` (s) if the block is still running then: the path at
     /// `u = s(t - t₀) / L`, clamped to `[0, 1]` (0 for a block of no length).
     #[inline(always)]
-    fn setpoint_at(&self, t: f64) -> Option<Setpoint> {
+    fn setpoint_at(&self, t: f64, kinematics: &Kinematics) -> Option<Setpoint> {
         if !(t < self.t0 + self.profile.duration) {
             return None;
         }
@@ -606,7 +611,7 @@ impl Active {
         };
         Some(Setpoint {
             time_s: t,
-            q: p.path.at(u),
+            q: p.path.at(u, kinematics),
             line: p.line,
             block_index: p.index,
         })
@@ -619,10 +624,9 @@ impl Active {
 /// `lookahead_blocks` blocks are already returned by [`Interpolator::new`].
 pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     blocks: I,
-    /// Blocks read from `blocks` and planned on their own (limits, tangents), not yet in the
-    /// window: read [`pass_batch`] at a time (see [`Interpolator::next_planned`]);
-    /// `blocks_done` once `blocks` has ended or failed.
-    read_ahead: VecDeque<Result<Option<PlannedBlock>>>,
+    /// Blocks read from `blocks` and not yet planned, read [`pass_batch`] at a time (see
+    /// [`Interpolator::next_block`]); `blocks_done` once `blocks` has ended or failed.
+    read_ahead: VecDeque<Result<Move>>,
     blocks_done: bool,
     input_done: bool,
     pending_error: Option<Error>,
@@ -705,7 +709,16 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     fn fill(&mut self) {
         let batch = pass_batch(&self.options);
         while !self.input_done && self.window.len() <= self.options.lookahead_blocks + batch - 1 {
-            match self.next_planned(batch) {
+            let next = match self.next_block(batch) {
+                None => None,
+                Some(Err(e)) => Some(Err(e)),
+                Some(Ok(block)) => {
+                    let index = self.next_index;
+                    self.next_index += 1;
+                    Some(self.plan(&block, index))
+                }
+            };
+            match next {
                 None => self.input_done = true,
                 Some(Err(e)) => {
                     self.pending_error = Some(e);
@@ -730,23 +743,23 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     /// instruction cache cold on every block. Reading stops at the first error, where the
     /// interpolator stops. Only when blocks are read changes (at most `batch` blocks early),
     /// not what is planned: the window and its backward passes are the same.
-    fn next_planned(&mut self, batch: usize) -> Option<Result<Option<PlannedBlock>>> {
+    /// The next block of the program, read `batch` at a time. With short blocks one is
+    /// needed per interpolation period or so, between the drives' samples; read one at a
+    /// time, the reader's code (interpreter, validation) found the instruction cache cold
+    /// on every block. Reading stops at the first error, where the interpolator stops. Only
+    /// when blocks are read changes (at most `batch` blocks early), not what is planned: the
+    /// window and its backward passes are the same. (Planning them a batch at a time too
+    /// was 1-4 % slower: each planned block is larger than the block, more data through the
+    /// data cache.)
+    fn next_block(&mut self, batch: usize) -> Option<Result<Move>> {
         if self.read_ahead.is_empty() && !self.blocks_done {
             for _ in 0..batch {
-                let planned = match self.blocks.next() {
-                    None => {
-                        self.blocks_done = true;
-                        break;
-                    }
-                    Some(Err(e)) => Err(e),
-                    Some(Ok(block)) => {
-                        let index = self.next_index;
-                        self.next_index += 1;
-                        self.plan(&block, index)
-                    }
+                let Some(block) = self.blocks.next() else {
+                    self.blocks_done = true;
+                    break;
                 };
-                let failed = planned.is_err();
-                self.read_ahead.push_back(planned);
+                let failed = block.is_err();
+                self.read_ahead.push_back(block);
                 if failed {
                     self.blocks_done = true;
                     break;
@@ -818,7 +831,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 start: b.start,
                 delta: b.end - b.start,
                 arc: None,
-                tcp,
+                tcp: tcp.is_some(),
                 tool_length_mm: b.tool_length_mm,
             },
             length: 0.0,
@@ -857,7 +870,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                     ));
                 }
                 planned.path.delta = AxisVec::ZERO;
-                planned.path.tcp = None;
+                planned.path.tcp = false;
                 planned.dwell_s = seconds;
                 return Ok(Some((planned, AxisVec::ZERO, AxisVec::ZERO)));
             }
@@ -876,7 +889,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                     };
                     planned.path.start = to_machine(&b.start);
                     planned.path.delta = to_machine(&b.end) - planned.path.start;
-                    planned.path.tcp = None;
+                    planned.path.tcp = false;
                 }
                 planned.length = planned.path.delta.mixed_norm();
             }
@@ -932,7 +945,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 }
             }
         };
-        let (start, end) = planned.path.end_tangents(planned.length);
+        let (start, end) = planned.path.end_tangents(planned.length, &self.kinematics);
         self.apply_limits(&mut planned, programmed, start);
         if !(planned.cap.is_finite()
             && planned.cap > 0.0
@@ -1061,9 +1074,10 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         let h = 2e-3;
         for k in 0..=SAMPLES {
             let u = k as f64 / SAMPLES as f64;
-            let q = path.at(u);
-            let (p1, m1) = (path.at(u + h), path.at(u - h));
-            let (p2, m2) = (path.at(u + 2.0 * h), path.at(u - 2.0 * h));
+            let k = &self.kinematics;
+            let q = path.at(u, k);
+            let (p1, m1) = (path.at(u + h, k), path.at(u - h, k));
+            let (p2, m2) = (path.at(u + 2.0 * h, k), path.at(u - 2.0 * h, k));
             for i in 0..9 {
                 let first = (p1.0[i] - m1.0[i]) / (2.0 * h * length);
                 let second = (p1.0[i] - 2.0 * q.0[i] + m1.0[i]) / (h * h * length * length);
@@ -1228,7 +1242,11 @@ impl<I: Iterator<Item = Result<Move>>> Iterator for Interpolator<I> {
             return None;
         }
         let t = self.step as f64 * self.period_s;
-        if let Some(setpoint) = self.active.as_ref().and_then(|a| a.setpoint_at(t)) {
+        if let Some(setpoint) = self
+            .active
+            .as_ref()
+            .and_then(|a| a.setpoint_at(t, &self.kinematics))
+        {
             self.step += 1;
             return Some(Ok(setpoint));
         }
@@ -1242,7 +1260,11 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     #[inline(never)]
     fn next_after_block(&mut self, t: f64) -> Option<Result<Setpoint>> {
         loop {
-            if let Some(setpoint) = self.active.as_ref().and_then(|a| a.setpoint_at(t)) {
+            if let Some(setpoint) = self
+                .active
+                .as_ref()
+                .and_then(|a| a.setpoint_at(t, &self.kinematics))
+            {
                 self.step += 1;
                 return Some(Ok(setpoint));
             }
@@ -1263,7 +1285,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 let u = if p.length > 0.0 { 1.0 } else { 0.0 };
                 return Some(Ok(Setpoint {
                     time_s: t,
-                    q: p.path.at(u),
+                    q: p.path.at(u, &self.kinematics),
                     line: p.line,
                     block_index: p.index,
                 }));

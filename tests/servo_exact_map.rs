@@ -146,15 +146,7 @@ fn force_saturation_falls_back_to_substeps() {
 /// sticks, the substeps run.
 #[test]
 fn slow_axis_inside_its_stribeck_zone_agrees_within_a_nanometre() {
-    let friction = FrictionConfig {
-        coulomb_n: Some(200.0),
-        stribeck_velocity_mm_per_s: Some(0.5),
-        ..Default::default()
-    };
-    let drive = DriveConfig {
-        backlash_mm: Some(0.003),
-        ..Default::default()
-    };
+    let (friction, drive) = slow_axis_drive();
     let w = 0.16;
     for (ff, closed) in [(0.0, false), (0.8, true)] {
         let (worst, fe, share) = compare(
@@ -174,13 +166,8 @@ fn slow_axis_inside_its_stribeck_zone_agrees_within_a_nanometre() {
     }
 }
 
-/// The slow axis above with its setpoints rounded to 0.1 µm, as a fine-segment G-code file
-/// writes them (four decimals): the command's velocity jumps by up to 0.1 mm/s from period
-/// to period (the axis moves 1.6 µm per period at most). The friction's linearisation error
-/// is then bounded with the table velocities at the substeps themselves, which such jumps
-/// move much less: the map agrees with the substeps within 1 nm and takes most periods.
-#[test]
-fn slow_axis_with_a_rounded_command_agrees_within_a_nanometre() {
+/// The slow axis's friction (a Stribeck zone up to 0.5 mm/s) and backlash.
+fn slow_axis_drive() -> (FrictionConfig, DriveConfig) {
     let friction = FrictionConfig {
         coulomb_n: Some(200.0),
         stribeck_velocity_mm_per_s: Some(0.5),
@@ -190,6 +177,17 @@ fn slow_axis_with_a_rounded_command_agrees_within_a_nanometre() {
         backlash_mm: Some(0.003),
         ..Default::default()
     };
+    (friction, drive)
+}
+
+/// The slow axis above with its setpoints rounded to 0.1 µm, as a fine-segment G-code file
+/// writes them (four decimals): the command's velocity jumps by up to 0.1 mm/s from period
+/// to period (the axis moves 1.6 µm per period at most). The friction's linearisation error
+/// is then bounded with the table velocities at the substeps themselves, which such jumps
+/// move much less: the map agrees with the substeps within 1 nm and takes most periods.
+#[test]
+fn slow_axis_with_a_rounded_command_agrees_within_a_nanometre() {
+    let (friction, drive) = slow_axis_drive();
     let w = 0.16;
     for (ff, closed) in [(0.0, false), (0.8, true)] {
         let (worst, fe, share) = compare(

@@ -305,10 +305,7 @@ impl PeriodMap {
         friction: f64,
         offset: f64,
     ) -> [f64; N_STATE] {
-        let input = [
-            x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff, friction, offset,
-        ];
-        self.dispatch(&input)
+        self.dispatch(&map_input(x, ds, f_ff, friction, offset))
     }
 
     /// [`PeriodMap::apply`] without friction and contact offset (both 0): the map's first
@@ -350,9 +347,7 @@ impl PeriodMap {
         friction: f64,
         offset: f64,
     ) -> f64 {
-        let input = [
-            x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff, friction, offset,
-        ];
+        let input = map_input(x, ds, f_ff, friction, offset);
         let mut largest = 0.0f64;
         for cols in &self.substep_velocities {
             for v in column_product(cols, &input) {
@@ -361,6 +356,14 @@ impl PeriodMap {
         }
         largest
     }
+}
+
+/// The inputs of [`PeriodMap`] in column order: the state, `Δs`, `F_ff`, `F_fr`, `off`.
+#[inline(always)]
+fn map_input(x: &[f64; N_STATE], ds: f64, f_ff: f64, friction: f64, offset: f64) -> [f64; N_INPUT] {
+    [
+        x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff, friction, offset,
+    ]
 }
 
 /// `Σ_j cols[j] u_j`, 8 lanes: one multiply and one add per column and lane, in column order.

@@ -1242,11 +1242,7 @@ impl<I: Iterator<Item = Result<Move>>> Iterator for Interpolator<I> {
             return None;
         }
         let t = self.step as f64 * self.period_s;
-        if let Some(setpoint) = self
-            .active
-            .as_ref()
-            .and_then(|a| a.setpoint_at(t, &self.kinematics))
-        {
+        if let Some(setpoint) = self.active_setpoint(t) {
             self.step += 1;
             return Some(Ok(setpoint));
         }
@@ -1255,16 +1251,20 @@ impl<I: Iterator<Item = Result<Move>>> Iterator for Interpolator<I> {
 }
 
 impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
+    /// The setpoint of the active block at `t` ([`Active::setpoint_at`]), if it runs then.
+    #[inline(always)]
+    fn active_setpoint(&self, t: f64) -> Option<Setpoint> {
+        self.active
+            .as_ref()
+            .and_then(|a| a.setpoint_at(t, &self.kinematics))
+    }
+
     /// [`Iterator::next`] where the active block has ended at time `t`: activates the next
     /// one (its first setpoint), or ends at rest at the last end point.
     #[inline(never)]
     fn next_after_block(&mut self, t: f64) -> Option<Result<Setpoint>> {
         loop {
-            if let Some(setpoint) = self
-                .active
-                .as_ref()
-                .and_then(|a| a.setpoint_at(t, &self.kinematics))
-            {
+            if let Some(setpoint) = self.active_setpoint(t) {
                 self.step += 1;
                 return Some(Ok(setpoint));
             }

@@ -296,20 +296,8 @@ struct ExactMaps {
 const SLOPE_STEPS: usize = 64;
 
 impl PeriodMap {
-    #[inline(always)]
-    fn apply(
-        &self,
-        x: &[f64; N_STATE],
-        ds: f64,
-        f_ff: f64,
-        friction: f64,
-        offset: f64,
-    ) -> [f64; N_STATE] {
-        self.dispatch(&map_input(x, ds, f_ff, friction, offset))
-    }
-
-    /// [`PeriodMap::apply`] without friction and contact offset (both 0): the map's first
-    /// nine columns. The same result as `apply(x, ds, f_ff, 0.0, 0.0)`: adding `c · 0 = ±0`
+    /// The map without friction and contact offset (both 0): its first nine columns. The
+    /// same result as `dispatch(&map_input(x, ds, f_ff, 0.0, 0.0))`: adding `c · 0 = ±0`
     /// to a sum leaves it unchanged unless the sum is `-0`, which a sum that starts at `+0`
     /// never is.
     #[inline(always)]
@@ -335,23 +323,15 @@ impl PeriodMap {
     }
 
     /// `max_j |v_j - v₀|` over the table velocities `v_j` at the substep starts of the
-    /// period (`v₀ = x[3]`, the first), for the inputs of [`PeriodMap::apply`]: the largest
-    /// velocity change at which the substep model evaluates the friction in this period.
-    /// Out of line: only periods whose cheap bound fails ask for it.
+    /// period (`v₀ = input[3]`, the first), for the map's inputs ([`map_input`]): the
+    /// largest velocity change at which the substep model evaluates the friction in this
+    /// period. Out of line: only periods whose cheap bound fails ask for it.
     #[inline(never)]
-    fn largest_substep_velocity_change(
-        &self,
-        x: &[f64; N_STATE],
-        ds: f64,
-        f_ff: f64,
-        friction: f64,
-        offset: f64,
-    ) -> f64 {
-        let input = map_input(x, ds, f_ff, friction, offset);
+    fn largest_substep_velocity_change(&self, input: &[f64; N_INPUT]) -> f64 {
         let mut largest = 0.0f64;
         for cols in &self.substep_velocities {
-            for v in column_product(cols, &input) {
-                largest = largest.max((v - x[3]).abs());
+            for v in column_product(cols, input) {
+                largest = largest.max((v - input[3]).abs());
             }
         }
         largest
@@ -788,7 +768,8 @@ impl AxisServo {
         let grid_slope = index as f64 * exact.slope_step;
         let map = exact.maps[index].get_or_init(|| self.period_map(grid_slope, true));
         let friction = f0 - grid_slope * v0;
-        let y = map.apply(&x, s_new - s_old, f_ff, friction, regime.offset);
+        let input = map_input(&x, s_new - s_old, f_ff, friction, regime.offset);
+        let y = map.dispatch(&input);
         if !all_finite(&y) {
             return false; // the substeps find it too, and end_period reports it
         }
@@ -814,15 +795,7 @@ impl AxisServo {
             // First with Δv bounded from the end points and the command; where that is not
             // enough (a command whose velocity jumps from period to period, such as the
             // rounded positions of a fine-segment file), with the substeps' own velocities.
-            if !within(dv)
-                && !within(map.largest_substep_velocity_change(
-                    &x,
-                    s_new - s_old,
-                    f_ff,
-                    friction,
-                    regime.offset,
-                ))
-            {
+            if !within(dv) && !within(map.largest_substep_velocity_change(&input)) {
                 return false;
             }
         }

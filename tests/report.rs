@@ -102,7 +102,7 @@ fn the_report_is_one_self_contained_page_with_every_section_and_figure() {
         "Sample period",
         "Date",
         "mtsim version",
-        "Scenario hash (FNV-1a 64)",
+        "Scenario hash (XXH64)",
     ] {
         assert!(html.contains(&format!("<th>{key}</th>")), "parameter {key}");
     }

@@ -574,7 +574,7 @@ fn test_table(folder: &RunFolder, date: Option<&str>) -> String {
                 });
             row(&mut out, "Date", &date);
             row(&mut out, "mtsim version", &t.mtsim_version);
-            row(&mut out, "Scenario hash (FNV-1a 64)", &t.scenario_hash);
+            row(&mut out, "Scenario hash (XXH64)", &t.scenario_hash);
         }
         None => {
             row(

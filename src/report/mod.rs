@@ -11,6 +11,7 @@ pub mod plot;
 pub mod polar;
 pub mod test_info;
 pub mod trace;
+pub mod xxh64;
 
 pub use files::{create_dir, temporary_path, write_atomic};
 pub use fixed::push_fixed;

@@ -1427,6 +1427,26 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// `reach` is the largest speed its bound allows, to 1e-12 of bisection, and
+        /// within the bound, from rest and from speed, short blocks and long.
+        #[test]
+        fn reach_is_the_bound_s_largest_speed(
+            v in 0.0..60.0f64,
+            length_exp in -6.0..2.0f64,
+            a in 10.0..5000.0f64,
+            j in 100.0..1e6f64,
+            from_rest in proptest::bool::ANY,
+        ) {
+            let v = if from_rest { 0.0 } else { v };
+            let (length, cap) = (10f64.powf(length_exp), 1e6);
+            let got = reach(v, length, cap, a, j);
+            let want = bisect(v, cap, |x| change_distance_bound(v, x, a, j) <= length);
+            proptest::prop_assert!((got - want).abs() <= 1e-12 * want.max(1.0), "{} {}", got, want);
+            proptest::prop_assert!(change_distance_bound(v, got, a, j) <= length || got == v);
+        }
+    }
+
     /// The closed-form `reach` against bisection of its defining inequality, on both sides of
     /// the knee `a²/j` and from rest.
     #[test]

@@ -16,6 +16,12 @@ pub fn read_file(path: &Path, options: &ngc::Options) -> Result<Moves<'static>> 
     Ok(Box::new(moves.map(|m| m.map_err(Into::into))))
 }
 
+/// The interpreter's own stream of the file at `path`, its errors not yet converted (for
+/// [`super::validate::checked`], which converts them without a layer of its own).
+pub fn read_moves(path: &Path, options: &ngc::Options) -> Result<ngc::Moves> {
+    Ok(ngc::read_file_with(path, options)?)
+}
+
 /// Streams the moves of `text`, reported as the contents of `path`, with default options.
 pub fn read_str<'a>(path: &'a Path, text: &'a str) -> Moves<'a> {
     Box::new(ngc::read_str(path, text, ngc::AxisVec::ZERO).map(|m| m.map_err(Into::into)))

@@ -65,7 +65,7 @@ pub fn scenario_run(
                 .simulate
                 .measure_lines
                 .map(|[first, last]| MeasuredLines { first, last }),
-            moves: validate::checked(path, machine, file::read_file(path, &scenario.reader)?),
+            moves: validate::checked(path, machine, file::read_moves(path, &scenario.reader)?),
         },
     })
 }

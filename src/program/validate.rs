@@ -16,7 +16,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::file::read_file;
+use super::file::read_moves;
 use super::{Move, Moves};
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
@@ -53,7 +53,7 @@ fn word_span(text: &str, line: usize, axis: Axis) -> std::ops::Range<usize> {
 /// Checks the G-code file at `path`, read with the scenario's reader `options`, against
 /// `machine` (see the module doc): the whole file, as [`checked`] streams it.
 pub fn validate_file(path: &Path, machine: &Machine, options: &ngc::Options) -> Result<()> {
-    for m in checked(path, machine, read_file(path, options)?) {
+    for m in checked(path, machine, read_moves(path, options)?) {
         m?;
     }
     Ok(())
@@ -62,8 +62,14 @@ pub fn validate_file(path: &Path, machine: &Machine, options: &ngc::Options) -> 
 /// The moves of the G-code file at `path`, checked against `machine` as they stream (see
 /// the module doc): the first move that fails is an error in place of the move, and a
 /// stream that ends without motion ends with an error. Nothing is collected; the file's
-/// text is read again only to show an error.
-pub fn checked(path: &Path, machine: &Machine, moves: Moves<'static>) -> Moves<'static> {
+/// text is read again only to show an error. `moves` is the reader itself (its errors
+/// converted here) or any stream of moves: with the reader, the moves pass through one
+/// boxed layer instead of two, one copy of each fewer.
+pub fn checked<I, E>(path: &Path, machine: &Machine, moves: I) -> Moves<'static>
+where
+    I: Iterator<Item = std::result::Result<Move, E>> + 'static,
+    E: Into<Error>,
+{
     let limits = machine
         .axes()
         .iter()
@@ -92,19 +98,19 @@ pub fn checked(path: &Path, machine: &Machine, moves: Moves<'static>) -> Moves<'
 }
 
 /// The stream of [`checked`].
-struct Checked {
+struct Checked<I> {
     path: PathBuf,
     /// The machine cannot give tool-centre-point control (xyzabc: no modelled chain; U V W
     /// layouts): its layout's name and why.
     no_tcp: Option<(&'static str, &'static str)>,
     /// Per machine axis: envelope (mm or deg), travel min and max.
     limits: Vec<(Axis, f64, f64, f64)>,
-    moves: Moves<'static>,
+    moves: I,
     moving: bool,
     done: bool,
 }
 
-impl Checked {
+impl<I> Checked<I> {
     /// The file's text, for an error message.
     fn text(&self) -> String {
         std::fs::read(&self.path)
@@ -193,7 +199,11 @@ impl Checked {
     }
 }
 
-impl Iterator for Checked {
+impl<I, E> Iterator for Checked<I>
+where
+    I: Iterator<Item = std::result::Result<Move, E>>,
+    E: Into<Error>,
+{
     type Item = Result<Move>;
 
     fn next(&mut self) -> Option<Result<Move>> {
@@ -202,7 +212,7 @@ impl Iterator for Checked {
         }
         let item = match self.moves.next() {
             Some(Ok(m)) => self.check(&m).map(|()| m),
-            Some(Err(e)) => Err(e),
+            Some(Err(e)) => Err(e.into()),
             None if self.moving => {
                 self.done = true;
                 return None;

@@ -245,7 +245,7 @@ pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
             crate::program::validate::checked(
                 path,
                 &scenario.machine,
-                file::read_file(path, &scenario.reader)?,
+                file::read_moves(path, &scenario.reader)?,
             ),
             &scenario.machine,
             cone.map(|c| CircleFrame::of_cone(&c)).as_ref(),

@@ -69,8 +69,8 @@
 //! ```
 //!
 //! `vp = V` if `D(vs, V) + D(V, ve) ≤ L`, else `vp` solves `D(vs, vp) + D(vp, ve) = L`
-//! (the left side grows with vp: false position, then bisection to the last float). From rest to rest with `V` reached this gives the
-//! textbook double-S time `T = L/V + V/a + a/j`.
+//! (the left side grows with vp: false position, then bisection to the last float). From
+//! rest to rest with `V` reached this gives the textbook double-S time `T = L/V + V/a + a/j`.
 //!
 //! # Look-ahead
 //!
@@ -1425,9 +1425,7 @@ mod tests {
             let got = largest_feasible(floor, cap, total(cap) - length, |x| total(x) - length);
             proptest::prop_assert_eq!(got.to_bits(), want.to_bits(), "got {} want {}", got, want);
         }
-    }
 
-    proptest::proptest! {
         /// `reach` is the largest speed its bound allows, to 1e-12 of bisection, and
         /// within the bound, from rest and from speed, short blocks and long.
         #[test]

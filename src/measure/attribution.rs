@@ -307,22 +307,24 @@ pub fn attribute_arc(from_deg: f64, span_deg: f64, sites: &[ReversalSite]) -> At
     }
 }
 
-/// The bar's sensitivity along the measured circle: one value per θ bin of
-/// [`super::ballbar::BIN_DEG`], taken at the first sample that falls in the bin.
+/// One axis vector per θ bin of [`super::ballbar::BIN_DEG`] along the measured circle,
+/// taken at the first sample that falls in the bin: the commanded position (where the bar's
+/// sensitivity is evaluated, only at the bins a reversal site asks for) or the commanded
+/// speed.
 #[derive(Clone, Debug)]
-pub struct SensitivityMap {
+pub struct ThetaMap {
     bins: Vec<Option<AxisVec>>,
 }
 
-impl Default for SensitivityMap {
+impl Default for ThetaMap {
     fn default() -> Self {
-        SensitivityMap {
+        ThetaMap {
             bins: vec![None; super::ballbar::N_BINS],
         }
     }
 }
 
-impl SensitivityMap {
+impl ThetaMap {
     /// Whether bin of `theta_deg` still needs a value.
     pub fn wants(&self, theta_deg: f64) -> bool {
         self.bins[bin_of(theta_deg)].is_none()
@@ -348,21 +350,24 @@ fn bin_of(theta_deg: f64) -> usize {
     ((t / super::ballbar::BIN_DEG) as usize).min(super::ballbar::N_BINS - 1)
 }
 
-/// Sites for each axis's reversal angles, with the normalised sensitivity from `map` and,
+/// Sites for each axis's reversal angles, with the normalised sensitivity
+/// `sensitivity_at(q)` at the commanded position `q` of the filled bin of `commanded`
+/// nearest each site (evaluated here, for the sites alone) and,
 /// given the commanded speeds `speed` (mm/s, deg/s per bin) and each axis's Stribeck
 /// velocity `slow(axis)`, the slow zone: the bins about the reversal where the axis moves
 /// slower than that, at most [`MAX_ZONE_DEG`] each way.
 pub fn sites_from_map(
     reversals: &[(Axis, Vec<f64>)],
-    map: &SensitivityMap,
+    commanded: &ThetaMap,
+    sensitivity_at: &dyn Fn(&AxisVec) -> AxisVec,
     length_mm: f64,
-    speed: Option<(&SensitivityMap, &dyn Fn(Axis) -> f64)>,
+    speed: Option<(&ThetaMap, &dyn Fn(Axis) -> f64)>,
 ) -> Vec<ReversalSite> {
     let mut sites = ReversalSite::unweighted(reversals);
     for site in &mut sites {
-        site.sensitivity = map
-            .at(site.theta_deg)
-            .map(|s| normalised_sensitivity(site.axis, s[site.axis], length_mm));
+        site.sensitivity = commanded.at(site.theta_deg).map(|q| {
+            normalised_sensitivity(site.axis, sensitivity_at(&q)[site.axis], length_mm)
+        });
         if let Some((speed, slow)) = speed {
             let limit = slow(site.axis);
             let step = super::ballbar::BIN_DEG;

@@ -14,11 +14,11 @@
 
 use nalgebra::Point3;
 
-use super::attribution::{bar_sensitivity_at, SensitivityMap};
+use super::attribution::{bar_sensitivity_at, ThetaMap};
 use super::ballbar::{deviation_mm, BallbarRun, CircleFrame};
 use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines};
-use crate::kinematics::{Kinematics, RotarySinCos};
+use crate::kinematics::Kinematics;
 use crate::pipeline::{Sample, Sink};
 use crate::{Axis, AxisVec};
 
@@ -49,13 +49,23 @@ pub struct BarReading {
 }
 
 impl BarGeometry {
-    pub fn read(&self, s: &Sample) -> BarReading {
-        self.read_at(s).0
+
+    /// The bar's sensitivity ∂L/∂q to every axis at the commanded position `q`, mm per mm
+    /// or deg ([`bar_sensitivity_at`]).
+    pub fn sensitivity_at(&self, q: &AxisVec) -> AxisVec {
+        let kin = &self.kinematics;
+        bar_sensitivity_at(
+            kin,
+            kin.layout.axes(),
+            q,
+            &kin.rotary_sin_cos(q),
+            &self.pivot_table_mm,
+            self.length_mm,
+        )
     }
 
-    /// [`BarGeometry::read`], with the sines and cosines of the commanded rotary angles
-    /// when it took them (the nominal chain), for the sensitivity map of the same sample.
-    fn read_at(&self, s: &Sample) -> (BarReading, Option<RotarySinCos>) {
+    /// What the bar reads at sample `s`.
+    pub fn read(&self, s: &Sample) -> BarReading {
         let kin = &self.kinematics;
         if !kin.location_errors.is_zero() {
             let dev = |q| deviation_mm(kin, q, &self.pivot_table_mm, self.length_mm) * 1e3;
@@ -68,7 +78,7 @@ impl BarGeometry {
                 nonlinear_um: deviation_um - dev(&s.linear),
                 theta_sin_cos,
             };
-            return (reading, None);
+            return reading;
         }
         // The actual and the twin's poses are within a following error of the commanded one:
         // their rotations from its sines and cosines (one `sin_cos` per angle and sample).
@@ -89,7 +99,7 @@ impl BarGeometry {
             nonlinear_um: deviation_um - dev(&s.linear),
             theta_sin_cos,
         };
-        (reading, Some(at_command))
+        reading
     }
 }
 
@@ -111,10 +121,11 @@ pub struct BallbarSink {
     pub run: BallbarRun,
     /// dL_nl against θ.
     pub signature: BallbarRun,
-    /// The bar's sensitivity ∂L/∂q to every axis against θ, at the commanded positions.
-    pub sensitivity: SensitivityMap,
+    /// Commanded axis positions against θ, mm or deg: where the bar's sensitivity is
+    /// evaluated for a reversal site ([`BarGeometry::sensitivity_at`]).
+    pub commanded: ThetaMap,
     /// Commanded axis speeds against θ, mm/s or deg/s.
-    pub speed: SensitivityMap,
+    pub speed: ThetaMap,
     /// The previous sample's time (s) and commanded positions.
     previous: Option<(f64, crate::AxisVec)>,
 }
@@ -130,8 +141,8 @@ impl BallbarSink {
             measured,
             run: BallbarRun::new(direction),
             signature: BallbarRun::new(direction),
-            sensitivity: SensitivityMap::default(),
-            speed: SensitivityMap::default(),
+            commanded: ThetaMap::default(),
+            speed: ThetaMap::default(),
             previous: None,
         }
     }
@@ -145,7 +156,7 @@ impl BallbarSink {
         if !is_measured(s, self.measured) {
             return None;
         }
-        let (r, at_command) = self.geometry.read_at(s);
+        let r = self.geometry.read(s);
         BallbarRun::push_pair_at(
             &mut self.run,
             &mut self.signature,
@@ -154,20 +165,8 @@ impl BallbarSink {
             r.deviation_um,
             r.nonlinear_um,
         );
-        if self.sensitivity.wants(r.theta_deg) {
-            let g = &self.geometry;
-            let axes = g.kinematics.layout.axes();
-            let kin = &g.kinematics;
-            let base = at_command.unwrap_or_else(|| kin.rotary_sin_cos(&s.commanded));
-            let s_q = bar_sensitivity_at(
-                kin,
-                axes,
-                &s.commanded,
-                &base,
-                &g.pivot_table_mm,
-                g.length_mm,
-            );
-            self.sensitivity.set(r.theta_deg, s_q);
+        if self.commanded.wants(r.theta_deg) {
+            self.commanded.set(r.theta_deg, s.commanded);
         }
         if let Some((t0, q0)) = previous.filter(|(t0, _)| s.time_s > *t0) {
             if self.speed.wants(r.theta_deg) {

@@ -188,7 +188,7 @@ pub fn run_ballbar(
         if let Some(b) = ballbar {
             runs.push(b.run);
             signatures.push(b.signature);
-            maps.push(b.sensitivity);
+            maps.push(b.commanded);
             speeds.push(b.speed);
         }
     }
@@ -217,6 +217,7 @@ pub fn run_ballbar(
         (Some(map), Some(g)) => sites_from_map(
             &reversals,
             map,
+            &|q| g.sensitivity_at(q),
             g.length_mm,
             speeds
                 .first()

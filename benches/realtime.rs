@@ -3,8 +3,9 @@
 //! Prints, in one run, for the bundled `cone-15-10` scenario with every nonlinearity on (dry
 //! friction and backlash on all five axes, the linear twin beside it):
 //! - `simulate` real-time factors (simulated machine seconds per CPU second of the running
-//!   thread, so that other load on the machine does not count) with the full 1 ms trace,
-//!   the trace decimated to one row per second, and the trace off (header only);
+//!   thread, so that other load on the machine does not count) with the full 1 ms trace
+//!   (as `trace.csv` and as `trace.parquet`), the trace decimated to one row per second, and
+//!   the trace off (header only);
 //! - the same cone in 36,000 segments against its 360 segments (fine/coarse ratio), as
 //!   generated moves and as the G-code file the post-processor writes (read by the
 //!   interpreter, as a user's fine-segment program is);
@@ -209,6 +210,10 @@ fn main() {
     };
     let cases = [
         ("full 1 ms trace", variant("full", "", 360)),
+        (
+            "full 1 ms trace as Parquet",
+            variant("parquet", "[simulate]\ntrace_format = \"parquet\"\n", 360),
+        ),
         (
             "trace decimated to 1 s",
             variant("decimated", "[simulate]\ntrace_every = 1000\n", 360),

@@ -180,6 +180,11 @@ pub enum Command {
         /// Also write report.html into the output folder (see `mtsim report`).
         #[arg(long)]
         html: bool,
+        /// The trace's file: trace.csv (text, fixed decimals) or trace.parquet (the same
+        /// columns as f64, for Spark, Dask, pandas and Polars). Overrides the scenario's
+        /// `[simulate] trace_format` (default csv).
+        #[arg(long, value_enum, value_name = "FORMAT")]
+        trace_format: Option<crate::input::scenario::TraceFormat>,
     },
     /// Print a shell completion script: `mtsim completions bash > /etc/bash_completion.d/mtsim`.
     Completions {
@@ -318,7 +323,8 @@ fn run(cli: Cli) -> Result<i32> {
             json,
             no_timing,
             html,
-        } => simulate::run(&scenario, &output, json, !no_timing, html),
+            trace_format,
+        } => simulate::run(&scenario, &output, json, !no_timing, html, trace_format),
         Command::Report { run_dirs, date } => report::run(&run_dirs, date.as_deref()),
         Command::Cone {
             scenario,

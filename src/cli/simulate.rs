@@ -5,11 +5,22 @@ use std::path::Path;
 use super::{print_stdout, spinner};
 use crate::check::{check, CheckOptions};
 use crate::error::{Result, EXIT_VIOLATIONS};
+use crate::input::scenario::TraceFormat;
 use crate::report::html::CHECK_FILE;
 use crate::report::write_atomic;
 
-pub fn run(path: &Path, out_dir: &Path, as_json: bool, timing: bool, html: bool) -> Result<i32> {
-    let scenario = super::load_scenario(path)?;
+pub fn run(
+    path: &Path,
+    out_dir: &Path,
+    as_json: bool,
+    timing: bool,
+    html: bool,
+    trace_format: Option<TraceFormat>,
+) -> Result<i32> {
+    let mut scenario = super::load_scenario(path)?;
+    if let Some(format) = trace_format {
+        scenario.simulate.trace_format = format;
+    }
     let bar = spinner("simulating");
     let summary = crate::study::simulate::simulate(&scenario, out_dir, timing, &|t| {
         bar.set_message(format!("{t:.1} s of machine time"))
@@ -24,7 +35,7 @@ pub fn run(path: &Path, out_dir: &Path, as_json: bool, timing: bool, html: bool)
             "simulated {:.2} s of machine time in {} interpolation periods; wrote {}, {}, {}, {} and {}",
             summary.sim_time_s,
             summary.setpoints,
-            crate::study::simulate::TRACE_FILE,
+            scenario.simulate.trace_format.file_name(),
             crate::study::simulate::SUMMARY_FILE,
             crate::study::simulate::PLOT_FILE,
             crate::report::test_info::TEST_FILE,

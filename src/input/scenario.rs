@@ -110,6 +110,28 @@ impl Default for CheckSection {
     }
 }
 
+/// The file format of `mtsim simulate`'s trace (`[simulate] trace_format`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum TraceFormat {
+    /// `trace.csv`: one text row per sample, fixed decimals per column.
+    #[default]
+    Csv,
+    /// `trace.parquet`: the same columns as f64 (the direction as text, the line as an
+    /// unsigned integer), for Spark, Dask, pandas and Polars; no text formatting.
+    Parquet,
+}
+
+impl TraceFormat {
+    /// The trace's file name in the output folder.
+    pub const fn file_name(self) -> &'static str {
+        match self {
+            TraceFormat::Csv => "trace.csv",
+            TraceFormat::Parquet => "trace.parquet",
+        }
+    }
+}
+
 /// `[simulate]`: options of `mtsim simulate`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -117,8 +139,11 @@ pub struct SimulateSection {
     /// Interpolate with tool-centre-point control (the tip on the straight line in the
     /// table frame, inverse kinematics every period) instead of joint space.
     pub tcp: bool,
-    /// Write every n-th sample to trace.csv (1: every interpolation period).
+    /// Write every n-th sample to the trace (1: every interpolation period).
     pub trace_every: usize,
+    /// The trace's file: `trace.csv` (text, rounded to the printed decimals) or
+    /// `trace.parquet` (the same columns as IEEE f64, as computed).
+    pub trace_format: TraceFormat,
     /// Path before and after the measured revolution, deg, so that the trace leaves out the
     /// start and stop transients.
     pub lead_deg: f64,
@@ -132,6 +157,7 @@ impl Default for SimulateSection {
         SimulateSection {
             tcp: false,
             trace_every: 1,
+            trace_format: TraceFormat::Csv,
             lead_deg: 20.0,
             measure_lines: None,
         }

@@ -1,8 +1,8 @@
 //! `report.html`: one self-contained page per run folder, for people to open.
 //!
-//! Reads what `simulate` wrote into the folder — `summary.json`, `test.json`, `trace.csv`,
-//! `ballbar.svg`, `check.json`, and `placement.svg` / `sweep-*.svg` when present — and
-//! writes one HTML file with inline SVG and CSS: no network, no JavaScript. Sections:
+//! Reads what `simulate` wrote into the folder — `summary.json`, `test.json`, `trace.csv`
+//! (or `trace.parquet`), `ballbar.svg`, `check.json`, and `placement.svg` / `sweep-*.svg`
+//! when present — and writes one HTML file with inline SVG and CSS: no network, no JavaScript. Sections:
 //! test parameters (ISO 230-4, 5.2), the figures (G, F, H per direction and
 //! bi-directional), the polar plot, deviation against θ, each axis's position, velocity and
 //! following error against θ with its reversal angles (the paper's Figs. 5 and 11), the mark
@@ -49,6 +49,87 @@ pub struct TraceRun {
 pub struct Trace {
     pub axes: Vec<Axis>,
     pub runs: Vec<TraceRun>,
+}
+
+/// Reads `trace.parquet` (`[simulate] trace_format = "parquet"`): the columns of
+/// `trace.csv`, as f64; None when the file is missing.
+pub fn read_trace_parquet(path: &Path) -> Result<Option<Trace>> {
+    use arrow::array::{Array, Float64Array, RecordBatchReader, StringArray};
+    use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+
+    let file = match std::fs::File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(source) => {
+            return Err(Error::Read {
+                path: path.to_path_buf(),
+                source,
+            })
+        }
+    };
+    let bad = |what: String| Error::invalid(path, what);
+    let reader = ParquetRecordBatchReaderBuilder::try_new(file)
+        .and_then(|b| b.build())
+        .map_err(|e| bad(format!("not a readable Parquet file: {e}")))?;
+    let schema = reader.schema();
+    let names: Vec<String> = schema.fields().iter().map(|f| f.name().clone()).collect();
+    let mut axes = Vec::new();
+    for axis in Axis::ALL {
+        let unit = if axis.is_rotary() { "deg" } else { "mm" };
+        if names.contains(&format!("{axis}_act_{unit}"))
+            && names.contains(&format!("{axis}_ferr_{unit}"))
+        {
+            axes.push(axis);
+        }
+    }
+    let mut runs: Vec<TraceRun> = Vec::new();
+    for batch in reader {
+        let batch = batch.map_err(|e| bad(format!("cannot read a row group: {e}")))?;
+        let floats = |name: &str| -> Result<&Float64Array> {
+            batch
+                .column_by_name(name)
+                .and_then(|c| c.as_any().downcast_ref::<Float64Array>())
+                .ok_or_else(|| bad(format!("no f64 column `{name}`")))
+        };
+        let direction = batch
+            .column_by_name("direction")
+            .and_then(|c| c.as_any().downcast_ref::<StringArray>())
+            .ok_or_else(|| bad("no text column `direction`".into()))?;
+        let (time, theta, dev) = (
+            floats("time_s")?,
+            floats("theta_deg")?,
+            floats("deviation_centred_um")?,
+        );
+        let mut axis_columns = Vec::new();
+        for axis in &axes {
+            let unit = if axis.is_rotary() { "deg" } else { "mm" };
+            axis_columns.push((
+                floats(&format!("{axis}_act_{unit}"))?,
+                floats(&format!("{axis}_ferr_{unit}"))?,
+            ));
+        }
+        let value = |a: &Float64Array, i: usize| if a.is_null(i) { f64::NAN } else { a.value(i) };
+        for i in 0..batch.num_rows() {
+            let dir = if direction.is_null(i) { "" } else { direction.value(i) };
+            if runs.last().is_none_or(|r| r.direction != dir) {
+                runs.push(TraceRun {
+                    direction: dir.to_string(),
+                    actual: vec![Vec::new(); axes.len()],
+                    following_error: vec![Vec::new(); axes.len()],
+                    ..TraceRun::default()
+                });
+            }
+            let run = runs.last_mut().expect("pushed above");
+            run.time_s.push(value(time, i));
+            run.theta_deg.push(value(theta, i));
+            run.deviation_centred_um.push(value(dev, i));
+            for (k, (a, f)) in axis_columns.iter().enumerate() {
+                run.actual[k].push(value(a, i));
+                run.following_error[k].push(value(f, i));
+            }
+        }
+    }
+    Ok(Some(Trace { axes, runs }))
 }
 
 /// Reads `trace.csv`; None when the file is missing.
@@ -164,7 +245,10 @@ impl RunFolder {
             None => None,
         };
         let check = read_json(&dir.join(CHECK_FILE))?;
-        let trace = read_trace(&dir.join("trace.csv"))?;
+        let trace = match read_trace(&dir.join("trace.csv"))? {
+            Some(trace) => Some(trace),
+            None => read_trace_parquet(&dir.join("trace.parquet"))?,
+        };
         let mut files: Vec<String> = std::fs::read_dir(dir)
             .map_err(|source| Error::Read {
                 path: dir.to_path_buf(),

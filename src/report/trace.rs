@@ -10,7 +10,6 @@
 //! memory and reach the disk only when a longer trace spills over: memory stays bounded,
 //! and a trace of one cone never makes the round trip through the file.
 
-use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
@@ -19,6 +18,7 @@ use super::files::temporary_path;
 use super::fixed::push_fixed_bytes_const;
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
+use crate::input::scenario::TraceFormat;
 use crate::measure::{is_measured, BallbarRun, BarGeometry, BarReading};
 use crate::pipeline::{Sample, Sink};
 use crate::Axis;
@@ -41,6 +41,7 @@ pub struct TraceSink {
     axes: &'static [Axis],
     geometry: Option<BarGeometry>,
     every: u64,
+    format: TraceFormat,
     direction: Direction,
     measured: Option<MeasuredLines>,
     row: Vec<f64>,
@@ -61,6 +62,7 @@ impl TraceSink {
         axes: &'static [Axis],
         geometry: Option<BarGeometry>,
         every: u64,
+        format: TraceFormat,
     ) -> Result<TraceSink> {
         let raw_path = trace_path.with_extension("csv.raw.tmp");
         Ok(TraceSink {
@@ -71,6 +73,7 @@ impl TraceSink {
             axes,
             geometry,
             every: every.max(1),
+            format,
             direction: Direction::Ccw,
             measured: None,
             row: Vec::with_capacity(RAW_FIXED_COLUMNS + 3 * axes.len()),
@@ -93,12 +96,17 @@ impl TraceSink {
                 .map_err(write_error(&self.raw_path))?;
             self.held = Vec::new();
         }
-        let mut header = String::from("direction,time_s,line,theta_deg");
-        for a in self.axes {
-            let u = a.unit();
-            let _ = write!(header, ",{a}_cmd_{u},{a}_act_{u},{a}_ferr_{u}");
+        let names = column_names(self.axes);
+        if self.format == TraceFormat::Parquet {
+            let rows: Box<dyn Read + '_> = if spilled {
+                let file = File::open(&self.raw_path).map_err(write_error(&self.raw_path))?;
+                Box::new(BufReader::new(file))
+            } else {
+                Box::new(&self.held[..])
+            };
+            return complete_parquet(rows, &self.raw_path, &self.trace_path, &names, runs);
         }
-        header.push_str(",nonlinear_um,deviation_um,deviation_centred_um");
+        let header = names.join(",");
         if spilled {
             let file = File::open(&self.raw_path).map_err(write_error(&self.raw_path))?;
             complete(
@@ -188,6 +196,151 @@ impl TraceSink {
         self.held.clear();
         Ok(())
     }
+}
+
+/// The trace's columns: direction, time, line, θ, per axis the commanded and actual
+/// position and the following error, the nonlinear signature, dL and the centred dL.
+fn column_names(axes: &[Axis]) -> Vec<String> {
+    let mut names: Vec<String> = ["direction", "time_s", "line", "theta_deg"]
+        .map(String::from)
+        .to_vec();
+    for a in axes {
+        let u = a.unit();
+        names.extend([format!("{a}_cmd_{u}"), format!("{a}_act_{u}"), format!("{a}_ferr_{u}")]);
+    }
+    names.extend(["nonlinear_um", "deviation_um", "deviation_centred_um"].map(String::from));
+    names
+}
+
+/// Rows per row group of `trace.parquet` (16 s of machine time at 1 ms): what the writer
+/// holds in memory at once, about 3 MB for five axes.
+pub const PARQUET_ROW_GROUP: usize = 16_384;
+
+/// Writes `trace_path` as Parquet from the binary rows read from `reader`, with the columns
+/// of `trace.csv` (`names`): the direction as text, the line as an unsigned integer, every
+/// other column as the f64 the run computed (not rounded). Row groups of
+/// [`PARQUET_ROW_GROUP`] rows, so that memory stays flat; uncompressed, plain-encoded floats
+/// (dictionary encoding for the direction only), column-chunk statistics and a fixed
+/// `created_by`: the same rows give the same bytes. Written to a temporary file, then
+/// renamed.
+fn complete_parquet(
+    mut reader: Box<dyn Read + '_>,
+    raw_path: &Path,
+    trace_path: &Path,
+    names: &[String],
+    runs: &[BallbarRun],
+) -> Result<()> {
+    use std::sync::Arc;
+
+    use arrow::array::{ArrayRef, Float64Array, StringArray, UInt64Array};
+    use arrow::datatypes::{DataType, Field, Schema};
+    use arrow::record_batch::RecordBatch;
+    use parquet::arrow::ArrowWriter;
+    use parquet::basic::Compression;
+    use parquet::file::properties::{EnabledStatistics, WriterProperties};
+
+    let tmp = temporary_path(trace_path);
+    let failed = |what: &dyn std::fmt::Display| {
+        let _ = std::fs::remove_file(&tmp);
+        Error::invalid(&tmp, format!("cannot write Parquet: {what}"))
+    };
+    let fields: Vec<Field> = names
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let ty = match i {
+                0 => DataType::Utf8,
+                2 => DataType::UInt64,
+                _ => DataType::Float64,
+            };
+            Field::new(name, ty, false)
+        })
+        .collect();
+    let schema = Arc::new(Schema::new(fields));
+    let props = WriterProperties::builder()
+        .set_compression(Compression::UNCOMPRESSED)
+        .set_dictionary_enabled(false)
+        .set_column_dictionary_enabled("direction".into(), true)
+        .set_statistics_enabled(EnabledStatistics::Chunk)
+        .set_created_by(format!("mtsim {}", env!("CARGO_PKG_VERSION")))
+        .set_max_row_group_size(PARQUET_ROW_GROUP)
+        .build();
+    let file = File::create(&tmp).map_err(write_error(&tmp))?;
+    // Buffered: besides whole pages the writer makes many small writes (page headers).
+    let sink = BufWriter::with_capacity(1 << 20, file);
+    let mut writer =
+        ArrowWriter::try_new(sink, schema.clone(), Some(props)).map_err(|e| failed(&e))?;
+    let centring = |d: Direction| {
+        runs.iter()
+            .find(|r| r.direction() == d)
+            .map(|r| r.centring())
+    };
+    let (ccw, cw) = (centring(Direction::Ccw), centring(Direction::Cw));
+    // Raw rows: direction, time, line, θ, sin θ, cos θ, 3 per axis, nonlinear, dL; the
+    // names have 7 columns besides the axes' 3 each.
+    let width = RAW_FIXED_COLUMNS + (names.len() - 7);
+    let n_floats = names.len() - 2;
+    let mut bytes = vec![0u8; 8 * width];
+    let mut v = vec![0.0; width];
+    let mut direction: Vec<&'static str> = Vec::with_capacity(PARQUET_ROW_GROUP);
+    let mut line: Vec<u64> = Vec::with_capacity(PARQUET_ROW_GROUP);
+    let mut floats: Vec<Vec<f64>> = vec![Vec::with_capacity(PARQUET_ROW_GROUP); n_floats];
+    let write_group = |direction: &mut Vec<&'static str>,
+                           line: &mut Vec<u64>,
+                           floats: &mut Vec<Vec<f64>>,
+                           writer: &mut ArrowWriter<BufWriter<File>>|
+     -> Result<()> {
+        if direction.is_empty() {
+            return Ok(());
+        }
+        let mut arrays: Vec<ArrayRef> = Vec::with_capacity(names.len());
+        arrays.push(Arc::new(StringArray::from(std::mem::take(direction))));
+        let mut floats = floats.iter_mut().map(std::mem::take);
+        // The columns' vectors become the arrays' buffers (no copy).
+        let f64_array = |c: Vec<f64>| Arc::new(Float64Array::new(c.into(), None)) as ArrayRef;
+        arrays.push(f64_array(floats.next().expect("time")));
+        arrays.push(Arc::new(UInt64Array::new(std::mem::take(line).into(), None)));
+        arrays.extend(floats.map(f64_array));
+        let batch = RecordBatch::try_new(schema.clone(), arrays).map_err(|e| failed(&e))?;
+        writer.write(&batch).map_err(|e| failed(&e))
+    };
+    loop {
+        match reader.read_exact(&mut bytes) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => break,
+            Err(e) => {
+                let _ = std::fs::remove_file(&tmp);
+                return Err(write_error(raw_path)(e));
+            }
+        }
+        for (x, c) in v.iter_mut().zip(bytes.chunks_exact(8)) {
+            *x = f64::from_le_bytes(c.try_into().expect("8 bytes"));
+        }
+        let cw_row = v[0] == 1.0;
+        let dev = v[width - 1];
+        let c = if cw_row { cw } else { ccw };
+        // `offset_um(θ)` from the sine and cosine the ball bar took (as in trace.csv).
+        let centred = c.map_or(dev, |c| dev - c.offset_um_at((v[4], v[5])));
+        direction.push(if cw_row { "cw" } else { "ccw" });
+        line.push(v[2] as u64);
+        // time, θ, the axes' columns, nonlinear, dL, centred dL.
+        let values = [v[1], v[3]]
+            .into_iter()
+            .chain(v[6..].iter().copied())
+            .chain([centred]);
+        for (column, x) in floats.iter_mut().zip(values) {
+            column.push(x);
+        }
+        if direction.len() == PARQUET_ROW_GROUP {
+            write_group(&mut direction, &mut line, &mut floats, &mut writer)?;
+            floats.iter_mut().for_each(|c| c.reserve(PARQUET_ROW_GROUP));
+        }
+    }
+    write_group(&mut direction, &mut line, &mut floats, &mut writer)?;
+    let mut out = writer.into_inner().map_err(|e| failed(&e))?;
+    out.flush().map_err(write_error(&tmp))?;
+    drop(out);
+    std::fs::rename(&tmp, trace_path).map_err(write_error(trace_path))
 }
 
 /// Writes `trace_path` from the binary rows read from `reader` (held rows, or the file at

@@ -17,7 +17,7 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::input::program::Direction;
-use crate::input::scenario::{Program, Scenario};
+use crate::input::scenario::{Program, Scenario, TraceFormat};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
 use crate::measure::ballbar::{analyse_events_at, BallbarResult};
 use crate::measure::settle::SettleGate;
@@ -60,7 +60,9 @@ pub struct SimulationSummary {
 }
 
 /// Files a simulation writes into its output folder.
-pub const TRACE_FILE: &str = "trace.csv";
+pub const TRACE_FILE: &str = TraceFormat::Csv.file_name();
+/// The trace with `[simulate] trace_format = "parquet"` (one of the two is written).
+pub const TRACE_PARQUET_FILE: &str = TraceFormat::Parquet.file_name();
 pub const SUMMARY_FILE: &str = "summary.json";
 pub const PLOT_FILE: &str = "ballbar.svg";
 
@@ -251,6 +253,7 @@ pub fn simulate(
         out_dir,
         &[
             TRACE_FILE,
+            TRACE_PARQUET_FILE,
             SUMMARY_FILE,
             PLOT_FILE,
             crate::report::test_info::TEST_FILE,
@@ -258,11 +261,13 @@ pub fn simulate(
             crate::report::html::REPORT_FILE,
         ],
     )?;
+    let format = scenario.simulate.trace_format;
     let mut trace = TraceSink::create(
-        &out_dir.join(TRACE_FILE),
+        &out_dir.join(format.file_name()),
         scenario.machine.axes(),
         bar_geometry(scenario),
         scenario.simulate.trace_every as u64,
+        format,
     )?;
     let started = Instant::now();
     let study = run_ballbar(scenario, Some(&mut trace), progress)?;
@@ -278,6 +283,20 @@ pub fn simulate(
         .map(|b| crate::study::diagnose::diagnose(b, runs, circle))
         .transpose()?;
     trace.finish(runs)?;
+    // The other format's trace of an earlier run would be read for this one's.
+    let other = match format {
+        TraceFormat::Csv => TRACE_PARQUET_FILE,
+        TraceFormat::Parquet => TRACE_FILE,
+    };
+    match std::fs::remove_file(out_dir.join(other)) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(crate::error::Error::Write {
+                path: out_dir.join(other),
+                source: e,
+            })
+        }
+        _ => {}
+    }
     if let Some(result) = &ballbar {
         let title = plot_title(scenario);
         crate::report::polar::write_polar_svg(

@@ -51,21 +51,40 @@ pub struct Trace {
     pub runs: Vec<TraceRun>,
 }
 
+/// The file at `path`, or None when there is none.
+fn open_if_present(path: &Path) -> Result<Option<std::fs::File>> {
+    match std::fs::File::open(path) {
+        Ok(f) => Ok(Some(f)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(source) => Err(Error::Read {
+            path: path.to_path_buf(),
+            source,
+        }),
+    }
+}
+
+/// The run a trace row of `direction` belongs to: the last one, or a new one where the
+/// direction changes (the rows of one direction come together).
+fn run_of<'r>(runs: &'r mut Vec<TraceRun>, direction: &str, n_axes: usize) -> &'r mut TraceRun {
+    if runs.last().is_none_or(|r| r.direction != direction) {
+        runs.push(TraceRun {
+            direction: direction.to_string(),
+            actual: vec![Vec::new(); n_axes],
+            following_error: vec![Vec::new(); n_axes],
+            ..TraceRun::default()
+        });
+    }
+    runs.last_mut().expect("pushed above")
+}
+
 /// Reads `trace.parquet` (`[simulate] trace_format = "parquet"`): the columns of
 /// `trace.csv`, as f64; None when the file is missing.
 pub fn read_trace_parquet(path: &Path) -> Result<Option<Trace>> {
     use arrow::array::{Array, Float64Array, RecordBatchReader, StringArray};
     use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 
-    let file = match std::fs::File::open(path) {
-        Ok(f) => f,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(source) => {
-            return Err(Error::Read {
-                path: path.to_path_buf(),
-                source,
-            })
-        }
+    let Some(file) = open_if_present(path)? else {
+        return Ok(None);
     };
     let bad = |what: String| Error::invalid(path, what);
     let reader = ParquetRecordBatchReaderBuilder::try_new(file)
@@ -111,15 +130,7 @@ pub fn read_trace_parquet(path: &Path) -> Result<Option<Trace>> {
         let value = |a: &Float64Array, i: usize| if a.is_null(i) { f64::NAN } else { a.value(i) };
         for i in 0..batch.num_rows() {
             let dir = if direction.is_null(i) { "" } else { direction.value(i) };
-            if runs.last().is_none_or(|r| r.direction != dir) {
-                runs.push(TraceRun {
-                    direction: dir.to_string(),
-                    actual: vec![Vec::new(); axes.len()],
-                    following_error: vec![Vec::new(); axes.len()],
-                    ..TraceRun::default()
-                });
-            }
-            let run = runs.last_mut().expect("pushed above");
+            let run = run_of(&mut runs, dir, axes.len());
             run.time_s.push(value(time, i));
             run.theta_deg.push(value(theta, i));
             run.deviation_centred_um.push(value(dev, i));
@@ -134,15 +145,8 @@ pub fn read_trace_parquet(path: &Path) -> Result<Option<Trace>> {
 
 /// Reads `trace.csv`; None when the file is missing.
 pub fn read_trace(path: &Path) -> Result<Option<Trace>> {
-    let file = match std::fs::File::open(path) {
-        Ok(f) => f,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(source) => {
-            return Err(Error::Read {
-                path: path.to_path_buf(),
-                source,
-            })
-        }
+    let Some(file) = open_if_present(path)? else {
+        return Ok(None);
     };
     let bad = |what: String| Error::invalid(path, what);
     let mut reader = csv::Reader::from_reader(std::io::BufReader::new(file));
@@ -179,16 +183,7 @@ pub fn read_trace(path: &Path) -> Result<Option<Trace>> {
                 .and_then(|s| s.trim().parse().ok())
                 .unwrap_or(f64::NAN)
         };
-        let dir = record.get(c_dir).unwrap_or("").to_string();
-        if runs.last().is_none_or(|r| r.direction != dir) {
-            runs.push(TraceRun {
-                direction: dir,
-                actual: vec![Vec::new(); axes.len()],
-                following_error: vec![Vec::new(); axes.len()],
-                ..TraceRun::default()
-            });
-        }
-        let run = runs.last_mut().expect("pushed above");
+        let run = run_of(&mut runs, record.get(c_dir).unwrap_or(""), axes.len());
         run.time_s.push(num(c_time));
         run.theta_deg.push(num(c_theta));
         run.deviation_centred_um.push(num(c_dev));

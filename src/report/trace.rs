@@ -19,6 +19,7 @@ use super::fixed::push_fixed_bytes_const;
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::TraceFormat;
+use crate::measure::ballbar::Centring;
 use crate::measure::{is_measured, BallbarRun, BarGeometry, BarReading};
 use crate::pipeline::{Sample, Sink};
 use crate::Axis;
@@ -198,6 +199,68 @@ impl TraceSink {
     }
 }
 
+/// The raw rows of a trace read back one at a time, each with the centred deviation
+/// `dL - (a cos θ + b sin θ)` of its direction's run: what both trace files are made of.
+struct RawRows<'p, R> {
+    reader: R,
+    /// The raw rows' file (for messages) and the output's temporary file, removed when a
+    /// read fails.
+    raw_path: &'p Path,
+    tmp: &'p Path,
+    bytes: Vec<u8>,
+    values: Vec<f64>,
+    ccw: Option<Centring>,
+    cw: Option<Centring>,
+}
+
+impl<'p, R: Read> RawRows<'p, R> {
+    fn new(
+        reader: R,
+        width: usize,
+        runs: &[BallbarRun],
+        raw_path: &'p Path,
+        tmp: &'p Path,
+    ) -> RawRows<'p, R> {
+        let centring = |d: Direction| {
+            runs.iter()
+                .find(|r| r.direction() == d)
+                .map(|r| r.centring())
+        };
+        RawRows {
+            reader,
+            raw_path,
+            tmp,
+            bytes: vec![0u8; 8 * width],
+            values: vec![0.0; width],
+            ccw: centring(Direction::Ccw),
+            cw: centring(Direction::Cw),
+        }
+    }
+
+    /// The next row's values, whether it is of the cw run, and its centred dL; None at the
+    /// end of the rows. A failed read removes the output's temporary file.
+    fn next_row(&mut self) -> Result<Option<(&[f64], bool, f64)>> {
+        match self.reader.read_exact(&mut self.bytes) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Ok(None),
+            Err(e) => {
+                let _ = std::fs::remove_file(self.tmp);
+                return Err(write_error(self.raw_path)(e));
+            }
+        }
+        let v = &mut self.values;
+        for (x, c) in v.iter_mut().zip(self.bytes.chunks_exact(8)) {
+            *x = f64::from_le_bytes(c.try_into().expect("8 bytes"));
+        }
+        let cw_row = v[0] == 1.0;
+        let dev = v[v.len() - 1];
+        let c = if cw_row { self.cw } else { self.ccw };
+        // `offset_um(θ)` from the sine and cosine the ball bar took (the same bits).
+        let centred = c.map_or(dev, |c| dev - c.offset_um_at((v[4], v[5])));
+        Ok(Some((&self.values, cw_row, centred)))
+    }
+}
+
 /// The trace's columns: direction, time, line, θ, per axis the commanded and actual
 /// position and the following error, the nonlinear signature, dL and the centred dL.
 fn column_names(axes: &[Axis]) -> Vec<String> {
@@ -224,7 +287,7 @@ pub const PARQUET_ROW_GROUP: usize = 16_384;
 /// `created_by`: the same rows give the same bytes. Written to a temporary file, then
 /// renamed.
 fn complete_parquet(
-    mut reader: Box<dyn Read + '_>,
+    reader: Box<dyn Read + '_>,
     raw_path: &Path,
     trace_path: &Path,
     names: &[String],
@@ -270,18 +333,11 @@ fn complete_parquet(
     let sink = BufWriter::with_capacity(1 << 20, file);
     let mut writer =
         ArrowWriter::try_new(sink, schema.clone(), Some(props)).map_err(|e| failed(&e))?;
-    let centring = |d: Direction| {
-        runs.iter()
-            .find(|r| r.direction() == d)
-            .map(|r| r.centring())
-    };
-    let (ccw, cw) = (centring(Direction::Ccw), centring(Direction::Cw));
     // Raw rows: direction, time, line, θ, sin θ, cos θ, 3 per axis, nonlinear, dL; the
     // names have 7 columns besides the axes' 3 each.
     let width = RAW_FIXED_COLUMNS + (names.len() - 7);
+    let mut rows = RawRows::new(reader, width, runs, raw_path, &tmp);
     let n_floats = names.len() - 2;
-    let mut bytes = vec![0u8; 8 * width];
-    let mut v = vec![0.0; width];
     let mut direction: Vec<&'static str> = Vec::with_capacity(PARQUET_ROW_GROUP);
     let mut line: Vec<u64> = Vec::with_capacity(PARQUET_ROW_GROUP);
     let mut floats: Vec<Vec<f64>> = vec![Vec::with_capacity(PARQUET_ROW_GROUP); n_floats];
@@ -304,23 +360,7 @@ fn complete_parquet(
         let batch = RecordBatch::try_new(schema.clone(), arrays).map_err(|e| failed(&e))?;
         writer.write(&batch).map_err(|e| failed(&e))
     };
-    loop {
-        match reader.read_exact(&mut bytes) {
-            Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => break,
-            Err(e) => {
-                let _ = std::fs::remove_file(&tmp);
-                return Err(write_error(raw_path)(e));
-            }
-        }
-        for (x, c) in v.iter_mut().zip(bytes.chunks_exact(8)) {
-            *x = f64::from_le_bytes(c.try_into().expect("8 bytes"));
-        }
-        let cw_row = v[0] == 1.0;
-        let dev = v[width - 1];
-        let c = if cw_row { cw } else { ccw };
-        // `offset_um(θ)` from the sine and cosine the ball bar took (as in trace.csv).
-        let centred = c.map_or(dev, |c| dev - c.offset_um_at((v[4], v[5])));
+    while let Some((v, cw_row, centred)) = rows.next_row()? {
         direction.push(if cw_row { "cw" } else { "ccw" });
         line.push(v[2] as u64);
         // time, θ, the axes' columns, nonlinear, dL, centred dL.
@@ -354,38 +394,15 @@ fn complete<R: Read>(
     runs: &[BallbarRun],
 ) -> Result<()> {
     let tmp = temporary_path(trace_path);
-    let read_err = write_error(raw_path);
     let write_err = write_error(&tmp);
     // Large writes: a 7 MB trace in a few system calls instead of one per 8 kB.
     let mut out = BufWriter::with_capacity(1 << 20, File::create(&tmp).map_err(&write_err)?);
     writeln!(out, "{header}").map_err(&write_err)?;
-    let centring = |d: Direction| {
-        runs.iter()
-            .find(|r| r.direction() == d)
-            .map(|r| r.centring())
-    };
-    let (ccw, cw) = (centring(Direction::Ccw), centring(Direction::Cw));
     let width = RAW_FIXED_COLUMNS + 3 * n_axes;
-    let mut bytes = vec![0u8; 8 * width];
-    let mut v = vec![0.0; width];
+    let mut rows = RawRows::new(reader, width, runs, raw_path, &tmp);
     let mut line: Vec<u8> = Vec::with_capacity(32 * width);
-    loop {
-        match reader.read_exact(&mut bytes) {
-            Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => break,
-            Err(e) => {
-                let _ = std::fs::remove_file(&tmp);
-                return Err(read_err(e));
-            }
-        }
-        for (x, c) in v.iter_mut().zip(bytes.chunks_exact(8)) {
-            *x = f64::from_le_bytes(c.try_into().expect("8 bytes"));
-        }
-        let cw_row = v[0] == 1.0;
+    while let Some((v, cw_row, centred)) = rows.next_row()? {
         let (theta, dev) = (v[3], v[width - 1]);
-        let c = if cw_row { cw } else { ccw };
-        // `offset_um(θ)` from the sine and cosine the ball bar took (the same bits).
-        let centred = c.map_or(dev, |c| dev - c.offset_um_at((v[4], v[5])));
         // The row is formatted once into one reused buffer: no allocation per value.
         line.clear();
         line.extend_from_slice(if cw_row { b"cw" } else { b"ccw" });

@@ -109,7 +109,10 @@ fn the_parquet_trace_holds_the_csv_trace_s_values_unrounded() {
         }
     }
     // Unrounded: the values do not all sit on the CSV's decimals.
-    assert!(worst > 0.5, "the Parquet values are the unrounded ones (worst {worst})");
+    assert!(
+        worst > 0.5,
+        "the Parquet values are the unrounded ones (worst {worst})"
+    );
 }
 
 #[test]
@@ -119,7 +122,10 @@ fn the_same_run_writes_the_same_parquet_bytes() {
     run(&a, TraceFormat::Parquet);
     run(&b, TraceFormat::Parquet);
     let read = |d: &PathBuf| std::fs::read(d.join("trace.parquet")).unwrap();
-    assert!(read(&a) == read(&b), "trace.parquet differs between two runs");
+    assert!(
+        read(&a) == read(&b),
+        "trace.parquet differs between two runs"
+    );
 }
 
 #[test]
@@ -151,10 +157,16 @@ fn the_report_reads_a_parquet_trace_as_it_reads_the_csv_one() {
         assert_eq!(c.direction, p.direction);
         assert_eq!(c.theta_deg.len(), p.theta_deg.len());
         let close = |a: &[f64], b: &[f64], half_unit: f64| {
-            a.iter().zip(b).all(|(x, y)| (x - y).abs() <= half_unit * (1.0 + 1e-6))
+            a.iter()
+                .zip(b)
+                .all(|(x, y)| (x - y).abs() <= half_unit * (1.0 + 1e-6))
         };
         assert!(close(&c.theta_deg, &p.theta_deg, 0.5e-4));
-        assert!(close(&c.deviation_centred_um, &p.deviation_centred_um, 0.5e-4));
+        assert!(close(
+            &c.deviation_centred_um,
+            &p.deviation_centred_um,
+            0.5e-4
+        ));
         for k in 0..c.actual.len() {
             assert!(close(&c.actual[k], &p.actual[k], 0.5e-6));
             assert!(close(&c.following_error[k], &p.following_error[k], 0.5e-7));
@@ -162,14 +174,21 @@ fn the_report_reads_a_parquet_trace_as_it_reads_the_csv_one() {
     }
     // And `mtsim report` makes the page from the Parquet folder alone.
     let out = mtsim_plain(&pq_dir, &["report", "."]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let page = std::fs::read_to_string(pq_dir.join("report.html")).unwrap();
     let csv_page = {
         let out = mtsim_plain(&csv_dir, &["report", "."]);
         assert!(out.status.success());
         std::fs::read_to_string(csv_dir.join("report.html")).unwrap()
     };
-    assert_eq!(page.matches("<svg").count(), csv_page.matches("<svg").count());
+    assert_eq!(
+        page.matches("<svg").count(),
+        csv_page.matches("<svg").count()
+    );
 }
 
 #[test]
@@ -179,9 +198,16 @@ fn an_unknown_trace_format_names_the_key_and_the_choices() {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/circle-iso230-4.toml"),
     )
     .unwrap()
-    .replace("../machines/", &format!("{}/machines/", env!("CARGO_MANIFEST_DIR")));
+    .replace(
+        "../machines/",
+        &format!("{}/machines/", env!("CARGO_MANIFEST_DIR")),
+    );
     let path = dir.join("bad.toml");
-    std::fs::write(&path, format!("{scenario}\n[simulate]\ntrace_format = \"xml\"\n")).unwrap();
+    std::fs::write(
+        &path,
+        format!("{scenario}\n[simulate]\ntrace_format = \"xml\"\n"),
+    )
+    .unwrap();
     let out = mtsim_plain(&dir, &["simulate", "bad.toml", "-o", "out"]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);

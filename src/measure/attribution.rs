@@ -365,9 +365,9 @@ pub fn sites_from_map(
 ) -> Vec<ReversalSite> {
     let mut sites = ReversalSite::unweighted(reversals);
     for site in &mut sites {
-        site.sensitivity = commanded.at(site.theta_deg).map(|q| {
-            normalised_sensitivity(site.axis, sensitivity_at(&q)[site.axis], length_mm)
-        });
+        site.sensitivity = commanded
+            .at(site.theta_deg)
+            .map(|q| normalised_sensitivity(site.axis, sensitivity_at(&q)[site.axis], length_mm));
         if let Some((speed, slow)) = speed {
             let limit = slow(site.axis);
             let step = super::ballbar::BIN_DEG;

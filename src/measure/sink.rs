@@ -49,7 +49,6 @@ pub struct BarReading {
 }
 
 impl BarGeometry {
-
     /// The bar's sensitivity ∂L/∂q to every axis at the commanded position `q`, mm per mm
     /// or deg ([`bar_sensitivity_at`]).
     pub fn sensitivity_at(&self, q: &AxisVec) -> AxisVec {

@@ -129,7 +129,11 @@ pub fn read_trace_parquet(path: &Path) -> Result<Option<Trace>> {
         }
         let value = |a: &Float64Array, i: usize| if a.is_null(i) { f64::NAN } else { a.value(i) };
         for i in 0..batch.num_rows() {
-            let dir = if direction.is_null(i) { "" } else { direction.value(i) };
+            let dir = if direction.is_null(i) {
+                ""
+            } else {
+                direction.value(i)
+            };
             let run = run_of(&mut runs, dir, axes.len());
             run.time_s.push(value(time, i));
             run.theta_deg.push(value(theta, i));

@@ -269,7 +269,11 @@ fn column_names(axes: &[Axis]) -> Vec<String> {
         .to_vec();
     for a in axes {
         let u = a.unit();
-        names.extend([format!("{a}_cmd_{u}"), format!("{a}_act_{u}"), format!("{a}_ferr_{u}")]);
+        names.extend([
+            format!("{a}_cmd_{u}"),
+            format!("{a}_act_{u}"),
+            format!("{a}_ferr_{u}"),
+        ]);
     }
     names.extend(["nonlinear_um", "deviation_um", "deviation_centred_um"].map(String::from));
     names
@@ -295,17 +299,16 @@ fn complete_parquet(
 ) -> Result<()> {
     use std::sync::Arc;
 
-    use arrow::array::{ArrayRef, Float64Array, StringArray, UInt64Array};
     use arrow::datatypes::{DataType, Field, Schema};
-    use arrow::record_batch::RecordBatch;
     use parquet::arrow::ArrowWriter;
     use parquet::basic::Compression;
     use parquet::file::properties::{EnabledStatistics, WriterProperties};
 
     let tmp = temporary_path(trace_path);
-    let failed = |what: &dyn std::fmt::Display| {
-        let _ = std::fs::remove_file(&tmp);
-        Error::invalid(&tmp, format!("cannot write Parquet: {what}"))
+    // A failure of the Parquet writer is a failed write of the temporary file.
+    let failed = |what: &dyn std::fmt::Display| Error::Write {
+        path: tmp.clone(),
+        source: std::io::Error::other(format!("cannot write Parquet: {what}")),
     };
     let fields: Vec<Field> = names
         .iter()
@@ -329,58 +332,96 @@ fn complete_parquet(
         .set_max_row_group_size(PARQUET_ROW_GROUP)
         .build();
     let file = File::create(&tmp).map_err(write_error(&tmp))?;
-    // Buffered: besides whole pages the writer makes many small writes (page headers).
-    let sink = BufWriter::with_capacity(1 << 20, file);
-    let mut writer =
-        ArrowWriter::try_new(sink, schema.clone(), Some(props)).map_err(|e| failed(&e))?;
-    // Raw rows: direction, time, line, θ, sin θ, cos θ, 3 per axis, nonlinear, dL; the
-    // names have 7 columns besides the axes' 3 each.
-    let width = RAW_FIXED_COLUMNS + (names.len() - 7);
-    let mut rows = RawRows::new(reader, width, runs, raw_path, &tmp);
-    let n_floats = names.len() - 2;
-    let mut direction: Vec<&'static str> = Vec::with_capacity(PARQUET_ROW_GROUP);
-    let mut line: Vec<u64> = Vec::with_capacity(PARQUET_ROW_GROUP);
-    let mut floats: Vec<Vec<f64>> = vec![Vec::with_capacity(PARQUET_ROW_GROUP); n_floats];
-    let write_group = |direction: &mut Vec<&'static str>,
-                           line: &mut Vec<u64>,
-                           floats: &mut Vec<Vec<f64>>,
-                           writer: &mut ArrowWriter<BufWriter<File>>|
-     -> Result<()> {
-        if direction.is_empty() {
-            return Ok(());
+    let written = (|| -> Result<()> {
+        // Buffered: besides whole pages the writer makes many small writes (page headers).
+        let sink = BufWriter::with_capacity(1 << 20, file);
+        let mut writer =
+            ArrowWriter::try_new(sink, schema.clone(), Some(props)).map_err(|e| failed(&e))?;
+        // Raw rows: direction, time, line, θ, sin θ, cos θ, 3 per axis, nonlinear, dL; the
+        // names have 7 columns besides the axes' 3 each.
+        let width = RAW_FIXED_COLUMNS + (names.len() - 7);
+        let mut rows = RawRows::new(reader, width, runs, raw_path, &tmp);
+        let mut group = RowGroup::new(names.len() - 2);
+        while let Some((v, cw_row, centred)) = rows.next_row()? {
+            group.direction.push(if cw_row { "cw" } else { "ccw" });
+            group.line.push(v[2] as u64);
+            // time, θ, the axes' columns, nonlinear, dL, centred dL.
+            let values = [v[1], v[3]]
+                .into_iter()
+                .chain(v[6..].iter().copied())
+                .chain([centred]);
+            for (column, x) in group.floats.iter_mut().zip(values) {
+                column.push(x);
+            }
+            if group.direction.len() == PARQUET_ROW_GROUP {
+                let batch = group.take_batch(&schema).map_err(|e| failed(&e))?;
+                writer.write(&batch).map_err(|e| failed(&e))?;
+                group.reserve();
+            }
         }
-        let mut arrays: Vec<ArrayRef> = Vec::with_capacity(names.len());
-        arrays.push(Arc::new(StringArray::from(std::mem::take(direction))));
-        let mut floats = floats.iter_mut().map(std::mem::take);
-        // The columns' vectors become the arrays' buffers (no copy).
-        let f64_array = |c: Vec<f64>| Arc::new(Float64Array::new(c.into(), None)) as ArrayRef;
-        arrays.push(f64_array(floats.next().expect("time")));
-        arrays.push(Arc::new(UInt64Array::new(std::mem::take(line).into(), None)));
-        arrays.extend(floats.map(f64_array));
-        let batch = RecordBatch::try_new(schema.clone(), arrays).map_err(|e| failed(&e))?;
-        writer.write(&batch).map_err(|e| failed(&e))
-    };
-    while let Some((v, cw_row, centred)) = rows.next_row()? {
-        direction.push(if cw_row { "cw" } else { "ccw" });
-        line.push(v[2] as u64);
-        // time, θ, the axes' columns, nonlinear, dL, centred dL.
-        let values = [v[1], v[3]]
-            .into_iter()
-            .chain(v[6..].iter().copied())
-            .chain([centred]);
-        for (column, x) in floats.iter_mut().zip(values) {
-            column.push(x);
+        if !group.direction.is_empty() {
+            let batch = group.take_batch(&schema).map_err(|e| failed(&e))?;
+            writer.write(&batch).map_err(|e| failed(&e))?;
         }
-        if direction.len() == PARQUET_ROW_GROUP {
-            write_group(&mut direction, &mut line, &mut floats, &mut writer)?;
-            floats.iter_mut().for_each(|c| c.reserve(PARQUET_ROW_GROUP));
-        }
+        let mut out = writer.into_inner().map_err(|e| failed(&e))?;
+        out.flush().map_err(write_error(&tmp))
+    })();
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
     }
-    write_group(&mut direction, &mut line, &mut floats, &mut writer)?;
-    let mut out = writer.into_inner().map_err(|e| failed(&e))?;
-    out.flush().map_err(write_error(&tmp))?;
-    drop(out);
     std::fs::rename(&tmp, trace_path).map_err(write_error(trace_path))
+}
+
+/// The rows of one row group of `trace.parquet`, column by column: the direction, the
+/// line, and the f64 columns in their order (time, θ, the axes', nonlinear, dL, centred dL).
+struct RowGroup {
+    direction: Vec<&'static str>,
+    line: Vec<u64>,
+    floats: Vec<Vec<f64>>,
+}
+
+impl RowGroup {
+    fn new(n_floats: usize) -> RowGroup {
+        let mut group = RowGroup {
+            direction: Vec::new(),
+            line: Vec::new(),
+            floats: vec![Vec::new(); n_floats],
+        };
+        group.reserve();
+        group
+    }
+
+    /// The rows as one record batch of `schema`, leaving the group empty: each column's
+    /// vector becomes its array's buffer (no copy).
+    fn take_batch(
+        &mut self,
+        schema: &std::sync::Arc<arrow::datatypes::Schema>,
+    ) -> std::result::Result<arrow::record_batch::RecordBatch, arrow::error::ArrowError> {
+        use std::sync::Arc;
+
+        use arrow::array::{ArrayRef, Float64Array, StringArray, UInt64Array};
+        let f64_array = |v: &mut Vec<f64>| {
+            Arc::new(Float64Array::new(std::mem::take(v).into(), None)) as ArrayRef
+        };
+        let mut arrays: Vec<ArrayRef> = Vec::with_capacity(self.floats.len() + 2);
+        arrays.push(Arc::new(StringArray::from(std::mem::take(
+            &mut self.direction,
+        ))));
+        let (time, rest) = self.floats.split_first_mut().expect("a time column");
+        arrays.push(f64_array(time));
+        let line = std::mem::take(&mut self.line);
+        arrays.push(Arc::new(UInt64Array::new(line.into(), None)));
+        arrays.extend(rest.iter_mut().map(f64_array));
+        arrow::record_batch::RecordBatch::try_new(schema.clone(), arrays)
+    }
+
+    /// Room for a whole group in every float column again (the others grow as they fill).
+    fn reserve(&mut self) {
+        self.floats
+            .iter_mut()
+            .for_each(|c| c.reserve(PARQUET_ROW_GROUP));
+    }
 }
 
 /// Writes `trace_path` from the binary rows read from `reader` (held rows, or the file at

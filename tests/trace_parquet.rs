@@ -72,12 +72,9 @@ fn decimals(name: &str) -> i32 {
     }
 }
 
-#[test]
-fn the_parquet_trace_holds_the_csv_trace_s_values_unrounded() {
-    let dir = scratch("trace-parquet", "values");
-    let (csv_dir, pq_dir) = (dir.join("csv"), dir.join("parquet"));
-    run(&csv_dir, TraceFormat::Csv);
-    run(&pq_dir, TraceFormat::Parquet);
+/// Asserts that `trace.parquet` in `pq_dir` holds the rows of `trace.csv` in `csv_dir`, each
+/// value within half a unit of the CSV's last decimal, and unrounded; returns the row count.
+fn assert_parquet_matches_csv(csv_dir: &Path, pq_dir: &Path) -> usize {
     assert!(!pq_dir.join("trace.csv").exists());
     let (names, text, floats) = parquet_columns(&pq_dir.join("trace.parquet"));
 
@@ -86,8 +83,6 @@ fn the_parquet_trace_holds_the_csv_trace_s_values_unrounded() {
     assert_eq!(names, header, "the same columns in the same order");
     let rows: Vec<csv::StringRecord> = csv.records().map(|r| r.unwrap()).collect();
     assert_eq!(rows.len(), text[0].len(), "the same rows");
-    assert!(rows.len() > 10_000, "a whole trace: {} rows", rows.len());
-    assert!(text[0].iter().any(|d| d == "cw") && text[0].iter().any(|d| d == "ccw"));
 
     let float_columns: Vec<usize> = (0..names.len()).filter(|&c| c != 0 && c != 2).collect();
     let mut worst = 0.0f64;
@@ -113,6 +108,78 @@ fn the_parquet_trace_holds_the_csv_trace_s_values_unrounded() {
         worst > 0.5,
         "the Parquet values are the unrounded ones (worst {worst})"
     );
+    if rows.len() > 1 {
+        assert!(text[0].iter().all(|d| d == "cw" || d == "ccw"));
+    }
+    rows.len()
+}
+
+#[test]
+fn the_parquet_trace_holds_the_csv_trace_s_values_unrounded() {
+    let dir = scratch("trace-parquet", "values");
+    let (csv_dir, pq_dir) = (dir.join("csv"), dir.join("parquet"));
+    run(&csv_dir, TraceFormat::Csv);
+    run(&pq_dir, TraceFormat::Parquet);
+    let rows = assert_parquet_matches_csv(&csv_dir, &pq_dir);
+    assert!(rows > 10_000, "a whole trace: {rows} rows");
+    let (_, text, _) = parquet_columns(&pq_dir.join("trace.parquet"));
+    assert!(text[0].iter().any(|d| d == "cw") && text[0].iter().any(|d| d == "ccw"));
+}
+
+/// A trace longer than the raw rows held in memory (`RAW_IN_MEMORY`, 8 MiB) spills them to
+/// a temporary file and writes the trace from there: two revolutions of the bundled cone
+/// file (about 72,000 rows of 23 values, 13 MB).
+#[test]
+fn a_trace_that_spills_to_disk_comes_out_the_same_in_both_formats() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = scratch("trace-parquet", "spill");
+    let program =
+        std::fs::read_to_string(root.join("scenarios/programs/cone-15-10-yt25.nc")).unwrap();
+    let mut text = String::new();
+    let moves: Vec<&str> = program.lines().filter(|l| l.starts_with("G01")).collect();
+    for l in program.lines().take_while(|l| !l.starts_with("G01")) {
+        text += &format!("{l}\n");
+    }
+    for revolution in 0..2 {
+        for m in &moves {
+            // C a full turn further each revolution, so that the table keeps turning.
+            let words: Vec<String> = m
+                .split_whitespace()
+                .map(|w| match w.strip_prefix('C') {
+                    Some(v) => format!(
+                        "C{:.4}",
+                        v.parse::<f64>().unwrap() - 360.0 * revolution as f64
+                    ),
+                    None => w.to_string(),
+                })
+                .collect();
+            text += &format!("{}\n", words.join(" "));
+        }
+    }
+    text += "M30\n";
+    std::fs::write(dir.join("long.nc"), text).unwrap();
+    let scenario = format!(
+        "machine = {:?}\n[program]\nfile = \"long.nc\"\n[program.cone]\nhalf_apex_deg = 15.0\n\
+         inclination_deg = 10.0\ncenter_mm = [0.0, -25.0, 200.0]\nballbar_length_mm = 100.0\n",
+        root.join("machines/trt-ac.toml").display().to_string()
+    );
+    std::fs::write(dir.join("long.toml"), scenario).unwrap();
+    let mut scenario = Scenario::load(&dir.join("long.toml")).unwrap();
+    let (csv_dir, pq_dir) = (dir.join("csv"), dir.join("parquet"));
+    simulate(&scenario, &csv_dir, false, &|_| {}).unwrap();
+    scenario.simulate.trace_format = TraceFormat::Parquet;
+    simulate(&scenario, &pq_dir, false, &|_| {}).unwrap();
+    let rows = assert_parquet_matches_csv(&csv_dir, &pq_dir);
+    let raw_bytes = rows * 8 * (8 + 3 * 5);
+    assert!(
+        raw_bytes > mtsim::report::trace::RAW_IN_MEMORY,
+        "{rows} rows ({raw_bytes} bytes) spill over"
+    );
+    assert!(std::fs::read_dir(&pq_dir).unwrap().all(|e| !e
+        .unwrap()
+        .file_name()
+        .to_string_lossy()
+        .ends_with(".tmp")));
 }
 
 #[test]

@@ -97,36 +97,29 @@ impl TraceSink {
                 .map_err(write_error(&self.raw_path))?;
             self.held = Vec::new();
         }
-        let names = column_names(self.axes);
-        if self.format == TraceFormat::Parquet {
-            let rows: Box<dyn Read + '_> = if spilled {
-                let file = File::open(&self.raw_path).map_err(write_error(&self.raw_path))?;
-                Box::new(BufReader::new(file))
-            } else {
-                Box::new(&self.held[..])
-            };
-            return complete_parquet(rows, &self.raw_path, &self.trace_path, &names, runs);
-        }
-        let header = names.join(",");
         if spilled {
             let file = File::open(&self.raw_path).map_err(write_error(&self.raw_path))?;
-            complete(
-                &mut BufReader::new(file),
-                &self.raw_path,
-                &self.trace_path,
-                &header,
-                self.axes.len(),
-                runs,
-            )
+            self.write_trace(BufReader::new(file), runs)
         } else {
-            complete(
-                &mut &self.held[..],
+            self.write_trace(&self.held[..], runs)
+        }
+    }
+
+    /// Writes the trace file in the sink's format from the raw rows read from `rows`.
+    fn write_trace<R: Read>(&self, rows: R, runs: &[BallbarRun]) -> Result<()> {
+        let names = column_names(self.axes);
+        match self.format {
+            TraceFormat::Csv => complete(
+                rows,
                 &self.raw_path,
                 &self.trace_path,
-                &header,
+                &names.join(","),
                 self.axes.len(),
                 runs,
-            )
+            ),
+            TraceFormat::Parquet => {
+                complete_parquet(rows, &self.raw_path, &self.trace_path, &names, runs)
+            }
         }
     }
 }
@@ -290,8 +283,8 @@ pub const PARQUET_ROW_GROUP: usize = 16_384;
 /// (dictionary encoding for the direction only), column-chunk statistics and a fixed
 /// `created_by`: the same rows give the same bytes. Written to a temporary file, then
 /// renamed.
-fn complete_parquet(
-    reader: Box<dyn Read + '_>,
+fn complete_parquet<R: Read>(
+    reader: R,
     raw_path: &Path,
     trace_path: &Path,
     names: &[String],
@@ -427,7 +420,7 @@ impl RowGroup {
 /// Writes `trace_path` from the binary rows read from `reader` (held rows, or the file at
 /// `raw_path`), appending the centred deviation `dL - (a cos θ + b sin θ)` of each row's run.
 fn complete<R: Read>(
-    reader: &mut R,
+    reader: R,
     raw_path: &Path,
     trace_path: &Path,
     header: &str,

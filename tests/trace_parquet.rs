@@ -108,9 +108,7 @@ fn assert_parquet_matches_csv(csv_dir: &Path, pq_dir: &Path) -> usize {
         worst > 0.5,
         "the Parquet values are the unrounded ones (worst {worst})"
     );
-    if rows.len() > 1 {
-        assert!(text[0].iter().all(|d| d == "cw" || d == "ccw"));
-    }
+    assert!(text[0].iter().all(|d| d == "cw" || d == "ccw"));
     rows.len()
 }
 

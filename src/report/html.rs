@@ -2,7 +2,8 @@
 //!
 //! Reads what `simulate` wrote into the folder — `summary.json`, `test.json`, `trace.csv`
 //! (or `trace.parquet`), `ballbar.svg`, `check.json`, and `placement.svg` / `sweep-*.svg`
-//! when present — and writes one HTML file with inline SVG and CSS: no network, no JavaScript. Sections:
+//! when present — and writes one HTML file with inline SVG and CSS: no network, no
+//! JavaScript. Sections:
 //! test parameters (ISO 230-4, 5.2), the figures (G, F, H per direction and
 //! bi-directional), the polar plot, deviation against θ, each axis's position, velocity and
 //! following error against θ with its reversal angles (the paper's Figs. 5 and 11), the mark
@@ -94,7 +95,7 @@ pub fn read_trace_parquet(path: &Path) -> Result<Option<Trace>> {
     let names: Vec<String> = schema.fields().iter().map(|f| f.name().clone()).collect();
     let mut axes = Vec::new();
     for axis in Axis::ALL {
-        let unit = if axis.is_rotary() { "deg" } else { "mm" };
+        let unit = axis.unit();
         if names.contains(&format!("{axis}_act_{unit}"))
             && names.contains(&format!("{axis}_ferr_{unit}"))
         {
@@ -121,7 +122,7 @@ pub fn read_trace_parquet(path: &Path) -> Result<Option<Trace>> {
         );
         let mut axis_columns = Vec::new();
         for axis in &axes {
-            let unit = if axis.is_rotary() { "deg" } else { "mm" };
+            let unit = axis.unit();
             axis_columns.push((
                 floats(&format!("{axis}_act_{unit}"))?,
                 floats(&format!("{axis}_ferr_{unit}"))?,

@@ -308,9 +308,9 @@ impl SceneMonitor {
         }
     }
 
-    /// Whether tool/table pairs use the relative-motion bound as well (off by default: on
-    /// the bundled cones it saves 30-60 % of the queries but costs two `sin_cos` and a
-    /// bound per pair on every sample, which `benches/check.rs` measured as slower overall).
+    /// Whether tool/table pairs use the relative-motion bound as well. Off by default: the
+    /// bound skips queries but needs two `sin_cos` and a bound per pair on every sample
+    /// (docs/performance.md has the figures).
     pub fn with_relative_bounds(mut self, on: bool) -> SceneMonitor {
         self.uses_relative = on && self.states.iter().any(|s| s.relative.is_some());
         self
@@ -420,8 +420,7 @@ impl SceneMonitor {
         let sigma = dot3(&self.w_max, &self.sum);
         let allowance = 1e-12 * (1.0 + sigma);
         let lazy = step.is_some() && !self.exhaustive && !self.uses_relative;
-        // The sample is built where it is kept (a copy built first and moved into `prev`
-        // cost a second 104-byte copy on every sample).
+        // The sample is built in place in `prev`, the slot that keeps it.
         if lazy && sigma < self.next_due && !self.hot_due(allowance) {
             self.prev = Some(Sample {
                 time_s,

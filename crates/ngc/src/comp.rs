@@ -186,7 +186,11 @@ impl Element {
                 let turn = if ccw { 1 } else { -1 };
                 let full = sweep(start, end, center, ccw);
                 let cut = find_turn([start.0, start.1], [center.0, center.1], turn, [x.0, x.1]);
-                let cut = if x.sub(start).norm() < 1e-9 { 0.0 } else { cut.abs() };
+                let cut = if x.sub(start).norm() < 1e-9 {
+                    0.0
+                } else {
+                    cut.abs()
+                };
                 cut <= full + 1e-9
             }
         }
@@ -360,7 +364,19 @@ impl Comp {
             }
             let t = reach.unit();
             let end = p.add(self.offset(t));
-            self.enter(Element::Line { start: c, end, dir: t }, t, p, mv, end, None, out);
+            self.enter(
+                Element::Line {
+                    start: c,
+                    end,
+                    dir: t,
+                },
+                t,
+                p,
+                mv,
+                end,
+                None,
+                out,
+            );
             return Ok(());
         }
         if chord.norm() < PLANE_EPS_MM {
@@ -440,7 +456,8 @@ impl Comp {
 
     /// The tool-centre offset for the unit tangent `t`: r on the tool's side.
     fn offset(&self, t: V2) -> V2 {
-        t.perp().scale(if self.left { self.radius } else { -self.radius })
+        t.perp()
+            .scale(if self.left { self.radius } else { -self.radius })
     }
 
     /// The entry element: from the uncompensated point to `end` (about `center` for an arc).
@@ -711,7 +728,9 @@ mod tests {
             radius: 2.0,
         };
         for p in c.crossings(d) {
-            assert!((p.norm() - 2.0).abs() < 1e-12 && (p.sub(V2(2.0, 0.0)).norm() - 2.0).abs() < 1e-12);
+            assert!(
+                (p.norm() - 2.0).abs() < 1e-12 && (p.sub(V2(2.0, 0.0)).norm() - 2.0).abs() < 1e-12
+            );
         }
         let far = Curve::Circle {
             center: V2(10.0, 0.0),

@@ -20,7 +20,7 @@
 //!   from the tool side (`ψ = −s φ`, and a reversal within [`TOLERANCE_CONCAVE_CORNER`] of
 //!   a half turn counted as `ψ ≈ +π`), decides the join: `ψ > tol` is **convex**, and the
 //!   centre goes round the corner point on an arc of radius `r` to the next element's
-//!   offset start; `ψ < −tol` is **concave**, and the two offset elements are cut where they
+//!   offset start (a G0 goes there straight); `ψ < −tol` is **concave**, and the two offset elements are cut where they
 //!   cross; `|ψ| ≤ tol` is a tangent join, and the next element runs on from where the last
 //!   ended;
 //! - the moves since the last element with motion in the plane wait in a queue, because a
@@ -561,16 +561,23 @@ impl Comp {
         }
     }
 
-    /// The arc of radius r about the corner point `prog` from the tool centre to `to`, at
-    /// the height (and rotary positions) where the tool stands.
+    /// The arc of radius r about the corner point `prog` from the tool centre to `to` (a
+    /// straight traverse for a rapid), at the height and rotary positions where the tool
+    /// stands.
     fn corner_arc(&mut self, mv: &Move, to: V2, out: &mut VecDeque<Move>) {
         let corner = with_ab(self.plane, self.cur, self.prog);
-        let arc = Move {
-            motion: Motion::Arc {
+        // A rapid goes round the corner straight, as rs274 does: the path of a traverse is
+        // not cut.
+        let motion = match mv.motion {
+            Motion::Rapid => Motion::Rapid,
+            _ => Motion::Arc {
                 clockwise: self.left,
                 plane: self.plane,
                 center_mm: [corner[Axis::X], corner[Axis::Y], corner[Axis::Z]],
             },
+        };
+        let arc = Move {
+            motion,
             end: with_ab(self.plane, self.cur, to),
             ..*mv
         };

@@ -11,7 +11,7 @@
 //! | handler | prolog sets | epilog commits | refused when |
 //! |---|---|---|---|
 //! | `setfeed_` | `#<feed>` = F | feed rate `#<feed>` | no value returned |
-//! | `setspeed_` | `#<speed>` = S | spindle speed `#<speed>` | no value returned; value < 0 |
+//! | `setspeed_` | `#<speed>` = S | spindle speed `#<speed>` | no value returned; value < −0.0001 |
 //! | `prepare_` | `#<tool>` = T, `#<pocket>` (−1 for T0) | selects `#<tool>` | tool not in the table; value ≤ 0 |
 //! | `change_` | tool in spindle, selected tool, their pockets | the tool change | no tool selected; compensation on; tool changer fault (#5601 < 0 while #5600 > 0); value ≤ 0 |
 //! | `settool_` | `#<tool>` = int(Q), `#<pocket>` | tool number `#<tool>` | no Q; Q < 0; tool not in the table; value ≤ 0 |
@@ -48,6 +48,10 @@ pub enum Handler {
     CycleProlog,
     CycleEpilog,
 }
+
+/// How far below zero a speed subroutine's return value may round before it counts as an
+/// abort.
+const SPEED_TOLERANCE: f64 = 1e-4;
 
 /// What an epilog commits from the value `v` of the parameter it reads.
 type Commits = fn(f64) -> Commit;
@@ -143,7 +147,7 @@ const RULES: [Rule; 12] = [
     Rule {
         name: "setspeed_epilog",
         handler: Handler::SetspeedEpilog,
-        epilog: epilog_rule(Some("speed"), Commit::Speed, 0.0, true, false),
+        epilog: epilog_rule(Some("speed"), Commit::Speed, -SPEED_TOLERANCE, true, false),
     },
     Rule {
         name: "setfeed_prolog",
@@ -461,10 +465,10 @@ pub(crate) fn epilog(
     })?;
     let commit = (rule.commits)(read);
     Ok(match (h, commit) {
-        // T0 selects no tool: its pocket is -1.
+        // T0 selects no tool: its pocket is negative (-1).
         (Handler::PrepareEpilog, Commit::SelectTool { tool, .. }) => Commit::SelectTool {
             tool,
-            prepared: local("pocket").is_none_or(|p| p != -1.0),
+            prepared: local("pocket").is_none_or(|p| p >= 0.0),
         },
         _ => commit,
     })

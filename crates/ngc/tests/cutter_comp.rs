@@ -545,3 +545,25 @@ fn prev_end(shape: &[([f64; 2], Option<([f64; 2], bool)>)], end: &[f64; 2]) -> [
         shape[k - 1].0
     }
 }
+
+/// A rapid round a convex corner goes straight to the next offset start (no arc), and a
+/// concave corner is cut for rapids as for feeds. Expected: rs274 on the same program
+/// (G41.1 D4: r = 2).
+#[test]
+fn a_rapid_goes_round_a_convex_corner_straight() {
+    let m = moves("G21 G90 G17\nG0 X0 Y0\nG41.1 D4\nG0 X10 Y0\nG0 X10 Y-10\nG1 X20 Y-10 F100\nG0 X20 Y-20\nG40 G0 X0 Y-30\nM2\n");
+    let ends: Vec<(MoveKind, [f64; 3])> = rows(&m).into_iter().map(|(k, e, _)| (k, e)).collect();
+    assert_eq!(
+        ends,
+        [
+            (Rapid, [0.0, 0.0, 0.0]),
+            (Rapid, [10.0, 2.0, 0.0]),
+            (Rapid, [12.0, 0.0, 0.0]),
+            (Rapid, [12.0, -8.0, 0.0]),
+            (Feed, [20.0, -8.0, 0.0]),
+            (Rapid, [22.0, -10.0, 0.0]),
+            (Rapid, [22.0, -20.0, 0.0]),
+            (Rapid, [0.0, -30.0, 0.0]),
+        ]
+    );
+}

@@ -410,19 +410,10 @@ mod tests {
         ]
         .map(|(x, y, w)| ControlPoint { x, y, w })
         .to_vec();
-        let (n, k) = (cps.len() - 1, 4);
-        let t: Vec<f64> = (0..=n + k)
-            .map(|j| {
-                if j < k {
-                    0.0
-                } else if j <= n {
-                    (j - k + 1) as f64
-                } else {
-                    (n - k + 2) as f64
-                }
-            })
-            .collect();
-        let u_max = (n - k + 2) as f64;
+        // The knot vector is the curve's definition; the evaluation below is the test's own.
+        let k = 4;
+        let defined = Curve::new(&cps, k);
+        let (t, u_max) = (defined.knots.clone(), defined.u_max());
         let exact = |s: f64| {
             let u = s * u_max;
             let (mut x, mut y, mut w) = (0.0, 0.0, 0.0);

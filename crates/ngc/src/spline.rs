@@ -130,8 +130,9 @@ impl<'a> Curve<'a> {
                 let i = s + 1 - k + j;
                 let den = t[i + k - r] - t[i];
                 let a = if den == 0.0 { 0.0 } else { (u - t[i]) / den };
-                for c in 0..3 {
-                    d[j][c] = (1.0 - a) * d[j - 1][c] + a * d[j][c];
+                let prev = d[j - 1];
+                for (c, lower) in d[j].iter_mut().zip(prev) {
+                    *c = (1.0 - a) * lower + a * *c;
                 }
             }
         }

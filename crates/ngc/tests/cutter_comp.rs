@@ -411,8 +411,6 @@ fn lathe_tools_compensate_the_nose_centre_and_shift_by_their_orientation() {
 /// sides (G41, G42), tool radius 5 mm.
 #[test]
 fn every_compensated_element_lies_one_tool_radius_off_the_programmed_path() {
-    // (end X, Y, and for an arc: centre X, Y and clockwise), from the start (0, 0).
-    type El = ([f64; 2], Option<([f64; 2], bool)>);
     let shapes: [&[El]; 3] = [
         // A rectangle with a concave notch.
         &[
@@ -532,12 +530,15 @@ fn every_compensated_element_lies_one_tool_radius_off_the_programmed_path() {
     }
 }
 
+/// A programmed element: end X, Y, and for an arc its centre X, Y and clockwise.
+type El = ([f64; 2], Option<([f64; 2], bool)>);
+
 fn dist(p: [f64; 2], q: [f64; 2]) -> f64 {
     (p[0] - q[0]).hypot(p[1] - q[1])
 }
 
 /// The start of the element ending at `end` in `shape` (the origin for the first).
-fn prev_end(shape: &[([f64; 2], Option<([f64; 2], bool)>)], end: &[f64; 2]) -> [f64; 2] {
+fn prev_end(shape: &[El], end: &[f64; 2]) -> [f64; 2] {
     let k = shape.iter().position(|(e, _)| e == end).unwrap();
     if k == 0 {
         [0.0, 0.0]

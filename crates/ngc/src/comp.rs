@@ -1,64 +1,256 @@
-//! Cutter radius compensation (G41/G42, G41.1/G42.1, G40) in the XY plane (G17) and, for
-//! lathes, the ZX plane (G18), ported from LinuxCNC 2.9's interpreter (interp_convert.cc
-//! `convert_straight_comp1/2`, `convert_arc_comp1/2`; interp_queue.cc). The tool centre
-//! runs at distance r from the programmed path, on its left (G41) or right (G42).
+//! Cutter radius compensation: G41 (tool left of the path), G42 (right), G41.1/G42.1 (the
+//! diameter given by D) and G40, in the XY plane (G17) and, for lathes, the ZX plane (G18).
 //!
-//! Everything is computed in plane coordinates (a, b): (X, Y) under G17, (Z, X) under G18,
-//! as LinuxCNC's `comp_get_current` does; the third axis (Z, or Y) rides along. With `c` the
-//! compensated current point, `o` the programmed start, `p` the programmed end:
+//! Behaviour as the LinuxCNC G-code reference describes it ("G40, G41, G42 cutter
+//! compensation", the "Cutter Compensation" chapter) and as the reference interpreter `rs274`
+//! shows it when run on small programs. All geometry is in plane coordinates `(a, b)`:
+//! `(X, Y)` under G17, `(Z, X)` under G18; the axis normal to the plane and the rotary axes
+//! ride along with each move. With `s = +1` for G41 and `-1` for G42 and `t` a unit tangent
+//! of the programmed path, the tool-centre offset is `n(t) = s · r · (−t_b, t_a)`:
 //!
-//! - **entry line** (first move after G41/G42): needs `|p - c| > r`; ends at
-//!   `p + r (cos α, sin α)`, `α = atan2(p - c) ± π/2` (+ for G41);
-//! - **entry arc**: the programmed end moves by r along the radius (toward the centre when
-//!   the tool is inside), and the arc from c to it gets a new centre on the old centre line,
-//!   `b / cos A` from the end (b half the chord, A the angle between chord and centre line);
-//! - **later moves**: θ = direction o → c (the tool side of the last move), β the turn of the
-//!   path measured from θ: β > π + 0.05 or β < -0.05 (`TOLERANCE_CONCAVE_CORNER`) is a
-//!   **concave** corner, β > 0.05 a **convex** one, else a tangent join. A convex corner gets
-//!   an arc of radius r about o (clockwise for G41) from c to `o + r n`; a concave corner
-//!   moves the end of every queued move to where the two offset paths cross: line-line
-//!   `c + r / tan((β + π)/2)` back along the old direction, line-arc, arc-line and arc-arc
-//!   by the triangle of the two centres and radii (r ± tool radius);
-//! - moves wait in a queue until the next move fixes their end (`move_endpoint_and_flush`):
-//!   a moved end that makes a straight move run backwards, or an arc sweep further than
-//!   programmed, is gouging and an error;
-//! - **G40** ends the queued moves at c; the next move (which must be straight) starts there.
+//! - a straight element `o → p` becomes the parallel line `o + n(t) → p + n(t)`; an arc about
+//!   `C` becomes the concentric arc whose end is `p` moved `r` along the radius (towards `C`
+//!   when the tool is inside the arc, which needs `r` smaller than the arc radius);
+//! - the **entry** (the first move with motion in the plane after G41/G42) starts at the
+//!   uncompensated point `c`: a line needs `|p − c| > r` and ends at `p + n(t)` with
+//!   `t ∥ p − c`; an arc ends one radius off `p` as above, about a new centre on the line
+//!   through `p` and `C`, equidistant from `c` and the new end (so it meets the offset
+//!   circle tangentially there);
+//! - at each **corner** the turn `φ ∈ (−π, π]` from the old tangent to the new one, seen
+//!   from the tool side (`ψ = −s φ`, and a reversal within [`TOLERANCE_CONCAVE_CORNER`] of
+//!   a half turn counted as `ψ ≈ +π`), decides the join: `ψ > tol` is **convex**, and the
+//!   centre goes round the corner point on an arc of radius `r` to the next element's
+//!   offset start (a G0 goes there straight); `ψ < −tol` is **concave**, and the two offset elements are cut where they
+//!   cross; `|ψ| ≤ tol` is a tangent join, and the next element runs on from where the last
+//!   ended;
+//! - the moves since the last element with motion in the plane wait in a queue, because a
+//!   concave corner moves their end; a cut that would make a straight move run backwards,
+//!   or an arc turn past its end, gouges the part and is refused;
+//! - **G40** sends the queued moves as they are; the next move (straight) starts there.
 //!
-//! A lathe tool (orientation 1-8, G41.1/G42.1 L) is compensated about the centre of its
-//! nose radius; its control point sits r off that centre in X and Z by the orientation
-//! (`latheorigin_x/z`), applied when a move leaves the queue.
+//! A lathe tool of orientation 1-8 (G41.1/G42.1 with L, or Q in the tool table) is
+//! compensated about the centre of its nose radius; every move sent out is shifted to the
+//! tool's control point, `r` off that centre in X and/or Z (see [`control_point_shift`]).
 
 use std::collections::VecDeque;
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::f64::consts::{PI, TAU};
 
 use crate::canon::{Motion, Move};
 use crate::{Axis, AxisVec, Plane};
 
-/// LinuxCNC's `TOLERANCE_CONCAVE_CORNER`, rad.
+/// Corner angle, rad, within which a turn of the path counts as a tangent join (no corner
+/// arc, no cut), as rs274 decides it.
 pub const TOLERANCE_CONCAVE_CORNER: f64 = 0.05;
-/// LinuxCNC's `TOLERANCE_EQUAL`.
-const TOLERANCE_EQUAL: f64 = 0.0001;
 
-/// A queued move's geometry, in plane coordinates.
-#[derive(Clone, Copy, Debug)]
-enum Kind {
-    /// A straight move; `dir` is the direction the gouge check compares with.
-    Line { dir: [f64; 2] },
-    /// An arc about `center`, turn +1 counter-clockwise, -1 clockwise; `sweep` the
-    /// programmed sweep in rad (0 for a corner arc, whose end never moves).
-    Arc {
-        center: [f64; 2],
-        turn: i32,
-        sweep: f64,
-    },
-    /// A dwell.
-    Other,
+/// Plane length, mm, under which a move has no motion in the plane (a plunge).
+const PLANE_EPS_MM: f64 = 1e-9;
+
+/// A point or vector in plane coordinates `(a, b)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct V2(f64, f64);
+
+impl V2 {
+    fn add(self, o: V2) -> V2 {
+        V2(self.0 + o.0, self.1 + o.1)
+    }
+    fn sub(self, o: V2) -> V2 {
+        V2(self.0 - o.0, self.1 - o.1)
+    }
+    fn scale(self, k: f64) -> V2 {
+        V2(self.0 * k, self.1 * k)
+    }
+    fn dot(self, o: V2) -> f64 {
+        self.0 * o.0 + self.1 * o.1
+    }
+    /// z component of the cross product: > 0 when `o` lies counter-clockwise of `self`.
+    fn cross(self, o: V2) -> f64 {
+        self.0 * o.1 - self.1 * o.0
+    }
+    fn norm(self) -> f64 {
+        self.0.hypot(self.1)
+    }
+    fn unit(self) -> V2 {
+        self.scale(1.0 / self.norm())
+    }
+    /// Turned a quarter turn counter-clockwise.
+    fn perp(self) -> V2 {
+        V2(-self.1, self.0)
+    }
+    fn angle(self) -> f64 {
+        self.1.atan2(self.0)
+    }
 }
 
-#[derive(Clone, Debug)]
-struct Queued {
-    mv: Move,
-    kind: Kind,
+/// An offset element as a curve to cut at a concave corner.
+#[derive(Clone, Copy, Debug)]
+enum Curve {
+    /// The line through `point` along the unit `dir`.
+    Line { point: V2, dir: V2 },
+    /// The circle about `center` of `radius`.
+    Circle { center: V2, radius: f64 },
+}
+
+impl Curve {
+    /// The points where `self` and `other` cross (none, one or two).
+    fn crossings(self, other: Curve) -> Vec<V2> {
+        match (self, other) {
+            (Curve::Line { point: p, dir: d }, Curve::Line { point: q, dir: e }) => {
+                // p + λ d = q + μ e  ⇒  λ = ((q − p) × e) / (d × e).
+                let den = d.cross(e);
+                if den.abs() < 1e-12 {
+                    return Vec::new();
+                }
+                vec![p.add(d.scale(q.sub(p).cross(e) / den))]
+            }
+            (Curve::Line { point, dir }, Curve::Circle { center, radius })
+            | (Curve::Circle { center, radius }, Curve::Line { point, dir }) => {
+                // |point + λ dir − center|² = radius²: λ² + 2 b λ + c = 0.
+                let w = point.sub(center);
+                let b = dir.dot(w);
+                let disc = b * b - (w.dot(w) - radius * radius);
+                if disc < 0.0 {
+                    return Vec::new();
+                }
+                let root = disc.sqrt();
+                vec![
+                    point.add(dir.scale(-b - root)),
+                    point.add(dir.scale(-b + root)),
+                ]
+            }
+            (
+                Curve::Circle {
+                    center: c1,
+                    radius: r1,
+                },
+                Curve::Circle {
+                    center: c2,
+                    radius: r2,
+                },
+            ) => {
+                // Along the centre line at x from c1, and ±h across it.
+                let d = c2.sub(c1);
+                let l = d.norm();
+                if l < 1e-12 {
+                    return Vec::new();
+                }
+                let x = (l * l + r1 * r1 - r2 * r2) / (2.0 * l);
+                let h2 = r1 * r1 - x * x;
+                if h2 < 0.0 {
+                    return Vec::new();
+                }
+                let u = d.scale(1.0 / l);
+                let foot = c1.add(u.scale(x));
+                let h = h2.sqrt();
+                vec![foot.add(u.perp().scale(h)), foot.sub(u.perp().scale(h))]
+            }
+        }
+    }
+}
+
+/// The last offset element with motion in the plane, as a concave corner cuts it.
+#[derive(Clone, Copy, Debug)]
+enum Element {
+    /// A straight move from `start` along `dir`, its end on the line through `end`.
+    Line { start: V2, end: V2, dir: V2 },
+    /// An arc from `start` to `end` about `center`, counter-clockwise when `ccw`.
+    Arc {
+        start: V2,
+        end: V2,
+        center: V2,
+        ccw: bool,
+    },
+}
+
+impl Element {
+    fn curve(self) -> Curve {
+        match self {
+            Element::Line { end, dir, .. } => Curve::Line { point: end, dir },
+            Element::Arc { end, center, .. } => Curve::Circle {
+                center,
+                radius: end.sub(center).norm(),
+            },
+        }
+    }
+
+    /// Whether the element, its end moved to `x`, still runs the way it was programmed: a
+    /// line not backwards, an arc not past its programmed end.
+    fn can_end_at(self, x: V2) -> bool {
+        match self {
+            Element::Line { start, dir, .. } => x.sub(start).dot(dir) >= 0.0,
+            Element::Arc {
+                start,
+                end,
+                center,
+                ccw,
+            } => {
+                let turn = if ccw { 1 } else { -1 };
+                let full = sweep(start, end, center, ccw);
+                let cut = find_turn([start.0, start.1], [center.0, center.1], turn, [x.0, x.1]);
+                let cut = if x.sub(start).norm() < 1e-9 {
+                    0.0
+                } else {
+                    cut.abs()
+                };
+                cut <= full + 1e-9
+            }
+        }
+    }
+}
+
+/// The sweep, rad in (0, 2π], of the arc from `a` to `b` about `c` (a full turn when they
+/// coincide).
+fn sweep(a: V2, b: V2, c: V2, ccw: bool) -> f64 {
+    find_turn([a.0, a.1], [c.0, c.1], if ccw { 1 } else { -1 }, [b.0, b.1]).abs()
+}
+
+/// The signed angle, rad, swept from `p1` to `p2` about `c` turning counter-clockwise
+/// (`turn` > 0) or clockwise (`turn` < 0), with `|turn| − 1` extra full turns; a full turn
+/// when the two directions coincide.
+pub fn find_turn(p1: [f64; 2], c: [f64; 2], turn: i32, p2: [f64; 2]) -> f64 {
+    let from = V2(p1[0] - c[0], p1[1] - c[1]);
+    let to = V2(p2[0] - c[0], p2[1] - c[1]);
+    // Counter-clockwise angle from `from` to `to`, in (0, 2π].
+    let mut ccw = to.angle() - from.angle();
+    while ccw <= 0.0 {
+        ccw += TAU;
+    }
+    while ccw > TAU {
+        ccw -= TAU;
+    }
+    let extra = (turn.unsigned_abs().max(1) - 1) as f64 * TAU;
+    if turn > 0 {
+        ccw + extra
+    } else {
+        let cw = TAU - ccw;
+        -(if cw == 0.0 { TAU } else { cw } + extra)
+    }
+}
+
+/// How the path joins at a corner, seen from the tool.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Corner {
+    /// The path turns away from the tool: the centre goes round the corner on an arc.
+    Convex,
+    /// The path turns towards the tool: the offset elements are cut where they cross.
+    Concave,
+    /// A turn within the tolerance: the next element runs on from the last one's end.
+    Tangent,
+}
+
+/// The shift, in tool radii along (X, Z), from a lathe tool's nose centre to its control
+/// point for orientations 1-8 (the LinuxCNC lathe tool-orientation diagram); none for 0 and 9.
+pub fn control_point_shift(orientation: u32) -> (f64, f64) {
+    match orientation {
+        1 => (-1.0, 1.0),
+        2 => (-1.0, -1.0),
+        3 => (1.0, -1.0),
+        4 => (1.0, 1.0),
+        5 => (0.0, 1.0),
+        6 => (-1.0, 0.0),
+        7 => (0.0, -1.0),
+        8 => (1.0, 0.0),
+        _ => (0.0, 0.0),
+    }
 }
 
 /// Compensation state from G41/G42 to G40.
@@ -72,65 +264,29 @@ pub struct Comp {
     pub orientation: u32,
     /// G17 or G18.
     pub plane: Plane,
-    first: bool,
-    /// Compensated current position (machine mm, deg).
+    /// The entry move has been made.
+    entered: bool,
+    /// Tool-centre point at the end of the queued path (machine coordinates, mm, deg).
     cur: AxisVec,
-    /// Programmed current point (a, b).
-    prog: [f64; 2],
-    queue: Vec<Queued>,
-    /// Start (a, b) of the first queued move, when known (LinuxCNC's `endpoint`).
-    endpoint: Option<[f64; 2]>,
-    /// End of the last move that left the queue.
+    /// Programmed point `(a, b)` at the end of the last element.
+    prog: V2,
+    /// Unit tangent of the programmed path at `prog`.
+    tangent: V2,
+    /// The last element with motion in the plane, while its end may still be cut.
+    last: Option<Element>,
+    /// That element and the moves after it (plunges, dwells), waiting for the next corner.
+    queue: Vec<Move>,
+    /// End of the last move sent out (control point).
     last_out: AxisVec,
-    /// Program length unit, mm (1 or 25.4), for LinuxCNC's radius check of 0.01 units.
-    unit_mm: f64,
-}
-
-fn ab(plane: Plane, p: &AxisVec) -> [f64; 2] {
-    let (a, b, _) = plane.axes();
-    [p[a], p[b]]
-}
-
-fn with_ab(plane: Plane, mut p: AxisVec, v: [f64; 2]) -> AxisVec {
-    let (a, b, _) = plane.axes();
-    p[a] = v[0];
-    p[b] = v[1];
-    p
-}
-
-fn dist(p: [f64; 2], q: [f64; 2]) -> f64 {
-    (p[0] - q[0]).hypot(p[1] - q[1])
-}
-
-fn dir(from: [f64; 2], to: [f64; 2]) -> f64 {
-    (to[1] - from[1]).atan2(to[0] - from[0])
-}
-
-fn polar(p: [f64; 2], r: f64, angle: f64) -> [f64; 2] {
-    [p[0] + r * angle.cos(), p[1] + r * angle.sin()]
-}
-
-/// LinuxCNC's `find_turn`: the signed sweep, rad, from `p1` to `p2` about `c` in the
-/// direction of `turn` (a full turn when they coincide).
-pub fn find_turn(p1: [f64; 2], c: [f64; 2], turn: i32, p2: [f64; 2]) -> f64 {
-    let mut alpha = dir(c, p1);
-    let mut beta = dir(c, p2);
-    if turn > 0 {
-        if beta <= alpha {
-            beta += TAU;
-        }
-        beta - alpha + (turn - 1) as f64 * TAU
-    } else {
-        if alpha <= beta {
-            alpha += TAU;
-        }
-        beta - alpha + (turn + 1) as f64 * TAU
-    }
+    /// The tool-centre point was moved from outside ([`Comp::set_current`]): the next
+    /// element starts from it without a corner.
+    moved: bool,
 }
 
 impl Comp {
-    /// Compensation switched on at `pos` (programmed and actual position alike, LinuxCNC's
-    /// current point), the last move having ended at `last_out`.
+    /// Compensation switched on at `pos` (programmed and tool-centre point alike), the last
+    /// move sent out having ended at `last_out`. `_unit_mm` (the program's length unit) is
+    /// not needed: every rule here is in mm or rad.
     pub fn new(
         left: bool,
         radius: f64,
@@ -138,550 +294,416 @@ impl Comp {
         plane: Plane,
         pos: AxisVec,
         last_out: AxisVec,
-        unit_mm: f64,
+        _unit_mm: f64,
     ) -> Comp {
+        let prog = ab(plane, &pos);
         Comp {
             left,
             radius,
             orientation,
             plane,
-            first: true,
+            entered: false,
             cur: pos,
-            prog: ab(plane, &pos),
+            prog,
+            tangent: V2(1.0, 0.0),
+            last: None,
             queue: Vec::new(),
-            endpoint: None,
             last_out,
-            unit_mm,
+            moved: false,
         }
     }
 
-    /// The tool is inside an arc of this turn.
-    fn inside(&self, turn: i32) -> bool {
-        (self.left && turn > 0) || (!self.left && turn < 0)
-    }
-
-    /// `target` with (a, b) = `v` and the third axis at the current point's (a corner).
-    fn corner_end(&self, target: &AxisVec, v: [f64; 2]) -> AxisVec {
-        let (_, _, n) = self.plane.axes();
-        let mut p = with_ab(self.plane, *target, v);
-        p[n] = self.cur[n];
-        p
-    }
-
-    fn push(&mut self, mv: Move, kind: Kind) {
-        self.queue.push(Queued { mv, kind });
-    }
-
-    /// Sets the compensated current point's (a, b) to `p`'s, the third axis kept, as
-    /// rs274 does when a G70 profile read moves its current point (`settings->current_x/z`).
+    /// Sets the tool-centre point's `(a, b)` to `p`'s, the other axes kept (a move made
+    /// outside compensation, such as a lathe cycle's, has moved the current point).
     pub fn set_current(&mut self, p: AxisVec) {
-        self.cur = with_ab(self.plane, self.cur, ab(self.plane, &p));
+        let v = ab(self.plane, &p);
+        self.cur = with_ab(self.plane, self.cur, v);
+        self.moved = true;
     }
 
     /// The entry move has been made.
     pub fn started(&self) -> bool {
-        !self.first
+        self.entered
     }
 
-    /// A move left as programmed (a tool of radius zero): goes out behind the queue.
+    /// A move made as programmed (a tool of radius zero, or a move outside the compensated
+    /// path): sent out behind the queued moves.
     pub fn pass(&mut self, mv: Move, out: &mut VecDeque<Move>) {
-        self.dequeue(out);
-        let mut mv = mv;
-        mv.start = self.last_out;
-        self.last_out = mv.end;
+        self.flush(out);
         self.cur = mv.end;
-        out.push_back(mv);
+        self.send_as_is(mv, out);
     }
 
-    /// A dwell: waits in the queue behind the queued moves, or goes out at once.
-    pub fn dwell(&mut self, mut mv: Move, out: &mut VecDeque<Move>) {
+    /// A dwell: waits behind the queued moves (it happens where they end), or goes out now.
+    pub fn dwell(&mut self, mv: Move, out: &mut VecDeque<Move>) {
         if self.queue.is_empty() {
-            mv.start = self.last_out;
-            mv.end = self.last_out;
-            out.push_back(mv);
+            self.send(mv, out);
         } else {
-            self.push(mv, Kind::Other);
+            self.queue.push(mv);
         }
     }
 
-    /// The lathe control point of a nose-centre point (a, b) = (Z, X) under G18.
-    fn lathe_origin(&self, p: [f64; 2]) -> [f64; 2] {
-        if self.plane != Plane::ZX {
-            return p;
-        }
-        let (o, r) = (self.orientation, self.radius);
-        let [mut z, mut x] = p;
-        if matches!(o, 2 | 6 | 1) {
-            x -= r;
-        }
-        if matches!(o, 3 | 8 | 4) {
-            x += r;
-        }
-        if matches!(o, 2 | 7 | 3) {
-            z -= r;
-        }
-        if matches!(o, 1 | 5 | 4) {
-            z += r;
-        }
-        [z, x]
-    }
-
-    /// Sends the queued moves out, each starting where the previous ended.
-    fn dequeue(&mut self, out: &mut VecDeque<Move>) {
-        self.endpoint = None;
-        let plane = self.plane;
-        for q in std::mem::take(&mut self.queue) {
-            let mut mv = q.mv;
-            mv.start = self.last_out;
-            if let Kind::Other = q.kind {
-                mv.end = self.last_out;
-            } else {
-                let e = self.lathe_origin(ab(plane, &mv.end));
-                mv.end = with_ab(plane, mv.end, e);
-            }
-            if let Kind::Arc {
-                center,
-                turn,
-                sweep,
-            } = q.kind
-            {
-                let c = self.lathe_origin(center);
-                let (a, b, _) = plane.axes();
-                let mut center_mm = [mv.start[Axis::X], mv.start[Axis::Y], mv.start[Axis::Z]];
-                center_mm[a.index()] = c[0];
-                center_mm[b.index()] = c[1];
-                // A full circle programmed stays one after rounding.
-                if sweep.abs() > PI && dist(ab(plane, &mv.start), ab(plane, &mv.end)) < 1e-7 {
-                    let s = ab(plane, &mv.start);
-                    mv.end = with_ab(plane, mv.end, s);
-                }
-                mv.motion = Motion::Arc {
-                    clockwise: turn < 0,
-                    plane,
-                    center_mm,
-                };
-            }
-            self.last_out = mv.end;
-            out.push_back(mv);
-        }
-    }
-
-    /// Moves the end (a, b) of every queued move to `p` and sends them out.
-    fn move_endpoint_and_flush(
-        &mut self,
-        p: [f64; 2],
-        out: &mut VecDeque<Move>,
-    ) -> Result<(), String> {
-        if self.queue.is_empty() {
-            return Ok(());
-        }
-        let plane = self.plane;
-        for q in &mut self.queue {
-            match q.kind {
-                Kind::Arc {
-                    center,
-                    turn,
-                    sweep,
-                } => {
-                    let r1 = dist(ab(plane, &q.mv.end), center);
-                    let r2 = dist(p, center);
-                    if (r1 - r2).abs() > 0.01 * self.unit_mm {
-                        return Err(format!("cutter compensation made an arc whose radii differ ({r1:.4} and {r2:.4} mm): expected a corner the tool can follow"));
-                    }
-                    if let Some(e) = self.endpoint {
-                        let l2 = find_turn(e, center, turn, p);
-                        if sweep != 0.0 && l2.abs() > sweep.abs() + 0.001 {
-                            return Err("arc move in concave corner cannot be reached by the tool without gouging: expected a smaller tool or a longer arc".into());
-                        }
-                    }
-                }
-                Kind::Line { dir } => {
-                    if let Some(e) = self.endpoint {
-                        if dir[0] * (p[0] - e[0]) + dir[1] * (p[1] - e[1]) < 0.0 {
-                            let what = if matches!(q.mv.motion, Motion::Rapid) {
-                                "straight traverse"
-                            } else {
-                                "straight feed"
-                            };
-                            return Err(format!("{what} in concave corner cannot be reached by the tool without gouging: expected a move longer than the tool radius"));
-                        }
-                    }
-                }
-                Kind::Other => {}
-            }
-            q.mv.end = with_ab(plane, q.mv.end, p);
-        }
-        self.dequeue(out);
-        self.endpoint = Some(p);
-        Ok(())
-    }
-
-    /// G40 (or a program stop): the queued moves end at the compensated current point.
-    /// Returns where the tool is (the next move's start).
+    /// G40 (or the end of the program): the queued moves go out as they are. Returns where
+    /// the tool stands, where the next move starts.
     pub fn off(&mut self, out: &mut VecDeque<Move>) -> Result<AxisVec, String> {
-        if self.radius > 0.0 && !self.first {
-            let c = ab(self.plane, &self.cur);
-            self.move_endpoint_and_flush(c, out)?;
-        }
-        self.dequeue(out);
+        self.check_last()?;
+        self.flush(out);
+        self.last = None;
         Ok(self.last_out)
     }
 
-    /// A G00/G01 move as programmed (`mv.end` the programmed end).
-    pub fn straight(&mut self, mut mv: Move, out: &mut VecDeque<Move>) -> Result<(), String> {
-        let plane = self.plane;
-        let r = self.radius;
-        let p = ab(plane, &mv.end);
-        let c = ab(plane, &self.cur);
-        let rapid = matches!(mv.motion, Motion::Rapid);
-        if self.first {
-            let distance = dist(p, c);
-            if distance <= r {
-                return Err(format!("length of cutter compensation entry move is not greater than the tool radius ({distance:.4} mm, tool radius {r:.4} mm): expected an entry move longer than the tool radius in the {} plane", plane.g_code()));
+    /// A straight move (G0, G1) under compensation, programmed from the current point to
+    /// `mv.end`.
+    pub fn straight(&mut self, mv: Move, out: &mut VecDeque<Move>) -> Result<(), String> {
+        let p = ab(self.plane, &mv.end);
+        let chord = p.sub(self.prog);
+        if !self.entered {
+            let c = ab(self.plane, &self.cur);
+            let reach = p.sub(c);
+            if reach.norm() <= self.radius {
+                return Err(format!(
+                    "cutter compensation entry move of {:.4} mm in the plane, not longer than the tool radius {:.4} mm: start farther from the path, or use a smaller tool",
+                    reach.norm(),
+                    self.radius
+                ));
             }
-            let alpha = dir(c, p) + if self.left { FRAC_PI_2 } else { -FRAC_PI_2 };
-            let end = polar(p, r, alpha);
-            self.endpoint = Some(c);
-            mv.end = with_ab(plane, mv.end, end);
-            self.cur = mv.end;
-            self.push(
-                mv,
-                Kind::Line {
-                    dir: [alpha.cos(), alpha.sin()],
+            let t = reach.unit();
+            let end = p.add(self.offset(t));
+            self.enter(
+                Element::Line {
+                    start: c,
+                    end,
+                    dir: t,
                 },
+                t,
+                p,
+                mv,
+                end,
+                None,
+                out,
             );
-            self.first = false;
-            self.prog = p;
             return Ok(());
         }
-        let o = self.prog;
-        if p == o {
-            // No motion in the plane: stays at the compensated point.
-            mv.end = with_ab(plane, mv.end, c);
+        if chord.norm() < PLANE_EPS_MM {
+            // A plunge: the tool centre stays where it is in the plane.
+            let mut mv = mv;
+            mv.end = with_ab(self.plane, mv.end, ab(self.plane, &self.cur));
             self.cur = mv.end;
-            self.push(mv, Kind::Line { dir: [0.0, 0.0] });
+            self.queue.push(mv);
             return Ok(());
         }
-        let mut theta = dir(o, c);
-        let mut alpha = dir(o, p);
-        let (beta, gamma) = if self.left {
-            if theta < alpha {
-                theta += TAU;
-            }
-            (theta - alpha - FRAC_PI_2, FRAC_PI_2)
-        } else {
-            if alpha < theta {
-                alpha += TAU;
-            }
-            (alpha - theta - FRAC_PI_2, -FRAC_PI_2)
-        };
-        let end = polar(p, r, alpha + gamma);
-        let mid = polar(o, r, alpha + gamma);
-        let small = TOLERANCE_CONCAVE_CORNER;
-        let front_arc = match self.queue.first().map(|q| q.kind) {
-            Some(Kind::Arc { center, turn, .. }) => Some((center, turn)),
-            _ => None,
-        };
-        let concave = beta < -small
-            || beta > PI + small
-            // An "h" shape: over the round part, then along the straight one.
-            || (beta > PI - small
-                && front_arc.is_some_and(|(_, turn)| (!self.left && turn > 0) || (self.left && turn < 0)));
-        if !concave && beta > small {
-            // Convex corner: an arc about the programmed corner (a traverse for G00).
-            self.move_endpoint_and_flush(c, out)?;
-            let corner = Move {
-                motion: Motion::Rapid,
-                end: self.corner_end(&mv.end, mid),
-                ..mv.clone()
-            };
-            if rapid {
-                self.push(corner, Kind::Line { dir: [0.0, 0.0] });
-            } else {
-                let corner = Move {
-                    motion: mv_arc_placeholder(),
-                    ..corner
-                };
-                self.push(
-                    corner,
-                    Kind::Arc {
-                        center: o,
-                        turn: if self.left { -1 } else { 1 },
-                        sweep: 0.0,
-                    },
-                );
-            }
-            self.dequeue(out);
-            self.endpoint = Some(mid);
-        } else if concave {
-            match front_arc {
-                None => {
-                    // Line to line: back along the old direction.
-                    let halfcorner = (beta + PI) / 2.0;
-                    if halfcorner == 0.0 {
-                        return Err("zero degree inside corner is invalid for cutter compensation: expected a corner the tool can enter".into());
-                    }
-                    let retreat = r / halfcorner.tan();
-                    let m = polar(c, retreat, theta + gamma);
-                    self.move_endpoint_and_flush(m, out)?;
-                }
-                Some((pc, pturn)) => {
-                    // Arc to line; the queued arc is the compensated one.
-                    let pend = ab(plane, &self.queue[0].mv.end);
-                    let oldrad = dist(pc, pend);
-                    let base_dir = dir(o, p);
-                    let theta = if pturn > 0 {
-                        base_dir + FRAC_PI_2
-                    } else {
-                        base_dir - FRAC_PI_2
-                    };
-                    let phi = dir(o, pc);
-                    let inside = self.inside(pturn);
-                    let oldrad_uncomp = if inside { oldrad + r } else { oldrad - r };
-                    let d = oldrad_uncomp * (theta - phi).cos();
-                    let l = if inside { d - r } else { d + r } / oldrad;
-                    if !(-1.0..=1.0).contains(&l) {
-                        return Err("arc to straight motion makes a corner the compensated tool can't fit in without gouging: expected a smaller tool".into());
-                    }
-                    let angle = if inside == (pturn > 0) {
-                        -l.acos() + theta + PI
-                    } else {
-                        l.acos() + theta + PI
-                    };
-                    self.move_endpoint_and_flush(polar(pc, oldrad, angle), out)?;
-                }
-            }
-        } else {
-            // Tangent (or straight on): no corner.
-            self.dequeue(out);
-            self.endpoint = Some(c);
-        }
-        mv.end = with_ab(plane, mv.end, end);
-        self.cur = mv.end;
-        self.push(
-            mv,
-            Kind::Line {
-                dir: [p[0] - o[0], p[1] - o[1]],
-            },
-        );
-        self.prog = p;
-        Ok(())
+        let t = chord.unit();
+        let n = self.offset(t);
+        let (start, end) = (self.prog.add(n), p.add(n));
+        let new = Element::Line { start, end, dir: t };
+        self.check_last()?;
+        self.join(new, t, t, p, mv, end, out)
     }
 
-    /// A G02/G03 move as programmed (`mv.end` the programmed end, the centre computed from
-    /// the programmed start).
-    pub fn arc(&mut self, mut mv: Move, out: &mut VecDeque<Move>) -> Result<(), String> {
-        let plane = self.plane;
+    /// An arc (G2, G3) under compensation, programmed from the current point to `mv.end`.
+    pub fn arc(&mut self, mv: Move, out: &mut VecDeque<Move>) -> Result<(), String> {
         let Motion::Arc {
             clockwise,
             center_mm,
             ..
         } = mv.motion
         else {
-            unreachable!("comp::arc takes arcs");
+            return self.straight(mv, out);
         };
-        let (a, b, _) = plane.axes();
-        let center = [center_mm[a.index()], center_mm[b.index()]];
-        let turn = if clockwise { -1 } else { 1 };
-        let inside = self.inside(turn);
-        let r = self.radius;
-        let end = ab(plane, &mv.end);
-        let c = ab(plane, &self.cur);
-        let too_small = |arc_radius: f64| {
-            format!("tool radius not less than arc radius with cutter compensation (arc radius {arc_radius:.4} mm, tool radius {r:.4} mm, tool inside the arc): expected a tool smaller than the arc")
-        };
-        if self.first {
-            if dist(end, c) <= r {
-                return Err(format!("radius of cutter compensation entry arc is not greater than the tool radius ({r:.4} mm): expected the entry arc to end further than the tool radius from its start"));
+        let ccw = !clockwise;
+        let (a, b, _) = self.plane.axes();
+        let center = V2(center_mm[index(a)], center_mm[index(b)]);
+        let p = ab(self.plane, &mv.end);
+        let radial = p.sub(center);
+        let r_end = radial.norm();
+        let inside = self.left == ccw;
+        if inside && self.radius >= r_end {
+            return Err(format!(
+                "tool radius {:.4} mm not smaller than the arc radius {:.4} mm it cuts inside: use a smaller tool or a larger arc",
+                self.radius, r_end
+            ));
+        }
+        let u_end = radial.scale(1.0 / r_end);
+        // The offset end: one tool radius along the radius, inwards when inside.
+        let end = p.add(u_end.scale(if inside { -self.radius } else { self.radius }));
+        let spin = |u: V2| if ccw { u.perp() } else { u.perp().scale(-1.0) };
+        let t_end = spin(u_end);
+        if !self.entered {
+            let c = ab(self.plane, &self.cur);
+            // Centre on the line through `end` along u_end, as far from c as from end:
+            // |end + k u − c|² = k²  ⇒  k = −|end − c|² / (2 u·(end − c)).
+            let w = end.sub(c);
+            let den = 2.0 * u_end.dot(w);
+            if den.abs() < 1e-12 {
+                return Err("cutter compensation entry arc with no arc from the start point to the compensated end: start elsewhere, or enter with a straight move".to_string());
             }
-            let arc_radius = dist(center, c);
-            if arc_radius <= r && inside {
-                return Err(too_small(arc_radius));
-            }
-            let gamma = if inside {
-                dir(end, center)
-            } else {
-                dir(center, end)
+            let new_center = end.add(u_end.scale(-w.dot(w) / den));
+            let element = Element::Arc {
+                start: c,
+                end,
+                center: new_center,
+                ccw,
             };
-            self.first = false;
-            self.prog = end;
-            let e2 = polar(end, r, gamma);
-            let b_len = dist(c, e2) / 2.0;
-            let ab_ang = dir(e2, center);
-            let a_ang = dir(e2, c) - ab_ang;
-            if a_ang.cos().abs() < TOLERANCE_EQUAL {
-                return Err(too_small(arc_radius));
-            }
-            let center2 = polar(e2, b_len / a_ang.cos(), ab_ang);
-            if self.orientation != 0 && self.orientation != 9 {
-                // A lathe tool first moves its control point to the nose centre.
-                let first = Move {
-                    motion: Motion::Linear,
-                    end: self.corner_end(&mv.end, c),
-                    ..mv.clone()
-                };
-                self.push(first, Kind::Line { dir: [0.0, 0.0] });
-                self.endpoint = Some(c);
-            }
-            mv.end = with_ab(plane, mv.end, e2);
-            self.cur = mv.end;
-            let sweep = find_turn(c, center2, turn, e2);
-            self.push(
-                mv,
-                Kind::Arc {
-                    center: center2,
-                    turn,
-                    sweep,
-                },
-            );
+            self.enter(element, t_end, p, mv, end, Some(new_center), out);
             return Ok(());
         }
-        let o = self.prog;
-        let arc_radius = dist(center, end);
-        let theta = dir(o, c) + if self.left { -FRAC_PI_2 } else { FRAC_PI_2 };
-        let mut delta = dir(o, center);
-        let alpha = if clockwise {
-            delta + FRAC_PI_2
-        } else {
-            delta - FRAC_PI_2
-        };
-        let mut beta = if self.left {
-            theta - alpha
-        } else {
-            alpha - theta
-        };
-        if beta > 1.5 * PI {
-            beta -= TAU;
-        } else if beta < -FRAC_PI_2 {
-            beta += TAU;
-        }
-        let gamma = if inside {
-            if arc_radius <= r {
-                return Err(too_small(arc_radius));
-            }
-            dir(end, center)
-        } else {
-            delta += PI;
-            dir(center, end)
-        };
-        let new_end = polar(end, r, gamma);
-        let small = TOLERANCE_CONCAVE_CORNER;
-        let sweep = find_turn(o, center, turn, end);
-        let main_kind = Kind::Arc {
+        let u_start = self.prog.sub(center).unit();
+        let t_start = spin(u_start);
+        let start = self.prog.add(self.offset(t_start));
+        let new = Element::Arc {
+            start,
+            end,
             center,
-            turn,
-            sweep,
+            ccw,
         };
-        if beta < -small || beta > PI + small || ((beta - PI).abs() < small && !inside) {
-            // Concave.
-            let front_arc = match self.queue.first().map(|q| q.kind) {
-                Some(Kind::Arc { center, turn, .. }) => Some((center, turn)),
-                _ => None,
+        self.join(new, t_start, t_end, p, mv, end, out)
+    }
+
+    /// The tool-centre offset for the unit tangent `t`: r on the tool's side.
+    fn offset(&self, t: V2) -> V2 {
+        t.perp()
+            .scale(if self.left { self.radius } else { -self.radius })
+    }
+
+    /// The entry element: from the uncompensated point to `end` (about `center` for an arc).
+    #[allow(clippy::too_many_arguments)]
+    fn enter(
+        &mut self,
+        element: Element,
+        t_end: V2,
+        p: V2,
+        mut mv: Move,
+        end: V2,
+        center: Option<V2>,
+        out: &mut VecDeque<Move>,
+    ) {
+        self.flush(out);
+        if center.is_some() && control_point_shift(self.orientation) != (0.0, 0.0) {
+            // A lathe tool's control point stands off the nose centre the arc starts from:
+            // a straight feed brings it to the arc's (shifted) start first.
+            let to_start = Move {
+                motion: Motion::Linear,
+                end: self.cur,
+                ..mv
             };
-            let mid = match front_arc {
-                None => {
-                    // Line to arc.
-                    let cy = arc_radius * (beta - FRAC_PI_2).sin();
-                    let (dist_from_center, angle) = if inside {
-                        let d = arc_radius - r;
-                        let l = (cy + r) / d;
-                        if !(-1.0..=1.0).contains(&l) {
-                            return Err(gouge_arc());
-                        }
-                        (
-                            d,
-                            if turn > 0 {
-                                theta + l.asin()
-                            } else {
-                                theta - l.asin()
-                            },
-                        )
-                    } else {
-                        let d = arc_radius + r;
-                        let l = (cy - r) / d;
-                        if !(-1.0..=1.0).contains(&l) {
-                            return Err(gouge_arc());
-                        }
-                        (
-                            d,
-                            if turn > 0 {
-                                theta + PI - l.asin()
-                            } else {
-                                theta + PI + l.asin()
-                            },
-                        )
-                    };
-                    polar(center, dist_from_center, angle)
-                }
-                Some((pc, pturn)) => {
-                    // Arc to arc: where the two compensated circles cross.
-                    let oldrad = dist(pc, ab(plane, &self.queue[0].mv.end));
-                    let newrad = if inside {
-                        arc_radius - r
-                    } else {
-                        arc_radius + r
-                    };
-                    let arc_cc = dist(pc, center);
-                    if oldrad == 0.0 || arc_cc == 0.0 {
-                        return Err("arc to arc motion is invalid because the arcs have the same center: expected arcs about different centres".into());
-                    }
-                    let k = (oldrad * oldrad + arc_cc * arc_cc - newrad * newrad)
-                        / (2.0 * oldrad * arc_cc);
-                    if !(-1.0..=1.0).contains(&k) {
-                        return Err("arc to arc motion makes a corner the compensated tool can't fit in without gouging: expected a smaller tool".into());
-                    }
-                    let pullback = k.acos();
-                    let cc_dir = dir(pc, center);
-                    let angle = if self.inside(pturn) == (turn > 0) {
-                        cc_dir + pullback
-                    } else {
-                        cc_dir - pullback
-                    };
-                    polar(pc, oldrad, angle)
-                }
-            };
-            self.move_endpoint_and_flush(mid, out)?;
-        } else if beta > small {
-            // Convex: an arc about the programmed corner first.
-            let mid = polar(o, r, delta);
-            self.dequeue(out);
-            let corner = Move {
-                end: self.corner_end(&mv.end, mid),
-                ..mv.clone()
-            };
-            self.push(
-                corner,
-                Kind::Arc {
-                    center: o,
-                    turn: if self.left { -1 } else { 1 },
-                    sweep: 0.0,
-                },
-            );
-            self.dequeue(out);
-            self.endpoint = Some(mid);
-        } else {
-            self.dequeue(out);
-            self.endpoint = Some(c);
+            self.send(to_start, out);
         }
-        mv.end = with_ab(plane, mv.end, new_end);
-        self.cur = mv.end;
-        self.push(mv, main_kind);
-        self.prog = end;
+        mv.end = with_ab(self.plane, mv.end, end);
+        if let (Some(c), Motion::Arc { center_mm, .. }) = (center, &mut mv.motion) {
+            let (a, b, _) = self.plane.axes();
+            center_mm[index(a)] = c.0;
+            center_mm[index(b)] = c.1;
+        }
+        self.entered = true;
+        self.push_element(element, t_end, p, mv);
+    }
+
+    /// A later element, `start_t`/`end_t` its programmed tangents at `prog` and `p`, its
+    /// offset `new` ending at `end`: joined to the queued one by the corner rule.
+    #[allow(clippy::too_many_arguments)]
+    fn join(
+        &mut self,
+        new: Element,
+        start_t: V2,
+        end_t: V2,
+        p: V2,
+        mut mv: Move,
+        end: V2,
+        out: &mut VecDeque<Move>,
+    ) -> Result<(), String> {
+        mv.end = with_ab(self.plane, mv.end, end);
+        // After the current point was moved from outside, the next element runs from it
+        // as from a tangent join (rs274 after a G70 profile read).
+        let corner = if std::mem::take(&mut self.moved) {
+            Corner::Tangent
+        } else {
+            self.corner(self.tangent, start_t)
+        };
+        let new = match corner {
+            Corner::Tangent => {
+                self.flush(out);
+                restart(new, ab(self.plane, &self.cur))
+            }
+            Corner::Convex => {
+                self.flush(out);
+                let start = match new {
+                    Element::Line { start, .. } | Element::Arc { start, .. } => start,
+                };
+                self.corner_arc(&mv, start, out);
+                new
+            }
+            Corner::Concave => {
+                let x = self.cut(new)?;
+                let (a, b, _) = self.plane.axes();
+                for q in &mut self.queue {
+                    q.end[a] = x.0;
+                    q.end[b] = x.1;
+                }
+                self.cur = with_ab(self.plane, self.cur, x);
+                self.flush(out);
+                restart(new, x)
+            }
+        };
+        self.push_element(new, end_t, p, mv);
         Ok(())
     }
-}
 
-fn gouge_arc() -> String {
-    "arc move in concave corner cannot be reached by the tool without gouging: expected a smaller tool or a gentler corner".into()
-}
-
-/// The motion of a queued arc before it leaves the queue (`dequeue` sets its centre).
-fn mv_arc_placeholder() -> Motion {
-    Motion::Arc {
-        clockwise: false,
-        plane: Plane::XY,
-        center_mm: [0.0; 3],
+    /// A queued straight move must still run forward from its start to its end when a
+    /// straight move or G40 ends it (rs274 lets an arc follow one that does not).
+    fn check_last(&self) -> Result<(), String> {
+        match self.last {
+            Some(last @ Element::Line { end, .. }) if !last.can_end_at(end) => Err(gouge(last)),
+            _ => Ok(()),
+        }
     }
+
+    /// Where the queued element and the offset of the next one cross, nearest the queued
+    /// element's end; refused when they do not cross, or the cut gouges.
+    fn cut(&self, new: Element) -> Result<V2, String> {
+        let last = self.last.expect("an element precedes every corner");
+        let c = ab(self.plane, &self.cur);
+        let x = last
+            .curve()
+            .crossings(new.curve())
+            .into_iter()
+            .min_by(|p, q| p.sub(c).norm().total_cmp(&q.sub(c).norm()));
+        match x {
+            Some(x) if last.can_end_at(x) => Ok(x),
+            _ => Err(gouge(last)),
+        }
+    }
+
+    /// The arc of radius r about the corner point `prog` from the tool centre to `to` (a
+    /// straight traverse for a rapid), at the height and rotary positions where the tool
+    /// stands.
+    fn corner_arc(&mut self, mv: &Move, to: V2, out: &mut VecDeque<Move>) {
+        let corner = with_ab(self.plane, self.cur, self.prog);
+        // A rapid goes round the corner straight, as rs274 does: the path of a traverse is
+        // not cut.
+        let motion = match mv.motion {
+            Motion::Rapid => Motion::Rapid,
+            _ => Motion::Arc {
+                clockwise: self.left,
+                plane: self.plane,
+                center_mm: [corner[Axis::X], corner[Axis::Y], corner[Axis::Z]],
+            },
+        };
+        let arc = Move {
+            motion,
+            end: with_ab(self.plane, self.cur, to),
+            ..*mv
+        };
+        self.cur = arc.end;
+        self.send(arc, out);
+    }
+
+    /// Queues `mv` as the new last element, the programmed path now at `p` with tangent `t`.
+    fn push_element(&mut self, element: Element, t: V2, p: V2, mv: Move) {
+        self.last = Some(element);
+        self.tangent = t;
+        self.prog = p;
+        self.cur = mv.end;
+        self.queue.push(mv);
+    }
+
+    /// The join at a corner from tangent `from` to tangent `to`.
+    fn corner(&self, from: V2, to: V2) -> Corner {
+        let phi = from.cross(to).atan2(from.dot(to));
+        let mut psi = if self.left { -phi } else { phi };
+        // A reversal within the tolerance of a half turn is taken round the outside.
+        if psi <= -PI + TOLERANCE_CONCAVE_CORNER {
+            psi += TAU;
+        }
+        if psi > TOLERANCE_CONCAVE_CORNER {
+            Corner::Convex
+        } else if psi < -TOLERANCE_CONCAVE_CORNER {
+            Corner::Concave
+        } else {
+            Corner::Tangent
+        }
+    }
+
+    /// Sends every queued move out.
+    fn flush(&mut self, out: &mut VecDeque<Move>) {
+        for mv in std::mem::take(&mut self.queue) {
+            self.send(mv, out);
+        }
+    }
+
+    /// Sends `mv` out, from where the last move ended, shifted to a lathe tool's control
+    /// point.
+    fn send(&mut self, mut mv: Move, out: &mut VecDeque<Move>) {
+        let (dx, dz) = control_point_shift(self.orientation);
+        let (dx, dz) = (dx * self.radius, dz * self.radius);
+        mv.end[Axis::X] += dx;
+        mv.end[Axis::Z] += dz;
+        if let Motion::Arc { center_mm, .. } = &mut mv.motion {
+            center_mm[0] += dx;
+            center_mm[2] += dz;
+        }
+        self.send_as_is(mv, out);
+    }
+
+    /// Sends `mv` out from where the last move ended, unshifted.
+    fn send_as_is(&mut self, mut mv: Move, out: &mut VecDeque<Move>) {
+        mv.start = self.last_out;
+        if matches!(mv.motion, Motion::Dwell { .. }) {
+            mv.end = self.last_out;
+        }
+        self.last_out = mv.end;
+        out.push_back(mv);
+    }
+}
+
+/// The refusal of a concave corner that `last` cannot reach.
+fn gouge(last: Element) -> String {
+    let what = match last {
+        Element::Line { .. } => "straight move",
+        Element::Arc { .. } => "arc",
+    };
+    format!(
+        "concave corner the tool cannot reach without gouging: the compensated {what} before it would have to run backwards; use a smaller tool or a longer {what}"
+    )
+}
+
+/// `element` starting at `start` instead (a tangent join or a concave cut).
+fn restart(element: Element, at: V2) -> Element {
+    match element {
+        Element::Line { end, dir, .. } => Element::Line {
+            start: at,
+            end,
+            dir,
+        },
+        Element::Arc {
+            end, center, ccw, ..
+        } => Element::Arc {
+            start: at,
+            end,
+            center,
+            ccw,
+        },
+    }
+}
+
+/// Index of `a` in an `[X, Y, Z]` arc centre.
+fn index(a: Axis) -> usize {
+    match a {
+        Axis::X => 0,
+        Axis::Y => 1,
+        _ => 2,
+    }
+}
+
+fn ab(plane: Plane, p: &AxisVec) -> V2 {
+    let (a, b, _) = plane.axes();
+    V2(p[a], p[b])
+}
+
+fn with_ab(plane: Plane, mut p: AxisVec, v: V2) -> AxisVec {
+    let (a, b, _) = plane.axes();
+    p[a] = v.0;
+    p[b] = v.1;
+    p
 }
 
 #[cfg(test)]
@@ -689,27 +711,77 @@ mod tests {
     use super::*;
 
     #[test]
-    fn find_turn_sweeps_in_the_direction_of_the_turn() {
+    fn find_turn_sweeps_in_the_asked_direction() {
         let c = [0.0, 0.0];
-        // A quarter turn from +x to +y: +π/2 counter-clockwise, -3π/2 clockwise.
-        assert!((find_turn([1.0, 0.0], c, 1, [0.0, 1.0]) - FRAC_PI_2).abs() < 1e-12);
-        assert!((find_turn([1.0, 0.0], c, -1, [0.0, 1.0]) + 1.5 * PI).abs() < 1e-12);
-        // Start = end: a full turn either way.
+        let q = find_turn([1.0, 0.0], c, 1, [0.0, 1.0]);
+        assert!((q - PI / 2.0).abs() < 1e-12);
+        let q = find_turn([1.0, 0.0], c, -1, [0.0, 1.0]);
+        assert!((q + 1.5 * PI).abs() < 1e-12);
         assert!((find_turn([1.0, 0.0], c, 1, [1.0, 0.0]) - TAU).abs() < 1e-12);
         assert!((find_turn([1.0, 0.0], c, -1, [1.0, 0.0]) + TAU).abs() < 1e-12);
+        assert!((find_turn([1.0, 0.0], c, 2, [-1.0, 0.0]) - 3.0 * PI).abs() < 1e-12);
     }
 
     #[test]
-    fn lathe_origin_moves_by_the_nose_radius_by_orientation() {
-        let mut c = Comp::new(true, 0.5, 2, Plane::ZX, AxisVec::ZERO, AxisVec::ZERO, 1.0);
-        // (a, b) = (Z, X): orientation 2 takes r off both X and Z.
-        assert_eq!(c.lathe_origin([10.0, 4.0]), [9.5, 3.5]);
-        c.orientation = 4;
-        assert_eq!(c.lathe_origin([10.0, 4.0]), [10.5, 4.5]);
-        c.orientation = 9;
-        assert_eq!(c.lathe_origin([10.0, 4.0]), [10.0, 4.0]);
-        c.plane = Plane::XY;
-        c.orientation = 2;
-        assert_eq!(c.lathe_origin([10.0, 4.0]), [10.0, 4.0]);
+    fn crossings_of_lines_and_circles() {
+        let l = Curve::Line {
+            point: V2(0.0, 1.0),
+            dir: V2(1.0, 0.0),
+        };
+        let m = Curve::Line {
+            point: V2(3.0, 0.0),
+            dir: V2(0.0, 1.0),
+        };
+        assert_eq!(l.crossings(m), vec![V2(3.0, 1.0)]);
+        let c = Curve::Circle {
+            center: V2(0.0, 0.0),
+            radius: 2.0,
+        };
+        let x = l.crossings(c);
+        assert_eq!(x.len(), 2);
+        for p in &x {
+            assert!((p.norm() - 2.0).abs() < 1e-12 && (p.1 - 1.0).abs() < 1e-12);
+        }
+        let d = Curve::Circle {
+            center: V2(2.0, 0.0),
+            radius: 2.0,
+        };
+        for p in c.crossings(d) {
+            assert!(
+                (p.norm() - 2.0).abs() < 1e-12 && (p.sub(V2(2.0, 0.0)).norm() - 2.0).abs() < 1e-12
+            );
+        }
+        let far = Curve::Circle {
+            center: V2(10.0, 0.0),
+            radius: 1.0,
+        };
+        assert!(c.crossings(far).is_empty());
+    }
+
+    #[test]
+    fn corners_are_classified_from_the_tool_side() {
+        let g41 = Comp::new(true, 1.0, 0, Plane::XY, AxisVec::ZERO, AxisVec::ZERO, 1.0);
+        let east = V2(1.0, 0.0);
+        let at = |deg: f64| V2(deg.to_radians().cos(), deg.to_radians().sin());
+        // G41: a left turn goes towards the tool.
+        assert_eq!(g41.corner(east, at(90.0)), Corner::Concave);
+        assert_eq!(g41.corner(east, at(-90.0)), Corner::Convex);
+        assert_eq!(g41.corner(east, at(2.0)), Corner::Tangent);
+        assert_eq!(g41.corner(east, at(180.0)), Corner::Convex);
+        assert_eq!(g41.corner(east, at(178.0)), Corner::Convex);
+        assert_eq!(g41.corner(east, at(170.0)), Corner::Concave);
+        let g42 = Comp { left: false, ..g41 };
+        assert_eq!(g42.corner(east, at(90.0)), Corner::Convex);
+        assert_eq!(g42.corner(east, at(-170.0)), Corner::Concave);
+    }
+
+    #[test]
+    fn lathe_shifts_are_one_radius_along_x_and_z() {
+        for o in 1..=8 {
+            let (x, z) = control_point_shift(o);
+            assert!(x.abs() <= 1.0 && z.abs() <= 1.0 && (x != 0.0 || z != 0.0));
+        }
+        assert_eq!(control_point_shift(0), (0.0, 0.0));
+        assert_eq!(control_point_shift(9), (0.0, 0.0));
     }
 }

@@ -402,3 +402,169 @@ fn lathe_tools_compensate_the_nose_centre_and_shift_by_their_orientation() {
     ];
     assert_eq!(got, expected);
 }
+
+/// The geometry of every compensated move, checked against the programmed path computed here
+/// from the program's own numbers: a straight move's tool-centre line lies parallel to the
+/// programmed line at distance r (both ends), on the tool's side; an arc keeps the programmed
+/// centre and ends at radius R − r (tool inside) or R + r (outside); a corner arc is centred
+/// on the programmed corner with radius r. Shapes with convex and concave corners, both
+/// sides (G41, G42), tool radius 5 mm.
+#[test]
+fn every_compensated_element_lies_one_tool_radius_off_the_programmed_path() {
+    let shapes: [&[El]; 3] = [
+        // A rectangle with a concave notch.
+        &[
+            ([60.0, 0.0], None),
+            ([60.0, 40.0], None),
+            ([40.0, 40.0], None),
+            ([40.0, 25.0], None),
+            ([20.0, 25.0], None),
+            ([20.0, 40.0], None),
+            ([0.0, 40.0], None),
+            ([0.0, 0.1], None),
+        ],
+        // Lines and arcs of both senses, convex and concave joins.
+        &[
+            ([40.0, 0.0], None),
+            ([60.0, 20.0], Some(([40.0, 20.0], false))),
+            ([60.0, 40.0], None),
+            ([40.0, 60.0], Some(([60.0, 60.0], true))),
+            ([0.0, 60.0], None),
+            ([-20.0, 30.0], None),
+        ],
+        // A slanted hexagon-like outline.
+        &[
+            ([30.0, 5.0], None),
+            ([50.0, 30.0], None),
+            ([35.0, 55.0], None),
+            ([5.0, 50.0], None),
+            ([-10.0, 25.0], None),
+        ],
+    ];
+    let r = 5.0;
+    for shape in shapes {
+        for left in [true, false] {
+            let mut text = String::from("G21 G17 G90\nT1 M6\nG0 X-30 Y-30\n");
+            text += &format!("{} D1 G1 X0 Y0 F100\n", if left { "G41" } else { "G42" });
+            for (end, arc) in shape {
+                match arc {
+                    None => text += &format!("G1 X{} Y{}\n", end[0], end[1]),
+                    Some((c, cw)) => {
+                        text += &format!(
+                            "{} X{} Y{} I{} J{}\n",
+                            if *cw { "G2" } else { "G3" },
+                            end[0],
+                            end[1],
+                            c[0] - prev_end(shape, end)[0],
+                            c[1] - prev_end(shape, end)[1]
+                        )
+                    }
+                }
+            }
+            text += "G40 G0 X-40 Y-40\nM2\n";
+            let m = moves(&text);
+            // Programmed element of line 5 + k is shape[k], from shape[k-1] (or the origin).
+            for mv in &m {
+                let Some(k) = mv.line.checked_sub(5).filter(|&k| k < shape.len()) else {
+                    continue;
+                };
+                let from = if k == 0 { [0.0, 0.0] } else { shape[k - 1].0 };
+                let (to, arc) = shape[k];
+                let end = [mv.end[Axis::X], mv.end[Axis::Y]];
+                let start = [mv.start[Axis::X], mv.start[Axis::Y]];
+                match (mv.motion, arc) {
+                    (
+                        Motion::Arc {
+                            center_mm,
+                            clockwise,
+                            ..
+                        },
+                        _,
+                    ) if center_mm[0] == from[0]
+                        && center_mm[1] == from[1]
+                        && arc.is_none_or(|(c, _)| c != from) =>
+                    {
+                        // A corner arc about the programmed corner: radius r, turning away
+                        // from the tool (clockwise for G41).
+                        assert_eq!(clockwise, left, "{text}");
+                        assert!(
+                            (dist(end, from) - r).abs() < 1e-9
+                                && (dist(start, from) - r).abs() < 1e-9,
+                            "{text}"
+                        );
+                    }
+                    (
+                        Motion::Arc {
+                            center_mm,
+                            clockwise,
+                            ..
+                        },
+                        Some((c, cw)),
+                    ) => {
+                        assert_eq!(
+                            (center_mm[0], center_mm[1], clockwise),
+                            (c[0], c[1], cw),
+                            "{text}"
+                        );
+                        let inside = left != cw;
+                        let expected = dist(to, c) + if inside { -r } else { r };
+                        assert!((dist(end, c) - expected).abs() < 1e-9, "{text}");
+                    }
+                    (Motion::Linear, None) => {
+                        // Signed distance of both ends from the programmed line, + on the left.
+                        let d = [to[0] - from[0], to[1] - from[1]];
+                        let len = d[0].hypot(d[1]);
+                        let side =
+                            |p: [f64; 2]| (d[0] * (p[1] - from[1]) - d[1] * (p[0] - from[0])) / len;
+                        let want = if left { r } else { -r };
+                        assert!(
+                            (side(end) - want).abs() < 1e-9 && (side(start) - want).abs() < 1e-9,
+                            "{text}\nline {}: {start:?} -> {end:?}",
+                            mv.line
+                        );
+                    }
+                    other => panic!("unexpected move {other:?} at line {}\n{text}", mv.line),
+                }
+            }
+        }
+    }
+}
+
+/// A programmed element: end X, Y, and for an arc its centre X, Y and clockwise.
+type El = ([f64; 2], Option<([f64; 2], bool)>);
+
+fn dist(p: [f64; 2], q: [f64; 2]) -> f64 {
+    (p[0] - q[0]).hypot(p[1] - q[1])
+}
+
+/// The start of the element ending at `end` in `shape` (the origin for the first).
+fn prev_end(shape: &[El], end: &[f64; 2]) -> [f64; 2] {
+    let k = shape.iter().position(|(e, _)| e == end).unwrap();
+    if k == 0 {
+        [0.0, 0.0]
+    } else {
+        shape[k - 1].0
+    }
+}
+
+/// A rapid round a convex corner goes straight to the next offset start (no arc), and a
+/// concave corner is cut for rapids as for feeds. Expected: rs274 on the same program
+/// (G41.1 D4: r = 2).
+#[test]
+fn a_rapid_goes_round_a_convex_corner_straight() {
+    let m = moves("G21 G90 G17\nG0 X0 Y0\nG41.1 D4\nG0 X10 Y0\nG0 X10 Y-10\nG1 X20 Y-10 F100\nG0 X20 Y-20\nG40 G0 X0 Y-30\nM2\n");
+    let ends: Vec<(MoveKind, [f64; 3])> = rows(&m).into_iter().map(|(k, e, _)| (k, e)).collect();
+    assert_eq!(
+        ends,
+        [
+            (Rapid, [0.0, 0.0, 0.0]),
+            (Rapid, [10.0, 2.0, 0.0]),
+            (Rapid, [12.0, 0.0, 0.0]),
+            (Rapid, [12.0, -8.0, 0.0]),
+            (Feed, [20.0, -8.0, 0.0]),
+            (Rapid, [22.0, -10.0, 0.0]),
+            (Rapid, [22.0, -20.0, 0.0]),
+            (Rapid, [0.0, -30.0, 0.0]),
+        ]
+    );
+}

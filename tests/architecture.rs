@@ -195,11 +195,12 @@ fn the_reader_crate_depends_on_nothing_of_mtsim() {
 //   module only re-exports (`pub use other::Item;`) is followed to where it comes from, so a
 //   `mod.rs` that gathers its children's items is not the file its users depend on.
 //
-// A parent's `mod child;` declaration is containment, not an edge: a parent may use its
-// children's items (`pub use child::Item`, `child::f()`), and a child that uses nothing of its
-// parent is ordinary structure. A child that names an item defined in its parent file
-// (`super::Item`) while the parent names one of the child's items is a loop, as is any longer
-// cycle. Paths inside inline modules (`mod tests { use super::*; }`) resolve from that module,
+// A parent's `mod child;` declaration and its re-exports (`pub use child::Item;`) are
+// containment, not edges: they offer the child's items to the parent's users, and the parent's
+// own code does not depend on them. A parent may use its children's items (`child::f()`), and a
+// child may use its parent's items (`super::Item`), but not both: a child that names an item
+// defined in its parent file while the parent's code names one of the child's items is a loop,
+// as is any longer cycle. Paths inside inline modules (`mod tests { use super::*; }`) resolve from that module,
 // so a file's own test module referring back to the file is no edge.
 
 /// One token of Rust code: an identifier (or keyword), or a piece of punctuation.
@@ -244,16 +245,14 @@ fn tokens(text: &str) -> Vec<Token> {
                 i += if c[i] == '\\' { 2 } else { 1 };
             }
             i += 1;
-        } else if (ch == 'r' || (ch == 'b' && c.get(i + 1) == Some(&'r')))
-            && {
-                let start = if ch == 'b' { i + 2 } else { i + 1 };
-                let mut j = start;
-                while c.get(j) == Some(&'#') {
-                    j += 1;
-                }
-                c.get(j) == Some(&'"')
+        } else if (ch == 'r' || (ch == 'b' && c.get(i + 1) == Some(&'r'))) && {
+            let start = if ch == 'b' { i + 2 } else { i + 1 };
+            let mut j = start;
+            while c.get(j) == Some(&'#') {
+                j += 1;
             }
-        {
+            c.get(j) == Some(&'"')
+        } {
             // A raw string: r"..." or r#"..."# (any number of #).
             let mut j = if ch == 'b' { i + 2 } else { i + 1 };
             let mut hashes = 0;
@@ -428,18 +427,18 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
                         segments,
                     };
                     if public {
-                        let name = alias.unwrap_or_else(|| reference.segments.last().unwrap().clone());
-                        src.reexports.push((from.clone(), name, Reference {
-                            from: from.clone(),
-                            segments: reference.segments.clone(),
-                        }));
+                        let name =
+                            alias.unwrap_or_else(|| reference.segments.last().unwrap().clone());
+                        src.reexports.push((from.clone(), name, reference));
+                    } else {
+                        src.references.push(reference);
                     }
-                    src.references.push(reference);
                 }
                 continue;
             }
-            Token::Ident(first) if !matches!(toks.get(i.wrapping_sub(1)), Some(Token::PathSep))
-                && toks.get(i + 1) == Some(&Token::PathSep) =>
+            Token::Ident(first)
+                if !matches!(toks.get(i.wrapping_sub(1)), Some(Token::PathSep))
+                    && toks.get(i + 1) == Some(&Token::PathSep) =>
             {
                 let mut segments = vec![first.clone()];
                 let mut j = i + 1;
@@ -450,7 +449,10 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
                             let mut trees = Vec::new();
                             j = use_tree(&toks, j + 1, segments.clone(), &mut trees);
                             for (s, _) in trees {
-                                src.references.push(Reference { from: current(&scope), segments: s });
+                                src.references.push(Reference {
+                                    from: current(&scope),
+                                    segments: s,
+                                });
                             }
                             segments.clear();
                             break;
@@ -460,7 +462,10 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
                     j += 2;
                 }
                 if !segments.is_empty() {
-                    src.references.push(Reference { from: current(&scope), segments });
+                    src.references.push(Reference {
+                        from: current(&scope),
+                        segments,
+                    });
                 }
                 i = j;
                 continue;
@@ -550,14 +555,21 @@ impl CrateGraph {
         let mut sources = Vec::new();
         let mut queue = vec![(Vec::new(), root.to_path_buf())];
         while let Some((module, file)) = queue.pop() {
-            assert!(file.exists(), "{}: module {module:?} not found", file.display());
+            assert!(
+                file.exists(),
+                "{}: module {module:?} not found",
+                file.display()
+            );
             let src = read_source(&file, &module);
             for m in &src.modules {
                 graph.modules.insert(m.clone(), file.clone());
             }
             queue.extend(src.children.iter().cloned());
             for (m, name, r) in &src.reexports {
-                let r = Reference { from: r.from.clone(), segments: r.segments.clone() };
+                let r = Reference {
+                    from: r.from.clone(),
+                    segments: r.segments.clone(),
+                };
                 graph.reexports.insert((m.clone(), name.clone()), r);
             }
             for (m, _) in &src.children {
@@ -632,7 +644,10 @@ impl CrateGraph {
             if let Some(target) = self.reexports.get(&(module.clone(), seg.clone())) {
                 let mut segments = target.segments.clone();
                 segments.extend(rest[k + 1..].iter().cloned());
-                let followed = Reference { from: target.from.clone(), segments };
+                let followed = Reference {
+                    from: target.from.clone(),
+                    segments,
+                };
                 // A re-export of something outside the crate is no edge at all.
                 return self.resolve(&followed, hops + 1);
             }
@@ -710,7 +725,11 @@ impl CrateGraph {
             .map(|(component, cycle)| {
                 let mut line = name(&cycle[0]);
                 for pair in cycle.windows(2) {
-                    line += &format!(" -({})-> {}", self.edges[&pair[0]][&pair[1]], name(&pair[1]));
+                    line += &format!(
+                        " -({})-> {}",
+                        self.edges[&pair[0]][&pair[1]],
+                        name(&pair[1])
+                    );
                 }
                 if component.len() + 1 > cycle.len() {
                     let all: Vec<String> = component.iter().map(name).collect();
@@ -789,10 +808,13 @@ fn the_loop_finder_tells_structure_from_loops() {
     // Three siblings in a ring, through a use group.
     let ring = write(&[
         ("lib.rs", "mod a;\nmod b;\nmod c;\n"),
-        ("a.rs", "use crate::{b::B, c};\npub struct A;\n"),
+        ("a.rs", "use crate::{b::B, self as root};\npub struct A;\n"),
         ("b.rs", "use super::c::C;\npub struct B;\n"),
         ("c.rs", "pub struct C;\nfn f() { crate::a::A; }\n"),
     ]);
-    assert_eq!(ring, "a.rs -(crate::b::B)-> b.rs -(super::c::C)-> c.rs -(crate::a::A)-> a.rs");
+    assert_eq!(
+        ring,
+        "a.rs -(crate::b::B)-> b.rs -(super::c::C)-> c.rs -(crate::a::A)-> a.rs"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

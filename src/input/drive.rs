@@ -732,27 +732,4 @@ mod tests {
         )
         .unwrap();
     }
-
-    /// The machine loader calls [`validate`], so a bad drive key in a machine file is
-    /// reported at its line.
-    #[test]
-    fn machine_files_report_drive_errors_at_their_line() {
-        let axis = |name: &str, extra: &str| {
-            format!("[axes.{name}]\nmin = -100\nmax = 100\nmax_velocity = 10000\nmax_acceleration = 1000\nmax_jerk = 10000\n{extra}")
-        };
-        let head = "name = \"m\"\nkinematics = \"xyz\"\n";
-        let text = format!(
-            "{head}{}{}{}",
-            axis("X", "[axes.X.servo]\nmodel = \"cascade\"\n"),
-            axis("Y", ""),
-            axis("Z", "[axes.Z.drive]\nbacklash_deg = 0.1\n")
-        );
-        let e = crate::input::machine::Machine::from_toml(Path::new("m.toml"), &text, None)
-            .unwrap_err();
-        let m = message(e);
-        assert!(
-            m.starts_with("24: `axes.Z.drive.backlash_deg`: is a rotary-axis key"),
-            "{m}"
-        );
-    }
 }

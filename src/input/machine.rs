@@ -329,3 +329,37 @@ pub fn deep_merge(base: &mut toml::Table, overlay: &toml::Table) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn message(e: Error) -> String {
+        match e {
+            Error::AtSource(e) => format!("{}: {}", e.line, e.message),
+            other => other.to_string(),
+        }
+    }
+
+    /// The machine loader calls [`crate::input::drive::validate`], so a bad drive key in a machine file is
+    /// reported at its line.
+    #[test]
+    fn machine_files_report_drive_errors_at_their_line() {
+        let axis = |name: &str, extra: &str| {
+            format!("[axes.{name}]\nmin = -100\nmax = 100\nmax_velocity = 10000\nmax_acceleration = 1000\nmax_jerk = 10000\n{extra}")
+        };
+        let head = "name = \"m\"\nkinematics = \"xyz\"\n";
+        let text = format!(
+            "{head}{}{}{}",
+            axis("X", "[axes.X.servo]\nmodel = \"cascade\"\n"),
+            axis("Y", ""),
+            axis("Z", "[axes.Z.drive]\nbacklash_deg = 0.1\n")
+        );
+        let e = Machine::from_toml(Path::new("m.toml"), &text, None).unwrap_err();
+        let m = message(e);
+        assert!(
+            m.starts_with("24: `axes.Z.drive.backlash_deg`: is a rotary-axis key"),
+            "{m}"
+        );
+    }
+}

@@ -192,8 +192,9 @@ fn the_reader_crate_depends_on_nothing_of_mtsim() {
 // - `crate::a::b::Item`, `super::Item`, `self::a::Item`, and `child::Item` for a module `child`
 //   the file declares; `use` groups (`crate::{a, b::{c, d}}`) are expanded;
 // - the path is followed down the module tree as far as it names modules, then an item that the
-//   module only re-exports (`pub use other::Item;`) is followed to where it comes from, so a
-//   `mod.rs` that gathers its children's items is not the file its users depend on.
+//   module only brings in with a `use` (`pub use other::Item;`, or a private `use` its children
+//   reach as `super::Item`) is followed to where it comes from, so a `mod.rs` that gathers
+//   items for its users or its children is not the file they depend on.
 //
 // A parent's `mod child;` declaration and its re-exports (`pub use child::Item;`) are
 // containment, not edges: they offer the child's items to the parent's users, and the parent's
@@ -330,8 +331,9 @@ struct SourceFile {
     modules: Vec<Vec<String>>,
     children: Vec<(Vec<String>, PathBuf)>,
     references: Vec<Reference>,
-    /// `pub use` re-exports: (module, exported name) → the path it re-exports.
-    reexports: Vec<(Vec<String>, String, Reference)>,
+    /// `use` items: (module, name it brings in) → the path it names. A `pub use` is a
+    /// re-export; a private `use` is also seen by the module's children (`super::name`).
+    imports: Vec<(Vec<String>, String, Reference)>,
 }
 
 /// Reads `file`, the file of module `module`.
@@ -352,7 +354,7 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
         modules: vec![module.to_vec()],
         children: Vec::new(),
         references: Vec::new(),
-        reexports: Vec::new(),
+        imports: Vec::new(),
     };
     // The inline modules open at this point, with the brace depth they opened at.
     let mut scope: Vec<(String, usize)> = Vec::new();
@@ -426,12 +428,15 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
                         from: from.clone(),
                         segments,
                     };
-                    if public {
-                        let name =
-                            alias.unwrap_or_else(|| reference.segments.last().unwrap().clone());
-                        src.reexports.push((from.clone(), name, reference));
-                    } else {
-                        src.references.push(reference);
+                    let name = alias.unwrap_or_else(|| reference.segments.last().unwrap().clone());
+                    if !public {
+                        src.references.push(Reference {
+                            from: from.clone(),
+                            segments: reference.segments.clone(),
+                        });
+                    }
+                    if name != "*" {
+                        src.imports.push((from.clone(), name, reference));
                     }
                 }
                 continue;
@@ -539,8 +544,8 @@ fn use_tree(
 struct CrateGraph {
     /// Module path → the file it is in (inline modules included).
     modules: BTreeMap<Vec<String>, PathBuf>,
-    /// (module, name) → the path a `pub use` in it re-exports under that name.
-    reexports: BTreeMap<(Vec<String>, String), Reference>,
+    /// (module, name) → the path a `use` in it brings in under that name.
+    imports: BTreeMap<(Vec<String>, String), Reference>,
     /// file → file it names → one path that makes the edge (for the message).
     edges: BTreeMap<PathBuf, BTreeMap<PathBuf, String>>,
 }
@@ -549,7 +554,7 @@ impl CrateGraph {
     fn read(root: &Path) -> CrateGraph {
         let mut graph = CrateGraph {
             modules: BTreeMap::new(),
-            reexports: BTreeMap::new(),
+            imports: BTreeMap::new(),
             edges: BTreeMap::new(),
         };
         let mut sources = Vec::new();
@@ -565,12 +570,12 @@ impl CrateGraph {
                 graph.modules.insert(m.clone(), file.clone());
             }
             queue.extend(src.children.iter().cloned());
-            for (m, name, r) in &src.reexports {
+            for (m, name, r) in &src.imports {
                 let r = Reference {
                     from: r.from.clone(),
                     segments: r.segments.clone(),
                 };
-                graph.reexports.insert((m.clone(), name.clone()), r);
+                graph.imports.insert((m.clone(), name.clone()), r);
             }
             for (m, _) in &src.children {
                 graph.modules.insert(m.clone(), PathBuf::new());
@@ -641,14 +646,14 @@ impl CrateGraph {
                 module = child;
                 continue;
             }
-            if let Some(target) = self.reexports.get(&(module.clone(), seg.clone())) {
+            if let Some(target) = self.imports.get(&(module.clone(), seg.clone())) {
                 let mut segments = target.segments.clone();
                 segments.extend(rest[k + 1..].iter().cloned());
                 let followed = Reference {
                     from: target.from.clone(),
                     segments,
                 };
-                // A re-export of something outside the crate is no edge at all.
+                // An import of something outside the crate is no edge at all.
                 return self.resolve(&followed, hops + 1);
             }
             break;

@@ -40,6 +40,7 @@ pub mod input;
 pub mod kinematics;
 pub mod measure;
 pub mod motion;
+pub mod numeric;
 pub mod pipeline;
 pub mod program;
 pub mod report;

@@ -3,17 +3,18 @@
 //! Every `crate::<module>` reference in `src/` must point at the same or a lower layer:
 //!
 //! ```text
-//! 0 error, kinematics (and the re-exported Axis, AxisVec, Plane)
-//! 1 input      plain configuration; imports no stage
-//! 2 program    NC programs → canonical moves
-//! 3 motion     moves → setpoints
-//! 4 drive      setpoints → actual axis positions
-//! 5 pipeline   the stages connected; the Sink trait
-//! 6 measure    sink: the ball bar
-//! 7 check      sinks: limits and collisions (uses measure's θ frame)
-//! 8 report     files
-//! 9 study      runs and studies beside the pipeline
-//! 10 cli       the command line
+//! 0 numeric    small numeric helpers (trig in degrees, cbrt, exp, fixed decimals); no stage
+//! 1 error, kinematics (and the re-exported Axis, AxisVec, Plane)
+//! 2 input      plain configuration; imports no stage
+//! 3 program    NC programs → canonical moves
+//! 4 motion     moves → setpoints
+//! 5 drive      setpoints → actual axis positions
+//! 6 pipeline   the stages connected; the Sink trait
+//! 7 measure    sink: the ball bar
+//! 8 check      sinks: limits and collisions (uses measure's θ frame)
+//! 9 report     files
+//! 10 study     runs and studies beside the pipeline
+//! 11 cli       the command line
 //! ```
 //!
 //! A reference upwards is a module reaching back up the pipeline, or a cycle in the making.
@@ -22,23 +23,24 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 const LAYERS: &[(&str, u32)] = &[
-    ("error", 0),
-    ("kinematics", 0),
-    ("Axis", 0),
-    ("AxisVec", 0),
-    ("Plane", 0),
-    ("Error", 0),
-    ("Result", 0),
-    ("input", 1),
-    ("program", 2),
-    ("motion", 3),
-    ("drive", 4),
-    ("pipeline", 5),
-    ("measure", 6),
-    ("check", 7),
-    ("report", 8),
-    ("study", 9),
-    ("cli", 10),
+    ("numeric", 0),
+    ("error", 1),
+    ("kinematics", 1),
+    ("Axis", 1),
+    ("AxisVec", 1),
+    ("Plane", 1),
+    ("Error", 1),
+    ("Result", 1),
+    ("input", 2),
+    ("program", 3),
+    ("motion", 4),
+    ("drive", 5),
+    ("pipeline", 6),
+    ("measure", 7),
+    ("check", 8),
+    ("report", 9),
+    ("study", 10),
+    ("cli", 11),
 ];
 
 fn layer(name: &str) -> Option<u32> {
@@ -143,6 +145,8 @@ fn every_module_refers_only_to_its_own_layer_or_below() {
         ("report", "measure"),
         ("study", "pipeline"),
         ("cli", "study"),
+        ("kinematics", "numeric"),
+        ("drive", "numeric"),
     ] {
         assert!(
             edges.contains_key(&(from.to_string(), to.to_string())),

@@ -44,8 +44,8 @@ use serde::{Serialize, Serializer};
 
 use super::bar::deviation_mm;
 use super::theta::{angle_distance_deg, BIN_DEG, N_BINS};
-use crate::kinematics::trig::sin_cos_deg;
 use crate::kinematics::{Kinematics, RotarySinCos};
+use crate::numeric::sin_cos_deg;
 use crate::{Axis, AxisVec};
 
 /// Standard uncertainty of an event's onset angle, deg.

@@ -50,7 +50,7 @@ use super::attribution::{attribute_arc, attribute_to_sites, AxisSet, ReversalSit
 use super::theta::{bin_index, bins, wrap_360};
 use crate::error::{Error, Result};
 use crate::input::program::{ConeTest, Direction};
-use crate::kinematics::trig::sin_cos_deg;
+use crate::numeric::sin_cos_deg;
 use crate::Axis;
 use crate::Plane;
 

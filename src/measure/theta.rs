@@ -2,7 +2,7 @@
 //! [`N_BINS`] bins of [`BIN_DEG`] over one revolution, bin `i` covering
 //! `[i BIN_DEG, (i + 1) BIN_DEG)`.
 
-use crate::kinematics::trig::sin_cos_deg;
+use crate::numeric::sin_cos_deg;
 
 /// Width of one theta bin, deg.
 pub const BIN_DEG: f64 = 0.05;

@@ -65,7 +65,7 @@ use std::path::Path;
 
 use super::presliding::{Presliding, ReversalValue};
 use crate::error::{Error, Result};
-use crate::input::drive::{DriveConfig, FrictionConfig, Model, Resolved, ServoConfig};
+use crate::input::drive::{si_per_unit, AxisDrive, Model};
 use crate::numeric::exp_neg;
 use crate::Axis;
 
@@ -360,23 +360,16 @@ fn column_product<const N: usize>(cols: &[[f64; 8]; N_INPUT], input: &[f64; N]) 
 }
 
 impl AxisServo {
-    /// `axis.is_rotary()` selects deg/rad and the `*_deg`/`*_nm` keys. Starts at rest at
-    /// `initial_position` (mm or deg), the backlash gap centred.
+    /// The servo of `drive` (validated and in SI units, [`AxisDrive`]), stepped every
+    /// `interpolation_period_s`. Starts at rest at `initial_position` (mm or deg), the backlash
+    /// gap centred.
     pub fn new(
-        axis: Axis,
-        servo: &ServoConfig,
-        drive: &DriveConfig,
-        friction: &FrictionConfig,
+        drive: &AxisDrive,
         interpolation_period_s: f64,
         initial_position: f64,
     ) -> Result<AxisServo> {
+        let axis = drive.axis;
         let where_ = format!("[axes.{axis}]");
-        if let Some((table, key, message)) = Resolved::problem(axis, servo, drive, friction) {
-            return Err(Error::invalid(
-                Path::new(&where_),
-                format!("`{table}.{key}`: {message}"),
-            ));
-        }
         if !(interpolation_period_s.is_finite() && interpolation_period_s > 0.0) {
             return Err(Error::invalid(
                 Path::new(&where_),
@@ -391,31 +384,27 @@ impl AxisServo {
                 format!("the initial position must be finite, got {initial_position}"),
             ));
         }
-        let r = Resolved::new(axis, servo, drive, friction);
-        let scale = if axis.is_rotary() { PI / 180.0 } else { 1e-3 };
+        let d = drive;
+        let scale = si_per_unit(axis);
         let t_ipo = interpolation_period_s;
-        let n_servo = ((t_ipo / (servo.servo_period_ms * 1e-3)).round() as usize).max(1);
+        let n_servo = ((t_ipo / d.servo_period_s).round() as usize).max(1);
         let t_servo = t_ipo / n_servo as f64;
-        let n_sub = servo.substeps as usize;
+        let n_sub = d.substeps as usize;
         let h = t_servo / n_sub as f64;
-        let mm = r.motor_mass.1;
-        let mt = r.table_mass.1;
+        let mm = d.motor_mass_kg_or_kgm2;
+        let mt = d.table_mass_kg_or_kgm2;
         let m_total = mm + mt;
-        // N/um -> N/m for linear axes; N m/rad as is for rotary ones.
-        let stiffness = if axis.is_rotary() {
-            r.stiffness.1
-        } else {
-            r.stiffness.1 * 1e6
-        };
-        let damping = 2.0 * r.damping_ratio * (stiffness * mm * mt / m_total).sqrt();
-        let tau = servo.current_time_constant_ms * 1e-3;
-        let viscous = r.viscous.1;
-        let kp = 2.0 * PI * servo.velocity_bandwidth_hz * m_total;
+        let stiffness = d.stiffness_n_per_m_or_nm_per_rad;
+        let damping = 2.0 * d.damping_ratio * (stiffness * mm * mt / m_total).sqrt();
+        let tau = d.current_time_constant_s;
+        let viscous = d.viscous_n_s_per_m_or_nm_s_per_rad;
+        let coulomb = d.coulomb_n_or_nm;
+        let kp = 2.0 * PI * d.velocity_bandwidth_hz * m_total;
         let state = initial_position * scale;
         Ok(AxisServo {
             axis,
-            model: r.model.unwrap_or(Model::Cascade),
-            fully_closed: r.fully_closed.unwrap_or(false),
+            model: d.model,
+            fully_closed: d.fully_closed,
             scale,
             inv_scale: 1.0 / scale,
             inv_t_ipo: 1.0 / t_ipo,
@@ -423,25 +412,25 @@ impl AxisServo {
             t_servo,
             n_sub,
             h,
-            kv: servo.kv_per_s,
-            kvff: servo.velocity_feedforward,
-            aff_mass: servo.acceleration_feedforward * m_total,
+            kv: d.kv_per_s,
+            kvff: d.velocity_feedforward,
+            aff_mass: d.acceleration_feedforward * m_total,
             kp,
-            ki_ts: kp * t_servo / (servo.velocity_integral_time_ms * 1e-3),
+            ki_ts: kp * t_servo / d.velocity_integral_time_s,
             current_alpha: if tau > 0.0 { -(-h / tau).exp_m1() } else { 1.0 },
-            force_limit: r.force_limit.1,
+            force_limit: d.force_limit_n_or_nm,
             h_over_mm: h / mm,
             mt_over_h: mt / h,
             inv_mt_plus_h_fv: 1.0 / (mt + h * viscous),
             mt,
             stiffness,
             damping,
-            half_backlash: 0.5 * r.backlash.1 * scale,
-            coulomb: r.coulomb.1,
-            static_friction: r.coulomb.1 * r.static_ratio,
-            stribeck: r.stribeck.1 * scale,
-            decay: (-servo.kv_per_s * t_servo).exp(),
-            fe_limit: r.fe_limit.1 * scale,
+            half_backlash: 0.5 * d.backlash_m_or_rad,
+            coulomb,
+            static_friction: coulomb * d.static_ratio,
+            stribeck: d.stribeck_m_or_rad_per_s,
+            decay: (-d.kv_per_s * t_servo).exp(),
+            fe_limit: d.following_error_limit_m_or_rad,
             setpoint: state,
             v_ff: 0.0,
             x_m: state,
@@ -451,28 +440,24 @@ impl AxisServo {
             force: 0.0,
             integral: 0.0,
             x_m_tick: state,
-            presliding: (r.presliding.1 > 0.0 && r.coulomb.1 > 0.0).then(|| {
-                let unit = if axis.is_rotary() { scale } else { 1e-6 };
+            presliding: (d.presliding_m_or_rad > 0.0 && coulomb > 0.0).then(|| {
                 Presliding::new(
-                    r.coulomb.1,
-                    r.presliding.1 * unit,
+                    coulomb,
+                    d.presliding_m_or_rad,
                     mt,
-                    r.presliding_damping_ratio,
+                    d.presliding_damping_ratio,
                 )
             }),
+            // The reversal value is a figure in the axis's interface unit (mm or deg).
             reversal: ReversalValue::new(
-                r.backlash.1,
-                r.coulomb.1,
+                d.backlash_mm_or_deg,
+                coulomb,
                 stiffness * scale,
-                if axis.is_rotary() {
-                    r.presliding.1
-                } else {
-                    r.presliding.1 * 1e-3
-                },
-                r.fully_closed.unwrap_or(false),
+                d.presliding_mm_or_deg,
+                d.fully_closed,
             ),
             exact: None,
-            bound_cache: Cell::new((0.0, r.coulomb.1 * r.static_ratio, 1.0)),
+            bound_cache: Cell::new((0.0, coulomb * d.static_ratio, 1.0)),
             carried_regime: None,
             velocity_si: 0.0,
             periods_exact: 0,
@@ -1186,15 +1171,14 @@ mod tests {
             model: "cascade".into(),
             ..Default::default()
         };
-        let mut s = AxisServo::new(
+        let drive = AxisDrive::resolve(
             Axis::X,
             &servo,
             &DriveConfig::default(),
             &FrictionConfig::default(),
-            1e-3,
-            0.0,
         )
         .unwrap();
+        let mut s = AxisServo::new(&drive, 1e-3, 0.0).unwrap();
         // Spring pre-loaded to 0.9 Fs = 175.5 N: d = 175.5 / 2e8 m. Motor held (force cancels).
         let fs = 150.0 * 1.3;
         for (load, moves) in [(0.9 * fs, false), (1.1 * fs, true)] {

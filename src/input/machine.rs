@@ -10,7 +10,7 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
-use crate::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
+use crate::input::drive::{AxisDrive, DriveConfig, FrictionConfig, ServoConfig};
 use crate::input::geometry_errors::{self, GeometryErrors};
 use crate::input::scene::{SceneConfig, ToolConfig};
 use crate::input::toml_text::{self, value_error};
@@ -88,6 +88,16 @@ pub struct AxisConfig {
 }
 
 impl AxisConfig {
+    /// The drive of this configuration as `axis` (see [`Machine::drive`]).
+    pub fn drive_of(&self, axis: Axis) -> Result<AxisDrive> {
+        AxisDrive::resolve(axis, &self.servo, &self.drive, &self.friction).map_err(|p| {
+            Error::invalid(
+                Path::new(&format!("[axes.{axis}]")),
+                format!("`{}.{}`: {}", p.table, p.key, p.message),
+            )
+        })
+    }
+
     /// True when `value` (mm or deg) lies within the travel, or the axis is continuous.
     pub fn within_travel(&self, value: f64) -> bool {
         self.continuous || (self.min..=self.max).contains(&value)
@@ -250,6 +260,13 @@ impl Machine {
             .expect("every axis of the layout is present")
     }
 
+    /// The drive of `axis` in SI units, resolved from its configuration by the function that
+    /// validated it on load ([`AxisDrive::resolve`]), so a what-if change made through
+    /// [`Machine::axis_mut`] is checked too; an error names `[axes.X]` and the key.
+    pub fn drive(&self, axis: Axis) -> Result<AxisDrive> {
+        self.axis(axis).drive_of(axis)
+    }
+
     pub fn has_axis(&self, axis: Axis) -> bool {
         self.axes.contains_key(&axis)
     }
@@ -316,6 +333,7 @@ fn check_axis(path: &Path, text: &str, section: &str, axis: Axis, c: &AxisConfig
         ));
     }
     crate::input::drive::validate(path, text, section, axis, &c.servo, &c.drive, &c.friction)
+        .map(|_| ())
 }
 
 /// Merges `overlay` into `base`: tables merge key by key, any other value replaces.

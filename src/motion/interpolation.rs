@@ -761,9 +761,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     /// time, the reader's code (interpreter, validation) found the instruction cache cold
     /// on every block. Reading stops at the first error, where the interpolator stops. Only
     /// when blocks are read changes (at most `batch` blocks early), not what is planned: the
-    /// window and its backward passes are the same. (Planning them a batch at a time as
-    /// well was no faster in alternating runs: fewer instruction-cache misses, but a planned
-    /// block is larger than the block, more data through the data cache.)
+    /// window and its backward passes are the same.
     fn next_block(&mut self, batch: usize) -> Option<Result<Move>> {
         if self.read_ahead.is_empty() && !self.blocks_done {
             for _ in 0..batch {

@@ -308,9 +308,8 @@ impl SceneMonitor {
         }
     }
 
-    /// Whether tool/table pairs use the relative-motion bound as well (off by default: on
-    /// the bundled cones it saves 30-60 % of the queries but costs two `sin_cos` and a
-    /// bound per pair on every sample, which `benches/check.rs` measured as slower overall).
+    /// Whether tool/table pairs use the relative-motion bound as well: fewer queries for two
+    /// `sin_cos` and a bound per pair on every sample (off by default; docs/performance.md).
     pub fn with_relative_bounds(mut self, on: bool) -> SceneMonitor {
         self.uses_relative = on && self.states.iter().any(|s| s.relative.is_some());
         self

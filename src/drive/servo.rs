@@ -1148,6 +1148,7 @@ fn play(x_m: f64, x_t: f64, half: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
 
     #[test]
     fn dead_zone_play_and_stribeck_bound_follow_their_definitions() {

@@ -352,15 +352,8 @@ pub fn deep_merge(base: &mut toml::Table, overlay: &toml::Table) {
 mod tests {
     use super::*;
 
-    fn message(e: Error) -> String {
-        match e {
-            Error::AtSource(e) => format!("{}: {}", e.line, e.message),
-            other => other.to_string(),
-        }
-    }
-
-    /// The machine loader calls [`crate::input::drive::validate`], so a bad drive key in a machine file is
-    /// reported at its line.
+    /// The machine loader calls [`crate::input::drive::validate`], so a bad drive key in a
+    /// machine file is reported at its line.
     #[test]
     fn machine_files_report_drive_errors_at_their_line() {
         let axis = |name: &str, extra: &str| {
@@ -373,11 +366,16 @@ mod tests {
             axis("Y", ""),
             axis("Z", "[axes.Z.drive]\nbacklash_deg = 0.1\n")
         );
-        let e = Machine::from_toml(Path::new("m.toml"), &text, None).unwrap_err();
-        let m = message(e);
-        assert!(
-            m.starts_with("24: `axes.Z.drive.backlash_deg`: is a rotary-axis key"),
-            "{m}"
-        );
+        match Machine::from_toml(Path::new("m.toml"), &text, None) {
+            Err(Error::AtSource(e)) => {
+                assert_eq!(e.line, 24);
+                assert!(
+                    e.message.starts_with("`axes.Z.drive.backlash_deg`: is a rotary-axis key"),
+                    "{}",
+                    e.message
+                );
+            }
+            other => panic!("expected an error at a line, got {other:?}"),
+        }
     }
 }

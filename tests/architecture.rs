@@ -364,6 +364,7 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
     let mut scope: Vec<(String, usize)> = Vec::new();
     let mut depth = 0usize;
     let mut path_attr: Option<String> = None;
+    let mut paths_seen = 0;
     let current = |scope: &[(String, usize)]| -> Vec<String> {
         let mut m = module.to_vec();
         m.extend(scope.iter().map(|(n, _)| n.clone()));
@@ -383,12 +384,12 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
             Token::Punct('#') if toks.get(i + 2) == Some(&Token::Ident("path".into())) => {
                 // #[path = "..."]: the string was dropped by the tokenizer, so read it from
                 // the text, in the order the attributes appear.
-                let n = src.children.len() + usize::from(path_attr.is_some());
                 path_attr = text
                     .match_indices("#[path")
-                    .nth(n)
+                    .nth(paths_seen)
                     .and_then(|(k, _)| text[k..].split('"').nth(1))
                     .map(str::to_string);
+                paths_seen += 1;
             }
             Token::Ident(w) if w == "mod" => {
                 if let Some(Token::Ident(name)) = toks.get(i + 1) {
@@ -581,17 +582,7 @@ impl CrateGraph {
                 };
                 graph.imports.insert((m.clone(), name.clone()), r);
             }
-            for (m, _) in &src.children {
-                graph.modules.insert(m.clone(), PathBuf::new());
-            }
             sources.push((file, src));
-        }
-        // The declared child modules were placeholders until their own files were read.
-        for (file, src) in &sources {
-            for (m, f) in &src.children {
-                graph.modules.insert(m.clone(), f.clone());
-            }
-            let _ = file;
         }
         for (file, src) in &sources {
             for r in &src.references {

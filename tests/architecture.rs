@@ -205,8 +205,8 @@ fn the_reader_crate_depends_on_nothing_of_mtsim() {
 // own code does not depend on them. A parent may use its children's items (`child::f()`), and a
 // child may use its parent's items (`super::Item`), but not both: a child that names an item
 // defined in its parent file while the parent's code names one of the child's items is a loop,
-// as is any longer cycle. Paths inside inline modules (`mod tests { use super::*; }`) resolve from that module,
-// so a file's own test module referring back to the file is no edge.
+// as is any longer cycle. Paths inside inline modules resolve from that module, and test code
+// (a `#[cfg(test)]` module or `use`) makes no edge: tests are clients of the whole crate.
 
 /// One token of Rust code: an identifier (or keyword), or a piece of punctuation.
 #[derive(Clone, Debug, PartialEq)]
@@ -365,6 +365,9 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
     let mut depth = 0usize;
     let mut path_attr: Option<String> = None;
     let mut paths_seen = 0;
+    // `#[cfg(test)]` seen, for the next item; the depth a test module opened at.
+    let mut test_attr = false;
+    let mut test_depth: Option<usize> = None;
     let current = |scope: &[(String, usize)]| -> Vec<String> {
         let mut m = module.to_vec();
         m.extend(scope.iter().map(|(n, _)| n.clone()));
@@ -380,6 +383,28 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
                 if scope.last().is_some_and(|(_, d)| *d == depth) {
                     scope.pop();
                 }
+                if test_depth == Some(depth) {
+                    test_depth = None;
+                }
+            }
+            Token::Punct('#')
+                if toks[i + 1..].starts_with(&[
+                    Token::Punct('['),
+                    Token::Ident("cfg".into()),
+                    Token::Punct('('),
+                    Token::Ident("test".into()),
+                    Token::Punct(')'),
+                ]) =>
+            {
+                test_attr = true;
+            }
+            Token::Ident(w)
+                if matches!(
+                    w.as_str(),
+                    "fn" | "struct" | "enum" | "impl" | "const" | "static" | "trait" | "type"
+                ) =>
+            {
+                test_attr = false;
             }
             Token::Punct('#') if toks.get(i + 2) == Some(&Token::Ident("path".into())) => {
                 // #[path = "..."]: the string was dropped by the tokenizer, so read it from
@@ -413,6 +438,9 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
                         Some(Token::Punct('{')) => {
                             src.modules.push(path);
                             scope.push((name.clone(), depth));
+                            if std::mem::take(&mut test_attr) && test_depth.is_none() {
+                                test_depth = Some(depth);
+                            }
                         }
                         _ => {}
                     }
@@ -426,6 +454,7 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
                         || (toks[i - 1] == Token::Punct(')')
                             && toks.get(i.wrapping_sub(4)) == Some(&Token::Ident("pub".into()))));
                 let from = current(&scope);
+                let test = std::mem::take(&mut test_attr) || test_depth.is_some();
                 let mut trees = Vec::new();
                 i = use_tree(&toks, i + 1, Vec::new(), &mut trees);
                 for (segments, alias) in trees {
@@ -434,7 +463,7 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
                         segments,
                     };
                     let name = alias.unwrap_or_else(|| reference.segments.last().unwrap().clone());
-                    if !public {
+                    if !public && !test {
                         src.references.push(Reference {
                             from: from.clone(),
                             segments: reference.segments.clone(),
@@ -448,7 +477,8 @@ fn read_source(file: &Path, module: &[String]) -> SourceFile {
             }
             Token::Ident(first)
                 if !matches!(toks.get(i.wrapping_sub(1)), Some(Token::PathSep))
-                    && toks.get(i + 1) == Some(&Token::PathSep) =>
+                    && toks.get(i + 1) == Some(&Token::PathSep)
+                    && test_depth.is_none() =>
             {
                 let mut segments = vec![first.clone()];
                 let mut j = i + 1;
@@ -785,7 +815,8 @@ fn the_loop_finder_tells_structure_from_loops() {
         CrateGraph::read(&dir.join("lib.rs")).describe_loops(&dir)
     };
     // A parent that uses its child's items, a child that uses a sibling through the parent's
-    // re-export, its own test module using `super::*`, and a path in a comment and a string.
+    // re-export, its own test module using `super::*`, a path in a comment and a string, and
+    // a test module that uses a file which uses its own.
     let allowed = write(&[
         ("lib.rs", "mod p;\nmod q;\npub use p::Z;\n"),
         ("p.rs", "mod c;\nmod d;\npub use c::Z;\npub use d::W;\nfn f() -> Z { c::make() }\n"),
@@ -794,8 +825,11 @@ fn the_loop_finder_tells_structure_from_loops() {
             "use super::W; // super::f\npub struct Z;\npub fn make() -> Z { let _ = \"super::f\"; Z }\n\
              #[cfg(test)]\nmod tests { use super::*; }\n",
         ),
-        ("p/d.rs", "pub struct W;\n"),
         ("q.rs", "use crate::Z;\nuse crate::p::{self, W};\n"),
+        (
+            "p/d.rs",
+            "pub struct W;\n#[cfg(test)]\nmod tests {\n    use crate::q;\n    fn t() { crate::p::c::make(); }\n}\n",
+        ),
     ]);
     assert_eq!(allowed, "");
     // A child reaching back into its parent while the parent uses the child.

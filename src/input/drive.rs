@@ -823,7 +823,10 @@ mod tests {
         assert_eq!((y.model, y.fully_closed), (Model::Cascade, true));
         assert_eq!(y.backlash_m_or_rad, 0.004 * 1e-3);
         assert_eq!(y.presliding_m_or_rad, 2.0 * 1e-6);
-        assert_eq!((y.backlash_mm_or_deg, y.presliding_mm_or_deg), (0.004, 2e-3));
+        assert_eq!(
+            (y.backlash_mm_or_deg, y.presliding_mm_or_deg),
+            (0.004, 2e-3)
+        );
         assert!(y.has_dry_friction());
         let twin = y.linear_twin();
         assert_eq!(

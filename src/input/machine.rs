@@ -370,7 +370,8 @@ mod tests {
             Err(Error::AtSource(e)) => {
                 assert_eq!(e.line, 24);
                 assert!(
-                    e.message.starts_with("`axes.Z.drive.backlash_deg`: is a rotary-axis key"),
+                    e.message
+                        .starts_with("`axes.Z.drive.backlash_deg`: is a rotary-axis key"),
                     "{}",
                     e.message
                 );

@@ -77,13 +77,13 @@
 
 pub mod error_table;
 pub mod location;
-pub mod trig;
 
 pub use location::{AxisLine, LocationErrors, LocationParam};
 
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Vector3};
 use serde::{Deserialize, Serialize};
 
+use crate::numeric::sin_cos_deg;
 use crate::{Axis, AxisVec};
 
 /// The layout of a machine.
@@ -351,8 +351,8 @@ impl Kinematics {
         let tilt = self.layout.tilt_axis().map_or(0.0, |t| q[t]);
         let table = self.layout.table_axis().map_or(0.0, |t| q[t]);
         RotarySinCos {
-            c: trig::sin_cos_deg(table),
-            tilt: trig::sin_cos_deg(tilt),
+            c: sin_cos_deg(table),
+            tilt: sin_cos_deg(tilt),
         }
     }
 

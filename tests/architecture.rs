@@ -3,42 +3,44 @@
 //! Every `crate::<module>` reference in `src/` must point at the same or a lower layer:
 //!
 //! ```text
-//! 0 error, kinematics (and the re-exported Axis, AxisVec, Plane)
-//! 1 input      plain configuration; imports no stage
-//! 2 program    NC programs → canonical moves
-//! 3 motion     moves → setpoints
-//! 4 drive      setpoints → actual axis positions
-//! 5 pipeline   the stages connected; the Sink trait
-//! 6 measure    sink: the ball bar
-//! 7 check      sinks: limits and collisions (uses measure's θ frame)
-//! 8 report     files
-//! 9 study      runs and studies beside the pipeline
-//! 10 cli       the command line
+//! 0 numeric    small numeric helpers (trig in degrees, cbrt, exp, fixed decimals); no stage
+//! 1 error, kinematics (and the re-exported Axis, AxisVec, Plane)
+//! 2 input      plain configuration; imports no stage
+//! 3 program    NC programs → canonical moves
+//! 4 motion     moves → setpoints
+//! 5 drive      setpoints → actual axis positions
+//! 6 pipeline   the stages connected; the Sink trait
+//! 7 measure    sink: the ball bar
+//! 8 check      sinks: limits and collisions (uses measure's θ frame)
+//! 9 report     files
+//! 10 study     runs and studies beside the pipeline
+//! 11 cli       the command line
 //! ```
 //!
 //! A reference upwards is a module reaching back up the pipeline, or a cycle in the making.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 const LAYERS: &[(&str, u32)] = &[
-    ("error", 0),
-    ("kinematics", 0),
-    ("Axis", 0),
-    ("AxisVec", 0),
-    ("Plane", 0),
-    ("Error", 0),
-    ("Result", 0),
-    ("input", 1),
-    ("program", 2),
-    ("motion", 3),
-    ("drive", 4),
-    ("pipeline", 5),
-    ("measure", 6),
-    ("check", 7),
-    ("report", 8),
-    ("study", 9),
-    ("cli", 10),
+    ("numeric", 0),
+    ("error", 1),
+    ("kinematics", 1),
+    ("Axis", 1),
+    ("AxisVec", 1),
+    ("Plane", 1),
+    ("Error", 1),
+    ("Result", 1),
+    ("input", 2),
+    ("program", 3),
+    ("motion", 4),
+    ("drive", 5),
+    ("pipeline", 6),
+    ("measure", 7),
+    ("check", 8),
+    ("report", 9),
+    ("study", 10),
+    ("cli", 11),
 ];
 
 fn layer(name: &str) -> Option<u32> {
@@ -143,6 +145,8 @@ fn every_module_refers_only_to_its_own_layer_or_below() {
         ("report", "measure"),
         ("study", "pipeline"),
         ("cli", "study"),
+        ("kinematics", "numeric"),
+        ("drive", "numeric"),
     ] {
         assert!(
             edges.contains_key(&(from.to_string(), to.to_string())),
@@ -180,4 +184,671 @@ fn the_reader_crate_depends_on_nothing_of_mtsim() {
         let text = std::fs::read_to_string(&file).unwrap();
         assert!(!text.contains("mtsim::"), "{} names mtsim", file.display());
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Loops between files.
+//
+// The graph's nodes are the crate's source files, found from the crate root by following its
+// `mod name;` declarations (with `#[path]`). A file A has an edge to a file B ≠ A when A's code
+// (comments and string literals removed) names a path that resolves into B:
+//
+// - `crate::a::b::Item`, `super::Item`, `self::a::Item`, and `child::Item` for a module `child`
+//   the file declares; `use` groups (`crate::{a, b::{c, d}}`) are expanded;
+// - the path is followed down the module tree as far as it names modules, then an item that the
+//   module only brings in with a `use` (`pub use other::Item;`, or a private `use` its children
+//   reach as `super::Item`) is followed to where it comes from, so a `mod.rs` that gathers
+//   items for its users or its children is not the file they depend on.
+//
+// A parent's `mod child;` declaration and its re-exports (`pub use child::Item;`) are
+// containment, not edges: they offer the child's items to the parent's users, and the parent's
+// own code does not depend on them. A parent may use its children's items (`child::f()`), and a
+// child may use its parent's items (`super::Item`), but not both: a child that names an item
+// defined in its parent file while the parent's code names one of the child's items is a loop,
+// as is any longer cycle. Paths inside inline modules resolve from that module, and test code
+// (a `#[cfg(test)]` module or `use`) makes no edge: tests are clients of the whole crate.
+
+/// One token of Rust code: an identifier (or keyword), or a piece of punctuation.
+#[derive(Clone, Debug, PartialEq)]
+enum Token {
+    Ident(String),
+    PathSep,
+    Punct(char),
+}
+
+/// The tokens of `text`, with comments, string, byte-string and char literals left out
+/// (a path named in a message or a doc comment is no dependency).
+fn tokens(text: &str) -> Vec<Token> {
+    let c: Vec<char> = text.chars().collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < c.len() {
+        let ch = c[i];
+        if ch == '/' && c.get(i + 1) == Some(&'/') {
+            while i < c.len() && c[i] != '\n' {
+                i += 1;
+            }
+        } else if ch == '/' && c.get(i + 1) == Some(&'*') {
+            let mut depth = 0;
+            while i < c.len() {
+                if c[i] == '/' && c.get(i + 1) == Some(&'*') {
+                    depth += 1;
+                    i += 2;
+                } else if c[i] == '*' && c.get(i + 1) == Some(&'/') {
+                    depth -= 1;
+                    i += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    i += 1;
+                }
+            }
+        } else if ch == '"' {
+            i += 1;
+            while i < c.len() && c[i] != '"' {
+                i += if c[i] == '\\' { 2 } else { 1 };
+            }
+            i += 1;
+        } else if (ch == 'r' || (ch == 'b' && c.get(i + 1) == Some(&'r'))) && {
+            let start = if ch == 'b' { i + 2 } else { i + 1 };
+            let mut j = start;
+            while c.get(j) == Some(&'#') {
+                j += 1;
+            }
+            c.get(j) == Some(&'"')
+        } {
+            // A raw string: r"..." or r#"..."# (any number of #).
+            let mut j = if ch == 'b' { i + 2 } else { i + 1 };
+            let mut hashes = 0;
+            while c[j] == '#' {
+                hashes += 1;
+                j += 1;
+            }
+            j += 1;
+            loop {
+                if j >= c.len() {
+                    break;
+                }
+                if c[j] == '"' && (1..=hashes).all(|k| c.get(j + k) == Some(&'#')) {
+                    j += 1 + hashes;
+                    break;
+                }
+                j += 1;
+            }
+            i = j;
+        } else if ch == '\'' {
+            // A char literal ('x', '\n', '\'') or a lifetime ('a).
+            if c.get(i + 1) == Some(&'\\') {
+                i += 2;
+                while i < c.len() && c[i] != '\'' {
+                    i += 1;
+                }
+                i += 1;
+            } else if c.get(i + 2) == Some(&'\'') {
+                i += 3;
+            } else {
+                i += 1;
+            }
+        } else if ch.is_alphabetic() || ch == '_' {
+            let start = i;
+            while i < c.len() && (c[i].is_alphanumeric() || c[i] == '_') {
+                i += 1;
+            }
+            let word: String = c[start..i].iter().collect();
+            if word == "b" && c.get(i) == Some(&'"') {
+                continue; // b"...": the string follows
+            }
+            out.push(Token::Ident(word));
+        } else if ch == ':' && c.get(i + 1) == Some(&':') {
+            out.push(Token::PathSep);
+            i += 2;
+        } else if ch.is_numeric() {
+            while i < c.len() && (c[i].is_alphanumeric() || c[i] == '_' || c[i] == '.') {
+                i += 1;
+            }
+        } else {
+            if !ch.is_whitespace() {
+                out.push(Token::Punct(ch));
+            }
+            i += 1;
+        }
+    }
+    out
+}
+
+/// A module of a crate: its path from the root (`["measure", "ballbar"]`) and the file it is in.
+struct Module {
+    path: Vec<String>,
+    file: PathBuf,
+}
+
+/// A path named in a file: the module it is named from, and its segments (`*` for a glob).
+struct Reference {
+    from: Vec<String>,
+    segments: Vec<String>,
+}
+
+/// One source file, read: the modules it holds (itself and its inline modules), the child
+/// module files it declares, and the paths it names.
+struct SourceFile {
+    modules: Vec<Vec<String>>,
+    children: Vec<(Vec<String>, PathBuf)>,
+    references: Vec<Reference>,
+    /// `use` items: (module, name it brings in) → the path it names. A `pub use` is a
+    /// re-export; a private `use` is also seen by the module's children (`super::name`).
+    imports: Vec<(Vec<String>, String, Reference)>,
+}
+
+/// Reads `file`, the file of module `module`.
+fn read_source(file: &Path, module: &[String]) -> SourceFile {
+    let toks = tokens(&std::fs::read_to_string(file).unwrap());
+    let is_mod_rs = matches!(
+        file.file_name().and_then(|n| n.to_str()),
+        Some("mod.rs" | "lib.rs" | "main.rs")
+    );
+    let dir = file.parent().unwrap();
+    // The folder of the file's child modules (Rust's module-file rules).
+    let child_dir = if is_mod_rs {
+        dir.to_path_buf()
+    } else {
+        dir.join(file.file_stem().unwrap())
+    };
+    let mut src = SourceFile {
+        modules: vec![module.to_vec()],
+        children: Vec::new(),
+        references: Vec::new(),
+        imports: Vec::new(),
+    };
+    // The inline modules open at this point, with the brace depth they opened at.
+    let mut scope: Vec<(String, usize)> = Vec::new();
+    let mut depth = 0usize;
+    let mut path_attr: Option<String> = None;
+    let mut paths_seen = 0;
+    // `#[cfg(test)]` seen, for the next item; the depth a test module opened at.
+    let mut test_attr = false;
+    let mut test_depth: Option<usize> = None;
+    let current = |scope: &[(String, usize)]| -> Vec<String> {
+        let mut m = module.to_vec();
+        m.extend(scope.iter().map(|(n, _)| n.clone()));
+        m
+    };
+    let text = std::fs::read_to_string(file).unwrap();
+    let mut i = 0;
+    while i < toks.len() {
+        match &toks[i] {
+            Token::Punct('{') => depth += 1,
+            Token::Punct('}') => {
+                depth -= 1;
+                if scope.last().is_some_and(|(_, d)| *d == depth) {
+                    scope.pop();
+                }
+                if test_depth == Some(depth) {
+                    test_depth = None;
+                }
+            }
+            Token::Punct('#')
+                if toks[i + 1..].starts_with(&[
+                    Token::Punct('['),
+                    Token::Ident("cfg".into()),
+                    Token::Punct('('),
+                    Token::Ident("test".into()),
+                    Token::Punct(')'),
+                ]) =>
+            {
+                test_attr = true;
+            }
+            Token::Ident(w)
+                if matches!(
+                    w.as_str(),
+                    "fn" | "struct" | "enum" | "impl" | "const" | "static" | "trait" | "type"
+                ) =>
+            {
+                test_attr = false;
+            }
+            Token::Punct('#') if toks.get(i + 2) == Some(&Token::Ident("path".into())) => {
+                // #[path = "..."]: the string was dropped by the tokenizer, so read it from
+                // the text, in the order the attributes appear.
+                path_attr = text
+                    .match_indices("#[path")
+                    .nth(paths_seen)
+                    .and_then(|(k, _)| text[k..].split('"').nth(1))
+                    .map(str::to_string);
+                paths_seen += 1;
+            }
+            Token::Ident(w) if w == "mod" => {
+                if let Some(Token::Ident(name)) = toks.get(i + 1) {
+                    let mut path = current(&scope);
+                    path.push(name.clone());
+                    match toks.get(i + 2) {
+                        Some(Token::Punct(';')) => {
+                            let file = match path_attr.take() {
+                                Some(p) => dir.join(p),
+                                None => {
+                                    let flat = child_dir.join(format!("{name}.rs"));
+                                    if flat.exists() {
+                                        flat
+                                    } else {
+                                        child_dir.join(name).join("mod.rs")
+                                    }
+                                }
+                            };
+                            src.children.push((path, file));
+                        }
+                        Some(Token::Punct('{')) => {
+                            src.modules.push(path);
+                            scope.push((name.clone(), depth));
+                            if std::mem::take(&mut test_attr) && test_depth.is_none() {
+                                test_depth = Some(depth);
+                            }
+                        }
+                        _ => {}
+                    }
+                    i += 2;
+                    continue;
+                }
+            }
+            Token::Ident(w) if w == "use" => {
+                let public = i > 0
+                    && (toks[i - 1] == Token::Ident("pub".into())
+                        || (toks[i - 1] == Token::Punct(')')
+                            && toks.get(i.wrapping_sub(4)) == Some(&Token::Ident("pub".into()))));
+                let from = current(&scope);
+                let test = std::mem::take(&mut test_attr) || test_depth.is_some();
+                let mut trees = Vec::new();
+                i = use_tree(&toks, i + 1, Vec::new(), &mut trees);
+                for (segments, alias) in trees {
+                    let reference = Reference {
+                        from: from.clone(),
+                        segments,
+                    };
+                    let name = alias.unwrap_or_else(|| reference.segments.last().unwrap().clone());
+                    if !public && !test {
+                        src.references.push(Reference {
+                            from: from.clone(),
+                            segments: reference.segments.clone(),
+                        });
+                    }
+                    if name != "*" {
+                        src.imports.push((from.clone(), name, reference));
+                    }
+                }
+                continue;
+            }
+            Token::Ident(first)
+                if !matches!(toks.get(i.wrapping_sub(1)), Some(Token::PathSep))
+                    && toks.get(i + 1) == Some(&Token::PathSep)
+                    && test_depth.is_none() =>
+            {
+                let mut segments = vec![first.clone()];
+                let mut j = i + 1;
+                while toks.get(j) == Some(&Token::PathSep) {
+                    match toks.get(j + 1) {
+                        Some(Token::Ident(s)) => segments.push(s.clone()),
+                        Some(Token::Punct('{')) => {
+                            let mut trees = Vec::new();
+                            j = use_tree(&toks, j + 1, segments.clone(), &mut trees);
+                            for (s, _) in trees {
+                                src.references.push(Reference {
+                                    from: current(&scope),
+                                    segments: s,
+                                });
+                            }
+                            segments.clear();
+                            break;
+                        }
+                        _ => break,
+                    }
+                    j += 2;
+                }
+                if !segments.is_empty() {
+                    src.references.push(Reference {
+                        from: current(&scope),
+                        segments,
+                    });
+                }
+                i = j;
+                continue;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    src
+}
+
+/// Parses the use tree that starts at `toks[i]` under `prefix`, pushing each full path (with
+/// its `as` alias) to `out`; returns the index after the tree (past a final `;`).
+fn use_tree(
+    toks: &[Token],
+    mut i: usize,
+    prefix: Vec<String>,
+    out: &mut Vec<(Vec<String>, Option<String>)>,
+) -> usize {
+    let mut path = prefix;
+    loop {
+        match toks.get(i) {
+            Some(Token::Ident(s)) if s == "as" => {
+                if let Some(Token::Ident(alias)) = toks.get(i + 1) {
+                    out.push((std::mem::take(&mut path), Some(alias.clone())));
+                }
+                i += 2;
+            }
+            Some(Token::Ident(s)) => {
+                path.push(s.clone());
+                i += 1;
+            }
+            Some(Token::Punct('*')) => {
+                path.push("*".into());
+                i += 1;
+            }
+            Some(Token::PathSep) => i += 1,
+            Some(Token::Punct('{')) => {
+                i += 1;
+                loop {
+                    i = use_tree(toks, i, path.clone(), out);
+                    match toks.get(i) {
+                        Some(Token::Punct(',')) => i += 1,
+                        Some(Token::Punct('}')) => {
+                            i += 1;
+                            break;
+                        }
+                        _ => return i,
+                    }
+                    if toks.get(i) == Some(&Token::Punct('}')) {
+                        i += 1;
+                        break;
+                    }
+                }
+                path.clear();
+            }
+            _ => {
+                if !path.is_empty() {
+                    out.push((path, None));
+                }
+                if toks.get(i) == Some(&Token::Punct(';')) {
+                    i += 1;
+                }
+                return i;
+            }
+        }
+    }
+}
+
+/// The file graph of the crate whose root is `root`.
+struct CrateGraph {
+    /// Module path → the file it is in (inline modules included).
+    modules: BTreeMap<Vec<String>, PathBuf>,
+    /// (module, name) → the path a `use` in it brings in under that name.
+    imports: BTreeMap<(Vec<String>, String), Reference>,
+    /// file → file it names → one path that makes the edge (for the message).
+    edges: BTreeMap<PathBuf, BTreeMap<PathBuf, String>>,
+}
+
+impl CrateGraph {
+    fn read(root: &Path) -> CrateGraph {
+        let mut graph = CrateGraph {
+            modules: BTreeMap::new(),
+            imports: BTreeMap::new(),
+            edges: BTreeMap::new(),
+        };
+        let mut sources = Vec::new();
+        let mut queue = vec![(Vec::new(), root.to_path_buf())];
+        while let Some((module, file)) = queue.pop() {
+            assert!(
+                file.exists(),
+                "{}: module {module:?} not found",
+                file.display()
+            );
+            let src = read_source(&file, &module);
+            for m in &src.modules {
+                graph.modules.insert(m.clone(), file.clone());
+            }
+            queue.extend(src.children.iter().cloned());
+            for (m, name, r) in &src.imports {
+                let r = Reference {
+                    from: r.from.clone(),
+                    segments: r.segments.clone(),
+                };
+                graph.imports.insert((m.clone(), name.clone()), r);
+            }
+            sources.push((file, src));
+        }
+        for (file, src) in &sources {
+            for r in &src.references {
+                if let Some(to) = graph.resolve(r, 0) {
+                    if &to != file {
+                        graph
+                            .edges
+                            .entry(file.clone())
+                            .or_default()
+                            .entry(to)
+                            .or_insert_with(|| r.segments.join("::"));
+                    }
+                }
+            }
+            graph.edges.entry(file.clone()).or_default();
+        }
+        graph
+    }
+
+    /// The file a path resolves into, or `None` for a path outside the crate (another crate,
+    /// a type's associated item, a local name).
+    fn resolve(&self, r: &Reference, hops: usize) -> Option<PathBuf> {
+        if hops > 8 {
+            return None;
+        }
+        let mut module = r.from.clone();
+        let mut rest = r.segments.as_slice();
+        match rest.first().map(String::as_str) {
+            Some("crate") => {
+                module.clear();
+                rest = &rest[1..];
+            }
+            Some("self") => rest = &rest[1..],
+            Some("super") => {
+                while rest.first().is_some_and(|s| s == "super") {
+                    module.pop()?;
+                    rest = &rest[1..];
+                }
+            }
+            Some(first) => {
+                let mut child = module.clone();
+                child.push(first.to_string());
+                if !self.modules.contains_key(&child) {
+                    return None;
+                }
+            }
+            None => return None,
+        }
+        for (k, seg) in rest.iter().enumerate() {
+            if seg == "self" {
+                continue;
+            }
+            let mut child = module.clone();
+            child.push(seg.clone());
+            if self.modules.contains_key(&child) {
+                module = child;
+                continue;
+            }
+            if let Some(target) = self.imports.get(&(module.clone(), seg.clone())) {
+                let mut segments = target.segments.clone();
+                segments.extend(rest[k + 1..].iter().cloned());
+                let followed = Reference {
+                    from: target.from.clone(),
+                    segments,
+                };
+                // An import of something outside the crate is no edge at all.
+                return self.resolve(&followed, hops + 1);
+            }
+            break;
+        }
+        self.modules.get(&module).cloned()
+    }
+
+    /// Every loop of the graph: for each set of files that all reach each other (a strongly
+    /// connected component of more than one file), the set and its shortest cycle through its
+    /// first file, as the files in order (the first repeated at the end).
+    fn loops(&self) -> Vec<(BTreeSet<PathBuf>, Vec<PathBuf>)> {
+        let nodes: Vec<&PathBuf> = self.edges.keys().collect();
+        let reach = |from: &PathBuf| -> BTreeSet<PathBuf> {
+            let mut seen = BTreeSet::new();
+            let mut stack = vec![from.clone()];
+            while let Some(n) = stack.pop() {
+                for to in self.edges.get(&n).into_iter().flat_map(|e| e.keys()) {
+                    if seen.insert(to.clone()) {
+                        stack.push(to.clone());
+                    }
+                }
+            }
+            seen
+        };
+        let reachable: BTreeMap<&PathBuf, BTreeSet<PathBuf>> =
+            nodes.iter().map(|n| (*n, reach(n))).collect();
+        let mut done: BTreeSet<PathBuf> = BTreeSet::new();
+        let mut loops = Vec::new();
+        for n in &nodes {
+            if done.contains(*n) || !reachable[n].contains(*n) {
+                continue;
+            }
+            // The files on a cycle through n: those n reaches and that reach n.
+            let component: BTreeSet<PathBuf> = reachable[n]
+                .iter()
+                .filter(|m| reachable.get(m).is_some_and(|r| r.contains(*n)))
+                .cloned()
+                .collect();
+            done.extend(component.iter().cloned());
+            // The shortest cycle through n (breadth first inside the component).
+            let mut previous: BTreeMap<PathBuf, PathBuf> = BTreeMap::new();
+            let mut queue = std::collections::VecDeque::from([(*n).clone()]);
+            'search: while let Some(m) = queue.pop_front() {
+                for to in self.edges[&m].keys() {
+                    if to == *n {
+                        previous.insert((*n).clone(), m.clone());
+                        break 'search;
+                    }
+                    if component.contains(to) && !previous.contains_key(to) {
+                        previous.insert(to.clone(), m.clone());
+                        queue.push_back(to.clone());
+                    }
+                }
+            }
+            let mut cycle = vec![(*n).clone()];
+            let mut at = previous[*n].clone();
+            while &at != *n {
+                cycle.push(at.clone());
+                at = previous[&at].clone();
+            }
+            cycle.push((*n).clone());
+            cycle.reverse();
+            loops.push((component, cycle));
+        }
+        loops
+    }
+
+    /// The loops written out, one per line: `a.rs -(super::b::X)-> b.rs -(...)-> a.rs`, and
+    /// where more files are tied together than the cycle shows, all of them on the next line.
+    fn describe_loops(&self, base: &Path) -> String {
+        let name = |f: &PathBuf| f.strip_prefix(base).unwrap_or(f).display().to_string();
+        self.loops()
+            .iter()
+            .map(|(component, cycle)| {
+                let mut line = name(&cycle[0]);
+                for pair in cycle.windows(2) {
+                    line += &format!(
+                        " -({})-> {}",
+                        self.edges[&pair[0]][&pair[1]],
+                        name(&pair[1])
+                    );
+                }
+                if component.len() + 1 > cycle.len() {
+                    let all: Vec<String> = component.iter().map(name).collect();
+                    line += &format!("\n  (one of the loops among {})", all.join(", "));
+                }
+                line
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+}
+
+fn assert_no_loops(root: &Path) {
+    let graph = CrateGraph::read(root);
+    let dir = root.parent().unwrap();
+    // Every source file of the folder is part of the module tree the graph was read from.
+    let mut files = Vec::new();
+    rust_files(dir, &mut files);
+    for file in files {
+        let binary = file == dir.join("main.rs") || file.starts_with(dir.join("bin"));
+        assert!(
+            binary || graph.edges.contains_key(&file),
+            "{} is not reached from {}",
+            file.display(),
+            root.display()
+        );
+    }
+    let loops = graph.describe_loops(dir);
+    assert!(loops.is_empty(), "files that import each other:\n{loops}");
+}
+
+#[test]
+fn no_two_files_of_src_import_each_other() {
+    assert_no_loops(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs"));
+}
+
+#[test]
+fn no_two_files_of_the_reader_crate_import_each_other() {
+    assert_no_loops(&Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/ngc/src/lib.rs"));
+}
+
+/// The loop finder itself, on a small crate written for it: what it allows and what it finds.
+#[test]
+fn the_loop_finder_tells_structure_from_loops() {
+    let dir = std::env::temp_dir().join(format!("mtsim-architecture-{}", std::process::id()));
+    let write = |files: &[(&str, &str)]| {
+        let _ = std::fs::remove_dir_all(&dir);
+        for (name, text) in files {
+            let path = dir.join(name);
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(path, text).unwrap();
+        }
+        CrateGraph::read(&dir.join("lib.rs")).describe_loops(&dir)
+    };
+    // A parent that uses its child's items, a child that uses a sibling through the parent's
+    // re-export, its own test module using `super::*`, a path in a comment and a string, and
+    // a test module that uses a file which uses its own.
+    let allowed = write(&[
+        ("lib.rs", "mod p;\nmod q;\npub use p::Z;\n"),
+        ("p.rs", "mod c;\nmod d;\npub use c::Z;\npub use d::W;\nfn f() -> Z { c::make() }\n"),
+        (
+            "p/c.rs",
+            "use super::W; // super::f\npub struct Z;\npub fn make() -> Z { let _ = \"super::f\"; Z }\n\
+             #[cfg(test)]\nmod tests { use super::*; }\n",
+        ),
+        ("q.rs", "use crate::Z;\nuse crate::p::{self, W};\n"),
+        (
+            "p/d.rs",
+            "pub struct W;\n#[cfg(test)]\nmod tests {\n    use crate::q;\n    fn t() { crate::p::c::make(); }\n}\n",
+        ),
+    ]);
+    assert_eq!(allowed, "");
+    // A child reaching back into its parent while the parent uses the child.
+    let back = write(&[
+        ("lib.rs", "mod p;\n"),
+        ("p.rs", "mod c;\npub struct V;\nfn f() { c::g() }\n"),
+        ("p/c.rs", "pub fn g() { let _ = super::V; }\n"),
+    ]);
+    assert_eq!(back, "p/c.rs -(super::V)-> p.rs -(c::g)-> p/c.rs");
+    // Three siblings in a ring, through a use group.
+    let ring = write(&[
+        ("lib.rs", "mod a;\nmod b;\nmod c;\n"),
+        ("a.rs", "use crate::{b::B, self as root};\npub struct A;\n"),
+        ("b.rs", "use super::c::C;\npub struct B;\n"),
+        ("c.rs", "pub struct C;\nfn f() { crate::a::A; }\n"),
+    ]);
+    assert_eq!(
+        ring,
+        "a.rs -(crate::b::B)-> b.rs -(super::c::C)-> c.rs -(crate::a::A)-> a.rs"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

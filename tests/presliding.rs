@@ -3,7 +3,7 @@
 //! takes the friction over gradually, `F = Fc (1 - 2 exp(-s / δ))` after a reversal.
 
 use mtsim::drive::AxisServo;
-use mtsim::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
+use mtsim::input::drive::{AxisDrive, DriveConfig, FrictionConfig, ServoConfig};
 use mtsim::Axis;
 
 /// b 10 um, Fc 150 N, k 200 N/um, δ 2 um, semi-closed cascade loop.
@@ -23,7 +23,12 @@ fn servo(presliding_um: Option<f64>) -> AxisServo {
         presliding_um,
         ..Default::default()
     };
-    AxisServo::new(Axis::X, &servo, &drive, &friction, 1e-3, 0.0).unwrap()
+    AxisServo::new(
+        &AxisDrive::resolve(Axis::X, &servo, &drive, &friction).unwrap(),
+        1e-3,
+        0.0,
+    )
+    .unwrap()
 }
 
 /// Moves from `from` to `to` mm at 10 mm/s with 1 ms setpoints, then dwells 1.5 s; returns

@@ -5,7 +5,7 @@
 use std::f64::consts::PI;
 
 use mtsim::drive::AxisServo;
-use mtsim::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
+use mtsim::input::drive::{AxisDrive, DriveConfig, FrictionConfig, ServoConfig};
 use mtsim::{Axis, Error};
 
 /// Interpolation period, s.
@@ -59,8 +59,18 @@ struct Sample {
 /// is discarded; then one full revolution is returned.
 fn circle(x: &Setup, y: &Setup, r: f64, feed: f64, ccw: bool) -> Vec<Sample> {
     let omega = feed / 60.0 / r * if ccw { 1.0 } else { -1.0 };
-    let mut sx = AxisServo::new(Axis::X, &x.servo, &x.drive, &x.friction, T, r).unwrap();
-    let mut sy = AxisServo::new(Axis::Y, &y.servo, &y.drive, &y.friction, T, 0.0).unwrap();
+    let mut sx = AxisServo::new(
+        &AxisDrive::resolve(Axis::X, &x.servo, &x.drive, &x.friction).unwrap(),
+        T,
+        r,
+    )
+    .unwrap();
+    let mut sy = AxisServo::new(
+        &AxisDrive::resolve(Axis::Y, &y.servo, &y.drive, &y.friction).unwrap(),
+        T,
+        0.0,
+    )
+    .unwrap();
     let lead_in = (1.0 / T).round() as usize;
     let revolution = (2.0 * PI / omega.abs() / T).round() as usize;
     let mut samples = Vec::with_capacity(revolution);
@@ -330,7 +340,12 @@ fn identical_dynamics_give_a_uniform_radial_error() {
 
 /// Runs a ramp at `speed` units/s for 2 s from rest and returns the final state.
 fn ramp(axis: Axis, s: &Setup, speed: f64) -> mtsim::drive::ServoState {
-    let mut servo = AxisServo::new(axis, &s.servo, &s.drive, &s.friction, T, 10.0).unwrap();
+    let mut servo = AxisServo::new(
+        &AxisDrive::resolve(axis, &s.servo, &s.drive, &s.friction).unwrap(),
+        T,
+        10.0,
+    )
+    .unwrap();
     let mut last = None;
     for k in 1..=2000 {
         let t = k as f64 * T;
@@ -400,10 +415,13 @@ fn an_unstable_drive_reports_divergence_on_its_axis() {
     }
     // A NaN setpoint is refused the same way.
     let mut servo = AxisServo::new(
-        Axis::B,
-        &ServoConfig::default(),
-        &DriveConfig::default(),
-        &FrictionConfig::default(),
+        &AxisDrive::resolve(
+            Axis::B,
+            &ServoConfig::default(),
+            &DriveConfig::default(),
+            &FrictionConfig::default(),
+        )
+        .unwrap(),
         T,
         0.0,
     )
@@ -415,7 +433,12 @@ fn an_unstable_drive_reports_divergence_on_its_axis() {
 }
 
 fn diverges_on_z(s: &Setup) {
-    let mut servo = AxisServo::new(Axis::Z, &s.servo, &s.drive, &s.friction, T, 0.0).unwrap();
+    let mut servo = AxisServo::new(
+        &AxisDrive::resolve(Axis::Z, &s.servo, &s.drive, &s.friction).unwrap(),
+        T,
+        0.0,
+    )
+    .unwrap();
     let mut outcome = None;
     for k in 1..=10_000 {
         let t = k as f64 * T;

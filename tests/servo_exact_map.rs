@@ -3,7 +3,7 @@
 //! setpoints through both, with dry friction, backlash, reversals and force saturation.
 
 use mtsim::drive::AxisServo;
-use mtsim::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
+use mtsim::input::drive::{AxisDrive, DriveConfig, FrictionConfig, ServoConfig};
 use mtsim::Axis;
 
 /// Interpolation period, s.
@@ -36,7 +36,14 @@ fn compare(
     setpoint: impl Fn(f64) -> f64,
 ) -> (f64, f64, f64) {
     let start = setpoint(0.0);
-    let new = || AxisServo::new(axis, servo, drive, friction, T, start).unwrap();
+    let new = || {
+        AxisServo::new(
+            &AxisDrive::resolve(axis, servo, drive, friction).unwrap(),
+            T,
+            start,
+        )
+        .unwrap()
+    };
     let (mut exact, mut substeps) = (new(), new().with_exact_map(false));
     let (mut worst, mut fe_max) = (0.0f64, 0.0f64);
     for k in 1..=(seconds / T).round() as usize {
@@ -123,7 +130,10 @@ fn force_saturation_falls_back_to_substeps() {
         force_limit_n: Some(2000.0),
         ..Default::default()
     };
-    let linear = FrictionConfig::default().viscous_only(Axis::Y);
+    let linear = FrictionConfig {
+        coulomb_n: Some(0.0),
+        ..Default::default()
+    };
     let (worst, fe, share) = compare(Axis::Y, &cascade(0.0, false), &drive, &linear, 1.0, |t| {
         if t > 0.1 {
             5.0

@@ -37,8 +37,8 @@ pub use shapes::{signed_distance, z_cylinder, Circle, CircleHull};
 
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
-use crate::kinematics::trig::sin_cos_deg;
 use crate::kinematics::{AxisLine, Kinematics, Layout};
+use crate::numeric::sin_cos_deg;
 use crate::{Axis, AxisVec};
 
 /// Collision groups. A pair of colliders is monitored when each one's membership meets the

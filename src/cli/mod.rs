@@ -2,14 +2,11 @@
 //! Inputs: command-line arguments and the scenario files they name.
 //! Outputs: tables or JSON on stdout, files, and exit codes: 0 success, 1 violations found, 2 bad input, 3 a run that failed.
 
-use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
 use crate::error::{Error, Result};
-use crate::input::program::{ConeTest, NcOptions};
-use crate::input::scenario::{Program, Scenario};
 use crate::study::shard::Shard;
 use crate::study::sweep::SweepParam;
 
@@ -21,8 +18,14 @@ mod cone;
 mod fit;
 mod merge;
 mod report;
+mod scenario;
 mod simulate;
 mod sweep;
+mod terminal;
+
+// The helpers every command uses, named here for the command files (`super::note`).
+use scenario::{cone_of, load_scenario};
+use terminal::{detail, note, print_stdout, progress_bar, spinner, warn};
 
 /// Machine-tool motion simulator: five-axis cone-frustum test, servo dynamics, ball bar,
 /// axis limits and collisions.
@@ -249,44 +252,8 @@ pub fn main() -> i32 {
     }
 }
 
-/// `--quiet` and `-v`, for the whole process.
-static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-static VERBOSE: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
-
-/// Whether `--quiet` was given.
-pub(crate) fn quiet() -> bool {
-    QUIET.load(std::sync::atomic::Ordering::Relaxed)
-}
-
-/// The `-v` count.
-pub(crate) fn verbosity() -> u8 {
-    VERBOSE.load(std::sync::atomic::Ordering::Relaxed)
-}
-
-/// A warning on stderr, unless `--quiet`.
-pub(crate) fn warn(text: &str) {
-    if !quiet() {
-        eprintln!("warning: {text}");
-    }
-}
-
-/// A note on stderr (which files were written), unless `--quiet`.
-pub(crate) fn note(text: &str) {
-    if !quiet() {
-        eprintln!("{text}");
-    }
-}
-
-/// Detail on stderr with `-v` (level 1) or `-vv` (level 2).
-pub(crate) fn detail(level: u8, text: &str) {
-    if verbosity() >= level && !quiet() {
-        eprintln!("{text}");
-    }
-}
-
 fn run(cli: Cli) -> Result<i32> {
-    QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
-    VERBOSE.store(cli.verbose, std::sync::atomic::Ordering::Relaxed);
+    terminal::set_flags(cli.quiet, cli.verbose);
     match cli.command {
         Command::Completions { shell } => {
             let mut out = Vec::new();
@@ -414,60 +381,4 @@ fn run(cli: Cli) -> Result<i32> {
         Command::Batch(args) => batch::run(&args),
         Command::Merge(args) => merge::run(&args),
     }
-}
-
-/// The cone of a scenario with a generated cone program, or an error naming `command`.
-fn cone_of(scenario: &Scenario, command: &str) -> Result<(ConeTest, NcOptions)> {
-    match &scenario.program {
-        Program::Cone { cone, nc, .. } => Ok((*cone, *nc)),
-        Program::File { .. } | Program::Circle { .. } => Err(Error::invalid(
-            &scenario.path,
-            format!("`mtsim {command}` needs a generated cone program ([program.cone])"),
-        )
-        .with_help("give the scenario a [program.cone] table instead of `file`")),
-    }
-}
-
-/// Loads a scenario. A G-code file program is checked against the machine (motion
-/// present, no move beyond the travel envelope) as its moves stream into the run
-/// (`program::validate::checked`), not in a pass of its own; outputs are written only at
-/// the end, so a bad move near the end still leaves none.
-pub(crate) fn load_scenario(path: &std::path::Path) -> Result<Scenario> {
-    Scenario::load(path)
-}
-
-/// A progress bar on stderr when it is a terminal; hidden otherwise (scripts, CI).
-pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
-    if quiet() || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(len);
-    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
-        "{what} {{bar:40}} {{pos}}/{{len}} {{eta}}"
-    )) {
-        bar.set_style(style);
-    }
-    bar
-}
-
-/// Prints to stdout; a closed pipe (`| head`) ends quietly instead of panicking.
-pub(crate) fn print_stdout(text: &str) {
-    let mut out = std::io::stdout().lock();
-    let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
-}
-
-/// A spinner on stderr when it is a terminal; hidden otherwise.
-pub(crate) fn spinner(what: &str) -> indicatif::ProgressBar {
-    if quiet() || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new_spinner();
-    bar.set_prefix(what.to_string());
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{spinner} {prefix}: {msg} [{elapsed}]")
-    {
-        bar.set_style(style);
-    }
-    bar.enable_steady_tick(std::time::Duration::from_millis(120));
-    bar
 }

@@ -33,19 +33,9 @@ impl Drives {
             .axes()
             .iter()
             .map(|&a| {
-                let c = machine.axis(a);
-                if linear {
-                    AxisServo::new(
-                        a,
-                        &c.servo,
-                        &c.drive.without_backlash(a),
-                        &c.friction.viscous_only(a),
-                        period,
-                        q[a],
-                    )
-                } else {
-                    AxisServo::new(a, &c.servo, &c.drive, &c.friction, period, q[a])
-                }
+                let drive = machine.drive(a)?;
+                let drive = if linear { drive.linear_twin() } else { drive };
+                AxisServo::new(&drive, period, q[a])
             })
             .collect::<Result<_>>()?;
         Ok(Drives {

@@ -65,7 +65,8 @@ use std::path::Path;
 
 use super::presliding::{Presliding, ReversalValue};
 use crate::error::{Error, Result};
-use crate::input::drive::{DriveConfig, FrictionConfig, Model, Resolved, ServoConfig};
+use crate::input::drive::{si_per_unit, AxisDrive, Model};
+use crate::numeric::exp_neg;
 use crate::Axis;
 
 /// The state of one axis at the end of an interpolation period.
@@ -359,23 +360,16 @@ fn column_product<const N: usize>(cols: &[[f64; 8]; N_INPUT], input: &[f64; N]) 
 }
 
 impl AxisServo {
-    /// `axis.is_rotary()` selects deg/rad and the `*_deg`/`*_nm` keys. Starts at rest at
-    /// `initial_position` (mm or deg), the backlash gap centred.
+    /// The servo of `drive` (validated and in SI units, [`AxisDrive`]), stepped every
+    /// `interpolation_period_s`. Starts at rest at `initial_position` (mm or deg), the backlash
+    /// gap centred.
     pub fn new(
-        axis: Axis,
-        servo: &ServoConfig,
-        drive: &DriveConfig,
-        friction: &FrictionConfig,
+        drive: &AxisDrive,
         interpolation_period_s: f64,
         initial_position: f64,
     ) -> Result<AxisServo> {
+        let axis = drive.axis;
         let where_ = format!("[axes.{axis}]");
-        if let Some((table, key, message)) = Resolved::problem(axis, servo, drive, friction) {
-            return Err(Error::invalid(
-                Path::new(&where_),
-                format!("`{table}.{key}`: {message}"),
-            ));
-        }
         if !(interpolation_period_s.is_finite() && interpolation_period_s > 0.0) {
             return Err(Error::invalid(
                 Path::new(&where_),
@@ -390,31 +384,27 @@ impl AxisServo {
                 format!("the initial position must be finite, got {initial_position}"),
             ));
         }
-        let r = Resolved::new(axis, servo, drive, friction);
-        let scale = if axis.is_rotary() { PI / 180.0 } else { 1e-3 };
+        let d = drive;
+        let scale = si_per_unit(axis);
         let t_ipo = interpolation_period_s;
-        let n_servo = ((t_ipo / (servo.servo_period_ms * 1e-3)).round() as usize).max(1);
+        let n_servo = ((t_ipo / d.servo_period_s).round() as usize).max(1);
         let t_servo = t_ipo / n_servo as f64;
-        let n_sub = servo.substeps as usize;
+        let n_sub = d.substeps as usize;
         let h = t_servo / n_sub as f64;
-        let mm = r.motor_mass.1;
-        let mt = r.table_mass.1;
+        let mm = d.motor_mass_kg_or_kgm2;
+        let mt = d.table_mass_kg_or_kgm2;
         let m_total = mm + mt;
-        // N/um -> N/m for linear axes; N m/rad as is for rotary ones.
-        let stiffness = if axis.is_rotary() {
-            r.stiffness.1
-        } else {
-            r.stiffness.1 * 1e6
-        };
-        let damping = 2.0 * r.damping_ratio * (stiffness * mm * mt / m_total).sqrt();
-        let tau = servo.current_time_constant_ms * 1e-3;
-        let viscous = r.viscous.1;
-        let kp = 2.0 * PI * servo.velocity_bandwidth_hz * m_total;
+        let stiffness = d.stiffness_n_per_m_or_nm_per_rad;
+        let damping = 2.0 * d.damping_ratio * (stiffness * mm * mt / m_total).sqrt();
+        let tau = d.current_time_constant_s;
+        let viscous = d.viscous_n_s_per_m_or_nm_s_per_rad;
+        let coulomb = d.coulomb_n_or_nm;
+        let kp = 2.0 * PI * d.velocity_bandwidth_hz * m_total;
         let state = initial_position * scale;
         Ok(AxisServo {
             axis,
-            model: r.model.unwrap_or(Model::Cascade),
-            fully_closed: r.fully_closed.unwrap_or(false),
+            model: d.model,
+            fully_closed: d.fully_closed,
             scale,
             inv_scale: 1.0 / scale,
             inv_t_ipo: 1.0 / t_ipo,
@@ -422,25 +412,25 @@ impl AxisServo {
             t_servo,
             n_sub,
             h,
-            kv: servo.kv_per_s,
-            kvff: servo.velocity_feedforward,
-            aff_mass: servo.acceleration_feedforward * m_total,
+            kv: d.kv_per_s,
+            kvff: d.velocity_feedforward,
+            aff_mass: d.acceleration_feedforward * m_total,
             kp,
-            ki_ts: kp * t_servo / (servo.velocity_integral_time_ms * 1e-3),
+            ki_ts: kp * t_servo / d.velocity_integral_time_s,
             current_alpha: if tau > 0.0 { -(-h / tau).exp_m1() } else { 1.0 },
-            force_limit: r.force_limit.1,
+            force_limit: d.force_limit_n_or_nm,
             h_over_mm: h / mm,
             mt_over_h: mt / h,
             inv_mt_plus_h_fv: 1.0 / (mt + h * viscous),
             mt,
             stiffness,
             damping,
-            half_backlash: 0.5 * r.backlash.1 * scale,
-            coulomb: r.coulomb.1,
-            static_friction: r.coulomb.1 * r.static_ratio,
-            stribeck: r.stribeck.1 * scale,
-            decay: (-servo.kv_per_s * t_servo).exp(),
-            fe_limit: r.fe_limit.1 * scale,
+            half_backlash: 0.5 * d.backlash_m_or_rad,
+            coulomb,
+            static_friction: coulomb * d.static_ratio,
+            stribeck: d.stribeck_m_or_rad_per_s,
+            decay: (-d.kv_per_s * t_servo).exp(),
+            fe_limit: d.following_error_limit_m_or_rad,
             setpoint: state,
             v_ff: 0.0,
             x_m: state,
@@ -450,28 +440,24 @@ impl AxisServo {
             force: 0.0,
             integral: 0.0,
             x_m_tick: state,
-            presliding: (r.presliding.1 > 0.0 && r.coulomb.1 > 0.0).then(|| {
-                let unit = if axis.is_rotary() { scale } else { 1e-6 };
+            presliding: (d.presliding_m_or_rad > 0.0 && coulomb > 0.0).then(|| {
                 Presliding::new(
-                    r.coulomb.1,
-                    r.presliding.1 * unit,
+                    coulomb,
+                    d.presliding_m_or_rad,
                     mt,
-                    r.presliding_damping_ratio,
+                    d.presliding_damping_ratio,
                 )
             }),
+            // The reversal value is a figure in the axis's interface unit (mm or deg).
             reversal: ReversalValue::new(
-                r.backlash.1,
-                r.coulomb.1,
+                d.backlash_mm_or_deg,
+                coulomb,
                 stiffness * scale,
-                if axis.is_rotary() {
-                    r.presliding.1
-                } else {
-                    r.presliding.1 * 1e-3
-                },
-                r.fully_closed.unwrap_or(false),
+                d.presliding_mm_or_deg,
+                d.fully_closed,
             ),
             exact: None,
-            bound_cache: Cell::new((0.0, r.coulomb.1 * r.static_ratio, 1.0)),
+            bound_cache: Cell::new((0.0, coulomb * d.static_ratio, 1.0)),
             carried_regime: None,
             velocity_si: 0.0,
             periods_exact: 0,
@@ -1152,43 +1138,6 @@ fn stribeck_bound_decay(v: f64, fc: f64, fs: f64, vs: f64) -> (f64, f64) {
     }
 }
 
-/// `eˣ` for `-708 < x ≤ 0` (the Stribeck law's `exp(-(v/vs)²)`, `-40 ≤ x ≤ 0` there), as
-/// fdlibm's `__ieee754_exp` computes it, error below one ulp: `x = k ln 2 + r` with
-/// `k = round(x / ln 2)` and `|r| ≤ ln 2 / 2` (ln 2 in two parts, so `r` is exact to the
-/// last bits), then
-///
-/// ```text
-/// c = r - r² (P1 + r² (P2 + r² (P3 + r² (P4 + r² P5)))),   eʳ = 1 - ((r c) / (c - 2) - r)
-/// ```
-///
-/// and `2ᵏ` put into the exponent. Only arithmetic, so the same on every CPU, and about a
-/// third of the library call; any other x goes to `f64::exp`.
-#[inline]
-fn exp_neg(x: f64) -> f64 {
-    const LN2_HI: f64 = 6.931_471_803_691_238_164_90e-1;
-    const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
-    const INV_LN2: f64 = 1.442_695_040_888_963_387_00;
-    const P1: f64 = 1.666_666_666_666_660_190_37e-1;
-    const P2: f64 = -2.777_777_777_701_559_338_42e-3;
-    const P3: f64 = 6.613_756_321_437_934_361_17e-5;
-    const P4: f64 = -1.653_390_220_546_525_153_90e-6;
-    const P5: f64 = 4.138_136_797_057_238_460_39e-8;
-    // 1.5 · 2⁵²: adding and subtracting it rounds to the nearest integer.
-    const ROUNDER: f64 = 6_755_399_441_055_744.0;
-    if !(x > -708.0 && x <= 0.0) {
-        return x.exp();
-    }
-    let k = (x * INV_LN2 + ROUNDER) - ROUNDER;
-    let hi = x - k * LN2_HI;
-    let lo = k * LN2_LO;
-    let r = hi - lo;
-    let t = r * r;
-    let c = r - t * (P1 + t * (P2 + t * (P3 + t * (P4 + t * P5))));
-    let y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi);
-    // 2ᵏ for -1022 ≤ k ≤ 0: a normal double.
-    y * f64::from_bits(((1023 + k as i64) as u64) << 52)
-}
-
 /// Play (backlash) element: the table at `x_t` stays put until the motor at `x_m` pushes it
 /// at either end of the gap of half-width `half`.
 #[inline]
@@ -1199,22 +1148,7 @@ fn play(x_m: f64, x_t: f64, half: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn exp_neg_is_within_one_ulp_of_the_library() {
-        let mut worst: f64 = 0.0;
-        let mut x = 0.0;
-        while x > -700.0 {
-            let (a, b) = (exp_neg(x), x.exp());
-            worst = worst.max((a - b).abs() / (b * f64::EPSILON));
-            x -= 0.003_141_592_653 * if x > -45.0 { 1.0 } else { 97.0 };
-        }
-        assert!(worst <= 1.0, "worst {worst} ulp");
-        assert_eq!(exp_neg(0.0), 1.0);
-        assert_eq!(exp_neg(-f64::MIN_POSITIVE), 1.0);
-        assert!(exp_neg(f64::NAN).is_nan());
-        assert_eq!(exp_neg(-800.0), 0.0);
-    }
+    use crate::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
 
     #[test]
     fn dead_zone_play_and_stribeck_bound_follow_their_definitions() {
@@ -1238,15 +1172,14 @@ mod tests {
             model: "cascade".into(),
             ..Default::default()
         };
-        let mut s = AxisServo::new(
+        let drive = AxisDrive::resolve(
             Axis::X,
             &servo,
             &DriveConfig::default(),
             &FrictionConfig::default(),
-            1e-3,
-            0.0,
         )
         .unwrap();
+        let mut s = AxisServo::new(&drive, 1e-3, 0.0).unwrap();
         // Spring pre-loaded to 0.9 Fs = 175.5 N: d = 175.5 / 2e8 m. Motor held (force cancels).
         let fs = 150.0 * 1.3;
         for (load, moves) in [(0.9 * fs, false), (1.1 * fs, true)] {

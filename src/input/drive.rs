@@ -1,7 +1,9 @@
 //! Drive configuration: `[axes.X.servo]`, `[axes.X.drive]` and `[axes.X.friction]` of a
-//! machine file, with the defaults of a mid-size machining centre, resolved per axis kind
-//! and validated. The models that run these parameters are in `crate::drive`.
+//! machine file, with the defaults of a mid-size machining centre, validated and resolved per
+//! axis kind into one [`AxisDrive`] in SI units. The models that run it are in `crate::drive`;
+//! nothing else reads the three tables' keys.
 
+use std::f64::consts::PI;
 use std::path::Path;
 
 use serde::Deserialize;
@@ -161,30 +163,30 @@ fn pick(
     }
 }
 
-/// Every parameter of one axis, resolved for its kind, in interface units as written
-/// (mm, deg, N, N m, ...), each with the key it came from.
-pub struct Resolved {
-    pub model: Option<Model>,
-    pub fully_closed: Option<bool>,
-    pub fe_limit: (&'static str, f64),
-    pub backlash: (&'static str, f64),
-    pub motor_mass: (&'static str, f64),
-    pub table_mass: (&'static str, f64),
-    pub stiffness: (&'static str, f64),
-    pub damping_ratio: f64,
-    pub force_limit: (&'static str, f64),
-    pub coulomb: (&'static str, f64),
-    pub static_ratio: f64,
-    pub stribeck: (&'static str, f64),
-    pub viscous: (&'static str, f64),
+/// Every parameter of one axis, picked for its kind with its default, in the units of the
+/// keys (mm, deg, um, N/um, ...), each with the key it came from: what the checks name.
+struct Written {
+    model: Option<Model>,
+    fully_closed: Option<bool>,
+    fe_limit: (&'static str, f64),
+    backlash: (&'static str, f64),
+    motor_mass: (&'static str, f64),
+    table_mass: (&'static str, f64),
+    stiffness: (&'static str, f64),
+    damping_ratio: f64,
+    force_limit: (&'static str, f64),
+    coulomb: (&'static str, f64),
+    static_ratio: f64,
+    stribeck: (&'static str, f64),
+    viscous: (&'static str, f64),
     /// Pre-sliding displacement δ, um or deg (0: off).
-    pub presliding: (&'static str, f64),
-    pub presliding_damping_ratio: f64,
+    presliding: (&'static str, f64),
+    presliding_damping_ratio: f64,
 }
 
-impl Resolved {
-    pub fn new(axis: Axis, s: &ServoConfig, d: &DriveConfig, f: &FrictionConfig) -> Resolved {
-        Resolved {
+impl Written {
+    fn new(axis: Axis, s: &ServoConfig, d: &DriveConfig, f: &FrictionConfig) -> Written {
+        Written {
             model: parse_model(&s.model),
             fully_closed: parse_feedback(&s.feedback),
             fe_limit: pick(
@@ -255,12 +257,12 @@ impl Resolved {
 
     /// The first problem found, as `(table, key, message)` with table "servo", "drive" or
     /// "friction".
-    pub fn problem(
+    fn problem(
         axis: Axis,
         s: &ServoConfig,
         d: &DriveConfig,
         f: &FrictionConfig,
-    ) -> Option<(&'static str, &'static str, String)> {
+    ) -> Option<DriveProblem> {
         let kind = if axis.is_rotary() { "rotary" } else { "linear" };
         let other = if axis.is_rotary() { "linear" } else { "rotary" };
         // Keys of the other kind of axis.
@@ -368,15 +370,17 @@ impl Resolved {
         };
         for (table, key, value, instead) in foreign {
             if value.is_some() {
-                return Some((
+                return Some(DriveProblem {
                     table,
                     key,
-                    format!("is a {other}-axis key, but axis {axis} is {kind}; use `{instead}`"),
-                ));
+                    message: format!(
+                        "is a {other}-axis key, but axis {axis} is {kind}; use `{instead}`"
+                    ),
+                });
             }
         }
 
-        let r = Resolved::new(axis, s, d, f);
+        let r = Written::new(axis, s, d, f);
         let unit = axis.unit();
         let finite_in = |v: f64, lo: f64, hi: f64| v.is_finite() && (lo..=hi).contains(&v);
         let positive = |v: f64| v.is_finite() && v > 0.0;
@@ -570,12 +574,160 @@ impl Resolved {
         checks
             .into_iter()
             .find(|c| !c.0)
-            .map(|(_, table, key, message)| (table, key, message))
+            .map(|(_, table, key, message)| DriveProblem {
+                table,
+                key,
+                message,
+            })
     }
 }
 
-/// Checks the drive parameters of one axis; errors name the key in `[section.servo]`,
-/// `[section.drive]` or `[section.friction]` and point at its line.
+/// A drive setting that is not valid: its table ("servo", "drive" or "friction"), its key,
+/// and what is wrong with it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriveProblem {
+    pub table: &'static str,
+    pub key: &'static str,
+    pub message: String,
+}
+
+/// SI units per interface unit of `axis`'s positions: m per mm, or rad per deg.
+pub fn si_per_unit(axis: Axis) -> f64 {
+    if axis.is_rotary() {
+        PI / 180.0
+    } else {
+        1e-3
+    }
+}
+
+/// One axis's drive, validated and resolved for its kind, in SI units: positions in m
+/// (linear) or rad (rotary), masses in kg or kg m², forces in N or N m. The servo models run
+/// it as it is; the keys of the machine file it came from are in [`ServoConfig`],
+/// [`DriveConfig`] and [`FrictionConfig`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisDrive {
+    pub axis: Axis,
+    pub model: Model,
+    /// Position feedback from the table scale (fully closed) or the motor encoder.
+    pub fully_closed: bool,
+    /// Position-loop gain Kv, 1/s.
+    pub kv_per_s: f64,
+    /// Velocity and acceleration feedforward, fractions in 0..=1.
+    pub velocity_feedforward: f64,
+    pub acceleration_feedforward: f64,
+    /// Velocity-loop bandwidth f_v, Hz.
+    pub velocity_bandwidth_hz: f64,
+    /// Velocity-loop integral time Ti, s.
+    pub velocity_integral_time_s: f64,
+    /// Current-loop time constant τ, s (0: an ideal current loop).
+    pub current_time_constant_s: f64,
+    /// Servo period as configured, s (the servo rounds it to divide the interpolation period).
+    pub servo_period_s: f64,
+    /// Mechanics integration substeps per servo period.
+    pub substeps: u32,
+    /// Following error beyond which the axis counts as diverged, m or rad.
+    pub following_error_limit_m_or_rad: f64,
+    /// Backlash (the whole gap), m or rad.
+    pub backlash_m_or_rad: f64,
+    /// Motor-side and table-side mass, kg, or inertia, kg m².
+    pub motor_mass_kg_or_kgm2: f64,
+    pub table_mass_kg_or_kgm2: f64,
+    /// Stiffness between motor and table, N/m or N m/rad.
+    pub stiffness_n_per_m_or_nm_per_rad: f64,
+    /// Damping ratio ζ of the motor-table mode.
+    pub damping_ratio: f64,
+    /// Motor force limit, N, or torque limit, N m.
+    pub force_limit_n_or_nm: f64,
+    /// Coulomb friction Fc, N or N m (0: no dry friction).
+    pub coulomb_n_or_nm: f64,
+    /// Static over Coulomb friction Fs/Fc.
+    pub static_ratio: f64,
+    /// Stribeck velocity vs, m/s or rad/s.
+    pub stribeck_m_or_rad_per_s: f64,
+    /// Viscous friction Fv, N s/m or N m s/rad.
+    pub viscous_n_s_per_m_or_nm_s_per_rad: f64,
+    /// Pre-sliding displacement δ of the Dahl bristle model, m or rad (0: off).
+    pub presliding_m_or_rad: f64,
+    /// Damping ratio of the bristle on the table mass.
+    pub presliding_damping_ratio: f64,
+    /// Backlash and pre-sliding displacement in the axis's interface unit (mm or deg), as
+    /// the lost motion at a reversal (ISO 230-2 reversal value) is reported.
+    pub backlash_mm_or_deg: f64,
+    pub presliding_mm_or_deg: f64,
+}
+
+impl AxisDrive {
+    /// Validates the three tables of `axis` and resolves them: each key of the axis's kind,
+    /// or its default, converted to SI. The first problem found is returned instead.
+    pub fn resolve(
+        axis: Axis,
+        servo: &ServoConfig,
+        drive: &DriveConfig,
+        friction: &FrictionConfig,
+    ) -> std::result::Result<AxisDrive, DriveProblem> {
+        if let Some(problem) = Written::problem(axis, servo, drive, friction) {
+            return Err(problem);
+        }
+        let w = Written::new(axis, servo, drive, friction);
+        let si = si_per_unit(axis);
+        Ok(AxisDrive {
+            axis,
+            model: w.model.unwrap_or(Model::Cascade),
+            fully_closed: w.fully_closed.unwrap_or(false),
+            kv_per_s: servo.kv_per_s,
+            velocity_feedforward: servo.velocity_feedforward,
+            acceleration_feedforward: servo.acceleration_feedforward,
+            velocity_bandwidth_hz: servo.velocity_bandwidth_hz,
+            velocity_integral_time_s: servo.velocity_integral_time_ms * 1e-3,
+            current_time_constant_s: servo.current_time_constant_ms * 1e-3,
+            servo_period_s: servo.servo_period_ms * 1e-3,
+            substeps: servo.substeps,
+            following_error_limit_m_or_rad: w.fe_limit.1 * si,
+            backlash_m_or_rad: w.backlash.1 * si,
+            motor_mass_kg_or_kgm2: w.motor_mass.1,
+            table_mass_kg_or_kgm2: w.table_mass.1,
+            // N/um for a linear axis; N m/rad as written for a rotary one.
+            stiffness_n_per_m_or_nm_per_rad: if axis.is_rotary() {
+                w.stiffness.1
+            } else {
+                w.stiffness.1 * 1e6
+            },
+            damping_ratio: w.damping_ratio,
+            force_limit_n_or_nm: w.force_limit.1,
+            coulomb_n_or_nm: w.coulomb.1,
+            static_ratio: w.static_ratio,
+            stribeck_m_or_rad_per_s: w.stribeck.1 * si,
+            viscous_n_s_per_m_or_nm_s_per_rad: w.viscous.1,
+            // um for a linear axis, deg for a rotary one.
+            presliding_m_or_rad: w.presliding.1 * if axis.is_rotary() { si } else { 1e-6 },
+            presliding_damping_ratio: w.presliding_damping_ratio,
+            backlash_mm_or_deg: w.backlash.1,
+            presliding_mm_or_deg: w.presliding.1 * if axis.is_rotary() { 1.0 } else { 1e-3 },
+        })
+    }
+
+    /// The same drive without its nonlinearities (backlash, Coulomb and static friction,
+    /// pre-sliding): viscous friction only, so its response is linear in the setpoint.
+    pub fn linear_twin(&self) -> AxisDrive {
+        AxisDrive {
+            backlash_m_or_rad: 0.0,
+            coulomb_n_or_nm: 0.0,
+            presliding_m_or_rad: 0.0,
+            backlash_mm_or_deg: 0.0,
+            presliding_mm_or_deg: 0.0,
+            ..*self
+        }
+    }
+
+    /// Whether the axis has dry friction the model runs (a cascade axis with Fc > 0), and so a
+    /// slow zone about each reversal bounded by its Stribeck velocity.
+    pub fn has_dry_friction(&self) -> bool {
+        self.coulomb_n_or_nm > 0.0 && self.model != Model::FirstOrder
+    }
+}
+
+/// Checks and resolves the drive parameters of one axis; errors name the key in
+/// `[section.servo]`, `[section.drive]` or `[section.friction]` and point at its line.
 pub fn validate(
     path: &Path,
     text: &str,
@@ -584,56 +736,16 @@ pub fn validate(
     servo: &ServoConfig,
     drive: &DriveConfig,
     friction: &FrictionConfig,
-) -> Result<()> {
-    match Resolved::problem(axis, servo, drive, friction) {
-        None => Ok(()),
-        Some((table, key, message)) => Err(value_error(
+) -> Result<AxisDrive> {
+    AxisDrive::resolve(axis, servo, drive, friction).map_err(|p| {
+        value_error(
             path,
             text,
-            &format!("{section}.{table}"),
-            key,
-            message,
-        )),
-    }
-}
-
-impl DriveConfig {
-    /// The same drive with the backlash closed: what the drive would do if it were linear.
-    pub fn without_backlash(&self, axis: Axis) -> DriveConfig {
-        let mut d = self.clone();
-        if axis.is_rotary() {
-            d.backlash_deg = Some(0.0);
-        } else {
-            d.backlash_mm = Some(0.0);
-        }
-        d
-    }
-
-    /// Backlash, mm or deg, with the default for the axis's kind (0).
-    pub fn backlash(&self, axis: Axis) -> f64 {
-        if axis.is_rotary() {
-            self.backlash_deg
-        } else {
-            self.backlash_mm
-        }
-        .unwrap_or(0.0)
-    }
-}
-
-impl FrictionConfig {
-    /// The same friction without its dry part (Coulomb, static, Stribeck): viscous only,
-    /// which is linear in velocity.
-    pub fn viscous_only(&self, axis: Axis) -> FrictionConfig {
-        let mut f = self.clone();
-        if axis.is_rotary() {
-            f.coulomb_nm = Some(0.0);
-            f.presliding_deg = None;
-        } else {
-            f.coulomb_n = Some(0.0);
-            f.presliding_um = None;
-        }
-        f
-    }
+            &format!("{section}.{}", p.table),
+            p.key,
+            p.message,
+        )
+    })
 }
 
 #[cfg(test)]
@@ -655,7 +767,7 @@ mod tests {
         friction: FrictionConfig,
     }
 
-    fn check(axis: Axis, text: &str) -> Result<()> {
+    fn check(axis: Axis, text: &str) -> Result<AxisDrive> {
         let parsed: Axes = toml::from_str(text).expect("test TOML parses");
         let s = &parsed.axes[&axis.to_string()];
         validate(
@@ -690,6 +802,50 @@ mod tests {
             )
             .unwrap();
         }
+    }
+
+    /// The defaults and written keys in SI: each figure from the key's unit by hand.
+    #[test]
+    fn a_drive_resolves_to_si_units_for_its_kind() {
+        let x = check(Axis::X, "[axes.X.servo]\n").unwrap();
+        assert_eq!(x.model, Model::FirstOrder);
+        assert!(!x.fully_closed);
+        assert_eq!(x.servo_period_s, 0.25e-3);
+        assert_eq!(x.velocity_integral_time_s, 10e-3);
+        assert_eq!(x.following_error_limit_m_or_rad, 0.05); // 50 mm
+        assert_eq!(x.motor_mass_kg_or_kgm2, 250.0);
+        assert_eq!(x.stiffness_n_per_m_or_nm_per_rad, 2e8); // 200 N/um
+        assert_eq!(x.stribeck_m_or_rad_per_s, 5e-4); // 0.5 mm/s
+        assert_eq!(x.presliding_m_or_rad, 0.0);
+        let text = "[axes.Y.servo]\nmodel = \"cascade\"\nfeedback = \"fully-closed\"\n\
+                    [axes.Y.drive]\nbacklash_mm = 0.004\n[axes.Y.friction]\npresliding_um = 2\n";
+        let y = check(Axis::Y, text).unwrap();
+        assert_eq!((y.model, y.fully_closed), (Model::Cascade, true));
+        assert_eq!(y.backlash_m_or_rad, 0.004 * 1e-3);
+        assert_eq!(y.presliding_m_or_rad, 2.0 * 1e-6);
+        assert_eq!(
+            (y.backlash_mm_or_deg, y.presliding_mm_or_deg),
+            (0.004, 2e-3)
+        );
+        assert!(y.has_dry_friction());
+        let twin = y.linear_twin();
+        assert_eq!(
+            (
+                twin.backlash_m_or_rad,
+                twin.coulomb_n_or_nm,
+                twin.presliding_m_or_rad
+            ),
+            (0.0, 0.0, 0.0)
+        );
+        assert!(!twin.has_dry_friction());
+        assert_eq!(twin.viscous_n_s_per_m_or_nm_s_per_rad, 1000.0);
+        let c = check(Axis::C, "[axes.C.drive]\nbacklash_deg = 0.003\n").unwrap();
+        let rad = std::f64::consts::PI / 180.0;
+        assert_eq!(c.backlash_m_or_rad, 0.003 * rad);
+        assert_eq!(c.following_error_limit_m_or_rad, 90.0 * rad);
+        assert_eq!(c.stribeck_m_or_rad_per_s, 0.1 * rad); // 0.1 deg/s
+        assert_eq!(c.stiffness_n_per_m_or_nm_per_rad, 3e6);
+        assert_eq!(c.coulomb_n_or_nm, 15.0);
     }
 
     #[test]
@@ -731,28 +887,5 @@ mod tests {
             "[axes.A.friction]\ncoulomb_nm = 10\n[axes.A.drive]\nbacklash_deg = 0.003\n",
         )
         .unwrap();
-    }
-
-    /// The machine loader calls [`validate`], so a bad drive key in a machine file is
-    /// reported at its line.
-    #[test]
-    fn machine_files_report_drive_errors_at_their_line() {
-        let axis = |name: &str, extra: &str| {
-            format!("[axes.{name}]\nmin = -100\nmax = 100\nmax_velocity = 10000\nmax_acceleration = 1000\nmax_jerk = 10000\n{extra}")
-        };
-        let head = "name = \"m\"\nkinematics = \"xyz\"\n";
-        let text = format!(
-            "{head}{}{}{}",
-            axis("X", "[axes.X.servo]\nmodel = \"cascade\"\n"),
-            axis("Y", ""),
-            axis("Z", "[axes.Z.drive]\nbacklash_deg = 0.1\n")
-        );
-        let e = crate::input::machine::Machine::from_toml(Path::new("m.toml"), &text, None)
-            .unwrap_err();
-        let m = message(e);
-        assert!(
-            m.starts_with("24: `axes.Z.drive.backlash_deg`: is a rotary-axis key"),
-            "{m}"
-        );
     }
 }

@@ -10,7 +10,7 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
-use crate::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
+use crate::input::drive::{AxisDrive, DriveConfig, FrictionConfig, ServoConfig};
 use crate::input::geometry_errors::{self, GeometryErrors};
 use crate::input::scene::{SceneConfig, ToolConfig};
 use crate::input::toml_text::{self, value_error};
@@ -88,6 +88,16 @@ pub struct AxisConfig {
 }
 
 impl AxisConfig {
+    /// The drive of this configuration as `axis` (see [`Machine::drive`]).
+    pub fn drive_of(&self, axis: Axis) -> Result<AxisDrive> {
+        AxisDrive::resolve(axis, &self.servo, &self.drive, &self.friction).map_err(|p| {
+            Error::invalid(
+                Path::new(&format!("[axes.{axis}]")),
+                format!("`{}.{}`: {}", p.table, p.key, p.message),
+            )
+        })
+    }
+
     /// True when `value` (mm or deg) lies within the travel, or the axis is continuous.
     pub fn within_travel(&self, value: f64) -> bool {
         self.continuous || (self.min..=self.max).contains(&value)
@@ -250,6 +260,13 @@ impl Machine {
             .expect("every axis of the layout is present")
     }
 
+    /// The drive of `axis` in SI units, resolved from its configuration by the function that
+    /// validated it on load ([`AxisDrive::resolve`]), so a what-if change made through
+    /// [`Machine::axis_mut`] is checked too; an error names `[axes.X]` and the key.
+    pub fn drive(&self, axis: Axis) -> Result<AxisDrive> {
+        self.axis(axis).drive_of(axis)
+    }
+
     pub fn has_axis(&self, axis: Axis) -> bool {
         self.axes.contains_key(&axis)
     }
@@ -316,6 +333,7 @@ fn check_axis(path: &Path, text: &str, section: &str, axis: Axis, c: &AxisConfig
         ));
     }
     crate::input::drive::validate(path, text, section, axis, &c.servo, &c.drive, &c.friction)
+        .map(|_| ())
 }
 
 /// Merges `overlay` into `base`: tables merge key by key, any other value replaces.
@@ -326,6 +344,39 @@ pub fn deep_merge(base: &mut toml::Table, overlay: &toml::Table) {
             _ => {
                 base.insert(key.clone(), value.clone());
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The machine loader calls [`crate::input::drive::validate`], so a bad drive key in a
+    /// machine file is reported at its line.
+    #[test]
+    fn machine_files_report_drive_errors_at_their_line() {
+        let axis = |name: &str, extra: &str| {
+            format!("[axes.{name}]\nmin = -100\nmax = 100\nmax_velocity = 10000\nmax_acceleration = 1000\nmax_jerk = 10000\n{extra}")
+        };
+        let head = "name = \"m\"\nkinematics = \"xyz\"\n";
+        let text = format!(
+            "{head}{}{}{}",
+            axis("X", "[axes.X.servo]\nmodel = \"cascade\"\n"),
+            axis("Y", ""),
+            axis("Z", "[axes.Z.drive]\nbacklash_deg = 0.1\n")
+        );
+        match Machine::from_toml(Path::new("m.toml"), &text, None) {
+            Err(Error::AtSource(e)) => {
+                assert_eq!(e.line, 24);
+                assert!(
+                    e.message
+                        .starts_with("`axes.Z.drive.backlash_deg`: is a rotary-axis key"),
+                    "{}",
+                    e.message
+                );
+            }
+            other => panic!("expected an error at a line, got {other:?}"),
         }
     }
 }

@@ -3,7 +3,7 @@
 //!
 //! # Sensitivity
 //!
-//! The bar reads `L(q) = |p_tool(q) - p_pivot(q)|` (see [`super::ballbar::deviation_mm`]). A
+//! The bar reads `L(q) = |p_tool(q) - p_pivot(q)|` (see [`super::bar::deviation_mm`]). A
 //! lost motion `δq_a` of axis a at a reversal moves the reading by `∂L/∂q_a · δq_a`, so an
 //! axis whose partial derivative is small at that angle cannot be what the bar shows there.
 //! The derivative is taken through the kinematics by central differences,
@@ -42,9 +42,10 @@
 use nalgebra::Point3;
 use serde::{Serialize, Serializer};
 
-use super::ballbar::{angle_distance_deg, deviation_mm};
-use crate::kinematics::trig::sin_cos_deg;
+use super::bar::deviation_mm;
+use super::theta::{angle_distance_deg, BIN_DEG, N_BINS};
 use crate::kinematics::{Kinematics, RotarySinCos};
+use crate::numeric::sin_cos_deg;
 use crate::{Axis, AxisVec};
 
 /// Standard uncertainty of an event's onset angle, deg.
@@ -307,7 +308,7 @@ pub fn attribute_arc(from_deg: f64, span_deg: f64, sites: &[ReversalSite]) -> At
     }
 }
 
-/// One axis vector per θ bin of [`super::ballbar::BIN_DEG`] along the measured circle,
+/// One axis vector per θ bin of [`BIN_DEG`] along the measured circle,
 /// taken at the first sample that falls in the bin: the commanded position (where the bar's
 /// sensitivity is evaluated, only at the bins a reversal site asks for) or the commanded
 /// speed.
@@ -319,7 +320,7 @@ pub struct ThetaMap {
 impl Default for ThetaMap {
     fn default() -> Self {
         ThetaMap {
-            bins: vec![None; super::ballbar::N_BINS],
+            bins: vec![None; N_BINS],
         }
     }
 }
@@ -338,7 +339,7 @@ impl ThetaMap {
     pub fn at(&self, theta_deg: f64) -> Option<AxisVec> {
         let n = self.bins.len() as isize;
         let i = bin_of(theta_deg) as isize;
-        let reach = (5.0 / super::ballbar::BIN_DEG) as isize;
+        let reach = (5.0 / BIN_DEG) as isize;
         (0..=reach).find_map(|k| {
             self.bins[(i + k).rem_euclid(n) as usize].or(self.bins[(i - k).rem_euclid(n) as usize])
         })
@@ -347,7 +348,7 @@ impl ThetaMap {
 
 fn bin_of(theta_deg: f64) -> usize {
     let t = theta_deg.rem_euclid(360.0);
-    ((t / super::ballbar::BIN_DEG) as usize).min(super::ballbar::N_BINS - 1)
+    ((t / BIN_DEG) as usize).min(N_BINS - 1)
 }
 
 /// Sites for each axis's reversal angles, with the normalised sensitivity
@@ -370,7 +371,7 @@ pub fn sites_from_map(
             .map(|q| normalised_sensitivity(site.axis, sensitivity_at(&q)[site.axis], length_mm));
         if let Some((speed, slow)) = speed {
             let limit = slow(site.axis);
-            let step = super::ballbar::BIN_DEG;
+            let step = BIN_DEG;
             let reach = (MAX_ZONE_DEG / step) as usize;
             let slow_at = |theta: f64| speed.at(theta).is_some_and(|v| v[site.axis].abs() < limit);
             let walk = |sign: f64| {

@@ -47,17 +47,13 @@ use nalgebra::{DMatrix, DVector, Matrix3, Point3, Rotation3, Vector3};
 use serde::Serialize;
 
 use super::attribution::{attribute_arc, attribute_to_sites, AxisSet, ReversalSite};
+use super::theta::{bin_index, bins, wrap_360};
 use crate::error::{Error, Result};
 use crate::input::program::{ConeTest, Direction};
-use crate::kinematics::trig::sin_cos_deg;
-use crate::kinematics::Kinematics;
+use crate::numeric::sin_cos_deg;
+use crate::Axis;
 use crate::Plane;
-use crate::{Axis, AxisVec};
 
-/// Width of one theta bin, deg.
-pub const BIN_DEG: f64 = 0.05;
-/// Number of theta bins in one revolution.
-pub const N_BINS: usize = 7200;
 /// Largest angular gap between filled bins a run may have, deg.
 pub const MAX_GAP_DEG: f64 = 10.0;
 /// Highest harmonic of the smooth shape removed before looking for events.
@@ -75,22 +71,8 @@ pub const SPIKE_FLOOR_UM: f64 = 0.5;
 /// ...or this height for a step, um.
 pub const STEP_FLOOR_UM: f64 = 1.0;
 pub use super::attribution::{ATTRIBUTION_MAX_DEG, ONSET_SIGMA_DEG};
-
-/// Ball-bar deviation `|p_tool - p_pivot| - L`, mm, both balls in the machine frame; the
-/// table ball is moved by the actual chain (location errors included).
-///
-/// `q_actual`: actual axis positions (mm, deg); the tool tip is its (X, Y, Z).
-/// `pivot_table_mm`: the table ball, table frame, mm. `length_mm`: nominal bar length L.
-pub fn deviation_mm(
-    kin: &Kinematics,
-    q_actual: &AxisVec,
-    pivot_table_mm: &Point3<f64>,
-    length_mm: f64,
-) -> f64 {
-    let tool = Point3::new(q_actual[Axis::X], q_actual[Axis::Y], q_actual[Axis::Z]);
-    let pivot = kin.actual_table_to_machine(q_actual, pivot_table_mm);
-    (tool - pivot).norm() - length_mm
-}
+pub use super::bar::deviation_mm;
+pub use super::theta::{angle_distance_deg, theta_sin_cos, BIN_DEG, N_BINS};
 
 /// The measured circle's frame in the table frame: origin (mm) and orientation.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -549,45 +531,6 @@ pub fn analyse_events_at(
 pub fn attribute(theta_deg: f64, reversals: &[(Axis, Vec<f64>)]) -> (Option<Axis>, f64) {
     let a = attribute_to_sites(theta_deg, &ReversalSite::unweighted(reversals));
     (a.axis, a.confidence)
-}
-
-/// Unsigned angle between two directions, deg in [0, 180].
-pub fn angle_distance_deg(a: f64, b: f64) -> f64 {
-    ((a - b + 180.0).rem_euclid(360.0) - 180.0).abs()
-}
-
-/// `(sin θ, cos θ)` of θ in deg, wrapped to [0, 360) first: the terms a run adds per sample
-/// and [`Centring::offset_um`] evaluates.
-#[inline]
-pub fn theta_sin_cos(theta_deg: f64) -> (f64, f64) {
-    sin_cos_deg(wrap_360(theta_deg))
-}
-
-#[inline]
-fn wrap_360(deg: f64) -> f64 {
-    // `rem_euclid` (an `fmod` call) only outside (-360, 360): inside, `deg % 360` is `deg`
-    // exactly, so the result is `deg`, or `deg + 360` for a negative one (the same bits;
-    // -0 stays -0 as `fmod` keeps it).
-    let t = if (0.0..360.0).contains(&deg) {
-        deg
-    } else if deg > -360.0 && deg < 0.0 {
-        deg + 360.0
-    } else {
-        deg.rem_euclid(360.0)
-    };
-    if t >= 360.0 {
-        0.0
-    } else {
-        t
-    }
-}
-
-fn bin_index(theta_deg: f64) -> usize {
-    ((theta_deg / BIN_DEG) as usize).min(N_BINS - 1)
-}
-
-fn bins(deg: f64) -> usize {
-    (deg / BIN_DEG).round() as usize
 }
 
 fn min_max(v: &[f64]) -> (f64, f64) {
@@ -1190,45 +1133,6 @@ fn detect_events(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The in-range shortcuts of `wrap_360` give the bits of the plain `rem_euclid` form.
-    #[test]
-    fn wrap_360_matches_rem_euclid_bit_for_bit() {
-        let reference = |deg: f64| {
-            let t = deg.rem_euclid(360.0);
-            if t >= 360.0 {
-                0.0
-            } else {
-                t
-            }
-        };
-        let mut values = vec![
-            0.0,
-            -0.0,
-            360.0,
-            -360.0,
-            720.0,
-            -720.0,
-            359.99999999999994,
-            -1e-300,
-            -5e-324,
-            1e-300,
-            f64::NAN,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        ];
-        for k in 0..20_000 {
-            let x = (k as f64 - 10_000.0) * 0.0731 + 1e-9 * k as f64;
-            values.extend([x, x.next_up(), x.next_down(), -x]);
-        }
-        for v in values {
-            assert_eq!(
-                wrap_360(v).to_bits(),
-                reference(v).to_bits(),
-                "wrap_360({v:e})"
-            );
-        }
-    }
 
     /// The sine and cosine a reading carries give the centring's bits.
     #[test]

@@ -4,8 +4,10 @@
 
 pub mod attribution;
 pub mod ballbar;
+pub mod bar;
 pub mod settle;
 pub mod sink;
+pub mod theta;
 
 pub use crate::input::program::Direction;
 pub use ballbar::{BallbarResult, BallbarRun, CircleFrame};

@@ -15,7 +15,8 @@
 use nalgebra::Point3;
 
 use super::attribution::{bar_sensitivity_at, ThetaMap};
-use super::ballbar::{deviation_mm, BallbarRun, CircleFrame};
+use super::ballbar::{BallbarRun, CircleFrame};
+use super::bar::deviation_mm;
 use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines};
 use crate::kinematics::Kinematics;

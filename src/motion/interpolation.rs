@@ -100,6 +100,7 @@ use nalgebra::Point3;
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::kinematics::{Kinematics, Layout};
+use crate::numeric::cbrt;
 use crate::program::{FeedMode, Motion, Move, PathControl};
 use crate::Plane;
 use crate::{Axis, AxisVec};
@@ -558,54 +559,6 @@ fn reach(v: f64, length: f64, cap: f64, a: f64, j: f64) -> f64 {
     x
 }
 
-/// Cube root within 0.67 ulp (FreeBSD's `s_cbrt.c`, as musl and the earlier Rust `libm`
-/// have it): the exponent divided by 3 in the bits, a polynomial to 23 bits,
-///
-/// ```text
-/// t ← t · P(r),  r = t³/x;   then one Newton step   t ← t + t (x/t² - t) / (2t + x/t²)
-/// ```
-///
-/// on `t` rounded to 21 bits (so that `t²` is exact). The library's `cbrt` is now correctly
-/// rounded and several times dearer; the look-ahead calls it about twice per block, and
-/// `reach` polishes its root by a Newton step anyway.
-#[inline]
-fn cbrt(x: f64) -> f64 {
-    const B1: u32 = 715_094_163; // (1023 - 1023/3 - 0.03306235651) · 2²⁰
-    const B2: u32 = 696_219_795; // (1023 - 1023/3 - 54/3 - 0.03306235651) · 2²⁰
-    const P0: f64 = 1.875_951_824_271_770_096_43;
-    const P1: f64 = -1.884_979_795_433_771_698_75;
-    const P2: f64 = 1.621_429_720_105_354_466_140;
-    const P3: f64 = -0.758_397_934_778_766_047_437;
-    const P4: f64 = 0.145_996_192_886_612_446_982;
-    let mut bits = x.to_bits();
-    let mut hx = (bits >> 32) as u32 & 0x7fff_ffff;
-    if hx >= 0x7ff0_0000 {
-        return x + x; // NaN or ±∞
-    }
-    if hx < 0x0010_0000 {
-        // Zero or subnormal: scale by 2⁵⁴ first.
-        bits = (x * f64::from_bits(0x4350_0000_0000_0000)).to_bits();
-        hx = (bits >> 32) as u32 & 0x7fff_ffff;
-        if hx == 0 {
-            return x;
-        }
-        hx = hx / 3 + B2;
-    } else {
-        hx = hx / 3 + B1;
-    }
-    bits &= 1 << 63;
-    bits |= (hx as u64) << 32;
-    let mut t = f64::from_bits(bits);
-    let r = (t * t) * (t / x);
-    t *= (P0 + r * (P1 + r * P2)) + ((r * r) * r) * (P3 + r * P4);
-    t = f64::from_bits((t.to_bits() + 0x8000_0000) & 0xffff_ffff_c000_0000);
-    let s = t * t;
-    let r = x / s;
-    let w = t + t;
-    let r = (r - t) / (w + r);
-    t + t * r
-}
-
 /// Blocks appended between two backward passes: half the look-ahead (at least 1).
 fn pass_batch(options: &InterpolationOptions) -> usize {
     (options.lookahead_blocks / 2).max(1)
@@ -808,9 +761,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     /// time, the reader's code (interpreter, validation) found the instruction cache cold
     /// on every block. Reading stops at the first error, where the interpolator stops. Only
     /// when blocks are read changes (at most `batch` blocks early), not what is planned: the
-    /// window and its backward passes are the same. (Planning them a batch at a time as
-    /// well was no faster in alternating runs: fewer instruction-cache misses, but a planned
-    /// block is larger than the block, more data through the data cache.)
+    /// window and its backward passes are the same.
     fn next_block(&mut self, batch: usize) -> Option<Result<Move>> {
         if self.read_ahead.is_empty() && !self.blocks_done {
             for _ in 0..batch {
@@ -1376,31 +1327,6 @@ mod tests {
                 );
             }
         }
-    }
-
-    /// The look-ahead's cube root against the library's (correctly rounded) over 30 decades
-    /// and both signs, and at the special values.
-    #[test]
-    fn cube_root_is_within_one_ulp_of_the_library() {
-        let mut worst: f64 = 0.0;
-        let mut x = 1e-150;
-        while x < 1e150 {
-            for v in [x, -x] {
-                let (a, b) = (cbrt(v), v.cbrt());
-                worst = worst.max((a - b).abs() / (b.abs() * f64::EPSILON));
-            }
-            x *= 1.000_731;
-        }
-        assert!(worst <= 1.0, "worst {worst} ulp");
-        assert_eq!(cbrt(27.0), 3.0);
-        assert_eq!(cbrt(-8.0), -2.0);
-        assert_eq!(cbrt(0.0).to_bits(), 0.0f64.to_bits());
-        assert_eq!(cbrt(-0.0).to_bits(), (-0.0f64).to_bits());
-        assert!(
-            (cbrt(f64::MIN_POSITIVE * 1e-10) - (f64::MIN_POSITIVE * 1e-10).cbrt()).abs() < 1e-120
-        );
-        assert!(cbrt(f64::NAN).is_nan());
-        assert_eq!(cbrt(f64::INFINITY), f64::INFINITY);
     }
 
     proptest::proptest! {

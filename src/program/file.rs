@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use super::Moves;
+use super::moves::Moves;
 use crate::error::Result;
 
 /// Streams the moves of the file at `path`; memory does not grow with the number of moves.

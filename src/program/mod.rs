@@ -5,16 +5,15 @@
 pub mod circle;
 pub mod cone;
 pub mod file;
+pub mod moves;
 pub mod validate;
 
 use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines, NcOptions};
 use crate::input::scenario::{Program, Scenario};
 
+pub use moves::Moves;
 pub use ngc::{FeedMode, Motion, Move, MoveKind, PathControl};
-
-/// A stream of canonical moves; yields at most one error, then stops.
-pub type Moves<'a> = Box<dyn Iterator<Item = Result<Move>> + 'a>;
 
 /// One program to run: its moves and the lines of its measured revolution.
 pub struct Run<'a> {

@@ -17,7 +17,8 @@
 use std::path::{Path, PathBuf};
 
 use super::file::read_moves;
-use super::{Move, Moves};
+use super::moves::Moves;
+use super::Move;
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::Axis;

@@ -4,14 +4,11 @@
 
 pub mod files;
 pub mod fit_plot;
-pub mod fixed;
 pub mod html;
 pub mod parquet;
 pub mod plot;
 pub mod polar;
 pub mod test_info;
 pub mod trace;
-pub mod xxh64;
 
 pub use files::{create_dir, temporary_path, write_atomic};
-pub use fixed::push_fixed;

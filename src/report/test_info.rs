@@ -66,23 +66,23 @@ pub struct TestParameters {
 /// The file `test.json` in a run folder.
 pub const TEST_FILE: &str = "test.json";
 
-/// The scenario hash of files with contents `chunks`: XXH64 ([`super::xxh64`]) of each
+/// The scenario hash of files with contents `chunks`: XXH64 (seed 0, `xxhash_rust`) of each
 /// file's bytes followed by its length (8 bytes, little-endian), so that moving bytes from
 /// one file to the next changes the hash.
 pub fn files_hash(chunks: &[&[u8]]) -> u64 {
-    let mut h = super::xxh64::Xxh64::new();
+    let mut h = xxhash_rust::xxh64::Xxh64::new(0);
     for chunk in chunks {
-        h.write(chunk);
-        h.write(&(chunk.len() as u64).to_le_bytes());
+        h.update(chunk);
+        h.update(&(chunk.len() as u64).to_le_bytes());
     }
-    h.finish()
+    h.digest()
 }
 
 /// [`files_hash`] of the files at `paths` (a file that cannot be read counts as empty),
 /// read in 64 KiB pieces: memory stays flat however long the program file is.
 fn files_hash_of_paths(paths: &[&Path]) -> u64 {
     use std::io::Read;
-    let mut h = super::xxh64::Xxh64::new();
+    let mut h = xxhash_rust::xxh64::Xxh64::new(0);
     let mut buf = vec![0u8; 64 * 1024];
     for path in paths {
         let mut length = 0u64;
@@ -91,7 +91,7 @@ fn files_hash_of_paths(paths: &[&Path]) -> u64 {
                 match file.read(&mut buf) {
                     Ok(0) => break,
                     Ok(n) => {
-                        h.write(&buf[..n]);
+                        h.update(&buf[..n]);
                         length += n as u64;
                     }
                     Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
@@ -101,9 +101,9 @@ fn files_hash_of_paths(paths: &[&Path]) -> u64 {
                 }
             }
         }
-        h.write(&length.to_le_bytes());
+        h.update(&length.to_le_bytes());
     }
-    h.finish()
+    h.digest()
 }
 
 /// Today's date, UTC, as YYYY-MM-DD (civil calendar from the Unix day number).

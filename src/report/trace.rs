@@ -15,12 +15,12 @@ use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
 use super::files::temporary_path;
-use super::fixed::push_fixed_bytes_const;
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::TraceFormat;
 use crate::measure::ballbar::Centring;
 use crate::measure::{is_measured, BallbarRun, BarGeometry, BarReading};
+use crate::numeric::push_fixed_bytes_const;
 use crate::pipeline::{Sample, Sink};
 use crate::Axis;
 

@@ -16,6 +16,7 @@ use nalgebra::{Point3, Vector3};
 use serde::Serialize;
 
 use crate::error::Result;
+use crate::input::drive::si_per_unit;
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario, TraceFormat};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
@@ -206,13 +207,16 @@ pub fn run_ballbar(
     // The bar's sensitivity is a property of the nominal pose at θ: the first run's map.
     // Each axis's Stribeck velocity bounds its slow zone about a reversal (a cascade axis
     // with dry friction; otherwise the zone is the reversal itself).
+    let drives = machine
+        .axes()
+        .iter()
+        .map(|&a| machine.drive(a))
+        .collect::<Result<Vec<_>>>()?;
     let stribeck = |a: Axis| -> f64 {
-        let c = machine.axis(a);
-        let r = crate::input::drive::Resolved::new(a, &c.servo, &c.drive, &c.friction);
-        if r.coulomb.1 > 0.0 && r.model != Some(crate::input::drive::Model::FirstOrder) {
-            r.stribeck.1
-        } else {
-            0.0
+        match drives.iter().find(|d| d.axis == a) {
+            // m/s or rad/s to the commanded speeds' mm/s or deg/s.
+            Some(d) if d.has_dry_friction() => d.stribeck_m_or_rad_per_s / si_per_unit(a),
+            _ => 0.0,
         }
     };
     let sites = match (maps.first(), geometry) {
@@ -380,12 +384,8 @@ pub fn reversal_values(
         .axes()
         .iter()
         .map(|&a| {
-            let c = machine.axis(a);
             let servo = crate::drive::AxisServo::new(
-                a,
-                &c.servo,
-                &c.drive,
-                &c.friction,
+                &machine.drive(a)?,
                 machine.interpolation_period_s,
                 0.0,
             )?;

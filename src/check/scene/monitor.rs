@@ -308,9 +308,8 @@ impl SceneMonitor {
         }
     }
 
-    /// Whether tool/table pairs use the relative-motion bound as well. Off by default: the
-    /// bound skips queries but needs two `sin_cos` and a bound per pair on every sample
-    /// (docs/performance.md has the figures).
+    /// Whether tool/table pairs use the relative-motion bound as well: fewer queries for two
+    /// `sin_cos` and a bound per pair on every sample (off by default; docs/performance.md).
     pub fn with_relative_bounds(mut self, on: bool) -> SceneMonitor {
         self.uses_relative = on && self.states.iter().any(|s| s.relative.is_some());
         self
@@ -420,7 +419,8 @@ impl SceneMonitor {
         let sigma = dot3(&self.w_max, &self.sum);
         let allowance = 1e-12 * (1.0 + sigma);
         let lazy = step.is_some() && !self.exhaustive && !self.uses_relative;
-        // The sample is built in place in `prev`, the slot that keeps it.
+        // The sample is built where it is kept (a copy built first and moved into `prev`
+        // cost a second 104-byte copy on every sample).
         if lazy && sigma < self.next_due && !self.hot_due(allowance) {
             self.prev = Some(Sample {
                 time_s,

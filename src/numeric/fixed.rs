@@ -1,4 +1,5 @@
-//! Fixed-point number formatting for big text tables, without allocation.
+//! Fixed-point number formatting for big text tables, without allocation. Kept instead of
+//! `format!("{v:.6}")` for its cost (the trace's rows: docs/performance.md, the trace table).
 
 /// Appends `v` with `decimals` digits after the point, as `format!("{v:.decimals$}")` would
 /// for |v| < 1e12 (round half away from zero on the scaled value), without the formatting

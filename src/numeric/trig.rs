@@ -12,9 +12,10 @@
 //! ```
 //!
 //! and the quadrant `k mod 4` swaps and negates them. Only multiplications and additions,
-//! so the result is the same on every CPU; multiples of 90° give exact 0 and ±1. This is
-//! about a quarter of the cost of `to_radians().sin_cos()` and more accurate for large
-//! angles, whose conversion to radians would round before the reduction.
+//! so the result is the same on every CPU; multiples of 90° give exact 0 and ±1, and large
+//! angles keep their accuracy (a conversion to radians would round before the reduction).
+//! Kept instead of `to_radians().sin_cos()` for its cost (about a quarter of it:
+//! docs/performance.md) and because the kinematics' and the ball bar's bits depend on it.
 
 const S1: f64 = -1.666_666_666_666_663_243_48e-1;
 const S2: f64 = 8.333_333_333_322_489_461_24e-3;

@@ -9,6 +9,7 @@ pub mod html;
 pub mod parquet;
 pub mod plot;
 pub mod polar;
+pub mod run;
 pub mod test_info;
 pub mod trace;
 pub mod xxh64;

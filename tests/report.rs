@@ -206,6 +206,25 @@ fn check_html_writes_the_limits_page() {
     );
 }
 
+/// `check.json` reads back into the `CheckReport` that wrote it: each axis's usage takes
+/// its axis from its key, and writing it again gives the same JSON.
+#[test]
+fn check_json_reads_back_into_the_check_report() {
+    let dir = scratch("report", "check-json");
+    let out = mtsim(&["check", "scenarios/cone-15-10.toml", "--json"]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let report: mtsim::check::CheckReport = serde_json::from_str(&text).unwrap();
+    assert_eq!(report.axes.len(), 5);
+    for (name, usage) in &report.axes {
+        assert_eq!(&usage.axis.to_string(), name);
+    }
+    assert!(!report.engagement.is_empty(), "the cone is cut");
+    let again = serde_json::to_string_pretty(&report).unwrap();
+    assert_eq!(format!("{again}\n"), text);
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 // ---- the browser test --------------------------------------------------------------
 
 /// The Chromium binary, if installed.

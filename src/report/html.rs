@@ -15,8 +15,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::plot::{self, Chart, Mark as ChartMark, Marker, Series};
-use super::run::{file_names, svg_texts, Diagnosis, Finding, Mark, RunFolder};
 pub use super::run::CHECK_FILE;
+use super::run::{file_names, svg_texts, Diagnosis, Finding, Mark, RunFolder};
 use super::trace::Trace;
 use crate::check::CheckReport;
 use crate::error::Result;
@@ -609,7 +609,10 @@ pub fn render(folder: &RunFolder, diagnosis: &Diagnosis, date: Option<&str>) -> 
     }
     if let Some(trace) = folder.trace.as_ref().filter(|t| !t.runs.is_empty()) {
         h.push_str("<h2 id=\"linear\">Deviation against θ</h2>\n");
-        h.push_str(&inline_svg(&deviation_chart(&diagnosis.marks, trace)?, "deviation"));
+        h.push_str(&inline_svg(
+            &deviation_chart(&diagnosis.marks, trace)?,
+            "deviation",
+        ));
         h.push_str(
             "<h2 id=\"axes\">Axis position, velocity and following error against θ</h2>\n\
              <p class=\"note\">One row per axis, as in the paper's Figs. 5 and 11; the vertical lines are \
@@ -698,7 +701,11 @@ pub fn write_study_page(dir: &Path) -> Result<Option<PathBuf>> {
 
 /// Writes the page of the run folder `folder` with its `diagnosis` to `report.html` there,
 /// atomically, and returns its path.
-pub fn write_run_page(folder: &RunFolder, diagnosis: &Diagnosis, date: Option<&str>) -> Result<PathBuf> {
+pub fn write_run_page(
+    folder: &RunFolder,
+    diagnosis: &Diagnosis,
+    date: Option<&str>,
+) -> Result<PathBuf> {
     let path = folder.dir.join(REPORT_FILE);
     super::write_atomic(&path, render(folder, diagnosis, date)?.as_bytes())?;
     Ok(path)

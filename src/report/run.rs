@@ -90,7 +90,11 @@ pub fn file_names(dir: &Path, extensions: &[&str]) -> Result<Vec<String>> {
 }
 
 /// (name, text) of each of `files` in `dir` that `inline` accepts and that can be read.
-pub fn svg_texts(dir: &Path, files: &[String], inline: &dyn Fn(&str) -> bool) -> Vec<(String, String)> {
+pub fn svg_texts(
+    dir: &Path,
+    files: &[String],
+    inline: &dyn Fn(&str) -> bool,
+) -> Vec<(String, String)> {
     files
         .iter()
         .filter(|n| inline(n))
@@ -103,8 +107,11 @@ impl RunFolder {
     pub fn read(dir: &Path) -> Result<RunFolder> {
         let summary_path = dir.join(SUMMARY_FILE);
         let summary = read_json(&summary_path)?.ok_or_else(|| {
-            Error::invalid(&summary_path, "no summary.json: not a run folder".to_string())
-                .with_help("give the folder `mtsim simulate SCENARIO -o FOLDER` wrote")
+            Error::invalid(
+                &summary_path,
+                "no summary.json: not a run folder".to_string(),
+            )
+            .with_help("give the folder `mtsim simulate SCENARIO -o FOLDER` wrote")
         })?;
         let files = file_names(dir, &[".csv", ".json", ".svg", ".nc", ".parquet"])?;
         let svgs = svg_texts(dir, &files, &|name| {

@@ -631,7 +631,11 @@ fn read_parquet(path: &Path) -> Result<Trace> {
     let Some(Column::Str(direction)) = table.column("direction") else {
         return Err(bad("no text column `direction`".into()));
     };
-    let [time, theta, dev] = [floats("time_s")?, floats("theta_deg")?, floats("deviation_centred_um")?];
+    let [time, theta, dev] = [
+        floats("time_s")?,
+        floats("theta_deg")?,
+        floats("deviation_centred_um")?,
+    ];
     let (mut axes, mut axis_cols) = (Vec::new(), Vec::new());
     for axis in Axis::ALL {
         let [act, ferr] = axis_column_names(axis);

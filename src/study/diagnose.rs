@@ -449,7 +449,8 @@ fn run_marks(folder: &RunFolder) -> Vec<Mark> {
                     .zip(&run.deviation_centred_um)
                     .filter(|(t, v)| t.is_finite() && v.is_finite())
                     .min_by(|a, b| {
-                        angular_distance_deg(*a.0, theta).total_cmp(&angular_distance_deg(*b.0, theta))
+                        angular_distance_deg(*a.0, theta)
+                            .total_cmp(&angular_distance_deg(*b.0, theta))
                     })?;
                 Some(*dev)
             });
@@ -465,7 +466,9 @@ fn run_marks(folder: &RunFolder) -> Vec<Mark> {
                     reversals
                         .iter()
                         .flat_map(|(a, angles)| {
-                            angles.iter().map(move |t| (angular_distance_deg(*t, theta), a))
+                            angles
+                                .iter()
+                                .map(move |t| (angular_distance_deg(*t, theta), a))
                         })
                         .min_by(|a, b| a.0.total_cmp(&b.0))
                         .map(|(d, a)| (a.clone(), d)),
@@ -497,7 +500,9 @@ pub fn diagnose_run(folder: &RunFolder) -> Diagnosis {
     let mut findings = Vec::new();
     for run in folder.trace.iter().flat_map(|t| &t.runs) {
         let (theta, dev) = (&run.theta_deg, &run.deviation_centred_um);
-        if let Some((g_um, g_without_um, theta_deg)) = g_without_peak(theta, dev, SPOT_HALF_WINDOW_DEG) {
+        if let Some((g_um, g_without_um, theta_deg)) =
+            g_without_peak(theta, dev, SPOT_HALF_WINDOW_DEG)
+        {
             if g_um > 0.0 && g_without_um < DOMINANT_SPOT_SHARE * g_um {
                 findings.push(Finding::DominantSpot {
                     direction: run.direction.clone(),
@@ -508,7 +513,8 @@ pub fn diagnose_run(folder: &RunFolder) -> Diagnosis {
             }
         }
         if let Some((amplitude_um, long_axis_deg)) = ellipse_um(theta, dev) {
-            if g.is_finite() && amplitude_um > ELLIPSE_SHARE * g && amplitude_um > ELLIPSE_FLOOR_UM {
+            if g.is_finite() && amplitude_um > ELLIPSE_SHARE * g && amplitude_um > ELLIPSE_FLOOR_UM
+            {
                 findings.push(Finding::Elliptical {
                     direction: run.direction.clone(),
                     amplitude_um,

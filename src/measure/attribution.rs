@@ -190,7 +190,9 @@ impl Serialize for AxisSet {
 impl<'de> Deserialize<'de> for AxisSet {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<AxisSet, D::Error> {
         let mut set = AxisSet::EMPTY;
-        Vec::<Axis>::deserialize(d)?.into_iter().for_each(|a| set.insert(a));
+        Vec::<Axis>::deserialize(d)?
+            .into_iter()
+            .for_each(|a| set.insert(a));
         Ok(set)
     }
 }

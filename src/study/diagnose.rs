@@ -410,7 +410,14 @@ pub fn ellipse_um(theta: &[f64], dev: &[f64]) -> Option<(f64, f64)> {
 /// A spot makes "most of G" when G without it is less than this share of G.
 const DOMINANT_SPOT_SHARE: f64 = 0.5;
 /// The window left out around the spot, ± deg.
-const SPOT_HALF_WINDOW_DEG: f64 = 5.0;
+pub const SPOT_HALF_WINDOW_DEG: f64 = 5.0;
+
+/// [`g_without_peak`] over ±[`SPOT_HALF_WINDOW_DEG`] when the spot makes most of G (G
+/// without it below half of G): (G, G without the spot, θ of the spot); None otherwise.
+pub fn dominant_spot(theta: &[f64], dev: &[f64]) -> Option<(f64, f64, f64)> {
+    g_without_peak(theta, dev, SPOT_HALF_WINDOW_DEG)
+        .filter(|&(g, g_rest, _)| g > 0.0 && g_rest < DOMINANT_SPOT_SHARE * g)
+}
 /// The 2θ part is worth a word above this share of G and above [`ELLIPSE_FLOOR_UM`].
 const ELLIPSE_SHARE: f64 = 0.15;
 const ELLIPSE_FLOOR_UM: f64 = 0.5;
@@ -500,17 +507,13 @@ pub fn diagnose_run(folder: &RunFolder) -> Diagnosis {
     let mut findings = Vec::new();
     for run in folder.trace.iter().flat_map(|t| &t.runs) {
         let (theta, dev) = (&run.theta_deg, &run.deviation_centred_um);
-        if let Some((g_um, g_without_um, theta_deg)) =
-            g_without_peak(theta, dev, SPOT_HALF_WINDOW_DEG)
-        {
-            if g_um > 0.0 && g_without_um < DOMINANT_SPOT_SHARE * g_um {
-                findings.push(Finding::DominantSpot {
-                    direction: run.direction.clone(),
-                    theta_deg,
-                    g_um,
-                    g_without_um,
-                });
-            }
+        if let Some((g_um, g_without_um, theta_deg)) = dominant_spot(theta, dev) {
+            findings.push(Finding::DominantSpot {
+                direction: run.direction.clone(),
+                theta_deg,
+                g_um,
+                g_without_um,
+            });
         }
         if let Some((amplitude_um, long_axis_deg)) = ellipse_um(theta, dev) {
             if g.is_finite() && amplitude_um > ELLIPSE_SHARE * g && amplitude_um > ELLIPSE_FLOOR_UM

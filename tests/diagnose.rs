@@ -203,3 +203,104 @@ fn simulate_reports_the_servo_mismatch_of_a_kv_30_27_circle_in_summary_json() {
         json["reversal_values"]
     );
 }
+
+/// The 2θ fit of trace rows returns an injected ellipse `A cos 2(θ − φ)` exactly, on rows
+/// that cover the circle unevenly (the bins' Fourier sums would not).
+#[test]
+fn the_two_theta_fit_of_uneven_rows_returns_the_injected_ellipse() {
+    use mtsim::study::diagnose::ellipse_um;
+    for (amplitude, axis_deg) in [(3.0, 30.0), (0.8, 120.0), (2.5, 179.0)] {
+        // 700 rows crowded towards 0° (θ = 300 u², u in [0, 1]).
+        let theta: Vec<f64> = (0..700)
+            .map(|i| 300.0 * (i as f64 / 699.0).powi(2))
+            .collect();
+        let dev: Vec<f64> = theta
+            .iter()
+            .map(|t| amplitude * (2.0 * (t - axis_deg) as f64).to_radians().cos())
+            .collect();
+        let (a, phi) = ellipse_um(&theta, &dev).unwrap();
+        assert!((a - amplitude).abs() < 1e-9, "{a} vs {amplitude}");
+        assert!((phi - axis_deg).abs() < 1e-7, "{phi} vs {axis_deg}");
+    }
+    // Fewer than 8 rows: no fit.
+    assert!(ellipse_um(&[0.0, 10.0, 20.0], &[1.0, 2.0, 3.0]).is_none());
+}
+
+/// G with and without one spot: a unit sine every degree with 10 µm added at θ = 100°.
+#[test]
+fn one_spot_that_makes_most_of_g_is_found_with_g_without_it() {
+    use mtsim::study::diagnose::g_without_peak;
+    let theta: Vec<f64> = (0..360).map(f64::from).collect();
+    let dev: Vec<f64> = theta
+        .iter()
+        .map(|t| t.to_radians().sin() + if *t == 100.0 { 10.0 } else { 0.0 })
+        .collect();
+    let (g, g_rest, spot) = g_without_peak(&theta, &dev, 5.0).unwrap();
+    let peak = 100f64.to_radians().sin() + 10.0;
+    assert!((g - (peak + 1.0)).abs() < 1e-12, "{g}");
+    // Without 95°..105° the band is the sine's: 1 at 90°, −1 at 270°.
+    assert!((g_rest - 2.0).abs() < 1e-12, "{g_rest}");
+    assert_eq!(spot, 100.0);
+}
+
+/// The findings of a run folder read from its summary: a mark of no axis is placed by the
+/// nearest reversal of any axis, a mark of an axis by that axis's nearest reversal; H and
+/// the mean radius error are named when large.
+#[test]
+fn a_run_folder_is_diagnosed_from_its_typed_summary() {
+    use mtsim::report::run::{Finding, RunFolder, RunSummary};
+    let summary: RunSummary = serde_json::from_str(
+        r#"{
+        "sim_time_s": 12.5, "setpoints": 12501, "realtime_factor": null,
+        "reversals_deg": {"X": [0.0, 180.0], "Y": [90.0, 270.0]},
+        "ballbar": {
+            "circular_deviation_um": 10.0, "radial_max_um": 5.0, "radial_min_um": -5.0,
+            "hysteresis_um": 4.0,
+            "spikes": [
+                {"theta_deg": 104.0, "peak_deg": 104.5, "height_um": 2.0, "width_deg": 1.0,
+                 "extent_deg": 1.0, "kind": "spike", "direction": "ccw", "axis": null,
+                 "confidence": 0.0, "candidates": [], "ambiguous": false},
+                {"theta_deg": 181.5, "peak_deg": 181.5, "height_um": -1.0, "width_deg": 0.0,
+                 "extent_deg": 0.0, "kind": "step", "direction": "cw", "axis": "X",
+                 "confidence": 0.9, "candidates": ["X"], "ambiguous": false}
+            ],
+            "runs": [
+                {"direction": "ccw", "samples": 100,
+                 "centring": {"r0_um": -2.5, "a_um": 0.0, "b_um": 0.0},
+                 "circular_deviation_um": 10.0, "radial_max_um": 5.0, "radial_min_um": -5.0,
+                 "noise_um": 0.1}
+            ]
+        }}"#,
+    )
+    .unwrap();
+    let folder = RunFolder {
+        dir: "run".into(),
+        summary,
+        test: None,
+        check: None,
+        trace: None,
+        svgs: Vec::new(),
+        files: Vec::new(),
+    };
+    let d = mtsim::study::diagnose::diagnose_run(&folder);
+    assert_eq!(d.marks.len(), 2);
+    assert_eq!(d.marks[0].number, 1);
+    let (axis, distance) = d.marks[0].nearest.clone().unwrap();
+    assert_eq!(axis, "Y");
+    assert!((distance - 14.0).abs() < 1e-12);
+    assert_eq!(d.marks[0].reversal, None);
+    let (at, distance) = d.marks[1].reversal.unwrap();
+    assert_eq!(at, 180.0);
+    assert!((distance - 1.5).abs() < 1e-12);
+    // No trace: no spot and no 2θ finding; the two marks, H (4 > 0.3 G), r0 (|−2.5| > 1).
+    assert_eq!(d.findings.len(), 4, "{:?}", d.findings);
+    assert!(matches!(d.findings[0], Finding::Mark(_)));
+    assert_eq!(d.findings[2], Finding::Hysteresis { h_um: 4.0 });
+    assert_eq!(
+        d.findings[3],
+        Finding::RadiusOffset {
+            direction: "ccw".into(),
+            r0_um: -2.5
+        }
+    );
+}

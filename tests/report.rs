@@ -206,6 +206,44 @@ fn check_html_writes_the_limits_page() {
     );
 }
 
+/// `check.json` reads back into the `CheckReport` that wrote it: each axis's usage takes
+/// its axis from its key, and writing it again gives the same JSON.
+#[test]
+fn check_json_reads_back_into_the_check_report() {
+    let dir = scratch("report", "check-json");
+    let out = mtsim(&["check", "scenarios/cone-15-10.toml", "--json"]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let report: mtsim::check::CheckReport = serde_json::from_str(&text).unwrap();
+    assert_eq!(report.axes.len(), 5);
+    for (name, usage) in &report.axes {
+        assert_eq!(&usage.axis.to_string(), name);
+    }
+    assert!(!report.engagement.is_empty(), "the cone is cut");
+    let again = serde_json::to_string_pretty(&report).unwrap();
+    assert_eq!(format!("{again}\n"), text);
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// The velocity the report plots is the central difference of the actual position: exact
+/// for a parabola inside the run, one-sided at its ends.
+#[test]
+fn the_plotted_velocity_is_the_central_difference_of_the_position() {
+    use mtsim::report::trace::TraceRun;
+    // p = t² mm at uneven times: (p(t+) - p(t-)) / (t+ - t-) = t+ + t-.
+    let time_s = vec![0.0, 0.1, 0.3, 0.4, 0.7];
+    let run = TraceRun {
+        actual: vec![time_s.iter().map(|t| t * t).collect()],
+        time_s: time_s.clone(),
+        ..TraceRun::default()
+    };
+    let v = run.velocity_per_min(0);
+    let want = [0.1, 0.3, 0.5, 1.0, 1.1].map(|x: f64| 60.0 * x);
+    for (got, want) in v.iter().zip(want) {
+        assert!((got - want).abs() < 1e-9, "{v:?}");
+    }
+}
+
 // ---- the browser test --------------------------------------------------------------
 
 /// The Chromium binary, if installed.

@@ -206,15 +206,13 @@ fn a_run_in_one_format_removes_the_other_format_s_trace() {
 
 #[test]
 fn the_report_reads_a_parquet_trace_as_it_reads_the_csv_one() {
-    use mtsim::report::html::{read_trace, read_trace_parquet};
+    use mtsim::report::trace::read_trace;
     let dir = scratch("trace-parquet", "report");
     let (csv_dir, pq_dir) = (dir.join("csv"), dir.join("parquet"));
     run(&csv_dir, TraceFormat::Csv);
     run(&pq_dir, TraceFormat::Parquet);
-    let from_csv = read_trace(&csv_dir.join("trace.csv")).unwrap().unwrap();
-    let from_pq = read_trace_parquet(&pq_dir.join("trace.parquet"))
-        .unwrap()
-        .unwrap();
+    let from_csv = read_trace(&csv_dir).unwrap().unwrap();
+    let from_pq = read_trace(&pq_dir).unwrap().unwrap();
     assert_eq!(from_csv.axes, from_pq.axes);
     assert_eq!(from_csv.runs.len(), 2, "ccw and cw");
     assert_eq!(from_csv.runs.len(), from_pq.runs.len());

@@ -7,7 +7,7 @@
 //! executes (its planner rounds the corner), so acceleration is taken only from three
 //! samples inside one block: it then catches arcs, G43.4 moves and what the servo does.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 use crate::input::machine::Machine;
@@ -15,7 +15,7 @@ use crate::pipeline::{Sample, Sink};
 use crate::{Axis, AxisVec};
 
 /// The kind of a violation, as scripts read it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ViolationKind {
     Travel,
@@ -25,8 +25,21 @@ pub enum ViolationKind {
     NearMiss,
 }
 
+impl ViolationKind {
+    /// The kind's name in JSON ("near_miss").
+    pub fn name(self) -> &'static str {
+        match self {
+            ViolationKind::Travel => "travel",
+            ViolationKind::Velocity => "velocity",
+            ViolationKind::Acceleration => "acceleration",
+            ViolationKind::Collision => "collision",
+            ViolationKind::NearMiss => "near_miss",
+        }
+    }
+}
+
 /// One violation: an interval of samples over which a limit is exceeded.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Violation {
     pub kind: ViolationKind,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -50,9 +63,11 @@ pub struct Violation {
 }
 
 /// How much of an axis a program uses.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AxisUsage {
-    #[serde(skip)]
+    /// Not written: JSON keys the usage by its axis (read back from the key, see
+    /// [`super::run::CheckReport`]).
+    #[serde(skip, default = "unread_axis")]
     pub axis: Axis,
     /// Used range, mm or deg.
     pub min: f64,
@@ -68,6 +83,11 @@ pub struct AxisUsage {
     /// Highest acceleration, mm/s² or deg/s², and its limit.
     pub peak_acceleration_per_s2: f64,
     pub acceleration_limit_per_s2: f64,
+}
+
+/// The axis of a usage before its JSON key is read.
+fn unread_axis() -> Axis {
+    Axis::X
 }
 
 /// A violation being extended sample by sample.

@@ -9,7 +9,7 @@ use std::cell::RefCell;
 use std::collections::{BTreeMap, VecDeque};
 use std::rc::Rc;
 
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::check::limits::{AxisUsage, LimitsMonitor, Violation, ViolationKind};
 use crate::check::scene::{EngagementSummary, EventKind, Scene, SceneMonitor, ToolConfig};
@@ -34,12 +34,13 @@ pub struct CheckOptions {
 }
 
 /// What `check` found.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CheckReport {
     /// In the order they started.
     pub violations: Vec<Violation>,
     /// Per axis: the used range against the travel, with the margin, and peak velocity and
     /// acceleration against the limits.
+    #[serde(deserialize_with = "usage_by_axis")]
     pub axes: BTreeMap<String, AxisUsage>,
     /// Samples checked (one per interpolation period).
     pub samples: u64,
@@ -60,6 +61,17 @@ impl CheckReport {
     pub fn is_clean(&self) -> bool {
         self.violations.is_empty()
     }
+}
+
+/// The axes' usage read from JSON, each with the axis its key names.
+fn usage_by_axis<'de, D: Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<BTreeMap<String, AxisUsage>, D::Error> {
+    let mut axes = BTreeMap::<String, AxisUsage>::deserialize(d)?;
+    for (name, usage) in &mut axes {
+        usage.axis = Axis::deserialize(serde::de::value::StrDeserializer::<D::Error>::new(name))?;
+    }
+    Ok(axes)
 }
 
 /// Tool changes read from the move stream ahead of the samples: (block index, tool number).

@@ -46,8 +46,7 @@ pub fn run(
         EXIT_VIOLATIONS
     };
     if let Some(file) = html {
-        let value = serde_json::to_value(&report).expect("plain data serializes");
-        let page = crate::report::html::render_check_page(&path.display().to_string(), &value);
+        let page = crate::report::html::render_check_page(&path.display().to_string(), &report);
         crate::report::write_atomic(file, page.as_bytes())?;
     }
     if as_json {

@@ -238,7 +238,7 @@ pub fn main() -> i32 {
     };
     let result = run(cli).and_then(|code| {
         if let Some(dir) = &sweep_html {
-            crate::report::html::write_report(dir, None)?;
+            report::write_report(dir, None)?;
         }
         Ok(code)
     });

@@ -1,9 +1,11 @@
 //! `mtsim report`: report.html for each run folder.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::print_stdout;
 use crate::error::{Error, Result};
+use crate::report::html;
+use crate::report::run::{RunFolder, SUMMARY_FILE};
 
 /// Checks a `--date` value: YYYY-MM-DD.
 pub fn check_date(date: &str) -> Result<()> {
@@ -34,13 +36,27 @@ pub fn check_date(date: &str) -> Result<()> {
     }
 }
 
+/// Writes `report.html` into `dir` and returns its path: the page of a run folder (read
+/// back, diagnosed by `study::diagnose`, rendered), or the study page of a `sweep` folder
+/// (no summary.json, but sweep or placement plots).
+pub fn write_report(dir: &Path, date: Option<&str>) -> Result<PathBuf> {
+    if !dir.join(SUMMARY_FILE).exists() {
+        if let Some(path) = html::write_study_page(dir)? {
+            return Ok(path);
+        }
+    }
+    let folder = RunFolder::read(dir)?;
+    let diagnosis = crate::study::diagnose::diagnose_run(&folder);
+    html::write_run_page(&folder, &diagnosis, date)
+}
+
 pub fn run(dirs: &[PathBuf], date: Option<&str>) -> Result<i32> {
     if let Some(d) = date {
         check_date(d)?;
     }
     let mut out = String::new();
     for dir in dirs {
-        let path = crate::report::html::write_report(dir, date)?;
+        let path = write_report(dir, date)?;
         out.push_str(&format!("wrote {}\n", path.display()));
     }
     print_stdout(&out);

@@ -67,7 +67,7 @@ pub fn run(
         EXIT_VIOLATIONS
     };
     if html {
-        crate::report::html::write_report(out_dir, None)?;
+        super::report::write_report(out_dir, None)?;
     }
     if as_json {
         print_stdout(&format!(

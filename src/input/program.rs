@@ -17,7 +17,7 @@
 //! r·(-r) + h·(L/sin α - h) = -L²cos²α + L² - L²sin²α = 0.
 
 use nalgebra::{Point3, Rotation3, Vector3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::kinematics::ToolPose;
 use crate::{Axis, Plane};
@@ -170,7 +170,7 @@ impl CircleTest {
 }
 
 /// The direction of travel of a run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Direction {
     /// Counter-clockwise: theta increases with time.

@@ -40,7 +40,7 @@
 //!   reversals and "no axis" at [`ATTRIBUTION_MAX_DEG`].
 
 use nalgebra::Point3;
-use serde::{Serialize, Serializer};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::bar::deviation_mm;
 use super::theta::{angle_distance_deg, BIN_DEG, N_BINS};
@@ -185,6 +185,16 @@ impl std::fmt::Display for AxisSet {
 impl Serialize for AxisSet {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         s.collect_seq(self.iter().map(|a| a.to_string()))
+    }
+}
+
+impl<'de> Deserialize<'de> for AxisSet {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<AxisSet, D::Error> {
+        let mut set = AxisSet::EMPTY;
+        Vec::<Axis>::deserialize(d)?
+            .into_iter()
+            .for_each(|a| set.insert(a));
+        Ok(set)
     }
 }
 

@@ -44,7 +44,7 @@
 //! reversal angle is nearest to its onset.
 
 use nalgebra::{DMatrix, DVector, Matrix3, Point3, Rotation3, Vector3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::attribution::{attribute_arc, attribute_to_sites, AxisSet, ReversalSite};
 use super::theta::{bin_index, bins, wrap_360};
@@ -138,7 +138,7 @@ impl CircleFrame {
 ///
 /// (a, b) is the set-up offset of the pivot from the circle's centre, projected on the
 /// frame's X and Y; r0 is the mean length error.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Centring {
     pub r0_um: f64,
     pub a_um: f64,
@@ -354,7 +354,7 @@ impl BallbarRun {
 }
 
 /// Spike or step.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum EventKind {
     /// A short excursion that returns to the baseline.
@@ -364,7 +364,7 @@ pub enum EventKind {
 }
 
 /// A spike or step found in a centred trace.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TraceEvent {
     /// Onset angle, deg: where the event leaves the baseline (a step's position).
     pub theta_deg: f64,
@@ -394,7 +394,7 @@ pub struct TraceEvent {
 }
 
 /// Figures of one run.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunFigures {
     pub direction: Direction,
     pub samples: u64,
@@ -407,7 +407,7 @@ pub struct RunFigures {
 }
 
 /// The ISO 230-4 figures and the events of one test.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BallbarResult {
     /// G: the largest over the runs, um.
     pub circular_deviation_um: f64,

@@ -1,287 +1,35 @@
 //! `report.html`: one self-contained page per run folder, for people to open.
 //!
-//! Reads what `simulate` wrote into the folder — `summary.json`, `test.json`, `trace.csv`
-//! (or `trace.parquet`), `ballbar.svg`, `check.json`, and `placement.svg` / `sweep-*.svg`
-//! when present — and writes one HTML file with inline SVG and CSS: no network, no
-//! JavaScript. Sections:
-//! test parameters (ISO 230-4, 5.2), the figures (G, F, H per direction and
+//! Renders a [`RunFolder`] (what `simulate` wrote: the summary, `test.json`, `check.json`,
+//! the trace, `ballbar.svg`, and `placement.svg` / `sweep-*.svg` when present) with its
+//! [`Diagnosis`] into one HTML file with inline SVG and CSS: no network, no JavaScript.
+//! Sections: test parameters (ISO 230-4, 5.2), the figures (G, F, H per direction and
 //! bi-directional), the polar plot, deviation against θ, each axis's position, velocity and
 //! following error against θ with its reversal angles (the paper's Figs. 5 and 11), the mark
-//! table with attribution, the diagnoses, the limits and collision summary, and links to
-//! the files beside it. The page depends only on the folder's files (and the `date` given),
-//! so the same run gives the same bytes.
-//!
-//! Velocity is the central difference of the actual position over the trace's time column,
-//! `v_i = (p_{i+1} - p_{i-1}) / (t_{i+1} - t_{i-1})`, in mm/min (deg/min for rotary axes).
+//! table with attribution, the diagnoses, the limits and collision summary, and links to the
+//! files beside it. The page depends only on its inputs (and the `date` given), so the same
+//! run gives the same bytes. Nothing is computed here but the layout: the figures and marks
+//! come from the ball bar, the findings from `study::diagnose`.
 
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use serde_json::Value;
-
-use super::plot::{self, Chart, Mark, Marker, Series};
-use super::test_info::{TestParameters, TEST_FILE};
-use crate::error::{Error, Result};
+use super::plot::{self, Chart, Mark as ChartMark, Marker, Series};
+pub use super::run::CHECK_FILE;
+use super::run::{file_names, svg_texts, Diagnosis, Finding, Mark, RunFolder};
+use super::trace::Trace;
+use crate::check::CheckReport;
+use crate::error::Result;
+use crate::input::program::Direction;
+use crate::measure::ballbar::EventKind;
+use crate::measure::BallbarResult;
 use crate::Axis;
 
 /// The file a report is written to, in the run folder.
 pub const REPORT_FILE: &str = "report.html";
-/// The limits and collision summary a simulation leaves beside its trace.
-pub const CHECK_FILE: &str = "check.json";
 
 /// Points per curve after decimation (per direction).
 const BUCKETS: usize = 900;
-
-/// One direction's columns of `trace.csv`.
-#[derive(Clone, Debug, Default)]
-pub struct TraceRun {
-    pub direction: String,
-    pub time_s: Vec<f64>,
-    pub theta_deg: Vec<f64>,
-    pub deviation_centred_um: Vec<f64>,
-    /// Per axis: actual position and following error (mm or deg).
-    pub actual: Vec<Vec<f64>>,
-    pub following_error: Vec<Vec<f64>>,
-}
-
-/// `trace.csv`, by direction.
-#[derive(Clone, Debug, Default)]
-pub struct Trace {
-    pub axes: Vec<Axis>,
-    pub runs: Vec<TraceRun>,
-}
-
-/// The file at `path`, or None when there is none.
-fn open_if_present(path: &Path) -> Result<Option<std::fs::File>> {
-    match std::fs::File::open(path) {
-        Ok(f) => Ok(Some(f)),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-        Err(source) => Err(Error::Read {
-            path: path.to_path_buf(),
-            source,
-        }),
-    }
-}
-
-/// The run a trace row of `direction` belongs to: the last one, or a new one where the
-/// direction changes (the rows of one direction come together).
-fn run_of<'r>(runs: &'r mut Vec<TraceRun>, direction: &str, n_axes: usize) -> &'r mut TraceRun {
-    if runs.last().is_none_or(|r| r.direction != direction) {
-        runs.push(TraceRun {
-            direction: direction.to_string(),
-            actual: vec![Vec::new(); n_axes],
-            following_error: vec![Vec::new(); n_axes],
-            ..TraceRun::default()
-        });
-    }
-    runs.last_mut().expect("pushed above")
-}
-
-/// Reads `trace.parquet` (`[simulate] trace_format = "parquet"`): the columns of
-/// `trace.csv`, as f64; None when the file is missing.
-pub fn read_trace_parquet(path: &Path) -> Result<Option<Trace>> {
-    use arrow::array::{Array, Float64Array, RecordBatchReader, StringArray};
-    use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
-
-    let Some(file) = open_if_present(path)? else {
-        return Ok(None);
-    };
-    let bad = |what: String| Error::invalid(path, what);
-    let reader = ParquetRecordBatchReaderBuilder::try_new(file)
-        .and_then(|b| b.build())
-        .map_err(|e| bad(format!("not a readable Parquet file: {e}")))?;
-    let schema = reader.schema();
-    let names: Vec<String> = schema.fields().iter().map(|f| f.name().clone()).collect();
-    let mut axes = Vec::new();
-    for axis in Axis::ALL {
-        let unit = axis.unit();
-        if names.contains(&format!("{axis}_act_{unit}"))
-            && names.contains(&format!("{axis}_ferr_{unit}"))
-        {
-            axes.push(axis);
-        }
-    }
-    let mut runs: Vec<TraceRun> = Vec::new();
-    for batch in reader {
-        let batch = batch.map_err(|e| bad(format!("cannot read a row group: {e}")))?;
-        let floats = |name: &str| -> Result<&Float64Array> {
-            batch
-                .column_by_name(name)
-                .and_then(|c| c.as_any().downcast_ref::<Float64Array>())
-                .ok_or_else(|| bad(format!("no f64 column `{name}`")))
-        };
-        let direction = batch
-            .column_by_name("direction")
-            .and_then(|c| c.as_any().downcast_ref::<StringArray>())
-            .ok_or_else(|| bad("no text column `direction`".into()))?;
-        let (time, theta, dev) = (
-            floats("time_s")?,
-            floats("theta_deg")?,
-            floats("deviation_centred_um")?,
-        );
-        let mut axis_columns = Vec::new();
-        for axis in &axes {
-            let unit = axis.unit();
-            axis_columns.push((
-                floats(&format!("{axis}_act_{unit}"))?,
-                floats(&format!("{axis}_ferr_{unit}"))?,
-            ));
-        }
-        let value = |a: &Float64Array, i: usize| if a.is_null(i) { f64::NAN } else { a.value(i) };
-        for i in 0..batch.num_rows() {
-            let dir = if direction.is_null(i) {
-                ""
-            } else {
-                direction.value(i)
-            };
-            let run = run_of(&mut runs, dir, axes.len());
-            run.time_s.push(value(time, i));
-            run.theta_deg.push(value(theta, i));
-            run.deviation_centred_um.push(value(dev, i));
-            for (k, (a, f)) in axis_columns.iter().enumerate() {
-                run.actual[k].push(value(a, i));
-                run.following_error[k].push(value(f, i));
-            }
-        }
-    }
-    Ok(Some(Trace { axes, runs }))
-}
-
-/// Reads `trace.csv`; None when the file is missing.
-pub fn read_trace(path: &Path) -> Result<Option<Trace>> {
-    let Some(file) = open_if_present(path)? else {
-        return Ok(None);
-    };
-    let bad = |what: String| Error::invalid(path, what);
-    let mut reader = csv::Reader::from_reader(std::io::BufReader::new(file));
-    let header = reader
-        .headers()
-        .map_err(|e| bad(format!("cannot read the header: {e}")))?
-        .clone();
-    let col = |name: &str| header.iter().position(|h| h == name);
-    let need = |name: &str| col(name).ok_or_else(|| bad(format!("no column `{name}`")));
-    let (c_dir, c_time, c_theta, c_dev) = (
-        need("direction")?,
-        need("time_s")?,
-        need("theta_deg")?,
-        need("deviation_centred_um")?,
-    );
-    let mut axes = Vec::new();
-    let mut axis_cols = Vec::new();
-    for axis in Axis::ALL {
-        let unit = if axis.is_rotary() { "deg" } else { "mm" };
-        if let (Some(a), Some(f)) = (
-            col(&format!("{axis}_act_{unit}")),
-            col(&format!("{axis}_ferr_{unit}")),
-        ) {
-            axes.push(axis);
-            axis_cols.push((a, f));
-        }
-    }
-    let mut runs: Vec<TraceRun> = Vec::new();
-    for (i, record) in reader.records().enumerate() {
-        let record = record.map_err(|e| bad(format!("row {}: {e}", i + 2)))?;
-        let num = |c: usize| -> f64 {
-            record
-                .get(c)
-                .and_then(|s| s.trim().parse().ok())
-                .unwrap_or(f64::NAN)
-        };
-        let run = run_of(&mut runs, record.get(c_dir).unwrap_or(""), axes.len());
-        run.time_s.push(num(c_time));
-        run.theta_deg.push(num(c_theta));
-        run.deviation_centred_um.push(num(c_dev));
-        for (k, &(a, f)) in axis_cols.iter().enumerate() {
-            run.actual[k].push(num(a));
-            run.following_error[k].push(num(f));
-        }
-    }
-    Ok(Some(Trace { axes, runs }))
-}
-
-/// Everything a report shows, read from a run folder.
-#[derive(Clone, Debug)]
-pub struct RunFolder {
-    pub dir: PathBuf,
-    pub summary: Value,
-    pub test: Option<TestParameters>,
-    pub check: Option<Value>,
-    pub trace: Option<Trace>,
-    /// Inline SVG documents found beside the trace: (file name, text).
-    pub svgs: Vec<(String, String)>,
-    /// Every CSV, JSON, SVG and NC file in the folder (for the links).
-    pub files: Vec<String>,
-}
-
-fn read_json(path: &Path) -> Result<Option<Value>> {
-    match std::fs::read_to_string(path) {
-        Ok(text) => serde_json::from_str(&text)
-            .map(Some)
-            .map_err(|e| Error::invalid(path, format!("not valid JSON: {e}"))),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-        Err(source) => Err(Error::Read {
-            path: path.to_path_buf(),
-            source,
-        }),
-    }
-}
-
-impl RunFolder {
-    /// Reads the run folder `dir` (what `mtsim simulate -o dir` wrote).
-    pub fn read(dir: &Path) -> Result<RunFolder> {
-        let summary_path = dir.join("summary.json");
-        let summary = read_json(&summary_path)?.ok_or_else(|| {
-            Error::invalid(
-                &summary_path,
-                "no summary.json: not a run folder".to_string(),
-            )
-            .with_help("give the folder `mtsim simulate SCENARIO -o FOLDER` wrote")
-        })?;
-        let test = match read_json(&dir.join(TEST_FILE))? {
-            Some(v) => Some(serde_json::from_value(v).map_err(|e| {
-                Error::invalid(&dir.join(TEST_FILE), format!("unexpected contents: {e}"))
-            })?),
-            None => None,
-        };
-        let check = read_json(&dir.join(CHECK_FILE))?;
-        let trace = match read_trace(&dir.join("trace.csv"))? {
-            Some(trace) => Some(trace),
-            None => read_trace_parquet(&dir.join("trace.parquet"))?,
-        };
-        let mut files: Vec<String> = std::fs::read_dir(dir)
-            .map_err(|source| Error::Read {
-                path: dir.to_path_buf(),
-                source,
-            })?
-            .filter_map(|e| e.ok())
-            .map(|e| e.file_name().to_string_lossy().into_owned())
-            .filter(|n| {
-                [".csv", ".json", ".svg", ".nc", ".parquet"]
-                    .iter()
-                    .any(|ext| n.ends_with(ext))
-            })
-            .collect();
-        files.sort();
-        let mut svgs = Vec::new();
-        for name in &files {
-            if name == "ballbar.svg" || name == "placement.svg" || name.starts_with("sweep-") {
-                if let Ok(text) = std::fs::read_to_string(dir.join(name)) {
-                    svgs.push((name.clone(), text));
-                }
-            }
-        }
-        Ok(RunFolder {
-            dir: dir.to_path_buf(),
-            summary,
-            test,
-            check,
-            trace,
-            svgs,
-            files,
-        })
-    }
-}
 
 /// Escapes text for HTML.
 pub fn esc(s: &str) -> String {
@@ -322,10 +70,6 @@ fn attr(svg: &str, name: &str) -> Option<String> {
     Some(head[i..j].to_string())
 }
 
-fn num(v: &Value) -> Option<f64> {
-    v.as_f64()
-}
-
 fn fmt_opt(v: Option<f64>, digits: usize, unit: &str) -> String {
     match v {
         Some(x) if x.is_finite() => format!("{x:.digits$} {unit}").trim_end().to_string(),
@@ -350,236 +94,98 @@ fn direction_colour(direction: &str) -> plotters::style::RGBColor {
     }
 }
 
-/// One event of `summary.json`'s ball-bar result.
-struct Event {
-    number: usize,
-    theta_deg: f64,
-    height_um: f64,
-    width_deg: f64,
-    kind: String,
-    direction: String,
-    axis: Option<String>,
-    confidence: f64,
+/// "ccw" or "cw".
+fn direction_name(d: Direction) -> String {
+    format!("{d:?}").to_lowercase()
 }
 
-fn events(summary: &Value) -> Vec<Event> {
-    summary["ballbar"]["spikes"]
-        .as_array()
-        .map(|a| {
-            a.iter()
-                .enumerate()
-                .map(|(i, e)| Event {
-                    number: i + 1,
-                    theta_deg: num(&e["theta_deg"]).unwrap_or(f64::NAN),
-                    height_um: num(&e["height_um"]).unwrap_or(f64::NAN),
-                    width_deg: num(&e["width_deg"]).unwrap_or(f64::NAN),
-                    kind: e["kind"].as_str().unwrap_or("?").to_string(),
-                    direction: e["direction"].as_str().unwrap_or("?").to_string(),
-                    axis: e["axis"].as_str().map(str::to_string),
-                    confidence: num(&e["confidence"]).unwrap_or(0.0),
-                })
-                .collect()
-        })
-        .unwrap_or_default()
+fn kind_name(kind: EventKind) -> &'static str {
+    match kind {
+        EventKind::Spike => "spike",
+        EventKind::Step => "step",
+    }
 }
 
-fn reversals(summary: &Value) -> BTreeMap<String, Vec<f64>> {
-    summary["reversals_deg"]
-        .as_object()
-        .map(|o| {
-            o.iter()
-                .map(|(k, v)| {
-                    (
-                        k.clone(),
-                        v.as_array()
-                            .map(|a| a.iter().filter_map(Value::as_f64).collect())
-                            .unwrap_or_default(),
-                    )
-                })
-                .collect()
-        })
-        .unwrap_or_default()
+/// One finding in words.
+fn finding_text(finding: &Finding) -> String {
+    match finding {
+        Finding::NoCircle => "No measured circle: the run has no ball-bar figures.".to_string(),
+        Finding::DominantSpot {
+            direction,
+            theta_deg: spot,
+            g_um: g_run,
+            g_without_um: g_rest,
+        } => format!(
+            "One spot dominates G ({} run): the deviation at θ = {spot:.1}° makes G = {g_run:.2} µm; \
+             without ±5° around it G would be {g_rest:.2} µm. Look at that spot (a transient, \
+             a reversal spike or a program artefact) before reading G as the machine's contouring error.",
+            direction.to_uppercase()
+        ),
+        Finding::Elliptical {
+            direction,
+            amplitude_um: amp,
+            long_axis_deg: dir,
+        } => format!(
+            "Elliptical shape ({} run): 2θ component {amp:.2} µm, long axis at {dir:.0}°. \
+             In a planar test a long axis near 45° or 135° points to a servo gain mismatch \
+             between the two axes, near 0° or 90° to a scale mismatch; on a cone it also \
+             holds the rotary axes' share.",
+            direction.to_uppercase()
+        ),
+        Finding::Mark(m) => mark_text(m),
+        Finding::Hysteresis { h_um: h } => format!(
+            "Hysteresis H = {h:.2} µm between the CW and CCW runs: lost motion that changes sign with \
+             the direction (backlash, servo lag, friction)."
+        ),
+        Finding::RadiusOffset { direction, r0_um: r0 } => format!(
+            "Mean radius {r0:+.2} µm off the bar length ({} run): servo lag shortens the \
+             radius of a contoured circle (radial error ≈ −v²/(2 Kv² R) without feedforward); \
+             a scale error changes it too.",
+            direction.to_uppercase()
+        ),
+        Finding::BlockSawtooth => "The fine sawtooth with a period of one program block (strongest where the rotary axes \
+             turn fastest, on the 15/10 cone between about 150° and 210°) is real, not an artefact of \
+             the plot: without tool-centre-point control the axes move linearly in joint space between \
+             block end points, and the tool tip sags off the cone between them. Its height falls with \
+             the square of the block length (4× the segments: 1/16 of the sag); the same sag is the \
+             cutter engagement depth `check` reports."
+            .to_string(),
+        Finding::Nothing => "Nothing stands out: no marks above noise.".to_string(),
+    }
 }
 
-fn angle_distance(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(360.0);
-    d.min(360.0 - d)
-}
-
-/// Peak-to-peak of `dev` with the ±`half_window_deg` around its extreme left out: how much of
-/// G one spot makes. Returns (G, G without the spot, θ of the spot).
-pub fn g_without_peak(theta: &[f64], dev: &[f64], half_window_deg: f64) -> Option<(f64, f64, f64)> {
-    let finite: Vec<(f64, f64)> = theta
-        .iter()
-        .zip(dev)
-        .filter(|(t, d)| t.is_finite() && d.is_finite())
-        .map(|(t, d)| (*t, *d))
-        .collect();
-    if finite.len() < 3 {
-        return None;
+/// A mark in words: what the axis reversing there points to.
+fn mark_text(m: &Mark) -> String {
+    let e = &m.event;
+    let where_ = format!(
+        "#{} at θ = {:.1}° ({})",
+        m.number,
+        e.theta_deg,
+        direction_name(e.direction)
+    );
+    match (e.axis, e.kind) {
+        (Some(axis), EventKind::Spike) => format!(
+            "Reversal spike {where_}, {:+.2} µm: axis {axis} reverses there; a spike at a reversal is \
+             lost motion from friction (stick-slip, the quadrant glitch) and servo lag. \
+             Friction compensation or more velocity feedforward on {axis} reduces it.",
+            e.height_um
+        ),
+        (Some(axis), EventKind::Step) => format!(
+            "Step {where_}, {:+.2} µm: axis {axis} reverses there; a step that stays is backlash or \
+             lost motion of {axis} (drive, guide or nut clearance). Backlash compensation on {axis} \
+             removes it.",
+            e.height_um
+        ),
+        (None, kind) => format!(
+            "Unattributed {} {where_}, {:+.2} µm: no axis reverses within 3°{}. Look for a block \
+             boundary, a feed change or the start and end of the measured revolution.",
+            kind_name(kind),
+            e.height_um,
+            m.nearest.as_ref().map_or(String::new(), |(a, d)| format!(
+                " (nearest: {a} at {d:.1}° away)"
+            ))
+        ),
     }
-    let (lo, hi) = finite
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-            (a.min(p.1), b.max(p.1))
-        });
-    let mean = finite.iter().map(|p| p.1).sum::<f64>() / finite.len() as f64;
-    // The spot: the extreme farther from the mean.
-    let spot = finite
-        .iter()
-        .max_by(|a, b| (a.1 - mean).abs().total_cmp(&(b.1 - mean).abs()))
-        .map(|p| p.0)?;
-    let rest: Vec<f64> = finite
-        .iter()
-        .filter(|p| angle_distance(p.0, spot) > half_window_deg)
-        .map(|p| p.1)
-        .collect();
-    let (rlo, rhi) = rest
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), d| {
-            (a.min(*d), b.max(*d))
-        });
-    Some((hi - lo, if rest.is_empty() { 0.0 } else { rhi - rlo }, spot))
-}
-
-/// Least-squares amplitude (µm) and orientation (deg, 0..180) of the 2θ (elliptical) part of
-/// `dev`: `d ≈ c cos 2θ + s sin 2θ`, amplitude `√(c² + s²)`, long axis at `atan2(s, c) / 2`.
-pub fn ellipse_um(theta: &[f64], dev: &[f64]) -> Option<(f64, f64)> {
-    let (mut cc, mut ss, mut cs, mut dc, mut ds, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0);
-    for (t, d) in theta.iter().zip(dev) {
-        if !(t.is_finite() && d.is_finite()) {
-            continue;
-        }
-        let (s2, c2) = (2.0 * t.to_radians()).sin_cos();
-        cc += c2 * c2;
-        ss += s2 * s2;
-        cs += c2 * s2;
-        dc += d * c2;
-        ds += d * s2;
-        n += 1;
-    }
-    let det = cc * ss - cs * cs;
-    if n < 8 || det.abs() < 1e-12 {
-        return None;
-    }
-    let c = (dc * ss - ds * cs) / det;
-    let s = (ds * cc - dc * cs) / det;
-    Some((
-        (c * c + s * s).sqrt(),
-        (s.atan2(c).to_degrees() / 2.0).rem_euclid(180.0),
-    ))
-}
-
-/// The diagnoses: what the figures and marks point to, in words.
-pub fn diagnoses(folder: &RunFolder) -> Vec<String> {
-    let s = &folder.summary;
-    let b = &s["ballbar"];
-    let mut out = Vec::new();
-    if b.is_null() {
-        return vec!["No measured circle: the run has no ball-bar figures.".to_string()];
-    }
-    let g = num(&b["circular_deviation_um"]).unwrap_or(f64::NAN);
-    if let Some(trace) = &folder.trace {
-        for run in &trace.runs {
-            if let Some((g_run, g_rest, spot)) =
-                g_without_peak(&run.theta_deg, &run.deviation_centred_um, 5.0)
-            {
-                if g_run > 0.0 && g_rest < 0.5 * g_run {
-                    out.push(format!(
-                        "One spot dominates G ({} run): the deviation at θ = {spot:.1}° makes G = {g_run:.2} µm; \
-                         without ±5° around it G would be {g_rest:.2} µm. Look at that spot (a transient, \
-                         a reversal spike or a program artefact) before reading G as the machine's contouring error.",
-                        run.direction.to_uppercase()
-                    ));
-                }
-            }
-            if let Some((amp, dir)) = ellipse_um(&run.theta_deg, &run.deviation_centred_um) {
-                if g.is_finite() && amp > 0.15 * g && amp > 0.5 {
-                    out.push(format!(
-                        "Elliptical shape ({} run): 2θ component {amp:.2} µm, long axis at {dir:.0}°. \
-                         In a planar test a long axis near 45° or 135° points to a servo gain mismatch \
-                         between the two axes, near 0° or 90° to a scale mismatch; on a cone it also \
-                         holds the rotary axes' share.",
-                        run.direction.to_uppercase()
-                    ));
-                }
-            }
-        }
-    }
-    let revs = reversals(s);
-    for e in events(s) {
-        let where_ = format!("#{} at θ = {:.1}° ({})", e.number, e.theta_deg, e.direction);
-        let text = match (&e.axis, e.kind.as_str()) {
-            (Some(axis), "spike") => format!(
-                "Reversal spike {where_}, {:+.2} µm: axis {axis} reverses there; a spike at a reversal is \
-                 lost motion from friction (stick-slip, the quadrant glitch) and servo lag. \
-                 Friction compensation or more velocity feedforward on {axis} reduces it.",
-                e.height_um
-            ),
-            (Some(axis), "step") => format!(
-                "Step {where_}, {:+.2} µm: axis {axis} reverses there; a step that stays is backlash or \
-                 lost motion of {axis} (drive, guide or nut clearance). Backlash compensation on {axis} \
-                 removes it.",
-                e.height_um
-            ),
-            _ => {
-                let nearest = revs
-                    .iter()
-                    .flat_map(|(a, v)| v.iter().map(move |t| (angle_distance(*t, e.theta_deg), a)))
-                    .min_by(|a, b| a.0.total_cmp(&b.0));
-                format!(
-                    "Unattributed {} {where_}, {:+.2} µm: no axis reverses within 3°{}. Look for a block \
-                     boundary, a feed change or the start and end of the measured revolution.",
-                    e.kind,
-                    e.height_um,
-                    nearest.map_or(String::new(), |(d, a)| format!(
-                        " (nearest: {a} at {d:.1}° away)"
-                    ))
-                )
-            }
-        };
-        out.push(text);
-    }
-    if let Some(h) = num(&b["hysteresis_um"]) {
-        if g.is_finite() && h > 0.3 * g {
-            out.push(format!(
-                "Hysteresis H = {h:.2} µm between the CW and CCW runs: lost motion that changes sign with \
-                 the direction (backlash, servo lag, friction)."
-            ));
-        }
-    }
-    if let Some(runs) = b["runs"].as_array() {
-        for r in runs {
-            let dir = r["direction"].as_str().unwrap_or("?").to_uppercase();
-            let c = &r["centring"];
-            if let Some(r0) = num(&c["r0_um"]) {
-                if r0.abs() > 1.0 {
-                    out.push(format!(
-                        "Mean radius {r0:+.2} µm off the bar length ({dir} run): servo lag shortens the \
-                         radius of a contoured circle (radial error ≈ −v²/(2 Kv² R) without feedforward); \
-                         a scale error changes it too."
-                    ));
-                }
-            }
-        }
-    }
-    if let Some(test) = &folder.test {
-        if test.test.starts_with("cone") && !test.tcp {
-            out.push(
-                "The fine sawtooth with a period of one program block (strongest where the rotary axes \
-                 turn fastest, on the 15/10 cone between about 150° and 210°) is real, not an artefact of \
-                 the plot: without tool-centre-point control the axes move linearly in joint space between \
-                 block end points, and the tool tip sags off the cone between them. Its height falls with \
-                 the square of the block length (4× the segments: 1/16 of the sag); the same sag is the \
-                 cutter engagement depth `check` reports."
-                    .to_string(),
-            );
-        }
-    }
-    if out.is_empty() {
-        out.push("Nothing stands out: no marks above noise.".to_string());
-    }
-    out
 }
 
 fn row(out: &mut String, key: &str, value: &str) {
@@ -677,96 +283,81 @@ fn test_table(folder: &RunFolder, date: Option<&str>) -> String {
         "Machine time",
         &format!(
             "{} ({} interpolation periods)",
-            fmt_opt(num(&s["sim_time_s"]), 2, "s"),
-            s["setpoints"]
+            fmt_opt(Some(s.sim_time_s), 2, "s"),
+            s.setpoints
         ),
     );
     out.push_str("</table>\n");
     out
 }
 
-fn figures_table(summary: &Value) -> String {
-    let b = &summary["ballbar"];
-    if b.is_null() {
+fn figures_table(ballbar: Option<&BallbarResult>) -> String {
+    let Some(b) = ballbar else {
         return "<p>No measured circle: no ball-bar figures.</p>\n".to_string();
-    }
+    };
     let mut out = String::from(
         "<table class=\"figures\">\n<tr><th>run</th><th>G circular deviation (µm)</th>\
          <th>F max (µm)</th><th>F min (µm)</th><th>H hysteresis (µm)</th><th>centre offset a, b (µm)</th>\
          <th>mean radius error (µm)</th><th>noise (µm)</th><th>samples</th></tr>\n",
     );
-    let f = |v: &Value, d: usize| fmt_opt(num(v), d, "");
-    if let Some(runs) = b["runs"].as_array() {
-        for r in runs {
-            let _ = writeln!(
-                out,
-                "<tr><td>{}</td><td class=\"figure\" data-figure=\"G-{0}\">{}</td><td>{}</td><td>{}</td><td>–</td>\
-                 <td>{}, {}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                esc(&r["direction"].as_str().unwrap_or("?").to_uppercase()),
-                f(&r["circular_deviation_um"], 2),
-                f(&r["radial_max_um"], 2),
-                f(&r["radial_min_um"], 2),
-                f(&r["centring"]["a_um"], 2),
-                f(&r["centring"]["b_um"], 2),
-                f(&r["centring"]["r0_um"], 2),
-                f(&r["noise_um"], 3),
-                r["samples"],
-            );
-        }
+    let f = |v: f64, d: usize| fmt_opt(Some(v), d, "");
+    for r in &b.runs {
+        let _ = writeln!(
+            out,
+            "<tr><td>{}</td><td class=\"figure\" data-figure=\"G-{0}\">{}</td><td>{}</td><td>{}</td><td>–</td>\
+             <td>{}, {}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&direction_name(r.direction).to_uppercase()),
+            f(r.circular_deviation_um, 2),
+            f(r.radial_max_um, 2),
+            f(r.radial_min_um, 2),
+            f(r.centring.a_um, 2),
+            f(r.centring.b_um, 2),
+            f(r.centring.r0_um, 2),
+            f(r.noise_um, 3),
+            r.samples,
+        );
     }
     let _ = writeln!(
         out,
         "<tr class=\"total\"><td>bi-directional</td><td class=\"figure\" data-figure=\"G\">{}</td>\
          <td class=\"figure\" data-figure=\"F-max\">{}</td><td class=\"figure\" data-figure=\"F-min\">{}</td>\
          <td class=\"figure\" data-figure=\"H\">{}</td><td></td><td></td><td></td><td></td></tr>",
-        f(&b["circular_deviation_um"], 2),
-        f(&b["radial_max_um"], 2),
-        f(&b["radial_min_um"], 2),
-        if b["hysteresis_um"].is_null() {
-            "– (one direction)".to_string()
-        } else {
-            f(&b["hysteresis_um"], 2)
-        },
+        f(b.circular_deviation_um, 2),
+        f(b.radial_max_um, 2),
+        f(b.radial_min_um, 2),
+        b.hysteresis_um
+            .map_or("– (one direction)".to_string(), |h| f(h, 2)),
     );
     out.push_str("</table>\n");
     out
 }
 
-fn marks_table(summary: &Value) -> String {
-    let evs = events(summary);
-    if evs.is_empty() {
+fn marks_table(marks: &[Mark]) -> String {
+    if marks.is_empty() {
         return "<p>No spikes or steps above noise.</p>\n".to_string();
     }
-    let revs = reversals(summary);
     let mut out = String::from(
         "<table class=\"marks\">\n<tr><th>#</th><th>kind</th><th>run</th><th>θ (deg)</th><th>height (µm)</th>\
          <th>width (deg)</th><th>axis</th><th>confidence</th><th>attribution</th></tr>\n",
     );
-    for e in &evs {
-        let attribution = match &e.axis {
-            Some(a) => revs
-                .get(a)
-                .and_then(|v| {
-                    v.iter()
-                        .map(|t| (angle_distance(*t, e.theta_deg), *t))
-                        .min_by(|x, y| x.0.total_cmp(&y.0))
-                })
-                .map_or(format!("axis {a}"), |(d, t)| {
-                    format!("{a} reverses at {t:.2}° ({d:.2}° away)")
-                }),
-            None => "none: no axis reverses within 3°".to_string(),
+    for m in marks {
+        let e = &m.event;
+        let attribution = match (e.axis, m.reversal) {
+            (Some(a), Some((t, d))) => format!("{a} reverses at {t:.2}° ({d:.2}° away)"),
+            (Some(a), None) => format!("axis {a}"),
+            (None, _) => "none: no axis reverses within 3°".to_string(),
         };
         let _ = writeln!(
             out,
             "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.2}</td><td>{:+.2}</td><td>{:.2}</td><td>{}</td>\
              <td>{:.2}</td><td>{}</td></tr>",
-            e.number,
-            esc(&e.kind),
-            esc(&e.direction.to_uppercase()),
+            m.number,
+            kind_name(e.kind),
+            esc(&direction_name(e.direction).to_uppercase()),
             e.theta_deg,
             e.height_um,
             e.width_deg,
-            esc(e.axis.as_deref().unwrap_or("?")),
+            esc(&e.axis.map_or("?".to_string(), |a| a.to_string())),
             e.confidence,
             esc(&attribution)
         );
@@ -775,13 +366,13 @@ fn marks_table(summary: &Value) -> String {
     out
 }
 
-fn check_section(check: &Value) -> String {
+fn check_section(check: &CheckReport) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
         "<p>{} samples, {} positions.</p>",
-        check["samples"],
-        if check["dynamics"].as_bool() == Some(true) {
+        check.samples,
+        if check.dynamics {
             "actual (servo)"
         } else {
             "commanded"
@@ -791,98 +382,77 @@ fn check_section(check: &Value) -> String {
         "<table class=\"limits\">\n<tr><th>axis</th><th>used</th><th>travel</th><th>margin</th>\
          <th>peak velocity / limit</th><th>peak acceleration / limit</th></tr>\n",
     );
-    if let Some(axes) = check["axes"].as_object() {
-        for (name, u) in axes {
-            let rotary = "ABC".contains(name.as_str());
-            let (unit, vunit, aunit) = if rotary {
-                ("deg", "deg/min", "deg/s²")
-            } else {
-                ("mm", "mm/min", "mm/s²")
-            };
-            let f = |k: &str, d: usize| fmt_opt(num(&u[k]), d, "");
-            let _ = writeln!(
-                out,
-                "<tr><td>{}</td><td>{} … {} {unit}</td><td>{} … {} {unit}</td><td>{}</td><td>{} / {} {vunit}</td>\
-                 <td>{} / {} {aunit}</td></tr>",
-                esc(name),
-                f("min", 3),
-                f("max", 3),
-                f("limit_min", 3),
-                f("limit_max", 3),
-                if u["margin"].is_null() {
-                    "continuous".to_string()
-                } else {
-                    fmt_opt(num(&u["margin"]), 3, unit)
-                },
-                f("peak_velocity_per_min", 0),
-                f("velocity_limit_per_min", 0),
-                f("peak_acceleration_per_s2", 0),
-                f("acceleration_limit_per_s2", 0),
-            );
-        }
+    for (name, u) in &check.axes {
+        let (unit, vunit, aunit) = if u.axis.is_rotary() {
+            ("deg", "deg/min", "deg/s²")
+        } else {
+            ("mm", "mm/min", "mm/s²")
+        };
+        let f = |v: f64, d: usize| fmt_opt(Some(v), d, "");
+        let _ = writeln!(
+            out,
+            "<tr><td>{}</td><td>{} … {} {unit}</td><td>{} … {} {unit}</td><td>{}</td><td>{} / {} {vunit}</td>\
+             <td>{} / {} {aunit}</td></tr>",
+            esc(name),
+            f(u.min, 3),
+            f(u.max, 3),
+            f(u.limit_min, 3),
+            f(u.limit_max, 3),
+            u.margin
+                .map_or("continuous".to_string(), |m| fmt_opt(Some(m), 3, unit)),
+            f(u.peak_velocity_per_min, 0),
+            f(u.velocity_limit_per_min, 0),
+            f(u.peak_acceleration_per_s2, 0),
+            f(u.acceleration_limit_per_s2, 0),
+        );
     }
     out.push_str("</table>\n<ul>\n");
-    if let (Some(c), Some(b)) = (
-        num(&check["min_clearance_mm"]),
-        check["min_clearance_bodies"].as_array(),
-    ) {
+    if let (Some(c), Some([a, b])) = (check.min_clearance_mm, &check.min_clearance_bodies) {
         let _ = writeln!(
             out,
             "<li>Smallest clearance: {c:.3} mm ({} / {}).</li>",
-            esc(b.first().and_then(Value::as_str).unwrap_or("?")),
-            esc(b.get(1).and_then(Value::as_str).unwrap_or("?"))
+            esc(a),
+            esc(b)
         );
     }
-    if let Some(eng) = check["engagement"].as_array() {
-        for e in eng {
-            let bodies = e["bodies"].as_array();
-            let _ = writeln!(
-                out,
-                "<li>Cutting: {} in {}, deepest {:.4} mm. Expected, not a collision: the cone-frustum test \
-                 cuts the cone; between block end points the joint-space interpolation lets the tip sag \
-                 into the nominal surface, by an amount that falls with the square of the block length.</li>",
-                esc(bodies.and_then(|b| b.first()).and_then(Value::as_str).unwrap_or("?")),
-                esc(bodies.and_then(|b| b.get(1)).and_then(Value::as_str).unwrap_or("?")),
-                num(&e["max_depth_mm"]).unwrap_or(f64::NAN)
-            );
-        }
+    for e in &check.engagement {
+        let _ = writeln!(
+            out,
+            "<li>Cutting: {} in {}, deepest {:.4} mm. Expected, not a collision: the cone-frustum test \
+             cuts the cone; between block end points the joint-space interpolation lets the tip sag \
+             into the nominal surface, by an amount that falls with the square of the block length.</li>",
+            esc(&e.bodies[0]),
+            esc(&e.bodies[1]),
+            e.max_depth_mm
+        );
     }
-    match check["violations"].as_array() {
-        Some(v) if !v.is_empty() => {
-            for x in v {
-                let what = x["axis"]
-                    .as_str()
-                    .map(str::to_string)
-                    .or_else(|| {
-                        x["bodies"].as_array().map(|b| {
-                            b.iter()
-                                .filter_map(Value::as_str)
-                                .collect::<Vec<_>>()
-                                .join(" / ")
-                        })
-                    })
-                    .unwrap_or_default();
-                let _ = writeln!(
-                    out,
-                    "<li class=\"violation\">{} {}: line {}, t {:.3}…{:.3} s, worst {:.3}{}</li>",
-                    esc(x["kind"].as_str().unwrap_or("?")),
-                    esc(&what),
-                    x["line"],
-                    num(&x["time_start_s"]).unwrap_or(f64::NAN),
-                    num(&x["time_end_s"]).unwrap_or(f64::NAN),
-                    num(&x["worst"]).unwrap_or(f64::NAN),
-                    num(&x["limit"]).map_or(String::new(), |l| format!(", limit {l:.3}")),
-                );
-            }
-        }
-        _ => out.push_str("<li>Clean: no violations and no near misses.</li>\n"),
+    if check.violations.is_empty() {
+        out.push_str("<li>Clean: no violations and no near misses.</li>\n");
+    }
+    for x in &check.violations {
+        let what = match (&x.axis, &x.bodies) {
+            (Some(a), _) => a.to_string(),
+            (None, Some(b)) => b.join(" / "),
+            (None, None) => String::new(),
+        };
+        let _ = writeln!(
+            out,
+            "<li class=\"violation\">{} {}: line {}, t {:.3}…{:.3} s, worst {:.3}{}</li>",
+            x.kind.name(),
+            esc(&what),
+            x.line,
+            x.time_start_s,
+            x.time_end_s,
+            x.worst,
+            x.limit.map_or(String::new(), |l| format!(", limit {l:.3}")),
+        );
     }
     out.push_str("</ul>\n");
     out
 }
 
 /// Deviation against θ, both directions, with the numbered marks.
-fn deviation_chart(folder: &RunFolder, trace: &Trace) -> Result<String> {
+fn deviation_chart(marks: &[Mark], trace: &Trace) -> Result<String> {
     let mut chart = Chart::new(
         "Deviation from the nominal circle, centred (least squares), against θ",
         "θ (deg)",
@@ -901,21 +471,12 @@ fn deviation_chart(folder: &RunFolder, trace: &Trace) -> Result<String> {
             dots: false,
         });
     }
-    for e in events(&folder.summary) {
-        let y = trace
-            .runs
-            .iter()
-            .find(|r| r.direction == e.direction)
-            .and_then(|r| value_at(&r.theta_deg, &r.deviation_centred_um, e.theta_deg));
-        chart.marks.push(Mark {
-            x: e.theta_deg,
-            y: y.unwrap_or(0.0),
-            label: e.number.to_string(),
-            colour: e
-                .axis
-                .as_deref()
-                .and_then(|a| Axis::ALL.into_iter().find(|x| x.to_string() == a))
-                .map_or(plot::INK, plot::axis_colour),
+    for m in marks {
+        chart.marks.push(ChartMark {
+            x: m.event.theta_deg,
+            y: m.trace_um.unwrap_or(0.0),
+            label: m.number.to_string(),
+            colour: m.event.axis.map_or(plot::INK, plot::axis_colour),
         });
     }
     chart.to_svg()
@@ -940,34 +501,9 @@ fn sorted_by_theta(theta: &[f64], y: &[f64], scale: f64) -> Vec<(f64, f64)> {
     out
 }
 
-fn value_at(theta: &[f64], y: &[f64], at: f64) -> Option<f64> {
-    theta
-        .iter()
-        .zip(y)
-        .filter(|(t, v)| t.is_finite() && v.is_finite())
-        .min_by(|a, b| angle_distance(*a.0, at).total_cmp(&angle_distance(*b.0, at)))
-        .map(|(_, v)| *v)
-}
-
-/// The central-difference velocity of `p` over `t`, per minute.
-pub fn velocity_per_min(t: &[f64], p: &[f64]) -> Vec<f64> {
-    let n = p.len();
-    (0..n)
-        .map(|i| {
-            let (a, b) = (i.saturating_sub(1), (i + 1).min(n.saturating_sub(1)));
-            let dt = t[b] - t[a];
-            if b > a && dt > 0.0 {
-                60.0 * (p[b] - p[a]) / dt
-            } else {
-                f64::NAN
-            }
-        })
-        .collect()
-}
-
 /// Position, velocity and following error of each axis against θ (the paper's Figs. 5, 11).
 fn axis_charts(folder: &RunFolder, trace: &Trace) -> Result<Vec<(String, String)>> {
-    let revs = reversals(&folder.summary);
+    let revs = &folder.summary.reversals_deg;
     let mut out = Vec::new();
     for (k, &axis) in trace.axes.iter().enumerate() {
         let (pu, vu, fu, fscale) = axis_unit(axis);
@@ -995,7 +531,7 @@ fn axis_charts(folder: &RunFolder, trace: &Trace) -> Result<Vec<(String, String)
             for run in &trace.runs {
                 let y: Vec<f64> = match q {
                     0 => run.actual[k].clone(),
-                    1 => velocity_per_min(&run.time_s, &run.actual[k]),
+                    1 => run.velocity_per_min(k),
                     _ => run.following_error[k].iter().map(|v| v * fscale).collect(),
                 };
                 let points = sorted_by_theta(&run.theta_deg, &y, 1.0);
@@ -1028,7 +564,7 @@ tr.total{font-weight:bold}figure{margin:.5em 0}svg.plot{width:100%;height:auto;d
 li.violation{color:#b00}.note{color:#555;font-size:.95em}";
 
 /// A page with the limits and collision summary of `mtsim check` alone.
-pub fn render_check_page(name: &str, check: &Value) -> String {
+pub fn render_check_page(name: &str, check: &CheckReport) -> String {
     format!(
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
          <title>mtsim check: {0}</title>\n<style>{CSS}</style>\n</head>\n<body>\n\
@@ -1040,8 +576,9 @@ pub fn render_check_page(name: &str, check: &Value) -> String {
     )
 }
 
-/// The HTML text of the report of `folder`; `date` (YYYY-MM-DD) overrides the recorded one.
-pub fn render(folder: &RunFolder, date: Option<&str>) -> Result<String> {
+/// The HTML text of the report of `folder` with its `diagnosis`; `date` (YYYY-MM-DD)
+/// overrides the recorded one.
+pub fn render(folder: &RunFolder, diagnosis: &Diagnosis, date: Option<&str>) -> Result<String> {
     let name = folder
         .test
         .as_ref()
@@ -1059,7 +596,7 @@ pub fn render(folder: &RunFolder, date: Option<&str>) -> Result<String> {
     h.push_str("<h2 id=\"test\">Test parameters (ISO 230-4)</h2>\n");
     h.push_str(&test_table(folder, date));
     h.push_str("<h2 id=\"figures\">Figures (ISO 230-4)</h2>\n");
-    h.push_str(&figures_table(&folder.summary));
+    h.push_str(&figures_table(folder.summary.ballbar.as_ref()));
     h.push_str(
         "<p class=\"note\">G: circular deviation, the radial band of the centred trace. F: radial deviation, \
          the largest and smallest radius against the nominal. H: circular hysteresis between the CW and \
@@ -1072,7 +609,10 @@ pub fn render(folder: &RunFolder, date: Option<&str>) -> Result<String> {
     }
     if let Some(trace) = folder.trace.as_ref().filter(|t| !t.runs.is_empty()) {
         h.push_str("<h2 id=\"linear\">Deviation against θ</h2>\n");
-        h.push_str(&inline_svg(&deviation_chart(folder, trace)?, "deviation"));
+        h.push_str(&inline_svg(
+            &deviation_chart(&diagnosis.marks, trace)?,
+            "deviation",
+        ));
         h.push_str(
             "<h2 id=\"axes\">Axis position, velocity and following error against θ</h2>\n\
              <p class=\"note\">One row per axis, as in the paper's Figs. 5 and 11; the vertical lines are \
@@ -1090,10 +630,10 @@ pub fn render(folder: &RunFolder, date: Option<&str>) -> Result<String> {
         }
     }
     h.push_str("<h2 id=\"marks\">Marks</h2>\n");
-    h.push_str(&marks_table(&folder.summary));
+    h.push_str(&marks_table(&diagnosis.marks));
     h.push_str("<h2 id=\"diagnoses\">Diagnoses</h2>\n<ul class=\"diagnoses\">\n");
-    for d in diagnoses(folder) {
-        let _ = writeln!(h, "<li>{}</li>", esc(&d));
+    for finding in &diagnosis.findings {
+        let _ = writeln!(h, "<li>{}</li>", esc(&finding_text(finding)));
     }
     h.push_str("</ul>\n");
     h.push_str("<h2 id=\"check\">Limits and collisions</h2>\n");
@@ -1113,26 +653,6 @@ pub fn render(folder: &RunFolder, date: Option<&str>) -> Result<String> {
     h.push_str(env!("CARGO_PKG_VERSION"));
     h.push_str(".</p>\n</body>\n</html>\n");
     Ok(h)
-}
-
-/// The plots a `sweep` folder holds: (file name, SVG text) of `placement.svg` and
-/// `sweep-*.svg`, and every CSV, JSON and SVG file for the links.
-fn study_files(dir: &Path) -> (Vec<(String, String)>, Vec<String>) {
-    let mut files: Vec<String> = std::fs::read_dir(dir)
-        .map(|r| {
-            r.filter_map(|e| e.ok())
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|n| [".csv", ".json", ".svg"].iter().any(|x| n.ends_with(x)))
-                .collect()
-        })
-        .unwrap_or_default();
-    files.sort();
-    let svgs = files
-        .iter()
-        .filter(|n| *n == "placement.svg" || (n.starts_with("sweep-") && n.ends_with(".svg")))
-        .filter_map(|n| Some((n.clone(), std::fs::read_to_string(dir.join(n)).ok()?)))
-        .collect();
-    (svgs, files)
 }
 
 /// The page of a `sweep` output folder: its plots and links.
@@ -1164,20 +684,29 @@ pub fn render_study(dir: &Path, svgs: &[(String, String)], files: &[String]) -> 
     h
 }
 
-/// Reads `dir`, writes `dir/report.html` atomically and returns its path. A folder `sweep`
-/// wrote (no summary.json, but sweep or placement plots) gets the study page.
-pub fn write_report(dir: &Path, date: Option<&str>) -> Result<PathBuf> {
-    if !dir.join("summary.json").exists() {
-        let (svgs, files) = study_files(dir);
-        if !svgs.is_empty() {
-            let path = dir.join(REPORT_FILE);
-            super::write_atomic(&path, render_study(dir, &svgs, &files).as_bytes())?;
-            return Ok(path);
-        }
+/// Writes the page of a `sweep` output folder (its plots and links) to `dir/report.html`
+/// and returns its path; None when `dir` holds no `placement.svg` or `sweep-*.svg`.
+pub fn write_study_page(dir: &Path) -> Result<Option<PathBuf>> {
+    let files = file_names(dir, &[".csv", ".json", ".svg"]).unwrap_or_default();
+    let svgs = svg_texts(dir, &files, &|n| {
+        n == "placement.svg" || (n.starts_with("sweep-") && n.ends_with(".svg"))
+    });
+    if svgs.is_empty() {
+        return Ok(None);
     }
-    let folder = RunFolder::read(dir)?;
-    let html = render(&folder, date)?;
     let path = dir.join(REPORT_FILE);
-    super::write_atomic(&path, html.as_bytes())?;
+    super::write_atomic(&path, render_study(dir, &svgs, &files).as_bytes())?;
+    Ok(Some(path))
+}
+
+/// Writes the page of the run folder `folder` with its `diagnosis` to `report.html` there,
+/// atomically, and returns its path.
+pub fn write_run_page(
+    folder: &RunFolder,
+    diagnosis: &Diagnosis,
+    date: Option<&str>,
+) -> Result<PathBuf> {
+    let path = folder.dir.join(REPORT_FILE);
+    super::write_atomic(&path, render(folder, diagnosis, date)?.as_bytes())?;
     Ok(path)
 }

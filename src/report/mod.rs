@@ -1,6 +1,13 @@
-//! **report** — sinks and writers: results in, files out.
-//! Inputs: samples (the trace), ball-bar results, check reports.
-//! Outputs: CSV, JSON, Parquet and SVG files, each written completely or not at all (temporary file, then rename).
+//! **report** — sinks, writers and pages: results in, files out; nothing is analysed here.
+//! Inputs: samples (the trace), typed results (ball-bar result, check report, test parameters, diagnosis).
+//! Outputs: CSV, JSON, Parquet, SVG and HTML files, each written completely or not at all (temporary file, then rename).
+//!
+//! The report is a layer below `study` (`tests/architecture.rs`), so what it renders is typed
+//! at its layer or below: the ball bar's [`BallbarResult`](crate::measure::BallbarResult),
+//! [`CheckReport`](crate::check::CheckReport), [`test_info::TestParameters`], and, defined
+//! here for the caller to fill, [`run::RunSummary`] (the part of `summary.json` a page shows)
+//! and [`run::Diagnosis`] (filled by `study::diagnose`). Run folders are read back with serde
+//! into those types ([`run::RunFolder`]), traces through [`trace::read_trace`].
 
 pub mod files;
 pub mod fit_plot;
@@ -8,6 +15,7 @@ pub mod html;
 pub mod parquet;
 pub mod plot;
 pub mod polar;
+pub mod run;
 pub mod test_info;
 pub mod trace;
 

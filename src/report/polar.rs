@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+use super::plot::{self, axis_colour};
 use crate::error::{Error, Result};
 use crate::input::program::Direction;
 use crate::measure::ballbar::{BallbarResult, BallbarRun, Centring, EventKind, BIN_DEG};
@@ -42,29 +43,13 @@ const TABLE_X: i32 = 945;
 /// Most events listed in the table.
 const TABLE_ROWS: usize = 30;
 
-const CCW_COLOUR: RGBColor = RGBColor(20, 90, 200);
-const CW_COLOUR: RGBColor = RGBColor(200, 40, 40);
 const GRID: RGBColor = RGBColor(205, 205, 205);
 const NOMINAL: RGBColor = RGBColor(60, 60, 60);
 
-fn axis_colour(axis: Axis) -> RGBColor {
-    match axis {
-        Axis::X => RGBColor(215, 110, 0),
-        Axis::Y => RGBColor(0, 140, 60),
-        Axis::Z => RGBColor(130, 40, 170),
-        Axis::A => RGBColor(140, 90, 40),
-        Axis::B => RGBColor(0, 130, 140),
-        Axis::C => RGBColor(90, 90, 90),
-        Axis::U => RGBColor(200, 60, 120),
-        Axis::V => RGBColor(90, 110, 200),
-        Axis::W => RGBColor(160, 150, 30),
-    }
-}
-
 fn direction_colour(direction: Direction) -> RGBColor {
     match direction {
-        Direction::Ccw => CCW_COLOUR,
-        Direction::Cw => CW_COLOUR,
+        Direction::Ccw => plot::CCW,
+        Direction::Cw => plot::CW,
     }
 }
 

@@ -5,8 +5,7 @@
 //! arcs, compensation state (feedforward and backlash per axis), sample period, date, mtsim
 //! version and a hash of the inputs. The hash is XXH64 over the bytes of the scenario,
 //! machine and program files, each followed by its length, so two runs with the same hash
-//! ran the same inputs. (It was FNV-1a 64, byte-serial at 4 cycles a byte, until hashing a
-//! fine-segment program took 5 % of its simulation.)
+//! ran the same inputs.
 //!
 //! The date is the only wall-clock figure: it is recorded only when asked for (`date`
 //! argument), so that `simulate --no-timing` stays byte-identical between runs.

@@ -9,6 +9,9 @@
 //! The first [`RAW_IN_MEMORY`] bytes of raw rows (about 50,000 rows of five axes) stay in
 //! memory and reach the disk only when a longer trace spills over: memory stays bounded,
 //! and a trace of one cone never makes the round trip through the file.
+//!
+//! [`read_trace`] reads a run folder's trace back (`trace.csv` or `trace.parquet`, the
+//! columns the report plots) into one [`Trace`] per format: the one reader of trace files.
 
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -464,4 +467,191 @@ fn complete<R: Read>(
     out.flush().map_err(&write_err)?;
     drop(out);
     std::fs::rename(&tmp, trace_path).map_err(write_error(trace_path))
+}
+
+/// One direction's columns of a trace file.
+#[derive(Clone, Debug, Default)]
+pub struct TraceRun {
+    /// The `direction` column's text ("ccw", "cw").
+    pub direction: String,
+    pub time_s: Vec<f64>,
+    pub theta_deg: Vec<f64>,
+    pub deviation_centred_um: Vec<f64>,
+    /// Per axis of [`Trace::axes`]: actual position and following error (mm or deg).
+    pub actual: Vec<Vec<f64>>,
+    pub following_error: Vec<Vec<f64>>,
+}
+
+impl TraceRun {
+    /// The velocity of axis `k` (index into [`Trace::axes`]) per minute: the central
+    /// difference `v_i = 60 (p_{i+1} - p_{i-1}) / (t_{i+1} - t_{i-1})` of the actual
+    /// position over the time column (one-sided at the ends; NaN where time does not advance).
+    pub fn velocity_per_min(&self, k: usize) -> Vec<f64> {
+        let (t, p) = (&self.time_s, &self.actual[k]);
+        let n = p.len();
+        (0..n)
+            .map(|i| {
+                let (a, b) = (i.saturating_sub(1), (i + 1).min(n.saturating_sub(1)));
+                let dt = t[b] - t[a];
+                if b > a && dt > 0.0 {
+                    60.0 * (p[b] - p[a]) / dt
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect()
+    }
+}
+
+/// A trace file read back, by direction (the rows of one direction come together).
+#[derive(Clone, Debug, Default)]
+pub struct Trace {
+    /// The axes with actual-position and following-error columns.
+    pub axes: Vec<Axis>,
+    pub runs: Vec<TraceRun>,
+}
+
+impl Trace {
+    /// An empty trace of `axes`.
+    fn of(axes: Vec<Axis>) -> Trace {
+        Trace {
+            axes,
+            runs: Vec::new(),
+        }
+    }
+
+    /// Appends one row: its direction, time, θ, centred deviation, and per axis the actual
+    /// position and following error. A row of another direction than the last starts a run.
+    fn push_row(
+        &mut self,
+        direction: &str,
+        [time, theta, dev]: [f64; 3],
+        axis_values: impl Iterator<Item = (f64, f64)>,
+    ) {
+        if self.runs.last().is_none_or(|r| r.direction != direction) {
+            self.runs.push(TraceRun {
+                direction: direction.to_string(),
+                actual: vec![Vec::new(); self.axes.len()],
+                following_error: vec![Vec::new(); self.axes.len()],
+                ..TraceRun::default()
+            });
+        }
+        let run = self.runs.last_mut().expect("pushed above");
+        run.time_s.push(time);
+        run.theta_deg.push(theta);
+        run.deviation_centred_um.push(dev);
+        for (k, (a, f)) in axis_values.enumerate() {
+            run.actual[k].push(a);
+            run.following_error[k].push(f);
+        }
+    }
+}
+
+/// The columns of each axis the reader takes: actual position and following error.
+fn axis_column_names(axis: Axis) -> [String; 2] {
+    let u = axis.unit();
+    [format!("{axis}_act_{u}"), format!("{axis}_ferr_{u}")]
+}
+
+/// The columns besides the axes' that the reader takes.
+const READ_COLUMNS: [&str; 4] = ["direction", "time_s", "theta_deg", "deviation_centred_um"];
+
+/// Reads the trace of the run folder `dir`: `trace.csv`, or else `trace.parquet`; None when
+/// the folder has neither. Values that are missing or not numbers read as NaN.
+pub fn read_trace(dir: &Path) -> Result<Option<Trace>> {
+    let csv = dir.join(TraceFormat::Csv.file_name());
+    if csv.exists() {
+        return read_csv(&csv).map(Some);
+    }
+    let parquet = dir.join(TraceFormat::Parquet.file_name());
+    if parquet.exists() {
+        return read_parquet(&parquet).map(Some);
+    }
+    Ok(None)
+}
+
+/// Reads `trace.csv` (the columns [`read_trace`] takes).
+fn read_csv(path: &Path) -> Result<Trace> {
+    let bad = |what: String| Error::invalid(path, what);
+    let file = File::open(path).map_err(|source| Error::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut reader = csv::Reader::from_reader(BufReader::new(file));
+    let header = reader
+        .headers()
+        .map_err(|e| bad(format!("cannot read the header: {e}")))?
+        .clone();
+    let col = |name: &str| header.iter().position(|h| h == name);
+    let mut fixed = [0; 4];
+    for (c, name) in fixed.iter_mut().zip(READ_COLUMNS) {
+        *c = col(name).ok_or_else(|| bad(format!("no column `{name}`")))?;
+    }
+    let [c_dir, c_time, c_theta, c_dev] = fixed;
+    let (mut axes, mut axis_cols) = (Vec::new(), Vec::new());
+    for axis in Axis::ALL {
+        let [act, ferr] = axis_column_names(axis);
+        if let (Some(a), Some(f)) = (col(&act), col(&ferr)) {
+            axes.push(axis);
+            axis_cols.push((a, f));
+        }
+    }
+    let mut trace = Trace::of(axes);
+    for (i, record) in reader.records().enumerate() {
+        let record = record.map_err(|e| bad(format!("row {}: {e}", i + 2)))?;
+        let num = |c: usize| -> f64 {
+            record
+                .get(c)
+                .and_then(|s| s.trim().parse().ok())
+                .unwrap_or(f64::NAN)
+        };
+        trace.push_row(
+            record.get(c_dir).unwrap_or(""),
+            [num(c_time), num(c_theta), num(c_dev)],
+            axis_cols.iter().map(|&(a, f)| (num(a), num(f))),
+        );
+    }
+    Ok(trace)
+}
+
+/// Reads `trace.parquet` (`[simulate] trace_format = "parquet"`): the columns of
+/// `trace.csv` as f64, through [`Table::read_parquet`](super::parquet::Table::read_parquet).
+fn read_parquet(path: &Path) -> Result<Trace> {
+    use super::parquet::{Column, Table};
+
+    let wanted = |name: &str| {
+        READ_COLUMNS.contains(&name) || name.contains("_act_") || name.contains("_ferr_")
+    };
+    let table = Table::read_parquet(path, &wanted)?;
+    let bad = |what: String| Error::invalid(path, what);
+    let floats = |name: &str| match table.column(name) {
+        Some(Column::F64(v)) => Ok(v),
+        _ => Err(bad(format!("no f64 column `{name}`"))),
+    };
+    let Some(Column::Str(direction)) = table.column("direction") else {
+        return Err(bad("no text column `direction`".into()));
+    };
+    let [time, theta, dev] = [
+        floats("time_s")?,
+        floats("theta_deg")?,
+        floats("deviation_centred_um")?,
+    ];
+    let (mut axes, mut axis_cols) = (Vec::new(), Vec::new());
+    for axis in Axis::ALL {
+        let [act, ferr] = axis_column_names(axis);
+        if table.column(&act).is_some() && table.column(&ferr).is_some() {
+            axes.push(axis);
+            axis_cols.push((floats(&act)?, floats(&ferr)?));
+        }
+    }
+    let value = |v: &[Option<f64>], i: usize| v[i].unwrap_or(f64::NAN);
+    let mut trace = Trace::of(axes);
+    for (i, dir) in direction.iter().enumerate() {
+        trace.push_row(
+            dir.as_deref().unwrap_or(""),
+            [value(time, i), value(theta, i), value(dev, i)],
+            axis_cols.iter().map(|(a, f)| (value(a, i), value(f, i))),
+        );
+    }
+    Ok(trace)
 }

@@ -31,6 +31,16 @@
 //! Backlash and reversal spikes per axis and direction come from the attributed marks:
 //! each step or spike whose candidates hold a single axis is that axis's; the ambiguous ones
 //! are listed with all their candidates.
+//!
+//! # The findings of a run folder (for the report)
+//!
+//! [`diagnose_run`] reads what a run folder holds (the ball-bar result, the reversal angles,
+//! the trace rows) and finds, per run of the trace: one spot that makes most of G
+//! ([`g_without_peak`]), and a 2θ (elliptical) part large against G ([`ellipse_um`]); per
+//! mark: the reversal it sits at; and from the figures: H and the mean radius error when they
+//! are large. The 2θ fit here is least squares on the trace's rows, at their θ: unlike the
+//! bins of [`harmonics`], the rows need not cover the circle evenly, so the normal equations
+//! are solved rather than the Fourier sums taken.
 
 use serde::Serialize;
 
@@ -38,6 +48,8 @@ use crate::error::Result;
 use crate::input::program::{CircleTest, Direction};
 use crate::measure::ballbar::{BallbarResult, EventKind, BIN_DEG};
 use crate::measure::BallbarRun;
+use crate::report::run::{Diagnosis, Finding, Mark, RunFolder};
+use crate::study::reversals::angular_distance_deg;
 
 /// A cyclic error below this amplitude is not reported, um.
 pub const CYCLIC_FLOOR_UM: f64 = 0.2;
@@ -326,4 +338,218 @@ pub fn diagnose(
         reversal_spikes,
         circle: circle.map(|c| diagnose_circle(runs, c)).transpose()?,
     })
+}
+
+/// Peak-to-peak of `dev` with the ±`half_window_deg` around its extreme left out: how much
+/// of G one spot makes. Returns (G, G without the spot, θ of the spot); None with fewer
+/// than 3 finite points. The spot is the extreme farther from the mean.
+pub fn g_without_peak(theta: &[f64], dev: &[f64], half_window_deg: f64) -> Option<(f64, f64, f64)> {
+    let finite: Vec<(f64, f64)> = theta
+        .iter()
+        .zip(dev)
+        .filter(|(t, d)| t.is_finite() && d.is_finite())
+        .map(|(t, d)| (*t, *d))
+        .collect();
+    if finite.len() < 3 {
+        return None;
+    }
+    let band = |values: &mut dyn Iterator<Item = f64>| {
+        values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
+            (lo.min(d), hi.max(d))
+        })
+    };
+    let (lo, hi) = band(&mut finite.iter().map(|p| p.1));
+    let mean = finite.iter().map(|p| p.1).sum::<f64>() / finite.len() as f64;
+    let spot = finite
+        .iter()
+        .max_by(|a, b| (a.1 - mean).abs().total_cmp(&(b.1 - mean).abs()))
+        .map(|p| p.0)?;
+    let mut rest = finite
+        .iter()
+        .filter(|p| angular_distance_deg(p.0, spot) > half_window_deg)
+        .map(|p| p.1)
+        .peekable();
+    let g_rest = if rest.peek().is_none() {
+        0.0
+    } else {
+        let (rlo, rhi) = band(&mut rest);
+        rhi - rlo
+    };
+    Some((hi - lo, g_rest, spot))
+}
+
+/// Least-squares amplitude (µm) and orientation (deg, 0..180) of the 2θ (elliptical) part of
+/// `dev` at the angles `theta` (deg): `d ≈ c cos 2θ + s sin 2θ`, amplitude `√(c² + s²)`,
+/// long axis at `atan2(s, c) / 2`. None with fewer than 8 finite points or a singular system.
+pub fn ellipse_um(theta: &[f64], dev: &[f64]) -> Option<(f64, f64)> {
+    let (mut cc, mut ss, mut cs, mut dc, mut ds, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0);
+    for (t, d) in theta.iter().zip(dev) {
+        if !(t.is_finite() && d.is_finite()) {
+            continue;
+        }
+        let (s2, c2) = (2.0 * t.to_radians()).sin_cos();
+        cc += c2 * c2;
+        ss += s2 * s2;
+        cs += c2 * s2;
+        dc += d * c2;
+        ds += d * s2;
+        n += 1;
+    }
+    let det = cc * ss - cs * cs;
+    if n < 8 || det.abs() < 1e-12 {
+        return None;
+    }
+    let c = (dc * ss - ds * cs) / det;
+    let s = (ds * cc - dc * cs) / det;
+    Some((
+        (c * c + s * s).sqrt(),
+        (s.atan2(c).to_degrees() / 2.0).rem_euclid(180.0),
+    ))
+}
+
+/// A spot makes "most of G" when G without it is less than this share of G.
+const DOMINANT_SPOT_SHARE: f64 = 0.5;
+/// The window left out around the spot, ± deg.
+pub const SPOT_HALF_WINDOW_DEG: f64 = 5.0;
+
+/// [`g_without_peak`] over ±[`SPOT_HALF_WINDOW_DEG`] when the spot makes most of G (G
+/// without it below half of G): (G, G without the spot, θ of the spot); None otherwise.
+pub fn dominant_spot(theta: &[f64], dev: &[f64]) -> Option<(f64, f64, f64)> {
+    g_without_peak(theta, dev, SPOT_HALF_WINDOW_DEG)
+        .filter(|&(g, g_rest, _)| g > 0.0 && g_rest < DOMINANT_SPOT_SHARE * g)
+}
+/// The 2θ part is worth a word above this share of G and above [`ELLIPSE_FLOOR_UM`].
+const ELLIPSE_SHARE: f64 = 0.15;
+const ELLIPSE_FLOOR_UM: f64 = 0.5;
+/// H is worth a word above this share of G.
+const HYSTERESIS_SHARE: f64 = 0.3;
+/// A mean radius error worth a word, µm.
+const RADIUS_FLOOR_UM: f64 = 1.0;
+
+/// The nearest of `angles` to `theta_deg`: (angle, distance), deg; the first of equals.
+fn nearest_angle(angles: &[f64], theta_deg: f64) -> Option<(f64, f64)> {
+    angles
+        .iter()
+        .map(|t| (*t, angular_distance_deg(*t, theta_deg)))
+        .min_by(|x, y| x.1.total_cmp(&y.1))
+}
+
+/// The marks of a run folder's ball-bar result, numbered, each with the reversal it sits
+/// at and the trace's deviation there.
+fn run_marks(folder: &RunFolder) -> Vec<Mark> {
+    let Some(ballbar) = &folder.summary.ballbar else {
+        return Vec::new();
+    };
+    let reversals = &folder.summary.reversals_deg;
+    ballbar
+        .events
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            let theta = e.theta_deg;
+            let direction = format!("{:?}", e.direction).to_lowercase();
+            let trace_um = folder.trace.as_ref().and_then(|trace| {
+                let run = trace.runs.iter().find(|r| r.direction == direction)?;
+                let (_, dev) = run
+                    .theta_deg
+                    .iter()
+                    .zip(&run.deviation_centred_um)
+                    .filter(|(t, v)| t.is_finite() && v.is_finite())
+                    .min_by(|a, b| {
+                        angular_distance_deg(*a.0, theta)
+                            .total_cmp(&angular_distance_deg(*b.0, theta))
+                    })?;
+                Some(*dev)
+            });
+            let (reversal, nearest) = match e.axis {
+                Some(axis) => (
+                    reversals
+                        .get(&axis.to_string())
+                        .and_then(|angles| nearest_angle(angles, theta)),
+                    None,
+                ),
+                None => (
+                    None,
+                    reversals
+                        .iter()
+                        .flat_map(|(a, angles)| {
+                            angles
+                                .iter()
+                                .map(move |t| (angular_distance_deg(*t, theta), a))
+                        })
+                        .min_by(|a, b| a.0.total_cmp(&b.0))
+                        .map(|(d, a)| (a.clone(), d)),
+                ),
+            };
+            Mark {
+                number: i + 1,
+                event: *e,
+                reversal,
+                nearest,
+                trace_um,
+            }
+        })
+        .collect()
+}
+
+/// What a run folder says about the machine, for the report: its marks, and the findings
+/// in the order the page lists them (per trace run the dominant spot and the 2θ part, the
+/// marks, H, the mean radius per run, a cone's block sawtooth).
+pub fn diagnose_run(folder: &RunFolder) -> Diagnosis {
+    let marks = run_marks(folder);
+    let Some(ballbar) = &folder.summary.ballbar else {
+        return Diagnosis {
+            marks,
+            findings: vec![Finding::NoCircle],
+        };
+    };
+    let g = ballbar.circular_deviation_um;
+    let mut findings = Vec::new();
+    for run in folder.trace.iter().flat_map(|t| &t.runs) {
+        let (theta, dev) = (&run.theta_deg, &run.deviation_centred_um);
+        if let Some((g_um, g_without_um, theta_deg)) = dominant_spot(theta, dev) {
+            findings.push(Finding::DominantSpot {
+                direction: run.direction.clone(),
+                theta_deg,
+                g_um,
+                g_without_um,
+            });
+        }
+        if let Some((amplitude_um, long_axis_deg)) = ellipse_um(theta, dev) {
+            if g.is_finite() && amplitude_um > ELLIPSE_SHARE * g && amplitude_um > ELLIPSE_FLOOR_UM
+            {
+                findings.push(Finding::Elliptical {
+                    direction: run.direction.clone(),
+                    amplitude_um,
+                    long_axis_deg,
+                });
+            }
+        }
+    }
+    findings.extend(marks.iter().cloned().map(Finding::Mark));
+    if let Some(h_um) = ballbar.hysteresis_um {
+        if g.is_finite() && h_um > HYSTERESIS_SHARE * g {
+            findings.push(Finding::Hysteresis { h_um });
+        }
+    }
+    for run in &ballbar.runs {
+        let r0_um = run.centring.r0_um;
+        if r0_um.abs() > RADIUS_FLOOR_UM {
+            findings.push(Finding::RadiusOffset {
+                direction: format!("{:?}", run.direction).to_lowercase(),
+                r0_um,
+            });
+        }
+    }
+    if folder
+        .test
+        .as_ref()
+        .is_some_and(|t| t.test.starts_with("cone") && !t.tcp)
+    {
+        findings.push(Finding::BlockSawtooth);
+    }
+    if findings.is_empty() {
+        findings.push(Finding::Nothing);
+    }
+    Diagnosis { marks, findings }
 }

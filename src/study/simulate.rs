@@ -317,14 +317,12 @@ pub fn simulate(
         let theta: Vec<f64> = (0..dev.len())
             .map(|i| (i as f64 + 0.5) * crate::measure::ballbar::BIN_DEG)
             .collect();
-        if let Some((g, rest, spot)) = crate::report::html::g_without_peak(&theta, &dev, 5.0) {
-            if g > 0.0 && rest < 0.5 * g {
-                warnings.push(format!(
-                    "one spot dominates G in the {} run: G = {g:.2} µm, {:.2} µm without ±5° around θ = {spot:.1}°",
-                    format!("{:?}", run.direction()).to_uppercase(),
-                    rest
-                ));
-            }
+        if let Some((g, rest, spot)) = crate::study::diagnose::dominant_spot(&theta, &dev) {
+            warnings.push(format!(
+                "one spot dominates G in the {} run: G = {g:.2} µm, {:.2} µm without ±5° around θ = {spot:.1}°",
+                format!("{:?}", run.direction()).to_uppercase(),
+                rest
+            ));
         }
     }
     let wall = started.elapsed().as_secs_f64();

@@ -38,7 +38,7 @@
 //! Memory does not grow with the number of samples: one state per pair, plus the events.
 
 use nalgebra::Vector3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::{BodyPoses, Carrier, PairKind, Scene, Warm};
 use crate::input::machine::Machine;
@@ -71,7 +71,7 @@ pub struct SceneEvent {
 }
 
 /// Cutter engagement over the run, for one cutting pair.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EngagementSummary {
     pub bodies: [String; 2],
     /// Largest measured depth of the cutter in the workpiece, mm (0 if it never touched);

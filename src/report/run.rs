@@ -1,0 +1,184 @@
+//! What the report of a run shows, as typed values: the run folder read back
+//! ([`RunFolder`]) and the diagnosis of it ([`Diagnosis`]).
+//!
+//! The folder's JSON files are read with serde into the types that wrote them: `test.json`
+//! into [`TestParameters`], `check.json` into [`CheckReport`], and the part of
+//! `summary.json` the page shows into [`RunSummary`] (the ball-bar result is
+//! [`BallbarResult`] itself). The summary as a whole is `study::simulate::SimulationSummary`,
+//! a layer above the report: [`RunSummary`] names the fields of it the report reads, and
+//! serde refuses a summary that lacks one.
+//!
+//! [`Diagnosis`] is filled by `study::diagnose::diagnose_run` (the analyses: the 2θ fit,
+//! the spot that dominates G, the reversal each mark is attributed to); the HTML page only
+//! puts it into words and tables.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::de::DeserializeOwned;
+use serde::Deserialize;
+
+use super::test_info::{TestParameters, TEST_FILE};
+use super::trace::{read_trace, Trace};
+use crate::check::CheckReport;
+use crate::error::{Error, Result};
+use crate::measure::ballbar::TraceEvent;
+use crate::measure::BallbarResult;
+
+/// The summary a simulation leaves in its folder.
+pub const SUMMARY_FILE: &str = "summary.json";
+/// The limits and collision summary a simulation leaves beside its trace.
+pub const CHECK_FILE: &str = "check.json";
+
+/// The part of `summary.json` the report shows.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub struct RunSummary {
+    /// Simulated machine time over all runs, s.
+    pub sim_time_s: f64,
+    /// Interpolation periods simulated.
+    pub setpoints: u64,
+    /// The ball-bar figures and marks; None without a measured circle.
+    pub ballbar: Option<BallbarResult>,
+    /// Each axis's reversal angles, deg, by axis letter.
+    pub reversals_deg: BTreeMap<String, Vec<f64>>,
+}
+
+/// A run folder read back: what `mtsim simulate -o DIR` wrote.
+#[derive(Clone, Debug)]
+pub struct RunFolder {
+    pub dir: PathBuf,
+    pub summary: RunSummary,
+    /// None for a folder made before `test.json` was written.
+    pub test: Option<TestParameters>,
+    /// None for a folder without `check.json`.
+    pub check: Option<CheckReport>,
+    /// None for a folder without a trace file.
+    pub trace: Option<Trace>,
+    /// Inline SVG documents found beside the trace: (file name, text).
+    pub svgs: Vec<(String, String)>,
+    /// Every CSV, JSON, SVG, NC and Parquet file in the folder (for the links).
+    pub files: Vec<String>,
+}
+
+/// The JSON file at `path` as a `T`; None when there is no such file.
+fn read_json<T: DeserializeOwned>(path: &Path) -> Result<Option<T>> {
+    match std::fs::read_to_string(path) {
+        Ok(text) => serde_json::from_str(&text)
+            .map(Some)
+            .map_err(|e| Error::invalid(path, format!("unexpected contents: {e}"))),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(source) => Err(Error::Read {
+            path: path.to_path_buf(),
+            source,
+        }),
+    }
+}
+
+/// The names of the files in `dir` that end in one of `extensions`, sorted.
+pub fn file_names(dir: &Path, extensions: &[&str]) -> Result<Vec<String>> {
+    let mut files: Vec<String> = std::fs::read_dir(dir)
+        .map_err(|source| Error::Read {
+            path: dir.to_path_buf(),
+            source,
+        })?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| extensions.iter().any(|ext| n.ends_with(ext)))
+        .collect();
+    files.sort();
+    Ok(files)
+}
+
+/// (name, text) of each of `files` in `dir` that `inline` accepts and that can be read.
+pub fn svg_texts(
+    dir: &Path,
+    files: &[String],
+    inline: &dyn Fn(&str) -> bool,
+) -> Vec<(String, String)> {
+    files
+        .iter()
+        .filter(|n| inline(n))
+        .filter_map(|n| Some((n.clone(), std::fs::read_to_string(dir.join(n)).ok()?)))
+        .collect()
+}
+
+impl RunFolder {
+    /// Reads the run folder `dir`.
+    pub fn read(dir: &Path) -> Result<RunFolder> {
+        let summary_path = dir.join(SUMMARY_FILE);
+        let summary = read_json(&summary_path)?.ok_or_else(|| {
+            Error::invalid(
+                &summary_path,
+                "no summary.json: not a run folder".to_string(),
+            )
+            .with_help("give the folder `mtsim simulate SCENARIO -o FOLDER` wrote")
+        })?;
+        let files = file_names(dir, &[".csv", ".json", ".svg", ".nc", ".parquet"])?;
+        let svgs = svg_texts(dir, &files, &|name| {
+            name == "ballbar.svg"
+                || name == "placement.svg"
+                || (name.starts_with("sweep-") && name.ends_with(".svg"))
+        });
+        Ok(RunFolder {
+            dir: dir.to_path_buf(),
+            summary,
+            test: read_json(&dir.join(TEST_FILE))?,
+            check: read_json(&dir.join(CHECK_FILE))?,
+            trace: read_trace(dir)?,
+            svgs,
+            files,
+        })
+    }
+}
+
+/// One mark (spike or step) of the ball-bar result, with where it sits among the reversals.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mark {
+    /// 1, 2, ... in the order of the result's marks (the numbers on the plot).
+    pub number: usize,
+    pub event: TraceEvent,
+    /// For a mark of an axis: that axis's reversal nearest the mark, (θ, distance), deg.
+    pub reversal: Option<(f64, f64)>,
+    /// For a mark of no axis: the nearest reversal of any axis, (axis letter, distance deg).
+    pub nearest: Option<(String, f64)>,
+    /// The trace's centred deviation nearest the mark's θ in its run, µm (where the plot
+    /// labels it); None without a trace of that run.
+    pub trace_um: Option<f64>,
+}
+
+/// One finding about the run, in the order the page lists them.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Finding {
+    /// No measured circle: nothing else is diagnosed.
+    NoCircle,
+    /// One spot makes most of G in a run (the trace's `direction` text).
+    DominantSpot {
+        direction: String,
+        theta_deg: f64,
+        g_um: f64,
+        g_without_um: f64,
+    },
+    /// The 2θ (elliptical) part of a run's centred trace is large against G.
+    Elliptical {
+        direction: String,
+        amplitude_um: f64,
+        long_axis_deg: f64,
+    },
+    /// A mark: the reversal spike or backlash step of an axis, or one of no axis.
+    Mark(Mark),
+    /// H is large against G.
+    Hysteresis { h_um: f64 },
+    /// A run's mean radius is off the bar length by more than 1 µm.
+    RadiusOffset { direction: String, r0_um: f64 },
+    /// A cone without tool-centre-point control: the block sawtooth is real.
+    BlockSawtooth,
+    /// Nothing stands out.
+    Nothing,
+}
+
+/// The diagnosis of a run folder: its marks (for the table and the plot) and findings.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Diagnosis {
+    pub marks: Vec<Mark>,
+    pub findings: Vec<Finding>,
+}

@@ -1,4 +1,5 @@
-//! Helpers shared by the integration tests (`mod common;` in each test file).
+//! Helpers shared by the integration tests (each stage's `tests/<stage>/main.rs` has
+//! `#[path = "../common/mod.rs"] mod common;`, and its files `use crate::common;`).
 
 #![allow(dead_code)]
 

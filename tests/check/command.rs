@@ -1,0 +1,312 @@
+//! `mtsim check` against answers known in advance: windows computed from the path itself,
+//! block times from the words, and the exit codes scripts rely on.
+
+use crate::common;
+
+use common::{mtsim, scratch, stdout_json, trt_ac, write_scenario, CONE_15_10};
+
+/// Runs `check --json` on a scenario body (and an NC program, if any); returns exit code and JSON.
+fn check(name: &str, body: &str, nc: Option<&str>, extra: &[&str]) -> (i32, serde_json::Value) {
+    let dir = scratch("check", name);
+    if let Some(nc) = nc {
+        std::fs::write(dir.join("p.nc"), nc).unwrap();
+    }
+    let path = write_scenario(&dir, &trt_ac(), body);
+    let mut args = vec!["check", path.to_str().unwrap(), "--json"];
+    args.extend_from_slice(extra);
+    let out = mtsim(&args);
+    let code = out.status.code().unwrap();
+    assert!(
+        code == 0 || code == 1,
+        "exit {code}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (code, serde_json::from_slice(&out.stdout).unwrap())
+}
+
+fn violations<'a>(v: &'a serde_json::Value, kind: &str) -> Vec<&'a serde_json::Value> {
+    v["violations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|x| x["kind"] == kind)
+        .collect()
+}
+
+/// X(θ) of the 15/10 cone at O = (0, 0, 200), L = 100, written out from the spec:
+/// X = (Rz(C) P).x with C = atan2(i, j) of t = unit(apex - P).
+fn spec_x(theta_deg: f64) -> f64 {
+    let (al, be, th) = (
+        15f64.to_radians(),
+        10f64.to_radians(),
+        theta_deg.to_radians(),
+    );
+    let (r, h, l) = (100.0 * al.cos(), 100.0 * al.sin(), 100.0 / al.sin());
+    let ry = |x: f64, y: f64, z: f64| [x * be.cos() - z * be.sin(), y, x * be.sin() + z * be.cos()];
+    let p = ry(r * th.cos(), r * th.sin(), h);
+    let apex = ry(0.0, 0.0, l);
+    let c = (apex[0] - p[0]).atan2(apex[1] - p[1]);
+    c.cos() * p[0] - c.sin() * p[1]
+}
+
+#[test]
+fn a_lowered_x_limit_is_crossed_inside_the_theta_window_computed_from_the_path() {
+    let (code, v) = check(
+        "travel",
+        &format!("{CONE_15_10}[machine_overrides.axes.X]\nmax = 50.0\n"),
+        None,
+        &[],
+    );
+    assert_eq!(code, 1);
+    // The window where X > 50 mm on the exact path: sign changes of X - 50 on a 0.1-deg
+    // grid, bisected on the spec's formula.
+    let above = |t: f64| spec_x(t) > 50.0;
+    let mut crossings = Vec::new();
+    for k in 0..3600 {
+        let (mut lo, mut hi) = (k as f64 * 0.1, (k + 1) as f64 * 0.1);
+        if above(lo) != above(hi) {
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if above(mid) == above(lo) {
+                    lo = mid
+                } else {
+                    hi = mid
+                }
+            }
+            crossings.push(0.5 * (lo + hi));
+        }
+    }
+    assert_eq!(crossings.len(), 2, "{crossings:?}");
+    let (enter, leave) = (crossings[0], crossings[1]);
+    let peak = (0..36000)
+        .map(|k| spec_x(k as f64 * 0.01))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let t = violations(&v, "travel");
+    assert_eq!(t.len(), 1, "{t:?}");
+    assert_eq!(t[0]["axis"], "X");
+    let (start, end) = (
+        t[0]["theta_start_deg"].as_f64().unwrap(),
+        t[0]["theta_end_deg"].as_f64().unwrap(),
+    );
+    // 1 ms samples are 0.01 deg apart; the 1-deg joint-space chords stay within 0.05 deg.
+    assert!(
+        (start - enter).abs() < 0.05 && (end - leave).abs() < 0.05,
+        "{start}..{end} vs {enter}..{leave}"
+    );
+    assert!(
+        (t[0]["worst"].as_f64().unwrap() - peak).abs() < 0.01,
+        "{} vs {peak}",
+        t[0]
+    );
+    assert_eq!(t[0]["limit"].as_f64().unwrap(), 50.0);
+    assert!(v["axes"]["X"]["margin"].as_f64().unwrap() < -17.0);
+}
+
+#[test]
+fn a_mid_block_travel_excursion_that_the_end_points_miss_is_found() {
+    // Under G43.4 the tip stays at table (100, 0, 50) while C turns from -90 to +90 deg:
+    // machine X = 100 cos C is 0 at both ends and 100 mm half way, past the 50 mm limit.
+    let nc = "G21 G90 G94\nG43.4 H1\nG00 X100 Y0 Z50 A0 C-90\nG01 C90 F1000\nG49\nM30\n";
+    let body = "[program]\nfile = \"p.nc\"\n[machine_overrides.axes.X]\nmax = 50.0\n";
+    let (code, v) = check("midblock", body, Some(nc), &[]);
+    assert_eq!(code, 1);
+    let t = violations(&v, "travel");
+    assert_eq!(t.len(), 1, "{t:?}");
+    assert_eq!(t[0]["line"], 4);
+    assert!(
+        (t[0]["worst"].as_f64().unwrap() - 100.0).abs() < 1e-3,
+        "{}",
+        t[0]
+    );
+    // The block takes 180 deg / F1000 = 10.8 s (mixed rule for a pure rotary move); X passes
+    // 50 mm at C = -60 and +60 deg, i.e. from 1/6 to 5/6 of the block.
+    let (t0, t1) = (
+        t[0]["time_start_s"].as_f64().unwrap(),
+        t[0]["time_end_s"].as_f64().unwrap(),
+    );
+    assert!(
+        (t0 - 1.8).abs() < 0.002 && (t1 - 9.0).abs() < 0.002,
+        "{t0}..{t1}"
+    );
+    assert!(
+        t[0]["theta_start_deg"].is_null(),
+        "a file without geometry has no theta"
+    );
+}
+
+#[test]
+fn inverse_time_blocks_that_are_too_short_exceed_the_velocity_limit() {
+    // G93 F600: the block takes 1/600 min = 0.1 s, so 100 mm of X is 60000 mm/min.
+    let nc = "G21 G90 G94\nG00 X0 Y0 Z100 A0 C0\nG93 G01 X100 F600\nM30\n";
+    let (code, v) = check("g93", "[program]\nfile = \"p.nc\"\n", Some(nc), &[]);
+    assert_eq!(code, 1);
+    let vel = violations(&v, "velocity");
+    assert_eq!(vel.len(), 1, "{vel:?}");
+    assert_eq!(
+        (vel[0]["axis"].as_str(), vel[0]["line"].as_u64()),
+        (Some("X"), Some(3))
+    );
+    assert!(
+        (vel[0]["worst"].as_f64().unwrap() - 60000.0).abs() < 1.0,
+        "{}",
+        vel[0]
+    );
+    assert_eq!(vel[0]["limit"].as_f64().unwrap(), 30000.0);
+}
+
+#[test]
+fn a_tcp_move_that_asks_too_much_of_c_exceeds_its_velocity_limit() {
+    // The tip moves 1 mm at F1000 (0.06 s) while C turns 90 deg: 90000 deg/min against 9000.
+    let nc = "G21 G90 G94\nG43.4 H1\nG00 X100 Y0 Z50 A0 C0\nG01 X101 C90 F1000\nG49\nM30\n";
+    let (code, v) = check("tcp", "[program]\nfile = \"p.nc\"\n", Some(nc), &[]);
+    assert_eq!(code, 1);
+    let c: Vec<_> = violations(&v, "velocity")
+        .into_iter()
+        .filter(|x| x["axis"] == "C")
+        .collect();
+    assert_eq!(c.len(), 1, "{v}");
+    assert!(
+        (c[0]["worst"].as_f64().unwrap() - 90000.0).abs() < 50.0,
+        "{}",
+        c[0]
+    );
+}
+
+#[test]
+fn the_near_miss_threshold_is_honoured() {
+    let (_, clean) = check("nm-ref", CONE_15_10, None, &[]);
+    let smallest = clean["min_clearance_mm"].as_f64().unwrap();
+    assert!(smallest > 2.0, "the bundled set-up is clear: {smallest}");
+    let above = format!("{}", smallest + 0.5);
+    let below = format!("{}", smallest - 0.5);
+    let (code, v) = check("nm-above", CONE_15_10, None, &["--near-miss", &above]);
+    assert_eq!(code, 1);
+    let nm = violations(&v, "near_miss");
+    assert!(
+        !nm.is_empty()
+            && nm
+                .iter()
+                .all(|x| x["worst"].as_f64().unwrap() < smallest + 0.5)
+    );
+    // Below the threshold the pair is measured at every sample, so the worst near miss is
+    // at most the clean run's smallest clearance (an upper bound from sparser queries) and
+    // within the 1 um that 1 ms sampling allows of it.
+    assert!(
+        nm.iter().any(|x| {
+            let worst = x["worst"].as_f64().unwrap();
+            worst <= smallest + 1e-9 && smallest - worst < 1e-3
+        }),
+        "smallest {smallest}, near misses {nm:?}"
+    );
+    let (code, v) = check("nm-below", CONE_15_10, None, &["--near-miss", &below]);
+    assert_eq!(code, 0, "{v}");
+}
+
+#[test]
+fn a_short_tool_drives_the_holder_into_the_frustum() {
+    // A frustum 45 mm tall (along its axis; the tip runs at L sin 15 deg = 25.9 mm) and a
+    // tool whose 50 mm holder starts 10 mm above the tip: the holder reaches far past the
+    // cutter's 10 mm radius while the flank is tangent to the frustum, so it hits the
+    // frustum above the tip.
+    let body = format!(
+        "{CONE_15_10}[workpiece]\nkind = \"cone-frustum\"\ntop_height_mm = 45.0\n\
+         [tool]\ncutter_diameter_mm = 20.0\nflute_length_mm = 8.0\nshank_diameter_mm = 20.0\nshank_length_mm = 2.0\nholder_diameter_mm = 50.0\nholder_length_mm = 30.0\ngauge_length_mm = 40.0\n"
+    );
+    let (code, v) = check("short-tool", &body, None, &[]);
+    assert_eq!(code, 1);
+    let c = violations(&v, "collision");
+    assert!(
+        c.iter().any(|x| x["bodies"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|b| b == "holder")),
+        "{v}"
+    );
+}
+
+#[test]
+fn dynamics_catches_an_overshoot_that_the_commanded_path_does_not_have() {
+    // A fast move ends exactly at the X limit; full velocity feedforward with a slow velocity
+    // loop rings past it after the setpoints have stopped.
+    let nc = "G21 G90 G94\nG00 X0 Y0 Z100 A0 C0\nG01 X100 F20000\nM30\n";
+    let body = "[program]\nfile = \"p.nc\"\n[machine_overrides.axes.X]\nmax = 100.0\n\
+                [machine_overrides.axes.X.servo]\nkv_per_s = 30.0\nvelocity_bandwidth_hz = 10.0\nvelocity_feedforward = 1.0\n\
+                [machine_overrides.axes.X.friction]\ncoulomb_n = 0.0\n";
+    let (code, v) = check("overshoot", body, Some(nc), &[]);
+    assert_eq!(code, 0, "the program itself stays inside: {v}");
+    let (code, v) = check("overshoot-dyn", body, Some(nc), &["--dynamics"]);
+    assert_eq!(code, 1);
+    let t = violations(&v, "travel");
+    assert!(!t.is_empty(), "{v}");
+    assert!(t
+        .iter()
+        .all(|x| x["axis"] == "X" && x["worst"].as_f64().unwrap() > 100.0));
+    assert_eq!(v["dynamics"], true);
+}
+
+#[test]
+fn every_bundled_scenario_checks_clean() {
+    for s in [
+        "cone-15-10",
+        "cone-45-30",
+        "cone-15-10-offset",
+        "cone-15-10-yt25",
+        "circle-iso230-4",
+        "file-cone-15-10-yt25",
+    ] {
+        let out = mtsim(&["check", &format!("scenarios/{s}.toml")]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{s}: {}",
+            String::from_utf8_lossy(&out.stdout)
+        );
+    }
+}
+
+#[test]
+fn bad_input_exits_2() {
+    let out = mtsim(&["check", "scenarios/cone-15-10.toml", "--near-miss", "-1"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn the_placement_map_marks_where_the_cone_fits_and_what_limits_it() {
+    // The 45/30 cone: at the C axis the tool needs Y down to -293.185 mm (the spec's range),
+    // inside the -350 mm travel; 300 mm off the axis along -Y it cannot fit.
+    let dir = scratch("check", "placement");
+    let out = mtsim(&[
+        "sweep",
+        "scenarios/cone-45-30.toml",
+        "--feasibility",
+        "--vary",
+        "center_x,center_y",
+        "--from",
+        "0,-300",
+        "--to",
+        "0,0",
+        "--step",
+        "1,300",
+        "--json",
+        "-o",
+        dir.to_str().unwrap(),
+    ]);
+    let v = stdout_json(&out);
+    let cells = v["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 2);
+    let at = |y: f64| cells.iter().find(|c| c["y"].as_f64() == Some(y)).unwrap();
+    assert_eq!(at(0.0)["fits"], true, "{}", at(0.0));
+    // The margin at the axis is the smaller of the Y travel margin (350 - 293.185) and the
+    // smallest clearance; it is positive.
+    let m = at(0.0)["margin_mm"].as_f64().unwrap();
+    assert!(m > 0.0 && m <= 350.0 - 293.185 + 1e-6, "{m}");
+    assert_eq!(at(-300.0)["fits"], false);
+    assert_eq!(at(-300.0)["limiting"], "Y travel");
+    assert!(at(-300.0)["margin_mm"].as_f64().unwrap() < 0.0);
+    let svg = std::fs::read_to_string(dir.join("placement.svg")).unwrap();
+    assert!(svg.contains("does not fit") && svg.contains("margin"));
+    assert!(std::fs::read_to_string(dir.join("placement.csv"))
+        .unwrap()
+        .starts_with("center_x,center_y,margin_mm,fits"));
+}

@@ -1,0 +1,12 @@
+//! The check stage (`src/check/`): `mtsim check` against answers known in advance, the
+//! bounded collision check against brute force, the collision scene, checks as the moves stream
+//! in, and the tool the program puts in the spindle.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod command;
+mod equivalence;
+mod scene;
+mod streamed;
+mod tool_change;

@@ -1,0 +1,12 @@
+//! The command line (`src/cli/`) as users and scripts meet it: JSON shapes, exit codes, error
+//! messages (insta snapshots in `snapshots/`), a new user's first runs, sharded runs merged
+//! back, and the Dask example.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod dask_example;
+mod messages;
+mod scale_out;
+mod scripts;
+mod usability;

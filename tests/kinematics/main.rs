@@ -1,0 +1,11 @@
+//! Kinematics (`src/kinematics/`): forward and inverse transforms of every layout, the sample
+//! machine files converted from LinuxCNC's, and the geometric errors of the rotary axes.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod geometric_errors;
+mod round_trips;
+mod trivial;
+mod trt_ab;
+mod uvw;

@@ -1,0 +1,8 @@
+//! The measure stage (`src/measure/`): the virtual ball bar against independently computed
+//! values, and the attribution of its trace's marks to axes.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod attribution;
+mod ballbar;

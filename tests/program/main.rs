@@ -1,0 +1,13 @@
+//! The program stage (`src/program/`, and the `ngc` crate's reader through it): the
+//! canonical moves `mtsim` reads from G-code, against LinuxCNC's `rs274`, its sample programs
+//! and values worked out by hand; the scenario's `[reader]` options; programs it cannot read.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod blocks;
+mod conformance;
+mod corpus;
+mod file_analysis;
+mod reader_options;
+mod unreadable;

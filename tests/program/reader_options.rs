@@ -1,0 +1,239 @@
+//! The scenario's `[reader]` section reaches the interpreter: dialect, tools (inline and
+//! LinuxCNC `.tbl`), `.var` parameters, work offsets, user M codes, and the machine's axes.
+
+use crate::common;
+
+use std::path::Path;
+
+use common::{scratch, trt_ac, write_scenario};
+use mtsim::input::scenario::Scenario;
+use mtsim::program::file::read_file;
+use mtsim::Axis;
+
+fn ends(scenario: &Scenario, program: &Path) -> Result<Vec<[f64; 6]>, String> {
+    read_file(program, &scenario.reader)
+        .map_err(|e| e.to_string())?
+        .map(|m| {
+            m.map(|m| Axis::XYZABC.map(|a| m.end[a]))
+                .map_err(|e| e.to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn work_offsets_tools_and_parameters_come_from_the_scenario() {
+    let dir = scratch("reader", "offsets");
+    std::fs::write(
+        dir.join("tools.tbl"),
+        "T1 P1 Z+50.0 D6.0 ;end mill\nT2 P2 Z+80 D10\n",
+    )
+    .unwrap();
+    // #5241-#5243: G55 = (1, 2, 3); #5161-#5163: G28 position (0, 0, 300).
+    std::fs::write(dir.join("sim.var"), "5241 1\n5242 2\n5243 3\n5163 300\n").unwrap();
+    std::fs::write(
+        dir.join("p.ngc"),
+        "G21 G90\nT1 M6 G43 H1\nG0 X10 Y20 Z30\nG55 G0 X0 Y0 Z0\nT2 M6 G43\nG0 Z0\nM428\nG28\nM2\n",
+    )
+    .unwrap();
+    let scenario_path = write_scenario(
+        &dir,
+        &trt_ac(),
+        r#"
+[program]
+file = "p.ngc"
+
+[reader]
+dialect = "linuxcnc"
+tool_table = "tools.tbl"
+var_file = "sim.var"
+work_offsets = { G54 = [100.0, 50.0, -200.0, 0.0, 0.0, 0.0] }
+user_m_codes = { M428 = "tcp-on" }
+"#,
+    );
+    let scenario = Scenario::load(&scenario_path).unwrap();
+    assert_eq!(scenario.reader.dialect, ngc::Dialect::Linuxcnc);
+    let got = ends(&scenario, &dir.join("p.ngc")).unwrap();
+    assert_eq!(
+        got,
+        [
+            // G54 (100, 50, -200) + tool 1 length 50 on Z.
+            [110.0, 70.0, -120.0, 0.0, 0.0, 0.0],
+            // G55 (1, 2, 3) + 50.
+            [1.0, 2.0, 53.0, 0.0, 0.0, 0.0],
+            // Tool 2: 3 + 80.
+            [1.0, 2.0, 83.0, 0.0, 0.0, 0.0],
+            // G28 with no words: every axis of the machine to the .var position.
+            [0.0, 0.0, 300.0, 0.0, 0.0, 0.0],
+        ]
+    );
+}
+
+#[test]
+fn a_word_for_an_axis_the_machine_lacks_is_an_error() {
+    let dir = scratch("reader", "axes");
+    std::fs::write(dir.join("p.nc"), "G0 X1\nG0 B10\n").unwrap();
+    let scenario = Scenario::load(&write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"p.nc\"\n",
+    ))
+    .unwrap();
+    let err = ends(&scenario, &dir.join("p.nc")).unwrap_err();
+    assert!(
+        err.contains("p.nc:2:4") && err.contains("no B axis"),
+        "{err}"
+    );
+}
+
+#[test]
+fn bad_reader_keys_are_input_errors() {
+    let dir = scratch("reader", "bad");
+    std::fs::write(dir.join("p.nc"), "G0 X1\n").unwrap();
+    let bad = write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"p.nc\"\n[reader]\nuser_m_codes = { M5 = \"tcp-on\" }\n",
+    );
+    let err = Scenario::load(&bad).unwrap_err().to_string();
+    assert!(err.contains("user M code of 100 or more"), "{err}");
+    let bad = write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"p.nc\"\n[reader]\nwork_offsets = { G60 = [0, 0, 0, 0, 0, 0] }\n",
+    );
+    let err = Scenario::load(&bad).unwrap_err().to_string();
+    assert!(err.contains("G54 G55"), "{err}");
+    let bad = write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"siemens\"\n",
+    );
+    assert!(Scenario::load(&bad).is_err());
+}
+
+#[test]
+fn tilted_planes_and_dynamic_work_offsets_use_the_machine_kinematics() {
+    use mtsim::kinematics::{Branch, ToolPose};
+    use nalgebra::{Point3, Vector3};
+    let dir = scratch("reader", "tilted");
+    let kin = common::load_trt_ac().kinematics;
+    // Haas G254 on the trt-ac machine: the programmed point (10, 5, 2) rides on the table,
+    // so after A30 C90 it is where mtsim's own forward chain puts that table point.
+    std::fs::write(dir.join("g254.nc"), "G254\nG0 X10 Y5 Z2\nA30 C90\nM30\n").unwrap();
+    let scenario = Scenario::load(&write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"g254.nc\"\n\n[reader]\ndialect = \"haas\"\n",
+    ))
+    .unwrap();
+    let got = ends(&scenario, &dir.join("g254.nc")).unwrap();
+    let mut q = mtsim::AxisVec::ZERO;
+    q[Axis::A] = 30.0;
+    q[Axis::C] = 90.0;
+    let m = kin.table_to_machine(&q, &Point3::new(10.0, 5.0, 2.0));
+    for (k, want) in [m.x, m.y, m.z, 30.0, 0.0, 90.0].iter().enumerate() {
+        assert!((got[1][k] - want).abs() < 1e-9, "{:?} vs {m:?}", got[1]);
+    }
+    // Fanuc G68.2 I30 J40 K0 then G53.1: the feature Z axis Rz(30) Rx(40) e_z =
+    // (sin30 sin40, -cos30 sin40, cos40) becomes the tool axis, as mtsim's inverse
+    // kinematics positions A and C for that tool axis.
+    std::fs::write(
+        dir.join("g682.nc"),
+        "G68.2 X0 Y0 Z0 I30 J40 K0\nG53.1\nM30\n",
+    )
+    .unwrap();
+    let scenario = Scenario::load(&write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"g682.nc\"\n\n[reader]\ndialect = \"fanuc\"\n",
+    ))
+    .unwrap();
+    let got = ends(&scenario, &dir.join("g682.nc")).unwrap();
+    let (s30, c30, s40, c40) = (
+        0.5,
+        3f64.sqrt() / 2.0,
+        40f64.to_radians().sin(),
+        40f64.to_radians().cos(),
+    );
+    let pose = ToolPose {
+        tip: Point3::origin(),
+        axis: Vector3::new(s30 * s40, -c30 * s40, c40),
+    };
+    let want = kin.inverse(&pose, Branch::Primary, 0.0);
+    assert!(
+        (got[0][3] - want[Axis::A]).abs() < 1e-9,
+        "{:?} vs {want:?}",
+        got[0]
+    );
+    assert!(
+        (got[0][5] - want[Axis::C]).abs() < 1e-9,
+        "{:?} vs {want:?}",
+        got[0]
+    );
+    assert!(
+        (got[0][3] - 40.0).abs() < 1e-9,
+        "A = J for a tilt about X: {:?}",
+        got[0]
+    );
+}
+
+/// `linuxcnc_ini`: an inch configuration's tool table and parameter file are converted to
+/// mm, its subroutine path and remaps apply, its numeric values are `#<_ini[...]>`, HAL
+/// pins come from `hal_pins`; an explicit scenario key takes precedence over the ini's.
+#[test]
+fn a_linuxcnc_configuration_gives_tools_parameters_paths_and_remaps() {
+    let dir = scratch("reader", "ini");
+    std::fs::create_dir_all(dir.join("cfg/subs")).unwrap();
+    std::fs::write(
+        dir.join("cfg/mill.ini"),
+        "[TRAJ]\nLINEAR_UNITS = inch\n[EMCIO]\nTOOL_TABLE = mill.tbl\n[RS274NGC]\n\
+         PARAMETER_FILE = mill.var\nSUBROUTINE_PATH = subs\n\
+         REMAP = M401 modalgroup=10 argspec=P ngc=m401\n[PARK]\nZ = 2.5\n",
+    )
+    .unwrap();
+    // Tool 1: 2 in long; G54 X = 1 in (#5221).
+    std::fs::write(dir.join("cfg/mill.tbl"), "T1 P1 Z2.0 D0.25\n").unwrap();
+    std::fs::write(dir.join("cfg/mill.var"), "5221 1.0\n").unwrap();
+    std::fs::write(
+        dir.join("cfg/subs/m401.ngc"),
+        "o<m401> sub\nG0 Y[#<p> + #<_ini[park]z> + #<_hal[spindle.0.at-speed]>]\no<m401> endsub\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("p.ngc"),
+        "G21 G90\nT1 M6 G43 H1\nG0 X0 Y0 Z0\nM401 P4\nM2\n",
+    )
+    .unwrap();
+    let scenario = |extra: &str| {
+        let path = write_scenario(
+            &dir,
+            &trt_ac(),
+            &format!(
+                "[program]\nfile = \"p.ngc\"\n[reader]\ndialect = \"linuxcnc\"\nlinuxcnc_ini = \"cfg/mill.ini\"\nhal_pins = {{ \"spindle.0.at-speed\" = 1.0 }}\n{extra}"
+            ),
+        );
+        Scenario::load(&path).unwrap()
+    };
+    let got = ends(&scenario(""), &dir.join("p.ngc")).unwrap();
+    // X: G54 1 in = 25.4 mm; Z: tool length 2 in = 50.8 mm; Y: P + 2.5 + 1 (mm, G21).
+    assert_eq!(
+        got,
+        [
+            [25.4, 0.0, 50.8, 0.0, 0.0, 0.0],
+            [25.4, 7.5, 50.8, 0.0, 0.0, 0.0]
+        ]
+    );
+    // A scenario tool table replaces the configuration's.
+    std::fs::write(dir.join("mm.tbl"), "T1 P1 Z10.0\n").unwrap();
+    let got = ends(&scenario("tool_table = \"mm.tbl\"\n"), &dir.join("p.ngc")).unwrap();
+    assert_eq!(got[0], [25.4, 0.0, 10.0, 0.0, 0.0, 0.0]);
+    // An unreadable configuration names the file and line.
+    std::fs::write(dir.join("cfg/mill.ini"), "[TRAJ]\nthis is not a key\n").unwrap();
+    let path = write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"p.ngc\"\n[reader]\nlinuxcnc_ini = \"cfg/mill.ini\"\n",
+    );
+    let err = Scenario::load(&path).unwrap_err().to_string();
+    assert!(err.contains("mill.ini:2:"), "{err}");
+}

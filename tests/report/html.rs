@@ -1,0 +1,621 @@
+//! The HTML report: one self-contained page per run, and that page in a real browser.
+//!
+//! The browser test renders every bundled scenario's report in headless Chromium. It skips,
+//! saying why, when Chromium is missing, and fails instead when the env var `CI` is set.
+
+use crate::common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use common::{mtsim, scratch};
+
+/// Runs `simulate --html --no-timing` on `scenario` into `dir` and returns the summary.
+fn simulate_with_report(scenario: &str, dir: &Path) -> serde_json::Value {
+    let out = mtsim(&[
+        "simulate",
+        scenario,
+        "-o",
+        dir.to_str().unwrap(),
+        "--no-timing",
+        "--html",
+    ]);
+    assert!(
+        out.status.code() == Some(0) || out.status.code() == Some(1),
+        "{scenario}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+/// The figures the page must show as text: (data-figure name, value with 2 decimals).
+fn figures(summary: &serde_json::Value) -> Vec<(String, String)> {
+    let b = &summary["ballbar"];
+    let mut out = vec![
+        ("G".to_string(), b["circular_deviation_um"].clone()),
+        ("F-max".to_string(), b["radial_max_um"].clone()),
+        ("F-min".to_string(), b["radial_min_um"].clone()),
+        ("H".to_string(), b["hysteresis_um"].clone()),
+    ];
+    for r in b["runs"].as_array().unwrap() {
+        let dir = r["direction"].as_str().unwrap().to_uppercase();
+        out.push((format!("G-{dir}"), r["circular_deviation_um"].clone()));
+    }
+    out.into_iter()
+        .filter_map(|(k, v)| v.as_f64().map(|x| (k, format!("{x:.2}"))))
+        .collect()
+}
+
+/// The text of the element with `data-figure="name"` in `html`.
+fn figure_text<'a>(html: &'a str, name: &str) -> Option<&'a str> {
+    let key = format!("data-figure=\"{name}\">");
+    let i = html.find(&key)? + key.len();
+    let j = html[i..].find('<')? + i;
+    Some(&html[i..j])
+}
+
+/// Every plot the page must hold for a run whose trace has `axes`.
+fn expected_plots(axes: &[&str]) -> Vec<String> {
+    let mut plots = vec!["polar".to_string(), "deviation".to_string()];
+    for a in axes {
+        for q in ["position", "velocity", "following-error"] {
+            plots.push(format!("{a}-{q}"));
+        }
+    }
+    plots
+}
+
+/// The axes of a trace, from its header (`X_act_mm`, `A_act_deg`, ...).
+fn trace_axes(dir: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join("trace.csv")).unwrap();
+    text.lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .filter_map(|c| c.split_once("_act_").map(|(a, _)| a.to_string()))
+        .collect()
+}
+
+#[test]
+fn the_report_is_one_self_contained_page_with_every_section_and_figure() {
+    let dir = scratch("report", "circle");
+    let summary = simulate_with_report("scenarios/circle-iso230-4.toml", &dir);
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+
+    // Self-contained: no script, no external resource.
+    assert!(!html.contains("<script"), "no JavaScript");
+    for external in ["src=\"http", "href=\"http", "@import", "url("] {
+        assert!(!html.contains(external), "no network: {external}");
+    }
+    // ISO 230-4 test parameters.
+    for key in [
+        "Machine",
+        "Test",
+        "Radius",
+        "Feed",
+        "Direction",
+        "Plane",
+        "Position (centre)",
+        "Start arc / overshoot arc",
+        "Compensation",
+        "Sample period",
+        "Date",
+        "mtsim version",
+        "Scenario hash (XXH64)",
+    ] {
+        assert!(html.contains(&format!("<th>{key}</th>")), "parameter {key}");
+    }
+    // The scenario's own numbers, as the scenario file states them.
+    let scenario = std::fs::read_to_string("scenarios/circle-iso230-4.toml").unwrap();
+    assert!(scenario.contains("radius_mm = 50.0"), "{scenario}");
+    assert!(html.contains("<td>50.000 mm</td>"), "radius row");
+    assert!(html.contains("1 ms (trace: every 1 sample)"));
+    // Every figure, as the summary states it, to 2 decimals; both directions.
+    let figs = figures(&summary);
+    assert!(figs.iter().any(|(k, _)| k == "H"), "two directions: H");
+    for (name, value) in &figs {
+        assert_eq!(
+            figure_text(&html, name).map(str::trim),
+            Some(value.as_str()),
+            "{name}"
+        );
+    }
+    // Every plot, with µm (never "um") on its deviation axis.
+    let axes = trace_axes(&dir);
+    let axes: Vec<&str> = axes.iter().map(String::as_str).collect();
+    assert_eq!(axes, ["X", "Y", "Z"]);
+    for plot in expected_plots(&axes) {
+        assert!(
+            html.contains(&format!("data-plot=\"{plot}\"")),
+            "plot {plot}"
+        );
+    }
+    assert!(html.contains("deviation (µm)") && !html.contains("(um)"));
+    for section in ["Marks", "Diagnoses", "Limits and collisions", "Files"] {
+        assert!(
+            html.contains(&format!("\">{section}</h2>")),
+            "section {section}"
+        );
+    }
+    for file in [
+        "trace.csv",
+        "summary.json",
+        "ballbar.svg",
+        "check.json",
+        "test.json",
+    ] {
+        assert!(
+            html.contains(&format!("<a href=\"{file}\">")),
+            "link {file}"
+        );
+    }
+
+    // Determinism: the same run gives the same page; `report` on the folder rewrites it.
+    let again = scratch("report", "circle-again");
+    simulate_with_report("scenarios/circle-iso230-4.toml", &again);
+    let html_again = std::fs::read_to_string(again.join("report.html")).unwrap();
+    assert_eq!(
+        html.replace(again.to_str().unwrap(), ""),
+        html_again.replace(again.to_str().unwrap(), ""),
+        "byte-identical reports"
+    );
+    let out = mtsim(&["report", dir.to_str().unwrap(), "--date", "2026-01-31"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let dated = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert!(dated.contains("<th>Date</th><td>2026-01-31</td>"));
+    assert!(!dir.join("report.html.tmp").exists());
+}
+
+#[test]
+fn report_refuses_a_folder_without_a_run_and_a_bad_date() {
+    let dir = scratch("report", "empty");
+    let out = mtsim(&["report", dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("summary.json"));
+    let out = mtsim(&["report", dir.to_str().unwrap(), "--date", "23.11.2026"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("YYYY-MM-DD"));
+}
+
+#[test]
+fn check_html_writes_the_limits_page() {
+    let dir = scratch("report", "check-html");
+    let page = dir.join("check.html");
+    let out = mtsim(&[
+        "check",
+        "scenarios/cone-15-10.toml",
+        "--html",
+        page.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.contains("Limits and collisions") && html.contains("<td>X</td>"));
+    assert!(
+        html.contains("Expected, not a collision"),
+        "cutting explained"
+    );
+}
+
+/// `check.json` reads back into the `CheckReport` that wrote it: each axis's usage takes
+/// its axis from its key, and writing it again gives the same JSON.
+#[test]
+fn check_json_reads_back_into_the_check_report() {
+    let dir = scratch("report", "check-json");
+    let out = mtsim(&["check", "scenarios/cone-15-10.toml", "--json"]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let report: mtsim::check::CheckReport = serde_json::from_str(&text).unwrap();
+    assert_eq!(report.axes.len(), 5);
+    for (name, usage) in &report.axes {
+        assert_eq!(&usage.axis.to_string(), name);
+    }
+    assert!(!report.engagement.is_empty(), "the cone is cut");
+    let again = serde_json::to_string_pretty(&report).unwrap();
+    assert_eq!(format!("{again}\n"), text);
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// The velocity the report plots is the central difference of the actual position: exact
+/// for a parabola inside the run, one-sided at its ends.
+#[test]
+fn the_plotted_velocity_is_the_central_difference_of_the_position() {
+    use mtsim::report::trace::TraceRun;
+    // p = t² mm at uneven times: (p(t+) - p(t-)) / (t+ - t-) = t+ + t-.
+    let time_s = vec![0.0, 0.1, 0.3, 0.4, 0.7];
+    let run = TraceRun {
+        actual: vec![time_s.iter().map(|t| t * t).collect()],
+        time_s: time_s.clone(),
+        ..TraceRun::default()
+    };
+    let v = run.velocity_per_min(0);
+    let want = [0.1, 0.3, 0.5, 1.0, 1.1].map(|x: f64| 60.0 * x);
+    for (got, want) in v.iter().zip(want) {
+        assert!((got - want).abs() < 1e-9, "{v:?}");
+    }
+}
+
+// ---- the browser test --------------------------------------------------------------
+
+/// The Chromium binary, if installed.
+fn chromium() -> Option<PathBuf> {
+    ["chromium", "chromium-browser", "google-chrome"]
+        .iter()
+        .flat_map(|name| {
+            std::env::var_os("PATH")
+                .map(|p| std::env::split_paths(&p).collect::<Vec<_>>())
+                .unwrap_or_default()
+                .into_iter()
+                .map(move |d| d.join(name))
+        })
+        .find(|p| p.is_file())
+}
+
+/// Decodes an 8-bit RGB or RGBA PNG to RGBA pixels (width, height, pixels).
+fn decode_png(bytes: &[u8]) -> (usize, usize, Vec<[u8; 4]>) {
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "a PNG file");
+    let (mut i, mut idat) = (8, Vec::new());
+    let (mut width, mut height, mut channels) = (0, 0, 0);
+    while i + 8 <= bytes.len() {
+        let len = u32::from_be_bytes(bytes[i..i + 4].try_into().unwrap()) as usize;
+        let kind = &bytes[i + 4..i + 8];
+        let data = &bytes[i + 8..i + 8 + len];
+        match kind {
+            b"IHDR" => {
+                width = u32::from_be_bytes(data[0..4].try_into().unwrap()) as usize;
+                height = u32::from_be_bytes(data[4..8].try_into().unwrap()) as usize;
+                assert_eq!(data[8], 8, "8-bit");
+                channels = match data[9] {
+                    2 => 3,
+                    6 => 4,
+                    c => panic!("colour type {c}"),
+                };
+                assert_eq!(data[12], 0, "not interlaced");
+            }
+            b"IDAT" => idat.extend_from_slice(data),
+            _ => {}
+        }
+        i += 12 + len;
+    }
+    let raw = miniz_oxide::inflate::decompress_to_vec_zlib(&idat).expect("zlib data");
+    let stride = width * channels;
+    let mut img = vec![0u8; stride * height];
+    for y in 0..height {
+        let line = &raw[y * (stride + 1)..(y + 1) * (stride + 1)];
+        let (filter, src) = (line[0], &line[1..]);
+        for x in 0..stride {
+            let a = if x >= channels {
+                img[y * stride + x - channels]
+            } else {
+                0
+            } as i16;
+            let b = if y > 0 { img[(y - 1) * stride + x] } else { 0 } as i16;
+            let c = if x >= channels && y > 0 {
+                img[(y - 1) * stride + x - channels]
+            } else {
+                0
+            } as i16;
+            let predictor = match filter {
+                0 => 0,
+                1 => a,
+                2 => b,
+                3 => (a + b) / 2,
+                4 => {
+                    let p = a + b - c;
+                    let (pa, pb, pc) = ((p - a).abs(), (p - b).abs(), (p - c).abs());
+                    if pa <= pb && pa <= pc {
+                        a
+                    } else if pb <= pc {
+                        b
+                    } else {
+                        c
+                    }
+                }
+                f => panic!("filter {f}"),
+            };
+            img[y * stride + x] = (src[x] as i16 + predictor) as u8;
+        }
+    }
+    let pixels = img
+        .chunks(channels)
+        .map(|p| [p[0], p[1], p[2], if channels == 4 { p[3] } else { 255 }])
+        .collect();
+    (width, height, pixels)
+}
+
+/// Measures every plot after layout and writes the sizes into the DOM, for `--dump-dom`.
+/// (Only the test copy of the page has it: the report itself needs no script.)
+const PROBE: &str = "<script>var out=[];document.querySelectorAll('svg.plot').forEach(function(s){\
+var r=s.getBoundingClientRect();out.push(s.getAttribute('data-plot')+' '+Math.round(r.width)+' '+Math.round(r.height));});\
+var p=document.createElement('pre');p.id='mtsim-sizes';p.textContent=out.join('\\n');document.body.appendChild(p);</script>";
+
+/// Renders `page` headless: (DOM after load, screenshot PNG bytes).
+fn render(browser: &Path, page: &Path, work: &Path) -> (String, Vec<u8>) {
+    let shot = work.join("shot.png");
+    let mut child = Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-extensions",
+            "--no-first-run",
+            "--hide-scrollbars",
+            "--window-size=1280,2400",
+        ])
+        .arg(format!(
+            "--user-data-dir={}",
+            work.join("profile").display()
+        ))
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg("--dump-dom")
+        .arg(format!("file://{}", page.display()))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("chromium starts");
+    let mut stdout = child.stdout.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        std::io::Read::read_to_string(&mut stdout, &mut s).unwrap();
+        s
+    });
+    let started = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            break;
+        }
+        if started.elapsed() > Duration::from_secs(90) {
+            let _ = child.kill();
+            panic!(
+                "chromium did not finish rendering {} in 90 s",
+                page.display()
+            );
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let dom = reader.join().unwrap();
+    let png =
+        std::fs::read(&shot).unwrap_or_else(|e| panic!("no screenshot of {}: {e}", page.display()));
+    (dom, png)
+}
+
+#[test]
+fn every_bundled_scenario_report_renders_in_headless_chromium() {
+    let Some(browser) = chromium() else {
+        if std::env::var_os("CI").is_some() {
+            panic!("chromium is missing and CI is set: install it (apt-get install chromium)");
+        }
+        eprintln!("SKIPPED every_bundled_scenario_report_renders_in_headless_chromium: chromium not found on PATH");
+        return;
+    };
+    let mut scenarios: Vec<PathBuf> = std::fs::read_dir("scenarios")
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    scenarios.sort();
+    assert!(scenarios.len() >= 6, "{scenarios:?}");
+    for scenario in &scenarios {
+        let name = scenario.file_stem().unwrap().to_string_lossy().into_owned();
+        let dir = scratch("report-browser", &name);
+        let summary = simulate_with_report(scenario.to_str().unwrap(), &dir.join("run"));
+        let html = std::fs::read_to_string(dir.join("run/report.html")).unwrap();
+        let page = dir.join("run/probe.html");
+        std::fs::write(&page, html.replace("</body>", &format!("{PROBE}</body>"))).unwrap();
+        let (dom, png) = render(&browser, &page, &dir);
+
+        // A screenshot with something on it: many colours, and far from all white.
+        let (w, h, pixels) = decode_png(&png);
+        assert!(w >= 1000 && h >= 1000, "{name}: {w} x {h}");
+        let inked = pixels
+            .iter()
+            .filter(|p| p[0] < 200 || p[1] < 200 || p[2] < 200)
+            .count();
+        let mut colours: Vec<[u8; 4]> = pixels.clone();
+        colours.sort_unstable();
+        colours.dedup();
+        assert!(
+            inked as f64 > 0.01 * (w * h) as f64,
+            "{name}: a blank page ({inked} inked pixels)"
+        );
+        assert!(colours.len() > 16, "{name}: {} colours", colours.len());
+
+        // Every plot laid out with a non-zero size.
+        let sizes_start = dom
+            .find("<pre id=\"mtsim-sizes\">")
+            .unwrap_or_else(|| panic!("{name}: probe missing"));
+        let sizes = &dom[sizes_start + 22..];
+        let sizes = &sizes[..sizes.find("</pre>").unwrap()];
+        let axes = trace_axes(&dir.join("run"));
+        let axes: Vec<&str> = axes.iter().map(String::as_str).collect();
+        assert!(axes.len() >= 3, "{name}: axes {axes:?}");
+        for plot in expected_plots(&axes) {
+            let line = sizes
+                .lines()
+                .find(|l| l.split(' ').next() == Some(plot.as_str()))
+                .unwrap_or_else(|| panic!("{name}: plot {plot} not in the page:\n{sizes}"));
+            let dims: Vec<f64> = line
+                .split(' ')
+                .skip(1)
+                .map(|v| v.parse().unwrap())
+                .collect();
+            assert!(
+                dims[0] > 100.0 && dims[1] > 50.0,
+                "{name}: {plot} is {dims:?} px"
+            );
+        }
+        // Every figure as text, as the summary states it.
+        for (figure, value) in figures(&summary) {
+            assert_eq!(
+                figure_text(&dom, &figure).map(str::trim),
+                Some(value.as_str()),
+                "{name}: figure {figure}"
+            );
+        }
+    }
+}
+
+// ---- the plots of the studies -------------------------------------------------------
+
+/// (x, y, text) of every `<text>` element of an SVG plotters wrote.
+fn svg_texts(svg: &str) -> Vec<(f64, f64, String)> {
+    let mut out = Vec::new();
+    let mut rest = svg;
+    while let Some(i) = rest.find("<text ") {
+        rest = &rest[i..];
+        let head_end = rest.find('>').unwrap();
+        let head = &rest[..head_end];
+        let attr = |name: &str| -> f64 {
+            let key = format!(" {name}=\"");
+            let a = head.find(&key).unwrap() + key.len();
+            head[a..a + head[a..].find('"').unwrap()].parse().unwrap()
+        };
+        let end = rest.find("</text>").unwrap();
+        out.push((
+            attr("x"),
+            attr("y"),
+            rest[head_end + 1..end].trim().to_string(),
+        ));
+        rest = &rest[end..];
+    }
+    out
+}
+
+#[test]
+fn the_sweep_plot_names_its_axis_in_words_and_keeps_the_legend_off_the_points() {
+    let dir = scratch("report", "sweep");
+    let out = mtsim(&[
+        "sweep",
+        "scenarios/cone-15-10.toml",
+        "--vary",
+        "center_y",
+        "--from",
+        "-40",
+        "--to",
+        "0",
+        "--step",
+        "2",
+        "-o",
+        dir.to_str().unwrap(),
+        "--html",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(dir.join("sweep-center_y.svg")).unwrap();
+    // `--html`: the study page holds the plot inline and links the files.
+    let page = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert!(page.contains("data-plot=\"sweep-center_y\"") && !page.contains("<script"));
+    assert!(page.contains("<a href=\"sweep-center_y.csv\">"));
+    let texts = svg_texts(&svg);
+    let has = |t: &str| texts.iter().any(|(_, _, s)| s == t);
+    assert!(has("cone centre Y, table frame (mm)"), "x axis in words");
+    assert!(has("reversal angle θ (deg)"));
+    assert!(!texts.iter().any(|(_, _, s)| s == "center_y (mm)"));
+    // The legend entries sit in the strip above the plot; every point lies below it.
+    let legend_y: Vec<f64> = texts
+        .iter()
+        .filter(|(_, _, s)| s.ends_with(" reversal") || s.contains("coincide at"))
+        .map(|t| t.1)
+        .collect();
+    assert_eq!(legend_y.len(), 4, "X, Y, Z and the coincidence: {texts:?}");
+    let strip = legend_y.iter().fold(0.0f64, |m, y| m.max(*y)) + 8.0;
+    let mut points = 0;
+    for c in svg.split("<circle ").skip(1) {
+        let cy: f64 = c
+            .split("cy=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            cy > strip,
+            "a point at y {cy} under the legend (strip to {strip})"
+        );
+        points += 1;
+    }
+    assert!(points > 40, "{points} points");
+}
+
+#[test]
+fn the_placement_map_tells_fit_cells_apart_and_marks_the_scenario_and_the_table() {
+    let dir = scratch("report", "placement");
+    let out = mtsim(&[
+        "sweep",
+        "scenarios/cone-15-10.toml",
+        "--feasibility",
+        "--vary",
+        "center_x,center_y",
+        "--from",
+        "-100",
+        "--to",
+        "100",
+        "--step",
+        "50",
+        "-o",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.code() == Some(0) || out.status.code() == Some(1));
+    let svg = std::fs::read_to_string(dir.join("placement.svg")).unwrap();
+    let csv = std::fs::read_to_string(dir.join("placement.csv")).unwrap();
+    // Distinct margins (to 1 µm) of the cells that fit, from the CSV ...
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let (m, f) = (
+        header.iter().position(|h| h.starts_with("margin")).unwrap(),
+        header.iter().position(|h| *h == "fits").unwrap(),
+    );
+    let mut margins: Vec<i64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|c| c[f] == "true")
+        .map(|c| (c[m].parse::<f64>().unwrap() * 1e3).round() as i64)
+        .collect();
+    margins.sort_unstable();
+    margins.dedup();
+    assert!(margins.len() >= 3, "{margins:?}");
+    // ... each get their own colour: the map has as many cell colours (rects of one cell size).
+    let cell_fills: std::collections::BTreeSet<&str> = svg
+        .split("<rect ")
+        .skip(2)
+        .filter(|r| r.contains("width=\"") && !r.contains("width=\"30\""))
+        .filter_map(|r| r.split("fill=\"").nth(1).and_then(|s| s.split('"').next()))
+        .filter(|fill| *fill != "#C8C8C8")
+        .collect();
+    assert!(
+        cell_fills.len() >= margins.len(),
+        "{} colours for {} margins",
+        cell_fills.len(),
+        margins.len()
+    );
+    let texts = svg_texts(&svg);
+    assert!(
+        texts.iter().any(|t| t.2 == "scenario"),
+        "the scenario's position"
+    );
+    assert!(texts
+        .iter()
+        .any(|t| t.2 == "cone centre X, table frame (mm)"));
+    // The table edge: a polyline of many points (a circle of the table radius).
+    assert!(
+        svg.split("<polyline").any(|p| p
+            .split("points=\"")
+            .nth(1)
+            .is_some_and(|pts| pts.split(' ').count() > 60)),
+        "no table outline"
+    );
+}

@@ -1,0 +1,8 @@
+//! The report stage (`src/report/`): the HTML report (also in a real browser) and the trace
+//! written as Parquet.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod html;
+mod trace_parquet;

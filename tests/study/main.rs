@@ -1,0 +1,11 @@
+//! Studies (`src/study/`): `simulate` end to end, the diagnoses and `fit` against injected
+//! errors, and the cone-frustum results of the literature (Kato et al.) reproduced.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod cone_reference;
+mod diagnose;
+mod fit;
+mod kato_reproduction;
+mod simulate;

@@ -419,8 +419,7 @@ impl SceneMonitor {
         let sigma = dot3(&self.w_max, &self.sum);
         let allowance = 1e-12 * (1.0 + sigma);
         let lazy = step.is_some() && !self.exhaustive && !self.uses_relative;
-        // The sample is built where it is kept (a copy built first and moved into `prev`
-        // cost a second 104-byte copy on every sample).
+        // The sample is built in place in `prev`, the slot that keeps it.
         if lazy && sigma < self.next_due && !self.hot_due(allowance) {
             self.prev = Some(Sample {
                 time_s,

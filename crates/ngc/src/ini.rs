@@ -165,7 +165,7 @@ pub struct LinuxcncConfig {
 impl Ini {
     /// The interpreter's part of the configuration.
     pub fn config(&self) -> Result<LinuxcncConfig, IniError> {
-        let python = crate::remap::python_dirs(self);
+        let python = self.python_dirs();
         let mut remaps = Vec::new();
         for e in self.all("RS274NGC", "REMAP") {
             let origin = format!("{}:{}", e.path.display(), e.line);
@@ -179,6 +179,11 @@ impl Ini {
                 r.python_motion = crate::remap::python_motion(&python, f);
                 r.python_keeps_motion = crate::remap::python_keeps_motion(&python, f);
             }
+            crate::remap::refuse_unknown_handlers(
+                &mut r,
+                |name| crate::stdglue::Handler::named(name).is_some(),
+                crate::stdglue::NAMES,
+            );
             crate::remap::check_handlers(&python, &mut r);
             remaps.push(r);
         }
@@ -196,6 +201,30 @@ impl Ini {
             remaps,
             inch: self.linear_units_inch()?,
         })
+    }
+
+    /// The folders of a configuration's `[PYTHON]` section: `PATH_PREPEND`, `PATH_APPEND` and
+    /// the folder of `TOPLEVEL`, relative to `ini_dir`.
+    pub fn python_dirs(&self) -> Vec<PathBuf> {
+        let mut dirs = Vec::new();
+        for key in ["PATH_PREPEND", "PATH_APPEND"] {
+            for e in self.all("PYTHON", key) {
+                dirs.extend(
+                    e.value
+                        .split(':')
+                        .filter(|s| !s.trim().is_empty())
+                        .map(|s| self.resolve(s)),
+                );
+            }
+        }
+        if let Some(e) = self.get("PYTHON", "TOPLEVEL") {
+            dirs.push(
+                self.resolve(&e.value)
+                    .parent()
+                    .map_or_else(|| self.dir().to_path_buf(), Path::to_path_buf),
+            );
+        }
+        dirs
     }
 }
 
@@ -300,6 +329,20 @@ fn parse_into(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A prolog or epilog that is not one of stdglue.py's is refused, naming it.
+    #[test]
+    fn a_handler_stdglue_has_not_is_refused() {
+        let ini = Ini::parse(
+            Path::new("/cfg/t.ini"),
+            "[RS274NGC]\nREMAP = T prolog=p ngc=prepare\nREMAP = M6 prolog=change_prolog ngc=change epilog=change_epilog\n",
+        )
+        .unwrap();
+        let c = ini.config().unwrap();
+        assert!(c.remaps[0].handlers_refused.as_ref().unwrap().contains("`p`"));
+        // stdglue's own names pass the name check (the [PYTHON] path then has no source).
+        assert!(!c.remaps[1].handlers_refused.as_ref().unwrap().contains("not one of"));
+    }
 
     const DEMO: &str = "\
 # a comment

@@ -17,7 +17,8 @@ use crate::lex::{LineError, LineResult, Word, EXPECTED_WORDS};
 use crate::options::{Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER};
 use crate::polar::Polar;
 use crate::probe;
-use crate::reader::{Notice, ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
+use crate::notice::Notice;
+use crate::units::{ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
 use crate::spline;
 
 /// Lathe codes (G33, G33.1, G76): a child module, so it reads the modal state directly.

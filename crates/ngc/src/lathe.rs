@@ -836,7 +836,7 @@ impl Interp {
                     let r2 = (target[Axis::X] - c[Axis::X]).hypot(target[Axis::Z] - c[Axis::Z]);
                     let abs_tol = std::f64::consts::SQRT_2
                         * if self.inch {
-                            0.002 * crate::reader::MM_PER_INCH
+                            0.002 * crate::units::MM_PER_INCH
                         } else {
                             0.02
                         };

@@ -36,6 +36,7 @@ mod g7x;
 mod ini;
 mod interp;
 mod lex;
+mod notice;
 mod options;
 mod polar;
 mod probe;
@@ -44,6 +45,7 @@ mod remap;
 mod spline;
 mod stdglue;
 mod turns;
+mod units;
 
 pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
@@ -54,8 +56,7 @@ pub use options::{
     parse_tool_orientations, parse_tool_table, parse_var_file, tool_pockets, work_offset_parameter,
     Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
 };
-pub use reader::{
-    read_file, read_file_with, read_str, read_str_with, Moves, Notice, ARC_RADIUS_TOLERANCE_MM,
-    FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH,
-};
+pub use notice::Notice;
+pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves};
+pub use units::{ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
 pub use remap::{parse_remap, Remap, RemapCode};

@@ -179,11 +179,6 @@ impl Ini {
                 r.python_motion = crate::remap::python_motion(&python, f);
                 r.python_keeps_motion = crate::remap::python_keeps_motion(&python, f);
             }
-            crate::remap::refuse_unknown_handlers(
-                &mut r,
-                |name| crate::stdglue::Handler::named(name).is_some(),
-                crate::stdglue::NAMES,
-            );
             crate::remap::check_handlers(&python, &mut r);
             remaps.push(r);
         }
@@ -329,20 +324,6 @@ fn parse_into(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A prolog or epilog that is not one of stdglue.py's is refused, naming it.
-    #[test]
-    fn a_handler_stdglue_has_not_is_refused() {
-        let ini = Ini::parse(
-            Path::new("/cfg/t.ini"),
-            "[RS274NGC]\nREMAP = T prolog=p ngc=prepare\nREMAP = M6 prolog=change_prolog ngc=change epilog=change_epilog\n",
-        )
-        .unwrap();
-        let c = ini.config().unwrap();
-        assert!(c.remaps[0].handlers_refused.as_ref().unwrap().contains("`p`"));
-        // stdglue's own names pass the name check (the [PYTHON] path then has no source).
-        assert!(!c.remaps[1].handlers_refused.as_ref().unwrap().contains("not one of"));
-    }
 
     const DEMO: &str = "\
 # a comment

@@ -1562,7 +1562,12 @@ impl Moves {
         };
         // Python prolog/epilog handlers: LinuxCNC's stdglue ones are emulated
         // (crate::stdglue); others cannot be run.
-        if let Some(why) = &remap.handlers_refused {
+        let unknown = [&remap.prolog, &remap.epilog]
+            .into_iter()
+            .flatten()
+            .find(|name| crate::stdglue::Handler::named(name).is_none())
+            .map(|name| format!("the Python handler `{name}` is not one of LinuxCNC's stdglue.py handlers mtsim emulates ({})", crate::stdglue::NAMES));
+        if let Some(why) = unknown.as_ref().or(remap.handlers_refused.as_ref()) {
             return Err(LineError::new(s.span.clone(), format!("`{name}` is remapped ({}) with Python prolog/epilog handlers around its subroutine: {why}; mtsim runs no Python, and such handlers set the parameters the subroutine reads", remap.origin), "Python remap")
                 .help("remap the code with LinuxCNC's stdglue handlers or without prolog= and epilog=, or remove it from the program"));
         }

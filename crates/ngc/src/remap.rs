@@ -74,8 +74,9 @@ pub struct Remap {
     /// Python prolog/epilog handlers (emulated when they are stdglue's, crate::stdglue).
     pub prolog: Option<String>,
     pub epilog: Option<String>,
-    /// Why the prolog/epilog cannot be emulated (not stdglue's, or defined in another
-    /// file on the `[PYTHON]` path); `None` when there are none or they are emulated.
+    /// Why the prolog/epilog cannot be emulated (defined in another file on the `[PYTHON]`
+    /// path, see [`check_handlers`]); `None` when there are none or they are emulated. A
+    /// handler name that is not one of stdglue's is refused where the code is read.
     pub handlers_refused: Option<String>,
     /// The configuration's stdglue `cycle_prolog` compares the sticky-word dict with 0.0
     /// (LinuxCNC 2.9's stdglue.py), a TypeError in Python 3 once an R word is recorded.
@@ -198,20 +199,6 @@ pub fn parse_remap(value: &str, origin: String) -> Result<Remap, String> {
         ));
     }
     Ok(r)
-}
-
-/// Refuses a remap whose prolog or epilog is not one of the emulated handlers: `known`
-/// says whether a handler name is emulated, `names` lists them for the message. The
-/// configuration reader (crate `ini`) passes the handlers of crate `stdglue`, so this
-/// module depends on neither.
-pub fn refuse_unknown_handlers(r: &mut Remap, known: impl Fn(&str) -> bool, names: &str) {
-    r.handlers_refused = [&r.prolog, &r.epilog]
-        .into_iter()
-        .flatten()
-        .find(|name| !known(name))
-        .map(|name| {
-            format!("the Python handler `{name}` is not one of LinuxCNC's stdglue.py handlers mtsim emulates ({names})")
-        });
 }
 
 /// Calls in a Python remap body that move the machine or change where it goes.

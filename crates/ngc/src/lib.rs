@@ -27,12 +27,14 @@
 //! ```
 
 mod axis;
+mod block;
 mod canon;
+mod code;
 mod comp;
+mod dialect;
 mod error;
 mod expr;
 mod frame;
-mod g7x;
 mod ini;
 mod interp;
 mod lex;
@@ -52,11 +54,11 @@ pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLER
 pub use error::{line_column, Error, Result, Syntax};
 pub use frame::RotaryTable;
 pub use ini::{scale_parameter_lengths, Ini, IniEntry, IniError, LinuxcncConfig};
+pub use notice::Notice;
 pub use options::{
     parse_tool_orientations, parse_tool_table, parse_var_file, tool_pockets, work_offset_parameter,
     Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
 };
-pub use notice::Notice;
 pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves};
-pub use units::{ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
 pub use remap::{parse_remap, Remap, RemapCode};
+pub use units::{ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};

@@ -21,8 +21,8 @@ use crate::canon::Move;
 use crate::error::{line_column, Error, Result, Syntax};
 use crate::expr::{Eval, Param};
 use crate::interp::{Interp, Stop};
-use crate::notice::Notice;
 use crate::lex::{is_blank, lex, lex_with, Lexed, LineError, LineResult, Word};
+use crate::notice::Notice;
 use crate::options::{Dialect, Options};
 use crate::remap::Remap;
 
@@ -420,9 +420,6 @@ pub struct Moves {
     words: Vec<Word<'static>>,
     /// A read error of a streamed file, reported by the next step.
     io_error: Option<std::io::Error>,
-    /// Reading the profile of a G70-G72 block: the call depth to return to, and the
-    /// cycle's line.
-    g7x_capture: Option<(usize, Cursor)>,
     remaps: Vec<Remap>,
     /// A block's words to run before the next line (after a remap returned).
     resume: Option<Resume>,
@@ -469,7 +466,6 @@ impl Moves {
             buf: String::new(),
             words: Vec::new(),
             io_error: None,
-            g7x_capture: None,
             remaps: options.remaps.clone(),
             resume: None,
             remaps_noticed: Vec::new(),
@@ -1438,20 +1434,6 @@ impl Moves {
             }
         }
         result?;
-        if let Some((depth, at)) = self.g7x_capture {
-            if self.frames.len() <= depth {
-                // The profile subroutine returned: cut it. Like rs274, an error points at
-                // the subroutine's last line and names the cycle's line.
-                self.g7x_capture = None;
-                self.interp.g7x_run(&mut self.queue).map_err(|mut e| {
-                    self.finished = true;
-                    e.message = format!("{} (the cycle at line {})", e.message, at.line);
-                    e.span = 0..len;
-                    // The line is read again from its program for the message.
-                    self.error_at(here, e, "")
-                })?;
-            }
-        }
         Ok(())
     }
 
@@ -1503,11 +1485,6 @@ impl Moves {
                 if words.is_empty() {
                     self.words = reuse(words);
                     return Ok(());
-                }
-                if self.g7x_capture.is_some() {
-                    let result = self.interp.g7x_profile_line(line, &words);
-                    self.words = reuse(words);
-                    return result;
                 }
                 let remap = if self.remaps.is_empty() {
                     None
@@ -1702,14 +1679,6 @@ impl Moves {
             &mut self.notices,
             &self.programs[here.file].path,
         )?;
-        if let Some(label) = self.interp.g7x_label() {
-            // G70-G72: run the profile subroutine (o-word flow and parameters
-            // as usual) with its blocks captured as the profile, not executed.
-            let depth = self.frames.len();
-            self.call(&label, &[], true, 1, next, 0..line.len())?;
-            self.g7x_capture = Some((depth, here));
-            return Ok(());
-        }
         match stop {
             Stop::None => {}
             Stop::End => self.finished = true,

@@ -2,8 +2,11 @@
 //! bit of modal state, and emits canonical moves.
 //!
 //! ```text
-//! program text ─► tokenizer (words, comments, file:line:column)
-//!              ─► modal interpreter (units, distance mode, plane, feed mode, TCP)
+//! program text ─► front end: tokenizer and reader (words, comments, o-words, macros,
+//!                 file:line:column), with the dialect's table (dialect/)
+//!              ─► typed block (block.rs: G codes by modal group, M codes, words)
+//!              ─► modal interpreter, phase by phase (interp/: units, feed, tool, plane,
+//!                 compensation, offsets, motion, flow)
 //!              ─► canonical moves (absolute axis positions, mm and deg)
 //! ```
 //!

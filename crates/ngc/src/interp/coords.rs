@@ -39,8 +39,9 @@ impl Interp {
         p
     }
 
-    /// Program X Y (mm) to machine X Y: `rot(p + g92, R) + g5x` (LinuxCNC
-    /// `rotate_and_offset_pos`), or `p + offset` without a rotation.
+    /// Program X Y (mm) to machine X Y: `rot(p + g92, R) + g5x` (the G92 offset turns with
+    /// the work system in LinuxCNC, measured with rs274), or `p + offset` without a
+    /// rotation.
     pub(super) fn xy_to_machine(&self, p: [f64; 2]) -> [f64; 2] {
         match self.rotation {
             None => [p[0] + self.offset[Axis::X], p[1] + self.offset[Axis::Y]],
@@ -147,10 +148,9 @@ impl Interp {
                 target[Axis::Y] = xy[1];
             }
         }
-        // Axis by axis (constant indices, so `target` stays in registers): stored by each
-        // word's axis and returned whole, it was read back in pieces larger than written,
-        // a store-forwarding stall on every block. The words are in `Axis::ALL` order, as
-        // the block collects them.
+        // Axis by axis with constant indices, so `target` stays in registers
+        // (docs/performance.md). The words are in `Axis::ALL` order, as the block collects
+        // them.
         debug_assert!(axis_words
             .windows(2)
             .all(|p| p[0].0.index() < p[1].0.index()));

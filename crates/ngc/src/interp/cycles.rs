@@ -12,7 +12,8 @@ use crate::polar::Polar;
 use crate::units::MM_PER_INCH;
 
 impl Interp {
-    /// Canned cycle in the current plane, expanded as LinuxCNC does (interp_cycles.cc).
+    /// Canned cycle in the current plane, its moves as LinuxCNC's G-code manual describes
+    /// them (checked against rs274).
     pub(super) fn cycle<'l>(
         &mut self,
         line: &str,
@@ -89,7 +90,7 @@ impl Interp {
         };
         // Everything in machine coordinates along n, and for u v.
         let old_n = *self.cycle_initial.get_or_insert(self.pos[n]);
-        let (r, bottom, du, dv, mut pu, mut pv);
+        let (r, bottom, du, dv, pu, pv);
         if self.absolute {
             r = r_prog + self.offset[n] + tlo(n);
             bottom = z_prog + self.offset[n] + tlo(n);
@@ -131,6 +132,42 @@ impl Interp {
         if (repeats as f64) * (pecks + 4.0) > 1e7 {
             return Err(LineError::new(at, "canned cycle would make more than 10^7 moves: expected a larger Q or fewer repeats", "too many moves"));
         }
+        let holes = Holes {
+            code,
+            axes: (u, v, n),
+            r,
+            bottom,
+            step: (du, dv),
+            first: (pu, pv),
+            delta,
+            repeats,
+            initial: old_n,
+        };
+        self.holes(&holes, get, line_no, queue, at)
+    }
+
+    /// The moves of the holes of a canned cycle: approach, the cycle's own moves down and
+    /// out, repeated `L` times (stepping by the increments under G91).
+    fn holes<'l>(
+        &mut self,
+        h: &Holes,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        line_no: usize,
+        queue: &mut VecDeque<Move>,
+        at: std::ops::Range<usize>,
+    ) -> LineResult<()> {
+        let Holes {
+            code,
+            axes: (u, v, n),
+            r,
+            bottom,
+            step: (du, dv),
+            first: (mut pu, mut pv),
+            delta,
+            repeats,
+            initial: old_n,
+        } = *h;
+        let scale = self.scale();
         let dwell = self.cycle_p.unwrap_or(0.0);
         let rapid_delta = 0.010 * MM_PER_INCH; // LinuxCNC's G73/G83 clearance, 0.010 in.
         let exact = PathControl::ExactPath;
@@ -160,7 +197,7 @@ impl Interp {
                 exact,
             );
         };
-        // LinuxCNC's CYCLE_MACRO: the first hole is approached at the current level (when
+        // As rs274 runs it: the first hole is approached at the current level (when
         // above R), the next ones at the clear level.
         let mut current = self.pos[n];
         let mut old = old_n;
@@ -251,7 +288,22 @@ impl Interp {
             }
         }
         self.pos = cur;
-        let _ = line;
         Ok(())
     }
+}
+
+/// A canned cycle's geometry along the plane's axes `(u, v, n)`, machine mm: the R plane,
+/// the hole bottom, the first hole (and the step between holes under G91), the peck depth.
+#[derive(Clone, Copy)]
+struct Holes {
+    code: u32,
+    axes: (Axis, Axis, Axis),
+    r: f64,
+    bottom: f64,
+    step: (f64, f64),
+    first: (f64, f64),
+    delta: f64,
+    repeats: u64,
+    /// The initial level along n of this row of cycles.
+    initial: f64,
 }

@@ -35,8 +35,7 @@ impl Interp {
         (feed, feed_mode): (Option<f64>, FeedMode),
     ) {
         if self.comp.is_none() && self.comp_out.is_none() {
-            // Built in the queue: a move built on the stack in pieces and then copied in
-            // (in 64-byte loads) stalled on every block.
+            // Built in place in the queue (docs/performance.md).
             queue.push_back(Move {
                 line,
                 motion,

@@ -133,8 +133,8 @@ pub struct Interp {
     table_given: bool,
     tool: u32,
     next_tool: u32,
-    /// A T word has selected `next_tool` since the last tool change (LinuxCNC's
-    /// `selected_pocket >= 0`).
+    /// A T word has selected `next_tool` since the last tool change (`#<_selected_pocket>`
+    /// is then its pocket, else -1).
     tool_selected: bool,
     pockets: HashMap<u32, u32>,
     tool_length_mm: f64,
@@ -173,7 +173,7 @@ pub struct Interp {
     comp: Option<comp::Comp>,
     /// Where the tool is after G40 when it differs from `pos` (the next move starts there).
     comp_out: Option<AxisVec>,
-    /// The move after G40 must be straight (LinuxCNC's `arc_not_allowed`).
+    /// The move after G40 must be straight (LinuxCNC refuses an arc there).
     arc_not_allowed: bool,
 }
 
@@ -324,8 +324,7 @@ impl Interp {
         }
     }
 
-    /// The pocket of tool `n` (`find_tool_pocket`): `None` when a tool table is given
-    /// without it.
+    /// The pocket of tool `n`: `None` when a tool table is given without it.
     pub(crate) fn glue_pocket(&self, n: u32) -> Option<f64> {
         (n == 0 || !self.table_given || self.tools.contains_key(&n))
             .then(|| self.pockets.get(&n).map_or(n as f64, |p| *p as f64))

@@ -8,8 +8,8 @@ use crate::lex::{LineError, LineResult, Word};
 use crate::polar::Polar;
 
 impl Interp {
-    /// Checks the polar words of a block (LinuxCNC `enhance_block`, `find_ends`) and turns
-    /// them into X and Y words in `single`. Returns true when they are left for a G91 canned
+    /// Checks the polar words of a block (where LinuxCNC refuses them, measured with rs274)
+    /// and turns them into X and Y words in `xy_out`. Returns true when they are left for a G91 canned
     /// cycle to apply at each repeat.
     pub(super) fn polar_words<'l>(
         &self,

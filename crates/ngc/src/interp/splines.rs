@@ -42,7 +42,8 @@ impl Interp {
         }
     }
 
-    /// The checks LinuxCNC's `convert_spline` makes, shared by G5, G5.1 and G5.2.
+    /// The checks LinuxCNC makes of a spline (its messages quoted from rs274), shared by G5,
+    /// G5.1 and G5.2.
     pub(super) fn spline_checks<'l>(
         &self,
         get: &dyn Fn(char) -> Option<Word<'l>>,

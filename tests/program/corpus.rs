@@ -16,9 +16,11 @@ use std::time::{Duration, Instant};
 
 use common::{machine, rs274, scratch};
 
-/// Fraction of standalone programs that `analyze` and `check` read, at least. The issue's
-/// goal is 0.90; this is the figure reached so far (raise it as the reader grows).
-const READ_FLOOR: f64 = 0.91;
+/// Fraction of standalone programs that `analyze` and `check` read, at least (raise it as
+/// the reader grows). 0.91 until issue 23 left out the lathe cycles G70-G72 and G76: the
+/// three G70-G72 samples (lathe_g70_71_demo, lathe_g7x_face_boring, lathe_g7x_quadrants)
+/// are now refused with the code named, 89 of 101 read.
+const READ_FLOOR: f64 = 0.88;
 
 /// Longest a single `analyze` or `check` may take before it counts as a hang.
 const TIMEOUT: Duration = Duration::from_secs(30);

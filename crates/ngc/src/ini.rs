@@ -165,7 +165,7 @@ pub struct LinuxcncConfig {
 impl Ini {
     /// The interpreter's part of the configuration.
     pub fn config(&self) -> Result<LinuxcncConfig, IniError> {
-        let python = crate::remap::python_dirs(self);
+        let python = self.python_dirs();
         let mut remaps = Vec::new();
         for e in self.all("RS274NGC", "REMAP") {
             let origin = format!("{}:{}", e.path.display(), e.line);
@@ -196,6 +196,30 @@ impl Ini {
             remaps,
             inch: self.linear_units_inch()?,
         })
+    }
+
+    /// The folders of a configuration's `[PYTHON]` section: `PATH_PREPEND`, `PATH_APPEND` and
+    /// the folder of `TOPLEVEL`, relative to `ini_dir`.
+    pub fn python_dirs(&self) -> Vec<PathBuf> {
+        let mut dirs = Vec::new();
+        for key in ["PATH_PREPEND", "PATH_APPEND"] {
+            for e in self.all("PYTHON", key) {
+                dirs.extend(
+                    e.value
+                        .split(':')
+                        .filter(|s| !s.trim().is_empty())
+                        .map(|s| self.resolve(s)),
+                );
+            }
+        }
+        if let Some(e) = self.get("PYTHON", "TOPLEVEL") {
+            dirs.push(
+                self.resolve(&e.value)
+                    .parent()
+                    .map_or_else(|| self.dir().to_path_buf(), Path::to_path_buf),
+            );
+        }
+        dirs
     }
 }
 

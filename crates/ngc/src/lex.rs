@@ -97,8 +97,8 @@ pub fn lex<'l>(line: &'l str, params: &Params, fanuc: bool) -> LineResult<Lexed<
 }
 
 /// [`lex`], with the words collected in `words` (cleared first): the reader hands the
-/// same buffer back for every block, so that a block costs no allocation. (Inlined into
-/// the reader: its large result read back from memory after a call cost a stall a line.)
+/// same buffer back for every block, so that a block costs no allocation. Inlined into the
+/// reader (docs/performance.md).
 #[inline(always)]
 pub fn lex_with<'l>(
     line: &'l str,
@@ -220,8 +220,7 @@ pub fn char_at(line: &str, i: usize) -> (char, Range<usize>) {
 
 /// Reads the word whose letter is at byte `start`. Blanks between the letter and the number
 /// are allowed; the number is `[+-]digits[.digits]` with at least one digit, or a value.
-/// (Inlined: its result is large, and moving it through memory cost a store-forwarding
-/// stall per word.)
+/// Inlined: its result is large (docs/performance.md).
 #[inline(always)]
 fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> LineResult<Word<'l>> {
     let bytes = line.as_bytes();

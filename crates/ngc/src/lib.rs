@@ -2,8 +2,11 @@
 //! bit of modal state, and emits canonical moves.
 //!
 //! ```text
-//! program text ─► tokenizer (words, comments, file:line:column)
-//!              ─► modal interpreter (units, distance mode, plane, feed mode, TCP)
+//! program text ─► front end: tokenizer and reader (words, comments, o-words, macros,
+//!                 file:line:column), with the dialect's table (dialect/)
+//!              ─► typed block (block.rs: G codes by modal group, M codes, words)
+//!              ─► modal interpreter, phase by phase (interp/: units, feed, tool, plane,
+//!                 compensation, offsets, motion, flow)
 //!              ─► canonical moves (absolute axis positions, mm and deg)
 //! ```
 //!
@@ -27,15 +30,18 @@
 //! ```
 
 mod axis;
+mod block;
 mod canon;
+mod code;
 mod comp;
+mod dialect;
 mod error;
 mod expr;
 mod frame;
-mod g7x;
 mod ini;
 mod interp;
 mod lex;
+mod notice;
 mod options;
 mod polar;
 mod probe;
@@ -44,18 +50,18 @@ mod remap;
 mod spline;
 mod stdglue;
 mod turns;
+mod units;
 
 pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
 pub use error::{line_column, Error, Result, Syntax};
 pub use frame::RotaryTable;
 pub use ini::{scale_parameter_lengths, Ini, IniEntry, IniError, LinuxcncConfig};
+pub use notice::Notice;
 pub use options::{
     parse_tool_orientations, parse_tool_table, parse_var_file, tool_pockets, work_offset_parameter,
     Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
 };
-pub use reader::{
-    read_file, read_file_with, read_str, read_str_with, Moves, Notice, ARC_RADIUS_TOLERANCE_MM,
-    FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH,
-};
+pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves};
 pub use remap::{parse_remap, Remap, RemapCode};
+pub use units::{ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};

@@ -12,9 +12,8 @@
 //!
 //! `(x, y)` is the current point in program coordinates (active work system, program
 //! units). An incremental polar move turns about the work origin, not about the current
-//! point: `G91 ^60` steps along a circle centred on X0 Y0. This is LinuxCNC's
-//! `find_ends` (and its canned-cycle repeat, where each of L repeats applies the increment
-//! again).
+//! point: `G91 ^60` steps along a circle centred on X0 Y0, as rs274 shows (and in a canned
+//! cycle, each of L repeats applies the increment again).
 
 /// The polar words of a block: `@` radius (program units) and `^` angle (deg).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -71,7 +70,7 @@ impl Polar {
     }
 
     /// One repeat of a G91 canned cycle: as [`Polar::incremental`], except that a zero
-    /// increment is skipped (LinuxCNC's `CYCLE_MACRO` tests the increment, not the word).
+    /// increment is skipped (rs274 tests the increment, not the word).
     pub fn cycle_step(&self, xy: [f64; 2]) -> Result<[f64; 2], &'static str> {
         let nonzero = |v: Option<f64>| v.filter(|v| *v != 0.0);
         Polar {

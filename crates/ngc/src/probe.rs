@@ -1,7 +1,7 @@
 //! Straight probing G38.2-G38.5 (LinuxCNC) in a simulator, which has no probe input.
 //!
 //! mtsim does what LinuxCNC's standalone interpreter `rs274` does with its model of the
-//! world (`saicanon.cc`, `STRAIGHT_PROBE`): the probe **never trips**. So
+//! world (its canonical `STRAIGHT_PROBE` call): the probe **never trips**. So
 //!
 //! 1. the probe move is a feed move (G01 at the F in effect) from the current point `s` to
 //!    the programmed point `t`, for all four codes alike (G38.2/.4 would raise an error on

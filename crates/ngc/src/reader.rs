@@ -22,31 +22,9 @@ use crate::error::{line_column, Error, Result, Syntax};
 use crate::expr::{Eval, Param};
 use crate::interp::{Interp, Stop};
 use crate::lex::{is_blank, lex, lex_with, Lexed, LineError, LineResult, Word};
+use crate::notice::Notice;
 use crate::options::{Dialect, Options};
 use crate::remap::Remap;
-
-/// Millimetres per inch (exact by definition).
-pub const MM_PER_INCH: f64 = 25.4;
-
-/// An R arc's |R| may be shorter than half its chord by at most this much, mm (the centre is
-/// then the chord's midpoint).
-pub const ARC_RADIUS_TOLERANCE_MM: f64 = 1e-3;
-
-/// Fanuc and Haas: radii at the start and end of an I J K arc may differ by at most this
-/// much, mm (LinuxCNC's rule is in docs/gcode.md). Fanuc sets the limit per machine
-/// (parameter 3410, alarm PS0020); no documented default was found, so this is chosen to
-/// accept what real controls are shown to accept: a Haas UMC-750 runs NX post output with
-/// differences up to 4.9 µm (issue 9), and inch output rounded to 0.0001 in moves a radius
-/// by up to about 3.6 µm. 10 µm accepts both and is half of Okuma's documented 20 µm.
-pub const FANUC_ARC_RADIUS_TOLERANCE_MM: f64 = 0.01;
-
-/// Something the reader accepted but did not simulate (a user M code, a message).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Notice {
-    pub path: PathBuf,
-    pub line: usize,
-    pub message: String,
-}
 
 /// Streams the moves of a file with default options, from `start`.
 pub fn read_file(path: &Path, start: AxisVec) -> Result<Moves> {
@@ -120,9 +98,7 @@ impl FileLines {
             self.reader.seek_relative(offset as i64 - self.pos as i64)?;
             self.pos = offset;
         }
-        // The line is read into `buf`'s own bytes, in place: a `String` taken apart and put
-        // back was stored in pieces and read back whole by the caller at once, a
-        // store-forwarding stall on every line.
+        // The line is read into `buf`'s own bytes, in place (docs/performance.md).
         // SAFETY: `buf` holds UTF-8 again before this returns: on an error it is emptied,
         // and the bytes read are checked (or replaced) below.
         let bytes = unsafe { buf.as_mut_vec() };
@@ -442,9 +418,6 @@ pub struct Moves {
     words: Vec<Word<'static>>,
     /// A read error of a streamed file, reported by the next step.
     io_error: Option<std::io::Error>,
-    /// Reading the profile of a G70-G72 block: the call depth to return to, and the
-    /// cycle's line.
-    g7x_capture: Option<(usize, Cursor)>,
     remaps: Vec<Remap>,
     /// A block's words to run before the next line (after a remap returned).
     resume: Option<Resume>,
@@ -491,7 +464,6 @@ impl Moves {
             buf: String::new(),
             words: Vec::new(),
             io_error: None,
-            g7x_capture: None,
             remaps: options.remaps.clone(),
             resume: None,
             remaps_noticed: Vec::new(),
@@ -509,8 +481,7 @@ impl Moves {
     }
 
     /// The line at `c`, and the cursor of the next line; `None` at the end of the text (or
-    /// on a read error, kept in `io_error`). (Inlined: the cursor returned through memory
-    /// and read back at once stalled every line.)
+    /// on a read error, kept in `io_error`). Inlined (docs/performance.md).
     #[inline(always)]
     fn line_at(&mut self, c: Cursor) -> Option<(&str, Cursor)> {
         let (line, len) = match &mut self.programs[c.file].source {
@@ -692,7 +663,7 @@ impl Moves {
                 offset: 0,
                 line: 1,
             };
-            let fanuc = self.dialect.is_fanuc_family();
+            let fanuc = self.dialect.table().macro_b;
             while let Some((line, next)) = self.line_at(c) {
                 if let Ok(Some(o)) = oline(line) {
                     if o.kw == Kw::Sub || (fanuc && o.kw == Kw::Number) {
@@ -715,7 +686,7 @@ impl Moves {
                 return Ok(c);
             }
         }
-        let names = if self.dialect.is_fanuc_family() {
+        let names = if self.dialect.table().macro_b {
             vec![
                 format!("O{label}.nc"),
                 format!("o{label}.nc"),
@@ -739,7 +710,7 @@ impl Moves {
                     if let Some(&c) = self.subs(file).get(label) {
                         return Ok(c);
                     }
-                    if self.dialect.is_fanuc_family() {
+                    if self.dialect.table().macro_b {
                         // A Fanuc program file without its own O line starts at its top.
                         return Ok(Cursor {
                             file,
@@ -775,7 +746,7 @@ impl Moves {
             ));
         }
         let start = self.find_sub(label, span)?;
-        let nlocal = if self.dialect.is_fanuc_family() {
+        let nlocal = if self.dialect.table().macro_b {
             33
         } else {
             30
@@ -878,7 +849,7 @@ impl Moves {
             line,
             i: at,
             params: &self.interp.params,
-            fanuc: self.dialect.is_fanuc_family(),
+            fanuc: self.dialect.table().macro_b,
         };
         e.skip_blanks();
         if line.as_bytes().get(e.i) != Some(&b'[') {
@@ -898,7 +869,7 @@ impl Moves {
         let label = o.label.clone();
         match o.kw {
             Kw::Number => {
-                if !self.dialect.is_fanuc_family() {
+                if !self.dialect.table().macro_b {
                     return Err(LineError::new(o.span, "o-word without a keyword: expected `o<label> sub`, `call`, `if`, `while` ...", "no keyword")
                         .help("LinuxCNC o-words need a keyword; for Fanuc programs set dialect = \"fanuc\""));
                 }
@@ -923,38 +894,7 @@ impl Moves {
                     ));
                 }
             }
-            Kw::Call => {
-                self.interp.refresh_system_parameters();
-                let mut args = Vec::new();
-                let mut e = Eval {
-                    line,
-                    i: o.rest,
-                    params: &self.interp.params,
-                    fanuc: false,
-                };
-                loop {
-                    e.skip_blanks();
-                    match line.as_bytes().get(e.i) {
-                        Some(b'[') => args.push(e.value()?),
-                        Some(b'(') | Some(b';') | None => break,
-                        _ => {
-                            return Err(LineError::new(
-                                e.i..e.i + 1,
-                                "expected `[argument]` after `call`",
-                                "expected `[`",
-                            ));
-                        }
-                    }
-                }
-                if args.len() > 30 {
-                    return Err(LineError::new(
-                        o.span,
-                        "more than 30 arguments: expected at most 30",
-                        "too many arguments",
-                    ));
-                }
-                self.call(&label, &args, true, 1, next, o.span)?;
-            }
+            Kw::Call => self.o_call(line, &o, &label, next)?,
             Kw::If => {
                 let (c, _) = self.eval_bracket(line, o.rest)?;
                 self.ifs.push((label.clone(), c != 0.0));
@@ -962,34 +902,7 @@ impl Moves {
                     self.skip_to(here, &label, &[Kw::ElseIf, Kw::Else, Kw::EndIf], o.span)?;
                 }
             }
-            Kw::ElseIf | Kw::Else => {
-                let Some((l, taken)) = self.ifs.last().cloned() else {
-                    return Err(LineError::new(
-                        o.span,
-                        "`else` without `if`: expected a matching `o.. if`",
-                        "no if",
-                    ));
-                };
-                if l != label {
-                    return Err(LineError::new(
-                        o.span.clone(),
-                        format!("`o{label}` does not match the open `o{l} if`"),
-                        "label mismatch",
-                    ));
-                }
-                if taken {
-                    self.skip_to(here, &label, &[Kw::EndIf], o.span)?;
-                } else if o.kw == Kw::Else {
-                    self.ifs.last_mut().expect("checked").1 = true;
-                } else {
-                    let (c, _) = self.eval_bracket(line, o.rest)?;
-                    if c != 0.0 {
-                        self.ifs.last_mut().expect("checked").1 = true;
-                    } else {
-                        self.skip_to(here, &label, &[Kw::ElseIf, Kw::Else, Kw::EndIf], o.span)?;
-                    }
-                }
-            }
+            Kw::ElseIf | Kw::Else => self.o_else(line, &o, &label, here)?,
             Kw::EndIf => match self.ifs.last() {
                 Some((l, _)) if *l == label => {
                     self.ifs.pop();
@@ -1002,34 +915,7 @@ impl Moves {
                     ))
                 }
             },
-            Kw::While => {
-                let top_do = matches!(self.loops.last(), Some(Loop { label: l, kind: LoopKind::Do, .. }) if *l == label);
-                let (c, _) = self.eval_bracket(line, o.rest)?;
-                if top_do {
-                    if c != 0.0 {
-                        self.backward(o.span)?;
-                        self.cursor = self.loops.last().expect("checked").start;
-                    } else {
-                        self.loops.pop();
-                    }
-                } else if c != 0.0 {
-                    let again = matches!(self.loops.last(), Some(Loop { label: l, kind: LoopKind::While, .. }) if *l == label);
-                    if !again {
-                        self.loops.push(Loop {
-                            label,
-                            kind: LoopKind::While,
-                            start: here,
-                        });
-                    }
-                } else {
-                    if matches!(self.loops.last(), Some(l) if l.label == label) {
-                        self.loops.pop();
-                    }
-                    self.skip_to(here, &label, &[Kw::EndWhile], o.span)?;
-                    let (_, after) = self.line_at(self.cursor).expect("found");
-                    self.cursor = after;
-                }
-            }
+            Kw::While => self.o_while(line, &o, label, here)?,
             Kw::EndWhile => match self.loops.last() {
                 Some(l) if l.label == label => {
                     let start = l.start;
@@ -1091,32 +977,133 @@ impl Moves {
                     ))
                 }
             },
-            Kw::Break | Kw::Continue => {
-                let Some(l) = self.loops.iter().rev().find(|l| l.label == label).cloned() else {
+            Kw::Break | Kw::Continue => self.o_break(line, &o, &label, here)?,
+        }
+        Ok(false)
+    }
+
+    /// `o<label> call [args]`: the subroutine called with its arguments.
+    fn o_call(&mut self, line: &str, o: &OLine, label: &str, next: Cursor) -> LineResult<()> {
+        self.interp.refresh_system_parameters();
+        let mut args = Vec::new();
+        let mut e = Eval {
+            line,
+            i: o.rest,
+            params: &self.interp.params,
+            fanuc: false,
+        };
+        loop {
+            e.skip_blanks();
+            match line.as_bytes().get(e.i) {
+                Some(b'[') => args.push(e.value()?),
+                Some(b'(') | Some(b';') | None => break,
+                _ => {
                     return Err(LineError::new(
-                        o.span.clone(),
-                        format!("`{}` outside loop `o{label}`", &line[o.span.clone()]),
-                        "not in this loop",
+                        e.i..e.i + 1,
+                        "expected `[argument]` after `call`",
+                        "expected `[`",
                     ));
-                };
-                let end = match l.kind {
-                    LoopKind::While => Kw::EndWhile,
-                    LoopKind::Do => Kw::While,
-                    _ => Kw::EndRepeat,
-                };
-                self.skip_to(here, &label, &[end], o.span)?;
-                if o.kw == Kw::Break {
-                    while let Some(top) = self.loops.pop() {
-                        if top.label == label {
-                            break;
-                        }
-                    }
-                    let (_, after) = self.line_at(self.cursor).expect("found");
-                    self.cursor = after;
                 }
             }
         }
-        Ok(false)
+        if args.len() > 30 {
+            return Err(LineError::new(
+                o.span.clone(),
+                "more than 30 arguments: expected at most 30",
+                "too many arguments",
+            ));
+        }
+        self.call(&label, &args, true, 1, next, o.span.clone())?;
+        Ok(())
+    }
+
+    /// `o.. elseif [cond]` / `o.. else`: taken when no branch of the `if` was.
+    fn o_else(&mut self, line: &str, o: &OLine, label: &str, here: Cursor) -> LineResult<()> {
+        let Some((l, taken)) = self.ifs.last().cloned() else {
+            return Err(LineError::new(
+                o.span.clone(),
+                "`else` without `if`: expected a matching `o.. if`",
+                "no if",
+            ));
+        };
+        if l != label {
+            return Err(LineError::new(
+                o.span.clone(),
+                format!("`o{label}` does not match the open `o{l} if`"),
+                "label mismatch",
+            ));
+        }
+        if taken {
+            self.skip_to(here, &label, &[Kw::EndIf], o.span.clone())?;
+        } else if o.kw == Kw::Else {
+            self.ifs.last_mut().expect("checked").1 = true;
+        } else {
+            let (c, _) = self.eval_bracket(line, o.rest)?;
+            if c != 0.0 {
+                self.ifs.last_mut().expect("checked").1 = true;
+            } else {
+                self.skip_to(here, &label, &[Kw::ElseIf, Kw::Else, Kw::EndIf], o.span.clone())?;
+            }
+        }
+        Ok(())
+    }
+
+    /// `o.. while [cond]`: the loop's head, or the tail of an `o.. do` loop.
+    fn o_while(&mut self, line: &str, o: &OLine, label: String, here: Cursor) -> LineResult<()> {
+        let top_do = matches!(self.loops.last(), Some(Loop { label: l, kind: LoopKind::Do, .. }) if *l == label);
+        let (c, _) = self.eval_bracket(line, o.rest)?;
+        if top_do {
+            if c != 0.0 {
+                self.backward(o.span.clone())?;
+                self.cursor = self.loops.last().expect("checked").start;
+            } else {
+                self.loops.pop();
+            }
+        } else if c != 0.0 {
+            let again = matches!(self.loops.last(), Some(Loop { label: l, kind: LoopKind::While, .. }) if *l == label);
+            if !again {
+                self.loops.push(Loop {
+                    label,
+                    kind: LoopKind::While,
+                    start: here,
+                });
+            }
+        } else {
+            if matches!(self.loops.last(), Some(l) if l.label == label) {
+                self.loops.pop();
+            }
+            self.skip_to(here, &label, &[Kw::EndWhile], o.span.clone())?;
+            let (_, after) = self.line_at(self.cursor).expect("found");
+            self.cursor = after;
+        }
+        Ok(())
+    }
+
+    /// `o.. break` / `o.. continue`: out of, or to the end of, the loop `label`.
+    fn o_break(&mut self, line: &str, o: &OLine, label: &str, here: Cursor) -> LineResult<()> {
+        let Some(l) = self.loops.iter().rev().find(|l| l.label == label).cloned() else {
+            return Err(LineError::new(
+                o.span.clone(),
+                format!("`{}` outside loop `o{label}`", &line[o.span.clone()]),
+                "not in this loop",
+            ));
+        };
+        let end = match l.kind {
+            LoopKind::While => Kw::EndWhile,
+            LoopKind::Do => Kw::While,
+            _ => Kw::EndRepeat,
+        };
+        self.skip_to(here, &label, &[end], o.span.clone())?;
+        if o.kw == Kw::Break {
+            while let Some(top) = self.loops.pop() {
+                if top.label == label {
+                    break;
+                }
+            }
+            let (_, after) = self.line_at(self.cursor).expect("found");
+            self.cursor = after;
+        }
+        Ok(())
     }
 
     fn optional_value(&mut self, line: &str, at: usize) -> LineResult<Option<f64>> {
@@ -1293,6 +1280,8 @@ impl Moves {
 
     /// Refuses a program written in another control's language: Heidenhain conversational
     /// (`BEGIN PGM`) or Siemens Sinumerik (`TRAORI`, `CYCLE800`), before any move.
+    /// Their front ends will plug in here (crate `dialect`'s module doc): a program
+    /// recognised as one of them is then read by its own front end instead.
     fn foreign_language(&mut self) -> Option<Error> {
         // A cheap screen first, so that a streamed file is read whole only when it fails.
         let suspect = match &self.programs[0].source {
@@ -1420,7 +1409,7 @@ impl Moves {
             if let Some(f) = self.frames.last() {
                 if self.programs[f.start.file].is_empty() || f.start.file != 0 {
                     // A Fanuc subprogram file without M99 returns at its end.
-                    if self.dialect.is_fanuc_family() && self.ret(None) {
+                    if self.dialect.table().macro_b && self.ret(None) {
                         return Ok(());
                     }
                 }
@@ -1439,8 +1428,7 @@ impl Moves {
             LineOwner::Shared(text) => &text[here.offset..here.offset + len],
             LineOwner::Buffer(buf) => buf.as_str(),
         };
-        // Field by field: the cursor was just stored in pieces, and a copy of it whole read
-        // them back at once (a store-forwarding stall per line). The file is the same.
+        // Field by field (docs/performance.md); the file is the same.
         self.cursor.offset = next.offset;
         self.cursor.line = next.line;
         let result = self.line(line, here, next).map_err(|e| {
@@ -1460,20 +1448,6 @@ impl Moves {
             }
         }
         result?;
-        if let Some((depth, at)) = self.g7x_capture {
-            if self.frames.len() <= depth {
-                // The profile subroutine returned: cut it. Like rs274, an error points at
-                // the subroutine's last line and names the cycle's line.
-                self.g7x_capture = None;
-                self.interp.g7x_run(&mut self.queue).map_err(|mut e| {
-                    self.finished = true;
-                    e.message = format!("{} (the cycle at line {})", e.message, at.line);
-                    e.span = 0..len;
-                    // The line is read again from its program for the message.
-                    self.error_at(here, e, "")
-                })?;
-            }
-        }
         Ok(())
     }
 
@@ -1488,7 +1462,7 @@ impl Moves {
                 }
             }
             Some(b'/') => return Ok(()),
-            Some(c) if self.dialect.is_fanuc_family() && c.is_ascii_alphabetic() => {
+            Some(c) if self.dialect.table().macro_b && c.is_ascii_alphabetic() => {
                 if let Some((m, at, rest)) = macro_line(line) {
                     return self.macro_statement(line, m, at, rest, here, next);
                 }
@@ -1502,7 +1476,7 @@ impl Moves {
         let lexed = lex_with(
             line,
             &self.interp.params,
-            self.dialect.is_fanuc_family(),
+            self.dialect.table().macro_b,
             words,
         )?;
         match lexed {
@@ -1525,11 +1499,6 @@ impl Moves {
                 if words.is_empty() {
                     self.words = reuse(words);
                     return Ok(());
-                }
-                if self.g7x_capture.is_some() {
-                    let result = self.interp.g7x_profile_line(line, &words);
-                    self.words = reuse(words);
-                    return result;
                 }
                 let remap = if self.remaps.is_empty() {
                     None
@@ -1584,7 +1553,12 @@ impl Moves {
         };
         // Python prolog/epilog handlers: LinuxCNC's stdglue ones are emulated
         // (crate::stdglue); others cannot be run.
-        if let Some(why) = &remap.handlers_refused {
+        let unknown = [&remap.prolog, &remap.epilog]
+            .into_iter()
+            .flatten()
+            .find(|name| crate::stdglue::Handler::named(name).is_none())
+            .map(|name| format!("the Python handler `{name}` is not one of LinuxCNC's stdglue.py handlers mtsim emulates ({})", crate::stdglue::NAMES));
+        if let Some(why) = unknown.as_ref().or(remap.handlers_refused.as_ref()) {
             return Err(LineError::new(s.span.clone(), format!("`{name}` is remapped ({}) with Python prolog/epilog handlers around its subroutine: {why}; mtsim runs no Python, and such handlers set the parameters the subroutine reads", remap.origin), "Python remap")
                 .help("remap the code with LinuxCNC's stdglue handlers or without prolog= and epilog=, or remove it from the program"));
         }
@@ -1719,14 +1693,6 @@ impl Moves {
             &mut self.notices,
             &self.programs[here.file].path,
         )?;
-        if let Some(label) = self.interp.g7x_label() {
-            // G70-G72: run the profile subroutine (o-word flow and parameters
-            // as usual) with its blocks captured as the profile, not executed.
-            let depth = self.frames.len();
-            self.call(&label, &[], true, 1, next, 0..line.len())?;
-            self.g7x_capture = Some((depth, here));
-            return Ok(());
-        }
         match stop {
             Stop::None => {}
             Stop::End => self.finished = true,
@@ -1741,7 +1707,7 @@ impl Moves {
             }
             Stop::Return { span } => {
                 if !self.ret(None) {
-                    if self.dialect.is_fanuc_family() {
+                    if self.dialect.table().macro_b {
                         // M99 in the main program: end (a real control would restart it).
                         self.finished = true;
                     } else {
@@ -1785,8 +1751,8 @@ impl Program {
     }
 }
 
-/// The index of the first `\n` in `bytes`, 8 bytes at a time: lines are short, and
-/// `memchr`'s set-up cost more than the search. With `v` the word XOR eight `\n`s, a byte
+/// The index of the first `\n` in `bytes`, 8 bytes at a time (lines are short; see
+/// docs/performance.md for `memchr`). With `v` the word XOR eight `\n`s, a byte
 /// of `(v - 0x01…01) & !v & 0x80…80` is set at every zero byte of `v` and can be set falsely
 /// only above one, so the lowest set byte is the first `\n`.
 #[inline]

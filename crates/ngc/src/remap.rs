@@ -15,7 +15,7 @@
 //! those of LinuxCNC's standard glue `stdglue.py` (crate::stdglue); others are refused where
 //! the code is used, naming them.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// The code a remap replaces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,8 +74,9 @@ pub struct Remap {
     /// Python prolog/epilog handlers (emulated when they are stdglue's, crate::stdglue).
     pub prolog: Option<String>,
     pub epilog: Option<String>,
-    /// Why the prolog/epilog cannot be emulated (not stdglue's, or defined in another
-    /// file on the `[PYTHON]` path); `None` when there are none or they are emulated.
+    /// Why the prolog/epilog cannot be emulated (defined in another file on the `[PYTHON]`
+    /// path, see [`check_handlers`]); `None` when there are none or they are emulated. A
+    /// handler name that is not one of stdglue's is refused where the code is read.
     pub handlers_refused: Option<String>,
     /// The configuration's stdglue `cycle_prolog` compares the sticky-word dict with 0.0
     /// (LinuxCNC 2.9's stdglue.py), a TypeError in Python 3 once an R word is recorded.
@@ -192,13 +193,6 @@ pub fn parse_remap(value: &str, origin: String) -> Result<Remap, String> {
             r.modal_group
         ));
     }
-    r.handlers_refused = [&r.prolog, &r.epilog]
-        .into_iter()
-        .flatten()
-        .find(|name| crate::stdglue::Handler::named(name).is_none())
-        .map(|name| {
-            format!("the Python handler `{name}` is not one of LinuxCNC's stdglue.py handlers mtsim emulates ({})", crate::stdglue::NAMES)
-        });
     if r.ngc.is_none() && r.python.is_none() {
         return Err(format!(
             "{code} has neither `ngc=` nor `python=`: expected the handler"
@@ -334,30 +328,6 @@ fn function_body<'t>(text: &'t str, name: &str) -> Option<&'t str> {
     start.map(|s| &text[s..])
 }
 
-/// The folders of a configuration's `[PYTHON]` section: `PATH_PREPEND`, `PATH_APPEND` and
-/// the folder of `TOPLEVEL`, relative to `ini_dir`.
-pub fn python_dirs(ini: &crate::ini::Ini) -> Vec<PathBuf> {
-    let mut dirs = Vec::new();
-    for key in ["PATH_PREPEND", "PATH_APPEND"] {
-        for e in ini.all("PYTHON", key) {
-            dirs.extend(
-                e.value
-                    .split(':')
-                    .filter(|s| !s.trim().is_empty())
-                    .map(|s| ini.resolve(s)),
-            );
-        }
-    }
-    if let Some(e) = ini.get("PYTHON", "TOPLEVEL") {
-        dirs.push(
-            ini.resolve(&e.value)
-                .parent()
-                .map_or_else(|| ini.dir().to_path_buf(), Path::to_path_buf),
-        );
-    }
-    dirs
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -394,14 +364,6 @@ mod tests {
             .positional());
         let t = parse_remap("T prolog=p ngc=prepare", String::new()).unwrap();
         assert_eq!(t.code, RemapCode::T);
-        assert!(t.handlers_refused.unwrap().contains("`p`"));
-        assert!(parse_remap(
-            "T prolog=prepare_prolog ngc=prepare epilog=prepare_epilog",
-            String::new()
-        )
-        .unwrap()
-        .handlers_refused
-        .is_none());
         assert!(parse_remap("M0 modalgroup=4 ngc=extend_m0", String::new()).is_ok());
         assert!(parse_remap("M400 modalgroup=4 ngc=m400", String::new()).is_err());
         assert!(parse_remap("M400 modalgroup=1 ngc=m400", String::new()).is_err());

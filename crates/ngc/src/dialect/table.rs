@@ -1,0 +1,133 @@
+//! The shape of a dialect's table, and the codes all dialects share: the leaf the three
+//! dialect files build their tables from.
+
+use crate::axis::Plane;
+use crate::code::{FeedRead, GCode, MotionMode, NonModal};
+
+/// What one control does, as the interpreter needs it.
+#[derive(Debug)]
+pub(crate) struct Table {
+    // Start-up modal state.
+    /// G99 (retract to R) at start-up; otherwise G98 (the initial level).
+    pub start_retract_r: bool,
+
+    // Code table.
+    /// The control's own G codes (code ×10); the codes all three share are in
+    /// [`common_g_code`].
+    pub g_code: fn(u32) -> Option<GCode>,
+    /// The control's refusals of codes it does not have: why, and what to do.
+    pub refusal: fn(u32) -> Option<(&'static str, &'static str)>,
+    /// F is set before G20/G21 take effect (LinuxCNC's order of execution); otherwise F is
+    /// read in the units the block selects.
+    pub feed_before_units: bool,
+    /// G4's P: its unit.
+    pub dwell_p: DwellUnit,
+    /// G4 X is a dwell time in seconds (Fanuc), not an axis word.
+    pub dwell_x_seconds: bool,
+    /// G4 may share a block with G0-G3 (LinuxCNC: group 0); otherwise it is in the motion
+    /// group.
+    pub dwell_beside_motion: bool,
+    /// G49 also cancels TCP (G43.4/G43.5/G234).
+    pub g49_cancels_tcp: bool,
+    /// G2/G3 P: the number of turns.
+    pub arc_turns: bool,
+    /// How far the radii at the start and the end of an I J K arc may differ.
+    pub arc_radius: ArcRadiusRule,
+    /// An off-plane centre offset of zero (`K0` in G17) is accepted.
+    pub zero_off_plane_offset: bool,
+    /// Polar coordinates `@` `^` (LinuxCNC).
+    pub polar_words: bool,
+    /// Rotated work systems (G10 L2 R).
+    pub rotated_work_systems: bool,
+
+    // Parameter and subprogram syntax.
+    /// Fanuc macro B: `#1`-`#33` locals per call, `IF [..] GOTO`, `WHILE [..] DO`, `O`
+    /// program numbers, M98/M99 subprograms, G65 macro calls; otherwise LinuxCNC's o-words
+    /// (`o<name> sub`, `call`, `if`, `while`) and `#<named>` parameters.
+    pub macro_b: bool,
+}
+
+/// The unit of a dwell's P word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum DwellUnit {
+    Seconds,
+    Milliseconds,
+    /// Seconds when P has a decimal point, milliseconds without (Haas).
+    MillisecondsUnlessDecimal,
+}
+
+/// How far an I J K arc's radius at its end may differ from that at its start.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum ArcRadiusRule {
+    /// LinuxCNC 2.9, measured with rs274 (docs/gcode.md): an error only when the difference
+    /// exceeds both 0.02·√2 mm (0.002·√2 in under G20) and 0.1 % of the start radius.
+    Linuxcnc,
+    /// A fixed tolerance, mm.
+    Absolute(f64),
+}
+
+/// The G codes (code ×10) every dialect reads the same way: RS274/NGC's core.
+pub(crate) fn common_g_code(code: u32) -> Option<GCode> {
+    use MotionMode::*;
+    Some(match code {
+        0 => GCode::Motion(Some(Rapid)),
+        10 => GCode::Motion(Some(Linear)),
+        20 => GCode::Motion(Some(Arc { clockwise: true })),
+        30 => GCode::Motion(Some(Arc { clockwise: false })),
+        40 => GCode::NonModal(NonModal::Dwell),
+        100 => GCode::NonModal(NonModal::G10),
+        170 => GCode::Plane(Plane::XY),
+        180 => GCode::Plane(Plane::ZX),
+        190 => GCode::Plane(Plane::YZ),
+        200 => GCode::Units(true),
+        210 => GCode::Units(false),
+        280 => GCode::NonModal(NonModal::G28),
+        281 => GCode::NonModal(NonModal::G28_1),
+        300 => GCode::NonModal(NonModal::G30),
+        301 => GCode::NonModal(NonModal::G30_1),
+        400 => GCode::CutterComp(0),
+        410 => GCode::CutterComp(1),
+        420 => GCode::CutterComp(2),
+        430 => GCode::ToolLength(0),
+        490 => GCode::ToolLength(9),
+        520 => GCode::NonModal(NonModal::G52),
+        530 => GCode::NonModal(NonModal::G53),
+        540..=590 if code % 10 == 0 => GCode::Coord((code - 530) / 10),
+        541 => GCode::CoordExtended,
+        610 => GCode::Path(0),
+        611 => GCode::Path(1),
+        640 => GCode::Path(4),
+        730 => GCode::Motion(Some(Cycle(730))),
+        800 => GCode::Motion(None),
+        810 | 820 | 830 | 850 | 860 | 890 => GCode::Motion(Some(Cycle(code))),
+        900 => GCode::Distance(true),
+        910 => GCode::Distance(false),
+        901 => GCode::ArcDistance(true),
+        911 => GCode::ArcDistance(false),
+        920 => GCode::NonModal(NonModal::G92),
+        921 => GCode::NonModal(NonModal::G92_1),
+        922 => GCode::NonModal(NonModal::G92_2),
+        923 => GCode::NonModal(NonModal::G92_3),
+        930 => GCode::Feed(FeedRead::InverseTime),
+        940 => GCode::Feed(FeedRead::PerMinute),
+        950 => GCode::Feed(FeedRead::PerRevolution),
+        980 => GCode::Retract(false),
+        990 => GCode::Retract(true),
+        _ => return None,
+    })
+}
+
+/// Refusals every dialect shares, after its own: why, and what to do.
+pub(crate) fn common_refusal(code: u32) -> Option<(&'static str, &'static str)> {
+    Some(match code {
+        680..=689 => (
+            " (2D coordinate rotation G68 and other G68.x are not supported; G68.2 is)",
+            "post-process the program without G68",
+        ),
+        840 | 870 | 880 => (
+            " (this canned cycle is not supported; G73 G81 G82 G83 G85 G86 G89 are)",
+            "",
+        ),
+        _ => return None,
+    })
+}

@@ -1,0 +1,440 @@
+//! The modal interpreter: one block of words into canonical moves in machine coordinates.
+//!
+//! Input: a block's words (crate `lex`) and the dialect's tables (crate `dialect`); state:
+//! the modal state between blocks ([`Interp`]); output: canonical [`Move`]s queued in
+//! order, and a [`Stop`] telling the reader what to do next (end, call, return).
+//!
+//! Machine position = program position + work offset (G54-G59.3, G54.1 Pn) + G92/G52
+//! offset + tool length offset (G43, on Z). The offsets live in LinuxCNC's numbered
+//! parameters (5211-5219 G92, 5221+20(n-1) work system n, 5161/5181 G28/G30), so `.var`
+//! files, G10 and `#5221 = ...` all act on the same numbers.
+//!
+//! # Order of execution
+//!
+//! A block is first read once into its typed words ([`Block`]: G codes by modal group, M
+//! codes, one word per letter), then [`Interp::block`] runs the phases in this order, each
+//! in its own file:
+//!
+//! | phase | codes | file |
+//! |---|---|---|
+//! | 0 | read and check the words | `words.rs`, crate `block` |
+//! | 1 | feed mode G93/G94/G95, units G20/G21 (for F), F, S | `modal.rs` |
+//! | 2 | T, M6, M61, user M codes, spindle M3/M4/M5 | `tool.rs` |
+//! | 3 | M70-M73 save and restore the modal state | `flow.rs` |
+//! | 4 | dwell G4 | `non_modal.rs` |
+//! | 5 | plane, units, cutter compensation, tool length, work system, path control, distance, retract, G68.2/G53.1, G254 | `modal.rs` |
+//! | - | the motion mode, polar and axis words | `motion.rs`, `polar_words.rs` |
+//! | 6 | G10, G28/G30, G28.1/G30.1, G52, G92 family | `non_modal.rs` |
+//! | 7 | motion: G0-G3, G5.x, G33/G33.1, G38.x, canned cycles, as modified by G53 | `motion.rs`, `arcs.rs`, `splines.rs`, `spindle_sync.rs`, `probing.rs`, `cycles.rs` |
+//! | 8 | stops and program flow: M2/M30, M98/M99 (G65 before phase 0) | `flow.rs` |
+//!
+//! The order is that of the NIST RS274/NGC interpreter report (version 3, section 3.8,
+//! "Order of Execution": feed mode, F, S, T, M6, spindle, coolant, overrides, dwell, plane,
+//! units, cutter radius and length compensation, coordinate system, path control,
+//! distance mode, retract mode, home/G10/G92, motion, stop) as LinuxCNC's G-code manual
+//! extends it ("G Code Order of Execution": M61 with M6, M70-M73 after the spindle, user M
+//! codes before the dwell, G52 with G92, G33/G38/G76 with the motion). Where the Fanuc
+//! family differs, the dialect's table says so: F is read in the units the block selects
+//! (LinuxCNC sets F before G20/G21, so `G20 F60` from metric is 60 mm/min there), G4 may
+//! not share a block with a motion code, and G65 is a macro call whose letters are
+//! arguments, not words of the block (the Fanuc Series 0i operator's manual, "Custom
+//! macro": "simple call").
+
+use std::collections::{HashMap, VecDeque};
+use std::path::Path;
+
+use crate::axis::{Axis, AxisVec, Plane};
+use crate::block::Block;
+use crate::canon::{Move, PathControl};
+use crate::code::{FeedRead, MotionMode};
+use crate::comp;
+use crate::expr::{Param, Params};
+use crate::frame::{Mat3, RotaryTable};
+use crate::lex::{LineResult, Word};
+use crate::notice::Notice;
+use crate::options::{Dialect, Options, Tool, UserM};
+use crate::spline;
+
+mod arcs;
+mod coords;
+mod cycles;
+mod emit;
+mod flow;
+mod modal;
+mod motion;
+mod non_modal;
+mod params;
+mod polar_words;
+mod probing;
+mod spindle_sync;
+mod splines;
+mod tool;
+mod words;
+
+/// What the reader must do after a block.
+pub enum Stop {
+    None,
+    End,
+    /// M98 P (Fanuc subprogram, shared locals) or G65 P (macro call, own locals).
+    Call {
+        label: String,
+        repeats: u64,
+        args: Vec<f64>,
+        locals: bool,
+        span: std::ops::Range<usize>,
+    },
+    /// M99.
+    Return {
+        span: std::ops::Range<usize>,
+    },
+    /// M73: restore this state when the subroutine returns.
+    SaveForReturn(Box<Saved>),
+}
+
+/// Modal state saved by M70/M73.
+#[derive(Clone, Debug)]
+pub struct Saved {
+    motion: Option<MotionMode>,
+    plane: Plane,
+    absolute: bool,
+    arc_absolute: bool,
+    feed_mode: FeedRead,
+    inch: bool,
+    feed: Option<f64>,
+    spindle_rpm: f64,
+    path: PathControl,
+    retract_r: bool,
+}
+
+/// The modal state of the controller between blocks.
+pub struct Interp {
+    pub params: Params,
+    dialect: Dialect,
+    axes: [bool; 9],
+    /// Machine position of the controlled point, mm and deg.
+    pos: AxisVec,
+    motion: Option<MotionMode>,
+    plane: Plane,
+    absolute: bool,
+    arc_absolute: bool,
+    feed_mode: FeedRead,
+    inch: bool,
+    /// F as programmed (program units per minute or per revolution, or 1/min).
+    feed: Option<f64>,
+    spindle_rpm: f64,
+    /// M3 or M4 in effect (M5, M6, M2/M30 stop it, as rs274 does by default).
+    spindle_turning: bool,
+    /// G7: X words are diameters (LinuxCNC lathe mode); G8 (default): radii.
+    diameter: bool,
+    tcp: bool,
+    tools: HashMap<u32, Tool>,
+    /// Lathe tool orientations by tool number (tool table Q).
+    orientations: HashMap<u32, u32>,
+    table_given: bool,
+    tool: u32,
+    next_tool: u32,
+    /// A T word has selected `next_tool` since the last tool change (`#<_selected_pocket>`
+    /// is then its pocket, else -1).
+    tool_selected: bool,
+    pockets: HashMap<u32, u32>,
+    tool_length_mm: f64,
+    /// Active work system: 1 = G54 ... 9 = G59.3, 10+ = G54.1 P1...
+    coord: u32,
+    /// Work offset + G92, machine minus program (before the tool length), cached.
+    offset: AxisVec,
+    /// LinuxCNC rotation of the active work system about Z (G10 L2 R), deg, cached, with
+    /// its work offset and the G92 offset in X Y, mm: machine = rot(program + g92) + g5x.
+    rotation: Option<(f64, [f64; 2], [f64; 2])>,
+    path: PathControl,
+    retract_r: bool,
+    cycle_r: Option<f64>,
+    cycle_z: Option<f64>,
+    cycle_q: Option<f64>,
+    cycle_p: Option<f64>,
+    /// Initial level of the canned cycles in a row (machine coordinate along the plane's
+    /// normal, mm): LinuxCNC keeps it from the first cycle block until a motion that is not
+    /// a cycle, so G98 returns there and G91 measures R from it.
+    cycle_initial: Option<f64>,
+    /// G5: (I, J) for a following G5 without them, -(P, Q) of the last G5 (program units).
+    spline_ij: [f64; 2],
+    /// G5.2: the NURBS control points so far (program X Y, weight) and the order.
+    nurbs: Vec<spline::ControlPoint>,
+    nurbs_order: usize,
+    user_m: HashMap<u32, UserM>,
+    user_m_path: Vec<std::path::PathBuf>,
+    noticed: Vec<u32>,
+    saved: Option<Box<Saved>>,
+    /// G68.2 feature frame: origin in work coordinates (mm) and rotation `R_f`.
+    tilt: Option<([f64; 3], Mat3)>,
+    /// Haas G254: the work offset follows the rotary table.
+    dwo: bool,
+    table: Option<RotaryTable>,
+    /// Cutter radius compensation (G41/G42 to G40) and its queued moves.
+    comp: Option<comp::Comp>,
+    /// Where the tool is after G40 when it differs from `pos` (the next move starts there).
+    comp_out: Option<AxisVec>,
+    /// The move after G40 must be straight (LinuxCNC refuses an arc there).
+    arc_not_allowed: bool,
+}
+
+/// Parameter of extended work offset P n (G54.1 Pn, G154 Pn), axis X.
+fn extended_parameter(n: u32) -> usize {
+    // LinuxCNC has none; stored above its range, 7001 + 20 (n - 1).
+    7001 + 20 * (n as usize - 1)
+}
+
+fn coord_parameter(coord: u32) -> usize {
+    if coord <= 9 {
+        5201 + 20 * coord as usize
+    } else {
+        extended_parameter(coord - 9)
+    }
+}
+
+impl Interp {
+    pub fn new(o: &Options) -> Interp {
+        let mut params = Params::new();
+        for &(n, v) in &o.parameters {
+            params.set(&Param::Numbered(n as usize), v);
+        }
+        params.numbered[5220] = 1.0;
+        for (key, v) in &o.ini_values {
+            params.set(
+                &Param::Named(format!("_ini[{}", key.to_ascii_lowercase())),
+                *v,
+            );
+        }
+        for (pin, v) in &o.hal_pins {
+            let name: String = pin.chars().filter(|c| !c.is_whitespace()).collect();
+            params.set(
+                &Param::Named(format!("_hal[{}]", name.to_ascii_lowercase())),
+                *v,
+            );
+        }
+        let mut axes = [false; 9];
+        for a in &o.axes {
+            axes[a.index()] = true;
+        }
+        let mut i = Interp {
+            params,
+            dialect: o.dialect,
+            axes,
+            pos: o.start,
+            motion: None,
+            plane: Plane::XY,
+            absolute: true,
+            arc_absolute: false,
+            feed_mode: FeedRead::PerMinute,
+            inch: false,
+            feed: None,
+            spindle_rpm: 0.0,
+            spindle_turning: false,
+            diameter: false,
+            tcp: o.tcp,
+            tools: o.tools.iter().map(|t| (t.number, *t)).collect(),
+            orientations: o.tool_orientations.iter().copied().collect(),
+            table_given: !o.tools.is_empty(),
+            tool: 0,
+            next_tool: 0,
+            tool_length_mm: 0.0,
+            coord: 1,
+            offset: AxisVec::ZERO,
+            rotation: None,
+            path: PathControl::BLEND,
+            retract_r: o.dialect.table().start_retract_r,
+            cycle_r: None,
+            cycle_z: None,
+            cycle_q: None,
+            cycle_p: None,
+            cycle_initial: None,
+            spline_ij: [0.0; 2],
+            nurbs: Vec::new(),
+            nurbs_order: 3,
+            user_m: o.user_m.clone(),
+            user_m_path: o.user_m_path.clone(),
+            tool_selected: false,
+            pockets: o.pockets.iter().copied().collect(),
+            noticed: Vec::new(),
+            saved: None,
+            tilt: None,
+            dwo: false,
+            table: o.table,
+            comp: None,
+            comp_out: None,
+            arc_not_allowed: false,
+        };
+        i.parameters_changed();
+        i
+    }
+
+    /// Recomputes the cached offsets after parameters changed.
+    pub fn parameters_changed(&mut self) {
+        let base = coord_parameter(self.coord);
+        let g92_on = self.params.numbered[5210] != 0.0;
+        for a in Axis::ALL {
+            let k = a.index();
+            let g92 = if g92_on {
+                self.params.numbered[5211 + k]
+            } else {
+                0.0
+            };
+            self.offset[a] = self.params.numbered.get(base + k).copied().unwrap_or(0.0) + g92;
+        }
+        let r = if self.coord <= 9 {
+            self.params.numbered[base + 9]
+        } else {
+            0.0
+        };
+        self.rotation = (r != 0.0).then(|| {
+            let n = &self.params.numbered;
+            let g92 = |k: usize| if g92_on { n[5211 + k] } else { 0.0 };
+            (r, [n[base], n[base + 1]], [g92(0), g92(1)])
+        });
+    }
+
+    /// LinuxCNC stdglue's `change_prolog` parameters: tool in the spindle, selected tool,
+    /// their pockets; `None` when no tool is prepared ("M6: no tool prepared").
+    pub fn tool_change_parameters(&mut self) -> Option<[(&'static str, f64); 4]> {
+        if !self.tool_selected {
+            return None;
+        }
+        self.refresh_system_parameters();
+        let g = &self.params.globals;
+        Some([
+            ("tool_in_spindle", self.tool as f64),
+            ("selected_tool", self.next_tool as f64),
+            ("current_pocket", g["_current_pocket"]),
+            ("selected_pocket", g["_selected_pocket"]),
+        ])
+    }
+
+    /// The tool change of stdglue's `change_epilog` (M6 without the G43).
+    pub fn complete_tool_change(&mut self) {
+        self.tool = self.next_tool;
+        self.tool_selected = false;
+    }
+
+    /// What LinuxCNC's stdglue handlers read of the interpreter (crate::stdglue).
+    pub(crate) fn glue_view(&self) -> crate::stdglue::View {
+        crate::stdglue::View {
+            plane: self.plane,
+            feed_zero: self.feed.is_none(),
+            inverse_time: self.feed_mode == FeedRead::InverseTime,
+            comp_on: self.comp.is_some(),
+        }
+    }
+
+    /// The pocket of tool `n`: `None` when a tool table is given without it.
+    pub(crate) fn glue_pocket(&self, n: u32) -> Option<f64> {
+        (n == 0 || !self.table_given || self.tools.contains_key(&n))
+            .then(|| self.pockets.get(&n).map_or(n as f64, |p| *p as f64))
+    }
+
+    /// Commits a stdglue epilog (`SELECT_TOOL`, `CHANGE_TOOL_NUMBER`, spindle speed, feed
+    /// rate in program units).
+    pub(crate) fn glue_commit(&mut self, c: &crate::stdglue::Commit) {
+        use crate::stdglue::Commit;
+        match *c {
+            Commit::SelectTool { tool, prepared } => {
+                self.next_tool = tool;
+                self.tool_selected = prepared;
+            }
+            Commit::ChangeTool => self.complete_tool_change(),
+            Commit::SetToolNumber(n) => {
+                self.tool = n;
+                self.next_tool = n;
+            }
+            Commit::Speed(rpm) => self.spindle_rpm = rpm,
+            Commit::Feed(f) => {
+                self.feed = (f > 0.0).then(|| match self.feed_mode {
+                    FeedRead::InverseTime => f,
+                    _ => f * self.scale(),
+                })
+            }
+            Commit::None | Commit::KeepMotion => {}
+        }
+    }
+
+    pub fn restore(&mut self, s: &Saved) {
+        self.motion = s.motion;
+        self.plane = s.plane;
+        self.absolute = s.absolute;
+        self.arc_absolute = s.arc_absolute;
+        self.feed_mode = s.feed_mode;
+        self.inch = s.inch;
+        self.feed = s.feed;
+        self.spindle_rpm = s.spindle_rpm;
+        self.path = s.path;
+        self.retract_r = s.retract_r;
+    }
+
+    fn save(&self) -> Saved {
+        Saved {
+            motion: self.motion,
+            plane: self.plane,
+            absolute: self.absolute,
+            arc_absolute: self.arc_absolute,
+            feed_mode: self.feed_mode,
+            inch: self.inch,
+            feed: self.feed,
+            spindle_rpm: self.spindle_rpm,
+            path: self.path,
+            retract_r: self.retract_r,
+        }
+    }
+
+    /// Interprets the words of one block, queueing its moves: the phases in the order of
+    /// the module doc.
+    pub fn block(
+        &mut self,
+        line: &str,
+        words: &[Word],
+        line_no: usize,
+        queue: &mut VecDeque<Move>,
+        notices: &mut Vec<Notice>,
+        path: &Path,
+    ) -> LineResult<Stop> {
+        // Most blocks of most programs: a G0/G1 move in a plain modal state.
+        if self.plain_move(words, line_no, queue) {
+            return Ok(Stop::None);
+        }
+        // Fanuc G65: a macro call whose letters are its arguments.
+        if let Some(g65) = self.macro_call(words) {
+            return self.g65(line, words, g65);
+        }
+        // 0. The block's words, typed and checked.
+        let mut b = Block::read(line, words, self.dialect)?;
+        self.check_words(&mut b)?;
+        // 1. Feed mode, units for F, F, S.
+        self.feed_and_speed(&mut b)?;
+        // 2. Tool select and change, user M codes, spindle.
+        self.tool_and_spindle(&b, line_no, notices, path)?;
+        // 3. M70-M73.
+        let stop = self.save_and_restore(&b)?;
+        // 4. Dwell.
+        self.dwell(&b, line_no, queue)?;
+        // 5. Plane, units, compensation, tool length, work system, path, distance, retract.
+        self.modal_groups(&b, line_no, queue)?;
+        // The motion mode, then the axis words (polar words resolved in the new state).
+        let previous_motion = self.motion_mode(&b)?;
+        self.axis_words(&mut b)?;
+        // 6. Non-modal codes that use axis words.
+        self.non_modal(&mut b, line_no, queue)?;
+        // 7. Motion.
+        self.motion(&mut b, previous_motion, line_no, queue)?;
+        // 8. Stops and program flow.
+        self.program_flow(&b, queue, stop)
+    }
+
+    /// The end of the program: the queued compensated moves end as at G40.
+    pub fn finish(&mut self, queue: &mut VecDeque<Move>) {
+        // As LinuxCNC's M2: the queue ends at the compensated point; a gouge found there
+        // was already reported with the move that made it.
+        let _ = self.comp_exit(queue);
+    }
+
+    /// Drops the queued compensated moves (after an error).
+    pub fn discard(&mut self) {
+        self.comp = None;
+    }
+}

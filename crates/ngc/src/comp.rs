@@ -278,9 +278,6 @@ pub struct Comp {
     queue: Vec<Move>,
     /// End of the last move sent out (control point).
     last_out: AxisVec,
-    /// The tool-centre point was moved from outside ([`Comp::set_current`]): the next
-    /// element starts from it without a corner.
-    moved: bool,
 }
 
 impl Comp {
@@ -309,16 +306,7 @@ impl Comp {
             last: None,
             queue: Vec::new(),
             last_out,
-            moved: false,
         }
-    }
-
-    /// Sets the tool-centre point's `(a, b)` to `p`'s, the other axes kept (a move made
-    /// outside compensation, such as a lathe cycle's, has moved the current point).
-    pub fn set_current(&mut self, p: AxisVec) {
-        let v = ab(self.plane, &p);
-        self.cur = with_ab(self.plane, self.cur, v);
-        self.moved = true;
     }
 
     /// The entry move has been made.
@@ -512,14 +500,7 @@ impl Comp {
         out: &mut VecDeque<Move>,
     ) -> Result<(), String> {
         mv.end = with_ab(self.plane, mv.end, end);
-        // After the current point was moved from outside, the next element runs from it
-        // as from a tangent join (rs274 after a G70 profile read).
-        let corner = if std::mem::take(&mut self.moved) {
-            Corner::Tangent
-        } else {
-            self.corner(self.tangent, start_t)
-        };
-        let new = match corner {
+        let new = match self.corner(self.tangent, start_t) {
             Corner::Tangent => {
                 self.flush(out);
                 restart(new, ab(self.plane, &self.cur))

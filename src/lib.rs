@@ -28,7 +28,7 @@
 //! | [`study`] | runs and studies | [`study::reversals`], [`study::simulate::simulate`], [`study::sweep`], [`study::placement`], [`study::fit`] |
 //! | [`cli`] | the `mtsim` command | [`cli::main`] |
 //! | [`kinematics`] | forward and inverse kinematics, geometric errors | [`kinematics::Kinematics`], [`kinematics::LocationErrors`] |
-//! | [`numeric`] | numeric helpers every stage shares | [`numeric::sin_cos_deg`], [`numeric::cbrt`], [`numeric::exp_neg`], [`numeric::push_fixed`] |
+//! | [`numeric`] | numeric helpers every stage shares | [`numeric::sin_cos_deg`], [`numeric::push_fixed`] |
 //!
 //! The G-code reader is the `ngc` crate of this workspace; its axis types are re-exported
 //! here. Positions are mm and deg at every interface, SI inside the servo models.

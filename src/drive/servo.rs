@@ -66,7 +66,7 @@ use std::path::Path;
 use super::presliding::{Presliding, ReversalValue};
 use crate::error::{Error, Result};
 use crate::input::drive::{si_per_unit, AxisDrive, Model};
-use crate::numeric::exp_neg;
+use libm::exp;
 use crate::Axis;
 
 /// The state of one axis at the end of an interpolation period.
@@ -775,7 +775,7 @@ impl AxisServo {
                 }
                 let u_low = (v0.abs() - dv).max(0.0) * exact.inv_stribeck;
                 u_low >= 1.23
-                    && error((4.0 * u_low * u_low - 2.0) * exp_neg(-(u_low * u_low)))
+                    && error((4.0 * u_low * u_low - 2.0) * exp(-(u_low * u_low)))
                         <= exact.tolerance
             };
             // First with Δv bounded from the end points and the command; where that is not
@@ -1133,7 +1133,7 @@ fn stribeck_bound_decay(v: f64, fc: f64, fs: f64, vs: f64) -> (f64, f64) {
     if u2 > 40.0 {
         (fc, 0.0)
     } else {
-        let decay = exp_neg(-u2);
+        let decay = exp(-u2);
         (fc + (fs - fc) * decay, decay)
     }
 }

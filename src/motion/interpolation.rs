@@ -100,7 +100,7 @@ use nalgebra::Point3;
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::kinematics::{Kinematics, Layout};
-use crate::numeric::cbrt;
+use libm::cbrt;
 use crate::program::{FeedMode, Motion, Move, PathControl};
 use crate::Plane;
 use crate::{Axis, AxisVec};

@@ -2,12 +2,8 @@
 //! Inputs: f64 values (angles in deg, lengths, exponents).
 //! Outputs: f64 results bit for bit the same on every CPU, and fixed-decimal text.
 
-pub mod cbrt;
-pub mod exp_neg;
 pub mod fixed;
 pub mod trig;
 
-pub use cbrt::cbrt;
-pub use exp_neg::exp_neg;
 pub use fixed::{push_fixed, push_fixed_bytes, push_fixed_bytes_const};
 pub use trig::sin_cos_deg;

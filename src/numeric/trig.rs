@@ -3,19 +3,22 @@
 //! `θ = 90° k + r` with `k = round(θ / 90)` and `|r| ≤ 45°`. The remainder is exact: for
 //! `k = 0` it is θ itself, otherwise θ and `90 k` lie within a factor of two of each other
 //! (`|r| ≤ 45 ≤ |90 k| / 2`), so their difference is a double (Sterbenz). Then
-//! `x = r π/180` (one rounding) and, on `|x| ≤ π/4`, the minimax polynomials of fdlibm's
-//! `__kernel_sin` and `__kernel_cos` (error below one ulp):
+//! `x = r π/180` (one rounding) and, on `|x| ≤ π/4`, the published minimax polynomials for
+//! sine and cosine on that interval (the coefficients of Sun's fdlibm, error below one ulp):
 //!
 //! ```text
 //! sin x = x + x³ (S1 + z (S2 + z (S3 + z (S4 + z (S5 + z S6))))),   z = x²
-//! cos x = 1 - z/2 + z² (C1 + z (C2 + z (C3 + z (C4 + z (C5 + z C6)))))
+//! cos x = w + ((1 - w) - z/2) + z² (C1 + z (C2 + ... + z C6)),       w = 1 - z/2
 //! ```
 //!
-//! and the quadrant `k mod 4` swaps and negates them. Only multiplications and additions,
-//! so the result is the same on every CPU; multiples of 90° give exact 0 and ±1, and large
-//! angles keep their accuracy (a conversion to radians would round before the reduction).
-//! Kept instead of `to_radians().sin_cos()` for its cost (about a quarter of it:
-//! docs/performance.md) and because the kinematics' and the ball bar's bits depend on it.
+//! (`w` first, then the rounding error of `1 - z/2` added back), and the quadrant `k mod 4`
+//! swaps and negates them. Only multiplications and additions, so the result is the same on
+//! every CPU; multiples of 90° give exact 0 and ±1, and large angles keep their accuracy (a
+//! conversion to radians would round before the reduction).
+//!
+//! Kept rather than a library call: `to_radians().sin_cos()` costs about four times as much
+//! (docs/performance.md), and `libm::sincos` on the same reduced `x` differs in the last bit
+//! for about 0.1 % of angles, which changes the bundled outputs (blocks, summaries, fits).
 
 const S1: f64 = -1.666_666_666_666_663_243_48e-1;
 const S2: f64 = 8.333_333_333_322_489_461_24e-3;

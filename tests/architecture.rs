@@ -146,7 +146,7 @@ fn every_module_refers_only_to_its_own_layer_or_below() {
         ("study", "pipeline"),
         ("cli", "study"),
         ("kinematics", "numeric"),
-        ("drive", "numeric"),
+        ("report", "numeric"),
     ] {
         assert!(
             edges.contains_key(&(from.to_string(), to.to_string())),

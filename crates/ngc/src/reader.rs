@@ -746,11 +746,7 @@ impl Moves {
             ));
         }
         let start = self.find_sub(label, span)?;
-        let nlocal = if self.dialect.table().macro_b {
-            33
-        } else {
-            30
-        };
+        let nlocal = if self.dialect.table().macro_b { 33 } else { 30 };
         let saved = if locals {
             let p = &mut self.interp.params;
             let saved = p.numbered[1..=nlocal].to_vec();
@@ -845,12 +841,7 @@ impl Moves {
 
     fn eval_bracket(&mut self, line: &str, at: usize) -> LineResult<(f64, usize)> {
         self.interp.refresh_system_parameters();
-        let mut e = Eval {
-            line,
-            i: at,
-            params: &self.interp.params,
-            fanuc: self.dialect.table().macro_b,
-        };
+        let mut e = Eval::new(line, at, &self.interp.params, self.dialect.table().macro_b);
         e.skip_blanks();
         if line.as_bytes().get(e.i) != Some(&b'[') {
             let end = (e.i + 1).min(line.len());
@@ -986,12 +977,7 @@ impl Moves {
     fn o_call(&mut self, line: &str, o: &OLine, label: &str, next: Cursor) -> LineResult<()> {
         self.interp.refresh_system_parameters();
         let mut args = Vec::new();
-        let mut e = Eval {
-            line,
-            i: o.rest,
-            params: &self.interp.params,
-            fanuc: false,
-        };
+        let mut e = Eval::new(line, o.rest, &self.interp.params, false);
         loop {
             e.skip_blanks();
             match line.as_bytes().get(e.i) {
@@ -1042,7 +1028,12 @@ impl Moves {
             if c != 0.0 {
                 self.ifs.last_mut().expect("checked").1 = true;
             } else {
-                self.skip_to(here, &label, &[Kw::ElseIf, Kw::Else, Kw::EndIf], o.span.clone())?;
+                self.skip_to(
+                    here,
+                    &label,
+                    &[Kw::ElseIf, Kw::Else, Kw::EndIf],
+                    o.span.clone(),
+                )?;
             }
         }
         Ok(())

@@ -47,6 +47,7 @@ mod polar;
 mod probe;
 mod reader;
 mod remap;
+mod side_file;
 mod spline;
 mod stdglue;
 mod turns;
@@ -63,6 +64,7 @@ pub use options::{
     parse_tool_orientations, parse_tool_table, parse_var_file, tool_pockets, work_offset_parameter,
     Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
 };
-pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves};
+pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves, MAX_LINE_BYTES};
 pub use remap::{parse_remap, Remap, RemapCode};
+pub use side_file::{read_side_file, MAX_SIDE_FILE_BYTES};
 pub use units::{ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};

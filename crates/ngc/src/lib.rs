@@ -15,6 +15,12 @@
 //! canonical machining calls are. Reading streams one line at a time, so memory does not
 //! grow with the program.
 //!
+//! Every input-driven depth and size is bounded, and exceeding a bound is an error with its
+//! place, never a crash: expressions nest at most [`MAX_NESTING`] levels, subroutine calls
+//! at most [`MAX_CALL_DEPTH`], `#INCLUDE`s in a LinuxCNC INI at most 8; program and
+//! subroutine files (streamed) have lines of at most [`MAX_LINE_BYTES`]; side files (INI)
+//! are read only when regular and at most [`MAX_SIDE_FILE_BYTES`] ([`read_side_file`]).
+//!
 //! ```
 //! use std::path::Path;
 //! use ngc::{read_str, AxisVec, Axis, Motion};

@@ -33,6 +33,22 @@ fn run(path: &Path, options: &Options) -> Result<Vec<f64>, String> {
     Ok(xs)
 }
 
+/// LinuxCNC options with subroutine files searched in `dir`.
+fn searching(dir: &Path) -> Options {
+    Options {
+        search_path: vec![dir.to_path_buf()],
+        dialect: Dialect::Linuxcnc,
+        ..Options::default()
+    }
+}
+
+/// Runs `dir/p.ngc` calling `o<label>` on its line 2; the error's text.
+fn calling(dir: &Path, label: &str) -> String {
+    let main = dir.join("p.ngc");
+    std::fs::write(&main, format!("G21\no<{label}> call\nM2\n")).unwrap();
+    run(&main, &searching(dir)).unwrap_err()
+}
+
 const SECRET: &str = "root:$6$secretsecret:19000:0:99999:7:::\n";
 
 #[test]
@@ -45,12 +61,7 @@ fn a_subroutine_file_is_streamed_and_called_more_than_once() {
     .unwrap();
     let main = dir.join("p.ngc");
     std::fs::write(&main, "G21 G90\no<two> call [1]\no<two> call [3.5]\nM2\n").unwrap();
-    let options = Options {
-        search_path: vec![dir.clone()],
-        dialect: Dialect::Linuxcnc,
-        ..Options::default()
-    };
-    assert_eq!(run(&main, &options), Ok(vec![2.0, 7.0]));
+    assert_eq!(run(&main, &searching(&dir)), Ok(vec![2.0, 7.0]));
 }
 
 #[cfg(unix)]
@@ -60,14 +71,7 @@ fn a_subroutine_file_that_is_not_regular_is_refused_with_its_name() {
     std::os::unix::fs::symlink("/dev/zero", dir.join("zero.ngc")).unwrap();
     std::fs::create_dir(dir.join("folder.ngc")).unwrap();
     for label in ["zero", "folder"] {
-        let main = dir.join("p.ngc");
-        std::fs::write(&main, format!("G21\no<{label}> call\nM2\n")).unwrap();
-        let options = Options {
-            search_path: vec![dir.clone()],
-            dialect: Dialect::Linuxcnc,
-            ..Options::default()
-        };
-        let e = run(&main, &options).unwrap_err();
+        let e = calling(&dir, label);
         assert!(e.starts_with("2:1: subroutine file "), "{e}");
         assert!(e.contains(&format!("{label}.ngc")), "{e}");
         assert!(e.contains("not a regular file"), "{e}");
@@ -102,13 +106,7 @@ fn a_line_longer_than_the_limit_is_a_read_error_naming_the_line() {
     );
     // A subroutine file with such a line: an error at the call, naming the file.
     std::fs::rename(&main, dir.join("long.ngc")).unwrap();
-    std::fs::write(&main, "G21\no<long> call\nM2\n").unwrap();
-    let options = Options {
-        search_path: vec![dir.clone()],
-        dialect: Dialect::Linuxcnc,
-        ..Options::default()
-    };
-    let e = run(&main, &options).unwrap_err();
+    let e = calling(&dir, "long");
     assert!(e.starts_with("2:1: subroutine file "), "{e}");
     assert!(e.contains("long.ngc: line 2: a line longer than"), "{e}");
 }

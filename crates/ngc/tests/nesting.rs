@@ -150,3 +150,23 @@ fn deep_conditions_and_call_arguments_are_refused_too() {
         assert!(message.contains("nested deeper than"), "{message}");
     }
 }
+
+#[test]
+fn twenty_thousand_nested_blocks_need_no_recursion() {
+    // o-word blocks are jumps by label, not recursion: 20,000 nested `if`s run to their move.
+    let n = 20_000;
+    let mut text = String::from("G21 G90\n");
+    for k in 1..=n {
+        text.push_str(&format!("o{k} if [1]\n"));
+    }
+    text.push_str("G1 X4 F100\n");
+    for k in (1..=n).rev() {
+        text.push_str(&format!("o{k} endif\n"));
+    }
+    text.push_str("M2\n");
+    let mut moves = read_str(Path::new("blocks.ngc"), &text, AxisVec::ZERO)
+        .collect::<Result<Vec<_>, _>>()
+        .unwrap();
+    assert_eq!(moves.len(), 1);
+    assert_eq!(moves.pop().unwrap().end[Axis::X], 4.0);
+}

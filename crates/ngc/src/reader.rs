@@ -79,8 +79,8 @@ pub const MAX_LINE_BYTES: usize = 1 << 20;
 /// it the message quotes the offending line alone.
 const MAX_QUOTED_FILE_BYTES: u64 = 64 << 20;
 
-/// The text of a program: in memory (a string, a subroutine file), or a file read line by
-/// line at byte offsets.
+/// The text of a program: in memory (a string), or a file (the program, a subroutine file)
+/// read line by line at byte offsets.
 enum Source {
     Text(Rc<str>),
     File(FileLines),
@@ -548,9 +548,9 @@ impl Moves {
         let program = &self.programs[c.file];
         match &program.source {
             Source::Text(text) => (text.to_string(), c.offset.min(text.len())),
-            Source::File(f) => match std::fs::read(&program.path)
-                .ok()
-                .filter(|_| f.len <= MAX_QUOTED_FILE_BYTES)
+            Source::File(f) => match (f.len <= MAX_QUOTED_FILE_BYTES)
+                .then(|| std::fs::read(&program.path).ok())
+                .flatten()
             {
                 Some(bytes) => {
                     let text = match String::from_utf8(bytes) {

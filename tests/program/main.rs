@@ -6,6 +6,7 @@
 mod common;
 
 mod blocks;
+mod bounded;
 mod conformance;
 mod corpus;
 mod file_analysis;

@@ -10,6 +10,10 @@
 //!
 //! and the functions `ABS ACOS ASIN ATAN[y]/[x] COS EXP FIX FUP ROUND LN SIN SQRT TAN
 //! EXISTS[#<name>]`, angles in degrees. Comparisons and logic give 1 or 0.
+//!
+//! The evaluator recurses once per nesting level (a `[`, a function's `[`, a leading sign,
+//! a `#` that takes a value), so a line deepens the stack only up to [`MAX_NESTING`]
+//! levels; deeper nesting is an error at the first level beyond it.
 
 use std::collections::HashMap;
 use std::ops::Range;
@@ -76,6 +80,11 @@ impl Default for Params {
     }
 }
 
+/// Deepest nesting of brackets, function arguments, leading signs and `#` indirections
+/// together in one value. LinuxCNC's own programs nest a handful of levels; 100 keeps the
+/// evaluator's stack below about 100 kB on any line.
+pub const MAX_NESTING: usize = 100;
+
 /// An expression error: byte range in the line and message.
 #[derive(Debug)]
 pub struct ExprError {
@@ -93,6 +102,8 @@ pub struct Eval<'a> {
     pub params: &'a Params,
     /// Fanuc macro B: `ATAN[a,b]` and `#0` (vacant) allowed.
     pub fanuc: bool,
+    /// Nesting levels open at the cursor, at most [`MAX_NESTING`].
+    depth: usize,
 }
 
 const FUNCTIONS: [&str; 14] = [
@@ -114,6 +125,37 @@ pub fn function_at(line: &str, i: usize) -> Option<&'static str> {
 }
 
 impl<'a> Eval<'a> {
+    /// A cursor at byte `i` of `line`, outside any nesting.
+    pub fn new(line: &'a str, i: usize, params: &'a Params, fanuc: bool) -> Eval<'a> {
+        Eval {
+            line,
+            i,
+            params,
+            fanuc,
+            depth: 0,
+        }
+    }
+
+    /// Runs `inner` one nesting level deeper, refusing the level that opens at byte `at`
+    /// when it goes beyond [`MAX_NESTING`].
+    fn nested<T>(&mut self, at: usize, inner: impl FnOnce(&mut Self) -> R<T>) -> R<T> {
+        if self.depth >= MAX_NESTING {
+            let at = at.min(self.line.len());
+            return Err(self.err(
+                at..(at + 1).min(self.line.len()),
+                format!(
+                    "expression nested deeper than {MAX_NESTING} levels: expected at most \
+                     {MAX_NESTING} brackets, functions, signs and `#` inside one another"
+                ),
+                "one level too deep",
+            ));
+        }
+        self.depth += 1;
+        let result = inner(self);
+        self.depth -= 1;
+        result
+    }
+
     fn err(
         &self,
         span: Range<usize>,
@@ -160,13 +202,16 @@ impl<'a> Eval<'a> {
     /// A real value: number, `[expr]`, `#param`, function, with optional leading sign.
     pub fn value(&mut self) -> R<f64> {
         let start = self.i;
-        match self.peek() {
-            Some(b'[') => {
-                self.i += 1;
-                let v = self.binary(0)?;
-                self.expect(b']', "to close the expression")?;
+        let c = self.peek();
+        // Where a nesting level opens: the bracket, sign or function name.
+        let open = self.i;
+        match c {
+            Some(b'[') => self.nested(open, |e| {
+                e.i += 1;
+                let v = e.binary(0)?;
+                e.expect(b']', "to close the expression")?;
                 Ok(v)
-            }
+            }),
             Some(b'#') => {
                 let p = self.param()?;
                 match self.params.get(&p) {
@@ -185,15 +230,15 @@ impl<'a> Eval<'a> {
                     )),
                 }
             }
-            Some(b'-') => {
-                self.i += 1;
-                Ok(-self.value()?)
-            }
-            Some(b'+') => {
-                self.i += 1;
-                self.value()
-            }
-            Some(c) if c.is_ascii_alphabetic() => self.function(),
+            Some(b'-') => self.nested(open, |e| {
+                e.i += 1;
+                Ok(-e.value()?)
+            }),
+            Some(b'+') => self.nested(open, |e| {
+                e.i += 1;
+                e.value()
+            }),
+            Some(c) if c.is_ascii_alphabetic() => self.nested(open, Self::function),
             Some(c) if c.is_ascii_digit() || c == b'.' => self.number(),
             _ => {
                 let at = self.i.min(self.line.len());
@@ -253,7 +298,7 @@ impl<'a> Eval<'a> {
             }
             return Ok(Param::Named(name));
         }
-        let v = self.value()?;
+        let v = self.nested(start, Self::value)?;
         if v < 0.0
             || v.fract().abs() > 1e-4
             || v.round() as usize > MAX_PARAMETER

@@ -23,7 +23,8 @@ pub struct IniEntry {
     pub line: usize,
 }
 
-/// An ini file that could not be read: where and why.
+/// An ini file that could not be read: where and why. The message names keys and what was
+/// expected, never the file's text (the file may be anything a scenario names).
 #[derive(Clone, Debug, PartialEq)]
 pub struct IniError {
     pub path: PathBuf,
@@ -134,10 +135,9 @@ impl Ini {
                 _ => Err(IniError {
                     path: e.path.clone(),
                     line: e.line,
-                    message: format!(
-                        "[TRAJ]LINEAR_UNITS = `{}`: expected `mm` or `inch`",
-                        e.value
-                    ),
+                    message: "[TRAJ]LINEAR_UNITS: expected `mm`, `inch` or the machine units \
+                              per mm"
+                        .into(),
                 }),
             },
         }
@@ -247,12 +247,11 @@ fn read_into(
     section: &mut String,
     entries: &mut Vec<IniEntry>,
 ) -> Result<(), IniError> {
-    let bytes = std::fs::read(path).map_err(|e| IniError {
+    let text = crate::side_file::read_side_file(path).map_err(|e| IniError {
         path: path.to_path_buf(),
         line: 0,
         message: format!("cannot read the LinuxCNC configuration: {e}"),
     })?;
-    let text = String::from_utf8_lossy(&bytes);
     parse_into(path, &text, depth, section, entries)
 }
 
@@ -292,7 +291,7 @@ fn parse_into(
             let Some(name) = name.strip_suffix(']') else {
                 return Err(err(
                     k + 1,
-                    format!("`{line}`: expected a section header `[NAME]`"),
+                    "expected a section header `[NAME]` closed by `]`".into(),
                 ));
             };
             *section = name.trim().to_string();
@@ -301,13 +300,13 @@ fn parse_into(
         let Some((key, value)) = line.split_once('=') else {
             return Err(err(
                 k + 1,
-                format!("`{line}`: expected `KEY = value`, a `[SECTION]` header or a comment"),
+                "expected `KEY = value`, a `[SECTION]` header or a comment".into(),
             ));
         };
         if section.is_empty() {
             return Err(err(
                 k + 1,
-                format!("`{line}` before any `[SECTION]` header"),
+                "`KEY = value` before any `[SECTION]` header: expected a header first".into(),
             ));
         }
         entries.push(IniEntry {

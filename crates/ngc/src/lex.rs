@@ -153,12 +153,7 @@ pub fn lex_with<'l>(
                 "unexpected `%`",
             ));
         } else if c == b'#' {
-            let mut e = Eval {
-                line,
-                i,
-                params,
-                fanuc,
-            };
+            let mut e = Eval::new(line, i, params, fanuc);
             let p = e.param()?;
             e.skip_blanks();
             if line.as_bytes().get(e.i) != Some(&b'=') {
@@ -260,12 +255,7 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let computed = (number.is_empty() && (sign_then(number_start)))
         || ((number == "-" || number == "+") && sign_then(i));
     if computed {
-        let mut e = Eval {
-            line,
-            i: number_start,
-            params,
-            fanuc,
-        };
+        let mut e = Eval::new(line, number_start, params, fanuc);
         let value = e.value()?;
         return Ok(Word {
             letter,

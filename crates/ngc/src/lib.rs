@@ -15,6 +15,12 @@
 //! canonical machining calls are. Reading streams one line at a time, so memory does not
 //! grow with the program.
 //!
+//! Every input-driven depth and size is bounded, and exceeding a bound is an error with its
+//! place, never a crash: expressions nest at most [`MAX_NESTING`] levels, subroutine calls
+//! at most [`MAX_CALL_DEPTH`], `#INCLUDE`s in a LinuxCNC INI at most 8; program and
+//! subroutine files (streamed) have lines of at most [`MAX_LINE_BYTES`]; side files (INI)
+//! are read only when regular and at most [`MAX_SIDE_FILE_BYTES`] ([`read_side_file`]).
+//!
 //! ```
 //! use std::path::Path;
 //! use ngc::{read_str, AxisVec, Axis, Motion};
@@ -47,6 +53,7 @@ mod polar;
 mod probe;
 mod reader;
 mod remap;
+mod side_file;
 mod spline;
 mod stdglue;
 mod turns;
@@ -55,6 +62,7 @@ mod units;
 pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
 pub use error::{line_column, Error, Result, Syntax};
+pub use expr::MAX_NESTING;
 pub use frame::RotaryTable;
 pub use ini::{scale_parameter_lengths, Ini, IniEntry, IniError, LinuxcncConfig};
 pub use notice::Notice;
@@ -62,6 +70,7 @@ pub use options::{
     parse_tool_orientations, parse_tool_table, parse_var_file, tool_pockets, work_offset_parameter,
     Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
 };
-pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves};
+pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves, MAX_LINE_BYTES};
 pub use remap::{parse_remap, Remap, RemapCode};
+pub use side_file::{read_side_file, MAX_SIDE_FILE_BYTES};
 pub use units::{ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};

@@ -171,27 +171,41 @@ impl Options {
     }
 }
 
+/// 1-based character column of `word`, a slice of `line`, in `line`.
+fn column(line: &str, word: &str) -> usize {
+    let at = (word.as_ptr() as usize).saturating_sub(line.as_ptr() as usize);
+    line.get(..at)
+        .map_or(1, |before| before.chars().count() + 1)
+}
+
 /// Parses a LinuxCNC parameter file: lines `number value`, blank lines ignored.
-/// Errors give the 1-based line and what was expected.
+/// Errors give the 1-based line, the column and what was expected, never the file's text.
 pub fn parse_var_file(text: &str) -> Result<Vec<(u32, f64)>, (usize, String)> {
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let mut parts = line.split_whitespace();
         let Some(first) = parts.next() else { continue };
-        let number = first.parse::<u32>().ok().filter(|n| (1..=5601).contains(n));
-        let value = parts
-            .next()
+        let Some(n) = first.parse::<u32>().ok().filter(|n| (1..=5601).contains(n)) else {
+            return Err((
+                k + 1,
+                format!(
+                    "column {}: expected a parameter number 1-5601",
+                    column(line, first)
+                ),
+            ));
+        };
+        let second = parts.next();
+        let Some(v) = second
             .and_then(|v| v.parse::<f64>().ok())
-            .filter(|v| v.is_finite());
-        match (number, value) {
-            (Some(n), Some(v)) => out.push((n, v)),
-            _ => {
-                return Err((
-                    k + 1,
-                    format!("`{line}`: expected a parameter number 1-5601 and a finite value"),
-                ))
-            }
-        }
+            .filter(|v| v.is_finite())
+        else {
+            let at = second.map_or(line.chars().count() + 1, |w| column(line, w));
+            return Err((
+                k + 1,
+                format!("column {at}: expected a finite value after the parameter number"),
+            ));
+        };
+        out.push((n, v));
     }
     Ok(out)
 }
@@ -232,7 +246,11 @@ pub fn parse_tool_table(text: &str) -> Result<Vec<Tool>, (usize, String)> {
             let bad = || {
                 (
                     k + 1,
-                    format!("`{word}` in `{raw}`: expected a letter and a number such as `Z+10.0`"),
+                    format!(
+                        "column {}: expected a word T P Z D X Y A B C U V W I J Q, a letter and \
+                         a number such as `Z+10.0`",
+                        column(raw, word)
+                    ),
                 )
             };
             let value = value.ok_or_else(bad)?;
@@ -245,7 +263,13 @@ pub fn parse_tool_table(text: &str) -> Result<Vec<Tool>, (usize, String)> {
             }
         }
         if tool.number == u32::MAX {
-            return Err((k + 1, format!("`{raw}`: expected a tool number `T<n>`")));
+            return Err((
+                k + 1,
+                format!(
+                    "column {}: expected a tool number `T<n>`",
+                    column(raw, line)
+                ),
+            ));
         }
         out.push(tool);
     }
@@ -271,7 +295,10 @@ pub fn parse_tool_orientations(text: &str) -> Result<Vec<(u32, u32)>, (usize, St
                 if !(0.0..=9.0).contains(&q) || q.fract() != 0.0 {
                     return Err((
                         n + 1,
-                        format!("`{word}` in `{raw}`: expected a lathe tool orientation Q0 to Q9"),
+                        format!(
+                            "column {}: expected a lathe tool orientation Q0 to Q9",
+                            column(raw, word)
+                        ),
                     ));
                 }
                 if q != 0.0 {

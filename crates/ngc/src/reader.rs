@@ -8,8 +8,10 @@
 //!
 //! A program file is streamed line by line through a fixed buffer: jumps (loops, calls,
 //! GOTO) seek back to a byte offset, as LinuxCNC re-reads its file by offset, and the
-//! subroutine index keeps offsets, not text. Subroutine files are loaded once. Moves are
-//! streamed, never collected, so memory grows neither with the file nor with the moves.
+//! subroutine index keeps offsets, not text. Subroutine files are streamed the same way.
+//! Moves are streamed, never collected, so memory grows neither with the file nor with the
+//! moves. A line longer than [`MAX_LINE_BYTES`] is a read error, and only regular files
+//! are read (a device such as `/dev/zero`, a FIFO or a folder is refused).
 
 use std::collections::{HashMap, VecDeque};
 use std::io::{BufRead, BufReader, Read};
@@ -56,13 +58,7 @@ pub fn read_file_with(path: &Path, options: &Options) -> Result<Moves> {
         path: path.to_path_buf(),
         source,
     };
-    let file = std::fs::File::open(path).map_err(read_error)?;
-    let len = file.metadata().map_err(read_error)?.len();
-    let source = Source::File(FileLines {
-        reader: BufReader::with_capacity(FILE_BUFFER_BYTES, file),
-        pos: 0,
-        len,
-    });
+    let source = Source::File(FileLines::open(path).map_err(read_error)?);
     Ok(Moves::new(path, source, options))
 }
 
@@ -74,8 +70,17 @@ pub fn read_str_with(path: &Path, text: &str, options: &Options) -> Moves {
 /// Read buffer of a streamed program file, bytes.
 const FILE_BUFFER_BYTES: usize = 64 * 1024;
 
-/// The text of a program: in memory (a string, a subroutine file), or a file read line by
-/// line at byte offsets.
+/// Longest line of a program or subroutine file, bytes (1 MiB): no G-code line comes near
+/// it, and a file without newlines (`/dev/zero`, a binary) stops here instead of growing
+/// the line buffer without end.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// Largest program file whose whole text an error message quotes, bytes (64 MiB); beyond
+/// it the message quotes the offending line alone.
+const MAX_QUOTED_FILE_BYTES: u64 = 64 << 20;
+
+/// The text of a program: in memory (a string), or a file (the program, a subroutine file)
+/// read line by line at byte offsets.
 enum Source {
     Text(Rc<str>),
     File(FileLines),
@@ -89,6 +94,17 @@ struct FileLines {
 }
 
 impl FileLines {
+    /// Opens the regular file at `path` for streaming (see [`crate::side_file::open_regular`]).
+    fn open(path: &Path) -> std::io::Result<FileLines> {
+        let file = crate::side_file::open_regular(path)?;
+        let len = file.metadata()?.len();
+        Ok(FileLines {
+            reader: BufReader::with_capacity(FILE_BUFFER_BYTES, file),
+            pos: 0,
+            len,
+        })
+    }
+
     /// Reads the line at byte `offset` into `buf` (without its `\n` or `\r\n`; invalid
     /// UTF-8 replaced); returns the bytes it takes in the file, 0 at the end.
     fn read_line(&mut self, offset: usize, buf: &mut String) -> std::io::Result<usize> {
@@ -119,6 +135,13 @@ impl FileLines {
                 Some(k) => (k + 1, true),
                 None => (available.len(), false),
             };
+            if n + take > MAX_LINE_BYTES + 2 {
+                bytes.clear();
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("a line longer than {MAX_LINE_BYTES} bytes: expected G-code lines"),
+                ));
+            }
             bytes.extend_from_slice(&available[..take]);
             self.reader.consume(take);
             n += take;
@@ -500,7 +523,10 @@ impl Moves {
                 Ok(0) => return None,
                 Ok(len) => (self.buf.as_str(), len),
                 Err(e) => {
-                    self.io_error = Some(e);
+                    self.io_error = Some(std::io::Error::new(
+                        e.kind(),
+                        format!("line {}: {e}", c.line),
+                    ));
                     return None;
                 }
             },
@@ -522,8 +548,11 @@ impl Moves {
         let program = &self.programs[c.file];
         match &program.source {
             Source::Text(text) => (text.to_string(), c.offset.min(text.len())),
-            Source::File(_) => match std::fs::read(&program.path) {
-                Ok(bytes) => {
+            Source::File(f) => match (f.len <= MAX_QUOTED_FILE_BYTES)
+                .then(|| std::fs::read(&program.path).ok())
+                .flatten()
+            {
+                Some(bytes) => {
                     let text = match String::from_utf8(bytes) {
                         Ok(t) => t,
                         Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
@@ -539,7 +568,7 @@ impl Moves {
                     };
                     (text, start)
                 }
-                Err(_) => {
+                None => {
                     let mut text = "\n".repeat(c.line.saturating_sub(1));
                     let start = text.len();
                     text.push_str(line_text);
@@ -677,12 +706,34 @@ impl Moves {
         self.programs[file].subs.as_ref().expect("built above")
     }
 
+    /// Where subroutine `label` starts in program `file`, if it is there; a file that could
+    /// not be read to its end while indexing it is an error at the call's `span`.
+    fn sub_in(
+        &mut self,
+        file: usize,
+        label: &str,
+        span: &std::ops::Range<usize>,
+    ) -> LineResult<Option<Cursor>> {
+        let found = self.subs(file).get(label).copied();
+        match self.io_error.take() {
+            Some(e) => Err(LineError::new(
+                span.clone(),
+                format!(
+                    "subroutine file {}: {e}",
+                    self.programs[file].path.display()
+                ),
+                "unreadable subroutine file",
+            )),
+            None => Ok(found),
+        }
+    }
+
     /// Where subroutine `label` starts: this file, a loaded file, or a file on the search
     /// path (`label.ngc`, or for Fanuc `O<label>.nc`), loaded once.
     fn find_sub(&mut self, label: &str, span: std::ops::Range<usize>) -> LineResult<Cursor> {
         let here = self.cursor.file;
         for file in std::iter::once(here).chain(0..self.programs.len()) {
-            if let Some(&c) = self.subs(file).get(label) {
+            if let Some(c) = self.sub_in(file, label, &span)? {
                 return Ok(c);
             }
         }
@@ -699,25 +750,32 @@ impl Moves {
         for dir in self.search_path.clone() {
             for name in &names {
                 let path = dir.join(name);
-                if let Ok(bytes) = std::fs::read(&path) {
-                    let text = String::from_utf8_lossy(&bytes).into_owned();
-                    self.programs.push(Program {
-                        path,
-                        source: Source::Text(text.into()),
-                        subs: None,
+                if !path.exists() {
+                    continue;
+                }
+                let lines = FileLines::open(&path).map_err(|e| {
+                    LineError::new(
+                        span.clone(),
+                        format!("subroutine file {}: {e}", path.display()),
+                        "unreadable subroutine file",
+                    )
+                })?;
+                self.programs.push(Program {
+                    path,
+                    source: Source::File(lines),
+                    subs: None,
+                });
+                let file = self.programs.len() - 1;
+                if let Some(c) = self.sub_in(file, label, &span)? {
+                    return Ok(c);
+                }
+                if self.dialect.table().macro_b {
+                    // A Fanuc program file without its own O line starts at its top.
+                    return Ok(Cursor {
+                        file,
+                        offset: 0,
+                        line: 1,
                     });
-                    let file = self.programs.len() - 1;
-                    if let Some(&c) = self.subs(file).get(label) {
-                        return Ok(c);
-                    }
-                    if self.dialect.table().macro_b {
-                        // A Fanuc program file without its own O line starts at its top.
-                        return Ok(Cursor {
-                            file,
-                            offset: 0,
-                            line: 1,
-                        });
-                    }
                 }
             }
         }
@@ -746,11 +804,7 @@ impl Moves {
             ));
         }
         let start = self.find_sub(label, span)?;
-        let nlocal = if self.dialect.table().macro_b {
-            33
-        } else {
-            30
-        };
+        let nlocal = if self.dialect.table().macro_b { 33 } else { 30 };
         let saved = if locals {
             let p = &mut self.interp.params;
             let saved = p.numbered[1..=nlocal].to_vec();
@@ -845,12 +899,7 @@ impl Moves {
 
     fn eval_bracket(&mut self, line: &str, at: usize) -> LineResult<(f64, usize)> {
         self.interp.refresh_system_parameters();
-        let mut e = Eval {
-            line,
-            i: at,
-            params: &self.interp.params,
-            fanuc: self.dialect.table().macro_b,
-        };
+        let mut e = Eval::new(line, at, &self.interp.params, self.dialect.table().macro_b);
         e.skip_blanks();
         if line.as_bytes().get(e.i) != Some(&b'[') {
             let end = (e.i + 1).min(line.len());
@@ -986,12 +1035,7 @@ impl Moves {
     fn o_call(&mut self, line: &str, o: &OLine, label: &str, next: Cursor) -> LineResult<()> {
         self.interp.refresh_system_parameters();
         let mut args = Vec::new();
-        let mut e = Eval {
-            line,
-            i: o.rest,
-            params: &self.interp.params,
-            fanuc: false,
-        };
+        let mut e = Eval::new(line, o.rest, &self.interp.params, false);
         loop {
             e.skip_blanks();
             match line.as_bytes().get(e.i) {
@@ -1042,7 +1086,12 @@ impl Moves {
             if c != 0.0 {
                 self.ifs.last_mut().expect("checked").1 = true;
             } else {
-                self.skip_to(here, &label, &[Kw::ElseIf, Kw::Else, Kw::EndIf], o.span.clone())?;
+                self.skip_to(
+                    here,
+                    &label,
+                    &[Kw::ElseIf, Kw::Else, Kw::EndIf],
+                    o.span.clone(),
+                )?;
             }
         }
         Ok(())

@@ -58,7 +58,8 @@ pub fn run(args: &MergeArgs) -> Result<i32> {
             let (_, total, parts) = join::<BatchHeader, Vec<BatchRow>>(&args.shards)?;
             let rows: Vec<BatchRow> = parts.into_iter().flatten().collect();
             size("rows", rows.len(), total)?;
-            super::batch::emit(&rows, args.json, &args.output)
+            let run_dir = crate::report::RunDir::begin(&args.output)?;
+            super::batch::emit(&rows, args.json, run_dir, &args.output)
         }
         other => Err(Error::usage(format!(
             "{}: unknown study {other:?} (this mtsim merges sweep, placement and batch shards)",

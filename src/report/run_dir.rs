@@ -1,0 +1,284 @@
+//! A folder of outputs written as one unit: staged beside the target, swapped in when complete.
+//!
+//! A command that writes several files into `-o DIR` writes them into `.DIR.mtsim-new` (same
+//! parent, so a rename moves it) and, once all are written, puts it in place of `DIR`: on
+//! Linux one `renameat2(RENAME_EXCHANGE)` swaps the two folders, elsewhere `DIR` is renamed to
+//! `.DIR.mtsim-old` and the new folder renamed in. The old run is then removed. A reader (or
+//! a crash at any instant) sees the old complete run or the new complete run, never a mix, and
+//! files only the old run wrote go with it.
+//!
+//! `.DIR.mtsim-lock` holds the writer's pid under an exclusive `flock` (`File::try_lock`):
+//! a second run into `DIR` is refused while the first lives, and the OS releases the lock when
+//! a run dies, however it dies. The lock file itself stays (removing a locked file would let
+//! two runs lock two different files of one name). A run that holds the lock first removes
+//! what a killed run left: `.DIR.mtsim-new`, and `.DIR.mtsim-old` (put back as `DIR` if the
+//! kill came between the two renames of the fallback). SIGINT and SIGTERM remove the staging
+//! folder and end the process as the signal would ([`signals`]).
+
+use std::fs::File;
+use std::io::{Read, Seek, Write};
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+
+/// The names that mtsim commands write into an output folder: a folder holding anything else
+/// is not replaced (`-o .` must not delete the user's files).
+fn is_run_output(name: &str) -> bool {
+    const FILES: [&str; 10] = [
+        "trace.csv",
+        "trace.parquet",
+        "summary.json",
+        "ballbar.svg",
+        "test.json",
+        "check.json",
+        "report.html",
+        "fit.json",
+        "location-errors.toml",
+        "fit.svg",
+    ];
+    const PREFIXES: [&str; 4] = ["sweep-", "placement.", "batch.", "runs"];
+    FILES.contains(&name) || PREFIXES.iter().any(|p| name.starts_with(p))
+}
+
+/// An output folder being written; [`RunDir::commit`] puts it in place, dropping it without
+/// committing removes what was written.
+#[derive(Debug)]
+pub struct RunDir {
+    target: PathBuf,
+    staging: PathBuf,
+    _lock: File,
+    committed: bool,
+}
+
+/// `<parent>/.<name>.mtsim-<what>`.
+fn sibling(target: &Path, what: &str) -> PathBuf {
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    target.with_file_name(format!(".{name}.mtsim-{what}"))
+}
+
+fn write_error(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
+    move |source| Error::Write {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Removes the file or folder at `path`, if any.
+fn remove_any(path: &Path) -> Result<()> {
+    let result = match std::fs::symlink_metadata(path) {
+        Err(_) => return Ok(()),
+        Ok(m) if m.is_dir() => std::fs::remove_dir_all(path),
+        Ok(_) => std::fs::remove_file(path),
+    };
+    match result {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(write_error(path)(e)),
+        _ => Ok(()),
+    }
+}
+
+impl RunDir {
+    /// Locks `target` for this run, cleans up after a killed run and creates the empty
+    /// staging folder. Fails (exit 2) when another live run holds the lock, when `target`
+    /// is not a folder, or when it holds files no mtsim run writes.
+    pub fn begin(target: &Path) -> Result<RunDir> {
+        if target.file_name().is_none() || target.as_os_str() == "." {
+            return Err(Error::usage(format!(
+                "-o {}: name the output folder (a run replaces the whole folder)",
+                target.display()
+            )));
+        }
+        let parent = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        super::create_dir(parent)?;
+        let lock_path = sibling(target, "lock");
+        let mut lock = File::options()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&lock_path)
+            .map_err(write_error(&lock_path))?;
+        if let Err(e) = lock.try_lock() {
+            let mut pid = String::new();
+            let _ = lock.read_to_string(&mut pid);
+            return Err(match e {
+                std::fs::TryLockError::WouldBlock => Error::usage(format!(
+                    "{} is being written by another mtsim run (pid {}); wait for it or choose another -o",
+                    target.display(),
+                    pid.trim()
+                )),
+                std::fs::TryLockError::Error(source) => Error::Write {
+                    path: lock_path,
+                    source,
+                },
+            });
+        }
+        (|| {
+            lock.set_len(0)?;
+            lock.rewind()?;
+            writeln!(lock, "{}", std::process::id())
+        })()
+        .map_err(write_error(&lock_path))?;
+        let (staging, old) = (sibling(target, "new"), sibling(target, "old"));
+        if std::fs::symlink_metadata(&old).is_ok() && std::fs::symlink_metadata(target).is_err() {
+            std::fs::rename(&old, target).map_err(write_error(target))?;
+        }
+        remove_any(&old)?;
+        remove_any(&staging)?;
+        if let Ok(meta) = std::fs::metadata(target) {
+            if !meta.is_dir() {
+                return Err(Error::usage(format!(
+                    "-o {}: a file, not a folder",
+                    target.display()
+                )));
+            }
+            let entries = std::fs::read_dir(target).map_err(write_error(target))?;
+            for entry in entries.flatten() {
+                let name = entry.file_name().to_string_lossy().into_owned();
+                if !is_run_output(&name) {
+                    return Err(Error::usage(format!(
+                        "-o {}: the folder holds {name}, which no mtsim run writes, and a run replaces the whole folder; choose a new or empty folder",
+                        target.display()
+                    )));
+                }
+            }
+        }
+        super::create_dir(&staging)?;
+        signals::watch(&staging);
+        Ok(RunDir {
+            target: target.to_path_buf(),
+            staging,
+            _lock: lock,
+            committed: false,
+        })
+    }
+
+    /// The folder to write the run's files into.
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// Puts the written folder in place of the target and removes the old run.
+    pub fn commit(mut self) -> Result<()> {
+        let old = sibling(&self.target, "old");
+        let exists = std::fs::symlink_metadata(&self.target).is_ok();
+        if !exists {
+            std::fs::rename(&self.staging, &self.target).map_err(write_error(&self.target))?;
+        } else if exchange(&self.staging, &self.target).is_ok() {
+            // The staging name now holds the old run.
+            self.committed = true;
+            signals::unwatch(&self.staging);
+            return remove_any(&self.staging);
+        } else {
+            std::fs::rename(&self.target, &old).map_err(write_error(&old))?;
+            std::fs::rename(&self.staging, &self.target).map_err(write_error(&self.target))?;
+        }
+        self.committed = true;
+        signals::unwatch(&self.staging);
+        remove_any(&old)
+    }
+}
+
+impl Drop for RunDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = remove_any(&self.staging);
+            signals::unwatch(&self.staging);
+        }
+    }
+}
+
+/// Swaps the folders `a` and `b` in one step (Linux `renameat2(RENAME_EXCHANGE)`).
+#[cfg(any(target_os = "linux", target_os = "android"))]
+fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
+    use rustix::fs::{renameat_with, RenameFlags, CWD};
+    renameat_with(CWD, a, CWD, b, RenameFlags::EXCHANGE).map_err(std::io::Error::from)
+}
+
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+fn exchange(_: &Path, _: &Path) -> std::io::Result<()> {
+    Err(std::io::ErrorKind::Unsupported.into())
+}
+
+/// SIGINT and SIGTERM while a run writes: its staging folders are removed, then the signal's
+/// default action ends the process (so the exit status says which signal). The handler only
+/// writes the signal number to a pipe (async-signal-safe); a thread reads it and cleans up.
+#[cfg(unix)]
+mod signals {
+    use std::path::{Path, PathBuf};
+    use std::sync::atomic::{AtomicI32, Ordering};
+    use std::sync::{Mutex, Once};
+
+    static STAGING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+    static PIPE_WRITE: AtomicI32 = AtomicI32::new(-1);
+    static INSTALL: Once = Once::new();
+
+    extern "C" fn on_signal(signal: libc::c_int) {
+        let byte = signal as u8;
+        let fd = PIPE_WRITE.load(Ordering::Relaxed);
+        // SAFETY: write(2) is async-signal-safe; the buffer is one live byte.
+        unsafe { libc::write(fd, (&byte as *const u8).cast(), 1) };
+    }
+
+    fn install() {
+        let mut fds = [0 as libc::c_int; 2];
+        // SAFETY: pipe(2) fills the two descriptors of the array it is given.
+        if unsafe { libc::pipe(fds.as_mut_ptr()) } != 0 {
+            return;
+        }
+        PIPE_WRITE.store(fds[1], Ordering::Relaxed);
+        let read_fd = fds[0];
+        let spawned = std::thread::Builder::new()
+            .name("mtsim-signals".into())
+            .spawn(move || {
+                let mut byte = 0u8;
+                // SAFETY: reads one byte into a live local from the pipe this thread owns.
+                while unsafe { libc::read(read_fd, (&mut byte as *mut u8).cast(), 1) } != 1 {}
+                let staging = STAGING.lock().unwrap_or_else(|e| e.into_inner());
+                for dir in staging.iter() {
+                    // A file the run is creating meanwhile can make one pass fail.
+                    for _ in 0..3 {
+                        if super::remove_any(dir).is_ok() {
+                            break;
+                        }
+                    }
+                }
+                // SAFETY: back to the default action, then the signal again: the process
+                // ends as if it had not been caught.
+                unsafe {
+                    libc::signal(byte as libc::c_int, libc::SIG_DFL);
+                    libc::raise(byte as libc::c_int);
+                }
+            });
+        if spawned.is_err() {
+            return;
+        }
+        for signal in [libc::SIGINT, libc::SIGTERM] {
+            // SAFETY: the handler only loads an atomic and calls write(2).
+            unsafe { libc::signal(signal, on_signal as *const () as libc::sighandler_t) };
+        }
+    }
+
+    pub fn watch(dir: &Path) {
+        INSTALL.call_once(install);
+        let mut staging = STAGING.lock().unwrap_or_else(|e| e.into_inner());
+        staging.push(dir.to_path_buf());
+    }
+
+    pub fn unwatch(dir: &Path) {
+        let mut staging = STAGING.lock().unwrap_or_else(|e| e.into_inner());
+        staging.retain(|d| d != dir);
+    }
+}
+
+#[cfg(not(unix))]
+mod signals {
+    use std::path::Path;
+    pub fn watch(_: &Path) {}
+    pub fn unwatch(_: &Path) {}
+}

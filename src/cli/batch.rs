@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{print_stdout, progress_bar};
 use crate::error::{Error, Result};
+use crate::report::test_info::{files_hash, files_hash_of_paths, scenario_hash};
 use crate::report::{write_atomic, RunDir};
 use crate::study::batch::{run_scenario, to_csv, to_parquet, BatchRow};
 use crate::study::shard::{Shard, ShardFile};
@@ -93,7 +94,7 @@ pub fn run(args: &BatchArgs) -> Result<i32> {
     bar.finish_and_clear();
     let Some(run_dir) = run_dir else {
         let shard = args.shard.expect("a batch without a staging folder is a shard");
-        let file = ShardFile::new("batch", shard, work.len(), header, rows);
+        let file = ShardFile::new("batch", shard, work.len(), batch_hash(&work), header, rows);
         let path = file.write(output, "batch")?;
         super::note(&format!(
             "wrote {}: join the shards with `mtsim merge`",
@@ -102,6 +103,20 @@ pub fn run(args: &BatchArgs) -> Result<i32> {
         return Ok(0);
     };
     emit(&rows, args.json, run_dir, &args.output)
+}
+
+/// The scenario hash of a batch: [`files_hash`] of its scenarios' hashes (the raw file's
+/// for a scenario that does not load), so that the shards of one batch agree on all of it.
+fn batch_hash(work: &[(String, PathBuf)]) -> String {
+    let hashes: Vec<String> = work
+        .iter()
+        .map(|(_, path)| match crate::input::scenario::Scenario::load(path) {
+            Ok(scenario) => scenario_hash(&scenario),
+            Err(_) => format!("{:016x}", files_hash_of_paths(&[path.as_path()])),
+        })
+        .collect();
+    let chunks: Vec<&[u8]> = hashes.iter().map(|h| h.as_bytes()).collect();
+    format!("{:016x}", files_hash(&chunks))
 }
 
 /// Writes batch.csv and batch.parquet and prints the rows: the same for a whole run and for

@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 use super::{cone_of, print_stdout, progress_bar};
 use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
+use crate::report::test_info::scenario_hash;
 use crate::report::{write_atomic, RunDir};
 use crate::study::placement::{placement_cells, PlacementMap};
 use crate::study::shard::{Shard, ShardFile};
@@ -66,7 +67,7 @@ pub fn sweep(
     })?;
     bar.finish_and_clear();
     if let Some(shard) = shard {
-        let file = ShardFile::new("sweep", shard, values.len(), header, part);
+        let file = ShardFile::new("sweep", shard, values.len(), scenario_hash(&scenario), header, part);
         wrote_shard(&file.write(shard_dir(output)?, &format!("sweep-{}", param.name()))?);
         return Ok(0);
     }
@@ -208,7 +209,7 @@ pub fn placement(
     let cells = placement_cells(&scenario, [px, py], &xs, &ys, range, &|| bar.inc(1))?;
     bar.finish_and_clear();
     if let Some(shard) = shard {
-        let file = ShardFile::new("placement", shard, n, header, cells);
+        let file = ShardFile::new("placement", shard, n, scenario_hash(&scenario), header, cells);
         wrote_shard(&file.write(shard_dir(output)?, "placement")?);
         return Ok(0);
     }

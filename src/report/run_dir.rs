@@ -1,19 +1,20 @@
 //! A folder of outputs written as one unit: staged beside the target, swapped in when complete.
 //!
 //! A command that writes several files into `-o DIR` writes them into `.DIR.mtsim-new` (same
-//! parent, so a rename moves it) and, once all are written, puts it in place of `DIR`: on
-//! Linux one `renameat2(RENAME_EXCHANGE)` swaps the two folders, elsewhere `DIR` is renamed to
-//! `.DIR.mtsim-old` and the new folder renamed in. The old run is then removed. A reader (or
-//! a crash at any instant) sees the old complete run or the new complete run, never a mix, and
-//! files only the old run wrote go with it.
+//! parent, so a rename moves it). Once all are written, the entries of `DIR` that no mtsim run
+//! writes (the user's notes, a `shards/` folder: see [`is_run_output`]) are moved into it, and
+//! it takes the place of `DIR`: on Linux one `renameat2(RENAME_EXCHANGE)` swaps the two
+//! folders, elsewhere `DIR` is renamed to `.DIR.mtsim-old` and the new folder renamed in. The
+//! old run is then removed. A reader, or a crash at any instant, sees the old complete run or
+//! the new complete run, never a mix; outputs only the old run wrote go with it.
 //!
 //! `.DIR.mtsim-lock` holds the writer's pid under an exclusive `flock` (`File::try_lock`):
 //! a second run into `DIR` is refused while the first lives, and the OS releases the lock when
-//! a run dies, however it dies. The lock file itself stays (removing a locked file would let
-//! two runs lock two different files of one name). A run that holds the lock first removes
-//! what a killed run left: `.DIR.mtsim-new`, and `.DIR.mtsim-old` (put back as `DIR` if the
-//! kill came between the two renames of the fallback). SIGINT and SIGTERM remove the staging
-//! folder and end the process as the signal would ([`signals`]).
+//! a run dies, however it dies. The lock file stays (removing a locked file would let two
+//! runs lock two different files of one name). The run that next holds the lock cleans up
+//! after a killed one ([`recover`]): the user's entries go back from `.DIR.mtsim-new` into
+//! `DIR`, `.DIR.mtsim-old` goes back as `DIR` if `DIR` is missing, and both are removed.
+//! SIGINT and SIGTERM do the same for the running command, then end it as the signal would.
 
 use std::fs::File;
 use std::io::{Read, Seek, Write};
@@ -21,9 +22,10 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
-/// The names that mtsim commands write into an output folder: a folder holding anything else
-/// is not replaced (`-o .` must not delete the user's files).
-fn is_run_output(name: &str) -> bool {
+/// Whether `name` is one an mtsim command writes into an output folder (or the temporary
+/// `<name>.tmp` / `<name>.raw.tmp` of one): such entries belong to the run and are replaced;
+/// all others are the user's and kept.
+pub fn is_run_output(name: &str) -> bool {
     const FILES: [&str; 10] = [
         "trace.csv",
         "trace.parquet",
@@ -36,8 +38,10 @@ fn is_run_output(name: &str) -> bool {
         "location-errors.toml",
         "fit.svg",
     ];
-    const PREFIXES: [&str; 4] = ["sweep-", "placement.", "batch.", "runs"];
-    FILES.contains(&name) || PREFIXES.iter().any(|p| name.starts_with(p))
+    const PREFIXES: [&str; 3] = ["sweep-", "placement.", "batch."];
+    let name = name.strip_suffix(".tmp").unwrap_or(name);
+    let name = name.strip_suffix(".raw").unwrap_or(name);
+    name == "runs" || FILES.contains(&name) || PREFIXES.iter().any(|p| name.starts_with(p))
 }
 
 /// An output folder being written; [`RunDir::commit`] puts it in place, dropping it without
@@ -66,6 +70,10 @@ fn write_error(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
     }
 }
 
+fn exists(path: &Path) -> bool {
+    std::fs::symlink_metadata(path).is_ok()
+}
+
 /// Removes the file or folder at `path`, if any.
 fn remove_any(path: &Path) -> Result<()> {
     let result = match std::fs::symlink_metadata(path) {
@@ -79,14 +87,43 @@ fn remove_any(path: &Path) -> Result<()> {
     }
 }
 
+/// Moves the user's entries (not [`is_run_output`]) of folder `from` into folder `to`.
+fn move_user_entries(from: &Path, to: &Path) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(from) else {
+        return Ok(());
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        if !is_run_output(&name.to_string_lossy()) && !exists(&to.join(&name)) {
+            std::fs::rename(entry.path(), to.join(&name)).map_err(write_error(&entry.path()))?;
+        }
+    }
+    Ok(())
+}
+
+/// What an interrupted run into `target` left, undone: the user's entries back from the
+/// staging folder, the old run back in place if the swap stopped half way, then both
+/// leftovers removed.
+fn recover(target: &Path) -> Result<()> {
+    let (staging, old) = (sibling(target, "new"), sibling(target, "old"));
+    if exists(&old) && !exists(target) {
+        std::fs::rename(&old, target).map_err(write_error(target))?;
+    }
+    if exists(target) {
+        move_user_entries(&staging, target)?;
+    }
+    remove_any(&old)?;
+    remove_any(&staging)
+}
+
 impl RunDir {
     /// Locks `target` for this run, cleans up after a killed run and creates the empty
-    /// staging folder. Fails (exit 2) when another live run holds the lock, when `target`
-    /// is not a folder, or when it holds files no mtsim run writes.
+    /// staging folder. Fails (exit 2) when another live run holds the lock or when `target`
+    /// is not a folder.
     pub fn begin(target: &Path) -> Result<RunDir> {
         if target.file_name().is_none() || target.as_os_str() == "." {
             return Err(Error::usage(format!(
-                "-o {}: name the output folder (a run replaces the whole folder)",
+                "-o {}: name the output folder (a run writes it whole, beside its parent's other entries)",
                 target.display()
             )));
         }
@@ -124,38 +161,23 @@ impl RunDir {
             writeln!(lock, "{}", std::process::id())
         })()
         .map_err(write_error(&lock_path))?;
-        let (staging, old) = (sibling(target, "new"), sibling(target, "old"));
-        if std::fs::symlink_metadata(&old).is_ok() && std::fs::symlink_metadata(target).is_err() {
-            std::fs::rename(&old, target).map_err(write_error(target))?;
+        recover(target)?;
+        if std::fs::metadata(target).is_ok_and(|m| !m.is_dir()) {
+            return Err(Error::usage(format!(
+                "-o {}: a file, not a folder",
+                target.display()
+            )));
         }
-        remove_any(&old)?;
-        remove_any(&staging)?;
-        if let Ok(meta) = std::fs::metadata(target) {
-            if !meta.is_dir() {
-                return Err(Error::usage(format!(
-                    "-o {}: a file, not a folder",
-                    target.display()
-                )));
-            }
-            let entries = std::fs::read_dir(target).map_err(write_error(target))?;
-            for entry in entries.flatten() {
-                let name = entry.file_name().to_string_lossy().into_owned();
-                if !is_run_output(&name) {
-                    return Err(Error::usage(format!(
-                        "-o {}: the folder holds {name}, which no mtsim run writes, and a run replaces the whole folder; choose a new or empty folder",
-                        target.display()
-                    )));
-                }
-            }
-        }
-        super::create_dir(&staging)?;
-        signals::watch(&staging);
-        Ok(RunDir {
+        // Watched before it exists: a signal from here on finds it to remove.
+        signals::watch(target);
+        let run_dir = RunDir {
             target: target.to_path_buf(),
-            staging,
+            staging: sibling(target, "new"),
             _lock: lock,
             committed: false,
-        })
+        };
+        super::create_dir(&run_dir.staging)?;
+        Ok(run_dir)
     }
 
     /// The folder to write the run's files into.
@@ -163,32 +185,33 @@ impl RunDir {
         &self.staging
     }
 
-    /// Puts the written folder in place of the target and removes the old run.
+    /// Puts the written folder, with the user's entries of the old one, in place of the
+    /// target and removes the old run.
     pub fn commit(mut self) -> Result<()> {
-        let old = sibling(&self.target, "old");
-        let exists = std::fs::symlink_metadata(&self.target).is_ok();
-        if !exists {
-            std::fs::rename(&self.staging, &self.target).map_err(write_error(&self.target))?;
-        } else if exchange(&self.staging, &self.target).is_ok() {
-            // The staging name now holds the old run.
-            self.committed = true;
-            signals::unwatch(&self.staging);
-            return remove_any(&self.staging);
+        let target = &self.target;
+        if !exists(target) {
+            std::fs::rename(&self.staging, target).map_err(write_error(target))?;
         } else {
-            std::fs::rename(&self.target, &old).map_err(write_error(&old))?;
-            std::fs::rename(&self.staging, &self.target).map_err(write_error(&self.target))?;
+            move_user_entries(target, &self.staging)?;
+            if exchange(&self.staging, target).is_err() {
+                let old = sibling(target, "old");
+                std::fs::rename(target, &old).map_err(write_error(&old))?;
+                std::fs::rename(&self.staging, target).map_err(write_error(target))?;
+            }
         }
+        // Now only outputs of the old run are left beside it, to be removed.
         self.committed = true;
-        signals::unwatch(&self.staging);
-        remove_any(&old)
+        signals::unwatch(target);
+        remove_any(&self.staging)?;
+        remove_any(&sibling(target, "old"))
     }
 }
 
 impl Drop for RunDir {
     fn drop(&mut self) {
         if !self.committed {
-            let _ = remove_any(&self.staging);
-            signals::unwatch(&self.staging);
+            let _ = recover(&self.target);
+            signals::unwatch(&self.target);
         }
     }
 }
@@ -205,7 +228,7 @@ fn exchange(_: &Path, _: &Path) -> std::io::Result<()> {
     Err(std::io::ErrorKind::Unsupported.into())
 }
 
-/// SIGINT and SIGTERM while a run writes: its staging folders are removed, then the signal's
+/// SIGINT and SIGTERM while a run writes: its target is recovered ([`recover`]), then the signal's
 /// default action ends the process (so the exit status says which signal). The handler only
 /// writes the signal number to a pipe (async-signal-safe); a thread reads it and cleans up.
 #[cfg(unix)]
@@ -214,7 +237,8 @@ mod signals {
     use std::sync::atomic::{AtomicI32, Ordering};
     use std::sync::{Mutex, Once};
 
-    static STAGING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+    /// The targets being written.
+    static TARGETS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
     static PIPE_WRITE: AtomicI32 = AtomicI32::new(-1);
     static INSTALL: Once = Once::new();
 
@@ -239,11 +263,11 @@ mod signals {
                 let mut byte = 0u8;
                 // SAFETY: reads one byte into a live local from the pipe this thread owns.
                 while unsafe { libc::read(read_fd, (&mut byte as *mut u8).cast(), 1) } != 1 {}
-                let staging = STAGING.lock().unwrap_or_else(|e| e.into_inner());
-                for dir in staging.iter() {
+                let targets = TARGETS.lock().unwrap_or_else(|e| e.into_inner());
+                for target in targets.iter() {
                     // A file the run is creating meanwhile can make one pass fail.
                     for _ in 0..3 {
-                        if super::remove_any(dir).is_ok() {
+                        if super::recover(target).is_ok() {
                             break;
                         }
                     }
@@ -264,15 +288,15 @@ mod signals {
         }
     }
 
-    pub fn watch(dir: &Path) {
+    pub fn watch(target: &Path) {
         INSTALL.call_once(install);
-        let mut staging = STAGING.lock().unwrap_or_else(|e| e.into_inner());
-        staging.push(dir.to_path_buf());
+        let mut targets = TARGETS.lock().unwrap_or_else(|e| e.into_inner());
+        targets.push(target.to_path_buf());
     }
 
-    pub fn unwatch(dir: &Path) {
-        let mut staging = STAGING.lock().unwrap_or_else(|e| e.into_inner());
-        staging.retain(|d| d != dir);
+    pub fn unwatch(target: &Path) {
+        let mut targets = TARGETS.lock().unwrap_or_else(|e| e.into_inner());
+        targets.retain(|d| d != target);
     }
 }
 

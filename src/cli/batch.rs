@@ -93,7 +93,9 @@ pub fn run(args: &BatchArgs) -> Result<i32> {
         .collect();
     bar.finish_and_clear();
     let Some(run_dir) = run_dir else {
-        let shard = args.shard.expect("a batch without a staging folder is a shard");
+        let shard = args
+            .shard
+            .expect("a batch without a staging folder is a shard");
         let file = ShardFile::new("batch", shard, work.len(), batch_hash(&work), header, rows);
         let path = file.write(output, "batch")?;
         super::note(&format!(
@@ -110,10 +112,12 @@ pub fn run(args: &BatchArgs) -> Result<i32> {
 fn batch_hash(work: &[(String, PathBuf)]) -> String {
     let hashes: Vec<String> = work
         .iter()
-        .map(|(_, path)| match crate::input::scenario::Scenario::load(path) {
-            Ok(scenario) => scenario_hash(&scenario),
-            Err(_) => format!("{:016x}", files_hash_of_paths(&[path.as_path()])),
-        })
+        .map(
+            |(_, path)| match crate::input::scenario::Scenario::load(path) {
+                Ok(scenario) => scenario_hash(&scenario),
+                Err(_) => format!("{:016x}", files_hash_of_paths(&[path.as_path()])),
+            },
+        )
         .collect();
     let chunks: Vec<&[u8]> = hashes.iter().map(|h| h.as_bytes()).collect();
     format!("{:016x}", files_hash(&chunks))
@@ -122,7 +126,12 @@ fn batch_hash(work: &[(String, PathBuf)]) -> String {
 /// Writes batch.csv and batch.parquet and prints the rows: the same for a whole run and for
 /// merged shards, into `run_dir`, then put in place as `output`. Exit code 1 when any
 /// scenario failed or has violations.
-pub(crate) fn emit(rows: &[BatchRow], as_json: bool, run_dir: RunDir, output: &Path) -> Result<i32> {
+pub(crate) fn emit(
+    rows: &[BatchRow],
+    as_json: bool,
+    run_dir: RunDir,
+    output: &Path,
+) -> Result<i32> {
     let (csv, parquet) = ("batch.csv", "batch.parquet");
     write_atomic(&run_dir.path().join(csv), &to_csv(rows)?)?;
     write_atomic(&run_dir.path().join(parquet), &to_parquet(rows)?)?;

@@ -67,7 +67,14 @@ pub fn sweep(
     })?;
     bar.finish_and_clear();
     if let Some(shard) = shard {
-        let file = ShardFile::new("sweep", shard, values.len(), scenario_hash(&scenario), header, part);
+        let file = ShardFile::new(
+            "sweep",
+            shard,
+            values.len(),
+            scenario_hash(&scenario),
+            header,
+            part,
+        );
         wrote_shard(&file.write(shard_dir(output)?, &format!("sweep-{}", param.name()))?);
         return Ok(0);
     }
@@ -209,7 +216,14 @@ pub fn placement(
     let cells = placement_cells(&scenario, [px, py], &xs, &ys, range, &|| bar.inc(1))?;
     bar.finish_and_clear();
     if let Some(shard) = shard {
-        let file = ShardFile::new("placement", shard, n, scenario_hash(&scenario), header, cells);
+        let file = ShardFile::new(
+            "placement",
+            shard,
+            n,
+            scenario_hash(&scenario),
+            header,
+            cells,
+        );
         wrote_shard(&file.write(shard_dir(output)?, "placement")?);
         return Ok(0);
     }

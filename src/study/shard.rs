@@ -165,7 +165,10 @@ fn differences<H: Serialize, P>(a: &ShardFile<H, P>, b: &ShardFile<H, P>) -> Vec
     differ(a.study != b.study, "study");
     differ(a.shard.count != b.shard.count, "shard count N");
     differ(a.total != b.total, "study size");
-    differ(a.scenario_hash != b.scenario_hash, "scenario contents (scenario_hash)");
+    differ(
+        a.scenario_hash != b.scenario_hash,
+        "scenario contents (scenario_hash)",
+    );
     let json = |h: &H| serde_json::to_value(h).expect("plain data serializes");
     match (json(&a.header), json(&b.header)) {
         (serde_json::Value::Object(x), serde_json::Value::Object(y)) => {

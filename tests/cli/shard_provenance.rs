@@ -94,8 +94,14 @@ fn merge_refuses_shards_of_other_scenario_contents_naming_both_files() {
     let two = sweep_shard(&scenario, "0", "2/2", &dir);
     let (code, err) = merge(&dir, &[&one, &two]);
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("differentstudies(scenariocontents(scenario_hash)differ)"), "{err}");
-    assert!(err.contains(&s(&one).replace(' ', "")) && err.contains(&s(&two).replace(' ', "")), "{err}");
+    assert!(
+        err.contains("differentstudies(scenariocontents(scenario_hash)differ)"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&s(&one).replace(' ', "")) && err.contains(&s(&two).replace(' ', "")),
+        "{err}"
+    );
 }
 
 #[test]

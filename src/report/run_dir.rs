@@ -10,8 +10,10 @@
 //!
 //! `.DIR.mtsim-lock` holds the writer's pid under an exclusive `flock` (`File::try_lock`):
 //! a second run into `DIR` is refused while the first lives, and the OS releases the lock when
-//! a run dies, however it dies. The lock file stays (removing a locked file would let two
-//! runs lock two different files of one name). The run that next holds the lock cleans up
+//! a run dies, however it dies. The run removes the lock file before it lets go of the lock;
+//! a run that locked a file meanwhile removed finds the path no longer names its file (device
+//! and inode differ) and starts over, so two runs never hold two files of one name. A crash
+//! leaves the file, unlocked: the next run takes it. The run that next holds the lock cleans up
 //! after a killed one ([`recover`]): the user's entries go back from `.DIR.mtsim-new` into
 //! `DIR`, `.DIR.mtsim-old` goes back as `DIR` if `DIR` is missing, and both are removed.
 //! SIGINT and SIGTERM do the same for the running command, then end it as the signal would.
@@ -116,6 +118,53 @@ fn recover(target: &Path) -> Result<()> {
     remove_any(&staging)
 }
 
+/// An exclusive `flock` on the file `lock_path`, created if missing, that the path still names.
+fn lock(target: &Path, lock_path: &Path) -> Result<File> {
+    loop {
+        let mut file = File::options()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(lock_path)
+            .map_err(write_error(lock_path))?;
+        match file.try_lock() {
+            Ok(()) if names_file(lock_path, &file) => return Ok(file),
+            Ok(()) => continue, // removed by the run that held it: lock the new file
+            Err(std::fs::TryLockError::WouldBlock) => {
+                let mut pid = String::new();
+                let _ = file.read_to_string(&mut pid);
+                return Err(Error::usage(format!(
+                    "{} is being written by another mtsim run (pid {}); wait for it or choose another -o",
+                    target.display(),
+                    pid.trim()
+                )));
+            }
+            Err(std::fs::TryLockError::Error(source)) => {
+                return Err(Error::Write {
+                    path: lock_path.to_path_buf(),
+                    source,
+                })
+            }
+        }
+    }
+}
+
+/// Whether `path` names the open `file` (same device and inode).
+#[cfg(unix)]
+fn names_file(path: &Path, file: &File) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(path), file.metadata()) {
+        (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn names_file(path: &Path, _: &File) -> bool {
+    path.exists()
+}
+
 impl RunDir {
     /// Locks `target` for this run, cleans up after a killed run and creates the empty
     /// staging folder. Fails (exit 2) when another live run holds the lock or when `target`
@@ -133,28 +182,7 @@ impl RunDir {
         };
         super::create_dir(parent)?;
         let lock_path = sibling(target, "lock");
-        let mut lock = File::options()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(&lock_path)
-            .map_err(write_error(&lock_path))?;
-        if let Err(e) = lock.try_lock() {
-            let mut pid = String::new();
-            let _ = lock.read_to_string(&mut pid);
-            return Err(match e {
-                std::fs::TryLockError::WouldBlock => Error::usage(format!(
-                    "{} is being written by another mtsim run (pid {}); wait for it or choose another -o",
-                    target.display(),
-                    pid.trim()
-                )),
-                std::fs::TryLockError::Error(source) => Error::Write {
-                    path: lock_path,
-                    source,
-                },
-            });
-        }
+        let mut lock = lock(target, &lock_path)?;
         (|| {
             lock.set_len(0)?;
             lock.rewind()?;
@@ -208,11 +236,13 @@ impl RunDir {
 }
 
 impl Drop for RunDir {
+    /// Cleans up an unfinished run; removes the lock file while the lock is still held.
     fn drop(&mut self) {
         if !self.committed {
             let _ = recover(&self.target);
             signals::unwatch(&self.target);
         }
+        let _ = std::fs::remove_file(sibling(&self.target, "lock"));
     }
 }
 
@@ -271,6 +301,7 @@ mod signals {
                             break;
                         }
                     }
+                    let _ = std::fs::remove_file(super::sibling(target, "lock"));
                 }
                 // SAFETY: back to the default action, then the signal again: the process
                 // ends as if it had not been caught.

@@ -136,17 +136,7 @@ fn a_run_killed_at_random_times_leaves_the_old_run_or_the_new_one_whole() {
     // The next run cleans up what the killed one left beside the folder.
     run_ok(&simulate_args(NEW, &out, true));
     assert_eq!(contents(&out), new);
-    assert_eq!(
-        names(&dir),
-        [
-            ".new.mtsim-lock",
-            ".old.mtsim-lock",
-            ".out.mtsim-lock",
-            "new",
-            "old",
-            "out"
-        ]
-    );
+    assert_eq!(names(&dir), ["new", "old", "out"]);
 }
 
 #[test]
@@ -200,6 +190,7 @@ fn a_second_run_into_a_folder_in_use_is_refused_and_a_dead_runs_lock_is_not() {
     drop(lock);
     run_ok(&simulate_args(NEW, &out, false));
     assert_ne!(contents(&out), before);
+    assert!(!lock_path.exists(), "a finished run removes its lock file");
 }
 
 /// Sends `signal` to `child` once its staging folder exists, and checks that the old run
@@ -223,7 +214,7 @@ fn interrupted(signal: &str, signal_number: i32) {
     // The signal comes within milliseconds of the start of a run of about half a second.
     let status = child.wait().unwrap();
     assert_eq!(status.signal(), Some(signal_number), "{status:?}");
-    assert_eq!(names(&dir), [".out.mtsim-lock", "out"]);
+    assert_eq!(names(&dir), ["out"]);
     assert_eq!(contents(&out), before);
 }
 

@@ -14,8 +14,8 @@ fn s(p: &Path) -> &str {
 }
 
 /// `sweep` of `scenario`'s center_y over -30..=`to` step 5, shard `shard`, into `dir`;
-/// returns the shard file.
-fn sweep_shard(scenario: &Path, to: &str, shard: &str, dir: &Path) -> PathBuf {
+/// asserts it succeeds and returns the shard file.
+pub(crate) fn sweep_shard(scenario: &Path, to: &str, shard: &str, dir: &Path) -> PathBuf {
     let out = mtsim(&[
         "sweep",
         s(scenario),

@@ -134,10 +134,14 @@ fn lock(target: &Path, lock_path: &Path) -> Result<File> {
             Err(std::fs::TryLockError::WouldBlock) => {
                 let mut pid = String::new();
                 let _ = file.read_to_string(&mut pid);
+                // The holder writes its pid just after it locks: it may not be there yet.
+                let pid = match pid.trim() {
+                    "" => "not yet written",
+                    pid => pid,
+                };
                 return Err(Error::usage(format!(
-                    "{} is being written by another mtsim run (pid {}); wait for it or choose another -o",
-                    target.display(),
-                    pid.trim()
+                    "{} is being written by another mtsim run (pid {pid}); wait for it or choose another -o",
+                    target.display()
                 )));
             }
             Err(std::fs::TryLockError::Error(source)) => {
@@ -189,6 +193,13 @@ impl RunDir {
             writeln!(lock, "{}", std::process::id())
         })()
         .map_err(write_error(&lock_path))?;
+        // From here on, dropping `run_dir` undoes what was done and removes the lock file.
+        let run_dir = RunDir {
+            target: target.to_path_buf(),
+            staging: sibling(target, "new"),
+            _lock: lock,
+            committed: false,
+        };
         recover(target)?;
         if std::fs::metadata(target).is_ok_and(|m| !m.is_dir()) {
             return Err(Error::usage(format!(
@@ -198,12 +209,6 @@ impl RunDir {
         }
         // Watched before it exists: a signal from here on finds it to remove.
         signals::watch(target);
-        let run_dir = RunDir {
-            target: target.to_path_buf(),
-            staging: sibling(target, "new"),
-            _lock: lock,
-            committed: false,
-        };
         super::create_dir(&run_dir.staging)?;
         Ok(run_dir)
     }

@@ -223,3 +223,15 @@ fn sigint_and_sigterm_leave_the_old_run_and_no_temporary_files() {
     interrupted("-INT", 2);
     interrupted("-TERM", 15);
 }
+
+#[test]
+fn an_output_that_is_a_file_is_refused_and_left_alone() {
+    let dir = scratch("run-folders", "file");
+    let out = dir.join("out");
+    std::fs::write(&out, b"mine").unwrap();
+    let refused = mtsim(&simulate_args(NEW, &out, false));
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("a file, not a folder"));
+    assert_eq!(std::fs::read(&out).unwrap(), b"mine");
+    assert_eq!(names(&dir), ["out"], "no lock file or staging folder left");
+}

@@ -235,3 +235,35 @@ fn an_output_that_is_a_file_is_refused_and_left_alone() {
     assert_eq!(std::fs::read(&out).unwrap(), b"mine");
     assert_eq!(names(&dir), ["out"], "no lock file or staging folder left");
 }
+
+#[test]
+fn a_sweep_into_the_folder_of_another_sweep_leaves_only_its_own_files() {
+    let dir = scratch("run-folders", "sweep");
+    let out = dir.join("out");
+    let sweep = |param: &str| {
+        run_ok(&[
+            "sweep",
+            NEW,
+            "--vary",
+            param,
+            "--from",
+            "-10",
+            "--to",
+            "0",
+            "--step",
+            "5",
+            "-o",
+            s(&out),
+        ])
+    };
+    sweep("center_x");
+    sweep("center_y");
+    assert_eq!(
+        names(&out),
+        [
+            "sweep-center_y.csv",
+            "sweep-center_y.parquet",
+            "sweep-center_y.svg"
+        ]
+    );
+}

@@ -169,3 +169,37 @@ fn merge_refuses_a_shard_whose_rows_do_not_match_its_share() {
     let (code, err) = merge(&dir, &[&one, &two]);
     assert_eq!(code, Some(0), "{err}");
 }
+
+#[test]
+fn merge_refuses_batch_shards_of_a_scenario_edited_between_them() {
+    let dir = scratch("shard-provenance", "batch");
+    let a = write_scenario(&dir, &trt_ac(), CONE_15_10);
+    let b = dir.join("b.toml");
+    std::fs::write(&b, common::scenario_text(&trt_ac(), CONE_15_10)).unwrap();
+    let shards = dir.join("shards");
+    let batch = |k: &str| {
+        let out = mtsim(&["batch", s(&a), s(&b), "--shard", k, "-o", s(&shards)]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        shards.join(format!("batch.shard-{}-of-2.json", &k[..1]))
+    };
+    let one = batch("1/2");
+    // Shard 2 runs b.toml only, but a.toml changed: the batch's hash covers every scenario.
+    std::fs::write(
+        &a,
+        common::scenario_text(&trt_ac(), &format!("{CONE_15_10}feed_mm_min = 500.0\n")),
+    )
+    .unwrap();
+    let two = batch("2/2");
+    assert_eq!(json(&one)["rows"], 1);
+    let (code, err) = merge(&dir, &[&one, &two]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("(scenariocontents(scenario_hash)differ)"),
+        "{err}"
+    );
+}

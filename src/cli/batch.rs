@@ -7,7 +7,8 @@ use serde::{Deserialize, Serialize};
 
 use super::{print_stdout, progress_bar};
 use crate::error::{Error, Result};
-use crate::report::{create_dir, write_atomic};
+use crate::report::test_info::{files_hash, files_hash_of_paths, scenario_hash};
+use crate::report::{write_atomic, RunDir};
 use crate::study::batch::{run_scenario, to_csv, to_parquet, BatchRow};
 use crate::study::shard::{Shard, ShardFile};
 
@@ -67,8 +68,14 @@ pub fn run(args: &BatchArgs) -> Result<i32> {
         simulate: args.simulate,
     };
     let range = args.shard.unwrap_or(Shard::WHOLE).range(work.len());
+    // A whole batch is one unit (with its runs/); a shard writes one file into a folder that
+    // the other shards share.
+    let run_dir = match args.shard {
+        None => Some(RunDir::begin(&args.output)?),
+        Some(_) => None,
+    };
+    let output = run_dir.as_ref().map_or(args.output.as_path(), RunDir::path);
     let bar = progress_bar(range.len() as u64, "batch");
-    let output = &args.output;
     let rows: Vec<BatchRow> = range
         .into_par_iter()
         .map(|i| {
@@ -85,29 +92,54 @@ pub fn run(args: &BatchArgs) -> Result<i32> {
         })
         .collect();
     bar.finish_and_clear();
-    if let Some(shard) = args.shard {
-        let file = ShardFile::new("batch", shard, work.len(), header, rows);
+    let Some(run_dir) = run_dir else {
+        let shard = args
+            .shard
+            .expect("a batch without a staging folder is a shard");
+        let file = ShardFile::new("batch", shard, work.len(), batch_hash(&work), header, rows);
         let path = file.write(output, "batch")?;
         super::note(&format!(
             "wrote {}: join the shards with `mtsim merge`",
             path.display()
         ));
         return Ok(0);
-    }
-    emit(&rows, args.json, output)
+    };
+    emit(&rows, args.json, run_dir, &args.output)
+}
+
+/// The scenario hash of a batch: [`files_hash`] of its scenarios' hashes (the raw file's
+/// for a scenario that does not load), so that the shards of one batch agree on all of it.
+fn batch_hash(work: &[(String, PathBuf)]) -> String {
+    let hashes: Vec<String> = work
+        .iter()
+        .map(
+            |(_, path)| match crate::input::scenario::Scenario::load(path) {
+                Ok(scenario) => scenario_hash(&scenario),
+                Err(_) => format!("{:016x}", files_hash_of_paths(&[path.as_path()])),
+            },
+        )
+        .collect();
+    let chunks: Vec<&[u8]> = hashes.iter().map(|h| h.as_bytes()).collect();
+    format!("{:016x}", files_hash(&chunks))
 }
 
 /// Writes batch.csv and batch.parquet and prints the rows: the same for a whole run and for
-/// merged shards. Exit code 1 when any scenario failed or has violations.
-pub(crate) fn emit(rows: &[BatchRow], as_json: bool, output: &Path) -> Result<i32> {
-    create_dir(output)?;
-    let (csv, parquet) = (output.join("batch.csv"), output.join("batch.parquet"));
-    write_atomic(&csv, &to_csv(rows)?)?;
-    write_atomic(&parquet, &to_parquet(rows)?)?;
+/// merged shards, into `run_dir`, then put in place as `output`. Exit code 1 when any
+/// scenario failed or has violations.
+pub(crate) fn emit(
+    rows: &[BatchRow],
+    as_json: bool,
+    run_dir: RunDir,
+    output: &Path,
+) -> Result<i32> {
+    let (csv, parquet) = ("batch.csv", "batch.parquet");
+    write_atomic(&run_dir.path().join(csv), &to_csv(rows)?)?;
+    write_atomic(&run_dir.path().join(parquet), &to_parquet(rows)?)?;
+    run_dir.commit()?;
     super::note(&format!(
         "wrote {} and {}",
-        csv.display(),
-        parquet.display()
+        output.join(csv).display(),
+        output.join(parquet).display()
     ));
     if as_json {
         let json = serde_json::json!({ "rows": rows });

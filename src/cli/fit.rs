@@ -27,7 +27,9 @@ pub fn run(
         inputs.push((Scenario::load(s)?, MeasuredTrace::read(m)?));
     }
     let bar = spinner("fitting");
-    let report = fit(&inputs, &options, out_dir)?;
+    let run_dir = crate::report::RunDir::begin(out_dir)?;
+    let report = fit(&inputs, &options, run_dir.path())?;
+    run_dir.commit()?;
     bar.finish_and_clear();
     if as_json {
         print_stdout(&format!(

@@ -26,26 +26,15 @@ pub struct MergeArgs {
 pub fn run(args: &MergeArgs) -> Result<i32> {
     let study = study_of(&args.shards[0])?;
     let out = Some(args.output.as_path());
-    let size = |what: &str, got: usize, total: usize| {
-        (got != total)
-            .then(|| {
-                Error::usage(format!(
-                    "the shards hold {got} {what} but the study has {total}: a shard file is damaged"
-                ))
-            })
-            .map_or(Ok(()), Err)
-    };
     match study.as_str() {
         "sweep" => {
-            let (header, total, parts) = join::<SweepHeader, SweepPart>(&args.shards)?;
-            size("rows", parts.iter().map(|p| p.rows.len()).sum(), total)?;
+            let (header, _, parts) = join::<SweepHeader, SweepPart>(&args.shards)?;
             let result = SweepResult::join(header.param.name(), parts);
             emit_sweep(&header, &result, args.json, out)
         }
         "placement" => {
-            let (header, total, parts) = join::<PlacementHeader, Vec<PlacementCell>>(&args.shards)?;
+            let (header, _, parts) = join::<PlacementHeader, Vec<PlacementCell>>(&args.shards)?;
             let cells: Vec<PlacementCell> = parts.into_iter().flatten().collect();
-            size("cells", cells.len(), total)?;
             let map = PlacementMap {
                 params: header.params.map(|p| p.name().to_string()),
                 cells,
@@ -55,10 +44,10 @@ pub fn run(args: &MergeArgs) -> Result<i32> {
             emit_placement(&header, &map, args.json, out)
         }
         "batch" => {
-            let (_, total, parts) = join::<BatchHeader, Vec<BatchRow>>(&args.shards)?;
+            let (_, _, parts) = join::<BatchHeader, Vec<BatchRow>>(&args.shards)?;
             let rows: Vec<BatchRow> = parts.into_iter().flatten().collect();
-            size("rows", rows.len(), total)?;
-            super::batch::emit(&rows, args.json, &args.output)
+            let run_dir = crate::report::RunDir::begin(&args.output)?;
+            super::batch::emit(&rows, args.json, run_dir, &args.output)
         }
         other => Err(Error::usage(format!(
             "{}: unknown study {other:?} (this mtsim merges sweep, placement and batch shards)",

@@ -7,7 +7,7 @@ use crate::check::{check, CheckOptions};
 use crate::error::{Result, EXIT_VIOLATIONS};
 use crate::input::scenario::TraceFormat;
 use crate::report::html::CHECK_FILE;
-use crate::report::write_atomic;
+use crate::report::{write_atomic, RunDir};
 
 pub fn run(
     path: &Path,
@@ -21,6 +21,10 @@ pub fn run(
     if let Some(format) = trace_format {
         scenario.simulate.trace_format = format;
     }
+    // Everything goes into a staging folder, put in place of `out_dir` when complete.
+    let run_dir = RunDir::begin(out_dir)?;
+    let target = out_dir;
+    let out_dir = run_dir.path();
     let bar = spinner("simulating");
     let summary = crate::study::simulate::simulate(&scenario, out_dir, timing, &|t| {
         bar.set_message(format!("{t:.1} s of machine time"))
@@ -69,6 +73,7 @@ pub fn run(
     if html {
         super::report::write_report(out_dir, None)?;
     }
+    run_dir.commit()?;
     if as_json {
         print_stdout(&format!(
             "{}\n",
@@ -130,7 +135,7 @@ pub fn run(
     }
     out.push_str(&format!(
         "wrote {}{}\n",
-        out_dir.display(),
+        target.display(),
         if html { " (report.html)" } else { "" }
     ));
     print_stdout(&out);

@@ -7,7 +7,8 @@ use serde::{Deserialize, Serialize};
 use super::{cone_of, print_stdout, progress_bar};
 use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
-use crate::report::{create_dir, write_atomic};
+use crate::report::test_info::scenario_hash;
+use crate::report::{write_atomic, RunDir};
 use crate::study::placement::{placement_cells, PlacementMap};
 use crate::study::shard::{Shard, ShardFile};
 use crate::study::sweep::{grid, sweep_part, SweepParam, SweepResult};
@@ -66,7 +67,14 @@ pub fn sweep(
     })?;
     bar.finish_and_clear();
     if let Some(shard) = shard {
-        let file = ShardFile::new("sweep", shard, values.len(), header, part);
+        let file = ShardFile::new(
+            "sweep",
+            shard,
+            values.len(),
+            scenario_hash(&scenario),
+            header,
+            part,
+        );
         wrote_shard(&file.write(shard_dir(output)?, &format!("sweep-{}", param.name()))?);
         return Ok(0);
     }
@@ -83,13 +91,13 @@ pub(crate) fn emit_sweep(
 ) -> Result<i32> {
     let param = header.param;
     if let Some(dir) = output {
-        create_dir(dir)?;
+        let run_dir = RunDir::begin(dir)?;
         let stem = format!("sweep-{}", param.name());
-        let csv_path = dir.join(format!("{stem}.csv"));
-        let parquet_path = dir.join(format!("{stem}.parquet"));
-        let svg_path = dir.join(format!("{stem}.svg"));
-        write_atomic(&csv_path, &result.to_csv()?)?;
-        write_atomic(&parquet_path, &result.to_parquet()?)?;
+        let [csv_name, parquet_name, svg_name] =
+            ["csv", "parquet", "svg"].map(|ext| format!("{stem}.{ext}"));
+        let staged = |name: &str| run_dir.path().join(name);
+        write_atomic(&staged(&csv_name), &result.to_csv()?)?;
+        write_atomic(&staged(&parquet_name), &result.to_parquet()?)?;
         let title = format!(
             "Reversal angles vs {} (half apex {} deg, inclination {} deg, L {} mm)",
             param.name(),
@@ -97,12 +105,16 @@ pub(crate) fn emit_sweep(
             header.cone[1],
             header.cone[2]
         );
-        write_atomic(&svg_path, result.to_svg(param.unit(), &title)?.as_bytes())?;
+        write_atomic(
+            &staged(&svg_name),
+            result.to_svg(param.unit(), &title)?.as_bytes(),
+        )?;
+        run_dir.commit()?;
         super::note(&format!(
             "wrote {}, {} and {}",
-            csv_path.display(),
-            parquet_path.display(),
-            svg_path.display()
+            dir.join(csv_name).display(),
+            dir.join(parquet_name).display(),
+            dir.join(svg_name).display()
         ));
     }
     if as_json {
@@ -204,7 +216,14 @@ pub fn placement(
     let cells = placement_cells(&scenario, [px, py], &xs, &ys, range, &|| bar.inc(1))?;
     bar.finish_and_clear();
     if let Some(shard) = shard {
-        let file = ShardFile::new("placement", shard, n, header, cells);
+        let file = ShardFile::new(
+            "placement",
+            shard,
+            n,
+            scenario_hash(&scenario),
+            header,
+            cells,
+        );
         wrote_shard(&file.write(shard_dir(output)?, "placement")?);
         return Ok(0);
     }
@@ -225,14 +244,16 @@ pub(crate) fn emit_placement(
     output: Option<&Path>,
 ) -> Result<i32> {
     if let Some(dir) = output {
-        create_dir(dir)?;
-        write_atomic(&dir.join("placement.csv"), &map.to_csv()?)?;
-        write_atomic(&dir.join("placement.parquet"), &map.to_parquet()?)?;
+        let run_dir = RunDir::begin(dir)?;
+        let staged = |name: &str| run_dir.path().join(name);
+        write_atomic(&staged("placement.csv"), &map.to_csv()?)?;
+        write_atomic(&staged("placement.parquet"), &map.to_parquet()?)?;
         let title = format!(
             "Where the test fits: {} (smallest margin, mm)",
             header.scenario
         );
-        write_atomic(&dir.join("placement.svg"), map.to_svg(&title)?.as_bytes())?;
+        write_atomic(&staged("placement.svg"), map.to_svg(&title)?.as_bytes())?;
+        run_dir.commit()?;
         super::note(&format!(
             "wrote {}, {} and {}",
             dir.join("placement.csv").display(),

@@ -16,7 +16,9 @@ pub mod parquet;
 pub mod plot;
 pub mod polar;
 pub mod run;
+pub mod run_dir;
 pub mod test_info;
 pub mod trace;
 
 pub use files::{create_dir, temporary_path, write_atomic};
+pub use run_dir::RunDir;

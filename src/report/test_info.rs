@@ -77,9 +77,19 @@ pub fn files_hash(chunks: &[&[u8]]) -> u64 {
     h.digest()
 }
 
+/// The scenario hash of `scenario`: [`files_hash`] of the scenario, machine and program
+/// files, as 16 hex digits.
+pub fn scenario_hash(scenario: &Scenario) -> String {
+    let mut files = vec![scenario.path.as_path(), scenario.machine.path.as_path()];
+    if let Program::File { path, .. } = &scenario.program {
+        files.push(path.as_path());
+    }
+    format!("{:016x}", files_hash_of_paths(&files))
+}
+
 /// [`files_hash`] of the files at `paths` (a file that cannot be read counts as empty),
 /// read in 64 KiB pieces: memory stays flat however long the program file is.
-fn files_hash_of_paths(paths: &[&Path]) -> u64 {
+pub fn files_hash_of_paths(paths: &[&Path]) -> u64 {
     use std::io::Read;
     let mut h = xxhash_rust::xxh64::Xxh64::new(0);
     let mut buf = vec![0u8; 64 * 1024];
@@ -235,10 +245,6 @@ impl TestParameters {
                 )
             })
             .collect();
-        let mut files = vec![scenario.path.as_path(), machine.path.as_path()];
-        if let Program::File { path, .. } = &scenario.program {
-            files.push(path.as_path());
-        }
         Ok(TestParameters {
             machine: machine.name.clone(),
             machine_file: machine.path.display().to_string(),
@@ -261,7 +267,7 @@ impl TestParameters {
             tcp: sim.tcp,
             date,
             mtsim_version: env!("CARGO_PKG_VERSION").to_string(),
-            scenario_hash: format!("{:016x}", files_hash_of_paths(&files)),
+            scenario_hash: scenario_hash(scenario),
         })
     }
 }

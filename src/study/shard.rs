@@ -4,9 +4,14 @@
 //! items. Shard `K/N` (1-based, `1 <= K <= N`) takes the contiguous items
 //! `floor((K-1) n / N) .. floor(K n / N)`: a deterministic partition that any batch engine
 //! can hand out by index (a Slurm array task, a Kubernetes Job, a Dask task). A shard writes
-//! its part as a [`ShardFile`] (JSON; floats round-trip exactly); [`join`] checks that the
-//! files are the N parts of one study and returns the parts in order, from which the study
-//! writes exactly what the unsharded run writes.
+//! its part as a [`ShardFile`] (JSON; floats round-trip exactly) that says where it came
+//! from: the study, its parameters, the scenario content hash, K/N, the study's size and the
+//! part's row count. [`join`] checks that the files are the N parts of one study (same
+//! study, parameters, hash, N and size; each K once; each part `len(range(K))` rows) and
+//! returns the parts in order, from which the study writes exactly what the unsharded run
+//! writes.
+
+use std::collections::BTreeSet;
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -56,8 +61,20 @@ impl FromStr for Shard {
     }
 }
 
-/// Format tag of shard files.
-pub const FORMAT: &str = "mtsim-shard/1";
+/// Format tag of shard files (`/2`: with the scenario hash and the row count).
+pub const FORMAT: &str = "mtsim-shard/2";
+
+/// A shard's part of a study: its row count is checked against the shard's share.
+pub trait ShardPart {
+    /// Items (rows, cells, scenarios) in the part.
+    fn rows(&self) -> usize;
+}
+
+impl<T> ShardPart for Vec<T> {
+    fn rows(&self) -> usize {
+        self.len()
+    }
+}
 
 /// One shard's part of a study, as written to disk.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -68,18 +85,32 @@ pub struct ShardFile<H, P> {
     pub shard: Shard,
     /// Items in the whole study's work list.
     pub total: usize,
+    /// Items in this part: `shard.range(total).len()`.
+    pub rows: usize,
+    /// The scenario content hash (XXH64, `report::test_info::scenario_hash`; for a batch,
+    /// of its scenarios' hashes), 16 hex digits.
+    pub scenario_hash: String,
     /// What identifies the study (its parameters); equal in every shard of it.
     pub header: H,
     pub part: P,
 }
 
-impl<H: Serialize, P: Serialize> ShardFile<H, P> {
-    pub fn new(study: &str, shard: Shard, total: usize, header: H, part: P) -> Self {
+impl<H: Serialize, P: Serialize + ShardPart> ShardFile<H, P> {
+    pub fn new(
+        study: &str,
+        shard: Shard,
+        total: usize,
+        scenario_hash: String,
+        header: H,
+        part: P,
+    ) -> Self {
         ShardFile {
             format: FORMAT.to_string(),
             study: study.to_string(),
             shard,
             total,
+            rows: part.rows(),
+            scenario_hash,
             header,
             part,
         }
@@ -122,12 +153,43 @@ fn not_shard(path: &Path, e: &dyn std::fmt::Display) -> Error {
     )
 }
 
-/// Reads the shard files of one study and returns its header and the parts in shard order.
-/// Fails unless the files are exactly shards 1..N of one study with equal headers.
+/// What differs between two shard files of supposedly one study: the names of the fields
+/// (header fields by their own names).
+fn differences<H: Serialize, P>(a: &ShardFile<H, P>, b: &ShardFile<H, P>) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut differ = |differs: bool, what: &str| {
+        if differs {
+            out.push(what.to_string());
+        }
+    };
+    differ(a.study != b.study, "study");
+    differ(a.shard.count != b.shard.count, "shard count N");
+    differ(a.total != b.total, "study size");
+    differ(
+        a.scenario_hash != b.scenario_hash,
+        "scenario contents (scenario_hash)",
+    );
+    let json = |h: &H| serde_json::to_value(h).expect("plain data serializes");
+    match (json(&a.header), json(&b.header)) {
+        (serde_json::Value::Object(x), serde_json::Value::Object(y)) => {
+            let keys: BTreeSet<&String> = x.keys().chain(y.keys()).collect();
+            for key in keys {
+                differ(x.get(key) != y.get(key), key);
+            }
+        }
+        (x, y) => differ(x != y, "parameters"),
+    }
+    out
+}
+
+/// Reads the shard files of one study and returns its header, the study's size and the parts
+/// in shard order. Fails (exit 2, naming the files and what differs) unless the files are
+/// exactly shards 1..N of one study (same study, parameters, scenario hash, N and size), each
+/// holding the rows of its share.
 pub fn join<H, P>(paths: &[PathBuf]) -> Result<(H, usize, Vec<P>)>
 where
-    H: DeserializeOwned + PartialEq,
-    P: DeserializeOwned,
+    H: DeserializeOwned + Serialize,
+    P: DeserializeOwned + ShardPart,
 {
     let mut files: Vec<(PathBuf, ShardFile<H, P>)> = Vec::new();
     for path in paths {
@@ -136,6 +198,20 @@ where
         if file.format != FORMAT {
             return Err(not_shard(path, &format!("format {:?}", file.format)));
         }
+        let Shard { index, count } = file.shard;
+        if index == 0 || index > count {
+            return Err(not_shard(path, &format!("shard {index}/{count}")));
+        }
+        let share = file.shard.range(file.total).len();
+        if file.rows != share || file.part.rows() != share {
+            return Err(Error::invalid(
+                path,
+                format!(
+                    "shard {}/{} of a study of {} should hold {share} rows; it says {} and holds {}: the file is damaged or cut short, run the shard again",
+                    file.shard.index, file.shard.count, file.total, file.rows, file.part.rows()
+                ),
+            ));
+        }
         files.push((path.clone(), file));
     }
     let Some((first_path, first)) = files.first() else {
@@ -143,37 +219,48 @@ where
             "mtsim merge needs the shard files of one study",
         ));
     };
-    let count = first.shard.count;
-    let total = first.total;
     for (path, f) in &files[1..] {
-        if f.study != first.study
-            || f.shard.count != count
-            || f.total != first.total
-            || f.header != first.header
-        {
+        let differs = differences(first, f);
+        if !differs.is_empty() {
             return Err(Error::usage(format!(
-                "{} and {} are shards of different studies (study, shard count, size or parameters differ): merge the shards of one run",
+                "{} and {} are shards of different studies ({} differ): merge the shards of one run",
                 first_path.display(),
-                path.display()
+                path.display(),
+                differs.join(", ")
             )));
         }
     }
-    files.sort_by_key(|(_, f)| f.shard.index);
+    let (count, total) = (first.shard.count, first.total);
+    let names = |k: usize| {
+        files
+            .iter()
+            .filter(|(_, f)| f.shard.index == k)
+            .map(|(p, _)| p.display().to_string())
+            .collect::<Vec<_>>()
+    };
     for k in 1..=count {
-        match files.iter().filter(|(_, f)| f.shard.index == k).count() {
+        let given = names(k);
+        match given.len() {
             1 => {}
             0 => {
+                let all: Vec<String> = files
+                    .iter()
+                    .map(|(p, f)| format!("{} ({}/{count})", p.display(), f.shard.index))
+                    .collect();
                 return Err(Error::usage(format!(
-                    "shard {k}/{count} is missing: give all {count} shard files"
-                )))
+                    "shard {k}/{count} is missing (given: {}): give all {count} shard files",
+                    all.join(", ")
+                )));
             }
             _ => {
                 return Err(Error::usage(format!(
-                    "shard {k}/{count} is given more than once"
+                    "shard {k}/{count} is given more than once: {}",
+                    given.join(", ")
                 )))
             }
         }
     }
+    files.sort_by_key(|(_, f)| f.shard.index);
     let mut parts = Vec::with_capacity(count);
     let mut header = None;
     for (_, f) in files {

@@ -120,6 +120,12 @@ pub struct SweepPart {
     pub candidates: Vec<Coincidence>,
 }
 
+impl crate::study::shard::ShardPart for SweepPart {
+    fn rows(&self) -> usize {
+        self.rows.len()
+    }
+}
+
 /// Reversal analysis of `cone` with `param` at each value of `values`, in parallel.
 /// `progress` is called once per finished value (from any thread).
 pub fn sweep(

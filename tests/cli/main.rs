@@ -7,6 +7,8 @@ mod common;
 
 mod dask_example;
 mod messages;
+mod run_folders;
 mod scale_out;
 mod scripts;
+mod shard_provenance;
 mod usability;

@@ -7,6 +7,8 @@ use std::path::{Path, PathBuf};
 
 use common::{mtsim, scratch};
 
+use crate::shard_provenance::sweep_shard;
+
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -216,34 +218,15 @@ fn parquet_holds_the_csv_table_at_full_precision() {
 #[test]
 fn merge_refuses_an_incomplete_or_mixed_set_of_shards() {
     let dir = scratch("scale", "refuse");
-    let sweep = |shard: &str, to: &str| {
-        mtsim(&[
-            "sweep",
-            "scenarios/cone-15-10.toml",
-            "--vary",
-            "center_y",
-            "--from",
-            "-30",
-            "--to",
-            to,
-            "--step",
-            "5",
-            "--shard",
-            shard,
-            "-o",
-            s(&dir),
-        ])
-    };
-    assert!(sweep("1/3", "-20").status.success());
-    assert!(sweep("2/3", "-20").status.success());
-    let one = dir.join("sweep-center_y.shard-1-of-3.json");
-    let two = dir.join("sweep-center_y.shard-2-of-3.json");
+    let scenario = Path::new("scenarios/cone-15-10.toml");
+    let sweep = |shard: &str, to: &str| sweep_shard(scenario, to, shard, &dir);
+    let one = sweep("1/3", "-20");
+    let two = sweep("2/3", "-20");
     let out = mtsim(&["merge", "-o", s(&dir.join("m")), s(&one), s(&two)]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("shard 3/3 is missing"));
     // Shard 3 of a different grid.
-    assert!(sweep("3/3", "-10").status.success());
-    let three = dir.join("sweep-center_y.shard-3-of-3.json");
+    let three = sweep("3/3", "-10");
     let out = mtsim(&[
         "merge",
         "-o",

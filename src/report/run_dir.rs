@@ -1,0 +1,344 @@
+//! A folder of outputs written as one unit: staged beside the target, swapped in when complete.
+//!
+//! A command that writes several files into `-o DIR` writes them into `.DIR.mtsim-new` (same
+//! parent, so a rename moves it). Once all are written, the entries of `DIR` that no mtsim run
+//! writes (the user's notes, a `shards/` folder: see [`is_run_output`]) are moved into it, and
+//! it takes the place of `DIR`: on Linux one `renameat2(RENAME_EXCHANGE)` swaps the two
+//! folders, elsewhere `DIR` is renamed to `.DIR.mtsim-old` and the new folder renamed in. The
+//! old run is then removed. A reader, or a crash at any instant, sees the old complete run or
+//! the new complete run, never a mix; outputs only the old run wrote go with it.
+//!
+//! `.DIR.mtsim-lock` holds the writer's pid under an exclusive `flock` (`File::try_lock`):
+//! a second run into `DIR` is refused while the first lives, and the OS releases the lock when
+//! a run dies, however it dies. The run removes the lock file before it lets go of the lock;
+//! a run that locked a file meanwhile removed finds the path no longer names its file (device
+//! and inode differ) and starts over, so two runs never hold two files of one name. A crash
+//! leaves the file, unlocked: the next run takes it. The run that next holds the lock cleans up
+//! after a killed one ([`recover`]): the user's entries go back from `.DIR.mtsim-new` into
+//! `DIR`, `.DIR.mtsim-old` goes back as `DIR` if `DIR` is missing, and both are removed.
+//! SIGINT and SIGTERM do the same for the running command, then end it as the signal would.
+
+use std::fs::File;
+use std::io::{Read, Seek, Write};
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+
+/// Whether `name` is one an mtsim command writes into an output folder (or the temporary
+/// `<name>.tmp` / `<name>.raw.tmp` of one): such entries belong to the run and are replaced;
+/// all others are the user's and kept.
+pub fn is_run_output(name: &str) -> bool {
+    const FILES: [&str; 10] = [
+        "trace.csv",
+        "trace.parquet",
+        "summary.json",
+        "ballbar.svg",
+        "test.json",
+        "check.json",
+        "report.html",
+        "fit.json",
+        "location-errors.toml",
+        "fit.svg",
+    ];
+    const PREFIXES: [&str; 3] = ["sweep-", "placement.", "batch."];
+    let name = name.strip_suffix(".tmp").unwrap_or(name);
+    let name = name.strip_suffix(".raw").unwrap_or(name);
+    name == "runs" || FILES.contains(&name) || PREFIXES.iter().any(|p| name.starts_with(p))
+}
+
+/// An output folder being written; [`RunDir::commit`] puts it in place, dropping it without
+/// committing removes what was written.
+#[derive(Debug)]
+pub struct RunDir {
+    target: PathBuf,
+    staging: PathBuf,
+    _lock: File,
+    committed: bool,
+}
+
+/// `<parent>/.<name>.mtsim-<what>`.
+fn sibling(target: &Path, what: &str) -> PathBuf {
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    target.with_file_name(format!(".{name}.mtsim-{what}"))
+}
+
+fn write_error(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
+    move |source| Error::Write {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+fn exists(path: &Path) -> bool {
+    std::fs::symlink_metadata(path).is_ok()
+}
+
+/// Removes the file or folder at `path`, if any.
+fn remove_any(path: &Path) -> Result<()> {
+    let result = match std::fs::symlink_metadata(path) {
+        Err(_) => return Ok(()),
+        Ok(m) if m.is_dir() => std::fs::remove_dir_all(path),
+        Ok(_) => std::fs::remove_file(path),
+    };
+    match result {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(write_error(path)(e)),
+        _ => Ok(()),
+    }
+}
+
+/// Moves the user's entries (not [`is_run_output`]) of folder `from` into folder `to`.
+fn move_user_entries(from: &Path, to: &Path) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(from) else {
+        return Ok(());
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        if !is_run_output(&name.to_string_lossy()) && !exists(&to.join(&name)) {
+            std::fs::rename(entry.path(), to.join(&name)).map_err(write_error(&entry.path()))?;
+        }
+    }
+    Ok(())
+}
+
+/// What an interrupted run into `target` left, undone: the user's entries back from the
+/// staging folder, the old run back in place if the swap stopped half way, then both
+/// leftovers removed.
+fn recover(target: &Path) -> Result<()> {
+    let (staging, old) = (sibling(target, "new"), sibling(target, "old"));
+    if exists(&old) && !exists(target) {
+        std::fs::rename(&old, target).map_err(write_error(target))?;
+    }
+    if exists(target) {
+        move_user_entries(&staging, target)?;
+    }
+    remove_any(&old)?;
+    remove_any(&staging)
+}
+
+/// An exclusive `flock` on the file `lock_path`, created if missing, that the path still names.
+fn lock(target: &Path, lock_path: &Path) -> Result<File> {
+    loop {
+        let mut file = File::options()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(lock_path)
+            .map_err(write_error(lock_path))?;
+        match file.try_lock() {
+            Ok(()) if names_file(lock_path, &file) => return Ok(file),
+            Ok(()) => continue, // removed by the run that held it: lock the new file
+            Err(std::fs::TryLockError::WouldBlock) => {
+                let mut pid = String::new();
+                let _ = file.read_to_string(&mut pid);
+                // The holder writes its pid just after it locks: it may not be there yet.
+                let pid = match pid.trim() {
+                    "" => "not yet written",
+                    pid => pid,
+                };
+                return Err(Error::usage(format!(
+                    "{} is being written by another mtsim run (pid {pid}); wait for it or choose another -o",
+                    target.display()
+                )));
+            }
+            Err(std::fs::TryLockError::Error(source)) => {
+                return Err(Error::Write {
+                    path: lock_path.to_path_buf(),
+                    source,
+                })
+            }
+        }
+    }
+}
+
+/// Whether `path` names the open `file` (same device and inode).
+#[cfg(unix)]
+fn names_file(path: &Path, file: &File) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(path), file.metadata()) {
+        (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn names_file(path: &Path, _: &File) -> bool {
+    path.exists()
+}
+
+impl RunDir {
+    /// Locks `target` for this run, cleans up after a killed run and creates the empty
+    /// staging folder. Fails (exit 2) when another live run holds the lock or when `target`
+    /// is not a folder.
+    pub fn begin(target: &Path) -> Result<RunDir> {
+        if target.file_name().is_none() || target.as_os_str() == "." {
+            return Err(Error::usage(format!(
+                "-o {}: name the output folder (a run writes it whole, beside its parent's other entries)",
+                target.display()
+            )));
+        }
+        let parent = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        super::create_dir(parent)?;
+        let lock_path = sibling(target, "lock");
+        let mut lock = lock(target, &lock_path)?;
+        (|| {
+            lock.set_len(0)?;
+            lock.rewind()?;
+            writeln!(lock, "{}", std::process::id())
+        })()
+        .map_err(write_error(&lock_path))?;
+        // From here on, dropping `run_dir` undoes what was done and removes the lock file.
+        let run_dir = RunDir {
+            target: target.to_path_buf(),
+            staging: sibling(target, "new"),
+            _lock: lock,
+            committed: false,
+        };
+        recover(target)?;
+        if std::fs::metadata(target).is_ok_and(|m| !m.is_dir()) {
+            return Err(Error::usage(format!(
+                "-o {}: a file, not a folder",
+                target.display()
+            )));
+        }
+        // Watched before it exists: a signal from here on finds it to remove.
+        signals::watch(target);
+        super::create_dir(&run_dir.staging)?;
+        Ok(run_dir)
+    }
+
+    /// The folder to write the run's files into.
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// Puts the written folder, with the user's entries of the old one, in place of the
+    /// target and removes the old run.
+    pub fn commit(mut self) -> Result<()> {
+        let target = &self.target;
+        if !exists(target) {
+            std::fs::rename(&self.staging, target).map_err(write_error(target))?;
+        } else {
+            move_user_entries(target, &self.staging)?;
+            if exchange(&self.staging, target).is_err() {
+                let old = sibling(target, "old");
+                std::fs::rename(target, &old).map_err(write_error(&old))?;
+                std::fs::rename(&self.staging, target).map_err(write_error(target))?;
+            }
+        }
+        // Now only outputs of the old run are left beside it, to be removed.
+        self.committed = true;
+        signals::unwatch(target);
+        remove_any(&self.staging)?;
+        remove_any(&sibling(target, "old"))
+    }
+}
+
+impl Drop for RunDir {
+    /// Cleans up an unfinished run; removes the lock file while the lock is still held.
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = recover(&self.target);
+            signals::unwatch(&self.target);
+        }
+        let _ = std::fs::remove_file(sibling(&self.target, "lock"));
+    }
+}
+
+/// Swaps the folders `a` and `b` in one step (Linux `renameat2(RENAME_EXCHANGE)`).
+#[cfg(any(target_os = "linux", target_os = "android"))]
+fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
+    use rustix::fs::{renameat_with, RenameFlags, CWD};
+    renameat_with(CWD, a, CWD, b, RenameFlags::EXCHANGE).map_err(std::io::Error::from)
+}
+
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+fn exchange(_: &Path, _: &Path) -> std::io::Result<()> {
+    Err(std::io::ErrorKind::Unsupported.into())
+}
+
+/// SIGINT and SIGTERM while a run writes: its target is recovered ([`recover`]), then the signal's
+/// default action ends the process (so the exit status says which signal). The handler only
+/// writes the signal number to a pipe (async-signal-safe); a thread reads it and cleans up.
+#[cfg(unix)]
+mod signals {
+    use std::path::{Path, PathBuf};
+    use std::sync::atomic::{AtomicI32, Ordering};
+    use std::sync::{Mutex, Once};
+
+    /// The targets being written.
+    static TARGETS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+    static PIPE_WRITE: AtomicI32 = AtomicI32::new(-1);
+    static INSTALL: Once = Once::new();
+
+    extern "C" fn on_signal(signal: libc::c_int) {
+        let byte = signal as u8;
+        let fd = PIPE_WRITE.load(Ordering::Relaxed);
+        // SAFETY: write(2) is async-signal-safe; the buffer is one live byte.
+        unsafe { libc::write(fd, (&byte as *const u8).cast(), 1) };
+    }
+
+    fn install() {
+        let mut fds = [0 as libc::c_int; 2];
+        // SAFETY: pipe(2) fills the two descriptors of the array it is given.
+        if unsafe { libc::pipe(fds.as_mut_ptr()) } != 0 {
+            return;
+        }
+        PIPE_WRITE.store(fds[1], Ordering::Relaxed);
+        let read_fd = fds[0];
+        let spawned = std::thread::Builder::new()
+            .name("mtsim-signals".into())
+            .spawn(move || {
+                let mut byte = 0u8;
+                // SAFETY: reads one byte into a live local from the pipe this thread owns.
+                while unsafe { libc::read(read_fd, (&mut byte as *mut u8).cast(), 1) } != 1 {}
+                let targets = TARGETS.lock().unwrap_or_else(|e| e.into_inner());
+                for target in targets.iter() {
+                    // A file the run is creating meanwhile can make one pass fail.
+                    for _ in 0..3 {
+                        if super::recover(target).is_ok() {
+                            break;
+                        }
+                    }
+                    let _ = std::fs::remove_file(super::sibling(target, "lock"));
+                }
+                // SAFETY: back to the default action, then the signal again: the process
+                // ends as if it had not been caught.
+                unsafe {
+                    libc::signal(byte as libc::c_int, libc::SIG_DFL);
+                    libc::raise(byte as libc::c_int);
+                }
+            });
+        if spawned.is_err() {
+            return;
+        }
+        for signal in [libc::SIGINT, libc::SIGTERM] {
+            // SAFETY: the handler only loads an atomic and calls write(2).
+            unsafe { libc::signal(signal, on_signal as *const () as libc::sighandler_t) };
+        }
+    }
+
+    pub fn watch(target: &Path) {
+        INSTALL.call_once(install);
+        let mut targets = TARGETS.lock().unwrap_or_else(|e| e.into_inner());
+        targets.push(target.to_path_buf());
+    }
+
+    pub fn unwatch(target: &Path) {
+        let mut targets = TARGETS.lock().unwrap_or_else(|e| e.into_inner());
+        targets.retain(|d| d != target);
+    }
+}
+
+#[cfg(not(unix))]
+mod signals {
+    use std::path::Path;
+    pub fn watch(_: &Path) {}
+    pub fn unwatch(_: &Path) {}
+}

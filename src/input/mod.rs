@@ -2,6 +2,7 @@
 //! Inputs: machine files, scenario files (paths relative to the scenario), `[machine_overrides]`.
 //! Outputs: plain values — [`Machine`], [`Scenario`], drive, scene, tool and test parameters; imports no stage.
 
+pub mod budget;
 pub mod drive;
 pub mod exact;
 pub mod geometry_errors;

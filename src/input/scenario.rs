@@ -153,6 +153,9 @@ pub struct SimulateSection {
     /// measures; every block after the first when absent.
     #[serde(deserialize_with = "exact::option_array")]
     pub measure_lines: Option<[usize; 2]>,
+    /// Most interpolation periods one run may take (input/budget.rs): a generated test
+    /// estimated above it is refused before it starts, any run stopped when it passes it.
+    pub max_samples: u64,
 }
 
 impl Default for SimulateSection {
@@ -163,6 +166,7 @@ impl Default for SimulateSection {
             trace_format: TraceFormat::Csv,
             lead_deg: 20.0,
             measure_lines: None,
+            max_samples: crate::input::budget::DEFAULT_MAX_SAMPLES,
         }
     }
 }
@@ -360,6 +364,15 @@ impl Scenario {
                 "simulate",
                 "lead_deg",
                 format!("must be in [0, 180] deg, got {}", sim.lead_deg),
+            ));
+        }
+        if sim.max_samples == 0 {
+            return Err(value_error(
+                path,
+                &text,
+                "simulate",
+                "max_samples",
+                "must be at least 1".into(),
             ));
         }
         if let Some([a, b]) = sim.measure_lines {

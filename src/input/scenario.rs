@@ -800,7 +800,7 @@ fn check_feed(feed_mm_min: f64) -> std::result::Result<(), String> {
         Err(format!("must be a positive feed in mm/min, got {feed_mm_min}"))
     } else if feed_mm_min > MAX_FEED_MM_MIN {
         Err(format!(
-            "feed {feed_mm_min} mm/min is beyond any machine (at most {MAX_FEED_MM_MIN} mm/min)"
+            "feed {feed_mm_min:e} mm/min is beyond any machine (at most {MAX_FEED_MM_MIN} mm/min)"
         ))
     } else {
         Ok(())

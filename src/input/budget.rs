@@ -17,8 +17,9 @@ use std::f64::consts::PI;
 use crate::error::{Error, Result};
 use crate::input::scenario::{Program, Scenario};
 
-/// Default `[simulate] max_samples`: 10⁹ samples, about 10 to 30 min of CPU per run here
-/// and 11.6 days of machine time at a 1 ms period.
+/// Default `[simulate] max_samples`: 10⁹ samples, 11.6 days of machine time at a 1 ms
+/// period; on one core about 6 min of `check` (programmed timing, 3·10⁶ samples/s) and
+/// well over an hour of `simulate` (servo models and trace).
 pub const DEFAULT_MAX_SAMPLES: u64 = 1_000_000_000;
 
 /// A generated test's expected work.

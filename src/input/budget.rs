@@ -9,18 +9,14 @@
 //! ```
 //!
 //! a lower bound (acceleration ramps only add to it). A run whose estimate exceeds
-//! `[simulate] max_samples` (default [`DEFAULT_MAX_SAMPLES`]) is refused before it starts;
+//! `[simulate] max_samples` (default [`DEFAULT_MAX_SAMPLES`], 10⁹) is refused before it starts;
 //! the pipeline stops any run, a G-code file's too, whose count passes it.
 
 use std::f64::consts::PI;
 
 use crate::error::{Error, Result};
+pub use crate::input::scenario::DEFAULT_MAX_SAMPLES;
 use crate::input::scenario::{Program, Scenario};
-
-/// Default `[simulate] max_samples`: 10⁹ samples, 11.6 days of machine time at a 1 ms
-/// period; on one core about 6 min of `check` (programmed timing, 3·10⁶ samples/s) and
-/// well over an hour of `simulate` (servo models and trace).
-pub const DEFAULT_MAX_SAMPLES: u64 = 1_000_000_000;
 
 /// A generated test's expected work.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -125,6 +125,14 @@ fn a_generated_test_over_the_sample_budget_is_refused_up_front_with_its_estimate
         assert!(err.contains("feed_mm_min = 0.001") && err.contains("years of machine time"), "{err}");
         assert!(err.contains("raise [program.cone] feed_mm_min"), "{err}");
     }
+    // The circle: 2π r at F, r = 50 mm.
+    let circle = "[program.circle]\nradius_mm = 50\nfeed_mm_min = 0.001\ncenter_mm = [0, 0, 100]\n";
+    write_scenario(&dir, &trt_ac(), &format!("{circle}[check]\ncollisions = false\n"));
+    let samples = 2.0 * PI * 50.0 / (0.001 / 60.0) / 1e-3;
+    let (code, err) = refused(&dir, &["check", "s.toml"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains(&format!("the run needs about {samples:.3e} samples")), "{err}");
+    assert!(err.contains("raise [program.circle] feed_mm_min"), "{err}");
     // The budget is the scenario's to set, at least 1 sample.
     write_scenario(
         &dir,

@@ -88,9 +88,21 @@ mod tests {
     #[test]
     fn exactly_three_values_pass_and_any_other_count_is_refused() {
         assert_eq!(read("p = [1, 2.5, -3]"), Ok([1.0, 2.5, -3.0]));
-        assert_eq!(read("p = [1, 2, 3, 4]").unwrap_err(), "invalid length 4, expected exactly 3 values");
-        assert_eq!(read("p = [1, 2, 3, 4, 5]").unwrap_err(), "invalid length 5, expected exactly 3 values");
-        assert_eq!(read("p = [1, 2]").unwrap_err(), "invalid length 2, expected exactly 3 values");
-        assert_eq!(read("p = []").unwrap_err(), "invalid length 0, expected exactly 3 values");
+        assert_eq!(
+            read("p = [1, 2, 3, 4]").unwrap_err(),
+            "invalid length 4, expected exactly 3 values"
+        );
+        assert_eq!(
+            read("p = [1, 2, 3, 4, 5]").unwrap_err(),
+            "invalid length 5, expected exactly 3 values"
+        );
+        assert_eq!(
+            read("p = [1, 2]").unwrap_err(),
+            "invalid length 2, expected exactly 3 values"
+        );
+        assert_eq!(
+            read("p = []").unwrap_err(),
+            "invalid length 0, expected exactly 3 values"
+        );
     }
 }

@@ -10,8 +10,8 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
-use crate::input::exact;
 use crate::input::drive::{AxisDrive, DriveConfig, FrictionConfig, ServoConfig};
+use crate::input::exact;
 use crate::input::geometry_errors::{self, GeometryErrors};
 use crate::input::scene::{SceneConfig, ToolConfig};
 use crate::input::toml_text::{self, value_error};

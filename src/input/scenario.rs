@@ -802,7 +802,9 @@ pub const MAX_FEED_MM_MIN: f64 = 1e6;
 /// Checks a generated test's feed: positive and at most [`MAX_FEED_MM_MIN`].
 fn check_feed(feed_mm_min: f64) -> std::result::Result<(), String> {
     if !(feed_mm_min.is_finite() && feed_mm_min > 0.0) {
-        Err(format!("must be a positive feed in mm/min, got {feed_mm_min}"))
+        Err(format!(
+            "must be a positive feed in mm/min, got {feed_mm_min}"
+        ))
     } else if feed_mm_min > MAX_FEED_MM_MIN {
         Err(format!(
             "feed {feed_mm_min:e} mm/min is beyond any machine (at most {MAX_FEED_MM_MIN} mm/min)"

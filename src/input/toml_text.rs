@@ -56,7 +56,11 @@ fn key_of_value_at(text: &str, start: usize) -> Option<String> {
         })
         .unwrap_or_default();
     let key = key.replace('"', "");
-    Some(if section.is_empty() { key } else { format!("{section}.{key}") })
+    Some(if section.is_empty() {
+        key
+    } else {
+        format!("{section}.{key}")
+    })
 }
 
 /// Byte range of `key = ...` inside the table `[section]` of a TOML text, found by a
@@ -124,7 +128,10 @@ mod tests {
     fn a_value_error_names_its_table_and_key() {
         let text = "a = 1\n[program.cone]\nx = 2\ncenter_mm = [0, 0, 200, 5]\n";
         let start = text.find("[0,").unwrap();
-        assert_eq!(key_of_value_at(text, start).as_deref(), Some("program.cone.center_mm"));
+        assert_eq!(
+            key_of_value_at(text, start).as_deref(),
+            Some("program.cone.center_mm")
+        );
         assert_eq!(key_of_value_at(text, 4).as_deref(), Some("a"));
         assert_eq!(key_of_value_at(text, text.find("[program").unwrap()), None);
     }

@@ -24,10 +24,17 @@ fn args<'a>(command: &'a str, s: &'a str) -> Vec<&'a str> {
 fn refused(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
     let start = Instant::now();
     let out = mtsim_plain(dir, args);
-    assert!(start.elapsed() < Duration::from_secs(20), "{args:?} took {:?}", start.elapsed());
+    assert!(
+        start.elapsed() < Duration::from_secs(20),
+        "{args:?} took {:?}",
+        start.elapsed()
+    );
     let err = String::from_utf8_lossy(&out.stderr).replace('│', " ");
     // One line: the message as miette wraps it, joined back.
-    (out.status.code(), err.split_whitespace().collect::<Vec<_>>().join(" "))
+    (
+        out.status.code(),
+        err.split_whitespace().collect::<Vec<_>>().join(" "),
+    )
 }
 
 /// Writes the bundled trt-ac machine with `from` replaced by `to` as `dir/m.toml` and a cone
@@ -44,12 +51,42 @@ fn on_machine(dir: &Path, from: &str, to: &str) -> &'static str {
 fn every_point_key_takes_exactly_its_number_of_values() {
     let cone_with = |center: &str| CONE_15_10.replace("[0.0, 0.0, 200.0]", center);
     let cases: [(&str, String, &str, &str); 6] = [
-        ("cone-4", cone_with("[0.0, 0.0, 200.0, 5.0]"), "s.toml:5:13:", "`program.cone.center_mm`: invalid length 4, expected exactly 3 values"),
-        ("cone-5", cone_with("[0.0, 0.0, 200.0, 5.0, 6.0]"), "s.toml:5:13:", "`program.cone.center_mm`: invalid length 5, expected exactly 3 values"),
-        ("cone-2", cone_with("[0.0, 0.0]"), "s.toml:5:13:", "`program.cone.center_mm`: invalid length 2, expected exactly 3 values"),
-        ("pivot-4", format!("{CONE_15_10}[ballbar]\npivot_mm = [0, 0, 0, 1]\n"), "s.toml:8:12:", "`ballbar.pivot_mm`: invalid length 4, expected exactly 3 values"),
-        ("circle-4", "[program.circle]\nradius_mm = 50\ncenter_mm = [0, 0, 100, 1]\n".into(), "s.toml:4:13:", "`program.circle.center_mm`: invalid length 4, expected exactly 3 values"),
-        ("offset-5", format!("{CONE_15_10}[reader.work_offsets]\nG54 = [1, 2, 3, 4, 5]\n"), "s.toml:8:7:", "`reader.work_offsets.G54`: invalid length 5, expected exactly 6 values"),
+        (
+            "cone-4",
+            cone_with("[0.0, 0.0, 200.0, 5.0]"),
+            "s.toml:5:13:",
+            "`program.cone.center_mm`: invalid length 4, expected exactly 3 values",
+        ),
+        (
+            "cone-5",
+            cone_with("[0.0, 0.0, 200.0, 5.0, 6.0]"),
+            "s.toml:5:13:",
+            "`program.cone.center_mm`: invalid length 5, expected exactly 3 values",
+        ),
+        (
+            "cone-2",
+            cone_with("[0.0, 0.0]"),
+            "s.toml:5:13:",
+            "`program.cone.center_mm`: invalid length 2, expected exactly 3 values",
+        ),
+        (
+            "pivot-4",
+            format!("{CONE_15_10}[ballbar]\npivot_mm = [0, 0, 0, 1]\n"),
+            "s.toml:8:12:",
+            "`ballbar.pivot_mm`: invalid length 4, expected exactly 3 values",
+        ),
+        (
+            "circle-4",
+            "[program.circle]\nradius_mm = 50\ncenter_mm = [0, 0, 100, 1]\n".into(),
+            "s.toml:4:13:",
+            "`program.circle.center_mm`: invalid length 4, expected exactly 3 values",
+        ),
+        (
+            "offset-5",
+            format!("{CONE_15_10}[reader.work_offsets]\nG54 = [1, 2, 3, 4, 5]\n"),
+            "s.toml:8:7:",
+            "`reader.work_offsets.G54`: invalid length 5, expected exactly 6 values",
+        ),
     ];
     for (name, body, at, message) in cases {
         let dir = scratch("bounds", name);
@@ -59,16 +96,27 @@ fn every_point_key_takes_exactly_its_number_of_values() {
         assert!(err.contains(at) && err.contains(message), "{name}: {err}");
     }
     let dir = scratch("bounds", "machine-pivot-4");
-    let s = on_machine(&dir, "pivot_mm = [0.0, 0.0, 0.0]", "pivot_mm = [0.0, 0.0, 0.0, 9.0]");
+    let s = on_machine(
+        &dir,
+        "pivot_mm = [0.0, 0.0, 0.0]",
+        "pivot_mm = [0.0, 0.0, 0.0, 9.0]",
+    );
     let (code, err) = refused(&dir, &["check", s]);
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("m.toml:7:12:") && err.contains("`pivot_mm`: invalid length 4"), "{err}");
+    assert!(
+        err.contains("m.toml:7:12:") && err.contains("`pivot_mm`: invalid length 4"),
+        "{err}"
+    );
 }
 
 #[test]
 fn a_feed_beyond_any_machine_says_so() {
     let dir = scratch("bounds", "feed-1e308");
-    write_scenario(&dir, &trt_ac(), &format!("{CONE_15_10}feed_mm_min = 1e308\n"));
+    write_scenario(
+        &dir,
+        &trt_ac(),
+        &format!("{CONE_15_10}feed_mm_min = 1e308\n"),
+    );
     let (code, err) = refused(&dir, &["check", "s.toml"]);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("s.toml:7:1:"), "{err}");
@@ -91,7 +139,10 @@ fn periods_and_axis_limits_no_machine_has_are_refused_at_their_own_key() {
             let (code, err) = refused(&dir, &args(command, s));
             assert_eq!(code, Some(2), "{period} {command}: {err}");
             assert!(err.contains("m.toml:8:1:"), "{period} {command}: {err}");
-            assert!(err.contains("`interpolation_period_ms`: must be in [0.01, 100] ms"), "{err}");
+            assert!(
+                err.contains("`interpolation_period_ms`: must be in [0.01, 100] ms"),
+                "{err}"
+            );
             assert!(!err.contains("[axes."), "{period}: {err}");
         }
     }
@@ -104,7 +155,10 @@ fn periods_and_axis_limits_no_machine_has_are_refused_at_their_own_key() {
         let (code, err) = refused(&dir, &args("simulate", s));
         assert_eq!(code, Some(2), "{key}: {err}");
         assert!(err.contains(&format!("m.toml:{line}:1:")), "{key}: {err}");
-        assert!(err.contains(&format!("`axes.X.{key}`: must be a finite number >= 0.001")), "{err}");
+        assert!(
+            err.contains(&format!("`axes.X.{key}`: must be a finite number >= 0.001")),
+            "{err}"
+        );
     }
 }
 
@@ -114,24 +168,44 @@ fn periods_and_axis_limits_no_machine_has_are_refused_at_their_own_key() {
 #[test]
 fn a_generated_test_over_the_sample_budget_is_refused_up_front_with_its_estimate() {
     let dir = scratch("bounds", "feed-slow");
-    write_scenario(&dir, &trt_ac(), &format!("{CONE_15_10}feed_mm_min = 0.001\n"));
+    write_scenario(
+        &dir,
+        &trt_ac(),
+        &format!("{CONE_15_10}feed_mm_min = 0.001\n"),
+    );
     let r_mm = 100.0 * 15f64.to_radians().cos();
     for (command, lead_deg) in [("check", 0.0), ("simulate", 20.0)] {
         let samples = 2.0 * PI * r_mm * (1.0 + lead_deg / 180.0) / (0.001 / 60.0) / 1e-3;
         let (code, err) = refused(&dir, &args(command, "s.toml"));
         assert_eq!(code, Some(2), "{command}: {err}");
-        assert!(err.contains(&format!("the run needs about {samples:.3e} samples")), "{command}: {err}");
-        assert!(err.contains("budget of 1000000000 ([simulate] max_samples)"), "{err}");
-        assert!(err.contains("feed_mm_min = 0.001") && err.contains("years of machine time"), "{err}");
+        assert!(
+            err.contains(&format!("the run needs about {samples:.3e} samples")),
+            "{command}: {err}"
+        );
+        assert!(
+            err.contains("budget of 1000000000 ([simulate] max_samples)"),
+            "{err}"
+        );
+        assert!(
+            err.contains("feed_mm_min = 0.001") && err.contains("years of machine time"),
+            "{err}"
+        );
         assert!(err.contains("raise [program.cone] feed_mm_min"), "{err}");
     }
     // The circle: 2π r at F, r = 50 mm.
     let circle = "[program.circle]\nradius_mm = 50\nfeed_mm_min = 0.001\ncenter_mm = [0, 0, 100]\n";
-    write_scenario(&dir, &trt_ac(), &format!("{circle}[check]\ncollisions = false\n"));
+    write_scenario(
+        &dir,
+        &trt_ac(),
+        &format!("{circle}[check]\ncollisions = false\n"),
+    );
     let samples = 2.0 * PI * 50.0 / (0.001 / 60.0) / 1e-3;
     let (code, err) = refused(&dir, &["check", "s.toml"]);
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains(&format!("the run needs about {samples:.3e} samples")), "{err}");
+    assert!(
+        err.contains(&format!("the run needs about {samples:.3e} samples")),
+        "{err}"
+    );
     assert!(err.contains("raise [program.circle] feed_mm_min"), "{err}");
     // The budget is the scenario's to set, at least 1 sample.
     write_scenario(
@@ -141,7 +215,10 @@ fn a_generated_test_over_the_sample_budget_is_refused_up_front_with_its_estimate
     );
     let (code, err) = refused(&dir, &["check", "s.toml"]);
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("`simulate.max_samples`: must be at least 1"), "{err}");
+    assert!(
+        err.contains("`simulate.max_samples`: must be at least 1"),
+        "{err}"
+    );
 }
 
 /// A G-code file has no estimate: the pipeline counts its samples and stops it at the
@@ -149,7 +226,8 @@ fn a_generated_test_over_the_sample_budget_is_refused_up_front_with_its_estimate
 /// samples by `check`), so a budget of 1000 stops it in its first second.
 #[test]
 fn a_file_program_past_the_budget_stops_with_the_line_it_reached() {
-    let program = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/programs/cone-15-10-yt25.nc");
+    let program =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/programs/cone-15-10-yt25.nc");
     let dir = scratch("bounds", "file-budget");
     let body = |max: u64| {
         format!("[program]\nfile = {:?}\n[check]\ncollisions = false\n[simulate]\nmax_samples = {max}\n", program.display().to_string())
@@ -163,7 +241,12 @@ fn a_file_program_past_the_budget_stops_with_the_line_it_reached() {
     }
     write_scenario(&dir, &trt_ac(), &body(100_000));
     let out = mtsim_plain(&dir, &["check", "s.toml"]);
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 /// Every bundled scenario's runs stay far below the default budget: `check` counts each
@@ -183,7 +266,11 @@ fn the_bundled_scenarios_stay_far_below_the_budget() {
             .split_once(" samples")
             .and_then(|(head, _)| head.rsplit(' ').next()?.parse().ok())
             .unwrap_or_else(|| panic!("{}: {text}", path.display()));
-        assert!(samples > 1000 && samples <= 1_000_000, "{}: {samples}", path.display());
+        assert!(
+            samples > 1000 && samples <= 1_000_000,
+            "{}: {samples}",
+            path.display()
+        );
         seen += 1;
     }
     assert!(seen >= 5, "{seen} scenarios");

@@ -88,21 +88,14 @@ mod tests {
     #[test]
     fn exactly_three_values_pass_and_any_other_count_is_refused() {
         assert_eq!(read("p = [1, 2.5, -3]"), Ok([1.0, 2.5, -3.0]));
-        assert_eq!(
-            read("p = [1, 2, 3, 4]").unwrap_err(),
-            "invalid length 4, expected exactly 3 values"
-        );
-        assert_eq!(
-            read("p = [1, 2, 3, 4, 5]").unwrap_err(),
-            "invalid length 5, expected exactly 3 values"
-        );
-        assert_eq!(
-            read("p = [1, 2]").unwrap_err(),
-            "invalid length 2, expected exactly 3 values"
-        );
-        assert_eq!(
-            read("p = []").unwrap_err(),
-            "invalid length 0, expected exactly 3 values"
-        );
+        for (text, given) in [
+            ("[1, 2, 3, 4]", 4),
+            ("[1, 2, 3, 4, 5]", 5),
+            ("[1, 2]", 2),
+            ("[]", 0),
+        ] {
+            let expected = format!("invalid length {given}, expected exactly 3 values");
+            assert_eq!(read(&format!("p = {text}")), Err(expected));
+        }
     }
 }

@@ -15,6 +15,7 @@ use std::path::PathBuf;
 
 use crate::drive::Drives;
 use crate::error::Result;
+use crate::input::budget;
 use crate::input::machine::Machine;
 use crate::kinematics::error_table::PositionErrors;
 use crate::motion::interpolation::{InterpolationOptions, Interpolator};
@@ -79,6 +80,9 @@ pub struct RunOptions {
     pub start_time_s: f64,
     /// The program's name, for messages.
     pub program_path: PathBuf,
+    /// Most samples the run may take ([`crate::input::budget`]); passing it stops the run
+    /// with an error that names the line reached.
+    pub max_samples: u64,
 }
 
 /// What a run did.
@@ -106,6 +110,14 @@ pub fn run(
     // Position-dependent errors of the axes (pitch, worm gear), for their direction of motion.
     let mut position_errors = machine.geometry.position_errors();
     let mut emit = |sample: &Sample, stats: &mut RunStats| -> Result<()> {
+        if stats.samples >= options.max_samples {
+            return Err(budget::exceeded(
+                &options.program_path,
+                options.max_samples,
+                sample.line,
+                sample.time_s - t0,
+            ));
+        }
         for sink in sinks.iter_mut() {
             sink.push(sample)?;
         }

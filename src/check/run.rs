@@ -14,6 +14,7 @@ use serde::{Deserialize, Deserializer, Serialize};
 use crate::check::limits::{AxisUsage, LimitsMonitor, Violation, ViolationKind};
 use crate::check::scene::{EngagementSummary, EventKind, Scene, SceneMonitor, ToolConfig};
 use crate::error::Result;
+use crate::input::budget;
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario};
 use crate::kinematics::Kinematics;
@@ -253,6 +254,7 @@ pub fn check_with(
         force_tcp: scenario.simulate.tcp,
         start_time_s: 0.0,
         program_path: scenario.path.clone(),
+        max_samples: budget::check_up_front(scenario, 0.0)?,
     };
     let stats = {
         let mut sinks: Vec<&mut dyn Sink> = vec![&mut limits];

@@ -11,6 +11,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::input::drive::{AxisDrive, DriveConfig, FrictionConfig, ServoConfig};
+use crate::input::exact;
 use crate::input::geometry_errors::{self, GeometryErrors};
 use crate::input::scene::{SceneConfig, ToolConfig};
 use crate::input::toml_text::{self, value_error};
@@ -26,7 +27,7 @@ pub struct MachineFile {
     /// "xyz", "trt-ac" or "trt-bc".
     pub kinematics: Layout,
     /// Machine coordinates of the pivot (where the rotary axes cross), mm.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::array")]
     pub pivot_mm: [f64; 3],
     /// Interpolator period, ms.
     #[serde(default = "default_interpolation_period_ms")]
@@ -44,10 +45,10 @@ pub struct MachineFile {
     #[serde(default)]
     pub dialect: ngc::Dialect,
     /// G28 reference position, machine X Y Z A B C (mm, deg); zero when absent (U V W: 0).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::array")]
     pub g28_mm: [f64; 6],
     /// G30 reference position, machine X Y Z A B C (mm, deg); zero when absent (U V W: 0).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact::array")]
     pub g30_mm: [f64; 6],
     // --- geometric errors (input/geometry_errors.rs) ---
     /// ISO 230-7 location errors of the rotary axes: `EX0C_um = 8.0`.
@@ -61,6 +62,15 @@ pub struct MachineFile {
 fn default_interpolation_period_ms() -> f64 {
     1.0
 }
+
+/// Shortest interpolation period, ms: shorter ones only multiply the samples (and the
+/// numerical noise of differentiated velocities) without changing what the axes do.
+pub const MIN_PERIOD_MS: f64 = 0.01;
+/// Longest interpolation period, ms.
+pub const MAX_PERIOD_MS: f64 = 100.0;
+/// Smallest velocity (per min), acceleration (per s²) and jerk (per s³) limit of an axis,
+/// mm or deg: below it an axis barely moves, and a run would take without end.
+pub const MIN_AXIS_LIMIT: f64 = 1e-3;
 
 /// Limits and drive parameters of one axis. Linear axes in mm, rotary axes in deg.
 #[derive(Clone, Debug, Deserialize)]
@@ -196,16 +206,16 @@ impl Machine {
                 ));
             }
         }
-        if !(file.interpolation_period_ms.is_finite()
-            && file.interpolation_period_ms > 0.0
-            && file.interpolation_period_ms <= 100.0)
-        {
+        let period_ms = file.interpolation_period_ms;
+        if !(MIN_PERIOD_MS..=MAX_PERIOD_MS).contains(&period_ms) {
             return Err(value_error(
                 path,
                 text,
                 "",
                 "interpolation_period_ms",
-                "must be in (0, 100] ms".into(),
+                format!(
+                    "must be in [{MIN_PERIOD_MS}, {MAX_PERIOD_MS}] ms (controls interpolate every 0.1 to 10 ms), got {period_ms}"
+                ),
             ));
         }
         if !file.pivot_mm.iter().all(|v| v.is_finite()) {
@@ -284,7 +294,7 @@ fn axis_list(layout: Layout) -> String {
 fn check_axis(path: &Path, text: &str, section: &str, axis: Axis, c: &AxisConfig) -> Result<()> {
     let unit = axis.unit();
     let positive = |key: &str, v: f64, what: &str| {
-        if v.is_finite() && v > 0.0 {
+        if v.is_finite() && v >= MIN_AXIS_LIMIT {
             Ok(())
         } else {
             Err(value_error(
@@ -292,7 +302,7 @@ fn check_axis(path: &Path, text: &str, section: &str, axis: Axis, c: &AxisConfig
                 text,
                 section,
                 key,
-                format!("must be a positive number ({what}), got {v}"),
+                format!("must be a finite number >= {MIN_AXIS_LIMIT} ({what}), got {v}"),
             ))
         }
     };

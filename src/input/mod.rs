@@ -2,7 +2,9 @@
 //! Inputs: machine files, scenario files (paths relative to the scenario), `[machine_overrides]`.
 //! Outputs: plain values — [`Machine`], [`Scenario`], drive, scene, tool and test parameters; imports no stage.
 
+pub mod budget;
 pub mod drive;
+pub mod exact;
 pub mod geometry_errors;
 pub mod machine;
 pub mod program;

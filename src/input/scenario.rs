@@ -9,6 +9,7 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
+use crate::input::exact;
 use crate::input::machine::Machine;
 use crate::input::program::{CircleTest, ConeTest, Direction, NcOptions};
 use crate::input::scene::{ConeSetup, ToolConfig, ToolShape, WorkpieceConfig, WorkpieceKind};
@@ -50,6 +51,7 @@ pub struct ReaderSection {
     /// LinuxCNC parameter file (`.var`), relative to the scenario: work offsets, G28/G30.
     pub var_file: Option<String>,
     /// Work offsets by code, X Y Z A B C in mm and deg: `G54 = [100, 50, -200, 0, 0, 0]`.
+    #[serde(deserialize_with = "exact::array_map")]
     pub work_offsets: std::collections::BTreeMap<String, [f64; 6]>,
     /// Folders searched for `o<name> call` and `M98 P<n>` subprogram files.
     pub subroutine_path: Vec<String>,
@@ -132,6 +134,11 @@ impl TraceFormat {
     }
 }
 
+/// Default `[simulate] max_samples` (input/budget.rs): 10⁹ samples, 11.6 days of machine
+/// time at a 1 ms period; on one core about 6 min of `check` (programmed timing, 3·10⁶
+/// samples/s) and well over an hour of `simulate` (servo models and trace).
+pub const DEFAULT_MAX_SAMPLES: u64 = 1_000_000_000;
+
 /// `[simulate]`: options of `mtsim simulate`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -149,7 +156,11 @@ pub struct SimulateSection {
     pub lead_deg: f64,
     /// For a file program: the source lines (first, last) whose blocks the ball bar
     /// measures; every block after the first when absent.
+    #[serde(deserialize_with = "exact::option_array")]
     pub measure_lines: Option<[usize; 2]>,
+    /// Most interpolation periods one run may take (input/budget.rs): a generated test
+    /// estimated above it is refused before it starts, any run stopped when it passes it.
+    pub max_samples: u64,
 }
 
 impl Default for SimulateSection {
@@ -160,6 +171,7 @@ impl Default for SimulateSection {
             trace_format: TraceFormat::Csv,
             lead_deg: 20.0,
             measure_lines: None,
+            max_samples: DEFAULT_MAX_SAMPLES,
         }
     }
 }
@@ -169,6 +181,7 @@ impl Default for SimulateSection {
 #[serde(deny_unknown_fields, default)]
 pub struct BallbarSection {
     /// Table-side ball, table frame, mm; defaults to the cone's base centre or the circle's centre.
+    #[serde(deserialize_with = "exact::option_array")]
     pub pivot_mm: Option<[f64; 3]>,
 }
 
@@ -197,6 +210,7 @@ pub struct CircleSection {
     pub direction: Option<String>,
     /// Both directions for hysteresis: `["ccw", "cw"]`.
     pub directions: Option<Vec<String>>,
+    #[serde(deserialize_with = "exact::array")]
     pub center_mm: [f64; 3],
 }
 
@@ -210,6 +224,7 @@ fn default_plane() -> String {
 pub struct ConeSection {
     pub half_apex_deg: f64,
     pub inclination_deg: f64,
+    #[serde(deserialize_with = "exact::array")]
     pub center_mm: [f64; 3],
     pub ballbar_length_mm: f64,
     #[serde(default = "default_segments")]
@@ -354,6 +369,15 @@ impl Scenario {
                 "simulate",
                 "lead_deg",
                 format!("must be in [0, 180] deg, got {}", sim.lead_deg),
+            ));
+        }
+        if sim.max_samples == 0 {
+            return Err(value_error(
+                path,
+                &text,
+                "simulate",
+                "max_samples",
+                "must be at least 1".into(),
             ));
         }
         if let Some([a, b]) = sim.measure_lines {
@@ -759,12 +783,7 @@ fn validate_cone(path: &Path, text: &str, c: &ConeSection) -> Result<(ConeTest, 
             format!("must be between 3 and 1000000 blocks, got {}", c.segments),
         ));
     }
-    if !(c.feed_mm_min.is_finite() && c.feed_mm_min > 0.0) {
-        return Err(err(
-            "feed_mm_min",
-            format!("must be a positive feed in mm/min, got {}", c.feed_mm_min),
-        ));
-    }
+    check_feed(c.feed_mm_min).map_err(|m| err("feed_mm_min", m))?;
     let nc = NcOptions {
         segments: c.segments,
         feed_mm_min: c.feed_mm_min,
@@ -774,6 +793,25 @@ fn validate_cone(path: &Path, text: &str, c: &ConeSection) -> Result<(ConeTest, 
         clockwise: false,
     };
     Ok((cone, nc))
+}
+
+/// Fastest feed a generated test may ask for, mm/min: beyond the rapid traverse of any
+/// machine tool (about 1e5 mm/min on the fastest linear-motor machines).
+pub const MAX_FEED_MM_MIN: f64 = 1e6;
+
+/// Checks a generated test's feed: positive and at most [`MAX_FEED_MM_MIN`].
+fn check_feed(feed_mm_min: f64) -> std::result::Result<(), String> {
+    if !(feed_mm_min.is_finite() && feed_mm_min > 0.0) {
+        Err(format!(
+            "must be a positive feed in mm/min, got {feed_mm_min}"
+        ))
+    } else if feed_mm_min > MAX_FEED_MM_MIN {
+        Err(format!(
+            "feed {feed_mm_min:e} mm/min is beyond any machine (at most {MAX_FEED_MM_MIN} mm/min)"
+        ))
+    } else {
+        Ok(())
+    }
 }
 
 /// Checks the cone geometry; on failure gives the offending key and what was expected.
@@ -839,12 +877,7 @@ fn validate_circle(
             format!("must be a positive radius in mm, got {}", c.radius_mm),
         ));
     }
-    if !(c.feed_mm_min.is_finite() && c.feed_mm_min > 0.0) {
-        return Err(err(
-            "feed_mm_min",
-            format!("must be a positive feed in mm/min, got {}", c.feed_mm_min),
-        ));
-    }
+    check_feed(c.feed_mm_min).map_err(|m| err("feed_mm_min", m))?;
     if !c.center_mm.iter().all(|v| v.is_finite()) {
         return Err(err(
             "center_mm",

@@ -8,6 +8,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::input::exact;
 use crate::input::toml_text::value_error;
 
 /// `[scene]`: machine geometry for collision checks.
@@ -96,8 +97,10 @@ impl Default for TableConfig {
 #[serde(deny_unknown_fields)]
 pub struct CradleBox {
     pub name: String,
+    #[serde(deserialize_with = "exact::array")]
     pub center_mm: [f64; 3],
     /// Full side lengths along X, Y, Z, mm.
+    #[serde(deserialize_with = "exact::array")]
     pub size_mm: [f64; 3],
 }
 
@@ -117,6 +120,7 @@ pub struct SpindleConfig {
     /// Diameter of a cylindrical nose, mm.
     pub diameter_mm: f64,
     /// Side lengths along machine X and Y of a box nose, mm.
+    #[serde(deserialize_with = "exact::array")]
     pub box_mm: [f64; 2],
     /// Length above the gauge line, mm.
     pub length_mm: f64,
@@ -255,6 +259,7 @@ pub struct ConeSetup {
     /// Inclination beta of the cone axis (about table Y, apex toward table -X), deg.
     pub inclination_deg: f64,
     /// Base-circle centre O in the table frame, mm.
+    #[serde(deserialize_with = "exact::array")]
     pub center_mm: [f64; 3],
     /// Ball-bar length L, mm.
     pub ballbar_length_mm: f64,

@@ -25,10 +25,42 @@ pub fn parse<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
 pub fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
     let message = e.message().trim().to_string();
     match e.span() {
-        Some(span) => Error::at(path, text, span, message.clone(), "here")
-            .with_help("see docs/machine-format.md and docs/scenario-format.md for every key"),
+        Some(span) => {
+            let message = match key_of_value_at(text, span.start) {
+                Some(key) => format!("`{key}`: {message}"),
+                None => message,
+            };
+            Error::at(path, text, span, message, "here")
+                .with_help("see docs/machine-format.md and docs/scenario-format.md for every key")
+        }
         None => Error::invalid(path, message),
     }
+}
+
+/// The dotted key (`program.cone.center_mm`) whose value starts at byte `start`, when
+/// `start` follows `key =` on its line; the table is the last `[header]` above it.
+fn key_of_value_at(text: &str, start: usize) -> Option<String> {
+    let before = text.get(..start)?;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    let key = before[line_start..].trim_end().strip_suffix('=')?.trim();
+    let is_key_char = |c: char| c.is_ascii_alphanumeric() || "_-.\"".contains(c);
+    if key.is_empty() || !key.chars().all(is_key_char) {
+        return None;
+    }
+    let section = before[..line_start]
+        .lines()
+        .rev()
+        .find_map(|line| {
+            let header = line.trim().strip_prefix('[')?.trim_start_matches('[');
+            Some(header[..header.find(']')?].trim().replace([' ', '"'], ""))
+        })
+        .unwrap_or_default();
+    let key = key.replace('"', "");
+    Some(if section.is_empty() {
+        key
+    } else {
+        format!("{section}.{key}")
+    })
 }
 
 /// Byte range of `key = ...` inside the table `[section]` of a TOML text, found by a
@@ -90,6 +122,18 @@ mod tests {
         let r = locate_key(text, "", "min").unwrap();
         assert_eq!(&text[r], "min = 1");
         assert!(locate_key(text, "axes.Z", "min").is_none());
+    }
+
+    #[test]
+    fn a_value_error_names_its_table_and_key() {
+        let text = "a = 1\n[program.cone]\nx = 2\ncenter_mm = [0, 0, 200, 5]\n";
+        let start = text.find("[0,").unwrap();
+        assert_eq!(
+            key_of_value_at(text, start).as_deref(),
+            Some("program.cone.center_mm")
+        );
+        assert_eq!(key_of_value_at(text, 4).as_deref(), Some("a"));
+        assert_eq!(key_of_value_at(text, text.find("[program").unwrap()), None);
     }
 }
 

@@ -49,6 +49,7 @@ use nalgebra::{DMatrix, DVector, Point3, Vector3};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::input::budget;
 use crate::input::program::{ConeTest, Direction};
 use crate::input::scenario::{Program, Scenario};
 use crate::kinematics::{LocationErrors, LocationParam};
@@ -354,6 +355,7 @@ fn record(
         force_tcp: sc.simulate.tcp,
         start_time_s: 0.0,
         program_path: sc.path.clone(),
+        max_samples: budget::check_up_front(&sc, sc.simulate.lead_deg)?,
     };
     pipeline::run(run.moves, machine, &options, &mut [&mut rec], &|_| {})?;
     Ok(rec.samples)

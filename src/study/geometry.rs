@@ -10,6 +10,7 @@
 use serde::Serialize;
 
 use crate::error::Result;
+use crate::input::budget;
 use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
 use crate::measure::ballbar::{deviation_mm, BallbarRun};
@@ -51,6 +52,7 @@ pub fn geometric_trace(scenario: &Scenario) -> Result<Option<GeometricTrace>> {
         force_tcp: scenario.simulate.tcp,
         start_time_s: 0.0,
         program_path: scenario.path.clone(),
+        max_samples: budget::check_up_front(scenario, scenario.simulate.lead_deg)?,
     };
     pipeline::run(
         run.moves,

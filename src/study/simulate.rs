@@ -16,6 +16,7 @@ use nalgebra::{Point3, Vector3};
 use serde::Serialize;
 
 use crate::error::Result;
+use crate::input::budget;
 use crate::input::drive::si_per_unit;
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario, TraceFormat};
@@ -148,6 +149,7 @@ pub fn run_ballbar(
             force_tcp: scenario.simulate.tcp,
             start_time_s: sim_time_s,
             program_path: scenario.path.clone(),
+            max_samples: budget::check_up_front(scenario, scenario.simulate.lead_deg)?,
         };
         // A file program measured from its first feed block: keep the start-up transient
         // (the rapid still settling) out of the measured revolution.

@@ -1,0 +1,124 @@
+//! The sample budget of a run: how many interpolation periods one run may take, estimated
+//! before sampling for a generated test and counted while sampling for any program.
+//!
+//! A generated cone or circle runs the arc `2π r (1 + 2 lead / 360°)` at the feed F, so
+//!
+//! ```text
+//! machine time  T ≈ 2π r (1 + lead/180°) / (F / 60)      s   (r mm, F mm/min)
+//! samples       n ≈ T / Δt                                   (Δt the interpolation period, s)
+//! ```
+//!
+//! a lower bound (acceleration ramps only add to it). A run whose estimate exceeds
+//! `[simulate] max_samples` (default [`DEFAULT_MAX_SAMPLES`], 10⁹) is refused before it starts;
+//! the pipeline stops any run, a G-code file's too, whose count passes it.
+
+use std::f64::consts::PI;
+
+use crate::error::{Error, Result};
+pub use crate::input::scenario::DEFAULT_MAX_SAMPLES;
+use crate::input::scenario::{Program, Scenario};
+
+/// A generated test's expected work.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleEstimate {
+    /// Tool-tip path of one run, lead-in and lead-out included, mm.
+    pub path_mm: f64,
+    /// The program's feed, mm/min.
+    pub feed_mm_min: f64,
+    /// Machine time of that path at that feed, s.
+    pub machine_time_s: f64,
+    /// Interpolation periods in that time.
+    pub samples: f64,
+}
+
+impl SampleEstimate {
+    /// The work of a generated test (None for a G-code file, counted while it runs) with
+    /// `lead_deg` before and after the measured revolution.
+    pub fn of(scenario: &Scenario, lead_deg: f64) -> Option<SampleEstimate> {
+        let (radius_mm, feed_mm_min) = match &scenario.program {
+            Program::Cone { cone, nc, .. } => (cone.radius_mm(), nc.feed_mm_min),
+            Program::Circle { circle, .. } => (circle.radius_mm, circle.feed_mm_min),
+            Program::File { .. } => return None,
+        };
+        let path_mm = 2.0 * PI * radius_mm * (1.0 + lead_deg.max(0.0) / 180.0);
+        let machine_time_s = path_mm / (feed_mm_min / 60.0);
+        Some(SampleEstimate {
+            path_mm,
+            feed_mm_min,
+            machine_time_s,
+            samples: machine_time_s / scenario.machine.interpolation_period_s,
+        })
+    }
+}
+
+/// Refuses a generated test whose estimated samples exceed the scenario's budget, naming
+/// the estimate and what to change; otherwise returns the budget, for the pipeline to
+/// count any run against.
+pub fn check_up_front(scenario: &Scenario, lead_deg: f64) -> Result<u64> {
+    let max = scenario.simulate.max_samples;
+    let Some(e) = SampleEstimate::of(scenario, lead_deg) else {
+        return Ok(max);
+    };
+    if e.samples <= max as f64 {
+        return Ok(max);
+    }
+    let table = match scenario.program {
+        Program::Circle { .. } => "[program.circle]",
+        _ => "[program.cone]",
+    };
+    Err(Error::invalid(
+        &scenario.path,
+        format!(
+            "the run needs about {:.3e} samples, more than the budget of {max} ([simulate] max_samples): \
+             {:.1} mm of path at feed_mm_min = {} is {} of machine time, sampled every {} ms",
+            e.samples,
+            e.path_mm,
+            e.feed_mm_min,
+            duration(e.machine_time_s),
+            scenario.machine.interpolation_period_s * 1e3,
+        ),
+    )
+    .with_help(format!(
+        "raise {table} feed_mm_min, lengthen the machine's interpolation_period_ms, \
+         or raise [simulate] max_samples"
+    )))
+}
+
+/// The error of a run stopped when its sample count passed `max_samples`, at source line
+/// `line` of `program` and machine time `time_s`.
+pub fn exceeded(program: &std::path::Path, max_samples: u64, line: usize, time_s: f64) -> Error {
+    Error::invalid(
+        program,
+        format!(
+            "the run passed its budget of {max_samples} samples ([simulate] max_samples) at program line {line}, \
+             after {} of machine time",
+            duration(time_s)
+        ),
+    )
+    .with_help("shorten the program (loops, feeds near zero), lengthen the machine's interpolation_period_ms, or raise [simulate] max_samples")
+}
+
+/// `s` as seconds, hours or years, whichever reads best.
+fn duration(s: f64) -> String {
+    const HOUR: f64 = 3600.0;
+    const YEAR: f64 = 365.25 * 24.0 * HOUR;
+    if s < HOUR {
+        format!("{s:.1} s")
+    } else if s < YEAR {
+        format!("{:.1} h", s / HOUR)
+    } else {
+        format!("{:.1} years", s / YEAR)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations_read_in_their_unit() {
+        assert_eq!(duration(36.4), "36.4 s");
+        assert_eq!(duration(7200.0), "2.0 h");
+        assert_eq!(duration(2.0 * 365.25 * 86400.0), "2.0 years");
+    }
+}

@@ -1,0 +1,277 @@
+//! Input that the keys cannot mean and work without bound, through the binary: a point key
+//! with other than 3 values, values no machine has (a feed of 1e308, a period of 1e-9 ms,
+//! limits of 5e-324) and runs past the sample budget all exit 2 with the file, line and key,
+//! or the estimate and what to change, before any long work.
+
+use crate::common;
+
+use std::f64::consts::PI;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use common::{mtsim_plain, scratch, trt_ac, write_scenario, CONE_15_10};
+
+/// The arguments of `command` on scenario `s` (simulate writes into `dir/out`).
+fn args<'a>(command: &'a str, s: &'a str) -> Vec<&'a str> {
+    match command {
+        "simulate" => vec![command, s, "-o", "out"],
+        _ => vec![command, s],
+    }
+}
+
+/// Runs `mtsim args..` in `dir`; returns the exit code and stderr. Every case here must be
+/// refused at once: a run that started sampling would take minutes to years.
+fn refused(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
+    let start = Instant::now();
+    let out = mtsim_plain(dir, args);
+    assert!(
+        start.elapsed() < Duration::from_secs(20),
+        "{args:?} took {:?}",
+        start.elapsed()
+    );
+    let err = String::from_utf8_lossy(&out.stderr).replace('│', " ");
+    // One line: the message as miette wraps it, joined back.
+    (
+        out.status.code(),
+        err.split_whitespace().collect::<Vec<_>>().join(" "),
+    )
+}
+
+/// Writes the bundled trt-ac machine with `from` replaced by `to` as `dir/m.toml` and a cone
+/// scenario on it; returns the scenario's name.
+fn on_machine(dir: &Path, from: &str, to: &str) -> &'static str {
+    let machine = std::fs::read_to_string(trt_ac()).unwrap();
+    assert!(machine.contains(from), "{from}");
+    std::fs::write(dir.join("m.toml"), machine.replacen(from, to, 1)).unwrap();
+    write_scenario(dir, "m.toml", CONE_15_10);
+    "s.toml"
+}
+
+#[test]
+fn every_point_key_takes_exactly_its_number_of_values() {
+    let cone_with = |center: &str| CONE_15_10.replace("[0.0, 0.0, 200.0]", center);
+    let cases: [(&str, String, &str, &str); 6] = [
+        (
+            "cone-4",
+            cone_with("[0.0, 0.0, 200.0, 5.0]"),
+            "s.toml:5:13:",
+            "`program.cone.center_mm`: invalid length 4, expected exactly 3 values",
+        ),
+        (
+            "cone-5",
+            cone_with("[0.0, 0.0, 200.0, 5.0, 6.0]"),
+            "s.toml:5:13:",
+            "`program.cone.center_mm`: invalid length 5, expected exactly 3 values",
+        ),
+        (
+            "cone-2",
+            cone_with("[0.0, 0.0]"),
+            "s.toml:5:13:",
+            "`program.cone.center_mm`: invalid length 2, expected exactly 3 values",
+        ),
+        (
+            "pivot-4",
+            format!("{CONE_15_10}[ballbar]\npivot_mm = [0, 0, 0, 1]\n"),
+            "s.toml:8:12:",
+            "`ballbar.pivot_mm`: invalid length 4, expected exactly 3 values",
+        ),
+        (
+            "circle-4",
+            "[program.circle]\nradius_mm = 50\ncenter_mm = [0, 0, 100, 1]\n".into(),
+            "s.toml:4:13:",
+            "`program.circle.center_mm`: invalid length 4, expected exactly 3 values",
+        ),
+        (
+            "offset-5",
+            format!("{CONE_15_10}[reader.work_offsets]\nG54 = [1, 2, 3, 4, 5]\n"),
+            "s.toml:8:7:",
+            "`reader.work_offsets.G54`: invalid length 5, expected exactly 6 values",
+        ),
+    ];
+    for (name, body, at, message) in cases {
+        let dir = scratch("bounds", name);
+        write_scenario(&dir, &trt_ac(), &body);
+        let (code, err) = refused(&dir, &["check", "s.toml"]);
+        assert_eq!(code, Some(2), "{name}: {err}");
+        assert!(err.contains(at) && err.contains(message), "{name}: {err}");
+    }
+    let dir = scratch("bounds", "machine-pivot-4");
+    let s = on_machine(
+        &dir,
+        "pivot_mm = [0.0, 0.0, 0.0]",
+        "pivot_mm = [0.0, 0.0, 0.0, 9.0]",
+    );
+    let (code, err) = refused(&dir, &["check", s]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("m.toml:7:12:") && err.contains("`pivot_mm`: invalid length 4"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_feed_beyond_any_machine_says_so() {
+    let dir = scratch("bounds", "feed-1e308");
+    write_scenario(
+        &dir,
+        &trt_ac(),
+        &format!("{CONE_15_10}feed_mm_min = 1e308\n"),
+    );
+    let (code, err) = refused(&dir, &["check", "s.toml"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("s.toml:7:1:"), "{err}");
+    assert!(
+        err.contains("feed 1e308 mm/min is beyond any machine (at most 1000000 mm/min)"),
+        "{err}"
+    );
+}
+
+#[test]
+fn periods_and_axis_limits_no_machine_has_are_refused_at_their_own_key() {
+    for period in ["1e-9", "5e-324", "0.009"] {
+        let dir = scratch("bounds", &format!("period-{period}"));
+        let s = on_machine(
+            &dir,
+            "interpolation_period_ms = 1.0",
+            &format!("interpolation_period_ms = {period}"),
+        );
+        for command in ["check", "simulate"] {
+            let (code, err) = refused(&dir, &args(command, s));
+            assert_eq!(code, Some(2), "{period} {command}: {err}");
+            assert!(err.contains("m.toml:8:1:"), "{period} {command}: {err}");
+            assert!(
+                err.contains("`interpolation_period_ms`: must be in [0.01, 100] ms"),
+                "{err}"
+            );
+            assert!(!err.contains("[axes."), "{period}: {err}");
+        }
+    }
+    for (key, line) in [("max_acceleration", 14), ("max_jerk", 15)] {
+        let dir = scratch("bounds", key);
+        let machine = std::fs::read_to_string(trt_ac()).unwrap();
+        let original = machine.lines().nth(line - 1).unwrap();
+        assert!(original.starts_with(key), "{original}");
+        let s = on_machine(&dir, original, &format!("{key} = 5e-324"));
+        let (code, err) = refused(&dir, &args("simulate", s));
+        assert_eq!(code, Some(2), "{key}: {err}");
+        assert!(err.contains(&format!("m.toml:{line}:1:")), "{key}: {err}");
+        assert!(
+            err.contains(&format!("`axes.X.{key}`: must be a finite number >= 0.001")),
+            "{err}"
+        );
+    }
+}
+
+/// `feed_mm_min = 0.001` is a valid feed, but the 15/10 cone's circle (r = L cos α) then
+/// takes a year of machine time: refused up front with the estimate
+/// n = 2π r (1 + lead/180°) / (F/60) / Δt, lead 0 for `check` and 20° for `simulate`.
+#[test]
+fn a_generated_test_over_the_sample_budget_is_refused_up_front_with_its_estimate() {
+    let dir = scratch("bounds", "feed-slow");
+    write_scenario(
+        &dir,
+        &trt_ac(),
+        &format!("{CONE_15_10}feed_mm_min = 0.001\n"),
+    );
+    let r_mm = 100.0 * 15f64.to_radians().cos();
+    for (command, lead_deg) in [("check", 0.0), ("simulate", 20.0)] {
+        let samples = 2.0 * PI * r_mm * (1.0 + lead_deg / 180.0) / (0.001 / 60.0) / 1e-3;
+        let (code, err) = refused(&dir, &args(command, "s.toml"));
+        assert_eq!(code, Some(2), "{command}: {err}");
+        assert!(
+            err.contains(&format!("the run needs about {samples:.3e} samples")),
+            "{command}: {err}"
+        );
+        assert!(
+            err.contains("budget of 1000000000 ([simulate] max_samples)"),
+            "{err}"
+        );
+        assert!(
+            err.contains("feed_mm_min = 0.001") && err.contains("years of machine time"),
+            "{err}"
+        );
+        assert!(err.contains("raise [program.cone] feed_mm_min"), "{err}");
+    }
+    // The circle: 2π r at F, r = 50 mm.
+    let circle = "[program.circle]\nradius_mm = 50\nfeed_mm_min = 0.001\ncenter_mm = [0, 0, 100]\n";
+    write_scenario(
+        &dir,
+        &trt_ac(),
+        &format!("{circle}[check]\ncollisions = false\n"),
+    );
+    let samples = 2.0 * PI * 50.0 / (0.001 / 60.0) / 1e-3;
+    let (code, err) = refused(&dir, &["check", "s.toml"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains(&format!("the run needs about {samples:.3e} samples")),
+        "{err}"
+    );
+    assert!(err.contains("raise [program.circle] feed_mm_min"), "{err}");
+    // The budget is the scenario's to set, at least 1 sample.
+    write_scenario(
+        &dir,
+        &trt_ac(),
+        &format!("{CONE_15_10}feed_mm_min = 0.001\n[simulate]\nmax_samples = 0\n"),
+    );
+    let (code, err) = refused(&dir, &["check", "s.toml"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("`simulate.max_samples`: must be at least 1"),
+        "{err}"
+    );
+}
+
+/// A G-code file has no estimate: the pipeline counts its samples and stops it at the
+/// budget with the line it reached. The bundled program runs 36.4 s at 1 ms (36,416
+/// samples by `check`), so a budget of 1000 stops it in its first second.
+#[test]
+fn a_file_program_past_the_budget_stops_with_the_line_it_reached() {
+    let program =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/programs/cone-15-10-yt25.nc");
+    let dir = scratch("bounds", "file-budget");
+    let body = |max: u64| {
+        format!("[program]\nfile = {:?}\n[check]\ncollisions = false\n[simulate]\nmax_samples = {max}\n", program.display().to_string())
+    };
+    write_scenario(&dir, &trt_ac(), &body(1000));
+    for command in ["check", "simulate"] {
+        let (code, err) = refused(&dir, &args(command, "s.toml"));
+        assert_eq!(code, Some(2), "{command}: {err}");
+        assert!(err.contains("the run passed its budget of 1000 samples ([simulate] max_samples) at program line"), "{err}");
+        assert!(err.contains("after 1.0 s of machine time"), "{err}");
+    }
+    write_scenario(&dir, &trt_ac(), &body(100_000));
+    let out = mtsim_plain(&dir, &["check", "s.toml"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Every bundled scenario's runs stay far below the default budget: `check` counts each
+/// run's samples, at most 1e6 (0.1 % of 1e9).
+#[test]
+fn the_bundled_scenarios_stay_far_below_the_budget() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut seen = 0;
+    for entry in std::fs::read_dir(root.join("scenarios")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let out = mtsim_plain(root, &["check", path.to_str().unwrap()]);
+        let text = String::from_utf8_lossy(&out.stdout);
+        let samples: u64 = text
+            .split_once(" samples")
+            .and_then(|(head, _)| head.rsplit(' ').next()?.parse().ok())
+            .unwrap_or_else(|| panic!("{}: {text}", path.display()));
+        assert!(
+            samples > 1000 && samples <= 1_000_000,
+            "{}: {samples}",
+            path.display()
+        );
+        seen += 1;
+    }
+    assert!(seen >= 5, "{seen} scenarios");
+}

@@ -540,7 +540,21 @@ fn refuse_what_the_layout_cannot_give(
     }
 }
 
-/// A path from a scenario, relative to the scenario's folder unless absolute.
+/// The text of a file a LinuxCNC configuration names, `None` when it does not exist (LinuxCNC
+/// then starts empty); a file that is not regular or too large is refused by name, its
+/// content never quoted.
+fn optional_side_file(p: &Path) -> Result<Option<String>> {
+    match ngc::read_side_file(p) {
+        Ok(t) => Ok(Some(t)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(e) => Err(Error::Invalid {
+            path: p.to_path_buf(),
+            message: format!("cannot read {}: {e}", p.display()),
+            help: Some("the LinuxCNC configuration names this file: point it at a regular file".into()),
+        }),
+    }
+}
+
 /// The reader options of a scenario: its `[reader]` over the machine's defaults.
 fn reader_options(
     path: &Path,
@@ -566,7 +580,7 @@ fn reader_options(
     o.set_reference(true, ngc::AxisVec::xyzabc(machine.reference_mm[1]));
     let read = |key: &str, file: &str| -> Result<(PathBuf, String)> {
         let p = resolve(path, file);
-        match std::fs::read_to_string(&p) {
+        match ngc::read_side_file(&p) {
             Ok(t) => Ok((p, t)),
             Err(e) => Err(value_error(
                 path,
@@ -610,7 +624,7 @@ fn reader_options(
         config.as_ref().and_then(|c| c.parameter_file.as_ref()),
     ) {
         // LinuxCNC starts from all zeros when the parameter file does not exist yet.
-        if let Ok(t) = std::fs::read_to_string(p) {
+        if let Some(t) = optional_side_file(p)? {
             let mut params = ngc::parse_var_file(&t).map_err(|(line, m)| Error::Invalid {
                 path: p.clone(),
                 message: format!("line {line}: {m}"),
@@ -626,7 +640,7 @@ fn reader_options(
     ) {
         // LinuxCNC starts with an empty tool table when the file does not exist (the
         // sample configurations name tables the configuration picker copies in).
-        let t = std::fs::read_to_string(p).unwrap_or_default();
+        let t = optional_side_file(p)?.unwrap_or_default();
         o.pockets.extend(ngc::tool_pockets(&t));
         let tools = ngc::parse_tool_table(&t).map_err(|(line, m)| Error::Invalid {
             path: p.clone(),

@@ -128,12 +128,12 @@ pub fn validate(
         };
         let table_path = tables_dir.join(file);
         let table_text = toml_text::read_text(&table_path).map_err(|e| match e {
-            Error::Read { .. } => value_error(
+            Error::Read { source, .. } => value_error(
                 path,
                 text,
                 "error_tables",
                 name,
-                format!("cannot read the error table {}", table_path.display()),
+                format!("cannot read the error table {}: {source}", table_path.display()),
             ),
             other => other,
         })?;

@@ -102,10 +102,7 @@ pub struct MeasuredTrace {
 impl MeasuredTrace {
     /// Reads a measured trace. Other columns (such as those of `trace.csv`) are ignored.
     pub fn read(path: &Path) -> Result<MeasuredTrace> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::input::toml_text::read_text(path)?;
         let mut lines = text
             .lines()
             .enumerate()

@@ -142,8 +142,12 @@ pub fn study_of(path: &Path) -> Result<String> {
 }
 
 fn read(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path)
-        .map_err(|e| Error::usage(format!("cannot read shard file {}: {e}", path.display())))
+    crate::input::toml_text::read_text(path).map_err(|e| match e {
+        Error::Read { source, .. } => {
+            Error::usage(format!("cannot read shard file {}: {source}", path.display()))
+        }
+        other => other,
+    })
 }
 
 fn not_shard(path: &Path, e: &dyn std::fmt::Display) -> Error {

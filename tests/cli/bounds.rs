@@ -275,3 +275,38 @@ fn the_bundled_scenarios_stay_far_below_the_budget() {
     }
     assert!(seen >= 5, "{seen} scenarios");
 }
+
+#[test]
+fn input_files_that_are_not_regular_files_are_refused_by_name_before_they_are_read() {
+    let dir = scratch("bounds", "devzero");
+    // The machine file, an error table of a machine, and a measured trace of `fit`, each
+    // pointed at /dev/zero (endless) and at a folder.
+    for target in ["/dev/zero", "/tmp"] {
+        write_scenario(&dir, target, CONE_15_10);
+        let (code, err) = refused(&dir, &["check", "s.toml"]);
+        assert_eq!(code, Some(2), "{target}: {err}");
+        assert!(
+            err.contains(target) && err.contains("not a regular file"),
+            "{target}: {err}"
+        );
+
+        let machine = std::fs::read_to_string(trt_ac()).unwrap();
+        std::fs::write(
+            dir.join("m.toml"),
+            format!("{machine}\n[error_tables]\nX = \"{target}\"\n"),
+        )
+        .unwrap();
+        write_scenario(&dir, "m.toml", CONE_15_10);
+        let (code, err) = refused(&dir, &["check", "s.toml"]);
+        assert_eq!(code, Some(2), "error table {target}: {err}");
+        assert!(err.contains("not a regular file"), "error table {target}: {err}");
+
+        write_scenario(&dir, &trt_ac(), CONE_15_10);
+        let (code, err) = refused(&dir, &["fit", "s.toml", "--measured", target, "-o", "fit"]);
+        assert_eq!(code, Some(2), "measured {target}: {err}");
+        assert!(
+            err.contains(target) && err.contains("not a regular file"),
+            "measured {target}: {err}"
+        );
+    }
+}

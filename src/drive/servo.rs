@@ -66,8 +66,8 @@ use std::path::Path;
 use super::presliding::{Presliding, ReversalValue};
 use crate::error::{Error, Result};
 use crate::input::drive::{si_per_unit, AxisDrive, Model};
-use libm::exp;
 use crate::Axis;
+use libm::exp;
 
 /// The state of one axis at the end of an interpolation period.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -775,8 +775,7 @@ impl AxisServo {
                 }
                 let u_low = (v0.abs() - dv).max(0.0) * exact.inv_stribeck;
                 u_low >= 1.23
-                    && error((4.0 * u_low * u_low - 2.0) * exp(-(u_low * u_low)))
-                        <= exact.tolerance
+                    && error((4.0 * u_low * u_low - 2.0) * exp(-(u_low * u_low))) <= exact.tolerance
             };
             // First with Δv bounded from the end points and the command; where that is not
             // enough (a command whose velocity jumps from period to period, such as the

@@ -133,7 +133,10 @@ pub fn validate(
                 text,
                 "error_tables",
                 name,
-                format!("cannot read the error table {}: {source}", table_path.display()),
+                format!(
+                    "cannot read the error table {}: {source}",
+                    table_path.display()
+                ),
             ),
             other => other,
         })?;

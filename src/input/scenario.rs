@@ -550,7 +550,9 @@ fn optional_side_file(p: &Path) -> Result<Option<String>> {
         Err(e) => Err(Error::Invalid {
             path: p.to_path_buf(),
             message: format!("cannot read {}: {e}", p.display()),
-            help: Some("the LinuxCNC configuration names this file: point it at a regular file".into()),
+            help: Some(
+                "the LinuxCNC configuration names this file: point it at a regular file".into(),
+            ),
         }),
     }
 }

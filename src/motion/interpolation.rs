@@ -100,10 +100,10 @@ use nalgebra::Point3;
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::kinematics::{Kinematics, Layout};
-use libm::cbrt;
 use crate::program::{FeedMode, Motion, Move, PathControl};
 use crate::Plane;
 use crate::{Axis, AxisVec};
+use libm::cbrt;
 
 /// One commanded position of all axes.
 #[derive(Clone, Copy, Debug, PartialEq)]

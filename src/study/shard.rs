@@ -143,9 +143,10 @@ pub fn study_of(path: &Path) -> Result<String> {
 
 fn read(path: &Path) -> Result<String> {
     crate::input::toml_text::read_text(path).map_err(|e| match e {
-        Error::Read { source, .. } => {
-            Error::usage(format!("cannot read shard file {}: {source}", path.display()))
-        }
+        Error::Read { source, .. } => Error::usage(format!(
+            "cannot read shard file {}: {source}",
+            path.display()
+        )),
         other => other,
     })
 }

@@ -299,7 +299,10 @@ fn input_files_that_are_not_regular_files_are_refused_by_name_before_they_are_re
         write_scenario(&dir, "m.toml", CONE_15_10);
         let (code, err) = refused(&dir, &["check", "s.toml"]);
         assert_eq!(code, Some(2), "error table {target}: {err}");
-        assert!(err.contains("not a regular file"), "error table {target}: {err}");
+        assert!(
+            err.contains("not a regular file"),
+            "error table {target}: {err}"
+        );
 
         write_scenario(&dir, &trt_ac(), CONE_15_10);
         let (code, err) = refused(&dir, &["fit", "s.toml", "--measured", target, "-o", "fit"]);

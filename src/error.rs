@@ -51,6 +51,20 @@ pub enum Error {
         help: Option<String>,
     },
 
+    /// Bad input at a known place in a file whose text is not shown: a file other than the
+    /// scenario and the program (a machine file, an error table), which may be any file the
+    /// user pointed at, so its lines are never quoted.
+    #[error("{}:{line}:{column}: {message}", path.display())]
+    #[diagnostic(code(mtsim::input))]
+    Located {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+        #[help]
+        help: Option<String>,
+    },
+
     /// A command-line argument out of range.
     #[error("{message}")]
     #[diagnostic(code(mtsim::usage))]
@@ -132,11 +146,26 @@ impl Error {
         }))
     }
 
+    /// The same error without the file's text, unless the file is `shown` (the scenario):
+    /// the place and the message stay, the quoted line goes.
+    pub fn without_source_unless(self, shown: Option<&Path>) -> Error {
+        match self {
+            Error::AtSource(e) if Some(e.path.as_path()) != shown => Error::Located {
+                path: e.path,
+                line: e.line,
+                column: e.column,
+                message: e.message,
+                help: e.help,
+            },
+            other => other,
+        }
+    }
+
     /// Adds a hint that says what to do.
     pub fn with_help(mut self, text: impl Into<String>) -> Error {
         match &mut self {
             Error::AtSource(e) => e.help = Some(text.into()),
-            Error::Invalid { help, .. } => *help = Some(text.into()),
+            Error::Invalid { help, .. } | Error::Located { help, .. } => *help = Some(text.into()),
             _ => {}
         }
         self

@@ -784,6 +784,7 @@ mod tests {
     fn message(e: Error) -> String {
         match e {
             Error::AtSource(e) => format!("{}: {}", e.line, e.message),
+            Error::Located { line, message, .. } => format!("{line}: {message}"),
             other => other.to_string(),
         }
     }

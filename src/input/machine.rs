@@ -148,6 +148,17 @@ impl Machine {
         text: &str,
         overrides: Option<(&Path, &str, &toml::Table)>,
     ) -> Result<Machine> {
+        // The machine file and its error tables may be any file the user named: their
+        // lines are not quoted in a message (the scenario's are).
+        Machine::from_toml_quoted(path, text, overrides)
+            .map_err(|e| e.without_source_unless(overrides.map(|o| o.0)))
+    }
+
+    fn from_toml_quoted(
+        path: &Path,
+        text: &str,
+        overrides: Option<(&Path, &str, &toml::Table)>,
+    ) -> Result<Machine> {
         let file: MachineFile = toml_text::parse(path, text)?;
         let Some((scenario_path, scenario_text, overrides)) = overrides else {
             return Machine::validate(path, text, file, path);
@@ -377,13 +388,11 @@ mod tests {
             axis("Z", "[axes.Z.drive]\nbacklash_deg = 0.1\n")
         );
         match Machine::from_toml(Path::new("m.toml"), &text, None) {
-            Err(Error::AtSource(e)) => {
-                assert_eq!(e.line, 24);
+            Err(Error::Located { line, message, .. }) => {
+                assert_eq!(line, 24);
                 assert!(
-                    e.message
-                        .starts_with("`axes.Z.drive.backlash_deg`: is a rotary-axis key"),
-                    "{}",
-                    e.message
+                    message.starts_with("`axes.Z.drive.backlash_deg`: is a rotary-axis key"),
+                    "{message}"
                 );
             }
             other => panic!("expected an error at a line, got {other:?}"),

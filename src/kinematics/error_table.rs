@@ -90,7 +90,7 @@ impl ErrorTable {
                             path,
                             text,
                             span,
-                            format!("expected a finite number, got `{word}`"),
+                            "expected a finite number".to_string(),
                             "not a number",
                         ))
                     }

@@ -313,3 +313,34 @@ fn input_files_that_are_not_regular_files_are_refused_by_name_before_they_are_re
         );
     }
 }
+
+#[test]
+fn a_machine_file_or_error_table_that_is_not_one_is_named_never_quoted() {
+    let dir = scratch("bounds", "noecho");
+    let secret = "root:$6$secretsecret:19000:0:99999:7:::\ndaemon:*:19000:0:99999:7:::\n";
+    std::fs::write(dir.join("shadow"), secret).unwrap();
+    // As the machine file: a TOML syntax error on line 1, column 40.
+    write_scenario(&dir, "shadow", CONE_15_10);
+    let (code, err) = refused(&dir, &["check", "s.toml"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("shadow:1:40:"), "{err}");
+    assert!(
+        !err.contains("secretsecret") && !err.contains("daemon"),
+        "{err}"
+    );
+    // As an error table of a good machine: not a number on line 1, column 1.
+    let machine = std::fs::read_to_string(trt_ac()).unwrap();
+    std::fs::write(
+        dir.join("m.toml"),
+        format!("{machine}\n[error_tables]\nX = \"shadow\"\n"),
+    )
+    .unwrap();
+    write_scenario(&dir, "m.toml", CONE_15_10);
+    let (code, err) = refused(&dir, &["check", "s.toml"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("shadow:1:1:"), "{err}");
+    assert!(
+        !err.contains("secretsecret") && !err.contains("daemon"),
+        "{err}"
+    );
+}

@@ -8,40 +8,19 @@ use serde::de::DeserializeOwned;
 use crate::error::{Error, Result};
 
 /// Reads a whole text file: a regular file (after links) of at most
-/// [`ngc::MAX_SIDE_FILE_BYTES`], so that a device such as `/dev/zero`, a FIFO or a huge file
-/// is refused before memory grows.
+/// [`ngc::MAX_SIDE_FILE_BYTES`] ([`ngc::read_side_bytes`]), so that a device such as
+/// `/dev/zero`, a FIFO or a huge file is refused before memory grows; invalid UTF-8 is an
+/// error.
 pub fn read_text(path: &Path) -> Result<String> {
-    use std::io::{Error as IoError, ErrorKind, Read};
-    let read = || -> std::io::Result<String> {
-        let meta = std::fs::metadata(path)?;
-        if !meta.is_file() {
-            return Err(IoError::new(
-                ErrorKind::InvalidInput,
-                "not a regular file (a device, FIFO or folder)",
-            ));
-        }
-        let too_large = || {
-            IoError::new(
-                ErrorKind::InvalidData,
-                format!("larger than {} MiB", ngc::MAX_SIDE_FILE_BYTES >> 20),
-            )
-        };
-        if meta.len() > ngc::MAX_SIDE_FILE_BYTES {
-            return Err(too_large());
-        }
-        let mut text = String::new();
-        std::fs::File::open(path)?
-            .take(ngc::MAX_SIDE_FILE_BYTES + 1)
-            .read_to_string(&mut text)?;
-        if text.len() as u64 > ngc::MAX_SIDE_FILE_BYTES {
-            return Err(too_large());
-        }
-        Ok(text)
-    };
-    read().map_err(|source| Error::Read {
-        path: path.to_path_buf(),
-        source,
-    })
+    ngc::read_side_bytes(path)
+        .and_then(|bytes| {
+            String::from_utf8(bytes)
+                .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
+        })
+        .map_err(|source| Error::Read {
+            path: path.to_path_buf(),
+            source,
+        })
 }
 
 /// Deserializes `text` (the contents of `path`); a syntax or schema error names the line,

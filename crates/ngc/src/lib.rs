@@ -72,5 +72,5 @@ pub use options::{
 };
 pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves, MAX_LINE_BYTES};
 pub use remap::{parse_remap, Remap, RemapCode};
-pub use side_file::{read_side_file, MAX_SIDE_FILE_BYTES};
+pub use side_file::{read_side_bytes, read_side_file, MAX_SIDE_FILE_BYTES};
 pub use units::{ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};

@@ -22,9 +22,9 @@ pub fn open_regular(path: &Path) -> std::io::Result<std::fs::File> {
     std::fs::File::open(path)
 }
 
-/// The text of the side file at `path`, invalid UTF-8 replaced; a file that is not regular
-/// or is larger than [`MAX_SIDE_FILE_BYTES`] is refused before its content is read.
-pub fn read_side_file(path: &Path) -> std::io::Result<String> {
+/// The bytes of the side file at `path`; a file that is not regular or is larger than
+/// [`MAX_SIDE_FILE_BYTES`] is refused before its content is read.
+pub fn read_side_bytes(path: &Path) -> std::io::Result<Vec<u8>> {
     let file = open_regular(path)?;
     let too_large = || {
         Error::new(
@@ -41,7 +41,12 @@ pub fn read_side_file(path: &Path) -> std::io::Result<String> {
     if bytes.len() as u64 > MAX_SIDE_FILE_BYTES {
         return Err(too_large());
     }
-    Ok(match String::from_utf8(bytes) {
+    Ok(bytes)
+}
+
+/// The text of the side file at `path` ([`read_side_bytes`]), invalid UTF-8 replaced.
+pub fn read_side_file(path: &Path) -> std::io::Result<String> {
+    Ok(match String::from_utf8(read_side_bytes(path)?) {
         Ok(text) => text,
         Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
     })

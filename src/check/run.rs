@@ -14,11 +14,11 @@ use serde::{Deserialize, Deserializer, Serialize};
 use crate::check::limits::{AxisUsage, LimitsMonitor, Violation, ViolationKind};
 use crate::check::scene::{EngagementSummary, EventKind, Scene, SceneMonitor, ToolConfig};
 use crate::error::Result;
-use crate::input::budget;
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario};
 use crate::kinematics::Kinematics;
 use crate::measure::CircleFrame;
+use crate::motion::work;
 use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
 use crate::{Axis, AxisVec};
@@ -254,7 +254,7 @@ pub fn check_with(
         force_tcp: scenario.simulate.tcp,
         start_time_s: 0.0,
         program_path: scenario.path.clone(),
-        max_samples: budget::check_up_front(scenario, 0.0)?,
+        max_samples: work::check_up_front(scenario, 0.0)?,
     };
     let stats = {
         let mut sinks: Vec<&mut dyn Sink> = vec![&mut limits];

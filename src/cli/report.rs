@@ -6,6 +6,7 @@ use super::print_stdout;
 use crate::error::{Error, Result};
 use crate::report::html;
 use crate::report::run::{RunFolder, SUMMARY_FILE};
+use crate::report::run_dir::FolderLock;
 
 /// Checks a `--date` value: YYYY-MM-DD.
 pub fn check_date(date: &str) -> Result<()> {
@@ -36,10 +37,24 @@ pub fn check_date(date: &str) -> Result<()> {
     }
 }
 
+/// Writes `report.html` into the finished output folder `dir`, under its lock (no run swaps
+/// the folder while its page is written from it), and returns its path.
+pub fn write_report(dir: &Path, date: Option<&str>) -> Result<PathBuf> {
+    if !dir.is_dir() {
+        return Err(Error::usage(format!(
+            "{}: not a folder; give the output folder of `mtsim simulate` or `mtsim sweep`",
+            dir.display()
+        )));
+    }
+    let _lock = FolderLock::take(dir)?;
+    write_page(dir, date)
+}
+
 /// Writes `report.html` into `dir` and returns its path: the page of a run folder (read
 /// back, diagnosed by `study::diagnose`, rendered), or the study page of a `sweep` folder
-/// (no summary.json, but sweep or placement plots).
-pub fn write_report(dir: &Path, date: Option<&str>) -> Result<PathBuf> {
+/// (no summary.json, but sweep or placement plots). `dir` is one this process owns (a run
+/// being staged) or holds the lock of.
+pub fn write_page(dir: &Path, date: Option<&str>) -> Result<PathBuf> {
     if !dir.join(SUMMARY_FILE).exists() {
         if let Some(path) = html::write_study_page(dir)? {
             return Ok(path);

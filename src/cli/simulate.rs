@@ -71,7 +71,7 @@ pub fn run(
         EXIT_VIOLATIONS
     };
     if html {
-        super::report::write_report(out_dir, None)?;
+        super::report::write_page(out_dir, None)?;
     }
     run_dir.commit()?;
     if as_json {

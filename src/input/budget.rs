@@ -1,5 +1,6 @@
 //! The sample budget of a run: how many interpolation periods one run may take, estimated
-//! before sampling for a generated test and counted while sampling for any program.
+//! before sampling for a generated test (here; a G-code file's read-ahead is in
+//! `motion::work`) and counted while sampling for any program.
 //!
 //! A generated cone or circle runs the arc `2π r (1 + 2 lead / 360°)` at the feed F, so
 //!
@@ -99,7 +100,7 @@ pub fn exceeded(program: &std::path::Path, max_samples: u64, line: usize, time_s
 }
 
 /// `s` as seconds, hours or years, whichever reads best.
-fn duration(s: f64) -> String {
+pub fn duration(s: f64) -> String {
     const HOUR: f64 = 3600.0;
     const YEAR: f64 = 365.25 * 24.0 * HOUR;
     if s < HOUR {

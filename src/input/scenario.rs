@@ -139,6 +139,10 @@ impl TraceFormat {
 /// samples/s) and well over an hour of `simulate` (servo models and trace).
 pub const DEFAULT_MAX_SAMPLES: u64 = 1_000_000_000;
 
+/// Default `[simulate] max_trace_rows`: 10⁷ rows, about 2 GB of `trace.csv` with five axes
+/// (2.8 h of machine time traced every 1 ms period).
+pub const DEFAULT_MAX_TRACE_ROWS: u64 = 10_000_000;
+
 /// `[simulate]`: options of `mtsim simulate`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -161,6 +165,10 @@ pub struct SimulateSection {
     /// Most interpolation periods one run may take (input/budget.rs): a generated test
     /// estimated above it is refused before it starts, any run stopped when it passes it.
     pub max_samples: u64,
+    /// Most rows the trace may hold (program/work.rs): a run estimated above it is refused
+    /// before it starts, and stopped when its trace passes it. About 210 bytes a row in
+    /// `trace.csv` with five axes, as much again in the temporary file while it is written.
+    pub max_trace_rows: u64,
 }
 
 impl Default for SimulateSection {
@@ -172,6 +180,7 @@ impl Default for SimulateSection {
             lead_deg: 20.0,
             measure_lines: None,
             max_samples: DEFAULT_MAX_SAMPLES,
+            max_trace_rows: DEFAULT_MAX_TRACE_ROWS,
         }
     }
 }
@@ -371,14 +380,19 @@ impl Scenario {
                 format!("must be in [0, 180] deg, got {}", sim.lead_deg),
             ));
         }
-        if sim.max_samples == 0 {
-            return Err(value_error(
-                path,
-                &text,
-                "simulate",
-                "max_samples",
-                "must be at least 1".into(),
-            ));
+        for (key, value) in [
+            ("max_samples", sim.max_samples),
+            ("max_trace_rows", sim.max_trace_rows),
+        ] {
+            if value == 0 {
+                return Err(value_error(
+                    path,
+                    &text,
+                    "simulate",
+                    key,
+                    "must be at least 1".into(),
+                ));
+            }
         }
         if let Some([a, b]) = sim.measure_lines {
             if a == 0 || b < a {

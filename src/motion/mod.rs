@@ -4,6 +4,7 @@
 
 pub mod interpolation;
 pub mod sampling;
+pub mod work;
 
 pub use interpolation::{InterpolationOptions, Interpolator, Setpoint};
 pub use sampling::NominalSampler;

@@ -169,6 +169,46 @@ fn names_file(path: &Path, _: &File) -> bool {
     path.exists()
 }
 
+/// The lock of an output folder that a command updates in place (`mtsim report` writing
+/// `report.html` into a run folder): no run swaps the folder meanwhile. Taking it first
+/// cleans up after a killed run, as [`RunDir::begin`] does; dropping it removes the lock file.
+#[derive(Debug)]
+pub struct FolderLock {
+    target: PathBuf,
+    _lock: File,
+}
+
+/// Locks `target` (`.DIR.mtsim-lock`) and writes this process's pid into the lock file.
+fn lock_with_pid(target: &Path) -> Result<File> {
+    let lock_path = sibling(target, "lock");
+    let mut lock = lock(target, &lock_path)?;
+    (|| {
+        lock.set_len(0)?;
+        lock.rewind()?;
+        writeln!(lock, "{}", std::process::id())
+    })()
+    .map_err(write_error(&lock_path))?;
+    Ok(lock)
+}
+
+impl FolderLock {
+    /// Locks the existing folder `target`; fails (exit 2) while another live run holds it.
+    pub fn take(target: &Path) -> Result<FolderLock> {
+        let lock = FolderLock {
+            target: target.to_path_buf(),
+            _lock: lock_with_pid(target)?,
+        };
+        recover(target)?;
+        Ok(lock)
+    }
+}
+
+impl Drop for FolderLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(sibling(&self.target, "lock"));
+    }
+}
+
 impl RunDir {
     /// Locks `target` for this run, cleans up after a killed run and creates the empty
     /// staging folder. Fails (exit 2) when another live run holds the lock or when `target`
@@ -185,14 +225,7 @@ impl RunDir {
             _ => Path::new("."),
         };
         super::create_dir(parent)?;
-        let lock_path = sibling(target, "lock");
-        let mut lock = lock(target, &lock_path)?;
-        (|| {
-            lock.set_len(0)?;
-            lock.rewind()?;
-            writeln!(lock, "{}", std::process::id())
-        })()
-        .map_err(write_error(&lock_path))?;
+        let lock = lock_with_pid(target)?;
         // From here on, dropping `run_dir` undoes what was done and removes the lock file.
         let run_dir = RunDir {
             target: target.to_path_buf(),

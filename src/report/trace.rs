@@ -49,6 +49,9 @@ pub struct TraceSink {
     direction: Direction,
     measured: Option<MeasuredLines>,
     row: Vec<f64>,
+    /// Rows recorded, and the most the run may record (`[simulate] max_trace_rows`).
+    rows: u64,
+    max_rows: u64,
 }
 
 fn write_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
@@ -60,13 +63,15 @@ fn write_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
 
 impl TraceSink {
     /// A trace of `axes` into `trace_path`, every `every`-th sample of the measured
-    /// revolution; without a ball bar (`geometry` None) the trace has its header only.
+    /// revolution, at most `max_rows` rows; without a ball bar (`geometry` None) the trace
+    /// has its header only.
     pub fn create(
         trace_path: &Path,
         axes: &'static [Axis],
         geometry: Option<BarGeometry>,
         every: u64,
         format: TraceFormat,
+        max_rows: u64,
     ) -> Result<TraceSink> {
         let raw_path = trace_path.with_extension("csv.raw.tmp");
         Ok(TraceSink {
@@ -81,6 +86,8 @@ impl TraceSink {
             direction: Direction::Ccw,
             measured: None,
             row: Vec::with_capacity(RAW_FIXED_COLUMNS + 3 * axes.len()),
+            rows: 0,
+            max_rows,
         })
     }
 
@@ -155,6 +162,15 @@ impl TraceSink {
         if self.geometry.is_none() || s.index % self.every != 0 {
             return Ok(());
         }
+        if self.rows >= self.max_rows {
+            return Err(Error::usage(format!(
+                "the trace passed its budget of {} rows ([simulate] max_trace_rows) at program line {}, \
+                 after {:.1} s of machine time: raise [simulate] trace_every or max_trace_rows, \
+                 or measure fewer blocks (measure_lines)",
+                self.max_rows, s.line, s.time_s
+            )));
+        }
+        self.rows += 1;
         let row = &mut self.row;
         row.clear();
         let cw = if self.direction == Direction::Cw {

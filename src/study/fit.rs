@@ -49,12 +49,12 @@ use nalgebra::{DMatrix, DVector, Point3, Vector3};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::input::budget;
 use crate::input::program::{ConeTest, Direction};
 use crate::input::scenario::{Program, Scenario};
 use crate::kinematics::{LocationErrors, LocationParam};
 use crate::measure::ballbar::{deviation_mm, BallbarRun, BIN_DEG, N_BINS};
 use crate::measure::{is_measured, BarGeometry, CircleFrame};
+use crate::motion::work;
 use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
 use crate::report::{create_dir, write_atomic};
@@ -352,7 +352,7 @@ fn record(
         force_tcp: sc.simulate.tcp,
         start_time_s: 0.0,
         program_path: sc.path.clone(),
-        max_samples: budget::check_up_front(&sc, sc.simulate.lead_deg)?,
+        max_samples: work::check_up_front(&sc, sc.simulate.lead_deg)?,
     };
     pipeline::run(run.moves, machine, &options, &mut [&mut rec], &|_| {})?;
     Ok(rec.samples)

@@ -10,11 +10,11 @@
 use serde::Serialize;
 
 use crate::error::Result;
-use crate::input::budget;
 use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
 use crate::measure::ballbar::{deviation_mm, BallbarRun};
 use crate::measure::{is_measured, BarGeometry};
+use crate::motion::work;
 use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
 use crate::study::simulate::bar_geometry;
@@ -52,7 +52,7 @@ pub fn geometric_trace(scenario: &Scenario) -> Result<Option<GeometricTrace>> {
         force_tcp: scenario.simulate.tcp,
         start_time_s: 0.0,
         program_path: scenario.path.clone(),
-        max_samples: budget::check_up_front(scenario, scenario.simulate.lead_deg)?,
+        max_samples: work::check_up_front(scenario, scenario.simulate.lead_deg)?,
     };
     pipeline::run(
         run.moves,

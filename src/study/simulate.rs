@@ -16,7 +16,6 @@ use nalgebra::{Point3, Vector3};
 use serde::Serialize;
 
 use crate::error::Result;
-use crate::input::budget;
 use crate::input::drive::si_per_unit;
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario, TraceFormat};
@@ -24,6 +23,7 @@ use crate::measure::attribution::{sites_from_map, ReversalSite};
 use crate::measure::ballbar::{analyse_events_at, BallbarResult};
 use crate::measure::settle::SettleGate;
 use crate::measure::{BallbarSink, BarGeometry, CircleFrame};
+use crate::motion::work;
 use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
 use crate::report::create_dir;
@@ -149,7 +149,7 @@ pub fn run_ballbar(
             force_tcp: scenario.simulate.tcp,
             start_time_s: sim_time_s,
             program_path: scenario.path.clone(),
-            max_samples: budget::check_up_front(scenario, scenario.simulate.lead_deg)?,
+            max_samples: work::check_up_front(scenario, scenario.simulate.lead_deg)?,
         };
         // A file program measured from its first feed block: keep the start-up transient
         // (the rapid still settling) out of the measured revolution.
@@ -267,6 +267,7 @@ pub fn simulate(
             crate::report::html::REPORT_FILE,
         ],
     )?;
+    work::check_trace_up_front(scenario, scenario.simulate.lead_deg)?;
     let format = scenario.simulate.trace_format;
     let mut trace = TraceSink::create(
         &out_dir.join(format.file_name()),
@@ -274,6 +275,7 @@ pub fn simulate(
         bar_geometry(scenario),
         scenario.simulate.trace_every as u64,
         format,
+        scenario.simulate.max_trace_rows,
     )?;
     let started = Instant::now();
     let study = run_ballbar(scenario, Some(&mut trace), progress)?;

@@ -221,11 +221,14 @@ fn a_generated_test_over_the_sample_budget_is_refused_up_front_with_its_estimate
     );
 }
 
-/// A G-code file has no estimate: the pipeline counts its samples and stops it at the
-/// budget with the line it reached. The bundled program runs 36.4 s at 1 ms (36,416
-/// samples by `check`), so a budget of 1000 stops it in its first second.
+/// A G-code file is read ahead of its run and each move adds its programmed time (the time
+/// `check` takes, a lower bound on the planner's): the bundled program's 360 feed blocks run
+/// 2π·96.5926 mm at F1000 with the deg counted as mm, 36.41 s, 36,416 samples at 1 ms by
+/// `check`. A budget of 1000 is refused by the read-ahead, in its first second of program;
+/// a budget of 36,416 passes the read-ahead and `check`, and stops `simulate`, whose planner
+/// ramps take longer, while it runs, with the line it reached.
 #[test]
-fn a_file_program_past_the_budget_stops_with_the_line_it_reached() {
+fn a_file_program_past_the_budget_is_refused_by_reading_ahead_or_stopped_where_it_passes() {
     let program =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/programs/cone-15-10-yt25.nc");
     let dir = scratch("bounds", "file-budget");
@@ -236,17 +239,123 @@ fn a_file_program_past_the_budget_stops_with_the_line_it_reached() {
     for command in ["check", "simulate"] {
         let (code, err) = refused(&dir, &args(command, "s.toml"));
         assert_eq!(code, Some(2), "{command}: {err}");
-        assert!(err.contains("the run passed its budget of 1000 samples ([simulate] max_samples) at program line"), "{err}");
-        assert!(err.contains("after 1.0 s of machine time"), "{err}");
+        assert!(
+            err.contains("over the budget of 1000 ([simulate] max_samples): read ahead to line"),
+            "{err}"
+        );
+        assert!(err.contains("cone-15-10-yt25.nc"), "{err}");
     }
-    write_scenario(&dir, &trt_ac(), &body(100_000));
+    write_scenario(&dir, &trt_ac(), &body(36_416));
     let out = mtsim_plain(&dir, &["check", "s.toml"]);
+    let text = String::from_utf8_lossy(&out.stdout);
     assert_eq!(
         out.status.code(),
         Some(0),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    assert!(text.contains("36416 samples"), "{text}");
+    let (code, err) = refused(&dir, &args("simulate", "s.toml"));
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains(
+            "the run passed its budget of 36416 samples ([simulate] max_samples) at program line"
+        ),
+        "{err}"
+    );
+}
+
+/// A program that loops without end is refused by the read-ahead, not sampled for hours:
+/// each pass of `o100 while [1]` moves 10 mm and back at F1000 (1.2 s), so 10⁹ samples at
+/// 1 ms (10⁶ s) are passed after 833,334 passes, 1,666,668 moves, before the interpreter's
+/// limit of 10⁶ loop iterations. With the iterations limit lower than that, the interpreter's
+/// own limit names the loop.
+#[test]
+fn a_program_that_loops_without_end_is_refused_after_reading_not_sampling() {
+    let dir = scratch("bounds", "endless-loop");
+    std::fs::write(
+        dir.join("loop.ngc"),
+        "G21 G90 G17\nG0 X0 Y0 Z0\nF1000\no100 while [1]\nG1 X10\nG1 X0\no100 endwhile\nM2\n",
+    )
+    .unwrap();
+    write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"loop.ngc\"\n[check]\ncollisions = false\n",
+    );
+    for command in ["check", "simulate"] {
+        let (code, err) = refused(&dir, &args(command, "s.toml"));
+        assert_eq!(code, Some(2), "{command}: {err}");
+        assert!(
+            err.contains("over the budget of 1000000000 ([simulate] max_samples): read ahead to line 5 of loop.ngc, its 1666668 moves"),
+            "{command}: {err}"
+        );
+        assert!(err.contains("277.8 h of machine time"), "{err}");
+    }
+}
+
+/// A file program's trace rows are counted while it runs: the bundled file cone traces
+/// about 36,260 rows, so a budget of 20,000 stops it on its way round.
+#[test]
+fn a_file_programs_trace_stops_at_its_row_budget() {
+    let program =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/programs/cone-15-10-yt25.nc");
+    let dir = scratch("bounds", "file-trace-rows");
+    write_scenario(
+        &dir,
+        &trt_ac(),
+        &format!(
+            "[program]\nfile = {:?}\n[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\n\
+             center_mm = [0.0, -25.0, 200.0]\nballbar_length_mm = 100.0\n[simulate]\nmax_trace_rows = 20000\n",
+            program.display().to_string()
+        ),
+    );
+    let (code, err) = refused(&dir, &args("simulate", "s.toml"));
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains(
+            "the trace passed its budget of 20000 rows ([simulate] max_trace_rows) at program line"
+        ),
+        "{err}"
+    );
+    assert!(!dir.join("out").exists(), "a stopped run leaves no folder");
+}
+
+/// `simulate`'s trace has a budget of its own: the 15/10 cone's measured revolution is
+/// 2π·100·cos 15° mm at F1000, 36.41 s, 36,413 rows at 1 ms; a budget of 10,000 rows is
+/// refused before the run with that estimate, 40,000 rows pass.
+#[test]
+fn a_trace_over_its_row_budget_is_refused_up_front() {
+    let dir = scratch("bounds", "trace-rows");
+    let rows = 2.0 * PI * 100.0 * 15f64.to_radians().cos() / (1000.0 / 60.0) / 1e-3;
+    for (max, every, refused_expected) in [
+        (10_000u64, 1u64, true),
+        (40_000, 1, false),
+        (10_000, 4, false),
+    ] {
+        write_scenario(
+            &dir,
+            &trt_ac(),
+            &format!("{CONE_15_10}[simulate]\nmax_trace_rows = {max}\ntrace_every = {every}\n"),
+        );
+        let (code, err) = refused(&dir, &args("simulate", "s.toml"));
+        if refused_expected {
+            assert_eq!(code, Some(2), "{err}");
+            assert!(
+                err.contains(&format!("the trace would hold about {rows:.3e} rows, more than the budget of {max} ([simulate] max_trace_rows)")),
+                "{err}"
+            );
+            assert!(!dir.join("out").exists(), "a refused run leaves no folder");
+        } else {
+            assert_eq!(code, Some(0), "{max} {every}: {err}");
+            let trace = std::fs::read_to_string(dir.join("out/trace.csv")).unwrap();
+            let n = trace.lines().count() as u64 - 1;
+            assert!(
+                n <= max && (n + 1) as f64 >= rows / every as f64,
+                "{n} rows"
+            );
+        }
+    }
 }
 
 /// Every bundled scenario's runs stay far below the default budget: `check` counts each

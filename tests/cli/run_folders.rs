@@ -1,7 +1,7 @@
 //! A run folder is one unit (src/report/run_dir.rs): `kill -9` at random times into a folder
 //! holding an earlier run leaves the old run or the new one, whole; a rerun leaves nothing of
 //! the old one; a second run into a folder in use is refused; SIGINT and SIGTERM leave no
-//! temporary files. `MTSIM_LONG_FAULTS=1` runs 100 kill times instead of 10.
+//! temporary files; `mtsim report` takes the same lock. `MTSIM_LONG_FAULTS=1` runs 100 kill times instead of 10.
 
 use crate::common;
 
@@ -191,6 +191,34 @@ fn a_second_run_into_a_folder_in_use_is_refused_and_a_dead_runs_lock_is_not() {
     run_ok(&simulate_args(NEW, &out, false));
     assert_ne!(contents(&out), before);
     assert!(!lock_path.exists(), "a finished run removes its lock file");
+}
+
+/// `mtsim report` writes into a finished run folder: it takes the folder's lock, so it is
+/// refused while a run writes there and leaves no lock file when done.
+#[test]
+fn report_into_a_folder_in_use_is_refused_and_otherwise_leaves_no_lock() {
+    let dir = scratch("run-folders", "report-lock");
+    let out = dir.join("out");
+    run_ok(&simulate_args(NEW, &out, false));
+    let lock_path = dir.join(".out.mtsim-lock");
+    let lock = std::fs::File::create(&lock_path).unwrap();
+    lock.try_lock().unwrap();
+    std::fs::write(&lock_path, b"4343\n").unwrap();
+    let refused = mtsim(&["report", s(&out)]);
+    assert_eq!(refused.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&refused.stderr).replace(['\n', '│', ' '], "");
+    assert!(
+        err.contains("isbeingwrittenbyanothermtsimrun(pid4343)"),
+        "{err}"
+    );
+    assert!(!out.join("report.html").exists());
+    drop(lock);
+    run_ok(&["report", s(&out)]);
+    assert!(out.join("report.html").exists());
+    assert_eq!(names(&dir), ["out"], "no lock file left");
+    let missing = mtsim(&["report", s(&dir.join("missing"))]);
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("not a folder"));
 }
 
 /// Sends `signal` to `child` once its staging folder exists, and checks that the old run

@@ -1,0 +1,160 @@
+//! The work a run will do, known before it samples: a lower bound on its machine time, from
+//! the program and the machine, checked against the run's budget (`input::budget`).
+//!
+//! A generated test's path is known in closed form ([`budget::SampleEstimate`]). A G-code
+//! file is read once ahead of the run (the moves only: no planning, no servo), and each
+//! canonical move adds its programmed duration ([`block_duration_s`]):
+//!
+//! ```text
+//! t_feed  = L / F            (G94; L the length F is the rate of: docs/interpolation.md)
+//! t_feed  = 1 / F   min      (G93)
+//! t_rapid = max_i |Δq_i| / v_max,i
+//! t_dwell = P
+//! ```
+//!
+//! The first move, which only places the machine (its start is unknown), adds nothing.
+//! That is the time `check`'s programmed timing takes, and a lower bound on the planner's (it
+//! never exceeds F or an axis's top speed, and adds ramps). A program whose sum already passes
+//! the budget would pass it when run: it is refused before the first sample, with the line
+//! reached. The read stops there, so a program that loops for ever is refused after
+//! `max_samples · Δt` of machine time has been read, not sampled.
+
+use std::f64::consts::TAU;
+
+use crate::error::{Error, Result};
+use crate::input::budget;
+use crate::input::program::Direction;
+use crate::input::scenario::{Program, Scenario};
+use crate::motion::sampling::block_duration_s;
+
+/// What the read-ahead of a file program found.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FileWork {
+    /// Canonical moves read.
+    pub moves: u64,
+    /// Programmed machine time of those moves (the first excepted), s.
+    pub machine_time_s: f64,
+}
+
+/// Reads `scenario`'s file program ahead of its run and adds up its least machine time,
+/// stopping with an error as soon as that passes the sample budget.
+pub fn read_ahead(scenario: &Scenario) -> Result<FileWork> {
+    let machine = &scenario.machine;
+    let period_s = machine.interpolation_period_s;
+    let max_samples = scenario.simulate.max_samples;
+    let run = crate::program::scenario_run(scenario, Direction::Ccw, 0.0)?;
+    let mut work = FileWork::default();
+    for m in run.moves {
+        let m = m?;
+        // The first move only places the machine: its start is unknown, and no run samples
+        // the path to it.
+        let t = if work.moves == 0 {
+            0.0
+        } else {
+            block_duration_s(&m, machine)?
+        };
+        work.moves += 1;
+        work.machine_time_s += t;
+        let samples = work.machine_time_s / period_s;
+        if samples > max_samples as f64 {
+            return Err(over_budget(scenario, &work, m.line, samples));
+        }
+    }
+    Ok(work)
+}
+
+fn program_name(scenario: &Scenario) -> String {
+    match &scenario.program {
+        Program::File { path, .. } => path.display().to_string(),
+        _ => "the generated program".into(),
+    }
+}
+
+fn over_budget(scenario: &Scenario, work: &FileWork, line: usize, samples: f64) -> Error {
+    Error::invalid(
+        &scenario.path,
+        format!(
+            "the program needs more than {:.3e} samples, over the budget of {} ([simulate] max_samples): \
+             read ahead to line {line} of {}, its {} moves take at least {} of machine time, sampled every {} ms",
+            samples,
+            scenario.simulate.max_samples,
+            program_name(scenario),
+            work.moves,
+            budget::duration(work.machine_time_s),
+            scenario.machine.interpolation_period_s * 1e3,
+        ),
+    )
+    .with_help(
+        "shorten the program (a loop without end? feeds near zero?), lengthen the machine's \
+         interpolation_period_ms, or raise [simulate] max_samples",
+    )
+}
+
+/// Refuses a traced run whose samples would pass the budget ([`check_up_front`]) or whose
+/// trace would pass `[simulate] max_trace_rows`: the measured revolution's least machine time
+/// over the period and `trace_every`, in every direction (`2π r / F` for a generated test;
+/// a file's rows are counted while it runs).
+pub fn check_trace_up_front(scenario: &Scenario, lead_deg: f64) -> Result<()> {
+    let sim = &scenario.simulate;
+    if !matches!(scenario.program, Program::File { .. }) {
+        budget::check_up_front(scenario, lead_deg)?;
+    }
+    let (measured_time_s, directions) = match &scenario.program {
+        Program::Cone {
+            cone,
+            nc,
+            directions,
+        } => (
+            TAU * cone.radius_mm() / (nc.feed_mm_min / 60.0),
+            directions.len(),
+        ),
+        Program::Circle { circle, directions } => (
+            TAU * circle.radius_mm / (circle.feed_mm_min / 60.0),
+            directions.len(),
+        ),
+        // A file's measured revolution starts where its axes have settled, known only
+        // while it runs: its rows are counted then (report/trace.rs).
+        Program::File { .. } => return Ok(()),
+    };
+    let rows = measured_time_s / scenario.machine.interpolation_period_s / sim.trace_every as f64
+        * directions as f64;
+    if rows <= sim.max_trace_rows as f64 {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        &scenario.path,
+        format!(
+            "the trace would hold about {rows:.3e} rows, more than the budget of {} ([simulate] max_trace_rows): \
+             {} of measured machine time in {directions} direction(s), sampled every {} ms, {} traced",
+            sim.max_trace_rows,
+            budget::duration(measured_time_s),
+            scenario.machine.interpolation_period_s * 1e3,
+            traced(sim.trace_every),
+        ),
+    )
+    .with_help("raise [simulate] trace_every or max_trace_rows, or shorten the measured revolution (a higher feed)"))
+}
+
+/// `every sample`, `every 2nd sample`, ...: what the trace keeps.
+fn traced(n: usize) -> String {
+    if n == 1 {
+        return "every sample".into();
+    }
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("every {n}{suffix} sample")
+}
+
+/// The sample budget of a run of `scenario`, after checking its estimate: the closed form of a
+/// generated test, the read-ahead of a file ([`read_ahead`]).
+pub fn check_up_front(scenario: &Scenario, lead_deg: f64) -> Result<u64> {
+    if let Program::File { .. } = scenario.program {
+        read_ahead(scenario)?;
+    }
+    budget::check_up_front(scenario, lead_deg)
+}

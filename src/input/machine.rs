@@ -160,8 +160,11 @@ impl Machine {
         overrides: Option<(&Path, &str, &toml::Table)>,
     ) -> Result<Machine> {
         let file: MachineFile = toml_text::parse(path, text)?;
+        // The machine file must hold on its own: its errors point at its own lines.
+        let machine = Machine::validate(path, text, file, path)?;
+        toml_text::check_numbers(path, text)?;
         let Some((scenario_path, scenario_text, overrides)) = overrides else {
-            return Machine::validate(path, text, file, path);
+            return Ok(machine);
         };
         // Error-table paths are relative to the file that names them.
         let tables_file = if overrides.contains_key("error_tables") {
@@ -172,13 +175,10 @@ impl Machine {
         let mut merged: toml::Table =
             toml::from_str(text).map_err(|e| toml_text::toml_error(path, text, &e))?;
         deep_merge(&mut merged, overrides);
-        let file: MachineFile = toml::Value::Table(merged).try_into().map_err(|e: toml::de::Error| {
-            Error::invalid(
-                scenario_path,
-                format!("[machine_overrides] does not fit the machine format: {}", e.message().trim()),
-            )
-            .with_help("[machine_overrides] takes the same keys as a machine file; see docs/machine-format.md")
-        })?;
+        let file = toml_text::parse_overridden::<MachineFile>(&merged, scenario_path, scenario_text)
+            .map_err(|e| {
+                e.with_help("[machine_overrides] takes the same keys as a machine file; see docs/machine-format.md")
+            })?;
         // Range errors in overridden values point at the scenario file.
         Machine::validate(scenario_path, scenario_text, file, tables_file)
     }

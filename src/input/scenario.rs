@@ -458,6 +458,7 @@ impl Scenario {
         }
         refuse_what_the_layout_cannot_give(path, &file, &program, &machine)?;
         let reader = reader_options(path, &text, &file.reader, &machine)?;
+        toml_text::check_numbers(path, &text)?;
         let tool_shapes = file
             .reader
             .tools

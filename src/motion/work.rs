@@ -63,31 +63,32 @@ pub fn read_ahead(scenario: &Scenario) -> Result<FileWork> {
     Ok(work)
 }
 
-fn program_name(scenario: &Scenario) -> String {
-    match &scenario.program {
-        Program::File { path, .. } => path.display().to_string(),
-        _ => "the generated program".into(),
-    }
-}
-
 fn over_budget(scenario: &Scenario, work: &FileWork, line: usize, samples: f64) -> Error {
-    Error::invalid(
-        &scenario.path,
-        format!(
-            "the program needs more than {:.3e} samples, over the budget of {} ([simulate] max_samples): \
-             read ahead to line {line} of {}, its {} moves take at least {} of machine time, sampled every {} ms",
-            samples,
-            scenario.simulate.max_samples,
-            program_name(scenario),
-            work.moves,
-            budget::duration(work.machine_time_s),
-            scenario.machine.interpolation_period_s * 1e3,
+    let message = format!(
+        "the program needs more than {:.3e} samples, over the budget of {} ([simulate] max_samples of {}): \
+         read ahead to this line, its {} moves take at least {} of machine time, sampled every {} ms",
+        samples,
+        scenario.simulate.max_samples,
+        scenario.path.display(),
+        work.moves,
+        budget::duration(work.machine_time_s),
+        scenario.machine.interpolation_period_s * 1e3,
+    );
+    let program = match &scenario.program {
+        Program::File { path, .. } => path.clone(),
+        _ => scenario.path.clone(),
+    };
+    Error::Located {
+        path: program,
+        line,
+        column: 1,
+        message,
+        help: Some(
+            "shorten the program (a loop without end? feeds near zero?), lengthen the machine's \
+             interpolation_period_ms, or raise [simulate] max_samples"
+                .into(),
         ),
-    )
-    .with_help(
-        "shorten the program (a loop without end? feeds near zero?), lengthen the machine's \
-         interpolation_period_ms, or raise [simulate] max_samples",
-    )
+    }
 }
 
 /// Refuses a traced run whose samples would pass the budget ([`check_up_front`]) or whose

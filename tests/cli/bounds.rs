@@ -240,10 +240,13 @@ fn a_file_program_past_the_budget_is_refused_by_reading_ahead_or_stopped_where_i
         let (code, err) = refused(&dir, &args(command, "s.toml"));
         assert_eq!(code, Some(2), "{command}: {err}");
         assert!(
-            err.contains("over the budget of 1000 ([simulate] max_samples): read ahead to line"),
+            err.contains("cone-15-10-yt25.nc:19:1: the program needs more than"),
             "{err}"
         );
-        assert!(err.contains("cone-15-10-yt25.nc"), "{err}");
+        assert!(
+            err.contains("over the budget of 1000 ([simulate] max_samples of s.toml): read ahead to this line"),
+            "{err}"
+        );
     }
     write_scenario(&dir, &trt_ac(), &body(36_416));
     let out = mtsim_plain(&dir, &["check", "s.toml"]);
@@ -287,7 +290,11 @@ fn a_program_that_loops_without_end_is_refused_after_reading_not_sampling() {
         let (code, err) = refused(&dir, &args(command, "s.toml"));
         assert_eq!(code, Some(2), "{command}: {err}");
         assert!(
-            err.contains("over the budget of 1000000000 ([simulate] max_samples): read ahead to line 5 of loop.ngc, its 1666668 moves"),
+            err.contains("loop.ngc:5:1: the program needs more than 1.000e9 samples, over the budget of 1000000000"),
+            "{command}: {err}"
+        );
+        assert!(
+            err.contains("read ahead to this line, its 1666668 moves"),
             "{command}: {err}"
         );
         assert!(err.contains("277.8 h of machine time"), "{err}");

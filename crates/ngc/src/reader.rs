@@ -1626,7 +1626,7 @@ impl Moves {
             }
             if !self.remaps_noticed.contains(&s.remap) {
                 self.remaps_noticed.push(s.remap);
-                self.notices.push(Notice { path: self.programs[here.file].path.clone(), line: here.line, message: format!("{} is remapped ({}) to the Python function `{}`, which does not move the machine: accepted and not run", remap.code, remap.origin, remap.python.as_deref().unwrap_or("")) });
+                self.notices.push(Notice { path: self.programs[here.file].path.clone(), line: here.line, message: format!("{} is remapped ({}) to the Python function `{}`, which does not move the machine: accepted and not run", remap.code, remap.origin, remap.python.as_deref().unwrap_or("")), warning: false });
             }
             if remap.python_keeps_motion {
                 self.modal_remap = Some(s.remap);

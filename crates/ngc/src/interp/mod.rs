@@ -52,7 +52,7 @@ use crate::expr::{Param, Params};
 use crate::frame::{Mat3, RotaryTable};
 use crate::lex::{LineResult, Word};
 use crate::notice::Notice;
-use crate::options::{Dialect, Options, Tool, UserM};
+use crate::options::{Dialect, Distance, Options, StartFeed, Tool, Units, UserM};
 use crate::spline;
 
 mod arcs;
@@ -119,6 +119,11 @@ pub struct Interp {
     arc_absolute: bool,
     feed_mode: FeedRead,
     inch: bool,
+    /// G20/G21 has been read (until then the units are the start state's, a guess the
+    /// first move warns about).
+    units_stated: bool,
+    /// Where the start state's units come from (named in that warning).
+    start_units_setting: &'static str,
     /// F as programmed (program units per minute or per revolution, or 1/min).
     feed: Option<f64>,
     spindle_rpm: f64,
@@ -221,11 +226,17 @@ impl Interp {
             axes,
             pos: o.start,
             motion: None,
-            plane: Plane::XY,
-            absolute: true,
+            plane: o.start_state.plane,
+            absolute: o.start_state.distance == Distance::Absolute,
             arc_absolute: false,
-            feed_mode: FeedRead::PerMinute,
-            inch: false,
+            feed_mode: match o.start_state.feed {
+                StartFeed::InverseTime => FeedRead::InverseTime,
+                StartFeed::PerMinute => FeedRead::PerMinute,
+                StartFeed::PerRevolution => FeedRead::PerRevolution,
+            },
+            inch: o.start_state.units == Units::Inch,
+            units_stated: false,
+            start_units_setting: o.start_units_setting,
             feed: None,
             spindle_rpm: 0.0,
             spindle_turning: false,
@@ -419,11 +430,38 @@ impl Interp {
         let previous_motion = self.motion_mode(&b)?;
         self.axis_words(&mut b)?;
         // 6. Non-modal codes that use axis words.
+        let queued = queue.len();
         self.non_modal(&mut b, line_no, queue)?;
         // 7. Motion.
         self.motion(&mut b, previous_motion, line_no, queue)?;
+        if !self.units_stated && queue.len() > queued {
+            self.warn_units_assumed(line_no, notices, path);
+        }
         // 8. Stops and program flow.
         self.program_flow(&b, queue, stop)
+    }
+
+    /// The program moves before it states its units: warn once, naming the unit assumed and
+    /// the setting that changes it (a program in the other unit is 25.4 times off).
+    fn warn_units_assumed(&mut self, line_no: usize, notices: &mut Vec<Notice>, path: &Path) {
+        self.units_stated = true;
+        let (unit, other) = if self.inch {
+            ("inches (G20)", "mm")
+        } else {
+            ("mm (G21)", "inches")
+        };
+        notices.push(Notice {
+            path: path.to_path_buf(),
+            line: line_no,
+            message: format!(
+                "the program moves before it states its units (no G20/G21 before this line): \
+                 read in {unit}, the unit the control starts in ({}); a program written in \
+                 {other} is read 25.4 times off: set the scenario's [reader] start_units or \
+                 the machine file's [start] units",
+                self.start_units_setting
+            ),
+            warning: true,
+        });
     }
 
     /// The end of the program: the queued compensated moves end as at G40.

@@ -23,6 +23,7 @@ impl Interp {
         for &(c, _) in b.g.iter() {
             if let GCode::Units(inch) = c {
                 self.inch = inch;
+                self.units_stated = true;
             }
         }
         for &(c, _) in b.g.iter() {

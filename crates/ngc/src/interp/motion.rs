@@ -399,6 +399,7 @@ impl Interp {
             || self.rotation.is_some()
             || self.tilt.is_some()
             || self.dwo
+            || !self.units_stated
         {
             return false;
         }

@@ -122,7 +122,7 @@ impl Interp {
                     let what = file.map_or(String::new(), |f| {
                         format!(" (runs {}, an external program)", f.display())
                     });
-                    notices.push(Notice { path: path.to_path_buf(), line: line_no, message: format!("user code M{code}{what} accepted and ignored (map it in the scenario's user_m_codes to give it an effect)") });
+                    notices.push(Notice { path: path.to_path_buf(), line: line_no, message: format!("user code M{code}{what} accepted and ignored (map it in the scenario's user_m_codes to give it an effect)"), warning: false });
                 }
                 Ok(None)
             }

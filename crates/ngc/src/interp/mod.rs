@@ -46,7 +46,7 @@ use std::path::Path;
 use crate::axis::{Axis, AxisVec, Plane};
 use crate::block::Block;
 use crate::canon::{Move, PathControl};
-use crate::code::{FeedRead, MotionMode};
+use crate::code::{FeedRead, GCode, MotionMode};
 use crate::comp;
 use crate::expr::{Param, Params};
 use crate::frame::{Mat3, RotaryTable};
@@ -114,6 +114,11 @@ pub struct Interp {
     /// Machine position of the controlled point, mm and deg.
     pos: AxisVec,
     motion: Option<MotionMode>,
+    /// The last G00-G03 mode (Fanuc group 01), in effect again after G80 where the
+    /// dialect's table says so.
+    interpolation: Option<MotionMode>,
+    /// The D word given alone (Fanuc family): the offset a later G41/G42 without D uses.
+    d_register: Option<u32>,
     plane: Plane,
     absolute: bool,
     arc_absolute: bool,
@@ -226,6 +231,8 @@ impl Interp {
             axes,
             pos: o.start,
             motion: None,
+            interpolation: None,
+            d_register: None,
             plane: o.start_state.plane,
             absolute: o.start_state.distance == Distance::Absolute,
             arc_absolute: false,
@@ -426,6 +433,7 @@ impl Interp {
         self.dwell(&b, line_no, queue)?;
         // 5. Plane, units, compensation, tool length, work system, path, distance, retract.
         self.modal_groups(&b, line_no, queue)?;
+        self.no_motion_notices(&b, line_no, notices, path);
         // The motion mode, then the axis words (polar words resolved in the new state).
         let previous_motion = self.motion_mode(&b)?;
         self.axis_words(&mut b)?;
@@ -439,6 +447,43 @@ impl Interp {
         }
         // 8. Stops and program flow.
         self.program_flow(&b, queue, stop)
+    }
+
+    /// A notice, once per code, for each G code of the block that has no effect on the
+    /// motion and each machine M code (brakes, chip conveyor, coolant options).
+    fn no_motion_notices(
+        &mut self,
+        b: &Block,
+        line_no: usize,
+        notices: &mut Vec<Notice>,
+        path: &Path,
+    ) {
+        let table = self.dialect.table();
+        // G codes are keyed apart from M codes in `noticed`.
+        const G_KEY: u32 = 1 << 20;
+        let g = b.g.iter().filter_map(|(c, _)| match c {
+            GCode::Control(code) => (table.no_motion_g)(*code).map(|m| (G_KEY + code, m)),
+            _ => None,
+        });
+        let m =
+            b.m.iter()
+                .filter_map(|(code, _)| (table.machine_m)(*code).map(|m| (*code, m)));
+        let found: Vec<(u32, &str)> = g.chain(m).collect();
+        for (key, meaning) in found {
+            if self.noticed.contains(&key) || self.noticed.len() >= 100 {
+                continue;
+            }
+            self.noticed.push(key);
+            notices.push(Notice {
+                path: path.to_path_buf(),
+                line: line_no,
+                message: format!(
+                    "{meaning}: accepted with no effect on the motion ({} dialect)",
+                    self.dialect.name()
+                ),
+                warning: false,
+            });
+        }
     }
 
     /// The program moves before it states its units: warn once, naming the unit assumed and

@@ -32,6 +32,14 @@ impl Interp {
         let previous_motion = self.motion;
         if let Some((mm, _)) = motion_code {
             self.motion = mm;
+            match mm {
+                Some(MotionMode::Rapid | MotionMode::Linear | MotionMode::Arc { .. }) => {
+                    self.interpolation = mm;
+                }
+                // Fanuc family: G80 leaves group 01's G00-G03 in effect.
+                None if self.dialect.table().g80_keeps_motion => self.motion = self.interpolation,
+                _ => {}
+            }
             // The initial level of a row of cycles is kept until a motion that is not one.
             if !matches!(mm, Some(MotionMode::Cycle(_))) {
                 self.cycle_initial = None;

@@ -71,6 +71,8 @@ impl Interp {
                 | 70..=73
                 | 98
                 | 99 => {}
+                97 if self.dialect.table().local_subprogram_m97 => {}
+                code if (self.dialect.table().machine_m)(code).is_some() => {}
                 code => {
                     if let Some(on) = self.user_m(b.line, code, w, line_no, notices, path)? {
                         tcp_m = Some(on);

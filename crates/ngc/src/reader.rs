@@ -1420,6 +1420,18 @@ impl Moves {
     fn skip_leader(&mut self) {
         let mut c = self.cursor;
         let mut text_before = false;
+        // A first line that starts like G-code (or `%`, a comment, a block delete) has no
+        // leader before it: nothing is read ahead.
+        while let Some((line, next)) = self.line_at(c) {
+            let t = line.trim_start_matches(['\u{feff}', ' ', '\t']);
+            if let Some(first) = t.chars().next() {
+                if "%OoNnGgMmTtXxYyZzFfSs(;#/".contains(first) {
+                    return;
+                }
+                break;
+            }
+            c = next;
+        }
         for _ in 0..64 {
             let Some((line, next)) = self.line_at(c) else {
                 return;

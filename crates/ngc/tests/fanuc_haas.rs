@@ -115,7 +115,9 @@ fn d_and_h_stand_alone_in_the_fanuc_family() {
     let (m, _) = read("G21 G90\nG43 H17 G0 Z0\nH3\nG0 Z0 X1\n", &o);
     assert_eq!(xyz(&m[0]), [0.0, 0.0, 100.0]);
     assert_eq!(xyz(&m[1]), [1.0, 0.0, 50.0]);
-    // LinuxCNC keeps refusing a D no code uses.
+    // LinuxCNC keeps refusing a D or an H no code uses.
+    let (_, msg) = error_with("G21\nG1 X1 H1 F100\n", &opts(Dialect::Linuxcnc));
+    assert!(msg.contains("`H` without G43"), "{msg}");
     let (_, msg) = error_with("G21\nD1\n", &opts(Dialect::Linuxcnc));
     assert!(msg.contains("`D` with no code that uses it"), "{msg}");
 }
@@ -199,4 +201,16 @@ fn spindle_limits_and_program_names_are_not_moves() {
     let text = "Information listing created by someone\nDate 15-Apr-2023\n\n%\nOFinal ToolPath\nG21 G0 X2\nM30\n%\n";
     let (m, _) = read(text, &opts(Dialect::Haas));
     assert_eq!(xyz(&m[0]), [2.0, 0.0, 0.0]);
+}
+
+#[test]
+fn g53_in_g91_goes_to_machine_coordinates_on_haas_only() {
+    // G54 X offset 100: G53 X5 is machine X 5 whatever the distance mode.
+    let mut o = opts(Dialect::Haas);
+    o.set_work_offset(1, ngc::AxisVec::xyzabc([100.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
+    let (m, _) = read("G21 G90 G0 X1\nG91 G53 G0 X5\n", &o);
+    assert_eq!(xyz(&m[1]), [5.0, 0.0, 0.0]);
+    o.dialect = Dialect::Fanuc;
+    let (_, msg) = error_with("G21 G91 G53 G0 X5\n", &o);
+    assert!(msg.contains("G53 in G91"), "{msg}");
 }

@@ -26,6 +26,7 @@ pub(super) const TABLE: Table = Table {
     offset_words_alone: true,
     g80_keeps_motion: true,
     g92_s_limits_spindle: true,
+    g53_absolute_in_g91: false,
     leader_before_percent: true,
     macro_b: true,
 };

@@ -28,6 +28,7 @@ pub(super) const TABLE: Table = Table {
     offset_words_alone: false,
     g80_keeps_motion: false,
     g92_s_limits_spindle: false,
+    g53_absolute_in_g91: false,
     leader_before_percent: false,
     macro_b: false,
 };

@@ -56,6 +56,10 @@ pub(crate) struct Table {
     /// G92 S with no axis word is the spindle speed limit (Fanuc M series, constant surface
     /// speed), not a coordinate shift.
     pub g92_s_limits_spindle: bool,
+    /// G53 in G91 moves to the machine coordinates given, as in G90 (Haas: its posts
+    /// write `G91 G28 X0 Y0` then `G53 G00 Z0`); otherwise it is an error (LinuxCNC, and
+    /// Fanuc, whose manuals give G53 as an absolute command only).
+    pub g53_absolute_in_g91: bool,
     /// Text before a program's first `%` line is the tape leader, skipped (Fanuc family).
     pub leader_before_percent: bool,
 
@@ -144,8 +148,8 @@ pub(crate) fn common_refusal(code: u32) -> Option<(&'static str, &'static str)> 
             " (2D coordinate rotation G68 and other G68.x are not supported; G68.2 is)",
             "post-process the program without G68",
         ),
-        740 | 760 | 840 | 870 | 880 => (
-            " (this canned cycle is not supported in this dialect; G73 G81 G82 G83 G85 G86 G89 are, and G74 G76 G84 G87 in the fanuc and haas dialects)",
+        740 | 840 | 870 | 880 => (
+            " (this canned cycle is not supported in this dialect; G73 G81 G82 G83 G85 G86 G89 are, and G74 G76 G84 in the fanuc and haas dialects)",
             "",
         ),
         _ => return None,

@@ -33,8 +33,8 @@ impl Interp {
             }
         }
         self.check_machine_axes(b)?;
-        // G41.1/G42.1 take the diameter itself in D.
-        let d_diameter = b.has_g(|c| matches!(c, GCode::CutterComp(3 | 4)));
+        // G41.1/G42.1 take the diameter itself in D, G96 the speed limit (rpm).
+        let d_diameter = b.has_g(|c| matches!(c, GCode::CutterComp(3 | 4) | GCode::Control(960)));
         let integers: &[char] = if b.has_any(const { letters(&['N', 'T', 'H', 'D', 'L']) }) {
             &['N', 'T', 'H', 'D', 'L']
         } else {

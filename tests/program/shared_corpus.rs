@@ -179,3 +179,74 @@ fn fanuc_haas_and_linuxcnc_programs_of_the_corpus_read_or_are_refused_for_a_list
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     assert!(read >= 11, "only {read} programs read");
 }
+
+/// Runs `args` on a scenario in a scratch folder: the program `program`, the three-axis
+/// machine with `machine_extra` appended and `[reader]` keys `reader`.
+fn run_units_case(
+    name: &str,
+    program: &str,
+    machine_extra: &str,
+    reader: &str,
+    args: &[&str],
+) -> (Option<i32>, String, String) {
+    let dir = scratch("units", name);
+    let machine = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/vmc-3axis.toml"),
+    )
+    .unwrap();
+    std::fs::write(dir.join("m.toml"), format!("{machine}\n{machine_extra}")).unwrap();
+    std::fs::write(dir.join("p.nc"), program).unwrap();
+    let s = dir.join("s.toml");
+    std::fs::write(
+        &s,
+        format!("machine = \"m.toml\"\n[program]\nfile = \"p.nc\"\n[reader]\n{reader}[check]\ncollisions = false\n"),
+    )
+    .unwrap();
+    let mut full: Vec<&str> = args.to_vec();
+    full.push(s.to_str().unwrap());
+    let out = mtsim(&full);
+    let _ = std::fs::remove_dir_all(&dir);
+    out
+}
+
+#[test]
+fn the_start_units_come_from_the_machine_or_scenario_and_a_guess_is_never_silent() {
+    // No G20/G21: read in mm, with a warning on stderr and in the JSON.
+    let program = "G90 G0 X4 Y2\nG1 X5 F10\nM30\n";
+    let (code, out, err) = run_units_case("mm", program, "", "", &["analyze", "--json"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("moves before it states its units"), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["axes"]["X"]["max"], 5.0);
+    assert!(v["warnings"][0].as_str().unwrap().contains("read in mm"));
+    // The machine starts in inch: X 5 in = 127 mm; the warning names the machine file.
+    let (_, out, err) = run_units_case(
+        "machine-inch",
+        program,
+        "[start]\nunits = \"inch\"\n",
+        "",
+        &["analyze", "--json"],
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["axes"]["X"]["max"], 127.0, "{err}");
+    assert!(err.contains("the machine file's [start] units"), "{err}");
+    // The scenario's start_units overrides the machine file.
+    let (_, out, _) = run_units_case(
+        "scenario-mm",
+        program,
+        "[start]\nunits = \"inch\"\n",
+        "start_units = \"mm\"\n",
+        &["analyze", "--json"],
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["axes"]["X"]["max"], 5.0);
+    // A program in mm stated as inches: X 500 in = 12,700 mm is longer than the whole
+    // travel, and 500 mm would fit: the error says so.
+    let (code, _, err) = run_units_case("too-long", "G20\nG0 X500\nM30\n", "", "", &["check"]);
+    assert_eq!(code, Some(2));
+    let err = one_line(&err);
+    assert!(
+        err.contains("read as mm instead of inches it would be 500 mm and fit"),
+        "{err}"
+    );
+}

@@ -14,6 +14,14 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
     let analysis = analyse_scenario(&scenario)?;
     let geometric = crate::study::geometry::geometric_trace(&scenario)?;
     let feed = feed_limits(&scenario)?;
+    let notices = crate::program::scenario_notices(&scenario)?;
+    let (warned, no_effect): (Vec<_>, Vec<_>) = notices.iter().partition(|n| n.warning);
+    let located = |n: &&ngc::Notice| format!("{}:{}: {}", n.path.display(), n.line, n.message);
+    let mut warnings = analysis.warnings();
+    warnings.extend(warned.iter().map(located));
+    for w in warned.iter().map(located) {
+        super::warn(&w);
+    }
     if as_json {
         let mut axes = Map::new();
         for a in &analysis.axes {
@@ -22,13 +30,16 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
                 serde_json::to_value(a).expect("plain data serializes"),
             );
         }
-        let v = json!({
+        let mut v = json!({
             "axes": axes,
             "min_linear_separation_deg": analysis.min_linear_separation_deg(),
-            "warnings": analysis.warnings(),
+            "warnings": warnings,
             "geometric_trace": geometric,
             "feed_limits": feed,
         });
+        if !no_effect.is_empty() {
+            v["no_motion_effect"] = no_effect.iter().map(located).collect();
+        }
         print_stdout(&format!(
             "{}\n",
             serde_json::to_string_pretty(&v).expect("plain data serializes")
@@ -50,7 +61,13 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
         ));
     }
     out.push_str(&feed_table(&feed));
-    for w in analysis.warnings() {
+    if !no_effect.is_empty() {
+        out.push_str("accepted with no effect on the motion:\n");
+        for n in &no_effect {
+            out.push_str(&format!("  line {}: {}\n", n.line, n.message));
+        }
+    }
+    for w in &warnings {
         out.push_str(&format!("warning: {w}\n"));
     }
     print_stdout(&out);

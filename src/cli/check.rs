@@ -22,6 +22,11 @@ pub fn run(
         }
     }
     let scenario = super::load_scenario(path)?;
+    for n in crate::program::scenario_notices(&scenario)? {
+        if n.warning {
+            super::warn(&format!("{}:{}: {}", n.path.display(), n.line, n.message));
+        }
+    }
     let bar = super::spinner("checking");
     let started = std::time::Instant::now();
     let report = check(

@@ -18,6 +18,22 @@ use crate::input::toml_text::{self, value_error};
 use crate::kinematics::{Kinematics, Layout};
 use crate::Axis;
 
+/// `[start]`: the modal state the control powers up in, before a program states it (a
+/// control's setup: Haas setting 9 "Dimensioning", Fanuc parameter 0000 bit INI for the
+/// units); what is not given is every dialect's factory state, mm, G90, G17, G94.
+#[derive(Clone, Copy, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StartSection {
+    /// "mm" or "inch".
+    pub units: Option<ngc::Units>,
+    /// "absolute" or "incremental".
+    pub distance: Option<ngc::Distance>,
+    /// "XY", "ZX" or "YZ".
+    pub plane: Option<ngc::Plane>,
+    /// "per-minute", "per-revolution" or "inverse-time".
+    pub feed_mode: Option<ngc::StartFeed>,
+}
+
 /// A machine file as written.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -44,6 +60,9 @@ pub struct MachineFile {
     /// "linuxcnc", "fanuc" (default) or "haas".
     #[serde(default)]
     pub dialect: ngc::Dialect,
+    /// The modal state the control powers up in.
+    #[serde(default)]
+    pub start: StartSection,
     /// G28 reference position, machine X Y Z A B C (mm, deg); zero when absent (U V W: 0).
     #[serde(default, deserialize_with = "exact::array")]
     pub g28_mm: [f64; 6],
@@ -128,6 +147,8 @@ pub struct Machine {
     pub tool: ToolConfig,
     /// Default G-code dialect of the control.
     pub dialect: ngc::Dialect,
+    /// The modal state the control powers up in, as far as the file gives it.
+    pub start: StartSection,
     /// G28 and G30 reference positions, machine X Y Z A B C (mm, deg); U V W at 0.
     pub reference_mm: [[f64; 6]; 2],
     /// Geometric errors; the location errors are also in `kinematics`.
@@ -258,6 +279,7 @@ impl Machine {
             scene: file.scene,
             tool: file.tool,
             dialect: file.dialect,
+            start: file.start,
             reference_mm: [file.g28_mm, file.g30_mm],
         })
     }

@@ -43,6 +43,14 @@ struct ScenarioFile {
 pub struct ReaderSection {
     /// "linuxcnc", "fanuc" or "haas"; the machine file's `dialect` when absent.
     pub dialect: Option<ngc::Dialect>,
+    /// The units the control starts in, over the machine file's `[start] units`.
+    pub start_units: Option<ngc::Units>,
+    /// G90 or G91 at start, over the machine file's `[start] distance`.
+    pub start_distance: Option<ngc::Distance>,
+    /// The plane at start, over the machine file's `[start] plane`.
+    pub start_plane: Option<ngc::Plane>,
+    /// The feed mode at start, over the machine file's `[start] feed_mode`.
+    pub start_feed_mode: Option<ngc::StartFeed>,
     /// LinuxCNC tool table (`.tbl`, lengths in mm), relative to the scenario.
     pub tool_table: Option<String>,
     /// Tools given inline: `tools = [{ number = 1, length_mm = 50.0, diameter_mm = 6.0 }]`,
@@ -592,6 +600,19 @@ fn reader_options(
                 pivot_mm: machine.kinematics.pivot_mm.into(),
             }),
         ..ngc::Options::default()
+    };
+    let m = &machine.start;
+    let d = ngc::StartState::default();
+    o.start_state = ngc::StartState {
+        units: r.start_units.or(m.units).unwrap_or(d.units),
+        distance: r.start_distance.or(m.distance).unwrap_or(d.distance),
+        plane: r.start_plane.or(m.plane).unwrap_or(d.plane),
+        feed: r.start_feed_mode.or(m.feed_mode).unwrap_or(d.feed),
+    };
+    o.start_units_setting = match (r.start_units, m.units) {
+        (Some(_), _) => "the scenario's [reader] start_units",
+        (None, Some(_)) => "the machine file's [start] units",
+        (None, None) => "no setting: the factory default",
     };
     o.set_reference(false, ngc::AxisVec::xyzabc(machine.reference_mm[0]));
     o.set_reference(true, ngc::AxisVec::xyzabc(machine.reference_mm[1]));

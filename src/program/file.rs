@@ -26,3 +26,12 @@ pub fn read_moves(path: &Path, options: &ngc::Options) -> Result<ngc::Moves> {
 pub fn read_str<'a>(path: &'a Path, text: &'a str) -> Moves<'a> {
     Box::new(ngc::read_str(path, text, ngc::AxisVec::ZERO).map(|m| m.map_err(Into::into)))
 }
+
+/// What the reader reports beside the moves of the file at `path`, up to its first error:
+/// warnings (a program that moves before it states its units) and the codes accepted with
+/// no effect on the motion.
+pub fn notices(path: &Path, options: &ngc::Options) -> Result<Vec<ngc::Notice>> {
+    let mut moves = ngc::read_file_with(path, options)?;
+    while let Some(Ok(_)) = moves.next() {}
+    Ok(moves.notices().to_vec())
+}

@@ -161,13 +161,23 @@ impl<I> Checked<I> {
                 ));
             }
             let unit = if axis.is_rotary() { "deg" } else { "mm" };
+            // A program in mm read as inches is 25.4 times too large.
+            let other_unit = if !axis.is_rotary() && length / ngc::MM_PER_INCH <= envelope {
+                format!(
+                    "; read as mm instead of inches it would be {} mm and fit: check the units \
+                     the program is in (G21) or the control starts in ([reader] start_units)",
+                    fmt_len(length / ngc::MM_PER_INCH)
+                )
+            } else {
+                String::new()
+            };
             return Err(Error::at(
                 &self.path,
                 &text,
                 span,
                 format!(
                     "this move takes {axis} {} {unit} (from {} to {}), longer than the machine's \
-                     whole {axis} travel of {} {unit} ({} .. {})",
+                     whole {axis} travel of {} {unit} ({} .. {}){other_unit}",
                     fmt_len(length),
                     fmt_len(from),
                     fmt_len(to),

@@ -68,7 +68,8 @@ pub use ini::{scale_parameter_lengths, Ini, IniEntry, IniError, LinuxcncConfig};
 pub use notice::Notice;
 pub use options::{
     parse_tool_orientations, parse_tool_table, parse_var_file, tool_pockets, work_offset_parameter,
-    Dialect, Options, Tool, UserM, G28_PARAMETER, G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
+    Dialect, Distance, Options, StartFeed, StartState, Tool, Units, UserM, G28_PARAMETER,
+    G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
 };
 pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves, MAX_LINE_BYTES};
 pub use remap::{parse_remap, Remap, RemapCode};

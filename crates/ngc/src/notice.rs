@@ -8,4 +8,7 @@ pub struct Notice {
     pub path: PathBuf,
     pub line: usize,
     pub message: String,
+    /// A warning (the program may be read at the wrong scale), not only a code accepted
+    /// without effect on the motion.
+    pub warning: bool,
 }

@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-use crate::axis::{Axis, AxisVec};
+use crate::axis::{Axis, AxisVec, Plane};
 use crate::frame::RotaryTable;
 
 /// The control whose G-code language a program is written in.
@@ -41,6 +41,61 @@ impl Dialect {
     }
 }
 
+/// The unit a control reads lengths in until the program says G20/G21 (G70/G71).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
+pub enum Units {
+    /// G21: millimetres.
+    #[default]
+    Mm,
+    /// G20: inches (Haas setting 9 "Dimensioning" = INCH, Fanuc parameter 0000 bit INI).
+    Inch,
+}
+
+/// G90 or G91 at power-up (Haas setting 10, Fanuc parameter 3402 bit G91).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
+pub enum Distance {
+    #[default]
+    Absolute,
+    Incremental,
+}
+
+/// G93, G94 or G95 at power-up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
+pub enum StartFeed {
+    InverseTime,
+    #[default]
+    PerMinute,
+    PerRevolution,
+}
+
+/// The modal state a control powers up in, before the program states any: the machine
+/// file's `[start]`, overridden by the scenario's `[reader] start_*` keys. The default is
+/// every dialect's factory state: mm, G90, G17, G94.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StartState {
+    pub units: Units,
+    pub distance: Distance,
+    pub plane: Plane,
+    pub feed: StartFeed,
+}
+
+impl Default for StartState {
+    fn default() -> StartState {
+        StartState {
+            units: Units::Mm,
+            distance: Distance::Absolute,
+            plane: Plane::XY,
+            feed: StartFeed::PerMinute,
+        }
+    }
+}
+
 /// One tool of the tool table, mm.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -72,6 +127,11 @@ pub enum UserM {
 #[derive(Clone, Debug)]
 pub struct Options {
     pub dialect: Dialect,
+    /// The modal state at power-up (units, distance mode, plane, feed mode).
+    pub start_state: StartState,
+    /// Where [`Options::start_state`]'s units come from, named in the warning given when a
+    /// program moves before it states its units.
+    pub start_units_setting: &'static str,
     /// The axes the machine has; a word for any other axis is an error.
     pub axes: Vec<Axis>,
     /// Machine position before the program runs, mm and deg.
@@ -121,6 +181,8 @@ impl Default for Options {
     fn default() -> Options {
         Options {
             dialect: Dialect::Fanuc,
+            start_state: StartState::default(),
+            start_units_setting: "the default",
             axes: Axis::XYZABC.to_vec(),
             start: AxisVec::ZERO,
             tools: Vec::new(),

@@ -284,6 +284,17 @@ fn oline(line: &str) -> LineResult<Option<OLine>> {
         while k < b.len() && b[k].is_ascii_digit() {
             k += 1;
         }
+        if d == k && b.get(k).is_some_and(u8::is_ascii_alphabetic) {
+            // `OFinal ToolPath`: a program name where the number would be (a CAM post's
+            // header), read as a Fanuc program number line; the rest of the line is its name.
+            let end = line[k..].find(['(', ';']).map_or(line.len(), |e| k + e);
+            return Ok(Some(OLine {
+                label: line[k..end].trim().to_ascii_lowercase(),
+                kw: Kw::Number,
+                rest: line.len(),
+                span: start..end,
+            }));
+        }
         if d == k {
             return Err(LineError::new(
                 start..k.max(start + 1),
@@ -803,7 +814,18 @@ impl Moves {
                 "call depth limit",
             ));
         }
-        let start = self.find_sub(label, span)?;
+        let start = match label.strip_prefix('N') {
+            // Haas M97: a local subprogram at a sequence number of this program.
+            Some(n) => self.sequence_line(self.cursor.file, n).ok_or_else(|| {
+                LineError::new(
+                    span,
+                    format!("M97 P{n}: no block with sequence number N{n} in this program"),
+                    "unknown sequence number",
+                )
+                .help("M97 calls a local subprogram that starts at N<n> of the same program")
+            })?,
+            None => self.find_sub(label, span)?,
+        };
         let nlocal = if self.dialect.table().macro_b { 33 } else { 30 };
         let saved = if locals {
             let p = &mut self.interp.params;
@@ -1291,7 +1313,25 @@ impl Moves {
 
     /// Fanuc GOTO n: the line with sequence number N n in the current program.
     fn goto(&mut self, n: &str, here: Cursor, span: std::ops::Range<usize>) -> LineResult<()> {
-        let file = here.file;
+        match self.sequence_line(here.file, n) {
+            Some(c) => {
+                if c.offset <= here.offset {
+                    self.backward(span)?;
+                }
+                self.cursor = c;
+                Ok(())
+            }
+            None => Err(LineError::new(
+                span,
+                format!("GOTO {n}: no block with sequence number N{n} in this program"),
+                "unknown target",
+            )),
+        }
+    }
+
+    /// The first line of `file` that starts with sequence number N`n` (leading zeros
+    /// ignored).
+    fn sequence_line(&mut self, file: usize, n: &str) -> Option<Cursor> {
         let mut c = Cursor {
             file,
             offset: 0,
@@ -1311,20 +1351,12 @@ impl Moves {
                 }
                 let t = line[d..k].trim_start_matches('0');
                 if k > d && (t == n || (t.is_empty() && n == "0")) {
-                    if c.offset <= here.offset {
-                        self.backward(span)?;
-                    }
-                    self.cursor = c;
-                    return Ok(());
+                    return Some(c);
                 }
             }
             c = next;
         }
-        Err(LineError::new(
-            span,
-            format!("GOTO {n}: no block with sequence number N{n} in this program"),
-            "unknown target",
-        ))
+        None
     }
 
     /// Refuses a program written in another control's language: Heidenhain conversational
@@ -1383,6 +1415,39 @@ impl Moves {
         None
     }
 
+    /// Fanuc family: text before the program's first `%` line (within its first 64 lines)
+    /// is the tape leader, which the control skips (a CAM system's listing header).
+    fn skip_leader(&mut self) {
+        let mut c = self.cursor;
+        let mut text_before = false;
+        // A first line that starts like G-code (or `%`, a comment, a block delete) has no
+        // leader before it: nothing is read ahead.
+        while let Some((line, next)) = self.line_at(c) {
+            let t = line.trim_start_matches(['\u{feff}', ' ', '\t']);
+            if let Some(first) = t.chars().next() {
+                if "%OoNnGgMmTtXxYyZzFfSs(;#/".contains(first) {
+                    return;
+                }
+                break;
+            }
+            c = next;
+        }
+        for _ in 0..64 {
+            let Some((line, next)) = self.line_at(c) else {
+                return;
+            };
+            let t = line.trim();
+            if t == "%" {
+                if text_before {
+                    self.cursor = c;
+                }
+                return;
+            }
+            text_before |= !t.is_empty();
+            c = next;
+        }
+    }
+
     /// The first line with more than blanks starts with `BEGIN PGM` (Heidenhain).
     fn first_line_heidenhain(&mut self) -> bool {
         let mut c = Cursor {
@@ -1407,6 +1472,9 @@ impl Moves {
             if let Some(e) = self.foreign_language() {
                 self.finished = true;
                 return Err(e);
+            }
+            if self.dialect.table().leader_before_percent {
+                self.skip_leader();
             }
         }
         if let Some((here, span, message)) = self.abort.take() {
@@ -1626,7 +1694,7 @@ impl Moves {
             }
             if !self.remaps_noticed.contains(&s.remap) {
                 self.remaps_noticed.push(s.remap);
-                self.notices.push(Notice { path: self.programs[here.file].path.clone(), line: here.line, message: format!("{} is remapped ({}) to the Python function `{}`, which does not move the machine: accepted and not run", remap.code, remap.origin, remap.python.as_deref().unwrap_or("")) });
+                self.notices.push(Notice { path: self.programs[here.file].path.clone(), line: here.line, message: format!("{} is remapped ({}) to the Python function `{}`, which does not move the machine: accepted and not run", remap.code, remap.origin, remap.python.as_deref().unwrap_or("")), warning: false });
             }
             if remap.python_keeps_motion {
                 self.modal_remap = Some(s.remap);

@@ -15,3 +15,7 @@ pub const ARC_RADIUS_TOLERANCE_MM: f64 = 1e-3;
 /// differences up to 4.9 µm (issue 9), and inch output rounded to 0.0001 in moves a radius
 /// by up to about 3.6 µm. 10 µm accepts both and is half of Okuma's documented 20 µm.
 pub const FANUC_ARC_RADIUS_TOLERANCE_MM: f64 = 0.01;
+
+/// An arc in an oblique plane (G02/G03 under G68.2 or G254 with the table tilted off a
+/// machine plane) runs as chords whose sagitta `r (1 − cos(Δφ/2))` is at most this, mm.
+pub const OBLIQUE_ARC_CHORD_TOLERANCE_MM: f64 = 1e-3;

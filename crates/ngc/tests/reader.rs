@@ -387,10 +387,10 @@ fn unsupported_constructs_are_reported_at_their_word() {
         ),
         ("G0 X0\nM98 P1000\n", 2, 1, "subroutine `1000` not found"),
         (
-            "G90\nG84 X0 Y0 Z-5 R1 F100\n",
+            "G90\nG87 X0 Y0 Z-5 R1 F100\n",
             2,
             1,
-            "unsupported code `G84`",
+            "unsupported code `G87`",
         ),
         ("G17 G68 X0 Y0 R30\n", 1, 5, "`G68` (2D coordinate rotation"),
         (
@@ -407,8 +407,9 @@ fn unsupported_constructs_are_reported_at_their_word() {
             "cutter radius compensation in G19",
         ),
         ("G1 U5\n", 1, 4, "`U5`: this machine has no U axis"),
-        ("M10\n", 1, 1, "unsupported code `M10`"),
-        ("G05\n", 1, 1, "unsupported code `G05`"),
+        // (M10/M11 and G05 are Fanuc rotary clamps and high-speed mode: tests/fanuc_haas.rs.)
+        ("M31\n", 1, 1, "unsupported code `M31`"),
+        ("G06\n", 1, 1, "unsupported code `G06`"),
         ("G1.5\n", 1, 1, "unsupported code `G1.5`"),
         ("G-1\n", 1, 1, "unsupported code `G-1`"),
     ];
@@ -464,7 +465,7 @@ fn words_in_the_wrong_place_or_twice_are_errors() {
         ("G1 G4 P100\n", 1, 4, "same modal group"),
         ("M03 M05\n", 1, 5, "same group"),
         ("M00 M30\n", 1, 5, "same group"),
-        ("G1 X1 H1 F100\n", 1, 7, "`H` without G43"),
+        // (`H` alone is a Fanuc length offset number: tests/fanuc_haas.rs.)
         ("G1 X1 P5 F100\n", 1, 7, "`P` with no code that uses it"),
         ("G0 X1 I5\n", 1, 7, "`I5` outside an arc"),
         ("G4\n", 1, 1, "without a time"),
@@ -565,13 +566,13 @@ fn file_errors_point_into_the_file_with_crlf_endings() {
 
 #[test]
 fn errors_carry_the_span_and_help() {
-    let err = read_str(Path::new(PATH), "G0 X0\nG84 X1 Y1 Z-3 R1\n", AxisVec::ZERO)
+    let err = read_str(Path::new(PATH), "G0 X0\nG87 X1 Y1 Z-3 R1\n", AxisVec::ZERO)
         .find_map(|b| b.err())
         .unwrap();
     let Error::Syntax(s) = &err else {
         panic!("expected a syntax error, got {err:?}")
     };
-    assert_eq!(&s.text[s.span.clone()], "G84");
+    assert_eq!(&s.text[s.span.clone()], "G87");
     assert!(
         s.help.as_deref().unwrap_or("").contains("docs/gcode.md"),
         "{s:?}"

@@ -206,13 +206,35 @@ fn tilted_frames_refuse_what_they_cannot_do() {
     assert!(msg.contains("G68.2 or G254 active"), "{msg}");
     let (_, msg) = error("G68.2 I0 J90 K0 C10\n", &fanuc);
     assert!(msg.contains("G68.2 block"), "{msg}");
-    // J45 without G53.1: the G17 normal is oblique in the machine; an arc there is refused.
-    let (line, msg) = error(
-        "G68.2 I0 J45 K0\nG0 X10 Y0 Z0\nG3 X0 Y10 I-10 F100\n",
-        &opts(Dialect::Fanuc, None),
-    );
-    assert_eq!(line, 3);
-    assert!(msg.contains("normal"), "{msg}");
     let (_, msg) = error("G68.2 I0 J90 K0\nG81 X0 Y0 Z-5 R2 F100\n", &fanuc);
     assert!(msg.contains("canned cycle"), "{msg}");
+}
+
+#[test]
+fn an_arc_in_an_oblique_plane_runs_as_chords_on_its_circle() {
+    // J45 without G53.1: R_f = Rx(45), the G17 normal is (0, -sin 45°, cos 45°) in the
+    // machine. The quarter circle of radius 10 about the origin, program (10 cos φ,
+    // 10 sin φ, 0), is machine (10 cos φ, 10 sin φ cos 45°, 10 sin φ sin 45°): every chord end
+    // 10 from the origin with Y = Z. Chords of sagitta ≤ 0.001 mm: Δφ ≤ 2 acos(1 − 1e-4)
+    // = 0.0282845 rad, so ⌈(π/2) / 0.0282845⌉ = 56 chords.
+    let m = moves(
+        "G21 G68.2 I0 J45 K0\nG0 X10 Y0 Z0\nG3 X0 Y10 I-10 F100\n",
+        &opts(Dialect::Fanuc, None),
+    );
+    let arc = &m[1..];
+    assert_eq!(arc.len(), 56);
+    let s = std::f64::consts::FRAC_1_SQRT_2 * 10.0;
+    let last = arc.last().unwrap().end;
+    assert!((last[Axis::X]).abs() < 1e-9 && (last[Axis::Y] - s).abs() < 1e-9);
+    assert!((last[Axis::Z] - s).abs() < 1e-9);
+    for c in arc {
+        assert_eq!(c.motion, Motion::Linear);
+        let [x, y, z] = [c.end[Axis::X], c.end[Axis::Y], c.end[Axis::Z]];
+        assert!(((x * x + y * y + z * z).sqrt() - 10.0).abs() < 1e-9);
+        assert!((y - z).abs() < 1e-9);
+        // The chord's midpoint is within 0.001 mm of the circle.
+        let mid = [0, 1, 2].map(|k| (c.start.0[k] + c.end.0[k]) / 2.0);
+        let r = (mid[0] * mid[0] + mid[1] * mid[1] + mid[2] * mid[2]).sqrt();
+        assert!(10.0 - r <= 1e-3 + 1e-12, "sagitta {}", 10.0 - r);
+    }
 }

@@ -2,8 +2,8 @@
 //! macro calls, `IF`/`WHILE`, G43.4/G43.5 TCP, G68.2/G53.1 tilted work planes; dwell P in
 //! ms or X in s.
 
-use crate::code::GCode;
-use crate::dialect::table::{common_g_code, ArcRadiusRule, DwellUnit, Table};
+use crate::code::{GCode, MotionMode};
+use crate::dialect::table::{common_g_code, common_no_motion_g, ArcRadiusRule, DwellUnit, Table};
 use crate::units::FANUC_ARC_RADIUS_TOLERANCE_MM;
 
 pub(super) const TABLE: Table = Table {
@@ -20,6 +20,14 @@ pub(super) const TABLE: Table = Table {
     zero_off_plane_offset: true,
     polar_words: false,
     rotated_work_systems: false,
+    machine_m,
+    no_motion_g,
+    local_subprogram_m97: false,
+    offset_words_alone: true,
+    g80_keeps_motion: true,
+    g92_s_limits_spindle: true,
+    g53_absolute_in_g91: false,
+    leader_before_percent: true,
     macro_b: true,
 };
 
@@ -28,7 +36,8 @@ pub(super) fn g_code(code: u32) -> Option<GCode> {
     Some(match code {
         434 | 435 => GCode::Tcp(true),
         440 => GCode::ToolLength(4),
-        51 | 80 => GCode::Control(code),
+        50 | 51 | 80 | 500 => GCode::Control(code),
+        740 | 760 | 840 => GCode::Motion(Some(MotionMode::Cycle(code))),
         682 => GCode::Tilt(true),
         690 => GCode::Tilt(false),
         531 => GCode::AlignRotary,
@@ -48,6 +57,28 @@ pub(super) fn refusal(code: u32) -> Option<(&'static str, &'static str)> {
             " (G7, G33 and G33.1 are read in the LinuxCNC dialect)",
             "set dialect = \"linuxcnc\"",
         ),
+        _ => return None,
+    })
+}
+
+/// The Fanuc family's G codes that change how the control runs the path, not the path
+/// (docs/gcode.md gives each one's manual section).
+pub(super) fn no_motion_g(code: u32) -> Option<&'static str> {
+    Some(match code {
+        50 => "G05 high-speed machining mode (look-ahead, smoothing)",
+        51 => "G05.1 AI contour control (look-ahead, smoothing)",
+        80 => "G08 look-ahead control",
+        500 => "G50 scaling cancel (with S on a lathe: the spindle speed limit)",
+        _ => return common_no_motion_g(code),
+    })
+}
+
+/// The Fanuc 0i/30i machine M codes of a typical builder's mill (the M codes other than
+/// M00-M09, M30, M98, M99 are the machine tool builder's).
+pub(super) fn machine_m(code: u32) -> Option<&'static str> {
+    Some(match code {
+        10 => "M10 rotary axis clamp (brake on)",
+        11 => "M11 rotary axis unclamp (brake off)",
         _ => return None,
     })
 }

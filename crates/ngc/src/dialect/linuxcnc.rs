@@ -3,7 +3,9 @@
 //! splines, polar words, rotated work systems.
 
 use crate::code::{GCode, MotionMode};
-use crate::dialect::table::{common_g_code, ArcRadiusRule, DwellUnit, Table};
+use crate::dialect::table::{
+    common_g_code, common_no_motion_g, no_machine_m, ArcRadiusRule, DwellUnit, Table,
+};
 
 pub(super) const TABLE: Table = Table {
     // rs274's initial retract mode is the R plane.
@@ -20,6 +22,14 @@ pub(super) const TABLE: Table = Table {
     zero_off_plane_offset: false,
     polar_words: true,
     rotated_work_systems: true,
+    machine_m: no_machine_m,
+    no_motion_g: common_no_motion_g,
+    local_subprogram_m97: false,
+    offset_words_alone: false,
+    g80_keeps_motion: false,
+    g92_s_limits_spindle: false,
+    g53_absolute_in_g91: false,
+    leader_before_percent: false,
     macro_b: false,
 };
 

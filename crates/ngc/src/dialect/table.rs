@@ -39,6 +39,29 @@ pub(crate) struct Table {
     pub polar_words: bool,
     /// Rotated work systems (G10 L2 R).
     pub rotated_work_systems: bool,
+    /// The control's machine M codes that do not move the axes (brakes, chip conveyor,
+    /// coolant options): their meaning. Accepted with a notice.
+    pub machine_m: fn(u32) -> Option<&'static str>,
+    /// G codes accepted with no effect on the canonical moves (look-ahead, smoothing,
+    /// spindle modes), code ×10: their meaning, for the notice.
+    pub no_motion_g: fn(u32) -> Option<&'static str>,
+    /// `M97 P<n>` calls sequence number N<n> of the same program (Haas local subprogram).
+    pub local_subprogram_m97: bool,
+    /// D and H words stand on their own (Fanuc family): D selects the cutter offset a later
+    /// G41/G42 uses, H the length offset (applied at once while G43/G44 is in effect).
+    pub offset_words_alone: bool,
+    /// G80 cancels only the canned cycle: the G00-G03 mode before it is in effect again
+    /// (Fanuc family: groups 01 and 09 apart); otherwise no motion mode is left (LinuxCNC).
+    pub g80_keeps_motion: bool,
+    /// G92 S with no axis word is the spindle speed limit (Fanuc M series, constant surface
+    /// speed), not a coordinate shift.
+    pub g92_s_limits_spindle: bool,
+    /// G53 in G91 moves to the machine coordinates given, as in G90 (Haas: its posts
+    /// write `G91 G28 X0 Y0` then `G53 G00 Z0`); otherwise it is an error (LinuxCNC, and
+    /// Fanuc, whose manuals give G53 as an absolute command only).
+    pub g53_absolute_in_g91: bool,
+    /// Text before a program's first `%` line is the tape leader, skipped (Fanuc family).
+    pub leader_before_percent: bool,
 
     // Parameter and subprogram syntax.
     /// Fanuc macro B: `#1`-`#33` locals per call, `IF [..] GOTO`, `WHILE [..] DO`, `O`
@@ -111,6 +134,7 @@ pub(crate) fn common_g_code(code: u32) -> Option<GCode> {
         930 => GCode::Feed(FeedRead::InverseTime),
         940 => GCode::Feed(FeedRead::PerMinute),
         950 => GCode::Feed(FeedRead::PerRevolution),
+        960 | 970 => GCode::Control(code),
         980 => GCode::Retract(false),
         990 => GCode::Retract(true),
         _ => return None,
@@ -124,10 +148,25 @@ pub(crate) fn common_refusal(code: u32) -> Option<(&'static str, &'static str)> 
             " (2D coordinate rotation G68 and other G68.x are not supported; G68.2 is)",
             "post-process the program without G68",
         ),
-        840 | 870 | 880 => (
-            " (this canned cycle is not supported; G73 G81 G82 G83 G85 G86 G89 are)",
+        740 | 840 | 870 | 880 => (
+            " (this canned cycle is not supported in this dialect; G73 G81 G82 G83 G85 G86 G89 are, and G74 G76 G84 in the fanuc and haas dialects)",
             "",
         ),
+        _ => return None,
+    })
+}
+
+/// No machine M codes beyond the shared ones.
+pub(crate) fn no_machine_m(_: u32) -> Option<&'static str> {
+    None
+}
+
+/// The G codes every dialect accepts without effect on the motion: G96/G97 (constant
+/// surface speed and its cancel: the spindle speed, not the path).
+pub(crate) fn common_no_motion_g(code: u32) -> Option<&'static str> {
+    Some(match code {
+        960 => "G96 constant surface speed (spindle speed only)",
+        970 => "G97 constant spindle speed (cancels G96)",
         _ => return None,
     })
 }

@@ -8,13 +8,26 @@ use crate::code::FeedRead;
 use crate::dialect::ArcRadiusRule;
 use crate::frame;
 use crate::lex::{LineError, LineResult, Word};
-use crate::units::{ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};
+use crate::units::{ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH, OBLIQUE_ARC_CHORD_TOLERANCE_MM};
+
+/// Most chords an oblique arc is cut into.
+const MAX_CHORDS: usize = 100_000;
+
+/// An arc in a tilted frame, as it reaches the machine.
+pub(super) enum TiltedArc {
+    /// In a machine plane: one canonical arc.
+    Canonical(Motion),
+    /// In an oblique plane: straight moves through these points (then the arc's end).
+    Chords(Vec<AxisVec>),
+}
 
 impl Interp {
     /// An arc in the plane of a G68.2 or G254 frame: the centre is found in program
-    /// coordinates, then mapped to the machine plane its normal turns into (the program
-    /// plane must map onto G17, G18 or G19 of the machine; clockwise flips when the normal
-    /// turns to the machine axis's negative direction).
+    /// coordinates, then mapped to the machine plane its normal turns into (clockwise flips
+    /// when the normal turns to the machine axis's negative direction). When the normal is
+    /// along no machine axis (the table tilted off 90°), the arc runs as chords within
+    /// [`OBLIQUE_ARC_CHORD_TOLERANCE_MM`], as the control interpolates it in the tilted
+    /// plane.
     pub(super) fn tilted_arc<'l>(
         &self,
         line: &str,
@@ -23,7 +36,7 @@ impl Interp {
         clockwise: bool,
         target: AxisVec,
         at: std::ops::Range<usize>,
-    ) -> LineResult<Motion> {
+    ) -> LineResult<TiltedArc> {
         let f = self.frame().expect("called with a frame");
         if Axis::XYZABC[3..].iter().any(|&a| target[a] != self.pos[a]) {
             return Err(LineError::new(at, "arc that turns a rotary axis with G68.2 or G254 active: expected the rotary axes still during G02/G03", "rotary arc in a tilted frame"));
@@ -43,16 +56,30 @@ impl Interp {
         normal[n.index()] = 1.0;
         let mn = frame::apply(&f.direction_rotation(&target), normal);
         let Some(k) = (0..3).find(|&k| mn[k].abs() > 1.0 - 1e-9) else {
-            return Err(LineError::new(at, format!("arc in a tilted plane whose normal is ({:.4}, {:.4}, {:.4}) in machine axes: expected it along X, Y or Z", mn[0], mn[1], mn[2]), "oblique arc plane").help("position the rotary axes with G53.1 first, or post the arc as lines"));
+            let points = oblique_chords(self.plane, ps, pe, c, clockwise).ok_or_else(|| {
+                LineError::new(at, format!("arc in a tilted plane whose normal is ({:.4}, {:.4}, {:.4}) in machine axes needs more than {MAX_CHORDS} chords of {OBLIQUE_ARC_CHORD_TOLERANCE_MM} mm sagitta", mn[0], mn[1], mn[2]), "oblique arc too long")
+            })?;
+            let chords = points
+                .into_iter()
+                .map(|p| {
+                    let m = f.to_machine(p, &self.offset, &target);
+                    let mut q = target;
+                    q[Axis::X] = m[0];
+                    q[Axis::Y] = m[1];
+                    q[Axis::Z] = m[2] + self.tool_length_mm;
+                    q
+                })
+                .collect();
+            return Ok(TiltedArc::Chords(chords));
         };
         let plane = [Plane::YZ, Plane::ZX, Plane::XY][k];
         let mut center_mm = f.to_machine(c, &self.offset, &target);
         center_mm[2] += self.tool_length_mm;
-        Ok(Motion::Arc {
+        Ok(TiltedArc::Canonical(Motion::Arc {
             clockwise: clockwise != (mn[k] < 0.0),
             plane,
             center_mm,
-        })
+        }))
     }
 
     /// The absolute arc centre `[X, Y, Z]`, machine mm, from I J K or R.
@@ -198,4 +225,59 @@ pub(super) fn turns(line: &str, p: &Word, feed_mode: FeedRead) -> LineResult<u32
         ));
     }
     Ok(p.value as u32)
+}
+
+/// The inner points of the chords of the arc from `s` to `e` about centre `c` in `plane`
+/// (program mm), in the direction given: the angle φ and the radius go linearly from
+/// start to end (a spiral when the radii differ, a helix along the normal), n chords with
+/// sagitta `r (1 − cos(Δφ/2n)) ≤` [`OBLIQUE_ARC_CHORD_TOLERANCE_MM`]; `None` beyond
+/// [`MAX_CHORDS`].
+fn oblique_chords(
+    plane: Plane,
+    s: [f64; 3],
+    e: [f64; 3],
+    c: [f64; 3],
+    clockwise: bool,
+) -> Option<Vec<[f64; 3]>> {
+    use std::f64::consts::TAU;
+    let (u, v, n) = plane.axes();
+    let (u, v, n) = (u.index(), v.index(), n.index());
+    let (r0, r1) = (
+        (s[u] - c[u]).hypot(s[v] - c[v]),
+        (e[u] - c[u]).hypot(e[v] - c[v]),
+    );
+    let a0 = (s[v] - c[v]).atan2(s[u] - c[u]);
+    let a1 = (e[v] - c[v]).atan2(e[u] - c[u]);
+    // Counter-clockwise sweep in (0, 2π]; a closed arc is a full turn.
+    let mut sweep = (a1 - a0).rem_euclid(TAU);
+    if clockwise {
+        sweep -= TAU;
+    }
+    if sweep.abs() < 1e-12 {
+        sweep = if clockwise { -TAU } else { TAU };
+    }
+    let r = r0.max(r1);
+    let step = if r > OBLIQUE_ARC_CHORD_TOLERANCE_MM {
+        2.0 * (1.0 - OBLIQUE_ARC_CHORD_TOLERANCE_MM / r).acos()
+    } else {
+        TAU
+    };
+    let count = (sweep.abs() / step).ceil().max(1.0);
+    if count > MAX_CHORDS as f64 {
+        return None;
+    }
+    let count = count as usize;
+    Some(
+        (1..count)
+            .map(|k| {
+                let t = k as f64 / count as f64;
+                let (a, radius) = (a0 + sweep * t, r0 + (r1 - r0) * t);
+                let mut p = [0.0; 3];
+                p[u] = c[u] + radius * a.cos();
+                p[v] = c[v] + radius * a.sin();
+                p[n] = s[n] + (e[n] - s[n]) * t;
+                p
+            })
+            .collect(),
+    )
 }

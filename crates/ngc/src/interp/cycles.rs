@@ -1,6 +1,7 @@
 //! Canned cycles G73, G81-G83, G85, G86, G89 in the current plane: the moves of each hole
 //! as LinuxCNC's G-code manual describes them (the retract to R or the initial level, the
-//! pecks, the dwell), checked against rs274.
+//! pecks, the dwell), checked against rs274; and the Fanuc family's G74/G84 tapping and
+//! G76 fine boring as the Fanuc 0i-MF operator's manual describes them.
 
 use std::collections::VecDeque;
 
@@ -61,7 +62,8 @@ impl Interp {
             self.cycle_q = Some(q.value * scale);
         }
         if let Some(p) = get('P') {
-            self.cycle_p = Some(p.value);
+            // In the dialect's dwell unit (Fanuc ms, LinuxCNC s), kept in seconds.
+            self.cycle_p = Some(self.dwell_seconds(line, &p, Some(p), None)?);
         }
         let r_prog = self.cycle_r.ok_or_else(|| {
             LineError::new(
@@ -269,6 +271,30 @@ impl Interp {
                         depth -= delta;
                     }
                     go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
+                    go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
+                }
+                840 | 740 => {
+                    // Tapping (Fanuc family): feed in, dwell, the spindle reverses, feed
+                    // out to R; G98 then rapids to the initial level.
+                    go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
+                    if dwell > 0.0 {
+                        dwell_at(self, queue, cur);
+                    }
+                    go(self, queue, &mut cur, Motion::Linear, pu, pv, r);
+                    if clear != r {
+                        go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
+                    }
+                }
+                760 => {
+                    // Fine boring (Fanuc family): feed in, dwell, the spindle stops
+                    // oriented, the tool shifts Q off the wall (+u, the builder's default
+                    // direction), rapids out and shifts back.
+                    go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
+                    if dwell > 0.0 {
+                        dwell_at(self, queue, cur);
+                    }
+                    go(self, queue, &mut cur, Motion::Rapid, pu + delta, pv, bottom);
+                    go(self, queue, &mut cur, Motion::Rapid, pu + delta, pv, clear);
                     go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
                 }
                 850 => {

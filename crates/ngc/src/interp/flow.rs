@@ -74,6 +74,24 @@ impl Interp {
                         span: w.span(),
                     });
                 }
+                97 if self.dialect.table().local_subprogram_m97 => {
+                    let p = b.get('P').ok_or_else(|| {
+                        LineError::new(
+                            w.span(),
+                            "M97 without P: expected `M97 P<sequence number>` (a local subprogram at N<sequence number> of this program)",
+                            "no P",
+                        )
+                    })?;
+                    let n = integer(&p, b.line)?;
+                    let repeats = b.get('L').map_or(1, |l| l.value.round() as u64);
+                    return Ok(Stop::Call {
+                        label: format!("N{n}"),
+                        repeats,
+                        args: Vec::new(),
+                        locals: false,
+                        span: w.span(),
+                    });
+                }
                 99 => return Ok(Stop::Return { span: w.span() }),
                 _ => {}
             }

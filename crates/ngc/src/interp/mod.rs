@@ -46,13 +46,13 @@ use std::path::Path;
 use crate::axis::{Axis, AxisVec, Plane};
 use crate::block::Block;
 use crate::canon::{Move, PathControl};
-use crate::code::{FeedRead, MotionMode};
+use crate::code::{FeedRead, GCode, MotionMode};
 use crate::comp;
 use crate::expr::{Param, Params};
 use crate::frame::{Mat3, RotaryTable};
 use crate::lex::{LineResult, Word};
 use crate::notice::Notice;
-use crate::options::{Dialect, Options, Tool, UserM};
+use crate::options::{Dialect, Distance, Options, StartFeed, Tool, Units, UserM};
 use crate::spline;
 
 mod arcs;
@@ -114,11 +114,21 @@ pub struct Interp {
     /// Machine position of the controlled point, mm and deg.
     pos: AxisVec,
     motion: Option<MotionMode>,
+    /// The last G00-G03 mode (Fanuc group 01), in effect again after G80 where the
+    /// dialect's table says so.
+    interpolation: Option<MotionMode>,
+    /// The D word given alone (Fanuc family): the offset a later G41/G42 without D uses.
+    d_register: Option<u32>,
     plane: Plane,
     absolute: bool,
     arc_absolute: bool,
     feed_mode: FeedRead,
     inch: bool,
+    /// G20/G21 has been read (until then the units are the start state's, a guess the
+    /// first move warns about).
+    units_stated: bool,
+    /// Where the start state's units come from (named in that warning).
+    start_units_setting: &'static str,
     /// F as programmed (program units per minute or per revolution, or 1/min).
     feed: Option<f64>,
     spindle_rpm: f64,
@@ -221,11 +231,19 @@ impl Interp {
             axes,
             pos: o.start,
             motion: None,
-            plane: Plane::XY,
-            absolute: true,
+            interpolation: None,
+            d_register: None,
+            plane: o.start_state.plane,
+            absolute: o.start_state.distance == Distance::Absolute,
             arc_absolute: false,
-            feed_mode: FeedRead::PerMinute,
-            inch: false,
+            feed_mode: match o.start_state.feed {
+                StartFeed::InverseTime => FeedRead::InverseTime,
+                StartFeed::PerMinute => FeedRead::PerMinute,
+                StartFeed::PerRevolution => FeedRead::PerRevolution,
+            },
+            inch: o.start_state.units == Units::Inch,
+            units_stated: false,
+            start_units_setting: o.start_units_setting,
             feed: None,
             spindle_rpm: 0.0,
             spindle_turning: false,
@@ -415,15 +433,80 @@ impl Interp {
         self.dwell(&b, line_no, queue)?;
         // 5. Plane, units, compensation, tool length, work system, path, distance, retract.
         self.modal_groups(&b, line_no, queue)?;
+        self.no_motion_notices(&b, line_no, notices, path);
         // The motion mode, then the axis words (polar words resolved in the new state).
         let previous_motion = self.motion_mode(&b)?;
         self.axis_words(&mut b)?;
         // 6. Non-modal codes that use axis words.
+        let queued = queue.len();
         self.non_modal(&mut b, line_no, queue)?;
         // 7. Motion.
         self.motion(&mut b, previous_motion, line_no, queue)?;
+        if !self.units_stated && queue.len() > queued {
+            self.warn_units_assumed(line_no, notices, path);
+        }
         // 8. Stops and program flow.
         self.program_flow(&b, queue, stop)
+    }
+
+    /// A notice, once per code, for each G code of the block that has no effect on the
+    /// motion and each machine M code (brakes, chip conveyor, coolant options).
+    fn no_motion_notices(
+        &mut self,
+        b: &Block,
+        line_no: usize,
+        notices: &mut Vec<Notice>,
+        path: &Path,
+    ) {
+        let table = self.dialect.table();
+        // G codes are keyed apart from M codes in `noticed`.
+        const G_KEY: u32 = 1 << 20;
+        let g = b.g.iter().filter_map(|(c, _)| match c {
+            GCode::Control(code) => (table.no_motion_g)(*code).map(|m| (G_KEY + code, m)),
+            _ => None,
+        });
+        let m =
+            b.m.iter()
+                .filter_map(|(code, _)| (table.machine_m)(*code).map(|m| (*code, m)));
+        let found: Vec<(u32, &str)> = g.chain(m).collect();
+        for (key, meaning) in found {
+            if self.noticed.contains(&key) || self.noticed.len() >= 100 {
+                continue;
+            }
+            self.noticed.push(key);
+            notices.push(Notice {
+                path: path.to_path_buf(),
+                line: line_no,
+                message: format!(
+                    "{meaning}: accepted with no effect on the motion ({} dialect)",
+                    self.dialect.name()
+                ),
+                warning: false,
+            });
+        }
+    }
+
+    /// The program moves before it states its units: warn once, naming the unit assumed and
+    /// the setting that changes it (a program in the other unit is 25.4 times off).
+    fn warn_units_assumed(&mut self, line_no: usize, notices: &mut Vec<Notice>, path: &Path) {
+        self.units_stated = true;
+        let (unit, other) = if self.inch {
+            ("inches (G20)", "mm")
+        } else {
+            ("mm (G21)", "inches")
+        };
+        notices.push(Notice {
+            path: path.to_path_buf(),
+            line: line_no,
+            message: format!(
+                "the program moves before it states its units (no G20/G21 before this line): \
+                 read in {unit}, the unit the control starts in ({}); a program written in \
+                 {other} is read 25.4 times off: set the scenario's [reader] start_units or \
+                 the machine file's [start] units",
+                self.start_units_setting
+            ),
+            warning: true,
+        });
     }
 
     /// The end of the program: the queued compensated moves end as at G40.

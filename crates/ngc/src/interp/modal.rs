@@ -23,6 +23,7 @@ impl Interp {
         for &(c, _) in b.g.iter() {
             if let GCode::Units(inch) = c {
                 self.inch = inch;
+                self.units_stated = true;
             }
         }
         for &(c, _) in b.g.iter() {
@@ -75,6 +76,11 @@ impl Interp {
         line_no: usize,
         queue: &mut VecDeque<Move>,
     ) -> LineResult<()> {
+        if let (true, Some(d)) = (self.dialect.table().offset_words_alone, b.get('D')) {
+            if !b.has_g(|c| matches!(c, GCode::CutterComp(3 | 4) | GCode::Control(960))) {
+                self.d_register = Some(d.value.round() as u32);
+            }
+        }
         for &(c, w) in b.g.iter() {
             match c {
                 GCode::Plane(p) => self.plane = p,
@@ -145,6 +151,17 @@ impl Interp {
             ));
         }
         if let Some(h) = b.get('H') {
+            let alone = self.dialect.table().offset_words_alone
+                && !b.has_g(|c| matches!(c, GCode::ToolLength(_) | GCode::Tcp(true)));
+            if alone {
+                // Fanuc family: H alone changes the length offset while G43/G44 is in
+                // effect (the sign of the offset in effect kept), and is kept otherwise.
+                let t = self.tool_entry(h.value.round() as u32, &h)?;
+                if self.tool_length_mm != 0.0 {
+                    self.tool_length_mm = t.length_mm.copysign(self.tool_length_mm);
+                }
+                return Ok(());
+            }
             let used = b.has_g(|c| {
                 matches!(c, GCode::ToolLength(_) | GCode::Tcp(true))
                     || matches!(c, GCode::NonModal(NonModal::G10))
@@ -210,7 +227,9 @@ impl Interp {
             })?;
             d.value * self.scale()
         } else {
-            let n = d.map_or(self.tool, |d| d.value.round() as u32);
+            let n = d.map_or(self.d_register.unwrap_or(self.tool), |d| {
+                d.value.round() as u32
+            });
             orientation = self.orientations.get(&n).copied().unwrap_or(0);
             if self.plane != Plane::ZX && !matches!(orientation, 0 | 9) {
                 return Err(LineError::new(w.span(), format!("`{}` with a lathe tool (orientation {orientation}) but the plane is not G18: expected G18", &line[w.span()]), "not G18"));

@@ -6,7 +6,7 @@
 use std::collections::VecDeque;
 use std::ops::Range;
 
-use super::arcs::turns;
+use super::arcs::{turns, TiltedArc};
 use super::Interp;
 use crate::axis::{Axis, Plane};
 use crate::block::{letters, slot, Block, Small};
@@ -32,6 +32,14 @@ impl Interp {
         let previous_motion = self.motion;
         if let Some((mm, _)) = motion_code {
             self.motion = mm;
+            match mm {
+                Some(MotionMode::Rapid | MotionMode::Linear | MotionMode::Arc { .. }) => {
+                    self.interpolation = mm;
+                }
+                // Fanuc family: G80 leaves group 01's G00-G03 in effect.
+                None if self.dialect.table().g80_keeps_motion => self.motion = self.interpolation,
+                _ => {}
+            }
             // The initial level of a row of cycles is kept until a motion that is not one.
             if !matches!(mm, Some(MotionMode::Cycle(_))) {
                 self.cycle_initial = None;
@@ -180,7 +188,7 @@ impl Interp {
                 "G53 motion",
             ));
         }
-        if g53 && !self.absolute {
+        if g53 && !self.absolute && !self.dialect.table().g53_absolute_in_g91 {
             return Err(LineError::new(
                 first,
                 "G53 in G91: expected G53 only in absolute mode (G90)",
@@ -326,7 +334,18 @@ impl Interp {
         let motion = match mode {
             MotionMode::Linear => Motion::Linear,
             MotionMode::Arc { clockwise } if self.frame().is_some() => {
-                self.tilted_arc(line, &get, b.words, clockwise, target, at.clone())?
+                match self.tilted_arc(line, &get, b.words, clockwise, target, at.clone())? {
+                    TiltedArc::Canonical(m) => m,
+                    TiltedArc::Chords(points) => {
+                        let mut from = start;
+                        for p in points.into_iter().chain(std::iter::once(target)) {
+                            self.emit(queue, line_no, Motion::Linear, from, p, self.path);
+                            from = p;
+                        }
+                        self.pos = target;
+                        return Ok(());
+                    }
+                }
             }
             MotionMode::Arc { clockwise } => {
                 let center_mm = self.arc_center(line, &get, b.words, clockwise, start, target)?;
@@ -399,6 +418,7 @@ impl Interp {
             || self.rotation.is_some()
             || self.tilt.is_some()
             || self.dwo
+            || !self.units_stated
         {
             return false;
         }

@@ -69,6 +69,14 @@ impl Interp {
             return Ok(());
         };
         let line = b.line;
+        // Fanuc M series: G92 S alone clamps the spindle speed (constant surface speed).
+        if nm == NonModal::G92
+            && self.dialect.table().g92_s_limits_spindle
+            && b.axis.is_empty()
+            && b.get('S').is_some()
+        {
+            return Ok(());
+        }
         if nm != NonModal::Dwell && nm != NonModal::G53 {
             b.axes_used = true;
             if let Some((Some(_), mw)) = b.motion_code() {

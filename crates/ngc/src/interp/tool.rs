@@ -71,6 +71,8 @@ impl Interp {
                 | 70..=73
                 | 98
                 | 99 => {}
+                97 if self.dialect.table().local_subprogram_m97 => {}
+                code if (self.dialect.table().machine_m)(code).is_some() => {}
                 code => {
                     if let Some(on) = self.user_m(b.line, code, w, line_no, notices, path)? {
                         tcp_m = Some(on);
@@ -122,7 +124,7 @@ impl Interp {
                     let what = file.map_or(String::new(), |f| {
                         format!(" (runs {}, an external program)", f.display())
                     });
-                    notices.push(Notice { path: path.to_path_buf(), line: line_no, message: format!("user code M{code}{what} accepted and ignored (map it in the scenario's user_m_codes to give it an effect)") });
+                    notices.push(Notice { path: path.to_path_buf(), line: line_no, message: format!("user code M{code}{what} accepted and ignored (map it in the scenario's user_m_codes to give it an effect)"), warning: false });
                 }
                 Ok(None)
             }

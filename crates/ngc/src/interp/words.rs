@@ -33,8 +33,8 @@ impl Interp {
             }
         }
         self.check_machine_axes(b)?;
-        // G41.1/G42.1 take the diameter itself in D.
-        let d_diameter = b.has_g(|c| matches!(c, GCode::CutterComp(3 | 4)));
+        // G41.1/G42.1 take the diameter itself in D, G96 the speed limit (rpm).
+        let d_diameter = b.has_g(|c| matches!(c, GCode::CutterComp(3 | 4) | GCode::Control(960)));
         let integers: &[char] = if b.has_any(const { letters(&['N', 'T', 'H', 'D', 'L']) }) {
             &['N', 'T', 'H', 'D', 'L']
         } else {
@@ -109,7 +109,13 @@ impl Interp {
         let peck = matches!(motion, Some(MotionMode::Cycle(730 | 830)));
         let cubic = matches!(motion, Some(MotionMode::Spline(50)));
         let nurbs = matches!(motion, Some(MotionMode::Spline(52)));
-        let dwell_cycle = matches!(motion, Some(MotionMode::Cycle(820 | 860 | 890)));
+        let dwell_cycle = matches!(
+            motion,
+            Some(MotionMode::Cycle(740 | 760 | 820 | 840 | 860 | 870 | 890))
+        );
+        // G76/G87 Q: the shift away from the bore wall.
+        let shift_cycle = matches!(motion, Some(MotionMode::Cycle(760 | 870)));
+        let table = self.dialect.table();
         // LinuxCNC G2/G3 P<turns>.
         let arc_turns =
             self.dialect.table().arc_turns && matches!(motion, Some(MotionMode::Arc { .. }));
@@ -119,11 +125,11 @@ impl Interp {
             .iter()
             .any(|(c, _)| (100..=199).contains(c) || self.user_m.contains_key(c));
         let checks: [(char, bool, &str); 5] = [
-            ('P', cubic || nurbs || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 98, 99]) || user || arc_turns, "`P` with no code that uses it: expected P only with G02/G03 (turns), G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89, M19, M50-M53, M62-M66, M98 or a user M code"),
-            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || cubic || has_m(&[19, 61, 66, 67, 68]) || user, "`Q` with no code that uses it: expected Q only with G5, G64, G73/G83, M19, M61, M66-M68 or a user M code"),
-            ('L', g10 || cycle || nurbs || has_m(&[66, 98]) || has_g(&|c| matches!(c, GCode::CutterComp(3 | 4))), "`L` with no code that uses it: expected L only with G10, G5.2, a canned cycle, G41.1/G42.1, M66 or M98"),
+            ('P', cubic || nurbs || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 97, 98, 99]) || user || arc_turns, "`P` with no code that uses it: expected P only with G02/G03 (turns), G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89, M19, M50-M53, M62-M66, M98 or a user M code"),
+            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || shift_cycle || cubic || has_m(&[19, 61, 66, 67, 68]) || user, "`Q` with no code that uses it: expected Q only with G5, G64, G73/G83, M19, M61, M66-M68 or a user M code"),
+            ('L', g10 || cycle || nurbs || has_m(&[66, 97, 98]) || has_g(&|c| matches!(c, GCode::CutterComp(3 | 4))), "`L` with no code that uses it: expected L only with G10, G5.2, a canned cycle, G41.1/G42.1, M66 or M98"),
             ('E', has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with M66-M68 or G187"),
-            ('D', has_g(&|c| matches!(c, GCode::CutterComp(1..=4))), "`D` with no code that uses it: expected D only with G41, G42, G41.1 or G42.1"),
+            ('D', table.offset_words_alone || has_g(&|c| matches!(c, GCode::CutterComp(1..=4) | GCode::Control(960))), "`D` with no code that uses it: expected D only with G41, G42, G41.1, G42.1 or G96 (in the fanuc and haas dialects, D also stands alone)"),
         ];
         for (letter, ok, message) in checks {
             if let Some(w) = get(letter) {

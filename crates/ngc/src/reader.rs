@@ -81,13 +81,59 @@ const MAX_QUOTED_FILE_BYTES: u64 = 64 << 20;
 
 /// The text of a program: in memory (a string), or a file (the program, a subroutine file)
 /// read line by line at byte offsets.
-enum Source {
+pub(crate) enum Source {
     Text(Rc<str>),
     File(FileLines),
 }
 
+impl Source {
+    /// The line at byte `offset` (without its `\n` or `\r\n`, a file's line read into
+    /// `buf`) and the bytes it takes; `None` at the end of the text.
+    #[inline(always)]
+    pub(crate) fn line<'a>(
+        &'a mut self,
+        offset: usize,
+        buf: &'a mut String,
+    ) -> std::io::Result<Option<(&'a str, usize)>> {
+        Ok(match self {
+            Source::Text(text) => {
+                if offset >= text.len() {
+                    return Ok(None);
+                }
+                let rest = &text[offset..];
+                let (raw, len) = match newline(rest.as_bytes()) {
+                    Some(n) => (&rest[..n], n + 1),
+                    None => (rest, rest.len()),
+                };
+                Some((raw.strip_suffix('\r').unwrap_or(raw), len))
+            }
+            Source::File(f) => match f.read_line(offset, buf)? {
+                0 => None,
+                len => Some((buf.as_str(), len)),
+            },
+        })
+    }
+
+    /// The whole text, for an error message (a file is read again, up to
+    /// `MAX_QUOTED_FILE_BYTES`); `None` when it cannot be.
+    pub(crate) fn quoted(&self, path: &Path) -> Option<String> {
+        match self {
+            Source::Text(text) => Some(text.to_string()),
+            Source::File(f) => {
+                let bytes = (f.len <= MAX_QUOTED_FILE_BYTES)
+                    .then(|| std::fs::read(path).ok())
+                    .flatten()?;
+                Some(match String::from_utf8(bytes) {
+                    Ok(t) => t,
+                    Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
+                })
+            }
+        }
+    }
+}
+
 /// A program file read through a buffer; `pos` is the byte offset of the next unread byte.
-struct FileLines {
+pub(crate) struct FileLines {
     reader: BufReader<std::fs::File>,
     pos: u64,
     len: u64,
@@ -95,7 +141,7 @@ struct FileLines {
 
 impl FileLines {
     /// Opens the regular file at `path` for streaming (see [`crate::side_file::open_regular`]).
-    fn open(path: &Path) -> std::io::Result<FileLines> {
+    pub(crate) fn open(path: &Path) -> std::io::Result<FileLines> {
         let file = crate::side_file::open_regular(path)?;
         let len = file.metadata()?.len();
         Ok(FileLines {
@@ -437,6 +483,9 @@ pub struct Moves {
     notices: Vec<Notice>,
     /// The current line of a streamed file.
     buf: String,
+    /// A HEIDENHAIN Klartext program's own front end (crate `dialect::heidenhain`), which
+    /// then yields every move.
+    klartext: Option<Box<crate::dialect::heidenhain::Reader>>,
     /// The block's word buffer, kept empty between blocks (no allocation per block).
     words: Vec<Word<'static>>,
     /// A read error of a streamed file, reported by the next step.
@@ -458,6 +507,22 @@ pub struct Moves {
 
 impl Moves {
     fn new(path: &Path, source: Source, options: &Options) -> Moves {
+        let mut moves = Moves::g_code(path, source, options);
+        // A Klartext program goes to its own front end, whatever the dialect named.
+        if options.dialect == Dialect::Heidenhain || moves.first_line_heidenhain() {
+            let source = std::mem::replace(&mut moves.programs[0].source, Source::Text("".into()));
+            let options = Options {
+                dialect: Dialect::Heidenhain,
+                ..options.clone()
+            };
+            moves.klartext = Some(Box::new(crate::dialect::heidenhain::Reader::new(
+                path, source, &options,
+            )));
+        }
+        moves
+    }
+
+    fn g_code(path: &Path, source: Source, options: &Options) -> Moves {
         Moves {
             programs: vec![Program {
                 path: path.to_path_buf(),
@@ -485,6 +550,7 @@ impl Moves {
             language_checked: false,
             notices: Vec::new(),
             buf: String::new(),
+            klartext: None,
             words: Vec::new(),
             io_error: None,
             remaps: options.remaps.clone(),
@@ -500,6 +566,9 @@ impl Moves {
     /// What was accepted without being simulated (user M codes, at most one notice per
     /// code), so far.
     pub fn notices(&self) -> &[Notice] {
+        if let Some(k) = &self.klartext {
+            return k.notices();
+        }
         &self.notices
     }
 
@@ -507,38 +576,24 @@ impl Moves {
     /// on a read error, kept in `io_error`). Inlined (docs/performance.md).
     #[inline(always)]
     fn line_at(&mut self, c: Cursor) -> Option<(&str, Cursor)> {
-        let (line, len) = match &mut self.programs[c.file].source {
-            Source::Text(text) => {
-                if c.offset >= text.len() {
-                    return None;
-                }
-                let rest = &text[c.offset..];
-                let (raw, len) = match newline(rest.as_bytes()) {
-                    Some(n) => (&rest[..n], n + 1),
-                    None => (rest, rest.len()),
-                };
-                (raw.strip_suffix('\r').unwrap_or(raw), len)
+        match self.programs[c.file].source.line(c.offset, &mut self.buf) {
+            Ok(Some((line, len))) => Some((
+                line,
+                Cursor {
+                    file: c.file,
+                    offset: c.offset + len,
+                    line: c.line + 1,
+                },
+            )),
+            Ok(None) => None,
+            Err(e) => {
+                self.io_error = Some(std::io::Error::new(
+                    e.kind(),
+                    format!("line {}: {e}", c.line),
+                ));
+                None
             }
-            Source::File(f) => match f.read_line(c.offset, &mut self.buf) {
-                Ok(0) => return None,
-                Ok(len) => (self.buf.as_str(), len),
-                Err(e) => {
-                    self.io_error = Some(std::io::Error::new(
-                        e.kind(),
-                        format!("line {}: {e}", c.line),
-                    ));
-                    return None;
-                }
-            },
-        };
-        Some((
-            line,
-            Cursor {
-                file: c.file,
-                offset: c.offset + len,
-                line: c.line + 1,
-            },
-        ))
+        }
     }
 
     /// The whole text of program `file` and the byte offset of 1-based `line` in it, for an
@@ -546,36 +601,7 @@ impl Moves {
     /// be, the text is `line_text` alone at its own line number.
     fn error_text(&self, c: Cursor, line_text: &str) -> (String, usize) {
         let program = &self.programs[c.file];
-        match &program.source {
-            Source::Text(text) => (text.to_string(), c.offset.min(text.len())),
-            Source::File(f) => match (f.len <= MAX_QUOTED_FILE_BYTES)
-                .then(|| std::fs::read(&program.path).ok())
-                .flatten()
-            {
-                Some(bytes) => {
-                    let text = match String::from_utf8(bytes) {
-                        Ok(t) => t,
-                        Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
-                    };
-                    let start = if c.line <= 1 {
-                        0
-                    } else {
-                        text.bytes()
-                            .enumerate()
-                            .filter(|&(_, b)| b == b'\n')
-                            .nth(c.line - 2)
-                            .map_or(text.len(), |(i, _)| i + 1)
-                    };
-                    (text, start)
-                }
-                None => {
-                    let mut text = "\n".repeat(c.line.saturating_sub(1));
-                    let start = text.len();
-                    text.push_str(line_text);
-                    (text, start)
-                }
-            },
-        }
+        quoted_at(program.source.quoted(&program.path), c.line, line_text)
     }
 
     fn error_at(&self, c: Cursor, err: LineError, line_text: &str) -> Error {
@@ -586,29 +612,7 @@ impl Moves {
     /// A syntax error at `err.span` of the line starting at byte `start` of `text`, the text
     /// of program `file`.
     fn syntax_in(&self, file: usize, text: &str, start: usize, err: LineError) -> Error {
-        let program = &self.programs[file];
-        let text = text.to_string();
-        let mut span = start + err.span.start..start + err.span.end;
-        span.end = span.end.min(text.len());
-        span.start = span.start.min(span.end);
-        // Keep the span on character boundaries (a label may end inside `é`).
-        while !text.is_char_boundary(span.start) {
-            span.start -= 1;
-        }
-        while !text.is_char_boundary(span.end) {
-            span.end += 1;
-        }
-        let (line, column) = line_column(&text, span.start);
-        Error::Syntax(Box::new(Syntax {
-            path: program.path.clone(),
-            line,
-            column,
-            message: err.message,
-            label: err.label,
-            help: err.help,
-            text,
-            span,
-        }))
+        syntax_error(&self.programs[file].path, text.to_string(), start, err)
     }
 
     fn backward(&mut self, span: std::ops::Range<usize>) -> LineResult<()> {
@@ -1391,9 +1395,8 @@ impl Moves {
             line: 1,
         };
         while let Some((line, next)) = self.line_at(c) {
-            let t = line.trim();
-            if !t.is_empty() {
-                return t.len() >= 9 && t.as_bytes()[..9].eq_ignore_ascii_case(b"BEGIN PGM");
+            if !line.trim().is_empty() {
+                return crate::dialect::heidenhain::opens_program(line);
             }
             c = next;
         }
@@ -1778,6 +1781,58 @@ impl Moves {
     }
 }
 
+/// A syntax error at `err.span` of the line starting at byte `start` of `text`, the text of
+/// the program at `path`.
+pub(crate) fn syntax_error(path: &Path, text: String, start: usize, err: LineError) -> Error {
+    let mut span = start + err.span.start..start + err.span.end;
+    span.end = span.end.min(text.len());
+    span.start = span.start.min(span.end);
+    // Keep the span on character boundaries (a label may end inside `é`).
+    while !text.is_char_boundary(span.start) {
+        span.start -= 1;
+    }
+    while !text.is_char_boundary(span.end) {
+        span.end += 1;
+    }
+    let (line, column) = line_column(&text, span.start);
+    Error::Syntax(Box::new(Syntax {
+        path: path.to_path_buf(),
+        line,
+        column,
+        message: err.message,
+        label: err.label,
+        help: err.help,
+        text,
+        span,
+    }))
+}
+
+/// The text quoted by an error at 1-based `line` (`text`, the whole program, when it could
+/// be read) and the byte offset of that line in it; without the program, `line_text` alone
+/// at its own line number.
+pub(crate) fn quoted_at(text: Option<String>, line: usize, line_text: &str) -> (String, usize) {
+    match text {
+        Some(text) => {
+            let start = if line <= 1 {
+                0
+            } else {
+                text.bytes()
+                    .enumerate()
+                    .filter(|&(_, b)| b == b'\n')
+                    .nth(line - 2)
+                    .map_or(text.len(), |(i, _)| i + 1)
+            };
+            (text, start)
+        }
+        None => {
+            let mut text = "\n".repeat(line.saturating_sub(1));
+            let start = text.len();
+            text.push_str(line_text);
+            (text, start)
+        }
+    }
+}
+
 /// An emptied vector of words, its allocation kept, for words that borrow another line.
 /// (Collecting a vector's own `into_iter` into the same layout reuses its allocation.)
 fn reuse<'a, 'b>(mut words: Vec<Word<'a>>) -> Vec<Word<'b>> {
@@ -1931,6 +1986,9 @@ impl Iterator for Moves {
 
     fn next(&mut self) -> Option<Result<Move>> {
         loop {
+            if let Some(k) = &mut self.klartext {
+                return k.next();
+            }
             if let Some(m) = self.queue.pop_front() {
                 return Some(Ok(m));
             }

@@ -28,6 +28,7 @@
 
 mod fanuc;
 mod haas;
+pub(crate) mod heidenhain;
 mod linuxcnc;
 mod table;
 
@@ -44,6 +45,7 @@ impl Dialect {
             Dialect::Linuxcnc => &linuxcnc::TABLE,
             Dialect::Fanuc => &fanuc::TABLE,
             Dialect::Haas => &haas::TABLE,
+            Dialect::Heidenhain => &heidenhain::TABLE,
         }
     }
 }

@@ -9,6 +9,7 @@ mod blocks;
 mod bounded;
 mod conformance;
 mod corpus;
+mod cross_dialect;
 mod file_analysis;
 mod reader_options;
 mod unreadable;

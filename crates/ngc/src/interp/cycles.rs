@@ -61,7 +61,10 @@ impl Interp {
             self.cycle_q = Some(q.value * scale);
         }
         if let Some(p) = get('P') {
-            self.cycle_p = Some(p.value);
+            self.cycle_p = Some(super::non_modal::dwell_p_seconds(
+                self.dialect.table().dwell_p,
+                &p,
+            ));
         }
         let r_prog = self.cycle_r.ok_or_else(|| {
             LineError::new(

@@ -599,14 +599,24 @@ impl Reader {
             }
         }
         let label = self.label_name(b.tok(2), b.span(2))?;
-        let mut repeats = 0;
+        // Passes run by jumping to the label: one, or m for `REP m` (a section repeat runs
+        // once on its own before its CALL, so m + 1 times in all).
+        let mut passes = 1;
         if b.is(3, "REP") {
-            let v = text::value(b.tok(4), &self.q, b.span(4))?;
+            let (rep, span) = match b.tok(4) {
+                "" => (b.tok(3).get(3..).unwrap_or(""), b.span(3)),
+                t => (t, b.span(4)),
+            };
+            let v = text::value(rep, &self.q, span.clone())?;
             if v < 0.0 || v.fract() != 0.0 || v > 65534.0 {
-                return Err(LineError::new(b.span(4), format!("REP {}: expected a whole number of repeats 0-65534", b.tok(4)), "bad repeat count"));
+                return Err(LineError::new(span, format!("REP {rep}: expected a whole number of repeats 0-65534"), "bad repeat count"));
             }
-            repeats = v as u64;
+            passes = v as u64;
         }
+        if passes == 0 {
+            return Ok(());
+        }
+        let repeats = passes - 1;
         let target = self.find_label(here.file, &label, b.span(2))?;
         self.push_frame(b, Frame { ret: self.cursor, call: here, target, repeats, program: false })?;
         self.backward(b.span(0))?;

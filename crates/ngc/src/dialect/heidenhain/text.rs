@@ -63,7 +63,10 @@ pub(super) fn strip_comment_in(line: &str, in_comment: bool) -> ((&str, bool), b
     if continued && !commented {
         body = body.trim_end().trim_end_matches('~');
     }
-    ((body, continued), continued && commented)
+    // A line that is all comment goes on as comment (a long comment wrapped at `~`); after
+    // words (`Q200=+2 ;SET-UP CLEARANCE ~`) the block goes on.
+    let all_comment = body[after_block_number(body)..].trim().is_empty();
+    ((body, continued), continued && commented && all_comment)
 }
 
 /// The tokens of a block: byte ranges of its blank-separated words (a `"…"` name is one).

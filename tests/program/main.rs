@@ -10,6 +10,7 @@ mod bounded;
 mod conformance;
 mod corpus;
 mod cross_dialect;
+mod heidenhain_corpus;
 mod file_analysis;
 mod reader_options;
 mod unreadable;

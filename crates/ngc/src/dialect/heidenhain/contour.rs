@@ -463,7 +463,7 @@ fn pole(r: &mut Reader, b: &Block) -> LineResult<()> {
     let (mut d, mut rad) = (None, None);
     let mask = words(r, b, &mut t, &mut e, None, &mut d, &mut rad)?;
     if mask & !3 != 0 {
-        return Err(LineError::new(b.span(1), "CC with a coordinate other than X Y: circles outside the working plane XY are not supported (tool axis Z)", "not the XY plane"));
+        return Err(LineError::new(b.span(1), format!("`{}` with a coordinate other than X Y: circles outside the working plane XY are not supported (tool axis Z)", b.text[b.spans(0, b.toks.len() - 1)].trim()), "not the XY plane"));
     }
     if !e.plain() || e.feed.is_some() {
         return Err(LineError::new(b.span(1), "CC takes only the centre's coordinates X Y (or IX IY)", "unexpected word"));

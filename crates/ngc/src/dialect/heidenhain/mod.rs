@@ -653,12 +653,12 @@ impl Reader {
         }
         let found = candidates.iter().find(|p| p.is_file()).cloned();
         let Some(path) = found else {
-            return Err(LineError::new(b.span(2), format!("CALL PGM {name}: no such file beside the program or on the search path"), "file not found"));
+            return Err(LineError::new(b.span(2), format!("`CALL PGM {name}`: no such file beside the program or on the search path"), "file not found"));
         };
         let file = match self.programs.iter().position(|p| p.path == path) {
             Some(k) => k,
             None => {
-                let lines = FileLines::open(&path).map_err(|e| LineError::new(b.span(2), format!("CALL PGM {name}: cannot read {}: {e}", path.display()), "unreadable file"))?;
+                let lines = FileLines::open(&path).map_err(|e| LineError::new(b.span(2), format!("`CALL PGM {name}`: cannot read {}: {e}", path.display()), "unreadable file"))?;
                 self.programs.push(Program { path, source: Source::File(lines), labels: None });
                 self.programs.len() - 1
             }

@@ -144,7 +144,12 @@ fn extra(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> LineResult<bool
     let t = b.tok(k);
     let (name, rest) = split_word(t);
     let span = b.span(k);
-    match name.to_ascii_uppercase().as_str() {
+    let mut upper = [0u8; 8];
+    let n = name.len().min(8);
+    for (u, c) in upper.iter_mut().zip(&name.as_bytes()[..n]) {
+        *u = c.to_ascii_uppercase();
+    }
+    match std::str::from_utf8(&upper[..n]).unwrap_or("") {
         "R" if rest == "0" => e.comp = Some(0),
         "RL" if rest.is_empty() => e.comp = Some(1),
         "RR" if rest.is_empty() => e.comp = Some(2),
@@ -160,7 +165,7 @@ fn extra(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> LineResult<bool
             return Err(LineError::new(span, format!("`{t}` (feed per revolution or per tooth) is not supported: expected F in mm/min"), "feed per revolution"))
         }
         "F" => {
-            let v = value(rest, &r.q, span.clone())?;
+            let v = b.value(k, 1, &r.q)?;
             if v <= 0.0 {
                 return Err(LineError::new(span, format!("`{t}`: expected a positive feed"), "bad feed"));
             }
@@ -239,41 +244,41 @@ fn words(
     for k in 1..b.toks.len() {
         let t = b.tok(k);
         let (name, rest) = split_word(t);
-        let upper = name.to_ascii_uppercase();
-        let (inc, axis_name) = match upper.strip_prefix('I') {
-            Some(a) if a.len() == 1 || a == "PR" || a == "PA" => (true, a),
-            _ => (false, upper.as_str()),
+        let nb = name.as_bytes();
+        // The common case first: one axis letter (or I and one) and a value.
+        let (inc, axis_name) = match nb {
+            [b'I' | b'i', _] | [b'I' | b'i', _, _] => (true, &name[1..]),
+            _ => (false, name),
         };
-        if let Some(axis) = LETTERS.iter().position(|&l| axis_name.len() == 1 && axis_name.starts_with(l)) {
-            if !rest.is_empty() && !(axis == 2 && false) {
-                let v = value(rest, &r.q, b.span(k))?;
+        if let [l] = axis_name.as_bytes() {
+            let axis = LETTERS.iter().position(|&c| c as u8 == l.to_ascii_uppercase());
+            if let (Some(axis), false) = (axis, rest.is_empty()) {
+                let v = b.value(k, name.len(), &r.q)?;
                 target[axis] = if inc { target[axis] + v } else { v };
                 mask |= 1 << axis;
                 continue;
             }
         }
-        match (axis_name, pr_pa.as_deref_mut()) {
-            ("PR", Some(p)) => {
-                p[0] = Some((value(rest, &r.q, b.span(k))?, inc));
+        if let Some(p) = pr_pa.as_deref_mut() {
+            let slot = [("PR", 0), ("PA", 1)]
+                .iter()
+                .find(|(n, _)| axis_name.eq_ignore_ascii_case(n));
+            if let Some(&(_, i)) = slot {
+                p[i] = Some((value(rest, &r.q, b.span(k))?, inc));
                 continue;
             }
-            ("PA", Some(p)) => {
-                p[1] = Some((value(rest, &r.q, b.span(k))?, inc));
-                continue;
-            }
-            _ => {}
         }
-        if upper == "DR" && (rest == "+" || rest == "-") {
+        if name.eq_ignore_ascii_case("DR") && (rest == "+" || rest == "-") {
             *arc_dir = Some(rest == "+");
             continue;
         }
-        if upper == "R" && rest != "0" && radius.is_some() {
+        if name.eq_ignore_ascii_case("R") && rest != "0" && radius.is_some() {
             *radius = Some(value(rest, &r.q, b.span(k))?);
             continue;
         }
         if !extra(r, b, k, e)? {
-            let what = match upper.as_str() {
-                "U" | "V" | "W" | "IU" | "IV" | "IW" => "the axes X Y Z A B C (U V W are not read)",
+            let what = match axis_name.to_ascii_uppercase().as_str() {
+                "U" | "V" | "W" => "the axes X Y Z A B C (U V W are not read)",
                 _ => "coordinates X Y Z A B C (I for incremental), R0/RL/RR, F, FMAX, FAUTO or M functions",
             };
             return Err(super::unexpected(b, k, &format!("`{}`", b.tok(0)), what));
@@ -326,7 +331,7 @@ fn line(r: &mut Reader, b: &Block, polar: bool) -> LineResult<()> {
     }
     if mask & 3 != 0 {
         let d = [target[X] - start[0], target[Y] - start[1]];
-        let n = d[0].hypot(d[1]);
+        let n = (d[0] * d[0] + d[1] * d[1]).sqrt();
         if n > 1e-12 {
             r.path.dir = Some([d[0] / n, d[1] / n]);
         }

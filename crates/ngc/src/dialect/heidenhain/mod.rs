@@ -262,7 +262,11 @@ impl Reader {
     }
 
     fn run_words_line(&mut self, here: Cursor) -> LineResult<()> {
-        let path = self.programs[here.file].path.clone();
+        if self.ends.is_empty() {
+            self.words.clear();
+            return Ok(());
+        }
+        let path = &self.programs[here.file].path;
         let text = std::mem::take(&mut self.text);
         let mut start = 0;
         let mut result = Ok(());
@@ -273,7 +277,7 @@ impl Reader {
                 line_no,
                 &mut self.queue,
                 &mut self.notices,
-                &path,
+                path,
             );
             start = end;
             match stop {
@@ -312,14 +316,25 @@ impl Reader {
         let Some(first) = b.toks.first() else {
             return Ok(());
         };
-        let key = b.tok(0).to_ascii_uppercase();
+        // Most blocks of most programs.
+        if matches!(b.tok(0), "L" | "l") {
+            return contour::block(self, b, "L");
+        }
+        // The keyword, upper case, without allocating (keywords are short).
+        let mut upper = [0u8; 16];
+        let raw = b.tok(0).as_bytes();
+        let n = raw.len().min(16);
+        for (u, c) in upper.iter_mut().zip(&raw[..n]) {
+            *u = c.to_ascii_uppercase();
+        }
+        let key = std::str::from_utf8(&upper[..n]).unwrap_or("");
         // Everything but a corner element releases the held line.
-        if !matches!(key.as_str(), "RND" | "CHF") && !(key == "L" || key == "LP") {
+        if !matches!(key, "RND" | "CHF" | "L" | "LP") {
             self.release_held(b)?;
         }
-        match key.as_str() {
+        match key {
             "L" | "LP" | "CC" | "C" | "CR" | "CT" | "CP" | "RND" | "CHF" => {
-                contour::block(self, b, &key)
+                contour::block(self, b, key)
             }
             "BEGIN" => self.begin_pgm(b),
             "END" if b.is(1, "PGM") => {
@@ -760,7 +775,13 @@ impl Reader {
 
     /// A G word; `code` as written (`"1"`, `"41.1"`).
     fn gword(&mut self, code: &'static str, span: Range<usize>) {
-        let value = code.parse().unwrap_or(0.0);
+        let value = match code {
+            "0" => 0.0,
+            "1" => 1.0,
+            "2" => 2.0,
+            "3" => 3.0,
+            _ => code.parse().unwrap_or(0.0),
+        };
         self.words.push(Word {
             letter: 'G',
             value,
@@ -810,6 +831,19 @@ impl Block<'_> {
     /// From token `a` through token `b`.
     fn spans(&self, a: usize, b: usize) -> Range<usize> {
         self.span(a).start..self.span(b).end
+    }
+
+    /// The value of token `k` after its `skip` letters: a plain decimal read in place (the
+    /// G-code lexer's reader looks past the token's end, so it is given the whole block),
+    /// else as [`text::value`] reads it.
+    fn value(&self, k: usize, skip: usize, q: &Qparams) -> LineResult<f64> {
+        let span = self.span(k);
+        if let (end, Some(v)) = crate::lex::scan_number(self.text.as_bytes(), span.start + skip) {
+            if end == span.end {
+                return Ok(v);
+            }
+        }
+        text::value(&self.text[span.start + skip..span.end], q, span)
     }
 
     fn is(&self, k: usize, word: &str) -> bool {

@@ -46,16 +46,20 @@ pub(super) fn strip_comment_in(line: &str, in_comment: bool) -> ((&str, bool), b
     if in_comment {
         return (("", continued), continued);
     }
-    let mut quoted = false;
     let mut end = line.len();
-    for (k, c) in line.bytes().enumerate() {
-        match c {
-            b'"' => quoted = !quoted,
-            b';' if !quoted => {
-                end = k;
-                break;
+    if !line.contains('"') {
+        end = line.find(';').unwrap_or(end);
+    } else {
+        let mut quoted = false;
+        for (k, c) in line.bytes().enumerate() {
+            match c {
+                b'"' => quoted = !quoted,
+                b';' if !quoted => {
+                    end = k;
+                    break;
+                }
+                _ => {}
             }
-            _ => {}
         }
     }
     let mut body = &line[..end];
@@ -123,6 +127,12 @@ pub(super) fn split_word(token: &str) -> (&str, &str) {
 
 /// A signed number or Q parameter (`+10`, `-2.5`, `.5`, `+Q1`, `-QL3`, `QR2`) at `span`.
 pub(super) fn value(rest: &str, q: &Qparams, span: Range<usize>) -> LineResult<f64> {
+    // Most values: a plain decimal, read as the G-code lexer reads one.
+    if let (end, Some(v)) = crate::lex::scan_number(rest.as_bytes(), 0) {
+        if end == rest.len() {
+            return Ok(v);
+        }
+    }
     if rest.contains(' ') {
         let joined: String = rest.chars().filter(|c| *c != ' ').collect();
         return value(&joined, q, span);

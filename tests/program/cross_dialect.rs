@@ -56,7 +56,11 @@ fn moves(path: &Path, o: &Options) -> Vec<Move> {
 /// Where two move lists differ, or None.
 fn difference(reference: &[Move], other: &[Move]) -> Option<String> {
     if reference.len() != other.len() {
-        return Some(format!("{} moves, the reference has {}", other.len(), reference.len()));
+        return Some(format!(
+            "{} moves, the reference has {}",
+            other.len(),
+            reference.len()
+        ));
     }
     let close = |a: f64, b: f64| (a - b).abs() <= TOLERANCE;
     for (k, (r, m)) in reference.iter().zip(other).enumerate() {
@@ -65,8 +69,16 @@ fn difference(reference: &[Move], other: &[Move]) -> Option<String> {
             .all(|&a| close(r.start[a], m.start[a]) && close(r.end[a], m.end[a]));
         let same_motion = match (r.motion, m.motion) {
             (
-                Motion::Arc { clockwise: c1, center_mm: a, .. },
-                Motion::Arc { clockwise: c2, center_mm: b, .. },
+                Motion::Arc {
+                    clockwise: c1,
+                    center_mm: a,
+                    ..
+                },
+                Motion::Arc {
+                    clockwise: c2,
+                    center_mm: b,
+                    ..
+                },
             ) => c1 == c2 && (0..3).all(|i| close(a[i], b[i])),
             (Motion::Dwell { seconds: a }, Motion::Dwell { seconds: b }) => close(a, b),
             (a, b) => a == b,
@@ -78,7 +90,15 @@ fn difference(reference: &[Move], other: &[Move]) -> Option<String> {
         if r.kind() != m.kind() || !same_points || !same_motion || !same_feed {
             return Some(format!(
                 "move {k}: {:?} {:?} → {:?} F{:?}, the reference (line {}) {:?} {:?} → {:?} F{:?}",
-                m.motion, &m.start.0[..6], &m.end.0[..6], m.feed, r.line, r.motion, &r.start.0[..6], &r.end.0[..6], r.feed
+                m.motion,
+                &m.start.0[..6],
+                &m.end.0[..6],
+                m.feed,
+                r.line,
+                r.motion,
+                &r.start.0[..6],
+                &r.end.0[..6],
+                r.feed
             ));
         }
     }
@@ -106,7 +126,11 @@ fn every_dialect_of_every_part_gives_the_reference_moves() {
             .collect();
         let (ref_file, ref_dialect) = present[0];
         let reference = moves(&dir.join(ref_file), &options(part, *ref_dialect));
-        assert!(reference.len() >= 4, "{part}: {} moves in {ref_file}", reference.len());
+        assert!(
+            reference.len() >= 4,
+            "{part}: {} moves in {ref_file}",
+            reference.len()
+        );
         for (file, dialect) in &present[1..] {
             let got = moves(&dir.join(file), &options(part, *dialect));
             compared += 1;
@@ -121,5 +145,9 @@ fn every_dialect_of_every_part_gives_the_reference_moves() {
         parts.len()
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    assert_eq!(heidenhain, parts.len(), "every part has a Heidenhain version");
+    assert_eq!(
+        heidenhain,
+        parts.len(),
+        "every part has a Heidenhain version"
+    );
 }

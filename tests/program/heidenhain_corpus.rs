@@ -51,11 +51,17 @@ fn mtsim(args: &[&str]) -> (Option<i32>, String) {
 #[test]
 fn corpus_klartext_programs_are_read_or_refused_by_name() {
     let Some(corpus) = corpus_dir() else {
-        eprintln!("SKIPPED heidenhain corpus: no shared/corpus above the package and MTSIM_CORPUS unset");
+        eprintln!(
+            "SKIPPED heidenhain corpus: no shared/corpus above the package and MTSIM_CORPUS unset"
+        );
         return;
     };
     let programs = klartext_programs(&corpus);
-    assert!(programs.len() >= 15, "{} Klartext programs in the corpus", programs.len());
+    assert!(
+        programs.len() >= 15,
+        "{} Klartext programs in the corpus",
+        programs.len()
+    );
     let work = scratch("klartext", "corpus");
     let (mut read, mut refused, mut failures) = (0, Vec::new(), Vec::new());
     for (k, (program, five_axis)) in programs.iter().enumerate() {
@@ -78,15 +84,22 @@ fn corpus_klartext_programs_are_read_or_refused_by_name() {
             let flat = err.split_whitespace().collect::<Vec<_>>().join(" ");
             match code {
                 None => failures.push(format!("{name}: {command} hung")),
-                Some(101) | Some(-1) => failures.push(format!("{name}: {command} panicked: {flat}")),
-                _ if flat.contains("panicked") => failures.push(format!("{name}: {command} panicked")),
+                Some(101) | Some(-1) => {
+                    failures.push(format!("{name}: {command} panicked: {flat}"))
+                }
+                _ if flat.contains("panicked") => {
+                    failures.push(format!("{name}: {command} panicked"))
+                }
                 Some(0) | Some(1) => outcome.push(None),
                 Some(2) => {
                     // Refused: by a construct it names, at a line of the program.
-                    let named = flat.contains('`') || flat.contains("Heidenhain") || flat.contains("cycle");
+                    let named =
+                        flat.contains('`') || flat.contains("Heidenhain") || flat.contains("cycle");
                     let located = flat.contains(&format!("{name}:")) || flat.contains("line");
                     if !named || !located || flat.contains("unexpected character") {
-                        failures.push(format!("{name}: {command} refused without naming the construct: {flat}"));
+                        failures.push(format!(
+                            "{name}: {command} refused without naming the construct: {flat}"
+                        ));
                     }
                     outcome.push(Some(flat));
                 }
@@ -95,7 +108,9 @@ fn corpus_klartext_programs_are_read_or_refused_by_name() {
         }
         match outcome.as_slice() {
             [None, None] => read += 1,
-            [Some(e), _] | [_, Some(e)] => refused.push(format!("{name}: {}", &e[..e.len().min(220)])),
+            [Some(e), _] | [_, Some(e)] => {
+                refused.push(format!("{name}: {}", &e[..e.len().min(220)]))
+            }
             _ => {}
         }
     }

@@ -10,7 +10,7 @@ mod bounded;
 mod conformance;
 mod corpus;
 mod cross_dialect;
-mod heidenhain_corpus;
 mod file_analysis;
+mod heidenhain_corpus;
 mod reader_options;
 mod unreadable;

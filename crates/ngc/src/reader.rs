@@ -1331,18 +1331,15 @@ impl Moves {
         ))
     }
 
-    /// Refuses a program written in another control's language: Heidenhain conversational
-    /// (`BEGIN PGM`) or Siemens Sinumerik (`TRAORI`, `CYCLE800`), before any move.
-    /// Their front ends will plug in here (crate `dialect`'s module doc): a program
-    /// recognised as one of them is then read by its own front end instead.
+    /// Refuses a program written in another control's language: Siemens Sinumerik
+    /// (`TRAORI`, `CYCLE800`), before any move (a Heidenhain program never gets here: it is
+    /// read by its own front end, see [`Moves::new`]). The Siemens front end will plug in
+    /// the same way (crate `dialect`'s module doc).
     fn foreign_language(&mut self) -> Option<Error> {
         // A cheap screen first, so that a streamed file is read whole only when it fails.
         let suspect = match &self.programs[0].source {
-            Source::Text(text) => may_be_foreign(text.as_bytes()) || self.first_line_heidenhain(),
-            Source::File(_) => {
-                self.first_line_heidenhain()
-                    || file_may_be_foreign(&self.programs[0].path).unwrap_or(false)
-            }
+            Source::Text(text) => may_be_foreign(text.as_bytes()),
+            Source::File(_) => file_may_be_foreign(&self.programs[0].path).unwrap_or(false),
         };
         if !suspect {
             return None;
@@ -1355,19 +1352,6 @@ impl Moves {
             }
         };
         let text = &text;
-        let first = text.lines().position(|l| !l.trim().is_empty())?;
-        let line = text.lines().nth(first)?;
-        let start = text.lines().take(first).map(|l| l.len() + 1).sum::<usize>();
-        let c = Cursor {
-            file: 0,
-            offset: start.min(text.len()),
-            line: first + 1,
-        };
-        let trimmed = line.trim_start();
-        let at = line.len() - trimmed.len();
-        if trimmed.to_ascii_uppercase().starts_with("BEGIN PGM") {
-            return Some(self.syntax_in(c.file, text, c.offset, LineError::new(at..line.len(), "this is a Heidenhain conversational (Klartext) program: expected G-code in the RS274/NGC, Fanuc or Haas language", "Heidenhain conversational").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
-        }
         // The first Siemens word in the file.
         let first = SIEMENS_TOKENS
             .iter()
@@ -1387,7 +1371,8 @@ impl Moves {
         None
     }
 
-    /// The first line with more than blanks starts with `BEGIN PGM` (Heidenhain).
+    /// The first line with more than blanks opens a Heidenhain Klartext program (`BEGIN
+    /// PGM`, with or without a block number).
     fn first_line_heidenhain(&mut self) -> bool {
         let mut c = Cursor {
             file: 0,

@@ -247,9 +247,7 @@ impl Interp {
         // Where X is an axis word (LinuxCNC), it is never a dwell time.
         let x = if table.dwell_x_seconds { x } else { None };
         let (seconds, w) = match (p, x) {
-            (Some(p), None) => {
-                (dwell_p_seconds(table.dwell_p, &p), p)
-            }
+            (Some(p), None) => (dwell_p_seconds(table.dwell_p, &p), p),
             (None, Some(x)) => (x.value, x),
             (Some(_), Some(x)) => {
                 return Err(LineError::new(

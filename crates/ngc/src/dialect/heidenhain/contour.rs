@@ -112,7 +112,10 @@ impl Contour {
 
     pub(super) fn set_position(&mut self, p: AxisVec) {
         use crate::axis::Axis;
-        for (k, a) in [Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::B, Axis::C].iter().enumerate() {
+        for (k, a) in [Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::B, Axis::C]
+            .iter()
+            .enumerate()
+        {
             self.pos[k] = p[*a];
         }
     }
@@ -158,16 +161,30 @@ fn extra(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> LineResult<bool
         "F" if rest.is_empty() && b.is(k + 1, "MAX") => {}
         "FAUTO" if rest.is_empty() => {
             e.feed = Some(r.path.tool_feed.ok_or_else(|| {
-                LineError::new(span, "FAUTO with no feed in the TOOL CALL: expected `TOOL CALL … F`", "no tool feed")
+                LineError::new(
+                    span,
+                    "FAUTO with no feed in the TOOL CALL: expected `TOOL CALL … F`",
+                    "no tool feed",
+                )
             })?)
         }
         "FU" | "FZ" => {
-            return Err(LineError::new(span, format!("`{t}` (feed per revolution or per tooth) is not supported: expected F in mm/min"), "feed per revolution"))
+            return Err(LineError::new(
+                span,
+                format!(
+                "`{t}` (feed per revolution or per tooth) is not supported: expected F in mm/min"
+            ),
+                "feed per revolution",
+            ))
         }
         "F" => {
             let v = b.value(k, 1, &r.q)?;
             if v <= 0.0 {
-                return Err(LineError::new(span, format!("`{t}`: expected a positive feed"), "bad feed"));
+                return Err(LineError::new(
+                    span,
+                    format!("`{t}`: expected a positive feed"),
+                    "bad feed",
+                ));
             }
             e.feed = Some(v);
         }
@@ -184,15 +201,21 @@ pub(super) fn m_word(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> Lin
     let upper = name.to_ascii_uppercase();
     if upper == "MB" {
         if !matches!(e.m140, Some(_)) {
-            return Err(LineError::new(span, "MB without M140: expected `M140 MB …`", "MB alone"));
+            return Err(LineError::new(
+                span,
+                "MB without M140: expected `M140 MB …`",
+                "MB alone",
+            ));
         }
-        e.m140 = Some(if rest.is_empty() && b.is(k + 1, "MAX") || rest.eq_ignore_ascii_case("MAX") {
-            None
-        } else if rest.is_empty() {
-            None
-        } else {
-            Some(value(rest, &r.q, span)?)
-        });
+        e.m140 = Some(
+            if rest.is_empty() && b.is(k + 1, "MAX") || rest.eq_ignore_ascii_case("MAX") {
+                None
+            } else if rest.is_empty() {
+                None
+            } else {
+                Some(value(rest, &r.q, span)?)
+            },
+        );
         return Ok(true);
     }
     if upper == "MAX" && b.is(k.wrapping_sub(1), "MB") {
@@ -218,12 +241,32 @@ pub(super) fn m_word(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> Lin
         128 => e.tcp = Some(true),
         129 => e.tcp = Some(false),
         140 => e.m140 = Some(None),
-        7 | 10 | 11 | 94 | 97 | 101..=110 | 116 | 117 | 118 | 120 | 134..=138 | 141..=150 | 197 | 198 => {
-            r.note(b, &format!("M{n} (Heidenhain) is accepted and not simulated"));
+        7
+        | 10
+        | 11
+        | 94
+        | 97
+        | 101..=110
+        | 116
+        | 117
+        | 118
+        | 120
+        | 134..=138
+        | 141..=150
+        | 197
+        | 198 => {
+            r.note(
+                b,
+                &format!("M{n} (Heidenhain) is accepted and not simulated"),
+            );
         }
         _ => {
-            return Err(LineError::new(span, format!("`M{n}` is not a Heidenhain M function mtsim reads"), "M function not supported")
-                .help("docs/gcode.md lists the Heidenhain M functions mtsim reads"))
+            return Err(LineError::new(
+                span,
+                format!("`M{n}` is not a Heidenhain M function mtsim reads"),
+                "M function not supported",
+            )
+            .help("docs/gcode.md lists the Heidenhain M functions mtsim reads"))
         }
     }
     Ok(true)
@@ -251,7 +294,9 @@ fn words(
             _ => (false, name),
         };
         if let [l] = axis_name.as_bytes() {
-            let axis = LETTERS.iter().position(|&c| c as u8 == l.to_ascii_uppercase());
+            let axis = LETTERS
+                .iter()
+                .position(|&c| c as u8 == l.to_ascii_uppercase());
             if let (Some(axis), false) = (axis, rest.is_empty()) {
                 let v = b.value(k, name.len(), &r.q)?;
                 target[axis] = if inc { target[axis] + v } else { v };
@@ -293,7 +338,15 @@ fn line(r: &mut Reader, b: &Block, polar: bool) -> LineResult<()> {
     let mut e = Extras::default();
     let mut pp = [None, None];
     let (mut dir, mut radius) = (None, None);
-    let mut mask = words(r, b, &mut target, &mut e, polar.then_some(&mut pp), &mut dir, &mut radius)?;
+    let mut mask = words(
+        r,
+        b,
+        &mut target,
+        &mut e,
+        polar.then_some(&mut pp),
+        &mut dir,
+        &mut radius,
+    )?;
     if polar {
         let c = pole_of(r, b)?;
         let p = r.path.pos;
@@ -315,7 +368,8 @@ fn line(r: &mut Reader, b: &Block, polar: bool) -> LineResult<()> {
     if let Some(f) = e.feed {
         r.path.feed = Some(f);
     }
-    let in_plane = mask & !3 == 0 || (mask & 4 != 0 && target[Z] == r.path.pos[Z] && mask & !7 == 0);
+    let in_plane =
+        mask & !3 == 0 || (mask & 4 != 0 && target[Z] == r.path.pos[Z] && mask & !7 == 0);
     if let Some(c) = r.path.corner.take() {
         if !(in_plane && e.plain()) {
             return Err(LineError::new(c.span, "RND or CHF must be followed by a straight line in the working plane with no M function or compensation change", "corner not closed"));
@@ -325,9 +379,22 @@ fn line(r: &mut Reader, b: &Block, polar: bool) -> LineResult<()> {
     release(r, b)?;
     let start = r.path.xy();
     if in_plane && e.plain() && mask != 0 {
-        r.path.held = Some(Held { start, end: target, feed: r.path.feed, line: b.line });
+        r.path.held = Some(Held {
+            start,
+            end: target,
+            feed: r.path.feed,
+            line: b.line,
+        });
     } else {
-        motion(r, b, if e.rapid { "0" } else { "1" }, &target, mask, None, &e)?;
+        motion(
+            r,
+            b,
+            if e.rapid { "0" } else { "1" },
+            &target,
+            mask,
+            None,
+            &e,
+        )?;
     }
     if mask & 3 != 0 {
         let d = [target[X] - start[0], target[Y] - start[1]];
@@ -404,7 +471,12 @@ fn motion(
 
 /// What follows a block's move: M140, TCP off, a cycle call; or, for a block of M functions
 /// alone (`moved` None), its M words.
-pub(super) fn run_extras(r: &mut Reader, b: &Block, e: &Extras, moved: Option<()>) -> LineResult<()> {
+pub(super) fn run_extras(
+    r: &mut Reader,
+    b: &Block,
+    e: &Extras,
+    moved: Option<()>,
+) -> LineResult<()> {
     if moved.is_none() {
         if e.tcp == Some(true) {
             super::frames::tcp(r, b, true);
@@ -471,7 +543,11 @@ fn pole(r: &mut Reader, b: &Block) -> LineResult<()> {
         return Err(LineError::new(b.span(1), format!("`{}` with a coordinate other than X Y: circles outside the working plane XY are not supported (tool axis Z)", b.text[b.spans(0, b.toks.len() - 1)].trim()), "not the XY plane"));
     }
     if !e.plain() || e.feed.is_some() {
-        return Err(LineError::new(b.span(1), "CC takes only the centre's coordinates X Y (or IX IY)", "unexpected word"));
+        return Err(LineError::new(
+            b.span(1),
+            "CC takes only the centre's coordinates X Y (or IX IY)",
+            "unexpected word",
+        ));
     }
     r.path.pole = Some([t[X], t[Y]]);
     Ok(())
@@ -479,7 +555,11 @@ fn pole(r: &mut Reader, b: &Block) -> LineResult<()> {
 
 fn pole_of(r: &Reader, b: &Block) -> LineResult<[f64; 2]> {
     r.path.pole.ok_or_else(|| {
-        LineError::new(b.span(0), format!("`{}` with no pole: expected a CC block before it", b.tok(0)), "no CC")
+        LineError::new(
+            b.span(0),
+            format!("`{}` with no pole: expected a CC block before it", b.tok(0)),
+            "no CC",
+        )
     })
 }
 
@@ -496,29 +576,72 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
     let mut pp = [None, None];
     let mut ccw = None;
     let mut radius = (key == "CR").then_some(0.0);
-    let mask = words(r, b, &mut target, &mut e, (key == "CP").then_some(&mut pp), &mut ccw, &mut radius)?;
+    let mask = words(
+        r,
+        b,
+        &mut target,
+        &mut e,
+        (key == "CP").then_some(&mut pp),
+        &mut ccw,
+        &mut radius,
+    )?;
     if let Some(f) = e.feed {
         r.path.feed = Some(f);
     }
     let p = r.path.xy();
-    let need_dir = || LineError::new(b.span(0), format!("`{key}` without DR+ or DR-: expected the direction of rotation"), "no direction");
+    let need_dir = || {
+        LineError::new(
+            b.span(0),
+            format!("`{key}` without DR+ or DR-: expected the direction of rotation"),
+            "no direction",
+        )
+    };
     let (centre, ccw, turns) = match key {
         "C" => {
             let c = pole_of(r, b)?;
             (c, ccw.ok_or_else(need_dir)?, 0)
         }
         "CR" => {
-            let rad = radius.filter(|v| *v != 0.0).ok_or_else(|| LineError::new(b.span(0), "CR without R: expected the radius R+… (R-… for more than 180°)", "no radius"))?;
+            let rad = radius.filter(|v| *v != 0.0).ok_or_else(|| {
+                LineError::new(
+                    b.span(0),
+                    "CR without R: expected the radius R+… (R-… for more than 180°)",
+                    "no radius",
+                )
+            })?;
             let ccw = ccw.ok_or_else(need_dir)?;
-            (radius_centre(p, [target[X], target[Y]], rad, ccw).ok_or_else(|| LineError::new(b.span(0), format!("CR: the end point is more than 2 R = {} away", 2.0 * rad.abs()), "radius too small"))?, ccw, 0)
+            (
+                radius_centre(p, [target[X], target[Y]], rad, ccw).ok_or_else(|| {
+                    LineError::new(
+                        b.span(0),
+                        format!(
+                            "CR: the end point is more than 2 R = {} away",
+                            2.0 * rad.abs()
+                        ),
+                        "radius too small",
+                    )
+                })?,
+                ccw,
+                0,
+            )
         }
         "CT" => {
-            let t = r.path.dir.ok_or_else(|| LineError::new(b.span(0), "CT with no contour element before it: expected a line or arc to be tangent to", "nothing to be tangent to"))?;
+            let t = r.path.dir.ok_or_else(|| {
+                LineError::new(
+                    b.span(0),
+                    "CT with no contour element before it: expected a line or arc to be tangent to",
+                    "nothing to be tangent to",
+                )
+            })?;
             let d = [target[X] - p[0], target[Y] - p[1]];
             let n = [-t[1], t[0]];
             let dn = d[0] * n[0] + d[1] * n[1];
             if dn.abs() < 1e-12 {
-                return Err(LineError::new(b.span(0), "CT: the end point lies on the tangent: expected a line L", "straight"));
+                return Err(LineError::new(
+                    b.span(0),
+                    "CT: the end point lies on the tangent: expected a line L",
+                    "straight",
+                ));
             }
             let s = (d[0] * d[0] + d[1] * d[1]) / (2.0 * dn);
             ([p[0] + n[0] * s, p[1] + n[1] * s], s > 0.0, 0)
@@ -552,7 +675,15 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
             t[Y] = at[1];
             t[Z] = z0 + (target[Z] - z0) * 360.0 * f64::from(k + 1) / total;
             let off = Centre::Offset(centre[0] - at[0], centre[1] - at[1]);
-            motion(r, b, g, &t, 3 | (mask & 4) | if target[Z] != z0 { 4 } else { 0 }, Some(off), &Extras::default())?;
+            motion(
+                r,
+                b,
+                g,
+                &t,
+                3 | (mask & 4) | if target[Z] != z0 { 4 } else { 0 },
+                Some(off),
+                &Extras::default(),
+            )?;
             r.path.pos = t;
             at = [t[X], t[Y]];
         }
@@ -565,7 +696,11 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
     motion(r, b, g, &target, mask | 3, Some(c), &e)?;
     let rv = [target[X] - centre[0], target[Y] - centre[1]];
     let n = rv[0].hypot(rv[1]).max(1e-300);
-    r.path.dir = Some(if ccw { [-rv[1] / n, rv[0] / n] } else { [rv[1] / n, -rv[0] / n] });
+    r.path.dir = Some(if ccw {
+        [-rv[1] / n, rv[0] / n]
+    } else {
+        [rv[1] / n, -rv[0] / n]
+    });
     r.path.pos = target;
     Ok(())
 }
@@ -582,7 +717,10 @@ fn radius_centre(p: [f64; 2], q: [f64; 2], rad: f64, ccw: bool) -> Option<[f64; 
     // The centre is left of the chord for a short CCW arc.
     let side = if ccw == (rad > 0.0) { 1.0 } else { -1.0 };
     let n = [-d[1] / chord, d[0] / chord];
-    Some([p[0] + d[0] / 2.0 + side * h * n[0], p[1] + d[1] / 2.0 + side * h * n[1]])
+    Some([
+        p[0] + d[0] / 2.0 + side * h * n[0],
+        p[1] + d[1] / 2.0 + side * h * n[1],
+    ])
 }
 
 /// `RND R…` / `CHF …` after a held line.
@@ -598,11 +736,34 @@ fn corner(r: &mut Reader, b: &Block, round: bool) -> LineResult<()> {
             "R" if round => size = Some(value(rest, &r.q, b.span(k))?),
             "" if !round => size = Some(value(rest, &r.q, b.span(k))?),
             "F" => feed = Some(value(rest, &r.q, b.span(k))?),
-            _ => return Err(super::unexpected(b, k, b.tok(0), if round { "R and F" } else { "the chamfer length and F" })),
+            _ => {
+                return Err(super::unexpected(
+                    b,
+                    k,
+                    b.tok(0),
+                    if round {
+                        "R and F"
+                    } else {
+                        "the chamfer length and F"
+                    },
+                ))
+            }
         }
     }
-    let size = size.filter(|s| *s > 0.0).ok_or_else(|| LineError::new(b.span(0), format!("`{}` without a positive size", b.tok(0)), "no size"))?;
-    r.path.corner = Some(Corner { held, round, size, feed, span: b.span(0) });
+    let size = size.filter(|s| *s > 0.0).ok_or_else(|| {
+        LineError::new(
+            b.span(0),
+            format!("`{}` without a positive size", b.tok(0)),
+            "no size",
+        )
+    })?;
+    r.path.corner = Some(Corner {
+        held,
+        round,
+        size,
+        feed,
+        span: b.span(0),
+    });
     Ok(())
 }
 
@@ -619,9 +780,17 @@ fn close_corner(r: &mut Reader, c: Corner, p2: [f64; 2], target: [f64; 6]) -> Li
     let (u, l1) = unit(h.start, k);
     let (v, l2) = unit(k, p2);
     let cos = (u[0] * v[0] + u[1] * v[1]).clamp(-1.0, 1.0);
-    let cut = if c.round { c.size * (cos.acos() / 2.0).tan() } else { c.size };
+    let cut = if c.round {
+        c.size * (cos.acos() / 2.0).tan()
+    } else {
+        c.size
+    };
     if !(cut < l1.min(l2) + 1e-9) || cos > 1.0 - 1e-12 || !cut.is_finite() {
-        return Err(LineError::new(c.span, "RND/CHF larger than the lines beside it (or the lines are in line)", "corner too large"));
+        return Err(LineError::new(
+            c.span,
+            "RND/CHF larger than the lines beside it (or the lines are in line)",
+            "corner too large",
+        ));
     }
     let a = [k[0] - u[0] * cut, k[1] - u[1] * cut];
     let e = [k[0] + v[0] * cut, k[1] + v[1] * cut];
@@ -631,7 +800,16 @@ fn close_corner(r: &mut Reader, c: Corner, p2: [f64; 2], target: [f64; 6]) -> Li
     first[Y] = a[1];
     emit_line(r, &first, h.feed, h.line, &span);
     let feed = c.feed.or(r.path.feed);
-    r.gword(if !c.round { "1" } else if u[0] * v[1] - u[1] * v[0] > 0.0 { "3" } else { "2" }, span.clone());
+    r.gword(
+        if !c.round {
+            "1"
+        } else if u[0] * v[1] - u[1] * v[0] > 0.0 {
+            "3"
+        } else {
+            "2"
+        },
+        span.clone(),
+    );
     r.word('X', e[0], span.clone());
     r.word('Y', e[1], span.clone());
     if c.round {
@@ -644,7 +822,12 @@ fn close_corner(r: &mut Reader, c: Corner, p2: [f64; 2], target: [f64; 6]) -> Li
         r.word('F', f, span.clone());
     }
     r.end_block(h.line + 1);
-    r.path.held = Some(Held { start: e, end: target, feed: r.path.feed, line: h.line + 2 });
+    r.path.held = Some(Held {
+        start: e,
+        end: target,
+        feed: r.path.feed,
+        line: h.line + 2,
+    });
     r.path.dir = Some(v);
     r.path.pos = target;
     Ok(())
@@ -664,7 +847,11 @@ fn emit_line(r: &mut Reader, t: &[f64; 6], feed: Option<f64>, line: usize, span:
 pub(super) fn release(r: &mut Reader, b: &Block) -> LineResult<()> {
     if let Some(c) = &r.path.corner {
         let _ = b;
-        return Err(LineError::new(c.span.clone(), "RND or CHF must be followed by a straight line L", "corner not closed"));
+        return Err(LineError::new(
+            c.span.clone(),
+            "RND or CHF must be followed by a straight line L",
+            "corner not closed",
+        ));
     }
     if let Some(h) = r.path.held.take() {
         emit_line(r, &h.end, h.feed, h.line, &(0..0));

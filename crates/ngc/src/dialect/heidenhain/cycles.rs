@@ -52,7 +52,13 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
     }
     let id = b.tok(2);
     let (major, minor) = id.split_once('.').unwrap_or((id, "0"));
-    let major: u32 = major.parse().map_err(|_| LineError::new(b.span(2), format!("`CYCL DEF {id}`: expected a cycle number"), "expected a number"))?;
+    let major: u32 = major.parse().map_err(|_| {
+        LineError::new(
+            b.span(2),
+            format!("`CYCL DEF {id}`: expected a cycle number"),
+            "expected a number",
+        )
+    })?;
     let minor: u32 = minor.parse().unwrap_or(0);
     match major {
         200 | 201 | 203 | 205 => define(r, b, major),
@@ -62,8 +68,19 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
         19 => frames::working_plane(r, b, minor),
         9 if minor == 0 => Ok(()),
         9 => {
-            let t = (3..b.toks.len()).find_map(|k| b.tok(k).parse::<f64>().ok().or_else(|| value(b.tok(k), &r.q, b.span(k)).ok()));
-            let t = t.ok_or_else(|| LineError::new(b.span(2), "CYCL DEF 9.1 without a dwell time: expected `CYCL DEF 9.1 DWELL 1.5`", "no time"))?;
+            let t = (3..b.toks.len()).find_map(|k| {
+                b.tok(k)
+                    .parse::<f64>()
+                    .ok()
+                    .or_else(|| value(b.tok(k), &r.q, b.span(k)).ok())
+            });
+            let t = t.ok_or_else(|| {
+                LineError::new(
+                    b.span(2),
+                    "CYCL DEF 9.1 without a dwell time: expected `CYCL DEF 9.1 DWELL 1.5`",
+                    "no time",
+                )
+            })?;
             r.gword("4", b.span(0));
             r.word('P', t, b.span(0));
             r.end_block(b.line);
@@ -72,7 +89,10 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
         // Tolerance and dynamic tuning: no motion.
         32 | 332 | 392 => Ok(()),
         _ => {
-            let name: Vec<&str> = (3..b.toks.len()).map(|k| b.tok(k)).take_while(|t| !t.contains('=')).collect();
+            let name: Vec<&str> = (3..b.toks.len())
+                .map(|k| b.tok(k))
+                .take_while(|t| !t.contains('='))
+                .collect();
             Err(LineError::new(b.spans(0, 2), format!("the Heidenhain cycle `CYCL DEF {id}{}{}` is not supported by mtsim: it reads the drilling cycles 200, 201, 203, 205 and the cycles 7, 9, 10, 19, 32", if name.is_empty() { "" } else { " " }, name.join(" ")), "Heidenhain cycle not supported")
                 .help("post the cycle as L moves, or see docs/gcode.md"))
         }
@@ -101,7 +121,11 @@ fn define(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
 /// Runs the defined cycle at the current position.
 pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
     let Some(n) = r.cycle.number else {
-        return Err(LineError::new(b.span(0), "cycle call with no cycle defined: expected CYCL DEF 200, 201, 203 or 205 before it", "no cycle"));
+        return Err(LineError::new(
+            b.span(0),
+            "cycle call with no cycle defined: expected CYCL DEF 200, 201, 203 or 205 before it",
+            "no cycle",
+        ));
     };
     let q = |k| r.q.q(k);
     let p = Params {
@@ -125,29 +149,86 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
         return Ok(());
     }
     if p.feed <= 0.0 {
-        return Err(LineError::new(span, format!("cycle {n}: feed Q206 = {}: expected a positive feed", p.feed), "no feed"));
+        return Err(LineError::new(
+            span,
+            format!(
+                "cycle {n}: feed Q206 = {}: expected a positive feed",
+                p.feed
+            ),
+            "no feed",
+        ));
     }
     let plan = match n {
-        201 => Plan { plunge: -p.depth, decrement: 0.0, min: 0.0, approach: p.clearance, retract_feed: Some(if p.retract_feed > 0.0 { p.retract_feed } else { p.feed }) },
-        200 => Plan { plunge: p.plunge, decrement: 0.0, min: 0.0, approach: p.clearance, retract_feed: None },
+        201 => Plan {
+            plunge: -p.depth,
+            decrement: 0.0,
+            min: 0.0,
+            approach: p.clearance,
+            retract_feed: Some(if p.retract_feed > 0.0 {
+                p.retract_feed
+            } else {
+                p.feed
+            }),
+        },
+        200 => Plan {
+            plunge: p.plunge,
+            decrement: 0.0,
+            min: 0.0,
+            approach: p.clearance,
+            retract_feed: None,
+        },
         203 => {
             if q(213) != 0.0 {
-                return Err(LineError::new(span, "cycle 203 with chip breaking (Q213 > 0) is not supported: expected Q213 = 0", "chip breaking"));
+                return Err(LineError::new(
+                    span,
+                    "cycle 203 with chip breaking (Q213 > 0) is not supported: expected Q213 = 0",
+                    "chip breaking",
+                ));
             }
-            Plan { plunge: p.plunge, decrement: p.decrement, min: p.min_plunge, approach: p.clearance, retract_feed: Some(if p.retract_feed > 0.0 { p.retract_feed } else { p.feed }) }
+            Plan {
+                plunge: p.plunge,
+                decrement: p.decrement,
+                min: p.min_plunge,
+                approach: p.clearance,
+                retract_feed: Some(if p.retract_feed > 0.0 {
+                    p.retract_feed
+                } else {
+                    p.feed
+                }),
+            }
         }
         _ => {
             if q(257) != 0.0 || q(379) != 0.0 || q(258) != q(259) {
                 return Err(LineError::new(span, "cycle 205 with chip breaking (Q257), a deepened start (Q379) or Q258 ≠ Q259 is not supported", "cycle 205 option"));
             }
-            Plan { plunge: p.plunge, decrement: p.decrement, min: p.min_plunge, approach: q(258), retract_feed: None }
+            Plan {
+                plunge: p.plunge,
+                decrement: p.decrement,
+                min: p.min_plunge,
+                approach: q(258),
+                retract_feed: None,
+            }
         }
     };
     if plan.plunge <= 0.0 {
-        return Err(LineError::new(span, format!("cycle {n}: plunging depth Q202 = {}: expected a positive depth", plan.plunge), "no plunging depth"));
+        return Err(LineError::new(
+            span,
+            format!(
+                "cycle {n}: plunging depth Q202 = {}: expected a positive depth",
+                plan.plunge
+            ),
+            "no plunging depth",
+        ));
     }
     drill(r, b, &p, &plan);
-    r.path.set_z(p.surface + if p.second > p.clearance { p.second } else { p.clearance });
+    r.path.set_z(
+        p.surface
+            + if p.second > p.clearance {
+                p.second
+            } else {
+                p.clearance
+            },
+    );
     Ok(())
 }
 
@@ -225,18 +306,29 @@ fn drill(r: &mut Reader, b: &Block, p: &Params, plan: &Plan) {
 }
 
 /// Words of a `CYCL DEF 7.x`/`10.x`/`19.x` line after the cycle number: (letters, value).
-pub(super) fn axis_words(r: &Reader, b: &Block) -> LineResult<Vec<(String, f64, std::ops::Range<usize>)>> {
+pub(super) fn axis_words(
+    r: &Reader,
+    b: &Block,
+) -> LineResult<Vec<(String, f64, std::ops::Range<usize>)>> {
     let mut out = Vec::new();
     for k in 3..b.toks.len() {
         let t = b.tok(k);
         if t.starts_with('#') {
-            return Err(LineError::new(b.span(k), format!("`{t}`: datum tables are not supported: expected the shift as X+… Y+… Z+…"), "datum table"));
+            return Err(LineError::new(
+                b.span(k),
+                format!("`{t}`: datum tables are not supported: expected the shift as X+… Y+… Z+…"),
+                "datum table",
+            ));
         }
         let (name, rest) = split_word(t);
         if rest.is_empty() {
             continue;
         }
-        out.push((name.to_ascii_uppercase(), value(rest, &r.q, b.span(k))?, b.span(k)));
+        out.push((
+            name.to_ascii_uppercase(),
+            value(rest, &r.q, b.span(k))?,
+            b.span(k),
+        ));
     }
     Ok(out)
 }

@@ -53,15 +53,29 @@ pub(super) fn apply(r: &mut Reader, b: &Block) -> LineResult<()> {
     }
     if rotated {
         if dl != 0.0 {
-            return Err(LineError::new(span, "a tool length delta DL with a tilted or rotated plane is not supported", "DL in a tilted plane"));
+            return Err(LineError::new(
+                span,
+                "a tool length delta DL with a tilted or rotated plane is not supported",
+                "DL in a tilted plane",
+            ));
         }
         if shifted {
             g52(r, b, [0.0; 3]);
         }
-        let m = mul(&r.frames_state.plane.unwrap_or(IDENTITY), &rot_z(r.frames_state.rot_deg));
+        let m = mul(
+            &r.frames_state.plane.unwrap_or(IDENTITY),
+            &rot_z(r.frames_state.rot_deg),
+        );
         let (i, j, k) = euler_zxz(&m);
         r.gword("68.2", span.clone());
-        for (l, v) in [('X', d[0]), ('Y', d[1]), ('Z', d[2]), ('I', i), ('J', j), ('K', k)] {
+        for (l, v) in [
+            ('X', d[0]),
+            ('Y', d[1]),
+            ('Z', d[2]),
+            ('I', i),
+            ('J', j),
+            ('K', k),
+        ] {
             r.word(l, v, span.clone());
         }
         r.end_block(b.line);
@@ -104,9 +118,16 @@ pub(super) fn datum_shift(r: &mut Reader, b: &Block) -> LineResult<()> {
             Some(a) => (true, a.to_string()),
             None => (false, name.clone()),
         };
-        let k = ["X", "Y", "Z"].iter().position(|a| *a == axis).ok_or_else(|| {
-            LineError::new(span, format!("`{name}` in a datum shift: expected X, Y or Z (IX, IY, IZ)"), "not X Y Z")
-        })?;
+        let k = ["X", "Y", "Z"]
+            .iter()
+            .position(|a| *a == axis)
+            .ok_or_else(|| {
+                LineError::new(
+                    span,
+                    format!("`{name}` in a datum shift: expected X, Y or Z (IX, IY, IZ)"),
+                    "not X Y Z",
+                )
+            })?;
         let d = &mut r.frames_state.datum[k];
         *d = if inc { *d + v } else { v };
     }
@@ -119,7 +140,13 @@ pub(super) fn rotation(r: &mut Reader, b: &Block) -> LineResult<()> {
         match name.as_str() {
             "ROT" => r.frames_state.rot_deg = v,
             "IROT" => r.frames_state.rot_deg += v,
-            _ => return Err(LineError::new(span, format!("`{name}` in a rotation: expected ROT or IROT"), "not ROT")),
+            _ => {
+                return Err(LineError::new(
+                    span,
+                    format!("`{name}` in a rotation: expected ROT or IROT"),
+                    "not ROT",
+                ))
+            }
         }
     }
     apply(r, b)
@@ -137,7 +164,13 @@ pub(super) fn working_plane(r: &mut Reader, b: &Block, minor: u32) -> LineResult
             "B" => abc[1] = v,
             "C" => abc[2] = v,
             "F" | "DIST" | "ABST" => {}
-            _ => return Err(LineError::new(span, format!("`{name}` in cycle 19: expected A, B, C (spatial angles)"), "not A B C")),
+            _ => {
+                return Err(LineError::new(
+                    span,
+                    format!("`{name}` in cycle 19: expected A, B, C (spatial angles)"),
+                    "not A B C",
+                ))
+            }
         }
     }
     r.frames_state.plane = (abc != [0.0; 3]).then(|| spatial(abc));
@@ -155,7 +188,11 @@ fn unit(v: [f64; 3]) -> Option<[f64; 3]> {
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 /// The rotation whose columns are `x` and `z` (unit, orthogonal) and `z × x`.
@@ -182,7 +219,14 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
             _ if !rest.is_empty() => {
                 v.insert(name.clone(), value(rest, &r.q, b.span(k))?);
             }
-            _ => return Err(super::unexpected(b, k, "PLANE", "the plane's angles or coordinates, then MOVE, TURN or STAY")),
+            _ => {
+                return Err(super::unexpected(
+                    b,
+                    k,
+                    "PLANE",
+                    "the plane's angles or coordinates, then MOVE, TURN or STAY",
+                ))
+            }
         }
     }
     let g = |n: &str| v.get(n).copied().unwrap_or(0.0);
@@ -193,22 +237,40 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
         "SPATIAL" => f.plane = Some(spatial([g("SPA"), g("SPB"), g("SPC")])),
         "EULER" => f.plane = Some(crate::frame::euler_zxz(g("EULPR"), g("EULNU"), g("EULROT"))),
         "VECTOR" => {
-            let z = unit([g("NX"), g("NY"), g("NZ")]).ok_or_else(|| bad("the normal vector N is zero"))?;
+            let z = unit([g("NX"), g("NY"), g("NZ")])
+                .ok_or_else(|| bad("the normal vector N is zero"))?;
             let bv = [g("BX"), g("BY"), g("BZ")];
             let dot = bv[0] * z[0] + bv[1] * z[1] + bv[2] * z[2];
-            let x = unit([bv[0] - dot * z[0], bv[1] - dot * z[1], bv[2] - dot * z[2]]).ok_or_else(|| bad("the base vector B is parallel to N"))?;
+            let x = unit([bv[0] - dot * z[0], bv[1] - dot * z[1], bv[2] - dot * z[2]])
+                .ok_or_else(|| bad("the base vector B is parallel to N"))?;
             f.plane = Some(from_axes(x, z));
         }
         "POINTS" => {
-            let p = |n: u8| [g(&format!("P{n}X")), g(&format!("P{n}Y")), g(&format!("P{n}Z"))];
+            let p = |n: u8| {
+                [
+                    g(&format!("P{n}X")),
+                    g(&format!("P{n}Y")),
+                    g(&format!("P{n}Z")),
+                ]
+            };
             let (p1, p2, p3) = (p(1), p(2), p(3));
-            let x = unit([p2[0] - p1[0], p2[1] - p1[1], p2[2] - p1[2]]).ok_or_else(|| bad("P1 and P2 are the same point"))?;
-            let z = unit(cross(x, [p3[0] - p1[0], p3[1] - p1[1], p3[2] - p1[2]])).ok_or_else(|| bad("the three points are in line"))?;
+            let x = unit([p2[0] - p1[0], p2[1] - p1[1], p2[2] - p1[2]])
+                .ok_or_else(|| bad("P1 and P2 are the same point"))?;
+            let z = unit(cross(x, [p3[0] - p1[0], p3[1] - p1[1], p3[2] - p1[2]]))
+                .ok_or_else(|| bad("the three points are in line"))?;
             f.plane = Some(from_axes(x, z));
         }
         "PROJECTED" => {
-            let u = [g("PROPR").to_radians().cos(), 0.0, -g("PROPR").to_radians().sin()];
-            let w = [0.0, g("PROMIN").to_radians().cos(), g("PROMIN").to_radians().sin()];
+            let u = [
+                g("PROPR").to_radians().cos(),
+                0.0,
+                -g("PROPR").to_radians().sin(),
+            ];
+            let w = [
+                0.0,
+                g("PROMIN").to_radians().cos(),
+                g("PROMIN").to_radians().sin(),
+            ];
             let z = unit(cross(u, w)).ok_or_else(|| bad("the projection angles give no plane"))?;
             f.plane = Some(mul(&from_axes(u, z), &rot_z(g("ROT"))));
         }
@@ -224,7 +286,13 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
         }
         _ => return Err(super::refusal(b, 0)),
     }
-    let how = how.ok_or_else(|| LineError::new(b.span(1), format!("PLANE {kind} without MOVE, TURN or STAY: expected how the rotary axes move"), "no positioning"))?;
+    let how = how.ok_or_else(|| {
+        LineError::new(
+            b.span(1),
+            format!("PLANE {kind} without MOVE, TURN or STAY: expected how the rotary axes move"),
+            "no positioning",
+        )
+    })?;
     apply(r, b)?;
     if how == "STAY" {
         return Ok(());
@@ -234,7 +302,10 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
             .help("use STAY, or a table-table five-axis machine"));
     };
     if how == "MOVE" {
-        r.note(b, "PLANE … MOVE positions the rotary axes as TURN does (no compensating linear move)");
+        r.note(
+            b,
+            "PLANE … MOVE positions the rotary axes as TURN does (no compensating linear move)",
+        );
     }
     if kind == "RESET" {
         let span = b.span(0);

@@ -243,7 +243,11 @@ impl Reader {
                 self.finished = true;
             }
             let here = self.cursor;
-            let b = Block { text: "", toks: &[], line: here.line };
+            let b = Block {
+                text: "",
+                toks: &[],
+                line: here.line,
+            };
             contour::release(self, &b).map_err(|e| self.error_at(here, e))?;
             return self.run_words(here);
         };
@@ -258,7 +262,8 @@ impl Reader {
 
     /// Runs the words emitted so far through the interpreter (outside any block).
     fn run_words(&mut self, here: Cursor) -> Result<()> {
-        self.run_words_line(here).map_err(|e| self.error_at(here, e))
+        self.run_words_line(here)
+            .map_err(|e| self.error_at(here, e))
     }
 
     fn run_words_line(&mut self, here: Cursor) -> LineResult<()> {
@@ -346,7 +351,12 @@ impl Reader {
             "BLK" | "TOOL" if b.is(1, "FORM") || b.is(1, "DEF") => Ok(()),
             "TOOL" if b.is(1, "CALL") => self.tool_call(b),
             "FN" => self.fn_block(b, here, 1),
-            _ if key.starts_with("FN") && key[2..].trim_end_matches(':').bytes().all(|c| c.is_ascii_digit()) => {
+            _ if key.starts_with("FN")
+                && key[2..]
+                    .trim_end_matches(':')
+                    .bytes()
+                    .all(|c| c.is_ascii_digit()) =>
+            {
                 self.fn_block(b, here, 0)
             }
             "LBL" => self.label(b),
@@ -359,11 +369,15 @@ impl Reader {
             "*" => Ok(()),
             _ if key.starts_with('*') => Ok(()),
             _ if key.starts_with('Q') && b.text[first.clone()].contains('=')
-                || key.starts_with('Q') && b.is(1, "=") || key.starts_with('Q') && b.tok(1).starts_with('=') =>
+                || key.starts_with('Q') && b.is(1, "=")
+                || key.starts_with('Q') && b.tok(1).starts_with('=') =>
             {
                 self.assign(b)
             }
-            _ if key.starts_with('M') && key[1..].bytes().all(|c| c.is_ascii_digit()) && key.len() > 1 => {
+            _ if key.starts_with('M')
+                && key[1..].bytes().all(|c| c.is_ascii_digit())
+                && key.len() > 1 =>
+            {
                 self.m_only(b, 0)
             }
             _ => Err(refusal(b, 0)),
@@ -406,14 +420,22 @@ impl Reader {
                 "" => {
                     let v = text::value(t, &self.q, span.clone())?;
                     if v < 0.0 || v.fract() != 0.0 || v > 1e9 {
-                        return Err(LineError::new(span, format!("`{t}`: expected a tool number"), "not a tool number"));
+                        return Err(LineError::new(
+                            span,
+                            format!("`{t}`: expected a tool number"),
+                            "not a tool number",
+                        ));
                     }
                     number = Some(v as u32);
                 }
                 "Z" if rest.is_empty() => {}
                 "X" | "Y" if rest.is_empty() => {
-                    return Err(LineError::new(span, format!("TOOL CALL with tool axis {t}: only tool axis Z is supported"), "tool axis not Z")
-                        .help("program the part with tool axis Z"));
+                    return Err(LineError::new(
+                        span,
+                        format!("TOOL CALL with tool axis {t}: only tool axis Z is supported"),
+                        "tool axis not Z",
+                    )
+                    .help("program the part with tool axis Z"));
                 }
                 "S" => {
                     let v = text::value(rest, &self.q, span.clone())?;
@@ -423,7 +445,14 @@ impl Reader {
                 "DL" => dl = text::value(rest, &self.q, span)?,
                 "DR" => dr = text::value(rest, &self.q, span)?,
                 "DR2" | "QS" => {}
-                _ => return Err(unexpected(b, k, "TOOL CALL", "a tool number, the axis Z, S, F, DL, DR or DR2")),
+                _ => {
+                    return Err(unexpected(
+                        b,
+                        k,
+                        "TOOL CALL",
+                        "a tool number, the axis Z, S, F, DL, DR or DR2",
+                    ))
+                }
             }
         }
         if let Some(n) = number {
@@ -454,14 +483,21 @@ impl Reader {
             .iter()
             .find(|t| t.number == self.tool.0)
             .map_or(0.0, |t| t.diameter_mm);
-        let scale = if self.inch { crate::units::MM_PER_INCH } else { 1.0 };
+        let scale = if self.inch {
+            crate::units::MM_PER_INCH
+        } else {
+            1.0
+        };
         d / scale + 2.0 * self.tool.2
     }
 
     /// `Q1 = formula`.
     fn assign(&mut self, b: &Block) -> LineResult<()> {
         let start = b.toks[0].start;
-        let eq = b.text[start..].find('=').map(|k| start + k).unwrap_or(start);
+        let eq = b.text[start..]
+            .find('=')
+            .map(|k| start + k)
+            .unwrap_or(start);
         let name = b.text[start..eq].trim();
         let v = self.q.formula(&b.text[eq + 1..], eq + 1)?;
         self.q.set_ref(name, v, start..eq)
@@ -471,10 +507,19 @@ impl Reader {
     fn fn_block(&mut self, b: &Block, here: Cursor, at: usize) -> LineResult<()> {
         let t = b.tok(at).trim_start_matches(['F', 'N', 'f', 'n']);
         let digits = t.bytes().take_while(|c| c.is_ascii_digit()).count();
-        let n: u32 = t[..digits]
-            .parse()
-            .map_err(|_| LineError::new(b.span(1), format!("`FN {}`: expected a function number such as `FN 0:`", b.tok(1)), "expected FN n"))?;
-        let colon = b.text[b.toks[at].start..].find(':').map(|k| b.toks[at].start + k + 1);
+        let n: u32 = t[..digits].parse().map_err(|_| {
+            LineError::new(
+                b.span(1),
+                format!(
+                    "`FN {}`: expected a function number such as `FN 0:`",
+                    b.tok(1)
+                ),
+                "expected FN n",
+            )
+        })?;
+        let colon = b.text[b.toks[at].start..]
+            .find(':')
+            .map(|k| b.toks[at].start + k + 1);
         let rest_at = colon.unwrap_or(b.toks[at].end);
         let rest = &b.text[rest_at..];
         match n {
@@ -497,14 +542,24 @@ impl Reader {
     fn fn_value(&self, n: u32, rhs: &str, at: usize) -> LineResult<f64> {
         let upper = rhs.to_ascii_uppercase();
         let split = |op: &str| {
-            upper.find(op).map(|k| (&rhs[..k], at + k + op.len(), &rhs[k + op.len()..]))
+            upper
+                .find(op)
+                .map(|k| (&rhs[..k], at + k + op.len(), &rhs[k + op.len()..]))
         };
-        let bad = || LineError::new(at..at + rhs.len(), format!("FN {n}: expected its operands and operator (docs/gcode.md)"), "bad FN");
+        let bad = || {
+            LineError::new(
+                at..at + rhs.len(),
+                format!("FN {n}: expected its operands and operator (docs/gcode.md)"),
+                "bad FN",
+            )
+        };
         let f = |s: &str, k: usize| self.q.formula(s, k);
         Ok(match n {
             0 => f(rhs, at)?,
             1..=4 | 8 | 13 => {
-                let op = ["", " + ", " - ", " * ", "DIV", "", "", "", "LEN", "", "", "", "", "ANG"][n as usize];
+                let op = [
+                    "", " + ", " - ", " * ", "DIV", "", "", "", "LEN", "", "", "", "", "ANG",
+                ][n as usize];
                 // A sign after a blank is the operand's: split at the operator between blanks.
                 let (a, k, c) = split(op).or_else(|| split(op.trim())).ok_or_else(bad)?;
                 let (x, y) = (f(a, at)?, f(c, k)?);
@@ -532,10 +587,23 @@ impl Reader {
     }
 
     /// `FN 9-12: IF a EQU|NE|GT|LT b GOTO LBL n`.
-    fn fn_jump(&mut self, b: &Block, n: u32, rest: &str, at: usize, here: Cursor) -> LineResult<()> {
+    fn fn_jump(
+        &mut self,
+        b: &Block,
+        n: u32,
+        rest: &str,
+        at: usize,
+        here: Cursor,
+    ) -> LineResult<()> {
         let upper = rest.to_ascii_uppercase();
         let op = ["EQU", "NE", "GT", "LT"][(n - 9) as usize];
-        let bad = || LineError::new(at..b.text.len(), format!("FN {n}: expected `IF a {op} b GOTO LBL n`"), "bad jump");
+        let bad = || {
+            LineError::new(
+                at..b.text.len(),
+                format!("FN {n}: expected `IF a {op} b GOTO LBL n`"),
+                "bad jump",
+            )
+        };
         let if_at = upper.find("IF").ok_or_else(bad)?;
         let op_at = upper.find(&format!(" {op} ")).ok_or_else(bad)?;
         let goto = upper.find("GOTO").ok_or_else(bad)?;
@@ -551,7 +619,11 @@ impl Reader {
             return Ok(());
         }
         let label = rest[goto + 4..].trim();
-        let label = label.strip_prefix("LBL").or_else(|| label.strip_prefix("lbl")).unwrap_or(label).trim();
+        let label = label
+            .strip_prefix("LBL")
+            .or_else(|| label.strip_prefix("lbl"))
+            .unwrap_or(label)
+            .trim();
         let span = at + goto..b.text.len();
         let label = self.label_name(label, span.clone())?;
         let target = self.find_label(here.file, &label, span.clone())?;
@@ -573,7 +645,11 @@ impl Reader {
         }
         match t.parse::<f64>() {
             Ok(v) => Ok(format!("{v}")),
-            Err(_) => Err(LineError::new(span, format!("`{t}`: expected a label number or \"name\""), "expected a label")),
+            Err(_) => Err(LineError::new(
+                span,
+                format!("`{t}`: expected a label number or \"name\""),
+                "expected a label",
+            )),
         }
     }
 
@@ -624,7 +700,11 @@ impl Reader {
             };
             let v = text::value(rep, &self.q, span.clone())?;
             if v < 0.0 || v.fract() != 0.0 || v > 65534.0 {
-                return Err(LineError::new(span, format!("REP {rep}: expected a whole number of repeats 0-65534"), "bad repeat count"));
+                return Err(LineError::new(
+                    span,
+                    format!("REP {rep}: expected a whole number of repeats 0-65534"),
+                    "bad repeat count",
+                ));
             }
             passes = v as u64;
         }
@@ -633,7 +713,16 @@ impl Reader {
         }
         let repeats = passes - 1;
         let target = self.find_label(here.file, &label, b.span(2))?;
-        self.push_frame(b, Frame { ret: self.cursor, call: here, target, repeats, program: false })?;
+        self.push_frame(
+            b,
+            Frame {
+                ret: self.cursor,
+                call: here,
+                target,
+                repeats,
+                program: false,
+            },
+        )?;
         self.backward(b.span(0))?;
         self.cursor = target;
         Ok(())
@@ -641,8 +730,15 @@ impl Reader {
 
     fn push_frame(&mut self, b: &Block, f: Frame) -> LineResult<()> {
         if self.frames.len() >= self.max_call_depth {
-            return Err(LineError::new(b.spans(0, b.toks.len() - 1), format!("calls nested more than {} deep: expected the calls to return", self.max_call_depth), "call depth")
-                .help("the limit is the reader option max_call_depth (docs/gcode.md)"));
+            return Err(LineError::new(
+                b.spans(0, b.toks.len() - 1),
+                format!(
+                    "calls nested more than {} deep: expected the calls to return",
+                    self.max_call_depth
+                ),
+                "call depth",
+            )
+            .help("the limit is the reader option max_call_depth (docs/gcode.md)"));
         }
         self.frames.push(f);
         Ok(())
@@ -655,9 +751,17 @@ impl Reader {
         let name = b.tok(2).trim_matches('"');
         let name = name.rsplit(['\\', '/']).next().unwrap_or(name);
         if name.is_empty() {
-            return Err(LineError::new(b.spans(0, 1), "CALL PGM without a file: expected `CALL PGM name`", "no file"));
+            return Err(LineError::new(
+                b.spans(0, 1),
+                "CALL PGM without a file: expected `CALL PGM name`",
+                "no file",
+            ));
         }
-        let dir = self.programs[here.file].path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let dir = self.programs[here.file]
+            .path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
         let mut candidates = Vec::new();
         for d in std::iter::once(&dir).chain(&self.search_path) {
             candidates.push(d.join(name));
@@ -668,18 +772,45 @@ impl Reader {
         }
         let found = candidates.iter().find(|p| p.is_file()).cloned();
         let Some(path) = found else {
-            return Err(LineError::new(b.span(2), format!("`CALL PGM {name}`: no such file beside the program or on the search path"), "file not found"));
+            return Err(LineError::new(
+                b.span(2),
+                format!("`CALL PGM {name}`: no such file beside the program or on the search path"),
+                "file not found",
+            ));
         };
         let file = match self.programs.iter().position(|p| p.path == path) {
             Some(k) => k,
             None => {
-                let lines = FileLines::open(&path).map_err(|e| LineError::new(b.span(2), format!("`CALL PGM {name}`: cannot read {}: {e}", path.display()), "unreadable file"))?;
-                self.programs.push(Program { path, source: Source::File(lines), labels: None });
+                let lines = FileLines::open(&path).map_err(|e| {
+                    LineError::new(
+                        b.span(2),
+                        format!("`CALL PGM {name}`: cannot read {}: {e}", path.display()),
+                        "unreadable file",
+                    )
+                })?;
+                self.programs.push(Program {
+                    path,
+                    source: Source::File(lines),
+                    labels: None,
+                });
                 self.programs.len() - 1
             }
         };
-        let target = Cursor { file, offset: 0, line: 1 };
-        self.push_frame(b, Frame { ret: self.cursor, call: here, target, repeats: 0, program: true })?;
+        let target = Cursor {
+            file,
+            offset: 0,
+            line: 1,
+        };
+        self.push_frame(
+            b,
+            Frame {
+                ret: self.cursor,
+                call: here,
+                target,
+                repeats: 0,
+                program: true,
+            },
+        )?;
         self.cursor = target;
         Ok(())
     }
@@ -699,10 +830,18 @@ impl Reader {
     fn find_label(&mut self, file: usize, label: &str, span: Range<usize>) -> LineResult<Cursor> {
         if self.programs[file].labels.is_none() {
             let mut map = HashMap::new();
-            let mut c = Cursor { file, offset: 0, line: 1 };
+            let mut c = Cursor {
+                file,
+                offset: 0,
+                line: 1,
+            };
             let mut buf = String::new();
             while let Ok(Some((line, len))) = self.programs[file].source.line(c.offset, &mut buf) {
-                let next = Cursor { file, offset: c.offset + len, line: c.line + 1 };
+                let next = Cursor {
+                    file,
+                    offset: c.offset + len,
+                    line: c.line + 1,
+                };
                 let rest = &line[text::after_block_number(line)..];
                 let (body, _) = text::strip_comment(rest);
                 let mut words = body.split_whitespace();
@@ -720,9 +859,17 @@ impl Reader {
             }
             self.programs[file].labels = Some(map);
         }
-        self.programs[file].labels.as_ref().and_then(|m| m.get(label).copied()).ok_or_else(|| {
-            LineError::new(span, format!("no `LBL {label}` in this program"), "unknown label")
-        })
+        self.programs[file]
+            .labels
+            .as_ref()
+            .and_then(|m| m.get(label).copied())
+            .ok_or_else(|| {
+                LineError::new(
+                    span,
+                    format!("no `LBL {label}` in this program"),
+                    "unknown label",
+                )
+            })
     }
 
     fn backward(&mut self, span: Range<usize>) -> LineResult<()> {
@@ -801,7 +948,11 @@ impl Reader {
     /// The interpreter's program position, after a block that moved in a way the front end
     /// does not follow (machine coordinates, a frame change).
     fn sync_position(&mut self, b: &Block) -> LineResult<()> {
-        self.run_words_line(Cursor { file: self.cursor.file, offset: 0, line: b.line })?;
+        self.run_words_line(Cursor {
+            file: self.cursor.file,
+            offset: 0,
+            line: b.line,
+        })?;
         let p = self.interp.program_position();
         self.path.set_position(p);
         Ok(())
@@ -865,7 +1016,10 @@ fn refusal(b: &Block, k: usize) -> LineError {
 /// The name a refusal gives: two words for `TCH PROBE`, `APPR LT`, `PATTERN DEF`, ….
 fn construct_name(b: &Block, k: usize) -> String {
     let first = b.tok(k).to_ascii_uppercase();
-    let two = ["TCH", "APPR", "DEP", "PATTERN", "SEL", "FUNCTION", "DECLARE", "SQL", "TRANS", "CALL", "TOOL", "END", "BLK", "FN", "CYCL"];
+    let two = [
+        "TCH", "APPR", "DEP", "PATTERN", "SEL", "FUNCTION", "DECLARE", "SQL", "TRANS", "CALL",
+        "TOOL", "END", "BLK", "FN", "CYCL",
+    ];
     if two.contains(&first.as_str()) && k + 1 < b.toks.len() {
         format!("{} {}", first, b.tok(k + 1).to_ascii_uppercase())
     } else {

@@ -122,7 +122,11 @@ struct Parser<'a> {
 impl Parser<'_> {
     fn error(&self, what: &str) -> LineError {
         let k = self.k.min(self.b.len());
-        LineError::new(self.at + k..self.at + self.b.len(), format!("formula: {what}"), "bad formula")
+        LineError::new(
+            self.at + k..self.at + self.b.len(),
+            format!("formula: {what}"),
+            "bad formula",
+        )
     }
 
     fn blanks(&mut self) {
@@ -214,7 +218,12 @@ impl Parser<'_> {
                 }
                 let name = &self.text[start..self.k];
                 let upper = name.to_ascii_uppercase();
-                if upper.starts_with('Q') && upper[1..].trim_start_matches(['L', 'R']).bytes().all(|b| b.is_ascii_digit()) {
+                if upper.starts_with('Q')
+                    && upper[1..]
+                        .trim_start_matches(['L', 'R'])
+                        .bytes()
+                        .all(|b| b.is_ascii_digit())
+                {
                     return self.q.get_ref(name, self.at + start..self.at + self.k);
                 }
                 if upper == "PI" {
@@ -249,7 +258,15 @@ fn function(name: &str) -> Option<fn(f64) -> f64> {
         "LOG" => f64::log10,
         "EXP" => f64::exp,
         "NEG" => |x: f64| -x,
-        "SGN" => |x: f64| if x > 0.0 { 1.0 } else if x < 0.0 { -1.0 } else { 0.0 },
+        "SGN" => |x: f64| {
+            if x > 0.0 {
+                1.0
+            } else if x < 0.0 {
+                -1.0
+            } else {
+                0.0
+            }
+        },
         _ => return None,
     })
 }

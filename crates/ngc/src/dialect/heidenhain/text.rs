@@ -26,7 +26,10 @@ pub(super) fn after_block_number(line: &str) -> usize {
     match b.get(end) {
         None => end,
         Some(c) if c.is_ascii_whitespace() => {
-            end + b[end..].iter().take_while(|c| c.is_ascii_whitespace()).count()
+            end + b[end..]
+                .iter()
+                .take_while(|c| c.is_ascii_whitespace())
+                .count()
         }
         // `5X` is not a number but the start of something else.
         Some(_) => lead,
@@ -95,7 +98,8 @@ pub(super) fn tokens(text: &str, from: usize, out: &mut Vec<Range<usize>>) {
         // address letters before it.
         let joins = |prev: &str| {
             let (letters, rest) = split_word(prev);
-            JOINED.iter().any(|l| l.eq_ignore_ascii_case(letters)) && matches!(rest.trim(), "" | "+" | "-")
+            JOINED.iter().any(|l| l.eq_ignore_ascii_case(letters))
+                && matches!(rest.trim(), "" | "+" | "-")
         };
         let first = b[start];
         if matches!(first, b'+' | b'-' | b'.') || first.is_ascii_digit() {

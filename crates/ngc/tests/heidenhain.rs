@@ -61,12 +61,17 @@ fn fmax_is_for_its_block_alone_and_f_stays() {
 #[test]
 fn polar_line_and_arc_about_the_pole() {
     // LP PR+20 PA+30 from the pole (5, 5): (5 + 20 cos 30°, 5 + 20 sin 30°) = (22.3205…, 15).
-    let m = moves("2 L X+0 Y+0 R0 F100\n3 CC X+5 Y+5\n4 LP PR+20 PA+30\n5 CP IPA+60 DR+\n6 LP IPR-10");
+    let m =
+        moves("2 L X+0 Y+0 R0 F100\n3 CC X+5 Y+5\n4 LP PR+20 PA+30\n5 CP IPA+60 DR+\n6 LP IPR-10");
     assert!(near(xy(&m[1]), [5.0 + 20.0 * 3f64.sqrt() / 2.0, 15.0]));
     // CP IPA+60 to 90°: (5, 25), counter-clockwise about the pole.
     assert!(near(xy(&m[2]), [5.0, 25.0]));
     match m[2].motion {
-        Motion::Arc { clockwise, center_mm, .. } => {
+        Motion::Arc {
+            clockwise,
+            center_mm,
+            ..
+        } => {
             assert!(!clockwise);
             assert!(near([center_mm[0], center_mm[1]], [5.0, 5.0]));
         }
@@ -81,7 +86,11 @@ fn ct_is_tangent_to_the_line_before_it() {
     // From (20, 0) heading +X to (30, 10): centre (20, 10), counter-clockwise.
     let m = moves("2 L X+0 Y+0 R0 F100\n3 L X+20\n4 CT X+30 Y+10");
     match m[2].motion {
-        Motion::Arc { clockwise, center_mm, .. } => {
+        Motion::Arc {
+            clockwise,
+            center_mm,
+            ..
+        } => {
             assert!(!clockwise);
             assert!(near([center_mm[0], center_mm[1]], [20.0, 10.0]));
         }
@@ -96,7 +105,11 @@ fn rnd_and_chf_cut_the_corner() {
     assert!(near(xy(&m[1]), [35.0, 0.0]));
     assert!(near(xy(&m[2]), [40.0, 5.0]));
     match m[2].motion {
-        Motion::Arc { clockwise, center_mm, .. } => {
+        Motion::Arc {
+            clockwise,
+            center_mm,
+            ..
+        } => {
             assert!(!clockwise);
             assert!(near([center_mm[0], center_mm[1]], [35.0, 5.0]));
         }
@@ -121,7 +134,10 @@ fn q_parameters_fn_and_formulas() {
          5 Q4 = (Q2 + 1) * 2 ^ 2 - SQRT(16) / 4\n6 L X+Q2 Y+Q3 Z+Q4 R0 FMAX",
     );
     // 3 LEN 4 = 5; 0 ANG 1 = 90°; (5 + 1) · 4 − 1 = 23.
-    assert_eq!([m[0].end[Axis::X], m[0].end[Axis::Y], m[0].end[Axis::Z]], [5.0, 90.0, 23.0]);
+    assert_eq!(
+        [m[0].end[Axis::X], m[0].end[Axis::Y], m[0].end[Axis::Z]],
+        [5.0, 90.0, 23.0]
+    );
 }
 
 #[test]
@@ -143,16 +159,27 @@ fn subprograms_and_section_repeats() {
     );
     // One call, then two passes of the subprogram; the section 6 runs twice.
     let ends: Vec<_> = m.iter().map(|m| xy(m)).collect();
-    assert_eq!(ends[1..], [[1.0, 0.0], [2.0, 0.0], [3.0, 0.0], [3.0, 1.0], [3.0, 2.0]]);
+    assert_eq!(
+        ends[1..],
+        [[1.0, 0.0], [2.0, 0.0], [3.0, 0.0], [3.0, 1.0], [3.0, 2.0]]
+    );
 }
 
 #[test]
 fn a_called_program_runs_to_its_end_then_the_caller_goes_on() {
     let dir = std::env::temp_dir().join(format!("ngc-klartext-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("SUB.h"), "0 BEGIN PGM SUB MM\n1 L IX+7\n2 END PGM SUB MM\n").unwrap();
+    std::fs::write(
+        dir.join("SUB.h"),
+        "0 BEGIN PGM SUB MM\n1 L IX+7\n2 END PGM SUB MM\n",
+    )
+    .unwrap();
     let main = dir.join("MAIN.h");
-    std::fs::write(&main, program("2 L X+0 Y+0 R0 F100\n3 CALL PGM SUB\n4 L Y+1")).unwrap();
+    std::fs::write(
+        &main,
+        program("2 L X+0 Y+0 R0 F100\n3 CALL PGM SUB\n4 L Y+1"),
+    )
+    .unwrap();
     let m: Vec<_> = ngc::read_file_with(&main, &opts())
         .unwrap()
         .collect::<Result<_, _>>()
@@ -160,7 +187,10 @@ fn a_called_program_runs_to_its_end_then_the_caller_goes_on() {
     assert_eq!(xy(&m[1]), [7.0, 0.0]);
     assert_eq!(xy(&m[2]), [7.0, 1.0]);
     std::fs::write(&main, program("3 CALL PGM NOWHERE")).unwrap();
-    let e = ngc::read_file_with(&main, &opts()).unwrap().find_map(Result::err).unwrap();
+    let e = ngc::read_file_with(&main, &opts())
+        .unwrap()
+        .find_map(Result::err)
+        .unwrap();
     assert!(e.to_string().contains("CALL PGM NOWHERE"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -171,12 +201,21 @@ fn drilling_cycle_200_pecks_as_the_manual_draws_it() {
         "2 L X+5 Y+5 Z+20 R0 FMAX\n3 CYCL DEF 200 DRILLING ~\n Q200=+2 ;SET-UP ~\n Q201=-7 ~\n \
          Q206=+100 ~\n Q202=+3 ~\n Q210=+0 ~\n Q203=+1 ~\n Q204=+10 ~\n Q211=+0.25\n4 CYCL CALL",
     );
-    let z: Vec<_> = m[1..].iter().map(|m| (m.motion == Motion::Rapid, m.end[Axis::Z])).collect();
+    let z: Vec<_> = m[1..]
+        .iter()
+        .map(|m| (m.motion == Motion::Rapid, m.end[Axis::Z]))
+        .collect();
     // Surface 1, clearance to 3, pecks of 3 to -6, a = 2 above the depth reached; 2nd
     // set-up clearance 11.
     let expected = [
-        (true, 3.0), (false, -2.0), (true, 3.0), (true, 0.0), (false, -5.0), (true, 3.0),
-        (true, -3.0), (false, -6.0),
+        (true, 3.0),
+        (false, -2.0),
+        (true, 3.0),
+        (true, 0.0),
+        (false, -5.0),
+        (true, 3.0),
+        (true, -3.0),
+        (false, -6.0),
     ];
     assert_eq!(z[..8], expected);
     assert_eq!(m[9].motion, Motion::Dwell { seconds: 0.25 });
@@ -204,7 +243,10 @@ fn plane_spatial_euler_and_vector_give_the_same_tilt() {
     };
     // Tilted 30° about X four ways: the table turns the same each time.
     let turned = |plane: &str| {
-        let m = moves_with(&format!("2 L X+0 Y+0 Z+50 A+0 C+0 R0 FMAX\n3 {plane}"), &table);
+        let m = moves_with(
+            &format!("2 L X+0 Y+0 Z+50 A+0 C+0 R0 FMAX\n3 {plane}"),
+            &table,
+        );
         let last = m.last().unwrap().end;
         [last[Axis::A], last[Axis::C]]
     };
@@ -231,7 +273,10 @@ fn unsupported_constructs_are_refused_by_name_at_their_line() {
     for (body, name) in [
         ("2 APPR LT X+10 Y+10 LEN 5 RL", "APPR LT"),
         ("2 TCH PROBE 400", "TCH PROBE"),
-        ("2 CYCL DEF 251 RECTANGULAR POCKET", "CYCL DEF 251 RECTANGULAR POCKET"),
+        (
+            "2 CYCL DEF 251 RECTANGULAR POCKET",
+            "CYCL DEF 251 RECTANGULAR POCKET",
+        ),
         ("2 FN 18: SYSREAD Q1 = ID270", "FN 18"),
         ("2 FL X+10", "FL"),
         ("2 L X+10 M92", "M92"),
@@ -251,13 +296,17 @@ fn endless_loops_and_deep_calls_stop_at_the_limits() {
         ..opts()
     };
     let text = program("2 LBL 1\n3 L IX+1 F100\n4 FN 9: IF +0 EQU +0 GOTO LBL 1");
-    let e = read_str_with(Path::new("t.h"), &text, &o).find_map(Result::err).unwrap();
+    let e = read_str_with(Path::new("t.h"), &text, &o)
+        .find_map(Result::err)
+        .unwrap();
     assert!(e.to_string().contains("1000"), "{e}");
     let o = Options {
         max_call_depth: 2,
         ..opts()
     };
     let text = program("2 CALL LBL 1\n3 M30\n4 LBL 1\n5 CALL LBL 2\n6 LBL 0\n7 LBL 2\n8 CALL LBL 3\n9 LBL 0\n10 LBL 3\n11 LBL 0");
-    let e = read_str_with(Path::new("t.h"), &text, &o).find_map(Result::err).unwrap();
+    let e = read_str_with(Path::new("t.h"), &text, &o)
+        .find_map(Result::err)
+        .unwrap();
     assert!(e.to_string().contains("nested more than 2"), "{e}");
 }

@@ -24,7 +24,7 @@ pub enum Dialect {
     /// G234 for TCP.
     Haas,
     /// HEIDENHAIN TNC 640 conversational (Klartext): `BEGIN PGM`, `L`, `CC`/`C`, Q
-    /// parameters, `LBL`, `CYCL DEF`, `PLANE` (its own front end, `dialect/heidenhain`).
+    /// parameters, `LBL`, `CYCL DEF`, `PLANE` (its own front end, `heidenhain/`).
     Heidenhain,
 }
 

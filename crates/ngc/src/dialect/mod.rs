@@ -13,7 +13,7 @@
 //!                                 ▼
 //!                          typed block (crate `block`) ─► interp phases ─► canonical Move
 //!                                 ▲        words of the same G codes (G1, G2 I J, G52, G68.2 …)
-//!  Heidenhain Klartext ──── own front end, `heidenhain/`: BEGIN PGM, L/C/CC/CT/RND, Q, LBL,
+//!  Heidenhain Klartext ──── own front end, crate module `heidenhain`: BEGIN PGM, L/C/CC/CT/RND, Q, LBL,
 //!                           CYCL DEF, PLANE (read whatever the dialect when BEGIN PGM opens it)
 //!  Siemens Sinumerik ────── own front end (issue 29): G-code plus R params, CYCLE8x, MCALL
 //! ```
@@ -28,7 +28,7 @@
 
 mod fanuc;
 mod haas;
-pub(crate) mod heidenhain;
+mod heidenhain;
 mod linuxcnc;
 mod table;
 

@@ -19,36 +19,14 @@
 
 use crate::lex::{LineError, LineResult};
 
-use super::text::{split_word, value};
-use super::{frames, Block, Reader};
+use super::frames;
+use super::state::{self, Block, Reader};
+use super::text::value;
 
-/// The cycle `CYCL DEF` defined last (its parameters are the Q parameters it set).
-#[derive(Default)]
-pub(super) struct Cycle {
-    number: Option<u32>,
-}
-
-/// `CYCL DEF …` or `CYCL CALL …`.
+/// `CYCL DEF …`.
 pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
-    if b.is(1, "CALL") {
-        if b.is(2, "PAT") || b.is(2, "POS") {
-            return Err(LineError::new(b.spans(0, 2), format!("`CYCL CALL {}` (points from a pattern or table) is not supported: expected CYCL CALL or M99 at each position", b.tok(2).to_ascii_uppercase()), "Heidenhain construct not supported"));
-        }
-        let mut e = super::contour::Extras::default();
-        for k in 2..b.toks.len() {
-            let (name, _) = split_word(b.tok(k));
-            if name.eq_ignore_ascii_case("F") {
-                continue;
-            }
-            if !super::contour::m_word(r, b, k, &mut e)? {
-                return Err(super::unexpected(b, k, "CYCL CALL", "F or M functions"));
-            }
-        }
-        call(r, b)?;
-        return super::contour::run_extras(r, b, &e, None);
-    }
     if !b.is(1, "DEF") {
-        return Err(super::refusal(b, 0));
+        return Err(state::refusal(b, 0));
     }
     let id = b.tok(2);
     let (major, minor) = id.split_once('.').unwrap_or((id, "0"));
@@ -303,32 +281,4 @@ fn drill(r: &mut Reader, b: &Block, p: &Params, plan: &Plan) {
     if p.second > p.clearance {
         z_move(r, "0", p.surface + p.second, None);
     }
-}
-
-/// Words of a `CYCL DEF 7.x`/`10.x`/`19.x` line after the cycle number: (letters, value).
-pub(super) fn axis_words(
-    r: &Reader,
-    b: &Block,
-) -> LineResult<Vec<(String, f64, std::ops::Range<usize>)>> {
-    let mut out = Vec::new();
-    for k in 3..b.toks.len() {
-        let t = b.tok(k);
-        if t.starts_with('#') {
-            return Err(LineError::new(
-                b.span(k),
-                format!("`{t}`: datum tables are not supported: expected the shift as X+… Y+… Z+…"),
-                "datum table",
-            ));
-        }
-        let (name, rest) = split_word(t);
-        if rest.is_empty() {
-            continue;
-        }
-        out.push((
-            name.to_ascii_uppercase(),
-            value(rest, &r.q, b.span(k))?,
-            b.span(k),
-        ));
-    }
-    Ok(out)
 }

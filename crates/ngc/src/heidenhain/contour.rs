@@ -18,116 +18,16 @@
 
 use std::ops::Range;
 
-use crate::axis::AxisVec;
 use crate::lex::{LineError, LineResult};
 
+use super::state::{self, Block, Corner, Extras, Held, Reader};
 use super::text::{split_word, value};
-use super::{cycles, Block, Reader};
+use super::{cycles, frames};
 
 const X: usize = 0;
 const Y: usize = 1;
 const Z: usize = 2;
 const LETTERS: [char; 6] = ['X', 'Y', 'Z', 'A', 'B', 'C'];
-
-/// The front end's view of the path.
-pub(super) struct Contour {
-    /// Program position X Y Z A B C (mm or inch, deg).
-    pos: [f64; 6],
-    /// The pole `CC` (circle centre).
-    pole: Option<[f64; 2]>,
-    /// Unit tangent at the end of the last contour element.
-    dir: Option<[f64; 2]>,
-    /// The modal feed (`FMAX` leaves it).
-    feed: Option<f64>,
-    /// The feed of `TOOL CALL … F` (`FAUTO`).
-    pub tool_feed: Option<f64>,
-    /// Radius compensation: 0 `R0`, 1 `RL`, 2 `RR`.
-    comp: u8,
-    held: Option<Held>,
-    corner: Option<Corner>,
-}
-
-/// A straight feed line in the plane, not yet run.
-#[derive(Clone, Copy)]
-struct Held {
-    start: [f64; 2],
-    end: [f64; 6],
-    feed: Option<f64>,
-    line: usize,
-}
-
-/// A `RND` (radius) or `CHF` (length) after a held line, waiting for the line after it.
-struct Corner {
-    held: Held,
-    round: bool,
-    size: f64,
-    feed: Option<f64>,
-    span: Range<usize>,
-}
-
-/// The words of a block besides its coordinates.
-#[derive(Default)]
-pub(super) struct Extras {
-    comp: Option<u8>,
-    feed: Option<f64>,
-    rapid: bool,
-    /// M words passed to the interpreter.
-    m: Vec<(f64, Range<usize>)>,
-    /// `M91`: the block's coordinates are machine coordinates.
-    m91: bool,
-    /// `M140 MB`: retract by a distance, or to the top (`MB MAX`, `None`).
-    m140: Option<Option<f64>>,
-    m99: bool,
-    tcp: Option<bool>,
-    span: Range<usize>,
-}
-
-impl Extras {
-    fn plain(&self) -> bool {
-        self.comp.is_none()
-            && !self.rapid
-            && self.m.is_empty()
-            && !self.m91
-            && self.m140.is_none()
-            && !self.m99
-            && self.tcp.is_none()
-    }
-}
-
-impl Contour {
-    pub(super) fn new(start: AxisVec) -> Contour {
-        let mut c = Contour {
-            pos: [0.0; 6],
-            pole: None,
-            dir: None,
-            feed: None,
-            tool_feed: None,
-            comp: 0,
-            held: None,
-            corner: None,
-        };
-        c.set_position(start);
-        c
-    }
-
-    pub(super) fn set_position(&mut self, p: AxisVec) {
-        use crate::axis::Axis;
-        for (k, a) in [Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::B, Axis::C]
-            .iter()
-            .enumerate()
-        {
-            self.pos[k] = p[*a];
-        }
-    }
-
-    pub(super) fn set_z(&mut self, z: f64) {
-        self.pos[Z] = z;
-    }
-
-    pub(super) fn xy(&self) -> [f64; 2] {
-        [self.pos[X], self.pos[Y]]
-    }
-}
 
 /// A contour block.
 pub(super) fn block(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
@@ -326,7 +226,7 @@ fn words(
                 "U" | "V" | "W" => "the axes X Y Z A B C (U V W are not read)",
                 _ => "coordinates X Y Z A B C (I for incremental), R0/RL/RR, F, FMAX, FAUTO or M functions",
             };
-            return Err(super::unexpected(b, k, &format!("`{}`", b.tok(0)), what));
+            return Err(state::unexpected(b, k, &format!("`{}`", b.tok(0)), what));
         }
     }
     Ok(mask)
@@ -423,7 +323,7 @@ fn motion(
 ) -> LineResult<()> {
     let key = b.span(0);
     if e.tcp == Some(true) {
-        super::frames::tcp(r, b, true);
+        frames::tcp(r, b, true);
     }
     if mask != 0 || centre.is_some() {
         if e.m91 {
@@ -479,7 +379,7 @@ pub(super) fn run_extras(
 ) -> LineResult<()> {
     if moved.is_none() {
         if e.tcp == Some(true) {
-            super::frames::tcp(r, b, true);
+            frames::tcp(r, b, true);
         }
         for (m, span) in &e.m {
             r.word('M', *m, span.clone());
@@ -490,7 +390,7 @@ pub(super) fn run_extras(
         retract(r, b, mb)?;
     }
     if e.tcp == Some(false) {
-        super::frames::tcp(r, b, false);
+        frames::tcp(r, b, false);
     }
     if e.m99 || (r.modal_cycle && moved.is_some()) {
         if e.m99 {
@@ -737,7 +637,7 @@ fn corner(r: &mut Reader, b: &Block, round: bool) -> LineResult<()> {
             "" if !round => size = Some(value(rest, &r.q, b.span(k))?),
             "F" => feed = Some(value(rest, &r.q, b.span(k))?),
             _ => {
-                return Err(super::unexpected(
+                return Err(state::unexpected(
                     b,
                     k,
                     b.tok(0),

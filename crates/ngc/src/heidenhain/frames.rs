@@ -24,22 +24,8 @@
 use crate::frame::{mul, rot_x, rot_y, rot_z, Mat3, IDENTITY};
 use crate::lex::{LineError, LineResult};
 
+use super::state::{self, Block, Reader};
 use super::text::{split_word, value};
-use super::{Block, Reader};
-
-/// The active transformations.
-#[derive(Default)]
-pub(super) struct Frames {
-    datum: [f64; 3],
-    /// The tool call's length delta `DL`.
-    pub dl: f64,
-    rot_deg: f64,
-    plane: Option<Mat3>,
-    /// G68.2 is on in the interpreter.
-    tilted: bool,
-    /// G52 is not zero in the interpreter.
-    shifted: bool,
-}
 
 /// Emits the words that make the interpreter's frame the front end's.
 pub(super) fn apply(r: &mut Reader, b: &Block) -> LineResult<()> {
@@ -113,7 +99,7 @@ fn euler_zxz(m: &Mat3) -> (f64, f64, f64) {
 
 /// `CYCL DEF 7.1 X+…` (7.2 Y, 7.3 Z; `IX` incremental).
 pub(super) fn datum_shift(r: &mut Reader, b: &Block) -> LineResult<()> {
-    for (name, v, span) in super::cycles::axis_words(r, b)? {
+    for (name, v, span) in axis_words(r, b)? {
         let (inc, axis) = match name.strip_prefix('I') {
             Some(a) => (true, a.to_string()),
             None => (false, name.clone()),
@@ -136,7 +122,7 @@ pub(super) fn datum_shift(r: &mut Reader, b: &Block) -> LineResult<()> {
 
 /// `CYCL DEF 10.1 ROT+30` (`IROT` incremental).
 pub(super) fn rotation(r: &mut Reader, b: &Block) -> LineResult<()> {
-    for (name, v, span) in super::cycles::axis_words(r, b)? {
+    for (name, v, span) in axis_words(r, b)? {
         match name.as_str() {
             "ROT" => r.frames_state.rot_deg = v,
             "IROT" => r.frames_state.rot_deg += v,
@@ -158,7 +144,7 @@ pub(super) fn working_plane(r: &mut Reader, b: &Block, minor: u32) -> LineResult
         return Ok(());
     }
     let mut abc = [0.0; 3];
-    for (name, v, span) in super::cycles::axis_words(r, b)? {
+    for (name, v, span) in axis_words(r, b)? {
         match name.as_str() {
             "A" => abc[0] = v,
             "B" => abc[1] = v,
@@ -220,7 +206,7 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
                 v.insert(name.clone(), value(rest, &r.q, b.span(k))?);
             }
             _ => {
-                return Err(super::unexpected(
+                return Err(state::unexpected(
                     b,
                     k,
                     "PLANE",
@@ -284,7 +270,7 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
             };
             f.plane = Some(mul(&f.plane.unwrap_or(IDENTITY), &turn));
         }
-        _ => return Err(super::refusal(b, 0)),
+        _ => return Err(state::refusal(b, 0)),
     }
     let how = how.ok_or_else(|| {
         LineError::new(
@@ -331,7 +317,7 @@ pub(super) fn function(r: &mut Reader, b: &Block) -> LineResult<()> {
     } else if b.is(1, "RESET") && b.is(2, "TCPM") {
         tcp(r, b, false);
     } else {
-        return Err(super::refusal(b, 0));
+        return Err(state::refusal(b, 0));
     }
     r.sync_position(b)
 }
@@ -353,4 +339,32 @@ pub(super) fn tcp(r: &mut Reader, b: &Block, on: bool) {
         r.word('H', tool as f64, span);
         r.end_block(b.line);
     }
+}
+
+/// Words of a `CYCL DEF 7.x`/`10.x`/`19.x` line after the cycle number: (letters, value).
+pub(super) fn axis_words(
+    r: &Reader,
+    b: &Block,
+) -> LineResult<Vec<(String, f64, std::ops::Range<usize>)>> {
+    let mut out = Vec::new();
+    for k in 3..b.toks.len() {
+        let t = b.tok(k);
+        if t.starts_with('#') {
+            return Err(LineError::new(
+                b.span(k),
+                format!("`{t}`: datum tables are not supported: expected the shift as X+… Y+… Z+…"),
+                "datum table",
+            ));
+        }
+        let (name, rest) = split_word(t);
+        if rest.is_empty() {
+            continue;
+        }
+        out.push((
+            name.to_ascii_uppercase(),
+            value(rest, &r.q, b.span(k))?,
+            b.span(k),
+        ));
+    }
+    Ok(out)
 }

@@ -20,116 +20,30 @@ mod contour;
 mod cycles;
 mod frames;
 mod qparam;
+mod state;
 mod text;
 
 use std::collections::{HashMap, VecDeque};
 use std::ops::Range;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::canon::Move;
-use crate::dialect::fanuc;
-use crate::dialect::table::{DwellUnit, Table};
 use crate::error::{Error, Result};
 use crate::interp::{Interp, Stop};
 use crate::lex::{LineError, LineResult, Word};
 use crate::notice::Notice;
-use crate::options::{Options, Tool};
-use crate::reader::{quoted_at, syntax_error, FileLines, Source};
+use crate::options::Options;
+use crate::source::{quoted_at, syntax_error, FileLines, Source};
 
-use contour::Contour;
-use cycles::Cycle;
-use frames::Frames;
 use qparam::Qparams;
-
-/// The interpreter's table for the words this front end emits: the Fanuc family's codes
-/// with G41.1/G42.1 (compensation by diameter: the tool radius plus `DR`), dwell in s.
-pub(crate) const TABLE: Table = Table {
-    g_code,
-    dwell_p: DwellUnit::Seconds,
-    ..fanuc::TABLE
-};
-
-fn g_code(code: u32) -> Option<crate::code::GCode> {
-    match code {
-        411 => Some(crate::code::GCode::CutterComp(3)),
-        421 => Some(crate::code::GCode::CutterComp(4)),
-        _ => fanuc::g_code(code),
-    }
-}
+pub(crate) use state::Reader;
+use state::{refusal, unexpected, Block, Contour, Cursor, Cycle, Extras, Frame, Frames, Program};
 
 /// True when `line`, the first line with more than blanks, opens a Klartext program:
 /// `BEGIN PGM`, with or without a block number.
 pub(crate) fn opens_program(line: &str) -> bool {
     let rest = &line[text::after_block_number(line)..];
     rest.len() >= 9 && rest.as_bytes()[..9].eq_ignore_ascii_case(b"BEGIN PGM")
-}
-
-/// A place in one of the loaded program files.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Cursor {
-    file: usize,
-    offset: usize,
-    /// 1-based line of `offset`.
-    line: usize,
-}
-
-struct Program {
-    path: PathBuf,
-    source: Source,
-    /// `LBL` name → the line after it; built on the first call or jump.
-    labels: Option<HashMap<String, Cursor>>,
-}
-
-/// A `CALL LBL` (or `CALL PGM`) being run.
-struct Frame {
-    /// Where the program goes on after the call.
-    ret: Cursor,
-    /// The `CALL LBL` line: reaching it again ends one pass of a section repeat.
-    call: Cursor,
-    /// Where each pass starts.
-    target: Cursor,
-    /// Passes still to run after this one.
-    repeats: u64,
-    /// A called program file (ends at `END PGM`), not a label.
-    program: bool,
-}
-
-/// The Klartext front end's move stream.
-pub(crate) struct Reader {
-    programs: Vec<Program>,
-    cursor: Cursor,
-    frames: Vec<Frame>,
-    interp: Interp,
-    queue: VecDeque<Move>,
-    notices: Vec<Notice>,
-    q: Qparams,
-    path: Contour,
-    frames_state: Frames,
-    cycle: Cycle,
-    tools: Vec<Tool>,
-    /// The machine's rotary table, for `PLANE … TURN`.
-    table: Option<crate::frame::RotaryTable>,
-    search_path: Vec<PathBuf>,
-    /// The current tool: number (0: none or named) and its `DL`, `DR`.
-    tool: (u32, f64, f64),
-    inch: bool,
-    /// `M126`: rotary axes take the shorter way.
-    shortest: bool,
-    /// `M89`: the cycle runs after every positioning.
-    modal_cycle: bool,
-    finished: bool,
-    flushed: bool,
-    iterations: u64,
-    max_iterations: u64,
-    max_call_depth: usize,
-    /// The block being read (physical lines joined), and a file's line buffer.
-    text: String,
-    buf: String,
-    toks: Vec<Range<usize>>,
-    /// Words to run, block by block: (end in `words`, line number, the block is a held one).
-    words: Vec<Word<'static>>,
-    ends: Vec<(usize, usize)>,
-    noticed: Vec<String>,
 }
 
 impl Reader {
@@ -206,7 +120,7 @@ impl Reader {
             if k > 0 {
                 self.text.push(' ');
             }
-            if self.text.len() + body.len() > crate::reader::MAX_LINE_BYTES {
+            if self.text.len() + body.len() > crate::source::MAX_LINE_BYTES {
                 break;
             }
             self.text.push_str(body);
@@ -362,6 +276,7 @@ impl Reader {
             "LBL" => self.label(b),
             "CALL" if b.is(1, "LBL") => self.call_label(b, here),
             "CALL" if b.is(1, "PGM") => self.call_program(b, here),
+            "CYCL" | "CYCLE" if b.is(1, "CALL") => self.cycle_call(b),
             "CYCL" | "CYCLE" => cycles::block(self, b),
             "PLANE" => frames::plane(self, b),
             "FUNCTION" => frames::function(self, b),
@@ -655,39 +570,37 @@ impl Reader {
 
     /// `LBL n`: a mark; `LBL 0` ends the subprogram being run.
     fn label(&mut self, b: &Block) -> LineResult<()> {
-        if b.tok(1) != "0" {
-            return Ok(());
-        }
-        match self.frames.last_mut() {
-            Some(f) if !f.program => {
-                if f.repeats > 0 {
-                    f.repeats -= 1;
-                    self.cursor = f.target;
-                    return self.backward(b.span(0));
-                }
-                self.cursor = f.ret;
-                self.frames.pop();
-                Ok(())
-            }
+        match self.frames.last() {
+            Some(f) if b.tok(1) == "0" && !f.program => self.end_pass(b),
             _ => Ok(()),
         }
+    }
+
+    /// One pass of the innermost label call is done: the next pass, or back after the call.
+    fn end_pass(&mut self, b: &Block) -> LineResult<()> {
+        let Some(f) = self.frames.last_mut() else {
+            return Ok(());
+        };
+        if f.repeats > 0 {
+            f.repeats -= 1;
+            self.cursor = f.target;
+            return self.backward(b.span(0));
+        }
+        self.cursor = f.ret;
+        self.frames.pop();
+        Ok(())
     }
 
     /// `CALL LBL n [REP m]`: runs from `LBL n` to `LBL 0` (a subprogram) or back to this
     /// line (a section repeat), m + 1 times in all.
     fn call_label(&mut self, b: &Block, here: Cursor) -> LineResult<()> {
         // Back at the call of the innermost frame: one pass of a section repeat is done.
-        if let Some(f) = self.frames.last_mut() {
-            if f.call == here && !f.program {
-                if f.repeats > 0 {
-                    f.repeats -= 1;
-                    self.cursor = f.target;
-                    return self.backward(b.span(0));
-                }
-                self.cursor = f.ret;
-                self.frames.pop();
-                return Ok(());
-            }
+        if self
+            .frames
+            .last()
+            .is_some_and(|f| f.call == here && !f.program)
+        {
+            return self.end_pass(b);
         }
         let label = self.label_name(b.tok(2), b.span(2))?;
         // Passes run by jumping to the label: one, or m for `REP m` (a section repeat runs
@@ -881,9 +794,28 @@ impl Reader {
         Ok(())
     }
 
+    /// `CYCL CALL [F] [M…]`: the defined cycle here.
+    fn cycle_call(&mut self, b: &Block) -> LineResult<()> {
+        if b.is(2, "PAT") || b.is(2, "POS") {
+            return Err(LineError::new(b.spans(0, 2), format!("`CYCL CALL {}` (points from a pattern or table) is not supported: expected CYCL CALL or M99 at each position", b.tok(2).to_ascii_uppercase()), "Heidenhain construct not supported"));
+        }
+        let mut e = Extras::default();
+        for k in 2..b.toks.len() {
+            let (name, _) = text::split_word(b.tok(k));
+            if name.eq_ignore_ascii_case("F") {
+                continue;
+            }
+            if !contour::m_word(self, b, k, &mut e)? {
+                return Err(unexpected(b, k, "CYCL CALL", "F or M functions"));
+            }
+        }
+        cycles::call(self, b)?;
+        contour::run_extras(self, b, &e, None)
+    }
+
     /// A block of M functions alone (`M5`, `STOP M0`).
     fn m_only(&mut self, b: &Block, from: usize) -> LineResult<()> {
-        let mut m = contour::Extras::default();
+        let mut m = Extras::default();
         for k in from..b.toks.len() {
             if !contour::m_word(self, b, k, &mut m)? {
                 return Err(unexpected(b, k, "an M block", "M functions"));
@@ -957,83 +889,6 @@ impl Reader {
         self.path.set_position(p);
         Ok(())
     }
-}
-
-/// A parsed block: its text and tokens.
-pub(super) struct Block<'a> {
-    text: &'a str,
-    toks: &'a [Range<usize>],
-    line: usize,
-}
-
-impl Block<'_> {
-    fn tok(&self, k: usize) -> &str {
-        self.toks.get(k).map_or("", |r| &self.text[r.clone()])
-    }
-
-    fn span(&self, k: usize) -> Range<usize> {
-        self.toks
-            .get(k)
-            .or(self.toks.last())
-            .cloned()
-            .unwrap_or(0..0)
-    }
-
-    /// From token `a` through token `b`.
-    fn spans(&self, a: usize, b: usize) -> Range<usize> {
-        self.span(a).start..self.span(b).end
-    }
-
-    /// The value of token `k` after its `skip` letters: a plain decimal read in place (the
-    /// G-code lexer's reader looks past the token's end, so it is given the whole block),
-    /// else as [`text::value`] reads it.
-    fn value(&self, k: usize, skip: usize, q: &Qparams) -> LineResult<f64> {
-        let span = self.span(k);
-        if let (end, Some(v)) = crate::lex::scan_number(self.text.as_bytes(), span.start + skip) {
-            if end == span.end {
-                return Ok(v);
-            }
-        }
-        text::value(&self.text[span.start + skip..span.end], q, span)
-    }
-
-    fn is(&self, k: usize, word: &str) -> bool {
-        self.tok(k).eq_ignore_ascii_case(word)
-    }
-}
-
-/// The construct at token `k` (and the next, for two-word constructs) is not supported.
-fn refusal(b: &Block, k: usize) -> LineError {
-    let name = construct_name(b, k);
-    LineError::new(
-        b.span(k).start..b.span((k + 1).min(b.toks.len().saturating_sub(1))).end,
-        format!("the Heidenhain construct `{name}` is not supported by mtsim"),
-        "Heidenhain construct not supported",
-    )
-    .help("docs/gcode.md lists the Heidenhain (Klartext) constructs mtsim reads")
-}
-
-/// The name a refusal gives: two words for `TCH PROBE`, `APPR LT`, `PATTERN DEF`, ….
-fn construct_name(b: &Block, k: usize) -> String {
-    let first = b.tok(k).to_ascii_uppercase();
-    let two = [
-        "TCH", "APPR", "DEP", "PATTERN", "SEL", "FUNCTION", "DECLARE", "SQL", "TRANS", "CALL",
-        "TOOL", "END", "BLK", "FN", "CYCL",
-    ];
-    if two.contains(&first.as_str()) && k + 1 < b.toks.len() {
-        format!("{} {}", first, b.tok(k + 1).to_ascii_uppercase())
-    } else {
-        first
-    }
-}
-
-/// An unexpected word in a known construct.
-fn unexpected(b: &Block, k: usize, what: &str, expected: &str) -> LineError {
-    LineError::new(
-        b.span(k),
-        format!("`{}` in {what}: expected {expected}", b.tok(k)),
-        "unexpected word",
-    )
 }
 
 impl Iterator for Reader {

@@ -50,6 +50,18 @@ fn near(a: [f64; 2], b: [f64; 2]) -> bool {
     (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9
 }
 
+/// An arc's direction and centre X Y.
+fn arc(m: &Move) -> (bool, [f64; 2]) {
+    match m.motion {
+        Motion::Arc {
+            clockwise,
+            center_mm,
+            ..
+        } => (clockwise, [center_mm[0], center_mm[1]]),
+        other => panic!("not an arc: {other:?}"),
+    }
+}
+
 #[test]
 fn fmax_is_for_its_block_alone_and_f_stays() {
     let m = moves("2 L X+0 Y+0 Z+5 R0 F300\n3 L X+10 FMAX\n4 L X+20");
@@ -66,17 +78,8 @@ fn polar_line_and_arc_about_the_pole() {
     assert!(near(xy(&m[1]), [5.0 + 20.0 * 3f64.sqrt() / 2.0, 15.0]));
     // CP IPA+60 to 90°: (5, 25), counter-clockwise about the pole.
     assert!(near(xy(&m[2]), [5.0, 25.0]));
-    match m[2].motion {
-        Motion::Arc {
-            clockwise,
-            center_mm,
-            ..
-        } => {
-            assert!(!clockwise);
-            assert!(near([center_mm[0], center_mm[1]], [5.0, 5.0]));
-        }
-        other => panic!("{other:?}"),
-    }
+    let (clockwise, centre) = arc(&m[2]);
+    assert!(!clockwise && near(centre, [5.0, 5.0]), "{centre:?}");
     // IPR-10: radius 10 at 90°.
     assert!(near(xy(&m[3]), [5.0, 15.0]));
 }
@@ -85,17 +88,8 @@ fn polar_line_and_arc_about_the_pole() {
 fn ct_is_tangent_to_the_line_before_it() {
     // From (20, 0) heading +X to (30, 10): centre (20, 10), counter-clockwise.
     let m = moves("2 L X+0 Y+0 R0 F100\n3 L X+20\n4 CT X+30 Y+10");
-    match m[2].motion {
-        Motion::Arc {
-            clockwise,
-            center_mm,
-            ..
-        } => {
-            assert!(!clockwise);
-            assert!(near([center_mm[0], center_mm[1]], [20.0, 10.0]));
-        }
-        other => panic!("{other:?}"),
-    }
+    let (clockwise, centre) = arc(&m[2]);
+    assert!(!clockwise && near(centre, [20.0, 10.0]), "{centre:?}");
 }
 
 #[test]
@@ -104,17 +98,8 @@ fn rnd_and_chf_cut_the_corner() {
     let m = moves("2 L X+0 Y+0 R0 F100\n3 L X+40\n4 RND R5\n5 L Y+40");
     assert!(near(xy(&m[1]), [35.0, 0.0]));
     assert!(near(xy(&m[2]), [40.0, 5.0]));
-    match m[2].motion {
-        Motion::Arc {
-            clockwise,
-            center_mm,
-            ..
-        } => {
-            assert!(!clockwise);
-            assert!(near([center_mm[0], center_mm[1]], [35.0, 5.0]));
-        }
-        other => panic!("{other:?}"),
-    }
+    let (clockwise, centre) = arc(&m[2]);
+    assert!(!clockwise && near(centre, [35.0, 5.0]), "{centre:?}");
     assert!(near(xy(&m[3]), [40.0, 40.0]));
     // A 120° turn (60° between the lines): RND R2 touches them 2 tan 60° = 3.4641 away.
     let m = moves("2 L X+0 Y+0 R0 F100\n3 L X+10\n4 RND R2\n5 L X+5 Y+8.660254037844386");

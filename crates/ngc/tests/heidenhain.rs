@@ -64,7 +64,7 @@ fn arc(m: &Move) -> (bool, [f64; 2]) {
 
 #[test]
 fn fmax_is_for_its_block_alone_and_f_stays() {
-    let m = moves("2 L X+0 Y+0 Z+5 R0 F300\n3 L X+10 FMAX\n4 L X+20");
+    let m = moves("2 L X+0 Y+0 Z+5 R0 F300\n3 L X+10 FMAX\n/4 L X+99\n4 L X+20");
     assert_eq!(m[1].motion, Motion::Rapid);
     assert_eq!(m[2].motion, Motion::Linear);
     assert_eq!(m[2].feed, Some(300.0));
@@ -205,6 +205,23 @@ fn drilling_cycle_200_pecks_as_the_manual_draws_it() {
     assert_eq!(z[..8], expected);
     assert_eq!(m[9].motion, Motion::Dwell { seconds: 0.25 });
     assert_eq!(z[9..], [(true, 3.0), (true, 11.0)]);
+}
+
+#[test]
+fn rigid_tapping_207_feeds_at_pitch_times_speed_in_and_out() {
+    // S500 × 1.25 mm = 625 mm/min, to Q203 + Q201 = -10 and back to 2, then 10.
+    let m = moves(
+        "2 TOOL CALL 1 Z S500\n3 L X+5 Y+5 Z+20 R0 FMAX\n4 CYCL DEF 207 RIGID TAPPING NEW ~\n \
+         Q200=+2 ~\n Q201=-10 ~\n Q239=+1.25 ~\n Q203=+0 ~\n Q204=+10\n5 CYCL CALL",
+    );
+    let z: Vec<_> = m[1..]
+        .iter()
+        .map(|m| (m.motion == Motion::Rapid, m.end[Axis::Z], m.feed))
+        .collect();
+    assert_eq!(z[0].1, 2.0);
+    assert_eq!(z[1], (false, -10.0, Some(625.0)));
+    assert_eq!(z[2], (false, 2.0, Some(625.0)));
+    assert_eq!((z[3].0, z[3].1), (true, 10.0));
 }
 
 #[test]

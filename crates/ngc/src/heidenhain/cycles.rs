@@ -3,7 +3,7 @@
 //! 10 (rotation) and 19 (working plane) through `frames`.
 //!
 //! HEIDENHAIN TNC 640 cycle programming manual, "Cycles: drilling" (200 DRILLING, 201
-//! REAMING, 203 UNIVERSAL DRILLING, 205 UNIVERSAL PECKING) and "Cycles: coordinate
+//! REAMING, 203 UNIVERSAL DRILLING, 205 UNIVERSAL PECKING, 207 RIGID TAPPING) and "Cycles: coordinate
 //! transformations" (7, 10, 19). With the surface s = Q203, set-up clearance a = Q200,
 //! depth Q201 (< 0), plunging depth Q202, second set-up clearance Q204, a drilling cycle
 //! at the current X Y runs:
@@ -39,7 +39,7 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
     })?;
     let minor: u32 = minor.parse().unwrap_or(0);
     match major {
-        200 | 201 | 203 | 205 => define(r, b, major),
+        200 | 201 | 203 | 205 | 207 => define(r, b, major),
         7 | 10 | 19 if minor == 0 => Ok(()),
         7 => frames::datum_shift(r, b),
         10 => frames::rotation(r, b),
@@ -71,7 +71,7 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
                 .map(|k| b.tok(k))
                 .take_while(|t| !t.contains('='))
                 .collect();
-            Err(LineError::new(b.spans(0, 2), format!("the Heidenhain cycle `CYCL DEF {id}{}{}` is not supported by mtsim: it reads the drilling cycles 200, 201, 203, 205 and the cycles 7, 9, 10, 19, 32", if name.is_empty() { "" } else { " " }, name.join(" ")), "Heidenhain cycle not supported")
+            Err(LineError::new(b.spans(0, 2), format!("the Heidenhain cycle `CYCL DEF {id}{}{}` is not supported by mtsim: it reads the drilling cycles 200, 201, 203, 205, 207 and the cycles 7, 9, 10, 19, 32", if name.is_empty() { "" } else { " " }, name.join(" ")), "Heidenhain cycle not supported")
                 .help("post the cycle as L moves, or see docs/gcode.md"))
         }
     }
@@ -101,12 +101,12 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
     let Some(n) = r.cycle.number else {
         return Err(LineError::new(
             b.span(0),
-            "cycle call with no cycle defined: expected CYCL DEF 200, 201, 203 or 205 before it",
+            "cycle call with no cycle defined: expected CYCL DEF 200, 201, 203, 205 or 207 before it",
             "no cycle",
         ));
     };
     let q = |k| r.q.q(k);
-    let p = Params {
+    let mut p = Params {
         clearance: q(200),
         depth: q(201),
         feed: q(206),
@@ -120,6 +120,11 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
         min_plunge: q(205),
     };
     let span = b.span(0);
+    if n == 207 {
+        // Rigid tapping: in and out at the pitch times the spindle speed.
+        p.feed = q(239).abs() * r.spindle_rpm;
+        (p.dwell_top, p.dwell_depth) = (0.0, 0.0);
+    }
     if p.depth > 0.0 {
         return Err(LineError::new(span, format!("cycle {n}: depth Q201 = {} is positive: expected a negative depth (down the tool axis)", p.depth), "positive depth"));
     }
@@ -130,13 +135,20 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
         return Err(LineError::new(
             span,
             format!(
-                "cycle {n}: feed Q206 = {}: expected a positive feed",
+                "cycle {n}: feed {} (Q206, or for 207 the pitch Q239 × the TOOL CALL's S): expected a positive feed",
                 p.feed
             ),
             "no feed",
         ));
     }
     let plan = match n {
+        207 => Plan {
+            plunge: -p.depth,
+            decrement: 0.0,
+            min: 0.0,
+            approach: p.clearance,
+            retract_feed: Some(p.feed),
+        },
         201 => Plan {
             plunge: -p.depth,
             decrement: 0.0,
@@ -197,6 +209,9 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
             ),
             "no plunging depth",
         ));
+    }
+    if n == 207 {
+        r.note(b, "cycle 207 taps at F = pitch Q239 × S; the spindle reversal at the bottom is not simulated");
     }
     drill(r, b, &p, &plan);
     r.path.set_z(

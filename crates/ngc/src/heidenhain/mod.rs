@@ -74,6 +74,7 @@ impl Reader {
             search_path: options.search_path.clone(),
             tool: (0, 0.0, 0.0),
             inch: false,
+            spindle_rpm: 0.0,
             shortest: false,
             modal_cycle: false,
             finished: false,
@@ -282,6 +283,8 @@ impl Reader {
             "FUNCTION" => frames::function(self, b),
             "STOP" => self.m_only(b, 1),
             "*" => Ok(()),
+            // A hidden block (`/85 M30`) is skipped, as the G-code reader skips `/` blocks.
+            _ if key.starts_with('/') => Ok(()),
             _ if key.starts_with('*') => Ok(()),
             _ if key.starts_with('Q') && b.text[first.clone()].contains('=')
                 || key.starts_with('Q') && b.is(1, "=")
@@ -354,6 +357,7 @@ impl Reader {
                 }
                 "S" => {
                     let v = text::value(rest, &self.q, span.clone())?;
+                    self.spindle_rpm = v;
                     self.word('S', v, span);
                 }
                 "F" => self.path.tool_feed = Some(text::value(rest, &self.q, span)?),

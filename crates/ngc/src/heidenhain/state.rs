@@ -67,6 +67,8 @@ pub(crate) struct Reader {
     /// The current tool: number (0: none or named) and its `DL`, `DR`.
     pub(super) tool: (u32, f64, f64),
     pub(super) inch: bool,
+    /// The spindle speed of the last `TOOL CALL … S`, rpm (cycle 207's feed).
+    pub(super) spindle_rpm: f64,
     /// `M126`: rotary axes take the shorter way.
     pub(super) shortest: bool,
     /// `M89`: the cycle runs after every positioning.

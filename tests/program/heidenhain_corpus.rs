@@ -122,5 +122,6 @@ fn corpus_klartext_programs_are_read_or_refused_by_name() {
         refused.join("\n  ")
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    assert!(read >= 1, "no Klartext program of the corpus was read");
+    // Three read today (a shop probe program, Fusion rigid tapping, hyperMILL five-axis).
+    assert!(read >= 3, "{read} Klartext programs of the corpus read, 3 expected");
 }

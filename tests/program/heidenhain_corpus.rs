@@ -123,5 +123,8 @@ fn corpus_klartext_programs_are_read_or_refused_by_name() {
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     // Three read today (a shop probe program, Fusion rigid tapping, hyperMILL five-axis).
-    assert!(read >= 3, "{read} Klartext programs of the corpus read, 3 expected");
+    assert!(
+        read >= 3,
+        "{read} Klartext programs of the corpus read, 3 expected"
+    );
 }

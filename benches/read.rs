@@ -1,5 +1,8 @@
 //! Read rate of the G-code reader (`cargo bench --bench read`), with criterion.
 //!
+//! The same toolpath is read in each dialect (LinuxCNC, Fanuc, Haas, Heidenhain Klartext),
+//! and each dialect's time is printed against the Fanuc front end's (issue 29: within 2×).
+//!
 //! A 100,000-block G01 program with six axis words and an F word per block, read from
 //! memory into canonical moves; criterion reports the throughput in blocks per second.
 //! The generated cone (360 blocks) is measured beside it: the moves the generator feeds
@@ -46,7 +49,71 @@ fn g01_program() -> String {
     text
 }
 
+/// The toolpath of [`g01_program`] in each dialect: the same G-code text for LinuxCNC,
+/// Fanuc and Haas, numbered `L` blocks for Heidenhain Klartext.
+fn dialect_programs() -> Vec<(&'static str, ngc::Dialect, String)> {
+    let g = g01_program();
+    let mut h = String::from("0 BEGIN PGM BENCH MM\n");
+    for (k, line) in g.lines().skip(1).take(BLOCKS).enumerate() {
+        let words: Vec<&str> = line.split(' ').skip(1).collect();
+        let signed: Vec<String> = words
+            .iter()
+            .map(|w| match w.as_bytes().get(1) {
+                Some(b'-') | None => w.to_string(),
+                _ if w.starts_with('F') => w.to_string(),
+                _ => format!("{}+{}", &w[..1], &w[1..]),
+            })
+            .collect();
+        h.push_str(&format!("{} L {}\n", k + 1, signed.join(" ")));
+    }
+    h.push_str(&format!("{} END PGM BENCH MM\n", BLOCKS + 1));
+    vec![
+        ("linuxcnc", ngc::Dialect::Linuxcnc, g.clone()),
+        ("fanuc", ngc::Dialect::Fanuc, g.clone()),
+        ("haas", ngc::Dialect::Haas, g),
+        ("heidenhain", ngc::Dialect::Heidenhain, h),
+    ]
+}
+
+fn read_dialect(dialect: ngc::Dialect, text: &str) -> usize {
+    let options = ngc::Options {
+        dialect,
+        ..ngc::Options::default()
+    };
+    ngc::read_str_with(Path::new("bench"), text, &options)
+        .map(|m| black_box(m.unwrap()))
+        .count()
+}
+
+/// The same toolpath read in every dialect, thread CPU time best of 5, and each dialect's
+/// time against the Fanuc front end's (the goal: within 2×).
+fn dialects_side_by_side() {
+    let programs = dialect_programs();
+    let mut fanuc = None;
+    for (name, dialect, text) in &programs {
+        let (wall, cpu) = best_of(5, thread_cpu_s, || {
+            assert_eq!(read_dialect(*dialect, text), BLOCKS)
+        });
+        let t = cpu.unwrap_or(wall);
+        if *name == "fanuc" {
+            fanuc = Some(t);
+        }
+        let ratio = fanuc.map_or(String::new(), |f| format!(" ({:.2}× Fanuc)", t / f));
+        println!("read {BLOCKS} blocks, {name:>10}: {:.1} ms{ratio}", t * 1e3);
+    }
+}
+
 fn read(c: &mut Criterion) {
+    let mut group = c.benchmark_group("read per dialect");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(BLOCKS as u64));
+    for (name, dialect, text) in dialect_programs() {
+        group.bench_function(name, |b| {
+            b.iter(|| assert_eq!(read_dialect(dialect, &text), BLOCKS))
+        });
+    }
+    group.finish();
+
     let text = g01_program();
     let mut group = c.benchmark_group("read");
     group.sample_size(10);
@@ -283,5 +350,6 @@ fn main() {
         benches();
         Criterion::default().configure_from_args().final_summary();
     }
+    dialects_side_by_side();
     versus_rs274();
 }

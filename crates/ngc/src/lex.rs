@@ -345,7 +345,7 @@ const POW10: [f64; 23] = [
 /// division rounds their exact quotient correctly (Clinger's fast path), so the result is
 /// the same f64 as `str::parse` gives: the correctly rounded value of the decimal.
 #[inline]
-fn scan_number(b: &[u8], start: usize) -> (usize, Option<f64>) {
+pub(crate) fn scan_number(b: &[u8], start: usize) -> (usize, Option<f64>) {
     let mut i = start;
     let negative = b.get(i) == Some(&b'-');
     if negative || b.get(i) == Some(&b'+') {

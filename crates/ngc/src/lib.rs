@@ -44,6 +44,7 @@ mod dialect;
 mod error;
 mod expr;
 mod frame;
+mod heidenhain;
 mod ini;
 mod interp;
 mod lex;
@@ -54,6 +55,7 @@ mod probe;
 mod reader;
 mod remap;
 mod side_file;
+mod source;
 mod spline;
 mod stdglue;
 mod turns;
@@ -71,7 +73,8 @@ pub use options::{
     Dialect, Distance, Options, StartFeed, StartState, Tool, Units, UserM, G28_PARAMETER,
     G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
 };
-pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves, MAX_LINE_BYTES};
+pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves};
 pub use remap::{parse_remap, Remap, RemapCode};
 pub use side_file::{read_side_bytes, read_side_file, MAX_SIDE_FILE_BYTES};
+pub use source::MAX_LINE_BYTES;
 pub use units::{ARC_RADIUS_TOLERANCE_MM, FANUC_ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH};

@@ -23,15 +23,19 @@ pub enum Dialect {
     /// Haas NGC: Fanuc-style with G4 P in s when it has a decimal point (ms otherwise) and
     /// G234 for TCP.
     Haas,
+    /// HEIDENHAIN TNC 640 conversational (Klartext): `BEGIN PGM`, `L`, `CC`/`C`, Q
+    /// parameters, `LBL`, `CYCL DEF`, `PLANE` (its own front end, `heidenhain/`).
+    Heidenhain,
 }
 
 impl Dialect {
-    /// `linuxcnc`, `fanuc` or `haas`.
+    /// `linuxcnc`, `fanuc`, `haas` or `heidenhain`.
     pub const fn name(self) -> &'static str {
         match self {
             Dialect::Linuxcnc => "linuxcnc",
             Dialect::Fanuc => "fanuc",
             Dialect::Haas => "haas",
+            Dialect::Heidenhain => "heidenhain",
         }
     }
 

@@ -14,19 +14,20 @@
 //! are read (a device such as `/dev/zero`, a FIFO or a folder is refused).
 
 use std::collections::{HashMap, VecDeque};
-use std::io::{BufRead, BufReader, Read};
+use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use crate::axis::AxisVec;
 use crate::canon::Move;
-use crate::error::{line_column, Error, Result, Syntax};
+use crate::error::{Error, Result};
 use crate::expr::{Eval, Param};
 use crate::interp::{Interp, Stop};
 use crate::lex::{is_blank, lex, lex_with, Lexed, LineError, LineResult, Word};
 use crate::notice::Notice;
 use crate::options::{Dialect, Options};
 use crate::remap::Remap;
+use crate::source::{quoted_at, syntax_error, FileLines, Source, FILE_BUFFER_BYTES};
 
 /// Streams the moves of a file with default options, from `start`.
 pub fn read_file(path: &Path, start: AxisVec) -> Result<Moves> {
@@ -65,105 +66,6 @@ pub fn read_file_with(path: &Path, options: &Options) -> Result<Moves> {
 /// Streams the moves of `text`, reported as the contents of `path`.
 pub fn read_str_with(path: &Path, text: &str, options: &Options) -> Moves {
     Moves::new(path, Source::Text(text.into()), options)
-}
-
-/// Read buffer of a streamed program file, bytes.
-const FILE_BUFFER_BYTES: usize = 64 * 1024;
-
-/// Longest line of a program or subroutine file, bytes (1 MiB): no G-code line comes near
-/// it, and a file without newlines (`/dev/zero`, a binary) stops here instead of growing
-/// the line buffer without end.
-pub const MAX_LINE_BYTES: usize = 1 << 20;
-
-/// Largest program file whose whole text an error message quotes, bytes (64 MiB); beyond
-/// it the message quotes the offending line alone.
-const MAX_QUOTED_FILE_BYTES: u64 = 64 << 20;
-
-/// The text of a program: in memory (a string), or a file (the program, a subroutine file)
-/// read line by line at byte offsets.
-enum Source {
-    Text(Rc<str>),
-    File(FileLines),
-}
-
-/// A program file read through a buffer; `pos` is the byte offset of the next unread byte.
-struct FileLines {
-    reader: BufReader<std::fs::File>,
-    pos: u64,
-    len: u64,
-}
-
-impl FileLines {
-    /// Opens the regular file at `path` for streaming (see [`crate::side_file::open_regular`]).
-    fn open(path: &Path) -> std::io::Result<FileLines> {
-        let file = crate::side_file::open_regular(path)?;
-        let len = file.metadata()?.len();
-        Ok(FileLines {
-            reader: BufReader::with_capacity(FILE_BUFFER_BYTES, file),
-            pos: 0,
-            len,
-        })
-    }
-
-    /// Reads the line at byte `offset` into `buf` (without its `\n` or `\r\n`; invalid
-    /// UTF-8 replaced); returns the bytes it takes in the file, 0 at the end.
-    fn read_line(&mut self, offset: usize, buf: &mut String) -> std::io::Result<usize> {
-        let offset = offset as u64;
-        if offset != self.pos {
-            // Within the buffer when jumping back a little (a loop), a real seek otherwise.
-            self.reader.seek_relative(offset as i64 - self.pos as i64)?;
-            self.pos = offset;
-        }
-        // The line is read into `buf`'s own bytes, in place (docs/performance.md).
-        // SAFETY: `buf` holds UTF-8 again before this returns: on an error it is emptied,
-        // and the bytes read are checked (or replaced) below.
-        let bytes = unsafe { buf.as_mut_vec() };
-        bytes.clear();
-        let mut n = 0;
-        loop {
-            let available = match self.reader.fill_buf() {
-                Ok(available) => available,
-                Err(e) => {
-                    bytes.clear();
-                    return Err(e);
-                }
-            };
-            if available.is_empty() {
-                break;
-            }
-            let (take, end) = match newline(available) {
-                Some(k) => (k + 1, true),
-                None => (available.len(), false),
-            };
-            if n + take > MAX_LINE_BYTES + 2 {
-                bytes.clear();
-                return Err(std::io::Error::new(
-                    std::io::ErrorKind::InvalidData,
-                    format!("a line longer than {MAX_LINE_BYTES} bytes: expected G-code lines"),
-                ));
-            }
-            bytes.extend_from_slice(&available[..take]);
-            self.reader.consume(take);
-            n += take;
-            if end {
-                break;
-            }
-        }
-        self.pos += n as u64;
-        if bytes.last() == Some(&b'\n') {
-            bytes.pop();
-            if bytes.last() == Some(&b'\r') {
-                bytes.pop();
-            }
-        }
-        // ASCII is UTF-8; a G-code line nearly always is, and this word-at-a-time test is a
-        // fraction of the general validation's cost on short lines.
-        if !bytes.is_ascii() && std::str::from_utf8(bytes).is_err() {
-            let valid = String::from_utf8_lossy(bytes).into_owned();
-            *buf = valid;
-        }
-        Ok(n)
-    }
 }
 
 /// A place in one of the loaded program texts.
@@ -448,6 +350,9 @@ pub struct Moves {
     notices: Vec<Notice>,
     /// The current line of a streamed file.
     buf: String,
+    /// A HEIDENHAIN Klartext program's own front end (crate `dialect::heidenhain`), which
+    /// then yields every move.
+    klartext: Option<Box<crate::heidenhain::Reader>>,
     /// The block's word buffer, kept empty between blocks (no allocation per block).
     words: Vec<Word<'static>>,
     /// A read error of a streamed file, reported by the next step.
@@ -469,6 +374,22 @@ pub struct Moves {
 
 impl Moves {
     fn new(path: &Path, source: Source, options: &Options) -> Moves {
+        let mut moves = Moves::g_code(path, source, options);
+        // A Klartext program goes to its own front end, whatever the dialect named.
+        if options.dialect == Dialect::Heidenhain || moves.first_line_heidenhain() {
+            let source = std::mem::replace(&mut moves.programs[0].source, Source::Text("".into()));
+            let options = Options {
+                dialect: Dialect::Heidenhain,
+                ..options.clone()
+            };
+            moves.klartext = Some(Box::new(crate::heidenhain::Reader::new(
+                path, source, &options,
+            )));
+        }
+        moves
+    }
+
+    fn g_code(path: &Path, source: Source, options: &Options) -> Moves {
         Moves {
             programs: vec![Program {
                 path: path.to_path_buf(),
@@ -496,6 +417,7 @@ impl Moves {
             language_checked: false,
             notices: Vec::new(),
             buf: String::new(),
+            klartext: None,
             words: Vec::new(),
             io_error: None,
             remaps: options.remaps.clone(),
@@ -511,6 +433,9 @@ impl Moves {
     /// What was accepted without being simulated (user M codes, at most one notice per
     /// code), so far.
     pub fn notices(&self) -> &[Notice] {
+        if let Some(k) = &self.klartext {
+            return k.notices();
+        }
         &self.notices
     }
 
@@ -518,38 +443,24 @@ impl Moves {
     /// on a read error, kept in `io_error`). Inlined (docs/performance.md).
     #[inline(always)]
     fn line_at(&mut self, c: Cursor) -> Option<(&str, Cursor)> {
-        let (line, len) = match &mut self.programs[c.file].source {
-            Source::Text(text) => {
-                if c.offset >= text.len() {
-                    return None;
-                }
-                let rest = &text[c.offset..];
-                let (raw, len) = match newline(rest.as_bytes()) {
-                    Some(n) => (&rest[..n], n + 1),
-                    None => (rest, rest.len()),
-                };
-                (raw.strip_suffix('\r').unwrap_or(raw), len)
+        match self.programs[c.file].source.line(c.offset, &mut self.buf) {
+            Ok(Some((line, len))) => Some((
+                line,
+                Cursor {
+                    file: c.file,
+                    offset: c.offset + len,
+                    line: c.line + 1,
+                },
+            )),
+            Ok(None) => None,
+            Err(e) => {
+                self.io_error = Some(std::io::Error::new(
+                    e.kind(),
+                    format!("line {}: {e}", c.line),
+                ));
+                None
             }
-            Source::File(f) => match f.read_line(c.offset, &mut self.buf) {
-                Ok(0) => return None,
-                Ok(len) => (self.buf.as_str(), len),
-                Err(e) => {
-                    self.io_error = Some(std::io::Error::new(
-                        e.kind(),
-                        format!("line {}: {e}", c.line),
-                    ));
-                    return None;
-                }
-            },
-        };
-        Some((
-            line,
-            Cursor {
-                file: c.file,
-                offset: c.offset + len,
-                line: c.line + 1,
-            },
-        ))
+        }
     }
 
     /// The whole text of program `file` and the byte offset of 1-based `line` in it, for an
@@ -557,36 +468,7 @@ impl Moves {
     /// be, the text is `line_text` alone at its own line number.
     fn error_text(&self, c: Cursor, line_text: &str) -> (String, usize) {
         let program = &self.programs[c.file];
-        match &program.source {
-            Source::Text(text) => (text.to_string(), c.offset.min(text.len())),
-            Source::File(f) => match (f.len <= MAX_QUOTED_FILE_BYTES)
-                .then(|| std::fs::read(&program.path).ok())
-                .flatten()
-            {
-                Some(bytes) => {
-                    let text = match String::from_utf8(bytes) {
-                        Ok(t) => t,
-                        Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
-                    };
-                    let start = if c.line <= 1 {
-                        0
-                    } else {
-                        text.bytes()
-                            .enumerate()
-                            .filter(|&(_, b)| b == b'\n')
-                            .nth(c.line - 2)
-                            .map_or(text.len(), |(i, _)| i + 1)
-                    };
-                    (text, start)
-                }
-                None => {
-                    let mut text = "\n".repeat(c.line.saturating_sub(1));
-                    let start = text.len();
-                    text.push_str(line_text);
-                    (text, start)
-                }
-            },
-        }
+        quoted_at(program.source.quoted(&program.path), c.line, line_text)
     }
 
     fn error_at(&self, c: Cursor, err: LineError, line_text: &str) -> Error {
@@ -597,29 +479,7 @@ impl Moves {
     /// A syntax error at `err.span` of the line starting at byte `start` of `text`, the text
     /// of program `file`.
     fn syntax_in(&self, file: usize, text: &str, start: usize, err: LineError) -> Error {
-        let program = &self.programs[file];
-        let text = text.to_string();
-        let mut span = start + err.span.start..start + err.span.end;
-        span.end = span.end.min(text.len());
-        span.start = span.start.min(span.end);
-        // Keep the span on character boundaries (a label may end inside `é`).
-        while !text.is_char_boundary(span.start) {
-            span.start -= 1;
-        }
-        while !text.is_char_boundary(span.end) {
-            span.end += 1;
-        }
-        let (line, column) = line_column(&text, span.start);
-        Error::Syntax(Box::new(Syntax {
-            path: program.path.clone(),
-            line,
-            column,
-            message: err.message,
-            label: err.label,
-            help: err.help,
-            text,
-            span,
-        }))
+        syntax_error(&self.programs[file].path, text.to_string(), start, err)
     }
 
     fn backward(&mut self, span: std::ops::Range<usize>) -> LineResult<()> {
@@ -1359,18 +1219,15 @@ impl Moves {
         None
     }
 
-    /// Refuses a program written in another control's language: Heidenhain conversational
-    /// (`BEGIN PGM`) or Siemens Sinumerik (`TRAORI`, `CYCLE800`), before any move.
-    /// Their front ends will plug in here (crate `dialect`'s module doc): a program
-    /// recognised as one of them is then read by its own front end instead.
+    /// Refuses a program written in another control's language: Siemens Sinumerik
+    /// (`TRAORI`, `CYCLE800`), before any move (a Heidenhain program never gets here: it is
+    /// read by its own front end, see [`Moves::new`]). The Siemens front end will plug in
+    /// the same way (crate `dialect`'s module doc).
     fn foreign_language(&mut self) -> Option<Error> {
         // A cheap screen first, so that a streamed file is read whole only when it fails.
         let suspect = match &self.programs[0].source {
-            Source::Text(text) => may_be_foreign(text.as_bytes()) || self.first_line_heidenhain(),
-            Source::File(_) => {
-                self.first_line_heidenhain()
-                    || file_may_be_foreign(&self.programs[0].path).unwrap_or(false)
-            }
+            Source::Text(text) => may_be_foreign(text.as_bytes()),
+            Source::File(_) => file_may_be_foreign(&self.programs[0].path).unwrap_or(false),
         };
         if !suspect {
             return None;
@@ -1383,19 +1240,6 @@ impl Moves {
             }
         };
         let text = &text;
-        let first = text.lines().position(|l| !l.trim().is_empty())?;
-        let line = text.lines().nth(first)?;
-        let start = text.lines().take(first).map(|l| l.len() + 1).sum::<usize>();
-        let c = Cursor {
-            file: 0,
-            offset: start.min(text.len()),
-            line: first + 1,
-        };
-        let trimmed = line.trim_start();
-        let at = line.len() - trimmed.len();
-        if trimmed.to_ascii_uppercase().starts_with("BEGIN PGM") {
-            return Some(self.syntax_in(c.file, text, c.offset, LineError::new(at..line.len(), "this is a Heidenhain conversational (Klartext) program: expected G-code in the RS274/NGC, Fanuc or Haas language", "Heidenhain conversational").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
-        }
         // The first Siemens word in the file.
         let first = SIEMENS_TOKENS
             .iter()
@@ -1448,7 +1292,8 @@ impl Moves {
         }
     }
 
-    /// The first line with more than blanks starts with `BEGIN PGM` (Heidenhain).
+    /// The first line with more than blanks opens a Heidenhain Klartext program (`BEGIN
+    /// PGM`, with or without a block number).
     fn first_line_heidenhain(&mut self) -> bool {
         let mut c = Cursor {
             file: 0,
@@ -1456,9 +1301,8 @@ impl Moves {
             line: 1,
         };
         while let Some((line, next)) = self.line_at(c) {
-            let t = line.trim();
-            if !t.is_empty() {
-                return t.len() >= 9 && t.as_bytes()[..9].eq_ignore_ascii_case(b"BEGIN PGM");
+            if !line.trim().is_empty() {
+                return crate::heidenhain::opens_program(line);
             }
             c = next;
         }
@@ -1868,37 +1712,6 @@ impl Program {
     }
 }
 
-/// The index of the first `\n` in `bytes`, 8 bytes at a time (lines are short; see
-/// docs/performance.md for `memchr`). With `v` the word XOR eight `\n`s, a byte
-/// of `(v - 0x01…01) & !v & 0x80…80` is set at every zero byte of `v` and can be set falsely
-/// only above one, so the lowest set byte is the first `\n`.
-#[inline]
-fn newline(bytes: &[u8]) -> Option<usize> {
-    const ONES: u64 = 0x0101_0101_0101_0101;
-    const HIGHS: u64 = 0x8080_8080_8080_8080;
-    let mut chunks = bytes.chunks_exact(8);
-    let mut i = 0;
-    for chunk in &mut chunks {
-        let mut word = [0u8; 8];
-        word.copy_from_slice(chunk);
-        let v = u64::from_le_bytes(word) ^ (ONES * b'\n' as u64);
-        let zero = v.wrapping_sub(ONES) & !v & HIGHS;
-        if zero != 0 {
-            return Some(i + (zero.trailing_zeros() / 8) as usize);
-        }
-        i += 8;
-    }
-    chunks
-        .remainder()
-        .iter()
-        .position(|&b| b == b'\n')
-        .map(|k| i + k)
-}
-
-/// True when `bytes` holds a `#` or a `[`, 8 bytes at a time as in [`newline`] (a zero
-/// byte of the word XOR eight `#`s, or of the word XOR eight `[`s). On lines this short a
-/// vectorised fold spent more in its set-up and reduction than in the search.
-#[inline]
 fn has_hash_or_bracket(bytes: &[u8]) -> bool {
     const ONES: u64 = 0x0101_0101_0101_0101;
     const HIGHS: u64 = 0x8080_8080_8080_8080;
@@ -1999,6 +1812,9 @@ impl Iterator for Moves {
 
     fn next(&mut self) -> Option<Result<Move>> {
         loop {
+            if let Some(k) = &mut self.klartext {
+                return k.next();
+            }
             if let Some(m) = self.queue.pop_front() {
                 return Some(Ok(m));
             }

@@ -437,13 +437,19 @@ fn words_the_machine_or_block_cannot_use_are_errors() {
 }
 
 #[test]
-fn other_controls_languages_are_refused_at_their_first_line() {
-    let (line, _, msg) = error_with(
+fn other_controls_languages_are_read_or_refused_at_their_first_line() {
+    // A Klartext program goes to the Heidenhain front end whatever the dialect named,
+    // with or without block numbers.
+    for text in [
         "BEGIN PGM PART MM\nL X+10 FMAX\nEND PGM PART MM\n",
-        &Options::default(),
-    );
-    assert_eq!(line, 1);
-    assert!(msg.contains("Heidenhain"), "{msg}");
+        "0  BEGIN PGM PART MM\n1  L X+10 FMAX\n2  END PGM PART MM\n",
+    ] {
+        let moves: Vec<_> = read_str_with(Path::new("t.h"), text, &Options::default())
+            .collect::<Result<_, _>>()
+            .unwrap();
+        assert_eq!(moves.len(), 1, "{text}");
+        assert_eq!(moves[0].end[ngc::Axis::X], 10.0);
+    }
     let (line, col, msg) = error_with("N10 G0 X0\nN20 TRAORI\nN30 G1 X1\n", &Options::default());
     assert_eq!((line, col), (2, 5));
     assert!(msg.contains("Siemens"), "{msg}");

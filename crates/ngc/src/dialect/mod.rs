@@ -12,22 +12,23 @@
 //!  Haas (NGC)           ─┘        │  the dialect's Table
 //!                                 ▼
 //!                          typed block (crate `block`) ─► interp phases ─► canonical Move
-//!                                 ▲
-//!  Heidenhain Klartext ──── own front end (issue 29): BLK FORM, L, CC/C, CYCL DEF, LBL
+//!                                 ▲        words of the same G codes (G1, G2 I J, G52, G68.2 …)
+//!  Heidenhain Klartext ──── own front end, crate module `heidenhain`: BEGIN PGM, L/C/CC/CT/RND, Q, LBL,
+//!                           CYCL DEF, PLANE (read whatever the dialect when BEGIN PGM opens it)
 //!  Siemens Sinumerik ────── own front end (issue 29): G-code plus R params, CYCLE8x, MCALL
 //! ```
 //!
 //! The three G-code dialects share one line syntax, so they differ only in this table. The
-//! Heidenhain conversational and Siemens Sinumerik languages have their own line syntax; they
-//! will plug in as whole front ends beside `lex`/`reader`, each turning its program text
-//! into the same typed [`Block`](crate::block::Block) of G codes and words (or, for a
-//! construct with no G-code counterpart, straight into canonical moves through the same
-//! `Interp` queue), with a [`Table`] of its own for the modal state it starts in. Whatever
-//! the front end, every move leaves as the same canonical [`Move`](crate::Move). Until then
-//! the reader recognises such programs and refuses them by name.
+//! Heidenhain conversational and Siemens Sinumerik languages have their own line syntax: they
+//! plug in as whole front ends beside `lex`/`reader`, each turning its program text into the
+//! words of a typed [`Block`](crate::block::Block) the same interpreter runs, with a
+//! [`Table`] of its own for the modal state it starts in. Whatever the front end, every move
+//! leaves as the same canonical [`Move`](crate::Move). Until the Siemens one is in, the
+//! reader recognises such programs and refuses them by name.
 
 mod fanuc;
 mod haas;
+mod heidenhain;
 mod linuxcnc;
 mod table;
 
@@ -44,6 +45,7 @@ impl Dialect {
             Dialect::Linuxcnc => &linuxcnc::TABLE,
             Dialect::Fanuc => &fanuc::TABLE,
             Dialect::Haas => &haas::TABLE,
+            Dialect::Heidenhain => &heidenhain::TABLE,
         }
     }
 }

@@ -255,15 +255,7 @@ impl Interp {
         // Where X is an axis word (LinuxCNC), it is never a dwell time.
         let x = if table.dwell_x_seconds { x } else { None };
         let (seconds, w) = match (p, x) {
-            (Some(p), None) => {
-                let seconds = match table.dwell_p {
-                    DwellUnit::Seconds => p.value,
-                    DwellUnit::Milliseconds => p.value / 1000.0,
-                    DwellUnit::MillisecondsUnlessDecimal if p.number.contains('.') => p.value,
-                    DwellUnit::MillisecondsUnlessDecimal => p.value / 1000.0,
-                };
-                (seconds, p)
-            }
+            (Some(p), None) => (dwell_p_seconds(table.dwell_p, &p), p),
             (None, Some(x)) => (x.value, x),
             (Some(_), Some(x)) => {
                 return Err(LineError::new(
@@ -431,5 +423,16 @@ impl Interp {
             }
         }
         Ok(())
+    }
+}
+
+/// A dwell's P word in seconds, in the dialect's unit (G4, and the cycles G82 G86 G89:
+/// the Fanuc Series 0i operator's manual gives both in ms).
+pub(super) fn dwell_p_seconds(unit: DwellUnit, p: &Word) -> f64 {
+    match unit {
+        DwellUnit::Seconds => p.value,
+        DwellUnit::Milliseconds => p.value / 1000.0,
+        DwellUnit::MillisecondsUnlessDecimal if p.number.contains('.') => p.value,
+        DwellUnit::MillisecondsUnlessDecimal => p.value / 1000.0,
     }
 }

@@ -1,0 +1,238 @@
+//! Program text as lines: a program in memory or a file streamed through a fixed buffer,
+//! read a line at a byte offset (so jumps seek back); and the error that quotes a place in
+//! it. Both front ends (the G-code reader and the Klartext one) read through it.
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::rc::Rc;
+
+use crate::error::{line_column, Error, Syntax};
+use crate::lex::LineError;
+
+/// Read buffer of a streamed program file, bytes.
+pub(crate) const FILE_BUFFER_BYTES: usize = 64 * 1024;
+
+/// Longest line of a program or subroutine file, bytes (1 MiB): no G-code line comes near
+/// it, and a file without newlines (`/dev/zero`, a binary) stops here instead of growing
+/// the line buffer without end.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// Largest program file whose whole text an error message quotes, bytes (64 MiB); beyond
+/// it the message quotes the offending line alone.
+const MAX_QUOTED_FILE_BYTES: u64 = 64 << 20;
+
+/// The text of a program: in memory (a string), or a file (the program, a subroutine file)
+/// read line by line at byte offsets.
+pub(crate) enum Source {
+    Text(Rc<str>),
+    File(FileLines),
+}
+
+impl Source {
+    /// The line at byte `offset` (without its `\n` or `\r\n`, a file's line read into
+    /// `buf`) and the bytes it takes; `None` at the end of the text.
+    #[inline(always)]
+    pub(crate) fn line<'a>(
+        &'a mut self,
+        offset: usize,
+        buf: &'a mut String,
+    ) -> std::io::Result<Option<(&'a str, usize)>> {
+        Ok(match self {
+            Source::Text(text) => {
+                if offset >= text.len() {
+                    return Ok(None);
+                }
+                let rest = &text[offset..];
+                let (raw, len) = match newline(rest.as_bytes()) {
+                    Some(n) => (&rest[..n], n + 1),
+                    None => (rest, rest.len()),
+                };
+                Some((raw.strip_suffix('\r').unwrap_or(raw), len))
+            }
+            Source::File(f) => match f.read_line(offset, buf)? {
+                0 => None,
+                len => Some((buf.as_str(), len)),
+            },
+        })
+    }
+
+    /// The whole text, for an error message (a file is read again, up to
+    /// `MAX_QUOTED_FILE_BYTES`); `None` when it cannot be.
+    pub(crate) fn quoted(&self, path: &Path) -> Option<String> {
+        match self {
+            Source::Text(text) => Some(text.to_string()),
+            Source::File(f) => {
+                let bytes = (f.len <= MAX_QUOTED_FILE_BYTES)
+                    .then(|| std::fs::read(path).ok())
+                    .flatten()?;
+                Some(match String::from_utf8(bytes) {
+                    Ok(t) => t,
+                    Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
+                })
+            }
+        }
+    }
+}
+
+/// A program file read through a buffer; `pos` is the byte offset of the next unread byte.
+pub(crate) struct FileLines {
+    reader: BufReader<std::fs::File>,
+    pos: u64,
+    pub(crate) len: u64,
+}
+
+impl FileLines {
+    /// Opens the regular file at `path` for streaming (see [`crate::side_file::open_regular`]).
+    pub(crate) fn open(path: &Path) -> std::io::Result<FileLines> {
+        let file = crate::side_file::open_regular(path)?;
+        let len = file.metadata()?.len();
+        Ok(FileLines {
+            reader: BufReader::with_capacity(FILE_BUFFER_BYTES, file),
+            pos: 0,
+            len,
+        })
+    }
+
+    /// Reads the line at byte `offset` into `buf` (without its `\n` or `\r\n`; invalid
+    /// UTF-8 replaced); returns the bytes it takes in the file, 0 at the end.
+    fn read_line(&mut self, offset: usize, buf: &mut String) -> std::io::Result<usize> {
+        let offset = offset as u64;
+        if offset != self.pos {
+            // Within the buffer when jumping back a little (a loop), a real seek otherwise.
+            self.reader.seek_relative(offset as i64 - self.pos as i64)?;
+            self.pos = offset;
+        }
+        // The line is read into `buf`'s own bytes, in place (docs/performance.md).
+        // SAFETY: `buf` holds UTF-8 again before this returns: on an error it is emptied,
+        // and the bytes read are checked (or replaced) below.
+        let bytes = unsafe { buf.as_mut_vec() };
+        bytes.clear();
+        let mut n = 0;
+        loop {
+            let available = match self.reader.fill_buf() {
+                Ok(available) => available,
+                Err(e) => {
+                    bytes.clear();
+                    return Err(e);
+                }
+            };
+            if available.is_empty() {
+                break;
+            }
+            let (take, end) = match newline(available) {
+                Some(k) => (k + 1, true),
+                None => (available.len(), false),
+            };
+            if n + take > MAX_LINE_BYTES + 2 {
+                bytes.clear();
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("a line longer than {MAX_LINE_BYTES} bytes: expected G-code lines"),
+                ));
+            }
+            bytes.extend_from_slice(&available[..take]);
+            self.reader.consume(take);
+            n += take;
+            if end {
+                break;
+            }
+        }
+        self.pos += n as u64;
+        if bytes.last() == Some(&b'\n') {
+            bytes.pop();
+            if bytes.last() == Some(&b'\r') {
+                bytes.pop();
+            }
+        }
+        // ASCII is UTF-8; a G-code line nearly always is, and this word-at-a-time test is a
+        // fraction of the general validation's cost on short lines.
+        if !bytes.is_ascii() && std::str::from_utf8(bytes).is_err() {
+            let valid = String::from_utf8_lossy(bytes).into_owned();
+            *buf = valid;
+        }
+        Ok(n)
+    }
+}
+
+/// The index of the first `\n` in `bytes`, 8 bytes at a time (lines are short; see
+/// docs/performance.md for `memchr`). With `v` the word XOR eight `\n`s, a byte
+/// of `(v - 0x01…01) & !v & 0x80…80` is set at every zero byte of `v` and can be set falsely
+/// only above one, so the lowest set byte is the first `\n`.
+#[inline]
+pub(crate) fn newline(bytes: &[u8]) -> Option<usize> {
+    const ONES: u64 = 0x0101_0101_0101_0101;
+    const HIGHS: u64 = 0x8080_8080_8080_8080;
+    let mut chunks = bytes.chunks_exact(8);
+    let mut i = 0;
+    for chunk in &mut chunks {
+        let mut word = [0u8; 8];
+        word.copy_from_slice(chunk);
+        let v = u64::from_le_bytes(word) ^ (ONES * b'\n' as u64);
+        let zero = v.wrapping_sub(ONES) & !v & HIGHS;
+        if zero != 0 {
+            return Some(i + (zero.trailing_zeros() / 8) as usize);
+        }
+        i += 8;
+    }
+    chunks
+        .remainder()
+        .iter()
+        .position(|&b| b == b'\n')
+        .map(|k| i + k)
+}
+
+/// True when `bytes` holds a `#` or a `[`, 8 bytes at a time as in [`newline`] (a zero
+/// byte of the word XOR eight `#`s, or of the word XOR eight `[`s). On lines this short a
+/// vectorised fold spent more in its set-up and reduction than in the search.
+#[inline]
+/// A syntax error at `err.span` of the line starting at byte `start` of `text`, the text of
+/// the program at `path`.
+pub(crate) fn syntax_error(path: &Path, text: String, start: usize, err: LineError) -> Error {
+    let mut span = start + err.span.start..start + err.span.end;
+    span.end = span.end.min(text.len());
+    span.start = span.start.min(span.end);
+    // Keep the span on character boundaries (a label may end inside `é`).
+    while !text.is_char_boundary(span.start) {
+        span.start -= 1;
+    }
+    while !text.is_char_boundary(span.end) {
+        span.end += 1;
+    }
+    let (line, column) = line_column(&text, span.start);
+    Error::Syntax(Box::new(Syntax {
+        path: path.to_path_buf(),
+        line,
+        column,
+        message: err.message,
+        label: err.label,
+        help: err.help,
+        text,
+        span,
+    }))
+}
+
+/// The text quoted by an error at 1-based `line` (`text`, the whole program, when it could
+/// be read) and the byte offset of that line in it; without the program, `line_text` alone
+/// at its own line number.
+pub(crate) fn quoted_at(text: Option<String>, line: usize, line_text: &str) -> (String, usize) {
+    match text {
+        Some(text) => {
+            let start = if line <= 1 {
+                0
+            } else {
+                text.bytes()
+                    .enumerate()
+                    .filter(|&(_, b)| b == b'\n')
+                    .nth(line - 2)
+                    .map_or(text.len(), |(i, _)| i + 1)
+            };
+            (text, start)
+        }
+        None => {
+            let mut text = "\n".repeat(line.saturating_sub(1));
+            let start = text.len();
+            text.push_str(line_text);
+            (text, start)
+        }
+    }
+}

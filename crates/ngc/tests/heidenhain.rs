@@ -1,0 +1,314 @@
+//! The HEIDENHAIN Klartext front end: each construct's moves against values worked out by
+//! hand, the refusals that name the construct, and the bounds (nesting, loops, lines).
+
+use std::path::Path;
+
+use ngc::{read_str_with, Axis, Dialect, Error, Motion, Move, Options, RotaryTable, Tool};
+
+fn opts() -> Options {
+    Options {
+        dialect: Dialect::Heidenhain,
+        tools: vec![Tool {
+            number: 1,
+            length_mm: 0.0,
+            diameter_mm: 10.0,
+        }],
+        ..Options::default()
+    }
+}
+
+fn program(body: &str) -> String {
+    format!("0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S1000\n{body}\n99 END PGM T MM\n")
+}
+
+fn moves_with(body: &str, o: &Options) -> Vec<Move> {
+    read_str_with(Path::new("t.h"), &program(body), o)
+        .collect::<Result<_, _>>()
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn moves(body: &str) -> Vec<Move> {
+    moves_with(body, &opts())
+}
+
+/// (line, column, message) of the error the program stops with.
+fn error(body: &str) -> (usize, usize, String) {
+    let e = read_str_with(Path::new("t.h"), &program(body), &opts())
+        .find_map(Result::err)
+        .expect("an error");
+    match e {
+        Error::Syntax(s) => (s.line, s.column, s.message),
+        other => panic!("{other}"),
+    }
+}
+
+fn xy(m: &Move) -> [f64; 2] {
+    [m.end[Axis::X], m.end[Axis::Y]]
+}
+
+fn near(a: [f64; 2], b: [f64; 2]) -> bool {
+    (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9
+}
+
+/// An arc's direction and centre X Y.
+fn arc(m: &Move) -> (bool, [f64; 2]) {
+    match m.motion {
+        Motion::Arc {
+            clockwise,
+            center_mm,
+            ..
+        } => (clockwise, [center_mm[0], center_mm[1]]),
+        other => panic!("not an arc: {other:?}"),
+    }
+}
+
+#[test]
+fn fmax_is_for_its_block_alone_and_f_stays() {
+    let m = moves("2 L X+0 Y+0 Z+5 R0 F300\n3 L X+10 FMAX\n/4 L X+99\n4 L X+20");
+    assert_eq!(m[1].motion, Motion::Rapid);
+    assert_eq!(m[2].motion, Motion::Linear);
+    assert_eq!(m[2].feed, Some(300.0));
+}
+
+#[test]
+fn polar_line_and_arc_about_the_pole() {
+    // LP PR+20 PA+30 from the pole (5, 5): (5 + 20 cos 30°, 5 + 20 sin 30°) = (22.3205…, 15).
+    let m =
+        moves("2 L X+0 Y+0 R0 F100\n3 CC X+5 Y+5\n4 LP PR+20 PA+30\n5 CP IPA+60 DR+\n6 LP IPR-10");
+    assert!(near(xy(&m[1]), [5.0 + 20.0 * 3f64.sqrt() / 2.0, 15.0]));
+    // CP IPA+60 to 90°: (5, 25), counter-clockwise about the pole.
+    assert!(near(xy(&m[2]), [5.0, 25.0]));
+    let (clockwise, centre) = arc(&m[2]);
+    assert!(!clockwise && near(centre, [5.0, 5.0]), "{centre:?}");
+    // IPR-10: radius 10 at 90°.
+    assert!(near(xy(&m[3]), [5.0, 15.0]));
+}
+
+#[test]
+fn ct_is_tangent_to_the_line_before_it() {
+    // From (20, 0) heading +X to (30, 10): centre (20, 10), counter-clockwise.
+    let m = moves("2 L X+0 Y+0 R0 F100\n3 L X+20\n4 CT X+30 Y+10");
+    let (clockwise, centre) = arc(&m[2]);
+    assert!(!clockwise && near(centre, [20.0, 10.0]), "{centre:?}");
+}
+
+#[test]
+fn rnd_and_chf_cut_the_corner() {
+    // A 90° corner at (40, 0): RND R5 touches the lines 5 from the corner (r tan 45°).
+    let m = moves("2 L X+0 Y+0 R0 F100\n3 L X+40\n4 RND R5\n5 L Y+40");
+    assert!(near(xy(&m[1]), [35.0, 0.0]));
+    assert!(near(xy(&m[2]), [40.0, 5.0]));
+    let (clockwise, centre) = arc(&m[2]);
+    assert!(!clockwise && near(centre, [35.0, 5.0]), "{centre:?}");
+    assert!(near(xy(&m[3]), [40.0, 40.0]));
+    // A 120° turn (60° between the lines): RND R2 touches them 2 tan 60° = 3.4641 away.
+    let m = moves("2 L X+0 Y+0 R0 F100\n3 L X+10\n4 RND R2\n5 L X+5 Y+8.660254037844386");
+    let t = 2.0 * 60f64.to_radians().tan();
+    assert!(near(xy(&m[1]), [10.0 - t, 0.0]));
+    assert!(near(xy(&m[2]), [10.0 - t * 0.5, t * 3f64.sqrt() / 2.0]));
+    let m = moves("2 L X+0 Y+0 R0 F100\n3 L X+40\n4 CHF 5\n5 L Y+40");
+    assert!(near(xy(&m[1]), [35.0, 0.0]));
+    assert!(near(xy(&m[2]), [40.0, 5.0]));
+    assert_eq!(m[2].motion, Motion::Linear);
+}
+
+#[test]
+fn q_parameters_fn_and_formulas() {
+    let m = moves(
+        "2 FN 0: Q1 = +3\n3 FN 8: Q2 = +Q1 LEN +4\n4 FN 13: Q3 = +0 ANG +1\n\
+         5 Q4 = (Q2 + 1) * 2 ^ 2 - SQRT(16) / 4\n6 L X+Q2 Y+Q3 Z+Q4 R0 FMAX",
+    );
+    // 3 LEN 4 = 5; 0 ANG 1 = 90°; (5 + 1) · 4 − 1 = 23.
+    assert_eq!(
+        [m[0].end[Axis::X], m[0].end[Axis::Y], m[0].end[Axis::Z]],
+        [5.0, 90.0, 23.0]
+    );
+}
+
+#[test]
+fn fn_jumps_loop_to_a_label() {
+    // Q1 counts 1..3: three moves of IX+10.
+    let m = moves(
+        "2 L X+0 Y+0 R0 F100\n3 FN 0: Q1 = +0\n4 LBL 1\n5 L IX+10\n6 FN 1: Q1 = +Q1 + +1\n\
+         7 FN 12: IF +Q1 LT +3 GOTO LBL 1\n8 L Y+5",
+    );
+    assert_eq!(m.len(), 5);
+    assert_eq!(m[3].end[Axis::X], 30.0);
+}
+
+#[test]
+fn subprograms_and_section_repeats() {
+    let m = moves(
+        "2 L X+0 Y+0 R0 F100\n3 CALL LBL 5\n4 CALL LBL 5 REP 2\n5 LBL 7\n6 L IY+1\n\
+         7 CALL LBL 7 REP 1\n8 M30\n9 LBL 5\n10 L IX+1\n11 LBL 0",
+    );
+    // One call, then two passes of the subprogram; the section 6 runs twice.
+    let ends: Vec<_> = m.iter().map(|m| xy(m)).collect();
+    assert_eq!(
+        ends[1..],
+        [[1.0, 0.0], [2.0, 0.0], [3.0, 0.0], [3.0, 1.0], [3.0, 2.0]]
+    );
+}
+
+#[test]
+fn a_called_program_runs_to_its_end_then_the_caller_goes_on() {
+    let dir = std::env::temp_dir().join(format!("ngc-klartext-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("SUB.h"),
+        "0 BEGIN PGM SUB MM\n1 L IX+7\n2 END PGM SUB MM\n",
+    )
+    .unwrap();
+    let main = dir.join("MAIN.h");
+    std::fs::write(
+        &main,
+        program("2 L X+0 Y+0 R0 F100\n3 CALL PGM SUB\n4 L Y+1"),
+    )
+    .unwrap();
+    let m: Vec<_> = ngc::read_file_with(&main, &opts())
+        .unwrap()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert_eq!(xy(&m[1]), [7.0, 0.0]);
+    assert_eq!(xy(&m[2]), [7.0, 1.0]);
+    std::fs::write(&main, program("3 CALL PGM NOWHERE")).unwrap();
+    let e = ngc::read_file_with(&main, &opts())
+        .unwrap()
+        .find_map(Result::err)
+        .unwrap();
+    assert!(e.to_string().contains("CALL PGM NOWHERE"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn drilling_cycle_200_pecks_as_the_manual_draws_it() {
+    let m = moves(
+        "2 L X+5 Y+5 Z+20 R0 FMAX\n3 CYCL DEF 200 DRILLING ~\n Q200=+2 ;SET-UP ~\n Q201=-7 ~\n \
+         Q206=+100 ~\n Q202=+3 ~\n Q210=+0 ~\n Q203=+1 ~\n Q204=+10 ~\n Q211=+0.25\n4 CYCL CALL",
+    );
+    let z: Vec<_> = m[1..]
+        .iter()
+        .map(|m| (m.motion == Motion::Rapid, m.end[Axis::Z]))
+        .collect();
+    // Surface 1, clearance to 3, pecks of 3 to -6, a = 2 above the depth reached; 2nd
+    // set-up clearance 11.
+    let expected = [
+        (true, 3.0),
+        (false, -2.0),
+        (true, 3.0),
+        (true, 0.0),
+        (false, -5.0),
+        (true, 3.0),
+        (true, -3.0),
+        (false, -6.0),
+    ];
+    assert_eq!(z[..8], expected);
+    assert_eq!(m[9].motion, Motion::Dwell { seconds: 0.25 });
+    assert_eq!(z[9..], [(true, 3.0), (true, 11.0)]);
+}
+
+#[test]
+fn rigid_tapping_207_feeds_at_pitch_times_speed_in_and_out() {
+    // S500 × 1.25 mm = 625 mm/min, to Q203 + Q201 = -10 and back to 2, then 10.
+    let m = moves(
+        "2 TOOL CALL 1 Z S500\n3 L X+5 Y+5 Z+20 R0 FMAX\n4 CYCL DEF 207 RIGID TAPPING NEW ~\n \
+         Q200=+2 ~\n Q201=-10 ~\n Q239=+1.25 ~\n Q203=+0 ~\n Q204=+10\n5 CYCL CALL",
+    );
+    let z: Vec<_> = m[1..]
+        .iter()
+        .map(|m| (m.motion == Motion::Rapid, m.end[Axis::Z], m.feed))
+        .collect();
+    assert_eq!(z[0].1, 2.0);
+    assert_eq!(z[1], (false, -10.0, Some(625.0)));
+    assert_eq!(z[2], (false, 2.0, Some(625.0)));
+    assert_eq!((z[3].0, z[3].1), (true, 10.0));
+}
+
+#[test]
+fn datum_shift_and_rotation_move_the_program_frame() {
+    // Datum (10, 5), then 90°: program (1, 0) is at (10, 6).
+    let m = moves(
+        "2 CYCL DEF 7.0 DATUM SHIFT\n3 CYCL DEF 7.1 X+10\n4 CYCL DEF 7.2 Y+5\n\
+         5 CYCL DEF 10.0 ROTATION\n6 CYCL DEF 10.1 ROT+90\n7 L X+1 Y+0 Z+0 R0 FMAX",
+    );
+    assert!(near(xy(&m[0]), [10.0, 6.0]), "{:?}", xy(&m[0]));
+}
+
+#[test]
+fn plane_spatial_euler_and_vector_give_the_same_tilt() {
+    let table = Options {
+        table: Some(RotaryTable {
+            tilt: Axis::A,
+            pivot_mm: [0.0; 3],
+        }),
+        ..opts()
+    };
+    // Tilted 30° about X four ways: the table turns the same each time.
+    let turned = |plane: &str| {
+        let m = moves_with(
+            &format!("2 L X+0 Y+0 Z+50 A+0 C+0 R0 FMAX\n3 {plane}"),
+            &table,
+        );
+        let last = m.last().unwrap().end;
+        [last[Axis::A], last[Axis::C]]
+    };
+    // The tool axis normal to the plane: A ±30° (C turns the table to match).
+    let spatial = turned("PLANE SPATIAL SPA+30 SPB+0 SPC+0 TURN FMAX");
+    assert!((spatial[0].abs() - 30.0).abs() < 1e-9, "{spatial:?}");
+    for plane in [
+        "PLANE EULER EULPR+0 EULNU+30 EULROT+0 TURN FMAX",
+        "PLANE VECTOR BX+1 BY+0 BZ+0 NX+0 NY-0.5 NZ+0.8660254037844386 TURN FMAX",
+        "PLANE RELATIV SPA+30 TURN FMAX",
+    ] {
+        let got = turned(plane);
+        assert!(near(got, spatial), "{plane}: {got:?} against {spatial:?}");
+    }
+    // Without a rotary table TURN is refused by name; STAY is read.
+    let (line, _, msg) = error("2 PLANE SPATIAL SPA+30 SPB+0 SPC+0 TURN");
+    assert_eq!(line, 3);
+    assert!(msg.contains("PLANE") && msg.contains("TURN"), "{msg}");
+    moves("2 PLANE SPATIAL SPA+30 SPB+0 SPC+0 STAY\n3 PLANE RESET STAY");
+}
+
+#[test]
+fn unsupported_constructs_are_refused_by_name_at_their_line() {
+    for (body, name) in [
+        ("2 APPR LT X+10 Y+10 LEN 5 RL", "APPR LT"),
+        ("2 TCH PROBE 400", "TCH PROBE"),
+        (
+            "2 CYCL DEF 251 RECTANGULAR POCKET",
+            "CYCL DEF 251 RECTANGULAR POCKET",
+        ),
+        ("2 FN 18: SYSREAD Q1 = ID270", "FN 18"),
+        ("2 FL X+10", "FL"),
+        ("2 L X+10 M92", "M92"),
+        ("2 PATTERN DEF", "PATTERN DEF"),
+    ] {
+        let (line, _, msg) = error(body);
+        assert_eq!(line, 3, "{body}");
+        assert!(msg.contains(name), "{body}: {msg}");
+        assert!(!msg.contains("unexpected character"), "{msg}");
+    }
+}
+
+#[test]
+fn endless_loops_and_deep_calls_stop_at_the_limits() {
+    let o = Options {
+        max_iterations: 1000,
+        ..opts()
+    };
+    let text = program("2 LBL 1\n3 L IX+1 F100\n4 FN 9: IF +0 EQU +0 GOTO LBL 1");
+    let e = read_str_with(Path::new("t.h"), &text, &o)
+        .find_map(Result::err)
+        .unwrap();
+    assert!(e.to_string().contains("1000"), "{e}");
+    let o = Options {
+        max_call_depth: 2,
+        ..opts()
+    };
+    let text = program("2 CALL LBL 1\n3 M30\n4 LBL 1\n5 CALL LBL 2\n6 LBL 0\n7 LBL 2\n8 CALL LBL 3\n9 LBL 0\n10 LBL 3\n11 LBL 0");
+    let e = read_str_with(Path::new("t.h"), &text, &o)
+        .find_map(Result::err)
+        .unwrap();
+    assert!(e.to_string().contains("nested more than 2"), "{e}");
+}

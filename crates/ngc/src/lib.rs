@@ -54,6 +54,7 @@ mod probe;
 mod reader;
 mod remap;
 mod side_file;
+mod siemens;
 mod spline;
 mod stdglue;
 mod turns;

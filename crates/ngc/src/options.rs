@@ -23,15 +23,19 @@ pub enum Dialect {
     /// Haas NGC: Fanuc-style with G4 P in s when it has a decimal point (ms otherwise) and
     /// G234 for TCP.
     Haas,
+    /// Siemens Sinumerik 840D: ISO G code plus R parameters, `DEF` variables, structured
+    /// control flow, frames and cycles, read by its own front end (crate `siemens`).
+    Siemens,
 }
 
 impl Dialect {
-    /// `linuxcnc`, `fanuc` or `haas`.
+    /// `linuxcnc`, `fanuc`, `haas` or `siemens`.
     pub const fn name(self) -> &'static str {
         match self {
             Dialect::Linuxcnc => "linuxcnc",
             Dialect::Fanuc => "fanuc",
             Dialect::Haas => "haas",
+            Dialect::Siemens => "siemens",
         }
     }
 

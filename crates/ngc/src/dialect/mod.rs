@@ -44,6 +44,8 @@ impl Dialect {
             Dialect::Linuxcnc => &linuxcnc::TABLE,
             Dialect::Fanuc => &fanuc::TABLE,
             Dialect::Haas => &haas::TABLE,
+            // The Siemens front end hands the interpreter ISO blocks in Fanuc's codes.
+            Dialect::Siemens => &fanuc::TABLE,
         }
     }
 }

@@ -17,7 +17,7 @@ impl Interp {
     }
 
     /// Program position (current work system, current units).
-    pub(super) fn program_position(&self) -> AxisVec {
+    pub(crate) fn program_position(&self) -> AxisVec {
         let mut p = self.pos - self.offset;
         p[Axis::Z] -= self.tool_length_mm;
         if self.rotation.is_some() {

@@ -5,18 +5,30 @@
 
 use std::path::{Path, PathBuf};
 
-use ngc::{read_file_with, read_str_with, Dialect, Error, Motion, Move, Options};
+use ngc::{read_file_with, read_str_with, AxisVec, Dialect, Error, Motion, Move, Options, UserM};
 
 fn parts_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/program/siemens_parts")
 }
 
+/// The options both dialects of a part read with: the part's tool table (`tools.tbl`) if
+/// it has one, work offsets G55 (100 50 0), G56 (-20 30 -5), G57 (0 0 10), and M428/M429
+/// mapped to TCP on/off (LinuxCNC has no TCP code of its own).
 fn options(dialect: Dialect, dir: &Path) -> Options {
-    Options {
+    let mut o = Options {
         dialect,
         search_path: vec![dir.to_path_buf()],
         ..Options::default()
+    };
+    if let Ok(text) = std::fs::read_to_string(dir.join("tools.tbl")) {
+        o.tools = ngc::parse_tool_table(&text).expect("tools.tbl");
     }
+    o.set_work_offset(2, AxisVec::xyzabc([100.0, 50.0, 0.0, 0.0, 0.0, 0.0]));
+    o.set_work_offset(3, AxisVec::xyzabc([-20.0, 30.0, -5.0, 0.0, 0.0, 0.0]));
+    o.set_work_offset(4, AxisVec::xyzabc([0.0, 0.0, 10.0, 0.0, 0.0, 0.0]));
+    o.user_m.insert(428, UserM::TcpOn);
+    o.user_m.insert(429, UserM::TcpOff);
+    o
 }
 
 fn read(path: &Path, o: &Options) -> Vec<Move> {
@@ -63,8 +75,8 @@ fn difference(a: &[Move], b: &[Move]) -> Option<String> {
             (Motion::Dwell { seconds: s }, Motion::Dwell { seconds: t }) => (s - t).abs() < 1e-9,
             _ => true,
         };
-        if x.kind() != y.kind() || !close(x.start.0, y.start.0) || !close(x.end.0, y.end.0) || !same_arc || x.tcp != y.tcp {
-            return Some(format!("move {k}: linuxcnc line {} {:?} {:?}->{:?} tcp {}, siemens line {} {:?} {:?}->{:?} tcp {}", x.line, x.motion, x.start, x.end, x.tcp, y.line, y.motion, y.start, y.end, y.tcp));
+        if x.kind() != y.kind() || !close(x.start.0, y.start.0) || !close(x.end.0, y.end.0) || !same_arc || x.tcp != y.tcp || x.feed.zip(y.feed).is_some_and(|(f, g)| (f - g).abs() > 1e-9) {
+            return Some(format!("move {k}:\n linuxcnc line {} {:?} {:?}->{:?} tcp {} {:?} F{:?}\n siemens  line {} {:?} {:?}->{:?} tcp {} {:?} F{:?}", x.line, x.motion, x.start.to_xyzabc(), x.end.to_xyzabc(), x.tcp, x.path, x.feed, y.line, y.motion, y.start.to_xyzabc(), y.end.to_xyzabc(), y.tcp, y.path, y.feed));
         }
     }
     None

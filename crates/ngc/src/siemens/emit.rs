@@ -31,6 +31,7 @@ impl Reader {
             self.push(&text, span);
         }
         if let Some((f, span)) = w.feed.clone() {
+            let f = if self.feed_in_mm { f / crate::units::MM_PER_INCH } else { f };
             self.push(&format!("F{}", number(f)), span);
         }
         if moves {

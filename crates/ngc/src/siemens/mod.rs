@@ -81,6 +81,8 @@ pub(crate) struct Reader {
     /// Tools called by name (`T="DRILL 8.5"`): numbered 1001, 1002 ... in order of call.
     tool_names: Vec<String>,
     tcp: bool,
+    /// G70: inch geometry with the feed in mm/min.
+    feed_in_mm: bool,
     /// The active plane's normal axis: 0 X (G19), 1 Y (G18), 2 Z (G17).
     normal: usize,
     /// Byte offset and number of the line being run.
@@ -144,6 +146,7 @@ impl Reader {
             tool_names: Vec::new(),
             tcp: options.tcp,
             normal: 2,
+            feed_in_mm: false,
             line_start: (0, 1),
             modal_call: None,
             search_path,

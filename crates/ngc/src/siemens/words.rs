@@ -267,8 +267,16 @@ impl Reader {
             }
             60 => "G61",
             64 | 641..=645 => "G64",
-            70 | 700 => "G20",
-            71 | 710 => "G21",
+            // G70/G71 switch the geometry's unit, G700/G710 the feed's too: under G70 F
+            // stays in mm/min (a metric basic system), so it is written in inch/min.
+            70 | 700 => {
+                self.feed_in_mm = code == 70;
+                "G20"
+            }
+            71 | 710 => {
+                self.feed_in_mm = false;
+                "G21"
+            }
             93 => "G93",
             94 => "G94",
             95 => "G95",

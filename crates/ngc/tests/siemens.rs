@@ -103,3 +103,35 @@ fn every_part_gives_the_same_moves_in_linuxcnc_and_siemens() {
     assert!(parts.len() >= 10, "expected at least 10 parts, found {}", parts.len());
     eprintln!("siemens parts: {} of {} identical", parts.len() - failures.len(), parts.len());
 }
+
+/// The corpus folder (`shared/corpus` above the checkout), when present.
+fn corpus() -> Option<PathBuf> {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .ancestors()
+        .map(|d| d.join("shared/corpus"))
+        .find(|d| d.join("manifest.tsv").is_file())
+}
+
+#[test]
+#[ignore]
+fn corpus_scan() {
+    let dir = corpus().unwrap();
+    let manifest = std::fs::read_to_string(dir.join("manifest.tsv")).unwrap();
+    for line in manifest.lines().skip(1) {
+        let f: Vec<&str> = line.split('\t').collect();
+        if f.get(1) != Some(&"siemens") {
+            continue;
+        }
+        let path = dir.join("programs").join(f[0]);
+        let o = options(Dialect::Siemens, path.parent().unwrap());
+        let mut n = 0;
+        let mut err = None;
+        for m in read_file_with(&path, &o).unwrap() {
+            match m {
+                Ok(_) => n += 1,
+                Err(e) => err = Some(e.to_string()),
+            }
+        }
+        eprintln!("{} moves={n} {}", f[0], err.unwrap_or_default());
+    }
+}

@@ -104,7 +104,7 @@ impl Reader {
             "EXTERN" => {}
             "MCALL" => self.mcall(sc, at, line_no)?,
             "TRANS" | "ATRANS" | "ROT" | "AROT" | "SCALE" | "ASCALE" | "MIRROR" | "AMIRROR" => self.frame_statement(kw, sc, at)?,
-            "CASE" | "SETAL" | "STOPRE_" | "WHEN" | "EVERY" | "ID" | "IDS" => {
+            "CALL" | "PCALL" | "EXECUTE" | "EXECTAB" | "CASE" | "SETAL" | "STOPRE_" | "WHEN" | "EVERY" | "ID" | "IDS" => {
                 return Err(sc.err(at, format!("`{kw}` is not supported by mtsim's Siemens reader"), "unsupported statement"));
             }
             _ => return Ok(None),
@@ -373,14 +373,19 @@ impl Reader {
             }
             _ => {}
         }
-        if self.vars.get(name).is_some() && sc.peek() == Some(b'=') {
-            return self.assign(sc, Var::Named(name.to_string()), at);
+        if name.starts_with('$') {
+            return Err(sc.err(at, format!("system variable `{name}` is not supported by mtsim"), "system variable"));
+        }
+        match sc.peek() {
+            Some(b'=') if self.vars.get(name).is_some() => {
+                return self.assign(sc, Var::Named(name.to_string()), at);
+            }
+            Some(b'=') => return Err(sc.err(at, format!("`{name}` is not a defined variable: expected `DEF REAL {name}` (or INT, BOOL) before it is set (global user data, GUD, is not read)"), "undefined variable")),
+            Some(b'[') => return Err(sc.err(at, format!("array element `{name}[..]`: mtsim reads scalar variables only"), "array")),
+            _ => {}
         }
         if name.starts_with("CYCLE") {
             return self.cycle_word(name, at, sc, line_no);
-        }
-        if name.starts_with('$') {
-            return Err(sc.err(at, format!("system variable `{name}` is not supported by mtsim"), "system variable"));
         }
         // A subprogram called by name, with values in parentheses.
         let mut args = Vec::new();

@@ -27,14 +27,20 @@ impl Reader {
         let computed = moves
             && (!self.frame.is_identity()
                 || w.axes.iter().chain(&w.centres).flatten().any(|c| c.mode != Mode::Modal));
-        for (text, span) in std::mem::take(&mut w.other) {
-            self.push(&text, span);
+        let other = std::mem::take(&mut w.other);
+        for (k, (text, span)) in other.iter().enumerate() {
+            // `G94 FNORM` names one code twice.
+            if !other[..k].iter().any(|(t, _)| t == text) {
+                self.push(text, span.clone());
+            }
         }
         if let Some((f, span)) = w.feed.clone() {
             let f = if self.feed_in_mm { f / crate::units::MM_PER_INCH } else { f };
             self.push(&format!("F{}", number(f)), span);
         }
-        if moves {
+        if !moves {
+            self.plane_code(self.normal, 0..0);
+        } else {
             if computed {
                 self.computed_words(&w)?;
             } else {
@@ -79,6 +85,14 @@ impl Reader {
         }
     }
 
+    /// The plane code for normal axis `k`, when the interpreter's plane differs.
+    fn plane_code(&mut self, k: usize, span: std::ops::Range<usize>) {
+        if k != self.interp_normal {
+            self.push(["G19", "G18", "G17"][k], span);
+            self.interp_normal = k;
+        }
+    }
+
     /// The words as written, in the program's distance mode.
     fn written_words(&mut self, w: &Words, up: &str) {
         let span = first_span(w);
@@ -86,6 +100,7 @@ impl Reader {
             self.push(if self.absolute { "G90" } else { "G91" }, span.clone());
             self.interp_absolute = self.absolute;
         }
+        self.plane_code(self.normal, span.clone());
         self.motion_code(false, false, span);
         let letters = b"XYZABCUVWIJK";
         for (k, c) in w.axes.iter().chain(&w.centres).enumerate() {
@@ -109,16 +124,18 @@ impl Reader {
         let work = [p[Axis::X], p[Axis::Y], p[Axis::Z]];
         let here = self.frame.to_frame(work);
         let arc = matches!(self.motion, 2 | 3);
-        let scale = if arc {
-            self.frame.plane_scale(self.normal).ok_or_else(|| {
-                LineError::new(span.clone(), "an arc in a frame that turns, tilts or stretches its plane: expected the frame to keep the arc's plane (rotations about the plane's normal, uniform scale)", "arc in a tilted frame")
+        let (plane, scale, flip) = if arc {
+            self.frame.arc_plane(self.normal).ok_or_else(|| {
+                LineError::new(span.clone(), "an arc in a frame that tilts its plane off the work axes or stretches it unevenly: expected rotations in steps of 90 deg off the plane, and a uniform scale", "arc in a tilted frame")
+                    .help("post the arc as lines, or program it without the frame")
             })?
         } else {
-            1.0
+            (self.normal, 1.0, false)
         };
         self.push("G90", span.clone());
         self.interp_absolute = true;
-        self.motion_code(true, self.frame.mirrors(), span.clone());
+        self.plane_code(plane, span.clone());
+        self.motion_code(true, flip, span.clone());
         let resolve = |c: &Option<Coordinate>, from: f64, absolute: bool| match c {
             None => from,
             Some(c) => match c.mode {
@@ -152,7 +169,7 @@ impl Reader {
             }
             let c = self.frame.to_work(c);
             for (k, l) in ["I", "J", "K"].iter().enumerate() {
-                if k != self.normal {
+                if k != plane {
                     self.push(&format!("{l}{}", number(c[k] - work[k])), span.clone());
                 }
             }

@@ -337,6 +337,9 @@ impl Eval<'_> {
         if sc.peek() == Some(b'(') {
             return self.function(sc, name, at);
         }
+        if sc.peek() == Some(b'[') {
+            return Err(sc.err(at, format!("array element `{name}[..]`: mtsim reads scalar variables only"), "array"));
+        }
         self.vars.get(name).ok_or_else(|| {
             sc.err(at, format!("`{name}` is not a defined variable: expected `DEF REAL {name}` (or INT, BOOL) before it is read"), "undefined variable")
         })
@@ -350,6 +353,13 @@ impl Eval<'_> {
     }
 
     fn function(&mut self, sc: &mut Scan, name: &str, at: usize) -> LineResult<f64> {
+        const NAMES: [&str; 16] = [
+            "SIN", "COS", "TAN", "ASIN", "ACOS", "ATAN2", "SQRT", "ABS", "POT", "TRUNC", "ROUND",
+            "ROUNDUP", "LN", "EXP", "MINVAL", "MAXVAL",
+        ];
+        if !NAMES.contains(&name) {
+            return Err(sc.err(at, format!("function `{name}` is not supported by mtsim: expected {}", NAMES.join(" ")), "unsupported function"));
+        }
         sc.eat(b'(');
         let mut args = [0.0; 2];
         let mut n = 0;
@@ -387,9 +397,7 @@ impl Eval<'_> {
             "EXP" => (1, a.exp()),
             "MINVAL" => (2, a.min(b)),
             "MAXVAL" => (2, a.max(b)),
-            _ => {
-                return Err(sc.err(at, format!("function `{name}` is not supported by mtsim: expected SIN COS TAN ASIN ACOS ATAN2 SQRT ABS POT TRUNC ROUND ROUNDUP LN EXP MINVAL MAXVAL"), "unsupported function"));
-            }
+            _ => (0, 0.0),
         };
         if n != want {
             return Err(sc.err(at, format!("`{name}` takes {want} argument(s), given {n}"), "wrong argument count"));

@@ -85,27 +85,29 @@ impl ProgFrame {
         det(&self.matrix) < 0.0
     }
 
-    /// The scale of the plane with normal axis `normal` (0 X, 1 Y, 2 Z) when the frame
-    /// keeps arcs of that plane circles in a plane of the same normal: `A n = ±s n` and
-    /// `A` scales every in-plane direction by `s`. `None` otherwise.
-    pub fn plane_scale(&self, normal: usize) -> Option<f64> {
-        let mut n = [0.0; 3];
-        n[normal] = 1.0;
-        let an = apply(&self.matrix, n);
-        let (u, v) = ((normal + 1) % 3, (normal + 2) % 3);
-        let mut eu = [0.0; 3];
-        eu[u] = 1.0;
-        let mut ev = [0.0; 3];
-        ev[v] = 1.0;
-        let (au, av) = (apply(&self.matrix, eu), apply(&self.matrix, ev));
+    /// Where an arc of the plane with normal axis `normal` (0 X, 1 Y, 2 Z) lands: the work
+    /// plane's normal axis `k` with `A n = ±s e_k`, the scale `s` (the same for every
+    /// in-plane direction, so a circle stays a circle), and whether the arc turns the other
+    /// way about `e_k` (`A n` along `-e_k`, or a mirroring frame, but not both). `None` when
+    /// the frame tilts the plane off the work axes or stretches it unevenly.
+    pub fn arc_plane(&self, normal: usize) -> Option<(usize, f64, bool)> {
+        let unit = |k: usize| {
+            let mut e = [0.0; 3];
+            e[k] = 1.0;
+            apply(&self.matrix, e)
+        };
+        let (an, au, av) = (unit(normal), unit((normal + 1) % 3), unit((normal + 2) % 3));
         let len = |x: [f64; 3]| (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
         let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
         let s = len(au);
         let tol = 1e-12 * s.max(1.0);
-        let normal_kept = an[u].abs() <= tol && an[v].abs() <= tol;
-        let conformal = (len(av) - s).abs() <= tol && dot(au, av).abs() <= tol * s;
-        let in_plane = au[normal].abs() <= tol && av[normal].abs() <= tol;
-        (normal_kept && conformal && in_plane && s > 0.0).then_some(s)
+        let k = (0..3).max_by(|&i, &j| an[i].abs().total_cmp(&an[j].abs()))?;
+        let along = (0..3).all(|i| i == k || an[i].abs() <= tol);
+        let conformal = (len(av) - s).abs() <= tol
+            && dot(au, av).abs() <= tol * s
+            && dot(au, an).abs() <= tol * s
+            && dot(av, an).abs() <= tol * s;
+        (along && conformal && s > 0.0).then(|| (k, s, (an[k] < 0.0) != self.mirrors()))
     }
 }
 
@@ -153,8 +155,14 @@ mod tests {
         let p = f.to_frame([7.0, 3.0, 2.0]);
         let back = f.to_work(p);
         assert!((back[0] - 7.0).abs() < 1e-12 && (back[1] - 3.0).abs() < 1e-12);
-        assert_eq!(f.plane_scale(2).map(|s| (s - 1.0).abs() < 1e-12), Some(true));
-        assert_eq!(f.plane_scale(0), None);
+        assert_eq!(f.arc_plane(2).map(|(k, s, flip)| (k, (s - 1.0).abs() < 1e-12, flip)), Some((2, true, false)));
+        // AROT Y90 stands the XY plane up as the work YZ plane, turning the same way
+        // about +X (Ry(90) e_z = +e_x).
+        let mut up = ProgFrame::default();
+        up.apply(Instruction::Rot(rotation_zyx(0.0, 90.0, 0.0)), false);
+        assert_eq!(up.arc_plane(2).map(|(k, _, flip)| (k, flip)), Some((0, false)));
+        up.apply(Instruction::Rot(rotation_zyx(0.0, 30.0, 0.0)), true);
+        assert_eq!(up.arc_plane(2), None);
         f.apply(Instruction::Mirror([true, false, false]), true);
         assert!(f.mirrors());
         // ATRANS in the turned frame moves along work Y.

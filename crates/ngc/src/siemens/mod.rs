@@ -85,6 +85,8 @@ pub(crate) struct Reader {
     feed_in_mm: bool,
     /// The active plane's normal axis: 0 X (G19), 1 Y (G18), 2 Z (G17).
     normal: usize,
+    /// The plane's normal as the interpreter was last given (a frame may stand an arc up).
+    interp_normal: usize,
     /// Byte offset and number of the line being run.
     line_start: (usize, usize),
     /// `MCALL CYCLE8x(..)`: the cycle called after each positioning block.
@@ -146,6 +148,7 @@ impl Reader {
             tool_names: Vec::new(),
             tcp: options.tcp,
             normal: 2,
+            interp_normal: 2,
             feed_in_mm: false,
             line_start: (0, 1),
             modal_call: None,

@@ -252,8 +252,9 @@ impl Reader {
                 return Ok(());
             }
             17 | 18 | 19 => {
+                // Written by `emit` (a frame may stand an arc's plane up).
                 self.normal = (19 - code) as usize;
-                ["G17", "G18", "G19"][code as usize - 17]
+                return Ok(());
             }
             40 => "G40",
             41 => "G41",

@@ -11,4 +11,5 @@ mod conformance;
 mod corpus;
 mod file_analysis;
 mod reader_options;
+mod siemens_corpus;
 mod unreadable;

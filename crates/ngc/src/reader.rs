@@ -1400,7 +1400,7 @@ impl Moves {
                 line: line_no,
             };
             let col = k - line_start;
-            return Some(self.syntax_in(c.file, text, c.offset, LineError::new(col..col + token.len(), format!("`{token}` is Siemens Sinumerik: this program is in the Siemens language, expected G-code in the RS274/NGC, Fanuc or Haas language"), "Siemens Sinumerik").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
+            return Some(self.syntax_in(c.file, text, c.offset, LineError::new(col..col + token.len(), format!("`{token}` is Siemens Sinumerik: this program is in the Siemens language, expected G-code in the RS274/NGC, Fanuc or Haas language"), "Siemens Sinumerik").help("set dialect = \"siemens\" in the scenario's [reader] to read it with the Sinumerik front end")));
         }
         None
     }

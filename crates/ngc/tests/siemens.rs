@@ -135,3 +135,118 @@ fn corpus_scan() {
         eprintln!("{} moves={n} {}", f[0], err.unwrap_or_default());
     }
 }
+
+fn ends(ms: &[Move]) -> Vec<[f64; 3]> {
+    ms.iter()
+        .map(|m| {
+            let e = m.end.to_xyzabc();
+            [e[0], e[1], e[2]].map(|v| (v * 1e9).round() / 1e9 + 0.0)
+        })
+        .collect()
+}
+
+#[test]
+fn extended_work_offsets_g505_to_g599_are_the_fanuc_extended_offsets() {
+    // G505 is extended offset 1, whose X Y Z the parameters 7001-7003 hold.
+    let mut o = options(Dialect::Siemens, Path::new("."));
+    o.parameters.extend([(7001, 10.0), (7002, 20.0), (7003, -5.0)]);
+    let ms: Vec<Move> = read_str_with(Path::new("t.mpf"), "G505 G0 X1 Y1 Z1\nG54 X1\nM30\n", &o)
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert_eq!(ends(&ms), vec![[11.0, 21.0, -4.0], [1.0, 21.0, -4.0]]);
+}
+
+#[test]
+fn gotob_loops_and_if_gotof_jumps_run_the_blocks_a_control_would() {
+    // R1 counts 1, 2, 3: three moves X1 X2 X3, then the jump skips X99.
+    let ms = moves("R1=0\nTOP: R1=R1+1\nG1 X=R1 F100\nIF R1<3 GOTOB TOP\nGOTOF N90\nG1 X99\nN90 G0 Z7\nM30\n");
+    assert_eq!(ends(&ms), vec![[1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [3.0, 0.0, 0.0], [3.0, 0.0, 7.0]]);
+}
+
+#[test]
+fn scale_rotation_about_x_and_mirror_map_points_as_the_frame_chain_says() {
+    // SCALE X2 Y2: a CR=5 arc from (0,0) to (10,0) lands from (0,0) to (20,0), radius 10,
+    // centre (10,0). ROT X90: frame Y10 is work Z10 (Rx(90) e_y = e_z).
+    let ms = moves("G17 G0 X0 Y0\nSCALE X2 Y2\nG2 X10 Y0 CR=5 F100\nROT X90\nG1 X0 Y10 Z0\nM30\n");
+    let e = ends(&ms);
+    assert_eq!(e[1], [20.0, 0.0, 0.0]);
+    let c = centre(&ms[1]).unwrap();
+    assert!((c[0] - 10.0).abs() < 1e-9 && c[1].abs() < 1e-9, "{c:?}");
+    assert_eq!(e[2], [0.0, 0.0, 10.0]);
+}
+
+#[test]
+fn tools_by_name_cycle800_reset_and_machine_m_codes_read_with_notices() {
+    let o = options(Dialect::Siemens, Path::new("."));
+    let mut r = read_str_with(Path::new("t.mpf"), "T=\"DRILL 8.5\" M6\nCYCLE800()\nM50\nG0 X1\nM30\n", &o);
+    let ms: Vec<Move> = r.by_ref().collect::<Result<_, _>>().unwrap();
+    assert_eq!(ms[0].tool, 1001);
+    let notes: Vec<&str> = r.notices().iter().map(|n| n.message.as_str()).collect();
+    assert!(notes.iter().any(|n| n.contains("DRILL 8.5") && n.contains("T1001")), "{notes:?}");
+    assert!(notes.iter().any(|n| n.contains("M50")), "{notes:?}");
+}
+
+#[test]
+fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
+    let cases: [(&str, usize, usize, &str); 7] = [
+        ("G0 X1\nN20 $P_UIFR[1]=CTRANS(X,10)\n", 2, 5, "system variable `$P_UIFR`"),
+        ("G0 X1\nCYCLE83(10,0,1,-20)\n", 2, 1, "`CYCLE83`"),
+        ("N10 G33 Z-10 K1\n", 1, 5, "`G33`"),
+        ("DEF STRING[8] S\n", 1, 5, "DEF STRING"),
+        ("R1=ISVAR(\"A\")\n", 1, 4, "`ISVAR`"),
+        ("G1 X1 F1\nCYCLE800(1,\"TC1\",0,57,0,0,0,0,30,0,0,0,0,-1)\n", 2, 1, "CYCLE800 with a swivel"),
+        ("NOSUCHPROG\n", 1, 1, "`NOSUCHPROG` is neither"),
+    ];
+    for (text, line, column, named) in cases {
+        let (l, c, m) = error(text);
+        assert_eq!((l, c), (line, column), "{text:?}: {m}");
+        assert!(m.contains(named), "{text:?}: {m}");
+    }
+}
+
+#[test]
+fn loops_and_nesting_are_bounded() {
+    let mut o = options(Dialect::Siemens, Path::new("."));
+    o.max_iterations = 1000;
+    let err = read_str_with(Path::new("t.mpf"), "LOOP\nG0 X1\nENDLOOP\n", &o)
+        .find_map(|m| m.err())
+        .expect("an endless loop is an error");
+    assert!(err.to_string().contains("backward jumps"), "{err}");
+    let deep = "IF 1\n".repeat(17) + &"ENDIF\n".repeat(17);
+    let (line, _, m) = error(&deep);
+    assert_eq!(line, 17, "{m}");
+    assert!(m.contains("nested deeper than 16"), "{m}");
+    // A subprogram that calls itself stops at the call depth.
+    let dir = std::env::temp_dir().join(format!("ngc-siemens-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("SELF.SPF"), "G1 X1 F1\nSELF\nM17\n").unwrap();
+    let err = read_str_with(Path::new("t.mpf"), "SELF\nM30\n", &options(Dialect::Siemens, &dir))
+        .find_map(|m| m.err())
+        .expect("endless recursion is an error");
+    assert!(err.to_string().contains("nested deeper"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_long_program_file_streams_and_jumps_back_by_offset() {
+    // 200 000 blocks inside a WHILE run twice: 400 000 moves, read from the file.
+    let dir = std::env::temp_dir().join(format!("ngc-siemens-long-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut text = String::from("DEF INT CNT=0\nWHILE CNT<2\nCNT=CNT+1\n");
+    for k in 0..200_000 {
+        text.push_str(&format!("G1 X{} Y=CNT F1000\n", k % 100));
+    }
+    text.push_str("ENDWHILE\nM30\n");
+    let path = dir.join("LONG.MPF");
+    std::fs::write(&path, text).unwrap();
+    let o = options(Dialect::Siemens, &dir);
+    let mut n = 0;
+    let mut last = None;
+    for m in read_file_with(&path, &o).unwrap() {
+        last = Some(m.unwrap());
+        n += 1;
+    }
+    assert_eq!(n, 400_000);
+    assert_eq!(last.unwrap().end.to_xyzabc()[1], 2.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}

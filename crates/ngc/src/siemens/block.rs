@@ -214,6 +214,10 @@ impl Reader {
             if sc.peek() == Some(b'[') {
                 return Err(sc.err(n_at, format!("array `{name}[..]`: mtsim reads scalar variables only"), "array"));
             }
+            let reserved = (name.len() == 1 && name.as_bytes()[0].is_ascii_uppercase()) || r_parameter(name).is_some() || NOTED.contains(&name);
+            if reserved {
+                return Err(sc.err(n_at, format!("`{name}` is an address or keyword: expected a variable name of two or more characters that is not one"), "reserved name"));
+            }
             let mut v = 0.0;
             if sc.eat(b'=') {
                 v = expr(sc, &self.vars)?;

@@ -250,3 +250,38 @@ fn a_long_program_file_streams_and_jumps_back_by_offset() {
     assert_eq!(last.unwrap().end.to_xyzabc()[1], 2.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Wall time of the Siemens front end against the Fanuc reader on the same 1M-block G01
+/// file (`cargo test --release -p ngc --test siemens timing -- --ignored --nocapture`;
+/// the benchmark `benches/read.rs` measures the same).
+#[test]
+#[ignore]
+fn timing_against_fanuc() {
+    let dir = std::env::temp_dir().join(format!("ngc-siemens-time-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut text = String::from("G71 G90 G94 G17\n");
+    for i in 0..1_000_000 {
+        let t = i as f64 * 1e-3;
+        text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4} F{:.1}\n", 100.0 * t.cos(), 100.0 * t.sin(), -0.5 * t, 1000.0 + (i % 7) as f64));
+    }
+    text.push_str("M30\n");
+    let path = dir.join("big.mpf");
+    std::fs::write(&path, &text).unwrap();
+    let nc = dir.join("big.nc");
+    std::fs::write(&nc, text.replacen("G71", "G21", 1)).unwrap();
+    let time = |d: Dialect| {
+        let path = if d == Dialect::Siemens { &path } else { &nc };
+        let o = Options { dialect: d, ..Options::default() };
+        (0..3)
+            .map(|_| {
+                let t = std::time::Instant::now();
+                let n = read_file_with(path, &o).unwrap().map(|m| m.unwrap()).count();
+                assert_eq!(n, 1_000_000);
+                t.elapsed().as_secs_f64()
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let (f, s) = (time(Dialect::Fanuc), time(Dialect::Siemens));
+    eprintln!("fanuc {f:.3} s, siemens {s:.3} s, ratio {:.2}", s / f);
+    let _ = std::fs::remove_dir_all(&dir);
+}

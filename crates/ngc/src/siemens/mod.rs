@@ -23,6 +23,7 @@ mod emit;
 mod expr;
 mod flow;
 mod frame;
+mod plain;
 mod source;
 mod words;
 
@@ -192,6 +193,10 @@ impl Reader {
         self.line_start = (level.offset, level.line);
         level.offset += n;
         level.line += 1;
+        if let Some(result) = self.plain(&line, line_no) {
+            self.line = line;
+            return result.map_err(|e| self.syntax_at(e, line_no));
+        }
         let mut upper = std::mem::take(&mut self.upper);
         upper.clear();
         upper.push_str(&line);
@@ -223,29 +228,32 @@ impl Reader {
     /// Runs the ISO block in `self.iso` through the interpreter.
     fn run_iso(&mut self, line_no: usize) -> LineResult<Stop> {
         let iso = std::mem::take(&mut self.iso);
-        let words = std::mem::take(&mut self.words);
-        let path = self.levels.last().map(|l| l.path.clone()).unwrap_or_default();
-        let result = match lex_with(&iso, &self.interp.params, true, reuse(words)) {
-            Ok(Lexed::Words { words, .. }) => {
-                let r = self.interp.block(
-                    &iso,
-                    &words,
-                    line_no,
-                    &mut self.queue,
-                    &mut self.notices,
-                    &path,
-                );
-                self.words = reuse(words);
-                r
-            }
-            Ok(_) => Ok(Stop::None),
-            Err(e) => Err(e),
-        };
-        let result = result.map_err(|e| self.source_span(e));
+        let result = self.run_text(&iso, line_no).map_err(|e| self.source_span(e));
         self.iso = iso;
         self.iso.clear();
         self.spans.clear();
         result
+    }
+
+    /// Runs the ISO block `text` through the interpreter (errors at spans of `text`).
+    fn run_text(&mut self, text: &str, line_no: usize) -> LineResult<Stop> {
+        let words = std::mem::take(&mut self.words);
+        let level = self.levels.last().expect("the main program level");
+        match lex_with(text, &self.interp.params, true, reuse(words))? {
+            Lexed::Words { words, .. } => {
+                let r = self.interp.block(
+                    text,
+                    &words,
+                    line_no,
+                    &mut self.queue,
+                    &mut self.notices,
+                    &level.path,
+                );
+                self.words = reuse(words);
+                r
+            }
+            _ => Ok(Stop::None),
+        }
     }
 
     /// An error in the ISO block, moved onto the Sinumerik words it came from.

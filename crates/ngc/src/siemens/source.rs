@@ -17,6 +17,8 @@ pub(super) enum Source {
         reader: BufReader<std::fs::File>,
         /// Byte offset of the next unread byte.
         pos: u64,
+        /// The line's bytes, the allocation kept from line to line.
+        bytes: Vec<u8>,
     },
 }
 
@@ -27,6 +29,7 @@ impl Source {
         Ok(Source::File {
             reader: BufReader::with_capacity(BUFFER_BYTES, file),
             pos: 0,
+            bytes: Vec::new(),
         })
     }
 
@@ -44,7 +47,7 @@ impl Source {
                 buf.push_str(line.strip_suffix('\r').unwrap_or(line));
                 Ok(len)
             }
-            Source::File { reader, pos } => {
+            Source::File { reader, pos, bytes } => {
                 if offset as u64 != *pos {
                     // Within the buffer for a short jump back (a loop), a seek otherwise.
                     let by = offset as i64 - *pos as i64;
@@ -53,11 +56,11 @@ impl Source {
                     }
                     *pos = offset as u64;
                 }
-                let mut bytes = Vec::new();
+                bytes.clear();
                 let n = reader
                     .by_ref()
                     .take(MAX_LINE_BYTES as u64 + 2)
-                    .read_until(b'\n', &mut bytes)?;
+                    .read_until(b'\n', bytes)?;
                 if n > MAX_LINE_BYTES + 1 {
                     return Err(std::io::Error::new(
                         std::io::ErrorKind::InvalidData,
@@ -68,7 +71,10 @@ impl Source {
                 while matches!(bytes.last(), Some(b'\n' | b'\r')) {
                     bytes.pop();
                 }
-                buf.push_str(&String::from_utf8_lossy(&bytes));
+                match std::str::from_utf8(bytes) {
+                    Ok(text) => buf.push_str(text),
+                    Err(_) => buf.push_str(&String::from_utf8_lossy(bytes)),
+                }
                 Ok(n)
             }
         }

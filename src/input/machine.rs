@@ -41,7 +41,7 @@ pub struct MachineFile {
     #[serde(default)]
     pub tool: ToolConfig,
     /// G-code dialect of this machine's control, the default for its scenarios:
-    /// "linuxcnc", "fanuc" (default) or "haas".
+    /// "linuxcnc", "fanuc" (default), "haas" or "siemens".
     #[serde(default)]
     pub dialect: ngc::Dialect,
     /// G28 reference position, machine X Y Z A B C (mm, deg); zero when absent (U V W: 0).

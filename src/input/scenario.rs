@@ -41,7 +41,7 @@ struct ScenarioFile {
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ReaderSection {
-    /// "linuxcnc", "fanuc" or "haas"; the machine file's `dialect` when absent.
+    /// "linuxcnc", "fanuc", "haas" or "siemens"; the machine file's `dialect` when absent.
     pub dialect: Option<ngc::Dialect>,
     /// LinuxCNC tool table (`.tbl`, lengths in mm), relative to the scenario.
     pub tool_table: Option<String>,

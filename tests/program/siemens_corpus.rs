@@ -35,8 +35,14 @@ fn mtsim(args: &[&str]) -> (Option<i32>, String, String) {
 #[test]
 fn siemens_corpus_programs_are_read_or_refused_by_name_without_panics_or_hangs() {
     let Some(dir) = corpus() else {
-        assert!(std::env::var_os("CI").is_none(), "the corpus (shared/corpus) is missing");
-        eprintln!("SKIPPED siemens corpus: no shared/corpus above {}", env!("CARGO_MANIFEST_DIR"));
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "the corpus (shared/corpus) is missing"
+        );
+        eprintln!(
+            "SKIPPED siemens corpus: no shared/corpus above {}",
+            env!("CARGO_MANIFEST_DIR")
+        );
         return;
     };
     let manifest = std::fs::read_to_string(dir.join("manifest.tsv")).unwrap();
@@ -48,13 +54,21 @@ fn siemens_corpus_programs_are_read_or_refused_by_name_without_panics_or_hangs()
             (f.get(1) == Some(&"siemens")).then_some(f[0])
         })
         .collect();
-    assert!(names.len() >= 10, "expected the corpus's Siemens programs, found {}", names.len());
+    assert!(
+        names.len() >= 10,
+        "expected the corpus's Siemens programs, found {}",
+        names.len()
+    );
     let work = scratch("siemens-corpus", "all");
     let (mut read, mut report) = (0, Vec::new());
     for (k, name) in names.iter().enumerate() {
         let path = dir.join("programs").join(name);
         let text = String::from_utf8_lossy(&std::fs::read(&path).unwrap()).into_owned();
-        let m = machine(if rs274::uses_b_axis(&text) { "trt-bc" } else { "trt-ac" });
+        let m = machine(if rs274::uses_b_axis(&text) {
+            "trt-bc"
+        } else {
+            "trt-ac"
+        });
         let scenario = work.join(format!("{k}.toml"));
         std::fs::write(
             &scenario,
@@ -69,7 +83,10 @@ fn siemens_corpus_programs_are_read_or_refused_by_name_without_panics_or_hangs()
         let (check, _, c_err) = mtsim(&["check", s]);
         for (what, code, err) in [("analyze", analyze, &a_err), ("check", check, &c_err)] {
             assert!(code.is_some(), "{name}: {what} hung (over {TIMEOUT:?})");
-            assert!(!err.contains("panicked") && code != Some(101), "{name}: {what} panicked: {err}");
+            assert!(
+                !err.contains("panicked") && code != Some(101),
+                "{name}: {what} panicked: {err}"
+            );
         }
         if analyze == Some(0) && matches!(check, Some(0 | 1)) {
             read += 1;
@@ -79,13 +96,32 @@ fn siemens_corpus_programs_are_read_or_refused_by_name_without_panics_or_hangs()
         // Refused: exit code 2, the program's file and line named with what is not read
         // (a construct in backquotes, or a move the machine cannot make).
         let err = a_err.replace('│', " ");
-        assert_eq!(analyze, Some(2), "{name}: analyze exit code {analyze:?}: {a_err}");
+        assert_eq!(
+            analyze,
+            Some(2),
+            "{name}: analyze exit code {analyze:?}: {a_err}"
+        );
         let placed = err.contains(&format!("{name}:"));
-        assert!(placed && (err.contains('`') || err.contains("travel")), "{name}: the refusal names no construct: {a_err}");
-        let first = err.lines().find(|l| l.contains('×')).unwrap_or("").trim().to_string();
+        assert!(
+            placed && (err.contains('`') || err.contains("travel")),
+            "{name}: the refusal names no construct: {a_err}"
+        );
+        let first = err
+            .lines()
+            .find(|l| l.contains('×'))
+            .unwrap_or("")
+            .trim()
+            .to_string();
         report.push(format!("{name}: refused: {first}"));
     }
     let _ = std::fs::remove_dir_all(&work);
-    eprintln!("siemens corpus: {read} of {} read, the others refused by name:\n{}", names.len(), report.join("\n"));
-    assert!(read >= READ_FLOOR, "only {read} Siemens programs read, floor {READ_FLOOR}");
+    eprintln!(
+        "siemens corpus: {read} of {} read, the others refused by name:\n{}",
+        names.len(),
+        report.join("\n")
+    );
+    assert!(
+        read >= READ_FLOOR,
+        "only {read} Siemens programs read, floor {READ_FLOOR}"
+    );
 }

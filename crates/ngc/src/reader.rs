@@ -79,10 +79,7 @@ pub fn read_str_with(path: &Path, text: &str, options: &Options) -> Moves {
 /// Read buffer of a streamed program file, bytes.
 const FILE_BUFFER_BYTES: usize = 64 * 1024;
 
-/// Longest line of a program or subroutine file, bytes (1 MiB): no G-code line comes near
-/// it, and a file without newlines (`/dev/zero`, a binary) stops here instead of growing
-/// the line buffer without end.
-pub const MAX_LINE_BYTES: usize = 1 << 20;
+pub use crate::side_file::MAX_LINE_BYTES;
 
 /// Largest program file whose whole text an error message quotes, bytes (64 MiB); beyond
 /// it the message quotes the offending line alone.

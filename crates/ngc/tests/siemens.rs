@@ -39,15 +39,23 @@ fn read(path: &Path, o: &Options) -> Vec<Move> {
 }
 
 fn moves(text: &str) -> Vec<Move> {
-    read_str_with(Path::new("t.mpf"), text, &options(Dialect::Siemens, Path::new(".")))
-        .collect::<Result<Vec<_>, _>>()
-        .unwrap_or_else(|e| panic!("expected the program to read, got: {e}"))
+    read_str_with(
+        Path::new("t.mpf"),
+        text,
+        &options(Dialect::Siemens, Path::new(".")),
+    )
+    .collect::<Result<Vec<_>, _>>()
+    .unwrap_or_else(|e| panic!("expected the program to read, got: {e}"))
 }
 
 fn error(text: &str) -> (usize, usize, String) {
-    let err = read_str_with(Path::new("t.mpf"), text, &options(Dialect::Siemens, Path::new(".")))
-        .find_map(|m| m.err())
-        .unwrap_or_else(|| panic!("expected an error in {text:?}"));
+    let err = read_str_with(
+        Path::new("t.mpf"),
+        text,
+        &options(Dialect::Siemens, Path::new(".")),
+    )
+    .find_map(|m| m.err())
+    .unwrap_or_else(|| panic!("expected an error in {text:?}"));
     match err {
         Error::Syntax(s) => (s.line, s.column, s.message),
         other => panic!("expected a syntax error, got {other:?}"),
@@ -62,20 +70,46 @@ fn centre(m: &Move) -> Option<[f64; 3]> {
 }
 
 /// The first difference between two move lists, if any.
-fn difference(a: &[Move], b: &[Move]) -> Option<String> {
+/// Path control is compared too, except in drilling cycles (`cycles`): LinuxCNC runs a
+/// canned cycle's moves in exact stop, and the Sinumerik manual does not say.
+fn difference(a: &[Move], b: &[Move], cycles: bool) -> Option<String> {
     if a.len() != b.len() {
         return Some(format!("{} moves against {}", a.len(), b.len()));
     }
     for (k, (x, y)) in a.iter().zip(b).enumerate() {
         let close = |p: [f64; 9], q: [f64; 9]| p.iter().zip(&q).all(|(u, v)| (u - v).abs() <= 1e-6);
         let same_arc = match (x.motion, y.motion) {
-            (Motion::Arc { clockwise: c1, plane: p1, .. }, Motion::Arc { clockwise: c2, plane: p2, .. }) => {
-                c1 == c2 && p1 == p2 && centre(x).zip(centre(y)).is_some_and(|(u, v)| u.iter().zip(&v).all(|(s, t)| (s - t).abs() <= 1e-6))
+            (
+                Motion::Arc {
+                    clockwise: c1,
+                    plane: p1,
+                    ..
+                },
+                Motion::Arc {
+                    clockwise: c2,
+                    plane: p2,
+                    ..
+                },
+            ) => {
+                c1 == c2
+                    && p1 == p2
+                    && centre(x)
+                        .zip(centre(y))
+                        .is_some_and(|(u, v)| u.iter().zip(&v).all(|(s, t)| (s - t).abs() <= 1e-6))
             }
             (Motion::Dwell { seconds: s }, Motion::Dwell { seconds: t }) => (s - t).abs() < 1e-9,
             _ => true,
         };
-        if x.kind() != y.kind() || !close(x.start.0, y.start.0) || !close(x.end.0, y.end.0) || !same_arc || x.tcp != y.tcp || x.feed.zip(y.feed).is_some_and(|(f, g)| (f - g).abs() > 1e-9) {
+        if x.kind() != y.kind()
+            || !close(x.start.0, y.start.0)
+            || !close(x.end.0, y.end.0)
+            || !same_arc
+            || x.tcp != y.tcp
+            || (x.path != y.path && !cycles)
+            || x.feed
+                .zip(y.feed)
+                .is_some_and(|(f, g)| (f - g).abs() > 1e-9)
+        {
             return Some(format!("move {k}:\n linuxcnc line {} {:?} {:?}->{:?} tcp {} {:?} F{:?}\n siemens  line {} {:?} {:?}->{:?} tcp {} {:?} F{:?}", x.line, x.motion, x.start.to_xyzabc(), x.end.to_xyzabc(), x.tcp, x.path, x.feed, y.line, y.motion, y.start.to_xyzabc(), y.end.to_xyzabc(), y.tcp, y.path, y.feed));
         }
     }
@@ -92,16 +126,31 @@ fn every_part_gives_the_same_moves_in_linuxcnc_and_siemens() {
     parts.sort();
     let mut failures = Vec::new();
     for part in &parts {
-        let lcnc = read(&part.join("linuxcnc.ngc"), &options(Dialect::Linuxcnc, part));
+        let lcnc = read(
+            &part.join("linuxcnc.ngc"),
+            &options(Dialect::Linuxcnc, part),
+        );
         let sie = read(&part.join("siemens.mpf"), &options(Dialect::Siemens, part));
-        assert!(lcnc.len() >= 3, "{}: too few moves to compare", part.display());
-        if let Some(d) = difference(&lcnc, &sie) {
+        assert!(
+            lcnc.len() >= 3,
+            "{}: too few moves to compare",
+            part.display()
+        );
+        if let Some(d) = difference(&lcnc, &sie, part.ends_with("04-drilling")) {
             failures.push(format!("{}: {d}", part.display()));
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    assert!(parts.len() >= 10, "expected at least 10 parts, found {}", parts.len());
-    eprintln!("siemens parts: {} of {} identical", parts.len() - failures.len(), parts.len());
+    assert!(
+        parts.len() >= 10,
+        "expected at least 10 parts, found {}",
+        parts.len()
+    );
+    eprintln!(
+        "siemens parts: {} of {} identical",
+        parts.len() - failures.len(),
+        parts.len()
+    );
 }
 
 /// The corpus folder (`shared/corpus` above the checkout), when present.
@@ -149,7 +198,8 @@ fn ends(ms: &[Move]) -> Vec<[f64; 3]> {
 fn extended_work_offsets_g505_to_g599_are_the_fanuc_extended_offsets() {
     // G505 is extended offset 1, whose X Y Z the parameters 7001-7003 hold.
     let mut o = options(Dialect::Siemens, Path::new("."));
-    o.parameters.extend([(7001, 10.0), (7002, 20.0), (7003, -5.0)]);
+    o.parameters
+        .extend([(7001, 10.0), (7002, 20.0), (7003, -5.0)]);
     let ms: Vec<Move> = read_str_with(Path::new("t.mpf"), "G505 G0 X1 Y1 Z1\nG54 X1\nM30\n", &o)
         .collect::<Result<_, _>>()
         .unwrap();
@@ -159,8 +209,18 @@ fn extended_work_offsets_g505_to_g599_are_the_fanuc_extended_offsets() {
 #[test]
 fn gotob_loops_and_if_gotof_jumps_run_the_blocks_a_control_would() {
     // R1 counts 1, 2, 3: three moves X1 X2 X3, then the jump skips X99.
-    let ms = moves("R1=0\nTOP: R1=R1+1\nG1 X=R1 F100\nIF R1<3 GOTOB TOP\nGOTOF N90\nG1 X99\nN90 G0 Z7\nM30\n");
-    assert_eq!(ends(&ms), vec![[1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [3.0, 0.0, 0.0], [3.0, 0.0, 7.0]]);
+    let ms = moves(
+        "R1=0\nTOP: R1=R1+1\nG1 X=R1 F100\nIF R1<3 GOTOB TOP\nGOTOF N90\nG1 X99\nN90 G0 Z7\nM30\n",
+    );
+    assert_eq!(
+        ends(&ms),
+        vec![
+            [1.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [3.0, 0.0, 0.0],
+            [3.0, 0.0, 7.0]
+        ]
+    );
 }
 
 #[test]
@@ -178,23 +238,42 @@ fn scale_rotation_about_x_and_mirror_map_points_as_the_frame_chain_says() {
 #[test]
 fn tools_by_name_cycle800_reset_and_machine_m_codes_read_with_notices() {
     let o = options(Dialect::Siemens, Path::new("."));
-    let mut r = read_str_with(Path::new("t.mpf"), "T=\"DRILL 8.5\" M6\nCYCLE800()\nM50\nG0 X1\nM30\n", &o);
+    let mut r = read_str_with(
+        Path::new("t.mpf"),
+        "T=\"DRILL 8.5\" M6\nCYCLE800()\nM50\nG0 X1\nM30\n",
+        &o,
+    );
     let ms: Vec<Move> = r.by_ref().collect::<Result<_, _>>().unwrap();
     assert_eq!(ms[0].tool, 1001);
     let notes: Vec<&str> = r.notices().iter().map(|n| n.message.as_str()).collect();
-    assert!(notes.iter().any(|n| n.contains("DRILL 8.5") && n.contains("T1001")), "{notes:?}");
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("DRILL 8.5") && n.contains("T1001")),
+        "{notes:?}"
+    );
     assert!(notes.iter().any(|n| n.contains("M50")), "{notes:?}");
 }
 
 #[test]
 fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
     let cases: [(&str, usize, usize, &str); 7] = [
-        ("G0 X1\nN20 $P_UIFR[1]=CTRANS(X,10)\n", 2, 5, "system variable `$P_UIFR`"),
+        (
+            "G0 X1\nN20 $P_UIFR[1]=CTRANS(X,10)\n",
+            2,
+            5,
+            "system variable `$P_UIFR`",
+        ),
         ("G0 X1\nCYCLE83(10,0,1,-20)\n", 2, 1, "`CYCLE83`"),
         ("N10 G33 Z-10 K1\n", 1, 5, "`G33`"),
         ("DEF STRING[8] S\n", 1, 5, "DEF STRING"),
         ("R1=ISVAR(\"A\")\n", 1, 4, "`ISVAR`"),
-        ("G1 X1 F1\nCYCLE800(1,\"TC1\",0,57,0,0,0,0,30,0,0,0,0,-1)\n", 2, 1, "CYCLE800 with a swivel"),
+        (
+            "G1 X1 F1\nCYCLE800(1,\"TC1\",0,57,0,0,0,0,30,0,0,0,0,-1)\n",
+            2,
+            1,
+            "CYCLE800 with a swivel",
+        ),
         ("NOSUCHPROG\n", 1, 1, "`NOSUCHPROG` is neither"),
     ];
     for (text, line, column, named) in cases {
@@ -220,9 +299,13 @@ fn loops_and_nesting_are_bounded() {
     let dir = std::env::temp_dir().join(format!("ngc-siemens-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("SELF.SPF"), "G1 X1 F1\nSELF\nM17\n").unwrap();
-    let err = read_str_with(Path::new("t.mpf"), "SELF\nM30\n", &options(Dialect::Siemens, &dir))
-        .find_map(|m| m.err())
-        .expect("endless recursion is an error");
+    let err = read_str_with(
+        Path::new("t.mpf"),
+        "SELF\nM30\n",
+        &options(Dialect::Siemens, &dir),
+    )
+    .find_map(|m| m.err())
+    .expect("endless recursion is an error");
     assert!(err.to_string().contains("nested deeper"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -262,7 +345,13 @@ fn timing_against_fanuc() {
     let mut text = String::from("G71 G90 G94 G17\n");
     for i in 0..1_000_000 {
         let t = i as f64 * 1e-3;
-        text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4} F{:.1}\n", 100.0 * t.cos(), 100.0 * t.sin(), -0.5 * t, 1000.0 + (i % 7) as f64));
+        text.push_str(&format!(
+            "G1 X{:.4} Y{:.4} Z{:.4} F{:.1}\n",
+            100.0 * t.cos(),
+            100.0 * t.sin(),
+            -0.5 * t,
+            1000.0 + (i % 7) as f64
+        ));
     }
     text.push_str("M30\n");
     let path = dir.join("big.mpf");
@@ -271,11 +360,17 @@ fn timing_against_fanuc() {
     std::fs::write(&nc, text.replacen("G71", "G21", 1)).unwrap();
     let time = |d: Dialect| {
         let path = if d == Dialect::Siemens { &path } else { &nc };
-        let o = Options { dialect: d, ..Options::default() };
+        let o = Options {
+            dialect: d,
+            ..Options::default()
+        };
         (0..3)
             .map(|_| {
                 let t = std::time::Instant::now();
-                let n = read_file_with(path, &o).unwrap().map(|m| m.unwrap()).count();
+                let n = read_file_with(path, &o)
+                    .unwrap()
+                    .map(|m| m.unwrap())
+                    .count();
                 assert_eq!(n, 1_000_000);
                 t.elapsed().as_secs_f64()
             })

@@ -14,7 +14,8 @@
 //!                          typed block (crate `block`) ─► interp phases ─► canonical Move
 //!                                 ▲
 //!  Heidenhain Klartext ──── own front end (issue 29): BLK FORM, L, CC/C, CYCL DEF, LBL
-//!  Siemens Sinumerik ────── own front end (issue 29): G-code plus R params, CYCLE8x, MCALL
+//!  Siemens Sinumerik ────── own front end (crate `siemens`): R params, DEF, IF/WHILE/FOR,
+//!                           frames, CYCLE81/82, MCALL; ISO blocks in Fanuc's codes
 //! ```
 //!
 //! The three G-code dialects share one line syntax, so they differ only in this table. The
@@ -23,8 +24,10 @@
 //! into the same typed [`Block`](crate::block::Block) of G codes and words (or, for a
 //! construct with no G-code counterpart, straight into canonical moves through the same
 //! `Interp` queue), with a [`Table`] of its own for the modal state it starts in. Whatever
-//! the front end, every move leaves as the same canonical [`Move`](crate::Move). Until then
-//! the reader recognises such programs and refuses them by name.
+//! the front end, every move leaves as the same canonical [`Move`](crate::Move). The Siemens front end is
+//! crate `siemens` (it hands the interpreter ISO blocks in Fanuc's codes, so its table is
+//! Fanuc's); until Heidenhain's is in, the reader recognises such programs and refuses them
+//! by name.
 
 mod fanuc;
 mod haas;

@@ -4,8 +4,9 @@
 //! programming").
 
 use super::expr::{expr, r_parameter, Scan};
-use super::flow::{skip_number_and_label, Structure, Var};
+use super::flow::skip_number_and_label;
 use super::frame::{rotation_zyx, Instruction};
+use super::state::{Structure, Var};
 use super::words::Words;
 use super::Reader;
 use crate::lex::LineResult;
@@ -13,10 +14,42 @@ use crate::lex::LineResult;
 /// Keywords accepted anywhere in a block that do not change the path mtsim reads
 /// (dynamics, compressors, look-ahead, orientation reference): noted once.
 const NOTED: &[&str] = &[
-    "SOFT", "BRISK", "FFWON", "FFWOF", "COMPOF", "COMPON", "COMPCAD", "COMPCURV", "CFC", "CFTCP",
-    "CFIN", "STOPRE", "SPATH", "UPATH", "ORIWKS", "ORIMKS", "ORIAXES", "ORIVECT", "SETMS",
-    "DIAMOF", "ACN", "ACP", "DC", "G64", "WAITM", "PTP", "CP", "DRIVE", "FGROUP", "GROUP_BEGIN",
-    "GROUP_END", "DISPLOF", "DISPLON", "SAVE", "FIFOCTRL", "OFFN",
+    "SOFT",
+    "BRISK",
+    "FFWON",
+    "FFWOF",
+    "COMPOF",
+    "COMPON",
+    "COMPCAD",
+    "COMPCURV",
+    "CFC",
+    "CFTCP",
+    "CFIN",
+    "STOPRE",
+    "SPATH",
+    "UPATH",
+    "ORIWKS",
+    "ORIMKS",
+    "ORIAXES",
+    "ORIVECT",
+    "SETMS",
+    "DIAMOF",
+    "ACN",
+    "ACP",
+    "DC",
+    "G64",
+    "WAITM",
+    "PTP",
+    "CP",
+    "DRIVE",
+    "FGROUP",
+    "GROUP_BEGIN",
+    "GROUP_END",
+    "DISPLOF",
+    "DISPLON",
+    "SAVE",
+    "FIFOCTRL",
+    "OFFN",
 ];
 
 impl Reader {
@@ -45,7 +78,13 @@ impl Reader {
     }
 
     /// The statement `kw` (at byte `at`), when it is one.
-    fn statement(&mut self, kw: &str, at: usize, sc: &mut Scan, line_no: usize) -> LineResult<Option<bool>> {
+    fn statement(
+        &mut self,
+        kw: &str,
+        at: usize,
+        sc: &mut Scan,
+        line_no: usize,
+    ) -> LineResult<Option<bool>> {
         let span = at..sc.at;
         match kw {
             "IF" => self.if_statement(sc, at)?,
@@ -65,7 +104,14 @@ impl Reader {
                 }
             }
             "ENDWHILE" => {
-                let Structure::While { offset, line } = self.pop(|s| matches!(s, Structure::While { .. }), "ENDWHILE", span.clone())? else { unreachable!() };
+                let Structure::While { offset, line } = self.pop(
+                    |s| matches!(s, Structure::While { .. }),
+                    "ENDWHILE",
+                    span.clone(),
+                )?
+                else {
+                    unreachable!()
+                };
                 self.backward(span)?;
                 (self.level().offset, self.level().line) = (offset, line);
             }
@@ -74,12 +120,23 @@ impl Reader {
             "REPEAT" | "LOOP" => {
                 let level = self.level();
                 let (offset, line) = (level.offset, level.line);
-                let s = if kw == "LOOP" { Structure::Loop { offset, line } } else { Structure::Repeat { offset, line } };
+                let s = if kw == "LOOP" {
+                    Structure::Loop { offset, line }
+                } else {
+                    Structure::Repeat { offset, line }
+                };
                 self.open(s, span)?;
             }
             "UNTIL" => {
                 let done = expr(sc, &self.vars)? != 0.0;
-                let Structure::Repeat { offset, line } = self.pop(|s| matches!(s, Structure::Repeat { .. }), "UNTIL", span.clone())? else { unreachable!() };
+                let Structure::Repeat { offset, line } = self.pop(
+                    |s| matches!(s, Structure::Repeat { .. }),
+                    "UNTIL",
+                    span.clone(),
+                )?
+                else {
+                    unreachable!()
+                };
                 if !done {
                     self.backward(span.clone())?;
                     self.open(Structure::Repeat { offset, line }, span)?;
@@ -87,14 +144,25 @@ impl Reader {
                 }
             }
             "ENDLOOP" => {
-                let Structure::Loop { offset, line } = self.pop(|s| matches!(s, Structure::Loop { .. }), "ENDLOOP", span.clone())? else { unreachable!() };
+                let Structure::Loop { offset, line } = self.pop(
+                    |s| matches!(s, Structure::Loop { .. }),
+                    "ENDLOOP",
+                    span.clone(),
+                )?
+                else {
+                    unreachable!()
+                };
                 self.backward(span.clone())?;
                 self.open(Structure::Loop { offset, line }, span)?;
                 (self.level().offset, self.level().line) = (offset, line);
             }
             "GOTOF" | "GOTOB" | "GOTO" | "GOTOC" => {
                 let Some((target, t_at)) = sc.ident() else {
-                    return Err(sc.err(at, format!("{kw} without a target: expected a label or block number"), "no target"));
+                    return Err(sc.err(
+                        at,
+                        format!("{kw} without a target: expected a label or block number"),
+                        "no target",
+                    ));
                 };
                 self.jump(kw, target, t_at..sc.at)?;
             }
@@ -103,9 +171,16 @@ impl Reader {
             "RET" => return self.end_of_level().map(Some),
             "EXTERN" => {}
             "MCALL" => self.mcall(sc, at, line_no)?,
-            "TRANS" | "ATRANS" | "ROT" | "AROT" | "SCALE" | "ASCALE" | "MIRROR" | "AMIRROR" => self.frame_statement(kw, sc, at)?,
-            "CALL" | "PCALL" | "EXECUTE" | "EXECTAB" | "CASE" | "SETAL" | "STOPRE_" | "WHEN" | "EVERY" | "ID" | "IDS" => {
-                return Err(sc.err(at, format!("`{kw}` is not supported by mtsim's Siemens reader"), "unsupported statement"));
+            "TRANS" | "ATRANS" | "ROT" | "AROT" | "SCALE" | "ASCALE" | "MIRROR" | "AMIRROR" => {
+                self.frame_statement(kw, sc, at)?
+            }
+            "CALL" | "PCALL" | "EXECUTE" | "EXECTAB" | "CASE" | "SETAL" | "STOPRE_" | "WHEN"
+            | "EVERY" | "ID" | "IDS" => {
+                return Err(sc.err(
+                    at,
+                    format!("`{kw}` is not supported by mtsim's Siemens reader"),
+                    "unsupported statement",
+                ));
             }
             _ => return Ok(None),
         }
@@ -113,11 +188,20 @@ impl Reader {
     }
 
     /// Pops the innermost structure, which must satisfy `is`.
-    fn pop(&mut self, is: impl Fn(&Structure) -> bool, kw: &str, span: std::ops::Range<usize>) -> LineResult<Structure> {
+    fn pop(
+        &mut self,
+        is: impl Fn(&Structure) -> bool,
+        kw: &str,
+        span: std::ops::Range<usize>,
+    ) -> LineResult<Structure> {
         let level = self.level();
         match level.structures.pop() {
             Some(s) if is(&s) => Ok(s),
-            _ => Err(crate::lex::LineError::new(span, format!("{kw} without its opening statement"), "unmatched")),
+            _ => Err(crate::lex::LineError::new(
+                span,
+                format!("{kw} without its opening statement"),
+                "unmatched",
+            )),
         }
     }
 
@@ -159,14 +243,34 @@ impl Reader {
         if start <= end {
             let level = self.level();
             let (offset, line) = (level.offset, level.line);
-            self.open(Structure::For { offset, line, var, end }, at..at + 3)
+            self.open(
+                Structure::For {
+                    offset,
+                    line,
+                    var,
+                    end,
+                },
+                at..at + 3,
+            )
         } else {
             self.skip(false, at..at + 3).map(|_| ())
         }
     }
 
     fn end_for(&mut self, span: std::ops::Range<usize>) -> LineResult<()> {
-        let Structure::For { offset, line, var, end } = self.pop(|s| matches!(s, Structure::For { .. }), "ENDFOR", span.clone())? else { unreachable!() };
+        let Structure::For {
+            offset,
+            line,
+            var,
+            end,
+        } = self.pop(
+            |s| matches!(s, Structure::For { .. }),
+            "ENDFOR",
+            span.clone(),
+        )?
+        else {
+            unreachable!()
+        };
         let v = match &var {
             Var::R(k) => self.vars.r[*k],
             Var::Named(n) => self.vars.get(n).unwrap_or(f64::INFINITY),
@@ -178,7 +282,15 @@ impl Reader {
         })?;
         if v <= end {
             self.backward(span.clone())?;
-            self.open(Structure::For { offset, line, var, end }, span)?;
+            self.open(
+                Structure::For {
+                    offset,
+                    line,
+                    var,
+                    end,
+                },
+                span,
+            )?;
             (self.level().offset, self.level().line) = (offset, line);
         }
         Ok(())
@@ -187,13 +299,21 @@ impl Reader {
     /// An R parameter or `DEF` variable to assign.
     fn variable(&mut self, sc: &mut Scan, at: usize) -> LineResult<Var> {
         let Some((name, n_at)) = sc.ident() else {
-            return Err(sc.err(at, "expected a variable (an R parameter or a DEF variable)", "no variable"));
+            return Err(sc.err(
+                at,
+                "expected a variable (an R parameter or a DEF variable)",
+                "no variable",
+            ));
         };
         if let Some(Some(k)) = r_parameter(name) {
             return Ok(Var::R(k as usize));
         }
         if self.vars.get(name).is_none() {
-            return Err(sc.err(n_at, format!("`{name}` is not a defined variable"), "undefined variable"));
+            return Err(sc.err(
+                n_at,
+                format!("`{name}` is not a defined variable"),
+                "undefined variable",
+            ));
         }
         Ok(Var::Named(name.to_string()))
     }
@@ -204,7 +324,11 @@ impl Reader {
             return Err(sc.err(at, "expected a type after DEF", "DEF"));
         };
         if !matches!(ty, "REAL" | "INT" | "BOOL") {
-            return Err(sc.err(t_at, format!("`DEF {ty}`: mtsim reads REAL, INT and BOOL variables"), "unsupported type"));
+            return Err(sc.err(
+                t_at,
+                format!("`DEF {ty}`: mtsim reads REAL, INT and BOOL variables"),
+                "unsupported type",
+            ));
         }
         let integer = ty != "REAL";
         loop {
@@ -212,9 +336,15 @@ impl Reader {
                 return Err(sc.err(sc.at, "expected a variable name", "no name"));
             };
             if sc.peek() == Some(b'[') {
-                return Err(sc.err(n_at, format!("array `{name}[..]`: mtsim reads scalar variables only"), "array"));
+                return Err(sc.err(
+                    n_at,
+                    format!("array `{name}[..]`: mtsim reads scalar variables only"),
+                    "array",
+                ));
             }
-            let reserved = (name.len() == 1 && name.as_bytes()[0].is_ascii_uppercase()) || r_parameter(name).is_some() || NOTED.contains(&name);
+            let reserved = (name.len() == 1 && name.as_bytes()[0].is_ascii_uppercase())
+                || r_parameter(name).is_some()
+                || NOTED.contains(&name);
             if reserved {
                 return Err(sc.err(n_at, format!("`{name}` is an address or keyword: expected a variable name of two or more characters that is not one"), "reserved name"));
             }
@@ -227,7 +357,11 @@ impl Reader {
             }
             let level = self.vars.levels.last_mut().expect("a variable level");
             if level.len() >= 10_000 {
-                return Err(sc.err(n_at, "more than 10000 variables in one program", "too many variables"));
+                return Err(sc.err(
+                    n_at,
+                    "more than 10000 variables in one program",
+                    "too many variables",
+                ));
             }
             level.insert(name.to_string(), v);
             if !sc.eat(b',') {
@@ -249,7 +383,11 @@ impl Reader {
                 return Err(sc.err(at, "expected `type name` in the PROC parameters", "PROC"));
             };
             let by_reference = ty == "VAR";
-            let ty = if by_reference { sc.ident().map_or("", |t| t.0) } else { ty };
+            let ty = if by_reference {
+                sc.ident().map_or("", |t| t.0)
+            } else {
+                ty
+            };
             let Some((name, n_at)) = sc.ident() else {
                 return Err(sc.err(at, "expected a parameter name", "PROC"));
             };
@@ -257,7 +395,11 @@ impl Reader {
                 return Err(sc.err(n_at, format!("PROC parameter `{name}` of type {ty}{}: mtsim reads REAL, INT and BOOL values", if by_reference { " by reference (VAR)" } else { "" }), "unsupported parameter"));
             }
             let v = args.get(k).copied().unwrap_or(0.0);
-            self.vars.levels.last_mut().expect("a variable level").insert(name.to_string(), v);
+            self.vars
+                .levels
+                .last_mut()
+                .expect("a variable level")
+                .insert(name.to_string(), v);
             k += 1;
             sc.eat(b',');
             if sc.done() {
@@ -272,7 +414,11 @@ impl Reader {
     fn frame_statement(&mut self, kw: &str, sc: &mut Scan, at: usize) -> LineResult<()> {
         let additive = kw.starts_with('A');
         let base = kw.trim_start_matches('A');
-        let base = if base == "ROT" || kw == "ROT" { "ROT" } else { base };
+        let base = if base == "ROT" || kw == "ROT" {
+            "ROT"
+        } else {
+            base
+        };
         let mut v: [Option<f64>; 3] = [None; 3];
         let mut rpl = None;
         while !sc.done() {
@@ -286,9 +432,15 @@ impl Reader {
                 "RPL" => 3,
                 _ => {
                     let (letter, digits) = name.split_at(1);
-                    let k = "XYZ".find(letter).filter(|_| digits.bytes().all(|b| b.is_ascii_digit() || b == b'.'));
+                    let k = "XYZ"
+                        .find(letter)
+                        .filter(|_| digits.bytes().all(|b| b.is_ascii_digit() || b == b'.'));
                     let Some(k) = k else {
-                        return Err(sc.err(n_at, format!("`{name}` in {kw}: expected X, Y, Z (or RPL= for ROT)"), "frame axis"));
+                        return Err(sc.err(
+                            n_at,
+                            format!("`{name}` in {kw}: expected X, Y, Z (or RPL= for ROT)"),
+                            "frame axis",
+                        ));
                     };
                     sc.at = n_at + 1;
                     k
@@ -315,7 +467,11 @@ impl Reader {
             "SCALE" => {
                 let s = v.map(|x| x.unwrap_or(1.0));
                 if s.iter().any(|x| *x == 0.0 || !x.is_finite()) {
-                    return Err(sc.err(at, "a scale of zero: expected non-zero factors", "zero scale"));
+                    return Err(sc.err(
+                        at,
+                        "a scale of zero: expected non-zero factors",
+                        "zero scale",
+                    ));
                 }
                 Instruction::Scale(s)
             }
@@ -327,13 +483,27 @@ impl Reader {
 
     /// The identifier `name` inside a list of words: a keyword, an assignment, `CR=`, a
     /// message, a cycle or a subprogram call.
-    pub(super) fn named(&mut self, name: &str, at: usize, sc: &mut Scan, w: &mut Words, line_no: usize) -> LineResult<()> {
+    pub(super) fn named(
+        &mut self,
+        name: &str,
+        at: usize,
+        sc: &mut Scan,
+        w: &mut Words,
+        line_no: usize,
+    ) -> LineResult<()> {
         match name {
             "R" if sc.peek() == Some(b'[') => {
                 sc.eat(b'[');
                 let k = expr(sc, &self.vars)?;
-                if !sc.eat(b']') || !(0.0..self.vars.r.len() as f64).contains(&k) || k.fract() != 0.0 {
-                    return Err(sc.err(at, "expected `R[index]` with an index 0-999", "R parameter"));
+                if !sc.eat(b']')
+                    || !(0.0..self.vars.r.len() as f64).contains(&k)
+                    || k.fract() != 0.0
+                {
+                    return Err(sc.err(
+                        at,
+                        "expected `R[index]` with an index 0-999",
+                        "R parameter",
+                    ));
                 }
                 return self.assign(sc, Var::R(k as usize), at);
             }
@@ -354,7 +524,11 @@ impl Reader {
             }
             "TRAORI" => {
                 self.tcp = true;
-                w.before.push(if self.d_active { "G43.4 H".to_string() + &self.tool.to_string() } else { "G43.4".into() });
+                w.before.push(if self.d_active {
+                    "G43.4 H".to_string() + &self.tool.to_string()
+                } else {
+                    "G43.4".into()
+                });
                 return Ok(());
             }
             "TRAFOOF" => {
@@ -378,7 +552,11 @@ impl Reader {
             _ => {}
         }
         if name.starts_with('$') {
-            return Err(sc.err(at, format!("system variable `{name}` is not supported by mtsim"), "system variable"));
+            return Err(sc.err(
+                at,
+                format!("system variable `{name}` is not supported by mtsim"),
+                "system variable",
+            ));
         }
         match sc.peek() {
             Some(b'=') if self.vars.get(name).is_some() => {
@@ -401,7 +579,11 @@ impl Reader {
                     args.push(expr(sc, &self.vars)?);
                 }
                 if !sc.eat(b',') && sc.peek() != Some(b')') {
-                    return Err(sc.err(at, format!("expected `,` or `)` in the call of `{name}`"), "call"));
+                    return Err(sc.err(
+                        at,
+                        format!("expected `,` or `)` in the call of `{name}`"),
+                        "call",
+                    ));
                 }
                 if args.len() > 64 {
                     return Err(sc.err(at, "more than 64 values in a call", "call"));

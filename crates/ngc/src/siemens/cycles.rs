@@ -12,23 +12,21 @@ use std::path::PathBuf;
 
 use super::expr::{expr, Scan};
 use super::source::Source;
+use super::state::Cycle;
 use super::words::number;
 use super::{Level, Reader};
 use crate::axis::Axis;
 use crate::lex::{LineError, LineResult};
 
-/// A drilling cycle's values, program units and s.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Cycle {
-    retract: f64,
-    approach: f64,
-    depth: f64,
-    dwell_s: f64,
-}
-
 impl Reader {
     /// `CYCLE8x(..)` among the words of a block: run now.
-    pub(super) fn cycle_word(&mut self, name: &str, at: usize, sc: &mut Scan, line_no: usize) -> LineResult<()> {
+    pub(super) fn cycle_word(
+        &mut self,
+        name: &str,
+        at: usize,
+        sc: &mut Scan,
+        line_no: usize,
+    ) -> LineResult<()> {
         if name == "CYCLE800" {
             let args = self.arguments(sc, at)?;
             if args.iter().any(Option::is_some) {
@@ -40,7 +38,10 @@ impl Reader {
         }
         if name == "CYCLE832" {
             self.arguments(sc, at)?;
-            self.notice(line_no, "CYCLE832 (high-speed settings) accepted and not simulated".into());
+            self.notice(
+                line_no,
+                "CYCLE832 (high-speed settings) accepted and not simulated".into(),
+            );
             return Ok(());
         }
         let cycle = self.cycle(name, at, sc)?;
@@ -56,18 +57,35 @@ impl Reader {
         let a = self.arguments(sc, at)?;
         let get = |k: usize| a.get(k).copied().flatten();
         let (Some(retract), Some(reference)) = (get(0), get(1)) else {
-            return Err(sc.err(at, format!("{name} without RTP and RFP: expected {name}(RTP, RFP, SDIS, DP, DPR{})", if name == "CYCLE82" { ", DTB" } else { "" }), "cycle values"));
+            return Err(sc.err(
+                at,
+                format!(
+                    "{name} without RTP and RFP: expected {name}(RTP, RFP, SDIS, DP, DPR{})",
+                    if name == "CYCLE82" { ", DTB" } else { "" }
+                ),
+                "cycle values",
+            ));
         };
         let depth = match (get(4), get(3)) {
             (Some(dpr), _) => reference - dpr.abs(),
             (None, Some(dp)) => dp,
-            (None, None) => return Err(sc.err(at, format!("{name} without DP or DPR: expected a drilling depth"), "no depth")),
+            (None, None) => {
+                return Err(sc.err(
+                    at,
+                    format!("{name} without DP or DPR: expected a drilling depth"),
+                    "no depth",
+                ))
+            }
         };
         Ok(Cycle {
             retract,
             approach: reference + get(2).unwrap_or(0.0).abs(),
             depth,
-            dwell_s: if name == "CYCLE82" { get(5).unwrap_or(0.0) } else { 0.0 },
+            dwell_s: if name == "CYCLE82" {
+                get(5).unwrap_or(0.0)
+            } else {
+                0.0
+            },
         })
     }
 
@@ -101,7 +119,11 @@ impl Reader {
                 return Ok(out);
             }
             if !sc.eat(b',') {
-                return Err(sc.err(at, "expected `,` or `)` in the cycle's values", "cycle values"));
+                return Err(sc.err(
+                    at,
+                    "expected `,` or `)` in the cycle's values",
+                    "cycle values",
+                ));
             }
         }
     }
@@ -126,7 +148,15 @@ impl Reader {
                 let mut q = here;
                 q[axis] = v;
                 let t = self.frame.to_work(q);
-                self.push(&format!("G90 G{motion} X{} Y{} Z{}", number(t[0]), number(t[1]), number(t[2])), 0..0);
+                self.push(
+                    &format!(
+                        "G90 G{motion} X{} Y{} Z{}",
+                        number(t[0]),
+                        number(t[1]),
+                        number(t[2])
+                    ),
+                    0..0,
+                );
                 self.interp_absolute = true;
                 self.interp_motion = motion;
             }
@@ -136,15 +166,29 @@ impl Reader {
     }
 
     /// Calls subprogram `name` (`L10`, or a program name), `repeats` times.
-    pub(super) fn call(&mut self, name: &str, args: Vec<f64>, repeats: u64, span: std::ops::Range<usize>) -> LineResult<()> {
+    pub(super) fn call(
+        &mut self,
+        name: &str,
+        args: Vec<f64>,
+        repeats: u64,
+        span: std::ops::Range<usize>,
+    ) -> LineResult<()> {
         if self.levels.len() > self.max_depth {
-            return Err(LineError::new(span, format!("subprograms nested deeper than {}", self.max_depth), "too deep"));
+            return Err(LineError::new(
+                span,
+                format!("subprograms nested deeper than {}", self.max_depth),
+                "too deep",
+            ));
         }
         let Some(path) = self.find_program(name) else {
             return Err(LineError::new(span, format!("`{name}` is neither a Sinumerik keyword mtsim reads nor a subprogram it finds ({name}.SPF or {name}.MPF beside the program or on the search path)"), "unknown name or subprogram"));
         };
         let text = crate::side_file::read_side_file(&path).map_err(|e| {
-            LineError::new(span.clone(), format!("subprogram {}: {e}", path.display()), "unreadable subprogram")
+            LineError::new(
+                span.clone(),
+                format!("subprogram {}: {e}", path.display()),
+                "unreadable subprogram",
+            )
         })?;
         self.levels.push(Level {
             source: Source::Text(text.into()),

@@ -20,13 +20,21 @@ impl Reader {
         let moves = w.has_motion_words();
         if let Some(span) = w.dwell.clone() {
             let Some((f, _)) = w.feed.take() else {
-                return Err(LineError::new(span, "G4 without F: expected `G4 F<seconds>` in a block of its own", "dwell without time"));
+                return Err(LineError::new(
+                    span,
+                    "G4 without F: expected `G4 F<seconds>` in a block of its own",
+                    "dwell without time",
+                ));
             };
             self.push(&format!("G4 X{}", number(f)), span);
         }
         let computed = moves
             && (!self.frame.is_identity()
-                || w.axes.iter().chain(&w.centres).flatten().any(|c| c.mode != Mode::Modal));
+                || w.axes
+                    .iter()
+                    .chain(&w.centres)
+                    .flatten()
+                    .any(|c| c.mode != Mode::Modal));
         let other = std::mem::take(&mut w.other);
         for (k, (text, span)) in other.iter().enumerate() {
             // `G94 FNORM` names one code twice.
@@ -35,7 +43,11 @@ impl Reader {
             }
         }
         if let Some((f, span)) = w.feed.clone() {
-            let f = if self.feed_in_mm { f / crate::units::MM_PER_INCH } else { f };
+            let f = if self.feed_in_mm {
+                f / crate::units::MM_PER_INCH
+            } else {
+                f
+            };
             self.push(&format!("F{}", number(f)), span);
         }
         if !moves {
@@ -47,9 +59,17 @@ impl Reader {
                 self.written_words(&w, up);
             }
         }
-        let stop = if self.iso.is_empty() { Stop::None } else { self.run_iso(line_no)? };
+        let stop = if self.iso.is_empty() {
+            Stop::None
+        } else {
+            self.run_iso(line_no)?
+        };
         if matches!(stop, Stop::End) {
             return Ok(false);
+        }
+        for iso in std::mem::take(&mut w.after) {
+            self.iso.push_str(&iso);
+            self.run_iso(line_no)?;
         }
         if moves && self.modal_call.is_some() && w.axes.iter().any(Option::is_some) {
             self.run_cycle(None, line_no)?;

@@ -118,7 +118,10 @@ impl<'a> Scan<'a> {
             end += 1;
         }
         self.at = end;
-        Some((std::str::from_utf8(&self.s[start..end]).unwrap_or(""), start))
+        Some((
+            std::str::from_utf8(&self.s[start..end]).unwrap_or(""),
+            start,
+        ))
     }
 
     /// An unsigned number as written (`12`, `1.5`, `.5`, `3.`, `1E-3` is not Sinumerik).
@@ -126,7 +129,11 @@ impl<'a> Scan<'a> {
         self.blanks();
         let start = self.at;
         let mut end = start;
-        while self.s.get(end).is_some_and(|c| c.is_ascii_digit() || *c == b'.') {
+        while self
+            .s
+            .get(end)
+            .is_some_and(|c| c.is_ascii_digit() || *c == b'.')
+        {
             end += 1;
         }
         // `EX` exponent: 1.5EX3 = 1500.
@@ -143,7 +150,10 @@ impl<'a> Scan<'a> {
             while self.s.get(k).is_some_and(|c| c.is_ascii_digit()) {
                 k += 1;
             }
-            if let Ok(e) = std::str::from_utf8(&self.s[e0..k]).unwrap_or("").parse::<i32>() {
+            if let Ok(e) = std::str::from_utf8(&self.s[e0..k])
+                .unwrap_or("")
+                .parse::<i32>()
+            {
                 v *= 10f64.powi(if neg { -e } else { e });
                 self.at = k;
             }
@@ -313,10 +323,18 @@ impl Eval<'_> {
             return Ok(v);
         }
         let Some((name, at)) = sc.ident() else {
-            return Err(sc.err(at, "expected a number, a variable, `(` or a function", "expected a value"));
+            return Err(sc.err(
+                at,
+                "expected a number, a variable, `(` or a function",
+                "expected a value",
+            ));
         };
         if name.starts_with('$') {
-            return Err(sc.err(at, format!("system variable `{name}` is not supported by mtsim"), "system variable"));
+            return Err(sc.err(
+                at,
+                format!("system variable `{name}` is not supported by mtsim"),
+                "system variable",
+            ));
         }
         if let Some(v) = r_parameter(name) {
             return self.r_value(sc, v, at);
@@ -324,7 +342,11 @@ impl Eval<'_> {
         if name == "R" && sc.eat(b'[') {
             let k = self.nested(sc, at)?;
             if !sc.eat(b']') {
-                return Err(sc.err(at, "expected `]` after the R parameter's index", "unclosed `[`"));
+                return Err(sc.err(
+                    at,
+                    "expected `]` after the R parameter's index",
+                    "unclosed `[`",
+                ));
             }
             return self.r_value(sc, Some(k), at);
         }
@@ -338,7 +360,11 @@ impl Eval<'_> {
             return self.function(sc, name, at);
         }
         if sc.peek() == Some(b'[') {
-            return Err(sc.err(at, format!("array element `{name}[..]`: mtsim reads scalar variables only"), "array"));
+            return Err(sc.err(
+                at,
+                format!("array element `{name}[..]`: mtsim reads scalar variables only"),
+                "array",
+            ));
         }
         self.vars.get(name).ok_or_else(|| {
             sc.err(at, format!("`{name}` is not a defined variable: expected `DEF REAL {name}` (or INT, BOOL) before it is read"), "undefined variable")
@@ -348,7 +374,11 @@ impl Eval<'_> {
     fn r_value(&self, sc: &Scan, k: Option<f64>, at: usize) -> LineResult<f64> {
         let index = k.filter(|k| *k >= 0.0 && k.fract() == 0.0 && *k < R_COUNT as f64);
         index.map(|k| self.vars.r[k as usize]).ok_or_else(|| {
-            sc.err(at, format!("R parameter out of range: expected R0 to R{}", R_COUNT - 1), "no such R parameter")
+            sc.err(
+                at,
+                format!("R parameter out of range: expected R0 to R{}", R_COUNT - 1),
+                "no such R parameter",
+            )
         })
     }
 
@@ -358,7 +388,14 @@ impl Eval<'_> {
             "ROUNDUP", "LN", "EXP", "MINVAL", "MAXVAL",
         ];
         if !NAMES.contains(&name) {
-            return Err(sc.err(at, format!("function `{name}` is not supported by mtsim: expected {}", NAMES.join(" ")), "unsupported function"));
+            return Err(sc.err(
+                at,
+                format!(
+                    "function `{name}` is not supported by mtsim: expected {}",
+                    NAMES.join(" ")
+                ),
+                "unsupported function",
+            ));
         }
         sc.eat(b'(');
         let mut args = [0.0; 2];
@@ -367,7 +404,11 @@ impl Eval<'_> {
             loop {
                 let v = self.nested(sc, at)?;
                 if n == args.len() {
-                    return Err(sc.err(at, format!("too many arguments to `{name}`"), "too many arguments"));
+                    return Err(sc.err(
+                        at,
+                        format!("too many arguments to `{name}`"),
+                        "too many arguments",
+                    ));
                 }
                 args[n] = v;
                 n += 1;
@@ -375,7 +416,11 @@ impl Eval<'_> {
                     break;
                 }
                 if !sc.eat(b',') {
-                    return Err(sc.err(at, format!("expected `,` or `)` in the arguments of `{name}`"), "unclosed call"));
+                    return Err(sc.err(
+                        at,
+                        format!("expected `,` or `)` in the arguments of `{name}`"),
+                        "unclosed call",
+                    ));
                 }
             }
         }
@@ -392,7 +437,14 @@ impl Eval<'_> {
             "POT" => (1, a * a),
             "TRUNC" => (1, a.trunc()),
             "ROUND" => (1, a.round()),
-            "ROUNDUP" => (1, if a.fract() == 0.0 { a } else { a.trunc() + a.signum() }),
+            "ROUNDUP" => (
+                1,
+                if a.fract() == 0.0 {
+                    a
+                } else {
+                    a.trunc() + a.signum()
+                },
+            ),
             "LN" => (1, a.ln()),
             "EXP" => (1, a.exp()),
             "MINVAL" => (2, a.min(b)),
@@ -400,10 +452,18 @@ impl Eval<'_> {
             _ => (0, 0.0),
         };
         if n != want {
-            return Err(sc.err(at, format!("`{name}` takes {want} argument(s), given {n}"), "wrong argument count"));
+            return Err(sc.err(
+                at,
+                format!("`{name}` takes {want} argument(s), given {n}"),
+                "wrong argument count",
+            ));
         }
         if !v.is_finite() {
-            return Err(sc.err(at, format!("`{name}` of an argument outside its domain"), "not a number"));
+            return Err(sc.err(
+                at,
+                format!("`{name}` of an argument outside its domain"),
+                "not a number",
+            ));
         }
         Ok(v)
     }

@@ -7,31 +7,9 @@
 //! backward jump counted against the iteration limit.
 
 use super::expr::Scan;
+use super::state::Structure;
 use super::{Reader, MAX_STRUCTURES};
 use crate::lex::{LineError, LineResult};
-
-/// An open control structure of a program level.
-pub(super) enum Structure {
-    If,
-    /// The `WHILE` line (re-read at `ENDWHILE`).
-    While { offset: usize, line: usize },
-    /// The first line of the body, the loop variable and its last value.
-    For {
-        offset: usize,
-        line: usize,
-        var: Var,
-        end: f64,
-    },
-    Repeat { offset: usize, line: usize },
-    Loop { offset: usize, line: usize },
-}
-
-/// A variable a block assigns: an R parameter or a `DEF` variable.
-#[derive(Clone, Debug)]
-pub(super) enum Var {
-    R(usize),
-    Named(String),
-}
 
 /// What opens or closes a structure, as the first statement of a line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,7 +71,9 @@ fn targets(line: &str) -> (Option<&str>, Option<&str>) {
     let save = sc.at;
     let mut number = None;
     if let Some((w, _)) = sc.ident() {
-        if w.strip_prefix('N').is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit())) {
+        if w.strip_prefix('N')
+            .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+        {
             number = Some(w);
         } else {
             sc.at = save;
@@ -113,7 +93,11 @@ impl Reader {
     pub(super) fn open(&mut self, s: Structure, span: std::ops::Range<usize>) -> LineResult<()> {
         let level = self.level();
         if level.structures.len() == MAX_STRUCTURES {
-            return Err(LineError::new(span, format!("control structures nested deeper than {MAX_STRUCTURES}"), "too deep"));
+            return Err(LineError::new(
+                span,
+                format!("control structures nested deeper than {MAX_STRUCTURES}"),
+                "too deep",
+            ));
         }
         level.structures.push(s);
         Ok(())
@@ -121,7 +105,11 @@ impl Reader {
 
     /// Skips forward past the partner of the structure just refused: the first `ELSE`
     /// (when `to_else`) or closing keyword at this depth. Returns the keyword found.
-    pub(super) fn skip(&mut self, to_else: bool, span: std::ops::Range<usize>) -> LineResult<String> {
+    pub(super) fn skip(
+        &mut self,
+        to_else: bool,
+        span: std::ops::Range<usize>,
+    ) -> LineResult<String> {
         let mut depth = 0usize;
         let mut buf = String::new();
         loop {
@@ -150,7 +138,10 @@ impl Reader {
         if self.iterations > self.max_iterations {
             return Err(LineError::new(
                 span,
-                format!("more than {} backward jumps (loop iterations): the program does not end", self.max_iterations),
+                format!(
+                    "more than {} backward jumps (loop iterations): the program does not end",
+                    self.max_iterations
+                ),
                 "endless loop",
             )
             .help("raise the reader's max_iterations if the loop is meant to run this long"));
@@ -160,7 +151,12 @@ impl Reader {
 
     /// `GOTOF`/`GOTOB`/`GOTO`/`GOTOC` to `target` (a label or `N` number). `Ok(false)`:
     /// not found, for `GOTOC` to go on.
-    pub(super) fn jump(&mut self, kind: &str, target: &str, span: std::ops::Range<usize>) -> LineResult<bool> {
+    pub(super) fn jump(
+        &mut self,
+        kind: &str,
+        target: &str,
+        span: std::ops::Range<usize>,
+    ) -> LineResult<bool> {
         let forward = kind != "GOTOB";
         let backward = kind != "GOTOF";
         if forward {
@@ -180,7 +176,20 @@ impl Reader {
         if kind == "GOTOC" {
             return Ok(false);
         }
-        Err(LineError::new(span, format!("{kind} {target}: no label `{target}:` or block `{target}` {} in this program", if forward && backward { "anywhere" } else if forward { "further on" } else { "earlier" }), "unknown jump target"))
+        Err(LineError::new(
+            span,
+            format!(
+                "{kind} {target}: no label `{target}:` or block `{target}` {} in this program",
+                if forward && backward {
+                    "anywhere"
+                } else if forward {
+                    "further on"
+                } else {
+                    "earlier"
+                }
+            ),
+            "unknown jump target",
+        ))
     }
 
     /// The place (offset, line) of the line carrying `target`: the first after the current

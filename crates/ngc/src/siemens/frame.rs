@@ -67,7 +67,11 @@ impl ProgFrame {
     /// The work point of frame point `p`.
     pub fn to_work(&self, p: [f64; 3]) -> [f64; 3] {
         let q = apply(&self.matrix, p);
-        [q[0] + self.origin[0], q[1] + self.origin[1], q[2] + self.origin[2]]
+        [
+            q[0] + self.origin[0],
+            q[1] + self.origin[1],
+            q[2] + self.origin[2],
+        ]
     }
 
     /// The frame point of work point `w`: `A⁻¹ (w - o)`.
@@ -155,12 +159,19 @@ mod tests {
         let p = f.to_frame([7.0, 3.0, 2.0]);
         let back = f.to_work(p);
         assert!((back[0] - 7.0).abs() < 1e-12 && (back[1] - 3.0).abs() < 1e-12);
-        assert_eq!(f.arc_plane(2).map(|(k, s, flip)| (k, (s - 1.0).abs() < 1e-12, flip)), Some((2, true, false)));
+        assert_eq!(
+            f.arc_plane(2)
+                .map(|(k, s, flip)| (k, (s - 1.0).abs() < 1e-12, flip)),
+            Some((2, true, false))
+        );
         // AROT Y90 stands the XY plane up as the work YZ plane, turning the same way
         // about +X (Ry(90) e_z = +e_x).
         let mut up = ProgFrame::default();
         up.apply(Instruction::Rot(rotation_zyx(0.0, 90.0, 0.0)), false);
-        assert_eq!(up.arc_plane(2).map(|(k, _, flip)| (k, flip)), Some((0, false)));
+        assert_eq!(
+            up.arc_plane(2).map(|(k, _, flip)| (k, flip)),
+            Some((0, false))
+        );
         up.apply(Instruction::Rot(rotation_zyx(0.0, 30.0, 0.0)), true);
         assert_eq!(up.arc_plane(2), None);
         f.apply(Instruction::Mirror([true, false, false]), true);

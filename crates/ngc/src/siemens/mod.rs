@@ -25,6 +25,7 @@ mod flow;
 mod frame;
 mod plain;
 mod source;
+mod state;
 mod words;
 
 use std::collections::VecDeque;
@@ -33,14 +34,14 @@ use std::path::{Path, PathBuf};
 use crate::canon::Move;
 use crate::error::{Error, Result, Syntax};
 use crate::interp::{Interp, Stop};
-use crate::lex::{lex_with, LineError, LineResult, Lexed, Word};
+use crate::lex::{lex_with, Lexed, LineError, LineResult, Word};
 use crate::notice::Notice;
 use crate::options::{Dialect, Options};
 
 use expr::Vars;
-use flow::Structure;
 use frame::ProgFrame;
 use source::Source;
+use state::Structure;
 
 /// Deepest nesting of `IF`, `WHILE`, `FOR`, `REPEAT` and `LOOP` in one program level
 /// (the control's own limit, Job planning "Program sequence control").
@@ -82,6 +83,8 @@ pub(crate) struct Reader {
     /// Tools called by name (`T="DRILL 8.5"`): numbered 1001, 1002 ... in order of call.
     tool_names: Vec<String>,
     tcp: bool,
+    /// G60 (exact stop) in effect; G64 otherwise.
+    exact_stop: bool,
     /// G70: inch geometry with the feed in mm/min.
     feed_in_mm: bool,
     /// The active plane's normal axis: 0 X (G19), 1 Y (G18), 2 Z (G17).
@@ -91,7 +94,7 @@ pub(crate) struct Reader {
     /// Byte offset and number of the line being run.
     line_start: (usize, usize),
     /// `MCALL CYCLE8x(..)`: the cycle called after each positioning block.
-    modal_call: Option<cycles::Cycle>,
+    modal_call: Option<state::Cycle>,
     search_path: Vec<PathBuf>,
     user_m: Vec<u32>,
     max_depth: usize,
@@ -151,6 +154,7 @@ impl Reader {
             normal: 2,
             interp_normal: 2,
             feed_in_mm: false,
+            exact_stop: false,
             line_start: (0, 1),
             modal_call: None,
             search_path,
@@ -180,10 +184,13 @@ impl Reader {
     fn step(&mut self) -> Result<bool> {
         let mut line = std::mem::take(&mut self.line);
         let level = self.levels.last_mut().expect("the main program level");
-        let n = level.source.line(level.offset, &mut line).map_err(|e| Error::Read {
-            path: level.path.clone(),
-            source: std::io::Error::new(e.kind(), format!("line {}: {e}", level.line)),
-        })?;
+        let n = level
+            .source
+            .line(level.offset, &mut line)
+            .map_err(|e| Error::Read {
+                path: level.path.clone(),
+                source: std::io::Error::new(e.kind(), format!("line {}: {e}", level.line)),
+            })?;
         if n == 0 {
             self.line = line;
             // The end of a file ends its level as M17 (or the program as M30).
@@ -228,7 +235,9 @@ impl Reader {
     /// Runs the ISO block in `self.iso` through the interpreter.
     fn run_iso(&mut self, line_no: usize) -> LineResult<Stop> {
         let iso = std::mem::take(&mut self.iso);
-        let result = self.run_text(&iso, line_no).map_err(|e| self.source_span(e));
+        let result = self
+            .run_text(&iso, line_no)
+            .map_err(|e| self.source_span(e));
         self.iso = iso;
         self.iso.clear();
         self.spans.clear();
@@ -272,7 +281,11 @@ impl Reader {
     fn notice(&mut self, line: usize, what: String) {
         if self.noticed.len() < 100 && !self.noticed.contains(&what) {
             self.noticed.push(what.clone());
-            let path = self.levels.last().map(|l| l.path.clone()).unwrap_or_default();
+            let path = self
+                .levels
+                .last()
+                .map(|l| l.path.clone())
+                .unwrap_or_default();
             self.notices.push(Notice {
                 path,
                 line,
@@ -295,7 +308,11 @@ impl Reader {
             span.end += 1;
         }
         let column = text[start..span.start].chars().count() + 1;
-        let path = self.levels.last().map(|l| l.path.clone()).unwrap_or_default();
+        let path = self
+            .levels
+            .last()
+            .map(|l| l.path.clone())
+            .unwrap_or_default();
         Error::Syntax(Box::new(Syntax {
             path,
             line,

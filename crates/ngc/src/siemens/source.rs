@@ -1,11 +1,11 @@
 //! A Sinumerik program's text, read one line at a byte offset: the main program streamed
 //! from its file through a fixed buffer, a subprogram read whole as a bounded side file.
 
-use std::io::{BufRead, BufReader, Seek, SeekFrom};
+use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 use std::rc::Rc;
 
-use crate::reader::MAX_LINE_BYTES;
+use crate::side_file::MAX_LINE_BYTES;
 
 /// Read buffer of a streamed program file, bytes.
 const BUFFER_BYTES: usize = 64 * 1024;
@@ -80,5 +80,3 @@ impl Source {
         }
     }
 }
-
-use std::io::Read as _;

@@ -11,7 +11,7 @@
 //! frame's scale in the plane; a mirroring frame turns G2 into G3 and back.
 
 use super::expr::{expr, r_parameter, Scan};
-use super::flow::Var;
+use super::state::Var;
 use super::Reader;
 use crate::lex::{LineError, LineResult};
 
@@ -54,6 +54,8 @@ pub(super) struct Words {
     pub other: Vec<(String, std::ops::Range<usize>)>,
     /// A second ISO block to run before this one (TRAORI, a D0 under TCP ...).
     pub before: Vec<String>,
+    /// ISO blocks to run after this one (G64 after a G9 block).
+    pub after: Vec<String>,
     /// `M17`/`RET`: return after the block; `M30`/`M2`: the interpreter ends.
     pub ret: bool,
     /// A subprogram call: name, arguments, repeats, span.
@@ -71,12 +73,18 @@ impl Words {
 
 impl Reader {
     /// Collects the words of the block at `sc` into `w`.
-    pub(super) fn collect(&mut self, sc: &mut Scan, w: &mut Words, line_no: usize) -> LineResult<()> {
+    pub(super) fn collect(
+        &mut self,
+        sc: &mut Scan,
+        w: &mut Words,
+        line_no: usize,
+    ) -> LineResult<()> {
         while !sc.done() {
             let at = sc.at;
             let c = sc.s[at];
             let next = sc.s.get(at + 1).copied();
-            let number_follows = next.is_some_and(|n| n.is_ascii_digit() || matches!(n, b'.' | b'-' | b'+'));
+            let number_follows =
+                next.is_some_and(|n| n.is_ascii_digit() || matches!(n, b'.' | b'-' | b'+'));
             if c.is_ascii_uppercase() && (number_follows || next == Some(b'=')) && is_address(c) {
                 self.address(sc, w, line_no)?;
                 continue;
@@ -117,12 +125,21 @@ impl Reader {
                 sc.eat(b'+');
             }
             let Some((_, v)) = sc.number() else {
-                return Err(sc.err(at, format!("`{}`: expected a number after the address", letter as char), "expected a number"));
+                return Err(sc.err(
+                    at,
+                    format!("`{}`: expected a number after the address", letter as char),
+                    "expected a number",
+                ));
             };
             (if neg { -v } else { v }, Mode::Modal, Some(from..sc.at))
         };
         let span = at..sc.at;
-        let coordinate = |raw| Coordinate { value, mode, raw, span: span.clone() };
+        let coordinate = |raw| Coordinate {
+            value,
+            mode,
+            raw,
+            span: span.clone(),
+        };
         if let Some(k) = AXES.iter().position(|&a| a == letter) {
             return put(&mut w.axes[k], coordinate(raw), sc, at);
         }
@@ -130,10 +147,19 @@ impl Reader {
             return put(&mut w.centres[k], coordinate(raw), sc, at);
         }
         if mode != Mode::Modal {
-            return Err(sc.err(at, format!("AC()/IC() on `{}`: expected them on axes and centres only", letter as char), "AC/IC not allowed"));
+            return Err(sc.err(
+                at,
+                format!(
+                    "AC()/IC() on `{}`: expected them on axes and centres only",
+                    letter as char
+                ),
+                "AC/IC not allowed",
+            ));
         }
         let text = |raw: &Option<std::ops::Range<usize>>| match raw {
-            Some(r) => std::str::from_utf8(&sc.s[r.clone()]).unwrap_or("0").to_string(),
+            Some(r) => std::str::from_utf8(&sc.s[r.clone()])
+                .unwrap_or("0")
+                .to_string(),
             None => number(value),
         };
         match letter {
@@ -163,15 +189,34 @@ impl Reader {
             }
             b'N' => Ok(()),
             b'H' => {
-                self.notice(line_no, format!("auxiliary function H{} accepted and not simulated", text(&raw)));
+                self.notice(
+                    line_no,
+                    format!(
+                        "auxiliary function H{} accepted and not simulated",
+                        text(&raw)
+                    ),
+                );
                 Ok(())
             }
-            _ => Err(sc.err(at, format!("address `{}` is not supported by mtsim's Siemens reader", letter as char), "unsupported address")),
+            _ => Err(sc.err(
+                at,
+                format!(
+                    "address `{}` is not supported by mtsim's Siemens reader",
+                    letter as char
+                ),
+                "unsupported address",
+            )),
         }
     }
 
     /// `T="name"`: a tool called by name, numbered 1001, 1002 ... in order of first call.
-    fn named_tool(&mut self, sc: &mut Scan, w: &mut Words, at: usize, line_no: usize) -> LineResult<()> {
+    fn named_tool(
+        &mut self,
+        sc: &mut Scan,
+        w: &mut Words,
+        at: usize,
+        line_no: usize,
+    ) -> LineResult<()> {
         sc.eat(b'"');
         let from = sc.at;
         while sc.s.get(sc.at).is_some_and(|c| *c != b'"') {
@@ -190,7 +235,13 @@ impl Reader {
             None => return Err(sc.err(at, "more than 10000 tool names", "too many tools")),
         };
         self.tool = 1001 + k as u32;
-        self.notice(line_no, format!("tool \"{name}\" called by name: simulated as tool T{}", self.tool));
+        self.notice(
+            line_no,
+            format!(
+                "tool \"{name}\" called by name: simulated as tool T{}",
+                self.tool
+            ),
+        );
         w.other.push((format!("T{}", self.tool), at..sc.at));
         Ok(())
     }
@@ -223,7 +274,16 @@ impl Reader {
     pub(super) fn set(&mut self, var: Var, v: f64, sc: &Scan, at: usize) -> LineResult<()> {
         match var {
             Var::R(k) if k < self.vars.r.len() => self.vars.r[k] = v,
-            Var::R(_) => return Err(sc.err(at, format!("R parameter out of range: expected R0 to R{}", self.vars.r.len() - 1), "no such R parameter")),
+            Var::R(_) => {
+                return Err(sc.err(
+                    at,
+                    format!(
+                        "R parameter out of range: expected R0 to R{}",
+                        self.vars.r.len() - 1
+                    ),
+                    "no such R parameter",
+                ))
+            }
             Var::Named(n) => {
                 let level = self.vars.levels.last_mut().expect("a variable level");
                 match level.get_mut(&n) {
@@ -236,8 +296,18 @@ impl Reader {
     }
 
     /// A G code, translated to Fanuc's (or refused by name).
-    fn g_code(&mut self, value: f64, span: std::ops::Range<usize>, w: &mut Words, sc: &Scan) -> LineResult<()> {
-        let code = if value >= 0.0 && value.fract() == 0.0 && value < 1000.0 { value as u32 } else { u32::MAX };
+    fn g_code(
+        &mut self,
+        value: f64,
+        span: std::ops::Range<usize>,
+        w: &mut Words,
+        sc: &Scan,
+    ) -> LineResult<()> {
+        let code = if value >= 0.0 && value.fract() == 0.0 && value < 1000.0 {
+            value as u32
+        } else {
+            u32::MAX
+        };
         let iso: &str = match code {
             0..=3 => {
                 w.motion = Some(code as u8);
@@ -266,8 +336,22 @@ impl Reader {
                 w.other.push((format!("G54.1 P{}", code - 504), span));
                 return Ok(());
             }
-            60 => "G61",
-            64 | 641..=645 => "G64",
+            60 => {
+                self.exact_stop = true;
+                "G61"
+            }
+            64 | 641..=645 => {
+                self.exact_stop = false;
+                "G64"
+            }
+            // Exact stop for this block only: G61 now, G64 again after it.
+            9 => {
+                if !self.exact_stop {
+                    w.other.push(("G61".into(), span));
+                    w.after.push("G64".into());
+                }
+                return Ok(());
+            }
             // G70/G71 switch the geometry's unit, G700/G710 the feed's too: under G70 F
             // stays in mm/min (a metric basic system), so it is written in inch/min.
             70 | 700 => {
@@ -283,7 +367,7 @@ impl Reader {
             95 => "G95",
             // Exact stop non-modal, exact-stop windows, corner behaviour, speed limits:
             // no effect on the path mtsim reads.
-            9 | 450 | 451 | 601 | 602 | 603 | 97 => return Ok(()),
+            450 | 451 | 601 | 602 | 603 | 97 => return Ok(()),
             _ => {
                 let text = std::str::from_utf8(&sc.s[span.clone()]).unwrap_or("G");
                 return Err(LineError::new(span, format!("`{text}` is not supported by mtsim's Siemens reader (docs/gcode.md lists the Sinumerik G codes it reads)"), "unsupported G code"));
@@ -294,7 +378,14 @@ impl Reader {
     }
 
     /// An M code: the ISO ones passed on, M17 a return, machine functions noted.
-    fn m_code(&mut self, value: f64, span: std::ops::Range<usize>, w: &mut Words, sc: &Scan, line_no: usize) -> LineResult<()> {
+    fn m_code(
+        &mut self,
+        value: f64,
+        span: std::ops::Range<usize>,
+        w: &mut Words,
+        sc: &Scan,
+        line_no: usize,
+    ) -> LineResult<()> {
         let code = whole(value, sc, span.start)? as u32;
         match code {
             17 => w.ret = true,
@@ -326,7 +417,11 @@ impl Reader {
 
 fn put(slot: &mut Option<Coordinate>, c: Coordinate, sc: &Scan, at: usize) -> LineResult<()> {
     if slot.is_some() {
-        return Err(sc.err(at, "repeated word: expected each address at most once per block", "repeated word"));
+        return Err(sc.err(
+            at,
+            "repeated word: expected each address at most once per block",
+            "repeated word",
+        ));
     }
     *slot = Some(c);
     Ok(())

@@ -103,18 +103,7 @@ impl Reader {
                     self.skip(false, span)?;
                 }
             }
-            "ENDWHILE" => {
-                let Structure::While { offset, line } = self.pop(
-                    |s| matches!(s, Structure::While { .. }),
-                    "ENDWHILE",
-                    span.clone(),
-                )?
-                else {
-                    unreachable!()
-                };
-                self.backward(span)?;
-                (self.level().offset, self.level().line) = (offset, line);
-            }
+            "ENDWHILE" | "ENDLOOP" => self.close_loop(kw, true, span)?,
             "FOR" => self.for_statement(sc, at)?,
             "ENDFOR" => self.end_for(span)?,
             "REPEAT" | "LOOP" => {
@@ -129,32 +118,7 @@ impl Reader {
             }
             "UNTIL" => {
                 let done = expr(sc, &self.vars)? != 0.0;
-                let Structure::Repeat { offset, line } = self.pop(
-                    |s| matches!(s, Structure::Repeat { .. }),
-                    "UNTIL",
-                    span.clone(),
-                )?
-                else {
-                    unreachable!()
-                };
-                if !done {
-                    self.backward(span.clone())?;
-                    self.open(Structure::Repeat { offset, line }, span)?;
-                    (self.level().offset, self.level().line) = (offset, line);
-                }
-            }
-            "ENDLOOP" => {
-                let Structure::Loop { offset, line } = self.pop(
-                    |s| matches!(s, Structure::Loop { .. }),
-                    "ENDLOOP",
-                    span.clone(),
-                )?
-                else {
-                    unreachable!()
-                };
-                self.backward(span.clone())?;
-                self.open(Structure::Loop { offset, line }, span)?;
-                (self.level().offset, self.level().line) = (offset, line);
+                self.close_loop(kw, !done, span)?;
             }
             "GOTOF" | "GOTOB" | "GOTO" | "GOTOC" => {
                 let Some((target, t_at)) = sc.ident() else {
@@ -203,6 +167,41 @@ impl Reader {
                 "unmatched",
             )),
         }
+    }
+
+    /// Closes the loop `kw` ends (`ENDWHILE`, `UNTIL`, `ENDLOOP`); when `again`, counts a
+    /// backward jump and goes back: to the `WHILE` line (which opens the loop again), or
+    /// to the first line of a `REPEAT` or `LOOP` body (the loop kept open).
+    fn close_loop(
+        &mut self,
+        kw: &str,
+        again: bool,
+        span: std::ops::Range<usize>,
+    ) -> LineResult<()> {
+        let opens = |s: &Structure| {
+            matches!(
+                (kw, s),
+                ("ENDWHILE", Structure::While { .. })
+                    | ("UNTIL", Structure::Repeat { .. })
+                    | ("ENDLOOP", Structure::Loop { .. })
+            )
+        };
+        let s = self.pop(opens, kw, span.clone())?;
+        if !again {
+            return Ok(());
+        }
+        let (Structure::While { offset, line }
+        | Structure::Repeat { offset, line }
+        | Structure::Loop { offset, line }) = s
+        else {
+            unreachable!("`opens` admits loops only")
+        };
+        self.backward(span.clone())?;
+        if !matches!(s, Structure::While { .. }) {
+            self.open(s, span)?;
+        }
+        (self.level().offset, self.level().line) = (offset, line);
+        Ok(())
     }
 
     /// `IF cond GOTOx label` (a jump) or `IF cond` (a structure).

@@ -153,38 +153,6 @@ fn every_part_gives_the_same_moves_in_linuxcnc_and_siemens() {
     );
 }
 
-/// The corpus folder (`shared/corpus` above the checkout), when present.
-fn corpus() -> Option<PathBuf> {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .ancestors()
-        .map(|d| d.join("shared/corpus"))
-        .find(|d| d.join("manifest.tsv").is_file())
-}
-
-#[test]
-#[ignore]
-fn corpus_scan() {
-    let dir = corpus().unwrap();
-    let manifest = std::fs::read_to_string(dir.join("manifest.tsv")).unwrap();
-    for line in manifest.lines().skip(1) {
-        let f: Vec<&str> = line.split('\t').collect();
-        if f.get(1) != Some(&"siemens") {
-            continue;
-        }
-        let path = dir.join("programs").join(f[0]);
-        let o = options(Dialect::Siemens, path.parent().unwrap());
-        let mut n = 0;
-        let mut err = None;
-        for m in read_file_with(&path, &o).unwrap() {
-            match m {
-                Ok(_) => n += 1,
-                Err(e) => err = Some(e.to_string()),
-            }
-        }
-        eprintln!("{} moves={n} {}", f[0], err.unwrap_or_default());
-    }
-}
-
 fn ends(ms: &[Move]) -> Vec<[f64; 3]> {
     ms.iter()
         .map(|m| {
@@ -379,4 +347,41 @@ fn timing_against_fanuc() {
     let (f, s) = (time(Dialect::Fanuc), time(Dialect::Siemens));
     eprintln!("fanuc {f:.3} s, siemens {s:.3} s, ratio {:.2}", s / f);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn deep_or_overflowing_expressions_and_garbage_are_errors_not_crashes() {
+    let minus = format!("R1={}1\n", "-".repeat(100_000));
+    assert!(error(&minus).2.contains("nested deeper"));
+    let parens = format!("R1={}1{}\n", "(".repeat(100), ")".repeat(100));
+    assert!(error(&parens).2.contains("nested deeper"));
+    assert!(error("R1=1EX300*1EX300\n").2.contains("finite"));
+    // Every byte sequence of a few kinds of garbage reads or fails, never panics.
+    let pieces = [
+        "G1", "X", "=", "AC(", ")", "R1", "IF", "ENDIF", "WHILE", "ENDFOR", "\"", ";", "é", "[",
+        "$", "N", ":", "-", "1.", "CR=", "TRANS", "MCALL", "CYCLE81(", ",",
+    ];
+    let mut state: u64 = 7;
+    for _ in 0..3000 {
+        let mut text = String::new();
+        for _ in 0..12 {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            text.push_str(pieces[(state >> 33) as usize % pieces.len()]);
+            if state & 1 == 0 {
+                text.push(' ');
+            }
+            if state & 6 == 0 {
+                text.push('\n');
+            }
+        }
+        let o = Options {
+            max_iterations: 100,
+            ..options(Dialect::Siemens, Path::new("."))
+        };
+        let _ = read_str_with(Path::new("t.mpf"), &text, &o)
+            .take(1000)
+            .count();
+    }
 }

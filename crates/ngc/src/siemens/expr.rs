@@ -173,7 +173,16 @@ fn is_ident(c: u8) -> bool {
 
 /// Evaluates one expression at the cursor.
 pub(super) fn expr(sc: &mut Scan, vars: &Vars) -> LineResult<f64> {
-    Eval { vars, depth: 0 }.comparison(sc)
+    let at = sc.at;
+    let v = Eval { vars, depth: 0 }.comparison(sc)?;
+    if !v.is_finite() {
+        return Err(sc.err(
+            at,
+            "the value overflows: expected a finite number",
+            "not finite",
+        ));
+    }
+    Ok(v)
 }
 
 struct Eval<'v> {
@@ -280,20 +289,36 @@ impl Eval<'_> {
         }
     }
 
+    /// A sign or `NOT` before an operand; each counts as a level of nesting.
     fn unary(&mut self, sc: &mut Scan) -> LineResult<f64> {
-        if sc.eat(b'-') {
-            return Ok(-self.unary(sc)?);
+        let at = sc.at;
+        let op = if sc.eat(b'-') {
+            b'-'
+        } else if sc.eat(b'+') {
+            b'+'
+        } else if sc.keyword("NOT") {
+            b'!'
+        } else if sc.keyword("B_NOT") {
+            b'~'
+        } else {
+            return self.operand(sc);
+        };
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(sc.err(
+                at,
+                format!("expression nested deeper than {MAX_DEPTH} levels"),
+                "too deep",
+            ));
         }
-        if sc.eat(b'+') {
-            return self.unary(sc);
-        }
-        if sc.keyword("NOT") {
-            return Ok(truth(self.unary(sc)? == 0.0));
-        }
-        if sc.keyword("B_NOT") {
-            return Ok(!(self.unary(sc)? as i64) as f64);
-        }
-        self.operand(sc)
+        let v = self.unary(sc)?;
+        self.depth -= 1;
+        Ok(match op {
+            b'-' => -v,
+            b'!' => truth(v == 0.0),
+            b'~' => !(v as i64) as f64,
+            _ => v,
+        })
     }
 
     fn nested(&mut self, sc: &mut Scan, at: usize) -> LineResult<f64> {

@@ -225,7 +225,15 @@ fn tools_by_name_cycle800_reset_and_machine_m_codes_read_with_notices() {
 
 #[test]
 fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
-    let cases: [(&str, usize, usize, &str); 7] = [
+    let cases: [(&str, usize, usize, &str); 10] = [
+        ("G1 X1 F1\nG2 X10 AR=90\n", 2, 8, "`AR` (arc opening angle)"),
+        ("G1 X1 F1\nCIP X10 Y5 I1=5 J1=2\n", 2, 1, "`CIP`"),
+        (
+            "G1 X1 A3=0 B3=0 C3=1 F1\n",
+            1,
+            7,
+            "`A3` (orientation vector)",
+        ),
         (
             "G0 X1\nN20 $P_UIFR[1]=CTRANS(X,10)\n",
             2,

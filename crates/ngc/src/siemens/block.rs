@@ -49,7 +49,42 @@ const NOTED: &[&str] = &[
     "DISPLON",
     "SAVE",
     "FIFOCTRL",
-    "OFFN",
+];
+
+/// Sinumerik words mtsim knows and does not read: refused with what they are.
+const REFUSED: &[(&str, &str)] = &[
+    ("AP", "polar angle"),
+    ("RP", "polar radius"),
+    ("AR", "arc opening angle"),
+    ("TURN", "full turns of a helix"),
+    ("CIP", "circle through an intermediate point"),
+    ("CT", "tangential circle"),
+    ("I1", "intermediate point of CIP"),
+    ("J1", "intermediate point of CIP"),
+    ("K1", "intermediate point of CIP"),
+    ("CHF", "chamfer"),
+    ("CHR", "chamfer"),
+    ("RND", "rounding"),
+    ("RNDM", "modal rounding"),
+    ("OFFN", "contour offset"),
+    ("SPOS", "spindle positioning"),
+    ("SPOSA", "spindle positioning"),
+    ("POLY", "polynomial interpolation"),
+    ("ASPLINE", "spline"),
+    ("BSPLINE", "spline"),
+    ("CSPLINE", "spline"),
+    ("TRANSMIT", "face transformation"),
+    ("TRACYL", "cylinder transformation"),
+    ("TRAANG", "inclined-axis transformation"),
+    ("TOFRAME", "tool frame"),
+    ("TCARR", "tool carrier"),
+    ("PAROT", "workpiece-aligned frame"),
+    ("A3", "orientation vector"),
+    ("B3", "orientation vector"),
+    ("C3", "orientation vector"),
+    ("A2", "orientation angle"),
+    ("B2", "orientation angle"),
+    ("C2", "orientation angle"),
 ];
 
 impl Reader {
@@ -541,6 +576,10 @@ impl Reader {
                 return Ok(());
             }
             "MSG" => return skip_call(sc, at),
+            n if REFUSED.iter().any(|(k, _)| *k == n) => {
+                let what = REFUSED.iter().find(|(k, _)| *k == n).map_or("", |(_, w)| w);
+                return Err(sc.err(at, format!("`{n}` ({what}) is not supported by mtsim's Siemens reader (docs/gcode.md lists what it reads)"), "unsupported Sinumerik word"));
+            }
             n if NOTED.contains(&n) => {
                 if sc.peek() == Some(b'(') {
                     skip_call(sc, at)?;

@@ -85,7 +85,19 @@ impl Reader {
             let next = sc.s.get(at + 1).copied();
             let number_follows =
                 next.is_some_and(|n| n.is_ascii_digit() || matches!(n, b'.' | b'-' | b'+'));
-            if c.is_ascii_uppercase() && (number_follows || next == Some(b'=')) && is_address(c) {
+            // `A3=`, `I1=`: a Sinumerik name with digits (orientation, CIP point), not a word.
+            let digits_then_equals = c != b'R' && {
+                let mut k = at + 1;
+                while sc.s.get(k).is_some_and(u8::is_ascii_digit) {
+                    k += 1;
+                }
+                k > at + 1 && sc.s.get(k) == Some(&b'=')
+            };
+            if c.is_ascii_uppercase()
+                && (number_follows || next == Some(b'='))
+                && is_address(c)
+                && !digits_then_equals
+            {
                 self.address(sc, w, line_no)?;
                 continue;
             }

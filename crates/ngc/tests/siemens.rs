@@ -245,10 +245,10 @@ fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
         ("DEF STRING[8] S\n", 1, 5, "DEF STRING"),
         ("R1=ISVAR(\"A\")\n", 1, 4, "`ISVAR`"),
         (
-            "G1 X1 F1\nCYCLE800(1,\"TC1\",0,57,0,0,0,0,30,0,0,0,0,-1)\n",
+            "G1 X1 F1\nCYCLE800(1,\"TC1\",0,27,0,0,0,0,30,0,0,0,0,-1)\n",
             2,
             1,
-            "CYCLE800 with a swivel",
+            "CYCLE800 swivel mode 27",
         ),
         ("NOSUCHPROG\n", 1, 1, "`NOSUCHPROG` is neither"),
     ];
@@ -392,4 +392,26 @@ fn deep_or_overflowing_expressions_and_garbage_are_errors_not_crashes() {
             .take(1000)
             .count();
     }
+}
+
+#[test]
+fn cycle800_axis_by_axis_is_the_tilted_plane_a_then_b_then_c_about_the_new_axes() {
+    // Mode 57, B90 about Y, zero point X0 = (10, 0, 0) before and Z1 = 2 after the turn:
+    // R = Ry(90) takes e_z to e_x and e_x to -e_z, origin (10,0,0) + R (0,0,2) = (12,0,0).
+    // Z5 is work (17, 0, 0); X5 is work (12, 0, -5).
+    let ms = moves("CYCLE800(0,\"TC1\",0,57,10,0,0,0,90,0,0,0,2,0)\nG1 X0 Y0 Z5 F100\nX5 Z0\nCYCLE800()\nG1 X1 Y2 Z3\nM30\n");
+    let e = ends(&ms);
+    assert_eq!(e[0], [17.0, 0.0, 0.0]);
+    assert_eq!(e[1], [12.0, 0.0, -5.0]);
+    assert_eq!(e[2], [1.0, 2.0, 3.0]);
+    // A30 then C90 about the turned Z: R = Rx(30) Rz(90) takes e_x to Rx(30) e_y =
+    // (0, cos 30, sin 30), so X10 is work (0, 8.660254038, 5).
+    let ms = moves("CYCLE800(0,\"\",0,57,0,0,0,30,0,90,0,0,0,0)\nG1 X10 Y0 Z0 F100\nM30\n");
+    let e = ends(&ms);
+    assert!(
+        (e[0][1] - 10.0 * 30f64.to_radians().cos()).abs() < 1e-9
+            && (e[0][2] - 5.0).abs() < 1e-9
+            && e[0][0].abs() < 1e-9,
+        "{e:?}"
+    );
 }

@@ -16,6 +16,7 @@ use super::state::Cycle;
 use super::words::number;
 use super::{Level, Reader};
 use crate::axis::Axis;
+use crate::frame::{apply, mul, rot_x, rot_y, rot_z, Mat3};
 use crate::lex::{LineError, LineResult};
 
 impl Reader {
@@ -29,12 +30,13 @@ impl Reader {
     ) -> LineResult<()> {
         if name == "CYCLE800" {
             let args = self.arguments(sc, at)?;
-            if args.iter().any(Option::is_some) {
-                return Err(sc.err(at, "CYCLE800 with a swivel plane: mtsim reads `CYCLE800()` (swivel reset) only; post the tilted plane as TRAORI moves or frames", "CYCLE800 swivel"));
-            }
             self.iso.clear();
             self.push("G69", at..sc.at);
-            return self.run_iso(line_no).map(|_| ());
+            self.run_iso(line_no)?;
+            if args.iter().any(Option::is_some) {
+                self.swivel(&args, at..sc.at, line_no)?;
+            }
+            return Ok(());
         }
         if name == "CYCLE832" {
             self.arguments(sc, at)?;
@@ -46,6 +48,47 @@ impl Reader {
         }
         let cycle = self.cycle(name, at, sc)?;
         self.run_cycle(Some(cycle), line_no)
+    }
+
+    /// `CYCLE800(_FR, _TC, _ST, _MODE, _X0, _Y0, _Z0, _A, _B, _C, _X1, _Y1, _Z1, _DIR, ..)`
+    /// in mode 57 (axis by axis: about X by A, then the new Y by B, then the newest Z by
+    /// C) as a new swivel plane (`_ST` units digit 0): the interpreter's tilted plane
+    /// G68.2 with `R = Rx(A) Ry(B) Rz(C)` and origin `X0 + R X1` (the zero point before,
+    /// then after the rotation), written as its Euler angles Z-X-Z; `_DIR` ≠ 0 turns the
+    /// rotary axes to it (G53.1, which needs the machine's rotary table).
+    fn swivel(
+        &mut self,
+        a: &[Option<f64>],
+        span: std::ops::Range<usize>,
+        line_no: usize,
+    ) -> LineResult<()> {
+        let get = |k: usize| a.get(k).copied().flatten().unwrap_or(0.0);
+        let (st, mode) = (get(2), get(3));
+        if mode != 57.0 || st.rem_euclid(10.0) != 0.0 {
+            return Err(LineError::new(span, format!("CYCLE800 swivel mode {mode} with _ST {st}: mtsim reads mode 57 (axis by axis X, Y, Z) as a new plane (_ST units digit 0), and CYCLE800() to reset"), "CYCLE800 swivel mode"));
+        }
+        let r = mul(&mul(&rot_x(get(7)), &rot_y(get(8))), &rot_z(get(9)));
+        let x1 = apply(&r, [get(10), get(11), get(12)]);
+        let origin = [get(4) + x1[0], get(5) + x1[1], get(6) + x1[2]];
+        let [i, j, k] = euler_zxz_angles(&r);
+        self.push(
+            &format!(
+                "G68.2 X{} Y{} Z{} I{} J{} K{}",
+                number(origin[0]),
+                number(origin[1]),
+                number(origin[2]),
+                number(i),
+                number(j),
+                number(k)
+            ),
+            span.clone(),
+        );
+        self.run_iso(line_no)?;
+        if get(13) != 0.0 {
+            self.push("G53.1", span);
+            self.run_iso(line_no)?;
+        }
+        Ok(())
     }
 
     /// Reads the cycle `name`'s values (its parentheses follow).
@@ -218,4 +261,19 @@ impl Reader {
             .flat_map(|d| names.iter().map(move |n| d.join(n)))
             .find(|p| p.is_file())
     }
+}
+
+/// The Z-X-Z Euler angles (deg) of rotation `r = Rz(i) Rx(j) Rz(k)`: `cos j = r₂₂`,
+/// `i = atan2(r₀₂, -r₁₂)`, `k = atan2(r₂₀, r₂₁)`; when `sin j = 0`, `k = 0` and
+/// `i = atan2(r₁₀, r₀₀)`.
+fn euler_zxz_angles(r: &Mat3) -> [f64; 3] {
+    let j = r[2][2].clamp(-1.0, 1.0).acos();
+    if j.sin().abs() < 1e-12 {
+        return [r[1][0].atan2(r[0][0]).to_degrees(), j.to_degrees(), 0.0];
+    }
+    [
+        r[0][2].atan2(-r[1][2]).to_degrees(),
+        j.to_degrees(),
+        r[2][0].atan2(r[2][1]).to_degrees(),
+    ]
 }

@@ -447,12 +447,8 @@ impl Reader {
     /// additive forms; with no axes, the absolute form clears the programmable frame.
     fn frame_statement(&mut self, kw: &str, sc: &mut Scan, at: usize) -> LineResult<()> {
         let additive = kw.starts_with('A');
-        let base = kw.trim_start_matches('A');
-        let base = if base == "ROT" || kw == "ROT" {
-            "ROT"
-        } else {
-            base
-        };
+        // ATRANS → TRANS, AROT → ROT, ASCALE → SCALE, AMIRROR → MIRROR.
+        let base = if additive { &kw[1..] } else { kw };
         let mut v: [Option<f64>; 3] = [None; 3];
         let mut rpl = None;
         while !sc.done() {
@@ -628,7 +624,7 @@ impl Reader {
                 }
             }
         }
-        w.call = Some((name.to_string(), args, 0, at..sc.at));
+        w.call = Some((name.to_string(), args, at..sc.at));
         Ok(())
     }
 

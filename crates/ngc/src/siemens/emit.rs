@@ -74,12 +74,12 @@ impl Reader {
         if moves && self.modal_call.is_some() && w.axes.iter().any(Option::is_some) {
             self.run_cycle(None, line_no)?;
         }
-        if let Some((name, args, _, span)) = w.call.take() {
+        if let Some((name, args, span)) = w.call.take() {
             let repeats = w.repeats.unwrap_or(1);
             self.call(&name, args, repeats, span)?;
         }
         if w.ret {
-            return self.end_of_level_now();
+            return self.end_of_level();
         }
         Ok(true)
     }
@@ -198,11 +198,6 @@ impl Reader {
             self.push(&format!("R{}", number(r * scale)), span);
         }
         Ok(())
-    }
-
-    /// `M17`/`RET` (or the end of a subprogram's file).
-    fn end_of_level_now(&mut self) -> LineResult<bool> {
-        self.end_of_level()
     }
 }
 

@@ -79,12 +79,10 @@ fn targets(line: &str) -> (Option<&str>, Option<&str>) {
             sc.at = save;
         }
     }
-    let save = sc.at;
     let label = match sc.ident() {
         Some((w, _)) if sc.eat(b':') => Some(w),
         _ => None,
     };
-    let _ = save;
     (number, label)
 }
 

@@ -58,8 +58,8 @@ pub(super) struct Words {
     pub after: Vec<String>,
     /// `M17`/`RET`: return after the block; `M30`/`M2`: the interpreter ends.
     pub ret: bool,
-    /// A subprogram call: name, arguments, repeats, span.
-    pub call: Option<(String, Vec<f64>, u64, std::ops::Range<usize>)>,
+    /// A subprogram call: name, arguments, span (the repeats are `repeats`).
+    pub call: Option<(String, Vec<f64>, std::ops::Range<usize>)>,
     pub repeats: Option<u64>,
 }
 
@@ -192,7 +192,7 @@ impl Reader {
             b'D' => self.d_number(whole(value, sc, at)?, span, w),
             b'L' => {
                 let name = format!("L{}", text(&raw));
-                w.call = Some((name, Vec::new(), 0, span));
+                w.call = Some((name, Vec::new(), span));
                 Ok(())
             }
             b'P' => {

@@ -253,9 +253,8 @@ impl Reader {
             return Ok(());
         }
         sc.at = save;
-        if cond {
-            self.open(Structure::If, at..at + 2)
-        } else if self.skip(true, at..at + 2)? == "ELSE" {
+        // A false head skips to its ELSE (whose branch then runs) or past its ENDIF.
+        if cond || self.skip(true, at..at + 2)? == "ELSE" {
             self.open(Structure::If, at..at + 2)
         } else {
             Ok(())

@@ -177,7 +177,7 @@ impl Reader {
             return Ok(());
         };
         let p = self.interp.program_position();
-        let here = self.frame.to_frame([p[Axis::X], p[Axis::Y], p[Axis::Z]]);
+        let here = self.frame.frame_point([p[Axis::X], p[Axis::Y], p[Axis::Z]]);
         let axis = self.normal;
         let mut steps = vec![(0u8, c.approach), (1, c.depth)];
         if c.dwell_s > 0.0 {
@@ -190,7 +190,7 @@ impl Reader {
             } else {
                 let mut q = here;
                 q[axis] = v;
-                let t = self.frame.to_work(q);
+                let t = self.frame.work_point(q);
                 self.push(
                     &format!(
                         "G90 G{motion} X{} Y{} Z{}",

@@ -142,7 +142,7 @@ impl Reader {
         let span = first_span(w);
         let p = self.interp.program_position();
         let work = [p[Axis::X], p[Axis::Y], p[Axis::Z]];
-        let here = self.frame.to_frame(work);
+        let here = self.frame.frame_point(work);
         let arc = matches!(self.motion, 2 | 3);
         let (plane, scale, flip) = if arc {
             self.frame.arc_plane(self.normal).ok_or_else(|| {
@@ -170,7 +170,7 @@ impl Reader {
             for k in 0..3 {
                 q[k] = resolve(&w.axes[k], here[k], self.absolute);
             }
-            let t = self.frame.to_work(q);
+            let t = self.frame.work_point(q);
             for (k, l) in ["X", "Y", "Z"].iter().enumerate() {
                 self.push(&format!("{l}{}", number(t[k])), span.clone());
             }
@@ -187,7 +187,7 @@ impl Reader {
             for k in 0..3 {
                 c[k] = resolve(&w.centres[k], here[k], false);
             }
-            let c = self.frame.to_work(c);
+            let c = self.frame.work_point(c);
             for (k, l) in ["I", "J", "K"].iter().enumerate() {
                 if k != plane {
                     self.push(&format!("{l}{}", number(c[k] - work[k])), span.clone());

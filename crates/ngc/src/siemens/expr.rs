@@ -214,7 +214,8 @@ fn truth(b: bool) -> f64 {
 impl Eval<'_> {
     fn comparison(&mut self, sc: &mut Scan) -> LineResult<f64> {
         let a = self.level(sc, 0)?;
-        let ops: [(&[u8; 2], fn(f64, f64) -> bool); 4] = [
+        type Compare = fn(f64, f64) -> bool;
+        let ops: [(&[u8; 2], Compare); 4] = [
             (b"==", |a, b| a == b),
             (b"<>", |a, b| a != b),
             (b"<=", |a, b| a <= b),

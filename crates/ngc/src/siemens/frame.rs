@@ -51,8 +51,8 @@ impl ProgFrame {
         match i {
             Instruction::Trans(v) => {
                 let d = apply(a, v);
-                for k in 0..3 {
-                    self.origin[k] += d[k];
+                for (o, d) in self.origin.iter_mut().zip(d) {
+                    *o += d;
                 }
             }
             Instruction::Rot(r) => self.matrix = mul(a, &r),
@@ -65,7 +65,7 @@ impl ProgFrame {
     }
 
     /// The work point of frame point `p`.
-    pub fn to_work(&self, p: [f64; 3]) -> [f64; 3] {
+    pub fn work_point(&self, p: [f64; 3]) -> [f64; 3] {
         let q = apply(&self.matrix, p);
         [
             q[0] + self.origin[0],
@@ -75,7 +75,7 @@ impl ProgFrame {
     }
 
     /// The frame point of work point `w`: `A⁻¹ (w - o)`.
-    pub fn to_frame(&self, w: [f64; 3]) -> [f64; 3] {
+    pub fn frame_point(&self, w: [f64; 3]) -> [f64; 3] {
         let d = [
             w[0] - self.origin[0],
             w[1] - self.origin[1],
@@ -154,10 +154,10 @@ mod tests {
         let mut f = ProgFrame::default();
         f.apply(Instruction::Trans([10.0, 0.0, 0.0]), false);
         f.apply(Instruction::Rot(rotation_zyx(0.0, 0.0, 90.0)), true);
-        let w = f.to_work([1.0, 0.0, 0.0]);
+        let w = f.work_point([1.0, 0.0, 0.0]);
         assert!((w[0] - 10.0).abs() < 1e-12 && (w[1] - 1.0).abs() < 1e-12);
-        let p = f.to_frame([7.0, 3.0, 2.0]);
-        let back = f.to_work(p);
+        let p = f.frame_point([7.0, 3.0, 2.0]);
+        let back = f.work_point(p);
         assert!((back[0] - 7.0).abs() < 1e-12 && (back[1] - 3.0).abs() < 1e-12);
         assert_eq!(
             f.arc_plane(2)

@@ -69,7 +69,7 @@ fn plain_codes(line: &[u8]) -> Option<([u16; MAX_CODES], usize)> {
         while let Some(&d) = line.get(i) {
             if d.is_ascii_digit() {
                 value = value.saturating_mul(10).saturating_add((d - b'0') as u32);
-            } else if !(d == b'.' && !whole) {
+            } else if d != b'.' || whole {
                 break;
             }
             i += 1;

@@ -333,7 +333,7 @@ impl Reader {
                 self.absolute = code == 90;
                 return Ok(());
             }
-            17 | 18 | 19 => {
+            17..=19 => {
                 // Written by `emit` (a frame may stand an arc's plane up).
                 self.normal = (19 - code) as usize;
                 return Ok(());

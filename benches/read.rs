@@ -233,7 +233,7 @@ fn versus_rs274() {
         let n = moves.map(|m| black_box(m.unwrap())).count();
         assert_eq!(n, big_blocks());
     });
-    line("ngc::read_file, Siemens front end", sinumerik);
+    line("ngc::read_file (Siemens)", sinumerik);
     println!(
         "  Siemens front end {:.2}x the Fanuc reader's wall time (goal <= 2x)",
         sinumerik.0 / reader.0

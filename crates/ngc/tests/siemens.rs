@@ -415,3 +415,11 @@ fn cycle800_axis_by_axis_is_the_tilted_plane_a_then_b_then_c_about_the_new_axes(
         "{e:?}"
     );
 }
+
+#[test]
+fn trailing_comments_block_numbers_and_lower_case_read_in_plain_and_translated_blocks() {
+    // A plain block (handed on as written) and a translated one (R parameter), each with
+    // a comment holding parentheses and a quote.
+    let ms = moves("n10 g1 x10 f100 ; move (fast) \"q\"\nN20 R1=4 G1 Y=R1 ; (y) \"q\"\nm30\n");
+    assert_eq!(ends(&ms), vec![[10.0, 0.0, 0.0], [10.0, 4.0, 0.0]]);
+}

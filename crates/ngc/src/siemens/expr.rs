@@ -304,14 +304,7 @@ impl Eval<'_> {
         } else {
             return self.operand(sc);
         };
-        self.depth += 1;
-        if self.depth > MAX_DEPTH {
-            return Err(sc.err(
-                at,
-                format!("expression nested deeper than {MAX_DEPTH} levels"),
-                "too deep",
-            ));
-        }
+        self.deeper(sc, at)?;
         let v = self.unary(sc)?;
         self.depth -= 1;
         Ok(match op {
@@ -322,7 +315,8 @@ impl Eval<'_> {
         })
     }
 
-    fn nested(&mut self, sc: &mut Scan, at: usize) -> LineResult<f64> {
+    /// One level deeper, bounded to [`MAX_DEPTH`].
+    fn deeper(&mut self, sc: &Scan, at: usize) -> LineResult<()> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
             return Err(sc.err(
@@ -331,6 +325,11 @@ impl Eval<'_> {
                 "too deep",
             ));
         }
+        Ok(())
+    }
+
+    fn nested(&mut self, sc: &mut Scan, at: usize) -> LineResult<f64> {
+        self.deeper(sc, at)?;
         let v = self.comparison(sc);
         self.depth -= 1;
         v

@@ -5,11 +5,13 @@
 //!
 //! A 100,000-block G01 program with six axis words and an F word per block, read from
 //! memory into canonical moves; criterion reports the throughput in blocks per second.
-//! The generated cone (360 blocks) is measured beside it: the moves the generator feeds
+//! The same program through the Siemens Sinumerik front end is measured beside it (goal:
+//! within 2x of the Fanuc reader). The generated cone (360 blocks) is measured beside it: the moves the generator feeds
 //! straight into the pipeline, against writing the same program as text and reading it back.
 //!
 //! Then, against LinuxCNC's interpreter (issue 9, item 17): a 1,000,000-block G01 file on
-//! disk is read by `ngc::read_file` (streaming, into canonical moves), by `mtsim blocks
+//! disk is read by `ngc::read_file` (streaming, into canonical moves; and with the Siemens
+//! front end), by `mtsim blocks
 //! --csv` (reading and printing every move to a file), and by `rs274` when it is installed
 //! (interpreting and printing its canonical calls to a file, as docs/rs274.md runs it).
 //! Wall and CPU time are printed (CPU: this thread for the reader, the child process for
@@ -129,6 +131,21 @@ fn read(c: &mut Criterion) {
             assert_eq!(n, BLOCKS);
         })
     });
+    // The same program read by the Siemens Sinumerik front end (goal: within 2x of Fanuc).
+    let siemens = ngc::Options {
+        dialect: ngc::Dialect::Siemens,
+        ..ngc::Options::default()
+    };
+    // Sinumerik says G71 for metric (G21 is ISO mode's).
+    let sinumerik_text = text.replacen("G21", "G71", 1);
+    group.bench_function("100k G01 blocks, Siemens front end", |b| {
+        b.iter(|| {
+            let moves =
+                ngc::read_str_with(Path::new("bench.mpf"), black_box(&sinumerik_text), &siemens);
+            let n = moves.map(|m| black_box(m.unwrap())).count();
+            assert_eq!(n, BLOCKS);
+        })
+    });
     group.finish();
 
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -173,10 +190,11 @@ fn smoke() -> bool {
 
 /// A G01 file of [`big_blocks`] blocks, X Y Z with 4 decimals and a varying F, as the
 /// measurement in docs/rs274.md §5.
-fn write_big_file(path: &Path) {
+/// `metric` is the first block's metric code: G21 (ISO), G71 (Sinumerik).
+fn write_big_file(path: &Path, metric: &str) {
     use std::io::Write;
     let mut out = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
-    writeln!(out, "G21 G90 G94 G17").unwrap();
+    writeln!(out, "{metric} G90 G94 G17").unwrap();
     // A fixed linear congruential sequence: the same file on every run.
     let mut state: u64 = 0x2545_f491_4f6c_dd1d;
     let mut next = || {
@@ -257,7 +275,7 @@ fn versus_rs274() {
     let dir = std::env::temp_dir().join(format!("mtsim-bench-read-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let program = dir.join("big.ngc");
-    write_big_file(&program);
+    write_big_file(&program, "G21");
     let mb = std::fs::metadata(&program).unwrap().len() as f64 / 1e6;
     let (runs, rs_runs) = if smoke() { (1, 1) } else { (3, 2) };
     println!(
@@ -271,6 +289,22 @@ fn versus_rs274() {
         assert_eq!(n, big_blocks());
     });
     line("ngc::read_file", reader);
+    let siemens = ngc::Options {
+        dialect: ngc::Dialect::Siemens,
+        ..ngc::Options::default()
+    };
+    let mpf = dir.join("big.mpf");
+    write_big_file(&mpf, "G71");
+    let sinumerik = best_of(runs, thread_cpu_s, || {
+        let moves = ngc::read_file_with(&mpf, &siemens).unwrap();
+        let n = moves.map(|m| black_box(m.unwrap())).count();
+        assert_eq!(n, big_blocks());
+    });
+    line("ngc::read_file (Siemens)", sinumerik);
+    println!(
+        "  Siemens front end {:.2}x the Fanuc reader's wall time (goal <= 2x)",
+        sinumerik.0 / reader.0
+    );
 
     let scenario = dir.join("s.toml");
     let machine = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/vmc-3axis.toml");

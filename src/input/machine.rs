@@ -57,7 +57,7 @@ pub struct MachineFile {
     #[serde(default)]
     pub tool: ToolConfig,
     /// G-code dialect of this machine's control, the default for its scenarios:
-    /// "linuxcnc", "fanuc" (default), "haas" or "heidenhain".
+    /// "linuxcnc", "fanuc" (default), "haas", "heidenhain" or "siemens".
     #[serde(default)]
     pub dialect: ngc::Dialect,
     /// The modal state the control powers up in.

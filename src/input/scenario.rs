@@ -41,7 +41,7 @@ struct ScenarioFile {
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ReaderSection {
-    /// "linuxcnc", "fanuc", "haas" or "heidenhain"; the machine file's `dialect` when absent.
+    /// "linuxcnc", "fanuc", "haas", "heidenhain" or "siemens"; the machine file's `dialect` when absent.
     pub dialect: Option<ngc::Dialect>,
     /// The units the control starts in, over the machine file's `[start] units`.
     pub start_units: Option<ngc::Units>,

@@ -14,4 +14,5 @@ mod file_analysis;
 mod heidenhain_corpus;
 mod reader_options;
 mod shared_corpus;
+mod siemens_corpus;
 mod unreadable;

@@ -106,7 +106,7 @@ fn bad_reader_keys_are_input_errors() {
     let bad = write_scenario(
         &dir,
         &trt_ac(),
-        "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"siemens\"\n",
+        "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"mazak\"\n",
     );
     assert!(Scenario::load(&bad).is_err());
 }

@@ -56,6 +56,7 @@ mod reader;
 mod remap;
 mod side_file;
 mod source;
+mod siemens;
 mod spline;
 mod stdglue;
 mod turns;

@@ -26,16 +26,20 @@ pub enum Dialect {
     /// HEIDENHAIN TNC 640 conversational (Klartext): `BEGIN PGM`, `L`, `CC`/`C`, Q
     /// parameters, `LBL`, `CYCL DEF`, `PLANE` (its own front end, `heidenhain/`).
     Heidenhain,
+    /// Siemens Sinumerik 840D: ISO G code plus R parameters, `DEF` variables, structured
+    /// control flow, frames and cycles, read by its own front end (crate `siemens`).
+    Siemens,
 }
 
 impl Dialect {
-    /// `linuxcnc`, `fanuc`, `haas` or `heidenhain`.
+    /// `linuxcnc`, `fanuc`, `haas`, `heidenhain` or `siemens`.
     pub const fn name(self) -> &'static str {
         match self {
             Dialect::Linuxcnc => "linuxcnc",
             Dialect::Fanuc => "fanuc",
             Dialect::Haas => "haas",
             Dialect::Heidenhain => "heidenhain",
+            Dialect::Siemens => "siemens",
         }
     }
 

@@ -59,12 +59,21 @@ pub fn read_file_with(path: &Path, options: &Options) -> Result<Moves> {
         path: path.to_path_buf(),
         source,
     };
+    if options.dialect == Dialect::Siemens {
+        let front = crate::siemens::Reader::new(path, None, options).map_err(read_error)?;
+        return Ok(Moves::siemens(path, front, options));
+    }
     let source = Source::File(FileLines::open(path).map_err(read_error)?);
     Ok(Moves::new(path, source, options))
 }
 
 /// Streams the moves of `text`, reported as the contents of `path`.
 pub fn read_str_with(path: &Path, text: &str, options: &Options) -> Moves {
+    if options.dialect == Dialect::Siemens {
+        let front = crate::siemens::Reader::new(path, Some(text), options)
+            .expect("a text source opens no file");
+        return Moves::siemens(path, front, options);
+    }
     Moves::new(path, Source::Text(text.into()), options)
 }
 
@@ -370,6 +379,8 @@ pub struct Moves {
     modal_remap: Option<usize>,
     /// stdglue cycle_prolog's sticky words.
     sticky: crate::stdglue::Sticky,
+    /// The Siemens Sinumerik front end, which reads the program instead (crate `siemens`).
+    siemens: Option<Box<crate::siemens::Reader>>,
 }
 
 impl Moves {
@@ -427,7 +438,15 @@ impl Moves {
             commit: None,
             modal_remap: None,
             sticky: Default::default(),
+            siemens: None,
         }
+    }
+
+    /// The moves of a Sinumerik program, read by its own front end.
+    fn siemens(path: &Path, front: crate::siemens::Reader, options: &Options) -> Moves {
+        let mut moves = Moves::new(path, Source::Text("".into()), options);
+        moves.siemens = Some(Box::new(front));
+        moves
     }
 
     /// What was accepted without being simulated (user M codes, at most one notice per
@@ -435,6 +454,9 @@ impl Moves {
     pub fn notices(&self) -> &[Notice] {
         if let Some(k) = &self.klartext {
             return k.notices();
+        }
+        if let Some(front) = &self.siemens {
+            return front.notices();
         }
         &self.notices
     }
@@ -1254,7 +1276,7 @@ impl Moves {
                 line: line_no,
             };
             let col = k - line_start;
-            return Some(self.syntax_in(c.file, text, c.offset, LineError::new(col..col + token.len(), format!("`{token}` is Siemens Sinumerik: this program is in the Siemens language, expected G-code in the RS274/NGC, Fanuc or Haas language"), "Siemens Sinumerik").help("post-process the part for a G-code control (dialect linuxcnc, fanuc or haas)")));
+            return Some(self.syntax_in(c.file, text, c.offset, LineError::new(col..col + token.len(), format!("`{token}` is Siemens Sinumerik: this program is in the Siemens language, expected G-code in the RS274/NGC, Fanuc or Haas language"), "Siemens Sinumerik").help("set dialect = \"siemens\" in the scenario's [reader] to read it with the Sinumerik front end")));
         }
         None
     }
@@ -1811,6 +1833,9 @@ impl Iterator for Moves {
     type Item = Result<Move>;
 
     fn next(&mut self) -> Option<Result<Move>> {
+        if let Some(front) = &mut self.siemens {
+            return front.next_move();
+        }
         loop {
             if let Some(k) = &mut self.klartext {
                 return k.next();

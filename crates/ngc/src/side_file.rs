@@ -5,6 +5,11 @@
 use std::io::{Error, ErrorKind, Read};
 use std::path::Path;
 
+/// Longest line of a program or subroutine file, bytes (1 MiB): no G-code line comes near
+/// it, and a file without newlines (`/dev/zero`, a binary) stops here instead of growing
+/// the line buffer without end.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
 /// Largest side file read, bytes (64 MiB): a tool table, parameter file or INI of a real
 /// machine is a few kB.
 pub const MAX_SIDE_FILE_BYTES: u64 = 64 << 20;

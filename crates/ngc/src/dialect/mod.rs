@@ -15,7 +15,8 @@
 //!                                 ▲        words of the same G codes (G1, G2 I J, G52, G68.2 …)
 //!  Heidenhain Klartext ──── own front end, crate module `heidenhain`: BEGIN PGM, L/C/CC/CT/RND, Q, LBL,
 //!                           CYCL DEF, PLANE (read whatever the dialect when BEGIN PGM opens it)
-//!  Siemens Sinumerik ────── own front end (issue 29): G-code plus R params, CYCLE8x, MCALL
+//!  Siemens Sinumerik ────── own front end, crate module `siemens`: R params, DEF, IF/WHILE/FOR,
+//!                           frames, CYCLE81/82, MCALL; ISO blocks in Fanuc's codes
 //! ```
 //!
 //! The three G-code dialects share one line syntax, so they differ only in this table. The
@@ -23,8 +24,8 @@
 //! plug in as whole front ends beside `lex`/`reader`, each turning its program text into the
 //! words of a typed [`Block`](crate::block::Block) the same interpreter runs, with a
 //! [`Table`] of its own for the modal state it starts in. Whatever the front end, every move
-//! leaves as the same canonical [`Move`](crate::Move). Until the Siemens one is in, the
-//! reader recognises such programs and refuses them by name.
+//! leaves as the same canonical [`Move`](crate::Move). The Siemens front end hands the
+//! interpreter ISO blocks in Fanuc's codes, so its table is Fanuc's.
 
 mod fanuc;
 mod haas;
@@ -46,6 +47,8 @@ impl Dialect {
             Dialect::Fanuc => &fanuc::TABLE,
             Dialect::Haas => &haas::TABLE,
             Dialect::Heidenhain => &heidenhain::TABLE,
+            // The Siemens front end hands the interpreter ISO blocks in Fanuc's codes.
+            Dialect::Siemens => &fanuc::TABLE,
         }
     }
 }

@@ -1,0 +1,666 @@
+//! One Sinumerik block: block number and label, then a statement (`IF`, `WHILE`, `FOR`,
+//! `REPEAT`, `LOOP`, `GOTOx`, `DEF`, `PROC`, `RET`, `MCALL`, a frame) or a list of words,
+//! names and calls (Fundamentals, "Structure of an NC program"; Job planning, "Flexible NC
+//! programming").
+
+use super::expr::{expr, r_parameter, Scan};
+use super::flow::skip_number_and_label;
+use super::frame::{rotation_zyx, Instruction};
+use super::state::{Structure, Var};
+use super::words::Words;
+use super::Reader;
+use crate::lex::LineResult;
+
+/// Keywords accepted anywhere in a block that do not change the path mtsim reads
+/// (dynamics, compressors, look-ahead, orientation reference): noted once.
+const NOTED: &[&str] = &[
+    "SOFT",
+    "BRISK",
+    "FFWON",
+    "FFWOF",
+    "COMPOF",
+    "COMPON",
+    "COMPCAD",
+    "COMPCURV",
+    "CFC",
+    "CFTCP",
+    "CFIN",
+    "STOPRE",
+    "SPATH",
+    "UPATH",
+    "ORIWKS",
+    "ORIMKS",
+    "ORIAXES",
+    "ORIVECT",
+    "SETMS",
+    "DIAMOF",
+    "ACN",
+    "ACP",
+    "DC",
+    "G64",
+    "WAITM",
+    "PTP",
+    "CP",
+    "DRIVE",
+    "FGROUP",
+    "GROUP_BEGIN",
+    "GROUP_END",
+    "DISPLOF",
+    "DISPLON",
+    "SAVE",
+    "FIFOCTRL",
+];
+
+/// Sinumerik words mtsim knows and does not read: refused with what they are.
+const REFUSED: &[(&str, &str)] = &[
+    ("AP", "polar angle"),
+    ("RP", "polar radius"),
+    ("AR", "arc opening angle"),
+    ("TURN", "full turns of a helix"),
+    ("CIP", "circle through an intermediate point"),
+    ("CT", "tangential circle"),
+    ("I1", "intermediate point of CIP"),
+    ("J1", "intermediate point of CIP"),
+    ("K1", "intermediate point of CIP"),
+    ("CHF", "chamfer"),
+    ("CHR", "chamfer"),
+    ("RND", "rounding"),
+    ("RNDM", "modal rounding"),
+    ("OFFN", "contour offset"),
+    ("SPOS", "spindle positioning"),
+    ("SPOSA", "spindle positioning"),
+    ("POLY", "polynomial interpolation"),
+    ("ASPLINE", "spline"),
+    ("BSPLINE", "spline"),
+    ("CSPLINE", "spline"),
+    ("TRANSMIT", "face transformation"),
+    ("TRACYL", "cylinder transformation"),
+    ("TRAANG", "inclined-axis transformation"),
+    ("TOFRAME", "tool frame"),
+    ("TCARR", "tool carrier"),
+    ("PAROT", "workpiece-aligned frame"),
+    ("A3", "orientation vector"),
+    ("B3", "orientation vector"),
+    ("C3", "orientation vector"),
+    ("A2", "orientation angle"),
+    ("B2", "orientation angle"),
+    ("C2", "orientation angle"),
+];
+
+impl Reader {
+    /// Runs one upper-cased line; `Ok(false)` when the program ends.
+    pub(super) fn block(&mut self, up: &str, line_no: usize) -> LineResult<bool> {
+        let mut sc = Scan::new(up);
+        match sc.peek() {
+            // Block skip (the skip switch on, as the G-code reader), and `%_N_..` headers.
+            Some(b'/' | b'%') | None | Some(b';') => return Ok(true),
+            _ => {}
+        }
+        skip_number_and_label(&mut sc);
+        if sc.done() {
+            return Ok(true);
+        }
+        let save = sc.at;
+        if let Some((kw, at)) = sc.ident() {
+            if let Some(go_on) = self.statement(kw, at, &mut sc, line_no)? {
+                return Ok(go_on);
+            }
+        }
+        sc.at = save;
+        let mut w = Words::default();
+        self.collect(&mut sc, &mut w, line_no)?;
+        self.emit(w, up, line_no)
+    }
+
+    /// The statement `kw` (at byte `at`), when it is one.
+    fn statement(
+        &mut self,
+        kw: &str,
+        at: usize,
+        sc: &mut Scan,
+        line_no: usize,
+    ) -> LineResult<Option<bool>> {
+        let span = at..sc.at;
+        match kw {
+            "IF" => self.if_statement(sc, at)?,
+            "ELSE" => {
+                self.pop(|s| matches!(s, Structure::If), "ELSE", span.clone())?;
+                self.skip(false, span)?;
+            }
+            "ENDIF" => {
+                self.pop(|s| matches!(s, Structure::If), "ENDIF", span)?;
+            }
+            "WHILE" => {
+                let (offset, line) = self.line_start;
+                if expr(sc, &self.vars)? != 0.0 {
+                    self.open(Structure::While { offset, line }, span)?;
+                } else {
+                    self.skip(false, span)?;
+                }
+            }
+            "ENDWHILE" | "ENDLOOP" => self.close_loop(kw, true, span)?,
+            "FOR" => self.for_statement(sc, at)?,
+            "ENDFOR" => self.end_for(span)?,
+            "REPEAT" | "LOOP" => {
+                let level = self.level();
+                let (offset, line) = (level.offset, level.line);
+                let s = if kw == "LOOP" {
+                    Structure::Loop { offset, line }
+                } else {
+                    Structure::Repeat { offset, line }
+                };
+                self.open(s, span)?;
+            }
+            "UNTIL" => {
+                let done = expr(sc, &self.vars)? != 0.0;
+                self.close_loop(kw, !done, span)?;
+            }
+            "GOTOF" | "GOTOB" | "GOTO" | "GOTOC" => {
+                let Some((target, t_at)) = sc.ident() else {
+                    return Err(sc.err(
+                        at,
+                        format!("{kw} without a target: expected a label or block number"),
+                        "no target",
+                    ));
+                };
+                self.jump(kw, target, t_at..sc.at)?;
+            }
+            "DEF" => self.def(sc, at)?,
+            "PROC" => self.proc(sc, at)?,
+            "RET" => return self.end_of_level().map(Some),
+            "EXTERN" => {}
+            "MCALL" => self.mcall(sc, at, line_no)?,
+            "TRANS" | "ATRANS" | "ROT" | "AROT" | "SCALE" | "ASCALE" | "MIRROR" | "AMIRROR" => {
+                self.frame_statement(kw, sc, at)?
+            }
+            "CALL" | "PCALL" | "EXECUTE" | "EXECTAB" | "CASE" | "SETAL" | "STOPRE_" | "WHEN"
+            | "EVERY" | "ID" | "IDS" => {
+                return Err(sc.err(
+                    at,
+                    format!("`{kw}` is not supported by mtsim's Siemens reader"),
+                    "unsupported statement",
+                ));
+            }
+            _ => return Ok(None),
+        }
+        Ok(Some(true))
+    }
+
+    /// Pops the innermost structure, which must satisfy `is`.
+    fn pop(
+        &mut self,
+        is: impl Fn(&Structure) -> bool,
+        kw: &str,
+        span: std::ops::Range<usize>,
+    ) -> LineResult<Structure> {
+        let level = self.level();
+        match level.structures.pop() {
+            Some(s) if is(&s) => Ok(s),
+            _ => Err(crate::lex::LineError::new(
+                span,
+                format!("{kw} without its opening statement"),
+                "unmatched",
+            )),
+        }
+    }
+
+    /// Closes the loop `kw` ends (`ENDWHILE`, `UNTIL`, `ENDLOOP`); when `again`, counts a
+    /// backward jump and goes back: to the `WHILE` line (which opens the loop again), or
+    /// to the first line of a `REPEAT` or `LOOP` body (the loop kept open).
+    fn close_loop(
+        &mut self,
+        kw: &str,
+        again: bool,
+        span: std::ops::Range<usize>,
+    ) -> LineResult<()> {
+        let opens = |s: &Structure| {
+            matches!(
+                (kw, s),
+                ("ENDWHILE", Structure::While { .. })
+                    | ("UNTIL", Structure::Repeat { .. })
+                    | ("ENDLOOP", Structure::Loop { .. })
+            )
+        };
+        let s = self.pop(opens, kw, span.clone())?;
+        if !again {
+            return Ok(());
+        }
+        let (Structure::While { offset, line }
+        | Structure::Repeat { offset, line }
+        | Structure::Loop { offset, line }) = s
+        else {
+            unreachable!("`opens` admits loops only")
+        };
+        self.backward(span.clone())?;
+        if !matches!(s, Structure::While { .. }) {
+            self.open(s, span)?;
+        }
+        (self.level().offset, self.level().line) = (offset, line);
+        Ok(())
+    }
+
+    /// `IF cond GOTOx label` (a jump) or `IF cond` (a structure).
+    fn if_statement(&mut self, sc: &mut Scan, at: usize) -> LineResult<()> {
+        let cond = expr(sc, &self.vars)? != 0.0;
+        let save = sc.at;
+        if let Some((kind, k_at)) = sc.ident().filter(|(k, _)| k.starts_with("GOTO")) {
+            let Some((target, t_at)) = sc.ident() else {
+                return Err(sc.err(k_at, format!("{kind} without a target"), "no target"));
+            };
+            if cond {
+                self.jump(kind, target, t_at..sc.at)?;
+            }
+            return Ok(());
+        }
+        sc.at = save;
+        // A false head skips to its ELSE (whose branch then runs) or past its ENDIF.
+        if cond || self.skip(true, at..at + 2)? == "ELSE" {
+            self.open(Structure::If, at..at + 2)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// `FOR var = start TO end`.
+    fn for_statement(&mut self, sc: &mut Scan, at: usize) -> LineResult<()> {
+        let var = self.variable(sc, at)?;
+        if !sc.eat(b'=') {
+            return Err(sc.err(at, "expected `FOR var = start TO end`", "FOR"));
+        }
+        let start = expr(sc, &self.vars)?;
+        if !sc.keyword("TO") {
+            return Err(sc.err(at, "expected `TO` in `FOR var = start TO end`", "no TO"));
+        }
+        let end = expr(sc, &self.vars)?;
+        self.set(var.clone(), start, sc, at)?;
+        if start <= end {
+            let level = self.level();
+            let (offset, line) = (level.offset, level.line);
+            self.open(
+                Structure::For {
+                    offset,
+                    line,
+                    var,
+                    end,
+                },
+                at..at + 3,
+            )
+        } else {
+            self.skip(false, at..at + 3).map(|_| ())
+        }
+    }
+
+    fn end_for(&mut self, span: std::ops::Range<usize>) -> LineResult<()> {
+        let Structure::For {
+            offset,
+            line,
+            var,
+            end,
+        } = self.pop(
+            |s| matches!(s, Structure::For { .. }),
+            "ENDFOR",
+            span.clone(),
+        )?
+        else {
+            unreachable!()
+        };
+        let v = match &var {
+            Var::R(k) => self.vars.r[*k],
+            Var::Named(n) => self.vars.get(n).unwrap_or(f64::INFINITY),
+        } + 1.0;
+        let sc = Scan::new("");
+        self.set(var.clone(), v, &sc, 0).map_err(|mut e| {
+            e.span = span.clone();
+            e
+        })?;
+        if v <= end {
+            self.backward(span.clone())?;
+            self.open(
+                Structure::For {
+                    offset,
+                    line,
+                    var,
+                    end,
+                },
+                span,
+            )?;
+            (self.level().offset, self.level().line) = (offset, line);
+        }
+        Ok(())
+    }
+
+    /// An R parameter or `DEF` variable to assign.
+    fn variable(&mut self, sc: &mut Scan, at: usize) -> LineResult<Var> {
+        let Some((name, n_at)) = sc.ident() else {
+            return Err(sc.err(
+                at,
+                "expected a variable (an R parameter or a DEF variable)",
+                "no variable",
+            ));
+        };
+        if let Some(Some(k)) = r_parameter(name) {
+            return Ok(Var::R(k as usize));
+        }
+        if self.vars.get(name).is_none() {
+            return Err(sc.err(
+                n_at,
+                format!("`{name}` is not a defined variable"),
+                "undefined variable",
+            ));
+        }
+        Ok(Var::Named(name.to_string()))
+    }
+
+    /// `DEF REAL|INT|BOOL name[=value], ...`.
+    fn def(&mut self, sc: &mut Scan, at: usize) -> LineResult<()> {
+        let Some((ty, t_at)) = sc.ident() else {
+            return Err(sc.err(at, "expected a type after DEF", "DEF"));
+        };
+        if !matches!(ty, "REAL" | "INT" | "BOOL") {
+            return Err(sc.err(
+                t_at,
+                format!("`DEF {ty}`: mtsim reads REAL, INT and BOOL variables"),
+                "unsupported type",
+            ));
+        }
+        let integer = ty != "REAL";
+        loop {
+            let Some((name, n_at)) = sc.ident() else {
+                return Err(sc.err(sc.at, "expected a variable name", "no name"));
+            };
+            if sc.peek() == Some(b'[') {
+                return Err(sc.err(
+                    n_at,
+                    format!("array `{name}[..]`: mtsim reads scalar variables only"),
+                    "array",
+                ));
+            }
+            let reserved = (name.len() == 1 && name.as_bytes()[0].is_ascii_uppercase())
+                || r_parameter(name).is_some()
+                || NOTED.contains(&name);
+            if reserved {
+                return Err(sc.err(n_at, format!("`{name}` is an address or keyword: expected a variable name of two or more characters that is not one"), "reserved name"));
+            }
+            let mut v = 0.0;
+            if sc.eat(b'=') {
+                v = expr(sc, &self.vars)?;
+                if integer {
+                    v = v.round();
+                }
+            }
+            let level = self.vars.levels.last_mut().expect("a variable level");
+            if level.len() >= 10_000 {
+                return Err(sc.err(
+                    n_at,
+                    "more than 10000 variables in one program",
+                    "too many variables",
+                ));
+            }
+            level.insert(name.to_string(), v);
+            if !sc.eat(b',') {
+                return Ok(());
+            }
+        }
+    }
+
+    /// `PROC name(REAL a, INT b ...)`: the call's values bound to the parameters.
+    fn proc(&mut self, sc: &mut Scan, at: usize) -> LineResult<()> {
+        sc.ident();
+        let args = std::mem::take(&mut self.level().args);
+        if !sc.eat(b'(') {
+            return Ok(());
+        }
+        let mut k = 0;
+        while !sc.eat(b')') {
+            let Some((ty, _)) = sc.ident() else {
+                return Err(sc.err(at, "expected `type name` in the PROC parameters", "PROC"));
+            };
+            let by_reference = ty == "VAR";
+            let ty = if by_reference {
+                sc.ident().map_or("", |t| t.0)
+            } else {
+                ty
+            };
+            let Some((name, n_at)) = sc.ident() else {
+                return Err(sc.err(at, "expected a parameter name", "PROC"));
+            };
+            if !matches!(ty, "REAL" | "INT" | "BOOL") || by_reference {
+                return Err(sc.err(n_at, format!("PROC parameter `{name}` of type {ty}{}: mtsim reads REAL, INT and BOOL values", if by_reference { " by reference (VAR)" } else { "" }), "unsupported parameter"));
+            }
+            let v = args.get(k).copied().unwrap_or(0.0);
+            self.vars
+                .levels
+                .last_mut()
+                .expect("a variable level")
+                .insert(name.to_string(), v);
+            k += 1;
+            sc.eat(b',');
+            if sc.done() {
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// `TRANS X.. Y.. Z..`, `ROT X.. Y.. Z..` / `ROT RPL=..`, `SCALE`, `MIRROR` and their
+    /// additive forms; with no axes, the absolute form clears the programmable frame.
+    fn frame_statement(&mut self, kw: &str, sc: &mut Scan, at: usize) -> LineResult<()> {
+        let additive = kw.starts_with('A');
+        // ATRANS → TRANS, AROT → ROT, ASCALE → SCALE, AMIRROR → MIRROR.
+        let base = if additive { &kw[1..] } else { kw };
+        let mut v: [Option<f64>; 3] = [None; 3];
+        let mut rpl = None;
+        while !sc.done() {
+            let Some((name, n_at)) = sc.ident() else {
+                return Err(sc.err(sc.at, format!("expected axis values after {kw}"), "frame"));
+            };
+            let slot = match name {
+                "X" => 0,
+                "Y" => 1,
+                "Z" => 2,
+                "RPL" => 3,
+                _ => {
+                    let (letter, digits) = name.split_at(1);
+                    let k = "XYZ"
+                        .find(letter)
+                        .filter(|_| digits.bytes().all(|b| b.is_ascii_digit() || b == b'.'));
+                    let Some(k) = k else {
+                        return Err(sc.err(
+                            n_at,
+                            format!("`{name}` in {kw}: expected X, Y, Z (or RPL= for ROT)"),
+                            "frame axis",
+                        ));
+                    };
+                    sc.at = n_at + 1;
+                    k
+                }
+            };
+            sc.eat(b'=');
+            let value = expr(sc, &self.vars)?;
+            if slot == 3 {
+                rpl = Some(value);
+            } else {
+                v[slot] = Some(value);
+            }
+        }
+        let instruction = match base {
+            "TRANS" => Instruction::Trans(v.map(|x| x.unwrap_or(0.0))),
+            "ROT" => {
+                let mut angles = v.map(|x| x.unwrap_or(0.0));
+                if let Some(a) = rpl {
+                    angles = [0.0; 3];
+                    angles[self.normal] = a;
+                }
+                Instruction::Rot(rotation_zyx(angles[0], angles[1], angles[2]))
+            }
+            "SCALE" => {
+                let s = v.map(|x| x.unwrap_or(1.0));
+                if s.iter().any(|x| *x == 0.0 || !x.is_finite()) {
+                    return Err(sc.err(
+                        at,
+                        "a scale of zero: expected non-zero factors",
+                        "zero scale",
+                    ));
+                }
+                Instruction::Scale(s)
+            }
+            _ => Instruction::Mirror(v.map(|x| x.is_some())),
+        };
+        self.frame.apply(instruction, additive);
+        Ok(())
+    }
+
+    /// The identifier `name` inside a list of words: a keyword, an assignment, `CR=`, a
+    /// message, a cycle or a subprogram call.
+    pub(super) fn named(
+        &mut self,
+        name: &str,
+        at: usize,
+        sc: &mut Scan,
+        w: &mut Words,
+        line_no: usize,
+    ) -> LineResult<()> {
+        match name {
+            "R" if sc.peek() == Some(b'[') => {
+                sc.eat(b'[');
+                let k = expr(sc, &self.vars)?;
+                if !sc.eat(b']')
+                    || !(0.0..self.vars.r.len() as f64).contains(&k)
+                    || k.fract() != 0.0
+                {
+                    return Err(sc.err(
+                        at,
+                        "expected `R[index]` with an index 0-999",
+                        "R parameter",
+                    ));
+                }
+                return self.assign(sc, Var::R(k as usize), at);
+            }
+            "CR" => {
+                if !sc.eat(b'=') {
+                    return Err(sc.err(at, "expected `CR=radius`", "CR"));
+                }
+                w.cr = Some((expr(sc, &self.vars)?, at..sc.at));
+                return Ok(());
+            }
+            "SUPA" => {
+                w.other.push(("G53".into(), at..sc.at));
+                return Ok(());
+            }
+            "FNORM" => {
+                w.other.push(("G94".into(), at..sc.at));
+                return Ok(());
+            }
+            "TRAORI" => {
+                self.tcp = true;
+                w.before.push(if self.d_active {
+                    "G43.4 H".to_string() + &self.tool.to_string()
+                } else {
+                    "G43.4".into()
+                });
+                return Ok(());
+            }
+            "TRAFOOF" => {
+                if self.tcp {
+                    w.before.push("G49".into());
+                    if self.d_active {
+                        w.before.push("G43".into());
+                    }
+                }
+                self.tcp = false;
+                return Ok(());
+            }
+            "MSG" => return skip_call(sc, at),
+            n if REFUSED.iter().any(|(k, _)| *k == n) => {
+                let what = REFUSED.iter().find(|(k, _)| *k == n).map_or("", |(_, w)| w);
+                return Err(sc.err(at, format!("`{n}` ({what}) is not supported by mtsim's Siemens reader (docs/gcode.md lists what it reads)"), "unsupported Sinumerik word"));
+            }
+            n if NOTED.contains(&n) => {
+                if sc.peek() == Some(b'(') {
+                    skip_call(sc, at)?;
+                }
+                self.notice(line_no, format!("`{n}` accepted and not simulated"));
+                return Ok(());
+            }
+            _ => {}
+        }
+        if name.starts_with('$') {
+            return Err(sc.err(
+                at,
+                format!("system variable `{name}` is not supported by mtsim"),
+                "system variable",
+            ));
+        }
+        match sc.peek() {
+            Some(b'=') if self.vars.get(name).is_some() => {
+                return self.assign(sc, Var::Named(name.to_string()), at);
+            }
+            Some(b'=') => return Err(sc.err(at, format!("`{name}` is not a defined variable: expected `DEF REAL {name}` (or INT, BOOL) before it is set (global user data, GUD, is not read)"), "undefined variable")),
+            Some(b'[') => return Err(sc.err(at, format!("array element `{name}[..]`: mtsim reads scalar variables only"), "array")),
+            _ => {}
+        }
+        if name.starts_with("CYCLE") {
+            return self.cycle_word(name, at, sc, line_no);
+        }
+        // A subprogram called by name, with values in parentheses.
+        let mut args = Vec::new();
+        if sc.eat(b'(') {
+            while !sc.eat(b')') {
+                if sc.peek() == Some(b',') {
+                    args.push(0.0);
+                } else {
+                    args.push(expr(sc, &self.vars)?);
+                }
+                if !sc.eat(b',') && sc.peek() != Some(b')') {
+                    return Err(sc.err(
+                        at,
+                        format!("expected `,` or `)` in the call of `{name}`"),
+                        "call",
+                    ));
+                }
+                if args.len() > 64 {
+                    return Err(sc.err(at, "more than 64 values in a call", "call"));
+                }
+            }
+        }
+        w.call = Some((name.to_string(), args, at..sc.at));
+        Ok(())
+    }
+
+    /// `MCALL CYCLE8x(..)` sets the modal call, `MCALL` alone clears it.
+    fn mcall(&mut self, sc: &mut Scan, at: usize, _line_no: usize) -> LineResult<()> {
+        if sc.done() {
+            self.modal_call = None;
+            return Ok(());
+        }
+        let Some((name, n_at)) = sc.ident() else {
+            return Err(sc.err(at, "expected a cycle after MCALL", "MCALL"));
+        };
+        self.modal_call = Some(self.cycle(name, n_at, sc)?);
+        Ok(())
+    }
+}
+
+/// Skips `( ... )` with strings inside, after a name.
+fn skip_call(sc: &mut Scan, at: usize) -> LineResult<()> {
+    if !sc.eat(b'(') {
+        return Ok(());
+    }
+    let mut depth = 1;
+    let mut quoted = false;
+    while let Some(&c) = sc.s.get(sc.at) {
+        sc.at += 1;
+        match c {
+            b'"' => quoted = !quoted,
+            b'(' if !quoted => depth += 1,
+            b')' if !quoted => {
+                depth -= 1;
+                if depth == 0 {
+                    return Ok(());
+                }
+            }
+            _ => {}
+        }
+    }
+    Err(sc.err(at, "expected `)` to close this call", "unclosed call"))
+}

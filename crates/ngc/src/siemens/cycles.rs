@@ -1,0 +1,279 @@
+//! Drilling cycles `CYCLE81` (drilling, centring) and `CYCLE82` (with a dwell at depth),
+//! called once or modally (`MCALL`), `CYCLE800()` (swivel plane reset), and subprogram
+//! calls (`L10 P3`, a program called by name).
+//!
+//! CYCLE81(RTP, RFP, SDIS, DP, DPR) and CYCLE82(.., DTB) (Siemens, "Cycles" programming
+//! manual, "Drilling, centering - CYCLE81", "Drilling, counterboring - CYCLE82"): from the
+//! drilling position, G0 to the reference plane brought forward by the safety distance
+//! (`RFP + SDIS` on the tool axis), G1 at the programmed feed to the depth (`RFP - DPR`
+//! when DPR is given, else `DP`), dwell DTB s (CYCLE82), G0 to the retraction plane RTP.
+
+use std::path::PathBuf;
+
+use super::expr::{expr, Scan};
+use super::source::Source;
+use super::state::Cycle;
+use super::words::number;
+use super::{Level, Reader};
+use crate::axis::Axis;
+use crate::frame::{apply, mul, rot_x, rot_y, rot_z, Mat3};
+use crate::lex::{LineError, LineResult};
+
+impl Reader {
+    /// `CYCLE8x(..)` among the words of a block: run now.
+    pub(super) fn cycle_word(
+        &mut self,
+        name: &str,
+        at: usize,
+        sc: &mut Scan,
+        line_no: usize,
+    ) -> LineResult<()> {
+        if name == "CYCLE800" {
+            let args = self.arguments(sc, at)?;
+            self.iso.clear();
+            self.push("G69", at..sc.at);
+            self.run_iso(line_no)?;
+            if args.iter().any(Option::is_some) {
+                self.swivel(&args, at..sc.at, line_no)?;
+            }
+            return Ok(());
+        }
+        if name == "CYCLE832" {
+            self.arguments(sc, at)?;
+            self.notice(
+                line_no,
+                "CYCLE832 (high-speed settings) accepted and not simulated".into(),
+            );
+            return Ok(());
+        }
+        let cycle = self.cycle(name, at, sc)?;
+        self.run_cycle(Some(cycle), line_no)
+    }
+
+    /// `CYCLE800(_FR, _TC, _ST, _MODE, _X0, _Y0, _Z0, _A, _B, _C, _X1, _Y1, _Z1, _DIR, ..)`
+    /// in mode 57 (axis by axis: about X by A, then the new Y by B, then the newest Z by
+    /// C) as a new swivel plane (`_ST` units digit 0): the interpreter's tilted plane
+    /// G68.2 with `R = Rx(A) Ry(B) Rz(C)` and origin `X0 + R X1` (the zero point before,
+    /// then after the rotation), written as its Euler angles Z-X-Z; `_DIR` ≠ 0 turns the
+    /// rotary axes to it (G53.1, which needs the machine's rotary table).
+    fn swivel(
+        &mut self,
+        a: &[Option<f64>],
+        span: std::ops::Range<usize>,
+        line_no: usize,
+    ) -> LineResult<()> {
+        let get = |k: usize| a.get(k).copied().flatten().unwrap_or(0.0);
+        let (st, mode) = (get(2), get(3));
+        if mode != 57.0 || st.rem_euclid(10.0) != 0.0 {
+            return Err(LineError::new(span, format!("CYCLE800 swivel mode {mode} with _ST {st}: mtsim reads mode 57 (axis by axis X, Y, Z) as a new plane (_ST units digit 0), and CYCLE800() to reset"), "CYCLE800 swivel mode"));
+        }
+        let r = mul(&mul(&rot_x(get(7)), &rot_y(get(8))), &rot_z(get(9)));
+        let x1 = apply(&r, [get(10), get(11), get(12)]);
+        let origin = [get(4) + x1[0], get(5) + x1[1], get(6) + x1[2]];
+        let [i, j, k] = euler_zxz_angles(&r);
+        self.push(
+            &format!(
+                "G68.2 X{} Y{} Z{} I{} J{} K{}",
+                number(origin[0]),
+                number(origin[1]),
+                number(origin[2]),
+                number(i),
+                number(j),
+                number(k)
+            ),
+            span.clone(),
+        );
+        self.run_iso(line_no)?;
+        if get(13) != 0.0 {
+            self.push("G53.1", span);
+            self.run_iso(line_no)?;
+        }
+        Ok(())
+    }
+
+    /// Reads the cycle `name`'s values (its parentheses follow).
+    pub(super) fn cycle(&mut self, name: &str, at: usize, sc: &mut Scan) -> LineResult<Cycle> {
+        let span = at..sc.at;
+        if !matches!(name, "CYCLE81" | "CYCLE82") {
+            return Err(LineError::new(span, format!("`{name}` is not supported by mtsim's Siemens reader: it reads the drilling cycles CYCLE81 and CYCLE82"), "unsupported cycle"));
+        }
+        let a = self.arguments(sc, at)?;
+        let get = |k: usize| a.get(k).copied().flatten();
+        let (Some(retract), Some(reference)) = (get(0), get(1)) else {
+            return Err(sc.err(
+                at,
+                format!(
+                    "{name} without RTP and RFP: expected {name}(RTP, RFP, SDIS, DP, DPR{})",
+                    if name == "CYCLE82" { ", DTB" } else { "" }
+                ),
+                "cycle values",
+            ));
+        };
+        let depth = match (get(4), get(3)) {
+            (Some(dpr), _) => reference - dpr.abs(),
+            (None, Some(dp)) => dp,
+            (None, None) => {
+                return Err(sc.err(
+                    at,
+                    format!("{name} without DP or DPR: expected a drilling depth"),
+                    "no depth",
+                ))
+            }
+        };
+        Ok(Cycle {
+            retract,
+            approach: reference + get(2).unwrap_or(0.0).abs(),
+            depth,
+            dwell_s: if name == "CYCLE82" {
+                get(5).unwrap_or(0.0)
+            } else {
+                0.0
+            },
+        })
+    }
+
+    /// `( v, , v ...)`: each value, `None` where left out.
+    fn arguments(&mut self, sc: &mut Scan, at: usize) -> LineResult<Vec<Option<f64>>> {
+        let mut out = Vec::new();
+        if !sc.eat(b'(') {
+            return Ok(out);
+        }
+        if sc.eat(b')') {
+            return Ok(out);
+        }
+        loop {
+            if matches!(sc.peek(), Some(b',' | b')')) {
+                out.push(None);
+            } else if sc.peek() == Some(b'"') {
+                // A string value (a plane name): skipped.
+                sc.at += 1;
+                while sc.s.get(sc.at).is_some_and(|c| *c != b'"') {
+                    sc.at += 1;
+                }
+                sc.at += 1;
+                out.push(None);
+            } else {
+                out.push(Some(expr(sc, &self.vars)?));
+            }
+            if out.len() > 64 {
+                return Err(sc.err(at, "more than 64 values in a call", "call"));
+            }
+            if sc.eat(b')') {
+                return Ok(out);
+            }
+            if !sc.eat(b',') {
+                return Err(sc.err(
+                    at,
+                    "expected `,` or `)` in the cycle's values",
+                    "cycle values",
+                ));
+            }
+        }
+    }
+
+    /// Runs `cycle` (or the modal call) at the current position, along the tool axis.
+    pub(super) fn run_cycle(&mut self, cycle: Option<Cycle>, line_no: usize) -> LineResult<()> {
+        let Some(c) = cycle.or(self.modal_call) else {
+            return Ok(());
+        };
+        let p = self.interp.program_position();
+        let here = self.frame.frame_point([p[Axis::X], p[Axis::Y], p[Axis::Z]]);
+        let axis = self.normal;
+        let mut steps = vec![(0u8, c.approach), (1, c.depth)];
+        if c.dwell_s > 0.0 {
+            steps.push((4, c.dwell_s));
+        }
+        steps.push((0, c.retract));
+        for (motion, v) in steps {
+            if motion == 4 {
+                self.push(&format!("G4 X{}", number(v)), 0..0);
+            } else {
+                let mut q = here;
+                q[axis] = v;
+                let t = self.frame.work_point(q);
+                self.push(
+                    &format!(
+                        "G90 G{motion} X{} Y{} Z{}",
+                        number(t[0]),
+                        number(t[1]),
+                        number(t[2])
+                    ),
+                    0..0,
+                );
+                self.interp_absolute = true;
+                self.interp_motion = motion;
+            }
+            self.run_iso(line_no)?;
+        }
+        Ok(())
+    }
+
+    /// Calls subprogram `name` (`L10`, or a program name), `repeats` times.
+    pub(super) fn call(
+        &mut self,
+        name: &str,
+        args: Vec<f64>,
+        repeats: u64,
+        span: std::ops::Range<usize>,
+    ) -> LineResult<()> {
+        if self.levels.len() > self.max_depth {
+            return Err(LineError::new(
+                span,
+                format!("subprograms nested deeper than {}", self.max_depth),
+                "too deep",
+            ));
+        }
+        let Some(path) = self.find_program(name) else {
+            return Err(LineError::new(span, format!("`{name}` is neither a Sinumerik keyword mtsim reads nor a subprogram it finds ({name}.SPF or {name}.MPF beside the program or on the search path)"), "unknown name or subprogram"));
+        };
+        let text = crate::side_file::read_side_file(&path).map_err(|e| {
+            LineError::new(
+                span.clone(),
+                format!("subprogram {}: {e}", path.display()),
+                "unreadable subprogram",
+            )
+        })?;
+        self.levels.push(Level {
+            source: Source::Text(text.into()),
+            path,
+            offset: 0,
+            line: 1,
+            start: (0, 1),
+            repeats: repeats.saturating_sub(1),
+            structures: Vec::new(),
+            args,
+        });
+        self.vars.levels.push(Default::default());
+        Ok(())
+    }
+
+    fn find_program(&self, name: &str) -> Option<PathBuf> {
+        let names = [
+            format!("{name}.SPF"),
+            format!("{name}.spf"),
+            format!("{name}.MPF"),
+            format!("{name}.mpf"),
+            format!("{}.spf", name.to_ascii_lowercase()),
+            format!("{}.mpf", name.to_ascii_lowercase()),
+        ];
+        self.search_path
+            .iter()
+            .flat_map(|d| names.iter().map(move |n| d.join(n)))
+            .find(|p| p.is_file())
+    }
+}
+
+/// The Z-X-Z Euler angles (deg) of rotation `r = Rz(i) Rx(j) Rz(k)`: `cos j = r₂₂`,
+/// `i = atan2(r₀₂, -r₁₂)`, `k = atan2(r₂₀, r₂₁)`; when `sin j = 0`, `k = 0` and
+/// `i = atan2(r₁₀, r₀₀)`.
+fn euler_zxz_angles(r: &Mat3) -> [f64; 3] {
+    let j = r[2][2].clamp(-1.0, 1.0).acos();
+    if j.sin().abs() < 1e-12 {
+        return [r[1][0].atan2(r[0][0]).to_degrees(), j.to_degrees(), 0.0];
+    }
+    [
+        r[0][2].atan2(-r[1][2]).to_degrees(),
+        j.to_degrees(),
+        r[2][0].atan2(r[2][1]).to_degrees(),
+    ]
+}

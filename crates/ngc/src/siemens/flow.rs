@@ -1,0 +1,223 @@
+//! Program flow (Job planning, "Program sequence control"): `IF`/`ELSE`/`ENDIF`,
+//! `WHILE`/`ENDWHILE`, `FOR`/`ENDFOR`, `REPEAT`/`UNTIL`, `LOOP`/`ENDLOOP`, and the jumps
+//! `GOTOF`/`GOTOB`/`GOTO`/`GOTOC` to a label (`NAME:`) or block number (`N100`).
+//!
+//! A structure is entered by evaluating its head; a false head skips forward to its
+//! partner, counting the structures nested on the way. Loops go back by byte offset, each
+//! backward jump counted against the iteration limit.
+
+use super::expr::Scan;
+use super::state::Structure;
+use super::{Reader, MAX_STRUCTURES};
+use crate::lex::{LineError, LineResult};
+
+/// What opens or closes a structure, as the first statement of a line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Mark {
+    Open,
+    Else,
+    Close,
+    Other,
+}
+
+/// The first statement of an upper-cased line after `/`, its block number and its label:
+/// its keyword and where the keyword starts.
+pub(super) fn head(line: &str) -> (Mark, &str, usize) {
+    let mut sc = Scan::new(line);
+    skip_number_and_label(&mut sc);
+    let Some((kw, at)) = sc.ident() else {
+        return (Mark::Other, "", sc.at);
+    };
+    let mark = match kw {
+        // `IF cond GOTOF label` is a jump, not a structure.
+        "IF" => {
+            if line[sc.at..].contains("GOTO") {
+                Mark::Other
+            } else {
+                Mark::Open
+            }
+        }
+        "WHILE" | "FOR" | "REPEAT" | "LOOP" => Mark::Open,
+        "ELSE" => Mark::Else,
+        "ENDIF" | "ENDWHILE" | "ENDFOR" | "UNTIL" | "ENDLOOP" => Mark::Close,
+        _ => Mark::Other,
+    };
+    (mark, kw, at)
+}
+
+/// Skips `/`, `N123` or `:123`, and a label `NAME:`.
+pub(super) fn skip_number_and_label(sc: &mut Scan) {
+    sc.eat(b'/');
+    let save = sc.at;
+    if let Some((w, _)) = sc.ident() {
+        let n = w.strip_prefix('N');
+        if !n.is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit())) {
+            sc.at = save;
+        }
+    } else if sc.eat(b':') {
+        sc.number();
+    }
+    let save = sc.at;
+    if sc.ident().is_some() && sc.eat(b':') {
+        return;
+    }
+    sc.at = save;
+}
+
+/// The block number (`N100`) and label (`NAME`) of an upper-cased line.
+fn targets(line: &str) -> (Option<&str>, Option<&str>) {
+    let mut sc = Scan::new(line);
+    sc.eat(b'/');
+    let save = sc.at;
+    let mut number = None;
+    if let Some((w, _)) = sc.ident() {
+        if w.strip_prefix('N')
+            .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+        {
+            number = Some(w);
+        } else {
+            sc.at = save;
+        }
+    }
+    let label = match sc.ident() {
+        Some((w, _)) if sc.eat(b':') => Some(w),
+        _ => None,
+    };
+    (number, label)
+}
+
+impl Reader {
+    /// Opens a structure, bounded to [`MAX_STRUCTURES`].
+    pub(super) fn open(&mut self, s: Structure, span: std::ops::Range<usize>) -> LineResult<()> {
+        let level = self.level();
+        if level.structures.len() == MAX_STRUCTURES {
+            return Err(LineError::new(
+                span,
+                format!("control structures nested deeper than {MAX_STRUCTURES}"),
+                "too deep",
+            ));
+        }
+        level.structures.push(s);
+        Ok(())
+    }
+
+    /// Skips forward past the partner of the structure just refused: the first `ELSE`
+    /// (when `to_else`) or closing keyword at this depth. Returns the keyword found.
+    pub(super) fn skip(
+        &mut self,
+        to_else: bool,
+        span: std::ops::Range<usize>,
+    ) -> LineResult<String> {
+        let mut depth = 0usize;
+        let mut buf = String::new();
+        loop {
+            let level = self.level();
+            let n = level.source.line(level.offset, &mut buf).unwrap_or(0);
+            if n == 0 {
+                return Err(LineError::new(span, "no closing keyword (ENDIF, ENDWHILE, ENDFOR, UNTIL, ENDLOOP) for this structure before the end of the program", "unclosed structure"));
+            }
+            level.offset += n;
+            level.line += 1;
+            buf.make_ascii_uppercase();
+            let (mark, kw, _) = head(&buf);
+            match mark {
+                Mark::Open => depth += 1,
+                Mark::Else if depth == 0 && to_else => return Ok(kw.to_string()),
+                Mark::Close if depth == 0 => return Ok(kw.to_string()),
+                Mark::Close => depth -= 1,
+                _ => {}
+            }
+        }
+    }
+
+    /// Counts a backward jump against the iteration limit.
+    pub(super) fn backward(&mut self, span: std::ops::Range<usize>) -> LineResult<()> {
+        self.iterations += 1;
+        if self.iterations > self.max_iterations {
+            return Err(LineError::new(
+                span,
+                format!(
+                    "more than {} backward jumps (loop iterations): the program does not end",
+                    self.max_iterations
+                ),
+                "endless loop",
+            )
+            .help("raise the reader's max_iterations if the loop is meant to run this long"));
+        }
+        Ok(())
+    }
+
+    /// `GOTOF`/`GOTOB`/`GOTO`/`GOTOC` to `target` (a label or `N` number). `Ok(false)`:
+    /// not found, for `GOTOC` to go on.
+    pub(super) fn jump(
+        &mut self,
+        kind: &str,
+        target: &str,
+        span: std::ops::Range<usize>,
+    ) -> LineResult<bool> {
+        let forward = kind != "GOTOB";
+        let backward = kind != "GOTOF";
+        if forward {
+            if let Some(at) = self.find(target, None) {
+                (self.level().offset, self.level().line) = at;
+                return Ok(true);
+            }
+        }
+        if backward {
+            let here = self.level().offset;
+            if let Some(at) = self.find(target, Some(here)) {
+                self.backward(span.clone())?;
+                (self.level().offset, self.level().line) = at;
+                return Ok(true);
+            }
+        }
+        if kind == "GOTOC" {
+            return Ok(false);
+        }
+        Err(LineError::new(
+            span,
+            format!(
+                "{kind} {target}: no label `{target}:` or block `{target}` {} in this program",
+                if forward && backward {
+                    "anywhere"
+                } else if forward {
+                    "further on"
+                } else {
+                    "earlier"
+                }
+            ),
+            "unknown jump target",
+        ))
+    }
+
+    /// The place (offset, line) of the line carrying `target`: the first after the current
+    /// line (`before` None), or the last before byte `before`.
+    fn find(&mut self, target: &str, before: Option<usize>) -> Option<(usize, usize)> {
+        let level = self.levels.last_mut()?;
+        let (mut offset, mut line) = match before {
+            None => (level.offset, level.line),
+            Some(_) => (0, 1),
+        };
+        let mut found = None;
+        let mut buf = String::new();
+        loop {
+            if before.is_some_and(|b| offset >= b) {
+                return found;
+            }
+            let n = level.source.line(offset, &mut buf).ok()?;
+            if n == 0 {
+                return found;
+            }
+            buf.make_ascii_uppercase();
+            let (number, label) = targets(&buf);
+            if number == Some(target) || label == Some(target) {
+                found = Some((offset, line));
+                if before.is_none() {
+                    return found;
+                }
+            }
+            offset += n;
+            line += 1;
+        }
+    }
+}

@@ -1,0 +1,44 @@
+//! The state types the front end's files share, in a leaf of their own: the open control
+//! structures, the variables a block assigns, a drilling cycle's values.
+
+/// An open control structure of a program level.
+pub(super) enum Structure {
+    If,
+    /// The `WHILE` line (re-read at `ENDWHILE`).
+    While {
+        offset: usize,
+        line: usize,
+    },
+    /// The first line of the body, the loop variable and its last value.
+    For {
+        offset: usize,
+        line: usize,
+        var: Var,
+        end: f64,
+    },
+    Repeat {
+        offset: usize,
+        line: usize,
+    },
+    Loop {
+        offset: usize,
+        line: usize,
+    },
+}
+
+/// A variable a block assigns: an R parameter or a `DEF` variable.
+#[derive(Clone, Debug)]
+pub(super) enum Var {
+    R(usize),
+    Named(String),
+}
+
+/// A drilling cycle's values, program units and s.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Cycle {
+    pub retract: f64,
+    /// RFP + SDIS.
+    pub approach: f64,
+    pub depth: f64,
+    pub dwell_s: f64,
+}

@@ -75,9 +75,15 @@
 //! errors along the axes (pitch and worm-gear error, [`error_table`]) act on the axis
 //! positions themselves, before the kinematics.
 
+pub mod axis_set;
+pub mod chain;
+pub mod chain_inverse;
 pub mod error_table;
+pub mod layout_chain;
 pub mod location;
 
+pub use axis_set::AxisSet;
+pub use chain::{Chain, Link, Side};
 pub use location::{AxisLine, LocationErrors, LocationParam};
 
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Vector3};
@@ -123,6 +129,10 @@ pub enum Layout {
     /// A B C as in xyzabc, U V W linear axes parallel to X Y Z.
     #[serde(rename = "xyzabcuvw")]
     Xyzabcuvw,
+    /// A machine file's own `[kinematics]` chain that no named layout is (a head machine, a
+    /// nutating table, ...), with these axes; the chain itself is [`Kinematics::chain`].
+    #[serde(skip)]
+    Chain(AxisSet),
 }
 
 impl Layout {
@@ -151,6 +161,7 @@ impl Layout {
             Layout::Xyzabc => &Axis::XYZABC,
             Layout::Xyuv => &[Axis::X, Axis::Y, Axis::U, Axis::V],
             Layout::Xyzabcuvw => &Axis::ALL,
+            Layout::Chain(axes) => axes.axes(),
         }
     }
 
@@ -162,7 +173,8 @@ impl Layout {
             | Layout::Xyza
             | Layout::Xyzabc
             | Layout::Xyuv
-            | Layout::Xyzabcuvw => None,
+            | Layout::Xyzabcuvw
+            | Layout::Chain(_) => None,
             Layout::TrtAc => Some(Axis::A),
             Layout::TrtBc => Some(Axis::B),
             Layout::TrtAb => Some(Axis::B),
@@ -173,7 +185,12 @@ impl Layout {
     /// (which has no cradle: A turns the part about the machine's X).
     pub fn table_axis(self) -> Option<Axis> {
         match self {
-            Layout::Xyz | Layout::Xz | Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw => None,
+            Layout::Xyz
+            | Layout::Xz
+            | Layout::Xyzabc
+            | Layout::Xyuv
+            | Layout::Xyzabcuvw
+            | Layout::Chain(_) => None,
             Layout::TrtAc | Layout::TrtBc => Some(Axis::C),
             Layout::TrtAb | Layout::Xyza => Some(Axis::A),
         }
@@ -206,6 +223,9 @@ impl Layout {
             Layout::Xyzabcuvw => Some(
                 "its A B C are world coordinates with no modelled kinematic chain and its U V W linear axes with no place in the tool pose",
             ),
+            Layout::Chain(_) => Some(
+                "its `[kinematics]` chain is not a named layout, and TCP, the ball bar and the collision scene do not run on general chains yet (the cone program does: `mtsim cone`)",
+            ),
             _ => None,
         }
     }
@@ -214,7 +234,7 @@ impl Layout {
     /// this machine: not a lathe (xz: a turning tool and chuck) nor xyzabc (the tool's
     /// orientation is not modelled).
     pub fn has_collision_scene(self) -> bool {
-        !matches!(self, Layout::Xz | Layout::Xyzabc) && !self.has_secondary_axes()
+        !matches!(self, Layout::Xz | Layout::Xyzabc | Layout::Chain(_)) && !self.has_secondary_axes()
     }
 
     /// +1 when a positive rotary command turns the table positively about its axis line's
@@ -237,6 +257,7 @@ impl Layout {
             Layout::Xyzabc => "xyzabc",
             Layout::Xyuv => "xyuv",
             Layout::Xyzabcuvw => "xyzabcuvw",
+            Layout::Chain(_) => "chain",
         }
     }
 }
@@ -268,6 +289,8 @@ pub struct Kinematics {
     pub pivot_mm: Vector3<f64>,
     /// Location errors of the rotary axes; they act only on the actual chain.
     pub location_errors: LocationErrors,
+    /// The machine file's own chain when it is no named layout ([`Layout::Chain`]).
+    pub general: Option<Chain>,
 }
 
 /// Below this horizontal length of the tool axis, C is free and kept.
@@ -279,7 +302,30 @@ impl Kinematics {
             layout,
             pivot_mm,
             location_errors: LocationErrors::default(),
+            general: None,
         }
+    }
+
+    /// A machine whose kinematics is `chain`, as its named layout when it is one (so that a
+    /// written-out trt-ac runs exactly as `kinematics = "trt-ac"`), else as [`Layout::Chain`].
+    pub fn from_chain(chain: Chain) -> Kinematics {
+        match layout_chain::named(&chain) {
+            Some((layout, pivot_mm)) => Kinematics::new(layout, pivot_mm),
+            None => Kinematics {
+                layout: Layout::Chain(AxisSet::of(&chain.axes())),
+                pivot_mm: Vector3::zeros(),
+                location_errors: LocationErrors::default(),
+                general: Some(chain),
+            },
+        }
+    }
+
+    /// The machine's chain (spec: shared/spec/kinematic-chains.md): its own, or its named
+    /// layout's written out; `None` for layouts whose rotaries or U V W have no place in
+    /// the tool pose (xyzabc, xyuv, xyzabcuvw).
+    pub fn chain(&self) -> Option<Chain> {
+        self.general
+            .or_else(|| layout_chain::of_layout(self.layout, self.pivot_mm))
     }
 
     /// The same machine with location errors on its rotary axes.
@@ -387,9 +433,13 @@ impl Kinematics {
         let (sc, cc) = angles.c;
         let m = match self.layout {
             // xyzabc's rotaries carry no modelled chain: its tool tip is the world X Y Z.
-            Layout::Xyz | Layout::Xz | Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw => {
-                return Rotation3::identity()
-            }
+            // A general chain's rotations are its own (Kinematics::chain); this slot is unused.
+            Layout::Xyz
+            | Layout::Xz
+            | Layout::Xyzabc
+            | Layout::Xyuv
+            | Layout::Xyzabcuvw
+            | Layout::Chain(_) => return Rotation3::identity(),
             Layout::Xyza => {
                 // Rx(A); the table axis (the `c` slot) is A.
                 let (sa, ca) = (sc, cc);

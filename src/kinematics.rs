@@ -234,7 +234,8 @@ impl Layout {
     /// this machine: not a lathe (xz: a turning tool and chuck) nor xyzabc (the tool's
     /// orientation is not modelled).
     pub fn has_collision_scene(self) -> bool {
-        !matches!(self, Layout::Xz | Layout::Xyzabc | Layout::Chain(_)) && !self.has_secondary_axes()
+        !matches!(self, Layout::Xz | Layout::Xyzabc | Layout::Chain(_))
+            && !self.has_secondary_axes()
     }
 
     /// +1 when a positive rotary command turns the table positively about its axis line's
@@ -318,6 +319,26 @@ impl Kinematics {
                 general: Some(chain),
             },
         }
+    }
+
+    /// The layout's name, or for a general chain its axes: "chain: table C; head X Y Z B".
+    pub fn describe(&self) -> String {
+        let Some(chain) = self.general else {
+            return self.layout.name().to_string();
+        };
+        let list = |links: &[Link]| {
+            let names: Vec<String> = links.iter().map(|l| l.axis.to_string()).collect();
+            if names.is_empty() {
+                "-".to_string()
+            } else {
+                names.join(" ")
+            }
+        };
+        format!(
+            "chain: table {}; head {}",
+            list(chain.table()),
+            list(chain.head())
+        )
     }
 
     /// The machine's chain (spec: shared/spec/kinematic-chains.md): its own, or its named

@@ -69,10 +69,7 @@ impl Link {
             let shift = self.point_mm - r * self.point_mm;
             Isometry3::from_parts(Translation3::from(shift), r.into())
         } else {
-            Isometry3::from_parts(
-                Translation3::from(self.direction * q),
-                Default::default(),
-            )
+            Isometry3::from_parts(Translation3::from(self.direction * q), Default::default())
         }
     }
 }
@@ -201,7 +198,11 @@ impl Chain {
     }
 
     /// Tool tip (mm) and tool direction in the workpiece frame at `q`.
-    pub fn tool_in_workpiece(&self, q: &AxisVec, tool_length_mm: f64) -> (Point3<f64>, Vector3<f64>) {
+    pub fn tool_in_workpiece(
+        &self,
+        q: &AxisVec,
+        tool_length_mm: f64,
+    ) -> (Point3<f64>, Vector3<f64>) {
         let (tip, direction) = self.tool_in_machine(q, tool_length_mm);
         let table = self.table_pose(q);
         (

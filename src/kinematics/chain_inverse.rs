@@ -58,8 +58,12 @@ pub enum InverseError {
 impl std::fmt::Display for InverseError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            InverseError::Unreachable => f.write_str("the tool direction is out of the chain's reach"),
-            InverseError::OutOfTravel => f.write_str("every solution leaves a rotary axis outside its travel"),
+            InverseError::Unreachable => {
+                f.write_str("the tool direction is out of the chain's reach")
+            }
+            InverseError::OutOfTravel => {
+                f.write_str("every solution leaves a rotary axis outside its travel")
+            }
             InverseError::Unsupported(why) => f.write_str(why),
         }
     }
@@ -104,13 +108,19 @@ pub fn solutions(
             let t0 = chain.tool_direction;
             // (u, a, α sign for the axis it gives), (v, b, …): see the module docs.
             let (u, a, v, b, first_is_r2, sign_u, sign_v) = match (s1, s2) {
-                (Side::Table, Side::Table) => (l1.direction, t0, l2.direction, t_w, false, -1.0, 1.0),
+                (Side::Table, Side::Table) => {
+                    (l1.direction, t0, l2.direction, t_w, false, -1.0, 1.0)
+                }
                 (Side::Table, Side::Head) => (l2.direction, t0, l1.direction, t_w, true, 1.0, 1.0),
                 _ => (l2.direction, t0, l1.direction, t_w, true, 1.0, -1.0),
             };
             let cs = common_vectors(&u, &a, &v, &b)?;
             for (branch, c) in cs.iter().enumerate() {
-                let (axis_u, axis_v) = if first_is_r2 { (l2.axis, l1.axis) } else { (l1.axis, l2.axis) };
+                let (axis_u, axis_v) = if first_is_r2 {
+                    (l2.axis, l1.axis)
+                } else {
+                    (l1.axis, l2.axis)
+                };
                 let mut joints = *previous;
                 let mut free_axis = None;
                 match turn_angle(&u, &a, c) {
@@ -204,7 +214,9 @@ fn common_vectors(
     let w = u.cross(v);
     let w2 = w.norm_squared();
     if w2 < EPS {
-        return Err(InverseError::Unsupported("the two rotary axes are parallel"));
+        return Err(InverseError::Unsupported(
+            "the two rotary axes are parallel",
+        ));
     }
     let uv = u.dot(v);
     let (ua, vb) = (u.dot(a), v.dot(b));
@@ -281,7 +293,9 @@ fn solve_linear(
             jtj.try_inverse().map(|inv| inv * rhs)
         }
     };
-    let x = solved.ok_or(InverseError::Unsupported("the linear axes are not independent"))?;
+    let x = solved.ok_or(InverseError::Unsupported(
+        "the linear axes are not independent",
+    ))?;
     for (i, (axis, _)) in chosen.iter().enumerate() {
         joints[*axis] = x[i];
     }
@@ -302,7 +316,11 @@ fn independent(chosen: &[(Axis, Vector3<f64>)], col: &Vector3<f64>) -> bool {
 pub enum PathEvent {
     /// The tool direction passed a pole at `line`: `axis` was free there and swings by
     /// `swing_deg` on the way to the next pose (a C swing at the pole).
-    Pole { line: usize, axis: Axis, swing_deg: f64 },
+    Pole {
+        line: usize,
+        axis: Axis,
+        swing_deg: f64,
+    },
     /// The nearest solution changed branch at `line` (the rotaries flip over).
     Switch { line: usize, from: usize, to: usize },
 }

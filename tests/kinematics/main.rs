@@ -4,6 +4,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod chains;
 mod geometric_errors;
 mod round_trips;
 mod trivial;

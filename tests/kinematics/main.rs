@@ -10,3 +10,4 @@ mod round_trips;
 mod trivial;
 mod trt_ab;
 mod uvw;
+mod written_out;

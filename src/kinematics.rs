@@ -223,9 +223,6 @@ impl Layout {
             Layout::Xyzabcuvw => Some(
                 "its A B C are world coordinates with no modelled kinematic chain and its U V W linear axes with no place in the tool pose",
             ),
-            Layout::Chain(_) => Some(
-                "its `[kinematics]` chain is not a named layout, and TCP, the ball bar and the collision scene do not run on general chains yet (the cone program does: `mtsim cone`)",
-            ),
             _ => None,
         }
     }
@@ -514,6 +511,12 @@ impl Kinematics {
     /// [`Kinematics::forward`] with the sines and cosines of `q`'s angles given.
     #[inline]
     pub fn forward_with(&self, q: &AxisVec, angles: &RotarySinCos) -> ToolPose {
+        if let Some(chain) = &self.general {
+            // A general chain's workpiece frame is the table frame (its pivot is the origin);
+            // the tool tip is the gauge point (tool length 0).
+            let (tip, axis) = chain.tool_in_workpiece(q, 0.0);
+            return ToolPose { tip, axis };
+        }
         let r_inv = self.rotation_of(angles).inverse();
         let tip_m = Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
         ToolPose {

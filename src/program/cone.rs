@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 
 use crate::input::machine::Machine;
 use crate::input::program::{ConePoses, ConeTest, MeasuredLines, NcOptions};
-use crate::kinematics::{Branch, Kinematics, C_START_REFERENCE_DEG};
+use crate::kinematics::{chain_inverse, Branch, Kinematics, C_START_REFERENCE_DEG};
 use crate::program::{FeedMode, Motion, Move};
 use crate::{Axis, AxisVec};
 
@@ -33,7 +33,26 @@ impl ConePath {
             branch: Branch::Primary,
             poses: cone.poses(),
         };
-        if let Some(tilt) = kinematics.layout.tilt_axis() {
+        if let Some(chain) = kinematics.general {
+            let fits = |path: &ConePath| {
+                let mut q = path.start();
+                (0..360).all(|k| {
+                    q = path.axes_after((k as f64).to_radians(), &q);
+                    chain
+                        .rotaries()
+                        .all(|(_, l)| machine.axis(l.axis).within_travel(q[l.axis]))
+                })
+            };
+            if !fits(&path) {
+                let other = ConePath {
+                    branch: Branch::Secondary,
+                    ..path
+                };
+                if fits(&other) {
+                    path = other;
+                }
+            }
+        } else if let Some(tilt) = kinematics.layout.tilt_axis() {
             let limits = machine.axis(tilt);
             let fits = |path: &ConePath| {
                 (0..360).all(|k| {
@@ -59,8 +78,37 @@ impl ConePath {
             .inverse(&self.poses.pose(theta_rad), self.branch, reference_c_deg)
     }
 
+    /// Axis positions at `theta_rad`, each rotary unwrapped nearest its value in
+    /// `previous` (on a named layout only the table axis's value counts, as in
+    /// [`ConePath::axes_near`]). On a general chain, the solution of this path's branch
+    /// ([`chain_inverse::Solution::branch`] 0 for the primary, 1 for the secondary; the one
+    /// there is where the two meet); NaN where the chain cannot reach the pose (refused on
+    /// load: input/scenario.rs).
+    pub fn axes_after(&self, theta_rad: f64, previous: &AxisVec) -> AxisVec {
+        let Some(chain) = &self.kinematics.general else {
+            let table = self.kinematics.layout.table_axis().unwrap_or(Axis::C);
+            return self.axes_near(theta_rad, previous[table]);
+        };
+        let wanted = match self.branch {
+            Branch::Primary => 0,
+            Branch::Secondary => 1,
+        };
+        let pose = self.poses.pose(theta_rad);
+        match chain_inverse::solutions(chain, &pose, 0.0, previous) {
+            Ok(all) => all
+                .iter()
+                .find(|s| s.branch == wanted)
+                .or(all.first())
+                .map_or(AxisVec([f64::NAN; 9]), |s| s.joints),
+            Err(_) => AxisVec([f64::NAN; 9]),
+        }
+    }
+
     /// Axis positions at θ = 0, with C in the spec's atan2 range.
     pub fn start(&self) -> AxisVec {
+        if self.kinematics.general.is_some() {
+            return self.axes_after(0.0, &AxisVec::ZERO);
+        }
         self.axes_near(0.0, C_START_REFERENCE_DEG)
     }
 
@@ -72,13 +120,13 @@ impl ConePath {
         span_rad: f64,
         n: usize,
     ) -> impl Iterator<Item = (f64, AxisVec)> {
-        // The table axis: C, or A on a trt-ab machine.
-        let table = self.kinematics.layout.table_axis().unwrap_or(Axis::C);
-        let mut previous_c = self.axes_near(theta0_rad, C_START_REFERENCE_DEG)[table];
+        // Each pose continuous from the one before (on a named layout: its table axis, C or
+        // trt-ab's A, from the spec's atan2 range at the start).
+        let mut previous = self.axes_after(theta0_rad, &AxisVec::ZERO);
         (0..=n).map(move |k| {
             let theta = theta0_rad + span_rad * k as f64 / n as f64;
-            let q = self.axes_near(theta, previous_c);
-            previous_c = q[table];
+            let q = self.axes_after(theta, &previous);
+            previous = q;
             (theta, q)
         })
     }
@@ -88,9 +136,8 @@ impl ConePath {
     /// path (truncation ~h⁴q⁽⁵⁾/30 ≈ 1e-11, far below the 0.01 deg the analysis needs).
     pub fn derivative(&self, theta_rad: f64) -> AxisVec {
         const H: f64 = 1e-3;
-        let c0 =
-            self.axes_near(theta_rad, 0.0)[self.kinematics.layout.table_axis().unwrap_or(Axis::C)];
-        let q = |dt: f64| self.axes_near(theta_rad + dt, c0);
+        let q0 = self.axes_after(theta_rad, &AxisVec::ZERO);
+        let q = |dt: f64| self.axes_after(theta_rad + dt, &q0);
         (q(-2.0 * H) - q(-H) * 8.0 + q(H) * 8.0 - q(2.0 * H)) * (1.0 / (12.0 * H))
     }
 }

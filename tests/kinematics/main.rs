@@ -4,6 +4,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod chain_cone;
 mod chains;
 mod geometric_errors;
 mod round_trips;

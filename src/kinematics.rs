@@ -528,7 +528,16 @@ impl Kinematics {
     /// Inverse kinematics on `branch`, with C unwrapped near `previous_c_deg` (and kept
     /// there when the tool axis is along the table's Z). `axis` need not be normalized.
     /// For trt-ab the table axis is A: `previous_c_deg` is then the previous A.
+    /// On a general chain, every rotary is unwrapped near `previous_c_deg`
+    /// ([`Kinematics::inverse_after`]).
     pub fn inverse(&self, pose: &ToolPose, branch: Branch, previous_c_deg: f64) -> AxisVec {
+        if let Some(chain) = &self.general {
+            let mut previous = AxisVec::ZERO;
+            for (_, link) in chain.rotaries() {
+                previous[link.axis] = previous_c_deg;
+            }
+            return self.inverse_after(pose, branch, &previous);
+        }
         let mut q = AxisVec::ZERO;
         if self.layout == Layout::TrtAb {
             let t = pose.axis.normalize();
@@ -583,6 +592,33 @@ impl Kinematics {
         q[Axis::Y] = m.y;
         q[Axis::Z] = m.z;
         q
+    }
+}
+
+impl Kinematics {
+    /// Inverse kinematics on `branch`, each rotary unwrapped nearest its value in
+    /// `previous` (on a named layout only the table axis's value counts, as in
+    /// [`Kinematics::inverse`]). On a general chain: the solution of `branch`
+    /// ([`chain_inverse::Solution::branch`] 0 for the primary, 1 for the secondary; the one
+    /// there is where they meet), tool length 0, linear axes beyond the first three kept at
+    /// `previous`; NaN where the chain cannot reach the pose (a cone is refused on load then).
+    pub fn inverse_after(&self, pose: &ToolPose, branch: Branch, previous: &AxisVec) -> AxisVec {
+        let Some(chain) = &self.general else {
+            let table = self.layout.table_axis().unwrap_or(Axis::C);
+            return self.inverse(pose, branch, previous[table]);
+        };
+        let wanted = match branch {
+            Branch::Primary => 0,
+            Branch::Secondary => 1,
+        };
+        match chain_inverse::solutions(chain, pose, 0.0, previous) {
+            Ok(all) => all
+                .iter()
+                .find(|s| s.branch == wanted)
+                .or(all.first())
+                .map_or(AxisVec([f64::NAN; 9]), |s| s.joints),
+            Err(_) => AxisVec([f64::NAN; 9]),
+        }
     }
 }
 

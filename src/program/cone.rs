@@ -8,9 +8,9 @@ use std::fmt::Write as _;
 
 use crate::input::machine::Machine;
 use crate::input::program::{ConePoses, ConeTest, MeasuredLines, NcOptions};
-use crate::kinematics::{chain_inverse, Branch, Kinematics, C_START_REFERENCE_DEG};
+use crate::kinematics::{Branch, Kinematics, C_START_REFERENCE_DEG};
 use crate::program::{FeedMode, Motion, Move};
-use crate::{Axis, AxisVec};
+use crate::AxisVec;
 
 /// The cone path on one machine: axis positions as functions of θ on one IK branch.
 #[derive(Clone, Copy, Debug)]
@@ -79,29 +79,10 @@ impl ConePath {
     }
 
     /// Axis positions at `theta_rad`, each rotary unwrapped nearest its value in
-    /// `previous` (on a named layout only the table axis's value counts, as in
-    /// [`ConePath::axes_near`]). On a general chain, the solution of this path's branch
-    /// ([`chain_inverse::Solution::branch`] 0 for the primary, 1 for the secondary; the one
-    /// there is where the two meet); NaN where the chain cannot reach the pose (refused on
-    /// load: input/scenario.rs).
+    /// `previous` ([`Kinematics::inverse_after`]).
     pub fn axes_after(&self, theta_rad: f64, previous: &AxisVec) -> AxisVec {
-        let Some(chain) = &self.kinematics.general else {
-            let table = self.kinematics.layout.table_axis().unwrap_or(Axis::C);
-            return self.axes_near(theta_rad, previous[table]);
-        };
-        let wanted = match self.branch {
-            Branch::Primary => 0,
-            Branch::Secondary => 1,
-        };
-        let pose = self.poses.pose(theta_rad);
-        match chain_inverse::solutions(chain, &pose, 0.0, previous) {
-            Ok(all) => all
-                .iter()
-                .find(|s| s.branch == wanted)
-                .or(all.first())
-                .map_or(AxisVec([f64::NAN; 9]), |s| s.joints),
-            Err(_) => AxisVec([f64::NAN; 9]),
-        }
+        self.kinematics
+            .inverse_after(&self.poses.pose(theta_rad), self.branch, previous)
     }
 
     /// Axis positions at θ = 0, with C in the spec's atan2 range.

@@ -221,6 +221,25 @@ fn the_cone_program_puts_the_tool_ball_on_the_circle_pointing_at_the_apex_on_eve
             worst_deg = worst_deg.max(angle.to_degrees());
             blocks += 1;
         }
+        // analyze's ranges of the machine's own axes are those of the program's blocks
+        // (1° apart: their extremes within 0.01 mm or deg of the exact path's).
+        let analysis = common::stdout_json(&mtsim_plain(&dir, &["analyze", "s.toml", "--json"]));
+        for axis in m.axes() {
+            let values: Vec<f64> = text
+                .lines()
+                .filter(|l| l.starts_with("G0"))
+                .filter_map(|l| l.split_whitespace().find(|w| w.starts_with(axis.letter())))
+                .map(|w| w[1..].parse().unwrap())
+                .collect();
+            let lo = values.iter().cloned().fold(f64::INFINITY, f64::min);
+            let hi = values.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+            let a = &analysis["axes"][axis.to_string()];
+            let (min, max) = (a["min"].as_f64().unwrap(), a["max"].as_f64().unwrap());
+            assert!(
+                (min - lo).abs() < 0.01 && (max - hi).abs() < 0.01,
+                "{machine} {axis}: analyze {min}..{max}, program {lo}..{hi}"
+            );
+        }
         eprintln!("{machine}: {blocks} blocks, worst {worst_mm:.2e} mm off the circle, {worst_deg:.2e} deg off the apex");
         assert!(blocks > 360, "{machine}: {blocks} blocks");
     }

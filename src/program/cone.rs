@@ -33,8 +33,9 @@ impl ConePath {
             branch: Branch::Primary,
             poses: cone.poses(),
         };
-        if let Some(chain) = kinematics.general {
-            let fits = |path: &ConePath| {
+        // The rotaries the branch must keep within travel: a general chain's all, else the tilt.
+        let fits = |path: &ConePath| match kinematics.general {
+            Some(chain) => {
                 let mut q = path.start();
                 (0..360).all(|k| {
                     q = path.axes_after((k as f64).to_radians(), &q);
@@ -42,31 +43,22 @@ impl ConePath {
                         .rotaries()
                         .all(|(_, l)| machine.axis(l.axis).within_travel(q[l.axis]))
                 })
-            };
-            if !fits(&path) {
-                let other = ConePath {
-                    branch: Branch::Secondary,
-                    ..path
-                };
-                if fits(&other) {
-                    path = other;
-                }
             }
-        } else if let Some(tilt) = kinematics.layout.tilt_axis() {
-            let limits = machine.axis(tilt);
-            let fits = |path: &ConePath| {
+            None => kinematics.layout.tilt_axis().is_none_or(|tilt| {
                 (0..360).all(|k| {
-                    limits.within_travel(path.axes_near((k as f64).to_radians(), 0.0)[tilt])
+                    machine
+                        .axis(tilt)
+                        .within_travel(path.axes_near((k as f64).to_radians(), 0.0)[tilt])
                 })
+            }),
+        };
+        if !fits(&path) {
+            let other = ConePath {
+                branch: Branch::Secondary,
+                ..path
             };
-            if !fits(&path) {
-                let other = ConePath {
-                    branch: Branch::Secondary,
-                    ..path
-                };
-                if fits(&other) {
-                    path = other;
-                }
+            if fits(&other) {
+                path = other;
             }
         }
         path

@@ -14,38 +14,12 @@ use mtsim::input::machine::Machine;
 use mtsim::kinematics::{Chain, Side};
 use mtsim::{Axis, AxisVec};
 
-type V = [f64; 3];
-
-fn sub(a: V, b: V) -> V {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn add(a: V, b: V) -> V {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn scale(a: V, s: f64) -> V {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-fn dot(a: V, b: V) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: V, b: V) -> V {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn norm(a: V) -> f64 {
-    dot(a, a).sqrt()
-}
+// The vector helpers and Rodrigues of the independent reference in geometric_errors.rs.
+use super::geometric_errors::{add, dot, norm, rodrigues, sub, V};
 
 /// Rodrigues: v turned by `deg` about the unit `d`.
 fn turn(d: V, deg: f64, v: V) -> V {
-    let (s, c) = deg.to_radians().sin_cos();
-    add(
-        add(scale(v, c), scale(cross(d, v), s)),
-        scale(d, dot(d, v) * (1.0 - c)),
-    )
+    rodrigues(d, deg.to_radians(), v)
 }
 
 /// One axis of the chain as plain numbers: (rotary, direction, point).
@@ -133,13 +107,7 @@ impl Spec {
     }
 }
 
-const SHIPPED: [&str; 5] = [
-    "machines/head-table-b45-c.toml",
-    "machines/fork-head-ca.toml",
-    "machines/nutating-table-b45-c.toml",
-    "machines/linuxcnc/bridgemill.toml",
-    "machines/linuxcnc/max5.toml",
-];
+use super::chains::SHIPPED;
 
 /// The 15/10 cone at O = 0, L = 100 (shared/spec/cone-frustum.md), in plain numbers.
 const ALPHA: f64 = 15.0;

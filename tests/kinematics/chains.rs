@@ -15,7 +15,7 @@ use nalgebra::{Point3, Vector3};
 use proptest::prelude::*;
 
 /// Every machine file shipped with a general chain, relative to the crate root.
-const SHIPPED: [&str; 5] = [
+pub(crate) const SHIPPED: [&str; 5] = [
     "machines/head-table-b45-c.toml",
     "machines/fork-head-ca.toml",
     "machines/nutating-table-b45-c.toml",
@@ -271,6 +271,22 @@ fn a_two_rotary_chain_has_two_solutions_and_the_nearest_is_chosen() {
     assert!((near(350.0).joints[Axis::C] - 360.0).abs() < 1e-12);
 }
 
+/// Poses with the tip at the origin: `(line, tool direction)`.
+fn at_origin(directions: &[(usize, Vector3<f64>)]) -> Vec<(usize, ToolPose)> {
+    directions
+        .iter()
+        .map(|(line, axis)| {
+            (
+                *line,
+                ToolPose {
+                    tip: Point3::origin(),
+                    axis: *axis,
+                },
+            )
+        })
+        .collect()
+}
+
 #[test]
 fn a_path_through_the_pole_reports_the_c_swing_and_a_path_over_it_a_switch() {
     // Fork head: the tool tilts 20° toward −Y (A = 20, C = 0), passes the vertical at line 2
@@ -279,30 +295,11 @@ fn a_path_through_the_pole_reports_the_c_swing_and_a_path_over_it_a_switch() {
     let m = load("machines/fork-head-ca.toml");
     let chain = chain_of(&m);
     let (s, c) = sin_cos(20.0);
-    let tip = Point3::new(0.0, 0.0, 0.0);
-    let poses = [
-        (
-            1,
-            ToolPose {
-                tip,
-                axis: Vector3::new(0.0, -s, c),
-            },
-        ),
-        (
-            2,
-            ToolPose {
-                tip,
-                axis: Vector3::z(),
-            },
-        ),
-        (
-            3,
-            ToolPose {
-                tip,
-                axis: Vector3::new(s, 0.0, c),
-            },
-        ),
-    ];
+    let poses = at_origin(&[
+        (1, Vector3::new(0.0, -s, c)),
+        (2, Vector3::z()),
+        (3, Vector3::new(s, 0.0, c)),
+    ]);
     let (q, events) =
         chain_inverse::follow(&chain, &poses, 0.0, &AxisVec::ZERO, &within(&m)).unwrap();
     assert_eq!(q[1][Axis::C], 0.0, "C kept at the pole");
@@ -318,24 +315,9 @@ fn a_path_through_the_pole_reports_the_c_swing_and_a_path_over_it_a_switch() {
         }
         ref e => panic!("{e:?}"),
     }
-    // A path that forces a flip: A's travel ±110 and the tool going from 20° toward −Y to
-    // 20° toward +Y through C held near 0 must take the other branch (A = −20 at C = 0).
-    let poses = [
-        (
-            5,
-            ToolPose {
-                tip,
-                axis: Vector3::new(0.0, -s, c),
-            },
-        ),
-        (
-            6,
-            ToolPose {
-                tip,
-                axis: Vector3::new(0.0, s, c),
-            },
-        ),
-    ];
+    // Tilting 20° toward −Y, then 20° toward +Y: the nearest solution flips A's sign
+    // (A = −20 at C = 0: 40° of A rather than 180° of C), a switch of branch.
+    let poses = at_origin(&[(5, Vector3::new(0.0, -s, c)), (6, Vector3::new(0.0, s, c))]);
     let (q, events) =
         chain_inverse::follow(&chain, &poses, 0.0, &AxisVec::ZERO, &within(&m)).unwrap();
     assert!(

@@ -19,7 +19,7 @@ use crate::kinematics::{Chain, Kinematics, Layout, Link};
 use crate::Axis;
 
 /// The `kinematics` key: a named layout (`"trt-ac"`) or a `[kinematics]` chain table
-/// (shared/spec/kinematic-chains.md).
+/// (the kinematic-chains spec).
 #[derive(Clone, Debug)]
 pub enum KinematicsSpec {
     Named(Layout),

@@ -21,6 +21,15 @@ use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Unit, Vector3};
 
 use crate::{Axis, AxisVec};
 
+/// Tool tip and tool axis in the table frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToolPose {
+    /// Tool tip, mm, table frame.
+    pub tip: Point3<f64>,
+    /// Unit tool axis, from the tip toward the spindle, table frame.
+    pub axis: Vector3<f64>,
+}
+
 /// Most axes a chain holds (one of each letter).
 pub const MAX_LINKS: usize = 9;
 

@@ -26,8 +26,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::chain::{Chain, Side};
-use super::{unwrap_near, ToolPose};
+use super::chain::{Chain, Side, ToolPose};
 use crate::{Axis, AxisVec};
 
 /// Below this, a projected vector is a point (its angle is free) or cones touch.
@@ -362,4 +361,9 @@ pub fn follow(
         joints.push(s.joints);
     }
     Ok((joints, events))
+}
+
+/// `angle_deg` plus the multiple of 360 that brings it nearest to `reference_deg`.
+pub fn unwrap_near(angle_deg: f64, reference_deg: f64) -> f64 {
+    angle_deg + 360.0 * ((reference_deg - angle_deg) / 360.0).round()
 }

@@ -15,7 +15,7 @@
 use nalgebra::Vector3;
 
 use super::chain::{Chain, Link};
-use super::Layout;
+use super::layout::Layout;
 use crate::Axis;
 
 /// The chain of `layout` with its rotary lines through `pivot_mm`.

@@ -18,7 +18,7 @@ pub fn deviation_mm(
 ) -> f64 {
     if let Some(chain) = &kin.general {
         // A general chain: the tool ball at the gauge point (tool length 0) carried by the
-        // head, the table ball carried by the table (shared/spec/kinematic-chains.md).
+        // head, the table ball carried by the table (the kinematic-chains spec).
         let (tool, _) = chain.tool_in_machine(q_actual, 0.0);
         let pivot = chain.table_pose(q_actual) * pivot_table_mm;
         return (tool - pivot).norm() - length_mm;

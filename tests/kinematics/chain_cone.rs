@@ -1,6 +1,6 @@
 //! The cone-frustum test on every shipped chain, checked with the spec's forward kinematics
-//! written out here (Rodrigues, shared/spec/kinematic-chains.md) and the cone of
-//! shared/spec/cone-frustum.md: `mtsim cone` puts the tool ball on the test circle within
+//! written out here (Rodrigues, the kinematic-chains spec) and the cone of
+//! the cone-frustum spec: `mtsim cone` puts the tool ball on the test circle within
 //! 2 µm at every block end, pointing at the apex within 0.01°; `simulate`'s ball-bar
 //! deviation is the spec's forward kinematics of the trace's actual axis positions within
 //! 0.01 µm.
@@ -15,7 +15,7 @@ use mtsim::kinematics::{Chain, Side};
 use mtsim::{Axis, AxisVec};
 
 // The vector helpers and Rodrigues of the independent reference in geometric_errors.rs.
-use super::geometric_errors::{add, dot, norm, rodrigues, sub, V};
+use super::geometric_errors::{add, dot, norm, rodrigues, scale, sub, V};
 
 /// Rodrigues: v turned by `deg` about the unit `d`.
 fn turn(d: V, deg: f64, v: V) -> V {
@@ -109,7 +109,7 @@ impl Spec {
 
 use super::chains::SHIPPED;
 
-/// The 15/10 cone at O = 0, L = 100 (shared/spec/cone-frustum.md), in plain numbers.
+/// The 15/10 cone at O = 0, L = 100 (the cone-frustum spec), in plain numbers.
 const ALPHA: f64 = 15.0;
 const BETA: f64 = 10.0;
 const L: f64 = 100.0;

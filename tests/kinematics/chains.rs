@@ -1,4 +1,4 @@
-//! Kinematic chains (shared/spec/kinematic-chains.md): the forward kinematics against closed
+//! Kinematic chains (the kinematic-chains spec): the forward kinematics against closed
 //! forms worked out by hand, round trips of the inverse kinematics on every shipped chain,
 //! poles and solution switches, the named layouts written out, and machine-file errors.
 

@@ -75,171 +75,24 @@
 //! errors along the axes (pitch and worm-gear error, [`error_table`]) act on the axis
 //! positions themselves, before the kinematics.
 
+pub mod axis_set;
+pub mod chain;
+pub mod chain_inverse;
 pub mod error_table;
+pub mod layout;
+pub mod layout_chain;
 pub mod location;
 
+pub use axis_set::AxisSet;
+pub use chain::{Chain, Link, Side, ToolPose};
+pub use chain_inverse::unwrap_near;
+pub use layout::Layout;
 pub use location::{AxisLine, LocationErrors, LocationParam};
 
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Vector3};
-use serde::{Deserialize, Serialize};
 
 use crate::numeric::sin_cos_deg;
 use crate::{Axis, AxisVec};
-
-/// The layout of a machine.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Layout {
-    /// Three linear axes, vertical spindle.
-    #[serde(rename = "xyz")]
-    Xyz,
-    /// Tilting rotary table: A tilts about X, C turns the table about its own Z.
-    #[serde(rename = "trt-ac")]
-    TrtAc,
-    /// Tilting rotary table: B tilts about Y, C turns the table about its own Z.
-    #[serde(rename = "trt-bc")]
-    TrtBc,
-    /// Table dual rotary (LinuxCNC xyzab-tdr): B tilts a cradle about Y, A turns the table
-    /// about the cradle's X; conventional directions (see the module docs).
-    #[serde(rename = "trt-ab")]
-    TrtAb,
-    /// Two linear axes X and Z (a lathe, LinuxCNC `trivkins coordinates=xz`): the tool tip
-    /// at (X, 0, Z).
-    #[serde(rename = "xz")]
-    Xz,
-    /// Three linear axes and a fourth axis A (LinuxCNC `trivkins`, COORDINATES = X Y Z A):
-    /// A turns the part about the machine's X axis through the pivot, `R = Rx(A)`.
-    #[serde(rename = "xyza")]
-    Xyza,
-    /// Six independent world axes X Y Z A B C, as LinuxCNC plans a robot's world
-    /// coordinates (puma, melfa): A B C are coordinates with no modelled chain (the
-    /// robot's joints are not modelled), so TCP, a ball bar and collisions are refused.
-    #[serde(rename = "xyzabc")]
-    Xyzabc,
-    /// Four independent linear axes X Y U V (a hot-wire foam cutter, LinuxCNC `trivkins
-    /// coordinates=xyuv`): X Y carry one end of the wire, U V the other.
-    #[serde(rename = "xyuv")]
-    Xyuv,
-    /// Nine independent world axes X Y Z A B C U V W (LinuxCNC's axis_9axis, trivkins):
-    /// A B C as in xyzabc, U V W linear axes parallel to X Y Z.
-    #[serde(rename = "xyzabcuvw")]
-    Xyzabcuvw,
-}
-
-impl Layout {
-    /// Every layout.
-    pub const ALL: [Layout; 9] = [
-        Layout::Xyz,
-        Layout::TrtAc,
-        Layout::TrtBc,
-        Layout::TrtAb,
-        Layout::Xz,
-        Layout::Xyza,
-        Layout::Xyzabc,
-        Layout::Xyuv,
-        Layout::Xyzabcuvw,
-    ];
-
-    /// The axes a machine of this layout has, in order.
-    pub fn axes(self) -> &'static [Axis] {
-        match self {
-            Layout::Xyz => &[Axis::X, Axis::Y, Axis::Z],
-            Layout::TrtAc => &[Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::C],
-            Layout::TrtBc => &[Axis::X, Axis::Y, Axis::Z, Axis::B, Axis::C],
-            Layout::TrtAb => &[Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::B],
-            Layout::Xz => &[Axis::X, Axis::Z],
-            Layout::Xyza => &[Axis::X, Axis::Y, Axis::Z, Axis::A],
-            Layout::Xyzabc => &Axis::XYZABC,
-            Layout::Xyuv => &[Axis::X, Axis::Y, Axis::U, Axis::V],
-            Layout::Xyzabcuvw => &Axis::ALL,
-        }
-    }
-
-    /// The tilting axis, if any.
-    pub fn tilt_axis(self) -> Option<Axis> {
-        match self {
-            Layout::Xyz
-            | Layout::Xz
-            | Layout::Xyza
-            | Layout::Xyzabc
-            | Layout::Xyuv
-            | Layout::Xyzabcuvw => None,
-            Layout::TrtAc => Some(Axis::A),
-            Layout::TrtBc => Some(Axis::B),
-            Layout::TrtAb => Some(Axis::B),
-        }
-    }
-
-    /// The axis that turns the table on the cradle, if any: C, or A for trt-ab and xyza
-    /// (which has no cradle: A turns the part about the machine's X).
-    pub fn table_axis(self) -> Option<Axis> {
-        match self {
-            Layout::Xyz | Layout::Xz | Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw => None,
-            Layout::TrtAc | Layout::TrtBc => Some(Axis::C),
-            Layout::TrtAb | Layout::Xyza => Some(Axis::A),
-        }
-    }
-
-    /// True when the rotary axes are world coordinates with no modelled kinematic chain
-    /// (xyzabc): then nothing that needs the tool's orientation or the machine's joints
-    /// (TCP, a ball bar through the servo models, the collision scene) can be computed.
-    pub fn rotaries_unmodelled(self) -> bool {
-        matches!(self, Layout::Xyzabc | Layout::Xyzabcuvw)
-    }
-
-    /// True when the layout has secondary linear axes U V W (xyuv, xyzabcuvw): axes with no
-    /// place in the tool pose (a foam cutter's far wire end), so nothing that needs the
-    /// tool's pose (TCP, a ball bar, the collision scene) can be computed.
-    pub fn has_secondary_axes(self) -> bool {
-        matches!(self, Layout::Xyuv | Layout::Xyzabcuvw)
-    }
-
-    /// Why the tool's pose is unknown on this layout (so TCP, a ball bar and the collision
-    /// scene are refused), for messages; `None` when it is modelled.
-    pub fn tool_pose_unmodelled(self) -> Option<&'static str> {
-        match self {
-            Layout::Xyzabc => Some(
-                "its A B C are world coordinates (a robot's, as LinuxCNC plans them) with no modelled kinematic chain",
-            ),
-            Layout::Xyuv => Some(
-                "its U V are linear axes with no place in the tool pose (a foam cutter's far wire end)",
-            ),
-            Layout::Xyzabcuvw => Some(
-                "its A B C are world coordinates with no modelled kinematic chain and its U V W linear axes with no place in the tool pose",
-            ),
-            _ => None,
-        }
-    }
-
-    /// True when the collision scene (a milling tool along +Z, a table, a cradle) models
-    /// this machine: not a lathe (xz: a turning tool and chuck) nor xyzabc (the tool's
-    /// orientation is not modelled).
-    pub fn has_collision_scene(self) -> bool {
-        !matches!(self, Layout::Xz | Layout::Xyzabc) && !self.has_secondary_axes()
-    }
-
-    /// +1 when a positive rotary command turns the table positively about its axis line's
-    /// direction (+X for A, +Y for B, +Z for C), -1 when negatively (trt-ab).
-    pub fn table_turn_sign(self) -> f64 {
-        match self {
-            Layout::TrtAb => -1.0,
-            _ => 1.0,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Layout::Xyz => "xyz",
-            Layout::TrtAc => "trt-ac",
-            Layout::TrtBc => "trt-bc",
-            Layout::TrtAb => "trt-ab",
-            Layout::Xz => "xz",
-            Layout::Xyza => "xyza",
-            Layout::Xyzabc => "xyzabc",
-            Layout::Xyuv => "xyuv",
-            Layout::Xyzabcuvw => "xyzabcuvw",
-        }
-    }
-}
 
 /// Which of the two inverse-kinematics solutions to take.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -251,15 +104,6 @@ pub enum Branch {
     Secondary,
 }
 
-/// Tool tip and tool axis in the table frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ToolPose {
-    /// Tool tip, mm, table frame.
-    pub tip: Point3<f64>,
-    /// Unit tool axis, from the tip toward the spindle, table frame.
-    pub axis: Vector3<f64>,
-}
-
 /// The kinematic chain of a machine.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Kinematics {
@@ -268,6 +112,8 @@ pub struct Kinematics {
     pub pivot_mm: Vector3<f64>,
     /// Location errors of the rotary axes; they act only on the actual chain.
     pub location_errors: LocationErrors,
+    /// The machine file's own chain when it is no named layout ([`Layout::Chain`]).
+    pub general: Option<Chain>,
 }
 
 /// Below this horizontal length of the tool axis, C is free and kept.
@@ -279,7 +125,50 @@ impl Kinematics {
             layout,
             pivot_mm,
             location_errors: LocationErrors::default(),
+            general: None,
         }
+    }
+
+    /// A machine whose kinematics is `chain`, as its named layout when it is one (so that a
+    /// written-out trt-ac runs exactly as `kinematics = "trt-ac"`), else as [`Layout::Chain`].
+    pub fn from_chain(chain: Chain) -> Kinematics {
+        match layout_chain::named(&chain) {
+            Some((layout, pivot_mm)) => Kinematics::new(layout, pivot_mm),
+            None => Kinematics {
+                layout: Layout::Chain(AxisSet::of(&chain.axes())),
+                pivot_mm: Vector3::zeros(),
+                location_errors: LocationErrors::default(),
+                general: Some(chain),
+            },
+        }
+    }
+
+    /// The layout's name, or for a general chain its axes: "chain: table C; head X Y Z B".
+    pub fn describe(&self) -> String {
+        let Some(chain) = self.general else {
+            return self.layout.name().to_string();
+        };
+        let list = |links: &[Link]| {
+            let names: Vec<String> = links.iter().map(|l| l.axis.to_string()).collect();
+            if names.is_empty() {
+                "-".to_string()
+            } else {
+                names.join(" ")
+            }
+        };
+        format!(
+            "chain: table {}; head {}",
+            list(chain.table()),
+            list(chain.head())
+        )
+    }
+
+    /// The machine's chain (the kinematic-chains spec): its own, or its named
+    /// layout's written out; `None` for layouts whose rotaries or U V W have no place in
+    /// the tool pose (xyzabc, xyuv, xyzabcuvw).
+    pub fn chain(&self) -> Option<Chain> {
+        self.general
+            .or_else(|| layout_chain::of_layout(self.layout, self.pivot_mm))
     }
 
     /// The same machine with location errors on its rotary axes.
@@ -387,9 +276,13 @@ impl Kinematics {
         let (sc, cc) = angles.c;
         let m = match self.layout {
             // xyzabc's rotaries carry no modelled chain: its tool tip is the world X Y Z.
-            Layout::Xyz | Layout::Xz | Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw => {
-                return Rotation3::identity()
-            }
+            // A general chain's rotations are its own (Kinematics::chain); this slot is unused.
+            Layout::Xyz
+            | Layout::Xz
+            | Layout::Xyzabc
+            | Layout::Xyuv
+            | Layout::Xyzabcuvw
+            | Layout::Chain(_) => return Rotation3::identity(),
             Layout::Xyza => {
                 // Rx(A); the table axis (the `c` slot) is A.
                 let (sa, ca) = (sc, cc);
@@ -443,6 +336,12 @@ impl Kinematics {
     /// [`Kinematics::forward`] with the sines and cosines of `q`'s angles given.
     #[inline]
     pub fn forward_with(&self, q: &AxisVec, angles: &RotarySinCos) -> ToolPose {
+        if let Some(chain) = &self.general {
+            // A general chain's workpiece frame is the table frame (its pivot is the origin);
+            // the tool tip is the gauge point (tool length 0).
+            let (tip, axis) = chain.tool_in_workpiece(q, 0.0);
+            return ToolPose { tip, axis };
+        }
         let r_inv = self.rotation_of(angles).inverse();
         let tip_m = Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
         ToolPose {
@@ -454,7 +353,16 @@ impl Kinematics {
     /// Inverse kinematics on `branch`, with C unwrapped near `previous_c_deg` (and kept
     /// there when the tool axis is along the table's Z). `axis` need not be normalized.
     /// For trt-ab the table axis is A: `previous_c_deg` is then the previous A.
+    /// On a general chain, every rotary is unwrapped near `previous_c_deg`
+    /// ([`Kinematics::inverse_after`]).
     pub fn inverse(&self, pose: &ToolPose, branch: Branch, previous_c_deg: f64) -> AxisVec {
+        if let Some(chain) = &self.general {
+            let mut previous = AxisVec::ZERO;
+            for (_, link) in chain.rotaries() {
+                previous[link.axis] = previous_c_deg;
+            }
+            return self.inverse_after(pose, branch, &previous);
+        }
         let mut q = AxisVec::ZERO;
         if self.layout == Layout::TrtAb {
             let t = pose.axis.normalize();
@@ -512,6 +420,33 @@ impl Kinematics {
     }
 }
 
+impl Kinematics {
+    /// Inverse kinematics on `branch`, each rotary unwrapped nearest its value in
+    /// `previous` (on a named layout only the table axis's value counts, as in
+    /// [`Kinematics::inverse`]). On a general chain: the solution of `branch`
+    /// ([`chain_inverse::Solution::branch`] 0 for the primary, 1 for the secondary; the one
+    /// there is where they meet), tool length 0, linear axes beyond the first three kept at
+    /// `previous`; NaN where the chain cannot reach the pose (a cone is refused on load then).
+    pub fn inverse_after(&self, pose: &ToolPose, branch: Branch, previous: &AxisVec) -> AxisVec {
+        let Some(chain) = &self.general else {
+            let table = self.layout.table_axis().unwrap_or(Axis::C);
+            return self.inverse(pose, branch, previous[table]);
+        };
+        let wanted = match branch {
+            Branch::Primary => 0,
+            Branch::Secondary => 1,
+        };
+        match chain_inverse::solutions(chain, pose, 0.0, previous) {
+            Ok(all) => all
+                .iter()
+                .find(|s| s.branch == wanted)
+                .or(all.first())
+                .map_or(AxisVec([f64::NAN; 9]), |s| s.joints),
+            Err(_) => AxisVec([f64::NAN; 9]),
+        }
+    }
+}
+
 /// `(sin, cos)` of the table axis (`c`: C, or A for trt-ab) and of the tilting axis (A or
 /// B; 0 without one), as
 /// [`Kinematics::rotation_of`] takes them.
@@ -541,11 +476,6 @@ pub fn add_small_angle(a: f64, r: f64, (sin_r, cos_r): (f64, f64)) -> (f64, f64)
         sin_r + (sin_r * cos_d_m1 + cos_r * sin_d),
         cos_r + (cos_r * cos_d_m1 - sin_r * sin_d),
     )
-}
-
-/// `angle_deg` plus the multiple of 360 that brings it nearest to `reference_deg`.
-pub fn unwrap_near(angle_deg: f64, reference_deg: f64) -> f64 {
-    angle_deg + 360.0 * ((reference_deg - angle_deg) / 360.0).round()
 }
 
 /// The first C value of a path: the spec's `atan2` range (-180, 180].

@@ -71,6 +71,17 @@ pub fn validate(
                 ),
             ));
         };
+        if matches!(layout, Layout::Chain(_)) {
+            return Err(value_error(
+                path,
+                text,
+                section,
+                key,
+                "location errors of a general [kinematics] chain are not modelled yet (only those \
+                 of the named layouts); remove this key"
+                    .into(),
+            ));
+        }
         if layout.rotaries_unmodelled() {
             return Err(value_error(
                 path,

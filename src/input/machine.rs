@@ -15,7 +15,7 @@ use crate::input::exact;
 use crate::input::geometry_errors::{self, GeometryErrors};
 use crate::input::scene::{SceneConfig, ToolConfig};
 use crate::input::toml_text::{self, value_error};
-use crate::kinematics::{Kinematics, Layout};
+use crate::kinematics::{Chain, Kinematics, Layout, Link};
 use crate::Axis;
 
 /// `[start]`: the modal state the control powers up in, before a program states it (a
@@ -34,14 +34,71 @@ pub struct StartSection {
     pub feed_mode: Option<ngc::StartFeed>,
 }
 
+/// The `kinematics` key: a named layout (`"trt-ac"`) or a `[kinematics]` chain table
+/// (the kinematic-chains spec).
+#[derive(Clone, Debug)]
+pub enum KinematicsSpec {
+    Named(Layout),
+    Chain(ChainFile),
+}
+
+/// A `[kinematics]` table as written.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChainFile {
+    /// The axes that carry the workpiece, from the bed outward.
+    #[serde(default)]
+    pub table: Vec<String>,
+    /// The axes that carry the tool, from the bed outward.
+    #[serde(default)]
+    pub head: Vec<String>,
+    /// The spindle gauge point, machine frame, all axes at 0, mm.
+    #[serde(default, deserialize_with = "exact::array")]
+    pub gauge_point_mm: [f64; 3],
+    /// Unit vector from the tool tip toward the spindle, all axes at 0.
+    #[serde(default = "default_tool_direction", deserialize_with = "exact::array")]
+    pub tool_direction: [f64; 3],
+}
+
+fn default_tool_direction() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+
+impl<'de> Deserialize<'de> for KinematicsSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct Spec;
+        impl<'de> serde::de::Visitor<'de> for Spec {
+            type Value = KinematicsSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a layout name such as \"trt-ac\" or a [kinematics] table")
+            }
+            fn visit_str<E: serde::de::Error>(
+                self,
+                v: &str,
+            ) -> std::result::Result<Self::Value, E> {
+                Layout::deserialize(serde::de::value::StrDeserializer::<E>::new(v))
+                    .map(KinematicsSpec::Named)
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> std::result::Result<Self::Value, A::Error> {
+                ChainFile::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(KinematicsSpec::Chain)
+            }
+        }
+        d.deserialize_any(Spec)
+    }
+}
+
 /// A machine file as written.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MachineFile {
     /// Free text.
     pub name: String,
-    /// "xyz", "trt-ac" or "trt-bc".
-    pub kinematics: Layout,
+    /// A named layout ("xyz", "trt-ac", ...) or a `[kinematics]` chain.
+    pub kinematics: KinematicsSpec,
     /// Machine coordinates of the pivot (where the rotary axes cross), mm.
     #[serde(default, deserialize_with = "exact::array")]
     pub pivot_mm: [f64; 3],
@@ -108,6 +165,13 @@ pub struct AxisConfig {
     pub max_acceleration: f64,
     /// Jerk limit, mm/s^3 or deg/s^3.
     pub max_jerk: f64,
+    /// Chains only: unit vector of the axis (rotary: its line; linear: its motion), at
+    /// home; default its letter's (X, U, A: +X; Y, V, B: +Y; Z, W, C: +Z).
+    #[serde(default, deserialize_with = "exact::option_array")]
+    pub direction: Option<[f64; 3]>,
+    /// Chains only, rotary axes: a point on the axis line at home, mm; default the origin.
+    #[serde(default, deserialize_with = "exact::option_array")]
+    pub point_mm: Option<[f64; 3]>,
     #[serde(default)]
     pub servo: ServoConfig,
     #[serde(default)]
@@ -205,6 +269,8 @@ impl Machine {
     }
 
     fn validate(path: &Path, text: &str, file: MachineFile, tables_file: &Path) -> Result<Machine> {
+        let kinematics = kinematics_of(path, text, &file)?;
+        let layout = kinematics.layout;
         let mut axes = BTreeMap::new();
         for (name, config) in file.axes {
             let section = format!("axes.{name}");
@@ -212,11 +278,11 @@ impl Machine {
                 [c] => Axis::from_letter(*c),
                 _ => None,
             };
-            let Some(axis) = axis.filter(|a| file.kinematics.axes().contains(a)) else {
+            let Some(axis) = axis.filter(|a| layout.axes().contains(a)) else {
                 let message = format!(
                     "the {} layout has no axis `{name}`; expected one of {}",
-                    file.kinematics.name(),
-                    axis_list(file.kinematics)
+                    layout.name(),
+                    axis_list(layout)
                 );
                 return Err(match toml_text::locate_key_header(text, &section) {
                     Some(span) => Error::at(path, text, span, message, "unknown axis"),
@@ -226,14 +292,14 @@ impl Machine {
             check_axis(path, text, &section, axis, &config)?;
             axes.insert(axis, config);
         }
-        for axis in file.kinematics.axes() {
+        for axis in layout.axes() {
             if !axes.contains_key(axis) {
                 return Err(Error::invalid(
                     path,
                     format!(
                         "missing table [axes.{axis}]: the {} layout needs axes {}",
-                        file.kinematics.name(),
-                        axis_list(file.kinematics)
+                        layout.name(),
+                        axis_list(layout)
                     ),
                 ));
             }
@@ -263,7 +329,7 @@ impl Machine {
         let geometry = geometry_errors::validate(
             path,
             text,
-            file.kinematics,
+            layout,
             &file.location_errors,
             &file.error_tables,
             tables_file.parent().unwrap_or(Path::new(".")),
@@ -271,8 +337,7 @@ impl Machine {
         Ok(Machine {
             name: file.name,
             path: path.to_path_buf(),
-            kinematics: Kinematics::new(file.kinematics, Vector3::from(file.pivot_mm))
-                .with_location_errors(geometry.location),
+            kinematics: kinematics.with_location_errors(geometry.location),
             geometry,
             interpolation_period_s: file.interpolation_period_ms * 1e-3,
             axes,
@@ -313,6 +378,99 @@ impl Machine {
     pub fn has_axis(&self, axis: Axis) -> bool {
         self.axes.contains_key(&axis)
     }
+}
+
+/// The machine's kinematics: its named layout, or its `[kinematics]` chain (run as the
+/// named layout it is written as, if any).
+fn kinematics_of(path: &Path, text: &str, file: &MachineFile) -> Result<Kinematics> {
+    let chain = match &file.kinematics {
+        KinematicsSpec::Named(layout) => {
+            for (name, config) in &file.axes {
+                let key = match (config.direction, config.point_mm) {
+                    (Some(_), _) => "direction",
+                    (None, Some(_)) => "point_mm",
+                    (None, None) => continue,
+                };
+                return Err(value_error(
+                    path,
+                    text,
+                    &format!("axes.{name}"),
+                    key,
+                    format!(
+                        "only a [kinematics] chain takes axis directions and points; the {} layout fixes them",
+                        layout.name()
+                    ),
+                ));
+            }
+            return Ok(Kinematics::new(*layout, Vector3::from(file.pivot_mm)));
+        }
+        KinematicsSpec::Chain(chain) => chain,
+    };
+    if file.pivot_mm != [0.0; 3] {
+        return Err(value_error(
+            path,
+            text,
+            "",
+            "pivot_mm",
+            "a [kinematics] chain places its rotary lines by their `point_mm`; remove `pivot_mm`"
+                .into(),
+        ));
+    }
+    let link = |key: &str, name: &String| -> Result<Link> {
+        let fail = |message: String| value_error(path, text, "kinematics", key, message);
+        let axis = match name.chars().collect::<Vec<_>>().as_slice() {
+            [c] => Axis::from_letter(*c),
+            _ => None,
+        }
+        .ok_or_else(|| {
+            fail(format!(
+                "`{name}` is not an axis letter (X Y Z A B C U V W)"
+            ))
+        })?;
+        let config = file.axes.get(name).ok_or_else(|| {
+            fail(format!(
+                "axis {name} of the chain has no [axes.{name}] table"
+            ))
+        })?;
+        let home = match axis {
+            Axis::X | Axis::U | Axis::A => Vector3::x(),
+            Axis::Y | Axis::V | Axis::B => Vector3::y(),
+            _ => Vector3::z(),
+        };
+        let direction = config.direction.map_or(home, Vector3::from);
+        if axis.is_rotary() {
+            let point = config.point_mm.map_or(Vector3::zeros(), Vector3::from);
+            Ok(Link::rotary(axis, direction, point))
+        } else if config.point_mm.is_some() {
+            Err(value_error(
+                path,
+                text,
+                &format!("axes.{name}"),
+                "point_mm",
+                "a linear axis has no line to place; remove `point_mm`".into(),
+            ))
+        } else {
+            Ok(Link::linear(axis, direction))
+        }
+    };
+    let table = chain
+        .table
+        .iter()
+        .map(|n| link("table", n))
+        .collect::<Result<Vec<_>>>()?;
+    let head = chain
+        .head
+        .iter()
+        .map(|n| link("head", n))
+        .collect::<Result<Vec<_>>>()?;
+    let chain = Chain::new(
+        &table,
+        &head,
+        Vector3::from(chain.gauge_point_mm),
+        Vector3::from(chain.tool_direction),
+    )
+    .map_err(|e| value_error(path, text, "kinematics", "head", e.0))?;
+    Ok(Kinematics::from_chain(chain))
 }
 
 fn axis_list(layout: Layout) -> String {

@@ -508,6 +508,9 @@ fn refuse_what_the_layout_cannot_give(
     machine: &Machine,
 ) -> Result<()> {
     let layout = machine.kinematics.layout;
+    if let Some(chain) = &machine.kinematics.general {
+        return refuse_what_a_chain_cannot_give(path, file, program, machine, chain);
+    }
     if matches!(program, Program::Cone { .. }) && layout.tilt_axis().is_none() {
         return Err(Error::invalid(
             path,
@@ -561,6 +564,66 @@ fn refuse_what_the_layout_cannot_give(
         .with_help("leave out [ballbar], [program.cone], [program.circle] and TCP: axis limits, timing and the trace are computed on every axis")),
         None => Ok(()),
     }
+}
+
+/// [`refuse_what_the_layout_cannot_give`] on a general `[kinematics]` chain: the cone
+/// needs every pose within the chain's reach; TCP, the circular test and the collision scene
+/// do not run on general chains yet.
+fn refuse_what_a_chain_cannot_give(
+    path: &Path,
+    file: &ScenarioFile,
+    program: &Program,
+    machine: &Machine,
+    chain: &crate::kinematics::Chain,
+) -> Result<()> {
+    let refuse = |what: &str, help: &str| {
+        Err(Error::invalid(
+            path,
+            format!(
+                "{what} does not run on a general [kinematics] chain yet ({})",
+                machine.path.display()
+            ),
+        )
+        .with_help(help.to_string()))
+    };
+    if file.check.collisions {
+        return refuse(
+            "the collision scene ([check] collisions = true, the default)",
+            "set [check] collisions = false: axis limits are still checked",
+        );
+    }
+    if file.reader.tcp || file.simulate.tcp {
+        return refuse(
+            "tool-centre-point control (TCP: [reader] tcp or [simulate] tcp)",
+            "program the machine's own axes, or generate the cone ([program.cone])",
+        );
+    }
+    if file.program.circle.is_some() {
+        return refuse(
+            "the circular test ([program.circle])",
+            "use [program.cone], or a G-code `file` with [ballbar] pivot_mm",
+        );
+    }
+    if let Program::Cone { cone, .. } = program {
+        let poses = cone.poses();
+        let unreachable = (0..360).find_map(|k| {
+            let pose = poses.pose((k as f64).to_radians());
+            crate::kinematics::chain_inverse::solutions(chain, &pose, 0.0, &crate::AxisVec::ZERO)
+                .err()
+                .map(|e| format!("at θ = {k} deg: {e}"))
+        });
+        if let Some(why) = unreachable {
+            return Err(Error::invalid(
+                path,
+                format!(
+                    "[program.cone] cannot be generated on {}: {why}",
+                    machine.path.display()
+                ),
+            )
+            .with_help("a smaller half apex angle or inclination keeps the tool within the rotaries' reach"));
+        }
+    }
+    Ok(())
 }
 
 /// The text of a file a LinuxCNC configuration names, `None` when it does not exist (LinuxCNC

@@ -94,6 +94,18 @@ pub fn bar_sensitivity_at(
     length_mm: f64,
 ) -> AxisVec {
     let mut s = AxisVec::ZERO;
+    if kin.general.is_some() {
+        // A general chain: every axis by the central difference of the chain's reading.
+        for &a in axes {
+            let (mut up, mut down) = (*q, *q);
+            up[a] += DIFF_STEP;
+            down[a] -= DIFF_STEP;
+            s[a] = (deviation_mm(kin, &up, pivot_table_mm, length_mm)
+                - deviation_mm(kin, &down, pivot_table_mm, length_mm))
+                / (2.0 * DIFF_STEP);
+        }
+        return s;
+    }
     let base = *base;
     // The table ball moves with the rotary axes only: one evaluation serves the linear ones
     // (the same arithmetic as `deviation_mm`; on the nominal chain that of

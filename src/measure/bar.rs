@@ -16,6 +16,13 @@ pub fn deviation_mm(
     pivot_table_mm: &Point3<f64>,
     length_mm: f64,
 ) -> f64 {
+    if let Some(chain) = &kin.general {
+        // A general chain: the tool ball at the gauge point (tool length 0) carried by the
+        // head, the table ball carried by the table (the kinematic-chains spec).
+        let (tool, _) = chain.tool_in_machine(q_actual, 0.0);
+        let pivot = chain.table_pose(q_actual) * pivot_table_mm;
+        return (tool - pivot).norm() - length_mm;
+    }
     let tool = Point3::new(q_actual[Axis::X], q_actual[Axis::Y], q_actual[Axis::Z]);
     let pivot = kin.actual_table_to_machine(q_actual, pivot_table_mm);
     (tool - pivot).norm() - length_mm

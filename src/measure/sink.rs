@@ -67,7 +67,7 @@ impl BarGeometry {
     /// What the bar reads at sample `s`.
     pub fn read(&self, s: &Sample) -> BarReading {
         let kin = &self.kinematics;
-        if !kin.location_errors.is_zero() {
+        if !kin.location_errors.is_zero() || kin.general.is_some() {
             let dev = |q| deviation_mm(kin, q, &self.pivot_table_mm, self.length_mm) * 1e3;
             let deviation_um = dev(&s.actual);
             let (theta_deg, theta_sin_cos) =

@@ -278,7 +278,13 @@ const SAMPLES: usize = 16;
 fn table_to_machine(k: &Kinematics, q: &AxisVec, p: [f64; 3]) -> [f64; 3] {
     let [x, y, z] = p;
     let (x, y, z) = match k.layout {
-        Layout::Xyz | Layout::Xz | Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw => (x, y, z),
+        // A general chain has no TCP here (refused on load), so no table rotation either.
+        Layout::Xyz
+        | Layout::Xz
+        | Layout::Xyzabc
+        | Layout::Xyuv
+        | Layout::Xyzabcuvw
+        | Layout::Chain(_) => (x, y, z),
         Layout::TrtAb | Layout::Xyza => {
             let m = k.table_rotation(q) * nalgebra::Vector3::new(x, y, z);
             (m.x, m.y, m.z)

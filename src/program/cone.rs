@@ -10,7 +10,7 @@ use crate::input::machine::Machine;
 use crate::input::program::{ConePoses, ConeTest, MeasuredLines, NcOptions};
 use crate::kinematics::{Branch, Kinematics, C_START_REFERENCE_DEG};
 use crate::program::{FeedMode, Motion, Move};
-use crate::{Axis, AxisVec};
+use crate::AxisVec;
 
 /// The cone path on one machine: axis positions as functions of θ on one IK branch.
 #[derive(Clone, Copy, Debug)]
@@ -33,21 +33,32 @@ impl ConePath {
             branch: Branch::Primary,
             poses: cone.poses(),
         };
-        if let Some(tilt) = kinematics.layout.tilt_axis() {
-            let limits = machine.axis(tilt);
-            let fits = |path: &ConePath| {
+        // The rotaries the branch must keep within travel: a general chain's all, else the tilt.
+        let fits = |path: &ConePath| match kinematics.general {
+            Some(chain) => {
+                let mut q = path.start();
                 (0..360).all(|k| {
-                    limits.within_travel(path.axes_near((k as f64).to_radians(), 0.0)[tilt])
+                    q = path.axes_after((k as f64).to_radians(), &q);
+                    chain
+                        .rotaries()
+                        .all(|(_, l)| machine.axis(l.axis).within_travel(q[l.axis]))
                 })
+            }
+            None => kinematics.layout.tilt_axis().is_none_or(|tilt| {
+                (0..360).all(|k| {
+                    machine
+                        .axis(tilt)
+                        .within_travel(path.axes_near((k as f64).to_radians(), 0.0)[tilt])
+                })
+            }),
+        };
+        if !fits(&path) {
+            let other = ConePath {
+                branch: Branch::Secondary,
+                ..path
             };
-            if !fits(&path) {
-                let other = ConePath {
-                    branch: Branch::Secondary,
-                    ..path
-                };
-                if fits(&other) {
-                    path = other;
-                }
+            if fits(&other) {
+                path = other;
             }
         }
         path
@@ -59,8 +70,18 @@ impl ConePath {
             .inverse(&self.poses.pose(theta_rad), self.branch, reference_c_deg)
     }
 
+    /// Axis positions at `theta_rad`, each rotary unwrapped nearest its value in
+    /// `previous` ([`Kinematics::inverse_after`]).
+    pub fn axes_after(&self, theta_rad: f64, previous: &AxisVec) -> AxisVec {
+        self.kinematics
+            .inverse_after(&self.poses.pose(theta_rad), self.branch, previous)
+    }
+
     /// Axis positions at θ = 0, with C in the spec's atan2 range.
     pub fn start(&self) -> AxisVec {
+        if self.kinematics.general.is_some() {
+            return self.axes_after(0.0, &AxisVec::ZERO);
+        }
         self.axes_near(0.0, C_START_REFERENCE_DEG)
     }
 
@@ -72,13 +93,13 @@ impl ConePath {
         span_rad: f64,
         n: usize,
     ) -> impl Iterator<Item = (f64, AxisVec)> {
-        // The table axis: C, or A on a trt-ab machine.
-        let table = self.kinematics.layout.table_axis().unwrap_or(Axis::C);
-        let mut previous_c = self.axes_near(theta0_rad, C_START_REFERENCE_DEG)[table];
+        // Each pose continuous from the one before (on a named layout: its table axis, C or
+        // trt-ab's A, from the spec's atan2 range at the start).
+        let mut previous = self.axes_after(theta0_rad, &AxisVec::ZERO);
         (0..=n).map(move |k| {
             let theta = theta0_rad + span_rad * k as f64 / n as f64;
-            let q = self.axes_near(theta, previous_c);
-            previous_c = q[table];
+            let q = self.axes_after(theta, &previous);
+            previous = q;
             (theta, q)
         })
     }
@@ -88,9 +109,8 @@ impl ConePath {
     /// path (truncation ~h⁴q⁽⁵⁾/30 ≈ 1e-11, far below the 0.01 deg the analysis needs).
     pub fn derivative(&self, theta_rad: f64) -> AxisVec {
         const H: f64 = 1e-3;
-        let c0 =
-            self.axes_near(theta_rad, 0.0)[self.kinematics.layout.table_axis().unwrap_or(Axis::C)];
-        let q = |dt: f64| self.axes_near(theta_rad + dt, c0);
+        let q0 = self.axes_after(theta_rad, &AxisVec::ZERO);
+        let q = |dt: f64| self.axes_after(theta_rad + dt, &q0);
         (q(-2.0 * H) - q(-H) * 8.0 + q(H) * 8.0 - q(2.0 * H)) * (1.0 / (12.0 * H))
     }
 }

@@ -149,10 +149,7 @@ impl TestParameters {
     /// The parameters of `scenario`; `date` as given (None: not recorded).
     pub fn of(scenario: &Scenario, date: Option<String>) -> Result<TestParameters> {
         let machine = &scenario.machine;
-        let kinematics = serde_json::to_value(machine.kinematics.layout)
-            .ok()
-            .and_then(|v| v.as_str().map(str::to_string))
-            .unwrap_or_default();
+        let kinematics = machine.kinematics.describe();
         let sim = &scenario.simulate;
         let lead = Some(sim.lead_deg);
         let dirs = |d: &[crate::input::program::Direction]| {

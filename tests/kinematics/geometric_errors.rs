@@ -16,33 +16,33 @@ use nalgebra::{Point3, Vector3};
 
 // ---------- the independent reference: the spec's equations, nothing else ----------
 
-type V = [f64; 3];
+pub(crate) type V = [f64; 3];
 
-fn sub(a: V, b: V) -> V {
+pub(crate) fn sub(a: V, b: V) -> V {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
-fn add(a: V, b: V) -> V {
+pub(crate) fn add(a: V, b: V) -> V {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
-fn dot(a: V, b: V) -> f64 {
+pub(crate) fn dot(a: V, b: V) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
-fn cross(a: V, b: V) -> V {
+pub(crate) fn cross(a: V, b: V) -> V {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
 }
-fn scale(a: V, s: f64) -> V {
+pub(crate) fn scale(a: V, s: f64) -> V {
     [a[0] * s, a[1] * s, a[2] * s]
 }
-fn norm(a: V) -> f64 {
+pub(crate) fn norm(a: V) -> f64 {
     dot(a, a).sqrt()
 }
 
 /// Rodrigues: rotate `x` by `theta` (rad) about unit `u`, right-hand rule.
-fn rodrigues(u: V, theta: f64, x: V) -> V {
+pub(crate) fn rodrigues(u: V, theta: f64, x: V) -> V {
     let (s, c) = theta.sin_cos();
     add(
         add(scale(x, c), scale(cross(u, x), s)),

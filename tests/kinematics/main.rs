@@ -4,8 +4,11 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod chain_cone;
+mod chains;
 mod geometric_errors;
 mod round_trips;
 mod trivial;
 mod trt_ab;
 mod uvw;
+mod written_out;

@@ -750,9 +750,13 @@ fn measure(scene: &Scene, i: usize, poses: &mut BodyPoses, warm: &mut Warm) -> f
 fn in_table_frames(k: &Kinematics, q: &AxisVec, u: Vector3<f64>) -> [Vector3<f64>; 2] {
     use crate::kinematics::Layout;
     let cradle = match k.layout {
-        Layout::Xyz | Layout::Xz | Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw => {
-            return [u, u]
-        }
+        // A general chain has no collision scene yet (refused on load).
+        Layout::Xyz
+        | Layout::Xz
+        | Layout::Xyzabc
+        | Layout::Xyuv
+        | Layout::Xyzabcuvw
+        | Layout::Chain(_) => return [u, u],
         Layout::Xyza => {
             // Rx(A)^T u; no cradle.
             let (s, c) = q[Axis::A].to_radians().sin_cos();

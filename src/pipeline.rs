@@ -18,6 +18,7 @@ use crate::error::Result;
 use crate::input::budget;
 use crate::input::machine::Machine;
 use crate::kinematics::error_table::PositionErrors;
+use crate::motion::feed_held::FeedReduction;
 use crate::motion::interpolation::{InterpolationOptions, Interpolator};
 use crate::motion::sampling::NominalSampler;
 use crate::program::Moves;
@@ -86,11 +87,13 @@ pub struct RunOptions {
 }
 
 /// What a run did.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunStats {
     pub samples: u64,
     /// Time of the last sample, s (including `start_time_s`).
     pub end_time_s: f64,
+    /// Feed blocks the planner ran below their F word, per axis and limit (planned timing).
+    pub feed_reductions: Vec<FeedReduction>,
 }
 
 /// Runs `moves` on `machine` and hands every sample to each sink in turn. `progress` is told
@@ -106,6 +109,7 @@ pub fn run(
     let mut stats = RunStats {
         samples: 0,
         end_time_s: t0,
+        feed_reductions: Vec::new(),
     };
     // Position-dependent errors of the axes (pitch, worm gear), for their direction of motion.
     let mut position_errors = machine.geometry.position_errors();
@@ -184,6 +188,7 @@ pub fn run(
                 next = setpoints.next().transpose()?;
                 k += 1;
             }
+            stats.feed_reductions = setpoints.feed_reductions();
             // The setpoints end at rest, the axes not yet: hold the last setpoint until
             // every axis has settled, for at most SETTLE_S.
             if settle {

@@ -10,6 +10,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::input::exact;
+use crate::input::lead_in::LeadIn;
 use crate::input::machine::Machine;
 use crate::input::program::{CircleTest, ConeTest, Direction, NcOptions};
 use crate::input::scene::{ConeSetup, ToolConfig, ToolShape, WorkpieceConfig, WorkpieceKind};
@@ -153,7 +154,13 @@ pub struct SimulateSection {
     pub trace_format: TraceFormat,
     /// Path before and after the measured revolution, deg, so that the trace leaves out the
     /// start and stop transients.
+    /// A circle test sizes it from the feed, the axes' limits and the servo loops when the
+    /// scenario does not give it ([`LeadIn`]).
     pub lead_deg: f64,
+    /// A circle test's lead-in, as run (set when the scenario is loaded; none for a cone or
+    /// a file).
+    #[serde(skip)]
+    pub lead_in: Option<LeadIn>,
     /// For a file program: the source lines (first, last) whose blocks the ball bar
     /// measures; every block after the first when absent.
     #[serde(deserialize_with = "exact::option_array")]
@@ -170,6 +177,7 @@ impl Default for SimulateSection {
             trace_every: 1,
             trace_format: TraceFormat::Csv,
             lead_deg: 20.0,
+            lead_in: None,
             measure_lines: None,
             max_samples: DEFAULT_MAX_SAMPLES,
         }
@@ -444,6 +452,15 @@ impl Scenario {
         }
         refuse_what_the_layout_cannot_give(path, &file, &program, &machine)?;
         let reader = reader_options(path, &text, &file.reader, &machine)?;
+        let mut simulate = file.simulate;
+        if let Program::Circle { circle, .. } = &program {
+            let lead = match toml_text::locate_key(&text, "simulate", "lead_deg") {
+                Some(_) => LeadIn::given(circle, &machine, simulate.lead_deg)?,
+                None => LeadIn::sized(circle, &machine)?,
+            };
+            simulate.lead_deg = lead.deg;
+            simulate.lead_in = Some(lead);
+        }
         let tool_shapes = file
             .reader
             .tools
@@ -457,7 +474,7 @@ impl Scenario {
             tool: file.tool.unwrap_or_else(|| machine.tool.clone()),
             machine,
             program,
-            simulate: file.simulate,
+            simulate,
             ballbar_pivot_mm: file.ballbar.pivot_mm.map(Vector3::from),
             workpiece,
             check: file.check,

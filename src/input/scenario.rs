@@ -297,6 +297,36 @@ pub struct Scenario {
     pub tool_shapes: std::collections::BTreeMap<u32, ToolShape>,
 }
 
+/// `[simulate] tcp = true` applies only to a program written for tool-centre-point control:
+/// a generated cone without `[program.cone] tcp` and a circle test are joint-space programs
+/// (machine X Y Z), which TCP would read as tool-tip positions. A file is checked as it
+/// streams (`program::validate::checked`).
+fn refuse_tcp_on_a_joint_space_test(
+    path: &Path,
+    text: &str,
+    program: &Program,
+    tcp: bool,
+) -> Result<()> {
+    let why = match program {
+        _ if !tcp => return Ok(()),
+        Program::Cone { nc, .. } if !nc.tcp => {
+            "the generated cone is written in joint space (machine X Y Z A C); set \
+             [program.cone] tcp = true to generate its G43.4 program"
+        }
+        Program::Circle { .. } => {
+            "the circle test is written in machine X Y Z with the rotary axes at rest (joint space)"
+        }
+        _ => return Ok(()),
+    };
+    Err(value_error(
+        path,
+        text,
+        "simulate",
+        "tcp",
+        format!("applies only to programs written for tool-centre-point control: {why}"),
+    ))
+}
+
 impl Scenario {
     pub fn load(path: &Path) -> Result<Scenario> {
         let text = toml_text::read_text(path)?;
@@ -452,6 +482,7 @@ impl Scenario {
         }
         refuse_what_the_layout_cannot_give(path, &file, &program, &machine)?;
         let reader = reader_options(path, &text, &file.reader, &machine)?;
+        refuse_tcp_on_a_joint_space_test(path, &text, &program, file.simulate.tcp)?;
         let mut simulate = file.simulate;
         if let Program::Circle { circle, .. } = &program {
             let lead = match toml_text::locate_key(&text, "simulate", "lead_deg") {

@@ -5,10 +5,11 @@
 //!   (program)         (motion)       (drive)               (measure, check, report)
 //! ```
 //!
-//! Two timings feed it. *Programmed*: the moves sampled at the time their words ask for,
-//! with no planning and no servo (what the program demands, for `check`). *Planned*: the
-//! look-ahead interpolator and the servo models (what the machine does, for `simulate` and
-//! `check --dynamics`). Every stage streams: one move, one setpoint, one sample at a time,
+//! Three timings feed it. *Programmed*: the moves sampled at the time their words ask for,
+//! with no planning and no servo (what the program demands, `check --programmed`).
+//! *Setpoints*: the look-ahead interpolator alone (what the control commands, `check`).
+//! *Planned*: the interpolator and the servo models (what the machine does, for `simulate`
+//! and `check --dynamics`). Every stage streams: one move, one setpoint, one sample at a time,
 //! so memory does not grow with the program. No stage reaches back.
 
 use std::path::PathBuf;
@@ -58,6 +59,8 @@ pub trait Sink {
 pub enum Timing {
     /// At the timing the program's words ask for; no planning, no servo.
     Programmed,
+    /// The look-ahead interpolator's setpoints, as the control commands them; no servo.
+    Setpoints,
     /// Look-ahead interpolation and the servo models.
     Planned {
         /// Also run the linear twins, for [`Sample::linear`].
@@ -141,15 +144,38 @@ pub fn run(
             &mut emit,
             &mut stats,
         )?,
-        Timing::Planned { twins, settle } => {
-            let interpolation = InterpolationOptions {
-                force_tcp: options.force_tcp,
-                program_path: options.program_path.clone(),
-                ..InterpolationOptions::default()
+        Timing::Setpoints => {
+            let mut setpoints = Interpolator::new(moves, machine, interpolation(options))?;
+            let mut sample = Sample {
+                index: 0,
+                time_s: t0,
+                line: 0,
+                block_index: 0,
+                commanded: AxisVec::ZERO,
+                actual: AxisVec::ZERO,
+                following_error: AxisVec::ZERO,
+                linear: AxisVec::ZERO,
             };
+            let mut k = 0u64;
+            while let Some(sp) = setpoints.next().transpose()? {
+                sample.index = k;
+                sample.time_s = t0 + sp.time_s;
+                sample.line = sp.line;
+                sample.block_index = sp.block_index;
+                sample.commanded = sp.q;
+                sample.actual = sp.q;
+                position_errors.apply_in_place(&mut sample.actual);
+                sample.linear = sp.q;
+                position_errors.apply_mean_in_place(&mut sample.linear);
+                emit(&sample, &mut stats)?;
+                k += 1;
+            }
+            stats.feed_reductions = setpoints.feed_reductions();
+        }
+        Timing::Planned { twins, settle } => {
             // One setpoint at a time, moved as little as possible (no `Peekable` or
             // `Enumerate` layers: each is another copy of the setpoint and its `Result`).
-            let mut setpoints = Interpolator::new(moves, machine, interpolation)?;
+            let mut setpoints = Interpolator::new(moves, machine, interpolation(options))?;
             let Some(first) = setpoints.next().transpose()? else {
                 return Ok(stats);
             };
@@ -212,6 +238,15 @@ pub fn run(
         }
     }
     Ok(stats)
+}
+
+/// The interpolator's options for a run.
+fn interpolation(options: &RunOptions) -> InterpolationOptions {
+    InterpolationOptions {
+        force_tcp: options.force_tcp,
+        program_path: options.program_path.clone(),
+        ..InterpolationOptions::default()
+    }
 }
 
 /// One interpolation period of the drives (and of their linear twins) towards

@@ -2,13 +2,13 @@
 //! feed blocks the planner ran below their F word, and how far (memory bounded by the axes,
 //! not by the program).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::motion::interpolation::{FeedLimit, LimitKind};
 use crate::Axis;
 
 /// Feed blocks held below their F word by one axis's limit.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FeedReduction {
     /// The axis whose limit binds, and which limit.
     pub axis: Axis,

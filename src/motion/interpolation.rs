@@ -139,7 +139,7 @@ pub struct InterpolationOptions {
 }
 
 /// Which axis limit holds a block's feed below its F word.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum LimitKind {
     /// The axis's maximum velocity: `v ≤ vmax_i / |q'_i|`.

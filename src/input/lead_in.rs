@@ -140,7 +140,11 @@ impl LeadIn {
             accel_time_s,
             settle_time_s,
             time_constant_s: tau,
-            speed_mm_min: speed * 60.0,
+            speed_mm_min: if speed == circle.feed_mm_min / 60.0 {
+                circle.feed_mm_min
+            } else {
+                speed * 60.0
+            },
             sized: false,
         })
     }

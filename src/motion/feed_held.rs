@@ -1,11 +1,38 @@
-//! The feed held to the machine, summarised: for each axis and each of its limits, how many
-//! feed blocks the planner ran below their F word, and how far (memory bounded by the axes,
-//! not by the program).
+//! The feed held to the machine: a feed block the planner runs below its F word, the axis
+//! limit that holds it ([`FeedLimit`]), and those summarised per axis and limit
+//! ([`FeedReductions`]: memory bounded by the axes, not by the program).
 
 use serde::{Deserialize, Serialize};
 
-use crate::motion::interpolation::{FeedLimit, LimitKind};
 use crate::Axis;
+
+/// Which axis limit holds a block's feed below its F word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LimitKind {
+    /// The axis's maximum velocity: `v ≤ vmax_i / |q'_i|`.
+    Velocity,
+    /// The axis's maximum acceleration through the path's curvature: `v² |q''_i| ≤ ½ amax_i`.
+    Acceleration,
+    /// The axis's maximum jerk through the path's curvature at constant speed:
+    /// `v³ |q'''_i| ≤ ⅓ jmax_i`.
+    Jerk,
+}
+
+/// A feed block planned below its programmed speed: the feed held to the machine.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FeedLimit {
+    /// Source line and 0-based position of the block.
+    pub line: usize,
+    pub block_index: u64,
+    /// The axis whose limit binds, and which limit.
+    pub axis: Axis,
+    pub limit: LimitKind,
+    /// The programmed path speed and the cruise speed the block is planned at, per minute in
+    /// path units (mm, deg counted as mm in mixed moves, the tool tip under TCP).
+    pub programmed_per_min: f64,
+    pub planned_per_min: f64,
+}
 
 /// Feed blocks held below their F word by one axis's limit.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

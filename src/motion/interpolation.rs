@@ -100,6 +100,7 @@ use nalgebra::Point3;
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::kinematics::{Kinematics, Layout};
+pub use crate::motion::feed_held::{FeedLimit, LimitKind};
 use crate::motion::feed_held::{FeedReduction, FeedReductions};
 use crate::program::{FeedMode, Motion, Move, PathControl};
 use crate::Plane;
@@ -136,34 +137,6 @@ pub struct InterpolationOptions {
     /// Keep a [`FeedLimit`] for every feed block that runs slower than its F word
     /// ([`Interpolator::take_feed_limits`]); off by default (memory would grow with them).
     pub record_feed_limits: bool,
-}
-
-/// Which axis limit holds a block's feed below its F word.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum LimitKind {
-    /// The axis's maximum velocity: `v ≤ vmax_i / |q'_i|`.
-    Velocity,
-    /// The axis's maximum acceleration through the path's curvature: `v² |q''_i| ≤ ½ amax_i`.
-    Acceleration,
-    /// The axis's maximum jerk through the path's curvature at constant speed:
-    /// `v³ |q'''_i| ≤ ⅓ jmax_i`.
-    Jerk,
-}
-
-/// A feed block planned below its programmed speed: the feed held to the machine.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct FeedLimit {
-    /// Source line and 0-based position of the block.
-    pub line: usize,
-    pub block_index: u64,
-    /// The axis whose limit binds, and which limit.
-    pub axis: Axis,
-    pub limit: LimitKind,
-    /// The programmed path speed and the cruise speed the block is planned at, per minute in
-    /// path units (mm, deg counted as mm in mixed moves, the tool tip under TCP).
-    pub programmed_per_min: f64,
-    pub planned_per_min: f64,
 }
 
 impl Default for InterpolationOptions {

@@ -49,6 +49,23 @@ pub struct Sample {
     pub linear: AxisVec,
 }
 
+impl Sample {
+    /// A sample at time `t0` (s) with every position zero, to be written in place.
+    #[inline(always)]
+    fn blank(t0: f64) -> Sample {
+        Sample {
+            index: 0,
+            time_s: t0,
+            line: 0,
+            block_index: 0,
+            commanded: AxisVec::ZERO,
+            actual: AxisVec::ZERO,
+            following_error: AxisVec::ZERO,
+            linear: AxisVec::ZERO,
+        }
+    }
+}
+
 /// A consumer of samples: the ball bar, the limits monitor, the collision scene, the trace.
 pub trait Sink {
     fn push(&mut self, sample: &Sample) -> Result<()>;
@@ -146,16 +163,7 @@ pub fn run(
         )?,
         Timing::Setpoints => {
             let mut setpoints = Interpolator::new(moves, machine, interpolation(options))?;
-            let mut sample = Sample {
-                index: 0,
-                time_s: t0,
-                line: 0,
-                block_index: 0,
-                commanded: AxisVec::ZERO,
-                actual: AxisVec::ZERO,
-                following_error: AxisVec::ZERO,
-                linear: AxisVec::ZERO,
-            };
+            let mut sample = Sample::blank(t0);
             let mut k = 0u64;
             while let Some(sp) = setpoints.next().transpose()? {
                 sample.index = k;
@@ -327,16 +335,7 @@ fn run_programmed_inline(
     emit: &mut Emit<'_>,
     stats: &mut RunStats,
 ) -> Result<()> {
-    let mut sample = Sample {
-        index: 0,
-        time_s: t0,
-        line: 0,
-        block_index: 0,
-        commanded: AxisVec::ZERO,
-        actual: AxisVec::ZERO,
-        following_error: AxisVec::ZERO,
-        linear: AxisVec::ZERO,
-    };
+    let mut sample = Sample::blank(t0);
     let mut sampler = NominalSampler::new(moves, machine, machine.interpolation_period_s);
     let mut k = 0u64;
     while let Some(at) = sampler.next_into(&mut sample.commanded)? {

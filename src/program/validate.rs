@@ -129,34 +129,35 @@ impl<I> Checked<I> {
             .unwrap_or_default()
     }
 
+    /// An error pointing at the whole source line of `m`.
+    fn line_error(&self, m: &Move, message: String, label: &str) -> Error {
+        let text = self.text();
+        let span = line_span(&text, m.line);
+        Error::at(&self.path, &text, span, message, label)
+    }
+
     fn check(&mut self, m: &Move) -> Result<()> {
         if let (Some((layout, why)), true) = (self.no_tcp, m.tcp) {
-            let text = self.text();
-            let span = line_span(&text, m.line);
-            return Err(Error::at(
-                &self.path,
-                &text,
-                span,
-                format!(
-                    "this move runs under tool-centre-point control (TCP), which this machine \
-                     ({layout} layout) cannot give: {why}"
-                ),
-                "TCP on",
-            )
-            .with_help("leave TCP off on this machine (no G43.4, no `tcp-on` user M code)"));
+            let message = format!(
+                "this move runs under tool-centre-point control (TCP), which this machine \
+                 ({layout} layout) cannot give: {why}"
+            );
+            return Err(self
+                .line_error(m, message, "TCP on")
+                .with_help("leave TCP off on this machine (no G43.4, no `tcp-on` user M code)"));
         }
         if self.written_for_tcp && !m.tcp && matches!(m.motion, Motion::Linear | Motion::Arc { .. })
         {
-            let text = self.text();
-            let span = line_span(&text, m.line);
-            return Err(Error::at(
-                &self.path,
-                &text,
-                span,
-                "[simulate] tcp = true applies only to programs written for tool-centre-point                  control, but this feed move runs in joint space (no G43.4, G234, M128 or TRAORI                  active): tcp would read its machine X Y Z as tool-tip positions and run another                  motion",
-                "joint-space move",
-            )
-            .with_help("remove `tcp = true` from [simulate] for a joint-space program, or switch TCP on before the first feed move"));
+            let message = "[simulate] tcp = true applies only to programs written for \
+                           tool-centre-point control, but this feed move runs in joint space (no \
+                           G43.4, G234, M128 or TRAORI active): tcp would read its machine X Y Z \
+                           as tool-tip positions and run another motion";
+            return Err(self
+                .line_error(m, message.to_string(), "joint-space move")
+                .with_help(
+                    "remove `tcp = true` from [simulate] for a joint-space program, or switch \
+                     TCP on before the first feed move",
+                ));
         }
         for &(axis, envelope, min, max) in &self.limits {
             let (from, to) = (m.start[axis], m.end[axis]);

@@ -1115,11 +1115,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 for (i, l) in self.limits.iter().enumerate() {
                     let Some(l) = l else { continue };
                     let jump = (rho * tangent_start.0[i] - prev.tangent.0[i]).abs();
-                    // The S-curves beside the junction end and start at zero path
-                    // acceleration, but within the period that holds the junction the axis
-                    // may still accelerate by up to `jmax T`: keep that out of the step.
-                    let room = (l.acceleration - l.jerk * self.period_s).max(0.5 * l.acceleration);
-                    let allowed = share * room * self.period_s;
+                    let allowed = share * l.acceleration * self.period_s;
                     if jump * mu > allowed {
                         mu = allowed / jump;
                     }

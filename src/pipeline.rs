@@ -171,10 +171,7 @@ pub fn run(
                 sample.line = sp.line;
                 sample.block_index = sp.block_index;
                 sample.commanded = sp.q;
-                sample.actual = sp.q;
-                position_errors.apply_in_place(&mut sample.actual);
-                sample.linear = sp.q;
-                position_errors.apply_mean_in_place(&mut sample.linear);
+                at_commanded(&mut sample, &mut position_errors);
                 emit(&sample, &mut stats)?;
                 k += 1;
             }
@@ -288,6 +285,16 @@ fn drive_sample(
     Ok(settled)
 }
 
+/// A sample without a servo: the table at the setpoint, with the position errors for its
+/// direction of motion (`actual`) and their mean (`linear`).
+#[inline(always)]
+fn at_commanded(sample: &mut Sample, errors: &mut PositionErrors) {
+    sample.actual = sample.commanded;
+    errors.apply_in_place(&mut sample.actual);
+    sample.linear = sample.commanded;
+    errors.apply_mean_in_place(&mut sample.linear);
+}
+
 /// The emitter of [`run`]: hands a sample to every sink and counts it.
 type Emit<'e> = dyn FnMut(&Sample, &mut RunStats) -> Result<()> + 'e;
 
@@ -343,10 +350,7 @@ fn run_programmed_inline(
         sample.time_s = t0 + at.time_s;
         sample.line = at.line;
         sample.block_index = at.block_index;
-        sample.actual = sample.commanded;
-        errors.apply_in_place(&mut sample.actual);
-        sample.linear = sample.commanded;
-        errors.apply_mean_in_place(&mut sample.linear);
+        at_commanded(&mut sample, errors);
         emit(&sample, stats)?;
         k += 1;
     }

@@ -13,7 +13,8 @@
 //! runs each case once over 20 ms of CPU (for CI); `MTSIM_BENCH_ONCE=1` makes each
 //! measurement one check (for `valgrind --tool=callgrind`); `MTSIM_BENCH_MIN_CPU_S=S` sets the
 //! CPU time a measurement spans (default 0.1 s); `MTSIM_BENCH_ONLY=45-30` runs only the cases
-//! whose name contains that text (the name is `scenario, variant`).
+//! whose name contains that text (the name is `scenario, variant`); `MTSIM_BENCH_PROGRAMMED=1`
+//! checks at programmed timing instead of the planner's (`check --programmed`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -133,6 +134,11 @@ fn main() {
     for (case, path) in cases {
         let scenario = Scenario::load(&path).unwrap();
         let mut rates = Vec::new();
+        let options = CheckOptions {
+            programmed: std::env::var("MTSIM_BENCH_PROGRAMMED")
+                .is_ok_and(|v| !v.is_empty() && v != "0"),
+            ..CheckOptions::default()
+        };
         let mut cpu_s = Vec::new();
         let mut report = None;
         for _ in 0..runs {
@@ -141,7 +147,7 @@ fn main() {
             let (t, mut n) = (cpu_now(), 0u32);
             let mut r;
             loop {
-                r = check(&scenario, &CheckOptions::default()).unwrap();
+                r = check(&scenario, &options).unwrap();
                 n += 1;
                 if once || cpu_now() - t >= min_cpu_s {
                     break;

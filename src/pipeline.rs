@@ -5,10 +5,11 @@
 //!   (program)         (motion)       (drive)               (measure, check, report)
 //! ```
 //!
-//! Two timings feed it. *Programmed*: the moves sampled at the time their words ask for,
-//! with no planning and no servo (what the program demands, for `check`). *Planned*: the
-//! look-ahead interpolator and the servo models (what the machine does, for `simulate` and
-//! `check --dynamics`). Every stage streams: one move, one setpoint, one sample at a time,
+//! Three timings feed it. *Programmed*: the moves sampled at the time their words ask for,
+//! with no planning and no servo (what the program demands, `check --programmed`).
+//! *Setpoints*: the look-ahead interpolator alone (what the control commands, `check`).
+//! *Planned*: the interpolator and the servo models (what the machine does, for `simulate`
+//! and `check --dynamics`). Every stage streams: one move, one setpoint, one sample at a time,
 //! so memory does not grow with the program. No stage reaches back.
 
 use std::path::PathBuf;
@@ -18,6 +19,7 @@ use crate::error::Result;
 use crate::input::budget;
 use crate::input::machine::Machine;
 use crate::kinematics::error_table::PositionErrors;
+use crate::motion::feed_held::FeedReduction;
 use crate::motion::interpolation::{InterpolationOptions, Interpolator};
 use crate::motion::sampling::NominalSampler;
 use crate::program::Moves;
@@ -47,6 +49,23 @@ pub struct Sample {
     pub linear: AxisVec,
 }
 
+impl Sample {
+    /// A sample at time `t0` (s) with every position zero, to be written in place.
+    #[inline(always)]
+    fn blank(t0: f64) -> Sample {
+        Sample {
+            index: 0,
+            time_s: t0,
+            line: 0,
+            block_index: 0,
+            commanded: AxisVec::ZERO,
+            actual: AxisVec::ZERO,
+            following_error: AxisVec::ZERO,
+            linear: AxisVec::ZERO,
+        }
+    }
+}
+
 /// A consumer of samples: the ball bar, the limits monitor, the collision scene, the trace.
 pub trait Sink {
     fn push(&mut self, sample: &Sample) -> Result<()>;
@@ -57,6 +76,8 @@ pub trait Sink {
 pub enum Timing {
     /// At the timing the program's words ask for; no planning, no servo.
     Programmed,
+    /// The look-ahead interpolator's setpoints, as the control commands them; no servo.
+    Setpoints,
     /// Look-ahead interpolation and the servo models.
     Planned {
         /// Also run the linear twins, for [`Sample::linear`].
@@ -86,11 +107,13 @@ pub struct RunOptions {
 }
 
 /// What a run did.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunStats {
     pub samples: u64,
     /// Time of the last sample, s (including `start_time_s`).
     pub end_time_s: f64,
+    /// Feed blocks the planner ran below their F word, per axis and limit (planned timing).
+    pub feed_reductions: Vec<FeedReduction>,
 }
 
 /// Runs `moves` on `machine` and hands every sample to each sink in turn. `progress` is told
@@ -106,6 +129,7 @@ pub fn run(
     let mut stats = RunStats {
         samples: 0,
         end_time_s: t0,
+        feed_reductions: Vec::new(),
     };
     // Position-dependent errors of the axes (pitch, worm gear), for their direction of motion.
     let mut position_errors = machine.geometry.position_errors();
@@ -137,15 +161,26 @@ pub fn run(
             &mut emit,
             &mut stats,
         )?,
+        Timing::Setpoints => {
+            let mut setpoints = Interpolator::new(moves, machine, interpolation(options))?;
+            let mut sample = Sample::blank(t0);
+            let mut k = 0u64;
+            while let Some(sp) = setpoints.next().transpose()? {
+                sample.index = k;
+                sample.time_s = t0 + sp.time_s;
+                sample.line = sp.line;
+                sample.block_index = sp.block_index;
+                sample.commanded = sp.q;
+                at_commanded(&mut sample, &mut position_errors);
+                emit(&sample, &mut stats)?;
+                k += 1;
+            }
+            stats.feed_reductions = setpoints.feed_reductions();
+        }
         Timing::Planned { twins, settle } => {
-            let interpolation = InterpolationOptions {
-                force_tcp: options.force_tcp,
-                program_path: options.program_path.clone(),
-                ..InterpolationOptions::default()
-            };
             // One setpoint at a time, moved as little as possible (no `Peekable` or
             // `Enumerate` layers: each is another copy of the setpoint and its `Result`).
-            let mut setpoints = Interpolator::new(moves, machine, interpolation)?;
+            let mut setpoints = Interpolator::new(moves, machine, interpolation(options))?;
             let Some(first) = setpoints.next().transpose()? else {
                 return Ok(stats);
             };
@@ -184,6 +219,7 @@ pub fn run(
                 next = setpoints.next().transpose()?;
                 k += 1;
             }
+            stats.feed_reductions = setpoints.feed_reductions();
             // The setpoints end at rest, the axes not yet: hold the last setpoint until
             // every axis has settled, for at most SETTLE_S.
             if settle {
@@ -207,6 +243,15 @@ pub fn run(
         }
     }
     Ok(stats)
+}
+
+/// The interpolator's options for a run.
+fn interpolation(options: &RunOptions) -> InterpolationOptions {
+    InterpolationOptions {
+        force_tcp: options.force_tcp,
+        program_path: options.program_path.clone(),
+        ..InterpolationOptions::default()
+    }
 }
 
 /// One interpolation period of the drives (and of their linear twins) towards
@@ -238,6 +283,16 @@ fn drive_sample(
         None => sample.linear = sample.actual,
     }
     Ok(settled)
+}
+
+/// A sample without a servo: the table at the setpoint, with the position errors for its
+/// direction of motion (`actual`) and their mean (`linear`).
+#[inline(always)]
+fn at_commanded(sample: &mut Sample, errors: &mut PositionErrors) {
+    sample.actual = sample.commanded;
+    errors.apply_in_place(&mut sample.actual);
+    sample.linear = sample.commanded;
+    errors.apply_mean_in_place(&mut sample.linear);
 }
 
 /// The emitter of [`run`]: hands a sample to every sink and counts it.
@@ -287,16 +342,7 @@ fn run_programmed_inline(
     emit: &mut Emit<'_>,
     stats: &mut RunStats,
 ) -> Result<()> {
-    let mut sample = Sample {
-        index: 0,
-        time_s: t0,
-        line: 0,
-        block_index: 0,
-        commanded: AxisVec::ZERO,
-        actual: AxisVec::ZERO,
-        following_error: AxisVec::ZERO,
-        linear: AxisVec::ZERO,
-    };
+    let mut sample = Sample::blank(t0);
     let mut sampler = NominalSampler::new(moves, machine, machine.interpolation_period_s);
     let mut k = 0u64;
     while let Some(at) = sampler.next_into(&mut sample.commanded)? {
@@ -304,10 +350,7 @@ fn run_programmed_inline(
         sample.time_s = t0 + at.time_s;
         sample.line = at.line;
         sample.block_index = at.block_index;
-        sample.actual = sample.commanded;
-        errors.apply_in_place(&mut sample.actual);
-        sample.linear = sample.commanded;
-        errors.apply_mean_in_place(&mut sample.linear);
+        at_commanded(&mut sample, errors);
         emit(&sample, stats)?;
         k += 1;
     }

@@ -1,11 +1,14 @@
 //! The limits monitor: travel, velocity and acceleration of every axis, checked on every
 //! sample (not only at block ends), with violations merged into intervals.
 //!
-//! Velocity and acceleration are finite differences of the samples:
-//! `v_k = (q_k - q_{k-1}) / Δt` and `a_k = (v_k - v_{k-1}) / Δt`. At programmed timing a
-//! junction between two straight blocks is a step in velocity, which no real controller
-//! executes (its planner rounds the corner), so acceleration is taken only from three
-//! samples inside one block: it then catches arcs, G43.4 moves and what the servo does.
+//! Velocity, acceleration and jerk are finite differences of the samples:
+//! `v_k = (q_k - q_{k-1}) / Δt`, `a_k = (v_k - v_{k-1}) / Δt`, `j_k = (a_k - a_{k-1}) / Δt`.
+//! On the planner's samples (the default) they are measured everywhere, junctions included.
+//! At programmed timing a junction between two straight blocks is a step in velocity, which
+//! no real controller executes (its planner rounds the corner), so there acceleration and
+//! jerk are taken only from samples inside one block ([`LimitsMonitor::within_blocks`]).
+//! Jerk is reported, not checked: the planner bounds the velocity step at a junction by the
+//! axis's acceleration over one period, not its jerk.
 
 use serde::{Deserialize, Serialize};
 
@@ -83,6 +86,11 @@ pub struct AxisUsage {
     /// Highest acceleration, mm/s² or deg/s², and its limit.
     pub peak_acceleration_per_s2: f64,
     pub acceleration_limit_per_s2: f64,
+    /// Highest jerk, mm/s³ or deg/s³, and the axis's jerk limit (reported, not checked).
+    #[serde(default)]
+    pub peak_jerk_per_s3: f64,
+    #[serde(default)]
+    pub jerk_limit_per_s3: f64,
 }
 
 /// The axis of a usage before its JSON key is read.
@@ -148,6 +156,7 @@ struct Lanes {
     max: [f64; LANES],
     peak_v: [f64; LANES],
     peak_a: [f64; LANES],
+    peak_j: [f64; LANES],
 }
 
 /// Checks every sample against the machine's limits; O(1) memory plus the violations found.
@@ -160,6 +169,8 @@ pub struct LimitsMonitor<'a> {
     /// Violations open (being extended).
     open: usize,
     violations: Vec<Violation>,
+    /// Acceleration and jerk only from samples of one block (programmed timing).
+    within_blocks: bool,
 }
 
 /// What the next sample needs of the previous one, written in place.
@@ -171,9 +182,12 @@ struct Previous {
     block_index: u64,
     /// Positions, mm and deg.
     q: [f64; LANES],
-    /// Velocity per s, when the sample had one inside its block (`has_v`).
+    /// Velocity per s, when the sample had one (inside its block with `within_blocks`).
     v: [f64; LANES],
     has_v: bool,
+    /// Acceleration per s², likewise.
+    a: [f64; LANES],
+    has_a: bool,
 }
 
 /// Relative slack on velocity and acceleration limits for rounding in finite differences.
@@ -213,6 +227,7 @@ impl<'a> LimitsMonitor<'a> {
             max: [f64::NEG_INFINITY; LANES],
             peak_v: [0.0; LANES],
             peak_a: [0.0; LANES],
+            peak_j: [0.0; LANES],
         };
         for t in &tracks {
             let (l, i) = (&t.limits, t.limits.index);
@@ -234,10 +249,20 @@ impl<'a> LimitsMonitor<'a> {
                 q: [0.0; LANES],
                 v: [0.0; LANES],
                 has_v: false,
+                a: [0.0; LANES],
+                has_a: false,
             },
             open: 0,
             violations: Vec::new(),
+            within_blocks: false,
         }
+    }
+
+    /// Takes acceleration and jerk only from samples inside one block: at programmed timing
+    /// a junction is a velocity step that no controller runs.
+    pub fn within_blocks(mut self) -> Self {
+        self.within_blocks = true;
+        self
     }
 
     /// One sample. The common case (no limit crossed, none open) is one pass over flat
@@ -269,11 +294,14 @@ impl<'a> LimitsMonitor<'a> {
         // (NaN where the positions are not finite): it raises no peak and trips nothing, and
         // the pass stays free of branches.
         let in_block = p.valid && p.block_index == s.block_index;
+        let joined = p.valid && (!self.within_blocks || in_block);
         let has_v = p.valid && s.time_s > p.time_s;
-        let has_a = has_v && p.has_v && in_block;
+        let has_a = has_v && p.has_v && joined;
+        let has_j = has_a && p.has_a;
         // As `(actual - previous) * (1 / dt)`, element by element: the same rounding.
         let k = 1.0 / (s.time_s - p.time_s);
         let (kv, ka) = (if has_v { k } else { 0.0 }, if has_a { k } else { 0.0 });
+        let kj = if has_j { k } else { 0.0 };
         let (mut v, mut a) = ([0.0; LANES], [0.0; LANES]);
         let n = &mut self.lanes;
         // Whether a lane is outside a limit, or not a number: every lane is checked, axis or
@@ -282,8 +310,11 @@ impl<'a> LimitsMonitor<'a> {
             let xi = x[i];
             v[i] = (xi - p.q[i]) * kv;
             a[i] = (v[i] - p.v[i]) * ka;
+            let jerk = ((a[i] - p.a[i]) * kj).abs();
             p.q[i] = xi;
             p.v[i] = v[i];
+            p.a[i] = a[i];
+            n.peak_j[i] = n.peak_j[i].max(jerk);
             // `f64::min`/`max`: a NaN sample keeps the old extreme. (Written as `a < b ? a :
             // b`, the select becomes a store only where the value changed, which is a
             // masked store, slow on AMD.)
@@ -305,7 +336,8 @@ impl<'a> LimitsMonitor<'a> {
         p.valid = true;
         p.time_s = s.time_s;
         p.block_index = s.block_index;
-        p.has_v = has_v && in_block;
+        p.has_v = has_v && (!self.within_blocks || in_block);
+        p.has_a = has_a;
         if outside || self.open != 0 {
             self.track(s, has_v.then_some(&v), has_a.then_some(&a));
         }
@@ -402,6 +434,8 @@ impl<'a> LimitsMonitor<'a> {
                     velocity_limit_per_min: c.max_velocity,
                     peak_acceleration_per_s2: self.lanes.peak_a[i],
                     acceleration_limit_per_s2: c.max_acceleration,
+                    peak_jerk_per_s3: self.lanes.peak_j[i],
+                    jerk_limit_per_s3: c.max_jerk,
                 }
             })
             .collect();

@@ -6,4 +6,6 @@ pub mod limits;
 pub mod run;
 pub mod scene;
 
-pub use run::{check, check_reference, check_with, CheckOptions, CheckReport, SceneQueries};
+pub use run::{
+    check, check_reference, check_with, CheckOptions, CheckReport, CheckTiming, SceneQueries,
+};

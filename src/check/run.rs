@@ -1,9 +1,11 @@
 //! `mtsim check`: does the program fit the machine? Travel, velocity and acceleration of
 //! every axis on every sample, and collisions and near misses in the scene, continuously.
 //!
-//! The program is sampled at its programmed timing ([`crate::motion::sampling`]), which is what it
-//! demands of the machine; with `dynamics` the samples are instead the actual axis positions
-//! from the interpolator and the servo models, so that overshoot past a limit is caught too.
+//! The program is sampled at the planner's timing (the look-ahead interpolator with its jerk
+//! limits, [`crate::motion::interpolation`]): what the control will command. With `programmed`
+//! it is sampled at the timing its words ask for ([`crate::motion::sampling`]), what it
+//! demands of the machine; with `dynamics` the samples are the actual axis positions from the
+//! interpolator and the servo models, so that overshoot past a limit is caught too.
 
 use std::cell::RefCell;
 use std::collections::{BTreeMap, VecDeque};
@@ -19,6 +21,7 @@ use crate::input::scenario::{Program, Scenario};
 use crate::kinematics::Kinematics;
 use crate::measure::CircleFrame;
 use crate::motion::work;
+use crate::motion::FeedReduction;
 use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
 use crate::{Axis, AxisVec};
@@ -30,6 +33,9 @@ pub use crate::pipeline::SETTLE_S;
 pub struct CheckOptions {
     /// Check the actual axis positions of the servo simulation instead of the commanded ones.
     pub dynamics: bool,
+    /// Sample the program at its programmed timing instead of the planner's (ignored with
+    /// `dynamics`).
+    pub programmed: bool,
     /// Near-miss clearance, mm; the scenario's (or the machine's) when `None`.
     pub near_miss_mm: Option<f64>,
 }
@@ -56,6 +62,40 @@ pub struct CheckReport {
     pub min_clearance_bodies: Option<[String; 2]>,
     /// Whether the samples were the actual (servo) positions.
     pub dynamics: bool,
+    /// How the samples were timed.
+    #[serde(default)]
+    pub timing: CheckTiming,
+    /// Feed blocks the planner ran below their F word, per axis and limit (left out when
+    /// there is none, and at programmed timing).
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub feed_reductions: Vec<FeedReduction>,
+}
+
+/// How `check` timed its samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CheckTiming {
+    /// The planner's setpoints (look-ahead, jerk-limited): what the control commands.
+    #[default]
+    Planned,
+    /// The timing the program's words ask for; a junction is a velocity step, so
+    /// accelerations and jerks at junctions are not measured.
+    Programmed,
+    /// The servo models' actual positions on the planner's setpoints.
+    Dynamics,
+}
+
+impl CheckTiming {
+    /// What the samples are, for a person.
+    pub fn describe(self) -> &'static str {
+        match self {
+            CheckTiming::Planned => "commanded positions at the planner's timing",
+            CheckTiming::Programmed => {
+                "commanded positions at programmed timing (accelerations at junctions between blocks are not measured)"
+            }
+            CheckTiming::Dynamics => "actual (servo) positions",
+        }
+    }
 }
 
 impl CheckReport {
@@ -241,13 +281,17 @@ pub fn check_with(
             })
         }
     };
-    let timing = if options.dynamics {
-        Timing::Planned {
+    let (timing, check_timing) = if options.dynamics {
+        let t = Timing::Planned {
             twins: false,
             settle: true,
-        }
+        };
+        (t, CheckTiming::Dynamics)
+    } else if options.programmed {
+        limits = limits.within_blocks();
+        (Timing::Programmed, CheckTiming::Programmed)
     } else {
-        Timing::Programmed
+        (Timing::Setpoints, CheckTiming::Planned)
     };
     let run_options = RunOptions {
         timing,
@@ -264,6 +308,7 @@ pub fn check_with(
         pipeline::run(moves, machine, &run_options, &mut sinks, &|_| {})?
     };
     let (samples, last_time) = (stats.samples, stats.end_time_s);
+    let feed_reductions = stats.feed_reductions;
     let scene = scene.map(|s| s.monitor);
     let (usage, mut violations) = limits.finish();
     let mut scene_queries = None;
@@ -308,6 +353,8 @@ pub fn check_with(
         min_clearance_mm,
         min_clearance_bodies,
         dynamics: options.dynamics,
+        timing: check_timing,
+        feed_reductions,
     })
 }
 

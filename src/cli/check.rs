@@ -4,17 +4,11 @@ use std::path::Path;
 
 use super::print_stdout;
 use crate::check::limits::ViolationKind;
-use crate::check::{check, CheckOptions, CheckReport};
+use crate::check::{check, CheckOptions, CheckReport, CheckTiming};
 use crate::error::{Error, Result, EXIT_VIOLATIONS};
 
-pub fn run(
-    path: &Path,
-    as_json: bool,
-    dynamics: bool,
-    near_miss_mm: Option<f64>,
-    html: Option<&Path>,
-) -> Result<i32> {
-    if let Some(d) = near_miss_mm {
+pub fn run(path: &Path, as_json: bool, options: CheckOptions, html: Option<&Path>) -> Result<i32> {
+    if let Some(d) = options.near_miss_mm {
         if !(d.is_finite() && d >= 0.0) {
             return Err(Error::usage(format!(
                 "--near-miss {d}: expected a clearance >= 0 mm"
@@ -29,14 +23,11 @@ pub fn run(
     }
     let bar = super::spinner("checking");
     let started = std::time::Instant::now();
-    let report = check(
-        &scenario,
-        &CheckOptions {
-            dynamics,
-            near_miss_mm,
-        },
-    )?;
+    let report = check(&scenario, &options)?;
     bar.finish_and_clear();
+    for f in &report.feed_reductions {
+        super::warn(&format!("feed held: {}", f.describe()));
+    }
     super::detail(
         1,
         &format!(
@@ -68,27 +59,24 @@ pub fn run(
 /// The text report of `mtsim check`.
 pub fn check_table(report: &CheckReport, name: &str) -> String {
     let mut out = format!(
-        "{name}: {} samples, {:.2} s of machine time, {} positions{}\n",
+        "{name}: {} samples, {:.2} s of machine time, {}{}\n",
         report.samples,
         report.sim_time_s,
-        if report.dynamics {
-            "actual (servo)"
-        } else {
-            "commanded"
-        },
+        report.timing.describe(),
         report
             .scene_queries
             .map_or(String::new(), |q| format!(", {q} geometric queries"))
     );
     out.push_str(&format!(
-        "{:<4} {:<4} {:>21} {:>21} {:>11} {:>27} {:>23}\n",
+        "{:<4} {:<4} {:>21} {:>21} {:>11} {:>27} {:>23} {:>25}\n",
         "axis",
         "unit",
         "used",
         "travel",
         "margin",
         "peak/limit velocity (/min)",
-        "peak/limit accel. (/s²)"
+        "peak/limit accel. (/s²)",
+        "peak/limit jerk (/s³)"
     ));
     for (axis, u) in &report.axes {
         let unit = if "ABC".contains(axis.as_str()) {
@@ -97,7 +85,7 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
             "mm"
         };
         out.push_str(&format!(
-            "{axis:<4} {unit:<4} {:>9.3}..{:<9.3} {:>9.3}..{:<9.3} {:>11} {:>15.0}/{:<11.0} {:>11.0}/{:<11.0}\n",
+            "{axis:<4} {unit:<4} {:>9.3}..{:<9.3} {:>9.3}..{:<9.3} {:>11} {:>15.0}/{:<11.0} {:>11.0}/{:<11.0} {:>12.0}/{:<12.0}\n",
             u.min,
             u.max,
             u.limit_min,
@@ -107,7 +95,20 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
             u.velocity_limit_per_min,
             u.peak_acceleration_per_s2,
             u.acceleration_limit_per_s2,
+            u.peak_jerk_per_s3,
+            u.jerk_limit_per_s3,
         ));
+    }
+    out.push_str(match report.timing {
+        CheckTiming::Programmed => {
+            "accelerations and jerks: within blocks only (at programmed timing a junction is a velocity step)\n"
+        }
+        _ => {
+            "jerk: reported, not checked (the planner bounds a junction's velocity step by the acceleration over one period)\n"
+        }
+    });
+    for f in &report.feed_reductions {
+        out.push_str(&format!("feed held: {}\n", f.describe()));
     }
     if let (Some(c), Some(b)) = (report.min_clearance_mm, &report.min_clearance_bodies) {
         out.push_str(&format!(

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
+use crate::check::CheckOptions;
 use crate::error::{Error, Result};
 use crate::study::shard::Shard;
 use crate::study::sweep::SweepParam;
@@ -145,6 +146,11 @@ pub enum Command {
         /// instead of the commanded ones.
         #[arg(long)]
         dynamics: bool,
+        /// Sample the program at the timing its words ask for (no feed planning) instead of
+        /// the planner's: what the program demands. A junction is then a velocity step, so
+        /// accelerations at junctions are not measured.
+        #[arg(long, conflicts_with = "dynamics")]
+        programmed: bool,
         /// Near-miss clearance, mm (default: `near_miss_mm` of the scenario's `[check]`, else the machine's `[scene]`).
         /// A near miss is a span of samples in which two bodies that must not touch are closer
         /// than this but not touching; each span is listed once, with its smallest clearance.
@@ -281,9 +287,19 @@ fn run(cli: Cli) -> Result<i32> {
             scenario,
             json,
             dynamics,
+            programmed,
             near_miss,
             html,
-        } => check::run(&scenario, json, dynamics, near_miss, html.as_deref()),
+        } => check::run(
+            &scenario,
+            json,
+            CheckOptions {
+                dynamics,
+                programmed,
+                near_miss_mm: near_miss,
+            },
+            html.as_deref(),
+        ),
         Command::Simulate {
             scenario,
             output,

@@ -47,11 +47,12 @@ pub fn run(
         ),
     );
     // Travel, velocity, acceleration and collisions, as `check` finds them (commanded
-    // positions): written beside the trace for the report, and told on stderr.
+    // positions at the planner's timing): written beside the trace for the report, and told on stderr.
     let checked = check(
         &scenario,
         &CheckOptions {
             dynamics: false,
+            programmed: false,
             near_miss_mm: None,
         },
     )?;

@@ -6,6 +6,7 @@ pub mod budget;
 pub mod drive;
 pub mod exact;
 pub mod geometry_errors;
+pub mod lead_in;
 pub mod machine;
 pub mod program;
 pub mod scenario;

@@ -10,6 +10,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::input::exact;
+use crate::input::lead_in::LeadIn;
 use crate::input::machine::Machine;
 use crate::input::program::{CircleTest, ConeTest, Direction, NcOptions};
 use crate::input::scene::{ConeSetup, ToolConfig, ToolShape, WorkpieceConfig, WorkpieceKind};
@@ -165,7 +166,13 @@ pub struct SimulateSection {
     pub trace_format: TraceFormat,
     /// Path before and after the measured revolution, deg, so that the trace leaves out the
     /// start and stop transients.
+    /// A circle test sizes it from the feed, the axes' limits and the servo loops when the
+    /// scenario does not give it ([`LeadIn`]).
     pub lead_deg: f64,
+    /// A circle test's lead-in, as run (set when the scenario is loaded; none for a cone or
+    /// a file).
+    #[serde(skip)]
+    pub lead_in: Option<LeadIn>,
     /// For a file program: the source lines (first, last) whose blocks the ball bar
     /// measures; every block after the first when absent.
     #[serde(deserialize_with = "exact::option_array")]
@@ -186,6 +193,7 @@ impl Default for SimulateSection {
             trace_every: 1,
             trace_format: TraceFormat::Csv,
             lead_deg: 20.0,
+            lead_in: None,
             measure_lines: None,
             max_samples: DEFAULT_MAX_SAMPLES,
             max_trace_rows: DEFAULT_MAX_TRACE_ROWS,
@@ -304,6 +312,36 @@ pub struct Scenario {
     pub reader: ngc::Options,
     /// Scene geometry of inline tools beyond length and diameter, by tool number.
     pub tool_shapes: std::collections::BTreeMap<u32, ToolShape>,
+}
+
+/// `[simulate] tcp = true` applies only to a program written for tool-centre-point control:
+/// a generated cone without `[program.cone] tcp` and a circle test are joint-space programs
+/// (machine X Y Z), which TCP would read as tool-tip positions. A file is checked as it
+/// streams (`program::validate::checked`).
+fn refuse_tcp_on_a_joint_space_test(
+    path: &Path,
+    text: &str,
+    program: &Program,
+    tcp: bool,
+) -> Result<()> {
+    let why = match program {
+        _ if !tcp => return Ok(()),
+        Program::Cone { nc, .. } if !nc.tcp => {
+            "the generated cone is written in joint space (machine X Y Z A C); set \
+             [program.cone] tcp = true to generate its G43.4 program"
+        }
+        Program::Circle { .. } => {
+            "the circle test is written in machine X Y Z with the rotary axes at rest (joint space)"
+        }
+        _ => return Ok(()),
+    };
+    Err(value_error(
+        path,
+        text,
+        "simulate",
+        "tcp",
+        format!("applies only to programs written for tool-centre-point control: {why}"),
+    ))
 }
 
 impl Scenario {
@@ -467,6 +505,16 @@ impl Scenario {
         refuse_what_the_layout_cannot_give(path, &file, &program, &machine)?;
         let reader = reader_options(path, &text, &file.reader, &machine)?;
         toml_text::check_numbers(path, &text)?;
+        refuse_tcp_on_a_joint_space_test(path, &text, &program, file.simulate.tcp)?;
+        let mut simulate = file.simulate;
+        if let Program::Circle { circle, .. } = &program {
+            let lead = match toml_text::locate_key(&text, "simulate", "lead_deg") {
+                Some(_) => LeadIn::given(circle, &machine, simulate.lead_deg)?,
+                None => LeadIn::sized(circle, &machine)?,
+            };
+            simulate.lead_deg = lead.deg;
+            simulate.lead_in = Some(lead);
+        }
         let tool_shapes = file
             .reader
             .tools
@@ -480,7 +528,7 @@ impl Scenario {
             tool: file.tool.unwrap_or_else(|| machine.tool.clone()),
             machine,
             program,
-            simulate: file.simulate,
+            simulate,
             ballbar_pivot_mm: file.ballbar.pivot_mm.map(Vector3::from),
             workpiece,
             check: file.check,

@@ -100,6 +100,8 @@ use nalgebra::Point3;
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::kinematics::{Kinematics, Layout};
+pub use crate::motion::feed_held::{FeedLimit, LimitKind};
+use crate::motion::feed_held::{FeedReduction, FeedReductions};
 use crate::program::{FeedMode, Motion, Move, PathControl};
 use crate::Plane;
 use crate::{Axis, AxisVec};
@@ -135,33 +137,6 @@ pub struct InterpolationOptions {
     /// Keep a [`FeedLimit`] for every feed block that runs slower than its F word
     /// ([`Interpolator::take_feed_limits`]); off by default (memory would grow with them).
     pub record_feed_limits: bool,
-}
-
-/// Which axis limit holds a block's feed below its F word.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum LimitKind {
-    /// The axis's maximum velocity: `v ≤ vmax_i / |q'_i|`.
-    Velocity,
-    /// The axis's maximum acceleration through the path's curvature: `v² |q''_i| ≤ ½ amax_i`.
-    Acceleration,
-    /// The axis's maximum jerk through the path's curvature.
-    Jerk,
-}
-
-/// A feed block planned below its programmed speed: the feed held to the machine.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct FeedLimit {
-    /// Source line and 0-based position of the block.
-    pub line: usize,
-    pub block_index: u64,
-    /// The axis whose limit binds, and which limit.
-    pub axis: Axis,
-    pub limit: LimitKind,
-    /// The programmed path speed and the cruise speed the block is planned at, per minute in
-    /// path units (mm, deg counted as mm in mixed moves, the tool tip under TCP).
-    pub programmed_per_min: f64,
-    pub planned_per_min: f64,
 }
 
 impl Default for InterpolationOptions {
@@ -661,6 +636,8 @@ pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     /// Blocks appended since the last backward pass.
     unpassed: usize,
     feed_limits: Option<Vec<FeedLimit>>,
+    /// Every block held below its F word, summarised (always kept: bounded memory).
+    reductions: FeedReductions,
     last_end: Option<JunctionEnd>,
     next_index: u64,
     active: Option<Active>,
@@ -703,6 +680,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             window: VecDeque::with_capacity(options.lookahead_blocks + pass_batch(&options) + 1),
             unpassed: 0,
             feed_limits: options.record_feed_limits.then(Vec::new),
+            reductions: FeedReductions::default(),
             options,
             last_end: None,
             next_index: 0,
@@ -788,20 +766,25 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
 
     /// Notes a feed block held below its F word (when recording).
     fn record(&mut self, p: &Planned) {
-        if let (Some(log), Some((axis, limit)), true) = (
-            self.feed_limits.as_mut(),
-            p.limited_by,
-            p.programmed.is_finite(),
-        ) {
-            log.push(FeedLimit {
+        if let (Some((axis, limit)), true) = (p.limited_by, p.programmed.is_finite()) {
+            let held = FeedLimit {
                 line: p.line,
                 block_index: p.index,
                 axis,
                 limit,
                 programmed_per_min: p.programmed * 60.0,
                 planned_per_min: p.cap * 60.0,
-            });
+            };
+            self.reductions.note(&held);
+            if let Some(log) = self.feed_limits.as_mut() {
+                log.push(held);
+            }
         }
+    }
+
+    /// The feed blocks planned so far below their F word, per axis and limit.
+    pub fn feed_reductions(&self) -> Vec<FeedReduction> {
+        self.reductions.list()
     }
 
     /// The feed limits noted since the last call, in block order (empty unless
@@ -1059,22 +1042,31 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 }
             }
         } else {
+            // The cruise speed is bounded by what each axis sees at constant speed (a = j = 0:
+            // velocity q' v, acceleration q'' v², jerk q''' v³); the path acceleration and
+            // jerk of a speed change then get what that leaves of each axis's budget.
             let (d1, d2, d3) = self.derivative_bounds(&p.path, p.length);
             for (i, l) in (0..9).filter_map(present) {
                 if d1[i] > 0.0 {
                     lower(&mut cap, l.velocity / d1[i], i, LimitKind::Velocity);
-                    accel = accel.min(0.5 * l.acceleration / d1[i]);
-                    jerk = jerk.min(l.jerk / (3.0 * d1[i]));
                 }
-            }
-            for (i, l) in (0..9).filter_map(present) {
                 if d2[i] > 0.0 {
                     let centripetal = (0.5 * l.acceleration / d2[i]).sqrt();
                     lower(&mut cap, centripetal, i, LimitKind::Acceleration);
-                    lower(&mut cap, l.jerk / (9.0 * d2[i] * accel), i, LimitKind::Jerk);
                 }
                 if d3[i] > 0.0 {
                     lower(&mut cap, cbrt(l.jerk / (3.0 * d3[i])), i, LimitKind::Jerk);
+                }
+            }
+            // Every speed in the block is at most `cap`, so `3 |q''| v a ≤ ⅓ jmax` holds
+            // with `a ≤ ⅓ jmax / (3 |q''| cap)`.
+            for (i, l) in (0..9).filter_map(present) {
+                if d1[i] > 0.0 {
+                    accel = accel.min(0.5 * l.acceleration / d1[i]);
+                    jerk = jerk.min(l.jerk / (3.0 * d1[i]));
+                }
+                if d2[i] > 0.0 && cap.is_finite() {
+                    accel = accel.min(l.jerk / (9.0 * d2[i] * cap));
                 }
             }
         }

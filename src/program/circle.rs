@@ -12,6 +12,9 @@ use crate::input::program::{CircleTest, MeasuredLines};
 use crate::program::{FeedMode, Motion, Move};
 use crate::{Axis, AxisVec, Plane};
 
+/// Longest arc of a lead-in or lead-out block, deg: a longer lead is split into equal arcs.
+pub const MAX_LEAD_ARC_DEG: f64 = 300.0;
+
 /// The circle program as canonical moves: a G00 to the start `lead_deg` before θ = 0, the
 /// lead-in arc, the measured full circle (one block) and the lead-out arc. Line numbers are
 /// those of the text [`write_program`] writes.
@@ -52,9 +55,18 @@ impl CircleProgram {
         }
     }
 
+    /// Arcs of the lead-in (and of the lead-out): one per [`MAX_LEAD_ARC_DEG`] or part.
+    fn lead_arcs(&self) -> usize {
+        if self.lead_deg > 0.0 {
+            (self.lead_deg / MAX_LEAD_ARC_DEG).ceil() as usize
+        } else {
+            0
+        }
+    }
+
     /// The line of the measured full-circle block.
     pub fn measured(&self) -> MeasuredLines {
-        let line = self.header.len() + 2 + usize::from(self.lead_deg > 0.0);
+        let line = self.header.len() + 2 + self.lead_arcs();
         MeasuredLines {
             first: line,
             last: line,
@@ -77,12 +89,15 @@ impl CircleProgram {
             plane: c.plane,
             center_mm: c.center_mm,
         };
-        if self.lead_deg > 0.0 {
-            ends.push((arc, zero));
+        // Equal arcs, each short of a full turn (an arc whose end is its start is one).
+        let n = self.lead_arcs();
+        let part = self.lead_deg / n.max(1) as f64;
+        for k in (0..n).rev() {
+            ends.push((arc, at(-sign * part * k as f64)));
         }
         ends.push((arc, zero));
-        if self.lead_deg > 0.0 {
-            ends.push((arc, at(sign * self.lead_deg)));
+        for k in 1..=n {
+            ends.push((arc, at(sign * part * k as f64)));
         }
         let first_line = self.header.len() + 1;
         let mut previous = AxisVec::ZERO;

@@ -64,7 +64,12 @@ pub fn scenario_run(
                 .simulate
                 .measure_lines
                 .map(|[first, last]| MeasuredLines { first, last }),
-            moves: validate::checked(path, machine, file::read_moves(path, &scenario.reader)?),
+            moves: validate::checked(
+                path,
+                machine,
+                scenario.simulate.tcp,
+                file::read_moves(path, &scenario.reader)?,
+            ),
         },
     })
 }

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 use super::file::read_moves;
 use super::moves::Moves;
-use super::Move;
+use super::{Motion, Move};
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::Axis;
@@ -54,7 +54,7 @@ fn word_span(text: &str, line: usize, axis: Axis) -> std::ops::Range<usize> {
 /// Checks the G-code file at `path`, read with the scenario's reader `options`, against
 /// `machine` (see the module doc): the whole file, as [`checked`] streams it.
 pub fn validate_file(path: &Path, machine: &Machine, options: &ngc::Options) -> Result<()> {
-    for m in checked(path, machine, read_moves(path, options)?) {
+    for m in checked(path, machine, false, read_moves(path, options)?) {
         m?;
     }
     Ok(())
@@ -65,8 +65,15 @@ pub fn validate_file(path: &Path, machine: &Machine, options: &ngc::Options) -> 
 /// stream that ends without motion ends with an error. Nothing is collected; the file's
 /// text is read again only to show an error. `moves` is the reader itself (its errors
 /// converted here) or any stream of moves: with the reader, the moves pass through one
-/// boxed layer instead of two, one copy of each fewer.
-pub fn checked<I, E>(path: &Path, machine: &Machine, moves: I) -> Moves<'static>
+/// boxed layer instead of two, one copy of each fewer. With `written_for_tcp` (`[simulate]
+/// tcp = true`) every feed move must run under tool-centre-point control (G43.4, G234, M128,
+/// TRAORI: the canonical `tcp` flag): a joint-space one is refused where it stands.
+pub fn checked<I, E>(
+    path: &Path,
+    machine: &Machine,
+    written_for_tcp: bool,
+    moves: I,
+) -> Moves<'static>
 where
     I: Iterator<Item = std::result::Result<Move, E>> + 'static,
     E: Into<Error>,
@@ -92,6 +99,7 @@ where
             .tool_pose_unmodelled()
             .map(|why| (machine.kinematics.layout.name(), why)),
         limits,
+        written_for_tcp,
         moves,
         moving: false,
         done: false,
@@ -106,6 +114,8 @@ struct Checked<I> {
     no_tcp: Option<(&'static str, &'static str)>,
     /// Per machine axis: envelope (mm or deg), travel min and max.
     limits: Vec<(Axis, f64, f64, f64)>,
+    /// Every feed move must carry the `tcp` flag (`[simulate] tcp = true`).
+    written_for_tcp: bool,
     moves: I,
     moving: bool,
     done: bool,
@@ -119,26 +129,35 @@ impl<I> Checked<I> {
             .unwrap_or_default()
     }
 
+    /// An error pointing at the whole source line of `m`.
+    fn line_error(&self, m: &Move, message: String, label: &str) -> Error {
+        let text = self.text();
+        let span = line_span(&text, m.line);
+        Error::at(&self.path, &text, span, message, label)
+    }
+
     fn check(&mut self, m: &Move) -> Result<()> {
         if let (Some((layout, why)), true) = (self.no_tcp, m.tcp) {
-            let text = self.text();
-            let start = text
-                .split_inclusive('\n')
-                .take(m.line.saturating_sub(1))
-                .map(str::len)
-                .sum::<usize>();
-            let len = text[start..].lines().next().unwrap_or("").len();
-            return Err(Error::at(
-                &self.path,
-                &text,
-                start..start + len,
-                format!(
-                    "this move runs under tool-centre-point control (TCP), which this machine \
-                     ({layout} layout) cannot give: {why}"
-                ),
-                "TCP on",
-            )
-            .with_help("leave TCP off on this machine (no G43.4, no `tcp-on` user M code)"));
+            let message = format!(
+                "this move runs under tool-centre-point control (TCP), which this machine \
+                 ({layout} layout) cannot give: {why}"
+            );
+            return Err(self
+                .line_error(m, message, "TCP on")
+                .with_help("leave TCP off on this machine (no G43.4, no `tcp-on` user M code)"));
+        }
+        if self.written_for_tcp && !m.tcp && matches!(m.motion, Motion::Linear | Motion::Arc { .. })
+        {
+            let message = "[simulate] tcp = true applies only to programs written for \
+                           tool-centre-point control, but this feed move runs in joint space (no \
+                           G43.4, G234, M128 or TRAORI active): tcp would read its machine X Y Z \
+                           as tool-tip positions and run another motion";
+            return Err(self
+                .line_error(m, message.to_string(), "joint-space move")
+                .with_help(
+                    "remove `tcp = true` from [simulate] for a joint-space program, or switch \
+                     TCP on before the first feed move",
+                ));
         }
         for &(axis, envelope, min, max) in &self.limits {
             let (from, to) = (m.start[axis], m.end[axis]);
@@ -233,6 +252,16 @@ where
         self.done = item.is_err();
         Some(item)
     }
+}
+
+/// The byte range of source line `line` (1-based) of `text`, without its line break.
+fn line_span(text: &str, line: usize) -> std::ops::Range<usize> {
+    let start = text
+        .split_inclusive('\n')
+        .take(line.saturating_sub(1))
+        .map(str::len)
+        .sum::<usize>();
+    start..start + text[start..].lines().next().unwrap_or("").len()
 }
 
 /// A length without hundreds of digits: 500, 1.0e308.

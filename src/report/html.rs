@@ -370,13 +370,9 @@ fn check_section(check: &CheckReport) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "<p>{} samples, {} positions.</p>",
+        "<p>{} samples, {}.</p>",
         check.samples,
-        if check.dynamics {
-            "actual (servo)"
-        } else {
-            "commanded"
-        }
+        esc(check.timing.describe())
     );
     out.push_str(
         "<table class=\"limits\">\n<tr><th>axis</th><th>used</th><th>travel</th><th>margin</th>\

@@ -245,6 +245,7 @@ pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
             crate::program::validate::checked(
                 path,
                 &scenario.machine,
+                scenario.simulate.tcp,
                 file::read_moves(path, &scenario.reader)?,
             ),
             &scenario.machine,

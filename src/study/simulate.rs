@@ -17,6 +17,7 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::input::drive::si_per_unit;
+use crate::input::lead_in::LeadIn;
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario, TraceFormat};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
@@ -24,6 +25,7 @@ use crate::measure::ballbar::{analyse_events_at, BallbarResult};
 use crate::measure::settle::SettleGate;
 use crate::measure::{BallbarSink, BarGeometry, CircleFrame};
 use crate::motion::work;
+use crate::motion::FeedReduction;
 use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
 use crate::report::create_dir;
@@ -56,9 +58,16 @@ pub struct SimulationSummary {
     /// Renishaw-style diagnostics from the trace; null without a measured circle.
     pub diagnostics: Option<crate::study::diagnose::Diagnostics>,
     /// What the user should know about the figures (a trimmed transient, one spot that
-    /// dominates G); left out when there is none.
+    /// dominates G, a feed held below the programmed one); left out when there is none.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub warnings: Vec<String>,
+    /// Feed blocks the planner ran below their F word, per axis and limit; left out when
+    /// every block runs at its F.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub feed_reductions: Vec<FeedReduction>,
+    /// A circle test's lead-in: its arc and how long it took to reach speed and settle.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lead_in: Option<LeadIn>,
 }
 
 /// Files a simulation writes into its output folder.
@@ -82,8 +91,11 @@ pub struct BallbarStudy {
     pub sim_time_s: f64,
     pub setpoints: u64,
     pub directions: Vec<Direction>,
-    /// What the user should know about the figures (a trimmed start-up transient).
+    /// What the user should know about the figures (a trimmed start-up transient, a feed
+    /// held below the programmed one).
     pub warnings: Vec<String>,
+    /// Feed blocks run below their F word, per axis and limit (over all directions).
+    pub feed_reductions: Vec<FeedReduction>,
 }
 
 impl BallbarStudy {
@@ -127,6 +139,7 @@ pub fn run_ballbar(
     let mut sim_time_s = 0.0;
     let mut setpoints = 0u64;
     let mut warnings = Vec::new();
+    let mut feed_reductions = Vec::new();
     for &direction in &directions {
         let mut run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
         if let Some(along) = &along {
@@ -190,6 +203,15 @@ pub fn run_ballbar(
         };
         sim_time_s = stats.end_time_s;
         setpoints += stats.samples;
+        // Each direction runs the same blocks: a reduction is listed once.
+        for r in stats.feed_reductions {
+            if !feed_reductions
+                .iter()
+                .any(|f: &FeedReduction| (f.axis, f.limit) == (r.axis, r.limit))
+            {
+                feed_reductions.push(r);
+            }
+        }
         if let Some(b) = ballbar {
             runs.push(b.run);
             signatures.push(b.signature);
@@ -241,7 +263,11 @@ pub fn run_ballbar(
         sim_time_s,
         setpoints,
         directions,
-        warnings,
+        warnings: warnings
+            .into_iter()
+            .chain(feed_reductions.iter().map(FeedReduction::describe))
+            .collect(),
+        feed_reductions,
     })
 }
 
@@ -346,6 +372,8 @@ pub fn simulate(
         reversal_values: reversal_values(&scenario.machine)?,
         diagnostics,
         warnings,
+        feed_reductions: study.feed_reductions.clone(),
+        lead_in: scenario.simulate.lead_in,
     };
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
     crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;

@@ -108,7 +108,7 @@ fn a_mid_block_travel_excursion_that_the_end_points_miss_is_found() {
     // machine X = 100 cos C is 0 at both ends and 100 mm half way, past the 50 mm limit.
     let nc = "G21 G90 G94\nG43.4 H1\nG00 X100 Y0 Z50 A0 C-90\nG01 C90 F1000\nG49\nM30\n";
     let body = "[program]\nfile = \"p.nc\"\n[machine_overrides.axes.X]\nmax = 50.0\n";
-    let (code, v) = check("midblock", body, Some(nc), &[]);
+    let (code, v) = check("midblock", body, Some(nc), &["--programmed"]);
     assert_eq!(code, 1);
     let t = violations(&v, "travel");
     assert_eq!(t.len(), 1, "{t:?}");
@@ -138,7 +138,12 @@ fn a_mid_block_travel_excursion_that_the_end_points_miss_is_found() {
 fn inverse_time_blocks_that_are_too_short_exceed_the_velocity_limit() {
     // G93 F600: the block takes 1/600 min = 0.1 s, so 100 mm of X is 60000 mm/min.
     let nc = "G21 G90 G94\nG00 X0 Y0 Z100 A0 C0\nG93 G01 X100 F600\nM30\n";
-    let (code, v) = check("g93", "[program]\nfile = \"p.nc\"\n", Some(nc), &[]);
+    let (code, v) = check(
+        "g93",
+        "[program]\nfile = \"p.nc\"\n",
+        Some(nc),
+        &["--programmed"],
+    );
     assert_eq!(code, 1);
     let vel = violations(&v, "velocity");
     assert_eq!(vel.len(), 1, "{vel:?}");
@@ -158,7 +163,12 @@ fn inverse_time_blocks_that_are_too_short_exceed_the_velocity_limit() {
 fn a_tcp_move_that_asks_too_much_of_c_exceeds_its_velocity_limit() {
     // The tip moves 1 mm at F1000 (0.06 s) while C turns 90 deg: 90000 deg/min against 9000.
     let nc = "G21 G90 G94\nG43.4 H1\nG00 X100 Y0 Z50 A0 C0\nG01 X101 C90 F1000\nG49\nM30\n";
-    let (code, v) = check("tcp", "[program]\nfile = \"p.nc\"\n", Some(nc), &[]);
+    let (code, v) = check(
+        "tcp",
+        "[program]\nfile = \"p.nc\"\n",
+        Some(nc),
+        &["--programmed"],
+    );
     assert_eq!(code, 1);
     let c: Vec<_> = violations(&v, "velocity")
         .into_iter()
@@ -309,4 +319,101 @@ fn the_placement_map_marks_where_the_cone_fits_and_what_limits_it() {
     assert!(std::fs::read_to_string(dir.join("placement.csv"))
         .unwrap()
         .starts_with("center_x,center_y,margin_mm,fits"));
+}
+
+#[test]
+fn the_planner_holds_a_too_short_g93_block_at_the_x_limit_and_says_so() {
+    // G93 F100 asks 600 mm of X in 0.6 s (60000 mm/min); the planner runs X at its 30000
+    // (reached after 57 mm: (v/2)(v/a + a/j) with v 500 mm/s, a 3000 mm/s², j 50000 mm/s³).
+    let dir = scratch("check", "g93-planned");
+    let nc = "G21 G90 G94\nG00 X-300 Y0 Z100 A0 C0\nG93 G01 X300 F100\nM30\n";
+    std::fs::write(dir.join("p.nc"), nc).unwrap();
+    let path = write_scenario(&dir, &trt_ac(), "[program]\nfile = \"p.nc\"\n");
+    let out = mtsim(&["check", path.to_str().unwrap(), "--json"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["timing"], "planned");
+    let held = &v["feed_reductions"][0];
+    assert_eq!(
+        (held["axis"].as_str(), held["limit"].as_str()),
+        (Some("X"), Some("velocity"))
+    );
+    assert_eq!(held["first_line"].as_u64(), Some(3));
+    assert!(
+        (held["planned_per_min"].as_f64().unwrap() - 30000.0).abs() < 1e-6,
+        "{held}"
+    );
+    assert!(
+        (held["programmed_per_min"].as_f64().unwrap() - 60000.0).abs() < 1e-6,
+        "{held}"
+    );
+    let peak = v["axes"]["X"]["peak_velocity_per_min"].as_f64().unwrap();
+    assert!((29990.0..=30000.0 * (1.0 + 1e-9)).contains(&peak), "{peak}");
+    assert!(
+        stderr.contains("feed held") && stderr.contains("X velocity limit"),
+        "{stderr}"
+    );
+}
+
+/// The largest per-junction velocity step of `axis_index` (X Y Z A C: 0..5) over a cone
+/// program written by `mtsim cone`, per s: at block k the axis runs at `F d_i / L` with
+/// `L = sqrt(Σ d²)` (deg counted as mm).
+fn largest_junction_step(nc: &str, axis_index: usize) -> f64 {
+    let mut previous: Option<[f64; 5]> = None;
+    let mut velocities = Vec::new();
+    for line in nc.lines() {
+        if !(line.starts_with("G00") || line.starts_with("G01")) {
+            continue;
+        }
+        let word = |letter: char| -> f64 {
+            let w = line
+                .split_whitespace()
+                .find(|w| w.starts_with(letter))
+                .unwrap();
+            w[1..].parse().unwrap()
+        };
+        let q = [word('X'), word('Y'), word('Z'), word('A'), word('C')];
+        if let (Some(p), true) = (previous, line.starts_with("G01")) {
+            let d: Vec<f64> = (0..5).map(|i| q[i] - p[i]).collect();
+            let l = d.iter().map(|x| x * x).sum::<f64>().sqrt();
+            velocities.push(word('F') / 60.0 * d[axis_index] / l);
+        }
+        previous = Some(q);
+    }
+    velocities
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn check_measures_the_accelerations_the_planners_samples_reach_on_the_cone() {
+    let dir = scratch("check", "cone-accel");
+    let path = write_scenario(&dir, &trt_ac(), CONE_15_10);
+    let nc = dir.join("cone.nc");
+    let out = mtsim(&["cone", path.to_str().unwrap(), "-o", nc.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0));
+    // A junction's velocity step, taken within one 1 ms period, or split over two when the
+    // junction falls inside one: the sampled acceleration is between half of step/T and
+    // the limit.
+    let step = largest_junction_step(&std::fs::read_to_string(&nc).unwrap(), 0);
+    assert!(step > 1.0, "{step} mm/s");
+    let (code, v) = check("cone-accel", CONE_15_10, None, &[]);
+    assert_eq!(code, 0, "{v}");
+    assert_eq!(v["timing"], "planned");
+    let x = &v["axes"]["X"];
+    let peak = x["peak_acceleration_per_s2"].as_f64().unwrap();
+    assert!(
+        peak >= 0.5 * step / 1e-3 && peak <= 3000.0 * (1.0 + 1e-9),
+        "X peak {peak} mm/s² against a junction step of {step} mm/s"
+    );
+    assert!(x["peak_jerk_per_s3"].as_f64().unwrap() > 0.0, "{x}");
+    // At programmed timing the table says that junctions are not measured.
+    let out = mtsim(&["check", path.to_str().unwrap(), "--programmed"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("accelerations at junctions between blocks are not measured"),
+        "{text}"
+    );
 }

@@ -13,4 +13,5 @@ mod run_folders;
 mod scale_out;
 mod scripts;
 mod shard_provenance;
+mod tcp_option;
 mod usability;

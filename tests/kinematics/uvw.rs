@@ -95,10 +95,10 @@ M2
         "axis_foam",
         program,
         NO_COLLISIONS,
-        &["check", "--json"],
+        &["check", "--json", "--programmed"],
     ));
     assert_eq!(v["violations"].as_array().unwrap().len(), 0, "{v}");
-    // `check` samples the program at its programmed timing every 1 ms: an extreme is met
+    // `check --programmed` samples the program at its programmed timing every 1 ms: an extreme is met
     // within one sample's travel (U at most 600 mm/min = 0.01 mm per sample).
     for (axis, lo, hi) in [
         ("X", 0.0, 30.0),
@@ -146,13 +146,13 @@ M2
 #[test]
 fn a_pure_u_move_takes_its_length_at_f() {
     // One G1 of U alone after the first move: 30 mm at 600 mm/min, 3 s at the programmed
-    // timing `check` samples.
+    // timing `check --programmed` samples.
     let v = stdout_json(&run(
         "foam-u",
         "axis_foam",
         "G21 G90 G0 U0\nG1 F600 U30\nM2\n",
         NO_COLLISIONS,
-        &["check", "--json"],
+        &["check", "--json", "--programmed"],
     ));
     let t = v["sim_time_s"].as_f64().unwrap();
     assert!((t - 3.0).abs() < 1e-9, "{t} s");

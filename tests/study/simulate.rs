@@ -151,6 +151,117 @@ fn a_gain_mismatch_draws_an_ellipse_at_45_or_135_deg_that_flips_with_direction()
     );
 }
 
+/// A circle of radius `r` mm at `feed` mm/min, both directions, on the three-axis VMC.
+fn circle_r(r: f64, feed: f64, overrides: &str) -> String {
+    scenario_text(
+        &machine("vmc-3axis"),
+        &format!("[program.circle]\nplane = \"XY\"\nradius_mm = {r}\nfeed_mm_min = {feed}\ndirections = [\"ccw\", \"cw\"]\ncenter_mm = [0.0, 0.0, 0.0]\n{overrides}"),
+    )
+}
+
+/// The closed-form radius loss of equal first-order loops, um: `r (1/sqrt(1 + (ω/Kv)²) − 1)`.
+fn radius_loss_um(r: f64, feed: f64, kv: f64) -> f64 {
+    let w = feed / 60.0 / r;
+    r * (1.0 / (1.0 + (w / kv).powi(2)).sqrt() - 1.0) * 1e3
+}
+
+#[test]
+fn circles_at_the_feeds_people_test_at_start_at_speed_with_equal_loops() {
+    // Equal first-order loops leave a uniform radius loss: G is 0 once the lead-in has
+    // reached the feed and the loops have settled.
+    for (r, feed, tolerance) in [
+        (25.0, 5000.0, 0.01),
+        (50.0, 5000.0, 0.01),
+        (10.0, 3000.0, 0.02),
+    ] {
+        let (s, _) = run(
+            &format!("speed{r}"),
+            &circle_r(r, feed, &first_order(&["X", "Y", "Z"], &[30.0; 3], 0.0)),
+        );
+        let b = s.ballbar.as_ref().unwrap();
+        assert!(
+            b.circular_deviation_um < 0.3,
+            "r {r} F{feed}: G {} um",
+            b.circular_deviation_um
+        );
+        let want = radius_loss_um(r, feed, 30.0);
+        for got in [b.radial_max_um, b.radial_min_um] {
+            assert!(
+                (got - want).abs() <= tolerance * want.abs(),
+                "r {r} F{feed}: {got} um vs {want} um"
+            );
+        }
+        // The lead-in holds at least the time to reach the feed from rest (double S with
+        // the arc's a = min(½ amax, ⅓ jmax r / (3 v)), j = ⅓ jmax) plus 5 time constants.
+        let lead = s.lead_in.expect("a circle reports its lead-in");
+        let v = feed / 60.0;
+        let (a, j) = (
+            f64::min(1500.0, 50000.0 / 3.0 * r / (3.0 * v)),
+            50000.0 / 3.0,
+        );
+        let t_reach = if v > a * a / j {
+            v / a + a / j
+        } else {
+            2.0 * (v / j).sqrt()
+        };
+        assert!(
+            lead.time_s >= t_reach + 5.0 / 30.0,
+            "{lead:?} vs {t_reach} s + 5/Kv"
+        );
+        let arc_mm = lead.deg.to_radians() * r;
+        assert!(arc_mm >= v * t_reach / 2.0 + v * 5.0 / 30.0, "{lead:?}");
+        assert!(s.feed_reductions.is_empty(), "{:?}", s.feed_reductions);
+    }
+}
+
+#[test]
+fn a_small_circle_runs_at_its_feed_and_the_servo_mismatch_reads_true() {
+    // r 10 mm at F3000: the axes see v²/r = 250 mm/s² and v³/r² = 1.25 m/s³ against 3000 mm/s²
+    // and 50 m/s³, so the feed holds. Kv 30/27: T_x − T_y = 1/30 − 1/27 s.
+    let (s, _) = run(
+        "small",
+        &circle_r(
+            10.0,
+            3000.0,
+            &first_order(&["X", "Y", "Z"], &[30.0, 27.0, 30.0], 0.0),
+        ),
+    );
+    assert!(s.feed_reductions.is_empty(), "{:?}", s.feed_reductions);
+    let want_ms = (1.0 / 30.0 - 1.0 / 27.0) * 1e3;
+    let got = s.diagnostics.unwrap().circle.unwrap().servo_mismatch_ms;
+    assert!(
+        (got - want_ms).abs() <= 0.05 * want_ms.abs(),
+        "{got} ms vs {want_ms} ms"
+    );
+}
+
+#[test]
+fn a_circle_too_small_for_the_axis_jerk_is_held_and_says_so() {
+    // r 1 mm at F3000: the axis jerk v³/r² = 125 m/s³ is above the 50 m/s³ limit. The planner
+    // keeps v³ |q'''| within ⅓ jmax (|q'''| = 1/r², raised by at most 10 % between samples).
+    let (s, _) = run(
+        "held",
+        &circle_r(1.0, 3000.0, &first_order(&["X", "Y", "Z"], &[30.0; 3], 0.0)),
+    );
+    let held = s.feed_reductions.first().expect("the feed is held");
+    let bound = (50000.0_f64 / 3.0).cbrt() * 60.0;
+    assert!(
+        held.planned_per_min <= bound && held.planned_per_min >= 0.95 * bound,
+        "{held:?} vs {bound} mm/min"
+    );
+    assert_eq!(held.programmed_per_min, 3000.0);
+    assert!(
+        ["X", "Y"].contains(&held.axis.to_string().as_str()),
+        "{held:?}"
+    );
+    assert_eq!(format!("{:?}", held.limit), "Jerk");
+    assert!(
+        s.warnings.iter().any(|w| w.contains("jerk limit holds")),
+        "{:?}",
+        s.warnings
+    );
+}
+
 #[test]
 fn backlash_on_x_in_a_semi_closed_loop_steps_the_trace_by_b_plus_2ff_over_k_at_x_reversals() {
     // b = 10 um, Fc = 150 N, k = 200 N/um: b + 2 Fc / k = 11.5 um. Only X has friction.

@@ -16,8 +16,9 @@ pub const COMMANDED_TOLERANCE: f64 = 0.01;
 /// own sampling interval, twice).
 pub const DURATION_TOLERANCE: f64 = 0.02;
 
-/// Refuses a trace whose directions, commanded positions or duration differ from the
-/// scenario's (`runs`: this trace's runs, simulated).
+/// Refuses a trace whose directions, duration or commanded positions differ from the
+/// scenario's (`runs`: this trace's runs, simulated), naming every difference: another feed
+/// also moves the commanded corners (the planner's blending) by a few um.
 pub fn check(
     scenario: &Scenario,
     trace: &MeasuredTrace,
@@ -54,11 +55,19 @@ pub fn check(
             }
         }
         let rows: Vec<&MeasuredPoint> = run.rows.iter().map(|&i| &measured[i]).collect();
-        if let Some(what) = commanded_difference(trace, &rows, &run.samples) {
-            return refuse(what);
-        }
-        if let Some(what) = duration_difference(&rows, &run.samples) {
-            return refuse(format!("{} ({})", what, direction_name(run.direction)));
+        let differences: Vec<String> = [
+            duration_difference(&rows, &run.samples),
+            commanded_difference(trace, &rows, &run.samples),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        if !differences.is_empty() {
+            return refuse(format!(
+                "{} ({})",
+                differences.join("; "),
+                direction_name(run.direction)
+            ));
         }
     }
     Ok(())

@@ -453,7 +453,7 @@ fn trace_fits(
 fn warnings(traces: &[TraceFit]) -> Vec<String> {
     traces
         .iter()
-        .filter(|t| t.noise.ratio > noise::EXCESS_RATIO)
+        .filter(|t| !t.noise.suggests.is_empty())
         .map(|t| {
             format!(
                 "{}: the residual ({:.3} um RMS) is {:.1} times the noise estimated from the trace \

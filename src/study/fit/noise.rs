@@ -24,8 +24,11 @@ use super::model::{Recorded, Run};
 use crate::input::program::Direction;
 use crate::Axis;
 
-/// Residual RMS above this multiple of the estimated noise is reported as unmodelled.
+/// Residual RMS above this multiple of the estimated noise is reported as unmodelled...
 pub const EXCESS_RATIO: f64 = 2.0;
+/// ...when the excess, `√(rms² − noise²)`, is also above this, um (a noise-free simulated
+/// trace has a residual of ~0.01 um from its printed digits and the binning).
+pub const EXCESS_FLOOR_UM: f64 = 0.05;
 /// Bootstrap replicates, and the seed of their random numbers (deterministic output).
 pub const REPLICATES: usize = 200;
 const SEED: u64 = 0x6d74_7369_6d5f_6669;
@@ -53,7 +56,8 @@ pub struct NoiseCheck {
     pub spike_um: f64,
     pub spike_theta_deg: Option<f64>,
     pub spike_width_deg: Option<f64>,
-    /// What the shape suggests, when the residual is well above the noise.
+    /// What the shape suggests, when the residual is well above the noise (empty otherwise:
+    /// the trace is explained).
     pub suggests: Vec<String>,
 }
 
@@ -217,15 +221,15 @@ pub(super) fn check_trace(runs: &[&Run], measured_theta: &[f64], residual: &DVec
     c.noise_um = (noise2 / n).sqrt();
     let rms = (rss / n).sqrt();
     c.ratio = if c.noise_um > 0.0 { rms / c.noise_um } else { 0.0 };
-    if c.ratio > EXCESS_RATIO {
-        c.suggests = suggestions(&c, rms);
+    let excess = (rms * rms - c.noise_um * c.noise_um).max(0.0).sqrt();
+    if c.ratio > EXCESS_RATIO && excess > EXCESS_FLOOR_UM {
+        c.suggests = suggestions(&c, excess);
     }
     c
 }
 
 /// What the residual's shape suggests, with its figures.
-fn suggestions(c: &NoiseCheck, rms: f64) -> Vec<String> {
-    let excess = (rms * rms - c.noise_um * c.noise_um).max(0.0).sqrt();
+fn suggestions(c: &NoiseCheck, excess: f64) -> Vec<String> {
     let mut out = Vec::new();
     if c.step_um.abs() >= (3.0 * c.noise_um).max(0.5 * excess) {
         out.push(format!(

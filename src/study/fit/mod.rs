@@ -505,7 +505,7 @@ fn write_outputs(
             let (scenario, trace) = &problem.inputs[r.trace];
             PlotSeries {
                 label: format!(
-                    "{} <- {} ({})",
+                    "{} (trace {}, {})",
                     file_name(&scenario.path),
                     file_name(&trace.path),
                     noise::direction_name(r.direction)

@@ -473,7 +473,11 @@ fn warnings(traces: &[TraceFit]) -> Vec<String> {
 fn cautions(estimates: &[ParamEstimate]) -> Vec<String> {
     estimates
         .iter()
-        .filter(|e| e.identifiable && e.name.starts_with("backlash_"))
+        .filter(|e| {
+            // Only a backlash the fit claims: positive and beyond twice its standard error.
+            e.name.starts_with("backlash_")
+                && e.value.zip(e.standard_error).is_some_and(|(v, se)| v > 2.0 * se)
+        })
         .map(|e| {
             format!(
                 "{} = {} {} is the lost motion at the reversal: backlash and friction's elastic \

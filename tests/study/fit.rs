@@ -541,7 +541,10 @@ fn a_misplaced_table_ball_gives_no_false_confident_errors_by_default() {
     assert!(fit["warnings"].as_array().unwrap().is_empty(), "{fit}");
     for t in fit["traces"].as_array().unwrap() {
         let noise = t["noise"]["noise_um"].as_f64().unwrap();
-        assert!((noise - 0.2).abs() < 0.03, "noise estimate {noise} um, truth 0.2");
+        assert!(
+            (noise - 0.2).abs() < 0.03,
+            "noise estimate {noise} um, truth 0.2"
+        );
     }
 
     let out = fit_output(&dir.join("known"), &pairs, &["--json", "--placement-known"]);
@@ -638,11 +641,14 @@ fn standard_errors_match_the_spread_over_noise_seeds() {
         let fit = common::stdout_json(&fit_output(&dir.join("fit"), &pairs, &["--json"]));
         for p in fit["parameters"].as_array().unwrap() {
             if p["identifiable"] == true {
-                values.entry(p["name"].as_str().unwrap().to_string()).or_default().push((
-                    p["value"].as_f64().unwrap(),
-                    p["standard_error"].as_f64().unwrap(),
-                    p["standard_error_white"].as_f64().unwrap(),
-                ));
+                values
+                    .entry(p["name"].as_str().unwrap().to_string())
+                    .or_default()
+                    .push((
+                        p["value"].as_f64().unwrap(),
+                        p["standard_error"].as_f64().unwrap(),
+                        p["standard_error_white"].as_f64().unwrap(),
+                    ));
             }
         }
     }

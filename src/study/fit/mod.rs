@@ -67,6 +67,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::input::scenario::Scenario;
 use crate::kinematics::{Layout, LocationParam};
 use crate::report::fit_plot::{render_fit_svg, PlotSeries};
 use crate::report::{create_dir, write_atomic};
@@ -77,7 +78,6 @@ pub use measured::{MeasuredPoint, MeasuredTrace};
 use model::Run;
 pub use noise::NoiseCheck;
 use suggest::suggest;
-use crate::input::scenario::Scenario;
 
 /// Singular values below this fraction of the largest (of the column-scaled sensitivity
 /// matrix) span the null space. Exact degeneracies of the ideal test sit at ~1e-10; some are
@@ -230,7 +230,6 @@ pub struct FitReport {
     /// The `[location_errors]` fragment (also written to location-errors.toml).
     pub fragment: String,
 }
-
 
 /// Fits location errors (the placement and the options) to `(scenario, measured trace)`
 /// pairs and writes fit.json, location-errors.toml, fit.svg and fit.html into `out_dir`.
@@ -423,7 +422,8 @@ fn trace_fits(
         let idx: Vec<usize> = own.iter().flat_map(|r| r.rows.clone()).collect();
         let m = idx.len() as f64;
         let mean = idx.iter().map(|&i| y[i]).sum::<f64>() / m;
-        let rms = |f: &dyn Fn(usize) -> f64| (idx.iter().map(|&i| f(i).powi(2)).sum::<f64>() / m).sqrt();
+        let rms =
+            |f: &dyn Fn(usize) -> f64| (idx.iter().map(|&i| f(i).powi(2)).sum::<f64>() / m).sqrt();
         let j = problem
             .params
             .iter()
@@ -476,7 +476,9 @@ fn cautions(estimates: &[ParamEstimate]) -> Vec<String> {
         .filter(|e| {
             // Only a backlash the fit claims: positive and beyond twice its standard error.
             e.name.starts_with("backlash_")
-                && e.value.zip(e.standard_error).is_some_and(|(v, se)| v > 2.0 * se)
+                && e.value
+                    .zip(e.standard_error)
+                    .is_some_and(|(v, se)| v > 2.0 * se)
         })
         .map(|e| {
             format!(
@@ -547,7 +549,6 @@ fn round_sig(v: f64) -> f64 {
     (v * s).round() / s
 }
 
-
 fn fragment_text(
     params: &[Param],
     estimates: &[ParamEstimate],
@@ -583,4 +584,3 @@ fn fragment_text(
     }
     s
 }
-

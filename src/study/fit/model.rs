@@ -151,4 +151,3 @@ pub(super) fn with_servo(
     }
     m
 }
-

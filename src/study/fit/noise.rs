@@ -34,10 +34,14 @@ pub const REPLICATES: usize = 200;
 const SEED: u64 = 0x6d74_7369_6d5f_6669;
 /// Half-width of the windows either side of a reversal for its step, deg.
 const STEP_WINDOW_DEG: f64 = 3.0;
+/// How far from a commanded reversal its step is looked for, deg.
+const STEP_SEARCH_DEG: f64 = 4.0;
 /// Half-width of the running median a spike is measured against, deg.
 const SPIKE_WINDOW_DEG: f64 = 2.5;
-/// A spike narrower than this (full width at half height) is "narrow", deg.
+/// A spike narrower than this (full width at half height) is "narrow", deg...
 const NARROW_DEG: f64 = 3.0;
+/// ...and at least this many points wide: one point between two levels is a step.
+const SPIKE_POINTS: usize = 3;
 
 /// One trace's residual against its noise, um.
 #[derive(Clone, Debug, Default, Serialize)]
@@ -156,20 +160,32 @@ fn window(pts: &[(f64, f64)], from: f64, to: f64) -> Vec<f64> {
         .collect()
 }
 
-/// The largest step across a reversal: median after minus median before.
+/// The step at `t`: median of the window after minus median of the window before.
+fn step_at(pts: &[(f64, f64)], t: f64) -> Option<f64> {
+    let mut before = window(pts, t - STEP_WINDOW_DEG, t);
+    let mut after = window(pts, t, t + STEP_WINDOW_DEG);
+    (before.len() >= 3 && after.len() >= 3).then(|| median(&mut after) - median(&mut before))
+}
+
+/// The largest step near a reversal: the split is searched within [`STEP_SEARCH_DEG`] of the
+/// commanded reversal, since the actual one lags it (servo lag, the dead zone taken up).
+/// Returns (step um, axis, θ of the step deg).
 fn largest_step(pts: &[(f64, f64)], samples: &[Recorded]) -> Option<(f64, Axis, f64)> {
     reversals(samples)
         .into_iter()
-        .filter_map(|(axis, t)| {
-            let mut before = window(pts, t - STEP_WINDOW_DEG, t);
-            let mut after = window(pts, t, t + STEP_WINDOW_DEG);
-            (before.len() >= 3 && after.len() >= 3)
-                .then(|| (median(&mut after) - median(&mut before), axis, t))
+        .flat_map(|(axis, t)| {
+            pts.iter()
+                .filter(move |p| {
+                    let d = (p.0 - t + 180.0).rem_euclid(360.0) - 180.0;
+                    d.abs() <= STEP_SEARCH_DEG
+                })
+                .filter_map(move |p| step_at(pts, p.0).map(|h| (h, axis, p.0)))
         })
         .max_by(|a, b| a.0.abs().total_cmp(&b.0.abs()))
 }
 
-/// The largest excursion from the running median: (height um, θ deg, width deg).
+/// The largest excursion from the running median at least [`SPIKE_POINTS`] wide at half
+/// height: (height um, θ deg, width deg).
 fn largest_spike(pts: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
     let dev: Vec<f64> = pts
         .iter()
@@ -178,25 +194,32 @@ fn largest_spike(pts: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
             p.1 - median(&mut w)
         })
         .collect();
-    let (i, peak) = dev
-        .iter()
-        .copied()
-        .enumerate()
-        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?;
-    let half = 0.5 * peak.abs();
-    let inside = |j: usize| dev[j].abs() >= half && dev[j].signum() == peak.signum();
-    let (mut lo, mut hi) = (i, i);
-    while lo > 0 && inside(lo - 1) {
-        lo -= 1;
-    }
-    while hi + 1 < dev.len() && inside(hi + 1) {
-        hi += 1;
-    }
-    Some((peak, pts[i].0, pts[hi].0 - pts[lo].0))
+    let extent = |i: usize| {
+        let peak = dev[i];
+        let inside = |j: usize| dev[j].abs() >= 0.5 * peak.abs() && dev[j].signum() == peak.signum();
+        let (mut lo, mut hi) = (i, i);
+        while lo > 0 && inside(lo - 1) {
+            lo -= 1;
+        }
+        while hi + 1 < dev.len() && inside(hi + 1) {
+            hi += 1;
+        }
+        (lo, hi)
+    };
+    let mut order: Vec<usize> = (0..dev.len()).collect();
+    order.sort_by(|a, b| dev[*b].abs().total_cmp(&dev[*a].abs()));
+    order.into_iter().find_map(|i| {
+        let (lo, hi) = extent(i);
+        (hi - lo + 1 >= SPIKE_POINTS).then(|| (dev[i], pts[i].0, pts[hi].0 - pts[lo].0))
+    })
 }
 
 /// Checks one trace's residual (its runs) against the noise estimated from it.
-pub(super) fn check_trace(runs: &[&Run], measured_theta: &[f64], residual: &DVector<f64>) -> NoiseCheck {
+pub(super) fn check_trace(
+    runs: &[&Run],
+    measured_theta: &[f64],
+    residual: &DVector<f64>,
+) -> NoiseCheck {
     let mut c = NoiseCheck::default();
     let (mut noise2, mut rss, mut n) = (0.0, 0.0, 0usize);
     for run in runs {
@@ -220,7 +243,11 @@ pub(super) fn check_trace(runs: &[&Run], measured_theta: &[f64], residual: &DVec
     let n = n.max(1) as f64;
     c.noise_um = (noise2 / n).sqrt();
     let rms = (rss / n).sqrt();
-    c.ratio = if c.noise_um > 0.0 { rms / c.noise_um } else { 0.0 };
+    c.ratio = if c.noise_um > 0.0 {
+        rms / c.noise_um
+    } else {
+        0.0
+    };
     let excess = (rms * rms - c.noise_um * c.noise_um).max(0.0).sqrt();
     if c.ratio > EXCESS_RATIO && excess > EXCESS_FLOOR_UM {
         c.suggests = suggestions(&c, excess);
@@ -356,5 +383,68 @@ pub fn direction_name(d: Direction) -> &'static str {
     match d {
         Direction::Ccw => "ccw",
         Direction::Cw => "cw",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::AxisVec;
+
+    /// A revolution whose commanded X, sin θ, reverses at 90 and 270 deg.
+    fn samples() -> Vec<Recorded> {
+        (0..3600)
+            .map(|i| {
+                let t = i as f64 * 0.1;
+                let mut q = AxisVec::ZERO;
+                q[Axis::X] = (t - 90.0).to_radians().cos();
+                Recorded {
+                    theta_deg: t,
+                    time_s: i as f64 * 1e-3,
+                    commanded: q,
+                    actual: q,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_step_at_a_reversal_and_a_narrow_spike_are_measured() {
+        let s = samples();
+        let revs = reversals(&s);
+        assert_eq!(revs.len(), 2, "{revs:?}");
+        assert!(revs.iter().all(|r| r.0 == Axis::X));
+        assert!((revs[0].1 - 90.0).abs() < 0.2 && (revs[1].1 - 270.0).abs() < 0.2, "{revs:?}");
+        // +2 um at 90 deg, -2 um at 270, a 1.5 um spike 1 deg wide at 45 deg, every 0.2 deg.
+        let pts: Vec<(f64, f64)> = (0..1800)
+            .map(|i| {
+                let t = i as f64 * 0.2 + 0.1;
+                let step = if t > 90.0 && t < 270.0 { 1.0 } else { -1.0 };
+                let spike = if (t - 45.0).abs() < 0.5 { 1.5 } else { 0.0 };
+                (t, step + spike)
+            })
+            .collect();
+        let (h, axis, t) = largest_step(&pts, &s).unwrap();
+        assert!((h.abs() - 2.0).abs() < 1e-9 && axis == Axis::X, "{h} {axis} {t}");
+        // Noise-free levels tie over the splits whose windows each hold one level's majority.
+        assert!((t - 90.0).abs() < 2.0 || (t - 270.0).abs() < 2.0, "{t}");
+        let (h, t, w) = largest_spike(&pts).unwrap();
+        assert!((h - 1.5).abs() < 1e-9 && (t - 45.0).abs() < 0.6 && (w - 0.8).abs() < 0.3, "{h} {t} {w}");
+    }
+
+    #[test]
+    fn white_noise_is_estimated_through_a_smooth_shape() {
+        // Deterministic pseudo-noise: uniform in [-√3, √3] σ (variance σ²).
+        let mut g = SplitMix(7);
+        let sigma = 0.2;
+        let r: Vec<f64> = (0..5000)
+            .map(|i| {
+                let u = g.below(1_000_000) as f64 / 1e6;
+                5.0 * (i as f64 * 0.002).sin() + sigma * 3f64.sqrt() * (2.0 * u - 1.0)
+            })
+            .collect();
+        let est = white_noise_um(&r);
+        // MAD-based: uniform noise is not Gaussian, so allow 15 %.
+        assert!((est / sigma - 1.0).abs() < 0.15, "{est}");
     }
 }

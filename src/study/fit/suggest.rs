@@ -14,7 +14,10 @@ use crate::pipeline::Timing;
 use crate::study::simulate::bar_geometry;
 
 /// Scores candidate extra cone tests by the null space they leave (geometric part only).
-pub(super) fn suggest(inputs: &[(Scenario, MeasuredTrace)], params: &[Param]) -> Result<Option<Suggestion>> {
+pub(super) fn suggest(
+    inputs: &[(Scenario, MeasuredTrace)],
+    params: &[Param],
+) -> Result<Option<Suggestion>> {
     let Some((base, cone)) = inputs.iter().find_map(|(s, _)| match &s.program {
         Program::Cone { cone, .. } => Some((s, *cone)),
         _ => None,

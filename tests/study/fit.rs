@@ -673,3 +673,61 @@ fn standard_errors_match_the_spread_over_noise_seeds() {
         );
     }
 }
+
+/// An effect the model lacks: 4 um of X backlash, fitted without `--backlash`. The residual
+/// is reported as well above the estimated noise, with steps at the reversals of X of about
+/// the backlash; with `--backlash` the backlash is fitted (4 um) and comes with the caution
+/// that a ball bar cannot tell it from friction's elastic lost motion.
+#[test]
+fn unmodelled_backlash_is_named_from_the_residual() {
+    let dir = common::scratch("fit", "unmodelled");
+    let truth = machine(&dir, "truth", &HIDDEN);
+    let mut text = std::fs::read_to_string(&truth).unwrap();
+    text.push_str("\n[axes.X.drive]\nbacklash_mm = 0.004\n");
+    std::fs::write(&truth, text).unwrap();
+    let nominal = machine(&dir, "nominal", &[]);
+    let mut pairs = Vec::new();
+    for (i, c) in [(15.0, 10.0, 200.0), (45.0, 30.0, 200.0)]
+        .iter()
+        .enumerate()
+    {
+        let s_true = scenario(&dir, &format!("true{i}"), &truth, *c, "");
+        let measured = measure(&dir, &format!("m{i}"), &s_true, 0.2, 51 + i as u64);
+        pairs.push((
+            scenario(&dir, &format!("fit{i}"), &nominal, *c, ""),
+            measured,
+        ));
+    }
+    let out = fit_output(&dir.join("fit"), &pairs, &["--json"]);
+    let fit = common::stdout_json(&out);
+    let warnings = fit["warnings"].as_array().unwrap();
+    assert_eq!(warnings.len(), 2, "{fit}");
+    for t in fit["traces"].as_array().unwrap() {
+        let n = &t["noise"];
+        assert!(n["ratio"].as_f64().unwrap() > 3.0, "{n}");
+        assert_eq!(n["step_axis"], "X", "{n}");
+        let step = n["step_um"].as_f64().unwrap().abs();
+        assert!(
+            (2.5..=5.0).contains(&step),
+            "step {step} um for 4 um of backlash"
+        );
+        assert!(
+            n["suggests"][0].as_str().unwrap().contains("backlash"),
+            "{n}"
+        );
+    }
+    assert!(flat(&out.stderr).contains("reversals of X"));
+
+    let out = fit_output(&dir.join("fit2"), &pairs, &["--json", "--backlash"]);
+    let fit = common::stdout_json(&out);
+    let b = param(&fit, "backlash_X")["value"].as_f64().unwrap();
+    assert!((b - 4.0).abs() < 0.3, "backlash_X {b}");
+    let cautions = fit["cautions"].as_array().unwrap();
+    assert!(
+        cautions
+            .iter()
+            .any(|c| c.as_str().unwrap().contains("backlash_X")
+                && c.as_str().unwrap().contains("pre-sliding")),
+        "{fit}"
+    );
+}

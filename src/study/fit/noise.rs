@@ -196,7 +196,8 @@ fn largest_spike(pts: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
         .collect();
     let extent = |i: usize| {
         let peak = dev[i];
-        let inside = |j: usize| dev[j].abs() >= 0.5 * peak.abs() && dev[j].signum() == peak.signum();
+        let inside =
+            |j: usize| dev[j].abs() >= 0.5 * peak.abs() && dev[j].signum() == peak.signum();
         let (mut lo, mut hi) = (i, i);
         while lo > 0 && inside(lo - 1) {
             lo -= 1;
@@ -414,7 +415,10 @@ mod tests {
         let revs = reversals(&s);
         assert_eq!(revs.len(), 2, "{revs:?}");
         assert!(revs.iter().all(|r| r.0 == Axis::X));
-        assert!((revs[0].1 - 90.0).abs() < 0.2 && (revs[1].1 - 270.0).abs() < 0.2, "{revs:?}");
+        assert!(
+            (revs[0].1 - 90.0).abs() < 0.2 && (revs[1].1 - 270.0).abs() < 0.2,
+            "{revs:?}"
+        );
         // +2 um at 90 deg, -2 um at 270, a 1.5 um spike 1 deg wide at 45 deg, every 0.2 deg.
         let pts: Vec<(f64, f64)> = (0..1800)
             .map(|i| {
@@ -425,11 +429,17 @@ mod tests {
             })
             .collect();
         let (h, axis, t) = largest_step(&pts, &s).unwrap();
-        assert!((h.abs() - 2.0).abs() < 1e-9 && axis == Axis::X, "{h} {axis} {t}");
+        assert!(
+            (h.abs() - 2.0).abs() < 1e-9 && axis == Axis::X,
+            "{h} {axis} {t}"
+        );
         // Noise-free levels tie over the splits whose windows each hold one level's majority.
         assert!((t - 90.0).abs() < 2.0 || (t - 270.0).abs() < 2.0, "{t}");
         let (h, t, w) = largest_spike(&pts).unwrap();
-        assert!((h - 1.5).abs() < 1e-9 && (t - 45.0).abs() < 0.6 && (w - 0.8).abs() < 0.3, "{h} {t} {w}");
+        assert!(
+            (h - 1.5).abs() < 1e-9 && (t - 45.0).abs() < 0.6 && (w - 0.8).abs() < 0.3,
+            "{h} {t} {w}"
+        );
     }
 
     #[test]

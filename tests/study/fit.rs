@@ -125,22 +125,15 @@ fn with_noise(
     path
 }
 
+/// `fit --json --placement-known` of `pairs` into `dir/fit` (the traces are simulated with
+/// the ball where the scenario says).
 fn run_fit(dir: &Path, pairs: &[(&Path, &Path)]) -> Value {
     let out = dir.join("fit");
-    let mut args: Vec<String> = vec!["fit".into()];
-    for (s, m) in pairs {
-        args.push(s.display().to_string());
-        args.push("--measured".into());
-        args.push(m.display().to_string());
-    }
-    args.extend([
-        "-o".into(),
-        out.display().to_string(),
-        "--json".into(),
-        "--placement-known".into(),
-    ]);
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let v = common::stdout_json(&common::mtsim(&args));
+    let owned: Vec<(PathBuf, PathBuf)> = pairs
+        .iter()
+        .map(|(s, m)| (s.to_path_buf(), m.to_path_buf()))
+        .collect();
+    let v = common::stdout_json(&fit_output(&out, &owned, &["--json", "--placement-known"]));
     for f in ["fit.json", "location-errors.toml", "fit.svg", "fit.html"] {
         assert!(out.join(f).is_file(), "fit wrote no {f}");
     }

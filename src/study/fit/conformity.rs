@@ -3,9 +3,9 @@
 //! same θ (the angles and the radius of the test), and the duration of the revolution (the
 //! feed). Inputs: the trace, its simulated runs. Output: `Ok`, or an error naming what differs.
 
+use super::measured::{MeasuredPoint, MeasuredTrace};
 use super::model::{Recorded, Run};
 use super::noise::direction_name;
-use super::{MeasuredPoint, MeasuredTrace};
 use crate::error::{Error, Result};
 use crate::input::scenario::{Program, Scenario};
 use crate::Axis;

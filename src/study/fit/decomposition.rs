@@ -6,7 +6,17 @@ use std::collections::BTreeMap;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{round_sig, NullDirection, Param, MIN_VISIBILITY, NULL_ENTRY, NULL_TOLERANCE};
+use serde::Serialize;
+
+use super::params::{round_sig, Param, MIN_VISIBILITY, NULL_ENTRY, NULL_TOLERANCE};
+
+/// A direction in parameter space that the tests cannot see.
+#[derive(Clone, Debug, Serialize)]
+pub struct NullDirection {
+    /// Parameter → coefficient (per unit of the pivot parameter, which has 1).
+    pub direction: BTreeMap<String, f64>,
+    pub description: String,
+}
 
 /// The column-scaled SVD of a sensitivity matrix.
 pub(super) struct Decomposition {

@@ -5,8 +5,9 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::decomposition::Decomposition;
+use super::measured::{MeasuredPoint, MeasuredTrace};
 use super::model::{predict, record, with_servo, Run};
-use super::{MeasuredPoint, MeasuredTrace, Param, BACKLASH_STEP, GAIN_STEP, GEOMETRY_STEP};
+use super::params::{Param, BACKLASH_STEP, GAIN_STEP, GEOMETRY_STEP};
 use crate::error::{Error, Result};
 use crate::input::program::Direction;
 use crate::input::scenario::Scenario;

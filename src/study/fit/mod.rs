@@ -51,6 +51,7 @@
 //! For a cone, candidate extra tests (another height of the centre, the other standard
 //! α/β, a centre off the C axis) are scored by the null space of the enlarged sensitivity
 //! matrix (geometric part, programmed timing); the best is suggested.
+
 mod conformity;
 mod decomposition;
 mod estimate;
@@ -58,178 +59,35 @@ mod measured;
 mod model;
 pub mod noise;
 mod page;
+mod params;
+mod result;
 mod suggest;
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use nalgebra::{DMatrix, DVector};
-use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
 use crate::kinematics::{Layout, LocationParam};
 use crate::report::fit_plot::{render_fit_svg, PlotSeries};
 use crate::report::{create_dir, write_atomic};
-use crate::Axis;
 use decomposition::describe_null;
+pub use decomposition::NullDirection;
 use estimate::{Problem, Solution};
 pub use measured::{MeasuredPoint, MeasuredTrace};
 use model::Run;
 pub use noise::NoiseCheck;
+pub(crate) use params::{round6, round_sig, Param};
+pub use params::{FitOptions, MIN_VISIBILITY, NULL_TOLERANCE};
+pub use result::{FitReport, ParamEstimate, Suggestion, TraceFit};
 use suggest::suggest;
-
-/// Singular values below this fraction of the largest (of the column-scaled sensitivity
-/// matrix) span the null space. Exact degeneracies of the ideal test sit at ~1e-10; some are
-/// broken only by second-order effects such as the servo lag of the recorded motion
-/// (~1e-5, e.g. the table-ball placement against the A-axis errors when the placement is fitted), which
-/// no real noise level resolves; genuine information starts near 1e-3.
-pub const NULL_TOLERANCE: f64 = 1e-4;
-/// Smallest RMS change of the traces, um per unit of a parameter (um, urad, mdeg, 1/s),
-/// for the parameter to count as seen at all.
-pub const MIN_VISIBILITY: f64 = 0.01;
-/// Entries of a null direction below this fraction of its largest (column-scaled) are
-/// rounding noise and dropped.
-const NULL_ENTRY: f64 = 1e-4;
-/// Finite-difference step of the location errors, um or urad.
-const GEOMETRY_STEP: f64 = 1.0;
-/// Finite-difference steps of backlash (um, or mdeg) and servo gain (1/s).
-const BACKLASH_STEP: f64 = 2.0;
-const GAIN_STEP: f64 = 0.5;
 
 /// Files `fit` writes.
 pub const FIT_JSON: &str = "fit.json";
 pub const FRAGMENT_FILE: &str = "location-errors.toml";
 pub const FIT_PLOT: &str = "fit.svg";
 pub const FIT_PAGE: &str = "fit.html";
-
-/// What to estimate besides the location errors and the bar-length offsets.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct FitOptions {
-    /// The table ball's placement is known: do not fit its error (three translations per
-    /// trace, fitted by default).
-    pub placement_known: bool,
-    /// Per-axis backlash.
-    pub backlash: bool,
-    /// Per-axis servo position-loop gain.
-    pub servo_gain: bool,
-}
-
-/// One parameter of the fit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Param {
-    Location(LocationParam),
-    BarOffset(usize),
-    Setup(usize, usize),
-    Backlash(Axis),
-    Gain(Axis),
-}
-
-impl Param {
-    fn name(&self) -> String {
-        match self {
-            Param::Location(p) => p.name().to_string(),
-            Param::BarOffset(k) => format!("bar_offset[{k}]"),
-            Param::Setup(k, i) => format!("setup_{}[{k}]", ["x", "y", "z"][*i]),
-            Param::Backlash(a) => format!("backlash_{a}"),
-            Param::Gain(a) => format!("kv_{a}"),
-        }
-    }
-    fn unit(&self) -> &'static str {
-        match self {
-            Param::Location(p) => p.unit(),
-            Param::BarOffset(_) | Param::Setup(..) => "um",
-            Param::Backlash(a) if a.is_rotary() => "mdeg",
-            Param::Backlash(_) => "um",
-            Param::Gain(_) => "1/s",
-        }
-    }
-    fn is_servo(&self) -> bool {
-        matches!(self, Param::Backlash(_) | Param::Gain(_))
-    }
-    /// Pivot preference when naming a null direction: lower first.
-    fn pivot_class(&self) -> u8 {
-        match self {
-            Param::Location(p) if !p.is_position() => 0,
-            Param::Location(_) => 1,
-            _ => 2,
-        }
-    }
-}
-
-/// A parameter's estimate.
-#[derive(Clone, Debug, Serialize)]
-pub struct ParamEstimate {
-    pub name: String,
-    pub unit: String,
-    /// The estimate; null when the tests cannot separate this parameter.
-    pub value: Option<f64>,
-    /// The larger of `standard_error_white` and the block bootstrap's.
-    pub standard_error: Option<f64>,
-    /// As if the residual were independent from sample to sample.
-    pub standard_error_white: Option<f64>,
-    pub identifiable: bool,
-    /// What the machine-file fragment carries (the prior for an inseparable pivot).
-    pub fragment_value: f64,
-}
-
-/// A direction in parameter space that the tests cannot see.
-#[derive(Clone, Debug, Serialize)]
-pub struct NullDirection {
-    /// Parameter → coefficient (per unit of the pivot parameter, which has 1).
-    pub direction: BTreeMap<String, f64>,
-    pub description: String,
-}
-
-/// One trace's fit.
-#[derive(Clone, Debug, Serialize)]
-pub struct TraceFit {
-    pub scenario: PathBuf,
-    pub measured: PathBuf,
-    pub points: usize,
-    /// Null when the tests cannot separate it (from the placement, for example).
-    pub bar_offset_um: Option<f64>,
-    pub residual_rms_um: f64,
-    pub measured_rms_um: f64,
-    /// The residual against the noise estimated from the trace.
-    pub noise: NoiseCheck,
-    /// Block length of the bootstrap, points (largest over the directions).
-    pub bootstrap_block_points: usize,
-}
-
-/// A suggested additional test.
-#[derive(Clone, Debug, Serialize)]
-pub struct Suggestion {
-    pub half_apex_deg: f64,
-    pub inclination_deg: f64,
-    pub center_mm: [f64; 3],
-    pub ballbar_length_mm: f64,
-    /// Inseparable combinations left with this test added (now: `null_dimensions`).
-    pub null_dimensions_after: usize,
-    pub text: String,
-}
-
-/// The result of `fit`, as written to fit.json.
-#[derive(Clone, Debug, Serialize)]
-pub struct FitReport {
-    pub layout: String,
-    /// Whether the table ball's placement was fitted (not `--placement-known`).
-    pub placement_fitted: bool,
-    /// Residuals well above the noise, named by trace (also printed on stderr).
-    pub warnings: Vec<String>,
-    /// What a fitted value may mean besides its name (backlash against lost motion).
-    pub cautions: Vec<String>,
-    pub parameters: Vec<ParamEstimate>,
-    pub traces: Vec<TraceFit>,
-    pub residual_rms_um: f64,
-    /// Singular values of the column-scaled sensitivity matrix, relative to the largest.
-    pub singular_values_relative: Vec<f64>,
-    pub null_dimensions: usize,
-    pub unidentifiable: Vec<NullDirection>,
-    pub suggestion: Option<Suggestion>,
-    /// The `[location_errors]` fragment (also written to location-errors.toml).
-    pub fragment: String,
-}
 
 /// Fits location errors (the placement and the options) to `(scenario, measured trace)`
 /// pairs and writes fit.json, location-errors.toml, fit.svg and fit.html into `out_dir`.
@@ -534,19 +392,6 @@ fn file_name(p: &Path) -> String {
     p.file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default()
-}
-
-fn round6(v: f64) -> f64 {
-    (v * 1e6).round() / 1e6
-}
-
-fn round_sig(v: f64) -> f64 {
-    if v == 0.0 || !v.is_finite() {
-        return v;
-    }
-    let e = v.abs().log10().floor() as i32;
-    let s = 10f64.powi(5 - e);
-    (v * s).round() / s
 }
 
 fn fragment_text(

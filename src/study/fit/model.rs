@@ -4,7 +4,7 @@
 
 use nalgebra::{Point3, Vector3};
 
-use super::Param;
+use super::params::Param;
 use crate::error::{Error, Result};
 use crate::input::budget;
 use crate::input::program::Direction;

@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use super::FitReport;
+use super::result::FitReport;
 use crate::report::html::{esc, inline_svg, CSS};
 
 /// The page's HTML text; depends only on its inputs (same fit, same bytes).

@@ -4,8 +4,10 @@
 use nalgebra::{DMatrix, Vector3};
 
 use super::decomposition::Decomposition;
+use super::measured::MeasuredTrace;
 use super::model::{predict, record};
-use super::{MeasuredTrace, Param, Suggestion};
+use super::params::Param;
+use super::result::Suggestion;
 use crate::error::Result;
 use crate::input::program::{ConeTest, Direction};
 use crate::input::scenario::{Program, Scenario};

@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 use super::{print_stdout, spinner};
 use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
-use crate::study::fit::{fit, FitOptions, MeasuredTrace, FIT_JSON, FIT_PLOT, FRAGMENT_FILE};
+use crate::study::fit::{
+    fit, FitOptions, MeasuredTrace, FIT_JSON, FIT_PAGE, FIT_PLOT, FRAGMENT_FILE,
+};
 
 pub fn run(
     scenarios: &[PathBuf],
@@ -31,6 +33,9 @@ pub fn run(
     let report = fit(&inputs, &options, run_dir.path())?;
     run_dir.commit()?;
     bar.finish_and_clear();
+    for w in report.warnings.iter().chain(&report.cautions) {
+        eprintln!("warning: {w}");
+    }
     if as_json {
         print_stdout(&format!(
             "{}\n",
@@ -55,9 +60,10 @@ pub fn run(
     }
     for t in &report.traces {
         out.push_str(&format!(
-            "{}: residual RMS {:.3} um (trace RMS {:.3} um), bar offset {}\n",
+            "{}: residual RMS {:.3} um (noise {:.3} um, trace RMS {:.3} um), bar offset {}\n",
             t.measured.display(),
             t.residual_rms_um,
+            t.noise.noise_um,
             t.measured_rms_um,
             t.bar_offset_um
                 .map_or("not separable".to_string(), |b| format!("{b:+.3} um"))
@@ -70,7 +76,7 @@ pub fn run(
         out.push_str(&format!("next test: {}\n", s.text));
     }
     out.push_str(&format!(
-        "wrote {}/{{{FIT_JSON}, {FRAGMENT_FILE}, {FIT_PLOT}}}\n",
+        "wrote {}/{{{FIT_JSON}, {FRAGMENT_FILE}, {FIT_PLOT}, {FIT_PAGE}}}\n",
         out_dir.display()
     ));
     print_stdout(&out);

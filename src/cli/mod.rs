@@ -204,7 +204,9 @@ pub enum Command {
     Man,
     /// Identify the location errors of the rotary axes from measured ball-bar traces:
     /// `mtsim fit A.toml --measured a.csv [B.toml --measured b.csv ...] -o DIR`. Writes
-    /// fit.json, location-errors.toml and fit.svg; names what the tests cannot separate.
+    /// fit.json, location-errors.toml, fit.svg and fit.html; fits the table ball's placement
+    /// per trace unless --placement-known; names what the tests cannot separate; refuses a
+    /// trace that does not belong to its scenario.
     Fit {
         /// Scenario files (TOML), one per measured trace, in order.
         #[arg(required = true)]
@@ -215,8 +217,12 @@ pub enum Command {
         /// Output folder (created if missing).
         #[arg(short, long, default_value = "fit")]
         output: PathBuf,
-        /// Also fit the table ball's placement error on the table, per trace.
-        #[arg(long)]
+        /// The table ball sits exactly where each scenario says: do not fit its placement
+        /// (three translations per trace, fitted by default).
+        #[arg(long, conflicts_with = "setup")]
+        placement_known: bool,
+        /// The placement is fitted by default; kept so that older command lines still run.
+        #[arg(long, hide = true)]
         setup: bool,
         /// Also fit each axis's backlash (re-simulates the servo models).
         #[arg(long)]
@@ -320,7 +326,8 @@ fn run(cli: Cli) -> Result<i32> {
             scenarios,
             measured,
             output,
-            setup,
+            placement_known,
+            setup: _,
             backlash,
             servo_gain,
             json,
@@ -329,7 +336,7 @@ fn run(cli: Cli) -> Result<i32> {
             &measured,
             &output,
             crate::study::fit::FitOptions {
-                setup,
+                placement_known,
                 backlash,
                 servo_gain,
             },

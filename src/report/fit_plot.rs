@@ -1,9 +1,10 @@
 //! fit.svg: measured against fitted ball-bar traces, with the residuals, for `mtsim fit`.
 //!
 //! One row per (trace, direction): the measured deviation and the fitted model against θ
-//! (left), the residual `measured − fitted` against θ (right). Everything in um.
+//! (left), the residual `measured − fitted` against θ (right); each row names its scenario
+//! and trace. Everything in µm.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use plotters::prelude::*;
 
@@ -49,7 +50,7 @@ pub fn render_fit_svg(series: &[PlotSeries]) -> Result<String> {
             };
             let mut chart = ChartBuilder::on(&rows[2 * k])
                 .caption(
-                    format!("{}: measured and fitted", s.label),
+                    format!("{}: measured and fitted (µm)", s.label),
                     ("sans-serif", 15),
                 )
                 .margin(8)
@@ -60,7 +61,7 @@ pub fn render_fit_svg(series: &[PlotSeries]) -> Result<String> {
             chart
                 .configure_mesh()
                 .x_desc("theta (deg)")
-                .y_desc("deviation (um)")
+                .y_desc("deviation (µm)")
                 .draw()
                 .map_err(err)?;
             chart
@@ -86,7 +87,7 @@ pub fn render_fit_svg(series: &[PlotSeries]) -> Result<String> {
                 .draw()
                 .map_err(err)?;
             let mut res = ChartBuilder::on(&rows[2 * k + 1])
-                .caption("residual: measured - fitted", ("sans-serif", 15))
+                .caption("residual: measured − fitted (µm)", ("sans-serif", 15))
                 .margin(8)
                 .x_label_area_size(32)
                 .y_label_area_size(52)
@@ -94,7 +95,7 @@ pub fn render_fit_svg(series: &[PlotSeries]) -> Result<String> {
                 .map_err(err)?;
             res.configure_mesh()
                 .x_desc("theta (deg)")
-                .y_desc("residual (um)")
+                .y_desc("residual (µm)")
                 .draw()
                 .map_err(err)?;
             res.draw_series(LineSeries::new(
@@ -106,10 +107,4 @@ pub fn render_fit_svg(series: &[PlotSeries]) -> Result<String> {
         root.present().map_err(err)?;
     }
     Ok(svg)
-}
-
-/// Writes fit.svg atomically.
-pub fn write_fit_svg(path: &Path, series: &[PlotSeries]) -> Result<()> {
-    let svg = render_fit_svg(series)?;
-    super::write_atomic(path, svg.as_bytes())
 }

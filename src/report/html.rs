@@ -41,7 +41,7 @@ pub fn esc(s: &str) -> String {
 
 /// An SVG document as an inline element: without the XML prolog, with a class and a
 /// `data-plot` name (for tests), scaled to the page width.
-fn inline_svg(svg: &str, name: &str) -> String {
+pub fn inline_svg(svg: &str, name: &str) -> String {
     let start = svg.find("<svg").unwrap_or(0);
     let body = &svg[start..];
     let body = body.replacen(
@@ -551,7 +551,7 @@ fn axis_charts(folder: &RunFolder, trace: &Trace) -> Result<Vec<(String, String)
     Ok(out)
 }
 
-const CSS: &str = "body{font-family:sans-serif;color:#1e1e1e;max-width:1180px;margin:1.5em auto;padding:0 1em;line-height:1.4}\
+pub const CSS: &str = "body{font-family:sans-serif;color:#1e1e1e;max-width:1180px;margin:1.5em auto;padding:0 1em;line-height:1.4}\
 h1{font-size:1.5em}h2{font-size:1.2em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}\
 table{border-collapse:collapse;margin:.5em 0}th,td{border:1px solid #ddd;padding:.25em .6em;text-align:left;vertical-align:top}\
 table.params th{background:#f5f5f5;width:16em}table.figures td,table.marks td,table.limits td{text-align:right}\

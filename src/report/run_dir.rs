@@ -28,7 +28,7 @@ use crate::error::{Error, Result};
 /// `<name>.tmp` / `<name>.raw.tmp` of one): such entries belong to the run and are replaced;
 /// all others are the user's and kept.
 pub fn is_run_output(name: &str) -> bool {
-    const FILES: [&str; 10] = [
+    const FILES: [&str; 11] = [
         "trace.csv",
         "trace.parquet",
         "summary.json",
@@ -39,6 +39,7 @@ pub fn is_run_output(name: &str) -> bool {
         "fit.json",
         "location-errors.toml",
         "fit.svg",
+        "fit.html",
     ];
     const PREFIXES: [&str; 3] = ["sweep-", "placement.", "batch."];
     let name = name.strip_suffix(".tmp").unwrap_or(name);

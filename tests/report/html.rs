@@ -619,3 +619,90 @@ fn the_placement_map_tells_fit_cells_apart_and_marks_the_scenario_and_the_table(
         "no table outline"
     );
 }
+
+/// `fit` writes fit.html beside fit.svg: one self-contained page with the traces, the plot
+/// (each panel naming its scenario, in µm), the parameters with their uncertainty, what
+/// cannot be separated and the next test; it renders in headless Chromium.
+#[test]
+fn the_fit_page_renders_in_headless_chromium() {
+    let dir = scratch("report-browser", "fit");
+    let mut args = vec!["fit".to_string()];
+    for name in ["cone-15-10", "cone-45-30"] {
+        let run = dir.join(name);
+        let sim = mtsim(&[
+            "simulate",
+            &format!("scenarios/{name}.toml"),
+            "-o",
+            run.to_str().unwrap(),
+            "--no-timing",
+        ]);
+        assert!(sim.status.code() == Some(0) || sim.status.code() == Some(1));
+        args.extend([
+            format!("scenarios/{name}.toml"),
+            "--measured".into(),
+            run.join("trace.csv").display().to_string(),
+        ]);
+    }
+    let out_dir = dir.join("fit");
+    args.extend(["-o".into(), out_dir.display().to_string()]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = mtsim(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let html = std::fs::read_to_string(out_dir.join("fit.html")).unwrap();
+    let svg = std::fs::read_to_string(out_dir.join("fit.svg")).unwrap();
+    for name in ["cone-15-10.toml", "cone-45-30.toml", "µm"] {
+        assert!(svg.contains(name), "fit.svg lacks {name}");
+    }
+    for section in [
+        "id=\"traces\"",
+        "id=\"plots\"",
+        "id=\"parameters\"",
+        "id=\"inseparable\"",
+        "id=\"next\"",
+        "data-plot=\"fit\"",
+        "EY0A",
+        "standard error",
+    ] {
+        assert!(html.contains(section), "fit.html lacks {section}");
+    }
+    assert!(
+        !html.contains("<script") && !html.contains("src=\"http") && !html.contains("href=\"http"),
+        "not self-contained"
+    );
+
+    let Some(browser) = chromium() else {
+        if std::env::var_os("CI").is_some() {
+            panic!("chromium is missing and CI is set: install it (apt-get install chromium)");
+        }
+        eprintln!("SKIPPED the_fit_page_renders_in_headless_chromium (browser part): chromium not found on PATH");
+        return;
+    };
+    let page = out_dir.join("probe.html");
+    std::fs::write(&page, html.replace("</body>", &format!("{PROBE}</body>"))).unwrap();
+    let (dom, png) = render(&browser, &page, &dir);
+    let (w, h, pixels) = decode_png(&png);
+    let inked = pixels
+        .iter()
+        .filter(|p| p[0] < 200 || p[1] < 200 || p[2] < 200)
+        .count();
+    assert!(
+        inked as f64 > 0.01 * (w * h) as f64,
+        "a blank page ({inked} inked pixels)"
+    );
+    let sizes_start = dom.find("<pre id=\"mtsim-sizes\">").expect("probe missing");
+    let line = dom[sizes_start + 22..]
+        .lines()
+        .find(|l| l.starts_with("fit "))
+        .expect("the fit plot in the page");
+    let dims: Vec<f64> = line
+        .split(' ')
+        .skip(1)
+        .map(|v| v.trim_end_matches("</pre>").parse().unwrap())
+        .collect();
+    assert!(dims[0] > 500.0 && dims[1] > 300.0, "fit plot {dims:?} px");
+    assert!(dom.contains("What these tests cannot separate"));
+}

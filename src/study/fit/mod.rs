@@ -1,0 +1,431 @@
+//! `mtsim fit`: the location errors of the rotary axes (and optionally backlash and servo
+//! gain) from measured ball-bar traces, with what the tests can and cannot separate.
+//!
+//! # Model
+//!
+//! For each pair (scenario, measured trace) and each direction in the trace, the scenario
+//! is simulated once (interpolator, servo models) and the actual axis positions of the
+//! measured revolution are kept. The predicted deviation at a measured θ is
+//!
+//! ```text
+//! dL(θ; p) = | tool(q) − T_tilt(q; p) T_C(q; p) (pivot + O + s) | − L + b_k
+//! ```
+//!
+//! binned like the ball bar (0.05 deg) and interpolated at θ: p the location errors, b_k the
+//! bar-length offset of trace k, s its table-ball placement error (three translations, fitted
+//! per trace unless `--placement-known`: in a real set-up the ball sits 10-20 um from where
+//! the scenario says, and an unfitted placement turns into false location errors). Location
+//! errors act after the servo, so this is exactly what `simulate` with the fitted errors
+//! gives. Backlash and servo gain (`--backlash`, `--servo-gain`) act inside the servo: their
+//! sensitivities come from re-simulating with each one stepped.
+//!
+//! # Estimation and identifiability
+//!
+//! Gauss–Newton on the stacked residuals `r = measured − dL` with the Jacobian J by
+//! central differences (1 um, 1 urad). Each column is scaled to unit norm (J_s = J D⁻¹)
+//! and J_s is decomposed, `J_s = U Σ Vᵀ`. Singular values below [`NULL_TOLERANCE`] σ_max
+//! span the null space: moving the parameters along `D⁻¹ v` leaves every trace unchanged,
+//! so the tests cannot separate those parameters. They are reported as combinations
+//! (reduced row-echelon form of the null basis, orientation errors as pivots), marked
+//! `identifiable: false`, and given no value. The step is the truncated pseudo-inverse
+//! solution; then each pivot is moved back to its prior value along its null direction, so
+//! the machine-file fragment carries each inseparable combination in the remaining
+//! parameter (a C-axis offset "as seen at the ball height", for example).
+//!
+//! A parameter that moves the traces by less than [`MIN_VISIBILITY`] (RMS, per unit) is not
+//! seen at all (the backlash of an axis perpendicular to the bar, for example) and is a null
+//! direction on its own.
+//!
+//! Standard errors: the larger of the independent-sample one, `σ² = |r|² / (n − rank)`,
+//! `Cov = σ² D⁻¹ V_r Σ_r⁻² V_rᵀ D⁻¹`, and a block bootstrap along θ ([`noise`]) that holds
+//! when the residual is correlated (unmodelled effects, correlated noise).
+//!
+//! # Checks
+//!
+//! Each trace is compared with its scenario before fitting ([`conformity`]); each trace's
+//! noise is estimated from the data and a residual well above it is reported with what its
+//! shape suggests ([`noise`]).
+//!
+//! # What to measure next
+//!
+//! For a cone, candidate extra tests (another height of the centre, the other standard
+//! α/β, a centre off the C axis) are scored by the null space of the enlarged sensitivity
+//! matrix (geometric part, programmed timing); the best is suggested.
+
+mod conformity;
+mod decomposition;
+mod estimate;
+mod measured;
+mod model;
+pub mod noise;
+mod page;
+mod params;
+mod result;
+mod suggest;
+
+use std::path::Path;
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::error::{Error, Result};
+use crate::input::scenario::Scenario;
+use crate::kinematics::{Layout, LocationParam};
+use crate::report::fit_plot::{render_fit_svg, PlotSeries};
+use crate::report::{create_dir, write_atomic};
+use decomposition::describe_null;
+pub use decomposition::NullDirection;
+use estimate::{Problem, Solution};
+pub use measured::{MeasuredPoint, MeasuredTrace};
+use model::Run;
+pub use noise::NoiseCheck;
+pub(crate) use params::{round6, round_sig, Param};
+pub use params::{FitOptions, MIN_VISIBILITY, NULL_TOLERANCE};
+pub use result::{FitReport, ParamEstimate, Suggestion, TraceFit};
+use suggest::suggest;
+
+/// Files `fit` writes.
+pub const FIT_JSON: &str = "fit.json";
+pub const FRAGMENT_FILE: &str = "location-errors.toml";
+pub const FIT_PLOT: &str = "fit.svg";
+pub const FIT_PAGE: &str = "fit.html";
+
+/// Fits location errors (the placement and the options) to `(scenario, measured trace)`
+/// pairs and writes fit.json, location-errors.toml, fit.svg and fit.html into `out_dir`.
+pub fn fit(
+    inputs: &[(Scenario, MeasuredTrace)],
+    options: &FitOptions,
+    out_dir: &Path,
+) -> Result<FitReport> {
+    let layout = common_layout(inputs)?;
+    let (params, servo_params) = parameters(layout, inputs.len(), options);
+    let (problem, mut runs) = Problem::new(inputs, params, servo_params)?;
+    problem.simulate(&mut runs, &DVector::zeros(problem.params.len()), None)?;
+    for (k, (scenario, trace)) in inputs.iter().enumerate() {
+        let own: Vec<&Run> = runs.iter().filter(|r| r.trace == k).collect();
+        conformity::check(scenario, trace, &own, &problem.measured)?;
+    }
+    let solution = problem.solve(&mut runs)?;
+    let (report, fitted) = assemble(&problem, &runs, solution, layout, options)?;
+    write_outputs(out_dir, &report, &problem, &runs, &fitted)?;
+    Ok(report)
+}
+
+/// The one machine layout of all scenarios (a machine with rotary axes).
+fn common_layout(inputs: &[(Scenario, MeasuredTrace)]) -> Result<Layout> {
+    let Some((first, _)) = inputs.first() else {
+        return Err(Error::usage(
+            "give at least one SCENARIO --measured TRACE.csv pair",
+        ));
+    };
+    let layout = first.machine.kinematics.layout;
+    if layout.tilt_axis().is_none() {
+        return Err(Error::invalid(
+            &first.path,
+            "`mtsim fit` needs a machine with rotary axes (trt-ac or trt-bc)",
+        ));
+    }
+    for (s, _) in inputs {
+        if s.machine.kinematics.layout != layout {
+            return Err(Error::invalid(
+                &s.path,
+                format!(
+                    "all scenarios of one fit must use one machine layout; the first uses {}",
+                    layout.name()
+                ),
+            ));
+        }
+    }
+    Ok(layout)
+}
+
+/// The parameters: location errors, then per trace its bar offset (and placement), then the
+/// servo parameters (also returned alone).
+fn parameters(layout: Layout, traces: usize, options: &FitOptions) -> (Vec<Param>, Vec<Param>) {
+    let mut params: Vec<Param> = LocationParam::ALL
+        .into_iter()
+        .filter(|p| layout.axes().contains(&p.axis()))
+        .map(Param::Location)
+        .collect();
+    for k in 0..traces {
+        params.push(Param::BarOffset(k));
+        if !options.placement_known {
+            params.extend((0..3).map(|i| Param::Setup(k, i)));
+        }
+    }
+    let servo: Vec<Param> = layout
+        .axes()
+        .iter()
+        .flat_map(|&a| {
+            let mut v = Vec::new();
+            if options.backlash {
+                v.push(Param::Backlash(a));
+            }
+            if options.servo_gain {
+                v.push(Param::Gain(a));
+            }
+            v
+        })
+        .collect();
+    params.extend(servo.iter().copied());
+    (params, servo)
+}
+
+/// Turns the solution into the report (and the fitted model, for the plots).
+fn assemble(
+    problem: &Problem,
+    runs: &[Run],
+    solution: Solution,
+    layout: Layout,
+    options: &FitOptions,
+) -> Result<(FitReport, DVector<f64>)> {
+    let Solution {
+        mut x,
+        decomposition: d,
+        ..
+    } = solution;
+    let n = problem.n();
+    let fitted = problem.model(runs, &x)?;
+    let residual = &problem.y - &fitted;
+    let rss = residual.norm_squared();
+    let sigma2 = rss / (n - d.rank).max(1) as f64;
+
+    // Null directions, named, and the fragment's basic solution.
+    let (rows, pivots) = d.null_rref(&problem.params);
+    for (row, &pv) in rows.iter().zip(&pivots) {
+        let t = x[pv];
+        x -= row * t;
+    }
+    debug_assert!((problem.model(runs, &x)? - &fitted).amax() < 1e-2);
+    let thetas: Vec<f64> = problem.measured.iter().map(|p| p.theta_deg).collect();
+    let (boot, blocks) = noise::bootstrap_errors(&d, runs, &thetas, &residual);
+    let identifiable = d.identifiable();
+    let estimates = estimates(problem, &x, &d.covariance(sigma2), &boot, &identifiable);
+    let unidentifiable: Vec<NullDirection> = rows
+        .iter()
+        .zip(&pivots)
+        .map(|(row, &pv)| describe_null(row, pv, &problem.params))
+        .collect();
+    let traces = trace_fits(problem, runs, &x, &identifiable, &residual, &blocks);
+    let fragment = fragment_text(
+        &problem.params,
+        &estimates,
+        &identifiable,
+        &unidentifiable,
+        layout,
+    );
+    let suggestion = if d.null_dim() > 0 {
+        suggest(problem.inputs, &problem.params)?
+    } else {
+        None
+    };
+    let report = FitReport {
+        layout: layout.name().to_string(),
+        placement_fitted: !options.placement_known,
+        warnings: warnings(&traces),
+        cautions: cautions(&estimates),
+        parameters: estimates,
+        traces,
+        residual_rms_um: round6((rss / n as f64).sqrt()),
+        singular_values_relative: d.relative.iter().map(|v| round_sig(*v)).collect(),
+        null_dimensions: d.null_dim(),
+        unidentifiable,
+        suggestion,
+        fragment,
+    };
+    Ok((report, fitted))
+}
+
+/// Each parameter's value and standard errors (none when the tests cannot separate it).
+fn estimates(
+    problem: &Problem,
+    x: &DVector<f64>,
+    cov: &DMatrix<f64>,
+    boot: &DVector<f64>,
+    identifiable: &[bool],
+) -> Vec<ParamEstimate> {
+    problem
+        .params
+        .iter()
+        .enumerate()
+        .map(|(j, p)| {
+            let value = problem.prior_value(p) + x[j];
+            let white = cov[(j, j)].max(0.0).sqrt();
+            ParamEstimate {
+                name: p.name(),
+                unit: p.unit().to_string(),
+                value: identifiable[j].then_some(round6(value)),
+                standard_error: identifiable[j].then(|| round6(white.max(boot[j]))),
+                standard_error_white: identifiable[j].then(|| round6(white)),
+                identifiable: identifiable[j],
+                fragment_value: round6(value),
+            }
+        })
+        .collect()
+}
+
+/// Each trace's offset, residual and noise check.
+fn trace_fits(
+    problem: &Problem,
+    runs: &[Run],
+    x: &DVector<f64>,
+    identifiable: &[bool],
+    residual: &DVector<f64>,
+    blocks: &[usize],
+) -> Vec<TraceFit> {
+    let thetas: Vec<f64> = problem.measured.iter().map(|p| p.theta_deg).collect();
+    let y = &problem.y;
+    let mut traces = Vec::new();
+    for (k, (scenario, trace)) in problem.inputs.iter().enumerate() {
+        let own: Vec<&Run> = runs.iter().filter(|r| r.trace == k).collect();
+        let idx: Vec<usize> = own.iter().flat_map(|r| r.rows.clone()).collect();
+        let m = idx.len() as f64;
+        let mean = idx.iter().map(|&i| y[i]).sum::<f64>() / m;
+        let rms =
+            |f: &dyn Fn(usize) -> f64| (idx.iter().map(|&i| f(i).powi(2)).sum::<f64>() / m).sqrt();
+        let j = problem
+            .params
+            .iter()
+            .position(|p| *p == Param::BarOffset(k))
+            .expect("bar offset");
+        traces.push(TraceFit {
+            scenario: scenario.path.clone(),
+            measured: trace.path.clone(),
+            points: idx.len(),
+            bar_offset_um: identifiable[j].then(|| round6(x[j])),
+            residual_rms_um: round6(rms(&|i| residual[i])),
+            measured_rms_um: round6(rms(&|i| y[i] - mean)),
+            noise: noise::check_trace(&own, &thetas, residual).rounded(),
+            bootstrap_block_points: runs
+                .iter()
+                .zip(blocks)
+                .filter(|(r, _)| r.trace == k)
+                .map(|(_, b)| *b)
+                .max()
+                .unwrap_or(1),
+        });
+    }
+    traces
+}
+
+/// A warning per trace whose residual is well above its noise.
+fn warnings(traces: &[TraceFit]) -> Vec<String> {
+    traces
+        .iter()
+        .filter(|t| !t.noise.suggests.is_empty())
+        .map(|t| {
+            format!(
+                "{}: the residual ({:.3} um RMS) is {:.1} times the noise estimated from the trace \
+                 ({:.3} um): the model misses something; the standard errors come from the block \
+                 bootstrap. The residual suggests: {}",
+                t.measured.display(),
+                t.residual_rms_um,
+                t.noise.ratio,
+                t.noise.noise_um,
+                t.noise.suggests.join("; ")
+            )
+        })
+        .collect()
+}
+
+/// What fitted servo parameters may stand for besides their name.
+fn cautions(estimates: &[ParamEstimate]) -> Vec<String> {
+    estimates
+        .iter()
+        .filter(|e| {
+            // Only a backlash the fit claims: positive and beyond twice its standard error.
+            e.name.starts_with("backlash_")
+                && e.value
+                    .zip(e.standard_error)
+                    .is_some_and(|(v, se)| v > 2.0 * se)
+        })
+        .map(|e| {
+            format!(
+                "{} = {} {} is the lost motion at the reversal: backlash and friction's elastic \
+                 pre-sliding give the same step in a ball-bar trace, so these tests cannot \
+                 separate them",
+                e.name,
+                e.value.unwrap_or(0.0),
+                e.unit
+            )
+        })
+        .collect()
+}
+
+/// Writes fit.json, location-errors.toml, fit.svg and fit.html.
+fn write_outputs(
+    out_dir: &Path,
+    report: &FitReport,
+    problem: &Problem,
+    runs: &[Run],
+    fitted: &DVector<f64>,
+) -> Result<()> {
+    create_dir(out_dir)?;
+    let json = serde_json::to_string_pretty(report).expect("plain data serializes");
+    write_atomic(&out_dir.join(FIT_JSON), format!("{json}\n").as_bytes())?;
+    write_atomic(&out_dir.join(FRAGMENT_FILE), report.fragment.as_bytes())?;
+    let series: Vec<PlotSeries> = runs
+        .iter()
+        .map(|r| {
+            let (scenario, trace) = &problem.inputs[r.trace];
+            PlotSeries {
+                label: format!(
+                    "{} (trace {}, {})",
+                    file_name(&scenario.path),
+                    file_name(&trace.path),
+                    noise::direction_name(r.direction)
+                ),
+                points: r
+                    .rows
+                    .iter()
+                    .map(|&i| (problem.measured[i].theta_deg, problem.y[i], fitted[i]))
+                    .collect(),
+            }
+        })
+        .collect();
+    let svg = render_fit_svg(&series)?;
+    write_atomic(&out_dir.join(FIT_PLOT), svg.as_bytes())?;
+    let html = page::render(report, &svg);
+    write_atomic(&out_dir.join(FIT_PAGE), html.as_bytes())
+}
+
+fn file_name(p: &Path) -> String {
+    p.file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+fn fragment_text(
+    params: &[Param],
+    estimates: &[ParamEstimate],
+    identifiable: &[bool],
+    nulls: &[NullDirection],
+    layout: crate::kinematics::Layout,
+) -> String {
+    let mut s = format!(
+        "# Location errors fitted by `mtsim fit` ({} machine). Paste into the machine file, or\n\
+         # under [machine_overrides.location_errors] in a scenario.\n",
+        layout.name()
+    );
+    if !nulls.is_empty() {
+        s.push_str("# The tests cannot separate some parameters; the values marked below carry a\n# combination (see fit.json \"unidentifiable\"):\n");
+        for n in nulls {
+            s.push_str(&format!("#   {}\n", n.description));
+        }
+    }
+    s.push_str("[location_errors]\n");
+    for (j, p) in params.iter().enumerate() {
+        if let Param::Location(lp) = p {
+            let note = if identifiable[j] {
+                ""
+            } else {
+                "  # not separable: carries a combination"
+            };
+            s.push_str(&format!(
+                "{} = {:.4}{note}\n",
+                lp.key(),
+                estimates[j].fragment_value
+            ));
+        }
+    }
+    s
+}

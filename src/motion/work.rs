@@ -13,7 +13,7 @@
 //! ```
 //!
 //! The first move, which only places the machine (its start is unknown), adds nothing.
-//! That is the time `check`'s programmed timing takes, and a lower bound on the planner's (it
+//! That is the time `check --programmed` takes, and a lower bound on the planner's (it
 //! never exceeds F or an axis's top speed, and adds ramps). A program whose sum already passes
 //! the budget would pass it when run: it is refused before the first sample, with the line
 //! reached. The read stops there, so a program that loops for ever is refused after

@@ -222,11 +222,12 @@ fn a_generated_test_over_the_sample_budget_is_refused_up_front_with_its_estimate
 }
 
 /// A G-code file is read ahead of its run and each move adds its programmed time (the time
-/// `check` takes, a lower bound on the planner's): the bundled program's 360 feed blocks run
-/// 2π·96.5926 mm at F1000 with the deg counted as mm, 36.41 s, 36,416 samples at 1 ms by
-/// `check`. A budget of 1000 is refused by the read-ahead, in its first second of program;
-/// a budget of 36,416 passes the read-ahead and `check`, and stops `simulate`, whose planner
-/// ramps take longer, while it runs, with the line it reached.
+/// `check --programmed` takes, a lower bound on the planner's): the bundled program's 360 feed
+/// blocks run 2π·96.5926 mm at F1000 with the deg counted as mm, 36.41 s, 36,416 samples at
+/// 1 ms by `check --programmed`. A budget of 1000 is refused by the read-ahead, in its first
+/// second of program; a budget of 36,416 passes the read-ahead and `check --programmed`, and
+/// stops `check` and `simulate`, whose planner ramps take longer, while they run, with the
+/// line reached.
 #[test]
 fn a_file_program_past_the_budget_is_refused_by_reading_ahead_or_stopped_where_it_passes() {
     let program =
@@ -249,7 +250,7 @@ fn a_file_program_past_the_budget_is_refused_by_reading_ahead_or_stopped_where_i
         );
     }
     write_scenario(&dir, &trt_ac(), &body(36_416));
-    let out = mtsim_plain(&dir, &["check", "s.toml"]);
+    let out = mtsim_plain(&dir, &["check", "--programmed", "s.toml"]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert_eq!(
         out.status.code(),
@@ -258,14 +259,16 @@ fn a_file_program_past_the_budget_is_refused_by_reading_ahead_or_stopped_where_i
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(text.contains("36416 samples"), "{text}");
-    let (code, err) = refused(&dir, &args("simulate", "s.toml"));
-    assert_eq!(code, Some(2), "{err}");
-    assert!(
-        err.contains(
-            "the run passed its budget of 36416 samples ([simulate] max_samples) at program line"
-        ),
-        "{err}"
-    );
+    for command in ["check", "simulate"] {
+        let (code, err) = refused(&dir, &args(command, "s.toml"));
+        assert_eq!(code, Some(2), "{command}: {err}");
+        assert!(
+            err.contains(
+                "the run passed its budget of 36416 samples ([simulate] max_samples) at program line"
+            ),
+            "{err}"
+        );
+    }
 }
 
 /// A program that loops without end is refused by the read-ahead, not sampled for hours:

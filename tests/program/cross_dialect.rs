@@ -1,5 +1,5 @@
 //! One toolpath, every dialect: each part of `tests/program/dialects/` is written by hand in
-//! every dialect that can say it, and every version must give the canonical moves of the
+//! every dialect that can say it (LinuxCNC, Fanuc, Haas, Heidenhain, Siemens), and every version must give the canonical moves of the
 //! reference (`linuxcnc.ngc`, else `fanuc.nc`): same kinds, positions, arc centres, feeds and
 //! dwell times within 1e-6 (mm, deg, mm/min, s). The parts and their toolpaths are listed
 //! in `tests/program/dialects/README.md`.
@@ -15,11 +15,12 @@ fn parts_dir() -> PathBuf {
 }
 
 /// The files of a part and their dialects, reference first.
-const FILES: [(&str, Dialect); 4] = [
+const FILES: [(&str, Dialect); 5] = [
     ("linuxcnc.ngc", Dialect::Linuxcnc),
     ("fanuc.nc", Dialect::Fanuc),
     ("haas.nc", Dialect::Haas),
     ("heidenhain.h", Dialect::Heidenhain),
+    ("siemens.mpf", Dialect::Siemens),
 ];
 
 /// The machine every part runs on: X Y Z A B C, T1 Ø10 mm of length 0; the five-axis
@@ -118,6 +119,7 @@ fn every_dialect_of_every_part_gives_the_reference_moves() {
     let mut failures = Vec::new();
     let mut compared = 0;
     let mut heidenhain = 0;
+    let mut siemens = 0;
     for part in &parts {
         let dir = parts_dir().join(part);
         let present: Vec<_> = FILES
@@ -135,13 +137,14 @@ fn every_dialect_of_every_part_gives_the_reference_moves() {
             let got = moves(&dir.join(file), &options(part, *dialect));
             compared += 1;
             heidenhain += usize::from(*dialect == Dialect::Heidenhain);
+            siemens += usize::from(*dialect == Dialect::Siemens);
             if let Some(d) = difference(&reference, &got) {
                 failures.push(format!("{part}/{file} against {ref_file}: {d}"));
             }
         }
     }
     eprintln!(
-        "cross-dialect: {} parts, {compared} programs compared with their reference ({heidenhain} Heidenhain)",
+        "cross-dialect: {} parts, {compared} programs compared with their reference ({heidenhain} Heidenhain, {siemens} Siemens)",
         parts.len()
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
@@ -150,4 +153,5 @@ fn every_dialect_of_every_part_gives_the_reference_moves() {
         parts.len(),
         "every part has a Heidenhain version"
     );
+    assert_eq!(siemens, parts.len(), "every part has a Siemens version");
 }

@@ -3,16 +3,14 @@
 
 use std::path::Path;
 
-use clap::CommandFactory;
-
-use super::{print_stdout, Cli};
+use super::print_stdout;
 use crate::error::{Error, Result};
 use crate::report::write_atomic;
 
-/// The command line as the pages describe it: built (so each subcommand's page is titled
-/// `mtsim-NAME`) and without clap's `help` subcommand, which has no page of its own.
-fn command() -> clap::Command {
-    let mut cmd = Cli::command().disable_help_subcommand(true);
+/// The command line `cli` as the pages describe it: built (so each subcommand's page is
+/// titled `mtsim-NAME`) and without clap's `help` subcommand, which has no page of its own.
+fn built(cli: clap::Command) -> clap::Command {
+    let mut cmd = cli.disable_help_subcommand(true);
     cmd.build();
     cmd
 }
@@ -28,11 +26,11 @@ fn render(cmd: clap::Command) -> Result<Vec<u8>> {
     Ok(out)
 }
 
-/// Without `dir`: `mtsim.1` on standard output. With `dir`: `dir/mtsim.1` and one
+/// The pages of the command line `cli`. Without `dir`: `mtsim.1` on standard output. With `dir`: `dir/mtsim.1` and one
 /// `dir/mtsim-NAME.1` for every subcommand its SUBCOMMANDS section names (each file
 /// written atomically; `dir` created if missing). Returns the exit code.
-pub fn run(dir: Option<&Path>) -> Result<i32> {
-    let cmd = command();
+pub fn run(cli: clap::Command, dir: Option<&Path>) -> Result<i32> {
+    let cmd = built(cli);
     let Some(dir) = dir else {
         print_stdout(&String::from_utf8_lossy(&render(cmd)?));
         return Ok(0);

@@ -284,7 +284,9 @@ fn run(cli: Cli) -> Result<i32> {
             print_stdout(&String::from_utf8_lossy(&out));
             Ok(0)
         }
-        Command::Man { output } => man::run(output.as_deref()),
+        Command::Man { output } => {
+            man::run(<Cli as clap::CommandFactory>::command(), output.as_deref())
+        }
         Command::Check {
             scenario,
             json,

@@ -717,3 +717,37 @@ fn man_writes_a_page_for_every_subcommand_its_page_names() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_analyze_and_sweep_json_keys_are_the_documented_ones() {
+    // Every key of the real output is quoted in docs/cli.md's sketch of that command.
+    let cli = doc("docs/cli.md");
+    let cases: [(&str, &[&str]); 2] = [
+        ("## `mtsim analyze", &["analyze", FILE_SC, "--json"]),
+        (
+            "## `mtsim sweep SCENARIO --vary",
+            &[
+                "sweep", SC, "--vary", "center_y", "--from", "-30", "--to", "-15", "--step", "5",
+                "--json",
+            ],
+        ),
+    ];
+    for (section, args) in cases {
+        let text = &cli[cli.find(section).unwrap()..];
+        let text = &text[..text[3..].find("\n## ").map_or(text.len(), |k| k + 3)];
+        let mut sketch = BTreeSet::new();
+        for block in text.split("```json\n").skip(1) {
+            sketch.extend(quoted(block.split("```").next().unwrap()));
+        }
+        let out = run_in(repo(), args);
+        assert!(out.status.success());
+        let mut keys = BTreeSet::new();
+        keys_of(&serde_json::from_slice(&out.stdout).unwrap(), &mut keys);
+        let missing: Vec<&String> = keys.difference(&sketch).collect();
+        assert!(
+            missing.is_empty(),
+            "`mtsim {}` keys docs/cli.md does not list: {missing:?}",
+            args[0]
+        );
+    }
+}

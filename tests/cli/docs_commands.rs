@@ -200,6 +200,14 @@ const SHOWN: &[(&str, Shown)] = &[
     ("mtsim $STUDY -o single > single.txt", Example),
     ("mtsim $STUDY --shard $k/8 -o shards", Example),
     ("mtsim merge shards/*.json -o merged > merged.txt", Example),
+    (
+        "python3 examples/dask/run_study.py --shards 8 --out study -- sweep scenarios/cone-15-10.toml --vary center_y --from -30 --to -15 --step 0.5",
+        Skip("needs Python with dask.distributed; tests/cli/dask_example.rs runs this example on a LocalCluster"),
+    ),
+    (
+        "python3 examples/dask/run_study.py --scheduler tcp://SCHEDULER:8786 --mtsim /opt/mtsim/bin/mtsim --shards 64 --out study -- batch --list plant-programs.txt",
+        Skip("needs a running Dask cluster (tcp://SCHEDULER:8786), a binary in /opt/mtsim and a plant's program list"),
+    ),
     ("mtsim <version>", Skip("the Parquet files' `created_by` text, not a command")),
     ("mtsim analyze", Names),
     ("mtsim batch", Names),
@@ -245,14 +253,16 @@ fn normalise(command: &str) -> String {
     command.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
-/// The `mtsim ...` commands of one Markdown text with their line: lines of code blocks that
-/// run mtsim (`mtsim ...`, `$ mtsim ...`, `do mtsim ...;`) and inline code spans that
-/// start with `mtsim ` (a span may wrap over lines of its paragraph).
+/// The `mtsim ...` commands of one Markdown text with their (last) line: lines of code
+/// blocks that run mtsim (`mtsim ...`, `$ mtsim ...`, `do mtsim ...;`, and the examples'
+/// scripts `python3 examples/...` that run it) and inline code spans that start with
+/// `mtsim ` (a span may wrap over lines of its paragraph).
 fn commands_in(text: &str) -> Vec<(String, usize)> {
     let mut found = Vec::new();
     let mut in_block = false;
     let mut paragraph = String::new();
     let mut paragraph_line = 0;
+    let mut continued = String::new();
     let flush = |paragraph: &mut String, line: usize, found: &mut Vec<(String, usize)>| {
         for (i, span) in paragraph.split('`').enumerate() {
             if i % 2 == 1 && span.starts_with("mtsim ") {
@@ -266,11 +276,21 @@ fn commands_in(text: &str) -> Vec<(String, usize)> {
             flush(&mut paragraph, paragraph_line, &mut found);
             in_block = !in_block;
         } else if in_block {
-            let t = line.trim().trim_start_matches("$ ");
+            // A line ending in `\` goes on in the next one.
+            if !continued.is_empty() || line.trim_end().ends_with('\\') {
+                continued.push_str(line.trim_end().trim_end_matches('\\'));
+                continued.push(' ');
+                if line.trim_end().ends_with('\\') {
+                    continue;
+                }
+            }
+            let joined = std::mem::take(&mut continued);
+            let t = if joined.is_empty() { line } else { &joined };
+            let t = t.trim().trim_start_matches("$ ");
             let start = t
                 .find("do mtsim ")
                 .map(|k| k + 3)
-                .or(t.starts_with("mtsim ").then_some(0));
+                .or((t.starts_with("mtsim ") || t.starts_with("python3 examples/")).then_some(0));
             if let Some(start) = start {
                 let command = t[start..].split(';').next().unwrap();
                 found.push((normalise(command), i + 1));
@@ -384,6 +404,15 @@ fn every_command_the_docs_show_is_listed_once() {
         }] += 1;
         n
     });
+    for (command, shown) in SHOWN {
+        if let Skip(reason) = shown {
+            assert!(
+                !reason.is_empty(),
+                "`{command}` is skipped without a reason"
+            );
+            println!("not run: `{command}`: {reason}");
+        }
+    }
     println!(
         "{} commands shown: {} run, {} named in prose, {} in the scale-out example, {} skipped",
         shown.len(),

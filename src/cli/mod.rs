@@ -17,6 +17,7 @@ mod blocks;
 mod check;
 mod cone;
 mod fit;
+mod man;
 mod merge;
 mod report;
 mod scenario;
@@ -200,8 +201,13 @@ pub enum Command {
         /// The shell: bash, elvish, fish, powershell or zsh.
         shell: clap_complete::Shell,
     },
-    /// Print the man page (roff): `mtsim man > mtsim.1; man ./mtsim.1`.
-    Man,
+    /// Print the man page (roff): `mtsim man > mtsim.1; man ./mtsim.1`. With `-o DIR`,
+    /// write `DIR/mtsim.1` and a page `DIR/mtsim-NAME.1` for every subcommand it names.
+    Man {
+        /// Folder for mtsim.1 and the subcommands' pages (created if missing).
+        #[arg(short, long, value_name = "DIR")]
+        output: Option<PathBuf>,
+    },
     /// Identify the location errors of the rotary axes from measured ball-bar traces:
     /// `mtsim fit A.toml --measured a.csv [B.toml --measured b.csv ...] -o DIR`. Writes
     /// fit.json, location-errors.toml, fit.svg and fit.html; fits the table ball's placement
@@ -278,16 +284,8 @@ fn run(cli: Cli) -> Result<i32> {
             print_stdout(&String::from_utf8_lossy(&out));
             Ok(0)
         }
-        Command::Man => {
-            let mut out = Vec::new();
-            clap_mangen::Man::new(<Cli as clap::CommandFactory>::command())
-                .render(&mut out)
-                .map_err(|source| Error::Write {
-                    path: PathBuf::from("<stdout>"),
-                    source,
-                })?;
-            print_stdout(&String::from_utf8_lossy(&out));
-            Ok(0)
+        Command::Man { output } => {
+            man::run(<Cli as clap::CommandFactory>::command(), output.as_deref())
         }
         Command::Check {
             scenario,

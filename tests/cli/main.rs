@@ -1,6 +1,6 @@
 //! The command line (`src/cli/`) as users and scripts meet it: JSON shapes, exit codes, error
 //! messages (insta snapshots in `snapshots/`), a new user's first runs, sharded runs merged
-//! back, and the Dask example.
+//! back, the Dask example, and every command the docs show.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -8,6 +8,7 @@ mod common;
 mod bad_inputs;
 mod bounds;
 mod dask_example;
+mod docs_commands;
 mod messages;
 mod run_folders;
 mod scale_out;

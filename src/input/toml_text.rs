@@ -120,8 +120,9 @@ pub fn parse_overridden<T: DeserializeOwned>(
 /// unit: 10⁹ mm is 1,000 km, 10⁹ mm/min 16.7 km/s; no machine key comes near it.
 pub const MAX_MAGNITUDE: f64 = 1e9;
 
-/// Integer keys that count work, not a size: they may be raised past [`MAX_MAGNITUDE`].
-const COUNTS: [&str; 2] = ["max_samples", "max_trace_rows"];
+/// Integer keys that count samples, not a size: they may be raised past [`MAX_MAGNITUDE`]
+/// (`trace_every = 1e12` keeps no row but the first: the trace switched off).
+const COUNTS: [&str; 3] = ["max_samples", "max_trace_rows", "trace_every"];
 
 /// Refuses a number in `text` (the contents of `path`) that no key can mean: NaN, an
 /// infinity, or one larger than [`MAX_MAGNITUDE`] in size (a travel of 1e308 mm, a table of

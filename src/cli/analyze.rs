@@ -110,6 +110,10 @@ pub fn analysis_table(analysis: &Analysis) -> String {
             None if a.reversals_deg.is_empty() => "none".to_string(),
             None => fmt_angles(&a.reversals_deg),
         };
+        let reversals = match a.reversals_not_listed {
+            Some(n) => format!("{reversals}; and {n} more not listed"),
+            None => reversals,
+        };
         out.push_str(&format!(
             "{:<4} {:>9.3} {unit:<3}{:>9.3} {unit:<3}{:>8.3} {unit:<3}{:>8.1} {:<8} {}\n",
             a.axis.to_string(),

@@ -46,7 +46,14 @@ pub struct AxisMotion {
     /// For a file program: the source lines of the blocks whose end is a turning point.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reversal_lines: Option<Vec<usize>>,
+    /// Reversals past the first [`MAX_LISTED_REVERSALS`] of the axis, counted, not listed
+    /// (memory stays flat however long the program); absent when all are listed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reversals_not_listed: Option<u64>,
 }
+
+/// Reversals of one axis listed (lines and angles) before the rest are only counted.
+pub const MAX_LISTED_REVERSALS: usize = 10_000;
 
 /// The per-axis analysis of a program.
 #[derive(Clone, Debug, PartialEq)]
@@ -169,6 +176,7 @@ pub fn analyse_cone(path: &ConePath, feed_mm_min: f64) -> Analysis {
                     r
                 },
                 reversal_lines: None,
+                reversals_not_listed: None,
             }
         })
         .collect();
@@ -336,7 +344,11 @@ impl<'m> MoveAnalysis<'m> {
                 }
                 if let Some(turn) = s.push_increment(d, q[axis], block.line, q) {
                     let theta = frame.map(|f| f.theta_deg(&kin.forward(&turn.1).tip));
-                    s.turns.push((turn.0, theta));
+                    if s.turns.len() < MAX_LISTED_REVERSALS {
+                        s.turns.push((turn.0, theta));
+                    } else {
+                        s.not_listed += 1;
+                    }
                 }
             }
             previous = q;
@@ -361,6 +373,7 @@ impl<'m> MoveAnalysis<'m> {
                     peak_speed_per_min: s.peak_speed,
                     reversals_deg,
                     reversal_lines: Some(s.turns.iter().map(|(l, _)| *l).collect()),
+                    reversals_not_listed: (s.not_listed > 0).then_some(s.not_listed),
                 }
             })
             .collect();
@@ -383,6 +396,8 @@ struct BlockAxisState {
     /// Direction of travel (+1 or -1) and the extreme reached in it: value, line, position.
     travel: Option<(f64, f64, usize, AxisVec)>,
     turns: Vec<(usize, Option<f64>)>,
+    /// Turns past [`MAX_LISTED_REVERSALS`].
+    not_listed: u64,
 }
 
 impl Default for BlockAxisState {
@@ -393,6 +408,7 @@ impl Default for BlockAxisState {
             peak_speed: 0.0,
             travel: None,
             turns: Vec::new(),
+            not_listed: 0,
         }
     }
 }
@@ -471,6 +487,7 @@ pub fn analyse_circle(circle: &CircleTest, axes: &[Axis]) -> Analysis {
                 peak_speed_per_min: speed,
                 reversals_deg,
                 reversal_lines: None,
+                reversals_not_listed: None,
             }
         })
         .collect();

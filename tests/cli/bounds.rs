@@ -463,3 +463,36 @@ fn a_machine_file_or_error_table_that_is_not_one_is_named_never_quoted() {
         "{err}"
     );
 }
+
+/// `analyze` lists an axis's first 10,000 reversals and counts the rest, so that its memory
+/// does not grow with a program of reversing moves: 12,001 feed blocks between X0 and X1
+/// turn X at the end of every block but the last, 12,000 times.
+#[test]
+fn analyze_lists_the_first_ten_thousand_reversals_and_counts_the_rest() {
+    let dir = scratch("bounds", "reversal-cap");
+    let mut program = String::from("G21 G90\nG0 X0 Y0 Z100\nF1000\n");
+    for k in 0..12_001 {
+        program.push_str(if k % 2 == 0 { "G1 X1\n" } else { "G1 X0\n" });
+    }
+    program.push_str("M2\n");
+    std::fs::write(dir.join("zigzag.ngc"), program).unwrap();
+    write_scenario(&dir, &trt_ac(), "[program]\nfile = \"zigzag.ngc\"\n");
+    let out = mtsim_plain(&dir, &["analyze", "s.toml", "--json"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let x = &json["axes"]["X"];
+    assert_eq!(x["reversal_lines"].as_array().unwrap().len(), 10_000);
+    assert_eq!(x["reversals_not_listed"], 2_000);
+    let text =
+        String::from_utf8_lossy(&mtsim_plain(&dir, &["analyze", "s.toml"]).stdout).to_string();
+    assert!(
+        text.contains("; and 2000 more not listed"),
+        "{}",
+        &text[..text.len().min(400)]
+    );
+}

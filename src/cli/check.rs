@@ -16,10 +16,8 @@ pub fn run(path: &Path, as_json: bool, options: CheckOptions, html: Option<&Path
         }
     }
     let scenario = super::load_scenario(path)?;
-    for n in crate::program::scenario_notices(&scenario)? {
-        if n.warning {
-            super::warn(&format!("{}:{}: {}", n.path.display(), n.line, n.message));
-        }
+    for n in crate::program::scenario_warnings(&scenario)? {
+        super::warn(&format!("{}:{}: {}", n.path.display(), n.line, n.message));
     }
     let bar = super::spinner("checking");
     let started = std::time::Instant::now();

@@ -35,3 +35,18 @@ pub fn notices(path: &Path, options: &ngc::Options) -> Result<Vec<ngc::Notice>> 
     while let Some(Ok(_)) = moves.next() {}
     Ok(moves.notices().to_vec())
 }
+
+/// The reader's warnings about the file at `path`. The one warning there is, a program that
+/// moves before it states its units, is given with the first block that queues a move, so
+/// the read stops at the first move: a command that only prints warnings does not read the
+/// whole program once more.
+pub fn warnings(path: &Path, options: &ngc::Options) -> Result<Vec<ngc::Notice>> {
+    let mut moves = ngc::read_file_with(path, options)?;
+    let _ = moves.next();
+    Ok(moves
+        .notices()
+        .iter()
+        .filter(|n| n.warning)
+        .cloned()
+        .collect())
+}

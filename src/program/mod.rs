@@ -83,6 +83,15 @@ pub fn scenario_notices(scenario: &Scenario) -> Result<Vec<ngc::Notice>> {
     }
 }
 
+/// The reader's warnings about the scenario's program file ([`file::warnings`]); none for a
+/// generated test.
+pub fn scenario_warnings(scenario: &Scenario) -> Result<Vec<ngc::Notice>> {
+    match &scenario.program {
+        Program::File { path, .. } => file::warnings(path, &scenario.reader),
+        _ => Ok(Vec::new()),
+    }
+}
+
 /// The program a scenario runs, as [`scenario_run`], with a file's moves as the interpreter
 /// gives them, unchecked against the machine (`mtsim blocks` prints them all).
 pub fn scenario_run_unchecked(scenario: &Scenario, direction: Direction) -> Result<Run<'static>> {

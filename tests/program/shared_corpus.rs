@@ -219,6 +219,13 @@ fn the_start_units_come_from_the_machine_or_scenario_and_a_guess_is_never_silent
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["axes"]["X"]["max"], 5.0);
     assert!(v["warnings"][0].as_str().unwrap().contains("read in mm"));
+    // `check` gives the same warning (its reader stops at the first move, which carries it).
+    let (_, _, err) = run_units_case("mm-check", program, "", "", &["check"]);
+    assert!(err.contains("moves before it states its units"), "{err}");
+    assert!(
+        err.contains(":1:"),
+        "the warning names the program line: {err}"
+    );
     // The machine starts in inch: X 5 in = 127 mm; the warning names the machine file.
     let (_, out, err) = run_units_case(
         "machine-inch",

@@ -214,3 +214,149 @@ fn g53_in_g91_goes_to_machine_coordinates_on_haas_only() {
     let (_, msg) = error_with("G21 G91 G53 G0 X5\n", &o);
     assert!(msg.contains("G53 in G91"), "{msg}");
 }
+
+/// The kinds and end points of `m`.
+fn path(m: &[ngc::Move]) -> Vec<(MoveKind, [f64; 3])> {
+    m.iter().map(|m| (m.kind(), xyz(m))).collect()
+}
+
+#[test]
+fn back_boring_shifts_off_the_wall_goes_down_through_the_hole_and_feeds_up() {
+    use MoveKind::{Feed as F, Rapid as R};
+    // Fanuc G87 at X5, from the initial level Z10: shift Q1.5 along +X, rapid down to
+    // R -20 (below the part), shift back, feed up to the bore's top Z -2, dwell 1 s
+    // (P1000 ms), shift off, rapid up to Z10, shift back.
+    let text = "G21 G90 G0 X0 Y0 Z10\nG98 G87 X5 Y0 Z-2 R-20 Q1.5 P1000 F100\nG80\n";
+    let (m, _) = read(text, &opts(Dialect::Fanuc));
+    let got = path(&m);
+    assert_eq!(
+        got[1..6],
+        [
+            (R, [5.0, 0.0, 10.0]),
+            (R, [6.5, 0.0, 10.0]),
+            (R, [6.5, 0.0, -20.0]),
+            (R, [5.0, 0.0, -20.0]),
+            (F, [5.0, 0.0, -2.0]),
+        ]
+    );
+    assert_eq!(m[6].motion, Motion::Dwell { seconds: 1.0 });
+    assert_eq!(
+        got[7..],
+        [
+            (R, [6.5, 0.0, -2.0]),
+            (R, [6.5, 0.0, 10.0]),
+            (R, [5.0, 0.0, 10.0]),
+        ]
+    );
+    // The shift as I J (incremental, any direction in the plane): I-1 J2 from X5 Y5.
+    let text = "G21 G90 G0 X0 Y0 Z10\nG87 X5 Y5 Z-2 R-20 I-1 J2 F100\n";
+    let (m, _) = read(text, &opts(Dialect::Fanuc));
+    let got: Vec<[f64; 3]> = m[2..4].iter().map(xyz).collect();
+    assert_eq!(got, [[4.0, 7.0, 10.0], [4.0, 7.0, -20.0]]);
+    // Haas back boring is G77, the same moves (no dwell); R above Z is refused.
+    let text = "G21 G90 G0 X0 Y0 Z10\nG77 X5 Y0 Z-2 R-20 Q1.5 F100\n";
+    let (m, _) = read(text, &opts(Dialect::Haas));
+    let ends: Vec<[f64; 3]> = m[1..].iter().map(xyz).collect();
+    assert_eq!(
+        ends,
+        [
+            [5.0, 0.0, 10.0],
+            [6.5, 0.0, 10.0],
+            [6.5, 0.0, -20.0],
+            [5.0, 0.0, -20.0],
+            [5.0, 0.0, -2.0],
+            [6.5, 0.0, -2.0],
+            [6.5, 0.0, 10.0],
+            [5.0, 0.0, 10.0]
+        ]
+    );
+    let (line, msg) = error_with(
+        "G21 G90 G0 Z10\nG87 X5 Z-20 R-2 Q1 F100\n",
+        &opts(Dialect::Fanuc),
+    );
+    assert_eq!(line, 2);
+    assert!(msg.contains("back boring"), "{msg}");
+    // LinuxCNC has no G87.
+    let (_, msg) = error_with(
+        "G21 G0 Z10\nG87 X5 Z-2 R-20 F100\n",
+        &opts(Dialect::Linuxcnc),
+    );
+    assert!(msg.contains("G87"), "{msg}");
+}
+
+#[test]
+fn boring_with_a_manual_retract_feeds_in_dwells_and_is_retracted_with_a_notice() {
+    use MoveKind::{Feed as F, Rapid as R};
+    // Fanuc G88 P2000 (ms) under G98 from Z10: rapid to R 2, feed to -5, dwell 2 s, the
+    // manual retract simulated as a rapid to the initial level.
+    let text = "G21 G90 G0 X0 Y0 Z10\nG98 G88 X1 Z-5 R2 P2000 F100\nG80\n";
+    let (m, notices) = read(text, &opts(Dialect::Fanuc));
+    let got = path(&m);
+    assert_eq!(
+        got[1..4],
+        [
+            (R, [1.0, 0.0, 10.0]),
+            (R, [1.0, 0.0, 2.0]),
+            (F, [1.0, 0.0, -5.0])
+        ]
+    );
+    assert_eq!(m[4].motion, Motion::Dwell { seconds: 2.0 });
+    assert_eq!(got[5], (R, [1.0, 0.0, 10.0]));
+    assert_eq!(got.len(), 6);
+    let manual: Vec<_> = notices
+        .iter()
+        .filter(|n| n.message.contains("manual retract"))
+        .collect();
+    assert_eq!(manual.len(), 1, "{notices:?}");
+    assert_eq!(manual[0].line, 2);
+    // Haas G87: bore in, manual retract, no dwell; G99 returns to R. Haas G88 P2. dwells 2 s.
+    let text = "G21 G90 G0 X0 Y0 Z10\nG99 G87 X1 Z-5 R2 F100\nG88 X3 P2.\n";
+    let (m, notices) = read(text, &opts(Dialect::Haas));
+    let got = path(&m);
+    assert_eq!(
+        got[1..],
+        [
+            (R, [1.0, 0.0, 10.0]),
+            (R, [1.0, 0.0, 2.0]),
+            (F, [1.0, 0.0, -5.0]),
+            (R, [1.0, 0.0, 2.0]),
+            (R, [3.0, 0.0, 2.0]),
+            (F, [3.0, 0.0, -5.0]),
+            (MoveKind::Dwell, [3.0, 0.0, -5.0]),
+            (R, [3.0, 0.0, 2.0]),
+        ]
+    );
+    assert_eq!(m[7].motion, Motion::Dwell { seconds: 2.0 });
+    let manual = notices
+        .iter()
+        .filter(|n| n.message.contains("manual retract"))
+        .count();
+    assert_eq!(manual, 2, "one notice each for G87 and G88: {notices:?}");
+}
+
+#[test]
+fn m73_and_m74_are_the_tool_air_blast_on_haas_and_save_the_modal_state_only_in_linuxcnc() {
+    // Haas: M73/M74 are machine codes (tool air blast on/off), accepted with a notice. An
+    // M73 in a subprogram does not restore G90 on its return: X1 after it is incremental.
+    let text = "G21 G90 G0 X5\nM98 P100\nG0 X1\nM30\nO100\nM73\nG91\nM74\nM99\n";
+    let (m, notices) = read(text, &opts(Dialect::Haas));
+    assert_eq!(xyz(m.last().unwrap())[0], 6.0);
+    for code in ["M73 tool air blast on", "M74 tool air blast off"] {
+        assert!(
+            notices.iter().any(|n| n.message.starts_with(code)),
+            "{code}: {notices:?}"
+        );
+    }
+    // Fanuc: M70-M73 are the builder's codes, refused unless mapped.
+    let (line, msg) = error_with("G21 G0 X1\nM73\n", &opts(Dialect::Fanuc));
+    assert_eq!(line, 2);
+    assert!(msg.contains("M73"), "{msg}");
+    // LinuxCNC: M73 in a subroutine restores G90 on return, so X1 is absolute.
+    let text = "G21 G90 G0 X5\no100 call\nG0 X1\nM2\no100 sub\nM73\nG91\no100 endsub\n";
+    let text = format!(
+        "o100 sub\nM73\nG91\no100 endsub\n{}",
+        &text[..text.find("M2").unwrap() + 3]
+    );
+    let (m, _) = read(&text, &opts(Dialect::Linuxcnc));
+    assert_eq!(xyz(m.last().unwrap())[0], 1.0);
+}

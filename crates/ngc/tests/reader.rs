@@ -387,10 +387,10 @@ fn unsupported_constructs_are_reported_at_their_word() {
         ),
         ("G0 X0\nM98 P1000\n", 2, 1, "subroutine `1000` not found"),
         (
-            "G90\nG87 X0 Y0 Z-5 R1 F100\n",
+            "G90\nG12 X0 Y0 Z-5 R1 F100\n",
             2,
             1,
-            "unsupported code `G87`",
+            "unsupported code `G12`",
         ),
         ("G17 G68 X0 Y0 R30\n", 1, 5, "`G68` (2D coordinate rotation"),
         (
@@ -566,13 +566,13 @@ fn file_errors_point_into_the_file_with_crlf_endings() {
 
 #[test]
 fn errors_carry_the_span_and_help() {
-    let err = read_str(Path::new(PATH), "G0 X0\nG87 X1 Y1 Z-3 R1\n", AxisVec::ZERO)
+    let err = read_str(Path::new(PATH), "G0 X0\nG12 X1 Y1 Z-3 R1\n", AxisVec::ZERO)
         .find_map(|b| b.err())
         .unwrap();
     let Error::Syntax(s) = &err else {
         panic!("expected a syntax error, got {err:?}")
     };
-    assert_eq!(&s.text[s.span.clone()], "G87");
+    assert_eq!(&s.text[s.span.clone()], "G12");
     assert!(
         s.help.as_deref().unwrap_or("").contains("docs/gcode.md"),
         "{s:?}"

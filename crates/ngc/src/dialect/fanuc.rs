@@ -28,6 +28,8 @@ pub(super) const TABLE: Table = Table {
     g92_s_limits_spindle: true,
     g53_absolute_in_g91: false,
     leader_before_percent: true,
+    g87_back_bore: true,
+    modal_state_m70_m73: false,
     macro_b: true,
 };
 
@@ -37,7 +39,7 @@ pub(super) fn g_code(code: u32) -> Option<GCode> {
         434 | 435 => GCode::Tcp(true),
         440 => GCode::ToolLength(4),
         50 | 51 | 80 | 500 => GCode::Control(code),
-        740 | 760 | 840 => GCode::Motion(Some(MotionMode::Cycle(code))),
+        740 | 760 | 840 | 870 | 880 => GCode::Motion(Some(MotionMode::Cycle(code))),
         682 => GCode::Tilt(true),
         690 => GCode::Tilt(false),
         531 => GCode::AlignRotary,

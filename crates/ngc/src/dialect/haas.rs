@@ -2,7 +2,7 @@
 //! dynamic work offsets, G154 P extended offsets, G103/G187; dwell P in s with a decimal
 //! point, ms without.
 
-use crate::code::GCode;
+use crate::code::{GCode, MotionMode};
 use crate::dialect::fanuc;
 use crate::dialect::table::{DwellUnit, Table};
 
@@ -13,6 +13,7 @@ pub(super) const TABLE: Table = Table {
     no_motion_g,
     local_subprogram_m97: true,
     g53_absolute_in_g91: true,
+    g87_back_bore: false,
     ..fanuc::TABLE
 };
 
@@ -23,6 +24,7 @@ fn g_code(code: u32) -> Option<GCode> {
         1030 | 1870 => GCode::Control(code),
         2540 => GCode::Dwo(true),
         2550 => GCode::Dwo(false),
+        770 => GCode::Motion(Some(MotionMode::Cycle(770))),
         _ => return fanuc::g_code(code),
     })
 }
@@ -56,6 +58,7 @@ fn machine_m(code: u32) -> Option<&'static str> {
         46 => "M46 jump if pallet loaded",
         59 => "M59 set output relay",
         69 => "M69 clear output relay",
+        73 => "M73 tool air blast on",
         74 => "M74 tool air blast off",
         75 => "M75 set G35/G136 reference point",
         78 => "M78 alarm if skip signal found",

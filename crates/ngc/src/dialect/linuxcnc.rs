@@ -30,6 +30,8 @@ pub(super) const TABLE: Table = Table {
     g92_s_limits_spindle: false,
     g53_absolute_in_g91: false,
     leader_before_percent: false,
+    g87_back_bore: false,
+    modal_state_m70_m73: true,
     macro_b: false,
 };
 

@@ -62,6 +62,12 @@ pub(crate) struct Table {
     pub g53_absolute_in_g91: bool,
     /// Text before a program's first `%` line is the tape leader, skipped (Fanuc family).
     pub leader_before_percent: bool,
+    /// G87 is back boring (Fanuc); otherwise, where the dialect has G87, boring with a
+    /// manual retract (Haas, whose back boring is G77).
+    pub g87_back_bore: bool,
+    /// M70-M73 save and restore the modal state (LinuxCNC); otherwise they are the
+    /// builder's machine codes (Haas M73/M74: tool air blast on/off).
+    pub modal_state_m70_m73: bool,
 
     // Parameter and subprogram syntax.
     /// Fanuc macro B: `#1`-`#33` locals per call, `IF [..] GOTO`, `WHILE [..] DO`, `O`
@@ -149,7 +155,7 @@ pub(crate) fn common_refusal(code: u32) -> Option<(&'static str, &'static str)> 
             "post-process the program without G68",
         ),
         740 | 840 | 870 | 880 => (
-            " (this canned cycle is not supported in this dialect; G73 G81 G82 G83 G85 G86 G89 are, and G74 G76 G84 in the fanuc and haas dialects)",
+            " (this canned cycle is not supported in this dialect; G73 G81 G82 G83 G85 G86 G89 are, and G74 G76 G84 G87 G88 in the fanuc and haas dialects)",
             "",
         ),
         _ => return None,

@@ -1,7 +1,8 @@
 //! Canned cycles G73, G81-G83, G85, G86, G89 in the current plane: the moves of each hole
 //! as LinuxCNC's G-code manual describes them (the retract to R or the initial level, the
-//! pecks, the dwell), checked against rs274; and the Fanuc family's G74/G84 tapping and
-//! G76 fine boring as the Fanuc 0i-MF operator's manual describes them.
+//! pecks, the dwell), checked against rs274; and the Fanuc family's G74/G84 tapping, G76
+//! fine boring, G87 back boring (Haas G77) and G88 boring with a manual retract (Haas G87
+//! and G88) as the Fanuc 0i-MF operator's manual and the Haas mill manual describe them.
 
 use std::collections::VecDeque;
 
@@ -65,6 +66,20 @@ impl Interp {
             // In the dialect's dwell unit (Fanuc ms, LinuxCNC s), kept in seconds.
             self.cycle_p = Some(self.dwell_seconds(line, &p, Some(p), None)?);
         }
+        let back_bore = self.is_back_bore(code);
+        if back_bore {
+            // The shift's I J (G17), K I (G18), J K (G19): incremental, along u and v.
+            let letter = |a: Axis| match a {
+                Axis::X => 'I',
+                Axis::Y => 'J',
+                _ => 'K',
+            };
+            let (i, j) = (get(letter(u)), get(letter(v)));
+            if i.is_some() || j.is_some() {
+                let value = |w: Option<Word>| w.map_or(0.0, |w| w.value * scale);
+                self.cycle_shift = Some((value(i), value(j)));
+            }
+        }
         let r_prog = self.cycle_r.ok_or_else(|| {
             LineError::new(
                 at.clone(),
@@ -108,7 +123,19 @@ impl Interp {
             pu = self.pos[u];
             pv = self.pos[v];
         }
-        if r < bottom {
+        if back_bore {
+            // R is the start below the bore, Z its top, the initial level above both.
+            if r >= bottom || old_n < bottom {
+                return Err(LineError::new(
+                    at,
+                    format!(
+                        "back boring: expected R below {} (the bore's top) and the initial level above it",
+                        n.letter()
+                    ),
+                    "back boring levels",
+                ));
+            }
+        } else if r < bottom {
             return Err(LineError::new(
                 at,
                 format!(
@@ -144,6 +171,7 @@ impl Interp {
             delta,
             repeats,
             initial: old_n,
+            back_bore,
         };
         self.holes(&holes, get, line_no, queue, at)
     }
@@ -159,60 +187,26 @@ impl Interp {
         at: std::ops::Range<usize>,
     ) -> LineResult<()> {
         let Holes {
-            code,
             axes: (u, v, n),
             r,
-            bottom,
             step: (du, dv),
             first: (mut pu, mut pv),
-            delta,
             repeats,
             initial: old_n,
+            ..
         } = *h;
         let scale = self.scale();
-        let dwell = self.cycle_p.unwrap_or(0.0);
-        let rapid_delta = 0.010 * MM_PER_INCH; // LinuxCNC's G73/G83 clearance, 0.010 in.
-        let exact = PathControl::ExactPath;
-        let mut cur = self.pos;
-        let go = |me: &mut Interp,
-                  queue: &mut VecDeque<Move>,
-                  cur: &mut AxisVec,
-                  motion: Motion,
-                  pu: f64,
-                  pv: f64,
-                  pn: f64| {
-            let mut t = *cur;
-            t[u] = pu;
-            t[v] = pv;
-            t[n] = pn;
-            me.emit(queue, line_no, motion, *cur, t, exact);
-            *cur = t;
-        };
-        // The dwell at the hole bottom (G82, G86, G89): P seconds where the tool stands.
-        let dwell_at = |me: &mut Interp, queue: &mut VecDeque<Move>, at: AxisVec| {
-            me.emit(
-                queue,
-                line_no,
-                Motion::Dwell { seconds: dwell },
-                at,
-                at,
-                exact,
-            );
+        let mut pen = Pen {
+            cur: self.pos,
+            axes: h.axes,
+            line_no,
         };
         // As rs274 runs it: the first hole is approached at the current level (when
         // above R), the next ones at the clear level.
         let mut current = self.pos[n];
         let mut old = old_n;
-        if old < r {
-            go(
-                self,
-                queue,
-                &mut cur,
-                Motion::Rapid,
-                self.pos[u],
-                self.pos[v],
-                r,
-            );
+        if old < r && !h.back_bore {
+            pen.go(self, queue, Motion::Rapid, self.pos[u], self.pos[v], r);
             old = r;
             current = r;
         }
@@ -233,88 +227,190 @@ impl Interp {
                 pu = xy[0] * scale + ox;
                 pv = xy[1] * scale + oy;
             }
+            if h.back_bore {
+                self.back_bore_hole(h, &mut pen, queue, pu, pv);
+                continue;
+            }
             if k == 0 && current > r {
-                go(self, queue, &mut cur, Motion::Rapid, pu, pv, current);
-                go(self, queue, &mut cur, Motion::Rapid, pu, pv, r);
+                pen.go(self, queue, Motion::Rapid, pu, pv, current);
+                pen.go(self, queue, Motion::Rapid, pu, pv, r);
             } else {
-                go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
+                pen.go(self, queue, Motion::Rapid, pu, pv, clear);
                 if clear > r {
-                    go(self, queue, &mut cur, Motion::Rapid, pu, pv, r);
+                    pen.go(self, queue, Motion::Rapid, pu, pv, r);
                 }
             }
-            match code {
-                810 => {
-                    go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
-                    go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
-                }
-                820 | 860 => {
-                    go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
-                    dwell_at(self, queue, cur);
-                    go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
-                }
-                830 | 730 => {
-                    let mut depth = r - delta;
-                    while depth > bottom {
-                        go(self, queue, &mut cur, Motion::Linear, pu, pv, depth);
-                        if code == 830 {
-                            go(self, queue, &mut cur, Motion::Rapid, pu, pv, r);
-                        }
-                        go(
-                            self,
-                            queue,
-                            &mut cur,
-                            Motion::Rapid,
-                            pu,
-                            pv,
-                            depth + rapid_delta,
-                        );
-                        depth -= delta;
+            self.down_and_out(h, &mut pen, queue, pu, pv, clear);
+        }
+        self.pos = pen.cur;
+        Ok(())
+    }
+
+    /// A hole's own moves, from R down to the bottom and out to `clear` (the G98/G99
+    /// level), at (pu, pv).
+    fn down_and_out(
+        &mut self,
+        h: &Holes,
+        pen: &mut Pen,
+        queue: &mut VecDeque<Move>,
+        pu: f64,
+        pv: f64,
+        clear: f64,
+    ) {
+        let (r, bottom, delta) = (h.r, h.bottom, h.delta);
+        let dwell = self.cycle_p.unwrap_or(0.0);
+        let rapid_delta = 0.010 * MM_PER_INCH; // LinuxCNC's G73/G83 clearance, 0.010 in.
+        match h.code {
+            810 => {
+                pen.go(self, queue, Motion::Linear, pu, pv, bottom);
+                pen.go(self, queue, Motion::Rapid, pu, pv, clear);
+            }
+            820 | 860 => {
+                pen.go(self, queue, Motion::Linear, pu, pv, bottom);
+                pen.dwell(self, queue, dwell);
+                pen.go(self, queue, Motion::Rapid, pu, pv, clear);
+            }
+            830 | 730 => {
+                let mut depth = r - delta;
+                while depth > bottom {
+                    pen.go(self, queue, Motion::Linear, pu, pv, depth);
+                    if h.code == 830 {
+                        pen.go(self, queue, Motion::Rapid, pu, pv, r);
                     }
-                    go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
-                    go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
+                    pen.go(self, queue, Motion::Rapid, pu, pv, depth + rapid_delta);
+                    depth -= delta;
                 }
-                840 | 740 => {
-                    // Tapping (Fanuc family): feed in, dwell, the spindle reverses, feed
-                    // out to R; G98 then rapids to the initial level.
-                    go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
-                    if dwell > 0.0 {
-                        dwell_at(self, queue, cur);
-                    }
-                    go(self, queue, &mut cur, Motion::Linear, pu, pv, r);
-                    if clear != r {
-                        go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
-                    }
+                pen.go(self, queue, Motion::Linear, pu, pv, bottom);
+                pen.go(self, queue, Motion::Rapid, pu, pv, clear);
+            }
+            840 | 740 => {
+                // Tapping (Fanuc family): feed in, dwell, the spindle reverses, feed
+                // out to R; G98 then rapids to the initial level.
+                pen.go(self, queue, Motion::Linear, pu, pv, bottom);
+                if dwell > 0.0 {
+                    pen.dwell(self, queue, dwell);
                 }
-                760 => {
-                    // Fine boring (Fanuc family): feed in, dwell, the spindle stops
-                    // oriented, the tool shifts Q off the wall (+u, the builder's default
-                    // direction), rapids out and shifts back.
-                    go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
-                    if dwell > 0.0 {
-                        dwell_at(self, queue, cur);
-                    }
-                    go(self, queue, &mut cur, Motion::Rapid, pu + delta, pv, bottom);
-                    go(self, queue, &mut cur, Motion::Rapid, pu + delta, pv, clear);
-                    go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
+                pen.go(self, queue, Motion::Linear, pu, pv, r);
+                if clear != r {
+                    pen.go(self, queue, Motion::Rapid, pu, pv, clear);
                 }
-                850 => {
-                    go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
-                    go(self, queue, &mut cur, Motion::Linear, pu, pv, r);
-                    if clear != r {
-                        go(self, queue, &mut cur, Motion::Rapid, pu, pv, clear);
-                    }
+            }
+            760 => {
+                // Fine boring (Fanuc family): feed in, dwell, the spindle stops
+                // oriented, the tool shifts Q off the wall (+u, the builder's default
+                // direction), rapids out and shifts back.
+                pen.go(self, queue, Motion::Linear, pu, pv, bottom);
+                if dwell > 0.0 {
+                    pen.dwell(self, queue, dwell);
                 }
-                _ => {
-                    // G89
-                    go(self, queue, &mut cur, Motion::Linear, pu, pv, bottom);
-                    dwell_at(self, queue, cur);
-                    // LinuxCNC feeds straight back to the clearance plane (checked with rs274).
-                    go(self, queue, &mut cur, Motion::Linear, pu, pv, clear);
+                pen.go(self, queue, Motion::Rapid, pu + delta, pv, bottom);
+                pen.go(self, queue, Motion::Rapid, pu + delta, pv, clear);
+                pen.go(self, queue, Motion::Rapid, pu, pv, clear);
+            }
+            870 | 880 => {
+                // Boring with a manual retract (Fanuc G88; Haas G87 without the dwell,
+                // G88 with it): feed in, dwell, the spindle stops and the operator jogs
+                // out. Simulated as a rapid straight back to the G98/G99 level (a notice
+                // says so).
+                pen.go(self, queue, Motion::Linear, pu, pv, bottom);
+                if h.code == 880 {
+                    pen.dwell(self, queue, dwell);
                 }
+                pen.go(self, queue, Motion::Rapid, pu, pv, clear);
+            }
+            850 => {
+                pen.go(self, queue, Motion::Linear, pu, pv, bottom);
+                pen.go(self, queue, Motion::Linear, pu, pv, r);
+                if clear != r {
+                    pen.go(self, queue, Motion::Rapid, pu, pv, clear);
+                }
+            }
+            _ => {
+                // G89
+                pen.go(self, queue, Motion::Linear, pu, pv, bottom);
+                pen.dwell(self, queue, dwell);
+                // LinuxCNC feeds straight back to the clearance plane (checked with rs274).
+                pen.go(self, queue, Motion::Linear, pu, pv, clear);
             }
         }
-        self.pos = cur;
-        Ok(())
+    }
+
+    /// One hole of back boring (Fanuc G87, Haas G77) at (pu, pv): at the initial level the
+    /// spindle stops oriented and the tool shifts off the wall by s (I J, else Q along +u,
+    /// the builder's default direction), rapids down through the hole to R, shifts back,
+    /// feeds up to the bore's top Z, dwells P, shifts off again, rapids up to the initial
+    /// level and shifts back. It always returns to the initial level: R lies below the part.
+    fn back_bore_hole(
+        &mut self,
+        h: &Holes,
+        pen: &mut Pen,
+        queue: &mut VecDeque<Move>,
+        pu: f64,
+        pv: f64,
+    ) {
+        let (low, top, initial) = (h.r, h.bottom, h.initial);
+        let (su, sv) = self.cycle_shift.unwrap_or((h.delta, 0.0));
+        let dwell = self.cycle_p.unwrap_or(0.0);
+        pen.go(self, queue, Motion::Rapid, pu, pv, initial);
+        pen.go(self, queue, Motion::Rapid, pu + su, pv + sv, initial);
+        pen.go(self, queue, Motion::Rapid, pu + su, pv + sv, low);
+        pen.go(self, queue, Motion::Rapid, pu, pv, low);
+        pen.go(self, queue, Motion::Linear, pu, pv, top);
+        if dwell > 0.0 {
+            pen.dwell(self, queue, dwell);
+        }
+        pen.go(self, queue, Motion::Rapid, pu + su, pv + sv, top);
+        pen.go(self, queue, Motion::Rapid, pu + su, pv + sv, initial);
+        pen.go(self, queue, Motion::Rapid, pu, pv, initial);
+    }
+}
+
+/// Where a canned cycle's tool is, and the moves that take it on: each along the plane's
+/// axes `(u, v, n)` only, exact path, on the cycle's line.
+struct Pen {
+    cur: AxisVec,
+    axes: (Axis, Axis, Axis),
+    line_no: usize,
+}
+
+impl Pen {
+    /// A move of `motion` to (pu, pv, pn).
+    fn go(
+        &mut self,
+        me: &mut Interp,
+        queue: &mut VecDeque<Move>,
+        motion: Motion,
+        pu: f64,
+        pv: f64,
+        pn: f64,
+    ) {
+        let (u, v, n) = self.axes;
+        let mut t = self.cur;
+        t[u] = pu;
+        t[v] = pv;
+        t[n] = pn;
+        me.emit(
+            queue,
+            self.line_no,
+            motion,
+            self.cur,
+            t,
+            PathControl::ExactPath,
+        );
+        self.cur = t;
+    }
+
+    /// A dwell of `seconds` where the tool stands (G82, G86, G88, G89 at the bottom).
+    fn dwell(&mut self, me: &mut Interp, queue: &mut VecDeque<Move>, seconds: f64) {
+        let at = self.cur;
+        me.emit(
+            queue,
+            self.line_no,
+            Motion::Dwell { seconds },
+            at,
+            at,
+            PathControl::ExactPath,
+        );
     }
 }
 
@@ -332,4 +428,14 @@ struct Holes {
     repeats: u64,
     /// The initial level along n of this row of cycles.
     initial: f64,
+    /// Back boring (Fanuc G87, Haas G77): R below the bore, `bottom` its top.
+    back_bore: bool,
+}
+
+impl Interp {
+    /// Whether cycle `code` is back boring: Haas G77, and G87 where the dialect says so
+    /// (Fanuc; on Haas G87 bores with a manual retract).
+    pub(super) fn is_back_bore(&self, code: u32) -> bool {
+        code == 770 || (code == 870 && self.dialect.table().g87_back_bore)
+    }
 }

@@ -11,9 +11,13 @@ use crate::lex::{LineError, LineResult, Word};
 
 impl Interp {
     /// Phase 3: M70 saves the modal state, M71 forgets it, M72 restores it; M73 saves it
-    /// for the subroutine's return.
+    /// for the subroutine's return. Only where the dialect reads them so (LinuxCNC; on Haas
+    /// M73/M74 are the tool air blast).
     pub(super) fn save_and_restore(&mut self, b: &Block) -> LineResult<Stop> {
         let mut stop = Stop::None;
+        if !self.dialect.table().modal_state_m70_m73 {
+            return Ok(stop);
+        }
         for &(code, w) in b.m.iter() {
             match code {
                 70 => self.saved = Some(Box::new(self.save())),

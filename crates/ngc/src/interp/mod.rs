@@ -161,6 +161,9 @@ pub struct Interp {
     cycle_z: Option<f64>,
     cycle_q: Option<f64>,
     cycle_p: Option<f64>,
+    /// G87 (Fanuc) / G77 (Haas) back boring: the shift I J (K) off the bore wall, plane
+    /// axes u v, mm; modal in the cycle (Q shifts +u instead).
+    cycle_shift: Option<(f64, f64)>,
     /// Initial level of the canned cycles in a row (machine coordinate along the plane's
     /// normal, mm): LinuxCNC keeps it from the first cycle block until a motion that is not
     /// a cycle, so G98 returns there and G91 measures R from it.
@@ -264,6 +267,7 @@ impl Interp {
             cycle_z: None,
             cycle_q: None,
             cycle_p: None,
+            cycle_shift: None,
             cycle_initial: None,
             spline_ij: [0.0; 2],
             nurbs: Vec::new(),
@@ -468,6 +472,30 @@ impl Interp {
         let m =
             b.m.iter()
                 .filter_map(|(code, _)| (table.machine_m)(*code).map(|m| (*code, m)));
+        // Boring with a manual retract (Fanuc G88, Haas G87/G88): the jog out is simulated.
+        let manual = b.g.iter().find_map(|(c, _)| match c {
+            GCode::Motion(Some(MotionMode::Cycle(code @ (870 | 880))))
+                if !self.is_back_bore(*code) =>
+            {
+                Some(*code)
+            }
+            _ => None,
+        });
+        if let Some(code) = manual.filter(|c| !self.noticed.contains(&(G_KEY + c))) {
+            self.noticed.push(G_KEY + code);
+            notices.push(Notice {
+                path: path.to_path_buf(),
+                line: line_no,
+                message: format!(
+                    "G{} bores with a manual retract (the spindle stops and the operator jogs \
+                     the tool out): simulated as a rapid straight back to the G98/G99 level \
+                     ({} dialect)",
+                    code / 10,
+                    self.dialect.name()
+                ),
+                warning: false,
+            });
+        }
         let found: Vec<(u32, &str)> = g.chain(m).collect();
         for (key, meaning) in found {
             if self.noticed.contains(&key) || self.noticed.len() >= 100 {

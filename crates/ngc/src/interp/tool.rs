@@ -54,23 +54,8 @@ impl Interp {
                     self.tool = n;
                     self.next_tool = n;
                 }
-                0
-                | 1
-                | 2
-                | 30
-                | 60
-                | 3
-                | 4
-                | 5
-                | 19
-                | 7
-                | 8
-                | 9
-                | 48..=53
-                | 62..=68
-                | 70..=73
-                | 98
-                | 99 => {}
+                0 | 1 | 2 | 30 | 60 | 3 | 4 | 5 | 19 | 7 | 8 | 9 | 48..=53 | 62..=68 | 98 | 99 => {}
+                70..=73 if self.dialect.table().modal_state_m70_m73 => {}
                 97 if self.dialect.table().local_subprogram_m97 => {}
                 code if (self.dialect.table().machine_m)(code).is_some() => {}
                 code => {
@@ -130,7 +115,7 @@ impl Interp {
             }
             None => {
                 Err(LineError::new(w.span(), format!("unsupported code `{}`", &line[w.span()]), "unsupported M code")
-                    .help("supported: M0-M9 M19 M30 M48-M53 M60-M68 M70-M73 M98 M99 and user M100-M199; map others in the scenario's user_m_codes"))
+                    .help("supported: M0-M9 M19 M30 M48-M53 M60-M68 M98 M99, M70-M73 in the linuxcnc dialect, the machine codes docs/gcode.md lists for fanuc and haas, and user M100-M199; map others in the scenario's user_m_codes"))
             }
         }
     }

@@ -26,8 +26,12 @@ impl Interp {
             self.tool_selected = true;
         }
         let mut tcp_m = None;
+        let machine_m = self.dialect.table().machine_m;
         for &(code, w) in b.m.iter() {
             match code {
+                // The control's own machine codes first (Haas M61-M68 are relays, not
+                // LinuxCNC's M61 Q tool number or M62-M68 I/O).
+                code if machine_m(code).is_some() => {}
                 6 if self.comp.is_some() => {
                     return Err(LineError::new(w.span(), "cannot change tools with cutter radius compensation on: expected G40 first", "tool change under compensation"));
                 }
@@ -57,7 +61,6 @@ impl Interp {
                 0 | 1 | 2 | 30 | 60 | 3 | 4 | 5 | 19 | 7 | 8 | 9 | 48..=53 | 62..=68 | 98 | 99 => {}
                 70..=73 if self.dialect.table().modal_state_m70_m73 => {}
                 97 if self.dialect.table().local_subprogram_m97 => {}
-                code if (self.dialect.table().machine_m)(code).is_some() => {}
                 code => {
                     if let Some(on) = self.user_m(b.line, code, w, line_no, notices, path)? {
                         tcp_m = Some(on);

@@ -63,6 +63,10 @@ pub struct Violation {
     /// The limit exceeded, in the unit of `worst`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub limit: Option<f64>,
+    /// A travel violation of a program that would fit read in the other unit: which unit,
+    /// and the ranges it gives ([`super::units::other_unit_note`]).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub other_unit: Option<String>,
 }
 
 /// How much of an axis a program uses.
@@ -466,6 +470,7 @@ fn close(
         line: open.first.2,
         worst: open.worst,
         limit: Some(open.limit),
+        other_unit: None,
     }
 }
 

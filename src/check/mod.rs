@@ -5,6 +5,7 @@
 pub mod limits;
 pub mod run;
 pub mod scene;
+pub mod units;
 
 pub use run::{
     check, check_reference, check_with, CheckOptions, CheckReport, CheckTiming, SceneQueries,

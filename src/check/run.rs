@@ -311,6 +311,16 @@ pub fn check_with(
     let feed_reductions = stats.feed_reductions;
     let scene = scene.map(|s| s.monitor);
     let (usage, mut violations) = limits.finish();
+    if violations.iter().any(|v| v.kind == ViolationKind::Travel) {
+        if let Some(note) = crate::check::units::other_unit_note(scenario, &usage) {
+            for v in violations
+                .iter_mut()
+                .filter(|v| v.kind == ViolationKind::Travel)
+            {
+                v.other_unit = Some(note.clone());
+            }
+        }
+    }
     let mut scene_queries = None;
     let mut engagement = Vec::new();
     let (mut min_clearance_mm, mut min_clearance_bodies) = (None, None);
@@ -339,6 +349,7 @@ pub fn check_with(
                 line: e.line,
                 worst: e.worst_mm,
                 limit,
+                other_unit: None,
             });
         }
         violations.sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));

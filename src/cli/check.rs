@@ -132,6 +132,7 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
         return out;
     }
     out.push_str(&format!("{} violation(s):\n", report.violations.len()));
+    let mut unit_named = false;
     for v in &report.violations {
         let what = match (&v.axis, &v.bodies) {
             (Some(a), _) => a.to_string(),
@@ -175,6 +176,11 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
             what,
             v.line
         ));
+        // Named once, under the first travel violation (every one carries it in JSON).
+        if let Some(note) = v.other_unit.as_ref().filter(|_| !unit_named) {
+            out.push_str(&format!("               {note}\n"));
+            unit_named = true;
+        }
     }
     out
 }

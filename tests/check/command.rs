@@ -417,3 +417,54 @@ fn check_measures_the_accelerations_the_planners_samples_reach_on_the_cone() {
         "{text}"
     );
 }
+
+#[test]
+fn an_inch_program_read_as_mm_that_leaves_the_travel_is_told_it_would_fit_in_inches() {
+    // Written in inches, no G20: read in mm (the start unit), Y runs 3..6 mm, below the
+    // lowered Y minimum of 50 mm. Read in inches, Y runs 76.2..152.4 mm, X 25.4..101.6,
+    // Z 12.7..50.8: all within the travel (X ±400, Y 50..350, Z -150..450).
+    let nc = "G90 G94 G17\nG00 X1 Y3 Z2\nG01 Z0.5 F20\nG01 X4 Y6\nG00 Z2\nM30\n";
+    let body = "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"fanuc\"\n\
+                [machine_overrides.axes.Y]\nmin = 50.0\n";
+    let (code, v) = check("inch_as_mm", body, Some(nc), &[]);
+    assert_eq!(code, 1);
+    let t = violations(&v, "travel");
+    assert!(!t.is_empty(), "{v}");
+    let note = t[0]["other_unit"]
+        .as_str()
+        .expect("the other unit is named");
+    for part in [
+        "reads in mm",
+        "inch scale (×25.4)",
+        "X 25.400 .. 101.600 mm",
+        "Y 76.200 .. 152.400 mm",
+        "Z 12.700 .. 50.800 mm",
+    ] {
+        assert!(note.contains(part), "{part}: {note}");
+    }
+    // The same program stating G21 is in mm on purpose: no note.
+    let (code, v) = check("mm_stated", body, Some(&format!("G21 {nc}")), &[]);
+    assert_eq!(code, 1);
+    assert!(violations(&v, "travel")
+        .iter()
+        .all(|t| t.get("other_unit").is_none()));
+    // An mm program read as inches (the control starts in inch): X 10..20 reads as
+    // 254..508 mm, past X's 400 mm maximum; read in mm X 10..20, Y 2, Z 5 fit, and the
+    // note says ÷25.4.
+    let nc = "G90 G94 G17\nG00 X10 Y2 Z5\nG01 X20 F20\nM30\n";
+    let body =
+        "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"fanuc\"\nstart_units = \"inch\"\n";
+    let (code, v) = check("mm_as_inch", body, Some(nc), &[]);
+    assert_eq!(code, 1);
+    let note = violations(&v, "travel")[0]["other_unit"]
+        .as_str()
+        .unwrap_or_default()
+        .to_string();
+    for part in [
+        "reads in inches",
+        "mm scale (÷25.4)",
+        "X 10.000 .. 20.000 mm",
+    ] {
+        assert!(note.contains(part), "{part}: {v}");
+    }
+}

@@ -692,6 +692,21 @@ fn optional_side_file(p: &Path) -> Result<Option<String>> {
 }
 
 /// The reader options of a scenario: its `[reader]` over the machine's defaults.
+/// A LinuxCNC machine starts in its machine units: `[TRAJ]LINEAR_UNITS`, when the
+/// configuration gives it, sets the start units over the machine file's `[start] units`
+/// (the scenario's `start_units` is applied instead when given).
+fn ini_start_units(ini: &ngc::Ini, o: &mut ngc::Options) -> std::result::Result<(), ngc::IniError> {
+    if ini.get("TRAJ", "LINEAR_UNITS").is_some() {
+        o.start_state.units = match ini.linear_units_inch()? {
+            true => ngc::Units::Inch,
+            false => ngc::Units::Mm,
+        };
+        o.start_units_setting =
+            "the LinuxCNC configuration's [TRAJ]LINEAR_UNITS ([reader] linuxcnc_ini)";
+    }
+    Ok(())
+}
+
 fn reader_options(
     path: &Path,
     text: &str,
@@ -753,6 +768,9 @@ fn reader_options(
             }
             };
             let ini = ngc::Ini::read(&p).map_err(ini_error)?;
+            if r.start_units.is_none() {
+                ini_start_units(&ini, &mut o).map_err(ini_error)?;
+            }
             // `#<_ini[section]key>`: the numeric values.
             o.ini_values.extend(ini.entries.iter().filter_map(|e| {
                 let v = e.value.parse::<f64>().ok().filter(|v| v.is_finite())?;

@@ -49,8 +49,14 @@ fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<rs274::Row>, String> 
     // A program with a configuration beside it (`name.ini`) reads its subroutine path and
     // remaps from there; the explicit tool_table takes precedence over the ini's.
     let ini = program.with_extension("ini");
+    // rs274, the standalone interpreter, starts in mm whatever the configuration's
+    // LINEAR_UNITS (run here: USE_LENGTH_UNITS(CANON_UNITS_MM) for an inch ini), so the
+    // scenario says so over the ini's inch start.
     let paths = if ini.is_file() {
-        format!("linuxcnc_ini = {:?}\n", ini.display().to_string())
+        format!(
+            "linuxcnc_ini = {:?}\nstart_units = \"mm\"\n",
+            ini.display().to_string()
+        )
     } else {
         format!(
             "subroutine_path = [{:?}]\n",

@@ -724,6 +724,8 @@ fn run_in_config(
     };
     let switchkins_pin =
         (!kins.is_empty() && trivial).then(|| ("motion.switchkins-type".to_string(), 0.0));
+    // rs274 starts in mm whatever the configuration's LINEAR_UNITS (a real LinuxCNC starts
+    // in its machine units): the scenario's start_units = "mm" says so over the ini.
     // LinuxCNC looks for subroutines on SUBROUTINE_PATH, then in [DISPLAY]PROGRAM_PREFIX,
     // whose default (~/linuxcnc/nc_files) is the user's copy of ncfiles.
     let sub_path = if ini.get("DISPLAY", "PROGRAM_PREFIX").is_none() {
@@ -741,7 +743,7 @@ fn run_in_config(
     std::fs::write(
         scenario,
         format!(
-            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\nlinuxcnc_ini = {:?}\n{sub_path}{user_m}{}[check]\ncollisions = false\n",
+            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\nlinuxcnc_ini = {:?}\nstart_units = \"mm\"\n{sub_path}{user_m}{}[check]\ncollisions = false\n",
             path.display().to_string(),
             ini.path.display().to_string(),
             {

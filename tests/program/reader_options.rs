@@ -227,6 +227,14 @@ fn a_linuxcnc_configuration_gives_tools_parameters_paths_and_remaps() {
     std::fs::write(dir.join("mm.tbl"), "T1 P1 Z10.0\n").unwrap();
     let got = ends(&scenario("tool_table = \"mm.tbl\"\n"), &dir.join("p.ngc")).unwrap();
     assert_eq!(got[0], [25.4, 0.0, 10.0, 0.0, 0.0, 0.0]);
+    // The configuration's LINEAR_UNITS = inch is the unit the machine starts in: X1 with no
+    // G20/G21 is 1 in = 25.4 mm, plus G54's 25.4 mm; the scenario's start_units = "mm"
+    // wins over it (1 mm + 25.4 mm), as it would over the machine file's [start] units.
+    std::fs::write(dir.join("p.ngc"), "G90\nG0 X1 Y0 Z0\nM2\n").unwrap();
+    let got = ends(&scenario(""), &dir.join("p.ngc")).unwrap();
+    assert_eq!(got, [[50.8, 0.0, 0.0, 0.0, 0.0, 0.0]]);
+    let got = ends(&scenario("start_units = \"mm\"\n"), &dir.join("p.ngc")).unwrap();
+    assert_eq!(got, [[26.4, 0.0, 0.0, 0.0, 0.0, 0.0]]);
     // An unreadable configuration names the file and line.
     std::fs::write(dir.join("cfg/mill.ini"), "[TRAJ]\nthis is not a key\n").unwrap();
     let path = write_scenario(

@@ -360,14 +360,3 @@ fn m73_and_m74_are_the_tool_air_blast_on_haas_and_save_the_modal_state_only_in_l
     let (m, _) = read(&text, &opts(Dialect::Linuxcnc));
     assert_eq!(xyz(m.last().unwrap())[0], 1.0);
 }
-
-#[test]
-fn haas_bolt_hole_patterns_are_refused_by_their_name() {
-    let text = "G21 G0 Z10\nG81 Z-1 R1 F100\nG70 I1 J0 L6\n";
-    let (line, msg) = error_with(text, &opts(Dialect::Haas));
-    assert_eq!(line, 3);
-    assert!(msg.contains("bolt-hole circle"), "{msg}");
-    // In the fanuc dialect G70 is the lathe finishing cycle left out.
-    let (_, msg) = error_with(text, &opts(Dialect::Fanuc));
-    assert!(msg.contains("lathe"), "{msg}");
-}

@@ -9,7 +9,6 @@ use crate::dialect::table::{DwellUnit, Table};
 pub(super) const TABLE: Table = Table {
     dwell_p: DwellUnit::MillisecondsUnlessDecimal,
     g_code,
-    refusal,
     machine_m,
     no_motion_g,
     local_subprogram_m97: true,
@@ -27,18 +26,6 @@ fn g_code(code: u32) -> Option<GCode> {
         2550 => GCode::Dwo(false),
         770 => GCode::Motion(Some(MotionMode::Cycle(770))),
         _ => return fanuc::g_code(code),
-    })
-}
-
-/// Haas refusals, then the Fanuc family's: on a Haas mill G70-G72 are bolt-hole patterns,
-/// not the lathe cycles of that number.
-fn refusal(code: u32) -> Option<(&'static str, &'static str)> {
-    Some(match code {
-        700 | 710 | 720 => (
-            " (Haas mill bolt-hole patterns: G70 bolt-hole circle, G71 bolt-hole arc, G72 bolt holes along an angle; not supported)",
-            "post the holes one by one under the canned cycle",
-        ),
-        _ => return fanuc::refusal(code),
     })
 }
 

@@ -14,7 +14,7 @@
 
 use std::path::PathBuf;
 
-use crate::drive::Drives;
+use crate::drive::{DriveLanes, Drives};
 use crate::error::Result;
 use crate::input::budget;
 use crate::input::machine::Machine;
@@ -243,6 +243,94 @@ pub fn run(
         }
     }
     Ok(stats)
+}
+
+/// [`run`] under planned timing with twins, for several points that share `moves`: one
+/// interpolation pass, its setpoints fed to every point's drives ([`DriveLanes`], one
+/// machine per point, alike but for their drives) and each point's samples to its own sink.
+/// `options.timing` is not read (planned, twins, no settling). Returns the run's figures
+/// (the same for every point) and which points failed (their drives diverged; their
+/// samples stopped there): a failed point is run alone for its error.
+pub fn run_lanes(
+    moves: Moves<'_>,
+    machines: &[&Machine],
+    options: &RunOptions,
+    sinks: &mut [&mut dyn Sink],
+    progress: &dyn Fn(f64),
+) -> Result<(RunStats, Vec<bool>)> {
+    let t0 = options.start_time_s;
+    let mut stats = RunStats {
+        samples: 0,
+        end_time_s: t0,
+        feed_reductions: Vec::new(),
+    };
+    let machine = machines[0];
+    let mut setpoints = Interpolator::new(moves, machine, interpolation(options))?;
+    let Some(first) = setpoints.next().transpose()? else {
+        return Ok((stats, vec![false; machines.len()]));
+    };
+    let mut lanes = DriveLanes::new(machines, &first.q)?;
+    let mut errors: Vec<PositionErrors> = machines
+        .iter()
+        .map(|m| m.geometry.position_errors())
+        .collect();
+    let mut samples = vec![
+        Sample {
+            following_error: AxisVec::ZERO,
+            ..Sample::blank(t0)
+        };
+        machines.len()
+    ];
+    let mut next = Some(first);
+    let mut k = 0u64;
+    while let Some(sp) = next {
+        if stats.samples >= options.max_samples {
+            return Err(budget::exceeded(
+                &options.program_path,
+                options.max_samples,
+                sp.line,
+                t0 + sp.time_s - t0,
+            ));
+        }
+        let time_s = t0 + sp.time_s;
+        lanes.step_twins(&sp.q, time_s);
+        for (i, (sample, sink)) in samples.iter_mut().zip(sinks.iter_mut()).enumerate() {
+            if !lanes.alive(i) {
+                continue;
+            }
+            sample.index = k;
+            sample.time_s = time_s;
+            sample.line = sp.line;
+            sample.block_index = sp.block_index;
+            sample.commanded = sp.q;
+            // Axes without a drive stay at their setpoint.
+            sample.actual = sp.q;
+            let stepped = lanes.step_point(
+                i,
+                &sp.q,
+                time_s,
+                &mut sample.actual,
+                &mut sample.following_error,
+            );
+            if stepped.is_none() || !lanes.alive(i) {
+                continue;
+            }
+            errors[i].apply_in_place(&mut sample.actual);
+            sample.linear = *lanes.twin_actual(i);
+            errors[i].apply_mean_in_place(&mut sample.linear);
+            sink.push(sample)?;
+        }
+        stats.samples += 1;
+        stats.end_time_s = time_s;
+        if k % 4096 == 0 {
+            progress(time_s);
+        }
+        next = setpoints.next().transpose()?;
+        k += 1;
+    }
+    stats.feed_reductions = setpoints.feed_reductions();
+    let failed = (0..lanes.len()).map(|i| !lanes.alive(i)).collect();
+    Ok((stats, failed))
 }
 
 /// The interpolator's options for a run.

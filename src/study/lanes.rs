@@ -94,11 +94,15 @@ pub fn run_ballbar_lanes(
 /// The key of what a scenario's points share: the scenario with each axis's servo, drive
 /// and friction tables at their defaults, in its debug form (exact for f64). Two scenarios
 /// with the same key run the same setpoints; anything not known to be drive-side (the
-/// kinematics and its location errors, the program, the position-error tables, the
-/// scenario's path) stays in the key, so a scenario that differs there is its own group.
+/// kinematics and its location errors, the program, the position-error tables) stays in
+/// the key, so a scenario that differs there is its own group. The scenario's and machine's
+/// paths are left out: they name the files in messages, and a pass that fails is run point by point.
 pub fn share_key(scenario: &Scenario) -> String {
     let mut bare = scenario.clone();
     bare.machine = without_drives(&scenario.machine);
+    // The paths name the files in messages only; a pass that fails runs its points alone.
+    bare.path = Default::default();
+    bare.machine.path = Default::default();
     format!("{bare:?}")
 }
 

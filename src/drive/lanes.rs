@@ -21,8 +21,6 @@ pub struct DriveLanes {
     twins: Vec<Option<Drives>>,
     /// Which twin each point shares.
     twin_of: Vec<usize>,
-    /// Each twin's actual positions after the last period, mm and deg.
-    twin_actual: Vec<AxisVec>,
 }
 
 impl DriveLanes {
@@ -45,12 +43,10 @@ impl DriveLanes {
             };
             twin_of.push(index);
         }
-        let twin_actual = vec![*q; twins.len()];
         Ok(DriveLanes {
             points,
             twins,
             twin_of,
-            twin_actual,
         })
     }
 
@@ -74,22 +70,29 @@ impl DriveLanes {
         self.points[i].is_some() && self.twins[self.twin_of[i]].is_some()
     }
 
-    /// Steps every live twin one period towards `setpoint`, reached at `time_s`. A twin
-    /// that fails stops, and with it every point that shares it.
-    pub fn step_twins(&mut self, setpoint: &AxisVec, time_s: f64) {
-        for (twin, actual) in self.twins.iter_mut().zip(&mut self.twin_actual) {
-            if let Some(d) = twin {
-                *actual = *setpoint;
-                if d.step_actual_into(setpoint, time_s, actual).is_err() {
-                    *twin = None;
-                }
-            }
-        }
+    /// Which twin point `i` shares.
+    pub fn twin_of(&self, i: usize) -> usize {
+        self.twin_of[i]
     }
 
-    /// The actual positions (mm, deg) of point `i`'s twin after [`DriveLanes::step_twins`].
-    pub fn twin_actual(&self, i: usize) -> &AxisVec {
-        &self.twin_actual[self.twin_of[i]]
+    /// Steps twin `t` one period towards `setpoint`, reached at `time_s`, writing its
+    /// driven axes into `actual` (mm, deg). False when the twin has failed (now or before):
+    /// it stops, and with it every point that shares it.
+    pub fn step_twin(
+        &mut self,
+        t: usize,
+        setpoint: &AxisVec,
+        time_s: f64,
+        actual: &mut AxisVec,
+    ) -> bool {
+        let Some(d) = self.twins[t].as_mut() else {
+            return false;
+        };
+        if d.step_actual_into(setpoint, time_s, actual).is_err() {
+            self.twins[t] = None;
+            return false;
+        }
+        true
     }
 
     /// Steps point `i`'s drives one period (see [`Drives::step_into`]). Returns whether

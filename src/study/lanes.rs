@@ -26,11 +26,10 @@ use crate::measure::settle::SettleGate;
 use crate::measure::BallbarSink;
 use crate::pipeline::{self, Sample, Sink};
 use crate::program;
-use crate::study::reversals::analyse_scenario;
 use crate::study::simulate::{
-    along_analysis, analysed_along, assemble, bar_geometry, directions_of, finish_along,
-    gates_transient, merge_reductions, reversals_of, run_ballbar, run_options, transient_warning,
-    BallbarStudy, SharedRuns,
+    analysed_along, analyses, assemble, bar_geometry, directions_of, finish_along, gates_transient,
+    merge_reductions, reversals_of, run_ballbar, run_options, transient_warning, BallbarStudy,
+    SharedRuns,
 };
 
 /// Most points in one interpolation pass: enough that the pass's own cost is a small share
@@ -158,11 +157,7 @@ fn run_pass(
 ) -> Result<Vec<Option<BallbarStudy>>> {
     let first = &scenarios[points[0]];
     let machines: Vec<&Machine> = points.iter().map(|&i| &scenarios[i].machine).collect();
-    let along = along_analysis(first);
-    let mut analysis = match along {
-        Some(_) => None,
-        None => Some(analyse_scenario(first)?),
-    };
+    let (along, mut analysis) = analyses(first)?;
     let geometry = bar_geometry(first);
     let directions = directions_of(first);
     let n = points.len();

@@ -117,12 +117,7 @@ pub fn run_ballbar(
     progress: &dyn Fn(f64),
 ) -> Result<BallbarStudy> {
     let machine = &scenario.machine;
-    // A generated program's reversal analysis has its own closed form, computed first.
-    let along = along_analysis(scenario);
-    let mut analysis = match along {
-        Some(_) => None,
-        None => Some(analyse_scenario(scenario)?),
-    };
+    let (along, mut analysis) = analyses(scenario)?;
     let geometry = bar_geometry(scenario);
     let directions = directions_of(scenario);
     let mut sinks = Vec::new();
@@ -190,6 +185,23 @@ pub(crate) fn directions_of(scenario: &Scenario) -> Vec<Direction> {
         Program::Cone { directions, .. } | Program::Circle { directions, .. } => directions.clone(),
         Program::File { .. } => vec![Direction::Ccw],
     }
+}
+
+/// The reversal analysis of the scenario's program: to ride along the runs (a file
+/// program), or done (a generated one, whose analysis has its own closed form).
+#[allow(clippy::type_complexity)]
+pub(crate) fn analyses(
+    scenario: &Scenario,
+) -> Result<(
+    Option<Rc<RefCell<MoveAnalysis<'_>>>>,
+    Option<crate::study::reversals::Analysis>,
+)> {
+    let along = along_analysis(scenario);
+    let done = match along {
+        Some(_) => None,
+        None => Some(analyse_scenario(scenario)?),
+    };
+    Ok((along, done))
 }
 
 /// The reversal analysis of a file program, riding along its one run (the file is read

@@ -14,13 +14,13 @@
 
 use std::path::PathBuf;
 
-use crate::drive::Drives;
+use crate::drive::{DriveLanes, Drives};
 use crate::error::Result;
 use crate::input::budget;
 use crate::input::machine::Machine;
 use crate::kinematics::error_table::PositionErrors;
 use crate::motion::feed_held::FeedReduction;
-use crate::motion::interpolation::{InterpolationOptions, Interpolator};
+use crate::motion::interpolation::{InterpolationOptions, Interpolator, Setpoint};
 use crate::motion::sampling::NominalSampler;
 use crate::program::Moves;
 use crate::AxisVec;
@@ -244,6 +244,112 @@ pub fn run(
     }
     Ok(stats)
 }
+
+/// [`run`] under planned timing with twins, for several points that share `moves`: one
+/// interpolation pass, its setpoints fed to every point's drives ([`DriveLanes`], one
+/// machine per point, alike but for their drives) and each point's samples to its own sink.
+/// `options.timing` is not read (planned, twins, no settling). Returns the run's figures
+/// (the same for every point) and which points failed (their drives diverged; their
+/// samples stopped there): a failed point is run alone for its error.
+pub fn run_lanes(
+    moves: Moves<'_>,
+    machines: &[&Machine],
+    options: &RunOptions,
+    sinks: &mut [&mut dyn Sink],
+    progress: &dyn Fn(f64),
+) -> Result<(RunStats, Vec<bool>)> {
+    let t0 = options.start_time_s;
+    let mut stats = RunStats {
+        samples: 0,
+        end_time_s: t0,
+        feed_reductions: Vec::new(),
+    };
+    let machine = machines[0];
+    let mut setpoints = Interpolator::new(moves, machine, interpolation(options))?;
+    let Some(first) = setpoints.next().transpose()? else {
+        return Ok((stats, vec![false; machines.len()]));
+    };
+    let mut lanes = DriveLanes::new(machines, &first.q)?;
+    let mut errors: Vec<PositionErrors> = machines
+        .iter()
+        .map(|m| m.geometry.position_errors())
+        .collect();
+    let mut samples = vec![Sample::blank(t0); machines.len()];
+    // Setpoints go to the drives a block at a time, point by point: a point's state stays
+    // in cache over the block. Memory: one block, whatever the program's length.
+    let mut block: Vec<Setpoint> = Vec::with_capacity(LANE_BLOCK);
+    let mut twin_out = vec![AxisVec::ZERO; lanes.twins() * LANE_BLOCK];
+    let mut next = Some(first);
+    let mut k = 0u64;
+    while next.is_some() {
+        block.clear();
+        while let Some(sp) = next.take() {
+            if stats.samples >= options.max_samples {
+                return Err(budget::exceeded(
+                    &options.program_path,
+                    options.max_samples,
+                    sp.line,
+                    t0 + sp.time_s - t0,
+                ));
+            }
+            stats.samples += 1;
+            stats.end_time_s = t0 + sp.time_s;
+            block.push(sp);
+            if block.len() == LANE_BLOCK {
+                next = setpoints.next().transpose()?;
+                break;
+            }
+            next = setpoints.next().transpose()?;
+        }
+        for t in 0..lanes.twins() {
+            for (sp, out) in block.iter().zip(&mut twin_out[t * LANE_BLOCK..]) {
+                *out = sp.q;
+                if !lanes.step_twin(t, &sp.q, t0 + sp.time_s, out) {
+                    break;
+                }
+            }
+        }
+        for (i, (sample, sink)) in samples.iter_mut().zip(sinks.iter_mut()).enumerate() {
+            let twin = lanes.twin_of(i) * LANE_BLOCK;
+            for (j, sp) in block.iter().enumerate() {
+                if !lanes.alive(i) {
+                    break;
+                }
+                sample.index = k + j as u64;
+                sample.time_s = t0 + sp.time_s;
+                sample.line = sp.line;
+                sample.block_index = sp.block_index;
+                sample.commanded = sp.q;
+                // Axes without a drive stay at their setpoint.
+                sample.actual = sp.q;
+                let stepped = lanes.step_point(
+                    i,
+                    &sp.q,
+                    sample.time_s,
+                    &mut sample.actual,
+                    &mut sample.following_error,
+                );
+                if stepped.is_none() {
+                    break;
+                }
+                errors[i].apply_in_place(&mut sample.actual);
+                sample.linear = twin_out[twin + j];
+                errors[i].apply_mean_in_place(&mut sample.linear);
+                sink.push(sample)?;
+            }
+        }
+        if k / 4096 != (k + block.len() as u64) / 4096 || k == 0 {
+            progress(stats.end_time_s);
+        }
+        k += block.len() as u64;
+    }
+    stats.feed_reductions = setpoints.feed_reductions();
+    let failed = (0..lanes.len()).map(|i| !lanes.alive(i)).collect();
+    Ok((stats, failed))
+}
+
+/// Setpoints handed to the drives of [`run_lanes`] at a time.
+const LANE_BLOCK: usize = 256;
 
 /// The interpolator's options for a run.
 fn interpolation(options: &RunOptions) -> InterpolationOptions {

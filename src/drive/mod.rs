@@ -3,9 +3,11 @@
 //! Outputs: the table-side (actual) position and following error of every axis, from per-axis servo models.
 
 pub mod drives;
+pub mod lanes;
 pub mod presliding;
 pub mod servo;
 
 pub use drives::{Drives, DrivesState};
+pub use lanes::DriveLanes;
 pub use presliding::{Presliding, ReversalValue};
 pub use servo::{AxisServo, ServoState};

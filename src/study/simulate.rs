@@ -117,25 +117,10 @@ pub fn run_ballbar(
     progress: &dyn Fn(f64),
 ) -> Result<BallbarStudy> {
     let machine = &scenario.machine;
-    // The reversal analysis of a file program rides along its one run (the file is read
-    // once for both); a generated program's has its own closed form, computed first.
-    let (mut analysis, along) = match &scenario.program {
-        Program::File { cone, .. } => {
-            let frame = cone.map(|c| CircleFrame::of_cone(&c));
-            (
-                None,
-                Some(Rc::new(RefCell::new(MoveAnalysis::new(machine, frame)))),
-            )
-        }
-        _ => (Some(analyse_scenario(scenario)?), None),
-    };
+    let (along, mut analysis) = analyses(scenario)?;
     let geometry = bar_geometry(scenario);
-    let directions = match &scenario.program {
-        Program::Cone { directions, .. } | Program::Circle { directions, .. } => directions.clone(),
-        Program::File { .. } => vec![Direction::Ccw],
-    };
-    let (mut runs, mut signatures, mut maps, mut speeds) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let directions = directions_of(scenario);
+    let mut sinks = Vec::new();
     let mut sim_time_s = 0.0;
     let mut setpoints = 0u64;
     let mut warnings = Vec::new();
@@ -143,31 +128,13 @@ pub fn run_ballbar(
     for &direction in &directions {
         let mut run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
         if let Some(along) = &along {
-            let along = Rc::clone(along);
-            run.moves = Box::new(run.moves.map(move |m| {
-                let m = m?;
-                along.borrow_mut().push(&m)?;
-                Ok(m)
-            }));
+            run.moves = analysed_along(run.moves, along);
         }
         if let Some(t) = trace.as_deref_mut() {
             t.start_run(direction, run.measured);
         }
         let mut ballbar = geometry.map(|g| BallbarSink::new(g, direction, run.measured));
-        let options = RunOptions {
-            timing: Timing::Planned {
-                twins: true,
-                settle: false,
-            },
-            force_tcp: scenario.simulate.tcp,
-            start_time_s: sim_time_s,
-            program_path: scenario.path.clone(),
-            max_samples: work::check_up_front(scenario, scenario.simulate.lead_deg)?,
-        };
-        // A file program measured from its first feed block: keep the start-up transient
-        // (the rapid still settling) out of the measured revolution.
-        let gate_transient = matches!(scenario.program, Program::File { .. })
-            && scenario.simulate.measure_lines.is_none();
+        let options = run_options(scenario, sim_time_s)?;
         let stats = {
             let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(1);
             let mut measure = ballbar.as_mut().map(|ballbar| BarAndTrace {
@@ -177,7 +144,7 @@ pub fn run_ballbar(
             if let Some(m) = measure.as_mut() {
                 sinks.push(m);
             }
-            match geometry.filter(|_| gate_transient && !sinks.is_empty()) {
+            match geometry.filter(|_| gates_transient(scenario) && !sinks.is_empty()) {
                 Some(g) => {
                     let mut gate = SettleGate::new(
                         sinks,
@@ -188,14 +155,7 @@ pub fn run_ballbar(
                         let mut gated: [&mut dyn Sink; 1] = [&mut gate];
                         pipeline::run(run.moves, machine, &options, &mut gated, progress)?
                     };
-                    if gate.skipped_samples > 0 {
-                        warnings.push(format!(
-                            "the file program has no measure_lines: the first {:.2} deg of the measured revolution \
-                             ({} samples, the start-up transient) were left out until the axes settled; \
-                             set [simulate] measure_lines to measure chosen blocks instead",
-                            gate.skipped_deg, gate.skipped_samples
-                        ));
-                    }
+                    warnings.extend(transient_warning(&gate));
                     stats
                 }
                 None => pipeline::run(run.moves, machine, &options, &mut sinks, progress)?,
@@ -203,31 +163,167 @@ pub fn run_ballbar(
         };
         sim_time_s = stats.end_time_s;
         setpoints += stats.samples;
-        // Each direction runs the same blocks: a reduction is listed once.
-        for r in stats.feed_reductions {
-            if !feed_reductions
-                .iter()
-                .any(|f: &FeedReduction| (f.axis, f.limit) == (r.axis, r.limit))
-            {
-                feed_reductions.push(r);
-            }
-        }
-        if let Some(b) = ballbar {
-            runs.push(b.run);
-            signatures.push(b.signature);
-            maps.push(b.commanded);
-            speeds.push(b.speed);
-        }
+        merge_reductions(&mut feed_reductions, stats.feed_reductions);
+        sinks.extend(ballbar);
     }
     if let Some(along) = along {
-        let done = std::mem::replace(&mut *along.borrow_mut(), MoveAnalysis::new(machine, None));
-        analysis = Some(done.finish());
+        analysis = Some(finish_along(machine, &along));
     }
-    let reversals: Vec<(Axis, Vec<f64>)> = analysis
+    let shared = SharedRuns {
+        reversals: reversals_of(analysis.as_ref()),
+        sim_time_s,
+        setpoints,
+        directions,
+        feed_reductions,
+    };
+    assemble(scenario, sinks, warnings, &shared)
+}
+
+/// The directions a scenario runs: a test's, or counter-clockwise for a file program.
+pub(crate) fn directions_of(scenario: &Scenario) -> Vec<Direction> {
+    match &scenario.program {
+        Program::Cone { directions, .. } | Program::Circle { directions, .. } => directions.clone(),
+        Program::File { .. } => vec![Direction::Ccw],
+    }
+}
+
+/// The reversal analysis of the scenario's program: to ride along the runs (a file
+/// program), or done (a generated one, whose analysis has its own closed form).
+#[allow(clippy::type_complexity)]
+pub(crate) fn analyses(
+    scenario: &Scenario,
+) -> Result<(
+    Option<Rc<RefCell<MoveAnalysis<'_>>>>,
+    Option<crate::study::reversals::Analysis>,
+)> {
+    let along = along_analysis(scenario);
+    let done = match along {
+        Some(_) => None,
+        None => Some(analyse_scenario(scenario)?),
+    };
+    Ok((along, done))
+}
+
+/// The reversal analysis of a file program, riding along its one run (the file is read
+/// once for both); None for a generated program, whose analysis has its own closed form.
+pub(crate) fn along_analysis(scenario: &Scenario) -> Option<Rc<RefCell<MoveAnalysis<'_>>>> {
+    match &scenario.program {
+        Program::File { cone, .. } => {
+            let frame = cone.map(|c| CircleFrame::of_cone(&c));
+            Some(Rc::new(RefCell::new(MoveAnalysis::new(
+                &scenario.machine,
+                frame,
+            ))))
+        }
+        _ => None,
+    }
+}
+
+/// `moves` with every move also handed to the analysis `along`.
+pub(crate) fn analysed_along<'a>(
+    moves: crate::program::Moves<'a>,
+    along: &Rc<RefCell<MoveAnalysis<'a>>>,
+) -> crate::program::Moves<'a> {
+    let along = Rc::clone(along);
+    Box::new(moves.map(move |m| {
+        let m = m?;
+        along.borrow_mut().push(&m)?;
+        Ok(m)
+    }))
+}
+
+/// The analysis `along` rode along the runs, finished.
+pub(crate) fn finish_along<'m>(
+    machine: &'m crate::input::Machine,
+    along: &Rc<RefCell<MoveAnalysis<'m>>>,
+) -> crate::study::reversals::Analysis {
+    let done = std::mem::replace(&mut *along.borrow_mut(), MoveAnalysis::new(machine, None));
+    done.finish()
+}
+
+/// Each axis's reversal angles, deg, from the analysis.
+pub(crate) fn reversals_of(
+    analysis: Option<&crate::study::reversals::Analysis>,
+) -> Vec<(Axis, Vec<f64>)> {
+    analysis
         .iter()
         .flat_map(|a| &a.axes)
         .map(|a| (a.axis, a.reversals_deg.clone()))
-        .collect();
+        .collect()
+}
+
+/// The pipeline's options for one direction of a ball-bar run starting at `start_time_s`.
+pub(crate) fn run_options(scenario: &Scenario, start_time_s: f64) -> Result<RunOptions> {
+    Ok(RunOptions {
+        timing: Timing::Planned {
+            twins: true,
+            settle: false,
+        },
+        force_tcp: scenario.simulate.tcp,
+        start_time_s,
+        program_path: scenario.path.clone(),
+        max_samples: work::check_up_front(scenario, scenario.simulate.lead_deg)?,
+    })
+}
+
+/// A file program measured from its first feed block: the start-up transient (the rapid
+/// still settling) is kept out of the measured revolution.
+pub(crate) fn gates_transient(scenario: &Scenario) -> bool {
+    matches!(scenario.program, Program::File { .. }) && scenario.simulate.measure_lines.is_none()
+}
+
+/// What the settle gate left out, as a warning; None when it left nothing out.
+pub(crate) fn transient_warning(gate: &SettleGate<'_>) -> Option<String> {
+    (gate.skipped_samples > 0).then(|| {
+        format!(
+            "the file program has no measure_lines: the first {:.2} deg of the measured revolution \
+             ({} samples, the start-up transient) were left out until the axes settled; \
+             set [simulate] measure_lines to measure chosen blocks instead",
+            gate.skipped_deg, gate.skipped_samples
+        )
+    })
+}
+
+/// Adds a direction's feed reductions: each direction runs the same blocks, so a
+/// reduction is listed once.
+pub(crate) fn merge_reductions(all: &mut Vec<FeedReduction>, new: Vec<FeedReduction>) {
+    for r in new {
+        if !all
+            .iter()
+            .any(|f: &FeedReduction| (f.axis, f.limit) == (r.axis, r.limit))
+        {
+            all.push(r);
+        }
+    }
+}
+
+/// What the runs of one program share, whatever the drives.
+pub(crate) struct SharedRuns {
+    pub reversals: Vec<(Axis, Vec<f64>)>,
+    pub sim_time_s: f64,
+    pub setpoints: u64,
+    pub directions: Vec<Direction>,
+    pub feed_reductions: Vec<FeedReduction>,
+}
+
+/// A scenario's study from its ball bars (one per direction) and what its runs share.
+pub(crate) fn assemble(
+    scenario: &Scenario,
+    ballbars: Vec<BallbarSink>,
+    warnings: Vec<String>,
+    shared: &SharedRuns,
+) -> Result<BallbarStudy> {
+    let machine = &scenario.machine;
+    let geometry = bar_geometry(scenario);
+    let (mut runs, mut signatures, mut maps, mut speeds) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for b in ballbars {
+        runs.push(b.run);
+        signatures.push(b.signature);
+        maps.push(b.commanded);
+        speeds.push(b.speed);
+    }
+    let reversals = shared.reversals.clone();
     // The bar's sensitivity is a property of the nominal pose at θ: the first run's map.
     // Each axis's Stribeck velocity bounds its slow zone about a reversal (a cascade axis
     // with dry friction; otherwise the zone is the reversal itself).
@@ -260,14 +356,14 @@ pub fn run_ballbar(
         signatures,
         sites,
         reversals,
-        sim_time_s,
-        setpoints,
-        directions,
+        sim_time_s: shared.sim_time_s,
+        setpoints: shared.setpoints,
+        directions: shared.directions.clone(),
         warnings: warnings
             .into_iter()
-            .chain(feed_reductions.iter().map(FeedReduction::describe))
+            .chain(shared.feed_reductions.iter().map(FeedReduction::describe))
             .collect(),
-        feed_reductions,
+        feed_reductions: shared.feed_reductions.clone(),
     })
 }
 

@@ -1,0 +1,255 @@
+//! Many ball-bar points at once: the points of a study that share their program share its
+//! reading, planning and interpolation.
+//!
+//! [`run_ballbar_lanes`] groups the scenarios by [`share_key`]: everything but each axis's
+//! servo, drive and friction tables (gains, feedforward, masses, stiffness, backlash,
+//! friction). A group's points differ only in how their drives answer the same setpoints, so
+//! one interpolation pass per direction feeds every point's drives side by side
+//! ([`crate::pipeline::run_lanes`]), and points whose linear twins are the same share one
+//! ([`crate::drive::DriveLanes`]). Each point keeps what depends on its drives: its drives,
+//! position-error state, ball bars, settle gate and reversal sites. Memory holds the state
+//! of the points in one pass, never the setpoint stream.
+//!
+//! A group runs in passes of at most [`POINTS_PER_PASS`] points; passes run in parallel on
+//! the rayon pool. A point whose drives diverge, or a pass that fails as a whole, is run
+//! alone by [`run_ballbar`] for its error: every result is the single run's.
+
+use std::cell::Cell;
+use std::sync::mpsc;
+
+use rayon::prelude::*;
+
+use crate::error::Result;
+use crate::input::scenario::Scenario;
+use crate::input::Machine;
+use crate::measure::settle::SettleGate;
+use crate::measure::BallbarSink;
+use crate::pipeline::{self, Sample, Sink};
+use crate::program;
+use crate::study::simulate::{
+    analysed_along, analyses, assemble, bar_geometry, directions_of, finish_along, gates_transient,
+    merge_reductions, reversals_of, run_ballbar, run_options, transient_warning, BallbarStudy,
+    SharedRuns,
+};
+
+/// Most points in one interpolation pass: enough that the pass's own cost is a small share
+/// of the point's, few enough that the passes of a large group spread over the cores.
+pub const POINTS_PER_PASS: usize = 64;
+
+/// The ball-bar study of every scenario, as [`run_ballbar`] gives it (without a trace): the
+/// i-th result is `run_ballbar(&scenarios[i], None, ..)`'s. `progress` is told the machine
+/// time simulated so far, s, summed over the points.
+pub fn run_ballbar_lanes(
+    scenarios: &[Scenario],
+    progress: &dyn Fn(f64),
+) -> Vec<Result<BallbarStudy>> {
+    let passes = passes(scenarios, rayon::current_num_threads());
+    let (sender, receiver) = mpsc::channel::<f64>();
+    // The passes run on a pool as wide as the caller's, from a thread of their own, so
+    // that this thread can hand their progress to `progress` (which need not be `Sync`).
+    let threads = rayon::current_num_threads();
+    let studies: Vec<Vec<Option<BallbarStudy>>> = std::thread::scope(|scope| {
+        let worker = scope.spawn(|| {
+            let run = || {
+                passes
+                    .par_iter()
+                    .map_with(sender, |sender, points| {
+                        let told = Cell::new(0.0);
+                        let tell = |t: f64| {
+                            let _ = sender.send((t - told.replace(t)) * points.len() as f64);
+                        };
+                        run_pass(scenarios, points, &tell)
+                            .unwrap_or_else(|_| (0..points.len()).map(|_| None).collect())
+                    })
+                    .collect()
+            };
+            match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
+                Ok(pool) => pool.install(run),
+                Err(_) => run(),
+            }
+        });
+        let mut total = 0.0;
+        for dt in receiver {
+            total += dt;
+            progress(total);
+        }
+        worker.join().expect("a study pass panicked")
+    });
+    let mut out: Vec<Option<BallbarStudy>> = (0..scenarios.len()).map(|_| None).collect();
+    for (points, studies) in passes.iter().zip(studies) {
+        for (&i, study) in points.iter().zip(studies) {
+            out[i] = study;
+        }
+    }
+    out.into_par_iter()
+        .enumerate()
+        .map(|(i, study)| match study {
+            Some(study) => Ok(study),
+            None => run_ballbar(&scenarios[i], None, &|_| {}),
+        })
+        .collect()
+}
+
+/// The key of what a scenario's points share: the scenario with each axis's servo, drive
+/// and friction tables at their defaults, in its debug form (exact for f64). Two scenarios
+/// with the same key run the same setpoints; anything not known to be drive-side (the
+/// kinematics and its location errors, the program, the position-error tables) stays in
+/// the key, so a scenario that differs there is its own group. The scenario's and machine's
+/// paths are left out: they name the files in messages, and a pass that fails is run point by point.
+pub fn share_key(scenario: &Scenario) -> String {
+    let mut bare = scenario.clone();
+    bare.machine = without_drives(&scenario.machine);
+    // The paths name the files in messages only; a pass that fails runs its points alone.
+    bare.path = Default::default();
+    bare.machine.path = Default::default();
+    format!("{bare:?}")
+}
+
+fn without_drives(machine: &Machine) -> Machine {
+    let mut bare = machine.clone();
+    for &axis in machine.axes() {
+        let config = bare.axis_mut(axis);
+        config.servo = Default::default();
+        config.drive = Default::default();
+        config.friction = Default::default();
+    }
+    bare
+}
+
+/// The scenarios' indices grouped by [`share_key`] (in order of first appearance), each
+/// group cut into passes of at most [`POINTS_PER_PASS`] points, and into at least as many
+/// passes as there are `threads` where the group is large enough.
+pub fn passes(scenarios: &[Scenario], threads: usize) -> Vec<Vec<usize>> {
+    let mut keys: Vec<String> = Vec::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (i, scenario) in scenarios.iter().enumerate() {
+        let key = share_key(scenario);
+        match keys.iter().position(|k| *k == key) {
+            Some(g) => groups[g].push(i),
+            None => {
+                keys.push(key);
+                groups.push(vec![i]);
+            }
+        }
+    }
+    groups
+        .into_iter()
+        .flat_map(|group| {
+            let size = group
+                .len()
+                .div_ceil(threads.max(1))
+                .clamp(1, POINTS_PER_PASS);
+            group
+                .chunks(size)
+                .map(<[usize]>::to_vec)
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// One interpolation pass per direction for the scenarios `points` (one group): each
+/// point's study, or None for a point to run alone (its drives failed). An error is the
+/// pass's as a whole.
+fn run_pass(
+    scenarios: &[Scenario],
+    points: &[usize],
+    progress: &dyn Fn(f64),
+) -> Result<Vec<Option<BallbarStudy>>> {
+    let first = &scenarios[points[0]];
+    let machines: Vec<&Machine> = points.iter().map(|&i| &scenarios[i].machine).collect();
+    let (along, mut analysis) = analyses(first)?;
+    let geometry = bar_geometry(first);
+    let directions = directions_of(first);
+    let n = points.len();
+    let mut ballbars: Vec<Vec<BallbarSink>> = (0..n).map(|_| Vec::new()).collect();
+    let mut warnings: Vec<Vec<String>> = vec![Vec::new(); n];
+    let mut failed = vec![false; n];
+    let (mut sim_time_s, mut setpoints, mut feed_reductions) = (0.0, 0u64, Vec::new());
+    for &direction in &directions {
+        let mut run = program::scenario_run(first, direction, first.simulate.lead_deg)?;
+        if let Some(along) = &along {
+            run.moves = analysed_along(run.moves, along);
+        }
+        let options = run_options(first, sim_time_s)?;
+        let mut bars: Vec<BallbarSink> = match geometry {
+            Some(g) => (0..n)
+                .map(|_| BallbarSink::new(g, direction, run.measured))
+                .collect(),
+            None => Vec::new(),
+        };
+        let (stats, dead) = match geometry {
+            None => {
+                let mut discard: Vec<Discard> = (0..n).map(|_| Discard).collect();
+                let mut sinks: Vec<&mut dyn Sink> =
+                    discard.iter_mut().map(|d| d as &mut dyn Sink).collect();
+                pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?
+            }
+            Some(g) if gates_transient(first) => {
+                let mut gates: Vec<SettleGate<'_>> = bars
+                    .iter_mut()
+                    .map(|bar| {
+                        SettleGate::new(
+                            vec![bar as &mut dyn Sink],
+                            run.measured,
+                            Box::new(move |s: &Sample| g.read(s).theta_deg),
+                        )
+                    })
+                    .collect();
+                let mut sinks: Vec<&mut dyn Sink> =
+                    gates.iter_mut().map(|g| g as &mut dyn Sink).collect();
+                let ran =
+                    pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?;
+                for (w, gate) in warnings.iter_mut().zip(&gates) {
+                    w.extend(transient_warning(gate));
+                }
+                ran
+            }
+            Some(_) => {
+                let mut sinks: Vec<&mut dyn Sink> =
+                    bars.iter_mut().map(|b| b as &mut dyn Sink).collect();
+                pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?
+            }
+        };
+        for (f, d) in failed.iter_mut().zip(dead) {
+            *f |= d;
+        }
+        sim_time_s = stats.end_time_s;
+        setpoints += stats.samples;
+        merge_reductions(&mut feed_reductions, stats.feed_reductions);
+        for (mine, bar) in ballbars.iter_mut().zip(bars) {
+            mine.push(bar);
+        }
+    }
+    if let Some(along) = along {
+        analysis = Some(finish_along(&first.machine, &along));
+    }
+    let shared = SharedRuns {
+        reversals: reversals_of(analysis.as_ref()),
+        sim_time_s,
+        setpoints,
+        directions,
+        feed_reductions,
+    };
+    Ok(points
+        .iter()
+        .zip(ballbars)
+        .zip(warnings)
+        .zip(failed)
+        .map(|(((&i, bars), warnings), failed)| {
+            if failed {
+                return None;
+            }
+            assemble(&scenarios[i], bars, warnings, &shared).ok()
+        })
+        .collect())
+}
+
+/// A sink that keeps nothing: a point without a measured circle (a file program without a
+/// cone) has nothing to measure.
+struct Discard;
+
+impl Sink for Discard {
+    fn push(&mut self, _: &Sample) -> Result<()> {
+        Ok(())
+    }
+}

@@ -615,7 +615,7 @@ fn refuse_what_the_layout_cannot_give(
 }
 
 /// [`refuse_what_the_layout_cannot_give`] on a general `[kinematics]` chain: the cone
-/// needs every pose within the chain's reach; TCP, the circular test and the collision scene
+/// needs every pose within the chain's reach; the circular test and the collision scene
 /// do not run on general chains yet.
 fn refuse_what_a_chain_cannot_give(
     path: &Path,
@@ -638,12 +638,6 @@ fn refuse_what_a_chain_cannot_give(
         return refuse(
             "the collision scene ([check] collisions = true, the default)",
             "set [check] collisions = false: axis limits are still checked",
-        );
-    }
-    if file.reader.tcp || file.simulate.tcp {
-        return refuse(
-            "tool-centre-point control (TCP: [reader] tcp or [simulate] tcp)",
-            "program the machine's own axes, or generate the cone ([program.cone])",
         );
     }
     if file.program.circle.is_some() {

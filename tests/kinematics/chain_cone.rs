@@ -115,15 +115,40 @@ const BETA: f64 = 10.0;
 const L: f64 = 100.0;
 
 fn scenario(dir: &Path, machine: &str) {
+    write_scenario(dir, "s.toml", machine, "", "");
+}
+
+/// A scenario `name` in `dir` with the 15/10 cone on `machine`; `program` goes before the
+/// cone table (a `file`), `extra` after it.
+fn write_scenario(dir: &Path, name: &str, machine: &str, program: &str, extra: &str) {
     let m = Path::new(env!("CARGO_MANIFEST_DIR")).join(machine);
     std::fs::write(
-        dir.join("s.toml"),
+        dir.join(name),
         format!(
-            "machine = {:?}\n[program.cone]\nhalf_apex_deg = {ALPHA}\ninclination_deg = {BETA}\ncenter_mm = [0.0, 0.0, 0.0]\nballbar_length_mm = {L}\n[check]\ncollisions = false\n",
+            "machine = {:?}\n[program]\n{program}[program.cone]\nhalf_apex_deg = {ALPHA}\ninclination_deg = {BETA}\ncenter_mm = [0.0, 0.0, 0.0]\nballbar_length_mm = {L}\n{extra}[check]\ncollisions = false\n",
             m.display().to_string()
         ),
     )
     .unwrap();
+}
+
+/// The TCP cone (`[program.cone] tcp`, G43.4: X Y Z the tool tip) as `s.toml`, and the
+/// program `mtsim cone` writes from it read back as a file, `f.toml`.
+fn tcp_scenarios(dir: &Path, machine: &str) {
+    write_scenario(dir, "s.toml", machine, "", "tcp = true\n[simulate]\ntcp = true\n");
+    let out = mtsim_plain(dir, &["cone", "s.toml", "-o", "cone.nc"]);
+    assert!(
+        out.status.success(),
+        "{machine}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    write_scenario(
+        dir,
+        "f.toml",
+        machine,
+        "file = \"cone.nc\"\n",
+        "[simulate]\ntcp = true\n",
+    );
 }
 
 fn load(machine: &str) -> (Machine, Spec) {
@@ -139,11 +164,27 @@ fn in_cone_frame(p: V) -> V {
     [c * p[0] + s * p[2], p[1], -s * p[0] + c * p[2]]
 }
 
-#[test]
-fn the_cone_program_puts_the_tool_ball_on_the_circle_pointing_at_the_apex_on_every_chain() {
+/// How far the tool ball of the spec's forward kinematics at `q` lies from the test circle
+/// (mm: the larger of the radial and the height error) and the tool direction from the
+/// apex (deg).
+fn off_the_cone(spec: &Spec, q: &AxisVec) -> (f64, f64) {
     let (sa, ca) = ALPHA.to_radians().sin_cos();
     let (r, h) = (L * ca, L * sa);
     let apex_cone = [0.0, 0.0, L / sa];
+    let (tip, t) = spec.tool_in_workpiece(q);
+    let p = in_cone_frame(tip);
+    let radial = (p[0].hypot(p[1]) - r).abs();
+    let height = (p[2] - h).abs();
+    let toward_apex = sub(apex_cone, p);
+    let t_cone = in_cone_frame(t);
+    let angle = (dot(toward_apex, t_cone) / norm(toward_apex) / norm(t_cone))
+        .clamp(-1.0, 1.0)
+        .acos();
+    (radial.max(height), angle.to_degrees())
+}
+
+#[test]
+fn the_cone_program_puts_the_tool_ball_on_the_circle_pointing_at_the_apex_on_every_chain() {
     for machine in SHIPPED {
         let dir = scratch(
             "chain-cone",
@@ -167,26 +208,13 @@ fn the_cone_program_puts_the_tool_ball_on_the_circle_pointing_at_the_apex_on_eve
                     q[axis] = word[1..].parse().unwrap();
                 }
             }
-            let (tip, t) = spec.tool_in_workpiece(&q);
-            let p = in_cone_frame(tip);
-            let radial = (p[0].hypot(p[1]) - r).abs();
-            let height = (p[2] - h).abs();
+            let (off_mm, off_deg) = off_the_cone(&spec, &q);
             assert!(
-                radial < 2e-3 && height < 2e-3,
-                "{machine}: {line}: off the circle by {radial} / {height} mm"
+                off_mm < 2e-3 && off_deg < 0.01,
+                "{machine}: {line}: off the circle by {off_mm} mm, {off_deg} deg off the apex"
             );
-            let toward_apex = sub(apex_cone, p);
-            let t_cone = in_cone_frame(t);
-            let angle = (dot(toward_apex, t_cone) / norm(toward_apex) / norm(t_cone))
-                .clamp(-1.0, 1.0)
-                .acos();
-            assert!(
-                angle.to_degrees() < 0.01,
-                "{machine}: {line}: {} deg off the apex",
-                angle.to_degrees()
-            );
-            worst_mm = worst_mm.max(radial).max(height);
-            worst_deg = worst_deg.max(angle.to_degrees());
+            worst_mm = worst_mm.max(off_mm);
+            worst_deg = worst_deg.max(off_deg);
             blocks += 1;
         }
         // analyze's ranges of the machine's own axes are those of the program's blocks
@@ -227,8 +255,21 @@ fn the_ball_bar_reads_the_spec_forward_kinematics_of_the_actual_axes_on_every_ch
             "{machine}: {}",
             String::from_utf8_lossy(&out.stderr)
         );
+        let (rows, worst) = ball_bar_against_the_spec(machine, &dir.join("run/trace.csv"));
+        eprintln!("{machine}: {rows} samples, worst difference {worst:.2e} um");
+        assert!(rows > 1000, "{machine}: {rows} rows");
+        // The trace gives positions to 1e-6 mm and deg and the deviation to 1e-4 um.
+        assert!(worst < 0.01, "{machine}: worst difference {worst} um");
+    }
+}
+
+/// The trace's rows and the largest difference (µm) between its ball-bar deviation and
+/// the spec's forward kinematics of its actual axes: the table ball at O = 0 (workpiece
+/// frame), the tool ball at the gauge point.
+fn ball_bar_against_the_spec(machine: &str, trace: &Path) -> (usize, f64) {
+    {
         let (m, spec) = load(machine);
-        let trace = std::fs::read_to_string(dir.join("run/trace.csv")).unwrap();
+        let trace = std::fs::read_to_string(trace).unwrap();
         let mut lines = trace.lines();
         let header: Vec<&str> = lines.next().unwrap().split(',').collect();
         let col = |name: &str| {
@@ -258,9 +299,63 @@ fn the_ball_bar_reads_the_spec_forward_kinematics_of_the_actual_axes_on_every_ch
             worst = worst.max((got - expected_um).abs());
             rows += 1;
         }
-        eprintln!("{machine}: {rows} samples, worst difference {worst:.2e} um");
-        assert!(rows > 1000, "{machine}: {rows} rows");
-        // The trace gives positions to 1e-6 mm and deg and the deviation to 1e-4 um.
-        assert!(worst < 0.01, "{machine}: worst difference {worst} um");
+        (rows, worst)
+    }
+}
+
+#[test]
+fn the_tcp_cone_puts_the_tool_ball_on_the_circle_pointing_at_the_apex_on_every_chain() {
+    for machine in SHIPPED {
+        let dir = scratch(
+            "chain-tcp-cone",
+            Path::new(machine).file_stem().unwrap().to_str().unwrap(),
+        );
+        tcp_scenarios(&dir, machine);
+        // The written G43.4 program read back: its block ends as the machine's own axes.
+        let rows = common::stdout_json(&mtsim_plain(&dir, &["blocks", "f.toml", "--json"]));
+        let (m, spec) = load(machine);
+        let (mut blocks, mut worst_mm, mut worst_deg) = (0, 0.0f64, 0.0f64);
+        for row in rows.as_array().unwrap() {
+            let mut q = AxisVec::ZERO;
+            for axis in m.axes() {
+                q[*axis] = row[axis.letter().to_ascii_lowercase().to_string()]
+                    .as_f64()
+                    .unwrap_or_else(|| panic!("{machine}: no {axis} in {row}"));
+            }
+            let (off_mm, off_deg) = off_the_cone(&spec, &q);
+            assert!(
+                off_mm < 2e-3 && off_deg < 0.01,
+                "{machine}: line {}: off the circle by {off_mm} mm, {off_deg} deg off the apex",
+                row["line"]
+            );
+            worst_mm = worst_mm.max(off_mm);
+            worst_deg = worst_deg.max(off_deg);
+            blocks += 1;
+        }
+        eprintln!("{machine} (TCP): {blocks} blocks, worst {worst_mm:.2e} mm off the circle, {worst_deg:.2e} deg off the apex");
+        assert!(blocks > 360, "{machine}: {blocks} blocks");
+    }
+}
+
+#[test]
+fn the_tcp_cone_ball_bar_reads_the_spec_forward_kinematics_of_the_actual_axes_on_every_chain() {
+    for machine in SHIPPED {
+        let dir = scratch(
+            "chain-tcp-bar",
+            Path::new(machine).file_stem().unwrap().to_str().unwrap(),
+        );
+        tcp_scenarios(&dir, machine);
+        for scenario in ["s.toml", "f.toml"] {
+            let out = mtsim_plain(&dir, &["simulate", scenario, "-o", "run", "--no-timing"]);
+            assert!(
+                out.status.code() == Some(0) || out.status.code() == Some(1),
+                "{machine} {scenario}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let (rows, worst) = ball_bar_against_the_spec(machine, &dir.join("run/trace.csv"));
+            eprintln!("{machine} {scenario} (TCP): {rows} samples, worst difference {worst:.2e} um");
+            assert!(rows > 1000, "{machine}: {rows} rows");
+            assert!(worst < 0.01, "{machine} {scenario}: worst difference {worst} um");
+        }
     }
 }

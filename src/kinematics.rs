@@ -77,6 +77,7 @@
 
 pub mod axis_set;
 pub mod chain;
+pub mod chain_events;
 pub mod chain_inverse;
 pub mod error_table;
 pub mod layout;

@@ -75,10 +75,15 @@ pub fn run(
         super::report::write_page(out_dir, None)?;
     }
     run_dir.commit()?;
+    let chain_events = crate::study::chain_events::chain_events(&scenario)?;
     if as_json {
+        let mut v = serde_json::to_value(&summary).expect("plain data serializes");
+        if let Some(events) = &chain_events {
+            v["chain_events"] = events.iter().map(|e| e.to_json()).collect();
+        }
         print_stdout(&format!(
             "{}\n",
-            serde_json::to_string_pretty(&summary).expect("plain data serializes")
+            serde_json::to_string_pretty(&v).expect("plain data serializes")
         ));
         return Ok(code);
     }
@@ -134,6 +139,7 @@ pub fn run(
             }
         }
     }
+    out.push_str(&super::chain_events_text(chain_events.as_deref()));
     out.push_str(&format!(
         "wrote {}{}\n",
         target.display(),

@@ -615,8 +615,8 @@ fn refuse_what_the_layout_cannot_give(
 }
 
 /// [`refuse_what_the_layout_cannot_give`] on a general `[kinematics]` chain: the cone
-/// needs every pose within the chain's reach; the circular test and the collision scene
-/// do not run on general chains yet.
+/// needs every pose within the chain's reach; the collision scene does not run on general
+/// chains yet. (The circular test runs with the rotaries held at 0, TCP through the chain.)
 fn refuse_what_a_chain_cannot_give(
     path: &Path,
     file: &ScenarioFile,
@@ -638,12 +638,6 @@ fn refuse_what_a_chain_cannot_give(
         return refuse(
             "the collision scene ([check] collisions = true, the default)",
             "set [check] collisions = false: axis limits are still checked",
-        );
-    }
-    if file.program.circle.is_some() {
-        return refuse(
-            "the circular test ([program.circle])",
-            "use [program.cone], or a G-code `file` with [ballbar] pivot_mm",
         );
     }
     if let Program::Cone { cone, .. } = program {

@@ -147,7 +147,8 @@ fn tcp_scenarios(dir: &Path, machine: &str) {
         "f.toml",
         machine,
         "file = \"cone.nc\"\n",
-        "[simulate]\ntcp = true\n",
+        // The generated program is Fanuc-style (its O1001 line is no LinuxCNC o-word).
+        "[simulate]\ntcp = true\n[reader]\ndialect = \"fanuc\"\n",
     );
 }
 
@@ -265,8 +266,14 @@ fn the_ball_bar_reads_the_spec_forward_kinematics_of_the_actual_axes_on_every_ch
 
 /// The trace's rows and the largest difference (µm) between its ball-bar deviation and
 /// the spec's forward kinematics of its actual axes: the table ball at O = 0 (workpiece
-/// frame), the tool ball at the gauge point.
+/// frame), the tool ball at the gauge point, the bar L long.
 fn ball_bar_against_the_spec(machine: &str, trace: &Path) -> (usize, f64) {
+    ball_bar_against(machine, trace, [0.0; 3], L)
+}
+
+/// [`ball_bar_against_the_spec`] with the table ball at `ball` (workpiece frame) and a bar
+/// `length` mm long.
+fn ball_bar_against(machine: &str, trace: &Path, ball: V, length: f64) -> (usize, f64) {
     {
         let (m, spec) = load(machine);
         let trace = std::fs::read_to_string(trace).unwrap();
@@ -293,8 +300,8 @@ fn ball_bar_against_the_spec(machine: &str, trace: &Path) -> (usize, f64) {
             }
             // The table ball at O = 0 (workpiece frame) and the tool ball at the gauge point.
             let (tool, _) = spec.tool_in_machine(&q);
-            let ball = apply(&spec.table, &q, [0.0, 0.0, 0.0], false);
-            let expected_um = (norm(sub(tool, ball)) - L) * 1e3;
+            let ball = apply(&spec.table, &q, ball, false);
+            let expected_um = (norm(sub(tool, ball)) - length) * 1e3;
             let got: f64 = f[deviation].parse().unwrap();
             worst = worst.max((got - expected_um).abs());
             rows += 1;
@@ -356,6 +363,54 @@ fn the_tcp_cone_ball_bar_reads_the_spec_forward_kinematics_of_the_actual_axes_on
             eprintln!("{machine} {scenario} (TCP): {rows} samples, worst difference {worst:.2e} um");
             assert!(rows > 1000, "{machine}: {rows} rows");
             assert!(worst < 0.01, "{machine} {scenario}: worst difference {worst} um");
+        }
+    }
+}
+
+#[test]
+fn the_circular_test_runs_on_every_chain_with_the_rotaries_held() {
+    // ISO 230-4 in XY, radius 80 mm about (10, 20, 30): the table ball where those axis
+    // values put the tool ball with every rotary at 0, by the spec's forward kinematics.
+    let (center, radius) = ([10.0, 20.0, 30.0], 80.0);
+    for machine in SHIPPED {
+        let dir = scratch(
+            "chain-circle",
+            Path::new(machine).file_stem().unwrap().to_str().unwrap(),
+        );
+        let m = Path::new(env!("CARGO_MANIFEST_DIR")).join(machine);
+        std::fs::write(
+            dir.join("c.toml"),
+            format!(
+                "machine = {:?}\n[program.circle]\nplane = \"XY\"\nradius_mm = {radius}\nfeed_mm_min = 2000.0\ncenter_mm = {center:?}\n[check]\ncollisions = false\n",
+                m.display().to_string()
+            ),
+        )
+        .unwrap();
+        let out = mtsim_plain(&dir, &["simulate", "c.toml", "-o", "run", "--no-timing"]);
+        assert!(
+            out.status.code() == Some(0) || out.status.code() == Some(1),
+            "{machine}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let (_, spec) = load(machine);
+        let mut q = AxisVec::ZERO;
+        (q[Axis::X], q[Axis::Y], q[Axis::Z]) = (center[0], center[1], center[2]);
+        let (ball, _) = spec.tool_in_workpiece(&q);
+        let (rows, worst) = ball_bar_against(machine, &dir.join("run/trace.csv"), ball, radius);
+        eprintln!("{machine} circle: {rows} samples, worst difference {worst:.2e} um");
+        assert!(rows > 1000, "{machine}: {rows} rows");
+        assert!(worst < 0.01, "{machine}: worst difference {worst} um");
+        // The rotaries stand still through the whole test.
+        let trace = std::fs::read_to_string(dir.join("run/trace.csv")).unwrap();
+        let header: Vec<&str> = trace.lines().next().unwrap().split(',').collect();
+        for (i, h) in header.iter().enumerate() {
+            if h.ends_with("_cmd_deg") {
+                assert!(
+                    trace.lines().skip(1).all(|r| r.split(',').nth(i) == Some("0.000000")
+                        || r.split(',').nth(i).and_then(|v| v.parse::<f64>().ok()) == Some(0.0)),
+                    "{machine}: {h} moves"
+                );
+            }
         }
     }
 }

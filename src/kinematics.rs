@@ -350,7 +350,11 @@ impl Kinematics {
             }
             return out;
         }
-        let m = self.tcp_to_machine(q, &Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]), tool_length_mm);
+        let m = self.tcp_to_machine(
+            q,
+            &Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]),
+            tool_length_mm,
+        );
         (out[Axis::X], out[Axis::Y], out[Axis::Z]) = (m.x, m.y, m.z);
         out
     }

@@ -65,7 +65,9 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
         ));
     }
     out.push_str(&feed_table(&feed));
-    out.push_str(&super::chain_events_text(chain_events.as_deref()));
+    out.push_str(&super::chain_events::chain_events_text(
+        chain_events.as_deref(),
+    ));
     if !no_effect.is_empty() {
         out.push_str("accepted with no effect on the motion:\n");
         for n in &no_effect {

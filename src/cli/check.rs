@@ -45,18 +45,16 @@ pub fn run(path: &Path, as_json: bool, options: CheckOptions, html: Option<&Path
     }
     let chain_events = crate::study::chain_events::chain_events(&scenario)?;
     if as_json {
-        let mut v = serde_json::to_value(&report).expect("plain data serializes");
-        if let Some(events) = &chain_events {
-            v["chain_events"] = events.iter().map(|e| e.to_json()).collect();
-        }
         print_stdout(&format!(
             "{}\n",
-            serde_json::to_string_pretty(&v).expect("plain data serializes")
+            super::chain_events::json_with_chain_events(&report, chain_events.as_deref())
         ));
         return Ok(code);
     }
     let mut out = check_table(&report, &path.display().to_string());
-    out.push_str(&super::chain_events_text(chain_events.as_deref()));
+    out.push_str(&super::chain_events::chain_events_text(
+        chain_events.as_deref(),
+    ));
     print_stdout(&out);
     Ok(code)
 }

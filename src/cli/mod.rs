@@ -14,6 +14,7 @@ use crate::study::sweep::SweepParam;
 mod analyze;
 mod batch;
 mod blocks;
+mod chain_events;
 mod check;
 mod cone;
 mod fit;
@@ -401,21 +402,5 @@ fn run(cli: Cli) -> Result<i32> {
         }
         Command::Batch(args) => batch::run(&args),
         Command::Merge(args) => merge::run(&args),
-    }
-}
-
-/// The poles and solution switches of a program on a general chain, for the terminal
-/// (`analyze`, `check`, `simulate`); nothing on a named layout (`None`).
-fn chain_events_text(events: Option<&[crate::study::chain_events::ChainEvent]>) -> String {
-    match events {
-        None => String::new(),
-        Some([]) => "kinematic chain: no poles or solution switches\n".to_string(),
-        Some(events) => {
-            let mut out = "kinematic chain: poles and solution switches\n".to_string();
-            for e in events {
-                out.push_str(&format!("  {}\n", e.message));
-            }
-            out
-        }
     }
 }

@@ -77,13 +77,9 @@ pub fn run(
     run_dir.commit()?;
     let chain_events = crate::study::chain_events::chain_events(&scenario)?;
     if as_json {
-        let mut v = serde_json::to_value(&summary).expect("plain data serializes");
-        if let Some(events) = &chain_events {
-            v["chain_events"] = events.iter().map(|e| e.to_json()).collect();
-        }
         print_stdout(&format!(
             "{}\n",
-            serde_json::to_string_pretty(&v).expect("plain data serializes")
+            super::chain_events::json_with_chain_events(&summary, chain_events.as_deref())
         ));
         return Ok(code);
     }
@@ -139,7 +135,9 @@ pub fn run(
             }
         }
     }
-    out.push_str(&super::chain_events_text(chain_events.as_deref()));
+    out.push_str(&super::chain_events::chain_events_text(
+        chain_events.as_deref(),
+    ));
     out.push_str(&format!(
         "wrote {}{}\n",
         target.display(),

@@ -679,6 +679,47 @@ fn optional_side_file(p: &Path) -> Result<Option<String>> {
     }
 }
 
+/// G53.1 (and PLANE, CYCLE800) on a general chain with two rotaries: the rotary solution
+/// for the plane's normal as the tool direction ([`chain_inverse::nearest`]: of both, the one
+/// whose rotaries move least from where they are, within travel).
+fn tool_aligner(machine: &Machine) -> Option<ngc::ToolAligner> {
+    use crate::kinematics::{chain_inverse, ToolPose};
+    use crate::{Axis, AxisVec};
+    let chain = machine
+        .kinematics
+        .general
+        .filter(|c| c.rotaries().count() == 2)?;
+    let travel: Vec<(Axis, bool, f64, f64)> = chain
+        .rotaries()
+        .map(|(_, l)| {
+            let a = machine.axis(l.axis);
+            (l.axis, a.continuous, a.min, a.max)
+        })
+        .collect();
+    // `AxisConfig::within_travel`, on copies the closure can own.
+    let within = move |axis: Axis, v: f64| {
+        travel
+            .iter()
+            .find(|(a, ..)| *a == axis)
+            .is_none_or(|(_, continuous, lo, hi)| *continuous || (*lo..=*hi).contains(&v))
+    };
+    Some(ngc::ToolAligner(std::sync::Arc::new(
+        move |t: [f64; 3], now: &AxisVec| {
+            let pose = ToolPose {
+                tip: nalgebra::Point3::origin(),
+                axis: Vector3::from(t),
+            };
+            let s = chain_inverse::nearest(&chain, &pose, 0.0, now, &within)
+                .map_err(|e| e.to_string())?;
+            let mut out = *now;
+            for (_, l) in chain.rotaries() {
+                out[l.axis] = s.joints[l.axis];
+            }
+            Ok(out)
+        },
+    )))
+}
+
 /// The reader options of a scenario: its `[reader]` over the machine's defaults.
 fn reader_options(
     path: &Path,
@@ -698,6 +739,7 @@ fn reader_options(
                 tilt,
                 pivot_mm: machine.kinematics.pivot_mm.into(),
             }),
+        aligner: tool_aligner(machine),
         ..ngc::Options::default()
     };
     let m = &machine.start;

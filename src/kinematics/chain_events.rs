@@ -59,7 +59,9 @@ impl PoleWatch {
                     self.pending = Some((line, free, q[free]));
                     None
                 } else {
-                    all.iter().find(|s| self.same_rotaries(&s.joints, q)).map(|s| s.branch)
+                    all.iter()
+                        .find(|s| self.same_rotaries(&s.joints, q))
+                        .map(|s| s.branch)
                 }
             }
             Err(_) => None,

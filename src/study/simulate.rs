@@ -444,7 +444,11 @@ pub fn bar_geometry(scenario: &Scenario) -> Option<BarGeometry> {
             // ball (the gauge point, by the chain's forward kinematics, workpiece frame).
             let center_table = match &kinematics.general {
                 Some(chain) => {
-                    let (x, y, z) = (circle.center_mm[0], circle.center_mm[1], circle.center_mm[2]);
+                    let (x, y, z) = (
+                        circle.center_mm[0],
+                        circle.center_mm[1],
+                        circle.center_mm[2],
+                    );
                     let q = crate::AxisVec::xyzabc([x, y, z, 0.0, 0.0, 0.0]);
                     chain.tool_in_workpiece(&q, 0.0).0.coords
                 }

@@ -60,7 +60,7 @@ fn unapply(links: &[Joint], q: &AxisVec, x: V, vector: bool) -> V {
     })
 }
 
-struct Spec {
+pub(crate) struct Spec {
     table: Vec<Joint>,
     head: Vec<Joint>,
     gauge: V,
@@ -98,7 +98,7 @@ impl Spec {
     }
 
     /// Tool tip and tool direction in the workpiece frame.
-    fn tool_in_workpiece(&self, q: &AxisVec) -> (V, V) {
+    pub(crate) fn tool_in_workpiece(&self, q: &AxisVec) -> (V, V) {
         let (tip, t) = self.tool_in_machine(q);
         (
             unapply(&self.table, q, tip, false),
@@ -135,7 +135,13 @@ fn write_scenario(dir: &Path, name: &str, machine: &str, program: &str, extra: &
 /// The TCP cone (`[program.cone] tcp`, G43.4: X Y Z the tool tip) as `s.toml`, and the
 /// program `mtsim cone` writes from it read back as a file, `f.toml`.
 fn tcp_scenarios(dir: &Path, machine: &str) {
-    write_scenario(dir, "s.toml", machine, "", "tcp = true\n[simulate]\ntcp = true\n");
+    write_scenario(
+        dir,
+        "s.toml",
+        machine,
+        "",
+        "tcp = true\n[simulate]\ntcp = true\n",
+    );
     let out = mtsim_plain(dir, &["cone", "s.toml", "-o", "cone.nc"]);
     assert!(
         out.status.success(),
@@ -152,7 +158,7 @@ fn tcp_scenarios(dir: &Path, machine: &str) {
     );
 }
 
-fn load(machine: &str) -> (Machine, Spec) {
+pub(crate) fn load(machine: &str) -> (Machine, Spec) {
     let m = Machine::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(machine)).unwrap();
     let spec = Spec::of(&m.kinematics.chain().unwrap());
     (m, spec)
@@ -261,6 +267,39 @@ fn the_ball_bar_reads_the_spec_forward_kinematics_of_the_actual_axes_on_every_ch
         assert!(rows > 1000, "{machine}: {rows} rows");
         // The trace gives positions to 1e-6 mm and deg and the deviation to 1e-4 um.
         assert!(worst < 0.01, "{machine}: worst difference {worst} um");
+        // The report knows the machine: its test parameters name the chain, and the trace
+        // the axis plots are drawn from has the machine's own axes, no others.
+        let (m, spec) = load(machine);
+        let names = |links: &[Joint]| match links {
+            [] => "-".to_string(),
+            l => l
+                .iter()
+                .map(|j| j.0.to_string())
+                .collect::<Vec<_>>()
+                .join(" "),
+        };
+        let info: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("run/test.json")).unwrap())
+                .unwrap();
+        assert_eq!(
+            info["kinematics"],
+            format!(
+                "chain: table {}; head {}",
+                names(&spec.table),
+                names(&spec.head)
+            ),
+            "{machine}"
+        );
+        let trace = std::fs::read_to_string(dir.join("run/trace.csv")).unwrap();
+        let plotted: Vec<String> = trace
+            .lines()
+            .next()
+            .unwrap()
+            .split(',')
+            .filter_map(|h| h.split_once("_act_").map(|(a, _)| a.to_string()))
+            .collect();
+        let own: Vec<String> = m.axes().iter().map(|a| a.to_string()).collect();
+        assert_eq!(plotted, own, "{machine}");
     }
 }
 
@@ -360,9 +399,14 @@ fn the_tcp_cone_ball_bar_reads_the_spec_forward_kinematics_of_the_actual_axes_on
                 String::from_utf8_lossy(&out.stderr)
             );
             let (rows, worst) = ball_bar_against_the_spec(machine, &dir.join("run/trace.csv"));
-            eprintln!("{machine} {scenario} (TCP): {rows} samples, worst difference {worst:.2e} um");
+            eprintln!(
+                "{machine} {scenario} (TCP): {rows} samples, worst difference {worst:.2e} um"
+            );
             assert!(rows > 1000, "{machine}: {rows} rows");
-            assert!(worst < 0.01, "{machine} {scenario}: worst difference {worst} um");
+            assert!(
+                worst < 0.01,
+                "{machine} {scenario}: worst difference {worst} um"
+            );
         }
     }
 }
@@ -406,8 +450,12 @@ fn the_circular_test_runs_on_every_chain_with_the_rotaries_held() {
         for (i, h) in header.iter().enumerate() {
             if h.ends_with("_cmd_deg") {
                 assert!(
-                    trace.lines().skip(1).all(|r| r.split(',').nth(i) == Some("0.000000")
-                        || r.split(',').nth(i).and_then(|v| v.parse::<f64>().ok()) == Some(0.0)),
+                    trace
+                        .lines()
+                        .skip(1)
+                        .all(|r| r.split(',').nth(i) == Some("0.000000")
+                            || r.split(',').nth(i).and_then(|v| v.parse::<f64>().ok())
+                                == Some(0.0)),
                     "{machine}: {h} moves"
                 );
             }

@@ -15,11 +15,13 @@ use std::path::Path;
 
 use common::{mtsim_plain, scratch};
 
-const FORK: &str = "G21 G90 G94 G17\nG00 X0 Y0 Z100 A20 C0\nG01 A0 F500\nG01 A20 C180\nG01 A-20 C180\nM30\n";
+const FORK: &str =
+    "G21 G90 G94 G17\nG00 X0 Y0 Z100 A20 C0\nG01 A0 F500\nG01 A20 C180\nG01 A-20 C180\nM30\n";
 
 /// The 45° head: B = 0 holds the tool vertical, along the C table's line (line 3); line 4
 /// goes on to B 60 at C 180 (a C swing of 180°); line 5 turns B from 60 to −60.
-const NUTATING: &str = "G21 G90 G94 G17\nG00 X0 Y0 Z100 B60 C0\nG01 B0 F500\nG01 B60 C180\nG01 B-60 C180\nM30\n";
+const NUTATING: &str =
+    "G21 G90 G94 G17\nG00 X0 Y0 Z100 B60 C0\nG01 B0 F500\nG01 B60 C180\nG01 B-60 C180\nM30\n";
 
 fn scenario(dir: &Path, machine: &str, program: &str) {
     std::fs::write(dir.join("p.nc"), program).unwrap();
@@ -70,7 +72,10 @@ fn a_fork_head_passing_the_pole_reports_the_c_swing_and_the_switch() {
         );
         assert_eq!(e[1]["kind"], "switch");
         assert_eq!(e[1]["line"], 5);
-        assert_eq!((e[1]["from"].as_u64(), e[1]["to"].as_u64()), (Some(0), Some(1)));
+        assert_eq!(
+            (e[1]["from"].as_u64(), e[1]["to"].as_u64()),
+            (Some(0), Some(1))
+        );
     }
     let out = mtsim_plain(&dir, &["analyze", "s.toml"]);
     let text = String::from_utf8_lossy(&out.stdout);
@@ -90,7 +95,10 @@ fn a_nutating_head_passing_the_pole_reports_the_c_swing_and_the_switch() {
         e[0]["message"],
         "line 3: pole of B (tool along C): C swings 180.000 deg in one block"
     );
-    assert_eq!((e[1]["kind"].as_str(), e[1]["line"].as_u64()), (Some("switch"), Some(5)));
+    assert_eq!(
+        (e[1]["kind"].as_str(), e[1]["line"].as_u64()),
+        (Some("switch"), Some(5))
+    );
     assert_ne!(e[1]["from"], e[1]["to"]);
 }
 

@@ -20,12 +20,24 @@ use super::chain_cone::load;
 
 const FORK: &str = "machines/fork-head-ca.toml";
 
+/// `mtsim blocks --json` of `program` on the fork head, read in `dialect`, with tool 1 of
+/// length 0.
 fn blocks(dir: &Path, program: &Path, dialect: &str) -> Vec<serde_json::Value> {
+    blocks_with_tool(dir, program, dialect, 0.0)
+}
+
+/// [`blocks`] with tool 1 `tool_length_mm` long.
+fn blocks_with_tool(
+    dir: &Path,
+    program: &Path,
+    dialect: &str,
+    tool_length_mm: f64,
+) -> Vec<serde_json::Value> {
     let m = Path::new(env!("CARGO_MANIFEST_DIR")).join(FORK);
     std::fs::write(
         dir.join("s.toml"),
         format!(
-            "machine = {:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"{dialect}\"\ntools = [{{ number = 1, length_mm = 0.0, diameter_mm = 10.0 }}]\n[check]\ncollisions = false\n",
+            "machine = {:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"{dialect}\"\ntools = [{{ number = 1, length_mm = {tool_length_mm:?}, diameter_mm = 10.0 }}]\n[check]\ncollisions = false\n",
             m.display().to_string(),
             program.display().to_string()
         ),
@@ -144,17 +156,7 @@ fn g43_4_on_a_fork_head_places_the_tip_of_a_50_mm_tool() {
         "G21 G90 G94 G17\nG43.4 H1\nG01 X0 Y0 Z0 A30 C0 F500\nG01 X10\nM30\n",
     )
     .unwrap();
-    let m = Path::new(env!("CARGO_MANIFEST_DIR")).join(FORK);
-    std::fs::write(
-        dir.join("s.toml"),
-        format!(
-            "machine = {:?}\n[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"fanuc\"\ntools = [{{ number = 1, length_mm = 50.0, diameter_mm = 10.0 }}]\n[check]\ncollisions = false\n",
-            m.display().to_string()
-        ),
-    )
-    .unwrap();
-    let v = common::stdout_json(&mtsim_plain(&dir, &["blocks", "s.toml", "--json"]));
-    let rows = v.as_array().unwrap();
+    let rows = blocks_with_tool(&dir, &program, "fanuc", 50.0);
     let c30 = 30f64.to_radians().cos();
     for (row, x) in [(&rows[0], 0.0), (&rows[1], 10.0)] {
         let q = axes(row);

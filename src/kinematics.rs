@@ -77,6 +77,7 @@
 
 pub mod axis_set;
 pub mod chain;
+pub mod chain_events;
 pub mod chain_inverse;
 pub mod error_table;
 pub mod layout;
@@ -326,6 +327,36 @@ impl Kinematics {
         let mut m = self.table_to_machine(q, &tip);
         m.z += tool_length_mm;
         m
+    }
+
+    /// Machine axis positions for a tool-centre-point position `q`: its X Y Z are the tool
+    /// tip in the table (workpiece) frame with the tool length offset L added to Z, as the
+    /// reader adds it; its rotaries (and any other axis) are the machine's. On a named layout
+    /// X Y Z become [`Kinematics::tcp_to_machine`]'s; on a general chain the linear axes are
+    /// solved so that the tip `g − L t` of the chain meets `(x, y, z − L)`
+    /// ([`chain_inverse::solve_linear`]; a W quill beside Z keeps its value). Unchanged
+    /// where the chain's linear axes cannot place the tip (an xz lathe off its plane: least
+    /// squares).
+    pub fn tcp_axes(&self, q: &AxisVec, tool_length_mm: f64) -> AxisVec {
+        let mut out = *q;
+        let tip = Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z] - tool_length_mm);
+        if let Some(chain) = &self.general {
+            let pose = ToolPose {
+                tip,
+                axis: Vector3::z(),
+            };
+            if chain_inverse::solve_linear(chain, &pose, tool_length_mm, &mut out).is_err() {
+                return *q;
+            }
+            return out;
+        }
+        let m = self.tcp_to_machine(
+            q,
+            &Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]),
+            tool_length_mm,
+        );
+        (out[Axis::X], out[Axis::Y], out[Axis::Z]) = (m.x, m.y, m.z);
+        out
     }
 
     /// Forward kinematics: axis positions → tool tip and tool axis in the table frame.

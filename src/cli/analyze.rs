@@ -15,6 +15,7 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
     let geometric = crate::study::geometry::geometric_trace(&scenario)?;
     let feed = feed_limits(&scenario)?;
     let notices = crate::program::scenario_notices(&scenario)?;
+    let chain_events = crate::study::chain_events::chain_events(&scenario)?;
     let (warned, no_effect): (Vec<_>, Vec<_>) = notices.iter().partition(|n| n.warning);
     let located = |n: &&ngc::Notice| format!("{}:{}: {}", n.path.display(), n.line, n.message);
     let mut warnings = analysis.warnings();
@@ -40,6 +41,9 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
         if !no_effect.is_empty() {
             v["no_motion_effect"] = no_effect.iter().map(located).collect();
         }
+        if let Some(events) = &chain_events {
+            v["chain_events"] = events.iter().map(|e| e.to_json()).collect();
+        }
         print_stdout(&format!(
             "{}\n",
             serde_json::to_string_pretty(&v).expect("plain data serializes")
@@ -61,6 +65,9 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
         ));
     }
     out.push_str(&feed_table(&feed));
+    out.push_str(&super::chain_events::chain_events_text(
+        chain_events.as_deref(),
+    ));
     if !no_effect.is_empty() {
         out.push_str("accepted with no effect on the motion:\n");
         for n in &no_effect {

@@ -43,14 +43,19 @@ pub fn run(path: &Path, as_json: bool, options: CheckOptions, html: Option<&Path
         let page = crate::report::html::render_check_page(&path.display().to_string(), &report);
         crate::report::write_atomic(file, page.as_bytes())?;
     }
+    let chain_events = crate::study::chain_events::chain_events(&scenario)?;
     if as_json {
         print_stdout(&format!(
             "{}\n",
-            serde_json::to_string_pretty(&report).expect("plain data serializes")
+            super::chain_events::json_with_chain_events(&report, chain_events.as_deref())
         ));
         return Ok(code);
     }
-    print_stdout(&check_table(&report, &path.display().to_string()));
+    let mut out = check_table(&report, &path.display().to_string());
+    out.push_str(&super::chain_events::chain_events_text(
+        chain_events.as_deref(),
+    ));
+    print_stdout(&out);
     Ok(code)
 }
 

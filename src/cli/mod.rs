@@ -14,6 +14,7 @@ use crate::study::sweep::SweepParam;
 mod analyze;
 mod batch;
 mod blocks;
+mod chain_events;
 mod check;
 mod cone;
 mod fit;

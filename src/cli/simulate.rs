@@ -75,10 +75,11 @@ pub fn run(
         super::report::write_page(out_dir, None)?;
     }
     run_dir.commit()?;
+    let chain_events = crate::study::chain_events::chain_events(&scenario)?;
     if as_json {
         print_stdout(&format!(
             "{}\n",
-            serde_json::to_string_pretty(&summary).expect("plain data serializes")
+            super::chain_events::json_with_chain_events(&summary, chain_events.as_deref())
         ));
         return Ok(code);
     }
@@ -134,6 +135,9 @@ pub fn run(
             }
         }
     }
+    out.push_str(&super::chain_events::chain_events_text(
+        chain_events.as_deref(),
+    ));
     out.push_str(&format!(
         "wrote {}{}\n",
         target.display(),

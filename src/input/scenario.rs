@@ -615,8 +615,8 @@ fn refuse_what_the_layout_cannot_give(
 }
 
 /// [`refuse_what_the_layout_cannot_give`] on a general `[kinematics]` chain: the cone
-/// needs every pose within the chain's reach; TCP, the circular test and the collision scene
-/// do not run on general chains yet.
+/// needs every pose within the chain's reach; the collision scene does not run on general
+/// chains yet. (The circular test runs with the rotaries held at 0, TCP through the chain.)
 fn refuse_what_a_chain_cannot_give(
     path: &Path,
     file: &ScenarioFile,
@@ -638,18 +638,6 @@ fn refuse_what_a_chain_cannot_give(
         return refuse(
             "the collision scene ([check] collisions = true, the default)",
             "set [check] collisions = false: axis limits are still checked",
-        );
-    }
-    if file.reader.tcp || file.simulate.tcp {
-        return refuse(
-            "tool-centre-point control (TCP: [reader] tcp or [simulate] tcp)",
-            "program the machine's own axes, or generate the cone ([program.cone])",
-        );
-    }
-    if file.program.circle.is_some() {
-        return refuse(
-            "the circular test ([program.circle])",
-            "use [program.cone], or a G-code `file` with [ballbar] pivot_mm",
         );
     }
     if let Program::Cone { cone, .. } = program {
@@ -691,6 +679,47 @@ fn optional_side_file(p: &Path) -> Result<Option<String>> {
     }
 }
 
+/// G53.1 (and PLANE, CYCLE800) on a general chain with two rotaries: the rotary solution
+/// for the plane's normal as the tool direction ([`chain_inverse::nearest`]: of both, the one
+/// whose rotaries move least from where they are, within travel).
+fn tool_aligner(machine: &Machine) -> Option<ngc::ToolAligner> {
+    use crate::kinematics::{chain_inverse, ToolPose};
+    use crate::{Axis, AxisVec};
+    let chain = machine
+        .kinematics
+        .general
+        .filter(|c| c.rotaries().count() == 2)?;
+    let travel: Vec<(Axis, bool, f64, f64)> = chain
+        .rotaries()
+        .map(|(_, l)| {
+            let a = machine.axis(l.axis);
+            (l.axis, a.continuous, a.min, a.max)
+        })
+        .collect();
+    // `AxisConfig::within_travel`, on copies the closure can own.
+    let within = move |axis: Axis, v: f64| {
+        travel
+            .iter()
+            .find(|(a, ..)| *a == axis)
+            .is_none_or(|(_, continuous, lo, hi)| *continuous || (*lo..=*hi).contains(&v))
+    };
+    Some(ngc::ToolAligner(std::sync::Arc::new(
+        move |t: [f64; 3], now: &AxisVec| {
+            let pose = ToolPose {
+                tip: nalgebra::Point3::origin(),
+                axis: Vector3::from(t),
+            };
+            let s = chain_inverse::nearest(&chain, &pose, 0.0, now, &within)
+                .map_err(|e| e.to_string())?;
+            let mut out = *now;
+            for (_, l) in chain.rotaries() {
+                out[l.axis] = s.joints[l.axis];
+            }
+            Ok(out)
+        },
+    )))
+}
+
 /// The reader options of a scenario: its `[reader]` over the machine's defaults.
 /// A LinuxCNC machine starts in its machine units: `[TRAJ]LINEAR_UNITS`, when the
 /// configuration gives it, sets the start units over the machine file's `[start] units`
@@ -725,6 +754,7 @@ fn reader_options(
                 tilt,
                 pivot_mm: machine.kinematics.pivot_mm.into(),
             }),
+        aligner: tool_aligner(machine),
         ..ngc::Options::default()
     };
     let m = &machine.start;

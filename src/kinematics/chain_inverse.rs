@@ -236,8 +236,10 @@ fn common_vectors(
 }
 
 /// Sets the chain's linear axes in `joints` (rotaries given) so that the tool tip meets
-/// the workpiece point `pose.tip`.
-fn solve_linear(
+/// the workpiece point `pose.tip` (`pose.axis` is not read: the rotaries fix the tool
+/// direction). The tool-centre-point interpolation runs this at every sample: the program's
+/// rotaries are the machine's, the tip is placed by the linear axes.
+pub fn solve_linear(
     chain: &Chain,
     pose: &ToolPose,
     tool_length_mm: f64,

@@ -203,6 +203,10 @@ impl BlockPath {
         }
         if self.tcp {
             let l = self.tool_length_mm;
+            if kinematics.general.is_some() {
+                // A general chain: its linear axes place the tip, the rotaries as programmed.
+                return kinematics.tcp_axes(&q, l);
+            }
             let mut m = table_to_machine(kinematics, &q, [q.0[0], q.0[1], q.0[2] - l]);
             m[2] += l;
             q.0[..3].copy_from_slice(&m);
@@ -253,7 +257,7 @@ const SAMPLES: usize = 16;
 fn table_to_machine(k: &Kinematics, q: &AxisVec, p: [f64; 3]) -> [f64; 3] {
     let [x, y, z] = p;
     let (x, y, z) = match k.layout {
-        // A general chain has no TCP here (refused on load), so no table rotation either.
+        // A general chain's TCP runs through `Kinematics::tcp_axes` instead.
         Layout::Xyz
         | Layout::Xz
         | Layout::Xyzabc
@@ -878,6 +882,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 // G00 runs in joint space even under TCP: convert tip to machine coordinates.
                 if let Some(k) = tcp {
                     let to_machine = |q: &AxisVec| {
+                        if k.general.is_some() {
+                            return k.tcp_axes(q, b.tool_length_mm);
+                        }
                         let mut m = *q;
                         let p = k.tcp_to_machine(
                             q,

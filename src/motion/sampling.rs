@@ -131,6 +131,9 @@ fn on_arc(block: &Move, mut q: AxisVec, f: f64) -> AxisVec {
 /// moving on the straight line; they become the machine's.
 #[inline(never)]
 fn under_tcp(block: &Move, machine: &Machine, mut q: AxisVec) -> AxisVec {
+    if machine.kinematics.general.is_some() {
+        return machine.kinematics.tcp_axes(&q, block.tool_length_mm);
+    }
     let tip = Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
     let m = machine
         .kinematics

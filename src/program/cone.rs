@@ -227,12 +227,13 @@ impl ConeProgram {
         } else {
             FeedMode::PerMinute
         };
-        // The program's words: X Y Z are the tool tip under TCP, else the machine axes.
+        // The program's words: X Y Z are the tool tip under TCP (a W quill keeps its own value),
+        // else the machine axes.
         let words = move |q: &AxisVec, theta: f64| {
             let tip = cone.point(theta);
             let mut end = AxisVec::ZERO;
             for &axis in axes {
-                end[axis] = if options.tcp && !axis.is_rotary() {
+                end[axis] = if options.tcp && axis.index() < 3 {
                     tip[axis.index()]
                 } else {
                     q[axis]

@@ -3,6 +3,7 @@
 //! Outputs: reversal analyses, `simulate` runs with their files, sweeps, placement maps and batches, whole or in shards.
 
 pub mod batch;
+pub mod chain_events;
 pub mod diagnose;
 pub mod feed;
 pub mod fit;

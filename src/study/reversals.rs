@@ -454,6 +454,9 @@ fn machine_coordinates(kin: &crate::kinematics::Kinematics, block: &Move, q: Axi
     if !block.tcp {
         return q;
     }
+    if kin.general.is_some() {
+        return kin.tcp_axes(&q, block.tool_length_mm);
+    }
     let tip = nalgebra::Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
     let m = kin.table_to_machine(&q, &tip);
     let mut out = q;

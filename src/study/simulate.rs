@@ -536,7 +536,20 @@ pub fn bar_geometry(scenario: &Scenario) -> Option<BarGeometry> {
         Program::Cone { cone, .. } => Some(cone_bar(cone)),
         Program::Circle { circle, .. } => {
             // The circle is programmed in machine coordinates, with any rotary axes at zero.
-            let center_table = Vector3::from(circle.center_mm) - kinematics.pivot_mm;
+            // On a general chain the table ball sits where the centre's X Y Z put the tool
+            // ball (the gauge point, by the chain's forward kinematics, workpiece frame).
+            let center_table = match &kinematics.general {
+                Some(chain) => {
+                    let (x, y, z) = (
+                        circle.center_mm[0],
+                        circle.center_mm[1],
+                        circle.center_mm[2],
+                    );
+                    let q = crate::AxisVec::xyzabc([x, y, z, 0.0, 0.0, 0.0]);
+                    chain.tool_in_workpiece(&q, 0.0).0.coords
+                }
+                None => Vector3::from(circle.center_mm) - kinematics.pivot_mm,
+            };
             Some(BarGeometry {
                 kinematics,
                 frame: CircleFrame::planar(center_table.into(), circle.plane),

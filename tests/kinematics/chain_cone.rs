@@ -60,7 +60,7 @@ fn unapply(links: &[Joint], q: &AxisVec, x: V, vector: bool) -> V {
     })
 }
 
-struct Spec {
+pub(crate) struct Spec {
     table: Vec<Joint>,
     head: Vec<Joint>,
     gauge: V,
@@ -98,7 +98,7 @@ impl Spec {
     }
 
     /// Tool tip and tool direction in the workpiece frame.
-    fn tool_in_workpiece(&self, q: &AxisVec) -> (V, V) {
+    pub(crate) fn tool_in_workpiece(&self, q: &AxisVec) -> (V, V) {
         let (tip, t) = self.tool_in_machine(q);
         (
             unapply(&self.table, q, tip, false),
@@ -115,18 +115,50 @@ const BETA: f64 = 10.0;
 const L: f64 = 100.0;
 
 fn scenario(dir: &Path, machine: &str) {
+    write_scenario(dir, "s.toml", machine, "", "");
+}
+
+/// A scenario `name` in `dir` with the 15/10 cone on `machine`; `program` goes before the
+/// cone table (a `file`), `extra` after it.
+fn write_scenario(dir: &Path, name: &str, machine: &str, program: &str, extra: &str) {
     let m = Path::new(env!("CARGO_MANIFEST_DIR")).join(machine);
     std::fs::write(
-        dir.join("s.toml"),
+        dir.join(name),
         format!(
-            "machine = {:?}\n[program.cone]\nhalf_apex_deg = {ALPHA}\ninclination_deg = {BETA}\ncenter_mm = [0.0, 0.0, 0.0]\nballbar_length_mm = {L}\n[check]\ncollisions = false\n",
+            "machine = {:?}\n[program]\n{program}[program.cone]\nhalf_apex_deg = {ALPHA}\ninclination_deg = {BETA}\ncenter_mm = [0.0, 0.0, 0.0]\nballbar_length_mm = {L}\n{extra}[check]\ncollisions = false\n",
             m.display().to_string()
         ),
     )
     .unwrap();
 }
 
-fn load(machine: &str) -> (Machine, Spec) {
+/// The TCP cone (`[program.cone] tcp`, G43.4: X Y Z the tool tip) as `s.toml`, and the
+/// program `mtsim cone` writes from it read back as a file, `f.toml`.
+fn tcp_scenarios(dir: &Path, machine: &str) {
+    write_scenario(
+        dir,
+        "s.toml",
+        machine,
+        "",
+        "tcp = true\n[simulate]\ntcp = true\n",
+    );
+    let out = mtsim_plain(dir, &["cone", "s.toml", "-o", "cone.nc"]);
+    assert!(
+        out.status.success(),
+        "{machine}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    write_scenario(
+        dir,
+        "f.toml",
+        machine,
+        "file = \"cone.nc\"\n",
+        // The generated program is Fanuc-style (its O1001 line is no LinuxCNC o-word).
+        "[simulate]\ntcp = true\n[reader]\ndialect = \"fanuc\"\n",
+    );
+}
+
+pub(crate) fn load(machine: &str) -> (Machine, Spec) {
     let m = Machine::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(machine)).unwrap();
     let spec = Spec::of(&m.kinematics.chain().unwrap());
     (m, spec)
@@ -139,11 +171,27 @@ fn in_cone_frame(p: V) -> V {
     [c * p[0] + s * p[2], p[1], -s * p[0] + c * p[2]]
 }
 
-#[test]
-fn the_cone_program_puts_the_tool_ball_on_the_circle_pointing_at_the_apex_on_every_chain() {
+/// How far the tool ball of the spec's forward kinematics at `q` lies from the test circle
+/// (mm: the larger of the radial and the height error) and the tool direction from the
+/// apex (deg).
+fn off_the_cone(spec: &Spec, q: &AxisVec) -> (f64, f64) {
     let (sa, ca) = ALPHA.to_radians().sin_cos();
     let (r, h) = (L * ca, L * sa);
     let apex_cone = [0.0, 0.0, L / sa];
+    let (tip, t) = spec.tool_in_workpiece(q);
+    let p = in_cone_frame(tip);
+    let radial = (p[0].hypot(p[1]) - r).abs();
+    let height = (p[2] - h).abs();
+    let toward_apex = sub(apex_cone, p);
+    let t_cone = in_cone_frame(t);
+    let angle = (dot(toward_apex, t_cone) / norm(toward_apex) / norm(t_cone))
+        .clamp(-1.0, 1.0)
+        .acos();
+    (radial.max(height), angle.to_degrees())
+}
+
+#[test]
+fn the_cone_program_puts_the_tool_ball_on_the_circle_pointing_at_the_apex_on_every_chain() {
     for machine in SHIPPED {
         let dir = scratch(
             "chain-cone",
@@ -167,26 +215,13 @@ fn the_cone_program_puts_the_tool_ball_on_the_circle_pointing_at_the_apex_on_eve
                     q[axis] = word[1..].parse().unwrap();
                 }
             }
-            let (tip, t) = spec.tool_in_workpiece(&q);
-            let p = in_cone_frame(tip);
-            let radial = (p[0].hypot(p[1]) - r).abs();
-            let height = (p[2] - h).abs();
+            let (off_mm, off_deg) = off_the_cone(&spec, &q);
             assert!(
-                radial < 2e-3 && height < 2e-3,
-                "{machine}: {line}: off the circle by {radial} / {height} mm"
+                off_mm < 2e-3 && off_deg < 0.01,
+                "{machine}: {line}: off the circle by {off_mm} mm, {off_deg} deg off the apex"
             );
-            let toward_apex = sub(apex_cone, p);
-            let t_cone = in_cone_frame(t);
-            let angle = (dot(toward_apex, t_cone) / norm(toward_apex) / norm(t_cone))
-                .clamp(-1.0, 1.0)
-                .acos();
-            assert!(
-                angle.to_degrees() < 0.01,
-                "{machine}: {line}: {} deg off the apex",
-                angle.to_degrees()
-            );
-            worst_mm = worst_mm.max(radial).max(height);
-            worst_deg = worst_deg.max(angle.to_degrees());
+            worst_mm = worst_mm.max(off_mm);
+            worst_deg = worst_deg.max(off_deg);
             blocks += 1;
         }
         // analyze's ranges of the machine's own axes are those of the program's blocks
@@ -227,8 +262,60 @@ fn the_ball_bar_reads_the_spec_forward_kinematics_of_the_actual_axes_on_every_ch
             "{machine}: {}",
             String::from_utf8_lossy(&out.stderr)
         );
+        let (rows, worst) = ball_bar_against_the_spec(machine, &dir.join("run/trace.csv"));
+        eprintln!("{machine}: {rows} samples, worst difference {worst:.2e} um");
+        assert!(rows > 1000, "{machine}: {rows} rows");
+        // The trace gives positions to 1e-6 mm and deg and the deviation to 1e-4 um.
+        assert!(worst < 0.01, "{machine}: worst difference {worst} um");
+        // The report knows the machine: its test parameters name the chain, and the trace
+        // the axis plots are drawn from has the machine's own axes, no others.
         let (m, spec) = load(machine);
+        let names = |links: &[Joint]| match links {
+            [] => "-".to_string(),
+            l => l
+                .iter()
+                .map(|j| j.0.to_string())
+                .collect::<Vec<_>>()
+                .join(" "),
+        };
+        let info: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("run/test.json")).unwrap())
+                .unwrap();
+        assert_eq!(
+            info["kinematics"],
+            format!(
+                "chain: table {}; head {}",
+                names(&spec.table),
+                names(&spec.head)
+            ),
+            "{machine}"
+        );
         let trace = std::fs::read_to_string(dir.join("run/trace.csv")).unwrap();
+        let plotted: Vec<String> = trace
+            .lines()
+            .next()
+            .unwrap()
+            .split(',')
+            .filter_map(|h| h.split_once("_act_").map(|(a, _)| a.to_string()))
+            .collect();
+        let own: Vec<String> = m.axes().iter().map(|a| a.to_string()).collect();
+        assert_eq!(plotted, own, "{machine}");
+    }
+}
+
+/// The trace's rows and the largest difference (µm) between its ball-bar deviation and
+/// the spec's forward kinematics of its actual axes: the table ball at O = 0 (workpiece
+/// frame), the tool ball at the gauge point, the bar L long.
+fn ball_bar_against_the_spec(machine: &str, trace: &Path) -> (usize, f64) {
+    ball_bar_against(machine, trace, [0.0; 3], L)
+}
+
+/// [`ball_bar_against_the_spec`] with the table ball at `ball` (workpiece frame) and a bar
+/// `length` mm long.
+fn ball_bar_against(machine: &str, trace: &Path, ball: V, length: f64) -> (usize, f64) {
+    {
+        let (m, spec) = load(machine);
+        let trace = std::fs::read_to_string(trace).unwrap();
         let mut lines = trace.lines();
         let header: Vec<&str> = lines.next().unwrap().split(',').collect();
         let col = |name: &str| {
@@ -252,15 +339,126 @@ fn the_ball_bar_reads_the_spec_forward_kinematics_of_the_actual_axes_on_every_ch
             }
             // The table ball at O = 0 (workpiece frame) and the tool ball at the gauge point.
             let (tool, _) = spec.tool_in_machine(&q);
-            let ball = apply(&spec.table, &q, [0.0, 0.0, 0.0], false);
-            let expected_um = (norm(sub(tool, ball)) - L) * 1e3;
+            let ball = apply(&spec.table, &q, ball, false);
+            let expected_um = (norm(sub(tool, ball)) - length) * 1e3;
             let got: f64 = f[deviation].parse().unwrap();
             worst = worst.max((got - expected_um).abs());
             rows += 1;
         }
-        eprintln!("{machine}: {rows} samples, worst difference {worst:.2e} um");
+        (rows, worst)
+    }
+}
+
+#[test]
+fn the_tcp_cone_puts_the_tool_ball_on_the_circle_pointing_at_the_apex_on_every_chain() {
+    for machine in SHIPPED {
+        let dir = scratch(
+            "chain-tcp-cone",
+            Path::new(machine).file_stem().unwrap().to_str().unwrap(),
+        );
+        tcp_scenarios(&dir, machine);
+        // The written G43.4 program read back: its block ends as the machine's own axes.
+        let rows = common::stdout_json(&mtsim_plain(&dir, &["blocks", "f.toml", "--json"]));
+        let (m, spec) = load(machine);
+        let (mut blocks, mut worst_mm, mut worst_deg) = (0, 0.0f64, 0.0f64);
+        for row in rows.as_array().unwrap() {
+            let mut q = AxisVec::ZERO;
+            for axis in m.axes() {
+                q[*axis] = row[axis.letter().to_ascii_lowercase().to_string()]
+                    .as_f64()
+                    .unwrap_or_else(|| panic!("{machine}: no {axis} in {row}"));
+            }
+            let (off_mm, off_deg) = off_the_cone(&spec, &q);
+            assert!(
+                off_mm < 2e-3 && off_deg < 0.01,
+                "{machine}: line {}: off the circle by {off_mm} mm, {off_deg} deg off the apex",
+                row["line"]
+            );
+            worst_mm = worst_mm.max(off_mm);
+            worst_deg = worst_deg.max(off_deg);
+            blocks += 1;
+        }
+        eprintln!("{machine} (TCP): {blocks} blocks, worst {worst_mm:.2e} mm off the circle, {worst_deg:.2e} deg off the apex");
+        assert!(blocks > 360, "{machine}: {blocks} blocks");
+    }
+}
+
+#[test]
+fn the_tcp_cone_ball_bar_reads_the_spec_forward_kinematics_of_the_actual_axes_on_every_chain() {
+    for machine in SHIPPED {
+        let dir = scratch(
+            "chain-tcp-bar",
+            Path::new(machine).file_stem().unwrap().to_str().unwrap(),
+        );
+        tcp_scenarios(&dir, machine);
+        for scenario in ["s.toml", "f.toml"] {
+            let out = mtsim_plain(&dir, &["simulate", scenario, "-o", "run", "--no-timing"]);
+            assert!(
+                out.status.code() == Some(0) || out.status.code() == Some(1),
+                "{machine} {scenario}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let (rows, worst) = ball_bar_against_the_spec(machine, &dir.join("run/trace.csv"));
+            eprintln!(
+                "{machine} {scenario} (TCP): {rows} samples, worst difference {worst:.2e} um"
+            );
+            assert!(rows > 1000, "{machine}: {rows} rows");
+            assert!(
+                worst < 0.01,
+                "{machine} {scenario}: worst difference {worst} um"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_circular_test_runs_on_every_chain_with_the_rotaries_held() {
+    // ISO 230-4 in XY, radius 80 mm about (10, 20, 30): the table ball where those axis
+    // values put the tool ball with every rotary at 0, by the spec's forward kinematics.
+    let (center, radius) = ([10.0, 20.0, 30.0], 80.0);
+    for machine in SHIPPED {
+        let dir = scratch(
+            "chain-circle",
+            Path::new(machine).file_stem().unwrap().to_str().unwrap(),
+        );
+        let m = Path::new(env!("CARGO_MANIFEST_DIR")).join(machine);
+        std::fs::write(
+            dir.join("c.toml"),
+            format!(
+                "machine = {:?}\n[program.circle]\nplane = \"XY\"\nradius_mm = {radius}\nfeed_mm_min = 2000.0\ncenter_mm = {center:?}\n[check]\ncollisions = false\n",
+                m.display().to_string()
+            ),
+        )
+        .unwrap();
+        let out = mtsim_plain(&dir, &["simulate", "c.toml", "-o", "run", "--no-timing"]);
+        assert!(
+            out.status.code() == Some(0) || out.status.code() == Some(1),
+            "{machine}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let (_, spec) = load(machine);
+        let mut q = AxisVec::ZERO;
+        (q[Axis::X], q[Axis::Y], q[Axis::Z]) = (center[0], center[1], center[2]);
+        let (ball, _) = spec.tool_in_workpiece(&q);
+        let (rows, worst) = ball_bar_against(machine, &dir.join("run/trace.csv"), ball, radius);
+        eprintln!("{machine} circle: {rows} samples, worst difference {worst:.2e} um");
         assert!(rows > 1000, "{machine}: {rows} rows");
-        // The trace gives positions to 1e-6 mm and deg and the deviation to 1e-4 um.
         assert!(worst < 0.01, "{machine}: worst difference {worst} um");
+        // The rotaries stand still through the whole test.
+        let trace = std::fs::read_to_string(dir.join("run/trace.csv")).unwrap();
+        let header: Vec<&str> = trace.lines().next().unwrap().split(',').collect();
+        for (i, h) in header.iter().enumerate() {
+            if h.ends_with("_cmd_deg") {
+                assert!(
+                    trace
+                        .lines()
+                        .skip(1)
+                        .all(|r| r.split(',').nth(i) == Some("0.000000")
+                            || r.split(',').nth(i).and_then(|v| v.parse::<f64>().ok())
+                                == Some(0.0)),
+                    "{machine}: {h} moves"
+                );
+            }
+        }
     }
 }

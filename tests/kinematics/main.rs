@@ -5,6 +5,8 @@
 mod common;
 
 mod chain_cone;
+mod chain_planes;
+mod chain_poles;
 mod chains;
 mod geometric_errors;
 mod round_trips;

@@ -22,6 +22,8 @@
 //! or -X (BC: `C = 180° - atan2`), unwrapped next to the current C. When t is along Z, C
 //! keeps its value.
 
+use std::sync::Arc;
+
 use crate::axis::{Axis, AxisVec};
 
 /// A 3×3 rotation matrix, row-major.
@@ -117,6 +119,23 @@ pub fn apply_t(a: &Mat3, v: [f64; 3]) -> [f64; 3] {
         *o = (0..3).map(|k| a[k][r] * v[k]).sum();
     }
     out
+}
+
+/// The rotary positions that put the tool along a direction, on a machine that is no
+/// table-table AC or BC (a kinematic chain the caller models): given the unit direction in
+/// the workpiece frame and the axis positions now, the axis positions with the rotaries
+/// turned (the others as they are), or why the direction cannot be reached. G53.1 on such a
+/// machine turns the rotaries with the tool tip held (the move and the moves under G68.2
+/// run under tool-centre-point control, their X Y Z the tip in the workpiece frame).
+#[derive(Clone)]
+pub struct ToolAligner(
+    pub Arc<dyn Fn([f64; 3], &AxisVec) -> Result<AxisVec, String> + Send + Sync>,
+);
+
+impl std::fmt::Debug for ToolAligner {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ToolAligner")
+    }
 }
 
 /// The program-to-machine map of a tilted plane and/or table-following work offset.

@@ -66,7 +66,7 @@ pub use axis::{Axis, AxisVec, Plane};
 pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
 pub use error::{line_column, Error, Result, Syntax};
 pub use expr::MAX_NESTING;
-pub use frame::RotaryTable;
+pub use frame::{RotaryTable, ToolAligner};
 pub use ini::{scale_parameter_lengths, Ini, IniEntry, IniError, LinuxcncConfig};
 pub use notice::Notice;
 pub use options::{

@@ -166,6 +166,9 @@ pub struct Options {
     /// The machine's rotary table (table-table AC or BC), for G68.2/G53.1 and G254; `None`
     /// on a three-axis machine, where G53.1 and G254 are errors.
     pub table: Option<RotaryTable>,
+    /// On a machine without such a table (a kinematic chain): how G53.1 turns its rotaries
+    /// ([`ToolAligner`]); `None`: G53.1 is an error there.
+    pub aligner: Option<crate::frame::ToolAligner>,
     /// LinuxCNC remapped codes (`[RS274NGC]REMAP`, crate::remap).
     pub remaps: Vec<crate::remap::Remap>,
     /// HAL pin values read by `#<_hal[pin.name]>`.
@@ -202,6 +205,7 @@ impl Default for Options {
             max_iterations: MAX_ITERATIONS,
             max_call_depth: MAX_CALL_DEPTH,
             table: None,
+            aligner: None,
             remaps: Vec::new(),
             hal_pins: Vec::new(),
             user_m_path: Vec::new(),

@@ -283,9 +283,12 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
     if how == "STAY" {
         return Ok(());
     }
-    let Some(table) = r.table else {
-        return Err(LineError::new(b.spans(0, b.toks.len() - 1), format!("PLANE … {how} on a machine with no rotary table mtsim can position (table-table AC or BC): expected STAY, with the rotary axes moved by L blocks"), "no rotary table")
-            .help("use STAY, or a table-table five-axis machine"));
+    // The rotaries TURN positions: the table's tilt and C, or a kinematic chain's.
+    let rotaries = match r.table {
+        Some(table) => vec![table.tilt, crate::axis::Axis::C],
+        None if !r.chain_rotaries.is_empty() => r.chain_rotaries.clone(),
+        None => return Err(LineError::new(b.spans(0, b.toks.len() - 1), format!("PLANE … {how} on a machine with no rotary table mtsim can position (table-table AC or BC, or a kinematic chain with two rotaries): expected STAY, with the rotary axes moved by L blocks"), "no rotary table")
+            .help("use STAY, or a table-table five-axis machine")),
     };
     if how == "MOVE" {
         r.note(
@@ -296,8 +299,9 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
     if kind == "RESET" {
         let span = b.span(0);
         r.gword("0", span.clone());
-        r.word(table.tilt.letter(), 0.0, span.clone());
-        r.word('C', 0.0, span);
+        for axis in rotaries {
+            r.word(axis.letter(), 0.0, span.clone());
+        }
         r.end_block(b.line);
         return r.sync_position(b);
     }

@@ -71,6 +71,15 @@ impl Reader {
             cycle: Cycle::default(),
             tools: options.tools.clone(),
             table: options.table,
+            chain_rotaries: match options.aligner {
+                Some(_) => options
+                    .axes
+                    .iter()
+                    .copied()
+                    .filter(|a| a.is_rotary())
+                    .collect(),
+                None => Vec::new(),
+            },
             search_path: options.search_path.clone(),
             tool: (0, 0.0, 0.0),
             inch: false,

@@ -63,6 +63,9 @@ pub(crate) struct Reader {
     pub(super) tools: Vec<Tool>,
     /// The machine's rotary table, for `PLANE … TURN`.
     pub(super) table: Option<crate::frame::RotaryTable>,
+    /// Without a table: the rotaries a caller's inverse kinematics turns for `PLANE … TURN`
+    /// (`Options::aligner`; empty when there is none).
+    pub(super) chain_rotaries: Vec<crate::axis::Axis>,
     pub(super) search_path: Vec<PathBuf>,
     /// The current tool: number (0: none or named) and its `DL`, `DR`.
     pub(super) tool: (u32, f64, f64),

@@ -9,6 +9,12 @@ use crate::canon::{FeedMode, Motion, Move, PathControl};
 use crate::code::FeedRead;
 
 impl Interp {
+    /// Tool-centre-point control for the next move: G43.4 and the like, or a tilted plane
+    /// on a kinematic chain (whose program X Y Z are the tool tip, [`crate::ToolAligner`]).
+    fn tcp_now(&self) -> bool {
+        self.tcp || (self.aligner.is_some() && self.tilt.is_some())
+    }
+
     pub(super) fn emit(
         &mut self,
         queue: &mut VecDeque<Move>,
@@ -43,7 +49,7 @@ impl Interp {
                 end,
                 feed,
                 feed_mode,
-                tcp: self.tcp,
+                tcp: self.tcp_now(),
                 tool: self.tool,
                 tool_length_mm: self.tool_length_mm,
                 path,
@@ -57,7 +63,7 @@ impl Interp {
             end,
             feed,
             feed_mode,
-            tcp: self.tcp,
+            tcp: self.tcp_now(),
             tool: self.tool,
             tool_length_mm: self.tool_length_mm,
             path,
@@ -125,7 +131,7 @@ impl Interp {
             end: target,
             feed,
             feed_mode,
-            tcp: self.tcp,
+            tcp: self.tcp_now(),
             tool: self.tool,
             tool_length_mm: self.tool_length_mm,
             path: self.path,

@@ -182,6 +182,8 @@ pub struct Interp {
     /// Haas G254: the work offset follows the rotary table.
     dwo: bool,
     table: Option<RotaryTable>,
+    /// G53.1 on a kinematic chain (no [`RotaryTable`]): the caller's inverse kinematics.
+    aligner: Option<crate::frame::ToolAligner>,
     /// Cutter radius compensation (G41/G42 to G40) and its queued moves.
     comp: Option<comp::Comp>,
     /// Where the tool is after G40 when it differs from `pos` (the next move starts there).
@@ -281,6 +283,7 @@ impl Interp {
             tilt: None,
             dwo: false,
             table: o.table,
+            aligner: o.aligner.clone(),
             comp: None,
             comp_out: None,
             arc_not_allowed: false,

@@ -355,13 +355,28 @@ impl Interp {
         line_no: usize,
         queue: &mut VecDeque<Move>,
     ) -> LineResult<()> {
+        if let (Some((_, rf)), None, Some(aligner)) = (self.tilt, self.table, &self.aligner) {
+            // A kinematic chain: the caller's inverse kinematics turns the rotaries; the
+            // move runs under tool-centre-point control, so the tool tip holds its place.
+            let end = (aligner.0)([rf[0][2], rf[1][2], rf[2][2]], &self.pos).map_err(|why| {
+                LineError::new(
+                    w.span(),
+                    format!("G53.1: the tilted plane's normal cannot be the tool direction: {why}"),
+                    "tool direction out of reach",
+                )
+            })?;
+            let start = self.pos;
+            self.emit(queue, line_no, Motion::Rapid, start, end, self.path);
+            self.pos = end;
+            return Ok(());
+        }
         let (Some((_, rf)), Some(table)) = (self.tilt, self.table) else {
             return Err(LineError::new(
                 w.span(),
                 if self.tilt.is_none() {
                     "G53.1 with no tilted plane: expected G68.2 in this or an earlier block"
                 } else {
-                    "G53.1 on a machine without a rotary table: expected a table-table AC or BC machine"
+                    "G53.1 on a machine without a rotary table: expected a table-table AC or BC machine, or a kinematic chain with two rotaries"
                 },
                 "nothing to align",
             ));

@@ -7,6 +7,7 @@ pub mod diagnose;
 pub mod feed;
 pub mod fit;
 pub mod geometry;
+pub mod glance;
 pub mod placement;
 pub mod reversals;
 pub mod shard;

@@ -251,8 +251,16 @@ pub enum Finding {
         amplitude_um: f64,
         long_axis_deg: f64,
     },
-    /// A mark: the reversal spike or backlash step of an axis, or one of no axis.
-    Mark(Mark),
+    /// The marks of one kind at one axis's reversals (or at reversals of axes the trace
+    /// cannot tell apart: `axis` names them all, joined by "/"), grouped.
+    AxisMarks(AxisMarks),
+    /// The marks no axis reverses near, grouped.
+    Unattributed {
+        /// The marks' numbers.
+        numbers: Vec<usize>,
+        /// The largest |height|, µm.
+        largest_um: f64,
+    },
     /// H is large against G.
     Hysteresis { h_um: f64 },
     /// A run's mean radius is off the bar length by more than 1 µm.
@@ -261,6 +269,24 @@ pub enum Finding {
     BlockSawtooth,
     /// Nothing stands out.
     Nothing,
+}
+
+/// The marks of one kind at the reversals of one axis (or of candidates that cannot be
+/// told apart), with what the machine file says about that axis's lost motion.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AxisMarks {
+    /// The axis, or the candidates joined by "/".
+    pub axis: String,
+    pub kind: crate::measure::ballbar::EventKind,
+    /// The marks' numbers (as on the plot).
+    pub numbers: Vec<usize>,
+    /// The largest |height|, µm.
+    pub largest_um: f64,
+    /// B as the trace shows it, for a single axis, µm.
+    pub b_um: Option<f64>,
+    /// The machine file's lost motion of each axis named (in its unit, mm or deg); empty
+    /// for a folder without it.
+    pub machine: Vec<(String, MachineReversal)>,
 }
 
 /// The diagnosis of a run folder: its marks (for the table and the plot) and findings.

@@ -453,6 +453,36 @@ fn every_bundled_scenario_report_renders_in_headless_chromium() {
                 "{name}: {plot} is {dims:?} px"
             );
         }
+        // The summary first: G, B of each axis and the ranked shares, as summary.json has them.
+        let g = summary["ballbar"]["circular_deviation_um"]
+            .as_f64()
+            .unwrap();
+        assert!(
+            dom.find("id=\"summary\"") < dom.find("id=\"test\""),
+            "{name}"
+        );
+        assert_eq!(
+            figure_text(&dom, "G").map(str::trim),
+            text_after(&dom, "data-summary=\"G\""),
+            "{name}: {g}"
+        );
+        for r in summary["reversal_b"].as_array().unwrap() {
+            let axis = r["axis"].as_str().unwrap();
+            let shown = text_after(&dom, &format!("data-b=\"{axis}\""))
+                .unwrap_or_else(|| panic!("{name}: no B of {axis}"));
+            match r["b_um"].as_f64() {
+                Some(b) => assert_eq!(shown, format!("{b:.2}"), "{name}: B of {axis}"),
+                None => assert!(shown.starts_with('–'), "{name}: B of {axis}: {shown}"),
+            }
+        }
+        let rows = share_rows(&dom);
+        let shares = summary["g_shares"].as_array().unwrap();
+        assert_eq!(rows.len(), shares.len(), "{name}: {rows:?}");
+        assert!(!rows.is_empty(), "{name}: no shares");
+        assert!(
+            rows.windows(2).all(|w| w[0].1 >= w[1].1),
+            "{name}: ranked: {rows:?}"
+        );
         // Every figure as text, as the summary states it.
         for (figure, value) in figures(&summary) {
             assert_eq!(
@@ -705,4 +735,173 @@ fn the_fit_page_renders_in_headless_chromium() {
         .collect();
     assert!(dims[0] > 500.0 && dims[1] > 300.0, "fit plot {dims:?} px");
     assert!(dom.contains("What these tests cannot separate"));
+}
+
+// ---- the summary a metrologist reads first ------------------------------------------
+
+/// The three-axis machine with a 10 µm backlash on X only and no Coulomb friction (so no
+/// axis has an elastic lost motion): the circle scenario on it, run into `dir/run`.
+fn backlash_on_x_only(dir: &Path) -> serde_json::Value {
+    let machine = std::fs::read_to_string(common::machine("vmc-3axis"))
+        .unwrap()
+        .replace("coulomb_n = 150.0", "coulomb_n = 0.0")
+        .replacen(
+            "[axes.X.friction]",
+            "[axes.X.drive]\nbacklash_mm = 0.010\n\n[axes.X.friction]",
+            1,
+        );
+    std::fs::write(dir.join("machine.toml"), machine).unwrap();
+    let scenario = std::fs::read_to_string("scenarios/circle-iso230-4.toml")
+        .unwrap()
+        .replace("../machines/vmc-3axis.toml", "machine.toml");
+    std::fs::write(dir.join("scenario.toml"), scenario).unwrap();
+    simulate_with_report(
+        dir.join("scenario.toml").to_str().unwrap(),
+        &dir.join("run"),
+    )
+}
+
+/// The text of the first element after `key` (an attribute such as `data-b="X"`).
+fn text_after<'a>(html: &'a str, key: &str) -> Option<&'a str> {
+    let i = html.find(key)?;
+    let start = html[i..].find('>')? + i + 1;
+    let end = html[start..].find('<')? + start;
+    Some(html[start..end].trim())
+}
+
+/// Every `data-share` row of the page: (axis:mechanism, contribution µm), in page order.
+fn share_rows(html: &str) -> Vec<(String, f64)> {
+    html.split("<tr data-share=\"")
+        .skip(1)
+        .map(|row| {
+            let key = row[..row.find('"').unwrap()].to_string();
+            let range = text_after(row, "class=\"range\"").unwrap().parse().unwrap();
+            (key, range)
+        })
+        .collect()
+}
+
+/// The numbers among the `<text>` elements of the plot `name` in `html`.
+fn plot_numbers(html: &str, name: &str) -> Vec<String> {
+    let i = html
+        .find(&format!("data-plot=\"{name}\""))
+        .unwrap_or_else(|| panic!("no plot {name}"));
+    let svg = &html[i..i + html[i..].find("</svg>").unwrap()];
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let s = &t[t.find('>')? + 1..];
+            let s = s[..s.find('<')?].trim();
+            s.parse::<f64>().ok().map(|_| s.to_string())
+        })
+        .collect()
+}
+
+/// Backlash on X only: B of X is the gap (the closed-form step of a semi-closed loop at
+/// its reversal, where the bar lies along X), B of Y is 0; only X gets backlash advice
+/// and a backlash share; the marks are listed by their peak; the flat Z position shows one
+/// value.
+#[test]
+fn backlash_on_x_only_gives_b_and_advice_for_x_only() {
+    let dir = scratch("report", "backlash-x");
+    let summary = backlash_on_x_only(&dir);
+    let b = |axis: &str| {
+        summary["reversal_b"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["axis"] == axis)
+            .unwrap()["b_um"]
+            .as_f64()
+    };
+    let (bx, by) = (b("X").unwrap(), b("Y").unwrap());
+    assert!((bx - 10.0).abs() < 0.5, "B of X {bx} µm, gap 10 µm");
+    assert!(by.abs() < 0.2, "B of Y {by} µm, no lost motion");
+    assert_eq!(b("Z"), None, "the bar does not see Z on an XY circle");
+    let shares = summary["g_shares"].as_array().unwrap();
+    let share = |axis: &str, mechanism: &str| {
+        shares
+            .iter()
+            .find(|c| c["axis"] == axis && c["mechanism"] == mechanism)
+            .map(|c| c["range_um"].as_f64().unwrap())
+    };
+    assert!((share("X", "backlash").unwrap() - 10.0).abs() < 0.5);
+    assert_eq!(share("Y", "backlash"), None, "{shares:?}");
+    assert_eq!(share("Y", "lost_motion"), None, "{shares:?}");
+    // The 2θ term the steps make is not servo mismatch (equal loops): what is left of it
+    // is small against the step.
+    assert!(
+        share("X/Y", "servo_mismatch").unwrap_or(0.0) < 1.0,
+        "{shares:?}"
+    );
+    let sum: f64 = shares.iter().map(|c| c["share"].as_f64().unwrap()).sum();
+    assert!((sum - 1.0).abs() < 1e-9, "{sum}");
+
+    let html = std::fs::read_to_string(dir.join("run/report.html")).unwrap();
+    let diagnoses = &html[html.find("<ul class=\"diagnoses\">").unwrap()..];
+    let diagnoses = &diagnoses[..diagnoses.find("</ul>").unwrap()];
+    let advice: Vec<&str> = diagnoses
+        .lines()
+        .filter(|l| l.contains("backlash compensation on"))
+        .collect();
+    assert_eq!(advice.len(), 1, "{diagnoses}");
+    assert!(advice[0].contains("Steps at X reversals"), "{}", advice[0]);
+    assert!(!diagnoses.contains("compensation on Y"), "{diagnoses}");
+    // One line per axis and mechanism: the four X steps are one line.
+    assert_eq!(diagnoses.matches("Steps at X reversals").count(), 1);
+
+    // Marks by their peak angle, as summary.json holds it.
+    for (i, e) in summary["ballbar"]["spikes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .enumerate()
+    {
+        let row = format!("<tr data-mark=\"{}\">", i + 1);
+        let row = &html[html.find(&row).unwrap()..];
+        let peak: f64 = text_after(row, "class=\"peak\"").unwrap().parse().unwrap();
+        assert!((peak - e["peak_deg"].as_f64().unwrap()).abs() < 0.006);
+    }
+    // The Z position stays within 10 nm: one labelled value besides the θ ticks.
+    let x_ticks = ["0", "100", "200", "300"];
+    let z = plot_numbers(&html, "Z-position");
+    assert_eq!(z.len() - x_ticks.len(), 1, "{z:?}");
+    // X's position is not flat: its ticks are many.
+    assert!(plot_numbers(&html, "X-position").len() > x_ticks.len() + 3);
+}
+
+/// The same page in headless Chromium: the DOM holds the summary, B of each axis and the
+/// ranked shares, with X's B at the gap and no backlash share for Y.
+#[test]
+fn the_summary_b_and_ranked_shares_render_in_headless_chromium() {
+    let Some(browser) = chromium() else {
+        if std::env::var_os("CI").is_some() {
+            panic!("chromium is missing and CI is set: install it (apt-get install chromium)");
+        }
+        eprintln!("SKIPPED the_summary_b_and_ranked_shares_render_in_headless_chromium: chromium not found on PATH");
+        return;
+    };
+    let dir = scratch("report-browser", "backlash-x");
+    let summary = backlash_on_x_only(&dir);
+    let (dom, _) = render(&browser, &dir.join("run/report.html"), &dir);
+    let g = summary["ballbar"]["circular_deviation_um"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(
+        text_after(&dom, "data-summary=\"G\""),
+        Some(format!("{g:.2}").as_str())
+    );
+    let bx: f64 = text_after(&dom, "data-b=\"X\"").unwrap().parse().unwrap();
+    let by: f64 = text_after(&dom, "data-b=\"Y\"").unwrap().parse().unwrap();
+    assert!((bx - 10.0).abs() < 0.5, "B of X {bx}");
+    assert!(by.abs() < 0.2, "B of Y {by}");
+    assert!(text_after(&dom, "data-b=\"Z\"").unwrap().starts_with('–'));
+    let rows = share_rows(&dom);
+    assert_eq!(rows[0].0, "X:backlash", "{rows:?}");
+    assert!((rows[0].1 - 10.0).abs() < 0.5);
+    assert!(
+        rows.windows(2).all(|w| w[0].1 >= w[1].1),
+        "ranked: {rows:?}"
+    );
+    assert!(!rows.iter().any(|r| r.0 == "Y:backlash"), "{rows:?}");
 }

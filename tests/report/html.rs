@@ -582,7 +582,7 @@ fn the_sweep_plot_names_its_axis_in_words_and_keeps_the_legend_off_the_points() 
 }
 
 #[test]
-fn the_placement_map_tells_fit_cells_apart_and_marks_the_scenario_and_the_table() {
+fn the_placement_map_scales_margins_linearly_and_refuses_a_cone_base_off_the_table() {
     let dir = scratch("report", "placement");
     let out = mtsim(&[
         "sweep",
@@ -602,36 +602,76 @@ fn the_placement_map_tells_fit_cells_apart_and_marks_the_scenario_and_the_table(
     assert!(out.status.code() == Some(0) || out.status.code() == Some(1));
     let svg = std::fs::read_to_string(dir.join("placement.svg")).unwrap();
     let csv = std::fs::read_to_string(dir.join("placement.csv")).unwrap();
-    // Distinct margins (to 1 µm) of the cells that fit, from the CSV ...
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     let (m, f) = (
         header.iter().position(|h| h.starts_with("margin")).unwrap(),
         header.iter().position(|h| *h == "fits").unwrap(),
     );
-    let mut margins: Vec<i64> = csv
+    let rows: Vec<Vec<&str>> = csv
         .lines()
         .skip(1)
-        .map(|l| l.split(',').collect::<Vec<_>>())
+        .map(|l| l.split(',').collect())
+        .collect();
+    let l = header.iter().position(|h| *h == "limiting").unwrap();
+    // The cone base (the frustum's, radius (L − R)/cos α with L 100 mm, α 15°, the cutter
+    // radius R 10 mm, tilted by β 10°) must stay on the table top (radius 200 mm): a cell
+    // whose base reaches past the edge does not fit, and says so; the margin of a cell that
+    // fits is at most its distance to the edge.
+    let rho = (100.0 - 10.0) / 15f64.to_radians().cos();
+    let beta = 10f64.to_radians();
+    let mut overhanging = 0;
+    for c in &rows {
+        let (x, y): (f64, f64) = (c[0].parse().unwrap(), c[1].parse().unwrap());
+        let farthest = (0..3600)
+            .map(|k| {
+                let phi = (k as f64 * 0.1).to_radians();
+                (x + rho * beta.cos() * phi.cos()).hypot(y + rho * phi.sin())
+            })
+            .fold(0.0, f64::max);
+        let margin: f64 = c[m].parse().unwrap();
+        if farthest > 200.0 + 0.01 {
+            overhanging += 1;
+            assert_eq!(
+                c[f],
+                "false",
+                "({x}, {y}) overhangs by {}",
+                farthest - 200.0
+            );
+            assert!(c[l].contains("over the table edge"), "{c:?}");
+        } else {
+            assert!(margin <= 200.0 - farthest + 0.002, "{c:?}: {farthest}");
+        }
+    }
+    assert!(overhanging >= 4, "{overhanging}");
+    let at = |x: &str, y: &str| rows.iter().find(|c| c[0] == x && c[1] == y).unwrap();
+    assert_eq!(at("0", "-100")[f], "true");
+    assert!((at("0", "-100")[m].parse::<f64>().unwrap() - (200.0 - 100.0 - rho)).abs() < 0.002);
+    assert_eq!(at("-50", "-100")[f], "false");
+    // A linear colour scale in mm: the legend's five values are equally spaced from the
+    // smallest to the largest margin of the cells that fit.
+    let fit: Vec<f64> = rows
+        .iter()
         .filter(|c| c[f] == "true")
-        .map(|c| (c[m].parse::<f64>().unwrap() * 1e3).round() as i64)
+        .map(|c| c[m].parse().unwrap())
         .collect();
-    margins.sort_unstable();
-    margins.dedup();
-    assert!(margins.len() >= 3, "{margins:?}");
-    // ... each get their own colour: the map has as many cell colours (rects of one cell size).
-    let cell_fills: std::collections::BTreeSet<&str> = svg
-        .split("<rect ")
-        .skip(2)
-        .filter(|r| r.contains("width=\"") && !r.contains("width=\"30\""))
-        .filter_map(|r| r.split("fill=\"").nth(1).and_then(|s| s.split('"').next()))
-        .filter(|fill| *fill != "#C8C8C8")
+    let (lo, hi) = fit
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(*v), b.max(*v))
+        });
+    assert!(hi > lo, "{fit:?}");
+    let legend: Vec<f64> = svg_texts(&svg)
+        .into_iter()
+        .filter(|t| t.0 > 760.0)
+        .filter_map(|t| t.2.parse().ok())
         .collect();
-    assert!(
-        cell_fills.len() >= margins.len(),
-        "{} colours for {} margins",
-        cell_fills.len(),
-        margins.len()
-    );
+    assert_eq!(legend.len(), 5, "{legend:?}");
+    for (k, v) in legend.iter().enumerate() {
+        let want = hi - (hi - lo) * k as f64 / 4.0;
+        assert!((v - want).abs() < 0.006, "{legend:?} against {lo}..{hi}");
+    }
+    assert!(svg.contains("(linear scale)"));
+    assert!(svg.contains("table edge (radius 200 mm)"));
     let texts = svg_texts(&svg);
     assert!(
         texts.iter().any(|t| t.2 == "scenario"),

@@ -338,6 +338,19 @@ const PROBE: &str = "<script>var out=[];document.querySelectorAll('svg.plot').fo
 var r=s.getBoundingClientRect();out.push(s.getAttribute('data-plot')+' '+Math.round(r.width)+' '+Math.round(r.height));});\
 var p=document.createElement('pre');p.id='mtsim-sizes';p.textContent=out.join('\\n');document.body.appendChild(p);</script>";
 
+/// The browser, or None after saying that `test` is skipped; with the env var `CI` set a
+/// missing browser fails the test instead.
+fn chromium_or_skip(test: &str) -> Option<PathBuf> {
+    let browser = chromium();
+    if browser.is_none() {
+        if std::env::var_os("CI").is_some() {
+            panic!("chromium is missing and CI is set: install it (apt-get install chromium)");
+        }
+        eprintln!("SKIPPED {test}: chromium not found on PATH");
+    }
+    browser
+}
+
 /// Renders `page` headless: (DOM after load, screenshot PNG bytes).
 fn render(browser: &Path, page: &Path, work: &Path) -> (String, Vec<u8>) {
     let shot = work.join("shot.png");
@@ -390,11 +403,9 @@ fn render(browser: &Path, page: &Path, work: &Path) -> (String, Vec<u8>) {
 
 #[test]
 fn every_bundled_scenario_report_renders_in_headless_chromium() {
-    let Some(browser) = chromium() else {
-        if std::env::var_os("CI").is_some() {
-            panic!("chromium is missing and CI is set: install it (apt-get install chromium)");
-        }
-        eprintln!("SKIPPED every_bundled_scenario_report_renders_in_headless_chromium: chromium not found on PATH");
+    let Some(browser) =
+        chromium_or_skip("every_bundled_scenario_report_renders_in_headless_chromium")
+    else {
         return;
     };
     let mut scenarios: Vec<PathBuf> = std::fs::read_dir("scenarios")
@@ -744,11 +755,9 @@ fn the_fit_page_renders_in_headless_chromium() {
         "not self-contained"
     );
 
-    let Some(browser) = chromium() else {
-        if std::env::var_os("CI").is_some() {
-            panic!("chromium is missing and CI is set: install it (apt-get install chromium)");
-        }
-        eprintln!("SKIPPED the_fit_page_renders_in_headless_chromium (browser part): chromium not found on PATH");
+    let Some(browser) =
+        chromium_or_skip("the_fit_page_renders_in_headless_chromium (browser part)")
+    else {
         return;
     };
     let page = out_dir.join("probe.html");
@@ -914,11 +923,9 @@ fn backlash_on_x_only_gives_b_and_advice_for_x_only() {
 /// ranked shares, with X's B at the gap and no backlash share for Y.
 #[test]
 fn the_summary_b_and_ranked_shares_render_in_headless_chromium() {
-    let Some(browser) = chromium() else {
-        if std::env::var_os("CI").is_some() {
-            panic!("chromium is missing and CI is set: install it (apt-get install chromium)");
-        }
-        eprintln!("SKIPPED the_summary_b_and_ranked_shares_render_in_headless_chromium: chromium not found on PATH");
+    let Some(browser) =
+        chromium_or_skip("the_summary_b_and_ranked_shares_render_in_headless_chromium")
+    else {
         return;
     };
     let dir = scratch("report-browser", "backlash-x");

@@ -16,7 +16,10 @@ use std::path::{Path, PathBuf};
 
 use super::plot::{self, Chart, Mark as ChartMark, Marker, Series};
 pub use super::run::CHECK_FILE;
-use super::run::{file_names, svg_texts, Diagnosis, Finding, Mark, RunFolder};
+use super::run::{
+    file_names, svg_texts, AxisMarks, AxisReversal, Contribution, Diagnosis, Finding,
+    MachineReversal, Mark, RunFolder,
+};
 use super::trace::Trace;
 use crate::check::CheckReport;
 use crate::error::Result;
@@ -27,6 +30,10 @@ use crate::Axis;
 
 /// The file a report is written to, in the run folder.
 pub const REPORT_FILE: &str = "report.html";
+
+/// A position plot whose range is below this (mm or deg) shows one value: ten times the
+/// trace's rounding.
+const POSITION_RESOLUTION: f64 = 1e-5;
 
 /// Points per curve after decimation (per direction).
 const BUCKETS: usize = 900;
@@ -132,7 +139,16 @@ fn finding_text(finding: &Finding) -> String {
              holds the rotary axes' share.",
             direction.to_uppercase()
         ),
-        Finding::Mark(m) => mark_text(m),
+        Finding::AxisMarks(g) => axis_marks_text(g),
+        Finding::Unattributed {
+            numbers,
+            largest_um,
+        } => format!(
+            "Marks {} (up to {largest_um:.2} µm) sit where no axis reverses within 3°: look for \
+             a block boundary, a feed change, a lost motion taken up before its reversal (inertia \
+             against little friction), or the start and end of the measured revolution.",
+            numbers_text(numbers)
+        ),
         Finding::Hysteresis { h_um: h } => format!(
             "Hysteresis H = {h:.2} µm between the CW and CCW runs: lost motion that changes sign with \
              the direction (backlash, servo lag, friction)."
@@ -154,37 +170,98 @@ fn finding_text(finding: &Finding) -> String {
     }
 }
 
-/// A mark in words: what the axis reversing there points to.
-fn mark_text(m: &Mark) -> String {
-    let e = &m.event;
-    let where_ = format!(
-        "#{} at θ = {:.1}° ({})",
-        m.number,
-        e.theta_deg,
-        direction_name(e.direction)
+/// "#1, #3, #4".
+fn numbers_text(numbers: &[usize]) -> String {
+    let list: Vec<String> = numbers.iter().map(|n| format!("#{n}")).collect();
+    list.join(", ")
+}
+
+/// A rotary axis letter (its lengths are in deg).
+fn is_rotary_letter(axis: &str) -> bool {
+    matches!(axis, "A" | "B" | "C")
+}
+
+/// What the machine file says about `axis`'s lost motion `m`, for a reversal step.
+fn lost_motion_text(axis: &str, m: &MachineReversal) -> String {
+    let (scale, unit, digits) = if is_rotary_letter(axis) {
+        (1.0, "deg", 5)
+    } else {
+        (1e3, "µm", 2)
+    };
+    let v = |x: f64| format!("{:.digits$} {unit}", x * scale);
+    if m.backlash > 0.0 {
+        format!(
+            "the machine file gives {axis} a backlash of {} (B = {} with the elastic part): \
+             backlash compensation on {axis} removes the backlash part.",
+            v(m.backlash),
+            v(m.b)
+        )
+    } else if m.elastic > 0.0 {
+        format!(
+            "{axis}'s drive has no backlash: the step is friction's elastic lost motion, the \
+             drive winding up by the friction at rest (2 Fc/k = {}). Backlash compensation does \
+             not remove it; reversal (friction) compensation or a stiffer drive reduces it.",
+            v(m.elastic)
+        )
+    } else {
+        format!(
+            "the machine file gives {axis} no lost motion (no backlash, no friction wind-up): \
+             the step comes from elsewhere (a transient at the reversal, servo lag)."
+        )
+    }
+}
+
+/// The marks of one axis and kind in words: what the axis reversing there points to.
+fn axis_marks_text(g: &AxisMarks) -> String {
+    let marks = format!(
+        "{} {}",
+        if g.numbers.len() == 1 {
+            "mark"
+        } else {
+            "marks"
+        },
+        numbers_text(&g.numbers)
     );
-    match (e.axis, e.kind) {
-        (Some(axis), EventKind::Spike) => format!(
-            "Reversal spike {where_}, {:+.2} µm: axis {axis} reverses there; a spike at a reversal is \
-             lost motion from friction (stick-slip, the quadrant glitch) and servo lag. \
-             Friction compensation or more velocity feedforward on {axis} reduces it.",
-            e.height_um
+    let which = if g.axis.contains('/') {
+        format!(
+            "{} reversals ({} reverse too close together for the trace to tell them apart)",
+            g.axis,
+            g.axis.replace('/', " and ")
+        )
+    } else {
+        format!("{} reversals", g.axis)
+    };
+    match g.kind {
+        EventKind::Spike => format!(
+            "Reversal spikes at {which}, {marks}, up to {:.2} µm: lost motion from friction \
+             (stick-slip, the quadrant glitch) and servo lag. Friction compensation or more \
+             velocity feedforward on {} reduces them.",
+            g.largest_um,
+            g.axis.replace('/', " or ")
         ),
-        (Some(axis), EventKind::Step) => format!(
-            "Step {where_}, {:+.2} µm: axis {axis} reverses there; a step that stays is backlash or \
-             lost motion of {axis} (drive, guide or nut clearance). Backlash compensation on {axis} \
-             removes it.",
-            e.height_um
-        ),
-        (None, kind) => format!(
-            "Unattributed {} {where_}, {:+.2} µm: no axis reverses within 3°{}. Look for a block \
-             boundary, a feed change or the start and end of the measured revolution.",
-            kind_name(kind),
-            e.height_um,
-            m.nearest.as_ref().map_or(String::new(), |(a, d)| format!(
-                " (nearest: {a} at {d:.1}° away)"
-            ))
-        ),
+        EventKind::Step => {
+            let b = g
+                .b_um
+                .map_or(String::new(), |b| format!("; B from the trace {b:.2} µm"));
+            let cause = if g.machine.is_empty() {
+                format!(
+                    "lost motion of {} (backlash or friction's elastic wind-up: this folder does \
+                     not say which the machine has).",
+                    g.axis
+                )
+            } else {
+                let parts: Vec<String> = g
+                    .machine
+                    .iter()
+                    .map(|(a, m)| lost_motion_text(a, m))
+                    .collect();
+                parts.join(" ")
+            };
+            format!(
+                "Steps at {which}, {marks}, up to {:.2} µm{b}: {cause}",
+                g.largest_um
+            )
+        }
     }
 }
 
@@ -337,32 +414,144 @@ fn marks_table(marks: &[Mark]) -> String {
         return "<p>No spikes or steps above noise.</p>\n".to_string();
     }
     let mut out = String::from(
-        "<table class=\"marks\">\n<tr><th>#</th><th>kind</th><th>run</th><th>θ (deg)</th><th>height (µm)</th>\
-         <th>width (deg)</th><th>axis</th><th>confidence</th><th>attribution</th></tr>\n",
+        "<table class=\"marks\">\n<tr><th>#</th><th>kind</th><th>run</th><th>peak θ (deg)</th>\
+         <th>start θ (deg)</th><th>extent (deg)</th><th>height (µm)</th><th>width (deg)</th><th>axis</th>\
+         <th>candidates</th><th>confidence</th><th>attribution</th></tr>\n",
     );
     for m in marks {
         let e = &m.event;
         let attribution = match (e.axis, m.reversal) {
-            (Some(a), Some((t, d))) => format!("{a} reverses at {t:.2}° ({d:.2}° away)"),
+            (Some(a), Some((t, d))) => format!("{a} reverses at {t:.2}° ({d:.2}° from the start)"),
             (Some(a), None) => format!("axis {a}"),
             (None, _) => "none: no axis reverses within 3°".to_string(),
         };
+        let candidates = if e.ambiguous {
+            format!("{} (cannot be told apart)", e.candidates)
+        } else {
+            e.candidates.to_string()
+        };
         let _ = writeln!(
             out,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.2}</td><td>{:+.2}</td><td>{:.2}</td><td>{}</td>\
+            "<tr data-mark=\"{}\"><td>{}</td><td>{}</td><td>{}</td><td class=\"peak\">{:.2}</td><td>{:.2}</td>\
+             <td>{:.2}</td><td>{:+.2}</td><td>{:.2}</td><td>{}</td><td class=\"candidates\">{}</td>\
              <td>{:.2}</td><td>{}</td></tr>",
+            m.number,
             m.number,
             kind_name(e.kind),
             esc(&direction_name(e.direction).to_uppercase()),
+            e.peak_deg,
             e.theta_deg,
+            e.extent_deg,
             e.height_um,
             e.width_deg,
             esc(&e.axis.map_or("?".to_string(), |a| a.to_string())),
+            esc(&candidates),
             e.confidence,
             esc(&attribution)
         );
     }
     out.push_str("</table>\n");
+    out
+}
+
+/// The summary a ball-bar user reads first: G, F, H, what each mechanism adds to G per
+/// axis (ranked) and each axis's reversal value B.
+fn summary_section(folder: &RunFolder) -> String {
+    let s = &folder.summary;
+    let Some(b) = &s.ballbar else {
+        return "<p>No measured circle: no ball-bar figures.</p>\n".to_string();
+    };
+    let mut out = format!(
+        "<p class=\"summary\">G <b data-summary=\"G\">{:.2}</b> µm · F max <b data-summary=\"F-max\">{:+.2}</b> µm · \
+         F min <b data-summary=\"F-min\">{:+.2}</b> µm · H <b data-summary=\"H\">{}</b></p>\n",
+        b.circular_deviation_um,
+        b.radial_max_um,
+        b.radial_min_um,
+        b.hysteresis_um
+            .map_or("– (one direction)".to_string(), |h| format!("{h:.2} µm")),
+    );
+    out.push_str(&shares_table(&s.g_shares));
+    out.push_str(&reversal_b_table(&s.reversal_b, &s.reversal_values));
+    out
+}
+
+/// The ranked contributions to G.
+fn shares_table(shares: &[Contribution]) -> String {
+    if shares.is_empty() {
+        return "<p>What makes G: not recorded in this folder (made before mtsim wrote it).</p>\n"
+            .to_string();
+    }
+    let mut out = String::from(
+        "<table class=\"shares\">\n<tr><th>rank</th><th>axis</th><th>mechanism</th>\
+         <th>contribution (µm)</th><th>share (%)</th><th>of G (%)</th></tr>\n",
+    );
+    for (i, c) in shares.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "<tr data-share=\"{}:{}\"><td>{}</td><td>{}</td><td>{}</td><td class=\"range\">{:.2}</td>\
+             <td class=\"share\">{:.0}</td><td>{:.0}</td></tr>",
+            esc(&c.axis),
+            esc(&format!("{:?}", c.mechanism).to_lowercase()),
+            i + 1,
+            esc(&c.axis),
+            esc(c.mechanism.name()),
+            c.range_um,
+            100.0 * c.share,
+            100.0 * c.of_g,
+        );
+    }
+    out.push_str(
+        "</table>\n<p class=\"note\">Contribution: the peak-to-peak the mechanism alone makes on \
+         the trace (a step its height, a spike its height, a 2θ term twice its amplitude). Ranges do \
+         not add, so the share is of the sum of the contributions, not of G; the last column is the \
+         contribution over G.</p>\n",
+    );
+    out
+}
+
+/// Each axis's reversal value B from the trace, beside the machine file's.
+fn reversal_b_table(
+    reversal_b: &[AxisReversal],
+    machine: &std::collections::BTreeMap<String, MachineReversal>,
+) -> String {
+    if reversal_b.is_empty() {
+        return String::new();
+    }
+    let mut out = String::from(
+        "<table class=\"reversal-b\">\n<tr><th>axis</th><th>B from the trace (µm)</th>\
+         <th>step at the bar (µm)</th><th>reversals measured</th><th>machine file: backlash + elastic = B</th></tr>\n",
+    );
+    for r in reversal_b {
+        let (scale, unit, digits) = if is_rotary_letter(&r.axis) {
+            (1.0, "deg", 5)
+        } else {
+            (1e3, "µm", 2)
+        };
+        let machine_b = machine.get(&r.axis).map_or("–".to_string(), |m| {
+            format!(
+                "{:.digits$} + {:.digits$} = {:.digits$} {unit}",
+                m.backlash * scale,
+                m.elastic * scale,
+                m.b * scale
+            )
+        });
+        let _ = writeln!(
+            out,
+            "<tr><td>{}</td><td class=\"figure\" data-b=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&r.axis),
+            esc(&r.axis),
+            r.b_um.map_or("– (the bar does not see its reversals)".to_string(), |b| format!("{b:.2}")),
+            r.step_um.map_or("–".to_string(), |s| format!("{s:.2}")),
+            r.reversals,
+            machine_b
+        );
+    }
+    out.push_str(
+        "</table>\n<p class=\"note\">B (ISO 230-2 reversal value) from the trace: the mean step of the \
+         centred trace across the axis's reversals (straight lines fitted 8° to 20° either side, taken \
+         to the reversal), divided by how much the bar sees the axis there; along the axis for a linear \
+         axis, of arc at the bar's length for a rotary one.</p>\n",
+    );
     out
 }
 
@@ -524,6 +713,10 @@ fn axis_charts(folder: &RunFolder, trace: &Trace) -> Result<Vec<(String, String)
             let mut chart = Chart::new(title, "θ (deg)", y_label, 540, 300);
             chart.x_range = Some((0.0, 360.0));
             chart.x_tick = Some(60.0);
+            if q == 0 {
+                // Positions: the trace rounds to 1e-6 mm or deg; a few of those is flat.
+                chart.y_resolution = POSITION_RESOLUTION;
+            }
             for run in &trace.runs {
                 let y: Vec<f64> = match q {
                     0 => run.actual[k].clone(),
@@ -554,7 +747,7 @@ fn axis_charts(folder: &RunFolder, trace: &Trace) -> Result<Vec<(String, String)
 pub const CSS: &str = "body{font-family:sans-serif;color:#1e1e1e;max-width:1180px;margin:1.5em auto;padding:0 1em;line-height:1.4}\
 h1{font-size:1.5em}h2{font-size:1.2em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}\
 table{border-collapse:collapse;margin:.5em 0}th,td{border:1px solid #ddd;padding:.25em .6em;text-align:left;vertical-align:top}\
-table.params th{background:#f5f5f5;width:16em}table.figures td,table.marks td,table.limits td{text-align:right}\
+table.params th{background:#f5f5f5;width:16em}table.figures td,table.marks td,table.limits td,table.shares td,table.reversal-b td{text-align:right}.summary{font-size:1.15em}\
 tr.total{font-weight:bold}figure{margin:.5em 0}svg.plot{width:100%;height:auto;display:block}\
 .axes{display:grid;grid-template-columns:repeat(3,1fr);gap:.5em}.axes figure{margin:0}\
 li.violation{color:#b00}.note{color:#555;font-size:.95em}";
@@ -589,6 +782,8 @@ pub fn render(folder: &RunFolder, diagnosis: &Diagnosis, date: Option<&str>) -> 
          <h1>mtsim report: {0}</h1>\n",
         esc(&name)
     );
+    h.push_str("<h2 id=\"summary\">Summary</h2>\n");
+    h.push_str(&summary_section(folder));
     h.push_str("<h2 id=\"test\">Test parameters (ISO 230-4)</h2>\n");
     h.push_str(&test_table(folder, date));
     h.push_str("<h2 id=\"figures\">Figures (ISO 230-4)</h2>\n");

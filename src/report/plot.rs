@@ -99,6 +99,10 @@ pub struct Chart {
     pub y_range: Option<(f64, f64)>,
     /// Tick every this much on x (None: plotters' choice).
     pub x_tick: Option<f64>,
+    /// A y range at most this wide (or within a few ULP of the values) is flat: the plot
+    /// shows one labelled value instead of ticks that all read the same. Default 1e-9 of
+    /// the unit.
+    pub y_resolution: f64,
     pub series: Vec<Series>,
     pub markers: Vec<Marker>,
     pub marks: Vec<Mark>,
@@ -116,6 +120,7 @@ impl Chart {
             x_range: None,
             y_range: None,
             x_tick: None,
+            y_resolution: 1e-9,
             series: Vec::new(),
             markers: Vec::new(),
             marks: Vec::new(),
@@ -153,10 +158,22 @@ impl Chart {
         if !(y0.is_finite() && y1.is_finite()) {
             (y0, y1) = (-1.0, 1.0);
         }
+        let flat = self
+            .y_range
+            .is_none()
+            .then(|| self.flat_value(y0, y1))
+            .flatten();
         let pad = ((y1 - y0) * 0.08)
             .max(1e-9 * y0.abs().max(y1.abs()))
             .max(1e-12);
-        let (y0, y1) = self.y_range.unwrap_or((y0 - pad, y1 + pad));
+        let (y0, y1) = match (self.y_range, flat) {
+            (Some(range), _) => range,
+            (None, Some(mid)) => {
+                let half = 10.0 * self.y_resolution.max(1e-9 * mid.abs()).max(1e-12);
+                (mid - half, mid + half)
+            }
+            (None, None) => (y0 - pad, y1 + pad),
+        };
 
         let mut svg = String::new();
         {
@@ -206,6 +223,9 @@ impl Chart {
                 .light_line_style(GRID.mix(0.5))
                 .bold_line_style(GRID)
                 .y_label_formatter(&|v| format_tick(*v));
+            if flat.is_some() {
+                mesh.y_labels(0);
+            }
             let x_ticks;
             if let Some(step) = self.x_tick {
                 x_ticks = ((x1 - x0) / step).round() as usize + 1;
@@ -244,6 +264,30 @@ impl Chart {
                         }
                     }
                 }
+            }
+            if let Some(mid) = flat {
+                let (px, py) = chart.backend_coord(&(x0, mid));
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        vec![(x0, mid), (x1, mid)],
+                        GRID.stroke_width(1),
+                    )))
+                    .map_err(draw_error)?;
+                root.draw(&Text::new(
+                    format_flat(mid, self.y_resolution),
+                    (px - 6, py),
+                    text(13.0 / 1.24, &INK, HPos::Right),
+                ))
+                .map_err(draw_error)?;
+                root.draw(&Text::new(
+                    format!(
+                        "flat: the range is below {}",
+                        format_tick(self.y_resolution.max(8.0 * f64::EPSILON * mid.abs()))
+                    ),
+                    (px + 8, py - 12),
+                    text(11.0, &INK, HPos::Left),
+                ))
+                .map_err(draw_error)?;
             }
             // Marker labels at the top edge, pushed apart.
             let plot = chart.plotting_area();
@@ -305,6 +349,31 @@ impl Chart {
             root.present().map_err(draw_error)?;
         }
         Ok(svg)
+    }
+}
+
+impl Chart {
+    /// The value of a flat signal spanning `y0..y1` (its mid-point), or None when the
+    /// range is wider than [`Chart::y_resolution`] and than 8 ULP of the values.
+    fn flat_value(&self, y0: f64, y1: f64) -> Option<f64> {
+        let ulp = 8.0 * f64::EPSILON * y0.abs().max(y1.abs());
+        (y1 - y0 <= self.y_resolution.max(ulp)).then_some(0.5 * (y0 + y1))
+    }
+}
+
+/// The one label of a flat signal: `v` to the decimals `resolution` resolves (at most 9).
+pub fn format_flat(v: f64, resolution: f64) -> String {
+    let digits = (-resolution.log10()).ceil().clamp(0.0, 9.0) as usize;
+    let s = format!("{v:.digits$}");
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        &s
+    };
+    if s == "-0" {
+        "0".to_string()
+    } else {
+        s.to_string()
     }
 }
 
@@ -436,6 +505,13 @@ mod tests {
         let out = decimate_min_max(&points, 100);
         assert!(out.len() <= 4 * 100 + 4, "{}", out.len());
         assert!(out.iter().any(|p| p.1 == 7.0));
+    }
+
+    #[test]
+    fn a_flat_value_is_labelled_to_its_resolution() {
+        assert_eq!(format_flat(99.9990234, 1e-5), "99.99902");
+        assert_eq!(format_flat(-1e-12, 1e-9), "0");
+        assert_eq!(format_flat(100.0, 1e-9), "100");
     }
 
     #[test]

@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use super::test_info::{TestParameters, TEST_FILE};
 use super::trace::{read_trace, Trace};
@@ -41,6 +41,93 @@ pub struct RunSummary {
     pub ballbar: Option<BallbarResult>,
     /// Each axis's reversal angles, deg, by axis letter.
     pub reversals_deg: BTreeMap<String, Vec<f64>>,
+    /// Each axis's lost motion at a reversal as the machine file sets it (mm or deg); empty
+    /// for a folder made before it was written.
+    #[serde(default)]
+    pub reversal_values: BTreeMap<String, MachineReversal>,
+    /// Each axis's reversal value B as the trace shows it; empty for an older folder.
+    #[serde(default)]
+    pub reversal_b: Vec<AxisReversal>,
+    /// Each mechanism's part of G per axis, ranked; empty for an older folder.
+    #[serde(default)]
+    pub g_shares: Vec<Contribution>,
+}
+
+/// An axis's lost motion at a reversal from the machine file, in its unit (mm or deg):
+/// the part of `summary.json`'s `reversal_values` the report reads.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+pub struct MachineReversal {
+    /// The backlash gap (0 when the drive has none or a fully-closed loop bridges it).
+    pub backlash: f64,
+    /// The drive's elastic wind-up by friction, `2 Fc / k`.
+    pub elastic: f64,
+    /// ISO 230-2 B: backlash + elastic.
+    pub b: f64,
+}
+
+/// An axis's reversal value B (ISO 230-2) as the trace shows it: the mean step of the
+/// centred trace across the axis's reversals, projected onto the axis (see
+/// `study::glance`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AxisReversal {
+    pub axis: String,
+    /// Mean of `|step| / s` over the reversals where the bar sees the axis (s >= 0.5), µm:
+    /// along the axis for a linear one, of arc at the bar's length for a rotary one. None
+    /// when the bar sees none of its reversals.
+    pub b_um: Option<f64>,
+    /// Mean `|step|` as the bar reads it (radial), µm.
+    pub step_um: Option<f64>,
+    /// Reversals measured (over all runs).
+    pub reversals: usize,
+}
+
+/// What makes a part of G.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Mechanism {
+    /// The backlash gap's part of the reversal step.
+    Backlash,
+    /// The elastic part of the reversal step (friction winding up the drive, `2 Fc / k`).
+    LostMotion,
+    /// Reversal spikes (friction, stick-slip, the quadrant glitch).
+    FrictionSpikes,
+    /// The 2θ term that flips with the direction: different loop lags.
+    ServoMismatch,
+    /// Squareness and cyclic (pitch) errors.
+    Geometric,
+    /// Scale mismatch between the plane axes.
+    Scale,
+    /// Marks no axis reverses near.
+    Unattributed,
+}
+
+impl Mechanism {
+    /// The mechanism in words.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mechanism::Backlash => "backlash",
+            Mechanism::LostMotion => "lost motion (friction's elastic wind-up)",
+            Mechanism::FrictionSpikes => "friction spikes",
+            Mechanism::ServoMismatch => "servo mismatch",
+            Mechanism::Geometric => "geometric errors",
+            Mechanism::Scale => "scale mismatch",
+            Mechanism::Unattributed => "unattributed marks",
+        }
+    }
+}
+
+/// One mechanism's part of G on one axis (or an axis pair, or the candidates of ambiguous
+/// marks joined by "/").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Contribution {
+    pub axis: String,
+    pub mechanism: Mechanism,
+    /// The peak-to-peak the mechanism alone makes on the trace, µm.
+    pub range_um: f64,
+    /// `range_um` over the sum of all contributions' ranges (0..1; the shares add to 1).
+    pub share: f64,
+    /// `range_um / G` (ranges do not add: these may sum past 1).
+    pub of_g: f64,
 }
 
 /// A run folder read back: what `mtsim simulate -o DIR` wrote.
@@ -164,8 +251,16 @@ pub enum Finding {
         amplitude_um: f64,
         long_axis_deg: f64,
     },
-    /// A mark: the reversal spike or backlash step of an axis, or one of no axis.
-    Mark(Mark),
+    /// The marks of one kind at one axis's reversals (or at reversals of axes the trace
+    /// cannot tell apart: `axis` names them all, joined by "/"), grouped.
+    AxisMarks(AxisMarks),
+    /// The marks no axis reverses near, grouped.
+    Unattributed {
+        /// The marks' numbers.
+        numbers: Vec<usize>,
+        /// The largest |height|, µm.
+        largest_um: f64,
+    },
     /// H is large against G.
     Hysteresis { h_um: f64 },
     /// A run's mean radius is off the bar length by more than 1 µm.
@@ -174,6 +269,24 @@ pub enum Finding {
     BlockSawtooth,
     /// Nothing stands out.
     Nothing,
+}
+
+/// The marks of one kind at the reversals of one axis (or of candidates that cannot be
+/// told apart), with what the machine file says about that axis's lost motion.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AxisMarks {
+    /// The axis, or the candidates joined by "/".
+    pub axis: String,
+    pub kind: crate::measure::ballbar::EventKind,
+    /// The marks' numbers (as on the plot).
+    pub numbers: Vec<usize>,
+    /// The largest |height|, µm.
+    pub largest_um: f64,
+    /// B as the trace shows it, for a single axis, µm.
+    pub b_um: Option<f64>,
+    /// The machine file's lost motion of each axis named (in its unit, mm or deg); empty
+    /// for a folder without it.
+    pub machine: Vec<(String, MachineReversal)>,
 }
 
 /// The diagnosis of a run folder: its marks (for the table and the plot) and findings.

@@ -48,7 +48,7 @@ use crate::error::Result;
 use crate::input::program::{CircleTest, Direction};
 use crate::measure::ballbar::{BallbarResult, EventKind, BIN_DEG};
 use crate::measure::BallbarRun;
-use crate::report::run::{Diagnosis, Finding, Mark, RunFolder};
+use crate::report::run::{AxisMarks, Diagnosis, Finding, Mark, RunFolder};
 use crate::study::reversals::angular_distance_deg;
 
 /// A cyclic error below this amplitude is not reported, um.
@@ -511,6 +511,59 @@ fn run_marks(folder: &RunFolder) -> Vec<Mark> {
         .collect()
 }
 
+/// The marks as findings, one per axis (or set of candidates) and kind, in the order of
+/// their first mark; the unattributed ones last, as one.
+fn grouped_marks(folder: &RunFolder, marks: &[Mark]) -> Vec<Finding> {
+    let summary = &folder.summary;
+    let mut groups: Vec<AxisMarks> = Vec::new();
+    let (mut loose, mut loose_um) = (Vec::new(), 0.0f64);
+    for m in marks {
+        let e = &m.event;
+        let Some(axis) = e.axis else {
+            loose.push(m.number);
+            loose_um = loose_um.max(e.height_um.abs());
+            continue;
+        };
+        let label = if e.ambiguous {
+            e.candidates.to_string()
+        } else {
+            axis.to_string()
+        };
+        match groups
+            .iter_mut()
+            .find(|g| g.axis == label && g.kind == e.kind)
+        {
+            Some(g) => {
+                g.numbers.push(m.number);
+                g.largest_um = g.largest_um.max(e.height_um.abs());
+            }
+            None => groups.push(AxisMarks {
+                machine: label
+                    .split('/')
+                    .filter_map(|a| Some((a.to_string(), *summary.reversal_values.get(a)?)))
+                    .collect(),
+                b_um: summary
+                    .reversal_b
+                    .iter()
+                    .find(|r| r.axis == label)
+                    .and_then(|r| r.b_um),
+                axis: label,
+                kind: e.kind,
+                numbers: vec![m.number],
+                largest_um: e.height_um.abs(),
+            }),
+        }
+    }
+    let mut out: Vec<Finding> = groups.into_iter().map(Finding::AxisMarks).collect();
+    if !loose.is_empty() {
+        out.push(Finding::Unattributed {
+            numbers: loose,
+            largest_um: loose_um,
+        });
+    }
+    out
+}
+
 /// What a run folder says about the machine, for the report: its marks, and the findings
 /// in the order the page lists them (per trace run the dominant spot and the 2θ part, the
 /// marks, H, the mean radius per run, a cone's block sawtooth).
@@ -545,7 +598,7 @@ pub fn diagnose_run(folder: &RunFolder) -> Diagnosis {
             }
         }
     }
-    findings.extend(marks.iter().cloned().map(Finding::Mark));
+    findings.extend(grouped_marks(folder, &marks));
     if let Some(h_um) = ballbar.hysteresis_um {
         if g.is_finite() && h_um > HYSTERESIS_SHARE * g {
             findings.push(Finding::Hysteresis { h_um });

@@ -8,6 +8,7 @@ pub mod diagnose;
 pub mod feed;
 pub mod fit;
 pub mod geometry;
+pub mod glance;
 pub mod lanes;
 pub mod placement;
 pub mod reversals;

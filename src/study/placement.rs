@@ -2,9 +2,11 @@
 //!
 //! Each cell runs the full `check` (travel, velocity, acceleration, collisions) with the cone
 //! centre moved there. Its margin is the smallest of the linear axes' travel margins and the
-//! smallest clearance between bodies that must not touch, mm: positive where the test fits
-//! with that much to spare. A cell with any violation (a rotary limit or speed included)
-//! does not fit, whatever its margin.
+//! smallest clearance between bodies that must not touch, and, on a rotary table, the
+//! distance from the cone's base circle to the table top's edge, mm: positive where the test
+//! fits with that much to spare. A cell with any violation (a rotary limit or speed
+//! included), or whose cone base reaches past the table's edge, does not fit, whatever its
+//! margin; its `limiting` says why.
 
 use rayon::prelude::*;
 use serde::{Deserialize, Deserializer, Serialize};
@@ -144,16 +146,71 @@ pub fn placement_cells(
                     limiting = format!("clearance {} / {}", b[0], b[1]);
                 }
             }
+            let mut fits = report.is_clean();
+            if let Some(over) = base_overhang_mm(&s) {
+                let edge = if over > 0.0 {
+                    format!("cone base {over:.1} mm {OVER_THE_EDGE}")
+                } else {
+                    "cone base / table edge".to_string()
+                };
+                // A limit or collision the check found is named first; the edge beside it.
+                if over > 0.0 && !fits {
+                    limiting = format!("{limiting}; {edge}");
+                } else if -over < margin {
+                    limiting = edge;
+                }
+                margin = margin.min(-over);
+                fits &= over <= 0.0;
+            }
             Ok(PlacementCell {
                 x,
                 y,
                 margin_mm: margin,
-                fits: report.is_clean(),
+                fits,
                 limiting,
                 violations: report.violations.len(),
             })
         })
         .collect::<Result<Vec<_>>>()
+}
+
+/// The words of a cell whose cone base leaves the table (in its `limiting`).
+pub const OVER_THE_EDGE: &str = "over the table edge";
+/// The crosses of cells that do not fit: a limit or collision, the cone base off the table.
+const LIMIT_CROSS: plotters::style::RGBColor = plotters::style::RGBColor(110, 110, 110);
+const EDGE_CROSS: plotters::style::RGBColor = plotters::style::RGBColor(190, 40, 30);
+
+/// How far the cone's base circle reaches past the edge of the rotary table's top, mm
+/// (negative: inside by that much); None for a table that is not a top face about Z.
+///
+/// The base circle (radius ρ about O, in the plane normal to the cone axis `(−sin β, 0,
+/// cos β)`) projects on the table top as `(O_x + ρ cos β cos φ, O_y + ρ sin φ)`; ρ is the
+/// frustum's base `(L − R) / cos α` (R the cutter radius) for the cone frustum, else the
+/// path cone's `L / cos α`. Its farthest point from the C axis, less the table radius.
+pub fn base_overhang_mm(scenario: &Scenario) -> Option<f64> {
+    use crate::input::scene::{TableAxis, WorkpieceKind};
+    let table = &scenario.machine.scene.table;
+    if table.axis != TableAxis::Z {
+        return None;
+    }
+    let cone = &scenario.workpiece.cone;
+    let (alpha, beta) = (
+        cone.half_apex_deg.to_radians(),
+        cone.inclination_deg.to_radians(),
+    );
+    let cutter = match scenario.workpiece.kind {
+        WorkpieceKind::ConeFrustum => 0.5 * scenario.tool.cutter_diameter_mm,
+        _ => 0.0,
+    };
+    let rho = (cone.ballbar_length_mm - cutter) / alpha.cos();
+    let [ox, oy, _] = cone.center_mm;
+    let farthest = (0..1440)
+        .map(|k| {
+            let phi = (k as f64 * 0.25).to_radians();
+            (ox + rho * beta.cos() * phi.cos()).hypot(oy + rho * phi.sin())
+        })
+        .fold(0.0, f64::max);
+    Some(farthest - table.radius_mm)
 }
 
 impl PlacementMap {
@@ -233,8 +290,8 @@ impl PlacementMap {
         Some((r(&|c| c.x), r(&|c| c.y)))
     }
 
-    /// SVG heat map: one cell per grid point, coloured by the rank of its margin among the
-    /// fit cells, with the scenario's position ringed and the table edge drawn; cells that do not fit are
+    /// SVG heat map: one cell per grid point, coloured linearly by its margin (mm) between
+    /// the smallest and largest margin of the fit cells, with the scenario's position ringed and the table edge drawn; cells that do not fit are
     /// hatched grey with a cross.
     pub fn to_svg(&self, title: &str) -> Result<String> {
         use plotters::prelude::*;
@@ -257,31 +314,28 @@ impl PlacementMap {
         let (hx, hy) = (half(&xs), half(&ys));
         let (x0, x1) = (xs[0] - hx, xs[xs.len() - 1] + hx);
         let (y0, y1) = (ys[0] - hy, ys[ys.len() - 1] + hy);
-        // The colour scale: by rank among the distinct margins of the cells that fit
-        // (to 1 µm), so that any two fit cells with different margins differ in colour,
-        // however close the margins (a linear scale let one large clearance wash out the rest).
-        let mut levels: Vec<f64> = self
+        // The colour scale: linear in the margin, mm, from the smallest to the largest
+        // margin of the cells that fit.
+        let (lo, hi) = self
             .cells
             .iter()
             .filter(|c| c.fits && c.margin_mm.is_finite())
-            .map(|c| (c.margin_mm * 1e3).round() / 1e3)
-            .collect();
-        levels.sort_by(f64::total_cmp);
-        levels.dedup();
-        let rank = |m: f64| -> f64 {
-            let m = (m * 1e3).round() / 1e3;
-            let i = levels.partition_point(|&l| l < m);
-            if levels.len() > 1 {
-                i as f64 / (levels.len() - 1) as f64
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
+                (a.min(c.margin_mm), b.max(c.margin_mm))
+            });
+        let span = if hi > lo { hi - lo } else { 1.0 };
+        let scale = |m: f64| -> f64 {
+            if lo.is_finite() {
+                ((m - lo) / span).clamp(0.0, 1.0)
             } else {
                 1.0
             }
         };
         let level_at = |t: f64| -> f64 {
-            if levels.is_empty() {
-                0.0
+            if lo.is_finite() {
+                lo + t * (hi - lo)
             } else {
-                levels[((t * (levels.len() - 1) as f64).round() as usize).min(levels.len() - 1)]
+                0.0
             }
         };
         let mut svg = String::new();
@@ -304,7 +358,7 @@ impl PlacementMap {
                 .draw()
                 .map_err(|e| draw_err(&e))?;
             let colour_at = |t: f64| HSLColor(t.clamp(0.0, 1.0) * 0.66, 0.75, 0.5);
-            let colour = |m: f64| colour_at(rank(m));
+            let colour = |m: f64| colour_at(scale(m));
             chart
                 .draw_series(self.cells.iter().map(|c| {
                     let style = if c.fits {
@@ -321,9 +375,14 @@ impl PlacementMap {
                         (c.x - hx * 0.6, c.y - hy * 0.6),
                         (c.x + hx * 0.6, c.y + hy * 0.6),
                     );
+                    let colour = if c.limiting.contains(OVER_THE_EDGE) {
+                        EDGE_CROSS
+                    } else {
+                        LIMIT_CROSS
+                    };
                     [
-                        PathElement::new(vec![a, b], RGBColor(120, 120, 120)),
-                        PathElement::new(vec![(a.0, b.1), (b.0, a.1)], RGBColor(120, 120, 120)),
+                        PathElement::new(vec![a, b], colour.stroke_width(2)),
+                        PathElement::new(vec![(a.0, b.1), (b.0, a.1)], colour.stroke_width(2)),
                     ]
                 }))
                 .map_err(|e| draw_err(&e))?;
@@ -342,8 +401,20 @@ impl PlacementMap {
                             .collect::<Vec<_>>(),
                         BLACK.stroke_width(2),
                     )))
-                    .map_err(|e| draw_err(&e))?
-                    .label("table edge");
+                    .map_err(|e| draw_err(&e))?;
+                // Its label at the top of the circle, or where it enters the map.
+                let (lx, ly) = if r <= y1 && r >= y0 && 0.0 >= x0 && 0.0 <= x1 {
+                    (0.0, r)
+                } else {
+                    (x0 + 0.02 * (x1 - x0), y1 - 0.04 * (y1 - y0))
+                };
+                chart
+                    .draw_series(std::iter::once(Text::new(
+                        format!("table edge (radius {r} mm)"),
+                        (lx, ly),
+                        ("sans-serif", 13).into_font().color(&BLACK),
+                    )))
+                    .map_err(|e| draw_err(&e))?;
             }
             let [sx, sy] = self.scenario_at;
             if sx >= x0 && sx <= x1 && sy >= y0 && sy <= y1 {
@@ -373,9 +444,9 @@ impl PlacementMap {
             let (_, h) = lg.dim_in_pixel();
             for k in 0..100 {
                 let t = 1.0 - k as f64 / 100.0;
-                let y = (k as f64 / 100.0 * (h as f64 - 80.0)) as i32 + 30;
+                let y = (k as f64 / 100.0 * (h as f64 - 130.0)) as i32 + 30;
                 lg.draw(&Rectangle::new(
-                    [(0, y), (30, y + (h as i32 - 80) / 100 + 1)],
+                    [(0, y), (30, y + (h as i32 - 130) / 100 + 1)],
                     colour_at(t).filled(),
                 ))
                 .map_err(|e| draw_err(&e))?;
@@ -383,31 +454,41 @@ impl PlacementMap {
             lg.draw(&Text::new("margin (mm)", (0, 5), ("sans-serif", 14)))
                 .map_err(|e| draw_err(&e))?;
             for t in [1.0, 0.75, 0.5, 0.25, 0.0] {
-                let y = ((1.0 - t) * (h as f64 - 80.0)) as i32 + 30;
+                let y = ((1.0 - t) * (h as f64 - 130.0)) as i32 + 30;
                 lg.draw(&Text::new(
-                    format!("{:.3}", level_at(t)),
+                    format!("{:.2}", level_at(t)),
                     (35, y - 5),
                     ("sans-serif", 12),
                 ))
                 .map_err(|e| draw_err(&e))?;
             }
             lg.draw(&Text::new(
-                "(rank scale)",
-                (0, h as i32 - 48),
+                "(linear scale)",
+                (0, h as i32 - 92),
                 ("sans-serif", 11),
             ))
             .map_err(|e| draw_err(&e))?;
             lg.draw(&Rectangle::new(
-                [(0, h as i32 - 35), (30, h as i32 - 15)],
+                [(0, h as i32 - 76), (30, h as i32 - 58)],
                 RGBColor(200, 200, 200).filled(),
             ))
             .map_err(|e| draw_err(&e))?;
-            lg.draw(&Text::new(
-                "does not fit",
-                (0, h as i32 - 10),
-                ("sans-serif", 12),
-            ))
-            .map_err(|e| draw_err(&e))?;
+            for (k, (line, colour)) in [
+                ("does not fit:", BLACK),
+                ("× a limit or collision", LIMIT_CROSS),
+                ("× cone base over", EDGE_CROSS),
+                ("   the table edge", EDGE_CROSS),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                lg.draw(&Text::new(
+                    line,
+                    (0, h as i32 - 44 + 13 * k as i32),
+                    ("sans-serif", 11).into_font().color(&colour),
+                ))
+                .map_err(|e| draw_err(&e))?;
+            }
             root.present().map_err(|e| draw_err(&e))?;
         }
         Ok(svg)

@@ -30,6 +30,7 @@ use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
 use crate::report::create_dir;
 use crate::report::trace::TraceSink;
+use crate::study::glance;
 use crate::study::reversals::{analyse_scenario, MoveAnalysis};
 use crate::Axis;
 
@@ -57,6 +58,14 @@ pub struct SimulationSummary {
     pub reversal_values: std::collections::BTreeMap<String, crate::drive::ReversalValue>,
     /// Renishaw-style diagnostics from the trace; null without a measured circle.
     pub diagnostics: Option<crate::study::diagnose::Diagnostics>,
+    /// Each axis's reversal value B as the trace shows it (`study::glance`); left out
+    /// without a measured circle.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub reversal_b: Vec<crate::report::run::AxisReversal>,
+    /// What each mechanism adds to G, per axis, largest first (`study::glance`); left out
+    /// without a measured circle.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub g_shares: Vec<crate::report::run::Contribution>,
     /// What the user should know about the figures (a trimmed transient, one spot that
     /// dominates G, a feed held below the programmed one); left out when there is none.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
@@ -412,6 +421,16 @@ pub fn simulate(
         .as_ref()
         .map(|b| crate::study::diagnose::diagnose(b, runs, circle))
         .transpose()?;
+    let machine_reversals = reversal_values(&scenario.machine)?;
+    let (reversal_b, g_shares) = match (&ballbar, &diagnostics) {
+        (Some(b), Some(d)) => {
+            let rb = glance::reversal_b(runs, &study.sites, scenario.machine.axes())?;
+            let circle = circle.zip(d.circle.as_ref());
+            let shares = glance::g_shares(b, &rb, &machine_reversals, circle);
+            (rb, shares)
+        }
+        _ => (Vec::new(), Vec::new()),
+    };
     trace.finish(runs)?;
     // The other format's trace of an earlier run would be read for this one's.
     let other = match format {
@@ -465,8 +484,10 @@ pub fn simulate(
             .collect(),
         reversal_sites: study.sites.clone(),
         directions: study.directions.clone(),
-        reversal_values: reversal_values(&scenario.machine)?,
+        reversal_values: machine_reversals,
         diagnostics,
+        reversal_b,
+        g_shares,
         warnings,
         feed_reductions: study.feed_reductions.clone(),
         lead_in: scenario.simulate.lead_in,

@@ -338,6 +338,19 @@ const PROBE: &str = "<script>var out=[];document.querySelectorAll('svg.plot').fo
 var r=s.getBoundingClientRect();out.push(s.getAttribute('data-plot')+' '+Math.round(r.width)+' '+Math.round(r.height));});\
 var p=document.createElement('pre');p.id='mtsim-sizes';p.textContent=out.join('\\n');document.body.appendChild(p);</script>";
 
+/// The browser, or None after saying that `test` is skipped; with the env var `CI` set a
+/// missing browser fails the test instead.
+fn chromium_or_skip(test: &str) -> Option<PathBuf> {
+    let browser = chromium();
+    if browser.is_none() {
+        if std::env::var_os("CI").is_some() {
+            panic!("chromium is missing and CI is set: install it (apt-get install chromium)");
+        }
+        eprintln!("SKIPPED {test}: chromium not found on PATH");
+    }
+    browser
+}
+
 /// Renders `page` headless: (DOM after load, screenshot PNG bytes).
 fn render(browser: &Path, page: &Path, work: &Path) -> (String, Vec<u8>) {
     let shot = work.join("shot.png");
@@ -390,11 +403,9 @@ fn render(browser: &Path, page: &Path, work: &Path) -> (String, Vec<u8>) {
 
 #[test]
 fn every_bundled_scenario_report_renders_in_headless_chromium() {
-    let Some(browser) = chromium() else {
-        if std::env::var_os("CI").is_some() {
-            panic!("chromium is missing and CI is set: install it (apt-get install chromium)");
-        }
-        eprintln!("SKIPPED every_bundled_scenario_report_renders_in_headless_chromium: chromium not found on PATH");
+    let Some(browser) =
+        chromium_or_skip("every_bundled_scenario_report_renders_in_headless_chromium")
+    else {
         return;
     };
     let mut scenarios: Vec<PathBuf> = std::fs::read_dir("scenarios")
@@ -453,6 +464,36 @@ fn every_bundled_scenario_report_renders_in_headless_chromium() {
                 "{name}: {plot} is {dims:?} px"
             );
         }
+        // The summary first: G, B of each axis and the ranked shares, as summary.json has them.
+        let g = summary["ballbar"]["circular_deviation_um"]
+            .as_f64()
+            .unwrap();
+        assert!(
+            dom.find("id=\"summary\"") < dom.find("id=\"test\""),
+            "{name}"
+        );
+        assert_eq!(
+            figure_text(&dom, "G").map(str::trim),
+            text_after(&dom, "data-summary=\"G\""),
+            "{name}: {g}"
+        );
+        for r in summary["reversal_b"].as_array().unwrap() {
+            let axis = r["axis"].as_str().unwrap();
+            let shown = text_after(&dom, &format!("data-b=\"{axis}\""))
+                .unwrap_or_else(|| panic!("{name}: no B of {axis}"));
+            match r["b_um"].as_f64() {
+                Some(b) => assert_eq!(shown, format!("{b:.2}"), "{name}: B of {axis}"),
+                None => assert!(shown.starts_with('–'), "{name}: B of {axis}: {shown}"),
+            }
+        }
+        let rows = share_rows(&dom);
+        let shares = summary["g_shares"].as_array().unwrap();
+        assert_eq!(rows.len(), shares.len(), "{name}: {rows:?}");
+        assert!(!rows.is_empty(), "{name}: no shares");
+        assert!(
+            rows.windows(2).all(|w| w[0].1 >= w[1].1),
+            "{name}: ranked: {rows:?}"
+        );
         // Every figure as text, as the summary states it.
         for (figure, value) in figures(&summary) {
             assert_eq!(
@@ -552,7 +593,7 @@ fn the_sweep_plot_names_its_axis_in_words_and_keeps_the_legend_off_the_points() 
 }
 
 #[test]
-fn the_placement_map_tells_fit_cells_apart_and_marks_the_scenario_and_the_table() {
+fn the_placement_map_scales_margins_linearly_and_refuses_a_cone_base_off_the_table() {
     let dir = scratch("report", "placement");
     let out = mtsim(&[
         "sweep",
@@ -572,36 +613,76 @@ fn the_placement_map_tells_fit_cells_apart_and_marks_the_scenario_and_the_table(
     assert!(out.status.code() == Some(0) || out.status.code() == Some(1));
     let svg = std::fs::read_to_string(dir.join("placement.svg")).unwrap();
     let csv = std::fs::read_to_string(dir.join("placement.csv")).unwrap();
-    // Distinct margins (to 1 µm) of the cells that fit, from the CSV ...
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     let (m, f) = (
         header.iter().position(|h| h.starts_with("margin")).unwrap(),
         header.iter().position(|h| *h == "fits").unwrap(),
     );
-    let mut margins: Vec<i64> = csv
+    let rows: Vec<Vec<&str>> = csv
         .lines()
         .skip(1)
-        .map(|l| l.split(',').collect::<Vec<_>>())
+        .map(|l| l.split(',').collect())
+        .collect();
+    let l = header.iter().position(|h| *h == "limiting").unwrap();
+    // The cone base (the frustum's, radius (L − R)/cos α with L 100 mm, α 15°, the cutter
+    // radius R 10 mm, tilted by β 10°) must stay on the table top (radius 200 mm): a cell
+    // whose base reaches past the edge does not fit, and says so; the margin of a cell that
+    // fits is at most its distance to the edge.
+    let rho = (100.0 - 10.0) / 15f64.to_radians().cos();
+    let beta = 10f64.to_radians();
+    let mut overhanging = 0;
+    for c in &rows {
+        let (x, y): (f64, f64) = (c[0].parse().unwrap(), c[1].parse().unwrap());
+        let farthest = (0..3600)
+            .map(|k| {
+                let phi = (k as f64 * 0.1).to_radians();
+                (x + rho * beta.cos() * phi.cos()).hypot(y + rho * phi.sin())
+            })
+            .fold(0.0, f64::max);
+        let margin: f64 = c[m].parse().unwrap();
+        if farthest > 200.0 + 0.01 {
+            overhanging += 1;
+            assert_eq!(
+                c[f],
+                "false",
+                "({x}, {y}) overhangs by {}",
+                farthest - 200.0
+            );
+            assert!(c[l].contains("over the table edge"), "{c:?}");
+        } else {
+            assert!(margin <= 200.0 - farthest + 0.002, "{c:?}: {farthest}");
+        }
+    }
+    assert!(overhanging >= 4, "{overhanging}");
+    let at = |x: &str, y: &str| rows.iter().find(|c| c[0] == x && c[1] == y).unwrap();
+    assert_eq!(at("0", "-100")[f], "true");
+    assert!((at("0", "-100")[m].parse::<f64>().unwrap() - (200.0 - 100.0 - rho)).abs() < 0.002);
+    assert_eq!(at("-50", "-100")[f], "false");
+    // A linear colour scale in mm: the legend's five values are equally spaced from the
+    // smallest to the largest margin of the cells that fit.
+    let fit: Vec<f64> = rows
+        .iter()
         .filter(|c| c[f] == "true")
-        .map(|c| (c[m].parse::<f64>().unwrap() * 1e3).round() as i64)
+        .map(|c| c[m].parse().unwrap())
         .collect();
-    margins.sort_unstable();
-    margins.dedup();
-    assert!(margins.len() >= 3, "{margins:?}");
-    // ... each get their own colour: the map has as many cell colours (rects of one cell size).
-    let cell_fills: std::collections::BTreeSet<&str> = svg
-        .split("<rect ")
-        .skip(2)
-        .filter(|r| r.contains("width=\"") && !r.contains("width=\"30\""))
-        .filter_map(|r| r.split("fill=\"").nth(1).and_then(|s| s.split('"').next()))
-        .filter(|fill| *fill != "#C8C8C8")
+    let (lo, hi) = fit
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(*v), b.max(*v))
+        });
+    assert!(hi > lo, "{fit:?}");
+    let legend: Vec<f64> = svg_texts(&svg)
+        .into_iter()
+        .filter(|t| t.0 > 760.0)
+        .filter_map(|t| t.2.parse().ok())
         .collect();
-    assert!(
-        cell_fills.len() >= margins.len(),
-        "{} colours for {} margins",
-        cell_fills.len(),
-        margins.len()
-    );
+    assert_eq!(legend.len(), 5, "{legend:?}");
+    for (k, v) in legend.iter().enumerate() {
+        let want = hi - (hi - lo) * k as f64 / 4.0;
+        assert!((v - want).abs() < 0.006, "{legend:?} against {lo}..{hi}");
+    }
+    assert!(svg.contains("(linear scale)"));
+    assert!(svg.contains("table edge (radius 200 mm)"));
     let texts = svg_texts(&svg);
     assert!(
         texts.iter().any(|t| t.2 == "scenario"),
@@ -674,11 +755,9 @@ fn the_fit_page_renders_in_headless_chromium() {
         "not self-contained"
     );
 
-    let Some(browser) = chromium() else {
-        if std::env::var_os("CI").is_some() {
-            panic!("chromium is missing and CI is set: install it (apt-get install chromium)");
-        }
-        eprintln!("SKIPPED the_fit_page_renders_in_headless_chromium (browser part): chromium not found on PATH");
+    let Some(browser) =
+        chromium_or_skip("the_fit_page_renders_in_headless_chromium (browser part)")
+    else {
         return;
     };
     let page = out_dir.join("probe.html");
@@ -705,4 +784,171 @@ fn the_fit_page_renders_in_headless_chromium() {
         .collect();
     assert!(dims[0] > 500.0 && dims[1] > 300.0, "fit plot {dims:?} px");
     assert!(dom.contains("What these tests cannot separate"));
+}
+
+// ---- the summary a metrologist reads first ------------------------------------------
+
+/// The three-axis machine with a 10 µm backlash on X only and no Coulomb friction (so no
+/// axis has an elastic lost motion): the circle scenario on it, run into `dir/run`.
+fn backlash_on_x_only(dir: &Path) -> serde_json::Value {
+    let machine = std::fs::read_to_string(common::machine("vmc-3axis"))
+        .unwrap()
+        .replace("coulomb_n = 150.0", "coulomb_n = 0.0")
+        .replacen(
+            "[axes.X.friction]",
+            "[axes.X.drive]\nbacklash_mm = 0.010\n\n[axes.X.friction]",
+            1,
+        );
+    std::fs::write(dir.join("machine.toml"), machine).unwrap();
+    let scenario = std::fs::read_to_string("scenarios/circle-iso230-4.toml")
+        .unwrap()
+        .replace("../machines/vmc-3axis.toml", "machine.toml");
+    std::fs::write(dir.join("scenario.toml"), scenario).unwrap();
+    simulate_with_report(
+        dir.join("scenario.toml").to_str().unwrap(),
+        &dir.join("run"),
+    )
+}
+
+/// The text of the first element after `key` (an attribute such as `data-b="X"`).
+fn text_after<'a>(html: &'a str, key: &str) -> Option<&'a str> {
+    let i = html.find(key)?;
+    let start = html[i..].find('>')? + i + 1;
+    let end = html[start..].find('<')? + start;
+    Some(html[start..end].trim())
+}
+
+/// Every `data-share` row of the page: (axis:mechanism, contribution µm), in page order.
+fn share_rows(html: &str) -> Vec<(String, f64)> {
+    html.split("<tr data-share=\"")
+        .skip(1)
+        .map(|row| {
+            let key = row[..row.find('"').unwrap()].to_string();
+            let range = text_after(row, "class=\"range\"").unwrap().parse().unwrap();
+            (key, range)
+        })
+        .collect()
+}
+
+/// The numbers among the `<text>` elements of the plot `name` in `html`.
+fn plot_numbers(html: &str, name: &str) -> Vec<String> {
+    let i = html
+        .find(&format!("data-plot=\"{name}\""))
+        .unwrap_or_else(|| panic!("no plot {name}"));
+    let svg = &html[i..i + html[i..].find("</svg>").unwrap()];
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let s = &t[t.find('>')? + 1..];
+            let s = s[..s.find('<')?].trim();
+            s.parse::<f64>().ok().map(|_| s.to_string())
+        })
+        .collect()
+}
+
+/// Backlash on X only: B of X is the gap (the closed-form step of a semi-closed loop at
+/// its reversal, where the bar lies along X), B of Y is 0; only X gets backlash advice
+/// and a backlash share; the marks are listed by their peak; the flat Z position shows one
+/// value.
+#[test]
+fn backlash_on_x_only_gives_b_and_advice_for_x_only() {
+    let dir = scratch("report", "backlash-x");
+    let summary = backlash_on_x_only(&dir);
+    let b = |axis: &str| {
+        summary["reversal_b"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["axis"] == axis)
+            .unwrap()["b_um"]
+            .as_f64()
+    };
+    let (bx, by) = (b("X").unwrap(), b("Y").unwrap());
+    assert!((bx - 10.0).abs() < 0.5, "B of X {bx} µm, gap 10 µm");
+    assert!(by.abs() < 0.2, "B of Y {by} µm, no lost motion");
+    assert_eq!(b("Z"), None, "the bar does not see Z on an XY circle");
+    let shares = summary["g_shares"].as_array().unwrap();
+    let share = |axis: &str, mechanism: &str| {
+        shares
+            .iter()
+            .find(|c| c["axis"] == axis && c["mechanism"] == mechanism)
+            .map(|c| c["range_um"].as_f64().unwrap())
+    };
+    assert!((share("X", "backlash").unwrap() - 10.0).abs() < 0.5);
+    assert_eq!(share("Y", "backlash"), None, "{shares:?}");
+    assert_eq!(share("Y", "lost_motion"), None, "{shares:?}");
+    // The 2θ term the steps make is not servo mismatch (equal loops): what is left of it
+    // is small against the step.
+    assert!(
+        share("X/Y", "servo_mismatch").unwrap_or(0.0) < 1.0,
+        "{shares:?}"
+    );
+    let sum: f64 = shares.iter().map(|c| c["share"].as_f64().unwrap()).sum();
+    assert!((sum - 1.0).abs() < 1e-9, "{sum}");
+
+    let html = std::fs::read_to_string(dir.join("run/report.html")).unwrap();
+    let diagnoses = &html[html.find("<ul class=\"diagnoses\">").unwrap()..];
+    let diagnoses = &diagnoses[..diagnoses.find("</ul>").unwrap()];
+    let advice: Vec<&str> = diagnoses
+        .lines()
+        .filter(|l| l.contains("backlash compensation on"))
+        .collect();
+    assert_eq!(advice.len(), 1, "{diagnoses}");
+    assert!(advice[0].contains("Steps at X reversals"), "{}", advice[0]);
+    assert!(!diagnoses.contains("compensation on Y"), "{diagnoses}");
+    // One line per axis and mechanism: the four X steps are one line.
+    assert_eq!(diagnoses.matches("Steps at X reversals").count(), 1);
+
+    // Marks by their peak angle, as summary.json holds it.
+    for (i, e) in summary["ballbar"]["spikes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .enumerate()
+    {
+        let row = format!("<tr data-mark=\"{}\">", i + 1);
+        let row = &html[html.find(&row).unwrap()..];
+        let peak: f64 = text_after(row, "class=\"peak\"").unwrap().parse().unwrap();
+        assert!((peak - e["peak_deg"].as_f64().unwrap()).abs() < 0.006);
+    }
+    // The Z position stays within 10 nm: one labelled value besides the θ ticks.
+    let x_ticks = ["0", "100", "200", "300"];
+    let z = plot_numbers(&html, "Z-position");
+    assert_eq!(z.len() - x_ticks.len(), 1, "{z:?}");
+    // X's position is not flat: its ticks are many.
+    assert!(plot_numbers(&html, "X-position").len() > x_ticks.len() + 3);
+}
+
+/// The same page in headless Chromium: the DOM holds the summary, B of each axis and the
+/// ranked shares, with X's B at the gap and no backlash share for Y.
+#[test]
+fn the_summary_b_and_ranked_shares_render_in_headless_chromium() {
+    let Some(browser) =
+        chromium_or_skip("the_summary_b_and_ranked_shares_render_in_headless_chromium")
+    else {
+        return;
+    };
+    let dir = scratch("report-browser", "backlash-x");
+    let summary = backlash_on_x_only(&dir);
+    let (dom, _) = render(&browser, &dir.join("run/report.html"), &dir);
+    let g = summary["ballbar"]["circular_deviation_um"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(
+        text_after(&dom, "data-summary=\"G\""),
+        Some(format!("{g:.2}").as_str())
+    );
+    let bx: f64 = text_after(&dom, "data-b=\"X\"").unwrap().parse().unwrap();
+    let by: f64 = text_after(&dom, "data-b=\"Y\"").unwrap().parse().unwrap();
+    assert!((bx - 10.0).abs() < 0.5, "B of X {bx}");
+    assert!(by.abs() < 0.2, "B of Y {by}");
+    assert!(text_after(&dom, "data-b=\"Z\"").unwrap().starts_with('–'));
+    let rows = share_rows(&dom);
+    assert_eq!(rows[0].0, "X:backlash", "{rows:?}");
+    assert!((rows[0].1 - 10.0).abs() < 0.5);
+    assert!(
+        rows.windows(2).all(|w| w[0].1 >= w[1].1),
+        "ranked: {rows:?}"
+    );
+    assert!(!rows.iter().any(|r| r.0 == "Y:backlash"), "{rows:?}");
 }

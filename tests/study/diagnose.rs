@@ -294,7 +294,20 @@ fn a_run_folder_is_diagnosed_from_its_typed_summary() {
     assert!((distance - 1.5).abs() < 1e-12);
     // No trace: no spot and no 2θ finding; the two marks, H (4 > 0.3 G), r0 (|−2.5| > 1).
     assert_eq!(d.findings.len(), 4, "{:?}", d.findings);
-    assert!(matches!(d.findings[0], Finding::Mark(_)));
+    // The marks grouped: X's step (the machine's lost motion unknown here), then the mark
+    // of no axis.
+    assert!(
+        matches!(&d.findings[0], Finding::AxisMarks(g) if g.axis == "X" && g.numbers == [2] && g.machine.is_empty()),
+        "{:?}",
+        d.findings
+    );
+    assert_eq!(
+        d.findings[1],
+        Finding::Unattributed {
+            numbers: vec![1],
+            largest_um: 2.0
+        }
+    );
     assert_eq!(d.findings[2], Finding::Hysteresis { h_um: 4.0 });
     assert_eq!(
         d.findings[3],

@@ -1,0 +1,265 @@
+//! The summary a ball-bar user reads first: each axis's reversal value B as the trace shows
+//! it, and what each mechanism adds to G, per axis, ranked.
+//!
+//! # B per axis (ISO 230-2 reversal value, as the bar sees it)
+//!
+//! At each reversal θr of axis a where the bar sees a (normalised sensitivity `s >= 0.5`,
+//! see `measure::attribution`), the centred trace is fitted by a straight line on each side,
+//! over `[θr − 20°, θr − 8°]` before and `[θr + 8°, θr + 20°]` after (in the direction of
+//! travel), and both lines are taken to θr: the step is `after(θr) − before(θr)`. The gap
+//! skips the take-up of the lost motion (with friction off, inertia can take up a backlash
+//! gap several degrees before the reversal); the lines cancel a smooth shape (lag, scale,
+//! the other axis's lost motion, which is linear in θ there). Then
+//!
+//! ```text
+//! B_a = mean over runs and reversals of |step| / s
+//! ```
+//!
+//! µm along a linear axis (s is the cosine between bar and axis), µm of arc at the bar's
+//! length for a rotary one. A reversal of another axis inside the windows adds its step too.
+//!
+//! # Shares of G
+//!
+//! Each mechanism's contribution is the peak-to-peak it makes on the trace alone, from its
+//! own closed form: a step of height h makes h; a spike of height h makes |h|; servo
+//! mismatch `±(v/2)(T_u − T_v) sin 2θ` makes `v |T_u − T_v|` (less the part of the 2θ term
+//! that the steps explain: a lost motion δ_u shapes the trace `(δ_u/2) cos θ sgn(sin θ)`,
+//! whose sin 2θ coefficient `4 δ_u / 3π` flips with the direction as lag does); squareness `(rα/2) sin 2θ`
+//! makes `r |α|`; a scale mismatch `(r (ε_u − ε_v)/2) cos 2θ` makes `r |ε_u − ε_v|`; a
+//! cyclic error of amplitude A makes 2A. Ranges do not add (`range(f + g) <= range f +
+//! range g`), so the share is normalised by the sum of the contributions, not by G; the
+//! contribution over G is given beside it.
+
+use std::collections::BTreeMap;
+
+use crate::drive::ReversalValue;
+use crate::input::program::{CircleTest, Direction};
+use crate::measure::attribution::ReversalSite;
+use crate::measure::ballbar::{BallbarResult, EventKind, BIN_DEG};
+use crate::measure::BallbarRun;
+use crate::report::run::{AxisReversal, Contribution, Mechanism};
+use crate::study::diagnose::CircleDiagnostics;
+
+/// The bar must see an axis at least this much (normalised sensitivity) for its step to
+/// count towards B.
+pub const B_SENSITIVITY_MIN: f64 = 0.5;
+/// The fit windows on each side of a reversal: from, to (deg from θr).
+pub const STEP_WINDOW_DEG: (f64, f64) = (8.0, 20.0);
+/// A contribution below this is left out of the shares, µm.
+pub const SHARE_FLOOR_UM: f64 = 0.05;
+
+/// The line through `(x, y)` taken to x = 0; None with fewer than 2 points.
+fn line_at_zero(points: &[(f64, f64)]) -> Option<f64> {
+    let n = points.len() as f64;
+    if points.len() < 2 {
+        return None;
+    }
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
+    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), p| {
+        (a + (p.0 - mx) * (p.1 - my), b + (p.0 - mx).powi(2))
+    });
+    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    Some(my - slope * mx)
+}
+
+/// The step of the binned trace `dev` (bins of [`BIN_DEG`]) across `theta_r`, in the
+/// direction of travel of `direction`, µm.
+pub fn step_across(dev: &[f64], theta_r: f64, direction: Direction) -> Option<f64> {
+    let (near, far) = STEP_WINDOW_DEG;
+    let side = |sign: f64| {
+        let points: Vec<(f64, f64)> = dev
+            .iter()
+            .enumerate()
+            .filter(|(_, y)| y.is_finite())
+            .filter_map(|(i, y)| {
+                let t = (i as f64 + 0.5) * BIN_DEG;
+                let x = (t - theta_r + 180.0).rem_euclid(360.0) - 180.0;
+                (sign * x >= near && sign * x <= far).then_some((x, *y))
+            })
+            .collect();
+        line_at_zero(&points)
+    };
+    let (after, before) = match direction {
+        Direction::Ccw => (side(1.0)?, side(-1.0)?),
+        Direction::Cw => (side(-1.0)?, side(1.0)?),
+    };
+    Some(after - before)
+}
+
+/// Each axis's B from the centred traces of `runs` at the reversal `sites`.
+pub fn reversal_b(
+    runs: &[BallbarRun],
+    sites: &[ReversalSite],
+    axes: &[crate::Axis],
+) -> crate::error::Result<Vec<AxisReversal>> {
+    let traces: Vec<(Direction, Vec<f64>)> = runs
+        .iter()
+        .map(|r| Ok((r.direction(), r.trace_um(true)?)))
+        .collect::<crate::error::Result<_>>()?;
+    Ok(axes
+        .iter()
+        .map(|&axis| {
+            let (mut b, mut step, mut n) = (0.0, 0.0, 0usize);
+            for site in sites.iter().filter(|s| s.axis == axis) {
+                let s = site.sensitivity.unwrap_or(1.0);
+                if s < B_SENSITIVITY_MIN {
+                    continue;
+                }
+                for (direction, dev) in &traces {
+                    if let Some(h) = step_across(dev, site.theta_deg, *direction) {
+                        b += h.abs() / s;
+                        step += h.abs();
+                        n += 1;
+                    }
+                }
+            }
+            let mean = |v: f64| (n > 0).then(|| v / n as f64);
+            AxisReversal {
+                axis: axis.to_string(),
+                b_um: mean(b),
+                step_um: mean(step),
+                reversals: n,
+            }
+        })
+        .collect())
+}
+
+/// Adds `range_um` to the contribution of (axis, mechanism), keeping the largest.
+fn keep_largest(
+    parts: &mut BTreeMap<(String, Mechanism), f64>,
+    axis: &str,
+    mechanism: Mechanism,
+    range_um: f64,
+) {
+    let entry = parts.entry((axis.to_string(), mechanism)).or_insert(0.0);
+    *entry = entry.max(range_um);
+}
+
+/// The contributions to G of a ball-bar `result`: the reversal steps of `reversal_b`
+/// (split into backlash and elastic lost motion as the machine's `machine` values set them),
+/// the spikes and unattributed marks of the result, and, for a circle, the 2θ terms and
+/// cyclic errors of `circle`; ranked, largest first.
+pub fn g_shares(
+    result: &BallbarResult,
+    reversal_b: &[AxisReversal],
+    machine: &BTreeMap<String, ReversalValue>,
+    circle: Option<(&CircleTest, &CircleDiagnostics)>,
+) -> Vec<Contribution> {
+    let mut parts: BTreeMap<(String, Mechanism), f64> = BTreeMap::new();
+    let noise = result.runs.iter().map(|r| r.noise_um).fold(0.0, f64::max);
+    for r in reversal_b {
+        let Some(step) = r.step_um.filter(|s| *s > 3.0 * noise) else {
+            continue;
+        };
+        // The backlash gap's share of the machine's B; without a gap, all elastic.
+        let gap = machine
+            .get(&r.axis)
+            .filter(|m| m.b > 0.0)
+            .map_or(0.0, |m| m.backlash / m.b);
+        keep_largest(&mut parts, &r.axis, Mechanism::Backlash, gap * step);
+        keep_largest(
+            &mut parts,
+            &r.axis,
+            Mechanism::LostMotion,
+            (1.0 - gap) * step,
+        );
+    }
+    for e in &result.events {
+        let (axis, mechanism) = match (e.axis, e.kind) {
+            (None, _) => ("–".to_string(), Mechanism::Unattributed),
+            (Some(_), EventKind::Step) => continue, // measured as B above
+            (Some(a), EventKind::Spike) if !e.ambiguous => {
+                (a.to_string(), Mechanism::FrictionSpikes)
+            }
+            (Some(_), EventKind::Spike) => (e.candidates.to_string(), Mechanism::FrictionSpikes),
+        };
+        keep_largest(&mut parts, &axis, mechanism, e.height_um.abs());
+    }
+    if let Some((test, d)) = circle {
+        let (u, v, _) = test.axes();
+        let pair = format!("{u}/{v}");
+        let r_mm = test.radius_mm;
+        // Lost motion δ on u (δ/2 cos θ sgn sin θ, flipping with the direction) has the
+        // sin 2θ term 4δ/3π, which the servo-mismatch fit reads as lag: take it out,
+        // v (T_u − T_v) − 8 (δ_u − δ_v) / 3π.
+        let step = |a: crate::Axis| {
+            reversal_b
+                .iter()
+                .find(|r| r.axis == a.to_string())
+                .and_then(|r| r.step_um)
+                .unwrap_or(0.0)
+        };
+        let lag_pp = d.servo_mismatch_ms * test.feed_mm_min / 60.0;
+        let lost_motion_pp = 8.0 * (step(u) - step(v)) / (3.0 * std::f64::consts::PI);
+        keep_largest(
+            &mut parts,
+            &pair,
+            Mechanism::ServoMismatch,
+            (lag_pp - lost_motion_pp).abs(),
+        );
+        keep_largest(
+            &mut parts,
+            &pair,
+            Mechanism::Scale,
+            (d.scale_mismatch_ppm * r_mm * 1e-3).abs(),
+        );
+        keep_largest(
+            &mut parts,
+            &pair,
+            Mechanism::Geometric,
+            (d.squareness_urad * r_mm * 1e-3).abs(),
+        );
+        for c in &d.cyclic {
+            keep_largest(
+                &mut parts,
+                &c.axis,
+                Mechanism::Geometric,
+                2.0 * c.amplitude_um,
+            );
+        }
+    }
+    let kept: Vec<((String, Mechanism), f64)> = parts
+        .into_iter()
+        .filter(|(_, range)| *range >= SHARE_FLOOR_UM)
+        .collect();
+    let total: f64 = kept.iter().map(|(_, r)| r).sum();
+    let g = result.circular_deviation_um;
+    let mut out: Vec<Contribution> = kept
+        .into_iter()
+        .map(|((axis, mechanism), range_um)| Contribution {
+            axis,
+            mechanism,
+            range_um,
+            share: range_um / total,
+            of_g: if g > 0.0 { range_um / g } else { f64::NAN },
+        })
+        .collect();
+    out.sort_by(|a, b| b.range_um.total_cmp(&a.range_um));
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A step of 10 µm at 180° on a slope: the lines on each side give 10 µm, whatever
+    /// the slope, and the sign follows the direction of travel.
+    #[test]
+    fn a_step_on_a_slope_is_its_height() {
+        let n = (360.0 / BIN_DEG).round() as usize;
+        let dev: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = (i as f64 + 0.5) * BIN_DEG;
+                0.03 * t + if t > 176.0 { 10.0 } else { 0.0 }
+            })
+            .collect();
+        let ccw = step_across(&dev, 180.0, Direction::Ccw).unwrap();
+        let cw = step_across(&dev, 180.0, Direction::Cw).unwrap();
+        assert!((ccw - 10.0).abs() < 1e-9, "{ccw}");
+        assert!((cw + 10.0).abs() < 1e-9, "{cw}");
+        // No step at 90°: the slope alone gives 0.
+        assert!(step_across(&dev, 90.0, Direction::Ccw).unwrap().abs() < 1e-9);
+    }
+}

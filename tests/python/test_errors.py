@@ -56,11 +56,11 @@ def test_a_bad_file_gives_the_line_column_and_message_of_the_command_line(tmp_pa
         mtsim.simulate(bad)
     err = e.value
     assert (err.file, err.line, err.key) == (str(bad), 8, "program.cone.feed_mm_min")
-    assert err.column == 15  # the value after "feed_mm_min = "
+    assert err.column == 1  # the key, where the command line puts its caret
     done = cli(mtsim_bin, "simulate", bad, "-o", tmp_path / "out")
     assert done.returncode == 2
     assert err.message.split(": ", 1)[1] in done.stderr
-    assert f"{bad}:8:15" in err.message
+    assert f"{bad}:8:1: " in err.message
 
 
 def test_a_missing_file_is_an_input_error(tmp_path):

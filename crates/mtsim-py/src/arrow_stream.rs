@@ -5,7 +5,7 @@
 use std::ffi::CString;
 use std::path::Path;
 
-use arrow::array::{RecordBatch, RecordBatchIterator};
+use arrow::array::{RecordBatch, RecordBatchIterator, RecordBatchReader};
 use arrow::datatypes::SchemaRef;
 use arrow::ffi_stream::FFI_ArrowArrayStream;
 use mtsim::error::Error;

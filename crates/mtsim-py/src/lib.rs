@@ -184,7 +184,8 @@ fn run_command(py: Python<'_>, args: Vec<String>) -> PyResult<i32> {
 /// A scenario or machine dict as the TOML text it is read as (the text the line and
 /// column of a dict's errors refer to). See `mtsim.to_toml`.
 #[pyfunction]
-fn to_toml(value: &Bound<'_, PyAny>) -> PyResult<String> {
+#[pyo3(name = "to_toml")]
+fn toml_of(value: &Bound<'_, PyAny>) -> PyResult<String> {
     to_toml::dict_to_toml(value, "the value")
 }
 
@@ -195,7 +196,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(analyze, m)?)?;
     m.add_function(wrap_pyfunction!(blocks, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
-    m.add_function(wrap_pyfunction!(to_toml, m)?)?;
+    m.add_function(wrap_pyfunction!(toml_of, m)?)?;
     m.add_function(wrap_pyfunction!(run_command, m)?)?;
     m.add_class::<ArrowStream>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -10,6 +10,8 @@
 # %%
 import pathlib
 
+import pyarrow.compute as pc
+
 import mtsim
 
 root = pathlib.Path(__file__).resolve().parents[2] if "__file__" in globals() else pathlib.Path.cwd()
@@ -46,7 +48,7 @@ b = summary["ballbar"]
 print(f"{summary['sim_time_s']:.2f} s of machine time in {summary['setpoints']} periods")
 print(f"G = {b['circular_deviation_um']:.2f} µm, F = {b['radial_max_um']:+.2f} / {b['radial_min_um']:+.2f} µm, "
       f"H = {b['hysteresis_um']:.2f} µm")
-for e in b["events"]:
+for e in b["spikes"]:
     print(f"  {e['direction']:>3} {e['kind']:<5} at θ = {e['theta_deg']:7.2f} deg, {e['height_um']:+.2f} µm, axis {e['axis']}")
 print(trace.schema)
 print(f"{trace.num_rows} rows")
@@ -57,6 +59,7 @@ print(f"{trace.num_rows} rows")
 # %%
 try:
     import matplotlib
+    import numpy as np
     import matplotlib.pyplot as plt
 except ImportError:
     plt = None
@@ -73,8 +76,8 @@ else:
         matplotlib.use("Agg")
     fig, ax = plt.subplots(subplot_kw={"projection": "polar"}, figsize=(6, 6))
     for d in ("ccw", "cw"):
-        run = trace.filter(trace["direction"] == d) if hasattr(trace, "filter") else trace
-        import numpy as np
+        run = trace.filter(pc.equal(trace["direction"], d))
+
         theta = np.radians(run["theta_deg"].to_numpy())
         ax.plot(theta, run["deviation_um"].to_numpy(), label=d.upper(), lw=0.8)
     for axis, angles in summary["reversals_deg"].items():

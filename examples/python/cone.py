@@ -85,6 +85,6 @@ else:
             ax.annotate(axis, (np.radians(t), ax.get_rmax()), fontsize=8)
     ax.set_title(f"15/10 cone: G = {b['circular_deviation_um']:.2f} µm")
     ax.legend(loc="lower right")
-    out = root / "cone-trace.png"
+    out = pathlib.Path("cone-trace.png")  # in the current folder
     fig.savefig(out, dpi=100)
     print("wrote", out)

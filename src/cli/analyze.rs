@@ -6,50 +6,102 @@ use serde_json::{json, Map};
 
 use super::print_stdout;
 use crate::error::Result;
+use crate::input::scenario::Scenario;
 use crate::study::feed::{feed_limits, FeedReport};
 use crate::study::reversals::{analyse_scenario, Analysis};
 
-pub fn run(path: &Path, as_json: bool) -> Result<i32> {
-    let scenario = super::load_scenario(path)?;
-    let analysis = analyse_scenario(&scenario)?;
-    let geometric = crate::study::geometry::geometric_trace(&scenario)?;
-    let feed = feed_limits(&scenario)?;
-    let notices = crate::program::scenario_notices(&scenario)?;
-    let chain_events = crate::study::chain_events::chain_events(&scenario)?;
-    let (warned, no_effect): (Vec<_>, Vec<_>) = notices.iter().partition(|n| n.warning);
-    let located = |n: &&ngc::Notice| format!("{}:{}: {}", n.path.display(), n.line, n.message);
-    let mut warnings = analysis.warnings();
-    warnings.extend(warned.iter().map(located));
-    for w in warned.iter().map(located) {
-        super::warn(&w);
+/// What `mtsim analyze` finds in a scenario, before it is printed.
+pub struct AnalyzeFindings {
+    pub analysis: Analysis,
+    pub geometric: Option<crate::study::geometry::GeometricTrace>,
+    pub feed: FeedReport,
+    /// The reader's notices: warnings, and words accepted with no effect on the motion.
+    pub notices: Vec<ngc::Notice>,
+    /// Poles and solution switches on a chain with two rotaries; None on other machines.
+    pub chain_events: Option<Vec<crate::study::chain_events::ChainEvent>>,
+}
+
+impl AnalyzeFindings {
+    pub fn of(scenario: &Scenario) -> Result<AnalyzeFindings> {
+        Ok(AnalyzeFindings {
+            analysis: analyse_scenario(scenario)?,
+            geometric: crate::study::geometry::geometric_trace(scenario)?,
+            feed: feed_limits(scenario)?,
+            notices: crate::program::scenario_notices(scenario)?,
+            chain_events: crate::study::chain_events::chain_events(scenario)?,
+        })
     }
-    if as_json {
+
+    /// The reader's warnings, `file:line: message`.
+    pub fn reader_warnings(&self) -> Vec<String> {
+        self.notices
+            .iter()
+            .filter(|n| n.warning)
+            .map(located)
+            .collect()
+    }
+
+    /// The document `mtsim analyze --json` prints.
+    pub fn json(&self) -> serde_json::Value {
         let mut axes = Map::new();
-        for a in &analysis.axes {
+        for a in &self.analysis.axes {
             axes.insert(
                 a.axis.to_string(),
                 serde_json::to_value(a).expect("plain data serializes"),
             );
         }
+        let mut warnings = self.analysis.warnings();
+        warnings.extend(self.reader_warnings());
         let mut v = json!({
             "axes": axes,
-            "min_linear_separation_deg": analysis.min_linear_separation_deg(),
+            "min_linear_separation_deg": self.analysis.min_linear_separation_deg(),
             "warnings": warnings,
-            "geometric_trace": geometric,
-            "feed_limits": feed,
+            "geometric_trace": self.geometric,
+            "feed_limits": self.feed,
         });
+        let no_effect: Vec<String> = self
+            .notices
+            .iter()
+            .filter(|n| !n.warning)
+            .map(located)
+            .collect();
         if !no_effect.is_empty() {
-            v["no_motion_effect"] = no_effect.iter().map(located).collect();
+            v["no_motion_effect"] = no_effect.into();
         }
-        if let Some(events) = &chain_events {
+        if let Some(events) = &self.chain_events {
             v["chain_events"] = events.iter().map(|e| e.to_json()).collect();
         }
+        v
+    }
+}
+
+fn located(n: &ngc::Notice) -> String {
+    format!("{}:{}: {}", n.path.display(), n.line, n.message)
+}
+
+pub fn run(path: &Path, as_json: bool) -> Result<i32> {
+    let scenario = super::load_scenario(path)?;
+    let found = AnalyzeFindings::of(&scenario)?;
+    for w in found.reader_warnings() {
+        super::warn(&w);
+    }
+    if as_json {
         print_stdout(&format!(
             "{}\n",
-            serde_json::to_string_pretty(&v).expect("plain data serializes")
+            serde_json::to_string_pretty(&found.json()).expect("plain data serializes")
         ));
         return Ok(0);
     }
+    let AnalyzeFindings {
+        analysis,
+        geometric,
+        feed,
+        notices,
+        chain_events,
+    } = found;
+    let no_effect: Vec<_> = notices.iter().filter(|n| !n.warning).collect();
+    let mut warnings = analysis.warnings();
+    warnings.extend(notices.iter().filter(|n| n.warning).map(located));
     let mut out = format!("{} on {}\n", path.display(), scenario.machine.name);
     out.push_str(&analysis_table(&analysis));
     match analysis.closest_linear_reversals() {

@@ -200,25 +200,31 @@ fn table_row(r: &BlockRow) -> String {
     )
 }
 
+/// The canonical moves of the scenario's program as rows, in memory (`--json`): one
+/// counter-clockwise revolution of a generated cone or circle, with no lead.
+pub fn block_rows(scenario: &Scenario) -> Result<Vec<BlockRow>> {
+    program::scenario_run_unchecked(scenario, Direction::Ccw)?
+        .moves
+        .map(|m| m.map(|m| BlockRow::of(&m, &scenario.machine)))
+        .collect()
+}
+
 /// Prints the canonical moves of the scenario's program. A generated cone or circle is
 /// printed as the generator emits it: one revolution, counter-clockwise, with no lead.
 pub fn run(path: &Path, format: Format) -> Result<i32> {
     let scenario = Scenario::load(path)?;
-    let run = program::scenario_run_unchecked(&scenario, Direction::Ccw)?;
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     // A closed pipe (`| head`) ends the output quietly.
     let mut write = |text: &str| out.write_all(text.as_bytes()).is_ok();
     match format {
         Format::Json => {
-            let rows = run
-                .moves
-                .map(|m| m.map(|m| BlockRow::of(&m, &scenario.machine)))
-                .collect::<Result<Vec<_>>>()?;
+            let rows = block_rows(&scenario)?;
             let json = serde_json::to_string_pretty(&rows).expect("plain data serializes");
             write(&format!("{json}\n"));
         }
         Format::Csv | Format::Table => {
+            let run = program::scenario_run_unchecked(&scenario, Direction::Ccw)?;
             let uvw = scenario.machine.axes().iter().any(|a| a.is_secondary());
             let (header, row): (String, fn(&BlockRow) -> String) = match format {
                 Format::Csv if uvw => (format!("{CSV_HEADER}{CSV_HEADER_UVW}\n"), csv_row),

@@ -26,6 +26,10 @@ mod simulate;
 mod sweep;
 mod terminal;
 
+// What the Python package (crates/mtsim-py) takes of the commands: their `--json` documents.
+pub use analyze::AnalyzeFindings;
+pub use blocks::{block_rows, BlockRow};
+
 // The helpers every command uses, named here for the command files (`super::note`).
 use scenario::{cone_of, load_scenario};
 use terminal::{detail, note, print_stdout, progress_bar, spinner, warn};
@@ -245,7 +249,24 @@ pub enum Command {
 
 /// Runs the command line and returns the exit code.
 pub fn main() -> i32 {
-    let cli = Cli::parse();
+    main_with(std::env::args_os())
+}
+
+/// The command line run on `args` (the program name first), in this process: what the
+/// `mtsim` binary does, returning its exit code (the Python package's `run_command`).
+pub fn main_with<I, T>(args: I) -> i32
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    // As `Cli::parse`, without ending the process: the message (or help) and its code.
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return e.exit_code();
+        }
+    };
     // `sweep --html`: the study page of the output folder, once the sweep has written it.
     let sweep_html = match &cli.command {
         Command::Sweep {

@@ -347,27 +347,23 @@ fn refuse_tcp_on_a_joint_space_test(
 impl Scenario {
     pub fn load(path: &Path) -> Result<Scenario> {
         let text = toml_text::read_text(path)?;
+        Scenario::from_toml(path, &text, None)
+    }
+
+    /// Parses `text` as the scenario file `path` (relative paths inside it resolve from
+    /// `path`'s folder). `machine` is the machine file's path and text when the caller has
+    /// them (the Python package's dict scenarios); otherwise the file the scenario's
+    /// `machine` key names is read.
+    pub fn from_toml(path: &Path, text: &str, machine: Option<(&Path, &str)>) -> Result<Scenario> {
         let file: ScenarioFile = toml_text::parse(path, &text)?;
-        let machine_path = resolve(path, &file.machine);
-        let machine_text = toml_text::read_text(&machine_path).map_err(|e| match e {
-            Error::Read { source, .. } => value_error(
-                path,
-                &text,
-                "",
-                "machine",
-                format!(
-                    "cannot read machine file {}: {source}",
-                    machine_path.display()
-                ),
-            ),
-            other => other,
-        })?;
+        let (machine_path, machine_text) = match machine {
+            Some((p, t)) => (p.to_path_buf(), t.to_string()),
+            None => read_machine(path, &text, &file.machine)?,
+        };
         let machine = Machine::from_toml(
             &machine_path,
             &machine_text,
-            file.machine_overrides
-                .as_ref()
-                .map(|o| (path, text.as_str(), o)),
+            file.machine_overrides.as_ref().map(|o| (path, text, o)),
         )?;
         let program = match (&file.program.file, &file.program.cone) {
             _ if file.program.circle.is_some() => {
@@ -966,6 +962,26 @@ fn reader_options(
         o.user_m.insert(n, *effect);
     }
     Ok(o)
+}
+
+/// The path and text of the machine file a scenario names; a file that cannot be read is
+/// an error at the scenario's `machine` key.
+fn read_machine(path: &Path, text: &str, machine: &str) -> Result<(PathBuf, String)> {
+    let machine_path = resolve(path, machine);
+    let machine_text = toml_text::read_text(&machine_path).map_err(|e| match e {
+        Error::Read { source, .. } => value_error(
+            path,
+            text,
+            "",
+            "machine",
+            format!(
+                "cannot read machine file {}: {source}",
+                machine_path.display()
+            ),
+        ),
+        other => other,
+    })?;
+    Ok((machine_path, machine_text))
 }
 
 pub fn resolve(scenario: &Path, relative: &str) -> PathBuf {

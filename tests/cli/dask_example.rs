@@ -1,7 +1,8 @@
 //! examples/dask/run_study.py on a LocalCluster of 2 workers: the study it runs in shards
-//! and merges equals the single-machine run byte for byte. Needs Python with
-//! `dask.distributed`, pandas and pyarrow: skipped (and said so) without them, failed
-//! without them when `CI` is set.
+//! and merges through the mtsim Python package equals the single-machine run of the binary
+//! byte for byte. Needs Python with the package (`pip install .`), `dask.distributed`,
+//! pandas and pyarrow: skipped (and said so) without them, failed without them when `CI`
+//! is set.
 
 use crate::common;
 
@@ -11,7 +12,7 @@ use common::{mtsim, scratch};
 
 fn dask_available() -> bool {
     Command::new("python3")
-        .args(["-c", "import dask.distributed, pandas, pyarrow"])
+        .args(["-c", "import mtsim, dask.distributed, pandas, pyarrow"])
         .output()
         .is_ok_and(|o| o.status.success())
 }
@@ -20,9 +21,9 @@ fn dask_available() -> bool {
 fn the_dask_example_runs_a_sharded_sweep_and_merges_it_byte_identical() {
     if !dask_available() {
         if std::env::var_os("CI").is_some() {
-            panic!("CI is set but python3 cannot import dask.distributed, pandas and pyarrow: install them (pip install \"dask[distributed]\" pandas pyarrow)");
+            panic!("CI is set but python3 cannot import mtsim, dask.distributed, pandas and pyarrow: install them (pip install . \"dask[distributed]\" pandas pyarrow)");
         }
-        eprintln!("skipped: python3 cannot import dask.distributed, pandas and pyarrow (pip install \"dask[distributed]\" pandas pyarrow)");
+        eprintln!("skipped: python3 cannot import mtsim, dask.distributed, pandas and pyarrow (pip install . \"dask[distributed]\" pandas pyarrow)");
         return;
     }
     let dir = scratch("dask", "sweep");
@@ -47,14 +48,7 @@ fn the_dask_example_runs_a_sharded_sweep_and_merges_it_byte_identical() {
     let run = Command::new("python3")
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .arg("examples/dask/run_study.py")
-        .args([
-            "--workers",
-            "2",
-            "--shards",
-            "4",
-            "--mtsim",
-            env!("CARGO_BIN_EXE_mtsim"),
-        ])
+        .args(["--workers", "2", "--shards", "4"])
         .args(["--out", out.to_str().unwrap(), "--"])
         .args(study)
         .output()

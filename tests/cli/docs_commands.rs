@@ -202,11 +202,11 @@ const SHOWN: &[(&str, Shown)] = &[
     ("mtsim merge shards/*.json -o merged > merged.txt", Example),
     (
         "python3 examples/dask/run_study.py --shards 8 --out study -- sweep scenarios/cone-15-10.toml --vary center_y --from -30 --to -15 --step 0.5",
-        Skip("needs Python with dask.distributed; tests/cli/dask_example.rs runs this example on a LocalCluster"),
+        Skip("needs Python with the mtsim package and dask.distributed; tests/cli/dask_example.rs runs this example on a LocalCluster"),
     ),
     (
-        "python3 examples/dask/run_study.py --scheduler tcp://SCHEDULER:8786 --mtsim /opt/mtsim/bin/mtsim --shards 64 --out study -- batch --list plant-programs.txt",
-        Skip("needs a running Dask cluster (tcp://SCHEDULER:8786), a binary in /opt/mtsim and a plant's program list"),
+        "python3 examples/dask/run_study.py --scheduler tcp://SCHEDULER:8786 --shards 64 --out study -- batch --list plant-programs.txt",
+        Skip("needs a running Dask cluster (tcp://SCHEDULER:8786) and a plant's program list"),
     ),
     ("mtsim <version>", Skip("the Parquet files' `created_by` text, not a command")),
     ("mtsim analyze", Names),

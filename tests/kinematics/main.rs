@@ -5,6 +5,7 @@
 mod common;
 
 mod chain_cone;
+mod chain_location;
 mod chains;
 mod geometric_errors;
 mod round_trips;

@@ -615,8 +615,8 @@ fn refuse_what_the_layout_cannot_give(
 }
 
 /// [`refuse_what_the_layout_cannot_give`] on a general `[kinematics]` chain: the cone
-/// needs every pose within the chain's reach; TCP, the circular test and the collision scene
-/// do not run on general chains yet.
+/// needs every pose within the chain's reach; TCP and the circular test do not run on
+/// general chains yet.
 fn refuse_what_a_chain_cannot_give(
     path: &Path,
     file: &ScenarioFile,
@@ -634,12 +634,6 @@ fn refuse_what_a_chain_cannot_give(
         )
         .with_help(help.to_string()))
     };
-    if file.check.collisions {
-        return refuse(
-            "the collision scene ([check] collisions = true, the default)",
-            "set [check] collisions = false: axis limits are still checked",
-        );
-    }
     if file.reader.tcp || file.simulate.tcp {
         return refuse(
             "tool-centre-point control (TCP: [reader] tcp or [simulate] tcp)",

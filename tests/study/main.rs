@@ -7,5 +7,6 @@ mod common;
 mod cone_reference;
 mod diagnose;
 mod fit;
+mod fit_chain;
 mod kato_reproduction;
 mod simulate;

@@ -106,7 +106,8 @@ pub fn fit(
         conformity::check(scenario, trace, &own, &problem.measured)?;
     }
     let solution = problem.solve(&mut runs)?;
-    let (report, fitted) = assemble(&problem, &runs, solution, layout, options)?;
+    let (mut report, fitted) = assemble(&problem, &runs, solution, layout, options)?;
+    report.cautions.extend(chain_cautions(&kinematics));
     write_outputs(out_dir, &report, &problem, &runs, &fitted)?;
     Ok(report)
 }
@@ -193,6 +194,30 @@ fn chain_parameters(chain: &Chain) -> Vec<LocationParam> {
             chain.link(p.axis()).is_some_and(|l| {
                 l.axis.is_rotary() && l.direction[p.component()].abs() < 1.0 - 1e-12
             })
+        })
+        .collect()
+}
+
+/// On a general chain, what no ball-bar test separates: a rotary line along no machine axis
+/// takes three offsets and three tilts ([`chain_parameters`]) of which only the two across
+/// the line act, so each triple is seen as two combinations at most (the rank report names
+/// them).
+fn chain_cautions(kinematics: &Kinematics) -> Vec<String> {
+    let Some(chain) = &kinematics.general else {
+        return Vec::new();
+    };
+    chain
+        .rotaries()
+        .filter(|(_, l)| l.direction.iter().all(|c| c.abs() < 1.0 - 1e-12))
+        .map(|(_, l)| {
+            let a = l.axis;
+            format!(
+                "{a}'s line ({:.4}, {:.4}, {:.4}) lies along no machine axis: of EX0{a}, EY0{a}, \
+                 EZ0{a} only the two offsets across the line act, and of EA0{a}, EB0{a}, EC0{a} \
+                 only the two tilts across it, so no test separates each triple into more than \
+                 two combinations",
+                l.direction.x, l.direction.y, l.direction.z
+            )
         })
         .collect()
 }

@@ -11,6 +11,9 @@
 //! dL(θ; p) = | tool(q) − T_tilt(q; p) T_C(q; p) (pivot + O + s) | − L + b_k
 //! ```
 //!
+//! On a general `[kinematics]` chain, tool(q) and the table ball are the actual chain's
+//! (`Kinematics::actual_chain`), with every rotary's acting parameters ([`chain_parameters`]).
+//!
 //! binned like the ball bar (0.05 deg) and interpolated at θ: p the location errors, b_k the
 //! bar-length offset of trace k, s its table-ball placement error (three translations, fitted
 //! per trace unless `--placement-known`: in a real set-up the ball sits 10-20 um from where

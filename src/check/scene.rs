@@ -315,17 +315,8 @@ impl Scene {
             groups::TABLE,
             all_tool,
         );
-        for b in cradle_boxes(machine) {
-            let (shape, local) = shapes::cuboid(b.center_mm, b.size_mm);
-            builder.add(
-                &b.name,
-                Carrier::Cradle,
-                shape,
-                local,
-                groups::TABLE,
-                all_tool,
-            );
-        }
+        let cradle = cradle_boxes(machine);
+        builder.add_boxes(&cradle, Carrier::Cradle, groups::TABLE, all_tool);
 
         // Tool stack, tip at the origin, axis +Z.
         let ball_bar = workpiece.kind == WorkpieceKind::BallBar;
@@ -402,17 +393,8 @@ impl Scene {
             groups::TOOL,
             tool_filter,
         );
-        for b in &scene.head {
-            let (shape, local) = shapes::cuboid(b.center_mm, b.size_mm);
-            builder.add(
-                &b.name,
-                Carrier::Head,
-                shape,
-                local,
-                groups::TOOL,
-                tool_filter,
-            );
-        }
+        let head: Vec<&CradleBox> = scene.head.iter().collect();
+        builder.add_boxes(&head, Carrier::Head, groups::TOOL, tool_filter);
 
         // Workpiece.
         let cone = &workpiece.cone;
@@ -891,6 +873,14 @@ impl Builder {
             analytic: None,
         });
         self.groups.push(groups);
+    }
+
+    /// Adds `boxes` (cradle or head boxes) to `carrier`.
+    fn add_boxes(&mut self, boxes: &[&CradleBox], carrier: Carrier, member: Group, filter: Group) {
+        for b in boxes {
+            let (shape, local) = shapes::cuboid(b.center_mm, b.size_mm);
+            self.add(&b.name, carrier, shape, local, member, filter);
+        }
     }
 
     /// A part's motion weights on a named layout: the tool stack moves with X Y Z, table

@@ -62,21 +62,17 @@ pub enum LocationParam {
 }
 
 impl LocationParam {
-    /// Every parameter, in table order (A, B, C; positions before orientations).
-    pub const ALL: [LocationParam; 12] = [
-        LocationParam::EY0A,
-        LocationParam::EZ0A,
-        LocationParam::EB0A,
-        LocationParam::EC0A,
-        LocationParam::EX0B,
-        LocationParam::EZ0B,
-        LocationParam::EA0B,
-        LocationParam::EC0B,
-        LocationParam::EX0C,
-        LocationParam::EY0C,
-        LocationParam::EA0C,
-        LocationParam::EB0C,
-    ];
+    /// Every parameter of a named layout, in table order (A, B, C; positions before
+    /// orientations): the first twelve of [`LocationParam::EVERY`].
+    pub const ALL: [LocationParam; 12] = {
+        let mut all = [LocationParam::EY0A; 12];
+        let mut i = 0;
+        while i < 12 {
+            all[i] = LocationParam::EVERY[i];
+            i += 1;
+        }
+        all
+    };
 
     /// Every parameter a general chain's rotary may carry: [`LocationParam::ALL`], then the
     /// components along each letter's own machine axis.

@@ -20,7 +20,7 @@ const HIDDEN: [(&str, f64); 8] = [
     ("EB0C", 20.0),
 ];
 
-fn unit(name: &str) -> &'static str {
+pub(super) fn unit(name: &str) -> &'static str {
     if matches!(name.as_bytes()[1], b'X' | b'Y' | b'Z') {
         "um"
     } else {

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::fit::{assert_recovered, measure, param, run_fit};
+use super::fit::{assert_recovered, measure, param, run_fit, unit};
 use crate::common::scratch;
 
 /// The bundled `machine` with `errors` ((name, unit, value)) as `dir/<name>.toml`.
@@ -16,12 +16,7 @@ fn machine(dir: &Path, machine: &str, name: &str, errors: &[(&str, f64)]) -> Pat
     if !errors.is_empty() {
         text.push_str("\n[location_errors]\n");
         for (n, v) in errors {
-            let unit = if matches!(n.as_bytes()[1], b'X' | b'Y' | b'Z') {
-                "um"
-            } else {
-                "urad"
-            };
-            text.push_str(&format!("{n}_{unit} = {v}\n"));
+            text.push_str(&format!("{n}_{} = {v}\n", unit(n)));
         }
     }
     let path = dir.join(format!("{name}.toml"));

@@ -172,6 +172,22 @@ impl Kinematics {
             .or_else(|| layout_chain::of_layout(self.layout, self.pivot_mm))
     }
 
+    /// The actual chain of a general machine: each rotary's line moved and turned by its
+    /// location errors ([`LocationErrors::actual_link`]); the nominal chain when they are
+    /// zero, `None` for a named layout (whose actual chain is [`Kinematics::actual_table_pose`]).
+    pub fn actual_chain(&self) -> Option<Chain> {
+        let chain = self.general?;
+        if self.location_errors.is_zero() {
+            return Some(chain);
+        }
+        Some(chain.rotaries().fold(chain, |actual, (_, link)| {
+            let (direction, point) =
+                self.location_errors
+                    .actual_link(link.axis, &link.direction, &link.point_mm);
+            actual.with_line(link.axis, direction, point)
+        }))
+    }
+
     /// The same machine with location errors on its rotary axes.
     pub fn with_location_errors(mut self, errors: LocationErrors) -> Kinematics {
         self.location_errors = errors;

@@ -7,6 +7,11 @@
 //! The ball bar is posed from both ends: its origin at the pivot ball (fixed to the table)
 //! and its +Z toward the tool ball (at the tool tip).
 //!
+//! On a `[kinematics]` chain every body rides on the links up to the one it is attached to
+//! ([`linked`]): the table on the table axes, cradle boxes on those up to their `link`,
+//! head boxes on the head axes up to theirs, the tool stack and spindle on the whole head,
+//! so a head turning moves the spindle housing and the holder.
+//!
 //! The bodies are rapier kinematic rigid bodies whose colliders carry [`InteractionGroups`]
 //! that encode which parts may touch (see [`groups`]); every collider pair the groups allow
 //! is monitored. A cutter/workpiece pair is *cutting* (its depth is engagement); every
@@ -16,10 +21,11 @@
 //! [`monitor`].
 
 pub mod frustum;
+pub mod linked;
 pub mod monitor;
 pub mod shapes;
 
-use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use parry3d_f64::math::{Pose, Rotation, Vector};
 use parry3d_f64::shape::SharedShape;
 use rapier3d_f64::dynamics::{RigidBodyBuilder, RigidBodyHandle, RigidBodySet};
@@ -40,6 +46,7 @@ use crate::input::machine::Machine;
 use crate::kinematics::{AxisLine, Kinematics, Layout};
 use crate::numeric::sin_cos_deg;
 use crate::{Axis, AxisVec};
+use linked::{LinkedBodies, Rides};
 
 /// Collision groups. A pair of colliders is monitored when each one's membership meets the
 /// other's filter (rapier's `InteractionTestMode::And`).
@@ -75,7 +82,12 @@ enum Carrier {
     Cradle = 1,
     Tool = 2,
     Bar = 3,
+    /// Head parts, carried by the head axes up to their link.
+    Head = 4,
 }
+
+/// Bodies in the scene (one per [`Carrier`]).
+const BODIES: usize = 5;
 
 /// Whether touching is cutting or a collision.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -222,7 +234,7 @@ impl Chain {
 pub(crate) struct BodyPoses<'a> {
     q: &'a AxisVec,
     chain: Option<(Isometry3<f64>, Isometry3<f64>)>,
-    poses: [Option<Pose>; 4],
+    poses: [Option<Pose>; BODIES],
 }
 
 impl<'a> BodyPoses<'a> {
@@ -230,7 +242,7 @@ impl<'a> BodyPoses<'a> {
         BodyPoses {
             q,
             chain: None,
-            poses: [None; 4],
+            poses: [None; BODIES],
         }
     }
 }
@@ -242,9 +254,11 @@ pub struct Scene {
     tilt_axis: Option<Axis>,
     bodies: RigidBodySet,
     colliders: ColliderSet,
-    body_handles: [RigidBodyHandle; 4],
+    body_handles: [RigidBodyHandle; BODIES],
     parts: Vec<Part>,
     pairs: Vec<Pair>,
+    /// The bodies' links: every body's on a general chain, the head boxes' on a named layout.
+    linked: Option<LinkedBodies>,
     bar: Option<BarEnds>,
     near_miss_mm: f64,
     engagement_resolution_mm: f64,
@@ -272,6 +286,7 @@ impl Scene {
             ));
         }
         let mut builder = Builder::new(machine.kinematics);
+        builder.linked = linked_bodies(machine)?;
         let all_tool = groups::CUTTER | groups::TOOL | groups::BAR | groups::BALL;
 
         // Table and cradle.
@@ -300,17 +315,8 @@ impl Scene {
             groups::TABLE,
             all_tool,
         );
-        for b in &scene.cradle {
-            let (shape, local) = shapes::cuboid(b.center_mm, b.size_mm);
-            builder.add(
-                &b.name,
-                Carrier::Cradle,
-                shape,
-                local,
-                groups::TABLE,
-                all_tool,
-            );
-        }
+        let cradle = cradle_boxes(machine);
+        builder.add_boxes(&cradle, Carrier::Cradle, groups::TABLE, all_tool);
 
         // Tool stack, tip at the origin, axis +Z.
         let ball_bar = workpiece.kind == WorkpieceKind::BallBar;
@@ -387,6 +393,8 @@ impl Scene {
             groups::TOOL,
             tool_filter,
         );
+        let head: Vec<&CradleBox> = scene.head.iter().collect();
+        builder.add_boxes(&head, Carrier::Head, groups::TOOL, tool_filter);
 
         // Workpiece.
         let cone = &workpiece.cone;
@@ -471,7 +479,12 @@ impl Scene {
                 );
                 let r_bar = 0.5 * workpiece.bar_diameter_mm;
                 let (shape, local) = z_cylinder(r_ball, length - r_ball, r_bar);
-                builder.bar_motion = Some(bar_motion(machine.kinematics.layout, o, length, r_bar));
+                builder.bar_motion = Some(match &builder.linked {
+                    Some(linked) if machine.kinematics.general.is_some() => {
+                        chain_bar_motion(linked, o, length, r_bar)
+                    }
+                    _ => bar_motion(machine.kinematics.layout, o, length, r_bar),
+                });
                 builder.add(
                     "bar",
                     Carrier::Bar,
@@ -531,6 +544,10 @@ impl Scene {
             }
             part.shape = shape.clone();
             part.local = shift * local;
+            if let Some(linked) = self.linked.filter(|_| self.kinematics.general.is_some()) {
+                // On a chain the tool's lever arms about the head's rotaries change with it.
+                part.motion = linked.weights(Rides::Tool, &aabb_corners(&part.shape, &part.local));
+            }
             // The closed-form distance takes the new cylinder's dimensions.
             part.analytic = Analytic::of(part.eroded.as_ref().unwrap_or(&part.shape));
             if let Some(collider) = self.colliders.get_mut(part.handle) {
@@ -585,6 +602,10 @@ impl Scene {
         if let Some(p) = poses.poses[carrier] {
             return p;
         }
+        if let Some(p) = self.linked_pose(carrier, poses) {
+            poses.poses[carrier] = Some(p);
+            return p;
+        }
         let q = poses.q;
         let (cradle, table) = *poses.chain.get_or_insert_with(|| self.chain.poses(q));
         let pose = |iso: &Isometry3<f64>| {
@@ -616,6 +637,34 @@ impl Scene {
         p
     }
 
+    /// The pose of body `carrier` through the chain's links: every body on a general chain,
+    /// the head boxes on a named layout; `None` for the rest.
+    fn linked_pose(&self, carrier: usize, poses: &mut BodyPoses) -> Option<Pose> {
+        let linked = self.linked.as_ref()?;
+        let q = poses.q;
+        let general = self.kinematics.general.is_some();
+        let iso = match carrier {
+            4 => linked.pose(Rides::Head, q),
+            _ if !general => return None,
+            0 => linked.pose(Rides::Table, q),
+            1 => linked.pose(Rides::Cradle, q),
+            2 => linked.pose(Rides::Tool, q),
+            _ => {
+                // The bar: from the pivot ball (on the table) toward the tool ball (the tip).
+                let ends = self.bar.as_ref()?;
+                let a = linked.pose(Rides::Table, q) * Point3::from(ends.pivot);
+                let tip = self.body_pose(2, poses).translation;
+                let dir = tip - to_vector(&a.coords);
+                let rotation = match dir.try_normalize() {
+                    Some(d) => Rotation::from_rotation_arc(Vector::Z, d),
+                    None => Rotation::IDENTITY,
+                };
+                return Some(Pose::from_parts(to_vector(&a.coords), rotation));
+            }
+        };
+        Some(to_pose(&iso))
+    }
+
     /// [`warm_bounds`] of pair `i` at the sample of `poses`.
     pub(crate) fn warm_bounds(
         &self,
@@ -631,10 +680,18 @@ impl Scene {
         warm_bounds(&pair, a, b, &pose_a, &pose_b, warm)
     }
 
-    /// Poses of the table, cradle, tool and bar frames in the machine frame at `q`.
-    fn body_poses(&self, q: &AxisVec) -> [Pose; 4] {
+    /// Poses of the table, cradle, tool, bar and head frames in the machine frame at `q`.
+    fn body_poses(&self, q: &AxisVec) -> [Pose; BODIES] {
         let mut poses = BodyPoses::new(q);
-        [0, 1, 2, 3].map(|carrier| self.body_pose(carrier, &mut poses))
+        [0, 1, 2, 3, 4].map(|carrier| self.body_pose(carrier, &mut poses))
+    }
+
+    /// The monitor's motion between two samples on a general chain ([`LinkedBodies::motion`]).
+    pub(crate) fn chain_motion(&self, a: &AxisVec, b: &AxisVec) -> Option<[f64; 3]> {
+        self.linked
+            .as_ref()
+            .filter(|_| self.kinematics.general.is_some())
+            .map(|l| l.motion(a, b))
     }
 }
 
@@ -709,6 +766,30 @@ fn bar_motion(layout: Layout, o: Vector3<f64>, length: f64, r_bar: f64) -> [f64;
     ]
 }
 
+/// [`bar_motion`] on a general chain: the pivot end moves at most `w_a · (Σ|Δlin|, Σ|Δθ|)`
+/// (a table point at O), the tool end `w_b · (…)` (the tool body's origin), and a point of the
+/// bar at most `k (|da| + |db|)`.
+fn chain_bar_motion(linked: &LinkedBodies, o: Vector3<f64>, length: f64, r_bar: f64) -> [f64; 3] {
+    let k = 1.0 + 2.0 * (length + r_bar) / length;
+    let a = linked.weights(Rides::Table, &[Point3::from(o)]);
+    let b = linked.weights(Rides::Tool, &[Point3::origin()]);
+    [k * (a[0] + b[0]), k * (a[1] + b[1]), k * (a[2] + b[2])]
+}
+
+/// The eight corners of the bounding box of `shape` at `local`, mm.
+fn aabb_corners(shape: &SharedShape, local: &Pose) -> Vec<Point3<f64>> {
+    let aabb = shape.compute_aabb(local);
+    (0..8)
+        .map(|i| {
+            Point3::new(
+                if i & 1 == 0 { aabb.mins.x } else { aabb.maxs.x },
+                if i & 2 == 0 { aabb.mins.y } else { aabb.maxs.y },
+                if i & 4 == 0 { aabb.mins.z } else { aabb.maxs.z },
+            )
+        })
+        .collect()
+}
+
 /// Distance of table point `p` (mm) from the table axis: C (the table's Z), or A (its X)
 /// for trt-ab.
 fn from_table_axis(layout: Layout, p: [f64; 3]) -> f64 {
@@ -723,16 +804,17 @@ struct Builder {
     kinematics: Kinematics,
     bodies: RigidBodySet,
     colliders: ColliderSet,
-    body_handles: [RigidBodyHandle; 4],
+    body_handles: [RigidBodyHandle; BODIES],
     parts: Vec<Part>,
     groups: Vec<InteractionGroups>,
     bar_motion: Option<[f64; 3]>,
+    linked: Option<LinkedBodies>,
 }
 
 impl Builder {
     fn new(kinematics: Kinematics) -> Builder {
         let mut bodies = RigidBodySet::new();
-        let body_handles =
+        let body_handles: [RigidBodyHandle; BODIES] =
             std::array::from_fn(|_| bodies.insert(RigidBodyBuilder::kinematic_position_based()));
         Builder {
             kinematics,
@@ -742,6 +824,7 @@ impl Builder {
             parts: Vec::new(),
             groups: Vec::new(),
             bar_motion: None,
+            linked: None,
         }
     }
 
@@ -765,8 +848,46 @@ impl Builder {
             self.body_handles[carrier as usize],
             &mut self.bodies,
         );
-        let motion = match carrier {
-            Carrier::Tool => [1.0, 0.0, 0.0],
+        let general = self.kinematics.general.is_some();
+        let rides = match carrier {
+            Carrier::Table => Rides::Table,
+            Carrier::Cradle => Rides::Cradle,
+            Carrier::Tool => Rides::Tool,
+            Carrier::Head | Carrier::Bar => Rides::Head,
+        };
+        let motion = match (carrier, &self.linked) {
+            (Carrier::Bar, _) => self.bar_motion.unwrap_or([0.0; 3]),
+            (Carrier::Head, Some(linked)) => linked.weights(rides, &aabb_corners(&shape, &local)),
+            (_, Some(linked)) if general => linked.weights(rides, &aabb_corners(&shape, &local)),
+            _ => self.trt_motion(carrier, &shape, &local),
+        };
+        self.parts.push(Part {
+            name: name.to_string(),
+            carrier,
+            handle,
+            shape,
+            local,
+            motion,
+            eroded: None,
+            skin_mm: 0.0,
+            analytic: None,
+        });
+        self.groups.push(groups);
+    }
+
+    /// Adds `boxes` (cradle or head boxes) to `carrier`.
+    fn add_boxes(&mut self, boxes: &[&CradleBox], carrier: Carrier, member: Group, filter: Group) {
+        for b in boxes {
+            let (shape, local) = shapes::cuboid(b.center_mm, b.size_mm);
+            self.add(&b.name, carrier, shape, local, member, filter);
+        }
+    }
+
+    /// A part's motion weights on a named layout: the tool stack moves with X Y Z, table
+    /// and cradle parts by their lever arms about the pivot and the C axis.
+    fn trt_motion(&self, carrier: Carrier, shape: &SharedShape, local: &Pose) -> [f64; 3] {
+        match carrier {
+            Carrier::Tool | Carrier::Head => [1.0, 0.0, 0.0],
             Carrier::Bar => self.bar_motion.unwrap_or([0.0; 3]),
             Carrier::Table | Carrier::Cradle => {
                 // Points at distance |p| from the pivot and rho from the C axis move at
@@ -786,19 +907,7 @@ impl Builder {
                     [0.0, far, 0.0]
                 }
             }
-        };
-        self.parts.push(Part {
-            name: name.to_string(),
-            carrier,
-            handle,
-            shape,
-            local,
-            motion,
-            eroded: None,
-            skin_mm: 0.0,
-            analytic: None,
-        });
-        self.groups.push(groups);
+        }
     }
 
     fn finish(
@@ -841,6 +950,7 @@ impl Builder {
             bar,
             near_miss_mm,
             engagement_resolution_mm,
+            linked: self.linked,
         };
         scene.set_axes(&AxisVec::ZERO);
         scene
@@ -925,4 +1035,98 @@ fn warm_bounds(
 
 fn to_vector(v: &Vector3<f64>) -> Vector {
     Vector::new(v.x, v.y, v.z)
+}
+
+fn to_pose(iso: &Isometry3<f64>) -> Pose {
+    let c = iso.rotation.coords; // (i, j, k, w)
+    Pose::from_parts(
+        to_vector(&iso.translation.vector),
+        Rotation::from_xyzw(c.x, c.y, c.z, c.w),
+    )
+}
+
+/// The cradle boxes the scene builds: all on a named layout; on a general chain those with
+/// a `link` (the default trunnion, written for the tilting tables, is not built there).
+fn cradle_boxes(machine: &Machine) -> Vec<&CradleBox> {
+    let scene = &machine.scene;
+    if machine.kinematics.general.is_some()
+        && scene.cradle == crate::input::scene::SceneConfig::default().cradle
+    {
+        return Vec::new();
+    }
+    scene.cradle.iter().collect()
+}
+
+/// The links the bodies ride on: on a general chain, its actual chain with the cradle boxes
+/// on the table axes up to their `link` and the head boxes on the head axes up to theirs;
+/// on a named layout, only when it has head boxes (on X, Y or Z). One link per list.
+fn linked_bodies(machine: &Machine) -> Result<Option<LinkedBodies>> {
+    let k = &machine.kinematics;
+    let scene = &machine.scene;
+    let path = machine.path.as_path();
+    let general = k.general.is_some();
+    let chain = match (k.actual_chain(), k.chain()) {
+        (Some(actual), _) => actual,
+        (None, Some(named)) if !scene.head.is_empty() => named,
+        (None, None) if !scene.head.is_empty() => {
+            return Err(Error::invalid(path, format!("[[scene.head]] boxes ride on the head's axes, which the {} layout does not model", k.layout.name())));
+        }
+        _ => {
+            // A named layout's cradle is its tilting axis's: a `link` must name it.
+            for b in &scene.cradle {
+                if let Some(link) = &b.link {
+                    let tilt = k.layout.tilt_axis().map(|a| a.to_string());
+                    if tilt.as_deref() != Some(link.as_str()) {
+                        return Err(Error::invalid(path, format!("scene.cradle box {:?}: link = {link:?}, but the cradle of the {} layout rides on its tilting axis ({}): remove the key", b.name, k.layout.name(), tilt.unwrap_or_else(|| "none".into()))));
+                    }
+                }
+            }
+            return Ok(None);
+        }
+    };
+    let one_link = |section: &str,
+                    boxes: &[&CradleBox],
+                    links: &[crate::kinematics::Link]|
+     -> Result<usize> {
+        let mut found: Option<(String, usize)> = None;
+        for b in boxes {
+            let Some(link) = &b.link else {
+                return Err(Error::invalid(path, format!("{section} box {:?}: give `link`, the axis it is attached after (one of {})", b.name, names(links))));
+            };
+            let n = Axis::from_letter(link.chars().next().unwrap_or(' '))
+                .filter(|_| link.chars().count() == 1)
+                .and_then(|a| LinkedBodies::prefix(links, a))
+                .ok_or_else(|| Error::invalid(path, format!("{section} box {:?}: link = {link:?} is not an axis of that side of the chain (one of {})", b.name, names(links))))?;
+            match &found {
+                Some((first, _)) if first != link => {
+                    return Err(Error::invalid(path, format!("{section} boxes must all ride on one link; {:?} names {link:?}, an earlier box {first:?}", b.name)));
+                }
+                _ => found = Some((link.clone(), n)),
+            }
+        }
+        Ok(found.map_or(0, |(_, n)| n))
+    };
+    let cradle: Vec<&CradleBox> = if general {
+        cradle_boxes(machine)
+    } else {
+        Vec::new()
+    };
+    let cradle_links = one_link("scene.cradle", &cradle, chain.table())?;
+    let head: Vec<&CradleBox> = scene.head.iter().collect();
+    let head_links = one_link("scene.head", &head, chain.head())?;
+    Ok(Some(LinkedBodies::new(
+        machine,
+        chain,
+        cradle_links,
+        head_links,
+    )))
+}
+
+fn names(links: &[crate::kinematics::Link]) -> String {
+    let v: Vec<String> = links.iter().map(|l| l.axis.to_string()).collect();
+    if v.is_empty() {
+        "none".into()
+    } else {
+        v.join(", ")
+    }
 }

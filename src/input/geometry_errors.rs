@@ -18,7 +18,7 @@ use std::path::Path;
 use crate::error::{Error, Result};
 use crate::input::toml_text::{self, value_error};
 use crate::kinematics::error_table::{ErrorTable, PositionErrors};
-use crate::kinematics::{Layout, LocationErrors, LocationParam};
+use crate::kinematics::{Chain, Layout, LocationErrors, LocationParam};
 use crate::Axis;
 
 /// Largest location error accepted, um or urad (1 mm, 1 mrad): beyond it the small-error
@@ -40,12 +40,14 @@ impl GeometryErrors {
     }
 }
 
-/// Validates `[location_errors]` and `[error_tables]` of a machine of `layout` (the file
-/// `path` with contents `text`); table files are read relative to `tables_dir`.
+/// Validates `[location_errors]` and `[error_tables]` of a machine of `layout` (its
+/// `chain` when it is a general one; the file `path` with contents `text`); table files are
+/// read relative to `tables_dir`.
 pub fn validate(
     path: &Path,
     text: &str,
     layout: Layout,
+    chain: Option<&Chain>,
     location: &BTreeMap<String, f64>,
     tables: &BTreeMap<String, String>,
     tables_dir: &Path,
@@ -53,9 +55,16 @@ pub fn validate(
     let section = "location_errors";
     let mut errors = LocationErrors::default();
     for (key, &value) in location {
-        let Some(param) = LocationParam::from_key(key) else {
-            let known: Vec<String> = LocationParam::ALL
-                .into_iter()
+        // A named layout takes the parameters of geometric-errors.md; a general chain's
+        // rotaries all six of each ([`LocationParam::EVERY`]).
+        let names = if chain.is_some() {
+            &LocationParam::EVERY[..]
+        } else {
+            &LocationParam::ALL[..]
+        };
+        let Some(param) = LocationParam::from_key(key).filter(|p| names.contains(p)) else {
+            let known: Vec<String> = names
+                .iter()
                 .filter(|p| layout.axes().contains(&p.axis()))
                 .map(|p| p.key())
                 .collect();
@@ -71,16 +80,20 @@ pub fn validate(
                 ),
             ));
         };
-        if matches!(layout, Layout::Chain(_)) {
-            return Err(value_error(
-                path,
-                text,
-                section,
-                key,
-                "location errors of a general [kinematics] chain are not modelled yet (only those \
-                 of the named layouts); remove this key"
-                    .into(),
-            ));
+        if let Some(link) = chain.and_then(|c| c.link(param.axis())) {
+            if link.direction[param.component()].abs() > 1.0 - 1e-12 {
+                return Err(value_error(
+                    path,
+                    text,
+                    section,
+                    key,
+                    format!(
+                        "axis {}'s line lies along this component, which moves or turns it \
+                         along itself (no effect): remove this key",
+                        param.axis()
+                    ),
+                ));
+            }
         }
         if layout.rotaries_unmodelled() {
             return Err(value_error(

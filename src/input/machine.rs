@@ -330,6 +330,7 @@ impl Machine {
             path,
             text,
             layout,
+            kinematics.general.as_ref(),
             &file.location_errors,
             &file.error_tables,
             tables_file.parent().unwrap_or(Path::new(".")),

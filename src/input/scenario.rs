@@ -553,7 +553,7 @@ fn refuse_what_the_layout_cannot_give(
 ) -> Result<()> {
     let layout = machine.kinematics.layout;
     if let Some(chain) = &machine.kinematics.general {
-        return refuse_what_a_chain_cannot_give(path, file, program, machine, chain);
+        return refuse_what_a_chain_cannot_give(path, program, machine, chain);
     }
     if matches!(program, Program::Cone { .. }) && layout.tilt_axis().is_none() {
         return Err(Error::invalid(
@@ -611,31 +611,14 @@ fn refuse_what_the_layout_cannot_give(
 }
 
 /// [`refuse_what_the_layout_cannot_give`] on a general `[kinematics]` chain: the cone
-/// needs every pose within the chain's reach; the collision scene does not run on general
-/// chains yet. (The circular test runs with the rotaries held at 0, TCP through the chain.)
+/// needs every pose within the chain's reach. (The circular test runs with the rotaries held
+/// at 0, TCP through the chain, the collision scene with bodies on the chain's links.)
 fn refuse_what_a_chain_cannot_give(
     path: &Path,
-    file: &ScenarioFile,
     program: &Program,
     machine: &Machine,
     chain: &crate::kinematics::Chain,
 ) -> Result<()> {
-    let refuse = |what: &str, help: &str| {
-        Err(Error::invalid(
-            path,
-            format!(
-                "{what} does not run on a general [kinematics] chain yet ({})",
-                machine.path.display()
-            ),
-        )
-        .with_help(help.to_string()))
-    };
-    if file.check.collisions {
-        return refuse(
-            "the collision scene ([check] collisions = true, the default)",
-            "set [check] collisions = false: axis limits are still checked",
-        );
-    }
     if let Program::Cone { cone, .. } = program {
         let poses = cone.poses();
         let unreachable = (0..360).find_map(|k| {

@@ -18,8 +18,13 @@ pub struct SceneConfig {
     /// The rotary table, in the table frame.
     pub table: TableConfig,
     /// Boxes of the trunnion/cradle, in the cradle frame (the table frame before the C
-    /// rotation): they tilt with A (or B) but do not turn with C.
+    /// rotation): they tilt with A (or B) but do not turn with C. On a `[kinematics]` chain,
+    /// boxes given at home in the machine frame, carried by the table axes up to their `link`.
     pub cradle: Vec<CradleBox>,
+    /// Head parts (a ram, a fork, a motor housing): boxes given at home in the machine frame,
+    /// carried by the head axes up to their `link` (on the named layouts X, Y or Z).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub head: Vec<CradleBox>,
     /// The spindle nose/head above the gauge line, moving with X Y Z.
     pub spindle: SpindleConfig,
     /// A clearance below this (mm) is a near miss.
@@ -38,18 +43,22 @@ impl Default for SceneConfig {
                     name: "cradle floor".into(),
                     center_mm: [0.0, 0.0, -150.0],
                     size_mm: [500.0, 400.0, 60.0],
+                    link: None,
                 },
                 CradleBox {
                     name: "cradle wall +X".into(),
                     center_mm: [280.0, 0.0, -60.0],
                     size_mm: [60.0, 400.0, 240.0],
+                    link: None,
                 },
                 CradleBox {
                     name: "cradle wall -X".into(),
                     center_mm: [-280.0, 0.0, -60.0],
                     size_mm: [60.0, 400.0, 240.0],
+                    link: None,
                 },
             ],
+            head: Vec::new(),
             spindle: SpindleConfig::default(),
             near_miss_mm: 2.0,
             engagement_resolution_mm: 1.0,
@@ -92,7 +101,8 @@ impl Default for TableConfig {
     }
 }
 
-/// `[[scene.cradle]]`: one box of the cradle, in the cradle frame.
+/// `[[scene.cradle]]` or `[[scene.head]]`: one box, in the cradle frame (a named layout's
+/// cradle) or at home in the machine frame (attached to a chain's `link`).
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct CradleBox {
@@ -102,6 +112,10 @@ pub struct CradleBox {
     /// Full side lengths along X, Y, Z, mm.
     #[serde(deserialize_with = "exact::array")]
     pub size_mm: [f64; 3],
+    /// The axis the box is attached after ("B"): it moves with that axis and those between
+    /// it and the bed on its side of the chain, not with those beyond.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub link: Option<String>,
 }
 
 /// Shape of the spindle nose.
@@ -355,10 +369,12 @@ impl SceneConfig {
         finite(path, text, "scene.table", "top_z_mm", &[t.top_z_mm])?;
         positive(path, text, "scene.table", "radius_mm", t.radius_mm)?;
         positive(path, text, "scene.table", "thickness_mm", t.thickness_mm)?;
-        for b in &self.cradle {
-            finite(path, text, "scene.cradle", "center_mm", &b.center_mm)?;
-            for v in b.size_mm {
-                positive(path, text, "scene.cradle", "size_mm", v)?;
+        for (section, boxes) in [("scene.cradle", &self.cradle), ("scene.head", &self.head)] {
+            for b in boxes {
+                finite(path, text, section, "center_mm", &b.center_mm)?;
+                for v in b.size_mm {
+                    positive(path, text, section, "size_mm", v)?;
+                }
             }
         }
         let s = &self.spindle;

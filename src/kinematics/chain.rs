@@ -220,6 +220,21 @@ impl Chain {
         )
     }
 
+    /// The same chain with `axis`'s line through `point_mm` along `direction` (normalised):
+    /// the actual chain of a rotary with location errors.
+    pub fn with_line(
+        mut self,
+        axis: Axis,
+        direction: Vector3<f64>,
+        point_mm: Vector3<f64>,
+    ) -> Chain {
+        if let Some(link) = self.links[..self.len].iter_mut().find(|l| l.axis == axis) {
+            link.direction = direction.normalize();
+            link.point_mm = point_mm;
+        }
+        self
+    }
+
     /// The rotary links, in chain order, with their sides.
     pub fn rotaries(&self) -> impl Iterator<Item = (Side, &Link)> {
         self.links().filter(|(_, l)| l.axis.is_rotary())

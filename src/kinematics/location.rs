@@ -22,6 +22,13 @@
 //!
 //! For C this gives u_C ≈ (EB0C, −EA0C, 1); for A, u_A ≈ (1, EC0A, −EB0A). With all errors
 //! zero, m is the nominal `pivot + R(q) p` of [`super::Kinematics::table_to_machine`].
+//!
+//! On a general chain (the kinematic-chains spec) a rotary's line need not lie along its
+//! letter's machine axis (a 45° nutating B), so every rotary takes all six parameters
+//! (EX0R EY0R EZ0R in um, EA0R EB0R EC0R in urad, [`LocationParam::EVERY`]); on each
+//! link, `p_k + e` and `unit(d_k + ε × d_k)` ([`LocationErrors::actual_link`]). Only the
+//! component along the line itself has no effect, and is refused on reading when the line
+//! lies along that machine axis.
 
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 use serde::Serialize;
@@ -44,11 +51,32 @@ pub enum LocationParam {
     EY0C,
     EA0C,
     EB0C,
+    /// The components along the letter's own machine axis: meaningful only on a general
+    /// chain whose line for that letter is not along it.
+    EX0A,
+    EA0A,
+    EY0B,
+    EB0B,
+    EZ0C,
+    EC0C,
 }
 
 impl LocationParam {
-    /// Every parameter, in table order (A, B, C; positions before orientations).
-    pub const ALL: [LocationParam; 12] = [
+    /// Every parameter of a named layout, in table order (A, B, C; positions before
+    /// orientations): the first twelve of [`LocationParam::EVERY`].
+    pub const ALL: [LocationParam; 12] = {
+        let mut all = [LocationParam::EY0A; 12];
+        let mut i = 0;
+        while i < 12 {
+            all[i] = LocationParam::EVERY[i];
+            i += 1;
+        }
+        all
+    };
+
+    /// Every parameter a general chain's rotary may carry: [`LocationParam::ALL`], then the
+    /// components along each letter's own machine axis.
+    pub const EVERY: [LocationParam; 18] = [
         LocationParam::EY0A,
         LocationParam::EZ0A,
         LocationParam::EB0A,
@@ -61,6 +89,12 @@ impl LocationParam {
         LocationParam::EY0C,
         LocationParam::EA0C,
         LocationParam::EB0C,
+        LocationParam::EX0A,
+        LocationParam::EA0A,
+        LocationParam::EY0B,
+        LocationParam::EB0B,
+        LocationParam::EZ0C,
+        LocationParam::EC0C,
     ];
 
     /// "EX0C".
@@ -79,6 +113,12 @@ impl LocationParam {
             EY0C => "EY0C",
             EA0C => "EA0C",
             EB0C => "EB0C",
+            EX0A => "EX0A",
+            EA0A => "EA0A",
+            EY0B => "EY0B",
+            EB0B => "EB0B",
+            EZ0C => "EZ0C",
+            EC0C => "EC0C",
         }
     }
 
@@ -110,14 +150,14 @@ impl LocationParam {
         format!("{}_{}", self.name(), self.unit())
     }
 
-    /// The parameter a machine-file key names, if any.
+    /// The parameter a machine-file key names, if any (of [`LocationParam::EVERY`]).
     pub fn from_key(key: &str) -> Option<LocationParam> {
-        LocationParam::ALL.into_iter().find(|p| p.key() == key)
+        LocationParam::EVERY.into_iter().find(|p| p.key() == key)
     }
 
     /// Index of the error component: 0 = X, 1 = Y, 2 = Z (translation along, or rotation
     /// about, that machine axis).
-    fn component(self) -> usize {
+    pub fn component(self) -> usize {
         match self.name().as_bytes()[1] {
             b'X' | b'A' => 0,
             b'Y' | b'B' => 1,
@@ -126,7 +166,7 @@ impl LocationParam {
     }
 
     pub fn index(self) -> usize {
-        LocationParam::ALL
+        LocationParam::EVERY
             .iter()
             .position(|p| *p == self)
             .expect("in ALL")
@@ -137,7 +177,7 @@ impl LocationParam {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LocationErrors {
     /// Indexed by [`LocationParam::index`]: um or urad.
-    values: [f64; 12],
+    values: [f64; 18],
 }
 
 impl LocationErrors {
@@ -161,7 +201,7 @@ impl LocationErrors {
 
     /// The non-zero parameters and their values.
     pub fn nonzero(&self) -> Vec<(LocationParam, f64)> {
-        LocationParam::ALL
+        LocationParam::EVERY
             .into_iter()
             .filter(|p| self.get(*p) != 0.0)
             .map(|p| (p, self.get(p)))
@@ -171,7 +211,10 @@ impl LocationErrors {
     /// Position offset of `axis`'s line, mm (machine X, Y, Z components).
     fn offset_mm(&self, axis: Axis) -> Vector3<f64> {
         let mut v = Vector3::zeros();
-        for p in LocationParam::ALL.into_iter().filter(|p| p.axis() == axis) {
+        for p in LocationParam::EVERY
+            .into_iter()
+            .filter(|p| p.axis() == axis)
+        {
             if p.is_position() {
                 v[p.component()] += self.get(p) * 1e-3;
             }
@@ -182,12 +225,31 @@ impl LocationErrors {
     /// Small-rotation vector (EA0R, EB0R, EC0R) of `axis`'s line, rad.
     fn rotation_rad(&self, axis: Axis) -> Vector3<f64> {
         let mut v = Vector3::zeros();
-        for p in LocationParam::ALL.into_iter().filter(|p| p.axis() == axis) {
+        for p in LocationParam::EVERY
+            .into_iter()
+            .filter(|p| p.axis() == axis)
+        {
             if !p.is_position() {
                 v[p.component()] += self.get(p) * 1e-6;
             }
         }
         v
+    }
+}
+
+impl LocationErrors {
+    /// The actual line of a general chain's rotary `axis` whose nominal line passes through
+    /// `point_mm` along the unit `direction` (home pose, machine frame):
+    /// `(p + e, unit(d + ε × d))`.
+    pub fn actual_link(
+        &self,
+        axis: Axis,
+        direction: &Vector3<f64>,
+        point_mm: &Vector3<f64>,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let eps = self.rotation_rad(axis);
+        let d = direction + eps.cross(direction);
+        (d.normalize(), point_mm + self.offset_mm(axis))
     }
 }
 

@@ -16,9 +16,10 @@ pub fn deviation_mm(
     pivot_table_mm: &Point3<f64>,
     length_mm: f64,
 ) -> f64 {
-    if let Some(chain) = &kin.general {
+    if let Some(chain) = &kin.actual_chain() {
         // A general chain: the tool ball at the gauge point (tool length 0) carried by the
-        // head, the table ball carried by the table (the kinematic-chains spec).
+        // head, the table ball carried by the table (the kinematic-chains spec), both by the
+        // actual chain (location errors included).
         let (tool, _) = chain.tool_in_machine(q_actual, 0.0);
         let pivot = chain.table_pose(q_actual) * pivot_table_mm;
         return (tool - pivot).norm() - length_mm;

@@ -5,6 +5,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod chain_scene;
 mod command;
 mod equivalence;
 mod scene;

@@ -23,11 +23,11 @@ fn turn(d: V, deg: f64, v: V) -> V {
 }
 
 /// One axis of the chain as plain numbers: (rotary, direction, point).
-type Joint = (Axis, bool, V, V);
+pub(super) type Joint = (Axis, bool, V, V);
 
 /// The spec's M_k(q) x applied for the links `links` from the outermost inward
 /// (`M_1 ⋯ M_n x`); `vector`: turn only (a direction).
-fn apply(links: &[Joint], q: &AxisVec, x: V, vector: bool) -> V {
+pub(super) fn apply(links: &[Joint], q: &AxisVec, x: V, vector: bool) -> V {
     links.iter().rev().fold(x, |x, (axis, rotary, d, p)| {
         if *rotary {
             if vector {
@@ -61,15 +61,15 @@ fn unapply(links: &[Joint], q: &AxisVec, x: V, vector: bool) -> V {
 }
 
 pub(crate) struct Spec {
-    table: Vec<Joint>,
-    head: Vec<Joint>,
+    pub(crate) table: Vec<Joint>,
+    pub(crate) head: Vec<Joint>,
     gauge: V,
     tool: V,
 }
 
 impl Spec {
     /// The machine file's chain as numbers (its data, not its code).
-    fn of(chain: &Chain) -> Spec {
+    pub(super) fn of(chain: &Chain) -> Spec {
         let joints = |side: Side| {
             chain
                 .links()
@@ -90,7 +90,7 @@ impl Spec {
     }
 
     /// Tool tip (tool length 0) and tool direction in the machine frame.
-    fn tool_in_machine(&self, q: &AxisVec) -> (V, V) {
+    pub(super) fn tool_in_machine(&self, q: &AxisVec) -> (V, V) {
         (
             apply(&self.head, q, self.gauge, false),
             apply(&self.head, q, self.tool, true),

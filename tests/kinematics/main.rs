@@ -5,6 +5,7 @@
 mod common;
 
 mod chain_cone;
+mod chain_location;
 mod chain_planes;
 mod chain_poles;
 mod chains;

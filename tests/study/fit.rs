@@ -20,7 +20,7 @@ const HIDDEN: [(&str, f64); 8] = [
     ("EB0C", 20.0),
 ];
 
-fn unit(name: &str) -> &'static str {
+pub(super) fn unit(name: &str) -> &'static str {
     if matches!(name.as_bytes()[1], b'X' | b'Y' | b'Z') {
         "um"
     } else {
@@ -75,7 +75,7 @@ impl Noise {
 
 /// Simulates `scenario` into `dir/<name>-sim` and writes its trace plus noise (sigma um) as
 /// the measured trace `dir/<name>.csv`.
-fn measure(dir: &Path, name: &str, scenario: &Path, sigma: f64, seed: u64) -> PathBuf {
+pub(super) fn measure(dir: &Path, name: &str, scenario: &Path, sigma: f64, seed: u64) -> PathBuf {
     let clean = simulate_trace(dir, name, scenario);
     let mut noise = Noise(seed);
     with_noise(dir, name, &clean, &mut || sigma * noise.gauss())
@@ -127,7 +127,7 @@ fn with_noise(
 
 /// `fit --json --placement-known` of `pairs` into `dir/fit` (the traces are simulated with
 /// the ball where the scenario says).
-fn run_fit(dir: &Path, pairs: &[(&Path, &Path)]) -> Value {
+pub(super) fn run_fit(dir: &Path, pairs: &[(&Path, &Path)]) -> Value {
     let out = dir.join("fit");
     let owned: Vec<(PathBuf, PathBuf)> = pairs
         .iter()
@@ -140,7 +140,7 @@ fn run_fit(dir: &Path, pairs: &[(&Path, &Path)]) -> Value {
     v
 }
 
-fn param<'a>(fit: &'a Value, name: &str) -> &'a Value {
+pub(super) fn param<'a>(fit: &'a Value, name: &str) -> &'a Value {
     fit["parameters"]
         .as_array()
         .unwrap()
@@ -149,7 +149,7 @@ fn param<'a>(fit: &'a Value, name: &str) -> &'a Value {
         .unwrap_or_else(|| panic!("no parameter {name}"))
 }
 
-fn assert_recovered(fit: &Value, name: &str, truth: f64) {
+pub(super) fn assert_recovered(fit: &Value, name: &str, truth: f64) {
     let p = param(fit, name);
     assert_eq!(
         p["identifiable"], true,

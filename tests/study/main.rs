@@ -7,6 +7,7 @@ mod common;
 mod cone_reference;
 mod diagnose;
 mod fit;
+mod fit_chain;
 mod kato_reproduction;
 mod lanes;
 mod simulate;

@@ -238,18 +238,22 @@ impl SceneMonitor {
                         Carrier::Cradle => Some(1),
                         _ => None,
                     };
-                    frame.filter(|_| tool.carrier == Carrier::Tool).map(|f| {
-                        let aabb = tool.shape.compute_aabb(&tool.local);
-                        let reach = (0..8)
-                            .map(|i| {
-                                let x = if i & 1 == 0 { aabb.mins.x } else { aabb.maxs.x };
-                                let y = if i & 2 == 0 { aabb.mins.y } else { aabb.maxs.y };
-                                let z = if i & 4 == 0 { aabb.mins.z } else { aabb.maxs.z };
-                                (x * x + y * y + z * z).sqrt()
-                            })
-                            .fold(0.0, f64::max);
-                        (f, reach)
-                    })
+                    // A general chain's bodies have no table rotation written out here.
+                    let named = scene.kinematics.general.is_none();
+                    frame
+                        .filter(|_| named && tool.carrier == Carrier::Tool)
+                        .map(|f| {
+                            let aabb = tool.shape.compute_aabb(&tool.local);
+                            let reach = (0..8)
+                                .map(|i| {
+                                    let x = if i & 1 == 0 { aabb.mins.x } else { aabb.maxs.x };
+                                    let y = if i & 2 == 0 { aabb.mins.y } else { aabb.maxs.y };
+                                    let z = if i & 4 == 0 { aabb.mins.z } else { aabb.maxs.z };
+                                    (x * x + y * y + z * z).sqrt()
+                                })
+                                .fold(0.0, f64::max);
+                            (f, reach)
+                        })
                 },
                 slack: 0.0,
                 moved: 0.0,
@@ -342,6 +346,22 @@ impl SceneMonitor {
         // Every pair is due at the next sample (no lazy skip past the change).
         self.next_due = f64::NEG_INFINITY;
         self.dues.fill(f64::NEG_INFINITY);
+        if self.scene.kinematics.general.is_some() {
+            // On a chain the tool parts' lever arms changed with the tool.
+            for (i, state) in self.states.iter_mut().enumerate() {
+                let pair = self.scene.pairs[i];
+                let (wa, wb) = (
+                    self.scene.parts[pair.a].motion,
+                    self.scene.parts[pair.b].motion,
+                );
+                state.weights = [wa[0] + wb[0], wa[1] + wb[1], wa[2] + wb[2]];
+            }
+            let states_w: Vec<[f64; 3]> = (0..self.states.len())
+                .filter(|i| !self.is_hot[*i])
+                .map(|i| self.states[i].weights)
+                .collect();
+            self.w_max = [0, 1, 2].map(|k| states_max(&states_w, k));
+        }
         for (i, state) in self.states.iter_mut().enumerate() {
             state.slack = 0.0;
             state.moved = 0.0;
@@ -585,9 +605,13 @@ impl SceneMonitor {
         }
     }
 
-    /// |dXYZ| (mm), |d tilt| (rad), |dC| (rad) between two samples.
+    /// |dXYZ| (mm), |d tilt| (rad), |dC| (rad) between two samples; on a general chain
+    /// Σ|Δq| over its linear axes (mm) and its rotaries (rad), and 0 ([`super::linked`]).
     #[inline]
     fn motion(&self, a: &AxisVec, b: &AxisVec) -> [f64; 3] {
+        if let Some(m) = self.scene.chain_motion(a, b) {
+            return m;
+        }
         let (a, b) = (&a.0, &b.0);
         let d = |i: usize| b[i] - a[i];
         let lin = (d(0).powi(2) + d(1).powi(2) + d(2).powi(2)).sqrt();

@@ -11,6 +11,9 @@
 //! dL(θ; p) = | tool(q) − T_tilt(q; p) T_C(q; p) (pivot + O + s) | − L + b_k
 //! ```
 //!
+//! On a general `[kinematics]` chain, tool(q) and the table ball are the actual chain's
+//! (`Kinematics::actual_chain`), with every rotary's acting parameters ([`chain_parameters`]).
+//!
 //! binned like the ball bar (0.05 deg) and interpolated at θ: p the location errors, b_k the
 //! bar-length offset of trace k, s its table-ball placement error (three translations, fitted
 //! per trace unless `--placement-known`: in a real set-up the ball sits 10-20 um from where
@@ -69,7 +72,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
-use crate::kinematics::{Layout, LocationParam};
+use crate::kinematics::{Chain, Kinematics, Layout, LocationParam};
 use crate::report::fit_plot::{render_fit_svg, PlotSeries};
 use crate::report::{create_dir, write_atomic};
 use decomposition::describe_null;
@@ -97,7 +100,8 @@ pub fn fit(
     out_dir: &Path,
 ) -> Result<FitReport> {
     let layout = common_layout(inputs)?;
-    let (params, servo_params) = parameters(layout, inputs.len(), options);
+    let kinematics = inputs[0].0.machine.kinematics;
+    let (params, servo_params) = parameters(&kinematics, inputs.len(), options);
     let (problem, mut runs) = Problem::new(inputs, params, servo_params)?;
     problem.simulate(&mut runs, &DVector::zeros(problem.params.len()), None)?;
     for (k, (scenario, trace)) in inputs.iter().enumerate() {
@@ -105,7 +109,8 @@ pub fn fit(
         conformity::check(scenario, trace, &own, &problem.measured)?;
     }
     let solution = problem.solve(&mut runs)?;
-    let (report, fitted) = assemble(&problem, &runs, solution, layout, options)?;
+    let (mut report, fitted) = assemble(&problem, &runs, solution, layout, options)?;
+    report.cautions.extend(chain_cautions(&kinematics));
     write_outputs(out_dir, &report, &problem, &runs, &fitted)?;
     Ok(report)
 }
@@ -118,14 +123,16 @@ fn common_layout(inputs: &[(Scenario, MeasuredTrace)]) -> Result<Layout> {
         ));
     };
     let layout = first.machine.kinematics.layout;
-    if layout.tilt_axis().is_none() {
+    let chain = first.machine.kinematics.general;
+    let chain_rotaries = chain.map_or(0, |c| c.rotaries().count());
+    if layout.tilt_axis().is_none() && chain_rotaries == 0 {
         return Err(Error::invalid(
             &first.path,
-            "`mtsim fit` needs a machine with rotary axes (trt-ac or trt-bc)",
+            "`mtsim fit` needs a machine with rotary axes (trt-ac, trt-bc, or a [kinematics] chain with rotaries)",
         ));
     }
     for (s, _) in inputs {
-        if s.machine.kinematics.layout != layout {
+        if s.machine.kinematics.layout != layout || s.machine.kinematics.general != chain {
             return Err(Error::invalid(
                 &s.path,
                 format!(
@@ -139,13 +146,24 @@ fn common_layout(inputs: &[(Scenario, MeasuredTrace)]) -> Result<Layout> {
 }
 
 /// The parameters: location errors, then per trace its bar offset (and placement), then the
-/// servo parameters (also returned alone).
-fn parameters(layout: Layout, traces: usize, options: &FitOptions) -> (Vec<Param>, Vec<Param>) {
-    let mut params: Vec<Param> = LocationParam::ALL
-        .into_iter()
-        .filter(|p| layout.axes().contains(&p.axis()))
-        .map(Param::Location)
-        .collect();
+/// servo parameters (also returned alone). On a general chain every rotary's six location
+/// errors but those along its own line ([`chain_parameters`]).
+fn parameters(
+    kinematics: &Kinematics,
+    traces: usize,
+    options: &FitOptions,
+) -> (Vec<Param>, Vec<Param>) {
+    let layout = kinematics.layout;
+    let mut params: Vec<Param> = match &kinematics.general {
+        Some(chain) => chain_parameters(chain),
+        None => LocationParam::ALL
+            .into_iter()
+            .filter(|p| layout.axes().contains(&p.axis()))
+            .collect(),
+    }
+    .into_iter()
+    .map(Param::Location)
+    .collect();
     for k in 0..traces {
         params.push(Param::BarOffset(k));
         if !options.placement_known {
@@ -168,6 +186,43 @@ fn parameters(layout: Layout, traces: usize, options: &FitOptions) -> (Vec<Param
         .collect();
     params.extend(servo.iter().copied());
     (params, servo)
+}
+
+/// A general chain's location-error parameters: each rotary's six (EVERY), but for a
+/// component along its own line, which moves or turns the line along itself.
+fn chain_parameters(chain: &Chain) -> Vec<LocationParam> {
+    LocationParam::EVERY
+        .into_iter()
+        .filter(|p| {
+            chain.link(p.axis()).is_some_and(|l| {
+                l.axis.is_rotary() && l.direction[p.component()].abs() < 1.0 - 1e-12
+            })
+        })
+        .collect()
+}
+
+/// On a general chain, what no ball-bar test separates: a rotary line along no machine axis
+/// takes three offsets and three tilts ([`chain_parameters`]) of which only the two across
+/// the line act, so each triple is seen as two combinations at most (the rank report names
+/// them).
+fn chain_cautions(kinematics: &Kinematics) -> Vec<String> {
+    let Some(chain) = &kinematics.general else {
+        return Vec::new();
+    };
+    chain
+        .rotaries()
+        .filter(|(_, l)| l.direction.iter().all(|c| c.abs() < 1.0 - 1e-12))
+        .map(|(_, l)| {
+            let a = l.axis;
+            format!(
+                "{a}'s line ({:.4}, {:.4}, {:.4}) lies along no machine axis: of EX0{a}, EY0{a}, \
+                 EZ0{a} only the two offsets across the line act, and of EA0{a}, EB0{a}, EC0{a} \
+                 only the two tilts across it, so no test separates each triple into more than \
+                 two combinations",
+                l.direction.x, l.direction.y, l.direction.z
+            )
+        })
+        .collect()
 }
 
 /// Turns the solution into the report (and the fitted model, for the plots).

@@ -6,15 +6,18 @@ use serde_json::{json, Map};
 
 use super::print_stdout;
 use crate::error::Result;
-use crate::study::feed::{feed_limits, FeedReport};
-use crate::study::reversals::{analyse_scenario, Analysis};
+use crate::study::analysis::{analyse_program, ProgramAnalysis};
+use crate::study::feed::FeedReport;
+use crate::study::reversals::Analysis;
 
 pub fn run(path: &Path, as_json: bool) -> Result<i32> {
     let scenario = super::load_scenario(path)?;
-    let analysis = analyse_scenario(&scenario)?;
-    let geometric = crate::study::geometry::geometric_trace(&scenario)?;
-    let feed = feed_limits(&scenario)?;
-    let notices = crate::program::scenario_notices(&scenario)?;
+    let ProgramAnalysis {
+        analysis,
+        geometric,
+        feed,
+        notices,
+    } = analyse_program(&scenario)?;
     let (warned, no_effect): (Vec<_>, Vec<_>) = notices.iter().partition(|n| n.warning);
     let located = |n: &&ngc::Notice| format!("{}:{}: {}", n.path.display(), n.line, n.message);
     let mut warnings = analysis.warnings();

@@ -7,12 +7,11 @@
 //! order (reversals, geometric trace, feed limits): the analysis reads on where the planner
 //! stops, and its error comes first.
 
-use std::sync::{Arc, Mutex};
-
 use crate::error::{Error, Result};
 use crate::input::scenario::{Program, Scenario};
 use crate::measure::CircleFrame;
-use crate::program::{file, validate, Move};
+use crate::program::validate::{self, Checked};
+use crate::program::{file, Move};
 use crate::study::feed::{feed_limits, plan_feed, FeedReport};
 use crate::study::geometry::{geometric_trace, GeometricTrace};
 use crate::study::reversals::{analyse_scenario, Analysis, MoveAnalysis};
@@ -40,13 +39,9 @@ pub fn analyse_program(scenario: &Scenario) -> Result<ProgramAnalysis> {
         });
     };
     let machine = &scenario.machine;
-    let notices = Arc::new(Mutex::new(Vec::new()));
-    let reader = KeepNotices {
-        moves: file::read_moves(path, &scenario.reader)?,
-        notices: Arc::clone(&notices),
-    };
+    let reader = file::read_moves(path, &scenario.reader)?;
     // The stream `program::scenario_run` gives for a file, as both passes read it.
-    let moves = validate::checked(path, machine, scenario.simulate.tcp, reader);
+    let moves = validate::checked_unboxed(path, machine, scenario.simulate.tcp, reader);
     let mut tee = Analysed {
         moves,
         analysis: MoveAnalysis::new(machine, cone.map(|c| CircleFrame::of_cone(&c))),
@@ -61,7 +56,9 @@ pub fn analyse_program(scenario: &Scenario) -> Result<ProgramAnalysis> {
     let analysis = tee.analysis.finish();
     let geometric = geometric_trace(scenario)?;
     let feed = feed?;
-    let notices = std::mem::take(&mut *notices.lock().expect("not poisoned"));
+    // The reader has ended (the analysis read it to its end): its notices are those
+    // `file::notices` collects.
+    let notices = tee.moves.inner().notices().to_vec();
     Ok(ProgramAnalysis {
         analysis,
         geometric,
@@ -73,7 +70,7 @@ pub fn analyse_program(scenario: &Scenario) -> Result<ProgramAnalysis> {
 /// The moves of a file program, each given to the reversal analysis on its way; a failed
 /// read or analysis ends the stream and is kept in `failed`.
 struct Analysed<'m> {
-    moves: crate::program::Moves<'static>,
+    moves: Checked<ngc::Moves>,
     analysis: MoveAnalysis<'m>,
     failed: Option<Error>,
 }
@@ -98,24 +95,5 @@ impl Iterator for Analysed<'_> {
                 None
             }
         }
-    }
-}
-
-/// The interpreter's moves; when they end (at the end of the program or at its first error)
-/// the reader's notices go to `notices`, as [`file::notices`] collects them.
-struct KeepNotices {
-    moves: ngc::Moves,
-    notices: Arc<Mutex<Vec<ngc::Notice>>>,
-}
-
-impl Iterator for KeepNotices {
-    type Item = std::result::Result<Move, ngc::Error>;
-
-    fn next(&mut self) -> Option<Self::Item> {
-        let next = self.moves.next();
-        if !matches!(next, Some(Ok(_))) {
-            *self.notices.lock().expect("not poisoned") = self.moves.notices().to_vec();
-        }
-        next
     }
 }

@@ -19,6 +19,7 @@ pub mod run;
 pub mod run_dir;
 pub mod test_info;
 pub mod trace;
+pub mod trace_parquet;
 
 pub use files::{create_dir, temporary_path, write_atomic};
 pub use run_dir::RunDir;

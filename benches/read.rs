@@ -307,16 +307,7 @@ fn versus_rs274() {
         sinumerik.0 / reader.0
     );
 
-    let scenario = dir.join("s.toml");
-    let machine = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/vmc-3axis.toml");
-    std::fs::write(
-        &scenario,
-        format!(
-            "machine = {:?}\n[program]\nfile = \"big.ngc\"\n",
-            machine.display().to_string()
-        ),
-    )
-    .unwrap();
+    let scenario = vmc_scenario(&dir, "big.ngc");
     let blocks = best_of(runs, children_cpu_s, || {
         let status = Command::new(env!("CARGO_BIN_EXE_mtsim"))
             .args(["blocks", scenario.to_str().unwrap(), "--csv"])
@@ -360,6 +351,21 @@ fn versus_rs274() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A scenario in `dir` that runs the file `program` (in `dir`) on the three-axis VMC.
+fn vmc_scenario(dir: &Path, program: &str) -> PathBuf {
+    let scenario = dir.join(format!("{program}.toml"));
+    let machine = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/vmc-3axis.toml");
+    std::fs::write(
+        &scenario,
+        format!(
+            "machine = {:?}\n[program]\nfile = {program:?}\n",
+            machine.display().to_string()
+        ),
+    )
+    .unwrap();
+    scenario
+}
+
 /// Runs `rs274` on `program` (printing its canonical calls to a file in `dir`).
 fn run_rs274(rs274: &Path, dir: &Path, program: &Path) {
     let (var, tools) = (dir.join("p.var"), dir.join("tool.tbl"));
@@ -393,16 +399,7 @@ fn analyze_versus_rs274() {
     std::fs::create_dir_all(&dir).unwrap();
     let program = dir.join("analyze.ngc");
     write_g01_file(&program, "G21", ANALYZE_BLOCKS);
-    let scenario = dir.join("analyze.toml");
-    let machine = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/vmc-3axis.toml");
-    std::fs::write(
-        &scenario,
-        format!(
-            "machine = {:?}\n[program]\nfile = \"analyze.ngc\"\n",
-            machine.display().to_string()
-        ),
-    )
-    .unwrap();
+    let scenario = vmc_scenario(&dir, "analyze.ngc");
     let runs = if smoke() { 3 } else { 10 };
     let analyze = process_cpu_s(&["analyze".as_ref(), scenario.as_os_str()], runs);
     let rs = rs274_binary().and_then(|rs274| {

@@ -20,6 +20,7 @@ pub mod run_dir;
 pub mod test_info;
 pub mod trace;
 pub mod trace_parquet;
+mod trace_rows;
 
 pub use files::{create_dir, temporary_path, write_atomic};
 pub use run_dir::RunDir;

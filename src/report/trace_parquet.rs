@@ -21,7 +21,7 @@ use parquet::file::writer::SerializedFileWriter;
 use parquet::schema::types::Type;
 
 use super::files::temporary_path;
-use super::trace::{write_error, RawRows, RAW_FIXED_COLUMNS};
+use super::trace_rows::{write_error, RawRows, RAW_FIXED_COLUMNS};
 use crate::error::{Error, Result};
 use crate::measure::BallbarRun;
 

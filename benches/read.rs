@@ -19,6 +19,9 @@
 //! the reader ≥ 20× faster than rs274. `MTSIM_BENCH_VS_ONLY=1` skips the criterion part;
 //! `MTSIM_BENCH_SMOKE=1` skips it too and reads a 100,000-block file once each (a CI smoke
 //! run: every reader still runs and agrees on the block count).
+//!
+//! Last, `mtsim analyze` of a 300,000-block file of the same kind as a whole process against
+//! `rs274` reading it (issue 27: at least 10x faster), CPU time of the child processes.
 
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
@@ -30,6 +33,9 @@ use mtsim::input::scenario::Scenario;
 use mtsim::input::Program;
 use mtsim::program::cone::{write_program, ConePath, ConeProgram};
 use mtsim::AxisVec;
+
+mod common;
+use common::{children_cpu_s, process_cpu_s};
 
 const BLOCKS: usize = 100_000;
 
@@ -192,6 +198,11 @@ fn smoke() -> bool {
 /// measurement in docs/rs274.md §5.
 /// `metric` is the first block's metric code: G21 (ISO), G71 (Sinumerik).
 fn write_big_file(path: &Path, metric: &str) {
+    write_g01_file(path, metric, big_blocks());
+}
+
+/// A G01 file of `blocks` blocks of [`write_big_file`]'s kind.
+fn write_g01_file(path: &Path, metric: &str, blocks: usize) {
     use std::io::Write;
     let mut out = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
     writeln!(out, "{metric} G90 G94 G17").unwrap();
@@ -203,7 +214,7 @@ fn write_big_file(path: &Path, metric: &str) {
             .wrapping_add(1_442_695_040_888_963_407);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
-    for _ in 0..big_blocks() {
+    for _ in 0..blocks {
         writeln!(
             out,
             "G1 X{:.4} Y{:.4} Z{:.4} F{:.1}",
@@ -221,16 +232,6 @@ fn write_big_file(path: &Path, metric: &str) {
 fn thread_cpu_s() -> Option<f64> {
     let t = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
     Some(t.split_whitespace().next()?.parse::<f64>().ok()? * 1e-9)
-}
-
-/// CPU time (user + system) of this process's waited-for children, s (`/proc/self/stat`
-/// fields 16 and 17, in clock ticks of 1/100 s).
-fn children_cpu_s() -> Option<f64> {
-    let t = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the command name, which is in parentheses and may hold blanks.
-    let fields: Vec<&str> = t.rsplit_once(')')?.1.split_whitespace().collect();
-    let ticks = |k: usize| fields.get(k - 3)?.parse::<f64>().ok();
-    Some((ticks(16)? + ticks(17)?) / 100.0)
 }
 
 /// Wall and CPU time of `f`, s: the best of `runs` each. `cpu` reads a CPU clock (this
@@ -306,16 +307,7 @@ fn versus_rs274() {
         sinumerik.0 / reader.0
     );
 
-    let scenario = dir.join("s.toml");
-    let machine = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/vmc-3axis.toml");
-    std::fs::write(
-        &scenario,
-        format!(
-            "machine = {:?}\n[program]\nfile = \"big.ngc\"\n",
-            machine.display().to_string()
-        ),
-    )
-    .unwrap();
+    let scenario = vmc_scenario(&dir, "big.ngc");
     let blocks = best_of(runs, children_cpu_s, || {
         let status = Command::new(env!("CARGO_BIN_EXE_mtsim"))
             .args(["blocks", scenario.to_str().unwrap(), "--csv"])
@@ -329,26 +321,8 @@ fn versus_rs274() {
     match rs274_binary() {
         None => println!("  rs274: not installed (package linuxcnc-uspace), comparison skipped"),
         Some(rs274) => {
-            let var = dir.join("p.var");
-            let tools = dir.join("tool.tbl");
-            std::fs::write(&tools, "").unwrap();
             let rs = best_of(rs_runs, children_cpu_s, || {
-                std::fs::write(&var, "").unwrap();
-                let status = Command::new(&rs274)
-                    .env("HOME", &dir)
-                    .arg("-t")
-                    .arg(&tools)
-                    .arg("-v")
-                    .arg(&var)
-                    .args(["-n", "2", "-g"])
-                    .arg(&program)
-                    .arg(dir.join("rs274.out"))
-                    .stdin(Stdio::null())
-                    .stdout(Stdio::null())
-                    .stderr(Stdio::null())
-                    .status()
-                    .unwrap();
-                assert!(status.success(), "rs274 failed on the benchmark file");
+                run_rs274(&rs274, &dir, &program)
             });
             line("rs274 (output file)", rs);
             let verdict = |ratio: f64| {
@@ -377,6 +351,84 @@ fn versus_rs274() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A scenario in `dir` that runs the file `program` (in `dir`) on the three-axis VMC.
+fn vmc_scenario(dir: &Path, program: &str) -> PathBuf {
+    let scenario = dir.join(format!("{program}.toml"));
+    let machine = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/vmc-3axis.toml");
+    std::fs::write(
+        &scenario,
+        format!(
+            "machine = {:?}\n[program]\nfile = {program:?}\n",
+            machine.display().to_string()
+        ),
+    )
+    .unwrap();
+    scenario
+}
+
+/// Runs `rs274` on `program` (printing its canonical calls to a file in `dir`).
+fn run_rs274(rs274: &Path, dir: &Path, program: &Path) {
+    let (var, tools) = (dir.join("p.var"), dir.join("tool.tbl"));
+    std::fs::write(&tools, "").unwrap();
+    std::fs::write(&var, "").unwrap();
+    let status = Command::new(rs274)
+        .env("HOME", dir)
+        .arg("-t")
+        .arg(&tools)
+        .arg("-v")
+        .arg(&var)
+        .args(["-n", "2", "-g"])
+        .arg(program)
+        .arg(dir.join("rs274.out"))
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .unwrap();
+    assert!(status.success(), "rs274 failed on the benchmark file");
+}
+
+/// Blocks of the file `mtsim analyze` reads against rs274 (issue 27: at least 10x faster).
+const ANALYZE_BLOCKS: usize = 300_000;
+
+/// `mtsim analyze` of a 300,000-block G01 file as a whole process (reading, the reversals,
+/// the feed limits, the notices, the printed table) against `rs274` reading the same file:
+/// CPU time of the child processes, mean of several runs of each.
+fn analyze_versus_rs274() {
+    let dir = std::env::temp_dir().join(format!("mtsim-bench-analyze-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let program = dir.join("analyze.ngc");
+    write_g01_file(&program, "G21", ANALYZE_BLOCKS);
+    let scenario = vmc_scenario(&dir, "analyze.ngc");
+    let runs = if smoke() { 3 } else { 10 };
+    let analyze = process_cpu_s(&["analyze".as_ref(), scenario.as_os_str()], runs);
+    let rs = rs274_binary().and_then(|rs274| {
+        let start = children_cpu_s()?;
+        for _ in 0..runs.min(3) {
+            run_rs274(&rs274, &dir, &program);
+        }
+        Some((children_cpu_s()? - start) / runs.min(3) as f64)
+    });
+    let rate = |s: f64| ANALYZE_BLOCKS as f64 / s / 1e6;
+    match (analyze, rs) {
+        (Some(a), Some(r)) => println!(
+            "\nmtsim analyze, {}k-block G01 file, whole process: {a:.3} s CPU ({:.2} M blocks/s); rs274 {r:.3} s ({:.2} M blocks/s); analyze {:.1}x faster (goal >= 10x: {})",
+            ANALYZE_BLOCKS / 1000,
+            rate(a),
+            rate(r),
+            r / a,
+            if r / a >= 10.0 { "met" } else { "NOT met" }
+        ),
+        (Some(a), None) => println!(
+            "\nmtsim analyze, {}k-block G01 file, whole process: {a:.3} s CPU ({:.2} M blocks/s); rs274 not installed, comparison skipped",
+            ANALYZE_BLOCKS / 1000,
+            rate(a)
+        ),
+        _ => println!("\nmtsim analyze: no /proc, CPU time not measured"),
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 criterion_group!(benches, read);
 
 fn main() {
@@ -386,4 +438,5 @@ fn main() {
     }
     dialects_side_by_side();
     versus_rs274();
+    analyze_versus_rs274();
 }

@@ -14,7 +14,12 @@
 //! - `check` with collisions on at 1 ms sampling: the real-time factor (per CPU second of
 //!   the running thread, like `simulate`), samples per second and the geometric queries made.
 //!
-//! `MTSIM_BENCH_SMOKE=1` runs each simulate case once and skips the rest (a CI smoke run);
+//! - whole `mtsim simulate` processes with the full trace (CSV, Parquet), decimated and off:
+//!   CPU time of the child process, real-time factor, and the trace's rows and MB per CPU
+//!   second (its cost: the difference to the trace-off process).
+//!
+//! `MTSIM_BENCH_SMOKE=1` runs each simulate case once, the whole processes three times, and
+//! skips the rest (a CI smoke run); `MTSIM_BENCH_ONLY=process` runs only the whole processes;
 //! `MTSIM_BENCH_ONLY=off` runs only the simulate cases whose name contains `off`
 //! (`file-fine`: the 36,000-block file alone);
 //! `MTSIM_BENCH_RUNS=N` runs each simulate case N times (for profiling).
@@ -27,6 +32,9 @@ use std::time::Instant;
 use mtsim::check::{check, CheckOptions};
 use mtsim::input::scenario::Scenario;
 use mtsim::study::simulate::simulate;
+
+mod common;
+use common::process_cpu_s;
 
 /// CPU time of the calling thread, s (`/proc/thread-self/schedstat`, ns on the CPU); falls
 /// back to wall time where that file does not exist.
@@ -190,6 +198,81 @@ fn long_program(dir: &Path, revolutions: usize) -> PathBuf {
     scenario
 }
 
+/// Whole `mtsim simulate` processes (issue 27: at least 1,000x real time per CPU second with
+/// the full trace): the cases `cases` (full trace as CSV, as Parquet, decimated, off), each
+/// the mean CPU time of `runs` processes, every run into a fresh folder; the trace's cost is
+/// the difference to the trace-off process, its throughput in rows and MB per CPU second.
+fn whole_processes(dir: &Path, cases: &[(&str, PathBuf)], runs: usize) {
+    let sim_time = Scenario::load(&cases[0].1)
+        .ok()
+        .and_then(|s| simulate(&s, &dir.join("process-probe"), false, &|_| {}).ok())
+        .map_or(f64::NAN, |s| s.sim_time_s);
+    let mut cpu = Vec::new();
+    for (k, (_, path)) in cases.iter().enumerate() {
+        let out = dir.join(format!("process-{k}"));
+        let _ = std::fs::remove_dir_all(&out);
+        // A fresh folder per run: replacing the last run's files costs the kernel time too.
+        let t = (0..runs)
+            .map(|r| {
+                let out = out.join(r.to_string());
+                process_cpu_s(
+                    &[
+                        "simulate".as_ref(),
+                        path.as_os_str(),
+                        "-o".as_ref(),
+                        out.as_os_str(),
+                        "--no-timing".as_ref(),
+                    ],
+                    1,
+                )
+            })
+            .sum::<Option<f64>>()
+            .map(|total| total / runs as f64);
+        cpu.push((t, out.join("0")));
+    }
+    let off = cpu.last().and_then(|(t, _)| *t);
+    for ((name, _), (t, out)) in cases.iter().zip(&cpu) {
+        let Some(t) = t else {
+            println!("whole mtsim simulate process, {name}: no /proc, not measured");
+            continue;
+        };
+        let trace = ["trace.csv", "trace.parquet"]
+            .iter()
+            .map(|f| out.join(f))
+            .find(|f| f.exists());
+        let throughput = match (trace, off) {
+            (Some(file), Some(off)) if *name != cases[cases.len() - 1].0 => {
+                let bytes = std::fs::metadata(&file).map_or(0, |m| m.len());
+                let rows = mtsim::report::trace::read_trace(out)
+                    .ok()
+                    .flatten()
+                    .map_or(0, |t| t.runs.iter().map(|r| r.time_s.len()).sum::<usize>());
+                let cost = (t - off).max(1e-6);
+                format!(
+                    "; the trace {:.1} ms: {rows} rows, {:.2} M rows/s, {:.0} MB/s",
+                    cost * 1e3,
+                    rows as f64 / cost / 1e6,
+                    bytes as f64 / cost / 1e6
+                )
+            }
+            _ => String::new(),
+        };
+        let rtf = sim_time / t;
+        let goal = if name.starts_with("full") {
+            format!(
+                " (goal >= 1,000x: {})",
+                if rtf >= 1000.0 { "met" } else { "NOT met" }
+            )
+        } else {
+            String::new()
+        };
+        println!(
+            "whole mtsim simulate process, cone-15-10 all nonlinear, {name}: {:.1} ms CPU (mean of {runs}), {rtf:.0}x real time per CPU second{goal}{throughput}",
+            t * 1e3
+        );
+    }
+}
+
 fn main() {
     let dir = scratch("run");
 
@@ -260,7 +343,10 @@ fn main() {
             coarse_med / fine_med
         );
     }
-    if smoke {
+    if only.is_empty() || only == "process" {
+        whole_processes(&dir, &cases[..4], if smoke { 3 } else { 15 });
+    }
+    if smoke || only == "process" {
         let _ = std::fs::remove_dir_all(&dir);
         return;
     }

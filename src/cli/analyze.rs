@@ -7,8 +7,9 @@ use serde_json::{json, Map};
 use super::print_stdout;
 use crate::error::Result;
 use crate::input::scenario::Scenario;
-use crate::study::feed::{feed_limits, FeedReport};
-use crate::study::reversals::{analyse_scenario, Analysis};
+use crate::study::analysis::{analyse_program, ProgramAnalysis};
+use crate::study::feed::FeedReport;
+use crate::study::reversals::Analysis;
 
 /// What `mtsim analyze` finds in a scenario, before it is printed.
 pub struct AnalyzeFindings {
@@ -23,11 +24,18 @@ pub struct AnalyzeFindings {
 
 impl AnalyzeFindings {
     pub fn of(scenario: &Scenario) -> Result<AnalyzeFindings> {
+        // One read of a file program gives the reversals, the feed limits and the notices.
+        let ProgramAnalysis {
+            analysis,
+            geometric,
+            feed,
+            notices,
+        } = analyse_program(scenario)?;
         Ok(AnalyzeFindings {
-            analysis: analyse_scenario(scenario)?,
-            geometric: crate::study::geometry::geometric_trace(scenario)?,
-            feed: feed_limits(scenario)?,
-            notices: crate::program::scenario_notices(scenario)?,
+            analysis,
+            geometric,
+            feed,
+            notices,
             chain_events: crate::study::chain_events::chain_events(scenario)?,
         })
     }

@@ -801,6 +801,39 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             .unwrap_or_default()
     }
 
+    /// Plans every remaining block without sampling any, for its feed limits (and
+    /// [`Interpolator::feed_reductions`]): they come out as when the setpoints are taken,
+    /// since a block's cruise speed and the limit that holds it are set when the block is
+    /// planned on its own ([`Interpolator::plan`]), before the junctions, the look-ahead or
+    /// the profile, which this skips. The first error ends it, as it ends the setpoints. The
+    /// interpolator yields nothing after.
+    pub fn plan_to_end(&mut self) -> Result<()> {
+        self.done = true;
+        // The window's blocks were planned, and their limits noted, when they were read.
+        self.window.clear();
+        if let Some(e) = self.pending_error.take() {
+            return Err(e);
+        }
+        loop {
+            let block = match self.read_ahead.pop_front() {
+                Some(block) => block,
+                None if self.blocks_done => return Ok(()),
+                None => match self.blocks.next() {
+                    Some(block) => block,
+                    None => {
+                        self.blocks_done = true;
+                        return Ok(());
+                    }
+                },
+            };
+            let index = self.next_index;
+            self.next_index += 1;
+            if let Some((planned, _, _)) = self.plan(&block?, index)? {
+                self.record(&planned);
+            }
+        }
+    }
+
     /// Geometry and limits of one block; `None` for a block without motion.
     /// Also returns the tangents `dq/ds` at its start and end.
     fn plan(&self, b: &Move, index: u64) -> Result<Option<PlannedBlock>> {

@@ -78,6 +78,22 @@ where
     I: Iterator<Item = std::result::Result<Move, E>> + 'static,
     E: Into<Error>,
 {
+    Box::new(checked_unboxed(path, machine, written_for_tcp, moves))
+}
+
+/// [`checked`] as its own type: the caller keeps the stream it checks
+/// ([`Checked::inner`], e.g. the reader's notices at the end) and the moves pass through
+/// no boxed layer.
+pub fn checked_unboxed<I, E>(
+    path: &Path,
+    machine: &Machine,
+    written_for_tcp: bool,
+    moves: I,
+) -> Checked<I>
+where
+    I: Iterator<Item = std::result::Result<Move, E>>,
+    E: Into<Error>,
+{
     let limits = machine
         .axes()
         .iter()
@@ -91,7 +107,7 @@ where
             (axis, envelope, config.min, config.max)
         })
         .collect();
-    Box::new(Checked {
+    Checked {
         path: path.to_path_buf(),
         no_tcp: machine
             .kinematics
@@ -103,11 +119,11 @@ where
         moves,
         moving: false,
         done: false,
-    })
+    }
 }
 
 /// The stream of [`checked`].
-struct Checked<I> {
+pub struct Checked<I> {
     path: PathBuf,
     /// The machine cannot give tool-centre-point control (xyzabc: no modelled chain; U V W
     /// layouts): its layout's name and why.
@@ -122,6 +138,11 @@ struct Checked<I> {
 }
 
 impl<I> Checked<I> {
+    /// The stream being checked.
+    pub fn inner(&self) -> &I {
+        &self.moves
+    }
+
     /// The file's text, for an error message.
     fn text(&self) -> String {
         std::fs::read(&self.path)

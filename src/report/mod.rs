@@ -19,6 +19,8 @@ pub mod run;
 pub mod run_dir;
 pub mod test_info;
 pub mod trace;
+pub mod trace_parquet;
+mod trace_rows;
 
 pub use files::{create_dir, temporary_path, write_atomic};
 pub use run_dir::RunDir;

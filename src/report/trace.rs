@@ -18,10 +18,10 @@ use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
 use super::files::temporary_path;
+use super::trace_rows::{write_error, RawRows, RAW_FIXED_COLUMNS};
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::TraceFormat;
-use crate::measure::ballbar::Centring;
 use crate::measure::{is_measured, BallbarRun, BarGeometry, BarReading};
 use crate::numeric::push_fixed_bytes_const;
 use crate::pipeline::{Sample, Sink};
@@ -29,10 +29,6 @@ use crate::Axis;
 
 /// Raw rows held in memory before they spill to the temporary file, bytes.
 pub const RAW_IN_MEMORY: usize = 8 << 20;
-
-/// Raw columns besides the three per axis: direction, time, line, θ, sin θ, cos θ (so that
-/// the centring needs no second `sin_cos`), the nonlinear signature, dL.
-const RAW_FIXED_COLUMNS: usize = 8;
 
 /// Writes the trace of every run of a simulation.
 pub struct TraceSink {
@@ -52,13 +48,6 @@ pub struct TraceSink {
     /// Rows recorded, and the most the run may record (`[simulate] max_trace_rows`).
     rows: u64,
     max_rows: u64,
-}
-
-fn write_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
-    move |source| Error::Write {
-        path: path.to_path_buf(),
-        source,
-    }
 }
 
 impl TraceSink {
@@ -127,9 +116,13 @@ impl TraceSink {
                 self.axes.len(),
                 runs,
             ),
-            TraceFormat::Parquet => {
-                complete_parquet(rows, &self.raw_path, &self.trace_path, &names, runs)
-            }
+            TraceFormat::Parquet => super::trace_parquet::complete_parquet(
+                rows,
+                &self.raw_path,
+                &self.trace_path,
+                &names,
+                runs,
+            ),
         }
     }
 }
@@ -211,68 +204,6 @@ impl TraceSink {
     }
 }
 
-/// The raw rows of a trace read back one at a time, each with the centred deviation
-/// `dL - (a cos θ + b sin θ)` of its direction's run: what both trace files are made of.
-struct RawRows<'p, R> {
-    reader: R,
-    /// The raw rows' file (for messages) and the output's temporary file, removed when a
-    /// read fails.
-    raw_path: &'p Path,
-    tmp: &'p Path,
-    bytes: Vec<u8>,
-    values: Vec<f64>,
-    ccw: Option<Centring>,
-    cw: Option<Centring>,
-}
-
-impl<'p, R: Read> RawRows<'p, R> {
-    fn new(
-        reader: R,
-        width: usize,
-        runs: &[BallbarRun],
-        raw_path: &'p Path,
-        tmp: &'p Path,
-    ) -> RawRows<'p, R> {
-        let centring = |d: Direction| {
-            runs.iter()
-                .find(|r| r.direction() == d)
-                .map(|r| r.centring())
-        };
-        RawRows {
-            reader,
-            raw_path,
-            tmp,
-            bytes: vec![0u8; 8 * width],
-            values: vec![0.0; width],
-            ccw: centring(Direction::Ccw),
-            cw: centring(Direction::Cw),
-        }
-    }
-
-    /// The next row's values, whether it is of the cw run, and its centred dL; None at the
-    /// end of the rows. A failed read removes the output's temporary file.
-    fn next_row(&mut self) -> Result<Option<(&[f64], bool, f64)>> {
-        match self.reader.read_exact(&mut self.bytes) {
-            Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Ok(None),
-            Err(e) => {
-                let _ = std::fs::remove_file(self.tmp);
-                return Err(write_error(self.raw_path)(e));
-            }
-        }
-        let v = &mut self.values;
-        for (x, c) in v.iter_mut().zip(self.bytes.chunks_exact(8)) {
-            *x = f64::from_le_bytes(c.try_into().expect("8 bytes"));
-        }
-        let cw_row = v[0] == 1.0;
-        let dev = v[v.len() - 1];
-        let c = if cw_row { self.cw } else { self.ccw };
-        // `offset_um(θ)` from the sine and cosine the ball bar took (the same bits).
-        let centred = c.map_or(dev, |c| dev - c.offset_um_at((v[4], v[5])));
-        Ok(Some((&self.values, cw_row, centred)))
-    }
-}
-
 /// The trace's columns: direction, time, line, θ, per axis the commanded and actual
 /// position and the following error, the nonlinear signature, dL and the centred dL.
 fn column_names(axes: &[Axis]) -> Vec<String> {
@@ -289,151 +220,6 @@ fn column_names(axes: &[Axis]) -> Vec<String> {
     }
     names.extend(["nonlinear_um", "deviation_um", "deviation_centred_um"].map(String::from));
     names
-}
-
-/// Rows per row group of `trace.parquet` (16 s of machine time at 1 ms): what the writer
-/// holds in memory at once, about 3 MB for five axes.
-pub const PARQUET_ROW_GROUP: usize = 16_384;
-
-/// Writes `trace_path` as Parquet from the binary rows read from `reader`, with the columns
-/// of `trace.csv` (`names`): the direction as text, the line as an unsigned integer, every
-/// other column as the f64 the run computed (not rounded). Row groups of
-/// [`PARQUET_ROW_GROUP`] rows, so that memory stays flat; uncompressed, plain-encoded floats
-/// (dictionary encoding for the direction only), column-chunk statistics and a fixed
-/// `created_by`: the same rows give the same bytes. Written to a temporary file, then
-/// renamed.
-fn complete_parquet<R: Read>(
-    reader: R,
-    raw_path: &Path,
-    trace_path: &Path,
-    names: &[String],
-    runs: &[BallbarRun],
-) -> Result<()> {
-    use std::sync::Arc;
-
-    use arrow::datatypes::{DataType, Field, Schema};
-    use parquet::arrow::ArrowWriter;
-    use parquet::basic::Compression;
-    use parquet::file::properties::{EnabledStatistics, WriterProperties};
-
-    let tmp = temporary_path(trace_path);
-    // A failure of the Parquet writer is a failed write of the temporary file.
-    let failed = |what: &dyn std::fmt::Display| Error::Write {
-        path: tmp.clone(),
-        source: std::io::Error::other(format!("cannot write Parquet: {what}")),
-    };
-    let fields: Vec<Field> = names
-        .iter()
-        .enumerate()
-        .map(|(i, name)| {
-            let ty = match i {
-                0 => DataType::Utf8,
-                2 => DataType::UInt64,
-                _ => DataType::Float64,
-            };
-            Field::new(name, ty, false)
-        })
-        .collect();
-    let schema = Arc::new(Schema::new(fields));
-    let props = WriterProperties::builder()
-        .set_compression(Compression::UNCOMPRESSED)
-        .set_dictionary_enabled(false)
-        .set_column_dictionary_enabled("direction".into(), true)
-        .set_statistics_enabled(EnabledStatistics::Chunk)
-        .set_created_by(format!("mtsim {}", env!("CARGO_PKG_VERSION")))
-        .set_max_row_group_size(PARQUET_ROW_GROUP)
-        .build();
-    let file = File::create(&tmp).map_err(write_error(&tmp))?;
-    let written = (|| -> Result<()> {
-        // Buffered: besides whole pages the writer makes many small writes (page headers).
-        let sink = BufWriter::with_capacity(1 << 20, file);
-        let mut writer =
-            ArrowWriter::try_new(sink, schema.clone(), Some(props)).map_err(|e| failed(&e))?;
-        // Raw rows: direction, time, line, θ, sin θ, cos θ, 3 per axis, nonlinear, dL; the
-        // names have 7 columns besides the axes' 3 each.
-        let width = RAW_FIXED_COLUMNS + (names.len() - 7);
-        let mut rows = RawRows::new(reader, width, runs, raw_path, &tmp);
-        let mut group = RowGroup::new(names.len() - 2);
-        while let Some((v, cw_row, centred)) = rows.next_row()? {
-            group.direction.push(if cw_row { "cw" } else { "ccw" });
-            group.line.push(v[2] as u64);
-            // time, θ, the axes' columns, nonlinear, dL, centred dL.
-            let values = [v[1], v[3]]
-                .into_iter()
-                .chain(v[6..].iter().copied())
-                .chain([centred]);
-            for (column, x) in group.floats.iter_mut().zip(values) {
-                column.push(x);
-            }
-            if group.direction.len() == PARQUET_ROW_GROUP {
-                let batch = group.take_batch(&schema).map_err(|e| failed(&e))?;
-                writer.write(&batch).map_err(|e| failed(&e))?;
-                group.reserve();
-            }
-        }
-        if !group.direction.is_empty() {
-            let batch = group.take_batch(&schema).map_err(|e| failed(&e))?;
-            writer.write(&batch).map_err(|e| failed(&e))?;
-        }
-        let mut out = writer.into_inner().map_err(|e| failed(&e))?;
-        out.flush().map_err(write_error(&tmp))
-    })();
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e);
-    }
-    std::fs::rename(&tmp, trace_path).map_err(write_error(trace_path))
-}
-
-/// The rows of one row group of `trace.parquet`, column by column: the direction, the
-/// line, and the f64 columns in their order (time, θ, the axes', nonlinear, dL, centred dL).
-struct RowGroup {
-    direction: Vec<&'static str>,
-    line: Vec<u64>,
-    floats: Vec<Vec<f64>>,
-}
-
-impl RowGroup {
-    fn new(n_floats: usize) -> RowGroup {
-        let mut group = RowGroup {
-            direction: Vec::new(),
-            line: Vec::new(),
-            floats: vec![Vec::new(); n_floats],
-        };
-        group.reserve();
-        group
-    }
-
-    /// The rows as one record batch of `schema`, leaving the group empty: each column's
-    /// vector becomes its array's buffer (no copy).
-    fn take_batch(
-        &mut self,
-        schema: &std::sync::Arc<arrow::datatypes::Schema>,
-    ) -> std::result::Result<arrow::record_batch::RecordBatch, arrow::error::ArrowError> {
-        use std::sync::Arc;
-
-        use arrow::array::{ArrayRef, Float64Array, StringArray, UInt64Array};
-        let f64_array = |v: &mut Vec<f64>| {
-            Arc::new(Float64Array::new(std::mem::take(v).into(), None)) as ArrayRef
-        };
-        let mut arrays: Vec<ArrayRef> = Vec::with_capacity(self.floats.len() + 2);
-        arrays.push(Arc::new(StringArray::from(std::mem::take(
-            &mut self.direction,
-        ))));
-        let (time, rest) = self.floats.split_first_mut().expect("a time column");
-        arrays.push(f64_array(time));
-        let line = std::mem::take(&mut self.line);
-        arrays.push(Arc::new(UInt64Array::new(line.into(), None)));
-        arrays.extend(rest.iter_mut().map(f64_array));
-        arrow::record_batch::RecordBatch::try_new(schema.clone(), arrays)
-    }
-
-    /// Room for a whole group in every float column again (the others grow as they fill).
-    fn reserve(&mut self) {
-        self.floats
-            .iter_mut()
-            .for_each(|c| c.reserve(PARQUET_ROW_GROUP));
-    }
 }
 
 /// Writes `trace_path` from the binary rows read from `reader` (held rows, or the file at

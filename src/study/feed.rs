@@ -3,9 +3,9 @@
 //!
 //! The planner caps each block's cruise speed so that no axis exceeds its velocity limit,
 //! and on curved paths its acceleration and jerk limits too (`motion::interpolation`, "Limits
-//! along the path"). This runs the program through the same interpolator as `simulate`
-//! (first direction, the scenario's TCP and lead-in) and collects what it noted. Memory grows
-//! with the number of limited blocks only.
+//! along the path"). This plans the program with the same interpolator as `simulate`
+//! (first direction, the scenario's TCP and lead-in) without sampling it, and collects what
+//! it noted. Memory grows with the number of limited blocks only.
 
 use std::collections::BTreeMap;
 
@@ -37,8 +37,18 @@ pub fn feed_limits(scenario: &Scenario) -> Result<FeedReport> {
         Program::File { .. } => Direction::Ccw,
     };
     let run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
+    plan_feed(run.moves, scenario)
+}
+
+/// Plans `moves` (the scenario's program, as [`program::scenario_run`] gives it) for the
+/// scenario's machine and reports where the feed was limited. The blocks are planned, not
+/// sampled: a block's cruise speed and the limit that holds it are set when it is planned.
+pub fn plan_feed(
+    moves: impl Iterator<Item = Result<program::Move>>,
+    scenario: &Scenario,
+) -> Result<FeedReport> {
     let mut feed_blocks = 0u64;
-    let moves = run.moves.inspect(|m| {
+    let moves = moves.inspect(|m| {
         if let Ok(m) = m {
             if matches!(
                 m.motion,
@@ -54,18 +64,12 @@ pub fn feed_limits(scenario: &Scenario) -> Result<FeedReport> {
         record_feed_limits: true,
         ..InterpolationOptions::default()
     };
-    let mut report = FeedReport::default();
     let mut interpolator = Interpolator::new(moves, &scenario.machine, options)?;
-    loop {
-        let next = interpolator.next();
-        report.blocks.extend(interpolator.take_feed_limits());
-        match next {
-            Some(r) => {
-                r?;
-            }
-            None => break,
-        }
-    }
+    interpolator.plan_to_end()?;
+    let mut report = FeedReport {
+        blocks: interpolator.take_feed_limits(),
+        ..FeedReport::default()
+    };
     drop(interpolator);
     for b in &report.blocks {
         *report

@@ -2,6 +2,7 @@
 //! Inputs: scenarios; the pipeline and its sinks; the analytic cone path.
 //! Outputs: reversal analyses, `simulate` runs with their files, sweeps, placement maps and batches, whole or in shards.
 
+pub mod analysis;
 pub mod batch;
 pub mod chain_events;
 pub mod diagnose;

@@ -302,3 +302,68 @@ fn path_control_modes_at_a_corner() {
         "collinear G61 junction at {through} mm/s"
     );
 }
+
+/// Planning without sampling (`Interpolator::plan_to_end`, what `analyze` runs) notes the
+/// same blocks, axes and speeds as the sampled run: 300 blocks alternating between a
+/// diagonal held by Y's velocity (closed form 6 000 √2 mm/min), a pure C move held at
+/// 9 000 deg/min, and a slow move that is not held, with the look-ahead window (16 blocks)
+/// refilled many times.
+#[test]
+fn planning_without_sampling_notes_the_same_feed_limits() {
+    let mut v = FAST;
+    v[1] = 6000.0;
+    let m = machine(v, ACCEL);
+    let mut blocks = Vec::new();
+    let mut at = q(&[0.0; 5]);
+    for k in 0..300 {
+        let (end, feed) = match k % 3 {
+            0 => (at + q(&[2.0, 2.0]), 20000.0),
+            1 => (at + q(&[0.0, 0.0, 0.0, 0.0, 0.0, 9.0]), 20000.0),
+            _ => (at + q(&[0.5]), 100.0),
+        };
+        blocks.push(g01(k + 1, at, end, feed));
+        at = end;
+    }
+    let (_, sampled) = run(blocks.clone(), &m);
+    let options = InterpolationOptions {
+        record_feed_limits: true,
+        ..InterpolationOptions::default()
+    };
+    let mut it = Interpolator::new(blocks.into_iter().map(Ok), &m, options).unwrap();
+    it.plan_to_end().unwrap();
+    let planned = it.take_feed_limits();
+    assert!(it.next().is_none(), "nothing to sample after planning");
+    assert_eq!(planned.len(), 200, "the diagonal and the C moves");
+    let key = |l: &FeedLimit| (l.line, l.axis, l.limit, l.planned_per_min.to_bits());
+    assert_eq!(
+        planned.iter().map(key).collect::<Vec<_>>(),
+        sampled.iter().map(key).collect::<Vec<_>>()
+    );
+    for l in &planned {
+        let expected = if l.axis == Axis::Y {
+            6000.0 * 2f64.sqrt()
+        } else {
+            9000.0
+        };
+        assert!((l.planned_per_min - expected).abs() < 1e-6, "{l:?}");
+    }
+}
+
+/// A block the planner refuses (no F word on a feed move) ends planning with its error,
+/// located at its line, as it ends the sampled run.
+#[test]
+fn planning_without_sampling_stops_at_a_block_it_cannot_plan() {
+    let m = machine(FAST, ACCEL);
+    // Past the look-ahead that `Interpolator::new` plans.
+    let mut blocks: Vec<Move> = (0..1000)
+        .map(|k| g01(k + 1, q(&[k as f64]), q(&[k as f64 + 1.0]), 1000.0))
+        .collect();
+    blocks[700].feed = None;
+    let options = InterpolationOptions {
+        record_feed_limits: true,
+        ..InterpolationOptions::default()
+    };
+    let mut it = Interpolator::new(blocks.into_iter().map(Ok), &m, options).unwrap();
+    let e = it.plan_to_end().unwrap_err().to_string();
+    assert!(e.contains("line 701") && e.contains("feed rate"), "{e}");
+}

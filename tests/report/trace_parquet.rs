@@ -278,3 +278,53 @@ fn an_unknown_trace_format_names_the_key_and_the_choices() {
     assert!(err.contains("csv") && err.contains("parquet"), "{err}");
     assert!(!dir.join("out").join("trace.csv").exists());
 }
+
+/// The file's layout, as docs/performance.md gives it: row groups of 16,384 rows (the last
+/// holds the rest), uncompressed, min/max statistics on `time_s` (the first and last time
+/// of the group) and `line` only, the direction dictionary-encoded.
+#[test]
+fn the_parquet_trace_has_the_documented_layout() {
+    use parquet::basic::{Compression, Encoding};
+    use parquet::file::reader::{FileReader, SerializedFileReader};
+    use parquet::file::statistics::Statistics;
+
+    let dir = scratch("trace-parquet", "layout");
+    run(&dir, TraceFormat::Parquet);
+    let (names, _, floats) = parquet_columns(&dir.join("trace.parquet"));
+    let time = &floats[0];
+    let file = File::open(dir.join("trace.parquet")).unwrap();
+    let meta = SerializedFileReader::new(file).unwrap().metadata().clone();
+    let groups = meta.row_groups();
+    assert_eq!(
+        time.len(),
+        (groups.len() - 1) * 16_384 + groups.last().unwrap().num_rows() as usize
+    );
+    assert!(
+        groups.len() >= 2,
+        "{} rows fill more than one group",
+        time.len()
+    );
+    let mut first_row = 0;
+    for g in groups {
+        let rows = g.num_rows() as usize;
+        for (c, column) in g.columns().iter().enumerate() {
+            assert_eq!(column.compression(), Compression::UNCOMPRESSED);
+            let stats = column.statistics();
+            match names[c].as_str() {
+                "time_s" => match stats {
+                    Some(Statistics::Double(s)) => {
+                        assert_eq!(*s.min_opt().unwrap(), time[first_row]);
+                        assert_eq!(*s.max_opt().unwrap(), time[first_row + rows - 1]);
+                    }
+                    other => panic!("time_s statistics: {other:?}"),
+                },
+                "line" => assert!(stats.is_some(), "line has statistics"),
+                name => assert!(stats.is_none(), "{name} has no statistics"),
+            }
+            if c == 0 {
+                assert!(column.encodings().any(|e| e == Encoding::RLE_DICTIONARY));
+            }
+        }
+        first_row += rows;
+    }
+}

@@ -347,6 +347,12 @@ fn refuse_tcp_on_a_joint_space_test(
 impl Scenario {
     pub fn load(path: &Path) -> Result<Scenario> {
         let text = toml_text::read_text(path)?;
+        Scenario::from_text(path, &text)
+    }
+
+    /// The scenario whose file at `path` holds `text` (paths inside it are relative to `path`).
+    pub fn from_text(path: &Path, text: &str) -> Result<Scenario> {
+        let text = text.to_string();
         let file: ScenarioFile = toml_text::parse(path, &text)?;
         let machine_path = resolve(path, &file.machine);
         let machine_text = toml_text::read_text(&machine_path).map_err(|e| match e {

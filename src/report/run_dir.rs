@@ -41,7 +41,7 @@ pub fn is_run_output(name: &str) -> bool {
         "fit.svg",
         "fit.html",
     ];
-    const PREFIXES: [&str; 3] = ["sweep-", "placement.", "batch."];
+    const PREFIXES: [&str; 5] = ["sweep-", "placement.", "batch.", "study", "rows."];
     let name = name.strip_suffix(".tmp").unwrap_or(name);
     let name = name.strip_suffix(".raw").unwrap_or(name);
     name == "runs" || FILES.contains(&name) || PREFIXES.iter().any(|p| name.starts_with(p))

@@ -7,6 +7,7 @@ pub mod diagnose;
 pub mod feed;
 pub mod fit;
 pub mod geometry;
+pub mod param;
 pub mod placement;
 pub mod reversals;
 pub mod shard;

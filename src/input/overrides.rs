@@ -196,22 +196,29 @@ impl ScenarioTree {
     }
 
     /// An "unknown field" error of a set key, restated as the study's key path with the
-    /// nearest keys the scenario or machine has at that place.
+    /// nearest keys the scenario or machine takes at that place.
     fn name_the_key(&self, e: Error, keys: &[KeyPath]) -> Error {
         let message = e.to_string();
-        if !message.contains("unknown field") {
-            return e;
-        }
-        let Some(key) = keys.iter().find(|k| self.missing_step(k).is_some()) else {
+        let Some(unknown) = message
+            .split_once("unknown field `")
+            .and_then(|(_, rest)| rest.split('`').next())
+        else {
             return e;
         };
-        let (depth, options) = self.missing_step(key).expect("found above");
-        let Some(Step::Key(bad)) = key.steps.get(depth) else {
+        let found = keys.iter().find_map(|k| {
+            let depth = k
+                .steps
+                .iter()
+                .position(|s| *s == Step::Key(unknown.to_string()))?;
+            Some((k, depth))
+        });
+        let Some((key, depth)) = found else {
             return e;
         };
         // Serde's list of the fields the table takes, then the keys the file has there.
         let mut names: Vec<String> = message
             .split_once("expected one of")
+            .or_else(|| message.split_once("expected `"))
             .map(|(_, list)| {
                 list.split('`')
                     .skip(1)
@@ -220,50 +227,64 @@ impl ScenarioTree {
                     .collect()
             })
             .unwrap_or_default();
-        for o in options {
-            if !names.contains(&o) {
-                names.push(o);
+        let (tree, offset) = match key.steps.first() {
+            Some(Step::Key(k)) if k == "machine" => (&self.machine, 1),
+            _ => (&self.tree, 0),
+        };
+        let present = match depth - offset {
+            0 => Some(tree),
+            d => match get(tree, &key.steps[offset..offset + d]) {
+                Some(toml::Value::Table(t)) => Some(t),
+                _ => None,
+            },
+        };
+        for name in present.into_iter().flat_map(|t| t.keys()) {
+            if !names.contains(name) {
+                names.push(name.clone());
             }
         }
-        names.sort_by_key(|n| (edit_distance(n, bad), n.clone()));
+        names.sort_by_key(|n| (edit_distance(n, unknown), n.clone()));
         let prefix = KeyPath {
             steps: key.steps[..depth].to_vec(),
         };
         let nearest: Vec<String> = names
             .iter()
             .take(3)
-            .map(|n| format!("`{prefix}.{n}`"))
+            .map(|n| match depth {
+                0 => format!("`{n}`"),
+                _ => format!("`{prefix}.{n}`"),
+            })
             .collect();
         Error::usage(format!(
-            "study key `{key}` names no key of the scenario {} or its machine; nearest: {}",
+            "study key `{key}` names no key of the scenario {} or its machine: `{unknown}` is not a key there; nearest: {}",
             self.path.display(),
             nearest.join(", ")
         ))
     }
+}
 
-    /// Where `key` leaves the trees (the step's depth) and the keys present there.
-    fn missing_step(&self, key: &KeyPath) -> Option<(usize, Vec<String>)> {
+impl ScenarioTree {
+    /// Where `key` leaves the scenario's (or, for `machine.`, the machine's) tree: the
+    /// depth of its first step that is not there and the nearest keys present beside it;
+    /// None when the whole path is present.
+    pub fn absent(&self, key: &KeyPath) -> Option<(usize, Vec<String>)> {
         let (tree, offset) = match key.steps.first() {
             Some(Step::Key(k)) if k == "machine" => (&self.machine, 1),
             _ => (&self.tree, 0),
         };
         let steps = &key.steps[offset..];
-        for depth in 0..steps.len() {
-            if depth > 0 && get(tree, &steps[..depth]).is_none() {
-                return None;
-            }
-            if get(tree, &steps[..=depth]).is_none() {
-                let keys = match depth {
-                    0 => tree.keys().cloned().collect(),
-                    _ => match get(tree, &steps[..depth]) {
-                        Some(toml::Value::Table(t)) => t.keys().cloned().collect(),
-                        _ => Vec::new(),
-                    },
-                };
-                return Some((depth + offset, keys));
-            }
+        let depth = (0..steps.len()).find(|&d| get(tree, &steps[..=d]).is_none())?;
+        let mut present: Vec<String> = match depth {
+            0 => tree.keys().cloned().collect(),
+            d => match get(tree, &steps[..d]) {
+                Some(toml::Value::Table(t)) => t.keys().cloned().collect(),
+                _ => Vec::new(),
+            },
+        };
+        if let Step::Key(bad) = &steps[depth] {
+            present.sort_by_key(|n| (edit_distance(n, bad), n.clone()));
         }
-        None
+        Some((depth + offset, present))
     }
 }
 

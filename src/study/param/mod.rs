@@ -55,9 +55,30 @@ impl Study {
         if let Some(first) = points.first() {
             // A bad path fails at every point: say so once, up front. A bad value is the
             // point's own failure, so only "names no key" errors stop the study here.
+            // A key the trees do not hold whose first point fails is a bad path too.
             if let Err(e) = tree.load_with(&spec.keys(), first) {
                 if matches!(e, crate::error::Error::Usage { .. }) {
                     return Err(e);
+                }
+                if let Some((key, (depth, near))) =
+                    spec.keys().iter().find_map(|k| Some((k, tree.absent(k)?)))
+                {
+                    let prefix = crate::input::overrides::KeyPath {
+                        steps: key.steps[..depth].to_vec(),
+                    };
+                    let near: Vec<String> = near
+                        .iter()
+                        .take(3)
+                        .map(|n| match depth {
+                            0 => format!("`{n}`"),
+                            _ => format!("`{prefix}.{n}`"),
+                        })
+                        .collect();
+                    return Err(crate::error::Error::usage(format!(
+                        "study key `{key}` names no key of the scenario {} or its machine ({e}); nearest: {}",
+                        tree.path.display(),
+                        near.join(", ")
+                    )));
                 }
             }
         }

@@ -23,6 +23,9 @@ pub struct StudyArgs {
     /// (overrides the study file's `g_limit_um`).
     #[arg(long, value_name = "UM")]
     pub g_limit_um: Option<f64>,
+    /// Points of a random study, in place of the study file's `samples` (e.g. a trial run).
+    #[arg(long, value_name = "N")]
+    pub samples: Option<usize>,
     /// Run only shard K of N (1 <= K <= N) of the points and write
     /// <output>/study.shard-K-of-N.json; join the N shards with `mtsim merge`.
     #[arg(long, value_name = "K/N")]
@@ -40,7 +43,7 @@ pub fn run(args: &StudyArgs) -> Result<i32> {
             )));
         }
     }
-    let study = Study::load(&args.study, args.g_limit_um)?;
+    let study = Study::load(&args.study, args.g_limit_um, args.samples)?;
     let range = args.shard.unwrap_or(Shard::WHOLE).range(study.points.len());
     let run_dir = match args.shard {
         None => Some(RunDir::begin(&args.output)?),

@@ -44,8 +44,18 @@ pub struct StudyHeader {
 impl Study {
     /// Loads the study file and its base scenario, makes the points, and checks that every
     /// key names a key of the scenario or its machine (with the first point's values).
-    pub fn load(path: &Path, g_limit_um: Option<f64>) -> Result<Study> {
-        let spec = StudySpec::load(path)?;
+    /// `samples` replaces a random study's `samples` (a smaller trial run of the same study).
+    pub fn load(path: &Path, g_limit_um: Option<f64>, samples: Option<usize>) -> Result<Study> {
+        let mut spec = StudySpec::load(path)?;
+        if let Some(n) = samples {
+            if !spec.random || !(1..=spec::MAX_POINTS).contains(&n) {
+                return Err(crate::error::Error::usage(format!(
+                    "--samples {n}: expected 1 to {} points of a random study (uniform, normal)",
+                    spec::MAX_POINTS
+                )));
+            }
+            spec.file.samples = Some(n);
+        }
         let tree = ScenarioTree::read(&spec.scenario)?;
         let base = crate::input::scenario::Scenario::from_text(
             &tree.path,

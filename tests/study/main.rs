@@ -8,4 +8,5 @@ mod cone_reference;
 mod diagnose;
 mod fit;
 mod kato_reproduction;
+mod param_study;
 mod simulate;

@@ -70,8 +70,17 @@ impl Study {
                 if matches!(e, crate::error::Error::Usage { .. }) {
                     return Err(e);
                 }
-                if let Some((key, (depth, near))) =
-                    spec.keys().iter().find_map(|k| Some((k, tree.absent(k)?)))
+                // An error that names the key is about its value: the point's own failure.
+                let message = e.to_string();
+                let names_it = |k: &crate::input::overrides::KeyPath| {
+                    let path = k.to_string();
+                    message.contains(path.strip_prefix("machine.").unwrap_or(&path))
+                };
+                if let Some((key, (depth, near))) = spec
+                    .keys()
+                    .iter()
+                    .filter(|k| !names_it(k))
+                    .find_map(|k| Some((k, tree.absent(k)?)))
                 {
                     let prefix = crate::input::overrides::KeyPath {
                         steps: key.steps[..depth].to_vec(),

@@ -3,22 +3,24 @@
 //! Outputs: one row per point (G, F, H, B and spikes per axis, check verdict, status), its summary, plots and page.
 
 pub mod evaluate;
+pub mod outputs;
 pub mod page;
 pub mod plots;
 pub mod random;
 pub mod spec;
 pub mod stats;
+pub mod summary;
 pub mod table;
 
 use std::path::Path;
 
-use serde::{Deserialize, Serialize};
-
 use crate::error::Result;
 use crate::input::overrides::ScenarioTree;
 use evaluate::Row;
-use spec::{Sampling, StudyFile, StudySpec};
-use stats::Share;
+use spec::StudySpec;
+
+pub use outputs::write_outputs;
+pub use summary::{StudyHeader, StudySummary};
 
 /// A study ready to run: its spec, the base scenario's tree, the machine's axes and points.
 #[derive(Clone, Debug)]
@@ -27,18 +29,6 @@ pub struct Study {
     pub tree: ScenarioTree,
     pub header: StudyHeader,
     pub points: Vec<Vec<f64>>,
-}
-
-/// What identifies a study (equal in all its shards) and what its summary needs.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct StudyHeader {
-    pub study: StudyFile,
-    /// The varied keys, as dotted paths.
-    pub keys: Vec<String>,
-    /// The machine's axes, by letter.
-    pub axes: Vec<String>,
-    /// The G limit of the share, um (the study file's or `--g-limit-um`).
-    pub g_limit_um: Option<f64>,
 }
 
 impl Study {
@@ -131,159 +121,4 @@ impl Study {
             done,
         )
     }
-}
-
-/// One key's rank correlation with G.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Sensitivity {
-    pub key: String,
-    /// Spearman's ρ of the key's values with G over the points that ran.
-    pub spearman_g: f64,
-}
-
-/// `study.json`: the study, its counts and, for a random study, the share below the limit
-/// and the keys G depends on most.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct StudySummary {
-    pub format: String,
-    pub study: StudyFile,
-    /// `grid` or `random`.
-    pub kind: String,
-    pub keys: Vec<String>,
-    pub axes: Vec<String>,
-    pub points: u64,
-    /// Points that ran, and that failed.
-    pub ok: u64,
-    pub failed: u64,
-    /// Points that ran without a `check` violation.
-    pub clean: u64,
-    pub g_min_um: Option<f64>,
-    pub g_max_um: Option<f64>,
-    pub g_limit_um: Option<f64>,
-    /// Points that ran with G below the limit, with the Wilson 95 % interval.
-    pub g_below_limit: Option<Share>,
-    /// Random study: the keys by |ρ|, largest first.
-    pub sensitivity: Vec<Sensitivity>,
-}
-
-/// Format tag of `study.json`.
-pub const FORMAT: &str = "mtsim-study/1";
-
-impl StudySummary {
-    pub fn of(header: &StudyHeader, rows: &[Row]) -> StudySummary {
-        let ran: Vec<&Row> = rows.iter().filter(|r| r.error.is_none()).collect();
-        let g: Vec<f64> = ran.iter().filter_map(|r| r.g_um).collect();
-        let random = header
-            .study
-            .vary
-            .iter()
-            .any(|v| v.uniform.is_some() || v.normal.is_some());
-        let g_below_limit = header.g_limit_um.and_then(|limit| {
-            let hits = g.iter().filter(|&&x| x < limit).count() as u64;
-            stats::wilson(hits, g.len() as u64, stats::Z95)
-        });
-        let mut sensitivity: Vec<Sensitivity> = Vec::new();
-        if random {
-            let with_g: Vec<&&Row> = ran.iter().filter(|r| r.g_um.is_some()).collect();
-            let gs: Vec<f64> = with_g.iter().filter_map(|r| r.g_um).collect();
-            for (k, key) in header.keys.iter().enumerate() {
-                let xs: Vec<f64> = with_g.iter().map(|r| r.values[k]).collect();
-                if let Some(rho) = stats::spearman(&xs, &gs) {
-                    sensitivity.push(Sensitivity {
-                        key: key.clone(),
-                        spearman_g: rho,
-                    });
-                }
-            }
-            sensitivity.sort_by(|a, b| b.spearman_g.abs().total_cmp(&a.spearman_g.abs()));
-        }
-        StudySummary {
-            format: FORMAT.to_string(),
-            study: header.study.clone(),
-            kind: if random { "random" } else { "grid" }.to_string(),
-            keys: header.keys.clone(),
-            axes: header.axes.clone(),
-            points: rows.len() as u64,
-            ok: ran.len() as u64,
-            failed: (rows.len() - ran.len()) as u64,
-            clean: ran.iter().filter(|r| r.violations == Some(0)).count() as u64,
-            g_min_um: g.iter().copied().reduce(f64::min),
-            g_max_um: g.iter().copied().reduce(f64::max),
-            g_limit_um: header.g_limit_um,
-            g_below_limit,
-            sensitivity,
-        }
-    }
-}
-
-/// The files of a study, in the order they are written.
-pub const ROWS_CSV: &str = "rows.csv";
-pub const ROWS_PARQUET: &str = "rows.parquet";
-pub const SUMMARY_FILE: &str = "study.json";
-pub const PAGE_FILE: &str = "study.html";
-
-/// Writes rows.csv, rows.parquet, study.json, the plots and study.html into `dir` (the
-/// staging folder of a run) from the rows alone, so that merged shards write the same bytes
-/// as one whole run. Returns the summary.
-pub fn write_outputs(dir: &Path, header: &StudyHeader, rows: &[Row]) -> Result<StudySummary> {
-    use crate::report::write_atomic;
-    write_atomic(
-        &dir.join(ROWS_CSV),
-        &table::to_csv(rows, &header.keys, &header.axes)?,
-    )?;
-    write_atomic(
-        &dir.join(ROWS_PARQUET),
-        &table::to_parquet(rows, &header.keys, &header.axes)?,
-    )?;
-    let summary = StudySummary::of(header, rows);
-    let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
-    write_atomic(&dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;
-    let mut svgs: Vec<(String, String, String)> = Vec::new();
-    let grids: Vec<Vec<f64>> = header
-        .study
-        .vary
-        .iter()
-        .filter_map(|v| match spec::sampling(v) {
-            Ok(Sampling::Grid(values)) => Some(values),
-            _ => None,
-        })
-        .collect();
-    match (&header.keys[..], &grids[..]) {
-        ([key], [_]) => svgs.push((
-            "study-response.svg".into(),
-            format!("Response: G and each axis's B against {key}"),
-            plots::response(rows, key, &header.axes)?,
-        )),
-        ([a, b], [xs, ys]) => svgs.push((
-            "study-heatmap.svg".into(),
-            format!("G over {a} and {b}"),
-            plots::heat_map(rows, [a, b], xs, ys)?,
-        )),
-        _ => {}
-    }
-    if let (Some(limit), Some(share)) = (summary.g_limit_um, &summary.g_below_limit) {
-        svgs.push((
-            "study-share.svg".into(),
-            format!("Share of points with G below {limit} µm"),
-            plots::share(rows, limit, share)?,
-        ));
-    }
-    if !summary.sensitivity.is_empty() {
-        let ranking: Vec<(String, f64)> = summary
-            .sensitivity
-            .iter()
-            .map(|s| (s.key.clone(), s.spearman_g))
-            .collect();
-        svgs.push((
-            "study-sensitivity.svg".into(),
-            "Which keys G depends on most".into(),
-            plots::sensitivity(&ranking)?,
-        ));
-    }
-    for (name, _, svg) in &svgs {
-        write_atomic(&dir.join(name), svg.as_bytes())?;
-    }
-    let page = page::render(&summary, rows, &svgs);
-    write_atomic(&dir.join(PAGE_FILE), page.as_bytes())?;
-    Ok(summary)
 }

@@ -5,8 +5,8 @@ use std::fmt::Write;
 
 use crate::report::html::{esc, inline_svg, CSS};
 use crate::study::param::evaluate::Row;
+use crate::study::param::summary::StudySummary;
 use crate::study::param::table::columns;
-use crate::study::param::StudySummary;
 
 /// Rows listed on the page; the rest are in rows.csv.
 pub const PAGE_ROWS: usize = 1000;

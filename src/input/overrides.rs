@@ -244,21 +244,10 @@ impl ScenarioTree {
             }
         }
         names.sort_by_key(|n| (edit_distance(n, unknown), n.clone()));
-        let prefix = KeyPath {
-            steps: key.steps[..depth].to_vec(),
-        };
-        let nearest: Vec<String> = names
-            .iter()
-            .take(3)
-            .map(|n| match depth {
-                0 => format!("`{n}`"),
-                _ => format!("`{prefix}.{n}`"),
-            })
-            .collect();
         Error::usage(format!(
             "study key `{key}` names no key of the scenario {} or its machine: `{unknown}` is not a key there; nearest: {}",
             self.path.display(),
-            nearest.join(", ")
+            nearest_keys(key, depth, &names)
         ))
     }
 }
@@ -286,6 +275,23 @@ impl ScenarioTree {
         }
         Some((depth + offset, present))
     }
+}
+
+/// The first three of `names` (nearest first) as full paths beside step `depth` of `key`:
+/// "`machine.axes.X.drive.backlash_mm`, ...".
+pub fn nearest_keys(key: &KeyPath, depth: usize, names: &[String]) -> String {
+    let prefix = KeyPath {
+        steps: key.steps[..depth].to_vec(),
+    };
+    let full: Vec<String> = names
+        .iter()
+        .take(3)
+        .map(|n| match depth {
+            0 => format!("`{n}`"),
+            _ => format!("`{prefix}.{n}`"),
+        })
+        .collect();
+    full.join(", ")
 }
 
 /// Levenshtein distance of two keys, in characters.

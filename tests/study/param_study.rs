@@ -54,6 +54,21 @@ fn column(header: &[String], rows: &[Vec<String>], name: &str) -> Vec<f64> {
     rows.iter().map(|r| r[i].parse().unwrap()).collect()
 }
 
+/// Runs a study that must be refused (exit 2, no output folder) and returns its stderr.
+fn refused(dir: &Path, vary: &str) -> String {
+    let study = study_file(dir, "circle-iso230-4.toml", "", vary);
+    let out = dir.join("out");
+    let o = mtsim(&[
+        "study",
+        study.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!out.exists());
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
 /// Semi-closed loop backlash b on X shifts the two half circles by ±b/2 along X: the step
 /// at X's reversals (θ = 0°, 180° on the XY circle, where the bar lies along X) grows by b
 /// (docs/servo-and-ballbar.md, "Backlash b on one axis"), on top of friction's lost motion.
@@ -255,45 +270,25 @@ fn merged_shards_equal_the_whole_study() {
 #[test]
 fn a_key_that_names_nothing_is_refused_with_the_nearest_keys() {
     let dir = scratch("study", "badkey");
-    let study = study_file(
+    let err = refused(
         &dir,
-        "circle-iso230-4.toml",
-        "",
         "[[vary]]\nkey = \"machine.axes.X.drive.bakclash_mm\"\nvalues = [0.0]\n",
-    );
-    let o = mtsim(&[
-        "study",
-        study.to_str().unwrap(),
-        "-o",
-        dir.join("out").to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&o.stderr).replace(['\n', '│', ' '], "");
+    )
+    .replace(['\n', '│', ' '], "");
     assert!(err.contains("`machine.axes.X.drive.bakclash_mm`"), "{err}");
     assert!(
         err.contains("nearest:`machine.axes.X.drive.backlash_mm`"),
         "{err}"
     );
-    assert!(!dir.join("out").exists());
 }
 
 #[test]
 fn a_nan_value_is_a_located_error() {
     let dir = scratch("study", "nan");
-    let study = study_file(
+    let err = refused(
         &dir,
-        "circle-iso230-4.toml",
-        "",
         "[[vary]]\nkey = \"machine.axes.X.drive.backlash_mm\"\nvalues = [0.0, nan]\n",
     );
-    let o = mtsim(&[
-        "study",
-        study.to_str().unwrap(),
-        "-o",
-        dir.join("out").to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&o.stderr);
     // The line of `values` (line 5: scenario, the empty top keys, [[vary]], key, values).
     assert!(err.contains("study.toml:5:1"), "{err}");
     assert!(err.contains("`vary.values`: is not a number"), "{err}");

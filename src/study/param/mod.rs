@@ -72,21 +72,10 @@ impl Study {
                     .filter(|k| !names_it(k))
                     .find_map(|k| Some((k, tree.absent(k)?)))
                 {
-                    let prefix = crate::input::overrides::KeyPath {
-                        steps: key.steps[..depth].to_vec(),
-                    };
-                    let near: Vec<String> = near
-                        .iter()
-                        .take(3)
-                        .map(|n| match depth {
-                            0 => format!("`{n}`"),
-                            _ => format!("`{prefix}.{n}`"),
-                        })
-                        .collect();
                     return Err(crate::error::Error::usage(format!(
                         "study key `{key}` names no key of the scenario {} or its machine ({e}); nearest: {}",
                         tree.path.display(),
-                        near.join(", ")
+                        crate::input::overrides::nearest_keys(key, depth, &near)
                     )));
                 }
             }

@@ -11,15 +11,13 @@ impl Rng {
     /// The generator seeded by `seed`, its state filled by SplitMix64 as its authors advise.
     pub fn new(seed: u64) -> Rng {
         let mut x = seed;
-        let mut next = || {
-            x = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = x;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^ (z >> 31)
-        };
         Rng {
-            s: [next(), next(), next(), next()],
+            s: [
+                splitmix64(&mut x),
+                splitmix64(&mut x),
+                splitmix64(&mut x),
+                splitmix64(&mut x),
+            ],
         }
     }
 
@@ -49,6 +47,15 @@ impl Rng {
     }
 }
 
+/// SplitMix64 (Steele, Lea and Flood, 2014): the next output of the state `x`.
+pub fn splitmix64(x: &mut u64) -> u64 {
+    *x = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    let mut z = *x;
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
 /// Standard normal CDF, `Φ(z) = (1 + erf(z/√2)) / 2`.
 pub fn normal_cdf(z: f64) -> f64 {
     0.5 * (1.0 + libm::erf(z / std::f64::consts::SQRT_2))
@@ -60,13 +67,9 @@ mod tests {
 
     #[test]
     fn the_first_outputs_of_seed_zero_are_the_reference_ones() {
-        // SplitMix64 of seed 0 gives 0xe220a8397b1dcdaf first (its authors' reference output).
+        // SplitMix64 of seed 0 gives 0xe220a8397b1dcdaf first (the reference output).
         let mut x: u64 = 0;
-        x = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = x;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        assert_eq!(z ^ (z >> 31), 0xe220_a839_7b1d_cdaf);
+        assert_eq!(splitmix64(&mut x), 0xe220_a839_7b1d_cdaf);
     }
 
     #[test]

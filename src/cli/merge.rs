@@ -49,8 +49,17 @@ pub fn run(args: &MergeArgs) -> Result<i32> {
             let run_dir = crate::report::RunDir::begin(&args.output)?;
             super::batch::emit(&rows, args.json, run_dir, &args.output)
         }
+        "study" => {
+            let (header, _, parts) =
+                join::<crate::study::param::StudyHeader, Vec<crate::study::param::evaluate::Row>>(
+                    &args.shards,
+                )?;
+            let rows: Vec<_> = parts.into_iter().flatten().collect();
+            let run_dir = crate::report::RunDir::begin(&args.output)?;
+            super::study::emit(&header, &rows, args.json, run_dir, &args.output)
+        }
         other => Err(Error::usage(format!(
-            "{}: unknown study {other:?} (this mtsim merges sweep, placement and batch shards)",
+            "{}: unknown study {other:?} (this mtsim merges sweep, placement, batch and study shards)",
             args.shards[0].display()
         ))),
     }

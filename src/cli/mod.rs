@@ -23,6 +23,7 @@ mod merge;
 mod report;
 mod scenario;
 mod simulate;
+mod study;
 mod sweep;
 mod terminal;
 
@@ -136,7 +137,12 @@ pub enum Command {
     /// check and (with --simulate) simulate figures, in batch.csv and batch.parquet.
     /// Exit code 1 when a scenario has violations or fails.
     Batch(batch::BatchArgs),
-    /// Join the shard files of one `sweep`, `sweep --feasibility` or `batch` run into the
+    /// The servo simulation over any scenario or machine key, by dotted path: a grid in
+    /// one or two keys or random samples over many (docs/studies.md). One row per point
+    /// (G, F, H, each axis's B and spikes, check verdict, status) in rows.csv and
+    /// rows.parquet, study.json, plots and study.html.
+    Study(study::StudyArgs),
+    /// Join the shard files of one `sweep`, `sweep --feasibility`, `batch` or `study` run into the
     /// files the unsharded run writes, byte for byte.
     Merge(merge::MergeArgs),
     /// Does the program fit the machine? Axis travel, velocity and acceleration on every
@@ -423,5 +429,6 @@ fn run(cli: Cli) -> Result<i32> {
         }
         Command::Batch(args) => batch::run(&args),
         Command::Merge(args) => merge::run(&args),
+        Command::Study(args) => study::run(&args),
     }
 }

@@ -8,6 +8,7 @@ pub mod exact;
 pub mod geometry_errors;
 pub mod lead_in;
 pub mod machine;
+pub mod overrides;
 pub mod program;
 pub mod scenario;
 pub mod scene;

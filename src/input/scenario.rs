@@ -350,6 +350,12 @@ impl Scenario {
         Scenario::from_toml(path, &text, None)
     }
 
+    /// The scenario whose file at `path` holds `text` (paths inside it are relative to `path`;
+    /// the machine file it names is read).
+    pub fn from_text(path: &Path, text: &str) -> Result<Scenario> {
+        Scenario::from_toml(path, text, None)
+    }
+
     /// Parses `text` as the scenario file `path` (relative paths inside it resolve from
     /// `path`'s folder). `machine` is the machine file's path and text when the caller has
     /// them (the Python package's dict scenarios); otherwise the file the scenario's

@@ -41,10 +41,15 @@ pub fn is_run_output(name: &str) -> bool {
         "fit.svg",
         "fit.html",
     ];
-    const PREFIXES: [&str; 3] = ["sweep-", "placement.", "batch."];
+    // A study's: rows.csv, rows.parquet, study.json, study.html, study-*.svg, its shards.
+    const STUDY: [&str; 4] = ["rows.csv", "rows.parquet", "study.json", "study.html"];
+    const PREFIXES: [&str; 5] = ["sweep-", "placement.", "batch.", "study-", "study.shard-"];
     let name = name.strip_suffix(".tmp").unwrap_or(name);
     let name = name.strip_suffix(".raw").unwrap_or(name);
-    name == "runs" || FILES.contains(&name) || PREFIXES.iter().any(|p| name.starts_with(p))
+    name == "runs"
+        || FILES.contains(&name)
+        || STUDY.contains(&name)
+        || PREFIXES.iter().any(|p| name.starts_with(p))
 }
 
 /// An output folder being written; [`RunDir::commit`] puts it in place, dropping it without

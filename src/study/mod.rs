@@ -11,6 +11,7 @@ pub mod fit;
 pub mod geometry;
 pub mod glance;
 pub mod lanes;
+pub mod param;
 pub mod placement;
 pub mod reversals;
 pub mod shard;

@@ -208,6 +208,46 @@ const SHOWN: &[(&str, Shown)] = &[
         "python3 examples/dask/run_study.py --scheduler tcp://SCHEDULER:8786 --shards 64 --out study -- batch --list plant-programs.txt",
         Skip("needs a running Dask cluster (tcp://SCHEDULER:8786) and a plant's program list"),
     ),
+    (
+        "mtsim study STUDY.toml -o DIR",
+        Run(&[(&["study", "scenarios/studies/kv-x-circle.toml", "-o", "study-kv"], 0)]),
+    ),
+    (
+        "mtsim study STUDY -o DIR [--g-limit-um UM] [--samples N] [--shard K/N] [--json]",
+        Run(&[(
+            &["study", "scenarios/studies/tolerance-cone-15-10.toml", "-o", "study-trial", "--g-limit-um", "30", "--samples", "3", "--json"],
+            0,
+        )]),
+    ),
+    (
+        "mtsim study scenarios/studies/backlash-x-circle.toml -o backlash",
+        Run(&[(&["study", "scenarios/studies/backlash-x-circle.toml", "-o", "backlash"], 0)]),
+    ),
+    (
+        "mtsim study scenarios/studies/tolerance-cone-15-10.toml -o tolerance",
+        // The 1,000 points take half a minute of CPU: the test runs 4 of them
+        // (tests/study/param_study.rs runs 20).
+        Run(&[(&["study", "scenarios/studies/tolerance-cone-15-10.toml", "-o", "tolerance", "--samples", "4"], 0)]),
+    ),
+    (
+        "mtsim study scenarios/studies/tolerance-cone-15-10.toml --shard $k/4 -o shards",
+        Run(&[
+            (&["study", "scenarios/studies/tolerance-cone-15-10.toml", "--samples", "4", "--shard", "1/2", "-o", "shards-study"], 0),
+            (&["study", "scenarios/studies/tolerance-cone-15-10.toml", "--samples", "4", "--shard", "2/2", "-o", "shards-study"], 0),
+        ]),
+    ),
+    (
+        "mtsim merge shards/study.shard-*.json -o tolerance",
+        Run(&[(
+            &["merge", "shards-study/study.shard-1-of-2.json", "shards-study/study.shard-2-of-2.json", "-o", "tolerance-merged"],
+            0,
+        )]),
+    ),
+    (
+        "python3 examples/dask/run_study.py --shards 8 --out tolerance -- study scenarios/studies/tolerance-cone-15-10.toml",
+        Skip("needs Python with dask.distributed; the sweep's run of the same script is tested in tests/cli/dask_example.rs"),
+    ),
+    ("mtsim study", Names),
     ("mtsim <version>", Skip("the Parquet files' `created_by` text, not a command")),
     ("mtsim analyze", Names),
     ("mtsim batch", Names),

@@ -10,4 +10,5 @@ mod fit;
 mod fit_chain;
 mod kato_reproduction;
 mod lanes;
+mod param_study;
 mod simulate;

@@ -1,0 +1,241 @@
+//! One point of a study: its scenario run through the servo simulation and `check`, and
+//! the figures of its row.
+//!
+//! Points are handed over in groups ([`evaluate_group`]): points whose scenarios differ only
+//! in drive, servo, friction, backlash or error keys share their program, so a group can run
+//! side by side in SIMD lanes (`study::lanes`); today each point takes the single-run path.
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::check::{check, CheckOptions};
+use crate::error::Result;
+use crate::input::overrides::{KeyPath, ScenarioTree, Step};
+use crate::input::scenario::Scenario;
+use crate::study::diagnose::{marks, AxisMark};
+use crate::study::simulate::run_ballbar;
+
+/// One point's row: the varied values, the ball-bar figures, per axis the reversal value B
+/// and the spike height, the check's violations, and the run's status.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    /// 1-based, in the order of the study's points.
+    pub point: u64,
+    pub values: Vec<f64>,
+    /// Why the point could not be run; None when it ran.
+    pub error: Option<String>,
+    /// G, F max, F min, H, um.
+    pub g_um: Option<f64>,
+    pub f_max_um: Option<f64>,
+    pub f_min_um: Option<f64>,
+    pub h_um: Option<f64>,
+    /// Per axis of the study's machine: mean step height of the marks attributed to that
+    /// axis alone (its reversal value B as the ball bar sees it), um.
+    pub b_um: Vec<Option<f64>>,
+    /// Per axis: mean height of the spikes attributed to that axis alone, um.
+    pub spike_um: Vec<Option<f64>>,
+    /// Violations `check` found (travel, velocity, acceleration, collisions).
+    pub violations: Option<u64>,
+}
+
+impl Row {
+    fn failed(point: u64, values: &[f64], error: String) -> Row {
+        Row {
+            point,
+            values: values.to_vec(),
+            error: Some(error),
+            g_um: None,
+            f_max_um: None,
+            f_min_um: None,
+            h_um: None,
+            b_um: Vec::new(),
+            spike_um: Vec::new(),
+            violations: None,
+        }
+    }
+
+    /// `ok` or `error`.
+    pub fn status(&self) -> &'static str {
+        if self.error.is_some() {
+            "error"
+        } else {
+            "ok"
+        }
+    }
+
+    /// `clean`, `violations` or empty for a point that did not run.
+    pub fn verdict(&self) -> &'static str {
+        match self.violations {
+            Some(0) => "clean",
+            Some(_) => "violations",
+            None => "",
+        }
+    }
+}
+
+/// Whether a key varies only what the drives do (a lane group's points share the program,
+/// its planning and interpolation): a machine axis's `servo`, `drive` or `friction` keys, or
+/// the machine's geometric errors.
+pub fn is_drive_key(key: &KeyPath) -> bool {
+    let names: Vec<&str> = key
+        .steps
+        .iter()
+        .filter_map(|s| match s {
+            Step::Key(k) => Some(k.as_str()),
+            Step::Index(_) => None,
+        })
+        .collect();
+    match names[..] {
+        ["machine", "axes", _, section, ..] => ["servo", "drive", "friction"].contains(&section),
+        ["machine", section, ..] => ["location_errors", "error_tables"].contains(&section),
+        _ => false,
+    }
+}
+
+/// The points of `indices` split into groups that differ only in drive keys, in order of
+/// their first point.
+pub fn groups(
+    keys: &[KeyPath],
+    points: &[Vec<f64>],
+    indices: std::ops::Range<usize>,
+) -> Vec<Vec<usize>> {
+    let shared: Vec<usize> = (0..keys.len())
+        .filter(|&k| !is_drive_key(&keys[k]))
+        .collect();
+    let mut out: Vec<(Vec<u64>, Vec<usize>)> = Vec::new();
+    for i in indices {
+        let id: Vec<u64> = shared.iter().map(|&k| points[i][k].to_bits()).collect();
+        match out.iter_mut().find(|(g, _)| *g == id) {
+            Some((_, members)) => members.push(i),
+            None => out.push((id, vec![i])),
+        }
+    }
+    out.into_iter().map(|(_, m)| m).collect()
+}
+
+/// The figures of one group of points, in its order. The one place the lane engine takes
+/// over: `study::lanes::simulate_lanes(&scenarios)` in place of the per-point runs.
+/// `done` is called once per point finished.
+pub fn evaluate_group(scenarios: &[Scenario], done: &(dyn Fn() + Sync)) -> Vec<Result<Figures>> {
+    scenarios
+        .par_iter()
+        .map(|s| {
+            let figures = figures_of(s);
+            done();
+            figures
+        })
+        .collect()
+}
+
+/// What one run gives a row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Figures {
+    pub g_um: f64,
+    pub f_max_um: f64,
+    pub f_min_um: f64,
+    pub h_um: Option<f64>,
+    pub steps: Vec<AxisMark>,
+    pub spikes: Vec<AxisMark>,
+    pub violations: u64,
+}
+
+/// One point through the single-run path: the ball-bar study (no files) and `check`.
+pub fn figures_of(scenario: &Scenario) -> Result<Figures> {
+    let study = run_ballbar(scenario, None, &|_| {})?;
+    let result = study.result()?.ok_or_else(|| {
+        crate::error::Error::invalid(&scenario.path, "a study needs a measured circle: a cone, a circle or a file program with [program.cone]")
+    })?;
+    let (steps, spikes) = marks(&result);
+    let report = check(scenario, &CheckOptions::default())?;
+    Ok(Figures {
+        g_um: result.circular_deviation_um,
+        f_max_um: result.radial_max_um,
+        f_min_um: result.radial_min_um,
+        h_um: result.hysteresis_um,
+        steps,
+        spikes,
+        violations: report.violations.len() as u64,
+    })
+}
+
+/// The rows of the points `indices`: each scenario built from `tree` with its values, the
+/// groups evaluated in parallel. A point that fails carries its error; the others run.
+pub fn evaluate(
+    tree: &ScenarioTree,
+    keys: &[KeyPath],
+    axes: &[String],
+    points: &[Vec<f64>],
+    indices: std::ops::Range<usize>,
+    done: &(dyn Fn() + Sync),
+) -> Vec<Row> {
+    let groups = groups(keys, points, indices);
+    let mut rows: Vec<Row> = groups
+        .par_iter()
+        .flat_map_iter(|group| {
+            let built: Vec<(usize, Result<Scenario>)> = group
+                .iter()
+                .map(|&i| (i, tree.load_with(keys, &points[i])))
+                .collect();
+            let (ok, bad): (Vec<_>, Vec<_>) = built.into_iter().partition(|(_, s)| s.is_ok());
+            let scenarios: Vec<Scenario> = ok
+                .iter()
+                .map(|(_, s)| s.as_ref().expect("ok").clone())
+                .collect();
+            let figures = evaluate_group(&scenarios, done);
+            let mut rows: Vec<Row> = ok
+                .iter()
+                .zip(figures)
+                .map(|((i, _), f)| row_of(*i, &points[*i], axes, f))
+                .collect();
+            for (i, s) in bad {
+                done();
+                let e = s.err().expect("partitioned");
+                rows.push(Row::failed(i as u64 + 1, &points[i], message(&e)));
+            }
+            rows
+        })
+        .collect();
+    rows.sort_by_key(|r| r.point);
+    rows
+}
+
+fn row_of(i: usize, values: &[f64], axes: &[String], figures: Result<Figures>) -> Row {
+    let f = match figures {
+        Ok(f) => f,
+        Err(e) => return Row::failed(i as u64 + 1, values, message(&e)),
+    };
+    let finite = |v: f64| v.is_finite().then_some(v);
+    let mean_of = |marks: &[AxisMark], axis: &str| {
+        let h: Vec<f64> = marks
+            .iter()
+            .filter(|m| m.axis == axis)
+            .map(|m| m.height_um)
+            .collect();
+        (!h.is_empty()).then(|| h.iter().sum::<f64>() / h.len() as f64)
+    };
+    Row {
+        point: i as u64 + 1,
+        values: values.to_vec(),
+        error: None,
+        g_um: finite(f.g_um),
+        f_max_um: finite(f.f_max_um),
+        f_min_um: finite(f.f_min_um),
+        h_um: f.h_um.and_then(finite),
+        b_um: axes.iter().map(|a| mean_of(&f.steps, a)).collect(),
+        spike_um: axes.iter().map(|a| mean_of(&f.spikes, a)).collect(),
+        violations: Some(f.violations),
+    }
+}
+
+/// An error as one line of a row: its message, with the study's `machine.` for the
+/// scenario's `machine_overrides.`.
+fn message(e: &crate::error::Error) -> String {
+    use crate::error::Error;
+    let text = match e {
+        Error::AtSource(s) => s.message.clone(),
+        Error::Located { message, .. } => message.clone(),
+        other => other.to_string(),
+    };
+    text.replace("machine_overrides.", "machine.")
+        .replace('\n', " ")
+}

@@ -1,0 +1,346 @@
+//! `mtsim study`: figures against closed forms (lost motion, servo mismatch), the Wilson
+//! interval against published values, reproducibility, shards, and the errors of bad keys
+//! and values.
+
+use std::path::{Path, PathBuf};
+
+use mtsim::study::param::stats::{spearman, wilson, Z95};
+
+use crate::common::{mtsim, scratch};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Writes a study file on the bundled scenario `scenario` with the `[[vary]]` tables `vary`.
+fn study_file(dir: &Path, scenario: &str, top: &str, vary: &str) -> PathBuf {
+    let path = dir.join("study.toml");
+    let base = root().join("scenarios").join(scenario);
+    let text = format!("scenario = {:?}\n{top}\n{vary}", base.display().to_string());
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Runs `mtsim study` and returns the rows of rows.csv as (header, rows).
+fn run(study: &Path, out: &Path, extra: &[&str]) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut args = vec![
+        "study",
+        study.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "-q",
+    ];
+    args.extend_from_slice(extra);
+    let o = mtsim(&args);
+    assert!(
+        o.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let mut r = csv::Reader::from_path(out.join("rows.csv")).unwrap();
+    let header = r.headers().unwrap().iter().map(String::from).collect();
+    let rows = r
+        .records()
+        .map(|rec| rec.unwrap().iter().map(String::from).collect())
+        .collect();
+    (header, rows)
+}
+
+fn column(header: &[String], rows: &[Vec<String>], name: &str) -> Vec<f64> {
+    let i = header
+        .iter()
+        .position(|h| h == name)
+        .unwrap_or_else(|| panic!("no column {name}"));
+    rows.iter().map(|r| r[i].parse().unwrap()).collect()
+}
+
+/// Runs a study that must be refused (exit 2, no output folder) and returns its stderr.
+fn refused(dir: &Path, vary: &str) -> String {
+    let study = study_file(dir, "circle-iso230-4.toml", "", vary);
+    let out = dir.join("out");
+    let o = mtsim(&[
+        "study",
+        study.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!out.exists());
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Semi-closed loop backlash b on X shifts the two half circles by ±b/2 along X: the step
+/// at X's reversals (θ = 0°, 180° on the XY circle, where the bar lies along X) grows by b
+/// (docs/servo-and-ballbar.md, "Backlash b on one axis"), on top of friction's lost motion.
+/// Y's reversals do not see it.
+#[test]
+fn the_x_reversal_step_grows_by_the_backlash() {
+    let dir = scratch("study", "backlash");
+    let study = study_file(
+        &dir,
+        "circle-iso230-4.toml",
+        "",
+        "[[vary]]\nkey = \"machine.axes.X.drive.backlash_mm\"\nfrom = 0.0\nto = 0.01\nstep = 0.005\n",
+    );
+    let (h, rows) = run(&study, &dir.join("out"), &[]);
+    let b = column(&h, &rows, "machine.axes.X.drive.backlash_mm");
+    let bx = column(&h, &rows, "B_X_um");
+    let by = column(&h, &rows, "B_Y_um");
+    assert_eq!(b, [0.0, 0.005, 0.01]);
+    for i in 1..3 {
+        let expected_um = (b[i] - b[0]) * 1e3;
+        let grown = bx[i] - bx[0];
+        // The step detector's fitted jump takes 0.92 of the lost motion: within 10 %.
+        assert!(
+            (grown - expected_um).abs() <= 0.10 * expected_um,
+            "B_X grew by {grown} um for {expected_um} um of backlash"
+        );
+        assert!((by[i] - by[0]).abs() < 0.2, "B_Y moved: {by:?}");
+    }
+    // G rises with the backlash: the two half circles part.
+    let g = column(&h, &rows, "G_um");
+    assert!(g[0] < g[1] && g[1] < g[2], "{g:?}");
+    let status = h.iter().position(|c| c == "status").unwrap();
+    assert!(rows.iter().all(|r| r[status] == "ok"));
+}
+
+/// Gain mismatch Kvx ≠ Kvy on a circle at speed v: the axes lag by v/Kv each, the trace is
+/// an ellipse of peak-to-peak `v |1/Kvx − 1/Kvy|` (docs/servo-and-ballbar.md), which
+/// dominates G once it passes the rest of the trace.
+#[test]
+fn g_follows_the_servo_mismatch_closed_form() {
+    let dir = scratch("study", "kv");
+    let study = study_file(
+        &dir,
+        "circle-iso230-4.toml",
+        "",
+        "[[vary]]\nkey = \"machine.axes.X.servo.kv_per_s\"\nvalues = [24.0, 27.0, 30.0, 36.0]\n",
+    );
+    let (h, rows) = run(&study, &dir.join("out"), &[]);
+    let kv = column(&h, &rows, "machine.axes.X.servo.kv_per_s");
+    let g = column(&h, &rows, "G_um");
+    let v_mm_s = 1000.0 / 60.0;
+    let g_matched = g[2];
+    for (k, g) in kv.iter().zip(&g) {
+        let pp_um = v_mm_s * (1.0 / k - 1.0 / 30.0).abs() * 1e3;
+        if pp_um == 0.0 {
+            continue;
+        }
+        // The rest of the trace (G at matched gains) bounds the difference; the ellipse
+        // swamps it: within 2 % of the closed form.
+        assert!(
+            (g - pp_um).abs() <= g_matched,
+            "Kvx {k}: G {g} against {pp_um}"
+        );
+        assert!(
+            (g - pp_um).abs() <= 0.02 * pp_um,
+            "Kvx {k}: G {g} against {pp_um}"
+        );
+    }
+}
+
+/// Newcombe (1998), Table I, method 3 (Wilson score interval without continuity correction).
+#[test]
+fn the_wilson_interval_matches_the_published_values() {
+    for (hits, n, low, high) in [
+        (81, 263, 0.2553, 0.3662),
+        (15, 148, 0.0624, 0.1605),
+        (0, 20, 0.0, 0.1611),
+        (1, 29, 0.0061, 0.1718),
+    ] {
+        let s = wilson(hits, n, Z95).unwrap();
+        assert!((s.low - low).abs() < 6e-5, "{hits}/{n}: low {}", s.low);
+        assert!((s.high - high).abs() < 6e-5, "{hits}/{n}: high {}", s.high);
+    }
+    assert!(wilson(1, 0, Z95).is_none());
+    // Spearman's ρ by hand: ranks (1 2 3 4 5) and (2 1 4 3 5), Σd² = 4, ρ = 1 − 6·4/(5·24) = 0.8.
+    let rho = spearman(&[1.0, 2.0, 3.0, 4.0, 5.0], &[20.0, 10.0, 40.0, 30.0, 50.0]).unwrap();
+    assert!((rho - 0.8).abs() < 1e-12);
+}
+
+const RANDOM: &str =
+    "[[vary]]\nkey = \"machine.axes.X.drive.backlash_mm\"\nuniform = [0.0, 0.01]\n\
+[[vary]]\nkey = \"machine.axes.Y.servo.kv_per_s\"\nnormal = [30.0, 1.5]\nmin = 27.0\nmax = 33.0\n";
+
+/// Same seed, the same bytes; another seed, other points. The share in study.json is the
+/// Wilson interval of the rows' own count.
+#[test]
+fn a_random_study_is_reproducible_and_its_share_is_counted() {
+    let dir = scratch("study", "random");
+    let study = study_file(
+        &dir,
+        "circle-iso230-4.toml",
+        "samples = 6\nseed = 5\ng_limit_um = 12.0",
+        RANDOM,
+    );
+    let (h, rows) = run(&study, &dir.join("a"), &[]);
+    run(&study, &dir.join("b"), &[]);
+    for f in [
+        "rows.csv",
+        "rows.parquet",
+        "study.json",
+        "study.html",
+        "study-share.svg",
+    ] {
+        let (a, b) = (
+            std::fs::read(dir.join("a").join(f)).unwrap(),
+            std::fs::read(dir.join("b").join(f)).unwrap(),
+        );
+        assert!(a == b, "{f} differs between two runs of one seed");
+    }
+    let x = column(&h, &rows, "machine.axes.X.drive.backlash_mm");
+    let kv = column(&h, &rows, "machine.axes.Y.servo.kv_per_s");
+    assert_eq!(rows.len(), 6);
+    assert!(x.iter().all(|v| (0.0..0.01).contains(v)));
+    assert!(kv.iter().all(|v| (27.0..=33.0).contains(v)));
+    let other = study_file(
+        &dir,
+        "circle-iso230-4.toml",
+        "samples = 6\nseed = 6\ng_limit_um = 12.0",
+        RANDOM,
+    );
+    let (_, rows2) = run(&other, &dir.join("c"), &[]);
+    assert_ne!(rows, rows2);
+    let g = column(&h, &rows, "G_um");
+    let hits = g.iter().filter(|&&g| g < 12.0).count() as u64;
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("a/study.json")).unwrap()).unwrap();
+    let share = &summary["g_below_limit"];
+    assert_eq!(share["hits"], hits);
+    let expected = wilson(hits, 6, Z95).unwrap();
+    assert_eq!(share["low"].as_f64().unwrap(), expected.low);
+    assert_eq!(summary["sensitivity"].as_array().unwrap().len(), 2);
+}
+
+/// Three shards joined by `mtsim merge` write the files of the whole run, byte for byte.
+#[test]
+fn merged_shards_equal_the_whole_study() {
+    let dir = scratch("study", "shards");
+    let study = study_file(
+        &dir,
+        "circle-iso230-4.toml",
+        "samples = 5\nseed = 9\ng_limit_um = 12.0",
+        RANDOM,
+    );
+    let s = study.to_str().unwrap();
+    for k in 1..=3 {
+        let shard = format!("{k}/3");
+        let o = mtsim(&[
+            "study",
+            s,
+            "--shard",
+            &shard,
+            "-o",
+            dir.join("shards").to_str().unwrap(),
+            "-q",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let files: Vec<String> = (1..=3)
+        .map(|k| {
+            dir.join(format!("shards/study.shard-{k}-of-3.json"))
+                .display()
+                .to_string()
+        })
+        .collect();
+    let mut args = vec!["merge"];
+    args.extend(files.iter().map(String::as_str));
+    let merged = dir.join("merged");
+    args.extend(["-o", merged.to_str().unwrap(), "-q"]);
+    assert!(mtsim(&args).status.success());
+    run(&study, &dir.join("whole"), &[]);
+    let mut names: Vec<String> = std::fs::read_dir(dir.join("whole"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert!(
+        names.contains(&"rows.parquet".to_string()) && names.contains(&"study.html".to_string())
+    );
+    for f in names {
+        let whole = std::fs::read(dir.join("whole").join(&f)).unwrap();
+        let joined = std::fs::read(merged.join(&f)).unwrap();
+        assert!(
+            whole == joined,
+            "{f} differs between the merged and the whole study"
+        );
+    }
+}
+
+#[test]
+fn a_key_that_names_nothing_is_refused_with_the_nearest_keys() {
+    let dir = scratch("study", "badkey");
+    let err = refused(
+        &dir,
+        "[[vary]]\nkey = \"machine.axes.X.drive.bakclash_mm\"\nvalues = [0.0]\n",
+    )
+    .replace(['\n', '│', ' '], "");
+    assert!(err.contains("`machine.axes.X.drive.bakclash_mm`"), "{err}");
+    assert!(
+        err.contains("nearest:`machine.axes.X.drive.backlash_mm`"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_nan_value_is_a_located_error() {
+    let dir = scratch("study", "nan");
+    let err = refused(
+        &dir,
+        "[[vary]]\nkey = \"machine.axes.X.drive.backlash_mm\"\nvalues = [0.0, nan]\n",
+    );
+    // The line of `values` (line 5: scenario, the empty top keys, [[vary]], key, values).
+    assert!(err.contains("study.toml:5:1"), "{err}");
+    assert!(err.contains("`vary.values`: is not a number"), "{err}");
+}
+
+/// A value the scenario refuses fails its point only; the others run.
+#[test]
+fn a_failing_point_does_not_stop_the_study() {
+    let dir = scratch("study", "failing");
+    let study = study_file(
+        &dir,
+        "circle-iso230-4.toml",
+        "",
+        "[[vary]]\nkey = \"machine.axes.X.drive.backlash_mm\"\nvalues = [-0.01, 0.0]\n",
+    );
+    let (h, rows) = run(&study, &dir.join("out"), &[]);
+    let (status, error) = (
+        h.iter().position(|c| c == "status").unwrap(),
+        h.iter().position(|c| c == "error").unwrap(),
+    );
+    assert_eq!(rows[0][status], "error");
+    assert!(
+        rows[0][error].contains("backlash_mm") && rows[0][error].contains(">= 0"),
+        "{:?}",
+        rows[0]
+    );
+    assert_eq!(rows[1][status], "ok");
+    assert!(column(&h, &rows[1..], "G_um")[0] > 0.0);
+}
+
+/// The tolerance study of docs/studies.md, with 20 of its 1,000 points: its table, plots and
+/// page are written.
+#[test]
+fn the_bundled_tolerance_study_runs_a_trial_of_twenty_points() {
+    let dir = scratch("study", "tolerance");
+    let study = root().join("scenarios/studies/tolerance-cone-15-10.toml");
+    let (h, rows) = run(&study, &dir.join("out"), &["--samples", "20"]);
+    assert_eq!(rows.len(), 20);
+    assert!(
+        h.contains(&"B_C_um".to_string())
+            && h.contains(&"machine.axes.Y.servo.kv_per_s".to_string())
+    );
+    let page = std::fs::read_to_string(dir.join("out/study.html")).unwrap();
+    for plot in ["study-share", "study-sensitivity"] {
+        assert!(
+            page.contains(&format!("data-plot=\"{plot}\"")),
+            "{plot} missing"
+        );
+        assert!(dir.join(format!("out/{plot}.svg")).exists());
+    }
+    let verdict = h.iter().position(|c| c == "verdict").unwrap();
+    assert!(rows
+        .iter()
+        .all(|r| r[verdict] == "clean" || r[verdict] == "violations"));
+}

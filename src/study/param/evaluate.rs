@@ -2,8 +2,9 @@
 //! the figures of its row.
 //!
 //! Points are handed over in groups ([`evaluate_group`]): points whose scenarios differ only
-//! in drive, servo, friction, backlash or error keys share their program, so a group can run
-//! side by side in SIMD lanes (`study::lanes`); today each point takes the single-run path.
+//! in drive, servo, friction, backlash or error keys share their program, so a group runs
+//! its drives side by side on one interpolation pass (`study::lanes`), and its `check`, which
+//! reads only the commanded motion, once.
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -13,7 +14,9 @@ use crate::error::Result;
 use crate::input::overrides::{KeyPath, ScenarioTree, Step};
 use crate::input::scenario::Scenario;
 use crate::study::diagnose::{marks, AxisMark};
-use crate::study::simulate::run_ballbar;
+use crate::study::glance::reversal_b;
+use crate::study::lanes::{run_ballbar_lanes, share_key};
+use crate::study::simulate::BallbarStudy;
 
 /// One point's row: the varied values, the ball-bar figures, per axis the reversal value B
 /// and the spike height, the check's violations, and the run's status.
@@ -113,18 +116,38 @@ pub fn groups(
     out.into_iter().map(|(_, m)| m).collect()
 }
 
-/// The figures of one group of points, in its order. The one place the lane engine takes
-/// over: `study::lanes::simulate_lanes(&scenarios)` in place of the per-point runs.
-/// `done` is called once per point finished.
+/// Points per thread run before their figures are taken: 16 points of the 15/10 cone hold
+/// about 50 MB of traces; a longer chunk saves little (docs/performance.md).
+const POINTS_PER_CHUNK_PER_THREAD: usize = 16;
+
+/// The figures of one group of points, in its order: the ball-bar studies of
+/// [`run_ballbar_lanes`] (each equal to its point's single run), and `check` once for each
+/// set of points with the same setpoints ([`share_key`]: `check` sees the commanded motion
+/// and the axis limits, which the drive keys do not change). `done` is called once per point.
 pub fn evaluate_group(scenarios: &[Scenario], done: &(dyn Fn() + Sync)) -> Vec<Result<Figures>> {
-    scenarios
-        .par_iter()
-        .map(|s| {
-            let figures = figures_of(s);
+    // A failed check is not kept: each of its points runs it again and carries its error.
+    let mut checked: Vec<(String, u64)> = Vec::new();
+    // A point's study holds its traces until its figures are taken, so the group runs in
+    // chunks of a few passes per thread: memory stays that of a chunk, not of the group.
+    let chunk = POINTS_PER_CHUNK_PER_THREAD * rayon::current_num_threads().max(1);
+    let mut out = Vec::with_capacity(scenarios.len());
+    for part in scenarios.chunks(chunk) {
+        let studies = run_ballbar_lanes(part, &|_| {});
+        for (scenario, study) in part.iter().zip(studies) {
+            let key = share_key(scenario);
+            let violations = match checked.iter().find(|(k, _)| *k == key) {
+                Some((_, v)) => Ok(*v),
+                None => check(scenario, &CheckOptions::default()).map(|r| {
+                    let v = r.violations.len() as u64;
+                    checked.push((key, v));
+                    v
+                }),
+            };
+            out.push(study.and_then(|s| figures_from(scenario, &s, violations?)));
             done();
-            figures
-        })
-        .collect()
+        }
+    }
+    out
 }
 
 /// What one run gives a row.
@@ -134,27 +157,31 @@ pub struct Figures {
     pub f_max_um: f64,
     pub f_min_um: f64,
     pub h_um: Option<f64>,
-    pub steps: Vec<AxisMark>,
+    /// Per axis of the machine, in its order: the reversal value B from the trace
+    /// (`study::glance::reversal_b`, as the run report gives it), um.
+    pub b_um: Vec<(String, Option<f64>)>,
     pub spikes: Vec<AxisMark>,
     pub violations: u64,
 }
 
-/// One point through the single-run path: the ball-bar study (no files) and `check`.
-pub fn figures_of(scenario: &Scenario) -> Result<Figures> {
-    let study = run_ballbar(scenario, None, &|_| {})?;
+/// One point's figures from its ball-bar study and its check's violation count.
+fn figures_from(scenario: &Scenario, study: &BallbarStudy, violations: u64) -> Result<Figures> {
     let result = study.result()?.ok_or_else(|| {
         crate::error::Error::invalid(&scenario.path, "a study needs a measured circle: a cone, a circle or a file program with [program.cone]")
     })?;
-    let (steps, spikes) = marks(&result);
-    let report = check(scenario, &CheckOptions::default())?;
+    let (_, spikes) = marks(&result);
+    let b_um = reversal_b(&study.runs, &study.sites, scenario.machine.axes())?
+        .into_iter()
+        .map(|r| (r.axis, r.b_um))
+        .collect();
     Ok(Figures {
         g_um: result.circular_deviation_um,
         f_max_um: result.radial_max_um,
         f_min_um: result.radial_min_um,
         h_um: result.hysteresis_um,
-        steps,
+        b_um,
         spikes,
-        violations: report.violations.len() as u64,
+        violations,
     })
 }
 
@@ -221,7 +248,10 @@ fn row_of(i: usize, values: &[f64], axes: &[String], figures: Result<Figures>) -
         f_max_um: finite(f.f_max_um),
         f_min_um: finite(f.f_min_um),
         h_um: f.h_um.and_then(finite),
-        b_um: axes.iter().map(|a| mean_of(&f.steps, a)).collect(),
+        b_um: axes
+            .iter()
+            .map(|a| f.b_um.iter().find(|(x, _)| x == a).and_then(|(_, b)| *b))
+            .collect(),
         spike_um: axes.iter().map(|a| mean_of(&f.spikes, a)).collect(),
         violations: Some(f.violations),
     }

@@ -25,7 +25,8 @@ from . import _native
 from .errors import InputError, MtsimError, RunError
 
 __all__ = [
-    "simulate", "check", "analyze", "blocks", "fit", "run_command", "to_toml", "Simulation",
+    "simulate", "check", "analyze", "blocks", "fit", "study", "run_command", "to_toml", "Simulation",
+    "Study",
     "MtsimError", "InputError", "RunError", "__version__",
 ]
 __version__: str = _native.__version__
@@ -144,6 +145,42 @@ def fit(scenarios: Scenario | Sequence[Scenario],
     return _native.fit(list(scenarios), [os.fspath(m) for m in measured], output=output,
                        placement_known=placement_known, backlash=backlash,
                        servo_gain=servo_gain)
+
+
+class Study(NamedTuple):
+    """What ``study`` returns; unpacks as ``summary, rows = mtsim.study(...)``."""
+
+    summary: dict
+    """The study.json document: the study as read, the counts, G's range (µm), the share of
+    points with G below the limit with its 95 % Wilson interval, and (random studies) each
+    key's Spearman rank correlation with G."""
+    rows: pa.Table
+    """One row per point, the columns of rows.csv / rows.parquet (docs/studies.md): the
+    varied values, ``status``, ``error``, ``G_um``, ``F_max_um``, ``F_min_um``, ``H_um``,
+    ``verdict``, ``violations``, ``B_<axis>_um`` and ``spike_<axis>_um``."""
+
+
+def study(path: str | os.PathLike[str], *, output: str | os.PathLike[str] | None = None,
+          samples: int | None = None, g_limit_um: float | None = None) -> Study:
+    """Runs a study file (docs/studies.md): the servo simulation over any scenario or
+    machine key, on a grid or at seeded random points, as ``mtsim study``.
+
+    Args:
+        path: the study file (TOML).
+        output: a folder to keep rows.csv, rows.parquet, study.json, the plots and
+            study.html in; by default a temporary folder that is removed.
+        samples: points of a random study, in place of the file's ``samples``.
+        g_limit_um: the G limit, µm, in place of the file's ``g_limit_um``.
+
+    Returns:
+        ``Study(summary, rows)``: the study.json dict and the rows as a ``pyarrow.Table``.
+
+    Raises:
+        InputError: a bad study file, key path or value (file, line, column and key set).
+    """
+    summary, stream = _native.study(os.fspath(path), output=output, samples=samples,
+                                    g_limit_um=g_limit_um)
+    return Study(summary, pa.RecordBatchReader.from_stream(stream).read_all())
 
 
 def to_toml(value: dict[str, Any]) -> str:

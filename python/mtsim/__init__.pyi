@@ -34,6 +34,14 @@ def fit(scenarios: Scenario | Sequence[Scenario], measured: PathLike | Sequence[
         servo_gain: bool = ...) -> dict[str, Any]:
     """Location errors fitted to measured traces, as `mtsim fit --json`."""
 
+class Study(NamedTuple):
+    summary: dict[str, Any]
+    rows: pa.Table
+
+def study(path: PathLike, *, output: PathLike | None = ..., samples: int | None = ...,
+          g_limit_um: float | None = ...) -> Study:
+    """A study file run (docs/studies.md): (study.json dict, rows pyarrow.Table)."""
+
 def to_toml(value: dict[str, Any]) -> str:
     """A scenario or machine dict as the TOML text mtsim reads."""
 

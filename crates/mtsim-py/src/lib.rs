@@ -20,6 +20,7 @@ use mtsim::cli::{block_rows, AnalyzeFindings};
 use mtsim::error::Error;
 use mtsim::input::scenario::TraceFormat;
 use mtsim::study::fit::{FitOptions, MeasuredTrace};
+use mtsim::study::param::{write_outputs, Study};
 use mtsim::study::simulate::TRACE_PARQUET_FILE;
 use pyo3::prelude::*;
 use serde::Serialize;
@@ -173,6 +174,34 @@ fn fit<'py>(
     json::to_py(py, &report)
 }
 
+/// Runs a study file: (study.json document, rows stream). See `mtsim.study`.
+#[pyfunction]
+#[pyo3(signature = (study, *, output=None, samples=None, g_limit_um=None))]
+fn study<'py>(
+    py: Python<'py>,
+    study: PathBuf,
+    output: Option<PathBuf>,
+    samples: Option<usize>,
+    g_limit_um: Option<f64>,
+) -> PyResult<(Bound<'py, PyAny>, ArrowStream)> {
+    let (summary, batches) = run(py, &Texts::default(), || {
+        if let Some(g) = g_limit_um {
+            if !(g.is_finite() && g > 0.0) {
+                return Err(Error::usage(format!(
+                    "g_limit_um {g}: expected a G limit > 0 um"
+                )));
+            }
+        }
+        let study = Study::load(&study, g_limit_um, samples)?;
+        let rows = study.run(0..study.points.len(), &|| {});
+        let dir = Scratch::begin(output.as_deref())?;
+        let summary = write_outputs(dir.path(), &study.header, &rows)?;
+        let batches = Batches::read_parquet(&dir.path().join("rows.parquet"))?;
+        Ok((to_json(&summary), batches))
+    })?;
+    Ok((json::to_py(py, &summary)?, ArrowStream::new(batches)))
+}
+
 /// The `mtsim` command line on `args` (without the program name), in this process;
 /// returns its exit code. See `mtsim.run_command`.
 #[pyfunction]
@@ -196,6 +225,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(analyze, m)?)?;
     m.add_function(wrap_pyfunction!(blocks, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
+    m.add_function(wrap_pyfunction!(study, m)?)?;
     m.add_function(wrap_pyfunction!(toml_of, m)?)?;
     m.add_function(wrap_pyfunction!(run_command, m)?)?;
     m.add_class::<ArrowStream>()?;

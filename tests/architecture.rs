@@ -317,12 +317,6 @@ fn tokens(text: &str) -> Vec<Token> {
     out
 }
 
-/// A module of a crate: its path from the root (`["measure", "ballbar"]`) and the file it is in.
-struct Module {
-    path: Vec<String>,
-    file: PathBuf,
-}
-
 /// A path named in a file: the module it is named from, and its segments (`*` for a glob).
 struct Reference {
     from: Vec<String>,

@@ -27,15 +27,6 @@ pub fn read_str<'a>(path: &'a Path, text: &'a str) -> Moves<'a> {
     Box::new(ngc::read_str(path, text, ngc::AxisVec::ZERO).map(|m| m.map_err(Into::into)))
 }
 
-/// What the reader reports beside the moves of the file at `path`, up to its first error:
-/// warnings (a program that moves before it states its units) and the codes accepted with
-/// no effect on the motion.
-pub fn notices(path: &Path, options: &ngc::Options) -> Result<Vec<ngc::Notice>> {
-    let mut moves = ngc::read_file_with(path, options)?;
-    while let Some(Ok(_)) = moves.next() {}
-    Ok(moves.notices().to_vec())
-}
-
 /// The reader's warnings about the file at `path`. The one warning there is, a program that
 /// moves before it states its units, is given with the first block that queues a move, so
 /// the read stops at the first move: a command that only prints warnings does not read the

@@ -74,15 +74,6 @@ pub fn scenario_run(
     })
 }
 
-/// What reading the scenario's program file reports beside its moves ([`file::notices`]);
-/// none for a generated test.
-pub fn scenario_notices(scenario: &Scenario) -> Result<Vec<ngc::Notice>> {
-    match &scenario.program {
-        Program::File { path, .. } => file::notices(path, &scenario.reader),
-        _ => Ok(Vec::new()),
-    }
-}
-
 /// The reader's warnings about the scenario's program file ([`file::warnings`]); none for a
 /// generated test.
 pub fn scenario_warnings(scenario: &Scenario) -> Result<Vec<ngc::Notice>> {

@@ -56,8 +56,8 @@ pub fn analyse_program(scenario: &Scenario) -> Result<ProgramAnalysis> {
     let analysis = tee.analysis.finish();
     let geometric = geometric_trace(scenario)?;
     let feed = feed?;
-    // The reader has ended (the analysis read it to its end): its notices are those
-    // `file::notices` collects.
+    // The reader has ended (the analysis read it to its end), so it holds every notice:
+    // the warnings and the codes accepted with no effect on the motion.
     let notices = tee.moves.inner().notices().to_vec();
     Ok(ProgramAnalysis {
         analysis,

@@ -91,6 +91,37 @@ fn machine_codes_and_smoothing_codes_are_accepted_with_one_notice_each() {
 }
 
 #[test]
+fn haas_m16_changes_the_tool_as_m06_does() {
+    let mut o = opts(Dialect::Haas);
+    o.tools = vec![Tool {
+        number: 7,
+        length_mm: 80.0,
+        diameter_mm: 8.0,
+    }];
+    // After the change tool 7 is active; G43 H7 then Z0 puts machine Z at its 80 mm length.
+    let text = |m: &str| format!("G21 G90\nT7 {m}\nG0 X1\nG43 H7 G0 Z0\n");
+    for code in ["M06", "M16"] {
+        let (m, notices) = read(&text(code), &o);
+        assert_eq!(m[0].tool, 7, "{code}: {m:?}");
+        assert_eq!(xyz(&m[0]), [1.0, 0.0, 0.0]);
+        assert_eq!(m[1].tool, 7);
+        assert_eq!(m[1].tool_length_mm, 80.0);
+        assert_eq!(xyz(&m[1]), [1.0, 0.0, 80.0]);
+        assert!(
+            !notices.iter().any(|n| n.message.contains("M16")),
+            "{notices:?}"
+        );
+    }
+    // Without the change, T7 alone leaves no tool active (tool 0).
+    let (m, _) = read("G21 G90\nT7\nG0 X1\n", &o);
+    assert_eq!(m[0].tool, 0);
+    // Under cutter compensation M16 is refused as M06 is.
+    let (line, msg) = error_with("G21 G90 G17\nT7 D7 M06\nG41 G1 X10 F100\nM16\n", &o);
+    assert_eq!(line, 4);
+    assert!(msg.contains("cannot change tools"), "{msg}");
+}
+
+#[test]
 fn d_and_h_stand_alone_in_the_fanuc_family() {
     let mut o = opts(Dialect::Haas);
     o.tools = vec![

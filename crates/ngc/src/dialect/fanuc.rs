@@ -23,6 +23,7 @@ pub(super) const TABLE: Table = Table {
     machine_m,
     no_motion_g,
     local_subprogram_m97: false,
+    m16_tool_change: false,
     offset_words_alone: true,
     g80_keeps_motion: true,
     g92_s_limits_spindle: true,

@@ -12,6 +12,7 @@ pub(super) const TABLE: Table = Table {
     machine_m,
     no_motion_g,
     local_subprogram_m97: true,
+    m16_tool_change: true,
     g53_absolute_in_g91: true,
     g87_back_bore: false,
     ..fanuc::TABLE
@@ -46,7 +47,6 @@ fn machine_m(code: u32) -> Option<&'static str> {
         11 => "M11 release 4th axis brake",
         12 => "M12 engage 5th axis brake",
         13 => "M13 release 5th axis brake",
-        16 => "M16 tool change (as M06)",
         17 => "M17 unclamp the pallet (pallet changer)",
         18 => "M18 clamp the pallet (pallet changer)",
         21..=28 => "M21-M28 optional user M function (relay)",

@@ -25,6 +25,7 @@ pub(super) const TABLE: Table = Table {
     machine_m: no_machine_m,
     no_motion_g: common_no_motion_g,
     local_subprogram_m97: false,
+    m16_tool_change: false,
     offset_words_alone: false,
     g80_keeps_motion: false,
     g92_s_limits_spindle: false,

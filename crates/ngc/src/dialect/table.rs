@@ -47,6 +47,8 @@ pub(crate) struct Table {
     pub no_motion_g: fn(u32) -> Option<&'static str>,
     /// `M97 P<n>` calls sequence number N<n> of the same program (Haas local subprogram).
     pub local_subprogram_m97: bool,
+    /// M16 changes the tool as M06 does (Haas mills' alternative tool-change code).
+    pub m16_tool_change: bool,
     /// D and H words stand on their own (Fanuc family): D selects the cutter offset a later
     /// G41/G42 uses, H the length offset (applied at once while G43/G44 is in effect).
     pub offset_words_alone: bool,

@@ -1,4 +1,4 @@
-//! Phase 2: T selects a tool, M6 changes to it, M61 sets it; user M codes (mapped in the
+//! Phase 2: T selects a tool, M6 (Haas: also M16) changes to it, M61 sets it; user M codes (mapped in the
 //! scenario, or M100-M199 programs); the spindle turns after the change (M3/M4) or stops
 //! (M5), as LinuxCNC's order of execution has it.
 
@@ -27,7 +27,14 @@ impl Interp {
         }
         let mut tcp_m = None;
         let machine_m = self.dialect.table().machine_m;
+        let m16_tool_change = self.dialect.table().m16_tool_change;
         for &(code, w) in b.m.iter() {
+            // Haas M16 is M06 under another number (HM M16).
+            let code = if code == 16 && m16_tool_change {
+                6
+            } else {
+                code
+            };
             match code {
                 // The control's own machine codes first (Haas M61-M68 are relays, not
                 // LinuxCNC's M61 Q tool number or M62-M68 I/O).

@@ -51,8 +51,10 @@ def simulate(scenario: Scenario, *, output: str | os.PathLike[str] | None = None
     Args:
         scenario: a scenario file's path, or a dict of its tables.
         output: a folder to keep the run's files in (trace.parquet, summary.json,
-            ballbar.svg, test.json), written as one unit as ``mtsim simulate -o`` writes
-            it; by default the files go to a temporary folder that is removed.
+            ballbar.svg, test.json), each file written whole or not at all (unlike
+            ``mtsim simulate -o``, the folder is not swapped in as one unit, so Ctrl-C
+            does not end the Python session); by default the files go to a temporary
+            folder that is removed.
         timing: fill ``realtime_factor`` and ``wall_time_s`` (left None by default, so
             that the summary is the same run to run).
 

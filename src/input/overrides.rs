@@ -205,12 +205,13 @@ impl ScenarioTree {
         else {
             return e;
         };
+        // The step is looked for below the `machine.` prefix, which names the tree, not a key.
         let found = keys.iter().find_map(|k| {
-            let depth = k
-                .steps
+            let offset = tree_offset(k);
+            let depth = k.steps[offset..]
                 .iter()
                 .position(|s| *s == Step::Key(unknown.to_string()))?;
-            Some((k, depth))
+            Some((k, depth + offset))
         });
         let Some((key, depth)) = found else {
             return e;
@@ -249,6 +250,14 @@ impl ScenarioTree {
             self.path.display(),
             nearest_keys(key, depth, &names)
         ))
+    }
+}
+
+/// 1 for a `machine.` key (its first step names the machine's tree), else 0.
+fn tree_offset(key: &KeyPath) -> usize {
+    match key.steps.first() {
+        Some(Step::Key(k)) if k == "machine" => 1,
+        _ => 0,
     }
 }
 

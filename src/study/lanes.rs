@@ -43,6 +43,10 @@ pub fn run_ballbar_lanes(
     scenarios: &[Scenario],
     progress: &dyn Fn(f64),
 ) -> Vec<Result<BallbarStudy>> {
+    // One point shares with nothing: its single run, without a pool or a thread of its own.
+    if let [scenario] = scenarios {
+        return vec![run_ballbar(scenario, None, progress)];
+    }
     let passes = passes(scenarios, rayon::current_num_threads());
     let (sender, receiver) = mpsc::channel::<f64>();
     // The passes run on a pool as wide as the caller's, from a thread of their own, so

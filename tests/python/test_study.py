@@ -31,13 +31,18 @@ def test_backlash_grid_raises_b_of_x_one_for_one_and_leaves_y(root, mtsim_bin, t
     assert [float(r["G_um"]) for r in written] == rows.column("G_um").to_pylist()
 
 
-def test_a_bad_study_file_raises_input_error_with_its_place(tmp_path):
+def test_a_bad_study_file_raises_input_error_with_its_place(root, tmp_path):
     bad = tmp_path / "bad.toml"
-    bad.write_text('scenario = "nowhere.toml"\n[[vary]]\nkey = "machine.axes.X.drive.backlash_mm"\nvalues = [0.0, nan]\n')
+    scenario = (root / "scenarios/circle-iso230-4.toml").as_posix()
+    bad.write_text(f'scenario = "{scenario}"\n[[vary]]\n'
+                   'key = "machine.axes.X.drive.backlash_mm"\nvalues = [0.0, nan]\n')
     try:
         mtsim.study(bad)
     except mtsim.InputError as e:
         assert e.exit_code == 2
-        assert str(bad) in (e.file or "") or "bad.toml" in str(e), str(e)
+        # Line 4 holds `values`, the key the NaN is in.
+        assert (e.line, e.column) == (4, 1), (e.line, e.column, str(e))
+        assert e.key == "vary.values", e.key
+        assert "not a number" in str(e), str(e)
     else:
         raise AssertionError("a NaN value in a study file must raise InputError")

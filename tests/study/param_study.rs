@@ -344,3 +344,17 @@ fn the_bundled_tolerance_study_runs_a_trial_of_twenty_points() {
         .iter()
         .all(|r| r[verdict] == "clean" || r[verdict] == "violations"));
 }
+
+/// A `machine.` key whose next step repeats `machine` is a key the machine lacks, refused
+/// with the keys the machine file has (it once sliced its path out of range and panicked).
+#[test]
+fn a_machine_key_named_twice_is_refused_not_a_panic() {
+    let dir = scratch("study", "machine-twice");
+    let err = refused(
+        &dir,
+        "[[vary]]\nkey = \"machine.machine.x\"\nvalues = [1.0]\n",
+    )
+    .replace(['\n', '│', ' '], "");
+    assert!(err.contains("`machine`isnotakeythere"), "{err}");
+    assert!(err.contains("nearest:`machine."), "{err}");
+}

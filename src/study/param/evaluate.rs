@@ -105,15 +105,17 @@ pub fn groups(
     let shared: Vec<usize> = (0..keys.len())
         .filter(|&k| !is_drive_key(&keys[k]))
         .collect();
-    let mut out: Vec<(Vec<u64>, Vec<usize>)> = Vec::new();
+    let mut index: std::collections::HashMap<Vec<u64>, usize> = Default::default();
+    let mut out: Vec<Vec<usize>> = Vec::new();
     for i in indices {
         let id: Vec<u64> = shared.iter().map(|&k| points[i][k].to_bits()).collect();
-        match out.iter_mut().find(|(g, _)| *g == id) {
-            Some((_, members)) => members.push(i),
-            None => out.push((id, vec![i])),
-        }
+        let g = *index.entry(id).or_insert_with(|| {
+            out.push(Vec::new());
+            out.len() - 1
+        });
+        out[g].push(i);
     }
-    out.into_iter().map(|(_, m)| m).collect()
+    out
 }
 
 /// Points per thread run before their figures are taken: 16 points of the 15/10 cone hold

@@ -952,3 +952,72 @@ fn the_summary_b_and_ranked_shares_render_in_headless_chromium() {
     );
     assert!(!rows.iter().any(|r| r.0 == "Y:backlash"), "{rows:?}");
 }
+
+/// The Done-when of a study: its page renders in headless Chromium with its plot laid out,
+/// its title and one row per point, each row's G the figure rows.csv holds.
+#[test]
+fn a_study_page_renders_in_headless_chromium_with_its_plot_and_rows() {
+    let Some(browser) =
+        chromium_or_skip("a_study_page_renders_in_headless_chromium_with_its_plot_and_rows")
+    else {
+        return;
+    };
+    let dir = scratch("study-browser", "backlash-x");
+    let out = dir.join("study");
+    let run = mtsim(&[
+        "study",
+        "scenarios/studies/backlash-x-circle.toml",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let html = std::fs::read_to_string(out.join("study.html")).unwrap();
+    let page = out.join("probe.html");
+    std::fs::write(&page, html.replace("</body>", &format!("{PROBE}</body>"))).unwrap();
+    let (dom, png) = render(&browser, &page, &dir);
+
+    let (w, h, pixels) = decode_png(&png);
+    let inked = pixels
+        .iter()
+        .filter(|p| p[0] < 200 || p[1] < 200 || p[2] < 200)
+        .count();
+    assert!(
+        inked as f64 > 0.01 * (w * h) as f64,
+        "a blank page ({inked} inked pixels)"
+    );
+    assert!(dom.contains("mtsim study: grid 5 points"), "title missing");
+    let sizes_start = dom.find("<pre id=\"mtsim-sizes\">").expect("probe ran");
+    let sizes = &dom[sizes_start + 22..];
+    let sizes = &sizes[..sizes.find("</pre>").unwrap()];
+    let response = sizes
+        .lines()
+        .find(|l| l.starts_with("study-response "))
+        .unwrap_or_else(|| panic!("the response plot is not in the page:\n{sizes}"));
+    let dims: Vec<f64> = response
+        .split(' ')
+        .skip(1)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(
+        dims[0] > 100.0 && dims[1] > 50.0,
+        "response plot {dims:?} px"
+    );
+    // One row per point: each point's G from rows.csv, as the page prints it (4 decimals).
+    let csv = std::fs::read_to_string(out.join("rows.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let g_col = header.iter().position(|c| *c == "G_um").unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 5);
+    for row in rows {
+        let g: f64 = row.split(',').nth(g_col).unwrap().parse().unwrap();
+        let shown = format!("{g:.4}");
+        assert!(
+            dom.contains(&shown),
+            "G {shown} um of a row is not in the page"
+        );
+    }
+}

@@ -401,6 +401,35 @@ fn render(browser: &Path, page: &Path, work: &Path) -> (String, Vec<u8>) {
     (dom, png)
 }
 
+/// Asserts that the screenshot `png` of `what` has ink on more than 1 % of its pixels;
+/// returns (width, height, pixels) for further checks.
+fn assert_inked(png: &[u8], what: &str) -> (usize, usize, Vec<[u8; 4]>) {
+    let (w, h, pixels) = decode_png(png);
+    let inked = pixels
+        .iter()
+        .filter(|p| p[0] < 200 || p[1] < 200 || p[2] < 200)
+        .count();
+    assert!(
+        inked as f64 > 0.01 * (w * h) as f64,
+        "{what}: a blank page ({inked} inked pixels)"
+    );
+    (w, h, pixels)
+}
+
+/// The laid-out size, px, of the plot `plot` as the probe wrote it into `dom`; None when
+/// the page has no such plot.
+fn plot_size(dom: &str, plot: &str) -> Option<[f64; 2]> {
+    let start = dom.find("<pre id=\"mtsim-sizes\">").expect("the probe ran") + 22;
+    let sizes = &dom[start..start + dom[start..].find("</pre>").unwrap()];
+    let line = sizes.lines().find(|l| l.split(' ').next() == Some(plot))?;
+    let dims: Vec<f64> = line
+        .split(' ')
+        .skip(1)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    Some([dims[0], dims[1]])
+}
+
 #[test]
 fn every_bundled_scenario_report_renders_in_headless_chromium() {
     let Some(browser) =
@@ -425,40 +454,20 @@ fn every_bundled_scenario_report_renders_in_headless_chromium() {
         let (dom, png) = render(&browser, &page, &dir);
 
         // A screenshot with something on it: many colours, and far from all white.
-        let (w, h, pixels) = decode_png(&png);
+        let (w, h, pixels) = assert_inked(&png, &name);
         assert!(w >= 1000 && h >= 1000, "{name}: {w} x {h}");
-        let inked = pixels
-            .iter()
-            .filter(|p| p[0] < 200 || p[1] < 200 || p[2] < 200)
-            .count();
-        let mut colours: Vec<[u8; 4]> = pixels.clone();
+        let mut colours: Vec<[u8; 4]> = pixels;
         colours.sort_unstable();
         colours.dedup();
-        assert!(
-            inked as f64 > 0.01 * (w * h) as f64,
-            "{name}: a blank page ({inked} inked pixels)"
-        );
         assert!(colours.len() > 16, "{name}: {} colours", colours.len());
 
         // Every plot laid out with a non-zero size.
-        let sizes_start = dom
-            .find("<pre id=\"mtsim-sizes\">")
-            .unwrap_or_else(|| panic!("{name}: probe missing"));
-        let sizes = &dom[sizes_start + 22..];
-        let sizes = &sizes[..sizes.find("</pre>").unwrap()];
         let axes = trace_axes(&dir.join("run"));
         let axes: Vec<&str> = axes.iter().map(String::as_str).collect();
         assert!(axes.len() >= 3, "{name}: axes {axes:?}");
         for plot in expected_plots(&axes) {
-            let line = sizes
-                .lines()
-                .find(|l| l.split(' ').next() == Some(plot.as_str()))
-                .unwrap_or_else(|| panic!("{name}: plot {plot} not in the page:\n{sizes}"));
-            let dims: Vec<f64> = line
-                .split(' ')
-                .skip(1)
-                .map(|v| v.parse().unwrap())
-                .collect();
+            let dims = plot_size(&dom, &plot)
+                .unwrap_or_else(|| panic!("{name}: plot {plot} not in the page"));
             assert!(
                 dims[0] > 100.0 && dims[1] > 50.0,
                 "{name}: {plot} is {dims:?} px"
@@ -763,25 +772,8 @@ fn the_fit_page_renders_in_headless_chromium() {
     let page = out_dir.join("probe.html");
     std::fs::write(&page, html.replace("</body>", &format!("{PROBE}</body>"))).unwrap();
     let (dom, png) = render(&browser, &page, &dir);
-    let (w, h, pixels) = decode_png(&png);
-    let inked = pixels
-        .iter()
-        .filter(|p| p[0] < 200 || p[1] < 200 || p[2] < 200)
-        .count();
-    assert!(
-        inked as f64 > 0.01 * (w * h) as f64,
-        "a blank page ({inked} inked pixels)"
-    );
-    let sizes_start = dom.find("<pre id=\"mtsim-sizes\">").expect("probe missing");
-    let line = dom[sizes_start + 22..]
-        .lines()
-        .find(|l| l.starts_with("fit "))
-        .expect("the fit plot in the page");
-    let dims: Vec<f64> = line
-        .split(' ')
-        .skip(1)
-        .map(|v| v.trim_end_matches("</pre>").parse().unwrap())
-        .collect();
+    assert_inked(&png, "fit.html");
+    let dims = plot_size(&dom, "fit").expect("the fit plot in the page");
     assert!(dims[0] > 500.0 && dims[1] > 300.0, "fit plot {dims:?} px");
     assert!(dom.contains("What these tests cannot separate"));
 }
@@ -980,28 +972,9 @@ fn a_study_page_renders_in_headless_chromium_with_its_plot_and_rows() {
     std::fs::write(&page, html.replace("</body>", &format!("{PROBE}</body>"))).unwrap();
     let (dom, png) = render(&browser, &page, &dir);
 
-    let (w, h, pixels) = decode_png(&png);
-    let inked = pixels
-        .iter()
-        .filter(|p| p[0] < 200 || p[1] < 200 || p[2] < 200)
-        .count();
-    assert!(
-        inked as f64 > 0.01 * (w * h) as f64,
-        "a blank page ({inked} inked pixels)"
-    );
+    assert_inked(&png, "study.html");
     assert!(dom.contains("mtsim study: grid 5 points"), "title missing");
-    let sizes_start = dom.find("<pre id=\"mtsim-sizes\">").expect("probe ran");
-    let sizes = &dom[sizes_start + 22..];
-    let sizes = &sizes[..sizes.find("</pre>").unwrap()];
-    let response = sizes
-        .lines()
-        .find(|l| l.starts_with("study-response "))
-        .unwrap_or_else(|| panic!("the response plot is not in the page:\n{sizes}"));
-    let dims: Vec<f64> = response
-        .split(' ')
-        .skip(1)
-        .map(|v| v.parse().unwrap())
-        .collect();
+    let dims = plot_size(&dom, "study-response").expect("the response plot in the page");
     assert!(
         dims[0] > 100.0 && dims[1] > 50.0,
         "response plot {dims:?} px"

@@ -30,7 +30,18 @@ pub(super) fn unit(name: &str) -> &'static str {
 
 /// Writes the bundled trt-ac machine (with `errors`) as `dir/<name>.toml`.
 fn machine(dir: &Path, name: &str, errors: &[(&str, f64)]) -> PathBuf {
-    let mut text = std::fs::read_to_string(common::trt_ac()).unwrap();
+    machine_with_errors(Path::new(&common::trt_ac()), dir, name, errors)
+}
+
+/// Writes the machine file `base` with `errors` ((name, value) in the parameter's unit)
+/// appended as its `[location_errors]`, as `dir/<name>.toml`.
+pub(super) fn machine_with_errors(
+    base: &Path,
+    dir: &Path,
+    name: &str,
+    errors: &[(&str, f64)],
+) -> PathBuf {
+    let mut text = std::fs::read_to_string(base).unwrap();
     if !errors.is_empty() {
         text.push_str("\n[location_errors]\n");
         for (n, v) in errors {

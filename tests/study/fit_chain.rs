@@ -6,22 +6,18 @@
 
 use std::path::{Path, PathBuf};
 
-use super::fit::{assert_recovered, measure, param, run_fit, unit};
+use super::fit::{assert_recovered, machine_with_errors, measure, param, run_fit};
 use crate::common::scratch;
 
-/// The bundled `machine` with `errors` ((name, unit, value)) as `dir/<name>.toml`.
+/// The bundled `machine` with `errors` ((name, value)) as `dir/<name>.toml`.
 fn machine(dir: &Path, machine: &str, name: &str, errors: &[(&str, f64)]) -> PathBuf {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut text = std::fs::read_to_string(root.join(format!("machines/{machine}.toml"))).unwrap();
-    if !errors.is_empty() {
-        text.push_str("\n[location_errors]\n");
-        for (n, v) in errors {
-            text.push_str(&format!("{n}_{} = {v}\n", unit(n)));
-        }
-    }
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, text).unwrap();
-    path
+    machine_with_errors(
+        &root.join(format!("machines/{machine}.toml")),
+        dir,
+        name,
+        errors,
+    )
 }
 
 /// The cone (α, β) at O = (0, 0, z) in the workpiece frame, both directions, F2000.

@@ -834,6 +834,19 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         }
     }
 
+    /// Plans `block`, given by reference beside the blocks of the stream (an interpolator
+    /// made on an empty one), as [`Interpolator::plan_to_end`] plans each block: for its
+    /// feed limit, without junctions, look-ahead or profile.
+    pub fn plan_block(&mut self, block: &Move) -> Result<()> {
+        self.done = true;
+        let index = self.next_index;
+        self.next_index += 1;
+        if let Some((planned, _, _)) = self.plan(block, index)? {
+            self.record(&planned);
+        }
+        Ok(())
+    }
+
     /// Geometry and limits of one block; `None` for a block without motion.
     /// Also returns the tangents `dq/ds` at its start and end.
     fn plan(&self, b: &Move, index: u64) -> Result<Option<PlannedBlock>> {

@@ -78,22 +78,16 @@ where
     I: Iterator<Item = std::result::Result<Move, E>> + 'static,
     E: Into<Error>,
 {
-    Box::new(checked_unboxed(path, machine, written_for_tcp, moves))
+    Box::new(Checked {
+        checker: move_checker(path, machine, written_for_tcp),
+        moves,
+        done: false,
+    })
 }
 
-/// [`checked`] as its own type: the caller keeps the stream it checks
-/// ([`Checked::inner`], e.g. the reader's notices at the end) and the moves pass through
-/// no boxed layer.
-pub fn checked_unboxed<I, E>(
-    path: &Path,
-    machine: &Machine,
-    written_for_tcp: bool,
-    moves: I,
-) -> Checked<I>
-where
-    I: Iterator<Item = std::result::Result<Move, E>>,
-    E: Into<Error>,
-{
+/// The checks of [`checked`] on moves given one at a time by reference (no copy of a move):
+/// [`MoveChecker::check`] each, then [`MoveChecker::end`] when the program ends.
+pub fn move_checker(path: &Path, machine: &Machine, written_for_tcp: bool) -> MoveChecker {
     let limits = machine
         .axes()
         .iter()
@@ -107,7 +101,7 @@ where
             (axis, envelope, config.min, config.max)
         })
         .collect();
-    Checked {
+    MoveChecker {
         path: path.to_path_buf(),
         no_tcp: machine
             .kinematics
@@ -116,14 +110,19 @@ where
             .map(|why| (machine.kinematics.layout.name(), why)),
         limits,
         written_for_tcp,
-        moves,
         moving: false,
-        done: false,
     }
 }
 
 /// The stream of [`checked`].
 pub struct Checked<I> {
+    checker: MoveChecker,
+    moves: I,
+    done: bool,
+}
+
+/// The checks of [`checked`], one move at a time ([`move_checker`]).
+pub struct MoveChecker {
     path: PathBuf,
     /// The machine cannot give tool-centre-point control (xyzabc: no modelled chain; U V W
     /// layouts): its layout's name and why.
@@ -132,17 +131,10 @@ pub struct Checked<I> {
     limits: Vec<(Axis, f64, f64, f64)>,
     /// Every feed move must carry the `tcp` flag (`[simulate] tcp = true`).
     written_for_tcp: bool,
-    moves: I,
     moving: bool,
-    done: bool,
 }
 
-impl<I> Checked<I> {
-    /// The stream being checked.
-    pub fn inner(&self) -> &I {
-        &self.moves
-    }
-
+impl MoveChecker {
     /// The file's text, for an error message.
     fn text(&self) -> String {
         std::fs::read(&self.path)
@@ -157,7 +149,8 @@ impl<I> Checked<I> {
         Error::at(&self.path, &text, span, message, label)
     }
 
-    fn check(&mut self, m: &Move) -> Result<()> {
+    /// Checks the next move of the program: an error where it is bad input.
+    pub fn check(&mut self, m: &Move) -> Result<()> {
         if let (Some((layout, why)), true) = (self.no_tcp, m.tcp) {
             let message = format!(
                 "this move runs under tool-centre-point control (TCP), which this machine \
@@ -234,6 +227,15 @@ impl<I> Checked<I> {
         Ok(())
     }
 
+    /// The program has ended: an error when none of its moves changed an axis position.
+    pub fn end(&self) -> Result<()> {
+        if self.moving {
+            Ok(())
+        } else {
+            Err(self.no_motion())
+        }
+    }
+
     fn no_motion(&self) -> Error {
         let text = self.text();
         let last = text.trim_end().len();
@@ -262,13 +264,15 @@ where
             return None;
         }
         let item = match self.moves.next() {
-            Some(Ok(m)) => self.check(&m).map(|()| m),
+            Some(Ok(m)) => self.checker.check(&m).map(|()| m),
             Some(Err(e)) => Err(e.into()),
-            None if self.moving => {
-                self.done = true;
-                return None;
-            }
-            None => Err(self.no_motion()),
+            None => match self.checker.end() {
+                Ok(()) => {
+                    self.done = true;
+                    return None;
+                }
+                Err(e) => Err(e),
+            },
         };
         self.done = item.is_err();
         Some(item)

@@ -1,18 +1,18 @@
 //! Everything `mtsim analyze` reports on a scenario's program: the reversal analysis, the
 //! geometric errors' trace, the feed limits and the reader's notices.
 //!
-//! A file program is read once for the reversals, the feed limits and the notices: its moves
-//! go to [`MoveAnalysis`] on their way to the planner, and the notices are taken from the
+//! A file program is read once for the reversals, the feed limits and the notices: each move,
+//! lent by the reader in place (no copy), is checked against the machine, then given to
+//! [`MoveAnalysis`] and to the planner ([`FeedPlanner`]), and the notices are taken from the
 //! same reader when it ends. Results and errors are those of the separate passes, in their
 //! order (reversals, geometric trace, feed limits): the analysis reads on where the planner
 //! stops, and its error comes first.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::input::scenario::{Program, Scenario};
 use crate::measure::CircleFrame;
-use crate::program::validate::{self, Checked};
-use crate::program::{file, Move};
-use crate::study::feed::{feed_limits, plan_feed, FeedReport};
+use crate::program::{file, validate};
+use crate::study::feed::{feed_limits, FeedPlanner, FeedReport};
 use crate::study::geometry::{geometric_trace, GeometricTrace};
 use crate::study::reversals::{analyse_scenario, Analysis, MoveAnalysis};
 
@@ -39,61 +39,30 @@ pub fn analyse_program(scenario: &Scenario) -> Result<ProgramAnalysis> {
         });
     };
     let machine = &scenario.machine;
-    let reader = file::read_moves(path, &scenario.reader)?;
-    // The stream `program::scenario_run` gives for a file, as both passes read it.
-    let moves = validate::checked_unboxed(path, machine, scenario.simulate.tcp, reader);
-    let mut tee = Analysed {
-        moves,
-        analysis: MoveAnalysis::new(machine, cone.map(|c| CircleFrame::of_cone(&c))),
-        failed: None,
-    };
-    let feed = plan_feed(&mut tee, scenario);
-    // Where the planner stopped early (a block it cannot plan), the analysis reads on.
-    tee.by_ref().for_each(drop);
-    if let Some(e) = tee.failed {
-        return Err(e);
+    let mut reader = file::read_moves(path, &scenario.reader)?;
+    // The checks `program::scenario_run` makes of a file, on each move in place.
+    let mut checker = validate::move_checker(path, machine, scenario.simulate.tcp);
+    let mut analysis = MoveAnalysis::new(machine, cone.map(|c| CircleFrame::of_cone(&c)));
+    let mut planner = FeedPlanner::new(scenario)?;
+    // The planner stops at a block it cannot plan; the analysis reads on, and its error
+    // (a bad read, a bad move) comes first.
+    while let Some(m) = reader.next_ref() {
+        let m = m?;
+        checker.check(m)?;
+        analysis.push(m)?;
+        planner.push(m);
     }
-    let analysis = tee.analysis.finish();
+    checker.end()?;
+    let analysis = analysis.finish();
     let geometric = geometric_trace(scenario)?;
-    let feed = feed?;
-    // The reader has ended (the analysis read it to its end), so it holds every notice:
-    // the warnings and the codes accepted with no effect on the motion.
-    let notices = tee.moves.inner().notices().to_vec();
+    let feed = planner.finish()?;
+    // The reader has ended, so it holds every notice: the warnings and the codes accepted
+    // with no effect on the motion.
+    let notices = reader.notices().to_vec();
     Ok(ProgramAnalysis {
         analysis,
         geometric,
         feed,
         notices,
     })
-}
-
-/// The moves of a file program, each given to the reversal analysis on its way; a failed
-/// read or analysis ends the stream and is kept in `failed`.
-struct Analysed<'m> {
-    moves: Checked<ngc::Moves>,
-    analysis: MoveAnalysis<'m>,
-    failed: Option<Error>,
-}
-
-impl Iterator for Analysed<'_> {
-    type Item = Result<Move>;
-
-    fn next(&mut self) -> Option<Result<Move>> {
-        if self.failed.is_some() {
-            return None;
-        }
-        match self.moves.next()? {
-            Ok(m) => match self.analysis.push(&m) {
-                Ok(()) => Some(Ok(m)),
-                Err(e) => {
-                    self.failed = Some(e);
-                    None
-                }
-            },
-            Err(e) => {
-                self.failed = Some(e);
-                None
-            }
-        }
-    }
 }

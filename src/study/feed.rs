@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::input::program::Direction;
 use crate::input::scenario::{Program, Scenario};
 use crate::motion::interpolation::{FeedLimit, InterpolationOptions, Interpolator};
@@ -50,33 +50,85 @@ pub fn plan_feed(
     let mut feed_blocks = 0u64;
     let moves = moves.inspect(|m| {
         if let Ok(m) = m {
-            if matches!(
-                m.motion,
-                program::Motion::Linear | program::Motion::Arc { .. }
-            ) {
-                feed_blocks += 1;
-            }
+            feed_blocks += u64::from(is_feed(m));
         }
     });
-    let options = InterpolationOptions {
+    let mut interpolator = Interpolator::new(moves, &scenario.machine, planner_options(scenario))?;
+    interpolator.plan_to_end()?;
+    let blocks = interpolator.take_feed_limits();
+    drop(interpolator);
+    Ok(report(blocks, feed_blocks))
+}
+
+/// [`plan_feed`] one move at a time, given by reference (no copy of a move): the moves of
+/// a file program planned beside another pass over them. The first error stops the
+/// planning; it is [`FeedPlanner::finish`]'s result.
+pub struct FeedPlanner {
+    interpolator: Interpolator<std::iter::Empty<Result<program::Move>>>,
+    feed_blocks: u64,
+    failed: Option<Error>,
+}
+
+impl FeedPlanner {
+    pub fn new(scenario: &Scenario) -> Result<FeedPlanner> {
+        Ok(FeedPlanner {
+            interpolator: Interpolator::new(
+                std::iter::empty(),
+                &scenario.machine,
+                planner_options(scenario),
+            )?,
+            feed_blocks: 0,
+            failed: None,
+        })
+    }
+
+    /// Plans the next move of the program.
+    pub fn push(&mut self, m: &program::Move) {
+        if self.failed.is_none() {
+            self.feed_blocks += u64::from(is_feed(m));
+            self.failed = self.interpolator.plan_block(m).err();
+        }
+    }
+
+    /// The report of the moves pushed, or the first block that could not be planned.
+    pub fn finish(mut self) -> Result<FeedReport> {
+        match self.failed {
+            Some(e) => Err(e),
+            None => Ok(report(
+                self.interpolator.take_feed_limits(),
+                self.feed_blocks,
+            )),
+        }
+    }
+}
+
+/// G01, G02 and G03: the blocks an F word applies to.
+fn is_feed(m: &program::Move) -> bool {
+    matches!(
+        m.motion,
+        program::Motion::Linear | program::Motion::Arc { .. }
+    )
+}
+
+/// The interpolator's options for `analyze`'s planning: the scenario's TCP, limits noted.
+fn planner_options(scenario: &Scenario) -> InterpolationOptions {
+    InterpolationOptions {
         force_tcp: scenario.simulate.tcp,
         program_path: scenario.path.clone(),
         record_feed_limits: true,
         ..InterpolationOptions::default()
-    };
-    let mut interpolator = Interpolator::new(moves, &scenario.machine, options)?;
-    interpolator.plan_to_end()?;
-    let mut report = FeedReport {
-        blocks: interpolator.take_feed_limits(),
-        ..FeedReport::default()
-    };
-    drop(interpolator);
-    for b in &report.blocks {
-        *report
-            .limited_by_axis
-            .entry(b.axis.to_string())
-            .or_default() += 1;
     }
-    report.feed_blocks = feed_blocks;
-    Ok(report)
+}
+
+/// The report of the limited `blocks` among `feed_blocks` feed blocks.
+fn report(blocks: Vec<FeedLimit>, feed_blocks: u64) -> FeedReport {
+    let mut limited_by_axis = BTreeMap::new();
+    for b in &blocks {
+        *limited_by_axis.entry(b.axis.to_string()).or_default() += 1;
+    }
+    FeedReport {
+        feed_blocks,
+        limited_by_axis,
+        blocks,
+    }
 }

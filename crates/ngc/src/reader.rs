@@ -344,6 +344,8 @@ pub struct Moves {
     dialect: Dialect,
     search_path: Vec<PathBuf>,
     queue: VecDeque<Move>,
+    /// The queue's first move was lent by [`Moves::next_ref`]: it leaves at the next call.
+    lent: bool,
     frames: Vec<Frame>,
     loops: Vec<Loop>,
     /// (label, a branch was taken)
@@ -416,6 +418,7 @@ impl Moves {
             dialect: options.dialect,
             search_path: options.search_path.clone(),
             queue: VecDeque::new(),
+            lent: false,
             frames: Vec::new(),
             loops: Vec::new(),
             ifs: Vec::new(),
@@ -1829,36 +1832,67 @@ fn kw_name(kw: Kw) -> &'static str {
         .map_or("", |(n, _)| n)
 }
 
-impl Iterator for Moves {
-    type Item = Result<Move>;
-
-    fn next(&mut self) -> Option<Result<Move>> {
-        if let Some(front) = &mut self.siemens {
-            return front.next_move();
+impl Moves {
+    /// The next move, lent in place: as [`Iterator::next`], without moving the (large) move
+    /// out of the reader's queue; it leaves the queue at the next call of either.
+    pub fn next_ref(&mut self) -> Option<Result<&Move>> {
+        if std::mem::take(&mut self.lent) {
+            self.queue.pop_front();
         }
-        loop {
-            if let Some(k) = &mut self.klartext {
-                return k.next();
+        if self.siemens.is_some() || self.klartext.is_some() {
+            // The other front ends hand out moves by value: one is held here to be lent.
+            match self.next()? {
+                Ok(m) => self.queue.push_back(m),
+                Err(e) => return Some(Err(e)),
             }
-            if let Some(m) = self.queue.pop_front() {
-                return Some(Ok(m));
-            }
+        } else if let Err(e) = self.fill_queue() {
+            return Some(Err(e));
+        }
+        self.lent = true;
+        self.queue.front().map(Ok)
+    }
+
+    /// Reads on until a move is queued (`Ok` with an empty queue: the program has ended).
+    /// After an error the queue is empty and the reader done.
+    fn fill_queue(&mut self) -> Result<()> {
+        while self.queue.is_empty() {
             if self.finished {
-                if !self.flushed {
-                    // A compensated element still held ends as at G40.
-                    self.flushed = true;
-                    self.interp.finish(&mut self.queue);
-                    continue;
+                if self.flushed {
+                    return Ok(());
                 }
-                return None;
+                // A compensated element still held ends as at G40.
+                self.flushed = true;
+                self.interp.finish(&mut self.queue);
+                continue;
             }
             if let Err(e) = self.step() {
                 self.queue.clear();
                 self.interp.discard();
                 self.flushed = true;
-                return Some(Err(e));
+                return Err(e);
             }
         }
+        Ok(())
+    }
+}
+
+impl Iterator for Moves {
+    type Item = Result<Move>;
+
+    fn next(&mut self) -> Option<Result<Move>> {
+        if std::mem::take(&mut self.lent) {
+            self.queue.pop_front();
+        }
+        if let Some(front) = &mut self.siemens {
+            return front.next_move();
+        }
+        if let Some(k) = &mut self.klartext {
+            return k.next();
+        }
+        if let Err(e) = self.fill_queue() {
+            return Some(Err(e));
+        }
+        self.queue.pop_front().map(Ok)
     }
 }
 

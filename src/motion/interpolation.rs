@@ -848,7 +848,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     }
 
     /// Geometry and limits of one block; `None` for a block without motion.
-    /// Also returns the tangents `dq/ds` at its start and end.
+    /// Also returns the tangents `dq/ds` at its start and end. Inlined: its result is large,
+    /// and each caller keeps a part of it.
+    #[inline(always)]
     fn plan(&self, b: &Move, index: u64) -> Result<Option<PlannedBlock>> {
         if !b.start.is_finite() || !b.end.is_finite() {
             return Err(self.block_error(b.line, "an axis position is not a finite number"));

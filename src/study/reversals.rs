@@ -304,13 +304,22 @@ impl<'m> MoveAnalysis<'m> {
 
     /// The next move of the program.
     pub fn push(&mut self, block: &Move) -> Result<()> {
+        let machine = self.machine;
+        if block.tcp {
+            let kin = &machine.kinematics;
+            let start = machine_coordinates(kin, block, block.start);
+            let end = machine_coordinates(kin, block, block.end);
+            return self.push_in_machine_axes(block, &start, &end);
+        }
+        // Out of TCP the block's axes are the machine's: no copy of them.
+        self.push_in_machine_axes(block, &block.start, &block.end)
+    }
+
+    /// [`MoveAnalysis::push`] with the block's start and end in machine axes.
+    fn push_in_machine_axes(&mut self, block: &Move, start: &AxisVec, end: &AxisVec) -> Result<()> {
         let (machine, frame, acc) = (self.machine, self.frame.as_ref(), &mut self.acc);
         let axes = machine.axes();
-        let kin = machine.kinematics;
-        let (start, end) = (
-            machine_coordinates(&kin, block, block.start),
-            machine_coordinates(&kin, block, block.end),
-        );
+        let kin = &machine.kinematics;
         if std::mem::take(&mut self.first) {
             for (s, &axis) in acc.iter_mut().zip(axes) {
                 s.extend(end[axis]);
@@ -329,20 +338,25 @@ impl<'m> MoveAnalysis<'m> {
         } else {
             1
         };
-        let mut previous = start;
+        let step_s = seconds.filter(|t| *t > 0.0).map(|t| t / steps as f64);
+        let mut previous = *start;
         for k in 1..=steps {
+            let inside;
             let q = if k == steps {
                 end
             } else {
-                position_in_block(block, machine, k as f64 / steps as f64)
+                inside = position_in_block(block, machine, k as f64 / steps as f64);
+                &inside
             };
             for (s, &axis) in acc.iter_mut().zip(axes) {
-                let d = q[axis] - previous[axis];
-                s.extend(q[axis]);
-                if let Some(t) = seconds.filter(|t| *t > 0.0) {
-                    s.peak_speed = s.peak_speed.max(d.abs() / (t / steps as f64) * 60.0);
+                let x = q[axis];
+                let d = x - previous[axis];
+                s.extend(x);
+                if let Some(t) = step_s {
+                    s.peak_speed = s.peak_speed.max(d.abs() / t * 60.0);
                 }
-                if let Some(turn) = s.push_increment(d, q[axis], block.line, q) {
+                // The turning point's position is kept only to give its θ.
+                if let Some(turn) = s.push_increment(d, x, block.line, frame.map(|_| q)) {
                     let theta = frame.map(|f| f.theta_deg(&kin.forward(&turn.1).tip));
                     if s.turns.len() < MAX_LISTED_REVERSALS {
                         s.turns.push((turn.0, theta));
@@ -351,7 +365,7 @@ impl<'m> MoveAnalysis<'m> {
                     }
                 }
             }
-            previous = q;
+            previous = *q;
         }
         Ok(())
     }
@@ -421,27 +435,34 @@ impl BlockAxisState {
 
     /// Records a move of `d` to `x` (at `q`, in a block of `line`); returns the line and
     /// position of a turning point once the axis has come back past the deadband.
+    /// `q` is kept with the extreme when given (for the turn's θ); the origin otherwise.
     fn push_increment(
         &mut self,
         d: f64,
         x: f64,
         line: usize,
-        q: AxisVec,
+        q: Option<&AxisVec>,
     ) -> Option<(usize, AxisVec)> {
         if d == 0.0 {
             return None;
         }
         // By reference: the position is copied only where it changes (most blocks).
         let Some((direction, extreme, ext_line, ext_q)) = &mut self.travel else {
-            self.travel = Some((d.signum(), x, line, q));
+            self.travel = Some((d.signum(), x, line, q.copied().unwrap_or(AxisVec::ZERO)));
             return None;
         };
         if (x - *extreme) * *direction > 0.0 {
-            (*extreme, *ext_line, *ext_q) = (x, line, q);
+            (*extreme, *ext_line) = (x, line);
+            if let Some(q) = q {
+                *ext_q = *q;
+            }
             None
         } else if (*extreme - x).abs() > REVERSAL_DEADBAND {
             let turn = (*ext_line, *ext_q);
-            (*direction, *extreme, *ext_line, *ext_q) = (-*direction, x, line, q);
+            (*direction, *extreme, *ext_line) = (-*direction, x, line);
+            if let Some(q) = q {
+                *ext_q = *q;
+            }
             Some(turn)
         } else {
             None

@@ -575,6 +575,27 @@ struct Planned {
     entry_max: f64,
 }
 
+/// A block's speed limits from the axis limits (see [`Planned`]), path units/s, /s², /s³.
+#[derive(Clone, Copy, Debug)]
+struct Limits {
+    programmed: f64,
+    by: Option<(Axis, LimitKind)>,
+    cap: f64,
+    accel: f64,
+    jerk: f64,
+}
+
+impl Limits {
+    /// A dwell's: no speed.
+    const NONE: Limits = Limits {
+        programmed: f64::INFINITY,
+        by: None,
+        cap: 0.0,
+        accel: 0.0,
+        jerk: 0.0,
+    };
+}
+
 /// A block planned on its own, with `dq/ds` at its start and at its end.
 type PlannedBlock = (Planned, AxisVec, AxisVec);
 
@@ -866,7 +887,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 ));
             }
         }
-        let tcp = (b.tcp || self.options.force_tcp).then_some(self.kinematics);
+        let tcp = (b.tcp || self.options.force_tcp).then_some(&self.kinematics);
         if let (Some(_), Some(why)) = (tcp, self.kinematics.layout.tool_pose_unmodelled()) {
             return Err(self.block_error(
                 b.line,
@@ -876,33 +897,33 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 ),
             ));
         }
-        let mut planned = Planned {
+        // The block's `Planned` is assembled last, from its parts: built early and filled in,
+        // it was copied whole into the result and read back in pieces (a stall).
+        let mut path = BlockPath {
+            start: b.start,
+            delta: b.end - b.start,
+            arc: None,
+            tcp: tcp.is_some(),
+            tool_length_mm: b.tool_length_mm,
+        };
+        let planned = |path: BlockPath, length: f64, limits: Limits| Planned {
             line: b.line,
             index,
-            path: BlockPath {
-                start: b.start,
-                delta: b.end - b.start,
-                arc: None,
-                tcp: tcp.is_some(),
-                tool_length_mm: b.tool_length_mm,
-            },
-            length: 0.0,
+            path,
+            length,
             dwell_s: 0.0,
             path_control: b.path,
-            programmed: f64::INFINITY,
-            limited_by: None,
-            cap: 0.0,
-            accel: 0.0,
-            jerk: 0.0,
+            programmed: limits.programmed,
+            limited_by: limits.by,
+            cap: limits.cap,
+            accel: limits.accel,
+            jerk: limits.jerk,
             entry_cap: 0.0,
             rho: 1.0,
             entry_max: 0.0,
         };
         // A B C (deg counted as mm) and U V W (mm): the axes besides the tool tip's X Y Z.
-        let rotary_norm = (3..9)
-            .map(|i| planned.path.delta.0[i].powi(2))
-            .sum::<f64>()
-            .sqrt();
+        let rotary_norm = (3..9).map(|i| path.delta.0[i].powi(2)).sum::<f64>().sqrt();
         let mixed = |path_xyz: f64| (path_xyz * path_xyz + rotary_norm * rotary_norm).sqrt();
         let tip_or_mixed = |path_xyz: f64| {
             if path_xyz > 1e-12 {
@@ -911,7 +932,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 rotary_norm
             }
         };
-        let d = planned.path.delta;
+        let d = path.delta;
+        let length;
         let linear_norm = (d.0[0] * d.0[0] + d.0[1] * d.0[1] + d.0[2] * d.0[2]).sqrt();
         match b.motion {
             Motion::Dwell { seconds } => {
@@ -921,10 +943,13 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                         format!("G04 dwell must be a finite time >= 0 s, got {seconds}"),
                     ));
                 }
-                planned.path.delta = AxisVec::ZERO;
-                planned.path.tcp = false;
-                planned.dwell_s = seconds;
-                return Ok(Some((planned, AxisVec::ZERO, AxisVec::ZERO)));
+                path.delta = AxisVec::ZERO;
+                path.tcp = false;
+                let dwell = Planned {
+                    dwell_s: seconds,
+                    ..planned(path, 0.0, Limits::NONE)
+                };
+                return Ok(Some((dwell, AxisVec::ZERO, AxisVec::ZERO)));
             }
             Motion::Rapid => {
                 // G00 runs in joint space even under TCP: convert tip to machine coordinates.
@@ -942,14 +967,14 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                         (m.0[0], m.0[1], m.0[2]) = (p.x, p.y, p.z);
                         m
                     };
-                    planned.path.start = to_machine(&b.start);
-                    planned.path.delta = to_machine(&b.end) - planned.path.start;
-                    planned.path.tcp = false;
+                    path.start = to_machine(&b.start);
+                    path.delta = to_machine(&b.end) - path.start;
+                    path.tcp = false;
                 }
-                planned.length = planned.path.delta.mixed_norm();
+                length = path.delta.mixed_norm();
             }
             Motion::Linear => {
-                planned.length = if tcp.is_some() {
+                length = if tcp.is_some() {
                     tip_or_mixed(linear_norm)
                 } else {
                     mixed(linear_norm)
@@ -964,18 +989,18 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 let i2 = 3 - arc.i0 - arc.i1;
                 let arc_len = arc.sweep.abs() * (arc.r0 + 0.5 * arc.dr).abs();
                 let helix = arc_len.hypot(d.0[i2]);
-                planned.path.arc = Some(arc);
-                planned.length = if tcp.is_some() {
+                path.arc = Some(arc);
+                length = if tcp.is_some() {
                     tip_or_mixed(helix)
                 } else {
                     mixed(helix)
                 };
             }
         }
-        if planned.length <= 1e-12 {
+        if length <= 1e-12 {
             return Ok(None);
         }
-        if !planned.length.is_finite() {
+        if !length.is_finite() {
             return Err(self.block_error(
                 b.line,
                 "the move is too long to plan: check the axis positions",
@@ -996,24 +1021,21 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 }
                 match b.feed_mode {
                     FeedMode::PerMinute => feed / 60.0,
-                    FeedMode::InverseTime => feed * planned.length / 60.0,
+                    FeedMode::InverseTime => feed * length / 60.0,
                 }
             }
         };
-        let (start, end) = planned.path.end_tangents(planned.length, &self.kinematics);
-        self.apply_limits(&mut planned, programmed, start);
-        if !(planned.cap.is_finite()
-            && planned.cap > 0.0
-            && planned.accel > 0.0
-            && planned.jerk > 0.0)
-            || !(planned.accel.is_finite() && planned.jerk.is_finite())
+        let (start, end) = path.end_tangents(length, &self.kinematics);
+        let limits = self.limits(&path, length, programmed, start);
+        if !(limits.cap.is_finite() && limits.cap > 0.0 && limits.accel > 0.0 && limits.jerk > 0.0)
+            || !(limits.accel.is_finite() && limits.jerk.is_finite())
         {
             return Err(self.block_error(
                 b.line,
                 "the move has no finite speed: check the axis positions and the feed",
             ));
         }
-        Ok(Some((planned, start, end)))
+        Ok(Some((planned(path, length, limits), start, end)))
     }
 
     fn arc_geometry(
@@ -1073,10 +1095,16 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         })
     }
 
-    /// Cruise cap and path acceleration and jerk limits from the axis limits; notes the axis
-    /// and limit that hold the cap below the programmed speed.
+    /// Cruise cap and path acceleration and jerk limits of a block of `length` along `path`
+    /// from the axis limits, with the axis and limit that hold the cap below `programmed`.
     /// `tangent_start`: `dq/ds` at the block's start (all of it for a straight block).
-    fn apply_limits(&self, p: &mut Planned, programmed: f64, tangent_start: AxisVec) {
+    fn limits(
+        &self,
+        path: &BlockPath,
+        length: f64,
+        programmed: f64,
+        tangent_start: AxisVec,
+    ) -> Limits {
         let (mut cap, mut accel, mut jerk) = (programmed, f64::INFINITY, f64::INFINITY);
         let mut by = None;
         let mut lower = |cap: &mut f64, value: f64, i: usize, kind: LimitKind| {
@@ -1086,7 +1114,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             }
         };
         let present = |i: usize| self.limits[i].map(|l| (i, l));
-        if p.path.is_straight() {
+        if path.is_straight() {
             let t = tangent_start;
             for (i, l) in (0..9).filter_map(present) {
                 let d = t.0[i].abs();
@@ -1100,7 +1128,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             // The cruise speed is bounded by what each axis sees at constant speed (a = j = 0:
             // velocity q' v, acceleration q'' v², jerk q''' v³); the path acceleration and
             // jerk of a speed change then get what that leaves of each axis's budget.
-            let (d1, d2, d3) = self.derivative_bounds(&p.path, p.length);
+            let (d1, d2, d3) = self.derivative_bounds(path, length);
             for (i, l) in (0..9).filter_map(present) {
                 if d1[i] > 0.0 {
                     lower(&mut cap, l.velocity / d1[i], i, LimitKind::Velocity);
@@ -1125,9 +1153,13 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 }
             }
         }
-        (p.cap, p.accel, p.jerk) = (cap, accel, jerk);
-        p.programmed = programmed;
-        p.limited_by = by;
+        Limits {
+            programmed,
+            by,
+            cap,
+            accel,
+            jerk,
+        }
     }
 
     /// Maxima of |dq/ds|, |d²q/ds²|, |d³q/ds³| per axis, sampled at `SAMPLES + 1` points.

@@ -932,9 +932,11 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 rotary_norm
             }
         };
-        let d = path.delta;
         let length;
-        let linear_norm = (d.0[0] * d.0[0] + d.0[1] * d.0[1] + d.0[2] * d.0[2]).sqrt();
+        // The delta's parts read where they are (a copy of it, stored in pieces and loaded
+        // whole, stalled).
+        let [dx, dy, dz, ..] = path.delta.0;
+        let linear_norm = (dx * dx + dy * dy + dz * dz).sqrt();
         match b.motion {
             Motion::Dwell { seconds } => {
                 if !(seconds.is_finite() && seconds >= 0.0) {
@@ -988,7 +990,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 let arc = self.arc_geometry(b, clockwise, plane, center_mm)?;
                 let i2 = 3 - arc.i0 - arc.i1;
                 let arc_len = arc.sweep.abs() * (arc.r0 + 0.5 * arc.dr).abs();
-                let helix = arc_len.hypot(d.0[i2]);
+                let helix = arc_len.hypot(path.delta.0[i2]);
                 path.arc = Some(arc);
                 length = if tcp.is_some() {
                     tip_or_mixed(helix)

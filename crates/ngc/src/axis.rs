@@ -130,7 +130,9 @@ impl AxisVec {
 
     /// Euclidean norm over all nine entries, with degrees counted as millimetres.
     /// This is the "mixed-unit" length a controller without tool-centre-point control
-    /// uses to turn an F word into a block time.
+    /// uses to turn an F word into a block time. Inlined: a vector just computed is then
+    /// read where it is, not stored and loaded back whole.
+    #[inline]
     pub fn mixed_norm(&self) -> f64 {
         self.0.iter().map(|v| v * v).sum::<f64>().sqrt()
     }

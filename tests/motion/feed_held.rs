@@ -329,6 +329,11 @@ fn planning_without_sampling_notes_the_same_feed_limits() {
         record_feed_limits: true,
         ..InterpolationOptions::default()
     };
+    // Block by block, by reference (`Interpolator::plan_block`, what `analyze` runs on a file).
+    let mut one = Interpolator::new(std::iter::empty(), &m, options.clone()).unwrap();
+    for b in &blocks {
+        one.plan_block(b).unwrap();
+    }
     let mut it = Interpolator::new(blocks.into_iter().map(Ok), &m, options).unwrap();
     it.plan_to_end().unwrap();
     let planned = it.take_feed_limits();
@@ -337,6 +342,10 @@ fn planning_without_sampling_notes_the_same_feed_limits() {
     let key = |l: &FeedLimit| (l.line, l.axis, l.limit, l.planned_per_min.to_bits());
     assert_eq!(
         planned.iter().map(key).collect::<Vec<_>>(),
+        sampled.iter().map(key).collect::<Vec<_>>()
+    );
+    assert_eq!(
+        one.take_feed_limits().iter().map(key).collect::<Vec<_>>(),
         sampled.iter().map(key).collect::<Vec<_>>()
     );
     for l in &planned {
@@ -363,7 +372,10 @@ fn planning_without_sampling_stops_at_a_block_it_cannot_plan() {
         record_feed_limits: true,
         ..InterpolationOptions::default()
     };
+    let mut one = Interpolator::new(std::iter::empty(), &m, options.clone()).unwrap();
+    let by_reference = blocks.iter().find_map(|b| one.plan_block(b).err());
     let mut it = Interpolator::new(blocks.into_iter().map(Ok), &m, options).unwrap();
     let e = it.plan_to_end().unwrap_err().to_string();
     assert!(e.contains("line 701") && e.contains("feed rate"), "{e}");
+    assert_eq!(by_reference.map(|e| e.to_string()), Some(e));
 }

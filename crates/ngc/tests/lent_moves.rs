@@ -37,7 +37,7 @@ fn programs() -> Vec<(&'static str, &'static str, Options)> {
         ),
         (
             "bad.nc",
-            "G21 G90\nG1 X1 F100\nG1 Y2\nG1 X1Q\nG1 X5\nM30\n",
+            "G21 G90\nG1 X1 F100\nG1 Y2\nG1 Z3\nG1 X1Q\nG1 X5\nM30\n",
             dialect(Dialect::Fanuc),
         ),
         (
@@ -96,7 +96,7 @@ fn lent_moves_are_the_moves_the_iterator_gives() {
 fn the_bad_program_ends_with_its_error_after_the_moves_before_it() {
     let (name, text, options) = programs().swap_remove(2);
     let got = by_value(name, text, &options);
-    assert_eq!(got.len(), 3, "{got:?}");
-    let error = got[2].as_ref().unwrap_err();
-    assert!(error.contains("bad.nc:4"), "{error}");
+    assert_eq!(got.len(), 4, "{got:?}");
+    let error = got[3].as_ref().unwrap_err();
+    assert!(error.contains("bad.nc:5"), "{error}");
 }

@@ -303,7 +303,7 @@ fn path_control_modes_at_a_corner() {
     );
 }
 
-/// Planning without sampling (`Interpolator::plan_to_end`, what `analyze` runs) notes the
+/// Planning without sampling (`Interpolator::plan_to_end`, what `analyze` runs on a generated program) notes the
 /// same blocks, axes and speeds as the sampled run: 300 blocks alternating between a
 /// diagonal held by Y's velocity (closed form 6 000 √2 mm/min), a pure C move held at
 /// 9 000 deg/min, and a slow move that is not held, with the look-ahead window (16 blocks)

@@ -14,12 +14,16 @@
 //! columns the report plots) into one [`Trace`] per format: the one reader of trace files.
 
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Seek, Write};
+use std::io::{BufReader, BufWriter, Read, Seek, Write};
+
+use arrow::datatypes::ToByteSlice;
 use std::path::{Path, PathBuf};
 
 use super::files::temporary_path;
 use super::trace_parquet::ParquetTrace;
-use super::trace_rows::{write_error, Block, AXES, BLOCK_ROWS, FIXED_COLUMNS, LINE, THETA, TIME};
+use super::trace_rows::{
+    centred_from_inputs, write_error, Block, AXES, BLOCK_ROWS, FIXED_COLUMNS, LINE, THETA, TIME,
+};
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::TraceFormat;
@@ -58,6 +62,11 @@ pub struct TraceSink {
     /// The row being recorded, and the centred deviations of the block being written.
     row: Vec<f64>,
     centred: Vec<f64>,
+    /// Parquet: the current run's `(dL, sin θ, cos θ)` per row whose other columns are
+    /// written, how many such values went to the temporary file, and the run's first row group.
+    inputs: Vec<f64>,
+    inputs_spilled: usize,
+    run_first_group: usize,
 }
 
 /// The trace file being written, in its format.
@@ -97,6 +106,9 @@ impl TraceSink {
             max_rows,
             row: Vec::with_capacity(FIXED_COLUMNS + 3 * axes.len()),
             centred: Vec::new(),
+            inputs: Vec::new(),
+            inputs_spilled: 0,
+            run_first_group: 0,
         })
     }
 
@@ -109,20 +121,102 @@ impl TraceSink {
     /// Ends the current run: its rows are written to the trace, centred with `centring`
     /// (the fit of the run's ball bar; dL as it is without one).
     pub fn end_run(&mut self, centring: Option<Centring>) -> Result<()> {
+        if self.format == TraceFormat::Parquet {
+            return self.end_parquet_run(centring);
+        }
         if self.held.is_empty() && self.spilled == 0 {
             return Ok(());
         }
         let mut out = match self.out.take() {
-            Some(out) => out,
-            None => self.open()?,
+            Some(TraceOut::Csv(out)) => out,
+            _ => match self.open()? {
+                TraceOut::Csv(out) => out,
+                TraceOut::Parquet(_) => unreachable!("a CSV trace writes CSV"),
+            },
         };
         let written = self.write_run(&mut out, centring);
-        self.out = Some(out);
+        self.out = Some(TraceOut::Csv(out));
         written
     }
 
+    /// Parquet: writes the columns of the block being filled, then the centred deviations of
+    /// every row group of the run.
+    fn end_parquet_run(&mut self, centring: Option<Centring>) -> Result<()> {
+        if let Some(block) = self.held.pop() {
+            self.stream(block)?;
+        }
+        let Some(TraceOut::Parquet(out)) = self.out.as_mut() else {
+            return Ok(());
+        };
+        let err = write_error(&self.raw_path);
+        let mut spilled = match self.raw.as_mut().filter(|_| self.inputs_spilled > 0) {
+            Some(raw) => {
+                raw.flush().map_err(&err)?;
+                raw.get_mut().rewind().map_err(&err)?;
+                Some(BufReader::with_capacity(1 << 16, raw.get_ref()))
+            }
+            None => None,
+        };
+        let (mut from_file, mut at) = (self.inputs_spilled, 0);
+        let mut read = Vec::new();
+        for group in self.run_first_group..out.groups() {
+            let need = 3 * out.group_rows(group);
+            let inputs = match spilled.as_mut().filter(|_| from_file > 0) {
+                Some(reader) => {
+                    let n = need.min(from_file);
+                    read_f64s(reader, n, &mut read).map_err(&err)?;
+                    read.extend_from_slice(&self.inputs[at..at + need - n]);
+                    (from_file, at) = (from_file - n, at + need - n);
+                    &read[..]
+                }
+                None => {
+                    at += need;
+                    &self.inputs[at - need..at]
+                }
+            };
+            centred_from_inputs(inputs, centring, &mut self.centred);
+            out.write_centred(group, &self.centred)?;
+        }
+        drop(spilled);
+        if let Some(raw) = self.raw.as_mut().filter(|_| self.inputs_spilled > 0) {
+            let file = raw.get_mut();
+            file.rewind().and_then(|()| file.set_len(0)).map_err(&err)?;
+        }
+        self.inputs.clear();
+        self.inputs_spilled = 0;
+        self.run_first_group = out.groups();
+        Ok(())
+    }
+
+    /// Parquet: writes the columns of `block` as a row group and keeps what its centred
+    /// deviations need; the block is then free for the next rows.
+    fn stream(&mut self, mut block: Block) -> Result<()> {
+        if block.rows() > 0 {
+            if self.out.is_none() {
+                self.out = Some(self.open()?);
+            }
+            let Some(TraceOut::Parquet(out)) = self.out.as_mut() else {
+                unreachable!("a Parquet trace writes Parquet");
+            };
+            out.write_block(&block, self.direction)?;
+            block.centring_inputs_into(&mut self.inputs);
+            if 8 * self.inputs.len() > RAW_IN_MEMORY {
+                let values = std::mem::take(&mut self.inputs);
+                self.raw_file()?
+                    .write_all(values.to_byte_slice())
+                    .map_err(write_error(&self.raw_path))?;
+                self.inputs_spilled += values.len();
+                self.inputs = values;
+                self.inputs.clear();
+            }
+        }
+        block.clear();
+        self.spare.push(block);
+        Ok(())
+    }
+
     /// Writes the held and spilled rows of the current run to `out`, and empties them.
-    fn write_run(&mut self, out: &mut TraceOut, centring: Option<Centring>) -> Result<()> {
+    fn write_run(&mut self, out: &mut CsvTrace, centring: Option<Centring>) -> Result<()> {
         let direction = self.direction;
         if let Some(mut raw) = self.raw.take().filter(|_| self.spilled > 0) {
             let err = write_error(&self.raw_path);
@@ -195,15 +289,6 @@ impl TraceSink {
     }
 }
 
-impl TraceOut {
-    fn write_block(&mut self, block: &Block, direction: Direction, centred: &[f64]) -> Result<()> {
-        match self {
-            TraceOut::Csv(csv) => csv.write_block(block, direction, centred),
-            TraceOut::Parquet(parquet) => parquet.write_block(block, direction, centred),
-        }
-    }
-}
-
 impl Drop for TraceSink {
     fn drop(&mut self) {
         // Finished or failed, the raw rows are not kept, nor an unfinished trace.
@@ -263,6 +348,14 @@ impl TraceSink {
     /// Starts a block for the next rows: a spare one, or a new one; when the run's full
     /// blocks pass [`RAW_IN_MEMORY`], they move to the temporary file first.
     fn next_block(&mut self) -> Result<()> {
+        if self.format == TraceFormat::Parquet {
+            if let Some(full) = self.held.pop() {
+                self.stream(full)?;
+            }
+            let block = self.spare.pop().unwrap_or_else(|| Block::new(self.width()));
+            self.held.push(block);
+            return Ok(());
+        }
         let block_bytes = 8 * BLOCK_ROWS * self.width();
         if self.held.len() * block_bytes > RAW_IN_MEMORY {
             self.spill()?;
@@ -272,29 +365,47 @@ impl TraceSink {
         Ok(())
     }
 
-    /// Moves the held (full) blocks to the temporary file (created on the first spill).
+    /// Moves the held (full) blocks to the temporary file.
     fn spill(&mut self) -> Result<()> {
-        let raw = match self.raw.as_mut() {
-            Some(raw) => raw,
-            None => {
-                let file = File::options()
-                    .read(true)
-                    .write(true)
-                    .create(true)
-                    .truncate(true)
-                    .open(&self.raw_path)
-                    .map_err(write_error(&self.raw_path))?;
-                self.raw.insert(BufWriter::with_capacity(1 << 16, file))
-            }
-        };
-        for mut block in self.held.drain(..) {
-            block.write_raw(raw).map_err(write_error(&self.raw_path))?;
+        let held = std::mem::take(&mut self.held);
+        for mut block in held {
+            block
+                .write_raw(self.raw_file()?)
+                .map_err(write_error(&self.raw_path))?;
             block.clear();
             self.spare.push(block);
             self.spilled += 1;
         }
         Ok(())
     }
+
+    /// The temporary file of spilled rows, created on the first spill.
+    fn raw_file(&mut self) -> Result<&mut BufWriter<File>> {
+        if self.raw.is_none() {
+            let file = File::options()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(true)
+                .open(&self.raw_path)
+                .map_err(write_error(&self.raw_path))?;
+            self.raw = Some(BufWriter::with_capacity(1 << 16, file));
+        }
+        Ok(self.raw.as_mut().expect("created above"))
+    }
+}
+
+/// Reads `n` little-endian f64 from `reader` into `out` (emptied first).
+fn read_f64s(reader: &mut impl Read, n: usize, out: &mut Vec<f64>) -> std::io::Result<()> {
+    let mut bytes = vec![0u8; 8 * n];
+    reader.read_exact(&mut bytes)?;
+    out.clear();
+    out.extend(
+        bytes
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes"))),
+    );
+    Ok(())
 }
 
 /// The trace's columns: direction, time, line, θ, per axis the commanded and actual

@@ -1,5 +1,7 @@
 //! `trace.parquet`: the columns of `trace.csv` as the f64 the run computed, one row group per
-//! block of a run's rows ([`Block`]), its column chunks written straight from the block.
+//! block of a run's rows ([`Block`]), its column chunks written straight from the block as
+//! it fills; the centred deviations of a run's row groups follow the run (its centring is
+//! known only at its end).
 //!
 //! The format is simple enough for a trace to be written without a Parquet writer in between
 //! (which copied every value three times): the file is `PAR1`, then per row group and column
@@ -134,14 +136,11 @@ impl ParquetTrace {
         })
     }
 
-    /// Writes the rows of `block`, of the run `direction`, with their `centred` deviations,
-    /// as one row group.
-    pub fn write_block(
-        &mut self,
-        block: &Block,
-        direction: Direction,
-        centred: &[f64],
-    ) -> Result<()> {
+    /// Writes the rows of `block`, of the run `direction`, as one row group: every column
+    /// but the centred deviation, which [`ParquetTrace::write_centred`] adds once the run's
+    /// centring is known (after the run's last row group: a column chunk is found by its
+    /// offset, wherever it lies in the file).
+    pub fn write_block(&mut self, block: &Block, direction: Direction) -> Result<()> {
         let rows = block.rows();
         let mut chunks = Vec::with_capacity(self.names.len());
         // direction: a dictionary of the run's name (plain: length, bytes), then one RLE run
@@ -178,14 +177,28 @@ impl ParquetTrace {
         let min_max = min_max.map(|(lo, hi)| (lo.to_le_bytes(), hi.to_le_bytes()));
         chunks.push(self.plain(INT64, rows, lines.to_byte_slice(), min_max)?);
         self.lines = lines;
-        let floats = std::iter::once(THETA)
-            .chain(AXES..block.width())
-            .map(|k| block.column(k))
-            .chain([centred]);
-        for column in floats {
+        for k in std::iter::once(THETA).chain(AXES..block.width()) {
+            let column = block.column(k);
             chunks.push(self.plain(DOUBLE, rows, column.to_byte_slice(), None)?);
         }
         self.groups.push((rows, chunks));
+        Ok(())
+    }
+
+    /// Row groups written so far.
+    pub fn groups(&self) -> usize {
+        self.groups.len()
+    }
+
+    /// The rows of row group `group`.
+    pub fn group_rows(&self, group: usize) -> usize {
+        self.groups[group].0
+    }
+
+    /// Writes the centred deviations of row group `group`, its last column.
+    pub fn write_centred(&mut self, group: usize, centred: &[f64]) -> Result<()> {
+        let chunk = self.plain(DOUBLE, centred.len(), centred.to_byte_slice(), None)?;
+        self.groups[group].1.push(chunk);
         Ok(())
     }
 

@@ -12,8 +12,9 @@ use std::path::Path;
 use crate::error::Error;
 use crate::measure::ballbar::Centring;
 
-/// Rows a block holds: a row group of `trace.parquet` (16 s of machine time at 1 ms).
-pub const BLOCK_ROWS: usize = 16_384;
+/// Rows a block holds: a row group of `trace.parquet` (4 s of machine time at 1 ms; about
+/// 700 kB for five axes, so that a block that is reused touches few pages).
+pub const BLOCK_ROWS: usize = 4_096;
 
 /// Columns besides the three per axis: time, line, θ, sin θ, cos θ (so that the centring
 /// needs no second `sin_cos`), the nonlinear signature, dL.
@@ -105,6 +106,18 @@ impl Block {
         }
     }
 
+    /// Appends each row's `(dL, sin θ, cos θ)` to `out`: what its centred deviation needs.
+    pub fn centring_inputs_into(&self, out: &mut Vec<f64>) {
+        let (dev, sin, cos) = (
+            self.column(self.width - 1),
+            self.column(SIN),
+            self.column(COS),
+        );
+        for ((&d, &s), &c) in dev.iter().zip(sin).zip(cos) {
+            out.extend_from_slice(&[d, s, c]);
+        }
+    }
+
     /// Writes a full block's values, little-endian, to `out` (a spill).
     pub fn write_raw(&self, out: &mut impl Write) -> std::io::Result<()> {
         let mut bytes = Vec::with_capacity(8 * BLOCK_ROWS);
@@ -128,4 +141,14 @@ impl Block {
         self.rows = BLOCK_ROWS;
         Ok(())
     }
+}
+
+/// The centred deviations `dL - (a cos θ + b sin θ)` of rows given as `(dL, sin θ, cos θ)`
+/// ([`Block::centring_inputs_into`]), with their run's `centring` (dL without one), into `out`.
+pub(super) fn centred_from_inputs(inputs: &[f64], centring: Option<Centring>, out: &mut Vec<f64>) {
+    out.clear();
+    out.extend(inputs.chunks_exact(3).map(|t| match centring {
+        None => t[0],
+        Some(c) => t[0] - c.offset_um_at((t[1], t[2])),
+    }));
 }

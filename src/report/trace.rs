@@ -59,8 +59,7 @@ pub struct TraceSink {
     /// Rows recorded, and the most the run may record (`[simulate] max_trace_rows`).
     rows: u64,
     max_rows: u64,
-    /// The row being recorded, and the centred deviations of the block being written.
-    row: Vec<f64>,
+    /// The centred deviations of the block being written.
     centred: Vec<f64>,
     /// Parquet: the current run's `(dL, sin θ, cos θ)` per row whose other columns are
     /// written, how many such values went to the temporary file, and the run's first row group.
@@ -104,7 +103,6 @@ impl TraceSink {
             measured: None,
             rows: 0,
             max_rows,
-            row: Vec::with_capacity(FIXED_COLUMNS + 3 * axes.len()),
             centred: Vec::new(),
             inputs: Vec::new(),
             inputs_spilled: 0,
@@ -332,16 +330,17 @@ impl TraceSink {
         if self.held.last().is_none_or(Block::is_full) {
             self.next_block()?;
         }
-        let row = &mut self.row;
-        row.clear();
-        let (sin, cos) = r.theta_sin_cos;
-        row.extend_from_slice(&[s.time_s, s.line as f64, r.theta_deg, sin, cos]);
-        for &a in self.axes {
-            row.extend_from_slice(&[s.commanded[a], s.actual[a], s.following_error[a]]);
+        let mut axes = [[0.0; 3]; Axis::ALL.len()];
+        for (values, &a) in axes.iter_mut().zip(self.axes) {
+            *values = [s.commanded[a], s.actual[a], s.following_error[a]];
         }
-        row.extend_from_slice(&[r.nonlinear_um, r.deviation_um]);
+        let (sin, cos) = r.theta_sin_cos;
         let block = self.held.last_mut().expect("a block with room");
-        block.push(row);
+        block.push(
+            [s.time_s, s.line as f64, r.theta_deg, sin, cos],
+            &axes[..self.axes.len()],
+            [r.nonlinear_um, r.deviation_um],
+        );
         Ok(())
     }
 

@@ -16,7 +16,7 @@
 //! The same rows give the same bytes (fixed `created_by`, no timestamps).
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{IoSlice, Write};
 use std::path::PathBuf;
 
 use arrow::datatypes::ToByteSlice;
@@ -57,7 +57,9 @@ struct Chunk {
 /// footer will say of every row group written.
 pub(super) struct ParquetTrace {
     tmp: PathBuf,
-    out: BufWriter<File>,
+    file: File,
+    /// Bytes not yet written (page headers), and the file's length with them.
+    pending: Vec<u8>,
     offset: u64,
     names: Vec<String>,
     groups: Vec<(usize, Vec<Chunk>)>,
@@ -70,13 +72,10 @@ impl ParquetTrace {
     /// `trace.csv`).
     pub fn create(tmp: PathBuf, names: Vec<String>) -> Result<ParquetTrace> {
         let file = File::create(&tmp).map_err(write_error(&tmp))?;
-        // Page headers are small writes; a column's values (larger than the buffer) go to
-        // the file in one write.
-        let mut out = BufWriter::with_capacity(1 << 16, file);
-        out.write_all(b"PAR1").map_err(write_error(&tmp))?;
         Ok(ParquetTrace {
             tmp,
-            out,
+            file,
+            pending: b"PAR1".to_vec(),
             offset: 4,
             names,
             groups: Vec::new(),
@@ -84,9 +83,18 @@ impl ParquetTrace {
         })
     }
 
+    /// Appends `bytes` to the file: small ones (headers) gathered, a column's values written
+    /// with the headers before them in one system call, with no copy.
     fn write(&mut self, bytes: &[u8]) -> Result<()> {
         self.offset += bytes.len() as u64;
-        self.out.write_all(bytes).map_err(write_error(&self.tmp))
+        if bytes.len() < 1 << 12 {
+            self.pending.extend_from_slice(bytes);
+            return Ok(());
+        }
+        let mut slices = [IoSlice::new(&self.pending), IoSlice::new(bytes)];
+        write_all_vectored(&mut self.file, &mut slices).map_err(write_error(&self.tmp))?;
+        self.pending.clear();
+        Ok(())
     }
 
     /// Writes one page: its header (a dictionary page, or a data page of `encoding`), then
@@ -208,7 +216,10 @@ impl ParquetTrace {
         self.write(&footer)?;
         self.write(&(footer.len() as u32).to_le_bytes())?;
         self.write(b"PAR1")?;
-        self.out.flush().map_err(write_error(&self.tmp))
+        let pending = std::mem::take(&mut self.pending);
+        self.file
+            .write_all(&pending)
+            .map_err(write_error(&self.tmp))
     }
 
     /// The file metadata (parquet.thrift's FileMetaData).
@@ -329,4 +340,18 @@ fn min_max_f64(values: &[f64]) -> Option<([u8; 8], [u8; 8])> {
         Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
     })?;
     Some((lo.to_le_bytes(), hi.to_le_bytes()))
+}
+
+/// Writes every byte of `slices` to `file`, in as few system calls as it takes.
+fn write_all_vectored(file: &mut File, mut slices: &mut [IoSlice<'_>]) -> std::io::Result<()> {
+    IoSlice::advance_slices(&mut slices, 0);
+    while !slices.is_empty() {
+        match file.write_vectored(slices) {
+            Ok(0) => return Err(std::io::ErrorKind::WriteZero.into()),
+            Ok(n) => IoSlice::advance_slices(&mut slices, n),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
 }

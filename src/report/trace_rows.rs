@@ -16,6 +16,11 @@ use crate::measure::ballbar::Centring;
 /// 700 kB for five axes, so that a block that is reused touches few pages).
 pub const BLOCK_ROWS: usize = 4_096;
 
+/// Values from one column's start to the next's: a cache line more than the rows, so that
+/// the columns of one row fall in different cache sets (at a stride of a power of two, the
+/// 22 values of a row would compete for one set of the L1 cache, and miss at every row).
+const STRIDE: usize = BLOCK_ROWS + 8;
+
 /// Columns besides the three per axis: time, line, θ, sin θ, cos θ (so that the centring
 /// needs no second `sin_cos`), the nonlinear signature, dL.
 pub(super) const FIXED_COLUMNS: usize = 7;
@@ -36,7 +41,7 @@ pub(super) fn write_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ 
     }
 }
 
-/// Up to [`BLOCK_ROWS`] rows of one run, column `k` in `values[k·BLOCK_ROWS ..]`.
+/// Up to [`BLOCK_ROWS`] rows of one run, column `k` in `values[k·STRIDE ..]`.
 #[derive(Debug)]
 pub(super) struct Block {
     values: Vec<f64>,
@@ -49,7 +54,7 @@ impl Block {
     /// reaches are never touched.
     pub fn new(width: usize) -> Block {
         Block {
-            values: vec![0.0; width * BLOCK_ROWS],
+            values: vec![0.0; width * STRIDE],
             rows: 0,
             width,
         }
@@ -63,21 +68,31 @@ impl Block {
         self.rows == BLOCK_ROWS
     }
 
-    /// Appends a row of `width` values, in the column order above.
+    /// Appends a row: time, line, θ, sin θ, cos θ (`head`), each axis's commanded and actual
+    /// position and following error (`axes`), the nonlinear signature and dL (`tail`).
     #[inline]
-    pub fn push(&mut self, row: &[f64]) {
-        debug_assert!(row.len() == self.width && self.rows < BLOCK_ROWS);
-        let column_starts = self.values[self.rows..].iter_mut().step_by(BLOCK_ROWS);
-        for (slot, &v) in column_starts.zip(row) {
-            *slot = v;
+    pub fn push(&mut self, head: [f64; 5], axes: &[[f64; 3]], tail: [f64; 2]) {
+        debug_assert!(5 + 3 * axes.len() + 2 == self.width && self.rows < BLOCK_ROWS);
+        const G: usize = STRIDE;
+        let (r, v) = (self.rows, &mut self.values);
+        for (k, x) in head.into_iter().enumerate() {
+            v[k * G + r] = x;
         }
+        for (i, axis) in axes.iter().enumerate() {
+            for (j, &x) in axis.iter().enumerate() {
+                v[(AXES + 3 * i + j) * G + r] = x;
+            }
+        }
+        let k = AXES + 3 * axes.len();
+        v[k * G + r] = tail[0];
+        v[(k + 1) * G + r] = tail[1];
         self.rows += 1;
     }
 
     /// Column `k` of the rows held.
     #[inline]
     pub fn column(&self, k: usize) -> &[f64] {
-        &self.values[k * BLOCK_ROWS..k * BLOCK_ROWS + self.rows]
+        &self.values[k * STRIDE..k * STRIDE + self.rows]
     }
 
     /// The number of columns.
@@ -121,9 +136,9 @@ impl Block {
     /// Writes a full block's values, little-endian, to `out` (a spill).
     pub fn write_raw(&self, out: &mut impl Write) -> std::io::Result<()> {
         let mut bytes = Vec::with_capacity(8 * BLOCK_ROWS);
-        for column in self.values.chunks_exact(BLOCK_ROWS) {
+        for column in self.values.chunks_exact(STRIDE) {
             bytes.clear();
-            bytes.extend(column.iter().flat_map(|v| v.to_le_bytes()));
+            bytes.extend(column[..BLOCK_ROWS].iter().flat_map(|v| v.to_le_bytes()));
             out.write_all(&bytes)?;
         }
         Ok(())
@@ -132,9 +147,9 @@ impl Block {
     /// Reads a full block written by [`Block::write_raw`] from `input`.
     pub fn read_raw(&mut self, input: &mut impl Read) -> std::io::Result<()> {
         let mut bytes = vec![0u8; 8 * BLOCK_ROWS];
-        for column in self.values.chunks_exact_mut(BLOCK_ROWS) {
+        for column in self.values.chunks_exact_mut(STRIDE) {
             input.read_exact(&mut bytes)?;
-            for (v, b) in column.iter_mut().zip(bytes.chunks_exact(8)) {
+            for (v, b) in column[..BLOCK_ROWS].iter_mut().zip(bytes.chunks_exact(8)) {
                 *v = f64::from_le_bytes(b.try_into().expect("8 bytes"));
             }
         }

@@ -200,36 +200,47 @@ fn long_program(dir: &Path, revolutions: usize) -> PathBuf {
 
 /// Whole `mtsim simulate` processes (issue 27: at least 1,000x real time per CPU second with
 /// the full trace): the cases `cases` (full trace as CSV, as Parquet, decimated, off), each
-/// the mean CPU time of `runs` processes, every run into a fresh folder; the trace's cost is
+/// the median CPU time of `runs` processes, every run into a fresh folder; the trace's cost is
 /// the difference to the trace-off process, its throughput in rows and MB per CPU second.
 fn whole_processes(dir: &Path, cases: &[(&str, PathBuf)], runs: usize) {
     let sim_time = Scenario::load(&cases[0].1)
         .ok()
         .and_then(|s| simulate(&s, &dir.join("process-probe"), false, &|_| {}).ok())
         .map_or(f64::NAN, |s| s.sim_time_s);
-    let mut cpu = Vec::new();
-    for (k, (_, path)) in cases.iter().enumerate() {
-        let out = dir.join(format!("process-{k}"));
-        let _ = std::fs::remove_dir_all(&out);
-        // A fresh folder per run: replacing the last run's files costs the kernel time too.
-        let t = (0..runs)
-            .map(|r| {
-                let out = out.join(r.to_string());
-                process_cpu_s(
-                    &[
-                        "simulate".as_ref(),
-                        path.as_os_str(),
-                        "-o".as_ref(),
-                        out.as_os_str(),
-                        "--no-timing".as_ref(),
-                    ],
-                    1,
-                )
-            })
-            .sum::<Option<f64>>()
-            .map(|total| total / runs as f64);
-        cpu.push((t, out.join("0")));
+    // Run r of every case in turn (the load of a shared machine drifts), each into a fresh
+    // folder: replacing the last run's files costs the kernel time too. The median of the
+    // runs of a case is its figure (one run slowed by another process's burst does not move it).
+    let outs: Vec<PathBuf> = (0..cases.len())
+        .map(|k| dir.join(format!("process-{k}")))
+        .collect();
+    for out in &outs {
+        let _ = std::fs::remove_dir_all(out);
     }
+    let mut times = vec![Some(Vec::new()); cases.len()];
+    for r in 0..runs {
+        for (k, (_, path)) in cases.iter().enumerate() {
+            let out = outs[k].join(r.to_string());
+            let t = process_cpu_s(
+                &[
+                    "simulate".as_ref(),
+                    path.as_os_str(),
+                    "-o".as_ref(),
+                    out.as_os_str(),
+                    "--no-timing".as_ref(),
+                ],
+                1,
+            );
+            times[k] = times[k].take().zip(t).map(|(mut v, t)| {
+                v.push(t);
+                v
+            });
+        }
+    }
+    let cpu: Vec<(Option<f64>, PathBuf)> = times
+        .into_iter()
+        .zip(&outs)
+        .map(|(t, out)| (t.map(median), out.join("0")))
+        .collect();
     let off = cpu.last().and_then(|(t, _)| *t);
     for ((name, _), (t, out)) in cases.iter().zip(&cpu) {
         let Some(t) = t else {
@@ -267,7 +278,7 @@ fn whole_processes(dir: &Path, cases: &[(&str, PathBuf)], runs: usize) {
             String::new()
         };
         println!(
-            "whole mtsim simulate process, cone-15-10 all nonlinear, {name}: {:.1} ms CPU (mean of {runs}), {rtf:.0}x real time per CPU second{goal}{throughput}",
+            "whole mtsim simulate process, cone-15-10 all nonlinear, {name}: {:.1} ms CPU (median of {runs}), {rtf:.0}x real time per CPU second{goal}{throughput}",
             t * 1e3
         );
     }

@@ -1,18 +1,26 @@
 //! What the benches share: the CPU time of child processes.
 
-/// CPU time (user + system) of this process's waited-for children, s (`/proc/self/stat`
-/// fields 16 and 17, in clock ticks of 1/100 s).
+/// CPU time (user + system) of this process's waited-for children, s (`getrusage`, to the
+/// microsecond: `/proc/self/stat` counts 10 ms ticks, too coarse for one 40 ms run).
 pub fn children_cpu_s() -> Option<f64> {
-    let t = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the command name, which is in parentheses and may hold blanks.
-    let fields: Vec<&str> = t.rsplit_once(')')?.1.split_whitespace().collect();
-    let ticks = |k: usize| fields.get(k - 3)?.parse::<f64>().ok();
-    Some((ticks(16)? + ticks(17)?) / 100.0)
+    #[cfg(unix)]
+    {
+        let mut usage = std::mem::MaybeUninit::<libc::rusage>::zeroed();
+        // SAFETY: getrusage fills the struct it is handed, and returns 0 when it did.
+        if unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, usage.as_mut_ptr()) } != 0 {
+            return None;
+        }
+        // SAFETY: filled above (and zeroed before: every field is an integer).
+        let usage = unsafe { usage.assume_init() };
+        let s = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+        Some(s(usage.ru_utime) + s(usage.ru_stime))
+    }
+    #[cfg(not(unix))]
+    None
 }
 
-/// Mean CPU time of one whole `mtsim` process with `args`, s, over `runs` runs (the
-/// children's clock counts 10 ms ticks, so many short runs are summed); its stdout is
-/// discarded. None where /proc is missing.
+/// Mean CPU time of one whole `mtsim` process with `args`, s, over `runs` runs; its stdout
+/// is discarded. None where the children's CPU time cannot be read.
 #[allow(dead_code)] // not every bench runs whole processes
 pub fn process_cpu_s(args: &[&std::ffi::OsStr], runs: usize) -> Option<f64> {
     let start = children_cpu_s()?;

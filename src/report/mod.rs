@@ -18,6 +18,7 @@ pub mod polar;
 pub mod run;
 pub mod run_dir;
 pub mod test_info;
+mod thrift_compact;
 pub mod trace;
 pub mod trace_parquet;
 mod trace_rows;

@@ -1,53 +1,77 @@
-//! `trace.csv`: one row per traced sample, as a pipeline sink.
+//! `trace.csv` (or `trace.parquet`): one row per traced sample, as a pipeline sink.
 //!
 //! Columns: direction, time, line, θ, then per axis the commanded and actual position and
 //! the following error, then the nonlinear signature, the deviation dL and the centred
-//! deviation `dL - (a cos θ + b sin θ)`. The centring is the least-squares fit of the whole
-//! run, known only at its end, so rows go to a binary temporary file first and `trace.csv`
-//! is written from it, line by line, when the runs are done: memory stays flat, and
-//! `trace.csv` appears only when complete. A run that fails leaves no temporary file.
-//! The first [`RAW_IN_MEMORY`] bytes of raw rows (about 50,000 rows of five axes) stay in
-//! memory and reach the disk only when a longer trace spills over: memory stays bounded,
-//! and a trace of one cone never makes the round trip through the file.
+//! deviation `dL - (a cos θ + b sin θ)`. The centring is the least-squares fit of a whole
+//! run, known only at its end, so a run's rows are held in blocks ([`Block`], column by
+//! column) until it ends ([`TraceSink::end_run`]), then written to the trace's temporary
+//! file; the blocks are reused by the next run (their memory is mapped once). A run longer
+//! than [`RAW_IN_MEMORY`] bytes of rows moves its full blocks to a binary temporary file and
+//! reads them back at its end: memory stays bounded. `trace.csv` appears, by a rename, only
+//! when complete; a run that fails leaves no temporary file.
 //!
 //! [`read_trace`] reads a run folder's trace back (`trace.csv` or `trace.parquet`, the
 //! columns the report plots) into one [`Trace`] per format: the one reader of trace files.
 
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Write};
+use std::io::{BufReader, BufWriter, Read, Seek, Write};
+
+use arrow::datatypes::ToByteSlice;
 use std::path::{Path, PathBuf};
 
 use super::files::temporary_path;
-use super::trace_rows::{write_error, RawRows, RAW_FIXED_COLUMNS};
+use super::trace_parquet::ParquetTrace;
+use super::trace_rows::{
+    centred_from_inputs, write_error, Block, AXES, BLOCK_ROWS, FIXED_COLUMNS, LINE, THETA, TIME,
+};
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::TraceFormat;
+use crate::measure::ballbar::Centring;
 use crate::measure::{is_measured, BallbarRun, BarGeometry, BarReading};
 use crate::numeric::push_fixed_bytes_const;
 use crate::pipeline::{Sample, Sink};
 use crate::Axis;
 
-/// Raw rows held in memory before they spill to the temporary file, bytes.
+/// Full blocks of one run's rows held in memory, at most, before they spill to the
+/// temporary file, bytes (three blocks of five axes: 49,152 rows).
 pub const RAW_IN_MEMORY: usize = 8 << 20;
 
 /// Writes the trace of every run of a simulation.
 pub struct TraceSink {
-    /// Raw rows not yet spilled (at most [`RAW_IN_MEMORY`] bytes).
-    held: Vec<u8>,
-    /// The temporary file, once the rows spilled over.
+    /// The current run's rows: full blocks, then the one being filled.
+    held: Vec<Block>,
+    /// Emptied blocks, for the next rows.
+    spare: Vec<Block>,
+    /// The temporary file of spilled blocks, and how many of the current run it holds.
     raw: Option<BufWriter<File>>,
+    spilled: usize,
     raw_path: PathBuf,
     trace_path: PathBuf,
+    /// The trace file being written (its temporary file), once a run has ended.
+    out: Option<TraceOut>,
     axes: &'static [Axis],
     geometry: Option<BarGeometry>,
     every: u64,
     format: TraceFormat,
     direction: Direction,
     measured: Option<MeasuredLines>,
-    row: Vec<f64>,
     /// Rows recorded, and the most the run may record (`[simulate] max_trace_rows`).
     rows: u64,
     max_rows: u64,
+    /// The centred deviations of the block being written.
+    centred: Vec<f64>,
+    /// Parquet: the current run's `(dL, sin θ, cos θ)` per row whose other columns are
+    /// written, how many such values went to the temporary file, and the run's first row group.
+    inputs: Vec<f64>,
+    inputs_spilled: usize,
+    run_first_group: usize,
+}
+
+/// The trace file being written, in its format.
+enum TraceOut {
+    Csv(CsvTrace),
+    Parquet(ParquetTrace),
 }
 
 impl TraceSink {
@@ -65,18 +89,24 @@ impl TraceSink {
         let raw_path = trace_path.with_extension("csv.raw.tmp");
         Ok(TraceSink {
             held: Vec::new(),
+            spare: Vec::new(),
             raw: None,
+            spilled: 0,
             raw_path,
             trace_path: trace_path.to_path_buf(),
+            out: None,
             axes,
             geometry,
             every: every.max(1),
             format,
             direction: Direction::Ccw,
             measured: None,
-            row: Vec::with_capacity(RAW_FIXED_COLUMNS + 3 * axes.len()),
             rows: 0,
             max_rows,
+            centred: Vec::new(),
+            inputs: Vec::new(),
+            inputs_spilled: 0,
+            run_first_group: 0,
         })
     }
 
@@ -86,52 +116,185 @@ impl TraceSink {
         self.measured = measured;
     }
 
-    /// Writes `trace.csv` (atomically) from the raw rows, centring each row with the fit of
-    /// its direction's run.
-    pub fn finish(mut self, runs: &[BallbarRun]) -> Result<()> {
-        let spilled = self.raw.is_some();
-        if let Some(mut raw) = self.raw.take() {
-            raw.write_all(&self.held)
-                .and_then(|()| raw.flush())
-                .map_err(write_error(&self.raw_path))?;
-            self.held = Vec::new();
+    /// Ends the current run: its rows are written to the trace, centred with `centring`
+    /// (the fit of the run's ball bar; dL as it is without one).
+    pub fn end_run(&mut self, centring: Option<Centring>) -> Result<()> {
+        if self.format == TraceFormat::Parquet {
+            return self.end_parquet_run(centring);
         }
-        if spilled {
-            let file = File::open(&self.raw_path).map_err(write_error(&self.raw_path))?;
-            self.write_trace(BufReader::new(file), runs)
-        } else {
-            self.write_trace(&self.held[..], runs)
+        if self.held.is_empty() && self.spilled == 0 {
+            return Ok(());
         }
+        let mut out = match self.out.take() {
+            Some(TraceOut::Csv(out)) => out,
+            _ => match self.open()? {
+                TraceOut::Csv(out) => out,
+                TraceOut::Parquet(_) => unreachable!("a CSV trace writes CSV"),
+            },
+        };
+        let written = self.write_run(&mut out, centring);
+        self.out = Some(TraceOut::Csv(out));
+        written
     }
 
-    /// Writes the trace file in the sink's format from the raw rows read from `rows`.
-    fn write_trace<R: Read>(&self, rows: R, runs: &[BallbarRun]) -> Result<()> {
-        let names = column_names(self.axes);
-        match self.format {
-            TraceFormat::Csv => complete(
-                rows,
-                &self.raw_path,
-                &self.trace_path,
-                &names.join(","),
-                self.axes.len(),
-                runs,
-            ),
-            TraceFormat::Parquet => super::trace_parquet::complete_parquet(
-                rows,
-                &self.raw_path,
-                &self.trace_path,
-                &names,
-                runs,
-            ),
+    /// Parquet: writes the columns of the block being filled, then the centred deviations of
+    /// every row group of the run.
+    fn end_parquet_run(&mut self, centring: Option<Centring>) -> Result<()> {
+        if let Some(block) = self.held.pop() {
+            self.stream(block)?;
         }
+        let Some(TraceOut::Parquet(out)) = self.out.as_mut() else {
+            return Ok(());
+        };
+        let err = write_error(&self.raw_path);
+        let mut spilled = match self.raw.as_mut().filter(|_| self.inputs_spilled > 0) {
+            Some(raw) => {
+                raw.flush().map_err(&err)?;
+                raw.get_mut().rewind().map_err(&err)?;
+                Some(BufReader::with_capacity(1 << 16, raw.get_ref()))
+            }
+            None => None,
+        };
+        let (mut from_file, mut at) = (self.inputs_spilled, 0);
+        let mut read = Vec::new();
+        for group in self.run_first_group..out.groups() {
+            let need = 3 * out.group_rows(group);
+            let inputs = match spilled.as_mut().filter(|_| from_file > 0) {
+                Some(reader) => {
+                    let n = need.min(from_file);
+                    read_f64s(reader, n, &mut read).map_err(&err)?;
+                    read.extend_from_slice(&self.inputs[at..at + need - n]);
+                    (from_file, at) = (from_file - n, at + need - n);
+                    &read[..]
+                }
+                None => {
+                    at += need;
+                    &self.inputs[at - need..at]
+                }
+            };
+            centred_from_inputs(inputs, centring, &mut self.centred);
+            out.write_centred(group, &self.centred)?;
+        }
+        drop(spilled);
+        if let Some(raw) = self.raw.as_mut().filter(|_| self.inputs_spilled > 0) {
+            let file = raw.get_mut();
+            file.rewind().and_then(|()| file.set_len(0)).map_err(&err)?;
+        }
+        self.inputs.clear();
+        self.inputs_spilled = 0;
+        self.run_first_group = out.groups();
+        Ok(())
+    }
+
+    /// Parquet: writes the columns of `block` as a row group and keeps what its centred
+    /// deviations need; the block is then free for the next rows.
+    fn stream(&mut self, mut block: Block) -> Result<()> {
+        if block.rows() > 0 {
+            if self.out.is_none() {
+                self.out = Some(self.open()?);
+            }
+            let Some(TraceOut::Parquet(out)) = self.out.as_mut() else {
+                unreachable!("a Parquet trace writes Parquet");
+            };
+            out.write_block(&block, self.direction)?;
+            block.centring_inputs_into(&mut self.inputs);
+            if 8 * self.inputs.len() > RAW_IN_MEMORY {
+                let values = std::mem::take(&mut self.inputs);
+                self.raw_file()?
+                    .write_all(values.to_byte_slice())
+                    .map_err(write_error(&self.raw_path))?;
+                self.inputs_spilled += values.len();
+                self.inputs = values;
+                self.inputs.clear();
+            }
+        }
+        block.clear();
+        self.spare.push(block);
+        Ok(())
+    }
+
+    /// Writes the held and spilled rows of the current run to `out`, and empties them.
+    fn write_run(&mut self, out: &mut CsvTrace, centring: Option<Centring>) -> Result<()> {
+        let direction = self.direction;
+        if let Some(mut raw) = self.raw.take().filter(|_| self.spilled > 0) {
+            let err = write_error(&self.raw_path);
+            let mut block = self.spare.pop().unwrap_or_else(|| Block::new(self.width()));
+            let read = (|| -> Result<()> {
+                raw.flush().map_err(&err)?;
+                let file = raw.get_mut();
+                file.rewind().map_err(&err)?;
+                let mut reader = BufReader::with_capacity(1 << 16, &*file);
+                for _ in 0..self.spilled {
+                    block.read_raw(&mut reader).map_err(&err)?;
+                    block.centred_into(centring, &mut self.centred);
+                    out.write_block(&block, direction, &self.centred)?;
+                }
+                drop(reader);
+                file.rewind().and_then(|()| file.set_len(0)).map_err(&err)
+            })();
+            block.clear();
+            self.spare.push(block);
+            self.raw = Some(raw);
+            self.spilled = 0;
+            read?;
+        }
+        for mut block in std::mem::take(&mut self.held) {
+            block.centred_into(centring, &mut self.centred);
+            out.write_block(&block, direction, &self.centred)?;
+            block.clear();
+            self.spare.push(block);
+        }
+        Ok(())
+    }
+
+    /// Creates the trace's temporary file and writes its header.
+    fn open(&self) -> Result<TraceOut> {
+        let names = column_names(self.axes);
+        let tmp = temporary_path(&self.trace_path);
+        Ok(match self.format {
+            TraceFormat::Csv => TraceOut::Csv(CsvTrace::create(tmp, &names.join(","))?),
+            TraceFormat::Parquet => TraceOut::Parquet(ParquetTrace::create(tmp, names)?),
+        })
+    }
+
+    /// Ends the last run (centred with the run of its direction in `runs`, if
+    /// [`TraceSink::end_run`] was not called) and puts the trace file in place.
+    pub fn finish(mut self, runs: &[BallbarRun]) -> Result<()> {
+        let centring = runs
+            .iter()
+            .find(|r| r.direction() == self.direction)
+            .map(|r| r.centring());
+        self.end_run(centring)?;
+        let out = match self.out.take() {
+            Some(out) => out,
+            None => self.open()?,
+        };
+        let tmp = temporary_path(&self.trace_path);
+        let closed = match out {
+            TraceOut::Csv(csv) => csv.finish(),
+            TraceOut::Parquet(parquet) => parquet.finish(),
+        };
+        if let Err(e) = closed {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(e);
+        }
+        std::fs::rename(&tmp, &self.trace_path).map_err(write_error(&self.trace_path))
+    }
+
+    /// Columns of a block: the fixed ones and three per axis.
+    fn width(&self) -> usize {
+        FIXED_COLUMNS + 3 * self.axes.len()
     }
 }
 
 impl Drop for TraceSink {
     fn drop(&mut self) {
-        // Finished or failed, the raw rows are not kept.
+        // Finished or failed, the raw rows are not kept, nor an unfinished trace.
         self.raw = None;
         let _ = std::fs::remove_file(&self.raw_path);
+        if self.out.take().is_some() {
+            let _ = std::fs::remove_file(temporary_path(&self.trace_path));
+        }
     }
 }
 
@@ -164,44 +327,84 @@ impl TraceSink {
             )));
         }
         self.rows += 1;
-        let row = &mut self.row;
-        row.clear();
-        let cw = if self.direction == Direction::Cw {
-            1.0
-        } else {
-            0.0
-        };
+        if self.held.last().is_none_or(Block::is_full) {
+            self.next_block()?;
+        }
+        let mut axes = [[0.0; 3]; Axis::ALL.len()];
+        for (values, &a) in axes.iter_mut().zip(self.axes) {
+            *values = [s.commanded[a], s.actual[a], s.following_error[a]];
+        }
         let (sin, cos) = r.theta_sin_cos;
-        row.extend_from_slice(&[cw, s.time_s, s.line as f64, r.theta_deg, sin, cos]);
-        for &a in self.axes {
-            row.extend_from_slice(&[s.commanded[a], s.actual[a], s.following_error[a]]);
+        let block = self.held.last_mut().expect("a block with room");
+        block.push(
+            [s.time_s, s.line as f64, r.theta_deg, sin, cos],
+            &axes[..self.axes.len()],
+            [r.nonlinear_um, r.deviation_um],
+        );
+        Ok(())
+    }
+
+    /// Starts a block for the next rows: a spare one, or a new one; when the run's full
+    /// blocks pass [`RAW_IN_MEMORY`], they move to the temporary file first.
+    fn next_block(&mut self) -> Result<()> {
+        if self.format == TraceFormat::Parquet {
+            if let Some(full) = self.held.pop() {
+                self.stream(full)?;
+            }
+            let block = self.spare.pop().unwrap_or_else(|| Block::new(self.width()));
+            self.held.push(block);
+            return Ok(());
         }
-        row.extend_from_slice(&[r.nonlinear_um, r.deviation_um]);
-        let start = self.held.len();
-        self.held.resize(start + 8 * row.len(), 0);
-        for (bytes, v) in self.held[start..].chunks_exact_mut(8).zip(row.iter()) {
-            bytes.copy_from_slice(&v.to_le_bytes());
-        }
-        if self.held.len() >= RAW_IN_MEMORY {
+        let block_bytes = 8 * BLOCK_ROWS * self.width();
+        if self.held.len() * block_bytes > RAW_IN_MEMORY {
             self.spill()?;
+        }
+        let block = self.spare.pop().unwrap_or_else(|| Block::new(self.width()));
+        self.held.push(block);
+        Ok(())
+    }
+
+    /// Moves the held (full) blocks to the temporary file.
+    fn spill(&mut self) -> Result<()> {
+        let held = std::mem::take(&mut self.held);
+        for mut block in held {
+            block
+                .write_raw(self.raw_file()?)
+                .map_err(write_error(&self.raw_path))?;
+            block.clear();
+            self.spare.push(block);
+            self.spilled += 1;
         }
         Ok(())
     }
 
-    /// Moves the held rows to the temporary file (created on the first spill).
-    fn spill(&mut self) -> Result<()> {
-        let raw = match self.raw.as_mut() {
-            Some(raw) => raw,
-            None => {
-                let file = File::create(&self.raw_path).map_err(write_error(&self.raw_path))?;
-                self.raw.insert(BufWriter::new(file))
-            }
-        };
-        raw.write_all(&self.held)
-            .map_err(write_error(&self.raw_path))?;
-        self.held.clear();
-        Ok(())
+    /// The temporary file of spilled rows, created on the first spill.
+    fn raw_file(&mut self) -> Result<&mut BufWriter<File>> {
+        if self.raw.is_none() {
+            let file = File::options()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(true)
+                .open(&self.raw_path)
+                .map_err(write_error(&self.raw_path))?;
+            self.raw = Some(BufWriter::with_capacity(1 << 16, file));
+        }
+        Ok(self.raw.as_mut().expect("created above"))
     }
+}
+
+/// Reads `n` little-endian f64 from `reader` into `out` (emptied first).
+fn read_f64s(reader: &mut impl Read, n: usize, out: &mut Vec<f64>) -> std::io::Result<()> {
+    let mut bytes = vec![0u8; 8 * n];
+    reader.read_exact(&mut bytes)?;
+    out.clear();
+    out.extend(
+        bytes
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes"))),
+    );
+    Ok(())
 }
 
 /// The trace's columns: direction, time, line, θ, per axis the commanded and actual
@@ -222,53 +425,71 @@ fn column_names(axes: &[Axis]) -> Vec<String> {
     names
 }
 
-/// Writes `trace_path` from the binary rows read from `reader` (held rows, or the file at
-/// `raw_path`), appending the centred deviation `dL - (a cos θ + b sin θ)` of each row's run.
-fn complete<R: Read>(
-    reader: R,
-    raw_path: &Path,
-    trace_path: &Path,
-    header: &str,
-    n_axes: usize,
-    runs: &[BallbarRun],
-) -> Result<()> {
-    let tmp = temporary_path(trace_path);
-    let write_err = write_error(&tmp);
-    // Large writes: a 7 MB trace in a few system calls instead of one per 8 kB.
-    let mut out = BufWriter::with_capacity(1 << 20, File::create(&tmp).map_err(&write_err)?);
-    writeln!(out, "{header}").map_err(&write_err)?;
-    let width = RAW_FIXED_COLUMNS + 3 * n_axes;
-    let mut rows = RawRows::new(reader, width, runs, raw_path, &tmp);
-    let mut line: Vec<u8> = Vec::with_capacity(32 * width);
-    while let Some((v, cw_row, centred)) = rows.next_row()? {
-        let (theta, dev) = (v[3], v[width - 1]);
-        // The row is formatted once into one reused buffer: no allocation per value.
-        line.clear();
-        line.extend_from_slice(if cw_row { b"cw" } else { b"ccw" });
-        // Each column's decimal count known at compile time (unrolled digit loops).
-        macro_rules! field {
-            ($value:expr, $decimals:literal) => {
-                line.push(b',');
-                push_fixed_bytes_const::<$decimals>(&mut line, $value);
-            };
-        }
-        field!(v[1], 4);
-        field!(v[2], 0);
-        field!(theta, 4);
-        for axis in v[6..width - 2].chunks_exact(3) {
-            field!(axis[0], 6);
-            field!(axis[1], 6);
-            field!(axis[2], 7);
-        }
-        for value in [v[width - 2], dev, centred] {
-            field!(value, 4);
-        }
-        line.push(b'\n');
-        out.write_all(&line).map_err(&write_err)?;
+/// `trace.csv` being written: its temporary file and one reused line buffer.
+struct CsvTrace {
+    tmp: PathBuf,
+    out: BufWriter<File>,
+    line: Vec<u8>,
+}
+
+impl CsvTrace {
+    /// Creates the temporary file `tmp` and writes the `header` line.
+    fn create(tmp: PathBuf, header: &str) -> Result<CsvTrace> {
+        let file = File::create(&tmp).map_err(write_error(&tmp))?;
+        // Large writes: a 7 MB trace in a few dozen system calls instead of one per 8 kB.
+        let mut out = BufWriter::with_capacity(1 << 18, file);
+        writeln!(out, "{header}").map_err(write_error(&tmp))?;
+        Ok(CsvTrace {
+            tmp,
+            out,
+            line: Vec::with_capacity(1 << 10),
+        })
     }
-    out.flush().map_err(&write_err)?;
-    drop(out);
-    std::fs::rename(&tmp, trace_path).map_err(write_error(trace_path))
+
+    /// Appends the rows of `block`, of the run `direction`, with their `centred` deviations.
+    fn write_block(&mut self, block: &Block, direction: Direction, centred: &[f64]) -> Result<()> {
+        let width = block.width();
+        let [time, line_no, theta] = [TIME, LINE, THETA].map(|k| block.column(k));
+        let axes: Vec<&[f64]> = (AXES..width - 2).map(|k| block.column(k)).collect();
+        let (nonlinear, dev) = (block.column(width - 2), block.column(width - 1));
+        let name: &[u8] = if direction == Direction::Cw {
+            b"cw"
+        } else {
+            b"ccw"
+        };
+        let line = &mut self.line;
+        for r in 0..block.rows() {
+            // The row is formatted once into one reused buffer: no allocation per value.
+            line.clear();
+            line.extend_from_slice(name);
+            // Each column's decimal count known at compile time (unrolled digit loops).
+            macro_rules! field {
+                ($value:expr, $decimals:literal) => {
+                    line.push(b',');
+                    push_fixed_bytes_const::<$decimals>(line, $value);
+                };
+            }
+            field!(time[r], 4);
+            field!(line_no[r], 0);
+            field!(theta[r], 4);
+            for axis in axes.chunks_exact(3) {
+                field!(axis[0][r], 6);
+                field!(axis[1][r], 6);
+                field!(axis[2][r], 7);
+            }
+            for value in [nonlinear[r], dev[r], centred[r]] {
+                field!(value, 4);
+            }
+            line.push(b'\n');
+            self.out.write_all(line).map_err(write_error(&self.tmp))?;
+        }
+        Ok(())
+    }
+
+    /// Flushes the file (the caller renames it).
+    fn finish(mut self) -> Result<()> {
+        self.out.flush().map_err(write_error(&self.tmp))
+    }
 }
 
 /// One direction's columns of a trace file.

@@ -1,200 +1,357 @@
-//! `trace.parquet`: the columns of `trace.csv` as the f64 the run computed, written with the
-//! Parquet column writers (no Arrow arrays in between).
+//! `trace.parquet`: the columns of `trace.csv` as the f64 the run computed, one row group per
+//! block of a run's rows ([`Block`]), its column chunks written straight from the block as
+//! it fills; the centred deviations of a run's row groups follow the run (its centring is
+//! known only at its end).
 //!
-//! Each row group of [`PARQUET_ROW_GROUP`] rows is gathered column by column from the raw
-//! rows and each column written as one batch: plain-encoded doubles and unsigned integers
-//! (copied, no per-value work besides the chunk's min and max), the direction dictionary
-//! encoded (two values, so one bit per row after the dictionary page). Uncompressed: the
-//! doubles of a servo trace are nearly incompressible, and compressing them costs more CPU
-//! than the file's whole encoding (see docs/performance.md). The same rows give the same
-//! bytes (fixed `created_by`, no timestamps).
+//! The format is simple enough for a trace to be written without a Parquet writer in between
+//! (which copied every value three times): the file is `PAR1`, then per row group and column
+//! one data page (a page header, then the values), then the footer (the file metadata) and
+//! its length, and `PAR1` again. Page headers and footer are Thrift compact structs
+//! ([`super::thrift_compact`]). Every column is required, uncompressed and plain-encoded
+//! (the little-endian values, no levels), but `direction`, which is dictionary-encoded: a
+//! row group is one run, so its dictionary is the run's one name and its data page one RLE
+//! run of index 0. Uncompressed: the doubles of a servo trace are nearly incompressible, and
+//! compressing them costs more CPU than the file's whole encoding (docs/performance.md).
+//! Min/max statistics on `time_s` and `line` (unsigned), which a reader filters rows by.
+//! The same rows give the same bytes (fixed `created_by`, no timestamps).
 
 use std::fs::File;
-use std::io::{BufWriter, Read, Write};
-use std::path::Path;
-use std::sync::Arc;
+use std::io::{IoSlice, Write};
+use std::path::PathBuf;
 
-use parquet::basic::{Compression, LogicalType, Repetition, Type as PhysicalType};
-use parquet::data_type::{ByteArray, ByteArrayType, DoubleType, Int64Type};
-use parquet::file::properties::{EnabledStatistics, WriterProperties};
-use parquet::file::writer::SerializedFileWriter;
-use parquet::schema::types::Type;
+use arrow::datatypes::ToByteSlice;
 
-use super::files::temporary_path;
-use super::trace_rows::{write_error, RawRows, RAW_FIXED_COLUMNS};
-use crate::error::{Error, Result};
-use crate::measure::BallbarRun;
+use super::thrift_compact::Compact;
+use super::trace_rows::{write_error, Block, AXES, LINE, THETA, TIME};
+use crate::error::Result;
+use crate::input::program::Direction;
 
-/// Rows per row group of `trace.parquet` (16 s of machine time at 1 ms): what the writer
-/// holds in memory at once, about 3 MB for five axes.
-pub const PARQUET_ROW_GROUP: usize = 16_384;
+/// Parquet's physical types, encodings and page types (parquet.thrift).
+const BYTE_ARRAY: i32 = 6;
+const INT64: i32 = 2;
+const DOUBLE: i32 = 5;
+const PLAIN: i32 = 0;
+const RLE: i32 = 3;
+const RLE_DICTIONARY: i32 = 8;
+const DATA_PAGE: i32 = 0;
+const DICTIONARY_PAGE: i32 = 2;
+/// Converted types of the `direction` (UTF8) and `line` (UINT_64) columns.
+const UTF8: i32 = 0;
+const UINT_64: i32 = 14;
 
-/// The Parquet schema of the trace's columns `names`: `direction` text, `line` an unsigned
-/// 64-bit integer, every other column a double; all required.
-fn schema(names: &[String]) -> parquet::errors::Result<Type> {
-    let fields = names
-        .iter()
-        .enumerate()
-        .map(|(i, name)| {
-            let (physical, logical) = match i {
-                0 => (PhysicalType::BYTE_ARRAY, Some(LogicalType::String)),
-                2 => (
-                    PhysicalType::INT64,
-                    Some(LogicalType::Integer {
-                        bit_width: 64,
-                        is_signed: false,
-                    }),
-                ),
-                _ => (PhysicalType::DOUBLE, None),
-            };
-            Type::primitive_type_builder(name, physical)
-                .with_repetition(Repetition::REQUIRED)
-                .with_logical_type(logical)
-                .build()
-                .map(Arc::new)
+/// Rows per row group of `trace.parquet` at most (a block; a row group never holds two runs).
+pub const PARQUET_ROW_GROUP: usize = super::trace_rows::BLOCK_ROWS;
+
+/// A column chunk as the footer describes it.
+struct Chunk {
+    physical: i32,
+    /// Offsets of its dictionary page (if any) and data page, and its size, bytes.
+    dictionary_offset: Option<u64>,
+    data_offset: u64,
+    size: u64,
+    /// Min and max as the statistics' bytes, for `time_s` and `line`.
+    min_max: Option<([u8; 8], [u8; 8])>,
+}
+
+/// `trace.parquet` being written: its temporary file, the offset reached, and what the
+/// footer will say of every row group written.
+pub(super) struct ParquetTrace {
+    tmp: PathBuf,
+    file: File,
+    /// Bytes not yet written (page headers), and the file's length with them.
+    pending: Vec<u8>,
+    offset: u64,
+    names: Vec<String>,
+    groups: Vec<(usize, Vec<Chunk>)>,
+    /// The `line` column of a block as integers.
+    lines: Vec<u64>,
+}
+
+impl ParquetTrace {
+    /// Creates the temporary file `tmp` for a trace with the columns `names` (those of
+    /// `trace.csv`).
+    pub fn create(tmp: PathBuf, names: Vec<String>) -> Result<ParquetTrace> {
+        let file = File::create(&tmp).map_err(write_error(&tmp))?;
+        Ok(ParquetTrace {
+            tmp,
+            file,
+            pending: b"PAR1".to_vec(),
+            offset: 4,
+            names,
+            groups: Vec::new(),
+            lines: Vec::new(),
         })
-        .collect::<parquet::errors::Result<Vec<_>>>()?;
-    Type::group_type_builder("schema")
-        .with_fields(fields)
-        .build()
-}
-
-/// Writes `trace_path` as Parquet from the binary rows read from `reader` (held rows, or
-/// the file at `raw_path`), with the columns of `trace.csv` (`names`) and the centred
-/// deviation of each row's run. Written to a temporary file, then renamed.
-pub(super) fn complete_parquet<R: Read>(
-    reader: R,
-    raw_path: &Path,
-    trace_path: &Path,
-    names: &[String],
-    runs: &[BallbarRun],
-) -> Result<()> {
-    let tmp = temporary_path(trace_path);
-    // A failure of the Parquet writer is a failed write of the temporary file.
-    let failed = |e: parquet::errors::ParquetError| Error::Write {
-        path: tmp.clone(),
-        source: std::io::Error::other(format!("cannot write Parquet: {e}")),
-    };
-    let props = WriterProperties::builder()
-        .set_compression(Compression::UNCOMPRESSED)
-        .set_dictionary_enabled(false)
-        .set_column_dictionary_enabled("direction".into(), true)
-        .set_statistics_enabled(EnabledStatistics::None)
-        .set_column_statistics_enabled("time_s".into(), EnabledStatistics::Chunk)
-        .set_column_statistics_enabled("line".into(), EnabledStatistics::Chunk)
-        .set_created_by(format!("mtsim {}", env!("CARGO_PKG_VERSION")))
-        .set_max_row_group_size(PARQUET_ROW_GROUP)
-        .build();
-    let schema = Arc::new(schema(names).map_err(failed)?);
-    let file = File::create(&tmp).map_err(write_error(&tmp))?;
-    let written = (|| -> Result<()> {
-        // Buffered: besides whole pages the writer makes many small writes (page headers).
-        let sink = BufWriter::with_capacity(1 << 20, file);
-        let mut writer =
-            SerializedFileWriter::new(sink, schema, Arc::new(props)).map_err(failed)?;
-        // Raw rows: direction, time, line, θ, sin θ, cos θ, 3 per axis, nonlinear, dL; the
-        // names have 7 columns besides the axes' 3 each.
-        let width = RAW_FIXED_COLUMNS + (names.len() - 7);
-        let mut rows = RawRows::new(reader, width, runs, raw_path, &tmp);
-        let mut group = RowGroup::new(names.len() - 2);
-        let mut more = true;
-        while more {
-            more = group.fill(&mut rows)?;
-            if !group.line.is_empty() {
-                group.write(&mut writer).map_err(failed)?;
-            }
-        }
-        let mut out = writer.into_inner().map_err(failed)?;
-        out.flush().map_err(write_error(&tmp))
-    })();
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e);
-    }
-    std::fs::rename(&tmp, trace_path).map_err(write_error(trace_path))
-}
-
-/// The rows of one row group, column by column: the direction, the line, and the f64
-/// columns in their order (time, θ, the axes', nonlinear, dL, centred dL), each f64 column a
-/// slice of [`PARQUET_ROW_GROUP`] values in `floats` (a row's values stored in place).
-struct RowGroup {
-    direction: Vec<ByteArray>,
-    line: Vec<i64>,
-    floats: Vec<f64>,
-}
-
-impl RowGroup {
-    fn new(n_floats: usize) -> RowGroup {
-        RowGroup {
-            direction: Vec::with_capacity(PARQUET_ROW_GROUP),
-            line: Vec::with_capacity(PARQUET_ROW_GROUP),
-            floats: vec![0.0; n_floats * PARQUET_ROW_GROUP],
-        }
     }
 
-    /// Empties the group and reads up to [`PARQUET_ROW_GROUP`] rows into it; false when the
-    /// rows have ended.
-    fn fill<R: Read>(&mut self, rows: &mut RawRows<'_, R>) -> Result<bool> {
-        self.direction.clear();
-        self.line.clear();
-        // One buffer per direction, shared by its rows.
-        let (ccw, cw) = (ByteArray::from("ccw"), ByteArray::from("cw"));
-        const G: usize = PARQUET_ROW_GROUP;
-        while self.line.len() < G {
-            let Some((v, cw_row, centred)) = rows.next_row()? else {
-                return Ok(false);
-            };
-            let r = self.line.len();
-            self.direction
-                .push(if cw_row { cw.clone() } else { ccw.clone() });
-            // Parquet's unsigned 64-bit integers are stored as INT64 bits.
-            self.line.push(v[2] as u64 as i64);
-            let f = &mut self.floats;
-            f[r] = v[1];
-            f[G + r] = v[3];
-            for (k, &x) in v[6..].iter().enumerate() {
-                f[(2 + k) * G + r] = x;
-            }
-            let last = f.len() - G;
-            f[last + r] = centred;
+    /// Appends `bytes` to the file: small ones (headers) gathered, a column's values written
+    /// with the headers before them in one system call, with no copy.
+    fn write(&mut self, bytes: &[u8]) -> Result<()> {
+        self.offset += bytes.len() as u64;
+        if bytes.len() < 1 << 12 {
+            self.pending.extend_from_slice(bytes);
+            return Ok(());
         }
-        Ok(true)
-    }
-
-    /// Writes the group as one row group, one batch per column.
-    fn write<W: Write + Send>(
-        &self,
-        writer: &mut SerializedFileWriter<W>,
-    ) -> parquet::errors::Result<()> {
-        let mut group = writer.next_row_group()?;
-        let mut index = 0;
-        while let Some(mut column) = group.next_column()? {
-            match index {
-                0 => {
-                    column
-                        .typed::<ByteArrayType>()
-                        .write_batch(&self.direction, None, None)?;
-                }
-                2 => {
-                    column
-                        .typed::<Int64Type>()
-                        .write_batch(&self.line, None, None)?;
-                }
-                _ => {
-                    // Float columns: time (index 1), then the rest from index 3 on.
-                    let k = if index == 1 { 0 } else { index - 2 };
-                    let start = k * PARQUET_ROW_GROUP;
-                    column.typed::<DoubleType>().write_batch(
-                        &self.floats[start..start + self.line.len()],
-                        None,
-                        None,
-                    )?;
-                }
-            }
-            column.close()?;
-            index += 1;
-        }
-        group.close()?;
+        let mut slices = [IoSlice::new(&self.pending), IoSlice::new(bytes)];
+        write_all_vectored(&mut self.file, &mut slices).map_err(write_error(&self.tmp))?;
+        self.pending.clear();
         Ok(())
     }
+
+    /// Writes one page: its header (a dictionary page, or a data page of `encoding`), then
+    /// `data`, of `values` values.
+    fn page(&mut self, dictionary: bool, values: usize, encoding: i32, data: &[u8]) -> Result<()> {
+        let mut h = Compact::new();
+        h.i32(
+            1,
+            if dictionary {
+                DICTIONARY_PAGE
+            } else {
+                DATA_PAGE
+            },
+        );
+        h.i32(2, data.len() as i32);
+        h.i32(3, data.len() as i32);
+        h.begin(if dictionary { 7 } else { 5 });
+        h.i32(1, values as i32);
+        h.i32(2, encoding);
+        if !dictionary {
+            // Definition and repetition levels (none: every column is required).
+            h.i32(3, RLE);
+            h.i32(4, RLE);
+        }
+        h.end();
+        h.end();
+        self.write(&h.bytes)?;
+        self.write(data)
+    }
+
+    /// A plain-encoded column chunk of `values` values from `data`.
+    fn plain(
+        &mut self,
+        physical: i32,
+        values: usize,
+        data: &[u8],
+        min_max: Option<([u8; 8], [u8; 8])>,
+    ) -> Result<Chunk> {
+        let data_offset = self.offset;
+        self.page(false, values, PLAIN, data)?;
+        Ok(Chunk {
+            physical,
+            dictionary_offset: None,
+            data_offset,
+            size: self.offset - data_offset,
+            min_max,
+        })
+    }
+
+    /// Writes the rows of `block`, of the run `direction`, as one row group: every column
+    /// but the centred deviation, which [`ParquetTrace::write_centred`] adds once the run's
+    /// centring is known (after the run's last row group: a column chunk is found by its
+    /// offset, wherever it lies in the file).
+    pub fn write_block(&mut self, block: &Block, direction: Direction) -> Result<()> {
+        let rows = block.rows();
+        let mut chunks = Vec::with_capacity(self.names.len());
+        // direction: a dictionary of the run's name (plain: length, bytes), then one RLE run
+        // of index 0 (bit width 1; the run's header is its length shifted left once).
+        let name: &[u8] = if direction == Direction::Cw {
+            b"cw"
+        } else {
+            b"ccw"
+        };
+        let dictionary_offset = self.offset;
+        let mut dictionary = (name.len() as u32).to_le_bytes().to_vec();
+        dictionary.extend_from_slice(name);
+        self.page(true, 1, PLAIN, &dictionary)?;
+        let data_offset = self.offset;
+        let mut indices = Compact::new();
+        indices.bytes.push(1);
+        indices.varint((rows as u64) << 1);
+        indices.bytes.push(0);
+        self.page(false, rows, RLE_DICTIONARY, &indices.bytes)?;
+        chunks.push(Chunk {
+            physical: BYTE_ARRAY,
+            dictionary_offset: Some(dictionary_offset),
+            data_offset,
+            size: self.offset - dictionary_offset,
+            min_max: None,
+        });
+        let time = block.column(TIME);
+        chunks.push(self.plain(DOUBLE, rows, time.to_byte_slice(), min_max_f64(time))?);
+        // Parquet's unsigned 64-bit integers are stored as INT64 bits.
+        let mut lines = std::mem::take(&mut self.lines);
+        lines.clear();
+        lines.extend(block.column(LINE).iter().map(|&l| l as u64));
+        let min_max = lines.iter().min().zip(lines.iter().max());
+        let min_max = min_max.map(|(lo, hi)| (lo.to_le_bytes(), hi.to_le_bytes()));
+        chunks.push(self.plain(INT64, rows, lines.to_byte_slice(), min_max)?);
+        self.lines = lines;
+        for k in std::iter::once(THETA).chain(AXES..block.width()) {
+            let column = block.column(k);
+            chunks.push(self.plain(DOUBLE, rows, column.to_byte_slice(), None)?);
+        }
+        self.groups.push((rows, chunks));
+        Ok(())
+    }
+
+    /// Row groups written so far.
+    pub fn groups(&self) -> usize {
+        self.groups.len()
+    }
+
+    /// The rows of row group `group`.
+    pub fn group_rows(&self, group: usize) -> usize {
+        self.groups[group].0
+    }
+
+    /// Writes the centred deviations of row group `group`, its last column.
+    pub fn write_centred(&mut self, group: usize, centred: &[f64]) -> Result<()> {
+        let chunk = self.plain(DOUBLE, centred.len(), centred.to_byte_slice(), None)?;
+        self.groups[group].1.push(chunk);
+        Ok(())
+    }
+
+    /// Writes the footer and flushes the file (the caller renames it).
+    pub fn finish(mut self) -> Result<()> {
+        let footer = self.footer();
+        self.write(&footer)?;
+        self.write(&(footer.len() as u32).to_le_bytes())?;
+        self.write(b"PAR1")?;
+        let pending = std::mem::take(&mut self.pending);
+        self.file
+            .write_all(&pending)
+            .map_err(write_error(&self.tmp))
+    }
+
+    /// The file metadata (parquet.thrift's FileMetaData).
+    fn footer(&self) -> Vec<u8> {
+        let mut f = Compact::new();
+        f.i32(1, 1);
+        // The schema: the root, then every column, required.
+        f.struct_list(2, self.names.len() + 1);
+        f.open();
+        f.binary(4, b"schema");
+        f.i32(5, self.names.len() as i32);
+        f.end();
+        for (k, name) in self.names.iter().enumerate() {
+            f.open();
+            f.i32(1, physical_of(k));
+            f.i32(3, 0);
+            f.binary(4, name.as_bytes());
+            match k {
+                0 => {
+                    f.i32(6, UTF8);
+                    f.begin(10);
+                    f.begin(1); // STRING
+                    f.end();
+                    f.end();
+                }
+                2 => {
+                    f.i32(6, UINT_64);
+                    f.begin(10);
+                    f.begin(10); // INTEGER
+                    f.byte(1, 64);
+                    f.bool(2, false);
+                    f.end();
+                    f.end();
+                }
+                _ => {}
+            }
+            f.end();
+        }
+        let rows: usize = self.groups.iter().map(|(rows, _)| rows).sum();
+        f.i64(3, rows as i64);
+        f.struct_list(4, self.groups.len());
+        for (rows, chunks) in &self.groups {
+            self.row_group(&mut f, *rows, chunks);
+        }
+        f.binary(6, format!("mtsim {}", env!("CARGO_PKG_VERSION")).as_bytes());
+        // Column orders: every column by its type's order (what makes min/max usable).
+        f.struct_list(7, self.names.len());
+        for _ in &self.names {
+            f.open();
+            f.begin(1);
+            f.end();
+            f.end();
+        }
+        f.end();
+        f.bytes
+    }
+
+    /// One row group of the footer (RowGroup, its ColumnChunks and their ColumnMetaData).
+    fn row_group(&self, f: &mut Compact, rows: usize, chunks: &[Chunk]) {
+        let size: u64 = chunks.iter().map(|c| c.size).sum();
+        let start = chunks
+            .first()
+            .map_or(0, |c| c.dictionary_offset.unwrap_or(c.data_offset));
+        f.open();
+        f.struct_list(1, chunks.len());
+        for (chunk, name) in chunks.iter().zip(&self.names) {
+            f.open();
+            f.i64(2, 0);
+            f.begin(3);
+            f.i32(1, chunk.physical);
+            if chunk.dictionary_offset.is_some() {
+                f.i32_list(2, &[PLAIN, RLE, RLE_DICTIONARY]);
+            } else {
+                f.i32_list(2, &[PLAIN, RLE]);
+            }
+            f.binary_list(3, &[name.as_bytes()]);
+            f.i32(4, 0); // uncompressed
+            f.i64(5, rows as i64);
+            f.i64(6, chunk.size as i64);
+            f.i64(7, chunk.size as i64);
+            f.i64(9, chunk.data_offset as i64);
+            if let Some(offset) = chunk.dictionary_offset {
+                f.i64(11, offset as i64);
+            }
+            if let Some((min, max)) = &chunk.min_max {
+                f.begin(12);
+                f.i64(3, 0); // null count
+                f.binary(5, max);
+                f.binary(6, min);
+                f.end();
+            }
+            f.end();
+            f.end();
+        }
+        f.i64(2, size as i64);
+        f.i64(3, rows as i64);
+        f.i64(5, start as i64);
+        f.i64(6, size as i64);
+        f.end();
+    }
+}
+
+/// The physical type of column `k` of the trace: `direction` text, `line` INT64, the rest
+/// doubles.
+fn physical_of(k: usize) -> i32 {
+    match k {
+        0 => BYTE_ARRAY,
+        2 => INT64,
+        _ => DOUBLE,
+    }
+}
+
+/// The least and greatest of `values` that are numbers, as statistics bytes; None when none is.
+fn min_max_f64(values: &[f64]) -> Option<([u8; 8], [u8; 8])> {
+    let finite = values.iter().filter(|v| !v.is_nan());
+    let (lo, hi) = finite.fold(None, |acc: Option<(f64, f64)>, &v| match acc {
+        None => Some((v, v)),
+        Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
+    })?;
+    Some((lo.to_le_bytes(), hi.to_le_bytes()))
+}
+
+/// Writes every byte of `slices` to `file`, in as few system calls as it takes.
+fn write_all_vectored(file: &mut File, mut slices: &mut [IoSlice<'_>]) -> std::io::Result<()> {
+    IoSlice::advance_slices(&mut slices, 0);
+    while !slices.is_empty() {
+        match file.write_vectored(slices) {
+            Ok(0) => return Err(std::io::ErrorKind::WriteZero.into()),
+            Ok(n) => IoSlice::advance_slices(&mut slices, n),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
 }

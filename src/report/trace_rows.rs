@@ -1,18 +1,38 @@
-//! The raw rows of a trace, read back one at a time with each row's centred deviation:
+//! The rows of one run of a trace, column by column, held until the run's centring is known:
 //! what `trace.csv` ([`super::trace`]) and `trace.parquet` ([`super::trace_parquet`]) are
 //! written from, and the write error both report.
+//!
+//! A [`Block`] holds up to [`BLOCK_ROWS`] rows, each column a slice of that many values, so
+//! that a block is a row group of `trace.parquet` as it stands (a column chunk is a slice),
+//! and a spilled block goes to disk and back as one read or write.
 
-use std::io::Read;
+use std::io::{Read, Write};
 use std::path::Path;
 
-use crate::error::{Error, Result};
-use crate::input::program::Direction;
+use crate::error::Error;
 use crate::measure::ballbar::Centring;
-use crate::measure::BallbarRun;
 
-/// Raw columns besides the three per axis: direction, time, line, θ, sin θ, cos θ (so that
-/// the centring needs no second `sin_cos`), the nonlinear signature, dL.
-pub(super) const RAW_FIXED_COLUMNS: usize = 8;
+/// Rows a block holds: a row group of `trace.parquet` (4 s of machine time at 1 ms; about
+/// 700 kB for five axes, so that a block that is reused touches few pages).
+pub const BLOCK_ROWS: usize = 4_096;
+
+/// Values from one column's start to the next's: a cache line more than the rows, so that
+/// the columns of one row fall in different cache sets (at a stride of a power of two, the
+/// 22 values of a row would compete for one set of the L1 cache, and miss at every row).
+const STRIDE: usize = BLOCK_ROWS + 8;
+
+/// Columns besides the three per axis: time, line, θ, sin θ, cos θ (so that the centring
+/// needs no second `sin_cos`), the nonlinear signature, dL.
+pub(super) const FIXED_COLUMNS: usize = 7;
+
+/// Column indices in a block; the axes' columns (commanded, actual, following error per
+/// axis) start at [`AXES`], and the nonlinear signature and dL are the last two.
+pub(super) const TIME: usize = 0;
+pub(super) const LINE: usize = 1;
+pub(super) const THETA: usize = 2;
+const SIN: usize = 3;
+const COS: usize = 4;
+pub(super) const AXES: usize = 5;
 
 pub(super) fn write_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
     move |source| Error::Write {
@@ -21,64 +41,129 @@ pub(super) fn write_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ 
     }
 }
 
-/// The raw rows of a trace read back one at a time, each with the centred deviation
-/// `dL - (a cos θ + b sin θ)` of its direction's run: what both trace files are made of.
-pub(super) struct RawRows<'p, R> {
-    reader: R,
-    /// The raw rows' file (for messages) and the output's temporary file, removed when a
-    /// read fails.
-    raw_path: &'p Path,
-    tmp: &'p Path,
-    bytes: Vec<u8>,
+/// Up to [`BLOCK_ROWS`] rows of one run, column `k` in `values[k·STRIDE ..]`.
+#[derive(Debug)]
+pub(super) struct Block {
     values: Vec<f64>,
-    ccw: Option<Centring>,
-    cw: Option<Centring>,
+    rows: usize,
+    width: usize,
 }
 
-impl<'p, R: Read> RawRows<'p, R> {
-    pub(super) fn new(
-        reader: R,
-        width: usize,
-        runs: &[BallbarRun],
-        raw_path: &'p Path,
-        tmp: &'p Path,
-    ) -> RawRows<'p, R> {
-        let centring = |d: Direction| {
-            runs.iter()
-                .find(|r| r.direction() == d)
-                .map(|r| r.centring())
-        };
-        RawRows {
-            reader,
-            raw_path,
-            tmp,
-            bytes: vec![0u8; 8 * width],
-            values: vec![0.0; width],
-            ccw: centring(Direction::Ccw),
-            cw: centring(Direction::Cw),
+impl Block {
+    /// An empty block of `width` columns. Zeroed by the allocator: pages that no row
+    /// reaches are never touched.
+    pub fn new(width: usize) -> Block {
+        Block {
+            values: vec![0.0; width * STRIDE],
+            rows: 0,
+            width,
         }
     }
 
-    /// The next row's values, whether it is of the cw run, and its centred dL; None at the
-    /// end of the rows. A failed read removes the output's temporary file.
-    pub(super) fn next_row(&mut self) -> Result<Option<(&[f64], bool, f64)>> {
-        match self.reader.read_exact(&mut self.bytes) {
-            Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Ok(None),
-            Err(e) => {
-                let _ = std::fs::remove_file(self.tmp);
-                return Err(write_error(self.raw_path)(e));
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    pub fn is_full(&self) -> bool {
+        self.rows == BLOCK_ROWS
+    }
+
+    /// Appends a row: time, line, θ, sin θ, cos θ (`head`), each axis's commanded and actual
+    /// position and following error (`axes`), the nonlinear signature and dL (`tail`).
+    #[inline]
+    pub fn push(&mut self, head: [f64; 5], axes: &[[f64; 3]], tail: [f64; 2]) {
+        debug_assert!(5 + 3 * axes.len() + 2 == self.width && self.rows < BLOCK_ROWS);
+        const G: usize = STRIDE;
+        let (r, v) = (self.rows, &mut self.values);
+        for (k, x) in head.into_iter().enumerate() {
+            v[k * G + r] = x;
+        }
+        for (i, axis) in axes.iter().enumerate() {
+            for (j, &x) in axis.iter().enumerate() {
+                v[(AXES + 3 * i + j) * G + r] = x;
             }
         }
-        let v = &mut self.values;
-        for (x, c) in v.iter_mut().zip(self.bytes.chunks_exact(8)) {
-            *x = f64::from_le_bytes(c.try_into().expect("8 bytes"));
-        }
-        let cw_row = v[0] == 1.0;
-        let dev = v[v.len() - 1];
-        let c = if cw_row { self.cw } else { self.ccw };
-        // `offset_um(θ)` from the sine and cosine the ball bar took (the same bits).
-        let centred = c.map_or(dev, |c| dev - c.offset_um_at((v[4], v[5])));
-        Ok(Some((&self.values, cw_row, centred)))
+        let k = AXES + 3 * axes.len();
+        v[k * G + r] = tail[0];
+        v[(k + 1) * G + r] = tail[1];
+        self.rows += 1;
     }
+
+    /// Column `k` of the rows held.
+    #[inline]
+    pub fn column(&self, k: usize) -> &[f64] {
+        &self.values[k * STRIDE..k * STRIDE + self.rows]
+    }
+
+    /// The number of columns.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Empties the block (its memory stays, for the next rows).
+    pub fn clear(&mut self) {
+        self.rows = 0;
+    }
+
+    /// Each row's centred deviation `dL - (a cos θ + b sin θ)` with its run's `centring`
+    /// (dL itself without one), into `out`; `offset_um_at` takes the sine and cosine the ball
+    /// bar took (the same bits).
+    pub fn centred_into(&self, centring: Option<Centring>, out: &mut Vec<f64>) {
+        let dev = self.column(self.width - 1);
+        out.clear();
+        match centring {
+            None => out.extend_from_slice(dev),
+            Some(c) => out.extend(
+                dev.iter()
+                    .zip(self.column(SIN).iter().zip(self.column(COS)))
+                    .map(|(&d, (&sin, &cos))| d - c.offset_um_at((sin, cos))),
+            ),
+        }
+    }
+
+    /// Appends each row's `(dL, sin θ, cos θ)` to `out`: what its centred deviation needs.
+    pub fn centring_inputs_into(&self, out: &mut Vec<f64>) {
+        let (dev, sin, cos) = (
+            self.column(self.width - 1),
+            self.column(SIN),
+            self.column(COS),
+        );
+        for ((&d, &s), &c) in dev.iter().zip(sin).zip(cos) {
+            out.extend_from_slice(&[d, s, c]);
+        }
+    }
+
+    /// Writes a full block's values, little-endian, to `out` (a spill).
+    pub fn write_raw(&self, out: &mut impl Write) -> std::io::Result<()> {
+        let mut bytes = Vec::with_capacity(8 * BLOCK_ROWS);
+        for column in self.values.chunks_exact(STRIDE) {
+            bytes.clear();
+            bytes.extend(column[..BLOCK_ROWS].iter().flat_map(|v| v.to_le_bytes()));
+            out.write_all(&bytes)?;
+        }
+        Ok(())
+    }
+
+    /// Reads a full block written by [`Block::write_raw`] from `input`.
+    pub fn read_raw(&mut self, input: &mut impl Read) -> std::io::Result<()> {
+        let mut bytes = vec![0u8; 8 * BLOCK_ROWS];
+        for column in self.values.chunks_exact_mut(STRIDE) {
+            input.read_exact(&mut bytes)?;
+            for (v, b) in column[..BLOCK_ROWS].iter_mut().zip(bytes.chunks_exact(8)) {
+                *v = f64::from_le_bytes(b.try_into().expect("8 bytes"));
+            }
+        }
+        self.rows = BLOCK_ROWS;
+        Ok(())
+    }
+}
+
+/// The centred deviations `dL - (a cos θ + b sin θ)` of rows given as `(dL, sin θ, cos θ)`
+/// ([`Block::centring_inputs_into`]), with their run's `centring` (dL without one), into `out`.
+pub(super) fn centred_from_inputs(inputs: &[f64], centring: Option<Centring>, out: &mut Vec<f64>) {
+    out.clear();
+    out.extend(inputs.chunks_exact(3).map(|t| match centring {
+        None => t[0],
+        Some(c) => t[0] - c.offset_um_at((t[1], t[2])),
+    }));
 }

@@ -170,6 +170,10 @@ pub fn run_ballbar(
                 None => pipeline::run(run.moves, machine, &options, &mut sinks, progress)?,
             }
         };
+        // The run's rows go to the trace now that its centring is known.
+        if let Some(t) = trace.as_deref_mut() {
+            t.end_run(ballbar.as_ref().map(|b| b.run.centring()))?;
+        }
         sim_time_s = stats.end_time_s;
         setpoints += stats.samples;
         merge_reductions(&mut feed_reductions, stats.feed_reductions);

@@ -279,9 +279,9 @@ fn an_unknown_trace_format_names_the_key_and_the_choices() {
     assert!(!dir.join("out").join("trace.csv").exists());
 }
 
-/// The file's layout, as docs/performance.md gives it: row groups of 16,384 rows (the last
-/// holds the rest), uncompressed, min/max statistics on `time_s` (the first and last time
-/// of the group) and `line` only, the direction dictionary-encoded.
+/// The file's layout, as docs/simulation.md gives it: row groups of 4,096 rows of one run
+/// each (a run's last holds the rest), uncompressed, min/max statistics on `time_s` (the
+/// first and last time of the group) and `line` only, the direction dictionary-encoded.
 #[test]
 fn the_parquet_trace_has_the_documented_layout() {
     use parquet::basic::{Compression, Encoding};
@@ -290,23 +290,33 @@ fn the_parquet_trace_has_the_documented_layout() {
 
     let dir = scratch("trace-parquet", "layout");
     run(&dir, TraceFormat::Parquet);
-    let (names, _, floats) = parquet_columns(&dir.join("trace.parquet"));
+    let (names, text, floats) = parquet_columns(&dir.join("trace.parquet"));
     let time = &floats[0];
+    let direction = &text[0];
     let file = File::open(dir.join("trace.parquet")).unwrap();
     let meta = SerializedFileReader::new(file).unwrap().metadata().clone();
     let groups = meta.row_groups();
+    let full = mtsim::report::trace_parquet::PARQUET_ROW_GROUP;
     assert_eq!(
         time.len(),
-        (groups.len() - 1) * 16_384 + groups.last().unwrap().num_rows() as usize
+        groups.iter().map(|g| g.num_rows() as usize).sum::<usize>()
     );
     assert!(
-        groups.len() >= 2,
-        "{} rows fill more than one group",
+        groups.len() >= 4,
+        "{} rows fill more than one group per run",
         time.len()
     );
     let mut first_row = 0;
-    for g in groups {
+    for (k, g) in groups.iter().enumerate() {
         let rows = g.num_rows() as usize;
+        // A group holds rows of one run, and is full unless the run ends with it.
+        let run = &direction[first_row..first_row + rows];
+        assert!(run.iter().all(|d| *d == run[0]), "group {k} holds one run");
+        let run_ends = direction.get(first_row + rows).is_none_or(|d| *d != run[0]);
+        assert!(
+            rows == full || (rows < full && run_ends),
+            "group {k}: {rows} rows"
+        );
         for (c, column) in g.columns().iter().enumerate() {
             assert_eq!(column.compression(), Compression::UNCOMPRESSED);
             let stats = column.statistics();

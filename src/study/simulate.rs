@@ -158,7 +158,7 @@ pub fn run_ballbar(
                     let mut gate = SettleGate::new(
                         sinks,
                         run.measured,
-                        Box::new(move |s| g.read(s).theta_deg),
+                        Box::new(move |s| g.read_commanded(&s.commanded).theta_deg),
                     );
                     let stats = {
                         let mut gated: [&mut dyn Sink; 1] = [&mut gate];

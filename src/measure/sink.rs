@@ -198,6 +198,8 @@ pub struct BallbarSink {
     pub speed: ThetaMap,
     /// The previous sample's time (s) and commanded positions.
     previous: Option<(f64, crate::AxisVec)>,
+    /// Whether `commanded` and `speed` are filled.
+    maps: bool,
 }
 
 impl BallbarSink {
@@ -214,7 +216,15 @@ impl BallbarSink {
             commanded: ThetaMap::default(),
             speed: ThetaMap::default(),
             previous: None,
+            maps: true,
         }
+    }
+
+    /// The same sink leaving `commanded` and `speed` empty: for the runs after a study's
+    /// first, whose maps it does not read (the sites come from the first run's).
+    pub fn without_maps(mut self) -> BallbarSink {
+        self.maps = false;
+        self
     }
 }
 
@@ -233,7 +243,11 @@ impl BallbarSink {
         s: &Sample,
         read: impl FnOnce(&BarGeometry, &Sample) -> BarReading,
     ) -> Option<BarReading> {
-        let previous = self.previous.replace((s.time_s, s.commanded));
+        let previous = if self.maps {
+            self.previous.replace((s.time_s, s.commanded))
+        } else {
+            None
+        };
         if !is_measured(s, self.measured) {
             return None;
         }
@@ -247,6 +261,9 @@ impl BallbarSink {
         );
         // θ is in [0, 360): its map bin is its run bin (bin 0 for a non-finite θ, as
         // `ThetaMap::wants` puts it).
+        if !self.maps {
+            return Some(r);
+        }
         let bin = r.terms.map_or(0, |t| t.bin);
         if self.commanded.wants_bin(bin) {
             self.commanded.set_bin(bin, s.commanded);

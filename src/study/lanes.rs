@@ -28,7 +28,7 @@ use crate::measure::BallbarSink;
 use crate::pipeline::{self, Sample, Sink};
 use crate::program;
 use crate::study::simulate::{
-    analysed_along, analyses, assemble, bar_geometry, directions_of, finish_along, gates_transient,
+    analysed_along, analyses, assemble, ballbar_sink, bar_geometry, directions_of, finish_along, gates_transient,
     merge_reductions, reversals_of, run_ballbar, run_options, transient_warning, BallbarStudy,
     SharedRuns,
 };
@@ -170,7 +170,7 @@ fn run_pass(
     let mut warnings: Vec<Vec<String>> = vec![Vec::new(); n];
     let mut failed = vec![false; n];
     let (mut sim_time_s, mut setpoints, mut feed_reductions) = (0.0, 0u64, Vec::new());
-    for &direction in &directions {
+    for (k, &direction) in directions.iter().enumerate() {
         let mut run = program::scenario_run(first, direction, first.simulate.lead_deg)?;
         if let Some(along) = &along {
             run.moves = analysed_along(run.moves, along);
@@ -178,7 +178,7 @@ fn run_pass(
         let options = run_options(first, sim_time_s)?;
         let mut bars: Vec<BallbarSink> = match geometry {
             Some(g) => (0..n)
-                .map(|_| BallbarSink::new(g, direction, run.measured))
+                .map(|_| ballbar_sink(g, direction, run.measured, k))
                 .collect(),
             None => Vec::new(),
         };

@@ -103,7 +103,7 @@ impl SharedReadings {
 
 /// The slot of sample `s` in `slots`, holding its setpoint's reading (read now if it holds
 /// another setpoint).
-#[inline]
+#[inline(always)]
 fn slot_of<'s>(slots: &'s mut [Option<Slot>], geometry: &BarGeometry, s: &Sample) -> &'s mut Slot {
     let slot = &mut slots[s.index as usize % SLOTS];
     let held = slot
@@ -138,8 +138,7 @@ impl Sink for SharedBallbar<'_> {
     #[inline]
     fn push(&mut self, s: &Sample) -> Result<()> {
         let readings = self.readings;
-        self.bar
-            .take_with(s, |_, s| readings.borrow_mut().read(s));
+        self.bar.take_with(s, |_, s| readings.borrow_mut().read(s));
         Ok(())
     }
 }

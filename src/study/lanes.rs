@@ -28,9 +28,9 @@ use crate::measure::BallbarSink;
 use crate::pipeline::{self, Sample, Sink};
 use crate::program;
 use crate::study::simulate::{
-    analysed_along, analyses, assemble, ballbar_sink, bar_geometry, directions_of, finish_along, gates_transient,
-    merge_reductions, reversals_of, run_ballbar, run_options, transient_warning, BallbarStudy,
-    SharedRuns,
+    analysed_along, analyses, assemble, ballbar_sink, bar_geometry, directions_of, finish_along,
+    gates_transient, merge_reductions, reversals_of, run_ballbar, run_options, transient_warning,
+    BallbarStudy, SharedRuns,
 };
 
 /// Most points in one interpolation pass: enough that the pass's own cost is a small share

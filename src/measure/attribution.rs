@@ -357,6 +357,18 @@ impl ThetaMap {
         self.bins[bin_of(theta_deg)] = Some(s);
     }
 
+    /// [`ThetaMap::wants`] by bin: [`super::theta::bin_index`] of θ in [0, 360) is its bin.
+    #[inline]
+    pub fn wants_bin(&self, bin: usize) -> bool {
+        self.bins[bin].is_none()
+    }
+
+    /// [`ThetaMap::set`] by bin.
+    #[inline]
+    pub fn set_bin(&mut self, bin: usize, s: AxisVec) {
+        self.bins[bin] = Some(s);
+    }
+
     /// The value of the filled bin nearest `theta_deg` (within 5 deg), if any.
     pub fn at(&self, theta_deg: f64) -> Option<AxisVec> {
         let n = self.bins.len() as isize;

@@ -167,14 +167,46 @@ struct Bin {
     sum_sin: f64,
 }
 
+/// What one sample's θ adds to a run whatever its deviation: its bin and the θ terms of
+/// the centring's normal equations, computed once per sample for every run it goes to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThetaTerms {
+    /// The bin of θ wrapped to [0, 360).
+    pub bin: usize,
+    pub sin: f64,
+    pub cos: f64,
+    /// cos² θ, cos θ sin θ, sin² θ.
+    pub cos_cos: f64,
+    pub cos_sin: f64,
+    pub sin_sin: f64,
+}
+
+impl ThetaTerms {
+    /// The terms of a finite θ (deg, any range) with `(sin θ, cos θ)`; None for a
+    /// non-finite θ (its sample is rejected).
+    #[inline]
+    pub fn new(theta_deg: f64, (sin, cos): (f64, f64)) -> Option<ThetaTerms> {
+        theta_deg.is_finite().then(|| ThetaTerms {
+            bin: bin_index(wrap_360(theta_deg)),
+            sin,
+            cos,
+            cos_cos: cos * cos,
+            cos_sin: cos * sin,
+            sin_sin: sin * sin,
+        })
+    }
+}
+
 /// One direction of a ball-bar test, streamed: fixed bins plus the centring sums.
 #[derive(Clone, Debug)]
 pub struct BallbarRun {
     direction: Direction,
     bins: Vec<Bin>,
-    /// Normal-equation sums: `sum phi phi^T` and `sum phi dL`, phi = (1, cos, sin).
-    normal: Matrix3<f64>,
-    rhs: Vector3<f64>,
+    /// Normal-equation sums of phi = (1, cos, sin): `sum phi phi^T` held as its six distinct
+    /// entries `[n, sum cos, sum sin, sum cos², sum cos sin, sum sin²]` (n as a float sum,
+    /// the matrix's own (0, 0) entry), and `sum phi dL`.
+    normal: [f64; 6],
+    rhs: [f64; 3],
     samples: u64,
     rejected: u64,
 }
@@ -184,8 +216,8 @@ impl BallbarRun {
         BallbarRun {
             direction,
             bins: vec![Bin::default(); N_BINS],
-            normal: Matrix3::zeros(),
-            rhs: Vector3::zeros(),
+            normal: [0.0; 6],
+            rhs: [0.0; 3],
             samples: 0,
             rejected: 0,
         }
@@ -203,8 +235,10 @@ impl BallbarRun {
             return;
         }
         let t = wrap_360(theta_deg);
-        let (s, c) = t.to_radians().sin_cos();
-        self.add(t, s, c, deviation_um);
+        let sin_cos = t.to_radians().sin_cos();
+        if let Some(terms) = ThetaTerms::new(t, sin_cos) {
+            self.add(&terms, deviation_um);
+        }
     }
 
     /// `a.push(θ, dev_a); b.push(θ, dev_b)` (the trace and its signature), with the θ terms
@@ -230,33 +264,59 @@ impl BallbarRun {
         dev_a_um: f64,
         dev_b_um: f64,
     ) {
-        if !theta_deg.is_finite() {
+        let terms = ThetaTerms::new(theta_deg, sin_cos);
+        BallbarRun::push_pair_terms(a, b, terms.as_ref(), dev_a_um, dev_b_um);
+    }
+
+    /// [`BallbarRun::push_pair_at`] with θ's terms already made (None: θ is not finite).
+    #[inline]
+    pub fn push_pair_terms(
+        a: &mut BallbarRun,
+        b: &mut BallbarRun,
+        terms: Option<&ThetaTerms>,
+        dev_a_um: f64,
+        dev_b_um: f64,
+    ) {
+        let Some(terms) = terms else {
             a.rejected += 1;
             b.rejected += 1;
             return;
-        }
-        let t = wrap_360(theta_deg);
-        let (s, c) = sin_cos;
+        };
         for (run, dev) in [(a, dev_a_um), (b, dev_b_um)] {
             if dev.is_finite() {
-                run.add(t, s, c, dev);
+                run.add(terms, dev);
             } else {
                 run.rejected += 1;
             }
         }
     }
 
-    /// Adds a finite sample at wrapped `t` (deg) with `sin t`, `cos t`.
+    /// Adds a finite sample with θ's `terms`.
     #[inline]
-    fn add(&mut self, t: f64, s: f64, c: f64, deviation_um: f64) {
-        let bin = &mut self.bins[bin_index(t)];
+    fn add(&mut self, terms: &ThetaTerms, deviation_um: f64) {
+        let &ThetaTerms {
+            bin,
+            sin,
+            cos,
+            cos_cos,
+            cos_sin,
+            sin_sin,
+        } = terms;
+        let bin = &mut self.bins[bin];
         bin.n += 1;
         bin.sum_um += deviation_um;
-        bin.sum_cos += c;
-        bin.sum_sin += s;
-        let phi = Vector3::new(1.0, c, s);
-        self.normal += phi * phi.transpose();
-        self.rhs += phi * deviation_um;
+        bin.sum_cos += cos;
+        bin.sum_sin += sin;
+        let n = &mut self.normal;
+        n[0] += 1.0;
+        n[1] += cos;
+        n[2] += sin;
+        n[3] += cos_cos;
+        n[4] += cos_sin;
+        n[5] += sin_sin;
+        self.rhs[0] += deviation_um;
+        self.rhs[1] += cos * deviation_um;
+        self.rhs[2] += sin * deviation_um;
         self.samples += 1;
     }
 
@@ -276,9 +336,11 @@ impl BallbarRun {
         if self.samples == 0 {
             return Centring::default();
         }
-        match self.normal.try_inverse() {
-            Some(inv) if self.normal.determinant().abs() > 1e-9 * (self.samples as f64).powi(3) => {
-                let x = inv * self.rhs;
+        let [n, c, s, cc, cs, ss] = self.normal;
+        let normal = Matrix3::new(n, c, s, c, cc, cs, s, cs, ss);
+        match normal.try_inverse() {
+            Some(inv) if normal.determinant().abs() > 1e-9 * (self.samples as f64).powi(3) => {
+                let x = inv * Vector3::from(self.rhs);
                 Centring {
                     r0_um: x[0],
                     a_um: x[1],

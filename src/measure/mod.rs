@@ -6,9 +6,10 @@ pub mod attribution;
 pub mod ballbar;
 pub mod bar;
 pub mod settle;
+pub mod shared;
 pub mod sink;
 pub mod theta;
 
 pub use crate::input::program::Direction;
 pub use ballbar::{BallbarResult, BallbarRun, CircleFrame};
-pub use sink::{is_measured, BallbarSink, BarGeometry, BarReading};
+pub use sink::{is_measured, BallbarSink, BarGeometry, BarReading, CommandedReading};

@@ -15,11 +15,11 @@
 use nalgebra::Point3;
 
 use super::attribution::{bar_sensitivity_at, ThetaMap};
-use super::ballbar::{BallbarRun, CircleFrame};
+use super::ballbar::{BallbarRun, CircleFrame, ThetaTerms};
 use super::bar::deviation_mm;
 use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines};
-use crate::kinematics::Kinematics;
+use crate::kinematics::{Kinematics, RotarySinCos};
 use crate::pipeline::{Sample, Sink};
 use crate::{Axis, AxisVec};
 
@@ -47,6 +47,21 @@ pub struct BarReading {
     /// `(sin θ, cos θ)` ([`CircleFrame::theta_deg_sin_cos`]): the run's terms and the
     /// trace's centring.
     pub theta_sin_cos: (f64, f64),
+    /// θ's bin and centring terms ([`ThetaTerms`]); None for a non-finite θ.
+    pub terms: Option<ThetaTerms>,
+}
+
+/// What the bar reads of a setpoint alone, whatever the drives: the same for every point
+/// that runs it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CommandedReading {
+    /// θ of the commanded tool tip, deg in [0, 360), and `(sin θ, cos θ)`.
+    pub theta_deg: f64,
+    pub theta_sin_cos: (f64, f64),
+    /// θ's bin and centring terms; None for a non-finite θ.
+    pub terms: Option<ThetaTerms>,
+    /// Sines and cosines of the commanded rotaries: the actual ones are taken near them.
+    pub at_command: RotarySinCos,
 }
 
 impl BarGeometry {
@@ -65,41 +80,96 @@ impl BarGeometry {
     }
 
     /// What the bar reads at sample `s`.
+    #[inline]
     pub fn read(&self, s: &Sample) -> BarReading {
+        let c = self.read_commanded(&s.commanded);
+        let full_chain = self.needs_full_chain();
+        let deviation = |q| self.deviation_on(full_chain, q, &s.commanded, &c);
+        c.with_deviations(deviation(&s.actual), deviation(&s.linear))
+    }
+
+    /// What the bar reads of the setpoint `commanded`: θ of its tool tip on the circle.
+    #[inline]
+    pub fn read_commanded(&self, commanded: &AxisVec) -> CommandedReading {
         let kin = &self.kinematics;
-        if !kin.location_errors.is_zero() || kin.general.is_some() {
-            let dev = |q| deviation_mm(kin, q, &self.pivot_table_mm, self.length_mm) * 1e3;
-            let deviation_um = dev(&s.actual);
-            let (theta_deg, theta_sin_cos) =
-                self.frame.theta_deg_sin_cos(&kin.forward(&s.commanded).tip);
-            let reading = BarReading {
-                theta_deg,
-                deviation_um,
-                nonlinear_um: deviation_um - dev(&s.linear),
-                theta_sin_cos,
-            };
-            return reading;
-        }
-        // The actual and the twin's poses are within a following error of the commanded one:
-        // their rotations from its sines and cosines (one `sin_cos` per angle and sample).
-        let at_command = kin.rotary_sin_cos(&s.commanded);
-        let dev = |q: &AxisVec| {
-            let r = kin.rotation_of(&kin.rotary_sin_cos_near(q, &s.commanded, &at_command));
-            let pivot = Point3::from(kin.pivot_mm + r * self.pivot_table_mm.coords);
-            let tool = Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
-            ((tool - pivot).norm() - self.length_mm) * 1e3
-        };
-        let deviation_um = dev(&s.actual);
+        let at_command = kin.rotary_sin_cos(commanded);
         let (theta_deg, theta_sin_cos) = self
             .frame
-            .theta_deg_sin_cos(&kin.forward_with(&s.commanded, &at_command).tip);
-        let reading = BarReading {
+            .theta_deg_sin_cos(&kin.forward_with(commanded, &at_command).tip);
+        CommandedReading {
             theta_deg,
-            deviation_um,
-            nonlinear_um: deviation_um - dev(&s.linear),
             theta_sin_cos,
-        };
-        reading
+            terms: ThetaTerms::new(theta_deg, theta_sin_cos),
+            at_command,
+        }
+    }
+
+    /// Whether the bar's table ball needs the whole chain at the actual positions (location
+    /// errors or a general chain): no [`BarGeometry::table_ball_mm`] then.
+    #[inline]
+    pub fn needs_full_chain(&self) -> bool {
+        let kin = &self.kinematics;
+        !kin.location_errors.is_zero() || kin.general.is_some()
+    }
+
+    /// dL at axis positions `q` (actual or the twin's) of a sample whose setpoint
+    /// `commanded` reads `c`, um.
+    #[inline]
+    pub fn deviation_um(&self, q: &AxisVec, commanded: &AxisVec, c: &CommandedReading) -> f64 {
+        self.deviation_on(self.needs_full_chain(), q, commanded, c)
+    }
+
+    /// [`BarGeometry::deviation_um`] with [`BarGeometry::needs_full_chain`] known.
+    #[inline]
+    fn deviation_on(
+        &self,
+        full_chain: bool,
+        q: &AxisVec,
+        commanded: &AxisVec,
+        c: &CommandedReading,
+    ) -> f64 {
+        if full_chain {
+            return deviation_mm(&self.kinematics, q, &self.pivot_table_mm, self.length_mm) * 1e3;
+        }
+        self.deviation_to_ball_um(q, &self.table_ball_mm(q, commanded, &c.at_command))
+    }
+
+    /// The table ball in the machine frame at axis positions `q` within a following error of
+    /// `commanded` (whose rotaries' sines and cosines are `at_command`), mm: its rotation
+    /// from theirs ([`Kinematics::rotary_sin_cos_near`], one `sin_cos` per angle and sample
+    /// saved). A function of `q`'s rotaries alone for a given setpoint; for a machine without
+    /// [`BarGeometry::needs_full_chain`].
+    #[inline]
+    pub fn table_ball_mm(
+        &self,
+        q: &AxisVec,
+        commanded: &AxisVec,
+        at_command: &RotarySinCos,
+    ) -> Point3<f64> {
+        let kin = &self.kinematics;
+        let r = kin.rotation_of(&kin.rotary_sin_cos_near(q, commanded, at_command));
+        Point3::from(kin.pivot_mm + r * self.pivot_table_mm.coords)
+    }
+
+    /// dL with the tool ball at `q`'s X Y Z and the table ball at `ball` (machine frame), um.
+    #[inline]
+    pub fn deviation_to_ball_um(&self, q: &AxisVec, ball: &Point3<f64>) -> f64 {
+        let tool = Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
+        ((tool - ball).norm() - self.length_mm) * 1e3
+    }
+}
+
+impl CommandedReading {
+    /// The whole reading, with dL and the linear twin's dL (um).
+    #[inline]
+    pub fn with_deviations(&self, deviation_um: f64, linear_um: f64) -> BarReading {
+        BarReading {
+            theta_deg: self.theta_deg,
+            deviation_um,
+            nonlinear_um: deviation_um - linear_um,
+            theta_sin_cos: self.theta_sin_cos,
+            terms: self.terms,
+        }
     }
 }
 
@@ -128,6 +198,8 @@ pub struct BallbarSink {
     pub speed: ThetaMap,
     /// The previous sample's time (s) and commanded positions.
     previous: Option<(f64, crate::AxisVec)>,
+    /// Whether `commanded` and `speed` are filled.
+    maps: bool,
 }
 
 impl BallbarSink {
@@ -144,7 +216,15 @@ impl BallbarSink {
             commanded: ThetaMap::default(),
             speed: ThetaMap::default(),
             previous: None,
+            maps: true,
         }
+    }
+
+    /// The same sink leaving `commanded` and `speed` empty: for the runs after a study's
+    /// first, whose maps it does not read (the sites come from the first run's).
+    pub fn without_maps(mut self) -> BallbarSink {
+        self.maps = false;
+        self
     }
 }
 
@@ -152,26 +232,46 @@ impl BallbarSink {
     /// The bar's reading of `s` when it is in the measured revolution (None otherwise),
     /// after taking it into the run: for a trace that records the same reading.
     pub fn take(&mut self, s: &Sample) -> Option<BarReading> {
-        let previous = self.previous.replace((s.time_s, s.commanded));
+        self.take_with(s, |geometry, s| geometry.read(s))
+    }
+
+    /// [`BallbarSink::take`] with the reading made by `read` (which must give
+    /// [`BarGeometry::read`]'s: a cache of readings shared by points, say).
+    #[inline]
+    pub fn take_with(
+        &mut self,
+        s: &Sample,
+        read: impl FnOnce(&BarGeometry, &Sample) -> BarReading,
+    ) -> Option<BarReading> {
+        let previous = if self.maps {
+            self.previous.replace((s.time_s, s.commanded))
+        } else {
+            None
+        };
         if !is_measured(s, self.measured) {
             return None;
         }
-        let r = self.geometry.read(s);
-        BallbarRun::push_pair_at(
+        let r = read(&self.geometry, s);
+        BallbarRun::push_pair_terms(
             &mut self.run,
             &mut self.signature,
-            r.theta_deg,
-            r.theta_sin_cos,
+            r.terms.as_ref(),
             r.deviation_um,
             r.nonlinear_um,
         );
-        if self.commanded.wants(r.theta_deg) {
-            self.commanded.set(r.theta_deg, s.commanded);
+        // θ is in [0, 360): its map bin is its run bin (bin 0 for a non-finite θ, as
+        // `ThetaMap::wants` puts it).
+        if !self.maps {
+            return Some(r);
+        }
+        let bin = r.terms.map_or(0, |t| t.bin);
+        if self.commanded.wants_bin(bin) {
+            self.commanded.set_bin(bin, s.commanded);
         }
         if let Some((t0, q0)) = previous.filter(|(t0, _)| s.time_s > *t0) {
-            if self.speed.wants(r.theta_deg) {
+            if self.speed.wants_bin(bin) {
                 self.speed
-                    .set(r.theta_deg, (s.commanded - q0) * (1.0 / (s.time_s - t0)));
+                    .set_bin(bin, (s.commanded - q0) * (1.0 / (s.time_s - t0)));
             }
         }
         Some(r)

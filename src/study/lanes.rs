@@ -14,7 +14,7 @@
 //! the rayon pool. A point whose drives diverge, or a pass that fails as a whole, is run
 //! alone by [`run_ballbar`] for its error: every result is the single run's.
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 use std::sync::mpsc;
 
 use rayon::prelude::*;
@@ -23,13 +23,14 @@ use crate::error::Result;
 use crate::input::scenario::Scenario;
 use crate::input::Machine;
 use crate::measure::settle::SettleGate;
+use crate::measure::shared::{SharedBallbar, SharedReadings};
 use crate::measure::BallbarSink;
 use crate::pipeline::{self, Sample, Sink};
 use crate::program;
 use crate::study::simulate::{
-    analysed_along, analyses, assemble, bar_geometry, directions_of, finish_along, gates_transient,
-    merge_reductions, reversals_of, run_ballbar, run_options, transient_warning, BallbarStudy,
-    SharedRuns,
+    analysed_along, analyses, assemble, ballbar_sink, bar_geometry, directions_of, finish_along,
+    gates_transient, merge_reductions, reversals_of, run_ballbar, run_options, transient_warning,
+    BallbarStudy, SharedRuns,
 };
 
 /// Most points in one interpolation pass: enough that the pass's own cost is a small share
@@ -169,7 +170,7 @@ fn run_pass(
     let mut warnings: Vec<Vec<String>> = vec![Vec::new(); n];
     let mut failed = vec![false; n];
     let (mut sim_time_s, mut setpoints, mut feed_reductions) = (0.0, 0u64, Vec::new());
-    for &direction in &directions {
+    for (k, &direction) in directions.iter().enumerate() {
         let mut run = program::scenario_run(first, direction, first.simulate.lead_deg)?;
         if let Some(along) = &along {
             run.moves = analysed_along(run.moves, along);
@@ -177,7 +178,7 @@ fn run_pass(
         let options = run_options(first, sim_time_s)?;
         let mut bars: Vec<BallbarSink> = match geometry {
             Some(g) => (0..n)
-                .map(|_| BallbarSink::new(g, direction, run.measured))
+                .map(|_| ballbar_sink(g, direction, run.measured, k))
                 .collect(),
             None => Vec::new(),
         };
@@ -188,30 +189,42 @@ fn run_pass(
                     discard.iter_mut().map(|d| d as &mut dyn Sink).collect();
                 pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?
             }
-            Some(g) if gates_transient(first) => {
-                let mut gates: Vec<SettleGate<'_>> = bars
+            Some(g) => {
+                // The points' bars read each setpoint (and each table ball their rotaries
+                // share) once for all.
+                let readings = RefCell::new(SharedReadings::new(g));
+                let mut shared: Vec<SharedBallbar<'_>> = bars
                     .iter_mut()
-                    .map(|bar| {
-                        SettleGate::new(
-                            vec![bar as &mut dyn Sink],
-                            run.measured,
-                            Box::new(move |s: &Sample| g.read(s).theta_deg),
-                        )
+                    .map(|bar| SharedBallbar {
+                        bar,
+                        readings: &readings,
                     })
                     .collect();
-                let mut sinks: Vec<&mut dyn Sink> =
-                    gates.iter_mut().map(|g| g as &mut dyn Sink).collect();
-                let ran =
-                    pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?;
-                for (w, gate) in warnings.iter_mut().zip(&gates) {
-                    w.extend(transient_warning(gate));
+                if gates_transient(first) {
+                    let theta_deg = |s: &Sample| readings.borrow_mut().read_commanded(s).theta_deg;
+                    let mut gates: Vec<SettleGate<'_>> = shared
+                        .iter_mut()
+                        .map(|bar| {
+                            SettleGate::new(
+                                vec![bar as &mut dyn Sink],
+                                run.measured,
+                                Box::new(theta_deg),
+                            )
+                        })
+                        .collect();
+                    let mut sinks: Vec<&mut dyn Sink> =
+                        gates.iter_mut().map(|g| g as &mut dyn Sink).collect();
+                    let ran =
+                        pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?;
+                    for (w, gate) in warnings.iter_mut().zip(&gates) {
+                        w.extend(transient_warning(gate));
+                    }
+                    ran
+                } else {
+                    let mut sinks: Vec<&mut dyn Sink> =
+                        shared.iter_mut().map(|b| b as &mut dyn Sink).collect();
+                    pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?
                 }
-                ran
-            }
-            Some(_) => {
-                let mut sinks: Vec<&mut dyn Sink> =
-                    bars.iter_mut().map(|b| b as &mut dyn Sink).collect();
-                pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?
             }
         };
         for (f, d) in failed.iter_mut().zip(dead) {

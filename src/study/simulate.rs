@@ -18,7 +18,7 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::input::drive::si_per_unit;
 use crate::input::lead_in::LeadIn;
-use crate::input::program::Direction;
+use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::{Program, Scenario, TraceFormat};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
 use crate::measure::ballbar::{analyse_events_at, BallbarResult};
@@ -134,7 +134,7 @@ pub fn run_ballbar(
     let mut setpoints = 0u64;
     let mut warnings = Vec::new();
     let mut feed_reductions = Vec::new();
-    for &direction in &directions {
+    for (k, &direction) in directions.iter().enumerate() {
         let mut run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
         if let Some(along) = &along {
             run.moves = analysed_along(run.moves, along);
@@ -142,7 +142,7 @@ pub fn run_ballbar(
         if let Some(t) = trace.as_deref_mut() {
             t.start_run(direction, run.measured);
         }
-        let mut ballbar = geometry.map(|g| BallbarSink::new(g, direction, run.measured));
+        let mut ballbar = geometry.map(|g| ballbar_sink(g, direction, run.measured, k));
         let options = run_options(scenario, sim_time_s)?;
         let stats = {
             let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(1);
@@ -158,7 +158,7 @@ pub fn run_ballbar(
                     let mut gate = SettleGate::new(
                         sinks,
                         run.measured,
-                        Box::new(move |s| g.read(s).theta_deg),
+                        Box::new(move |s| g.read_commanded(&s.commanded).theta_deg),
                     );
                     let stats = {
                         let mut gated: [&mut dyn Sink; 1] = [&mut gate];
@@ -190,6 +190,22 @@ pub fn run_ballbar(
         feed_reductions,
     };
     assemble(scenario, sinks, warnings, &shared)
+}
+
+/// The ball bar of a scenario's `k`-th run: with the maps of the bar's sensitivity and the
+/// speeds for the first ([`assemble`] reads those), without for the others.
+pub(crate) fn ballbar_sink(
+    geometry: BarGeometry,
+    direction: Direction,
+    measured: Option<MeasuredLines>,
+    k: usize,
+) -> BallbarSink {
+    let sink = BallbarSink::new(geometry, direction, measured);
+    if k == 0 {
+        sink
+    } else {
+        sink.without_maps()
+    }
 }
 
 /// The directions a scenario runs: a test's, or counter-clockwise for a file program.

@@ -6,3 +6,4 @@ mod common;
 
 mod attribution;
 mod ballbar;
+mod shared;

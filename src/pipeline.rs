@@ -311,10 +311,13 @@ pub fn run_lanes(
         block_t.extend(block.iter().map(|sp| t0 + sp.time_s));
         lanes.step_block(&block_q, &block_t);
         for (i, (sample, sink)) in samples.iter_mut().zip(sinks.iter_mut()).enumerate() {
-            for (j, sp) in block.iter().enumerate() {
-                if !alive[i] {
-                    break;
-                }
+            if !alive[i] {
+                continue;
+            }
+            // A point stops at the setpoint where one of its drives or twins failed.
+            let completed = lanes.completed(i);
+            alive[i] = completed >= block.len();
+            for (j, sp) in block.iter().enumerate().take(completed) {
                 sample.index = k + j as u64;
                 sample.time_s = block_t[j];
                 sample.line = sp.line;
@@ -323,16 +326,13 @@ pub fn run_lanes(
                 // Axes without a drive stay at their setpoint.
                 sample.actual = sp.q;
                 sample.linear = sp.q;
-                alive[i] = lanes.write_point(
+                lanes.write_point(
                     i,
                     j,
                     &mut sample.actual,
                     &mut sample.following_error,
                     &mut sample.linear,
                 );
-                if !alive[i] {
-                    break;
-                }
                 errors[i].apply_in_place(&mut sample.actual);
                 errors[i].apply_mean_in_place(&mut sample.linear);
                 sink.push(sample)?;

@@ -114,16 +114,10 @@ impl AxisLanes {
         }
     }
 
-    /// Whether point `i`'s servo completed the `j`-th setpoint of the last block.
+    /// Setpoints of the last block point `i`'s servo completed.
     #[inline(always)]
-    fn reached(&self, i: usize, j: usize) -> bool {
-        j < self.completed[self.servo_of[i]]
-    }
-
-    /// Index of point `i`'s `j`-th output of the last block.
-    #[inline(always)]
-    fn at(&self, i: usize, j: usize) -> usize {
-        self.servo_of[i] * BLOCK + j
+    fn completed_by(&self, i: usize) -> usize {
+        self.completed[self.servo_of[i]]
     }
 }
 
@@ -134,6 +128,17 @@ pub struct DriveLanes {
     /// Per machine axis, the points' drives and their twins.
     drives: Vec<AxisLanes>,
     twins: Vec<AxisLanes>,
+    /// Per point, one entry per machine axis: where its outputs are in that axis's buffers.
+    slots: Vec<Slot>,
+}
+
+/// Where one point's outputs on one axis are: the axis, and the first entries of its
+/// drive's and its twin's outputs in their buffers.
+#[derive(Clone, Copy, Debug)]
+struct Slot {
+    axis: Axis,
+    drive: usize,
+    twin: usize,
 }
 
 impl DriveLanes {
@@ -145,10 +150,21 @@ impl DriveLanes {
                 .map(|&a| AxisLanes::new(machines, a, q[a], linear))
                 .collect::<Result<Vec<_>>>()
         };
+        let (drives, twins) = (lanes(false)?, lanes(true)?);
+        let slots = (0..machines.len())
+            .flat_map(|i| {
+                drives.iter().zip(&twins).map(move |(d, t)| Slot {
+                    axis: d.axis,
+                    drive: d.servo_of[i] * BLOCK,
+                    twin: t.servo_of[i] * BLOCK,
+                })
+            })
+            .collect();
         Ok(DriveLanes {
             points: machines.len(),
-            drives: lanes(false)?,
-            twins: lanes(true)?,
+            drives,
+            twins,
+            slots,
         })
     }
 
@@ -169,14 +185,6 @@ impl DriveLanes {
             .zip(&self.twins)
             .map(|(d, t)| (d.axis, d.servos.len(), t.servos.len()))
             .collect()
-    }
-
-    /// Whether point `i` is still running (none of its drives or twins has failed).
-    pub fn alive(&self, i: usize) -> bool {
-        self.drives
-            .iter()
-            .chain(&self.twins)
-            .all(|lanes| lanes.servos[lanes.servo_of[i]].is_some())
     }
 
     /// Steps every distinct drive and twin through `setpoints` (at most [`BLOCK`]), the
@@ -211,10 +219,20 @@ impl DriveLanes {
         }
     }
 
-    /// Point `i`'s outputs after the `j`-th setpoint of the last block, written for its
-    /// driven axes (the others are left as they are): `actual` and `following_error` of its
-    /// drives (mm, deg), `linear` of its twins. False, with nothing written, when one of its
-    /// drives or twins failed before that setpoint.
+    /// Setpoints of the last block for which point `i` has outputs: all of them, or fewer
+    /// when one of its drives or twins failed in the block (0 once failed).
+    pub fn completed(&self, i: usize) -> usize {
+        self.drives
+            .iter()
+            .chain(&self.twins)
+            .map(|lanes| lanes.completed_by(i))
+            .min()
+            .unwrap_or(usize::MAX)
+    }
+
+    /// Point `i`'s outputs after the `j`-th setpoint of the last block (`j` below
+    /// [`DriveLanes::completed`]), written for its driven axes (the others are left as they
+    /// are): `actual` and `following_error` of its drives (mm, deg), `linear` of its twins.
     #[inline]
     pub fn write_point(
         &self,
@@ -223,22 +241,14 @@ impl DriveLanes {
         actual: &mut AxisVec,
         following_error: &mut AxisVec,
         linear: &mut AxisVec,
-    ) -> bool {
-        let all_reached = self
-            .drives
-            .iter()
-            .chain(&self.twins)
-            .all(|lanes| lanes.reached(i, j));
-        if !all_reached {
-            return false;
+    ) {
+        let n = self.drives.len();
+        let slots = &self.slots[i * n..(i + 1) * n];
+        for ((slot, drive), twin) in slots.iter().zip(&self.drives).zip(&self.twins) {
+            let a = slot.axis;
+            actual[a] = drive.actual[slot.drive + j];
+            following_error[a] = drive.following_error[slot.drive + j];
+            linear[a] = twin.actual[slot.twin + j];
         }
-        for (drive, twin) in self.drives.iter().zip(&self.twins) {
-            let a = drive.axis;
-            let k = drive.at(i, j);
-            actual[a] = drive.actual[k];
-            following_error[a] = drive.following_error[k];
-            linear[a] = twin.actual[twin.at(i, j)];
-        }
-        true
     }
 }

@@ -275,13 +275,15 @@ pub fn run_lanes(
         .iter()
         .map(|m| m.geometry.position_errors())
         .collect();
-    let mut samples = vec![Sample::blank(t0); machines.len()];
     // Setpoints go to the drives a block at a time, each distinct servo through the whole
     // block (its state stays in cache), then to the points. Memory: one block, whatever
     // the program's length.
     let mut block: Vec<Setpoint> = Vec::with_capacity(LANE_BLOCK);
     let mut block_q: Vec<AxisVec> = Vec::with_capacity(LANE_BLOCK);
     let mut block_t: Vec<f64> = Vec::with_capacity(LANE_BLOCK);
+    // The block's samples: what the points share written once a block, each point's
+    // drive outputs over them in turn.
+    let mut samples: Vec<Sample> = Vec::with_capacity(LANE_BLOCK);
     let mut alive = vec![true; machines.len()];
     let mut next = Some(first);
     let mut k = 0u64;
@@ -310,29 +312,43 @@ pub fn run_lanes(
         block_t.clear();
         block_t.extend(block.iter().map(|sp| t0 + sp.time_s));
         lanes.step_block(&block_q, &block_t);
-        for (i, (sample, sink)) in samples.iter_mut().zip(sinks.iter_mut()).enumerate() {
+        samples.clear();
+        samples.extend(block.iter().enumerate().map(|(j, sp)| Sample {
+            index: k + j as u64,
+            time_s: block_t[j],
+            line: sp.line,
+            block_index: sp.block_index,
+            commanded: sp.q,
+            // Axes without a drive stay at their setpoint.
+            actual: sp.q,
+            following_error: AxisVec::ZERO,
+            linear: sp.q,
+        }));
+        // Whether a point's position errors are in the block's samples.
+        let mut dirty = false;
+        for (i, sink) in sinks.iter_mut().enumerate() {
             if !alive[i] {
                 continue;
             }
             // A point stops at the setpoint where one of its drives or twins failed.
-            let completed = lanes.completed(i);
-            alive[i] = completed >= block.len();
-            for (j, sp) in block.iter().enumerate().take(completed) {
-                sample.index = k + j as u64;
-                sample.time_s = block_t[j];
-                sample.line = sp.line;
-                sample.block_index = sp.block_index;
-                sample.commanded = sp.q;
-                // Axes without a drive stay at their setpoint.
-                sample.actual = sp.q;
-                sample.linear = sp.q;
-                lanes.write_point(
-                    i,
-                    j,
-                    &mut sample.actual,
-                    &mut sample.following_error,
-                    &mut sample.linear,
-                );
+            let completed = lanes.completed(i).min(block.len());
+            alive[i] = completed == block.len();
+            let samples = &mut samples[..completed];
+            if dirty {
+                for sample in samples.iter_mut() {
+                    sample.actual = sample.commanded;
+                    sample.linear = sample.commanded;
+                }
+            }
+            dirty |= !errors[i].is_empty();
+            for (a, actual, following_error, linear) in lanes.outputs(i) {
+                for (j, sample) in samples.iter_mut().enumerate() {
+                    sample.actual[a] = actual[j];
+                    sample.following_error[a] = following_error[j];
+                    sample.linear[a] = linear[j];
+                }
+            }
+            for sample in samples.iter_mut() {
                 errors[i].apply_in_place(&mut sample.actual);
                 errors[i].apply_mean_in_place(&mut sample.linear);
                 sink.push(sample)?;

@@ -230,25 +230,23 @@ impl DriveLanes {
             .unwrap_or(usize::MAX)
     }
 
-    /// Point `i`'s outputs after the `j`-th setpoint of the last block (`j` below
-    /// [`DriveLanes::completed`]), written for its driven axes (the others are left as they
-    /// are): `actual` and `following_error` of its drives (mm, deg), `linear` of its twins.
-    #[inline]
-    pub fn write_point(
-        &self,
-        i: usize,
-        j: usize,
-        actual: &mut AxisVec,
-        following_error: &mut AxisVec,
-        linear: &mut AxisVec,
-    ) {
+    /// Point `i`'s outputs over the last block, one entry per driven axis: the axis, then
+    /// the actual positions and following errors of its drive (mm, deg) and the actual
+    /// positions of its twin, one per setpoint (read the first [`DriveLanes::completed`]).
+    pub fn outputs(&self, i: usize) -> impl Iterator<Item = (Axis, &[f64], &[f64], &[f64])> {
         let n = self.drives.len();
         let slots = &self.slots[i * n..(i + 1) * n];
-        for ((slot, drive), twin) in slots.iter().zip(&self.drives).zip(&self.twins) {
-            let a = slot.axis;
-            actual[a] = drive.actual[slot.drive + j];
-            following_error[a] = drive.following_error[slot.drive + j];
-            linear[a] = twin.actual[slot.twin + j];
-        }
+        slots
+            .iter()
+            .zip(&self.drives)
+            .zip(&self.twins)
+            .map(|((slot, drive), twin)| {
+                (
+                    slot.axis,
+                    &drive.actual[slot.drive..slot.drive + BLOCK],
+                    &drive.following_error[slot.drive..slot.drive + BLOCK],
+                    &twin.actual[slot.twin..slot.twin + BLOCK],
+                )
+            })
     }
 }

@@ -164,6 +164,19 @@ fn g_code_file_points_in_lanes_give_their_single_runs_figures() {
         .collect();
     assert_eq!(passes(&points, 1).len(), 1);
     assert_lanes_equal_single_runs(&points);
+    // The tables are read: G moves against the same point without them.
+    let plain = load(
+        &dir,
+        "plain",
+        &bundled("cone-15-10.toml"),
+        &axis("Y", 0.0, 150.0, 30.0, 0.0),
+    );
+    let with = g_um(&points[..2])[0];
+    let without = g_um(&[plain.clone(), plain])[0];
+    assert!(
+        (with - without).abs() > 0.5,
+        "G {with} with the tables, {without} without"
+    );
 }
 
 /// Scenarios that differ in feed or geometry run different setpoints: they are not grouped,
@@ -309,4 +322,53 @@ fn a_point_whose_drive_fails_on_one_axis_gives_its_single_runs_error() {
             ),
         }
     }
+}
+
+/// Points on a machine with position-error tables (pitch on X and Y, a worm-gear error on
+/// C): each point's errors, applied for its own direction of motion, are its single run's.
+#[test]
+fn points_with_position_error_tables_give_their_single_runs_figures() {
+    let dir = scratch("lanes", "tables");
+    std::fs::write(
+        dir.join("x.comp"),
+        "-200 -0.004 0.003\n0 0 0.002\n200 0.006 0.001\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("c.comp"),
+        "0 0 0.001\n180 0.002 -0.001\n360 0 0.001\n",
+    )
+    .unwrap();
+    let machine_text = std::fs::read_to_string(root().join("machines/trt-ac.toml")).unwrap();
+    let machine_path = dir.join("m.toml");
+    std::fs::write(
+        &machine_path,
+        format!("{machine_text}\n[error_tables]\nX = \"x.comp\"\nY = \"x.comp\"\nC = \"c.comp\"\n"),
+    )
+    .unwrap();
+    let base = bundled("cone-15-10.toml").replace(
+        &format!("\"{}/machines/trt-ac.toml\"", root().display()),
+        &format!("{:?}", machine_path.display().to_string()),
+    );
+    assert!(base.contains("m.toml"), "{base}");
+    let points: Vec<Scenario> = [(0.0, 150.0), (0.003, 150.0), (0.003, 0.0), (0.006, 300.0)]
+        .iter()
+        .enumerate()
+        .map(|(i, &(b, fc))| load(&dir, &format!("t{i}"), &base, &axis("Y", b, fc, 30.0, 0.0)))
+        .collect();
+    assert_eq!(passes(&points, 1).len(), 1);
+    assert_lanes_equal_single_runs(&points);
+    // The tables are read: G moves against the same point without them.
+    let plain = load(
+        &dir,
+        "plain",
+        &bundled("cone-15-10.toml"),
+        &axis("Y", 0.0, 150.0, 30.0, 0.0),
+    );
+    let with = g_um(&points[..2])[0];
+    let without = g_um(&[plain.clone(), plain])[0];
+    assert!(
+        (with - without).abs() > 0.5,
+        "G {with} with the tables, {without} without"
+    );
 }

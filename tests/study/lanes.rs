@@ -164,19 +164,6 @@ fn g_code_file_points_in_lanes_give_their_single_runs_figures() {
         .collect();
     assert_eq!(passes(&points, 1).len(), 1);
     assert_lanes_equal_single_runs(&points);
-    // The tables are read: G moves against the same point without them.
-    let plain = load(
-        &dir,
-        "plain",
-        &bundled("cone-15-10.toml"),
-        &axis("Y", 0.0, 150.0, 30.0, 0.0),
-    );
-    let with = g_um(&points[..2])[0];
-    let without = g_um(&[plain.clone(), plain])[0];
-    assert!(
-        (with - without).abs() > 0.5,
-        "G {with} with the tables, {without} without"
-    );
 }
 
 /// Scenarios that differ in feed or geometry run different setpoints: they are not grouped,

@@ -3,8 +3,13 @@
 //! A 1,000-point study of X and Y backlash and kv on the bundled 15/10 cone (every point
 //! 41 s of machine time), side by side in one run:
 //! - the single-point path (`run_ballbar`, one point at a time) on a subset, extrapolated;
-//! - the shared path (`run_ballbar_lanes`: one interpolation pass per group of points, the
-//!   drives side by side, twins shared) on a rayon pool of 1 thread and of 2.
+//! - the shared path (`run_ballbar_lanes`: one interpolation pass per group of points, each
+//!   distinct drive of an axis stepped once) on a rayon pool of 1 thread and of 2.
+//!
+//! Two studies: `grid` (X and Y backlash 0-9 µm in steps of 1, kv of X and Y together
+//! 25-34 /s: a pass's points share most of their drives) and `random` (X and Y backlash and
+//! kv each uniform and independent over the same ranges, as a tolerance study draws them:
+//! every point's X and Y drives are its own). `MTSIM_BENCH_STUDY=grid|random` runs one.
 //!
 //! Figures: CPU seconds of the process (every thread; `/proc/self/stat`), wall seconds, and
 //! the real-time factor per point per CPU second (machine seconds of all points / CPU s).
@@ -40,21 +45,48 @@ fn env_usize(name: &str) -> Option<usize> {
     std::env::var(name).ok().and_then(|v| v.parse().ok())
 }
 
-/// The study's points: X backlash, Y backlash (0-9 µm each) and kv of X and Y (25-34 /s),
-/// kv outermost so that the points of one pass share their linear twins as a grid does.
-fn points(base: &Scenario, n: usize) -> Vec<Scenario> {
+/// The grid study's points: X backlash, Y backlash (0-9 µm each) and kv of X and Y
+/// (25-34 /s), kv outermost as a grid's loops run.
+fn grid_points(base: &Scenario, n: usize) -> Vec<Scenario> {
     (0..n)
         .map(|i| {
             let (bx, by, kv) = (i % 10, (i / 10) % 10, (i / 100) % 10);
-            let mut s = base.clone();
-            for (axis, backlash) in [(Axis::X, bx), (Axis::Y, by)] {
-                let config = s.machine.axis_mut(axis);
-                config.drive.backlash_mm = Some(backlash as f64 * 1e-3);
-                config.servo.kv_per_s = 25.0 + kv as f64;
-            }
-            s
+            let kv = 25.0 + kv as f64;
+            with_drives(base, [bx as f64 * 1e-3, by as f64 * 1e-3], [kv, kv])
         })
         .collect()
+}
+
+/// The random study's points: X and Y backlash uniform in 0-9 µm and kv of X and of Y
+/// uniform in 25-34 /s, independent (splitmix64, seed 27).
+fn random_points(base: &Scenario, n: usize) -> Vec<Scenario> {
+    let mut state = 27u64;
+    let mut uniform = |low: f64, high: f64| {
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        low + (high - low) * (z >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..n)
+        .map(|_| {
+            let backlash_mm = [uniform(0.0, 0.009), uniform(0.0, 0.009)];
+            let kv = [uniform(25.0, 34.0), uniform(25.0, 34.0)];
+            with_drives(base, backlash_mm, kv)
+        })
+        .collect()
+}
+
+/// `base` with X and Y backlash (mm) and kv (1/s) as given.
+fn with_drives(base: &Scenario, backlash_mm: [f64; 2], kv_per_s: [f64; 2]) -> Scenario {
+    let mut s = base.clone();
+    for (k, axis) in [Axis::X, Axis::Y].into_iter().enumerate() {
+        let config = s.machine.axis_mut(axis);
+        config.drive.backlash_mm = Some(backlash_mm[k]);
+        config.servo.kv_per_s = kv_per_s[k];
+    }
+    s
 }
 
 /// Runs `f` and returns (CPU s, wall s).
@@ -69,11 +101,23 @@ fn main() {
     let n = env_usize("MTSIM_BENCH_POINTS").unwrap_or(if smoke { 16 } else { 1000 });
     let n_single = env_usize("MTSIM_BENCH_SINGLE").unwrap_or(if smoke { 2 } else { 20 });
     let only = std::env::var("MTSIM_BENCH_ONLY").unwrap_or_default();
+    let which = std::env::var("MTSIM_BENCH_STUDY").unwrap_or_default();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let base = Scenario::load(&root.join("scenarios/cone-15-10.toml")).unwrap();
-    let study = points(&base, n);
-    let sim_s = run_ballbar(&study[0], None, &|_| {}).unwrap().sim_time_s;
-    println!("study: {n} points of the 15/10 cone, {sim_s:.2} s of machine time each");
+    let sim_s = run_ballbar(&base, None, &|_| {}).unwrap().sim_time_s;
+    let studies: [(&str, fn(&Scenario, usize) -> Vec<Scenario>); 2] =
+        [("grid", grid_points), ("random", random_points)];
+    for (name, points) in studies {
+        if which.is_empty() || which == name {
+            run_study(name, &points(&base, n), sim_s, n_single, &only);
+        }
+    }
+}
+
+/// Runs the cases of one study and prints their figures.
+fn run_study(name: &str, study: &[Scenario], sim_s: f64, n_single: usize, only: &str) {
+    let n = study.len();
+    println!("{name} study: {n} points of the 15/10 cone, {sim_s:.2} s of machine time each");
     let line = |name: &str, points: usize, (cpu, wall): (f64, f64)| {
         println!(
             "{name:<28} {points:>5} points  CPU {cpu:>7.3} s  wall {wall:>7.3} s  \
@@ -83,7 +127,7 @@ fn main() {
         );
     };
     if only.is_empty() || only == "single" {
-        // Spread over the grid: every (n / n_single)-th point.
+        // Spread over the study: every (n / n_single)-th point.
         let step = (n / n_single.max(1)).max(1);
         let subset: Vec<&Scenario> = study.iter().step_by(step).take(n_single).collect();
         let t = measure(|| {
@@ -109,7 +153,7 @@ fn main() {
             .build()
             .unwrap();
         let t = measure(|| {
-            let results = pool.install(|| run_ballbar_lanes(&study, &|_| {}));
+            let results = pool.install(|| run_ballbar_lanes(study, &|_| {}));
             assert!(results.iter().all(|r| r.is_ok()), "a point failed");
         });
         line(&format!("lanes, {threads} thread(s)"), n, t);

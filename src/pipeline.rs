@@ -246,8 +246,9 @@ pub fn run(
 }
 
 /// [`run`] under planned timing with twins, for several points that share `moves`: one
-/// interpolation pass, its setpoints fed to every point's drives ([`DriveLanes`], one
-/// machine per point, alike but for their drives) and each point's samples to its own sink.
+/// interpolation pass, its setpoints fed to the points' drives ([`DriveLanes`], one machine
+/// per point, alike but for their drives: each distinct drive of an axis stepped once) and
+/// each point's samples to its own sink.
 /// `options.timing` is not read (planned, twins, no settling). Returns the run's figures
 /// (the same for every point) and which points failed (their drives diverged; their
 /// samples stopped there): a failed point is run alone for its error.
@@ -274,11 +275,16 @@ pub fn run_lanes(
         .iter()
         .map(|m| m.geometry.position_errors())
         .collect();
-    let mut samples = vec![Sample::blank(t0); machines.len()];
-    // Setpoints go to the drives a block at a time, point by point: a point's state stays
-    // in cache over the block. Memory: one block, whatever the program's length.
+    // Setpoints go to the drives a block at a time, each distinct servo through the whole
+    // block (its state stays in cache), then to the points. Memory: one block, whatever
+    // the program's length.
     let mut block: Vec<Setpoint> = Vec::with_capacity(LANE_BLOCK);
-    let mut twin_out = vec![AxisVec::ZERO; lanes.twins() * LANE_BLOCK];
+    let mut block_q: Vec<AxisVec> = Vec::with_capacity(LANE_BLOCK);
+    let mut block_t: Vec<f64> = Vec::with_capacity(LANE_BLOCK);
+    // The block's samples: what the points share written once a block, each point's
+    // drive outputs over them in turn.
+    let mut samples: Vec<Sample> = Vec::with_capacity(LANE_BLOCK);
+    let mut alive = vec![true; machines.len()];
     let mut next = Some(first);
     let mut k = 0u64;
     while next.is_some() {
@@ -301,39 +307,49 @@ pub fn run_lanes(
             }
             next = setpoints.next().transpose()?;
         }
-        for t in 0..lanes.twins() {
-            for (sp, out) in block.iter().zip(&mut twin_out[t * LANE_BLOCK..]) {
-                *out = sp.q;
-                if !lanes.step_twin(t, &sp.q, t0 + sp.time_s, out) {
-                    break;
+        block_q.clear();
+        block_q.extend(block.iter().map(|sp| sp.q));
+        block_t.clear();
+        block_t.extend(block.iter().map(|sp| t0 + sp.time_s));
+        lanes.step_block(&block_q, &block_t);
+        samples.clear();
+        samples.extend(block.iter().enumerate().map(|(j, sp)| Sample {
+            index: k + j as u64,
+            time_s: block_t[j],
+            line: sp.line,
+            block_index: sp.block_index,
+            commanded: sp.q,
+            // Axes without a drive stay at their setpoint.
+            actual: sp.q,
+            following_error: AxisVec::ZERO,
+            linear: sp.q,
+        }));
+        // Whether a point's position errors are in the block's samples.
+        let mut dirty = false;
+        for (i, sink) in sinks.iter_mut().enumerate() {
+            if !alive[i] {
+                continue;
+            }
+            // A point stops at the setpoint where one of its drives or twins failed.
+            let completed = lanes.completed(i).min(block.len());
+            alive[i] = completed == block.len();
+            let samples = &mut samples[..completed];
+            if dirty {
+                for sample in samples.iter_mut() {
+                    sample.actual = sample.commanded;
+                    sample.linear = sample.commanded;
                 }
             }
-        }
-        for (i, (sample, sink)) in samples.iter_mut().zip(sinks.iter_mut()).enumerate() {
-            let twin = lanes.twin_of(i) * LANE_BLOCK;
-            for (j, sp) in block.iter().enumerate() {
-                if !lanes.alive(i) {
-                    break;
+            dirty |= !errors[i].is_empty();
+            for (a, actual, following_error, linear) in lanes.outputs(i) {
+                for (j, sample) in samples.iter_mut().enumerate() {
+                    sample.actual[a] = actual[j];
+                    sample.following_error[a] = following_error[j];
+                    sample.linear[a] = linear[j];
                 }
-                sample.index = k + j as u64;
-                sample.time_s = t0 + sp.time_s;
-                sample.line = sp.line;
-                sample.block_index = sp.block_index;
-                sample.commanded = sp.q;
-                // Axes without a drive stay at their setpoint.
-                sample.actual = sp.q;
-                let stepped = lanes.step_point(
-                    i,
-                    &sp.q,
-                    sample.time_s,
-                    &mut sample.actual,
-                    &mut sample.following_error,
-                );
-                if stepped.is_none() {
-                    break;
-                }
+            }
+            for sample in samples.iter_mut() {
                 errors[i].apply_in_place(&mut sample.actual);
-                sample.linear = twin_out[twin + j];
                 errors[i].apply_mean_in_place(&mut sample.linear);
                 sink.push(sample)?;
             }
@@ -344,12 +360,12 @@ pub fn run_lanes(
         k += block.len() as u64;
     }
     stats.feed_reductions = setpoints.feed_reductions();
-    let failed = (0..lanes.len()).map(|i| !lanes.alive(i)).collect();
+    let failed = alive.iter().map(|&a| !a).collect();
     Ok((stats, failed))
 }
 
 /// Setpoints handed to the drives of [`run_lanes`] at a time.
-const LANE_BLOCK: usize = 256;
+const LANE_BLOCK: usize = crate::drive::lanes::BLOCK;
 
 /// The interpolator's options for a run.
 fn interpolation(options: &RunOptions) -> InterpolationOptions {

@@ -1,128 +1,252 @@
-//! The drives of many points of a study on one setpoint stream: each point's [`Drives`]
-//! side by side, and the linear twins shared by every point whose twin is the same.
+//! The drives of many points of a study on one setpoint stream, shared per axis: each
+//! distinct servo of an axis is stepped once and its outputs read by every point that has it.
 //!
-//! A twin is the drive without dry friction and backlash ([`Drives::new`] with `linear`),
-//! so the points of a study that differ only in friction or backlash have one twin between
-//! them: a backlash study with three kv values steps three twins, not one per point. Each
-//! point's drives and each twin are the very models a single run steps, stepped in the same
-//! order on the same setpoints: a point's figures are the single run's, bit for bit.
+//! The axes of [`super::Drives`] are independent (one [`AxisServo`] per axis, no coupling):
+//! an axis's actual positions are a function of its drive configuration, the interpolation
+//! period and its own setpoint stream alone. Points on one setpoint stream whose drive on an
+//! axis is the same (the same [`crate::input::drive::AxisDrive`], exact for f64) therefore
+//! have the same positions on that axis, and one servo gives them: a study of X and Y
+//! backlash steps one Z, B and C servo for all its points, and one X servo per X backlash.
+//! The linear twins (the drives without dry friction and backlash, [`super::Drives::new`]
+//! with `linear`) are shared the same way, per axis. Every servo is the very model a single
+//! run steps, on the same setpoints in the same order: a point's figures are the single
+//! run's, bit for bit.
+//!
+//! The setpoints come a block at a time ([`BLOCK`]); each servo runs through the block
+//! before the next one starts (its state stays in cache), writing its outputs to a buffer of
+//! one block, which the points then read. Memory: one block per distinct servo.
 
-use super::drives::Drives;
+use super::servo::AxisServo;
 use crate::error::Result;
 use crate::input::machine::Machine;
-use crate::AxisVec;
+use crate::{Axis, AxisVec};
 
-/// The drives of several points, and their distinct linear twins.
+/// Setpoints stepped at a time.
+pub const BLOCK: usize = 256;
+
+/// The distinct servos of one axis over the points, and their outputs over the last block.
+#[derive(Clone, Debug)]
+struct AxisLanes {
+    axis: Axis,
+    /// The distinct servos; None once one has failed (diverged).
+    servos: Vec<Option<AxisServo>>,
+    /// Which servo each point has.
+    servo_of: Vec<usize>,
+    /// Per servo, [`BLOCK`] entries: actual position (mm, deg) and following error after each
+    /// setpoint of the last block (the following errors only for the nonlinear drives).
+    actual: Vec<f64>,
+    following_error: Vec<f64>,
+    /// Per servo, the setpoints of the last block it completed (fewer than the block's when
+    /// it failed in it; 0 once failed).
+    completed: Vec<usize>,
+}
+
+impl AxisLanes {
+    /// The servos of `axis` for `machines`, at rest at `position` (mm, deg); with `linear`,
+    /// their linear twins.
+    fn new(machines: &[&Machine], axis: Axis, position: f64, linear: bool) -> Result<AxisLanes> {
+        let mut keys: Vec<String> = Vec::new();
+        let mut servos = Vec::new();
+        let mut servo_of = Vec::with_capacity(machines.len());
+        for machine in machines {
+            let drive = machine.drive(axis)?;
+            let drive = if linear { drive.linear_twin() } else { drive };
+            let period = machine.interpolation_period_s;
+            // The debug form is exact for f64 (the shortest text that reads back the same).
+            let key = format!("{period:?} {drive:?}");
+            let index = match keys.iter().position(|k| *k == key) {
+                Some(i) => i,
+                None => {
+                    keys.push(key);
+                    servos.push(Some(AxisServo::new(&drive, period, position)?));
+                    servos.len() - 1
+                }
+            };
+            servo_of.push(index);
+        }
+        let n = servos.len();
+        Ok(AxisLanes {
+            axis,
+            servos,
+            servo_of,
+            actual: vec![0.0; n * BLOCK],
+            following_error: if linear {
+                Vec::new()
+            } else {
+                vec![0.0; n * BLOCK]
+            },
+            completed: vec![0; n],
+        })
+    }
+
+    /// Steps every live servo through `setpoints` (at most [`BLOCK`]), reached at `times_s`,
+    /// servo after servo: the nonlinear drives with [`AxisServo::advance`], the twins with
+    /// [`AxisServo::advance_twin`], as [`super::Drives`] steps them.
+    #[inline(always)]
+    fn step_block_inline(&mut self, setpoints: &[AxisVec], times_s: &[f64], linear: bool) {
+        let a = self.axis;
+        for (s, slot) in self.servos.iter_mut().enumerate() {
+            let Some(servo) = slot.as_mut() else {
+                self.completed[s] = 0;
+                continue;
+            };
+            let actual = &mut self.actual[s * BLOCK..(s + 1) * BLOCK];
+            let mut done = 0;
+            for (j, (q, &t)) in setpoints.iter().zip(times_s).enumerate() {
+                let stepped = if linear {
+                    servo.advance_twin(q[a], t)
+                } else {
+                    servo.advance(q[a], t)
+                };
+                if stepped.is_err() {
+                    break;
+                }
+                actual[j] = servo.actual();
+                if !linear {
+                    self.following_error[s * BLOCK + j] = servo.following_error();
+                }
+                done = j + 1;
+            }
+            if done < setpoints.len() {
+                *slot = None;
+            }
+            self.completed[s] = done;
+        }
+    }
+
+    /// Setpoints of the last block point `i`'s servo completed.
+    #[inline(always)]
+    fn completed_by(&self, i: usize) -> usize {
+        self.completed[self.servo_of[i]]
+    }
+}
+
+/// The drives and linear twins of several points, shared per axis.
 #[derive(Clone, Debug)]
 pub struct DriveLanes {
-    /// Each point's nonlinear drives; None once they have failed (diverged).
-    points: Vec<Option<Drives>>,
-    /// The distinct twins; None once one has failed.
-    twins: Vec<Option<Drives>>,
-    /// Which twin each point shares.
-    twin_of: Vec<usize>,
+    points: usize,
+    /// Per machine axis, the points' drives and their twins.
+    drives: Vec<AxisLanes>,
+    twins: Vec<AxisLanes>,
+    /// Per point, one entry per machine axis: where its outputs are in that axis's buffers.
+    slots: Vec<Slot>,
+}
+
+/// Where one point's outputs on one axis are: the axis, and the first entries of its
+/// drive's and its twin's outputs in their buffers.
+#[derive(Clone, Copy, Debug)]
+struct Slot {
+    axis: Axis,
+    drive: usize,
+    twin: usize,
 }
 
 impl DriveLanes {
     /// The drives of `machines` (one per point, all with the same axes) at rest at `q`.
     pub fn new(machines: &[&Machine], q: &AxisVec) -> Result<DriveLanes> {
-        let mut keys: Vec<String> = Vec::new();
-        let mut twins = Vec::new();
-        let mut twin_of = Vec::with_capacity(machines.len());
-        let mut points = Vec::with_capacity(machines.len());
-        for machine in machines {
-            points.push(Some(Drives::new(machine, q, false)?));
-            let key = twin_key(machine)?;
-            let index = match keys.iter().position(|k| *k == key) {
-                Some(i) => i,
-                None => {
-                    keys.push(key);
-                    twins.push(Some(Drives::new(machine, q, true)?));
-                    twins.len() - 1
-                }
-            };
-            twin_of.push(index);
-        }
+        let axes = machines.first().map_or(&[][..], |m| m.axes());
+        let lanes = |linear| {
+            axes.iter()
+                .map(|&a| AxisLanes::new(machines, a, q[a], linear))
+                .collect::<Result<Vec<_>>>()
+        };
+        let (drives, twins) = (lanes(false)?, lanes(true)?);
+        let slots = (0..machines.len())
+            .flat_map(|i| {
+                drives.iter().zip(&twins).map(move |(d, t)| Slot {
+                    axis: d.axis,
+                    drive: d.servo_of[i] * BLOCK,
+                    twin: t.servo_of[i] * BLOCK,
+                })
+            })
+            .collect();
         Ok(DriveLanes {
-            points,
+            points: machines.len(),
+            drives,
             twins,
-            twin_of,
+            slots,
         })
     }
 
     /// Number of points.
     pub fn len(&self) -> usize {
-        self.points.len()
+        self.points
     }
 
     /// True without points.
     pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
+        self.points == 0
     }
 
-    /// Number of distinct linear twins stepped.
-    pub fn twins(&self) -> usize {
-        self.twins.len()
+    /// Distinct servos stepped per axis, drives and twins: `(axis, drives, twins)`.
+    pub fn distinct(&self) -> Vec<(Axis, usize, usize)> {
+        self.drives
+            .iter()
+            .zip(&self.twins)
+            .map(|(d, t)| (d.axis, d.servos.len(), t.servos.len()))
+            .collect()
     }
 
-    /// Whether point `i` is still running (neither its drives nor its twin have failed).
-    pub fn alive(&self, i: usize) -> bool {
-        self.points[i].is_some() && self.twins[self.twin_of[i]].is_some()
-    }
-
-    /// Which twin point `i` shares.
-    pub fn twin_of(&self, i: usize) -> usize {
-        self.twin_of[i]
-    }
-
-    /// Steps twin `t` one period towards `setpoint`, reached at `time_s`, writing its
-    /// driven axes into `actual` (mm, deg). False when the twin has failed (now or before):
-    /// it stops, and with it every point that shares it.
-    pub fn step_twin(
-        &mut self,
-        t: usize,
-        setpoint: &AxisVec,
-        time_s: f64,
-        actual: &mut AxisVec,
-    ) -> bool {
-        let Some(d) = self.twins[t].as_mut() else {
-            return false;
-        };
-        if d.step_actual_into(setpoint, time_s, actual).is_err() {
-            self.twins[t] = None;
-            return false;
+    /// Steps every distinct drive and twin through `setpoints` (at most [`BLOCK`]), the
+    /// `j`-th reached at `times_s[j]`; read each point's outputs with
+    /// [`DriveLanes::write_point`]. A servo that fails stops there, and with it every point
+    /// that has it.
+    pub fn step_block(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
+        assert!(setpoints.len() <= BLOCK && times_s.len() == setpoints.len());
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX, checked at run time just above.
+            return unsafe { self.step_block_avx(setpoints, times_s) };
         }
-        true
+        self.step_block_inline(setpoints, times_s)
     }
 
-    /// Steps point `i`'s drives one period (see [`Drives::step_into`]). Returns whether
-    /// every axis settled, or None when the point has failed (now or before).
-    pub fn step_point(
-        &mut self,
-        i: usize,
-        setpoint: &AxisVec,
-        time_s: f64,
-        actual: &mut AxisVec,
-        following_error: &mut AxisVec,
-    ) -> Option<bool> {
-        let drives = self.points[i].as_mut()?;
-        match drives.step_into(setpoint, time_s, actual, following_error) {
-            Ok(settled) => Some(settled),
-            Err(_) => {
-                self.points[i] = None;
-                None
-            }
+    /// [`DriveLanes::step_block`] compiled for AVX, as [`super::Drives::step_into`] is (no
+    /// FMA: the arithmetic is the same whatever the vector width).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn step_block_avx(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
+        self.step_block_inline(setpoints, times_s)
+    }
+
+    #[inline(always)]
+    fn step_block_inline(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
+        for lanes in &mut self.drives {
+            lanes.step_block_inline(setpoints, times_s, false);
+        }
+        for lanes in &mut self.twins {
+            lanes.step_block_inline(setpoints, times_s, true);
         }
     }
-}
 
-/// What makes two machines' linear twins the same: every axis's twin drive and the
-/// period (their debug forms, exact for f64: the shortest text that reads back the same).
-fn twin_key(machine: &Machine) -> Result<String> {
-    let drives = machine
-        .axes()
-        .iter()
-        .map(|&a| Ok(machine.drive(a)?.linear_twin()))
-        .collect::<Result<Vec<_>>>()?;
-    Ok(format!("{:?} {:?}", machine.interpolation_period_s, drives))
+    /// Setpoints of the last block for which point `i` has outputs: all of them, or fewer
+    /// when one of its drives or twins failed in the block (0 once failed).
+    pub fn completed(&self, i: usize) -> usize {
+        self.drives
+            .iter()
+            .chain(&self.twins)
+            .map(|lanes| lanes.completed_by(i))
+            .min()
+            .unwrap_or(usize::MAX)
+    }
+
+    /// Point `i`'s outputs over the last block, one entry per driven axis: the axis, then
+    /// the actual positions and following errors of its drive (mm, deg) and the actual
+    /// positions of its twin, one per setpoint (read the first [`DriveLanes::completed`]).
+    pub fn outputs(&self, i: usize) -> impl Iterator<Item = (Axis, &[f64], &[f64], &[f64])> {
+        let n = self.drives.len();
+        let slots = &self.slots[i * n..(i + 1) * n];
+        slots
+            .iter()
+            .zip(&self.drives)
+            .zip(&self.twins)
+            .map(|((slot, drive), twin)| {
+                (
+                    slot.axis,
+                    &drive.actual[slot.drive..slot.drive + BLOCK],
+                    &drive.following_error[slot.drive..slot.drive + BLOCK],
+                    &twin.actual[slot.twin..slot.twin + BLOCK],
+                )
+            })
+    }
 }

@@ -4,11 +4,11 @@
 //! [`run_ballbar_lanes`] groups the scenarios by [`share_key`]: everything but each axis's
 //! servo, drive and friction tables (gains, feedforward, masses, stiffness, backlash,
 //! friction). A group's points differ only in how their drives answer the same setpoints, so
-//! one interpolation pass per direction feeds every point's drives side by side
-//! ([`crate::pipeline::run_lanes`]), and points whose linear twins are the same share one
-//! ([`crate::drive::DriveLanes`]). Each point keeps what depends on its drives: its drives,
-//! position-error state, ball bars, settle gate and reversal sites. Memory holds the state
-//! of the points in one pass, never the setpoint stream.
+//! one interpolation pass per direction feeds the points' drives
+//! ([`crate::pipeline::run_lanes`]), and points whose drive (or linear twin) on an axis is
+//! the same share that axis's servo ([`crate::drive::DriveLanes`]). Each point keeps what
+//! depends on its drives: its position-error state, ball bars, settle gate and reversal
+//! sites. Memory holds the state of the points in one pass, never the setpoint stream.
 //!
 //! A group runs in passes of at most [`POINTS_PER_PASS`] points; passes run in parallel on
 //! the rayon pool. A point whose drives diverge, or a pass that fails as a whole, is run

@@ -4,9 +4,12 @@
 
 use std::path::{Path, PathBuf};
 
+use mtsim::drive::DriveLanes;
 use mtsim::input::scenario::Scenario;
+use mtsim::input::Machine;
 use mtsim::study::lanes::{passes, run_ballbar_lanes};
 use mtsim::study::simulate::{run_ballbar, BallbarStudy};
+use mtsim::{Axis, AxisVec};
 
 use crate::common::{machine, scratch};
 
@@ -208,4 +211,151 @@ fn points_that_differ_in_feed_or_geometry_are_not_grouped_and_a_mixed_batch_is_e
     // The slower feed is a different test: its G differs from the grouped cone's.
     let g = g_um(&points[..2]);
     assert!(g[0] != g[1], "G {g:?}");
+}
+
+/// The distinct servos a pass steps per axis, drives and twins, for these scenarios.
+fn distinct(points: &[Scenario]) -> Vec<(Axis, usize, usize)> {
+    let machines: Vec<&Machine> = points.iter().map(|s| &s.machine).collect();
+    DriveLanes::new(&machines, &AxisVec::ZERO)
+        .unwrap()
+        .distinct()
+}
+
+/// Points that differ on one axis only step one servo per point on that axis and one for
+/// all on every other, and still give their single runs' figures; a kv that differs on X
+/// alone gives X one twin per kv, the other axes one.
+#[test]
+fn points_that_differ_on_one_axis_share_the_others_servos_and_are_exact() {
+    let dir = scratch("lanes", "one-axis");
+    let base = bundled("cone-15-10.toml");
+    let backlash: Vec<Scenario> = [0.0, 0.002, 0.005]
+        .iter()
+        .enumerate()
+        .map(|(i, &b)| {
+            let over = format!("[machine_overrides.axes.Y.drive]\nbacklash_mm = {b}\n");
+            load(&dir, &format!("y{i}"), &base, &over)
+        })
+        .collect();
+    assert_eq!(
+        distinct(&backlash),
+        vec![
+            (Axis::X, 1, 1),
+            (Axis::Y, 3, 1),
+            (Axis::Z, 1, 1),
+            (Axis::A, 1, 1),
+            (Axis::C, 1, 1)
+        ]
+    );
+    assert_lanes_equal_single_runs(&backlash);
+    let kv: Vec<Scenario> = [25.0, 30.0, 30.0, 35.0]
+        .iter()
+        .enumerate()
+        .map(|(i, &kv)| {
+            let over = format!("[machine_overrides.axes.X.servo]\nkv_per_s = {kv}\n");
+            load(&dir, &format!("x{i}"), &base, &over)
+        })
+        .collect();
+    assert_eq!(distinct(&kv)[0], (Axis::X, 3, 3));
+    assert!(distinct(&kv)[1..].iter().all(|&(_, d, t)| (d, t) == (1, 1)));
+    assert_lanes_equal_single_runs(&kv);
+    // Y's backlash moves G: the shared servos did not hide the differing one.
+    let g = g_um(&backlash);
+    assert!(g[2] > g[0] + 1.0, "G {g:?}");
+}
+
+/// A point whose drive on one axis fails (its following error passes its limit) is run
+/// alone and gives its single run's error, and so do the points that share that drive; the
+/// points beside them that share the other axes' servos keep their single runs' figures.
+#[test]
+fn a_point_whose_drive_fails_on_one_axis_gives_its_single_runs_error() {
+    let dir = scratch("lanes", "fail");
+    let base = bundled("cone-15-10.toml");
+    // The cone at 1000 mm/min lags X by about v / kv = 0.5 mm: a 1 µm limit fails.
+    let tight = "[machine_overrides.axes.X.servo]\nfollowing_error_limit_mm = 0.001\n";
+    let rotary = "[machine_overrides.axes.C.servo]\nfollowing_error_limit_deg = 0.0001\n";
+    let points: Vec<Scenario> = [
+        (0.0, ""),
+        (0.002, tight),
+        (0.004, tight),
+        (0.003, ""),
+        (0.001, rotary),
+    ]
+    .iter()
+    .enumerate()
+    .map(|(i, &(b, extra))| {
+        let over = format!("[machine_overrides.axes.Y.drive]\nbacklash_mm = {b}\n{extra}");
+        load(&dir, &format!("f{i}"), &base, &over)
+    })
+    .collect();
+    assert_eq!(passes(&points, 1).len(), 1);
+    let lanes = run_ballbar_lanes(&points, &|_| {});
+    for (i, (scenario, lane)) in points.iter().zip(lanes).enumerate() {
+        let single = run_ballbar(scenario, None, &|_| {});
+        match (i, lane, single) {
+            (0 | 3, Ok(lane), Ok(single)) => assert_eq!(figures(&lane), figures(&single)),
+            (1 | 2 | 4, Err(lane), Err(single)) => {
+                let (lane, single) = (lane.to_string(), single.to_string());
+                assert_eq!(lane, single, "point {i}");
+                let axis = if i == 4 { "C" } else { "X" };
+                assert!(
+                    lane.contains("following error") && lane.contains(axis),
+                    "{lane}"
+                );
+            }
+            (i, lane, single) => panic!(
+                "point {i}: lanes {:?}, single {:?}",
+                lane.map(|_| ()),
+                single.map(|_| ())
+            ),
+        }
+    }
+}
+
+/// Points on a machine with position-error tables (pitch on X and Y, a worm-gear error on
+/// C): each point's errors, applied for its own direction of motion, are its single run's.
+#[test]
+fn points_with_position_error_tables_give_their_single_runs_figures() {
+    let dir = scratch("lanes", "tables");
+    std::fs::write(
+        dir.join("x.comp"),
+        "-200 -0.004 0.003\n0 0 0.002\n200 0.006 0.001\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("c.comp"),
+        "0 0 0.001\n180 0.002 -0.001\n360 0 0.001\n",
+    )
+    .unwrap();
+    let machine_text = std::fs::read_to_string(root().join("machines/trt-ac.toml")).unwrap();
+    let machine_path = dir.join("m.toml");
+    std::fs::write(
+        &machine_path,
+        format!("{machine_text}\n[error_tables]\nX = \"x.comp\"\nY = \"x.comp\"\nC = \"c.comp\"\n"),
+    )
+    .unwrap();
+    let base = bundled("cone-15-10.toml").replace(
+        &format!("\"{}/machines/trt-ac.toml\"", root().display()),
+        &format!("{:?}", machine_path.display().to_string()),
+    );
+    assert!(base.contains("m.toml"), "{base}");
+    let points: Vec<Scenario> = [(0.0, 150.0), (0.003, 150.0), (0.003, 0.0), (0.006, 300.0)]
+        .iter()
+        .enumerate()
+        .map(|(i, &(b, fc))| load(&dir, &format!("t{i}"), &base, &axis("Y", b, fc, 30.0, 0.0)))
+        .collect();
+    assert_eq!(passes(&points, 1).len(), 1);
+    assert_lanes_equal_single_runs(&points);
+    // The tables are read: G moves against the same point without them.
+    let plain = load(
+        &dir,
+        "plain",
+        &bundled("cone-15-10.toml"),
+        &axis("Y", 0.0, 150.0, 30.0, 0.0),
+    );
+    let with = g_um(&points[..2])[0];
+    let without = g_um(&[plain.clone(), plain])[0];
+    assert!(
+        (with - without).abs() > 0.5,
+        "G {with} with the tables, {without} without"
+    );
 }

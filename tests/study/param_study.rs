@@ -358,3 +358,70 @@ fn a_machine_key_named_twice_is_refused_not_a_panic() {
     assert!(err.contains("`machine`isnotakeythere"), "{err}");
     assert!(err.contains("nearest:`machine."), "{err}");
 }
+
+/// A point's scenario is built from the base's parsed tree (`ScenarioTree::load_with`, no
+/// text written, the machine file read once): it is the scenario the point's text gives
+/// when read as a file, and a refused value is the same error at the same line, column and
+/// key of that text.
+#[test]
+fn a_point_built_from_the_tree_is_the_scenario_of_its_text() {
+    use mtsim::input::overrides::{set, KeyPath, ScenarioTree};
+    use mtsim::input::scenario::Scenario;
+    let by_text = |tree: &ScenarioTree, keys: &[KeyPath], values: &[f64]| {
+        let mut t = tree.tree.clone();
+        for (k, &v) in keys.iter().zip(values) {
+            set(&mut t, &tree.machine, k, v).unwrap();
+        }
+        Scenario::from_toml(&tree.path, &toml::to_string(&t).unwrap(), None)
+    };
+    let keys = |ks: &[&str]| -> Vec<KeyPath> { ks.iter().map(|k| k.parse().unwrap()).collect() };
+    let cone = ScenarioTree::read(&root().join("scenarios/cone-15-10.toml")).unwrap();
+    let cone_keys = keys(&[
+        "machine.axes.X.drive.backlash_mm",
+        "machine.axes.Y.servo.kv_per_s",
+        "program.cone.center_mm[1]",
+        "program.cone.segments",
+        "machine.location_errors.EX0C_um",
+    ]);
+    let values = [0.004, 31.0, 25.0, 720.0, 3.0];
+    let point = cone.load_with(&cone_keys, &values).unwrap();
+    assert_eq!(
+        format!("{point:?}"),
+        format!("{:?}", by_text(&cone, &cone_keys, &values).unwrap())
+    );
+    assert_eq!(
+        point.machine.axis(mtsim::Axis::X).drive.backlash_mm,
+        Some(0.004)
+    );
+    assert_eq!(point.machine.axis(mtsim::Axis::Y).servo.kv_per_s, 31.0);
+    assert_eq!(point.cone().unwrap().center_mm.y, 25.0);
+    // The circle sizes its lead-in unless `[simulate] lead_deg` is given.
+    let circle = ScenarioTree::read(&root().join("scenarios/circle-iso230-4.toml")).unwrap();
+    for ks in [&["program.circle.radius_mm"][..], &["simulate.lead_deg"]] {
+        let ks = keys(ks);
+        let point = circle.load_with(&ks, &[40.0]).unwrap();
+        assert_eq!(
+            format!("{point:?}"),
+            format!("{:?}", by_text(&circle, &ks, &[40.0]).unwrap())
+        );
+    }
+    let given = circle
+        .load_with(&keys(&["simulate.lead_deg"]), &[40.0])
+        .unwrap();
+    assert_eq!(given.simulate.lead_deg, 40.0);
+    // Refused: a drive check, a cone check at its line, a number beyond any machine.
+    for (key, value, says) in [
+        ("machine.axes.X.drive.backlash_mm", -0.01, ">= 0"),
+        ("program.cone.segments", 2.0, "between 3 and 1000000"),
+        ("program.cone.feed_mm_min", 1e12, "beyond any machine"),
+    ] {
+        let ks = keys(&[key]);
+        let err = cone.load_with(&ks, &[value]).unwrap_err().to_string();
+        assert!(err.contains(says), "{err}");
+        assert_eq!(err, by_text(&cone, &ks, &[value]).unwrap_err().to_string());
+    }
+    let err = cone
+        .load_with(&keys(&["program.cone.segments"]), &[2.0])
+        .unwrap_err();
+    assert!(matches!(err, mtsim::error::Error::AtSource(_)), "{err:?}");
+}

@@ -425,3 +425,79 @@ fn a_point_built_from_the_tree_is_the_scenario_of_its_text() {
         .unwrap_err();
     assert!(matches!(err, mtsim::error::Error::AtSource(_)), "{err:?}");
 }
+
+/// The heat map's cells lie at their values whatever order a grid lists them in: a grid in
+/// descending and unsorted order draws the cells of the ascending grid, the largest G at the
+/// largest values (right, top) and the smallest at the smallest (left, bottom).
+#[test]
+fn the_heat_map_places_cells_by_value_in_any_grid_order() {
+    use mtsim::study::param::evaluate::Row;
+    use mtsim::study::param::plots::heat_map;
+    let rows = |xs: &[f64], ys: &[f64]| -> Vec<Row> {
+        let mut out = Vec::new();
+        for &x in xs {
+            for &y in ys {
+                out.push(Row {
+                    point: out.len() as u64 + 1,
+                    values: vec![x, y],
+                    error: None,
+                    g_um: Some(10.0 * x + y / 10.0),
+                    f_max_um: None,
+                    f_min_um: None,
+                    h_um: None,
+                    b_um: Vec::new(),
+                    spike_um: Vec::new(),
+                    violations: Some(0),
+                });
+            }
+        }
+        out
+    };
+    // The cells: (x, y, width, height, fill) of the rectangles left of the legend (x < 760
+    // px), but the white background.
+    let cells = |svg: &str| -> Vec<(i64, i64, i64, i64, String)> {
+        let attr = |line: &str, name: &str| -> String {
+            let start = line.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
+            line[start..].split('"').next().unwrap().to_string()
+        };
+        let mut out: Vec<_> = svg
+            .lines()
+            .filter(|l| l.starts_with("<rect") && !l.contains("#FFFFFF"))
+            .map(|l| {
+                let n = |name: &str| attr(l, name).parse::<i64>().unwrap();
+                (n("x"), n("y"), n("width"), n("height"), attr(l, "fill"))
+            })
+            .filter(|c| c.0 < 760)
+            .collect();
+        out.sort();
+        out
+    };
+    let keys = ["a", "b"];
+    let (xs, ys) = ([1.0, 2.0, 3.0], [10.0, 20.0, 30.0]);
+    let sorted = cells(&heat_map(&rows(&xs, &ys), keys, &xs, &ys).unwrap());
+    assert_eq!(sorted.len(), 9);
+    for (xs, ys) in [
+        ([3.0, 2.0, 1.0], [30.0, 20.0, 10.0]),
+        ([2.0, 3.0, 1.0], [20.0, 10.0, 30.0]),
+    ] {
+        let drawn = cells(&heat_map(&rows(&xs, &ys), keys, &xs, &ys).unwrap());
+        assert_eq!(drawn, sorted, "grid {xs:?} x {ys:?}");
+    }
+    // Blue to red: the smallest G (a 1, b 10) is #2028DF, the largest (a 3, b 30) #DF2020.
+    let at = |fill: &str| sorted.iter().find(|c| c.4 == fill).unwrap().clone();
+    let (small, large) = (at("#2028DF"), at("#DF2020"));
+    let (x_min, x_max) = (sorted[0].0, sorted[8].0);
+    let y_min = sorted.iter().map(|c| c.1).min().unwrap();
+    let y_max = sorted.iter().map(|c| c.1).max().unwrap();
+    assert_eq!(
+        (small.0, small.1),
+        (x_min, y_max),
+        "smallest G left, bottom"
+    );
+    assert_eq!((large.0, large.1), (x_max, y_min), "largest G right, top");
+    // Three columns and three rows of cells side by side, none overlapping.
+    let mut left: Vec<i64> = sorted.iter().map(|c| c.0).collect();
+    left.dedup();
+    assert_eq!(left.len(), 3);
+    assert!((left[1] - left[0] - sorted[0].2).abs() <= 1, "{sorted:?}");
+}

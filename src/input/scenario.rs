@@ -417,44 +417,7 @@ impl Scenario {
         machine: Machine,
     ) -> Result<Scenario> {
         let text = source.text();
-        let program = match (&file.program.file, &file.program.cone) {
-            _ if file.program.circle.is_some() => {
-                if file.program.file.is_some() || file.program.cone.is_some() {
-                    return Err(Error::invalid(
-                        path,
-                        "[program] takes one of `file`, [program.cone] or [program.circle]",
-                    ));
-                }
-                let c = file.program.circle.as_ref().expect("checked above");
-                let (circle, directions) = validate_circle(path, text, c)?;
-                Program::Circle { circle, directions }
-            }
-            (Some(f), cone) => Program::File {
-                path: resolve(path, f),
-                cone: cone
-                    .as_ref()
-                    .map(|c| validate_cone(path, text, c))
-                    .transpose()?
-                    .map(|(c, _)| c),
-            },
-            (None, Some(c)) => {
-                let (cone, nc) = validate_cone(path, text, c)?;
-                let directions =
-                    parse_directions(path, text, CONE, "directions", c.directions.as_deref())?;
-                Program::Cone {
-                    cone,
-                    nc,
-                    directions,
-                }
-            }
-            (None, None) => {
-                return Err(Error::invalid(
-                    path,
-                    "[program] needs `file = \"...\"` or a [program.cone] table",
-                )
-                .with_help("see docs/scenario-format.md"))
-            }
-        };
+        let program = program_of(path, text, &file)?;
         let sim = &file.simulate;
         if sim.trace_every == 0 {
             return Err(value_error(
@@ -591,6 +554,49 @@ impl Scenario {
             Program::Circle { .. } => None,
         }
     }
+}
+
+/// The program of a scenario file: a circle, a generated cone, or a G-code file (with the
+/// cone's geometry when the file gives it).
+fn program_of(path: &Path, text: &str, file: &ScenarioFile) -> Result<Program> {
+    Ok(match (&file.program.file, &file.program.cone) {
+        _ if file.program.circle.is_some() => {
+            if file.program.file.is_some() || file.program.cone.is_some() {
+                return Err(Error::invalid(
+                    path,
+                    "[program] takes one of `file`, [program.cone] or [program.circle]",
+                ));
+            }
+            let c = file.program.circle.as_ref().expect("checked above");
+            let (circle, directions) = validate_circle(path, text, c)?;
+            Program::Circle { circle, directions }
+        }
+        (Some(f), cone) => Program::File {
+            path: resolve(path, f),
+            cone: cone
+                .as_ref()
+                .map(|c| validate_cone(path, text, c))
+                .transpose()?
+                .map(|(c, _)| c),
+        },
+        (None, Some(c)) => {
+            let (cone, nc) = validate_cone(path, text, c)?;
+            let directions =
+                parse_directions(path, text, CONE, "directions", c.directions.as_deref())?;
+            Program::Cone {
+                cone,
+                nc,
+                directions,
+            }
+        }
+        (None, None) => {
+            return Err(Error::invalid(
+                path,
+                "[program] needs `file = \"...\"` or a [program.cone] table",
+            )
+            .with_help("see docs/scenario-format.md"))
+        }
+    })
 }
 
 /// Where a scenario's values were read from: its text, which errors point into, or a TOML

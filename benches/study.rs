@@ -15,7 +15,9 @@
 //! the real-time factor per point per CPU second (machine seconds of all points / CPU s).
 //! `MTSIM_BENCH_SMOKE=1` runs 16 points and 2 single ones (a CI smoke run);
 //! `MTSIM_BENCH_POINTS=N` sets the study's size and `MTSIM_BENCH_SINGLE=N` the subset's;
-//! `MTSIM_BENCH_ONLY=single|lanes1|lanes2` runs one case (for callgrind).
+//! `MTSIM_BENCH_ONLY=single|lanes1|lanes2|setup` runs one case (for callgrind); `setup`
+//! times only the building of the bundled tolerance study's points' scenarios from its
+//! base (`mtsim::study::param`), no simulation.
 //! It prints figures; it asserts nothing (timing is not a test).
 
 use std::path::PathBuf;
@@ -96,6 +98,26 @@ fn measure(f: impl FnOnce()) -> (f64, f64) {
     (cpu_now() - c, w.elapsed().as_secs_f64())
 }
 
+/// The set-up of a study's points alone: each point's scenario of the bundled tolerance
+/// study (`scenarios/studies/tolerance-cone-15-10.toml`) built from its parsed base.
+fn setup(root: &std::path::Path, n: usize) {
+    let path = root.join("scenarios/studies/tolerance-cone-15-10.toml");
+    let study = mtsim::study::param::Study::load(&path, None, Some(n)).unwrap();
+    let keys = study.spec.keys();
+    let t = measure(|| {
+        for p in &study.points {
+            study.tree.load_with(&keys, p).unwrap();
+        }
+    });
+    println!(
+        "{:<28} {n:>5} points  CPU {:>7.3} s  wall {:>7.3} s  {:>7.1} us CPU/point",
+        "set-up only (no simulation)",
+        t.0,
+        t.1,
+        1e6 * t.0 / n as f64
+    );
+}
+
 fn main() {
     let smoke = std::env::var("MTSIM_BENCH_SMOKE").is_ok_and(|v| !v.is_empty() && v != "0");
     let n = env_usize("MTSIM_BENCH_POINTS").unwrap_or(if smoke { 16 } else { 1000 });
@@ -103,6 +125,9 @@ fn main() {
     let only = std::env::var("MTSIM_BENCH_ONLY").unwrap_or_default();
     let which = std::env::var("MTSIM_BENCH_STUDY").unwrap_or_default();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    if only == "setup" {
+        return setup(&root, n);
+    }
     let base = Scenario::load(&root.join("scenarios/cone-15-10.toml")).unwrap();
     let sim_s = run_ballbar(&base, None, &|_| {}).unwrap().sim_time_s;
     let studies: [(&str, fn(&Scenario, usize) -> Vec<Scenario>); 2] =

@@ -385,162 +385,188 @@ impl Written {
         let finite_in = |v: f64, lo: f64, hi: f64| v.is_finite() && (lo..=hi).contains(&v);
         let positive = |v: f64| v.is_finite() && v > 0.0;
         let non_negative = |v: f64| v.is_finite() && v >= 0.0;
-        let checks: [(bool, &'static str, &'static str, String); 23] = [
+        // The messages are written only for the problem found (a study validates every point).
+        let checks: [(
+            bool,
+            &'static str,
+            &'static str,
+            Box<dyn Fn() -> String + '_>,
+        ); 23] = [
             (
                 r.model.is_some(),
                 "servo",
                 "model",
-                format!("must be \"first-order\" or \"cascade\", got {:?}", s.model),
+                Box::new(|| format!("must be \"first-order\" or \"cascade\", got {:?}", s.model)),
             ),
             (
                 r.fully_closed.is_some(),
                 "servo",
                 "feedback",
-                format!(
-                    "must be \"semi-closed\" or \"fully-closed\", got {:?}",
-                    s.feedback
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be \"semi-closed\" or \"fully-closed\", got {:?}",
+                        s.feedback
+                    )
+                }),
             ),
             (
                 finite_in(s.kv_per_s, 1e-3, 1e4) && s.kv_per_s > 0.0,
                 "servo",
                 "kv_per_s",
-                format!(
-                    "must be a positive gain in 1/s (typically 20-60), got {}",
-                    s.kv_per_s
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be a positive gain in 1/s (typically 20-60), got {}",
+                        s.kv_per_s
+                    )
+                }),
             ),
             (
                 finite_in(s.velocity_feedforward, 0.0, 1.0),
                 "servo",
                 "velocity_feedforward",
-                format!(
-                    "must be a fraction in 0..=1, got {}",
-                    s.velocity_feedforward
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be a fraction in 0..=1, got {}",
+                        s.velocity_feedforward
+                    )
+                }),
             ),
             (
                 finite_in(s.acceleration_feedforward, 0.0, 1.0),
                 "servo",
                 "acceleration_feedforward",
-                format!(
-                    "must be a fraction in 0..=1, got {}",
-                    s.acceleration_feedforward
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be a fraction in 0..=1, got {}",
+                        s.acceleration_feedforward
+                    )
+                }),
             ),
             (
                 positive(s.velocity_bandwidth_hz) && s.velocity_bandwidth_hz <= 1e5,
                 "servo",
                 "velocity_bandwidth_hz",
-                format!(
-                    "must be a positive frequency in Hz (typically 50-300), got {}",
-                    s.velocity_bandwidth_hz
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be a positive frequency in Hz (typically 50-300), got {}",
+                        s.velocity_bandwidth_hz
+                    )
+                }),
             ),
             (
                 positive(s.velocity_integral_time_ms),
                 "servo",
                 "velocity_integral_time_ms",
-                format!(
-                    "must be a positive time in ms (typically 2-20), got {}",
-                    s.velocity_integral_time_ms
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be a positive time in ms (typically 2-20), got {}",
+                        s.velocity_integral_time_ms
+                    )
+                }),
             ),
             (
                 finite_in(s.current_time_constant_ms, 0.0, 100.0),
                 "servo",
                 "current_time_constant_ms",
-                format!(
-                    "must be a time in 0..=100 ms (typically 0.1-0.5), got {}",
-                    s.current_time_constant_ms
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be a time in 0..=100 ms (typically 0.1-0.5), got {}",
+                        s.current_time_constant_ms
+                    )
+                }),
             ),
             (
                 positive(s.servo_period_ms) && s.servo_period_ms <= 100.0,
                 "servo",
                 "servo_period_ms",
-                format!(
-                    "must be a period in (0, 100] ms (typically 0.125-1), got {}",
-                    s.servo_period_ms
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be a period in (0, 100] ms (typically 0.125-1), got {}",
+                        s.servo_period_ms
+                    )
+                }),
             ),
             (
                 (1..=1000).contains(&s.substeps),
                 "servo",
                 "substeps",
-                format!("must be a whole number in 1..=1000, got {}", s.substeps),
+                Box::new(|| format!("must be a whole number in 1..=1000, got {}", s.substeps)),
             ),
             (
                 positive(r.fe_limit.1),
                 "servo",
                 r.fe_limit.0,
-                format!("must be a positive distance ({unit}), got {}", r.fe_limit.1),
+                Box::new(|| format!("must be a positive distance ({unit}), got {}", r.fe_limit.1)),
             ),
             (
                 non_negative(r.backlash.1),
                 "drive",
                 r.backlash.0,
-                format!("must be >= 0 ({unit}), got {}", r.backlash.1),
+                Box::new(|| format!("must be >= 0 ({unit}), got {}", r.backlash.1)),
             ),
             (
                 positive(r.motor_mass.1),
                 "drive",
                 r.motor_mass.0,
-                format!("must be positive, got {}", r.motor_mass.1),
+                Box::new(|| format!("must be positive, got {}", r.motor_mass.1)),
             ),
             (
                 positive(r.table_mass.1),
                 "drive",
                 r.table_mass.0,
-                format!("must be positive, got {}", r.table_mass.1),
+                Box::new(|| format!("must be positive, got {}", r.table_mass.1)),
             ),
             (
                 positive(r.stiffness.1),
                 "drive",
                 r.stiffness.0,
-                format!("must be positive, got {}", r.stiffness.1),
+                Box::new(|| format!("must be positive, got {}", r.stiffness.1)),
             ),
             (
                 finite_in(r.damping_ratio, 0.0, 10.0),
                 "drive",
                 "damping_ratio",
-                format!(
-                    "must be in 0..=10 (typically 0.02-0.1), got {}",
-                    r.damping_ratio
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be in 0..=10 (typically 0.02-0.1), got {}",
+                        r.damping_ratio
+                    )
+                }),
             ),
             (
                 positive(r.force_limit.1),
                 "drive",
                 r.force_limit.0,
-                format!("must be positive, got {}", r.force_limit.1),
+                Box::new(|| format!("must be positive, got {}", r.force_limit.1)),
             ),
             (
                 non_negative(r.coulomb.1),
                 "friction",
                 r.coulomb.0,
-                format!("must be >= 0, got {}", r.coulomb.1),
+                Box::new(|| format!("must be >= 0, got {}", r.coulomb.1)),
             ),
             (
                 finite_in(r.static_ratio, 1.0, 100.0),
                 "friction",
                 "static_ratio",
-                format!(
-                    "must be Fs/Fc >= 1 (typically 1.1-1.5), got {}",
-                    r.static_ratio
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be Fs/Fc >= 1 (typically 1.1-1.5), got {}",
+                        r.static_ratio
+                    )
+                }),
             ),
             (
                 non_negative(r.stribeck.1),
                 "friction",
                 r.stribeck.0,
-                format!("must be >= 0, got {}", r.stribeck.1),
+                Box::new(|| format!("must be >= 0, got {}", r.stribeck.1)),
             ),
             (
                 non_negative(r.viscous.1),
                 "friction",
                 r.viscous.0,
-                format!("must be >= 0, got {}", r.viscous.1),
+                Box::new(|| format!("must be >= 0, got {}", r.viscous.1)),
             ),
             (
                 finite_in(
@@ -550,35 +576,37 @@ impl Written {
                 ),
                 "friction",
                 r.presliding.0,
-                format!(
-                    "must be a displacement >= 0 ({}; 0 is off, typically {}), got {}",
-                    if axis.is_rotary() { "deg" } else { "um" },
-                    if axis.is_rotary() {
-                        "0.0003-0.001"
-                    } else {
-                        "1-5"
-                    },
-                    r.presliding.1
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be a displacement >= 0 ({}; 0 is off, typically {}), got {}",
+                        if axis.is_rotary() { "deg" } else { "um" },
+                        if axis.is_rotary() {
+                            "0.0003-0.001"
+                        } else {
+                            "1-5"
+                        },
+                        r.presliding.1
+                    )
+                }),
             ),
             (
                 finite_in(r.presliding_damping_ratio, 0.0, 10.0),
                 "friction",
                 "presliding_damping_ratio",
-                format!(
-                    "must be in 0..=10 (typically 0.5-1), got {}",
-                    r.presliding_damping_ratio
-                ),
+                Box::new(|| {
+                    format!(
+                        "must be in 0..=10 (typically 0.5-1), got {}",
+                        r.presliding_damping_ratio
+                    )
+                }),
             ),
         ];
-        checks
-            .into_iter()
-            .find(|c| !c.0)
-            .map(|(_, table, key, message)| DriveProblem {
-                table,
-                key,
-                message,
-            })
+        let (_, table, key, message) = checks.into_iter().find(|c| !c.0)?;
+        Some(DriveProblem {
+            table,
+            key,
+            message: message(),
+        })
     }
 }
 

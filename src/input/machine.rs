@@ -233,39 +233,8 @@ impl Machine {
         text: &str,
         overrides: Option<(&Path, &str, &toml::Table)>,
     ) -> Result<Machine> {
-        // The machine file and its error tables may be any file the user named: their
-        // lines are not quoted in a message (the scenario's are).
-        Machine::from_toml_quoted(path, text, overrides)
-            .map_err(|e| e.without_source_unless(overrides.map(|o| o.0)))
-    }
-
-    fn from_toml_quoted(
-        path: &Path,
-        text: &str,
-        overrides: Option<(&Path, &str, &toml::Table)>,
-    ) -> Result<Machine> {
-        let file: MachineFile = toml_text::parse(path, text)?;
-        // The machine file must hold on its own: its errors point at its own lines.
-        let machine = Machine::validate(path, text, file, path)?;
-        toml_text::check_numbers(path, text)?;
-        let Some((scenario_path, scenario_text, overrides)) = overrides else {
-            return Ok(machine);
-        };
-        // Error-table paths are relative to the file that names them.
-        let tables_file = if overrides.contains_key("error_tables") {
-            scenario_path
-        } else {
-            path
-        };
-        let mut merged: toml::Table =
-            toml::from_str(text).map_err(|e| toml_text::toml_error(path, text, &e))?;
-        deep_merge(&mut merged, overrides);
-        let file = toml_text::parse_overridden::<MachineFile>(&merged, scenario_path, scenario_text)
-            .map_err(|e| {
-                e.with_help("[machine_overrides] takes the same keys as a machine file; see docs/machine-format.md")
-            })?;
-        // Range errors in overridden values point at the scenario file.
-        Machine::validate(scenario_path, scenario_text, file, tables_file)
+        MachineBase::new(path, text.to_string(), overrides.map(|o| o.0))?
+            .machine(overrides.map(|(scenario, text, o)| (scenario, Some(text), o)))
     }
 
     fn validate(path: &Path, text: &str, file: MachineFile, tables_file: &Path) -> Result<Machine> {
@@ -378,6 +347,97 @@ impl Machine {
 
     pub fn has_axis(&self, axis: Axis) -> bool {
         self.axes.contains_key(&axis)
+    }
+}
+
+/// A machine file read and checked on its own, ready to take a scenario's
+/// `[machine_overrides]` again and again: a study's points read the file once.
+#[derive(Clone, Debug)]
+pub struct MachineBase {
+    path: PathBuf,
+    text: String,
+    /// The file's TOML tree, which the overrides are merged over.
+    tree: toml::Table,
+    /// The machine as the file alone gives it.
+    alone: Machine,
+}
+
+impl MachineBase {
+    /// The machine file at `path` whose contents are `text`, checked on its own: its errors
+    /// point at its own lines. The machine file and its error tables may be any file the
+    /// user named: their lines are quoted in a message only when it is the file `shown`.
+    pub fn new(path: &Path, text: String, shown: Option<&Path>) -> Result<MachineBase> {
+        MachineBase::quoted(path, text).map_err(|e| e.without_source_unless(shown))
+    }
+
+    fn quoted(path: &Path, text: String) -> Result<MachineBase> {
+        let file: MachineFile = toml_text::parse(path, &text)?;
+        let alone = Machine::validate(path, &text, file, path)?;
+        let tree = toml_text::numbers_checked(path, &text)?;
+        Ok(MachineBase {
+            path: path.to_path_buf(),
+            text,
+            tree,
+            alone,
+        })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The file's contents.
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
+    /// The file's TOML tree.
+    pub fn tree(&self) -> &toml::Table {
+        &self.tree
+    }
+
+    /// The machine, with `overrides` merged over the file when a scenario gives them
+    /// (its path, text when there is one, and `[machine_overrides]` table: see
+    /// [`MachineBase::overridden`]); errors are quoted only from the scenario's lines.
+    pub fn machine(
+        &self,
+        overrides: Option<(&Path, Option<&str>, &toml::Table)>,
+    ) -> Result<Machine> {
+        match overrides {
+            None => Ok(self.alone.clone()),
+            Some((scenario, text, o)) => self
+                .overridden(scenario, text, o)
+                .map_err(|e| e.without_source_unless(Some(scenario))),
+        }
+    }
+
+    /// The machine with the `[machine_overrides]` table `overrides` of the scenario file
+    /// `scenario` merged over the file. With the scenario's text, an error the overrides
+    /// make points at its key there; without it (a scenario built from a tree) it names no
+    /// place: read the tree's text then for the place.
+    fn overridden(
+        &self,
+        scenario: &Path,
+        scenario_text: Option<&str>,
+        overrides: &toml::Table,
+    ) -> Result<Machine> {
+        // Error-table paths are relative to the file that names them.
+        let tables_file = match overrides.contains_key("error_tables") {
+            true => scenario,
+            false => &self.path,
+        };
+        let mut merged = self.tree.clone();
+        deep_merge(&mut merged, overrides);
+        let file = match scenario_text {
+            Some(text) => toml_text::parse_overridden::<MachineFile>(&merged, scenario, text),
+            None => MachineFile::deserialize(toml::Value::Table(merged))
+                .map_err(|e| Error::invalid(scenario, e.to_string())),
+        }
+        .map_err(|e| {
+            e.with_help("[machine_overrides] takes the same keys as a machine file; see docs/machine-format.md")
+        })?;
+        // Range errors in overridden values point at the scenario file.
+        Machine::validate(scenario, scenario_text.unwrap_or(""), file, tables_file)
     }
 }
 

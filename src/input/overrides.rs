@@ -11,6 +11,7 @@ use std::path::Path;
 use std::str::FromStr;
 
 use crate::error::{Error, Result};
+use crate::input::machine::MachineBase;
 use crate::input::scenario::Scenario;
 use crate::input::toml_text;
 
@@ -164,16 +165,19 @@ pub struct ScenarioTree {
     pub tree: toml::Table,
     /// The machine file's tree with the scenario's own `[machine_overrides]` over it.
     pub machine: toml::Table,
+    /// The scenario as its file gives it.
+    pub base: Scenario,
+    /// The machine file it names, read once.
+    machine_file: MachineBase,
 }
 
 impl ScenarioTree {
     /// Reads the scenario at `path` and its machine file's tree.
     pub fn read(path: &Path) -> Result<ScenarioTree> {
-        let base = Scenario::load(path)?;
         let text = toml_text::read_text(path)?;
+        let (base, machine_file) = Scenario::with_machine(path, &text, None)?;
         let tree: toml::Table = toml_text::parse(path, &text)?;
-        let machine_text = toml_text::read_text(&base.machine.path)?;
-        let mut machine: toml::Table = toml_text::parse(&base.machine.path, &machine_text)?;
+        let mut machine = machine_file.tree().clone();
         if let Some(toml::Value::Table(o)) = tree.get(OVERRIDES) {
             crate::input::machine::deep_merge(&mut machine, o);
         }
@@ -181,18 +185,21 @@ impl ScenarioTree {
             path: path.to_path_buf(),
             tree,
             machine,
+            base,
+            machine_file,
         })
     }
 
-    /// The scenario with `values` set at `keys`, validated as a scenario file is. A path
-    /// that names no key is an error that names the nearest keys there are.
+    /// The scenario with `values` set at `keys`, validated as a scenario file is (built
+    /// from the tree, [`Scenario::from_tree`]). A path that names no key is an error that
+    /// names the nearest keys there are.
     pub fn load_with(&self, keys: &[KeyPath], values: &[f64]) -> Result<Scenario> {
         let mut tree = self.tree.clone();
         for (key, &value) in keys.iter().zip(values) {
             set(&mut tree, &self.machine, key, value).map_err(|m| Error::invalid(&self.path, m))?;
         }
-        let text = toml::to_string(&tree).map_err(|e| Error::invalid(&self.path, e.to_string()))?;
-        Scenario::from_text(&self.path, &text).map_err(|e| self.name_the_key(e, keys))
+        Scenario::from_tree(&self.path, &tree, &self.machine_file)
+            .map_err(|e| self.name_the_key(e, keys))
     }
 
     /// An "unknown field" error of a set key, restated as the study's key path with the

@@ -11,7 +11,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 use crate::input::exact;
 use crate::input::lead_in::LeadIn;
-use crate::input::machine::Machine;
+use crate::input::machine::{Machine, MachineBase};
 use crate::input::program::{CircleTest, ConeTest, Direction, NcOptions};
 use crate::input::scene::{ConeSetup, ToolConfig, ToolShape, WorkpieceConfig, WorkpieceKind};
 use crate::input::toml_text::{self, value_error};
@@ -361,59 +361,68 @@ impl Scenario {
     /// them (the Python package's dict scenarios); otherwise the file the scenario's
     /// `machine` key names is read.
     pub fn from_toml(path: &Path, text: &str, machine: Option<(&Path, &str)>) -> Result<Scenario> {
-        let file: ScenarioFile = toml_text::parse(path, &text)?;
+        Scenario::with_machine(path, text, machine).map(|(s, _)| s)
+    }
+
+    /// [`Scenario::from_toml`], with the machine file as it was read: the base on which
+    /// [`Scenario::from_tree`] builds more scenarios without reading it again.
+    pub fn with_machine(
+        path: &Path,
+        text: &str,
+        machine: Option<(&Path, &str)>,
+    ) -> Result<(Scenario, MachineBase)> {
+        let file: ScenarioFile = toml_text::parse(path, text)?;
         let (machine_path, machine_text) = match machine {
             Some((p, t)) => (p.to_path_buf(), t.to_string()),
-            None => read_machine(path, &text, &file.machine)?,
+            None => read_machine(path, text, &file.machine)?,
         };
-        let machine = Machine::from_toml(
-            &machine_path,
-            &machine_text,
-            file.machine_overrides.as_ref().map(|o| (path, text, o)),
-        )?;
-        let program = match (&file.program.file, &file.program.cone) {
-            _ if file.program.circle.is_some() => {
-                if file.program.file.is_some() || file.program.cone.is_some() {
-                    return Err(Error::invalid(
-                        path,
-                        "[program] takes one of `file`, [program.cone] or [program.circle]",
-                    ));
-                }
-                let c = file.program.circle.as_ref().expect("checked above");
-                let (circle, directions) = validate_circle(path, &text, c)?;
-                Program::Circle { circle, directions }
-            }
-            (Some(f), cone) => Program::File {
-                path: resolve(path, f),
-                cone: cone
-                    .as_ref()
-                    .map(|c| validate_cone(path, &text, c))
-                    .transpose()?
-                    .map(|(c, _)| c),
-            },
-            (None, Some(c)) => {
-                let (cone, nc) = validate_cone(path, &text, c)?;
-                let directions =
-                    parse_directions(path, &text, CONE, "directions", c.directions.as_deref())?;
-                Program::Cone {
-                    cone,
-                    nc,
-                    directions,
-                }
-            }
-            (None, None) => {
-                return Err(Error::invalid(
-                    path,
-                    "[program] needs `file = \"...\"` or a [program.cone] table",
-                )
-                .with_help("see docs/scenario-format.md"))
-            }
-        };
+        let overrides = file.machine_overrides.as_ref();
+        let base = MachineBase::new(&machine_path, machine_text, overrides.map(|_| path))?;
+        let machine = base.machine(overrides.map(|o| (path, Some(text), o)))?;
+        let scenario = Scenario::assemble(path, Source::Text(text), file, machine)?;
+        Ok((scenario, base))
+    }
+
+    /// The scenario whose file at `path` would hold the TOML tree `tree`, on the machine
+    /// file `machine` (the one its `machine` key names, read once for many scenarios: a
+    /// study's points). It is [`Scenario::from_toml`] of the tree's text, without writing
+    /// and reading that text: only a tree that is refused is written out, so that its error
+    /// points at the line, column and key of the text, as `from_toml`'s does.
+    pub fn from_tree(path: &Path, tree: &toml::Table, machine: &MachineBase) -> Result<Scenario> {
+        Scenario::from_tree_unplaced(path, tree, machine).or_else(|_| {
+            let text = toml::to_string(tree).map_err(|e| Error::invalid(path, e.to_string()))?;
+            Scenario::from_toml(path, &text, Some((machine.path(), machine.text())))
+        })
+    }
+
+    /// [`Scenario::from_tree`] whose errors name no place.
+    fn from_tree_unplaced(
+        path: &Path,
+        tree: &toml::Table,
+        machine: &MachineBase,
+    ) -> Result<Scenario> {
+        let file = ScenarioFile::deserialize(toml::Value::Table(tree.clone()))
+            .map_err(|e| Error::invalid(path, e.to_string()))?;
+        let overrides = file.machine_overrides.as_ref();
+        let m = machine.machine(overrides.map(|o| (path, None, o)))?;
+        Scenario::assemble(path, Source::Tree(tree), file, m)
+    }
+
+    /// The validated scenario of `file` on `machine`; `source` is where `file` was read
+    /// from, for the places of errors.
+    fn assemble(
+        path: &Path,
+        source: Source,
+        file: ScenarioFile,
+        machine: Machine,
+    ) -> Result<Scenario> {
+        let text = source.text();
+        let program = program_of(path, text, &file)?;
         let sim = &file.simulate;
         if sim.trace_every == 0 {
             return Err(value_error(
                 path,
-                &text,
+                text,
                 "simulate",
                 "trace_every",
                 "must be at least 1".into(),
@@ -422,7 +431,7 @@ impl Scenario {
         if !(sim.lead_deg.is_finite() && (0.0..=180.0).contains(&sim.lead_deg)) {
             return Err(value_error(
                 path,
-                &text,
+                text,
                 "simulate",
                 "lead_deg",
                 format!("must be in [0, 180] deg, got {}", sim.lead_deg),
@@ -435,7 +444,7 @@ impl Scenario {
             if value == 0 {
                 return Err(value_error(
                     path,
-                    &text,
+                    text,
                     "simulate",
                     key,
                     "must be at least 1".into(),
@@ -444,14 +453,14 @@ impl Scenario {
         }
         if let Some([a, b]) = sim.measure_lines {
             if a == 0 || b < a {
-                return Err(value_error(path, &text, "simulate", "measure_lines", format!("expected [first, last] source lines with 1 <= first <= last, got [{a}, {b}]")));
+                return Err(value_error(path, text, "simulate", "measure_lines", format!("expected [first, last] source lines with 1 <= first <= last, got [{a}, {b}]")));
             }
         }
         if let Some(p) = file.ballbar.pivot_mm {
             if !p.iter().all(|v| v.is_finite()) {
                 return Err(value_error(
                     path,
-                    &text,
+                    text,
                     "ballbar",
                     "pivot_mm",
                     "must be three finite numbers (mm)".into(),
@@ -459,16 +468,16 @@ impl Scenario {
             }
         }
         if let Some(w) = &file.workpiece {
-            w.validate(path, &text, "workpiece")?;
+            w.validate(path, text, "workpiece")?;
         }
         if let Some(t) = &file.tool {
-            t.validate(path, &text, "tool")?;
+            t.validate(path, text, "tool")?;
         }
         if let Some(d) = file.check.near_miss_mm {
             if !(d.is_finite() && d >= 0.0) {
                 return Err(value_error(
                     path,
-                    &text,
+                    text,
                     "check",
                     "near_miss_mm",
                     format!("must be a clearance >= 0 mm, got {d}"),
@@ -498,21 +507,21 @@ impl Scenario {
         } else if workpiece.kind != WorkpieceKind::None {
             return Err(value_error(
                 path,
-                &text,
+                text,
                 "workpiece",
                 "kind",
                 "a cone-frustum or ball-bar workpiece needs a [program.cone]".into(),
             ));
         }
         refuse_what_the_layout_cannot_give(path, &file, &program, &machine)?;
-        let reader = reader_options(path, &text, &file.reader, &machine)?;
-        toml_text::check_numbers(path, &text)?;
-        refuse_tcp_on_a_joint_space_test(path, &text, &program, file.simulate.tcp)?;
+        let reader = reader_options(path, text, &file.reader, &machine)?;
+        source.check_numbers(path)?;
+        refuse_tcp_on_a_joint_space_test(path, text, &program, file.simulate.tcp)?;
         let mut simulate = file.simulate;
         if let Program::Circle { circle, .. } = &program {
-            let lead = match toml_text::locate_key(&text, "simulate", "lead_deg") {
-                Some(_) => LeadIn::given(circle, &machine, simulate.lead_deg)?,
-                None => LeadIn::sized(circle, &machine)?,
+            let lead = match source.has("simulate", "lead_deg") {
+                true => LeadIn::given(circle, &machine, simulate.lead_deg)?,
+                false => LeadIn::sized(circle, &machine)?,
             };
             simulate.lead_deg = lead.deg;
             simulate.lead_in = Some(lead);
@@ -543,6 +552,86 @@ impl Scenario {
             Program::Cone { cone, .. } => Some(cone),
             Program::File { cone, .. } => cone.as_ref(),
             Program::Circle { .. } => None,
+        }
+    }
+}
+
+/// The program of a scenario file: a circle, a generated cone, or a G-code file (with the
+/// cone's geometry when the file gives it).
+fn program_of(path: &Path, text: &str, file: &ScenarioFile) -> Result<Program> {
+    Ok(match (&file.program.file, &file.program.cone) {
+        _ if file.program.circle.is_some() => {
+            if file.program.file.is_some() || file.program.cone.is_some() {
+                return Err(Error::invalid(
+                    path,
+                    "[program] takes one of `file`, [program.cone] or [program.circle]",
+                ));
+            }
+            let c = file.program.circle.as_ref().expect("checked above");
+            let (circle, directions) = validate_circle(path, text, c)?;
+            Program::Circle { circle, directions }
+        }
+        (Some(f), cone) => Program::File {
+            path: resolve(path, f),
+            cone: cone
+                .as_ref()
+                .map(|c| validate_cone(path, text, c))
+                .transpose()?
+                .map(|(c, _)| c),
+        },
+        (None, Some(c)) => {
+            let (cone, nc) = validate_cone(path, text, c)?;
+            let directions =
+                parse_directions(path, text, CONE, "directions", c.directions.as_deref())?;
+            Program::Cone {
+                cone,
+                nc,
+                directions,
+            }
+        }
+        (None, None) => {
+            return Err(Error::invalid(
+                path,
+                "[program] needs `file = \"...\"` or a [program.cone] table",
+            )
+            .with_help("see docs/scenario-format.md"))
+        }
+    })
+}
+
+/// Where a scenario's values were read from: its text, which errors point into, or a TOML
+/// tree that has none (its errors name no place).
+#[derive(Clone, Copy)]
+enum Source<'a> {
+    Text(&'a str),
+    Tree(&'a toml::Table),
+}
+
+impl Source<'_> {
+    /// The text errors point into; empty for a tree.
+    fn text(&self) -> &str {
+        match self {
+            Source::Text(t) => t,
+            Source::Tree(_) => "",
+        }
+    }
+
+    /// [`toml_text::check_numbers`].
+    fn check_numbers(&self, path: &Path) -> Result<()> {
+        match self {
+            Source::Text(t) => toml_text::check_numbers(path, t),
+            Source::Tree(t) => toml_text::check_tree_numbers(path, t),
+        }
+    }
+
+    /// Whether the scenario gives `key` in `[section]`.
+    fn has(&self, section: &str, key: &str) -> bool {
+        match self {
+            Source::Text(t) => toml_text::locate_key(t, section, key).is_some(),
+            Source::Tree(t) => t
+                .get(section)
+                .and_then(toml::Value::as_table)
+                .is_some_and(|s| s.contains_key(key)),
         }
     }
 }
@@ -1172,4 +1261,32 @@ fn parse_directions(
         ));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bundled scenarios, one with `[machine_overrides]`, build from their trees without
+    /// the text (the fall-back that writes it is for refused trees only), to the same
+    /// scenario.
+    #[test]
+    fn bundled_scenarios_build_from_their_trees() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        for (name, overrides) in [
+            ("cone-15-10.toml", ""),
+            ("circle-iso230-4.toml", ""),
+            (
+                "cone-15-10.toml",
+                "[machine_overrides.axes.X.drive]\nbacklash_mm = 0.003\n",
+            ),
+        ] {
+            let path = root.join("scenarios").join(name);
+            let text = toml_text::read_text(&path).unwrap() + "\n" + overrides;
+            let (by_text, machine) = Scenario::with_machine(&path, &text, None).unwrap();
+            let tree: toml::Table = toml::from_str(&text).unwrap();
+            let by_tree = Scenario::from_tree_unplaced(&path, &tree, &machine).unwrap();
+            assert_eq!(format!("{by_tree:?}"), format!("{by_text:?}"), "{name}");
+        }
+    }
 }

@@ -129,9 +129,20 @@ const COUNTS: [&str; 3] = ["max_samples", "max_trace_rows", "trace_every"];
 /// 1e308 mm: values the checks that follow would turn into overflows). Run after the keys'
 /// own checks, which give the more precise message where they have one.
 pub fn check_numbers(path: &Path, text: &str) -> Result<()> {
+    numbers_checked(path, text).map(drop)
+}
+
+/// [`check_numbers`], returning the tree it read.
+pub fn numbers_checked(path: &Path, text: &str) -> Result<toml::Table> {
     let table: toml::Table = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
-    let mut keys = Vec::new();
-    check_table(path, text, &table, &mut keys)
+    check_table(path, text, &table, &mut Vec::new())?;
+    Ok(table)
+}
+
+/// [`check_numbers`] on a tree that has no text: the same refusals, with no line to point
+/// at.
+pub fn check_tree_numbers(path: &Path, table: &toml::Table) -> Result<()> {
+    check_table(path, "", table, &mut Vec::new())
 }
 
 fn check_table(path: &Path, text: &str, table: &toml::Table, keys: &mut Vec<String>) -> Result<()> {

@@ -312,7 +312,8 @@ fn independent(chosen: &[(Axis, Vector3<f64>)], col: &Vector3<f64>) -> bool {
     }
 }
 
-/// What the inverse kinematics met along a path.
+/// What the inverse kinematics met along a path (found by
+/// [`PoleWatch`](super::chain_events::PoleWatch)).
 #[derive(Clone, Debug, PartialEq)]
 pub enum PathEvent {
     /// The tool direction passed a pole at `line`: `axis` was free there and swings by
@@ -324,45 +325,6 @@ pub enum PathEvent {
     },
     /// The nearest solution changed branch at `line` (the rotaries flip over).
     Switch { line: usize, from: usize, to: usize },
-}
-
-/// Joint values for a path of `(line, pose)`, each the nearest to the one before
-/// (starting from `start`), with the poles and solution switches met.
-pub fn follow(
-    chain: &Chain,
-    poses: &[(usize, ToolPose)],
-    tool_length_mm: f64,
-    start: &AxisVec,
-    within: &dyn Fn(Axis, f64) -> bool,
-) -> Result<(Vec<AxisVec>, Vec<PathEvent>), (usize, InverseError)> {
-    let mut joints = Vec::with_capacity(poses.len());
-    let mut events = Vec::new();
-    let mut previous = *start;
-    let mut last: Option<Solution> = None;
-    let mut pending_pole: Option<(usize, Axis)> = None;
-    for (line, pose) in poses {
-        let s = nearest(chain, pose, tool_length_mm, &previous, within).map_err(|e| (*line, e))?;
-        if let Some((pole_line, axis)) = pending_pole.take() {
-            events.push(PathEvent::Pole {
-                line: pole_line,
-                axis,
-                swing_deg: s.joints[axis] - previous[axis],
-            });
-        }
-        if let Some(axis) = s.free_axis {
-            pending_pole = Some((*line, axis));
-        } else if let Some(l) = last.filter(|l| l.free_axis.is_none() && l.branch != s.branch) {
-            events.push(PathEvent::Switch {
-                line: *line,
-                from: l.branch,
-                to: s.branch,
-            });
-        }
-        previous = s.joints;
-        last = Some(s);
-        joints.push(s.joints);
-    }
-    Ok((joints, events))
 }
 
 /// `angle_deg` plus the multiple of 360 that brings it nearest to `reference_deg`.

@@ -28,9 +28,8 @@ use crate::measure::BallbarSink;
 use crate::pipeline::{self, Sample, Sink};
 use crate::program;
 use crate::study::simulate::{
-    analysed_along, analyses, assemble, ballbar_sink, bar_geometry, directions_of, finish_along,
-    gates_transient, merge_reductions, reversals_of, run_ballbar, run_options, transient_warning,
-    BallbarStudy, SharedRuns,
+    analysed_along, analyses, assemble, ballbar_sink, bar_geometry, directions_of, gates_transient,
+    merge_reductions, run_ballbar, run_options, transient_warning, BallbarStudy, SharedRuns,
 };
 
 /// Most points in one interpolation pass: enough that the pass's own cost is a small share
@@ -162,7 +161,7 @@ fn run_pass(
 ) -> Result<Vec<Option<BallbarStudy>>> {
     let first = &scenarios[points[0]];
     let machines: Vec<&Machine> = points.iter().map(|&i| &scenarios[i].machine).collect();
-    let (along, mut analysis) = analyses(first)?;
+    let (along, analysis) = analyses(first)?;
     let geometry = bar_geometry(first);
     let directions = directions_of(first);
     let n = points.len();
@@ -237,16 +236,14 @@ fn run_pass(
             mine.push(bar);
         }
     }
-    if let Some(along) = along {
-        analysis = Some(finish_along(&first.machine, &along));
-    }
-    let shared = SharedRuns {
-        reversals: reversals_of(analysis.as_ref()),
+    let shared = SharedRuns::new(
+        &first.machine,
+        (along, analysis),
+        directions,
         sim_time_s,
         setpoints,
-        directions,
         feed_reductions,
-    };
+    );
     Ok(points
         .iter()
         .zip(ballbars)

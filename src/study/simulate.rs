@@ -126,7 +126,7 @@ pub fn run_ballbar(
     progress: &dyn Fn(f64),
 ) -> Result<BallbarStudy> {
     let machine = &scenario.machine;
-    let (along, mut analysis) = analyses(scenario)?;
+    let (along, analysis) = analyses(scenario)?;
     let geometry = bar_geometry(scenario);
     let directions = directions_of(scenario);
     let mut sinks = Vec::new();
@@ -179,16 +179,14 @@ pub fn run_ballbar(
         merge_reductions(&mut feed_reductions, stats.feed_reductions);
         sinks.extend(ballbar);
     }
-    if let Some(along) = along {
-        analysis = Some(finish_along(machine, &along));
-    }
-    let shared = SharedRuns {
-        reversals: reversals_of(analysis.as_ref()),
+    let shared = SharedRuns::new(
+        machine,
+        (along, analysis),
+        directions,
         sim_time_s,
         setpoints,
-        directions,
         feed_reductions,
-    };
+    );
     assemble(scenario, sinks, warnings, &shared)
 }
 
@@ -261,26 +259,6 @@ pub(crate) fn analysed_along<'a>(
     }))
 }
 
-/// The analysis `along` rode along the runs, finished.
-pub(crate) fn finish_along<'m>(
-    machine: &'m crate::input::Machine,
-    along: &Rc<RefCell<MoveAnalysis<'m>>>,
-) -> crate::study::reversals::Analysis {
-    let done = std::mem::replace(&mut *along.borrow_mut(), MoveAnalysis::new(machine, None));
-    done.finish()
-}
-
-/// Each axis's reversal angles, deg, from the analysis.
-pub(crate) fn reversals_of(
-    analysis: Option<&crate::study::reversals::Analysis>,
-) -> Vec<(Axis, Vec<f64>)> {
-    analysis
-        .iter()
-        .flat_map(|a| &a.axes)
-        .map(|a| (a.axis, a.reversals_deg.clone()))
-        .collect()
-}
-
 /// The pipeline's options for one direction of a ball-bar run starting at `start_time_s`.
 pub(crate) fn run_options(scenario: &Scenario, start_time_s: f64) -> Result<RunOptions> {
     Ok(RunOptions {
@@ -333,6 +311,41 @@ pub(crate) struct SharedRuns {
     pub setpoints: u64,
     pub directions: Vec<Direction>,
     pub feed_reductions: Vec<FeedReduction>,
+}
+
+impl SharedRuns {
+    /// After the runs in `directions` on `machine`: each axis's reversal angles (deg) from
+    /// the program's analysis, `done` before the runs or finished now from the one that
+    /// rode `along` them ([`analyses`]), and the runs' tallies.
+    pub(crate) fn new<'m>(
+        machine: &'m crate::input::Machine,
+        (along, done): (
+            Option<Rc<RefCell<MoveAnalysis<'m>>>>,
+            Option<crate::study::reversals::Analysis>,
+        ),
+        directions: Vec<Direction>,
+        sim_time_s: f64,
+        setpoints: u64,
+        feed_reductions: Vec<FeedReduction>,
+    ) -> SharedRuns {
+        let analysis = done.or_else(|| {
+            let along = along?;
+            let rode =
+                std::mem::replace(&mut *along.borrow_mut(), MoveAnalysis::new(machine, None));
+            Some(rode.finish())
+        });
+        SharedRuns {
+            reversals: analysis
+                .iter()
+                .flat_map(|a| &a.axes)
+                .map(|a| (a.axis, a.reversals_deg.clone()))
+                .collect(),
+            sim_time_s,
+            setpoints,
+            directions,
+            feed_reductions,
+        }
+    }
 }
 
 /// A scenario's study from its ball bars (one per direction) and what its runs share.

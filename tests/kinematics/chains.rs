@@ -8,6 +8,7 @@ use std::path::Path;
 
 use common::scratch;
 use mtsim::input::machine::Machine;
+use mtsim::kinematics::chain_events::PoleWatch;
 use mtsim::kinematics::chain_inverse::{self, PathEvent};
 use mtsim::kinematics::{Chain, Kinematics, Layout, ToolPose};
 use mtsim::{Axis, AxisVec};
@@ -287,21 +288,34 @@ fn at_origin(directions: &[(usize, Vector3<f64>)]) -> Vec<(usize, ToolPose)> {
         .collect()
 }
 
+/// The joints of a path of poses, each the nearest solution to the one before (from all
+/// axes at 0), and the events the pole watch finds on them.
+fn follow(m: &Machine, poses: &[(usize, ToolPose)]) -> (Vec<AxisVec>, Vec<PathEvent>) {
+    let chain = chain_of(m);
+    let mut watch = PoleWatch::new(&chain).expect("two rotaries");
+    let mut joints: Vec<AxisVec> = Vec::new();
+    for (line, pose) in poses {
+        let previous = joints.last().copied().unwrap_or(AxisVec::ZERO);
+        let s = chain_inverse::nearest(&chain, pose, 0.0, &previous, &within(m)).unwrap();
+        watch.push(*line, &s.joints);
+        joints.push(s.joints);
+    }
+    (joints, watch.finish())
+}
+
 #[test]
 fn a_path_through_the_pole_reports_the_c_swing_and_a_path_over_it_a_switch() {
     // Fork head: the tool tilts 20° toward −Y (A = 20, C = 0), passes the vertical at line 2
     // (C free, kept at 0) and leaves toward +X: t = (sin 20, 0, cos 20) needs C = 90, A = 20,
     // or C = −90, A = −20: either way C swings 90° at the pole.
     let m = load("machines/fork-head-ca.toml");
-    let chain = chain_of(&m);
     let (s, c) = sin_cos(20.0);
     let poses = at_origin(&[
         (1, Vector3::new(0.0, -s, c)),
         (2, Vector3::z()),
         (3, Vector3::new(s, 0.0, c)),
     ]);
-    let (q, events) =
-        chain_inverse::follow(&chain, &poses, 0.0, &AxisVec::ZERO, &within(&m)).unwrap();
+    let (q, events) = follow(&m, &poses);
     assert_eq!(q[1][Axis::C], 0.0, "C kept at the pole");
     assert_eq!(events.len(), 1, "{events:?}");
     match events[0] {
@@ -318,8 +332,7 @@ fn a_path_through_the_pole_reports_the_c_swing_and_a_path_over_it_a_switch() {
     // Tilting 20° toward −Y, then 20° toward +Y: the nearest solution flips A's sign
     // (A = −20 at C = 0: 40° of A rather than 180° of C), a switch of branch.
     let poses = at_origin(&[(5, Vector3::new(0.0, -s, c)), (6, Vector3::new(0.0, s, c))]);
-    let (q, events) =
-        chain_inverse::follow(&chain, &poses, 0.0, &AxisVec::ZERO, &within(&m)).unwrap();
+    let (q, events) = follow(&m, &poses);
     assert!(
         (q[1][Axis::A] + 20.0).abs() < 1e-12 && q[1][Axis::C].abs() < 1e-12,
         "{:?}",

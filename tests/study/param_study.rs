@@ -358,3 +358,146 @@ fn a_machine_key_named_twice_is_refused_not_a_panic() {
     assert!(err.contains("`machine`isnotakeythere"), "{err}");
     assert!(err.contains("nearest:`machine."), "{err}");
 }
+
+/// A point's scenario is built from the base's parsed tree (`ScenarioTree::load_with`, no
+/// text written, the machine file read once): it is the scenario the point's text gives
+/// when read as a file, and a refused value is the same error at the same line, column and
+/// key of that text.
+#[test]
+fn a_point_built_from_the_tree_is_the_scenario_of_its_text() {
+    use mtsim::input::overrides::{set, KeyPath, ScenarioTree};
+    use mtsim::input::scenario::Scenario;
+    let by_text = |tree: &ScenarioTree, keys: &[KeyPath], values: &[f64]| {
+        let mut t = tree.tree.clone();
+        for (k, &v) in keys.iter().zip(values) {
+            set(&mut t, &tree.machine, k, v).unwrap();
+        }
+        Scenario::from_toml(&tree.path, &toml::to_string(&t).unwrap(), None)
+    };
+    let keys = |ks: &[&str]| -> Vec<KeyPath> { ks.iter().map(|k| k.parse().unwrap()).collect() };
+    let cone = ScenarioTree::read(&root().join("scenarios/cone-15-10.toml")).unwrap();
+    let cone_keys = keys(&[
+        "machine.axes.X.drive.backlash_mm",
+        "machine.axes.Y.servo.kv_per_s",
+        "program.cone.center_mm[1]",
+        "program.cone.segments",
+        "machine.location_errors.EX0C_um",
+    ]);
+    let values = [0.004, 31.0, 25.0, 720.0, 3.0];
+    let point = cone.load_with(&cone_keys, &values).unwrap();
+    assert_eq!(
+        format!("{point:?}"),
+        format!("{:?}", by_text(&cone, &cone_keys, &values).unwrap())
+    );
+    assert_eq!(
+        point.machine.axis(mtsim::Axis::X).drive.backlash_mm,
+        Some(0.004)
+    );
+    assert_eq!(point.machine.axis(mtsim::Axis::Y).servo.kv_per_s, 31.0);
+    assert_eq!(point.cone().unwrap().center_mm.y, 25.0);
+    // The circle sizes its lead-in unless `[simulate] lead_deg` is given.
+    let circle = ScenarioTree::read(&root().join("scenarios/circle-iso230-4.toml")).unwrap();
+    for ks in [&["program.circle.radius_mm"][..], &["simulate.lead_deg"]] {
+        let ks = keys(ks);
+        let point = circle.load_with(&ks, &[40.0]).unwrap();
+        assert_eq!(
+            format!("{point:?}"),
+            format!("{:?}", by_text(&circle, &ks, &[40.0]).unwrap())
+        );
+    }
+    let given = circle
+        .load_with(&keys(&["simulate.lead_deg"]), &[40.0])
+        .unwrap();
+    assert_eq!(given.simulate.lead_deg, 40.0);
+    // Refused: a drive check, a cone check at its line, a number beyond any machine.
+    for (key, value, says) in [
+        ("machine.axes.X.drive.backlash_mm", -0.01, ">= 0"),
+        ("program.cone.segments", 2.0, "between 3 and 1000000"),
+        ("program.cone.feed_mm_min", 1e12, "beyond any machine"),
+    ] {
+        let ks = keys(&[key]);
+        let err = cone.load_with(&ks, &[value]).unwrap_err().to_string();
+        assert!(err.contains(says), "{err}");
+        assert_eq!(err, by_text(&cone, &ks, &[value]).unwrap_err().to_string());
+    }
+    let err = cone
+        .load_with(&keys(&["program.cone.segments"]), &[2.0])
+        .unwrap_err();
+    assert!(matches!(err, mtsim::error::Error::AtSource(_)), "{err:?}");
+}
+
+/// The heat map's cells lie at their values whatever order a grid lists them in: a grid in
+/// descending and unsorted order draws the cells of the ascending grid, the largest G at the
+/// largest values (right, top) and the smallest at the smallest (left, bottom).
+#[test]
+fn the_heat_map_places_cells_by_value_in_any_grid_order() {
+    use mtsim::study::param::evaluate::Row;
+    use mtsim::study::param::plots::heat_map;
+    let rows = |xs: &[f64], ys: &[f64]| -> Vec<Row> {
+        let mut out = Vec::new();
+        for &x in xs {
+            for &y in ys {
+                out.push(Row {
+                    point: out.len() as u64 + 1,
+                    values: vec![x, y],
+                    error: None,
+                    g_um: Some(10.0 * x + y / 10.0),
+                    f_max_um: None,
+                    f_min_um: None,
+                    h_um: None,
+                    b_um: Vec::new(),
+                    spike_um: Vec::new(),
+                    violations: Some(0),
+                });
+            }
+        }
+        out
+    };
+    // The cells: (x, y, width, height, fill) of the rectangles left of the legend (x < 760
+    // px), but the white background.
+    let cells = |svg: &str| -> Vec<(i64, i64, i64, i64, String)> {
+        let attr = |line: &str, name: &str| -> String {
+            let start = line.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
+            line[start..].split('"').next().unwrap().to_string()
+        };
+        let mut out: Vec<_> = svg
+            .lines()
+            .filter(|l| l.starts_with("<rect") && !l.contains("#FFFFFF"))
+            .map(|l| {
+                let n = |name: &str| attr(l, name).parse::<i64>().unwrap();
+                (n("x"), n("y"), n("width"), n("height"), attr(l, "fill"))
+            })
+            .filter(|c| c.0 < 760)
+            .collect();
+        out.sort();
+        out
+    };
+    let keys = ["a", "b"];
+    let (xs, ys) = ([1.0, 2.0, 3.0], [10.0, 20.0, 30.0]);
+    let sorted = cells(&heat_map(&rows(&xs, &ys), keys, &xs, &ys).unwrap());
+    assert_eq!(sorted.len(), 9);
+    for (xs, ys) in [
+        ([3.0, 2.0, 1.0], [30.0, 20.0, 10.0]),
+        ([2.0, 3.0, 1.0], [20.0, 10.0, 30.0]),
+    ] {
+        let drawn = cells(&heat_map(&rows(&xs, &ys), keys, &xs, &ys).unwrap());
+        assert_eq!(drawn, sorted, "grid {xs:?} x {ys:?}");
+    }
+    // Blue to red: the smallest G (a 1, b 10) is #2028DF, the largest (a 3, b 30) #DF2020.
+    let at = |fill: &str| sorted.iter().find(|c| c.4 == fill).unwrap().clone();
+    let (small, large) = (at("#2028DF"), at("#DF2020"));
+    let (x_min, x_max) = (sorted[0].0, sorted[8].0);
+    let y_min = sorted.iter().map(|c| c.1).min().unwrap();
+    let y_max = sorted.iter().map(|c| c.1).max().unwrap();
+    assert_eq!(
+        (small.0, small.1),
+        (x_min, y_max),
+        "smallest G left, bottom"
+    );
+    assert_eq!((large.0, large.1), (x_max, y_min), "largest G right, top");
+    // Three columns and three rows of cells side by side, none overlapping.
+    let mut left: Vec<i64> = sorted.iter().map(|c| c.0).collect();
+    left.dedup();
+    assert_eq!(left.len(), 3);
+    assert!((left[1] - left[0] - sorted[0].2).abs() <= 1, "{sorted:?}");
+}

@@ -47,10 +47,6 @@ impl Study {
             spec.file.samples = Some(n);
         }
         let tree = ScenarioTree::read(&spec.scenario)?;
-        let base = crate::input::scenario::Scenario::from_text(
-            &tree.path,
-            &toml::to_string(&tree.tree).unwrap_or_default(),
-        )?;
         let points = spec.points();
         if let Some(first) = points.first() {
             // A bad path fails at every point: say so once, up front. A bad value is the
@@ -82,7 +78,8 @@ impl Study {
         }
         let header = StudyHeader {
             keys: spec.keys().iter().map(ToString::to_string).collect(),
-            axes: base
+            axes: tree
+                .base
                 .machine
                 .axes()
                 .iter()

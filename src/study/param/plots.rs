@@ -13,10 +13,14 @@ use crate::Axis;
 /// G and each axis's B against the one varied key.
 pub fn response(rows: &[Row], key: &str, axes: &[String]) -> Result<String> {
     let mut chart = Chart::new(&format!("Response to {key}"), key, "G, B (µm)", 900, 520);
+    // In order of the key's value, whatever order the grid gave them in.
     let curve = |y: &dyn Fn(&Row) -> Option<f64>| -> Vec<(f64, f64)> {
-        rows.iter()
+        let mut points: Vec<(f64, f64)> = rows
+            .iter()
             .filter_map(|r| Some((*r.values.first()?, y(r)?)))
-            .collect()
+            .collect();
+        points.sort_by(|a, b| a.0.total_cmp(&b.0));
+        points
     };
     chart.series.push(Series {
         label: "G".into(),
@@ -130,15 +134,53 @@ pub fn sensitivity(ranking: &[(String, f64)]) -> Result<String> {
     Ok(svg)
 }
 
+/// The cells of one grid key's values along an axis of the heat map, whatever order the
+/// values were given in: in order of value, each cell reaches halfway to its neighbours, an
+/// end cell as far out as in; a lone value's cell is 1 wide.
+struct Cells {
+    /// The distinct values, ascending.
+    sorted: Vec<f64>,
+}
+
+impl Cells {
+    fn new(values: &[f64]) -> Cells {
+        let mut sorted = values.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        sorted.dedup();
+        Cells { sorted }
+    }
+
+    /// The cell of `value`, one of the grid's: (low, high) edge.
+    fn of(&self, value: f64) -> Option<(f64, f64)> {
+        let s = &self.sorted;
+        let i = s.binary_search_by(|v| v.total_cmp(&value)).ok()?;
+        let n = s.len();
+        if n == 1 {
+            return Some((value - 0.5, value + 0.5));
+        }
+        let low = match i {
+            0 => s[0] - (s[1] - s[0]) / 2.0,
+            _ => (s[i - 1] + s[i]) / 2.0,
+        };
+        let high = match i {
+            _ if i == n - 1 => s[i] + (s[i] - s[i - 1]) / 2.0,
+            _ => (s[i] + s[i + 1]) / 2.0,
+        };
+        Some((low, high))
+    }
+
+    /// From the first cell's low edge to the last one's high edge.
+    fn span(&self) -> std::ops::Range<f64> {
+        let edge = |v: Option<&f64>| v.and_then(|&v| self.of(v));
+        let (low, high) = (edge(self.sorted.first()), edge(self.sorted.last()));
+        low.map_or(0.0, |c| c.0)..high.map_or(1.0, |c| c.1)
+    }
+}
+
 /// G over a grid of two keys, a colour per cell (linear from the smallest to the largest G);
-/// grey where the point failed.
+/// grey where the point failed. `xs` and `ys` are each key's values, in any order.
 pub fn heat_map(rows: &[Row], keys: [&str; 2], xs: &[f64], ys: &[f64]) -> Result<String> {
-    let half = |v: &[f64]| match v {
-        [a, b, ..] => (b - a).abs() / 2.0,
-        _ => 0.5,
-    };
-    let (hx, hy) = (half(xs), half(ys));
-    let span = |v: &[f64], h: f64| (v[0] - h)..(v[v.len() - 1] + h);
+    let (xs, ys) = (Cells::new(xs), Cells::new(ys));
     let g: Vec<f64> = rows.iter().filter_map(|r| r.g_um).collect();
     let (lo, hi) = g
         .iter()
@@ -158,7 +200,7 @@ pub fn heat_map(rows: &[Row], keys: [&str; 2], xs: &[f64], ys: &[f64]) -> Result
             .margin(15)
             .x_label_area_size(45)
             .y_label_area_size(70)
-            .build_cartesian_2d(span(xs, hx), span(ys, hy))
+            .build_cartesian_2d(xs.span(), ys.span())
             .map_err(draw_error)?;
         chart
             .configure_mesh()
@@ -169,12 +211,12 @@ pub fn heat_map(rows: &[Row], keys: [&str; 2], xs: &[f64], ys: &[f64]) -> Result
             .map_err(draw_error)?;
         chart
             .draw_series(rows.iter().filter_map(|r| {
-                let (x, y) = (*r.values.first()?, *r.values.get(1)?);
+                let (x, y) = (xs.of(*r.values.first()?)?, ys.of(*r.values.get(1)?)?);
                 let style = match r.g_um {
                     Some(g) => colour_at(t(g)).filled(),
                     None => RGBColor(200, 200, 200).filled(),
                 };
-                Some(Rectangle::new([(x - hx, y - hy), (x + hx, y + hy)], style))
+                Some(Rectangle::new([(x.0, y.0), (x.1, y.1)], style))
             }))
             .map_err(draw_error)?;
         let lg = legend.margin(60, 60, 10, 10);

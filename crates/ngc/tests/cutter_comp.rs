@@ -5,24 +5,18 @@
 
 use std::path::Path;
 
-use ngc::{read_str_with, Axis, Dialect, Error, Motion, MoveKind, Options, Tool};
+mod common;
+
+use common::{compensated_options, G42_ARCS};
+use ngc::{read_str_with, Axis, Dialect, Error, Motion, MoveKind, Options};
 
 const G41_LINES: &str = "G21 G17 G90 G40\nT1 M6\nG0 X-20 Y-20\nG41 D1 G1 X0 Y0 F100\nG1 X50 Y0\nG1 X50 Y30\nG1 X20 Y30\nG1 X0 Y0\nG40 G1 X-20 Y-20\nM2\n";
-const G42_ARCS: &str = "G21 G17 G90 G40\nT1 M6\nG0 X-30 Y0 Z5\nG42 D1 G1 X-20 Y0 F100\nG1 Z-2\nG2 X0 Y20 I20 J0\nG1 X30 Y20\nG2 X40 Y10 I0 J-10\nG1 X40 Y-10\nG1 X-20 Y-10\nG40 G0 X-40 Y-20\nM2\n";
 const G41_1_BUMP: &str = "G21 G17 G90\nG0 X0 Y-20\nG41.1 D8 G1 X0 Y0 F200\nG1 X20 Y0\nG3 X40 Y0 I10 J0\nG1 X40 Y30\nG1 X0 Y30\nG1 X0 Y0\nG40 G1 X-10 Y-10\nM2\n";
 const CONCAVE_LINE_ARC: &str = "G21 G17 G90\nT1 M6\nG0 X0 Y-20\nG41 D1 G1 X0 Y0 F100\nG1 X30 Y0\nG2 X30 Y40 I20 J20\nG1 X30 Y60\nG1 X0 Y60\nG40 G1 X-10 Y70\nM2\n";
 const CONCAVE_ARC_ARC: &str = "G21 G17 G90\nT1 M6\nG0 X-10 Y-20\nG41 D1 G1 X0 Y0 F100\nG2 X20 Y0 I10 J0\nG2 X30 Y-10 I0 J-10\nG1 X30 Y-30\nG40 G1 X40 Y-40\nM2\n";
 
 fn opts() -> Options {
-    Options {
-        dialect: Dialect::Linuxcnc,
-        tools: vec![Tool {
-            number: 1,
-            length_mm: 0.0,
-            diameter_mm: 10.0,
-        }],
-        ..Options::default()
-    }
+    compensated_options()
 }
 
 fn moves(text: &str) -> Vec<ngc::Move> {

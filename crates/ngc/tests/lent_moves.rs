@@ -5,31 +5,20 @@
 
 use std::path::Path;
 
-use ngc::{read_str_with, Dialect, Move, Options, Tool};
+mod common;
+
+use common::{compensated_options, G42_ARCS};
+use ngc::{read_str_with, Dialect, Move, Options};
 
 /// Programs of each front end, with the options they are read with.
 fn programs() -> Vec<(&'static str, &'static str, Options)> {
-    let compensated = Options {
-        dialect: Dialect::Linuxcnc,
-        tools: vec![Tool {
-            number: 1,
-            length_mm: 0.0,
-            diameter_mm: 10.0,
-        }],
-        ..Options::default()
-    };
+    let compensated = compensated_options();
     let dialect = |dialect| Options {
         dialect,
         ..Options::default()
     };
     vec![
-        (
-            "comp.ngc",
-            "G21 G17 G90 G40\nT1 M6\nG0 X-30 Y0 Z5\nG42 D1 G1 X-20 Y0 F100\nG1 Z-2\n\
-             G2 X0 Y20 I20 J0\nG1 X30 Y20\nG2 X40 Y10 I0 J-10\nG1 X40 Y-10\nG1 X-20 Y-10\n\
-             G40 G0 X-40 Y-20\nM2\n",
-            compensated,
-        ),
+        ("comp.ngc", G42_ARCS, compensated),
         (
             "plain.nc",
             "G21 G90 G94\nG1 X1 Y2 F600\nG0 Z5\nG4 P0.5\nG3 X0 Y3 I-1 J0.5\nM30\n",

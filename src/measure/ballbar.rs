@@ -364,15 +364,28 @@ impl BallbarRun {
         } else {
             Centring::default()
         };
+        let mean = |b: &Bin| (b.sum_um - fit.a_um * b.sum_cos - fit.b_um * b.sum_sin) / b.n as f64;
+        if self.bins.len() == N_BINS && self.bins.iter().all(|b| b.n > 0) {
+            return Ok(Self::every_bin_filled(self.bins.iter().map(mean).collect()));
+        }
         let means: Vec<Option<f64>> = self
             .bins
             .iter()
-            .map(|b| {
-                (b.n > 0)
-                    .then(|| (b.sum_um - fit.a_um * b.sum_cos - fit.b_um * b.sum_sin) / b.n as f64)
-            })
+            .map(|b| (b.n > 0).then(|| mean(b)))
             .collect();
         self.fill(&means)
+    }
+
+    /// [`BallbarRun::fill`] when every bin holds samples: each bin is its own span of one
+    /// bin, `y_i + (y_j − y_i)·0/1` (kept as written: it turns a −0 mean into +0, as `fill`
+    /// does).
+    fn every_bin_filled(mut means: Vec<f64>) -> Vec<f64> {
+        let first = means[0];
+        for i in 0..means.len() {
+            let (yi, yj) = (means[i], means.get(i + 1).copied().unwrap_or(first));
+            means[i] = yi + (yj - yi) * 0.0 / 1.0;
+        }
+        means
     }
 
     /// Which bins hold at least one sample.
@@ -1211,5 +1224,40 @@ mod tests {
                 c.offset_um(theta).to_bits()
             );
         }
+    }
+
+    /// A run with every bin filled reads each bin's mean (two samples a bin, 1 and 3 µm
+    /// apart from the bin's own level, so the mean is level + 2), the same bits as the
+    /// general filling of gaps gives; a −0 mean comes out +0, as there.
+    #[test]
+    fn every_bin_filled_reads_the_bin_means() {
+        let mut run = BallbarRun::new(Direction::Ccw);
+        let level = |i: usize| {
+            if i == 17 {
+                -2.0
+            } else {
+                (i % 13) as f64 * 0.25
+            }
+        };
+        for i in 0..N_BINS {
+            let theta = (i as f64 + 0.5) * BIN_DEG;
+            run.push(theta, level(i) + 1.0);
+            run.push(theta, level(i) + 3.0);
+        }
+        let trace = run.trace_um(false).unwrap();
+        let means: Vec<Option<f64>> = run
+            .bins
+            .iter()
+            .map(|b| Some(b.sum_um / b.n as f64))
+            .collect();
+        let filled = run.fill(&means).unwrap();
+        for i in 0..N_BINS {
+            assert_eq!(trace[i], level(i) + 2.0, "bin {i}");
+            assert_eq!(trace[i].to_bits(), filled[i].to_bits(), "bin {i}");
+        }
+        assert_eq!(
+            BallbarRun::every_bin_filled(vec![-0.0, -0.0])[0].to_bits(),
+            0
+        );
     }
 }

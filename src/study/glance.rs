@@ -35,7 +35,7 @@ use std::collections::BTreeMap;
 use crate::drive::ReversalValue;
 use crate::input::program::{CircleTest, Direction};
 use crate::measure::attribution::ReversalSite;
-use crate::measure::ballbar::{BallbarResult, EventKind, BIN_DEG};
+use crate::measure::ballbar::{BallbarResult, EventKind, BIN_DEG, N_BINS};
 use crate::measure::BallbarRun;
 use crate::report::run::{AxisReversal, Contribution, Mechanism};
 use crate::study::diagnose::CircleDiagnostics;
@@ -67,25 +67,48 @@ fn line_at_zero(points: &[(f64, f64)]) -> Option<f64> {
 /// The step of the binned trace `dev` (bins of [`BIN_DEG`]) across `theta_r`, in the
 /// direction of travel of `direction`, µm.
 pub fn step_across(dev: &[f64], theta_r: f64, direction: Direction) -> Option<f64> {
-    let (near, far) = STEP_WINDOW_DEG;
-    let side = |sign: f64| {
-        let points: Vec<(f64, f64)> = dev
-            .iter()
-            .enumerate()
-            .filter(|(_, y)| y.is_finite())
-            .filter_map(|(i, y)| {
-                let t = (i as f64 + 0.5) * BIN_DEG;
-                let x = (t - theta_r + 180.0).rem_euclid(360.0) - 180.0;
-                (sign * x >= near && sign * x <= far).then_some((x, *y))
-            })
-            .collect();
-        line_at_zero(&points)
-    };
+    let side = |sign: f64| line_at_zero(&window_points(dev, theta_r, sign));
     let (after, before) = match direction {
         Direction::Ccw => (side(1.0)?, side(-1.0)?),
         Direction::Cw => (side(-1.0)?, side(1.0)?),
     };
     Some(after - before)
+}
+
+/// The finite bins of `dev` whose offset `x = θ − θr` (wrapped to [−180°, 180°)) lies in
+/// `sign · x ∈ [near, far]` of [`STEP_WINDOW_DEG`], as `(x, value)` in bin order.
+///
+/// Over a full revolution only the bins `i ≈ (θr + x)/BIN_DEG − ½ (mod N_BINS)` can be in
+/// the window, so only those (two bins of margin each side) are tested, each by the same
+/// test as a scan of every bin would apply: the same points, in the same order.
+fn window_points(dev: &[f64], theta_r: f64, sign: f64) -> Vec<(f64, f64)> {
+    let (near, far) = STEP_WINDOW_DEG;
+    let offset = |i: usize| {
+        let t = (i as f64 + 0.5) * BIN_DEG;
+        (t - theta_r + 180.0).rem_euclid(360.0) - 180.0
+    };
+    let in_window = |i: &usize| {
+        let x = offset(*i);
+        dev[*i].is_finite() && sign * x >= near && sign * x <= far
+    };
+    if dev.len() != N_BINS || !(theta_r.abs() <= 720.0) {
+        let all = (0..dev.len()).filter(in_window);
+        return all.map(|i| (offset(i), dev[i])).collect();
+    }
+    let (lo, hi) = if sign > 0.0 {
+        (theta_r + near, theta_r + far)
+    } else {
+        (theta_r - far, theta_r - near)
+    };
+    let first = (lo / BIN_DEG - 0.5).floor() as i64 - 2;
+    let last = (hi / BIN_DEG - 0.5).ceil() as i64 + 2;
+    let mut bins: Vec<usize> = (first..=last)
+        .map(|k| k.rem_euclid(N_BINS as i64) as usize)
+        .collect();
+    bins.sort_unstable();
+    bins.dedup();
+    bins.retain(in_window);
+    bins.into_iter().map(|i| (offset(i), dev[i])).collect()
 }
 
 /// Each axis's B from the centred traces of `runs` at the reversal `sites`.
@@ -261,5 +284,39 @@ mod tests {
         assert!((cw + 10.0).abs() < 1e-9, "{cw}");
         // No step at 90°: the slope alone gives 0.
         assert!(step_across(&dev, 90.0, Direction::Ccw).unwrap().abs() < 1e-9);
+    }
+
+    /// The windows near 0°/360° wrap: a reversal at 3° takes its "before" window from
+    /// [343°, 355°], and the points are those a scan of every bin finds, in bin order.
+    #[test]
+    fn windows_wrap_and_hold_every_bin_in_them() {
+        let dev: Vec<f64> = (0..N_BINS)
+            .map(|i| {
+                if i % 97 == 0 {
+                    f64::NAN
+                } else {
+                    (i as f64 * 0.37).sin()
+                }
+            })
+            .collect();
+        for theta_r in [0.0, 3.0, 7.99, 180.0, 340.0, 352.5, 359.99, 360.0, -5.0] {
+            for sign in [1.0, -1.0] {
+                let scanned: Vec<(f64, f64)> = (0..N_BINS)
+                    .filter(|&i| dev[i].is_finite())
+                    .filter_map(|i| {
+                        let t = (i as f64 + 0.5) * BIN_DEG;
+                        let x = (t - theta_r + 180.0).rem_euclid(360.0) - 180.0;
+                        (sign * x >= 8.0 && sign * x <= 20.0).then_some((x, dev[i]))
+                    })
+                    .collect();
+                // 12° of 0.05° bins, less the NaN bins among them.
+                assert!((236..=241).contains(&scanned.len()), "{}", scanned.len());
+                assert_eq!(
+                    window_points(&dev, theta_r, sign),
+                    scanned,
+                    "{theta_r} {sign}"
+                );
+            }
+        }
     }
 }

@@ -333,44 +333,44 @@ pub fn attribute_arc(from_deg: f64, span_deg: f64, sites: &[ReversalSite]) -> At
 /// One axis vector per θ bin of [`BIN_DEG`] along the measured circle,
 /// taken at the first sample that falls in the bin: the commanded position (where the bar's
 /// sensitivity is evaluated, only at the bins a reversal site asks for) or the commanded
-/// speed.
-#[derive(Clone, Debug)]
+/// speed. Its [`N_BINS`] bins (576 kB) are allocated at the first value set: a run that
+/// fills no map (a study's later runs) allocates nothing.
+#[derive(Clone, Debug, Default)]
 pub struct ThetaMap {
+    /// Empty until a value is set, then [`N_BINS`] long.
     bins: Vec<Option<AxisVec>>,
-}
-
-impl Default for ThetaMap {
-    fn default() -> Self {
-        ThetaMap {
-            bins: vec![None; N_BINS],
-        }
-    }
 }
 
 impl ThetaMap {
     /// Whether bin of `theta_deg` still needs a value.
     pub fn wants(&self, theta_deg: f64) -> bool {
-        self.bins[bin_of(theta_deg)].is_none()
+        self.wants_bin(bin_of(theta_deg))
     }
 
     pub fn set(&mut self, theta_deg: f64, s: AxisVec) {
-        self.bins[bin_of(theta_deg)] = Some(s);
+        self.set_bin(bin_of(theta_deg), s);
     }
 
     /// [`ThetaMap::wants`] by bin: [`super::theta::bin_index`] of θ in [0, 360) is its bin.
     #[inline]
     pub fn wants_bin(&self, bin: usize) -> bool {
-        self.bins[bin].is_none()
+        self.bins.get(bin).is_none_or(Option::is_none)
     }
 
     /// [`ThetaMap::set`] by bin.
     #[inline]
     pub fn set_bin(&mut self, bin: usize, s: AxisVec) {
+        if self.bins.is_empty() {
+            self.bins = vec![None; N_BINS];
+        }
         self.bins[bin] = Some(s);
     }
 
     /// The value of the filled bin nearest `theta_deg` (within 5 deg), if any.
     pub fn at(&self, theta_deg: f64) -> Option<AxisVec> {
+        if self.bins.is_empty() {
+            return None;
+        }
         let n = self.bins.len() as isize;
         let i = bin_of(theta_deg) as isize;
         let reach = (5.0 / BIN_DEG) as isize;

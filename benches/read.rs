@@ -35,7 +35,7 @@ use mtsim::program::cone::{write_program, ConePath, ConeProgram};
 use mtsim::AxisVec;
 
 mod common;
-use common::{children_cpu_s, process_cpu_s};
+use common::{children_cpu_s, median_cpu_s, process_cpu_s};
 
 const BLOCKS: usize = 100_000;
 
@@ -393,7 +393,7 @@ const ANALYZE_BLOCKS: usize = 300_000;
 
 /// `mtsim analyze` of a 300,000-block G01 file as a whole process (reading, the reversals,
 /// the feed limits, the notices, the printed table) against `rs274` reading the same file:
-/// CPU time of the child processes, mean of several runs of each.
+/// CPU time of the child processes, the median of several runs of each.
 fn analyze_versus_rs274() {
     let dir = std::env::temp_dir().join(format!("mtsim-bench-analyze-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -402,13 +402,8 @@ fn analyze_versus_rs274() {
     let scenario = vmc_scenario(&dir, "analyze.ngc");
     let runs = if smoke() { 3 } else { 10 };
     let analyze = process_cpu_s(&["analyze".as_ref(), scenario.as_os_str()], runs);
-    let rs = rs274_binary().and_then(|rs274| {
-        let start = children_cpu_s()?;
-        for _ in 0..runs.min(3) {
-            run_rs274(&rs274, &dir, &program);
-        }
-        Some((children_cpu_s()? - start) / runs.min(3) as f64)
-    });
+    let rs = rs274_binary()
+        .and_then(|rs274| median_cpu_s(runs.min(3), || run_rs274(&rs274, &dir, &program)));
     let rate = |s: f64| ANALYZE_BLOCKS as f64 / s / 1e6;
     match (analyze, rs) {
         (Some(a), Some(r)) => println!(

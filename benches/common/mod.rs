@@ -19,12 +19,12 @@ pub fn children_cpu_s() -> Option<f64> {
     None
 }
 
-/// Mean CPU time of one whole `mtsim` process with `args`, s, over `runs` runs; its stdout
-/// is discarded. None where the children's CPU time cannot be read.
+/// Median CPU time of one whole `mtsim` process with `args`, s, over `runs` runs (one run
+/// slowed by a burst of other load on the host does not move it); its stdout is
+/// discarded. None where the children's CPU time cannot be read.
 #[allow(dead_code)] // not every bench runs whole processes
 pub fn process_cpu_s(args: &[&std::ffi::OsStr], runs: usize) -> Option<f64> {
-    let start = children_cpu_s()?;
-    for _ in 0..runs {
+    median_cpu_s(runs, || {
         let status = std::process::Command::new(env!("CARGO_BIN_EXE_mtsim"))
             .args(args)
             .stdout(std::process::Stdio::null())
@@ -32,6 +32,19 @@ pub fn process_cpu_s(args: &[&std::ffi::OsStr], runs: usize) -> Option<f64> {
             .status()
             .expect("mtsim runs");
         assert!(status.success(), "mtsim {args:?} failed");
+    })
+}
+
+/// Median, over `runs` calls of `run`, of the CPU time of the child processes each call
+/// waits for, s.
+#[allow(dead_code)] // not every bench runs whole processes
+pub fn median_cpu_s(runs: usize, mut run: impl FnMut()) -> Option<f64> {
+    let mut times = Vec::with_capacity(runs);
+    for _ in 0..runs.max(1) {
+        let start = children_cpu_s()?;
+        run();
+        times.push(children_cpu_s()? - start);
     }
-    Some((children_cpu_s()? - start) / runs as f64)
+    times.sort_by(f64::total_cmp);
+    Some(times[times.len() / 2])
 }

@@ -55,6 +55,8 @@ pub fn validate(
     let section = "location_errors";
     let mut errors = LocationErrors::default();
     for (key, &value) in location {
+        // A refusal of this key, located at its value.
+        let refuse = |message: String| Err(value_error(path, text, section, key, message));
         // A named layout takes the parameters of geometric-errors.md; a general chain's
         // rotaries all six of each ([`LocationParam::EVERY`]).
         let names = if chain.is_some() {
@@ -68,69 +70,39 @@ pub fn validate(
                 .filter(|p| layout.axes().contains(&p.axis()))
                 .map(|p| p.key())
                 .collect();
-            return Err(value_error(
-                path,
-                text,
-                section,
-                key,
-                format!(
-                    "unknown location error; expected one of {} (ISO 230-7 names with a unit \
-                     suffix _um or _urad)",
-                    known.join(", ")
-                ),
+            return refuse(format!(
+                "unknown location error; expected one of {} (ISO 230-7 names with a unit \
+                 suffix _um or _urad)",
+                known.join(", ")
             ));
         };
         if let Some(link) = chain.and_then(|c| c.link(param.axis())) {
             if link.direction[param.component()].abs() > 1.0 - 1e-12 {
-                return Err(value_error(
-                    path,
-                    text,
-                    section,
-                    key,
-                    format!(
-                        "axis {}'s line lies along this component, which moves or turns it \
-                         along itself (no effect): remove this key",
-                        param.axis()
-                    ),
+                return refuse(format!(
+                    "axis {}'s line lies along this component, which moves or turns it \
+                     along itself (no effect): remove this key",
+                    param.axis()
                 ));
             }
         }
         if layout.rotaries_unmodelled() {
-            return Err(value_error(
-                path,
-                text,
-                section,
-                key,
-                format!(
-                    "the {} layout's rotaries are world coordinates with no modelled axis lines, \
-                     so they carry no location errors; remove this key",
-                    layout.name()
-                ),
+            return refuse(format!(
+                "the {} layout's rotaries are world coordinates with no modelled axis lines, \
+                 so they carry no location errors; remove this key",
+                layout.name()
             ));
         }
         if !layout.axes().contains(&param.axis()) {
-            return Err(value_error(
-                path,
-                text,
-                section,
-                key,
-                format!(
-                    "the {} layout has no {} axis; remove this key",
-                    layout.name(),
-                    param.axis()
-                ),
+            return refuse(format!(
+                "the {} layout has no {} axis; remove this key",
+                layout.name(),
+                param.axis()
             ));
         }
         if !(value.is_finite() && value.abs() <= MAX_LOCATION_ERROR) {
-            return Err(value_error(
-                path,
-                text,
-                section,
-                key,
-                format!(
-                    "must be a finite number within ±{MAX_LOCATION_ERROR} {}, got {value}",
-                    param.unit()
-                ),
+            return refuse(format!(
+                "must be a finite number within ±{MAX_LOCATION_ERROR} {}, got {value}",
+                param.unit()
             ));
         }
         errors.set(param, value);

@@ -324,8 +324,6 @@ pub fn run_lanes(
             following_error: AxisVec::ZERO,
             linear: sp.q,
         }));
-        // Whether a point's position errors are in the block's samples.
-        let mut dirty = false;
         for (i, sink) in sinks.iter_mut().enumerate() {
             if !alive[i] {
                 continue;
@@ -334,13 +332,9 @@ pub fn run_lanes(
             let completed = lanes.completed(i).min(block.len());
             alive[i] = completed == block.len();
             let samples = &mut samples[..completed];
-            if dirty {
-                for sample in samples.iter_mut() {
-                    sample.actual = sample.commanded;
-                    sample.linear = sample.commanded;
-                }
-            }
-            dirty |= !errors[i].is_empty();
+            // Every axis with a position-error table is a driven axis (the tables are
+            // refused on others), so the point's drive outputs overwrite whatever the last
+            // point's errors left in the block's samples.
             for (a, actual, following_error, linear) in lanes.outputs(i) {
                 for (j, sample) in samples.iter_mut().enumerate() {
                     sample.actual[a] = actual[j];

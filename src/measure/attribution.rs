@@ -342,22 +342,14 @@ pub struct ThetaMap {
 }
 
 impl ThetaMap {
-    /// Whether bin of `theta_deg` still needs a value.
-    pub fn wants(&self, theta_deg: f64) -> bool {
-        self.wants_bin(bin_of(theta_deg))
-    }
-
-    pub fn set(&mut self, theta_deg: f64, s: AxisVec) {
-        self.set_bin(bin_of(theta_deg), s);
-    }
-
-    /// [`ThetaMap::wants`] by bin: [`super::theta::bin_index`] of θ in [0, 360) is its bin.
+    /// Whether `bin` still needs a value ([`super::theta::bin_index`] of θ in [0, 360) is
+    /// its bin).
     #[inline]
     pub fn wants_bin(&self, bin: usize) -> bool {
         self.bins.get(bin).is_none_or(Option::is_none)
     }
 
-    /// [`ThetaMap::set`] by bin.
+    /// Sets the value of `bin`.
     #[inline]
     pub fn set_bin(&mut self, bin: usize, s: AxisVec) {
         if self.bins.is_empty() {

@@ -241,34 +241,8 @@ impl BallbarRun {
         }
     }
 
-    /// `a.push(θ, dev_a); b.push(θ, dev_b)` (the trace and its signature), with the θ terms
-    /// computed once.
-    pub fn push_pair(
-        a: &mut BallbarRun,
-        b: &mut BallbarRun,
-        theta_deg: f64,
-        dev_a_um: f64,
-        dev_b_um: f64,
-    ) {
-        let sin_cos = theta_sin_cos(theta_deg);
-        BallbarRun::push_pair_at(a, b, theta_deg, sin_cos, dev_a_um, dev_b_um);
-    }
-
-    /// [`BallbarRun::push_pair`] with `sin_cos` = [`theta_sin_cos`]`(theta_deg)` already
-    /// known (the ball bar's reading carries it, for the trace too).
-    pub fn push_pair_at(
-        a: &mut BallbarRun,
-        b: &mut BallbarRun,
-        theta_deg: f64,
-        sin_cos: (f64, f64),
-        dev_a_um: f64,
-        dev_b_um: f64,
-    ) {
-        let terms = ThetaTerms::new(theta_deg, sin_cos);
-        BallbarRun::push_pair_terms(a, b, terms.as_ref(), dev_a_um, dev_b_um);
-    }
-
-    /// [`BallbarRun::push_pair_at`] with θ's terms already made (None: θ is not finite).
+    /// `a` and `b` (the trace and its signature) take one sample at θ, whose terms are made
+    /// once for both (None: θ is not finite), with deviations `dev_a_um` and `dev_b_um`.
     #[inline]
     pub fn push_pair_terms(
         a: &mut BallbarRun,

@@ -19,9 +19,9 @@ use crate::error::Result;
 use crate::pipeline::{Sample, Sink};
 use crate::{Axis, AxisVec};
 
-/// Slots of [`SharedReadings`]: at least the samples a pass hands each point at a time
-/// (the pipeline's lane block, 256), so that a block's setpoints are read once for all.
-pub const SLOTS: usize = 256;
+/// Slots of [`SharedReadings`]: the samples a pass hands each point at a time (the drives'
+/// lane block), so that a block's setpoints are read once for all.
+pub const SLOTS: usize = crate::drive::lanes::BLOCK;
 
 /// Bits of every value of an axis vector: the key of exact equality (NaN included).
 type Bits = [u64; 9];

@@ -260,7 +260,7 @@ impl BallbarSink {
             r.nonlinear_um,
         );
         // θ is in [0, 360): its map bin is its run bin (bin 0 for a non-finite θ, as
-        // `ThetaMap::wants` puts it).
+        // the θ map's own binning puts it).
         if !self.maps {
             return Some(r);
         }

@@ -34,7 +34,7 @@ use crate::pipeline::{Sample, Sink};
 use crate::Axis;
 
 /// Full blocks of one run's rows held in memory, at most, before they spill to the
-/// temporary file, bytes (three blocks of five axes: 49,152 rows).
+/// temporary file, bytes (the CSV trace's full rows: about twelve blocks of 4,096 rows).
 pub const RAW_IN_MEMORY: usize = 8 << 20;
 
 /// Writes the trace of every run of a simulation.

@@ -15,6 +15,13 @@
 //! Min/max statistics on `time_s` and `line` (unsigned), which a reader filters rows by.
 //! The same rows give the same bytes (fixed `created_by`, no timestamps).
 
+// Parquet's plain encoding is little-endian, and the columns are written from memory as
+// they are.
+#[cfg(target_endian = "big")]
+compile_error!(
+    "trace.parquet writes the f64 columns' memory as they are: a little-endian target is needed"
+);
+
 use std::fs::File;
 use std::io::{IoSlice, Write};
 use std::path::PathBuf;

@@ -139,10 +139,16 @@ struct Track {
 
 /// Lanes per sample: one per entry of [`AxisVec`] (X Y Z A B C U V W).
 const LANES: usize = 9;
-const _: () = assert!(
-    LANES == 9,
-    "LimitsMonitor::push_inline passes lanes 0..8, then 8"
-);
+const _: () = assert!(LANES == 9, "LimitsMonitor::push_avx passes lanes 0..8, then 8");
+
+/// A sample's finite-difference factors ([`LimitsMonitor::factors`]).
+struct Factors {
+    has_v: bool,
+    has_a: bool,
+    kv: f64,
+    ka: f64,
+    kj: f64,
+}
 
 /// The per-sample state and limits of all nine axis slots (`LANES`), flat (one lane per entry of
 /// [`AxisVec`]): the common case is then a few vector operations. A slot with no axis, or
@@ -175,6 +181,8 @@ pub struct LimitsMonitor<'a> {
     violations: Vec<Violation>,
     /// Acceleration and jerk only from samples of one block (programmed timing).
     within_blocks: bool,
+    /// Whether an axis sits in the ninth lane (W): the lanes then go 0..8 and 8, else 0..8.
+    ninth_lane: bool,
 }
 
 /// What the next sample needs of the previous one, written in place.
@@ -241,6 +249,7 @@ impl<'a> LimitsMonitor<'a> {
             lanes.v_trip[i] = l.velocity_trip;
             lanes.a_trip[i] = l.acceleration_trip;
         }
+        let ninth_lane = tracks.iter().any(|t| t.limits.index == LANES - 1);
         LimitsMonitor {
             machine,
             theta_of,
@@ -259,6 +268,7 @@ impl<'a> LimitsMonitor<'a> {
             open: 0,
             violations: Vec::new(),
             within_blocks: false,
+            ninth_lane,
         }
     }
 
@@ -281,22 +291,15 @@ impl<'a> LimitsMonitor<'a> {
         self.push_inline(s)
     }
 
-    /// [`LimitsMonitor::push`] compiled for AVX (four lanes per instruction; no FMA, so the
-    /// figures are those of the plain build).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn push_avx(&mut self, s: &Sample) {
-        self.push_inline(s)
-    }
-
+    /// What a sample's finite differences need: whether it has a velocity, an acceleration
+    /// and a jerk, and their factors `1/Δt` (0 where one does not apply, so that it is 0 in
+    /// every lane, NaN where the positions are not finite: it raises no peak and trips
+    /// nothing, and the lanes stay free of branches). Moves the previous sample's time on.
     #[inline(always)]
-    fn push_inline(&mut self, s: &Sample) {
-        let x = &s.actual.0;
+    fn factors(&mut self, s: &Sample) -> Factors {
         let p = &mut self.previous;
         // A velocity needs an earlier sample, an acceleration also a velocity of the same
-        // block. Where one does not apply its factor is 0, so that it is 0 in every lane
-        // (NaN where the positions are not finite): it raises no peak and trips nothing, and
-        // the pass stays free of branches.
+        // block.
         let in_block = p.valid && p.block_index == s.block_index;
         let joined = p.valid && (!self.within_blocks || in_block);
         let has_v = p.valid && s.time_s > p.time_s;
@@ -304,46 +307,131 @@ impl<'a> LimitsMonitor<'a> {
         let has_j = has_a && p.has_a;
         // As `(actual - previous) * (1 / dt)`, element by element: the same rounding.
         let k = 1.0 / (s.time_s - p.time_s);
-        let (kv, ka) = (if has_v { k } else { 0.0 }, if has_a { k } else { 0.0 });
-        let kj = if has_j { k } else { 0.0 };
-        let (mut v, mut a) = ([0.0; LANES], [0.0; LANES]);
-        let n = &mut self.lanes;
-        // Whether a lane is outside a limit, or not a number: every lane is checked, axis or
-        // not (a slot with no axis has infinite limits), and `track` sorts them out.
-        let mut lane = |i: usize| -> bool {
-            let xi = x[i];
-            v[i] = (xi - p.q[i]) * kv;
-            a[i] = (v[i] - p.v[i]) * ka;
-            let jerk = ((a[i] - p.a[i]) * kj).abs();
-            p.q[i] = xi;
-            p.v[i] = v[i];
-            p.a[i] = a[i];
-            n.peak_j[i] = n.peak_j[i].max(jerk);
-            // `f64::min`/`max`: a NaN sample keeps the old extreme. (Written as `a < b ? a :
-            // b`, the select becomes a store only where the value changed, which is a
-            // masked store, slow on AMD.)
-            n.min[i] = n.min[i].min(xi);
-            n.max[i] = n.max[i].max(xi);
-            let speed = v[i].abs() * 60.0;
-            n.peak_v[i] = n.peak_v[i].max(speed);
-            let accel = a[i].abs();
-            n.peak_a[i] = n.peak_a[i].max(accel);
-            !((xi <= n.hi[i]) & (xi >= n.lo[i]) & (speed <= n.v_trip[i]) & (accel <= n.a_trip[i]))
-        };
-        // Eight lanes as two full vectors, the ninth on its own: a loop of nine is
-        // vectorised with masked loads and stores, which are slow.
-        let mut outside = false;
-        for i in 0..8 {
-            outside |= lane(i);
-        }
-        outside |= lane(8);
         p.valid = true;
         p.time_s = s.time_s;
         p.block_index = s.block_index;
         p.has_v = has_v && (!self.within_blocks || in_block);
         p.has_a = has_a;
+        Factors {
+            has_v,
+            has_a,
+            kv: if has_v { k } else { 0.0 },
+            ka: if has_a { k } else { 0.0 },
+            kj: if has_j { k } else { 0.0 },
+        }
+    }
+
+    /// Lane `i` of a sample at `x` (its position): velocity and acceleration into `v` and
+    /// `a`, the previous sample and the extremes moved on. Whether the lane is outside a
+    /// limit, or not a number: every lane is checked, axis or not (a slot with no axis has
+    /// infinite limits), and `track` sorts them out.
+    #[inline(always)]
+    fn lane(&mut self, i: usize, x: f64, f: &Factors, v: &mut [f64; LANES], a: &mut [f64; LANES]) -> bool {
+        let (p, n) = (&mut self.previous, &mut self.lanes);
+        v[i] = (x - p.q[i]) * f.kv;
+        a[i] = (v[i] - p.v[i]) * f.ka;
+        let jerk = ((a[i] - p.a[i]) * f.kj).abs();
+        p.q[i] = x;
+        p.v[i] = v[i];
+        p.a[i] = a[i];
+        n.peak_j[i] = n.peak_j[i].max(jerk);
+        // `f64::min`/`max`: a NaN sample keeps the old extreme.
+        n.min[i] = n.min[i].min(x);
+        n.max[i] = n.max[i].max(x);
+        let speed = v[i].abs() * 60.0;
+        n.peak_v[i] = n.peak_v[i].max(speed);
+        let accel = a[i].abs();
+        n.peak_a[i] = n.peak_a[i].max(accel);
+        !((x <= n.hi[i]) & (x >= n.lo[i]) & (speed <= n.v_trip[i]) & (accel <= n.a_trip[i]))
+    }
+
+    /// [`LimitsMonitor::push`] with the first eight lanes as two vectors of four (AVX, no
+    /// FMA: the figures are those of the plain build, bit for bit). The extremes and peaks
+    /// are `max(value, peak)` as `vmaxpd` takes it (`value > peak ? value : peak`), which is
+    /// `f64::max` while the peak is a number, as it always is (it starts at 0 or ±∞ and a
+    /// NaN value keeps it). The ninth lane (W) only when an axis sits there.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn push_avx(&mut self, s: &Sample) {
+        use std::arch::x86_64::*;
+        let f = self.factors(s);
+        let x = &s.actual.0;
+        let (mut v, mut a) = ([0.0; LANES], [0.0; LANES]);
+        // SAFETY: every load and store is of four lanes at 0 or 4 of nine-lane arrays.
+        let inside = unsafe {
+            let (p, n) = (&mut self.previous, &mut self.lanes);
+            let abs = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
+            let (kv, ka, kj) = (
+                _mm256_set1_pd(f.kv),
+                _mm256_set1_pd(f.ka),
+                _mm256_set1_pd(f.kj),
+            );
+            let per_min = _mm256_set1_pd(60.0);
+            let mut inside = -1;
+            for i in [0, 4] {
+                // A macro, not a closure: a closure would not have AVX enabled.
+                macro_rules! ld {
+                    ($r:expr) => {
+                        _mm256_loadu_pd($r.as_ptr().add(i))
+                    };
+                }
+                let xi = ld!(x);
+                let vi = _mm256_mul_pd(_mm256_sub_pd(xi, ld!(&p.q)), kv);
+                let ai = _mm256_mul_pd(_mm256_sub_pd(vi, ld!(&p.v)), ka);
+                let jerk = _mm256_and_pd(_mm256_mul_pd(_mm256_sub_pd(ai, ld!(&p.a)), kj), abs);
+                _mm256_storeu_pd(p.q.as_mut_ptr().add(i), xi);
+                _mm256_storeu_pd(p.v.as_mut_ptr().add(i), vi);
+                _mm256_storeu_pd(p.a.as_mut_ptr().add(i), ai);
+                _mm256_storeu_pd(v.as_mut_ptr().add(i), vi);
+                _mm256_storeu_pd(a.as_mut_ptr().add(i), ai);
+                let speed = _mm256_mul_pd(_mm256_and_pd(vi, abs), per_min);
+                let accel = _mm256_and_pd(ai, abs);
+                for (value, peak) in [
+                    (jerk, &mut n.peak_j),
+                    (xi, &mut n.max),
+                    (speed, &mut n.peak_v),
+                    (accel, &mut n.peak_a),
+                ] {
+                    let at = peak.as_mut_ptr().add(i);
+                    _mm256_storeu_pd(at, _mm256_max_pd(value, _mm256_loadu_pd(at)));
+                }
+                let at = n.min.as_mut_ptr().add(i);
+                _mm256_storeu_pd(at, _mm256_min_pd(xi, _mm256_loadu_pd(at)));
+                let ok = _mm256_and_pd(
+                    _mm256_and_pd(
+                        _mm256_cmp_pd::<_CMP_LE_OQ>(xi, ld!(&n.hi)),
+                        _mm256_cmp_pd::<_CMP_GE_OQ>(xi, ld!(&n.lo)),
+                    ),
+                    _mm256_and_pd(
+                        _mm256_cmp_pd::<_CMP_LE_OQ>(speed, ld!(&n.v_trip)),
+                        _mm256_cmp_pd::<_CMP_LE_OQ>(accel, ld!(&n.a_trip)),
+                    ),
+                );
+                inside &= _mm256_movemask_pd(ok);
+            }
+            inside == 0xF
+        };
+        let mut outside = !inside;
+        if self.ninth_lane {
+            outside |= self.lane(LANES - 1, x[LANES - 1], &f, &mut v, &mut a);
+        }
         if outside || self.open != 0 {
-            self.track(s, has_v.then_some(&v), has_a.then_some(&a));
+            self.track(s, f.has_v.then_some(&v), f.has_a.then_some(&a));
+        }
+    }
+
+    #[inline(always)]
+    fn push_inline(&mut self, s: &Sample) {
+        let f = self.factors(s);
+        let x = &s.actual.0;
+        let (mut v, mut a) = ([0.0; LANES], [0.0; LANES]);
+        let lanes = if self.ninth_lane { LANES } else { LANES - 1 };
+        let mut outside = false;
+        for i in 0..lanes {
+            outside |= self.lane(i, x[i], &f, &mut v, &mut a);
+        }
+        if outside || self.open != 0 {
+            self.track(s, f.has_v.then_some(&v), f.has_a.then_some(&a));
         }
     }
 

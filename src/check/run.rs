@@ -115,6 +115,24 @@ fn usage_by_axis<'de, D: Deserializer<'de>>(
     Ok(axes)
 }
 
+/// The limits monitor and the collision scene as one sink: each sample to both, in that
+/// order, with one call per sample.
+struct Monitors<'a> {
+    limits: LimitsMonitor<'a>,
+    scene: Option<SceneSink>,
+}
+
+impl Sink for Monitors<'_> {
+    #[inline]
+    fn push(&mut self, s: &Sample) -> Result<()> {
+        self.limits.push(s);
+        match self.scene.as_mut() {
+            Some(scene) => scene.push(s),
+            None => Ok(()),
+        }
+    }
+}
+
 /// Tool changes read from the move stream ahead of the samples: (block index, tool number).
 type ToolChanges = Rc<RefCell<VecDeque<(u64, u32)>>>;
 
@@ -135,6 +153,7 @@ struct SceneSink {
 }
 
 impl Sink for SceneSink {
+    #[inline]
     fn push(&mut self, s: &Sample) -> Result<()> {
         if s.block_index != self.changes_applied_at {
             self.changes_applied_at = s.block_index;
@@ -248,7 +267,7 @@ pub fn check_with(
     }
     let theta_of = move |q: &AxisVec| frame.map(|f| f.theta_deg(&kin.forward(q).tip));
     let mut limits = LimitsMonitor::new(machine, &theta_of);
-    let mut scene = match scenario.check.collisions {
+    let scene = match scenario.check.collisions {
         false => None,
         true => {
             let near_miss = options.near_miss_mm.unwrap_or(
@@ -300,15 +319,11 @@ pub fn check_with(
         program_path: scenario.path.clone(),
         max_samples: work::check_up_front(scenario, 0.0)?,
     };
-    let stats = {
-        let mut sinks: Vec<&mut dyn Sink> = vec![&mut limits];
-        if let Some(scene) = scene.as_mut() {
-            sinks.push(scene);
-        }
-        pipeline::run(moves, machine, &run_options, &mut sinks, &|_| {})?
-    };
+    let mut monitors = Monitors { limits, scene };
+    let stats = pipeline::run(moves, machine, &run_options, &mut [&mut monitors], &|_| {})?;
     let (samples, last_time) = (stats.samples, stats.end_time_s);
     let feed_reductions = stats.feed_reductions;
+    let Monitors { limits, scene } = monitors;
     let scene = scene.map(|s| s.monitor);
     let (usage, mut violations) = limits.finish();
     if violations.iter().any(|v| v.kind == ViolationKind::Travel) {

@@ -687,6 +687,7 @@ impl Scene {
     }
 
     /// The monitor's motion between two samples on a general chain ([`LinkedBodies::motion`]).
+    #[inline]
     pub(crate) fn chain_motion(&self, a: &AxisVec, b: &AxisVec) -> Option<[f64; 3]> {
         self.linked
             .as_ref()

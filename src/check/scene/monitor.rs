@@ -392,42 +392,35 @@ impl SceneMonitor {
 
     /// One sample: time (s), angle on the nominal path (deg) if any, program line, axis
     /// positions (mm, deg). Samples with non-finite positions are ignored.
+    #[inline]
     pub fn push(&mut self, time_s: f64, theta_deg: Option<f64>, line: usize, q: &AxisVec) {
         self.push_sample(time_s, Theta::Known(theta_deg), line, q);
     }
 
     /// One sample whose θ is computed, when needed, by the function of
     /// [`SceneMonitor::with_theta`] (none without it).
+    #[inline]
     pub fn push_at(&mut self, time_s: f64, line: usize, q: &AxisVec) {
         self.push_sample(time_s, Theta::OfQ, line, q);
     }
 
+    /// One sample. Most samples only advance the motion sums (this, inlined into the
+    /// caller); those at which a pair may be due go on to [`SceneMonitor::visit_due`].
+    #[inline]
     fn push_sample(&mut self, time_s: f64, theta: Theta, line: usize, q: &AxisVec) {
         // Written on the flat arrays: the `AxisVec` operators are not inlined across crates,
-        // and this runs on every sample.
-        if !(time_s.is_finite() && q.0.iter().all(|v| v.is_finite())) {
+        // and this runs on every sample. Every lane is tested (no early exit), so that the
+        // test is a few vector compares.
+        let finite = q.0.iter().fold(time_s.is_finite(), |ok, v| ok & v.is_finite());
+        if !finite {
             return;
         }
         self.samples += 1;
         let step = self.prev.as_ref().map(|prev| self.motion(&prev.q, q));
-        // Relative motion of the tip in the table and cradle frames: chord and Ω per frame,
-        // |Δu| and U.
-        let mut relative: Option<([(f64, f64); 2], f64, f64)> = None;
-        if self.uses_relative {
-            let u =
-                Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]) - self.scene.kinematics.pivot_mm;
-            let now = in_table_frames(&self.scene.kinematics, q, u);
-            let u_norm = u.norm();
-            if let (Some((before, u_before)), Some(s)) = (self.prev_relative, step) {
-                let omega = [s[1] + s[2], s[1]];
-                relative = Some((
-                    [0, 1].map(|f| ((now[f] - before[f]).norm(), omega[f])),
-                    s[0],
-                    u_norm.max(u_before),
-                ));
-            }
-            self.prev_relative = Some((now, u_norm));
-        }
+        let relative = match self.uses_relative {
+            true => self.relative_step(q, step),
+            false => None,
+        };
         // Sample by sample only the sums advance; the pairs are visited once σ reaches the
         // earliest time one of them may be due.
         let prev_sum = self.sum;
@@ -439,23 +432,16 @@ impl SceneMonitor {
         let sigma = dot3(&self.w_max, &self.sum);
         let allowance = 1e-12 * (1.0 + sigma);
         let lazy = step.is_some() && !self.exhaustive && !self.uses_relative;
-        // The sample is built in place in `prev`, the slot that keeps it.
-        if lazy && sigma < self.next_due && !self.hot_due(allowance) {
-            self.prev = Some(Sample {
-                time_s,
-                theta,
-                line,
-                q: *q,
-            });
-            return;
-        }
         let now = Sample {
             time_s,
             theta,
             line,
             q: *q,
         };
-        let mut poses = BodyPoses::new(q);
+        if lazy && sigma < self.next_due && !self.hot_due(allowance) {
+            self.prev = Some(now);
+            return;
+        }
         let visit = Visit {
             step,
             prev_sum,
@@ -463,10 +449,43 @@ impl SceneMonitor {
             sigma,
             allowance,
         };
+        self.visit_due(&visit, now, lazy);
+    }
+
+    /// The tool tip's motion relative to the table and cradle frames from the previous
+    /// sample to `q`: chord and Ω per frame, |Δu| and U (for the relative-motion bound).
+    #[inline(never)]
+    fn relative_step(
+        &mut self,
+        q: &AxisVec,
+        step: Option<[f64; 3]>,
+    ) -> Option<([(f64, f64); 2], f64, f64)> {
+        let u = Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]) - self.scene.kinematics.pivot_mm;
+        let now = in_table_frames(&self.scene.kinematics, q, u);
+        let u_norm = u.norm();
+        let mut relative = None;
+        if let (Some((before, u_before)), Some(s)) = (self.prev_relative, step) {
+            let omega = [s[1] + s[2], s[1]];
+            relative = Some((
+                [0, 1].map(|f| ((now[f] - before[f]).norm(), omega[f])),
+                s[0],
+                u_norm.max(u_before),
+            ));
+        }
+        self.prev_relative = Some((now, u_norm));
+        relative
+    }
+
+    /// Visits, at sample `now`, the pairs that may be due: only the hot ones while σ is
+    /// short of the next due value of the others (`lazy`), else every pair σ has reached.
+    #[inline(never)]
+    fn visit_due(&mut self, visit: &Visit, now: Sample, lazy: bool) {
+        let mut poses = BodyPoses::new(&now.q);
+        let sigma = visit.sigma;
         if lazy && sigma < self.next_due {
             // Only a hot pair may be due: the others keep their sums and their σ.
             for h in 0..self.hot.len() {
-                self.visit(self.hot[h], &visit, &mut poses, &now);
+                self.visit(self.hot[h], visit, &mut poses, &now);
             }
         } else {
             // A full visit brings up to date only the pairs that may be due (σ past their
@@ -490,7 +509,7 @@ impl SceneMonitor {
                 if i == n {
                     break;
                 }
-                self.visit(i, &visit, &mut poses, &now);
+                self.visit(i, visit, &mut poses, &now);
                 if self.dues[i] < next_due {
                     next_due = self.dues[i];
                 }

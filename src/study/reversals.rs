@@ -126,13 +126,7 @@ const GRID_STEPS: usize = 720;
 
 /// Analyses the exact cone path at tool-ball feed `feed_mm_min`.
 pub fn analyse_cone(path: &ConePath, feed_mm_min: f64) -> Analysis {
-    let step = TAU / GRID_STEPS as f64;
-    let grid: Vec<(f64, AxisVec)> = (0..=GRID_STEPS)
-        .map(|k| {
-            let theta = (k as f64 + 0.5) * step;
-            (theta, path.derivative(theta))
-        })
-        .collect();
+    let grid = derivative_grid(path);
     let theta_rate = feed_mm_min / path.cone.radius_mm(); // rad/min
                                                           // C is tracked continuously over one revolution for its range.
     let (mut c_min, mut c_max) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -167,20 +161,43 @@ pub fn analyse_cone(path: &ConePath, feed_mm_min: f64) -> Analysis {
                 max,
                 range: max - min,
                 peak_speed_per_min: peak_rate * theta_rate, // (mm or deg)/rad · rad/min
-                reversals_deg: {
-                    let mut r: Vec<f64> = reversals
-                        .iter()
-                        .map(|t| normalize_deg(t.to_degrees()))
-                        .collect();
-                    r.sort_by(f64::total_cmp);
-                    r
-                },
+                reversals_deg: sorted_deg(&reversals),
                 reversal_lines: None,
                 reversals_not_listed: None,
             }
         })
         .collect();
     Analysis { axes }
+}
+
+/// Each axis's reversal angles on the exact cone path, deg, sorted: those of
+/// [`analyse_cone`], without the ranges and peak speeds (what a ball-bar run needs).
+pub fn cone_reversals_deg(path: &ConePath) -> Vec<(Axis, Vec<f64>)> {
+    let grid = derivative_grid(path);
+    path.kinematics
+        .layout
+        .axes()
+        .iter()
+        .map(|&axis| (axis, sorted_deg(&reversal_roots(path, &grid, axis))))
+        .collect()
+}
+
+/// dq/dθ at the middle of each of the `GRID_STEPS` steps of a revolution (and one past).
+fn derivative_grid(path: &ConePath) -> Vec<(f64, AxisVec)> {
+    let step = TAU / GRID_STEPS as f64;
+    (0..=GRID_STEPS)
+        .map(|k| {
+            let theta = (k as f64 + 0.5) * step;
+            (theta, path.derivative(theta))
+        })
+        .collect()
+}
+
+/// Angles in rad as deg in [0, 360), sorted.
+fn sorted_deg(rad: &[f64]) -> Vec<f64> {
+    let mut r: Vec<f64> = rad.iter().map(|t| normalize_deg(t.to_degrees())).collect();
+    r.sort_by(f64::total_cmp);
+    r
 }
 
 /// Roots of dq_axis/dθ with a sign change, rad.
@@ -261,6 +278,27 @@ pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
         ),
         Program::Circle { circle, .. } => Ok(analyse_circle(circle, scenario.machine.axes())),
     }
+}
+
+/// Each axis's reversal angles of a scenario's program, deg: those of [`analyse_scenario`],
+/// for a generated cone without the ranges and peak speeds.
+pub fn scenario_reversals_deg(scenario: &Scenario) -> Result<Vec<(Axis, Vec<f64>)>> {
+    match &scenario.program {
+        Program::Cone { cone, .. } => Ok(cone_reversals_deg(&ConePath::new(
+            *cone,
+            &scenario.machine,
+        ))),
+        _ => Ok(reversals_deg(analyse_scenario(scenario)?)),
+    }
+}
+
+/// Each axis's reversal angles of an analysis, deg.
+pub fn reversals_deg(analysis: Analysis) -> Vec<(Axis, Vec<f64>)> {
+    analysis
+        .axes
+        .into_iter()
+        .map(|a| (a.axis, a.reversals_deg))
+        .collect()
 }
 
 /// Analyses the moves of an NC program. `frame`, when given, supplies θ for the turning

@@ -31,7 +31,7 @@ use crate::program;
 use crate::report::create_dir;
 use crate::report::trace::TraceSink;
 use crate::study::glance;
-use crate::study::reversals::{analyse_scenario, MoveAnalysis};
+use crate::study::reversals::{reversals_deg, scenario_reversals_deg, MoveAnalysis};
 use crate::Axis;
 
 /// What a simulation found.
@@ -216,17 +216,18 @@ pub(crate) fn directions_of(scenario: &Scenario) -> Vec<Direction> {
 
 /// The reversal analysis of the scenario's program: to ride along the runs (a file
 /// program), or done (a generated one, whose analysis has its own closed form).
+/// Of a done analysis only each axis's reversal angles (deg) are kept.
 #[allow(clippy::type_complexity)]
 pub(crate) fn analyses(
     scenario: &Scenario,
 ) -> Result<(
     Option<Rc<RefCell<MoveAnalysis<'_>>>>,
-    Option<crate::study::reversals::Analysis>,
+    Option<Vec<(Axis, Vec<f64>)>>,
 )> {
     let along = along_analysis(scenario);
     let done = match along {
         Some(_) => None,
-        None => Some(analyse_scenario(scenario)?),
+        None => Some(scenario_reversals_deg(scenario)?),
     };
     Ok((along, done))
 }
@@ -321,25 +322,21 @@ impl SharedRuns {
         machine: &'m crate::input::Machine,
         (along, done): (
             Option<Rc<RefCell<MoveAnalysis<'m>>>>,
-            Option<crate::study::reversals::Analysis>,
+            Option<Vec<(Axis, Vec<f64>)>>,
         ),
         directions: Vec<Direction>,
         sim_time_s: f64,
         setpoints: u64,
         feed_reductions: Vec<FeedReduction>,
     ) -> SharedRuns {
-        let analysis = done.or_else(|| {
+        let reversals = done.or_else(|| {
             let along = along?;
             let rode =
                 std::mem::replace(&mut *along.borrow_mut(), MoveAnalysis::new(machine, None));
-            Some(rode.finish())
+            Some(reversals_deg(rode.finish()))
         });
         SharedRuns {
-            reversals: analysis
-                .iter()
-                .flat_map(|a| &a.axes)
-                .map(|a| (a.axis, a.reversals_deg.clone()))
-                .collect(),
+            reversals: reversals.unwrap_or_default(),
             sim_time_s,
             setpoints,
             directions,

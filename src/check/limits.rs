@@ -139,7 +139,10 @@ struct Track {
 
 /// Lanes per sample: one per entry of [`AxisVec`] (X Y Z A B C U V W).
 const LANES: usize = 9;
-const _: () = assert!(LANES == 9, "LimitsMonitor::push_avx passes lanes 0..8, then 8");
+const _: () = assert!(
+    LANES == 9,
+    "LimitsMonitor::push_avx passes lanes 0..8, then 8"
+);
 
 /// A sample's finite-difference factors ([`LimitsMonitor::factors`]).
 struct Factors {
@@ -326,7 +329,14 @@ impl<'a> LimitsMonitor<'a> {
     /// limit, or not a number: every lane is checked, axis or not (a slot with no axis has
     /// infinite limits), and `track` sorts them out.
     #[inline(always)]
-    fn lane(&mut self, i: usize, x: f64, f: &Factors, v: &mut [f64; LANES], a: &mut [f64; LANES]) -> bool {
+    fn lane(
+        &mut self,
+        i: usize,
+        x: f64,
+        f: &Factors,
+        v: &mut [f64; LANES],
+        a: &mut [f64; LANES],
+    ) -> bool {
         let (p, n) = (&mut self.previous, &mut self.lanes);
         v[i] = (x - p.q[i]) * f.kv;
         a[i] = (v[i] - p.v[i]) * f.ka;
@@ -566,5 +576,82 @@ impl Sink for LimitsMonitor<'_> {
     fn push(&mut self, sample: &Sample) -> Result<()> {
         LimitsMonitor::push(self, sample);
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A walk of five axes over blocks of 40 samples at 1 ms: steady motion, a travel
+    /// crossing, velocity and acceleration spikes, a repeated time and a NaN position.
+    fn samples() -> Vec<Sample> {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut noise = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut q = AxisVec::ZERO;
+        let mut out = Vec::new();
+        for k in 0..2000u64 {
+            // X swings through its travel limit at 60 mm; the others walk.
+            q.0[0] = 55.0 + 10.0 * (k as f64 / 200.0).sin();
+            for (i, step) in [(1, -0.03), (2, 0.01), (3, 0.02), (5, 0.1)] {
+                q.0[i] += step * (1.0 + 0.002 * noise());
+            }
+            if k % 300 == 150 {
+                q.0[1] += 3.0; // a jump: velocity and acceleration far past their limits
+            }
+            let mut actual = q;
+            if k == 1234 {
+                actual.0[1] = f64::NAN;
+            }
+            out.push(Sample {
+                index: k,
+                time_s: if k == 700 { 0.699 } else { k as f64 * 1e-3 },
+                line: 10 + k as usize / 40,
+                block_index: k / 40,
+                commanded: q,
+                actual,
+                following_error: AxisVec::ZERO,
+                linear: actual,
+            });
+        }
+        out
+    }
+
+    #[test]
+    fn the_vector_lanes_give_the_plain_lanes_figures_bit_for_bit() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/trt-ac.toml");
+        let mut machine = Machine::load(&path).unwrap();
+        machine.axis_mut(Axis::X).max = 60.0;
+        let theta = |q: &AxisVec| Some(q.0[0]);
+        for within_blocks in [false, true] {
+            let monitor = || {
+                let m = LimitsMonitor::new(&machine, &theta);
+                if within_blocks {
+                    m.within_blocks()
+                } else {
+                    m
+                }
+            };
+            let (mut plain, mut vector) = (monitor(), monitor());
+            for s in &samples() {
+                plain.push_inline(s);
+                vector.push(s);
+            }
+            let (plain, vector) = (plain.finish(), vector.finish());
+            assert!(!plain.1.is_empty(), "the walk crosses limits");
+            let x = samples()
+                .iter()
+                .map(|s| s.actual.0[0])
+                .fold(f64::MIN, f64::max);
+            let usage_x = vector.0.iter().find(|u| u.axis == Axis::X).unwrap();
+            assert_eq!(usage_x.max.to_bits(), x.to_bits());
+            // Debug prints the shortest text that reads back to the same bits.
+            assert_eq!(format!("{plain:?}"), format!("{vector:?}"));
+        }
     }
 }

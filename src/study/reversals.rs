@@ -284,10 +284,9 @@ pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
 /// for a generated cone without the ranges and peak speeds.
 pub fn scenario_reversals_deg(scenario: &Scenario) -> Result<Vec<(Axis, Vec<f64>)>> {
     match &scenario.program {
-        Program::Cone { cone, .. } => Ok(cone_reversals_deg(&ConePath::new(
-            *cone,
-            &scenario.machine,
-        ))),
+        Program::Cone { cone, .. } => {
+            Ok(cone_reversals_deg(&ConePath::new(*cone, &scenario.machine)))
+        }
         _ => Ok(reversals_deg(analyse_scenario(scenario)?)),
     }
 }
@@ -554,4 +553,29 @@ pub fn analyse_circle(circle: &CircleTest, axes: &[Axis]) -> Analysis {
         })
         .collect();
     Analysis { axes }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cones_reversal_angles_alone_are_those_of_its_analysis() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        for name in ["cone-15-10", "cone-45-30", "cone-15-10-offset"] {
+            let scenario = Scenario::load(&root.join(format!("scenarios/{name}.toml"))).unwrap();
+            let full = reversals_deg(analyse_scenario(&scenario).unwrap());
+            let alone = scenario_reversals_deg(&scenario).unwrap();
+            assert!(
+                full.iter().any(|(_, r)| !r.is_empty()),
+                "{name} has reversals"
+            );
+            let bits = |r: &[(Axis, Vec<f64>)]| -> Vec<(Axis, Vec<u64>)> {
+                r.iter()
+                    .map(|(a, d)| (*a, d.iter().map(|v| v.to_bits()).collect()))
+                    .collect()
+            };
+            assert_eq!(bits(&full), bits(&alone), "{name}");
+        }
+    }
 }

@@ -411,7 +411,9 @@ impl SceneMonitor {
         // Written on the flat arrays: the `AxisVec` operators are not inlined across crates,
         // and this runs on every sample. Every lane is tested (no early exit), so that the
         // test is a few vector compares.
-        let finite = q.0.iter().fold(time_s.is_finite(), |ok, v| ok & v.is_finite());
+        let finite =
+            q.0.iter()
+                .fold(time_s.is_finite(), |ok, v| ok & v.is_finite());
         if !finite {
             return;
         }

@@ -28,7 +28,7 @@ use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::TraceFormat;
 use crate::measure::ballbar::Centring;
-use crate::measure::{is_measured, BallbarRun, BarGeometry, BarReading};
+use crate::measure::{is_measured, BarGeometry, BarReading};
 use crate::numeric::push_fixed_bytes_const;
 use crate::pipeline::{Sample, Sink};
 use crate::Axis;
@@ -257,14 +257,10 @@ impl TraceSink {
         })
     }
 
-    /// Ends the last run (centred with the run of its direction in `runs`, if
-    /// [`TraceSink::end_run`] was not called) and puts the trace file in place.
-    pub fn finish(mut self, runs: &[BallbarRun]) -> Result<()> {
-        let centring = runs
-            .iter()
-            .find(|r| r.direction() == self.direction)
-            .map(|r| r.centring());
-        self.end_run(centring)?;
+    /// Puts the trace file in place; every run's rows were written by
+    /// [`TraceSink::end_run`], the only place that knows their centring.
+    pub fn finish(mut self) -> Result<()> {
+        debug_assert!(self.held.is_empty(), "a run's rows not ended by end_run");
         let out = match self.out.take() {
             Some(out) => out,
             None => self.open()?,

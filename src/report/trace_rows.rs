@@ -1,15 +1,17 @@
 //! The rows of one run of a trace, column by column, held until the run's centring is known:
 //! what `trace.csv` ([`super::trace`]) and `trace.parquet` ([`super::trace_parquet`]) are
-//! written from, and the write error both report.
+//! written from, the spill file of what a run holds past its memory, and the write error
+//! both formats report.
 //!
 //! A [`Block`] holds up to [`BLOCK_ROWS`] rows, each column a slice of that many values, so
 //! that a block is a row group of `trace.parquet` as it stands (a column chunk is a slice),
-//! and a spilled block goes to disk and back as one read or write.
+//! and a spilled block goes to disk and back as one read or write ([`SpillFile`]).
 
-use std::io::{Read, Write};
-use std::path::Path;
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Read, Seek, Write};
+use std::path::{Path, PathBuf};
 
-use crate::error::Error;
+use crate::error::{Error, Result};
 use crate::measure::ballbar::Centring;
 
 /// Rows a block holds: a row group of `trace.parquet` (4 s of machine time at 1 ms; about
@@ -38,6 +40,67 @@ pub(super) fn write_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ 
     move |source| Error::Write {
         path: path.to_path_buf(),
         source,
+    }
+}
+
+/// A binary temporary file for what a run holds past the memory it may use (see
+/// `super::trace::RAW_IN_MEMORY`): created at the first spill, emptied at each run's end for
+/// the next, removed when dropped.
+pub(super) struct SpillFile {
+    path: PathBuf,
+    file: Option<BufWriter<File>>,
+}
+
+impl SpillFile {
+    pub fn new(path: PathBuf) -> SpillFile {
+        SpillFile { path, file: None }
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The file to append to, created at the first call.
+    pub fn writer(&mut self) -> Result<&mut BufWriter<File>> {
+        if self.file.is_none() {
+            let file = File::options()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(true)
+                .open(&self.path)
+                .map_err(write_error(&self.path))?;
+            self.file = Some(BufWriter::with_capacity(1 << 16, file));
+        }
+        Ok(self.file.as_mut().expect("created above"))
+    }
+
+    /// What was written since the last [`SpillFile::clear`], from its start.
+    pub fn reader(&mut self) -> Result<BufReader<&File>> {
+        self.writer()?;
+        let (path, out) = (&self.path, self.file.as_mut().expect("created above"));
+        out.flush().map_err(write_error(path))?;
+        out.get_mut().rewind().map_err(write_error(path))?;
+        Ok(BufReader::with_capacity(1 << 16, out.get_ref()))
+    }
+
+    /// Empties the file for the next run.
+    pub fn clear(&mut self) -> Result<()> {
+        let Some(out) = self.file.as_mut() else {
+            return Ok(());
+        };
+        let file = out.get_mut();
+        file.rewind()
+            .and_then(|()| file.set_len(0))
+            .map_err(write_error(&self.path))
+    }
+}
+
+impl Drop for SpillFile {
+    fn drop(&mut self) {
+        // Finished or failed, a run's spilled rows are not kept.
+        self.file = None;
+        let _ = std::fs::remove_file(&self.path);
     }
 }
 

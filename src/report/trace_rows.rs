@@ -168,18 +168,21 @@ impl Block {
         self.rows = 0;
     }
 
-    /// Each row's centred deviation `dL - (a cos θ + b sin θ)` with its run's `centring`
-    /// (dL itself without one), into `out`; `offset_um_at` takes the sine and cosine the ball
-    /// bar took (the same bits).
+    /// Each row's centred deviation ([`centred`]) with its run's `centring` (dL itself without
+    /// one), into `out`.
     pub fn centred_into(&self, centring: Option<Centring>, out: &mut Vec<f64>) {
-        let dev = self.column(self.width - 1);
+        let (dev, sin, cos) = (
+            self.column(self.width - 1),
+            self.column(SIN),
+            self.column(COS),
+        );
         out.clear();
         match centring {
             None => out.extend_from_slice(dev),
             Some(c) => out.extend(
                 dev.iter()
-                    .zip(self.column(SIN).iter().zip(self.column(COS)))
-                    .map(|(&d, (&sin, &cos))| d - c.offset_um_at((sin, cos))),
+                    .zip(sin.iter().zip(cos))
+                    .map(|(&d, (&s, &k))| centred(d, (s, k), c)),
             ),
         }
     }
@@ -221,12 +224,20 @@ impl Block {
     }
 }
 
-/// The centred deviations `dL - (a cos θ + b sin θ)` of rows given as `(dL, sin θ, cos θ)`
+/// The centred deviations of rows given as `(dL, sin θ, cos θ)` in a row
 /// ([`Block::centring_inputs_into`]), with their run's `centring` (dL without one), into `out`.
 pub(super) fn centred_from_inputs(inputs: &[f64], centring: Option<Centring>, out: &mut Vec<f64>) {
     out.clear();
     out.extend(inputs.chunks_exact(3).map(|t| match centring {
         None => t[0],
-        Some(c) => t[0] - c.offset_um_at((t[1], t[2])),
+        Some(c) => centred(t[0], (t[1], t[2]), c),
     }));
+}
+
+/// The centred deviation `dL - (a cos θ + b sin θ)` of a row with deviation `dev` (dL) at
+/// `sin_cos` (the sine and cosine of θ the ball bar took: the same bits) in a run whose
+/// ball bar was centred by `centring`.
+#[inline(always)]
+fn centred(dev: f64, sin_cos: (f64, f64), centring: Centring) -> f64 {
+    dev - centring.offset_um_at(sin_cos)
 }

@@ -186,71 +186,25 @@ struct Written {
 
 impl Written {
     fn new(axis: Axis, s: &ServoConfig, d: &DriveConfig, f: &FrictionConfig) -> Written {
+        let picked = by_kind(s, d, f)
+            .map(|(_, linear, rotary, defaults)| pick(axis, linear, rotary, defaults));
+        let [fe_limit, backlash, motor_mass, table_mass, stiffness, force_limit, coulomb, stribeck, viscous, presliding] =
+            picked;
         Written {
             model: parse_model(&s.model),
             fully_closed: parse_feedback(&s.feedback),
-            fe_limit: pick(
-                axis,
-                ("following_error_limit_mm", s.following_error_limit_mm),
-                ("following_error_limit_deg", s.following_error_limit_deg),
-                (50.0, 90.0),
-            ),
-            backlash: pick(
-                axis,
-                ("backlash_mm", d.backlash_mm),
-                ("backlash_deg", d.backlash_deg),
-                (0.0, 0.0),
-            ),
-            motor_mass: pick(
-                axis,
-                ("motor_mass_kg", d.motor_mass_kg),
-                ("motor_inertia_kgm2", d.motor_inertia_kgm2),
-                (250.0, 3.0),
-            ),
-            table_mass: pick(
-                axis,
-                ("table_mass_kg", d.table_mass_kg),
-                ("table_inertia_kgm2", d.table_inertia_kgm2),
-                (500.0, 5.0),
-            ),
-            stiffness: pick(
-                axis,
-                ("stiffness_n_per_um", d.stiffness_n_per_um),
-                ("stiffness_nm_per_rad", d.stiffness_nm_per_rad),
-                (200.0, 3.0e6),
-            ),
+            fe_limit,
+            backlash,
+            motor_mass,
+            table_mass,
+            stiffness,
             damping_ratio: d.damping_ratio.unwrap_or(0.05),
-            force_limit: pick(
-                axis,
-                ("force_limit_n", d.force_limit_n),
-                ("torque_limit_nm", d.torque_limit_nm),
-                (20_000.0, 1200.0),
-            ),
-            coulomb: pick(
-                axis,
-                ("coulomb_n", f.coulomb_n),
-                ("coulomb_nm", f.coulomb_nm),
-                (150.0, 15.0),
-            ),
+            force_limit,
+            coulomb,
             static_ratio: f.static_ratio.unwrap_or(1.3),
-            stribeck: pick(
-                axis,
-                ("stribeck_velocity_mm_per_s", f.stribeck_velocity_mm_per_s),
-                ("stribeck_velocity_deg_per_s", f.stribeck_velocity_deg_per_s),
-                (0.5, 0.1),
-            ),
-            viscous: pick(
-                axis,
-                ("viscous_n_s_per_m", f.viscous_n_s_per_m),
-                ("viscous_nm_s_per_rad", f.viscous_nm_s_per_rad),
-                (1000.0, 5.0),
-            ),
-            presliding: pick(
-                axis,
-                ("presliding_um", f.presliding_um),
-                ("presliding_deg", f.presliding_deg),
-                (0.0, 0.0),
-            ),
+            stribeck,
+            viscous,
+            presliding,
             presliding_damping_ratio: f.presliding_damping_ratio.unwrap_or(1.0),
         }
     }
@@ -406,6 +360,82 @@ fn require(
     })
 }
 
+/// A setting with a key for each kind of axis: its table, the linear key and value, the
+/// rotary key and value, and the defaults (linear, rotary).
+type ByKind = (
+    &'static str,
+    (&'static str, Option<f64>),
+    (&'static str, Option<f64>),
+    (f64, f64),
+);
+
+/// The settings keyed by the kind of axis, as written (the fields of [`Written`] that carry
+/// their key, in its order).
+fn by_kind(s: &ServoConfig, d: &DriveConfig, f: &FrictionConfig) -> [ByKind; 10] {
+    [
+        (
+            "servo",
+            ("following_error_limit_mm", s.following_error_limit_mm),
+            ("following_error_limit_deg", s.following_error_limit_deg),
+            (50.0, 90.0),
+        ),
+        (
+            "drive",
+            ("backlash_mm", d.backlash_mm),
+            ("backlash_deg", d.backlash_deg),
+            (0.0, 0.0),
+        ),
+        (
+            "drive",
+            ("motor_mass_kg", d.motor_mass_kg),
+            ("motor_inertia_kgm2", d.motor_inertia_kgm2),
+            (250.0, 3.0),
+        ),
+        (
+            "drive",
+            ("table_mass_kg", d.table_mass_kg),
+            ("table_inertia_kgm2", d.table_inertia_kgm2),
+            (500.0, 5.0),
+        ),
+        (
+            "drive",
+            ("stiffness_n_per_um", d.stiffness_n_per_um),
+            ("stiffness_nm_per_rad", d.stiffness_nm_per_rad),
+            (200.0, 3.0e6),
+        ),
+        (
+            "drive",
+            ("force_limit_n", d.force_limit_n),
+            ("torque_limit_nm", d.torque_limit_nm),
+            (20_000.0, 1200.0),
+        ),
+        (
+            "friction",
+            ("coulomb_n", f.coulomb_n),
+            ("coulomb_nm", f.coulomb_nm),
+            (150.0, 15.0),
+        ),
+        (
+            "friction",
+            ("stribeck_velocity_mm_per_s", f.stribeck_velocity_mm_per_s),
+            ("stribeck_velocity_deg_per_s", f.stribeck_velocity_deg_per_s),
+            (0.5, 0.1),
+        ),
+        (
+            "friction",
+            ("viscous_n_s_per_m", f.viscous_n_s_per_m),
+            ("viscous_nm_s_per_rad", f.viscous_nm_s_per_rad),
+            (1000.0, 5.0),
+        ),
+        (
+            "friction",
+            ("presliding_um", f.presliding_um),
+            ("presliding_deg", f.presliding_deg),
+            (0.0, 0.0),
+        ),
+    ]
+}
+
 /// A key of the other kind of axis than `axis` (`backlash_mm` on a rotary axis), named with
 /// the key to use instead.
 fn foreign_key(
@@ -414,65 +444,12 @@ fn foreign_key(
     d: &DriveConfig,
     f: &FrictionConfig,
 ) -> std::result::Result<(), DriveProblem> {
-    // (table, linear key and value, rotary key and value)
-    let pairs = [
-        (
-            "servo",
-            ("following_error_limit_mm", s.following_error_limit_mm),
-            ("following_error_limit_deg", s.following_error_limit_deg),
-        ),
-        (
-            "drive",
-            ("backlash_mm", d.backlash_mm),
-            ("backlash_deg", d.backlash_deg),
-        ),
-        (
-            "drive",
-            ("motor_mass_kg", d.motor_mass_kg),
-            ("motor_inertia_kgm2", d.motor_inertia_kgm2),
-        ),
-        (
-            "drive",
-            ("table_mass_kg", d.table_mass_kg),
-            ("table_inertia_kgm2", d.table_inertia_kgm2),
-        ),
-        (
-            "drive",
-            ("stiffness_n_per_um", d.stiffness_n_per_um),
-            ("stiffness_nm_per_rad", d.stiffness_nm_per_rad),
-        ),
-        (
-            "drive",
-            ("force_limit_n", d.force_limit_n),
-            ("torque_limit_nm", d.torque_limit_nm),
-        ),
-        (
-            "friction",
-            ("coulomb_n", f.coulomb_n),
-            ("coulomb_nm", f.coulomb_nm),
-        ),
-        (
-            "friction",
-            ("stribeck_velocity_mm_per_s", f.stribeck_velocity_mm_per_s),
-            ("stribeck_velocity_deg_per_s", f.stribeck_velocity_deg_per_s),
-        ),
-        (
-            "friction",
-            ("viscous_n_s_per_m", f.viscous_n_s_per_m),
-            ("viscous_nm_s_per_rad", f.viscous_nm_s_per_rad),
-        ),
-        (
-            "friction",
-            ("presliding_um", f.presliding_um),
-            ("presliding_deg", f.presliding_deg),
-        ),
-    ];
     let (kind, other) = if axis.is_rotary() {
         ("rotary", "linear")
     } else {
         ("linear", "rotary")
     };
-    for (table, linear, rotary) in pairs {
+    for (table, linear, rotary, _) in by_kind(s, d, f) {
         let ((key, value), instead) = if axis.is_rotary() {
             (linear, rotary.0)
         } else {

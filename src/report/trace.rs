@@ -5,9 +5,9 @@
 //! deviation `dL - (a cos θ + b sin θ)`. The centring is the least-squares fit of a whole
 //! run, known only at its end ([`TraceSink::end_run`]), so rows are gathered in blocks
 //! ([`Block`], column by column) and each format keeps what it needs until then:
-//! `trace.csv` holds the run's blocks ([`CsvRuns`]); `trace.parquet` writes each full block
-//! as a row group and holds only each row's `(dL, sin θ, cos θ)` ([`ParquetRuns`]). Past
-//! [`RAW_IN_MEMORY`] bytes, what is held moves to a binary temporary file ([`SpillFile`])
+//! `trace.csv` holds the run's blocks (`CsvRuns`); `trace.parquet` writes each full block
+//! as a row group and holds only each row's `(dL, sin θ, cos θ)` (`ParquetRuns`). Past
+//! [`RAW_IN_MEMORY`] bytes, what is held moves to a binary temporary file (`SpillFile`)
 //! and is read back at the run's end: memory stays bounded. Blocks are reused by the next
 //! run (their memory is mapped once). The trace file appears, by a rename, only when
 //! complete; a run that fails leaves no temporary file.

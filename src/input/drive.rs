@@ -186,71 +186,25 @@ struct Written {
 
 impl Written {
     fn new(axis: Axis, s: &ServoConfig, d: &DriveConfig, f: &FrictionConfig) -> Written {
+        let picked = by_kind(s, d, f)
+            .map(|(_, linear, rotary, defaults)| pick(axis, linear, rotary, defaults));
+        let [fe_limit, backlash, motor_mass, table_mass, stiffness, force_limit, coulomb, stribeck, viscous, presliding] =
+            picked;
         Written {
             model: parse_model(&s.model),
             fully_closed: parse_feedback(&s.feedback),
-            fe_limit: pick(
-                axis,
-                ("following_error_limit_mm", s.following_error_limit_mm),
-                ("following_error_limit_deg", s.following_error_limit_deg),
-                (50.0, 90.0),
-            ),
-            backlash: pick(
-                axis,
-                ("backlash_mm", d.backlash_mm),
-                ("backlash_deg", d.backlash_deg),
-                (0.0, 0.0),
-            ),
-            motor_mass: pick(
-                axis,
-                ("motor_mass_kg", d.motor_mass_kg),
-                ("motor_inertia_kgm2", d.motor_inertia_kgm2),
-                (250.0, 3.0),
-            ),
-            table_mass: pick(
-                axis,
-                ("table_mass_kg", d.table_mass_kg),
-                ("table_inertia_kgm2", d.table_inertia_kgm2),
-                (500.0, 5.0),
-            ),
-            stiffness: pick(
-                axis,
-                ("stiffness_n_per_um", d.stiffness_n_per_um),
-                ("stiffness_nm_per_rad", d.stiffness_nm_per_rad),
-                (200.0, 3.0e6),
-            ),
+            fe_limit,
+            backlash,
+            motor_mass,
+            table_mass,
+            stiffness,
             damping_ratio: d.damping_ratio.unwrap_or(0.05),
-            force_limit: pick(
-                axis,
-                ("force_limit_n", d.force_limit_n),
-                ("torque_limit_nm", d.torque_limit_nm),
-                (20_000.0, 1200.0),
-            ),
-            coulomb: pick(
-                axis,
-                ("coulomb_n", f.coulomb_n),
-                ("coulomb_nm", f.coulomb_nm),
-                (150.0, 15.0),
-            ),
+            force_limit,
+            coulomb,
             static_ratio: f.static_ratio.unwrap_or(1.3),
-            stribeck: pick(
-                axis,
-                ("stribeck_velocity_mm_per_s", f.stribeck_velocity_mm_per_s),
-                ("stribeck_velocity_deg_per_s", f.stribeck_velocity_deg_per_s),
-                (0.5, 0.1),
-            ),
-            viscous: pick(
-                axis,
-                ("viscous_n_s_per_m", f.viscous_n_s_per_m),
-                ("viscous_nm_s_per_rad", f.viscous_nm_s_per_rad),
-                (1000.0, 5.0),
-            ),
-            presliding: pick(
-                axis,
-                ("presliding_um", f.presliding_um),
-                ("presliding_deg", f.presliding_deg),
-                (0.0, 0.0),
-            ),
+            stribeck,
+            viscous,
+            presliding,
             presliding_damping_ratio: f.presliding_damping_ratio.unwrap_or(1.0),
         }
     }
@@ -263,351 +217,249 @@ impl Written {
         d: &DriveConfig,
         f: &FrictionConfig,
     ) -> Option<DriveProblem> {
-        let kind = if axis.is_rotary() { "rotary" } else { "linear" };
-        let other = if axis.is_rotary() { "linear" } else { "rotary" };
-        // Keys of the other kind of axis.
-        let foreign: [(&str, &str, Option<f64>, &str); 10] = if axis.is_rotary() {
-            [
-                (
-                    "servo",
-                    "following_error_limit_mm",
-                    s.following_error_limit_mm,
-                    "following_error_limit_deg",
-                ),
-                ("drive", "backlash_mm", d.backlash_mm, "backlash_deg"),
-                (
-                    "drive",
-                    "motor_mass_kg",
-                    d.motor_mass_kg,
-                    "motor_inertia_kgm2",
-                ),
-                (
-                    "drive",
-                    "table_mass_kg",
-                    d.table_mass_kg,
-                    "table_inertia_kgm2",
-                ),
-                (
-                    "drive",
-                    "stiffness_n_per_um",
-                    d.stiffness_n_per_um,
-                    "stiffness_nm_per_rad",
-                ),
-                ("drive", "force_limit_n", d.force_limit_n, "torque_limit_nm"),
-                ("friction", "coulomb_n", f.coulomb_n, "coulomb_nm"),
-                (
-                    "friction",
-                    "stribeck_velocity_mm_per_s",
-                    f.stribeck_velocity_mm_per_s,
-                    "stribeck_velocity_deg_per_s",
-                ),
-                (
-                    "friction",
-                    "viscous_n_s_per_m",
-                    f.viscous_n_s_per_m,
-                    "viscous_nm_s_per_rad",
-                ),
-                (
-                    "friction",
-                    "presliding_um",
-                    f.presliding_um,
-                    "presliding_deg",
-                ),
-            ]
-        } else {
-            [
-                (
-                    "servo",
-                    "following_error_limit_deg",
-                    s.following_error_limit_deg,
-                    "following_error_limit_mm",
-                ),
-                ("drive", "backlash_deg", d.backlash_deg, "backlash_mm"),
-                (
-                    "drive",
-                    "motor_inertia_kgm2",
-                    d.motor_inertia_kgm2,
-                    "motor_mass_kg",
-                ),
-                (
-                    "drive",
-                    "table_inertia_kgm2",
-                    d.table_inertia_kgm2,
-                    "table_mass_kg",
-                ),
-                (
-                    "drive",
-                    "stiffness_nm_per_rad",
-                    d.stiffness_nm_per_rad,
-                    "stiffness_n_per_um",
-                ),
-                (
-                    "drive",
-                    "torque_limit_nm",
-                    d.torque_limit_nm,
-                    "force_limit_n",
-                ),
-                ("friction", "coulomb_nm", f.coulomb_nm, "coulomb_n"),
-                (
-                    "friction",
-                    "stribeck_velocity_deg_per_s",
-                    f.stribeck_velocity_deg_per_s,
-                    "stribeck_velocity_mm_per_s",
-                ),
-                (
-                    "friction",
-                    "viscous_nm_s_per_rad",
-                    f.viscous_nm_s_per_rad,
-                    "viscous_n_s_per_m",
-                ),
-                (
-                    "friction",
-                    "presliding_deg",
-                    f.presliding_deg,
-                    "presliding_um",
-                ),
-            ]
-        };
-        for (table, key, value, instead) in foreign {
-            if value.is_some() {
-                return Some(DriveProblem {
-                    table,
-                    key,
-                    message: format!(
-                        "is a {other}-axis key, but axis {axis} is {kind}; use `{instead}`"
-                    ),
-                });
-            }
-        }
+        foreign_key(axis, s, d, f)
+            .and_then(|()| Written::new(axis, s, d, f).check(axis, s))
+            .err()
+    }
 
-        let r = Written::new(axis, s, d, f);
+    /// Checks every value in turn (the order of the keys in docs/servo.md): the first out of
+    /// its range is the problem; its message is written only then (a study validates every
+    /// point).
+    fn check(&self, axis: Axis, s: &ServoConfig) -> std::result::Result<(), DriveProblem> {
         let unit = axis.unit();
         let finite_in = |v: f64, lo: f64, hi: f64| v.is_finite() && (lo..=hi).contains(&v);
         let positive = |v: f64| v.is_finite() && v > 0.0;
         let non_negative = |v: f64| v.is_finite() && v >= 0.0;
-        // The messages are written only for the problem found (a study validates every point).
-        let checks: [(
-            bool,
-            &'static str,
-            &'static str,
-            Box<dyn Fn() -> String + '_>,
-        ); 23] = [
-            (
-                r.model.is_some(),
-                "servo",
-                "model",
-                Box::new(|| format!("must be \"first-order\" or \"cascade\", got {:?}", s.model)),
-            ),
-            (
-                r.fully_closed.is_some(),
-                "servo",
-                "feedback",
-                Box::new(|| {
-                    format!(
-                        "must be \"semi-closed\" or \"fully-closed\", got {:?}",
-                        s.feedback
-                    )
-                }),
-            ),
-            (
-                finite_in(s.kv_per_s, 1e-3, 1e4) && s.kv_per_s > 0.0,
-                "servo",
-                "kv_per_s",
-                Box::new(|| {
-                    format!(
-                        "must be a positive gain in 1/s (typically 20-60), got {}",
-                        s.kv_per_s
-                    )
-                }),
-            ),
-            (
-                finite_in(s.velocity_feedforward, 0.0, 1.0),
-                "servo",
-                "velocity_feedforward",
-                Box::new(|| {
-                    format!(
-                        "must be a fraction in 0..=1, got {}",
-                        s.velocity_feedforward
-                    )
-                }),
-            ),
-            (
-                finite_in(s.acceleration_feedforward, 0.0, 1.0),
-                "servo",
-                "acceleration_feedforward",
-                Box::new(|| {
-                    format!(
-                        "must be a fraction in 0..=1, got {}",
-                        s.acceleration_feedforward
-                    )
-                }),
-            ),
-            (
-                positive(s.velocity_bandwidth_hz) && s.velocity_bandwidth_hz <= 1e5,
-                "servo",
-                "velocity_bandwidth_hz",
-                Box::new(|| {
-                    format!(
-                        "must be a positive frequency in Hz (typically 50-300), got {}",
-                        s.velocity_bandwidth_hz
-                    )
-                }),
-            ),
-            (
-                positive(s.velocity_integral_time_ms),
-                "servo",
-                "velocity_integral_time_ms",
-                Box::new(|| {
-                    format!(
-                        "must be a positive time in ms (typically 2-20), got {}",
-                        s.velocity_integral_time_ms
-                    )
-                }),
-            ),
-            (
-                finite_in(s.current_time_constant_ms, 0.0, 100.0),
-                "servo",
-                "current_time_constant_ms",
-                Box::new(|| {
-                    format!(
-                        "must be a time in 0..=100 ms (typically 0.1-0.5), got {}",
-                        s.current_time_constant_ms
-                    )
-                }),
-            ),
-            (
-                positive(s.servo_period_ms) && s.servo_period_ms <= 100.0,
-                "servo",
-                "servo_period_ms",
-                Box::new(|| {
-                    format!(
-                        "must be a period in (0, 100] ms (typically 0.125-1), got {}",
-                        s.servo_period_ms
-                    )
-                }),
-            ),
-            (
-                (1..=1000).contains(&s.substeps),
-                "servo",
-                "substeps",
-                Box::new(|| format!("must be a whole number in 1..=1000, got {}", s.substeps)),
-            ),
-            (
-                positive(r.fe_limit.1),
-                "servo",
-                r.fe_limit.0,
-                Box::new(|| format!("must be a positive distance ({unit}), got {}", r.fe_limit.1)),
-            ),
-            (
-                non_negative(r.backlash.1),
-                "drive",
-                r.backlash.0,
-                Box::new(|| format!("must be >= 0 ({unit}), got {}", r.backlash.1)),
-            ),
-            (
-                positive(r.motor_mass.1),
-                "drive",
-                r.motor_mass.0,
-                Box::new(|| format!("must be positive, got {}", r.motor_mass.1)),
-            ),
-            (
-                positive(r.table_mass.1),
-                "drive",
-                r.table_mass.0,
-                Box::new(|| format!("must be positive, got {}", r.table_mass.1)),
-            ),
-            (
-                positive(r.stiffness.1),
-                "drive",
-                r.stiffness.0,
-                Box::new(|| format!("must be positive, got {}", r.stiffness.1)),
-            ),
-            (
-                finite_in(r.damping_ratio, 0.0, 10.0),
-                "drive",
-                "damping_ratio",
-                Box::new(|| {
-                    format!(
-                        "must be in 0..=10 (typically 0.02-0.1), got {}",
-                        r.damping_ratio
-                    )
-                }),
-            ),
-            (
-                positive(r.force_limit.1),
-                "drive",
-                r.force_limit.0,
-                Box::new(|| format!("must be positive, got {}", r.force_limit.1)),
-            ),
-            (
-                non_negative(r.coulomb.1),
-                "friction",
-                r.coulomb.0,
-                Box::new(|| format!("must be >= 0, got {}", r.coulomb.1)),
-            ),
-            (
-                finite_in(r.static_ratio, 1.0, 100.0),
-                "friction",
-                "static_ratio",
-                Box::new(|| {
-                    format!(
-                        "must be Fs/Fc >= 1 (typically 1.1-1.5), got {}",
-                        r.static_ratio
-                    )
-                }),
-            ),
-            (
-                non_negative(r.stribeck.1),
-                "friction",
-                r.stribeck.0,
-                Box::new(|| format!("must be >= 0, got {}", r.stribeck.1)),
-            ),
-            (
-                non_negative(r.viscous.1),
-                "friction",
-                r.viscous.0,
-                Box::new(|| format!("must be >= 0, got {}", r.viscous.1)),
-            ),
-            (
-                finite_in(
-                    r.presliding.1,
-                    0.0,
-                    if axis.is_rotary() { 1.0 } else { 1000.0 },
-                ),
-                "friction",
-                r.presliding.0,
-                Box::new(|| {
-                    format!(
-                        "must be a displacement >= 0 ({}; 0 is off, typically {}), got {}",
-                        if axis.is_rotary() { "deg" } else { "um" },
-                        if axis.is_rotary() {
-                            "0.0003-0.001"
-                        } else {
-                            "1-5"
-                        },
-                        r.presliding.1
-                    )
-                }),
-            ),
-            (
-                finite_in(r.presliding_damping_ratio, 0.0, 10.0),
-                "friction",
-                "presliding_damping_ratio",
-                Box::new(|| {
-                    format!(
-                        "must be in 0..=10 (typically 0.5-1), got {}",
-                        r.presliding_damping_ratio
-                    )
-                }),
-            ),
-        ];
-        let (_, table, key, message) = checks.into_iter().find(|c| !c.0)?;
-        Some(DriveProblem {
-            table,
-            key,
-            message: message(),
-        })
+        require(self.model.is_some(), "servo", "model", || {
+            format!("must be \"first-order\" or \"cascade\", got {:?}", s.model)
+        })?;
+        require(self.fully_closed.is_some(), "servo", "feedback", || {
+            format!(
+                "must be \"semi-closed\" or \"fully-closed\", got {:?}",
+                s.feedback
+            )
+        })?;
+        let kv = s.kv_per_s;
+        require(
+            finite_in(kv, 1e-3, 1e4) && kv > 0.0,
+            "servo",
+            "kv_per_s",
+            || format!("must be a positive gain in 1/s (typically 20-60), got {kv}"),
+        )?;
+        for (key, v) in [
+            ("velocity_feedforward", s.velocity_feedforward),
+            ("acceleration_feedforward", s.acceleration_feedforward),
+        ] {
+            require(finite_in(v, 0.0, 1.0), "servo", key, || {
+                format!("must be a fraction in 0..=1, got {v}")
+            })?;
+        }
+        let hz = s.velocity_bandwidth_hz;
+        require(
+            positive(hz) && hz <= 1e5,
+            "servo",
+            "velocity_bandwidth_hz",
+            || format!("must be a positive frequency in Hz (typically 50-300), got {hz}"),
+        )?;
+        let ti = s.velocity_integral_time_ms;
+        require(positive(ti), "servo", "velocity_integral_time_ms", || {
+            format!("must be a positive time in ms (typically 2-20), got {ti}")
+        })?;
+        let tc = s.current_time_constant_ms;
+        require(
+            finite_in(tc, 0.0, 100.0),
+            "servo",
+            "current_time_constant_ms",
+            || format!("must be a time in 0..=100 ms (typically 0.1-0.5), got {tc}"),
+        )?;
+        let period = s.servo_period_ms;
+        require(
+            positive(period) && period <= 100.0,
+            "servo",
+            "servo_period_ms",
+            || format!("must be a period in (0, 100] ms (typically 0.125-1), got {period}"),
+        )?;
+        require(
+            (1..=1000).contains(&s.substeps),
+            "servo",
+            "substeps",
+            || format!("must be a whole number in 1..=1000, got {}", s.substeps),
+        )?;
+        let (key, v) = self.fe_limit;
+        require(positive(v), "servo", key, || {
+            format!("must be a positive distance ({unit}), got {v}")
+        })?;
+        let (key, v) = self.backlash;
+        require(non_negative(v), "drive", key, || {
+            format!("must be >= 0 ({unit}), got {v}")
+        })?;
+        for (key, v) in [self.motor_mass, self.table_mass, self.stiffness] {
+            require(positive(v), "drive", key, || {
+                format!("must be positive, got {v}")
+            })?;
+        }
+        let zeta = self.damping_ratio;
+        require(finite_in(zeta, 0.0, 10.0), "drive", "damping_ratio", || {
+            format!("must be in 0..=10 (typically 0.02-0.1), got {zeta}")
+        })?;
+        let (key, v) = self.force_limit;
+        require(positive(v), "drive", key, || {
+            format!("must be positive, got {v}")
+        })?;
+        let (key, v) = self.coulomb;
+        require(non_negative(v), "friction", key, || {
+            format!("must be >= 0, got {v}")
+        })?;
+        let ratio = self.static_ratio;
+        require(
+            finite_in(ratio, 1.0, 100.0),
+            "friction",
+            "static_ratio",
+            || format!("must be Fs/Fc >= 1 (typically 1.1-1.5), got {ratio}"),
+        )?;
+        for (key, v) in [self.stribeck, self.viscous] {
+            require(non_negative(v), "friction", key, || {
+                format!("must be >= 0, got {v}")
+            })?;
+        }
+        let (key, v) = self.presliding;
+        let (most, in_unit, typical) = if axis.is_rotary() {
+            (1.0, "deg", "0.0003-0.001")
+        } else {
+            (1000.0, "um", "1-5")
+        };
+        require(finite_in(v, 0.0, most), "friction", key, || {
+            format!(
+                "must be a displacement >= 0 ({in_unit}; 0 is off, typically {typical}), got {v}"
+            )
+        })?;
+        let zeta = self.presliding_damping_ratio;
+        require(
+            finite_in(zeta, 0.0, 10.0),
+            "friction",
+            "presliding_damping_ratio",
+            || format!("must be in 0..=10 (typically 0.5-1), got {zeta}"),
+        )
     }
+}
+
+/// `Err` with the problem of `table`.`key` unless `ok`; the message is written only then.
+fn require(
+    ok: bool,
+    table: &'static str,
+    key: &'static str,
+    message: impl FnOnce() -> String,
+) -> std::result::Result<(), DriveProblem> {
+    if ok {
+        return Ok(());
+    }
+    Err(DriveProblem {
+        table,
+        key,
+        message: message(),
+    })
+}
+
+/// A setting with a key for each kind of axis: its table, the linear key and value, the
+/// rotary key and value, and the defaults (linear, rotary).
+type ByKind = (
+    &'static str,
+    (&'static str, Option<f64>),
+    (&'static str, Option<f64>),
+    (f64, f64),
+);
+
+/// The settings keyed by the kind of axis, as written (the fields of [`Written`] that carry
+/// their key, in its order).
+fn by_kind(s: &ServoConfig, d: &DriveConfig, f: &FrictionConfig) -> [ByKind; 10] {
+    [
+        (
+            "servo",
+            ("following_error_limit_mm", s.following_error_limit_mm),
+            ("following_error_limit_deg", s.following_error_limit_deg),
+            (50.0, 90.0),
+        ),
+        (
+            "drive",
+            ("backlash_mm", d.backlash_mm),
+            ("backlash_deg", d.backlash_deg),
+            (0.0, 0.0),
+        ),
+        (
+            "drive",
+            ("motor_mass_kg", d.motor_mass_kg),
+            ("motor_inertia_kgm2", d.motor_inertia_kgm2),
+            (250.0, 3.0),
+        ),
+        (
+            "drive",
+            ("table_mass_kg", d.table_mass_kg),
+            ("table_inertia_kgm2", d.table_inertia_kgm2),
+            (500.0, 5.0),
+        ),
+        (
+            "drive",
+            ("stiffness_n_per_um", d.stiffness_n_per_um),
+            ("stiffness_nm_per_rad", d.stiffness_nm_per_rad),
+            (200.0, 3.0e6),
+        ),
+        (
+            "drive",
+            ("force_limit_n", d.force_limit_n),
+            ("torque_limit_nm", d.torque_limit_nm),
+            (20_000.0, 1200.0),
+        ),
+        (
+            "friction",
+            ("coulomb_n", f.coulomb_n),
+            ("coulomb_nm", f.coulomb_nm),
+            (150.0, 15.0),
+        ),
+        (
+            "friction",
+            ("stribeck_velocity_mm_per_s", f.stribeck_velocity_mm_per_s),
+            ("stribeck_velocity_deg_per_s", f.stribeck_velocity_deg_per_s),
+            (0.5, 0.1),
+        ),
+        (
+            "friction",
+            ("viscous_n_s_per_m", f.viscous_n_s_per_m),
+            ("viscous_nm_s_per_rad", f.viscous_nm_s_per_rad),
+            (1000.0, 5.0),
+        ),
+        (
+            "friction",
+            ("presliding_um", f.presliding_um),
+            ("presliding_deg", f.presliding_deg),
+            (0.0, 0.0),
+        ),
+    ]
+}
+
+/// A key of the other kind of axis than `axis` (`backlash_mm` on a rotary axis), named with
+/// the key to use instead.
+fn foreign_key(
+    axis: Axis,
+    s: &ServoConfig,
+    d: &DriveConfig,
+    f: &FrictionConfig,
+) -> std::result::Result<(), DriveProblem> {
+    let (kind, other) = if axis.is_rotary() {
+        ("rotary", "linear")
+    } else {
+        ("linear", "rotary")
+    };
+    for (table, linear, rotary, _) in by_kind(s, d, f) {
+        let ((key, value), instead) = if axis.is_rotary() {
+            (linear, rotary.0)
+        } else {
+            (rotary, linear.0)
+        };
+        require(value.is_none(), table, key, || {
+            format!("is a {other}-axis key, but axis {axis} is {kind}; use `{instead}`")
+        })?;
+    }
+    Ok(())
 }
 
 /// A drive setting that is not valid: its table ("servo", "drive" or "friction"), its key,

@@ -822,42 +822,12 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             .unwrap_or_default()
     }
 
-    /// Plans every remaining block without sampling any, for its feed limits (and
-    /// [`Interpolator::feed_reductions`]): they come out as when the setpoints are taken,
-    /// since a block's cruise speed and the limit that holds it are set when the block is
-    /// planned on its own ([`Interpolator::plan`]), before the junctions, the look-ahead or
-    /// the profile, which this skips. The first error ends it, as it ends the setpoints. The
-    /// interpolator yields nothing after.
-    pub fn plan_to_end(&mut self) -> Result<()> {
-        self.done = true;
-        // The window's blocks were planned, and their limits noted, when they were read.
-        self.window.clear();
-        if let Some(e) = self.pending_error.take() {
-            return Err(e);
-        }
-        loop {
-            let block = match self.read_ahead.pop_front() {
-                Some(block) => block,
-                None if self.blocks_done => return Ok(()),
-                None => match self.blocks.next() {
-                    Some(block) => block,
-                    None => {
-                        self.blocks_done = true;
-                        return Ok(());
-                    }
-                },
-            };
-            let index = self.next_index;
-            self.next_index += 1;
-            if let Some((planned, _, _)) = self.plan(&block?, index)? {
-                self.record(&planned);
-            }
-        }
-    }
-
     /// Plans `block`, given by reference beside the blocks of the stream (an interpolator
-    /// made on an empty one), as [`Interpolator::plan_to_end`] plans each block: for its
-    /// feed limit, without junctions, look-ahead or profile.
+    /// made on an empty one), for its feed limits (and [`Interpolator::feed_reductions`]):
+    /// they come out as when the setpoints are taken, since a block's cruise speed and the
+    /// limit that holds it are set when the block is planned on its own
+    /// ([`Interpolator::plan`]), before the junctions, the look-ahead or the profile, which
+    /// this skips. The interpolator yields nothing after.
     pub fn plan_block(&mut self, block: &Move) -> Result<()> {
         self.done = true;
         let index = self.next_index;

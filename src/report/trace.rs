@@ -3,18 +3,20 @@
 //! Columns: direction, time, line, θ, then per axis the commanded and actual position and
 //! the following error, then the nonlinear signature, the deviation dL and the centred
 //! deviation `dL - (a cos θ + b sin θ)`. The centring is the least-squares fit of a whole
-//! run, known only at its end, so a run's rows are held in blocks ([`Block`], column by
-//! column) until it ends ([`TraceSink::end_run`]), then written to the trace's temporary
-//! file; the blocks are reused by the next run (their memory is mapped once). A run longer
-//! than [`RAW_IN_MEMORY`] bytes of rows moves its full blocks to a binary temporary file and
-//! reads them back at its end: memory stays bounded. `trace.csv` appears, by a rename, only
-//! when complete; a run that fails leaves no temporary file.
+//! run, known only at its end ([`TraceSink::end_run`]), so rows are gathered in blocks
+//! ([`Block`], column by column) and each format keeps what it needs until then:
+//! `trace.csv` holds the run's blocks (`CsvRuns`); `trace.parquet` writes each full block
+//! as a row group and holds only each row's `(dL, sin θ, cos θ)` (`ParquetRuns`). Past
+//! [`RAW_IN_MEMORY`] bytes, what is held moves to a binary temporary file (`SpillFile`)
+//! and is read back at the run's end: memory stays bounded. Blocks are reused by the next
+//! run (their memory is mapped once). The trace file appears, by a rename, only when
+//! complete; a run that fails leaves no temporary file.
 //!
 //! [`read_trace`] reads a run folder's trace back (`trace.csv` or `trace.parquet`, the
 //! columns the report plots) into one [`Trace`] per format: the one reader of trace files.
 
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Seek, Write};
+use std::io::{BufReader, BufWriter, Read, Write};
 
 use arrow::datatypes::ToByteSlice;
 use std::path::{Path, PathBuf};
@@ -22,56 +24,43 @@ use std::path::{Path, PathBuf};
 use super::files::temporary_path;
 use super::trace_parquet::ParquetTrace;
 use super::trace_rows::{
-    centred_from_inputs, write_error, Block, AXES, BLOCK_ROWS, FIXED_COLUMNS, LINE, THETA, TIME,
+    centred_from_inputs, write_error, Block, SpillFile, AXES, BLOCK_ROWS, FIXED_COLUMNS, LINE,
+    THETA, TIME,
 };
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::TraceFormat;
 use crate::measure::ballbar::Centring;
-use crate::measure::{is_measured, BallbarRun, BarGeometry, BarReading};
+use crate::measure::{is_measured, BarGeometry, BarReading};
 use crate::numeric::push_fixed_bytes_const;
 use crate::pipeline::{Sample, Sink};
 use crate::Axis;
 
-/// Full blocks of one run's rows held in memory, at most, before they spill to the
-/// temporary file, bytes (the CSV trace's full rows: about twelve blocks of 4,096 rows).
+/// What one run holds in memory, at most, before it spills to the temporary file, bytes (the
+/// CSV trace's full blocks: about twelve of 4,096 rows; the Parquet trace's centring inputs).
 pub const RAW_IN_MEMORY: usize = 8 << 20;
 
 /// Writes the trace of every run of a simulation.
 pub struct TraceSink {
-    /// The current run's rows: full blocks, then the one being filled.
-    held: Vec<Block>,
-    /// Emptied blocks, for the next rows.
-    spare: Vec<Block>,
-    /// The temporary file of spilled blocks, and how many of the current run it holds.
-    raw: Option<BufWriter<File>>,
-    spilled: usize,
-    raw_path: PathBuf,
+    /// The block being filled with the current run's rows.
+    filling: Option<Block>,
+    /// The rows of the run's earlier blocks and the trace file, as the format keeps them.
+    format: Format,
     trace_path: PathBuf,
-    /// The trace file being written (its temporary file), once a run has ended.
-    out: Option<TraceOut>,
     axes: &'static [Axis],
     geometry: Option<BarGeometry>,
     every: u64,
-    format: TraceFormat,
     direction: Direction,
     measured: Option<MeasuredLines>,
     /// Rows recorded, and the most the run may record (`[simulate] max_trace_rows`).
     rows: u64,
     max_rows: u64,
-    /// The centred deviations of the block being written.
-    centred: Vec<f64>,
-    /// Parquet: the current run's `(dL, sin θ, cos θ)` per row whose other columns are
-    /// written, how many such values went to the temporary file, and the run's first row group.
-    inputs: Vec<f64>,
-    inputs_spilled: usize,
-    run_first_group: usize,
 }
 
-/// The trace file being written, in its format.
-enum TraceOut {
-    Csv(CsvTrace),
-    Parquet(ParquetTrace),
+/// Each format's state between a run's blocks, its trace file opened at its first rows.
+enum Format {
+    Csv(CsvRuns),
+    Parquet(ParquetRuns),
 }
 
 impl TraceSink {
@@ -86,27 +75,46 @@ impl TraceSink {
         format: TraceFormat,
         max_rows: u64,
     ) -> Result<TraceSink> {
-        let raw_path = trace_path.with_extension("csv.raw.tmp");
+        let (tmp, names) = (temporary_path(trace_path), column_names(axes));
+        // Columns of a block: the fixed ones and three per axis.
+        let width = FIXED_COLUMNS + 3 * axes.len();
+        let spill = SpillFile::new(trace_path.with_extension("csv.raw.tmp"));
+        let format = match format {
+            TraceFormat::Csv => Format::Csv(CsvRuns {
+                width,
+                held: Vec::new(),
+                spare: Vec::new(),
+                spill,
+                spilled: 0,
+                centred: Vec::new(),
+                tmp,
+                header: names.join(","),
+                out: None,
+            }),
+            TraceFormat::Parquet => Format::Parquet(ParquetRuns {
+                width,
+                spare: None,
+                inputs: Vec::new(),
+                spill,
+                inputs_spilled: 0,
+                run_first_group: 0,
+                centred: Vec::new(),
+                tmp,
+                names,
+                out: None,
+            }),
+        };
         Ok(TraceSink {
-            held: Vec::new(),
-            spare: Vec::new(),
-            raw: None,
-            spilled: 0,
-            raw_path,
+            filling: None,
+            format,
             trace_path: trace_path.to_path_buf(),
-            out: None,
             axes,
             geometry,
             every: every.max(1),
-            format,
             direction: Direction::Ccw,
             measured: None,
             rows: 0,
             max_rows,
-            centred: Vec::new(),
-            inputs: Vec::new(),
-            inputs_spilled: 0,
-            run_first_group: 0,
         })
     }
 
@@ -119,180 +127,39 @@ impl TraceSink {
     /// Ends the current run: its rows are written to the trace, centred with `centring`
     /// (the fit of the run's ball bar; dL as it is without one).
     pub fn end_run(&mut self, centring: Option<Centring>) -> Result<()> {
-        if self.format == TraceFormat::Parquet {
-            return self.end_parquet_run(centring);
+        let last = self.filling.take();
+        match &mut self.format {
+            Format::Csv(csv) => csv.end_run(last, self.direction, centring),
+            Format::Parquet(parquet) => parquet.end_run(last, self.direction, centring),
         }
-        if self.held.is_empty() && self.spilled == 0 {
-            return Ok(());
-        }
-        let mut out = match self.out.take() {
-            Some(TraceOut::Csv(out)) => out,
-            _ => match self.open()? {
-                TraceOut::Csv(out) => out,
-                TraceOut::Parquet(_) => unreachable!("a CSV trace writes CSV"),
-            },
-        };
-        let written = self.write_run(&mut out, centring);
-        self.out = Some(TraceOut::Csv(out));
-        written
     }
 
-    /// Parquet: writes the columns of the block being filled, then the centred deviations of
-    /// every row group of the run.
-    fn end_parquet_run(&mut self, centring: Option<Centring>) -> Result<()> {
-        if let Some(block) = self.held.pop() {
-            self.stream(block)?;
-        }
-        let Some(TraceOut::Parquet(out)) = self.out.as_mut() else {
-            return Ok(());
-        };
-        let err = write_error(&self.raw_path);
-        let mut spilled = match self.raw.as_mut().filter(|_| self.inputs_spilled > 0) {
-            Some(raw) => {
-                raw.flush().map_err(&err)?;
-                raw.get_mut().rewind().map_err(&err)?;
-                Some(BufReader::with_capacity(1 << 16, raw.get_ref()))
-            }
-            None => None,
-        };
-        let (mut from_file, mut at) = (self.inputs_spilled, 0);
-        let mut read = Vec::new();
-        for group in self.run_first_group..out.groups() {
-            let need = 3 * out.group_rows(group);
-            let inputs = match spilled.as_mut().filter(|_| from_file > 0) {
-                Some(reader) => {
-                    let n = need.min(from_file);
-                    read_f64s(reader, n, &mut read).map_err(&err)?;
-                    read.extend_from_slice(&self.inputs[at..at + need - n]);
-                    (from_file, at) = (from_file - n, at + need - n);
-                    &read[..]
-                }
-                None => {
-                    at += need;
-                    &self.inputs[at - need..at]
-                }
-            };
-            centred_from_inputs(inputs, centring, &mut self.centred);
-            out.write_centred(group, &self.centred)?;
-        }
-        drop(spilled);
-        if let Some(raw) = self.raw.as_mut().filter(|_| self.inputs_spilled > 0) {
-            let file = raw.get_mut();
-            file.rewind().and_then(|()| file.set_len(0)).map_err(&err)?;
-        }
-        self.inputs.clear();
-        self.inputs_spilled = 0;
-        self.run_first_group = out.groups();
-        Ok(())
-    }
-
-    /// Parquet: writes the columns of `block` as a row group and keeps what its centred
-    /// deviations need; the block is then free for the next rows.
-    fn stream(&mut self, mut block: Block) -> Result<()> {
-        if block.rows() > 0 {
-            if self.out.is_none() {
-                self.out = Some(self.open()?);
-            }
-            let Some(TraceOut::Parquet(out)) = self.out.as_mut() else {
-                unreachable!("a Parquet trace writes Parquet");
-            };
-            out.write_block(&block, self.direction)?;
-            block.centring_inputs_into(&mut self.inputs);
-            if 8 * self.inputs.len() > RAW_IN_MEMORY {
-                let values = std::mem::take(&mut self.inputs);
-                self.raw_file()?
-                    .write_all(values.to_byte_slice())
-                    .map_err(write_error(&self.raw_path))?;
-                self.inputs_spilled += values.len();
-                self.inputs = values;
-                self.inputs.clear();
-            }
-        }
-        block.clear();
-        self.spare.push(block);
-        Ok(())
-    }
-
-    /// Writes the held and spilled rows of the current run to `out`, and empties them.
-    fn write_run(&mut self, out: &mut CsvTrace, centring: Option<Centring>) -> Result<()> {
-        let direction = self.direction;
-        if let Some(mut raw) = self.raw.take().filter(|_| self.spilled > 0) {
-            let err = write_error(&self.raw_path);
-            let mut block = self.spare.pop().unwrap_or_else(|| Block::new(self.width()));
-            let read = (|| -> Result<()> {
-                raw.flush().map_err(&err)?;
-                let file = raw.get_mut();
-                file.rewind().map_err(&err)?;
-                let mut reader = BufReader::with_capacity(1 << 16, &*file);
-                for _ in 0..self.spilled {
-                    block.read_raw(&mut reader).map_err(&err)?;
-                    block.centred_into(centring, &mut self.centred);
-                    out.write_block(&block, direction, &self.centred)?;
-                }
-                drop(reader);
-                file.rewind().and_then(|()| file.set_len(0)).map_err(&err)
-            })();
-            block.clear();
-            self.spare.push(block);
-            self.raw = Some(raw);
-            self.spilled = 0;
-            read?;
-        }
-        for mut block in std::mem::take(&mut self.held) {
-            block.centred_into(centring, &mut self.centred);
-            out.write_block(&block, direction, &self.centred)?;
-            block.clear();
-            self.spare.push(block);
-        }
-        Ok(())
-    }
-
-    /// Creates the trace's temporary file and writes its header.
-    fn open(&self) -> Result<TraceOut> {
-        let names = column_names(self.axes);
-        let tmp = temporary_path(&self.trace_path);
-        Ok(match self.format {
-            TraceFormat::Csv => TraceOut::Csv(CsvTrace::create(tmp, &names.join(","))?),
-            TraceFormat::Parquet => TraceOut::Parquet(ParquetTrace::create(tmp, names)?),
-        })
-    }
-
-    /// Ends the last run (centred with the run of its direction in `runs`, if
-    /// [`TraceSink::end_run`] was not called) and puts the trace file in place.
-    pub fn finish(mut self, runs: &[BallbarRun]) -> Result<()> {
-        let centring = runs
-            .iter()
-            .find(|r| r.direction() == self.direction)
-            .map(|r| r.centring());
-        self.end_run(centring)?;
-        let out = match self.out.take() {
-            Some(out) => out,
-            None => self.open()?,
-        };
-        let tmp = temporary_path(&self.trace_path);
-        let closed = match out {
-            TraceOut::Csv(csv) => csv.finish(),
-            TraceOut::Parquet(parquet) => parquet.finish(),
+    /// Puts the trace file in place; every run's rows were written by
+    /// [`TraceSink::end_run`], the only place that knows their centring.
+    pub fn finish(mut self) -> Result<()> {
+        debug_assert!(self.filling.is_none(), "a run's rows not ended by end_run");
+        let closed = match &mut self.format {
+            Format::Csv(csv) => csv.finish(),
+            Format::Parquet(parquet) => parquet.finish(),
         };
         if let Err(e) = closed {
-            let _ = std::fs::remove_file(&tmp);
+            let _ = std::fs::remove_file(temporary_path(&self.trace_path));
             return Err(e);
         }
+        let tmp = temporary_path(&self.trace_path);
         std::fs::rename(&tmp, &self.trace_path).map_err(write_error(&self.trace_path))
-    }
-
-    /// Columns of a block: the fixed ones and three per axis.
-    fn width(&self) -> usize {
-        FIXED_COLUMNS + 3 * self.axes.len()
     }
 }
 
 impl Drop for TraceSink {
     fn drop(&mut self) {
-        // Finished or failed, the raw rows are not kept, nor an unfinished trace.
-        self.raw = None;
-        let _ = std::fs::remove_file(&self.raw_path);
-        if self.out.take().is_some() {
+        // Finished or failed, an unfinished trace is not kept (nor the spill file, which
+        // removes itself).
+        let open = match &mut self.format {
+            Format::Csv(csv) => csv.out.take().is_some(),
+            Format::Parquet(parquet) => parquet.out.take().is_some(),
+        };
+        if open {
             let _ = std::fs::remove_file(temporary_path(&self.trace_path));
         }
     }
@@ -327,7 +194,7 @@ impl TraceSink {
             )));
         }
         self.rows += 1;
-        if self.held.last().is_none_or(Block::is_full) {
+        if self.filling.as_ref().is_none_or(Block::is_full) {
             self.next_block()?;
         }
         let mut axes = [[0.0; 3]; Axis::ALL.len()];
@@ -335,7 +202,7 @@ impl TraceSink {
             *values = [s.commanded[a], s.actual[a], s.following_error[a]];
         }
         let (sin, cos) = r.theta_sin_cos;
-        let block = self.held.last_mut().expect("a block with room");
+        let block = self.filling.as_mut().expect("a block with room");
         block.push(
             [s.time_s, s.line as f64, r.theta_deg, sin, cos],
             &axes[..self.axes.len()],
@@ -344,33 +211,55 @@ impl TraceSink {
         Ok(())
     }
 
-    /// Starts a block for the next rows: a spare one, or a new one; when the run's full
-    /// blocks pass [`RAW_IN_MEMORY`], they move to the temporary file first.
+    /// Hands the full block (if any) to the format and takes an empty one for the next rows.
     fn next_block(&mut self) -> Result<()> {
-        if self.format == TraceFormat::Parquet {
-            if let Some(full) = self.held.pop() {
-                self.stream(full)?;
-            }
-            let block = self.spare.pop().unwrap_or_else(|| Block::new(self.width()));
-            self.held.push(block);
-            return Ok(());
-        }
-        let block_bytes = 8 * BLOCK_ROWS * self.width();
-        if self.held.len() * block_bytes > RAW_IN_MEMORY {
-            self.spill()?;
-        }
-        let block = self.spare.pop().unwrap_or_else(|| Block::new(self.width()));
-        self.held.push(block);
+        let full = self.filling.take();
+        self.filling = Some(match &mut self.format {
+            Format::Csv(csv) => csv.next_block(full)?,
+            Format::Parquet(parquet) => parquet.next_block(full, self.direction)?,
+        });
         Ok(())
     }
+}
 
-    /// Moves the held (full) blocks to the temporary file.
+/// `trace.csv`'s state: the run's full blocks, held until its centring is known (past
+/// [`RAW_IN_MEMORY`], moved to the spill file), then written row by row.
+struct CsvRuns {
+    /// Columns of a block.
+    width: usize,
+    held: Vec<Block>,
+    /// Emptied blocks, for the next rows.
+    spare: Vec<Block>,
+    /// The spill file, and how many blocks of the current run it holds.
+    spill: SpillFile,
+    spilled: usize,
+    /// The centred deviations of the block being written.
+    centred: Vec<f64>,
+    /// The trace's temporary file and header, and the file once opened.
+    tmp: PathBuf,
+    header: String,
+    out: Option<CsvTrace>,
+}
+
+impl CsvRuns {
+    /// Holds the `full` block (when the held blocks pass [`RAW_IN_MEMORY`], they move to
+    /// the spill file), and gives an empty one.
+    fn next_block(&mut self, full: Option<Block>) -> Result<Block> {
+        if let Some(full) = full {
+            self.held.push(full);
+            if self.held.len() * 8 * BLOCK_ROWS * self.width > RAW_IN_MEMORY {
+                self.spill()?;
+            }
+        }
+        Ok(self.spare.pop().unwrap_or_else(|| Block::new(self.width)))
+    }
+
+    /// Moves the held (full) blocks to the spill file.
     fn spill(&mut self) -> Result<()> {
-        let held = std::mem::take(&mut self.held);
-        for mut block in held {
+        for mut block in std::mem::take(&mut self.held) {
             block
-                .write_raw(self.raw_file()?)
-                .map_err(write_error(&self.raw_path))?;
+                .write_raw(self.spill.writer()?)
+                .map_err(write_error(self.spill.path()))?;
             block.clear();
             self.spare.push(block);
             self.spilled += 1;
@@ -378,19 +267,166 @@ impl TraceSink {
         Ok(())
     }
 
-    /// The temporary file of spilled rows, created on the first spill.
-    fn raw_file(&mut self) -> Result<&mut BufWriter<File>> {
-        if self.raw.is_none() {
-            let file = File::options()
-                .read(true)
-                .write(true)
-                .create(true)
-                .truncate(true)
-                .open(&self.raw_path)
-                .map_err(write_error(&self.raw_path))?;
-            self.raw = Some(BufWriter::with_capacity(1 << 16, file));
+    /// Writes the run's rows (the spilled blocks, the held ones, then `last`), centred with
+    /// `centring`, and empties them.
+    fn end_run(
+        &mut self,
+        last: Option<Block>,
+        direction: Direction,
+        centring: Option<Centring>,
+    ) -> Result<()> {
+        self.held.extend(last);
+        if self.held.is_empty() && self.spilled == 0 {
+            return Ok(());
         }
-        Ok(self.raw.as_mut().expect("created above"))
+        if self.out.is_none() {
+            self.out = Some(CsvTrace::create(self.tmp.clone(), &self.header)?);
+        }
+        let out = self.out.as_mut().expect("opened above");
+        if self.spilled > 0 {
+            let path = self.spill.path().to_path_buf();
+            let mut block = self.spare.pop().unwrap_or_else(|| Block::new(self.width));
+            let mut reader = self.spill.reader()?;
+            for _ in 0..self.spilled {
+                block.read_raw(&mut reader).map_err(write_error(&path))?;
+                block.centred_into(centring, &mut self.centred);
+                out.write_block(&block, direction, &self.centred)?;
+            }
+            drop(reader);
+            self.spill.clear()?;
+            block.clear();
+            self.spare.push(block);
+            self.spilled = 0;
+        }
+        for mut block in std::mem::take(&mut self.held) {
+            block.centred_into(centring, &mut self.centred);
+            out.write_block(&block, direction, &self.centred)?;
+            block.clear();
+            self.spare.push(block);
+        }
+        Ok(())
+    }
+
+    /// Flushes the trace file (with its header only when no run had rows); the caller
+    /// renames it.
+    fn finish(&mut self) -> Result<()> {
+        match self.out.take() {
+            Some(out) => out.finish(),
+            None => CsvTrace::create(self.tmp.clone(), &self.header)?.finish(),
+        }
+    }
+}
+
+/// `trace.parquet`'s state: each full block is written at once as a row group, and each
+/// row's `(dL, sin θ, cos θ)` kept (past [`RAW_IN_MEMORY`], in the spill file) for the
+/// run's centred deviations, written at its end.
+struct ParquetRuns {
+    /// Columns of a block.
+    width: usize,
+    /// The block written last, emptied for the next rows.
+    spare: Option<Block>,
+    /// The current run's centring inputs in memory, and how many went to the spill file.
+    inputs: Vec<f64>,
+    spill: SpillFile,
+    inputs_spilled: usize,
+    /// The current run's first row group.
+    run_first_group: usize,
+    /// The centred deviations of the row group being written.
+    centred: Vec<f64>,
+    /// The trace's temporary file and columns, and the file once opened.
+    tmp: PathBuf,
+    names: Vec<String>,
+    out: Option<ParquetTrace>,
+}
+
+impl ParquetRuns {
+    /// Writes the `full` block (if any) of the run `direction`, and gives an empty one.
+    fn next_block(&mut self, full: Option<Block>, direction: Direction) -> Result<Block> {
+        match full {
+            Some(block) => self.write(block, direction),
+            None => Ok(self.spare.take().unwrap_or_else(|| Block::new(self.width))),
+        }
+    }
+
+    /// Writes the columns of `block` as a row group and keeps what its centred deviations
+    /// need; gives the block back emptied.
+    fn write(&mut self, mut block: Block, direction: Direction) -> Result<Block> {
+        if block.rows() > 0 {
+            if self.out.is_none() {
+                self.out = Some(ParquetTrace::create(self.tmp.clone(), self.names.clone())?);
+            }
+            let out = self.out.as_mut().expect("opened above");
+            out.write_block(&block, direction)?;
+            block.centring_inputs_into(&mut self.inputs);
+            if 8 * self.inputs.len() > RAW_IN_MEMORY {
+                self.spill
+                    .writer()?
+                    .write_all(self.inputs.to_byte_slice())
+                    .map_err(write_error(self.spill.path()))?;
+                self.inputs_spilled += self.inputs.len();
+                self.inputs.clear();
+            }
+        }
+        block.clear();
+        Ok(block)
+    }
+
+    /// Writes the columns of `last` (the block being filled), then the centred deviations
+    /// of every row group of the run.
+    fn end_run(
+        &mut self,
+        last: Option<Block>,
+        direction: Direction,
+        centring: Option<Centring>,
+    ) -> Result<()> {
+        if let Some(block) = last {
+            self.spare = Some(self.write(block, direction)?);
+        }
+        let Some(out) = self.out.as_mut() else {
+            return Ok(());
+        };
+        let path = self.spill.path().to_path_buf();
+        let mut spilled = match self.inputs_spilled {
+            0 => None,
+            _ => Some(self.spill.reader()?),
+        };
+        let (mut from_file, mut at) = (self.inputs_spilled, 0);
+        let mut read = Vec::new();
+        for group in self.run_first_group..out.groups() {
+            let need = 3 * out.group_rows(group);
+            let inputs = match spilled.as_mut().filter(|_| from_file > 0) {
+                Some(reader) => {
+                    let n = need.min(from_file);
+                    read_f64s(reader, n, &mut read).map_err(write_error(&path))?;
+                    read.extend_from_slice(&self.inputs[at..at + need - n]);
+                    (from_file, at) = (from_file - n, at + need - n);
+                    &read[..]
+                }
+                None => {
+                    at += need;
+                    &self.inputs[at - need..at]
+                }
+            };
+            centred_from_inputs(inputs, centring, &mut self.centred);
+            out.write_centred(group, &self.centred)?;
+        }
+        if let Some(reader) = spilled {
+            drop(reader);
+            self.spill.clear()?;
+        }
+        self.inputs.clear();
+        self.inputs_spilled = 0;
+        self.run_first_group = out.groups();
+        Ok(())
+    }
+
+    /// Writes the footer (a trace without rows: the schema only); the caller renames the
+    /// file.
+    fn finish(&mut self) -> Result<()> {
+        match self.out.take() {
+            Some(out) => out.finish(),
+            None => ParquetTrace::create(self.tmp.clone(), self.names.clone())?.finish(),
+        }
     }
 }
 

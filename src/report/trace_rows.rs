@@ -1,15 +1,17 @@
 //! The rows of one run of a trace, column by column, held until the run's centring is known:
 //! what `trace.csv` ([`super::trace`]) and `trace.parquet` ([`super::trace_parquet`]) are
-//! written from, and the write error both report.
+//! written from, the spill file of what a run holds past its memory, and the write error
+//! both formats report.
 //!
 //! A [`Block`] holds up to [`BLOCK_ROWS`] rows, each column a slice of that many values, so
 //! that a block is a row group of `trace.parquet` as it stands (a column chunk is a slice),
-//! and a spilled block goes to disk and back as one read or write.
+//! and a spilled block goes to disk and back as one read or write ([`SpillFile`]).
 
-use std::io::{Read, Write};
-use std::path::Path;
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Read, Seek, Write};
+use std::path::{Path, PathBuf};
 
-use crate::error::Error;
+use crate::error::{Error, Result};
 use crate::measure::ballbar::Centring;
 
 /// Rows a block holds: a row group of `trace.parquet` (4 s of machine time at 1 ms; about
@@ -38,6 +40,67 @@ pub(super) fn write_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ 
     move |source| Error::Write {
         path: path.to_path_buf(),
         source,
+    }
+}
+
+/// A binary temporary file for what a run holds past the memory it may use (see
+/// `super::trace::RAW_IN_MEMORY`): created at the first spill, emptied at each run's end for
+/// the next, removed when dropped.
+pub(super) struct SpillFile {
+    path: PathBuf,
+    file: Option<BufWriter<File>>,
+}
+
+impl SpillFile {
+    pub fn new(path: PathBuf) -> SpillFile {
+        SpillFile { path, file: None }
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The file to append to, created at the first call.
+    pub fn writer(&mut self) -> Result<&mut BufWriter<File>> {
+        if self.file.is_none() {
+            let file = File::options()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(true)
+                .open(&self.path)
+                .map_err(write_error(&self.path))?;
+            self.file = Some(BufWriter::with_capacity(1 << 16, file));
+        }
+        Ok(self.file.as_mut().expect("created above"))
+    }
+
+    /// What was written since the last [`SpillFile::clear`], from its start.
+    pub fn reader(&mut self) -> Result<BufReader<&File>> {
+        self.writer()?;
+        let (path, out) = (&self.path, self.file.as_mut().expect("created above"));
+        out.flush().map_err(write_error(path))?;
+        out.get_mut().rewind().map_err(write_error(path))?;
+        Ok(BufReader::with_capacity(1 << 16, out.get_ref()))
+    }
+
+    /// Empties the file for the next run.
+    pub fn clear(&mut self) -> Result<()> {
+        let Some(out) = self.file.as_mut() else {
+            return Ok(());
+        };
+        let file = out.get_mut();
+        file.rewind()
+            .and_then(|()| file.set_len(0))
+            .map_err(write_error(&self.path))
+    }
+}
+
+impl Drop for SpillFile {
+    fn drop(&mut self) {
+        // Finished or failed, a run's spilled rows are not kept.
+        self.file = None;
+        let _ = std::fs::remove_file(&self.path);
     }
 }
 
@@ -105,18 +168,21 @@ impl Block {
         self.rows = 0;
     }
 
-    /// Each row's centred deviation `dL - (a cos θ + b sin θ)` with its run's `centring`
-    /// (dL itself without one), into `out`; `offset_um_at` takes the sine and cosine the ball
-    /// bar took (the same bits).
+    /// Each row's centred deviation ([`centred`]) with its run's `centring` (dL itself without
+    /// one), into `out`.
     pub fn centred_into(&self, centring: Option<Centring>, out: &mut Vec<f64>) {
-        let dev = self.column(self.width - 1);
+        let (dev, sin, cos) = (
+            self.column(self.width - 1),
+            self.column(SIN),
+            self.column(COS),
+        );
         out.clear();
         match centring {
             None => out.extend_from_slice(dev),
             Some(c) => out.extend(
                 dev.iter()
-                    .zip(self.column(SIN).iter().zip(self.column(COS)))
-                    .map(|(&d, (&sin, &cos))| d - c.offset_um_at((sin, cos))),
+                    .zip(sin.iter().zip(cos))
+                    .map(|(&d, (&s, &k))| centred(d, (s, k), c)),
             ),
         }
     }
@@ -158,12 +224,20 @@ impl Block {
     }
 }
 
-/// The centred deviations `dL - (a cos θ + b sin θ)` of rows given as `(dL, sin θ, cos θ)`
+/// The centred deviations of rows given as `(dL, sin θ, cos θ)` in a row
 /// ([`Block::centring_inputs_into`]), with their run's `centring` (dL without one), into `out`.
 pub(super) fn centred_from_inputs(inputs: &[f64], centring: Option<Centring>, out: &mut Vec<f64>) {
     out.clear();
     out.extend(inputs.chunks_exact(3).map(|t| match centring {
         None => t[0],
-        Some(c) => t[0] - c.offset_um_at((t[1], t[2])),
+        Some(c) => centred(t[0], (t[1], t[2]), c),
     }));
+}
+
+/// The centred deviation `dL - (a cos θ + b sin θ)` of a row with deviation `dev` (dL) at
+/// `sin_cos` (the sine and cosine of θ the ball bar took: the same bits) in a run whose
+/// ball bar was centred by `centring`.
+#[inline(always)]
+fn centred(dev: f64, sin_cos: (f64, f64), centring: Centring) -> f64 {
+    dev - centring.offset_um_at(sin_cos)
 }

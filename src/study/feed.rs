@@ -43,26 +43,24 @@ pub fn feed_limits(scenario: &Scenario) -> Result<FeedReport> {
 /// Plans `moves` (the scenario's program, as [`program::scenario_run`] gives it) for the
 /// scenario's machine and reports where the feed was limited. The blocks are planned, not
 /// sampled: a block's cruise speed and the limit that holds it are set when it is planned.
+/// The first error, of a move or of its planning, ends it.
 pub fn plan_feed(
     moves: impl Iterator<Item = Result<program::Move>>,
     scenario: &Scenario,
 ) -> Result<FeedReport> {
-    let mut feed_blocks = 0u64;
-    let moves = moves.inspect(|m| {
-        if let Ok(m) = m {
-            feed_blocks += u64::from(is_feed(m));
+    let mut planner = FeedPlanner::new(scenario)?;
+    for m in moves {
+        planner.push(&m?);
+        if planner.failed.is_some() {
+            break;
         }
-    });
-    let mut interpolator = Interpolator::new(moves, &scenario.machine, planner_options(scenario))?;
-    interpolator.plan_to_end()?;
-    let blocks = interpolator.take_feed_limits();
-    drop(interpolator);
-    Ok(report(blocks, feed_blocks))
+    }
+    planner.finish()
 }
 
-/// [`plan_feed`] one move at a time, given by reference (no copy of a move): the moves of
-/// a file program planned beside another pass over them. The first error stops the
-/// planning; it is [`FeedPlanner::finish`]'s result.
+/// The planning of [`plan_feed`], one move at a time, given by reference (no copy of a move):
+/// also the moves of a file program planned beside another pass over them. The first error
+/// stops the planning; it is [`FeedPlanner::finish`]'s result.
 pub struct FeedPlanner {
     interpolator: Interpolator<std::iter::Empty<Result<program::Move>>>,
     feed_blocks: u64,

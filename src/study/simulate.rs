@@ -461,7 +461,7 @@ pub fn simulate(
         }
         _ => (Vec::new(), Vec::new()),
     };
-    trace.finish(runs)?;
+    trace.finish()?;
     // The other format's trace of an earlier run would be read for this one's.
     let other = match format {
         TraceFormat::Csv => TRACE_PARQUET_FILE,

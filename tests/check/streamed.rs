@@ -6,22 +6,6 @@ use crate::common;
 
 use std::path::Path;
 
-/// A scenario in `dir` running `program` (as `p.nc`) on the three-axis machine
-/// (X -400 .. 400 mm).
-fn file_scenario(dir: &Path, program: &str) -> String {
-    std::fs::write(dir.join("p.nc"), program).unwrap();
-    let s = dir.join("s.toml");
-    std::fs::write(
-        &s,
-        format!(
-            "machine = \"{}\"\n[program]\nfile = \"p.nc\"\n",
-            common::machine("vmc-3axis")
-        ),
-    )
-    .unwrap();
-    s.display().to_string()
-}
-
 /// `blocks` G01 blocks zig-zagging 0.1 mm in X at 6 m/min (1 ms each), then `last`.
 fn long_program(blocks: usize, last: &str) -> String {
     let mut text = String::from("G21 G90 G94\nG00 X0 Y0 Z0\n");
@@ -56,7 +40,7 @@ fn a_bad_move_or_line_near_the_end_of_a_long_program_exits_2_and_writes_nothing(
     ];
     for (name, last, expected) in cases {
         let dir = common::scratch("streamed-checks", name);
-        let s = file_scenario(&dir, &long_program(BLOCKS, last));
+        let s = common::file_scenario(&dir, &long_program(BLOCKS, last));
         for args in [
             &["analyze", &s][..],
             &["check", &s, "--html", "check.html"][..],
@@ -81,7 +65,7 @@ fn a_program_whose_only_moves_go_nowhere_is_still_refused_at_its_end() {
     for _ in 0..1000 {
         program.push_str("G00 X0 Y0\n");
     }
-    let s = file_scenario(&dir, &program);
+    let s = common::file_scenario(&dir, &program);
     for command in ["analyze", "check"] {
         let out = common::mtsim_plain(&dir, &[command, &s]);
         let err = unwrapped(&out.stderr);

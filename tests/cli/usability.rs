@@ -88,21 +88,6 @@ fn measuring_from_the_first_feed_block_warns_that_one_spot_dominates_g() {
     assert!(err.contains("θ = 0.0°") || err.contains("θ = 359"), "{err}");
 }
 
-/// A scenario in `dir` running the G-code `program` on the three-axis machine.
-fn file_scenario(dir: &std::path::Path, program: &str) -> String {
-    std::fs::write(dir.join("p.nc"), program).unwrap();
-    let s = dir.join("s.toml");
-    std::fs::write(
-        &s,
-        format!(
-            "machine = \"{}\"\n[program]\nfile = \"p.nc\"\n",
-            common::machine("vmc-3axis")
-        ),
-    )
-    .unwrap();
-    s.display().to_string()
-}
-
 #[test]
 fn programs_without_motion_or_with_absurd_moves_exit_2_with_file_line_column() {
     let x308 = format!("G01 X1{} F100\n", "0".repeat(308));
@@ -123,7 +108,7 @@ fn programs_without_motion_or_with_absurd_moves_exit_2_with_file_line_column() {
     ];
     for (name, program, expected) in cases {
         let dir = scratch("usability", name);
-        let s = file_scenario(&dir, program);
+        let s = common::file_scenario(&dir, program);
         for command in ["analyze", "check", "simulate"] {
             let started = std::time::Instant::now();
             let out = common::mtsim_plain(
@@ -153,7 +138,7 @@ fn programs_without_motion_or_with_absurd_moves_exit_2_with_file_line_column() {
 fn simulate_reports_a_travel_overrun_as_check_does() {
     // X to 500 mm on a -400 .. 400 mm axis: within the envelope's length, beyond its end.
     let dir = scratch("usability", "overrun");
-    let s = file_scenario(&dir, "G00 X0 Y0 Z100\nG01 X500 F6000\n");
+    let s = common::file_scenario(&dir, "G00 X0 Y0 Z100\nG01 X500 F6000\n");
     let check = mtsim(&["check", &s, "--json"]);
     assert_eq!(check.status.code(), Some(1));
     let out = mtsim(&["simulate", &s, "-o", dir.join("out").to_str().unwrap()]);

@@ -100,6 +100,16 @@ pub fn write_scenario(dir: &Path, machine: &str, body: &str) -> PathBuf {
     path
 }
 
+/// Writes the G-code `program` as `dir/p.nc` and a scenario `dir/s.toml` that runs it on the
+/// three-axis machine (X -400 .. 400 mm); returns the scenario's path.
+pub fn file_scenario(dir: &Path, program: &str) -> String {
+    std::fs::write(dir.join("p.nc"), program).unwrap();
+    let body = "[program]\nfile = \"p.nc\"\n";
+    write_scenario(dir, &machine("vmc-3axis"), body)
+        .display()
+        .to_string()
+}
+
 /// The path of a LinuxCNC sample machine file, `machines/linuxcnc/<stem>.toml`.
 pub fn linuxcnc_machine(stem: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -303,11 +303,11 @@ fn path_control_modes_at_a_corner() {
     );
 }
 
-/// Planning without sampling (`Interpolator::plan_to_end`, what `analyze` runs on a generated program) notes the
-/// same blocks, axes and speeds as the sampled run: 300 blocks alternating between a
-/// diagonal held by Y's velocity (closed form 6 000 √2 mm/min), a pure C move held at
-/// 9 000 deg/min, and a slow move that is not held, with the look-ahead window (16 blocks)
-/// refilled many times.
+/// Planning without sampling (`Interpolator::plan_block`, what `analyze` runs, block by block
+/// by reference) notes the same blocks, axes and speeds as the sampled run: 300 blocks
+/// alternating between a diagonal held by Y's velocity (closed form 6 000 √2 mm/min), a pure
+/// C move held at 9 000 deg/min, and a slow move that is not held, with the look-ahead window
+/// (16 blocks) refilled many times.
 #[test]
 fn planning_without_sampling_notes_the_same_feed_limits() {
     let mut v = FAST;
@@ -329,23 +329,16 @@ fn planning_without_sampling_notes_the_same_feed_limits() {
         record_feed_limits: true,
         ..InterpolationOptions::default()
     };
-    // Block by block, by reference (`Interpolator::plan_block`, what `analyze` runs on a file).
-    let mut one = Interpolator::new(std::iter::empty(), &m, options.clone()).unwrap();
+    let mut it = Interpolator::new(std::iter::empty(), &m, options).unwrap();
     for b in &blocks {
-        one.plan_block(b).unwrap();
+        it.plan_block(b).unwrap();
     }
-    let mut it = Interpolator::new(blocks.into_iter().map(Ok), &m, options).unwrap();
-    it.plan_to_end().unwrap();
     let planned = it.take_feed_limits();
     assert!(it.next().is_none(), "nothing to sample after planning");
     assert_eq!(planned.len(), 200, "the diagonal and the C moves");
     let key = |l: &FeedLimit| (l.line, l.axis, l.limit, l.planned_per_min.to_bits());
     assert_eq!(
         planned.iter().map(key).collect::<Vec<_>>(),
-        sampled.iter().map(key).collect::<Vec<_>>()
-    );
-    assert_eq!(
-        one.take_feed_limits().iter().map(key).collect::<Vec<_>>(),
         sampled.iter().map(key).collect::<Vec<_>>()
     );
     for l in &planned {
@@ -375,7 +368,10 @@ fn planning_without_sampling_stops_at_a_block_it_cannot_plan() {
     let mut one = Interpolator::new(std::iter::empty(), &m, options.clone()).unwrap();
     let by_reference = blocks.iter().find_map(|b| one.plan_block(b).err());
     let mut it = Interpolator::new(blocks.into_iter().map(Ok), &m, options).unwrap();
-    let e = it.plan_to_end().unwrap_err().to_string();
+    let e = it
+        .find_map(|s| s.err())
+        .expect("the sampled run fails")
+        .to_string();
     assert!(e.contains("line 701") && e.contains("feed rate"), "{e}");
     assert_eq!(by_reference.map(|e| e.to_string()), Some(e));
 }

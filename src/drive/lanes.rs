@@ -16,6 +16,7 @@
 //! before the next one starts (its state stays in cache), writing its outputs to a buffer of
 //! one block, which the points then read. Memory: one block per distinct servo.
 
+use super::lane_servo::{TwinLanes, LANES};
 use super::servo::AxisServo;
 use crate::error::Result;
 use crate::input::machine::Machine;
@@ -30,6 +31,10 @@ struct AxisLanes {
     axis: Axis,
     /// The distinct servos; None once one has failed (diverged).
     servos: Vec<Option<AxisServo>>,
+    /// The linear twins with a period map, [`LANES`] to a lane group; the servos stepped
+    /// one by one (every nonlinear drive, and the twins of no group).
+    groups: Vec<TwinLanes>,
+    alone: Vec<usize>,
     /// Which servo each point has.
     servo_of: Vec<usize>,
     /// Per servo, [`BLOCK`] entries: actual position (mm, deg) and following error after each
@@ -65,9 +70,16 @@ impl AxisLanes {
             servo_of.push(index);
         }
         let n = servos.len();
+        let (groups, alone) = if linear {
+            lane_groups(&servos)
+        } else {
+            (Vec::new(), (0..n).collect())
+        };
         Ok(AxisLanes {
             axis,
             servos,
+            groups,
+            alone,
             servo_of,
             actual: vec![0.0; n * BLOCK],
             following_error: if linear {
@@ -85,7 +97,18 @@ impl AxisLanes {
     #[inline(always)]
     fn step_block_inline(&mut self, setpoints: &[AxisVec], times_s: &[f64], linear: bool) {
         let a = self.axis;
-        for (s, slot) in self.servos.iter_mut().enumerate() {
+        for group in &self.groups {
+            group.step_block(
+                &mut self.servos,
+                a,
+                setpoints,
+                times_s,
+                &mut self.actual,
+                &mut self.completed,
+            );
+        }
+        for &s in &self.alone {
+            let slot = &mut self.servos[s];
             let Some(servo) = slot.as_mut() else {
                 self.completed[s] = 0;
                 continue;
@@ -119,6 +142,18 @@ impl AxisLanes {
     fn completed_by(&self, i: usize) -> usize {
         self.completed[self.servo_of[i]]
     }
+}
+
+/// The servos of `servos` that have a twin period map in lane groups of [`LANES`] (the
+/// last one ragged), and the others.
+fn lane_groups(servos: &[Option<AxisServo>]) -> (Vec<TwinLanes>, Vec<usize>) {
+    let (mapped, alone): (Vec<usize>, Vec<usize>) =
+        (0..servos.len()).partition(|&s| TwinLanes::new(servos, &[s]).is_some());
+    let groups = mapped
+        .chunks(LANES)
+        .map(|lanes| TwinLanes::new(servos, lanes).expect("every lane has a twin map"))
+        .collect();
+    (groups, alone)
 }
 
 /// The drives and linear twins of several points, shared per axis.
@@ -194,10 +229,24 @@ impl DriveLanes {
     pub fn step_block(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
         assert!(setpoints.len() <= BLOCK && times_s.len() == setpoints.len());
         #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512F, checked at run time just above.
+            return unsafe { self.step_block_avx512(setpoints, times_s) };
+        }
+        #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU has AVX, checked at run time just above.
             return unsafe { self.step_block_avx(setpoints, times_s) };
         }
+        self.step_block_inline(setpoints, times_s)
+    }
+
+    /// [`DriveLanes::step_block`] compiled for AVX-512: a lane group's vectors of
+    /// [`LANES`] f64 in one register (Rust never fuses a multiplication and an addition,
+    /// so the arithmetic is still the same whatever the vector width).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn step_block_avx512(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
         self.step_block_inline(setpoints, times_s)
     }
 

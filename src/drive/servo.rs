@@ -160,7 +160,45 @@ pub struct AxisServo {
 }
 
 /// Number of state variables of the cascade model: `x_m v_m x_t v_t F ∫ x_m,tick`.
-const N_STATE: usize = 7;
+pub(super) const N_STATE: usize = 7;
+
+/// Inputs of a linear twin's period map: the state, `Δs` and `F_ff` (no friction, no
+/// contact offset).
+pub(super) const N_TWIN_INPUT: usize = N_STATE + 2;
+
+/// What a lane servo ([`super::lane_servo`]) needs to step a linear twin's mapped period
+/// the way [`AxisServo::advance_twin`] does: the map's columns and the constants of the
+/// period's inputs and checks.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct TwinPeriod {
+    /// The first [`N_TWIN_INPUT`] columns of the period map, rows `x_m v_m x_t v_t F ∫
+    /// x_m,tick` (positions relative to the previous setpoint).
+    pub cols: [[f64; N_STATE]; N_TWIN_INPUT],
+    /// SI units per interface unit and its inverse.
+    pub scale: f64,
+    pub inv_scale: f64,
+    /// `1 / T_ipo`, 1/s.
+    pub inv_t_ipo: f64,
+    /// `k_aff m_tot`, kg or kg m².
+    pub aff_mass: f64,
+    /// Half the force limit, N or N m: the map applies while `|F|` stays within it.
+    pub half_limit: f64,
+    /// Divergence bound of the following errors, SI.
+    pub fe_limit: f64,
+}
+
+/// Everything a servo carries from one interpolation period to the next on the path of
+/// [`AxisServo::advance_twin`], SI: what a lane servo gathers and scatters back.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct TwinState {
+    pub setpoint: f64,
+    pub v_ff: f64,
+    /// `x_m v_m x_t v_t F ∫ x_m,tick`, positions absolute.
+    pub x: [f64; N_STATE],
+    pub velocity_si: f64,
+    /// Periods advanced by the map.
+    pub periods_exact: u64,
+}
 
 /// One interpolation period of the cascade model in its linear regime, as an affine map of
 /// the state (positions relative to the previous setpoint `s_{k-1}`):
@@ -804,6 +842,63 @@ impl AxisServo {
     /// The lost motion this axis shows at a reversal (ISO 230-2 B and its parts), mm or deg.
     pub fn reversal_value(&self) -> ReversalValue {
         self.reversal
+    }
+
+    /// The linear twin's mapped period for a lane servo; None for any other servo (first
+    /// order, dry friction, backlash, pre-sliding, no map), which steps on its own.
+    pub(super) fn twin_period(&self) -> Option<TwinPeriod> {
+        let exact = self.exact.as_deref().filter(|e| e.lti)?;
+        let map = exact.maps[0].get()?;
+        let mut cols = [[0.0; N_STATE]; N_TWIN_INPUT];
+        for (col, full) in cols.iter_mut().zip(&map.cols) {
+            col.copy_from_slice(&full[..N_STATE]);
+        }
+        Some(TwinPeriod {
+            cols,
+            scale: self.scale,
+            inv_scale: self.inv_scale,
+            inv_t_ipo: self.inv_t_ipo,
+            aff_mass: self.aff_mass,
+            half_limit: 0.5 * self.force_limit,
+            fe_limit: self.fe_limit,
+        })
+    }
+
+    /// The state [`AxisServo::advance_twin`] carries between periods.
+    pub(super) fn twin_state(&self) -> TwinState {
+        TwinState {
+            setpoint: self.setpoint,
+            v_ff: self.v_ff,
+            x: [
+                self.x_m,
+                self.v_m,
+                self.x_t,
+                self.v_t,
+                self.force,
+                self.integral,
+                self.x_m_tick,
+            ],
+            velocity_si: self.velocity_si,
+            periods_exact: self.periods_exact,
+        }
+    }
+
+    /// Sets the state of [`AxisServo::twin_state`] (a linear twin's: its carried regime and
+    /// friction-bound cache are never read).
+    pub(super) fn set_twin_state(&mut self, state: &TwinState) {
+        self.setpoint = state.setpoint;
+        self.v_ff = state.v_ff;
+        [
+            self.x_m,
+            self.v_m,
+            self.x_t,
+            self.v_t,
+            self.force,
+            self.integral,
+            self.x_m_tick,
+        ] = state.x;
+        self.velocity_si = state.velocity_si;
+        self.periods_exact = state.periods_exact;
     }
 
     /// Advances one interpolation period towards `setpoint` (mm or deg), reached by the

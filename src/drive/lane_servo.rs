@@ -126,30 +126,29 @@ impl TwinLanes {
     /// lane must run it scalar (state untouched).
     #[inline(always)]
     fn mapped_period(&self, st: &mut State, q: f64) -> [bool; LANES] {
-        let mut s_new = [0.0; LANES];
-        let mut v_ff = [0.0; LANES];
-        let mut u = [[0.0; LANES]; N_TWIN_INPUT];
-        for l in 0..LANES {
-            s_new[l] = q * self.scale[l];
-            let s_old = st.setpoint[l];
-            v_ff[l] = (s_new[l] - s_old) * self.inv_t_ipo[l];
-            let a_ff = (v_ff[l] - st.v_ff[l]) * self.inv_t_ipo[l];
-            u[0][l] = st.x[0][l] - s_old;
-            u[1][l] = st.x[1][l];
-            u[2][l] = st.x[2][l] - s_old;
-            u[3][l] = st.x[3][l];
-            u[4][l] = st.x[4][l];
-            u[5][l] = st.x[5][l];
-            u[6][l] = st.x[6][l] - s_old;
-            u[7][l] = s_new[l] - s_old;
-            u[8][l] = self.aff_mass[l] * a_ff;
-        }
+        let s_new: Lanes = std::array::from_fn(|l| q * self.scale[l]);
+        let s_old = st.setpoint;
+        let v_ff: Lanes = std::array::from_fn(|l| (s_new[l] - s_old[l]) * self.inv_t_ipo[l]);
+        let f_ff = std::array::from_fn(|l| {
+            self.aff_mass[l] * ((v_ff[l] - st.v_ff[l]) * self.inv_t_ipo[l])
+        });
+        let relative = |x: &Lanes| std::array::from_fn(|l| x[l] - s_old[l]);
+        let u: [Lanes; N_TWIN_INPUT] = [
+            relative(&st.x[0]),
+            st.x[1],
+            relative(&st.x[2]),
+            st.x[3],
+            st.x[4],
+            st.x[5],
+            relative(&st.x[6]),
+            std::array::from_fn(|l| s_new[l] - s_old[l]),
+            f_ff,
+        ];
         let y = self.product(&u);
         let mut ok = [false; LANES];
         for l in 0..LANES {
-            let s_old = st.setpoint[l];
-            let x_m = y[0][l] + s_old;
-            let x_t = y[2][l] + s_old;
+            let x_m = y[0][l] + s_old[l];
+            let x_t = y[2][l] + s_old[l];
             // 0 exactly when the six are finite (see `all_finite` in `servo`).
             let probe = (0..6).fold(0.0, |sum, r| sum + (y[r][l] - y[r][l]));
             // `&` rather than `&&`: every condition is computed, without branches.
@@ -167,9 +166,9 @@ impl TwinLanes {
             st.x[3][l] = take(y[3][l], st.x[3][l]);
             st.x[4][l] = take(y[4][l], st.x[4][l]);
             st.x[5][l] = take(y[5][l], st.x[5][l]);
-            st.x[6][l] = take(y[6][l] + s_old, st.x[6][l]);
+            st.x[6][l] = take(y[6][l] + s_old[l], st.x[6][l]);
             st.velocity[l] = take(y[3][l], st.velocity[l]);
-            st.setpoint[l] = take(s_new[l], s_old);
+            st.setpoint[l] = take(s_new[l], s_old[l]);
             st.v_ff[l] = take(v_ff[l], st.v_ff[l]);
             st.periods_exact[l] += u64::from(ok[l]);
         }

@@ -28,7 +28,7 @@ use crate::{Axis, AxisVec};
 pub const LANES: usize = 8;
 
 /// One value per lane.
-type Lanes = [f64; LANES];
+pub(super) type Lanes = [f64; LANES];
 
 /// A group of up to [`LANES`] linear twins of one axis, in structure-of-arrays form.
 #[derive(Clone, Debug)]

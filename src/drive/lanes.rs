@@ -16,6 +16,7 @@
 //! before the next one starts (its state stays in cache), writing its outputs to a buffer of
 //! one block, which the points then read. Memory: one block per distinct servo.
 
+use super::lane_drive::DriveLaneGroup;
 use super::lane_servo::{TwinLanes, LANES};
 use super::servo::AxisServo;
 use crate::error::Result;
@@ -31,9 +32,10 @@ struct AxisLanes {
     axis: Axis,
     /// The distinct servos; None once one has failed (diverged).
     servos: Vec<Option<AxisServo>>,
-    /// The linear twins with a period map, [`LANES`] to a lane group; the servos stepped
-    /// one by one (every nonlinear drive, and the twins of no group).
+    /// The linear twins with a period map and the nonlinear drives with a slope-0 map,
+    /// [`LANES`] to a lane group; the servos stepped one by one (those of no group).
     groups: Vec<TwinLanes>,
+    drive_groups: Vec<DriveLaneGroup>,
     alone: Vec<usize>,
     /// Which servo each point has.
     servo_of: Vec<usize>,
@@ -70,15 +72,18 @@ impl AxisLanes {
             servo_of.push(index);
         }
         let n = servos.len();
-        let (groups, alone) = if linear {
-            lane_groups(&servos)
+        let (groups, drive_groups, alone) = if linear {
+            let (groups, alone) = lane_groups(&servos, TwinLanes::new);
+            (groups, Vec::new(), alone)
         } else {
-            (Vec::new(), (0..n).collect())
+            let (groups, alone) = lane_groups(&servos, DriveLaneGroup::new);
+            (Vec::new(), groups, alone)
         };
         Ok(AxisLanes {
             axis,
             servos,
             groups,
+            drive_groups,
             alone,
             servo_of,
             actual: vec![0.0; n * BLOCK],
@@ -104,6 +109,17 @@ impl AxisLanes {
                 setpoints,
                 times_s,
                 &mut self.actual,
+                &mut self.completed,
+            );
+        }
+        for group in &self.drive_groups {
+            group.step_block(
+                &mut self.servos,
+                a,
+                setpoints,
+                times_s,
+                &mut self.actual,
+                &mut self.following_error,
                 &mut self.completed,
             );
         }
@@ -144,14 +160,17 @@ impl AxisLanes {
     }
 }
 
-/// The servos of `servos` that have a twin period map in lane groups of [`LANES`] (the
-/// last one ragged), and the others.
-fn lane_groups(servos: &[Option<AxisServo>]) -> (Vec<TwinLanes>, Vec<usize>) {
-    let (mapped, alone): (Vec<usize>, Vec<usize>) =
-        (0..servos.len()).partition(|&s| TwinLanes::new(servos, &[s]).is_some());
-    let groups = mapped
+/// The servos of `servos` that `group` takes, in lane groups of [`LANES`] (the last one
+/// ragged), and the others.
+fn lane_groups<G>(
+    servos: &[Option<AxisServo>],
+    group: impl Fn(&[Option<AxisServo>], &[usize]) -> Option<G>,
+) -> (Vec<G>, Vec<usize>) {
+    let (taken, alone): (Vec<usize>, Vec<usize>) =
+        (0..servos.len()).partition(|&s| group(servos, &[s]).is_some());
+    let groups = taken
         .chunks(LANES)
-        .map(|lanes| TwinLanes::new(servos, lanes).expect("every lane has a twin map"))
+        .map(|lanes| group(servos, lanes).expect("every lane was taken alone"))
         .collect();
     (groups, alone)
 }

@@ -187,6 +187,35 @@ pub(super) struct TwinPeriod {
     pub fe_limit: f64,
 }
 
+/// What a lane servo ([`super::lane_drive`]) needs to step a nonlinear drive's period the
+/// way [`AxisServo::advance`] does when the period map of friction slope 0 applies: its
+/// columns and the constants of the regime checks, SI.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct DrivePeriod {
+    /// The columns of `[M | b_Δs | b_ff | b_fr | b_off]` at slope 0, rows as in
+    /// [`TwinPeriod`].
+    pub cols: [[f64; N_STATE]; N_INPUT],
+    pub scale: f64,
+    pub inv_scale: f64,
+    pub inv_t_ipo: f64,
+    pub aff_mass: f64,
+    pub half_limit: f64,
+    pub fe_limit: f64,
+    pub stiffness: f64,
+    pub damping: f64,
+    pub half_backlash: f64,
+    pub coulomb: f64,
+    pub static_friction: f64,
+    pub stribeck: f64,
+    pub mt_over_h: f64,
+    /// The slope grid of [`ExactMaps`] and its tolerance.
+    pub slope_step: f64,
+    pub inv_slope_step: f64,
+    pub delta_friction: f64,
+    pub inv_stribeck: f64,
+    pub tolerance: f64,
+}
+
 /// Everything a servo carries from one interpolation period to the next on the path of
 /// [`AxisServo::advance_twin`], SI: what a lane servo gathers and scatters back.
 #[derive(Clone, Copy, Debug, Default)]
@@ -228,25 +257,25 @@ struct PeriodMap {
 }
 
 /// Inputs of [`PeriodMap`]: the state, `Δs`, `F_ff`, `F_fr`, `off`.
-const N_INPUT: usize = N_STATE + 4;
+pub(super) const N_INPUT: usize = N_STATE + 4;
 
 /// A linear regime of the cascade model at one state ([`AxisServo::linear_regime`]).
 #[derive(Clone, Copy, Debug)]
-struct Regime {
+pub(super) struct Regime {
     /// Direction of slip (0 without dry friction) and contact offset of the spring, SI.
-    side: f64,
-    offset: f64,
+    pub(super) side: f64,
+    pub(super) offset: f64,
     /// Dry friction on the table: the margins below apply.
-    dry: bool,
+    pub(super) dry: bool,
     /// `|v_t|`, the push on the table against friction `sign(v_t) (m_t v_t / h + F_spring)`,
     /// the friction bound `g(v_t)` and `m_t / h`.
-    speed: f64,
-    push: f64,
-    bound: f64,
+    pub(super) speed: f64,
+    pub(super) push: f64,
+    pub(super) bound: f64,
     /// `exp(-(v_t/vs)²)` where the bound needed it (0 beyond the Stribeck cut-off), for
     /// the friction's slope.
-    decay: f64,
-    mt_over_h: f64,
+    pub(super) decay: f64,
+    pub(super) mt_over_h: f64,
 }
 
 impl Regime {
@@ -864,6 +893,56 @@ impl AxisServo {
         })
     }
 
+    /// A nonlinear drive's mapped period at friction slope 0 (the map's grid slope index 0)
+    /// for a lane servo; None for a drive without such a map (first order, pre-sliding, a
+    /// linear twin, no map), which steps on its own. Builds that map where it was not yet
+    /// (as the first period needing it would: the same map).
+    pub(super) fn drive_period(&self) -> Option<DrivePeriod> {
+        if self.presliding.is_some() {
+            return None;
+        }
+        let exact = self.exact.as_deref().filter(|e| !e.lti)?;
+        let grid_slope = 0.0 * exact.slope_step;
+        let map = exact.maps[0].get_or_init(|| self.period_map(grid_slope, true));
+        let mut cols = [[0.0; N_STATE]; N_INPUT];
+        for (col, full) in cols.iter_mut().zip(&map.cols) {
+            col.copy_from_slice(&full[..N_STATE]);
+        }
+        Some(DrivePeriod {
+            cols,
+            scale: self.scale,
+            inv_scale: self.inv_scale,
+            inv_t_ipo: self.inv_t_ipo,
+            aff_mass: self.aff_mass,
+            half_limit: 0.5 * self.force_limit,
+            fe_limit: self.fe_limit,
+            stiffness: self.stiffness,
+            damping: self.damping,
+            half_backlash: self.half_backlash,
+            coulomb: self.coulomb,
+            static_friction: self.static_friction,
+            stribeck: self.stribeck,
+            mt_over_h: self.mt_over_h,
+            slope_step: exact.slope_step,
+            inv_slope_step: exact.inv_slope_step,
+            delta_friction: exact.delta_friction,
+            inv_stribeck: exact.inv_stribeck,
+            tolerance: exact.tolerance,
+        })
+    }
+
+    /// The carried regime and the friction-bound cache, what [`AxisServo::advance`] carries
+    /// beyond [`AxisServo::twin_state`].
+    pub(super) fn regime_state(&self) -> (Option<Regime>, (f64, f64, f64)) {
+        (self.carried_regime, self.bound_cache.get())
+    }
+
+    /// Sets what [`AxisServo::regime_state`] gives.
+    pub(super) fn set_regime_state(&mut self, regime: Option<Regime>, cache: (f64, f64, f64)) {
+        self.carried_regime = regime;
+        self.bound_cache.set(cache);
+    }
+
     /// The state [`AxisServo::advance_twin`] carries between periods.
     pub(super) fn twin_state(&self) -> TwinState {
         TwinState {
@@ -1215,7 +1294,7 @@ fn stribeck_bound(v: f64, fc: f64, fs: f64, vs: f64) -> f64 {
 /// [`stribeck_bound`] and the `exp(-(v/vs)²)` it took (1 at rest, 0 beyond the cut-off
 /// `(v/vs)² > 40`, where the bound is `Fc` exactly; unused without a Stribeck zone).
 #[inline]
-fn stribeck_bound_decay(v: f64, fc: f64, fs: f64, vs: f64) -> (f64, f64) {
+pub(super) fn stribeck_bound_decay(v: f64, fc: f64, fs: f64, vs: f64) -> (f64, f64) {
     if fs == fc || v == 0.0 {
         return (fs, 1.0);
     }

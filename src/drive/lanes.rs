@@ -160,18 +160,26 @@ impl AxisLanes {
     }
 }
 
+/// Fewest servos a lane group steps: a group costs its whole vectors whatever its lanes,
+/// so one or two servos step faster on their own.
+const MIN_LANES: usize = 3;
+
 /// The servos of `servos` that `group` takes, in lane groups of [`LANES`] (the last one
-/// ragged), and the others.
+/// ragged, of at least [`MIN_LANES`]), and the others.
 fn lane_groups<G>(
     servos: &[Option<AxisServo>],
     group: impl Fn(&[Option<AxisServo>], &[usize]) -> Option<G>,
 ) -> (Vec<G>, Vec<usize>) {
-    let (taken, alone): (Vec<usize>, Vec<usize>) =
+    let (taken, mut alone): (Vec<usize>, Vec<usize>) =
         (0..servos.len()).partition(|&s| group(servos, &[s]).is_some());
-    let groups = taken
-        .chunks(LANES)
-        .map(|lanes| group(servos, lanes).expect("every lane was taken alone"))
-        .collect();
+    let mut groups = Vec::new();
+    for lanes in taken.chunks(LANES) {
+        if lanes.len() < MIN_LANES {
+            alone.extend_from_slice(lanes);
+        } else {
+            groups.push(group(servos, lanes).expect("every lane was taken alone"));
+        }
+    }
     (groups, alone)
 }
 

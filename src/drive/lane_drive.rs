@@ -12,12 +12,13 @@
 //! Δv_g = |v_ff - v_ff⁻|,   r admits 2 Δv_g            (slip margin, Regime::admits)
 //! c = 2 (Fs - Fc) |v₀| / vs² · exp(-(v₀/vs)²),   c / Δc < ½      (grid slope index 0)
 //! u = (x - s, Δs, F_ff, -side·g(v₀) - 0·v₀, off),   y_r = Σ_j M_l[r,j] u_j  (from 0)
-//! y finite;   Δv = 2 max(|y_v_t - v₀|, Δv_g);   e_F(Δv, k = 2) ≤ tol where it is asked
+//! y finite;   Δv = 2 max(|y_v_t - v₀|, Δv_g);   e_F(Δv, k) ≤ tol where it is asked
 //! Δv ≤ 2 Δv_g or r admits Δv;   the regime at y is r's and admits Δv;   |fe| ≤ limit
 //! ```
 //!
-//! A lane whose period fails any of these (another slope, no carried regime, the sharper
-//! tolerance bound, the substeps' velocities, a failure) runs that period through the
+//! (`e_F` with `k = 2`, then with the sharper `k` and its `exp`, as in [`AxisServo`]'s
+//! period). A lane whose period fails any of these (another slope, no carried regime, the
+//! substeps' own velocities needed, a failure) runs that period through the
 //! scalar [`AxisServo::advance`] instead, its whole state (the carried regime and the
 //! friction-bound cache included) scattered to it and gathered back. The friction bound at
 //! the period's end is the scalar [`stribeck_bound_decay`] per lane (its `exp` the same
@@ -27,6 +28,7 @@ use super::lane_servo::{Lanes, LANES};
 use super::lanes::BLOCK;
 use super::servo::{stribeck_bound_decay, AxisServo, Regime, TwinState, N_INPUT, N_STATE};
 use crate::{Axis, AxisVec};
+use libm::exp;
 
 /// A group of up to [`LANES`] nonlinear drives of one axis, in structure-of-arrays form.
 #[derive(Clone, Debug)]
@@ -267,12 +269,22 @@ impl DriveLaneGroup {
         let v0 = st.x[3][l];
         let dv = 2.0 * (y[3][l] - v0).abs().max(dv_guess[l]);
         if self.slope_step[l] > 0.0 && (v0.abs() - dv) * self.inv_stribeck[l] <= 40f64.sqrt() {
-            let curvature =
-                self.delta_friction[l] * self.inv_stribeck[l] * self.inv_stribeck[l] * 2.0;
-            let grid_slope = 0.0 * self.slope_step[l];
-            let error = (slope[l] - grid_slope).abs() * dv + 0.5 * curvature * dv * dv;
-            if !(error <= self.tolerance[l]) {
-                return false;
+            // e_F at k = 2, then at the sharper k of `try_exact_period` (the same `exp`);
+            // the substeps' own velocities are left to the scalar servo.
+            let error = |k: f64| {
+                let curvature =
+                    self.delta_friction[l] * self.inv_stribeck[l] * self.inv_stribeck[l] * k;
+                let grid_slope = 0.0 * self.slope_step[l];
+                (slope[l] - grid_slope).abs() * dv + 0.5 * curvature * dv * dv
+            };
+            if !(error(2.0) <= self.tolerance[l]) {
+                let u_low = (v0.abs() - dv).max(0.0) * self.inv_stribeck[l];
+                let sharp = u_low >= 1.23
+                    && error((4.0 * u_low * u_low - 2.0) * exp(-(u_low * u_low)))
+                        <= self.tolerance[l];
+                if !sharp {
+                    return false;
+                }
             }
         }
         if dv > 2.0 * dv_guess[l] && !admits(st, l, dv) {

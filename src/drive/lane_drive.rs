@@ -24,8 +24,7 @@
 //! the period's end is the scalar [`stribeck_bound_decay`] per lane (its `exp` the same
 //! `libm::exp`).
 
-use super::lane_servo::{Lanes, LANES};
-use super::lanes::BLOCK;
+use super::lane_servo::{Lanes, BLOCK, LANES};
 use super::servo::{stribeck_bound_decay, AxisServo, Regime, TwinState, N_INPUT, N_STATE};
 use crate::{Axis, AxisVec};
 use libm::exp;

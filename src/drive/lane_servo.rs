@@ -20,9 +20,11 @@
 //! scalar servo then decides, counts and reports exactly as in a single run. Every lane's
 //! positions are therefore the single run's, bit for bit, whatever the vector width.
 
-use super::lanes::BLOCK;
 use super::servo::{AxisServo, TwinState, N_STATE, N_TWIN_INPUT};
 use crate::{Axis, AxisVec};
+
+/// Setpoints stepped at a time (a lane group's outputs: [`BLOCK`] per servo).
+pub const BLOCK: usize = 256;
 
 /// Servos per lane group: one AVX-512 register of f64 (two AVX ones).
 pub const LANES: usize = 8;

@@ -23,8 +23,7 @@ use crate::error::Result;
 use crate::input::machine::Machine;
 use crate::{Axis, AxisVec};
 
-/// Setpoints stepped at a time.
-pub const BLOCK: usize = 256;
+pub use super::lane_servo::BLOCK;
 
 /// The distinct servos of one axis over the points, and their outputs over the last block.
 #[derive(Clone, Debug)]

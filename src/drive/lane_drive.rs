@@ -24,7 +24,7 @@
 //! the period's end is the scalar [`stribeck_bound_decay`] per lane (its `exp` the same
 //! `libm::exp`).
 
-use super::lane_servo::{Lanes, BLOCK, LANES};
+use super::lane_servo::{lane_product, Lanes, BLOCK, LANES};
 use super::servo::{stribeck_bound_decay, AxisServo, Regime, TwinState, N_INPUT, N_STATE};
 use crate::{Axis, AxisVec};
 use libm::exp;
@@ -223,7 +223,7 @@ impl DriveLaneGroup {
             friction,
             st.offset,
         ];
-        let y = self.product(&u);
+        let y = lane_product(&self.cols, &u);
         let mut ok = [false; LANES];
         for l in 0..LANES {
             ok[l] = start_ok[l]
@@ -375,20 +375,6 @@ impl DriveLaneGroup {
             mt_over_h: self.mt_over_h[l],
         };
         Some((regime, Some((v_t, bound, decay))))
-    }
-
-    /// `y_r = Σ_j cols[j][r] u_j` per lane, from 0 in column order.
-    #[inline(always)]
-    fn product(&self, u: &[Lanes; N_INPUT]) -> [Lanes; N_STATE] {
-        let mut y = [[0.0; LANES]; N_STATE];
-        for (col, u_j) in self.cols.iter().zip(u) {
-            for (y_r, m_r) in y.iter_mut().zip(col) {
-                for l in 0..LANES {
-                    y_r[l] += m_r[l] * u_j[l];
-                }
-            }
-        }
-        y
     }
 
     /// Lane `l`'s period through its scalar servo ([`AxisServo::advance`]); false when it

@@ -146,7 +146,7 @@ impl TwinLanes {
             std::array::from_fn(|l| s_new[l] - s_old[l]),
             f_ff,
         ];
-        let y = self.product(&u);
+        let y = lane_product(&self.cols, &u);
         let mut ok = [false; LANES];
         for l in 0..LANES {
             let x_m = y[0][l] + s_old[l];
@@ -175,20 +175,6 @@ impl TwinLanes {
             st.periods_exact[l] += u64::from(ok[l]);
         }
         ok
-    }
-
-    /// `y_r = Σ_j cols[j][r] u_j` per lane, from 0 in column order.
-    #[inline(always)]
-    fn product(&self, u: &[Lanes; N_TWIN_INPUT]) -> [Lanes; N_STATE] {
-        let mut y = [[0.0; LANES]; N_STATE];
-        for (col, u_j) in self.cols.iter().zip(u) {
-            for (y_r, m_r) in y.iter_mut().zip(col) {
-                for l in 0..LANES {
-                    y_r[l] += m_r[l] * u_j[l];
-                }
-            }
-        }
-        y
     }
 
     /// Lane `l`'s period through its scalar servo ([`AxisServo::advance_twin`]); false
@@ -268,4 +254,22 @@ fn lane_state(st: &State, l: usize) -> TwinState {
         velocity_si: st.velocity[l],
         periods_exact: st.periods_exact[l],
     }
+}
+
+/// `y_r = Σ_j cols[j][r] u_j` per lane, from 0 in column order: per lane the scalar
+/// period map's product, one vector multiplication and one addition per column and row.
+#[inline(always)]
+pub(super) fn lane_product<const N: usize>(
+    cols: &[[Lanes; N_STATE]; N],
+    u: &[Lanes; N],
+) -> [Lanes; N_STATE] {
+    let mut y = [[0.0; LANES]; N_STATE];
+    for (col, u_j) in cols.iter().zip(u) {
+        for (y_r, m_r) in y.iter_mut().zip(col) {
+            for l in 0..LANES {
+                y_r[l] += m_r[l] * u_j[l];
+            }
+        }
+    }
+    y
 }

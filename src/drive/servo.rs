@@ -390,6 +390,11 @@ impl PeriodMap {
         [acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]]
     }
 
+    /// The first `N` columns without their padding.
+    fn first_columns<const N: usize>(&self) -> [[f64; N_STATE]; N] {
+        std::array::from_fn(|j| std::array::from_fn(|r| self.cols[j][r]))
+    }
+
     /// `max_j |v_j - v₀|` over the table velocities `v_j` at the substep starts of the
     /// period (`v₀ = input[3]`, the first), for the map's inputs ([`map_input`]): the
     /// largest velocity change at which the substep model evaluates the friction in this
@@ -878,12 +883,8 @@ impl AxisServo {
     pub(super) fn twin_period(&self) -> Option<TwinPeriod> {
         let exact = self.exact.as_deref().filter(|e| e.lti)?;
         let map = exact.maps[0].get()?;
-        let mut cols = [[0.0; N_STATE]; N_TWIN_INPUT];
-        for (col, full) in cols.iter_mut().zip(&map.cols) {
-            col.copy_from_slice(&full[..N_STATE]);
-        }
         Some(TwinPeriod {
-            cols,
+            cols: map.first_columns(),
             scale: self.scale,
             inv_scale: self.inv_scale,
             inv_t_ipo: self.inv_t_ipo,
@@ -904,12 +905,8 @@ impl AxisServo {
         let exact = self.exact.as_deref().filter(|e| !e.lti)?;
         let grid_slope = 0.0 * exact.slope_step;
         let map = exact.maps[0].get_or_init(|| self.period_map(grid_slope, true));
-        let mut cols = [[0.0; N_STATE]; N_INPUT];
-        for (col, full) in cols.iter_mut().zip(&map.cols) {
-            col.copy_from_slice(&full[..N_STATE]);
-        }
         Some(DrivePeriod {
-            cols,
+            cols: map.first_columns(),
             scale: self.scale,
             inv_scale: self.inv_scale,
             inv_t_ipo: self.inv_t_ipo,

@@ -25,7 +25,9 @@
 //! `libm::exp`).
 
 use super::lane_servo::{lane_product, Lanes, BLOCK, LANES};
-use super::servo::{stribeck_bound_decay, AxisServo, Regime, TwinState, N_INPUT, N_STATE};
+use super::servo::{
+    all_finite, stribeck_bound_decay, AxisServo, Regime, TwinState, N_INPUT, N_STATE,
+};
 use crate::{Axis, AxisVec};
 use libm::exp;
 
@@ -252,6 +254,8 @@ impl DriveLaneGroup {
     /// carried in `st`), the following errors. The same decisions as `try_exact_period`
     /// and `end_period` in the same order of operations.
     #[inline(always)]
+    // `!(a <= b)`: a NaN fails the test, as in the scalar period.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     fn period_ok(
         &self,
         st: &mut State,
@@ -261,8 +265,7 @@ impl DriveLaneGroup {
         dv_guess: &Lanes,
         s_new: f64,
     ) -> bool {
-        let probe = (0..6).fold(0.0, |sum, r| sum + (y[r][l] - y[r][l]));
-        if probe != 0.0 {
+        if !all_finite(&std::array::from_fn(|r| y[r][l])) {
             return false;
         }
         let v0 = st.x[3][l];

@@ -20,7 +20,7 @@
 //! scalar servo then decides, counts and reports exactly as in a single run. Every lane's
 //! positions are therefore the single run's, bit for bit, whatever the vector width.
 
-use super::servo::{AxisServo, TwinState, N_STATE, N_TWIN_INPUT};
+use super::servo::{all_finite, AxisServo, TwinState, N_STATE, N_TWIN_INPUT};
 use crate::{Axis, AxisVec};
 
 /// Setpoints stepped at a time (a lane group's outputs: [`BLOCK`] per servo).
@@ -127,6 +127,8 @@ impl TwinLanes {
     /// One period by the lanes' maps; per lane, whether it was taken (state updated) or the
     /// lane must run it scalar (state untouched).
     #[inline(always)]
+    // `!(a > b)`: the scalar period's test, which a NaN passes (the finite test catches it).
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     fn mapped_period(&self, st: &mut State, q: f64) -> [bool; LANES] {
         let s_new: Lanes = std::array::from_fn(|l| q * self.scale[l]);
         let s_old = st.setpoint;
@@ -151,14 +153,12 @@ impl TwinLanes {
         for l in 0..LANES {
             let x_m = y[0][l] + s_old[l];
             let x_t = y[2][l] + s_old[l];
-            // 0 exactly when the six are finite (see `all_finite` in `servo`).
-            let probe = (0..6).fold(0.0, |sum, r| sum + (y[r][l] - y[r][l]));
             // `&` rather than `&&`: every condition is computed, without branches.
             ok[l] = st.live[l]
                 & q.is_finite()
                 & (st.x[4][l].abs() <= self.half_limit[l])
                 & !(y[4][l].abs() > self.half_limit[l])
-                & (probe == 0.0)
+                & all_finite(&std::array::from_fn(|r| y[r][l]))
                 & !((s_new[l] - x_t).abs() > self.fe_limit[l])
                 & !((s_new[l] - x_m).abs() > self.fe_limit[l]);
             let take = |new: f64, old: f64| if ok[l] { new } else { old };

@@ -12,9 +12,11 @@
 //! run steps, on the same setpoints in the same order: a point's figures are the single
 //! run's, bit for bit.
 //!
-//! The setpoints come a block at a time ([`BLOCK`]); each servo runs through the block
-//! before the next one starts (its state stays in cache), writing its outputs to a buffer of
-//! one block, which the points then read. Memory: one block per distinct servo.
+//! The setpoints come a block at a time ([`BLOCK`]); each lane group of servos (up to 8
+//! stepped side by side in SIMD lanes: [`super::lane_servo`], [`super::lane_drive`]) or servo
+//! stepped alone runs through the block before the next one starts (its state stays in
+//! cache), writing its outputs to a buffer of one block, which the points then read.
+//! Memory: one block per distinct servo.
 
 use super::lane_drive::DriveLaneGroup;
 use super::lane_servo::{TwinLanes, LANES};

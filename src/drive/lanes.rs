@@ -12,17 +12,20 @@
 //! run steps, on the same setpoints in the same order: a point's figures are the single
 //! run's, bit for bit.
 //!
-//! The setpoints come a block at a time ([`BLOCK`]); each servo runs through the block
-//! before the next one starts (its state stays in cache), writing its outputs to a buffer of
-//! one block, which the points then read. Memory: one block per distinct servo.
+//! The setpoints come a block at a time ([`BLOCK`]); each lane group of servos (up to 8
+//! stepped side by side in SIMD lanes: [`super::lane_servo`], [`super::lane_drive`]) or servo
+//! stepped alone runs through the block before the next one starts (its state stays in
+//! cache), writing its outputs to a buffer of one block, which the points then read.
+//! Memory: one block per distinct servo.
 
+use super::lane_drive::DriveLaneGroup;
+use super::lane_servo::{TwinLanes, LANES};
 use super::servo::AxisServo;
 use crate::error::Result;
 use crate::input::machine::Machine;
 use crate::{Axis, AxisVec};
 
-/// Setpoints stepped at a time.
-pub const BLOCK: usize = 256;
+pub use super::lane_servo::BLOCK;
 
 /// The distinct servos of one axis over the points, and their outputs over the last block.
 #[derive(Clone, Debug)]
@@ -30,6 +33,11 @@ struct AxisLanes {
     axis: Axis,
     /// The distinct servos; None once one has failed (diverged).
     servos: Vec<Option<AxisServo>>,
+    /// The linear twins with a period map and the nonlinear drives with a slope-0 map,
+    /// [`LANES`] to a lane group; the servos stepped one by one (those of no group).
+    groups: Vec<TwinLanes>,
+    drive_groups: Vec<DriveLaneGroup>,
+    alone: Vec<usize>,
     /// Which servo each point has.
     servo_of: Vec<usize>,
     /// Per servo, [`BLOCK`] entries: actual position (mm, deg) and following error after each
@@ -65,9 +73,19 @@ impl AxisLanes {
             servo_of.push(index);
         }
         let n = servos.len();
+        let (groups, drive_groups, alone) = if linear {
+            let (groups, alone) = lane_groups(&servos, TwinLanes::new);
+            (groups, Vec::new(), alone)
+        } else {
+            let (groups, alone) = lane_groups(&servos, DriveLaneGroup::new);
+            (Vec::new(), groups, alone)
+        };
         Ok(AxisLanes {
             axis,
             servos,
+            groups,
+            drive_groups,
+            alone,
             servo_of,
             actual: vec![0.0; n * BLOCK],
             following_error: if linear {
@@ -85,7 +103,29 @@ impl AxisLanes {
     #[inline(always)]
     fn step_block_inline(&mut self, setpoints: &[AxisVec], times_s: &[f64], linear: bool) {
         let a = self.axis;
-        for (s, slot) in self.servos.iter_mut().enumerate() {
+        for group in &self.groups {
+            group.step_block(
+                &mut self.servos,
+                a,
+                setpoints,
+                times_s,
+                &mut self.actual,
+                &mut self.completed,
+            );
+        }
+        for group in &self.drive_groups {
+            group.step_block(
+                &mut self.servos,
+                a,
+                setpoints,
+                times_s,
+                &mut self.actual,
+                &mut self.following_error,
+                &mut self.completed,
+            );
+        }
+        for &s in &self.alone {
+            let slot = &mut self.servos[s];
             let Some(servo) = slot.as_mut() else {
                 self.completed[s] = 0;
                 continue;
@@ -119,6 +159,29 @@ impl AxisLanes {
     fn completed_by(&self, i: usize) -> usize {
         self.completed[self.servo_of[i]]
     }
+}
+
+/// Fewest servos a lane group steps: a group costs its whole vectors whatever its lanes,
+/// so one or two servos step faster on their own.
+const MIN_LANES: usize = 3;
+
+/// The servos of `servos` that `group` takes, in lane groups of [`LANES`] (the last one
+/// ragged, of at least [`MIN_LANES`]), and the others.
+fn lane_groups<G>(
+    servos: &[Option<AxisServo>],
+    group: impl Fn(&[Option<AxisServo>], &[usize]) -> Option<G>,
+) -> (Vec<G>, Vec<usize>) {
+    let (taken, mut alone): (Vec<usize>, Vec<usize>) =
+        (0..servos.len()).partition(|&s| group(servos, &[s]).is_some());
+    let mut groups = Vec::new();
+    for lanes in taken.chunks(LANES) {
+        if lanes.len() < MIN_LANES {
+            alone.extend_from_slice(lanes);
+        } else {
+            groups.push(group(servos, lanes).expect("every lane was taken alone"));
+        }
+    }
+    (groups, alone)
 }
 
 /// The drives and linear twins of several points, shared per axis.
@@ -194,10 +257,24 @@ impl DriveLanes {
     pub fn step_block(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
         assert!(setpoints.len() <= BLOCK && times_s.len() == setpoints.len());
         #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512F, checked at run time just above.
+            return unsafe { self.step_block_avx512(setpoints, times_s) };
+        }
+        #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU has AVX, checked at run time just above.
             return unsafe { self.step_block_avx(setpoints, times_s) };
         }
+        self.step_block_inline(setpoints, times_s)
+    }
+
+    /// [`DriveLanes::step_block`] compiled for AVX-512: a lane group's vectors of
+    /// [`LANES`] f64 in one register (Rust never fuses a multiplication and an addition,
+    /// so the arithmetic is still the same whatever the vector width).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn step_block_avx512(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
         self.step_block_inline(setpoints, times_s)
     }
 

@@ -3,6 +3,8 @@
 //! Outputs: the table-side (actual) position and following error of every axis, from per-axis servo models.
 
 pub mod drives;
+pub mod lane_drive;
+pub mod lane_servo;
 pub mod lanes;
 pub mod presliding;
 pub mod servo;

@@ -160,7 +160,74 @@ pub struct AxisServo {
 }
 
 /// Number of state variables of the cascade model: `x_m v_m x_t v_t F ∫ x_m,tick`.
-const N_STATE: usize = 7;
+pub(super) const N_STATE: usize = 7;
+
+/// Inputs of a linear twin's period map: the state, `Δs` and `F_ff` (no friction, no
+/// contact offset).
+pub(super) const N_TWIN_INPUT: usize = N_STATE + 2;
+
+/// What a lane servo ([`super::lane_servo`]) needs to step a linear twin's mapped period
+/// the way [`AxisServo::advance_twin`] does: the map's columns and the constants of the
+/// period's inputs and checks.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct TwinPeriod {
+    /// The first [`N_TWIN_INPUT`] columns of the period map, rows `x_m v_m x_t v_t F ∫
+    /// x_m,tick` (positions relative to the previous setpoint).
+    pub cols: [[f64; N_STATE]; N_TWIN_INPUT],
+    /// SI units per interface unit and its inverse.
+    pub scale: f64,
+    pub inv_scale: f64,
+    /// `1 / T_ipo`, 1/s.
+    pub inv_t_ipo: f64,
+    /// `k_aff m_tot`, kg or kg m².
+    pub aff_mass: f64,
+    /// Half the force limit, N or N m: the map applies while `|F|` stays within it.
+    pub half_limit: f64,
+    /// Divergence bound of the following errors, SI.
+    pub fe_limit: f64,
+}
+
+/// What a lane servo ([`super::lane_drive`]) needs to step a nonlinear drive's period the
+/// way [`AxisServo::advance`] does when the period map of friction slope 0 applies: its
+/// columns and the constants of the regime checks, SI.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct DrivePeriod {
+    /// The columns of `[M | b_Δs | b_ff | b_fr | b_off]` at slope 0, rows as in
+    /// [`TwinPeriod`].
+    pub cols: [[f64; N_STATE]; N_INPUT],
+    pub scale: f64,
+    pub inv_scale: f64,
+    pub inv_t_ipo: f64,
+    pub aff_mass: f64,
+    pub half_limit: f64,
+    pub fe_limit: f64,
+    pub stiffness: f64,
+    pub damping: f64,
+    pub half_backlash: f64,
+    pub coulomb: f64,
+    pub static_friction: f64,
+    pub stribeck: f64,
+    pub mt_over_h: f64,
+    /// The slope grid of [`ExactMaps`] and its tolerance.
+    pub slope_step: f64,
+    pub inv_slope_step: f64,
+    pub delta_friction: f64,
+    pub inv_stribeck: f64,
+    pub tolerance: f64,
+}
+
+/// Everything a servo carries from one interpolation period to the next on the path of
+/// [`AxisServo::advance_twin`], SI: what a lane servo gathers and scatters back.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct TwinState {
+    pub setpoint: f64,
+    pub v_ff: f64,
+    /// `x_m v_m x_t v_t F ∫ x_m,tick`, positions absolute.
+    pub x: [f64; N_STATE],
+    pub velocity_si: f64,
+    /// Periods advanced by the map.
+    pub periods_exact: u64,
+}
 
 /// One interpolation period of the cascade model in its linear regime, as an affine map of
 /// the state (positions relative to the previous setpoint `s_{k-1}`):
@@ -190,25 +257,25 @@ struct PeriodMap {
 }
 
 /// Inputs of [`PeriodMap`]: the state, `Δs`, `F_ff`, `F_fr`, `off`.
-const N_INPUT: usize = N_STATE + 4;
+pub(super) const N_INPUT: usize = N_STATE + 4;
 
 /// A linear regime of the cascade model at one state ([`AxisServo::linear_regime`]).
 #[derive(Clone, Copy, Debug)]
-struct Regime {
+pub(super) struct Regime {
     /// Direction of slip (0 without dry friction) and contact offset of the spring, SI.
-    side: f64,
-    offset: f64,
+    pub(super) side: f64,
+    pub(super) offset: f64,
     /// Dry friction on the table: the margins below apply.
-    dry: bool,
+    pub(super) dry: bool,
     /// `|v_t|`, the push on the table against friction `sign(v_t) (m_t v_t / h + F_spring)`,
     /// the friction bound `g(v_t)` and `m_t / h`.
-    speed: f64,
-    push: f64,
-    bound: f64,
+    pub(super) speed: f64,
+    pub(super) push: f64,
+    pub(super) bound: f64,
     /// `exp(-(v_t/vs)²)` where the bound needed it (0 beyond the Stribeck cut-off), for
     /// the friction's slope.
-    decay: f64,
-    mt_over_h: f64,
+    pub(super) decay: f64,
+    pub(super) mt_over_h: f64,
 }
 
 impl Regime {
@@ -231,7 +298,7 @@ impl Regime {
 /// an earlier `x_m`) are finite. `v - v` is 0 for a finite v and NaN otherwise: the sum is
 /// 0 exactly when every one is finite (one comparison instead of six).
 #[inline(always)]
-fn all_finite(x: &[f64; N_STATE]) -> bool {
+pub(super) fn all_finite(x: &[f64; N_STATE]) -> bool {
     let probe = (x[0] - x[0])
         + (x[1] - x[1])
         + (x[2] - x[2])
@@ -321,6 +388,11 @@ impl PeriodMap {
     fn product<const N: usize>(&self, input: &[f64; N]) -> [f64; N_STATE] {
         let acc = column_product(&self.cols, input);
         [acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]]
+    }
+
+    /// The first `N` columns without their padding.
+    fn first_columns<const N: usize>(&self) -> [[f64; N_STATE]; N] {
+        std::array::from_fn(|j| std::array::from_fn(|r| self.cols[j][r]))
     }
 
     /// `max_j |v_j - v₀|` over the table velocities `v_j` at the substep starts of the
@@ -806,6 +878,105 @@ impl AxisServo {
         self.reversal
     }
 
+    /// The linear twin's mapped period for a lane servo; None for any other servo (first
+    /// order, dry friction, backlash, pre-sliding, no map), which steps on its own.
+    pub(super) fn twin_period(&self) -> Option<TwinPeriod> {
+        let exact = self.exact.as_deref().filter(|e| e.lti)?;
+        let map = exact.maps[0].get()?;
+        Some(TwinPeriod {
+            cols: map.first_columns(),
+            scale: self.scale,
+            inv_scale: self.inv_scale,
+            inv_t_ipo: self.inv_t_ipo,
+            aff_mass: self.aff_mass,
+            half_limit: 0.5 * self.force_limit,
+            fe_limit: self.fe_limit,
+        })
+    }
+
+    /// A nonlinear drive's mapped period at friction slope 0 (the map's grid slope index 0)
+    /// for a lane servo; None for a drive without such a map (first order, pre-sliding, a
+    /// linear twin, no map), which steps on its own. Builds that map where it was not yet
+    /// (as the first period needing it would: the same map).
+    pub(super) fn drive_period(&self) -> Option<DrivePeriod> {
+        if self.presliding.is_some() {
+            return None;
+        }
+        let exact = self.exact.as_deref().filter(|e| !e.lti)?;
+        let grid_slope = 0.0 * exact.slope_step;
+        let map = exact.maps[0].get_or_init(|| self.period_map(grid_slope, true));
+        Some(DrivePeriod {
+            cols: map.first_columns(),
+            scale: self.scale,
+            inv_scale: self.inv_scale,
+            inv_t_ipo: self.inv_t_ipo,
+            aff_mass: self.aff_mass,
+            half_limit: 0.5 * self.force_limit,
+            fe_limit: self.fe_limit,
+            stiffness: self.stiffness,
+            damping: self.damping,
+            half_backlash: self.half_backlash,
+            coulomb: self.coulomb,
+            static_friction: self.static_friction,
+            stribeck: self.stribeck,
+            mt_over_h: self.mt_over_h,
+            slope_step: exact.slope_step,
+            inv_slope_step: exact.inv_slope_step,
+            delta_friction: exact.delta_friction,
+            inv_stribeck: exact.inv_stribeck,
+            tolerance: exact.tolerance,
+        })
+    }
+
+    /// The carried regime and the friction-bound cache, what [`AxisServo::advance`] carries
+    /// beyond [`AxisServo::twin_state`].
+    pub(super) fn regime_state(&self) -> (Option<Regime>, (f64, f64, f64)) {
+        (self.carried_regime, self.bound_cache.get())
+    }
+
+    /// Sets what [`AxisServo::regime_state`] gives.
+    pub(super) fn set_regime_state(&mut self, regime: Option<Regime>, cache: (f64, f64, f64)) {
+        self.carried_regime = regime;
+        self.bound_cache.set(cache);
+    }
+
+    /// The state [`AxisServo::advance_twin`] carries between periods.
+    pub(super) fn twin_state(&self) -> TwinState {
+        TwinState {
+            setpoint: self.setpoint,
+            v_ff: self.v_ff,
+            x: [
+                self.x_m,
+                self.v_m,
+                self.x_t,
+                self.v_t,
+                self.force,
+                self.integral,
+                self.x_m_tick,
+            ],
+            velocity_si: self.velocity_si,
+            periods_exact: self.periods_exact,
+        }
+    }
+
+    /// Sets the state of [`AxisServo::twin_state`] (a linear twin's: its carried regime and
+    /// friction-bound cache are never read).
+    pub(super) fn set_twin_state(&mut self, state: &TwinState) {
+        self.setpoint = state.setpoint;
+        self.v_ff = state.v_ff;
+        [
+            self.x_m,
+            self.v_m,
+            self.x_t,
+            self.v_t,
+            self.force,
+            self.integral,
+            self.x_m_tick,
+        ] = state.x;
+        self.velocity_si = state.velocity_si;
+        self.periods_exact = state.periods_exact;
+    }
+
     /// Advances one interpolation period towards `setpoint` (mm or deg), reached by the
     /// command at the end of the period; `time_s` is for error messages.
     pub fn step(&mut self, setpoint: f64, time_s: f64) -> Result<ServoState> {
@@ -1120,7 +1291,7 @@ fn stribeck_bound(v: f64, fc: f64, fs: f64, vs: f64) -> f64 {
 /// [`stribeck_bound`] and the `exp(-(v/vs)²)` it took (1 at rest, 0 beyond the cut-off
 /// `(v/vs)² > 40`, where the bound is `Fc` exactly; unused without a Stribeck zone).
 #[inline]
-fn stribeck_bound_decay(v: f64, fc: f64, fs: f64, vs: f64) -> (f64, f64) {
+pub(super) fn stribeck_bound_decay(v: f64, fc: f64, fs: f64, vs: f64) -> (f64, f64) {
     if fs == fc || v == 0.0 {
         return (fs, 1.0);
     }

@@ -1,0 +1,179 @@
+//! A study's drives stepped together (`drive::DriveLanes`, its linear twins in SIMD lane
+//! groups, `drive::lane_servo`) against each point's own drives (`drive::Drives`) on the
+//! same setpoints: every output the same bits, for 1 to 9 points (lane groups of 8 and a
+//! ragged one), with and without dry friction and backlash, with a point whose drives fail
+//! mid-block and one whose twin leaves the map (force beyond half its limit) for a while.
+
+use std::path::Path;
+
+use mtsim::drive::{AxisServo, DriveLanes, Drives};
+use mtsim::input::Machine;
+use mtsim::{Axis, AxisVec};
+
+/// Interpolation periods of the run (the bundled machine's period is 1 ms): 6 s.
+const PERIODS: usize = 6_000;
+
+fn trt_ac() -> Machine {
+    Machine::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/trt-ac.toml")).unwrap()
+}
+
+/// A cone-like path of the five axes at `t` s: X and Y on a circle of 25 mm at about
+/// 1,500 mm/min entered from rest (the speed ramps up over 0.5 s, so the feedforward's
+/// acceleration jumps), Z, A and C moving with it. X and Y reverse every half turn.
+fn setpoint(t: f64) -> AxisVec {
+    // ω = 1 rad/s reached at 0.5 s: the phase is ∫ω dt.
+    let phase = if t < 0.5 { t * t } else { t - 0.25 };
+    let mut q = AxisVec::ZERO;
+    q[Axis::X] = 25.0 * phase.cos() - 25.0;
+    q[Axis::Y] = 25.0 * phase.sin();
+    q[Axis::Z] = 3.0 * (0.5 * phase).sin();
+    q[Axis::A] = -10.0 * (0.5 * phase).sin();
+    q[Axis::C] = 40.0 * phase;
+    q
+}
+
+/// `n` points that differ in X's and Y's kv (so every X and Y twin is distinct) and, with
+/// `nonlinear`, in backlash; without it, no axis has dry friction. Point 2 has a following
+/// error limit on X that the circle passes (its drive and twin fail), point 4 an X force
+/// limit its twin's circle exceeds by half (its twin runs periods by substeps).
+fn machines(n: usize, nonlinear: bool) -> Vec<Machine> {
+    (0..n)
+        .map(|i| {
+            let mut m = trt_ac();
+            for (a, kv) in [(Axis::X, 25.0 + i as f64), (Axis::Y, 34.0 - 0.5 * i as f64)] {
+                let axis = m.axis_mut(a);
+                axis.servo.kv_per_s = kv;
+                axis.drive.backlash_mm = nonlinear.then_some(0.001 * i as f64);
+                if i == 2 {
+                    axis.servo.following_error_limit_mm = Some(0.4);
+                }
+                if i == 4 && a == Axis::X {
+                    axis.drive.force_limit_n = Some(FORCE_LIMIT_N);
+                }
+            }
+            if !nonlinear {
+                for a in [Axis::X, Axis::Y, Axis::Z] {
+                    m.axis_mut(a).friction.coulomb_n = Some(0.0);
+                }
+                for a in [Axis::A, Axis::C] {
+                    m.axis_mut(a).friction.coulomb_nm = Some(0.0);
+                }
+            }
+            m
+        })
+        .collect()
+}
+
+/// Point 4's X force limit, N.
+const FORCE_LIMIT_N: f64 = 60.0;
+
+/// One point alone: per setpoint, each axis's actual position and following error of its
+/// drive and its twin's actual position, until the first of them fails.
+fn single(machine: &Machine, q0: &AxisVec) -> Vec<Vec<(Axis, f64, f64, f64)>> {
+    let mut drives = Drives::new(machine, q0, false).unwrap();
+    let mut twins = Drives::new(machine, q0, true).unwrap();
+    let mut out = Vec::new();
+    for k in 1..=PERIODS {
+        let t = k as f64 * 1e-3;
+        let q = setpoint(t);
+        let (Ok(d), Ok(linear)) = (drives.step(&q, t), twins.step_actual(&q, t)) else {
+            break;
+        };
+        let axes = machine.axes().iter();
+        out.push(
+            axes.map(|&a| (a, d.actual[a], d.following_error[a], linear[a]))
+                .collect(),
+        );
+    }
+    out
+}
+
+/// The same points in lanes, block by block: each point's outputs until it stops.
+fn in_lanes(machines: &[Machine], q0: &AxisVec) -> Vec<Vec<Vec<(Axis, f64, f64, f64)>>> {
+    let refs: Vec<&Machine> = machines.iter().collect();
+    let mut lanes = DriveLanes::new(&refs, q0).unwrap();
+    let mut out = vec![Vec::new(); machines.len()];
+    let mut alive = vec![true; machines.len()];
+    // Blocks of 256 and a ragged last one.
+    let times: Vec<f64> = (1..=PERIODS).map(|k| k as f64 * 1e-3).collect();
+    for block_t in times.chunks(mtsim::drive::lanes::BLOCK) {
+        let block_q: Vec<AxisVec> = block_t.iter().map(|&t| setpoint(t)).collect();
+        lanes.step_block(&block_q, block_t);
+        for (i, point) in out.iter_mut().enumerate() {
+            if !alive[i] {
+                assert_eq!(lanes.completed(i), 0, "point {i} failed before");
+                continue;
+            }
+            let completed = lanes.completed(i).min(block_t.len());
+            alive[i] = completed == block_t.len();
+            let outputs: Vec<_> = lanes.outputs(i).collect();
+            for j in 0..completed {
+                point.push(
+                    outputs
+                        .iter()
+                        .map(|(a, actual, fe, linear)| (*a, actual[j], fe[j], linear[j]))
+                        .collect(),
+                );
+            }
+        }
+    }
+    out
+}
+
+fn bits(run: &[Vec<(Axis, f64, f64, f64)>]) -> Vec<Vec<(Axis, u64, u64, u64)>> {
+    run.iter()
+        .map(|step| {
+            step.iter()
+                .map(|&(a, x, fe, l)| (a, x.to_bits(), fe.to_bits(), l.to_bits()))
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn lane_groups_of_1_to_9_points_give_each_points_own_drives_bit_for_bit() {
+    let q0 = setpoint(0.0);
+    for nonlinear in [false, true] {
+        for n in 1..=9 {
+            let machines = machines(n, nonlinear);
+            let lanes = in_lanes(&machines, &q0);
+            for (i, (machine, lane)) in machines.iter().zip(&lanes).enumerate() {
+                let single = single(machine, &q0);
+                let what = format!("{n} points, nonlinear {nonlinear}, point {i}");
+                // Point 2's following error passes its limit within the first turn, in
+                // the middle of a block; the others run to the end.
+                if i == 2 {
+                    assert!(single.len() > 100 && single.len() < PERIODS, "{what}");
+                    assert_ne!(single.len() % 256, 0, "{what}: fails mid-block");
+                } else {
+                    assert_eq!(single.len(), PERIODS, "{what}");
+                }
+                assert_eq!(lane.len(), single.len(), "{what}: setpoints completed");
+                assert!(bits(lane) == bits(&single), "{what}: outputs differ");
+            }
+        }
+    }
+}
+
+/// Point 4's X twin does leave the map: its force passes half its limit in some periods
+/// (which the lane group then runs through the scalar servo), and takes it in most.
+#[test]
+fn the_force_limited_twin_leaves_the_map_for_some_periods() {
+    let machine = &machines(5, false)[4];
+    let twin = machine.drive(Axis::X).unwrap().linear_twin();
+    let mut servo = AxisServo::new(
+        &twin,
+        machine.interpolation_period_s,
+        setpoint(0.0)[Axis::X],
+    )
+    .unwrap();
+    for k in 1..=PERIODS {
+        let t = k as f64 * 1e-3;
+        servo.advance_twin(setpoint(t)[Axis::X], t).unwrap();
+    }
+    let (mapped, substepped) = servo.period_counts();
+    assert!(
+        substepped > 10 && mapped > 2 * substepped,
+        "{mapped} {substepped}"
+    );
+}

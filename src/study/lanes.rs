@@ -169,6 +169,10 @@ fn run_pass(
     let mut warnings: Vec<Vec<String>> = vec![Vec::new(); n];
     let mut failed = vec![false; n];
     let (mut sim_time_s, mut setpoints, mut feed_reductions) = (0.0, 0u64, Vec::new());
+    // Without a settle gate every bar takes every sample: their first run's command maps
+    // are the same, kept once for all (`SharedReadings::with_maps`).
+    let gated = gates_transient(first);
+    let mut common_maps = None;
     for (k, &direction) in directions.iter().enumerate() {
         let mut run = program::scenario_run(first, direction, first.simulate.lead_deg)?;
         if let Some(along) = &along {
@@ -177,7 +181,10 @@ fn run_pass(
         let options = run_options(first, sim_time_s)?;
         let mut bars: Vec<BallbarSink> = match geometry {
             Some(g) => (0..n)
-                .map(|_| ballbar_sink(g, direction, run.measured, k))
+                .map(|_| match ballbar_sink(g, direction, run.measured, k) {
+                    bar if gated => bar,
+                    bar => bar.without_maps(),
+                })
                 .collect(),
             None => Vec::new(),
         };
@@ -191,7 +198,11 @@ fn run_pass(
             Some(g) => {
                 // The points' bars read each setpoint (and each table ball their rotaries
                 // share) once for all.
-                let readings = RefCell::new(SharedReadings::new(g));
+                let readings = SharedReadings::new(g);
+                let readings = RefCell::new(match k == 0 && !gated {
+                    true => readings.with_maps(),
+                    false => readings,
+                });
                 let mut shared: Vec<SharedBallbar<'_>> = bars
                     .iter_mut()
                     .map(|bar| SharedBallbar {
@@ -199,7 +210,7 @@ fn run_pass(
                         readings: &readings,
                     })
                     .collect();
-                if gates_transient(first) {
+                let ran = if gated {
                     let theta_deg = |s: &Sample| readings.borrow_mut().read_commanded(s).theta_deg;
                     let mut gates: Vec<SettleGate<'_>> = shared
                         .iter_mut()
@@ -223,7 +234,12 @@ fn run_pass(
                     let mut sinks: Vec<&mut dyn Sink> =
                         shared.iter_mut().map(|b| b as &mut dyn Sink).collect();
                     pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?
+                };
+                drop(shared);
+                if k == 0 {
+                    common_maps = readings.into_inner().into_maps();
                 }
+                ran
             }
         };
         for (f, d) in failed.iter_mut().zip(dead) {
@@ -249,11 +265,13 @@ fn run_pass(
         .zip(ballbars)
         .zip(warnings)
         .zip(failed)
-        .map(|(((&i, bars), warnings), failed)| {
+        .map(|(((&i, mut bars), warnings), failed)| {
             if failed {
                 return None;
             }
-            assemble(&scenarios[i], bars, warnings, &shared).ok()
+            let own = bars.first_mut().and_then(|b| b.maps.take());
+            let maps = own.as_ref().or(common_maps.as_ref());
+            assemble(&scenarios[i], bars, maps, warnings, &shared).ok()
         })
         .collect())
 }

@@ -311,6 +311,32 @@ fn a_point_whose_drive_fails_on_one_axis_gives_its_single_runs_error() {
     }
 }
 
+/// The pass's first point fails in its first block: the others' reversal sites (from the
+/// command maps their pass keeps once) are still their single runs'.
+#[test]
+fn a_pass_whose_first_point_fails_gives_the_others_their_single_runs_sites() {
+    let dir = scratch("lanes", "fail-first");
+    let base = bundled("cone-15-10.toml");
+    let tight = "[machine_overrides.axes.X.servo]\nfollowing_error_limit_mm = 0.001\n";
+    let points: Vec<Scenario> = [(0.002, tight), (0.0, ""), (0.003, "")]
+        .iter()
+        .enumerate()
+        .map(|(i, &(b, extra))| {
+            let over = format!("[machine_overrides.axes.Y.drive]\nbacklash_mm = {b}\n{extra}");
+            load(&dir, &format!("f{i}"), &base, &over)
+        })
+        .collect();
+    assert_eq!(passes(&points, 1).len(), 1);
+    let lanes = run_ballbar_lanes(&points, &|_| {});
+    assert!(lanes[0].is_err());
+    for (i, (scenario, lane)) in points.iter().zip(lanes).enumerate().skip(1) {
+        let single = run_ballbar(scenario, None, &|_| {}).unwrap();
+        let lane = lane.unwrap();
+        assert!(!single.sites.is_empty(), "point {i} has sites");
+        assert_eq!(figures(&lane), figures(&single), "point {i}");
+    }
+}
+
 /// Points on a machine with position-error tables (pitch on X and Y, a worm-gear error on
 /// C): each point's errors, applied for its own direction of motion, are its single run's.
 #[test]

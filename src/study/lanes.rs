@@ -15,6 +15,7 @@
 //! alone by [`run_ballbar`] for its error: every result is the single run's.
 
 use std::cell::{Cell, RefCell};
+use std::collections::HashMap;
 use std::sync::mpsc;
 
 use rayon::prelude::*;
@@ -121,31 +122,39 @@ fn without_drives(machine: &Machine) -> Machine {
 }
 
 /// The scenarios' indices grouped by [`share_key`] (in order of first appearance), each
-/// group cut into passes of at most [`POINTS_PER_PASS`] points, and into at least as many
-/// passes as there are `threads` where the group is large enough.
+/// group cut into passes of at most [`POINTS_PER_PASS`] points and of equal sizes (±1), as
+/// many as a multiple of `threads` where the group has that many points: passes of a group
+/// cost about the same, so the threads finish together.
 pub fn passes(scenarios: &[Scenario], threads: usize) -> Vec<Vec<usize>> {
-    let mut keys: Vec<String> = Vec::new();
+    // The keys (a scenario's debug form each) in parallel: made one by one, they were the
+    // pass's only serial work of note.
+    let keys: Vec<String> = scenarios.par_iter().map(share_key).collect();
+    let mut group_of: HashMap<String, usize> = HashMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
-    for (i, scenario) in scenarios.iter().enumerate() {
-        let key = share_key(scenario);
-        match keys.iter().position(|k| *k == key) {
-            Some(g) => groups[g].push(i),
-            None => {
-                keys.push(key);
-                groups.push(vec![i]);
-            }
-        }
+    for (i, key) in keys.into_iter().enumerate() {
+        let g = *group_of.entry(key).or_insert_with(|| {
+            groups.push(Vec::new());
+            groups.len() - 1
+        });
+        groups[g].push(i);
     }
+    let threads = threads.max(1);
     groups
         .into_iter()
         .flat_map(|group| {
-            let size = group
-                .len()
-                .div_ceil(threads.max(1))
-                .clamp(1, POINTS_PER_PASS);
-            group
-                .chunks(size)
-                .map(<[usize]>::to_vec)
+            let mut count = group.len().div_ceil(POINTS_PER_PASS);
+            if group.len() >= threads {
+                count = count.next_multiple_of(threads);
+            }
+            // The first `len % count` passes take one point more.
+            let (size, larger) = (group.len() / count, group.len() % count);
+            let mut rest = &group[..];
+            (0..count)
+                .map(|k| {
+                    let (pass, next) = rest.split_at(size + usize::from(k < larger));
+                    rest = next;
+                    pass.to_vec()
+                })
                 .collect::<Vec<_>>()
         })
         .collect()

@@ -16,6 +16,7 @@
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
 use std::sync::mpsc;
 
 use rayon::prelude::*;
@@ -123,41 +124,112 @@ fn without_drives(machine: &Machine) -> Machine {
 
 /// The scenarios' indices grouped by [`share_key`] (in order of first appearance), each
 /// group cut into passes of at most [`POINTS_PER_PASS`] points and of equal sizes (±1), as
-/// many as a multiple of `threads` where the group has that many points: passes of a group
-/// cost about the same, so the threads finish together.
+/// many as a multiple of `threads` where the group has that many points, so that the
+/// threads finish together. Of the counts up to twice the fewest, the cut whose passes
+/// share the most drives is taken ([`pass_cost`]): a grid of 100 points per kv runs in
+/// passes of 50 that each hold one kv, not of 62 or 63 of which half straddle two.
 pub fn passes(scenarios: &[Scenario], threads: usize) -> Vec<Vec<usize>> {
     // The keys (a scenario's debug form each) in parallel: made one by one, they were the
-    // pass's only serial work of note.
-    let keys: Vec<String> = scenarios.par_iter().map(share_key).collect();
-    let mut group_of: HashMap<String, usize> = HashMap::new();
+    // study's only serial work of note.
+    let keys: Vec<(String, Vec<DriveIds>)> = scenarios
+        .par_iter()
+        .map(|s| (share_key(s), drive_ids(&s.machine)))
+        .collect();
+    let mut group_of: HashMap<&str, usize> = HashMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
-    for (i, key) in keys.into_iter().enumerate() {
+    for (i, (key, _)) in keys.iter().enumerate() {
         let g = *group_of.entry(key).or_insert_with(|| {
             groups.push(Vec::new());
             groups.len() - 1
         });
         groups[g].push(i);
     }
+    let ids: Vec<&[DriveIds]> = keys.iter().map(|(_, ids)| &ids[..]).collect();
     let threads = threads.max(1);
     groups
         .into_iter()
         .flat_map(|group| {
-            let mut count = group.len().div_ceil(POINTS_PER_PASS);
+            let mut fewest = group.len().div_ceil(POINTS_PER_PASS);
             if group.len() >= threads {
-                count = count.next_multiple_of(threads);
+                fewest = fewest.next_multiple_of(threads);
             }
-            // The first `len % count` passes take one point more.
-            let (size, larger) = (group.len() / count, group.len() % count);
-            let mut rest = &group[..];
-            (0..count)
-                .map(|k| {
-                    let (pass, next) = rest.split_at(size + usize::from(k < larger));
-                    rest = next;
-                    pass.to_vec()
-                })
+            let cost = |count: usize| -> f64 {
+                cut(&group, count).map(|pass| pass_cost(pass, &ids)).sum()
+            };
+            let mut best = (fewest, cost(fewest));
+            for count in (fewest + threads..=(2 * fewest).min(group.len())).step_by(threads) {
+                let c = cost(count);
+                if c < best.1 {
+                    best = (count, c);
+                }
+            }
+            cut(&group, best.0)
+                .map(<[usize]>::to_vec)
                 .collect::<Vec<_>>()
         })
         .collect()
+}
+
+/// `group` cut into `count` passes of equal sizes, the first `len % count` one point larger.
+fn cut(group: &[usize], count: usize) -> impl Iterator<Item = &[usize]> {
+    let (size, larger) = (group.len() / count, group.len() % count);
+    let mut rest = group;
+    (0..count).map(move |k| {
+        let (pass, next) = rest.split_at(size + usize::from(k < larger));
+        rest = next;
+        pass
+    })
+}
+
+/// Per axis of a machine, hashes of its drive's and its linear twin's validated form: the
+/// points of a pass with the same hashes share that axis's servos ([`DriveLanes`],
+/// which compares the forms themselves). Only [`pass_cost`] reads them.
+///
+/// [`DriveLanes`]: crate::drive::DriveLanes
+type DriveIds = (u64, u64);
+
+fn drive_ids(machine: &Machine) -> Vec<DriveIds> {
+    let hash = |text: String| {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        text.hash(&mut h);
+        h.finish()
+    };
+    let period = machine.interpolation_period_s;
+    machine
+        .axes()
+        .iter()
+        .map(|&a| match machine.drive(a) {
+            Ok(d) => (
+                hash(format!("{period:?} {d:?}")),
+                hash(format!("{period:?} {:?}", d.linear_twin())),
+            ),
+            // The pass fails as a whole; its cost does not matter.
+            Err(_) => (0, 0),
+        })
+        .collect()
+}
+
+/// What a pass of `points` costs, roughly, in millions of instructions (callgrind, the
+/// 15/10 cone): the pass's reading, planning and interpolation, each point's ball bar and
+/// samples, and each distinct nonlinear drive and linear twin of an axis.
+fn pass_cost(points: &[usize], ids: &[&[DriveIds]]) -> f64 {
+    const PASS: f64 = 100.0;
+    const POINT: f64 = 18.0;
+    const DRIVE: f64 = 25.0;
+    const TWIN: f64 = 6.0;
+    let axes = ids[points[0]].len();
+    let distinct = |of: &dyn Fn(usize) -> u64| {
+        let mut seen: Vec<u64> = points.iter().map(|&i| of(i)).collect();
+        seen.sort_unstable();
+        seen.dedup();
+        seen.len() as f64
+    };
+    let (mut drives, mut twins) = (0.0, 0.0);
+    for a in 0..axes {
+        drives += distinct(&|i| ids[i][a].0);
+        twins += distinct(&|i| ids[i][a].1);
+    }
+    PASS + POINT * points.len() as f64 + DRIVE * drives + TWIN * twins
 }
 
 /// One interpolation pass per direction for the scenarios `points` (one group): each

@@ -125,36 +125,48 @@ fn without_drives(machine: &Machine) -> Machine {
 /// The scenarios' indices grouped by [`share_key`] (in order of first appearance), each
 /// group cut into passes of at most [`POINTS_PER_PASS`] points and of equal sizes (±1), as
 /// many as a multiple of `threads` where the group has that many points, so that the
-/// threads finish together. Of the counts up to twice the fewest, the cut whose passes
-/// share the most drives is taken ([`pass_cost`]): a grid of 100 points per kv runs in
-/// passes of 50 that each hold one kv, not of 62 or 63 of which half straddle two.
+/// threads finish together. A group of more than a full pass a thread takes, of the counts
+/// up to twice the fewest, the cut whose passes share the most drives ([`pass_cost`]): a
+/// grid of 100 points per kv runs in passes of 50 that each hold one kv, not of 62 or 63
+/// of which half straddle two.
 pub fn passes(scenarios: &[Scenario], threads: usize) -> Vec<Vec<usize>> {
     // The keys (a scenario's debug form each) in parallel: made one by one, they were the
     // study's only serial work of note.
-    let keys: Vec<(String, Vec<DriveIds>)> = scenarios
-        .par_iter()
-        .map(|s| (share_key(s), drive_ids(&s.machine)))
-        .collect();
+    let keys: Vec<String> = scenarios.par_iter().map(share_key).collect();
     let mut group_of: HashMap<&str, usize> = HashMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
-    for (i, (key, _)) in keys.iter().enumerate() {
+    for (i, key) in keys.iter().enumerate() {
         let g = *group_of.entry(key).or_insert_with(|| {
             groups.push(Vec::new());
             groups.len() - 1
         });
         groups[g].push(i);
     }
-    let ids: Vec<&[DriveIds]> = keys.iter().map(|(_, ids)| &ids[..]).collect();
     let threads = threads.max(1);
     groups
         .into_iter()
-        .flat_map(|group| {
+        .flat_map(|group| -> Vec<Vec<usize>> {
             let mut fewest = group.len().div_ceil(POINTS_PER_PASS);
             if group.len() >= threads {
                 fewest = fewest.next_multiple_of(threads);
             }
+            // At most a full pass a thread (a few points, a chunk of `mtsim study`): the
+            // fewest passes, without an estimate.
+            if group.len() <= POINTS_PER_PASS * threads {
+                return cut(&group, fewest).map(<[usize]>::to_vec).collect();
+            }
+            let ids: Vec<Vec<DriveIds>> = group
+                .par_iter()
+                .map(|&i| drive_ids(&scenarios[i].machine))
+                .collect();
             let cost = |count: usize| -> f64 {
-                cut(&group, count).map(|pass| pass_cost(pass, &ids)).sum()
+                let mut at = 0;
+                cut(&group, count)
+                    .map(|pass| {
+                        at += pass.len();
+                        pass_cost(&ids[at - pass.len()..at])
+                    })
+                    .sum()
             };
             let mut best = (fewest, cost(fewest));
             for count in (fewest + threads..=(2 * fewest).min(group.len())).step_by(threads) {
@@ -163,9 +175,7 @@ pub fn passes(scenarios: &[Scenario], threads: usize) -> Vec<Vec<usize>> {
                     best = (count, c);
                 }
             }
-            cut(&group, best.0)
-                .map(<[usize]>::to_vec)
-                .collect::<Vec<_>>()
+            cut(&group, best.0).map(<[usize]>::to_vec).collect()
         })
         .collect()
 }
@@ -209,27 +219,27 @@ fn drive_ids(machine: &Machine) -> Vec<DriveIds> {
         .collect()
 }
 
-/// What a pass of `points` costs, roughly, in millions of instructions (callgrind, the
+/// What a pass costs, roughly (`ids`: its points' [`drive_ids`]), in millions of instructions (callgrind, the
 /// 15/10 cone): the pass's reading, planning and interpolation, each point's ball bar and
 /// samples, and each distinct nonlinear drive and linear twin of an axis.
-fn pass_cost(points: &[usize], ids: &[&[DriveIds]]) -> f64 {
+fn pass_cost(ids: &[Vec<DriveIds>]) -> f64 {
     const PASS: f64 = 100.0;
     const POINT: f64 = 18.0;
     const DRIVE: f64 = 25.0;
     const TWIN: f64 = 6.0;
-    let axes = ids[points[0]].len();
-    let distinct = |of: &dyn Fn(usize) -> u64| {
-        let mut seen: Vec<u64> = points.iter().map(|&i| of(i)).collect();
+    let axes = ids[0].len();
+    let distinct = |of: &dyn Fn(&[DriveIds]) -> u64| {
+        let mut seen: Vec<u64> = ids.iter().map(|ids| of(ids)).collect();
         seen.sort_unstable();
         seen.dedup();
         seen.len() as f64
     };
     let (mut drives, mut twins) = (0.0, 0.0);
     for a in 0..axes {
-        drives += distinct(&|i| ids[i][a].0);
-        twins += distinct(&|i| ids[i][a].1);
+        drives += distinct(&|ids| ids[a].0);
+        twins += distinct(&|ids| ids[a].1);
     }
-    PASS + POINT * points.len() as f64 + DRIVE * drives + TWIN * twins
+    PASS + POINT * ids.len() as f64 + DRIVE * drives + TWIN * twins
 }
 
 /// One interpolation pass per direction for the scenarios `points` (one group): each

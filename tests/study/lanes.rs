@@ -337,6 +337,30 @@ fn a_pass_whose_first_point_fails_gives_the_others_their_single_runs_sites() {
     }
 }
 
+/// A grid of X and Y backlash (10 × 10) at 10 kv values, kv outermost, on 2 threads: 20
+/// passes of 50 points, each within one kv (its X and Y drives 10 and 5), not 16 of 62-63
+/// of which half straddle two kv (20 X drives).
+#[test]
+fn a_grid_is_cut_into_passes_that_each_hold_one_kv() {
+    let dir = scratch("lanes", "grid-passes");
+    let base = load(&dir, "base", &bundled("cone-15-10.toml"), "");
+    let points: Vec<Scenario> = (0..1000)
+        .map(|i| {
+            let mut s = base.clone();
+            for (axis, b) in [(Axis::X, i % 10), (Axis::Y, (i / 10) % 10)] {
+                let config = s.machine.axis_mut(axis);
+                config.drive.backlash_mm = Some(b as f64 * 1e-3);
+                config.servo.kv_per_s = 25.0 + (i / 100) as f64;
+            }
+            s
+        })
+        .collect();
+    let expected: Vec<Vec<usize>> = (0..20).map(|k| (50 * k..50 * k + 50).collect()).collect();
+    assert_eq!(passes(&points, 2), expected);
+    // One thread: 16 passes are the fewest; 20 of one kv each are still cheaper.
+    assert_eq!(passes(&points, 1), expected);
+}
+
 /// Points on a machine with position-error tables (pitch on X and Y, a worm-gear error on
 /// C): each point's errors, applied for its own direction of motion, are its single run's.
 #[test]

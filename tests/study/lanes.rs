@@ -269,26 +269,17 @@ fn points_that_differ_on_one_axis_share_the_others_servos_and_are_exact() {
 #[test]
 fn a_point_whose_drive_fails_on_one_axis_gives_its_single_runs_error() {
     let dir = scratch("lanes", "fail");
-    let base = bundled("cone-15-10.toml");
     // The cone at 1000 mm/min lags X by about v / kv = 0.5 mm: a 1 µm limit fails.
     let tight = "[machine_overrides.axes.X.servo]\nfollowing_error_limit_mm = 0.001\n";
     let rotary = "[machine_overrides.axes.C.servo]\nfollowing_error_limit_deg = 0.0001\n";
-    let points: Vec<Scenario> = [
+    let points = [
         (0.0, ""),
         (0.002, tight),
         (0.004, tight),
         (0.003, ""),
         (0.001, rotary),
-    ]
-    .iter()
-    .enumerate()
-    .map(|(i, &(b, extra))| {
-        let over = format!("[machine_overrides.axes.Y.drive]\nbacklash_mm = {b}\n{extra}");
-        load(&dir, &format!("f{i}"), &base, &over)
-    })
-    .collect();
-    assert_eq!(passes(&points, 1).len(), 1);
-    let lanes = run_ballbar_lanes(&points, &|_| {});
+    ];
+    let (points, lanes) = y_backlash_pass(&dir, &points);
     for (i, (scenario, lane)) in points.iter().zip(lanes).enumerate() {
         let single = run_ballbar(scenario, None, &|_| {});
         match (i, lane, single) {
@@ -311,23 +302,33 @@ fn a_point_whose_drive_fails_on_one_axis_gives_its_single_runs_error() {
     }
 }
 
+/// Points of the bundled 15/10 cone with Y backlash (mm) and extra overrides, one pass, and
+/// their lanes' studies.
+fn y_backlash_pass(
+    dir: &Path,
+    sets: &[(f64, &str)],
+) -> (Vec<Scenario>, Vec<mtsim::Result<BallbarStudy>>) {
+    let base = bundled("cone-15-10.toml");
+    let points: Vec<Scenario> = sets
+        .iter()
+        .enumerate()
+        .map(|(i, &(b, extra))| {
+            let over = format!("[machine_overrides.axes.Y.drive]\nbacklash_mm = {b}\n{extra}");
+            load(dir, &format!("f{i}"), &base, &over)
+        })
+        .collect();
+    assert_eq!(passes(&points, 1).len(), 1);
+    let lanes = run_ballbar_lanes(&points, &|_| {});
+    (points, lanes)
+}
+
 /// The pass's first point fails in its first block: the others' reversal sites (from the
 /// command maps their pass keeps once) are still their single runs'.
 #[test]
 fn a_pass_whose_first_point_fails_gives_the_others_their_single_runs_sites() {
     let dir = scratch("lanes", "fail-first");
-    let base = bundled("cone-15-10.toml");
     let tight = "[machine_overrides.axes.X.servo]\nfollowing_error_limit_mm = 0.001\n";
-    let points: Vec<Scenario> = [(0.002, tight), (0.0, ""), (0.003, "")]
-        .iter()
-        .enumerate()
-        .map(|(i, &(b, extra))| {
-            let over = format!("[machine_overrides.axes.Y.drive]\nbacklash_mm = {b}\n{extra}");
-            load(&dir, &format!("f{i}"), &base, &over)
-        })
-        .collect();
-    assert_eq!(passes(&points, 1).len(), 1);
-    let lanes = run_ballbar_lanes(&points, &|_| {});
+    let (points, lanes) = y_backlash_pass(&dir, &[(0.002, tight), (0.0, ""), (0.003, "")]);
     assert!(lanes[0].is_err());
     for (i, (scenario, lane)) in points.iter().zip(lanes).enumerate().skip(1) {
         let single = run_ballbar(scenario, None, &|_| {}).unwrap();

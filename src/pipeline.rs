@@ -331,21 +331,31 @@ pub fn run_lanes(
             // A point stops at the setpoint where one of its drives or twins failed.
             let completed = lanes.completed(i).min(block.len());
             alive[i] = completed == block.len();
-            let samples = &mut samples[..completed];
             // Every axis with a position-error table is a driven axis (the tables are
             // refused on others), so the point's drive outputs overwrite whatever the last
-            // point's errors left in the block's samples.
-            for (a, actual, following_error, linear) in lanes.outputs(i) {
-                for (j, sample) in samples.iter_mut().enumerate() {
-                    sample.actual[a] = actual[j];
-                    sample.following_error[a] = following_error[j];
-                    sample.linear[a] = linear[j];
+            // point's errors left in the block's samples. A few samples at a time, so that
+            // they are still in the L1 cache when the sink reads them.
+            for start in (0..completed).step_by(SINK_CHUNK) {
+                let chunk = start..(start + SINK_CHUNK).min(completed);
+                let samples = &mut samples[chunk.clone()];
+                for (a, actual, following_error, linear) in lanes.outputs(i) {
+                    let outputs = actual[chunk.clone()]
+                        .iter()
+                        .zip(&following_error[chunk.clone()])
+                        .zip(&linear[chunk.clone()]);
+                    for (sample, ((&actual, &following_error), &linear)) in
+                        samples.iter_mut().zip(outputs)
+                    {
+                        sample.actual[a] = actual;
+                        sample.following_error[a] = following_error;
+                        sample.linear[a] = linear;
+                    }
                 }
-            }
-            for sample in samples.iter_mut() {
-                errors[i].apply_in_place(&mut sample.actual);
-                errors[i].apply_mean_in_place(&mut sample.linear);
-                sink.push(sample)?;
+                for sample in samples.iter_mut() {
+                    errors[i].apply_in_place(&mut sample.actual);
+                    errors[i].apply_mean_in_place(&mut sample.linear);
+                    sink.push(sample)?;
+                }
             }
         }
         if k / 4096 != (k + block.len() as u64) / 4096 || k == 0 {
@@ -360,6 +370,11 @@ pub fn run_lanes(
 
 /// Setpoints handed to the drives of [`run_lanes`] at a time.
 const LANE_BLOCK: usize = crate::drive::lanes::BLOCK;
+
+/// Samples of a block a point's drive outputs are written into and pushed to its sink at
+/// a time in [`run_lanes`]: 32 samples (10 kB) stay in the L1 cache between the two, where
+/// a whole block (82 kB), written axis by axis, did not.
+const SINK_CHUNK: usize = 32;
 
 /// The interpolator's options for a run.
 fn interpolation(options: &RunOptions) -> InterpolationOptions {

@@ -12,4 +12,4 @@ pub mod theta;
 
 pub use crate::input::program::Direction;
 pub use ballbar::{BallbarResult, BallbarRun, CircleFrame};
-pub use sink::{is_measured, BallbarSink, BarGeometry, BarReading, CommandedReading};
+pub use sink::{is_measured, BallbarSink, BarGeometry, BarReading, CommandMaps, CommandedReading};

@@ -14,7 +14,7 @@ use std::cell::RefCell;
 
 use nalgebra::Point3;
 
-use super::sink::{BallbarSink, BarGeometry, BarReading, CommandedReading};
+use super::sink::{BallbarSink, BarGeometry, BarReading, CommandMaps, CommandedReading};
 use crate::error::Result;
 use crate::pipeline::{Sample, Sink};
 use crate::{Axis, AxisVec};
@@ -47,6 +47,9 @@ pub struct SharedReadings {
     /// [`BarGeometry::needs_full_chain`]: no table balls kept then.
     full_chain: bool,
     slots: Vec<Option<Slot>>,
+    /// The bars' [`CommandMaps`], kept once for all, and the index of the next sample they
+    /// take (see [`SharedReadings::with_maps`]).
+    maps: Option<(CommandMaps, u64)>,
 }
 
 impl SharedReadings {
@@ -57,6 +60,35 @@ impl SharedReadings {
             rotaries: [layout.tilt_axis(), layout.table_axis()],
             full_chain: geometry.needs_full_chain(),
             slots: vec![None; SLOTS],
+            maps: None,
+        }
+    }
+
+    /// The same, keeping the [`CommandMaps`] of its bars once for all (their bars are made
+    /// [`BallbarSink::without_maps`]). The maps depend only on the samples' setpoints, so
+    /// they are the same for every bar that takes every sample of a run, in order, from
+    /// index 0 (points of a pass without a settle gate): they take each sample index once,
+    /// from whichever bar pushes it first. A bar that stops early (its drives failed)
+    /// leaves the samples after its last to the next bar.
+    pub fn with_maps(mut self) -> SharedReadings {
+        self.maps = Some((CommandMaps::default(), 0));
+        self
+    }
+
+    /// The maps kept by [`SharedReadings::with_maps`].
+    pub fn into_maps(self) -> Option<CommandMaps> {
+        self.maps.map(|(maps, _)| maps)
+    }
+
+    /// Hands sample `s` to the kept maps if none of the bars has yet (`bin`: its θ bin
+    /// when it is measured).
+    #[inline]
+    fn map(&mut self, s: &Sample, bin: Option<usize>) {
+        if let Some((maps, next)) = &mut self.maps {
+            if s.index == *next {
+                maps.take(s, bin);
+                *next += 1;
+            }
         }
     }
 
@@ -74,6 +106,7 @@ impl SharedReadings {
             rotaries,
             full_chain,
             slots,
+            ..
         } = self;
         let Slot {
             reading: c, balls, ..
@@ -137,8 +170,9 @@ pub struct SharedBallbar<'a> {
 impl Sink for SharedBallbar<'_> {
     #[inline]
     fn push(&mut self, s: &Sample) -> Result<()> {
-        let readings = self.readings;
-        self.bar.take_with(s, |_, s| readings.borrow_mut().read(s));
+        let mut readings = self.readings.borrow_mut();
+        let r = self.bar.take_with(s, |_, s| readings.read(s));
+        readings.map(s, r.as_ref().map(BarReading::bin));
         Ok(())
     }
 }

@@ -159,6 +159,15 @@ impl BarGeometry {
     }
 }
 
+impl BarReading {
+    /// θ's map bin: θ is in [0, 360), so its map bin is its run bin (bin 0 for a
+    /// non-finite θ, as the θ map's own binning puts it).
+    #[inline]
+    pub fn bin(&self) -> usize {
+        self.terms.map_or(0, |t| t.bin)
+    }
+}
+
 impl CommandedReading {
     /// The whole reading, with dL and the linear twin's dL (um).
     #[inline]
@@ -191,15 +200,44 @@ pub struct BallbarSink {
     pub run: BallbarRun,
     /// dL_nl against θ.
     pub signature: BallbarRun,
-    /// Commanded axis positions against θ, mm or deg: where the bar's sensitivity is
-    /// evaluated for a reversal site ([`BarGeometry::sensitivity_at`]).
+    /// The commanded positions and speeds against θ; None where they are not wanted (the
+    /// runs after a study's first) or are kept for many bars at once.
+    pub maps: Option<CommandMaps>,
+}
+
+/// Commanded axis positions and speeds against θ over a run's measured samples, the first
+/// value of each bin: where the bar's sensitivity is evaluated for a reversal site
+/// ([`BarGeometry::sensitivity_at`]) and how fast each axis moves there. They depend on the
+/// setpoints alone, so points that run the same setpoints can share one.
+#[derive(Clone, Debug, Default)]
+pub struct CommandMaps {
+    /// Commanded axis positions against θ, mm or deg.
     pub commanded: ThetaMap,
-    /// Commanded axis speeds against θ, mm/s or deg/s.
+    /// Commanded axis speeds against θ, mm/s or deg/s: from the previous sample.
     pub speed: ThetaMap,
     /// The previous sample's time (s) and commanded positions.
-    previous: Option<(f64, crate::AxisVec)>,
-    /// Whether `commanded` and `speed` are filled.
-    maps: bool,
+    previous: Option<(f64, AxisVec)>,
+}
+
+impl CommandMaps {
+    /// Takes sample `s`, which the bar reads in θ bin `bin` when it is measured (None: not
+    /// measured; it is only the next one's previous sample).
+    #[inline]
+    pub fn take(&mut self, s: &Sample, bin: Option<usize>) {
+        let previous = self.previous.replace((s.time_s, s.commanded));
+        let Some(bin) = bin else {
+            return;
+        };
+        if self.commanded.wants_bin(bin) {
+            self.commanded.set_bin(bin, s.commanded);
+        }
+        if let Some((t0, q0)) = previous.filter(|(t0, _)| s.time_s > *t0) {
+            if self.speed.wants_bin(bin) {
+                self.speed
+                    .set_bin(bin, (s.commanded - q0) * (1.0 / (s.time_s - t0)));
+            }
+        }
+    }
 }
 
 impl BallbarSink {
@@ -213,17 +251,15 @@ impl BallbarSink {
             measured,
             run: BallbarRun::new(direction),
             signature: BallbarRun::new(direction),
-            commanded: ThetaMap::default(),
-            speed: ThetaMap::default(),
-            previous: None,
-            maps: true,
+            maps: Some(CommandMaps::default()),
         }
     }
 
-    /// The same sink leaving `commanded` and `speed` empty: for the runs after a study's
-    /// first, whose maps it does not read (the sites come from the first run's).
+    /// The same sink without [`CommandMaps`]: for the runs after a study's first, whose
+    /// maps it does not read (the sites come from the first run's), or for bars whose maps
+    /// are kept once for all.
     pub fn without_maps(mut self) -> BallbarSink {
-        self.maps = false;
+        self.maps = None;
         self
     }
 }
@@ -243,11 +279,20 @@ impl BallbarSink {
         s: &Sample,
         read: impl FnOnce(&BarGeometry, &Sample) -> BarReading,
     ) -> Option<BarReading> {
-        let previous = if self.maps {
-            self.previous.replace((s.time_s, s.commanded))
-        } else {
-            None
-        };
+        let r = self.read_with(s, read);
+        if let Some(maps) = &mut self.maps {
+            maps.take(s, r.as_ref().map(BarReading::bin));
+        }
+        r
+    }
+
+    /// [`BallbarSink::take_with`] without the maps.
+    #[inline]
+    fn read_with(
+        &mut self,
+        s: &Sample,
+        read: impl FnOnce(&BarGeometry, &Sample) -> BarReading,
+    ) -> Option<BarReading> {
         if !is_measured(s, self.measured) {
             return None;
         }
@@ -259,21 +304,6 @@ impl BallbarSink {
             r.deviation_um,
             r.nonlinear_um,
         );
-        // θ is in [0, 360): its map bin is its run bin (bin 0 for a non-finite θ, as
-        // the θ map's own binning puts it).
-        if !self.maps {
-            return Some(r);
-        }
-        let bin = r.terms.map_or(0, |t| t.bin);
-        if self.commanded.wants_bin(bin) {
-            self.commanded.set_bin(bin, s.commanded);
-        }
-        if let Some((t0, q0)) = previous.filter(|(t0, _)| s.time_s > *t0) {
-            if self.speed.wants_bin(bin) {
-                self.speed
-                    .set_bin(bin, (s.commanded - q0) * (1.0 / (s.time_s - t0)));
-            }
-        }
         Some(r)
     }
 }

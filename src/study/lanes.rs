@@ -15,6 +15,8 @@
 //! alone by [`run_ballbar`] for its error: every result is the single run's.
 
 use std::cell::{Cell, RefCell};
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
 use std::sync::mpsc;
 
 use rayon::prelude::*;
@@ -121,34 +123,123 @@ fn without_drives(machine: &Machine) -> Machine {
 }
 
 /// The scenarios' indices grouped by [`share_key`] (in order of first appearance), each
-/// group cut into passes of at most [`POINTS_PER_PASS`] points, and into at least as many
-/// passes as there are `threads` where the group is large enough.
+/// group cut into passes of at most [`POINTS_PER_PASS`] points and of equal sizes (±1), as
+/// many as a multiple of `threads` where the group has that many points, so that the
+/// threads finish together. A group of more than a full pass a thread takes, of the counts
+/// up to twice the fewest, the cut whose passes share the most drives ([`pass_cost`]): a
+/// grid of 100 points per kv runs in passes of 50 that each hold one kv, not of 62 or 63
+/// of which half straddle two.
 pub fn passes(scenarios: &[Scenario], threads: usize) -> Vec<Vec<usize>> {
-    let mut keys: Vec<String> = Vec::new();
+    // The keys (a scenario's debug form each) in parallel: made one by one, they were the
+    // study's only serial work of note.
+    let keys: Vec<String> = scenarios.par_iter().map(share_key).collect();
+    let mut group_of: HashMap<&str, usize> = HashMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
-    for (i, scenario) in scenarios.iter().enumerate() {
-        let key = share_key(scenario);
-        match keys.iter().position(|k| *k == key) {
-            Some(g) => groups[g].push(i),
-            None => {
-                keys.push(key);
-                groups.push(vec![i]);
-            }
-        }
+    for (i, key) in keys.iter().enumerate() {
+        let g = *group_of.entry(key).or_insert_with(|| {
+            groups.push(Vec::new());
+            groups.len() - 1
+        });
+        groups[g].push(i);
     }
+    let threads = threads.max(1);
     groups
         .into_iter()
-        .flat_map(|group| {
-            let size = group
-                .len()
-                .div_ceil(threads.max(1))
-                .clamp(1, POINTS_PER_PASS);
-            group
-                .chunks(size)
-                .map(<[usize]>::to_vec)
-                .collect::<Vec<_>>()
+        .flat_map(|group| -> Vec<Vec<usize>> {
+            let mut fewest = group.len().div_ceil(POINTS_PER_PASS);
+            if group.len() >= threads {
+                fewest = fewest.next_multiple_of(threads);
+            }
+            // At most a full pass a thread (a few points, a chunk of `mtsim study`): the
+            // fewest passes, without an estimate.
+            if group.len() <= POINTS_PER_PASS * threads {
+                return cut(&group, fewest).map(<[usize]>::to_vec).collect();
+            }
+            let ids: Vec<Vec<DriveIds>> = group
+                .par_iter()
+                .map(|&i| drive_ids(&scenarios[i].machine))
+                .collect();
+            let cost = |count: usize| -> f64 {
+                let mut at = 0;
+                cut(&group, count)
+                    .map(|pass| {
+                        at += pass.len();
+                        pass_cost(&ids[at - pass.len()..at])
+                    })
+                    .sum()
+            };
+            let mut best = (fewest, cost(fewest));
+            for count in (fewest + threads..=(2 * fewest).min(group.len())).step_by(threads) {
+                let c = cost(count);
+                if c < best.1 {
+                    best = (count, c);
+                }
+            }
+            cut(&group, best.0).map(<[usize]>::to_vec).collect()
         })
         .collect()
+}
+
+/// `group` cut into `count` passes of equal sizes, the first `len % count` one point larger.
+fn cut(group: &[usize], count: usize) -> impl Iterator<Item = &[usize]> {
+    let (size, larger) = (group.len() / count, group.len() % count);
+    let mut rest = group;
+    (0..count).map(move |k| {
+        let (pass, next) = rest.split_at(size + usize::from(k < larger));
+        rest = next;
+        pass
+    })
+}
+
+/// Per axis of a machine, hashes of its drive's and its linear twin's validated form: the
+/// points of a pass with the same hashes share that axis's servos ([`DriveLanes`],
+/// which compares the forms themselves). Only [`pass_cost`] reads them.
+///
+/// [`DriveLanes`]: crate::drive::DriveLanes
+type DriveIds = (u64, u64);
+
+fn drive_ids(machine: &Machine) -> Vec<DriveIds> {
+    let hash = |text: String| {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        text.hash(&mut h);
+        h.finish()
+    };
+    let period = machine.interpolation_period_s;
+    machine
+        .axes()
+        .iter()
+        .map(|&a| match machine.drive(a) {
+            Ok(d) => (
+                hash(format!("{period:?} {d:?}")),
+                hash(format!("{period:?} {:?}", d.linear_twin())),
+            ),
+            // The pass fails as a whole; its cost does not matter.
+            Err(_) => (0, 0),
+        })
+        .collect()
+}
+
+/// What a pass costs, roughly (`ids`: its points' [`drive_ids`]), in millions of instructions (callgrind, the
+/// 15/10 cone): the pass's reading, planning and interpolation, each point's ball bar and
+/// samples, and each distinct nonlinear drive and linear twin of an axis.
+fn pass_cost(ids: &[Vec<DriveIds>]) -> f64 {
+    const PASS: f64 = 100.0;
+    const POINT: f64 = 18.0;
+    const DRIVE: f64 = 25.0;
+    const TWIN: f64 = 6.0;
+    let axes = ids[0].len();
+    let distinct = |of: &dyn Fn(&[DriveIds]) -> u64| {
+        let mut seen: Vec<u64> = ids.iter().map(|ids| of(ids)).collect();
+        seen.sort_unstable();
+        seen.dedup();
+        seen.len() as f64
+    };
+    let (mut drives, mut twins) = (0.0, 0.0);
+    for a in 0..axes {
+        drives += distinct(&|ids| ids[a].0);
+        twins += distinct(&|ids| ids[a].1);
+    }
+    PASS + POINT * ids.len() as f64 + DRIVE * drives + TWIN * twins
 }
 
 /// One interpolation pass per direction for the scenarios `points` (one group): each
@@ -169,6 +260,10 @@ fn run_pass(
     let mut warnings: Vec<Vec<String>> = vec![Vec::new(); n];
     let mut failed = vec![false; n];
     let (mut sim_time_s, mut setpoints, mut feed_reductions) = (0.0, 0u64, Vec::new());
+    // Without a settle gate every bar takes every sample: their first run's command maps
+    // are the same, kept once for all (`SharedReadings::with_maps`).
+    let gated = gates_transient(first);
+    let mut common_maps = None;
     for (k, &direction) in directions.iter().enumerate() {
         let mut run = program::scenario_run(first, direction, first.simulate.lead_deg)?;
         if let Some(along) = &along {
@@ -177,7 +272,10 @@ fn run_pass(
         let options = run_options(first, sim_time_s)?;
         let mut bars: Vec<BallbarSink> = match geometry {
             Some(g) => (0..n)
-                .map(|_| ballbar_sink(g, direction, run.measured, k))
+                .map(|_| match ballbar_sink(g, direction, run.measured, k) {
+                    bar if gated => bar,
+                    bar => bar.without_maps(),
+                })
                 .collect(),
             None => Vec::new(),
         };
@@ -191,7 +289,11 @@ fn run_pass(
             Some(g) => {
                 // The points' bars read each setpoint (and each table ball their rotaries
                 // share) once for all.
-                let readings = RefCell::new(SharedReadings::new(g));
+                let readings = SharedReadings::new(g);
+                let readings = RefCell::new(match k == 0 && !gated {
+                    true => readings.with_maps(),
+                    false => readings,
+                });
                 let mut shared: Vec<SharedBallbar<'_>> = bars
                     .iter_mut()
                     .map(|bar| SharedBallbar {
@@ -199,7 +301,7 @@ fn run_pass(
                         readings: &readings,
                     })
                     .collect();
-                if gates_transient(first) {
+                let ran = if gated {
                     let theta_deg = |s: &Sample| readings.borrow_mut().read_commanded(s).theta_deg;
                     let mut gates: Vec<SettleGate<'_>> = shared
                         .iter_mut()
@@ -223,7 +325,12 @@ fn run_pass(
                     let mut sinks: Vec<&mut dyn Sink> =
                         shared.iter_mut().map(|b| b as &mut dyn Sink).collect();
                     pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?
+                };
+                drop(shared);
+                if k == 0 {
+                    common_maps = readings.into_inner().into_maps();
                 }
+                ran
             }
         };
         for (f, d) in failed.iter_mut().zip(dead) {
@@ -249,11 +356,13 @@ fn run_pass(
         .zip(ballbars)
         .zip(warnings)
         .zip(failed)
-        .map(|(((&i, bars), warnings), failed)| {
+        .map(|(((&i, mut bars), warnings), failed)| {
             if failed {
                 return None;
             }
-            assemble(&scenarios[i], bars, warnings, &shared).ok()
+            let own = bars.first_mut().and_then(|b| b.maps.take());
+            let maps = own.as_ref().or(common_maps.as_ref());
+            assemble(&scenarios[i], bars, maps, warnings, &shared).ok()
         })
         .collect())
 }

@@ -23,7 +23,7 @@ use crate::input::scenario::{Program, Scenario, TraceFormat};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
 use crate::measure::ballbar::{analyse_events_at, BallbarResult};
 use crate::measure::settle::SettleGate;
-use crate::measure::{BallbarSink, BarGeometry, CircleFrame};
+use crate::measure::{BallbarSink, BarGeometry, CircleFrame, CommandMaps};
 use crate::motion::work;
 use crate::motion::FeedReduction;
 use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
@@ -187,7 +187,8 @@ pub fn run_ballbar(
         setpoints,
         feed_reductions,
     );
-    assemble(scenario, sinks, warnings, &shared)
+    let maps = sinks.first_mut().and_then(|b| b.maps.take());
+    assemble(scenario, sinks, maps.as_ref(), warnings, &shared)
 }
 
 /// The ball bar of a scenario's `k`-th run: with the maps of the bar's sensitivity and the
@@ -345,22 +346,21 @@ impl SharedRuns {
     }
 }
 
-/// A scenario's study from its ball bars (one per direction) and what its runs share.
+/// A scenario's study from its ball bars (one per direction), the first run's command maps
+/// (the reversal sites' poses and speeds) and what its runs share.
 pub(crate) fn assemble(
     scenario: &Scenario,
     ballbars: Vec<BallbarSink>,
+    maps: Option<&CommandMaps>,
     warnings: Vec<String>,
     shared: &SharedRuns,
 ) -> Result<BallbarStudy> {
     let machine = &scenario.machine;
     let geometry = bar_geometry(scenario);
-    let (mut runs, mut signatures, mut maps, mut speeds) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut runs, mut signatures) = (Vec::new(), Vec::new());
     for b in ballbars {
         runs.push(b.run);
         signatures.push(b.signature);
-        maps.push(b.commanded);
-        speeds.push(b.speed);
     }
     let reversals = shared.reversals.clone();
     // The bar's sensitivity is a property of the nominal pose at θ: the first run's map.
@@ -378,15 +378,13 @@ pub(crate) fn assemble(
             _ => 0.0,
         }
     };
-    let sites = match (maps.first(), geometry) {
-        (Some(map), Some(g)) => sites_from_map(
+    let sites = match (maps, geometry) {
+        (Some(maps), Some(g)) => sites_from_map(
             &reversals,
-            map,
+            &maps.commanded,
             &|q| g.sensitivity_at(q),
             g.length_mm,
-            speeds
-                .first()
-                .map(|s| (s, &stribeck as &dyn Fn(Axis) -> f64)),
+            Some((&maps.speed, &stribeck as &dyn Fn(Axis) -> f64)),
         ),
         _ => ReversalSite::unweighted(&reversals),
     };

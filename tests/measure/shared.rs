@@ -3,6 +3,7 @@
 
 use std::cell::RefCell;
 
+use mtsim::input::program::MeasuredLines;
 use mtsim::input::Direction;
 use mtsim::kinematics::location::{LocationErrors, LocationParam};
 use mtsim::kinematics::{Kinematics, Layout};
@@ -161,4 +162,47 @@ fn a_shared_ballbar_runs_as_its_single_one() {
         // Every bin, sum and map of the sink.
         assert_eq!(format!("{bar:?}"), format!("{single:?}"));
     }
+}
+
+/// The command maps kept once for the bars of a pass are each bar's own, bit for bit, also
+/// when the first bar stops early (its drives failed) and the next one takes over; samples
+/// before the measured lines count only as a speed's previous sample.
+#[test]
+fn maps_kept_once_are_every_bars_own() {
+    let g = geometry(Kinematics::new(Layout::TrtAc, Vector3::zeros()));
+    let measured = Some(MeasuredLines { first: 2, last: 2 });
+    let sample_at = |k: u64, point: usize| Sample {
+        line: if k < 300 { 1 } else { 2 },
+        ..sample(k, point)
+    };
+    let readings = RefCell::new(SharedReadings::new(g).with_maps());
+    let mut bars: Vec<BallbarSink> = (0..3)
+        .map(|_| BallbarSink::new(g, Direction::Ccw, measured).without_maps())
+        .collect();
+    let mut alone = BallbarSink::new(g, Direction::Ccw, measured);
+    // Bar 0 stops at sample 1,000 (in the fourth block), as a failed point does.
+    let stop = 1000;
+    for start in (0..6300u64).step_by(256) {
+        for (point, bar) in bars.iter_mut().enumerate() {
+            let mut sink = SharedBallbar {
+                bar,
+                readings: &readings,
+            };
+            let end = (start + 256).min(if point == 0 { stop } else { 6300 });
+            for k in start..end {
+                sink.push(&sample_at(k, point)).unwrap();
+            }
+        }
+        for k in start..(start + 256).min(6300) {
+            alone.push(&sample_at(k, 1)).unwrap();
+        }
+    }
+    assert!(bars.iter().all(|b| b.maps.is_none()));
+    let kept = readings.into_inner().into_maps().expect("maps kept");
+    let own = alone.maps.expect("the single bar's maps");
+    let filled = |m: &mtsim::measure::attribution::ThetaMap| {
+        (0..72).filter(|&i| m.at(i as f64 * 5.0).is_some()).count()
+    };
+    assert!(filled(&own.commanded) > 10 && filled(&own.speed) > 10);
+    assert_eq!(format!("{kept:?}"), format!("{own:?}"));
 }

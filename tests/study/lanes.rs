@@ -269,26 +269,17 @@ fn points_that_differ_on_one_axis_share_the_others_servos_and_are_exact() {
 #[test]
 fn a_point_whose_drive_fails_on_one_axis_gives_its_single_runs_error() {
     let dir = scratch("lanes", "fail");
-    let base = bundled("cone-15-10.toml");
     // The cone at 1000 mm/min lags X by about v / kv = 0.5 mm: a 1 µm limit fails.
     let tight = "[machine_overrides.axes.X.servo]\nfollowing_error_limit_mm = 0.001\n";
     let rotary = "[machine_overrides.axes.C.servo]\nfollowing_error_limit_deg = 0.0001\n";
-    let points: Vec<Scenario> = [
+    let points = [
         (0.0, ""),
         (0.002, tight),
         (0.004, tight),
         (0.003, ""),
         (0.001, rotary),
-    ]
-    .iter()
-    .enumerate()
-    .map(|(i, &(b, extra))| {
-        let over = format!("[machine_overrides.axes.Y.drive]\nbacklash_mm = {b}\n{extra}");
-        load(&dir, &format!("f{i}"), &base, &over)
-    })
-    .collect();
-    assert_eq!(passes(&points, 1).len(), 1);
-    let lanes = run_ballbar_lanes(&points, &|_| {});
+    ];
+    let (points, lanes) = y_backlash_pass(&dir, &points);
     for (i, (scenario, lane)) in points.iter().zip(lanes).enumerate() {
         let single = run_ballbar(scenario, None, &|_| {});
         match (i, lane, single) {
@@ -309,6 +300,66 @@ fn a_point_whose_drive_fails_on_one_axis_gives_its_single_runs_error() {
             ),
         }
     }
+}
+
+/// Points of the bundled 15/10 cone with Y backlash (mm) and extra overrides, one pass, and
+/// their lanes' studies.
+fn y_backlash_pass(
+    dir: &Path,
+    sets: &[(f64, &str)],
+) -> (Vec<Scenario>, Vec<mtsim::Result<BallbarStudy>>) {
+    let base = bundled("cone-15-10.toml");
+    let points: Vec<Scenario> = sets
+        .iter()
+        .enumerate()
+        .map(|(i, &(b, extra))| {
+            let over = format!("[machine_overrides.axes.Y.drive]\nbacklash_mm = {b}\n{extra}");
+            load(dir, &format!("f{i}"), &base, &over)
+        })
+        .collect();
+    assert_eq!(passes(&points, 1).len(), 1);
+    let lanes = run_ballbar_lanes(&points, &|_| {});
+    (points, lanes)
+}
+
+/// The pass's first point fails in its first block: the others' reversal sites (from the
+/// command maps their pass keeps once) are still their single runs'.
+#[test]
+fn a_pass_whose_first_point_fails_gives_the_others_their_single_runs_sites() {
+    let dir = scratch("lanes", "fail-first");
+    let tight = "[machine_overrides.axes.X.servo]\nfollowing_error_limit_mm = 0.001\n";
+    let (points, lanes) = y_backlash_pass(&dir, &[(0.002, tight), (0.0, ""), (0.003, "")]);
+    assert!(lanes[0].is_err());
+    for (i, (scenario, lane)) in points.iter().zip(lanes).enumerate().skip(1) {
+        let single = run_ballbar(scenario, None, &|_| {}).unwrap();
+        let lane = lane.unwrap();
+        assert!(!single.sites.is_empty(), "point {i} has sites");
+        assert_eq!(figures(&lane), figures(&single), "point {i}");
+    }
+}
+
+/// A grid of X and Y backlash (10 × 10) at 10 kv values, kv outermost, on 2 threads: 20
+/// passes of 50 points, each within one kv (its X and Y drives 10 and 5), not 16 of 62-63
+/// of which half straddle two kv (20 X drives).
+#[test]
+fn a_grid_is_cut_into_passes_that_each_hold_one_kv() {
+    let dir = scratch("lanes", "grid-passes");
+    let base = load(&dir, "base", &bundled("cone-15-10.toml"), "");
+    let points: Vec<Scenario> = (0..1000)
+        .map(|i| {
+            let mut s = base.clone();
+            for (axis, b) in [(Axis::X, i % 10), (Axis::Y, (i / 10) % 10)] {
+                let config = s.machine.axis_mut(axis);
+                config.drive.backlash_mm = Some(b as f64 * 1e-3);
+                config.servo.kv_per_s = 25.0 + (i / 100) as f64;
+            }
+            s
+        })
+        .collect();
+    let expected: Vec<Vec<usize>> = (0..20).map(|k| (50 * k..50 * k + 50).collect()).collect();
+    assert_eq!(passes(&points, 2), expected);
+    // One thread: 16 passes are the fewest; 20 of one kv each are still cheaper.
+    assert_eq!(passes(&points, 1), expected);
 }
 
 /// Points on a machine with position-error tables (pitch on X and Y, a worm-gear error on

@@ -298,6 +298,7 @@ impl Regime {
 /// an earlier `x_m`) are finite. `v - v` is 0 for a finite v and NaN otherwise: the sum is
 /// 0 exactly when every one is finite (one comparison instead of six).
 #[inline(always)]
+#[allow(clippy::eq_op)] // `v - v` on purpose: NaN for a non-finite v
 pub(super) fn all_finite(x: &[f64; N_STATE]) -> bool {
     let probe = (x[0] - x[0])
         + (x[1] - x[1])

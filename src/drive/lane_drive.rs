@@ -139,7 +139,8 @@ impl DriveLaneGroup {
     /// Steps the group's live drives of `all` through `setpoints` (at `times_s`): actual
     /// positions and following errors (mm, deg) to `actual` and `following_error` at
     /// `s * BLOCK + j`, the setpoints completed to `completed[s]`; a drive that fails
-    /// becomes None.
+    /// becomes None. Returns the lane periods stepped and how many of them were handed to
+    /// the scalar servo.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     pub fn step_block(
@@ -151,19 +152,24 @@ impl DriveLaneGroup {
         actual: &mut [f64],
         following_error: &mut [f64],
         completed: &mut [usize],
-    ) {
+    ) -> (u64, u64) {
         let mut st = self.gather(all);
         for &s in &self.servos {
             completed[s] = if all[s].is_some() { setpoints.len() } else { 0 };
         }
+        let (mut stepped, mut handed_back) = (0, 0);
         for (j, (q, &t)) in setpoints.iter().zip(times_s).enumerate() {
             let q = q[axis];
             let ok = self.mapped_period(&mut st, q);
             for (l, &s) in self.servos.iter().enumerate() {
-                if st.live[l] && !ok[l] && !self.scalar_period(all, &mut st, l, q, t) {
-                    completed[s] = j;
+                if st.live[l] && !ok[l] {
+                    handed_back += 1;
+                    if !self.scalar_period(all, &mut st, l, q, t) {
+                        completed[s] = j;
+                    }
                 }
                 if st.live[l] {
+                    stepped += 1;
                     let x_t = st.x[2][l];
                     actual[s * BLOCK + j] = x_t * self.inv_scale[l];
                     following_error[s * BLOCK + j] = (st.setpoint[l] - x_t) * self.inv_scale[l];
@@ -171,6 +177,7 @@ impl DriveLaneGroup {
             }
         }
         self.scatter(all, &st);
+        (stepped, handed_back)
     }
 
     /// One period by the lanes' slope-0 maps where every lane's checks pass (state

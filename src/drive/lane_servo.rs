@@ -94,7 +94,8 @@ impl TwinLanes {
     /// Steps the group's live servos of `all` (the axis `axis`'s) through `setpoints`,
     /// reached at `times_s`: each servo's actual positions (mm, deg) go to
     /// `actual[s * BLOCK + j]` and the setpoints it completed to `completed[s]`; a servo
-    /// that fails becomes None there.
+    /// that fails becomes None there. Returns the lane periods stepped and how many of them
+    /// were handed to the scalar servo.
     #[inline(always)]
     pub fn step_block(
         &self,
@@ -104,24 +105,30 @@ impl TwinLanes {
         times_s: &[f64],
         actual: &mut [f64],
         completed: &mut [usize],
-    ) {
+    ) -> (u64, u64) {
         let mut st = self.gather(all);
         for &s in &self.servos {
             completed[s] = if all[s].is_some() { setpoints.len() } else { 0 };
         }
+        let (mut stepped, mut handed_back) = (0, 0);
         for (j, (q, &t)) in setpoints.iter().zip(times_s).enumerate() {
             let q = q[axis];
             let ok = self.mapped_period(&mut st, q);
             for (l, &s) in self.servos.iter().enumerate() {
-                if st.live[l] && !ok[l] && !self.scalar_period(all, &mut st, l, q, t) {
-                    completed[s] = j;
+                if st.live[l] && !ok[l] {
+                    handed_back += 1;
+                    if !self.scalar_period(all, &mut st, l, q, t) {
+                        completed[s] = j;
+                    }
                 }
                 if st.live[l] {
+                    stepped += 1;
                     actual[s * BLOCK + j] = st.x[2][l] * self.inv_scale[l];
                 }
             }
         }
         self.scatter(all, &st);
+        (stepped, handed_back)
     }
 
     /// One period by the lanes' maps; per lane, whether it was taken (state updated) or the

@@ -47,6 +47,8 @@ struct AxisLanes {
     /// Per servo, the setpoints of the last block it completed (fewer than the block's when
     /// it failed in it; 0 once failed).
     completed: Vec<usize>,
+    /// Lane periods the groups stepped so far, and those of them handed to the scalar servo.
+    lane_periods: (u64, u64),
 }
 
 impl AxisLanes {
@@ -94,6 +96,7 @@ impl AxisLanes {
                 vec![0.0; n * BLOCK]
             },
             completed: vec![0; n],
+            lane_periods: (0, 0),
         })
     }
 
@@ -103,8 +106,9 @@ impl AxisLanes {
     #[inline(always)]
     fn step_block_inline(&mut self, setpoints: &[AxisVec], times_s: &[f64], linear: bool) {
         let a = self.axis;
+        let mut counts = (0, 0);
         for group in &self.groups {
-            group.step_block(
+            let (stepped, handed_back) = group.step_block(
                 &mut self.servos,
                 a,
                 setpoints,
@@ -112,9 +116,10 @@ impl AxisLanes {
                 &mut self.actual,
                 &mut self.completed,
             );
+            counts = (counts.0 + stepped, counts.1 + handed_back);
         }
         for group in &self.drive_groups {
-            group.step_block(
+            let (stepped, handed_back) = group.step_block(
                 &mut self.servos,
                 a,
                 setpoints,
@@ -123,7 +128,12 @@ impl AxisLanes {
                 &mut self.following_error,
                 &mut self.completed,
             );
+            counts = (counts.0 + stepped, counts.1 + handed_back);
         }
+        self.lane_periods = (
+            self.lane_periods.0 + counts.0,
+            self.lane_periods.1 + counts.1,
+        );
         for &s in &self.alone {
             let slot = &mut self.servos[s];
             let Some(servo) = slot.as_mut() else {
@@ -248,6 +258,17 @@ impl DriveLanes {
             .zip(&self.twins)
             .map(|(d, t)| (d.axis, d.servos.len(), t.servos.len()))
             .collect()
+    }
+
+    /// Periods the lane groups stepped so far, `[drives, twins]`, each with how many of
+    /// them were handed to the scalar servo (a lane that left the shared map for that period).
+    pub fn lane_periods(&self) -> [(u64, u64); 2] {
+        let sum = |lanes: &[AxisLanes]| {
+            lanes.iter().fold((0, 0), |(a, b), l| {
+                (a + l.lane_periods.0, b + l.lane_periods.1)
+            })
+        };
+        [sum(&self.drives), sum(&self.twins)]
     }
 
     /// Steps every distinct drive and twin through `setpoints` (at most [`BLOCK`]), the

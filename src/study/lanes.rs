@@ -219,15 +219,16 @@ fn drive_ids(machine: &Machine) -> Vec<DriveIds> {
         .collect()
 }
 
-/// What a pass costs, roughly (`ids`: its points' [`drive_ids`]), in millions of instructions (callgrind, the
-/// 15/10 cone): the pass's reading, planning and interpolation, each point's ball bar and
-/// samples, and each distinct nonlinear drive and linear twin of an axis.
+/// What a pass costs, roughly (`ids`: its points' [`drive_ids`]), in millions of
+/// instructions of the 15/10 cone: the pass's reading, planning and interpolation, each
+/// point's ball bar and samples, and each distinct nonlinear drive and linear twin of an
+/// axis (weights from profiles: docs/performance.md).
 fn pass_cost(ids: &[Vec<DriveIds>]) -> f64 {
     const PASS: f64 = 100.0;
     const POINT: f64 = 18.0;
     const DRIVE: f64 = 25.0;
     const TWIN: f64 = 6.0;
-    let axes = ids[0].len();
+    let axes = ids.first().map_or(0, Vec::len);
     let distinct = |of: &dyn Fn(&[DriveIds]) -> u64| {
         let mut seen: Vec<u64> = ids.iter().map(|ids| of(ids)).collect();
         seen.sort_unstable();

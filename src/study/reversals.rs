@@ -172,7 +172,7 @@ pub fn analyse_cone(path: &ConePath, feed_mm_min: f64) -> Analysis {
 
 /// Each axis's reversal angles on the exact cone path, deg, sorted: those of
 /// [`analyse_cone`], without the ranges and peak speeds (what a ball-bar run needs).
-pub fn cone_reversals_deg(path: &ConePath) -> Vec<(Axis, Vec<f64>)> {
+fn cone_reversals_deg(path: &ConePath) -> Vec<(Axis, Vec<f64>)> {
     let grid = derivative_grid(path);
     path.kinematics
         .layout

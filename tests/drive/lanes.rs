@@ -90,6 +90,15 @@ fn single(machine: &Machine, q0: &AxisVec) -> Vec<Vec<(Axis, f64, f64, f64)>> {
 
 /// The same points in lanes, block by block: each point's outputs until it stops.
 fn in_lanes(machines: &[Machine], q0: &AxisVec) -> Vec<Vec<Vec<(Axis, f64, f64, f64)>>> {
+    in_lanes_counted(machines, q0).0
+}
+
+/// [`in_lanes`] with [`DriveLanes::lane_periods`] at the end.
+#[allow(clippy::type_complexity)]
+fn in_lanes_counted(
+    machines: &[Machine],
+    q0: &AxisVec,
+) -> (Vec<Vec<Vec<(Axis, f64, f64, f64)>>>, [(u64, u64); 2]) {
     let refs: Vec<&Machine> = machines.iter().collect();
     let mut lanes = DriveLanes::new(&refs, q0).unwrap();
     let mut out = vec![Vec::new(); machines.len()];
@@ -117,7 +126,8 @@ fn in_lanes(machines: &[Machine], q0: &AxisVec) -> Vec<Vec<Vec<(Axis, f64, f64, 
             }
         }
     }
-    out
+    let counts = lanes.lane_periods();
+    (out, counts)
 }
 
 fn bits(run: &[Vec<(Axis, f64, f64, f64)>]) -> Vec<Vec<(Axis, u64, u64, u64)>> {
@@ -152,6 +162,27 @@ fn lane_groups_of_1_to_9_points_give_each_points_own_drives_bit_for_bit() {
                 assert!(bits(lane) == bits(&single), "{what}: outputs differ");
             }
         }
+    }
+}
+
+/// The equality above would hold if the lane groups handed every period to the scalar
+/// servo: here they must step most periods themselves. Eight points of distinct X and Y
+/// drives make one group of X drives and one of Y drives, and as many of twins.
+#[test]
+fn the_lane_groups_step_most_periods_themselves() {
+    let q0 = setpoint(0.0);
+    let machines = machines(8, true);
+    let (_, [drives, twins]) = in_lanes_counted(&machines, &q0);
+    for (what, (stepped, handed_back)) in [("drives", drives), ("twins", twins)] {
+        // Two groups (X and Y) of 8 lanes over the periods, less the failing point's.
+        assert!(
+            stepped > 8 * PERIODS as u64,
+            "{what}: {stepped} lane periods"
+        );
+        assert!(
+            handed_back * 4 < stepped,
+            "{what}: {handed_back} of {stepped} lane periods handed to the scalar servo"
+        );
     }
 }
 

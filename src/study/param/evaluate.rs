@@ -128,40 +128,35 @@ const POINTS_PER_CHUNK_PER_THREAD: usize = 16;
 /// and the axis limits, which the drive keys do not change). `done` is called once per point.
 pub fn evaluate_group(scenarios: &[Scenario], done: &(dyn Fn() + Sync)) -> Vec<Result<Figures>> {
     // A failed check is not kept: each of its points runs it again and carries its error.
-    let mut checked: Vec<(String, u64)> = Vec::new();
+    let mut checked: std::collections::HashMap<String, u64> = Default::default();
     // A point's study holds its traces until its figures are taken, so the group runs in
     // chunks of a few passes per thread: memory stays that of a chunk, not of the group.
     let chunk = POINTS_PER_CHUNK_PER_THREAD * rayon::current_num_threads().max(1);
     let mut out = Vec::with_capacity(scenarios.len());
-    let mut figures = Vec::new();
     for part in scenarios.chunks(chunk) {
         let studies = run_ballbar_lanes(part, &|_| {});
+        let keys: Vec<String> = part.par_iter().map(share_key).collect();
         let violations: Vec<Result<u64>> = part
             .iter()
-            .map(|scenario| {
-                let key = share_key(scenario);
-                match checked.iter().find(|(k, _)| *k == key) {
-                    Some((_, v)) => Ok(*v),
-                    None => check(scenario, &CheckOptions::default()).map(|r| {
-                        let v = r.violations.len() as u64;
-                        checked.push((key, v));
-                        v
-                    }),
-                }
+            .zip(keys)
+            .map(|(scenario, key)| match checked.get(&key) {
+                Some(&v) => Ok(v),
+                None => check(scenario, &CheckOptions::default()).map(|r| {
+                    let v = r.violations.len() as u64;
+                    checked.insert(key, v);
+                    v
+                }),
             })
             .collect();
-        // The figures (the spike analysis above all) cost a fifth of a point: taken on
-        // every core, not on this thread alone while the pool waits.
-        part.par_iter()
-            .zip(studies)
-            .zip(violations)
-            .map(|((scenario, study), violations)| {
+        // The figures (the spike analysis above all) on every core, not on this thread
+        // alone while the pool waits.
+        out.par_extend(part.par_iter().zip(studies).zip(violations).map(
+            |((scenario, study), violations)| {
                 let figures = study.and_then(|s| figures_from(scenario, &s, violations?));
                 done();
                 figures
-            })
-            .collect_into_vec(&mut figures);
-        out.append(&mut figures);
+            },
+        ));
     }
     out
 }

@@ -204,14 +204,7 @@ impl TwinLanes {
             st.live[l] = false;
             return false;
         }
-        let back = servo.twin_state();
-        st.setpoint[l] = back.setpoint;
-        st.v_ff[l] = back.v_ff;
-        for (row, &v) in st.x.iter_mut().zip(&back.x) {
-            row[l] = v;
-        }
-        st.velocity[l] = back.velocity_si;
-        st.periods_exact[l] = back.periods_exact;
+        set_lane_state(st, l, &servo.twin_state());
         true
     }
 
@@ -229,14 +222,7 @@ impl TwinLanes {
             let Some(servo) = all[s].as_ref() else {
                 continue;
             };
-            let state = servo.twin_state();
-            st.setpoint[l] = state.setpoint;
-            st.v_ff[l] = state.v_ff;
-            for (row, &v) in st.x.iter_mut().zip(&state.x) {
-                row[l] = v;
-            }
-            st.velocity[l] = state.velocity_si;
-            st.periods_exact[l] = state.periods_exact;
+            set_lane_state(&mut st, l, &servo.twin_state());
             st.live[l] = true;
         }
         st
@@ -250,6 +236,17 @@ impl TwinLanes {
             }
         }
     }
+}
+
+/// `state` into lane `l` of the lanes' state (its liveness aside).
+fn set_lane_state(st: &mut State, l: usize, state: &TwinState) {
+    st.setpoint[l] = state.setpoint;
+    st.v_ff[l] = state.v_ff;
+    for (row, &v) in st.x.iter_mut().zip(&state.x) {
+        row[l] = v;
+    }
+    st.velocity[l] = state.velocity_si;
+    st.periods_exact[l] = state.periods_exact;
 }
 
 /// Lane `l` of the lanes' state.

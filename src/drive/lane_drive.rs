@@ -58,6 +58,7 @@ pub struct DriveLaneGroup {
 }
 
 /// The lanes' carried state over one block.
+#[derive(Default)]
 struct State {
     setpoint: Lanes,
     v_ff: Lanes,
@@ -109,17 +110,17 @@ impl DriveLaneGroup {
         };
         for (l, &s) in servos.iter().enumerate() {
             let p = all[s].as_ref()?.drive_period()?;
-            for (col, lane_col) in p.cols.iter().zip(g.cols.iter_mut()) {
+            for (col, lane_col) in p.map.cols.iter().zip(g.cols.iter_mut()) {
                 for (&m, row) in col.iter().zip(lane_col.iter_mut()) {
                     row[l] = m;
                 }
             }
-            g.scale[l] = p.scale;
-            g.inv_scale[l] = p.inv_scale;
-            g.inv_t_ipo[l] = p.inv_t_ipo;
-            g.aff_mass[l] = p.aff_mass;
-            g.half_limit[l] = p.half_limit;
-            g.fe_limit[l] = p.fe_limit;
+            g.scale[l] = p.map.scale;
+            g.inv_scale[l] = p.map.inv_scale;
+            g.inv_t_ipo[l] = p.map.inv_t_ipo;
+            g.aff_mass[l] = p.map.aff_mass;
+            g.half_limit[l] = p.map.half_limit;
+            g.fe_limit[l] = p.map.fe_limit;
             g.stiffness[l] = p.stiffness;
             g.damping[l] = p.damping;
             g.half_backlash[l] = p.half_backlash;
@@ -413,25 +414,7 @@ impl DriveLaneGroup {
 
     /// The servos' state in lanes (padding lanes and failed drives not live).
     fn gather(&self, all: &[Option<AxisServo>]) -> State {
-        let z = [0.0; LANES];
-        let mut st = State {
-            setpoint: z,
-            v_ff: z,
-            x: [z; N_STATE],
-            velocity: z,
-            periods_exact: [0; LANES],
-            live: [false; LANES],
-            has: [false; LANES],
-            side: z,
-            offset: z,
-            dry: [false; LANES],
-            speed: z,
-            push: z,
-            bound: z,
-            decay: z,
-            regime_mt_over_h: z,
-            cache: [(0.0, 0.0, 0.0); LANES],
-        };
+        let mut st = State::default();
         for (l, &s) in self.servos.iter().enumerate() {
             if let Some(servo) = all[s].as_ref() {
                 get(servo, &mut st, l);

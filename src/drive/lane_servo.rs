@@ -49,6 +49,7 @@ pub struct TwinLanes {
 
 /// The lanes' carried state over one block (gathered from the servos at its start and
 /// scattered back at its end, so that the servos hold it between blocks).
+#[derive(Default)]
 struct State {
     setpoint: Lanes,
     v_ff: Lanes,
@@ -210,14 +211,7 @@ impl TwinLanes {
 
     /// The servos' state in lanes (padding lanes and failed servos not live).
     fn gather(&self, all: &[Option<AxisServo>]) -> State {
-        let mut st = State {
-            setpoint: [0.0; LANES],
-            v_ff: [0.0; LANES],
-            x: [[0.0; LANES]; N_STATE],
-            velocity: [0.0; LANES],
-            periods_exact: [0; LANES],
-            live: [false; LANES],
-        };
+        let mut st = State::default();
         for (l, &s) in self.servos.iter().enumerate() {
             let Some(servo) = all[s].as_ref() else {
                 continue;

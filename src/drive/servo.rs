@@ -166,14 +166,14 @@ pub(super) const N_STATE: usize = 7;
 /// contact offset).
 pub(super) const N_TWIN_INPUT: usize = N_STATE + 2;
 
-/// What a lane servo ([`super::lane_servo`]) needs to step a linear twin's mapped period
-/// the way [`AxisServo::advance_twin`] does: the map's columns and the constants of the
-/// period's inputs and checks.
+/// What a lane servo needs to step a mapped period the way the scalar servo does: the
+/// period map's first `C` columns and the constants of the period's inputs and checks. A
+/// linear twin's ([`super::lane_servo`], [`AxisServo::advance_twin`]) is [`TwinPeriod`].
 #[derive(Clone, Copy, Debug)]
-pub(super) struct TwinPeriod {
-    /// The first [`N_TWIN_INPUT`] columns of the period map, rows `x_m v_m x_t v_t F ∫
-    /// x_m,tick` (positions relative to the previous setpoint).
-    pub cols: [[f64; N_STATE]; N_TWIN_INPUT],
+pub(super) struct MappedPeriod<const C: usize> {
+    /// Columns of the period map, rows `x_m v_m x_t v_t F ∫ x_m,tick` (positions relative
+    /// to the previous setpoint).
+    pub cols: [[f64; N_STATE]; C],
     /// SI units per interface unit and its inverse.
     pub scale: f64,
     pub inv_scale: f64,
@@ -187,20 +187,16 @@ pub(super) struct TwinPeriod {
     pub fe_limit: f64,
 }
 
+/// A linear twin's mapped period: the first [`N_TWIN_INPUT`] columns (no friction, no
+/// contact offset).
+pub(super) type TwinPeriod = MappedPeriod<N_TWIN_INPUT>;
+
 /// What a lane servo ([`super::lane_drive`]) needs to step a nonlinear drive's period the
 /// way [`AxisServo::advance`] does when the period map of friction slope 0 applies: its
-/// columns and the constants of the regime checks, SI.
+/// columns `[M | b_Δs | b_ff | b_fr | b_off]` and the constants of the regime checks, SI.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct DrivePeriod {
-    /// The columns of `[M | b_Δs | b_ff | b_fr | b_off]` at slope 0, rows as in
-    /// [`TwinPeriod`].
-    pub cols: [[f64; N_STATE]; N_INPUT],
-    pub scale: f64,
-    pub inv_scale: f64,
-    pub inv_t_ipo: f64,
-    pub aff_mass: f64,
-    pub half_limit: f64,
-    pub fe_limit: f64,
+    pub map: MappedPeriod<N_INPUT>,
     pub stiffness: f64,
     pub damping: f64,
     pub half_backlash: f64,
@@ -879,12 +875,9 @@ impl AxisServo {
         self.reversal
     }
 
-    /// The linear twin's mapped period for a lane servo; None for any other servo (first
-    /// order, dry friction, backlash, pre-sliding, no map), which steps on its own.
-    pub(super) fn twin_period(&self) -> Option<TwinPeriod> {
-        let exact = self.exact.as_deref().filter(|e| e.lti)?;
-        let map = exact.maps[0].get()?;
-        Some(TwinPeriod {
+    /// `map`'s first `C` columns with this servo's constants, for a lane servo.
+    fn mapped_period<const C: usize>(&self, map: &PeriodMap) -> MappedPeriod<C> {
+        MappedPeriod {
             cols: map.first_columns(),
             scale: self.scale,
             inv_scale: self.inv_scale,
@@ -892,7 +885,15 @@ impl AxisServo {
             aff_mass: self.aff_mass,
             half_limit: 0.5 * self.force_limit,
             fe_limit: self.fe_limit,
-        })
+        }
+    }
+
+    /// The linear twin's mapped period for a lane servo; None for any other servo (first
+    /// order, dry friction, backlash, pre-sliding, no map), which steps on its own.
+    pub(super) fn twin_period(&self) -> Option<TwinPeriod> {
+        let exact = self.exact.as_deref().filter(|e| e.lti)?;
+        let map = exact.maps[0].get()?;
+        Some(self.mapped_period(map))
     }
 
     /// A nonlinear drive's mapped period at friction slope 0 (the map's grid slope index 0)
@@ -907,13 +908,7 @@ impl AxisServo {
         let grid_slope = 0.0 * exact.slope_step;
         let map = exact.maps[0].get_or_init(|| self.period_map(grid_slope, true));
         Some(DrivePeriod {
-            cols: map.first_columns(),
-            scale: self.scale,
-            inv_scale: self.inv_scale,
-            inv_t_ipo: self.inv_t_ipo,
-            aff_mass: self.aff_mass,
-            half_limit: 0.5 * self.force_limit,
-            fe_limit: self.fe_limit,
+            map: self.mapped_period(map),
             stiffness: self.stiffness,
             damping: self.damping,
             half_backlash: self.half_backlash,

@@ -7,12 +7,13 @@ use crate::error::{Error, Result};
 
 /// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename, so a
 /// reader never sees a partial file and a failure leaves no partial file behind.
+///
+/// Not synced to disk (no `fsync`), as the traces and the output folder's swap are not:
+/// the promise is against a failed or killed run, not a power cut (docs/cli.md).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let tmp = temporary_path(path);
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
+        std::fs::File::create(&tmp)?.write_all(bytes)?;
         std::fs::rename(&tmp, path)
     })();
     result.map_err(|source| {

@@ -65,7 +65,8 @@ struct Chunk {
 pub(super) struct ParquetTrace {
     tmp: PathBuf,
     file: File,
-    /// Bytes not yet written (page headers), and the file's length with them.
+    /// Bytes not yet written (the file's magic before the first pages; the spare buffer
+    /// of [`Gather`] otherwise), and the file's length with them.
     pending: Vec<u8>,
     offset: u64,
     names: Vec<String>,
@@ -90,23 +91,42 @@ impl ParquetTrace {
         })
     }
 
-    /// Appends `bytes` to the file: small ones (headers) gathered, a column's values written
-    /// with the headers before them in one system call, with no copy.
-    fn write(&mut self, bytes: &[u8]) -> Result<()> {
-        self.offset += bytes.len() as u64;
-        if bytes.len() < 1 << 12 {
-            self.pending.extend_from_slice(bytes);
-            return Ok(());
+    /// Starts gathering pages, after the bytes not yet written.
+    fn gather<'a>(&mut self) -> Gather<'a> {
+        Gather {
+            small: std::mem::take(&mut self.pending),
+            large: Vec::new(),
         }
-        let mut slices = [IoSlice::new(&self.pending), IoSlice::new(bytes)];
+    }
+
+    /// Appends `bytes` to the pages being gathered.
+    fn push<'a>(&mut self, g: &mut Gather<'a>, bytes: &'a [u8]) {
+        self.offset += bytes.len() as u64;
+        g.push(bytes);
+    }
+
+    /// Writes the gathered pages in one system call (as few as the kernel takes), with no
+    /// copy of the columns: a whole row group at once, so that the kernel fills its page
+    /// cache in large pieces (22 writes of 32 kB cost about 0.3 ms more than one of 720 kB).
+    fn flush(&mut self, g: Gather<'_>) -> Result<()> {
+        let mut slices = g.slices();
         write_all_vectored(&mut self.file, &mut slices).map_err(write_error(&self.tmp))?;
-        self.pending.clear();
+        let mut spare = g.small;
+        spare.clear();
+        self.pending = spare;
         Ok(())
     }
 
-    /// Writes one page: its header (a dictionary page, or a data page of `encoding`), then
+    /// Adds one page: its header (a dictionary page, or a data page of `encoding`), then
     /// `data`, of `values` values.
-    fn page(&mut self, dictionary: bool, values: usize, encoding: i32, data: &[u8]) -> Result<()> {
+    fn page<'a>(
+        &mut self,
+        g: &mut Gather<'a>,
+        dictionary: bool,
+        values: usize,
+        encoding: i32,
+        data: &'a [u8],
+    ) {
         let mut h = Compact::new();
         h.i32(
             1,
@@ -128,27 +148,29 @@ impl ParquetTrace {
         }
         h.end();
         h.end();
-        self.write(&h.bytes)?;
-        self.write(data)
+        self.offset += h.bytes.len() as u64;
+        g.small.extend_from_slice(&h.bytes);
+        self.push(g, data);
     }
 
-    /// A plain-encoded column chunk of `values` values from `data`.
-    fn plain(
+    /// Adds a plain-encoded column chunk of `values` values from `data`.
+    fn plain<'a>(
         &mut self,
+        g: &mut Gather<'a>,
         physical: i32,
         values: usize,
-        data: &[u8],
+        data: &'a [u8],
         min_max: Option<([u8; 8], [u8; 8])>,
-    ) -> Result<Chunk> {
+    ) -> Chunk {
         let data_offset = self.offset;
-        self.page(false, values, PLAIN, data)?;
-        Ok(Chunk {
+        self.page(g, false, values, PLAIN, data);
+        Chunk {
             physical,
             dictionary_offset: None,
             data_offset,
             size: self.offset - data_offset,
             min_max,
-        })
+        }
     }
 
     /// Writes the rows of `block`, of the run `direction`, as one row group: every column
@@ -158,6 +180,11 @@ impl ParquetTrace {
     pub fn write_block(&mut self, block: &Block, direction: Direction) -> Result<()> {
         let rows = block.rows();
         let mut chunks = Vec::with_capacity(self.names.len());
+        // Parquet's unsigned 64-bit integers are stored as INT64 bits.
+        let mut lines = std::mem::take(&mut self.lines);
+        lines.clear();
+        lines.extend(block.column(LINE).iter().map(|&l| l as u64));
+        let mut g = self.gather();
         // direction: a dictionary of the run's name (plain: length, bytes), then one RLE run
         // of index 0 (bit width 1; the run's header is its length shifted left once).
         let name: &[u8] = if direction == Direction::Cw {
@@ -168,13 +195,13 @@ impl ParquetTrace {
         let dictionary_offset = self.offset;
         let mut dictionary = (name.len() as u32).to_le_bytes().to_vec();
         dictionary.extend_from_slice(name);
-        self.page(true, 1, PLAIN, &dictionary)?;
+        self.page(&mut g, true, 1, PLAIN, &dictionary);
         let data_offset = self.offset;
         let mut indices = Compact::new();
         indices.bytes.push(1);
         indices.varint((rows as u64) << 1);
         indices.bytes.push(0);
-        self.page(false, rows, RLE_DICTIONARY, &indices.bytes)?;
+        self.page(&mut g, false, rows, RLE_DICTIONARY, &indices.bytes);
         chunks.push(Chunk {
             physical: BYTE_ARRAY,
             dictionary_offset: Some(dictionary_offset),
@@ -183,19 +210,23 @@ impl ParquetTrace {
             min_max: None,
         });
         let time = block.column(TIME);
-        chunks.push(self.plain(DOUBLE, rows, time.to_byte_slice(), min_max_f64(time))?);
-        // Parquet's unsigned 64-bit integers are stored as INT64 bits.
-        let mut lines = std::mem::take(&mut self.lines);
-        lines.clear();
-        lines.extend(block.column(LINE).iter().map(|&l| l as u64));
+        chunks.push(self.plain(
+            &mut g,
+            DOUBLE,
+            rows,
+            time.to_byte_slice(),
+            min_max_f64(time),
+        ));
         let min_max = lines.iter().min().zip(lines.iter().max());
         let min_max = min_max.map(|(lo, hi)| (lo.to_le_bytes(), hi.to_le_bytes()));
-        chunks.push(self.plain(INT64, rows, lines.to_byte_slice(), min_max)?);
-        self.lines = lines;
+        chunks.push(self.plain(&mut g, INT64, rows, lines.to_byte_slice(), min_max));
         for k in std::iter::once(THETA).chain(AXES..block.width()) {
             let column = block.column(k);
-            chunks.push(self.plain(DOUBLE, rows, column.to_byte_slice(), None)?);
+            chunks.push(self.plain(&mut g, DOUBLE, rows, column.to_byte_slice(), None));
         }
+        let written = self.flush(g);
+        self.lines = lines;
+        written?;
         self.groups.push((rows, chunks));
         Ok(())
     }
@@ -212,7 +243,9 @@ impl ParquetTrace {
 
     /// Writes the centred deviations of row group `group`, its last column.
     pub fn write_centred(&mut self, group: usize, centred: &[f64]) -> Result<()> {
-        let chunk = self.plain(DOUBLE, centred.len(), centred.to_byte_slice(), None)?;
+        let mut g = self.gather();
+        let chunk = self.plain(&mut g, DOUBLE, centred.len(), centred.to_byte_slice(), None);
+        self.flush(g)?;
         self.groups[group].1.push(chunk);
         Ok(())
     }
@@ -220,13 +253,12 @@ impl ParquetTrace {
     /// Writes the footer and flushes the file (the caller renames it).
     pub fn finish(mut self) -> Result<()> {
         let footer = self.footer();
-        self.write(&footer)?;
-        self.write(&(footer.len() as u32).to_le_bytes())?;
-        self.write(b"PAR1")?;
-        let pending = std::mem::take(&mut self.pending);
-        self.file
-            .write_all(&pending)
-            .map_err(write_error(&self.tmp))
+        let length = (footer.len() as u32).to_le_bytes();
+        let mut g = self.gather();
+        for bytes in [&footer[..], &length, b"PAR1"] {
+            self.push(&mut g, bytes);
+        }
+        self.flush(g)
     }
 
     /// The file metadata (parquet.thrift's FileMetaData).
@@ -347,6 +379,36 @@ fn min_max_f64(values: &[f64]) -> Option<([u8; 8], [u8; 8])> {
         Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
     })?;
     Some((lo.to_le_bytes(), hi.to_le_bytes()))
+}
+
+/// Pages gathered for one write: headers and small pages copied into `small`, large pages
+/// (a block's column slices) borrowed, each written after `small[..at]` and before the rest.
+struct Gather<'a> {
+    small: Vec<u8>,
+    large: Vec<(usize, &'a [u8])>,
+}
+
+impl<'a> Gather<'a> {
+    fn push(&mut self, bytes: &'a [u8]) {
+        if bytes.len() < 1 << 12 {
+            self.small.extend_from_slice(bytes);
+        } else {
+            self.large.push((self.small.len(), bytes));
+        }
+    }
+
+    /// The bytes in file order.
+    fn slices(&self) -> Vec<IoSlice<'_>> {
+        let mut slices = Vec::with_capacity(2 * self.large.len() + 1);
+        let mut from = 0;
+        for &(at, bytes) in &self.large {
+            slices.push(IoSlice::new(&self.small[from..at]));
+            slices.push(IoSlice::new(bytes));
+            from = at;
+        }
+        slices.push(IoSlice::new(&self.small[from..]));
+        slices
+    }
 }
 
 /// Writes every byte of `slices` to `file`, in as few system calls as it takes.

@@ -295,7 +295,6 @@ impl CsvRuns {
                 block.centred_into(centring, &mut self.centred);
                 out.write_block(&block, direction, &self.centred)?;
             }
-            drop(reader);
             self.spill.clear()?;
             block.clear();
             self.spare.push(block);
@@ -413,8 +412,7 @@ impl ParquetRuns {
             centred_from_inputs(inputs, centring, &mut self.centred);
             out.write_centred(group, &self.centred)?;
         }
-        if let Some(reader) = spilled {
-            drop(reader);
+        if spilled.is_some() {
             self.spill.clear()?;
         }
         self.inputs.clear();
@@ -433,7 +431,7 @@ impl ParquetRuns {
     }
 }
 
-/// Reads `n` little-endian f64 from `reader` into `out` (emptied first).
+/// Reads `n` f64 (as [`SpillFile`] holds them) from `reader` into `out` (emptied first).
 fn read_f64s(reader: &mut impl Read, n: usize, out: &mut Vec<f64>) -> std::io::Result<()> {
     let mut bytes = vec![0u8; 8 * n];
     reader.read_exact(&mut bytes)?;
@@ -441,7 +439,7 @@ fn read_f64s(reader: &mut impl Read, n: usize, out: &mut Vec<f64>) -> std::io::R
     out.extend(
         bytes
             .chunks_exact(8)
-            .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes"))),
+            .map(|b| f64::from_ne_bytes(b.try_into().expect("8 bytes"))),
     );
     Ok(())
 }

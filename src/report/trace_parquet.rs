@@ -23,13 +23,13 @@ compile_error!(
 );
 
 use std::fs::File;
-use std::io::{IoSlice, Write};
+use std::io::IoSlice;
 use std::path::PathBuf;
 
 use arrow::datatypes::ToByteSlice;
 
 use super::thrift_compact::Compact;
-use super::trace_rows::{write_error, Block, AXES, LINE, THETA, TIME};
+use super::trace_rows::{write_all_vectored, write_error, Block, AXES, LINE, THETA, TIME};
 use crate::error::Result;
 use crate::input::program::Direction;
 
@@ -409,18 +409,4 @@ impl<'a> Gather<'a> {
         slices.push(IoSlice::new(&self.small[from..]));
         slices
     }
-}
-
-/// Writes every byte of `slices` to `file`, in as few system calls as it takes.
-fn write_all_vectored(file: &mut File, mut slices: &mut [IoSlice<'_>]) -> std::io::Result<()> {
-    IoSlice::advance_slices(&mut slices, 0);
-    while !slices.is_empty() {
-        match file.write_vectored(slices) {
-            Ok(0) => return Err(std::io::ErrorKind::WriteZero.into()),
-            Ok(n) => IoSlice::advance_slices(&mut slices, n),
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(())
 }

@@ -5,11 +5,14 @@
 //!
 //! A [`Block`] holds up to [`BLOCK_ROWS`] rows, each column a slice of that many values, so
 //! that a block is a row group of `trace.parquet` as it stands (a column chunk is a slice),
-//! and a spilled block goes to disk and back as one read or write ([`SpillFile`]).
+//! and a spilled block goes to disk as one write of its columns, with no copy, and comes back
+//! a column a read ([`SpillFile`]).
 
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Seek, Write};
+use std::io::{IoSlice, Read, Seek, Write};
 use std::path::{Path, PathBuf};
+
+use arrow::datatypes::ToByteSlice;
 
 use crate::error::{Error, Result};
 use crate::measure::ballbar::Centring;
@@ -45,10 +48,12 @@ pub(super) fn write_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ 
 
 /// A binary temporary file for what a run holds past the memory it may use (see
 /// `super::trace::RAW_IN_MEMORY`): created at the first spill, emptied at each run's end for
-/// the next, removed when dropped.
+/// the next, removed when dropped. Values go in as they are in memory (native byte order:
+/// the same process reads them back), in large writes and reads, so it has no buffer of its
+/// own.
 pub(super) struct SpillFile {
     path: PathBuf,
-    file: Option<BufWriter<File>>,
+    file: Option<File>,
 }
 
 impl SpillFile {
@@ -61,7 +66,7 @@ impl SpillFile {
     }
 
     /// The file to append to, created at the first call.
-    pub fn writer(&mut self) -> Result<&mut BufWriter<File>> {
+    pub fn writer(&mut self) -> Result<&mut File> {
         if self.file.is_none() {
             let file = File::options()
                 .read(true)
@@ -70,26 +75,24 @@ impl SpillFile {
                 .truncate(true)
                 .open(&self.path)
                 .map_err(write_error(&self.path))?;
-            self.file = Some(BufWriter::with_capacity(1 << 16, file));
+            self.file = Some(file);
         }
         Ok(self.file.as_mut().expect("created above"))
     }
 
     /// What was written since the last [`SpillFile::clear`], from its start.
-    pub fn reader(&mut self) -> Result<BufReader<&File>> {
+    pub fn reader(&mut self) -> Result<&File> {
         self.writer()?;
-        let (path, out) = (&self.path, self.file.as_mut().expect("created above"));
-        out.flush().map_err(write_error(path))?;
-        out.get_mut().rewind().map_err(write_error(path))?;
-        Ok(BufReader::with_capacity(1 << 16, out.get_ref()))
+        let (path, file) = (&self.path, self.file.as_mut().expect("created above"));
+        file.rewind().map_err(write_error(path))?;
+        Ok(file)
     }
 
     /// Empties the file for the next run.
     pub fn clear(&mut self) -> Result<()> {
-        let Some(out) = self.file.as_mut() else {
+        let Some(file) = self.file.as_mut() else {
             return Ok(());
         };
-        let file = out.get_mut();
         file.rewind()
             .and_then(|()| file.set_len(0))
             .map_err(write_error(&self.path))
@@ -199,15 +202,13 @@ impl Block {
         }
     }
 
-    /// Writes a full block's values, little-endian, to `out` (a spill).
-    pub fn write_raw(&self, out: &mut impl Write) -> std::io::Result<()> {
-        let mut bytes = Vec::with_capacity(8 * BLOCK_ROWS);
-        for column in self.values.chunks_exact(STRIDE) {
-            bytes.clear();
-            bytes.extend(column[..BLOCK_ROWS].iter().flat_map(|v| v.to_le_bytes()));
-            out.write_all(&bytes)?;
-        }
-        Ok(())
+    /// Writes a full block's values, column after column as they are in memory, to `out` (a
+    /// spill): one vectored write of the columns, no copy.
+    pub fn write_raw(&self, out: &mut File) -> std::io::Result<()> {
+        let mut columns: Vec<IoSlice<'_>> = (self.values.chunks_exact(STRIDE))
+            .map(|column| IoSlice::new(column[..BLOCK_ROWS].to_byte_slice()))
+            .collect();
+        write_all_vectored(out, &mut columns)
     }
 
     /// Reads a full block written by [`Block::write_raw`] from `input`.
@@ -216,7 +217,7 @@ impl Block {
         for column in self.values.chunks_exact_mut(STRIDE) {
             input.read_exact(&mut bytes)?;
             for (v, b) in column[..BLOCK_ROWS].iter_mut().zip(bytes.chunks_exact(8)) {
-                *v = f64::from_le_bytes(b.try_into().expect("8 bytes"));
+                *v = f64::from_ne_bytes(b.try_into().expect("8 bytes"));
             }
         }
         self.rows = BLOCK_ROWS;
@@ -240,4 +241,21 @@ pub(super) fn centred_from_inputs(inputs: &[f64], centring: Option<Centring>, ou
 #[inline(always)]
 fn centred(dev: f64, sin_cos: (f64, f64), centring: Centring) -> f64 {
     dev - centring.offset_um_at(sin_cos)
+}
+
+/// Writes every byte of `slices` to `file`, in as few system calls as it takes.
+pub(super) fn write_all_vectored(
+    file: &mut File,
+    mut slices: &mut [IoSlice<'_>],
+) -> std::io::Result<()> {
+    IoSlice::advance_slices(&mut slices, 0);
+    while !slices.is_empty() {
+        match file.write_vectored(slices) {
+            Ok(0) => return Err(std::io::ErrorKind::WriteZero.into()),
+            Ok(n) => IoSlice::advance_slices(&mut slices, n),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
 }

@@ -47,8 +47,8 @@ pub fn sin_cos_deg(theta_deg: f64) -> (f64, f64) {
     if !(theta_deg.abs() < 1e12) {
         return theta_deg.to_radians().sin_cos();
     }
-    let (k, sin, cos) = reduced(theta_deg);
-    in_quadrant(k, sin, cos)
+    let (quadrant, sin, cos) = reduced(theta_deg);
+    in_quadrant(quadrant, sin, cos)
 }
 
 /// [`sin_cos_deg`] of two angles at once, bit for bit ([`F64x2`]: the reduction and the
@@ -58,20 +58,21 @@ pub fn sin_cos_deg_pair(a_deg: f64, b_deg: f64) -> [(f64, f64); 2] {
     if !(a_deg.abs() < 1e12 && b_deg.abs() < 1e12) {
         return [sin_cos_deg(a_deg), sin_cos_deg(b_deg)];
     }
-    let (k, sin, cos) = reduced(F64x2::new(a_deg, b_deg));
-    let (k, sin, cos) = (k.lanes(), sin.lanes(), cos.lanes());
+    let (quadrant, sin, cos) = reduced(F64x2::new(a_deg, b_deg));
+    let (quadrant, sin, cos) = (quadrant.lanes(), sin.lanes(), cos.lanes());
     [
-        in_quadrant(k[0], sin[0], cos[0]),
-        in_quadrant(k[1], sin[1], cos[1]),
+        in_quadrant(quadrant[0], sin[0], cos[0]),
+        in_quadrant(quadrant[1], sin[1], cos[1]),
     ]
 }
 
-/// The quadrant `k` of θ (`round(θ / 90)`, deg) and the sine and cosine of the remainder
-/// `θ - 90 k` (see the module), for `|θ| < 10¹²`.
+/// The quadrant of θ as `k + 1.5 · 2⁵²` (`k = round(θ / 90)`, deg) and the sine and cosine
+/// of the remainder `θ - 90 k` (see the module), for `|θ| < 10¹²`.
 #[inline(always)]
 fn reduced<T: Lanes>(theta_deg: T) -> (T, T, T) {
     let c = T::from;
-    let k = (theta_deg * c(1.0 / 90.0) + c(ROUNDER)) - c(ROUNDER);
+    let quadrant = theta_deg * c(1.0 / 90.0) + c(ROUNDER);
+    let k = quadrant - c(ROUNDER);
     let r = theta_deg - c(90.0) * k;
     let x = r * c(std::f64::consts::PI / 180.0);
     let z = x * x;
@@ -81,13 +82,15 @@ fn reduced<T: Lanes>(theta_deg: T) -> (T, T, T) {
     let w = c(1.0) - half;
     let tail = z * z * (c(C1) + z * (c(C2) + z * (c(C3) + z * (c(C4) + z * (c(C5) + z * c(C6))))));
     let cos = w + (((c(1.0) - w) - half) + tail);
-    (k, sin, cos)
+    (quadrant, sin, cos)
 }
 
-/// `(sin θ, cos θ)` from the remainder's, swapped and negated for the quadrant `k`.
+/// `(sin θ, cos θ)` from the remainder's, swapped and negated for θ's quadrant `k mod 4`,
+/// given as `k + 1.5 · 2⁵²`: a double in [2⁵², 2⁵³) (|k| < 2⁵¹), whose ulp is 1, so its
+/// significand's low bits are those of `k + 2⁵¹`, and `2⁵¹ ≡ 0 (mod 4)`.
 #[inline(always)]
-fn in_quadrant(k: f64, sin: f64, cos: f64) -> (f64, f64) {
-    match (k as i64) & 3 {
+fn in_quadrant(quadrant: f64, sin: f64, cos: f64) -> (f64, f64) {
+    match quadrant.to_bits() & 3 {
         0 => (sin, cos),
         1 => (cos, -sin),
         2 => (-sin, -cos),

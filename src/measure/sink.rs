@@ -87,7 +87,7 @@ impl BarGeometry {
 
     /// [`BarGeometry::read`] with [`BarGeometry::needs_full_chain`] known (a test of every
     /// location error: about a hundred instructions a sample, when asked each time).
-    #[inline]
+    #[inline(always)]
     pub fn read_on(&self, full_chain: bool, s: &Sample) -> BarReading {
         let c = self.read_commanded(&s.commanded);
         let deviation = |q| self.deviation_on(full_chain, q, &s.commanded, &c);

@@ -92,7 +92,7 @@ pub use location::{AxisLine, LocationErrors, LocationParam};
 
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Vector3};
 
-use crate::numeric::sin_cos_deg;
+use crate::numeric::{sin_cos_deg_pair, F64x2, Lanes};
 use crate::{Axis, AxisVec};
 
 /// Which of the two inverse-kinematics solutions to take.
@@ -251,22 +251,20 @@ impl Kinematics {
     }
 
     /// Sine and cosine of the table axis (C, or A for trt-ab) and of the tilt at `q`
-    /// ([`RotarySinCos`]).
+    /// ([`RotarySinCos`]; both angles in one pass, [`sin_cos_deg_pair`]).
     #[inline]
     pub fn rotary_sin_cos(&self, q: &AxisVec) -> RotarySinCos {
         let tilt = self.layout.tilt_axis().map_or(0.0, |t| q[t]);
         let table = self.layout.table_axis().map_or(0.0, |t| q[t]);
-        RotarySinCos {
-            c: sin_cos_deg(table),
-            tilt: sin_cos_deg(tilt),
-        }
+        let [c, tilt] = sin_cos_deg_pair(table, tilt);
+        RotarySinCos { c, tilt }
     }
 
     /// [`Kinematics::rotary_sin_cos`] at `q` near `reference` (whose values are `at`), by the
     /// angle-addition formulas with `sin δ`, `cos δ` of the small difference δ from their
-    /// series: `sin(a + δ) = sin a cos δ + cos a sin δ`. Within a few ulp of `sin_cos` (the
-    /// bar's length to 10⁻¹³ mm), at a fraction of its cost; `sin_cos` itself when the angles
-    /// are more than 0.01 rad apart.
+    /// series: `sin(a + δ) = sin a cos δ + cos a sin δ` ([`add_small_angle`], both angles in
+    /// one pass). Within a few ulp of `sin_cos` (the bar's length to 10⁻¹³ mm), at a fraction
+    /// of its cost; `sin_cos` itself when the angles are more than 0.01 rad apart.
     #[inline]
     pub fn rotary_sin_cos_near(
         &self,
@@ -274,14 +272,28 @@ impl Kinematics {
         reference: &AxisVec,
         at: &RotarySinCos,
     ) -> RotarySinCos {
-        let tilt = self.layout.tilt_axis();
-        let angle = |a: Option<Axis>, sc: (f64, f64)| match a {
-            None => sc,
-            Some(a) => add_small_angle(q[a].to_radians(), reference[a].to_radians(), sc),
+        let (table, tilt) = (self.layout.table_axis(), self.layout.tilt_axis());
+        let rad = |a: Option<Axis>, v: &AxisVec| a.map_or(0.0, |a| v[a].to_radians());
+        let (a, r) = (
+            [rad(table, q), rad(tilt, q)],
+            [rad(table, reference), rad(tilt, reference)],
+        );
+        let d = F64x2::new(a[0], a[1]) - F64x2::new(r[0], r[1]);
+        let (sin, cos) = small_angle_added(
+            d,
+            F64x2::new(at.c.0, at.tilt.0),
+            F64x2::new(at.c.1, at.tilt.1),
+        );
+        let (d, sin, cos) = (d.lanes(), sin.lanes(), cos.lanes());
+        // Lane by lane what `add_small_angle` gives; an angle the layout lacks keeps `at`'s.
+        let lane = |i: usize, axis: Option<Axis>, at: (f64, f64)| match axis {
+            None => at,
+            Some(_) if !(d[i].abs() <= SMALL_ANGLE_RAD) => a[i].sin_cos(),
+            Some(_) => (sin[i], cos[i]),
         };
         RotarySinCos {
-            c: angle(self.layout.table_axis(), at.c),
-            tilt: angle(tilt, at.tilt),
+            c: lane(0, table, at.c),
+            tilt: lane(1, tilt, at.tilt),
         }
     }
 
@@ -390,11 +402,27 @@ impl Kinematics {
             return ToolPose { tip, axis };
         }
         let r_inv = self.rotation_of(angles).inverse();
-        let tip_m = Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
         ToolPose {
-            tip: Point3::from(r_inv * (tip_m - self.pivot_mm)),
+            tip: self.tip_turned_back(q, &r_inv),
             axis: r_inv * Vector3::z(),
         }
+    }
+
+    /// The tool tip of [`Kinematics::forward_with`] alone, table frame, mm (the ball bar's θ
+    /// needs no tool axis).
+    #[inline]
+    pub fn tip_with(&self, q: &AxisVec, angles: &RotarySinCos) -> Point3<f64> {
+        if let Some(chain) = &self.general {
+            return chain.tool_in_workpiece(q, 0.0).0;
+        }
+        self.tip_turned_back(q, &self.rotation_of(angles).inverse())
+    }
+
+    /// `R⁻¹ (tip - pivot)`: the machine tip at `q`'s X Y Z in the table frame, `r_inv` = R⁻¹.
+    #[inline(always)]
+    fn tip_turned_back(&self, q: &AxisVec, r_inv: &Rotation3<f64>) -> Point3<f64> {
+        let tip_m = Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
+        Point3::from(r_inv * (tip_m - self.pivot_mm))
     }
 
     /// Inverse kinematics on `branch`, with C unwrapped near `previous_c_deg` (and kept
@@ -503,22 +531,34 @@ pub struct RotarySinCos {
     pub tilt: (f64, f64),
 }
 
+/// Largest angle step `|a - r|` (rad) that [`add_small_angle`] takes by its series.
+const SMALL_ANGLE_RAD: f64 = 0.01;
+
 /// `(sin a, cos a)` from `(sin r, cos r)` for `a` near `r` (rad): the angle-addition formulas
 /// with the series of `sin δ`, `cos δ` for `δ = a - r` (to `δ⁷` and `δ⁶`, whose remainders
 /// are below 10⁻²² for `|δ| ≤ 0.01`); `sin_cos` beyond that.
 #[inline]
 pub fn add_small_angle(a: f64, r: f64, (sin_r, cos_r): (f64, f64)) -> (f64, f64) {
     let d = a - r;
-    if !(d.abs() <= 0.01) {
+    if !(d.abs() <= SMALL_ANGLE_RAD) {
         return a.sin_cos();
     }
+    small_angle_added(d, sin_r, cos_r)
+}
+
+/// `(sin(r + δ), cos(r + δ))` from `sin r`, `cos r` and the series of `sin δ`, `cos δ`
+/// ([`add_small_angle`]), for one angle or two ([`F64x2`]).
+#[inline(always)]
+fn small_angle_added<T: Lanes>(d: T, sin_r: T, cos_r: T) -> (T, T) {
+    let c = T::from;
     let d2 = d * d;
     // The series' divisions as products by the reciprocals (a rounding each, far below the
     // 10⁻²² truncation; products do not stall the pipeline as divisions do).
-    let sin_d =
-        d * (1.0 - d2 * (1.0 / 6.0) * (1.0 - d2 * (1.0 / 20.0) * (1.0 - d2 * (1.0 / 42.0))));
+    let sin_d = d
+        * (c(1.0)
+            - d2 * c(1.0 / 6.0) * (c(1.0) - d2 * c(1.0 / 20.0) * (c(1.0) - d2 * c(1.0 / 42.0))));
     // cos δ - 1, kept apart so that the small terms are not lost against 1.
-    let cos_d_m1 = -d2 * 0.5 * (1.0 - d2 * (1.0 / 12.0) * (1.0 - d2 * (1.0 / 30.0)));
+    let cos_d_m1 = -d2 * c(0.5) * (c(1.0) - d2 * c(1.0 / 12.0) * (c(1.0) - d2 * c(1.0 / 30.0)));
     (
         sin_r + (sin_r * cos_d_m1 + cos_r * sin_d),
         cos_r + (cos_r * cos_d_m1 - sin_r * sin_d),

@@ -3,7 +3,9 @@
 //! Outputs: f64 results bit for bit the same on every CPU, and fixed-decimal text.
 
 pub mod fixed;
+pub mod pair;
 pub mod trig;
 
 pub use fixed::{push_fixed, push_fixed_bytes, push_fixed_bytes_const};
-pub use trig::sin_cos_deg;
+pub use pair::{F64x2, Lanes};
+pub use trig::{sin_cos_deg, sin_cos_deg_pair};

@@ -20,6 +20,8 @@
 //! (docs/performance.md), and `libm::sincos` on the same reduced `x` differs in the last bit
 //! for about 0.1 % of angles, which changes the bundled outputs (blocks, summaries, fits).
 
+use super::pair::{F64x2, Lanes};
+
 const S1: f64 = -1.666_666_666_666_663_243_48e-1;
 const S2: f64 = 8.333_333_333_322_489_461_24e-3;
 const S3: f64 = -1.984_126_982_985_794_931_34e-4;
@@ -45,16 +47,50 @@ pub fn sin_cos_deg(theta_deg: f64) -> (f64, f64) {
     if !(theta_deg.abs() < 1e12) {
         return theta_deg.to_radians().sin_cos();
     }
-    let k = (theta_deg * (1.0 / 90.0) + ROUNDER) - ROUNDER;
-    let r = theta_deg - 90.0 * k;
-    let x = r * (std::f64::consts::PI / 180.0);
+    let (quadrant, sin, cos) = reduced(theta_deg);
+    in_quadrant(quadrant, sin, cos)
+}
+
+/// [`sin_cos_deg`] of two angles at once, bit for bit ([`F64x2`]: the reduction and the
+/// polynomials of both in one pass).
+#[inline]
+pub fn sin_cos_deg_pair(a_deg: f64, b_deg: f64) -> [(f64, f64); 2] {
+    if !(a_deg.abs() < 1e12 && b_deg.abs() < 1e12) {
+        return [sin_cos_deg(a_deg), sin_cos_deg(b_deg)];
+    }
+    let (quadrant, sin, cos) = reduced(F64x2::new(a_deg, b_deg));
+    let (quadrant, sin, cos) = (quadrant.lanes(), sin.lanes(), cos.lanes());
+    [
+        in_quadrant(quadrant[0], sin[0], cos[0]),
+        in_quadrant(quadrant[1], sin[1], cos[1]),
+    ]
+}
+
+/// The quadrant of θ as `k + 1.5 · 2⁵²` (`k = round(θ / 90)`, deg) and the sine and cosine
+/// of the remainder `θ - 90 k` (see the module), for `|θ| < 10¹²`.
+#[inline(always)]
+fn reduced<T: Lanes>(theta_deg: T) -> (T, T, T) {
+    let c = T::from;
+    let quadrant = theta_deg * c(1.0 / 90.0) + c(ROUNDER);
+    let k = quadrant - c(ROUNDER);
+    let r = theta_deg - c(90.0) * k;
+    let x = r * c(std::f64::consts::PI / 180.0);
     let z = x * x;
-    let sin = x + z * x * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
-    let half = 0.5 * z;
-    let w = 1.0 - half;
-    let tail = z * z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
-    let cos = w + (((1.0 - w) - half) + tail);
-    match (k as i64) & 3 {
+    let sin =
+        x + z * x * (c(S1) + z * (c(S2) + z * (c(S3) + z * (c(S4) + z * (c(S5) + z * c(S6))))));
+    let half = c(0.5) * z;
+    let w = c(1.0) - half;
+    let tail = z * z * (c(C1) + z * (c(C2) + z * (c(C3) + z * (c(C4) + z * (c(C5) + z * c(C6))))));
+    let cos = w + (((c(1.0) - w) - half) + tail);
+    (quadrant, sin, cos)
+}
+
+/// `(sin θ, cos θ)` from the remainder's, swapped and negated for θ's quadrant `k mod 4`,
+/// given as `k + 1.5 · 2⁵²`: a double in [2⁵², 2⁵³) (|k| < 2⁵¹), whose ulp is 1, so its
+/// significand's low bits are those of `k + 2⁵¹`, and `2⁵¹ ≡ 0 (mod 4)`.
+#[inline(always)]
+fn in_quadrant(quadrant: f64, sin: f64, cos: f64) -> (f64, f64) {
+    match quadrant.to_bits() & 3 {
         0 => (sin, cos),
         1 => (cos, -sin),
         2 => (-sin, -cos),
@@ -94,6 +130,24 @@ mod tests {
             theta += 0.012_345_678_9 * std::f64::consts::E;
         }
         assert!(worst <= 3.0 * f64::EPSILON, "worst difference {worst:e}");
+    }
+
+    #[test]
+    fn the_pair_gives_each_angle_the_bits_of_the_single_one() {
+        let mut angles = vec![0.0, -0.0, 90.0, -45.0, 45.0, 135.0, 1e12, -1e13, f64::NAN];
+        let mut theta: f64 = -1000.0;
+        while theta < 1000.0 {
+            let edge = 45.0 * (theta / 45.0).round();
+            angles.extend([theta, edge, edge.next_up(), edge.next_down(), 1e-9 * theta]);
+            theta += 0.012_345_678_9 * std::f64::consts::PI;
+        }
+        let bits = |(s, c): (f64, f64)| (s.to_bits(), c.to_bits());
+        for (i, &a) in angles.iter().enumerate() {
+            let b = angles[(i * 7919 + 13) % angles.len()];
+            let [pa, pb] = sin_cos_deg_pair(a, b);
+            assert_eq!(bits(pa), bits(sin_cos_deg(a)), "{a:e} (with {b:e})");
+            assert_eq!(bits(pb), bits(sin_cos_deg(b)), "{b:e} (with {a:e})");
+        }
     }
 
     #[test]

@@ -185,7 +185,7 @@ impl TraceSink {
     /// Records `s` with the ball bar's reading `r` of it (already taken by the ball bar, so
     /// the kinematics run once per sample); skips samples between every `every`-th one.
     pub fn push_reading(&mut self, s: &Sample, r: &BarReading) -> Result<()> {
-        if self.geometry.is_none() || s.index % self.every != 0 {
+        if self.geometry.is_none() || (self.every > 1 && s.index % self.every != 0) {
             return Ok(());
         }
         if self.rows >= self.max_rows {
@@ -200,15 +200,12 @@ impl TraceSink {
         if self.filling.as_ref().is_none_or(Block::is_full) {
             self.next_block()?;
         }
-        let mut axes = [[0.0; 3]; Axis::ALL.len()];
-        for (values, &a) in axes.iter_mut().zip(self.axes) {
-            *values = [s.commanded[a], s.actual[a], s.following_error[a]];
-        }
         let (sin, cos) = r.theta_sin_cos;
         let block = self.filling.as_mut().expect("a block with room");
         block.push(
             [s.time_s, s.line as f64, r.theta_deg, sin, cos],
-            &axes[..self.axes.len()],
+            self.axes,
+            [&s.commanded, &s.actual, &s.following_error],
             [r.nonlinear_um, r.deviation_um],
         );
         Ok(())

@@ -16,6 +16,7 @@ use arrow::datatypes::ToByteSlice;
 
 use crate::error::{Error, Result};
 use crate::measure::ballbar::Centring;
+use crate::{Axis, AxisVec};
 
 /// Rows a block holds: a row group of `trace.parquet` (4 s of machine time at 1 ms; about
 /// 700 kB for five axes, so that a block that is reused touches few pages).
@@ -134,24 +135,34 @@ impl Block {
         self.rows == BLOCK_ROWS
     }
 
-    /// Appends a row: time, line, θ, sin θ, cos θ (`head`), each axis's commanded and actual
-    /// position and following error (`axes`), the nonlinear signature and dL (`tail`).
+    /// Appends a row: time, line, θ, sin θ, cos θ (`head`), each of `axes`' commanded and
+    /// actual position and following error (`[commanded, actual, error][j][axis]`), the
+    /// nonlinear signature and dL (`tail`). Each value goes straight to its column.
     #[inline]
-    pub fn push(&mut self, head: [f64; 5], axes: &[[f64; 3]], tail: [f64; 2]) {
-        debug_assert!(5 + 3 * axes.len() + 2 == self.width && self.rows < BLOCK_ROWS);
+    pub fn push(
+        &mut self,
+        head: [f64; 5],
+        axes: &[Axis],
+        [commanded, actual, error]: [&AxisVec; 3],
+        tail: [f64; 2],
+    ) {
+        debug_assert!(AXES + 3 * axes.len() + 2 == self.width);
         const G: usize = STRIDE;
-        let (r, v) = (self.rows, &mut self.values);
+        let r = self.rows;
+        assert!(r < BLOCK_ROWS, "a block with room");
+        // Split so that each index below is known in bounds from `r < BLOCK_ROWS` alone.
+        let (head_columns, rest) = self.values.split_at_mut(AXES * G);
         for (k, x) in head.into_iter().enumerate() {
-            v[k * G + r] = x;
+            head_columns[k * G + r] = x;
         }
-        for (i, axis) in axes.iter().enumerate() {
-            for (j, &x) in axis.iter().enumerate() {
-                v[(AXES + 3 * i + j) * G + r] = x;
-            }
+        let (axis_columns, tail_columns) = rest.split_at_mut(3 * G * axes.len());
+        for (columns, &a) in axis_columns.chunks_exact_mut(3 * G).zip(axes) {
+            columns[r] = commanded[a];
+            columns[G + r] = actual[a];
+            columns[2 * G + r] = error[a];
         }
-        let k = AXES + 3 * axes.len();
-        v[k * G + r] = tail[0];
-        v[(k + 1) * G + r] = tail[1];
+        tail_columns[r] = tail[0];
+        tail_columns[G + r] = tail[1];
         self.rows += 1;
     }
 

@@ -656,15 +656,19 @@ fn from_total_order_key(key: i64) -> f64 {
 
 /// Noise standard deviation from the differences of neighbouring filled bins, um.
 fn noise_sigma(trace: &[f64], filled: &[bool]) -> f64 {
-    let idx: Vec<usize> = (0..trace.len()).filter(|&i| filled[i]).collect();
-    let mut diffs: Vec<f64> = idx
-        .iter()
-        .zip(idx.iter().cycle().skip(1))
-        .map(|(&i, &j)| (trace[j] - trace[i]).abs())
-        .collect();
-    if diffs.is_empty() {
+    let Some(first) = (0..trace.len()).find(|&i| filled[i]) else {
         return 0.0;
+    };
+    // Each filled bin to the next one around the circle, the last back to the first.
+    let mut diffs = Vec::with_capacity(trace.len());
+    let mut previous = first;
+    for j in first + 1..trace.len() {
+        if filled[j] {
+            diffs.push((trace[j] - trace[previous]).abs());
+            previous = j;
+        }
     }
+    diffs.push((trace[first] - trace[previous]).abs());
     1.4826 * median(&mut diffs) / 2f64.sqrt()
 }
 
@@ -827,14 +831,15 @@ impl<'a> ShapeFit<'a> {
         };
         // The steps' part of the fit, Σ_s h_s u_s(i) = Σ_{k_s ≤ i} h_s - (i/n) Σ_s h_s: the
         // first sum grows as i passes each k_s (in `order`, reversed to increasing bins).
-        let heights: Vec<f64> = x.iter().skip(FOURIER).copied().collect();
+        let x = x.as_slice();
+        let heights: Vec<f64> = x[FOURIER..].to_vec();
         let total: f64 = heights.iter().sum();
         let mut passed = 0.0;
         let mut pending = order.iter().rev().peekable();
         let fit = (0..n)
             .map(|i| {
                 self.row(i, &mut r);
-                let smooth: f64 = r.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
+                let smooth: f64 = r.iter().zip(&x[..FOURIER]).map(|(a, b)| a * b).sum();
                 while let Some(&&s) = pending.peek().filter(|&&&s| step_indices[s] <= i) {
                     passed += heights[s];
                     pending.next();

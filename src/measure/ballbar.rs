@@ -1360,4 +1360,44 @@ mod tests {
             );
         }
     }
+
+    /// A trace that is exactly a smooth shape plus two steps is fitted exactly: the step
+    /// heights and every bin, with the steps given in either order, from one `ShapeFit` of
+    /// the trace after a fit without steps (the sums it shares), on the traces' bins and on
+    /// another bin count.
+    #[test]
+    fn a_shape_with_steps_is_fitted_exactly() {
+        for n in [N_BINS, 360] {
+            let (k1, k2) = (n / 7, 5 * n / 8);
+            let u = |k: usize, i: usize| f64::from(u8::from(i >= k)) - i as f64 / n as f64;
+            let v: Vec<f64> = (0..n)
+                .map(|i| {
+                    let t = std::f64::consts::TAU * i as f64 / n as f64;
+                    2.0 + 0.5 * (3.0 * t).cos() - 0.3 * t.sin()
+                        + 0.2 * (6.0 * t).sin()
+                        + 1.5 * u(k1, i)
+                        - 0.7 * u(k2, i)
+                })
+                .collect();
+            let trig = unit_circle(n);
+            let shape = ShapeFit::new(&v, &trig);
+            let (smooth, none) = shape.fit(&[]);
+            assert!(none.is_empty());
+            assert!(smooth.iter().zip(&v).any(|(f, x)| (f - x).abs() > 0.1));
+            for steps in [[k1, k2], [k2, k1]] {
+                let (fit, heights) = shape.fit(&steps);
+                let want = if steps[0] == k1 {
+                    [1.5, -0.7]
+                } else {
+                    [-0.7, 1.5]
+                };
+                for (h, w) in heights.iter().zip(want) {
+                    assert!((h - w).abs() < 1e-9, "{n}: {h} against {w}");
+                }
+                for (f, x) in fit.iter().zip(&v) {
+                    assert!((f - x).abs() < 1e-9, "{n}: {f} against {x}");
+                }
+            }
+        }
+    }
 }

@@ -742,33 +742,38 @@ impl<'a> ShapeFit<'a> {
             atb_fourier: [0.0; FOURIER],
             moment_v: 0.0,
         };
-        let mut r = [0.0; FOURIER];
         let (mut moment, mut atb, mut moment_v) = ([0.0; FOURIER], [0.0; FOURIER], 0.0);
         for i in (0..n).rev() {
-            fit.row(i, &mut r);
             let (vi, fi) = (v[i], i as f64);
-            for j in 0..FOURIER {
-                moment[j] += fi * r[j];
-                atb[j] += r[j] * vi;
-            }
+            // Column 0 is 1.
+            moment[0] += fi * 1.0;
+            atb[0] += 1.0 * vi;
+            fit.each_harmonic(i, |j, cos, sin| {
+                moment[j] += fi * cos;
+                atb[j] += cos * vi;
+                moment[j + 1] += fi * sin;
+                atb[j + 1] += sin * vi;
+            });
             moment_v += fi * vi;
         }
         (fit.moment, fit.atb_fourier, fit.moment_v) = (moment, atb, moment_v);
         fit
     }
 
-    /// The Fourier part of row i of A: 1, then cos and sin of harmonic k (entry (k i) mod n).
+    /// The Fourier part of row i of A after its leading 1: `f(j, cos, sin)` for each harmonic
+    /// k, whose cos and sin are columns j = 2k - 1 and j + 1 (entry (k i) mod n of the table).
     #[inline(always)]
-    fn row(&self, i: usize, r: &mut [f64; FOURIER]) {
+    fn each_harmonic(&self, i: usize, mut f: impl FnMut(usize, f64, f64)) {
         let n = self.v.len();
-        r[0] = 1.0;
+        let trig = &self.trig[..n];
         let mut m = 0;
         for k in 1..=SMOOTH_ORDER {
             m += i; // (k i) mod n: both terms below n
             if m >= n {
                 m -= n;
             }
-            (r[2 * k - 1], r[2 * k]) = self.trig[m];
+            let (cos, sin) = trig[m];
+            f(2 * k - 1, cos, sin);
         }
     }
 
@@ -782,16 +787,16 @@ impl<'a> ShapeFit<'a> {
         let mut suffix = vec![[0.0; FOURIER]; step_indices.len()];
         let mut suffix_v = vec![0.0; step_indices.len()];
         let (mut sum, mut sum_v) = ([0.0; FOURIER], 0.0);
-        let mut r = [0.0; FOURIER];
         let mut next = 0;
         for i in (0..n).rev() {
             if next == order.len() {
                 break;
             }
-            self.row(i, &mut r);
-            for j in 0..FOURIER {
-                sum[j] += r[j];
-            }
+            sum[0] += 1.0;
+            self.each_harmonic(i, |j, cos, sin| {
+                sum[j] += cos;
+                sum[j + 1] += sin;
+            });
             sum_v += v[i];
             while next < order.len() && step_indices[order[next]] >= i {
                 // k_s = i (k_s beyond the last bin sums nothing: it is recorded before any row).
@@ -834,12 +839,17 @@ impl<'a> ShapeFit<'a> {
         let x = x.as_slice();
         let heights: Vec<f64> = x[FOURIER..].to_vec();
         let total: f64 = heights.iter().sum();
+        let xf: [f64; FOURIER] = x[..FOURIER].try_into().expect("the Fourier columns");
         let mut passed = 0.0;
         let mut pending = order.iter().rev().peekable();
         let fit = (0..n)
             .map(|i| {
-                self.row(i, &mut r);
-                let smooth: f64 = r.iter().zip(&x[..FOURIER]).map(|(a, b)| a * b).sum();
+                // Σ_j A_ij x_j in the order of j, from 1 · x_0 (what a sum from −0 gives).
+                let mut smooth = 1.0 * xf[0];
+                self.each_harmonic(i, |j, cos, sin| {
+                    smooth += cos * xf[j];
+                    smooth += sin * xf[j + 1];
+                });
                 while let Some(&&s) = pending.peek().filter(|&&&s| step_indices[s] <= i) {
                     passed += heights[s];
                     pending.next();

@@ -779,6 +779,53 @@ impl<'a> ShapeFit<'a> {
 
     /// The fit with steps at `step_indices` (bins) and the step heights (um, in their order).
     fn fit(&self, step_indices: &[usize]) -> (Vec<f64>, Vec<f64>) {
+        let (x, order) = self.solve(step_indices);
+        let nf = self.v.len() as f64;
+        // The steps' part of the fit, Σ_s h_s u_s(i) = Σ_{k_s ≤ i} h_s - (i/n) Σ_s h_s: the
+        // first sum grows as i passes each k_s (in `order`, reversed to increasing bins).
+        let heights: Vec<f64> = x[FOURIER..].to_vec();
+        let total: f64 = heights.iter().sum();
+        let xf: [f64; FOURIER] = x[..FOURIER].try_into().expect("the Fourier columns");
+        let mut passed = 0.0;
+        let mut pending = order.iter().rev().peekable();
+        let fit = (0..self.v.len())
+            .map(|i| {
+                let smooth = self.smooth_at(&xf, i);
+                while let Some(&&s) = pending.peek().filter(|&&&s| step_indices[s] <= i) {
+                    passed += heights[s];
+                    pending.next();
+                }
+                smooth + (passed - i as f64 / nf * total)
+            })
+            .collect();
+        (fit, heights)
+    }
+
+    /// The fit without steps, bin by bin: at each bin the value of `fit(&[])`, the same bits
+    /// (its steps' part `0 - (i/n)·Σ∅` kept as written), for a caller that reads a few bins.
+    fn without_steps(&self) -> impl Fn(usize) -> f64 + '_ {
+        let (x, _) = self.solve(&[]);
+        let total: f64 = x[FOURIER..].iter().sum();
+        let xf: [f64; FOURIER] = x[..FOURIER].try_into().expect("the Fourier columns");
+        let nf = self.v.len() as f64;
+        move |i| self.smooth_at(&xf, i) + (0.0 - i as f64 / nf * total)
+    }
+
+    /// Σ_j A_ij x_j of the Fourier columns at bin i, in the order of j, from 1 · x_0 (what a
+    /// sum from −0 gives).
+    #[inline(always)]
+    fn smooth_at(&self, xf: &[f64; FOURIER], i: usize) -> f64 {
+        let mut smooth = 1.0 * xf[0];
+        self.each_harmonic(i, |j, cos, sin| {
+            smooth += cos * xf[j];
+            smooth += sin * xf[j + 1];
+        });
+        smooth
+    }
+
+    /// The least-squares coefficients (the Fourier columns, then the steps in their order)
+    /// and the steps' order by decreasing bin.
+    fn solve(&self, step_indices: &[usize]) -> (Vec<f64>, Vec<usize>) {
         let (v, n) = (self.v, self.v.len());
         let p = FOURIER + step_indices.len();
         // Steps by decreasing bin: S(k) of each as the backward sums pass its bin.
@@ -834,30 +881,7 @@ impl<'a> ShapeFit<'a> {
             Some(ch) => ch.solve(&atb),
             None => DVector::zeros(p),
         };
-        // The steps' part of the fit, Σ_s h_s u_s(i) = Σ_{k_s ≤ i} h_s - (i/n) Σ_s h_s: the
-        // first sum grows as i passes each k_s (in `order`, reversed to increasing bins).
-        let x = x.as_slice();
-        let heights: Vec<f64> = x[FOURIER..].to_vec();
-        let total: f64 = heights.iter().sum();
-        let xf: [f64; FOURIER] = x[..FOURIER].try_into().expect("the Fourier columns");
-        let mut passed = 0.0;
-        let mut pending = order.iter().rev().peekable();
-        let fit = (0..n)
-            .map(|i| {
-                // Σ_j A_ij x_j in the order of j, from 1 · x_0 (what a sum from −0 gives).
-                let mut smooth = 1.0 * xf[0];
-                self.each_harmonic(i, |j, cos, sin| {
-                    smooth += cos * xf[j];
-                    smooth += sin * xf[j + 1];
-                });
-                while let Some(&&s) = pending.peek().filter(|&&&s| step_indices[s] <= i) {
-                    passed += heights[s];
-                    pending.next();
-                }
-                smooth + (passed - i as f64 / nf * total)
-            })
-            .collect();
-        (fit, heights)
+        (x.as_slice().to_vec(), order)
     }
 }
 
@@ -938,7 +962,7 @@ fn find_steps(c: &[f64], threshold: f64, anchors: &[usize]) -> (Vec<Step>, Vec<f
     let mut found = all_steps(&stat, threshold);
     found.sort_by(|a, b| b.0.total_cmp(&a.0));
     for (_, index) in found {
-        let index = refine_step(&r0, index);
+        let index = refine_step(r0.len(), |i| r0[i], index);
         let taken = indices.iter().any(|&k| {
             angle_distance_deg(k as f64 * BIN_DEG, index as f64 * BIN_DEG) < STEP_GAP_DEG
         });
@@ -952,7 +976,7 @@ fn find_steps(c: &[f64], threshold: f64, anchors: &[usize]) -> (Vec<Step>, Vec<f
         let Some(index) = largest_step(&step_statistic(&r), threshold) else {
             break;
         };
-        let index = refine_step(&r, index);
+        let index = refine_step(r.len(), |i| r[i], index);
         let taken = indices.iter().any(|&k| {
             angle_distance_deg(k as f64 * BIN_DEG, index as f64 * BIN_DEG) < STEP_GAP_DEG
         });
@@ -980,11 +1004,12 @@ fn find_steps(c: &[f64], threshold: f64, anchors: &[usize]) -> (Vec<Step>, Vec<f
 fn anchored_steps(c: &[f64], threshold: f64, anchors: &[usize]) -> (Vec<Step>, Vec<f64>) {
     let trig = unit_circle(c.len());
     let shape = ShapeFit::new(c, &trig);
-    let (fit0, _) = shape.fit(&[]);
-    let r0: Vec<f64> = c.iter().zip(&fit0).map(|(x, f)| x - f).collect();
+    // The residual of the smooth fit, only in the anchors' windows.
+    let fit0 = shape.without_steps();
+    let r0 = |i: usize| c[i] - fit0(i);
     let mut indices: Vec<usize> = Vec::new();
     for &a in anchors {
-        let index = refine_step(&r0, a);
+        let index = refine_step(c.len(), r0, a);
         let taken = indices.iter().any(|&k| {
             angle_distance_deg(k as f64 * BIN_DEG, index as f64 * BIN_DEG) < STEP_GAP_DEG
         });
@@ -1044,11 +1069,15 @@ fn eliminate_weak_steps(
 /// most of its variance, `max_k n_l n_r / n (mean_r - mean_l)²`, with k within
 /// `near ± STEP_GAP_DEG` (the far-window statistic locates a step only to a few degrees when a
 /// spike sits on it).
-fn refine_step(r: &[f64], near: usize) -> usize {
-    let n = r.len() as isize;
+fn refine_step(n: usize, r: impl Fn(usize) -> f64, near: usize) -> usize {
+    let n = n as isize;
     let w = bins(STEP_GAP_DEG + STEP_WINDOW_DEG) as isize;
     let reach = bins(STEP_GAP_DEG) as isize;
-    let at = |k: isize| r[(near as isize + k).rem_euclid(n) as usize];
+    // The window's bins, each read once.
+    let window: Vec<f64> = (-w..w)
+        .map(|k| r((near as isize + k).rem_euclid(n) as usize))
+        .collect();
+    let at = |k: isize| window[(k + w) as usize];
     let total: f64 = (-w..w).map(at).sum();
     let len = (2 * w) as f64;
     let (mut left, mut best) = (0.0, (f64::NEG_INFINITY, 0isize));
@@ -1393,6 +1422,10 @@ mod tests {
             let shape = ShapeFit::new(&v, &trig);
             let (smooth, none) = shape.fit(&[]);
             assert!(none.is_empty());
+            let at = shape.without_steps();
+            for (i, f) in smooth.iter().enumerate() {
+                assert_eq!(at(i).to_bits(), f.to_bits(), "{n}: bin {i}");
+            }
             assert!(smooth.iter().zip(&v).any(|(f, x)| (f - x).abs() > 0.1));
             for steps in [[k1, k2], [k2, k1]] {
                 let (fit, heights) = shape.fit(&steps);

@@ -82,10 +82,27 @@ pub fn scale_um_per_div(max_abs_um: f64) -> f64 {
 /// Screen point at `radius_px` and `theta_deg` (counter-clockwise from the right).
 fn at(radius_px: f64, theta_deg: f64) -> (i32, i32) {
     let t = theta_deg * PI / 180.0;
+    let (sin, cos) = t.sin_cos();
     (
-        (CX + radius_px * t.cos()).round() as i32,
-        (CY - radius_px * t.sin()).round() as i32,
+        round_px(CX + radius_px * cos),
+        round_px(CY - radius_px * sin),
     )
+}
+
+/// `x.round() as i32` (half away from zero, saturating, NaN to 0) without the call to libm's
+/// `round`: the part truncation drops, `x - trunc(x)`, is exact, and a half or more of it
+/// steps away from zero.
+fn round_px(x: f64) -> i32 {
+    let t = x as i64;
+    let dropped = x - t as f64;
+    let r = if dropped >= 0.5 {
+        t.saturating_add(1)
+    } else if dropped <= -0.5 {
+        t.saturating_sub(1)
+    } else {
+        t
+    };
+    r.clamp(i32::MIN as i64, i32::MAX as i64) as i32
 }
 
 /// A text style of `size` px. (plotters' SVG backend writes font-size as size / 1.24.)
@@ -161,6 +178,7 @@ pub fn render_polar_svg(
     let radius = |d_um: f64| R_PX + (d_um * DIV_PX / scale).clamp(-R_PX, 1.5 * DIVS * DIV_PX);
 
     let mut svg = String::new();
+    let mut trace_points = Vec::with_capacity(traces.len());
     {
         let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
         let err = |e: DrawingAreaErrorKind<_>| Error::Write {
@@ -234,7 +252,7 @@ pub fn render_polar_svg(
             .map_err(err)?;
         }
 
-        // Traces.
+        // Traces: each drawn as a placeholder, its points written by `svg_points`.
         for (direction, trace) in &traces {
             let mut points: Vec<(i32, i32)> = Vec::with_capacity(trace.len() + 1);
             for (i, &d) in trace.iter().chain(trace.first()).enumerate() {
@@ -243,8 +261,9 @@ pub fn render_polar_svg(
                     points.push(p);
                 }
             }
+            trace_points.push(svg_points(&points, (WIDTH, HEIGHT)));
             root.draw(&PathElement::new(
-                points,
+                vec![PLACEHOLDER],
                 direction_colour(*direction).stroke_width(1),
             ))
             .map_err(err)?;
@@ -443,11 +462,135 @@ pub fn render_polar_svg(
         }
         root.present().map_err(err)?;
     }
-    Ok(svg)
+    Ok(fill_placeholders(&svg, &trace_points))
+}
+
+/// The one point a trace's path is drawn with (plotters writes it as `points="0,0 "`); no
+/// other path of the plot has a single point.
+const PLACEHOLDER: (i32, i32) = (0, 0);
+const PLACEHOLDER_POINTS: &str = "points=\"0,0 \"/>";
+
+/// A path's `points` attribute value as plotters' SVG backend writes it for `points` on a
+/// drawing area of `size` px: each point clamped into the area, then `x,y ` (plotters
+/// formats each with `write!`, about 550 instructions a point; a trace has thousands).
+fn svg_points(points: &[(i32, i32)], size: (u32, u32)) -> String {
+    fn push_int(s: &mut Vec<u8>, v: i32) {
+        if v < 0 {
+            s.push(b'-');
+        }
+        let (mut u, mut digits, mut at) = (v.unsigned_abs(), [0u8; 10], 10);
+        loop {
+            at -= 1;
+            digits[at] = b'0' + (u % 10) as u8;
+            u /= 10;
+            if u == 0 {
+                break;
+            }
+        }
+        for &d in &digits[at..] {
+            s.push(d);
+        }
+    }
+    let mut s = Vec::with_capacity(points.len() * 8);
+    for &(x, y) in points {
+        push_int(&mut s, x.min(size.0 as i32).max(0));
+        s.push(b',');
+        push_int(&mut s, y.min(size.1 as i32).max(0));
+        s.push(b' ');
+    }
+    String::from_utf8(s).expect("ASCII digits")
+}
+
+/// `svg` with the placeholder paths' points replaced, in order, by `points`.
+fn fill_placeholders(svg: &str, points: &[String]) -> String {
+    let mut out = String::with_capacity(svg.len() + points.iter().map(String::len).sum::<usize>());
+    let mut rest = svg;
+    for p in points {
+        let at = rest
+            .find(PLACEHOLDER_POINTS)
+            .expect("each trace drew its placeholder");
+        out.push_str(&rest[..at]);
+        out.push_str("points=\"");
+        out.push_str(p);
+        out.push_str("\"/>");
+        rest = &rest[at + PLACEHOLDER_POINTS.len()..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// "5", "0.2", "20": the scale without trailing zeros.
 fn fmt_scale(scale: f64) -> String {
     let s = format!("{scale:.1}");
     s.trim_end_matches(".0").to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A path drawn as a placeholder and filled with `svg_points` is the SVG plotters writes
+    /// for the path itself: points inside, on and outside the area's edges, negative ones,
+    /// and two paths in order.
+    #[test]
+    fn filled_placeholders_are_plotters_paths() {
+        let paths = [
+            vec![
+                (12, 7),
+                (-5, 40),
+                (300, 200),
+                (301, 201),
+                (0, 0),
+                (150, -2_000_000_000),
+            ],
+            vec![(299, 0), (1, 1), (i32::MAX, i32::MIN), (42, 199)],
+        ];
+        let render = |placeholder: bool| {
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, (300, 200)).into_drawing_area();
+                for (k, path) in paths.iter().enumerate() {
+                    let points = if placeholder {
+                        vec![PLACEHOLDER]
+                    } else {
+                        path.clone()
+                    };
+                    let colour = if k == 0 { plot::CCW } else { plot::CW };
+                    root.draw(&PathElement::new(points, colour.stroke_width(1)))
+                        .unwrap();
+                }
+                root.present().unwrap();
+            }
+            svg
+        };
+        let filled: Vec<String> = paths.iter().map(|p| svg_points(p, (300, 200))).collect();
+        assert_eq!(fill_placeholders(&render(true), &filled), render(false));
+    }
+
+    /// The pixel rounding is `f64::round` then `as i32`: at and around every half, on both
+    /// sides of zero, past the i32 range, at the infinities and NaN.
+    #[test]
+    fn pixel_rounding_is_rounding_half_away_from_zero() {
+        let mut xs = vec![
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            3e9,
+            -3e9,
+            2147483647.5,
+            -2147483648.5,
+            1e300,
+            -0.0,
+            0.49999999999999994,
+            -0.49999999999999994,
+            4503599627370497.0,
+        ];
+        for k in -2000..2000 {
+            let h = k as f64 * 0.5;
+            xs.extend([h, h.next_up(), h.next_down(), h + 0.25]);
+        }
+        for x in xs {
+            assert_eq!(round_px(x), x.round() as i32, "{x}");
+        }
+    }
 }

@@ -178,7 +178,6 @@ pub fn render_polar_svg(
     let radius = |d_um: f64| R_PX + (d_um * DIV_PX / scale).clamp(-R_PX, 1.5 * DIVS * DIV_PX);
 
     let mut svg = String::new();
-    let mut trace_points = Vec::with_capacity(traces.len());
     {
         let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
         let err = |e: DrawingAreaErrorKind<_>| Error::Write {
@@ -252,7 +251,7 @@ pub fn render_polar_svg(
             .map_err(err)?;
         }
 
-        // Traces: each drawn as a placeholder, its points written by `svg_points`.
+        // Traces.
         for (direction, trace) in &traces {
             let mut points: Vec<(i32, i32)> = Vec::with_capacity(trace.len() + 1);
             for (i, &d) in trace.iter().chain(trace.first()).enumerate() {
@@ -261,9 +260,8 @@ pub fn render_polar_svg(
                     points.push(p);
                 }
             }
-            trace_points.push(svg_points(&points, (WIDTH, HEIGHT)));
             root.draw(&PathElement::new(
-                vec![PLACEHOLDER],
+                points,
                 direction_colour(*direction).stroke_width(1),
             ))
             .map_err(err)?;
@@ -462,61 +460,7 @@ pub fn render_polar_svg(
         }
         root.present().map_err(err)?;
     }
-    Ok(fill_placeholders(&svg, &trace_points))
-}
-
-/// The one point a trace's path is drawn with (plotters writes it as `points="0,0 "`); no
-/// other path of the plot has a single point.
-const PLACEHOLDER: (i32, i32) = (0, 0);
-const PLACEHOLDER_POINTS: &str = "points=\"0,0 \"/>";
-
-/// A path's `points` attribute value as plotters' SVG backend writes it for `points` on a
-/// drawing area of `size` px: each point clamped into the area, then `x,y ` (plotters
-/// formats each with `write!`, about 550 instructions a point; a trace has thousands).
-fn svg_points(points: &[(i32, i32)], size: (u32, u32)) -> String {
-    fn push_int(s: &mut Vec<u8>, v: i32) {
-        if v < 0 {
-            s.push(b'-');
-        }
-        let (mut u, mut digits, mut at) = (v.unsigned_abs(), [0u8; 10], 10);
-        loop {
-            at -= 1;
-            digits[at] = b'0' + (u % 10) as u8;
-            u /= 10;
-            if u == 0 {
-                break;
-            }
-        }
-        for &d in &digits[at..] {
-            s.push(d);
-        }
-    }
-    let mut s = Vec::with_capacity(points.len() * 8);
-    for &(x, y) in points {
-        push_int(&mut s, x.min(size.0 as i32).max(0));
-        s.push(b',');
-        push_int(&mut s, y.min(size.1 as i32).max(0));
-        s.push(b' ');
-    }
-    String::from_utf8(s).expect("ASCII digits")
-}
-
-/// `svg` with the placeholder paths' points replaced, in order, by `points`.
-fn fill_placeholders(svg: &str, points: &[String]) -> String {
-    let mut out = String::with_capacity(svg.len() + points.iter().map(String::len).sum::<usize>());
-    let mut rest = svg;
-    for p in points {
-        let at = rest
-            .find(PLACEHOLDER_POINTS)
-            .expect("each trace drew its placeholder");
-        out.push_str(&rest[..at]);
-        out.push_str("points=\"");
-        out.push_str(p);
-        out.push_str("\"/>");
-        rest = &rest[at + PLACEHOLDER_POINTS.len()..];
-    }
-    out.push_str(rest);
-    out
+    Ok(svg)
 }
 
 /// "5", "0.2", "20": the scale without trailing zeros.
@@ -528,44 +472,6 @@ fn fmt_scale(scale: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A path drawn as a placeholder and filled with `svg_points` is the SVG plotters writes
-    /// for the path itself: points inside, on and outside the area's edges, negative ones,
-    /// and two paths in order.
-    #[test]
-    fn filled_placeholders_are_plotters_paths() {
-        let paths = [
-            vec![
-                (12, 7),
-                (-5, 40),
-                (300, 200),
-                (301, 201),
-                (0, 0),
-                (150, -2_000_000_000),
-            ],
-            vec![(299, 0), (1, 1), (i32::MAX, i32::MIN), (42, 199)],
-        ];
-        let render = |placeholder: bool| {
-            let mut svg = String::new();
-            {
-                let root = SVGBackend::with_string(&mut svg, (300, 200)).into_drawing_area();
-                for (k, path) in paths.iter().enumerate() {
-                    let points = if placeholder {
-                        vec![PLACEHOLDER]
-                    } else {
-                        path.clone()
-                    };
-                    let colour = if k == 0 { plot::CCW } else { plot::CW };
-                    root.draw(&PathElement::new(points, colour.stroke_width(1)))
-                        .unwrap();
-                }
-                root.present().unwrap();
-            }
-            svg
-        };
-        let filled: Vec<String> = paths.iter().map(|p| svg_points(p, (300, 200))).collect();
-        assert_eq!(fill_placeholders(&render(true), &filled), render(false));
-    }
 
     /// The pixel rounding is `f64::round` then `as i32`: at and around every half, on both
     /// sides of zero, past the i32 range, at the infinities and NaN.

@@ -306,14 +306,16 @@ pub(super) fn all_finite(x: &[f64; N_STATE]) -> bool {
     probe == 0.0
 }
 
-/// `x.round()` for `x ≥ 0` (halves away from zero), at most `max`; written out because
-/// `f64::round` is a library call on baseline x86-64.
+/// `x.round()` for `x ≥ 0` (halves away from zero), at most `max` (0 for `x < 0`, `max`
+/// for NaN, which `min` drops); written out because `f64::round` is a library call on
+/// baseline x86-64. Through `i64`, whose conversions are one instruction each there (those
+/// of `usize` are not), on `x` clamped to `[0, max + 1]`.
 #[inline]
 fn round_index(x: f64, max: usize) -> usize {
-    let x = x.min(max as f64 + 1.0);
-    let i = x as usize; // truncates; NaN gives 0 as `round` would
+    let x = x.min(max as f64 + 1.0).max(0.0);
+    let i = x as i64; // truncates
     let i = if x - i as f64 >= 0.5 { i + 1 } else { i };
-    i.min(max)
+    (i as usize).min(max)
 }
 
 /// The period maps of one axis for a grid of friction slopes, so that the map also applies
@@ -1346,6 +1348,21 @@ fn play(x_m: f64, x_t: f64, half: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
+
+    /// `round_index` is `f64::round` clamped to `[0, max]`, halves away from zero.
+    #[test]
+    fn round_index_rounds_halves_up_and_clamps() {
+        for k in -40..=700 {
+            let x = k as f64 * 0.125;
+            let expected = x.round().clamp(0.0, 64.0) as usize;
+            assert_eq!(round_index(x, 64), expected, "x = {x}");
+        }
+        assert_eq!(round_index(0.5 - f64::EPSILON / 4.0, 64), 0);
+        assert_eq!(round_index(f64::NAN, 64), 64);
+        assert_eq!(round_index(f64::INFINITY, 64), 64);
+        assert_eq!(round_index(f64::NEG_INFINITY, 64), 0);
+        assert_eq!(round_index(-0.0, 64), 0);
+    }
 
     #[test]
     fn dead_zone_play_and_stribeck_bound_follow_their_definitions() {

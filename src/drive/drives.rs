@@ -2,7 +2,7 @@
 
 #[cfg(target_arch = "x86_64")]
 use super::product::{Avx2, Avx512};
-use super::product::{ColumnProduct, Portable};
+use super::product::{ColumnProduct, Portable, Width};
 use super::servo::AxisServo;
 use crate::error::Result;
 use crate::input::machine::Machine;
@@ -24,6 +24,8 @@ pub struct DrivesState {
 pub struct Drives {
     axes: &'static [Axis],
     servos: Vec<AxisServo>,
+    /// The vector width of the period maps' products (the same result at every width).
+    width: Width,
 }
 
 impl Drives {
@@ -44,6 +46,7 @@ impl Drives {
         Ok(Drives {
             axes: machine.axes(),
             servos,
+            width: Width::detect(),
         })
     }
 
@@ -76,16 +79,30 @@ impl Drives {
         actual: &mut AxisVec,
         following_error: &mut AxisVec,
     ) -> Result<bool> {
-        #[cfg(target_arch = "x86_64")]
-        if let Some(k) = Avx512::detect() {
+        match self.width {
             // SAFETY: the CPU has AVX-512F, as the token says.
-            return unsafe { self.step_avx512(k, setpoint, time_s, actual, following_error) };
-        }
-        #[cfg(target_arch = "x86_64")]
-        if let Some(k) = Avx2::detect() {
+            #[cfg(target_arch = "x86_64")]
+            Width::Avx512(k) => unsafe {
+                self.step_avx512(k, setpoint, time_s, actual, following_error)
+            },
             // SAFETY: the CPU has AVX2, as the token says.
-            return unsafe { self.step_avx2(k, setpoint, time_s, actual, following_error) };
+            #[cfg(target_arch = "x86_64")]
+            Width::Avx2(k) => unsafe {
+                self.step_avx2(k, setpoint, time_s, actual, following_error)
+            },
+            Width::Portable => self.step_portable(setpoint, time_s, actual, following_error),
         }
+    }
+
+    /// [`Drives::step_into`] for any CPU (out of line: the vector builds are the rule).
+    #[inline(never)]
+    fn step_portable(
+        &mut self,
+        setpoint: &AxisVec,
+        time_s: f64,
+        actual: &mut AxisVec,
+        following_error: &mut AxisVec,
+    ) -> Result<bool> {
         self.step_inline(Portable, setpoint, time_s, actual, following_error)
     }
 
@@ -154,16 +171,25 @@ impl Drives {
         time_s: f64,
         actual: &mut AxisVec,
     ) -> Result<()> {
-        #[cfg(target_arch = "x86_64")]
-        if let Some(k) = Avx512::detect() {
+        match self.width {
             // SAFETY: the CPU has AVX-512F, as the token says.
-            return unsafe { self.step_actual_avx512(k, setpoint, time_s, actual) };
-        }
-        #[cfg(target_arch = "x86_64")]
-        if let Some(k) = Avx2::detect() {
+            #[cfg(target_arch = "x86_64")]
+            Width::Avx512(k) => unsafe { self.step_actual_avx512(k, setpoint, time_s, actual) },
             // SAFETY: the CPU has AVX2, as the token says.
-            return unsafe { self.step_actual_avx2(k, setpoint, time_s, actual) };
+            #[cfg(target_arch = "x86_64")]
+            Width::Avx2(k) => unsafe { self.step_actual_avx2(k, setpoint, time_s, actual) },
+            Width::Portable => self.step_actual_portable(setpoint, time_s, actual),
         }
+    }
+
+    /// [`Drives::step_actual_into`] for any CPU (out of line, see [`Drives::step_portable`]).
+    #[inline(never)]
+    fn step_actual_portable(
+        &mut self,
+        setpoint: &AxisVec,
+        time_s: f64,
+        actual: &mut AxisVec,
+    ) -> Result<()> {
         self.step_actual_inline(Portable, setpoint, time_s, actual)
     }
 

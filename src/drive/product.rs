@@ -54,6 +54,31 @@ pub(super) struct Avx2(());
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Avx512(());
 
+/// The widest [`ColumnProduct`] the CPU has, found once.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Width {
+    Portable,
+    #[cfg(target_arch = "x86_64")]
+    Avx2(Avx2),
+    #[cfg(target_arch = "x86_64")]
+    Avx512(Avx512),
+}
+
+impl Width {
+    /// The widest the CPU has.
+    pub(super) fn detect() -> Width {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(k) = Avx512::detect() {
+            return Width::Avx512(k);
+        }
+        #[cfg(target_arch = "x86_64")]
+        if let Some(k) = Avx2::detect() {
+            return Width::Avx2(k);
+        }
+        Width::Portable
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 impl Avx2 {
     /// The token, where the CPU has AVX and AVX2.

@@ -1,7 +1,7 @@
 //! The drives of one machine: one [`AxisServo`] per axis, stepped together.
 
 #[cfg(target_arch = "x86_64")]
-use super::product::{Avx2, Avx512};
+use super::product::Avx2;
 use super::product::{ColumnProduct, Portable, Width};
 use super::servo::AxisServo;
 use crate::error::Result;
@@ -80,11 +80,6 @@ impl Drives {
         following_error: &mut AxisVec,
     ) -> Result<bool> {
         match self.width {
-            // SAFETY: the CPU has AVX-512F, as the token says.
-            #[cfg(target_arch = "x86_64")]
-            Width::Avx512(k) => unsafe {
-                self.step_avx512(k, setpoint, time_s, actual, following_error)
-            },
             // SAFETY: the CPU has AVX2, as the token says.
             #[cfg(target_arch = "x86_64")]
             Width::Avx2(k) => unsafe {
@@ -106,23 +101,9 @@ impl Drives {
         self.step_inline(Portable, setpoint, time_s, actual, following_error)
     }
 
-    /// [`Drives::step_into`] compiled for AVX-512, every axis's period inlined into one
-    /// function, a period map's column in one register (no FMA, whose single rounding would
+    /// [`Drives::step_into`] compiled for AVX2, every axis's period inlined into one
+    /// function, a period map's column in two registers (no FMA, whose single rounding would
     /// change the result: the arithmetic is the same whatever the vector width).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    unsafe fn step_avx512(
-        &mut self,
-        k: Avx512,
-        setpoint: &AxisVec,
-        time_s: f64,
-        actual: &mut AxisVec,
-        following_error: &mut AxisVec,
-    ) -> Result<bool> {
-        self.step_inline(k, setpoint, time_s, actual, following_error)
-    }
-
-    /// [`Drives::step_into`] compiled for AVX2 (see [`Drives::step_avx512`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2")]
     unsafe fn step_avx2(
@@ -172,9 +153,6 @@ impl Drives {
         actual: &mut AxisVec,
     ) -> Result<()> {
         match self.width {
-            // SAFETY: the CPU has AVX-512F, as the token says.
-            #[cfg(target_arch = "x86_64")]
-            Width::Avx512(k) => unsafe { self.step_actual_avx512(k, setpoint, time_s, actual) },
             // SAFETY: the CPU has AVX2, as the token says.
             #[cfg(target_arch = "x86_64")]
             Width::Avx2(k) => unsafe { self.step_actual_avx2(k, setpoint, time_s, actual) },
@@ -193,20 +171,7 @@ impl Drives {
         self.step_actual_inline(Portable, setpoint, time_s, actual)
     }
 
-    /// [`Drives::step_actual_into`] compiled for AVX-512 (see [`Drives::step_avx512`]).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    unsafe fn step_actual_avx512(
-        &mut self,
-        k: Avx512,
-        setpoint: &AxisVec,
-        time_s: f64,
-        actual: &mut AxisVec,
-    ) -> Result<()> {
-        self.step_actual_inline(k, setpoint, time_s, actual)
-    }
-
-    /// [`Drives::step_actual_into`] compiled for AVX2 (see [`Drives::step_avx512`]).
+    /// [`Drives::step_actual_into`] compiled for AVX2 (see [`Drives::step_avx2`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2")]
     unsafe fn step_actual_avx2(

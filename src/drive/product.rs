@@ -4,8 +4,9 @@
 //! Every width does the same operations in the same order: per column and row one
 //! multiplication, then one addition to the row's sum (never fused: Rust does not contract
 //! them), the columns in order from a sum of `+0`. The result is therefore the same bit for
-//! bit whatever the width; only the number of instructions differs (a column is one AVX-512
-//! register, two AVX ones, four SSE2 ones).
+//! bit whatever the width; only the number of instructions differs (a column is two AVX
+//! registers, four SSE2 ones). Not AVX-512: with one column a register it took fewer
+//! instructions but more time (docs/performance.md).
 
 /// Columns of a period map: up to the map's inputs, 8 rows each (row 7 is padding).
 pub(super) type Columns<const C: usize> = [[f64; 8]; C];
@@ -48,29 +49,17 @@ impl ColumnProduct for Portable {
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Avx2(());
 
-/// The product in one AVX-512 register a column. Inlined only into functions compiled for
-/// AVX-512F.
-#[cfg(target_arch = "x86_64")]
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Avx512(());
-
 /// The widest [`ColumnProduct`] the CPU has, found once.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Width {
     Portable,
     #[cfg(target_arch = "x86_64")]
     Avx2(Avx2),
-    #[cfg(target_arch = "x86_64")]
-    Avx512(Avx512),
 }
 
 impl Width {
     /// The widest the CPU has.
     pub(super) fn detect() -> Width {
-        #[cfg(target_arch = "x86_64")]
-        if let Some(k) = Avx512::detect() {
-            return Width::Avx512(k);
-        }
         #[cfg(target_arch = "x86_64")]
         if let Some(k) = Avx2::detect() {
             return Width::Avx2(k);
@@ -90,15 +79,6 @@ impl Avx2 {
 }
 
 #[cfg(target_arch = "x86_64")]
-impl Avx512 {
-    /// The token, where the CPU has AVX-512F.
-    #[inline]
-    pub(super) fn detect() -> Option<Avx512> {
-        std::arch::is_x86_feature_detected!("avx512f").then_some(Avx512(()))
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
 impl ColumnProduct for Avx2 {
     #[inline(always)]
     fn product<const C: usize, const N: usize>(
@@ -108,19 +88,6 @@ impl ColumnProduct for Avx2 {
     ) -> [f64; 8] {
         // SAFETY: the token exists only where the CPU has AVX2 (`Avx2::detect`).
         unsafe { product_avx2(cols, input) }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl ColumnProduct for Avx512 {
-    #[inline(always)]
-    fn product<const C: usize, const N: usize>(
-        self,
-        cols: &Columns<C>,
-        input: &[f64; N],
-    ) -> [f64; 8] {
-        // SAFETY: the token exists only where the CPU has AVX-512F (`Avx512::detect`).
-        unsafe { product_avx512(cols, input) }
     }
 }
 
@@ -155,26 +122,6 @@ unsafe fn product_avx2<const C: usize, const N: usize>(
     acc
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[inline]
-unsafe fn product_avx512<const C: usize, const N: usize>(
-    cols: &Columns<C>,
-    input: &[f64; N],
-) -> [f64; 8] {
-    use std::arch::x86_64::*;
-    let mut sum = _mm512_setzero_pd();
-    for (col, &u) in cols.iter().zip(input) {
-        // SAFETY: a column is 8 f64, read unaligned.
-        let c = unsafe { _mm512_loadu_pd(col.as_ptr()) };
-        sum = _mm512_add_pd(sum, _mm512_mul_pd(c, _mm512_set1_pd(u)));
-    }
-    let mut acc = [0.0; 8];
-    // SAFETY: `acc` is 8 f64, written unaligned.
-    unsafe { _mm512_storeu_pd(acc.as_mut_ptr(), sum) };
-    acc
-}
-
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use super::*;
@@ -195,10 +142,6 @@ mod tests {
         let expected_zero = Portable.product(&cols, &zero);
         let bits = |y: [f64; 8]| y.map(f64::to_bits);
         if let Some(k) = Avx2::detect() {
-            assert_eq!(bits(k.product(&cols, &input)), bits(expected));
-            assert_eq!(bits(k.product(&cols, &zero)), bits(expected_zero));
-        }
-        if let Some(k) = Avx512::detect() {
             assert_eq!(bits(k.product(&cols, &input)), bits(expected));
             assert_eq!(bits(k.product(&cols, &zero)), bits(expected_zero));
         }

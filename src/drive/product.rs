@@ -8,6 +8,8 @@
 //! registers, four SSE2 ones). Not AVX-512: with one column a register it took fewer
 //! instructions but more time (docs/performance.md).
 
+use super::servo::all_finite;
+
 /// Columns of a period map: up to the map's inputs, 8 rows each (row 7 is padding).
 pub(super) type Columns<const C: usize> = [[f64; 8]; C];
 
@@ -20,6 +22,10 @@ pub(super) trait ColumnProduct: Copy {
         cols: &Columns<C>,
         input: &[f64; N],
     ) -> [f64; 8];
+
+    /// Whether rows 0-5 of a product are finite ([`all_finite`]: row 6 is an earlier row 0,
+    /// row 7 padding).
+    fn finite(self, y: &[f64; 8]) -> bool;
 }
 
 /// The product in plain Rust, for any CPU (the compiler picks the width it may).
@@ -40,6 +46,11 @@ impl ColumnProduct for Portable {
             }
         }
         acc
+    }
+
+    #[inline(always)]
+    fn finite(self, y: &[f64; 8]) -> bool {
+        all_finite(&[y[0], y[1], y[2], y[3], y[4], y[5], y[6]])
     }
 }
 
@@ -89,6 +100,12 @@ impl ColumnProduct for Avx2 {
         // SAFETY: the token exists only where the CPU has AVX2 (`Avx2::detect`).
         unsafe { product_avx2(cols, input) }
     }
+
+    #[inline(always)]
+    fn finite(self, y: &[f64; 8]) -> bool {
+        // SAFETY: as above.
+        unsafe { finite_avx2(y) }
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -122,6 +139,28 @@ unsafe fn product_avx2<const C: usize, const N: usize>(
     acc
 }
 
+/// [`ColumnProduct::finite`] on two AVX registers: `v - v` is 0 for a finite `v` and NaN
+/// otherwise, so `(y_r - y_r) + (y_{r+4} - y_{r+4})` is 0 in all four lanes (rows 6 and 7
+/// replaced by 0) exactly when rows 0-5 are finite, as [`all_finite`]'s sum is.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx,avx2")]
+#[inline]
+#[allow(clippy::eq_op)] // `v - v` on purpose: NaN for a non-finite v
+fn finite_avx2(y: &[f64; 8]) -> bool {
+    use std::arch::x86_64::*;
+    // SAFETY: `y` is 8 f64, read as two unaligned halves of 4.
+    let (low, high) = unsafe {
+        (
+            _mm256_loadu_pd(y.as_ptr()),
+            _mm256_loadu_pd(y.as_ptr().add(4)),
+        )
+    };
+    let zero = _mm256_setzero_pd();
+    let high = _mm256_blend_pd::<0b1100>(_mm256_sub_pd(high, high), zero);
+    let probe = _mm256_add_pd(_mm256_sub_pd(low, low), high);
+    _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(probe, zero)) == 0b1111
+}
+
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use super::*;
@@ -144,6 +183,22 @@ mod tests {
         if let Some(k) = Avx2::detect() {
             assert_eq!(bits(k.product(&cols, &input)), bits(expected));
             assert_eq!(bits(k.product(&cols, &zero)), bits(expected_zero));
+        }
+    }
+
+    /// Every width finds rows 0-5 finite exactly when each of them is, whatever rows 6-7 hold.
+    #[test]
+    fn every_width_checks_rows_0_to_5_for_finite_values() {
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            for row in 0..8 {
+                let mut y = [1.5, -2.0, 0.0, -0.0, 1e300, -1e-300, 3.0, 0.0];
+                y[row] = bad;
+                let expected = row >= 6;
+                assert_eq!(Portable.finite(&y), expected, "row {row}: {bad}");
+                if let Some(k) = Avx2::detect() {
+                    assert_eq!(k.finite(&y), expected, "row {row}: {bad}");
+                }
+            }
         }
     }
 }

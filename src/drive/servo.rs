@@ -375,20 +375,25 @@ impl PeriodMap {
         x: &[f64; N_STATE],
         ds: f64,
         f_ff: f64,
-    ) -> [f64; N_STATE] {
+    ) -> ([f64; N_STATE], bool) {
         let input = [x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff];
         self.dispatch(k, &input)
     }
 
     /// The product over the first `N` columns, column by column by `k` (the same
     /// multiplications and additions in the same order whatever the vector width, so the
-    /// result does not depend on the CPU). Inlined into its caller, which picks `k`:
-    /// [`super::Drives`] runs every axis in one function compiled for the widest vectors
-    /// the CPU has.
+    /// result does not depend on the CPU), and whether it is finite ([`all_finite`]).
+    /// Inlined into its caller, which picks `k`: [`super::Drives`] runs every axis in one
+    /// function compiled for the widest vectors the CPU has.
     #[inline(always)]
-    fn dispatch<K: ColumnProduct, const N: usize>(&self, k: K, input: &[f64; N]) -> [f64; N_STATE] {
+    fn dispatch<K: ColumnProduct, const N: usize>(
+        &self,
+        k: K,
+        input: &[f64; N],
+    ) -> ([f64; N_STATE], bool) {
         let acc = k.product(&self.cols, input);
-        [acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]]
+        let y = [acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]];
+        (y, k.finite(&acc))
     }
 
     /// The first `N` columns without their padding.
@@ -740,8 +745,8 @@ impl AxisServo {
             self.integral,
             self.x_m_tick - s_old,
         ];
-        let y = map.apply_without_friction(k, &x, s_new - s_old, f_ff);
-        if y[4].abs() > limit || !all_finite(&y) {
+        let (y, finite) = map.apply_without_friction(k, &x, s_new - s_old, f_ff);
+        if y[4].abs() > limit || !finite {
             return false;
         }
         self.x_m = y[0] + s_old;
@@ -828,8 +833,8 @@ impl AxisServo {
         let map = exact.maps[index].get_or_init(|| self.period_map(grid_slope, true));
         let friction = f0 - grid_slope * v0;
         let input = map_input(&x, s_new - s_old, f_ff, friction, regime.offset);
-        let y = map.dispatch(k, &input);
-        if !all_finite(&y) {
+        let (y, finite) = map.dispatch(k, &input);
+        if !finite {
             return false; // the substeps find it too, and end_period reports it
         }
         let dv = 2.0 * (y[3] - x[3]).abs().max(dv_guess);
@@ -1090,8 +1095,8 @@ impl AxisServo {
             self.integral,
             self.x_m_tick - s_old,
         ];
-        let y = map.apply_without_friction(k, &x, s_new - s_old, f_ff);
-        if y[4].abs() > limit || !all_finite(&y) {
+        let (y, finite) = map.apply_without_friction(k, &x, s_new - s_old, f_ff);
+        if y[4].abs() > limit || !finite {
             return self.advance_with(k, setpoint, time_s);
         }
         let x_t_old = self.x_t;

@@ -8,7 +8,21 @@
 //! registers, four SSE2 ones). Not AVX-512: with one column a register it took fewer
 //! instructions but more time (docs/performance.md).
 
-use super::servo::all_finite;
+/// Whether the state variables the divergence check covers, the first six of `x` (`x_m v_m
+/// x_t v_t F ∫`; not `x_m,tick`, which is an earlier `x_m`), are finite. `v - v` is 0 for a
+/// finite v and NaN otherwise: the sum is 0 exactly when every one is finite (one
+/// comparison instead of six). `R ≥ 6`: a state, or a product's rows.
+#[inline(always)]
+#[allow(clippy::eq_op)] // `v - v` on purpose: NaN for a non-finite v
+pub(super) fn all_finite<const R: usize>(x: &[f64; R]) -> bool {
+    let probe = (x[0] - x[0])
+        + (x[1] - x[1])
+        + (x[2] - x[2])
+        + (x[3] - x[3])
+        + (x[4] - x[4])
+        + (x[5] - x[5]);
+    probe == 0.0
+}
 
 /// Columns of a period map: up to the map's inputs, 8 rows each (row 7 is padding).
 pub(super) type Columns<const C: usize> = [[f64; 8]; C];
@@ -50,7 +64,7 @@ impl ColumnProduct for Portable {
 
     #[inline(always)]
     fn finite(self, y: &[f64; 8]) -> bool {
-        all_finite(&[y[0], y[1], y[2], y[3], y[4], y[5], y[6]])
+        all_finite(y)
     }
 }
 

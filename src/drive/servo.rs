@@ -64,7 +64,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use super::presliding::{Presliding, ReversalValue};
-use super::product::{ColumnProduct, Portable};
+use super::product::{all_finite, ColumnProduct, Portable};
 use crate::error::{Error, Result};
 use crate::input::drive::{si_per_unit, AxisDrive, Model};
 use crate::Axis;
@@ -289,21 +289,6 @@ impl Regime {
     fn same(&self, other: &Regime) -> bool {
         self.side == other.side && self.offset == other.offset
     }
-}
-
-/// Whether the state variables the divergence check covers (all but `x_m,tick`, which is
-/// an earlier `x_m`) are finite. `v - v` is 0 for a finite v and NaN otherwise: the sum is
-/// 0 exactly when every one is finite (one comparison instead of six).
-#[inline(always)]
-#[allow(clippy::eq_op)] // `v - v` on purpose: NaN for a non-finite v
-pub(super) fn all_finite(x: &[f64; N_STATE]) -> bool {
-    let probe = (x[0] - x[0])
-        + (x[1] - x[1])
-        + (x[2] - x[2])
-        + (x[3] - x[3])
-        + (x[4] - x[4])
-        + (x[5] - x[5]);
-    probe == 0.0
 }
 
 /// `x.round()` for `x ≥ 0` (halves away from zero), at most `max` (0 for `x < 0`, `max`

@@ -68,8 +68,8 @@ impl ColumnProduct for Portable {
     }
 }
 
-/// The product in two AVX registers a column. Inlined only into functions compiled for
-/// AVX2 (its intrinsics are not inlined elsewhere).
+/// The product in two AVX registers a column. Use it inside functions compiled for AVX2
+/// (`#[target_feature]`): elsewhere its intrinsics stay calls.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Avx2(());

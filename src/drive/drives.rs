@@ -1,5 +1,8 @@
 //! The drives of one machine: one [`AxisServo`] per axis, stepped together.
 
+#[cfg(target_arch = "x86_64")]
+use super::product::Avx2;
+use super::product::{ColumnProduct, Portable, Width};
 use super::servo::AxisServo;
 use crate::error::Result;
 use crate::input::machine::Machine;
@@ -21,6 +24,8 @@ pub struct DrivesState {
 pub struct Drives {
     axes: &'static [Axis],
     servos: Vec<AxisServo>,
+    /// The vector width of the period maps' products (the same result at every width).
+    width: Width,
 }
 
 impl Drives {
@@ -41,6 +46,7 @@ impl Drives {
         Ok(Drives {
             axes: machine.axes(),
             servos,
+            width: Width::detect(),
         })
     }
 
@@ -73,32 +79,48 @@ impl Drives {
         actual: &mut AxisVec,
         following_error: &mut AxisVec,
     ) -> Result<bool> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU has AVX, checked at run time just above.
-            return unsafe { self.step_avx(setpoint, time_s, actual, following_error) };
+        match self.width {
+            // SAFETY: the CPU has AVX2, as the token says.
+            #[cfg(target_arch = "x86_64")]
+            Width::Avx2(k) => unsafe {
+                self.step_avx2(k, setpoint, time_s, actual, following_error)
+            },
+            Width::Portable => self.step_portable(setpoint, time_s, actual, following_error),
         }
-        self.step_inline(setpoint, time_s, actual, following_error)
     }
 
-    /// [`Drives::step_into`] compiled for AVX, every axis's period inlined into one function
-    /// (no FMA, whose single rounding would change the result: the arithmetic is the same
-    /// whatever the vector width).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn step_avx(
+    /// [`Drives::step_into`] for any CPU (out of line: the vector builds are the rule).
+    #[inline(never)]
+    fn step_portable(
         &mut self,
         setpoint: &AxisVec,
         time_s: f64,
         actual: &mut AxisVec,
         following_error: &mut AxisVec,
     ) -> Result<bool> {
-        self.step_inline(setpoint, time_s, actual, following_error)
+        self.step_inline(Portable, setpoint, time_s, actual, following_error)
+    }
+
+    /// [`Drives::step_into`] compiled for AVX2, every axis's period inlined into one
+    /// function, a period map's column in two registers (no FMA, whose single rounding would
+    /// change the result: the arithmetic is the same whatever the vector width).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2")]
+    unsafe fn step_avx2(
+        &mut self,
+        k: Avx2,
+        setpoint: &AxisVec,
+        time_s: f64,
+        actual: &mut AxisVec,
+        following_error: &mut AxisVec,
+    ) -> Result<bool> {
+        self.step_inline(k, setpoint, time_s, actual, following_error)
     }
 
     #[inline(always)]
-    fn step_inline(
+    fn step_inline<K: ColumnProduct>(
         &mut self,
+        k: K,
         setpoint: &AxisVec,
         time_s: f64,
         actual: &mut AxisVec,
@@ -106,7 +128,7 @@ impl Drives {
     ) -> Result<bool> {
         let mut settled = true;
         for (servo, &a) in self.servos.iter_mut().zip(self.axes) {
-            servo.advance(setpoint[a], time_s)?;
+            servo.advance_with(k, setpoint[a], time_s)?;
             let fe = servo.following_error();
             actual[a] = servo.actual();
             following_error[a] = fe;
@@ -130,35 +152,48 @@ impl Drives {
         time_s: f64,
         actual: &mut AxisVec,
     ) -> Result<()> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU has AVX, checked at run time just above.
-            return unsafe { self.step_actual_avx(setpoint, time_s, actual) };
+        match self.width {
+            // SAFETY: the CPU has AVX2, as the token says.
+            #[cfg(target_arch = "x86_64")]
+            Width::Avx2(k) => unsafe { self.step_actual_avx2(k, setpoint, time_s, actual) },
+            Width::Portable => self.step_actual_portable(setpoint, time_s, actual),
         }
-        self.step_actual_inline(setpoint, time_s, actual)
     }
 
-    /// [`Drives::step_actual_into`] compiled for AVX (see [`Drives::step_avx`]).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn step_actual_avx(
+    /// [`Drives::step_actual_into`] for any CPU (out of line, see [`Drives::step_portable`]).
+    #[inline(never)]
+    fn step_actual_portable(
         &mut self,
         setpoint: &AxisVec,
         time_s: f64,
         actual: &mut AxisVec,
     ) -> Result<()> {
-        self.step_actual_inline(setpoint, time_s, actual)
+        self.step_actual_inline(Portable, setpoint, time_s, actual)
+    }
+
+    /// [`Drives::step_actual_into`] compiled for AVX2 (see [`Drives::step_avx2`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2")]
+    unsafe fn step_actual_avx2(
+        &mut self,
+        k: Avx2,
+        setpoint: &AxisVec,
+        time_s: f64,
+        actual: &mut AxisVec,
+    ) -> Result<()> {
+        self.step_actual_inline(k, setpoint, time_s, actual)
     }
 
     #[inline(always)]
-    fn step_actual_inline(
+    fn step_actual_inline<K: ColumnProduct>(
         &mut self,
+        k: K,
         setpoint: &AxisVec,
         time_s: f64,
         actual: &mut AxisVec,
     ) -> Result<()> {
         for (servo, &a) in self.servos.iter_mut().zip(self.axes) {
-            servo.advance_twin(setpoint[a], time_s)?;
+            servo.advance_twin_with(k, setpoint[a], time_s)?;
             actual[a] = servo.actual();
         }
         Ok(())

@@ -25,9 +25,8 @@
 //! `libm::exp`).
 
 use super::lane_servo::{lane_product, Lanes, BLOCK, LANES};
-use super::servo::{
-    all_finite, stribeck_bound_decay, AxisServo, Regime, TwinState, N_INPUT, N_STATE,
-};
+use super::product::all_finite;
+use super::servo::{stribeck_bound_decay, AxisServo, Regime, TwinState, N_INPUT, N_STATE};
 use crate::{Axis, AxisVec};
 use libm::exp;
 
@@ -273,7 +272,7 @@ impl DriveLaneGroup {
         dv_guess: &Lanes,
         s_new: f64,
     ) -> bool {
-        if !all_finite(&std::array::from_fn(|r| y[r][l])) {
+        if !all_finite::<N_STATE>(&std::array::from_fn(|r| y[r][l])) {
             return false;
         }
         let v0 = st.x[3][l];

@@ -20,7 +20,8 @@
 //! scalar servo then decides, counts and reports exactly as in a single run. Every lane's
 //! positions are therefore the single run's, bit for bit, whatever the vector width.
 
-use super::servo::{all_finite, AxisServo, TwinState, N_STATE, N_TWIN_INPUT};
+use super::product::all_finite;
+use super::servo::{AxisServo, TwinState, N_STATE, N_TWIN_INPUT};
 use crate::{Axis, AxisVec};
 
 /// Setpoints stepped at a time (a lane group's outputs: [`BLOCK`] per servo).
@@ -166,7 +167,7 @@ impl TwinLanes {
                 & q.is_finite()
                 & (st.x[4][l].abs() <= self.half_limit[l])
                 & !(y[4][l].abs() > self.half_limit[l])
-                & all_finite(&std::array::from_fn(|r| y[r][l]))
+                & all_finite::<N_STATE>(&std::array::from_fn(|r| y[r][l]))
                 & !((s_new[l] - x_t).abs() > self.fe_limit[l])
                 & !((s_new[l] - x_m).abs() > self.fe_limit[l]);
             let take = |new: f64, old: f64| if ok[l] { new } else { old };

@@ -7,6 +7,7 @@ pub mod lane_drive;
 pub mod lane_servo;
 pub mod lanes;
 pub mod presliding;
+mod product;
 pub mod servo;
 
 pub use drives::{Drives, DrivesState};

@@ -64,6 +64,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use super::presliding::{Presliding, ReversalValue};
+use super::product::{all_finite, ColumnProduct, Portable};
 use crate::error::{Error, Result};
 use crate::input::drive::{si_per_unit, AxisDrive, Model};
 use crate::Axis;
@@ -290,29 +291,16 @@ impl Regime {
     }
 }
 
-/// Whether the state variables the divergence check covers (all but `x_m,tick`, which is
-/// an earlier `x_m`) are finite. `v - v` is 0 for a finite v and NaN otherwise: the sum is
-/// 0 exactly when every one is finite (one comparison instead of six).
-#[inline(always)]
-#[allow(clippy::eq_op)] // `v - v` on purpose: NaN for a non-finite v
-pub(super) fn all_finite(x: &[f64; N_STATE]) -> bool {
-    let probe = (x[0] - x[0])
-        + (x[1] - x[1])
-        + (x[2] - x[2])
-        + (x[3] - x[3])
-        + (x[4] - x[4])
-        + (x[5] - x[5]);
-    probe == 0.0
-}
-
-/// `x.round()` for `x ≥ 0` (halves away from zero), at most `max`; written out because
-/// `f64::round` is a library call on baseline x86-64.
+/// `x.round()` for `x ≥ 0` (halves away from zero), at most `max` (0 for `x < 0`, `max`
+/// for NaN, which `min` drops); written out because `f64::round` is a library call on
+/// baseline x86-64. Through `i64`, whose conversions are one instruction each there (those
+/// of `usize` are not), on `x` clamped to `[0, max + 1]`.
 #[inline]
 fn round_index(x: f64, max: usize) -> usize {
-    let x = x.min(max as f64 + 1.0);
-    let i = x as usize; // truncates; NaN gives 0 as `round` would
+    let x = x.min(max as f64 + 1.0).max(0.0);
+    let i = x as i64; // truncates
     let i = if x - i as f64 >= 0.5 { i + 1 } else { i };
-    i.min(max)
+    (i as usize).min(max)
 }
 
 /// The period maps of one axis for a grid of friction slopes, so that the map also applies
@@ -366,25 +354,31 @@ impl PeriodMap {
     /// to a sum leaves it unchanged unless the sum is `-0`, which a sum that starts at `+0`
     /// never is.
     #[inline(always)]
-    fn apply_without_friction(&self, x: &[f64; N_STATE], ds: f64, f_ff: f64) -> [f64; N_STATE] {
+    fn apply_without_friction<K: ColumnProduct>(
+        &self,
+        k: K,
+        x: &[f64; N_STATE],
+        ds: f64,
+        f_ff: f64,
+    ) -> ([f64; N_STATE], bool) {
         let input = [x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff];
-        self.dispatch(&input)
+        self.dispatch(k, &input)
     }
 
+    /// The product over the first `N` columns, column by column by `k` (the same
+    /// multiplications and additions in the same order whatever the vector width, so the
+    /// result does not depend on the CPU), and whether it is finite ([`all_finite`]).
+    /// Inlined into its caller, which picks `k`: [`super::Drives`] runs every axis in one
+    /// function compiled for the widest vectors the CPU has.
     #[inline(always)]
-    fn dispatch<const N: usize>(&self, input: &[f64; N]) -> [f64; N_STATE] {
-        // Inlined into its caller, which picks the vector width: `Drives` runs every axis in
-        // one AVX-enabled function where the CPU has AVX (see `Drives::step`).
-        self.product(input)
-    }
-
-    /// The product, column by column (the same multiplications and additions in the same
-    /// order whatever the vector width, so the result does not depend on the CPU), over the
-    /// first `N` columns.
-    #[inline(always)]
-    fn product<const N: usize>(&self, input: &[f64; N]) -> [f64; N_STATE] {
-        let acc = column_product(&self.cols, input);
-        [acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]]
+    fn dispatch<K: ColumnProduct, const N: usize>(
+        &self,
+        k: K,
+        input: &[f64; N],
+    ) -> ([f64; N_STATE], bool) {
+        let acc = k.product(&self.cols, input);
+        let y = [acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]];
+        (y, k.finite(&acc))
     }
 
     /// The first `N` columns without their padding.
@@ -400,7 +394,7 @@ impl PeriodMap {
     fn largest_substep_velocity_change(&self, input: &[f64; N_INPUT]) -> f64 {
         let mut largest = 0.0f64;
         for cols in &self.substep_velocities {
-            for v in column_product(cols, input) {
+            for v in Portable.product(cols, input) {
                 largest = largest.max((v - input[3]).abs());
             }
         }
@@ -414,18 +408,6 @@ fn map_input(x: &[f64; N_STATE], ds: f64, f_ff: f64, friction: f64, offset: f64)
     [
         x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff, friction, offset,
     ]
-}
-
-/// `Σ_j cols[j] u_j`, 8 lanes: one multiply and one add per column and lane, in column order.
-#[inline(always)]
-fn column_product<const N: usize>(cols: &[[f64; 8]; N_INPUT], input: &[f64; N]) -> [f64; 8] {
-    let mut acc = [0.0; 8];
-    for (col, &u) in cols.iter().zip(input) {
-        for (a, c) in acc.iter_mut().zip(col) {
-            *a += c * u;
-        }
-    }
-    acc
 }
 
 impl AxisServo {
@@ -725,7 +707,13 @@ impl AxisServo {
     /// only regime condition is the force within half its limit at both ends (the same
     /// decisions and the same arithmetic as the general path, without its friction terms).
     #[inline(always)]
-    fn try_lti_period(&mut self, s_old: f64, s_new: f64, f_ff: f64) -> bool {
+    fn try_lti_period<K: ColumnProduct>(
+        &mut self,
+        k: K,
+        s_old: f64,
+        s_new: f64,
+        f_ff: f64,
+    ) -> bool {
         let limit = 0.5 * self.force_limit;
         if self.force.abs() > limit {
             return false;
@@ -742,8 +730,8 @@ impl AxisServo {
             self.integral,
             self.x_m_tick - s_old,
         ];
-        let y = map.apply_without_friction(&x, s_new - s_old, f_ff);
-        if y[4].abs() > limit || !all_finite(&y) {
+        let (y, finite) = map.apply_without_friction(k, &x, s_new - s_old, f_ff);
+        if y[4].abs() > limit || !finite {
             return false;
         }
         self.x_m = y[0] + s_old;
@@ -773,12 +761,18 @@ impl AxisServo {
     /// the friction's linearisation error is within tolerance ([`ExactMaps`]); false (state
     /// untouched) otherwise.
     #[inline(always)]
-    fn try_exact_period(&mut self, s_old: f64, s_new: f64, f_ff: f64) -> bool {
+    fn try_exact_period<K: ColumnProduct>(
+        &mut self,
+        k: K,
+        s_old: f64,
+        s_new: f64,
+        f_ff: f64,
+    ) -> bool {
         let Some(exact) = self.exact.as_deref() else {
             return false;
         };
         if exact.lti {
-            return self.try_lti_period(s_old, s_new, f_ff);
+            return self.try_lti_period(k, s_old, s_new, f_ff);
         }
         let x = [
             self.x_m - s_old,
@@ -824,8 +818,8 @@ impl AxisServo {
         let map = exact.maps[index].get_or_init(|| self.period_map(grid_slope, true));
         let friction = f0 - grid_slope * v0;
         let input = map_input(&x, s_new - s_old, f_ff, friction, regime.offset);
-        let y = map.dispatch(&input);
-        if !all_finite(&y) {
+        let (y, finite) = map.dispatch(k, &input);
+        if !finite {
             return false; // the substeps find it too, and end_period reports it
         }
         let dv = 2.0 * (y[3] - x[3]).abs().max(dv_guess);
@@ -1014,6 +1008,17 @@ impl AxisServo {
     /// [`AxisServo::actual`] and the like: each is a product).
     #[inline(always)]
     pub fn advance(&mut self, setpoint: f64, time_s: f64) -> Result<()> {
+        self.advance_with(Portable, setpoint, time_s)
+    }
+
+    /// [`AxisServo::advance`] with the period map's product by `k` (the same result).
+    #[inline(always)]
+    pub(super) fn advance_with<K: ColumnProduct>(
+        &mut self,
+        k: K,
+        setpoint: f64,
+        time_s: f64,
+    ) -> Result<()> {
         if !setpoint.is_finite() {
             return Err(self.diverged(time_s, format!("the setpoint is not finite ({setpoint})")));
         }
@@ -1027,7 +1032,7 @@ impl AxisServo {
                 self.step_first_order(s_old, s_new, v_ff);
                 false
             }
-            Model::Cascade => self.step_cascade(s_old, s_new, v_ff, a_ff),
+            Model::Cascade => self.step_cascade(k, s_old, s_new, v_ff, a_ff),
         };
         self.setpoint = s_new;
         self.v_ff = v_ff;
@@ -1040,6 +1045,17 @@ impl AxisServo {
     /// wherever the map does not apply; any other axis goes to `advance` at once.
     #[inline(always)]
     pub fn advance_twin(&mut self, setpoint: f64, time_s: f64) -> Result<()> {
+        self.advance_twin_with(Portable, setpoint, time_s)
+    }
+
+    /// [`AxisServo::advance_twin`] with the period map's product by `k` (the same result).
+    #[inline(always)]
+    pub(super) fn advance_twin_with<K: ColumnProduct>(
+        &mut self,
+        k: K,
+        setpoint: f64,
+        time_s: f64,
+    ) -> Result<()> {
         let limit = 0.5 * self.force_limit;
         let map = match self.exact.as_deref() {
             Some(exact) if exact.lti && setpoint.is_finite() && self.force.abs() <= limit => {
@@ -1048,7 +1064,7 @@ impl AxisServo {
             _ => None,
         };
         let Some(map) = map else {
-            return self.advance(setpoint, time_s);
+            return self.advance_with(k, setpoint, time_s);
         };
         let s_new = setpoint * self.scale;
         let s_old = self.setpoint;
@@ -1064,9 +1080,9 @@ impl AxisServo {
             self.integral,
             self.x_m_tick - s_old,
         ];
-        let y = map.apply_without_friction(&x, s_new - s_old, f_ff);
-        if y[4].abs() > limit || !all_finite(&y) {
-            return self.advance(setpoint, time_s);
+        let (y, finite) = map.apply_without_friction(k, &x, s_new - s_old, f_ff);
+        if y[4].abs() > limit || !finite {
+            return self.advance_with(k, setpoint, time_s);
         }
         let x_t_old = self.x_t;
         self.x_m = y[0] + s_old;
@@ -1183,9 +1199,16 @@ impl AxisServo {
     /// by `n_sub` mechanics substeps under the held force command.
     #[inline(always)]
     /// True when the exact map took the period (its result checked finite).
-    fn step_cascade(&mut self, s_old: f64, s_new: f64, v_ff: f64, a_ff: f64) -> bool {
+    fn step_cascade<K: ColumnProduct>(
+        &mut self,
+        k: K,
+        s_old: f64,
+        s_new: f64,
+        v_ff: f64,
+        a_ff: f64,
+    ) -> bool {
         let f_ff = self.aff_mass * a_ff;
-        if self.try_exact_period(s_old, s_new, f_ff) {
+        if self.try_exact_period(k, s_old, s_new, f_ff) {
             self.periods_exact += 1;
             return true;
         }
@@ -1315,6 +1338,21 @@ fn play(x_m: f64, x_t: f64, half: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::input::drive::{DriveConfig, FrictionConfig, ServoConfig};
+
+    /// `round_index` is `f64::round` clamped to `[0, max]`, halves away from zero.
+    #[test]
+    fn round_index_rounds_halves_up_and_clamps() {
+        for k in -40..=700 {
+            let x = k as f64 * 0.125;
+            let expected = x.round().clamp(0.0, 64.0) as usize;
+            assert_eq!(round_index(x, 64), expected, "x = {x}");
+        }
+        assert_eq!(round_index(0.5 - f64::EPSILON / 4.0, 64), 0);
+        assert_eq!(round_index(f64::NAN, 64), 64);
+        assert_eq!(round_index(f64::INFINITY, 64), 64);
+        assert_eq!(round_index(f64::NEG_INFINITY, 64), 0);
+        assert_eq!(round_index(-0.0, 64), 0);
+    }
 
     #[test]
     fn dead_zone_play_and_stribeck_bound_follow_their_definitions() {

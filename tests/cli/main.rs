@@ -1,6 +1,6 @@
 //! The command line (`src/cli/`) as users and scripts meet it: JSON shapes, exit codes, error
 //! messages (insta snapshots in `snapshots/`), a new user's first runs, sharded runs merged
-//! back, the Dask example, every command the docs show, and how the binary is linked.
+//! back, the Dask example, and every command the docs show.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -10,7 +10,6 @@ mod bounds;
 mod dask_example;
 mod docs_commands;
 mod messages;
-mod process;
 mod run_folders;
 mod scale_out;
 mod scripts;

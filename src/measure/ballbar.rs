@@ -43,6 +43,8 @@
 //! are short excursions above a smooth local baseline; each is attributed to the axis whose
 //! reversal angle is nearest to its onset.
 
+use std::borrow::Cow;
+
 use nalgebra::{DMatrix, DVector, Matrix3, Point3, Rotation3, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -704,8 +706,8 @@ const FOURIER: usize = 1 + 2 * SMOOTH_ORDER;
 /// each fit repeats them only down to its first step.
 struct ShapeFit<'a> {
     v: &'a [f64],
-    /// cos and sin of 360° m / n for each m.
-    trig: &'a [(f64, f64)],
+    /// cos and sin of 360° m / n for each m: the trace's [`unit_circle`].
+    trig: Cow<'static, [(f64, f64)]>,
     moment: [f64; FOURIER],
     atb_fourier: [f64; FOURIER],
     moment_v: f64,
@@ -713,7 +715,7 @@ struct ShapeFit<'a> {
 
 /// cos and sin of 360° m / n for m in 0..n: once per m rather than once per harmonic and
 /// bin, and for the traces' [`N_BINS`] once per process.
-fn unit_circle(n: usize) -> std::borrow::Cow<'static, [(f64, f64)]> {
+fn unit_circle(n: usize) -> Cow<'static, [(f64, f64)]> {
     let table = |n: usize| -> Vec<(f64, f64)> {
         (0..n)
             .map(|m| {
@@ -723,32 +725,44 @@ fn unit_circle(n: usize) -> std::borrow::Cow<'static, [(f64, f64)]> {
             .collect()
     };
     static BINS: std::sync::OnceLock<Vec<(f64, f64)>> = std::sync::OnceLock::new();
-    match n == N_BINS {
-        true => std::borrow::Cow::Borrowed(BINS.get_or_init(|| table(N_BINS))),
-        false => std::borrow::Cow::Owned(table(n)),
+    if n == N_BINS {
+        Cow::Borrowed(BINS.get_or_init(|| table(N_BINS)))
+    } else {
+        Cow::Owned(table(n))
+    }
+}
+
+/// The Fourier part of row i of A after its leading 1: `f(j, cos, sin)` for each harmonic
+/// k, whose cos and sin are columns j = 2k - 1 and j + 1 (entry (k i) mod n of `trig`, the
+/// [`unit_circle`] of n bins).
+#[inline(always)]
+fn each_harmonic(trig: &[(f64, f64)], i: usize, mut f: impl FnMut(usize, f64, f64)) {
+    let n = trig.len();
+    let mut m = 0;
+    for k in 1..=SMOOTH_ORDER {
+        m += i; // (k i) mod n: both terms below n
+        if m >= n {
+            m -= n;
+        }
+        let (cos, sin) = trig[m];
+        f(2 * k - 1, cos, sin);
     }
 }
 
 impl<'a> ShapeFit<'a> {
-    /// The sums over all bins of trace `v`, with `trig` its [`unit_circle`].
-    fn new(v: &'a [f64], trig: &'a [(f64, f64)]) -> Self {
+    /// The sums over all bins of trace `v`.
+    fn new(v: &'a [f64]) -> Self {
         let n = v.len();
         // The traces have N_BINS bins: far more than the harmonics need for orthogonality.
-        debug_assert!(n > 2 * SMOOTH_ORDER && trig.len() == n);
-        let mut fit = ShapeFit {
-            v,
-            trig,
-            moment: [0.0; FOURIER],
-            atb_fourier: [0.0; FOURIER],
-            moment_v: 0.0,
-        };
+        debug_assert!(n > 2 * SMOOTH_ORDER);
+        let trig = unit_circle(n);
         let (mut moment, mut atb, mut moment_v) = ([0.0; FOURIER], [0.0; FOURIER], 0.0);
         for i in (0..n).rev() {
             let (vi, fi) = (v[i], i as f64);
             // Column 0 is 1.
             moment[0] += fi * 1.0;
             atb[0] += 1.0 * vi;
-            fit.each_harmonic(i, |j, cos, sin| {
+            each_harmonic(&trig, i, |j, cos, sin| {
                 moment[j] += fi * cos;
                 atb[j] += cos * vi;
                 moment[j + 1] += fi * sin;
@@ -756,24 +770,12 @@ impl<'a> ShapeFit<'a> {
             });
             moment_v += fi * vi;
         }
-        (fit.moment, fit.atb_fourier, fit.moment_v) = (moment, atb, moment_v);
-        fit
-    }
-
-    /// The Fourier part of row i of A after its leading 1: `f(j, cos, sin)` for each harmonic
-    /// k, whose cos and sin are columns j = 2k - 1 and j + 1 (entry (k i) mod n of the table).
-    #[inline(always)]
-    fn each_harmonic(&self, i: usize, mut f: impl FnMut(usize, f64, f64)) {
-        let n = self.v.len();
-        let trig = &self.trig[..n];
-        let mut m = 0;
-        for k in 1..=SMOOTH_ORDER {
-            m += i; // (k i) mod n: both terms below n
-            if m >= n {
-                m -= n;
-            }
-            let (cos, sin) = trig[m];
-            f(2 * k - 1, cos, sin);
+        ShapeFit {
+            v,
+            trig,
+            moment,
+            atb_fourier: atb,
+            moment_v,
         }
     }
 
@@ -816,7 +818,7 @@ impl<'a> ShapeFit<'a> {
     #[inline(always)]
     fn smooth_at(&self, xf: &[f64; FOURIER], i: usize) -> f64 {
         let mut smooth = 1.0 * xf[0];
-        self.each_harmonic(i, |j, cos, sin| {
+        each_harmonic(&self.trig, i, |j, cos, sin| {
             smooth += cos * xf[j];
             smooth += sin * xf[j + 1];
         });
@@ -835,12 +837,13 @@ impl<'a> ShapeFit<'a> {
         let mut suffix_v = vec![0.0; step_indices.len()];
         let (mut sum, mut sum_v) = ([0.0; FOURIER], 0.0);
         let mut next = 0;
+        let trig: &[(f64, f64)] = &self.trig;
         for i in (0..n).rev() {
             if next == order.len() {
                 break;
             }
             sum[0] += 1.0;
-            self.each_harmonic(i, |j, cos, sin| {
+            each_harmonic(trig, i, |j, cos, sin| {
                 sum[j] += cos;
                 sum[j + 1] += sin;
             });
@@ -953,8 +956,7 @@ fn find_steps(c: &[f64], threshold: f64, anchors: &[usize]) -> (Vec<Step>, Vec<f
     // First every region of the statistic at once (steps 10-20 deg apart each have their
     // own plateau, and fitting them together keeps the smooth shape from bending into
     // them), then greedily whatever the joint fit leaves.
-    let trig = unit_circle(c.len());
-    let shape = ShapeFit::new(c, &trig);
+    let shape = ShapeFit::new(c);
     let (fit0, _) = shape.fit(&[]);
     let r0: Vec<f64> = c.iter().zip(&fit0).map(|(x, f)| x - f).collect();
     let stat = step_statistic(&r0);
@@ -1002,8 +1004,7 @@ fn find_steps(c: &[f64], threshold: f64, anchors: &[usize]) -> (Vec<Step>, Vec<f
 /// kept if it stands out ([`eliminate_weak_steps`]). Anchors closer than [`STEP_GAP_DEG`]
 /// share one step.
 fn anchored_steps(c: &[f64], threshold: f64, anchors: &[usize]) -> (Vec<Step>, Vec<f64>) {
-    let trig = unit_circle(c.len());
-    let shape = ShapeFit::new(c, &trig);
+    let shape = ShapeFit::new(c);
     // The residual of the smooth fit, only in the anchors' windows.
     let fit0 = shape.without_steps();
     let r0 = |i: usize| c[i] - fit0(i);
@@ -1418,8 +1419,7 @@ mod tests {
                         - 0.7 * u(k2, i)
                 })
                 .collect();
-            let trig = unit_circle(n);
-            let shape = ShapeFit::new(&v, &trig);
+            let shape = ShapeFit::new(&v);
             let (smooth, none) = shape.fit(&[]);
             assert!(none.is_empty());
             let at = shape.without_steps();

@@ -173,7 +173,7 @@ impl Sink for TraceSink {
         let Some(geometry) = &self.geometry else {
             return Ok(());
         };
-        if s.index % self.every != 0 || !is_measured(s, self.measured) {
+        if self.skips(s.index) || !is_measured(s, self.measured) {
             return Ok(());
         }
         let r = geometry.read(s);
@@ -182,10 +182,17 @@ impl Sink for TraceSink {
 }
 
 impl TraceSink {
+    /// Whether sample `index` falls between every `every`-th one (the division only when
+    /// samples are skipped at all).
+    #[inline]
+    fn skips(&self, index: u64) -> bool {
+        self.every > 1 && index % self.every != 0
+    }
+
     /// Records `s` with the ball bar's reading `r` of it (already taken by the ball bar, so
     /// the kinematics run once per sample); skips samples between every `every`-th one.
     pub fn push_reading(&mut self, s: &Sample, r: &BarReading) -> Result<()> {
-        if self.geometry.is_none() || (self.every > 1 && s.index % self.every != 0) {
+        if self.geometry.is_none() || self.skips(s.index) {
             return Ok(());
         }
         if self.rows >= self.max_rows {

@@ -452,4 +452,3 @@ fn fmt_scale(scale: f64) -> String {
     let s = format!("{scale:.1}");
     s.trim_end_matches(".0").to_string()
 }
-

@@ -16,7 +16,7 @@
 //! columns the report plots) into one [`Trace`] per format: the one reader of trace files.
 
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Write};
+use std::io::{BufReader, BufWriter, Write};
 
 use arrow::datatypes::ToByteSlice;
 use std::path::{Path, PathBuf};
@@ -24,8 +24,8 @@ use std::path::{Path, PathBuf};
 use super::files::temporary_path;
 use super::trace_parquet::ParquetTrace;
 use super::trace_rows::{
-    centred_from_inputs, write_error, Block, SpillFile, AXES, BLOCK_ROWS, FIXED_COLUMNS, LINE,
-    THETA, TIME,
+    centred_from_inputs, read_f64s_into, write_error, Block, SpillFile, AXES, BLOCK_ROWS,
+    FIXED_COLUMNS, LINE, THETA, TIME,
 };
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
@@ -403,7 +403,9 @@ impl ParquetRuns {
             let inputs = match spilled.as_mut().filter(|_| from_file > 0) {
                 Some(reader) => {
                     let n = need.min(from_file);
-                    read_f64s(reader, n, &mut read).map_err(write_error(&path))?;
+                    read.clear();
+                    read.resize(n, 0.0);
+                    read_f64s_into(reader, &mut read).map_err(write_error(&path))?;
                     read.extend_from_slice(&self.inputs[at..at + need - n]);
                     (from_file, at) = (from_file - n, at + need - n);
                     &read[..]
@@ -433,19 +435,6 @@ impl ParquetRuns {
             None => ParquetTrace::create(self.tmp.clone(), self.names.clone())?.finish(),
         }
     }
-}
-
-/// Reads `n` f64 (as [`SpillFile`] holds them) from `reader` into `out` (emptied first).
-fn read_f64s(reader: &mut impl Read, n: usize, out: &mut Vec<f64>) -> std::io::Result<()> {
-    let mut bytes = vec![0u8; 8 * n];
-    reader.read_exact(&mut bytes)?;
-    out.clear();
-    out.extend(
-        bytes
-            .chunks_exact(8)
-            .map(|b| f64::from_ne_bytes(b.try_into().expect("8 bytes"))),
-    );
-    Ok(())
 }
 
 /// The trace's columns: direction, time, line, θ, per axis the commanded and actual

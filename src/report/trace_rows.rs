@@ -224,16 +224,23 @@ impl Block {
 
     /// Reads a full block written by [`Block::write_raw`] from `input`.
     pub fn read_raw(&mut self, input: &mut impl Read) -> std::io::Result<()> {
-        let mut bytes = vec![0u8; 8 * BLOCK_ROWS];
         for column in self.values.chunks_exact_mut(STRIDE) {
-            input.read_exact(&mut bytes)?;
-            for (v, b) in column[..BLOCK_ROWS].iter_mut().zip(bytes.chunks_exact(8)) {
-                *v = f64::from_ne_bytes(b.try_into().expect("8 bytes"));
-            }
+            read_f64s_into(input, &mut column[..BLOCK_ROWS])?;
         }
         self.rows = BLOCK_ROWS;
         Ok(())
     }
+}
+
+/// Fills `out` with f64 read from `input`, in the machine's byte order (as [`SpillFile`]
+/// holds them): one read of the whole slice.
+pub(super) fn read_f64s_into(input: &mut impl Read, out: &mut [f64]) -> std::io::Result<()> {
+    let mut bytes = vec![0u8; 8 * out.len()];
+    input.read_exact(&mut bytes)?;
+    for (v, b) in out.iter_mut().zip(bytes.chunks_exact(8)) {
+        *v = f64::from_ne_bytes(b.try_into().expect("8 bytes"));
+    }
+    Ok(())
 }
 
 /// The centred deviations of rows given as `(dL, sin θ, cos θ)` in a row

@@ -96,13 +96,8 @@ impl ParquetTrace {
         Gather {
             small: std::mem::take(&mut self.pending),
             large: Vec::new(),
+            offset: self.offset,
         }
-    }
-
-    /// Appends `bytes` to the pages being gathered.
-    fn push<'a>(&mut self, g: &mut Gather<'a>, bytes: &'a [u8]) {
-        self.offset += bytes.len() as u64;
-        g.push(bytes);
     }
 
     /// Writes the gathered pages in one system call (as few as the kernel takes), with no
@@ -111,66 +106,11 @@ impl ParquetTrace {
     fn flush(&mut self, g: Gather<'_>) -> Result<()> {
         let mut slices = g.slices();
         write_all_vectored(&mut self.file, &mut slices).map_err(write_error(&self.tmp))?;
+        self.offset = g.offset;
         let mut spare = g.small;
         spare.clear();
         self.pending = spare;
         Ok(())
-    }
-
-    /// Adds one page: its header (a dictionary page, or a data page of `encoding`), then
-    /// `data`, of `values` values.
-    fn page<'a>(
-        &mut self,
-        g: &mut Gather<'a>,
-        dictionary: bool,
-        values: usize,
-        encoding: i32,
-        data: &'a [u8],
-    ) {
-        let mut h = Compact::new();
-        h.i32(
-            1,
-            if dictionary {
-                DICTIONARY_PAGE
-            } else {
-                DATA_PAGE
-            },
-        );
-        h.i32(2, data.len() as i32);
-        h.i32(3, data.len() as i32);
-        h.begin(if dictionary { 7 } else { 5 });
-        h.i32(1, values as i32);
-        h.i32(2, encoding);
-        if !dictionary {
-            // Definition and repetition levels (none: every column is required).
-            h.i32(3, RLE);
-            h.i32(4, RLE);
-        }
-        h.end();
-        h.end();
-        self.offset += h.bytes.len() as u64;
-        g.small.extend_from_slice(&h.bytes);
-        self.push(g, data);
-    }
-
-    /// Adds a plain-encoded column chunk of `values` values from `data`.
-    fn plain<'a>(
-        &mut self,
-        g: &mut Gather<'a>,
-        physical: i32,
-        values: usize,
-        data: &'a [u8],
-        min_max: Option<([u8; 8], [u8; 8])>,
-    ) -> Chunk {
-        let data_offset = self.offset;
-        self.page(g, false, values, PLAIN, data);
-        Chunk {
-            physical,
-            dictionary_offset: None,
-            data_offset,
-            size: self.offset - data_offset,
-            min_max,
-        }
     }
 
     /// Writes the rows of `block`, of the run `direction`, as one row group: every column
@@ -192,37 +132,31 @@ impl ParquetTrace {
         } else {
             b"ccw"
         };
-        let dictionary_offset = self.offset;
+        let dictionary_offset = g.offset;
         let mut dictionary = (name.len() as u32).to_le_bytes().to_vec();
         dictionary.extend_from_slice(name);
-        self.page(&mut g, true, 1, PLAIN, &dictionary);
-        let data_offset = self.offset;
+        g.page(true, 1, PLAIN, &dictionary);
+        let data_offset = g.offset;
         let mut indices = Compact::new();
         indices.bytes.push(1);
         indices.varint((rows as u64) << 1);
         indices.bytes.push(0);
-        self.page(&mut g, false, rows, RLE_DICTIONARY, &indices.bytes);
+        g.page(false, rows, RLE_DICTIONARY, &indices.bytes);
         chunks.push(Chunk {
             physical: BYTE_ARRAY,
             dictionary_offset: Some(dictionary_offset),
             data_offset,
-            size: self.offset - dictionary_offset,
+            size: g.offset - dictionary_offset,
             min_max: None,
         });
         let time = block.column(TIME);
-        chunks.push(self.plain(
-            &mut g,
-            DOUBLE,
-            rows,
-            time.to_byte_slice(),
-            min_max_f64(time),
-        ));
+        chunks.push(g.plain(DOUBLE, rows, time.to_byte_slice(), min_max_f64(time)));
         let min_max = lines.iter().min().zip(lines.iter().max());
         let min_max = min_max.map(|(lo, hi)| (lo.to_le_bytes(), hi.to_le_bytes()));
-        chunks.push(self.plain(&mut g, INT64, rows, lines.to_byte_slice(), min_max));
+        chunks.push(g.plain(INT64, rows, lines.to_byte_slice(), min_max));
         for k in std::iter::once(THETA).chain(AXES..block.width()) {
             let column = block.column(k);
-            chunks.push(self.plain(&mut g, DOUBLE, rows, column.to_byte_slice(), None));
+            chunks.push(g.plain(DOUBLE, rows, column.to_byte_slice(), None));
         }
         let written = self.flush(g);
         self.lines = lines;
@@ -244,7 +178,7 @@ impl ParquetTrace {
     /// Writes the centred deviations of row group `group`, its last column.
     pub fn write_centred(&mut self, group: usize, centred: &[f64]) -> Result<()> {
         let mut g = self.gather();
-        let chunk = self.plain(&mut g, DOUBLE, centred.len(), centred.to_byte_slice(), None);
+        let chunk = g.plain(DOUBLE, centred.len(), centred.to_byte_slice(), None);
         self.flush(g)?;
         self.groups[group].1.push(chunk);
         Ok(())
@@ -256,7 +190,7 @@ impl ParquetTrace {
         let length = (footer.len() as u32).to_le_bytes();
         let mut g = self.gather();
         for bytes in [&footer[..], &length, b"PAR1"] {
-            self.push(&mut g, bytes);
+            g.push(bytes);
         }
         self.flush(g)
     }
@@ -386,14 +320,71 @@ fn min_max_f64(values: &[f64]) -> Option<([u8; 8], [u8; 8])> {
 struct Gather<'a> {
     small: Vec<u8>,
     large: Vec<(usize, &'a [u8])>,
+    /// The file's length with the bytes gathered.
+    offset: u64,
 }
 
 impl<'a> Gather<'a> {
+    /// Appends `bytes`: copied if small, by reference otherwise.
     fn push(&mut self, bytes: &'a [u8]) {
         if bytes.len() < 1 << 12 {
-            self.small.extend_from_slice(bytes);
+            self.copy(bytes);
         } else {
+            self.offset += bytes.len() as u64;
             self.large.push((self.small.len(), bytes));
+        }
+    }
+
+    /// Appends a copy of `bytes`.
+    fn copy(&mut self, bytes: &[u8]) {
+        self.offset += bytes.len() as u64;
+        self.small.extend_from_slice(bytes);
+    }
+
+    /// Adds one page: its header (a dictionary page, or a data page of `encoding`), then
+    /// `data`, of `values` values.
+    fn page(&mut self, dictionary: bool, values: usize, encoding: i32, data: &'a [u8]) {
+        let mut h = Compact::new();
+        h.i32(
+            1,
+            if dictionary {
+                DICTIONARY_PAGE
+            } else {
+                DATA_PAGE
+            },
+        );
+        h.i32(2, data.len() as i32);
+        h.i32(3, data.len() as i32);
+        h.begin(if dictionary { 7 } else { 5 });
+        h.i32(1, values as i32);
+        h.i32(2, encoding);
+        if !dictionary {
+            // Definition and repetition levels (none: every column is required).
+            h.i32(3, RLE);
+            h.i32(4, RLE);
+        }
+        h.end();
+        h.end();
+        self.copy(&h.bytes);
+        self.push(data);
+    }
+
+    /// Adds a plain-encoded column chunk of `values` values from `data`.
+    fn plain(
+        &mut self,
+        physical: i32,
+        values: usize,
+        data: &'a [u8],
+        min_max: Option<([u8; 8], [u8; 8])>,
+    ) -> Chunk {
+        let data_offset = self.offset;
+        self.page(false, values, PLAIN, data);
+        Chunk {
+            physical,
+            dictionary_offset: None,
+            data_offset,
+            size: self.offset - data_offset,
+            min_max,
         }
     }
 

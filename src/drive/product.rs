@@ -69,7 +69,10 @@ impl ColumnProduct for Portable {
 }
 
 /// The product in two AVX registers a column. Use it inside functions compiled for AVX2
-/// (`#[target_feature]`): elsewhere its intrinsics stay calls.
+/// (`#[target_feature]`): elsewhere its intrinsics stay calls. Its intrinsics are all AVX's,
+/// but the token asks for AVX2 too: AVX2's broadcast from a register (`vbroadcastsd ymm,
+/// xmm`) makes each column's `_mm256_set1_pd` one instruction, where AVX alone needs two
+/// (`vmovddup` and `vinsertf128`).
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Avx2(());

@@ -288,8 +288,7 @@ impl Kinematics {
         // Lane by lane what `add_small_angle` gives; an angle the layout lacks keeps `at`'s.
         let lane = |i: usize, axis: Option<Axis>, at: (f64, f64)| match axis {
             None => at,
-            Some(_) if !(d[i].abs() <= SMALL_ANGLE_RAD) => a[i].sin_cos(),
-            Some(_) => (sin[i], cos[i]),
+            Some(_) => series_or_sin_cos(a[i], d[i], || (sin[i], cos[i])),
         };
         RotarySinCos {
             c: lane(0, table, at.c),
@@ -540,10 +539,18 @@ const SMALL_ANGLE_RAD: f64 = 0.01;
 #[inline]
 pub fn add_small_angle(a: f64, r: f64, (sin_r, cos_r): (f64, f64)) -> (f64, f64) {
     let d = a - r;
-    if !(d.abs() <= SMALL_ANGLE_RAD) {
-        return a.sin_cos();
+    series_or_sin_cos(a, d, || small_angle_added(d, sin_r, cos_r))
+}
+
+/// `series()`, the `(sin a, cos a)` of [`add_small_angle`]'s series, when the step `d` to
+/// `a` is at most [`SMALL_ANGLE_RAD`]; `a.sin_cos()` otherwise (a non-finite `d` too).
+#[inline(always)]
+fn series_or_sin_cos(a: f64, d: f64, series: impl FnOnce() -> (f64, f64)) -> (f64, f64) {
+    if d.abs() <= SMALL_ANGLE_RAD {
+        series()
+    } else {
+        a.sin_cos()
     }
-    small_angle_added(d, sin_r, cos_r)
 }
 
 /// `(sin(r + δ), cos(r + δ))` from `sin r`, `cos r` and the series of `sin δ`, `cos δ`

@@ -388,27 +388,21 @@ impl Kinematics {
 
     /// Forward kinematics: axis positions → tool tip and tool axis in the table frame.
     pub fn forward(&self, q: &AxisVec) -> ToolPose {
-        self.forward_with(q, &self.rotary_sin_cos(q))
-    }
-
-    /// [`Kinematics::forward`] with the sines and cosines of `q`'s angles given.
-    #[inline]
-    pub fn forward_with(&self, q: &AxisVec, angles: &RotarySinCos) -> ToolPose {
         if let Some(chain) = &self.general {
             // A general chain's workpiece frame is the table frame (its pivot is the origin);
             // the tool tip is the gauge point (tool length 0).
             let (tip, axis) = chain.tool_in_workpiece(q, 0.0);
             return ToolPose { tip, axis };
         }
-        let r_inv = self.rotation_of(angles).inverse();
+        let r_inv = self.rotation_of(&self.rotary_sin_cos(q)).inverse();
         ToolPose {
             tip: self.tip_turned_back(q, &r_inv),
             axis: r_inv * Vector3::z(),
         }
     }
 
-    /// The tool tip of [`Kinematics::forward_with`] alone, table frame, mm (the ball bar's θ
-    /// needs no tool axis).
+    /// The tool tip of [`Kinematics::forward`] alone, table frame, mm, with the sines and
+    /// cosines of `q`'s angles given (the ball bar's θ needs no tool axis).
     #[inline]
     pub fn tip_with(&self, q: &AxisVec, angles: &RotarySinCos) -> Point3<f64> {
         if let Some(chain) = &self.general {

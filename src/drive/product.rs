@@ -25,7 +25,7 @@ pub(super) fn all_finite<const R: usize>(x: &[f64; R]) -> bool {
 }
 
 /// Columns of a period map: up to the map's inputs, 8 rows each (row 7 is padding).
-pub(super) type Columns<const C: usize> = [[f64; 8]; C];
+type Columns<const C: usize> = [[f64; 8]; C];
 
 /// One way of computing [`Columns`] times an input vector. A token: a value of a type other
 /// than [`Portable`] exists only where the CPU has the instructions it uses.
@@ -100,7 +100,7 @@ impl Width {
 impl Avx2 {
     /// The token, where the CPU has AVX and AVX2.
     #[inline]
-    pub(super) fn detect() -> Option<Avx2> {
+    fn detect() -> Option<Avx2> {
         (std::arch::is_x86_feature_detected!("avx") && std::arch::is_x86_feature_detected!("avx2"))
             .then_some(Avx2(()))
     }

@@ -3,7 +3,7 @@
 //! Outputs: f64 results bit for bit the same on every CPU, and fixed-decimal text.
 
 pub mod fixed;
-pub mod pair;
+mod pair;
 pub mod trig;
 
 pub use fixed::{push_fixed, push_fixed_bytes, push_fixed_bytes_const};

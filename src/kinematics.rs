@@ -92,7 +92,7 @@ pub use location::{AxisLine, LocationErrors, LocationParam};
 
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Vector3};
 
-use crate::numeric::{sin_cos_deg_pair, F64x2, Lanes};
+use crate::numeric::{sin_cos_deg_pair, F64x2, LaneOps};
 use crate::{Axis, AxisVec};
 
 /// Which of the two inverse-kinematics solutions to take.
@@ -550,7 +550,7 @@ fn series_or_sin_cos(a: f64, d: f64, series: impl FnOnce() -> (f64, f64)) -> (f6
 /// `(sin(r + δ), cos(r + δ))` from `sin r`, `cos r` and the series of `sin δ`, `cos δ`
 /// ([`add_small_angle`]), for one angle or two ([`F64x2`]).
 #[inline(always)]
-fn small_angle_added<T: Lanes>(d: T, sin_r: T, cos_r: T) -> (T, T) {
+fn small_angle_added<T: LaneOps>(d: T, sin_r: T, cos_r: T) -> (T, T) {
     let c = T::from;
     let d2 = d * d;
     // The series' divisions as products by the reciprocals (a rounding each, far below the

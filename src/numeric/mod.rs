@@ -7,5 +7,5 @@ mod pair;
 pub mod trig;
 
 pub use fixed::{push_fixed, push_fixed_bytes, push_fixed_bytes_const};
-pub use pair::{F64x2, Lanes};
+pub use pair::{F64x2, LaneOps};
 pub use trig::{sin_cos_deg, sin_cos_deg_pair};

@@ -8,13 +8,13 @@
 //! registers, four SSE2 ones). Not AVX-512: with one column a register it took fewer
 //! instructions but more time (docs/performance.md).
 
-/// Whether the state variables the divergence check covers, the first six of `x` (`x_m v_m
-/// x_t v_t F ∫`; not `x_m,tick`, which is an earlier `x_m`), are finite. `v - v` is 0 for a
-/// finite v and NaN otherwise: the sum is 0 exactly when every one is finite (one
-/// comparison instead of six). `R ≥ 6`: a state, or a product's rows.
+/// Whether the state variables the divergence check covers, `x = (x_m v_m x_t v_t F ∫)`, are
+/// finite (a state's or a product's first six rows, `first_chunk`: not `x_m,tick`, which is
+/// an earlier `x_m`). `v - v` is 0 for a finite v and NaN otherwise: the sum is 0 exactly
+/// when every one is finite (one comparison instead of six).
 #[inline(always)]
 #[allow(clippy::eq_op)] // `v - v` on purpose: NaN for a non-finite v
-pub(super) fn all_finite<const R: usize>(x: &[f64; R]) -> bool {
+pub(super) fn all_finite(x: &[f64; 6]) -> bool {
     let probe = (x[0] - x[0])
         + (x[1] - x[1])
         + (x[2] - x[2])
@@ -64,7 +64,7 @@ impl ColumnProduct for Portable {
 
     #[inline(always)]
     fn finite(self, y: &[f64; 8]) -> bool {
-        all_finite(y)
+        all_finite(y.first_chunk().expect("8 rows"))
     }
 }
 

@@ -1118,7 +1118,6 @@ impl AxisServo {
                 self.v_t,
                 self.force,
                 self.integral,
-                0.0,
             ])
         {
             return Err(self.diverged(time_s, "the drive state is no longer finite".into()));

@@ -178,9 +178,27 @@ fn finite_avx2(y: &[f64; 8]) -> bool {
     _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(probe, zero)) == 0b1111
 }
 
-#[cfg(all(test, target_arch = "x86_64"))]
+#[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The AVX token where the CPU has it; elsewhere None, after saying that `test` skips
+    /// its checks of that width (the portable width's are still made).
+    #[cfg(target_arch = "x86_64")]
+    fn avx(test: &str) -> Option<Avx2> {
+        let k = Avx2::detect();
+        if k.is_none() {
+            eprintln!("{test}: the AVX width's checks skipped: this CPU lacks AVX or AVX2");
+        }
+        k
+    }
+
+    /// No vector width besides the portable one off x86_64: None, after saying so.
+    #[cfg(not(target_arch = "x86_64"))]
+    fn avx(test: &str) -> Option<Portable> {
+        eprintln!("{test}: the AVX width's checks skipped: not an x86_64 build");
+        None
+    }
 
     /// Every width gives the portable product bit for bit, signed zeros and all.
     #[test]
@@ -194,10 +212,18 @@ mod tests {
         cols[2][4] = -0.0;
         let input: [f64; 11] = std::array::from_fn(|j| (j as f64 * 1.3).cos() * 1e-3);
         let zero: [f64; 9] = [-0.0; 9];
+        // The portable product against the sum written out, row by row from +0.
         let expected = Portable.product(&cols, &input);
+        for (r, &y) in expected.iter().enumerate() {
+            let sum = cols
+                .iter()
+                .zip(input)
+                .fold(0.0, |a, (col, u)| a + col[r] * u);
+            assert_eq!(y.to_bits(), sum.to_bits(), "row {r}");
+        }
         let expected_zero = Portable.product(&cols, &zero);
         let bits = |y: [f64; 8]| y.map(f64::to_bits);
-        if let Some(k) = Avx2::detect() {
+        if let Some(k) = avx("every_width_gives_the_portable_product") {
             assert_eq!(bits(k.product(&cols, &input)), bits(expected));
             assert_eq!(bits(k.product(&cols, &zero)), bits(expected_zero));
         }
@@ -206,13 +232,14 @@ mod tests {
     /// Every width finds rows 0-5 finite exactly when each of them is, whatever rows 6-7 hold.
     #[test]
     fn every_width_checks_rows_0_to_5_for_finite_values() {
+        let k = avx("every_width_checks_rows_0_to_5_for_finite_values");
         for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
             for row in 0..8 {
                 let mut y = [1.5, -2.0, 0.0, -0.0, 1e300, -1e-300, 3.0, 0.0];
                 y[row] = bad;
                 let expected = row >= 6;
                 assert_eq!(Portable.finite(&y), expected, "row {row}: {bad}");
-                if let Some(k) = Avx2::detect() {
+                if let Some(k) = k {
                     assert_eq!(k.finite(&y), expected, "row {row}: {bad}");
                 }
             }

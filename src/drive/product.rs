@@ -9,8 +9,8 @@
 //! instructions but more time (docs/performance.md).
 
 /// Whether the state variables the divergence check covers, `x = (x_m v_m x_t v_t F ∫)`, are
-/// finite (a state's or a product's first six rows, `first_chunk`: not `x_m,tick`, which is
-/// an earlier `x_m`). `v - v` is 0 for a finite v and NaN otherwise: the sum is 0 exactly
+/// finite (a state's or a product's first six rows: not `x_m,tick`, which is an earlier
+/// `x_m`). `v - v` is 0 for a finite v and NaN otherwise: the sum is 0 exactly
 /// when every one is finite (one comparison instead of six).
 #[inline(always)]
 #[allow(clippy::eq_op)] // `v - v` on purpose: NaN for a non-finite v
@@ -64,7 +64,10 @@ impl ColumnProduct for Portable {
 
     #[inline(always)]
     fn finite(self, y: &[f64; 8]) -> bool {
-        all_finite(y.first_chunk().expect("8 rows"))
+        // The six rows taken apart (`first_chunk().expect(..)`'s panic path, never taken,
+        // moved other functions' code generation).
+        let [x_m, v_m, x_t, v_t, force, integral, ..] = *y;
+        all_finite(&[x_m, v_m, x_t, v_t, force, integral])
     }
 }
 

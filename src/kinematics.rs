@@ -92,7 +92,7 @@ pub use location::{AxisLine, LocationErrors, LocationParam};
 
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Vector3};
 
-use crate::numeric::{sin_cos_deg_pair, F64x2, Lanes};
+use crate::numeric::{sin_cos_deg_pair, F64x2, LaneOps};
 use crate::{Axis, AxisVec};
 
 /// Which of the two inverse-kinematics solutions to take.
@@ -288,8 +288,7 @@ impl Kinematics {
         // Lane by lane what `add_small_angle` gives; an angle the layout lacks keeps `at`'s.
         let lane = |i: usize, axis: Option<Axis>, at: (f64, f64)| match axis {
             None => at,
-            Some(_) if !(d[i].abs() <= SMALL_ANGLE_RAD) => a[i].sin_cos(),
-            Some(_) => (sin[i], cos[i]),
+            Some(_) => series_or_sin_cos(a[i], d[i], || (sin[i], cos[i])),
         };
         RotarySinCos {
             c: lane(0, table, at.c),
@@ -389,27 +388,21 @@ impl Kinematics {
 
     /// Forward kinematics: axis positions → tool tip and tool axis in the table frame.
     pub fn forward(&self, q: &AxisVec) -> ToolPose {
-        self.forward_with(q, &self.rotary_sin_cos(q))
-    }
-
-    /// [`Kinematics::forward`] with the sines and cosines of `q`'s angles given.
-    #[inline]
-    pub fn forward_with(&self, q: &AxisVec, angles: &RotarySinCos) -> ToolPose {
         if let Some(chain) = &self.general {
             // A general chain's workpiece frame is the table frame (its pivot is the origin);
             // the tool tip is the gauge point (tool length 0).
             let (tip, axis) = chain.tool_in_workpiece(q, 0.0);
             return ToolPose { tip, axis };
         }
-        let r_inv = self.rotation_of(angles).inverse();
+        let r_inv = self.rotation_of(&self.rotary_sin_cos(q)).inverse();
         ToolPose {
             tip: self.tip_turned_back(q, &r_inv),
             axis: r_inv * Vector3::z(),
         }
     }
 
-    /// The tool tip of [`Kinematics::forward_with`] alone, table frame, mm (the ball bar's θ
-    /// needs no tool axis).
+    /// The tool tip of [`Kinematics::forward`] alone, table frame, mm, with the sines and
+    /// cosines of `q`'s angles given (the ball bar's θ needs no tool axis).
     #[inline]
     pub fn tip_with(&self, q: &AxisVec, angles: &RotarySinCos) -> Point3<f64> {
         if let Some(chain) = &self.general {
@@ -540,16 +533,24 @@ const SMALL_ANGLE_RAD: f64 = 0.01;
 #[inline]
 pub fn add_small_angle(a: f64, r: f64, (sin_r, cos_r): (f64, f64)) -> (f64, f64) {
     let d = a - r;
-    if !(d.abs() <= SMALL_ANGLE_RAD) {
-        return a.sin_cos();
+    series_or_sin_cos(a, d, || small_angle_added(d, sin_r, cos_r))
+}
+
+/// `series()`, the `(sin a, cos a)` of [`add_small_angle`]'s series, when the step `d` to
+/// `a` is at most [`SMALL_ANGLE_RAD`]; `a.sin_cos()` otherwise (a non-finite `d` too).
+#[inline(always)]
+fn series_or_sin_cos(a: f64, d: f64, series: impl FnOnce() -> (f64, f64)) -> (f64, f64) {
+    if d.abs() <= SMALL_ANGLE_RAD {
+        series()
+    } else {
+        a.sin_cos()
     }
-    small_angle_added(d, sin_r, cos_r)
 }
 
 /// `(sin(r + δ), cos(r + δ))` from `sin r`, `cos r` and the series of `sin δ`, `cos δ`
 /// ([`add_small_angle`]), for one angle or two ([`F64x2`]).
 #[inline(always)]
-fn small_angle_added<T: Lanes>(d: T, sin_r: T, cos_r: T) -> (T, T) {
+fn small_angle_added<T: LaneOps>(d: T, sin_r: T, cos_r: T) -> (T, T) {
     let c = T::from;
     let d2 = d * d;
     // The series' divisions as products by the reciprocals (a rounding each, far below the

@@ -272,7 +272,7 @@ impl DriveLaneGroup {
         dv_guess: &Lanes,
         s_new: f64,
     ) -> bool {
-        if !all_finite::<N_STATE>(&std::array::from_fn(|r| y[r][l])) {
+        if !all_finite(&std::array::from_fn(|r| y[r][l])) {
             return false;
         }
         let v0 = st.x[3][l];

@@ -167,7 +167,7 @@ impl TwinLanes {
                 & q.is_finite()
                 & (st.x[4][l].abs() <= self.half_limit[l])
                 & !(y[4][l].abs() > self.half_limit[l])
-                & all_finite::<N_STATE>(&std::array::from_fn(|r| y[r][l]))
+                & all_finite(&std::array::from_fn(|r| y[r][l]))
                 & !((s_new[l] - x_t).abs() > self.fe_limit[l])
                 & !((s_new[l] - x_m).abs() > self.fe_limit[l]);
             let take = |new: f64, old: f64| if ok[l] { new } else { old };

@@ -8,13 +8,13 @@
 //! registers, four SSE2 ones). Not AVX-512: with one column a register it took fewer
 //! instructions but more time (docs/performance.md).
 
-/// Whether the state variables the divergence check covers, the first six of `x` (`x_m v_m
-/// x_t v_t F ∫`; not `x_m,tick`, which is an earlier `x_m`), are finite. `v - v` is 0 for a
-/// finite v and NaN otherwise: the sum is 0 exactly when every one is finite (one
-/// comparison instead of six). `R ≥ 6`: a state, or a product's rows.
+/// Whether the state variables the divergence check covers, `x = (x_m v_m x_t v_t F ∫)`, are
+/// finite (a state's or a product's first six rows: not `x_m,tick`, which is an earlier
+/// `x_m`). `v - v` is 0 for a finite v and NaN otherwise: the sum is 0 exactly
+/// when every one is finite (one comparison instead of six).
 #[inline(always)]
 #[allow(clippy::eq_op)] // `v - v` on purpose: NaN for a non-finite v
-pub(super) fn all_finite<const R: usize>(x: &[f64; R]) -> bool {
+pub(super) fn all_finite(x: &[f64; 6]) -> bool {
     let probe = (x[0] - x[0])
         + (x[1] - x[1])
         + (x[2] - x[2])
@@ -25,7 +25,7 @@ pub(super) fn all_finite<const R: usize>(x: &[f64; R]) -> bool {
 }
 
 /// Columns of a period map: up to the map's inputs, 8 rows each (row 7 is padding).
-pub(super) type Columns<const C: usize> = [[f64; 8]; C];
+type Columns<const C: usize> = [[f64; 8]; C];
 
 /// One way of computing [`Columns`] times an input vector. A token: a value of a type other
 /// than [`Portable`] exists only where the CPU has the instructions it uses.
@@ -64,12 +64,18 @@ impl ColumnProduct for Portable {
 
     #[inline(always)]
     fn finite(self, y: &[f64; 8]) -> bool {
-        all_finite(y)
+        // The six rows taken apart (`first_chunk().expect(..)`'s panic path, never taken,
+        // moved other functions' code generation).
+        let [x_m, v_m, x_t, v_t, force, integral, ..] = *y;
+        all_finite(&[x_m, v_m, x_t, v_t, force, integral])
     }
 }
 
 /// The product in two AVX registers a column. Use it inside functions compiled for AVX2
-/// (`#[target_feature]`): elsewhere its intrinsics stay calls.
+/// (`#[target_feature]`): elsewhere its intrinsics stay calls. Its intrinsics are all AVX's,
+/// but the token asks for AVX2 too: AVX2's broadcast from a register (`vbroadcastsd ymm,
+/// xmm`) makes each column's `_mm256_set1_pd` one instruction, where AVX alone needs two
+/// (`vmovddup` and `vinsertf128`).
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Avx2(());
@@ -97,7 +103,7 @@ impl Width {
 impl Avx2 {
     /// The token, where the CPU has AVX and AVX2.
     #[inline]
-    pub(super) fn detect() -> Option<Avx2> {
+    fn detect() -> Option<Avx2> {
         (std::arch::is_x86_feature_detected!("avx") && std::arch::is_x86_feature_detected!("avx2"))
             .then_some(Avx2(()))
     }
@@ -175,9 +181,27 @@ fn finite_avx2(y: &[f64; 8]) -> bool {
     _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(probe, zero)) == 0b1111
 }
 
-#[cfg(all(test, target_arch = "x86_64"))]
+#[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The AVX token where the CPU has it; elsewhere None, after saying that `test` skips
+    /// its checks of that width (the portable width's are still made).
+    #[cfg(target_arch = "x86_64")]
+    fn avx(test: &str) -> Option<Avx2> {
+        let k = Avx2::detect();
+        if k.is_none() {
+            eprintln!("{test}: the AVX width's checks skipped: this CPU lacks AVX or AVX2");
+        }
+        k
+    }
+
+    /// No vector width besides the portable one off x86_64: None, after saying so.
+    #[cfg(not(target_arch = "x86_64"))]
+    fn avx(test: &str) -> Option<Portable> {
+        eprintln!("{test}: the AVX width's checks skipped: not an x86_64 build");
+        None
+    }
 
     /// Every width gives the portable product bit for bit, signed zeros and all.
     #[test]
@@ -191,10 +215,18 @@ mod tests {
         cols[2][4] = -0.0;
         let input: [f64; 11] = std::array::from_fn(|j| (j as f64 * 1.3).cos() * 1e-3);
         let zero: [f64; 9] = [-0.0; 9];
+        // The portable product against the sum written out, row by row from +0.
         let expected = Portable.product(&cols, &input);
+        for (r, &y) in expected.iter().enumerate() {
+            let sum = cols
+                .iter()
+                .zip(input)
+                .fold(0.0, |a, (col, u)| a + col[r] * u);
+            assert_eq!(y.to_bits(), sum.to_bits(), "row {r}");
+        }
         let expected_zero = Portable.product(&cols, &zero);
         let bits = |y: [f64; 8]| y.map(f64::to_bits);
-        if let Some(k) = Avx2::detect() {
+        if let Some(k) = avx("every_width_gives_the_portable_product") {
             assert_eq!(bits(k.product(&cols, &input)), bits(expected));
             assert_eq!(bits(k.product(&cols, &zero)), bits(expected_zero));
         }
@@ -203,13 +235,14 @@ mod tests {
     /// Every width finds rows 0-5 finite exactly when each of them is, whatever rows 6-7 hold.
     #[test]
     fn every_width_checks_rows_0_to_5_for_finite_values() {
+        let k = avx("every_width_checks_rows_0_to_5_for_finite_values");
         for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
             for row in 0..8 {
                 let mut y = [1.5, -2.0, 0.0, -0.0, 1e300, -1e-300, 3.0, 0.0];
                 y[row] = bad;
                 let expected = row >= 6;
                 assert_eq!(Portable.finite(&y), expected, "row {row}: {bad}");
-                if let Some(k) = Avx2::detect() {
+                if let Some(k) = k {
                     assert_eq!(k.finite(&y), expected, "row {row}: {bad}");
                 }
             }

@@ -350,7 +350,7 @@ const SLOPE_STEPS: usize = 64;
 
 impl PeriodMap {
     /// The map without friction and contact offset (both 0): its first nine columns. The
-    /// same result as `dispatch(&map_input(x, ds, f_ff, 0.0, 0.0))`: adding `c · 0 = ±0`
+    /// same result as `product_and_finite(&map_input(x, ds, f_ff, 0.0, 0.0))`: adding `c · 0 = ±0`
     /// to a sum leaves it unchanged unless the sum is `-0`, which a sum that starts at `+0`
     /// never is.
     #[inline(always)]
@@ -362,7 +362,7 @@ impl PeriodMap {
         f_ff: f64,
     ) -> ([f64; N_STATE], bool) {
         let input = [x[0], x[1], x[2], x[3], x[4], x[5], x[6], ds, f_ff];
-        self.dispatch(k, &input)
+        self.product_and_finite(k, &input)
     }
 
     /// The product over the first `N` columns, column by column by `k` (the same
@@ -371,7 +371,7 @@ impl PeriodMap {
     /// Inlined into its caller, which picks `k`: [`super::Drives`] runs every axis in one
     /// function compiled for the widest vectors the CPU has.
     #[inline(always)]
-    fn dispatch<K: ColumnProduct, const N: usize>(
+    fn product_and_finite<K: ColumnProduct, const N: usize>(
         &self,
         k: K,
         input: &[f64; N],
@@ -818,7 +818,7 @@ impl AxisServo {
         let map = exact.maps[index].get_or_init(|| self.period_map(grid_slope, true));
         let friction = f0 - grid_slope * v0;
         let input = map_input(&x, s_new - s_old, f_ff, friction, regime.offset);
-        let (y, finite) = map.dispatch(k, &input);
+        let (y, finite) = map.product_and_finite(k, &input);
         if !finite {
             return false; // the substeps find it too, and end_period reports it
         }
@@ -1118,7 +1118,6 @@ impl AxisServo {
                 self.v_t,
                 self.force,
                 self.integral,
-                0.0,
             ])
         {
             return Err(self.diverged(time_s, "the drive state is no longer finite".into()));

@@ -112,8 +112,8 @@ impl SharedReadings {
             reading: c, balls, ..
         } = slot_of(slots, geometry, s);
         if *full_chain {
-            let deviation_um = geometry.deviation_um(&s.actual, &s.commanded, c);
-            let linear_um = geometry.deviation_um(&s.linear, &s.commanded, c);
+            let deviation_um = geometry.deviation_on(true, &s.actual, &s.commanded, c);
+            let linear_um = geometry.deviation_on(true, &s.linear, &s.commanded, c);
             return c.with_deviations(deviation_um, linear_um);
         }
         let mut deviation = |k: usize, q: &AxisVec| {

@@ -88,7 +88,7 @@ impl BarGeometry {
     /// [`BarGeometry::read`] with [`BarGeometry::needs_full_chain`] known (a test of every
     /// location error: about a hundred instructions a sample, when asked each time).
     #[inline(always)]
-    pub fn read_on(&self, full_chain: bool, s: &Sample) -> BarReading {
+    pub(crate) fn read_on(&self, full_chain: bool, s: &Sample) -> BarReading {
         let c = self.read_commanded(&s.commanded);
         let deviation = |q| self.deviation_on(full_chain, q, &s.commanded, &c);
         c.with_deviations(deviation(&s.actual), deviation(&s.linear))
@@ -119,16 +119,10 @@ impl BarGeometry {
     }
 
     /// dL at axis positions `q` (actual or the twin's) of a sample whose setpoint
-    /// `commanded` reads `c`, um.
-    #[inline]
-    pub fn deviation_um(&self, q: &AxisVec, commanded: &AxisVec, c: &CommandedReading) -> f64 {
-        self.deviation_on(self.needs_full_chain(), q, commanded, c)
-    }
-
-    /// [`BarGeometry::deviation_um`] with [`BarGeometry::needs_full_chain`] known (inlined:
+    /// `commanded` reads `c`, um, with [`BarGeometry::needs_full_chain`] known (inlined:
     /// twice a sample, its call cost a sixth of it).
     #[inline(always)]
-    fn deviation_on(
+    pub(super) fn deviation_on(
         &self,
         full_chain: bool,
         q: &AxisVec,

@@ -3,9 +3,9 @@
 //! Outputs: f64 results bit for bit the same on every CPU, and fixed-decimal text.
 
 pub mod fixed;
-pub mod pair;
+mod pair;
 pub mod trig;
 
 pub use fixed::{push_fixed, push_fixed_bytes, push_fixed_bytes_const};
-pub use pair::{F64x2, Lanes};
+pub use pair::{F64x2, LaneOps};
 pub use trig::{sin_cos_deg, sin_cos_deg_pair};

@@ -16,13 +16,13 @@ use std::arch::x86_64::{
 
 /// What a formula written once for `f64` and for [`F64x2`] uses: the four operations
 /// and constants (`T::from(c)`, in every lane).
-pub trait Lanes:
+pub trait LaneOps:
     Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self> + From<f64>
 {
 }
 
-impl Lanes for f64 {}
-impl Lanes for F64x2 {}
+impl LaneOps for f64 {}
+impl LaneOps for F64x2 {}
 
 impl From<f64> for F64x2 {
     #[inline(always)]

@@ -20,7 +20,7 @@
 //! (docs/performance.md), and `libm::sincos` on the same reduced `x` differs in the last bit
 //! for about 0.1 % of angles, which changes the bundled outputs (blocks, summaries, fits).
 
-use super::pair::{F64x2, Lanes};
+use super::pair::{F64x2, LaneOps};
 
 const S1: f64 = -1.666_666_666_666_663_243_48e-1;
 const S2: f64 = 8.333_333_333_322_489_461_24e-3;
@@ -69,7 +69,7 @@ pub fn sin_cos_deg_pair(a_deg: f64, b_deg: f64) -> [(f64, f64); 2] {
 /// The quadrant of θ as `k + 1.5 · 2⁵²` (`k = round(θ / 90)`, deg) and the sine and cosine
 /// of the remainder `θ - 90 k` (see the module), for `|θ| < 10¹²`.
 #[inline(always)]
-fn reduced<T: Lanes>(theta_deg: T) -> (T, T, T) {
+fn reduced<T: LaneOps>(theta_deg: T) -> (T, T, T) {
     let c = T::from;
     let quadrant = theta_deg * c(1.0 / 90.0) + c(ROUNDER);
     let k = quadrant - c(ROUNDER);

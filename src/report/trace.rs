@@ -49,6 +49,8 @@ pub struct TraceSink {
     trace_path: PathBuf,
     axes: &'static [Axis],
     geometry: Option<BarGeometry>,
+    /// [`BarGeometry::needs_full_chain`], asked once.
+    full_chain: bool,
     every: u64,
     direction: Direction,
     measured: Option<MeasuredLines>,
@@ -109,6 +111,7 @@ impl TraceSink {
             format,
             trace_path: trace_path.to_path_buf(),
             axes,
+            full_chain: geometry.is_some_and(|g| g.needs_full_chain()),
             geometry,
             every: every.max(1),
             direction: Direction::Ccw,
@@ -176,7 +179,7 @@ impl Sink for TraceSink {
         if self.skips(s.index) || !is_measured(s, self.measured) {
             return Ok(());
         }
-        let r = geometry.read(s);
+        let r = geometry.read_on(self.full_chain, s);
         self.push_reading(s, &r)
     }
 }

@@ -10,6 +10,7 @@ mod chain_planes;
 mod chain_poles;
 mod chains;
 mod geometric_errors;
+mod reading;
 mod round_trips;
 mod trivial;
 mod trt_ab;

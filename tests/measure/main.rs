@@ -6,5 +6,4 @@ mod common;
 
 mod attribution;
 mod ballbar;
-mod reading;
 mod shared;

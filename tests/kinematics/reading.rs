@@ -18,6 +18,19 @@ fn bits((s, c): (f64, f64)) -> (u64, u64) {
     (s.to_bits(), c.to_bits())
 }
 
+/// `got` is within `ulps` ulp (of the angle in radians, at least of 1) of the library's sine
+/// and cosine of `deg` in radians; an axis the layout lacks (`axis` None) is not checked.
+fn assert_near_library(axis: Option<mtsim::Axis>, got: (f64, f64), deg: f64, ulps: f64) {
+    if axis.is_none() {
+        return;
+    }
+    let x = deg.to_radians();
+    let (s, c) = x.sin_cos();
+    let tol = ulps * f64::EPSILON * x.abs().max(1.0);
+    let (ds, dc) = ((got.0 - s).abs(), (got.1 - c).abs());
+    assert!(ds <= tol && dc <= tol, "{axis:?} at {deg}°: {ds:e} {dc:e}");
+}
+
 /// Commanded rotaries over several turns, and actual ones off them by steps inside and
 /// beyond the series' 0.01 rad (0.573°).
 fn poses() -> impl Iterator<Item = (f64, f64, f64, f64)> {
@@ -55,17 +68,10 @@ fn the_commanded_rotaries_are_each_angles_sin_cos_deg() {
                 bits(want(tilt_axis, tilt)),
                 "{layout:?} {tilt}"
             );
-            // And the closed form: the library's sine and cosine of the angle in radians,
+            // And the closed form: the library's sine and cosine of each angle in radians,
             // whose conversion rounds by half an ulp of the radians.
-            if table_axis.is_some() {
-                let x = table.to_radians();
-                let (s, c) = x.sin_cos();
-                let tol = 2.0 * f64::EPSILON * x.abs().max(1.0);
-                assert!(
-                    (at.c.0 - s).abs() <= tol && (at.c.1 - c).abs() <= tol,
-                    "{table}"
-                );
-            }
+            assert_near_library(table_axis, at.c, table, 2.0);
+            assert_near_library(tilt_axis, at.tilt, tilt, 2.0);
         }
     }
 }
@@ -99,14 +105,9 @@ fn the_actual_rotaries_near_the_command_are_each_angles_add_small_angle() {
                 bits(want_tilt),
                 "{layout:?} {tilt} → {tilt_q}"
             );
-            // Within a few ulp of the library at the actual angle.
-            if table_axis.is_some() {
-                let x = table_q.to_radians();
-                let (s, c) = x.sin_cos();
-                let tol = 4.0 * f64::EPSILON * x.abs().max(1.0);
-                let (ds, dc) = ((near.c.0 - s).abs(), (near.c.1 - c).abs());
-                assert!(ds <= tol && dc <= tol, "{table} → {table_q}: {ds:e} {dc:e}");
-            }
+            // Within a few ulp of the library at the actual angles.
+            assert_near_library(table_axis, near.c, table_q, 4.0);
+            assert_near_library(tilt_axis, near.tilt, tilt_q, 4.0);
         }
     }
 }

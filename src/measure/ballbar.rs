@@ -213,11 +213,30 @@ pub struct BallbarRun {
     rejected: u64,
 }
 
+/// Stores into one bin of every page `bins` spans, so that each page is first touched by a
+/// write. The compiler may turn `vec![Bin::default(); N]` into a zeroed allocation whose
+/// fresh pages the kernel maps on first touch; a first touch that reads (a bin's sums
+/// loaded before they are stored) maps the shared zero page, and the store after it faults
+/// again and flushes the TLB of every core the process runs on: with two threads, a
+/// quarter of a study pass's CPU (docs/performance.md). `black_box` hides the stored zero's
+/// value, so the store stays.
+fn touch_for_writing(bins: &mut [Bin]) {
+    let per_page = (4096 / std::mem::size_of::<Bin>()).max(1);
+    let last = bins.len().saturating_sub(1);
+    for i in (0..bins.len()).step_by(per_page).chain([last]) {
+        if let Some(bin) = bins.get_mut(i) {
+            bin.n = std::hint::black_box(0);
+        }
+    }
+}
+
 impl BallbarRun {
     pub fn new(direction: Direction) -> Self {
+        let mut bins = vec![Bin::default(); N_BINS];
+        touch_for_writing(&mut bins);
         BallbarRun {
             direction,
-            bins: vec![Bin::default(); N_BINS],
+            bins,
             normal: [0.0; 6],
             rhs: [0.0; 3],
             samples: 0,

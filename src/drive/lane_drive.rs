@@ -356,16 +356,7 @@ impl DriveLaneGroup {
         };
         let (fc, fs) = (self.coulomb[l], self.static_friction[l]);
         if fc == 0.0 && fs == 0.0 {
-            let regime = Regime {
-                side: 0.0,
-                offset,
-                dry: false,
-                speed: 0.0,
-                push: 0.0,
-                bound: 0.0,
-                decay: 0.0,
-                mt_over_h: 0.0,
-            };
+            let regime = Regime::without_friction(offset);
             return Some((regime, None));
         }
         if v_t == 0.0 {
@@ -475,16 +466,7 @@ fn get(servo: &AxisServo, st: &mut State, l: usize) {
     st.periods_exact[l] = state.periods_exact;
     let (regime, cache) = servo.regime_state();
     st.has[l] = regime.is_some();
-    let r = regime.unwrap_or(Regime {
-        side: 0.0,
-        offset: 0.0,
-        dry: false,
-        speed: 0.0,
-        push: 0.0,
-        bound: 0.0,
-        decay: 0.0,
-        mt_over_h: 0.0,
-    });
+    let r = regime.unwrap_or(Regime::without_friction(0.0));
     st.side[l] = r.side;
     st.offset[l] = r.offset;
     st.dry[l] = r.dry;

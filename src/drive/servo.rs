@@ -276,6 +276,22 @@ pub(super) struct Regime {
 }
 
 impl Regime {
+    /// The regime of a table without dry friction: the spring's contact offset (SI) is its
+    /// only condition.
+    #[inline]
+    pub(super) fn without_friction(offset: f64) -> Regime {
+        Regime {
+            side: 0.0,
+            offset,
+            dry: false,
+            speed: 0.0,
+            push: 0.0,
+            bound: 0.0,
+            decay: 0.0,
+            mt_over_h: 0.0,
+        }
+    }
+
     /// Whether the regime holds through a velocity change of `dv_margin`: the table stays
     /// clear of rest and keeps slipping (`push > g + m_t dv / h`).
     #[inline]
@@ -672,16 +688,7 @@ impl AxisServo {
             0.0
         };
         if self.coulomb == 0.0 && self.static_friction == 0.0 {
-            return Some(Regime {
-                side: 0.0,
-                offset,
-                dry: false,
-                speed: 0.0,
-                push: 0.0,
-                bound: 0.0,
-                decay: 0.0,
-                mt_over_h: 0.0,
-            });
+            return Some(Regime::without_friction(offset));
         }
         // Slipping (the margins are checked by `admits`), friction at its bound against
         // the motion.

@@ -186,11 +186,55 @@ impl Error {
     }
 }
 
-/// A G-code reader error becomes a diagnostic that shows the line with its caret.
+/// Whether the program text `text` looks like no program before the byte `at` where its
+/// reader stopped: no line before that one holds a word (only blanks, comments, `%` or
+/// nothing), or the offending line holds control characters or bytes that were not UTF-8.
+/// Such a file (an image, a scenario given as the program) is named by its path, line and
+/// column only: its content is not the user's G-code to quote.
+fn not_a_program(text: &str, at: usize) -> bool {
+    let at = at.min(text.len());
+    let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[at..].find('\n').map_or(text.len(), |i| at + i);
+    let line = &text[line_start..line_end];
+    let garbled = line
+        .chars()
+        .any(|c| c == '\u{fffd}' || (c.is_control() && c != '\t' && c != '\r'));
+    let words_before = text[..line_start].lines().any(|l| {
+        let mut depth = 0;
+        for c in l.chars() {
+            match c {
+                '(' => depth += 1,
+                ')' if depth > 0 => depth -= 1,
+                ';' if depth == 0 => return false,
+                c if depth == 0 && !c.is_whitespace() && c != '%' => return true,
+                _ => {}
+            }
+        }
+        false
+    });
+    garbled || !words_before
+}
+
+/// A G-code reader error becomes a diagnostic that shows the line with its caret (or, for a
+/// file that is no program at all, only its place: [`not_a_program`]).
 impl From<ngc::Error> for Error {
     fn from(e: ngc::Error) -> Error {
         match e {
             ngc::Error::Read { path, source } => Error::Read { path, source },
+            // Neither the text nor the reader's message, which names the offending word.
+            ngc::Error::Syntax(s) if not_a_program(&s.text, s.span.start) => Error::Located {
+                path: s.path,
+                line: s.line,
+                column: s.column,
+                message: format!(
+                    "not an NC program: it does not read as one from its first block ({})",
+                    s.label
+                ),
+                help: Some(
+                    "check the scenario's [program] file: it names this file as the program"
+                        .into(),
+                ),
+            },
             ngc::Error::Syntax(s) => {
                 let error = Error::at(&s.path, &s.text, s.span, s.message, s.label);
                 match s.help {

@@ -29,7 +29,10 @@ pub fn run(
         inputs.push((Scenario::load(s)?, MeasuredTrace::read(m)?));
     }
     let bar = spinner("fitting");
-    let run_dir = crate::report::RunDir::begin(out_dir)?;
+    // The measured traces often sit in the folder of the run that made them: they stay.
+    let run_dir = crate::report::RunDir::begin(out_dir)?
+        .reads(scenarios)
+        .reads(measured);
     let report = fit(&inputs, &options, run_dir.path())?;
     run_dir.commit()?;
     bar.finish_and_clear();

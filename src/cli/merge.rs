@@ -46,7 +46,7 @@ pub fn run(args: &MergeArgs) -> Result<i32> {
         "batch" => {
             let (_, _, parts) = join::<BatchHeader, Vec<BatchRow>>(&args.shards)?;
             let rows: Vec<BatchRow> = parts.into_iter().flatten().collect();
-            let run_dir = crate::report::RunDir::begin(&args.output)?;
+            let run_dir = crate::report::RunDir::begin(&args.output)?.reads(&args.shards);
             super::batch::emit(&rows, args.json, run_dir, &args.output)
         }
         "study" => {
@@ -55,7 +55,7 @@ pub fn run(args: &MergeArgs) -> Result<i32> {
                     &args.shards,
                 )?;
             let rows: Vec<_> = parts.into_iter().flatten().collect();
-            let run_dir = crate::report::RunDir::begin(&args.output)?;
+            let run_dir = crate::report::RunDir::begin(&args.output)?.reads(&args.shards);
             super::study::emit(&header, &rows, args.json, run_dir, &args.output)
         }
         other => Err(Error::usage(format!(

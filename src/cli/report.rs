@@ -46,8 +46,11 @@ pub fn write_report(dir: &Path, date: Option<&str>) -> Result<PathBuf> {
             dir.display()
         )));
     }
-    let _lock = FolderLock::take(dir)?;
-    write_page(dir, date)
+    let lock = FolderLock::take(dir)?;
+    lock.may_write(html::REPORT_FILE)?;
+    let path = write_page(dir, date)?;
+    lock.record(html::REPORT_FILE)?;
+    Ok(path)
 }
 
 /// Writes `report.html` into `dir` and returns its path: the page of a run folder (read

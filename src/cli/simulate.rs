@@ -22,7 +22,7 @@ pub fn run(
         scenario.simulate.trace_format = format;
     }
     // Everything goes into a staging folder, put in place of `out_dir` when complete.
-    let run_dir = RunDir::begin(out_dir)?;
+    let run_dir = RunDir::begin(out_dir)?.reads(&[path]);
     let target = out_dir;
     let out_dir = run_dir.path();
     let bar = spinner("simulating");

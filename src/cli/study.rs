@@ -96,7 +96,8 @@ pub(crate) fn emit(
     } else {
         print_stdout(&describe(&summary));
     }
-    Ok(0)
+    // As `batch`: a point that failed to run makes the exit code 1, its row says why.
+    Ok(if summary.failed > 0 { 1 } else { 0 })
 }
 
 fn describe(s: &StudySummary) -> String {

@@ -22,6 +22,11 @@ pub enum Step {
     Index(usize),
 }
 
+/// The most parts a key path may have: the deepest key of a scenario with its machine
+/// (`machine.axes.B.location_errors.x_mm`, say) has 6, so 32 leaves room and keeps every
+/// walk over a path, and the tables it makes, shallow whatever the input.
+pub const MAX_KEY_PARTS: usize = 32;
+
 /// A dotted key path: `machine.axes.X.servo.kv_per_s`, `program.cone.center_mm[1]`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct KeyPath {
@@ -36,6 +41,11 @@ impl FromStr for KeyPath {
             format!("key path {s:?}: {why}; expected e.g. machine.axes.X.drive.backlash_mm or program.cone.center_mm[1]")
         };
         let mut steps = Vec::new();
+        if s.split('.').count() > MAX_KEY_PARTS {
+            return Err(bad(&format!(
+                "more than {MAX_KEY_PARTS} parts (no scenario or machine key is that deep)"
+            )));
+        }
         for part in s.split('.') {
             let (name, mut rest) = part.split_at(part.find('[').unwrap_or(part.len()));
             let key_char = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
@@ -53,6 +63,9 @@ impl FromStr for KeyPath {
                     .parse()
                     .map_err(|_| bad("an index is a whole number"))?;
                 steps.push(Step::Index(index));
+                if steps.len() > 2 * MAX_KEY_PARTS {
+                    return Err(bad("too many indexes"));
+                }
                 rest = inner.1;
             }
         }

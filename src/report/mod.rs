@@ -12,6 +12,7 @@
 pub mod files;
 pub mod fit_plot;
 pub mod html;
+pub mod manifest;
 pub mod parquet;
 pub mod plot;
 pub mod polar;

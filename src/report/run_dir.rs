@@ -1,12 +1,18 @@
 //! A folder of outputs written as one unit: staged beside the target, swapped in when complete.
 //!
 //! A command that writes several files into `-o DIR` writes them into `.DIR.mtsim-new` (same
-//! parent, so a rename moves it). Once all are written, the entries of `DIR` that no mtsim run
-//! writes (the user's notes, a `shards/` folder: see [`is_run_output`]) are moved into it, and
-//! it takes the place of `DIR`: on Linux one `renameat2(RENAME_EXCHANGE)` swaps the two
-//! folders, elsewhere `DIR` is renamed to `.DIR.mtsim-old` and the new folder renamed in. The
-//! old run is then removed. A reader, or a crash at any instant, sees the old complete run or
-//! the new complete run, never a mix; outputs only the old run wrote go with it.
+//! parent, so a rename moves it). Once all are written, the run records them in the folder's
+//! manifest ([`Manifest`], `.mtsim-run.json`: names, sizes and hashes). Then the entries of
+//! `DIR` that are not the earlier run's own (by the earlier manifest, never by their names:
+//! the user's notes, a `shards/` folder, a file the earlier run wrote and the user edited, a
+//! measured trace this run reads) are moved into the new folder, and it takes the place of
+//! `DIR`: on Linux one `renameat2(RENAME_EXCHANGE)` swaps the two folders, elsewhere `DIR` is
+//! renamed to `.DIR.mtsim-old` and the new folder renamed in. The old folder, which then holds
+//! only the earlier run's unchanged files, is removed. A reader, or a crash at any instant,
+//! sees the old complete run or the new complete run, never a mix. When an entry of the
+//! user's has the name of one the run wrote, the run is refused (exit 2) and `DIR` is left as
+//! it was. `-o LINK`, a symbolic link to a folder, writes into the folder it names: the link
+//! stays.
 //!
 //! `.DIR.mtsim-lock` holds the writer's pid under an exclusive `flock` (`File::try_lock`):
 //! a second run into `DIR` is refused while the first lives, and the OS releases the lock when
@@ -14,43 +20,19 @@
 //! a run that locked a file meanwhile removed finds the path no longer names its file (device
 //! and inode differ) and starts over, so two runs never hold two files of one name. A crash
 //! leaves the file, unlocked: the next run takes it. The run that next holds the lock cleans up
-//! after a killed one ([`recover`]): the user's entries go back from `.DIR.mtsim-new` into
-//! `DIR`, `.DIR.mtsim-old` goes back as `DIR` if `DIR` is missing, and both are removed.
-//! SIGINT and SIGTERM do the same for the running command, then end it as the signal would.
+//! after a killed one ([`recover`]): the user's entries (those the staged manifest does not
+//! list) go back from `.DIR.mtsim-new` into `DIR`, `.DIR.mtsim-old` goes back as `DIR` if
+//! `DIR` is missing, and both are removed. SIGINT and SIGTERM do the same for the running
+//! command, then end it as the signal would.
 
 use std::fs::File;
 use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
 
-use crate::error::{Error, Result};
+use std::collections::BTreeSet;
 
-/// Whether `name` is one an mtsim command writes into an output folder (or the temporary
-/// `<name>.tmp` / `<name>.raw.tmp` of one): such entries belong to the run and are replaced;
-/// all others are the user's and kept.
-pub fn is_run_output(name: &str) -> bool {
-    const FILES: [&str; 11] = [
-        "trace.csv",
-        "trace.parquet",
-        "summary.json",
-        "ballbar.svg",
-        "test.json",
-        "check.json",
-        "report.html",
-        "fit.json",
-        "location-errors.toml",
-        "fit.svg",
-        "fit.html",
-    ];
-    // A study's: rows.csv, rows.parquet, study.json, study.html, study-*.svg, its shards.
-    const STUDY: [&str; 4] = ["rows.csv", "rows.parquet", "study.json", "study.html"];
-    const PREFIXES: [&str; 5] = ["sweep-", "placement.", "batch.", "study-", "study.shard-"];
-    let name = name.strip_suffix(".tmp").unwrap_or(name);
-    let name = name.strip_suffix(".raw").unwrap_or(name);
-    name == "runs"
-        || FILES.contains(&name)
-        || STUDY.contains(&name)
-        || PREFIXES.iter().any(|p| name.starts_with(p))
-}
+use super::manifest::{Manifest, MANIFEST_FILE};
+use crate::error::{Error, Result};
 
 /// An output folder being written; [`RunDir::commit`] puts it in place, dropping it without
 /// committing removes what was written.
@@ -58,6 +40,8 @@ pub fn is_run_output(name: &str) -> bool {
 pub struct RunDir {
     target: PathBuf,
     staging: PathBuf,
+    /// The canonical paths of the files this run reads: never taken for the earlier run's.
+    inputs: BTreeSet<PathBuf>,
     _lock: File,
     committed: bool,
 }
@@ -95,14 +79,19 @@ fn remove_any(path: &Path) -> Result<()> {
     }
 }
 
-/// Moves the user's entries (not [`is_run_output`]) of folder `from` into folder `to`.
-fn move_user_entries(from: &Path, to: &Path) -> Result<()> {
+/// Moves back into `to` the user's entries that an interrupted commit had moved into the
+/// staged folder `from`: those its manifest does not list. Without a manifest the commit had
+/// not started moving, and every entry is the run's.
+fn move_back_user_entries(from: &Path, to: &Path) -> Result<()> {
+    let Some(staged) = Manifest::read(from) else {
+        return Ok(());
+    };
     let Ok(entries) = std::fs::read_dir(from) else {
         return Ok(());
     };
     for entry in entries.flatten() {
         let name = entry.file_name();
-        if !is_run_output(&name.to_string_lossy()) && !exists(&to.join(&name)) {
+        if !staged.lists(&name.to_string_lossy()) && !exists(&to.join(&name)) {
             std::fs::rename(entry.path(), to.join(&name)).map_err(write_error(&entry.path()))?;
         }
     }
@@ -118,7 +107,7 @@ fn recover(target: &Path) -> Result<()> {
         std::fs::rename(&old, target).map_err(write_error(target))?;
     }
     if exists(target) {
-        move_user_entries(&staging, target)?;
+        move_back_user_entries(&staging, target)?;
     }
     remove_any(&old)?;
     remove_any(&staging)
@@ -200,12 +189,37 @@ fn lock_with_pid(target: &Path) -> Result<File> {
 impl FolderLock {
     /// Locks the existing folder `target`; fails (exit 2) while another live run holds it.
     pub fn take(target: &Path) -> Result<FolderLock> {
+        let target = &through_links(target)?;
         let lock = FolderLock {
             target: target.to_path_buf(),
             _lock: lock_with_pid(target)?,
         };
         recover(target)?;
         Ok(lock)
+    }
+
+    /// Refuses (exit 2) to write the file `name` into the folder when one of the user's
+    /// stands there: one that the folder's manifest does not list as it is now.
+    pub fn may_write(&self, name: &str) -> Result<()> {
+        let path = self.target.join(name);
+        let earlier = Manifest::read(&self.target).unwrap_or_default();
+        if !exists(&path) || earlier.owns(&self.target, name, &BTreeSet::new()) {
+            return Ok(());
+        }
+        Err(Error::usage(format!(
+            "{}: not written by an mtsim run (the folder's {MANIFEST_FILE} does not list it as it is now); nothing was changed: move it away or write the run again with --html",
+            path.display()
+        )))
+    }
+
+    /// Adds the file `name`, just written into the folder, to its manifest.
+    pub fn record(&self, name: &str) -> Result<()> {
+        let mut manifest = Manifest::read(&self.target).unwrap_or_default();
+        let path = self.target.join(name);
+        let record = super::manifest::record_of(&path).map_err(write_error(&path))?;
+        manifest.mtsim_run = super::manifest::FORMAT;
+        manifest.files.insert(name.to_string(), record);
+        manifest.write(&self.target)
     }
 }
 
@@ -215,10 +229,33 @@ impl Drop for FolderLock {
     }
 }
 
+/// The folder a chain of symbolic links at `target` ends in (`target` itself when it is no
+/// link), so that a run writes through `-o LINK` and leaves the link in place.
+fn through_links(target: &Path) -> Result<PathBuf> {
+    let mut path = target.to_path_buf();
+    // As many links as the kernel follows (ELOOP past 40).
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&path) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let next = std::fs::read_link(&path).map_err(write_error(&path))?;
+                path = match path.parent() {
+                    Some(parent) if next.is_relative() => parent.join(next),
+                    _ => next,
+                };
+            }
+            _ => return Ok(path),
+        }
+    }
+    Err(Error::usage(format!(
+        "-o {}: a loop of symbolic links; name a folder",
+        target.display()
+    )))
+}
+
 impl RunDir {
     /// Locks `target` for this run, cleans up after a killed run and creates the empty
     /// staging folder. Fails (exit 2) when another live run holds the lock or when `target`
-    /// is not a folder.
+    /// is not a folder. A `target` that is a symbolic link stands for the folder it names.
     pub fn begin(target: &Path) -> Result<RunDir> {
         if target.file_name().is_none() || target.as_os_str() == "." {
             return Err(Error::usage(format!(
@@ -226,6 +263,7 @@ impl RunDir {
                 target.display()
             )));
         }
+        let target = &through_links(target)?;
         let parent = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
@@ -236,6 +274,7 @@ impl RunDir {
         let run_dir = RunDir {
             target: target.to_path_buf(),
             staging: sibling(target, "new"),
+            inputs: BTreeSet::new(),
             _lock: lock,
             committed: false,
         };
@@ -252,26 +291,77 @@ impl RunDir {
         Ok(run_dir)
     }
 
+    /// Records the files this run reads (scenarios, measured traces, shards): whatever an
+    /// earlier manifest says of them, they stay in the folder as the user's.
+    pub fn reads<P: AsRef<Path>>(mut self, inputs: &[P]) -> RunDir {
+        for input in inputs {
+            if let Ok(path) = std::fs::canonicalize(input) {
+                self.inputs.insert(path);
+            }
+        }
+        self
+    }
+
     /// The folder to write the run's files into.
     pub fn path(&self) -> &Path {
         &self.staging
     }
 
-    /// Puts the written folder, with the user's entries of the old one, in place of the
-    /// target and removes the old run.
+    /// The top-level entries of the target that are not the earlier run's own (by its
+    /// manifest), to be kept; refused when one has the name of an entry this run wrote.
+    fn users_entries(&self, staged: &Manifest) -> Result<Vec<std::ffi::OsString>> {
+        let target = &self.target;
+        let earlier = Manifest::read(target).unwrap_or_default();
+        let entries = std::fs::read_dir(target).map_err(write_error(target))?;
+        let (mut keep, mut clashes) = (Vec::new(), Vec::new());
+        for entry in entries {
+            let name = entry.map_err(write_error(target))?.file_name();
+            let text = name.to_string_lossy();
+            if earlier.owns(target, &text, &self.inputs) {
+                continue;
+            }
+            if staged.lists(&text) {
+                clashes.push(text.into_owned());
+            } else {
+                keep.push(name);
+            }
+        }
+        if clashes.is_empty() {
+            return Ok(keep);
+        }
+        Err(Error::usage(format!(
+            "-o {}: {} {} not written by an earlier mtsim run (the folder's {MANIFEST_FILE} does not list {} as it is now), and this run writes the same {}; nothing was changed: move {} away or choose another -o",
+            target.display(),
+            clashes.join(", "),
+            if clashes.len() == 1 { "is" } else { "are" },
+            if clashes.len() == 1 { "it" } else { "them" },
+            if clashes.len() == 1 { "name" } else { "names" },
+            if clashes.len() == 1 { "it" } else { "them" },
+        )))
+    }
+
+    /// Records what the run wrote in its manifest, then puts the written folder, with the
+    /// user's entries of the old one, in place of the target and removes the old run's own
+    /// files. Refused (exit 2, the target untouched) when an entry of the user's has the name
+    /// of one the run wrote.
     pub fn commit(mut self) -> Result<()> {
+        let staged = Manifest::of_folder(&self.staging)?;
+        staged.write(&self.staging)?;
         let target = &self.target;
         if !exists(target) {
             std::fs::rename(&self.staging, target).map_err(write_error(target))?;
         } else {
-            move_user_entries(target, &self.staging)?;
+            for name in self.users_entries(&staged)? {
+                let (from, to) = (target.join(&name), self.staging.join(&name));
+                std::fs::rename(&from, &to).map_err(write_error(&from))?;
+            }
             if exchange(&self.staging, target).is_err() {
                 let old = sibling(target, "old");
                 std::fs::rename(target, &old).map_err(write_error(&old))?;
                 std::fs::rename(&self.staging, target).map_err(write_error(target))?;
             }
         }
-        // Now only outputs of the old run are left beside it, to be removed.
+        // Now only the old run's own files are left beside it, to be removed.
         self.committed = true;
         signals::unwatch(target);
         remove_any(&self.staging)?;

@@ -66,3 +66,30 @@ fn a_malformed_number_in_a_program_names_file_line_and_column_with_help() {
     assert!(!err.contains("panicked"), "{err}");
     insta::assert_snapshot!(err);
 }
+
+/// A program path that names no program (a scenario file, an image): the message gives its
+/// path, line and column, never its content, and says what to check.
+#[test]
+fn a_program_path_that_names_no_program_is_named_without_its_content() {
+    let dir = scratch("messages", "not-a-program");
+    let image: Vec<u8> = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n']
+        .into_iter()
+        .chain((0..200u32).map(|i| (i * 37 % 251) as u8))
+        .collect();
+    std::fs::write(dir.join("image.nc"), &image).unwrap();
+    std::fs::write(
+        dir.join("other.nc"),
+        "# SECRET-FIRST-LINE of some TOML\nkey = \"SECRET-SECOND-LINE\"\n",
+    )
+    .unwrap();
+    for program in ["image.nc", "other.nc"] {
+        write_scenario(&dir, &trt_ac(), &format!("[program]\nfile = \"{program}\"\n"));
+        let (code, err) = analyze_stderr(&dir);
+        assert_eq!(code, Some(2), "{err}");
+        assert!(err.contains(&format!("{program}:1:")), "{err}");
+        assert!(err.contains("not an NC program"), "{err}");
+        for quoted in ["SECRET", "PNG", "NAS", "key"] {
+            assert!(!err.contains(quoted), "{program} quoted `{quoted}`: {err}");
+        }
+    }
+}

@@ -151,6 +151,7 @@ fn a_rerun_leaves_no_file_of_the_earlier_run_and_keeps_the_users_files() {
     assert_eq!(
         names(&out),
         [
+            ".mtsim-run.json",
             "ballbar.svg",
             "check.json",
             "notes.txt",
@@ -289,9 +290,212 @@ fn a_sweep_into_the_folder_of_another_sweep_leaves_only_its_own_files() {
     assert_eq!(
         names(&out),
         [
+            ".mtsim-run.json",
             "sweep-center_y.csv",
             "sweep-center_y.parquet",
             "sweep-center_y.svg"
         ]
     );
+}
+
+/// Each file below `dir` whose top-level entry is not among `run`'s, with its length and a
+/// checksum of its bytes (readable when an assertion fails): each must survive a run.
+fn user_files(dir: &Path, run: &[&str]) -> BTreeMap<PathBuf, (usize, u64)> {
+    contents(dir)
+        .into_iter()
+        .filter(|(p, _)| {
+            let top = p.components().next().unwrap().as_os_str().to_string_lossy();
+            !run.contains(&top.as_ref())
+        })
+        .map(|(p, bytes)| {
+            let sum = bytes
+                .iter()
+                .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| (h ^ *b as u64).wrapping_mul(0x100_0000_01b3));
+            (p, (bytes.len(), sum))
+        })
+        .collect()
+}
+
+/// What `simulate` (without `--html`) writes: the manifest and its five files.
+const SIMULATE_FILES: [&str; 6] = [
+    ".mtsim-run.json",
+    "ballbar.svg",
+    "check.json",
+    "summary.json",
+    "test.json",
+    "trace.csv",
+];
+
+/// Issue 42's reproduction: names that look like mtsim's (`runs/`, `study-*`, `batch.*`)
+/// are the user's when no manifest lists them, and a run goes beside them.
+#[test]
+fn files_named_like_outputs_but_not_listed_in_a_manifest_are_kept() {
+    let dir = scratch("run-folders", "lookalikes");
+    let out = dir.join("p");
+    std::fs::create_dir_all(out.join("runs")).unwrap();
+    std::fs::write(out.join("runs/k"), b"x").unwrap();
+    std::fs::write(out.join("study-notes.txt"), b"x").unwrap();
+    std::fs::write(out.join("batch.xlsx"), b"x").unwrap();
+    std::fs::write(out.join("report.html"), b"<p>mine</p>").unwrap();
+    let before = contents(&out);
+    run_ok(&simulate_args(NEW, &out, false));
+    run_ok(&simulate_args(OLD, &out, false));
+    let after = contents(&out);
+    for (path, bytes) in &before {
+        assert_eq!(after.get(path), Some(bytes), "{} was lost", path.display());
+    }
+    let mut expected: Vec<&str> = SIMULATE_FILES.to_vec();
+    expected.extend(["batch.xlsx", "report.html", "runs", "study-notes.txt"]);
+    expected.sort();
+    assert_eq!(names(&out), expected);
+    // The run asked for a page: report.html is the user's, so it is refused, and nothing changes.
+    let refused = mtsim(&simulate_args(NEW, &out, true));
+    assert_eq!(refused.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&refused.stderr).replace(['\n', '│', ' '], "");
+    assert!(err.contains("report.htmlisnotwrittenbyanearliermtsimrun"), "{err}");
+    assert_eq!(contents(&out), after, "the refused run touched nothing");
+    assert_eq!(names(&dir), ["p"], "no lock or staging folder left");
+}
+
+/// `fit --measured DIR/trace.csv -o DIR`: the trace the fit reads stays, though the earlier
+/// run's manifest lists it; the earlier run's other files go.
+#[test]
+fn a_fit_into_the_folder_of_its_measured_trace_keeps_the_trace() {
+    let dir = scratch("run-folders", "fit");
+    let out = dir.join("out");
+    run_ok(&simulate_args(NEW, &out, false));
+    let trace = std::fs::read(out.join("trace.csv")).unwrap();
+    let measured = out.join("trace.csv");
+    run_ok(&["fit", NEW, "--measured", s(&measured), "-o", s(&out)]);
+    assert_eq!(std::fs::read(&measured).unwrap(), trace);
+    let held = names(&out);
+    assert!(held.contains(&"fit.json".to_string()), "{held:?}");
+    assert!(!held.contains(&"summary.json".to_string()), "{held:?}");
+}
+
+/// A folder written by a run and then edited: the edited file is the user's.
+#[test]
+fn an_output_the_user_edited_is_theirs_and_a_run_that_would_replace_it_is_refused() {
+    let dir = scratch("run-folders", "edited");
+    let out = dir.join("out");
+    run_ok(&simulate_args(NEW, &out, false));
+    std::fs::write(out.join("ballbar.svg"), b"<svg>annotated</svg>").unwrap();
+    let before = contents(&out);
+    let refused = mtsim(&simulate_args(NEW, &out, false));
+    assert_eq!(refused.status.code(), Some(2));
+    assert_eq!(contents(&out), before);
+    // Renamed out of the way, it is kept as the user's, and the run goes beside it.
+    std::fs::rename(out.join("ballbar.svg"), out.join("ballbar-annotated.svg")).unwrap();
+    run_ok(&simulate_args(NEW, &out, false));
+    assert_eq!(
+        std::fs::read(out.join("ballbar-annotated.svg")).unwrap(),
+        b"<svg>annotated</svg>"
+    );
+}
+
+/// `-o LINK`: the run writes into the folder the link names; the link stays a link, and the
+/// user's files in its folder stay.
+#[test]
+fn an_output_through_a_symbolic_link_writes_through_it_and_keeps_it() {
+    let dir = scratch("run-folders", "link");
+    let real = dir.join("real");
+    std::fs::create_dir_all(&real).unwrap();
+    std::fs::write(real.join("mine.txt"), b"mine").unwrap();
+    let link = dir.join("link");
+    std::os::unix::fs::symlink("real", &link).unwrap();
+    run_ok(&simulate_args(NEW, &link, false));
+    run_ok(&simulate_args(OLD, &link, false));
+    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+    assert_eq!(std::fs::read_link(&link).unwrap(), Path::new("real"));
+    assert_eq!(std::fs::read(real.join("mine.txt")).unwrap(), b"mine");
+    assert!(real.join("summary.json").is_file());
+    assert_eq!(names(&dir), ["link", "real"]);
+}
+
+/// `mtsim report` adds its page to the folder's manifest, so the next run replaces it.
+#[test]
+fn a_page_written_by_report_is_the_runs_and_a_rerun_with_html_replaces_it() {
+    let dir = scratch("run-folders", "report-manifest");
+    let out = dir.join("out");
+    run_ok(&simulate_args(NEW, &out, false));
+    run_ok(&["report", s(&out)]);
+    let manifest = std::fs::read_to_string(out.join(".mtsim-run.json")).unwrap();
+    assert!(manifest.contains("\"report.html\""), "{manifest}");
+    run_ok(&simulate_args(OLD, &out, true));
+    run_ok(&simulate_args(NEW, &out, false));
+    assert!(!out.join("report.html").exists(), "the earlier run's page goes with it");
+}
+
+/// A user's tree drawn at random: names like mtsim's outputs and not, files and folders.
+fn random_tree(rng: &mut Rng, root: &Path) -> usize {
+    const NAMES: [&str; 12] = [
+        "trace.csv.bak",
+        "runs",
+        "study-notes.txt",
+        "batch.xlsx",
+        "placement.md",
+        "sweep-old",
+        "fit.toml",
+        "notes",
+        ".hidden",
+        "report.htm",
+        "shards",
+        "summary.json.orig",
+    ];
+    let mut made = 0;
+    for name in NAMES {
+        if rng.unit() < 0.5 {
+            continue;
+        }
+        let path = root.join(name);
+        if rng.unit() < 0.5 {
+            std::fs::create_dir_all(path.join("inner")).unwrap();
+            std::fs::write(path.join("inner/trace.csv"), name.as_bytes()).unwrap();
+        } else {
+            std::fs::write(&path, name.as_bytes()).unwrap();
+        }
+        made += 1;
+    }
+    made
+}
+
+/// The property of issue 42: over random user trees, every entry the run did not write
+/// survives a run, a rerun and a killed run (after the next run has cleaned up).
+#[test]
+fn every_entry_not_in_the_manifest_survives_runs_reruns_and_killed_runs() {
+    let dir = scratch("run-folders", "property");
+    let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+    let cases = if std::env::var_os("MTSIM_LONG_FAULTS").is_some() { 40 } else { 8 };
+    let mut users = 0;
+    for case in 0..cases {
+        let out = dir.join(format!("case{case}"));
+        std::fs::create_dir_all(&out).unwrap();
+        users += random_tree(&mut rng, &out);
+        let mine = user_files(&out, &[]);
+        let check = |when: &str| {
+            let held = user_files(&out, &SIMULATE_FILES);
+            assert_eq!(held, mine, "case {case}, after {when}");
+        };
+        run_ok(&simulate_args(OLD, &out, false));
+        check("a run");
+        run_ok(&simulate_args(NEW, &out, false));
+        check("a rerun");
+        let mut child = spawn(&simulate_args(OLD, &out, false));
+        std::thread::sleep(Duration::from_millis((rng.unit() * 400.0) as u64));
+        let _ = child.kill();
+        child.wait().unwrap();
+        // Killed while it moved them, the user's entries are in the folder or in the staged
+        // one beside it, never gone; the next run puts them back.
+        let staging = dir.join(format!(".case{case}.mtsim-new"));
+        let mut held = user_files(&out, &SIMULATE_FILES);
+        if staging.is_dir() {
+            // The staged folder also holds the run's own files, finished or not.
+            let staged = user_files(&staging, &[]);
+            held.extend(staged.into_iter().filter(|(p, _)| mine.contains_key(p)));
+        }
+        assert_eq!(held, mine, "case {case}, just after a killed run");
+        run_ok(&simulate_args(NEW, &out, false));
+        check("a killed run and the next");
+    }
+    assert!(users > 0, "the trees held some of the user's entries");
 }

@@ -41,7 +41,7 @@ class Simulation(NamedTuple):
     """The summary.json document: ``sim_time_s`` (s), ``setpoints``, ``ballbar`` (G, F, H
     in µm and the events, θ in deg), ``reversals_deg``, ``reversal_values``, ..."""
     trace: pa.Table
-    """The trace, the columns of trace.csv / trace.parquet (docs/output-format.md)."""
+    """The trace, the columns of trace.csv / trace.parquet (docs/simulation.md, "Outputs")."""
 
 
 def simulate(scenario: Scenario, *, output: str | os.PathLike[str] | None = None,
@@ -114,9 +114,16 @@ def blocks(scenario: Scenario) -> pa.Table:
     Returns:
         A ``pyarrow.Table``: ``line`` (source line), ``kind`` (rapid, feed, arc, dwell),
         the end point ``x y z`` (mm) and ``a b c`` (deg) in machine coordinates, ``feed``
-        (mm/min, null for rapids), ``tool``; ``u v w`` (mm) on machines with those axes.
+        (mm/min, null for rapids), ``dwell_s`` (s, null but for dwells), ``tool``; ``u v w``
+        (mm) on machines with those axes. A column that is null in every row (``dwell_s`` of
+        a program without dwells) keeps its number type, float64.
     """
-    return pa.Table.from_pylist(_native.blocks(scenario))
+    table = pa.Table.from_pylist(_native.blocks(scenario))
+    for i, field in enumerate(table.schema):
+        if pa.types.is_null(field.type):
+            table = table.set_column(i, pa.field(field.name, pa.float64()),
+                                     table.column(i).cast(pa.float64()))
+    return table
 
 
 def fit(scenarios: Scenario | Sequence[Scenario],

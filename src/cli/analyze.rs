@@ -141,6 +141,10 @@ pub fn run(path: &Path, as_json: bool) -> Result<i32> {
     Ok(0)
 }
 
+/// Reversals listed per axis in the table; a longer list gives its count and these first
+/// ones (`--json` lists them all).
+const REVERSALS_SHOWN: usize = 8;
+
 /// The per-axis table of `mtsim analyze`.
 pub fn analysis_table(analysis: &Analysis) -> String {
     let mut out = String::new();
@@ -163,11 +167,18 @@ pub fn analysis_table(analysis: &Analysis) -> String {
         let reversals = match &a.reversal_lines {
             Some(lines) if lines.is_empty() => "none".to_string(),
             Some(lines) => {
-                let l = lines
+                let mut l = lines
                     .iter()
+                    .take(REVERSALS_SHOWN)
                     .map(|l| format!("line {l}"))
                     .collect::<Vec<_>>()
                     .join(", ");
+                if lines.len() > REVERSALS_SHOWN {
+                    l = format!(
+                        "{} reversals, the first {REVERSALS_SHOWN}: {l}, ... (all in --json)",
+                        lines.len()
+                    );
+                }
                 if a.reversals_deg.is_empty() {
                     l
                 } else {
@@ -238,9 +249,18 @@ pub fn feed_table(feed: &FeedReport) -> String {
 }
 
 fn fmt_angles(angles: &[f64]) -> String {
-    angles
+    let shown = angles
         .iter()
+        .take(REVERSALS_SHOWN)
         .map(|t| format!("{t:.2}"))
         .collect::<Vec<_>>()
-        .join(", ")
+        .join(", ");
+    if angles.len() > REVERSALS_SHOWN {
+        format!(
+            "{} reversals, the first {REVERSALS_SHOWN}: {shown}, ... (all in --json)",
+            angles.len()
+        )
+    } else {
+        shown
+    }
 }

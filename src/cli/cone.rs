@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use super::{cone_of, print_stdout};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
 use crate::program::cone::{write_program, ConePath};
 use crate::report::write_atomic;
@@ -13,6 +13,13 @@ pub fn run(path: &Path, output: Option<&Path>, g93: bool, tcp: bool) -> Result<i
     let (cone, mut nc) = cone_of(&scenario, "cone")?;
     nc.inverse_time |= g93;
     nc.tcp |= tcp;
+    if nc.inverse_time && nc.tcp {
+        // Both asked for, on the line or in the scenario: the TCP program feeds the tip in
+        // mm/min (G94), so G93 would be dropped without a word.
+        return Err(Error::usage(
+            "--g93 with --tcp (or [program.cone] inverse_time with tcp): the G43.4 program feeds the tool tip in mm/min (G94) and writes no G93; choose one",
+        ));
+    }
     let cone_path = ConePath::new(cone, &scenario.machine);
     let (text, _) = write_program(&cone_path, &scenario.machine.name, &nc);
     match output {

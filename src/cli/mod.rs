@@ -49,7 +49,8 @@ pub struct Cli {
     /// No progress bars and no warnings on stderr (errors still go there).
     #[arg(short, long, global = true)]
     pub quiet: bool,
-    /// More detail on stderr: what each stage did and how long it took (-vv: more).
+    /// More detail on stderr: what each stage did, and for `simulate` how long each stage
+    /// took (-vv: more, e.g. the check's table).
     #[arg(short, long, global = true, action = clap::ArgAction::Count)]
     pub verbose: u8,
 }

@@ -436,8 +436,11 @@ impl MachineBase {
         .map_err(|e| {
             e.with_help("[machine_overrides] takes the same keys as a machine file; see docs/machine-format.md")
         })?;
-        // Range errors in overridden values point at the scenario file.
-        Machine::validate(scenario, scenario_text.unwrap_or(""), file, tables_file)
+        // Range errors in overridden values point at the scenario file; the machine is still
+        // the machine file's (test.json names it, the scenario hash reads it).
+        let mut machine = Machine::validate(scenario, scenario_text.unwrap_or(""), file, tables_file)?;
+        machine.path = self.path.clone();
+        Ok(machine)
     }
 }
 

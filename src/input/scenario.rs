@@ -1089,6 +1089,12 @@ fn validate_cone(path: &Path, text: &str, c: &ConeSection) -> Result<(ConeTest, 
         ));
     }
     check_feed(c.feed_mm_min).map_err(|m| err("feed_mm_min", m))?;
+    if c.inverse_time && c.tcp {
+        return Err(err(
+            "inverse_time",
+            "cannot be set with tcp = true: the G43.4 program feeds the tool tip in mm/min (G94); choose one".into(),
+        ));
+    }
     let nc = NcOptions {
         segments: c.segments,
         feed_mm_min: c.feed_mm_min,

@@ -750,7 +750,8 @@ table{border-collapse:collapse;margin:.5em 0}th,td{border:1px solid #ddd;padding
 table.params th{background:#f5f5f5;width:16em}table.figures td,table.marks td,table.limits td,table.shares td,table.reversal-b td{text-align:right}.summary{font-size:1.15em}\
 tr.total{font-weight:bold}figure{margin:.5em 0}svg.plot{width:100%;height:auto;display:block}\
 .axes{display:grid;grid-template-columns:repeat(3,1fr);gap:.5em}.axes figure{margin:0}\
-li.violation{color:#b00}.note{color:#555;font-size:.95em}";
+li.violation{color:#b00}.note{color:#555;font-size:.95em}\
+div.wide{overflow-x:auto;max-width:100%}pre{white-space:pre-wrap;overflow-wrap:anywhere;background:#f7f7f7;padding:.5em}";
 
 /// A page with the limits and collision summary of `mtsim check` alone.
 pub fn render_check_page(name: &str, check: &CheckReport) -> String {

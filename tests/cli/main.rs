@@ -9,6 +9,7 @@ mod bad_inputs;
 mod bounds;
 mod dask_example;
 mod docs_commands;
+mod hostile;
 mod messages;
 mod run_folders;
 mod scale_out;

@@ -416,3 +416,67 @@ fn quiet_sweep_and_batch_write_their_files_without_a_word() {
     );
     assert!(std::fs::read_dir(&dir).unwrap().count() >= 3);
 }
+
+/// `cone --g93 --tcp` asked for two feed forms at once: refused, never one dropped.
+#[test]
+fn cone_with_g93_and_tcp_is_refused_not_silently_half_done() {
+    let out = mtsim(&["cone", "scenarios/cone-15-10.toml", "--g93", "--tcp"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--g93 with --tcp") && err.contains("choose one"), "{err}");
+    assert!(out.stdout.is_empty(), "no program written");
+    // Each alone still writes its program.
+    let g93 = mtsim(&["cone", "scenarios/cone-15-10.toml", "--g93"]);
+    assert!(String::from_utf8_lossy(&g93.stdout).contains("G93"));
+    let tcp = mtsim(&["cone", "scenarios/cone-15-10.toml", "--tcp"]);
+    assert!(String::from_utf8_lossy(&tcp.stdout).contains("G43.4"));
+}
+
+/// A program that reverses X 30 times: the table gives the count and the first 8 lines,
+/// `--json` lists all 30.
+#[test]
+fn analyze_gives_a_long_reversal_list_as_its_count_and_first_lines() {
+    let dir = scratch("usability", "many-reversals");
+    let mut program = String::from("G21 G90 G94\nG0 X0 Y0 Z50\nF1000\n");
+    for i in 0..31 {
+        program.push_str(&format!("G1 X{}\n", if i % 2 == 0 { 10 } else { 0 }));
+    }
+    program.push_str("M30\n");
+    let scenario = common::file_scenario(&dir, &program);
+    let out = mtsim(&["analyze", &scenario]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let x_row = text.lines().find(|l| l.starts_with("X ")).unwrap();
+    assert!(x_row.contains("30 reversals, the first 8: line 4,"), "{x_row}");
+    assert_eq!(x_row.matches("line ").count(), 8, "{x_row}");
+    let json = stdout_json(&mtsim(&["analyze", &scenario, "--json"]));
+    let x = json["axes"]
+        .as_array()
+        .map(|a| a.iter().find(|a| a["axis"] == "X").unwrap().clone())
+        .unwrap_or_else(|| json["axes"]["X"].clone());
+    assert_eq!(x["reversal_lines"].as_array().unwrap().len(), 30, "{x}");
+}
+
+/// `-v` on simulate gives each stage's wall time; the whole run's real-time factor is printed
+/// beside the simulation's own.
+#[test]
+fn simulate_verbose_gives_stage_times_and_the_whole_runs_factor() {
+    let dir = scratch("usability", "verbose");
+    let out = mtsim(&[
+        "simulate",
+        "scenarios/circle-iso230-4.toml",
+        "-o",
+        dir.join("out").to_str().unwrap(),
+        "-v",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let err = String::from_utf8_lossy(&out.stderr);
+    for stage in ["stages (wall): read ", "simulation (", "check ", "whole run "] {
+        assert!(err.contains(stage), "{stage}: {err}");
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("x for the whole run (") && text.contains("the simulation alone"),
+        "{text}"
+    );
+}

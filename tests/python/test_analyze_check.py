@@ -62,3 +62,10 @@ def test_blocks_is_the_binary_s_rows_as_a_table(mtsim_bin, root):
 def test_check_refuses_a_negative_near_miss():
     with pytest.raises(mtsim.InputError, match="near_miss_mm -1"):
         mtsim.check(scenario_dict("cone-15-10.toml"), near_miss_mm=-1.0)
+
+
+def test_blocks_of_a_program_without_dwells_types_dwell_s_as_float64(root):
+    table = mtsim.blocks(root / "scenarios" / "cone-15-10.toml")
+    assert table.column("dwell_s").null_count == table.num_rows
+    assert table.schema.field("dwell_s").type == pa.float64()
+    assert table.schema.field("x").type == pa.float64()

@@ -46,3 +46,14 @@ def test_a_bad_study_file_raises_input_error_with_its_place(root, tmp_path):
         assert "not a number" in str(e), str(e)
     else:
         raise AssertionError("a NaN value in a study file must raise InputError")
+
+
+def test_the_python_example_of_docs_studies_runs(root, monkeypatch, capsys):
+    # The fenced Python block of docs/studies.md, run as written from the repository root.
+    text = (root / "docs" / "studies.md").read_text()
+    code = text.split("```python\n", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(root)
+    exec(compile(code, "docs/studies.md", "exec"), {})
+    printed = capsys.readouterr().out
+    assert "0 points failed" in printed
+    assert "B_X_um" in printed

@@ -994,3 +994,36 @@ fn a_study_page_renders_in_headless_chromium_with_its_plot_and_rows() {
         );
     }
 }
+
+/// test.json names the machine file a scenario's `[machine_overrides]` change, not the
+/// scenario (which it names beside it), and its hash changes with the machine file.
+#[test]
+fn test_json_names_the_machine_file_under_machine_overrides() {
+    let dir = scratch("report", "overrides");
+    let machine = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/trt-ac.toml");
+    std::fs::copy(&machine, dir.join("m.toml")).unwrap();
+    std::fs::write(
+        dir.join("s.toml"),
+        format!(
+            "machine = \"m.toml\"\n{}\n[machine_overrides.axes.X.drive]\nbacklash_mm = 0.003\n",
+            common::CONE_15_10
+        ),
+    )
+    .unwrap();
+    let hash = |dir: &Path| -> (String, String) {
+        simulate_with_report(dir.join("s.toml").to_str().unwrap(), &dir.join("out"));
+        let t: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("out/test.json")).unwrap()).unwrap();
+        (
+            t["machine_file"].as_str().unwrap().to_string(),
+            t["scenario_hash"].as_str().unwrap().to_string(),
+        )
+    };
+    let (file, before) = hash(&dir);
+    assert!(file.ends_with("m.toml"), "{file}");
+    let mut text = std::fs::read_to_string(dir.join("m.toml")).unwrap();
+    text.push_str("\n# an edit of the machine file\n");
+    std::fs::write(dir.join("m.toml"), text).unwrap();
+    let (_, after) = hash(&dir);
+    assert_ne!(before, after, "the scenario hash reads the machine file");
+}

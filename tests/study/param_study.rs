@@ -23,6 +23,16 @@ fn study_file(dir: &Path, scenario: &str, top: &str, vary: &str) -> PathBuf {
 
 /// Runs `mtsim study` and returns the rows of rows.csv as (header, rows).
 fn run(study: &Path, out: &Path, extra: &[&str]) -> (Vec<String>, Vec<Vec<String>>) {
+    run_with_exit(study, out, extra, 0)
+}
+
+/// Runs `mtsim study`, checks its exit code is `code`, and returns rows.csv as (header, rows).
+fn run_with_exit(
+    study: &Path,
+    out: &Path,
+    extra: &[&str],
+    code: i32,
+) -> (Vec<String>, Vec<Vec<String>>) {
     let mut args = vec![
         "study",
         study.to_str().unwrap(),
@@ -32,8 +42,9 @@ fn run(study: &Path, out: &Path, extra: &[&str]) -> (Vec<String>, Vec<Vec<String
     ];
     args.extend_from_slice(extra);
     let o = mtsim(&args);
-    assert!(
-        o.status.success(),
+    assert_eq!(
+        o.status.code(),
+        Some(code),
         "stderr: {}",
         String::from_utf8_lossy(&o.stderr)
     );
@@ -294,7 +305,8 @@ fn a_nan_value_is_a_located_error() {
     assert!(err.contains("`vary.values`: is not a number"), "{err}");
 }
 
-/// A value the scenario refuses fails its point only; the others run.
+/// A value the scenario refuses fails its point only; the others run, and the exit code is
+/// 1, as `batch`'s when a scenario failed.
 #[test]
 fn a_failing_point_does_not_stop_the_study() {
     let dir = scratch("study", "failing");
@@ -304,7 +316,7 @@ fn a_failing_point_does_not_stop_the_study() {
         "",
         "[[vary]]\nkey = \"machine.axes.X.drive.backlash_mm\"\nvalues = [-0.01, 0.0]\n",
     );
-    let (h, rows) = run(&study, &dir.join("out"), &[]);
+    let (h, rows) = run_with_exit(&study, &dir.join("out"), &[], 1);
     let (status, error) = (
         h.iter().position(|c| c == "status").unwrap(),
         h.iter().position(|c| c == "error").unwrap(),
@@ -317,6 +329,22 @@ fn a_failing_point_does_not_stop_the_study() {
     );
     assert_eq!(rows[1][status], "ok");
     assert!(column(&h, &rows[1..], "G_um")[0] > 0.0);
+}
+
+/// A key path of 20,000 parts is refused with exit 2 (it once overflowed the stack).
+#[test]
+fn a_key_path_of_twenty_thousand_parts_is_refused() {
+    let dir = scratch("study", "deep-key");
+    let key = vec!["a"; 20_000].join(".");
+    let study = study_file(
+        &dir,
+        "circle-iso230-4.toml",
+        "",
+        &format!("[[vary]]\nkey = \"{key}\"\nvalues = [1.0]\n"),
+    );
+    let o = mtsim(&["study", study.to_str().unwrap(), "-o", dir.join("out").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("more than 32 parts"));
 }
 
 /// The tolerance study of docs/studies.md, with 20 of its 1,000 points: its table, plots and

@@ -110,7 +110,7 @@ fn rows_table(h: &mut String, summary: &StudySummary, rows: &[Row]) {
             rows.len()
         );
     }
-    h.push_str("<table class=\"figures\">\n<tr>");
+    h.push_str("<div class=\"wide\"><table class=\"figures\">\n<tr>");
     for c in columns(&summary.keys, &summary.axes) {
         let _ = write!(h, "<th>{}</th>", esc(&c));
     }
@@ -133,5 +133,5 @@ fn rows_table(h: &mut String, summary: &StudySummary, rows: &[Row]) {
         }
         h.push_str("</tr>\n");
     }
-    h.push_str("</table>\n");
+    h.push_str("</table></div>\n");
 }

@@ -186,12 +186,21 @@ impl Error {
     }
 }
 
-/// Whether the program text `text` looks like no program before the byte `at` where its
-/// reader stopped: no line before that one holds a word (only blanks, comments, `%` or
-/// nothing), or the offending line holds control characters or bytes that were not UTF-8.
-/// Such a file (an image, a scenario given as the program) is named by its path, line and
-/// column only: its content is not the user's G-code to quote.
-fn not_a_program(text: &str, at: usize) -> bool {
+/// Extensions of files that are no NC program whatever they hold: data, pages, images,
+/// documents and source code a scenario may name by mistake.
+const NOT_PROGRAM_EXTENSIONS: [&str; 22] = [
+    "toml", "json", "csv", "parquet", "svg", "html", "htm", "xml", "png", "jpg", "jpeg", "gif",
+    "pdf", "zip", "gz", "md", "yaml", "yml", "py", "rs", "xlsx", "docx",
+];
+
+/// Whether the file `path` with text `text` is no program at all, judged where its reader
+/// stopped (byte `at`): the offending line holds control characters or bytes that were not
+/// UTF-8 (an image, an archive), or nothing before that line was read as a block and the
+/// file's extension names another kind of file (a scenario or machine file named as the
+/// program). Such a file is named by its path, line and column only: its content is not the
+/// user's G-code to quote. A real program that fails on its first block (a Sinumerik system
+/// variable, say) keeps the reader's message, which names the construct.
+fn not_a_program(path: &Path, text: &str, at: usize) -> bool {
     let at = at.min(text.len());
     let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
     let line_end = text[at..].find('\n').map_or(text.len(), |i| at + i);
@@ -199,6 +208,10 @@ fn not_a_program(text: &str, at: usize) -> bool {
     let garbled = line
         .chars()
         .any(|c| c == '\u{fffd}' || (c.is_control() && c != '\t' && c != '\r'));
+    let other_kind = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| NOT_PROGRAM_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()));
     let words_before = text[..line_start].lines().any(|l| {
         let mut depth = 0;
         for c in l.chars() {
@@ -212,7 +225,7 @@ fn not_a_program(text: &str, at: usize) -> bool {
         }
         false
     });
-    garbled || !words_before
+    garbled || (other_kind && !words_before)
 }
 
 /// A G-code reader error becomes a diagnostic that shows the line with its caret (or, for a
@@ -222,7 +235,7 @@ impl From<ngc::Error> for Error {
         match e {
             ngc::Error::Read { path, source } => Error::Read { path, source },
             // Neither the text nor the reader's message, which names the offending word.
-            ngc::Error::Syntax(s) if not_a_program(&s.text, s.span.start) => Error::Located {
+            ngc::Error::Syntax(s) if not_a_program(&s.path, &s.text, s.span.start) => Error::Located {
                 path: s.path,
                 line: s.line,
                 column: s.column,

@@ -361,9 +361,9 @@ impl RunDir {
                 std::fs::rename(&self.staging, target).map_err(write_error(target))?;
             }
         }
-        // Now only the old run's own files are left beside it, to be removed.
+        // Now only the old run's own files are left beside it, to be removed. The target stays
+        // watched until the lock file is gone (in `drop`): a signal meanwhile removes it too.
         self.committed = true;
-        signals::unwatch(target);
         remove_any(&self.staging)?;
         remove_any(&sibling(target, "old"))
     }
@@ -374,9 +374,9 @@ impl Drop for RunDir {
     fn drop(&mut self) {
         if !self.committed {
             let _ = recover(&self.target);
-            signals::unwatch(&self.target);
         }
         let _ = std::fs::remove_file(sibling(&self.target, "lock"));
+        signals::unwatch(&self.target);
     }
 }
 

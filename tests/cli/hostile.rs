@@ -193,11 +193,14 @@ fn names_place(text: &str, name: &str) -> bool {
 }
 
 /// Loads `path` with `load`: no panic, and either a clean load or exit code 2 naming
-/// `name` (or the machine file a scenario names) with line and column.
+/// `name` (or the machine file a scenario names) with line and column, or, where the key
+/// is not in the file to point at (removed, or a table that lacks what it needs), with the
+/// key: one of the parts of `key`.
 fn loads_or_names_the_place<T>(
     path: &Path,
     load: impl FnOnce(&Path) -> mtsim::error::Result<T>,
     case: &str,
+    key: &[String],
 ) -> Result<(), TestCaseError> {
     let name = path.file_name().unwrap().to_string_lossy().into_owned();
     let outcome = catch_unwind(AssertUnwindSafe(|| load(path)));
@@ -209,16 +212,27 @@ fn loads_or_names_the_place<T>(
         let text = format!("{e}");
         prop_assert_eq!(code, 2, "{}: exit {} for {}", case, code, text);
         // A scenario's error may be about the machine file it names (never quoted).
+        let named_key = key
+            .iter()
+            .filter(|k| !k.starts_with('['))
+            .any(|k| text.contains(k.as_str()));
         let placed = names_place(&text, &name)
             || names_place(&text, ".toml")
-            || text.contains("cannot read");
+            || text.contains("cannot read")
+            || (text.contains(&name) && named_key);
         prop_assert!(placed, "{}: the error names no file:line:column: {}", case, text);
     }
     Ok(())
 }
 
 /// One case: file `index` of `files`, leaf `leaf` of it edited by `edit`.
-fn edited_copy(files: &[PathBuf], index: usize, leaf: usize, edit: &Edit, tag: &str) -> (PathBuf, String) {
+fn edited_copy(
+    files: &[PathBuf],
+    index: usize,
+    leaf: usize,
+    edit: &Edit,
+    tag: &str,
+) -> (PathBuf, String, Vec<String>) {
     let source = &files[index % files.len()];
     let text = std::fs::read_to_string(source).unwrap();
     let mut table: toml::Table = toml::from_str(&text).unwrap();
@@ -234,7 +248,7 @@ fn edited_copy(files: &[PathBuf], index: usize, leaf: usize, edit: &Edit, tag: &
         path.join("."),
         edit
     );
-    (out, case)
+    (out, case, path.clone())
 }
 
 fn edit() -> impl Strategy<Value = Edit> {
@@ -282,8 +296,8 @@ proptest! {
         index in 0usize..64, leaf in 0usize..4096, edit in edit(),
     ) {
         let files = bundled("machines");
-        let (path, case) = edited_copy(&files, index, leaf, &edit, "m");
-        loads_or_names_the_place(&path, Machine::load, &case)?;
+        let (path, case, key) = edited_copy(&files, index, leaf, &edit, "m");
+        loads_or_names_the_place(&path, Machine::load, &case, &key)?;
     }
 
     /// 300 edited scenario files.
@@ -292,8 +306,8 @@ proptest! {
         index in 0usize..64, leaf in 0usize..4096, edit in edit(),
     ) {
         let files = bundled("scenarios");
-        let (path, case) = edited_copy(&files, index, leaf, &edit, "s");
-        loads_or_names_the_place(&path, Scenario::load, &case)?;
+        let (path, case, key) = edited_copy(&files, index, leaf, &edit, "s");
+        loads_or_names_the_place(&path, Scenario::load, &case, &key)?;
     }
 
     /// 300 edited study files.
@@ -302,8 +316,8 @@ proptest! {
         index in 0usize..64, leaf in 0usize..4096, edit in edit(),
     ) {
         let files = bundled("scenarios/studies");
-        let (path, case) = edited_copy(&files, index, leaf, &edit, "t");
-        loads_or_names_the_place(&path, |p| Study::load(p, None, None), &case)?;
+        let (path, case, key) = edited_copy(&files, index, leaf, &edit, "t");
+        loads_or_names_the_place(&path, |p| Study::load(p, None, None), &case, &key)?;
     }
 
     /// 300 programs with hostile words put in: read and analysed in process, they end

@@ -68,7 +68,8 @@ fn a_malformed_number_in_a_program_names_file_line_and_column_with_help() {
 }
 
 /// A program path that names no program (a scenario file, an image): the message gives its
-/// path, line and column, never its content, and says what to check.
+/// path, line and column, never its content, and says what to check. A real program that
+/// fails on its first block keeps the reader's message and its line.
 #[test]
 fn a_program_path_that_names_no_program_is_named_without_its_content() {
     let dir = scratch("messages", "not-a-program");
@@ -78,11 +79,11 @@ fn a_program_path_that_names_no_program_is_named_without_its_content() {
         .collect();
     std::fs::write(dir.join("image.nc"), &image).unwrap();
     std::fs::write(
-        dir.join("other.nc"),
+        dir.join("other.toml"),
         "# SECRET-FIRST-LINE of some TOML\nkey = \"SECRET-SECOND-LINE\"\n",
     )
     .unwrap();
-    for program in ["image.nc", "other.nc"] {
+    for program in ["image.nc", "other.toml"] {
         write_scenario(&dir, &trt_ac(), &format!("[program]\nfile = \"{program}\"\n"));
         let (code, err) = analyze_stderr(&dir);
         assert_eq!(code, Some(2), "{err}");
@@ -92,4 +93,15 @@ fn a_program_path_that_names_no_program_is_named_without_its_content() {
             assert!(!err.contains(quoted), "{program} quoted `{quoted}`: {err}");
         }
     }
+}
+
+#[test]
+fn a_program_that_fails_on_its_first_block_is_quoted_with_the_readers_message() {
+    let dir = scratch("messages", "first-block");
+    std::fs::write(dir.join("p.nc"), "(a part)\nG01 X1.2.3 F100\nM30\n").unwrap();
+    write_scenario(&dir, &trt_ac(), "[program]\nfile = \"p.nc\"\n");
+    let (code, err) = analyze_stderr(&dir);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("p.nc:2:5:") && err.contains("G01 X1.2.3 F100"), "{err}");
+    assert!(!err.contains("not an NC program"), "{err}");
 }

@@ -227,40 +227,51 @@ fn completions_and_a_man_page_are_generated() {
     assert_eq!(mtsim(&["completions", "tcsh"]).status.code(), Some(2));
 }
 
+/// A run killed at any time leaves no temporary file once the next run has run: its
+/// half-written files are in the staged folder beside `out`, never in `out`. A file of the
+/// user's with a temporary-looking name is theirs (no manifest lists it) and stays.
 #[test]
 fn a_killed_run_leaves_no_temporary_file_after_the_next_run() {
     let dir = scratch("usability", "stale");
     let out_dir = dir.join("out");
     std::fs::create_dir_all(&out_dir).unwrap();
-    // What a run killed mid-trace leaves: the raw rows and half-written outputs.
-    for stale in [
-        "trace.csv.raw.tmp",
-        "summary.json.tmp",
-        "ballbar.svg.tmp",
-        "report.html.tmp",
-    ] {
-        std::fs::write(out_dir.join(stale), b"").unwrap();
-    }
     std::fs::write(out_dir.join("notes.tmp"), b"mine").unwrap();
-    let out = mtsim(&[
+    std::fs::write(out_dir.join("summary.json.tmp"), b"mine too").unwrap();
+    let args = [
         "simulate",
         "scenarios/circle-iso230-4.toml",
         "-o",
         out_dir.to_str().unwrap(),
         "--no-timing",
         "--html",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let left: Vec<String> = std::fs::read_dir(&out_dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".tmp"))
-        .collect();
-    assert_eq!(left, ["notes.tmp"], "only the user's own file stays");
+    ];
+    for delay_ms in [5, 40, 120, 300] {
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_mtsim"))
+            .args(args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        let _ = child.kill();
+        child.wait().unwrap();
+        let out = mtsim(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let mut left: Vec<String> = std::fs::read_dir(&out_dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".tmp"))
+            .collect();
+        left.sort();
+        assert_eq!(left, ["notes.tmp", "summary.json.tmp"], "killed after {delay_ms} ms");
+        let beside: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(beside, ["out"], "killed after {delay_ms} ms");
+    }
+    assert_eq!(std::fs::read(out_dir.join("summary.json.tmp")).unwrap(), b"mine too");
 }
 
 #[test]

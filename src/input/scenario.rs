@@ -294,17 +294,6 @@ pub enum Program {
     },
 }
 
-impl Program {
-    /// The geometry of a generated cone, to change it (a placement map's or fit's cells);
-    /// `None` for any other test.
-    pub fn generated_cone_mut(&mut self) -> Option<&mut ConeTest> {
-        match self {
-            Program::Cone { cone, .. } => Some(cone),
-            Program::Circle { .. } | Program::File { .. } => None,
-        }
-    }
-}
-
 /// A loaded, validated scenario.
 #[derive(Clone, Debug)]
 pub struct Scenario {

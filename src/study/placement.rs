@@ -15,6 +15,7 @@ use crate::check::{check, CheckOptions};
 use crate::error::{Error, Result};
 use crate::input::scenario::{check_cone, Scenario};
 use crate::program::test_of;
+use crate::program::tests::generated_cone_mut;
 use crate::study::sweep::SweepParam;
 
 /// One grid cell.
@@ -123,7 +124,7 @@ pub fn placement_cells(
         .map(|&(x, y)| {
             let mut s = scenario.clone();
             let c = params[1].apply(&params[0].apply(cone, x), y);
-            if let Some(cone) = s.program.generated_cone_mut() {
+            if let Some(cone) = generated_cone_mut(&mut s.program) {
                 *cone = c;
             }
             s.workpiece.cone.center_mm = c.center_mm.into();

@@ -23,6 +23,7 @@ pub mod file;
 pub mod frame;
 pub mod interface;
 
+use crate::input::program::ConeTest;
 use crate::input::scenario::{Program, Scenario};
 
 pub use frame::CircleFrame;
@@ -51,4 +52,13 @@ pub fn of(program: &Program) -> Box<dyn TestProgram + '_> {
 /// The test `scenario` runs.
 pub fn test_of(scenario: &Scenario) -> Box<dyn TestProgram + '_> {
     of(&scenario.program)
+}
+
+/// The geometry of a generated cone, to change it (a placement map's cells, `fit`'s suggested
+/// tests); `None` for any other test.
+pub fn generated_cone_mut(program: &mut Program) -> Option<&mut ConeTest> {
+    match program {
+        Program::Cone { cone, .. } => Some(cone),
+        Program::Circle { .. } | Program::File { .. } => None,
+    }
 }

@@ -14,6 +14,7 @@ use crate::input::scenario::Scenario;
 use crate::kinematics::LocationParam;
 use crate::pipeline::Timing;
 use crate::program::test_of;
+use crate::program::tests::generated_cone_mut;
 use crate::study::simulate::bar_geometry;
 
 /// Scores candidate extra cone tests by the null space they leave (geometric part only).
@@ -71,7 +72,7 @@ pub(super) fn suggest(
     };
     let with_cone = |c: ConeTest| -> Scenario {
         let mut s = base.clone();
-        if let Some(cone) = s.program.generated_cone_mut() {
+        if let Some(cone) = generated_cone_mut(&mut s.program) {
             *cone = c;
         }
         s

@@ -846,3 +846,165 @@ fn the_loop_finder_tells_structure_from_loops() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Seams: one door per concept.
+//
+// A test program is a `TestProgram` (src/program/tests/), a measurement a `Measurement`
+// (src/measure/). The scenario's `Program` enum is the configuration `input` reads; the rest of
+// the house asks the trait, so the enum is named in at most three files (where it is defined,
+// re-exported, and registered) and its variants are matched only there. Each implementation of
+// either trait is in its folder and named in its one registry.
+
+/// The code tokens of every source file of `src/`, by path relative to `src/`.
+fn src_tokens() -> Vec<(String, Vec<Token>)> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    files
+        .iter()
+        .map(|f| {
+            let rel = f.strip_prefix(&src).unwrap().display().to_string();
+            (rel, tokens(&std::fs::read_to_string(f).unwrap()))
+        })
+        .collect()
+}
+
+/// Whether `toks` names the identifier `name`.
+fn names(toks: &[Token], name: &str) -> bool {
+    toks.iter()
+        .any(|t| matches!(t, Token::Ident(s) if s == name))
+}
+
+/// Whether `toks` name a variant of `name` (`name::Variant`).
+fn names_variant(toks: &[Token], name: &str) -> bool {
+    toks.windows(3).any(|w| {
+        matches!(&w[0], Token::Ident(s) if s == name)
+            && w[1] == Token::PathSep
+            && matches!(&w[2], Token::Ident(v) if v.starts_with(|c: char| c.is_uppercase()))
+    })
+}
+
+/// The types `impl Trait for Type` implements `trait_name` for, in `toks`.
+fn implementors(toks: &[Token], trait_name: &str) -> Vec<String> {
+    toks.windows(4)
+        .filter_map(|w| match w {
+            [Token::Ident(i), Token::Ident(t), Token::Ident(f), Token::Ident(ty)]
+                if i == "impl" && t == trait_name && f == "for" =>
+            {
+                Some(ty.clone())
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// The seams of enums read in one stage and asked of through a trait everywhere else: the
+/// enum, the files that may name it (its definition, a re-export, the registry that turns it
+/// into the trait), and the files among those that may match on its variants.
+const ENUM_SEAMS: &[(&str, &[&str], &[&str])] = &[(
+    "Program",
+    &["input/scenario.rs", "input/mod.rs", "program/tests/mod.rs"],
+    &["input/scenario.rs", "program/tests/mod.rs"],
+)];
+
+#[test]
+fn the_test_program_enum_is_named_in_at_most_three_files_and_matched_only_where_read_and_registered(
+) {
+    let files = src_tokens();
+    for (name, may_name, may_match) in ENUM_SEAMS {
+        assert!(
+            may_name.len() <= 3,
+            "{name}: more than three files may name it"
+        );
+        let naming: Vec<&String> = files
+            .iter()
+            .filter(|(_, t)| names(t, name))
+            .map(|(f, _)| f)
+            .collect();
+        let stray: Vec<&&String> = naming
+            .iter()
+            .filter(|f| !may_name.contains(&f.as_str()))
+            .collect();
+        assert!(
+            stray.is_empty(),
+            "`{name}` is named outside {may_name:?} (ask the trait instead): {stray:?}"
+        );
+        let matching: Vec<&String> = files
+            .iter()
+            .filter(|(f, t)| names_variant(t, name) && !may_match.contains(&f.as_str()))
+            .map(|(f, _)| f)
+            .collect();
+        assert!(
+            matching.is_empty(),
+            "a stage matches on `{name}`'s variants outside {may_match:?}: {matching:?}"
+        );
+        // The rule sees what it is about: the definition does name and match the enum.
+        assert!(naming.iter().any(|f| f.as_str() == may_match[0]));
+    }
+}
+
+/// Each implementation of a seam's trait: in its folder, and its module named in the registry
+/// file (`cone::Cone`, `cut::build`). `exempt` are implementations the registry need not list
+/// (with the reason at the call).
+fn assert_registered(trait_name: &str, folder: &str, registry: &str, exempt: &[&str]) {
+    let files = src_tokens();
+    let registry_tokens = &files
+        .iter()
+        .find(|(f, _)| f == registry)
+        .unwrap_or_else(|| panic!("{registry} not found"))
+        .1;
+    let names_module = |module: &str| {
+        registry_tokens
+            .windows(2)
+            .any(|w| matches!(&w[0], Token::Ident(s) if s == module) && w[1] == Token::PathSep)
+    };
+    let mut found = 0;
+    for (file, toks) in &files {
+        for ty in implementors(toks, trait_name) {
+            found += 1;
+            assert!(
+                file.starts_with(folder),
+                "{file}: `impl {trait_name} for {ty}` outside {folder}"
+            );
+            let module = Path::new(file).file_stem().unwrap().to_string_lossy();
+            assert!(
+                exempt.contains(&ty.as_str()) || file == registry || names_module(&module),
+                "{file}: `{ty}` implements {trait_name} but {registry} does not register it \
+                 (as `{module}::...`)"
+            );
+        }
+    }
+    assert!(found > 0, "no implementation of {trait_name} found");
+}
+
+#[test]
+fn every_test_program_lives_in_program_tests_and_is_registered_there() {
+    assert_registered("TestProgram", "program/tests/", "program/tests/mod.rs", &[]);
+}
+
+#[test]
+fn every_measurement_lives_in_measure_and_is_registered_in_one_place() {
+    // The ball bar is built by `simulate` itself (its bins feed the trace and the report).
+    assert_registered(
+        "Measurement",
+        "measure/",
+        "measure/measurement.rs",
+        &["BallbarSink"],
+    );
+    // One registry: only measurement.rs names it, and the pipeline knows no measurement.
+    for (file, toks) in src_tokens() {
+        if file != "measure/measurement.rs" {
+            assert!(
+                !names(&toks, "REGISTRY"),
+                "{file} names the measurement registry"
+            );
+        }
+        if file == "pipeline.rs" {
+            for name in ["Measurement", "BallbarSink", "measure"] {
+                assert!(!names(&toks, name), "pipeline.rs names `{name}`");
+            }
+        }
+    }
+}

@@ -17,13 +17,13 @@ use crate::check::limits::{AxisUsage, LimitsMonitor, Violation, ViolationKind};
 use crate::check::scene::{EngagementSummary, EventKind, Scene, SceneMonitor, ToolConfig};
 use crate::error::Result;
 use crate::input::program::Direction;
-use crate::input::scenario::{Program, Scenario};
+use crate::input::scenario::Scenario;
 use crate::kinematics::Kinematics;
 use crate::measure::CircleFrame;
 use crate::motion::work;
 use crate::motion::FeedReduction;
 use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
-use crate::program;
+use crate::program::{self, test_of};
 use crate::{Axis, AxisVec};
 
 pub use crate::pipeline::SETTLE_S;
@@ -416,13 +416,5 @@ fn from_first_end<'a>(moves: program::Moves<'a>, kin: Kinematics) -> program::Mo
 
 /// The frame that gives θ: the measured circle of a cone or circle test, if any.
 fn theta_frame(scenario: &Scenario) -> Option<CircleFrame> {
-    match &scenario.program {
-        Program::Cone { cone, .. } => Some(CircleFrame::of_cone(cone)),
-        Program::Circle { circle, .. } => {
-            let center =
-                nalgebra::Vector3::from(circle.center_mm) - scenario.machine.kinematics.pivot_mm;
-            Some(CircleFrame::planar(center.into(), circle.plane))
-        }
-        Program::File { cone, .. } => cone.map(|c| CircleFrame::of_cone(&c)),
-    }
+    test_of(scenario).theta_frame(&scenario.machine.kinematics)
 }

@@ -4,8 +4,8 @@
 //! violations, as the reader's units warning names the unit it assumed.
 
 use crate::check::limits::AxisUsage;
-use crate::input::scenario::{Program, Scenario};
-use crate::program::file;
+use crate::input::scenario::Scenario;
+use crate::program::{file, test_of};
 
 /// A note for the travel violations of `scenario`'s program file (`usage`: its axes'
 /// travel limits): when the program read in the other start unit keeps every linear axis's
@@ -13,9 +13,8 @@ use crate::program::file;
 /// a generated program, when the program states its units itself (both readings agree),
 /// when it still leaves the travel, or when it does not read in the other unit.
 pub fn other_unit_note(scenario: &Scenario, usage: &[AxisUsage]) -> Option<String> {
-    let Program::File { path, .. } = &scenario.program else {
-        return None;
-    };
+    let test = test_of(scenario);
+    let path = test.file()?;
     let mut options = scenario.reader.clone();
     let (read, other, factor) = match options.start_state.units {
         ngc::Units::Mm => ("mm", ngc::Units::Inch, "×25.4"),

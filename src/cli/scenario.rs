@@ -2,13 +2,14 @@
 
 use crate::error::{Error, Result};
 use crate::input::program::{ConeTest, NcOptions};
-use crate::input::scenario::{Program, Scenario};
+use crate::input::scenario::Scenario;
+use crate::program::test_of;
 
 /// The cone of a scenario with a generated cone program, or an error naming `command`.
 pub(crate) fn cone_of(scenario: &Scenario, command: &str) -> Result<(ConeTest, NcOptions)> {
-    match &scenario.program {
-        Program::Cone { cone, nc, .. } => Ok((*cone, *nc)),
-        Program::File { .. } | Program::Circle { .. } => Err(Error::invalid(
+    match test_of(scenario).generated_cone() {
+        Some((cone, nc)) => Ok((*cone, *nc)),
+        None => Err(Error::invalid(
             &scenario.path,
             format!("`mtsim {command}` needs a generated cone program ([program.cone])"),
         )

@@ -16,8 +16,20 @@
 use std::f64::consts::PI;
 
 use crate::error::{Error, Result};
+use crate::input::scenario::Scenario;
 pub use crate::input::scenario::DEFAULT_MAX_SAMPLES;
-use crate::input::scenario::{Program, Scenario};
+
+/// A generated test's measured revolution in closed form (`program::TestProgram::revolution`):
+/// the tool tip's circle of `radius_mm` about the workpiece at `feed_mm_min`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Revolution {
+    /// Radius of the measured circle, mm.
+    pub radius_mm: f64,
+    /// The program's feed along it, mm/min.
+    pub feed_mm_min: f64,
+    /// The scenario table that gives it, for messages: `[program.cone]`.
+    pub table: &'static str,
+}
 
 /// A generated test's expected work.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,40 +45,39 @@ pub struct SampleEstimate {
 }
 
 impl SampleEstimate {
-    /// The work of a generated test (None for a G-code file, counted while it runs) with
-    /// `lead_deg` before and after the measured revolution.
-    pub fn of(scenario: &Scenario, lead_deg: f64) -> Option<SampleEstimate> {
-        let (radius_mm, feed_mm_min) = match &scenario.program {
-            Program::Cone { cone, nc, .. } => (cone.radius_mm(), nc.feed_mm_min),
-            Program::Circle { circle, .. } => (circle.radius_mm, circle.feed_mm_min),
-            Program::File { .. } => return None,
-        };
+    /// The work of a generated test whose measured revolution is `revolution`, on `scenario`'s
+    /// machine, with `lead_deg` before and after the measured revolution.
+    pub fn of(scenario: &Scenario, revolution: &Revolution, lead_deg: f64) -> SampleEstimate {
+        let (radius_mm, feed_mm_min) = (revolution.radius_mm, revolution.feed_mm_min);
         let path_mm = 2.0 * PI * radius_mm * (1.0 + lead_deg.max(0.0) / 180.0);
         let machine_time_s = path_mm / (feed_mm_min / 60.0);
-        Some(SampleEstimate {
+        SampleEstimate {
             path_mm,
             feed_mm_min,
             machine_time_s,
             samples: machine_time_s / scenario.machine.interpolation_period_s,
-        })
+        }
     }
 }
 
 /// Refuses a generated test whose estimated samples exceed the scenario's budget, naming
 /// the estimate and what to change; otherwise returns the budget, for the pipeline to
-/// count any run against.
-pub fn check_up_front(scenario: &Scenario, lead_deg: f64) -> Result<u64> {
+/// count any run against. `revolution` is the test's measured revolution in closed form
+/// (None for a G-code file, counted while it runs).
+pub fn check_up_front(
+    scenario: &Scenario,
+    revolution: Option<Revolution>,
+    lead_deg: f64,
+) -> Result<u64> {
     let max = scenario.simulate.max_samples;
-    let Some(e) = SampleEstimate::of(scenario, lead_deg) else {
+    let Some(revolution) = revolution else {
         return Ok(max);
     };
+    let e = SampleEstimate::of(scenario, &revolution, lead_deg);
     if e.samples <= max as f64 {
         return Ok(max);
     }
-    let table = match scenario.program {
-        Program::Circle { .. } => "[program.circle]",
-        _ => "[program.cone]",
-    };
+    let table = revolution.table;
     Err(Error::invalid(
         &scenario.path,
         format!(

@@ -5,6 +5,7 @@
 pub mod attribution;
 pub mod ballbar;
 pub mod bar;
+pub mod measurement;
 pub mod settle;
 pub mod shared;
 pub mod sink;
@@ -12,4 +13,5 @@ pub mod theta;
 
 pub use crate::input::program::Direction;
 pub use ballbar::{BallbarResult, BallbarRun, CircleFrame};
+pub use measurement::Measurement;
 pub use sink::{is_measured, BallbarSink, BarGeometry, BarReading, CommandMaps, CommandedReading};

@@ -3,6 +3,7 @@
 //! `[i BIN_DEG, (i + 1) BIN_DEG)`.
 
 use crate::numeric::sin_cos_deg;
+pub use crate::numeric::wrap_360;
 
 /// Width of one theta bin, deg.
 pub const BIN_DEG: f64 = 0.05;
@@ -19,26 +20,6 @@ pub fn angle_distance_deg(a: f64, b: f64) -> f64 {
 #[inline]
 pub fn theta_sin_cos(theta_deg: f64) -> (f64, f64) {
     sin_cos_deg(wrap_360(theta_deg))
-}
-
-/// θ in deg wrapped to [0, 360) (360 itself to 0), bit for bit as `rem_euclid(360)`.
-#[inline]
-pub fn wrap_360(deg: f64) -> f64 {
-    // `rem_euclid` (an `fmod` call) only outside (-360, 360): inside, `deg % 360` is `deg`
-    // exactly, so the result is `deg`, or `deg + 360` for a negative one (the same bits;
-    // -0 stays -0 as `fmod` keeps it).
-    let t = if (0.0..360.0).contains(&deg) {
-        deg
-    } else if deg > -360.0 && deg < 0.0 {
-        deg + 360.0
-    } else {
-        deg.rem_euclid(360.0)
-    };
-    if t >= 360.0 {
-        0.0
-    } else {
-        t
-    }
 }
 
 /// The bin of θ in [0, 360) deg.

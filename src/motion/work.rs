@@ -20,12 +20,14 @@
 //! `max_samples · Δt` of machine time has been read, not sampled.
 
 use std::f64::consts::TAU;
+use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::input::budget;
 use crate::input::program::Direction;
-use crate::input::scenario::{Program, Scenario};
+use crate::input::scenario::Scenario;
 use crate::motion::sampling::block_duration_s;
+use crate::program::test_of;
 
 /// What the read-ahead of a file program found.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -74,10 +76,9 @@ fn over_budget(scenario: &Scenario, work: &FileWork, line: usize, samples: f64) 
         budget::duration(work.machine_time_s),
         scenario.machine.interpolation_period_s * 1e3,
     );
-    let program = match &scenario.program {
-        Program::File { path, .. } => path.clone(),
-        _ => scenario.path.clone(),
-    };
+    let program = test_of(scenario)
+        .file()
+        .map_or_else(|| scenario.path.clone(), Path::to_path_buf);
     Error::Located {
         path: program,
         line,
@@ -97,26 +98,15 @@ fn over_budget(scenario: &Scenario, work: &FileWork, line: usize, samples: f64) 
 /// a file's rows are counted while it runs).
 pub fn check_trace_up_front(scenario: &Scenario, lead_deg: f64) -> Result<()> {
     let sim = &scenario.simulate;
-    if !matches!(scenario.program, Program::File { .. }) {
-        budget::check_up_front(scenario, lead_deg)?;
-    }
-    let (measured_time_s, directions) = match &scenario.program {
-        Program::Cone {
-            cone,
-            nc,
-            directions,
-        } => (
-            TAU * cone.radius_mm() / (nc.feed_mm_min / 60.0),
-            directions.len(),
-        ),
-        Program::Circle { circle, directions } => (
-            TAU * circle.radius_mm / (circle.feed_mm_min / 60.0),
-            directions.len(),
-        ),
-        // A file's measured revolution starts where its axes have settled, known only
-        // while it runs: its rows are counted then (report/trace.rs).
-        Program::File { .. } => return Ok(()),
+    let test = test_of(scenario);
+    // A file's measured revolution starts where its axes have settled, known only while it
+    // runs: its rows are counted then (report/trace.rs).
+    let Some(revolution) = test.revolution() else {
+        return Ok(());
     };
+    budget::check_up_front(scenario, Some(revolution), lead_deg)?;
+    let measured_time_s = TAU * revolution.radius_mm / (revolution.feed_mm_min / 60.0);
+    let directions = test.directions().len();
     let rows = measured_time_s / scenario.machine.interpolation_period_s / sim.trace_every as f64
         * directions as f64;
     if rows <= sim.max_trace_rows as f64 {
@@ -154,8 +144,9 @@ fn traced(n: usize) -> String {
 /// The sample budget of a run of `scenario`, after checking its estimate: the closed form of a
 /// generated test, the read-ahead of a file ([`read_ahead`]).
 pub fn check_up_front(scenario: &Scenario, lead_deg: f64) -> Result<u64> {
-    if let Program::File { .. } = scenario.program {
+    let revolution = test_of(scenario).revolution();
+    if revolution.is_none() {
         read_ahead(scenario)?;
     }
-    budget::check_up_front(scenario, lead_deg)
+    budget::check_up_front(scenario, revolution, lead_deg)
 }

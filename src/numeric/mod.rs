@@ -8,4 +8,4 @@ pub mod trig;
 
 pub use fixed::{push_fixed, push_fixed_bytes, push_fixed_bytes_const};
 pub use pair::{F64x2, LaneOps};
-pub use trig::{sin_cos_deg, sin_cos_deg_pair};
+pub use trig::{sin_cos_deg, sin_cos_deg_pair, wrap_360};

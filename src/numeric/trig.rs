@@ -98,6 +98,26 @@ fn in_quadrant(quadrant: f64, sin: f64, cos: f64) -> (f64, f64) {
     }
 }
 
+/// θ in deg wrapped to [0, 360) (360 itself to 0), bit for bit as `rem_euclid(360)`.
+#[inline]
+pub fn wrap_360(deg: f64) -> f64 {
+    // `rem_euclid` (an `fmod` call) only outside (-360, 360): inside, `deg % 360` is `deg`
+    // exactly, so the result is `deg`, or `deg + 360` for a negative one (the same bits;
+    // -0 stays -0 as `fmod` keeps it).
+    let t = if (0.0..360.0).contains(&deg) {
+        deg
+    } else if deg > -360.0 && deg < 0.0 {
+        deg + 360.0
+    } else {
+        deg.rem_euclid(360.0)
+    };
+    if t >= 360.0 {
+        0.0
+    } else {
+        t
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

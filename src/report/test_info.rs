@@ -15,7 +15,9 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
-use crate::input::scenario::{Program, Scenario};
+use crate::input::scenario::Scenario;
+use crate::program::test_of;
+use crate::program::tests::TestDescription;
 
 /// The test parameters of one run.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -81,8 +83,9 @@ pub fn files_hash(chunks: &[&[u8]]) -> u64 {
 /// files, as 16 hex digits.
 pub fn scenario_hash(scenario: &Scenario) -> String {
     let mut files = vec![scenario.path.as_path(), scenario.machine.path.as_path()];
-    if let Program::File { path, .. } = &scenario.program {
-        files.push(path.as_path());
+    let test = test_of(scenario);
+    if let Some(path) = test.file() {
+        files.push(path);
     }
     format!("{:016x}", files_hash_of_paths(&files))
 }
@@ -151,75 +154,18 @@ impl TestParameters {
         let machine = &scenario.machine;
         let kinematics = machine.kinematics.describe();
         let sim = &scenario.simulate;
-        let lead = Some(sim.lead_deg);
-        let dirs = |d: &[crate::input::program::Direction]| {
-            d.iter()
-                .map(|d| format!("{d:?}").to_lowercase())
-                .collect::<Vec<_>>()
-        };
-        let cone_geometry = |c: &crate::input::program::ConeTest| {
-            format!(
-                "cone frustum, half apex {} deg, inclination {} deg, ball bar {} mm (circle radius {:.3} mm)",
-                c.half_apex_deg,
-                c.inclination_deg,
-                c.ballbar_length_mm,
-                c.radius_mm()
-            )
-        };
-        let mut program_file = None;
-        let (test, geometry, radius_mm, feed, directions, plane, position, start, overshoot) =
-            match &scenario.program {
-                Program::Cone {
-                    cone,
-                    nc,
-                    directions,
-                } => (
-                    "cone frustum (ISO 10791-6 ball-bar version of NAS 979)".to_string(),
-                    cone_geometry(cone),
-                    Some(cone.radius_mm()),
-                    Some(nc.feed_mm_min),
-                    dirs(directions),
-                    format!(
-                        "circle plane inclined {} deg about the table X axis",
-                        cone.inclination_deg
-                    ),
-                    Some([cone.center_mm.x, cone.center_mm.y, cone.center_mm.z]),
-                    lead,
-                    lead,
-                ),
-                Program::Circle { circle, directions } => (
-                    "circular test (ISO 230-4)".to_string(),
-                    format!("circle, radius {} mm", circle.radius_mm),
-                    Some(circle.radius_mm),
-                    Some(circle.feed_mm_min),
-                    dirs(directions),
-                    format!("{:?}", circle.plane),
-                    Some(circle.center_mm),
-                    lead,
-                    lead,
-                ),
-                Program::File { path, cone } => {
-                    program_file = Some(path.display().to_string());
-                    (
-                        "G-code file".to_string(),
-                        cone.as_ref()
-                            .map_or("as programmed".to_string(), cone_geometry),
-                        cone.as_ref().map(|c| c.radius_mm()),
-                        None,
-                        vec!["ccw".to_string()],
-                        cone.as_ref().map_or("as programmed".to_string(), |c| {
-                            format!(
-                                "circle plane inclined {} deg about the table X axis",
-                                c.inclination_deg
-                            )
-                        }),
-                        cone.as_ref()
-                            .map(|c| [c.center_mm.x, c.center_mm.y, c.center_mm.z]),
-                        None,
-                        None,
-                    )
-                }
-            };
+        let TestDescription {
+            test,
+            geometry,
+            radius_mm,
+            feed_mm_min: feed,
+            directions,
+            plane,
+            position_mm: position,
+            start_arc_deg: start,
+            overshoot_arc_deg: overshoot,
+            program_file,
+        } = test_of(scenario).description(sim.lead_deg);
         let compensation = machine
             .axes()
             .iter()

@@ -9,8 +9,8 @@
 //! stops, and its error comes first.
 
 use crate::error::Result;
-use crate::input::scenario::{Program, Scenario};
-use crate::measure::CircleFrame;
+use crate::input::scenario::Scenario;
+use crate::program::test_of;
 use crate::program::{file, validate};
 use crate::study::feed::{feed_limits, FeedPlanner, FeedReport};
 use crate::study::geometry::{geometric_trace, GeometricTrace};
@@ -30,7 +30,8 @@ pub struct ProgramAnalysis {
 
 /// Analyses the scenario's program; see the module documentation.
 pub fn analyse_program(scenario: &Scenario) -> Result<ProgramAnalysis> {
-    let Program::File { path, cone } = &scenario.program else {
+    let test = test_of(scenario);
+    let Some(path) = test.file() else {
         return Ok(ProgramAnalysis {
             analysis: analyse_scenario(scenario)?,
             geometric: geometric_trace(scenario)?,
@@ -42,7 +43,7 @@ pub fn analyse_program(scenario: &Scenario) -> Result<ProgramAnalysis> {
     let mut reader = file::read_moves(path, &scenario.reader)?;
     // The checks `program::scenario_run` makes of a file, on each move in place.
     let mut checker = validate::move_checker(path, machine, scenario.simulate.tcp);
-    let mut analysis = MoveAnalysis::new(machine, cone.map(|c| CircleFrame::of_cone(&c)));
+    let mut analysis = MoveAnalysis::new(machine, test.theta_frame(&machine.kinematics));
     let mut planner = FeedPlanner::new(scenario)?;
     // The planner stops at a block it cannot plan; the analysis reads on, and its error
     // (a bad read, a bad move) comes first.

@@ -13,9 +13,10 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::input::program::Direction;
-use crate::input::scenario::{Program, Scenario};
+use crate::input::scenario::Scenario;
 use crate::motion::interpolation::{FeedLimit, InterpolationOptions, Interpolator};
 use crate::program;
+use crate::program::test_of;
 
 /// The blocks whose feed the machine holds below the programmed one.
 #[derive(Clone, Debug, Default, Serialize)]
@@ -30,12 +31,11 @@ pub struct FeedReport {
 
 /// Plans the scenario's program and reports where the feed was limited.
 pub fn feed_limits(scenario: &Scenario) -> Result<FeedReport> {
-    let direction = match &scenario.program {
-        Program::Cone { directions, .. } | Program::Circle { directions, .. } => {
-            directions.first().copied().unwrap_or(Direction::Ccw)
-        }
-        Program::File { .. } => Direction::Ccw,
-    };
+    let direction = test_of(scenario)
+        .directions()
+        .first()
+        .copied()
+        .unwrap_or(Direction::Ccw);
     let run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
     plan_feed(run.moves, scenario)
 }

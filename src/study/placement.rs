@@ -13,7 +13,9 @@ use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::check::{check, CheckOptions};
 use crate::error::{Error, Result};
-use crate::input::scenario::{check_cone, Program, Scenario};
+use crate::input::scenario::{check_cone, Scenario};
+use crate::program::test_of;
+use crate::program::tests::generated_cone_mut;
 use crate::study::sweep::SweepParam;
 
 /// One grid cell.
@@ -82,9 +84,9 @@ pub fn placement_map(
 /// What the map marks besides its cells: the scenario's own values of the two parameters
 /// (zero without a cone) and the rotary table's radius, mm.
 pub fn scenario_marks(scenario: &Scenario, params: [SweepParam; 2]) -> ([f64; 2], f64) {
-    let at = match &scenario.program {
-        Program::Cone { cone, .. } => [value_of(params[0], cone), value_of(params[1], cone)],
-        _ => [0.0, 0.0],
+    let at = match test_of(scenario).generated_cone() {
+        Some((cone, _)) => [value_of(params[0], cone), value_of(params[1], cone)],
+        None => [0.0, 0.0],
     };
     (at, scenario.machine.scene.table.radius_mm)
 }
@@ -98,7 +100,8 @@ pub fn placement_cells(
     range: std::ops::Range<usize>,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Vec<PlacementCell>> {
-    let Program::Cone { cone, .. } = &scenario.program else {
+    let test = test_of(scenario);
+    let Some((cone, _)) = test.generated_cone() else {
         return Err(Error::invalid(
             &scenario.path,
             "a placement map needs a [program.cone]",
@@ -121,7 +124,7 @@ pub fn placement_cells(
         .map(|&(x, y)| {
             let mut s = scenario.clone();
             let c = params[1].apply(&params[0].apply(cone, x), y);
-            if let Program::Cone { cone, .. } = &mut s.program {
+            if let Some(cone) = generated_cone_mut(&mut s.program) {
                 *cone = c;
             }
             s.workpiece.cone.center_mm = c.center_mm.into();

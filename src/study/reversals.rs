@@ -16,12 +16,12 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::input::machine::Machine;
-use crate::input::program::CircleTest;
-use crate::input::scenario::{Program, Scenario};
+use crate::input::program::{CircleTest, Direction};
+use crate::input::scenario::Scenario;
 use crate::measure::CircleFrame;
 use crate::motion::sampling::{block_duration_s, position_in_block};
 use crate::program::cone::{normalize_deg, ConePath};
-use crate::program::{file, Motion, Move};
+use crate::program::{test_of, Motion, Move, TestProgram};
 use crate::{Axis, AxisVec};
 
 /// Reversals of different linear axes closer than this (deg) cannot be told apart in a trace.
@@ -259,35 +259,36 @@ fn peak_abs_derivative(path: &ConePath, grid: &[(f64, AxisVec)], axis: Axis) -> 
 }
 
 /// The reversal study of a scenario's program, run beside the pipeline: the exact path for
-/// a generated cone, the closed form for a circle, the moves for a file (read on their own).
+/// a generated cone, the closed form for a circle, the moves for any other program (a file,
+/// read on its own).
 pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
-    match &scenario.program {
-        Program::Cone { cone, nc, .. } => Ok(analyse_cone(
-            &ConePath::new(*cone, &scenario.machine),
-            nc.feed_mm_min,
-        )),
-        Program::File { path, cone } => analyse_moves(
-            crate::program::validate::checked(
-                path,
-                &scenario.machine,
-                scenario.simulate.tcp,
-                file::read_moves(path, &scenario.reader)?,
-            ),
-            &scenario.machine,
-            cone.map(|c| CircleFrame::of_cone(&c)).as_ref(),
-        ),
-        Program::Circle { circle, .. } => Ok(analyse_circle(circle, scenario.machine.axes())),
+    let test = test_of(scenario);
+    let machine = &scenario.machine;
+    if let Some((cone, nc)) = test.generated_cone() {
+        return Ok(analyse_cone(&ConePath::new(*cone, machine), nc.feed_mm_min));
     }
+    if let Some(circle) = test.circle() {
+        return Ok(analyse_circle(circle, machine.axes()));
+    }
+    analyse_moves(
+        test.run(scenario, Direction::Ccw, 0.0)?.moves,
+        machine,
+        test.theta_frame(&machine.kinematics).as_ref(),
+    )
+}
+
+/// Whether the reversal angles of `test` have a closed form here (a generated cone's exact
+/// path, a circle's), or come from its moves.
+pub fn has_closed_form(test: &dyn TestProgram) -> bool {
+    test.generated_cone().is_some() || test.circle().is_some()
 }
 
 /// Each axis's reversal angles of a scenario's program, deg: those of [`analyse_scenario`],
 /// for a generated cone without the ranges and peak speeds.
 pub fn scenario_reversals_deg(scenario: &Scenario) -> Result<Vec<(Axis, Vec<f64>)>> {
-    match &scenario.program {
-        Program::Cone { cone, .. } => {
-            Ok(cone_reversals_deg(&ConePath::new(*cone, &scenario.machine)))
-        }
-        _ => Ok(reversals_deg(analyse_scenario(scenario)?)),
+    match test_of(scenario).generated_cone() {
+        Some((cone, _)) => Ok(cone_reversals_deg(&ConePath::new(*cone, &scenario.machine))),
+        None => Ok(reversals_deg(analyse_scenario(scenario)?)),
     }
 }
 

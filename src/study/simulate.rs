@@ -8,30 +8,35 @@
 //! bins, and the trace goes to disk as it is made.
 
 use std::cell::RefCell;
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::rc::Rc;
 use std::time::Instant;
 
-use nalgebra::{Point3, Vector3};
+use nalgebra::Point3;
 use serde::Serialize;
 
 use crate::error::Result;
 use crate::input::drive::si_per_unit;
 use crate::input::lead_in::LeadIn;
 use crate::input::program::{Direction, MeasuredLines};
-use crate::input::scenario::{Program, Scenario, TraceFormat};
+use crate::input::scenario::{Scenario, TraceFormat};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
 use crate::measure::ballbar::{analyse_events_at, BallbarResult};
+use crate::measure::measurement;
 use crate::measure::settle::SettleGate;
-use crate::measure::{BallbarSink, BarGeometry, CircleFrame, CommandMaps};
+use crate::measure::{BallbarSink, BarGeometry, CommandMaps};
 use crate::motion::work;
 use crate::motion::FeedReduction;
 use crate::pipeline::{self, RunOptions, Sample, Sink, Timing};
 use crate::program;
+use crate::program::test_of;
 use crate::report::create_dir;
 use crate::report::trace::TraceSink;
 use crate::study::glance;
-use crate::study::reversals::{reversals_deg, scenario_reversals_deg, MoveAnalysis};
+use crate::study::reversals::{
+    has_closed_form, reversals_deg, scenario_reversals_deg, MoveAnalysis,
+};
 use crate::Axis;
 
 /// What a simulation found.
@@ -77,6 +82,10 @@ pub struct SimulationSummary {
     /// A circle test's lead-in: its arc and how long it took to reach speed and settle.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lead_in: Option<LeadIn>,
+    /// What each registered measurement beside the ball bar read (`measure::measurement`),
+    /// by name; left out when none applies.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty", default)]
+    pub measurements: BTreeMap<String, serde_json::Value>,
 }
 
 /// Files a simulation writes into its output folder.
@@ -105,6 +114,8 @@ pub struct BallbarStudy {
     pub warnings: Vec<String>,
     /// Feed blocks run below their F word, per axis and limit (over all directions).
     pub feed_reductions: Vec<FeedReduction>,
+    /// What each registered measurement beside the ball bar read, by name.
+    pub measurements: BTreeMap<String, serde_json::Value>,
 }
 
 impl BallbarStudy {
@@ -129,6 +140,7 @@ pub fn run_ballbar(
     let (along, analysis) = analyses(scenario)?;
     let geometry = bar_geometry(scenario);
     let directions = directions_of(scenario);
+    let mut measurements = measurement::for_scenario(scenario, &*test_of(scenario));
     let mut sinks = Vec::new();
     let mut sim_time_s = 0.0;
     let mut setpoints = 0u64;
@@ -143,6 +155,9 @@ pub fn run_ballbar(
             t.start_run(direction, run.measured);
         }
         let mut ballbar = geometry.map(|g| ballbar_sink(g, direction, run.measured, k));
+        for m in &mut measurements {
+            m.start_run(direction, run.measured);
+        }
         let options = run_options(scenario, sim_time_s)?;
         let stats = {
             let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(1);
@@ -152,6 +167,9 @@ pub fn run_ballbar(
             });
             if let Some(m) = measure.as_mut() {
                 sinks.push(m);
+            }
+            for m in &mut measurements {
+                sinks.push(&mut **m);
             }
             match geometry.filter(|_| gates_transient(scenario) && !sinks.is_empty()) {
                 Some(g) => {
@@ -174,6 +192,9 @@ pub fn run_ballbar(
         if let Some(t) = trace.as_deref_mut() {
             t.end_run(ballbar.as_ref().map(|b| b.run.centring()))?;
         }
+        for m in &mut measurements {
+            m.end_run()?;
+        }
         sim_time_s = stats.end_time_s;
         setpoints += stats.samples;
         merge_reductions(&mut feed_reductions, stats.feed_reductions);
@@ -188,7 +209,11 @@ pub fn run_ballbar(
         feed_reductions,
     );
     let maps = sinks.first_mut().and_then(|b| b.maps.take());
-    assemble(scenario, sinks, maps.as_ref(), warnings, &shared)
+    let mut study = assemble(scenario, sinks, maps.as_ref(), warnings, &shared)?;
+    for m in &measurements {
+        study.measurements.insert(m.name().to_string(), m.finish()?);
+    }
+    Ok(study)
 }
 
 /// The ball bar of a scenario's `k`-th run: with the maps of the bar's sensitivity and the
@@ -209,10 +234,7 @@ pub(crate) fn ballbar_sink(
 
 /// The directions a scenario runs: a test's, or counter-clockwise for a file program.
 pub(crate) fn directions_of(scenario: &Scenario) -> Vec<Direction> {
-    match &scenario.program {
-        Program::Cone { directions, .. } | Program::Circle { directions, .. } => directions.clone(),
-        Program::File { .. } => vec![Direction::Ccw],
-    }
+    test_of(scenario).directions()
 }
 
 /// The reversal analysis of the scenario's program: to ride along the runs (a file
@@ -236,16 +258,15 @@ pub(crate) fn analyses(
 /// The reversal analysis of a file program, riding along its one run (the file is read
 /// once for both); None for a generated program, whose analysis has its own closed form.
 pub(crate) fn along_analysis(scenario: &Scenario) -> Option<Rc<RefCell<MoveAnalysis<'_>>>> {
-    match &scenario.program {
-        Program::File { cone, .. } => {
-            let frame = cone.map(|c| CircleFrame::of_cone(&c));
-            Some(Rc::new(RefCell::new(MoveAnalysis::new(
-                &scenario.machine,
-                frame,
-            ))))
-        }
-        _ => None,
+    let test = test_of(scenario);
+    if has_closed_form(&*test) {
+        return None;
     }
+    let frame = test.theta_frame(&scenario.machine.kinematics);
+    Some(Rc::new(RefCell::new(MoveAnalysis::new(
+        &scenario.machine,
+        frame,
+    ))))
 }
 
 /// `moves` with every move also handed to the analysis `along`.
@@ -278,7 +299,7 @@ pub(crate) fn run_options(scenario: &Scenario, start_time_s: f64) -> Result<RunO
 /// A file program measured from its first feed block: the start-up transient (the rapid
 /// still settling) is kept out of the measured revolution.
 pub(crate) fn gates_transient(scenario: &Scenario) -> bool {
-    matches!(scenario.program, Program::File { .. }) && scenario.simulate.measure_lines.is_none()
+    test_of(scenario).starts_unsettled() && scenario.simulate.measure_lines.is_none()
 }
 
 /// What the settle gate left out, as a warning; None when it left nothing out.
@@ -401,6 +422,7 @@ pub(crate) fn assemble(
             .chain(shared.feed_reductions.iter().map(FeedReduction::describe))
             .collect(),
         feed_reductions: shared.feed_reductions.clone(),
+        measurements: BTreeMap::new(),
     })
 }
 
@@ -441,10 +463,8 @@ pub fn simulate(
     let ballbar = study.result()?;
     let (runs, reversals) = (&study.runs, &study.reversals);
     let mut warnings = study.warnings.clone();
-    let circle = match &scenario.program {
-        Program::Circle { circle, .. } => Some(circle),
-        _ => None,
-    };
+    let test = test_of(scenario);
+    let circle = test.circle();
     let diagnostics = ballbar
         .as_ref()
         .map(|b| crate::study::diagnose::diagnose(b, runs, circle))
@@ -519,6 +539,7 @@ pub fn simulate(
         warnings,
         feed_reductions: study.feed_reductions.clone(),
         lead_in: scenario.simulate.lead_in,
+        measurements: study.measurements.clone(),
     };
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
     crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;
@@ -575,39 +596,12 @@ pub fn reversal_values(
 pub fn bar_geometry(scenario: &Scenario) -> Option<BarGeometry> {
     let kinematics = scenario.machine.kinematics;
     let pivot_override = scenario.ballbar_pivot_mm.map(Point3::from);
-    let cone_bar = |c: &crate::input::program::ConeTest| BarGeometry {
+    test_of(scenario).bar(&kinematics).map(|bar| BarGeometry {
         kinematics,
-        frame: CircleFrame::of_cone(c),
-        pivot_table_mm: pivot_override.unwrap_or(Point3::from(c.center_mm)),
-        length_mm: c.ballbar_length_mm,
-    };
-    match &scenario.program {
-        Program::Cone { cone, .. } => Some(cone_bar(cone)),
-        Program::Circle { circle, .. } => {
-            // The circle is programmed in machine coordinates, with any rotary axes at zero.
-            // On a general chain the table ball sits where the centre's X Y Z put the tool
-            // ball (the gauge point, by the chain's forward kinematics, workpiece frame).
-            let center_table = match &kinematics.general {
-                Some(chain) => {
-                    let (x, y, z) = (
-                        circle.center_mm[0],
-                        circle.center_mm[1],
-                        circle.center_mm[2],
-                    );
-                    let q = crate::AxisVec::xyzabc([x, y, z, 0.0, 0.0, 0.0]);
-                    chain.tool_in_workpiece(&q, 0.0).0.coords
-                }
-                None => Vector3::from(circle.center_mm) - kinematics.pivot_mm,
-            };
-            Some(BarGeometry {
-                kinematics,
-                frame: CircleFrame::planar(center_table.into(), circle.plane),
-                pivot_table_mm: pivot_override.unwrap_or(Point3::from(center_table)),
-                length_mm: circle.radius_mm,
-            })
-        }
-        Program::File { cone, .. } => cone.as_ref().map(cone_bar),
-    }
+        frame: bar.frame,
+        pivot_table_mm: pivot_override.unwrap_or(bar.pivot_table_mm),
+        length_mm: bar.length_mm,
+    })
 }
 
 fn plot_title(scenario: &Scenario) -> String {
@@ -616,23 +610,5 @@ fn plot_title(scenario: &Scenario) -> String {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    match &scenario.program {
-        Program::Cone { cone, nc, .. } => format!(
-            "{name}: cone {}/{} deg, O ({}, {}, {}) mm, L {} mm, F{}",
-            cone.half_apex_deg,
-            cone.inclination_deg,
-            cone.center_mm.x,
-            cone.center_mm.y,
-            cone.center_mm.z,
-            cone.ballbar_length_mm,
-            nc.feed_mm_min
-        ),
-        Program::Circle { circle, .. } => {
-            format!(
-                "{name}: circle r {} mm, F{} ({:?})",
-                circle.radius_mm, circle.feed_mm_min, circle.plane
-            )
-        }
-        Program::File { path, .. } => format!("{name}: {}", path.display()),
-    }
+    test_of(scenario).title(&name)
 }

@@ -6,4 +6,5 @@ mod common;
 
 mod attribution;
 mod ballbar;
+mod measurement;
 mod shared;

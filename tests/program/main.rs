@@ -15,4 +15,5 @@ mod heidenhain_corpus;
 mod reader_options;
 mod shared_corpus;
 mod siemens_corpus;
+mod test_programs;
 mod unreadable;

@@ -7,7 +7,8 @@ use super::measured::{MeasuredPoint, MeasuredTrace};
 use super::model::{Recorded, Run};
 use super::noise::direction_name;
 use crate::error::{Error, Result};
-use crate::input::scenario::{Program, Scenario};
+use crate::input::scenario::Scenario;
+use crate::program::test_of;
 use crate::Axis;
 
 /// Largest commanded difference accepted: mm for linear axes, deg for rotary ones.
@@ -35,12 +36,7 @@ pub fn check(
         )
         .with_help("give each scenario the trace measured with it, in the same order"))
     };
-    let planned = match &scenario.program {
-        Program::Cone { directions, .. } | Program::Circle { directions, .. } => {
-            Some(directions.clone())
-        }
-        Program::File { .. } => None,
-    };
+    let planned = test_of(scenario).planned_directions();
     for run in runs {
         if let Some(dirs) = &planned {
             if !dirs.contains(&run.direction) {

@@ -10,9 +10,11 @@ use super::params::Param;
 use super::result::Suggestion;
 use crate::error::Result;
 use crate::input::program::{ConeTest, Direction};
-use crate::input::scenario::{Program, Scenario};
+use crate::input::scenario::Scenario;
 use crate::kinematics::LocationParam;
 use crate::pipeline::Timing;
+use crate::program::test_of;
+use crate::program::tests::generated_cone_mut;
 use crate::study::simulate::bar_geometry;
 
 /// Scores candidate extra cone tests by the null space they leave (geometric part only).
@@ -20,10 +22,10 @@ pub(super) fn suggest(
     inputs: &[(Scenario, MeasuredTrace)],
     params: &[Param],
 ) -> Result<Option<Suggestion>> {
-    let Some((base, cone)) = inputs.iter().find_map(|(s, _)| match &s.program {
-        Program::Cone { cone, .. } => Some((s, *cone)),
-        _ => None,
-    }) else {
+    let Some((base, cone)) = inputs
+        .iter()
+        .find_map(|(s, _)| test_of(s).generated_cone().map(|(c, _)| (s, *c)))
+    else {
         return Ok(None);
     };
     let loc_params: Vec<LocationParam> = params
@@ -70,7 +72,7 @@ pub(super) fn suggest(
     };
     let with_cone = |c: ConeTest| -> Scenario {
         let mut s = base.clone();
-        if let Program::Cone { cone, .. } = &mut s.program {
+        if let Some(cone) = generated_cone_mut(&mut s.program) {
             *cone = c;
         }
         s
@@ -78,7 +80,7 @@ pub(super) fn suggest(
     // The present tests' geometric sensitivities (each with its own bar offset).
     let mut blocks = Vec::new();
     for (s, _) in inputs {
-        if matches!(s.program, Program::Cone { .. }) {
+        if test_of(s).generated_cone().is_some() {
             blocks.push(sens(s)?);
         }
     }

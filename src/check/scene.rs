@@ -289,213 +289,9 @@ impl Scene {
         builder.linked = linked_bodies(machine)?;
         let all_tool = groups::CUTTER | groups::TOOL | groups::BAR | groups::BALL;
 
-        // Table and cradle.
-        let t = &scene.table;
-        let (shape, local) = z_cylinder(t.top_z_mm - t.thickness_mm, t.top_z_mm, t.radius_mm);
-        let local = match t.axis {
-            TableAxis::Z => local,
-            // Ry(90 deg) takes the cylinder's +Z to +X.
-            TableAxis::X => {
-                Pose::from_parts(
-                    Vector::ZERO,
-                    Rotation::from_rotation_arc(Vector::Z, Vector::X),
-                ) * local
-            }
-        };
-        let stands_on_top = workpiece.kind == WorkpieceKind::BallBar
-            || (workpiece.kind == WorkpieceKind::ConeFrustum && workpiece.riser);
-        if t.axis != TableAxis::Z && stands_on_top {
-            return Err(Error::invalid(path, "a riser or ball-bar post stands on a table about Z, but scene.table.axis is \"x\" (a faceplate): set workpiece.riser = false, or use a table about Z"));
-        }
-        builder.add(
-            "table",
-            Carrier::Table,
-            shape,
-            local,
-            groups::TABLE,
-            all_tool,
-        );
-        let cradle = cradle_boxes(machine);
-        builder.add_boxes(&cradle, Carrier::Cradle, groups::TABLE, all_tool);
-
-        // Tool stack, tip at the origin, axis +Z.
-        let ball_bar = workpiece.kind == WorkpieceKind::BallBar;
-        let sides = groups::TABLE | groups::FIXTURE | groups::WORKPIECE;
-        if ball_bar {
-            let shape = SharedShape::ball(0.5 * workpiece.ball_diameter_mm);
-            builder.add(
-                "tool ball",
-                Carrier::Tool,
-                shape,
-                Pose::IDENTITY,
-                groups::BALL,
-                sides,
-            );
-        } else {
-            let (shape, local) =
-                z_cylinder(0.0, tool.flute_length_mm, 0.5 * tool.cutter_diameter_mm);
-            builder.add("cutter", Carrier::Tool, shape, local, groups::CUTTER, sides);
-            let skin = CUTTER_SKIN_MM
-                .min(0.25 * tool.cutter_diameter_mm)
-                .min(0.25 * tool.flute_length_mm);
-            let (eroded, _) = z_cylinder(
-                skin,
-                tool.flute_length_mm - skin,
-                0.5 * tool.cutter_diameter_mm - skin,
-            );
-            if let Some(cutter) = builder.parts.last_mut() {
-                cutter.eroded = Some(eroded);
-                cutter.skin_mm = skin;
-            }
-        }
-        let tool_filter = sides | groups::BAR | groups::BALL;
-        let shank_top = tool.flute_length_mm + tool.shank_length_mm;
-        let (shape, local) = z_cylinder(
-            tool.flute_length_mm,
-            shank_top,
-            0.5 * tool.shank_diameter_mm,
-        );
-        builder.add(
-            "shank",
-            Carrier::Tool,
-            shape,
-            local,
-            groups::TOOL,
-            tool_filter,
-        );
-        let (shape, local) = z_cylinder(
-            tool.holder_bottom_mm(),
-            tool.gauge_length_mm,
-            0.5 * tool.holder_diameter_mm,
-        );
-        builder.add(
-            "holder",
-            Carrier::Tool,
-            shape,
-            local,
-            groups::TOOL,
-            tool_filter,
-        );
-        let sp = &scene.spindle;
-        let top = tool.gauge_length_mm + sp.length_mm;
-        let (shape, local) = match sp.shape {
-            SpindleShape::Cylinder => z_cylinder(tool.gauge_length_mm, top, 0.5 * sp.diameter_mm),
-            SpindleShape::Box => shapes::cuboid(
-                [0.0, 0.0, 0.5 * (tool.gauge_length_mm + top)],
-                [sp.box_mm[0], sp.box_mm[1], sp.length_mm],
-            ),
-        };
-        builder.add(
-            "spindle",
-            Carrier::Tool,
-            shape,
-            local,
-            groups::TOOL,
-            tool_filter,
-        );
-        let head: Vec<&CradleBox> = scene.head.iter().collect();
-        builder.add_boxes(&head, Carrier::Head, groups::TOOL, tool_filter);
-
-        // Workpiece.
-        let cone = &workpiece.cone;
-        let o = Vector3::from(cone.center_mm);
-        let mut bar = None;
-        match workpiece.kind {
-            WorkpieceKind::None => {}
-            WorkpieceKind::ConeFrustum => {
-                cone.check(path)?;
-                let f = Frustum::new(cone, tool, workpiece.top_height_mm, path)?;
-                let hull = CircleHull {
-                    circles: [f.base, f.top],
-                };
-                builder.add(
-                    "workpiece",
-                    Carrier::Table,
-                    SharedShape::new(hull),
-                    Pose::IDENTITY,
-                    groups::WORKPIECE,
-                    groups::CUTTER | groups::TOOL | groups::BALL,
-                );
-                if workpiece.riser {
-                    let lowest = o.z - f.base.radius * f.base.normal.x.hypot(f.base.normal.y);
-                    if lowest <= t.top_z_mm {
-                        return Err(Error::invalid(path, format!(
-                            "the cone's base circle reaches down to z = {lowest:.3} mm in the table frame, at or below the table top ({} mm): raise the cone centre or lower scene.table.top_z_mm",
-                            t.top_z_mm
-                        )));
-                    }
-                    let foot = Circle {
-                        centre: Vector::new(o.x, o.y, t.top_z_mm),
-                        normal: Vector::Z,
-                        radius: f.base.radius,
-                    };
-                    let riser = CircleHull {
-                        circles: [f.base, foot],
-                    };
-                    builder.add(
-                        "riser",
-                        Carrier::Table,
-                        SharedShape::new(riser),
-                        Pose::IDENTITY,
-                        groups::FIXTURE,
-                        all_tool,
-                    );
-                }
-            }
-            WorkpieceKind::BallBar => {
-                cone.check(path)?;
-                let r_ball = 0.5 * workpiece.ball_diameter_mm;
-                let length = cone.ballbar_length_mm;
-                if length <= 2.0 * r_ball {
-                    return Err(Error::invalid(path, format!("the ball-bar length ({length} mm) must exceed the ball diameter ({} mm)", workpiece.ball_diameter_mm)));
-                }
-                let post_top = o.z - r_ball;
-                if post_top <= t.top_z_mm {
-                    return Err(Error::invalid(path, format!(
-                        "the pivot ball at z = {} mm in the table frame does not clear the table top ({} mm): raise the cone centre or lower scene.table.top_z_mm",
-                        o.z, t.top_z_mm
-                    )));
-                }
-                let ball = SharedShape::ball(r_ball);
-                let at_o = Pose::from_translation(Vector::new(o.x, o.y, o.z));
-                builder.add(
-                    "pivot ball",
-                    Carrier::Table,
-                    ball,
-                    at_o,
-                    groups::BALL,
-                    groups::TOOL | groups::CUTTER,
-                );
-                let (shape, local) =
-                    z_cylinder(t.top_z_mm, post_top, 0.5 * workpiece.post_diameter_mm);
-                let local = Pose::from_translation(Vector::new(o.x, o.y, 0.0)) * local;
-                builder.add(
-                    "post",
-                    Carrier::Table,
-                    shape,
-                    local,
-                    groups::FIXTURE,
-                    all_tool,
-                );
-                let r_bar = 0.5 * workpiece.bar_diameter_mm;
-                let (shape, local) = z_cylinder(r_ball, length - r_ball, r_bar);
-                builder.bar_motion = Some(match &builder.linked {
-                    Some(linked) if machine.kinematics.general.is_some() => {
-                        chain_bar_motion(linked, o, length, r_bar)
-                    }
-                    _ => bar_motion(machine.kinematics.layout, o, length, r_bar),
-                });
-                builder.add(
-                    "bar",
-                    Carrier::Bar,
-                    shape,
-                    local,
-                    groups::BAR,
-                    sides | groups::TOOL,
-                );
-                bar = Some(BarEnds { pivot: o });
-            }
-        }
+        builder.add_table(machine, workpiece, all_tool)?;
+        builder.add_tool_stack(machine, tool, workpiece);
+        let bar = builder.add_workpiece(machine, tool, workpiece, all_tool)?;
         Ok(builder.finish(bar, near_miss_mm, scene.engagement_resolution_mm))
     }
 
@@ -955,6 +751,245 @@ impl Builder {
         };
         scene.set_axes(&AxisVec::ZERO);
         scene
+    }
+
+    /// The table (a cylinder about its axis, Z or X) and the cradle's boxes. A riser or a
+    /// ball-bar post stands on the table top, so it needs a table about Z.
+    fn add_table(
+        &mut self,
+        machine: &Machine,
+        workpiece: &WorkpieceConfig,
+        all_tool: Group,
+    ) -> Result<()> {
+        let path = machine.path.as_path();
+        let t = &machine.scene.table;
+        let (shape, local) = z_cylinder(t.top_z_mm - t.thickness_mm, t.top_z_mm, t.radius_mm);
+        let local = match t.axis {
+            TableAxis::Z => local,
+            // Ry(90 deg) takes the cylinder's +Z to +X.
+            TableAxis::X => {
+                Pose::from_parts(
+                    Vector::ZERO,
+                    Rotation::from_rotation_arc(Vector::Z, Vector::X),
+                ) * local
+            }
+        };
+        let stands_on_top = workpiece.kind == WorkpieceKind::BallBar
+            || (workpiece.kind == WorkpieceKind::ConeFrustum && workpiece.riser);
+        if t.axis != TableAxis::Z && stands_on_top {
+            return Err(Error::invalid(path, "a riser or ball-bar post stands on a table about Z, but scene.table.axis is \"x\" (a faceplate): set workpiece.riser = false, or use a table about Z"));
+        }
+        self.add(
+            "table",
+            Carrier::Table,
+            shape,
+            local,
+            groups::TABLE,
+            all_tool,
+        );
+        let cradle = cradle_boxes(machine);
+        self.add_boxes(&cradle, Carrier::Cradle, groups::TABLE, all_tool);
+        Ok(())
+    }
+
+    /// The tool stack, tip at the origin, axis +Z: the cutter (or the ball of a ball bar),
+    /// shank, holder and spindle, then the head's boxes.
+    fn add_tool_stack(
+        &mut self,
+        machine: &Machine,
+        tool: &ToolConfig,
+        workpiece: &WorkpieceConfig,
+    ) {
+        let scene = &machine.scene;
+        let ball_bar = workpiece.kind == WorkpieceKind::BallBar;
+        let sides = groups::TABLE | groups::FIXTURE | groups::WORKPIECE;
+        if ball_bar {
+            let shape = SharedShape::ball(0.5 * workpiece.ball_diameter_mm);
+            self.add(
+                "tool ball",
+                Carrier::Tool,
+                shape,
+                Pose::IDENTITY,
+                groups::BALL,
+                sides,
+            );
+        } else {
+            let (shape, local) =
+                z_cylinder(0.0, tool.flute_length_mm, 0.5 * tool.cutter_diameter_mm);
+            self.add("cutter", Carrier::Tool, shape, local, groups::CUTTER, sides);
+            let skin = CUTTER_SKIN_MM
+                .min(0.25 * tool.cutter_diameter_mm)
+                .min(0.25 * tool.flute_length_mm);
+            let (eroded, _) = z_cylinder(
+                skin,
+                tool.flute_length_mm - skin,
+                0.5 * tool.cutter_diameter_mm - skin,
+            );
+            if let Some(cutter) = self.parts.last_mut() {
+                cutter.eroded = Some(eroded);
+                cutter.skin_mm = skin;
+            }
+        }
+        let tool_filter = sides | groups::BAR | groups::BALL;
+        let shank_top = tool.flute_length_mm + tool.shank_length_mm;
+        let (shape, local) = z_cylinder(
+            tool.flute_length_mm,
+            shank_top,
+            0.5 * tool.shank_diameter_mm,
+        );
+        self.add(
+            "shank",
+            Carrier::Tool,
+            shape,
+            local,
+            groups::TOOL,
+            tool_filter,
+        );
+        let (shape, local) = z_cylinder(
+            tool.holder_bottom_mm(),
+            tool.gauge_length_mm,
+            0.5 * tool.holder_diameter_mm,
+        );
+        self.add(
+            "holder",
+            Carrier::Tool,
+            shape,
+            local,
+            groups::TOOL,
+            tool_filter,
+        );
+        let sp = &scene.spindle;
+        let top = tool.gauge_length_mm + sp.length_mm;
+        let (shape, local) = match sp.shape {
+            SpindleShape::Cylinder => z_cylinder(tool.gauge_length_mm, top, 0.5 * sp.diameter_mm),
+            SpindleShape::Box => shapes::cuboid(
+                [0.0, 0.0, 0.5 * (tool.gauge_length_mm + top)],
+                [sp.box_mm[0], sp.box_mm[1], sp.length_mm],
+            ),
+        };
+        self.add(
+            "spindle",
+            Carrier::Tool,
+            shape,
+            local,
+            groups::TOOL,
+            tool_filter,
+        );
+        let head: Vec<&CradleBox> = scene.head.iter().collect();
+        self.add_boxes(&head, Carrier::Head, groups::TOOL, tool_filter);
+    }
+
+    /// The workpiece: a cone frustum (on its riser if it has one) or a ball bar's pivot
+    /// ball, post and bar; where the bar's pivot is for a ball bar.
+    fn add_workpiece(
+        &mut self,
+        machine: &Machine,
+        tool: &ToolConfig,
+        workpiece: &WorkpieceConfig,
+        all_tool: Group,
+    ) -> Result<Option<BarEnds>> {
+        let path = machine.path.as_path();
+        let t = &machine.scene.table;
+        let sides = groups::TABLE | groups::FIXTURE | groups::WORKPIECE;
+        let cone = &workpiece.cone;
+        let o = Vector3::from(cone.center_mm);
+        match workpiece.kind {
+            WorkpieceKind::None => {}
+            WorkpieceKind::ConeFrustum => {
+                cone.check(path)?;
+                let f = Frustum::new(cone, tool, workpiece.top_height_mm, path)?;
+                let hull = CircleHull {
+                    circles: [f.base, f.top],
+                };
+                self.add(
+                    "workpiece",
+                    Carrier::Table,
+                    SharedShape::new(hull),
+                    Pose::IDENTITY,
+                    groups::WORKPIECE,
+                    groups::CUTTER | groups::TOOL | groups::BALL,
+                );
+                if workpiece.riser {
+                    let lowest = o.z - f.base.radius * f.base.normal.x.hypot(f.base.normal.y);
+                    if lowest <= t.top_z_mm {
+                        return Err(Error::invalid(path, format!(
+                                "the cone's base circle reaches down to z = {lowest:.3} mm in the table frame, at or below the table top ({} mm): raise the cone centre or lower scene.table.top_z_mm",
+                                t.top_z_mm
+                            )));
+                    }
+                    let foot = Circle {
+                        centre: Vector::new(o.x, o.y, t.top_z_mm),
+                        normal: Vector::Z,
+                        radius: f.base.radius,
+                    };
+                    let riser = CircleHull {
+                        circles: [f.base, foot],
+                    };
+                    self.add(
+                        "riser",
+                        Carrier::Table,
+                        SharedShape::new(riser),
+                        Pose::IDENTITY,
+                        groups::FIXTURE,
+                        all_tool,
+                    );
+                }
+            }
+            WorkpieceKind::BallBar => {
+                cone.check(path)?;
+                let r_ball = 0.5 * workpiece.ball_diameter_mm;
+                let length = cone.ballbar_length_mm;
+                if length <= 2.0 * r_ball {
+                    return Err(Error::invalid(path, format!("the ball-bar length ({length} mm) must exceed the ball diameter ({} mm)", workpiece.ball_diameter_mm)));
+                }
+                let post_top = o.z - r_ball;
+                if post_top <= t.top_z_mm {
+                    return Err(Error::invalid(path, format!(
+                            "the pivot ball at z = {} mm in the table frame does not clear the table top ({} mm): raise the cone centre or lower scene.table.top_z_mm",
+                            o.z, t.top_z_mm
+                        )));
+                }
+                let ball = SharedShape::ball(r_ball);
+                let at_o = Pose::from_translation(Vector::new(o.x, o.y, o.z));
+                self.add(
+                    "pivot ball",
+                    Carrier::Table,
+                    ball,
+                    at_o,
+                    groups::BALL,
+                    groups::TOOL | groups::CUTTER,
+                );
+                let (shape, local) =
+                    z_cylinder(t.top_z_mm, post_top, 0.5 * workpiece.post_diameter_mm);
+                let local = Pose::from_translation(Vector::new(o.x, o.y, 0.0)) * local;
+                self.add(
+                    "post",
+                    Carrier::Table,
+                    shape,
+                    local,
+                    groups::FIXTURE,
+                    all_tool,
+                );
+                let r_bar = 0.5 * workpiece.bar_diameter_mm;
+                let (shape, local) = z_cylinder(r_ball, length - r_ball, r_bar);
+                self.bar_motion = Some(match &self.linked {
+                    Some(linked) if machine.kinematics.general.is_some() => {
+                        chain_bar_motion(linked, o, length, r_bar)
+                    }
+                    _ => bar_motion(machine.kinematics.layout, o, length, r_bar),
+                });
+                self.add(
+                    "bar",
+                    Carrier::Bar,
+                    shape,
+                    local,
+                    groups::BAR,
+                    sides | groups::TOOL,
+                );
+                return Ok(Some(BarEnds { pivot: o }));
+            }
+        }
+        Ok(None)
     }
 }
 

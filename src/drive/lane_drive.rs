@@ -22,11 +22,13 @@
 //! scalar [`AxisServo::advance`] instead, its whole state (the carried regime and the
 //! friction-bound cache included) scattered to it and gathered back. The friction bound at
 //! the period's end is the scalar [`stribeck_bound_decay`] per lane (its `exp` the same
-//! `libm::exp`).
+//! `libm::exp`). The stepping itself is [`super::lane_step`]'s, which both lane kinds share.
 
-use super::lane_servo::{lane_product, Lanes, BLOCK, LANES};
+use super::lane_step::{self, lane_product, LaneKind, LaneMaps, LaneState, Lanes, LANES};
+use super::period_map::{Regime, N_INPUT, N_STATE};
 use super::product::all_finite;
-use super::servo::{stribeck_bound_decay, AxisServo, Regime, TwinState, N_INPUT, N_STATE};
+use super::servo::{stribeck_bound_decay, AxisServo};
+use crate::error::Result;
 use crate::{Axis, AxisVec};
 use libm::exp;
 
@@ -34,14 +36,8 @@ use libm::exp;
 #[derive(Clone, Debug)]
 pub struct DriveLaneGroup {
     servos: Vec<usize>,
-    /// The slope-0 period maps, `cols[j][r][l]`.
-    cols: [[Lanes; N_STATE]; N_INPUT],
-    scale: Lanes,
-    inv_scale: Lanes,
-    inv_t_ipo: Lanes,
-    aff_mass: Lanes,
-    half_limit: Lanes,
-    fe_limit: Lanes,
+    /// The slope-0 period maps.
+    maps: LaneMaps<N_INPUT>,
     stiffness: Lanes,
     damping: Lanes,
     half_backlash: Lanes,
@@ -56,16 +52,10 @@ pub struct DriveLaneGroup {
     tolerance: Lanes,
 }
 
-/// The lanes' carried state over one block.
+/// A lane's carried regime ([`Regime`], field by field; `has` false: none) and
+/// friction-bound cache `(v, g, exp)`, beyond the common [`LaneState`].
 #[derive(Default)]
-struct State {
-    setpoint: Lanes,
-    v_ff: Lanes,
-    x: [Lanes; N_STATE],
-    velocity: Lanes,
-    periods_exact: [u64; LANES],
-    live: [bool; LANES],
-    /// The carried regime ([`Regime`], field by field; `has` false: none).
+pub(super) struct RegimeLanes {
     has: [bool; LANES],
     side: Lanes,
     offset: Lanes,
@@ -74,10 +64,12 @@ struct State {
     push: Lanes,
     bound: Lanes,
     decay: Lanes,
-    regime_mt_over_h: Lanes,
-    /// The friction-bound cache `(v, g, exp)`.
+    mt_over_h: Lanes,
     cache: [(f64, f64, f64); LANES],
 }
+
+/// The lanes' carried state over one block.
+type State = LaneState<RegimeLanes>;
 
 impl DriveLaneGroup {
     /// The group of `servos` (indices into `all`, at most [`LANES`]), or None when one of
@@ -87,13 +79,7 @@ impl DriveLaneGroup {
         let z = [0.0; LANES];
         let mut g = DriveLaneGroup {
             servos: servos.to_vec(),
-            cols: [[z; N_STATE]; N_INPUT],
-            scale: z,
-            inv_scale: z,
-            inv_t_ipo: z,
-            aff_mass: z,
-            half_limit: z,
-            fe_limit: z,
+            maps: LaneMaps::zero(),
             stiffness: z,
             damping: z,
             half_backlash: z,
@@ -109,17 +95,7 @@ impl DriveLaneGroup {
         };
         for (l, &s) in servos.iter().enumerate() {
             let p = all[s].as_ref()?.drive_period()?;
-            for (col, lane_col) in p.map.cols.iter().zip(g.cols.iter_mut()) {
-                for (&m, row) in col.iter().zip(lane_col.iter_mut()) {
-                    row[l] = m;
-                }
-            }
-            g.scale[l] = p.map.scale;
-            g.inv_scale[l] = p.map.inv_scale;
-            g.inv_t_ipo[l] = p.map.inv_t_ipo;
-            g.aff_mass[l] = p.map.aff_mass;
-            g.half_limit[l] = p.map.half_limit;
-            g.fe_limit[l] = p.map.fe_limit;
+            g.maps.set_lane(l, &p.map);
             g.stiffness[l] = p.stiffness;
             g.damping[l] = p.damping;
             g.half_backlash[l] = p.half_backlash;
@@ -153,107 +129,8 @@ impl DriveLaneGroup {
         following_error: &mut [f64],
         completed: &mut [usize],
     ) -> (u64, u64) {
-        let mut st = self.gather(all);
-        for &s in &self.servos {
-            completed[s] = if all[s].is_some() { setpoints.len() } else { 0 };
-        }
-        let (mut stepped, mut handed_back) = (0, 0);
-        for (j, (q, &t)) in setpoints.iter().zip(times_s).enumerate() {
-            let q = q[axis];
-            let ok = self.mapped_period(&mut st, q);
-            for (l, &s) in self.servos.iter().enumerate() {
-                if st.live[l] && !ok[l] {
-                    handed_back += 1;
-                    if !self.scalar_period(all, &mut st, l, q, t) {
-                        completed[s] = j;
-                    }
-                }
-                if st.live[l] {
-                    stepped += 1;
-                    let x_t = st.x[2][l];
-                    actual[s * BLOCK + j] = x_t * self.inv_scale[l];
-                    following_error[s * BLOCK + j] = (st.setpoint[l] - x_t) * self.inv_scale[l];
-                }
-            }
-        }
-        self.scatter(all, &st);
-        (stepped, handed_back)
-    }
-
-    /// One period by the lanes' slope-0 maps where every lane's checks pass (state
-    /// updated); per lane, whether it was taken.
-    #[inline(always)]
-    fn mapped_period(&self, st: &mut State, q: f64) -> [bool; LANES] {
-        let s_new: Lanes = std::array::from_fn(|l| q * self.scale[l]);
-        let s_old = st.setpoint;
-        let v_ff: Lanes = std::array::from_fn(|l| (s_new[l] - s_old[l]) * self.inv_t_ipo[l]);
-        let dv_guess: Lanes = std::array::from_fn(|l| (v_ff[l] - st.v_ff[l]).abs());
-        let f_ff: Lanes = std::array::from_fn(|l| {
-            self.aff_mass[l] * ((v_ff[l] - st.v_ff[l]) * self.inv_t_ipo[l])
-        });
-        let v0 = st.x[3];
-        // The slope at v₀ and the friction input, as `try_exact_period` forms them.
-        let mut slope = [0.0; LANES];
-        let mut friction = [0.0; LANES];
-        let mut start_ok = [false; LANES];
-        for l in 0..LANES {
-            let side = st.side[l];
-            let f0 = if side == 0.0 {
-                0.0
-            } else {
-                -side * st.bound[l]
-            };
-            let u = v0[l].abs() * self.inv_stribeck[l];
-            let c = 2.0 * self.delta_friction[l] * u * self.inv_stribeck[l] * st.decay[l];
-            slope[l] = if side == 0.0 || self.slope_step[l] == 0.0 {
-                0.0
-            } else {
-                c
-            };
-            let grid_slope = 0.0 * self.slope_step[l];
-            friction[l] = f0 - grid_slope * v0[l];
-            let margin = 2.0 * dv_guess[l];
-            start_ok[l] = st.live[l]
-                & st.has[l]
-                & admits(st, l, margin)
-                & (slope[l] * self.inv_slope_step[l] < 0.5 || slope[l] == 0.0);
-        }
-        let relative = |x: &Lanes| std::array::from_fn(|l| x[l] - s_old[l]);
-        let u: [Lanes; N_INPUT] = [
-            relative(&st.x[0]),
-            st.x[1],
-            relative(&st.x[2]),
-            st.x[3],
-            st.x[4],
-            st.x[5],
-            relative(&st.x[6]),
-            std::array::from_fn(|l| s_new[l] - s_old[l]),
-            f_ff,
-            friction,
-            st.offset,
-        ];
-        let y = lane_product(&self.cols, &u);
-        let mut ok = [false; LANES];
-        for l in 0..LANES {
-            ok[l] = start_ok[l]
-                && q.is_finite()
-                && self.period_ok(st, l, &y, &slope, &dv_guess, s_new[l]);
-        }
-        for l in 0..LANES {
-            let take = |new: f64, old: f64| if ok[l] { new } else { old };
-            st.x[0][l] = take(y[0][l] + s_old[l], st.x[0][l]);
-            st.x[1][l] = take(y[1][l], st.x[1][l]);
-            st.x[2][l] = take(y[2][l] + s_old[l], st.x[2][l]);
-            st.x[3][l] = take(y[3][l], st.x[3][l]);
-            st.x[4][l] = take(y[4][l], st.x[4][l]);
-            st.x[5][l] = take(y[5][l], st.x[5][l]);
-            st.x[6][l] = take(y[6][l] + s_old[l], st.x[6][l]);
-            st.velocity[l] = take(y[3][l], st.velocity[l]);
-            st.setpoint[l] = take(s_new[l], s_old[l]);
-            st.v_ff[l] = take(v_ff[l], st.v_ff[l]);
-            st.periods_exact[l] += u64::from(ok[l]);
-        }
-        ok
+        let fe = Some(following_error);
+        lane_step::step_block(self, all, axis, setpoints, times_s, actual, fe, completed)
     }
 
     /// Lane `l`'s checks after the product `y`: finite, the tolerance at k = 2 where it is
@@ -296,13 +173,13 @@ impl DriveLaneGroup {
                 }
             }
         }
-        if dv > 2.0 * dv_guess[l] && !admits(st, l, dv) {
+        if dv > 2.0 * dv_guess[l] && !admits(&st.extra, l, dv) {
             return false;
         }
         let Some((end, cache)) = self.end_regime(l, y) else {
             return false;
         };
-        let same = end.side == st.side[l] && end.offset == st.offset[l];
+        let same = end.side == st.extra.side[l] && end.offset == st.extra.offset[l];
         let end_admits =
             !end.dry || !(end.speed <= dv || end.push <= end.bound + end.mt_over_h * dv);
         if !(same && end_admits) {
@@ -311,19 +188,19 @@ impl DriveLaneGroup {
         let s_old = st.setpoint[l];
         let fe = s_new - (y[2][l] + s_old);
         let fe_motor = s_new - (y[0][l] + s_old);
-        if fe.abs() > self.fe_limit[l] || fe_motor.abs() > self.fe_limit[l] {
+        if fe.abs() > self.maps.fe_limit[l] || fe_motor.abs() > self.maps.fe_limit[l] {
             return false;
         }
-        st.side[l] = end.side;
-        st.offset[l] = end.offset;
-        st.dry[l] = end.dry;
-        st.speed[l] = end.speed;
-        st.push[l] = end.push;
-        st.bound[l] = end.bound;
-        st.decay[l] = end.decay;
-        st.regime_mt_over_h[l] = end.mt_over_h;
+        st.extra.side[l] = end.side;
+        st.extra.offset[l] = end.offset;
+        st.extra.dry[l] = end.dry;
+        st.extra.speed[l] = end.speed;
+        st.extra.push[l] = end.push;
+        st.extra.bound[l] = end.bound;
+        st.extra.decay[l] = end.decay;
+        st.extra.mt_over_h[l] = end.mt_over_h;
         if let Some(cache) = cache {
-            st.cache[l] = cache;
+            st.extra.cache[l] = cache;
         }
         true
     }
@@ -338,7 +215,7 @@ impl DriveLaneGroup {
         y: &[Lanes; N_STATE],
     ) -> Option<(Regime, Option<(f64, f64, f64)>)> {
         let [x_m, v_m, x_t, v_t, force] = [y[0][l], y[1][l], y[2][l], y[3][l], y[4][l]];
-        if force.abs() > self.half_limit[l] {
+        if force.abs() > self.maps.half_limit[l] {
             return None;
         }
         let (k, c) = (self.stiffness[l], self.damping[l]);
@@ -377,103 +254,122 @@ impl DriveLaneGroup {
         };
         Some((regime, Some((v_t, bound, decay))))
     }
+}
 
-    /// Lane `l`'s period through its scalar servo ([`AxisServo::advance`]); false when it
-    /// failed (the servo is then dropped, the lane no longer live).
-    #[cold]
-    #[inline(never)]
-    fn scalar_period(
-        &self,
-        all: &mut [Option<AxisServo>],
-        st: &mut State,
-        l: usize,
-        q: f64,
-        t: f64,
-    ) -> bool {
-        let s = self.servos[l];
-        let servo = all[s].as_mut().expect("a live lane's servo");
-        put(servo, st, l);
-        if servo.advance(q, t).is_err() {
-            all[s] = None;
-            st.live[l] = false;
-            return false;
-        }
-        get(servo, st, l);
-        true
+impl LaneKind for DriveLaneGroup {
+    type Extra = RegimeLanes;
+
+    fn servos(&self) -> &[usize] {
+        &self.servos
     }
 
-    /// The servos' state in lanes (padding lanes and failed drives not live).
-    fn gather(&self, all: &[Option<AxisServo>]) -> State {
-        let mut st = State::default();
-        for (l, &s) in self.servos.iter().enumerate() {
-            if let Some(servo) = all[s].as_ref() {
-                get(servo, &mut st, l);
-                st.live[l] = true;
-            }
-        }
-        st
+    fn inv_scale(&self) -> &Lanes {
+        &self.maps.inv_scale
     }
 
-    /// The live lanes' state back to their drives.
-    fn scatter(&self, all: &mut [Option<AxisServo>], st: &State) {
-        for (l, &s) in self.servos.iter().enumerate() {
-            if let (true, Some(servo)) = (st.live[l], all[s].as_mut()) {
-                put(servo, st, l);
-            }
+    /// One period by the lanes' slope-0 maps where every lane's checks pass (state
+    /// updated); per lane, whether it was taken.
+    #[inline(always)]
+    fn mapped_period(&self, st: &mut State, q: f64) -> [bool; LANES] {
+        let step = self.maps.step(st, q);
+        let dv_guess: Lanes = std::array::from_fn(|l| (step.v_ff[l] - st.v_ff[l]).abs());
+        let v0 = st.x[3];
+        // The slope at v₀ and the friction input, as `try_exact_period` forms them.
+        let mut slope = [0.0; LANES];
+        let mut friction = [0.0; LANES];
+        let mut start_ok = [false; LANES];
+        for l in 0..LANES {
+            let side = st.extra.side[l];
+            let f0 = if side == 0.0 {
+                0.0
+            } else {
+                -side * st.extra.bound[l]
+            };
+            let u = v0[l].abs() * self.inv_stribeck[l];
+            let c = 2.0 * self.delta_friction[l] * u * self.inv_stribeck[l] * st.extra.decay[l];
+            slope[l] = if side == 0.0 || self.slope_step[l] == 0.0 {
+                0.0
+            } else {
+                c
+            };
+            let grid_slope = 0.0 * self.slope_step[l];
+            friction[l] = f0 - grid_slope * v0[l];
+            let margin = 2.0 * dv_guess[l];
+            start_ok[l] = st.live[l]
+                & st.extra.has[l]
+                & admits(&st.extra, l, margin)
+                & (slope[l] * self.inv_slope_step[l] < 0.5 || slope[l] == 0.0);
         }
+        let [u0, u1, u2, u3, u4, u5, u6, u7, u8] = step.state_inputs(st);
+        let u: [Lanes; N_INPUT] = [
+            u0,
+            u1,
+            u2,
+            u3,
+            u4,
+            u5,
+            u6,
+            u7,
+            u8,
+            friction,
+            st.extra.offset,
+        ];
+        let y = lane_product(&self.maps.cols, &u);
+        let mut ok = [false; LANES];
+        for l in 0..LANES {
+            ok[l] = start_ok[l]
+                && q.is_finite()
+                && self.period_ok(st, l, &y, &slope, &dv_guess, step.s_new[l]);
+        }
+        for l in 0..LANES {
+            step.take(st, l, ok[l], &y);
+        }
+        ok
+    }
+
+    /// Lane `l`'s state to `servo`: its [`TwinState`](super::period_map::TwinState), carried
+    /// regime and friction-bound cache.
+    fn put(servo: &mut AxisServo, st: &State, l: usize) {
+        servo.set_twin_state(&st.twin_state(l));
+        let r = &st.extra;
+        let regime = r.has[l].then_some(Regime {
+            side: r.side[l],
+            offset: r.offset[l],
+            dry: r.dry[l],
+            speed: r.speed[l],
+            push: r.push[l],
+            bound: r.bound[l],
+            decay: r.decay[l],
+            mt_over_h: r.mt_over_h[l],
+        });
+        servo.set_regime_state(regime, r.cache[l]);
+    }
+
+    /// `servo`'s state to lane `l`.
+    fn get(servo: &AxisServo, st: &mut State, l: usize) {
+        st.set_twin_state(l, &servo.twin_state());
+        let (regime, cache) = servo.regime_state();
+        let e = &mut st.extra;
+        e.has[l] = regime.is_some();
+        let r = regime.unwrap_or(Regime::without_friction(0.0));
+        e.side[l] = r.side;
+        e.offset[l] = r.offset;
+        e.dry[l] = r.dry;
+        e.speed[l] = r.speed;
+        e.push[l] = r.push;
+        e.bound[l] = r.bound;
+        e.decay[l] = r.decay;
+        e.mt_over_h[l] = r.mt_over_h;
+        e.cache[l] = cache;
+    }
+
+    fn advance(servo: &mut AxisServo, setpoint: f64, time_s: f64) -> Result<()> {
+        servo.advance(setpoint, time_s)
     }
 }
 
 /// [`Regime::admits`] of lane `l`'s carried regime.
 #[inline(always)]
-fn admits(st: &State, l: usize, dv_margin: f64) -> bool {
-    !st.dry[l]
-        || !(st.speed[l] <= dv_margin
-            || st.push[l] <= st.bound[l] + st.regime_mt_over_h[l] * dv_margin)
-}
-
-/// Lane `l`'s state to `servo`.
-fn put(servo: &mut AxisServo, st: &State, l: usize) {
-    servo.set_twin_state(&TwinState {
-        setpoint: st.setpoint[l],
-        v_ff: st.v_ff[l],
-        x: std::array::from_fn(|r| st.x[r][l]),
-        velocity_si: st.velocity[l],
-        periods_exact: st.periods_exact[l],
-    });
-    let regime = st.has[l].then_some(Regime {
-        side: st.side[l],
-        offset: st.offset[l],
-        dry: st.dry[l],
-        speed: st.speed[l],
-        push: st.push[l],
-        bound: st.bound[l],
-        decay: st.decay[l],
-        mt_over_h: st.regime_mt_over_h[l],
-    });
-    servo.set_regime_state(regime, st.cache[l]);
-}
-
-/// `servo`'s state to lane `l`.
-fn get(servo: &AxisServo, st: &mut State, l: usize) {
-    let state = servo.twin_state();
-    st.setpoint[l] = state.setpoint;
-    st.v_ff[l] = state.v_ff;
-    for (row, &v) in st.x.iter_mut().zip(&state.x) {
-        row[l] = v;
-    }
-    st.velocity[l] = state.velocity_si;
-    st.periods_exact[l] = state.periods_exact;
-    let (regime, cache) = servo.regime_state();
-    st.has[l] = regime.is_some();
-    let r = regime.unwrap_or(Regime::without_friction(0.0));
-    st.side[l] = r.side;
-    st.offset[l] = r.offset;
-    st.dry[l] = r.dry;
-    st.speed[l] = r.speed;
-    st.push[l] = r.push;
-    st.bound[l] = r.bound;
-    st.decay[l] = r.decay;
-    st.regime_mt_over_h[l] = r.mt_over_h;
-    st.cache[l] = cache;
+fn admits(r: &RegimeLanes, l: usize, dv_margin: f64) -> bool {
+    !r.dry[l] || !(r.speed[l] <= dv_margin || r.push[l] <= r.bound[l] + r.mt_over_h[l] * dv_margin)
 }

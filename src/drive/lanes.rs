@@ -19,13 +19,14 @@
 //! Memory: one block per distinct servo.
 
 use super::lane_drive::DriveLaneGroup;
-use super::lane_servo::{TwinLanes, LANES};
+use super::lane_servo::TwinLanes;
+use super::lane_step::LANES;
 use super::servo::AxisServo;
 use crate::error::Result;
 use crate::input::machine::Machine;
 use crate::{Axis, AxisVec};
 
-pub use super::lane_servo::BLOCK;
+pub use super::lane_step::BLOCK;
 
 /// The distinct servos of one axis over the points, and their outputs over the last block.
 #[derive(Clone, Debug)]

@@ -5,7 +5,9 @@
 pub mod drives;
 pub mod lane_drive;
 pub mod lane_servo;
+pub mod lane_step;
 pub mod lanes;
+mod period_map;
 pub mod presliding;
 mod product;
 pub mod servo;

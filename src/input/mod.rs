@@ -10,6 +10,7 @@ pub mod lead_in;
 pub mod machine;
 pub mod overrides;
 pub mod program;
+pub mod reader;
 pub mod scenario;
 pub mod scene;
 pub mod toml_text;

@@ -1,7 +1,7 @@
 //! Reading TOML input files (machines, scenarios) with errors that point at the line.
 
 use std::ops::Range;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
@@ -307,4 +307,15 @@ pub fn locate_key_header(text: &str, section: &str) -> Option<Range<usize>> {
         offset += line.len();
     }
     None
+}
+
+/// `relative` as named in the input file at `scenario`: from that file's folder, unless it
+/// is absolute.
+pub fn resolve(scenario: &Path, relative: &str) -> PathBuf {
+    let p = Path::new(relative);
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        scenario.parent().unwrap_or(Path::new(".")).join(p)
+    }
 }

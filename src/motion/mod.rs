@@ -4,6 +4,7 @@
 
 pub mod feed_held;
 pub mod interpolation;
+mod profile;
 pub mod sampling;
 pub mod work;
 

@@ -11,6 +11,8 @@
 
 use std::path::PathBuf;
 
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -132,49 +134,7 @@ impl Chart {
     /// The SVG text of the chart.
     pub fn to_svg(&self) -> Result<String> {
         let finite = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite();
-        let all = || {
-            self.series
-                .iter()
-                .flat_map(|s| s.points.iter())
-                .filter(finite)
-        };
-        let (mut x0, mut x1) = self.x_range.unwrap_or_else(|| {
-            all().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                (a.min(p.0), b.max(p.0))
-            })
-        });
-        if !(x0.is_finite() && x1.is_finite()) {
-            (x0, x1) = (0.0, 1.0);
-        }
-        if x1 <= x0 {
-            (x0, x1) = (x0 - 0.5, x0 + 0.5);
-        }
-        let in_x = |p: &&(f64, f64)| p.0 >= x0 && p.0 <= x1;
-        let (mut y0, mut y1) = all()
-            .filter(in_x)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                (a.min(p.1), b.max(p.1))
-            });
-        if !(y0.is_finite() && y1.is_finite()) {
-            (y0, y1) = (-1.0, 1.0);
-        }
-        let flat = self
-            .y_range
-            .is_none()
-            .then(|| self.flat_value(y0, y1))
-            .flatten();
-        let pad = ((y1 - y0) * 0.08)
-            .max(1e-9 * y0.abs().max(y1.abs()))
-            .max(1e-12);
-        let (y0, y1) = match (self.y_range, flat) {
-            (Some(range), _) => range,
-            (None, Some(mid)) => {
-                let half = 10.0 * self.y_resolution.max(1e-9 * mid.abs()).max(1e-12);
-                (mid - half, mid + half)
-            }
-            (None, None) => (y0 - pad, y1 + pad),
-        };
-
+        let ((x0, x1), (y0, y1), flat) = self.ranges();
         let mut svg = String::new();
         {
             let root =
@@ -289,66 +249,131 @@ impl Chart {
                 ))
                 .map_err(draw_error)?;
             }
-            // Marker labels at the top edge, pushed apart.
-            let plot = chart.plotting_area();
-            let top = plot.get_pixel_range().1.start - 8;
-            let xs: Vec<f64> = self
-                .markers
-                .iter()
-                .filter(|m| m.x >= x0 && m.x <= x1)
-                .map(|m| plot.map_coordinate(&(m.x, y1)).0 as f64)
-                .collect();
-            let spread = spread_labels(&xs, 16.0);
-            for (m, px) in self
-                .markers
-                .iter()
-                .filter(|m| m.x >= x0 && m.x <= x1)
-                .zip(spread)
-            {
-                root.draw(&Text::new(
-                    m.label.clone(),
-                    (px.round() as i32, top),
-                    text(11.0, &m.colour, HPos::Center),
-                ))
-                .map_err(draw_error)?;
-            }
-            // Numbered marks: a ring on the curve, labels spread along x above the curves.
-            let mut marks: Vec<&Mark> = self
-                .marks
-                .iter()
-                .filter(|m| m.x >= x0 && m.x <= x1 && m.y.is_finite())
-                .collect();
-            marks.sort_by(|a, b| a.x.total_cmp(&b.x));
-            let xs: Vec<f64> = marks
-                .iter()
-                .map(|m| plot.map_coordinate(&(m.x, m.y)).0 as f64)
-                .collect();
-            let spread = spread_labels(&xs, 18.0);
-            for (m, px) in marks.iter().zip(spread) {
-                let p = plot.map_coordinate(&(m.x, m.y.clamp(y0, y1)));
-                plot.draw(&Circle::new(
-                    (m.x, m.y.clamp(y0, y1)),
-                    4,
-                    m.colour.stroke_width(2),
-                ))
-                .map_err(draw_error)?;
-                let label_y = if p.1 > top + 60 { p.1 - 22 } else { p.1 + 22 };
-                let lx = px.round() as i32;
-                root.draw(&PathElement::new(
-                    vec![p, (lx, label_y)],
-                    m.colour.mix(0.6).stroke_width(1),
-                ))
-                .map_err(draw_error)?;
-                root.draw(&Text::new(
-                    m.label.clone(),
-                    (lx, label_y - 6),
-                    text(12.0, &m.colour, HPos::Center),
-                ))
-                .map_err(draw_error)?;
-            }
+            self.draw_labels(&root, chart.plotting_area(), (x0, x1), (y0, y1))?;
             root.present().map_err(draw_error)?;
         }
         Ok(svg)
+    }
+}
+
+impl Chart {
+    /// The plot's x and y ranges and, for a flat signal, its value ([`Chart::flat_value`]):
+    /// x over the finite points (or [`Chart::x_range`]), y over those within x, padded by 8 %
+    /// (or [`Chart::y_range`], or ten resolutions about a flat value).
+    #[allow(clippy::type_complexity)]
+    fn ranges(&self) -> ((f64, f64), (f64, f64), Option<f64>) {
+        let finite = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite();
+        let all = || {
+            self.series
+                .iter()
+                .flat_map(|s| s.points.iter())
+                .filter(finite)
+        };
+        let (mut x0, mut x1) = self.x_range.unwrap_or_else(|| {
+            all().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p.0), b.max(p.0))
+            })
+        });
+        if !(x0.is_finite() && x1.is_finite()) {
+            (x0, x1) = (0.0, 1.0);
+        }
+        if x1 <= x0 {
+            (x0, x1) = (x0 - 0.5, x0 + 0.5);
+        }
+        let in_x = |p: &&(f64, f64)| p.0 >= x0 && p.0 <= x1;
+        let (mut y0, mut y1) = all()
+            .filter(in_x)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p.1), b.max(p.1))
+            });
+        if !(y0.is_finite() && y1.is_finite()) {
+            (y0, y1) = (-1.0, 1.0);
+        }
+        let flat = self
+            .y_range
+            .is_none()
+            .then(|| self.flat_value(y0, y1))
+            .flatten();
+        let pad = ((y1 - y0) * 0.08)
+            .max(1e-9 * y0.abs().max(y1.abs()))
+            .max(1e-12);
+        let (y0, y1) = match (self.y_range, flat) {
+            (Some(range), _) => range,
+            (None, Some(mid)) => {
+                let half = 10.0 * self.y_resolution.max(1e-9 * mid.abs()).max(1e-12);
+                (mid - half, mid + half)
+            }
+            (None, None) => (y0 - pad, y1 + pad),
+        };
+        ((x0, x1), (y0, y1), flat)
+    }
+
+    /// The markers' labels at the top edge of the plot area, pushed apart, and the numbered
+    /// marks: a ring on the curve, labels spread along x above the curves.
+    fn draw_labels(
+        &self,
+        root: &DrawingArea<SVGBackend<'_>, Shift>,
+        plot: &DrawingArea<SVGBackend<'_>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+        (x0, x1): (f64, f64),
+        (y0, y1): (f64, f64),
+    ) -> Result<()> {
+        // Marker labels at the top edge, pushed apart.
+        let top = plot.get_pixel_range().1.start - 8;
+        let xs: Vec<f64> = self
+            .markers
+            .iter()
+            .filter(|m| m.x >= x0 && m.x <= x1)
+            .map(|m| plot.map_coordinate(&(m.x, y1)).0 as f64)
+            .collect();
+        let spread = spread_labels(&xs, 16.0);
+        for (m, px) in self
+            .markers
+            .iter()
+            .filter(|m| m.x >= x0 && m.x <= x1)
+            .zip(spread)
+        {
+            root.draw(&Text::new(
+                m.label.clone(),
+                (px.round() as i32, top),
+                text(11.0, &m.colour, HPos::Center),
+            ))
+            .map_err(draw_error)?;
+        }
+        // Numbered marks: a ring on the curve, labels spread along x above the curves.
+        let mut marks: Vec<&Mark> = self
+            .marks
+            .iter()
+            .filter(|m| m.x >= x0 && m.x <= x1 && m.y.is_finite())
+            .collect();
+        marks.sort_by(|a, b| a.x.total_cmp(&b.x));
+        let xs: Vec<f64> = marks
+            .iter()
+            .map(|m| plot.map_coordinate(&(m.x, m.y)).0 as f64)
+            .collect();
+        let spread = spread_labels(&xs, 18.0);
+        for (m, px) in marks.iter().zip(spread) {
+            let p = plot.map_coordinate(&(m.x, m.y.clamp(y0, y1)));
+            plot.draw(&Circle::new(
+                (m.x, m.y.clamp(y0, y1)),
+                4,
+                m.colour.stroke_width(2),
+            ))
+            .map_err(draw_error)?;
+            let label_y = if p.1 > top + 60 { p.1 - 22 } else { p.1 + 22 };
+            let lx = px.round() as i32;
+            root.draw(&PathElement::new(
+                vec![p, (lx, label_y)],
+                m.colour.mix(0.6).stroke_width(1),
+            ))
+            .map_err(draw_error)?;
+            root.draw(&Text::new(
+                m.label.clone(),
+                (lx, label_y - 6),
+                text(12.0, &m.colour, HPos::Center),
+            ))
+            .map_err(draw_error)?;
+        }
+        Ok(())
     }
 }
 

@@ -17,6 +17,8 @@ use crate::input::scenario::{check_cone, Scenario};
 use crate::program::test_of;
 use crate::program::tests::generated_cone_mut;
 use crate::study::sweep::SweepParam;
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
 
 /// One grid cell.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -298,8 +300,6 @@ impl PlacementMap {
     /// hatched grey with a cross.
     pub fn to_svg(&self, title: &str) -> Result<String> {
         use plotters::prelude::*;
-        let draw_err =
-            |e: &dyn std::fmt::Display| Error::usage(format!("cannot draw the map: {e}"));
         let uniq = |f: &dyn Fn(&PlacementCell) -> f64| {
             let mut v: Vec<f64> = self.cells.iter().map(|c| f(c)).collect();
             v.sort_by(f64::total_cmp);
@@ -360,8 +360,7 @@ impl PlacementMap {
                 .y_desc(axis_title(&self.params[1]))
                 .draw()
                 .map_err(|e| draw_err(&e))?;
-            let colour_at = |t: f64| HSLColor(t.clamp(0.0, 1.0) * 0.66, 0.75, 0.5);
-            let colour = |m: f64| colour_at(scale(m));
+            let colour = |m: f64| margin_colour(scale(m));
             chart
                 .draw_series(self.cells.iter().map(|c| {
                     let style = if c.fits {
@@ -389,52 +388,7 @@ impl PlacementMap {
                     ]
                 }))
                 .map_err(|e| draw_err(&e))?;
-            // The table outline (a circle about the C axis), when the map is of the centre's
-            // X and Y, and the scenario's own position.
-            if self.params[0] == "center_x" && self.params[1] == "center_y" {
-                let r = self.table_radius_mm;
-                chart
-                    .draw_series(std::iter::once(PathElement::new(
-                        (0..=360)
-                            .map(|k| {
-                                let t = (k as f64).to_radians();
-                                (r * t.cos(), r * t.sin())
-                            })
-                            .filter(|&(x, y)| x >= x0 && x <= x1 && y >= y0 && y <= y1)
-                            .collect::<Vec<_>>(),
-                        BLACK.stroke_width(2),
-                    )))
-                    .map_err(|e| draw_err(&e))?;
-                // Its label at the top of the circle, or where it enters the map.
-                let (lx, ly) = if r <= y1 && r >= y0 && 0.0 >= x0 && 0.0 <= x1 {
-                    (0.0, r)
-                } else {
-                    (x0 + 0.02 * (x1 - x0), y1 - 0.04 * (y1 - y0))
-                };
-                chart
-                    .draw_series(std::iter::once(Text::new(
-                        format!("table edge (radius {r} mm)"),
-                        (lx, ly),
-                        ("sans-serif", 13).into_font().color(&BLACK),
-                    )))
-                    .map_err(|e| draw_err(&e))?;
-            }
-            let [sx, sy] = self.scenario_at;
-            if sx >= x0 && sx <= x1 && sy >= y0 && sy <= y1 {
-                chart
-                    .draw_series([
-                        Circle::new((sx, sy), 8, BLACK.stroke_width(3)),
-                        Circle::new((sx, sy), 2, BLACK.filled()),
-                    ])
-                    .map_err(|e| draw_err(&e))?;
-                chart
-                    .draw_series(std::iter::once(Text::new(
-                        "scenario",
-                        (sx, sy),
-                        ("sans-serif", 13).into_font().color(&BLACK),
-                    )))
-                    .map_err(|e| draw_err(&e))?;
-            }
+            self.draw_landmarks(&mut chart, (x0, x1), (y0, y1))?;
             // Outline of the mapped area.
             chart
                 .draw_series(std::iter::once(PathElement::new(
@@ -442,60 +396,144 @@ impl PlacementMap {
                     BLACK.stroke_width(1),
                 )))
                 .map_err(|e| draw_err(&e))?;
-            // Legend: the colour scale and the cross.
-            let lg = legend.margin(60, 60, 10, 10);
-            let (_, h) = lg.dim_in_pixel();
-            for k in 0..100 {
-                let t = 1.0 - k as f64 / 100.0;
-                let y = (k as f64 / 100.0 * (h as f64 - 130.0)) as i32 + 30;
-                lg.draw(&Rectangle::new(
-                    [(0, y), (30, y + (h as i32 - 130) / 100 + 1)],
-                    colour_at(t).filled(),
-                ))
-                .map_err(|e| draw_err(&e))?;
-            }
-            lg.draw(&Text::new("margin (mm)", (0, 5), ("sans-serif", 14)))
-                .map_err(|e| draw_err(&e))?;
-            for t in [1.0, 0.75, 0.5, 0.25, 0.0] {
-                let y = ((1.0 - t) * (h as f64 - 130.0)) as i32 + 30;
-                lg.draw(&Text::new(
-                    format!("{:.2}", level_at(t)),
-                    (35, y - 5),
-                    ("sans-serif", 12),
-                ))
-                .map_err(|e| draw_err(&e))?;
-            }
-            lg.draw(&Text::new(
-                "(linear scale)",
-                (0, h as i32 - 92),
-                ("sans-serif", 11),
-            ))
-            .map_err(|e| draw_err(&e))?;
-            lg.draw(&Rectangle::new(
-                [(0, h as i32 - 76), (30, h as i32 - 58)],
-                RGBColor(200, 200, 200).filled(),
-            ))
-            .map_err(|e| draw_err(&e))?;
-            for (k, (line, colour)) in [
-                ("does not fit:", BLACK),
-                ("× a limit or collision", LIMIT_CROSS),
-                ("× cone base over", EDGE_CROSS),
-                ("   the table edge", EDGE_CROSS),
-            ]
-            .into_iter()
-            .enumerate()
-            {
-                lg.draw(&Text::new(
-                    line,
-                    (0, h as i32 - 44 + 13 * k as i32),
-                    ("sans-serif", 11).into_font().color(&colour),
-                ))
-                .map_err(|e| draw_err(&e))?;
-            }
+            draw_legend(&legend, level_at)?;
             root.present().map_err(|e| draw_err(&e))?;
         }
         Ok(svg)
     }
+
+    /// The map's landmarks: the table outline (a circle about the C axis) with its label,
+    /// when the map is of the centre's X and Y, and the scenario's own position, ringed;
+    /// each where it lies within `x0..x1`, `y0..y1`.
+    fn draw_landmarks(
+        &self,
+        chart: &mut plotters::prelude::ChartContext<
+            '_,
+            plotters::prelude::SVGBackend<'_>,
+            plotters::prelude::Cartesian2d<RangedCoordf64, RangedCoordf64>,
+        >,
+        (x0, x1): (f64, f64),
+        (y0, y1): (f64, f64),
+    ) -> Result<()> {
+        use plotters::prelude::*;
+        // The table outline (a circle about the C axis), when the map is of the centre's
+        // X and Y, and the scenario's own position.
+        if self.params[0] == "center_x" && self.params[1] == "center_y" {
+            let r = self.table_radius_mm;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    (0..=360)
+                        .map(|k| {
+                            let t = (k as f64).to_radians();
+                            (r * t.cos(), r * t.sin())
+                        })
+                        .filter(|&(x, y)| x >= x0 && x <= x1 && y >= y0 && y <= y1)
+                        .collect::<Vec<_>>(),
+                    BLACK.stroke_width(2),
+                )))
+                .map_err(|e| draw_err(&e))?;
+            // Its label at the top of the circle, or where it enters the map.
+            let (lx, ly) = if r <= y1 && r >= y0 && 0.0 >= x0 && 0.0 <= x1 {
+                (0.0, r)
+            } else {
+                (x0 + 0.02 * (x1 - x0), y1 - 0.04 * (y1 - y0))
+            };
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    format!("table edge (radius {r} mm)"),
+                    (lx, ly),
+                    ("sans-serif", 13).into_font().color(&BLACK),
+                )))
+                .map_err(|e| draw_err(&e))?;
+        }
+        let [sx, sy] = self.scenario_at;
+        if sx >= x0 && sx <= x1 && sy >= y0 && sy <= y1 {
+            chart
+                .draw_series([
+                    Circle::new((sx, sy), 8, BLACK.stroke_width(3)),
+                    Circle::new((sx, sy), 2, BLACK.filled()),
+                ])
+                .map_err(|e| draw_err(&e))?;
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    "scenario",
+                    (sx, sy),
+                    ("sans-serif", 13).into_font().color(&BLACK),
+                )))
+                .map_err(|e| draw_err(&e))?;
+        }
+        Ok(())
+    }
+}
+
+/// The map's legend in `legend`: the colour scale from the smallest to the largest margin
+/// (`level_at(t)` for `t` from 0 to 1, mm) and what the cell crosses mean.
+fn draw_legend(
+    legend: &plotters::prelude::DrawingArea<plotters::prelude::SVGBackend<'_>, Shift>,
+    level_at: impl Fn(f64) -> f64,
+) -> Result<()> {
+    use plotters::prelude::*;
+    let lg = legend.margin(60, 60, 10, 10);
+    let (_, h) = lg.dim_in_pixel();
+    for k in 0..100 {
+        let t = 1.0 - k as f64 / 100.0;
+        let y = (k as f64 / 100.0 * (h as f64 - 130.0)) as i32 + 30;
+        lg.draw(&Rectangle::new(
+            [(0, y), (30, y + (h as i32 - 130) / 100 + 1)],
+            margin_colour(t).filled(),
+        ))
+        .map_err(|e| draw_err(&e))?;
+    }
+    lg.draw(&Text::new("margin (mm)", (0, 5), ("sans-serif", 14)))
+        .map_err(|e| draw_err(&e))?;
+    for t in [1.0, 0.75, 0.5, 0.25, 0.0] {
+        let y = ((1.0 - t) * (h as f64 - 130.0)) as i32 + 30;
+        lg.draw(&Text::new(
+            format!("{:.2}", level_at(t)),
+            (35, y - 5),
+            ("sans-serif", 12),
+        ))
+        .map_err(|e| draw_err(&e))?;
+    }
+    lg.draw(&Text::new(
+        "(linear scale)",
+        (0, h as i32 - 92),
+        ("sans-serif", 11),
+    ))
+    .map_err(|e| draw_err(&e))?;
+    lg.draw(&Rectangle::new(
+        [(0, h as i32 - 76), (30, h as i32 - 58)],
+        RGBColor(200, 200, 200).filled(),
+    ))
+    .map_err(|e| draw_err(&e))?;
+    for (k, (line, colour)) in [
+        ("does not fit:", BLACK),
+        ("× a limit or collision", LIMIT_CROSS),
+        ("× cone base over", EDGE_CROSS),
+        ("   the table edge", EDGE_CROSS),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        lg.draw(&Text::new(
+            line,
+            (0, h as i32 - 44 + 13 * k as i32),
+            ("sans-serif", 11).into_font().color(&colour),
+        ))
+        .map_err(|e| draw_err(&e))?;
+    }
+    Ok(())
+}
+
+/// The colour of scale position `t` (0 the smallest margin, 1 the largest): hue from red
+/// to blue.
+fn margin_colour(t: f64) -> plotters::prelude::HSLColor {
+    plotters::prelude::HSLColor(t.clamp(0.0, 1.0) * 0.66, 0.75, 0.5)
+}
+
+/// A drawing error of the map, as a usage error.
+fn draw_err(e: &dyn std::fmt::Display) -> Error {
+    Error::usage(format!("cannot draw the map: {e}"))
 }
 
 /// A placement parameter in words, with its unit.

@@ -1,0 +1,319 @@
+//! The lane stepping both lane kinds share: up to [`LANES`] servos of one axis, one per SIMD
+//! lane, stepped through a block of setpoints by their period maps, a lane handing a period
+//! its map cannot take to its scalar servo ([`super::lane_servo`] for the linear twins,
+//! [`super::lane_drive`] for the nonlinear drives).
+//!
+//! Per interpolation period and lane `l`, both kinds start from the same setpoint step and
+//! the same state inputs, and a period the map takes ends the same way:
+//!
+//! ```text
+//! s⁺ = q · scale_l,  v_ff = (s⁺ - s) / T_ipo,l,  F_ff = k_aff m_l (v_ff - v_ff⁻) / T_ipo,l
+//! u  = (x_m - s, v_m, x_t - s, v_t, F, ∫, x_m,tick - s, s⁺ - s, F_ff, …the kind's inputs)
+//! y_r = (…((0 + M_l[r,0] u_0) + M_l[r,1] u_1) + …)                         r = 0..7
+//! x⁺ = y with the positions made absolute (+ s),  s ← s⁺,  v_ff⁻ ← v_ff
+//! ```
+//!
+//! with the map stored as `cols[j][r][l]`, so that the product is a multiply-add (a
+//! multiplication, then an addition: never fused) of whole lane vectors per column and row.
+//! What differs between the kinds is [`LaneKind`]: the inputs beyond the state, the checks a
+//! lane's period must pass, what a lane carries beyond the common [`LaneState`] (the drive's
+//! regime), and which scalar period takes over. A lane whose period fails its checks runs
+//! that period through the scalar servo, its state scattered to it and gathered back: the
+//! scalar servo then decides, counts and reports exactly as in a single run, and every
+//! lane's positions are the single run's, bit for bit, whatever the vector width.
+
+use super::period_map::{MappedPeriod, TwinState, N_STATE, N_TWIN_INPUT};
+use super::servo::AxisServo;
+use crate::error::Result;
+use crate::{Axis, AxisVec};
+
+/// Setpoints stepped at a time (a lane group's outputs: [`BLOCK`] per servo).
+pub const BLOCK: usize = 256;
+
+/// Servos per lane group: one AVX-512 register of f64 (two AVX ones).
+pub const LANES: usize = 8;
+
+/// One value per lane.
+pub(super) type Lanes = [f64; LANES];
+
+/// The period maps of a lane group's servos in lanes: the first `C` columns, `cols[j][r][l]`
+/// (column `j`, row `r`, lane `l`), and the constants of the period's inputs and checks
+/// ([`MappedPeriod`]).
+#[derive(Clone, Debug)]
+pub(super) struct LaneMaps<const C: usize> {
+    pub cols: [[Lanes; N_STATE]; C],
+    pub scale: Lanes,
+    pub inv_scale: Lanes,
+    pub inv_t_ipo: Lanes,
+    pub aff_mass: Lanes,
+    pub half_limit: Lanes,
+    pub fe_limit: Lanes,
+}
+
+impl<const C: usize> LaneMaps<C> {
+    /// All lanes zero (padding lanes stay so).
+    pub fn zero() -> LaneMaps<C> {
+        let z = [0.0; LANES];
+        LaneMaps {
+            cols: [[z; N_STATE]; C],
+            scale: z,
+            inv_scale: z,
+            inv_t_ipo: z,
+            aff_mass: z,
+            half_limit: z,
+            fe_limit: z,
+        }
+    }
+
+    /// `p` into lane `l`.
+    pub fn set_lane(&mut self, l: usize, p: &MappedPeriod<C>) {
+        for (col, lane_col) in p.cols.iter().zip(self.cols.iter_mut()) {
+            for (&m, row) in col.iter().zip(lane_col.iter_mut()) {
+                row[l] = m;
+            }
+        }
+        self.scale[l] = p.scale;
+        self.inv_scale[l] = p.inv_scale;
+        self.inv_t_ipo[l] = p.inv_t_ipo;
+        self.aff_mass[l] = p.aff_mass;
+        self.half_limit[l] = p.half_limit;
+        self.fe_limit[l] = p.fe_limit;
+    }
+
+    /// The period's setpoint step to the axis position `q` (mm, deg), per lane.
+    #[inline(always)]
+    pub fn step<E>(&self, st: &LaneState<E>, q: f64) -> SetpointStep {
+        let s_new: Lanes = std::array::from_fn(|l| q * self.scale[l]);
+        let s_old = st.setpoint;
+        let v_ff: Lanes = std::array::from_fn(|l| (s_new[l] - s_old[l]) * self.inv_t_ipo[l]);
+        let f_ff = std::array::from_fn(|l| {
+            self.aff_mass[l] * ((v_ff[l] - st.v_ff[l]) * self.inv_t_ipo[l])
+        });
+        SetpointStep {
+            s_new,
+            s_old,
+            v_ff,
+            f_ff,
+        }
+    }
+}
+
+/// One period's setpoint step per lane, SI: the new setpoint `s⁺`, the previous `s`, the
+/// feedforward velocity `v_ff = (s⁺ - s) / T_ipo` and force `F_ff`.
+pub(super) struct SetpointStep {
+    pub s_new: Lanes,
+    pub s_old: Lanes,
+    pub v_ff: Lanes,
+    pub f_ff: Lanes,
+}
+
+impl SetpointStep {
+    /// The map inputs both kinds share: the state with its positions relative to the
+    /// previous setpoint, `Δs = s⁺ - s` and `F_ff`.
+    #[inline(always)]
+    pub fn state_inputs<E>(&self, st: &LaneState<E>) -> [Lanes; N_TWIN_INPUT] {
+        let s_old = self.s_old;
+        let relative = |x: &Lanes| std::array::from_fn(|l| x[l] - s_old[l]);
+        [
+            relative(&st.x[0]),
+            st.x[1],
+            relative(&st.x[2]),
+            st.x[3],
+            st.x[4],
+            st.x[5],
+            relative(&st.x[6]),
+            std::array::from_fn(|l| self.s_new[l] - s_old[l]),
+            self.f_ff,
+        ]
+    }
+
+    /// Lane `l`'s state after the period: the map's result `y` (positions relative to the
+    /// previous setpoint) where `ok`, its state unchanged where not.
+    #[inline(always)]
+    pub fn take<E>(&self, st: &mut LaneState<E>, l: usize, ok: bool, y: &[Lanes; N_STATE]) {
+        let s_old = self.s_old;
+        let take = |new: f64, old: f64| if ok { new } else { old };
+        st.x[0][l] = take(y[0][l] + s_old[l], st.x[0][l]);
+        st.x[1][l] = take(y[1][l], st.x[1][l]);
+        st.x[2][l] = take(y[2][l] + s_old[l], st.x[2][l]);
+        st.x[3][l] = take(y[3][l], st.x[3][l]);
+        st.x[4][l] = take(y[4][l], st.x[4][l]);
+        st.x[5][l] = take(y[5][l], st.x[5][l]);
+        st.x[6][l] = take(y[6][l] + s_old[l], st.x[6][l]);
+        st.velocity[l] = take(y[3][l], st.velocity[l]);
+        st.setpoint[l] = take(self.s_new[l], s_old[l]);
+        st.v_ff[l] = take(self.v_ff[l], st.v_ff[l]);
+        st.periods_exact[l] += u64::from(ok);
+    }
+}
+
+/// The lanes' carried state over one block (gathered from the servos at its start and
+/// scattered back at its end, so that the servos hold it between blocks): what
+/// [`TwinState`] holds, per lane, and what the kind carries beyond it (`extra`).
+#[derive(Default)]
+pub(super) struct LaneState<E> {
+    pub setpoint: Lanes,
+    pub v_ff: Lanes,
+    /// `x_m v_m x_t v_t F ∫ x_m,tick`, positions absolute.
+    pub x: [Lanes; N_STATE],
+    pub velocity: Lanes,
+    pub periods_exact: [u64; LANES],
+    /// The lane steps a servo that has not failed.
+    pub live: [bool; LANES],
+    pub extra: E,
+}
+
+impl<E> LaneState<E> {
+    /// `state` into lane `l` (its liveness and the kind's extra aside).
+    pub fn set_twin_state(&mut self, l: usize, state: &TwinState) {
+        self.setpoint[l] = state.setpoint;
+        self.v_ff[l] = state.v_ff;
+        for (row, &v) in self.x.iter_mut().zip(&state.x) {
+            row[l] = v;
+        }
+        self.velocity[l] = state.velocity_si;
+        self.periods_exact[l] = state.periods_exact;
+    }
+
+    /// Lane `l`'s [`TwinState`].
+    pub fn twin_state(&self, l: usize) -> TwinState {
+        TwinState {
+            setpoint: self.setpoint[l],
+            v_ff: self.v_ff[l],
+            x: std::array::from_fn(|r| self.x[r][l]),
+            velocity_si: self.velocity[l],
+            periods_exact: self.periods_exact[l],
+        }
+    }
+}
+
+/// One kind of lane group: how its lanes take a period by their maps and how a lane's state
+/// goes to and from its scalar servo, which takes the periods the map cannot.
+pub(super) trait LaneKind {
+    /// What a lane carries beyond [`LaneState`]'s common part.
+    type Extra: Default;
+    /// The servos the lanes step (indices into the axis's servos; the first lanes).
+    fn servos(&self) -> &[usize];
+    /// SI units per interface unit, inverted, per lane.
+    fn inv_scale(&self) -> &Lanes;
+    /// One period by the lanes' maps to the axis position `q`; per lane, whether it was
+    /// taken (state updated) or the lane must run it scalar (state untouched).
+    fn mapped_period(&self, st: &mut LaneState<Self::Extra>, q: f64) -> [bool; LANES];
+    /// Lane `l`'s whole state to `servo`.
+    fn put(servo: &mut AxisServo, st: &LaneState<Self::Extra>, l: usize);
+    /// `servo`'s whole state to lane `l`.
+    fn get(servo: &AxisServo, st: &mut LaneState<Self::Extra>, l: usize);
+    /// The scalar period of `servo` to `setpoint` at `time_s`.
+    fn advance(servo: &mut AxisServo, setpoint: f64, time_s: f64) -> Result<()>;
+}
+
+/// Steps the live servos of `all` (the axis `axis`'s) in `group` through `setpoints`,
+/// reached at `times_s`: each servo's actual positions (mm, deg) go to
+/// `actual[s * BLOCK + j]`, and its following errors to `following_error` there when that
+/// is asked for, and the setpoints it completed to `completed[s]`; a servo that fails
+/// becomes None there. Returns the lane periods stepped and how many of them were handed to
+/// the scalar servo.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn step_block<K: LaneKind>(
+    group: &K,
+    all: &mut [Option<AxisServo>],
+    axis: Axis,
+    setpoints: &[AxisVec],
+    times_s: &[f64],
+    actual: &mut [f64],
+    mut following_error: Option<&mut [f64]>,
+    completed: &mut [usize],
+) -> (u64, u64) {
+    let mut st = gather(group, all);
+    for &s in group.servos() {
+        completed[s] = if all[s].is_some() { setpoints.len() } else { 0 };
+    }
+    let inv_scale = group.inv_scale();
+    let (mut stepped, mut handed_back) = (0, 0);
+    for (j, (q, &t)) in setpoints.iter().zip(times_s).enumerate() {
+        let q = q[axis];
+        let ok = group.mapped_period(&mut st, q);
+        for (l, &s) in group.servos().iter().enumerate() {
+            if st.live[l] && !ok[l] {
+                handed_back += 1;
+                if !scalar_period(group, all, &mut st, l, q, t) {
+                    completed[s] = j;
+                }
+            }
+            if st.live[l] {
+                stepped += 1;
+                let x_t = st.x[2][l];
+                actual[s * BLOCK + j] = x_t * inv_scale[l];
+                if let Some(fe) = following_error.as_deref_mut() {
+                    fe[s * BLOCK + j] = (st.setpoint[l] - x_t) * inv_scale[l];
+                }
+            }
+        }
+    }
+    scatter(group, all, &st);
+    (stepped, handed_back)
+}
+
+/// Lane `l`'s period through its scalar servo ([`LaneKind::advance`]); false when it
+/// failed (the servo is then dropped, the lane no longer live).
+#[cold]
+#[inline(never)]
+fn scalar_period<K: LaneKind>(
+    group: &K,
+    all: &mut [Option<AxisServo>],
+    st: &mut LaneState<K::Extra>,
+    l: usize,
+    q: f64,
+    t: f64,
+) -> bool {
+    let s = group.servos()[l];
+    let servo = all[s].as_mut().expect("a live lane's servo");
+    K::put(servo, st, l);
+    if K::advance(servo, q, t).is_err() {
+        all[s] = None;
+        st.live[l] = false;
+        return false;
+    }
+    K::get(servo, st, l);
+    true
+}
+
+/// The servos' state in lanes (padding lanes and failed servos not live).
+fn gather<K: LaneKind>(group: &K, all: &[Option<AxisServo>]) -> LaneState<K::Extra> {
+    let mut st = LaneState::default();
+    for (l, &s) in group.servos().iter().enumerate() {
+        if let Some(servo) = all[s].as_ref() {
+            K::get(servo, &mut st, l);
+            st.live[l] = true;
+        }
+    }
+    st
+}
+
+/// The live lanes' state back to their servos.
+fn scatter<K: LaneKind>(group: &K, all: &mut [Option<AxisServo>], st: &LaneState<K::Extra>) {
+    for (l, &s) in group.servos().iter().enumerate() {
+        if let (true, Some(servo)) = (st.live[l], all[s].as_mut()) {
+            K::put(servo, st, l);
+        }
+    }
+}
+
+/// `y_r = Σ_j cols[j][r] u_j` per lane, from 0 in column order: per lane the scalar
+/// period map's product, one vector multiplication and one addition per column and row.
+#[inline(always)]
+pub(super) fn lane_product<const N: usize>(
+    cols: &[[Lanes; N_STATE]; N],
+    u: &[Lanes; N],
+) -> [Lanes; N_STATE] {
+    let mut y = [[0.0; LANES]; N_STATE];
+    for (col, u_j) in cols.iter().zip(u) {
+        for (y_r, m_r) in y.iter_mut().zip(col) {
+            for l in 0..LANES {
+                y_r[l] += m_r[l] * u_j[l];
+            }
+        }
+    }
+    y
+}

@@ -5,6 +5,7 @@
 pub mod attribution;
 pub mod ballbar;
 pub mod bar;
+pub mod feed;
 pub mod settle;
 pub mod shared;
 pub mod sink;

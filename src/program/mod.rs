@@ -51,7 +51,13 @@ pub fn scenario_run(
             }
         }
         Program::Circle { circle, .. } => {
-            let program = circle::CircleProgram::new(circle, clockwise, lead_deg);
+            let mut program = circle::CircleProgram::new(circle, clockwise, lead_deg);
+            // A lead of whole turns near the axes' limits (`input::lead_in`): only for the
+            // lead it was sized as, not for a run without one.
+            let lead = scenario.simulate.lead_in;
+            if lead_deg > 0.0 && lead.is_some_and(|l| l.whole_turns && l.deg == lead_deg) {
+                program = program.in_whole_turns();
+            }
             Run {
                 direction,
                 measured: Some(program.measured()),

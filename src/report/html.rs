@@ -470,6 +470,7 @@ fn summary_section(folder: &RunFolder) -> String {
         b.hysteresis_um
             .map_or("– (one direction)".to_string(), |h| format!("{h:.2} µm")),
     );
+    out.push_str(&super::circle_figures::feed_warning(b));
     out.push_str(&shares_table(&s.g_shares));
     out.push_str(&reversal_b_table(&s.reversal_b, &s.reversal_values));
     out
@@ -658,7 +659,7 @@ fn deviation_chart(marks: &[Mark], trace: &Trace) -> Result<String> {
     }
     for m in marks {
         chart.marks.push(ChartMark {
-            x: m.event.theta_deg,
+            x: m.event.peak_deg.rem_euclid(360.0),
             y: m.trace_um.unwrap_or(0.0),
             label: m.number.to_string(),
             colour: m.event.axis.map_or(plot::INK, plot::axis_colour),
@@ -794,6 +795,10 @@ pub fn render(folder: &RunFolder, diagnosis: &Diagnosis, date: Option<&str>) -> 
          CCW runs, about the common centre. Centring: least-squares centre offset a (cos θ), b (sin θ) \
          and mean radius error r0, removed before the figures.</p>\n",
     );
+    if let Some(c) = folder.summary.diagnostics.as_ref().and_then(|d| d.circle.as_ref()) {
+        h.push_str("<h2 id=\"circle-figures\">Servo mismatch, squareness, scale</h2>\n");
+        h.push_str(&super::circle_figures::circle_figures_table(c));
+    }
     if let Some((_, svg)) = folder.svgs.iter().find(|(n, _)| n == "ballbar.svg") {
         h.push_str("<h2 id=\"polar\">Polar plot</h2>\n");
         h.push_str(&inline_svg(svg, "polar"));

@@ -21,6 +21,7 @@ use crate::input::lead_in::LeadIn;
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::{Program, Scenario, TraceFormat};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
+use crate::measure::feed::{FeedMeter, FeedSeen};
 use crate::measure::ballbar::{analyse_events_at, BallbarResult};
 use crate::measure::settle::SettleGate;
 use crate::measure::{BallbarSink, BarGeometry, CircleFrame, CommandMaps};
@@ -105,6 +106,11 @@ pub struct BallbarStudy {
     pub warnings: Vec<String>,
     /// Feed blocks run below their F word, per axis and limit (over all directions).
     pub feed_reductions: Vec<FeedReduction>,
+    /// Each run's tool speed along the measured circle, from the samples.
+    pub feed: Vec<FeedMeter>,
+    /// The measured circle's radius (mm) and programmed feed (mm/min) of a generated test;
+    /// None for a file program.
+    pub nominal_feed: Option<(f64, f64)>,
 }
 
 impl BallbarStudy {
@@ -114,8 +120,33 @@ impl BallbarStudy {
         if self.runs.is_empty() {
             return Ok(None);
         }
-        analyse_events_at(&self.runs, &self.signatures, &self.sites).map(Some)
+        let mut result = analyse_events_at(&self.runs, &self.signatures, &self.sites)?;
+        result.feed = self
+            .nominal_feed
+            .and_then(|(radius_mm, feed_mm_min)| FeedSeen::of(&self.feed, radius_mm, feed_mm_min));
+        Ok(Some(result))
     }
+}
+
+/// The measured circle's radius (mm) and programmed feed (mm/min) of a generated test: what
+/// the tool's speed over the measured revolution is held to. None for a file program.
+pub(crate) fn nominal_feed(scenario: &Scenario) -> Option<(f64, f64)> {
+    match &scenario.program {
+        Program::Circle { circle, .. } => Some((circle.radius_mm, circle.feed_mm_min)),
+        Program::Cone { cone, nc, .. } => Some((cone.radius_mm(), nc.feed_mm_min)),
+        Program::File { .. } => None,
+    }
+}
+
+/// The warning for G measured off the programmed feed; None at feed (or without one).
+pub(crate) fn off_feed_warning(result: &BallbarResult, scenario: &Scenario) -> Option<String> {
+    let seen = result.feed.filter(|f| !f.at_feed)?;
+    let (_, feed) = nominal_feed(scenario)?;
+    Some(format!(
+        "the tool did not hold the programmed F{feed} over the measured revolution: it ran at \
+         {:.0} to {:.0} mm/min, so G is not that of a circle at F{feed}",
+        seen.feed_min_mm_min, seen.feed_max_mm_min
+    ))
 }
 
 /// Runs every direction of the scenario through the pipeline into the virtual ball bar
@@ -357,10 +388,11 @@ pub(crate) fn assemble(
 ) -> Result<BallbarStudy> {
     let machine = &scenario.machine;
     let geometry = bar_geometry(scenario);
-    let (mut runs, mut signatures) = (Vec::new(), Vec::new());
+    let (mut runs, mut signatures, mut feed) = (Vec::new(), Vec::new(), Vec::new());
     for b in ballbars {
         runs.push(b.run);
         signatures.push(b.signature);
+        feed.push(b.feed);
     }
     let reversals = shared.reversals.clone();
     // The bar's sensitivity is a property of the nominal pose at θ: the first run's map.
@@ -401,6 +433,8 @@ pub(crate) fn assemble(
             .chain(shared.feed_reductions.iter().map(FeedReduction::describe))
             .collect(),
         feed_reductions: shared.feed_reductions.clone(),
+        feed,
+        nominal_feed: nominal_feed(scenario),
     })
 }
 
@@ -441,6 +475,7 @@ pub fn simulate(
     let ballbar = study.result()?;
     let (runs, reversals) = (&study.runs, &study.reversals);
     let mut warnings = study.warnings.clone();
+    warnings.extend(ballbar.as_ref().and_then(|b| off_feed_warning(b, scenario)));
     let circle = match &scenario.program {
         Program::Circle { circle, .. } => Some(circle),
         _ => None,

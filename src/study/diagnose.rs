@@ -16,9 +16,15 @@
 //! ```
 //!
 //! so, with `⟨·⟩` the mean over the two directions and `Δ` half their difference (CCW − CW):
-//! `scale mismatch ε_u - ε_v = 2 ⟨a2⟩ / r` (ppm), `squareness α = 2 ⟨b2⟩ / r` (µrad, positive
-//! when the u axis leans toward +v), `servo mismatch T_u - T_v = 2 Δb2 / v` (ms), its
-//! peak-to-peak `v |T_u - T_v|`.
+//! `scale mismatch ε_u - ε_v = 2 ⟨a2⟩ / r` less the apparent scale mismatch of the lags
+//! ([`LagFit::apparent_scale`]) (ppm), `squareness α = 2 ⟨b2⟩ / r` (µrad, positive when the
+//! u axis leans toward +v), `servo mismatch T_u - T_v = 2 Δb2 / v` (ms, in full
+//! [`LagFit::mismatch_s`]), its peak-to-peak `v |T_u - T_v|`.
+//!
+//! Each needs both directions: from one, the flipping and the fixed oval are one sin 2θ term
+//! (Kv 30/27 alone read as −1,234 µrad of squareness), and the lag also turns the servo oval
+//! into a2. From one direction they are NaN (`null` in `summary.json`) with the reason in
+//! [`CircleDiagnostics::not_measured`], never numbers.
 //!
 //! **Cyclic error** of pitch p along axis u (a screw's pitch error) adds
 //! `e(u) cos θ` with `e(u) = A cos(2π u / p + φ)`, `u = r cos θ`: after removing the Fourier

@@ -21,7 +21,7 @@ use crate::input::lead_in::LeadIn;
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::{Program, Scenario, TraceFormat};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
-use crate::measure::feed::{FeedMeter, FeedSeen};
+use crate::measure::feed::{FeedMeter, FeedSeen, AT_FEED_TOLERANCE};
 use crate::measure::ballbar::{analyse_events_at, BallbarResult};
 use crate::measure::settle::SettleGate;
 use crate::measure::{BallbarSink, BarGeometry, CircleFrame, CommandMaps};
@@ -142,11 +142,20 @@ pub(crate) fn nominal_feed(scenario: &Scenario) -> Option<(f64, f64)> {
 pub(crate) fn off_feed_warning(result: &BallbarResult, scenario: &Scenario) -> Option<String> {
     let seen = result.feed.filter(|f| !f.at_feed)?;
     let (_, feed) = nominal_feed(scenario)?;
-    Some(format!(
-        "the tool did not hold the programmed F{feed} over the measured revolution: it ran at \
-         {:.0} to {:.0} mm/min, so G is not that of a circle at F{feed}",
-        seen.feed_min_mm_min, seen.feed_max_mm_min
-    ))
+    let (min, max) = (seen.feed_min_mm_min, seen.feed_max_mm_min);
+    Some(if max <= feed * (1.0 + AT_FEED_TOLERANCE) {
+        format!(
+            "the tool did not reach the programmed F{feed} over the whole measured revolution: it \
+             ran at {min:.0} to {max:.0} mm/min, so G is not that of a circle at F{feed}"
+        )
+    } else {
+        format!(
+            "the tool's speed along the measured circle varied from {min:.0} to {max:.0} mm/min \
+             about the programmed F{feed} (more than {:.0} %), as a joint-space program's does \
+             within its blocks, so G is not that of a circle at F{feed}",
+            100.0 * AT_FEED_TOLERANCE
+        )
+    })
 }
 
 /// Runs every direction of the scenario through the pipeline into the virtual ball bar

@@ -6,6 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use mtsim::input::scenario::Scenario;
+use mtsim::report::html::render;
+use mtsim::report::run::RunFolder;
+use mtsim::study::diagnose::diagnose_run;
 use mtsim::study::simulate::simulate;
 
 use crate::common::{machine, scenario_text, scratch};
@@ -37,6 +40,12 @@ fn run_circle(
     simulate(&scenario, &out, false, &|_| {}).unwrap();
     let json = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     (out, json)
+}
+
+/// The report page of the run folder `out`.
+fn page(out: &Path) -> String {
+    let folder = RunFolder::read(out).unwrap();
+    render(&folder, &diagnose_run(&folder), None).unwrap()
 }
 
 /// The commanded tool speed between consecutive rows of each run of `trace.csv`,
@@ -99,12 +108,13 @@ fn held_circles_run_their_measured_revolution_at_one_speed_and_say_whether_it_is
         // the measured revolution does not accelerate (it started at 2,638 mm/min).
         assert!(hi - lo <= 0.002 * hi, "F{feed}: {lo}..{hi} mm/min");
         // A held feed is said, on the page's G and in the warnings.
+        assert_eq!(page(&out).contains("data-warning=\"feed\""), !at_feed);
         if !at_feed {
             let warnings = json["warnings"].as_array().unwrap();
             assert!(
                 warnings
                     .iter()
-                    .any(|w| w.as_str().unwrap().contains("did not hold the programmed")),
+                    .any(|w| w.as_str().unwrap().contains("did not reach the programmed")),
                 "{warnings:?}"
             );
         }
@@ -118,13 +128,14 @@ fn a_circle_the_machine_can_hold_is_at_feed() {
     let (lo, hi) = trace_speed_range(&out);
     assert!((lo - 3000.0).abs() < 1.0 && (hi - 3000.0).abs() < 1.0, "{lo}..{hi}");
     assert_eq!(json["ballbar"]["at_feed"], serde_json::Value::Bool(true));
+    assert!(!page(&out).contains("data-warning=\"feed\""));
 }
 
 /// One direction cannot tell a servo mismatch from squareness: with Kv 30/27 both are null
 /// with the reason, never a number (they read −1,234 µrad and 0.0 ms).
 #[test]
 fn a_one_direction_circle_gives_null_squareness_and_mismatch_with_the_reason() {
-    let (_, json) = run_circle("one-way", 50.0, 1000.0, "[\"ccw\"]", [30.0, 27.0, 30.0]);
+    let (out, json) = run_circle("one-way", 50.0, 1000.0, "[\"ccw\"]", [30.0, 27.0, 30.0]);
     let c = &json["diagnostics"]["circle"];
     for field in [
         "squareness_urad",
@@ -136,6 +147,12 @@ fn a_one_direction_circle_gives_null_squareness_and_mismatch_with_the_reason() {
         assert!(c[field].is_null(), "{field}: {}", c[field]);
         let why = c["not_measured"][field].as_str().unwrap();
         assert!(why.starts_with("needs both directions"), "{field}: {why}");
+    }
+    // The page says the same, and gives no number.
+    let page = page(&out);
+    for key in ["squareness", "servo-mismatch", "scale-mismatch"] {
+        let cell = format!("data-circle=\"{key}\">not measured: needs both directions");
+        assert!(page.contains(&cell), "{key}");
     }
 }
 

@@ -68,8 +68,13 @@ pub struct LeadIn {
     pub settle_time_s: f64,
     /// The slowest servo loop's time constant, s.
     pub time_constant_s: f64,
-    /// The speed reached, mm/min (the programmed feed unless the axes hold it lower).
+    /// The speed planned at θ = 0, mm/min: the programmed feed unless the axes' closed-form
+    /// limits on the circle hold it lower (the planner's own bounds may hold it lower still).
     pub speed_mm_min: f64,
+    /// The speed the tool had at θ = 0, as the samples show it (the slowest run's), mm/min;
+    /// filled in by a simulation, left out before.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reached_mm_min: Option<f64>,
     /// Whether the lead was sized here (true) or given as `[simulate] lead_deg`.
     pub sized: bool,
     /// Whether the lead-in and lead-out are whole turns of the measured circle (`deg` a
@@ -190,6 +195,7 @@ impl LeadIn {
             },
             sized: false,
             whole_turns: false,
+            reached_mm_min: None,
         })
     }
 }

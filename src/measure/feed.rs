@@ -24,6 +24,8 @@ pub struct FeedMeter {
     previous: Option<(f64, f64)>,
     /// Smallest and largest `|Δθ| / Δt`, deg/s; None before two measured samples.
     range_deg_s: Option<(f64, f64)>,
+    /// The first `|Δθ| / Δt`, deg/s: the speed the lead-in brought the tool to.
+    first_deg_s: Option<f64>,
 }
 
 impl FeedMeter {
@@ -40,6 +42,7 @@ impl FeedMeter {
         }
         let step = ((theta_deg - theta0 + 180.0).rem_euclid(360.0) - 180.0).abs();
         let rate = step / dt;
+        self.first_deg_s.get_or_insert(rate);
         self.range_deg_s = Some(match self.range_deg_s {
             None => (rate, rate),
             Some((lo, hi)) => (lo.min(rate), hi.max(rate)),
@@ -50,6 +53,21 @@ impl FeedMeter {
     pub fn range_deg_s(&self) -> Option<(f64, f64)> {
         self.range_deg_s
     }
+
+    /// The angular speed at the start of the measured revolution, deg/s.
+    pub fn first_deg_s(&self) -> Option<f64> {
+        self.first_deg_s
+    }
+}
+
+/// The slowest start of the measured revolution over `meters` (one per run) on a circle of
+/// `radius_mm`, mm/min: the speed the lead-in reached, as the samples show it.
+pub fn start_mm_min(meters: &[FeedMeter], radius_mm: f64) -> Option<f64> {
+    meters
+        .iter()
+        .filter_map(FeedMeter::first_deg_s)
+        .reduce(f64::min)
+        .map(|deg_s| deg_s.to_radians() * radius_mm * 60.0)
 }
 
 /// The feed the tool ran at over the measured revolutions against the programmed one.

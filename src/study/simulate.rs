@@ -562,7 +562,12 @@ pub fn simulate(
         g_shares,
         warnings,
         feed_reductions: study.feed_reductions.clone(),
-        lead_in: scenario.simulate.lead_in,
+        lead_in: scenario.simulate.lead_in.map(|lead| LeadIn {
+            reached_mm_min: study
+                .nominal_feed
+                .and_then(|(radius_mm, _)| crate::measure::feed::start_mm_min(&study.feed, radius_mm)),
+            ..lead
+        }),
     };
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
     crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;

@@ -107,6 +107,10 @@ fn held_circles_run_their_measured_revolution_at_one_speed_and_say_whether_it_is
         // Whatever speed the planner holds the circle at, the lead-in brought the tool to it:
         // the measured revolution does not accelerate (it started at 2,638 mm/min).
         assert!(hi - lo <= 0.002 * hi, "F{feed}: {lo}..{hi} mm/min");
+        // And the lead-in says the speed it reached, not the one it planned.
+        let reached = json["lead_in"]["reached_mm_min"].as_f64().unwrap();
+        assert!((reached - lo).abs() <= 0.002 * lo, "{reached} vs {lo}");
+        assert_eq!(json["lead_in"]["whole_turns"], serde_json::Value::Bool(true));
         // A held feed is said, on the page's G and in the warnings.
         assert_eq!(page(&out).contains("data-warning=\"feed\""), !at_feed);
         if !at_feed {

@@ -128,15 +128,15 @@ pub fn run(
                 out.push_str("no spikes or steps above noise\n");
             } else {
                 out.push_str(&format!(
-                    "{:>4} {:>6} {:>10} {:>10} {:>6} {:>5} {:>10}\n",
-                    "run", "kind", "θ (deg)", "height (µm)", "axis", "conf.", "width (deg)"
+                    "{:>4} {:>6} {:>12} {:>10} {:>6} {:>5} {:>10}\n",
+                    "run", "kind", "peak θ (deg)", "height (µm)", "axis", "conf.", "width (deg)"
                 ));
                 for e in &b.events {
                     out.push_str(&format!(
-                        "{:>4} {:>6} {:>10.2} {:>10.2} {:>6} {:>5.2} {:>10.2}\n",
+                        "{:>4} {:>6} {:>12.2} {:>10.2} {:>6} {:>5.2} {:>10.2}\n",
                         format!("{:?}", e.direction).to_lowercase(),
                         format!("{:?}", e.kind).to_lowercase(),
-                        e.theta_deg,
+                        e.peak_deg,
                         e.height_um,
                         e.axis.map_or("?".to_string(), |a| a.to_string()),
                         e.confidence,
@@ -145,6 +145,9 @@ pub fn run(
                 }
             }
         }
+    }
+    if let Some(c) = summary.diagnostics.as_ref().and_then(|d| d.circle.as_ref()) {
+        out.push_str(&circle_figures_text(c));
     }
     out.push_str(&super::chain_events::chain_events_text(
         chain_events.as_deref(),
@@ -174,4 +177,43 @@ impl Stages {
             self.read_s, self.simulate_s, self.check_s, self.files_s
         )
     }
+}
+
+/// A circle test's servo mismatch, squareness and scale mismatch, each a number only when
+/// the data separates it, and why not otherwise.
+fn circle_figures_text(c: &crate::study::diagnose::CircleDiagnostics) -> String {
+    let figure = |value: f64, text: String, field: &str| {
+        if value.is_finite() {
+            text
+        } else {
+            format!(
+                "not measured ({})",
+                c.not_measured.get(field).map_or("", |w| w.as_str())
+            )
+        }
+    };
+    format!(
+        "servo mismatch: {}\nsquareness: {}\nscale mismatch: {}\n",
+        figure(
+            c.servo_mismatch_ms,
+            format!(
+                "{:+.3} ms ({:.2} µm peak-to-peak)",
+                c.servo_mismatch_ms, c.servo_mismatch_pp_um
+            ),
+            "servo_mismatch_ms"
+        ),
+        figure(
+            c.squareness_urad,
+            format!(
+                "{:+.2} µrad ({:+.2} µm/m)",
+                c.squareness_urad, c.squareness_um_per_m
+            ),
+            "squareness_urad"
+        ),
+        figure(
+            c.scale_mismatch_ppm,
+            format!("{:+.2} ppm", c.scale_mismatch_ppm),
+            "scale_mismatch_ppm"
+        ),
+    )
 }

@@ -16,6 +16,27 @@
 //! `n = max(5, ln(lag / 0.01 µm))` time constants at speed. The lead is
 //! `1.25 D_acc + V n τ` (the planner's derivative bounds, raised between samples, make its
 //! acceleration a few per cent lower than the closed form), rounded up to a whole degree.
+//!
+//! # Near the machine's limits: whole turns
+//!
+//! The planner caps each block's cruise speed from bounds on its own path derivatives, and
+//! at a junction it scales the speed by the ratio of the two blocks' caps
+//! (`motion::interpolation`, "Junctions"): where a cap holds a lead arc or the measured
+//! revolution below F, the two caps differ, the tangent "jumps" by that ratio, and the
+//! junction is taken at the speed the axes' acceleration allows in one period. The measured
+//! revolution then starts far below F (r 10 mm at F7000 started at 2,638 mm/min). So when F
+//! comes within [`NEAR_LIMIT_SHARE`] of what the axes can give on the circle at all,
+//!
+//! ```text
+//! v_limit = min(vmax, sqrt(½ amax r), (⅓ jmax r²)^⅓)     (the plane axes' smallest limits)
+//! ```
+//!
+//! the lead-in (and the lead-out) is made of whole turns of the measured circle instead,
+//! each one block with the measured one's start, end and centre: the planner caps them all
+//! alike, whatever its rules, so the junctions keep the speed and the measured revolution
+//! runs at the speed the lead reached. The sized lead is rounded up to whole turns.
+//! Below that share every block runs at its programmed F (the planner's bounds on a whole
+//! turn give at least 0.8 of `v_limit`) and the lead keeps its arcs.
 
 use serde::Serialize;
 
@@ -30,6 +51,9 @@ const SETTLED_MM: f64 = 1e-5;
 const MIN_TIME_CONSTANTS: f64 = 5.0;
 /// Margin on the closed-form acceleration distance and time.
 const ACCEL_MARGIN: f64 = 1.25;
+/// A feed above this share of the circle's closed-form speed limit gets a lead-in of whole
+/// turns (see the module documentation).
+pub const NEAR_LIMIT_SHARE: f64 = 0.5;
 
 /// How long a circle test's lead-in is.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -44,14 +68,32 @@ pub struct LeadIn {
     pub settle_time_s: f64,
     /// The slowest servo loop's time constant, s.
     pub time_constant_s: f64,
-    /// The speed reached, mm/min (the programmed feed unless the axes hold it lower).
+    /// The speed planned at θ = 0, mm/min: the programmed feed unless the axes' closed-form
+    /// limits on the circle hold it lower (the planner's own bounds may hold it lower still).
     pub speed_mm_min: f64,
+    /// The speed the tool had at θ = 0, as the samples show it (the slowest run's), mm/min;
+    /// filled in by a simulation, left out before.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reached_mm_min: Option<f64>,
     /// Whether the lead was sized here (true) or given as `[simulate] lead_deg`.
     pub sized: bool,
+    /// Whether the lead-in and lead-out are whole turns of the measured circle (`deg` a
+    /// multiple of 360): a sized lead when F is near the axes' limits on the circle.
+    pub whole_turns: bool,
 }
 
 /// The planner's speed change from rest on the circle: (cruise V mm/s, a mm/s², j mm/s³).
 fn planned_speed_change(circle: &CircleTest, machine: &Machine) -> (f64, f64, f64) {
+    let (limit, amax, jmax) = circle_limits(circle, machine);
+    let r = circle.radius_mm;
+    let speed = (circle.feed_mm_min / 60.0).min(limit);
+    let accel = (0.5 * amax).min(jmax / (9.0 * speed / r));
+    (speed, accel, jmax / 3.0)
+}
+
+/// The closed-form speed limit on the circle, `min(vmax, sqrt(½ amax r), (⅓ jmax r²)^⅓)`
+/// (mm/s), and the plane axes' smallest acceleration (mm/s²) and jerk (mm/s³) limits.
+fn circle_limits(circle: &CircleTest, machine: &Machine) -> (f64, f64, f64) {
     let (u, v, _) = circle.axes();
     let r = circle.radius_mm;
     let (mut vmax, mut amax, mut jmax) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
@@ -61,12 +103,10 @@ fn planned_speed_change(circle: &CircleTest, machine: &Machine) -> (f64, f64, f6
         amax = amax.min(c.max_acceleration);
         jmax = jmax.min(c.max_jerk);
     }
-    let speed = (circle.feed_mm_min / 60.0)
-        .min(vmax)
+    let limit = vmax
         .min((0.5 * amax * r).sqrt())
         .min((jmax * r * r / 3.0).cbrt());
-    let accel = (0.5 * amax).min(jmax / (9.0 * speed / r));
-    (speed, accel, jmax / 3.0)
+    (limit, amax, jmax)
 }
 
 /// Time of an S-curve from rest to `v` (zero acceleration at both ends), s.
@@ -106,6 +146,14 @@ impl LeadIn {
         let n = MIN_TIME_CONSTANTS.max((lag_mm / SETTLED_MM).ln());
         let length_mm = 0.5 * speed * t_acc + speed * n * tau;
         let deg = (length_mm / circle.radius_mm).to_degrees().ceil();
+        let (limit, _, _) = circle_limits(circle, machine);
+        if circle.feed_mm_min / 60.0 > NEAR_LIMIT_SHARE * limit {
+            return Ok(LeadIn {
+                sized: true,
+                whole_turns: true,
+                ..LeadIn::given(circle, machine, 360.0 * (deg / 360.0).ceil())?
+            });
+        }
         Ok(LeadIn {
             sized: true,
             ..LeadIn::given(circle, machine, deg)?
@@ -146,6 +194,8 @@ impl LeadIn {
                 speed * 60.0
             },
             sized: false,
+            whole_turns: false,
+            reached_mm_min: None,
         })
     }
 }

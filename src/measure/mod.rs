@@ -6,6 +6,7 @@ pub mod attribution;
 pub mod ballbar;
 pub mod bar;
 pub mod measurement;
+pub mod feed;
 pub mod settle;
 pub mod shared;
 pub mod sink;

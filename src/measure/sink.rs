@@ -17,6 +17,7 @@ use nalgebra::Point3;
 use super::attribution::{bar_sensitivity_at, ThetaMap};
 use super::ballbar::{BallbarRun, CircleFrame, ThetaTerms};
 use super::bar::deviation_mm;
+use super::feed::FeedMeter;
 use crate::error::Result;
 use crate::input::program::{Direction, MeasuredLines};
 use crate::kinematics::{Kinematics, RotarySinCos};
@@ -206,6 +207,8 @@ pub struct BallbarSink {
     /// The commanded positions and speeds against θ; None where they are not wanted (the
     /// runs after a study's first) or are kept for many bars at once.
     pub maps: Option<CommandMaps>,
+    /// The tool's speed along the measured circle over the measured samples.
+    pub feed: FeedMeter,
 }
 
 /// Commanded axis positions and speeds against θ over a run's measured samples, the first
@@ -256,6 +259,7 @@ impl BallbarSink {
             run: BallbarRun::new(direction),
             signature: BallbarRun::new(direction),
             maps: Some(CommandMaps::default()),
+            feed: FeedMeter::default(),
         }
     }
 
@@ -302,6 +306,7 @@ impl BallbarSink {
             return None;
         }
         let r = read(&self.geometry, s);
+        self.feed.take(s.time_s, r.theta_deg);
         BallbarRun::push_pair_terms(
             &mut self.run,
             &mut self.signature,

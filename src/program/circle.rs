@@ -23,6 +23,9 @@ pub struct CircleProgram {
     circle: CircleTest,
     clockwise: bool,
     lead_deg: f64,
+    /// The lead-in and lead-out as whole turns from θ = 0 to θ = 0, each one block like the
+    /// measured one (`input::lead_in`, "Near the machine's limits").
+    whole_turns: bool,
     header: [String; 4],
 }
 
@@ -37,6 +40,7 @@ impl CircleProgram {
             circle: *circle,
             clockwise,
             lead_deg,
+            whole_turns: false,
             header: [
                 "%".to_string(),
                 "O2001 (MTSIM CIRCULAR TEST, ISO 230-4)".to_string(),
@@ -55,9 +59,20 @@ impl CircleProgram {
         }
     }
 
-    /// Arcs of the lead-in (and of the lead-out): one per [`MAX_LEAD_ARC_DEG`] or part.
+    /// The same program with its lead-in and lead-out in whole turns of the measured circle:
+    /// `lead_deg` rounded up to a multiple of 360 deg, each turn one block from θ = 0 to
+    /// θ = 0, the measured one's twin.
+    pub fn in_whole_turns(mut self) -> CircleProgram {
+        self.whole_turns = true;
+        self
+    }
+
+    /// Arcs of the lead-in (and of the lead-out): one per [`MAX_LEAD_ARC_DEG`] or part, or
+    /// one per whole turn.
     fn lead_arcs(&self) -> usize {
-        if self.lead_deg > 0.0 {
+        if self.whole_turns {
+            (self.lead_deg / 360.0).ceil() as usize
+        } else if self.lead_deg > 0.0 {
             (self.lead_deg / MAX_LEAD_ARC_DEG).ceil() as usize
         } else {
             0
@@ -81,24 +96,31 @@ impl CircleProgram {
             let p = c.point(theta_deg);
             AxisVec::xyzabc([p[0], p[1], p[2], 0.0, 0.0, 0.0])
         };
-        let start = at(-sign * self.lead_deg);
         let zero = at(0.0);
-        let mut ends = vec![(Motion::Rapid, start)];
         let arc = Motion::Arc {
             clockwise: self.clockwise,
             plane: c.plane,
             center_mm: c.center_mm,
         };
-        // Equal arcs, each short of a full turn (an arc whose end is its start is one).
         let n = self.lead_arcs();
-        let part = self.lead_deg / n.max(1) as f64;
-        for k in (0..n).rev() {
-            ends.push((arc, at(-sign * part * k as f64)));
-        }
-        ends.push((arc, zero));
-        for k in 1..=n {
-            ends.push((arc, at(sign * part * k as f64)));
-        }
+        let ends = if self.whole_turns {
+            // Every arc a whole turn from θ = 0 (an arc whose end is its start is one).
+            let mut ends = vec![(Motion::Rapid, zero)];
+            ends.extend(std::iter::repeat_n((arc, zero), 2 * n + 1));
+            ends
+        } else {
+            // Equal arcs, each short of a full turn.
+            let mut ends = vec![(Motion::Rapid, at(-sign * self.lead_deg))];
+            let part = self.lead_deg / n.max(1) as f64;
+            for k in (0..n).rev() {
+                ends.push((arc, at(-sign * part * k as f64)));
+            }
+            ends.push((arc, zero));
+            for k in 1..=n {
+                ends.push((arc, at(sign * part * k as f64)));
+            }
+            ends
+        };
         let first_line = self.header.len() + 1;
         let mut previous = AxisVec::ZERO;
         ends.into_iter().enumerate().map(move |(k, (motion, end))| {

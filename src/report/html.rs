@@ -470,8 +470,36 @@ fn summary_section(folder: &RunFolder) -> String {
         b.hysteresis_um
             .map_or("– (one direction)".to_string(), |h| format!("{h:.2} µm")),
     );
+    if let Some(w) = super::circle_figures::feed_warning(b) {
+        let _ = writeln!(
+            out,
+            "<p class=\"warning\" data-warning=\"feed\" style=\"color:#b00\">{}</p>",
+            esc(&w)
+        );
+    }
     out.push_str(&shares_table(&s.g_shares));
     out.push_str(&reversal_b_table(&s.reversal_b, &s.reversal_values));
+    out
+}
+
+/// A circle test's servo mismatch, squareness and scale (`data-circle` cells), each a
+/// number or why not, and the notes under them.
+fn circle_figures_table(c: &super::run::CircleFigures) -> String {
+    let mut out = String::from(
+        "<table class=\"circle-figures\">\n<tr><th>figure</th><th>value</th></tr>\n",
+    );
+    for (key, name, value) in super::circle_figures::circle_figure_rows(c) {
+        let _ = writeln!(
+            out,
+            "<tr><td>{}</td><td data-circle=\"{key}\">{}</td></tr>",
+            esc(name),
+            esc(&value)
+        );
+    }
+    out.push_str("</table>\n");
+    for note in super::circle_figures::circle_figure_notes(c) {
+        let _ = writeln!(out, "<p class=\"note\">{}</p>", esc(&note));
+    }
     out
 }
 
@@ -658,7 +686,7 @@ fn deviation_chart(marks: &[Mark], trace: &Trace) -> Result<String> {
     }
     for m in marks {
         chart.marks.push(ChartMark {
-            x: m.event.theta_deg,
+            x: m.event.peak_deg.rem_euclid(360.0),
             y: m.trace_um.unwrap_or(0.0),
             label: m.number.to_string(),
             colour: m.event.axis.map_or(plot::INK, plot::axis_colour),
@@ -795,6 +823,10 @@ pub fn render(folder: &RunFolder, diagnosis: &Diagnosis, date: Option<&str>) -> 
          CCW runs, about the common centre. Centring: least-squares centre offset a (cos θ), b (sin θ) \
          and mean radius error r0, removed before the figures.</p>\n",
     );
+    if let Some(c) = folder.summary.diagnostics.as_ref().and_then(|d| d.circle.as_ref()) {
+        h.push_str("<h2 id=\"circle-figures\">Servo mismatch, squareness, scale</h2>\n");
+        h.push_str(&circle_figures_table(c));
+    }
     if let Some((_, svg)) = folder.svgs.iter().find(|(n, _)| n == "ballbar.svg") {
         h.push_str("<h2 id=\"polar\">Polar plot</h2>\n");
         h.push_str(&inline_svg(svg, "polar"));

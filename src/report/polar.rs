@@ -410,7 +410,7 @@ pub fn render_polar_svg(
                 })
                 .collect()
         };
-        let header = ["#", "axis", "kind", "θ", "µm", "run", "conf."].map(String::from);
+        let header = ["#", "axis", "kind", "peak θ", "µm", "run", "conf."].map(String::from);
         for cell in row(header, &black, y) {
             root.draw(&cell).map_err(err)?;
         }
@@ -426,7 +426,7 @@ pub fn render_polar_svg(
                     .axis
                     .map_or("?".to_string(), |a| a.letter().to_string()),
                 kind.to_string(),
-                format!("{:.1}°", event.theta_deg),
+                format!("{:.1}°", event.peak_deg),
                 format!("{:+.1}", event.height_um),
                 direction_name(event.direction).to_string(),
                 format!("{:.2}", event.confidence),

@@ -51,6 +51,37 @@ pub struct RunSummary {
     /// Each mechanism's part of G per axis, ranked; empty for an older folder.
     #[serde(default)]
     pub g_shares: Vec<Contribution>,
+    /// The diagnostics from the trace; None without a measured circle or in an older
+    /// folder.
+    #[serde(default)]
+    pub diagnostics: Option<RunDiagnostics>,
+}
+
+/// The part of `summary.json`'s `diagnostics` the report reads.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+pub struct RunDiagnostics {
+    /// A circle test's figures; None for a cone or a file program.
+    #[serde(default)]
+    pub circle: Option<CircleFigures>,
+}
+
+/// A circle test's Ballbar figures (`study::diagnose::CircleDiagnostics`): each None when
+/// the data cannot separate it (`null` in the file), with the reason in `not_measured`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+pub struct CircleFigures {
+    /// `ε_u − ε_v`, ppm.
+    pub scale_mismatch_ppm: Option<f64>,
+    /// The apparent scale mismatch of the servo mismatch, taken out of the above, ppm.
+    #[serde(default)]
+    pub servo_scale_ppm: Option<f64>,
+    /// Squareness, µrad (= µm/m).
+    pub squareness_urad: Option<f64>,
+    /// `T_u − T_v`, ms, and its oval's peak-to-peak, µm.
+    pub servo_mismatch_ms: Option<f64>,
+    pub servo_mismatch_pp_um: Option<f64>,
+    /// Why a figure is not measured, by its field name.
+    #[serde(default)]
+    pub not_measured: BTreeMap<String, String>,
 }
 
 /// An axis's lost motion at a reversal from the machine file, in its unit (mm or deg):
@@ -228,7 +259,7 @@ pub struct Mark {
     pub reversal: Option<(f64, f64)>,
     /// For a mark of no axis: the nearest reversal of any axis, (axis letter, distance deg).
     pub nearest: Option<(String, f64)>,
-    /// The trace's centred deviation nearest the mark's θ in its run, µm (where the plot
+    /// The trace's centred deviation nearest the mark's peak in its run, µm (where the plot
     /// labels it); None without a trace of that run.
     pub trace_um: Option<f64>,
 }

@@ -16,9 +16,15 @@
 //! ```
 //!
 //! so, with `⟨·⟩` the mean over the two directions and `Δ` half their difference (CCW − CW):
-//! `scale mismatch ε_u - ε_v = 2 ⟨a2⟩ / r` (ppm), `squareness α = 2 ⟨b2⟩ / r` (µrad, positive
-//! when the u axis leans toward +v), `servo mismatch T_u - T_v = 2 Δb2 / v` (ms), its
-//! peak-to-peak `v |T_u - T_v|`.
+//! `scale mismatch ε_u - ε_v = 2 ⟨a2⟩ / r` less the apparent scale mismatch of the lags
+//! ([`LagFit::apparent_scale`]) (ppm), `squareness α = 2 ⟨b2⟩ / r` (µrad, positive when the
+//! u axis leans toward +v), `servo mismatch T_u - T_v = 2 Δb2 / v` (ms, in full
+//! [`LagFit::mismatch_s`]), its peak-to-peak `v |T_u - T_v|`.
+//!
+//! Each needs both directions: from one, the flipping and the fixed oval are one sin 2θ term
+//! (Kv 30/27 alone read as −1,234 µrad of squareness), and the lag also turns the servo oval
+//! into a2. From one direction they are NaN (`null` in `summary.json`) with the reason in
+//! [`CircleDiagnostics::not_measured`], never numbers.
 //!
 //! **Cyclic error** of pitch p along axis u (a screw's pitch error) adds
 //! `e(u) cos θ` with `e(u) = A cos(2π u / p + φ)`, `u = r cos θ`: after removing the Fourier
@@ -41,6 +47,8 @@
 //! are large. The 2θ fit here is least squares on the trace's rows, at their θ: unlike the
 //! bins of [`harmonics`], the rows need not cover the circle evenly, so the normal equations
 //! are solved rather than the Fourier sums taken.
+
+use std::collections::BTreeMap;
 
 use serde::Serialize;
 
@@ -88,21 +96,48 @@ pub struct CyclicError {
 }
 
 /// The circle-test diagnostics.
+///
+/// A figure the data cannot separate from another is NaN here and `null` in `summary.json`
+/// (serde_json writes a non-finite number as `null`), never a number, and
+/// [`CircleDiagnostics::not_measured`] says why.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CircleDiagnostics {
-    /// `ε_u - ε_v`, ppm.
+    /// `ε_u - ε_v`, ppm: the cos 2θ term less the part the measured servo mismatch makes
+    /// ([`CircleDiagnostics::servo_scale_ppm`]). NaN from one direction when a servo
+    /// mismatch could make more of it than [`SCALE_SEPARATION_PPM`] (or a tenth of it).
     pub scale_mismatch_ppm: f64,
-    /// α, µrad: positive when the first plane axis leans toward the second.
+    /// The apparent scale mismatch the measured servo mismatch makes at this feed, taken out
+    /// of `scale_mismatch_ppm`, ppm; NaN without both directions.
+    pub servo_scale_ppm: f64,
+    /// α, µrad: positive when the first plane axis leans toward the second. NaN without
+    /// both directions.
     pub squareness_urad: f64,
-    /// `T_u - T_v = 1/Kv_u - 1/Kv_v`, ms.
+    /// α in µm per m of travel (the same number as µrad); NaN without both directions.
+    pub squareness_um_per_m: f64,
+    /// `T_u - T_v = 1/Kv_u - 1/Kv_v`, ms; NaN without both directions.
     pub servo_mismatch_ms: f64,
-    /// Peak-to-peak of the servo-mismatch oval, `v |T_u - T_v|`, um.
+    /// Peak-to-peak of the servo-mismatch oval, `v |T_u - T_v|`, um; NaN without both
+    /// directions.
     pub servo_mismatch_pp_um: f64,
+    /// Why a figure above is not measured, by its field name; left out when all are.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub not_measured: BTreeMap<String, String>,
     /// Cyclic errors found, per plane axis.
     pub cyclic: Vec<CyclicError>,
     /// Per run: the fitted harmonics.
     pub harmonics: Vec<(Direction, Harmonics)>,
 }
+
+/// From one direction the scale mismatch is reported only when a servo mismatch (which one
+/// direction cannot measure) could make at most this much of it, ppm, or a tenth of it.
+pub const SCALE_SEPARATION_PPM: f64 = 1.0;
+
+/// Why squareness is not measured from one direction.
+pub const SQUARENESS_NEEDS_BOTH: &str = "needs both directions: from one direction a servo \
+     mismatch's oval at 45° cannot be told from squareness's";
+/// Why the servo mismatch is not measured from one direction.
+pub const MISMATCH_NEEDS_BOTH: &str = "needs both directions: a servo mismatch is the part of \
+     the oval at 45° that flips with the direction";
 
 /// One attributed reversal mark.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -228,45 +263,119 @@ pub fn diagnose_circle(runs: &[BallbarRun], circle: &CircleTest) -> Result<Circl
             (run.direction(), harmonics(&clean))
         })
         .collect();
-    let mean = |f: &dyn Fn(&Harmonics) -> f64| {
-        per_run.iter().map(|(_, h)| f(h)).sum::<f64>() / per_run.len().max(1) as f64
-    };
-    let (a2, b2) = (mean(&|h| h.a2), mean(&|h| h.b2));
-    let servo_mismatch_s = servo_mismatch_s(&per_run, mean(&|h| h.r0), r_mm, v_mm_s);
-    Ok(CircleDiagnostics {
-        scale_mismatch_ppm: 2.0 * a2 / r_mm * 1e3,
-        squareness_urad: 2.0 * b2 / r_mm * 1e3,
-        servo_mismatch_ms: servo_mismatch_s * 1e3,
-        servo_mismatch_pp_um: v_mm_s * servo_mismatch_s.abs() * 1e3,
+    let r0_um = per_run.iter().map(|(_, h)| h.r0).sum::<f64>() / per_run.len().max(1) as f64;
+    let (ccw, cw) = (
+        direction_mean(&per_run, Direction::Ccw),
+        direction_mean(&per_run, Direction::Cw),
+    );
+    let mut d = CircleDiagnostics {
+        scale_mismatch_ppm: f64::NAN,
+        servo_scale_ppm: f64::NAN,
+        squareness_urad: f64::NAN,
+        squareness_um_per_m: f64::NAN,
+        servo_mismatch_ms: f64::NAN,
+        servo_mismatch_pp_um: f64::NAN,
+        not_measured: BTreeMap::new(),
         cyclic,
         harmonics: per_run,
+    };
+    let (Some(ccw), Some(cw)) = (ccw, cw) else {
+        for (figure, why) in [
+            ("scale_mismatch_ppm", SCALE_NEEDS_BOTH),
+            ("servo_scale_ppm", MISMATCH_NEEDS_BOTH),
+            ("squareness_urad", SQUARENESS_NEEDS_BOTH),
+            ("squareness_um_per_m", SQUARENESS_NEEDS_BOTH),
+            ("servo_mismatch_ms", MISMATCH_NEEDS_BOTH),
+            ("servo_mismatch_pp_um", MISMATCH_NEEDS_BOTH),
+        ] {
+            d.not_measured.insert(figure.to_string(), why.to_string());
+        }
+        return Ok(d);
+    };
+    // The servo part of 2θ flips with the direction and cancels in the mean of the two.
+    let (a2, b2) = (0.5 * (ccw.a2 + cw.a2), 0.5 * (ccw.b2 + cw.b2));
+    let lags = LagFit::of(&ccw, &cw, r0_um, r_mm, v_mm_s);
+    let servo_mismatch_s = lags.mismatch_s();
+    d.servo_scale_ppm = lags.apparent_scale() * 1e6;
+    d.scale_mismatch_ppm = 2.0 * a2 / r_mm * 1e3 - d.servo_scale_ppm;
+    d.squareness_urad = 2.0 * b2 / r_mm * 1e3;
+    d.squareness_um_per_m = d.squareness_urad;
+    d.servo_mismatch_ms = servo_mismatch_s * 1e3;
+    d.servo_mismatch_pp_um = v_mm_s * servo_mismatch_s.abs() * 1e3;
+    Ok(d)
+}
+
+/// Why the scale mismatch is not measured from one direction.
+pub const SCALE_NEEDS_BOTH: &str = "needs both directions: a servo mismatch, which only both \
+     directions measure, also makes a cos 2θ term (its oval turned by the lag, and an apparent \
+     scale mismatch)";
+
+/// The mean harmonics of the runs in `direction`; None without one.
+fn direction_mean(per_run: &[(Direction, Harmonics)], direction: Direction) -> Option<Harmonics> {
+    let runs: Vec<&Harmonics> = per_run
+        .iter()
+        .filter(|(d, _)| *d == direction)
+        .map(|(_, h)| h)
+        .collect();
+    let n = runs.len() as f64;
+    let mean = |f: fn(&Harmonics) -> f64| runs.iter().map(|h| f(h)).sum::<f64>() / n;
+    (!runs.is_empty()).then(|| Harmonics {
+        r0: mean(|h| h.r0),
+        a1: mean(|h| h.a1),
+        b1: mean(|h| h.b1),
+        a2: mean(|h| h.a2),
+        b2: mean(|h| h.b2),
     })
 }
 
-/// `T_u − T_v`, s, from the 2θ terms of the CCW and CW runs (0 without both).
+/// The plane axes' lags read from the 2θ terms of a CCW and a CW run, as first-order loops
+/// (`φ = atan(ω T)`, amplitude `cos φ`): `φ_u = φ̄ + δ`, `φ_v = φ̄ − δ`.
 ///
-/// Lags `φ = atan(ω T)` turn the axes' sines by `φ_u = φ̄ + δ`, `φ_v = φ̄ − δ` and shrink them
-/// to `cos φ`, so the radius is `ρ ≈ r ḡ + (r ḡ/2) sin 2δ sin 2θ' ± …` about the *actual*
-/// angle `θ' = θ ∓ φ̄` (CCW, CW), with `ḡ = 1 + r0/r` (the mean radius loss). Turning each
-/// run's (a2, b2) back by `2φ̄`, `φ̄ = acos ḡ`, half the CCW − CW difference of the turned b2
-/// is `Δ = (r ḡ/2) sin 2δ`, and `T_u − T_v = (tan(φ̄ + δ) − tan(φ̄ − δ)) / ω`. For small lags
-/// this is the classic `2 Δb2 / v`; at r 10 mm F3000 (ω/Kv ≈ 0.17) the classic form is 16 %
-/// short.
-fn servo_mismatch_s(per_run: &[(Direction, Harmonics)], r0_um: f64, r_mm: f64, v_mm_s: f64) -> f64 {
-    let of = |d: Direction| per_run.iter().find(|(x, _)| *x == d).map(|(_, h)| h);
-    let (Some(ccw), Some(cw)) = (of(Direction::Ccw), of(Direction::Cw)) else {
-        return 0.0;
-    };
-    let g = (1.0 + r0_um * 1e-3 / r_mm).clamp(f64::MIN_POSITIVE, 1.0);
-    let lag = g.acos();
-    let (s, c) = (2.0 * lag).sin_cos();
-    // b2 about θ' = θ − σ φ̄: B = b2 cos 2φ̄ − σ a2 sin 2φ̄ (σ = +1 CCW, −1 CW).
-    let turned_ccw = ccw.b2 * c - ccw.a2 * s;
-    let turned_cw = cw.b2 * c + cw.a2 * s;
-    let flip_mm = 0.5 * (turned_ccw - turned_cw) * 1e-3;
-    let delta = 0.5 * (2.0 * flip_mm / (r_mm * g)).clamp(-1.0, 1.0).asin();
-    let omega = v_mm_s / r_mm;
-    ((lag + delta).tan() - (lag - delta).tan()) / omega
+/// Lags turn the axes' sines by `φ_u`, `φ_v` and shrink them to `cos φ`, so the radius is
+/// `ρ ≈ r ḡ + (r ḡ/2) sin 2δ sin 2θ' ± …` about the *actual* angle `θ' = θ ∓ φ̄` (CCW, CW),
+/// with `ḡ = 1 + r0/r` (the mean radius loss). Turning each run's (a2, b2) back by `2φ̄`,
+/// `φ̄ = acos ḡ`, half the CCW − CW difference of the turned b2 is `Δ = (r ḡ/2) sin 2δ`.
+struct LagFit {
+    /// φ̄, rad.
+    mean_rad: f64,
+    /// δ, rad.
+    half_difference_rad: f64,
+    /// ω = v/r, rad/s.
+    omega: f64,
+}
+
+impl LagFit {
+    fn of(ccw: &Harmonics, cw: &Harmonics, r0_um: f64, r_mm: f64, v_mm_s: f64) -> LagFit {
+        let g = (1.0 + r0_um * 1e-3 / r_mm).clamp(f64::MIN_POSITIVE, 1.0);
+        let lag = g.acos();
+        let (s, c) = (2.0 * lag).sin_cos();
+        // b2 about θ' = θ − σ φ̄: B = b2 cos 2φ̄ − σ a2 sin 2φ̄ (σ = +1 CCW, −1 CW).
+        let turned_ccw = ccw.b2 * c - ccw.a2 * s;
+        let turned_cw = cw.b2 * c + cw.a2 * s;
+        let flip_mm = 0.5 * (turned_ccw - turned_cw) * 1e-3;
+        LagFit {
+            mean_rad: lag,
+            half_difference_rad: 0.5 * (2.0 * flip_mm / (r_mm * g)).clamp(-1.0, 1.0).asin(),
+            omega: v_mm_s / r_mm,
+        }
+    }
+
+    /// `T_u − T_v = (tan(φ̄ + δ) − tan(φ̄ − δ)) / ω`, s. For small lags this is the classic
+    /// `2 Δb2 / v`; at r 10 mm F3000 (ω/Kv ≈ 0.17) the classic form is 16 % short.
+    fn mismatch_s(&self) -> f64 {
+        let (lag, delta) = (self.mean_rad, self.half_difference_rad);
+        ((lag + delta).tan() - (lag - delta).tan()) / self.omega
+    }
+
+    /// The scale mismatch the lags alone make, `ε_u − ε_v`: with `u = r cos φ_u cos(θ − φ_u)`,
+    /// `v = r cos φ_v sin(θ − φ_v)`, `|p|²/r²` has the cos 2θ term
+    /// `(cos²φ_u cos 2φ_u − cos²φ_v cos 2φ_v)/2`, the same in both directions, so
+    /// `2 a2 / r = (cos²φ_u cos 2φ_u − cos²φ_v cos 2φ_v)/2 ≈ (3/2) ω² (T_v² − T_u²)`.
+    fn apparent_scale(&self) -> f64 {
+        let term = |phi: f64| phi.cos().powi(2) * (2.0 * phi).cos();
+        let (lag, delta) = (self.mean_rad, self.half_difference_rad);
+        0.5 * (term(lag + delta) - term(lag - delta))
+    }
 }
 
 /// The best pitch (mm) and amplitude (um) of a cyclic error along the axis at `r cos θ`
@@ -467,6 +576,9 @@ fn run_marks(folder: &RunFolder) -> Vec<Mark> {
         .map(|(i, e)| {
             let theta = e.theta_deg;
             let direction = format!("{:?}", e.direction).to_lowercase();
+            // The trace's value where the mark is drawn: at its peak, as the plots and
+            // tables give its angle.
+            let peak = e.peak_deg;
             let trace_um = folder.trace.as_ref().and_then(|trace| {
                 let run = trace.runs.iter().find(|r| r.direction == direction)?;
                 let (_, dev) = run
@@ -475,8 +587,8 @@ fn run_marks(folder: &RunFolder) -> Vec<Mark> {
                     .zip(&run.deviation_centred_um)
                     .filter(|(t, v)| t.is_finite() && v.is_finite())
                     .min_by(|a, b| {
-                        angular_distance_deg(*a.0, theta)
-                            .total_cmp(&angular_distance_deg(*b.0, theta))
+                        angular_distance_deg(*a.0, peak)
+                            .total_cmp(&angular_distance_deg(*b.0, peak))
                     })?;
                 Some(*dev)
             });

@@ -22,6 +22,7 @@ use crate::input::lead_in::LeadIn;
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::{Scenario, TraceFormat};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
+use crate::measure::feed::{FeedMeter, FeedSeen, AT_FEED_TOLERANCE};
 use crate::measure::ballbar::{analyse_events_at, BallbarResult};
 use crate::measure::measurement;
 use crate::measure::settle::SettleGate;
@@ -116,6 +117,11 @@ pub struct BallbarStudy {
     pub feed_reductions: Vec<FeedReduction>,
     /// What each registered measurement beside the ball bar read, by name.
     pub measurements: BTreeMap<String, serde_json::Value>,
+    /// Each run's tool speed along the measured circle, from the samples.
+    pub feed: Vec<FeedMeter>,
+    /// The measured circle's radius (mm) and programmed feed (mm/min) of a generated test;
+    /// None for a file program.
+    pub nominal_feed: Option<(f64, f64)>,
 }
 
 impl BallbarStudy {
@@ -125,8 +131,40 @@ impl BallbarStudy {
         if self.runs.is_empty() {
             return Ok(None);
         }
-        analyse_events_at(&self.runs, &self.signatures, &self.sites).map(Some)
+        let mut result = analyse_events_at(&self.runs, &self.signatures, &self.sites)?;
+        result.feed = self
+            .nominal_feed
+            .and_then(|(radius_mm, feed_mm_min)| FeedSeen::of(&self.feed, radius_mm, feed_mm_min));
+        Ok(Some(result))
     }
+}
+
+/// The measured circle's radius (mm) and programmed feed (mm/min) of a generated test: what
+/// the tool's speed over the measured revolution is held to. None for a file program.
+pub(crate) fn nominal_feed(scenario: &Scenario) -> Option<(f64, f64)> {
+    test_of(scenario)
+        .revolution()
+        .map(|r| (r.radius_mm, r.feed_mm_min))
+}
+
+/// The warning for G measured off the programmed feed; None at feed (or without one).
+pub(crate) fn off_feed_warning(result: &BallbarResult, scenario: &Scenario) -> Option<String> {
+    let seen = result.feed.filter(|f| !f.at_feed)?;
+    let (_, feed) = nominal_feed(scenario)?;
+    let (min, max) = (seen.feed_min_mm_min, seen.feed_max_mm_min);
+    Some(if max <= feed * (1.0 + AT_FEED_TOLERANCE) {
+        format!(
+            "the tool did not reach the programmed F{feed} over the whole measured revolution: it \
+             ran at {min:.0} to {max:.0} mm/min, so G is not that of a circle at F{feed}"
+        )
+    } else {
+        format!(
+            "the tool's speed along the measured circle varied from {min:.0} to {max:.0} mm/min \
+             about the programmed F{feed} (more than {:.0} %), as a joint-space program's does \
+             within its blocks, so G is not that of a circle at F{feed}",
+            100.0 * AT_FEED_TOLERANCE
+        )
+    })
 }
 
 /// Runs every direction of the scenario through the pipeline into the virtual ball bar
@@ -378,10 +416,11 @@ pub(crate) fn assemble(
 ) -> Result<BallbarStudy> {
     let machine = &scenario.machine;
     let geometry = bar_geometry(scenario);
-    let (mut runs, mut signatures) = (Vec::new(), Vec::new());
+    let (mut runs, mut signatures, mut feed) = (Vec::new(), Vec::new(), Vec::new());
     for b in ballbars {
         runs.push(b.run);
         signatures.push(b.signature);
+        feed.push(b.feed);
     }
     let reversals = shared.reversals.clone();
     // The bar's sensitivity is a property of the nominal pose at θ: the first run's map.
@@ -423,6 +462,8 @@ pub(crate) fn assemble(
             .collect(),
         feed_reductions: shared.feed_reductions.clone(),
         measurements: BTreeMap::new(),
+        feed,
+        nominal_feed: nominal_feed(scenario),
     })
 }
 
@@ -463,6 +504,7 @@ pub fn simulate(
     let ballbar = study.result()?;
     let (runs, reversals) = (&study.runs, &study.reversals);
     let mut warnings = study.warnings.clone();
+    warnings.extend(ballbar.as_ref().and_then(|b| off_feed_warning(b, scenario)));
     let test = test_of(scenario);
     let circle = test.circle();
     let diagnostics = ballbar
@@ -538,7 +580,12 @@ pub fn simulate(
         g_shares,
         warnings,
         feed_reductions: study.feed_reductions.clone(),
-        lead_in: scenario.simulate.lead_in,
+        lead_in: scenario.simulate.lead_in.map(|lead| LeadIn {
+            reached_mm_min: study
+                .nominal_feed
+                .and_then(|(radius_mm, _)| crate::measure::feed::start_mm_min(&study.feed, radius_mm)),
+            ..lead
+        }),
         measurements: study.measurements.clone(),
     };
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");

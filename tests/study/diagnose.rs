@@ -139,14 +139,87 @@ fn a_gain_mismatch_is_an_oval_at_45_deg_that_flips_and_an_apparent_scale_mismatc
         "{}",
         d.servo_mismatch_pp_um
     );
+    // The apparent scale mismatch is said and taken out of the scale mismatch.
     let w = V / R;
     let apparent = 1.5 * w * w * (tv * tv - tu * tu) * 1e6;
     assert!(
-        close(d.scale_mismatch_ppm, apparent, 0.03),
+        close(d.servo_scale_ppm, apparent, 0.03),
         "{} vs {apparent}",
+        d.servo_scale_ppm
+    );
+    assert!(
+        d.scale_mismatch_ppm.abs() <= 0.03 * apparent,
+        "{}",
         d.scale_mismatch_ppm
     );
     assert!(d.squareness_urad.abs() < 0.5, "{}", d.squareness_urad);
+    assert!(d.not_measured.is_empty(), "{:?}", d.not_measured);
+}
+
+#[test]
+fn squareness_and_a_gain_mismatch_together_are_told_apart_by_the_two_directions() {
+    // 50 µrad of squareness on Kv 30/27: the oval that flips is the mismatch, the one that
+    // stays is the squareness.
+    let (tu, tv) = (1.0 / 30.0, 1.0 / 27.0);
+    let e = Errors {
+        scale_u: 0.0,
+        scale_v: 0.0,
+        squareness: 50e-6,
+        lag_u_s: tu,
+        lag_v_s: tv,
+        cyclic_um: 0.0,
+        cyclic_pitch: 10.0,
+    };
+    let d = diagnose_circle(
+        &[run(Direction::Ccw, &e), run(Direction::Cw, &e)],
+        &circle(),
+    )
+    .unwrap();
+    assert!(close(d.squareness_urad, 50.0, 0.02), "{}", d.squareness_urad);
+    assert_eq!(d.squareness_um_per_m, d.squareness_urad);
+    let want_ms = (tu - tv) * 1e3;
+    assert!(
+        close(d.servo_mismatch_ms, want_ms, 0.02),
+        "{}",
+        d.servo_mismatch_ms
+    );
+}
+
+#[test]
+fn one_direction_gives_no_squareness_mismatch_or_scale_and_says_why() {
+    // Kv 30/27 alone in one direction: its oval at 45° reads as -1,234 µrad of squareness if
+    // taken for one. Each direction alone: every figure the flip separates is NaN (null in
+    // summary.json) with the reason; the cyclic search and harmonics still run.
+    let e = Errors {
+        scale_u: 0.0,
+        scale_v: 0.0,
+        squareness: 0.0,
+        lag_u_s: 1.0 / 30.0,
+        lag_v_s: 1.0 / 27.0,
+        cyclic_um: 0.0,
+        cyclic_pitch: 10.0,
+    };
+    for direction in [Direction::Ccw, Direction::Cw] {
+        let d = diagnose_circle(&[run(direction, &e)], &circle()).unwrap();
+        for (field, value) in [
+            ("squareness_urad", d.squareness_urad),
+            ("squareness_um_per_m", d.squareness_um_per_m),
+            ("servo_mismatch_ms", d.servo_mismatch_ms),
+            ("servo_mismatch_pp_um", d.servo_mismatch_pp_um),
+            ("scale_mismatch_ppm", d.scale_mismatch_ppm),
+            ("servo_scale_ppm", d.servo_scale_ppm),
+        ] {
+            assert!(value.is_nan(), "{field}: {value}");
+            assert!(
+                d.not_measured[field].starts_with("needs both directions"),
+                "{field}: {:?}",
+                d.not_measured
+            );
+        }
+        let json = serde_json::to_value(&d).unwrap();
+        assert!(json["squareness_urad"].is_null() && json["servo_mismatch_ms"].is_null());
+        assert_eq!(d.harmonics.len(), 1);
+    }
 }
 
 #[test]

@@ -4,6 +4,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod circle_feed;
 mod cone_reference;
 mod diagnose;
 mod fit;

@@ -106,6 +106,7 @@ pub fn analyse_events_at(
             .map(|f| f.radial_min_um)
             .fold(f64::INFINITY, f64::min),
         hysteresis_um,
+        feed: None,
         events,
         runs: figures,
     })

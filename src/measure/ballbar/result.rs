@@ -72,6 +72,11 @@ pub struct BallbarResult {
     pub radial_min_um: f64,
     /// H between the first CCW and the first CW run, um; None with one direction.
     pub hysteresis_um: Option<f64>,
+    /// Whether the tool ran at the programmed feed over the measured revolutions, and its
+    /// slowest and fastest speed there (`measure::feed`); left out without a nominal feed
+    /// (a file program).
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
+    pub feed: Option<crate::measure::feed::FeedSeen>,
     /// Spikes and steps of all runs, by run then theta.
     #[serde(rename = "spikes")]
     pub events: Vec<TraceEvent>,

@@ -29,11 +29,17 @@ impl TestProgram for Circle<'_> {
 
     fn run(
         &self,
-        _scenario: &Scenario,
+        scenario: &Scenario,
         direction: Direction,
         lead_deg: f64,
     ) -> Result<Run<'static>> {
-        let program = CircleProgram::new(self.circle, direction == Direction::Cw, lead_deg);
+        let mut program = CircleProgram::new(self.circle, direction == Direction::Cw, lead_deg);
+        // A lead of whole turns near the axes' limits (`input::lead_in`): only for the lead
+        // it was sized as, not for a run without one.
+        let lead = scenario.simulate.lead_in;
+        if lead_deg > 0.0 && lead.is_some_and(|l| l.whole_turns && l.deg == lead_deg) {
+            program = program.in_whole_turns();
+        }
         Ok(Run {
             direction,
             measured: Some(program.measured()),

@@ -56,11 +56,13 @@
 //! matrix (geometric part, programmed timing); the best is suggested.
 
 mod conformity;
+mod correlated;
 mod decomposition;
 mod estimate;
 mod measured;
 mod model;
 pub mod noise;
+mod nuisance;
 mod page;
 mod params;
 mod result;
@@ -68,7 +70,7 @@ mod suggest;
 
 use std::path::Path;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
@@ -82,7 +84,8 @@ pub use measured::{MeasuredPoint, MeasuredTrace};
 use model::Run;
 pub use noise::NoiseCheck;
 pub(crate) use params::{round6, round_sig, Param};
-pub use params::{FitOptions, MIN_VISIBILITY, NULL_TOLERANCE};
+pub use correlated::{fit_ar1, ArNoise};
+pub use params::{FitOptions, MIN_VISIBILITY, NULL_TOLERANCE, NUMERICAL_ZERO};
 pub use result::{FitReport, ParamEstimate, Suggestion, TraceFit};
 use suggest::suggest;
 
@@ -233,42 +236,75 @@ fn assemble(
     layout: Layout,
     options: &FitOptions,
 ) -> Result<(FitReport, DVector<f64>)> {
-    let Solution {
-        mut x,
-        decomposition: d,
-        ..
-    } = solution;
     let n = problem.n();
-    let fitted = problem.model(runs, &x)?;
+    let x = &solution.x;
+    let fitted = problem.model(runs, x)?;
     let residual = &problem.y - &fitted;
     let rss = residual.norm_squared();
-    let sigma2 = rss / (n - d.rank).max(1) as f64;
+    let local = &solution.local;
+    let sigma2 = rss / (n - local.rank).max(1) as f64;
 
-    // Null directions, named, and the fragment's basic solution.
-    let (rows, pivots) = d.null_rref(&problem.params);
-    for (row, &pv) in rows.iter().zip(&pivots) {
-        let t = x[pv];
-        x -= row * t;
-    }
-    debug_assert!((problem.model(runs, &x)? - &fitted).amax() < 1e-2);
+    // Null directions, named; their pivots were held at the prior by the solve, so `x` is
+    // the fragment's basic solution.
+    let (rows, pivots) = solution.structural.null_rref(&problem.params);
     let thetas: Vec<f64> = problem.measured.iter().map(|p| p.theta_deg).collect();
-    let (boot, blocks) = noise::bootstrap_errors(&d, runs, &thetas, &residual);
-    let identifiable = d.identifiable();
-    let estimates = estimates(problem, &x, &d.covariance(sigma2), &boot, &identifiable);
-    let unidentifiable: Vec<NullDirection> = rows
+    let (boot, blocks) = noise::bootstrap_errors(local, runs, &thetas, &residual);
+    let ar_runs: Vec<_> = runs
+        .iter()
+        .map(|r| {
+            (
+                noise::theta_order(r, &thetas),
+                noise::run_noise(r, &thetas, &residual),
+            )
+        })
+        .collect();
+    let correlated_se = correlated::ar_standard_errors(local, &ar_runs);
+    let nuisance = nuisance::mask(&problem.params, &solution);
+    let identifiable: Vec<bool> = solution
+        .structural
+        .identifiable()
+        .into_iter()
+        .zip(&nuisance)
+        .map(|(i, nu)| i && !nu)
+        .collect();
+    let errors = StandardErrors {
+        white: local.covariance(sigma2).diagonal().map(|v| v.max(0.0).sqrt()),
+        bootstrap: boot,
+        correlated: correlated_se,
+    };
+    let estimates = estimates(problem, x, &errors, &identifiable);
+    let mut unidentifiable: Vec<NullDirection> = rows
         .iter()
         .zip(&pivots)
         .map(|(row, &pv)| describe_null(row, pv, &problem.params))
         .collect();
-    let traces = trace_fits(problem, runs, &x, &identifiable, &residual, &blocks);
+    unidentifiable.extend(nuisance::describe(
+        &problem.params,
+        &solution,
+        &nuisance,
+        &errors.total(),
+        &identifiable,
+    ));
+    // The basic solution: each free pivot (placement) moved back to zero along its null
+    // direction, so the bar offset carries what it cannot be told from.
+    let mut basic = x.clone();
+    for (row, &pv) in rows.iter().zip(&pivots) {
+        if !solution.fixed[pv] {
+            let t = basic[pv];
+            basic -= row * t;
+        }
+    }
+    let traces = trace_fits(problem, runs, x, &basic, &identifiable, &residual, &blocks);
+    let notes = conformity::weak_matches(problem.inputs, &traces)?;
     let fragment = fragment_text(
         &problem.params,
         &estimates,
         &identifiable,
+        &nuisance,
         &unidentifiable,
         layout,
     );
-    let suggestion = if d.null_dim() > 0 {
+    let suggestion = if solution.structural.null_dim() > 0 || nuisance.contains(&true) {
         suggest(problem.inputs, &problem.params)?
     } else {
         None
@@ -278,11 +314,18 @@ fn assemble(
         placement_fitted: !options.placement_known,
         warnings: warnings(&traces),
         cautions: cautions(&estimates),
+        notes,
         parameters: estimates,
         traces,
         residual_rms_um: round6((rss / n as f64).sqrt()),
-        singular_values_relative: d.relative.iter().map(|v| round_sig(*v)).collect(),
-        null_dimensions: d.null_dim(),
+        iterations: solution.iterations,
+        singular_values_relative: solution
+            .structural
+            .relative
+            .iter()
+            .map(|v| round_sig(*v))
+            .collect(),
+        null_dimensions: solution.structural.null_dim(),
         unidentifiable,
         suggestion,
         fragment,
@@ -290,27 +333,46 @@ fn assemble(
     Ok((report, fitted))
 }
 
+/// Each parameter's three standard errors, parameter units.
+struct StandardErrors {
+    /// As if the residual were independent from point to point.
+    white: DVector<f64>,
+    /// Circular block bootstrap of the residual along θ.
+    bootstrap: DVector<f64>,
+    /// Under the AR(1) model of each run's residual.
+    correlated: DVector<f64>,
+}
+
+impl StandardErrors {
+    /// The largest of the three: each holds where the others may not.
+    fn total(&self) -> DVector<f64> {
+        self.white
+            .zip_zip_map(&self.bootstrap, &self.correlated, |a, b, c| a.max(b).max(c))
+    }
+}
+
 /// Each parameter's value and standard errors (none when the tests cannot separate it).
 fn estimates(
     problem: &Problem,
     x: &DVector<f64>,
-    cov: &DMatrix<f64>,
-    boot: &DVector<f64>,
+    errors: &StandardErrors,
     identifiable: &[bool],
 ) -> Vec<ParamEstimate> {
+    let total = errors.total();
     problem
         .params
         .iter()
         .enumerate()
         .map(|(j, p)| {
             let value = problem.prior_value(p) + x[j];
-            let white = cov[(j, j)].max(0.0).sqrt();
+            let shown = |v: f64| identifiable[j].then(|| round6(v));
             ParamEstimate {
                 name: p.name(),
                 unit: p.unit().to_string(),
-                value: identifiable[j].then_some(round6(value)),
-                standard_error: identifiable[j].then(|| round6(white.max(boot[j]))),
-                standard_error_white: identifiable[j].then(|| round6(white)),
+                value: shown(value),
+                standard_error: shown(total[j]),
+                standard_error_white: shown(errors.white[j]),
+                standard_error_correlated: shown(errors.correlated[j]),
                 identifiable: identifiable[j],
                 fragment_value: round6(value),
             }
@@ -323,6 +385,7 @@ fn trace_fits(
     problem: &Problem,
     runs: &[Run],
     x: &DVector<f64>,
+    basic: &DVector<f64>,
     identifiable: &[bool],
     residual: &DVector<f64>,
     blocks: &[usize],
@@ -342,11 +405,21 @@ fn trace_fits(
             .iter()
             .position(|p| *p == Param::BarOffset(k))
             .expect("bar offset");
+        let (lo, hi) = idx.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &i| {
+            (lo.min(y[i]), hi.max(y[i]))
+        });
         traces.push(TraceFit {
             scenario: scenario.path.clone(),
             measured: trace.path.clone(),
             points: idx.len(),
+            matched: if trace.commanded_axes.is_empty() {
+                "weakly".to_string()
+            } else {
+                "commanded".to_string()
+            },
+            radius_change_um: round6(hi - lo),
             bar_offset_um: identifiable[j].then(|| round6(x[j])),
+            bar_offset_basic_um: round6(basic[j]),
             residual_rms_um: round6(rms(&|i| residual[i])),
             measured_rms_um: round6(rms(&|i| y[i] - mean)),
             noise: noise::check_trace(&own, &thetas, residual).rounded(),
@@ -453,6 +526,7 @@ fn fragment_text(
     params: &[Param],
     estimates: &[ParamEstimate],
     identifiable: &[bool],
+    nuisance: &[bool],
     nulls: &[NullDirection],
     layout: crate::kinematics::Layout,
 ) -> String {
@@ -472,6 +546,8 @@ fn fragment_text(
         if let Param::Location(lp) = p {
             let note = if identifiable[j] {
                 ""
+            } else if nuisance[j] {
+                "  # barely seen: the fit's nuisance value, not a measurement"
             } else {
                 "  # not separable: carries a combination"
             };

@@ -93,7 +93,11 @@ pub(super) fn measure(dir: &Path, name: &str, scenario: &Path, sigma: f64, seed:
 }
 
 /// Simulates `scenario` into `dir/<name>-sim`; returns (θ, deviation, direction) per row.
-pub(super) fn simulate_trace(dir: &Path, name: &str, scenario: &Path) -> Vec<(String, f64, String)> {
+pub(super) fn simulate_trace(
+    dir: &Path,
+    name: &str,
+    scenario: &Path,
+) -> Vec<(String, f64, String)> {
     let out = dir.join(format!("{name}-sim"));
     let run = common::mtsim(&[
         "simulate",
@@ -753,10 +757,17 @@ fn a_trace_without_commanded_columns_is_matched_weakly() {
     assert_eq!(fit["traces"][0]["matched"], "weakly", "{fit}");
     assert_eq!(fit["notes"].as_array().unwrap().len(), 1, "{fit}");
     let err = flat(&out.stderr);
-    assert!(err.contains("note:") && err.contains("only weakly"), "{err}");
+    assert!(
+        err.contains("note:") && err.contains("only weakly"),
+        "{err}"
+    );
     // mtsim's own trace.csv carries the commanded columns: matched by them, no note.
     let _ = simulate_trace(&dir, "c1510", &s1510);
-    let out = fit_output(&dir.join("o2"), &[(s1510.clone(), dir.join("c1510-sim/trace.csv"))], &["--json"]);
+    let out = fit_output(
+        &dir.join("o2"),
+        &[(s1510.clone(), dir.join("c1510-sim/trace.csv"))],
+        &["--json"],
+    );
     let fit = common::stdout_json(&out);
     assert_eq!(fit["traces"][0]["matched"], "commanded", "{fit}");
     assert!(fit["notes"].as_array().unwrap().is_empty(), "{fit}");
@@ -767,7 +778,9 @@ fn a_trace_without_commanded_columns_is_matched_weakly() {
     assert_eq!(out.status.code(), Some(2), "{}", flat(&out.stderr));
     let err = flat(&out.stderr);
     assert!(
-        err.contains("does not belong") && err.contains("bar offset") && err.contains("radius change"),
+        err.contains("does not belong")
+            && err.contains("bar offset")
+            && err.contains("radius change"),
         "{err}"
     );
     assert!(!dir.join("o3/fit.json").exists());

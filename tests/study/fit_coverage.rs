@@ -27,7 +27,13 @@ struct Ar1 {
 
 /// A cone scenario on `machine` (both directions, F2000, one point in ten), with the
 /// table ball `shift_um` from the cone's centre, written as `dir/<name>.toml`.
-fn cone(dir: &Path, name: &str, machine: &Path, cone: (f64, f64, f64), shift_um: [f64; 3]) -> PathBuf {
+fn cone(
+    dir: &Path,
+    name: &str,
+    machine: &Path,
+    cone: (f64, f64, f64),
+    shift_um: [f64; 3],
+) -> PathBuf {
     let (alpha, beta, zt) = cone;
     let ball = if shift_um == [0.0; 3] {
         String::new()
@@ -113,7 +119,11 @@ fn fit_seed(case: &Case, seed: u64, extra: &[&str]) -> (Value, String) {
             m.display().to_string(),
         ]);
     }
-    args.extend(["-o".into(), case.dir.join("fit").display().to_string(), "--json".into()]);
+    args.extend([
+        "-o".into(),
+        case.dir.join("fit").display().to_string(),
+        "--json".into(),
+    ]);
     args.extend(extra.iter().map(|s| s.to_string()));
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let out = common::mtsim(&args);
@@ -147,7 +157,13 @@ fn identified(fit: &Value) -> Vec<(String, f64, f64)> {
 
 /// Runs `seeds` and checks coverage: every identifiable location error within 3 standard
 /// errors of `truth` (absent: 0). Returns the largest |error|/se per parameter, printed.
-fn assert_coverage(label: &str, case: &Case, truth: &[(&str, f64)], seeds: u64, extra: &[&str]) -> Vec<Value> {
+fn assert_coverage(
+    label: &str,
+    case: &Case,
+    truth: &[(&str, f64)],
+    seeds: u64,
+    extra: &[&str],
+) -> Vec<Value> {
     let truth: BTreeMap<&str, f64> = truth.iter().copied().collect();
     let mut worst: BTreeMap<String, f64> = BTreeMap::new();
     let mut failures = Vec::new();
@@ -162,7 +178,9 @@ fn assert_coverage(label: &str, case: &Case, truth: &[(&str, f64)], seeds: u64, 
                 *w = z;
             }
             if z.abs() > 3.0 {
-                failures.push(format!("seed {seed}: {name} = {v} +- {se}, truth {t} ({z:+.1} se)"));
+                failures.push(format!(
+                    "seed {seed}: {name} = {v} +- {se}, truth {t} ({z:+.1} se)"
+                ));
             }
         }
         fits.push(fit);
@@ -196,7 +214,10 @@ fn correlated_noise_gives_no_warning_and_is_covered() {
     let c = case(
         "ar1",
         &HIDDEN,
-        &[((15.0, 10.0, 200.0), [0.0; 3]), ((45.0, 30.0, 200.0), [0.0; 3])],
+        &[
+            ((15.0, 10.0, 200.0), [0.0; 3]),
+            ((45.0, 30.0, 200.0), [0.0; 3]),
+        ],
         Ar1 {
             sigma: SIGMA,
             phi: PHI,
@@ -289,7 +310,10 @@ fn a_misplaced_ball_up_to_1_mm_is_fitted_without_bias() {
             for (i, axis) in ["x", "y", "z"].iter().enumerate() {
                 let p = param(fit, &format!("setup_{axis}[{k}]"));
                 if p["identifiable"] == true {
-                    let (v, se) = (p["value"].as_f64().unwrap(), p["standard_error"].as_f64().unwrap());
+                    let (v, se) = (
+                        p["value"].as_f64().unwrap(),
+                        p["standard_error"].as_f64().unwrap(),
+                    );
                     assert!((v - shift[i]).abs() <= 3.0 * se, "{p}: truth {}", shift[i]);
                 }
             }

@@ -158,7 +158,10 @@ fn duration_difference(rows: &[&MeasuredPoint], samples: &[Recorded]) -> Option<
 /// own radius change (the peak-to-valley of its deviation): a constant larger than all the
 /// trace varies by is no bar-length error but a trace of another test (another bar, another
 /// radius, another reference).
-pub fn weak_matches(inputs: &[(Scenario, MeasuredTrace)], traces: &[TraceFit]) -> Result<Vec<String>> {
+pub fn weak_matches(
+    inputs: &[(Scenario, MeasuredTrace)],
+    traces: &[TraceFit],
+) -> Result<Vec<String>> {
     let mut notes = Vec::new();
     for ((scenario, trace), fit) in inputs.iter().zip(traces) {
         if !trace.commanded_axes.is_empty() {

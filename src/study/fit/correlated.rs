@@ -155,7 +155,10 @@ fn ar_apply(noise: ArNoise, rows: &[usize], u: &DVector<f64>, out: &mut DVector<
 
 /// Standard errors of the estimate under the runs' AR(1) noise (`runs`: each run's rows in
 /// θ order with its model), parameter units.
-pub(super) fn ar_standard_errors(d: &Decomposition, runs: &[(Vec<usize>, ArNoise)]) -> DVector<f64> {
+pub(super) fn ar_standard_errors(
+    d: &Decomposition,
+    runs: &[(Vec<usize>, ArNoise)],
+) -> DVector<f64> {
     let np = d.v.nrows();
     let n = d.u.nrows();
     let rank = d.rank;
@@ -171,7 +174,7 @@ pub(super) fn ar_standard_errors(d: &Decomposition, runs: &[(Vec<usize>, ArNoise
         ru.set_column(i, &col);
     }
     let w = d.u.columns(0, rank).transpose() * ru; // U_rᵀ R U_r
-    // B = D⁻¹ V_r Σ_r⁻¹ (np × rank); Cov = B W Bᵀ.
+                                                   // B = D⁻¹ V_r Σ_r⁻¹ (np × rank); Cov = B W Bᵀ.
     let mut b = DMatrix::zeros(np, rank);
     for i in 0..rank {
         let c = d.v.column(i).component_div(&d.scale) / d.s[i];
@@ -256,14 +259,26 @@ mod tests {
         let u = DVector::from_vec(gauss(5, 9));
         let rows: Vec<usize> = vec![3, 0, 8, 1, 2, 7, 4, 6, 5];
         let mut out = DVector::zeros(9);
-        ar_apply(ArNoise { sigma_um: sigma, phi }, &rows, &u, &mut out);
+        ar_apply(
+            ArNoise {
+                sigma_um: sigma,
+                phi,
+            },
+            &rows,
+            &u,
+            &mut out,
+        );
         for (a, &ra) in rows.iter().enumerate() {
             let direct: f64 = rows
                 .iter()
                 .enumerate()
                 .map(|(b, &rb)| sigma * sigma * phi.powi((a as i32 - b as i32).abs()) * u[rb])
                 .sum();
-            assert!((out[ra] - direct).abs() < 1e-12, "{a}: {} {direct}", out[ra]);
+            assert!(
+                (out[ra] - direct).abs() < 1e-12,
+                "{a}: {} {direct}",
+                out[ra]
+            );
         }
     }
 }

@@ -7,9 +7,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use super::decomposition::Decomposition;
 use super::measured::{MeasuredPoint, MeasuredTrace};
 use super::model::{predict, record, with_servo, Run};
-use super::params::{
-    Param, BACKLASH_STEP, CONVERGED_UM, GAIN_STEP, GEOMETRY_STEP, MAX_ITERATIONS,
-};
+use super::params::{Param, BACKLASH_STEP, CONVERGED_UM, GAIN_STEP, GEOMETRY_STEP, MAX_ITERATIONS};
 use crate::error::{Error, Result};
 use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
@@ -306,7 +304,10 @@ impl<'a> Problem<'a> {
         // truncated step follows them instead.
         let mut fixed = dropped.clone();
         for &p in &pivots {
-            if matches!(self.params[p], Param::Location(_) | Param::Backlash(_) | Param::Gain(_)) {
+            if matches!(
+                self.params[p],
+                Param::Location(_) | Param::Backlash(_) | Param::Gain(_)
+            ) {
                 fixed[p] = true;
             }
         }

@@ -77,6 +77,7 @@ use crate::input::scenario::Scenario;
 use crate::kinematics::{Chain, Kinematics, Layout, LocationParam};
 use crate::report::fit_plot::{render_fit_svg, PlotSeries};
 use crate::report::{create_dir, write_atomic};
+pub use correlated::{fit_ar1, ArNoise};
 use decomposition::describe_null;
 pub use decomposition::NullDirection;
 use estimate::{Problem, Solution};
@@ -84,7 +85,6 @@ pub use measured::{MeasuredPoint, MeasuredTrace};
 use model::Run;
 pub use noise::NoiseCheck;
 pub(crate) use params::{round6, round_sig, Param};
-pub use correlated::{fit_ar1, ArNoise};
 pub use params::{FitOptions, MIN_VISIBILITY, NULL_TOLERANCE, NUMERICAL_ZERO};
 pub use result::{FitReport, ParamEstimate, Suggestion, TraceFit};
 use suggest::suggest;
@@ -268,7 +268,10 @@ fn assemble(
         .map(|(i, nu)| i && !nu)
         .collect();
     let errors = StandardErrors {
-        white: local.covariance(sigma2).diagonal().map(|v| v.max(0.0).sqrt()),
+        white: local
+            .covariance(sigma2)
+            .diagonal()
+            .map(|v| v.max(0.0).sqrt()),
         bootstrap: boot,
         correlated: correlated_se,
     };

@@ -28,7 +28,12 @@ pub fn render(report: &FitReport, svg: &str) -> String {
     );
     if !report.warnings.is_empty() || !report.cautions.is_empty() || !report.notes.is_empty() {
         h.push_str("<h2 id=\"warnings\">Warnings</h2>\n<ul class=\"warnings\">\n");
-        for w in report.warnings.iter().chain(&report.cautions).chain(&report.notes) {
+        for w in report
+            .warnings
+            .iter()
+            .chain(&report.cautions)
+            .chain(&report.notes)
+        {
             let _ = writeln!(h, "<li>{}</li>", esc(w));
         }
         h.push_str("</ul>\n");

@@ -25,29 +25,32 @@
 //! # Estimation and identifiability
 //!
 //! Gauss–Newton on the stacked residuals `r = measured − dL` with the Jacobian J by
-//! central differences (1 um, 1 urad). Each column is scaled to unit norm (J_s = J D⁻¹)
-//! and J_s is decomposed, `J_s = U Σ Vᵀ`. Singular values below [`NULL_TOLERANCE`] σ_max
-//! span the null space: moving the parameters along `D⁻¹ v` leaves every trace unchanged,
-//! so the tests cannot separate those parameters. They are reported as combinations
-//! (reduced row-echelon form of the null basis, orientation errors as pivots), marked
-//! `identifiable: false`, and given no value. The step is the truncated pseudo-inverse
-//! solution; then each pivot is moved back to its prior value along its null direction, so
-//! the machine-file fragment carries each inseparable combination in the remaining
-//! parameter (a C-axis offset "as seen at the ball height", for example).
+//! central differences (1 um, 1 urad), taken afresh at each iterate ([`estimate`]: a ball
+//! 1 mm off is beyond one linearisation). Each column is scaled to unit norm (J_s = J D⁻¹)
+//! and J_s is decomposed, `J_s = U Σ Vᵀ`. At the nominal machine, singular values below
+//! [`NULL_TOLERANCE`] σ_max span the null space: moving the parameters along `D⁻¹ v` leaves
+//! every trace unchanged, so the tests cannot separate those parameters. They are reported
+//! as combinations (reduced row-echelon form of the null basis, orientation errors as
+//! pivots), marked `identifiable: false`, and given no value. Each location-error pivot is
+//! held at its prior, so the machine-file fragment carries each inseparable combination in
+//! the remaining parameter (a C-axis offset "as seen at the ball height", for example).
 //!
-//! A parameter that moves the traces by less than [`MIN_VISIBILITY`] (RMS, per unit) is not
-//! seen at all (the backlash of an axis perpendicular to the bar, for example) and is a null
-//! direction on its own.
+//! A parameter that does not act at all ([`NUMERICAL_ZERO`]), or a servo parameter below
+//! [`MIN_VISIBILITY`] (the backlash of an axis perpendicular to the bar), is left out and
+//! is a null direction on its own. A location error below [`MIN_VISIBILITY`] is a nuisance
+//! ([`nuisance`]): fitted with the others so it does not leak into them, given no value.
 //!
-//! Standard errors: the larger of the independent-sample one, `σ² = |r|² / (n − rank)`,
-//! `Cov = σ² D⁻¹ V_r Σ_r⁻² V_rᵀ D⁻¹`, and a block bootstrap along θ ([`noise`]) that holds
-//! when the residual is correlated (unmodelled effects, correlated noise).
+//! Standard errors: the largest of the independent-sample one, `σ² = |r|² / (n − rank)`,
+//! `Cov = σ² D⁻¹ V_r Σ_r⁻² V_rᵀ D⁻¹`, the one under each run's AR(1) noise model
+//! ([`correlated`]), and a block bootstrap along θ ([`noise`]) that holds when the residual
+//! is correlated (unmodelled effects, correlated noise).
 //!
 //! # Checks
 //!
-//! Each trace is compared with its scenario before fitting ([`conformity`]); each trace's
-//! noise is estimated from the data and a residual well above it is reported with what its
-//! shape suggests ([`noise`]).
+//! Each trace is compared with its scenario before fitting ([`conformity`]), and one
+//! without commanded columns, matched only weakly, is said so and refused when its fitted
+//! bar offset exceeds its own radius change; each trace's noise is estimated from the data
+//! (AR(1)) and a residual well above it is reported with what its shape suggests ([`noise`]).
 //!
 //! # What to measure next
 //!

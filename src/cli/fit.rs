@@ -39,6 +39,9 @@ pub fn run(
     for w in report.warnings.iter().chain(&report.cautions) {
         eprintln!("warning: {w}");
     }
+    for n in &report.notes {
+        eprintln!("note: {n}");
+    }
     if as_json {
         print_stdout(&format!(
             "{}\n",
@@ -63,11 +66,18 @@ pub fn run(
     }
     for t in &report.traces {
         out.push_str(&format!(
-            "{}: residual RMS {:.3} um (noise {:.3} um, trace RMS {:.3} um), bar offset {}\n",
+            "{}: residual RMS {:.3} um (noise {:.3} um, correlation {:.2} from point to point, \
+             trace RMS {:.3} um), matched {}, bar offset {}\n",
             t.measured.display(),
             t.residual_rms_um,
             t.noise.noise_um,
+            t.noise.correlation,
             t.measured_rms_um,
+            if t.matched == "weakly" {
+                "weakly (no commanded columns)"
+            } else {
+                "by its commanded columns"
+            },
             t.bar_offset_um
                 .map_or("not separable".to_string(), |b| format!("{b:+.3} um"))
         ));

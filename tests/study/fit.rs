@@ -69,7 +69,7 @@ fn scenario(dir: &Path, name: &str, machine: &Path, cone: (f64, f64, f64), extra
 }
 
 /// Standard normal numbers from a fixed seed (LCG + Box–Muller).
-struct Noise(u64);
+pub(super) struct Noise(pub(super) u64);
 impl Noise {
     fn uniform(&mut self) -> f64 {
         self.0 = self
@@ -78,7 +78,7 @@ impl Noise {
             .wrapping_add(1442695040888963407);
         ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
     }
-    fn gauss(&mut self) -> f64 {
+    pub(super) fn gauss(&mut self) -> f64 {
         let (u, v) = (self.uniform(), self.uniform());
         (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
     }
@@ -93,7 +93,11 @@ pub(super) fn measure(dir: &Path, name: &str, scenario: &Path, sigma: f64, seed:
 }
 
 /// Simulates `scenario` into `dir/<name>-sim`; returns (θ, deviation, direction) per row.
-fn simulate_trace(dir: &Path, name: &str, scenario: &Path) -> Vec<(String, f64, String)> {
+pub(super) fn simulate_trace(
+    dir: &Path,
+    name: &str,
+    scenario: &Path,
+) -> Vec<(String, f64, String)> {
     let out = dir.join(format!("{name}-sim"));
     let run = common::mtsim(&[
         "simulate",
@@ -121,7 +125,7 @@ fn simulate_trace(dir: &Path, name: &str, scenario: &Path) -> Vec<(String, f64, 
 }
 
 /// Writes `clean` plus `noise()` per row as the measured trace `dir/<name>.csv`.
-fn with_noise(
+pub(super) fn with_noise(
     dir: &Path,
     name: &str,
     clean: &[(String, f64, String)],
@@ -734,4 +738,50 @@ fn unmodelled_backlash_is_named_from_the_residual() {
                 && c.as_str().unwrap().contains("pre-sliding")),
         "{fit}"
     );
+}
+
+/// A trace without commanded columns is matched to its scenario only weakly: `fit` says so
+/// (a note on stderr, `notes` and `matched: "weakly"` in fit.json). The 45/30 cone's
+/// deviation recorded against a bar 0.5 mm shorter (500 um added), given as the 15/10
+/// cone's, needs a bar offset of ~500 um, far beyond its own radius change: refused, exit 2.
+#[test]
+fn a_trace_without_commanded_columns_is_matched_weakly() {
+    let dir = common::scratch("fit", "weak-match");
+    let nominal = machine(&dir, "nominal", &[]);
+    let s1510 = scenario(&dir, "c1510", &nominal, (15.0, 10.0, 200.0), "");
+    let s4530 = scenario(&dir, "c4530", &nominal, (45.0, 30.0, 200.0), "");
+    let own = measure(&dir, "own", &s1510, 0.1, 61);
+    let out = fit_output(&dir.join("o"), &[(s1510.clone(), own)], &["--json"]);
+    assert!(out.status.success(), "{}", flat(&out.stderr));
+    let fit = common::stdout_json(&out);
+    assert_eq!(fit["traces"][0]["matched"], "weakly", "{fit}");
+    assert_eq!(fit["notes"].as_array().unwrap().len(), 1, "{fit}");
+    let err = flat(&out.stderr);
+    assert!(
+        err.contains("note:") && err.contains("only weakly"),
+        "{err}"
+    );
+    // mtsim's own trace.csv carries the commanded columns: matched by them, no note.
+    let _ = simulate_trace(&dir, "c1510", &s1510);
+    let out = fit_output(
+        &dir.join("o2"),
+        &[(s1510.clone(), dir.join("c1510-sim/trace.csv"))],
+        &["--json"],
+    );
+    let fit = common::stdout_json(&out);
+    assert_eq!(fit["traces"][0]["matched"], "commanded", "{fit}");
+    assert!(fit["notes"].as_array().unwrap().is_empty(), "{fit}");
+
+    let clean = simulate_trace(&dir, "c4530", &s4530);
+    let foreign = with_noise(&dir, "foreign", &clean, &mut || 500.0);
+    let out = fit_output(&dir.join("o3"), &[(s1510, foreign)], &[]);
+    assert_eq!(out.status.code(), Some(2), "{}", flat(&out.stderr));
+    let err = flat(&out.stderr);
+    assert!(
+        err.contains("does not belong")
+            && err.contains("bar offset")
+            && err.contains("radius change"),
+        "{err}"
+    );
+    assert!(!dir.join("o3/fit.json").exists());
 }

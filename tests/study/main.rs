@@ -9,6 +9,7 @@ mod cone_reference;
 mod diagnose;
 mod fit;
 mod fit_chain;
+mod fit_coverage;
 mod kato_reproduction;
 mod lanes;
 mod param_study;

@@ -6,6 +6,7 @@
 use super::measured::{MeasuredPoint, MeasuredTrace};
 use super::model::{Recorded, Run};
 use super::noise::direction_name;
+use super::result::TraceFit;
 use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
 use crate::program::test_of;
@@ -146,4 +147,53 @@ fn duration_difference(rows: &[&MeasuredPoint], samples: &[Recorded]) -> Option<
             expected / span.max(f64::MIN_POSITIVE)
         )
     })
+}
+
+/// After the fit, the traces without commanded columns: a note for each (they were matched
+/// to their scenario only weakly), and a refusal of one whose fitted bar offset exceeds its
+/// own radius change (the peak-to-valley of its deviation): a constant larger than all the
+/// trace varies by is no bar-length error but a trace of another test (another bar, another
+/// radius, another reference).
+pub fn weak_matches(
+    inputs: &[(Scenario, MeasuredTrace)],
+    traces: &[TraceFit],
+) -> Result<Vec<String>> {
+    let mut notes = Vec::new();
+    for ((scenario, trace), fit) in inputs.iter().zip(traces) {
+        if !trace.commanded_axes.is_empty() {
+            continue;
+        }
+        let offset = fit.bar_offset_basic_um;
+        if offset.abs() > fit.radius_change_um {
+            return Err(Error::invalid(
+                &trace.path,
+                format!(
+                    "this trace does not belong to the scenario {}: the fit needs a bar offset \
+                     of {offset:+.3} um, more than the trace's own radius change ({:.3} um \
+                     peak-to-valley); a trace of another test (another bar length, radius or \
+                     reference) looks like this",
+                    scenario.path.display(),
+                    fit.radius_change_um
+                ),
+            )
+            .with_help(
+                "give each scenario the trace measured with it; mtsim's trace.csv carries the \
+                 commanded columns that match it for sure",
+            ));
+        }
+        notes.push(format!(
+            "{}: no commanded axis columns (X_cmd_mm ...), so it is matched to {} only weakly: \
+             by its directions{}, and by its fitted bar offset ({offset:+.3} um) against its own \
+             radius change ({:.3} um); a trace of another test at the same feed would pass",
+            trace.path.display(),
+            scenario.path.display(),
+            if trace.points.iter().any(|p| p.time_s.is_some()) {
+                " and the revolution's duration"
+            } else {
+                ""
+            },
+            fit.radius_change_um
+        ));
+    }
+    Ok(notes)
 }

@@ -8,7 +8,7 @@ use nalgebra::{DMatrix, DVector};
 
 use serde::Serialize;
 
-use super::params::{round_sig, Param, MIN_VISIBILITY, NULL_ENTRY, NULL_TOLERANCE};
+use super::params::{round_sig, Param, MIN_VISIBILITY, NULL_ENTRY, NULL_TOLERANCE, NUMERICAL_ZERO};
 
 /// A direction in parameter space that the tests cannot see.
 #[derive(Clone, Debug, Serialize)]
@@ -29,14 +29,13 @@ pub(super) struct Decomposition {
 }
 
 impl Decomposition {
-    pub fn new(j: &DMatrix<f64>) -> Decomposition {
+    /// Decomposes `j` with the columns marked in `dropped` left out (zeroed: they join the
+    /// null space on their own).
+    pub fn new(j: &DMatrix<f64>, dropped: &[bool]) -> Decomposition {
         let np = j.ncols();
-        let rows = j.nrows().max(1) as f64;
         let mut js = j.clone();
-        // A parameter that moves the traces by less than MIN_VISIBILITY (RMS, per unit) is
-        // not seen by these tests: its column is dropped and it joins the null space.
         for c in 0..np {
-            if js.column(c).norm() / rows.sqrt() < MIN_VISIBILITY {
+            if dropped[c] {
                 js.column_mut(c).fill(0.0);
             }
         }
@@ -112,6 +111,22 @@ impl Decomposition {
             c += &v * v.transpose() * (sigma2 / (self.s[i] * self.s[i]));
         }
         c
+    }
+
+    /// The columns to leave out of `j`: every parameter that moves the traces by less than
+    /// [`NUMERICAL_ZERO`] (RMS, per unit), and a servo parameter below [`MIN_VISIBILITY`]
+    /// (its sensitivity, from re-simulation, is then mostly the simulation's own rounding).
+    /// A location error or placement between the two is kept: a nuisance (see `fit`).
+    pub fn dropped(j: &DMatrix<f64>, params: &[Param]) -> Vec<bool> {
+        let rows = (j.nrows().max(1) as f64).sqrt();
+        params
+            .iter()
+            .enumerate()
+            .map(|(c, p)| {
+                let rms = j.column(c).norm() / rows;
+                rms < NUMERICAL_ZERO || (p.is_servo() && rms < MIN_VISIBILITY)
+            })
+            .collect()
     }
 
     /// A parameter is identifiable when its unit vector has no part in the null space.
@@ -193,8 +208,13 @@ pub(super) fn describe_null(row: &DVector<f64>, pivot: usize, params: &[Param]) 
     }
     let piv = &params[pivot];
     let description = match others.as_slice() {
-        [] => format!(
+        [] if piv.is_servo() => format!(
             "{} does not change the traces measurably (less than {MIN_VISIBILITY} um RMS per {}): these tests do not see it",
+            piv.name(),
+            piv.unit()
+        ),
+        [] => format!(
+            "{} does not change the traces at all (less than {NUMERICAL_ZERO} um RMS per {}): these tests do not see it",
             piv.name(),
             piv.unit()
         ),

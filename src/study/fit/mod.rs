@@ -25,29 +25,32 @@
 //! # Estimation and identifiability
 //!
 //! Gauss–Newton on the stacked residuals `r = measured − dL` with the Jacobian J by
-//! central differences (1 um, 1 urad). Each column is scaled to unit norm (J_s = J D⁻¹)
-//! and J_s is decomposed, `J_s = U Σ Vᵀ`. Singular values below [`NULL_TOLERANCE`] σ_max
-//! span the null space: moving the parameters along `D⁻¹ v` leaves every trace unchanged,
-//! so the tests cannot separate those parameters. They are reported as combinations
-//! (reduced row-echelon form of the null basis, orientation errors as pivots), marked
-//! `identifiable: false`, and given no value. The step is the truncated pseudo-inverse
-//! solution; then each pivot is moved back to its prior value along its null direction, so
-//! the machine-file fragment carries each inseparable combination in the remaining
-//! parameter (a C-axis offset "as seen at the ball height", for example).
+//! central differences (1 um, 1 urad), taken afresh at each iterate ([`estimate`]: a ball
+//! 1 mm off is beyond one linearisation). Each column is scaled to unit norm (J_s = J D⁻¹)
+//! and J_s is decomposed, `J_s = U Σ Vᵀ`. At the nominal machine, singular values below
+//! [`NULL_TOLERANCE`] σ_max span the null space: moving the parameters along `D⁻¹ v` leaves
+//! every trace unchanged, so the tests cannot separate those parameters. They are reported
+//! as combinations (reduced row-echelon form of the null basis, orientation errors as
+//! pivots), marked `identifiable: false`, and given no value. Each location-error pivot is
+//! held at its prior, so the machine-file fragment carries each inseparable combination in
+//! the remaining parameter (a C-axis offset "as seen at the ball height", for example).
 //!
-//! A parameter that moves the traces by less than [`MIN_VISIBILITY`] (RMS, per unit) is not
-//! seen at all (the backlash of an axis perpendicular to the bar, for example) and is a null
-//! direction on its own.
+//! A parameter that does not act at all ([`NUMERICAL_ZERO`]), or a servo parameter below
+//! [`MIN_VISIBILITY`] (the backlash of an axis perpendicular to the bar), is left out and
+//! is a null direction on its own. A location error below [`MIN_VISIBILITY`] is a nuisance
+//! ([`nuisance`]): fitted with the others so it does not leak into them, given no value.
 //!
-//! Standard errors: the larger of the independent-sample one, `σ² = |r|² / (n − rank)`,
-//! `Cov = σ² D⁻¹ V_r Σ_r⁻² V_rᵀ D⁻¹`, and a block bootstrap along θ ([`noise`]) that holds
-//! when the residual is correlated (unmodelled effects, correlated noise).
+//! Standard errors: the largest of the independent-sample one, `σ² = |r|² / (n − rank)`,
+//! `Cov = σ² D⁻¹ V_r Σ_r⁻² V_rᵀ D⁻¹`, the one under each run's AR(1) noise model
+//! ([`correlated`]), and a block bootstrap along θ ([`noise`]) that holds when the residual
+//! is correlated (unmodelled effects, correlated noise).
 //!
 //! # Checks
 //!
-//! Each trace is compared with its scenario before fitting ([`conformity`]); each trace's
-//! noise is estimated from the data and a residual well above it is reported with what its
-//! shape suggests ([`noise`]).
+//! Each trace is compared with its scenario before fitting ([`conformity`]), and one
+//! without commanded columns, matched only weakly, is said so and refused when its fitted
+//! bar offset exceeds its own radius change; each trace's noise is estimated from the data
+//! (AR(1)) and a residual well above it is reported with what its shape suggests ([`noise`]).
 //!
 //! # What to measure next
 //!
@@ -56,11 +59,13 @@
 //! matrix (geometric part, programmed timing); the best is suggested.
 
 mod conformity;
+mod correlated;
 mod decomposition;
 mod estimate;
 mod measured;
 mod model;
 pub mod noise;
+mod nuisance;
 mod page;
 mod params;
 mod result;
@@ -68,13 +73,14 @@ mod suggest;
 
 use std::path::Path;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
 use crate::kinematics::{Chain, Kinematics, Layout, LocationParam};
 use crate::report::fit_plot::{render_fit_svg, PlotSeries};
 use crate::report::{create_dir, write_atomic};
+pub use correlated::{fit_ar1, ArNoise};
 use decomposition::describe_null;
 pub use decomposition::NullDirection;
 use estimate::{Problem, Solution};
@@ -82,7 +88,7 @@ pub use measured::{MeasuredPoint, MeasuredTrace};
 use model::Run;
 pub use noise::NoiseCheck;
 pub(crate) use params::{round6, round_sig, Param};
-pub use params::{FitOptions, MIN_VISIBILITY, NULL_TOLERANCE};
+pub use params::{FitOptions, MIN_VISIBILITY, NULL_TOLERANCE, NUMERICAL_ZERO};
 pub use result::{FitReport, ParamEstimate, Suggestion, TraceFit};
 use suggest::suggest;
 
@@ -233,42 +239,78 @@ fn assemble(
     layout: Layout,
     options: &FitOptions,
 ) -> Result<(FitReport, DVector<f64>)> {
-    let Solution {
-        mut x,
-        decomposition: d,
-        ..
-    } = solution;
     let n = problem.n();
-    let fitted = problem.model(runs, &x)?;
+    let x = &solution.x;
+    let fitted = problem.model(runs, x)?;
     let residual = &problem.y - &fitted;
     let rss = residual.norm_squared();
-    let sigma2 = rss / (n - d.rank).max(1) as f64;
+    let local = &solution.local;
+    let sigma2 = rss / (n - local.rank).max(1) as f64;
 
-    // Null directions, named, and the fragment's basic solution.
-    let (rows, pivots) = d.null_rref(&problem.params);
-    for (row, &pv) in rows.iter().zip(&pivots) {
-        let t = x[pv];
-        x -= row * t;
-    }
-    debug_assert!((problem.model(runs, &x)? - &fitted).amax() < 1e-2);
+    // Null directions, named; their pivots were held at the prior by the solve, so `x` is
+    // the fragment's basic solution.
+    let (rows, pivots) = solution.structural.null_rref(&problem.params);
     let thetas: Vec<f64> = problem.measured.iter().map(|p| p.theta_deg).collect();
-    let (boot, blocks) = noise::bootstrap_errors(&d, runs, &thetas, &residual);
-    let identifiable = d.identifiable();
-    let estimates = estimates(problem, &x, &d.covariance(sigma2), &boot, &identifiable);
-    let unidentifiable: Vec<NullDirection> = rows
+    let (boot, blocks) = noise::bootstrap_errors(local, runs, &thetas, &residual);
+    let ar_runs: Vec<_> = runs
+        .iter()
+        .map(|r| {
+            (
+                noise::theta_order(r, &thetas),
+                noise::run_noise(r, &thetas, &residual),
+            )
+        })
+        .collect();
+    let correlated_se = correlated::ar_standard_errors(local, &ar_runs);
+    let nuisance = nuisance::mask(&problem.params, &solution);
+    let identifiable: Vec<bool> = solution
+        .structural
+        .identifiable()
+        .into_iter()
+        .zip(&nuisance)
+        .map(|(i, nu)| i && !nu)
+        .collect();
+    let errors = StandardErrors {
+        white: local
+            .covariance(sigma2)
+            .diagonal()
+            .map(|v| v.max(0.0).sqrt()),
+        bootstrap: boot,
+        correlated: correlated_se,
+    };
+    let estimates = estimates(problem, x, &errors, &identifiable);
+    let mut unidentifiable: Vec<NullDirection> = rows
         .iter()
         .zip(&pivots)
         .map(|(row, &pv)| describe_null(row, pv, &problem.params))
         .collect();
-    let traces = trace_fits(problem, runs, &x, &identifiable, &residual, &blocks);
+    unidentifiable.extend(nuisance::describe(
+        &problem.params,
+        &solution,
+        &nuisance,
+        &errors.total(),
+        &identifiable,
+    ));
+    // The basic solution: each free pivot (placement) moved back to zero along its null
+    // direction, so the bar offset carries what it cannot be told from.
+    let mut basic = x.clone();
+    for (row, &pv) in rows.iter().zip(&pivots) {
+        if !solution.fixed[pv] {
+            let t = basic[pv];
+            basic -= row * t;
+        }
+    }
+    let traces = trace_fits(problem, runs, x, &basic, &identifiable, &residual, &blocks);
+    let notes = conformity::weak_matches(problem.inputs, &traces)?;
     let fragment = fragment_text(
         &problem.params,
         &estimates,
         &identifiable,
+        &nuisance,
         &unidentifiable,
         layout,
     );
-    let suggestion = if d.null_dim() > 0 {
+    let suggestion = if solution.structural.null_dim() > 0 || nuisance.contains(&true) {
         suggest(problem.inputs, &problem.params)?
     } else {
         None
@@ -278,11 +320,18 @@ fn assemble(
         placement_fitted: !options.placement_known,
         warnings: warnings(&traces),
         cautions: cautions(&estimates),
+        notes,
         parameters: estimates,
         traces,
         residual_rms_um: round6((rss / n as f64).sqrt()),
-        singular_values_relative: d.relative.iter().map(|v| round_sig(*v)).collect(),
-        null_dimensions: d.null_dim(),
+        iterations: solution.iterations,
+        singular_values_relative: solution
+            .structural
+            .relative
+            .iter()
+            .map(|v| round_sig(*v))
+            .collect(),
+        null_dimensions: solution.structural.null_dim(),
         unidentifiable,
         suggestion,
         fragment,
@@ -290,27 +339,46 @@ fn assemble(
     Ok((report, fitted))
 }
 
+/// Each parameter's three standard errors, parameter units.
+struct StandardErrors {
+    /// As if the residual were independent from point to point.
+    white: DVector<f64>,
+    /// Circular block bootstrap of the residual along θ.
+    bootstrap: DVector<f64>,
+    /// Under the AR(1) model of each run's residual.
+    correlated: DVector<f64>,
+}
+
+impl StandardErrors {
+    /// The largest of the three: each holds where the others may not.
+    fn total(&self) -> DVector<f64> {
+        self.white
+            .zip_zip_map(&self.bootstrap, &self.correlated, |a, b, c| a.max(b).max(c))
+    }
+}
+
 /// Each parameter's value and standard errors (none when the tests cannot separate it).
 fn estimates(
     problem: &Problem,
     x: &DVector<f64>,
-    cov: &DMatrix<f64>,
-    boot: &DVector<f64>,
+    errors: &StandardErrors,
     identifiable: &[bool],
 ) -> Vec<ParamEstimate> {
+    let total = errors.total();
     problem
         .params
         .iter()
         .enumerate()
         .map(|(j, p)| {
             let value = problem.prior_value(p) + x[j];
-            let white = cov[(j, j)].max(0.0).sqrt();
+            let shown = |v: f64| identifiable[j].then(|| round6(v));
             ParamEstimate {
                 name: p.name(),
                 unit: p.unit().to_string(),
-                value: identifiable[j].then_some(round6(value)),
-                standard_error: identifiable[j].then(|| round6(white.max(boot[j]))),
-                standard_error_white: identifiable[j].then(|| round6(white)),
+                value: shown(value),
+                standard_error: shown(total[j]),
+                standard_error_white: shown(errors.white[j]),
+                standard_error_correlated: shown(errors.correlated[j]),
                 identifiable: identifiable[j],
                 fragment_value: round6(value),
             }
@@ -323,6 +391,7 @@ fn trace_fits(
     problem: &Problem,
     runs: &[Run],
     x: &DVector<f64>,
+    basic: &DVector<f64>,
     identifiable: &[bool],
     residual: &DVector<f64>,
     blocks: &[usize],
@@ -342,11 +411,21 @@ fn trace_fits(
             .iter()
             .position(|p| *p == Param::BarOffset(k))
             .expect("bar offset");
+        let (lo, hi) = idx.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &i| {
+            (lo.min(y[i]), hi.max(y[i]))
+        });
         traces.push(TraceFit {
             scenario: scenario.path.clone(),
             measured: trace.path.clone(),
             points: idx.len(),
+            matched: if trace.commanded_axes.is_empty() {
+                "weakly".to_string()
+            } else {
+                "commanded".to_string()
+            },
+            radius_change_um: round6(hi - lo),
             bar_offset_um: identifiable[j].then(|| round6(x[j])),
+            bar_offset_basic_um: round6(basic[j]),
             residual_rms_um: round6(rms(&|i| residual[i])),
             measured_rms_um: round6(rms(&|i| y[i] - mean)),
             noise: noise::check_trace(&own, &thetas, residual).rounded(),
@@ -453,6 +532,7 @@ fn fragment_text(
     params: &[Param],
     estimates: &[ParamEstimate],
     identifiable: &[bool],
+    nuisance: &[bool],
     nulls: &[NullDirection],
     layout: crate::kinematics::Layout,
 ) -> String {
@@ -472,6 +552,8 @@ fn fragment_text(
         if let Param::Location(lp) = p {
             let note = if identifiable[j] {
                 ""
+            } else if nuisance[j] {
+                "  # barely seen: the fit's nuisance value, not a measurement"
             } else {
                 "  # not separable: carries a combination"
             };

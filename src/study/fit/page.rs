@@ -26,9 +26,14 @@ pub fn render(report: &FitReport, svg: &str) -> String {
         "<p class=\"note\">Table-ball placement: {placement}. Residual RMS over all traces: {:.3} um.</p>",
         report.residual_rms_um
     );
-    if !report.warnings.is_empty() || !report.cautions.is_empty() {
+    if !report.warnings.is_empty() || !report.cautions.is_empty() || !report.notes.is_empty() {
         h.push_str("<h2 id=\"warnings\">Warnings</h2>\n<ul class=\"warnings\">\n");
-        for w in report.warnings.iter().chain(&report.cautions) {
+        for w in report
+            .warnings
+            .iter()
+            .chain(&report.cautions)
+            .chain(&report.notes)
+        {
             let _ = writeln!(h, "<li>{}</li>", esc(w));
         }
         h.push_str("</ul>\n");
@@ -68,13 +73,13 @@ fn traces_table(report: &FitReport) -> String {
     let mut h = String::from(
         "<h2 id=\"traces\">Traces</h2>\n<table class=\"traces\">\n<tr><th>scenario</th><th>measured</th>\
          <th>points</th><th>trace RMS (um)</th><th>residual RMS (um)</th><th>noise (um)</th>\
-         <th>residual / noise</th><th>bar offset (um)</th></tr>\n",
+         <th>residual / noise</th><th>noise correlation</th><th>matched</th><th>bar offset (um)</th></tr>\n",
     );
     for t in &report.traces {
         let _ = writeln!(
             h,
             "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td>\
-             <td>{:.1}</td><td>{}</td></tr>",
+             <td>{:.1}</td><td>{:.2}</td><td>{}</td><td>{}</td></tr>",
             esc(&t.scenario.display().to_string()),
             esc(&t.measured.display().to_string()),
             t.points,
@@ -82,6 +87,8 @@ fn traces_table(report: &FitReport) -> String {
             t.residual_rms_um,
             t.noise.noise_um,
             t.noise.ratio,
+            t.noise.correlation,
+            esc(&t.matched),
             t.bar_offset_um
                 .map_or("not separable".to_string(), |b| format!("{b:+.3}"))
         );
@@ -111,8 +118,9 @@ fn parameters_table(report: &FitReport) -> String {
         );
     }
     h.push_str(
-        "</table>\n<p class=\"note\">Standard error: the larger of the independent-sample one and a \
-         block bootstrap along theta, which holds when the residual is correlated.</p>\n",
+        "</table>\n<p class=\"note\">Standard error: the largest of the independent-sample one, the one \
+         under the AR(1) model of the residual (correlated noise) and a block bootstrap along \
+         theta, which holds when the residual is correlated.</p>\n",
     );
     h
 }

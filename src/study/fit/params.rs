@@ -12,8 +12,18 @@ use crate::Axis;
 /// no real noise level resolves; genuine information starts near 1e-3.
 pub const NULL_TOLERANCE: f64 = 1e-4;
 /// Smallest RMS change of the traces, um per unit of a parameter (um, urad, mdeg, 1/s),
-/// for the parameter to count as seen at all.
+/// for the parameter to count as seen. A servo parameter below it is left out of the fit
+/// (its sensitivity, from re-simulation, is mostly rounding); a location error or
+/// placement below it is kept in the fit as a nuisance, given no value, and its spread is
+/// carried into the others' standard errors.
 pub const MIN_VISIBILITY: f64 = 0.01;
+/// A column below this RMS, um per unit, moves the traces only by rounding: the parameter
+/// does not act at all (a tilt of C with the ball on C's line, for example).
+pub const NUMERICAL_ZERO: f64 = 1e-7;
+/// Gauss–Newton iterations at most, and the RMS model change (um) of a step below which
+/// they stop.
+pub(crate) const MAX_ITERATIONS: usize = 12;
+pub(crate) const CONVERGED_UM: f64 = 1e-6;
 /// Entries of a null direction below this fraction of its largest (column-scaled) are
 /// rounding noise and dropped.
 pub(crate) const NULL_ENTRY: f64 = 1e-4;
@@ -67,11 +77,14 @@ impl Param {
     pub fn is_servo(&self) -> bool {
         matches!(self, Param::Backlash(_) | Param::Gain(_))
     }
-    /// Pivot preference when naming a null direction: lower first.
+    /// Pivot preference when naming a null direction: lower first. The bar offset comes
+    /// last, so it carries what the placement and it cannot separate (the constant a
+    /// foreign trace needs, checked against the trace's own radius change).
     pub fn pivot_class(&self) -> u8 {
         match self {
             Param::Location(p) if !p.is_position() => 0,
             Param::Location(_) => 1,
+            Param::BarOffset(_) => 3,
             _ => 2,
         }
     }

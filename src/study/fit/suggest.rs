@@ -6,7 +6,7 @@ use nalgebra::{DMatrix, Vector3};
 use super::decomposition::Decomposition;
 use super::measured::MeasuredTrace;
 use super::model::{predict, record};
-use super::params::Param;
+use super::params::{Param, MIN_VISIBILITY};
 use super::result::Suggestion;
 use crate::error::Result;
 use crate::input::program::{ConeTest, Direction};
@@ -123,7 +123,12 @@ pub(super) fn suggest(
             j.view_mut((r0, nl + k), (b.nrows(), 1)).fill(1.0);
             r0 += b.nrows();
         }
-        Decomposition::new(&j)
+        // A column below MIN_VISIBILITY is not separated in any useful sense.
+        let rows = (j.nrows().max(1) as f64).sqrt();
+        let unseen: Vec<bool> = (0..j.ncols())
+            .map(|c| j.column(c).norm() / rows < MIN_VISIBILITY)
+            .collect();
+        Decomposition::new(&j, &unseen)
     };
     // The location errors the present tests leave inseparable.
     let null_now = stack(&blocks.iter().collect::<Vec<_>>()).null_dim();

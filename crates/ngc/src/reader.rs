@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use crate::axis::AxisVec;
+use crate::budget::Budget;
 use crate::canon::Move;
 use crate::error::{Error, Result};
 use crate::expr::{Eval, Param};
@@ -294,10 +295,22 @@ struct Loop {
     /// Where an iteration starts again: the `while` line for while loops, the line after
     /// `do` / `repeat` otherwise.
     start: Cursor,
+    /// The opening line and the span of its o-word or `WHILE`, for an unclosed loop.
+    head: (Cursor, std::ops::Range<usize>),
+}
+
+/// An open `o.. if`: its label, whether a branch was taken, and its opening line and span.
+#[derive(Clone, Debug)]
+struct OpenIf {
+    label: String,
+    taken: bool,
+    head: (Cursor, std::ops::Range<usize>),
 }
 
 struct Frame {
     ret: Cursor,
+    /// The calling line and the call's span: the construct a repeat is counted against.
+    site: (Cursor, std::ops::Range<usize>),
     saved: Vec<f64>,
     loops: usize,
     ifs: usize,
@@ -348,10 +361,12 @@ pub struct Moves {
     lent: bool,
     frames: Vec<Frame>,
     loops: Vec<Loop>,
-    /// (label, a branch was taken)
-    ifs: Vec<(String, bool)>,
-    iterations: u64,
-    max_iterations: u64,
+    ifs: Vec<OpenIf>,
+    /// Executed blocks, against the option `max_blocks` (crate::budget).
+    budget: Budget,
+    /// The construct that last repeated (a backward jump, a call, a repeated pass): where a
+    /// spent budget is reported.
+    repeating: Option<(Cursor, std::ops::Range<usize>)>,
     max_call_depth: usize,
     finished: bool,
     /// The interpreter's held moves have been released (or dropped after an error).
@@ -422,8 +437,8 @@ impl Moves {
             frames: Vec::new(),
             loops: Vec::new(),
             ifs: Vec::new(),
-            iterations: 0,
-            max_iterations: options.max_iterations,
+            budget: Budget::new(options.max_blocks),
+            repeating: None,
             max_call_depth: options.max_call_depth,
             finished: false,
             flushed: false,
@@ -507,17 +522,10 @@ impl Moves {
         syntax_error(&self.programs[file].path, text.to_string(), start, err)
     }
 
-    fn backward(&mut self, span: std::ops::Range<usize>) -> LineResult<()> {
-        self.iterations += 1;
-        if self.iterations > self.max_iterations {
-            return Err(LineError::new(
-                span,
-                format!("more than {} loop iterations: expected the program to end (is this an endless loop?)", self.max_iterations),
-                "loop limit reached",
-            )
-            .help("the limit is the reader option max_iterations (docs/gcode.md)"));
-        }
-        Ok(())
+    /// A backward jump from the line at `here`: the construct a spent budget names (the
+    /// blocks themselves are counted as they run, in [`Moves::step`]).
+    fn backward(&mut self, here: Cursor, span: std::ops::Range<usize>) {
+        self.repeating = Some((here, span));
     }
 
     /// Moves the cursor forward from the line after `from` to the first o-word line with
@@ -683,15 +691,23 @@ impl Moves {
         .help("set the scenario's subroutine search path, or define the subroutine in the program"))
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn call(
         &mut self,
         label: &str,
         args: &[f64],
         locals: bool,
         repeats: u64,
+        here: Cursor,
         next: Cursor,
         span: std::ops::Range<usize>,
     ) -> LineResult<()> {
+        // Every pass runs at least its return: a count the budget cannot hold is refused
+        // before the first pass.
+        self.budget
+            .check_passes(repeats, "this subprogram call", span.clone())?;
+        let site = (here, span.clone());
+        self.repeating = Some(site.clone());
         if self.frames.len() >= self.max_call_depth {
             return Err(LineError::new(
                 span,
@@ -725,6 +741,7 @@ impl Moves {
         };
         self.frames.push(Frame {
             ret: next,
+            site,
             saved,
             loops: self.loops.len(),
             ifs: self.ifs.len(),
@@ -747,6 +764,7 @@ impl Moves {
         };
         if frame.repeats > 0 {
             frame.repeats -= 1;
+            self.repeating = Some(frame.site.clone());
             self.cursor = frame.start;
             self.loops.truncate(frame.loops);
             self.ifs.truncate(frame.ifs);
@@ -850,17 +868,21 @@ impl Moves {
                     ));
                 }
             }
-            Kw::Call => self.o_call(line, &o, &label, next)?,
+            Kw::Call => self.o_call(line, &o, &label, here, next)?,
             Kw::If => {
                 let (c, _) = self.eval_bracket(line, o.rest)?;
-                self.ifs.push((label.clone(), c != 0.0));
+                self.ifs.push(OpenIf {
+                    label: label.clone(),
+                    taken: c != 0.0,
+                    head: (here, o.span.clone()),
+                });
                 if c == 0.0 {
                     self.skip_to(here, &label, &[Kw::ElseIf, Kw::Else, Kw::EndIf], o.span)?;
                 }
             }
             Kw::ElseIf | Kw::Else => self.o_else(line, &o, &label, here)?,
             Kw::EndIf => match self.ifs.last() {
-                Some((l, _)) if *l == label => {
+                Some(open) if open.label == label => {
                     self.ifs.pop();
                 }
                 _ => {
@@ -875,7 +897,7 @@ impl Moves {
             Kw::EndWhile => match self.loops.last() {
                 Some(l) if l.label == label => {
                     let start = l.start;
-                    self.backward(o.span)?;
+                    self.backward(here, o.span);
                     self.cursor = start;
                 }
                 _ => {
@@ -890,6 +912,7 @@ impl Moves {
                 label,
                 kind: LoopKind::Do,
                 start: next,
+                head: (here, o.span),
             }),
             Kw::Repeat => {
                 let (n, _) = self.eval_bracket(line, o.rest)?;
@@ -898,6 +921,12 @@ impl Moves {
                 } else {
                     0
                 };
+                // Every pass runs at least its `endrepeat` line.
+                self.budget.check_passes(
+                    n.saturating_sub(1),
+                    "this o-word repeat",
+                    o.span.clone(),
+                )?;
                 if n == 0 {
                     self.skip_to(here, &label, &[Kw::EndRepeat], o.span)?;
                     let (_, after) = self.line_at(self.cursor).expect("found");
@@ -907,6 +936,7 @@ impl Moves {
                         label,
                         kind: LoopKind::Repeat(n - 1),
                         start: next,
+                        head: (here, o.span),
                     });
                 }
             }
@@ -915,11 +945,12 @@ impl Moves {
                     label: l,
                     kind: LoopKind::Repeat(left),
                     start,
+                    ..
                 }) if *l == label => {
                     if *left > 0 {
                         *left -= 1;
                         let start = *start;
-                        self.backward(o.span)?;
+                        self.backward(here, o.span);
                         self.cursor = start;
                     } else {
                         self.loops.pop();
@@ -939,7 +970,14 @@ impl Moves {
     }
 
     /// `o<label> call [args]`: the subroutine called with its arguments.
-    fn o_call(&mut self, line: &str, o: &OLine, label: &str, next: Cursor) -> LineResult<()> {
+    fn o_call(
+        &mut self,
+        line: &str,
+        o: &OLine,
+        label: &str,
+        here: Cursor,
+        next: Cursor,
+    ) -> LineResult<()> {
         self.interp.refresh_system_parameters();
         let mut args = Vec::new();
         let mut e = Eval::new(line, o.rest, &self.interp.params, false);
@@ -964,13 +1002,16 @@ impl Moves {
                 "too many arguments",
             ));
         }
-        self.call(&label, &args, true, 1, next, o.span.clone())?;
+        self.call(label, &args, true, 1, here, next, o.span.clone())?;
         Ok(())
     }
 
     /// `o.. elseif [cond]` / `o.. else`: taken when no branch of the `if` was.
     fn o_else(&mut self, line: &str, o: &OLine, label: &str, here: Cursor) -> LineResult<()> {
-        let Some((l, taken)) = self.ifs.last().cloned() else {
+        let Some(OpenIf {
+            label: l, taken, ..
+        }) = self.ifs.last().cloned()
+        else {
             return Err(LineError::new(
                 o.span.clone(),
                 "`else` without `if`: expected a matching `o.. if`",
@@ -987,11 +1028,11 @@ impl Moves {
         if taken {
             self.skip_to(here, &label, &[Kw::EndIf], o.span.clone())?;
         } else if o.kw == Kw::Else {
-            self.ifs.last_mut().expect("checked").1 = true;
+            self.ifs.last_mut().expect("checked").taken = true;
         } else {
             let (c, _) = self.eval_bracket(line, o.rest)?;
             if c != 0.0 {
-                self.ifs.last_mut().expect("checked").1 = true;
+                self.ifs.last_mut().expect("checked").taken = true;
             } else {
                 self.skip_to(
                     here,
@@ -1010,7 +1051,7 @@ impl Moves {
         let (c, _) = self.eval_bracket(line, o.rest)?;
         if top_do {
             if c != 0.0 {
-                self.backward(o.span.clone())?;
+                self.backward(here, o.span.clone());
                 self.cursor = self.loops.last().expect("checked").start;
             } else {
                 self.loops.pop();
@@ -1022,6 +1063,7 @@ impl Moves {
                     label,
                     kind: LoopKind::While,
                     start: here,
+                    head: (here, o.span.clone()),
                 });
             }
         } else {
@@ -1164,6 +1206,7 @@ impl Moves {
                             label: m,
                             kind: LoopKind::FanucDo,
                             start: here,
+                            head: (here, span.clone()),
                         });
                     }
                 } else {
@@ -1182,7 +1225,7 @@ impl Moves {
                 match self.loops.last() {
                     Some(l) if l.label == m => {
                         let start = l.start;
-                        self.backward(span)?;
+                        self.backward(here, span);
                         self.cursor = start;
                         Ok(())
                     }
@@ -1201,7 +1244,7 @@ impl Moves {
         match self.sequence_line(here.file, n) {
             Some(c) => {
                 if c.offset <= here.offset {
-                    self.backward(span)?;
+                    self.backward(here, span);
                 }
                 self.cursor = c;
                 Ok(())
@@ -1280,6 +1323,60 @@ impl Moves {
             };
             let col = k - line_start;
             return Some(self.syntax_in(c.file, text, c.offset, LineError::new(col..col + token.len(), format!("`{token}` is Siemens Sinumerik: this program is in the Siemens language, expected G-code in the RS274/NGC, Fanuc or Haas language"), "Siemens Sinumerik").help("set dialect = \"siemens\" in the scenario's [reader] to read it with the Sinumerik front end")));
+        }
+        None
+    }
+
+    /// The text of the line at `here`, `len` bytes long, just read by [`Moves::line_at`].
+    fn buf_line(&self, here: Cursor, len: usize) -> String {
+        match &self.programs[here.file].source {
+            Source::Text(text) => text[here.offset..here.offset + len].to_string(),
+            Source::File(_) => self.buf.clone(),
+        }
+    }
+
+    /// At the end of a text: the innermost `if`, loop or `WHILE` opened in it that has no
+    /// closing line anywhere after its head, as an error at its opening line. (A loop left
+    /// by a jump, as Fanuc allows, has its closing line and is not reported.)
+    fn unclosed(&mut self) -> Option<Error> {
+        let (loops_from, ifs_from) = self.frames.last().map_or((0, 0), |f| (f.loops, f.ifs));
+        let mut open: Vec<(Cursor, std::ops::Range<usize>, String, Vec<Kw>)> = Vec::new();
+        for l in &self.loops[loops_from.min(self.loops.len())..] {
+            let ends = match l.kind {
+                LoopKind::While => vec![Kw::EndWhile],
+                LoopKind::Do => vec![Kw::While],
+                LoopKind::Repeat(_) => vec![Kw::EndRepeat],
+                LoopKind::FanucDo => Vec::new(),
+            };
+            open.push((l.head.0, l.head.1.clone(), l.label.clone(), ends));
+        }
+        for i in &self.ifs[ifs_from.min(self.ifs.len())..] {
+            open.push((i.head.0, i.head.1.clone(), i.label.clone(), vec![Kw::EndIf]));
+        }
+        // Innermost first: the one opened last.
+        open.sort_by_key(|(c, ..)| std::cmp::Reverse((c.file, c.offset)));
+        let cursor = self.cursor;
+        for (head, span, label, ends) in open {
+            let closed = if ends.is_empty() {
+                self.skip_to_end(head, &label, span.clone()).is_ok()
+            } else {
+                self.skip_to(head, &label, &ends, span.clone()).is_ok()
+            };
+            self.cursor = cursor;
+            if self.io_error.take().is_some() || closed {
+                continue;
+            }
+            let closing = if ends.is_empty() {
+                format!("END {label}")
+            } else {
+                format!("o{label} {}", kw_name(ends[0]))
+            };
+            let err = LineError::new(
+                span,
+                format!("this structure is never closed: expected `{closing}` before the end of the program"),
+                "unclosed structure",
+            );
+            return Some(self.error_at(head, err, ""));
         }
         None
     }
@@ -1392,6 +1489,10 @@ impl Moves {
                     source: e,
                 });
             }
+            if let Some(e) = self.unclosed() {
+                self.finished = true;
+                return Err(e);
+            }
             if let Some(f) = self.frames.last() {
                 if self.programs[f.start.file].is_empty() || f.start.file != 0 {
                     // A Fanuc subprogram file without M99 returns at its end.
@@ -1404,6 +1505,16 @@ impl Moves {
             return Ok(());
         };
         let len = line.len();
+        if !self.budget.spend() {
+            self.finished = true;
+            let (at, span) = self.repeating.clone().unwrap_or((here, 0..len));
+            let line = if at == here {
+                self.buf_line(here, len)
+            } else {
+                String::new()
+            };
+            return Err(self.error_at(at, self.budget.spent(span), &line));
+        }
         // Own the line while the interpreter changes state: share the text (a reference
         // count, no copy), or take the file's line buffer (given back below).
         let owner = match &self.programs[here.file].source {
@@ -1618,7 +1729,7 @@ impl Moves {
                 })?
             }
         };
-        self.call(label, &positional, true, 1, next, s.span.clone())?;
+        self.call(label, &positional, true, 1, here, next, s.span.clone())?;
         if !remap.positional() {
             if let Some(locals) = self.interp.params.locals.last_mut() {
                 for (letter, v) in &s.args {
@@ -1689,7 +1800,7 @@ impl Moves {
                 locals,
                 span,
             } => {
-                self.call(&label, &args, locals, repeats, next, span)?;
+                self.call(&label, &args, locals, repeats, here, next, span)?;
             }
             Stop::Return { span } => {
                 if !self.ret(None) {

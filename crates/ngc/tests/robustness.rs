@@ -28,7 +28,7 @@ const ALPHABET: [&str; 46] = [
 fn options(dialect: Dialect) -> Options {
     Options {
         dialect,
-        max_iterations: 2000,
+        max_blocks: 2000,
         tools: vec![ngc::Tool {
             number: 1,
             length_mm: 20.0,

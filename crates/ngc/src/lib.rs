@@ -45,6 +45,7 @@ mod dialect;
 mod error;
 mod expr;
 mod frame;
+mod front_end;
 mod heidenhain;
 mod ini;
 mod interp;

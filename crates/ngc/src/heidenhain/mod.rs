@@ -19,6 +19,7 @@
 mod contour;
 mod cycles;
 mod frames;
+mod front;
 mod qparam;
 mod state;
 mod text;
@@ -35,16 +36,10 @@ use crate::notice::Notice;
 use crate::options::Options;
 use crate::source::{quoted_at, syntax_error, FileLines, Source};
 
+pub(crate) use front::FRONT_END;
 use qparam::Qparams;
 pub(crate) use state::Reader;
 use state::{refusal, unexpected, Block, Contour, Cursor, Cycle, Extras, Frame, Frames, Program};
-
-/// True when `line`, the first line with more than blanks, opens a Klartext program:
-/// `BEGIN PGM`, with or without a block number.
-pub(crate) fn opens_program(line: &str) -> bool {
-    let rest = &line[text::after_block_number(line)..];
-    rest.len() >= 9 && rest.as_bytes()[..9].eq_ignore_ascii_case(b"BEGIN PGM")
-}
 
 impl Reader {
     pub(crate) fn new(path: &Path, source: Source, options: &Options) -> Reader {

@@ -37,6 +37,7 @@ use std::path::{Path, PathBuf};
 
 use crate::canon::Move;
 use crate::error::{Error, Result, Syntax};
+use crate::front_end::{FrontEnd, Input, Registration};
 use crate::interp::{Interp, Stop};
 use crate::lex::{lex_with, Lexed, LineError, LineResult, Word};
 use crate::notice::Notice;
@@ -425,6 +426,30 @@ impl Reader {
                 }
             }
         }
+    }
+}
+
+/// The Sinumerik front end's entry in `reader::FRONT_ENDS`: it reads a program of the
+/// `siemens` dialect (a program in memory as its text, a file streamed its own way).
+pub(crate) const FRONT_END: Registration = Registration {
+    dialect: |d| d == Dialect::Siemens,
+    first_line: None,
+    open: |path, input, options| {
+        let text = match &input {
+            Input::Source(crate::source::Source::Text(text)) => Some(&**text),
+            _ => None,
+        };
+        Ok(Box::new(Reader::new(path, text, options)?))
+    },
+};
+
+impl FrontEnd for Reader {
+    fn next_move(&mut self) -> Option<Result<Move>> {
+        Reader::next_move(self)
+    }
+
+    fn notices(&self) -> &[Notice] {
+        Reader::notices(self)
     }
 }
 

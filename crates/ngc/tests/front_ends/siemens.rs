@@ -314,7 +314,7 @@ fn a_long_program_file_streams_and_jumps_back_by_offset() {
 }
 
 /// Wall time of the Siemens front end against the Fanuc reader on the same 1M-block G01
-/// file (`cargo test --release -p ngc --test siemens timing -- --ignored --nocapture`;
+/// file (`cargo test --release -p ngc --test front_ends siemens::timing -- --ignored --nocapture`;
 /// the benchmark `benches/read.rs` measures the same).
 #[test]
 #[ignore]

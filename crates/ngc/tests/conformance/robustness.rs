@@ -2,7 +2,7 @@
 //! or one error, and stops.
 //!
 //! CI runs a short run (256 cases per property). The long run of 10^6 cases:
-//! `NGC_FUZZ_CASES=1000000 cargo test --release -p ngc --test robustness` (docs/gcode.md).
+//! `NGC_FUZZ_CASES=1000000 cargo test --release -p ngc --test conformance robustness::` (docs/gcode.md).
 
 use std::path::Path;
 

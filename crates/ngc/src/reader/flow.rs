@@ -18,7 +18,7 @@ impl IsoReader {
         self.repeating = Some((here, span));
     }
 
-    /// IsoReader the cursor forward from the line after `from` to the first o-word line with
+    /// Moves the cursor forward from the line after `from` to the first o-word line with
     /// `label` and a keyword in `kws`; the cursor is left on that line.
     pub(super) fn skip_to(
         &mut self,

@@ -15,8 +15,8 @@ use super::state::{Cursor, IsoReader};
 impl IsoReader {
     /// Refuses a program written in another control's language: Siemens Sinumerik
     /// (`TRAORI`, `CYCLE800`), before any move (a Heidenhain program never gets here: it is
-    /// read by its own front end, see [`IsoReader::new`]). The Siemens front end will plug in
-    /// the same way (crate `dialect`'s module doc).
+    /// read by its own front end, chosen in `reader::read_with`). A program of the `siemens`
+    /// dialect is read by the Sinumerik front end instead.
     pub(super) fn foreign_language(&mut self) -> Option<Error> {
         // A cheap screen first, so that a streamed file is read whole only when it fails.
         let suspect = match &self.programs[0].source {

@@ -170,7 +170,7 @@ pub(crate) struct IsoReader {
     pub(super) dialect: Dialect,
     pub(super) search_path: Vec<PathBuf>,
     pub(super) queue: VecDeque<Move>,
-    /// The queue's first move was lent by [`Moves::next_ref`]: it leaves at the next call.
+    /// The queue's first move was lent by `FrontEnd::next_ref`: it leaves at the next call.
     pub(super) lent: bool,
     pub(super) frames: Vec<Frame>,
     pub(super) loops: Vec<Loop>,

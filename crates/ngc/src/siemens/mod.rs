@@ -67,7 +67,7 @@ struct Level {
     /// For each open structure, its opening line (offset, number) and keyword's span.
     opened: Vec<(usize, usize, std::ops::Range<usize>)>,
     /// Program sections being repeated (`REPEAT label P=n`), innermost last.
-    sections: Vec<repeat::Section>,
+    sections: Vec<state::Section>,
     /// `PROC` parameters to bind: the values the call passed.
     args: Vec<f64>,
 }

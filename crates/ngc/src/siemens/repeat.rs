@@ -16,22 +16,9 @@ use std::ops::Range;
 
 use super::expr::{expr, Scan};
 use super::flow::targets;
+use super::state::Section;
 use super::{Reader, MAX_STRUCTURES};
 use crate::lex::{LineError, LineResult};
-
-/// A section being repeated.
-pub(super) struct Section {
-    /// Byte offset and 1-based number of its first line.
-    pub start: (usize, usize),
-    /// The byte offset that ends a pass.
-    pub end: usize,
-    /// Passes still to run after this one.
-    pub left: u64,
-    /// Where the program goes on after the last pass: the line after the `REPEAT`.
-    pub back: (usize, usize),
-    /// The `REPEAT` line (offset, number) and the statement's span.
-    pub site: (usize, usize, Range<usize>),
-}
 
 /// A line of a level's text that carries a label: offset, 1-based number, length in bytes.
 type Found = (usize, usize, usize);

@@ -184,10 +184,11 @@ pub struct Options {
     pub pockets: Vec<(u32, u32)>,
 }
 
-/// Default limit on executed blocks per program run: 10⁷, over 600 times the blocks the
-/// longest program of the project's corpus executes, and a budget the reader spends in
-/// seconds, not minutes (docs/gcode.md).
-pub const MAX_BLOCKS: u64 = 10_000_000;
+/// Default limit on executed blocks per program run: 2·10⁶, over 120 times the blocks the
+/// longest program of the project's corpus executes, and fewer than the 10⁶ loop passes of
+/// a three-line loop the reader allowed before, so an endless loop stops in seconds
+/// (docs/gcode.md).
+pub const MAX_BLOCKS: u64 = 2_000_000;
 /// Default limit on subroutine nesting.
 pub const MAX_CALL_DEPTH: usize = 64;
 

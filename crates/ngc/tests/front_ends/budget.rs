@@ -80,9 +80,9 @@ fn xs(moves: &[Move]) -> Vec<f64> {
 }
 
 #[test]
-fn the_default_budget_is_ten_million_blocks() {
-    assert_eq!(Options::default().max_blocks, 10_000_000);
-    assert_eq!(ngc::MAX_BLOCKS, 10_000_000);
+fn the_default_budget_is_two_million_blocks() {
+    assert_eq!(Options::default().max_blocks, 2_000_000);
+    assert_eq!(ngc::MAX_BLOCKS, 2_000_000);
 }
 
 #[test]

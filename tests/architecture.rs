@@ -1036,21 +1036,9 @@ const MAX_CODE_LINES: usize = 1000;
 /// file's code lines) and why. The lead shrinks this list as the splits land.
 const SIZE_ALLOWED: &[(&str, Option<&str>, &str)] = &[
     (
-        "crates/ngc/src/reader.rs",
-        None,
-        "1,732 code lines: becoming the reader/ folder (flow, calls, remap) with one \
-         FrontEnd per dialect (issue 37 item 4) on another branch at the time of writing",
-    ),
-    (
         "src/report/polar.rs",
         Some("render_polar_svg"),
         "321 lines: being split on another branch at the time of writing",
-    ),
-    (
-        "crates/ngc/src/interp/cycles.rs",
-        Some("cycle"),
-        "159 lines: crates/ngc is being reworked on another branch (issue 37 item 4), so \
-         this split was left to it",
     ),
 ];
 
@@ -1273,4 +1261,60 @@ fn the_size_rule_counts_code_lines_and_function_lines() {
             ("r".to_string(), 1)
         ]
     );
+}
+
+/// Front ends behind one trait (issue 37): outside its own folder of `crates/ngc/src`, a
+/// control's front end is named only by its registration, once, in `reader/mod.rs`'s
+/// `FRONT_ENDS` (a new control is its folder and that one line); the ISO family's reader is
+/// the last entry, reading every program no other front end claims.
+#[test]
+fn each_front_end_is_named_only_by_its_registration() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/ngc/src");
+    let registry = src.join("reader/mod.rs");
+    let fronts = ["siemens", "heidenhain"];
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    for file in &files {
+        let rel = file.strip_prefix(&src).unwrap();
+        let text = std::fs::read_to_string(file).unwrap();
+        for front in fronts {
+            if rel.starts_with(front) {
+                continue;
+            }
+            let path = format!("crate::{front}::");
+            for (k, _) in text.match_indices(&path) {
+                let named = &text[k + path.len()..];
+                let name: String = named
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                assert!(
+                    *file == registry && name == "FRONT_END",
+                    "{} names `{path}{name}`: only reader/mod.rs names a front end, by its FRONT_END",
+                    rel.display()
+                );
+            }
+        }
+    }
+    let text = std::fs::read_to_string(&registry).unwrap();
+    let list = &text[text.find("const FRONT_ENDS").expect("FRONT_ENDS in reader/mod.rs")..];
+    let list = &list[..list.find("];").unwrap()];
+    for front in fronts {
+        assert_eq!(
+            list.matches(&format!("&crate::{front}::FRONT_END,")).count(),
+            1,
+            "{front} registered once in FRONT_ENDS"
+        );
+        let folder = src.join(front);
+        let mut own = Vec::new();
+        rust_files(&folder, &mut own);
+        assert!(
+            own.iter().any(|f| std::fs::read_to_string(f)
+                .unwrap()
+                .contains("pub(crate) const FRONT_END: Registration")),
+            "{front}/ defines its FRONT_END registration"
+        );
+    }
+    let last = list.trim_end().trim_end_matches(',').rsplit(',').next().unwrap().trim();
+    assert_eq!(last, "&stream::FRONT_END", "the ISO family last in FRONT_ENDS");
 }

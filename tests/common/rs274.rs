@@ -222,7 +222,7 @@ pub fn parse(text: &str) -> Vec<RsMove> {
     let mut per_rev = false;
     // Inside START_SPEED_FEED_SYNC ... STOP_SPEED_FEED_SYNCH (G33, G33.1, G76) the feed is
     // pitch × S, and rs274 prints the pitch to 6 decimals only: such moves carry no feed
-    // here (crates/ngc/tests/lathe.rs compares their feeds within that rounding).
+    // here (crates/ngc/tests/interp/lathe.rs compares their feeds within that rounding).
     let mut sync = false;
     let mut plane = "XY";
     let mut moves = Vec::new();

@@ -37,6 +37,7 @@
 
 mod axis;
 mod block;
+mod budget;
 mod canon;
 mod code;
 mod comp;
@@ -44,6 +45,7 @@ mod dialect;
 mod error;
 mod expr;
 mod frame;
+mod front_end;
 mod heidenhain;
 mod ini;
 mod interp;
@@ -72,7 +74,7 @@ pub use notice::Notice;
 pub use options::{
     parse_tool_orientations, parse_tool_table, parse_var_file, tool_pockets, work_offset_parameter,
     Dialect, Distance, Options, StartFeed, StartState, Tool, Units, UserM, G28_PARAMETER,
-    G30_PARAMETER, MAX_CALL_DEPTH, MAX_ITERATIONS,
+    G30_PARAMETER, MAX_BLOCKS, MAX_CALL_DEPTH,
 };
 pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves};
 pub use remap::{parse_remap, Remap, RemapCode};

@@ -159,8 +159,9 @@ pub struct Options {
     /// Tool-centre-point control on from the start (LinuxCNC configurations whose
     /// kinematics are always in TCP mode).
     pub tcp: bool,
-    /// Loop iterations (backward jumps of every kind) allowed in one run.
-    pub max_iterations: u64,
+    /// Blocks executed in one run (crate `budget`): every block counts each time it runs, in
+    /// loops, jumps, repeated subprograms, macro calls and repeated sections alike.
+    pub max_blocks: u64,
     /// Subroutine nesting allowed.
     pub max_call_depth: usize,
     /// The machine's rotary table (table-table AC or BC), for G68.2/G53.1 and G254; `None`
@@ -183,8 +184,11 @@ pub struct Options {
     pub pockets: Vec<(u32, u32)>,
 }
 
-/// Default limit on loop iterations per program run.
-pub const MAX_ITERATIONS: u64 = 1_000_000;
+/// Default limit on executed blocks per program run: 2·10⁶, over 120 times the blocks the
+/// longest program of the project's corpus executes, and fewer than the 10⁶ loop passes of
+/// a three-line loop the reader allowed before, so an endless loop stops in seconds
+/// (docs/gcode.md).
+pub const MAX_BLOCKS: u64 = 2_000_000;
 /// Default limit on subroutine nesting.
 pub const MAX_CALL_DEPTH: usize = 64;
 
@@ -202,7 +206,7 @@ impl Default for Options {
             search_path: Vec::new(),
             user_m: HashMap::new(),
             tcp: false,
-            max_iterations: MAX_ITERATIONS,
+            max_blocks: MAX_BLOCKS,
             max_call_depth: MAX_CALL_DEPTH,
             table: None,
             aligner: None,

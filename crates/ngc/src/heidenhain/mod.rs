@@ -19,6 +19,7 @@
 mod contour;
 mod cycles;
 mod frames;
+mod front;
 mod qparam;
 mod state;
 mod text;
@@ -35,16 +36,10 @@ use crate::notice::Notice;
 use crate::options::Options;
 use crate::source::{quoted_at, syntax_error, FileLines, Source};
 
+pub(crate) use front::FRONT_END;
 use qparam::Qparams;
 pub(crate) use state::Reader;
 use state::{refusal, unexpected, Block, Contour, Cursor, Cycle, Extras, Frame, Frames, Program};
-
-/// True when `line`, the first line with more than blanks, opens a Klartext program:
-/// `BEGIN PGM`, with or without a block number.
-pub(crate) fn opens_program(line: &str) -> bool {
-    let rest = &line[text::after_block_number(line)..];
-    rest.len() >= 9 && rest.as_bytes()[..9].eq_ignore_ascii_case(b"BEGIN PGM")
-}
 
 impl Reader {
     pub(crate) fn new(path: &Path, source: Source, options: &Options) -> Reader {
@@ -88,8 +83,8 @@ impl Reader {
             modal_cycle: false,
             finished: false,
             flushed: false,
-            iterations: 0,
-            max_iterations: options.max_iterations,
+            budget: crate::budget::Budget::new(options.max_blocks),
+            repeating: None,
             max_call_depth: options.max_call_depth,
             text: String::new(),
             buf: String::new(),
@@ -176,6 +171,18 @@ impl Reader {
             return self.run_words(here);
         };
         self.cursor = next;
+        if !self.budget.spend() {
+            self.finished = true;
+            let (at, span) = self.repeating.clone().unwrap_or((here, 0..0));
+            let err = self.budget.spent(span);
+            return Err(if at == here {
+                self.error_at(here, err)
+            } else {
+                let program = &self.programs[at.file];
+                let (text, start) = quoted_at(program.source.quoted(&program.path), at.line, "");
+                syntax_error(&program.path, text, start, err)
+            });
+        }
         let result = self.block(here);
         let result = result.and_then(|()| self.run_words_line(here));
         result.map_err(|e| {
@@ -556,7 +563,7 @@ impl Reader {
         let label = self.label_name(label, span.clone())?;
         let target = self.find_label(here.file, &label, span.clone())?;
         if target.offset <= here.offset {
-            self.backward(span)?;
+            self.backward(here, span);
         }
         self.cursor = target;
         Ok(())
@@ -584,24 +591,27 @@ impl Reader {
     /// `LBL n`: a mark; `LBL 0` ends the subprogram being run.
     fn label(&mut self, b: &Block) -> LineResult<()> {
         match self.frames.last() {
-            Some(f) if b.tok(1) == "0" && !f.program => self.end_pass(b),
+            Some(f) if b.tok(1) == "0" && !f.program => {
+                self.end_pass();
+                Ok(())
+            }
             _ => Ok(()),
         }
     }
 
     /// One pass of the innermost label call is done: the next pass, or back after the call.
-    fn end_pass(&mut self, b: &Block) -> LineResult<()> {
+    fn end_pass(&mut self) {
         let Some(f) = self.frames.last_mut() else {
-            return Ok(());
+            return;
         };
         if f.repeats > 0 {
             f.repeats -= 1;
             self.cursor = f.target;
-            return self.backward(b.span(0));
+            self.repeating = Some((f.call, f.call_span.clone()));
+            return;
         }
         self.cursor = f.ret;
         self.frames.pop();
-        Ok(())
     }
 
     /// `CALL LBL n [REP m]`: runs from `LBL n` to `LBL 0` (a subprogram) or back to this
@@ -613,7 +623,8 @@ impl Reader {
             .last()
             .is_some_and(|f| f.call == here && !f.program)
         {
-            return self.end_pass(b);
+            self.end_pass();
+            return Ok(());
         }
         let label = self.label_name(b.tok(2), b.span(2))?;
         // Passes run by jumping to the label: one, or m for `REP m` (a section repeat runs
@@ -638,18 +649,23 @@ impl Reader {
             return Ok(());
         }
         let repeats = passes - 1;
+        let call_span = b.spans(0, b.toks.len() - 1);
+        // Every pass runs at least the label's `LBL 0` or its `CALL`.
+        self.budget
+            .check_passes(passes, "this label call", call_span.clone())?;
         let target = self.find_label(here.file, &label, b.span(2))?;
         self.push_frame(
             b,
             Frame {
                 ret: self.cursor,
                 call: here,
+                call_span: call_span.clone(),
                 target,
                 repeats,
                 program: false,
             },
         )?;
-        self.backward(b.span(0))?;
+        self.backward(here, call_span);
         self.cursor = target;
         Ok(())
     }
@@ -732,6 +748,7 @@ impl Reader {
             Frame {
                 ret: self.cursor,
                 call: here,
+                call_span: b.spans(0, b.toks.len() - 1),
                 target,
                 repeats: 0,
                 program: true,
@@ -798,13 +815,10 @@ impl Reader {
             })
     }
 
-    fn backward(&mut self, span: Range<usize>) -> LineResult<()> {
-        self.iterations += 1;
-        if self.iterations > self.max_iterations {
-            return Err(LineError::new(span, format!("more than {} repeats, calls and jumps: expected the program to end (is this an endless loop?)", self.max_iterations), "loop limit reached")
-                .help("the limit is the reader option max_iterations (docs/gcode.md)"));
-        }
-        Ok(())
+    /// A backward jump or call from the block at `here`: the construct a spent budget names
+    /// (the blocks themselves are counted as they are read, in `step`).
+    fn backward(&mut self, here: Cursor, span: Range<usize>) {
+        self.repeating = Some((here, span));
     }
 
     /// `CYCL CALL [F] [M…]`: the defined cycle here.

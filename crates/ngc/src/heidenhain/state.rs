@@ -40,6 +40,8 @@ pub(super) struct Frame {
     pub(super) ret: Cursor,
     /// The `CALL LBL` line: reaching it again ends one pass of a section repeat.
     pub(super) call: Cursor,
+    /// The call's span in its block: the construct a repeated pass is counted against.
+    pub(super) call_span: Range<usize>,
     /// Where each pass starts.
     pub(super) target: Cursor,
     /// Passes still to run after this one.
@@ -78,8 +80,11 @@ pub(crate) struct Reader {
     pub(super) modal_cycle: bool,
     pub(super) finished: bool,
     pub(super) flushed: bool,
-    pub(super) iterations: u64,
-    pub(super) max_iterations: u64,
+    /// Executed blocks, against the option `max_blocks` (crate::budget).
+    pub(super) budget: crate::budget::Budget,
+    /// The construct that last repeated (a backward jump, a call, a repeated pass): where a
+    /// spent budget is reported.
+    pub(super) repeating: Option<(Cursor, Range<usize>)>,
     pub(super) max_call_depth: usize,
     /// The block being read (physical lines joined), and a file's line buffer.
     pub(super) text: String,

@@ -46,40 +46,7 @@ impl Interp {
                 "axis word in a cycle",
             ));
         }
-        if let Some(r) = get('R') {
-            self.cycle_r = Some(r.value * scale);
-        }
-        if let Some(z) = get(n.letter()) {
-            self.cycle_z = Some(z.value * scale);
-        }
-        if let Some(q) = get('Q') {
-            if q.value <= 0.0 {
-                return Err(LineError::new(
-                    q.span(),
-                    "Q in a peck cycle: expected a peck depth greater than zero",
-                    "Q not positive",
-                ));
-            }
-            self.cycle_q = Some(q.value * scale);
-        }
-        if let Some(p) = get('P') {
-            // In the dialect's dwell unit (Fanuc ms, LinuxCNC s), kept in seconds.
-            self.cycle_p = Some(self.dwell_seconds(line, &p, Some(p), None)?);
-        }
-        let back_bore = self.is_back_bore(code);
-        if back_bore {
-            // The shift's I J (G17), K I (G18), J K (G19): incremental, along u and v.
-            let letter = |a: Axis| match a {
-                Axis::X => 'I',
-                Axis::Y => 'J',
-                _ => 'K',
-            };
-            let (i, j) = (get(letter(u)), get(letter(v)));
-            if i.is_some() || j.is_some() {
-                let value = |w: Option<Word>| w.map_or(0.0, |w| w.value * scale);
-                self.cycle_shift = Some((value(i), value(j)));
-            }
-        }
+        let back_bore = self.cycle_words(line, code, get, (u, v, n), scale)?;
         let r_prog = self.cycle_r.ok_or_else(|| {
             LineError::new(
                 at.clone(),
@@ -174,6 +141,53 @@ impl Interp {
             back_bore,
         };
         self.holes(&holes, get, line_no, queue, at)
+    }
+
+    /// The sticky words of a canned cycle block (R, the hole bottom, Q, P, and a back
+    /// bore's shift I J K), kept for the blocks after it; true for a back bore.
+    fn cycle_words<'l>(
+        &mut self,
+        line: &str,
+        code: u32,
+        get: &dyn Fn(char) -> Option<Word<'l>>,
+        (u, v, n): (Axis, Axis, Axis),
+        scale: f64,
+    ) -> LineResult<bool> {
+        if let Some(r) = get('R') {
+            self.cycle_r = Some(r.value * scale);
+        }
+        if let Some(z) = get(n.letter()) {
+            self.cycle_z = Some(z.value * scale);
+        }
+        if let Some(q) = get('Q') {
+            if q.value <= 0.0 {
+                return Err(LineError::new(
+                    q.span(),
+                    "Q in a peck cycle: expected a peck depth greater than zero",
+                    "Q not positive",
+                ));
+            }
+            self.cycle_q = Some(q.value * scale);
+        }
+        if let Some(p) = get('P') {
+            // In the dialect's dwell unit (Fanuc ms, LinuxCNC s), kept in seconds.
+            self.cycle_p = Some(self.dwell_seconds(line, &p, Some(p), None)?);
+        }
+        let back_bore = self.is_back_bore(code);
+        if back_bore {
+            // The shift's I J (G17), K I (G18), J K (G19): incremental, along u and v.
+            let letter = |a: Axis| match a {
+                Axis::X => 'I',
+                Axis::Y => 'J',
+                _ => 'K',
+            };
+            let (i, j) = (get(letter(u)), get(letter(v)));
+            if i.is_some() || j.is_some() {
+                let value = |w: Option<Word>| w.map_or(0.0, |w| w.value * scale);
+                self.cycle_shift = Some((value(i), value(j)));
+            }
+        }
+        Ok(back_bore)
     }
 
     /// The moves of the holes of a canned cycle: approach, the cycle's own moves down and

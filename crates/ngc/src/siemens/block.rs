@@ -141,6 +141,8 @@ impl Reader {
             "ENDWHILE" | "ENDLOOP" => self.close_loop(kw, true, span)?,
             "FOR" => self.for_statement(sc, at)?,
             "ENDFOR" => self.end_for(span)?,
+            "REPEATB" => self.section_repeat(kw, sc, at)?,
+            "REPEAT" if !sc.done() => self.section_repeat(kw, sc, at)?,
             "REPEAT" | "LOOP" => {
                 let level = self.level();
                 let (offset, line) = (level.offset, level.line);
@@ -194,6 +196,7 @@ impl Reader {
         span: std::ops::Range<usize>,
     ) -> LineResult<Structure> {
         let level = self.level();
+        level.opened.pop();
         match level.structures.pop() {
             Some(s) if is(&s) => Ok(s),
             _ => Err(crate::lex::LineError::new(
@@ -221,6 +224,7 @@ impl Reader {
                     | ("ENDLOOP", Structure::Loop { .. })
             )
         };
+        let head = self.level().opened.last().cloned();
         let s = self.pop(opens, kw, span.clone())?;
         if !again {
             return Ok(());
@@ -231,9 +235,10 @@ impl Reader {
         else {
             unreachable!("`opens` admits loops only")
         };
-        self.backward(span.clone())?;
+        self.backward(span.clone());
         if !matches!(s, Structure::While { .. }) {
-            self.open(s, span)?;
+            let head = head.unwrap_or((self.line_start.0, self.line_start.1, span));
+            self.reopen(s, head);
         }
         (self.level().offset, self.level().line) = (offset, line);
         Ok(())
@@ -291,6 +296,7 @@ impl Reader {
     }
 
     fn end_for(&mut self, span: std::ops::Range<usize>) -> LineResult<()> {
+        let head = self.level().opened.last().cloned();
         let Structure::For {
             offset,
             line,
@@ -314,16 +320,17 @@ impl Reader {
             e
         })?;
         if v <= end {
-            self.backward(span.clone())?;
-            self.open(
+            self.backward(span.clone());
+            let head = head.unwrap_or((self.line_start.0, self.line_start.1, span));
+            self.reopen(
                 Structure::For {
                     offset,
                     line,
                     var,
                     end,
                 },
-                span,
-            )?;
+                head,
+            );
             (self.level().offset, self.level().line) = (offset, line);
         }
         Ok(())

@@ -223,9 +223,17 @@ impl Reader {
                 "too deep",
             ));
         }
+        // Every run of the subprogram executes at least one block.
+        self.budget.check_passes(
+            repeats.saturating_sub(1),
+            "this subprogram call",
+            span.clone(),
+        )?;
         let Some(path) = self.find_program(name) else {
             return Err(LineError::new(span, format!("`{name}` is neither a Sinumerik keyword mtsim reads nor a subprogram it finds ({name}.SPF or {name}.MPF beside the program or on the search path)"), "unknown name or subprogram"));
         };
+        let site = (self.line_start.0, self.line_start.1, span.clone());
+        self.repeating = Some((self.levels.len() - 1, site));
         let text = crate::side_file::read_side_file(&path).map_err(|e| {
             LineError::new(
                 span.clone(),
@@ -241,6 +249,8 @@ impl Reader {
             start: (0, 1),
             repeats: repeats.saturating_sub(1),
             structures: Vec::new(),
+            opened: Vec::new(),
+            sections: Vec::new(),
             args,
         });
         self.vars.levels.push(Default::default());

@@ -3,8 +3,8 @@
 //! `GOTOF`/`GOTOB`/`GOTO`/`GOTOC` to a label (`NAME:`) or block number (`N100`).
 //!
 //! A structure is entered by evaluating its head; a false head skips forward to its
-//! partner, counting the structures nested on the way. Loops go back by byte offset, each
-//! backward jump counted against the iteration limit.
+//! partner, counting the structures nested on the way. Loops go back by byte offset; the
+//! blocks they run again count against the block budget (crate `budget`).
 
 use super::expr::Scan;
 use super::state::Structure;
@@ -37,7 +37,15 @@ pub(super) fn head(line: &str) -> (Mark, &str, usize) {
                 Mark::Open
             }
         }
-        "WHILE" | "FOR" | "REPEAT" | "LOOP" => Mark::Open,
+        // `REPEAT label P=n` repeats a section (repeat.rs): it opens nothing.
+        "REPEAT" => {
+            if sc.done() {
+                Mark::Open
+            } else {
+                Mark::Other
+            }
+        }
+        "WHILE" | "FOR" | "LOOP" => Mark::Open,
         "ELSE" => Mark::Else,
         "ENDIF" | "ENDWHILE" | "ENDFOR" | "UNTIL" | "ENDLOOP" => Mark::Close,
         _ => Mark::Other,
@@ -65,7 +73,7 @@ pub(super) fn skip_number_and_label(sc: &mut Scan) {
 }
 
 /// The block number (`N100`) and label (`NAME`) of an upper-cased line.
-fn targets(line: &str) -> (Option<&str>, Option<&str>) {
+pub(super) fn targets(line: &str) -> (Option<&str>, Option<&str>) {
     let mut sc = Scan::new(line);
     sc.eat(b'/');
     let save = sc.at;
@@ -98,7 +106,43 @@ impl Reader {
             ));
         }
         level.structures.push(s);
+        let (offset, line) = self.line_start;
+        self.level().opened.push((offset, line, span));
         Ok(())
+    }
+
+    /// Opens `s` again with the opening line it had (a loop going round).
+    pub(super) fn reopen(&mut self, s: Structure, head: (usize, usize, std::ops::Range<usize>)) {
+        let level = self.level();
+        level.structures.push(s);
+        level.opened.push(head);
+    }
+
+    /// True when a closing keyword at depth 0 follows the structure opened on the line at
+    /// byte `offset` of the current level.
+    pub(super) fn closed_after(&mut self, offset: usize) -> bool {
+        let mut depth = 0usize;
+        let mut buf = String::new();
+        let level = self.level();
+        let mut at = offset;
+        let mut first = true;
+        loop {
+            let n = level.source.line(at, &mut buf).unwrap_or(0);
+            if n == 0 {
+                return false;
+            }
+            at += n;
+            if std::mem::take(&mut first) {
+                continue;
+            }
+            buf.make_ascii_uppercase();
+            match head(&buf).0 {
+                Mark::Open => depth += 1,
+                Mark::Close if depth == 0 => return true,
+                Mark::Close => depth -= 1,
+                _ => {}
+            }
+        }
     }
 
     /// Skips forward past the partner of the structure just refused: the first `ELSE`
@@ -130,21 +174,11 @@ impl Reader {
         }
     }
 
-    /// Counts a backward jump against the iteration limit.
-    pub(super) fn backward(&mut self, span: std::ops::Range<usize>) -> LineResult<()> {
-        self.iterations += 1;
-        if self.iterations > self.max_iterations {
-            return Err(LineError::new(
-                span,
-                format!(
-                    "more than {} backward jumps (loop iterations): the program does not end",
-                    self.max_iterations
-                ),
-                "endless loop",
-            )
-            .help("raise the reader's max_iterations if the loop is meant to run this long"));
-        }
-        Ok(())
+    /// A backward jump from the current line: the construct a spent budget names (the
+    /// blocks themselves are counted as they are read, in `step`).
+    pub(super) fn backward(&mut self, span: std::ops::Range<usize>) {
+        let (offset, line) = self.line_start;
+        self.repeating = Some((self.levels.len() - 1, (offset, line, span)));
     }
 
     /// `GOTOF`/`GOTOB`/`GOTO`/`GOTOC` to `target` (a label or `N` number). `Ok(false)`:
@@ -166,7 +200,7 @@ impl Reader {
         if backward {
             let here = self.level().offset;
             if let Some(at) = self.find(target, Some(here)) {
-                self.backward(span.clone())?;
+                self.backward(span.clone());
                 (self.level().offset, self.level().line) = at;
                 return Ok(true);
             }

@@ -14,8 +14,11 @@
 //! ```
 //!
 //! Control structures nest at most [`MAX_STRUCTURES`] deep per program level, subprograms
-//! at most `Options::max_call_depth`, and backward jumps are counted against
-//! `Options::max_iterations`, so no program hangs the reader.
+//! at most `Options::max_call_depth`, and every executed block is counted against
+//! `Options::max_blocks` (crate `budget`), so no program hangs the reader.
+//!
+//! A structure still open where its program's text ends, with no closing line after its
+//! head, is an error at its opening line.
 
 mod block;
 mod cycles;
@@ -24,6 +27,7 @@ mod expr;
 mod flow;
 mod frame;
 mod plain;
+mod repeat;
 mod source;
 mod state;
 mod words;
@@ -33,6 +37,7 @@ use std::path::{Path, PathBuf};
 
 use crate::canon::Move;
 use crate::error::{Error, Result, Syntax};
+use crate::front_end::{FrontEnd, Input, Registration};
 use crate::interp::{Interp, Stop};
 use crate::lex::{lex_with, Lexed, LineError, LineResult, Word};
 use crate::notice::Notice;
@@ -59,6 +64,10 @@ struct Level {
     /// Runs left after this one.
     repeats: u64,
     structures: Vec<Structure>,
+    /// For each open structure, its opening line (offset, number) and keyword's span.
+    opened: Vec<(usize, usize, std::ops::Range<usize>)>,
+    /// Program sections being repeated (`REPEAT label P=n`), innermost last.
+    sections: Vec<state::Section>,
     /// `PROC` parameters to bind: the values the call passed.
     args: Vec<f64>,
 }
@@ -98,8 +107,11 @@ pub(crate) struct Reader {
     search_path: Vec<PathBuf>,
     user_m: Vec<u32>,
     max_depth: usize,
-    iterations: u64,
-    max_iterations: u64,
+    /// Executed blocks, against the option `max_blocks` (crate::budget).
+    budget: crate::budget::Budget,
+    /// The construct that last repeated (a backward jump, a repeated call or section): its
+    /// level, line (offset, number) and span, where a spent budget is reported.
+    repeating: Option<(usize, (usize, usize, std::ops::Range<usize>))>,
     /// The ISO block being built, and for each of its words the span of the Sinumerik
     /// words it came from: (start in `iso`, span in the source line).
     iso: String,
@@ -137,6 +149,8 @@ impl Reader {
                 start: (0, 1),
                 repeats: 0,
                 structures: Vec::new(),
+                opened: Vec::new(),
+                sections: Vec::new(),
                 args: Vec::new(),
             }],
             vars: Vars::new(),
@@ -160,8 +174,8 @@ impl Reader {
             search_path,
             user_m: options.user_m.keys().copied().collect(),
             max_depth: options.max_call_depth,
-            iterations: 0,
-            max_iterations: options.max_iterations,
+            budget: crate::budget::Budget::new(options.max_blocks),
+            repeating: None,
             iso: String::new(),
             spans: Vec::new(),
             line: String::new(),
@@ -182,6 +196,7 @@ impl Reader {
 
     /// Reads and runs the next line; `Ok(false)` at the end of the program.
     fn step(&mut self) -> Result<bool> {
+        self.section_end();
         let mut line = std::mem::take(&mut self.line);
         let level = self.levels.last_mut().expect("the main program level");
         let n = level
@@ -193,10 +208,24 @@ impl Reader {
             })?;
         if n == 0 {
             self.line = line;
+            if let Some(e) = self.unclosed() {
+                return Err(e);
+            }
             // The end of a file ends its level as M17 (or the program as M30).
             return self.end_of_level().map_err(|e| self.syntax(e));
         }
         let line_no = level.line;
+        if !self.budget.spend() {
+            self.line = line;
+            let depth = self.levels.len() - 1;
+            let (offset, line_no) = (self.levels[depth].offset, self.levels[depth].line);
+            let (depth, (offset, line_no, span)) = self
+                .repeating
+                .clone()
+                .unwrap_or((depth, (offset, line_no, 0..0)));
+            let err = self.budget.spent(span);
+            return Err(self.error_on_line(depth, offset, line_no, err));
+        }
         self.line_start = (level.offset, level.line);
         level.offset += n;
         level.line += 1;
@@ -222,6 +251,9 @@ impl Reader {
         if level.repeats > 0 {
             level.repeats -= 1;
             (level.offset, level.line) = level.start;
+            level.structures.clear();
+            level.opened.clear();
+            level.sections.clear();
             return Ok(true);
         }
         if self.levels.len() == 1 {
@@ -326,6 +358,46 @@ impl Reader {
         }))
     }
 
+    /// The error `e` on the line at byte `offset` (number `line`) of program level `depth`.
+    fn error_on_line(&mut self, depth: usize, offset: usize, line: usize, e: LineError) -> Error {
+        let mut text = String::new();
+        let mut path = None;
+        if let Some(level) = self.levels.get_mut(depth) {
+            if level.source.line(offset, &mut text).is_err() {
+                text.clear();
+            }
+            path = Some(level.path.clone());
+        }
+        let current = std::mem::replace(&mut self.line, text);
+        let mut err = self.syntax_at(e, line);
+        self.line = current;
+        if let (Error::Syntax(s), Some(path)) = (&mut err, path) {
+            // The quoted program is the level's own.
+            s.path = path;
+        }
+        err
+    }
+
+    /// At the end of a level's text: the innermost structure opened in it with no closing
+    /// line after its head, as an error at its opening line. (A loop left by a jump has its
+    /// closing line and is not reported.)
+    fn unclosed(&mut self) -> Option<Error> {
+        let depth = self.levels.len() - 1;
+        let opened = self.levels[depth].opened.clone();
+        for (offset, line, span) in opened.into_iter().rev() {
+            if !self.closed_after(offset) {
+                let err = LineError::new(
+                    span,
+                    "this structure is never closed: expected its ENDIF, ENDWHILE, ENDFOR, UNTIL or ENDLOOP before the end of the program",
+                    "unclosed structure",
+                );
+                self.finished = true;
+                return Some(self.error_on_line(depth, offset, line, err));
+            }
+        }
+        None
+    }
+
     fn syntax(&self, e: LineError) -> Error {
         let line = self.levels.last().map_or(1, |l| l.line.saturating_sub(1));
         self.syntax_at(e, line)
@@ -354,6 +426,30 @@ impl Reader {
                 }
             }
         }
+    }
+}
+
+/// The Sinumerik front end's entry in `reader::FRONT_ENDS`: it reads a program of the
+/// `siemens` dialect (a program in memory as its text, a file streamed its own way).
+pub(crate) const FRONT_END: Registration = Registration {
+    dialect: |d| d == Dialect::Siemens,
+    first_line: None,
+    open: |path, input, options| {
+        let text = match &input {
+            Input::Source(crate::source::Source::Text(text)) => Some(&**text),
+            _ => None,
+        };
+        Ok(Box::new(Reader::new(path, text, options)?))
+    },
+};
+
+impl FrontEnd for Reader {
+    fn next_move(&mut self) -> Option<Result<Move>> {
+        Reader::next_move(self)
+    }
+
+    fn notices(&self) -> &[Notice] {
+        Reader::notices(self)
     }
 }
 

@@ -1,5 +1,8 @@
 //! The state types the front end's files share, in a leaf of their own: the open control
-//! structures, the variables a block assigns, a drilling cycle's values.
+//! structures, the sections being repeated, the variables a block assigns, a drilling
+//! cycle's values.
+
+use std::ops::Range;
 
 /// An open control structure of a program level.
 pub(super) enum Structure {
@@ -41,4 +44,18 @@ pub(super) struct Cycle {
     pub approach: f64,
     pub depth: f64,
     pub dwell_s: f64,
+}
+
+/// A section being repeated.
+pub(super) struct Section {
+    /// Byte offset and 1-based number of its first line.
+    pub(super) start: (usize, usize),
+    /// The byte offset that ends a pass.
+    pub(super) end: usize,
+    /// Passes still to run after this one.
+    pub(super) left: u64,
+    /// Where the program goes on after the last pass: the line after the `REPEAT`.
+    pub(super) back: (usize, usize),
+    /// The `REPEAT` line (offset, number) and the statement's span.
+    pub(super) site: (usize, usize, Range<usize>),
 }

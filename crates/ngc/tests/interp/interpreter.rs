@@ -169,10 +169,10 @@ fn subroutine_files_load_from_the_search_path() {
 #[test]
 fn endless_loops_and_recursion_stop_with_a_clear_error() {
     let mut o = opts(Dialect::Linuxcnc);
-    o.max_iterations = 1000;
+    o.max_blocks = 1000;
     let (line, _, msg) = error_with("o1 while [1]\no1 endwhile\n", &o);
     assert_eq!(line, 2);
-    assert!(msg.contains("more than 1000 loop iterations"), "{msg}");
+    assert!(msg.contains("more than 1000 blocks executed"), "{msg}");
     let (_, _, msg) = error_with(
         "o<r> sub\no<r> call\no<r> endsub\no<r> call\n",
         &opts(Dialect::Linuxcnc),
@@ -181,11 +181,11 @@ fn endless_loops_and_recursion_stop_with_a_clear_error() {
     let (_, _, msg) = error_with(
         "N1 GOTO 1\n",
         &Options {
-            max_iterations: 50,
+            max_blocks: 50,
             ..opts(Dialect::Fanuc)
         },
     );
-    assert!(msg.contains("more than 50 loop iterations"), "{msg}");
+    assert!(msg.contains("more than 50 blocks executed"), "{msg}");
 }
 
 #[test]

@@ -294,7 +294,7 @@ fn unsupported_constructs_are_refused_by_name_at_their_line() {
 #[test]
 fn endless_loops_and_deep_calls_stop_at_the_limits() {
     let o = Options {
-        max_iterations: 1000,
+        max_blocks: 1000,
         ..opts()
     };
     let text = program("2 LBL 1\n3 L IX+1 F100\n4 FN 9: IF +0 EQU +0 GOTO LBL 1");

@@ -5,9 +5,7 @@
 
 use std::path::Path;
 
-mod common;
-
-use common::{compensated_options, G42_ARCS};
+use crate::common::{compensated_options, G42_ARCS};
 use ngc::{read_str_with, Dialect, Move, Options};
 
 /// Programs of each front end, with the options they are read with.

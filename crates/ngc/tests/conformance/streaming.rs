@@ -99,9 +99,11 @@ const JUMPS: [&str; 6] = [
 
 /// Moves of each of [`JUMPS`], counted by hand: 5 + 3 loop passes; 2 calls + 4 do-while
 /// passes; the elseif branch + 2 passes before the break; 3 WHILE passes + 3 GOTO passes +
-/// 2 M98 repeats; X1 and the endless loop's first pass and 1000 repeats (then the limit's
-/// error); the move before the bad word.
-const MOVES: [usize; 6] = [8, 6, 3, 8, 1002, 1];
+/// 2 M98 repeats; X1 and 333 passes of the endless loop (then the block budget's error:
+/// the i-th `G1 X2` is block 3i + 1, or 3i + 2 after the extra comment line of the invalid
+/// UTF-8 variant, and at most 1001 blocks run, so i ≤ 333 either way); the move before the
+/// bad word.
+const MOVES: [usize; 6] = [8, 6, 3, 8, 334, 1];
 
 #[test]
 fn jumps_read_the_same_with_lf_crlf_and_invalid_utf8() {
@@ -114,7 +116,7 @@ fn jumps_read_the_same_with_lf_crlf_and_invalid_utf8() {
         };
         let options = Options {
             dialect,
-            max_iterations: 1000,
+            max_blocks: 1001,
             ..Options::default()
         };
         let crlf = program.replace('\n', "\r\n");
@@ -218,7 +220,7 @@ proptest! {
         let text = lines.join(end);
         let options = Options {
             dialect: Dialect::Linuxcnc,
-            max_iterations: 200,
+            max_blocks: 200,
             ..Options::default()
         };
         let (from_file, from_str) = both(&dir.join("p.ngc"), text.as_bytes(), &options);

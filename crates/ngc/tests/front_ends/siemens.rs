@@ -262,11 +262,14 @@ fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
 #[test]
 fn loops_and_nesting_are_bounded() {
     let mut o = options(Dialect::Siemens, Path::new("."));
-    o.max_iterations = 1000;
+    o.max_blocks = 1000;
     let err = read_str_with(Path::new("t.mpf"), "LOOP\nG0 X1\nENDLOOP\n", &o)
         .find_map(|m| m.err())
         .expect("an endless loop is an error");
-    assert!(err.to_string().contains("backward jumps"), "{err}");
+    assert!(
+        err.to_string().contains("more than 1000 blocks executed"),
+        "{err}"
+    );
     let deep = "IF 1\n".repeat(17) + &"ENDIF\n".repeat(17);
     let (line, _, m) = error(&deep);
     assert_eq!(line, 17, "{m}");
@@ -311,7 +314,7 @@ fn a_long_program_file_streams_and_jumps_back_by_offset() {
 }
 
 /// Wall time of the Siemens front end against the Fanuc reader on the same 1M-block G01
-/// file (`cargo test --release -p ngc --test siemens timing -- --ignored --nocapture`;
+/// file (`cargo test --release -p ngc --test front_ends siemens::timing -- --ignored --nocapture`;
 /// the benchmark `benches/read.rs` measures the same).
 #[test]
 #[ignore]
@@ -385,7 +388,7 @@ fn deep_or_overflowing_expressions_and_garbage_are_errors_not_crashes() {
             }
         }
         let o = Options {
-            max_iterations: 100,
+            max_blocks: 100,
             ..options(Dialect::Siemens, Path::new("."))
         };
         let _ = read_str_with(Path::new("t.mpf"), &text, &o)

@@ -5,9 +5,7 @@
 
 use std::path::Path;
 
-mod common;
-
-use common::{compensated_options, G42_ARCS};
+use crate::common::{compensated_options, G42_ARCS};
 use ngc::{read_str_with, Axis, Dialect, Error, Motion, MoveKind, Options};
 
 const G41_LINES: &str = "G21 G17 G90 G40\nT1 M6\nG0 X-20 Y-20\nG41 D1 G1 X0 Y0 F100\nG1 X50 Y0\nG1 X50 Y30\nG1 X20 Y30\nG1 X0 Y0\nG40 G1 X-20 Y-20\nM2\n";

@@ -2,7 +2,7 @@
 //! or one error, and stops.
 //!
 //! CI runs a short run (256 cases per property). The long run of 10^6 cases:
-//! `NGC_FUZZ_CASES=1000000 cargo test --release -p ngc --test robustness` (docs/gcode.md).
+//! `NGC_FUZZ_CASES=1000000 cargo test --release -p ngc --test conformance robustness::` (docs/gcode.md).
 
 use std::path::Path;
 
@@ -28,7 +28,7 @@ const ALPHABET: [&str; 46] = [
 fn options(dialect: Dialect) -> Options {
     Options {
         dialect,
-        max_iterations: 2000,
+        max_blocks: 2000,
         tools: vec![ngc::Tool {
             number: 1,
             length_mm: 20.0,

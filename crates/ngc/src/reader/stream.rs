@@ -1,0 +1,427 @@
+//! The streaming core of the ISO family's reader: a line at the cursor, its o-word or macro
+//! statement or its words (lexed into a reused buffer), the interpreter's block, and the
+//! queue of moves it fills. Every line read counts against the block budget.
+
+use std::collections::VecDeque;
+use std::path::Path;
+use std::rc::Rc;
+
+use crate::budget::Budget;
+use crate::canon::Move;
+use crate::error::{Error, Result};
+use crate::interp::{Interp, Stop};
+use crate::lex::{lex_with, Lexed, LineError, LineResult, Word};
+use crate::notice::Notice;
+use crate::options::Options;
+use crate::source::Source;
+
+use super::oword::{after_line_number, macro_line, oline};
+use super::state::{Cursor, IsoReader, Program};
+use crate::front_end::{FrontEnd, Registration};
+
+impl IsoReader {
+    pub(super) fn new(path: &Path, source: Source, options: &Options) -> IsoReader {
+        IsoReader {
+            programs: vec![Program {
+                path: path.to_path_buf(),
+                source,
+                subs: None,
+            }],
+            cursor: Cursor {
+                file: 0,
+                offset: 0,
+                line: 1,
+            },
+            interp: Interp::new(options),
+            dialect: options.dialect,
+            search_path: options.search_path.clone(),
+            queue: VecDeque::new(),
+            lent: false,
+            frames: Vec::new(),
+            loops: Vec::new(),
+            ifs: Vec::new(),
+            budget: Budget::new(options.max_blocks),
+            repeating: None,
+            max_call_depth: options.max_call_depth,
+            finished: false,
+            flushed: false,
+            percent_seen: false,
+            language_checked: false,
+            notices: Vec::new(),
+            buf: String::new(),
+            words: Vec::new(),
+            io_error: None,
+            remaps: options.remaps.clone(),
+            resume: None,
+            remaps_noticed: Vec::new(),
+            abort: None,
+            commit: None,
+            modal_remap: None,
+            sticky: Default::default(),
+        }
+    }
+
+    /// Reads on until a move is queued, the program ends, or an error.
+    pub(super) fn step(&mut self) -> Result<()> {
+        if !self.language_checked {
+            self.language_checked = true;
+            if let Some(e) = self.foreign_language() {
+                self.finished = true;
+                return Err(e);
+            }
+            if self.dialect.table().leader_before_percent {
+                self.skip_leader();
+            }
+        }
+        if let Some((here, span, message)) = self.abort.take() {
+            self.finished = true;
+            return Err(self.error_at(here, LineError::new(span, message, "remap epilog"), ""));
+        }
+        if let Some(c) = self.commit.take() {
+            self.interp.glue_commit(&c);
+        }
+        if let Some(r) = self.resume.take() {
+            let line = r.line.as_str();
+            let words: Vec<Word> = r
+                .words
+                .iter()
+                .map(|(letter, value, number, span)| Word {
+                    letter: *letter,
+                    value: *value,
+                    number: &line[number.clone()],
+                    span: *span,
+                })
+                .collect();
+            let next = self.cursor;
+            // The rest of the block may hold further remapped codes (`S300 M3 F50` with S
+            // and F remapped: F, then S, then M3).
+            let split = if self.remaps.is_empty() {
+                Ok(None)
+            } else {
+                let busy: Vec<usize> = self.frames.iter().filter_map(|f| f.remap).collect();
+                crate::remap::split(&self.remaps, &words, line, &busy, self.modal_remap)
+            };
+            let result = split.and_then(|s| match s {
+                Some(s) => self.run_remap(line, &words, s, r.here, next),
+                None => self.run_block(line, &words, r.here, next),
+            });
+            return result.map_err(|e| {
+                self.finished = true;
+                self.error_at(r.here, e, line)
+            });
+        }
+        let here = self.cursor;
+        let Some((line, next)) = self.line_at(here) else {
+            if let Some(e) = self.io_error.take() {
+                self.finished = true;
+                return Err(Error::Read {
+                    path: self.programs[here.file].path.clone(),
+                    source: e,
+                });
+            }
+            if let Some(e) = self.unclosed() {
+                self.finished = true;
+                return Err(e);
+            }
+            if let Some(f) = self.frames.last() {
+                if self.programs[f.start.file].is_empty() || f.start.file != 0 {
+                    // A Fanuc subprogram file without M99 returns at its end.
+                    if self.dialect.table().macro_b && self.ret(None) {
+                        return Ok(());
+                    }
+                }
+            }
+            self.finished = true;
+            return Ok(());
+        };
+        let len = line.len();
+        if !self.budget.spend() {
+            self.finished = true;
+            let (at, span) = self.repeating.clone().unwrap_or((here, 0..len));
+            let line = if at == here {
+                self.buf_line(here, len)
+            } else {
+                String::new()
+            };
+            return Err(self.error_at(at, self.budget.spent(span), &line));
+        }
+        // Own the line while the interpreter changes state: share the text (a reference
+        // count, no copy), or take the file's line buffer (given back below).
+        let owner = match &self.programs[here.file].source {
+            Source::Text(text) => LineOwner::Shared(Rc::clone(text)),
+            Source::File(_) => LineOwner::Buffer(std::mem::take(&mut self.buf)),
+        };
+        let line = match &owner {
+            LineOwner::Shared(text) => &text[here.offset..here.offset + len],
+            LineOwner::Buffer(buf) => buf.as_str(),
+        };
+        // Field by field (docs/performance.md); the file is the same.
+        self.cursor.offset = next.offset;
+        self.cursor.line = next.line;
+        let result = self.line(line, here, next).map_err(|e| {
+            self.finished = true;
+            self.error_at(here, e, line)
+        });
+        if let LineOwner::Buffer(buf) = owner {
+            self.buf = buf;
+        }
+        if result.is_ok() {
+            if let Some(e) = self.io_error.take() {
+                self.finished = true;
+                return Err(Error::Read {
+                    path: self.programs[here.file].path.clone(),
+                    source: e,
+                });
+            }
+        }
+        result?;
+        Ok(())
+    }
+
+    pub(super) fn line(&mut self, line: &str, here: Cursor, next: Cursor) -> LineResult<()> {
+        let b = line.as_bytes();
+        let first = after_line_number(b);
+        match b.get(first) {
+            Some(b'o' | b'O') => {
+                if let Some(o) = oline(line)? {
+                    self.o_word(line, o, here, next)?;
+                    return Ok(());
+                }
+            }
+            Some(b'/') => return Ok(()),
+            Some(c) if self.dialect.table().macro_b && c.is_ascii_alphabetic() => {
+                if let Some((m, at, rest)) = macro_line(line) {
+                    return self.macro_statement(line, m, at, rest, here, next);
+                }
+            }
+            _ => {}
+        }
+        if has_hash_or_bracket(b) {
+            self.interp.refresh_system_parameters();
+        }
+        let words = reuse(std::mem::take(&mut self.words));
+        let lexed = lex_with(
+            line,
+            &self.interp.params,
+            self.dialect.table().macro_b,
+            words,
+        )?;
+        match lexed {
+            Lexed::Nothing => Ok(()),
+            Lexed::Percent => {
+                if self.percent_seen {
+                    self.finished = true;
+                } else {
+                    self.percent_seen = true;
+                }
+                Ok(())
+            }
+            Lexed::Words { words, assigns } => {
+                if !assigns.is_empty() {
+                    for (p, v) in &assigns {
+                        self.interp.params.set(p, *v);
+                    }
+                    self.interp.parameters_changed();
+                }
+                if words.is_empty() {
+                    self.words = reuse(words);
+                    return Ok(());
+                }
+                let remap = if self.remaps.is_empty() {
+                    None
+                } else {
+                    let busy: Vec<usize> = self.frames.iter().filter_map(|f| f.remap).collect();
+                    if !busy.is_empty() && crate::remap::uses_builtin(&self.remaps, &words, &busy) {
+                        if let Some(e) = self
+                            .frames
+                            .iter_mut()
+                            .rev()
+                            .find(|f| f.remap.is_some())
+                            .and_then(|f| f.epilog.as_mut())
+                        {
+                            e.builtin_used = true;
+                        }
+                    }
+                    if self.modal_remap.is_some() && crate::remap::sets_motion(&words) {
+                        self.modal_remap = None;
+                    }
+                    crate::remap::split(&self.remaps, &words, line, &busy, self.modal_remap)?
+                };
+                let result = match remap {
+                    Some(s) => self.run_remap(line, &words, s, here, next),
+                    None => self.run_block(line, &words, here, next),
+                };
+                self.words = reuse(words);
+                // Not `result`: that copied the whole (large) result on every block.
+                result?;
+                Ok(())
+            }
+        }
+    }
+
+    /// Interprets one block's words and follows its stop (end, call, return).
+    pub(super) fn run_block(
+        &mut self,
+        line: &str,
+        words: &[Word],
+        here: Cursor,
+        next: Cursor,
+    ) -> LineResult<()> {
+        let stop = self.interp.block(
+            line,
+            words,
+            here.line,
+            &mut self.queue,
+            &mut self.notices,
+            &self.programs[here.file].path,
+        )?;
+        match stop {
+            Stop::None => {}
+            Stop::End => self.finished = true,
+            Stop::Call {
+                label,
+                repeats,
+                args,
+                locals,
+                span,
+            } => {
+                self.call(&label, &args, locals, repeats, here, next, span)?;
+            }
+            Stop::Return { span } => {
+                if !self.ret(None) {
+                    if self.dialect.table().macro_b {
+                        // M99 in the main program: end (a real control would restart it).
+                        self.finished = true;
+                    } else {
+                        return Err(LineError::new(
+                            span,
+                            "M99 outside a subprogram",
+                            "no subprogram",
+                        ));
+                    }
+                }
+            }
+            Stop::SaveForReturn(saved) => {
+                if let Some(f) = self.frames.last_mut() {
+                    f.restore = Some(saved);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads on until a move is queued (`Ok` with an empty queue: the program has ended).
+    /// After an error the queue is empty and the reader done.
+    pub(super) fn fill_queue(&mut self) -> Result<()> {
+        while self.queue.is_empty() {
+            if self.finished {
+                if self.flushed {
+                    return Ok(());
+                }
+                // A compensated element still held ends as at G40.
+                self.flushed = true;
+                self.interp.finish(&mut self.queue);
+                continue;
+            }
+            if let Err(e) = self.step() {
+                self.queue.clear();
+                self.interp.discard();
+                self.flushed = true;
+                return Err(e);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// An emptied vector of words, its allocation kept, for words that borrow another line.
+/// (Collecting a vector's own `into_iter` into the same layout reuses its allocation.)
+pub(super) fn reuse<'a, 'b>(mut words: Vec<Word<'a>>) -> Vec<Word<'b>> {
+    words.clear();
+    words.into_iter().map(|_| Word::EMPTY).collect()
+}
+
+/// The line being interpreted, owned apart from the reader's state.
+pub(super) enum LineOwner {
+    Shared(Rc<str>),
+    Buffer(String),
+}
+
+pub(super) fn has_hash_or_bracket(bytes: &[u8]) -> bool {
+    const ONES: u64 = 0x0101_0101_0101_0101;
+    const HIGHS: u64 = 0x8080_8080_8080_8080;
+    let zero = |v: u64| v.wrapping_sub(ONES) & !v & HIGHS;
+    let mut chunks = bytes.chunks_exact(8);
+    for chunk in &mut chunks {
+        let mut word = [0u8; 8];
+        word.copy_from_slice(chunk);
+        let w = u64::from_le_bytes(word);
+        if zero(w ^ (ONES * b'#' as u64)) | zero(w ^ (ONES * b'[' as u64)) != 0 {
+            return true;
+        }
+    }
+    chunks.remainder().iter().any(|&c| c == b'#' || c == b'[')
+}
+
+/// The ISO G-code family reads every dialect no other front end claims: it is the last of
+/// `reader::FRONT_ENDS`.
+pub(crate) const FRONT_END: Registration = Registration {
+    dialect: |_| true,
+    first_line: None,
+    open: |path, input, options| {
+        let source = input.into_source(path)?;
+        Ok(Box::new(IsoReader::new(path, source, options)))
+    },
+};
+
+impl FrontEnd for IsoReader {
+    fn next_move(&mut self) -> Option<Result<Move>> {
+        if std::mem::take(&mut self.lent) {
+            self.queue.pop_front();
+        }
+        if let Err(e) = self.fill_queue() {
+            return Some(Err(e));
+        }
+        self.queue.pop_front().map(Ok)
+    }
+
+    /// The next move, lent in place: without moving the (large) move out of the reader's
+    /// queue; it leaves the queue at the next call of either.
+    fn next_ref<'a>(&'a mut self, _slot: &'a mut Option<Move>) -> Option<Result<&'a Move>> {
+        if std::mem::take(&mut self.lent) {
+            self.queue.pop_front();
+        }
+        if let Err(e) = self.fill_queue() {
+            return Some(Err(e));
+        }
+        self.lent = true;
+        self.queue.front().map(Ok)
+    }
+
+    fn notices(&self) -> &[Notice] {
+        &self.notices
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::has_hash_or_bracket;
+
+    #[test]
+    fn a_hash_or_bracket_is_found_at_every_place_of_every_short_line() {
+        // Bytes next to `#` (0x23) and `[` (0x5b), and ones whose difference from them
+        // borrows across bytes in the 8-byte test.
+        let filler = b"G1X-0.5\"$ZZ\\\x01\xff";
+        for len in 0..=24 {
+            let line: Vec<u8> = (0..len).map(|k| filler[k % filler.len()]).collect();
+            assert!(!has_hash_or_bracket(&line), "{len}: none in {line:?}");
+            for at in 0..len {
+                for c in [b'#', b'['] {
+                    let mut with = line.clone();
+                    with[at] = c;
+                    assert!(has_hash_or_bracket(&with), "{} at {at} of {len}", c as char);
+                }
+            }
+        }
+    }
+}

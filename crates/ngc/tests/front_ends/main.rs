@@ -1,0 +1,12 @@
+//! The front ends behind `FrontEnd`: HEIDENHAIN Klartext, Siemens Sinumerik, the Fanuc and
+//! Haas dialects as CAM posts write them, moves lent in place by every front end, and the
+//! one budget of executed blocks every front end counts.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod budget;
+mod fanuc_haas;
+mod heidenhain;
+mod lent_moves;
+mod siemens;

@@ -1,0 +1,9 @@
+//! The modal interpreter's phases: parameters and flow, offsets, tools and cycles, lathe
+//! codes, the secondary axes U V W, tilted work planes, and LinuxCNC remaps with their
+//! stdglue handlers.
+
+mod interpreter;
+mod lathe;
+mod remap_glue;
+mod secondary_axes;
+mod tilted;

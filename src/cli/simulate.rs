@@ -13,7 +13,7 @@ pub fn run(
     path: &Path,
     out_dir: &Path,
     as_json: bool,
-    timing: bool,
+    (timing, with_budget): (bool, bool),
     html: bool,
     trace_format: Option<TraceFormat>,
 ) -> Result<i32> {
@@ -26,9 +26,10 @@ pub fn run(
     let target = out_dir;
     let out_dir = run_dir.path();
     let bar = spinner("simulating");
-    let summary = crate::study::simulate::simulate(&scenario, out_dir, timing, &|t| {
-        bar.set_message(format!("{t:.1} s of machine time"))
-    })?;
+    let summary =
+        crate::study::simulate::simulate_with(&scenario, out_dir, timing, with_budget, &|t| {
+            bar.set_message(format!("{t:.1} s of machine time"))
+        })?;
     bar.finish_and_clear();
     for w in &summary.warnings {
         super::warn(w);

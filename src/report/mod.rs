@@ -9,6 +9,7 @@
 //! and [`run::Diagnosis`] (filled by `study::diagnose`). Run folders are read back with serde
 //! into those types ([`run::RunFolder`]), traces through [`trace::read_trace`].
 
+pub mod budget_table;
 pub mod files;
 pub mod fit_plot;
 pub mod html;

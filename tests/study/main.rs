@@ -4,6 +4,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod budget;
 mod cone_reference;
 mod diagnose;
 mod fit;

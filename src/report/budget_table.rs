@@ -7,8 +7,19 @@ use std::fmt::Write as _;
 use super::html::esc;
 use super::run::{BudgetMechanism, BudgetRow, ErrorBudget};
 
+/// Below this G, µm, the shares are not put into words: projections on so flat a curve are
+/// ill-conditioned (two rows of a few µm that cancel can take shares of ±1000).
+pub const HEADLINE_G_MIN_UM: f64 = 0.05;
+
 /// The sentence on top of the table: the largest share in words, with the advice for it.
 pub fn headline(budget: &ErrorBudget) -> String {
+    if !(budget.g_um >= HEADLINE_G_MIN_UM) {
+        return format!(
+            "G is {:.3} µm: too small to split into parts; the rows' peak-to-valleys say what \
+             each mechanism alone would draw.",
+            budget.g_um
+        );
+    }
     let top = budget
         .rows
         .iter()
@@ -33,8 +44,17 @@ pub fn headline(budget: &ErrorBudget) -> String {
 fn what(row: &BudgetRow) -> String {
     match (&row.axis, row.mechanism) {
         (_, BudgetMechanism::Program) => "the program's own path".to_string(),
+        (None, BudgetMechanism::Servo) => "the servos' common lag".to_string(),
         (Some(a), m) => format!("the {a} axis's {}", m.name()),
         (None, m) => format!("the {}", m.name()),
+    }
+}
+
+/// A row's mechanism in the table.
+fn row_name(row: &BudgetRow) -> String {
+    match (&row.axis, row.mechanism) {
+        (None, BudgetMechanism::Servo) => "servos' common lag".to_string(),
+        (_, m) => m.name().to_string(),
     }
 }
 
@@ -43,6 +63,10 @@ fn advice(row: &BudgetRow) -> String {
     let axis = row.axis.as_deref().unwrap_or("the");
     match row.mechanism {
         BudgetMechanism::Program => "raise the segment count or use TCP".to_string(),
+        BudgetMechanism::Servo if row.axis.is_none() => {
+            "raise the feedforward of every axis (the same on each), or run at a lower feed"
+                .to_string()
+        }
         BudgetMechanism::Servo => format!(
             "match the {axis} axis's position-loop gain to the others' or raise its feedforward"
         ),
@@ -87,7 +111,7 @@ pub fn budget_section(budget: Option<&ErrorBudget>) -> String {
             esc(&key),
             esc(axis),
             i + 1,
-            esc(r.mechanism.name()),
+            esc(&row_name(r)),
             esc(axis),
             r.pv_um,
             100.0 * r.share,
@@ -122,6 +146,19 @@ mod tests {
             pv_um: 1.0,
             share,
         }
+    }
+
+    #[test]
+    fn a_flat_curve_is_not_split() {
+        let budget = ErrorBudget {
+            g_um: 0.001,
+            rows: vec![
+                row(BudgetMechanism::Servo, Some("X"), 2500.0),
+                row(BudgetMechanism::Servo, Some("Y"), -2499.0),
+            ],
+            interaction_share: 0.0,
+        };
+        assert!(headline(&budget).starts_with("G is 0.001 µm: too small"));
     }
 
     #[test]

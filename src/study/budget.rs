@@ -10,14 +10,21 @@
 //! | run | actual positions q | measured against |
 //! |---|---|---|
 //! | program | q = s (the setpoint) | nothing: its curve is the row |
-//! | servo of axis a | s, with q_a from a's linear twin (no backlash, no dry friction) | program |
-//! | backlash of a | s, with q_a from a's drive with its backlash and no dry friction | servo of a |
-//! | friction of a | s, with q_a from a's drive with its dry friction (and pre-sliding), no backlash | servo of a |
+//! | servos' common lag (axis null) | every axis through one first-order loop of gain 1/τ̄ | program |
+//! | servo of axis a | the common lag's, with q_a from a's linear twin (no backlash, no dry friction) | common lag |
+//! | backlash of a | the same, q_a from a's drive with its backlash and no dry friction | servo of a |
+//! | friction of a | the same, q_a from a's drive with its dry friction (and pre-sliding), no backlash | servo of a |
 //! | geometric | s, read through the chain with the location errors | program |
 //! | error table of a | s, with `q_a = s_a + e_a(s_a, direction)` | program |
 //!
-//! Friction and backlash ride on their axis's servo, as they do on the machine: a row is
-//! the run's curve minus its servo's. Rows are built only for mechanisms the machine has
+//! `τ̄` is the mean of the axes' velocity lags `τ_a = (1 − k_vff,a)/Kv_a` over the axes the
+//! program moves (a circle's two; every axis otherwise). Identical dynamics on every axis
+//! draw almost nothing on the bar (the spec's closed form 6), while one axis lagging alone
+//! draws hundreds of µm that the others' lags cancel: measured against the common loop, a
+//! servo row is what that axis's loop does differently from the others (its gain mismatch,
+//! its inner loops), and what they do alike is the common lag's row (on a cone, the program's
+//! own curve seen a lag later). Friction and backlash ride on their axis's servo, as they do
+//! on the machine: a row is the run's curve minus its servo's. Rows are built only for mechanisms the machine has
 //! (a drive with backlash, dry friction on a cascade drive, location errors, a table) on
 //! axes the program moves; the machine file has no squareness of the linear axes, so no
 //! squareness row is ever made.

@@ -56,8 +56,8 @@
 //! `c_lm = dL_backlash + dL_friction − 2 dL_servo` (raw, per sample). Away from a reversal
 //! the table lags the linear twin by half the lost motion δ in the direction of motion, so
 //! `c_lm(θ) ≈ −(δ/2) sgn(v_a) S_a(θ)` with `S_a = ∂dL/∂q_a` (central difference at the
-//! servo run's q). Over the θ bins where the axis moves at least a fifth of its top speed
-//! (the take-up after a reversal left out), by least squares,
+//! servo run's q, at a bin's first sample). Over the θ bins where the axis moves at least a
+//! fifth of its top speed (the take-up after a reversal left out), by least squares,
 //!
 //! ```text
 //! δ = −2 Σ c̄_lm g / Σ g²,     g = sgn(v̄_a) S̄_a
@@ -304,7 +304,9 @@ fn common_lag_s(scenario: &Scenario) -> Result<f64> {
     })
 }
 
-/// Sums over one θ bin of B's fit: samples, `c_lm`, `S_a`, `v_a`.
+/// One θ bin of B's fit: sums over its samples of `c_lm` and `v_a`, and `S_a` at its first
+/// sample (smooth in θ: a 0.05° bin holds a few samples, and the difference costs two
+/// readings).
 #[derive(Clone, Copy, Debug, Default)]
 struct LostBin {
     n: u64,
@@ -441,20 +443,21 @@ impl BudgetRun<'_> {
             let Source::Servo(i) = plan.cases[lost.servo_case].source else {
                 continue;
             };
-            let mut q = delayed;
-            q[a] = self.servos[i].actual();
-            let (mut up, mut down) = (q, q);
-            up[a] += DIFF_STEP;
-            down[a] -= DIFF_STEP;
-            let at = |q: &AxisVec| match a.is_rotary() {
-                true => reading.to_ball(q, reading.ball_at(q).as_ref()),
-                false => reading.to_ball(q, delayed_ball.as_ref()),
-            };
-            let slope = (at(&up) - at(&down)) / (2.0 * DIFF_STEP);
             let b = &mut bins[bin];
+            if b.n == 0 {
+                let mut q = delayed;
+                q[a] = self.servos[i].actual();
+                let (mut up, mut down) = (q, q);
+                up[a] += DIFF_STEP;
+                down[a] -= DIFF_STEP;
+                let at = |q: &AxisVec| match a.is_rotary() {
+                    true => reading.to_ball(q, reading.ball_at(q).as_ref()),
+                    false => reading.to_ball(q, delayed_ball.as_ref()),
+                };
+                b.s = (at(&up) - at(&down)) / (2.0 * DIFF_STEP);
+            }
             b.n += 1;
             b.c += c;
-            b.s += slope;
             b.v += self.velocity[a];
         }
     }
@@ -720,7 +723,7 @@ fn fitted_lost_motion<'b>(directions: impl Iterator<Item = &'b [LostBin]>) -> Op
             if top == 0.0 || v.abs() < B_SPEED_FRACTION * top {
                 continue;
             }
-            let g = v.signum() * mean(b, b.s);
+            let g = v.signum() * b.s;
             cg += mean(b, b.c) * g;
             gg += g * g;
         }
@@ -757,7 +760,7 @@ mod tests {
                 LostBin {
                     n: 2,
                     c: 2.0 * (-0.5 * delta * v.signum() * s),
-                    s: 2.0 * s,
+                    s,
                     v: 2.0 * v,
                 }
             })

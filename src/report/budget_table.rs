@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use super::html::esc;
+use super::escape::esc;
 use super::run::{BudgetMechanism, BudgetRow, ErrorBudget};
 
 /// Below this G, µm, the shares are not put into words: projections on so flat a curve are

@@ -38,13 +38,7 @@ const POSITION_RESOLUTION: f64 = 1e-5;
 /// Points per curve after decimation (per direction).
 const BUCKETS: usize = 900;
 
-/// Escapes text for HTML.
-pub fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
+pub use super::escape::esc;
 
 /// An SVG document as an inline element: without the XML prolog, with a class and a
 /// `data-plot` name (for tests), scaled to the page width.

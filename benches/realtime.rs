@@ -22,6 +22,8 @@
 //! skips the rest (a CI smoke run); `MTSIM_BENCH_ONLY=process` runs only the whole processes;
 //! `MTSIM_BENCH_ONLY=off` runs only the simulate cases whose name contains `off`
 //! (`file-fine`: the 36,000-block file alone);
+//! `MTSIM_BENCH_ONLY=budget` runs only `simulate` with the error budget against
+//! `--no-budget`, side by side;
 //! `MTSIM_BENCH_RUNS=N` runs each simulate case N times (for profiling).
 //! It prints figures; it asserts nothing (timing is not a test).
 
@@ -31,7 +33,7 @@ use std::time::Instant;
 
 use mtsim::check::{check, CheckOptions};
 use mtsim::input::scenario::Scenario;
-use mtsim::study::simulate::simulate;
+use mtsim::study::simulate::{simulate, simulate_with};
 
 mod common;
 use common::process_cpu_s;
@@ -61,6 +63,22 @@ fn simulate_rtf(scenario: &Path, out: &Path, runs: usize) -> (f64, f64, f64) {
     }
     let best = rtf.iter().cloned().fold(0.0, f64::max);
     (sim_time, median(rtf), best)
+}
+
+/// `simulate` with and without the error budget side by side (runs alternating, so that a
+/// drift in the machine's load hits both): the median CPU time of each, ms, and their ratio.
+fn budget_cost(scenario: &Path, out: &Path, runs: usize) -> (f64, f64, f64) {
+    let scenario = Scenario::load(scenario).unwrap();
+    let (mut with, mut without) = (Vec::new(), Vec::new());
+    for _ in 0..runs {
+        for (budget, times) in [(false, &mut without), (true, &mut with)] {
+            let t = cpu_now();
+            simulate_with(&scenario, out, false, budget, &|_| {}).unwrap();
+            times.push(cpu_now() - t);
+        }
+    }
+    let (with, without) = (median(with), median(without));
+    (without * 1e3, with * 1e3, with / without.max(1e-9))
 }
 
 fn root() -> PathBuf {
@@ -338,6 +356,24 @@ fn main() {
             "simulate cone-15-10, friction + backlash on X Y Z A C, linear twin, {name}: {sim_time:.2} s machine time; real-time factor (per CPU second) median {med:.0}x, best {best:.0}x ({runs} runs){ratio}"
         );
     }
+    // The error budget's cost: `simulate` with it against `simulate --no-budget`, on the
+    // bundled cone (friction on every axis) and with every nonlinearity on (`MTSIM_BENCH_ONLY=budget`).
+    if only.is_empty() || only == "budget" {
+        let stock = root().join("scenarios/cone-15-10.toml");
+        for (name, path) in [
+            ("cone-15-10 as bundled (friction on X Y Z A C)", stock),
+            (
+                "cone-15-10, friction + backlash on X Y Z A C",
+                cases[0].1.clone(),
+            ),
+        ] {
+            let (without, with, ratio) = budget_cost(&path, &dir.join("out-budget"), runs);
+            println!(
+                "simulate {name}, full trace: without the error budget {without:.1} ms CPU, with it {with:.1} ms (median of {runs}); ratio {ratio:.2} (goal <= 3: {})",
+                if ratio <= 3.0 { "met" } else { "NOT met" }
+            );
+        }
+    }
     // The same two cones as G-code files, full trace: the interpreter reads every block.
     // `MTSIM_BENCH_ONLY=file-fine` runs the 36,000-block file alone (for profiling).
     if only.is_empty() || "file".contains(only.as_str()) || only == "file-fine" {
@@ -357,7 +393,7 @@ fn main() {
     if only.is_empty() || only == "process" {
         whole_processes(&dir, &cases[..4], if smoke { 3 } else { 15 });
     }
-    if smoke || only == "process" {
+    if smoke || only == "process" || only == "budget" {
         let _ = std::fs::remove_dir_all(&dir);
         return;
     }

@@ -207,6 +207,10 @@ pub enum Command {
         /// `[simulate] trace_format` (default csv).
         #[arg(long, value_enum, value_name = "FORMAT")]
         trace_format: Option<crate::input::scenario::TraceFormat>,
+        /// Leave out the error budget (the counterfactual runs that say what makes G, and
+        /// B per axis from them): faster, and summary.json has no `error_budget`.
+        #[arg(long)]
+        no_budget: bool,
     },
     /// Print a shell completion script: `mtsim completions bash > /etc/bash_completion.d/mtsim`.
     Completions {
@@ -340,7 +344,15 @@ fn run(cli: Cli) -> Result<i32> {
             no_timing,
             html,
             trace_format,
-        } => simulate::run(&scenario, &output, json, !no_timing, html, trace_format),
+            no_budget,
+        } => simulate::run(
+            &scenario,
+            &output,
+            json,
+            (!no_timing, !no_budget),
+            html,
+            trace_format,
+        ),
         Command::Report { run_dirs, date } => report::run(&run_dirs, date.as_deref()),
         Command::Cone {
             scenario,

@@ -14,7 +14,7 @@ pub fn run(
     path: &Path,
     out_dir: &Path,
     as_json: bool,
-    timing: bool,
+    (timing, with_budget): (bool, bool),
     html: bool,
     trace_format: Option<TraceFormat>,
 ) -> Result<i32> {
@@ -30,9 +30,10 @@ pub fn run(
     let target = out_dir;
     let out_dir = run_dir.path();
     let bar = spinner("simulating");
-    let summary = crate::study::simulate::simulate(&scenario, out_dir, timing, &|t| {
-        bar.set_message(format!("{t:.1} s of machine time"))
-    })?;
+    let summary =
+        crate::study::simulate::simulate_with(&scenario, out_dir, timing, with_budget, &|t| {
+            bar.set_message(format!("{t:.1} s of machine time"))
+        })?;
     bar.finish_and_clear();
     stages.simulate_s = started.elapsed().as_secs_f64() - stages.read_s;
     for w in &summary.warnings {

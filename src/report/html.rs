@@ -17,8 +17,8 @@ use std::path::{Path, PathBuf};
 use super::plot::{self, Chart, Mark as ChartMark, Marker, Series};
 pub use super::run::CHECK_FILE;
 use super::run::{
-    file_names, svg_texts, AxisMarks, AxisReversal, Contribution, Diagnosis, Finding,
-    MachineReversal, Mark, RunFolder,
+    file_names, svg_texts, AxisMarks, AxisReversal, Diagnosis, Finding, MachineReversal, Mark,
+    RunFolder,
 };
 use super::trace::Trace;
 use crate::check::CheckReport;
@@ -38,13 +38,7 @@ const POSITION_RESOLUTION: f64 = 1e-5;
 /// Points per curve after decimation (per direction).
 const BUCKETS: usize = 900;
 
-/// Escapes text for HTML.
-pub fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
+pub use super::escape::esc;
 
 /// An SVG document as an inline element: without the XML prolog, with a class and a
 /// `data-plot` name (for tests), scaled to the page width.
@@ -477,7 +471,9 @@ fn summary_section(folder: &RunFolder) -> String {
             esc(&w)
         );
     }
-    out.push_str(&shares_table(&s.g_shares));
+    out.push_str(&super::budget_table::budget_section(
+        s.error_budget.as_ref(),
+    ));
     out.push_str(&reversal_b_table(&s.reversal_b, &s.reversal_values));
     out
 }
@@ -500,40 +496,6 @@ fn circle_figures_table(c: &super::run::CircleFigures) -> String {
     for note in super::circle_figures::circle_figure_notes(c) {
         let _ = writeln!(out, "<p class=\"note\">{}</p>", esc(&note));
     }
-    out
-}
-
-/// The ranked contributions to G.
-fn shares_table(shares: &[Contribution]) -> String {
-    if shares.is_empty() {
-        return "<p>What makes G: not recorded in this folder (made before mtsim wrote it).</p>\n"
-            .to_string();
-    }
-    let mut out = String::from(
-        "<table class=\"shares\">\n<tr><th>rank</th><th>axis</th><th>mechanism</th>\
-         <th>contribution (µm)</th><th>share (%)</th><th>of G (%)</th></tr>\n",
-    );
-    for (i, c) in shares.iter().enumerate() {
-        let _ = writeln!(
-            out,
-            "<tr data-share=\"{}:{}\"><td>{}</td><td>{}</td><td>{}</td><td class=\"range\">{:.2}</td>\
-             <td class=\"share\">{:.0}</td><td>{:.0}</td></tr>",
-            esc(&c.axis),
-            esc(&format!("{:?}", c.mechanism).to_lowercase()),
-            i + 1,
-            esc(&c.axis),
-            esc(c.mechanism.name()),
-            c.range_um,
-            100.0 * c.share,
-            100.0 * c.of_g,
-        );
-    }
-    out.push_str(
-        "</table>\n<p class=\"note\">Contribution: the peak-to-peak the mechanism alone makes on \
-         the trace (a step its height, a spike its height, a 2θ term twice its amplitude). Ranges do \
-         not add, so the share is of the sum of the contributions, not of G; the last column is the \
-         contribution over G.</p>\n",
-    );
     out
 }
 
@@ -575,10 +537,11 @@ fn reversal_b_table(
         );
     }
     out.push_str(
-        "</table>\n<p class=\"note\">B (ISO 230-2 reversal value) from the trace: the mean step of the \
-         centred trace across the axis's reversals (straight lines fitted 8° to 20° either side, taken \
-         to the reversal), divided by how much the bar sees the axis there; along the axis for a linear \
-         axis, of arc at the bar's length for a rotary one.</p>\n",
+        "</table>\n<p class=\"note\">B (ISO 230-2 reversal value) from the trace: the lost motion the \
+         axis's own backlash and friction runs make on the bar, fitted with how much the bar sees the \
+         axis where it moves; along the axis for a linear axis, of arc at the bar's length for a rotary \
+         one; 0 for an axis without backlash and dry friction. Step at the bar: that lost motion's \
+         peak-to-valley on the bar.</p>\n",
     );
     out
 }
@@ -775,7 +738,7 @@ fn axis_charts(folder: &RunFolder, trace: &Trace) -> Result<Vec<(String, String)
 pub const CSS: &str = "body{font-family:sans-serif;color:#1e1e1e;max-width:1180px;margin:1.5em auto;padding:0 1em;line-height:1.4}\
 h1{font-size:1.5em}h2{font-size:1.2em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}\
 table{border-collapse:collapse;margin:.5em 0}th,td{border:1px solid #ddd;padding:.25em .6em;text-align:left;vertical-align:top}\
-table.params th{background:#f5f5f5;width:16em}table.figures td,table.marks td,table.limits td,table.shares td,table.reversal-b td{text-align:right}.summary{font-size:1.15em}\
+table.params th{background:#f5f5f5;width:16em}table.figures td,table.marks td,table.limits td,table.budget td,table.reversal-b td{text-align:right}.summary{font-size:1.15em}\
 tr.total{font-weight:bold}figure{margin:.5em 0}svg.plot{width:100%;height:auto;display:block}\
 .axes{display:grid;grid-template-columns:repeat(3,1fr);gap:.5em}.axes figure{margin:0}\
 li.violation{color:#b00}.note{color:#555;font-size:.95em}\

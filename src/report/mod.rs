@@ -10,6 +10,8 @@
 //! into those types ([`run::RunFolder`]), traces through [`trace::read_trace`].
 
 pub mod circle_figures;
+pub mod budget_table;
+pub mod escape;
 pub mod files;
 pub mod fit_plot;
 pub mod html;

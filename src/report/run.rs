@@ -48,9 +48,10 @@ pub struct RunSummary {
     /// Each axis's reversal value B as the trace shows it; empty for an older folder.
     #[serde(default)]
     pub reversal_b: Vec<AxisReversal>,
-    /// Each mechanism's part of G per axis, ranked; empty for an older folder.
+    /// What makes G, by counterfactual runs; None for an older folder or a run without it
+    /// (`--no-budget`).
     #[serde(default)]
-    pub g_shares: Vec<Contribution>,
+    pub error_budget: Option<ErrorBudget>,
     /// The diagnostics from the trace; None without a measured circle or in an older
     /// folder.
     #[serde(default)]
@@ -96,69 +97,82 @@ pub struct MachineReversal {
     pub b: f64,
 }
 
-/// An axis's reversal value B (ISO 230-2) as the trace shows it: the mean step of the
-/// centred trace across the axis's reversals, projected onto the axis (see
-/// `study::glance`).
+/// An axis's reversal value B (ISO 230-2) as the trace shows it: the lost motion that
+/// the axis's own backlash and friction runs of the error budget make on the bar, fitted
+/// with the bar's sensitivity to the axis (see `study::budget`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AxisReversal {
     pub axis: String,
-    /// Mean of `|step| / s` over the reversals where the bar sees the axis (s >= 0.5), µm:
-    /// along the axis for a linear one, of arc at the bar's length for a rotary one. None
-    /// when the bar sees none of its reversals.
+    /// The fitted lost motion, µm: along the axis for a linear one, of arc at the bar's
+    /// length for a rotary one (0 for an axis without backlash and dry friction). None when
+    /// the bar does not see the axis while it moves.
     pub b_um: Option<f64>,
-    /// Mean `|step|` as the bar reads it (radial), µm.
+    /// The peak-to-valley the axis's lost motion makes on the bar (radial), µm.
     pub step_um: Option<f64>,
-    /// Reversals measured (over all runs).
+    /// Reversals of the axis where the bar sees it (normalised sensitivity at least 0.5),
+    /// over all runs.
     pub reversals: usize,
 }
 
-/// What makes a part of G.
+/// A mechanism of the error budget: what one counterfactual run adds to the ideal machine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Mechanism {
-    /// The backlash gap's part of the reversal step.
+pub enum BudgetMechanism {
+    /// The ideal machine's own curve (actual = commanded): chord and joint-space
+    /// interpolation error, passage through a pole.
+    Program,
+    /// One axis's servo loop (lag and gain) without its nonlinearities.
+    Servo,
+    /// One axis's backlash, on its servo.
     Backlash,
-    /// The elastic part of the reversal step (friction winding up the drive, `2 Fc / k`).
-    LostMotion,
-    /// Reversal spikes (friction, stick-slip, the quadrant glitch).
-    FrictionSpikes,
-    /// The 2θ term that flips with the direction: different loop lags.
-    ServoMismatch,
-    /// Squareness and cyclic (pitch) errors.
+    /// One axis's dry friction and its lost motion (elastic wind-up, pre-sliding), on its servo.
+    Friction,
+    /// The location errors of the rotary axes.
     Geometric,
-    /// Scale mismatch between the plane axes.
-    Scale,
-    /// Marks no axis reverses near.
-    Unattributed,
+    /// One axis's position-error table.
+    ErrorTable,
+    /// The squareness of the linear axes (no machine file sets it yet).
+    Squareness,
 }
 
-impl Mechanism {
+impl BudgetMechanism {
     /// The mechanism in words.
     pub fn name(self) -> &'static str {
         match self {
-            Mechanism::Backlash => "backlash",
-            Mechanism::LostMotion => "lost motion (friction's elastic wind-up)",
-            Mechanism::FrictionSpikes => "friction spikes",
-            Mechanism::ServoMismatch => "servo mismatch",
-            Mechanism::Geometric => "geometric errors",
-            Mechanism::Scale => "scale mismatch",
-            Mechanism::Unattributed => "unattributed marks",
+            BudgetMechanism::Program => "the program's own path",
+            BudgetMechanism::Servo => "servo lag and gain",
+            BudgetMechanism::Backlash => "backlash",
+            BudgetMechanism::Friction => "friction and its lost motion",
+            BudgetMechanism::Geometric => "geometric (location) errors",
+            BudgetMechanism::ErrorTable => "position-error table",
+            BudgetMechanism::Squareness => "squareness",
         }
     }
 }
 
-/// One mechanism's part of G on one axis (or an axis pair, or the candidates of ambiguous
-/// marks joined by "/").
+/// One row of the error budget.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Contribution {
-    pub axis: String,
-    pub mechanism: Mechanism,
-    /// The peak-to-peak the mechanism alone makes on the trace, µm.
-    pub range_um: f64,
-    /// `range_um` over the sum of all contributions' ranges (0..1; the shares add to 1).
+pub struct BudgetRow {
+    pub mechanism: BudgetMechanism,
+    /// The axis letter; None for the program and the geometric errors.
+    pub axis: Option<String>,
+    /// The contribution curve's peak-to-valley over the revolution that gives G, µm.
+    pub pv_um: f64,
+    /// `<c − c̄, d − d̄> / <d − d̄, d − d̄>`: the part of the full curve d (centred) the
+    /// contribution c explains; negative for a part that works against G.
     pub share: f64,
-    /// `range_um / G` (ranges do not add: these may sum past 1).
-    pub of_g: f64,
+}
+
+/// What makes G, from counterfactual runs (`study::budget`): each mechanism's share of the
+/// full run's curve, and what is left to their interplay, so that the shares and
+/// `interaction_share` add to 1.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ErrorBudget {
+    /// G of the revolution the shares are taken over, µm.
+    pub g_um: f64,
+    pub rows: Vec<BudgetRow>,
+    /// `1 − Σ share`.
+    pub interaction_share: f64,
 }
 
 /// A run folder read back: what `mtsim simulate -o DIR` wrote.

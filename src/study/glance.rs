@@ -1,5 +1,6 @@
-//! The summary a ball-bar user reads first: each axis's reversal value B as the trace shows
-//! it, and what each mechanism adds to G, per axis, ranked.
+//! A study point's reversal value B per axis from its trace alone, for `mtsim study`'s
+//! `B_<axis>_um` columns. `simulate` no longer uses it: its B comes from the error budget's
+//! lost-motion runs (`study::budget`), which a study's shared passes do not run.
 //!
 //! # B per axis (ISO 230-2 reversal value, as the bar sees it)
 //!
@@ -17,36 +18,18 @@
 //!
 //! µm along a linear axis (s is the cosine between bar and axis), µm of arc at the bar's
 //! length for a rotary one. A reversal of another axis inside the windows adds its step too.
-//!
-//! # Shares of G
-//!
-//! Each mechanism's contribution is the peak-to-peak it makes on the trace alone, from its
-//! own closed form: a step of height h makes h; a spike of height h makes |h|; servo
-//! mismatch `±(v/2)(T_u − T_v) sin 2θ` makes `v |T_u − T_v|` (less the part of the 2θ term
-//! that the steps explain: a lost motion δ_u shapes the trace `(δ_u/2) cos θ sgn(sin θ)`,
-//! whose sin 2θ coefficient `4 δ_u / 3π` flips with the direction as lag does); squareness `(rα/2) sin 2θ`
-//! makes `r |α|`; a scale mismatch `(r (ε_u − ε_v)/2) cos 2θ` makes `r |ε_u − ε_v|`; a
-//! cyclic error of amplitude A makes 2A. Ranges do not add (`range(f + g) <= range f +
-//! range g`), so the share is normalised by the sum of the contributions, not by G; the
-//! contribution over G is given beside it.
 
-use std::collections::BTreeMap;
-
-use crate::drive::ReversalValue;
-use crate::input::program::{CircleTest, Direction};
+use crate::input::program::Direction;
 use crate::measure::attribution::ReversalSite;
-use crate::measure::ballbar::{BallbarResult, EventKind, BIN_DEG, N_BINS};
+use crate::measure::ballbar::{BIN_DEG, N_BINS};
 use crate::measure::BallbarRun;
-use crate::report::run::{AxisReversal, Contribution, Mechanism};
-use crate::study::diagnose::CircleDiagnostics;
+use crate::report::run::AxisReversal;
 
 /// The bar must see an axis at least this much (normalised sensitivity) for its step to
 /// count towards B.
 pub const B_SENSITIVITY_MIN: f64 = 0.5;
 /// The fit windows on each side of a reversal: from, to (deg from θr).
 pub const STEP_WINDOW_DEG: (f64, f64) = (8.0, 20.0);
-/// A contribution below this is left out of the shares, µm.
-pub const SHARE_FLOOR_UM: f64 = 0.05;
 
 /// The line through `(x, y)` taken to x = 0; None with fewer than 2 points.
 fn line_at_zero(points: &[(f64, f64)]) -> Option<f64> {
@@ -147,120 +130,6 @@ pub fn reversal_b(
             }
         })
         .collect())
-}
-
-/// Adds `range_um` to the contribution of (axis, mechanism), keeping the largest.
-fn keep_largest(
-    parts: &mut BTreeMap<(String, Mechanism), f64>,
-    axis: &str,
-    mechanism: Mechanism,
-    range_um: f64,
-) {
-    let entry = parts.entry((axis.to_string(), mechanism)).or_insert(0.0);
-    *entry = entry.max(range_um);
-}
-
-/// The contributions to G of a ball-bar `result`: the reversal steps of `reversal_b`
-/// (split into backlash and elastic lost motion as the machine's `machine` values set them),
-/// the spikes and unattributed marks of the result, and, for a circle, the 2θ terms and
-/// cyclic errors of `circle`; ranked, largest first.
-pub fn g_shares(
-    result: &BallbarResult,
-    reversal_b: &[AxisReversal],
-    machine: &BTreeMap<String, ReversalValue>,
-    circle: Option<(&CircleTest, &CircleDiagnostics)>,
-) -> Vec<Contribution> {
-    let mut parts: BTreeMap<(String, Mechanism), f64> = BTreeMap::new();
-    let noise = result.runs.iter().map(|r| r.noise_um).fold(0.0, f64::max);
-    for r in reversal_b {
-        let Some(step) = r.step_um.filter(|s| *s > 3.0 * noise) else {
-            continue;
-        };
-        // The backlash gap's share of the machine's B; without a gap, all elastic.
-        let gap = machine
-            .get(&r.axis)
-            .filter(|m| m.b > 0.0)
-            .map_or(0.0, |m| m.backlash / m.b);
-        keep_largest(&mut parts, &r.axis, Mechanism::Backlash, gap * step);
-        keep_largest(
-            &mut parts,
-            &r.axis,
-            Mechanism::LostMotion,
-            (1.0 - gap) * step,
-        );
-    }
-    for e in &result.events {
-        let (axis, mechanism) = match (e.axis, e.kind) {
-            (None, _) => ("–".to_string(), Mechanism::Unattributed),
-            (Some(_), EventKind::Step) => continue, // measured as B above
-            (Some(a), EventKind::Spike) if !e.ambiguous => {
-                (a.to_string(), Mechanism::FrictionSpikes)
-            }
-            (Some(_), EventKind::Spike) => (e.candidates.to_string(), Mechanism::FrictionSpikes),
-        };
-        keep_largest(&mut parts, &axis, mechanism, e.height_um.abs());
-    }
-    if let Some((test, d)) = circle {
-        let (u, v, _) = test.axes();
-        let pair = format!("{u}/{v}");
-        let r_mm = test.radius_mm;
-        // Lost motion δ on u (δ/2 cos θ sgn sin θ, flipping with the direction) has the
-        // sin 2θ term 4δ/3π, which the servo-mismatch fit reads as lag: take it out,
-        // v (T_u − T_v) − 8 (δ_u − δ_v) / 3π.
-        let step = |a: crate::Axis| {
-            reversal_b
-                .iter()
-                .find(|r| r.axis == a.to_string())
-                .and_then(|r| r.step_um)
-                .unwrap_or(0.0)
-        };
-        let lag_pp = d.servo_mismatch_ms * test.feed_mm_min / 60.0;
-        let lost_motion_pp = 8.0 * (step(u) - step(v)) / (3.0 * std::f64::consts::PI);
-        keep_largest(
-            &mut parts,
-            &pair,
-            Mechanism::ServoMismatch,
-            (lag_pp - lost_motion_pp).abs(),
-        );
-        keep_largest(
-            &mut parts,
-            &pair,
-            Mechanism::Scale,
-            (d.scale_mismatch_ppm * r_mm * 1e-3).abs(),
-        );
-        keep_largest(
-            &mut parts,
-            &pair,
-            Mechanism::Geometric,
-            (d.squareness_urad * r_mm * 1e-3).abs(),
-        );
-        for c in &d.cyclic {
-            keep_largest(
-                &mut parts,
-                &c.axis,
-                Mechanism::Geometric,
-                2.0 * c.amplitude_um,
-            );
-        }
-    }
-    let kept: Vec<((String, Mechanism), f64)> = parts
-        .into_iter()
-        .filter(|(_, range)| *range >= SHARE_FLOOR_UM)
-        .collect();
-    let total: f64 = kept.iter().map(|(_, r)| r).sum();
-    let g = result.circular_deviation_um;
-    let mut out: Vec<Contribution> = kept
-        .into_iter()
-        .map(|((axis, mechanism), range_um)| Contribution {
-            axis,
-            mechanism,
-            range_um,
-            share: range_um / total,
-            of_g: if g > 0.0 { range_um / g } else { f64::NAN },
-        })
-        .collect();
-    out.sort_by(|a, b| b.range_um.total_cmp(&a.range_um));
-    out
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 
 pub mod analysis;
 pub mod batch;
+pub mod budget;
 pub mod chain_events;
 pub mod diagnose;
 pub mod feed;

@@ -34,7 +34,7 @@ use crate::program;
 use crate::program::test_of;
 use crate::report::create_dir;
 use crate::report::trace::TraceSink;
-use crate::study::glance;
+use crate::study::budget::{self, BudgetDirection, BudgetPlan, BudgetRun, BudgetStepper};
 use crate::study::reversals::{
     has_closed_form, reversals_deg, scenario_reversals_deg, MoveAnalysis,
 };
@@ -64,14 +64,14 @@ pub struct SimulationSummary {
     pub reversal_values: std::collections::BTreeMap<String, crate::drive::ReversalValue>,
     /// Renishaw-style diagnostics from the trace; null without a measured circle.
     pub diagnostics: Option<crate::study::diagnose::Diagnostics>,
-    /// Each axis's reversal value B as the trace shows it (`study::glance`); left out
-    /// without a measured circle.
+    /// Each axis's reversal value B from its lost-motion runs (`study::budget`); left out
+    /// without a measured circle or a budget.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub reversal_b: Vec<crate::report::run::AxisReversal>,
-    /// What each mechanism adds to G, per axis, largest first (`study::glance`); left out
-    /// without a measured circle.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub g_shares: Vec<crate::report::run::Contribution>,
+    /// What makes G, by counterfactual runs (`study::budget`); left out without a measured
+    /// circle or with `--no-budget`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_budget: Option<crate::report::run::ErrorBudget>,
     /// What the user should know about the figures (a trimmed transient, one spot that
     /// dominates G, a feed held below the programmed one); left out when there is none.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
@@ -171,12 +171,24 @@ pub(crate) fn off_feed_warning(result: &BallbarResult, scenario: &Scenario) -> O
 /// (and into `trace`, when given). `progress` is told the simulated time now and then.
 pub fn run_ballbar(
     scenario: &Scenario,
-    mut trace: Option<&mut TraceSink>,
+    trace: Option<&mut TraceSink>,
     progress: &dyn Fn(f64),
 ) -> Result<BallbarStudy> {
+    run_ballbar_budget(scenario, trace, None, progress).map(|(study, _)| study)
+}
+
+/// [`run_ballbar`] with the error budget's runs of `budget` beside it (`study::budget`):
+/// each direction's, or why they failed.
+pub fn run_ballbar_budget(
+    scenario: &Scenario,
+    mut trace: Option<&mut TraceSink>,
+    budget: Option<&BudgetPlan>,
+    progress: &dyn Fn(f64),
+) -> Result<(BallbarStudy, BudgetRuns)> {
     let machine = &scenario.machine;
     let (along, analysis) = analyses(scenario)?;
     let geometry = bar_geometry(scenario);
+    let mut budget_runs = Vec::new();
     let directions = directions_of(scenario);
     let mut measurements = measurement::for_scenario(scenario, &*test_of(scenario));
     let mut sinks = Vec::new();
@@ -197,11 +209,15 @@ pub fn run_ballbar(
             m.start_run(direction, run.measured);
         }
         let options = run_options(scenario, sim_time_s)?;
+        let budget_run = budget
+            .filter(|_| ballbar.is_some())
+            .map(|plan| RefCell::new(plan.start(direction)));
         let stats = {
             let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(1);
             let mut measure = ballbar.as_mut().map(|ballbar| BarAndTrace {
                 ballbar,
                 trace: trace.as_deref_mut(),
+                budget: budget_run.as_ref(),
             });
             if let Some(m) = measure.as_mut() {
                 sinks.push(m);
@@ -209,6 +225,8 @@ pub fn run_ballbar(
             for m in &mut measurements {
                 sinks.push(&mut **m);
             }
+            // The budget's servos take every setpoint, before any settle gate.
+            let mut stepper = budget_run.as_ref().map(BudgetStepper);
             match geometry.filter(|_| gates_transient(scenario) && !sinks.is_empty()) {
                 Some(g) => {
                     let mut gate = SettleGate::new(
@@ -217,15 +235,25 @@ pub fn run_ballbar(
                         Box::new(move |s| g.read_commanded(&s.commanded).theta_deg),
                     );
                     let stats = {
-                        let mut gated: [&mut dyn Sink; 1] = [&mut gate];
+                        let mut gated: Vec<&mut dyn Sink> = Vec::with_capacity(2);
+                        if let Some(s) = stepper.as_mut() {
+                            gated.push(s);
+                        }
+                        gated.push(&mut gate);
                         pipeline::run(run.moves, machine, &options, &mut gated, progress)?
                     };
                     warnings.extend(transient_warning(&gate));
                     stats
                 }
-                None => pipeline::run(run.moves, machine, &options, &mut sinks, progress)?,
+                None => {
+                    if let Some(s) = stepper.as_mut() {
+                        sinks.insert(0, s);
+                    }
+                    pipeline::run(run.moves, machine, &options, &mut sinks, progress)?
+                }
             }
         };
+        budget_runs.extend(budget_run.map(|b| b.into_inner().finish()));
         // The run's rows go to the trace now that its centring is known.
         if let Some(t) = trace.as_deref_mut() {
             t.end_run(ballbar.as_ref().map(|b| b.run.centring()))?;
@@ -251,8 +279,12 @@ pub fn run_ballbar(
     for m in &measurements {
         study.measurements.insert(m.name().to_string(), m.finish()?);
     }
-    Ok(study)
+    let budget_runs = budget_runs.into_iter().collect();
+    Ok((study, budget_runs))
 }
+
+/// The error budget's runs of every direction, or why one of them failed.
+pub type BudgetRuns = std::result::Result<Vec<BudgetDirection>, String>;
 
 /// The ball bar of a scenario's `k`-th run: with the maps of the bar's sensitivity and the
 /// speeds for the first ([`assemble`] reads those), without for the others.
@@ -467,12 +499,24 @@ pub(crate) fn assemble(
     })
 }
 
-/// Runs the scenario and writes `trace.csv`, `summary.json` and `ballbar.svg` to `out_dir`.
-/// `progress` is told the simulated time, s, now and then.
+/// Runs the scenario and writes `trace.csv`, `summary.json` and `ballbar.svg` to `out_dir`,
+/// with the error budget. `progress` is told the simulated time, s, now and then.
 pub fn simulate(
     scenario: &Scenario,
     out_dir: &Path,
     timing: bool,
+    progress: &dyn Fn(f64),
+) -> Result<SimulationSummary> {
+    simulate_with(scenario, out_dir, timing, true, progress)
+}
+
+/// [`simulate`], with the error budget (`study::budget`) or without it (`--no-budget`:
+/// no `error_budget`, no B per axis).
+pub fn simulate_with(
+    scenario: &Scenario,
+    out_dir: &Path,
+    timing: bool,
+    with_budget: bool,
     progress: &dyn Fn(f64),
 ) -> Result<SimulationSummary> {
     create_dir(out_dir)?;
@@ -500,7 +544,12 @@ pub fn simulate(
         scenario.simulate.max_trace_rows,
     )?;
     let started = Instant::now();
-    let study = run_ballbar(scenario, Some(&mut trace), progress)?;
+    let plan = match bar_geometry(scenario).filter(|_| with_budget) {
+        Some(g) => Some(BudgetPlan::new(scenario, g)?),
+        None => None,
+    };
+    let (study, budget_runs) =
+        run_ballbar_budget(scenario, Some(&mut trace), plan.as_ref(), progress)?;
     let ballbar = study.result()?;
     let (runs, reversals) = (&study.runs, &study.reversals);
     let mut warnings = study.warnings.clone();
@@ -512,14 +561,16 @@ pub fn simulate(
         .map(|b| crate::study::diagnose::diagnose(b, runs, circle))
         .transpose()?;
     let machine_reversals = reversal_values(&scenario.machine)?;
-    let (reversal_b, g_shares) = match (&ballbar, &diagnostics) {
-        (Some(b), Some(d)) => {
-            let rb = glance::reversal_b(runs, &study.sites, scenario.machine.axes())?;
-            let circle = circle.zip(d.circle.as_ref());
-            let shares = glance::g_shares(b, &rb, &machine_reversals, circle);
-            (rb, shares)
+    let (error_budget, reversal_b) = match (&ballbar, &plan, budget_runs) {
+        (Some(b), Some(plan), Ok(directions)) if directions.len() == runs.len() => {
+            let (budget, rb) = budget::assemble(plan, &directions, runs, b, &study.sites)?;
+            (Some(budget), rb)
         }
-        _ => (Vec::new(), Vec::new()),
+        (Some(_), Some(_), Err(why)) => {
+            warnings.push(format!("no error budget: one of its runs failed ({why})"));
+            (None, Vec::new())
+        }
+        _ => (None, Vec::new()),
     };
     trace.finish()?;
     // The other format's trace of an earlier run would be read for this one's.
@@ -577,7 +628,7 @@ pub fn simulate(
         reversal_values: machine_reversals,
         diagnostics,
         reversal_b,
-        g_shares,
+        error_budget,
         warnings,
         feed_reductions: study.feed_reductions.clone(),
         lead_in: scenario.simulate.lead_in.map(|lead| LeadIn {
@@ -604,15 +655,21 @@ pub fn simulate(
     Ok(summary)
 }
 
-/// The ball bar and the trace of its readings, as one sink: the bar reads each sample once.
-struct BarAndTrace<'a> {
+/// The ball bar, the trace of its readings and the error budget's runs, as one sink: the
+/// bar reads each sample once, and the budget takes the samples the bar takes.
+struct BarAndTrace<'a, 'p> {
     ballbar: &'a mut BallbarSink,
     trace: Option<&'a mut TraceSink>,
+    budget: Option<&'a RefCell<BudgetRun<'p>>>,
 }
 
-impl Sink for BarAndTrace<'_> {
+impl Sink for BarAndTrace<'_, '_> {
     fn push(&mut self, s: &Sample) -> Result<()> {
-        match (self.ballbar.take(s), self.trace.as_deref_mut()) {
+        let reading = self.ballbar.take(s);
+        if let (Some(r), Some(budget)) = (&reading, self.budget) {
+            budget.borrow_mut().record(s, r);
+        }
+        match (reading, self.trace.as_deref_mut()) {
             (Some(r), Some(trace)) => trace.push_reading(s, &r),
             _ => Ok(()),
         }

@@ -495,13 +495,23 @@ fn every_bundled_scenario_report_renders_in_headless_chromium() {
                 None => assert!(shown.starts_with('–'), "{name}: B of {axis}: {shown}"),
             }
         }
-        let rows = share_rows(&dom);
-        let shares = summary["g_shares"].as_array().unwrap();
-        assert_eq!(rows.len(), shares.len(), "{name}: {rows:?}");
-        assert!(!rows.is_empty(), "{name}: no shares");
+        // The error budget: its sentence, then every row ranked by share, then the interplay.
+        let rows = budget_rows(&dom);
+        let budget = summary["error_budget"]["rows"].as_array().unwrap();
+        assert_eq!(rows.len(), budget.len() + 1, "{name}: {rows:?}");
+        assert!(!budget.is_empty(), "{name}: no budget");
+        let (ranked, interplay) = rows.split_at(rows.len() - 1);
         assert!(
-            rows.windows(2).all(|w| w[0].1 >= w[1].1),
+            ranked.windows(2).all(|w| w[0].1 >= w[1].1),
             "{name}: ranked: {rows:?}"
+        );
+        assert!(
+            interplay[0].0.starts_with("interaction:"),
+            "{name}: {rows:?}"
+        );
+        assert!(
+            text_after(&dom, "data-summary=\"headline\"").is_some_and(|t| t.contains("% of G")),
+            "{name}: no sentence on top"
         );
         // Every figure as text, as the summary states it.
         for (figure, value) in figures(&summary) {
@@ -810,14 +820,14 @@ fn text_after<'a>(html: &'a str, key: &str) -> Option<&'a str> {
     Some(html[start..end].trim())
 }
 
-/// Every `data-share` row of the page: (axis:mechanism, contribution µm), in page order.
-fn share_rows(html: &str) -> Vec<(String, f64)> {
-    html.split("<tr data-share=\"")
+/// Every `data-budget` row of the page: (mechanism:axis, share %), in page order.
+fn budget_rows(html: &str) -> Vec<(String, f64)> {
+    html.split("<tr data-budget=\"")
         .skip(1)
         .map(|row| {
             let key = row[..row.find('"').unwrap()].to_string();
-            let range = text_after(row, "class=\"range\"").unwrap().parse().unwrap();
-            (key, range)
+            let share = text_after(row, "class=\"share\"").unwrap().parse().unwrap();
+            (key, share)
         })
         .collect()
 }
@@ -859,23 +869,32 @@ fn backlash_on_x_only_gives_b_and_advice_for_x_only() {
     assert!((bx - 10.0).abs() < 0.5, "B of X {bx} µm, gap 10 µm");
     assert!(by.abs() < 0.2, "B of Y {by} µm, no lost motion");
     assert_eq!(b("Z"), None, "the bar does not see Z on an XY circle");
-    let shares = summary["g_shares"].as_array().unwrap();
-    let share = |axis: &str, mechanism: &str| {
-        shares
-            .iter()
+    let budget = &summary["error_budget"];
+    let rows = budget["rows"].as_array().unwrap();
+    let row = |mechanism: &str, axis: &str| {
+        rows.iter()
             .find(|c| c["axis"] == axis && c["mechanism"] == mechanism)
-            .map(|c| c["range_um"].as_f64().unwrap())
+            .map(|c| (c["pv_um"].as_f64().unwrap(), c["share"].as_f64().unwrap()))
     };
-    assert!((share("X", "backlash").unwrap() - 10.0).abs() < 0.5);
-    assert_eq!(share("Y", "backlash"), None, "{shares:?}");
-    assert_eq!(share("Y", "lost_motion"), None, "{shares:?}");
-    // The 2θ term the steps make is not servo mismatch (equal loops): what is left of it
-    // is small against the step.
+    // X's backlash row: the gap's step, and most of G.
+    let (pv, share) = row("backlash", "X").unwrap();
+    assert!((pv - 10.0).abs() < 0.5, "{budget}");
+    assert!(share > 0.5, "{budget}");
+    // No lost motion on Y, no friction anywhere: no such rows.
+    assert_eq!(row("backlash", "Y"), None, "{budget}");
     assert!(
-        share("X/Y", "servo_mismatch").unwrap_or(0.0) < 1.0,
-        "{shares:?}"
+        !rows.iter().any(|c| c["mechanism"] == "friction"),
+        "{budget}"
     );
-    let sum: f64 = shares.iter().map(|c| c["share"].as_f64().unwrap()).sum();
+    // Equal loops: what each servo does differently from the other is small against the step.
+    for axis in ["X", "Y"] {
+        assert!(row("servo", axis).unwrap().0 < 1.0, "{budget}");
+    }
+    let sum: f64 = rows
+        .iter()
+        .map(|c| c["share"].as_f64().unwrap())
+        .sum::<f64>()
+        + budget["interaction_share"].as_f64().unwrap();
     assert!((sum - 1.0).abs() < 1e-9, "{sum}");
 
     let html = std::fs::read_to_string(dir.join("run/report.html")).unwrap();
@@ -935,14 +954,15 @@ fn the_summary_b_and_ranked_shares_render_in_headless_chromium() {
     assert!((bx - 10.0).abs() < 0.5, "B of X {bx}");
     assert!(by.abs() < 0.2, "B of Y {by}");
     assert!(text_after(&dom, "data-b=\"Z\"").unwrap().starts_with('–'));
-    let rows = share_rows(&dom);
-    assert_eq!(rows[0].0, "X:backlash", "{rows:?}");
-    assert!((rows[0].1 - 10.0).abs() < 0.5);
+    let rows = budget_rows(&dom);
+    assert_eq!(rows[0].0, "backlash:X", "{rows:?}");
+    assert!(rows[0].1 > 50.0, "{rows:?}");
+    let ranked = &rows[..rows.len() - 1];
     assert!(
-        rows.windows(2).all(|w| w[0].1 >= w[1].1),
+        ranked.windows(2).all(|w| w[0].1 >= w[1].1),
         "ranked: {rows:?}"
     );
-    assert!(!rows.iter().any(|r| r.0 == "Y:backlash"), "{rows:?}");
+    assert!(!rows.iter().any(|r| r.0 == "backlash:Y"), "{rows:?}");
 }
 
 /// The Done-when of a study: its page renders in headless Chromium with its plot laid out,

@@ -5,6 +5,7 @@
 mod common;
 
 mod circle_feed;
+mod budget;
 mod cone_reference;
 mod diagnose;
 mod fit;

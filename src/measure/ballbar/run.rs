@@ -160,6 +160,16 @@ impl BallbarRun {
         }
     }
 
+    /// One sample at θ, whose terms are made by the caller (None: θ is not finite), with
+    /// deviation `dev_um`: for runs that take the same samples as a bar (the error budget's).
+    #[inline]
+    pub fn push_terms(&mut self, terms: Option<&ThetaTerms>, dev_um: f64) {
+        match terms {
+            Some(terms) if dev_um.is_finite() => self.add(terms, dev_um),
+            _ => self.rejected += 1,
+        }
+    }
+
     /// Adds a finite sample with θ's `terms`.
     #[inline]
     fn add(&mut self, terms: &ThetaTerms, deviation_um: f64) {

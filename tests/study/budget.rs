@@ -1,0 +1,417 @@
+//! The error budget by counterfactual runs (`study::budget`), against figures computed
+//! another way: the ideal machine's curve through a forward kinematics written out here, a
+//! backlash row against the difference of two whole runs, the lost motion of a drive
+//! against its closed form, and a gain mismatch that must own G.
+
+use std::path::{Path, PathBuf};
+
+use mtsim::input::scenario::Scenario;
+use mtsim::measure::Direction;
+use mtsim::report::run::{BudgetMechanism, BudgetRow, ErrorBudget};
+use mtsim::study::simulate::{run_ballbar, simulate, SimulationSummary};
+
+use crate::common::{machine, scenario_text, scratch, trt_ac};
+
+/// Writes and loads a scenario.
+fn load(name: &str, text: &str) -> (Scenario, PathBuf) {
+    let dir = scratch("budget", name);
+    let path = dir.join("scenario.toml");
+    std::fs::write(&path, text).unwrap();
+    (Scenario::load(&path).unwrap(), dir)
+}
+
+/// Runs `simulate` on a scenario; its summary and output folder.
+fn run(name: &str, text: &str) -> (SimulationSummary, PathBuf) {
+    let (scenario, dir) = load(name, text);
+    let out = dir.join("out");
+    let summary = simulate(&scenario, &out, false, &|_| {}).unwrap();
+    (summary, out)
+}
+
+/// Overrides that leave every axis of `axes` (linear, rotary) without dry friction, with
+/// `kv` (1/s) each and `extra` TOML lines appended.
+fn clean(linear: &[&str], rotary: &[&str], kv: &[(&str, f64)], extra: &str) -> String {
+    let mut s = String::new();
+    for a in linear.iter().chain(rotary) {
+        let k = kv.iter().find(|(b, _)| b == a).map_or(30.0, |(_, k)| *k);
+        let key = if rotary.contains(a) {
+            "coulomb_nm"
+        } else {
+            "coulomb_n"
+        };
+        s += &format!(
+            "[machine_overrides.axes.{a}.servo]\nmodel = \"cascade\"\nkv_per_s = {k}\n\
+             [machine_overrides.axes.{a}.friction]\n{key} = 0.0\n"
+        );
+    }
+    s + extra
+}
+
+const CONE_AXES: (&[&str], &[&str]) = (&["X", "Y", "Z"], &["A", "C"]);
+
+/// The bundled 15/10 cone (both directions) with `overrides`.
+fn cone(overrides: &str) -> String {
+    scenario_text(
+        &trt_ac(),
+        &format!(
+            "[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 200.0]\n\
+             ballbar_length_mm = 100.0\nsegments = 360\nfeed_mm_min = 1000.0\n{overrides}"
+        ),
+    )
+}
+
+/// An ISO 230-4 circle on the three-axis machine (r 50, F1000, both directions).
+fn circle(overrides: &str) -> String {
+    scenario_text(
+        &machine("vmc-3axis"),
+        &format!(
+            "[program.circle]\nplane = \"XY\"\nradius_mm = 50.0\nfeed_mm_min = 1000.0\n\
+             directions = [\"ccw\", \"cw\"]\ncenter_mm = [0.0, 0.0, 100.0]\n{overrides}"
+        ),
+    )
+}
+
+fn budget(s: &SimulationSummary) -> &ErrorBudget {
+    s.error_budget.as_ref().expect("an error budget")
+}
+
+fn rows<'b>(b: &'b ErrorBudget, m: BudgetMechanism) -> Vec<&'b BudgetRow> {
+    b.rows.iter().filter(|r| r.mechanism == m).collect()
+}
+
+/// The direction whose revolution gives G (the first of equals).
+fn g_direction(s: &SimulationSummary) -> (usize, Direction) {
+    let runs = &s.ballbar.as_ref().unwrap().runs;
+    let k = (0..runs.len()).fold(0, |best, i| {
+        if runs[i].circular_deviation_um > runs[best].circular_deviation_um {
+            i
+        } else {
+            best
+        }
+    });
+    (k, runs[k].direction)
+}
+
+/// Checks what must hold of any budget: the shares and the interplay add to 1, G is the
+/// run's, and lost motion is told only of the axes that have it.
+fn assert_consistent(s: &SimulationSummary, lost_motion_axes: &[&str]) {
+    let b = budget(s);
+    let sum: f64 = b.rows.iter().map(|r| r.share).sum::<f64>() + b.interaction_share;
+    assert!((sum - 1.0).abs() < 1e-9, "{b:?}");
+    assert!(
+        (b.g_um - s.ballbar.as_ref().unwrap().circular_deviation_um).abs() < 1e-12,
+        "{b:?}"
+    );
+    for r in rows(b, BudgetMechanism::Backlash)
+        .into_iter()
+        .chain(rows(b, BudgetMechanism::Friction))
+    {
+        let axis = r.axis.as_deref().unwrap();
+        assert!(
+            lost_motion_axes.contains(&axis) || r.pv_um <= 0.3,
+            "lost motion told of {axis}: {r:?}"
+        );
+    }
+}
+
+/// The clean machine's B: under 0.3 µm on every axis the bar sees.
+fn assert_clean_b(s: &SimulationSummary) {
+    assert!(!s.reversal_b.is_empty());
+    eprintln!(
+        "clean B: {:?}",
+        s.reversal_b
+            .iter()
+            .map(|r| (&r.axis, r.b_um))
+            .collect::<Vec<_>>()
+    );
+    for r in &s.reversal_b {
+        if let Some(b) = r.b_um {
+            assert!(b.abs() < 0.3, "{r:?}");
+        }
+    }
+}
+
+/// The trace's rows of one direction: θ (deg) and the commanded X Y Z A C.
+fn commanded_rows(out: &Path, direction: Direction) -> Vec<(f64, [f64; 5])> {
+    let mut r = csv::Reader::from_path(out.join("trace.csv")).unwrap();
+    let h = r.headers().unwrap().clone();
+    let col = |name: &str| h.iter().position(|c| c == name).unwrap();
+    let name = format!("{direction:?}").to_lowercase();
+    let cols = [
+        col("X_cmd_mm"),
+        col("Y_cmd_mm"),
+        col("Z_cmd_mm"),
+        col("A_cmd_deg"),
+        col("C_cmd_deg"),
+    ];
+    let (d, t) = (col("direction"), col("theta_deg"));
+    r.records()
+        .map(|rec| rec.unwrap())
+        .filter(|rec| rec[d] == name)
+        .map(|rec| {
+            (
+                rec[t].parse().unwrap(),
+                cols.map(|c| rec[c].parse().unwrap()),
+            )
+        })
+        .collect()
+}
+
+/// The bar's reading of commanded positions on trt-ac, written out: the table ball
+/// `p = (0, 0, 200)` (table frame) goes to `Rx(A) Rz(C) p` (the pivot at the origin), the
+/// tool ball is at X Y Z, and `dL = |tool − ball| − L`, µm.
+fn trt_ac_reading([x, y, z, a, c]: [f64; 5], length_mm: f64) -> f64 {
+    let (p_x, p_y, p_z) = (0.0, 0.0, 200.0);
+    let (sc, cc) = c.to_radians().sin_cos();
+    let (sa, ca) = a.to_radians().sin_cos();
+    // Rz(C) p, then Rx(A).
+    let (x1, y1, z1) = (cc * p_x - sc * p_y, sc * p_x + cc * p_y, p_z);
+    let ball = (x1, ca * y1 - sa * z1, sa * y1 + ca * z1);
+    let d = ((x - ball.0).powi(2) + (y - ball.1).powi(2) + (z - ball.2).powi(2)).sqrt();
+    (d - length_mm) * 1e3
+}
+
+/// Peak-to-valley of `(θ deg, dL µm)` samples after removing their least-squares circle
+/// centre `r0 + a cos θ + b sin θ`, over bins of 0.05°.
+fn centred_peak_to_valley(samples: &[(f64, f64)]) -> f64 {
+    // Normal equations of (1, cos, sin).
+    let mut m = [[0.0f64; 3]; 3];
+    let mut v = [0.0f64; 3];
+    for &(t, d) in samples {
+        let phi = [1.0, t.to_radians().cos(), t.to_radians().sin()];
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] += phi[i] * phi[j];
+            }
+            v[i] += phi[i] * d;
+        }
+    }
+    let fit = solve3(m, v);
+    let mut bins = vec![(0.0, 0u32); 7200];
+    for &(t, d) in samples {
+        let r = d - fit[1] * t.to_radians().cos() - fit[2] * t.to_radians().sin();
+        let i = ((t.rem_euclid(360.0) / 0.05) as usize).min(7199);
+        bins[i].0 += r;
+        bins[i].1 += 1;
+    }
+    let means: Vec<f64> = bins
+        .iter()
+        .filter(|b| b.1 > 0)
+        .map(|b| b.0 / b.1 as f64)
+        .collect();
+    let (lo, hi) = means
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+            (l.min(x), h.max(x))
+        });
+    hi - lo
+}
+
+/// Solves a 3×3 system by Cramer's rule.
+fn solve3(m: [[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    let det = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(m);
+    let mut x = [0.0; 3];
+    for (k, xk) in x.iter_mut().enumerate() {
+        let mut mk = m;
+        for i in 0..3 {
+            mk[i][k] = v[i];
+        }
+        *xk = det(mk) / d;
+    }
+    x
+}
+
+#[test]
+fn a_clean_cone_tells_of_no_lost_motion_and_its_program_row_is_the_commanded_path() {
+    let (linear, rotary) = CONE_AXES;
+    let (s, out) = run("clean-cone", &cone(&clean(linear, rotary, &[], "")));
+    assert_consistent(&s, &[]);
+    assert_clean_b(&s);
+    let b = budget(&s);
+    // No backlash, no dry friction: no such rows at all.
+    assert!(rows(b, BudgetMechanism::Backlash).is_empty(), "{b:?}");
+    assert!(rows(b, BudgetMechanism::Friction).is_empty(), "{b:?}");
+    // The program row against the commanded positions through the kinematics written out.
+    let (_, direction) = g_direction(&s);
+    let samples: Vec<(f64, f64)> = commanded_rows(&out, direction)
+        .into_iter()
+        .map(|(t, q)| (t, trt_ac_reading(q, 100.0)))
+        .collect();
+    assert!(samples.len() > 10_000, "{}", samples.len());
+    let want = centred_peak_to_valley(&samples);
+    let program = rows(b, BudgetMechanism::Program)[0];
+    assert!(
+        (program.pv_um - want).abs() <= 0.2,
+        "program row {} µm, the commanded path {want} µm",
+        program.pv_um
+    );
+    // The cone's own path is a sizeable part of G (a few µm of chord error at 360 segments).
+    assert!(want > 1.0, "{want}");
+    eprintln!(
+        "clean cone: program row {} µm, commanded path {want} µm",
+        program.pv_um
+    );
+    // The servos' common lag, and five servos, one row each; nothing else on this machine.
+    let servo = rows(b, BudgetMechanism::Servo);
+    assert_eq!(
+        servo.iter().filter(|r| r.axis.is_none()).count(),
+        1,
+        "{b:?}"
+    );
+    assert_eq!(servo.len(), 6, "{b:?}");
+    assert_eq!(b.rows.len(), 7, "{b:?}");
+}
+
+#[test]
+fn a_clean_circle_tells_of_no_lost_motion() {
+    let (s, _) = run(
+        "clean-circle",
+        &circle(&clean(&["X", "Y", "Z"], &[], &[], "")),
+    );
+    assert_consistent(&s, &[]);
+    assert_clean_b(&s);
+    let b = budget(&s);
+    // Z does not move on an XY circle: no row for it.
+    let servo: Vec<&str> = rows(b, BudgetMechanism::Servo)
+        .iter()
+        .filter_map(|r| r.axis.as_deref())
+        .collect();
+    assert_eq!(servo, ["X", "Y"], "{b:?}");
+    // The circle's program part is a polygon of short chords: well under a micrometre.
+    assert!(rows(b, BudgetMechanism::Program)[0].pv_um < 0.5, "{b:?}");
+}
+
+/// The X backlash row against the difference of two whole runs, with and without it, over
+/// the revolution that gives G; and B for X against the 10 µm gap.
+fn backlash_row_is_the_difference_of_two_runs(name: &str, without: String, with: String) {
+    let (s, _) = run(name, &with);
+    assert_consistent(&s, &["X"]);
+    let b = budget(&s);
+    let row = rows(b, BudgetMechanism::Backlash);
+    assert_eq!(row.len(), 1, "{b:?}");
+    assert_eq!(row[0].axis.as_deref(), Some("X"));
+    let (k, _) = g_direction(&s);
+    let trace = |text: &str, tag: &str| {
+        let (scenario, _) = load(&format!("{name}-{tag}"), text);
+        let study = run_ballbar(&scenario, None, &|_| {}).unwrap();
+        study.runs[k].trace_um(true).unwrap()
+    };
+    let (a, b0) = (trace(&with, "with"), trace(&without, "without"));
+    let diff: Vec<f64> = a.iter().zip(&b0).map(|(a, b)| a - b).collect();
+    let (lo, hi) = diff
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+            (l.min(x), h.max(x))
+        });
+    let want = hi - lo;
+    eprintln!(
+        "{name}: backlash row {} µm, two runs {want} µm",
+        row[0].pv_um
+    );
+    assert!(
+        (row[0].pv_um - want).abs() <= 0.05 * want,
+        "{name}: backlash row {} µm, two runs {want} µm",
+        row[0].pv_um
+    );
+    // B of X: the gap, 10 µm (the elastic part is the linear twin's, viscous only).
+    let bx = s.reversal_b.iter().find(|r| r.axis == "X").unwrap();
+    let bx = bx.b_um.unwrap();
+    eprintln!("{name}: B of X {bx} µm");
+    assert!((bx - 10.0).abs() <= 1.0, "{name}: B of X {bx} µm");
+    for r in s.reversal_b.iter().filter(|r| r.axis != "X") {
+        assert!(r.b_um.is_none_or(|b| b.abs() < 0.3), "{r:?}");
+    }
+}
+
+#[test]
+fn ten_micrometres_of_x_backlash_on_a_circle_is_its_row() {
+    let backlash = "[machine_overrides.axes.X.drive]\nbacklash_mm = 0.010\n";
+    let axes = ["X", "Y", "Z"];
+    backlash_row_is_the_difference_of_two_runs(
+        "backlash-circle",
+        circle(&clean(&axes, &[], &[], "")),
+        circle(&clean(&axes, &[], &[], backlash)),
+    );
+}
+
+#[test]
+fn ten_micrometres_of_x_backlash_on_a_cone_is_its_row() {
+    let backlash = "[machine_overrides.axes.X.drive]\nbacklash_mm = 0.010\n";
+    let (linear, rotary) = CONE_AXES;
+    backlash_row_is_the_difference_of_two_runs(
+        "backlash-cone",
+        cone(&clean(linear, rotary, &[], "")),
+        cone(&clean(linear, rotary, &[], backlash)),
+    );
+}
+
+/// The servo rows' shares added.
+fn servo_share(s: &SimulationSummary) -> f64 {
+    rows(budget(s), BudgetMechanism::Servo)
+        .iter()
+        .map(|r| r.share)
+        .sum()
+}
+
+#[test]
+fn a_gain_mismatch_on_a_circle_is_the_servos() {
+    let (s, _) = run(
+        "kv-circle",
+        &circle(&clean(
+            &["X", "Y", "Z"],
+            &[],
+            &[("X", 30.0), ("Y", 27.0)],
+            "",
+        )),
+    );
+    assert_consistent(&s, &[]);
+    let share = servo_share(&s);
+    eprintln!("gain mismatch: servo share {share}");
+    assert!(share > 0.8, "servo share {share}: {:?}", budget(&s));
+}
+
+#[test]
+fn a_gain_mismatch_on_a_cone_is_the_servos() {
+    let (linear, rotary) = CONE_AXES;
+    let (s, _) = run(
+        "kv-cone",
+        &cone(&clean(linear, rotary, &[("X", 24.0), ("Y", 30.0)], "")),
+    );
+    assert_consistent(&s, &[]);
+    let share = servo_share(&s);
+    eprintln!("gain mismatch: servo share {share}");
+    assert!(share > 0.8, "servo share {share}: {:?}", budget(&s));
+}
+
+#[test]
+fn friction_alone_makes_the_drive_s_elastic_lost_motion() {
+    // The stock three-axis machine's friction on X only: B of X is the wind-up 2 Fc / k of
+    // the spec (150 N over 200 N/µm: 1.5 µm), and no other axis tells of lost motion.
+    let (s, _) = run(
+        "friction-circle",
+        &circle(&clean(
+            &["Y", "Z"],
+            &[],
+            &[],
+            "[machine_overrides.axes.X.servo]\nmodel = \"cascade\"\n\
+             [machine_overrides.axes.X.friction]\ncoulomb_n = 150.0\n",
+        )),
+    );
+    assert_consistent(&s, &["X"]);
+    let b = budget(&s);
+    let friction = rows(b, BudgetMechanism::Friction);
+    assert_eq!(friction.len(), 1, "{b:?}");
+    let want = 2.0 * 150.0 / 200.0; // µm
+    let bx = s.reversal_b.iter().find(|r| r.axis == "X").unwrap();
+    let bx = bx.b_um.unwrap();
+    eprintln!("friction alone: B of X {bx} µm, 2 Fc/k {want} µm");
+    assert!(
+        (bx - want).abs() <= 0.2 * want,
+        "B of X {bx} µm, 2 Fc/k {want} µm"
+    );
+}

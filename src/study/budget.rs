@@ -284,14 +284,13 @@ impl BudgetPlan {
 /// The servos' common lag τ̄, s: the mean of `τ_a = (1 − k_vff,a) / Kv_a` over the axes
 /// the program moves (a circle's two, or every axis of the machine).
 fn common_lag_s(scenario: &Scenario) -> Result<f64> {
-    use crate::input::scenario::Program;
     let machine = &scenario.machine;
-    let axes: Vec<Axis> = match &scenario.program {
-        Program::Circle { circle, .. } => {
+    let axes: Vec<Axis> = match crate::program::test_of(scenario).circle() {
+        Some(circle) => {
             let (u, v, _) = circle.axes();
             vec![u, v]
         }
-        _ => machine.axes().to_vec(),
+        None => machine.axes().to_vec(),
     };
     let mut lags = Vec::new();
     for a in axes.into_iter().filter(|a| machine.axes().contains(a)) {

@@ -1,9 +1,12 @@
 //! One budget of executed blocks per run, shared by every front end, so that no program
-//! runs forever: a block counts each time it is executed, whether the flow reaches it once,
-//! again through a loop or jump, or inside a repeated subprogram, macro call or section.
+//! runs forever: a block counts each time the flow comes back to it, through a loop or
+//! jump, or inside a subprogram, macro call or repeated section. The main program's first
+//! pass is free: a block of the main program that lies past every one executed before (the
+//! flow reading on) costs nothing, so a straight program runs however long its file is, and
+//! only repetition draws on the budget.
 //!
 //! ```text
-//! used = Σ over executed blocks of 1        (a block run k times counts k)
+//! used = Σ over executed blocks of [not a first pass through the main program]
 //! used > max_blocks  ─► error at the repeating construct (file:line:col), naming the option
 //! ```
 //!
@@ -22,6 +25,8 @@ use crate::lex::LineError;
 pub(crate) struct Budget {
     max: u64,
     used: u64,
+    /// The main program's byte offset from which a block is read for the first time.
+    fresh_from: usize,
 }
 
 impl Budget {
@@ -29,7 +34,20 @@ impl Budget {
         Budget {
             max: max_blocks,
             used: 0,
+            fresh_from: 0,
         }
+    }
+
+    /// Counts the block at byte `offset` of the main program (`main`) or of a called file:
+    /// free when it is the main program's first pass over it (past every block executed
+    /// before), one block otherwise. False once the budget is spent.
+    #[inline(always)]
+    pub(crate) fn spend_at(&mut self, main: bool, offset: usize) -> bool {
+        if main && offset >= self.fresh_from {
+            self.fresh_from = offset + 1;
+            return true;
+        }
+        self.spend()
     }
 
     /// Counts one executed block; false once the budget is spent.

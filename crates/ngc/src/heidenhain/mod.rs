@@ -171,7 +171,7 @@ impl Reader {
             return self.run_words(here);
         };
         self.cursor = next;
-        if !self.budget.spend() {
+        if !self.budget.spend_at(here.file == 0, here.offset) {
             self.finished = true;
             let (at, span) = self.repeating.clone().unwrap_or((here, 0..0));
             let err = self.budget.spent(span);

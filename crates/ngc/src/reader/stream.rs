@@ -135,7 +135,7 @@ impl IsoReader {
             return Ok(());
         };
         let len = line.len();
-        if !self.budget.spend() {
+        if !self.budget.spend_at(here.file == 0, here.offset) {
             self.finished = true;
             let (at, span) = self.repeating.clone().unwrap_or((here, 0..len));
             let line = if at == here {

@@ -198,6 +198,7 @@ impl Reader {
     fn step(&mut self) -> Result<bool> {
         self.section_end();
         let mut line = std::mem::take(&mut self.line);
+        let main = self.levels.len() == 1;
         let level = self.levels.last_mut().expect("the main program level");
         let n = level
             .source
@@ -215,7 +216,7 @@ impl Reader {
             return self.end_of_level().map_err(|e| self.syntax(e));
         }
         let line_no = level.line;
-        if !self.budget.spend() {
+        if !self.budget.spend_at(main, level.offset) {
             self.line = line;
             let depth = self.levels.len() - 1;
             let (offset, line_no) = (self.levels[depth].offset, self.levels[depth].line);

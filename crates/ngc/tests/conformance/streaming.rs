@@ -99,11 +99,12 @@ const JUMPS: [&str; 6] = [
 
 /// Moves of each of [`JUMPS`], counted by hand: 5 + 3 loop passes; 2 calls + 4 do-while
 /// passes; the elseif branch + 2 passes before the break; 3 WHILE passes + 3 GOTO passes +
-/// 2 M98 repeats; X1 and 333 passes of the endless loop (then the block budget's error:
-/// the i-th `G1 X2` is block 3i + 1, or 3i + 2 after the extra comment line of the invalid
-/// UTF-8 variant, and at most 1001 blocks run, so i ≤ 333 either way); the move before the
-/// bad word.
-const MOVES: [usize; 6] = [8, 6, 3, 8, 334, 1];
+/// 2 M98 repeats; X1, the endless loop's first pass and 334 more (then the block budget's
+/// error: the main program's first pass is free, the comment line of the invalid UTF-8
+/// variant included; counted pass i's while, `G1 X2` and endwhile are blocks 3i - 2, 3i - 1
+/// and 3i, and at most 1001 blocks run, so the last move is pass 334's, block 1001); the
+/// move before the bad word.
+const MOVES: [usize; 6] = [8, 6, 3, 8, 336, 1];
 
 #[test]
 fn jumps_read_the_same_with_lf_crlf_and_invalid_utf8() {

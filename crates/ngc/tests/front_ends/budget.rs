@@ -231,9 +231,11 @@ fn endless_loops_and_jumps_stop_at_the_budget_at_the_jumping_line() {
 
 #[test]
 fn a_loop_counts_every_block_it_runs_exactly() {
-    // `o1 while` .. `o1 endwhile` around one move: blocks 1 (G1 X0), then per pass the
-    // while line, the move and the endwhile, so pass i's move is block 3i. A budget of
-    // 3·7 + 1 = 22 blocks runs 7 passes and stops at the 8th while line.
+    // `o1 while` .. `o1 endwhile` around one move. The main program's first pass is free:
+    // G1 X0 and the first pass's while, move and endwhile cost nothing. Every pass after it
+    // reads its lines again: counted pass k's while, move and endwhile are blocks 3k-2,
+    // 3k-1 and 3k. A budget of 22 blocks runs 7 counted passes (21 blocks) and stops at the
+    // 8th one's move (block 23): the first move, the free pass's and 7 more.
     let o = Options {
         max_blocks: 22,
         ..opts(Dialect::Linuxcnc)
@@ -241,9 +243,9 @@ fn a_loop_counts_every_block_it_runs_exactly() {
     let text = "G1 X0 F100\no1 while [1]\nG91 X1\no1 endwhile\n";
     let all: Vec<_> = read_str_with(Path::new("t.ngc"), text, &o).collect();
     let ok = all.iter().filter(|m| m.is_ok()).count();
-    assert_eq!(ok, 1 + 7, "the first move and 7 passes");
+    assert_eq!(ok, 1 + 1 + 7, "the first move, the free pass and 7 counted passes");
     assert!(all.last().unwrap().is_err());
-    // One block more runs no further move: the 8th pass's move is block 24.
+    // One block more runs the 8th counted pass's move (block 23), and stops at its endwhile.
     let o = Options {
         max_blocks: 23,
         ..o
@@ -252,7 +254,7 @@ fn a_loop_counts_every_block_it_runs_exactly() {
         read_str_with(Path::new("t.ngc"), text, &o)
             .filter(|m| m.is_ok())
             .count(),
-        8
+        10
     );
 }
 
@@ -390,4 +392,29 @@ fn a_structure_open_at_the_end_of_the_program_is_an_error_at_its_opening_line() 
         Dialect::Fanuc,
     );
     assert_eq!(xs(&m), [1.0, 2.0, 9.0]);
+}
+
+/// A straight program longer than the whole budget reads whole: its first pass is free.
+/// The same lines repeated by a loop draw on the budget and stop.
+#[test]
+fn a_straight_program_longer_than_the_budget_reads_whole() {
+    let mut body = String::new();
+    for i in 0..3000 {
+        body.push_str(&format!("G1 X{}\n", i % 7));
+    }
+    let options = Options {
+        max_blocks: 100,
+        ..opts(Dialect::Linuxcnc)
+    };
+    let straight = format!("G21 G90 G94\nF1000\n{body}M2\n");
+    let moves: Vec<Move> = read_str_with(Path::new("long.ngc"), &straight, &options)
+        .collect::<Result<_, _>>()
+        .expect("a straight program repeats nothing");
+    // One move per G1: X changes at every step (i % 7).
+    assert_eq!(moves.len(), 3000);
+    let looped = format!("G21 G90 G94\nF1000\no100 repeat [5]\n{body}o100 endrepeat\nM2\n");
+    let err = read_str_with(Path::new("loop.ngc"), &looped, &options)
+        .find_map(|m| m.err())
+        .map(|e| e.to_string());
+    assert!(err.as_deref().is_some_and(|e| e.contains("max_blocks")), "{err:?}");
 }

@@ -105,14 +105,7 @@ pub fn run(
             .collect::<Vec<_>>()
             .join(" + ")
     );
-    if let Some(rtf) = summary.realtime_factor {
-        // What the user waited for: the whole command, reading and the check included.
-        out.push_str(&format!(
-            "real-time factor: {:.0}x for the whole run ({whole_s:.3} s wall: read, simulation, check, files); the simulation alone {rtf:.0}x ({:.3} s)\n",
-            summary.sim_time_s / whole_s.max(1e-9),
-            summary.wall_time_s.unwrap_or(0.0)
-        ));
-    }
+    out.push_str(&realtime_text(&summary, whole_s));
     match &summary.ballbar {
         None => out.push_str(
             "no measured circle: give the scenario a cone or circle to get ball-bar figures\n",
@@ -216,5 +209,18 @@ fn circle_figures_text(c: &crate::study::diagnose::CircleDiagnostics) -> String 
             format!("{:+.2} ppm", c.scale_mismatch_ppm),
             "scale_mismatch_ppm"
         ),
+    )
+}
+
+/// The real-time factors, when timed: what the user waited for (the whole command, reading
+/// and the check included) beside the simulation's own.
+fn realtime_text(summary: &crate::study::simulate::SimulationSummary, whole_s: f64) -> String {
+    let Some(rtf) = summary.realtime_factor else {
+        return String::new();
+    };
+    format!(
+        "real-time factor: {:.0}x for the whole run ({whole_s:.3} s wall: read, simulation, check, files); the simulation alone {rtf:.0}x ({:.3} s)\n",
+        summary.sim_time_s / whole_s.max(1e-9),
+        summary.wall_time_s.unwrap_or(0.0)
     )
 }

@@ -43,7 +43,7 @@ pub fn headline(budget: &ErrorBudget) -> String {
 /// A row's mechanism and axis in words.
 fn what(row: &BudgetRow) -> String {
     match (&row.axis, row.mechanism) {
-        (_, BudgetMechanism::Program) => "the program's own path".to_string(),
+        (_, BudgetMechanism::ProgramPath) => "the program's own path".to_string(),
         (None, BudgetMechanism::Servo) => "the servos' common lag".to_string(),
         (Some(a), m) => format!("the {a} axis's {}", m.name()),
         (None, m) => format!("the {}", m.name()),
@@ -62,7 +62,7 @@ fn row_name(row: &BudgetRow) -> String {
 fn advice(row: &BudgetRow) -> String {
     let axis = row.axis.as_deref().unwrap_or("the");
     match row.mechanism {
-        BudgetMechanism::Program => "raise the segment count or use TCP".to_string(),
+        BudgetMechanism::ProgramPath => "raise the segment count or use TCP".to_string(),
         BudgetMechanism::Servo if row.axis.is_none() => {
             "raise the feedforward of every axis (the same on each), or run at a lower feed"
                 .to_string()
@@ -166,7 +166,7 @@ mod tests {
         let budget = ErrorBudget {
             g_um: 10.0,
             rows: vec![
-                row(BudgetMechanism::Program, None, 0.62),
+                row(BudgetMechanism::ProgramPath, None, 0.62),
                 row(BudgetMechanism::Servo, Some("C"), 0.3),
             ],
             interaction_share: 0.08,

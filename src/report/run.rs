@@ -120,7 +120,8 @@ pub struct AxisReversal {
 pub enum BudgetMechanism {
     /// The ideal machine's own curve (actual = commanded): chord and joint-space
     /// interpolation error, passage through a pole.
-    Program,
+    #[serde(rename = "program")]
+    ProgramPath,
     /// One axis's servo loop (lag and gain) without its nonlinearities.
     Servo,
     /// One axis's backlash, on its servo.
@@ -139,7 +140,7 @@ impl BudgetMechanism {
     /// The mechanism in words.
     pub fn name(self) -> &'static str {
         match self {
-            BudgetMechanism::Program => "the program's own path",
+            BudgetMechanism::ProgramPath => "the program's own path",
             BudgetMechanism::Servo => "servo lag and gain",
             BudgetMechanism::Backlash => "backlash",
             BudgetMechanism::Friction => "friction and its lost motion",

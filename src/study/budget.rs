@@ -151,7 +151,7 @@ impl BudgetPlan {
         let delay_s = common_lag_s(scenario)?;
         let mut plan = BudgetPlan {
             cases: vec![Case {
-                mechanism: BudgetMechanism::Program,
+                mechanism: BudgetMechanism::ProgramPath,
                 axis: None,
                 source: Source::Ideal,
                 base: None,

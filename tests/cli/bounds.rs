@@ -272,16 +272,16 @@ fn a_file_program_past_the_budget_is_refused_by_reading_ahead_or_stopped_where_i
 }
 
 /// A program that loops without end is refused by the read-ahead, not sampled for hours:
-/// each pass of `o100 while [1]` moves 10 mm and back at F1000 (1.2 s), so 10⁹ samples at
-/// 1 ms (10⁶ s) are passed after 833,334 passes, 1,666,668 moves, before the interpreter's
-/// limit of 10⁶ loop iterations. With the iterations limit lower than that, the interpreter's
-/// own limit names the loop.
+/// each pass of `o100 while [1]` moves 10 mm and back at F10 (120 s), so 10⁹ samples at
+/// 1 ms (10⁶ s) are passed after 8,334 passes, 16,668 moves with the first rapid, long
+/// before the interpreter's block budget (`max_blocks`, 2·10⁶ blocks run again: four a
+/// pass). A loop of short moves meets that budget first, and the reader names the loop.
 #[test]
 fn a_program_that_loops_without_end_is_refused_after_reading_not_sampling() {
     let dir = scratch("bounds", "endless-loop");
     std::fs::write(
         dir.join("loop.ngc"),
-        "G21 G90 G17\nG0 X0 Y0 Z0\nF1000\no100 while [1]\nG1 X10\nG1 X0\no100 endwhile\nM2\n",
+        "G21 G90 G17\nG0 X0 Y0 Z0\nF10\no100 while [1]\nG1 X10\nG1 X0\no100 endwhile\nM2\n",
     )
     .unwrap();
     write_scenario(
@@ -297,7 +297,7 @@ fn a_program_that_loops_without_end_is_refused_after_reading_not_sampling() {
             "{command}: {err}"
         );
         assert!(
-            err.contains("read ahead to this line, its 1666668 moves"),
+            err.contains("read ahead to this line, its 16668 moves"),
             "{command}: {err}"
         );
         assert!(err.contains("277.8 h of machine time"), "{err}");

@@ -235,19 +235,21 @@ impl From<ngc::Error> for Error {
         match e {
             ngc::Error::Read { path, source } => Error::Read { path, source },
             // Neither the text nor the reader's message, which names the offending word.
-            ngc::Error::Syntax(s) if not_a_program(&s.path, &s.text, s.span.start) => Error::Located {
-                path: s.path,
-                line: s.line,
-                column: s.column,
-                message: format!(
-                    "not an NC program: it does not read as one from its first block ({})",
-                    s.label
-                ),
-                help: Some(
-                    "check the scenario's [program] file: it names this file as the program"
-                        .into(),
-                ),
-            },
+            ngc::Error::Syntax(s) if not_a_program(&s.path, &s.text, s.span.start) => {
+                Error::Located {
+                    path: s.path,
+                    line: s.line,
+                    column: s.column,
+                    message: format!(
+                        "not an NC program: it does not read as one from its first block ({})",
+                        s.label
+                    ),
+                    help: Some(
+                        "check the scenario's [program] file: it names this file as the program"
+                            .into(),
+                    ),
+                }
+            }
             ngc::Error::Syntax(s) => {
                 let error = Error::at(&s.path, &s.text, s.span, s.message, s.label);
                 match s.help {

@@ -1034,13 +1034,11 @@ const MAX_CODE_LINES: usize = 1000;
 
 /// Over a limit for now: the file (from the repository root), the function (None: the
 /// file's code lines) and why. The lead shrinks this list as the splits land.
-const SIZE_ALLOWED: &[(&str, Option<&str>, &str)] = &[
-    (
-        "src/report/polar.rs",
-        Some("render_polar_svg"),
-        "321 lines: being split on another branch at the time of writing",
-    ),
-];
+const SIZE_ALLOWED: &[(&str, Option<&str>, &str)] = &[(
+    "src/report/polar.rs",
+    Some("render_polar_svg"),
+    "321 lines: being split on another branch at the time of writing",
+)];
 
 /// `text` with comments removed and every character of a string or char literal (its
 /// quotes included) replaced by `"`, line breaks kept: braces and `fn` in a comment or a
@@ -1297,11 +1295,14 @@ fn each_front_end_is_named_only_by_its_registration() {
         }
     }
     let text = std::fs::read_to_string(&registry).unwrap();
-    let list = &text[text.find("const FRONT_ENDS").expect("FRONT_ENDS in reader/mod.rs")..];
+    let list = &text[text
+        .find("const FRONT_ENDS")
+        .expect("FRONT_ENDS in reader/mod.rs")..];
     let list = &list[..list.find("];").unwrap()];
     for front in fronts {
         assert_eq!(
-            list.matches(&format!("&crate::{front}::FRONT_END,")).count(),
+            list.matches(&format!("&crate::{front}::FRONT_END,"))
+                .count(),
             1,
             "{front} registered once in FRONT_ENDS"
         );
@@ -1315,6 +1316,15 @@ fn each_front_end_is_named_only_by_its_registration() {
             "{front}/ defines its FRONT_END registration"
         );
     }
-    let last = list.trim_end().trim_end_matches(',').rsplit(',').next().unwrap().trim();
-    assert_eq!(last, "&stream::FRONT_END", "the ISO family last in FRONT_ENDS");
+    let last = list
+        .trim_end()
+        .trim_end_matches(',')
+        .rsplit(',')
+        .next()
+        .unwrap()
+        .trim();
+    assert_eq!(
+        last, "&stream::FRONT_END",
+        "the ISO family last in FRONT_ENDS"
+    );
 }

@@ -438,7 +438,8 @@ impl MachineBase {
         })?;
         // Range errors in overridden values point at the scenario file; the machine is still
         // the machine file's (test.json names it, the scenario hash reads it).
-        let mut machine = Machine::validate(scenario, scenario_text.unwrap_or(""), file, tables_file)?;
+        let mut machine =
+            Machine::validate(scenario, scenario_text.unwrap_or(""), file, tables_file)?;
         machine.path = self.path.clone();
         Ok(machine)
     }

@@ -5,8 +5,8 @@
 pub mod attribution;
 pub mod ballbar;
 pub mod bar;
-pub mod measurement;
 pub mod feed;
+pub mod measurement;
 pub mod settle;
 pub mod shared;
 pub mod sink;

@@ -481,9 +481,8 @@ fn summary_section(folder: &RunFolder) -> String {
 /// A circle test's servo mismatch, squareness and scale (`data-circle` cells), each a
 /// number or why not, and the notes under them.
 fn circle_figures_table(c: &super::run::CircleFigures) -> String {
-    let mut out = String::from(
-        "<table class=\"circle-figures\">\n<tr><th>figure</th><th>value</th></tr>\n",
-    );
+    let mut out =
+        String::from("<table class=\"circle-figures\">\n<tr><th>figure</th><th>value</th></tr>\n");
     for (key, name, value) in super::circle_figures::circle_figure_rows(c) {
         let _ = writeln!(
             out,
@@ -786,7 +785,12 @@ pub fn render(folder: &RunFolder, diagnosis: &Diagnosis, date: Option<&str>) -> 
          CCW runs, about the common centre. Centring: least-squares centre offset a (cos θ), b (sin θ) \
          and mean radius error r0, removed before the figures.</p>\n",
     );
-    if let Some(c) = folder.summary.diagnostics.as_ref().and_then(|d| d.circle.as_ref()) {
+    if let Some(c) = folder
+        .summary
+        .diagnostics
+        .as_ref()
+        .and_then(|d| d.circle.as_ref())
+    {
         h.push_str("<h2 id=\"circle-figures\">Servo mismatch, squareness, scale</h2>\n");
         h.push_str(&circle_figures_table(c));
     }

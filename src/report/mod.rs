@@ -9,8 +9,8 @@
 //! and [`run::Diagnosis`] (filled by `study::diagnose`). Run folders are read back with serde
 //! into those types ([`run::RunFolder`]), traces through [`trace::read_trace`].
 
-pub mod circle_figures;
 pub mod budget_table;
+pub mod circle_figures;
 pub mod escape;
 pub mod files;
 pub mod fit_plot;

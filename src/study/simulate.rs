@@ -22,8 +22,8 @@ use crate::input::lead_in::LeadIn;
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::{Scenario, TraceFormat};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
-use crate::measure::feed::{FeedMeter, FeedSeen, AT_FEED_TOLERANCE};
 use crate::measure::ballbar::{analyse_events_at, BallbarResult};
+use crate::measure::feed::{FeedMeter, FeedSeen, AT_FEED_TOLERANCE};
 use crate::measure::measurement;
 use crate::measure::settle::SettleGate;
 use crate::measure::{BallbarSink, BarGeometry, CommandMaps};
@@ -632,9 +632,9 @@ pub fn simulate_with(
         warnings,
         feed_reductions: study.feed_reductions.clone(),
         lead_in: scenario.simulate.lead_in.map(|lead| LeadIn {
-            reached_mm_min: study
-                .nominal_feed
-                .and_then(|(radius_mm, _)| crate::measure::feed::start_mm_min(&study.feed, radius_mm)),
+            reached_mm_min: study.nominal_feed.and_then(|(radius_mm, _)| {
+                crate::measure::feed::start_mm_min(&study.feed, radius_mm)
+            }),
             ..lead
         }),
         measurements: study.measurements.clone(),

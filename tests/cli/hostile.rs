@@ -65,10 +65,8 @@ fn hostile_values() -> Vec<Value> {
 /// value, and each of its elements another).
 fn leaves(table: &toml::Table) -> Vec<Vec<String>> {
     let mut out = Vec::new();
-    let mut stack: Vec<(Vec<String>, &Value)> = table
-        .iter()
-        .map(|(k, v)| (vec![k.clone()], v))
-        .collect();
+    let mut stack: Vec<(Vec<String>, &Value)> =
+        table.iter().map(|(k, v)| (vec![k.clone()], v)).collect();
     while let Some((path, value)) = stack.pop() {
         match value {
             Value::Table(t) => {
@@ -142,7 +140,13 @@ fn apply(table: &mut toml::Table, path: &[String], edit: &Edit, values: &[Value]
 }
 
 /// Element `index` of the array that `parents` ends in (inside `table`, its parent table).
-fn set_element(table: &mut toml::Table, parents: &[String], index: usize, edit: &Edit, values: &[Value]) {
+fn set_element(
+    table: &mut toml::Table,
+    parents: &[String],
+    index: usize,
+    edit: &Edit,
+    values: &[Value],
+) {
     let Some(name) = parents.last() else { return };
     let Some(Value::Array(array)) = table.get_mut(name) else {
         return;
@@ -187,8 +191,12 @@ fn names_place(text: &str, name: &str) -> bool {
         let rest = &text[i + name.len()..];
         let mut parts = rest.splitn(3, ':');
         parts.next() == Some("")
-            && parts.next().is_some_and(|l| !l.is_empty() && l.bytes().all(|b| b.is_ascii_digit()))
-            && parts.next().is_some_and(|c| c.bytes().next().is_some_and(|b| b.is_ascii_digit()))
+            && parts
+                .next()
+                .is_some_and(|l| !l.is_empty() && l.bytes().all(|b| b.is_ascii_digit()))
+            && parts
+                .next()
+                .is_some_and(|c| c.bytes().next().is_some_and(|b| b.is_ascii_digit()))
     })
 }
 
@@ -220,7 +228,12 @@ fn loads_or_names_the_place<T>(
             || names_place(&text, ".toml")
             || text.contains("cannot read")
             || (text.contains(&name) && named_key);
-        prop_assert!(placed, "{}: the error names no file:line:column: {}", case, text);
+        prop_assert!(
+            placed,
+            "{}: the error names no file:line:column: {}",
+            case,
+            text
+        );
     }
     Ok(())
 }

@@ -84,7 +84,11 @@ fn a_program_path_that_names_no_program_is_named_without_its_content() {
     )
     .unwrap();
     for program in ["image.nc", "other.toml"] {
-        write_scenario(&dir, &trt_ac(), &format!("[program]\nfile = \"{program}\"\n"));
+        write_scenario(
+            &dir,
+            &trt_ac(),
+            &format!("[program]\nfile = \"{program}\"\n"),
+        );
         let (code, err) = analyze_stderr(&dir);
         assert_eq!(code, Some(2), "{err}");
         assert!(err.contains(&format!("{program}:1:")), "{err}");
@@ -102,6 +106,9 @@ fn a_program_that_fails_on_its_first_block_is_quoted_with_the_readers_message() 
     write_scenario(&dir, &trt_ac(), "[program]\nfile = \"p.nc\"\n");
     let (code, err) = analyze_stderr(&dir);
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("p.nc:2:5:") && err.contains("G01 X1.2.3 F100"), "{err}");
+    assert!(
+        err.contains("p.nc:2:5:") && err.contains("G01 X1.2.3 F100"),
+        "{err}"
+    );
     assert!(!err.contains("not an NC program"), "{err}");
 }

@@ -308,9 +308,9 @@ fn user_files(dir: &Path, run: &[&str]) -> BTreeMap<PathBuf, (usize, u64)> {
             !run.contains(&top.as_ref())
         })
         .map(|(p, bytes)| {
-            let sum = bytes
-                .iter()
-                .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| (h ^ *b as u64).wrapping_mul(0x100_0000_01b3));
+            let sum = bytes.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
+                (h ^ *b as u64).wrapping_mul(0x100_0000_01b3)
+            });
             (p, (bytes.len(), sum))
         })
         .collect()
@@ -352,7 +352,10 @@ fn files_named_like_outputs_but_not_listed_in_a_manifest_are_kept() {
     let refused = mtsim(&simulate_args(NEW, &out, true));
     assert_eq!(refused.status.code(), Some(2));
     let err = String::from_utf8_lossy(&refused.stderr).replace(['\n', '│', ' '], "");
-    assert!(err.contains("report.htmlisnotwrittenbyanearliermtsimrun"), "{err}");
+    assert!(
+        err.contains("report.htmlisnotwrittenbyanearliermtsimrun"),
+        "{err}"
+    );
     assert_eq!(contents(&out), after, "the refused run touched nothing");
     assert_eq!(names(&dir), ["p"], "no lock or staging folder left");
 }
@@ -405,7 +408,10 @@ fn an_output_through_a_symbolic_link_writes_through_it_and_keeps_it() {
     std::os::unix::fs::symlink("real", &link).unwrap();
     run_ok(&simulate_args(NEW, &link, false));
     run_ok(&simulate_args(OLD, &link, false));
-    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
     assert_eq!(std::fs::read_link(&link).unwrap(), Path::new("real"));
     assert_eq!(std::fs::read(real.join("mine.txt")).unwrap(), b"mine");
     assert!(real.join("summary.json").is_file());
@@ -423,7 +429,10 @@ fn a_page_written_by_report_is_the_runs_and_a_rerun_with_html_replaces_it() {
     assert!(manifest.contains("\"report.html\""), "{manifest}");
     run_ok(&simulate_args(OLD, &out, true));
     run_ok(&simulate_args(NEW, &out, false));
-    assert!(!out.join("report.html").exists(), "the earlier run's page goes with it");
+    assert!(
+        !out.join("report.html").exists(),
+        "the earlier run's page goes with it"
+    );
 }
 
 /// A user's tree drawn at random: names like mtsim's outputs and not, files and folders.
@@ -465,7 +474,11 @@ fn random_tree(rng: &mut Rng, root: &Path) -> usize {
 fn every_entry_not_in_the_manifest_survives_runs_reruns_and_killed_runs() {
     let dir = scratch("run-folders", "property");
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
-    let cases = if std::env::var_os("MTSIM_LONG_FAULTS").is_some() { 40 } else { 8 };
+    let cases = if std::env::var_os("MTSIM_LONG_FAULTS").is_some() {
+        40
+    } else {
+        8
+    };
     let mut users = 0;
     for case in 0..cases {
         let out = dir.join(format!("case{case}"));

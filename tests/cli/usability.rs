@@ -257,21 +257,32 @@ fn a_killed_run_leaves_no_temporary_file_after_the_next_run() {
         let _ = child.kill();
         child.wait().unwrap();
         let out = mtsim(&args);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let mut left: Vec<String> = std::fs::read_dir(&out_dir)
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .filter(|n| n.ends_with(".tmp"))
             .collect();
         left.sort();
-        assert_eq!(left, ["notes.tmp", "summary.json.tmp"], "killed after {delay_ms} ms");
+        assert_eq!(
+            left,
+            ["notes.tmp", "summary.json.tmp"],
+            "killed after {delay_ms} ms"
+        );
         let beside: Vec<String> = std::fs::read_dir(&dir)
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .collect();
         assert_eq!(beside, ["out"], "killed after {delay_ms} ms");
     }
-    assert_eq!(std::fs::read(out_dir.join("summary.json.tmp")).unwrap(), b"mine too");
+    assert_eq!(
+        std::fs::read(out_dir.join("summary.json.tmp")).unwrap(),
+        b"mine too"
+    );
 }
 
 #[test]
@@ -434,7 +445,10 @@ fn cone_with_g93_and_tcp_is_refused_not_silently_half_done() {
     let out = mtsim(&["cone", "scenarios/cone-15-10.toml", "--g93", "--tcp"]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--g93 with --tcp") && err.contains("choose one"), "{err}");
+    assert!(
+        err.contains("--g93 with --tcp") && err.contains("choose one"),
+        "{err}"
+    );
     assert!(out.stdout.is_empty(), "no program written");
     // Each alone still writes its program.
     let g93 = mtsim(&["cone", "scenarios/cone-15-10.toml", "--g93"]);
@@ -455,10 +469,18 @@ fn analyze_gives_a_long_reversal_list_as_its_count_and_first_lines() {
     program.push_str("M30\n");
     let scenario = common::file_scenario(&dir, &program);
     let out = mtsim(&["analyze", &scenario]);
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8_lossy(&out.stdout);
     let x_row = text.lines().find(|l| l.starts_with("X ")).unwrap();
-    assert!(x_row.contains("30 reversals, the first 8: line 4,"), "{x_row}");
+    assert!(
+        x_row.contains("30 reversals, the first 8: line 4,"),
+        "{x_row}"
+    );
     assert_eq!(x_row.matches("line ").count(), 8, "{x_row}");
     let json = stdout_json(&mtsim(&["analyze", &scenario, "--json"]));
     let x = json["axes"]
@@ -480,9 +502,19 @@ fn simulate_verbose_gives_stage_times_and_the_whole_runs_factor() {
         dir.join("out").to_str().unwrap(),
         "-v",
     ]);
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let err = String::from_utf8_lossy(&out.stderr);
-    for stage in ["stages (wall): read ", "simulation (", "check ", "whole run "] {
+    for stage in [
+        "stages (wall): read ",
+        "simulation (",
+        "check ",
+        "whole run ",
+    ] {
         assert!(err.contains(stage), "{stage}: {err}");
     }
     let text = String::from_utf8_lossy(&out.stdout);

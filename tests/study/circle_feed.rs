@@ -95,7 +95,9 @@ fn held_circles_run_their_measured_revolution_at_one_speed_and_say_whether_it_is
         );
         let (lo, hi) = trace_speed_range(&out);
         let b = &json["ballbar"];
-        let at_feed = b["at_feed"].as_bool().expect("a generated circle says at_feed");
+        let at_feed = b["at_feed"]
+            .as_bool()
+            .expect("a generated circle says at_feed");
         let feed_min = b["feed_min_mm_min"].as_f64().unwrap();
         let feed_max = b["feed_max_mm_min"].as_f64().unwrap();
         println!("F{feed}: trace {lo:.1}..{hi:.1} mm/min, summary {feed_min:.1}..{feed_max:.1}, at_feed {at_feed}");
@@ -110,7 +112,10 @@ fn held_circles_run_their_measured_revolution_at_one_speed_and_say_whether_it_is
         // And the lead-in says the speed it reached, not the one it planned.
         let reached = json["lead_in"]["reached_mm_min"].as_f64().unwrap();
         assert!((reached - lo).abs() <= 0.002 * lo, "{reached} vs {lo}");
-        assert_eq!(json["lead_in"]["whole_turns"], serde_json::Value::Bool(true));
+        assert_eq!(
+            json["lead_in"]["whole_turns"],
+            serde_json::Value::Bool(true)
+        );
         // A held feed is said, on the page's G and in the warnings.
         assert_eq!(page(&out).contains("data-warning=\"feed\""), !at_feed);
         if !at_feed {
@@ -130,7 +135,10 @@ fn held_circles_run_their_measured_revolution_at_one_speed_and_say_whether_it_is
 fn a_circle_the_machine_can_hold_is_at_feed() {
     let (out, json) = run_circle("free", 10.0, 3000.0, "[\"ccw\"]", [30.0; 3]);
     let (lo, hi) = trace_speed_range(&out);
-    assert!((lo - 3000.0).abs() < 1.0 && (hi - 3000.0).abs() < 1.0, "{lo}..{hi}");
+    assert!(
+        (lo - 3000.0).abs() < 1.0 && (hi - 3000.0).abs() < 1.0,
+        "{lo}..{hi}"
+    );
     assert_eq!(json["ballbar"]["at_feed"], serde_json::Value::Bool(true));
     assert!(!page(&out).contains("data-warning=\"feed\""));
 }
@@ -165,18 +173,30 @@ fn a_one_direction_circle_gives_null_squareness_and_mismatch_with_the_reason() {
 /// the apparent scale mismatch `(3/2) ω² (T_y² − T_x²)` = 43.4 ppm taken out of the scale.
 #[test]
 fn a_two_direction_circle_gives_the_kv_mismatch_in_ms() {
-    let (_, json) = run_circle("two-way", 50.0, 1000.0, "[\"ccw\", \"cw\"]", [30.0, 27.0, 30.0]);
+    let (_, json) = run_circle(
+        "two-way",
+        50.0,
+        1000.0,
+        "[\"ccw\", \"cw\"]",
+        [30.0, 27.0, 30.0],
+    );
     let c = &json["diagnostics"]["circle"];
     let (tx, ty) = (1.0 / 30.0, 1.0 / 27.0);
     let want_ms = (tx - ty) * 1e3;
     let ms = c["servo_mismatch_ms"].as_f64().unwrap();
-    assert!((ms - want_ms).abs() <= 0.02 * want_ms.abs(), "{ms} ms vs {want_ms} ms");
+    assert!(
+        (ms - want_ms).abs() <= 0.02 * want_ms.abs(),
+        "{ms} ms vs {want_ms} ms"
+    );
     let squareness = c["squareness_urad"].as_f64().unwrap();
     assert!(squareness.abs() < 1.0, "{squareness} µrad");
     let w = 1000.0 / 60.0 / 50.0;
     let apparent = 1.5 * w * w * (ty * ty - tx * tx) * 1e6;
     let servo_scale = c["servo_scale_ppm"].as_f64().unwrap();
-    assert!((servo_scale - apparent).abs() <= 0.03 * apparent, "{servo_scale} vs {apparent}");
+    assert!(
+        (servo_scale - apparent).abs() <= 0.03 * apparent,
+        "{servo_scale} vs {apparent}"
+    );
     let scale = c["scale_mismatch_ppm"].as_f64().unwrap();
     assert!(scale.abs() <= 0.03 * apparent, "{scale} ppm");
     assert!(c.get("not_measured").is_none(), "{c}");

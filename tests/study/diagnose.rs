@@ -175,7 +175,11 @@ fn squareness_and_a_gain_mismatch_together_are_told_apart_by_the_two_directions(
         &circle(),
     )
     .unwrap();
-    assert!(close(d.squareness_urad, 50.0, 0.02), "{}", d.squareness_urad);
+    assert!(
+        close(d.squareness_urad, 50.0, 0.02),
+        "{}",
+        d.squareness_urad
+    );
     assert_eq!(d.squareness_um_per_m, d.squareness_urad);
     let want_ms = (tu - tv) * 1e3;
     assert!(

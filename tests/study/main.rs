@@ -4,8 +4,8 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-mod circle_feed;
 mod budget;
+mod circle_feed;
 mod cone_reference;
 mod diagnose;
 mod fit;

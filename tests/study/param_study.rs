@@ -342,8 +342,18 @@ fn a_key_path_of_twenty_thousand_parts_is_refused() {
         "",
         &format!("[[vary]]\nkey = \"{key}\"\nvalues = [1.0]\n"),
     );
-    let o = mtsim(&["study", study.to_str().unwrap(), "-o", dir.join("out").to_str().unwrap()]);
-    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = mtsim(&[
+        "study",
+        study.to_str().unwrap(),
+        "-o",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     assert!(String::from_utf8_lossy(&o.stderr).contains("more than 32 parts"));
 }
 

@@ -243,7 +243,11 @@ fn a_loop_counts_every_block_it_runs_exactly() {
     let text = "G1 X0 F100\no1 while [1]\nG91 X1\no1 endwhile\n";
     let all: Vec<_> = read_str_with(Path::new("t.ngc"), text, &o).collect();
     let ok = all.iter().filter(|m| m.is_ok()).count();
-    assert_eq!(ok, 1 + 1 + 7, "the first move, the free pass and 7 counted passes");
+    assert_eq!(
+        ok,
+        1 + 1 + 7,
+        "the first move, the free pass and 7 counted passes"
+    );
     assert!(all.last().unwrap().is_err());
     // One block more runs the 8th counted pass's move (block 23), and stops at its endwhile.
     let o = Options {
@@ -416,5 +420,8 @@ fn a_straight_program_longer_than_the_budget_reads_whole() {
     let err = read_str_with(Path::new("loop.ngc"), &looped, &options)
         .find_map(|m| m.err())
         .map(|e| e.to_string());
-    assert!(err.as_deref().is_some_and(|e| e.contains("max_blocks")), "{err:?}");
+    assert!(
+        err.as_deref().is_some_and(|e| e.contains("max_blocks")),
+        "{err:?}"
+    );
 }

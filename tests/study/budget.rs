@@ -244,7 +244,7 @@ fn a_clean_cone_tells_of_no_lost_motion_and_its_program_row_is_the_commanded_pat
         .collect();
     assert!(samples.len() > 10_000, "{}", samples.len());
     let want = centred_peak_to_valley(&samples);
-    let program = rows(b, BudgetMechanism::Program)[0];
+    let program = rows(b, BudgetMechanism::ProgramPath)[0];
     assert!(
         (program.pv_um - want).abs() <= 0.2,
         "program row {} µm, the commanded path {want} µm",
@@ -283,7 +283,10 @@ fn a_clean_circle_tells_of_no_lost_motion() {
         .collect();
     assert_eq!(servo, ["X", "Y"], "{b:?}");
     // The circle's program part is a polygon of short chords: well under a micrometre.
-    assert!(rows(b, BudgetMechanism::Program)[0].pv_um < 0.5, "{b:?}");
+    assert!(
+        rows(b, BudgetMechanism::ProgramPath)[0].pv_um < 0.5,
+        "{b:?}"
+    );
 }
 
 /// The X backlash row against the difference of two whole runs, with and without it, over

@@ -358,6 +358,11 @@ impl ThetaMap {
         self.bins[bin] = Some(s);
     }
 
+    /// The value of bin `i`, if it was set.
+    pub fn bin(&self, i: usize) -> Option<AxisVec> {
+        self.bins.get(i).copied().flatten()
+    }
+
     /// The value of the filled bin nearest `theta_deg` (within 5 deg), if any.
     pub fn at(&self, theta_deg: f64) -> Option<AxisVec> {
         if self.bins.is_empty() {

@@ -107,6 +107,9 @@ pub struct BallbarStudy {
     pub sites: Vec<ReversalSite>,
     /// Each axis's reversal angles from the analysis, deg.
     pub reversals: Vec<(Axis, Vec<f64>)>,
+    /// Each machine axis's reversal value B from the signatures (`study::lost_motion`),
+    /// in the machine's order; empty without a bar or command maps.
+    pub lost_motion_b: Vec<crate::report::run::AxisReversal>,
     pub sim_time_s: f64,
     pub setpoints: u64,
     pub directions: Vec<Direction>,
@@ -480,11 +483,18 @@ pub(crate) fn assemble(
         ),
         _ => ReversalSite::unweighted(&reversals),
     };
+    let lost_motion_b = match (maps, geometry) {
+        (Some(maps), Some(g)) => {
+            crate::study::lost_motion::reversal_b(&signatures, maps, &g, &drives, &sites)?
+        }
+        _ => Vec::new(),
+    };
     Ok(BallbarStudy {
         runs,
         signatures,
         sites,
         reversals,
+        lost_motion_b,
         sim_time_s: shared.sim_time_s,
         setpoints: shared.setpoints,
         directions: shared.directions.clone(),

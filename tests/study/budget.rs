@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use mtsim::input::scenario::Scenario;
 use mtsim::measure::Direction;
 use mtsim::report::run::{BudgetMechanism, BudgetRow, ErrorBudget};
+use mtsim::study::param::evaluate::evaluate_group;
 use mtsim::study::simulate::{run_ballbar, simulate, SimulationSummary};
 
 use crate::common::{machine, scenario_text, scratch, trt_ac};
@@ -131,6 +132,29 @@ fn assert_clean_b(s: &SimulationSummary) {
     }
 }
 
+/// The `B_<axis>_um` columns `mtsim study` gives each of `texts`, run as one group of
+/// points (side by side on one interpolation pass, as a study runs them).
+fn study_b(name: &str, texts: &[&str]) -> Vec<Vec<(String, Option<f64>)>> {
+    let scenarios: Vec<Scenario> = texts
+        .iter()
+        .enumerate()
+        .map(|(i, t)| load(&format!("{name}-{i}"), t).0)
+        .collect();
+    evaluate_group(&scenarios, &|| {})
+        .into_iter()
+        .map(|f| f.unwrap().b_um)
+        .collect()
+}
+
+/// The study's B of one point: under 0.3 µm on every axis but `lost` (which may be absent).
+fn assert_study_b_clean_but(b: &[(String, Option<f64>)], lost: Option<&str>) {
+    eprintln!("study B: {b:?}");
+    assert!(b.iter().any(|(_, v)| v.is_some()), "{b:?}");
+    for (axis, v) in b.iter().filter(|(a, _)| Some(a.as_str()) != lost) {
+        assert!(v.is_none_or(|v| v.abs() < 0.3), "{axis}: {v:?}");
+    }
+}
+
 /// The trace's rows of one direction: θ (deg) and the commanded X Y Z A C.
 fn commanded_rows(out: &Path, direction: Direction) -> Vec<(f64, [f64; 5])> {
     let mut r = csv::Reader::from_path(out.join("trace.csv")).unwrap();
@@ -229,9 +253,12 @@ fn solve3(m: [[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
 #[test]
 fn a_clean_cone_tells_of_no_lost_motion_and_its_program_row_is_the_commanded_path() {
     let (linear, rotary) = CONE_AXES;
-    let (s, out) = run("clean-cone", &cone(&clean(linear, rotary, &[], "")));
+    let text = cone(&clean(linear, rotary, &[], ""));
+    let (s, out) = run("clean-cone", &text);
     assert_consistent(&s, &[]);
     assert_clean_b(&s);
+    // The study's columns too: the cone's own shape is no lost motion.
+    assert_study_b_clean_but(&study_b("clean-cone-study", &[&text])[0], None);
     let b = budget(&s);
     // No backlash, no dry friction: no such rows at all.
     assert!(rows(b, BudgetMechanism::Backlash).is_empty(), "{b:?}");
@@ -329,6 +356,21 @@ fn backlash_row_is_the_difference_of_two_runs(name: &str, without: String, with:
     for r in s.reversal_b.iter().filter(|r| r.axis != "X") {
         assert!(r.b_um.is_none_or(|b| b.abs() < 0.3), "{r:?}");
     }
+    // The study's B of the same two machines, run side by side: the gap on X, and agreeing
+    // with the budget's within half a micrometre; nothing on the clean one.
+    let both = study_b(&format!("{name}-study"), &[&with, &without]);
+    assert_study_b_clean_but(&both[0], Some("X"));
+    assert_study_b_clean_but(&both[1], None);
+    let study_bx = both[0].iter().find(|(a, _)| a == "X").unwrap().1.unwrap();
+    eprintln!("{name}: study B of X {study_bx} µm, budget's {bx} µm");
+    assert!(
+        (study_bx - 10.0).abs() <= 1.0,
+        "{name}: study B of X {study_bx} µm"
+    );
+    assert!(
+        (study_bx - bx).abs() <= 0.5,
+        "{name}: study {study_bx}, budget {bx}"
+    );
 }
 
 #[test]
@@ -417,4 +459,42 @@ fn friction_alone_makes_the_drive_s_elastic_lost_motion() {
         (bx - want).abs() <= 0.2 * want,
         "B of X {bx} µm, 2 Fc/k {want} µm"
     );
+}
+
+/// The stock machine (dry friction on all five axes) with 10 µm of X and 6 µm of Y
+/// backlash, on the cone: a study's B of each axis, from the run's lost-motion signature,
+/// against the budget's, from each axis's own runs. Five lost-motion terms whose
+/// sensitivities swing with θ: the joint fit must keep each axis's part its own.
+#[test]
+fn a_study_s_b_on_a_cone_with_lost_motion_on_every_axis_is_the_budget_s() {
+    let backlash = "[machine_overrides.axes.X.drive]\nbacklash_mm = 0.010\n\
+                    [machine_overrides.axes.Y.drive]\nbacklash_mm = 0.006\n";
+    let text = cone(backlash);
+    let (s, _) = run("lost-everywhere", &text);
+    let study = study_b("lost-everywhere-study", &[&text]).remove(0);
+    let mut compared = 0;
+    for r in &s.reversal_b {
+        let theirs = study.iter().find(|(a, _)| *a == r.axis).unwrap().1;
+        eprintln!("{}: budget {:?}, study {theirs:?}", r.axis, r.b_um);
+        assert_eq!(r.b_um.is_some(), theirs.is_some(), "{}", r.axis);
+        if let (Some(want), Some(got)) = (r.b_um, theirs) {
+            assert!(
+                (got - want).abs() <= 0.5_f64.max(0.05 * want.abs()),
+                "{}: study {got} µm, budget {want} µm",
+                r.axis
+            );
+            compared += 1;
+        }
+    }
+    assert!(compared >= 3, "{compared}");
+    // Against the closed form, B = b + 2 Fc/k: 150 N at the default 200 N/µm is 1.5 µm on
+    // X and Y; A's 15 N m at 3e6 N m/rad is 1e-5 rad, 1 µm of arc at the 100 mm bar.
+    let b = |axis: &str| study.iter().find(|(a, _)| a == axis).unwrap().1.unwrap();
+    for (axis, want) in [("X", 11.5), ("Y", 7.5), ("A", 1.0)] {
+        assert!(
+            (b(axis) - want).abs() <= 0.2,
+            "{axis}: {} µm, {want} µm",
+            b(axis)
+        );
+    }
 }

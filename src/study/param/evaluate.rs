@@ -14,7 +14,6 @@ use crate::error::Result;
 use crate::input::overrides::{KeyPath, ScenarioTree, Step};
 use crate::input::scenario::Scenario;
 use crate::study::diagnose::{marks, AxisMark};
-use crate::study::glance::reversal_b;
 use crate::study::lanes::{run_ballbar_lanes, share_key};
 use crate::study::simulate::BallbarStudy;
 
@@ -32,8 +31,8 @@ pub struct Row {
     pub f_max_um: Option<f64>,
     pub f_min_um: Option<f64>,
     pub h_um: Option<f64>,
-    /// Per axis of the study's machine: mean step height of the marks attributed to that
-    /// axis alone (its reversal value B as the ball bar sees it), um.
+    /// Per axis of the study's machine: its reversal value B as the ball bar sees it, from
+    /// the run's lost-motion signature (`study::lost_motion`), um.
     pub b_um: Vec<Option<f64>>,
     /// Per axis: mean height of the spikes attributed to that axis alone, um.
     pub spike_um: Vec<Option<f64>>,
@@ -168,8 +167,8 @@ pub struct Figures {
     pub f_max_um: f64,
     pub f_min_um: f64,
     pub h_um: Option<f64>,
-    /// Per axis of the machine, in its order: the reversal value B from the trace
-    /// (`study::glance::reversal_b`, as the run report gives it), um.
+    /// Per axis of the machine, in its order: the reversal value B from the run's
+    /// lost-motion signature (`study::lost_motion::reversal_b`), um.
     pub b_um: Vec<(String, Option<f64>)>,
     pub spikes: Vec<AxisMark>,
     pub violations: u64,
@@ -181,9 +180,10 @@ fn figures_from(scenario: &Scenario, study: &BallbarStudy, violations: u64) -> R
         crate::error::Error::invalid(&scenario.path, "a study needs a measured circle: a cone, a circle or a file program with [program.cone]")
     })?;
     let (_, spikes) = marks(&result);
-    let b_um = reversal_b(&study.runs, &study.sites, scenario.machine.axes())?
-        .into_iter()
-        .map(|r| (r.axis, r.b_um))
+    let b_um = study
+        .lost_motion_b
+        .iter()
+        .map(|r| (r.axis.clone(), r.b_um))
         .collect();
     Ok(Figures {
         g_um: result.circular_deviation_um,

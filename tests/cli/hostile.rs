@@ -19,12 +19,12 @@ use proptest::test_runner::Config;
 use toml::Value;
 
 /// The repository root.
-fn root() -> PathBuf {
+pub(crate) fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// The bundled files of one kind, sorted.
-fn bundled(folder: &str) -> Vec<PathBuf> {
+pub(crate) fn bundled(folder: &str) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(root().join(folder))
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -36,7 +36,7 @@ fn bundled(folder: &str) -> Vec<PathBuf> {
 
 /// A value of each kind that no key of a machine, scenario or study should take as it is,
 /// or that sits at the edge of what a number can be.
-fn hostile_values() -> Vec<Value> {
+pub(crate) fn hostile_values() -> Vec<Value> {
     let f = Value::Float;
     vec![
         f(f64::NAN),
@@ -63,7 +63,7 @@ fn hostile_values() -> Vec<Value> {
 
 /// The dotted paths of every value below `table` (tables are walked into; an array is one
 /// value, and each of its elements another).
-fn leaves(table: &toml::Table) -> Vec<Vec<String>> {
+pub(crate) fn leaves(table: &toml::Table) -> Vec<Vec<String>> {
     let mut out = Vec::new();
     let mut stack: Vec<(Vec<String>, &Value)> =
         table.iter().map(|(k, v)| (vec![k.clone()], v)).collect();
@@ -96,14 +96,14 @@ fn leaves(table: &toml::Table) -> Vec<Vec<String>> {
 
 /// What is done to the chosen key.
 #[derive(Clone, Debug)]
-enum Edit {
+pub(crate) enum Edit {
     Set(usize),
     Remove,
     Unknown,
 }
 
 /// Applies `edit` to the value at `path` in `table` (nothing when the path is gone).
-fn apply(table: &mut toml::Table, path: &[String], edit: &Edit, values: &[Value]) {
+pub(crate) fn apply(table: &mut toml::Table, path: &[String], edit: &Edit, values: &[Value]) {
     let (last, parents) = path.split_last().unwrap();
     let (walk, element) = match last.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
         // An array element: the array is the value at the parents' last part.
@@ -165,7 +165,7 @@ fn set_element(
 
 /// A relative file key (`machine`, `file`, `scenario`) of a bundled file made absolute, so
 /// that the edited copy in a scratch folder still names the bundled file.
-fn absolute_paths(table: &mut toml::Table, dir: &Path) {
+pub(crate) fn absolute_paths(table: &mut toml::Table, dir: &Path) {
     for key in ["machine", "scenario"] {
         if let Some(Value::String(p)) = table.get_mut(key) {
             *p = dir.join(&*p).display().to_string();
@@ -186,7 +186,7 @@ fn scratch() -> PathBuf {
 }
 
 /// Whether `text` names a place: `NAME:line:column`.
-fn names_place(text: &str, name: &str) -> bool {
+pub(crate) fn names_place(text: &str, name: &str) -> bool {
     text.match_indices(name).any(|(i, _)| {
         let rest = &text[i + name.len()..];
         let mut parts = rest.splitn(3, ':');

@@ -7,6 +7,7 @@ mod common;
 
 mod bad_inputs;
 mod bounds;
+mod campaign;
 mod dask_example;
 mod docs_commands;
 mod hostile;

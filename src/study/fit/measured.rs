@@ -48,9 +48,18 @@ impl Columns {
         let cols: Vec<&str> = header.split(',').map(str::trim).collect();
         let find = |name: &str| cols.iter().position(|c| *c == name);
         let (Some(theta), Some(deviation)) = (find("theta_deg"), find("deviation_um")) else {
+            // The columns it lacks, not the header: a file given as a trace may be anything.
+            let lacks: Vec<&str> = ["theta_deg", "deviation_um"]
+                .into_iter()
+                .filter(|c| find(c).is_none())
+                .collect();
             return Err(Error::invalid(
                 path,
-                format!("the header `{header}` lacks theta_deg or deviation_um"),
+                format!(
+                    "line 1 (the header, {} columns) has no {} column",
+                    cols.len(),
+                    lacks.join(" or ")
+                ),
             )
             .with_help(HELP));
         };

@@ -590,6 +590,36 @@ impl Reader {
 
     /// `LBL n`: a mark; `LBL 0` ends the subprogram being run.
     fn label(&mut self, b: &Block) -> LineResult<()> {
+        // `LBL n` or `LBL "name"`, and nothing after it (a name may hold spaces).
+        if b.tok(1).is_empty() {
+            return Err(LineError::new(
+                b.span(0),
+                "`LBL`: expected a label number or \"name\"".to_string(),
+                "expected a label",
+            ));
+        }
+        if !b.tok(1).starts_with('"') {
+            if b.tok(1).parse::<f64>().is_err() {
+                return Err(LineError::new(
+                    b.span(1),
+                    format!("`{}`: expected a label number or \"name\"", b.tok(1)),
+                    "expected a label",
+                ));
+            }
+            if !b.tok(2).is_empty() {
+                return Err(LineError::new(
+                    b.span(2),
+                    format!(
+                        "`{}` after `LBL {}`: a label takes nothing after its number or \"name\" \
+                         (a repeat is `CALL LBL {} REP n`)",
+                        b.tok(2),
+                        b.tok(1),
+                        b.tok(1)
+                    ),
+                    "nothing may follow",
+                ));
+            }
+        }
         match self.frames.last() {
             Some(f) if b.tok(1) == "0" && !f.program => {
                 self.end_pass();

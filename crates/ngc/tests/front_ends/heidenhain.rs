@@ -291,6 +291,23 @@ fn unsupported_constructs_are_refused_by_name_at_their_line() {
     }
 }
 
+/// A label mark is `LBL n` or `LBL "name"` and nothing else: a repeat written on the mark,
+/// or a mark without its label, is refused at its line, never read as a mark.
+#[test]
+fn a_label_mark_with_words_after_it_or_none_is_refused() {
+    for (body, column, said) in [
+        ("2 LBL 1 REP 3", 9, "`REP` after `LBL 1`"),
+        ("2 LBL", 3, "expected a label number"),
+        ("2 LBL X", 7, "`X`: expected a label number"),
+    ] {
+        let (line, col, msg) = error(body);
+        assert_eq!((line, col), (3, column), "{body}: {msg}");
+        assert!(msg.contains(said), "{body}: {msg}");
+    }
+    // Named marks may hold spaces.
+    assert!(!moves("2 LBL \"A B\"\n3 L X+1 R0 F100\n4 LBL 0").is_empty());
+}
+
 #[test]
 fn endless_loops_and_deep_calls_stop_at_the_limits() {
     let o = Options {

@@ -106,6 +106,7 @@ pub fn set(
                 .entry(OVERRIDES)
                 .or_insert_with(|| toml::Value::Table(toml::Table::new()));
             let integer = matches!(get(machine, rest), Some(toml::Value::Integer(_)));
+            copy_indexed_array(overrides, machine, rest);
             return set_in(overrides, rest, value, integer, path);
         }
         _ => (scenario, &path.steps[..]),
@@ -117,6 +118,42 @@ pub fn set(
         *root = t;
     }
     result
+}
+
+/// An index below `machine.` names an element of an array the machine file holds, while an
+/// override replaces an array whole: the overrides take a copy of the array at the first
+/// index's place (unless they hold one already), and the element is then set in the copy,
+/// so the other elements keep the machine file's values.
+fn copy_indexed_array(overrides: &mut toml::Value, machine: &toml::Table, steps: &[Step]) {
+    let Some(first) = steps.iter().position(|s| matches!(s, Step::Index(_))) else {
+        return;
+    };
+    let prefix = &steps[..first];
+    let toml::Value::Table(table) = overrides else {
+        return;
+    };
+    let mut at: &mut toml::Table = table;
+    if get(at, prefix).is_some() {
+        return;
+    }
+    let Some(array) = get(machine, prefix).cloned() else {
+        return;
+    };
+    // The prefix is keys only: `first` is its first index.
+    let Some((Step::Key(last), tables)) = prefix.split_last() else {
+        return;
+    };
+    for step in tables {
+        let Step::Key(key) = step else { return };
+        at = match at
+            .entry(key.clone())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+        {
+            toml::Value::Table(t) => t,
+            _ => return,
+        };
+    }
+    at.insert(last.clone(), array);
 }
 
 /// The value at `steps` below `table`, if there is one.

@@ -539,3 +539,51 @@ fn the_heat_map_places_cells_by_value_in_any_grid_order() {
     assert_eq!(left.len(), 3);
     assert!((left[1] - left[0] - sorted[0].2).abs() <= 1, "{sorted:?}");
 }
+
+/// A study key may name an element of an array the machine file holds
+/// (`machine.pivot_mm[2]`): the point's machine is the file's with that element changed and
+/// the others kept, and its run is that of a scenario that writes the whole array out.
+#[test]
+fn a_study_varies_an_element_of_a_machine_array_as_a_scenario_writing_it_out() {
+    use mtsim::input::overrides::{KeyPath, ScenarioTree};
+    use mtsim::input::scenario::Scenario;
+    use mtsim::study::simulate::run_ballbar;
+
+    let dir = scratch("study", "array-key");
+    let base = root().join("scenarios/cone-15-10.toml");
+    let tree = ScenarioTree::read(&base).unwrap();
+    let key: KeyPath = "machine.pivot_mm[2]".parse().unwrap();
+    let g = |s: &Scenario| {
+        let study = run_ballbar(s, None, &|_| {}).unwrap();
+        study.result().unwrap().unwrap().circular_deviation_um
+    };
+    let mut gs = Vec::new();
+    for z in [0.0, 25.0] {
+        let point = tree.load_with(std::slice::from_ref(&key), &[z]).unwrap();
+        // The same machine written out by hand: the file's X and Y of the pivot, z.
+        let text = std::fs::read_to_string(&base).unwrap().replace(
+            "\"../machines/",
+            &format!("\"{}/machines/", root().display()),
+        );
+        let path = dir.join(format!("z{z}.toml"));
+        std::fs::write(
+            &path,
+            format!("{text}\n[machine_overrides]\npivot_mm = [0.0, 0.0, {z:?}]\n"),
+        )
+        .unwrap();
+        let written = Scenario::load(&path).unwrap();
+        assert_eq!(
+            format!("{:?}", point.machine.kinematics),
+            format!("{:?}", written.machine.kinematics)
+        );
+        let (a, b) = (g(&point), g(&written));
+        assert_eq!(
+            a.to_bits(),
+            b.to_bits(),
+            "z {z}: study point {a}, written {b}"
+        );
+        gs.push(a);
+    }
+    // The element is read: the pivot's height changes the cone's G.
+    assert_ne!(gs[0], gs[1], "{gs:?}");
+}

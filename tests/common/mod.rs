@@ -3,6 +3,7 @@
 
 #![allow(dead_code)]
 
+pub mod linuxcnc;
 pub mod rs274;
 
 use std::path::{Path, PathBuf};

@@ -10,6 +10,7 @@ mod chain_planes;
 mod chain_poles;
 mod chains;
 mod geometric_errors;
+mod linuxcnc_samples;
 mod reading;
 mod round_trips;
 mod trivial;

@@ -196,12 +196,13 @@ fn the_linuxcnc_sample_machine_files_load_with_the_sample_limits() {
         ),
         (
             "xyzac-trt",
-            Layout::TrtAc,
+            // Chains: their tilting axes are offset from C (tests/kinematics/linuxcnc_samples.rs).
+            Layout::Chain,
             [(Axis::Y, 100.0), (Axis::Z, 120.0), (Axis::A, 50.0)],
         ),
         (
             "xyzbc-trt",
-            Layout::TrtBc,
+            Layout::Chain,
             [(Axis::Y, 100.0), (Axis::Z, 120.0), (Axis::B, 36000.0)],
         ),
     ] {

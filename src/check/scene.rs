@@ -275,10 +275,8 @@ impl Scene {
     ) -> Result<Scene> {
         let path = machine.path.as_path();
         let scene = &machine.scene;
-        // Values come from files that may not have been validated with their text.
-        scene.validate(path, "")?;
-        tool.validate(path, "", "tool")?;
-        workpiece.validate(path, "", "workpiece")?;
+        // The machine's [scene] and [tool] and the scenario's [tool] and [workpiece] were
+        // checked when their files were read (input/scene.rs); the clearance is an argument.
         if !(near_miss_mm.is_finite() && near_miss_mm >= 0.0) {
             return Err(Error::invalid(
                 path,

@@ -79,6 +79,7 @@ pub mod axis_set;
 pub mod chain;
 pub mod chain_events;
 pub mod chain_inverse;
+pub mod cradle_table;
 pub mod error_table;
 pub mod layout;
 pub mod layout_chain;
@@ -87,6 +88,7 @@ pub mod location;
 pub use axis_set::AxisSet;
 pub use chain::{Chain, Link, Side, ToolPose};
 pub use chain_inverse::unwrap_near;
+pub use cradle_table::CradleTablePoses;
 pub use layout::{Branch, Layout, RotarySinCos};
 pub use location::{AxisLine, LocationErrors, LocationParam};
 
@@ -201,6 +203,21 @@ impl Kinematics {
             Some(tilt) => self.actual_line(tilt).turn(sign * q[tilt]) * home,
             None => home,
         }
+    }
+
+    /// The actual lines of the tilting and the table axis, taken once, for posing the cradle
+    /// and the table sample by sample ([`CradleTablePoses::poses`]: the poses of
+    /// [`Kinematics::actual_cradle_pose`] and [`Kinematics::actual_table_pose`]).
+    pub fn cradle_table_poses(&self) -> CradleTablePoses {
+        let line = |a: Axis| (a.index(), self.actual_line(a));
+        CradleTablePoses::new(
+            match (self.layout.tilt_axis(), self.layout.table_axis()) {
+                (Some(tilt), Some(table)) => Some((line(tilt), line(table))),
+                _ => None,
+            },
+            self.layout.table_turn_sign(),
+            self.pivot_mm,
+        )
     }
 
     /// The actual pose of the table at `q`: maps a table-frame point p to the machine

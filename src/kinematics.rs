@@ -303,6 +303,24 @@ impl Kinematics {
         }
     }
 
+    /// `angles` with rotary `axis`'s sine and cosine replaced by `sin_cos`: the table axis
+    /// (C, or A on trt-ab and xyza) fills the `c` slot, the tilting axis the other.
+    #[inline]
+    pub fn with_rotary_sin_cos(
+        &self,
+        angles: &RotarySinCos,
+        axis: Axis,
+        sin_cos: (f64, f64),
+    ) -> RotarySinCos {
+        let mut out = *angles;
+        if Some(axis) == self.layout.table_axis() {
+            out.c = sin_cos;
+        } else {
+            out.tilt = sin_cos;
+        }
+        out
+    }
+
     /// R from the sines and cosines of its angles ([`Layout::rotation_matrix`]).
     #[inline]
     pub fn rotation_of(&self, angles: &RotarySinCos) -> Rotation3<f64> {

@@ -84,9 +84,9 @@ fn random_points(base: &Scenario, n: usize) -> Vec<Scenario> {
 fn with_drives(base: &Scenario, backlash_mm: [f64; 2], kv_per_s: [f64; 2]) -> Scenario {
     let mut s = base.clone();
     for (k, axis) in [Axis::X, Axis::Y].into_iter().enumerate() {
-        let config = s.machine.axis_mut(axis);
-        config.drive.backlash_mm = Some(backlash_mm[k]);
-        config.servo.kv_per_s = kv_per_s[k];
+        let d = s.machine.drive(axis);
+        let d = d.with_backlash_mm_or_deg(backlash_mm[k]).unwrap();
+        s.machine.axis_mut(axis).drive = d.with_kv_per_s(kv_per_s[k]).unwrap();
     }
     s
 }

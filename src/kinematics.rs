@@ -79,6 +79,7 @@ pub mod axis_set;
 pub mod chain;
 pub mod chain_events;
 pub mod chain_inverse;
+pub mod cradle_table;
 pub mod error_table;
 pub mod layout;
 pub mod layout_chain;
@@ -87,23 +88,14 @@ pub mod location;
 pub use axis_set::AxisSet;
 pub use chain::{Chain, Link, Side, ToolPose};
 pub use chain_inverse::unwrap_near;
-pub use layout::Layout;
+pub use cradle_table::CradleTablePoses;
+pub use layout::{Branch, Layout, RotarySinCos};
 pub use location::{AxisLine, LocationErrors, LocationParam};
 
-use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Vector3};
+use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Vector3};
 
-use crate::numeric::{sin_cos_deg_pair, F64x2, LaneOps};
+use crate::numeric::{F64x2, LaneOps};
 use crate::{Axis, AxisVec};
-
-/// Which of the two inverse-kinematics solutions to take.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Branch {
-    /// Tilt >= 0 (the spec's branch).
-    #[default]
-    Primary,
-    /// Tilt <= 0 and C + 180 deg.
-    Secondary,
-}
 
 /// The kinematic chain of a machine.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -115,10 +107,12 @@ pub struct Kinematics {
     pub location_errors: LocationErrors,
     /// The machine file's own chain when it is no named layout ([`Layout::Chain`]).
     pub general: Option<Chain>,
+    /// The nominal chain: the machine file's own, or the named layout's written out when the
+    /// machine was read ([`layout_chain::of_layout`]); `None` where the tool pose has no
+    /// chain (xyzabc, xyuv, xyzabcuvw). A named layout's closed forms
+    /// ([`Layout::rotation_matrix`], [`Layout::solve_rotaries`]) are this chain's fast path.
+    nominal: Option<Chain>,
 }
-
-/// Below this horizontal length of the tool axis, C is free and kept.
-const C_FREE_EPS: f64 = 1e-12;
 
 impl Kinematics {
     pub fn new(layout: Layout, pivot_mm: Vector3<f64>) -> Kinematics {
@@ -127,6 +121,7 @@ impl Kinematics {
             pivot_mm,
             location_errors: LocationErrors::default(),
             general: None,
+            nominal: layout_chain::of_layout(layout, pivot_mm),
         }
     }
 
@@ -136,10 +131,11 @@ impl Kinematics {
         match layout_chain::named(&chain) {
             Some((layout, pivot_mm)) => Kinematics::new(layout, pivot_mm),
             None => Kinematics {
-                layout: Layout::Chain(AxisSet::of(&chain.axes())),
+                layout: Layout::chain_of(AxisSet::of(&chain.axes())),
                 pivot_mm: Vector3::zeros(),
                 location_errors: LocationErrors::default(),
                 general: Some(chain),
+                nominal: Some(chain),
             },
         }
     }
@@ -168,8 +164,7 @@ impl Kinematics {
     /// layout's written out; `None` for layouts whose rotaries or U V W have no place in
     /// the tool pose (xyzabc, xyuv, xyzabcuvw).
     pub fn chain(&self) -> Option<Chain> {
-        self.general
-            .or_else(|| layout_chain::of_layout(self.layout, self.pivot_mm))
+        self.nominal
     }
 
     /// The actual chain of a general machine: each rotary's line moved and turned by its
@@ -208,6 +203,21 @@ impl Kinematics {
             Some(tilt) => self.actual_line(tilt).turn(sign * q[tilt]) * home,
             None => home,
         }
+    }
+
+    /// The actual lines of the tilting and the table axis, taken once, for posing the cradle
+    /// and the table sample by sample ([`CradleTablePoses::poses`]: the poses of
+    /// [`Kinematics::actual_cradle_pose`] and [`Kinematics::actual_table_pose`]).
+    pub fn cradle_table_poses(&self) -> CradleTablePoses {
+        let line = |a: Axis| (a.index(), self.actual_line(a));
+        CradleTablePoses::new(
+            match (self.layout.tilt_axis(), self.layout.table_axis()) {
+                (Some(tilt), Some(table)) => Some((line(tilt), line(table))),
+                _ => None,
+            },
+            self.layout.table_turn_sign(),
+            self.pivot_mm,
+        )
     }
 
     /// The actual pose of the table at `q`: maps a table-frame point p to the machine
@@ -254,10 +264,7 @@ impl Kinematics {
     /// ([`RotarySinCos`]; both angles in one pass, [`sin_cos_deg_pair`]).
     #[inline]
     pub fn rotary_sin_cos(&self, q: &AxisVec) -> RotarySinCos {
-        let tilt = self.layout.tilt_axis().map_or(0.0, |t| q[t]);
-        let table = self.layout.table_axis().map_or(0.0, |t| q[t]);
-        let [c, tilt] = sin_cos_deg_pair(table, tilt);
-        RotarySinCos { c, tilt }
+        self.layout.rotary_sin_cos(q)
     }
 
     /// [`Kinematics::rotary_sin_cos`] at `q` near `reference` (whose values are `at`), by the
@@ -296,42 +303,28 @@ impl Kinematics {
         }
     }
 
-    /// R from the sines and cosines of its angles.
+    /// `angles` with rotary `axis`'s sine and cosine replaced by `sin_cos`: the table axis
+    /// (C, or A on trt-ab and xyza) fills the `c` slot, the tilting axis the other.
+    #[inline]
+    pub fn with_rotary_sin_cos(
+        &self,
+        angles: &RotarySinCos,
+        axis: Axis,
+        sin_cos: (f64, f64),
+    ) -> RotarySinCos {
+        let mut out = *angles;
+        if Some(axis) == self.layout.table_axis() {
+            out.c = sin_cos;
+        } else {
+            out.tilt = sin_cos;
+        }
+        out
+    }
+
+    /// R from the sines and cosines of its angles ([`Layout::rotation_matrix`]).
     #[inline]
     pub fn rotation_of(&self, angles: &RotarySinCos) -> Rotation3<f64> {
-        // Written out with one sin_cos per angle (the ball bar reads it three times a sample):
-        // Rx(A) Rz(C), Ry(B) Rz(C) and Ry(-B) Rx(-A).
-        let (sc, cc) = angles.c;
-        let m = match self.layout {
-            // xyzabc's rotaries carry no modelled chain: its tool tip is the world X Y Z.
-            // A general chain's rotations are its own (Kinematics::chain); this slot is unused.
-            Layout::Xyz
-            | Layout::Xz
-            | Layout::Xyzabc
-            | Layout::Xyuv
-            | Layout::Xyzabcuvw
-            | Layout::Chain(_) => return Rotation3::identity(),
-            Layout::Xyza => {
-                // Rx(A); the table axis (the `c` slot) is A.
-                let (sa, ca) = (sc, cc);
-                Matrix3::new(1.0, 0.0, 0.0, 0.0, ca, -sa, 0.0, sa, ca)
-            }
-            Layout::TrtAb => {
-                // For trt-ab the table axis (the `c` slot) is A.
-                let (sa, ca) = (sc, cc);
-                let (sb, cb) = angles.tilt;
-                Matrix3::new(cb, sa * sb, -ca * sb, 0.0, ca, sa, sb, -sa * cb, ca * cb)
-            }
-            Layout::TrtAc => {
-                let (sa, ca) = angles.tilt;
-                Matrix3::new(cc, -sc, 0.0, ca * sc, ca * cc, -sa, sa * sc, sa * cc, ca)
-            }
-            Layout::TrtBc => {
-                let (sb, cb) = angles.tilt;
-                Matrix3::new(cb * cc, -cb * sc, sb, sc, cc, 0.0, -sb * cc, sb * sc, cb)
-            }
-        };
-        Rotation3::from_matrix_unchecked(m)
+        Rotation3::from_matrix_unchecked(self.layout.rotation_matrix(angles))
     }
 
     /// Machine coordinates of a table-frame point at axis positions `q`.
@@ -386,6 +379,45 @@ impl Kinematics {
         out
     }
 
+    /// [`Kinematics::tcp_axes`] as the interpolator runs it every sample: on a named layout
+    /// the rotation written out with one `sin_cos` per angle ([`Kinematics::turned_to_machine`]),
+    /// on a general chain `tcp_axes` itself. Within 10⁻¹² mm of `tcp_axes` (the order of
+    /// the floating-point operations differs; tests/kinematics/written_out.rs).
+    #[inline]
+    pub fn tcp_axes_per_sample(&self, q: &AxisVec, tool_length_mm: f64) -> AxisVec {
+        if self.general.is_some() {
+            // A general chain: its linear axes place the tip, the rotaries as programmed.
+            return self.tcp_axes(q, tool_length_mm);
+        }
+        let l = tool_length_mm;
+        let mut out = *q;
+        let mut m = self.turned_to_machine(q, [q.0[0], q.0[1], q.0[2] - l]);
+        m[2] += l;
+        out.0[..3].copy_from_slice(&m);
+        out
+    }
+
+    /// `pivot + R(q) p` of [`Kinematics::table_to_machine`] with R applied one rotation at a
+    /// time ([`Layout::turn_point`]); `pivot + p` on a general chain. mm and deg.
+    #[inline]
+    pub fn turned_to_machine(&self, q: &AxisVec, p: [f64; 3]) -> [f64; 3] {
+        let [x, y, z] = self.layout.turn_point(q, p);
+        [
+            x + self.pivot_mm.x,
+            y + self.pivot_mm.y,
+            z + self.pivot_mm.z,
+        ]
+    }
+
+    /// A machine-frame vector `u` in the table frame, `R(q)ᵀ u`, and in the cradle frame
+    /// (the part the tilting axis carries), `R_tilt(q)ᵀ u`, with one `sin_cos` per angle
+    /// ([`Layout::into_table_frames`]); `[u, u]` on a general chain (whose bodies ride its
+    /// links: `check/scene/linked.rs`).
+    #[inline]
+    pub fn into_table_frames(&self, q: &AxisVec, u: Vector3<f64>) -> [Vector3<f64>; 2] {
+        self.layout.into_table_frames(q, u)
+    }
+
     /// Forward kinematics: axis positions → tool tip and tool axis in the table frame.
     pub fn forward(&self, q: &AxisVec) -> ToolPose {
         if let Some(chain) = &self.general {
@@ -432,54 +464,8 @@ impl Kinematics {
             return self.inverse_after(pose, branch, &previous);
         }
         let mut q = AxisVec::ZERO;
-        if self.layout == Layout::TrtAb {
-            let t = pose.axis.normalize();
-            let b = t.x.clamp(-1.0, 1.0).asin().to_degrees();
-            let a = if t.y.hypot(t.z) < C_FREE_EPS {
-                previous_c_deg
-            } else {
-                let a = (-t.y).atan2(t.z).to_degrees();
-                let a = match branch {
-                    Branch::Primary => a,
-                    Branch::Secondary => a + 180.0,
-                };
-                unwrap_near(a, previous_c_deg)
-            };
-            q[Axis::B] = match branch {
-                Branch::Primary => b,
-                Branch::Secondary => 180.0 - b,
-            };
-            q[Axis::A] = a;
-        } else if self.layout == Layout::Xyza {
-            // Rx(A) t = z: t = Rx(-A) z = (0, sin A, cos A), so A = atan2(j, k) (reached
-            // exactly only when i = 0: a fourth axis cannot tilt the tool about Y).
-            let t = pose.axis.normalize();
-            q[Axis::A] = if t.y.hypot(t.z) < C_FREE_EPS {
-                previous_c_deg
-            } else {
-                unwrap_near(t.y.atan2(t.z).to_degrees(), previous_c_deg)
-            };
-        } else if let Some(tilt_axis) = self.layout.tilt_axis() {
-            let t = pose.axis.normalize();
-            let tilt = t.z.clamp(-1.0, 1.0).acos().to_degrees();
-            // Direction (angle about Z) that t's horizontal part must be turned to by C.
-            let target = match self.layout {
-                Layout::TrtAc => 90.0,
-                _ => 180.0,
-            };
-            let (tilt, target) = match branch {
-                Branch::Primary => (tilt, target),
-                Branch::Secondary => (-tilt, target + 180.0),
-            };
-            let horizontal = t.x.hypot(t.y);
-            let c = if horizontal < C_FREE_EPS {
-                previous_c_deg
-            } else {
-                unwrap_near(target - t.y.atan2(t.x).to_degrees(), previous_c_deg)
-            };
-            q[tilt_axis] = tilt;
-            q[Axis::C] = c;
-        }
+        self.layout
+            .solve_rotaries(&pose.axis.normalize(), branch, previous_c_deg, &mut q);
         let m = self.table_to_machine(&q, &pose.tip);
         q[Axis::X] = m.x;
         q[Axis::Y] = m.y;
@@ -487,7 +473,6 @@ impl Kinematics {
         q
     }
 }
-
 impl Kinematics {
     /// Inverse kinematics on `branch`, each rotary unwrapped nearest its value in
     /// `previous` (on a named layout only the table axis's value counts, as in
@@ -513,15 +498,6 @@ impl Kinematics {
             Err(_) => AxisVec([f64::NAN; 9]),
         }
     }
-}
-
-/// `(sin, cos)` of the table axis (`c`: C, or A for trt-ab) and of the tilting axis (A or
-/// B; 0 without one), as
-/// [`Kinematics::rotation_of`] takes them.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RotarySinCos {
-    pub c: (f64, f64),
-    pub tilt: (f64, f64),
 }
 
 /// Largest angle step `|a - r|` (rad) that [`add_small_angle`] takes by its series.

@@ -945,6 +945,45 @@ fn the_test_program_enum_is_named_in_at_most_three_files_and_matched_only_where_
     }
 }
 
+/// The named layouts' variants, as `Layout::Variant`.
+const LAYOUTS: &[&str] = &[
+    "Xyz",
+    "TrtAc",
+    "TrtBc",
+    "TrtAb",
+    "Xz",
+    "Xyza",
+    "Xyzabc",
+    "Xyuv",
+    "Xyzabcuvw",
+    "Chain",
+];
+
+/// A machine build is a chain, with a named layout's closed forms as its fast path: the
+/// layouts are named one by one (`Layout::TrtAc`) in one file only, and no stage matches
+/// on them (it asks the kinematics: its chain, frames and inverse).
+#[test]
+fn named_layouts_appear_in_one_file_and_no_stage_matches_on_them() {
+    let files = src_tokens();
+    let naming: Vec<&String> = files
+        .iter()
+        .filter(|(_, toks)| {
+            toks.windows(3).any(|w| {
+                matches!(&w[0], Token::Ident(s) if s == "Layout")
+                    && w[1] == Token::PathSep
+                    && matches!(&w[2], Token::Ident(v) if LAYOUTS.contains(&v.as_str()))
+            })
+        })
+        .map(|(f, _)| f)
+        .collect();
+    assert_eq!(
+        naming,
+        ["kinematics/layout.rs"],
+        "the named layouts are written out in kinematics/layout.rs alone; elsewhere ask \
+         `Kinematics` (its chain, `into_table_frames`, `turned_to_machine`, `inverse`)"
+    );
+}
+
 /// Each implementation of a seam's trait: in its folder, and its module named in the registry
 /// file (`cone::Cone`, `cut::build`). `exempt` are implementations the registry need not list
 /// (with the reason at the call).

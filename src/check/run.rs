@@ -270,12 +270,7 @@ pub fn check_with(
     let scene = match scenario.check.collisions {
         false => None,
         true => {
-            let near_miss = options.near_miss_mm.unwrap_or(
-                scenario
-                    .check
-                    .near_miss_mm
-                    .unwrap_or(machine.scene.near_miss_mm),
-            );
+            let near_miss = options.near_miss_mm.unwrap_or(scenario.check.near_miss_mm);
             Some(SceneSink {
                 monitor: SceneMonitor::new(
                     Scene::new(machine, &scenario.tool, &scenario.workpiece, near_miss)?,

@@ -25,7 +25,7 @@ pub mod linked;
 pub mod monitor;
 pub mod shapes;
 
-use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Vector3};
 use parry3d_f64::math::{Pose, Rotation, Vector};
 use parry3d_f64::shape::SharedShape;
 use rapier3d_f64::dynamics::{RigidBodyBuilder, RigidBodyHandle, RigidBodySet};
@@ -43,8 +43,7 @@ pub use shapes::{signed_distance, z_cylinder, Circle, CircleHull};
 
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
-use crate::kinematics::{AxisLine, Kinematics, Layout};
-use crate::numeric::sin_cos_deg;
+use crate::kinematics::{CradleTablePoses, Kinematics, Layout};
 use crate::{Axis, AxisVec};
 use linked::{LinkedBodies, Rides};
 
@@ -180,56 +179,6 @@ struct BarEnds {
     pivot: Vector3<f64>,
 }
 
-/// The table chain, taken once from the kinematics for posing the bodies: the actual
-/// lines (location errors included) of the tilting axis and of the table axis, with their
-/// indices into the axis vector, and the sign of a positive turn.
-#[derive(Clone, Copy, Debug)]
-struct Chain {
-    axes: Option<((usize, AxisLine), (usize, AxisLine))>,
-    sign: f64,
-    pivot: Vector3<f64>,
-}
-
-impl Chain {
-    fn of(k: &Kinematics) -> Chain {
-        let line = |a: Axis| (a.index(), k.actual_line(a));
-        Chain {
-            axes: match (k.layout.tilt_axis(), k.layout.table_axis()) {
-                (Some(tilt), Some(table)) => Some((line(tilt), line(table))),
-                _ => None,
-            },
-            sign: k.layout.table_turn_sign(),
-            pivot: k.pivot_mm,
-        }
-    }
-
-    /// `T(θ)` of [`AxisLine::turn`], built from the quaternion directly:
-    /// `r = (cos θ/2, sin θ/2 · d)`, the half angle's sine and cosine reduced exactly in
-    /// degrees ([`sin_cos_deg`]).
-    fn turn(line: &AxisLine, angle_deg: f64) -> Isometry3<f64> {
-        let (s, c) = sin_cos_deg(0.5 * angle_deg);
-        let r = UnitQuaternion::new_unchecked(Quaternion::from_parts(
-            c,
-            line.direction.into_inner() * s,
-        ));
-        Isometry3::from_parts(Translation3::from(line.point_mm - r * line.point_mm), r)
-    }
-
-    /// The cradle and the table poses at `q` ([`Kinematics::actual_cradle_pose`] and
-    /// [`Kinematics::actual_table_pose`], sharing the tilt).
-    fn poses(&self, q: &AxisVec) -> (Isometry3<f64>, Isometry3<f64>) {
-        let home = Isometry3::from_parts(Translation3::from(self.pivot), Default::default());
-        match &self.axes {
-            Some(((tilt, tilt_line), (table, table_line))) => {
-                let t = Chain::turn(tilt_line, self.sign * q.0[*tilt]);
-                let c = Chain::turn(table_line, self.sign * q.0[*table]);
-                (t * home, t * c * home)
-            }
-            None => (home, home),
-        }
-    }
-}
-
 /// The body poses of one sample, each computed when first asked for.
 pub(crate) struct BodyPoses<'a> {
     q: &'a AxisVec,
@@ -250,7 +199,8 @@ impl<'a> BodyPoses<'a> {
 /// The collision scene of one machine, tool and workpiece.
 pub struct Scene {
     kinematics: Kinematics,
-    chain: Chain,
+    /// The cradle's and the table's poses, the lines taken once from the kinematics.
+    chain: CradleTablePoses,
     tilt_axis: Option<Axis>,
     bodies: RigidBodySet,
     colliders: ColliderSet,
@@ -275,10 +225,8 @@ impl Scene {
     ) -> Result<Scene> {
         let path = machine.path.as_path();
         let scene = &machine.scene;
-        // Values come from files that may not have been validated with their text.
-        scene.validate(path, "")?;
-        tool.validate(path, "", "tool")?;
-        workpiece.validate(path, "", "workpiece")?;
+        // The machine's [scene] and [tool] and the scenario's [tool] and [workpiece] were
+        // checked when their files were read (input/scene.rs); the clearance is an argument.
         if !(near_miss_mm.is_finite() && near_miss_mm >= 0.0) {
             return Err(Error::invalid(
                 path,
@@ -736,7 +684,7 @@ impl Builder {
             }
         }
         let mut scene = Scene {
-            chain: Chain::of(&self.kinematics),
+            chain: self.kinematics.cradle_table_poses(),
             tilt_axis: self.kinematics.layout.tilt_axis(),
             kinematics: self.kinematics,
             bodies: self.bodies,

@@ -38,7 +38,7 @@ impl Drives {
             .axes()
             .iter()
             .map(|&a| {
-                let drive = machine.drive(a)?;
+                let drive = machine.drive(a);
                 let drive = if linear { drive.linear_twin() } else { drive };
                 AxisServo::new(&drive, period, q[a])
             })

@@ -60,7 +60,7 @@ impl AxisLanes {
         let mut servos = Vec::new();
         let mut servo_of = Vec::with_capacity(machines.len());
         for machine in machines {
-            let drive = machine.drive(axis)?;
+            let drive = machine.drive(axis);
             let drive = if linear { drive.linear_twin() } else { drive };
             let period = machine.interpolation_period_s;
             // The debug form is exact for f64 (the shortest text that reads back the same).

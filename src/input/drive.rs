@@ -239,13 +239,7 @@ impl Written {
                 s.feedback
             )
         })?;
-        let kv = s.kv_per_s;
-        require(
-            finite_in(kv, 1e-3, 1e4) && kv > 0.0,
-            "servo",
-            "kv_per_s",
-            || format!("must be a positive gain in 1/s (typically 20-60), got {kv}"),
-        )?;
+        check_kv(s.kv_per_s)?;
         for (key, v) in [
             ("velocity_feedforward", s.velocity_feedforward),
             ("acceleration_feedforward", s.acceleration_feedforward),
@@ -289,10 +283,7 @@ impl Written {
         require(positive(v), "servo", key, || {
             format!("must be a positive distance ({unit}), got {v}")
         })?;
-        let (key, v) = self.backlash;
-        require(non_negative(v), "drive", key, || {
-            format!("must be >= 0 ({unit}), got {v}")
-        })?;
+        check_backlash(axis, self.backlash.1)?;
         for (key, v) in [self.motor_mass, self.table_mass, self.stiffness] {
             require(positive(v), "drive", key, || {
                 format!("must be positive, got {v}")
@@ -341,6 +332,28 @@ impl Written {
             || format!("must be in 0..=10 (typically 0.5-1), got {zeta}"),
         )
     }
+}
+
+/// The position-loop gain `kv_per_s`, 1/s: positive, at most 10⁴.
+fn check_kv(kv: f64) -> std::result::Result<(), DriveProblem> {
+    require(
+        kv.is_finite() && (1e-3..=1e4).contains(&kv) && kv > 0.0,
+        "servo",
+        "kv_per_s",
+        || format!("must be a positive gain in 1/s (typically 20-60), got {kv}"),
+    )
+}
+
+/// The backlash of `axis` (`backlash_mm` or `backlash_deg`), mm or deg: finite, >= 0.
+fn check_backlash(axis: Axis, v: f64) -> std::result::Result<(), DriveProblem> {
+    let key = if axis.is_rotary() {
+        "backlash_deg"
+    } else {
+        "backlash_mm"
+    };
+    require(v.is_finite() && v >= 0.0, "drive", key, || {
+        format!("must be >= 0 ({}), got {v}", axis.unit())
+    })
 }
 
 /// `Err` with the problem of `table`.`key` unless `ok`; the message is written only then.
@@ -471,6 +484,17 @@ pub struct DriveProblem {
     pub message: String,
 }
 
+impl DriveProblem {
+    /// The problem as an error that names `[axes.X]` and the key (a value changed after
+    /// loading, such as a fit's step, has no line to point at).
+    pub fn of_axis(self, axis: Axis) -> crate::error::Error {
+        crate::error::Error::invalid(
+            Path::new(&format!("[axes.{axis}]")),
+            format!("`{}.{}`: {}", self.table, self.key, self.message),
+        )
+    }
+}
+
 /// SI units per interface unit of `axis`'s positions: m per mm, or rad per deg.
 pub fn si_per_unit(axis: Axis) -> f64 {
     if axis.is_rotary() {
@@ -584,6 +608,55 @@ impl AxisDrive {
             backlash_mm_or_deg: w.backlash.1,
             presliding_mm_or_deg: w.presliding.1 * if axis.is_rotary() { 1.0 } else { 1e-3 },
         })
+    }
+
+    /// The drive of `axis` with every key at its default (no key written).
+    pub fn default_for(axis: Axis) -> AxisDrive {
+        AxisDrive::resolve(
+            axis,
+            &ServoConfig::default(),
+            &DriveConfig::default(),
+            &FrictionConfig::default(),
+        )
+        .expect("the defaults are valid for every axis")
+    }
+
+    /// The same drive with backlash `mm_or_deg` (the whole gap, mm or deg), checked as the
+    /// machine file's `backlash_mm` or `backlash_deg` is.
+    pub fn with_backlash_mm_or_deg(
+        &self,
+        mm_or_deg: f64,
+    ) -> std::result::Result<AxisDrive, DriveProblem> {
+        check_backlash(self.axis, mm_or_deg)?;
+        Ok(AxisDrive {
+            backlash_m_or_rad: mm_or_deg * si_per_unit(self.axis),
+            backlash_mm_or_deg: mm_or_deg,
+            ..*self
+        })
+    }
+
+    /// The same drive with position-loop gain `kv_per_s` (1/s), checked as the machine
+    /// file's `kv_per_s` is.
+    pub fn with_kv_per_s(&self, kv_per_s: f64) -> std::result::Result<AxisDrive, DriveProblem> {
+        check_kv(kv_per_s)?;
+        Ok(AxisDrive { kv_per_s, ..*self })
+    }
+
+    /// The servo model's name as the machine file writes it.
+    pub fn model_name(&self) -> &'static str {
+        match self.model {
+            Model::FirstOrder => "first-order",
+            Model::Cascade => "cascade",
+        }
+    }
+
+    /// The position feedback's name as the machine file writes it.
+    pub fn feedback_name(&self) -> &'static str {
+        if self.fully_closed {
+            "fully-closed"
+        } else {
+            "semi-closed"
+        }
     }
 
     /// The same drive without its nonlinearities (backlash, Coulomb and static friction,

@@ -180,17 +180,26 @@ pub struct AxisConfig {
     pub friction: FrictionConfig,
 }
 
-impl AxisConfig {
-    /// The drive of this configuration as `axis` (see [`Machine::drive`]).
-    pub fn drive_of(&self, axis: Axis) -> Result<AxisDrive> {
-        AxisDrive::resolve(axis, &self.servo, &self.drive, &self.friction).map_err(|p| {
-            Error::invalid(
-                Path::new(&format!("[axes.{axis}]")),
-                format!("`{}.{}`: {}", p.table, p.key, p.message),
-            )
-        })
-    }
+/// One axis of a loaded machine: its limits and its drive, resolved (every default applied,
+/// in SI units) when the file was read. Linear axes in mm, rotary axes in deg.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MachineAxis {
+    /// Lower and upper travel limit, mm or deg.
+    pub min: f64,
+    pub max: f64,
+    /// A rotary axis that turns without end; `min`/`max` are then not travel limits.
+    pub continuous: bool,
+    /// Velocity limit, mm/min or deg/min.
+    pub max_velocity: f64,
+    /// Acceleration limit, mm/s^2 or deg/s^2.
+    pub max_acceleration: f64,
+    /// Jerk limit, mm/s^3 or deg/s^3.
+    pub max_jerk: f64,
+    /// The servo, mechanics and friction of `[axes.X.servo]`, `.drive` and `.friction`.
+    pub drive: AxisDrive,
+}
 
+impl MachineAxis {
     /// True when `value` (mm or deg) lies within the travel, or the axis is continuous.
     pub fn within_travel(&self, value: f64) -> bool {
         self.continuous || (self.min..=self.max).contains(&value)
@@ -206,7 +215,7 @@ pub struct Machine {
     pub kinematics: Kinematics,
     /// Interpolator period, s.
     pub interpolation_period_s: f64,
-    axes: BTreeMap<Axis, AxisConfig>,
+    axes: BTreeMap<Axis, MachineAxis>,
     pub scene: SceneConfig,
     pub tool: ToolConfig,
     /// Default G-code dialect of the control.
@@ -258,8 +267,19 @@ impl Machine {
                     None => Error::invalid(path, message),
                 });
             };
-            check_axis(path, text, &section, axis, &config)?;
-            axes.insert(axis, config);
+            let drive = check_axis(path, text, &section, axis, &config)?;
+            axes.insert(
+                axis,
+                MachineAxis {
+                    min: config.min,
+                    max: config.max,
+                    continuous: config.continuous,
+                    max_velocity: config.max_velocity,
+                    max_acceleration: config.max_acceleration,
+                    max_jerk: config.max_jerk,
+                    drive,
+                },
+            );
         }
         for axis in layout.axes() {
             if !axes.contains_key(axis) {
@@ -324,25 +344,35 @@ impl Machine {
         self.kinematics.layout.axes()
     }
 
-    /// Configuration of `axis`; panics if the machine has no such axis (a programming error:
-    /// every axis of the layout is checked present on load).
-    pub fn axis(&self, axis: Axis) -> &AxisConfig {
+    /// Limits and drive of `axis`; panics if the machine has no such axis (a programming
+    /// error: every axis of the layout is checked present on load).
+    pub fn axis(&self, axis: Axis) -> &MachineAxis {
         &self.axes[&axis]
     }
 
-    /// Mutable configuration of `axis` (for what-if runs such as `fit`); panics like
-    /// [`Machine::axis`].
-    pub fn axis_mut(&mut self, axis: Axis) -> &mut AxisConfig {
+    /// Mutable limits and drive of `axis` (for what-if runs such as `fit`, which change the
+    /// resolved values through [`AxisDrive::with_backlash_mm_or_deg`] and
+    /// [`AxisDrive::with_kv_per_s`]); panics like [`Machine::axis`].
+    pub fn axis_mut(&mut self, axis: Axis) -> &mut MachineAxis {
         self.axes
             .get_mut(&axis)
             .expect("every axis of the layout is present")
     }
 
-    /// The drive of `axis` in SI units, resolved from its configuration by the function that
-    /// validated it on load ([`AxisDrive::resolve`]), so a what-if change made through
-    /// [`Machine::axis_mut`] is checked too; an error names `[axes.X]` and the key.
-    pub fn drive(&self, axis: Axis) -> Result<AxisDrive> {
-        self.axis(axis).drive_of(axis)
+    /// The drive of `axis` in SI units, as resolved when the file was read
+    /// ([`AxisDrive::resolve`]).
+    pub fn drive(&self, axis: Axis) -> AxisDrive {
+        self.axis(axis).drive
+    }
+
+    /// The same machine with every axis's drive at its defaults: what stays when the drives
+    /// are set aside (a key of the machines that can share one interpolation pass).
+    pub fn with_default_drives(&self) -> Machine {
+        let mut bare = self.clone();
+        for (axis, config) in bare.axes.iter_mut() {
+            config.drive = AxisDrive::default_for(*axis);
+        }
+        bare
     }
 
     pub fn has_axis(&self, axis: Axis) -> bool {
@@ -547,7 +577,14 @@ fn axis_list(layout: Layout) -> String {
         .join(", ")
 }
 
-fn check_axis(path: &Path, text: &str, section: &str, axis: Axis, c: &AxisConfig) -> Result<()> {
+/// Checks the limits of `[axes.X]` and its drive tables, and resolves the drive.
+fn check_axis(
+    path: &Path,
+    text: &str,
+    section: &str,
+    axis: Axis,
+    c: &AxisConfig,
+) -> Result<AxisDrive> {
     let unit = axis.unit();
     let positive = |key: &str, v: f64, what: &str| {
         if v.is_finite() && v >= MIN_AXIS_LIMIT {
@@ -599,7 +636,6 @@ fn check_axis(path: &Path, text: &str, section: &str, axis: Axis, c: &AxisConfig
         ));
     }
     crate::input::drive::validate(path, text, section, axis, &c.servo, &c.drive, &c.friction)
-        .map(|_| ())
 }
 
 /// Merges `overlay` into `base`: tables merge key by key, any other value replaces.

@@ -15,6 +15,6 @@ pub mod scenario;
 pub mod scene;
 pub mod toml_text;
 
-pub use machine::{AxisConfig, Machine};
+pub use machine::{AxisConfig, Machine, MachineAxis};
 pub use program::{CircleTest, ConeTest, Direction, MeasuredLines, NcOptions};
 pub use scenario::{Program, Scenario};

@@ -110,7 +110,7 @@ fn tool_aligner(machine: &Machine) -> Option<ngc::ToolAligner> {
             (l.axis, a.continuous, a.min, a.max)
         })
         .collect();
-    // `AxisConfig::within_travel`, on copies the closure can own.
+    // `MachineAxis::within_travel`, on copies the closure can own.
     let within = move |axis: Axis, v: f64| {
         travel
             .iter()

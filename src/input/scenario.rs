@@ -51,6 +51,15 @@ pub struct CheckSection {
     pub collisions: bool,
 }
 
+/// `[check]` resolved: the near-miss clearance given, or the machine's `[scene]` one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CheckOptions {
+    /// Near-miss clearance, mm.
+    pub near_miss_mm: f64,
+    /// Check collisions in the scene (false: axis limits only).
+    pub collisions: bool,
+}
+
 impl Default for CheckSection {
     fn default() -> Self {
         CheckSection {
@@ -246,7 +255,7 @@ pub struct Scenario {
     pub workpiece: WorkpieceConfig,
     /// The tool in the spindle (the scenario's, else the machine's).
     pub tool: ToolConfig,
-    pub check: CheckSection,
+    pub check: CheckOptions,
     /// How a program file is read: dialect, axes, tools, offsets, search path.
     pub reader: ngc::Options,
     /// Scene geometry of inline tools beyond length and diameter, by tool number.
@@ -471,6 +480,13 @@ impl Scenario {
             .iter()
             .map(|t| (t.number, t.shape()))
             .collect();
+        let check = CheckOptions {
+            near_miss_mm: file
+                .check
+                .near_miss_mm
+                .unwrap_or(machine.scene.near_miss_mm),
+            collisions: file.check.collisions,
+        };
         Ok(Scenario {
             reader,
             tool_shapes,
@@ -481,7 +497,7 @@ impl Scenario {
             simulate,
             ballbar_pivot_mm: file.ballbar.pivot_mm.map(Vector3::from),
             workpiece,
-            check: file.check,
+            check,
         })
     }
 

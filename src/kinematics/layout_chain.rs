@@ -14,31 +14,13 @@
 
 use nalgebra::Vector3;
 
-use super::chain::{Chain, Link};
+use super::chain::Chain;
 use super::layout::Layout;
-use crate::Axis;
 
-/// The chain of `layout` with its rotary lines through `pivot_mm`.
+/// The chain of `layout` with its rotary lines through `pivot_mm` ([`Layout::links`]).
 pub fn of_layout(layout: Layout, pivot_mm: Vector3<f64>) -> Option<Chain> {
-    let x = Vector3::x();
-    let y = Vector3::y();
-    let z = Vector3::z();
-    let rot = |axis, d| Link::rotary(axis, d, pivot_mm);
-    let xyz = [
-        Link::linear(Axis::X, x),
-        Link::linear(Axis::Y, y),
-        Link::linear(Axis::Z, z),
-    ];
-    let (table, head): (Vec<Link>, Vec<Link>) = match layout {
-        Layout::Xyz => (vec![], xyz.to_vec()),
-        Layout::Xz => (vec![], vec![xyz[0], xyz[2]]),
-        Layout::Xyza => (vec![rot(Axis::A, x)], xyz.to_vec()),
-        Layout::TrtAc => (vec![rot(Axis::A, x), rot(Axis::C, z)], xyz.to_vec()),
-        Layout::TrtBc => (vec![rot(Axis::B, y), rot(Axis::C, z)], xyz.to_vec()),
-        Layout::TrtAb => (vec![rot(Axis::B, -y), rot(Axis::A, -x)], xyz.to_vec()),
-        Layout::Xyzabc | Layout::Xyuv | Layout::Xyzabcuvw | Layout::Chain(_) => return None,
-    };
-    Chain::new(&table, &head, Vector3::zeros(), z).ok()
+    let (table, head) = layout.links(pivot_mm)?;
+    Chain::new(&table, &head, Vector3::zeros(), Vector3::z()).ok()
 }
 
 /// The named layout (and its pivot) that `chain` is written exactly as, if any: the

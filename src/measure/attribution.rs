@@ -125,14 +125,7 @@ pub fn bar_sensitivity_at(
             // Only the perturbed angle's sine and cosine change: the other one's are shared
             // (the arithmetic of `deviation_mm` on the nominal chain, term for term).
             let rotated = |q: &AxisVec| {
-                let mut angles = base;
-                let sc = sin_cos_deg(q[a]);
-                // The table axis (C, or A on trt-ab and xyza) fills the `c` slot.
-                if Some(a) == kin.layout.table_axis() {
-                    angles.c = sc;
-                } else {
-                    angles.tilt = sc;
-                }
+                let angles = kin.with_rotary_sin_cos(&base, a, sin_cos_deg(q[a]));
                 let r = kin.rotation_of(&angles);
                 let pivot = Point3::from(kin.pivot_mm + r * pivot_table_mm.coords);
                 (Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]) - pivot).norm() - length_mm

@@ -99,7 +99,7 @@ use nalgebra::Point3;
 
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
-use crate::kinematics::{Kinematics, Layout};
+use crate::kinematics::Kinematics;
 pub use crate::motion::feed_held::{FeedLimit, LimitKind};
 use crate::motion::feed_held::{FeedReduction, FeedReductions};
 use crate::motion::profile::{reach, Profile};
@@ -203,14 +203,7 @@ impl BlockPath {
             q.0[arc.i1] = arc.c1 + r * sin;
         }
         if self.tcp {
-            let l = self.tool_length_mm;
-            if kinematics.general.is_some() {
-                // A general chain: its linear axes place the tip, the rotaries as programmed.
-                return kinematics.tcp_axes(&q, l);
-            }
-            let mut m = table_to_machine(kinematics, &q, [q.0[0], q.0[1], q.0[2] - l]);
-            m[2] += l;
-            q.0[..3].copy_from_slice(&m);
+            return kinematics.tcp_axes_per_sample(&q, self.tool_length_mm);
         }
         q
     }
@@ -252,37 +245,6 @@ impl BlockPath {
 
 /// Intervals at which the derivatives of a curved block are sampled.
 const SAMPLES: usize = 16;
-
-/// `pivot + R(q) p` of [`Kinematics::table_to_machine`], written out with one `sin_cos` per
-/// angle: `R = Rx(A) Rz(C)` (trt-ac), `Ry(B) Rz(C)` (trt-bc), identity (xyz). mm and deg.
-fn table_to_machine(k: &Kinematics, q: &AxisVec, p: [f64; 3]) -> [f64; 3] {
-    let [x, y, z] = p;
-    let (x, y, z) = match k.layout {
-        // A general chain's TCP runs through `Kinematics::tcp_axes` instead.
-        Layout::Xyz
-        | Layout::Xz
-        | Layout::Xyzabc
-        | Layout::Xyuv
-        | Layout::Xyzabcuvw
-        | Layout::Chain(_) => (x, y, z),
-        Layout::TrtAb | Layout::Xyza => {
-            let m = k.table_rotation(q) * nalgebra::Vector3::new(x, y, z);
-            (m.x, m.y, m.z)
-        }
-        Layout::TrtAc | Layout::TrtBc => {
-            let (sc, cc) = q[Axis::C].to_radians().sin_cos();
-            let (x, y) = (cc * x - sc * y, sc * x + cc * y);
-            if k.layout == Layout::TrtAc {
-                let (sa, ca) = q[Axis::A].to_radians().sin_cos();
-                (x, ca * y - sa * z, sa * y + ca * z)
-            } else {
-                let (sb, cb) = q[Axis::B].to_radians().sin_cos();
-                (cb * x + sb * z, y, -sb * x + cb * z)
-            }
-        }
-    };
-    [x + k.pivot_mm.x, y + k.pivot_mm.y, z + k.pivot_mm.z]
-}
 
 /// Blocks appended between two backward passes: half the look-ahead (at least 1).
 fn pass_batch(options: &InterpolationOptions) -> usize {
@@ -1114,29 +1076,6 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                     line: p.line,
                     block_index: p.index,
                 }));
-            }
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use nalgebra::Vector3;
-
-    #[test]
-    fn written_out_table_rotation_matches_the_kinematics_module() {
-        let q = AxisVec::xyzabc([0.0, 0.0, 0.0, 23.0, -41.0, 137.0]);
-        let p = Point3::new(12.5, -7.25, 88.0);
-        for layout in Layout::ALL {
-            let k = Kinematics::new(layout, Vector3::new(1.0, -2.0, 3.0));
-            let expected = k.table_to_machine(&q, &p);
-            let got = table_to_machine(&k, &q, [p.x, p.y, p.z]);
-            for i in 0..3 {
-                assert!(
-                    (got[i] - expected[i]).abs() < 1e-12,
-                    "{layout:?}: {got:?} vs {expected}"
-                );
             }
         }
     }

@@ -170,21 +170,16 @@ impl TestParameters {
             .axes()
             .iter()
             .map(|&axis| {
-                let a = machine.axis(axis);
+                let d = machine.drive(axis);
                 let unit = axis_unit(axis);
-                let backlash = if axis.is_rotary() {
-                    a.drive.backlash_deg
-                } else {
-                    a.drive.backlash_mm
-                }
-                .unwrap_or(0.0);
                 format!(
-                    "{axis}: {} servo, Kv {} 1/s, velocity feedforward {:.0} %, acceleration feedforward {:.0} %, {} feedback, backlash {backlash} {unit} (not compensated)",
-                    a.servo.model,
-                    a.servo.kv_per_s,
-                    100.0 * a.servo.velocity_feedforward,
-                    100.0 * a.servo.acceleration_feedforward,
-                    a.servo.feedback,
+                    "{axis}: {} servo, Kv {} 1/s, velocity feedforward {:.0} %, acceleration feedforward {:.0} %, {} feedback, backlash {} {unit} (not compensated)",
+                    d.model_name(),
+                    d.kv_per_s,
+                    100.0 * d.velocity_feedforward,
+                    100.0 * d.acceleration_feedforward,
+                    d.feedback_name(),
+                    d.backlash_mm_or_deg,
                 )
             })
             .collect();

@@ -167,7 +167,7 @@ impl BudgetPlan {
         // The servos' common response: a row of its own when they lag.
         let lagged = if delay_s > 0.0 {
             for &axis in machine.axes() {
-                let d = machine.drive(axis)?.linear_twin();
+                let d = machine.drive(axis).linear_twin();
                 plan.common.push(AxisDrive {
                     model: crate::input::drive::Model::FirstOrder,
                     kv_per_s: 1.0 / delay_s,
@@ -187,7 +187,7 @@ impl BudgetPlan {
             0
         };
         for &axis in machine.axes() {
-            let drive = machine.drive(axis)?;
+            let drive = machine.drive(axis);
             let servo_case =
                 plan.servo_case(BudgetMechanism::Servo, drive.linear_twin(), true, lagged);
             let mut lost = Vec::new();
@@ -294,7 +294,7 @@ fn common_lag_s(scenario: &Scenario) -> Result<f64> {
     };
     let mut lags = Vec::new();
     for a in axes.into_iter().filter(|a| machine.axes().contains(a)) {
-        let d = machine.drive(a)?;
+        let d = machine.drive(a);
         lags.push((1.0 - d.velocity_feedforward) / d.kv_per_s);
     }
     Ok(match lags.len() {

@@ -104,22 +104,11 @@ pub fn run_ballbar_lanes(
 /// paths are left out: they name the files in messages, and a pass that fails is run point by point.
 pub fn share_key(scenario: &Scenario) -> String {
     let mut bare = scenario.clone();
-    bare.machine = without_drives(&scenario.machine);
+    bare.machine = scenario.machine.with_default_drives();
     // The paths name the files in messages only; a pass that fails runs its points alone.
     bare.path = Default::default();
     bare.machine.path = Default::default();
     format!("{bare:?}")
-}
-
-fn without_drives(machine: &Machine) -> Machine {
-    let mut bare = machine.clone();
-    for &axis in machine.axes() {
-        let config = bare.axis_mut(axis);
-        config.servo = Default::default();
-        config.drive = Default::default();
-        config.friction = Default::default();
-    }
-    bare
 }
 
 /// The scenarios' indices grouped by [`share_key`] (in order of first appearance), each
@@ -208,13 +197,12 @@ fn drive_ids(machine: &Machine) -> Vec<DriveIds> {
     machine
         .axes()
         .iter()
-        .map(|&a| match machine.drive(a) {
-            Ok(d) => (
+        .map(|&a| {
+            let d = machine.drive(a);
+            (
                 hash(format!("{period:?} {d:?}")),
                 hash(format!("{period:?} {:?}", d.linear_twin())),
-            ),
-            // The pass fails as a whole; its cost does not matter.
-            Err(_) => (0, 0),
+            )
         })
         .collect()
 }

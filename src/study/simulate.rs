@@ -465,7 +465,7 @@ pub(crate) fn assemble(
         .axes()
         .iter()
         .map(|&a| machine.drive(a))
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<Vec<_>>();
     let stribeck = |a: Axis| -> f64 {
         match drives.iter().find(|d| d.axis == a) {
             // m/s or rad/s to the commanded speeds' mm/s or deg/s.
@@ -695,7 +695,7 @@ pub fn reversal_values(
         .iter()
         .map(|&a| {
             let servo = crate::drive::AxisServo::new(
-                &machine.drive(a)?,
+                &machine.drive(a),
                 machine.interpolation_period_s,
                 0.0,
             )?;

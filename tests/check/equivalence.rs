@@ -99,7 +99,7 @@ fn agree_with(
             "{what} {axis}"
         );
     }
-    let near_miss = s.check.near_miss_mm.unwrap_or(s.machine.scene.near_miss_mm);
+    let near_miss = s.check.near_miss_mm;
     // GJK is warm-started from the pair's previous query, and the two paths query different
     // samples, so the same pose can come back a few tenths of a µm apart (seen: 0.28 µm at
     // 18 mm on cone-15-10-yt25 once the scene used the actual kinematic chain).

@@ -41,22 +41,20 @@ fn machines(n: usize, nonlinear: bool) -> Vec<Machine> {
         .map(|i| {
             let mut m = trt_ac();
             for (a, kv) in [(Axis::X, 25.0 + i as f64), (Axis::Y, 34.0 - 0.5 * i as f64)] {
-                let axis = m.axis_mut(a);
-                axis.servo.kv_per_s = kv;
-                axis.drive.backlash_mm = nonlinear.then_some(0.001 * i as f64);
+                let d = m.drive(a).with_kv_per_s(kv).unwrap();
+                let backlash_mm = if nonlinear { 0.001 * i as f64 } else { 0.0 };
+                let mut d = d.with_backlash_mm_or_deg(backlash_mm).unwrap();
                 if i == 2 {
-                    axis.servo.following_error_limit_mm = Some(0.4);
+                    d.following_error_limit_m_or_rad = 0.4 * 1e-3; // 0.4 mm, as resolved
                 }
                 if i == 4 && a == Axis::X {
-                    axis.drive.force_limit_n = Some(FORCE_LIMIT_N);
+                    d.force_limit_n_or_nm = FORCE_LIMIT_N;
                 }
+                m.axis_mut(a).drive = d;
             }
             if !nonlinear {
-                for a in [Axis::X, Axis::Y, Axis::Z] {
-                    m.axis_mut(a).friction.coulomb_n = Some(0.0);
-                }
-                for a in [Axis::A, Axis::C] {
-                    m.axis_mut(a).friction.coulomb_nm = Some(0.0);
+                for a in [Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::C] {
+                    m.axis_mut(a).drive.coulomb_n_or_nm = 0.0;
                 }
             }
             m
@@ -191,7 +189,7 @@ fn the_lane_groups_step_most_periods_themselves() {
 #[test]
 fn the_force_limited_twin_leaves_the_map_for_some_periods() {
     let machine = &machines(5, false)[4];
-    let twin = machine.drive(Axis::X).unwrap().linear_twin();
+    let twin = machine.drive(Axis::X).linear_twin();
     let mut servo = AxisServo::new(
         &twin,
         machine.interpolation_period_s,

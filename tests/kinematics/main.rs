@@ -9,6 +9,7 @@ mod chain_location;
 mod chain_planes;
 mod chain_poles;
 mod chains;
+mod fast_path;
 mod geometric_errors;
 mod linuxcnc_samples;
 mod reading;

@@ -349,9 +349,9 @@ fn a_grid_is_cut_into_passes_that_each_hold_one_kv() {
         .map(|i| {
             let mut s = base.clone();
             for (axis, b) in [(Axis::X, i % 10), (Axis::Y, (i / 10) % 10)] {
-                let config = s.machine.axis_mut(axis);
-                config.drive.backlash_mm = Some(b as f64 * 1e-3);
-                config.servo.kv_per_s = 25.0 + (i / 100) as f64;
+                let d = s.machine.drive(axis);
+                let d = d.with_backlash_mm_or_deg(b as f64 * 1e-3).unwrap();
+                s.machine.axis_mut(axis).drive = d.with_kv_per_s(25.0 + (i / 100) as f64).unwrap();
             }
             s
         })

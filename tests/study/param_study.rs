@@ -428,10 +428,10 @@ fn a_point_built_from_the_tree_is_the_scenario_of_its_text() {
         format!("{:?}", by_text(&cone, &cone_keys, &values).unwrap())
     );
     assert_eq!(
-        point.machine.axis(mtsim::Axis::X).drive.backlash_mm,
-        Some(0.004)
+        point.machine.drive(mtsim::Axis::X).backlash_mm_or_deg,
+        0.004
     );
-    assert_eq!(point.machine.axis(mtsim::Axis::Y).servo.kv_per_s, 31.0);
+    assert_eq!(point.machine.drive(mtsim::Axis::Y).kv_per_s, 31.0);
     assert_eq!(point.cone().unwrap().center_mm.y, 25.0);
     // The circle sizes its lead-in unless `[simulate] lead_deg` is given.
     let circle = ScenarioTree::read(&root().join("scenarios/circle-iso230-4.toml")).unwrap();

@@ -42,7 +42,6 @@ use serde::{Deserialize, Serialize};
 
 use super::{BodyPoses, Carrier, PairKind, Scene, Warm};
 use crate::input::machine::Machine;
-use crate::kinematics::Kinematics;
 use crate::{Axis, AxisVec};
 
 /// Kind of a reported event.
@@ -463,7 +462,7 @@ impl SceneMonitor {
         step: Option<[f64; 3]>,
     ) -> Option<([(f64, f64); 2], f64, f64)> {
         let u = Vector3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]) - self.scene.kinematics.pivot_mm;
-        let now = in_table_frames(&self.scene.kinematics, q, u);
+        let now = self.scene.kinematics.into_table_frames(q, u);
         let u_norm = u.norm();
         let mut relative = None;
         if let (Some((before, u_before)), Some(s)) = (self.prev_relative, step) {
@@ -788,76 +787,4 @@ fn measure(scene: &Scene, i: usize, poses: &mut BodyPoses, warm: &mut Warm) -> f
     let pose_a = scene.body_pose(a.carrier as usize, poses) * a.local;
     let pose_b = scene.body_pose(b.carrier as usize, poses) * b.local;
     super::pair_distance(&pair, a, b, &pose_a, &pose_b, warm)
-}
-
-/// `u` (machine frame) in the table frame, `R_C^T R_tilt^T u`, and in the cradle frame,
-/// `R_tilt^T u` ([`Kinematics::table_rotation`] written out, two `sin_cos`).
-fn in_table_frames(k: &Kinematics, q: &AxisVec, u: Vector3<f64>) -> [Vector3<f64>; 2] {
-    use crate::kinematics::Layout;
-    let cradle = match k.layout {
-        // A general chain has no collision scene yet (refused on load).
-        Layout::Xyz
-        | Layout::Xz
-        | Layout::Xyzabc
-        | Layout::Xyuv
-        | Layout::Xyzabcuvw
-        | Layout::Chain(_) => return [u, u],
-        Layout::Xyza => {
-            // Rx(A)^T u; no cradle.
-            let (s, c) = q[Axis::A].to_radians().sin_cos();
-            return [Vector3::new(u.x, c * u.y + s * u.z, -s * u.y + c * u.z), u];
-        }
-        Layout::TrtAb => {
-            // Ry(-B)^T u, then Rx(-A)^T.
-            let (sb, cb) = q[Axis::B].to_radians().sin_cos();
-            let cradle = Vector3::new(cb * u.x + sb * u.z, u.y, -sb * u.x + cb * u.z);
-            let (sa, ca) = q[Axis::A].to_radians().sin_cos();
-            let table = Vector3::new(
-                cradle.x,
-                ca * cradle.y - sa * cradle.z,
-                sa * cradle.y + ca * cradle.z,
-            );
-            return [table, cradle];
-        }
-        Layout::TrtAc => {
-            let (s, c) = q[Axis::A].to_radians().sin_cos();
-            Vector3::new(u.x, c * u.y + s * u.z, -s * u.y + c * u.z)
-        }
-        Layout::TrtBc => {
-            let (s, c) = q[Axis::B].to_radians().sin_cos();
-            Vector3::new(c * u.x - s * u.z, u.y, s * u.x + c * u.z)
-        }
-    };
-    let (s, c) = q[Axis::C].to_radians().sin_cos();
-    let table = Vector3::new(
-        c * cradle.x + s * cradle.y,
-        -s * cradle.x + c * cradle.y,
-        cradle.z,
-    );
-    [table, cradle]
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::kinematics::Layout;
-
-    #[test]
-    fn the_frames_written_out_equal_the_table_rotation() {
-        for layout in Layout::ALL {
-            let k = Kinematics::new(layout, Vector3::new(5.0, -3.0, 100.0));
-            let mut q = AxisVec::ZERO;
-            q[Axis::A] = 23.0;
-            q[Axis::B] = -37.0;
-            q[Axis::C] = 211.0;
-            let u = Vector3::new(12.0, -250.0, 80.0);
-            let [table, cradle] = in_table_frames(&k, &q, u);
-            let mut tilt = q;
-            tilt[layout.table_axis().unwrap_or(Axis::C)] = 0.0;
-            assert!((table - k.table_rotation(&q).transpose() * u).norm() < 1e-12);
-            if layout != Layout::Xyz {
-                assert!((cradle - k.table_rotation(&tilt).transpose() * u).norm() < 1e-12);
-            }
-        }
-    }
 }

@@ -177,7 +177,7 @@ impl<'a> Problem<'a> {
         }
         for run in runs.iter_mut() {
             let (scenario, _) = &self.inputs[run.trace];
-            let machine = with_servo(&scenario.machine, &self.servo_params, &values);
+            let machine = with_servo(&scenario.machine, &self.servo_params, &values)?;
             run.samples = record(
                 scenario,
                 &machine,
@@ -254,11 +254,8 @@ impl<'a> Problem<'a> {
         let machine = &self.inputs[0].0.machine;
         match p {
             Param::Location(lp) => self.prior.get(*lp),
-            Param::Backlash(a) if a.is_rotary() => {
-                machine.axis(*a).drive.backlash_deg.unwrap_or(0.0) * 1e3
-            }
-            Param::Backlash(a) => machine.axis(*a).drive.backlash_mm.unwrap_or(0.0) * 1e3,
-            Param::Gain(a) => machine.axis(*a).servo.kv_per_s,
+            Param::Backlash(a) => machine.drive(*a).backlash_mm_or_deg * 1e3,
+            Param::Gain(a) => machine.drive(*a).kv_per_s,
             _ => 0.0,
         }
     }

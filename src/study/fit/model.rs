@@ -128,26 +128,27 @@ pub(super) fn predict(
         .collect())
 }
 
-/// The machine with the servo parameters of `values` applied.
+/// The machine with the servo parameters of `values` added to its resolved drives
+/// (backlash in um or mdeg, Kv in 1/s); a value out of its key's range is an error.
 pub(super) fn with_servo(
     base: &crate::input::Machine,
     params: &[Param],
     values: &[f64],
-) -> crate::input::Machine {
+) -> Result<crate::input::Machine> {
     let mut m = base.clone();
     for (p, v) in params.iter().zip(values) {
-        match p {
+        let (axis, changed) = match p {
             Param::Backlash(a) => {
-                let d = &mut m.axis_mut(*a).drive;
-                if a.is_rotary() {
-                    d.backlash_deg = Some(d.backlash_deg.unwrap_or(0.0) + v * 1e-3);
-                } else {
-                    d.backlash_mm = Some(d.backlash_mm.unwrap_or(0.0) + v * 1e-3);
-                }
+                let d = m.drive(*a);
+                (
+                    *a,
+                    d.with_backlash_mm_or_deg(d.backlash_mm_or_deg + v * 1e-3),
+                )
             }
-            Param::Gain(a) => m.axis_mut(*a).servo.kv_per_s += v,
-            _ => {}
-        }
+            Param::Gain(a) => (*a, m.drive(*a).with_kv_per_s(m.drive(*a).kv_per_s + v)),
+            _ => continue,
+        };
+        m.axis_mut(axis).drive = changed.map_err(|p| p.of_axis(axis))?;
     }
-    m
+    Ok(m)
 }

@@ -22,6 +22,7 @@ mod frames;
 mod front;
 mod qparam;
 mod state;
+mod sysread;
 mod text;
 
 use std::collections::{HashMap, VecDeque};
@@ -290,7 +291,9 @@ impl Reader {
             {
                 self.fn_block(b, here, 0)
             }
-            "LBL" => self.label(b),
+            "LBL" => self.label(b.tok(1) == "0"),
+            // `LBL1`: a label glued to its number (its jumps find it, `find_label`).
+            _ if key.len() > 3 && key.starts_with("LBL") => self.label(&key[3..] == "0"),
             "CALL" if b.is(1, "LBL") => self.call_label(b, here),
             "CALL" if b.is(1, "PGM") => self.call_program(b, here),
             "CYCL" | "CYCLE" if b.is(1, "CALL") => self.cycle_call(b),
@@ -467,7 +470,8 @@ impl Reader {
             9..=12 => self.fn_jump(b, n, rest, rest_at, here),
             14 => Err(LineError::new(b.span(0), format!("the program raises an error: {}", rest.trim()), "FN 14 error")),
             15 | 16 => Ok(()),
-            _ => Err(LineError::new(b.spans(0, 1), format!("`FN {n}` is not supported: mtsim reads FN 0-16 (arithmetic, trigonometry, jumps, error and print)"), "FN not supported")
+            18 => sysread::read(self, b, rest, rest_at),
+            _ => Err(LineError::new(b.spans(0, 1), format!("`FN {n}` is not supported: mtsim reads FN 0-16 (arithmetic, trigonometry, jumps, error and print) and FN 18 (system data); FN 17 SYSWRITE, FN 19 PLC, FN 20 WAIT FOR, FN 26-28 tables and the others are refused"), "FN not supported")
                 .help("docs/gcode.md lists the Heidenhain constructs mtsim reads")),
         }
     }
@@ -589,9 +593,9 @@ impl Reader {
     }
 
     /// `LBL n`: a mark; `LBL 0` ends the subprogram being run.
-    fn label(&mut self, b: &Block) -> LineResult<()> {
+    fn label(&mut self, zero: bool) -> LineResult<()> {
         match self.frames.last() {
-            Some(f) if b.tok(1) == "0" && !f.program => {
+            Some(f) if zero && !f.program => {
                 self.end_pass();
                 Ok(())
             }
@@ -635,6 +639,8 @@ impl Reader {
                 "" => (b.tok(3).get(3..).unwrap_or(""), b.span(3)),
                 t => (t, b.span(4)),
             };
+            // `REP 20/20`: the TNC shows the repeats left after the slash.
+            let rep = rep.split('/').next().unwrap_or(rep);
             let v = text::value(rep, &self.q, span.clone())?;
             if v < 0.0 || v.fract() != 0.0 || v > 65534.0 {
                 return Err(LineError::new(
@@ -788,8 +794,19 @@ impl Reader {
                 let rest = &line[text::after_block_number(line)..];
                 let (body, _) = text::strip_comment(rest);
                 let mut words = body.split_whitespace();
-                if words.next().is_some_and(|w| w.eq_ignore_ascii_case("LBL")) {
-                    if let Some(l) = words.next() {
+                // `LBL 1`, or `LBL1` as some posts write it.
+                let first = words.next().unwrap_or("");
+                let glued = first
+                    .get(..3)
+                    .filter(|k| k.eq_ignore_ascii_case("LBL") && first.len() > 3)
+                    .map(|_| &first[3..]);
+                let name = match glued {
+                    Some(l) => Some(l),
+                    None if first.eq_ignore_ascii_case("LBL") => words.next(),
+                    None => None,
+                };
+                {
+                    if let Some(l) = name {
                         let key = if l.starts_with('"') {
                             l.trim_matches('"').to_string()
                         } else {

@@ -232,13 +232,6 @@ impl Interp {
                 *v,
             );
         }
-        if o.dialect.table().macro_b {
-            params.unmodelled = Some(if o.dialect == Dialect::Haas {
-                system_vars::unmodelled_haas
-            } else {
-                system_vars::unmodelled
-            });
-        }
         let mut axes = [false; 9];
         for a in &o.axes {
             axes[a.index()] = true;
@@ -312,6 +305,7 @@ impl Interp {
             tcp_axes: o.tcp_axes.clone(),
         };
         i.parameters_changed();
+        i.refuse_unmodelled_system_variables();
         i
     }
 

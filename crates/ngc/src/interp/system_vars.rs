@@ -49,6 +49,17 @@ pub(crate) fn unmodelled_haas(n: usize) -> Option<&'static str> {
 }
 
 impl Interp {
+    /// Macro B dialects: reading a system variable of [`unmodelled`] is an error.
+    pub(super) fn refuse_unmodelled_system_variables(&mut self) {
+        if self.dialect.table().macro_b {
+            self.params.unmodelled = Some(if self.dialect == Dialect::Haas {
+                unmodelled_haas
+            } else {
+                unmodelled
+            });
+        }
+    }
+
     /// The macro B modal and position variables, from the state now (program units).
     pub(super) fn refresh_macro_b(&mut self) {
         let p = self.program_position();

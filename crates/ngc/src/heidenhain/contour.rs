@@ -77,7 +77,8 @@ fn extra(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> LineResult<bool
                 "feed per revolution",
             ))
         }
-        "F" => {
+        // `FQ53`: the feed in a Q parameter (as `F+Q53`).
+        "F" | "FQ" | "FQL" | "FQR" => {
             let v = b.value(k, 1, &r.q)?;
             if v <= 0.0 {
                 return Err(LineError::new(

@@ -384,3 +384,11 @@ fn glued_labels_and_rep_with_a_slash_are_read() {
     let xs: Vec<f64> = m.iter().skip(1).map(|m| m.end[Axis::X]).collect();
     assert_eq!(xs, [1.0, 2.0, 3.0]);
 }
+
+/// `FQ53` is the feed held in Q53, as `F+Q53`.
+#[test]
+fn a_feed_in_a_q_parameter_is_read() {
+    let m = moves("2 Q53 = 250\n3 L X+0 Y+0 Z+5 R0 FMAX\n4 L X+10 FQ53\n5 L X+30 F+Q53");
+    let feeds: Vec<Option<f64>> = m.iter().skip(1).map(|m| m.feed).collect();
+    assert_eq!(feeds, [Some(250.0), Some(250.0)]);
+}

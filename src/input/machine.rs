@@ -120,12 +120,13 @@ pub struct MachineFile {
     /// The modal state the control powers up in.
     #[serde(default)]
     pub start: StartSection,
-    /// G28 reference position, machine X Y Z A B C (mm, deg); zero when absent (U V W: 0).
-    #[serde(default, deserialize_with = "exact::array")]
-    pub g28_mm: [f64; 6],
-    /// G30 reference position, machine X Y Z A B C (mm, deg); zero when absent (U V W: 0).
-    #[serde(default, deserialize_with = "exact::array")]
-    pub g30_mm: [f64; 6],
+    /// G28 reference position, machine X Y Z A B C (mm, deg; U V W: 0). Absent: a
+    /// program that uses G28 is refused, naming this key.
+    #[serde(default, deserialize_with = "exact::option_array")]
+    pub g28_mm: Option<[f64; 6]>,
+    /// G30 reference position, as `g28_mm`.
+    #[serde(default, deserialize_with = "exact::option_array")]
+    pub g30_mm: Option<[f64; 6]>,
     // --- geometric errors (input/geometry_errors.rs) ---
     /// ISO 230-7 location errors of the rotary axes: `EX0C_um = 8.0`.
     #[serde(default)]
@@ -222,8 +223,9 @@ pub struct Machine {
     pub dialect: ngc::Dialect,
     /// The modal state the control powers up in, as far as the file gives it.
     pub start: StartSection,
-    /// G28 and G30 reference positions, machine X Y Z A B C (mm, deg); U V W at 0.
-    pub reference_mm: [[f64; 6]; 2],
+    /// G28 and G30 reference positions, machine X Y Z A B C (mm, deg); U V W at 0;
+    /// `None` where the file gives none.
+    pub reference_mm: [Option<[f64; 6]>; 2],
     /// Geometric errors; the location errors are also in `kinematics`.
     pub geometry: GeometryErrors,
 }

@@ -202,8 +202,21 @@ fn machine_options(r: &ReaderSection, machine: &Machine) -> ngc::Options {
         (None, Some(_)) => "the machine file's [start] units",
         (None, None) => "no setting: the factory default",
     };
-    o.set_reference(false, ngc::AxisVec::xyzabc(machine.reference_mm[0]));
-    o.set_reference(true, ngc::AxisVec::xyzabc(machine.reference_mm[1]));
+    for (k, key) in ["g28_mm", "g30_mm"].iter().enumerate() {
+        match machine.reference_mm[k] {
+            Some(p) => o.set_reference(k == 1, ngc::AxisVec::xyzabc(p)),
+            None => {
+                o.reference_missing[k] = Some(format!(
+                    "`{key}` in the machine file {}",
+                    machine.path.display()
+                ))
+            }
+        }
+    }
+    let kinematics = machine.kinematics.clone();
+    o.tcp_axes = Some(ngc::TcpAxes(std::sync::Arc::new(
+        move |q: &ngc::AxisVec, tool_length_mm: f64| kinematics.tcp_axes(q, tool_length_mm),
+    )));
     o
 }
 

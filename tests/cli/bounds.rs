@@ -146,7 +146,7 @@ fn periods_and_axis_limits_no_machine_has_are_refused_at_their_own_key() {
             assert!(!err.contains("[axes."), "{period}: {err}");
         }
     }
-    for (key, line) in [("max_acceleration", 14), ("max_jerk", 15)] {
+    for (key, line) in [("max_acceleration", 19), ("max_jerk", 20)] {
         let dir = scratch("bounds", key);
         let machine = std::fs::read_to_string(trt_ac()).unwrap();
         let original = machine.lines().nth(line - 1).unwrap();

@@ -36,6 +36,11 @@ fn programs(dir: &Path) -> Vec<PathBuf> {
     v
 }
 
+/// rs274 starts with a parameter file of zeros, so its G28 and G30 positions are the
+/// origin: the machine's reference positions (Z at the top of travel) are set to that.
+const ZERO_REFERENCES: &str =
+    "[machine_overrides]\ng28_mm = [0, 0, 0, 0, 0, 0]\ng30_mm = [0, 0, 0, 0, 0, 0]\n";
+
 /// Runs `mtsim blocks --csv` on `program` (on an A/C machine, or B/C when the program has
 /// B words); the rows, or the error text.
 fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<rs274::Row>, String> {
@@ -66,7 +71,7 @@ fn mtsim_blocks(program: &Path, work: &Path) -> Result<Vec<rs274::Row>, String> 
     std::fs::write(
         &scenario,
         format!(
-            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\ntool_table = {:?}\n{paths}",
+            "machine = {machine_path:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\ntool_table = {:?}\n{paths}{ZERO_REFERENCES}",
             program.display().to_string(),
             data("conformance").join("tool.tbl").display().to_string(),
         ),
@@ -237,7 +242,7 @@ fn mtsim_refuses_what_rs274_refuses_at_the_same_line() {
         std::fs::write(
             &scenario,
             format!(
-                "machine = {:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\n",
+                "machine = {:?}\n[program]\nfile = {:?}\n[reader]\ndialect = \"linuxcnc\"\n{ZERO_REFERENCES}",
                 machine("trt-ac"),
                 p.display().to_string()
             ),

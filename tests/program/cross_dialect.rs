@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use ngc::{Axis, Dialect, Motion, Move, Options, RotaryTable, Tool, UserM};
+use ngc::{Axis, AxisVec, Dialect, Motion, Move, Options, RotaryTable, TcpAxes, Tool, UserM};
 
 const TOLERANCE: f64 = 1e-6;
 
@@ -23,9 +23,9 @@ const FILES: [(&str, Dialect); 5] = [
     ("siemens.mpf", Dialect::Siemens),
 ];
 
-/// The machine every part runs on: X Y Z A B C, T1 Ø10 mm of length 0; the five-axis
-/// parts (16, 17) on a table-table AC machine with its pivot at the origin, LinuxCNC's TCP
-/// as the user M codes M428/M429.
+/// The machine every part runs on: X Y Z A B C, T1 Ø10 mm of length 0, the G28 position
+/// at machine Z450; the five-axis parts (16, 17, 22, 24) on a table-table AC machine with
+/// its pivot at the origin, LinuxCNC's TCP as the user M codes M428/M429.
 fn options(part: &str, dialect: Dialect) -> Options {
     let mut o = Options {
         dialect,
@@ -36,15 +36,37 @@ fn options(part: &str, dialect: Dialect) -> Options {
         }],
         ..Options::default()
     };
-    if part.starts_with("16-") || part.starts_with("17-") {
-        o.table = Some(RotaryTable {
+    if ["16-", "17-", "22-", "24-"]
+        .iter()
+        .any(|p| part.starts_with(p))
+    {
+        let table = RotaryTable {
             tilt: Axis::A,
             pivot_mm: [0.0; 3],
-        });
+        };
+        o.table = Some(table);
+        o.tcp_axes = Some(tcp_axes(table));
         o.user_m.insert(428, UserM::TcpOn);
         o.user_m.insert(429, UserM::TcpOff);
     }
+    // Part 23: the G28 position, machine Z450.
+    o.set_reference(false, AxisVec::xyzabc([0.0, 0.0, 450.0, 0.0, 0.0, 0.0]));
     o
+}
+
+/// The table-table machine's axes at a TCP position (for a TCP cancel, part 22):
+/// `m = R(q) (x, y, z − L) + (0, 0, L)`, pivot at the origin.
+fn tcp_axes(table: RotaryTable) -> TcpAxes {
+    TcpAxes(std::sync::Arc::new(move |q: &AxisVec, l: f64| {
+        let r = table.rotation(q);
+        let tip = [q[Axis::X], q[Axis::Y], q[Axis::Z] - l];
+        let mut out = *q;
+        for (k, a) in [Axis::X, Axis::Y, Axis::Z].into_iter().enumerate() {
+            out[a] = (0..3).map(|j| r[k][j] * tip[j]).sum::<f64>();
+        }
+        out[Axis::Z] += l;
+        out
+    }))
 }
 
 fn moves(path: &Path, o: &Options) -> Vec<Move> {

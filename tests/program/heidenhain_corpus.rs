@@ -122,9 +122,11 @@ fn corpus_klartext_programs_are_read_or_refused_by_name() {
         refused.join("\n  ")
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    // Three read today (a shop probe program, Fusion rigid tapping, hyperMILL five-axis).
+    // 12 of the 19 filed as Heidenhain read (FN 18 SYSREAD, cycle 1 PECKING, `LBL1`,
+    // `REP n/n`); the others are refused for a file not given, a fault of the program, or
+    // a construct named (docs/gcode.md, "HEIDENHAIN Klartext").
     assert!(
-        read >= 3,
-        "{read} Klartext programs of the corpus read, 3 expected"
+        read >= 12,
+        "{read} Klartext programs of the corpus read, 12 expected"
     );
 }

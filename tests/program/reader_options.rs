@@ -245,3 +245,66 @@ fn a_linuxcnc_configuration_gives_tools_parameters_paths_and_remaps() {
     let err = Scenario::load(&path).unwrap_err().to_string();
     assert!(err.contains("mill.ini:2:"), "{err}");
 }
+
+/// G28 on a machine file without `g28_mm` is refused naming the key; on the bundled VMC it
+/// goes to the file's Z (the top of Z's travel, 200 mm).
+#[test]
+fn g28_takes_the_machine_files_reference_or_is_refused_naming_the_key() {
+    let dir = scratch("reader", "g28");
+    std::fs::write(
+        dir.join("p.nc"),
+        "G21 G90\nG0 X10 Y20 Z5\nG91 G28 Z0\nG90\nM30\n",
+    )
+    .unwrap();
+    let body = "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"fanuc\"\n";
+    let scenario =
+        Scenario::load(&write_scenario(&dir, &common::machine("vmc-3axis"), body)).unwrap();
+    let got = ends(&scenario, &dir.join("p.nc")).unwrap();
+    assert_eq!(got.last().unwrap()[..3], [10.0, 20.0, 200.0]);
+    // The same machine without its reference positions.
+    let text = std::fs::read_to_string(common::machine("vmc-3axis")).unwrap();
+    let stripped: String = text
+        .lines()
+        .filter(|l| !l.starts_with("g28_mm") && !l.starts_with("g30_mm"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(dir.join("m.toml"), stripped).unwrap();
+    let machine = dir.join("m.toml").display().to_string();
+    let scenario = Scenario::load(&write_scenario(&dir, &machine, body)).unwrap();
+    let err = ends(&scenario, &dir.join("p.nc")).unwrap_err();
+    assert!(
+        err.contains("`g28_mm` in the machine file") && err.contains("not given"),
+        "{err}"
+    );
+}
+
+/// TCP cancel on the bundled trt-ac: after `G49` the current point is where mtsim's own
+/// kinematics put the axes, so `G1 Z20` moves Z alone.
+#[test]
+fn a_tcp_cancel_takes_the_machines_axis_positions() {
+    let dir = scratch("reader", "tcp-cancel");
+    std::fs::write(
+        dir.join("p.nc"),
+        "G21 G90\nG0 X0 Y0 Z50 A0 C0\nG43.4\nG1 X5 Y10 Z2 A30 C40 F500\nG49\nG1 Z20\nM30\n",
+    )
+    .unwrap();
+    let scenario = Scenario::load(&write_scenario(
+        &dir,
+        &trt_ac(),
+        "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"fanuc\"\n",
+    ))
+    .unwrap();
+    let got = ends(&scenario, &dir.join("p.nc")).unwrap();
+    let mut q = mtsim::AxisVec::ZERO;
+    q[Axis::A] = 30.0;
+    q[Axis::C] = 40.0;
+    let m = common::load_trt_ac()
+        .kinematics
+        .table_to_machine(&q, &nalgebra::Point3::new(5.0, 10.0, 2.0));
+    let last = got.last().unwrap();
+    assert!(
+        (last[0] - m.x).abs() < 1e-9 && (last[1] - m.y).abs() < 1e-9,
+        "{last:?} vs {m:?}"
+    );
+    assert_eq!(last[2], 20.0);
+}

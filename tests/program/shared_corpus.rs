@@ -37,12 +37,18 @@ const REFUSED: &[(&str, Why, &str)] = &[
         "unsupported code `M451`",
     ),
     // A lathe program: mtsim leaves out the lathe cycles G70-G72 and G76.
-    ("haas_lathe_o58214.nc", Why::Gap, "G71 (lathe"),
+    ("haas_lathe_o58214.nc", Why::Gap, "G71` (Haas lathe"),
     // Not text: the file in the repository is binary.
     ("haas_mc_o78238.nc", Why::Fault, "unexpected character"),
-    // Heidenhain conversational listed as Fanuc: refused by name.
-    ("hdh_cirstud.h", Why::Fault, "Heidenhain"),
-    ("hdh_profile.h", Why::Fault, "Heidenhain"),
+    // Heidenhain conversational listed as Fanuc, read as Klartext: a circle around CC
+    // from a start the operator sets by hand (the program reads it with FN 18), and a
+    // blank between a coordinate's sign and its Q parameter (`Z + Q13`).
+    ("hdh_cirstud.h", Why::Fault, "is on CC"),
+    (
+        "hdh_profile.h",
+        Why::Fault,
+        "expected a number such as +10.5",
+    ),
     // The subroutine files these programs call are not in their repository's folder.
     (
         "lcnc_lagun_HEMA-P017.ngc",

@@ -36,6 +36,9 @@ pub struct Params {
     pub globals: HashMap<String, f64>,
     /// One map per subroutine call level; the last is the current one.
     pub locals: Vec<HashMap<String, f64>>,
+    /// The meaning of a numbered system parameter the dialect has and mtsim does not give
+    /// (Fanuc `#3011`, the date): reading it is an error naming that, never a 0.
+    pub unmodelled: Option<fn(usize) -> Option<&'static str>>,
 }
 
 impl Params {
@@ -44,6 +47,7 @@ impl Params {
             numbered: vec![0.0; MAX_PARAMETER + 1],
             globals: HashMap::new(),
             locals: vec![HashMap::new()],
+            unmodelled: None,
         }
     }
 
@@ -214,6 +218,15 @@ impl<'a> Eval<'a> {
             }),
             Some(b'#') => {
                 let p = self.param()?;
+                if let (Param::Numbered(n), Some(what)) = (&p, self.params.unmodelled) {
+                    if let Some(what) = what(*n) {
+                        return Err(self.err(
+                            start..self.i,
+                            format!("`#{n}` is {what} on this control: mtsim does not model its value, so the program is not read"),
+                            "system variable not modelled",
+                        ));
+                    }
+                }
                 match self.params.get(&p) {
                     Some(v) => Ok(v),
                     None => Err(self.err(

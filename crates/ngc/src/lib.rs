@@ -73,7 +73,7 @@ pub use ini::{scale_parameter_lengths, Ini, IniEntry, IniError, LinuxcncConfig};
 pub use notice::Notice;
 pub use options::{
     parse_tool_orientations, parse_tool_table, parse_var_file, tool_pockets, work_offset_parameter,
-    Dialect, Distance, Options, StartFeed, StartState, Tool, Units, UserM, G28_PARAMETER,
+    Dialect, Distance, Options, StartFeed, StartState, TcpAxes, Tool, Units, UserM, G28_PARAMETER,
     G30_PARAMETER, MAX_BLOCKS, MAX_CALL_DEPTH,
 };
 pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves};

@@ -182,6 +182,28 @@ pub struct Options {
     /// Tool pockets (tool number, pocket `P` of the tool table), for `#<_current_pocket>`
     /// and `#<_selected_pocket>`.
     pub pockets: Vec<(u32, u32)>,
+    /// G28 (`[0]`) and G30 (`[1]`) reference positions the machine does not give: the
+    /// setting that would give it (`g28_mm` in the machine file), named when a program
+    /// uses G28 or G30 before a G28.1/G30.1 or a parameter file sets it. `None`: the
+    /// position is parameters 5161-5169 (5181-5189), zero unless set, as in LinuxCNC.
+    pub reference_missing: [Option<String>; 2],
+    /// The machine's axis positions at a tool-centre-point position: given the position
+    /// under TCP (X Y Z the tip in the table frame, the tool length added to Z, the
+    /// rotaries the machine's) and the tool length (mm), the positions the axes are at.
+    /// Used when TCP is cancelled, where the control takes the axes' positions as the
+    /// current point; `None`: the interpreter refuses a TCP cancel with the rotaries
+    /// turned off zero, where it cannot say where the axes are.
+    pub tcp_axes: Option<TcpAxes>,
+}
+
+/// See [`Options::tcp_axes`].
+#[derive(Clone)]
+pub struct TcpAxes(pub std::sync::Arc<dyn Fn(&AxisVec, f64) -> AxisVec + Send + Sync>);
+
+impl std::fmt::Debug for TcpAxes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("TcpAxes")
+    }
 }
 
 /// Default limit on executed blocks per program run: 2·10⁶, over 120 times the blocks the
@@ -215,6 +237,8 @@ impl Default for Options {
             user_m_path: Vec::new(),
             ini_values: Vec::new(),
             pockets: Vec::new(),
+            reference_missing: [None, None],
+            tcp_axes: None,
         }
     }
 }

@@ -15,8 +15,23 @@ pub(super) const TABLE: Table = Table {
     m16_tool_change: true,
     g53_absolute_in_g91: true,
     g87_back_bore: false,
+    refusal,
     ..fanuc::TABLE
 };
+
+/// Haas codes mtsim does not run, with both of their Haas meanings (the dialect reads mill
+/// and lathe programs; Haas mill and lathe operator's manuals, "G-codes"), then the Fanuc
+/// family's refusals.
+fn refusal(code: u32) -> Option<(&'static str, &'static str)> {
+    const HELP: &str =
+        "post the holes as a canned cycle at each position, the turning as G00/G01 moves";
+    Some(match code {
+        700 => (" (Haas lathe: finishing cycle; Haas mill: bolt hole circle) is not supported by mtsim", HELP),
+        710 => (" (Haas lathe: O.D./I.D. stock removal cycle; Haas mill: bolt hole arc) is not supported by mtsim", HELP),
+        720 => (" (Haas lathe: end face stock removal cycle; Haas mill: bolt holes along an angle) is not supported by mtsim", HELP),
+        _ => return fanuc::refusal(code),
+    })
+}
 
 fn g_code(code: u32) -> Option<GCode> {
     Some(match code {

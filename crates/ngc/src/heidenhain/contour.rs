@@ -77,7 +77,8 @@ fn extra(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> LineResult<bool
                 "feed per revolution",
             ))
         }
-        "F" => {
+        // `FQ53`: the feed in a Q parameter (as `F+Q53`).
+        "F" | "FQ" | "FQL" | "FQR" => {
             let v = b.value(k, 1, &r.q)?;
             if v <= 0.0 {
                 return Err(LineError::new(
@@ -304,7 +305,9 @@ fn line(r: &mut Reader, b: &Block, polar: bool) -> LineResult<()> {
         }
     }
     r.path.pos = target;
-    if e.m91 || e.m140.is_some() || e.tcp.is_some() {
+    // A rotary turned under a tilted plane moves the program point in that plane.
+    let turned_in_frame = mask & !7 != 0 && r.interp.framed();
+    if e.m91 || e.m140.is_some() || e.tcp.is_some() || turned_in_frame {
         r.sync_position(b)?;
     }
     Ok(())
@@ -499,6 +502,18 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
     let (centre, ccw, turns) = match key {
         "C" => {
             let c = pole_of(r, b)?;
+            if (p[0] - c[0]).hypot(p[1] - c[1]) < 1e-9 {
+                // TNC 640 manual, "Circular path C around circle center CC": the radius
+                // is the distance from CC to the start point.
+                return Err(LineError::new(
+                    b.span(0),
+                    format!(
+                        "`C` (circular path around the pole CC): the start point X{:+} Y{:+} is on CC, so the circle has radius zero; the program expects the tool placed away from CC before it (by hand, or a position mtsim does not know)",
+                        p[0], p[1]
+                    ),
+                    "start on CC",
+                ));
+            }
             (c, ccw.ok_or_else(need_dir)?, 0)
         }
         "CR" => {

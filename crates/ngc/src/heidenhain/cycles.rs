@@ -40,6 +40,7 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
     let minor: u32 = minor.parse().unwrap_or(0);
     match major {
         200 | 201 | 203 | 205 | 207 => define(r, b, major),
+        1 => pecking_value(r, b, minor),
         7 | 10 | 19 if minor == 0 => Ok(()),
         7 => frames::datum_shift(r, b),
         10 => frames::rotation(r, b),
@@ -71,10 +72,45 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
                 .map(|k| b.tok(k))
                 .take_while(|t| !t.contains('='))
                 .collect();
-            Err(LineError::new(b.spans(0, 2), format!("the Heidenhain cycle `CYCL DEF {id}{}{}` is not supported by mtsim: it reads the drilling cycles 200, 201, 203, 205, 207 and the cycles 7, 9, 10, 19, 32", if name.is_empty() { "" } else { " " }, name.join(" ")), "Heidenhain cycle not supported")
+            Err(LineError::new(b.spans(0, 2), format!("the Heidenhain cycle `CYCL DEF {id}{}{}` is not supported by mtsim: it reads the drilling cycles 1, 200, 201, 203, 205, 207 and the cycles 7, 9, 10, 19, 32", if name.is_empty() { "" } else { " " }, name.join(" ")), "Heidenhain cycle not supported")
                 .help("post the cycle as L moves, or see docs/gcode.md"))
         }
     }
+}
+
+/// `CYCL DEF 1.0 PECKING` (defines the cycle) and `1.1 DIST 2` … `1.5 F80` (its set-up
+/// clearance, depth, plunging depth, dwell and feed): the value after the word.
+fn pecking_value(r: &mut Reader, b: &Block, minor: u32) -> LineResult<()> {
+    if minor == 0 {
+        r.cycle.number = Some(1);
+        r.cycle.pecking = [0.0; 5];
+        r.modal_cycle = false;
+        return Ok(());
+    }
+    let (Some(first), Some(last)) = (b.toks.get(3), b.toks.last()) else {
+        return Err(LineError::new(
+            b.span(2),
+            format!("`CYCL DEF 1.{minor}` without a value"),
+            "no value",
+        ));
+    };
+    let text = &b.text[first.start..last.end];
+    let at = text
+        .find(|c: char| c.is_ascii_digit() || matches!(c, '+' | '-' | '.') || c == 'Q')
+        .unwrap_or(text.len());
+    let span = first.start + at..last.end;
+    let v = value(text[at..].trim(), &r.q, span.clone())?;
+    match minor {
+        1..=5 => r.cycle.pecking[minor as usize - 1] = v,
+        _ => {
+            return Err(LineError::new(
+                b.spans(0, 2),
+                format!("`CYCL DEF 1.{minor}`: cycle 1 PECKING has the lines 1.1 to 1.5"),
+                "no such line",
+            ))
+        }
+    }
+    Ok(())
 }
 
 /// `CYCL DEF 2xx … Q200=+2 ;… Q201=-10 …`: sets the Q parameters, remembers the cycle.
@@ -105,6 +141,9 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
             "no cycle",
         ));
     };
+    if n == 1 {
+        return pecking(r, b);
+    }
     let q = |k| r.q.q(k);
     let mut p = Params {
         clearance: q(200),
@@ -296,4 +335,54 @@ fn drill(r: &mut Reader, b: &Block, p: &Params, plan: &Plan) {
     if p.second > p.clearance {
         z_move(r, "0", p.surface + p.second, None);
     }
+}
+
+/// Cycle 1 PECKING at the current position (TNC 426/430 User's Manual, "PECKING (Cycle
+/// 1)"): the tool stands at the set-up clearance a above the surface, so the surface is at
+/// `s = z − a`. It feeds to the first plunging depth below s, rapids back to where it
+/// started, rapids down to t above the depth reached and feeds one plunging depth further,
+/// until the depth; dwells; rapids back to the start. The advanced stop distance
+/// `t = 0.6 mm` for a hole up to 30 mm deep, `depth / 50` beyond, at most 7 mm.
+fn pecking(r: &mut Reader, b: &Block) -> LineResult<()> {
+    let [clearance, depth, plunge, dwell, feed] = r.cycle.pecking;
+    let span = b.span(0);
+    if depth > 0.0 {
+        return Err(LineError::new(span, format!("cycle 1: depth {depth} is positive: mtsim drills down the tool axis Z only (expected a negative depth)"), "positive depth"));
+    }
+    if depth == 0.0 {
+        return Ok(());
+    }
+    if feed <= 0.0 || plunge <= 0.0 {
+        return Err(LineError::new(span, format!("cycle 1: feed {feed} and plunging depth {plunge}: expected both positive (CYCL DEF 1.3 and 1.5)"), "no feed or plunge"));
+    }
+    let start = r.path.pos[2];
+    let surface = start - clearance.abs();
+    let t = if -depth <= 30.0 {
+        0.6
+    } else {
+        (-depth / 50.0).min(7.0)
+    };
+    let p = Params {
+        clearance: clearance.abs(),
+        depth,
+        feed,
+        plunge,
+        dwell_top: 0.0,
+        surface,
+        second: 0.0,
+        dwell_depth: dwell,
+        retract_feed: 0.0,
+        decrement: 0.0,
+        min_plunge: 0.0,
+    };
+    let plan = Plan {
+        plunge,
+        decrement: 0.0,
+        min: 0.0,
+        approach: t,
+        retract_feed: None,
+    };
+    drill(r, b, &p, &plan);
+    r.path.set_z(start);
+    Ok(())
 }

@@ -22,6 +22,7 @@ mod frames;
 mod front;
 mod qparam;
 mod state;
+mod sysread;
 mod text;
 
 use std::collections::{HashMap, VecDeque};
@@ -290,7 +291,15 @@ impl Reader {
             {
                 self.fn_block(b, here, 0)
             }
-            "LBL" => self.label(b),
+            "LBL" => {
+                label_mark(b, 1)?;
+                self.label(b.tok(1) == "0")
+            }
+            // `LBL1`: a label glued to its number (its jumps find it, `find_label`).
+            _ if key.len() > 3 && key.starts_with("LBL") => {
+                label_mark(b, 0)?;
+                self.label(&key[3..] == "0")
+            }
             "CALL" if b.is(1, "LBL") => self.call_label(b, here),
             "CALL" if b.is(1, "PGM") => self.call_program(b, here),
             "CYCL" | "CYCLE" if b.is(1, "CALL") => self.cycle_call(b),
@@ -467,7 +476,8 @@ impl Reader {
             9..=12 => self.fn_jump(b, n, rest, rest_at, here),
             14 => Err(LineError::new(b.span(0), format!("the program raises an error: {}", rest.trim()), "FN 14 error")),
             15 | 16 => Ok(()),
-            _ => Err(LineError::new(b.spans(0, 1), format!("`FN {n}` is not supported: mtsim reads FN 0-16 (arithmetic, trigonometry, jumps, error and print)"), "FN not supported")
+            18 => sysread::read(self, b, rest, rest_at),
+            _ => Err(LineError::new(b.spans(0, 1), format!("`FN {n}` is not supported: mtsim reads FN 0-16 (arithmetic, trigonometry, jumps, error and print) and FN 18 (system data); FN 17 SYSWRITE, FN 19 PLC, FN 20 WAIT FOR, FN 26-28 tables and the others are refused"), "FN not supported")
                 .help("docs/gcode.md lists the Heidenhain constructs mtsim reads")),
         }
     }
@@ -589,39 +599,9 @@ impl Reader {
     }
 
     /// `LBL n`: a mark; `LBL 0` ends the subprogram being run.
-    fn label(&mut self, b: &Block) -> LineResult<()> {
-        // `LBL n` or `LBL "name"`, and nothing after it (a name may hold spaces).
-        if b.tok(1).is_empty() {
-            return Err(LineError::new(
-                b.span(0),
-                "`LBL`: expected a label number or \"name\"".to_string(),
-                "expected a label",
-            ));
-        }
-        if !b.tok(1).starts_with('"') {
-            if b.tok(1).parse::<f64>().is_err() {
-                return Err(LineError::new(
-                    b.span(1),
-                    format!("`{}`: expected a label number or \"name\"", b.tok(1)),
-                    "expected a label",
-                ));
-            }
-            if !b.tok(2).is_empty() {
-                return Err(LineError::new(
-                    b.span(2),
-                    format!(
-                        "`{}` after `LBL {}`: a label takes nothing after its number or \"name\" \
-                         (a repeat is `CALL LBL {} REP n`)",
-                        b.tok(2),
-                        b.tok(1),
-                        b.tok(1)
-                    ),
-                    "nothing may follow",
-                ));
-            }
-        }
+    fn label(&mut self, zero: bool) -> LineResult<()> {
         match self.frames.last() {
-            Some(f) if b.tok(1) == "0" && !f.program => {
+            Some(f) if zero && !f.program => {
                 self.end_pass();
                 Ok(())
             }
@@ -665,6 +645,8 @@ impl Reader {
                 "" => (b.tok(3).get(3..).unwrap_or(""), b.span(3)),
                 t => (t, b.span(4)),
             };
+            // `REP 20/20`: the TNC shows the repeats left after the slash.
+            let rep = rep.split('/').next().unwrap_or(rep);
             let v = text::value(rep, &self.q, span.clone())?;
             if v < 0.0 || v.fract() != 0.0 || v > 65534.0 {
                 return Err(LineError::new(
@@ -818,8 +800,19 @@ impl Reader {
                 let rest = &line[text::after_block_number(line)..];
                 let (body, _) = text::strip_comment(rest);
                 let mut words = body.split_whitespace();
-                if words.next().is_some_and(|w| w.eq_ignore_ascii_case("LBL")) {
-                    if let Some(l) = words.next() {
+                // `LBL 1`, or `LBL1` as some posts write it.
+                let first = words.next().unwrap_or("");
+                let glued = first
+                    .get(..3)
+                    .filter(|k| k.eq_ignore_ascii_case("LBL") && first.len() > 3)
+                    .map(|_| &first[3..]);
+                let name = match glued {
+                    Some(l) => Some(l),
+                    None if first.eq_ignore_ascii_case("LBL") => words.next(),
+                    None => None,
+                };
+                {
+                    if let Some(l) = name {
                         let key = if l.starts_with('"') {
                             l.trim_matches('"').to_string()
                         } else {
@@ -974,4 +967,43 @@ impl Iterator for Reader {
             }
         }
     }
+}
+
+/// Checks a label mark: `LBL n` or `LBL "name"` (the label at token `at` = 1), or `LBL1`
+/// glued (`at` = 0), and nothing after it: a repeat written on the mark, or a mark without
+/// its label, is refused, never read as a mark. A quoted name may hold spaces.
+fn label_mark(b: &Block, at: usize) -> LineResult<()> {
+    let label = b.tok(at);
+    if at == 1 {
+        if label.is_empty() {
+            return Err(LineError::new(
+                b.span(0),
+                "`LBL`: expected a label number or \"name\"".to_string(),
+                "expected a label",
+            ));
+        }
+        if label.starts_with('"') {
+            return Ok(());
+        }
+        if label.parse::<f64>().is_err() {
+            return Err(LineError::new(
+                b.span(1),
+                format!("`{label}`: expected a label number or \"name\""),
+                "expected a label",
+            ));
+        }
+    }
+    let after = b.tok(at + 1);
+    if after.is_empty() {
+        return Ok(());
+    }
+    let mark = if at == 1 { format!("LBL {label}") } else { label.to_string() };
+    Err(LineError::new(
+        b.span(at + 1),
+        format!(
+            "`{after}` after `{mark}`: a label takes nothing after its number or \"name\" \
+             (a repeat is `CALL {mark} REP n`)"
+        ),
+        "nothing may follow",
+    ))
 }

@@ -102,7 +102,7 @@ impl Qparams {
         if !v.is_finite() {
             return Err(LineError::new(
                 at..at + text.len(),
-                "the formula has no finite value: expected a formula without a division by zero or the root of a negative number",
+                format!("the Q-parameter formula `{}` has no finite value: expected a formula without a division by zero or the root of a negative number (a value read with FN 18 from a position set by hand is the program's start position here)", text.trim()),
                 "not a number",
             ));
         }

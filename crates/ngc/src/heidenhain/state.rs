@@ -214,6 +214,9 @@ pub(super) struct Frames {
 #[derive(Default)]
 pub(super) struct Cycle {
     pub(super) number: Option<u32>,
+    /// Cycle 1 PECKING's values as `CYCL DEF 1.1`-`1.5` give them: set-up clearance,
+    /// depth, plunging depth, dwell (s), feed.
+    pub(super) pecking: [f64; 5],
 }
 
 /// A parsed block: its text and tokens.

@@ -71,6 +71,11 @@ impl Interp {
         }
     }
 
+    /// A tilted plane (G68.2) or table-following offset (G254) is active.
+    pub(crate) fn framed(&self) -> bool {
+        self.tilt.is_some() || self.dwo
+    }
+
     /// The program-to-machine map while G68.2 or G254 is active.
     pub(super) fn frame(&self) -> Option<Frame> {
         if self.tilt.is_none() && !self.dwo {
@@ -82,6 +87,13 @@ impl Interp {
             rotation,
             table: self.table,
         })
+    }
+
+    /// Machine position of the tool tip (the tool length offset taken off Z), mm and deg.
+    pub(crate) fn machine_tip(&self) -> AxisVec {
+        let mut p = self.pos;
+        p[Axis::Z] -= self.tool_length_mm;
+        p
     }
 
     /// Machine X Y Z of the controlled point without the tool length offset, mm.
@@ -96,6 +108,21 @@ impl Interp {
     /// The machine target of axis words (program coordinates, or machine with G53).
     pub(super) fn target(&self, axis_words: &[(Axis, Word)], g53: bool) -> AxisVec {
         if let (Some(f), false) = (self.frame(), g53) {
+            if !self.dwo && axis_words.iter().all(|(a, _)| a.is_rotary()) {
+                // A tilted plane without TCP (G68.2, CYCL DEF 19, PLANE): a block of
+                // rotary words alone turns those axes and no other (Fanuc G68.2 and
+                // Heidenhain's tilted plane position only the programmed axes; the plane
+                // is not followed without TCP).
+                let mut target = self.pos;
+                for &(a, w) in axis_words {
+                    target[a] = if self.absolute {
+                        w.value + self.offset[a]
+                    } else {
+                        self.pos[a] + w.value
+                    };
+                }
+                return target;
+            }
             // Program X Y Z in the feature / table-fixed frame; rotary (and U V W) words as
             // usual.
             let mut p = f.to_program(self.tip(), &self.offset, &self.pos);

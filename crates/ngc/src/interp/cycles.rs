@@ -64,7 +64,10 @@ impl Interp {
                 "no bottom",
             )
         })?;
-        let repeats = get('L').map_or(1, |l| l.value.round() as u64);
+        // Repeats: LinuxCNC and Haas L; Fanuc K (Series 0i "Canned cycle": K, the number
+        // of repeats, in G91 each at the next increment).
+        let k = get('K').filter(|_| self.dialect.table().macro_b);
+        let repeats = get('L').or(k).map_or(1, |l| l.value.round() as u64);
         let tlo = |a: Axis| {
             if a == Axis::Z {
                 self.tool_length_mm

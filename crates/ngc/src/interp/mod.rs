@@ -68,6 +68,7 @@ mod polar_words;
 mod probing;
 mod spindle_sync;
 mod splines;
+mod system_vars;
 mod tool;
 mod words;
 
@@ -190,6 +191,11 @@ pub struct Interp {
     comp_out: Option<AxisVec>,
     /// The move after G40 must be straight (LinuxCNC refuses an arc there).
     arc_not_allowed: bool,
+    /// G28 / G30 reference positions not given ([`Options::reference_missing`]): the
+    /// setting to name when a program goes there; cleared by G28.1 / G30.1.
+    reference_missing: [Option<String>; 2],
+    /// The axes' positions at a TCP position ([`Options::tcp_axes`]), for a TCP cancel.
+    tcp_axes: Option<crate::options::TcpAxes>,
 }
 
 /// Parameter of extended work offset P n (G54.1 Pn, G154 Pn), axis X.
@@ -287,8 +293,19 @@ impl Interp {
             comp: None,
             comp_out: None,
             arc_not_allowed: false,
+            reference_missing: [0, 1].map(|k| {
+                // A parameter file that sets the position gives it.
+                let base = [crate::options::G28_PARAMETER, crate::options::G30_PARAMETER][k];
+                let given = o
+                    .parameters
+                    .iter()
+                    .any(|(n, _)| (base..base + 9).contains(n));
+                o.reference_missing[k].clone().filter(|_| !given)
+            }),
+            tcp_axes: o.tcp_axes.clone(),
         };
         i.parameters_changed();
+        i.refuse_unmodelled_system_variables();
         i
     }
 

@@ -92,7 +92,11 @@ impl Interp {
                 GCode::CutterComp(k) => self.cutter_comp_on(b, k, w)?,
                 GCode::ToolLength(kind) => self.tool_length(b, kind, w)?,
                 GCode::Tcp(on) => {
-                    self.tcp = on;
+                    if on {
+                        self.tcp = true;
+                    } else {
+                        self.tcp_cancel();
+                    }
                     if let Some(h) = b.get('H') {
                         let t = self.tool_entry(h.value.round() as u32, &h)?;
                         self.tool_length_mm = t.length_mm;
@@ -295,13 +299,30 @@ impl Interp {
                 self.tool_length_mm += t.length_mm;
             }
             _ => {
-                self.tool_length_mm = 0.0;
                 if self.dialect.table().g49_cancels_tcp {
-                    self.tcp = false;
+                    self.tcp_cancel();
                 }
+                self.tool_length_mm = 0.0;
             }
         }
         Ok(())
+    }
+
+    /// TCP off (G49 on the Fanuc family, M129 / `FUNCTION RESET TCPM`, `TRAFOOF`): every
+    /// control's manual has the current point become where the axes are (Fanuc: the
+    /// absolute coordinates are updated to the axes' positions, Heidenhain and Sinumerik:
+    /// the display shows the axes' positions without the transformation), so the next
+    /// block moves only the axes it programs. With the rotaries turned that point is not
+    /// the tip's: `pos ← K(pos, L)`, the machine's TCP transform
+    /// ([`crate::Options::tcp_axes`]), taken with the tool length still in effect.
+    pub(super) fn tcp_cancel(&mut self) {
+        if !self.tcp {
+            return;
+        }
+        self.tcp = false;
+        if let Some(k) = &self.tcp_axes {
+            self.pos = (k.0)(&self.pos, self.tool_length_mm);
+        }
     }
 
     /// G54.1 P / G154 P: extended work offsets P1-P99.

@@ -168,6 +168,8 @@ impl Interp {
         if !matches!(mode, MotionMode::Arc { .. }) {
             if let Some(w) = arc_words.iter().find(|w| {
                 !(matches!(mode, MotionMode::Cycle(_)) && w.letter == 'R')
+                    // Fanuc and Haas: a canned cycle's K is its repeat count.
+                    && !(matches!(mode, MotionMode::Cycle(_)) && w.letter == 'K' && self.dialect.table().macro_b)
                     // Back boring's shift I J (K).
                     && !(matches!(mode, MotionMode::Cycle(c) if self.is_back_bore(c)))
                     && !(matches!(mode, MotionMode::SpindleSync(_)) && w.letter == 'K')

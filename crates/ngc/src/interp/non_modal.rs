@@ -121,6 +121,18 @@ impl Interp {
                 } else {
                     G30_PARAMETER
                 } as usize;
+                let k = usize::from(nm == NonModal::G30);
+                if let Some(setting) = &self.reference_missing[k] {
+                    return Err(LineError::new(
+                        w.span(),
+                        format!(
+                            "`{}` goes to the machine's reference position, which is not given: set {setting}",
+                            ["G28", "G30"][k]
+                        ),
+                        "no reference position",
+                    )
+                    .help("the control's reference point is a machine setting (on most machines Z at the top of its travel); the reader never assumes zero"));
+                }
                 self.go_home(base, axis_words, line_no, queue);
             }
             NonModal::G28_1 | NonModal::G30_1 => {
@@ -129,6 +141,7 @@ impl Interp {
                 } else {
                     G30_PARAMETER
                 } as usize;
+                self.reference_missing[usize::from(nm == NonModal::G30_1)] = None;
                 for a in Axis::ALL {
                     self.params.numbered[base + a.index()] = self.pos[a];
                 }

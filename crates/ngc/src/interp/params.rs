@@ -92,5 +92,8 @@ impl Interp {
             },
         );
         g.insert("_task".into(), 0.0);
+        if self.dialect.table().macro_b {
+            self.refresh_macro_b();
+        }
     }
 }

@@ -75,8 +75,10 @@ impl Interp {
                 }
             }
         }
-        if let Some(on) = tcp_m {
-            self.tcp = on;
+        match tcp_m {
+            Some(true) => self.tcp = true,
+            Some(false) => self.tcp_cancel(),
+            None => {}
         }
         // After M6 (LinuxCNC's order of execution): M3/M4 start the spindle, M5 stops it.
         for &(code, _) in b.m.iter() {

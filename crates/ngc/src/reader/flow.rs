@@ -404,6 +404,7 @@ impl IsoReader {
                         match lex(stmt, &self.interp.params, true).map_err(|e| shift(e, off))? {
                             Lexed::Words { words, assigns } if words.is_empty() => {
                                 for (p, v) in assigns {
+                                    self.interp.check_assign(stmt, &p, v)?;
                                     self.interp.params.set(&p, v);
                                 }
                                 self.interp.parameters_changed();

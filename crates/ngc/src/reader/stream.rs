@@ -219,6 +219,7 @@ impl IsoReader {
             Lexed::Words { words, assigns } => {
                 if !assigns.is_empty() {
                     for (p, v) in &assigns {
+                        self.interp.check_assign(line, p, *v)?;
                         self.interp.params.set(p, *v);
                     }
                     self.interp.parameters_changed();

@@ -3,7 +3,7 @@
 //! names and calls (Fundamentals, "Structure of an NC program"; Job planning, "Flexible NC
 //! programming").
 
-use super::expr::{expr, r_parameter, Scan};
+use super::expr::{expr, r_parameter, system_variable_kind, Scan};
 use super::flow::skip_number_and_label;
 use super::frame::{rotation_zyx, Instruction};
 use super::state::{Structure, Var};
@@ -167,13 +167,35 @@ impl Reader {
                 };
                 self.jump(kw, target, t_at..sc.at)?;
             }
-            "DEF" => self.def(sc, at)?,
+            "DEF" => self.def(sc, at, line_no)?,
             "PROC" => self.proc(sc, at)?,
             "RET" => return self.end_of_level().map(Some),
             "EXTERN" => {}
             "MCALL" => self.mcall(sc, at, line_no)?,
             "TRANS" | "ATRANS" | "ROT" | "AROT" | "SCALE" | "ASCALE" | "MIRROR" | "AMIRROR" => {
                 self.frame_statement(kw, sc, at)?
+            }
+            "CALL" if sc.peek() == Some(b'"') => {
+                // Indirect call of a program named by a string (SINUMERIK programming
+                // manual, "Indirect subprogram call CALL"): its name is the path's last
+                // part, `_N_NAME_SPF` in the control's internal form.
+                let start = sc.at + 1;
+                let end = sc.s[start..]
+                    .iter()
+                    .position(|&c| c == b'"')
+                    .map(|k| start + k)
+                    .ok_or_else(|| sc.err(at, "`CALL \"` without its closing quote", "unclosed"))?;
+                let path = String::from_utf8_lossy(&sc.s[start..end]).into_owned();
+                sc.at = end + 1;
+                let last = path.rsplit('/').next().unwrap_or(&path);
+                let name = last.strip_prefix("_N_").unwrap_or(last);
+                let name = name
+                    .strip_suffix("_SPF")
+                    .or_else(|| name.strip_suffix("_MPF"))
+                    .or_else(|| name.rsplit_once('.').map(|(n, _)| n))
+                    .unwrap_or(name)
+                    .to_string();
+                self.call(&name, Vec::new(), 1, at..sc.at)?;
             }
             "CALL" | "PCALL" | "EXECUTE" | "EXECTAB" | "CASE" | "SETAL" | "STOPRE_" | "WHEN"
             | "EVERY" | "ID" | "IDS" => {
@@ -358,15 +380,27 @@ impl Reader {
         Ok(Var::Named(name.to_string()))
     }
 
-    /// `DEF REAL|INT|BOOL name[=value], ...`.
-    fn def(&mut self, sc: &mut Scan, at: usize) -> LineResult<()> {
+    /// `DEF REAL|INT|BOOL name[=value], ...`; `DEF STRING|CHAR|AXIS|FRAME …` accepted with
+    /// a notice (text, axis names and frames for display or for constructs mtsim refuses
+    /// where they are used: a later use of the variable is an undefined variable).
+    fn def(&mut self, sc: &mut Scan, at: usize, line_no: usize) -> LineResult<()> {
         let Some((ty, t_at)) = sc.ident() else {
             return Err(sc.err(at, "expected a type after DEF", "DEF"));
         };
+        if matches!(ty, "STRING" | "CHAR" | "AXIS" | "FRAME") {
+            let text = String::from_utf8_lossy(&sc.s[t_at..]);
+            let text = text.split(';').next().unwrap_or("").trim().to_string();
+            sc.at = sc.s.len();
+            self.notice(
+                line_no,
+                format!("`DEF {text}`: a {ty} variable (Sinumerik programming manual, \"Variable types\") is accepted and not held: a use of it in a move or a condition is refused"),
+            );
+            return Ok(());
+        }
         if !matches!(ty, "REAL" | "INT" | "BOOL") {
             return Err(sc.err(
                 t_at,
-                format!("`DEF {ty}`: mtsim reads REAL, INT and BOOL variables"),
+                format!("`DEF {ty}`: mtsim reads REAL, INT and BOOL variables (STRING, CHAR, AXIS and FRAME with a notice)"),
                 "unsupported type",
             ));
         }
@@ -594,7 +628,10 @@ impl Reader {
         if name.starts_with('$') {
             return Err(sc.err(
                 at,
-                format!("system variable `{name}` is not supported by mtsim"),
+                format!(
+                    "system variable `{name}` ({}) is not supported by mtsim",
+                    system_variable_kind(name)
+                ),
                 "system variable",
             ));
         }

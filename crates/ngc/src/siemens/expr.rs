@@ -357,7 +357,10 @@ impl Eval<'_> {
         if name.starts_with('$') {
             return Err(sc.err(
                 at,
-                format!("system variable `{name}` is not supported by mtsim"),
+                format!(
+                    "system variable `{name}` ({}) is not supported by mtsim",
+                    system_variable_kind(name)
+                ),
                 "system variable",
             ));
         }
@@ -507,4 +510,36 @@ fn close(sc: &mut Scan, at: usize) -> LineResult<()> {
     } else {
         Err(sc.err(at, "expected `)` to close this `(`", "unclosed `(`"))
     }
+}
+
+/// What a Sinumerik system variable is, by its prefix (SINUMERIK 840D sl "System
+/// variables" list manual: `$M…` machine data, `$S…` setting data, `$P…` program
+/// variables read at preprocessing, `$A…` main-run variables, `$T…` tool data), for the
+/// refusal that names it.
+pub(super) fn system_variable_kind(name: &str) -> &'static str {
+    let upper = name.to_ascii_uppercase();
+    let kinds: [(&str, &str); 12] = [
+        ("$MN_", "general machine data"),
+        ("$MC_", "channel machine data"),
+        ("$MA_", "axis machine data"),
+        ("$SN_", "general setting data"),
+        ("$SC_", "channel setting data"),
+        ("$SA_", "axis setting data"),
+        (
+            "$P_UIFR",
+            "a settable zero offset frame (G54 …), which the machine file does not give",
+        ),
+        ("$P_", "a program variable read at preprocessing"),
+        ("$AA_", "an axis main-run variable"),
+        ("$A_DB", "PLC data (a data block byte, word or double word)"),
+        (
+            "$A_",
+            "a main-run variable (time, PLC signals, measurement)",
+        ),
+        ("$TC_", "tool management data"),
+    ];
+    kinds.iter().find(|(p, _)| upper.starts_with(p)).map_or(
+        "a system variable of the control; the SINUMERIK system variables list manual names it",
+        |(_, k)| k,
+    )
 }

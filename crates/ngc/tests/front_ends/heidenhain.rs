@@ -329,3 +329,83 @@ fn endless_loops_and_deep_calls_stop_at_the_limits() {
         .unwrap();
     assert!(e.to_string().contains("nested more than 2"), "{e}");
 }
+
+/// Cycle 1 PECKING from Z5 with set-up clearance 5 (surface Z0), depth -7, plunging depth
+/// 3, dwell 0.5 s, F100 (TNC 426/430 manual, "PECKING (Cycle 1)"; advanced stop distance
+/// t = 0.6 mm for a hole up to 30 mm): feed to -3, rapid to 5, rapid to -3 + 0.6 = -2.4,
+/// feed to -6, rapid to 5, rapid to -5.4, feed to -7, dwell, rapid to 5.
+#[test]
+fn cycle_1_pecks_as_the_manual_describes() {
+    let m = moves(
+        "2 L X+10 Y+20 Z+5 R0 FMAX\n3 CYCL DEF 1.0 PECKING\n4 CYCL DEF 1.1 DIST5\n5 CYCL DEF 1.2 DEPTH-7\n6 CYCL DEF 1.3 PLNGNG3\n7 CYCL DEF 1.4 DWELL0.5\n8 CYCL DEF 1.5 F100\n9 L M99",
+    );
+    let path: Vec<(ngc::MoveKind, f64)> = m
+        .iter()
+        .skip_while(|m| m.line < 10)
+        .map(|m| (m.kind(), m.end[Axis::Z]))
+        .filter(|(k, _)| *k != ngc::MoveKind::Dwell)
+        .collect();
+    use ngc::MoveKind::{Feed, Rapid};
+    let want = [
+        (Rapid, 5.0),
+        (Feed, -3.0),
+        (Rapid, 5.0),
+        (Rapid, -2.4),
+        (Feed, -6.0),
+        (Rapid, 5.0),
+        (Rapid, -5.4),
+        (Feed, -7.0),
+        (Rapid, 5.0),
+    ];
+    assert_eq!(path.len(), want.len(), "{path:?}");
+    for (got, want) in path.iter().zip(want) {
+        assert!(got.0 == want.0 && (got.1 - want.1).abs() < 1e-9, "{path:?}");
+    }
+    let dwell: Vec<_> = m
+        .iter()
+        .filter_map(|m| match m.motion {
+            Motion::Dwell { seconds } => Some(seconds),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(dwell, [0.5]);
+    assert!(m.iter().all(|m| near(xy(m), [10.0, 20.0]) || m.line < 3));
+}
+
+/// FN 18 SYSREAD: ID270 the position in the active system, ID240 the REF position, ID50
+/// the tool table (T1: length 0, Ø10 → R 5), ID20 NR1 the tool; others refused by ID.
+#[test]
+fn fn_18_reads_the_position_and_tool_data() {
+    let m = moves(
+        "2 CYCL DEF 7.0 DATUM SHIFT\n3 CYCL DEF 7.1 X+100\n4 L X+10 Y+20 Z+30 R0 FMAX\n5 FN 18: SYSREAD Q1 = ID270 NR1 IDX1\n6 FN18: SYSREAD Q2 = ID240 NR1 IDX1\n7 FN 18: SYSREAD Q3 = ID50 NR2 IDX1\n8 FN 18: SYSREAD Q4 = ID20 NR1\n9 L X+Q1 Y+Q2 Z+Q3 FMAX\n10 L X+Q4 FMAX",
+    );
+    // Q1 = 10 (work), Q2 = 110 (REF: the datum shift 100 added), Q3 = 5, Q4 = 1; the
+    // datum shift puts the program's X+10 at machine X110.
+    let n = m.len();
+    assert!(near(xy(&m[n - 2]), [110.0, 110.0]), "{:?}", m[n - 2].end);
+    assert!((m[n - 2].end[Axis::Z] - 5.0).abs() < 1e-9);
+    assert!((m[n - 1].end[Axis::X] - 101.0).abs() < 1e-9);
+    let (line, _, message) = error("2 FN 18: SYSREAD Q1 = ID990 NR1");
+    assert_eq!(line, 3);
+    assert!(
+        message.contains("ID990") && message.contains("FN 18: SYSREAD"),
+        "{message}"
+    );
+}
+
+/// `LBL1` glued to its number is a label, and `CALL LBL 1 REP 2/2` repeats twice (the
+/// number after the slash is the count the TNC shows left).
+#[test]
+fn glued_labels_and_rep_with_a_slash_are_read() {
+    let m = moves("2 L X+0 Y+0 Z+0 R0 FMAX\n3 LBL1\n4 L IX+1 F100\n5 CALL LBL 1 REP 2/2");
+    let xs: Vec<f64> = m.iter().skip(1).map(|m| m.end[Axis::X]).collect();
+    assert_eq!(xs, [1.0, 2.0, 3.0]);
+}
+
+/// `FQ53` is the feed held in Q53, as `F+Q53`.
+#[test]
+fn a_feed_in_a_q_parameter_is_read() {
+    let m = moves("2 Q53 = 250\n3 L X+0 Y+0 Z+5 R0 FMAX\n4 L X+10 FQ53\n5 L X+30 F+Q53");
+    let feeds: Vec<Option<f64>> = m.iter().skip(1).map(|m| m.feed).collect();
+    assert_eq!(feeds, [Some(250.0), Some(250.0)]);
+}

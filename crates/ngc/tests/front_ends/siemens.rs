@@ -242,7 +242,7 @@ fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
         ),
         ("G0 X1\nCYCLE83(10,0,1,-20)\n", 2, 1, "`CYCLE83`"),
         ("N10 G33 Z-10 K1\n", 1, 5, "`G33`"),
-        ("DEF STRING[8] S\n", 1, 5, "DEF STRING"),
+        ("DEF POINT PT\n", 1, 5, "DEF POINT"),
         ("R1=ISVAR(\"A\")\n", 1, 4, "`ISVAR`"),
         (
             "G1 X1 F1\nCYCLE800(1,\"TC1\",0,27,0,0,0,0,30,0,0,0,0,-1)\n",
@@ -425,4 +425,34 @@ fn trailing_comments_block_numbers_and_lower_case_read_in_plain_and_translated_b
     // a comment holding parentheses and a quote.
     let ms = moves("n10 g1 x10 f100 ; move (fast) \"q\"\nN20 R1=4 G1 Y=R1 ; (y) \"q\"\nm30\n");
     assert_eq!(ends(&ms), vec![[10.0, 0.0, 0.0], [10.0, 4.0, 0.0]]);
+}
+
+/// `CALL "/_N_SPF_DIR/_N_HOLE_SPF"` runs HOLE.SPF (the path's last part in the control's
+/// internal form); `DEF STRING[20] NAME` is accepted with a notice; a system variable is
+/// refused naming what it is.
+#[test]
+fn an_indirect_call_and_display_only_definitions_are_read() {
+    let dir = std::env::temp_dir().join(format!("ngc-siemens-call-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("HOLE.SPF"), "G91 G1 Z-2 F100\nZ2\nG90\nM17\n").unwrap();
+    let program = "DEF STRING[20] NAME=\"PART 1\"\nG0 X10 Y5 Z3\nCALL \"/_N_SPF_DIR/_N_HOLE_SPF\"\nG0 X20\nM30\n";
+    let m: Vec<Move> = read_str_with(
+        Path::new("t.mpf"),
+        program,
+        &options(Dialect::Siemens, &dir),
+    )
+    .collect::<Result<_, _>>()
+    .unwrap_or_else(|e| panic!("{e}"));
+    let z: Vec<f64> = m.iter().map(|m| m.end[ngc::Axis::Z]).collect();
+    assert_eq!(z, [3.0, 1.0, 3.0, 3.0]);
+    assert_eq!(m[3].end[ngc::Axis::X], 20.0);
+    let err = read_str_with(
+        Path::new("t.mpf"),
+        "R1=$MN_SCALING_SYSTEM_IS_METRIC\nM30\n",
+        &options(Dialect::Siemens, &dir),
+    )
+    .find_map(|m| m.err())
+    .expect("a system variable mtsim does not have is refused");
+    assert!(err.to_string().contains("general machine data"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

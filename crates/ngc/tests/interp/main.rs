@@ -7,3 +7,4 @@ mod lathe;
 mod remap_glue;
 mod secondary_axes;
 mod tilted;
+mod traps;

@@ -1,0 +1,9 @@
+0 BEGIN PGM TCP MM
+1 ; trap: M128 with A90, then M129: the next block moves Z alone
+2 TOOL CALL 1 Z S1000
+3 L X+0 Y+0 Z+50 A+0 C+0 R0 FMAX
+4 M128
+5 L X+0 Y+10 Z+0 A+90 C+0 F500
+6 M129
+7 L Z+20 F500
+8 END PGM TCP MM

@@ -8,5 +8,6 @@ pub mod scene;
 pub mod units;
 
 pub use run::{
-    check, check_reference, check_with, CheckOptions, CheckReport, CheckTiming, SceneQueries,
+    check, check_observed, check_reference, check_with, CheckOptions, CheckReport, CheckTiming,
+    SceneQueries,
 };

@@ -252,6 +252,17 @@ pub fn check_with(
     options: &CheckOptions,
     queries: SceneQueries,
 ) -> Result<CheckReport> {
+    check_observed(scenario, options, queries, &|_, _| {})
+}
+
+/// [`check_with`], telling `progress` now and then the machine time reached and the run's
+/// least machine time (s; the up-front estimate, which the planner's ramps exceed).
+pub fn check_observed(
+    scenario: &Scenario,
+    options: &CheckOptions,
+    queries: SceneQueries,
+    progress: &dyn Fn(f64, f64),
+) -> Result<CheckReport> {
     let machine = &scenario.machine;
     let kin = machine.kinematics;
     let frame = theta_frame(scenario);
@@ -307,15 +318,23 @@ pub fn check_with(
     } else {
         (Timing::Setpoints, CheckTiming::Planned)
     };
+    let (max_samples, least_s) = work::check_up_front_timed(scenario, 0.0)?;
     let run_options = RunOptions {
         timing,
         force_tcp: scenario.simulate.tcp,
         start_time_s: 0.0,
         program_path: scenario.path.clone(),
-        max_samples: work::check_up_front(scenario, 0.0)?,
+        max_samples,
     };
     let mut monitors = Monitors { limits, scene };
-    let stats = pipeline::run(moves, machine, &run_options, &mut [&mut monitors], &|_| {})?;
+    let progress = |t: f64| progress(t, least_s);
+    let stats = pipeline::run(
+        moves,
+        machine,
+        &run_options,
+        &mut [&mut monitors],
+        &progress,
+    )?;
     let (samples, last_time) = (stats.samples, stats.end_time_s);
     let feed_reductions = stats.feed_reductions;
     let Monitors { limits, scene } = monitors;

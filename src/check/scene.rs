@@ -23,6 +23,7 @@
 pub mod frustum;
 pub mod linked;
 pub mod monitor;
+mod plane;
 pub mod shapes;
 
 use nalgebra::{Isometry3, Point3, Vector3};

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use super::print_stdout;
 use crate::check::limits::ViolationKind;
-use crate::check::{check, CheckOptions, CheckReport, CheckTiming};
+use crate::check::{check_observed, CheckOptions, CheckReport, CheckTiming, SceneQueries};
 use crate::error::{Error, Result, EXIT_VIOLATIONS};
 
 pub fn run(path: &Path, as_json: bool, options: CheckOptions, html: Option<&Path>) -> Result<i32> {
@@ -19,9 +19,15 @@ pub fn run(path: &Path, as_json: bool, options: CheckOptions, html: Option<&Path
     for n in crate::program::scenario_warnings(&scenario)? {
         super::warn(&format!("{}:{}: {}", n.path.display(), n.line, n.message));
     }
-    let bar = super::spinner("checking");
+    // Machine seconds checked against the run's least machine time (the planner's ramps
+    // may take it past that, and the bar's length follows).
+    let bar = super::progress_bar(0, "checking, s of machine time");
+    let progress = |t_s: f64, least_s: f64| {
+        bar.set_length(least_s.max(t_s).ceil() as u64);
+        bar.set_position(t_s as u64);
+    };
     let started = std::time::Instant::now();
-    let report = check(&scenario, &options)?;
+    let report = check_observed(&scenario, &options, SceneQueries::Bounded, &progress)?;
     bar.finish_and_clear();
     for f in &report.feed_reductions {
         super::warn(&format!("feed held: {}", f.describe()));

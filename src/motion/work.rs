@@ -144,9 +144,19 @@ fn traced(n: usize) -> String {
 /// The sample budget of a run of `scenario`, after checking its estimate: the closed form of a
 /// generated test, the read-ahead of a file ([`read_ahead`]).
 pub fn check_up_front(scenario: &Scenario, lead_deg: f64) -> Result<u64> {
+    check_up_front_timed(scenario, lead_deg).map(|(budget, _)| budget)
+}
+
+/// [`check_up_front`], with the run's least machine time (s): the closed form of a generated
+/// test ([`budget::SampleEstimate`]), the read-ahead's sum for a file. For a progress bar.
+pub fn check_up_front_timed(scenario: &Scenario, lead_deg: f64) -> Result<(u64, f64)> {
     let revolution = test_of(scenario).revolution();
-    if revolution.is_none() {
-        read_ahead(scenario)?;
-    }
-    budget::check_up_front(scenario, revolution, lead_deg)
+    let least_s = match revolution {
+        None => read_ahead(scenario)?.machine_time_s,
+        Some(r) => budget::SampleEstimate::of(scenario, &r, lead_deg).machine_time_s,
+    };
+    Ok((
+        budget::check_up_front(scenario, revolution, lead_deg)?,
+        least_s,
+    ))
 }

@@ -141,3 +141,66 @@ fn a_parameter_file_or_ini_that_is_not_one_is_named_without_its_text() {
         assert!(!stderr.contains("secretsecret"), "{key}: {stderr}");
     }
 }
+
+/// The Heidenhain and Sinumerik front ends' expressions (issue 42 item 3): a formula of
+/// 20,000 nested brackets, functions or signs is refused with exit 2 at its line, naming
+/// the nesting, never a stack overflow (exit 134). The ISO family's are above.
+#[test]
+fn twenty_thousand_nested_heidenhain_and_sinumerik_expressions_exit_2_at_their_line() {
+    let n = 20_000;
+    let heidenhain = |expr: String| {
+        format!(
+            "0 BEGIN PGM DEEP MM\n1 Q1 = {expr}\n2 L X+0 Y+0 Z+0 R0 FMAX\n3 L X+Q1 F100\n4 END PGM DEEP MM\n"
+        )
+    };
+    let sinumerik =
+        |expr: String| format!("N10 G0 X0 Y0 Z0\nN20 R1={expr}\nN30 G1 X=R1 F100\nM30\n");
+    let cases = [
+        (
+            "hh-brackets",
+            "heidenhain",
+            heidenhain(format!("{}1{}", "(".repeat(n), ")".repeat(n))),
+        ),
+        (
+            "hh-sqrt",
+            "heidenhain",
+            heidenhain(format!("{}1{}", "SQRT (".repeat(n), ")".repeat(n))),
+        ),
+        (
+            "hh-signs",
+            "heidenhain",
+            heidenhain(format!("{}1", "-".repeat(n))),
+        ),
+        (
+            "sie-brackets",
+            "siemens",
+            sinumerik(format!("{}1{}", "(".repeat(n), ")".repeat(n))),
+        ),
+        (
+            "sie-sin",
+            "siemens",
+            sinumerik(format!("{}1{}", "SIN(".repeat(n), ")".repeat(n))),
+        ),
+        (
+            "sie-signs",
+            "siemens",
+            sinumerik(format!("{}1", "-".repeat(n))),
+        ),
+    ];
+    for (name, dialect, program) in cases {
+        let dir = scratch("bounded", name);
+        std::fs::write(dir.join("p.txt"), program).unwrap();
+        let path = dir.join("s.toml");
+        std::fs::write(
+            &path,
+            format!(
+                "machine = {:?}\n[program]\nfile = \"p.txt\"\n[reader]\ndialect = \"{dialect}\"\n",
+                machine("vmc-3axis")
+            ),
+        )
+        .unwrap();
+        let (out, stderr) = check(&path);
+        assert_refused(&out, &stderr, "p.txt:2:");
+        assert!(stderr.contains("nested"), "{name}: {stderr}");
+    }
+}

@@ -9,9 +9,17 @@
 //! pair can neither touch nor come nearer than the threshold, at a sample or between
 //! samples. When a query is due and the bound over the last interval exceeds the sum of the
 //! clearances at its ends, contact may have happened inside it: the interval is advanced
-//! conservatively (step `s += d / bound`) to find it. A pair within the threshold is
-//! measured at every sample. The cutter/workpiece pair is re-measured once the bound
-//! reaches `max(d, engagement resolution)`, so its reported depth is within that
+//! conservatively (step `s += d / bound`) to find it. A pair within the threshold (in a
+//! collision or near miss) is measured again once the bound could end its event or bring a
+//! new worst value: after a measured `d`, at `min(-d, W + d)` for a collision whose deepest
+//! penetration is `W`, at `min(T - d, d, d - w)` for a near miss whose smallest clearance is
+//! `w` (threshold `T`). Past the worst-value margin, the separating direction of the last
+//! query bounds the signed distance from below at a support point's cost
+//! ([`super::plane`]): a part held in a collision while the program runs on is measured
+//! again only when its event could end. The samples in between are in the event, so its
+//! span and worst value are those of measuring every sample (the worst to 1e-9 mm and the
+//! query's own accuracy). The cutter/workpiece pair is re-measured once the bound reaches
+//! `max(d, engagement resolution)`, so its reported depth is within that
 //! resolution of the true maximum.
 //!
 //! A pair of a tool part and a part on the table (or cradle) has a second, tighter bound:
@@ -40,6 +48,7 @@
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
+use super::plane::PlaneBound;
 use super::{BodyPoses, Carrier, PairKind, Scene, Warm};
 use crate::input::machine::Machine;
 use crate::{Axis, AxisVec};
@@ -139,8 +148,13 @@ struct PairState {
     /// For a tool part against a table (0) or cradle (1) part: that frame and the tool
     /// part's reach P from the tip, mm (the relative-motion bound).
     relative: Option<(usize, f64)>,
-    /// Motion bound allowed before the next query, mm.
+    /// Motion bound allowed before the next query (or, in an event, the next look at its
+    /// plane bound), mm.
     slack: f64,
+    /// In an event: the motion bound before which it cannot end, mm.
+    exit_slack: f64,
+    /// In an event: the separating direction of the last query ([`PlaneBound`]).
+    plane: Option<PlaneBound>,
     /// Motion bound accumulated since the last query, mm.
     moved: f64,
     /// The motion sums ([`SceneMonitor`]'s `sum`) up to which `moved` is brought.
@@ -208,6 +222,10 @@ struct Visit {
     allowance: f64,
 }
 
+/// How far below an event's worst value (mm) the plane bound may reach at a sample that is
+/// not measured: the bound is exact but computed in floating point, and a part held at one
+/// depth (moving parallel to a face) sits on it to the last bits.
+const PLANE_TOLERANCE_MM: f64 = 1e-9;
 /// Sub-steps of conservative advancement inside one sample interval, at most.
 const MAX_ADVANCE_STEPS: usize = 64;
 /// Clearance below which advancement inside an interval declares contact, mm.
@@ -255,6 +273,8 @@ impl SceneMonitor {
                         })
                 },
                 slack: 0.0,
+                exit_slack: 0.0,
+                plane: None,
                 moved: 0.0,
                 synced: [0.0; 3],
                 last_mm: f64::INFINITY,
@@ -363,6 +383,8 @@ impl SceneMonitor {
         }
         for (i, state) in self.states.iter_mut().enumerate() {
             state.slack = 0.0;
+            state.exit_slack = 0.0;
+            state.plane = None;
             state.moved = 0.0;
             state.synced = self.sum;
             state.last_mm = 0.0;
@@ -565,7 +587,9 @@ impl SceneMonitor {
             }
         }
         let state = &mut self.states[i];
-        if state.moved >= state.slack || self.exhaustive {
+        let due = state.moved >= state.slack && !self.certified(i, poses);
+        let state = &mut self.states[i];
+        if due || self.exhaustive {
             let pair = self.scene.pairs[i];
             let d = measure(&self.scene, i, poses, &mut state.warm);
             self.queries += 1;
@@ -579,6 +603,12 @@ impl SceneMonitor {
                 }
             }
             self.classify(i, now, d);
+            let state = &self.states[i];
+            let plane = match (&state.open, self.exhaustive) {
+                (Some(_), false) => self.scene.plane_bound(i, state.warm.gjk),
+                _ => None,
+            };
+            self.states[i].plane = plane;
         }
         // σ does not wait for a hot pair (its own bound is checked at every sample). Less a
         // rounding allowance on the sums.
@@ -587,6 +617,32 @@ impl SceneMonitor {
             true => f64::INFINITY,
             false => v.sigma + (state.slack - state.moved) - v.allowance,
         };
+    }
+
+    /// Whether pair `i`, due by its lever-arm bound, is shown by its plane bound to stay in
+    /// its event with no new worst value at this sample: its bound is short of the event's
+    /// end (`exit_slack`) and the plane bound keeps the signed distance at or above the
+    /// event's worst (less [`PLANE_TOLERANCE_MM`]). The next look is due once the lever-arm
+    /// bound could take up the plane bound's margin.
+    fn certified(&mut self, i: usize, poses: &mut BodyPoses) -> bool {
+        let state = &self.states[i];
+        let (Some(open), Some(plane)) = (&state.open, &state.plane) else {
+            return false;
+        };
+        if state.moved >= state.exit_slack {
+            return false;
+        }
+        let floor = match open.kind {
+            EventKind::Collision => -open.worst_mm,
+            EventKind::NearMiss => open.worst_mm,
+        };
+        let lower = self.scene.plane_lower(i, poses, plane);
+        if lower < floor - PLANE_TOLERANCE_MM {
+            return false;
+        }
+        let state = &mut self.states[i];
+        state.slack = state.exit_slack.min(state.moved + (lower - floor).max(0.0));
+        true
     }
 
     /// Whether a hot pair may be due at this sample: its own bound since its last visit,
@@ -691,10 +747,17 @@ impl SceneMonitor {
         });
     }
 
-    /// Ends pair `i`'s open event, if any, resolving its last θ.
+    /// Ends pair `i`'s open event, if any, resolving its last θ. The samples the pair was
+    /// not measured at since its last query were in the event (its slack says so, see
+    /// [`SceneMonitor::classify`]), so the event lasts up to the sample before the one that
+    /// closes it (at the end of the run: the last sample).
     fn close_open(&mut self, i: usize) {
         if let Some(mut event) = self.states[i].open.take() {
-            let (theta, q) = self.states[i].open_end;
+            let (mut theta, mut q) = self.states[i].open_end;
+            if let Some(prev) = self.prev.filter(|p| p.time_s > event.time_end_s) {
+                event.time_end_s = prev.time_s;
+                (theta, q) = (prev.theta, prev.q);
+            }
             event.theta_end_deg = self.theta(theta, &q);
             self.events.push(event);
         }
@@ -760,6 +823,20 @@ impl SceneMonitor {
                     worst_mm: worst(k),
                 });
             }
+        }
+        // Inside an event the pair need not be measured again until its bound `m` could
+        // change the event: a collision (`d <= 0`, deepest `W`) stays one while `m < -d`, with
+        // no new deepest sample while `m < W + d`; a near miss (`0 < d < T`, smallest `w`)
+        // stays one while `m < min(T - d, d)`, with no new smallest clearance while
+        // `m < d - w`. Past the second, the plane bound may still show it ([`Self::certified`]).
+        let state = &mut self.states[i];
+        if let Some(open) = &state.open {
+            let (exit, worst) = match open.kind {
+                EventKind::Collision => (-d, open.worst_mm + d),
+                EventKind::NearMiss => ((threshold - d).min(d), d - open.worst_mm),
+            };
+            state.exit_slack = exit;
+            state.slack = exit.min(worst);
         }
     }
 }

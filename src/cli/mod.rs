@@ -17,6 +17,7 @@ mod blocks;
 mod chain_events;
 mod check;
 mod cone;
+mod cut;
 mod fit;
 mod man;
 mod merge;
@@ -212,6 +213,11 @@ pub enum Command {
         #[arg(long)]
         no_budget: bool,
     },
+    /// Predict the machined cone as a CMM will measure it: the cutter moved by the actual
+    /// motion (servo, lost motion, geometric errors) or, with --commanded, the program alone.
+    /// Writes surface.csv, surface.parquet (theta_deg, z_mm, deviation_um; empty where not
+    /// cut) and cut.json (roundness, centre and diameter per height, cone angle, reversal marks).
+    Cut(cut::CutArgs),
     /// Print a shell completion script: `mtsim completions bash > /etc/bash_completion.d/mtsim`.
     Completions {
         /// The shell: bash, elvish, fish, powershell or zsh.
@@ -353,6 +359,7 @@ fn run(cli: Cli) -> Result<i32> {
             html,
             trace_format,
         ),
+        Command::Cut(args) => cut::run(&args),
         Command::Report { run_dirs, date } => report::run(&run_dirs, date.as_deref()),
         Command::Cone {
             scenario,

@@ -53,7 +53,7 @@ pub trait Measurement: Sink {
 pub type Build = fn(&Scenario, &dyn TestProgram) -> Option<Box<dyn Measurement>>;
 
 /// Every measurement `simulate` takes beside the ball bar, by name: one line each.
-pub const REGISTRY: &[(&str, Build)] = &[];
+pub const REGISTRY: &[(&str, Build)] = &[("cut", crate::measure::cut::build)];
 
 /// The registered measurements that apply to `scenario`'s test, in the registry's order.
 pub fn for_scenario(scenario: &Scenario, test: &dyn TestProgram) -> Vec<Box<dyn Measurement>> {

@@ -1,0 +1,65 @@
+//! The cut cone's files: `surface.csv`, `surface.parquet` (θ, z, deviation; empty where not
+//! cut) and `cut.json` (what a CMM reports), each written completely or not at all.
+
+use std::path::Path;
+
+use super::parquet::{Column, Table};
+use super::write_atomic;
+use crate::error::Result;
+use crate::measure::cut::{CutFigures, CutSurface};
+
+pub const SURFACE_CSV: &str = "surface.csv";
+pub const SURFACE_PARQUET: &str = "surface.parquet";
+pub const CUT_JSON: &str = "cut.json";
+
+/// The grid's points in file order: by height, then θ. `(θ deg, z mm, d um or None)`.
+fn points(surface: &CutSurface) -> impl Iterator<Item = (f64, f64, Option<f64>)> + '_ {
+    let envelope = &surface.envelope;
+    envelope.rows.iter().enumerate().flat_map(move |(i, row)| {
+        (0..envelope.column_count()).map(move |j| {
+            let d = envelope.depth_um(j, i);
+            (
+                j as f64 * envelope.step_deg,
+                row.z_mm,
+                d.is_finite().then_some(d),
+            )
+        })
+    })
+}
+
+/// `surface.csv`: fixed decimals (θ 4, z 4, d 4), an empty deviation where not cut.
+pub fn surface_csv(surface: &CutSurface) -> String {
+    let mut out = String::from("theta_deg,z_mm,deviation_um\n");
+    for (theta, z, d) in points(surface) {
+        match d {
+            Some(d) => out.push_str(&format!("{theta:.4},{z:.4},{d:.4}\n")),
+            None => out.push_str(&format!("{theta:.4},{z:.4},\n")),
+        }
+    }
+    out
+}
+
+/// `surface.parquet`: the same columns as f64, null where not cut.
+pub fn surface_table(surface: &CutSurface) -> Table {
+    let (mut theta, mut z, mut d) = (Vec::new(), Vec::new(), Vec::new());
+    for (t, zz, dd) in points(surface) {
+        theta.push(Some(t));
+        z.push(Some(zz));
+        d.push(dd);
+    }
+    Table::new()
+        .with("theta_deg", Column::F64(theta))
+        .with("z_mm", Column::F64(z))
+        .with("deviation_um", Column::F64(d))
+}
+
+/// Writes the three files into `dir`.
+pub fn write_cut_files(dir: &Path, surface: &CutSurface, figures: &CutFigures) -> Result<()> {
+    write_atomic(&dir.join(SURFACE_CSV), surface_csv(surface).as_bytes())?;
+    write_atomic(
+        &dir.join(SURFACE_PARQUET),
+        &surface_table(surface).to_parquet()?,
+    )?;
+    let json = serde_json::to_string_pretty(figures).expect("plain data serializes");
+    write_atomic(&dir.join(CUT_JSON), format!("{json}\n").as_bytes())
+}

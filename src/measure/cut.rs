@@ -19,9 +19,7 @@ use crate::input::program::{ConeTest, Direction, MeasuredLines};
 use crate::input::scenario::Scenario;
 use crate::kinematics::{Kinematics, LocationErrors, ToolPose};
 use crate::measure::is_measured;
-use crate::measure::measurement::Measurement;
 use crate::pipeline::{Sample, Sink};
-use crate::program::TestProgram;
 use crate::{Axis, AxisVec};
 
 use envelope::Envelope;
@@ -89,7 +87,8 @@ pub struct CutFigures {
     pub samples: u64,
 }
 
-/// The cut surface of a cone test: a [`Measurement`].
+/// The cut surface of a cone test: a `Measurement` (its trait methods beside the registry,
+/// `measure/measurement.rs`).
 #[derive(Clone, Debug)]
 pub struct CutSurface {
     pub geometry: CutGeometry,
@@ -287,6 +286,29 @@ pub fn actual_tool(kin: &Kinematics, q: &AxisVec) -> ToolPose {
     }
 }
 
+impl CutSurface {
+    /// A run in `direction` starts (`measured`: its measured lines). One piece is cut, by
+    /// one run: the chosen direction's, or the first run's.
+    pub fn start_run(&mut self, direction: Direction, measured: Option<MeasuredLines>) {
+        self.cutting = match self.options.direction {
+            Some(d) => d == direction,
+            None => self.cut_direction.is_none(),
+        } && self.cut_direction.is_none();
+        if self.cutting {
+            self.cut_direction = Some(direction);
+        }
+        self.measured = measured;
+    }
+
+    /// The run that started last has ended: the columns it reaches are computed.
+    pub fn end_run(&mut self) {
+        if self.cutting {
+            self.envelope.end_run(&self.geometry);
+            self.cutting = false;
+        }
+    }
+}
+
 impl Sink for CutSurface {
     #[inline]
     fn push(&mut self, s: &Sample) -> Result<()> {
@@ -299,48 +321,4 @@ impl Sink for CutSurface {
         self.samples += 1;
         Ok(())
     }
-}
-
-impl Measurement for CutSurface {
-    fn name(&self) -> &'static str {
-        "cut"
-    }
-
-    /// One piece is cut, by one run: the chosen direction's, or the first run's.
-    fn start_run(&mut self, direction: Direction, measured: Option<MeasuredLines>) {
-        self.cutting = match self.options.direction {
-            Some(d) => d == direction,
-            None => self.cut_direction.is_none(),
-        } && self.cut_direction.is_none();
-        if self.cutting {
-            self.cut_direction = Some(direction);
-        }
-        self.measured = measured;
-    }
-
-    fn end_run(&mut self) -> Result<()> {
-        if self.cutting {
-            self.envelope.end_run(&self.geometry);
-            self.cutting = false;
-        }
-        Ok(())
-    }
-
-    fn finish(&self) -> Result<serde_json::Value> {
-        serde_json::to_value(self.figures()).map_err(|e| Error::usage(e.to_string()))
-    }
-}
-
-/// The cut of a scenario's test at the default grid, where the test has a cone and the
-/// scenario asks for the cut (`scenario.simulate.cut`). Its marks need each axis's
-/// reversal angles, which the study layer finds (`study::cut` sets them with
-/// [`CutSurface::set_reversals`]); built here, it reports none.
-pub fn build(scenario: &Scenario, test: &dyn TestProgram) -> Option<Box<dyn Measurement>> {
-    if !scenario.simulate.cut {
-        return None;
-    }
-    let cone = test.cone()?;
-    CutSurface::new(scenario, cone, CutOptions::default(), Vec::new())
-        .ok()
-        .map(|c| Box::new(c) as Box<dyn Measurement>)
 }

@@ -9,7 +9,6 @@ use crate::error::{Error, Result};
 use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
 use crate::measure::cut::{CutOptions, CutSurface};
-use crate::measure::measurement::Measurement;
 use crate::measure::settle::SettleGate;
 use crate::pipeline::{self, Sink, Timing};
 use crate::program::{self, test_of};
@@ -90,7 +89,7 @@ pub fn run_cut(scenario: &Scenario, options: CutOptions, progress: &dyn Fn(f64))
             progress,
         )?,
     };
-    surface.end_run()?;
+    surface.end_run();
     warnings.extend(
         stats
             .feed_reductions

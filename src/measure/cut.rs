@@ -164,6 +164,11 @@ impl CutSurface {
         self.reversals = reversals;
     }
 
+    /// Each axis's reversal angles, deg.
+    pub fn reversals(&self) -> &[(Axis, Vec<f64>)] {
+        &self.reversals
+    }
+
     /// The options it cuts with.
     pub fn options(&self) -> &CutOptions {
         &self.options

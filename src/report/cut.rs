@@ -53,7 +53,7 @@ pub fn surface_table(surface: &CutSurface) -> Table {
         .with("deviation_um", Column::F64(d))
 }
 
-/// Writes the three files into `dir`.
+/// Writes the surface, `cut.json` and the two pictures (`report::cut_plots`) into `dir`.
 pub fn write_cut_files(dir: &Path, surface: &CutSurface, figures: &CutFigures) -> Result<()> {
     write_atomic(&dir.join(SURFACE_CSV), surface_csv(surface).as_bytes())?;
     write_atomic(
@@ -61,5 +61,9 @@ pub fn write_cut_files(dir: &Path, surface: &CutSurface, figures: &CutFigures) -
         &surface_table(surface).to_parquet()?,
     )?;
     let json = serde_json::to_string_pretty(figures).expect("plain data serializes");
-    write_atomic(&dir.join(CUT_JSON), format!("{json}\n").as_bytes())
+    write_atomic(&dir.join(CUT_JSON), format!("{json}\n").as_bytes())?;
+    let map = super::cut_plots::surface_svg(surface, surface.reversals())?;
+    write_atomic(&dir.join(super::cut_plots::SURFACE_SVG), map.as_bytes())?;
+    let polar = super::cut_plots::roundness_svg(surface, figures)?;
+    write_atomic(&dir.join(super::cut_plots::ROUNDNESS_SVG), polar.as_bytes())
 }

@@ -7,6 +7,7 @@ mod common;
 
 mod bad_inputs;
 mod bounds;
+mod cut;
 mod dask_example;
 mod docs_commands;
 mod hostile;

@@ -7,6 +7,7 @@ use super::parquet::{Column, Table};
 use super::write_atomic;
 use crate::error::Result;
 use crate::measure::cut::{CutFigures, CutSurface};
+use crate::numeric::fixed::push_fixed;
 
 pub const SURFACE_CSV: &str = "surface.csv";
 pub const SURFACE_PARQUET: &str = "surface.parquet";
@@ -27,13 +28,33 @@ fn points(surface: &CutSurface) -> impl Iterator<Item = (f64, f64, Option<f64>)>
     })
 }
 
-/// `surface.csv`: fixed decimals (θ 4, z 4, d 4), an empty deviation where not cut.
+/// `surface.csv`: fixed decimals (θ 4, z 4, d 4), an empty deviation where not cut. Each
+/// column's θ and each row's z are written once and copied ([`push_fixed`]: the grid has
+/// tens of thousands of points).
 pub fn surface_csv(surface: &CutSurface) -> String {
-    let mut out = String::from("theta_deg,z_mm,deviation_um\n");
-    for (theta, z, d) in points(surface) {
-        match d {
-            Some(d) => out.push_str(&format!("{theta:.4},{z:.4},{d:.4}\n")),
-            None => out.push_str(&format!("{theta:.4},{z:.4},\n")),
+    let envelope = &surface.envelope;
+    let fixed = |v: f64| {
+        let mut text = String::new();
+        push_fixed(&mut text, v, 4);
+        text
+    };
+    let thetas: Vec<String> = (0..envelope.column_count())
+        .map(|j| fixed(j as f64 * envelope.step_deg))
+        .collect();
+    let mut out = String::with_capacity(32 * envelope.values.len() + 32);
+    out.push_str("theta_deg,z_mm,deviation_um\n");
+    for (i, row) in envelope.rows.iter().enumerate() {
+        let z = fixed(row.z_mm);
+        for (j, theta) in thetas.iter().enumerate() {
+            out.push_str(theta);
+            out.push(',');
+            out.push_str(&z);
+            out.push(',');
+            let d = envelope.depth_um(j, i);
+            if d.is_finite() {
+                push_fixed(&mut out, d, 4);
+            }
+            out.push('\n');
         }
     }
     out

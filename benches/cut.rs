@@ -60,7 +60,8 @@ fn main() {
         let run = mtsim::study::cut::run_cut(&scenario, CutOptions::default(), &|_| {}).unwrap();
         let out = dir.join("cut");
         std::fs::create_dir_all(&out).unwrap();
-        mtsim::report::cut::write_cut_files(&out, &run.surface, &run.surface.figures()).unwrap();
+        mtsim::report::cut::write_cut_files(&out, "cut", &run.surface, &run.surface.figures())
+            .unwrap();
         let t2 = cpu_now();
         simulate.push(t1 - t0);
         cut.push(t2 - t1);

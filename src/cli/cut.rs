@@ -24,7 +24,8 @@ Examples:
 pub struct CutArgs {
     /// Scenario file (TOML) with a cone: [program.cone], or [program] file beside one.
     pub scenario: PathBuf,
-    /// Output folder: surface.csv, surface.parquet and cut.json (written as one unit).
+    /// Output folder: surface.csv, surface.parquet, cut.json, surface.svg, roundness.svg and
+    /// cut.html (written as one unit).
     #[arg(short, long, default_value = "cut")]
     pub output: PathBuf,
     /// Cut with the commanded positions through the nominal kinematics: what the program
@@ -76,7 +77,13 @@ pub fn run(args: &CutArgs) -> Result<i32> {
         warn(w);
     }
     let figures = cut.surface.figures();
-    write_cut_files(run_dir.path(), &cut.surface, &figures)?;
+    let name = args
+        .scenario
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let title = format!("Cut cone: {name}");
+    write_cut_files(run_dir.path(), &title, &cut.surface, &figures)?;
     run_dir.commit()?;
     if args.json {
         let json = serde_json::to_string_pretty(&figures).expect("plain data serializes");

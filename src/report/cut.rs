@@ -74,8 +74,14 @@ pub fn surface_table(surface: &CutSurface) -> Table {
         .with("deviation_um", Column::F64(d))
 }
 
-/// Writes the surface, `cut.json` and the two pictures (`report::cut_plots`) into `dir`.
-pub fn write_cut_files(dir: &Path, surface: &CutSurface, figures: &CutFigures) -> Result<()> {
+/// Writes the surface, `cut.json`, the two pictures (`report::cut_plots`) and `cut.html`
+/// (`report::cut_html`, titled `title`) into `dir`.
+pub fn write_cut_files(
+    dir: &Path,
+    title: &str,
+    surface: &CutSurface,
+    figures: &CutFigures,
+) -> Result<()> {
     write_atomic(&dir.join(SURFACE_CSV), surface_csv(surface).as_bytes())?;
     write_atomic(
         &dir.join(SURFACE_PARQUET),
@@ -86,5 +92,7 @@ pub fn write_cut_files(dir: &Path, surface: &CutSurface, figures: &CutFigures) -
     let map = super::cut_plots::surface_svg(surface, surface.reversals())?;
     write_atomic(&dir.join(super::cut_plots::SURFACE_SVG), map.as_bytes())?;
     let polar = super::cut_plots::roundness_svg(surface, figures)?;
-    write_atomic(&dir.join(super::cut_plots::ROUNDNESS_SVG), polar.as_bytes())
+    write_atomic(&dir.join(super::cut_plots::ROUNDNESS_SVG), polar.as_bytes())?;
+    let page = super::cut_html::cut_html(title, surface, figures, &map, &polar);
+    write_atomic(&dir.join(super::cut_html::CUT_HTML), page.as_bytes())
 }

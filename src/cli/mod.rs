@@ -212,6 +212,11 @@ pub enum Command {
         /// B per axis from them): faster, and summary.json has no `error_budget`.
         #[arg(long)]
         no_budget: bool,
+        /// Also predict the cut cone (`mtsim cut` at its default grid, the first run's
+        /// piece): its figures go into summary.json under `measurements.cut` (without
+        /// reversal marks; `mtsim cut` gives them and the surface files).
+        #[arg(long)]
+        cut: bool,
     },
     /// Predict the machined cone as a CMM will measure it: the cutter moved by the actual
     /// motion (servo, lost motion, geometric errors) or, with --commanded, the program alone.
@@ -351,13 +356,14 @@ fn run(cli: Cli) -> Result<i32> {
             html,
             trace_format,
             no_budget,
+            cut,
         } => simulate::run(
             &scenario,
             &output,
             json,
             (!no_timing, !no_budget),
             html,
-            trace_format,
+            (trace_format, cut),
         ),
         Command::Cut(args) => cut::run(&args),
         Command::Report { run_dirs, date } => report::run(&run_dirs, date.as_deref()),

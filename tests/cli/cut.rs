@@ -88,3 +88,36 @@ fn cut_refuses_a_scenario_without_a_cone_and_heights_off_the_flank() {
     assert_eq!(run.status.code(), Some(2));
     assert!(!dir.join("cut").exists(), "nothing is written on bad input");
 }
+
+/// `simulate --cut` cuts the same piece as `cut` (the same run, the same samples): its
+/// figures in summary.json are `cut`'s, to the bit (the marks aside: `cut` reads them).
+#[test]
+fn simulate_with_cut_reports_the_figures_cut_reports() {
+    let dir = common::scratch("cut-cli", "simulate");
+    let sim = dir.join("sim").display().to_string();
+    let cut = dir.join("cut").display().to_string();
+    let s = common::stdout_json(&common::mtsim(&[
+        "simulate",
+        "scenarios/cone-15-10.toml",
+        "-o",
+        &sim,
+        "--cut",
+        "--no-budget",
+        "--json",
+    ]));
+    let c = common::stdout_json(&common::mtsim(&[
+        "cut",
+        "scenarios/cone-15-10.toml",
+        "-o",
+        &cut,
+        "--json",
+    ]));
+    let from_simulate = &s["measurements"]["cut"];
+    assert_eq!(from_simulate["heights"], c["heights"]);
+    assert_eq!(from_simulate["samples"], c["samples"]);
+    assert_eq!(
+        from_simulate["cone_angle_error_urad"],
+        c["cone_angle_error_urad"]
+    );
+    assert_eq!(from_simulate["marks"], serde_json::json!([]));
+}

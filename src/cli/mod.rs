@@ -17,6 +17,7 @@ mod blocks;
 mod chain_events;
 mod check;
 mod cone;
+mod cut;
 mod fit;
 mod man;
 mod merge;
@@ -211,7 +212,17 @@ pub enum Command {
         /// B per axis from them): faster, and summary.json has no `error_budget`.
         #[arg(long)]
         no_budget: bool,
+        /// Also predict the cut cone (`mtsim cut` at its default grid, the first run's
+        /// piece): its figures go into summary.json under `measurements.cut` (without
+        /// reversal marks; `mtsim cut` gives them and the surface files).
+        #[arg(long)]
+        cut: bool,
     },
+    /// Predict the machined cone as a CMM will measure it: the cutter moved by the actual
+    /// motion (servo, lost motion, geometric errors) or, with --commanded, the program alone.
+    /// Writes surface.csv, surface.parquet (theta_deg, z_mm, deviation_um; empty where not
+    /// cut) and cut.json (roundness, centre and diameter per height, cone angle, reversal marks).
+    Cut(cut::CutArgs),
     /// Print a shell completion script: `mtsim completions bash > /etc/bash_completion.d/mtsim`.
     Completions {
         /// The shell: bash, elvish, fish, powershell or zsh.
@@ -345,14 +356,16 @@ fn run(cli: Cli) -> Result<i32> {
             html,
             trace_format,
             no_budget,
+            cut,
         } => simulate::run(
             &scenario,
             &output,
             json,
             (!no_timing, !no_budget),
             html,
-            trace_format,
+            (trace_format, cut),
         ),
+        Command::Cut(args) => cut::run(&args),
         Command::Report { run_dirs, date } => report::run(&run_dirs, date.as_deref()),
         Command::Cone {
             scenario,

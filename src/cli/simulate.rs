@@ -16,7 +16,7 @@ pub fn run(
     as_json: bool,
     (timing, with_budget): (bool, bool),
     html: bool,
-    trace_format: Option<TraceFormat>,
+    (trace_format, cut): (Option<TraceFormat>, bool),
 ) -> Result<i32> {
     let started = Instant::now();
     let mut stages = Stages::default();
@@ -25,6 +25,7 @@ pub fn run(
     if let Some(format) = trace_format {
         scenario.simulate.trace_format = format;
     }
+    scenario.simulate.cut = cut;
     // Everything goes into a staging folder, put in place of `out_dir` when complete.
     let run_dir = RunDir::begin(out_dir)?.reads(&[path]);
     let target = out_dir;

@@ -11,6 +11,9 @@
 
 pub mod budget_table;
 pub mod circle_figures;
+pub mod cut;
+pub mod cut_html;
+pub mod cut_plots;
 pub mod escape;
 pub mod files;
 pub mod fit_plot;

@@ -6,6 +6,7 @@ pub mod analysis;
 pub mod batch;
 pub mod budget;
 pub mod chain_events;
+pub mod cut;
 pub mod diagnose;
 pub mod feed;
 pub mod fit;

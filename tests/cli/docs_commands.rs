@@ -50,6 +50,20 @@ const SHOWN: &[(&str, Shown)] = &[
         ]),
     ),
     ("mtsim cone SCENARIO [-o FILE] [--g93] [--tcp]", Run(&[(&["cone", SC], 0)])),
+    ("mtsim cut SCENARIO -o DIR", Names),
+    (
+        "mtsim cut SCENARIO [-o DIR] [--commanded] [--theta-step-deg D] [--heights-mm Z,..] [--json]",
+        Run(&[(&["cut", SC, "-o", "cut-h", "--heights-mm", "30,40,50", "--json"], 0)]),
+    ),
+    ("mtsim cut scenarios/cone-15-10.toml -o cut", Run(&[(&["cut", SC, "-o", "cut"], 0)])),
+    (
+        "mtsim cut scenarios/cone-15-10.toml -o cut0 --commanded",
+        Run(&[(&["cut", SC, "-o", "cut0", "--commanded"], 0)]),
+    ),
+    (
+        "mtsim cut scenarios/file-cone-15-10-yt25.toml -o cutf",
+        Run(&[(&["cut", FILE_SC, "-o", "cutf"], 0)]),
+    ),
     (
         "mtsim analyze SCENARIO [--json]",
         Run(&[(&["analyze", SC], 0), (&["analyze", FILE_SC, "--json"], 0)]),

@@ -8,6 +8,7 @@ mod common;
 mod bad_inputs;
 mod bounds;
 mod campaign;
+mod cut;
 mod dask_example;
 mod docs_commands;
 mod hostile;

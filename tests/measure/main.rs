@@ -6,5 +6,6 @@ mod common;
 
 mod attribution;
 mod ballbar;
+mod cut;
 mod measurement;
 mod shared;

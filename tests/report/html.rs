@@ -340,7 +340,7 @@ var p=document.createElement('pre');p.id='mtsim-sizes';p.textContent=out.join('\
 
 /// The browser, or None after saying that `test` is skipped; with the env var `CI` set a
 /// missing browser fails the test instead.
-fn chromium_or_skip(test: &str) -> Option<PathBuf> {
+pub(crate) fn chromium_or_skip(test: &str) -> Option<PathBuf> {
     let browser = chromium();
     if browser.is_none() {
         if std::env::var_os("CI").is_some() {
@@ -352,7 +352,7 @@ fn chromium_or_skip(test: &str) -> Option<PathBuf> {
 }
 
 /// Renders `page` headless: (DOM after load, screenshot PNG bytes).
-fn render(browser: &Path, page: &Path, work: &Path) -> (String, Vec<u8>) {
+pub(crate) fn render(browser: &Path, page: &Path, work: &Path) -> (String, Vec<u8>) {
     let shot = work.join("shot.png");
     let mut child = Command::new(browser)
         .args([

@@ -4,5 +4,6 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod cut_html;
 mod html;
 mod trace_parquet;

@@ -74,6 +74,10 @@ impl TestProgram for File<'_> {
         self.cone.map(cone::bar)
     }
 
+    fn cone(&self) -> Option<&ConeTest> {
+        self.cone
+    }
+
     fn starts_unsettled(&self) -> bool {
         true
     }

@@ -124,6 +124,12 @@ pub trait TestProgram {
         None
     }
 
+    /// The cone-frustum geometry the test is measured on: the generated cone's, or the one a
+    /// file program's scenario gives beside it (the cut surface, `measure::cut`).
+    fn cone(&self) -> Option<&ConeTest> {
+        self.generated_cone().map(|(cone, _)| cone)
+    }
+
     /// The ISO 230-4 circle, for the circle's own diagnostics.
     fn circle(&self) -> Option<&CircleTest> {
         None

@@ -1,0 +1,261 @@
+//! The machined surface as the lower envelope of every cutter position, streamed onto a fixed
+//! θ × height grid.
+//!
+//! `d(θ_j, z_i) = min over positions k of d_k(θ_j, z_i)` ([`CutGeometry::depths_um`]). Testing
+//! every position on every column would cost positions × columns; a position only reaches
+//! columns near its own generatrix, and there only by its clearance: with `e_k` the least
+//! depth it cuts at its own θ (over the rows) and κ the cutter's clearance per rad²
+//! ([`CutGeometry::clearance_um_per_rad2`]),
+//!
+//! ```text
+//! d_k(θ_j, z_i) ≥ e_k + κ (θ_j − θ_k)²
+//! ```
+//!
+//! So each column is computed once the cutter's contact has moved `reach` columns past it
+//! (all positions that may reach it have come): first from the position nearest to it, then
+//! from every other buffered position whose bound is below the column's deepest row so far.
+//! `reach` is where the clearance passes [`REACH_UM`]. Memory: the grid and the positions
+//! within `reach` of the contact, whatever the program's length. The contact must move
+//! on (as on a test's measured revolution); a position that comes back to columns already
+//! computed is applied to them directly, so nothing is lost either way.
+
+use std::collections::VecDeque;
+
+use super::geometry::{CutGeometry, CutterLine, Row, NOT_CUT};
+
+/// Clearance at which a cutter position stops being tested on other columns, um: a position
+/// deeper than the surface its neighbours leave by more than this, this far away, is not
+/// seen there.
+pub const REACH_UM: f64 = 200.0;
+
+/// Most columns a position is tested on either side of its own.
+const MAX_REACH_COLUMNS: usize = 400;
+
+/// A cutter position waiting for its columns.
+#[derive(Clone, Copy, Debug)]
+struct Buffered {
+    /// θ of the contact, in columns, unwrapped over the run.
+    u: f64,
+    line: CutterLine,
+    /// Least depth it cuts at its own θ, um.
+    e_min_um: f64,
+}
+
+/// The lower envelope on the grid, and the run that feeds it.
+#[derive(Clone, Debug)]
+pub struct Envelope {
+    pub step_deg: f64,
+    pub rows: Vec<Row>,
+    /// `(cos θ_j, sin θ_j)` of each column.
+    columns: Vec<(f64, f64)>,
+    /// Depth per column and row (column-major: `values[j * rows + i]`), um.
+    pub values: Vec<f64>,
+    /// Columns a position is tested on either side of its own, and κ per column², um.
+    reach: i64,
+    clearance_per_column2_um: f64,
+    run: RunState,
+    /// Scratch rows: one position's depths, and a column's envelope.
+    scratch: Vec<f64>,
+    local: Vec<f64>,
+}
+
+#[derive(Clone, Debug, Default)]
+struct RunState {
+    buffer: VecDeque<Buffered>,
+    /// Unwrapped contact of the first and the last position, columns.
+    first_u: Option<f64>,
+    last_u: f64,
+    /// +1 when the contact moves to higher θ, −1 to lower, 0 not yet known.
+    sense: i64,
+    /// The next column to compute (unwrapped), and the farthest contact so far.
+    next_column: i64,
+    front_u: f64,
+}
+
+impl Envelope {
+    pub fn new(geometry: &CutGeometry, step_deg: f64, rows: Vec<Row>) -> Envelope {
+        let count = (360.0 / step_deg).round() as usize;
+        let columns = (0..count)
+            .map(|j| {
+                let (s, c) = (j as f64 * step_deg).to_radians().sin_cos();
+                (c, s)
+            })
+            .collect();
+        let step_rad = step_deg.to_radians();
+        let kappa = geometry.clearance_um_per_rad2(&rows);
+        let per_column2 = kappa * step_rad * step_rad;
+        let reach = if per_column2 > 0.0 {
+            ((REACH_UM / per_column2).sqrt().ceil() as usize).clamp(2, MAX_REACH_COLUMNS)
+        } else {
+            MAX_REACH_COLUMNS
+        };
+        Envelope {
+            step_deg,
+            values: vec![NOT_CUT; count * rows.len()],
+            scratch: vec![0.0; rows.len()],
+            local: vec![0.0; rows.len()],
+            rows,
+            columns,
+            reach: reach as i64,
+            clearance_per_column2_um: per_column2,
+            run: RunState::default(),
+        }
+    }
+
+    pub fn column_count(&self) -> usize {
+        self.columns.len()
+    }
+
+    /// Depth at column `j`, row `i`, um ([`NOT_CUT`] where no position reached it).
+    pub fn depth_um(&self, j: usize, i: usize) -> f64 {
+        self.values[j * self.rows.len() + i]
+    }
+
+    /// Takes one cutter position of the run.
+    pub fn push(&mut self, geometry: &CutGeometry, line: CutterLine) {
+        let contact = line.contact_rad();
+        let (s, c) = contact.sin_cos();
+        geometry.depths_um((c, s), &self.rows, &line, &mut self.scratch);
+        let e_min_um = self.scratch.iter().copied().fold(NOT_CUT, f64::min);
+        if !e_min_um.is_finite() {
+            // It cuts no row at its own θ, so none anywhere (the clearance only adds).
+            return;
+        }
+        let n = self.columns.len() as f64;
+        let raw = contact.to_degrees() / self.step_deg;
+        let run = &mut self.run;
+        let u = match run.first_u {
+            None => {
+                run.first_u = Some(raw);
+                run.front_u = raw;
+                raw
+            }
+            Some(_) => run.last_u + (raw - run.last_u + n / 2.0).rem_euclid(n) - n / 2.0,
+        };
+        run.last_u = u;
+        let buffered = Buffered { u, line, e_min_um };
+        if run.sense == 0 {
+            let first = run.first_u.expect("set above");
+            if (u - first).abs() >= 1.0 {
+                run.sense = if u > first { 1 } else { -1 };
+                run.next_column = first.round() as i64 - run.sense * (self.reach + 1);
+            }
+        } else if (run.sense as f64) * (run.next_column as f64 - u) > -(self.reach as f64 + 1.0) {
+            // Back within reach of columns already computed: apply it to them directly.
+            self.apply_to_done(geometry, &buffered);
+        }
+        let run = &mut self.run;
+        run.buffer.push_back(buffered);
+        if run.sense != 0 && (run.sense as f64) * (u - run.front_u) > 0.0 {
+            run.front_u = u;
+        }
+        while self.run.sense != 0
+            && (self.run.sense as f64) * (self.run.front_u - self.run.next_column as f64)
+                > (self.reach + 1) as f64
+        {
+            self.compute_next(geometry);
+        }
+    }
+
+    /// The run has ended: every column its positions reach is computed.
+    pub fn end_run(&mut self, geometry: &CutGeometry) {
+        let Some(first) = self.run.first_u else {
+            return;
+        };
+        if self.run.sense == 0 {
+            // The contact never left its first column: the columns about it.
+            self.run.sense = 1;
+            self.run.next_column = first.round() as i64 - self.reach - 1;
+        }
+        let sense = self.run.sense;
+        let last = self.run.front_u.round() as i64 + sense * (self.reach + 1);
+        while sense * (last - self.run.next_column) >= 0 {
+            self.compute_next(geometry);
+        }
+        self.run = RunState::default();
+    }
+
+    /// Computes column `next_column` from the buffer and moves on; drops the positions no
+    /// later column needs.
+    fn compute_next(&mut self, geometry: &CutGeometry) {
+        let j = self.run.next_column;
+        self.compute_column(geometry, j);
+        let run = &mut self.run;
+        run.next_column += run.sense;
+        let keep = (self.reach + 1) as f64;
+        while let Some(b) = run.buffer.front() {
+            if (run.sense as f64) * (run.next_column as f64 - b.u) > keep {
+                run.buffer.pop_front();
+            } else {
+                break;
+            }
+        }
+    }
+
+    /// The envelope at unwrapped column `j` of the buffered positions, folded into the grid.
+    fn compute_column(&mut self, geometry: &CutGeometry, j: i64) {
+        let count = self.columns.len() as i64;
+        let column = j.rem_euclid(count) as usize;
+        let theta = self.columns[column];
+        let jf = j as f64;
+        let reach = self.reach as f64;
+        self.local.fill(NOT_CUT);
+        // The nearest position first, so that the bound prunes the others.
+        let nearest = self
+            .run
+            .buffer
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| (b.u - jf).abs() <= reach)
+            .min_by(|(_, a), (_, b)| (a.u - jf).abs().total_cmp(&(b.u - jf).abs()))
+            .map(|(k, _)| k);
+        let Some(nearest) = nearest else {
+            return;
+        };
+        let mut deepest_row = NOT_CUT;
+        for k in
+            std::iter::once(nearest).chain((0..self.run.buffer.len()).filter(|&k| k != nearest))
+        {
+            let b = &self.run.buffer[k];
+            let du = (b.u - jf).abs();
+            if du > reach || b.e_min_um + self.clearance_per_column2_um * du * du >= deepest_row {
+                continue;
+            }
+            geometry.depths_um(theta, &self.rows, &b.line, &mut self.scratch);
+            for (l, &d) in self.local.iter_mut().zip(&self.scratch) {
+                *l = l.min(d);
+            }
+            deepest_row = self.local.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        }
+        let h = self.rows.len();
+        for (v, &l) in self.values[column * h..(column + 1) * h]
+            .iter_mut()
+            .zip(&self.local)
+        {
+            *v = v.min(l);
+        }
+    }
+
+    /// A position that came back within reach of columns already computed, applied to them.
+    fn apply_to_done(&mut self, geometry: &CutGeometry, b: &Buffered) {
+        let sense = self.run.sense;
+        let count = self.columns.len() as i64;
+        let h = self.rows.len();
+        let lo = (b.u - self.reach as f64).ceil() as i64;
+        let hi = (b.u + self.reach as f64).floor() as i64;
+        for j in lo..=hi {
+            // Computed columns lie behind `next_column`.
+            if sense * (self.run.next_column - j) <= 0 {
+                continue;
+            }
+            let column = j.rem_euclid(count) as usize;
+            geometry.depths_um(self.columns[column], &self.rows, &b.line, &mut self.scratch);
+            for (v, &d) in self.values[column * h..(column + 1) * h]
+                .iter_mut()
+                .zip(&self.scratch)
+            {
+                *v = v.min(d);
+            }
+        }
+    }
+}

@@ -1,0 +1,193 @@
+//! The nominal machined cone and the depth a cutter position leaves on it
+//! (`docs/cut.md`, the contract `cutting-test.md`).
+//!
+//! Cone frame: origin the base-circle centre O, +Z the cone axis (the table frame turned by
+//! `Ry(-β)`). The nominal surface is the path cone (the tool-axis lines of the nominal path,
+//! half angle α, apex at `L / sin α`) offset inward by the cutter radius R:
+//!
+//! ```text
+//! ρ(z)    = ((L − R) / sin α − z) tan α               radius of the frustum at height z
+//! S(θ, z) = (ρ cos θ, ρ sin θ, z)                     a surface point
+//! n(θ)    = (cos α cos θ, cos α sin θ, sin α)         its outward unit normal
+//! z_tip   = (L − R) sin α                             where the flank's end meets the frustum
+//! ```
+//!
+//! A cutter position is the line `p + s t` (tip p, unit axis t toward the spindle,
+//! `0 ≤ s ≤ flute length`) with a cylinder of radius R about it. Along the ray `S + d n`,
+//! `|(w + d n) × t| = R` with `w = S − p` is the quadratic
+//!
+//! ```text
+//! A d² + 2 B d + C = 0,   A = 1 − (n·t)²,  B = w·n − (w·t)(n·t),  C = |w|² − (w·t)² − R²
+//! ```
+//!
+//! whose smaller root `d = (−B − √(B² − A C)) / A` is where the ray enters the cylinder: the
+//! depth that position cuts to (positive: material left). It counts only when the entry
+//! lies on the flutes (`0 ≤ (w + d n)·t ≤ flute length`) and the cylinder lies outside the
+//! surface along the ray (the chord's middle `−B / A > 0`; the cutter across the part, whose
+//! roots are two diameters deeper, is not this side's).
+
+use nalgebra::{Point3, Rotation3, Vector3};
+
+use crate::input::program::ConeTest;
+
+/// Depth of a grid point no cutter position reaches.
+pub const NOT_CUT: f64 = f64::INFINITY;
+
+/// A cutter position in the cone frame: tip (mm) and unit axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CutterLine {
+    pub tip: Vector3<f64>,
+    pub axis: Vector3<f64>,
+}
+
+impl CutterLine {
+    /// θ of the tip about the cone axis, rad: the generatrix the cutter works on.
+    pub fn contact_rad(&self) -> f64 {
+        self.tip.y.atan2(self.tip.x)
+    }
+}
+
+/// The nominal cut cone of a test and the cutter that machines it.
+#[derive(Clone, Debug)]
+pub struct CutGeometry {
+    /// Half apex angle α, rad, and its sine and cosine.
+    pub alpha_rad: f64,
+    sin_a: f64,
+    cos_a: f64,
+    /// Ball-bar length L (the tool tip's distance from O), mm.
+    pub length_mm: f64,
+    /// Cutter radius R and flute length, mm.
+    pub cutter_radius_mm: f64,
+    pub flute_length_mm: f64,
+    /// Base-circle centre O, table frame, mm, and the turn from the table frame into the
+    /// cone frame (`Ry(β)`).
+    origin_mm: Vector3<f64>,
+    to_cone: Rotation3<f64>,
+}
+
+impl CutGeometry {
+    pub fn new(cone: &ConeTest, cutter_radius_mm: f64, flute_length_mm: f64) -> CutGeometry {
+        let alpha_rad = cone.half_apex_deg.to_radians();
+        CutGeometry {
+            alpha_rad,
+            sin_a: alpha_rad.sin(),
+            cos_a: alpha_rad.cos(),
+            length_mm: cone.ballbar_length_mm,
+            cutter_radius_mm,
+            flute_length_mm,
+            origin_mm: cone.center_mm,
+            to_cone: cone.frame_rotation().inverse(),
+        }
+    }
+
+    /// `z_tip = (L − R) sin α`, mm.
+    pub fn tip_height_mm(&self) -> f64 {
+        (self.length_mm - self.cutter_radius_mm) * self.sin_a
+    }
+
+    /// Height where the flutes' end meets the frustum, `z_tip + flute cos α`, mm.
+    pub fn flute_end_height_mm(&self) -> f64 {
+        self.tip_height_mm() + self.flute_length_mm * self.cos_a
+    }
+
+    /// Height of the frustum's apex, `(L − R) / sin α`, mm (ρ = 0 there).
+    pub fn apex_height_mm(&self) -> f64 {
+        (self.length_mm - self.cutter_radius_mm) / self.sin_a
+    }
+
+    /// ρ(z), mm.
+    pub fn radius_at(&self, z_mm: f64) -> f64 {
+        (self.apex_height_mm() - z_mm) * self.sin_a / self.cos_a
+    }
+
+    /// `cos α`: a depth d along n moves the radius at a height by `d / cos α`.
+    pub fn cos_alpha(&self) -> f64 {
+        self.cos_a
+    }
+
+    /// A tool pose of the table frame (tip mm, axis) in the cone frame.
+    pub fn line_of(&self, tip_table_mm: &Point3<f64>, axis_table: &Vector3<f64>) -> CutterLine {
+        CutterLine {
+            tip: self.to_cone * (tip_table_mm.coords - self.origin_mm),
+            axis: (self.to_cone * axis_table).normalize(),
+        }
+    }
+
+    /// The unit direction of θ (cos θ, sin θ) and the rows' heights and radii: the depth of
+    /// `line` at every row, um ([`NOT_CUT`] where it does not cut), into `out`.
+    #[inline]
+    pub fn depths_um(&self, (c, s): (f64, f64), rows: &[Row], line: &CutterLine, out: &mut [f64]) {
+        let n = Vector3::new(self.cos_a * c, self.cos_a * s, self.sin_a);
+        let t = &line.axis;
+        let nt = n.dot(t);
+        let a = 1.0 - nt * nt;
+        if a < 1e-12 {
+            out.fill(NOT_CUT);
+            return;
+        }
+        let inv_a = 1.0 / a;
+        let r2 = self.cutter_radius_mm * self.cutter_radius_mm;
+        for (row, d_out) in rows.iter().zip(out.iter_mut()) {
+            let w = Vector3::new(row.radius_mm * c, row.radius_mm * s, row.z_mm) - line.tip;
+            let wt = w.dot(t);
+            let b = w.dot(&n) - wt * nt;
+            let cc = w.norm_squared() - wt * wt - r2;
+            let disc = b * b - a * cc;
+            *d_out = NOT_CUT;
+            if disc < 0.0 || b >= 0.0 {
+                continue;
+            }
+            let d = (-b - disc.sqrt()) * inv_a;
+            let along = wt + d * nt;
+            if (0.0..=self.flute_length_mm).contains(&along) {
+                *d_out = d * 1e3;
+            }
+        }
+    }
+
+    /// A lower bound of how far (um) the nominal cutter at θ clears the surface at θ + Δθ,
+    /// per rad² of Δθ, over `rows`: κ with `gap ≥ κ Δθ²` (the cutter's and the cone's
+    /// curvatures across the generatrix, `gap ≈ (ρ Δθ)² (1/R + cos α / ρ) / 2`), from the exact
+    /// nominal gap at Δθ from 0.01 to 8 deg, less a fifth for the machine's errors.
+    pub fn clearance_um_per_rad2(&self, rows: &[Row]) -> f64 {
+        let nominal = CutterLine {
+            tip: Vector3::new(
+                self.length_mm * self.cos_a,
+                0.0,
+                self.length_mm * self.sin_a,
+            ),
+            axis: Vector3::new(-self.sin_a, 0.0, self.cos_a),
+        };
+        let mut out = vec![0.0; rows.len()];
+        let mut kappa = f64::INFINITY;
+        for dtheta_deg in [0.01, 0.03, 0.1, 0.3, 1.0, 2.0, 4.0, 8.0] {
+            let dtheta = f64::to_radians(dtheta_deg);
+            self.depths_um(dtheta.sin_cos().rev(), rows, &nominal, &mut out);
+            for &gap in &out {
+                // A row the cutter no longer reaches at this Δθ clears it entirely.
+                if gap.is_finite() {
+                    kappa = kappa.min(gap / (dtheta * dtheta));
+                }
+            }
+        }
+        0.8 * kappa.max(0.0)
+    }
+}
+
+/// One height of the grid: z and ρ(z), mm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Row {
+    pub z_mm: f64,
+    pub radius_mm: f64,
+}
+
+/// `(sin, cos)` → `(cos, sin)`.
+trait Rev {
+    fn rev(self) -> (f64, f64);
+}
+
+impl Rev for (f64, f64) {
+    fn rev(self) -> (f64, f64) {
+        (self.1, self.0)
+    }
+}

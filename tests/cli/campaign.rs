@@ -319,7 +319,7 @@ fn file_case(rng: &mut Rng, dir: &Path) -> Case {
         }
         1 => {
             let (scenario, what) = edited(rng, "scenarios", dir, "s.toml");
-            let command = *rng.pick(&["check", "simulate", "analyze", "cone"]);
+            let command = *rng.pick(&["check", "simulate", "analyze", "cone", "cut"]);
             (command, scenario, what)
         }
         _ => {
@@ -330,6 +330,7 @@ fn file_case(rng: &mut Rng, dir: &Path) -> Case {
     let mut args = vec![command.to_string(), file.display().to_string()];
     match command {
         "simulate" => args.extend(["-o".into(), out, "--no-budget".into()]),
+        "cut" => args.extend(["-o".into(), out]),
         "study" => args.extend(["-o".into(), out]),
         "cone" => args.extend(["-o".into(), dir.join("cone.nc").display().to_string()]),
         _ => {}

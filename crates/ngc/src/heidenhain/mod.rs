@@ -997,7 +997,11 @@ fn label_mark(b: &Block, at: usize) -> LineResult<()> {
     if after.is_empty() {
         return Ok(());
     }
-    let mark = if at == 1 { format!("LBL {label}") } else { label.to_string() };
+    let mark = if at == 1 {
+        format!("LBL {label}")
+    } else {
+        label.to_string()
+    };
     Err(LineError::new(
         b.span(at + 1),
         format!(

@@ -25,8 +25,8 @@ from . import _native
 from .errors import InputError, MtsimError, RunError
 
 __all__ = [
-    "simulate", "check", "analyze", "blocks", "fit", "study", "run_command", "to_toml", "Simulation",
-    "Study",
+    "simulate", "check", "analyze", "blocks", "fit", "study", "cut", "run_command", "to_toml",
+    "Simulation", "Study", "Cut",
     "MtsimError", "InputError", "RunError", "__version__",
 ]
 __version__: str = _native.__version__
@@ -71,6 +71,50 @@ def simulate(scenario: Scenario, *, output: str | os.PathLike[str] | None = None
     """
     summary, stream = _native.simulate(scenario, output=output, timing=timing)
     return Simulation(summary, pa.RecordBatchReader.from_stream(stream).read_all())
+
+
+class Cut(NamedTuple):
+    """What `cut` returns."""
+
+    figures: dict
+    """The cut.json document: ``cutter_radius_mm``, ``heights`` (each ``z_mm``,
+    ``roundness_um``, ``centre_offset_um`` [x, y], ``diameter_error_um``),
+    ``cone_angle_error_urad`` and ``marks`` (``axis``, ``theta_deg``, ``step_um``)."""
+    surface: pa.Table
+    """The surface: ``theta_deg``, ``z_mm`` and ``deviation_um`` (null where not cut)."""
+
+
+def cut(scenario: Scenario, *, output: str | os.PathLike[str] | None = None,
+        theta_step_deg: float | None = None, heights_mm: Sequence[float] | None = None,
+        height_step_mm: float | None = None, commanded: bool = False) -> Cut:
+    """Predicts the cone the machine cuts, as a CMM measures it (docs/cut.md): what
+    ``mtsim cut`` computes.
+
+    Args:
+        scenario: a scenario file's path, or a dict of its tables (a cone: generated, or a
+            file program with ``[program.cone]``).
+        output: a folder to keep the files in (surface.csv, surface.parquet, cut.json, the
+            plots and cut.html); by default a temporary folder that is removed.
+        theta_step_deg: the grid's θ step, deg (0.1 by default).
+        heights_mm: the evaluation heights, mm in the cone's frame (three over the flank
+            contact by default).
+        height_step_mm: the spacing of the grid's other heights, mm (2 by default).
+        commanded: cut with the commanded motion through the nominal chain (the program's
+            own part) instead of the actual motion.
+
+    Returns:
+        ``Cut(figures, surface)``: the cut.json document (µm, µrad, deg, mm) and the surface
+        as a ``pyarrow.Table``.
+
+    Raises:
+        InputError: the scenario is bad, or is not a cone.
+        RunError: the simulation diverged or a file could not be written.
+    """
+    figures, stream = _native.cut(
+        scenario, output=output, theta_step_deg=theta_step_deg,
+        heights_mm=None if heights_mm is None else list(heights_mm),
+        height_step_mm=height_step_mm, commanded=commanded)
+    return Cut(figures, pa.RecordBatchReader.from_stream(stream).read_all())
 
 
 def check(scenario: Scenario, *, dynamics: bool = False, programmed: bool = False,

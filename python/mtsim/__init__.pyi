@@ -19,6 +19,15 @@ class Simulation(NamedTuple):
 def simulate(scenario: Scenario, *, output: PathLike | None = ..., timing: bool = ...) -> Simulation:
     """Runs the scenario into the virtual ball bar: (summary dict, trace pyarrow.Table)."""
 
+class Cut(NamedTuple):
+    figures: dict[str, Any]
+    surface: pa.Table
+
+def cut(scenario: Scenario, *, output: PathLike | None = ..., theta_step_deg: float | None = ...,
+        heights_mm: Sequence[float] | None = ..., height_step_mm: float | None = ...,
+        commanded: bool = ...) -> Cut:
+    """The machined cone as a CMM measures it: (cut.json dict, surface pyarrow.Table)."""
+
 def check(scenario: Scenario, *, dynamics: bool = ..., programmed: bool = ...,
           near_miss_mm: float | None = ...) -> dict[str, Any]:
     """Limits and collisions, as `mtsim check --json` (near_miss_mm in mm)."""

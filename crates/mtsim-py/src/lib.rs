@@ -19,6 +19,8 @@ use mtsim::check::CheckOptions;
 use mtsim::cli::{block_rows, AnalyzeFindings};
 use mtsim::error::Error;
 use mtsim::input::scenario::TraceFormat;
+use mtsim::measure::cut::CutOptions;
+use mtsim::report::cut::{write_cut_files, SURFACE_PARQUET};
 use mtsim::study::fit::{FitOptions, MeasuredTrace};
 use mtsim::study::param::{write_outputs, Study};
 use mtsim::study::simulate::TRACE_PARQUET_FILE;
@@ -77,6 +79,40 @@ fn simulate<'py>(
         Ok((to_json(&summary), batches))
     })?;
     Ok((json::to_py(py, &summary)?, ArrowStream::new(batches)))
+}
+
+/// Predicts the machined cone: (the cut.json figures, the surface stream). See `mtsim.cut`.
+#[pyfunction]
+#[pyo3(signature = (scenario, *, output=None, theta_step_deg=None, heights_mm=None,
+                    height_step_mm=None, commanded=false))]
+fn cut<'py>(
+    py: Python<'py>,
+    scenario: &Bound<'py, PyAny>,
+    output: Option<PathBuf>,
+    theta_step_deg: Option<f64>,
+    heights_mm: Option<Vec<f64>>,
+    height_step_mm: Option<f64>,
+    commanded: bool,
+) -> PyResult<(Bound<'py, PyAny>, ArrowStream)> {
+    let input = ScenarioInput::from_py(scenario)?;
+    let (figures, batches) = run(py, &input.texts(), || {
+        let scenario = input.load()?;
+        let defaults = CutOptions::default();
+        let options = CutOptions {
+            theta_step_deg: theta_step_deg.unwrap_or(defaults.theta_step_deg),
+            heights_mm: heights_mm.unwrap_or_default(),
+            height_step_mm: height_step_mm.unwrap_or(defaults.height_step_mm),
+            commanded,
+            direction: None,
+        };
+        let cut = mtsim::study::cut::run_cut(&scenario, options, &|_| {})?;
+        let figures = cut.surface.figures();
+        let dir = Scratch::begin(output.as_deref())?;
+        write_cut_files(dir.path(), "Cut cone", &cut.surface, &figures)?;
+        let batches = Batches::read_parquet(&dir.path().join(SURFACE_PARQUET))?;
+        Ok((to_json(&figures), batches))
+    })?;
+    Ok((json::to_py(py, &figures)?, ArrowStream::new(batches)))
 }
 
 /// Checks limits and collisions: the `check --json` document. See `mtsim.check`.
@@ -222,6 +258,7 @@ fn toml_of(value: &Bound<'_, PyAny>) -> PyResult<String> {
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add_function(wrap_pyfunction!(cut, m)?)?;
     m.add_function(wrap_pyfunction!(analyze, m)?)?;
     m.add_function(wrap_pyfunction!(blocks, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;

@@ -55,6 +55,11 @@ pub struct CheckReport {
     pub sim_time_s: f64,
     /// Geometric queries made by the collision scene (null without a scene).
     pub scene_queries: Option<u64>,
+    /// Why the collisions were checked against a stand-in: the machine file gives no
+    /// `[scene]`, so mtsim's default geometry took its place (left out when the file gives
+    /// one, or collisions are off).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub scene_stand_in: Option<String>,
     /// Cutter engagement in the workpiece, per cutting pair.
     pub engagement: Vec<EngagementSummary>,
     /// Smallest clearance between bodies that must not touch, mm, and the pair.
@@ -229,6 +234,20 @@ pub fn check(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport>
     check_with(scenario, options, SceneQueries::Bounded)
 }
 
+/// The stand-in note of [`CheckReport::scene_stand_in`], when collisions are checked on a
+/// machine whose file gives no `[scene]`.
+fn scene_stand_in(scenario: &Scenario) -> Option<String> {
+    let machine = &scenario.machine;
+    (scenario.check.collisions && !machine.scene_given).then(|| {
+        format!(
+            "collisions were checked against a stand-in: {} has no [scene], so mtsim's default \
+             geometry (docs/scene.md: a table, on the named layouts a trunnion, a spindle) took the place of this \
+             machine's; give its [scene] for a check of its own geometry",
+            machine.path.display()
+        )
+    })
+}
+
 /// [`check`] with the scene queried for every pair at every sample, no motion bound
 /// skipping any: the slow, unoptimised reference the bounded check is tested against.
 pub fn check_reference(scenario: &Scenario, options: &CheckOptions) -> Result<CheckReport> {
@@ -389,6 +408,7 @@ pub fn check_observed(
         samples,
         sim_time_s: last_time,
         scene_queries,
+        scene_stand_in: scene_stand_in(scenario),
         engagement,
         min_clearance_mm,
         min_clearance_bodies,

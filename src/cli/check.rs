@@ -119,6 +119,9 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
     for f in &report.feed_reductions {
         out.push_str(&format!("feed held: {}\n", f.describe()));
     }
+    if let Some(why) = &report.scene_stand_in {
+        out.push_str(&format!("note: {why}\n"));
+    }
     if let (Some(c), Some(b)) = (report.min_clearance_mm, &report.min_clearance_bodies) {
         out.push_str(&format!(
             "smallest clearance: {c:.3} mm ({} / {})\n",

@@ -107,9 +107,10 @@ pub struct MachineFile {
     pub interpolation_period_ms: f64,
     /// One table per axis, keyed by letter: `[axes.X]`.
     pub axes: BTreeMap<String, AxisConfig>,
-    /// Collision-scene geometry of the machine.
+    /// Collision-scene geometry of the machine; None when the file has no `[scene]` (the
+    /// default geometry then stands in for it).
     #[serde(default)]
-    pub scene: SceneConfig,
+    pub scene: Option<SceneConfig>,
     /// The tool in the spindle.
     #[serde(default)]
     pub tool: ToolConfig,
@@ -218,6 +219,9 @@ pub struct Machine {
     pub interpolation_period_s: f64,
     axes: BTreeMap<Axis, MachineAxis>,
     pub scene: SceneConfig,
+    /// Whether the machine file gives its `[scene]`; without it, `check` says that the
+    /// default geometry stood in for the machine's.
+    pub scene_given: bool,
     pub tool: ToolConfig,
     /// Default G-code dialect of the control.
     pub dialect: ngc::Dialect,
@@ -316,7 +320,9 @@ impl Machine {
                 "must be three finite numbers (mm)".into(),
             ));
         }
-        crate::input::scene::validate_machine_tables(path, text, &file.scene, &file.tool)?;
+        let scene_given = file.scene.is_some();
+        let scene = file.scene.unwrap_or_default();
+        crate::input::scene::validate_machine_tables(path, text, &scene, &file.tool)?;
         let geometry = geometry_errors::validate(
             path,
             text,
@@ -333,7 +339,8 @@ impl Machine {
             geometry,
             interpolation_period_s: file.interpolation_period_ms * 1e-3,
             axes,
-            scene: file.scene,
+            scene,
+            scene_given,
             tool: file.tool,
             dialect: file.dialect,
             start: file.start,

@@ -471,3 +471,50 @@ fn an_inch_program_read_as_mm_that_leaves_the_travel_is_told_it_would_fit_in_inc
         assert!(note.contains(part), "{part}: {v}");
     }
 }
+
+/// A machine file without `[scene]` is checked against the default geometry, and `check`
+/// says so, naming the file (JSON and text); a machine that gives its scene, or a check
+/// without collisions, says nothing of a stand-in.
+#[test]
+fn a_machine_without_a_scene_is_said_to_be_checked_against_a_stand_in() {
+    // trt-ac gives no [scene]: the default stands in.
+    let (_, v) = check("stand-in", CONE_15_10, None, &[]);
+    let note = v["scene_stand_in"].as_str().expect("a stand-in note");
+    assert!(
+        note.contains("trt-ac.toml") && note.contains("[scene]"),
+        "{note}"
+    );
+    let dir = scratch("check", "stand-in-text");
+    let path = write_scenario(&dir, &trt_ac(), CONE_15_10);
+    let text =
+        String::from_utf8_lossy(&mtsim(&["check", path.to_str().unwrap()]).stdout).into_owned();
+    assert!(
+        text.contains("note: collisions were checked against a stand-in"),
+        "{text}"
+    );
+    // With the scene given in the scenario's overrides, or collisions off: no note.
+    let (_, v) = check(
+        "scene-given",
+        &format!("{CONE_15_10}[machine_overrides.scene.table]\nradius_mm = 200.0\n"),
+        None,
+        &[],
+    );
+    assert!(v.get("scene_stand_in").is_none(), "{v}");
+    let (_, v) = check(
+        "no-collisions",
+        &format!("{CONE_15_10}[check]\ncollisions = false\n"),
+        None,
+        &[],
+    );
+    assert!(v.get("scene_stand_in").is_none(), "{v}");
+    // The head-table machine ships its scene.
+    let dir = scratch("check", "head-table");
+    let path = write_scenario(&dir, &common::machine("head-table-b45-c"), "[program.circle]\nplane = \"XY\"\nradius_mm = 50.0\nfeed_mm_min = 1000.0\ncenter_mm = [0.0, 0.0, 100.0]\n");
+    let o = mtsim(&["check", path.to_str().unwrap(), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_default();
+    assert!(
+        v.is_object() && v.get("scene_stand_in").is_none(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

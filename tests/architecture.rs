@@ -216,6 +216,28 @@ enum Token {
     Punct(char),
 }
 
+/// The index just past the (nested) block comment that starts at `c[i]`; `inside` sees
+/// each character within it.
+fn past_block_comment(c: &[char], mut i: usize, inside: &mut dyn FnMut(char)) -> usize {
+    let mut depth = 0;
+    while i < c.len() {
+        if c[i] == '/' && c.get(i + 1) == Some(&'*') {
+            depth += 1;
+            i += 2;
+        } else if c[i] == '*' && c.get(i + 1) == Some(&'/') {
+            depth -= 1;
+            i += 2;
+            if depth == 0 {
+                break;
+            }
+        } else {
+            inside(c[i]);
+            i += 1;
+        }
+    }
+    i
+}
+
 /// The tokens of `text`, with comments, string, byte-string and char literals left out
 /// (a path named in a message or a doc comment is no dependency).
 fn tokens(text: &str) -> Vec<Token> {
@@ -229,21 +251,7 @@ fn tokens(text: &str) -> Vec<Token> {
                 i += 1;
             }
         } else if ch == '/' && c.get(i + 1) == Some(&'*') {
-            let mut depth = 0;
-            while i < c.len() {
-                if c[i] == '/' && c.get(i + 1) == Some(&'*') {
-                    depth += 1;
-                    i += 2;
-                } else if c[i] == '*' && c.get(i + 1) == Some(&'/') {
-                    depth -= 1;
-                    i += 2;
-                    if depth == 0 {
-                        break;
-                    }
-                } else {
-                    i += 1;
-                }
-            }
+            i = past_block_comment(&c, i, &mut |_| {});
         } else if ch == '"' {
             i += 1;
             while i < c.len() && c[i] != '"' {
@@ -1096,24 +1104,11 @@ fn code_only(text: &str) -> String {
                 i += 1;
             }
         } else if ch == '/' && c.get(i + 1) == Some(&'*') {
-            let mut depth = 0;
-            while i < c.len() {
-                if c[i] == '/' && c.get(i + 1) == Some(&'*') {
-                    depth += 1;
-                    i += 2;
-                } else if c[i] == '*' && c.get(i + 1) == Some(&'/') {
-                    depth -= 1;
-                    i += 2;
-                    if depth == 0 {
-                        break;
-                    }
-                } else {
-                    if c[i] == '\n' {
-                        out.push('\n');
-                    }
-                    i += 1;
+            i = past_block_comment(&c, i, &mut |ch| {
+                if ch == '\n' {
+                    out.push('\n');
                 }
-            }
+            });
         } else if ch == '"' {
             let start = i;
             i += 1;

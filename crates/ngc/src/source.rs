@@ -21,6 +21,17 @@ pub const MAX_LINE_BYTES: usize = 1 << 20;
 /// it the message quotes the offending line alone.
 const MAX_QUOTED_FILE_BYTES: u64 = 64 << 20;
 
+/// A place in one of a front end's loaded program texts: which text, the byte offset of a
+/// line's start, and that line's 1-based number.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Cursor {
+    pub(crate) file: usize,
+    /// Byte offset of the line start.
+    pub(crate) offset: usize,
+    /// 1-based line number of the line at `offset`.
+    pub(crate) line: usize,
+}
+
 /// The text of a program: in memory (a string), or a file (the program, a subroutine file)
 /// read line by line at byte offsets.
 pub(crate) enum Source {

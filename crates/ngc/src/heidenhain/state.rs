@@ -18,14 +18,7 @@ use crate::source::Source;
 use super::qparam::Qparams;
 use super::text;
 
-/// A place in one of the loaded program files.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) struct Cursor {
-    pub(super) file: usize,
-    pub(super) offset: usize,
-    /// 1-based line of `offset`.
-    pub(super) line: usize,
-}
+pub(super) use crate::source::Cursor;
 
 pub(super) struct Program {
     pub(super) path: PathBuf,

@@ -17,15 +17,7 @@ use crate::options::Dialect;
 use crate::remap::Remap;
 use crate::source::{quoted_at, syntax_error, Source};
 
-/// A place in one of the loaded program texts.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) struct Cursor {
-    pub(super) file: usize,
-    /// Byte offset of the line start.
-    pub(super) offset: usize,
-    /// 1-based line number of the line at `offset`.
-    pub(super) line: usize,
-}
+pub(super) use crate::source::Cursor;
 
 pub(super) struct Program {
     pub(super) path: PathBuf,

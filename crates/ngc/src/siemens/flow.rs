@@ -227,31 +227,12 @@ impl Reader {
     /// The place (offset, line) of the line carrying `target`: the first after the current
     /// line (`before` None), or the last before byte `before`.
     fn find(&mut self, target: &str, before: Option<usize>) -> Option<(usize, usize)> {
-        let level = self.levels.last_mut()?;
-        let (mut offset, mut line) = match before {
+        let level = self.levels.last()?;
+        let (from, line) = match before {
             None => (level.offset, level.line),
             Some(_) => (0, 1),
         };
-        let mut found = None;
-        let mut buf = String::new();
-        loop {
-            if before.is_some_and(|b| offset >= b) {
-                return found;
-            }
-            let n = level.source.line(offset, &mut buf).ok()?;
-            if n == 0 {
-                return found;
-            }
-            buf.make_ascii_uppercase();
-            let (number, label) = targets(&buf);
-            if number == Some(target) || label == Some(target) {
-                found = Some((offset, line));
-                if before.is_none() {
-                    return found;
-                }
-            }
-            offset += n;
-            line += 1;
-        }
+        self.label_line(target, from, line, before, before.is_some())
+            .map(|(offset, line, _)| (offset, line))
     }
 }

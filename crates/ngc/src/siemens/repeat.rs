@@ -145,7 +145,7 @@ impl Reader {
     /// The line of the current level carrying `target` (a label or `N` number), from byte
     /// `from` (line number `line`) on: the first one, or with `last` the last one before
     /// byte `before`; the search stops at `before` if given.
-    fn label_line(
+    pub(super) fn label_line(
         &mut self,
         target: &str,
         from: usize,

@@ -108,9 +108,7 @@ pub fn run(
     );
     out.push_str(&realtime_text(&summary, whole_s));
     match &summary.ballbar {
-        None => out.push_str(
-            "no measured circle: give the scenario a cone or circle to get ball-bar figures\n",
-        ),
+        None => out.push_str(&contour_text(&summary.measurements)?),
         Some(b) => {
             out.push_str(&format!(
                 "ISO 230-4: circular deviation G = {:.2} µm, radial deviation F = {:+.2} / {:+.2} µm, hysteresis H = {}\n",
@@ -224,4 +222,45 @@ fn realtime_text(summary: &crate::study::simulate::SimulationSummary, whole_s: f
         summary.sim_time_s / whole_s.max(1e-9),
         summary.wall_time_s.unwrap_or(0.0)
     )
+}
+
+/// What a program without a measured circle prints: its contour error and worst lines.
+fn contour_text(
+    measurements: &std::collections::BTreeMap<String, serde_json::Value>,
+) -> Result<String> {
+    let mut out = String::from(
+        "no measured circle (no ball-bar figures): give the scenario a cone or circle for them\n",
+    );
+    if !measurements.contains_key("contour") {
+        return Ok(out);
+    }
+    let f = crate::study::simulate::contour_figures(measurements)?;
+    if f.samples == 0 {
+        out.push_str("contour error: no feed move was measured\n");
+        return Ok(out);
+    }
+    out.push_str(&format!(
+        "contour error (actual tool tip to the programmed path): max {:.2} µm, RMS {:.2} µm over {} samples",
+        f.max_um, f.rms_um, f.samples
+    ));
+    if f.max_tool_axis_error_urad > 0.0 {
+        out.push_str(&format!(
+            "; tool axis up to {:.1} µrad",
+            f.max_tool_axis_error_urad
+        ));
+    }
+    out.push('\n');
+    let worst: Vec<String> = f
+        .worst
+        .iter()
+        .take(5)
+        .map(|w| {
+            format!(
+                "line {} ({:.2} µm at {:.3} s)",
+                w.line, w.contour_um, w.time_s
+            )
+        })
+        .collect();
+    out.push_str(&format!("worst: {}\n", worst.join(", ")));
+    Ok(out)
 }

@@ -5,6 +5,7 @@
 pub mod attribution;
 pub mod ballbar;
 pub mod bar;
+pub mod contour;
 pub mod cut;
 pub mod feed;
 pub mod measurement;

@@ -11,6 +11,7 @@
 
 pub mod budget_table;
 pub mod circle_figures;
+pub mod contour;
 pub mod cut;
 pub mod cut_html;
 pub mod cut_plots;

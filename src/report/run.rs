@@ -249,6 +249,7 @@ impl RunFolder {
         let files = file_names(dir, &[".csv", ".json", ".svg", ".nc", ".parquet"])?;
         let svgs = svg_texts(dir, &files, &|name| {
             name == "ballbar.svg"
+                || name == super::contour::CONTOUR_PLOT_FILE
                 || name == "placement.svg"
                 || (name.starts_with("sweep-") && name.ends_with(".svg"))
         });

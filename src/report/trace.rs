@@ -21,6 +21,7 @@ use std::io::{BufReader, BufWriter, Write};
 use arrow::datatypes::ToByteSlice;
 use std::path::{Path, PathBuf};
 
+use super::contour::ContourFile;
 use super::files::temporary_path;
 use super::trace_parquet::ParquetTrace;
 use super::trace_rows::{
@@ -31,6 +32,7 @@ use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::TraceFormat;
 use crate::measure::ballbar::Centring;
+use crate::measure::contour::ContourReading;
 use crate::measure::{is_measured, BarGeometry, BarReading};
 use crate::numeric::push_fixed_bytes_const;
 use crate::pipeline::{Sample, Sink};
@@ -57,6 +59,8 @@ pub struct TraceSink {
     /// Rows recorded, and the most the run may record (`[simulate] max_trace_rows`).
     rows: u64,
     max_rows: u64,
+    /// A program's trace (no ball bar): `contour.csv` beside it ([`super::contour`]).
+    contour: Option<ContourFile>,
 }
 
 /// Each format's state between a run's blocks, its trace file opened at its first rows.
@@ -83,6 +87,7 @@ impl TraceSink {
         let spill = SpillFile::new(trace_path.with_extension("csv.raw.tmp"));
         let format = match format {
             TraceFormat::Csv => Format::Csv(CsvRuns {
+                direct: geometry.is_none(),
                 width,
                 held: Vec::new(),
                 spare: Vec::new(),
@@ -94,6 +99,7 @@ impl TraceSink {
                 out: None,
             }),
             TraceFormat::Parquet => Format::Parquet(ParquetRuns {
+                direct: geometry.is_none(),
                 width,
                 spare: None,
                 inputs: Vec::new(),
@@ -106,7 +112,14 @@ impl TraceSink {
                 out: None,
             }),
         };
+        let contour = match geometry {
+            None => Some(ContourFile::create(
+                &trace_path.with_file_name(super::contour::CONTOUR_FILE),
+            )?),
+            Some(_) => None,
+        };
         Ok(TraceSink {
+            contour,
             filling: None,
             format,
             trace_path: trace_path.to_path_buf(),
@@ -153,7 +166,11 @@ impl TraceSink {
             return Err(e);
         }
         let tmp = temporary_path(&self.trace_path);
-        std::fs::rename(&tmp, &self.trace_path).map_err(write_error(&self.trace_path))
+        std::fs::rename(&tmp, &self.trace_path).map_err(write_error(&self.trace_path))?;
+        match self.contour.take() {
+            Some(contour) => contour.finish(),
+            None => Ok(()),
+        }
     }
 }
 
@@ -198,15 +215,7 @@ impl TraceSink {
         if self.geometry.is_none() || self.skips(s.index) {
             return Ok(());
         }
-        if self.rows >= self.max_rows {
-            return Err(Error::usage(format!(
-                "the trace passed its budget of {} rows ([simulate] max_trace_rows) at program line {}, \
-                 after {:.1} s of machine time: raise [simulate] trace_every or max_trace_rows, \
-                 or measure fewer blocks (measure_lines)",
-                self.max_rows, s.line, s.time_s
-            )));
-        }
-        self.rows += 1;
+        self.count_row(s)?;
         if self.filling.as_ref().is_none_or(Block::is_full) {
             self.next_block()?;
         }
@@ -221,11 +230,50 @@ impl TraceSink {
         Ok(())
     }
 
+    /// Records sample `s` of a program without a ball bar: its axes, with θ and the bar's
+    /// columns empty (NaN), and its contour error (`None` on a rapid or a dwell) in
+    /// `contour.csv`; skips samples between every `every`-th one.
+    pub fn push_program(&mut self, s: &Sample, contour: Option<&ContourReading>) -> Result<()> {
+        if self.geometry.is_some() || self.skips(s.index) {
+            return Ok(());
+        }
+        self.count_row(s)?;
+        if self.filling.as_ref().is_none_or(Block::is_full) {
+            self.next_block()?;
+        }
+        let nan = f64::NAN;
+        let block = self.filling.as_mut().expect("a block with room");
+        block.push(
+            [s.time_s, s.line as f64, nan, nan, nan],
+            self.axes,
+            [&s.commanded, &s.actual, &s.following_error],
+            [nan, nan],
+        );
+        match (contour, self.contour.as_mut()) {
+            (Some(r), Some(file)) => file.push(self.direction, s.time_s, s.line, r),
+            _ => Ok(()),
+        }
+    }
+
+    /// Counts a row against `[simulate] max_trace_rows`.
+    fn count_row(&mut self, s: &Sample) -> Result<()> {
+        if self.rows >= self.max_rows {
+            return Err(Error::usage(format!(
+                "the trace passed its budget of {} rows ([simulate] max_trace_rows) at program line {}, \
+                 after {:.1} s of machine time: raise [simulate] trace_every or max_trace_rows, \
+                 or measure fewer blocks (measure_lines)",
+                self.max_rows, s.line, s.time_s
+            )));
+        }
+        self.rows += 1;
+        Ok(())
+    }
+
     /// Hands the full block (if any) to the format and takes an empty one for the next rows.
     fn next_block(&mut self) -> Result<()> {
         let full = self.filling.take();
         self.filling = Some(match &mut self.format {
-            Format::Csv(csv) => csv.next_block(full)?,
+            Format::Csv(csv) => csv.next_block(full, self.direction)?,
             Format::Parquet(parquet) => parquet.next_block(full, self.direction)?,
         });
         Ok(())
@@ -235,6 +283,9 @@ impl TraceSink {
 /// `trace.csv`'s state: the run's full blocks, held until its centring is known (past
 /// [`RAW_IN_MEMORY`], moved to the spill file), then written row by row.
 struct CsvRuns {
+    /// A program's trace (no ball bar): nothing to centre, so each full block is written at
+    /// once and nothing is held.
+    direct: bool,
     /// Columns of a block.
     width: usize,
     held: Vec<Block>,
@@ -254,7 +305,14 @@ struct CsvRuns {
 impl CsvRuns {
     /// Holds the `full` block (when the held blocks pass [`RAW_IN_MEMORY`], they move to
     /// the spill file), and gives an empty one.
-    fn next_block(&mut self, full: Option<Block>) -> Result<Block> {
+    fn next_block(&mut self, full: Option<Block>, direction: Direction) -> Result<Block> {
+        if self.direct {
+            if let Some(mut full) = full {
+                self.write_now(&mut full, direction)?;
+                self.spare.push(full);
+            }
+            return Ok(self.spare.pop().unwrap_or_else(|| Block::new(self.width)));
+        }
         if let Some(full) = full {
             self.held.push(full);
             if self.held.len() * 8 * BLOCK_ROWS * self.width > RAW_IN_MEMORY {
@@ -262,6 +320,18 @@ impl CsvRuns {
             }
         }
         Ok(self.spare.pop().unwrap_or_else(|| Block::new(self.width)))
+    }
+
+    /// Writes `block` (of a program's trace: nothing to centre) and empties it.
+    fn write_now(&mut self, block: &mut Block, direction: Direction) -> Result<()> {
+        if self.out.is_none() {
+            self.out = Some(CsvTrace::create(self.tmp.clone(), &self.header)?);
+        }
+        let out = self.out.as_mut().expect("opened above");
+        block.centred_into(None, &mut self.centred);
+        out.write_block(block, direction, &self.centred)?;
+        block.clear();
+        Ok(())
     }
 
     /// Moves the held (full) blocks to the spill file.
@@ -285,6 +355,13 @@ impl CsvRuns {
         direction: Direction,
         centring: Option<Centring>,
     ) -> Result<()> {
+        if self.direct {
+            if let Some(mut last) = last {
+                self.write_now(&mut last, direction)?;
+                self.spare.push(last);
+            }
+            return Ok(());
+        }
         self.held.extend(last);
         if self.held.is_empty() && self.spilled == 0 {
             return Ok(());
@@ -330,6 +407,9 @@ impl CsvRuns {
 /// row's `(dL, sin θ, cos θ)` kept (past [`RAW_IN_MEMORY`], in the spill file) for the
 /// run's centred deviations, written at its end.
 struct ParquetRuns {
+    /// A program's trace (no ball bar): no centring inputs are kept, the centred column is
+    /// dL (NaN) as it is.
+    direct: bool,
     /// Columns of a block.
     width: usize,
     /// The block written last, emptied for the next rows.
@@ -366,6 +446,13 @@ impl ParquetRuns {
             }
             let out = self.out.as_mut().expect("opened above");
             out.write_block(&block, direction)?;
+            if self.direct {
+                // Nothing to centre: the centred column is dL (NaN) as it is.
+                block.centred_into(None, &mut self.centred);
+                out.write_centred(out.groups() - 1, &self.centred)?;
+                block.clear();
+                return Ok(block);
+            }
             block.centring_inputs_into(&mut self.inputs);
             if 8 * self.inputs.len() > RAW_IN_MEMORY {
                 self.spill
@@ -391,7 +478,8 @@ impl ParquetRuns {
         if let Some(block) = last {
             self.spare = Some(self.write(block, direction)?);
         }
-        let Some(out) = self.out.as_mut() else {
+        let direct = self.direct;
+        let Some(out) = self.out.as_mut().filter(|_| !direct) else {
             return Ok(());
         };
         let path = self.spill.path().to_path_buf();

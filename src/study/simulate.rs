@@ -23,6 +23,7 @@ use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::{Scenario, TraceFormat};
 use crate::measure::attribution::{sites_from_map, ReversalSite};
 use crate::measure::ballbar::{analyse_events_at, BallbarResult};
+use crate::measure::contour::{ContourGauge, ContourProfile};
 use crate::measure::feed::{FeedMeter, FeedSeen, AT_FEED_TOLERANCE};
 use crate::measure::measurement;
 use crate::measure::settle::SettleGate;
@@ -125,6 +126,9 @@ pub struct BallbarStudy {
     /// The measured circle's radius (mm) and programmed feed (mm/min) of a generated test;
     /// None for a file program.
     pub nominal_feed: Option<(f64, f64)>,
+    /// A program without a measured circle: its contour error along the first run
+    /// (`measure::contour`; its figures are `measurements.contour`).
+    pub contour_profile: Option<ContourProfile>,
 }
 
 impl BallbarStudy {
@@ -199,6 +203,7 @@ pub fn run_ballbar_budget(
     let mut setpoints = 0u64;
     let mut warnings = Vec::new();
     let mut feed_reductions = Vec::new();
+    let mut contour = None;
     for (k, &direction) in directions.iter().enumerate() {
         let mut run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
         if let Some(along) = &along {
@@ -208,6 +213,20 @@ pub fn run_ballbar_budget(
             t.start_run(direction, run.measured);
         }
         let mut ballbar = geometry.map(|g| ballbar_sink(g, direction, run.measured, k));
+        // A program without a measured circle: its contour error, the program read again in
+        // step with the samples.
+        let mut gauge = match (&ballbar, k) {
+            (None, 0) => {
+                let again = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
+                Some(ContourGauge::new(
+                    machine,
+                    again.moves,
+                    scenario.simulate.tcp,
+                    sim_time_s,
+                ))
+            }
+            _ => None,
+        };
         for m in &mut measurements {
             m.start_run(direction, run.measured);
         }
@@ -217,13 +236,31 @@ pub fn run_ballbar_budget(
             .map(|plan| RefCell::new(plan.start(direction)));
         let stats = {
             let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(1);
-            let mut measure = ballbar.as_mut().map(|ballbar| BarAndTrace {
-                ballbar,
-                trace: trace.as_deref_mut(),
-                budget: budget_run.as_ref(),
-            });
+            // The ball bar and its trace, or (no measured circle) the contour gauge and the
+            // program's trace: one of the two.
+            let (mut measure, mut program_trace) = match (ballbar.as_mut(), gauge.as_mut()) {
+                (Some(ballbar), _) => (
+                    Some(BarAndTrace {
+                        ballbar,
+                        trace: trace.as_deref_mut(),
+                        budget: budget_run.as_ref(),
+                    }),
+                    None,
+                ),
+                (None, Some(gauge)) => (
+                    None,
+                    Some(ProgramAndTrace {
+                        gauge,
+                        trace: trace.as_deref_mut(),
+                    }),
+                ),
+                (None, None) => (None, None),
+            };
             if let Some(m) = measure.as_mut() {
                 sinks.push(m);
+            }
+            if let Some(p) = program_trace.as_mut() {
+                sinks.push(p);
             }
             for m in &mut measurements {
                 sinks.push(&mut **m);
@@ -256,6 +293,9 @@ pub fn run_ballbar_budget(
                 }
             }
         };
+        if let Some(gauge) = gauge {
+            contour = Some((gauge.figures(), gauge.profile().clone()));
+        }
         budget_runs.extend(budget_run.map(|b| b.into_inner().finish()));
         // The run's rows go to the trace now that its centring is known.
         if let Some(t) = trace.as_deref_mut() {
@@ -281,6 +321,11 @@ pub fn run_ballbar_budget(
     let mut study = assemble(scenario, sinks, maps.as_ref(), warnings, &shared)?;
     for m in &measurements {
         study.measurements.insert(m.name().to_string(), m.finish()?);
+    }
+    if let Some((figures, profile)) = contour {
+        let json = serde_json::to_value(figures).expect("plain data serializes");
+        study.measurements.insert("contour".into(), json);
+        study.contour_profile = Some(profile);
     }
     let budget_runs = budget_runs.into_iter().collect();
     Ok((study, budget_runs))
@@ -506,6 +551,7 @@ pub(crate) fn assemble(
         measurements: BTreeMap::new(),
         feed,
         nominal_feed: nominal_feed(scenario),
+        contour_profile: None,
     })
 }
 
@@ -541,6 +587,8 @@ pub fn simulate_with(
             crate::report::test_info::TEST_FILE,
             crate::report::html::CHECK_FILE,
             crate::report::html::REPORT_FILE,
+            crate::report::contour::CONTOUR_FILE,
+            crate::report::contour::CONTOUR_PLOT_FILE,
         ],
     )?;
     work::check_trace_up_front(scenario, scenario.simulate.lead_deg)?;
@@ -596,6 +644,15 @@ pub fn simulate_with(
             })
         }
         _ => {}
+    }
+    if let Some(profile) = &study.contour_profile {
+        let figures = contour_figures(&study.measurements)?;
+        let svg =
+            crate::report::contour::render_contour_svg(profile, &figures, &plot_title(scenario))?;
+        crate::report::write_atomic(
+            &out_dir.join(crate::report::contour::CONTOUR_PLOT_FILE),
+            svg.as_bytes(),
+        )?;
     }
     if let Some(result) = &ballbar {
         let title = plot_title(scenario);
@@ -682,6 +739,34 @@ impl Sink for BarAndTrace<'_, '_> {
         match (reading, self.trace.as_deref_mut()) {
             (Some(r), Some(trace)) => trace.push_reading(s, &r),
             _ => Ok(()),
+        }
+    }
+}
+
+/// The contour error's figures of a program without a measured circle, from the
+/// measurements of its run (`measurements.contour`); empty figures where there is none.
+pub fn contour_figures(
+    measurements: &BTreeMap<String, serde_json::Value>,
+) -> Result<crate::measure::contour::ContourFigures> {
+    match measurements.get("contour") {
+        Some(v) => serde_json::from_value(v.clone())
+            .map_err(|e| crate::error::Error::usage(format!("contour figures: {e}"))),
+        None => Ok(Default::default()),
+    }
+}
+
+/// A program without a measured circle: its contour error, and its trace rows with it.
+struct ProgramAndTrace<'a, 'g> {
+    gauge: &'a mut ContourGauge<'g>,
+    trace: Option<&'a mut TraceSink>,
+}
+
+impl Sink for ProgramAndTrace<'_, '_> {
+    fn push(&mut self, s: &Sample) -> Result<()> {
+        let reading = self.gauge.read(s)?;
+        match self.trace.as_deref_mut() {
+            Some(trace) => trace.push_program(s, reading.as_ref()),
+            None => Ok(()),
         }
     }
 }

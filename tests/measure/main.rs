@@ -6,6 +6,7 @@ mod common;
 
 mod attribution;
 mod ballbar;
+mod contour;
 mod cut;
 mod measurement;
 mod shared;

@@ -14,6 +14,7 @@ pub mod circle_figures;
 pub mod cut;
 pub mod cut_html;
 pub mod cut_plots;
+pub mod cut_tip;
 pub mod escape;
 pub mod files;
 pub mod fit_plot;

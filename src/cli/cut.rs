@@ -7,7 +7,8 @@ use crate::error::Result;
 use crate::input::program::Direction;
 use crate::measure::cut::{CutOptions, DEFAULT_HEIGHT_STEP_MM, DEFAULT_THETA_STEP_DEG};
 use crate::report::budget_table::mechanism_label;
-use crate::report::cut::{cut_json, write_cut_files, CutBeside, CutBudget};
+use crate::report::cut::{cut_json, write_cut_files, CutBeside};
+use crate::report::cut_budget::CutBudget;
 use crate::report::RunDir;
 
 #[derive(Debug, clap::Args)]

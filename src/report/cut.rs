@@ -6,8 +6,8 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use super::cut_budget::CutBudget;
 use super::parquet::{Column, Table};
-use super::run::BudgetMechanism;
 use super::write_atomic;
 use crate::error::Result;
 use crate::measure::cut::{CutFigures, CutSurface};
@@ -76,44 +76,6 @@ pub fn surface_table(surface: &CutSurface) -> Table {
         .with("theta_deg", Column::F64(theta))
         .with("z_mm", Column::F64(z))
         .with("deviation_um", Column::F64(d))
-}
-
-/// One row of the cut's error budget: what one mechanism (on one axis) changes on the
-/// surface, `c(θ, z)`, the grid of its counterfactual cut less the cut it adds to
-/// (`study::cut_budget`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CutBudgetRow {
-    pub mechanism: BudgetMechanism,
-    /// The axis letter; None for the program, the servos' common lag and the geometric errors.
-    pub axis: Option<String>,
-    /// `sqrt(mean c²)` and `max c − min c` over the points every run cut, µm.
-    pub rms_um: f64,
-    pub pv_um: f64,
-    /// `<c, d> / <d, d>`: the part of the full cut's deviation d the row explains.
-    pub share: f64,
-    /// The largest change of c along the height at one θ, `max_θ |c(θ, top) − c(θ, bottom)|`
-    /// over the grid's highest and lowest rows, µm: what a tilt of the tool axis makes and
-    /// a ball bar (one point per θ, at the tip) cannot see.
-    pub height_change_um: f64,
-    /// c per grid point, µm, in the envelope's order (`values[j * rows + i]`), NaN where a
-    /// run did not cut; not written.
-    #[serde(skip)]
-    pub contribution_um: Vec<f64>,
-}
-
-/// The cut's error budget (`study::cut_budget`): the program's own part and each
-/// mechanism's, by counterfactual cuts, and what is left to their interplay, so that the
-/// shares and `interaction_share` add to 1.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CutBudget {
-    /// The full cut's d over the points every run cut: RMS and peak-to-valley, µm.
-    pub rms_um: f64,
-    pub pv_um: f64,
-    /// The points every run cut, of the grid.
-    pub points: usize,
-    pub rows: Vec<CutBudgetRow>,
-    /// `1 − Σ share`.
-    pub interaction_share: f64,
 }
 
 /// `cut.json`: the CMM's figures, with the error budget when it was made.

@@ -10,8 +10,7 @@
 //! (grey where not cut). After its first frame the page counts the canvas's non-background
 //! pixels into `data-ink` on the canvas, which the browser test reads.
 
-use super::budget_table::mechanism_label;
-use super::cut::{CutBudget, CutBudgetRow};
+use super::cut_budget::{budget_section, CutBudget};
 use super::escape::esc;
 use crate::measure::cut::{CutFigures, CutSurface};
 
@@ -97,51 +96,6 @@ fn tip_section(tip: Option<&str>) -> String {
         ),
         None => String::new(),
     }
-}
-
-/// The cut's error budget: one row per mechanism, ranked by share, and the interplay.
-fn budget_section(budget: Option<&CutBudget>) -> String {
-    let Some(b) = budget else {
-        return "<h2 id=\"budget\">Error budget</h2>\n<p>No error budget for this cut (cut with \
-                <code>--commanded</code> or <code>--no-budget</code>, or one of its runs failed).</p>\n"
-            .to_string();
-    };
-    let mut rows: Vec<&CutBudgetRow> = b.rows.iter().collect();
-    rows.sort_by(|a, c| c.share.total_cmp(&a.share));
-    let body: String = rows
-        .iter()
-        .map(|r| {
-            let axis = r.axis.as_deref().unwrap_or("–");
-            format!(
-                "<tr data-budget=\"{}:{}\"><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td>\
-                 <td>{:.3}</td><td>{:.1}</td></tr>",
-                esc(&format!("{:?}", r.mechanism).to_lowercase()),
-                esc(axis),
-                esc(&mechanism_label(r.mechanism, r.axis.as_deref())),
-                esc(axis),
-                r.rms_um,
-                r.pv_um,
-                r.height_change_um,
-                100.0 * r.share
-            )
-        })
-        .collect();
-    format!(
-        "<h2 id=\"budget\">Error budget</h2>\n<table class=\"budget\"><tr><th>mechanism</th><th>axis</th>\
-         <th>RMS (µm)</th><th>peak-to-valley (µm)</th><th>change along the height (µm)</th>\
-         <th>share of d (%)</th></tr>{body}<tr data-budget=\"interaction:–\"><td>the mechanisms acting \
-         together</td><td>–</td><td>–</td><td>–</td><td>–</td><td>{:.1}</td></tr></table>\n<p>Each row \
-         is a counterfactual cut: the same setpoints on the ideal machine plus that one mechanism \
-         (backlash and friction on their axis's servo), less the cut it adds to, at every grid point \
-         every run cut ({} points; the full cut's d: RMS {:.3} µm, peak-to-valley {:.3} µm). Share: \
-         the row projected on the full cut's d, ⟨c, d⟩ / ⟨d, d⟩, so the shares and the interplay \
-         add to 100 %. Change along the height: what the row changes between the lowest and the \
-         highest row at one θ, which a ball bar does not see.</p>\n",
-        100.0 * b.interaction_share,
-        b.points,
-        b.rms_um,
-        b.pv_um
-    )
 }
 
 /// The page.

@@ -12,6 +12,7 @@
 pub mod budget_table;
 pub mod circle_figures;
 pub mod cut;
+pub mod cut_budget;
 pub mod cut_html;
 pub mod cut_plots;
 pub mod cut_tip;

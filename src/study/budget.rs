@@ -29,6 +29,9 @@
 //! axes the program moves; the machine file has no squareness of the linear axes, so no
 //! squareness row is ever made.
 //!
+//! The cut (`study::cut_budget`) runs the same plan: it takes each run's positions
+//! ([`BudgetRun::measured_positions`]) and cuts them on its grid instead of reading the bar.
+//!
 //! # The rows
 //!
 //! Each run's bar reading `dL_k(θ)` is binned as the full run's is (the same samples, the

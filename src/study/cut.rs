@@ -1,5 +1,7 @@
 //! `mtsim cut`: one run of a cone scenario's program through the pipeline into the cut
-//! surface (`measure::cut`), with the reversal angles its marks are read at.
+//! surface (`measure::cut`), with the reversal angles its marks are read at, the ball bar's
+//! reading of the same run (to draw beside the cut) and the cut's error budget
+//! (`study::cut_budget`, its runs riding the same pass).
 //!
 //! The run is `simulate`'s (the same program, lead, interpolator, servo and settle gate for a
 //! file program), in one direction: one piece is cut by one pass. With `commanded` the
@@ -14,7 +16,7 @@ use crate::measure::cut::{CutOptions, CutSurface};
 use crate::measure::settle::SettleGate;
 use crate::pipeline::{self, Sink, Timing};
 use crate::program::{self, test_of};
-use crate::report::cut::CutBudget;
+use crate::report::cut_budget::CutBudget;
 use crate::study::budget::{BudgetPlan, BudgetStepper};
 use crate::study::cut_budget::{assemble, CutBudgetRuns};
 use crate::study::reversals::reversals_deg;

@@ -46,7 +46,7 @@ use crate::input::scenario::Scenario;
 use crate::measure::cut::{CutOptions, CutSurface};
 use crate::measure::is_measured;
 use crate::pipeline::{Sample, Sink};
-use crate::report::cut::{CutBudget, CutBudgetRow};
+use crate::report::cut_budget::{CutBudget, CutBudgetRow};
 use crate::study::budget::{peak_to_valley, projection_share, BudgetPlan, BudgetRun, CaseInfo};
 use crate::{Axis, AxisVec};
 

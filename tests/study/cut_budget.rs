@@ -11,7 +11,7 @@ use mtsim::input::ConeTest;
 use mtsim::kinematics::{Branch, LocationErrors};
 use mtsim::measure::bar::deviation_mm;
 use mtsim::measure::cut::{actual_tool, CutOptions};
-use mtsim::report::cut::{CutBudget, CutBudgetRow};
+use mtsim::report::cut_budget::{CutBudget, CutBudgetRow};
 use mtsim::report::run::BudgetMechanism;
 use mtsim::study::cut::{run_cut, CutRun};
 use mtsim::{Axis, AxisVec};

@@ -1,11 +1,12 @@
 //! Release-mode benchmark of `cut` beside `simulate`, run by `cargo bench --bench cut`.
 //!
 //! The 15/10 cone of `scenarios/cone-15-10.toml` in 720 segments: `study::cut::run_cut` at
-//! the default grid with its files (`surface.csv`, `surface.parquet`, `cut.json`, the two
-//! SVGs) against `study::simulate::simulate_with` without the error budget (its trace,
-//! summary, plot and test files), alternated in one process, each measurement the CPU time
-//! of the running thread (`/proc/thread-self/schedstat`). Prints each median and the ratio
-//! (the issue's goal: at most 2). It asserts nothing (timing is not a test).
+//! the default grid with its files (`surface.csv`, `surface.parquet`, `cut.json`, the
+//! SVGs, `cut.html`) without and with its error budget (`study::cut_budget`), against
+//! `study::simulate::simulate_with` without and with its error budget (its trace, summary,
+//! plot and test files), alternated in one process, each measurement the CPU time of the
+//! running thread (`/proc/thread-self/schedstat`). Prints each median and the ratios (the
+//! issue's goal: `cut` at most 2x `simulate`). It asserts nothing (timing is not a test).
 //! `MTSIM_BENCH_RUNS=N` sets the runs of each (default 9); `MTSIM_BENCH_SMOKE=1` runs each once.
 
 use std::path::PathBuf;
@@ -33,6 +34,18 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// `cut` with its files into `out`, with its error budget or without (`--no-budget`).
+fn cut_with_files(scenario: &Scenario, out: &std::path::Path, budget: bool) {
+    let run = mtsim::study::cut::run_cut(scenario, CutOptions::default(), budget, &|_| {}).unwrap();
+    std::fs::create_dir_all(out).unwrap();
+    let beside = mtsim::report::cut::CutBeside {
+        budget: run.budget.as_ref(),
+        ballbar_um: run.ballbar_um.as_deref(),
+    };
+    let figures = run.surface.figures();
+    mtsim::report::cut::write_cut_files(out, "cut", &run.surface, &figures, beside).unwrap();
+}
+
 fn main() {
     let dir = std::env::temp_dir().join(format!("mtsim-bench-cut-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -51,27 +64,34 @@ fn main() {
             .and_then(|n| n.parse().ok())
             .unwrap_or(9)
     };
-    let (mut simulate, mut cut) = (Vec::new(), Vec::new());
+    // Each of: simulate without and with its budget, cut without and with its budget.
+    let mut cpu: [Vec<f64>; 4] = Default::default();
     for _ in 0..runs {
-        let t0 = cpu_now();
-        mtsim::study::simulate::simulate_with(&scenario, &dir.join("sim"), false, false, &|_| {})
-            .unwrap();
-        let t1 = cpu_now();
-        let run = mtsim::study::cut::run_cut(&scenario, CutOptions::default(), &|_| {}).unwrap();
-        let out = dir.join("cut");
-        std::fs::create_dir_all(&out).unwrap();
-        mtsim::report::cut::write_cut_files(&out, "cut", &run.surface, &run.surface.figures())
-            .unwrap();
-        let t2 = cpu_now();
-        simulate.push(t1 - t0);
-        cut.push(t2 - t1);
+        for (k, times) in cpu.iter_mut().enumerate() {
+            let t0 = cpu_now();
+            match k {
+                0 | 1 => {
+                    let sim = dir.join("sim");
+                    mtsim::study::simulate::simulate_with(&scenario, &sim, false, k == 1, &|_| {})
+                        .unwrap();
+                }
+                _ => cut_with_files(&scenario, &dir.join("cut"), k == 3),
+            }
+            times.push(cpu_now() - t0);
+        }
     }
-    let (s, c) = (median(simulate), median(cut));
+    let [s, sb, c, cb] = cpu.map(median);
     println!(
-        "cone 15/10, 720 segments, {runs} runs each: simulate (no budget) {:.1} ms, cut {:.1} ms, ratio {:.2}",
+        "cone 15/10, 720 segments, {runs} runs each (median CPU): simulate --no-budget {:.1} ms, \
+         simulate {:.1} ms; cut --no-budget {:.1} ms, cut {:.1} ms; cut --no-budget / simulate \
+         --no-budget {:.2}, cut / cut --no-budget {:.2}, cut / simulate {:.2}",
         s * 1e3,
+        sb * 1e3,
         c * 1e3,
-        c / s
+        cb * 1e3,
+        c / s,
+        cb / c,
+        cb / sb
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

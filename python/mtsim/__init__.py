@@ -86,7 +86,8 @@ class Cut(NamedTuple):
 
 def cut(scenario: Scenario, *, output: str | os.PathLike[str] | None = None,
         theta_step_deg: float | None = None, heights_mm: Sequence[float] | None = None,
-        height_step_mm: float | None = None, commanded: bool = False) -> Cut:
+        height_step_mm: float | None = None, commanded: bool = False,
+        budget: bool = True) -> Cut:
     """Predicts the cone the machine cuts, as a CMM measures it (docs/cut.md): what
     ``mtsim cut`` computes.
 
@@ -101,6 +102,8 @@ def cut(scenario: Scenario, *, output: str | os.PathLike[str] | None = None,
         height_step_mm: the spacing of the grid's other heights, mm (2 by default).
         commanded: cut with the commanded motion through the nominal chain (the program's
             own part) instead of the actual motion.
+        budget: make the error budget (``figures["budget"]``, as ``mtsim cut`` does; False
+            is ``--no-budget``: faster). A commanded cut has none.
 
     Returns:
         ``Cut(figures, surface)``: the cut.json document (µm, µrad, deg, mm) and the surface
@@ -113,7 +116,7 @@ def cut(scenario: Scenario, *, output: str | os.PathLike[str] | None = None,
     figures, stream = _native.cut(
         scenario, output=output, theta_step_deg=theta_step_deg,
         heights_mm=None if heights_mm is None else list(heights_mm),
-        height_step_mm=height_step_mm, commanded=commanded)
+        height_step_mm=height_step_mm, commanded=commanded, budget=budget)
     return Cut(figures, pa.RecordBatchReader.from_stream(stream).read_all())
 
 

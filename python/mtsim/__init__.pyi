@@ -25,7 +25,7 @@ class Cut(NamedTuple):
 
 def cut(scenario: Scenario, *, output: PathLike | None = ..., theta_step_deg: float | None = ...,
         heights_mm: Sequence[float] | None = ..., height_step_mm: float | None = ...,
-        commanded: bool = ...) -> Cut:
+        commanded: bool = ..., budget: bool = ...) -> Cut:
     """The machined cone as a CMM measures it: (cut.json dict, surface pyarrow.Table)."""
 
 def check(scenario: Scenario, *, dynamics: bool = ..., programmed: bool = ...,

@@ -6,7 +6,9 @@ use super::{print_stdout, spinner, warn};
 use crate::error::Result;
 use crate::input::program::Direction;
 use crate::measure::cut::{CutOptions, DEFAULT_HEIGHT_STEP_MM, DEFAULT_THETA_STEP_DEG};
-use crate::report::cut::write_cut_files;
+use crate::report::budget_table::mechanism_label;
+use crate::report::cut::{cut_json, write_cut_files, CutBeside};
+use crate::report::cut_budget::CutBudget;
 use crate::report::RunDir;
 
 #[derive(Debug, clap::Args)]
@@ -20,6 +22,7 @@ base circle along the cone axis; the flank contact runs from the tip height \
 Examples:
   mtsim cut scenarios/cone-15-10.toml -o cut
   mtsim cut scenarios/cone-15-10.toml -o cut-nominal --commanded
+  mtsim cut scenarios/cone-15-10.toml -o cut-fast --no-budget
   mtsim cut scenarios/cone-15-10.toml -o cut --heights-mm 30,40,50 --theta-step-deg 0.05")]
 pub struct CutArgs {
     /// Scenario file (TOML) with a cone: [program.cone], or [program] file beside one.
@@ -45,6 +48,10 @@ pub struct CutArgs {
     /// The run that cuts (a generated cone): ccw or cw; default the scenario's first.
     #[arg(long, value_parser = parse_direction)]
     pub direction: Option<Direction>,
+    /// Leave out the error budget (the counterfactual cuts that say what each mechanism does
+    /// to the surface): faster, and cut.json has no `budget`. A commanded cut has none.
+    #[arg(long)]
+    pub no_budget: bool,
     /// Print cut.json to standard output.
     #[arg(long)]
     pub json: bool,
@@ -69,7 +76,7 @@ pub fn run(args: &CutArgs) -> Result<i32> {
     };
     let run_dir = RunDir::begin(&args.output)?.reads(&[&args.scenario]);
     let bar = spinner("cutting");
-    let cut = crate::study::cut::run_cut(&scenario, options, &|t| {
+    let cut = crate::study::cut::run_cut(&scenario, options, !args.no_budget, &|t| {
         bar.set_message(format!("{t:.1} s of machine time"))
     })?;
     bar.finish_and_clear();
@@ -83,29 +90,58 @@ pub fn run(args: &CutArgs) -> Result<i32> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let title = format!("Cut cone: {name}");
-    write_cut_files(run_dir.path(), &title, &cut.surface, &figures)?;
+    let beside = CutBeside {
+        budget: cut.budget.as_ref(),
+        ballbar_um: cut.ballbar_um.as_deref(),
+    };
+    write_cut_files(run_dir.path(), &title, &cut.surface, &figures, beside)?;
     run_dir.commit()?;
     if args.json {
-        let json = serde_json::to_string_pretty(&figures).expect("plain data serializes");
-        print_stdout(&format!("{json}\n"));
+        print_stdout(&cut_json(&figures, cut.budget.as_ref()));
         return Ok(0);
     }
-    print_stdout(&summary_text(
-        &args.scenario,
-        &args.output,
-        &figures,
-        cut.sim_time_s,
-    ));
+    let mut text = summary_text(&args.scenario, &figures, cut.sim_time_s);
+    if let Some(b) = &cut.budget {
+        text.push_str(&budget_text(b));
+    }
+    text.push_str(&format!("wrote {}\n", args.output.display()));
+    print_stdout(&text);
     Ok(0)
 }
 
+/// The error budget as a table: rows ranked by share, then the interplay.
+fn budget_text(b: &CutBudget) -> String {
+    let mut out = format!(
+        "error budget of d (RMS {:.3} µm, peak-to-valley {:.3} µm over {} points):\n{:<34} {:>4} {:>9} {:>9} {:>12} {:>8}\n",
+        b.rms_um, b.pv_um, b.points, "mechanism", "axis", "RMS (µm)", "p-v (µm)", "height (µm)", "share %"
+    );
+    let mut rows: Vec<_> = b.rows.iter().collect();
+    rows.sort_by(|a, c| c.share.total_cmp(&a.share));
+    for r in rows {
+        out.push_str(&format!(
+            "{:<34} {:>4} {:>9.3} {:>9.3} {:>12.3} {:>8.1}\n",
+            mechanism_label(r.mechanism, r.axis.as_deref()),
+            r.axis.as_deref().unwrap_or("-"),
+            r.rms_um,
+            r.pv_um,
+            r.height_change_um,
+            100.0 * r.share
+        ));
+    }
+    out.push_str(&format!(
+        "{:<34} {:>4} {:>9} {:>9} {:>12} {:>8.1}\n",
+        "the mechanisms acting together",
+        "-",
+        "",
+        "",
+        "",
+        100.0 * b.interaction_share
+    ));
+    out
+}
+
 /// The figures as a table, as a CMM prints them.
-fn summary_text(
-    scenario: &Path,
-    output: &Path,
-    f: &crate::measure::cut::CutFigures,
-    sim_time_s: f64,
-) -> String {
+fn summary_text(scenario: &Path, f: &crate::measure::cut::CutFigures, sim_time_s: f64) -> String {
     let mut out = format!(
         "{}: cut {} with R = {:.3} mm ({:.2} s of machine time{})\n",
         scenario.display(),
@@ -145,6 +181,5 @@ fn summary_text(
             f.not_cut_points, f.grid_points
         ));
     }
-    out.push_str(&format!("wrote {}\n", output.display()));
     out
 }

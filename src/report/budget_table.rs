@@ -52,7 +52,13 @@ fn what(row: &BudgetRow) -> String {
 
 /// A row's mechanism in the table.
 fn row_name(row: &BudgetRow) -> String {
-    match (&row.axis, row.mechanism) {
+    mechanism_label(row.mechanism, row.axis.as_deref())
+}
+
+/// A budget row's mechanism in a table (the ball bar's and the cut's): the servo row
+/// without an axis is the servos' common lag.
+pub fn mechanism_label(mechanism: BudgetMechanism, axis: Option<&str>) -> String {
+    match (axis, mechanism) {
         (None, BudgetMechanism::Servo) => "servos' common lag".to_string(),
         (_, m) => m.name().to_string(),
     }

@@ -1,8 +1,12 @@
 //! The cut cone's files: `surface.csv`, `surface.parquet` (θ, z, deviation; empty where not
-//! cut) and `cut.json` (what a CMM reports), each written completely or not at all.
+//! cut) and `cut.json` (what a CMM reports, and the cut's error budget), each written
+//! completely or not at all.
 
 use std::path::Path;
 
+use serde::{Deserialize, Serialize};
+
+use super::cut_budget::CutBudget;
 use super::parquet::{Column, Table};
 use super::write_atomic;
 use crate::error::Result;
@@ -74,25 +78,72 @@ pub fn surface_table(surface: &CutSurface) -> Table {
         .with("deviation_um", Column::F64(d))
 }
 
-/// Writes the surface, `cut.json`, the two pictures (`report::cut_plots`) and `cut.html`
-/// (`report::cut_html`, titled `title`) into `dir`.
+/// `cut.json`: the CMM's figures, with the error budget when it was made.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CutJson {
+    #[serde(flatten)]
+    pub figures: CutFigures,
+    /// Left out with `--no-budget`, `--commanded`, or when a budget run failed.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub budget: Option<CutBudget>,
+}
+
+/// What the page shows beside the cut: its error budget and the ball bar's radial
+/// deviation over the same run (binned over θ, `N_BINS` values at bin centres, µm).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CutBeside<'a> {
+    pub budget: Option<&'a CutBudget>,
+    pub ballbar_um: Option<&'a [f64]>,
+}
+
+/// Writes the surface, `cut.json`, the pictures (`report::cut_plots`, `report::cut_tip`) and
+/// `cut.html` (`report::cut_html`, titled `title`) into `dir`.
 pub fn write_cut_files(
     dir: &Path,
     title: &str,
     surface: &CutSurface,
     figures: &CutFigures,
+    beside: CutBeside<'_>,
 ) -> Result<()> {
     write_atomic(&dir.join(SURFACE_CSV), surface_csv(surface).as_bytes())?;
     write_atomic(
         &dir.join(SURFACE_PARQUET),
         &surface_table(surface).to_parquet()?,
     )?;
-    let json = serde_json::to_string_pretty(figures).expect("plain data serializes");
-    write_atomic(&dir.join(CUT_JSON), format!("{json}\n").as_bytes())?;
+    let json = cut_json(figures, beside.budget);
+    write_atomic(&dir.join(CUT_JSON), json.as_bytes())?;
     let map = super::cut_plots::surface_svg(surface, surface.reversals())?;
     write_atomic(&dir.join(super::cut_plots::SURFACE_SVG), map.as_bytes())?;
     let polar = super::cut_plots::roundness_svg(surface, figures)?;
     write_atomic(&dir.join(super::cut_plots::ROUNDNESS_SVG), polar.as_bytes())?;
-    let page = super::cut_html::cut_html(title, surface, figures, &map, &polar);
+    let tip = match beside.ballbar_um {
+        Some(bar) => {
+            let svg = super::cut_tip::tip_svg(surface, bar)?;
+            write_atomic(&dir.join(super::cut_tip::TIP_SVG), svg.as_bytes())?;
+            Some(svg)
+        }
+        None => None,
+    };
+    let page = super::cut_html::cut_html(
+        title,
+        surface,
+        figures,
+        &super::cut_html::Pictures {
+            map: &map,
+            polar: &polar,
+            tip: tip.as_deref(),
+        },
+        beside.budget,
+    );
     write_atomic(&dir.join(super::cut_html::CUT_HTML), page.as_bytes())
+}
+
+/// `cut.json`'s text: the figures and the budget, pretty, with a final newline.
+pub fn cut_json(figures: &CutFigures, budget: Option<&CutBudget>) -> String {
+    let doc = CutJson {
+        figures: figures.clone(),
+        budget: budget.cloned(),
+    };
+    let json = serde_json::to_string_pretty(&doc).expect("plain data serializes");
+    format!("{json}\n")
 }

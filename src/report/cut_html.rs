@@ -10,6 +10,7 @@
 //! (grey where not cut). After its first frame the page counts the canvas's non-background
 //! pixels into `data-ink` on the canvas, which the browser test reads.
 
+use super::cut_budget::{budget_section, CutBudget};
 use super::escape::esc;
 use crate::measure::cut::{CutFigures, CutSurface};
 
@@ -75,14 +76,39 @@ fn mesh_json(surface: &CutSurface) -> (String, f64) {
     (json, largest)
 }
 
+/// The page's pictures, as SVG text: the unrolled map, the roundness panels and the ball
+/// bar beside the cut at the tip height (None without a bar reading).
+pub struct Pictures<'a> {
+    pub map: &'a str,
+    pub polar: &'a str,
+    pub tip: Option<&'a str>,
+}
+
+/// The ball bar beside the cut, with the sentence that says how to read it.
+fn tip_section(tip: Option<&str>) -> String {
+    match tip {
+        Some(svg) => format!(
+            "<h2 id=\"tip\">Ball bar and cut at the tip height</h2>\n<p>The same run read two ways: \
+             the ball bar's radial deviation dL (not centred) and the cut's deviation d just above \
+             the tip height, over the same θ. They agree where dL varies slowly against the cutter; \
+             d stays below dL where the cutter cannot follow a scallop or spike, and above the tip \
+             the cut also shows what tilts the tool axis, which the bar cannot see (docs/cut.md).</p>\n{svg}\n"
+        ),
+        None => String::new(),
+    }
+}
+
 /// The page.
 pub fn cut_html(
     title: &str,
     surface: &CutSurface,
     figures: &CutFigures,
-    map_svg: &str,
-    polar_svg: &str,
+    pictures: &Pictures<'_>,
+    budget: Option<&CutBudget>,
 ) -> String {
+    let (map_svg, polar_svg) = (pictures.map, pictures.polar);
+    let tip = tip_section(pictures.tip);
+    let budget = budget_section(budget);
     let (mesh, largest) = mesh_json(surface);
     let k = exaggeration(surface, largest);
     let rows: String = figures
@@ -126,7 +152,7 @@ td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}#view{{border:1px
 <table><tr><th>z (mm)</th><th>roundness (µm)</th><th>centre x, y (µm)</th><th>diameter error (µm)</th></tr>{rows}</table>
 <p>Cone angle error: {angle}.</p>
 <table><tr><th>axis</th><th>reversal θ (deg)</th><th>step (µm)</th></tr>{marks}</table>
-<h2>The surface, unrolled</h2>
+{budget}{tip}<h2>The surface, unrolled</h2>
 {map_svg}
 <h2>Roundness per height</h2>
 {polar_svg}

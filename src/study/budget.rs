@@ -29,6 +29,9 @@
 //! axes the program moves; the machine file has no squareness of the linear axes, so no
 //! squareness row is ever made.
 //!
+//! The cut (`study::cut_budget`) runs the same plan: it takes each run's positions
+//! ([`BudgetRun::measured_positions`]) and cuts them on its grid instead of reading the bar.
+//!
 //! # The rows
 //!
 //! Each run's bar reading `dL_k(θ)` is binned as the full run's is (the same samples, the
@@ -395,12 +398,7 @@ impl BudgetRun<'_> {
         }
         let plan = self.plan;
         let cmd = s.commanded;
-        let first = *self.first.get_or_insert(cmd);
-        for &a in crate::Axis::ALL.iter() {
-            if cmd[a] != first[a] && !self.moved.contains(&a) {
-                self.moved.push(a);
-            }
-        }
+        self.note_measured(&cmd);
         let reading = IdealReading::new(&plan.ideal, &cmd);
         let delayed = self.common_positions(&cmd);
         let delayed_ball = reading.ball_at(&delayed);
@@ -410,18 +408,15 @@ impl BudgetRun<'_> {
                 Source::Common => reading.to_ball(&delayed, delayed_ball.as_ref()),
                 Source::Servo(i) => {
                     let axis = plan.drives[i].0.axis;
-                    let mut q = delayed;
-                    q[axis] = self.servos[i].actual();
+                    let q = self.positions_of(case.source, &cmd, &delayed);
                     match axis.is_rotary() {
                         true => reading.to_ball(&q, reading.ball_at(&q).as_ref()),
                         false => reading.to_ball(&q, delayed_ball.as_ref()),
                     }
                 }
                 Source::Table(i) => {
-                    let axis = plan.tables[i].0;
-                    let mut q = cmd;
-                    q[axis] += self.table_state[i].1;
-                    reading.at(&q, axis.is_rotary())
+                    let q = self.positions_of(case.source, &cmd, &delayed);
+                    reading.at(&q, plan.tables[i].0.is_rotary())
                 }
                 Source::Geometric => {
                     let g = &plan.actual;
@@ -459,6 +454,52 @@ impl BudgetRun<'_> {
             b.c += c;
             b.v += self.velocity[a];
         }
+    }
+
+    /// A measured setpoint `cmd`: the axes that have left the first one are moved.
+    fn note_measured(&mut self, cmd: &AxisVec) {
+        let first = *self.first.get_or_insert(*cmd);
+        for &a in crate::Axis::ALL.iter() {
+            if cmd[a] != first[a] && !self.moved.contains(&a) {
+                self.moved.push(a);
+            }
+        }
+    }
+
+    /// The actual positions of a run from `source` at the setpoint `cmd` (stepped already),
+    /// with `delayed` the common servo's ([`BudgetRun::common_positions`]); mm and deg.
+    /// The geometric run's are the setpoint: its errors are in the chain it is read through.
+    fn positions_of(&self, source: Source, cmd: &AxisVec, delayed: &AxisVec) -> AxisVec {
+        match source {
+            Source::Ideal | Source::Geometric => *cmd,
+            Source::Common => *delayed,
+            Source::Servo(i) => {
+                let mut q = *delayed;
+                q[self.plan.drives[i].0.axis] = self.servos[i].actual();
+                q
+            }
+            Source::Table(i) => {
+                let mut q = *cmd;
+                q[self.plan.tables[i].0] += self.table_state[i].1;
+                q
+            }
+        }
+    }
+
+    /// Each run's actual positions at the measured setpoint `cmd` (stepped already), in the
+    /// plan's order ([`BudgetPlan::cases`]), for a measurement other than the bar (the cut)
+    /// that reads them through its own geometry; None once a servo failed.
+    pub fn measured_positions(&mut self, cmd: &AxisVec, out: &mut Vec<AxisVec>) -> Option<()> {
+        if self.failed.is_some() {
+            return None;
+        }
+        self.note_measured(cmd);
+        let delayed = self.common_positions(cmd);
+        out.clear();
+        for case in &self.plan.cases {
+            out.push(self.positions_of(case.source, cmd, &delayed));
+        }
+        Some(())
     }
 
     /// Every axis through the common servo (the setpoint `cmd` itself without one).
@@ -545,6 +586,40 @@ pub struct BudgetDirection {
     lost_bins: Vec<Vec<LostBin>>,
 }
 
+impl BudgetDirection {
+    /// The axes whose measured setpoint left its first value.
+    pub fn moved(&self) -> &[Axis] {
+        &self.moved
+    }
+}
+
+/// One run of a plan as another measurement sees it: the mechanism and axis it adds, the
+/// run it is measured against (None: the program's own, against nothing) and whether its
+/// positions are read through the chain with the location errors (the geometric run) or
+/// through the nominal one (every other).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CaseInfo {
+    pub mechanism: BudgetMechanism,
+    pub axis: Option<Axis>,
+    pub base: Option<usize>,
+    pub location_errors: bool,
+}
+
+impl BudgetPlan {
+    /// The plan's runs, in the order [`BudgetRun::measured_positions`] gives them.
+    pub fn cases(&self) -> Vec<CaseInfo> {
+        self.cases
+            .iter()
+            .map(|c| CaseInfo {
+                mechanism: c.mechanism,
+                axis: c.axis,
+                base: c.base,
+                location_errors: matches!(c.source, Source::Geometric),
+            })
+            .collect()
+    }
+}
+
 /// Steps a direction's [`BudgetRun`] on every sample of the pipeline (placed before any
 /// settle gate: the servos must see every setpoint).
 pub struct BudgetStepper<'a, 'p>(pub &'a RefCell<BudgetRun<'p>>);
@@ -622,7 +697,7 @@ pub fn assemble(
 }
 
 /// `max − min` of a curve, µm.
-fn peak_to_valley(c: &[f64]) -> f64 {
+pub fn peak_to_valley(c: &[f64]) -> f64 {
     let (lo, hi) = c
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
@@ -637,11 +712,21 @@ fn peak_to_valley(c: &[f64]) -> f64 {
 
 /// `<c − c̄, d − d̄> / <d − d̄, d − d̄>`; 0 when d is flat.
 pub fn share_of(c: &[f64], d: &[f64]) -> f64 {
+    projection_share(c, d, true)
+}
+
+/// The part of `d` that `c` explains, `<c − c̄, d − d̄> / <d − d̄, d − d̄>` with the means
+/// taken out (`about_mean`: a centred curve, the bar's) or `<c, d> / <d, d>` about zero
+/// (a deviation whose mean is a figure, the cut's size); 0 when d is flat (zero).
+pub fn projection_share(c: &[f64], d: &[f64], about_mean: bool) -> f64 {
     let n = d.len().min(c.len()) as f64;
     if n == 0.0 {
         return 0.0;
     }
-    let (cm, dm) = (c.iter().sum::<f64>() / n, d.iter().sum::<f64>() / n);
+    let (cm, dm) = match about_mean {
+        true => (c.iter().sum::<f64>() / n, d.iter().sum::<f64>() / n),
+        false => (0.0, 0.0),
+    };
     let (cd, dd) = c.iter().zip(d).fold((0.0, 0.0), |(cd, dd), (c, d)| {
         (cd + (c - cm) * (d - dm), dd + (d - dm) * (d - dm))
     });

@@ -1,9 +1,13 @@
 //! `mtsim cut`: one run of a cone scenario's program through the pipeline into the cut
-//! surface (`measure::cut`), with the reversal angles its marks are read at.
+//! surface (`measure::cut`), with the reversal angles its marks are read at, the ball bar's
+//! reading of the same run (to draw beside the cut) and the cut's error budget
+//! (`study::cut_budget`, its runs riding the same pass).
 //!
 //! The run is `simulate`'s (the same program, lead, interpolator, servo and settle gate for a
 //! file program), in one direction: one piece is cut by one pass. With `commanded` the
 //! samples are the interpolator's setpoints alone (no servo), which is all the cut reads then.
+
+use std::cell::RefCell;
 
 use crate::error::{Error, Result};
 use crate::input::program::Direction;
@@ -12,15 +16,24 @@ use crate::measure::cut::{CutOptions, CutSurface};
 use crate::measure::settle::SettleGate;
 use crate::pipeline::{self, Sink, Timing};
 use crate::program::{self, test_of};
+use crate::report::cut_budget::CutBudget;
+use crate::study::budget::{BudgetPlan, BudgetStepper};
+use crate::study::cut_budget::{assemble, CutBudgetRuns};
 use crate::study::reversals::reversals_deg;
 use crate::study::simulate::{
-    analysed_along, analyses, bar_geometry, directions_of, gates_transient, run_options,
-    transient_warning,
+    analysed_along, analyses, ballbar_sink, bar_geometry, directions_of, gates_transient,
+    run_options, transient_warning,
 };
 
 /// What a cut run gives.
 pub struct CutRun {
     pub surface: CutSurface,
+    /// The cut's error budget (`study::cut_budget`); None with `commanded`, without a
+    /// budget asked for, or when one of its runs failed (said in `warnings`).
+    pub budget: Option<CutBudget>,
+    /// The ball bar's radial deviation dL of the same run, µm, binned over θ (`N_BINS` bins,
+    /// raw: not centred); None when the bar's samples leave a gap.
+    pub ballbar_um: Option<Vec<f64>>,
     /// Machine time of the run, s, and its samples.
     pub sim_time_s: f64,
     pub setpoints: u64,
@@ -28,8 +41,15 @@ pub struct CutRun {
     pub warnings: Vec<String>,
 }
 
-/// Cuts `scenario`'s cone with `options`. `progress` is told the machine time now and then.
-pub fn run_cut(scenario: &Scenario, options: CutOptions, progress: &dyn Fn(f64)) -> Result<CutRun> {
+/// Cuts `scenario`'s cone with `options`, with the error budget when `with_budget` (and the
+/// cut is not `commanded`: the program alone has nothing to split). `progress` is told the
+/// machine time now and then.
+pub fn run_cut(
+    scenario: &Scenario,
+    options: CutOptions,
+    with_budget: bool,
+    progress: &dyn Fn(f64),
+) -> Result<CutRun> {
     let test = test_of(scenario);
     let cone = *test.cone().ok_or_else(|| {
         Error::usage(format!(
@@ -48,12 +68,26 @@ pub fn run_cut(scenario: &Scenario, options: CutOptions, progress: &dyn Fn(f64))
     }
     let (along, done) = analyses(scenario)?;
     let commanded = options.commanded;
+    let geometry = bar_geometry(scenario);
+    let plan = match geometry.filter(|_| with_budget && !commanded) {
+        Some(g) => Some(BudgetPlan::new(scenario, g)?),
+        None => None,
+    };
+    let budget_run = plan.as_ref().map(|p| RefCell::new(p.start(direction)));
+    let mut budget_cuts = match (&plan, &budget_run) {
+        (Some(plan), Some(run)) => Some(CutBudgetRuns::new(scenario, &cone, plan, &options, run)?),
+        _ => None,
+    };
     let mut surface = CutSurface::new(scenario, &cone, options, Vec::new())?;
     let mut run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
     if let Some(along) = &along {
         run.moves = analysed_along(run.moves, along);
     }
     surface.start_run(direction, run.measured);
+    if let Some(b) = budget_cuts.as_mut() {
+        b.start_run(direction, run.measured);
+    }
+    let mut ballbar = geometry.map(|g| ballbar_sink(g, direction, run.measured, 1));
     let mut run_options = run_options(scenario, 0.0)?;
     run_options.timing = if commanded {
         Timing::Setpoints
@@ -64,30 +98,55 @@ pub fn run_cut(scenario: &Scenario, options: CutOptions, progress: &dyn Fn(f64))
         }
     };
     let mut warnings = Vec::new();
-    let stats = match bar_geometry(scenario).filter(|_| gates_transient(scenario)) {
-        Some(g) => {
-            let mut gate = SettleGate::new(
-                vec![&mut surface as &mut dyn Sink],
-                run.measured,
-                Box::new(move |s| g.read_commanded(&s.commanded).theta_deg),
-            );
-            let stats = pipeline::run(
-                run.moves,
-                &scenario.machine,
-                &run_options,
-                &mut [&mut gate],
-                progress,
-            )?;
-            warnings.extend(transient_warning(&gate));
-            stats
+    let stats = {
+        let mut sinks: Vec<&mut dyn Sink> = vec![&mut surface];
+        if let Some(b) = budget_cuts.as_mut() {
+            sinks.push(b);
         }
-        None => pipeline::run(
-            run.moves,
-            &scenario.machine,
-            &run_options,
-            &mut [&mut surface],
-            progress,
-        )?,
+        if let Some(b) = ballbar.as_mut() {
+            sinks.push(b);
+        }
+        // The budget's servos take every setpoint, before any settle gate.
+        let mut stepper = budget_run.as_ref().map(BudgetStepper);
+        match geometry.filter(|_| gates_transient(scenario)) {
+            Some(g) => {
+                let mut gate = SettleGate::new(
+                    sinks,
+                    run.measured,
+                    Box::new(move |s| g.read_commanded(&s.commanded).theta_deg),
+                );
+                let stats = {
+                    let mut outer: Vec<&mut dyn Sink> = Vec::with_capacity(2);
+                    if let Some(s) = stepper.as_mut() {
+                        outer.push(s);
+                    }
+                    outer.push(&mut gate);
+                    pipeline::run(
+                        run.moves,
+                        &scenario.machine,
+                        &run_options,
+                        &mut outer,
+                        progress,
+                    )?
+                };
+                warnings.extend(transient_warning(&gate));
+                stats
+            }
+            None => {
+                let mut outer: Vec<&mut dyn Sink> = Vec::with_capacity(sinks.len() + 1);
+                if let Some(s) = stepper.as_mut() {
+                    outer.push(s);
+                }
+                outer.extend(sinks);
+                pipeline::run(
+                    run.moves,
+                    &scenario.machine,
+                    &run_options,
+                    &mut outer,
+                    progress,
+                )?
+            }
+        }
     };
     surface.end_run();
     warnings.extend(
@@ -108,8 +167,20 @@ pub fn run_cut(scenario: &Scenario, options: CutOptions, progress: &dyn Fn(f64))
         (None, None) => Vec::new(),
     };
     surface.set_reversals(reversals);
+    let cuts = budget_cuts.map(CutBudgetRuns::finish);
+    let budget = match (cuts, budget_run.map(|r| r.into_inner().finish())) {
+        (Some(cuts), Some(Ok(done))) => Some(assemble(cuts, &surface, done.moved())),
+        (_, Some(Err(why))) => {
+            warnings.push(format!("no error budget: one of its runs failed ({why})"));
+            None
+        }
+        _ => None,
+    };
+    let ballbar_um = ballbar.and_then(|b| b.run.trace_um(false).ok());
     Ok(CutRun {
         surface,
+        budget,
+        ballbar_um,
         sim_time_s: stats.end_time_s,
         setpoints: stats.samples,
         warnings,

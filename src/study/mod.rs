@@ -7,6 +7,7 @@ pub mod batch;
 pub mod budget;
 pub mod chain_events;
 pub mod cut;
+pub mod cut_budget;
 pub mod diagnose;
 pub mod feed;
 pub mod fit;

@@ -52,7 +52,7 @@ const SHOWN: &[(&str, Shown)] = &[
     ("mtsim cone SCENARIO [-o FILE] [--g93] [--tcp]", Run(&[(&["cone", SC], 0)])),
     ("mtsim cut SCENARIO -o DIR", Names),
     (
-        "mtsim cut SCENARIO [-o DIR] [--commanded] [--theta-step-deg D] [--heights-mm Z,..] [--json]",
+        "mtsim cut SCENARIO [-o DIR] [--commanded] [--theta-step-deg D] [--heights-mm Z,..] [--no-budget] [--json]",
         Run(&[(&["cut", SC, "-o", "cut-h", "--heights-mm", "30,40,50", "--json"], 0)]),
     ),
     ("mtsim cut scenarios/cone-15-10.toml -o cut", Run(&[(&["cut", SC, "-o", "cut"], 0)])),

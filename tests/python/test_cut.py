@@ -1,5 +1,5 @@
-"""`mtsim.cut`: the machined cone's figures and surface, against the command line's cut.json
-and the grid the options ask for, and the commanded cut's closed form (the program's own
+"""`mtsim.cut`: the machined cone's figures, error budget and surface, against the command
+line's cut.json and the grid the options ask for, `budget=False` against `--no-budget`, and the commanded cut's closed form (the program's own
 chords leave a sag that falls as 1/n^2: docs/cut.md)."""
 
 import json
@@ -25,6 +25,20 @@ def test_cut_gives_the_command_line_s_figures_and_the_grid_asked_for(root, mtsim
     zs = sorted(set(surface.column("z_mm").to_pylist()))
     assert surface.num_rows == 720 * len(zs)
     assert 30.0 in zs and 50.0 in zs
+    # The error budget, as the command line's: shares and the interplay add to 1.
+    budget = figures["budget"]
+    assert abs(sum(r["share"] for r in budget["rows"]) + budget["interaction_share"] - 1) < 1e-9
+    assert budget["rows"][0]["mechanism"] == "program"
+
+
+def test_budget_false_is_no_budget(root, mtsim_bin, tmp_path):
+    figures, _ = mtsim.cut(root / "scenarios/cone-15-10.toml", theta_step_deg=1.0, budget=False)
+    out = tmp_path / "cli"
+    run = cli(mtsim_bin, "cut", "scenarios/cone-15-10.toml", "--theta-step-deg", "1", "--no-budget",
+              "-o", out)
+    assert run.returncode == 0, run.stderr
+    assert "budget" not in figures
+    assert figures == json.loads((out / "cut.json").read_text())
 
 
 def test_a_fine_commanded_cone_is_cut_within_its_chord_sag():

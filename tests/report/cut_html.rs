@@ -1,5 +1,6 @@
 //! `cut.html` in headless Chromium, on every bundled cone scenario: the map, the roundness
-//! plots and the 3D view (three.js, WebGL) are drawn, the canvas non-empty.
+//! plots, the ball bar beside the cut at the tip height, the error budget's table and the
+//! 3D view (three.js, WebGL) are drawn, the canvas non-empty.
 
 use crate::common;
 use crate::html::{chromium_or_skip, render};
@@ -14,10 +15,10 @@ const CONES: &[&str] = &[
 ];
 
 #[test]
-fn every_bundled_cone_cut_page_renders_its_map_plots_and_3d_view() {
-    let Some(browser) =
-        chromium_or_skip("every_bundled_cone_cut_page_renders_its_map_plots_and_3d_view")
-    else {
+fn every_bundled_cone_cut_page_renders_its_map_plots_budget_ball_bar_and_3d_view() {
+    let Some(browser) = chromium_or_skip(
+        "every_bundled_cone_cut_page_renders_its_map_plots_budget_ball_bar_and_3d_view",
+    ) else {
         return;
     };
     for name in CONES {
@@ -38,6 +39,45 @@ fn every_bundled_cone_cut_page_renders_its_map_plots_and_3d_view() {
             dom.matches("Ø error").count(),
             3,
             "{name}: three polar panels"
+        );
+        // The ball bar beside the cut at the tip height: one chart, both curves on one θ
+        // axis, drawn (plotters' paths inside the inline SVG).
+        let tip = dom
+            .split("id=\"tip\"")
+            .nth(1)
+            .unwrap_or_else(|| panic!("{name}: no ball bar beside the cut"));
+        let chart = &tip[..tip.find("</svg>").expect("the chart's SVG")];
+        assert!(chart.contains("ball bar dL"), "{name}: the bar's curve");
+        assert!(
+            chart.contains("cut d at the tip height"),
+            "{name}: the cut's"
+        );
+        assert!(chart.contains("θ (deg)"), "{name}: the θ axis");
+        assert!(
+            chart.matches("<path").count() + chart.matches("<polyline").count() >= 2,
+            "{name}: the curves are drawn"
+        );
+        // The error budget: the program's row, at least one mechanism's and the interplay.
+        let budget = dom
+            .split("class=\"budget\"")
+            .nth(1)
+            .unwrap_or_else(|| panic!("{name}: no budget table"));
+        let table = &budget[..budget.find("</table>").expect("the table's end")];
+        assert!(
+            table.contains("data-budget=\"programpath:–\""),
+            "{name}: program row"
+        );
+        assert!(
+            table.contains("data-budget=\"servo:–\""),
+            "{name}: the common lag"
+        );
+        assert!(
+            table.contains("data-budget=\"interaction:–\""),
+            "{name}: interplay"
+        );
+        assert!(
+            table.matches("<tr data-budget").count() >= 4,
+            "{name}: the budget's rows"
         );
         // The 3D view drew: non-background pixels counted by the page after its first frame.
         let ink: usize = dom

@@ -7,6 +7,7 @@ mod common;
 mod budget;
 mod circle_feed;
 mod cone_reference;
+mod cut_budget;
 mod diagnose;
 mod fit;
 mod fit_chain;

@@ -20,7 +20,7 @@ use mtsim::cli::{block_rows, AnalyzeFindings};
 use mtsim::error::Error;
 use mtsim::input::scenario::TraceFormat;
 use mtsim::measure::cut::CutOptions;
-use mtsim::report::cut::{write_cut_files, SURFACE_PARQUET};
+use mtsim::report::cut::{write_cut_files, CutBeside, CutJson, SURFACE_PARQUET};
 use mtsim::study::fit::{FitOptions, MeasuredTrace};
 use mtsim::study::param::{write_outputs, Study};
 use mtsim::study::simulate::TRACE_PARQUET_FILE;
@@ -84,7 +84,8 @@ fn simulate<'py>(
 /// Predicts the machined cone: (the cut.json figures, the surface stream). See `mtsim.cut`.
 #[pyfunction]
 #[pyo3(signature = (scenario, *, output=None, theta_step_deg=None, heights_mm=None,
-                    height_step_mm=None, commanded=false))]
+                    height_step_mm=None, commanded=false, budget=true))]
+#[allow(clippy::too_many_arguments)]
 fn cut<'py>(
     py: Python<'py>,
     scenario: &Bound<'py, PyAny>,
@@ -93,6 +94,7 @@ fn cut<'py>(
     heights_mm: Option<Vec<f64>>,
     height_step_mm: Option<f64>,
     commanded: bool,
+    budget: bool,
 ) -> PyResult<(Bound<'py, PyAny>, ArrowStream)> {
     let input = ScenarioInput::from_py(scenario)?;
     let (figures, batches) = run(py, &input.texts(), || {
@@ -105,12 +107,20 @@ fn cut<'py>(
             commanded,
             direction: None,
         };
-        let cut = mtsim::study::cut::run_cut(&scenario, options, &|_| {})?;
+        let cut = mtsim::study::cut::run_cut(&scenario, options, budget, &|_| {})?;
         let figures = cut.surface.figures();
         let dir = Scratch::begin(output.as_deref())?;
-        write_cut_files(dir.path(), "Cut cone", &cut.surface, &figures)?;
+        let beside = CutBeside {
+            budget: cut.budget.as_ref(),
+            ballbar_um: cut.ballbar_um.as_deref(),
+        };
+        write_cut_files(dir.path(), "Cut cone", &cut.surface, &figures, beside)?;
         let batches = Batches::read_parquet(&dir.path().join(SURFACE_PARQUET))?;
-        Ok((to_json(&figures), batches))
+        let doc = CutJson {
+            figures,
+            budget: cut.budget,
+        };
+        Ok((to_json(&doc), batches))
     })?;
     Ok((json::to_py(py, &figures)?, ArrowStream::new(batches)))
 }

@@ -52,6 +52,9 @@ pub const PROFILE_BINS: usize = 2_000;
 pub struct ContourReading {
     /// Distance from the actual tip to the programmed path, µm.
     pub contour_um: f64,
+    /// From the nearest point of the path to the actual tip, workpiece frame, mm: the
+    /// contour error as a vector (its length is `contour_um`), for the error budget.
+    pub error_mm: Vector3<f64>,
     /// Angle between the actual and the programmed tool axis, µrad.
     pub tool_axis_error_urad: f64,
 }
@@ -179,16 +182,32 @@ impl<'a> ContourGauge<'a> {
         while self.window.front().is_some_and(|b| b.index + 1 < k) {
             self.window.pop_front();
         }
-        let Some(here) = self.window.iter().position(|b| b.index == k) else {
+        let actual = actual_tool(&self.actual, &s.actual);
+        let Some((error_mm, programmed_axis)) = self.nearest(s, &actual) else {
             return Ok(None);
         };
+        let cos = actual.axis.dot(&programmed_axis).clamp(-1.0, 1.0);
+        let reading = ContourReading {
+            contour_um: error_mm.norm() * 1e3,
+            error_mm,
+            tool_axis_error_urad: angle_between(&actual.axis, &programmed_axis, cos) * 1e6,
+        };
+        self.record(s, &reading);
+        Ok(Some(reading))
+    }
+
+    /// The contour error vector (mm) of the tool at `pose` at sample `s` (read already by
+    /// [`ContourGauge::read`], which holds its blocks), and the programmed tool axis at the
+    /// nearest point; None off the contour.
+    fn nearest(&self, s: &Sample, pose: &ToolPose) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        let k = s.block_index;
+        let here = self.window.iter().position(|b| b.index == k)?;
         // The first move only places the machine (its start is unknown), and is no contour.
         if !self.window[here].contour || k == 0 {
-            return Ok(None);
+            return None;
         }
-        let actual = actual_tool(&self.actual, &s.actual);
-        let w = workpiece_point(&actual, self.window[here].block.tool_length_mm);
-        let mut best: Option<(f64, Vector3<f64>)> = None;
+        let w = workpiece_point(pose, self.window[here].block.tool_length_mm);
+        let mut best: Option<(f64, Vector3<f64>, Vector3<f64>)> = None;
         for (j, path) in self.window.iter().enumerate() {
             if !path.contour || path.index == 0 || path.index + 1 < k || path.index > k + 1 {
                 continue;
@@ -200,21 +219,24 @@ impl<'a> ContourGauge<'a> {
                 std::cmp::Ordering::Greater => 0.0,
                 std::cmp::Ordering::Equal => fraction_of(&path.block, &s.commanded),
             };
-            let (d, axis) = self.distance(path, &w, start_f);
-            if best.is_none_or(|(b, _)| d < b) {
-                best = Some((d, axis));
+            let (point, axis) = self.nearest_on(path, &w, start_f);
+            let d = (w - point).norm();
+            if best.is_none_or(|(b, _, _)| d < b) {
+                best = Some((d, w - point, axis));
             }
         }
-        let Some((d, programmed_axis)) = best else {
-            return Ok(None);
+        best.map(|(_, e, axis)| (e, axis))
+    }
+
+    /// The contour error vector (mm) at sample `s` (read already) of axis positions `q`
+    /// other than the actual ones (an error budget's run), through the chain with the
+    /// location errors when `location_errors`, else the nominal one.
+    pub fn error_at(&self, s: &Sample, q: &AxisVec, location_errors: bool) -> Option<Vector3<f64>> {
+        let pose = match location_errors {
+            true => actual_tool(&self.actual, q),
+            false => self.nominal.forward(q),
         };
-        let cos = actual.axis.dot(&programmed_axis).clamp(-1.0, 1.0);
-        let reading = ContourReading {
-            contour_um: d * 1e3,
-            tool_axis_error_urad: angle_between(&actual.axis, &programmed_axis, cos) * 1e6,
-        };
-        self.record(s, &reading);
-        Ok(Some(reading))
+        self.nearest(s, &pose).map(|(e, _)| e)
     }
 
     /// What the gauge measured over the run.
@@ -310,9 +332,9 @@ impl<'a> ContourGauge<'a> {
         (workpiece_point(&pose, tool_length_mm), pose.axis)
     }
 
-    /// The distance (mm) from `w` to `path`, and the programmed tool axis at the nearest
-    /// point; `start_f` is where the search starts.
-    fn distance(&self, path: &BlockPath, w: &Point3<f64>, start_f: f64) -> (f64, Vector3<f64>) {
+    /// The point of `path` nearest `w`, and the programmed tool axis there; `start_f` is
+    /// where the search starts.
+    fn nearest_on(&self, path: &BlockPath, w: &Point3<f64>, start_f: f64) -> (Point3<f64>, Vector3<f64>) {
         let l = path.block.tool_length_mm;
         if let Some((a, b)) = path.segment {
             let ab = b - a;
@@ -323,7 +345,7 @@ impl<'a> ContourGauge<'a> {
                 0.0
             };
             let axis = self.programmed(&path.block, f, l).1;
-            return ((a + ab * f - w).norm(), axis);
+            return (a + ab * f, axis);
         }
         newton_nearest(|f| self.programmed(&path.block, f, l), w, start_f)
     }
@@ -331,12 +353,12 @@ impl<'a> ContourGauge<'a> {
 
 /// Minimises `|P(f) − w|²` over `f ∈ [0, 1]` by Newton's method on its derivative
 /// `(P − w)·P'`, with `P'` and `P''` by central differences (a stencil kept inside the
-/// block); returns the distance and the tool axis there.
+/// block); returns the nearest point and the tool axis there.
 fn newton_nearest(
     p: impl Fn(f64) -> (Point3<f64>, Vector3<f64>),
     w: &Point3<f64>,
     start_f: f64,
-) -> (f64, Vector3<f64>) {
+) -> (Point3<f64>, Vector3<f64>) {
     const H: f64 = 1e-4;
     let mut f = start_f.clamp(0.0, 1.0);
     for _ in 0..8 {
@@ -362,8 +384,7 @@ fn newton_nearest(
             break;
         }
     }
-    let (point, axis) = p(f);
-    ((point - w).norm(), axis)
+    p(f)
 }
 
 /// `tip_L + L ẑ` with `tip_L = tip_0 − L·axis`: the reader's coordinates of a tool tip

@@ -137,8 +137,9 @@ pub struct BudgetPlan {
     tables: Vec<(Axis, ErrorTable)>,
     lost_motion: Vec<LostMotion>,
     /// The bar on the nominal chain, and on the actual one (location errors).
-    ideal: BarGeometry,
-    actual: BarGeometry,
+    /// The bar on the nominal chain, and on the actual one (location errors); None for a
+    /// plan whose runs are read as positions only ([`BudgetPlan::for_positions`]).
+    bar: Option<(BarGeometry, BarGeometry)>,
     period_s: f64,
     /// The common servo of every axis (see [`common_lag_s`]); none without a common lag.
     common: Vec<AxisDrive>,
@@ -147,9 +148,23 @@ pub struct BudgetPlan {
 impl BudgetPlan {
     /// The runs for `scenario`'s bar `geometry`: every mechanism the machine has.
     pub fn new(scenario: &Scenario, geometry: BarGeometry) -> Result<BudgetPlan> {
+        BudgetPlan::build(scenario, Some(geometry))
+    }
+
+    /// The same runs for a measurement that reads each run's positions through its own
+    /// geometry ([`BudgetRun::measured_positions`]: the contour error of a part program),
+    /// without a bar.
+    pub fn for_positions(scenario: &Scenario) -> Result<BudgetPlan> {
+        BudgetPlan::build(scenario, None)
+    }
+
+    fn build(scenario: &Scenario, geometry: Option<BarGeometry>) -> Result<BudgetPlan> {
         let machine = &scenario.machine;
-        let mut ideal = geometry;
-        ideal.kinematics.location_errors = Default::default();
+        let bar = geometry.map(|actual| {
+            let mut ideal = actual;
+            ideal.kinematics.location_errors = Default::default();
+            (ideal, actual)
+        });
         let period_s = machine.interpolation_period_s;
         let delay_s = common_lag_s(scenario)?;
         let mut plan = BudgetPlan {
@@ -162,8 +177,7 @@ impl BudgetPlan {
             drives: Vec::new(),
             tables: Vec::new(),
             lost_motion: Vec::new(),
-            ideal,
-            actual: geometry,
+            bar,
             period_s,
             common: Vec::new(),
         };
@@ -219,7 +233,7 @@ impl BudgetPlan {
                 });
             }
         }
-        if !geometry.kinematics.location_errors.is_zero() {
+        if !machine.kinematics.location_errors.is_zero() {
             plan.cases.push(Case {
                 mechanism: BudgetMechanism::Geometric,
                 axis: None,
@@ -397,9 +411,13 @@ impl BudgetRun<'_> {
             return;
         }
         let plan = self.plan;
+        // Readings come from the bar's sink alone, which a plan without a bar never has.
+        let Some((ideal, actual)) = &plan.bar else {
+            return;
+        };
         let cmd = s.commanded;
         self.note_measured(&cmd);
-        let reading = IdealReading::new(&plan.ideal, &cmd);
+        let reading = IdealReading::new(ideal, &cmd);
         let delayed = self.common_positions(&cmd);
         let delayed_ball = reading.ball_at(&delayed);
         for (k, case) in plan.cases.iter().enumerate() {
@@ -419,7 +437,7 @@ impl BudgetRun<'_> {
                     reading.at(&q, plan.tables[i].0.is_rotary())
                 }
                 Source::Geometric => {
-                    let g = &plan.actual;
+                    let g = actual;
                     deviation_mm(&g.kinematics, &cmd, &g.pivot_table_mm, g.length_mm) * 1e3
                 }
             };
@@ -745,7 +763,10 @@ fn reversal_b(
     contribution: &dyn Fn(usize) -> Vec<f64>,
     moved: &dyn Fn(Axis) -> bool,
 ) -> Vec<AxisReversal> {
-    let length_mm = plan.ideal.length_mm;
+    let Some((ideal, _)) = &plan.bar else {
+        return Vec::new();
+    };
+    let length_mm = ideal.length_mm;
     plan.drives
         .iter()
         .filter(|(_, linear)| *linear)

@@ -9,6 +9,7 @@ use crate::error::{Result, EXIT_VIOLATIONS};
 use crate::input::scenario::TraceFormat;
 use crate::report::html::CHECK_FILE;
 use crate::report::{write_atomic, RunDir};
+use crate::study::contour_budget::ContourBudget;
 
 pub fn run(
     path: &Path,
@@ -262,5 +263,37 @@ fn contour_text(
         })
         .collect();
     out.push_str(&format!("worst: {}\n", worst.join(", ")));
+    let budget = measurements
+        .get("contour")
+        .and_then(|c| c.get("budget"))
+        .and_then(|b| serde_json::from_value::<ContourBudget>(b.clone()).ok());
+    if let Some(b) = budget {
+        let mut rows: Vec<_> = b.rows.iter().filter(|r| r.share.abs() >= 0.005).collect();
+        rows.sort_by(|x, y| y.share.total_cmp(&x.share));
+        let parts: Vec<String> = rows
+            .iter()
+            .map(|r| {
+                let axis = r
+                    .axis
+                    .as_deref()
+                    .map_or(String::new(), |a| format!(" of {a}"));
+                format!(
+                    "{}{axis} {:.0} % (RMS {:.2} µm)",
+                    crate::report::budget_table::mechanism_label(r.mechanism, r.axis.as_deref()),
+                    100.0 * r.share,
+                    r.rms_um
+                )
+            })
+            .collect();
+        out.push_str(&format!(
+            "contour error budget (counterfactual runs): {}; the mechanisms together {:.0} %\n",
+            parts.join(", "),
+            // Rounded to whole percent, without a "-0".
+            match 100.0 * b.interaction_share {
+                v if v.abs() < 0.5 => 0.0,
+                v => v,
+            }
+        ));
+    }
     Ok(out)
 }

@@ -334,7 +334,12 @@ impl<'a> ContourGauge<'a> {
 
     /// The point of `path` nearest `w`, and the programmed tool axis there; `start_f` is
     /// where the search starts.
-    fn nearest_on(&self, path: &BlockPath, w: &Point3<f64>, start_f: f64) -> (Point3<f64>, Vector3<f64>) {
+    fn nearest_on(
+        &self,
+        path: &BlockPath,
+        w: &Point3<f64>,
+        start_f: f64,
+    ) -> (Point3<f64>, Vector3<f64>) {
         let l = path.block.tool_length_mm;
         if let Some((a, b)) = path.segment {
             let ab = b - a;

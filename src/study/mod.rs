@@ -6,6 +6,7 @@ pub mod analysis;
 pub mod batch;
 pub mod budget;
 pub mod chain_events;
+pub mod contour_budget;
 pub mod cut;
 pub mod cut_budget;
 pub mod diagnose;

@@ -36,6 +36,7 @@ use crate::program::test_of;
 use crate::report::create_dir;
 use crate::report::trace::TraceSink;
 use crate::study::budget::{self, BudgetDirection, BudgetPlan, BudgetRun, BudgetStepper};
+use crate::study::contour_budget::ContourBudgetRuns;
 use crate::study::reversals::{
     has_closed_form, reversals_deg, scenario_reversals_deg, MoveAnalysis,
 };
@@ -232,8 +233,13 @@ pub fn run_ballbar_budget(
         }
         let options = run_options(scenario, sim_time_s)?;
         let budget_run = budget
-            .filter(|_| ballbar.is_some())
+            .filter(|_| ballbar.is_some() || gauge.is_some())
             .map(|plan| RefCell::new(plan.start(direction)));
+        // A part program's budget reads each run's positions through the contour gauge.
+        let mut contour_runs = match (&gauge, &budget_run, budget) {
+            (Some(_), Some(run), Some(plan)) => Some(ContourBudgetRuns::new(plan, run)),
+            _ => None,
+        };
         let stats = {
             let mut sinks: Vec<&mut dyn Sink> = Vec::with_capacity(1);
             // The ball bar and its trace, or (no measured circle) the contour gauge and the
@@ -252,6 +258,7 @@ pub fn run_ballbar_budget(
                     Some(ProgramAndTrace {
                         gauge,
                         trace: trace.as_deref_mut(),
+                        budget: contour_runs.as_mut(),
                     }),
                 ),
                 (None, None) => (None, None),
@@ -293,10 +300,16 @@ pub fn run_ballbar_budget(
                 }
             }
         };
+        let contour_sums = contour_runs.and_then(ContourBudgetRuns::finish);
+        let finished = budget_run.map(|b| b.into_inner().finish());
         if let Some(gauge) = gauge {
-            contour = Some((gauge.figures(), gauge.profile().clone()));
+            let budget = match (contour_sums, &finished) {
+                (Some(sums), Some(Ok(direction))) => Some(sums.budget(direction.moved())),
+                _ => None,
+            };
+            contour = Some((gauge.figures(), gauge.profile().clone(), budget));
         }
-        budget_runs.extend(budget_run.map(|b| b.into_inner().finish()));
+        budget_runs.extend(finished);
         // The run's rows go to the trace now that its centring is known.
         if let Some(t) = trace.as_deref_mut() {
             t.end_run(ballbar.as_ref().map(|b| b.run.centring()))?;
@@ -322,8 +335,12 @@ pub fn run_ballbar_budget(
     for m in &measurements {
         study.measurements.insert(m.name().to_string(), m.finish()?);
     }
-    if let Some((figures, profile)) = contour {
-        let json = serde_json::to_value(figures).expect("plain data serializes");
+    if let Some((figures, profile, budget)) = contour {
+        let mut json = serde_json::to_value(figures).expect("plain data serializes");
+        if let (Some(budget), Some(map)) = (budget, json.as_object_mut()) {
+            let budget = serde_json::to_value(budget).expect("plain data serializes");
+            map.insert("budget".into(), budget);
+        }
         study.measurements.insert("contour".into(), json);
         study.contour_profile = Some(profile);
     }
@@ -602,9 +619,11 @@ pub fn simulate_with(
         scenario.simulate.max_trace_rows,
     )?;
     let started = Instant::now();
-    let plan = match bar_geometry(scenario).filter(|_| with_budget) {
-        Some(g) => Some(BudgetPlan::new(scenario, g)?),
-        None => None,
+    // The ball bar's budget; a part program's, of its contour error, without a bar.
+    let plan = match (bar_geometry(scenario), with_budget) {
+        (Some(g), true) => Some(BudgetPlan::new(scenario, g)?),
+        (None, true) => Some(BudgetPlan::for_positions(scenario)?),
+        (_, false) => None,
     };
     let (study, budget_runs) =
         run_ballbar_budget(scenario, Some(&mut trace), plan.as_ref(), progress)?;
@@ -756,14 +775,19 @@ pub fn contour_figures(
 }
 
 /// A program without a measured circle: its contour error, and its trace rows with it.
-struct ProgramAndTrace<'a, 'g> {
+struct ProgramAndTrace<'a, 'g, 'b, 'p> {
     gauge: &'a mut ContourGauge<'g>,
     trace: Option<&'a mut TraceSink>,
+    /// The error budget's runs, each read at the full run's feed samples.
+    budget: Option<&'a mut ContourBudgetRuns<'b, 'p>>,
 }
 
-impl Sink for ProgramAndTrace<'_, '_> {
+impl Sink for ProgramAndTrace<'_, '_, '_, '_> {
     fn push(&mut self, s: &Sample) -> Result<()> {
         let reading = self.gauge.read(s)?;
+        if let (Some(r), Some(budget)) = (&reading, self.budget.as_deref_mut()) {
+            budget.record(self.gauge, s, &r.error_mm);
+        }
         match self.trace.as_deref_mut() {
             Some(trace) => trace.push_program(s, reading.as_ref()),
             None => Ok(()),

@@ -123,7 +123,12 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 }
 
 fn run_square() -> (std::path::PathBuf, serde_json::Value) {
-    let dir = scratch("contour", "square");
+    run_square_with("square", "")
+}
+
+/// The square on the first-order machine with the extra TOML `extra` (more overrides).
+fn run_square_with(name: &str, extra: &str) -> (std::path::PathBuf, serde_json::Value) {
+    let dir = scratch("contour", name);
     std::fs::write(dir.join("p.nc"), SQUARE).unwrap();
     let mut body = String::from("[program]\nfile = \"p.nc\"\n");
     for a in ["X", "Y", "Z"] {
@@ -132,6 +137,7 @@ fn run_square() -> (std::path::PathBuf, serde_json::Value) {
              [machine_overrides.axes.{a}.friction]\ncoulomb_n = 0.0\n"
         );
     }
+    body += extra;
     let path = write_scenario(&dir, &machine("vmc-3axis"), &body);
     let scenario = Scenario::load(&path).unwrap();
     let out = dir.join("out");
@@ -208,4 +214,72 @@ fn rounded_square_matches_a_first_order_loop() {
     assert!((c["max_um"].as_f64().unwrap() - max).abs() < 1e-3);
     assert_eq!(c["samples"].as_u64().unwrap() as usize, contour.len());
     assert!(out.join("contour.svg").exists());
+}
+
+/// The budget's rows of a run's `summary.json`: (mechanism, axis or "", row).
+fn budget_rows(summary: &serde_json::Value) -> Vec<(String, String, serde_json::Value)> {
+    let budget = &summary["measurements"]["contour"]["budget"];
+    budget["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            let axis = r["axis"].as_str().unwrap_or("").to_string();
+            (
+                r["mechanism"].as_str().unwrap().to_string(),
+                axis,
+                r.clone(),
+            )
+        })
+        .collect()
+}
+
+/// The contour error's budget by counterfactual runs: on a machine whose axes are identical
+/// first-order loops, the servos' common lag is the whole error (share 1) and no row names
+/// backlash or friction; with 10 µm of backlash on X alone, an X backlash row appears (and
+/// no Y one) whose largest part is b/2 = 5 µm, the closed form of a table held half the
+/// backlash behind its motor, normal to the square's Y straights, where the full run reads
+/// 5 µm too.
+#[test]
+fn the_budget_names_only_the_mechanisms_the_machine_has() {
+    let (_, clean) = run_square_with("budget-clean", "");
+    let rows = budget_rows(&clean);
+    assert!(
+        rows.iter().all(|(m, _, _)| m == "program" || m == "servo"),
+        "{rows:?}"
+    );
+    let common = rows
+        .iter()
+        .find(|(m, a, _)| m == "servo" && a.is_empty())
+        .unwrap();
+    assert!((common.2["share"].as_f64().unwrap() - 1.0).abs() < 1e-6);
+
+    let b_um = 10.0;
+    let extra = format!(
+        "[machine_overrides.axes.X.drive]\nbacklash_mm = {}\n",
+        b_um / 1e3
+    );
+    let (out, with_backlash) = run_square_with("budget-backlash", &extra);
+    let rows = budget_rows(&with_backlash);
+    let backlash: Vec<_> = rows.iter().filter(|(m, _, _)| m == "backlash").collect();
+    assert_eq!(backlash.len(), 1, "{rows:?}");
+    assert_eq!(backlash[0].1, "X");
+    assert!(rows.iter().all(|(m, _, _)| m != "friction"));
+    let max = backlash[0].2["max_um"].as_f64().unwrap();
+    assert!((max - b_um / 2.0).abs() < 0.01, "X backlash row: {max} µm");
+    // The shares and the interplay add to 1.
+    let budget = &with_backlash["measurements"]["contour"]["budget"];
+    let shares: f64 = rows
+        .iter()
+        .map(|(_, _, r)| r["share"].as_f64().unwrap())
+        .sum();
+    let total = shares + budget["interaction_share"].as_f64().unwrap();
+    assert!((total - 1.0).abs() < 1e-9);
+    // The full run on the middle of the Y straights (lines 5 and 9).
+    let (_, contour) = read_csv(&out.join("contour.csv"));
+    for l in [5, 9] {
+        let rows: Vec<&Vec<f64>> = contour.iter().filter(|c| c[1] as usize == l).collect();
+        let middle = rows[rows.len() / 2][2];
+        assert!((middle - b_um / 2.0).abs() < 0.1, "line {l}: {middle} µm");
+    }
 }

@@ -90,7 +90,8 @@ fn tip_section(tip: Option<&str>) -> String {
         Some(svg) => format!(
             "<h2 id=\"tip\">Ball bar and cut at the tip height</h2>\n<p>The same run read two ways: \
              the ball bar's radial deviation dL (not centred) and the cut's deviation d just above \
-             the tip height, over the same θ. They agree where dL varies slowly against the cutter; \
+             the tip height, over the same θ. They agree where dL varies slowly against the cutter \
+             (the bar's θ is the commanded tip's, the servos' lag ahead of where the cutter cuts); \
              d stays below dL where the cutter cannot follow a scallop or spike, and above the tip \
              the cut also shows what tilts the tool axis, which the bar cannot see (docs/cut.md).</p>\n{svg}\n"
         ),

@@ -5,7 +5,9 @@
 //! At the tip the surface normal n lies along the bar (both are normal to the generatrix in
 //! its plane), so d there is the lower envelope of dL over the cutter's reach: equal where
 //! dL varies slowly against the cutter, below it in the scallops and spikes the cutter
-//! cannot follow into (docs/cut.md).
+//! cannot follow into (docs/cut.md). The bar bins dL by the commanded tip's θ, the cut sits
+//! at the actual tip's: with the actual motion the bar's curve runs the servos' lag angle
+//! `ω / Kv` ahead of the cut's.
 
 use super::plot::{axis_colour, decimate_min_max, Chart, Marker, Series, CCW, CW};
 use crate::error::Result;

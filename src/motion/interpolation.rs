@@ -95,8 +95,6 @@ use std::collections::VecDeque;
 use std::f64::consts::TAU;
 use std::path::PathBuf;
 
-use nalgebra::Point3;
-
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::kinematics::Kinematics;
@@ -606,19 +604,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             Motion::Rapid => {
                 // G00 runs in joint space even under TCP: convert tip to machine coordinates.
                 if let Some(k) = tcp {
-                    let to_machine = |q: &AxisVec| {
-                        if k.general.is_some() {
-                            return k.tcp_axes(q, b.tool_length_mm);
-                        }
-                        let mut m = *q;
-                        let p = k.tcp_to_machine(
-                            q,
-                            &Point3::new(q.0[0], q.0[1], q.0[2]),
-                            b.tool_length_mm,
-                        );
-                        (m.0[0], m.0[1], m.0[2]) = (p.x, p.y, p.z);
-                        m
-                    };
+                    let to_machine = |q: &AxisVec| k.tcp_axes(q, b.tool_length_mm);
                     path.start = to_machine(&b.start);
                     path.delta = to_machine(&b.end) - path.start;
                     path.tcp = false;

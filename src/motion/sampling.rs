@@ -7,8 +7,6 @@
 //! `period_s` on one global clock, so the stream is uniform across block boundaries.
 //! Memory is O(1): one block at a time.
 
-use nalgebra::Point3;
-
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::program::{FeedMode, Motion, Move};
@@ -130,18 +128,8 @@ fn on_arc(block: &Move, mut q: AxisVec, f: f64) -> AxisVec {
 /// [`position_in_block`] under TCP: X Y Z of `q` are the tool tip in the table frame,
 /// moving on the straight line; they become the machine's.
 #[inline(never)]
-fn under_tcp(block: &Move, machine: &Machine, mut q: AxisVec) -> AxisVec {
-    if machine.kinematics.general.is_some() {
-        return machine.kinematics.tcp_axes(&q, block.tool_length_mm);
-    }
-    let tip = Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
-    let m = machine
-        .kinematics
-        .tcp_to_machine(&q, &tip, block.tool_length_mm);
-    q[Axis::X] = m.x;
-    q[Axis::Y] = m.y;
-    q[Axis::Z] = m.z;
-    q
+fn under_tcp(block: &Move, machine: &Machine, q: AxisVec) -> AxisVec {
+    machine.kinematics.tcp_axes(&q, block.tool_length_mm)
 }
 
 /// Streams [`Setpoint`]s every `period_s` through a block stream at programmed timing; the

@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 
 use crate::input::machine::Machine;
 use crate::input::program::{ConePoses, ConeTest, MeasuredLines, NcOptions};
-use crate::kinematics::{Branch, Kinematics, C_START_REFERENCE_DEG};
+use crate::kinematics::{Branch, Kinematics};
 use crate::program::{FeedMode, Motion, Move};
 use crate::AxisVec;
 
@@ -34,23 +34,17 @@ impl ConePath {
             poses: cone.poses(),
         };
         // The rotaries the branch must keep within travel: a general chain's all, else the tilt.
-        let fits = |path: &ConePath| match kinematics.general {
-            Some(chain) => {
-                let mut q = path.start();
-                (0..360).all(|k| {
-                    q = path.axes_after((k as f64).to_radians(), &q);
-                    chain
-                        .rotaries()
-                        .all(|(_, l)| machine.axis(l.axis).within_travel(q[l.axis]))
-                })
-            }
-            None => kinematics.layout.tilt_axis().is_none_or(|tilt| {
-                (0..360).all(|k| {
-                    machine
-                        .axis(tilt)
-                        .within_travel(path.axes_near((k as f64).to_radians(), 0.0)[tilt])
-                })
-            }),
+        // (A named layout's tilt is a function of the tool axis alone: the same whichever
+        // table angle it is unwrapped near.)
+        let rotaries = kinematics.travel_bound_rotaries();
+        let fits = |path: &ConePath| {
+            let mut q = path.start();
+            (0..360).all(|k| {
+                q = path.axes_after((k as f64).to_radians(), &q);
+                rotaries
+                    .iter()
+                    .all(|&a| machine.axis(a).within_travel(q[a]))
+            })
         };
         if !fits(&path) {
             let other = ConePath {
@@ -79,10 +73,8 @@ impl ConePath {
 
     /// Axis positions at θ = 0, with C in the spec's atan2 range.
     pub fn start(&self) -> AxisVec {
-        if self.kinematics.general.is_some() {
-            return self.axes_after(0.0, &AxisVec::ZERO);
-        }
-        self.axes_near(0.0, C_START_REFERENCE_DEG)
+        self.kinematics
+            .inverse_first(&self.poses.pose(0.0), self.branch)
     }
 
     /// Axis positions at `n + 1` equally spaced θ from `theta0_rad` over `span_rad`, C kept

@@ -101,7 +101,7 @@ use crate::kinematics::Kinematics;
 pub use crate::motion::feed_held::{FeedLimit, LimitKind};
 use crate::motion::feed_held::{FeedReduction, FeedReductions};
 use crate::motion::profile::{reach, Profile};
-use crate::program::{FeedMode, Motion, Move, PathControl};
+use crate::program::{Feed, Motion, Move, PathControl};
 use crate::Plane;
 use crate::{Axis, AxisVec};
 use libm::cbrt;
@@ -692,23 +692,20 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     /// minute, or `length` per inverse-time feed; unbounded for a rapid.
     #[inline(always)]
     fn programmed_speed(&self, b: &Move, length: f64) -> Result<f64> {
-        Ok(match b.motion {
-            Motion::Rapid => f64::INFINITY,
-            _ => {
-                let feed = b.feed.unwrap_or(0.0);
-                if !(feed.is_finite() && feed > 0.0) {
-                    let what = match b.feed_mode {
-                        FeedMode::PerMinute => "a feed rate: program an F word > 0 (mm/min)",
-                        FeedMode::InverseTime => {
-                            "an inverse-time feed: under G93 program an F word > 0 (1/min) on every move"
-                        }
-                    };
-                    return Err(self.block_error(b.line, format!("the move needs {what}")));
-                }
-                match b.feed_mode {
-                    FeedMode::PerMinute => feed / 60.0,
-                    FeedMode::InverseTime => feed * length / 60.0,
-                }
+        Ok(match (b.motion, b.feed) {
+            (Motion::Rapid, _) => f64::INFINITY,
+            (_, Feed::PerMinute(f)) if f.is_finite() && f > 0.0 => f / 60.0,
+            (_, Feed::InverseTime(f)) if f.is_finite() && f > 0.0 => f * length / 60.0,
+            // The reader refuses a feed move without a positive F; a generated or hand-made
+            // move may still carry none, or F0 from a G95 or G33 at S0.
+            (_, feed) => {
+                let what = match feed {
+                    Feed::InverseTime(_) => {
+                        "an inverse-time feed: under G93 program an F word > 0 (1/min) on every move"
+                    }
+                    _ => "a feed rate: program an F word > 0 (mm/min)",
+                };
+                return Err(self.block_error(b.line, format!("the move needs {what}")));
             }
         })
     }

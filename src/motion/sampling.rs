@@ -9,7 +9,7 @@
 
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
-use crate::program::{FeedMode, Motion, Move};
+use crate::program::{Feed, Motion, Move};
 use crate::{Axis, AxisVec};
 
 use crate::motion::interpolation::Setpoint;
@@ -35,16 +35,11 @@ pub fn block_duration_s(block: &Move, machine: &Machine) -> Result<f64> {
                 .map(|&a| d[a].abs() / (machine.axis(a).max_velocity / 60.0))
                 .fold(0.0, f64::max));
         }
-        Motion::Linear | Motion::Arc { .. } => {
-            let f = block
-                .feed
-                .filter(|f| f.is_finite() && *f > 0.0)
-                .ok_or_else(bad_feed)?;
-            match block.feed_mode {
-                FeedMode::InverseTime => 1.0 / f,
-                FeedMode::PerMinute => feed_length(block) / f,
-            }
-        }
+        Motion::Linear | Motion::Arc { .. } => match block.feed {
+            Feed::InverseTime(f) if f.is_finite() && f > 0.0 => 1.0 / f,
+            Feed::PerMinute(f) if f.is_finite() && f > 0.0 => feed_length(block) / f,
+            _ => return Err(bad_feed()),
+        },
     };
     Ok(minutes * 60.0)
 }
@@ -305,8 +300,7 @@ mod tests {
             motion: Motion::Linear,
             start: v(start),
             end: v(end),
-            feed: Some(feed_mm_per_min),
-            feed_mode: FeedMode::PerMinute,
+            feed: Feed::PerMinute(feed_mm_per_min),
             ..Move::default()
         }
     }

@@ -9,7 +9,7 @@ use std::fmt::Write as _;
 use crate::input::machine::Machine;
 use crate::input::program::{ConePoses, ConeTest, MeasuredLines, NcOptions};
 use crate::kinematics::{Branch, Kinematics};
-use crate::program::{FeedMode, Motion, Move};
+use crate::program::{Feed, Motion, Move};
 use crate::AxisVec;
 
 /// The cone path on one machine: axis positions as functions of θ on one IK branch.
@@ -214,10 +214,10 @@ impl ConeProgram {
         let rapid_line = self.header.len() + 1;
         let chord = 2.0 * cone.radius_mm() * (self.step_rad.abs() / 2.0).sin();
         let dt_min = chord / options.feed_mm_min;
-        let feed_mode = if options.inverse_time && !options.tcp {
-            FeedMode::InverseTime
+        let feed_of: fn(f64) -> Feed = if options.inverse_time && !options.tcp {
+            Feed::InverseTime
         } else {
-            FeedMode::PerMinute
+            Feed::PerMinute
         };
         // The program's words: X Y Z are the tool tip under TCP (a W quill keeps its own value),
         // else the machine axes.
@@ -234,7 +234,6 @@ impl ConeProgram {
             end
         };
         let (mut previous, mut q_prev) = (AxisVec::ZERO, AxisVec::ZERO);
-        let mut feed = None;
         path.sampled(
             self.theta0_rad,
             self.step_rad * self.total as f64,
@@ -243,17 +242,17 @@ impl ConeProgram {
         .enumerate()
         .map(move |(k, (theta, q))| {
             let end = words(&q, theta);
-            let motion = if k == 0 {
-                Motion::Rapid
+            let (motion, feed) = if k == 0 {
+                (Motion::Rapid, Feed::None)
             } else {
-                feed = Some(if options.tcp {
+                let f = if options.tcp {
                     options.feed_mm_min
                 } else if options.inverse_time {
                     1.0 / dt_min
                 } else {
                     (q - q_prev).mixed_norm() / dt_min
-                });
-                Motion::Linear
+                };
+                (Motion::Linear, feed_of(f))
             };
             let mv = Move {
                 line: rapid_line + k,
@@ -261,7 +260,6 @@ impl ConeProgram {
                 start: previous,
                 end,
                 feed,
-                feed_mode,
                 tcp: options.tcp,
                 ..Move::default()
             };
@@ -305,7 +303,7 @@ pub fn write_program(
         for &axis in axes {
             let _ = write!(out, " {}{}", axis, fmt_num(mv.end[axis]));
         }
-        if let Some(f) = mv.feed {
+        if let Some(f) = mv.feed.rate() {
             let _ = write!(out, " F{f:.3} (THETA {:.3})", block.theta_rad.to_degrees());
         }
         out.push('\n');

@@ -105,8 +105,10 @@ pub struct Kinematics {
     pub pivot_mm: Vector3<f64>,
     /// Location errors of the rotary axes; they act only on the actual chain.
     pub location_errors: LocationErrors,
-    /// The machine file's own chain when it is no named layout ([`Layout::Chain`]).
-    pub general: Option<Chain>,
+    /// The machine file's own chain when it is no named layout ([`Layout::Chain`]). Private:
+    /// the stages ask the kinematics, which picks the named layout's closed form or this
+    /// chain ([`Kinematics::has_closed_form`], [`Kinematics::own_chain`]).
+    general: Option<Chain>,
     /// The nominal chain: the machine file's own, or the named layout's written out when the
     /// machine was read ([`layout_chain::of_layout`]); `None` where the tool pose has no
     /// chain (xyzabc, xyuv, xyzabcuvw). A named layout's closed forms
@@ -138,6 +140,25 @@ impl Kinematics {
                 nominal: Some(chain),
             },
         }
+    }
+
+    /// Whether the nominal chain is a named layout's, with its closed forms (R(q) written
+    /// out, the rotaries solved in closed form, the table and cradle posed by
+    /// [`Kinematics::actual_table_pose`]); false on a general chain, whose bodies ride its
+    /// links. For the stages that pose bodies or read the bar one way or the other (the
+    /// collision scene, the bar's sensitivity); the arithmetic itself is the kinematics'.
+    #[inline]
+    pub fn has_closed_form(&self) -> bool {
+        self.general.is_none()
+    }
+
+    /// The machine file's own chain when it is no named layout: what a stage that works on
+    /// a general chain's links needs (the fit's location-error parameters per link, the
+    /// chain's poles and switches, G53.1's tool aligner, the reader's checks). `None` on a
+    /// named layout, whose written-out chain is [`Kinematics::chain`].
+    #[inline]
+    pub fn own_chain(&self) -> Option<&Chain> {
+        self.general.as_ref()
     }
 
     /// The layout's name, or for a general chain its axes: "chain: table C; head X Y Z B".
@@ -416,6 +437,39 @@ impl Kinematics {
     #[inline]
     pub fn into_table_frames(&self, q: &AxisVec, u: Vector3<f64>) -> [Vector3<f64>; 2] {
         self.layout.into_table_frames(q, u)
+    }
+
+    /// The tool tip (the gauge point, tool length 0) in the table frame, mm, when the linear
+    /// axes stand at `xyz_mm` and the rotaries at zero: `xyz − pivot` on a named layout
+    /// (R(0) = I), the chain's forward kinematics (workpiece frame) on a general chain.
+    pub fn tip_at_home_rotaries(&self, xyz_mm: [f64; 3]) -> Vector3<f64> {
+        match &self.general {
+            Some(chain) => {
+                let q = AxisVec::xyzabc([xyz_mm[0], xyz_mm[1], xyz_mm[2], 0.0, 0.0, 0.0]);
+                chain.tool_in_workpiece(&q, 0.0).0.coords
+            }
+            None => Vector3::from(xyz_mm) - self.pivot_mm,
+        }
+    }
+
+    /// The rotaries a path must keep within travel when its inverse is chosen (the branch):
+    /// every rotary of a general chain; the tilting axis of a named layout (its table axis
+    /// is unwrapped along the path).
+    pub fn travel_bound_rotaries(&self) -> Vec<Axis> {
+        match &self.general {
+            Some(chain) => chain.rotaries().map(|(_, l)| l.axis).collect(),
+            None => self.layout.tilt_axis().into_iter().collect(),
+        }
+    }
+
+    /// Axis positions for the first pose of a path on `branch`: on a named layout the
+    /// table axis in the spec's `atan2` range ([`C_START_REFERENCE_DEG`]); on a general
+    /// chain every rotary nearest zero ([`Kinematics::inverse_after`]).
+    pub fn inverse_first(&self, pose: &ToolPose, branch: Branch) -> AxisVec {
+        if self.general.is_some() {
+            return self.inverse_after(pose, branch, &AxisVec::ZERO);
+        }
+        self.inverse(pose, branch, C_START_REFERENCE_DEG)
     }
 
     /// Forward kinematics: axis positions → tool tip and tool axis in the table frame.

@@ -992,6 +992,45 @@ fn named_layouts_appear_in_one_file_and_no_stage_matches_on_them() {
     );
 }
 
+/// One kinematics: the machine's own chain (`Kinematics::general`) is read inside
+/// `src/kinematics*` alone. A stage asks the kinematics (frames, TCP, inverse, poses), which
+/// picks the named layout's closed form or the chain; where a stage must know which (the
+/// scene's bodies ride the chain's links), it asks `has_closed_form`, and a stage working on
+/// a general chain's links takes `own_chain` without branching on whether it is there.
+#[test]
+fn the_general_chain_is_read_inside_the_kinematics_alone() {
+    // Files outside src/kinematics* allowed to read `.general` (none).
+    const ALLOWED: &[&str] = &[];
+    let files = src_tokens();
+    let reads = |toks: &[Token]| {
+        toks.windows(2).any(|w| {
+            w[0] == Token::Punct('.') && matches!(&w[1], Token::Ident(s) if s == "general")
+        })
+    };
+    let branches = |toks: &[Token]| {
+        toks.windows(5).any(|w| {
+            matches!(&w[0], Token::Ident(s) if s == "own_chain")
+                && w[1] == Token::Punct('(')
+                && w[2] == Token::Punct(')')
+                && w[3] == Token::Punct('.')
+                && matches!(&w[4], Token::Ident(s) if s == "is_some" || s == "is_none")
+        })
+    };
+    let inside = |f: &str| f == "kinematics.rs" || f.starts_with("kinematics/");
+    let stray: Vec<&String> = files
+        .iter()
+        .filter(|(f, t)| !inside(f) && !ALLOWED.contains(&f.as_str()) && (reads(t) || branches(t)))
+        .map(|(f, _)| f)
+        .collect();
+    assert!(
+        stray.is_empty(),
+        "a stage reads the general chain or branches on it; ask `Kinematics` (its frames, \
+         `tcp_axes`, `inverse_first`, `has_closed_form`): {stray:?}"
+    );
+    // The rule sees what it is about: the kinematics does read it.
+    assert!(files.iter().any(|(f, t)| f == "kinematics.rs" && reads(t)));
+}
+
 /// Each implementation of a seam's trait: in its folder, and its module named in the registry
 /// file (`cone::Cone`, `cut::build`). `exempt` are implementations the registry need not list
 /// (with the reason at the call).

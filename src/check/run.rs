@@ -429,13 +429,9 @@ fn from_first_end<'a>(moves: program::Moves<'a>, kin: Kinematics) -> program::Mo
         }
         m.map(|m| {
             let mut end = m.end;
-            if m.tcp && kin.general.is_some() {
-                end = kin.tcp_axes(&m.end, m.tool_length_mm);
-            } else if m.tcp {
+            if m.tcp {
                 // X Y Z are the tool tip in the table frame.
-                let tip = nalgebra::Point3::new(end[Axis::X], end[Axis::Y], end[Axis::Z]);
-                let q = kin.tcp_to_machine(&m.end, &tip, m.tool_length_mm);
-                (end[Axis::X], end[Axis::Y], end[Axis::Z]) = (q.x, q.y, q.z);
+                end = kin.tcp_axes(&m.end, m.tool_length_mm);
             }
             program::Move {
                 motion: program::Motion::Dwell { seconds: 0.0 },

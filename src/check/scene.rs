@@ -289,7 +289,7 @@ impl Scene {
             }
             part.shape = shape.clone();
             part.local = shift * local;
-            if let Some(linked) = self.linked.filter(|_| self.kinematics.general.is_some()) {
+            if let Some(linked) = self.linked.filter(|_| !self.kinematics.has_closed_form()) {
                 // On a chain the tool's lever arms about the head's rotaries change with it.
                 part.motion = linked.weights(Rides::Tool, &aabb_corners(&part.shape, &part.local));
             }
@@ -387,7 +387,7 @@ impl Scene {
     fn linked_pose(&self, carrier: usize, poses: &mut BodyPoses) -> Option<Pose> {
         let linked = self.linked.as_ref()?;
         let q = poses.q;
-        let general = self.kinematics.general.is_some();
+        let general = !self.kinematics.has_closed_form();
         let iso = match carrier {
             4 => linked.pose(Rides::Head, q),
             _ if !general => return None,
@@ -436,7 +436,7 @@ impl Scene {
     pub(crate) fn chain_motion(&self, a: &AxisVec, b: &AxisVec) -> Option<[f64; 3]> {
         self.linked
             .as_ref()
-            .filter(|_| self.kinematics.general.is_some())
+            .filter(|_| !self.kinematics.has_closed_form())
             .map(|l| l.motion(a, b))
     }
 }
@@ -594,7 +594,7 @@ impl Builder {
             self.body_handles[carrier as usize],
             &mut self.bodies,
         );
-        let general = self.kinematics.general.is_some();
+        let general = !self.kinematics.has_closed_form();
         let rides = match carrier {
             Carrier::Table => Rides::Table,
             Carrier::Cradle => Rides::Cradle,
@@ -922,7 +922,7 @@ impl Builder {
                 let r_bar = 0.5 * workpiece.bar_diameter_mm;
                 let (shape, local) = z_cylinder(r_ball, length - r_ball, r_bar);
                 self.bar_motion = Some(match &self.linked {
-                    Some(linked) if machine.kinematics.general.is_some() => {
+                    Some(linked) if !machine.kinematics.has_closed_form() => {
                         chain_bar_motion(linked, o, length, r_bar)
                     }
                     _ => bar_motion(machine.kinematics.layout, o, length, r_bar),
@@ -1034,7 +1034,7 @@ fn to_pose(iso: &Isometry3<f64>) -> Pose {
 /// a `link` (the default trunnion, written for the tilting tables, is not built there).
 fn cradle_boxes(machine: &Machine) -> Vec<&CradleBox> {
     let scene = &machine.scene;
-    if machine.kinematics.general.is_some()
+    if !machine.kinematics.has_closed_form()
         && scene.cradle == crate::input::scene::SceneConfig::default().cradle
     {
         return Vec::new();
@@ -1049,7 +1049,7 @@ fn linked_bodies(machine: &Machine) -> Result<Option<LinkedBodies>> {
     let k = &machine.kinematics;
     let scene = &machine.scene;
     let path = machine.path.as_path();
-    let general = k.general.is_some();
+    let general = !k.has_closed_form();
     let chain = match (k.actual_chain(), k.chain()) {
         (Some(actual), _) => actual,
         (None, Some(named)) if !scene.head.is_empty() => named,

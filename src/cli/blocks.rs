@@ -16,7 +16,7 @@ use crate::input::machine::Machine;
 use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
 use crate::motion::sampling::position_in_block;
-use crate::program::{self, FeedMode, Motion, Move};
+use crate::program::{self, Feed, Motion, Move};
 use crate::Axis;
 
 /// How to print the rows.
@@ -100,11 +100,11 @@ pub fn feed_mm_min(m: &Move) -> Option<f64> {
     if matches!(m.motion, Motion::Rapid | Motion::Dwell { .. }) {
         return None;
     }
-    let f = m.feed?;
-    Some(match m.feed_mode {
-        FeedMode::PerMinute => f,
-        FeedMode::InverseTime => f * block_length(m),
-    })
+    match m.feed {
+        Feed::None => None,
+        Feed::PerMinute(f) => Some(f),
+        Feed::InverseTime(f) => Some(f * block_length(m)),
+    }
 }
 
 /// Length of a feed move as LinuxCNC counts it for inverse time: mm of X Y Z, or mm of

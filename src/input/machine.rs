@@ -327,7 +327,7 @@ impl Machine {
             path,
             text,
             layout,
-            kinematics.general.as_ref(),
+            kinematics.own_chain(),
             &file.location_errors,
             &file.error_tables,
             tables_file.parent().unwrap_or(Path::new(".")),

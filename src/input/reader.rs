@@ -101,8 +101,9 @@ fn tool_aligner(machine: &Machine) -> Option<ngc::ToolAligner> {
     use crate::{Axis, AxisVec};
     let chain = machine
         .kinematics
-        .general
-        .filter(|c| c.rotaries().count() == 2)?;
+        .own_chain()
+        .filter(|c| c.rotaries().count() == 2)
+        .copied()?;
     let travel: Vec<(Axis, bool, f64, f64)> = chain
         .rotaries()
         .map(|(_, l)| {

@@ -607,7 +607,7 @@ fn refuse_what_the_layout_cannot_give(
     machine: &Machine,
 ) -> Result<()> {
     let layout = machine.kinematics.layout;
-    if let Some(chain) = &machine.kinematics.general {
+    if let Some(chain) = machine.kinematics.own_chain() {
         return refuse_what_a_chain_cannot_give(path, program, machine, chain);
     }
     if matches!(program, Program::Cone { .. }) && layout.tilt_axis().is_none() {

@@ -94,7 +94,7 @@ pub fn bar_sensitivity_at(
     length_mm: f64,
 ) -> AxisVec {
     let mut s = AxisVec::ZERO;
-    if kin.general.is_some() {
+    if !kin.has_closed_form() {
         // A general chain: every axis by the central difference of the chain's reading.
         for &a in axes {
             let (mut up, mut down) = (*q, *q);

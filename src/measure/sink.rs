@@ -116,7 +116,7 @@ impl BarGeometry {
     #[inline]
     pub fn needs_full_chain(&self) -> bool {
         let kin = &self.kinematics;
-        !kin.location_errors.is_zero() || kin.general.is_some()
+        !kin.location_errors.is_zero() || !kin.has_closed_form()
     }
 
     /// dL at axis positions `q` (actual or the twin's) of a sample whose setpoint

@@ -95,15 +95,13 @@ use std::collections::VecDeque;
 use std::f64::consts::TAU;
 use std::path::PathBuf;
 
-use nalgebra::Point3;
-
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
 use crate::kinematics::Kinematics;
 pub use crate::motion::feed_held::{FeedLimit, LimitKind};
 use crate::motion::feed_held::{FeedReduction, FeedReductions};
 use crate::motion::profile::{reach, Profile};
-use crate::program::{FeedMode, Motion, Move, PathControl};
+use crate::program::{Feed, Motion, Move, PathControl};
 use crate::Plane;
 use crate::{Axis, AxisVec};
 use libm::cbrt;
@@ -606,19 +604,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             Motion::Rapid => {
                 // G00 runs in joint space even under TCP: convert tip to machine coordinates.
                 if let Some(k) = tcp {
-                    let to_machine = |q: &AxisVec| {
-                        if k.general.is_some() {
-                            return k.tcp_axes(q, b.tool_length_mm);
-                        }
-                        let mut m = *q;
-                        let p = k.tcp_to_machine(
-                            q,
-                            &Point3::new(q.0[0], q.0[1], q.0[2]),
-                            b.tool_length_mm,
-                        );
-                        (m.0[0], m.0[1], m.0[2]) = (p.x, p.y, p.z);
-                        m
-                    };
+                    let to_machine = |q: &AxisVec| k.tcp_axes(q, b.tool_length_mm);
                     path.start = to_machine(&b.start);
                     path.delta = to_machine(&b.end) - path.start;
                     path.tcp = false;
@@ -706,23 +692,20 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     /// minute, or `length` per inverse-time feed; unbounded for a rapid.
     #[inline(always)]
     fn programmed_speed(&self, b: &Move, length: f64) -> Result<f64> {
-        Ok(match b.motion {
-            Motion::Rapid => f64::INFINITY,
-            _ => {
-                let feed = b.feed.unwrap_or(0.0);
-                if !(feed.is_finite() && feed > 0.0) {
-                    let what = match b.feed_mode {
-                        FeedMode::PerMinute => "a feed rate: program an F word > 0 (mm/min)",
-                        FeedMode::InverseTime => {
-                            "an inverse-time feed: under G93 program an F word > 0 (1/min) on every move"
-                        }
-                    };
-                    return Err(self.block_error(b.line, format!("the move needs {what}")));
-                }
-                match b.feed_mode {
-                    FeedMode::PerMinute => feed / 60.0,
-                    FeedMode::InverseTime => feed * length / 60.0,
-                }
+        Ok(match (b.motion, b.feed) {
+            (Motion::Rapid, _) => f64::INFINITY,
+            (_, Feed::PerMinute(f)) if f.is_finite() && f > 0.0 => f / 60.0,
+            (_, Feed::InverseTime(f)) if f.is_finite() && f > 0.0 => f * length / 60.0,
+            // The reader refuses a feed move without a positive F; a generated or hand-made
+            // move may still carry none, or F0 from a G95 or G33 at S0.
+            (_, feed) => {
+                let what = match feed {
+                    Feed::InverseTime(_) => {
+                        "an inverse-time feed: under G93 program an F word > 0 (1/min) on every move"
+                    }
+                    _ => "a feed rate: program an F word > 0 (mm/min)",
+                };
+                return Err(self.block_error(b.line, format!("the move needs {what}")));
             }
         })
     }

@@ -7,11 +7,9 @@
 //! `period_s` on one global clock, so the stream is uniform across block boundaries.
 //! Memory is O(1): one block at a time.
 
-use nalgebra::Point3;
-
 use crate::error::{Error, Result};
 use crate::input::machine::Machine;
-use crate::program::{FeedMode, Motion, Move};
+use crate::program::{Feed, Motion, Move};
 use crate::{Axis, AxisVec};
 
 use crate::motion::interpolation::Setpoint;
@@ -37,16 +35,11 @@ pub fn block_duration_s(block: &Move, machine: &Machine) -> Result<f64> {
                 .map(|&a| d[a].abs() / (machine.axis(a).max_velocity / 60.0))
                 .fold(0.0, f64::max));
         }
-        Motion::Linear | Motion::Arc { .. } => {
-            let f = block
-                .feed
-                .filter(|f| f.is_finite() && *f > 0.0)
-                .ok_or_else(bad_feed)?;
-            match block.feed_mode {
-                FeedMode::InverseTime => 1.0 / f,
-                FeedMode::PerMinute => feed_length(block) / f,
-            }
-        }
+        Motion::Linear | Motion::Arc { .. } => match block.feed {
+            Feed::InverseTime(f) if f.is_finite() && f > 0.0 => 1.0 / f,
+            Feed::PerMinute(f) if f.is_finite() && f > 0.0 => feed_length(block) / f,
+            _ => return Err(bad_feed()),
+        },
     };
     Ok(minutes * 60.0)
 }
@@ -130,18 +123,8 @@ fn on_arc(block: &Move, mut q: AxisVec, f: f64) -> AxisVec {
 /// [`position_in_block`] under TCP: X Y Z of `q` are the tool tip in the table frame,
 /// moving on the straight line; they become the machine's.
 #[inline(never)]
-fn under_tcp(block: &Move, machine: &Machine, mut q: AxisVec) -> AxisVec {
-    if machine.kinematics.general.is_some() {
-        return machine.kinematics.tcp_axes(&q, block.tool_length_mm);
-    }
-    let tip = Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);
-    let m = machine
-        .kinematics
-        .tcp_to_machine(&q, &tip, block.tool_length_mm);
-    q[Axis::X] = m.x;
-    q[Axis::Y] = m.y;
-    q[Axis::Z] = m.z;
-    q
+fn under_tcp(block: &Move, machine: &Machine, q: AxisVec) -> AxisVec {
+    machine.kinematics.tcp_axes(&q, block.tool_length_mm)
 }
 
 /// Streams [`Setpoint`]s every `period_s` through a block stream at programmed timing; the
@@ -317,8 +300,7 @@ mod tests {
             motion: Motion::Linear,
             start: v(start),
             end: v(end),
-            feed: Some(feed_mm_per_min),
-            feed_mode: FeedMode::PerMinute,
+            feed: Feed::PerMinute(feed_mm_per_min),
             ..Move::default()
         }
     }

@@ -9,7 +9,7 @@
 use std::fmt::Write as _;
 
 use crate::input::program::{CircleTest, MeasuredLines};
-use crate::program::{FeedMode, Motion, Move};
+use crate::program::{Feed, Motion, Move};
 use crate::{Axis, AxisVec, Plane};
 
 /// Longest arc of a lead-in or lead-out block, deg: a longer lead is split into equal arcs.
@@ -129,8 +129,11 @@ impl CircleProgram {
                 motion,
                 start: previous,
                 end,
-                feed: (motion != Motion::Rapid).then_some(c.feed_mm_min),
-                feed_mode: FeedMode::PerMinute,
+                feed: if motion == Motion::Rapid {
+                    Feed::None
+                } else {
+                    Feed::PerMinute(c.feed_mm_min)
+                },
                 tcp: false,
                 ..Move::default()
             };

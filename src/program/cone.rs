@@ -8,8 +8,8 @@ use std::fmt::Write as _;
 
 use crate::input::machine::Machine;
 use crate::input::program::{ConePoses, ConeTest, MeasuredLines, NcOptions};
-use crate::kinematics::{Branch, Kinematics, C_START_REFERENCE_DEG};
-use crate::program::{FeedMode, Motion, Move};
+use crate::kinematics::{Branch, Kinematics};
+use crate::program::{Feed, Motion, Move};
 use crate::AxisVec;
 
 /// The cone path on one machine: axis positions as functions of θ on one IK branch.
@@ -34,23 +34,17 @@ impl ConePath {
             poses: cone.poses(),
         };
         // The rotaries the branch must keep within travel: a general chain's all, else the tilt.
-        let fits = |path: &ConePath| match kinematics.general {
-            Some(chain) => {
-                let mut q = path.start();
-                (0..360).all(|k| {
-                    q = path.axes_after((k as f64).to_radians(), &q);
-                    chain
-                        .rotaries()
-                        .all(|(_, l)| machine.axis(l.axis).within_travel(q[l.axis]))
-                })
-            }
-            None => kinematics.layout.tilt_axis().is_none_or(|tilt| {
-                (0..360).all(|k| {
-                    machine
-                        .axis(tilt)
-                        .within_travel(path.axes_near((k as f64).to_radians(), 0.0)[tilt])
-                })
-            }),
+        // (A named layout's tilt is a function of the tool axis alone: the same whichever
+        // table angle it is unwrapped near.)
+        let rotaries = kinematics.travel_bound_rotaries();
+        let fits = |path: &ConePath| {
+            let mut q = path.start();
+            (0..360).all(|k| {
+                q = path.axes_after((k as f64).to_radians(), &q);
+                rotaries
+                    .iter()
+                    .all(|&a| machine.axis(a).within_travel(q[a]))
+            })
         };
         if !fits(&path) {
             let other = ConePath {
@@ -79,10 +73,8 @@ impl ConePath {
 
     /// Axis positions at θ = 0, with C in the spec's atan2 range.
     pub fn start(&self) -> AxisVec {
-        if self.kinematics.general.is_some() {
-            return self.axes_after(0.0, &AxisVec::ZERO);
-        }
-        self.axes_near(0.0, C_START_REFERENCE_DEG)
+        self.kinematics
+            .inverse_first(&self.poses.pose(0.0), self.branch)
     }
 
     /// Axis positions at `n + 1` equally spaced θ from `theta0_rad` over `span_rad`, C kept
@@ -222,10 +214,10 @@ impl ConeProgram {
         let rapid_line = self.header.len() + 1;
         let chord = 2.0 * cone.radius_mm() * (self.step_rad.abs() / 2.0).sin();
         let dt_min = chord / options.feed_mm_min;
-        let feed_mode = if options.inverse_time && !options.tcp {
-            FeedMode::InverseTime
+        let feed_of: fn(f64) -> Feed = if options.inverse_time && !options.tcp {
+            Feed::InverseTime
         } else {
-            FeedMode::PerMinute
+            Feed::PerMinute
         };
         // The program's words: X Y Z are the tool tip under TCP (a W quill keeps its own value),
         // else the machine axes.
@@ -242,7 +234,6 @@ impl ConeProgram {
             end
         };
         let (mut previous, mut q_prev) = (AxisVec::ZERO, AxisVec::ZERO);
-        let mut feed = None;
         path.sampled(
             self.theta0_rad,
             self.step_rad * self.total as f64,
@@ -251,17 +242,17 @@ impl ConeProgram {
         .enumerate()
         .map(move |(k, (theta, q))| {
             let end = words(&q, theta);
-            let motion = if k == 0 {
-                Motion::Rapid
+            let (motion, feed) = if k == 0 {
+                (Motion::Rapid, Feed::None)
             } else {
-                feed = Some(if options.tcp {
+                let f = if options.tcp {
                     options.feed_mm_min
                 } else if options.inverse_time {
                     1.0 / dt_min
                 } else {
                     (q - q_prev).mixed_norm() / dt_min
-                });
-                Motion::Linear
+                };
+                (Motion::Linear, feed_of(f))
             };
             let mv = Move {
                 line: rapid_line + k,
@@ -269,7 +260,6 @@ impl ConeProgram {
                 start: previous,
                 end,
                 feed,
-                feed_mode,
                 tcp: options.tcp,
                 ..Move::default()
             };
@@ -313,7 +303,7 @@ pub fn write_program(
         for &axis in axes {
             let _ = write!(out, " {}{}", axis, fmt_num(mv.end[axis]));
         }
-        if let Some(f) = mv.feed {
+        if let Some(f) = mv.feed.rate() {
             let _ = write!(out, " F{f:.3} (THETA {:.3})", block.theta_rad.to_degrees());
         }
         out.push('\n');

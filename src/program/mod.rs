@@ -14,7 +14,7 @@ use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
 
 pub use moves::Moves;
-pub use ngc::{FeedMode, Motion, Move, MoveKind, PathControl};
+pub use ngc::{Feed, FeedMode, Motion, Move, MoveKind, PathControl};
 pub use tests::{test_of, Run, TestProgram};
 
 /// The program a scenario runs in `direction`, with `lead_deg` of extra path before and after

@@ -40,7 +40,7 @@ impl ChainEvent {
 /// layouts report none, so their outputs keep their shape).
 pub fn chain_events(scenario: &Scenario) -> Result<Option<Vec<ChainEvent>>> {
     let kin = scenario.machine.kinematics;
-    let Some(chain) = kin.general else {
+    let Some(&chain) = kin.own_chain() else {
         return Ok(None);
     };
     let Some(mut watch) = PoleWatch::new(&chain) else {

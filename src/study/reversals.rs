@@ -513,7 +513,7 @@ fn machine_coordinates(kin: &crate::kinematics::Kinematics, block: &Move, q: Axi
     if !block.tcp {
         return q;
     }
-    if kin.general.is_some() {
+    if !kin.has_closed_form() {
         return kin.tcp_axes(&q, block.tool_length_mm);
     }
     let tip = nalgebra::Point3::new(q[Axis::X], q[Axis::Y], q[Axis::Z]);

@@ -10,7 +10,7 @@ use mtsim::input::machine::Machine;
 use mtsim::motion::interpolation::{
     FeedLimit, InterpolationOptions, Interpolator, LimitKind, Setpoint,
 };
-use mtsim::program::{Motion, Move, PathControl};
+use mtsim::program::{Feed, Motion, Move, PathControl};
 use mtsim::{Axis, AxisVec, Plane};
 
 const PERIOD: f64 = 1e-3;
@@ -46,7 +46,7 @@ fn g01(line: usize, start: AxisVec, end: AxisVec, feed: f64) -> Move {
         motion: Motion::Linear,
         start,
         end,
-        feed: Some(feed),
+        feed: Feed::PerMinute(feed),
         ..Move::default()
     }
 }
@@ -157,7 +157,7 @@ fn an_arc_is_held_by_the_centripetal_acceleration() {
         },
         start,
         end: start,
-        feed: Some(10000.0),
+        feed: Feed::PerMinute(10000.0),
         ..Move::default()
     };
     let (s, limits) = run(vec![arc], &m);
@@ -360,7 +360,7 @@ fn planning_without_sampling_stops_at_a_block_it_cannot_plan() {
     let mut blocks: Vec<Move> = (0..1000)
         .map(|k| g01(k + 1, q(&[k as f64]), q(&[k as f64 + 1.0]), 1000.0))
         .collect();
-    blocks[700].feed = None;
+    blocks[700].feed = Feed::None;
     let options = InterpolationOptions {
         record_feed_limits: true,
         ..InterpolationOptions::default()

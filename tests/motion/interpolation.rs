@@ -6,7 +6,7 @@ use std::path::Path;
 use mtsim::input::machine::Machine;
 use mtsim::kinematics::{Branch, ToolPose, C_START_REFERENCE_DEG};
 use mtsim::motion::interpolation::{InterpolationOptions, Interpolator, Setpoint};
-use mtsim::program::{FeedMode, Motion, Move};
+use mtsim::program::{Feed, Motion, Move};
 use mtsim::Plane;
 use mtsim::{Axis, AxisVec, Result};
 use nalgebra::{Point3, Rotation3, Vector3};
@@ -62,8 +62,8 @@ fn block(line: usize, motion: Motion, start: AxisVec, end: AxisVec, feed: Option
         motion,
         start,
         end,
-        feed,
-        feed_mode: FeedMode::PerMinute,
+        // `None`: a move without a feed (a rapid, a dwell, or a feed move made by hand).
+        feed: feed.map_or(Feed::None, Feed::PerMinute),
         tcp: false,
         ..Move::default()
     }
@@ -357,7 +357,7 @@ fn cone_frustum_program_runs_at_the_programmed_feed_between_the_ramps() {
             let b = &blocks[k];
             let d = b.end - b.start;
             for axis in [Axis::X, Axis::Y, Axis::Z, Axis::A, Axis::C] {
-                let expected = b.feed.unwrap() / 60.0 * d[axis] / d.mixed_norm();
+                let expected = b.feed.rate().unwrap() / 60.0 * d[axis] / d.mixed_norm();
                 assert!(
                     (velocity(&s, n, axis) - expected).abs() < 1e-6 * (1.0 + expected.abs()),
                     "block {k} axis {axis}"
@@ -382,7 +382,7 @@ fn inverse_time_blocks_take_one_over_f_minutes() {
     let blocks: Vec<Move> = chain(&points, &[60.0; 5])
         .into_iter()
         .map(|b| Move {
-            feed_mode: FeedMode::InverseTime,
+            feed: Feed::InverseTime(60.0),
             ..b
         })
         .collect();
@@ -785,8 +785,9 @@ fn a_move_without_feed_is_an_error_that_names_its_line() {
     );
     let message = first_error(vec![g01(3, a, b, 0.0)], InterpolationOptions::default());
     assert!(message.contains("line 3"), "{message}");
+    // The reader refuses a G93 move without F; an inverse-time F of zero is refused here.
     let inverse = Move {
-        feed_mode: FeedMode::InverseTime,
+        feed: Feed::InverseTime(0.0),
         ..block(4, Motion::Linear, a, b, None)
     };
     let message = first_error(vec![inverse], InterpolationOptions::default());

@@ -106,7 +106,7 @@ fn difference(reference: &[Move], other: &[Move]) -> Option<String> {
             (Motion::Dwell { seconds: a }, Motion::Dwell { seconds: b }) => close(a, b),
             (a, b) => a == b,
         };
-        let same_feed = match (r.feed, m.feed) {
+        let same_feed = match (r.feed.rate(), m.feed.rate()) {
             (Some(a), Some(b)) => close(a, b),
             (a, b) => r.kind() == ngc::MoveKind::Rapid || a == b,
         };

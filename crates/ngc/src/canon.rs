@@ -100,12 +100,47 @@ pub enum FeedMode {
     InverseTime,
 }
 
+/// A move's feed, resolved by the reader from the F word in effect, the feed mode (G93,
+/// G94, G95's F × S) and the units (in/min converted under G20): what the planner runs a
+/// feed move at, as a number. A rapid and a dwell have none; a feed move always has one
+/// (the reader refuses a G01, G02 or G03 without a positive F in effect, with its file,
+/// line and column).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Feed {
+    /// A rapid (each axis at its maximum velocity) or a dwell: no path feed.
+    #[default]
+    None,
+    /// G94: the path speed, mm/min (deg counted as mm for mixed moves).
+    PerMinute(f64),
+    /// G93: the inverse of the block time, 1/min.
+    InverseTime(f64),
+}
+
+impl Feed {
+    /// F: mm/min under G94, 1/min under G93; `None` for a rapid or a dwell.
+    pub const fn rate(self) -> Option<f64> {
+        match self {
+            Feed::None => None,
+            Feed::PerMinute(f) | Feed::InverseTime(f) => Some(f),
+        }
+    }
+
+    /// How F is read; `None` for a rapid or a dwell.
+    pub const fn mode(self) -> Option<FeedMode> {
+        match self {
+            Feed::None => None,
+            Feed::PerMinute(_) => Some(FeedMode::PerMinute),
+            Feed::InverseTime(_) => Some(FeedMode::InverseTime),
+        }
+    }
+}
+
 /// One canonical move: an executable block with modal state resolved. Positions are
 /// absolute machine coordinates, mm and deg: work offsets (G54-G59.3, G92, G52) and the
 /// tool length offset (G43) are already applied, so `end` is where the machine axes go.
 ///
 /// Build one with struct-update syntax so that fields added later keep code compiling:
-/// `Move { line, motion, start, end, feed: Some(600.0), ..Move::default() }`.
+/// `Move { line, motion, start, end, feed: Feed::PerMinute(600.0), ..Move::default() }`.
 ///
 /// This is the narrow interface between reading a program and moving the machine (the
 /// role of LinuxCNC's canonical machining calls): generators emit it too.
@@ -118,10 +153,8 @@ pub struct Move {
     pub start: AxisVec,
     /// Axis positions at the end of the block.
     pub end: AxisVec,
-    /// F in effect: mm/min in G94 (converted from in/min under G20), 1/min in G93.
-    /// `None` when no F has been programmed (fine for G00 and G04).
-    pub feed: Option<f64>,
-    pub feed_mode: FeedMode,
+    /// The feed of a feed move, resolved ([`Feed`]); [`Feed::None`] for a rapid or a dwell.
+    pub feed: Feed,
     /// G43.4 tool-centre-point control active: X Y Z are the tool tip in the table frame.
     pub tcp: bool,
     /// Active tool number (the T of the last M6 or M61 Q), 0 for no tool.
@@ -141,8 +174,7 @@ impl Default for Move {
             motion: Motion::Rapid,
             start: AxisVec::ZERO,
             end: AxisVec::ZERO,
-            feed: None,
-            feed_mode: FeedMode::PerMinute,
+            feed: Feed::None,
             tcp: false,
             tool: 0,
             tool_length_mm: 0.0,

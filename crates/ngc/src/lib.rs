@@ -32,7 +32,7 @@
 //! assert_eq!(moves.len(), 1);
 //! assert_eq!(moves[0].motion, Motion::Linear);
 //! assert_eq!(moves[0].end[Axis::Y], -2.5);
-//! assert_eq!(moves[0].feed, Some(600.0));
+//! assert_eq!(moves[0].feed, ngc::Feed::PerMinute(600.0));
 //! ```
 
 mod axis;
@@ -65,7 +65,7 @@ mod turns;
 mod units;
 
 pub use axis::{Axis, AxisVec, Plane};
-pub use canon::{FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
+pub use canon::{Feed, FeedMode, Motion, Move, MoveKind, PathControl, FULL_CIRCLE_TOLERANCE_MM};
 pub use error::{line_column, Error, Result, Syntax};
 pub use expr::MAX_NESTING;
 pub use frame::{RotaryTable, ToolAligner};

@@ -256,7 +256,7 @@ impl SceneMonitor {
                         _ => None,
                     };
                     // A general chain's bodies have no table rotation written out here.
-                    let named = scene.kinematics.general.is_none();
+                    let named = scene.kinematics.has_closed_form();
                     frame
                         .filter(|_| named && tool.carrier == Carrier::Tool)
                         .map(|f| {
@@ -365,7 +365,7 @@ impl SceneMonitor {
         // Every pair is due at the next sample (no lazy skip past the change).
         self.next_due = f64::NEG_INFINITY;
         self.dues.fill(f64::NEG_INFINITY);
-        if self.scene.kinematics.general.is_some() {
+        if !self.scene.kinematics.has_closed_form() {
             // On a chain the tool parts' lever arms changed with the tool.
             for (i, state) in self.states.iter_mut().enumerate() {
                 let pair = self.scene.pairs[i];

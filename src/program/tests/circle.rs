@@ -60,18 +60,7 @@ impl TestProgram for Circle<'_> {
     /// forward kinematics, workpiece frame); on a named layout at the centre less the pivot.
     fn bar(&self, kinematics: &Kinematics) -> Option<BarSetup> {
         let circle = self.circle;
-        let center_table = match &kinematics.general {
-            Some(chain) => {
-                let (x, y, z) = (
-                    circle.center_mm[0],
-                    circle.center_mm[1],
-                    circle.center_mm[2],
-                );
-                let q = crate::AxisVec::xyzabc([x, y, z, 0.0, 0.0, 0.0]);
-                chain.tool_in_workpiece(&q, 0.0).0.coords
-            }
-            None => Vector3::from(circle.center_mm) - kinematics.pivot_mm,
-        };
+        let center_table = kinematics.tip_at_home_rotaries(circle.center_mm);
         Some(BarSetup {
             frame: CircleFrame::planar(center_table.into(), circle.plane),
             pivot_table_mm: Point3::from(center_table),

@@ -129,7 +129,7 @@ fn common_layout(inputs: &[(Scenario, MeasuredTrace)]) -> Result<Layout> {
         ));
     };
     let layout = first.machine.kinematics.layout;
-    let chain = first.machine.kinematics.general;
+    let chain = first.machine.kinematics.own_chain();
     let chain_rotaries = chain.map_or(0, |c| c.rotaries().count());
     if layout.tilt_axis().is_none() && chain_rotaries == 0 {
         return Err(Error::invalid(
@@ -138,7 +138,7 @@ fn common_layout(inputs: &[(Scenario, MeasuredTrace)]) -> Result<Layout> {
         ));
     }
     for (s, _) in inputs {
-        if s.machine.kinematics.layout != layout || s.machine.kinematics.general != chain {
+        if s.machine.kinematics.layout != layout || s.machine.kinematics.own_chain() != chain {
             return Err(Error::invalid(
                 &s.path,
                 format!(
@@ -160,7 +160,7 @@ fn parameters(
     options: &FitOptions,
 ) -> (Vec<Param>, Vec<Param>) {
     let layout = kinematics.layout;
-    let mut params: Vec<Param> = match &kinematics.general {
+    let mut params: Vec<Param> = match kinematics.own_chain() {
         Some(chain) => chain_parameters(chain),
         None => LocationParam::ALL
             .into_iter()
@@ -212,7 +212,7 @@ fn chain_parameters(chain: &Chain) -> Vec<LocationParam> {
 /// the line act, so each triple is seen as two combinations at most (the rank report names
 /// them).
 fn chain_cautions(kinematics: &Kinematics) -> Vec<String> {
-    let Some(chain) = &kinematics.general else {
+    let Some(chain) = kinematics.own_chain() else {
         return Vec::new();
     };
     chain

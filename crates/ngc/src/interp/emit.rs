@@ -5,7 +5,7 @@ use std::collections::VecDeque;
 
 use super::Interp;
 use crate::axis::AxisVec;
-use crate::canon::{FeedMode, Motion, Move, PathControl};
+use crate::canon::{Feed, Motion, Move, PathControl};
 use crate::code::FeedRead;
 
 impl Interp {
@@ -24,7 +24,7 @@ impl Interp {
         end: AxisVec,
         path: PathControl,
     ) {
-        let feed = self.feed_out();
+        let feed = self.feed_of(&motion);
         self.emit_with_feed(queue, line, motion, start, end, path, feed);
     }
 
@@ -38,7 +38,7 @@ impl Interp {
         start: AxisVec,
         end: AxisVec,
         path: PathControl,
-        (feed, feed_mode): (Option<f64>, FeedMode),
+        feed: Feed,
     ) {
         if self.comp.is_none() && self.comp_out.is_none() {
             // Built in place in the queue (docs/performance.md).
@@ -48,7 +48,6 @@ impl Interp {
                 start,
                 end,
                 feed,
-                feed_mode,
                 tcp: self.tcp_now(),
                 tool: self.tool,
                 tool_length_mm: self.tool_length_mm,
@@ -62,7 +61,6 @@ impl Interp {
             start,
             end,
             feed,
-            feed_mode,
             tcp: self.tcp_now(),
             tool: self.tool,
             tool_length_mm: self.tool_length_mm,
@@ -90,13 +88,18 @@ impl Interp {
         queue.push_back(mv);
     }
 
-    pub(super) fn feed_out(&self) -> (Option<f64>, FeedMode) {
-        match self.feed_mode {
-            FeedRead::PerMinute => (self.feed, FeedMode::PerMinute),
-            FeedRead::PerRevolution => {
-                (self.feed.map(|f| f * self.spindle_rpm), FeedMode::PerMinute)
-            }
-            FeedRead::InverseTime => (self.feed, FeedMode::InverseTime),
+    /// The feed of a move of `motion`, resolved once here: none for a rapid or a dwell;
+    /// for a feed move the F in effect as the feed mode reads it (G95: F × S, mm/min).
+    /// The modal checks ([`Interp::feed_in_effect`]) have refused a feed move without one.
+    pub(super) fn feed_of(&self, motion: &Motion) -> Feed {
+        if matches!(motion, Motion::Rapid | Motion::Dwell { .. }) {
+            return Feed::None;
+        }
+        match (self.feed_mode, self.feed) {
+            (_, None) => Feed::None,
+            (FeedRead::PerMinute, Some(f)) => Feed::PerMinute(f),
+            (FeedRead::PerRevolution, Some(f)) => Feed::PerMinute(f * self.spindle_rpm),
+            (FeedRead::InverseTime, Some(f)) => Feed::InverseTime(f),
         }
     }
 
@@ -123,14 +126,13 @@ impl Interp {
         start: AxisVec,
         target: AxisVec,
     ) -> Result<(), String> {
-        let (feed, feed_mode) = self.feed_out();
+        let feed = self.feed_of(&motion);
         let mv = Move {
             line: line_no,
             motion,
             start,
             end: target,
             feed,
-            feed_mode,
             tcp: self.tcp_now(),
             tool: self.tool,
             tool_length_mm: self.tool_length_mm,

@@ -19,7 +19,7 @@
 use std::collections::VecDeque;
 
 use super::Interp;
-use crate::canon::{FeedMode, Motion, Move};
+use crate::canon::{Feed, Motion, Move};
 use crate::lex::{LineError, LineResult, Word};
 use crate::AxisVec;
 
@@ -71,7 +71,7 @@ impl Interp {
             ));
         }
         let feed_mm_per_min = pitch.value * self.scale() * self.spindle_rpm;
-        let feed = (Some(feed_mm_per_min), FeedMode::PerMinute);
+        let feed = Feed::PerMinute(feed_mm_per_min);
         let start = self.pos;
         let path = self.path;
         self.emit_with_feed(queue, line_no, Motion::Linear, start, target, path, feed);

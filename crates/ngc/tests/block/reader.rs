@@ -7,7 +7,7 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::path::Path;
 
 use approx::assert_relative_eq;
-use ngc::{read_file, read_str, AxisVec, Error, FeedMode, Motion, Move, Plane};
+use ngc::{read_file, read_str, AxisVec, Error, Feed, Motion, Move, Plane};
 use proptest::prelude::*;
 
 const PATH: &str = "test.nc";
@@ -78,7 +78,7 @@ fn decimal_words_parse_to_the_nearest_f64() {
     assert_eq!(b[0].end.0[2], -0.5);
     assert_eq!(b[0].end.0[3], 7.0);
     assert_eq!(b[0].end.0[4].to_bits(), (0.1_f64 + 0.2).to_bits());
-    assert_eq!(b[0].feed, Some(100.0));
+    assert_eq!(b[0].feed, Feed::PerMinute(100.0));
 }
 
 #[test]
@@ -100,10 +100,13 @@ fn modal_state_carries_over_between_blocks() {
     assert_eq!(b[1].end, xyz(1.0, 2.0, 0.0));
     assert_eq!(b[3].end, xyz(4.0, 2.0, 3.0));
     assert_eq!(b[4].end, AxisVec::xyzabc([4.0, 2.0, 3.0, 10.0, 0.0, -20.0]));
-    assert!(b.iter().all(|b| b.feed == Some(500.0)));
-    assert!(b
-        .iter()
-        .all(|b| b.feed_mode == FeedMode::PerMinute && !b.tcp));
+    // F stays in effect across the rapids, which carry none themselves.
+    assert!(b.iter().all(|b| !b.tcp
+        && b.feed
+            == match b.motion {
+                Motion::Rapid => Feed::None,
+                _ => Feed::PerMinute(500.0),
+            }));
     // Each block starts where the previous one ended.
     for pair in b.windows(2) {
         assert_eq!(pair[1].start, pair[0].end);
@@ -127,10 +130,18 @@ fn incremental_moves_accumulate_on_every_axis_from_the_start_position() {
 fn inch_words_are_converted_to_mm_and_rotary_words_stay_in_degrees() {
     let b = read("G20 G1 X1 Y0.5 C90 F10\nG91 Z-2\nG21 G90 X1\n");
     assert_eq!(b[0].end, AxisVec::xyzabc([25.4, 12.7, 0.0, 0.0, 0.0, 90.0]));
-    assert_eq!(b[0].feed, Some(254.0), "F 10 in/min is 254 mm/min");
+    assert_eq!(
+        b[0].feed,
+        Feed::PerMinute(254.0),
+        "F 10 in/min is 254 mm/min"
+    );
     assert_eq!(b[1].end.0[2], -50.8);
     assert_eq!(b[2].end.0[0], 1.0, "G21 reads mm again");
-    assert_eq!(b[2].feed, Some(254.0), "the feed in effect stays in mm/min");
+    assert_eq!(
+        b[2].feed,
+        Feed::PerMinute(254.0),
+        "the feed in effect stays in mm/min"
+    );
 }
 
 #[test]
@@ -230,12 +241,10 @@ fn helical_arc_moves_the_normal_axis_linearly_and_keeps_the_start_normal_in_the_
 #[test]
 fn inverse_time_feed_is_read_per_block_and_not_converted() {
     let b = read("G20 G93 G1 X1 F2\nX2 F0.5\nG0 X0\nG94 G1 X1 F10\n");
-    assert_eq!(b[0].feed_mode, FeedMode::InverseTime);
-    assert_eq!(b[0].feed, Some(2.0));
-    assert_eq!(b[1].feed, Some(0.5));
-    assert_eq!(b[2].motion, Motion::Rapid);
-    assert_eq!(b[3].feed_mode, FeedMode::PerMinute);
-    assert_eq!(b[3].feed, Some(254.0));
+    assert_eq!(b[0].feed, Feed::InverseTime(2.0));
+    assert_eq!(b[1].feed, Feed::InverseTime(0.5));
+    assert_eq!((b[2].motion, b[2].feed), (Motion::Rapid, Feed::None));
+    assert_eq!(b[3].feed, Feed::PerMinute(254.0));
 }
 
 #[test]
@@ -277,7 +286,11 @@ N50 G1 X2
     assert_eq!(b.len(), 1);
     assert_eq!(b[0].line, 5);
     assert_eq!(b[0].end, xyz(1.0, 2.0, 0.0));
-    assert_eq!(b[0].feed, Some(100.0), "the deleted block's F1 is not read");
+    assert_eq!(
+        b[0].feed,
+        Feed::PerMinute(100.0),
+        "the deleted block's F1 is not read"
+    );
 }
 
 #[test]
@@ -327,14 +340,8 @@ fn a_file_with_tcp_and_inverse_time_reads_block_by_block() {
     assert_eq!(b[0].end, xyz(0.0, 0.0, 50.0));
     assert!(!b[0].tcp && b[1].tcp && b[4].tcp && !b[5].tcp);
     assert_eq!(b[2].end, AxisVec::xyzabc([10.0, 0.0, 10.0, 5.0, 0.0, 90.0]));
-    assert_eq!(
-        (b[2].feed_mode, b[2].feed),
-        (FeedMode::InverseTime, Some(2.5))
-    );
-    assert_eq!(
-        (b[4].feed_mode, b[4].feed),
-        (FeedMode::PerMinute, Some(1000.0))
-    );
+    assert_eq!(b[2].feed, Feed::InverseTime(2.5));
+    assert_eq!(b[4].feed, Feed::PerMinute(1000.0));
     assert_eq!(b[5].motion, Motion::Dwell { seconds: 0.25 });
 }
 

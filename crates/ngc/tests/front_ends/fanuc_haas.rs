@@ -56,7 +56,7 @@ fn a_control_that_starts_in_inch_reads_inches_and_a_program_without_units_is_war
     // 1 in = 25.4 mm; F10 in/min = 254 mm/min.
     assert_eq!(xyz(&m[0]), [25.4, 50.8, 0.0]);
     assert_eq!(xyz(&m[1]), [25.4, 50.8, -12.7]);
-    assert_eq!(m[1].feed, Some(254.0));
+    assert_eq!(m[1].feed, ngc::Feed::PerMinute(254.0));
     assert!(notices
         .iter()
         .any(|n| n.warning && n.message.contains("inches (G20)")));

@@ -67,7 +67,7 @@ fn fmax_is_for_its_block_alone_and_f_stays() {
     let m = moves("2 L X+0 Y+0 Z+5 R0 F300\n3 L X+10 FMAX\n/4 L X+99\n4 L X+20");
     assert_eq!(m[1].motion, Motion::Rapid);
     assert_eq!(m[2].motion, Motion::Linear);
-    assert_eq!(m[2].feed, Some(300.0));
+    assert_eq!(m[2].feed, ngc::Feed::PerMinute(300.0));
 }
 
 #[test]
@@ -219,8 +219,8 @@ fn rigid_tapping_207_feeds_at_pitch_times_speed_in_and_out() {
         .map(|m| (m.motion == Motion::Rapid, m.end[Axis::Z], m.feed))
         .collect();
     assert_eq!(z[0].1, 2.0);
-    assert_eq!(z[1], (false, -10.0, Some(625.0)));
-    assert_eq!(z[2], (false, 2.0, Some(625.0)));
+    assert_eq!(z[1], (false, -10.0, ngc::Feed::PerMinute(625.0)));
+    assert_eq!(z[2], (false, 2.0, ngc::Feed::PerMinute(625.0)));
     assert_eq!((z[3].0, z[3].1), (true, 10.0));
 }
 
@@ -406,6 +406,20 @@ fn glued_labels_and_rep_with_a_slash_are_read() {
 #[test]
 fn a_feed_in_a_q_parameter_is_read() {
     let m = moves("2 Q53 = 250\n3 L X+0 Y+0 Z+5 R0 FMAX\n4 L X+10 FQ53\n5 L X+30 F+Q53");
-    let feeds: Vec<Option<f64>> = m.iter().skip(1).map(|m| m.feed).collect();
+    let feeds: Vec<Option<f64>> = m.iter().skip(1).map(|m| m.feed.rate()).collect();
     assert_eq!(feeds, [Some(250.0), Some(250.0)]);
+}
+
+/// A straight line with no F in effect (none in the block, none before it, no FMAX) is the
+/// reader's error at its line, so no feed move leaves the reader without a feed.
+#[test]
+fn a_feed_move_with_no_feed_in_effect_is_an_error_at_its_line() {
+    // (Source line 3: the program's BEGIN PGM and TOOL CALL come first.)
+    let (line, _, message) = error("2 L X+10 Y+0 Z+0 R0");
+    assert_eq!(line, 3, "{message}");
+    // With an F before it, the feed move carries that number; the FMAX move carries none.
+    let m = moves("2 L X+0 Y+0 Z+5 R0 FMAX\n3 L X+10 F250\n4 L X+20");
+    assert_eq!(m[0].feed, ngc::Feed::None);
+    assert_eq!(m[1].feed, ngc::Feed::PerMinute(250.0));
+    assert_eq!(m[2].feed, ngc::Feed::PerMinute(250.0));
 }

@@ -107,7 +107,8 @@ fn difference(a: &[Move], b: &[Move], cycles: bool) -> Option<String> {
             || x.tcp != y.tcp
             || (x.path != y.path && !cycles)
             || x.feed
-                .zip(y.feed)
+                .rate()
+                .zip(y.feed.rate())
                 .is_some_and(|(f, g)| (f - g).abs() > 1e-9)
         {
             return Some(format!("move {k}:\n linuxcnc line {} {:?} {:?}->{:?} tcp {} {:?} F{:?}\n siemens  line {} {:?} {:?}->{:?} tcp {} {:?} F{:?}", x.line, x.motion, x.start.to_xyzabc(), x.end.to_xyzabc(), x.tcp, x.path, x.feed, y.line, y.motion, y.start.to_xyzabc(), y.end.to_xyzabc(), y.tcp, y.path, y.feed));
@@ -455,4 +456,18 @@ fn an_indirect_call_and_display_only_definitions_are_read() {
     .expect("a system variable mtsim does not have is refused");
     assert!(err.to_string().contains("general machine data"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A G1 with no F in effect is the reader's error at its line and column, so no feed move
+/// leaves the reader without a feed; a G0 carries none.
+#[test]
+fn a_feed_move_with_no_feed_in_effect_is_an_error_at_its_line() {
+    let (line, column, message) = error("G0 X1\nG1 X10\n");
+    assert_eq!((line, column), (2, 1), "{message}");
+    assert!(message.contains("no feed"), "{message}");
+    let m = moves("G0 X1\nG1 X10 F300\n");
+    assert_eq!(
+        (m[0].feed, m[1].feed),
+        (ngc::Feed::None, ngc::Feed::PerMinute(300.0))
+    );
 }

@@ -406,7 +406,7 @@ fn path_control_modes_reach_the_moves() {
     assert_eq!(m[3].path, PathControl::BLEND);
     // G95: F per revolution times S.
     let m = cnc("G95 S1000 F0.1 G1 X1\n");
-    assert_eq!(m[0].feed, Some(100.0));
+    assert_eq!(m[0].feed, ngc::Feed::PerMinute(100.0));
     // G20 G90.1: absolute arc centre in inches.
     let m = cnc("G20 G90.1 G0 X1 Y0\nG3 X0 Y1 I0 J0 F10\n");
     let Motion::Arc { center_mm, .. } = m[1].motion else {

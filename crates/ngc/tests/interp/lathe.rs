@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use ngc::{read_str_with, Axis, Dialect, FeedMode, MoveKind, Options};
+use ngc::{read_str_with, Axis, Dialect, Feed, MoveKind, Options};
 
 fn opts() -> Options {
     Options {
@@ -35,12 +35,11 @@ fn g33_feeds_at_pitch_times_spindle_speed() {
         "G21 G18 F100\nS500 M3\nG0 X10 Z5\nG33 Z-20 K1.5\nG1 X12\nG20 S200\nG33 Z-1 K0.05\nM2\n",
     );
     assert_eq!(m[1].kind(), MoveKind::Feed);
-    assert_eq!(m[1].feed, Some(750.0));
-    assert_eq!(m[1].feed_mode, FeedMode::PerMinute);
+    assert_eq!(m[1].feed, Feed::PerMinute(750.0));
     assert_eq!(m[1].end[Axis::Z], -20.0);
     // The ordinary feed is untouched.
-    assert_eq!(m[2].feed, Some(100.0));
-    assert!((m[3].feed.unwrap() - 254.0).abs() < 1e-9);
+    assert_eq!(m[2].feed, Feed::PerMinute(100.0));
+    assert!(matches!(m[3].feed, Feed::PerMinute(f) if (f - 254.0).abs() < 1e-9));
     assert!((m[3].end[Axis::Z] + 25.4).abs() < 1e-12);
 }
 
@@ -49,8 +48,14 @@ fn g33_feeds_at_pitch_times_spindle_speed() {
 fn rigid_tap_goes_and_returns_and_g7_halves_x() {
     let m = moves("G21 G18\nS400 M4\nG7 G0 X20 Z10\nG33.1 Z-8 K0.8\nG0 X30\nM2\n");
     assert_eq!(m[0].end[Axis::X], 10.0);
-    assert_eq!((m[1].end[Axis::Z], m[1].feed), (-8.0, Some(320.0)));
-    assert_eq!((m[2].end[Axis::Z], m[2].feed), (10.0, Some(320.0)));
+    assert_eq!(
+        (m[1].end[Axis::Z], m[1].feed),
+        (-8.0, Feed::PerMinute(320.0))
+    );
+    assert_eq!(
+        (m[2].end[Axis::Z], m[2].feed),
+        (10.0, Feed::PerMinute(320.0))
+    );
     assert_eq!(m[3].end[Axis::X], 15.0);
 }
 

@@ -113,7 +113,7 @@ fn tool_speed_and_feed_remaps_set_and_commit_the_parameters() {
             ([3.0, 300.0, 15.0], 7),
         ]
     );
-    assert_eq!(moves[7].feed, Some(50.0));
+    assert_eq!(moves[7].feed, ngc::Feed::PerMinute(50.0));
 }
 
 /// An epilog commits the parameter as the subroutine left it (`#<feed> = 3·F`), and
@@ -129,7 +129,7 @@ fn epilogs_read_the_subroutines_parameters_unless_it_used_the_builtin() {
     );
     let o = options(&changed.0, &EXTEND_BUILTINS[4..]);
     let moves = read("G21\nF50\nG1 X1\n", &o).unwrap();
-    assert_eq!(moves[0].feed, Some(150.0));
+    assert_eq!(moves[0].feed, ngc::Feed::PerMinute(150.0));
     let builtin = Subs::new(
         "builtin",
         &[
@@ -144,7 +144,10 @@ fn epilogs_read_the_subroutines_parameters_unless_it_used_the_builtin() {
     // F50 gives 100 (the body's F, the epilog does not commit 50); T5's body selects 7
     // and the epilog leaves it (builtin_used), so the built-in M6 loads tool 7.
     let moves = read("G21\nF50\nT5 M6\nG1 X1\n", &o).unwrap();
-    assert_eq!((moves[0].feed, moves[0].tool), (Some(100.0), 7));
+    assert_eq!(
+        (moves[0].feed, moves[0].tool),
+        (ngc::Feed::PerMinute(100.0), 7)
+    );
 }
 
 /// The glue's refusals, at the remapped code (the point of each check is its message).

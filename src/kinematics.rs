@@ -83,6 +83,7 @@ pub mod cradle_table;
 pub mod error_table;
 pub mod layout;
 pub mod layout_chain;
+pub mod linear_errors;
 pub mod location;
 
 pub use axis_set::AxisSet;
@@ -167,20 +168,36 @@ impl Kinematics {
         self.nominal
     }
 
-    /// The actual chain of a general machine: each rotary's line moved and turned by its
-    /// location errors ([`LocationErrors::actual_link`]); the nominal chain when they are
-    /// zero, `None` for a named layout (whose actual chain is [`Kinematics::actual_table_pose`]).
+    /// The actual chain of a general machine, or of a named layout whose linear axes carry
+    /// errors: each rotary's line moved and turned by its location errors
+    /// ([`LocationErrors::actual_link`]), each linear axis's direction squared
+    /// ([`linear_errors::squared_direction`]) and its component errors acting after its
+    /// motion. The nominal chain when all are zero; `None` for a named layout with ideal
+    /// linear axes (whose actual chain is [`Kinematics::actual_table_pose`]).
     pub fn actual_chain(&self) -> Option<Chain> {
-        let chain = self.general?;
-        if self.location_errors.is_zero() {
+        let errors = &self.location_errors;
+        let chain = match self.general {
+            Some(chain) => chain,
+            None if errors.has_linear() => self.nominal?,
+            None => return None,
+        };
+        if errors.is_zero() {
             return Some(chain);
         }
-        Some(chain.rotaries().fold(chain, |actual, (_, link)| {
-            let (direction, point) =
-                self.location_errors
-                    .actual_link(link.axis, &link.direction, &link.point_mm);
+        let actual = chain.links().fold(chain, |actual, (_, link)| {
+            let eps = errors.squareness_rad(link.axis);
+            let (direction, point) = if link.axis.is_rotary() {
+                errors.actual_link(link.axis, &link.direction, &link.point_mm)
+            } else if eps != Vector3::zeros() {
+                let squared = linear_errors::squared_direction(&link.direction, &eps);
+                (squared, link.point_mm)
+            } else {
+                // An ideal linear axis keeps its direction bit for bit.
+                return actual;
+            };
             actual.with_line(link.axis, direction, point)
-        }))
+        });
+        Some(actual.with_components(errors.components()))
     }
 
     /// The same machine with location errors on its rotary axes.

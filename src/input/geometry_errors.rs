@@ -92,7 +92,24 @@ pub fn validate(
                 ));
             }
         }
-        if layout.rotaries_unmodelled() {
+        if param.is_squareness() {
+            let linear_in_chain = match chain {
+                Some(c) => c.link(param.axis()).is_some(),
+                None => layout
+                    .links(nalgebra::Vector3::zeros())
+                    .is_some_and(|(table, head)| {
+                        table.iter().chain(&head).any(|l| l.axis == param.axis())
+                    }),
+            };
+            if !linear_in_chain {
+                return refuse(format!(
+                    "the {} layout has no {} axis in a kinematic chain, so nothing is out of \
+                     square; remove this key",
+                    layout.name(),
+                    param.axis()
+                ));
+            }
+        } else if layout.rotaries_unmodelled() {
             return refuse(format!(
                 "the {} layout's rotaries are world coordinates with no modelled axis lines, \
                  so they carry no location errors; remove this key",

@@ -76,8 +76,9 @@ use std::path::Path;
 use nalgebra::DVector;
 
 use crate::error::{Error, Result};
-use crate::input::scenario::{Program, Scenario};
+use crate::input::scenario::Scenario;
 use crate::kinematics::{Chain, Kinematics, Layout, LocationParam};
+use crate::program::test_of;
 use crate::report::fit_plot::{render_fit_svg, PlotSeries};
 use crate::report::{create_dir, write_atomic};
 pub use correlated::{fit_ar1, ArNoise};
@@ -155,9 +156,7 @@ fn common_layout(inputs: &[(Scenario, MeasuredTrace)]) -> Result<Layout> {
 /// True when a pair is a circle test: the Ballbar user's test of the linear axes'
 /// squareness (ISO 230-4), whose three errors the fit then estimates too.
 fn has_circle(inputs: &[(Scenario, MeasuredTrace)]) -> bool {
-    inputs
-        .iter()
-        .any(|(s, _)| matches!(s.program, Program::Circle { .. }))
+    inputs.iter().any(|(s, _)| test_of(s).circle().is_some())
 }
 
 /// The parameters: location errors (with the squareness of the linear axes the chain has,

@@ -71,9 +71,11 @@
 //! The controller plans with the nominal chain above ([`Kinematics::table_to_machine`],
 //! [`Kinematics::inverse`]). The machine moves with its actual chain, which carries the
 //! ISO 230-7 location errors of the rotary axes ([`location`]):
-//! [`Kinematics::actual_table_to_machine`] and [`Kinematics::actual_table_pose`]. Position
-//! errors along the axes (pitch and worm-gear error, [`error_table`]) act on the axis
-//! positions themselves, before the kinematics.
+//! [`Kinematics::actual_table_to_machine`] and [`Kinematics::actual_table_pose`]. The
+//! ISO 230-1 errors of the linear axes (squareness and component errors,
+//! [`linear_errors`]) act on the links of [`Kinematics::actual_chain`], which a named
+//! layout then runs too. Position errors along the axes (pitch and worm-gear error,
+//! [`error_table`]) act on the axis positions themselves, before the kinematics.
 
 pub mod axis_set;
 pub mod chain;

@@ -71,9 +71,11 @@
 //! The controller plans with the nominal chain above ([`Kinematics::table_to_machine`],
 //! [`Kinematics::inverse`]). The machine moves with its actual chain, which carries the
 //! ISO 230-7 location errors of the rotary axes ([`location`]):
-//! [`Kinematics::actual_table_to_machine`] and [`Kinematics::actual_table_pose`]. Position
-//! errors along the axes (pitch and worm-gear error, [`error_table`]) act on the axis
-//! positions themselves, before the kinematics.
+//! [`Kinematics::actual_table_to_machine`] and [`Kinematics::actual_table_pose`]. The
+//! ISO 230-1 errors of the linear axes (squareness and component errors,
+//! [`linear_errors`]) act on the links of [`Kinematics::actual_chain`], which a named
+//! layout then runs too. Position errors along the axes (pitch and worm-gear error,
+//! [`error_table`]) act on the axis positions themselves, before the kinematics.
 
 pub mod axis_set;
 pub mod chain;
@@ -83,6 +85,7 @@ pub mod cradle_table;
 pub mod error_table;
 pub mod layout;
 pub mod layout_chain;
+pub mod linear_errors;
 pub mod location;
 
 pub use axis_set::AxisSet;
@@ -188,20 +191,36 @@ impl Kinematics {
         self.nominal
     }
 
-    /// The actual chain of a general machine: each rotary's line moved and turned by its
-    /// location errors ([`LocationErrors::actual_link`]); the nominal chain when they are
-    /// zero, `None` for a named layout (whose actual chain is [`Kinematics::actual_table_pose`]).
+    /// The actual chain of a general machine, or of a named layout whose linear axes carry
+    /// errors: each rotary's line moved and turned by its location errors
+    /// ([`LocationErrors::actual_link`]), each linear axis's direction squared
+    /// ([`linear_errors::squared_direction`]) and its component errors acting after its
+    /// motion. The nominal chain when all are zero; `None` for a named layout with ideal
+    /// linear axes (whose actual chain is [`Kinematics::actual_table_pose`]).
     pub fn actual_chain(&self) -> Option<Chain> {
-        let chain = self.general?;
-        if self.location_errors.is_zero() {
+        let errors = &self.location_errors;
+        let chain = match self.general {
+            Some(chain) => chain,
+            None if errors.has_linear() => self.nominal?,
+            None => return None,
+        };
+        if errors.is_zero() {
             return Some(chain);
         }
-        Some(chain.rotaries().fold(chain, |actual, (_, link)| {
-            let (direction, point) =
-                self.location_errors
-                    .actual_link(link.axis, &link.direction, &link.point_mm);
+        let actual = chain.links().fold(chain, |actual, (_, link)| {
+            let eps = errors.squareness_rad(link.axis);
+            let (direction, point) = if link.axis.is_rotary() {
+                errors.actual_link(link.axis, &link.direction, &link.point_mm)
+            } else if eps != Vector3::zeros() {
+                let squared = linear_errors::squared_direction(&link.direction, &eps);
+                (squared, link.point_mm)
+            } else {
+                // An ideal linear axis keeps its direction bit for bit.
+                return actual;
+            };
             actual.with_line(link.axis, direction, point)
-        }))
+        });
+        Some(actual.with_components(errors.components()))
     }
 
     /// The same machine with location errors on its rotary axes.

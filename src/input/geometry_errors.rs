@@ -1,5 +1,6 @@
 //! The geometric errors of a machine file: `[location_errors]` (ISO 230-7 location errors of
-//! the rotary axes) and `[error_tables]` (per-axis position-error tables in LinuxCNC's
+//! the rotary axes, with the ISO 230-1 squareness `EC0Y`, `EB0Z`, `EA0Z` of the linear
+//! axes) and `[error_tables]` (per-axis position-error tables in LinuxCNC's
 //! compensation-file format). The value types and the math live in
 //! [`crate::kinematics::location`] and [`crate::kinematics::error_table`].
 //!
@@ -59,11 +60,17 @@ pub fn validate(
         let refuse = |message: String| Err(value_error(path, text, section, key, message));
         // A named layout takes the parameters of geometric-errors.md; a general chain's
         // rotaries all six of each ([`LocationParam::EVERY`]).
-        let names = if chain.is_some() {
+        // Both take the squareness of the linear axes (ISO 230-1).
+        let rotary_names = if chain.is_some() {
             &LocationParam::EVERY[..]
         } else {
             &LocationParam::ALL[..]
         };
+        let names: Vec<LocationParam> = rotary_names
+            .iter()
+            .copied()
+            .chain(LocationParam::SQUARENESS)
+            .collect();
         let Some(param) = LocationParam::from_key(key).filter(|p| names.contains(p)) else {
             let known: Vec<String> = names
                 .iter()
@@ -85,7 +92,24 @@ pub fn validate(
                 ));
             }
         }
-        if layout.rotaries_unmodelled() {
+        if param.is_squareness() {
+            let linear_in_chain = match chain {
+                Some(c) => c.link(param.axis()).is_some(),
+                None => layout
+                    .links(nalgebra::Vector3::zeros())
+                    .is_some_and(|(table, head)| {
+                        table.iter().chain(&head).any(|l| l.axis == param.axis())
+                    }),
+            };
+            if !linear_in_chain {
+                return refuse(format!(
+                    "the {} layout has no {} axis in a kinematic chain, so nothing is out of \
+                     square; remove this key",
+                    layout.name(),
+                    param.axis()
+                ));
+            }
+        } else if layout.rotaries_unmodelled() {
             return refuse(format!(
                 "the {} layout's rotaries are world coordinates with no modelled axis lines, \
                  so they carry no location errors; remove this key",

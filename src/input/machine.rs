@@ -10,6 +10,7 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
+use crate::input::component_errors;
 use crate::input::drive::{AxisDrive, DriveConfig, FrictionConfig, ServoConfig};
 use crate::input::exact;
 use crate::input::geometry_errors::{self, GeometryErrors};
@@ -135,6 +136,10 @@ pub struct MachineFile {
     /// Position-error table files per axis (LinuxCNC compensation format): `C = "c.comp"`.
     #[serde(default)]
     pub error_tables: BTreeMap<String, String>,
+    /// ISO 230-1 component-error tables (CSV) of the linear axes: `X = "x-errors.csv"`
+    /// (input/component_errors.rs).
+    #[serde(default)]
+    pub component_errors: BTreeMap<String, String>,
 }
 
 fn default_interpolation_period_ms() -> f64 {
@@ -174,6 +179,10 @@ pub struct AxisConfig {
     /// Chains only, rotary axes: a point on the axis line at home, mm; default the origin.
     #[serde(default, deserialize_with = "exact::option_array")]
     pub point_mm: Option<[f64; 3]>,
+    /// Linear axes X, Y, Z: the reference point r_J of its `[component_errors]` table
+    /// (where it was measured), machine frame at home, mm; default the origin.
+    #[serde(default, deserialize_with = "exact::option_array")]
+    pub reference_mm: Option<[f64; 3]>,
     #[serde(default)]
     pub servo: ServoConfig,
     #[serde(default)]
@@ -252,10 +261,19 @@ impl Machine {
             .machine(overrides.map(|(scenario, text, o)| (scenario, Some(text), o)))
     }
 
-    fn validate(path: &Path, text: &str, file: MachineFile, tables_file: &Path) -> Result<Machine> {
+    /// `tables_files`: the files that name the `[error_tables]` and the
+    /// `[component_errors]` (their paths are relative to those files).
+    fn validate(
+        path: &Path,
+        text: &str,
+        file: MachineFile,
+        tables_files: [&Path; 2],
+    ) -> Result<Machine> {
+        let [tables_file, components_file] = tables_files;
         let kinematics = kinematics_of(path, text, &file)?;
         let layout = kinematics.layout;
         let mut axes = BTreeMap::new();
+        let mut reference_mm = BTreeMap::new();
         for (name, config) in file.axes {
             let section = format!("axes.{name}");
             let axis = match name.chars().collect::<Vec<_>>().as_slice() {
@@ -274,6 +292,16 @@ impl Machine {
                 });
             };
             let drive = check_axis(path, text, &section, axis, &config)?;
+            if let Some(r) = config.reference_mm {
+                if !matches!(axis, Axis::X | Axis::Y | Axis::Z) || !r.iter().all(|v| v.is_finite())
+                {
+                    let message = "the reference point of a linear axis X, Y or Z's component \
+                                   errors: three finite numbers, mm"
+                        .to_string();
+                    return Err(value_error(path, text, &section, "reference_mm", message));
+                }
+                reference_mm.insert(axis, r);
+            }
             axes.insert(
                 axis,
                 MachineAxis {
@@ -332,10 +360,20 @@ impl Machine {
             &file.error_tables,
             tables_file.parent().unwrap_or(Path::new(".")),
         )?;
+        let components = component_errors::read(
+            path,
+            text,
+            layout,
+            kinematics.chain().as_ref(),
+            &file.component_errors,
+            &reference_mm,
+            components_file.parent().unwrap_or(Path::new(".")),
+        )?;
         Ok(Machine {
             name: file.name,
             path: path.to_path_buf(),
-            kinematics: kinematics.with_location_errors(geometry.location),
+            kinematics: kinematics
+                .with_location_errors(geometry.location.with_components(components)),
             geometry,
             interpolation_period_s: file.interpolation_period_ms * 1e-3,
             axes,
@@ -411,7 +449,7 @@ impl MachineBase {
 
     fn quoted(path: &Path, text: String) -> Result<MachineBase> {
         let file: MachineFile = toml_text::parse(path, &text)?;
-        let alone = Machine::validate(path, &text, file, path)?;
+        let alone = Machine::validate(path, &text, file, [path, path])?;
         let tree = toml_text::numbers_checked(path, &text)?;
         Ok(MachineBase {
             path: path.to_path_buf(),
@@ -461,10 +499,11 @@ impl MachineBase {
         overrides: &toml::Table,
     ) -> Result<Machine> {
         // Error-table paths are relative to the file that names them.
-        let tables_file = match overrides.contains_key("error_tables") {
+        let named_by = |key: &str| match overrides.contains_key(key) {
             true => scenario,
-            false => &self.path,
+            false => self.path.as_path(),
         };
+        let tables_files = [named_by("error_tables"), named_by("component_errors")];
         let mut merged = self.tree.clone();
         deep_merge(&mut merged, overrides);
         let file = match scenario_text {
@@ -478,7 +517,7 @@ impl MachineBase {
         // Range errors in overridden values point at the scenario file; the machine is still
         // the machine file's (test.json names it, the scenario hash reads it).
         let mut machine =
-            Machine::validate(scenario, scenario_text.unwrap_or(""), file, tables_file)?;
+            Machine::validate(scenario, scenario_text.unwrap_or(""), file, tables_files)?;
         machine.path = self.path.clone();
         Ok(machine)
     }

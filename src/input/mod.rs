@@ -3,6 +3,7 @@
 //! Outputs: plain values — [`Machine`], [`Scenario`], drive, scene, tool and test parameters; imports no stage.
 
 pub mod budget;
+pub mod component_errors;
 pub mod drive;
 pub mod exact;
 pub mod geometry_errors;

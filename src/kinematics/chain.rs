@@ -19,6 +19,7 @@
 
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Unit, Vector3};
 
+use super::linear_errors::ComponentErrors;
 use crate::{Axis, AxisVec};
 
 /// Tool tip and tool axis in the table frame.
@@ -102,6 +103,9 @@ pub struct Chain {
     pub gauge_point_mm: Vector3<f64>,
     /// Unit tool direction at home, from the tip toward the spindle.
     pub tool_direction: Vector3<f64>,
+    /// The component errors of the linear axes, on an actual chain
+    /// ([`super::linear_errors`]): `E_J(q_J)` right after `M_J(q_J)`.
+    components: Option<&'static ComponentErrors>,
 }
 
 /// Why a chain is not valid.
@@ -150,6 +154,7 @@ impl Chain {
             len: table.len() + head.len(),
             gauge_point_mm,
             tool_direction: tool_direction.normalize(),
+            components: None,
         })
     }
 
@@ -190,12 +195,37 @@ impl Chain {
 
     /// T_table(q): workpiece frame → machine frame.
     pub fn table_pose(&self, q: &AxisVec) -> Isometry3<f64> {
-        product(self.table(), q)
+        self.product(self.table(), q)
     }
 
     /// T_head(q): the spindle's home pose → its pose at `q`, machine frame.
     pub fn head_pose(&self, q: &AxisVec) -> Isometry3<f64> {
-        product(self.head(), q)
+        self.product(self.head(), q)
+    }
+
+    /// The motion of `link` at `q`: `M_k(q_k)`, followed on an actual chain by the
+    /// linear axis's component errors `E_k(q_k)` ([`super::linear_errors`]).
+    pub fn link_motion(&self, link: &Link, q: &AxisVec) -> Isometry3<f64> {
+        let value = q[link.axis];
+        let motion = link.motion(value);
+        match self.components.and_then(|c| c.motion(link.axis, value)) {
+            Some(errors) => motion * errors,
+            None => motion,
+        }
+    }
+
+    /// M_1(q_1) E_1(q_1) ⋯ M_n(q_n) E_n(q_n) of `links` ([`Chain::link_motion`]).
+    pub fn product(&self, links: &[Link], q: &AxisVec) -> Isometry3<f64> {
+        links
+            .iter()
+            .fold(Isometry3::identity(), |acc, l| acc * self.link_motion(l, q))
+    }
+
+    /// The same chain with the linear axes' component errors `components` acting after
+    /// their motions (the actual chain).
+    pub fn with_components(mut self, components: Option<&'static ComponentErrors>) -> Chain {
+        self.components = components;
+        self
     }
 
     /// Tool tip (mm) and tool direction in the machine frame at `q`, for a tool of length
@@ -239,13 +269,6 @@ impl Chain {
     pub fn rotaries(&self) -> impl Iterator<Item = (Side, &Link)> {
         self.links().filter(|(_, l)| l.axis.is_rotary())
     }
-}
-
-/// M_1(q_1) ⋯ M_n(q_n) of `links`.
-fn product(links: &[Link], q: &AxisVec) -> Isometry3<f64> {
-    links
-        .iter()
-        .fold(Isometry3::identity(), |acc, l| acc * l.motion(q[l.axis]))
 }
 
 fn is_direction(v: &Vector3<f64>) -> bool {

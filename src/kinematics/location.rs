@@ -33,6 +33,7 @@
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 use serde::Serialize;
 
+use super::linear_errors::ComponentErrors;
 use crate::Axis;
 
 /// One location-error parameter. Position errors are in um, orientation errors in urad.
@@ -59,6 +60,11 @@ pub enum LocationParam {
     EB0B,
     EZ0C,
     EC0C,
+    /// Squareness of the linear axes (ISO 230-1, [`super::linear_errors`]): Y's line
+    /// turned about Z, Z's about Y and about X; X is the reference.
+    EC0Y,
+    EB0Z,
+    EA0Z,
 }
 
 impl LocationParam {
@@ -119,16 +125,33 @@ impl LocationParam {
             EB0B => "EB0B",
             EZ0C => "EZ0C",
             EC0C => "EC0C",
+            EC0Y => "EC0Y",
+            EB0Z => "EB0Z",
+            EA0Z => "EA0Z",
         }
     }
 
-    /// The rotary axis the parameter belongs to.
+    /// The squareness errors of the linear axes (ISO 230-1), in `[location_errors]` too.
+    pub const SQUARENESS: [LocationParam; 3] = [
+        LocationParam::EC0Y,
+        LocationParam::EB0Z,
+        LocationParam::EA0Z,
+    ];
+
+    /// The axis the parameter belongs to: a rotary, or Y and Z for the squareness errors.
     pub fn axis(self) -> Axis {
         match self.name().as_bytes()[3] {
             b'A' => Axis::A,
             b'B' => Axis::B,
+            b'Y' => Axis::Y,
+            b'Z' => Axis::Z,
             _ => Axis::C,
         }
+    }
+
+    /// True for a squareness error of a linear axis ([`LocationParam::SQUARENESS`]).
+    pub fn is_squareness(self) -> bool {
+        LocationParam::SQUARENESS.contains(&self)
     }
 
     /// True for a position error (um), false for an orientation error (urad).
@@ -150,9 +173,13 @@ impl LocationParam {
         format!("{}_{}", self.name(), self.unit())
     }
 
-    /// The parameter a machine-file key names, if any (of [`LocationParam::EVERY`]).
+    /// The parameter a machine-file key names, if any (of [`LocationParam::EVERY`] and
+    /// [`LocationParam::SQUARENESS`]).
     pub fn from_key(key: &str) -> Option<LocationParam> {
-        LocationParam::EVERY.into_iter().find(|p| p.key() == key)
+        LocationParam::EVERY
+            .into_iter()
+            .chain(LocationParam::SQUARENESS)
+            .find(|p| p.key() == key)
     }
 
     /// Index of the error component: 0 = X, 1 = Y, 2 = Z (translation along, or rotation
@@ -165,19 +192,31 @@ impl LocationParam {
         }
     }
 
+    /// Index into [`LocationParam::EVERY`], then [`LocationParam::SQUARENESS`].
     pub fn index(self) -> usize {
+        let every = LocationParam::EVERY.len();
         LocationParam::EVERY
             .iter()
             .position(|p| *p == self)
-            .expect("in ALL")
+            .or_else(|| {
+                LocationParam::SQUARENESS
+                    .iter()
+                    .position(|p| *p == self)
+                    .map(|i| every + i)
+            })
+            .expect("in EVERY or SQUARENESS")
     }
 }
 
-/// The location errors of a machine's rotary axes; zero for a perfect machine.
+/// The location errors of a machine's rotary axes, with the squareness and the component
+/// errors of its linear axes ([`super::linear_errors`]): every error the actual chain
+/// carries; zero for a perfect machine.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LocationErrors {
     /// Indexed by [`LocationParam::index`]: um or urad.
-    values: [f64; 18],
+    values: [f64; 21],
+    /// The component-error tables of X, Y and Z, if any.
+    components: Option<&'static ComponentErrors>,
 }
 
 impl LocationErrors {
@@ -196,13 +235,47 @@ impl LocationErrors {
     }
 
     pub fn is_zero(&self) -> bool {
-        self.values.iter().all(|v| *v == 0.0)
+        self.values.iter().all(|v| *v == 0.0) && self.components.is_none()
+    }
+
+    /// True when a linear axis carries an error (squareness or a component table): the
+    /// actual chain then differs from the nominal one on its linear links too.
+    pub fn has_linear(&self) -> bool {
+        self.components.is_some()
+            || LocationParam::SQUARENESS
+                .into_iter()
+                .any(|p| self.get(p) != 0.0)
+    }
+
+    /// The same errors with the component tables `components` (none when empty).
+    pub fn with_components(mut self, components: ComponentErrors) -> LocationErrors {
+        self.components = (!components.is_empty()).then(|| components.interned());
+        self
+    }
+
+    /// The component-error tables of X, Y and Z, if any.
+    pub fn components(&self) -> Option<&'static ComponentErrors> {
+        self.components
+    }
+
+    /// The squareness rotation (EA, EB, EC) of linear axis `axis`'s line, rad: Y turns
+    /// about Z by EC0Y, Z about X by EA0Z and about Y by EB0Z; zero for any other axis.
+    pub fn squareness_rad(&self, axis: Axis) -> Vector3<f64> {
+        let mut v = Vector3::zeros();
+        for p in LocationParam::SQUARENESS
+            .into_iter()
+            .filter(|p| p.axis() == axis)
+        {
+            v[p.component()] = self.get(p) * 1e-6;
+        }
+        v
     }
 
     /// The non-zero parameters and their values.
     pub fn nonzero(&self) -> Vec<(LocationParam, f64)> {
         LocationParam::EVERY
             .into_iter()
+            .chain(LocationParam::SQUARENESS)
             .filter(|p| self.get(*p) != 0.0)
             .map(|p| (p, self.get(p)))
             .collect()

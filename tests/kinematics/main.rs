@@ -11,6 +11,7 @@ mod chain_poles;
 mod chains;
 mod fast_path;
 mod geometric_errors;
+mod linear_errors;
 mod linuxcnc_samples;
 mod reading;
 mod round_trips;

@@ -12,6 +12,7 @@ mod diagnose;
 mod fit;
 mod fit_chain;
 mod fit_coverage;
+mod fit_squareness;
 mod kato_reproduction;
 mod lanes;
 mod param_study;

@@ -99,10 +99,7 @@ impl LinkedBodies {
 
     /// The pose of the body at `q`: its frame in the machine frame.
     pub fn pose(&self, rides: Rides, q: &AxisVec) -> Isometry3<f64> {
-        let product = self
-            .links(rides)
-            .iter()
-            .fold(Isometry3::identity(), |acc, l| acc * l.motion(q[l.axis]));
+        let product = self.chain.product(self.links(rides), q);
         match rides {
             Rides::Tool => product * self.tool_frame,
             _ => product,

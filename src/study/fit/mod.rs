@@ -78,6 +78,7 @@ use nalgebra::DVector;
 use crate::error::{Error, Result};
 use crate::input::scenario::Scenario;
 use crate::kinematics::{Chain, Kinematics, Layout, LocationParam};
+use crate::program::test_of;
 use crate::report::fit_plot::{render_fit_svg, PlotSeries};
 use crate::report::{create_dir, write_atomic};
 pub use correlated::{fit_ar1, ArNoise};
@@ -107,7 +108,7 @@ pub fn fit(
 ) -> Result<FitReport> {
     let layout = common_layout(inputs)?;
     let kinematics = inputs[0].0.machine.kinematics;
-    let (params, servo_params) = parameters(&kinematics, inputs.len(), options);
+    let (params, servo_params) = parameters(&kinematics, inputs.len(), has_circle(inputs), options);
     let (problem, mut runs) = Problem::new(inputs, params, servo_params)?;
     problem.simulate(&mut runs, &DVector::zeros(problem.params.len()), None)?;
     for (k, (scenario, trace)) in inputs.iter().enumerate() {
@@ -131,10 +132,11 @@ fn common_layout(inputs: &[(Scenario, MeasuredTrace)]) -> Result<Layout> {
     let layout = first.machine.kinematics.layout;
     let chain = first.machine.kinematics.own_chain();
     let chain_rotaries = chain.map_or(0, |c| c.rotaries().count());
-    if layout.tilt_axis().is_none() && chain_rotaries == 0 {
+    // Circles alone fit the linear axes' squareness, on any machine.
+    if layout.tilt_axis().is_none() && chain_rotaries == 0 && !has_circle(inputs) {
         return Err(Error::invalid(
             &first.path,
-            "`mtsim fit` needs a machine with rotary axes (trt-ac, trt-bc, or a [kinematics] chain with rotaries)",
+            "`mtsim fit` needs a machine with rotary axes (trt-ac, trt-bc, or a [kinematics] chain with rotaries), or circle tests (for the squareness of X, Y and Z)",
         ));
     }
     for (s, _) in inputs {
@@ -151,25 +153,36 @@ fn common_layout(inputs: &[(Scenario, MeasuredTrace)]) -> Result<Layout> {
     Ok(layout)
 }
 
-/// The parameters: location errors, then per trace its bar offset (and placement), then the
-/// servo parameters (also returned alone). On a general chain every rotary's six location
-/// errors but those along its own line ([`chain_parameters`]).
+/// True when a pair is a circle test: the Ballbar user's test of the linear axes'
+/// squareness (ISO 230-4), whose three errors the fit then estimates too.
+fn has_circle(inputs: &[(Scenario, MeasuredTrace)]) -> bool {
+    inputs.iter().any(|(s, _)| test_of(s).circle().is_some())
+}
+
+/// The parameters: location errors (with the squareness of the linear axes the chain has,
+/// when a circle is among the tests: `squareness`), then per trace its bar offset (and
+/// placement), then the servo parameters (also returned alone). On a general chain every
+/// rotary's six location errors but those along its own line ([`chain_parameters`]).
 fn parameters(
     kinematics: &Kinematics,
     traces: usize,
+    squareness: bool,
     options: &FitOptions,
 ) -> (Vec<Param>, Vec<Param>) {
     let layout = kinematics.layout;
-    let mut params: Vec<Param> = match kinematics.own_chain() {
+    let mut location: Vec<LocationParam> = match kinematics.own_chain() {
         Some(chain) => chain_parameters(chain),
         None => LocationParam::ALL
             .into_iter()
             .filter(|p| layout.axes().contains(&p.axis()))
             .collect(),
+    };
+    if squareness {
+        let chain = kinematics.chain();
+        let linear = |p: &LocationParam| chain.is_some_and(|c| c.link(p.axis()).is_some());
+        location.extend(LocationParam::SQUARENESS.into_iter().filter(linear));
     }
-    .into_iter()
-    .map(Param::Location)
-    .collect();
+    let mut params: Vec<Param> = location.into_iter().map(Param::Location).collect();
     for k in 0..traces {
         params.push(Param::BarOffset(k));
         if !options.placement_known {

@@ -551,7 +551,8 @@ fn aabb_corners(shape: &SharedShape, local: &Pose) -> Vec<Point3<f64>> {
 /// of the cylinder turned about the table axis lies within
 /// `|φ| (dist(p, table axis) + |d_C − d_S| |x − p|)` of where turning it about its own axis
 /// puts it, so the set moves by at most that much (its Hausdorff distance). `None` for
-/// other shapes. 0 for the table itself (its cylinder is about the table axis).
+/// other shapes. 0 for the table itself (its cylinder is about the table axis); the caller
+/// keeps the smaller of this and the plain lever arm, both bounds.
 fn turned_cylinder(layout: Layout, shape: &SharedShape, local: &Pose) -> Option<f64> {
     let cylinder = shape.as_cylinder()?;
     let table_axis = match layout.table_axis() {
@@ -684,7 +685,8 @@ impl Builder {
                     [
                         0.0,
                         far,
-                        turned_cylinder(self.kinematics.layout, shape, local).unwrap_or(rho),
+                        turned_cylinder(self.kinematics.layout, shape, local)
+                            .map_or(rho, |w| w.min(rho)),
                     ]
                 } else {
                     [0.0, far, 0.0]

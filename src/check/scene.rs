@@ -24,6 +24,7 @@ pub mod frustum;
 pub mod linked;
 pub mod monitor;
 mod plane;
+pub mod prism;
 pub mod shapes;
 
 use nalgebra::{Isometry3, Point3, Vector3};
@@ -124,6 +125,9 @@ struct Part {
     /// The part as a shape [`frustum::signed_distance`] takes, in the part's local frame
     /// (filled in by [`Builder::finish`]; for the cutter, of the eroded shape).
     analytic: Option<Analytic>,
+    /// The part as a right prism (its own shape, not eroded), for the closed-form distance
+    /// of parallel prisms ([`prism`]).
+    prism: Option<prism::Prism>,
 }
 
 /// A part whose distance to a frustum has a certified closed-form query.
@@ -158,6 +162,9 @@ pub(crate) struct Warm {
     /// The certifying direction and the cylinder's centre it was found at, in the frustum's
     /// frame.
     normal: Option<(Vector, Vector)>,
+    /// Whether the last query was answered by the closed form of parallel prisms, which
+    /// costs no more than a look at the plane bound ([`prism`]).
+    prism: bool,
 }
 
 /// The cutter/workpiece distance is measured from the cutter eroded by this much (mm), less
@@ -295,6 +302,7 @@ impl Scene {
             }
             // The closed-form distance takes the new cylinder's dimensions.
             part.analytic = Analytic::of(part.eroded.as_ref().unwrap_or(&part.shape));
+            part.prism = prism::Prism::of(&part.shape);
             if let Some(collider) = self.colliders.get_mut(part.handle) {
                 collider.set_shape(shape);
                 collider.set_position_wrt_parent(part.local);
@@ -536,6 +544,31 @@ fn aabb_corners(shape: &SharedShape, local: &Pose) -> Vec<Point3<f64>> {
         .collect()
 }
 
+/// The lever arm (mm per rad of the table axis) of a cylinder on the table whose axis is
+/// (nearly) the table axis: turning the table by `φ` turns the cylinder about its own axis,
+/// which leaves it where it was, and about the line between the two axes. With `p` a point
+/// of the cylinder's axis and `d_S`, `d_C` the two unit directions (same sense), a point `x`
+/// of the cylinder turned about the table axis lies within
+/// `|φ| (dist(p, table axis) + |d_C − d_S| |x − p|)` of where turning it about its own axis
+/// puts it, so the set moves by at most that much (its Hausdorff distance). `None` for
+/// other shapes. 0 for the table itself (its cylinder is about the table axis); the caller
+/// keeps the smaller of this and the plain lever arm, both bounds.
+fn turned_cylinder(layout: Layout, shape: &SharedShape, local: &Pose) -> Option<f64> {
+    let cylinder = shape.as_cylinder()?;
+    let table_axis = match layout.table_axis() {
+        Some(Axis::A) => Vector::X,
+        _ => Vector::Z,
+    };
+    let mut d = local.rotation * Vector::Y;
+    if d.dot(table_axis) < 0.0 {
+        d = -d;
+    }
+    let p = local.translation;
+    let off_axis = (p - table_axis * p.dot(table_axis)).length();
+    let reach = cylinder.half_height.hypot(cylinder.radius);
+    Some(off_axis + (table_axis - d).length() * reach)
+}
+
 /// Distance of table point `p` (mm) from the table axis: C (the table's Z), or A (its X)
 /// for trt-ab.
 fn from_table_axis(layout: Layout, p: [f64; 3]) -> f64 {
@@ -617,6 +650,7 @@ impl Builder {
             eroded: None,
             skin_mm: 0.0,
             analytic: None,
+            prism: None,
         });
         self.groups.push(groups);
     }
@@ -648,7 +682,12 @@ impl Builder {
                     rho = rho.max(from_table_axis(self.kinematics.layout, [x, y, z]));
                 }
                 if carrier == Carrier::Table {
-                    [0.0, far, rho]
+                    [
+                        0.0,
+                        far,
+                        turned_cylinder(self.kinematics.layout, shape, local)
+                            .map_or(rho, |w| w.min(rho)),
+                    ]
                 } else {
                     [0.0, far, 0.0]
                 }
@@ -665,6 +704,7 @@ impl Builder {
         let mut parts = self.parts;
         for part in &mut parts {
             part.analytic = Analytic::of(part.eroded.as_ref().unwrap_or(&part.shape));
+            part.prism = prism::Prism::of(&part.shape);
         }
         let mut pairs = Vec::new();
         for a in 0..parts.len() {
@@ -943,10 +983,21 @@ impl Builder {
 }
 
 /// Signed distance of `pair` (parts `a`, `b` at world poses `pa`, `pb`), mm. A cutting
-/// pair is measured from the eroded cutter (see [`CUTTER_SKIN_MM`]). A cylinder against a
-/// frustum takes the certified closed form ([`frustum::signed_distance`]) when its bounds
-/// meet, and parry's GJK/EPA ([`signed_distance`]) otherwise.
+/// pair is measured from the eroded cutter (see [`CUTTER_SKIN_MM`]). Two prisms with
+/// parallel axes (a cylinder against a cylinder or a box) take their closed form
+/// ([`prism::signed_distance`]); a cylinder against a frustum takes the certified closed
+/// form ([`frustum::signed_distance`]) when its bounds meet; parry's GJK/EPA
+/// ([`signed_distance`]) answers the rest.
 fn pair_distance(pair: &Pair, a: &Part, b: &Part, pa: &Pose, pb: &Pose, warm: &mut Warm) -> f64 {
+    warm.prism = false;
+    if let (PairKind::Collision, Some(prism_a), Some(prism_b)) = (pair.kind, a.prism, b.prism) {
+        if let Some((d, n)) = prism::signed_distance(&prism_a, pa, &prism_b, pb) {
+            // The direction that attains it separates the two (GJK's next start).
+            warm.gjk = Some(n);
+            warm.prism = true;
+            return d;
+        }
+    }
     let skin = if pair.kind == PairKind::Cutting {
         a.skin_mm + b.skin_mm
     } else {

@@ -167,10 +167,10 @@ fn the_bounded_check_agrees_where_there_are_near_misses_and_collisions() {
 }
 
 /// A small deterministic generator (no seed files, same poses every run).
-struct Lcg(u64);
+pub(crate) struct Lcg(pub(crate) u64);
 
 impl Lcg {
-    fn unit(&mut self) -> f64 {
+    pub(crate) fn unit(&mut self) -> f64 {
         self.0 = self
             .0
             .wrapping_mul(6364136223846793005)
@@ -178,11 +178,11 @@ impl Lcg {
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+    pub(crate) fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.unit()
     }
 
-    fn direction(&mut self) -> parry3d_f64::math::Vector {
+    pub(crate) fn direction(&mut self) -> parry3d_f64::math::Vector {
         loop {
             let v = parry3d_f64::math::Vector::new(
                 self.range(-1.0, 1.0),
@@ -338,20 +338,40 @@ fn the_closed_form_cylinder_to_frustum_distance_agrees_with_gjk_on_random_poses(
 /// noise, as the two query different samples), for a small share of the queries.
 #[test]
 fn the_bounded_check_agrees_with_the_reference_through_long_collisions_and_near_misses() {
-    let root = env!("CARGO_MANIFEST_DIR");
-    let dir = std::env::temp_dir().join(format!("mtsim-equiv-events-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("p.ngc"),
+    through_events(
+        "trt-bc",
         "G21 G90 G17 G94\nG0 X0 Y0 Z60 B0 C0\nG1 Z-12 F3000\nG1 X120 F4000\nG1 Y100 C90\n\
          G1 X-80 Z-6 C200\nG1 Z-15\nG1 X0 Y-60 B-20\nG1 Z0.5 B0\nG1 X100 Z1.5 C250\nG1 Z40\n\
          G1 X-100 Z-5\nM2\n",
-    )
-    .unwrap();
+    );
+}
+
+/// The same on the three-axis machine, where every pair is two parallel prisms (the closed
+/// form): a slow plunge through the table's whole thickness and out below (the depth
+/// growing, then shrinking as the shank and holder pass through), a drag at one depth, a
+/// ramp along the trunnion wall, a skim within the near-miss threshold.
+#[test]
+fn the_bounded_check_agrees_with_the_reference_through_a_plunge_on_three_axes() {
+    through_events(
+        "vmc-3axis",
+        "G21 G90 G17 G94\nG0 X50 Y0 Z60\nG1 Z-150 F600\nG1 Z-20 F3000\nG1 X150 F4000\n\
+         G1 X215 Y40 Z-70\nG1 X150 Z-5\nG1 Z1.2\nG1 X-100 Y-50\nG1 Z-30\nG1 Z40\nM2\n",
+    );
+}
+
+/// Checks `program` on `machine` (a bundled machine file) both ways and compares them.
+fn through_events(machine: &str, program: &str) {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir = std::env::temp_dir().join(format!(
+        "mtsim-equiv-events-{machine}-{}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("p.ngc"), program).unwrap();
     std::fs::write(
         dir.join("s.toml"),
         format!(
-            "machine = \"{root}/machines/trt-bc.toml\"\n[program]\nfile = \"p.ngc\"\n[reader]\ndialect = \"linuxcnc\"\n[workpiece]\nkind = \"none\"\n"
+            "machine = \"{root}/machines/{machine}.toml\"\n[program]\nfile = \"p.ngc\"\n[reader]\ndialect = \"linuxcnc\"\n[workpiece]\nkind = \"none\"\n"
         ),
     )
     .unwrap();
@@ -386,7 +406,7 @@ fn the_bounded_check_agrees_with_the_reference_through_long_collisions_and_near_
         .fold(0.0, f64::max);
     assert!(longest > 10.0, "{longest}");
     let (f, r) = (fast.scene_queries.unwrap(), slow.scene_queries.unwrap());
-    eprintln!("long events: {f} of the reference's {r} queries");
+    eprintln!("long events on {machine}: {f} of the reference's {r} queries");
     assert!((f as f64) < 0.05 * r as f64, "{f} of {r}");
     assert!(
         (fast.min_clearance_mm.unwrap() - slow.min_clearance_mm.unwrap()).abs() < 1e-6,

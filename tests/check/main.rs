@@ -8,6 +8,7 @@ mod common;
 mod chain_scene;
 mod command;
 mod equivalence;
+mod prism;
 mod scene;
 mod streamed;
 mod tool_change;

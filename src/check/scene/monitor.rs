@@ -604,8 +604,10 @@ impl SceneMonitor {
             }
             self.classify(i, now, d);
             let state = &self.states[i];
-            let plane = match (&state.open, self.exhaustive) {
-                (Some(_), false) => self.scene.plane_bound(i, state.warm.gjk),
+            // A pair the closed form of parallel prisms answers is measured again instead:
+            // that costs no more than the plane bound, and is exact.
+            let plane = match (&state.open, self.exhaustive, state.warm.prism) {
+                (Some(_), false, false) => self.scene.plane_bound(i, state.warm.gjk, poses),
                 _ => None,
             };
             self.states[i].plane = plane;

@@ -13,16 +13,14 @@ use crate::error::{Error, Result};
 use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
 use crate::measure::cut::{CutOptions, CutSurface};
-use crate::measure::settle::SettleGate;
-use crate::pipeline::{self, Sink, Timing};
+use crate::pipeline::{Sink, Timing};
 use crate::program::{self, test_of};
 use crate::report::cut_budget::CutBudget;
 use crate::study::budget::{BudgetPlan, BudgetStepper};
 use crate::study::cut_budget::{assemble, CutBudgetRuns};
 use crate::study::reversals::reversals_deg;
 use crate::study::simulate::{
-    analysed_along, analyses, ballbar_sink, bar_geometry, directions_of, gates_transient,
-    run_options, transient_warning,
+    analysed_along, analyses, ballbar_sink, bar_geometry, directions_of, run_options, Gate,
 };
 
 /// What a cut run gives.
@@ -108,45 +106,20 @@ pub fn run_cut(
         }
         // The budget's servos take every setpoint, before any settle gate.
         let mut stepper = budget_run.as_ref().map(BudgetStepper);
-        match geometry.filter(|_| gates_transient(scenario)) {
-            Some(g) => {
-                let mut gate = SettleGate::new(
-                    sinks,
-                    run.measured,
-                    Box::new(move |s| g.read_commanded(&s.commanded).theta_deg),
-                );
-                let stats = {
-                    let mut outer: Vec<&mut dyn Sink> = Vec::with_capacity(2);
-                    if let Some(s) = stepper.as_mut() {
-                        outer.push(s);
-                    }
-                    outer.push(&mut gate);
-                    pipeline::run(
-                        run.moves,
-                        &scenario.machine,
-                        &run_options,
-                        &mut outer,
-                        progress,
-                    )?
-                };
-                warnings.extend(transient_warning(&gate));
-                stats
-            }
-            None => {
-                let mut outer: Vec<&mut dyn Sink> = Vec::with_capacity(sinks.len() + 1);
-                if let Some(s) = stepper.as_mut() {
-                    outer.push(s);
-                }
-                outer.extend(sinks);
-                pipeline::run(
-                    run.moves,
-                    &scenario.machine,
-                    &run_options,
-                    &mut outer,
-                    progress,
-                )?
-            }
-        }
+        let stepper = stepper.as_mut().map(|s| s as &mut dyn Sink);
+        let gate = Gate {
+            scenario,
+            measured: run.measured,
+            geometry,
+        };
+        gate.run(
+            run.moves,
+            &run_options,
+            sinks,
+            stepper,
+            &mut warnings,
+            progress,
+        )?
     };
     surface.end_run();
     warnings.extend(

@@ -217,15 +217,7 @@ pub fn run_ballbar_budget(
         // A program without a measured circle: its contour error, the program read again in
         // step with the samples.
         let mut gauge = match (&ballbar, k) {
-            (None, 0) => {
-                let again = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
-                Some(ContourGauge::new(
-                    machine,
-                    again.moves,
-                    scenario.simulate.tcp,
-                    sim_time_s,
-                ))
-            }
+            (None, 0) => Some(contour_gauge(scenario, direction, sim_time_s)?),
             _ => None,
         };
         for m in &mut measurements {
@@ -274,31 +266,13 @@ pub fn run_ballbar_budget(
             }
             // The budget's servos take every setpoint, before any settle gate.
             let mut stepper = budget_run.as_ref().map(BudgetStepper);
-            match geometry.filter(|_| gates_transient(scenario) && !sinks.is_empty()) {
-                Some(g) => {
-                    let mut gate = SettleGate::new(
-                        sinks,
-                        run.measured,
-                        Box::new(move |s| g.read_commanded(&s.commanded).theta_deg),
-                    );
-                    let stats = {
-                        let mut gated: Vec<&mut dyn Sink> = Vec::with_capacity(2);
-                        if let Some(s) = stepper.as_mut() {
-                            gated.push(s);
-                        }
-                        gated.push(&mut gate);
-                        pipeline::run(run.moves, machine, &options, &mut gated, progress)?
-                    };
-                    warnings.extend(transient_warning(&gate));
-                    stats
-                }
-                None => {
-                    if let Some(s) = stepper.as_mut() {
-                        sinks.insert(0, s);
-                    }
-                    pipeline::run(run.moves, machine, &options, &mut sinks, progress)?
-                }
-            }
+            let stepper = stepper.as_mut().map(|s| s as &mut dyn Sink);
+            let gate = Gate {
+                scenario,
+                measured: run.measured,
+                geometry,
+            };
+            gate.run(run.moves, &options, sinks, stepper, &mut warnings, progress)?
         };
         let contour_sums = contour_runs.and_then(ContourBudgetRuns::finish);
         let finished = budget_run.map(|b| b.into_inner().finish());
@@ -664,15 +638,7 @@ pub fn simulate_with(
         }
         _ => {}
     }
-    if let Some(profile) = &study.contour_profile {
-        let figures = contour_figures(&study.measurements)?;
-        let svg =
-            crate::report::contour::render_contour_svg(profile, &figures, &plot_title(scenario))?;
-        crate::report::write_atomic(
-            &out_dir.join(crate::report::contour::CONTOUR_PLOT_FILE),
-            svg.as_bytes(),
-        )?;
-    }
+    write_contour_plot(scenario, &study, out_dir)?;
     if let Some(result) = &ballbar {
         let title = plot_title(scenario);
         crate::report::polar::write_polar_svg(
@@ -762,6 +728,19 @@ impl Sink for BarAndTrace<'_, '_> {
     }
 }
 
+/// `contour.svg` of a program without a measured circle (nothing for one with a circle).
+fn write_contour_plot(scenario: &Scenario, study: &BallbarStudy, out_dir: &Path) -> Result<()> {
+    let Some(profile) = &study.contour_profile else {
+        return Ok(());
+    };
+    let figures = contour_figures(&study.measurements)?;
+    let svg = crate::report::contour::render_contour_svg(profile, &figures, &plot_title(scenario))?;
+    crate::report::write_atomic(
+        &out_dir.join(crate::report::contour::CONTOUR_PLOT_FILE),
+        svg.as_bytes(),
+    )
+}
+
 /// The contour error's figures of a program without a measured circle, from the
 /// measurements of its run (`measurements.contour`); empty figures where there is none.
 pub fn contour_figures(
@@ -771,6 +750,75 @@ pub fn contour_figures(
         Some(v) => serde_json::from_value(v.clone())
             .map_err(|e| crate::error::Error::usage(format!("contour figures: {e}"))),
         None => Ok(Default::default()),
+    }
+}
+
+/// The contour gauge of a program without a measured circle, on its run in `direction`
+/// starting at machine time `start_s`: the program read a second time, in step with the run.
+fn contour_gauge(
+    scenario: &Scenario,
+    direction: Direction,
+    start_s: f64,
+) -> Result<ContourGauge<'_>> {
+    let again = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
+    Ok(ContourGauge::new(
+        &scenario.machine,
+        again.moves,
+        scenario.simulate.tcp,
+        start_s,
+    ))
+}
+
+/// How one run of a scenario reaches its sinks: for a file program measured from where it
+/// settles ([`gates_transient`]), through the settle gate (θ from the bar's `geometry`).
+pub(crate) struct Gate<'s> {
+    pub scenario: &'s Scenario,
+    pub measured: Option<MeasuredLines>,
+    pub geometry: Option<BarGeometry>,
+}
+
+impl Gate<'_> {
+    /// Runs `moves` with `options` into `sinks`, the error budget's `stepper` (if any) in
+    /// front of every sample (its servos take every setpoint, before any gate); the gate's
+    /// warning goes to `warnings`.
+    pub(crate) fn run<'a>(
+        &self,
+        moves: crate::program::Moves<'_>,
+        options: &RunOptions,
+        mut sinks: Vec<&'a mut dyn Sink>,
+        stepper: Option<&mut dyn Sink>,
+        warnings: &mut Vec<String>,
+        progress: &dyn Fn(f64),
+    ) -> Result<crate::pipeline::RunStats> {
+        let machine = &self.scenario.machine;
+        let gated = self
+            .geometry
+            .filter(|_| gates_transient(self.scenario) && !sinks.is_empty());
+        let Some(g) = gated else {
+            let mut all: Vec<&mut dyn Sink> = Vec::with_capacity(sinks.len() + 1);
+            if let Some(s) = stepper {
+                all.push(s);
+            }
+            for s in sinks.iter_mut() {
+                all.push(&mut **s);
+            }
+            return pipeline::run(moves, machine, options, &mut all, progress);
+        };
+        let mut gate = SettleGate::new(
+            sinks,
+            self.measured,
+            Box::new(move |s| g.read_commanded(&s.commanded).theta_deg),
+        );
+        let stats = {
+            let mut outer: Vec<&mut dyn Sink> = Vec::with_capacity(2);
+            if let Some(s) = stepper {
+                outer.push(s);
+            }
+            outer.push(&mut gate);
+            pipeline::run(moves, machine, options, &mut outer, progress)?
+        };
+        warnings.extend(transient_warning(&gate));
+        Ok(stats)
     }
 }
 

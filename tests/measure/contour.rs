@@ -283,3 +283,33 @@ fn the_budget_names_only_the_mechanisms_the_machine_has() {
         assert!((middle - b_um / 2.0).abs() < 0.1, "line {l}: {middle} µm");
     }
 }
+
+/// A part program's `trace.parquet` (no ball bar: nothing held for a centring, each block
+/// written as it fills, its centred column NaN) reads back with one row per period and the
+/// same actual positions as its `trace.csv`.
+#[test]
+fn a_part_programs_parquet_trace_holds_the_csv_traces_rows() {
+    use mtsim::report::trace::read_trace;
+    let (csv_out, summary) = run_square_with("parquet-csv", "");
+    let (pq_out, _) = run_square_with("parquet-pq", "[simulate]\ntrace_format = \"parquet\"\n");
+    assert!(pq_out.join("trace.parquet").exists() && !pq_out.join("trace.csv").exists());
+    let (csv, pq) = (
+        read_trace(&csv_out).unwrap().unwrap(),
+        read_trace(&pq_out).unwrap().unwrap(),
+    );
+    let setpoints = summary["setpoints"].as_u64().unwrap() as usize;
+    assert_eq!(pq.runs.len(), 1);
+    assert_eq!(pq.runs[0].time_s.len(), setpoints);
+    assert!(pq.runs[0].deviation_centred_um.iter().all(|v| v.is_nan()));
+    for (k, axis) in csv.axes.iter().enumerate() {
+        let (a, b) = (&csv.runs[0].actual[k], &pq.runs[0].actual[k]);
+        let worst = a
+            .iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        // The CSV holds 6 decimals, the Parquet file the f64 itself.
+        assert!(worst <= 5e-7, "{axis}: {worst}");
+    }
+    assert!(pq_out.join("contour.csv").exists());
+}

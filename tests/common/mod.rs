@@ -145,3 +145,36 @@ pub fn run_on_linuxcnc_machine(
     args.insert(1, "s.toml");
     mtsim_plain(&dir, &args)
 }
+
+/// A CSV file of numbers with a header (a `trace.csv`): text columns read as NaN.
+pub struct CsvTable {
+    pub header: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl CsvTable {
+    pub fn read(path: &Path) -> CsvTable {
+        let text = std::fs::read_to_string(path).unwrap();
+        let mut lines = text.lines();
+        let header = lines
+            .next()
+            .unwrap()
+            .split(',')
+            .map(str::to_string)
+            .collect();
+        let rows = lines
+            .map(|l| {
+                l.split(',')
+                    .map(|v| v.parse().unwrap_or(f64::NAN))
+                    .collect()
+            })
+            .collect();
+        CsvTable { header, rows }
+    }
+
+    /// The index of column `name`.
+    pub fn col(&self, name: &str) -> usize {
+        let found = self.header.iter().position(|h| h == name);
+        found.unwrap_or_else(|| panic!("the table has no column {name}"))
+    }
+}

@@ -5,6 +5,7 @@
 //! rotation, its own chain); it calls nothing of mtsim's kinematics.
 
 use crate::common;
+use crate::common::CsvTable as Trace;
 
 use std::path::Path;
 
@@ -332,38 +333,6 @@ fn hidden(seed: &mut u64) -> f64 {
         .wrapping_mul(6364136223846793005)
         .wrapping_add(1442695040888963407);
     ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-}
-
-struct Trace {
-    header: Vec<String>,
-    rows: Vec<Vec<f64>>,
-}
-
-impl Trace {
-    fn read(path: &Path) -> Trace {
-        let text = std::fs::read_to_string(path).unwrap();
-        let mut lines = text.lines();
-        let header: Vec<String> = lines
-            .next()
-            .unwrap()
-            .split(',')
-            .map(str::to_string)
-            .collect();
-        let rows = lines
-            .map(|l| {
-                l.split(',')
-                    .map(|v| v.parse::<f64>().unwrap_or(f64::NAN))
-                    .collect()
-            })
-            .collect();
-        Trace { header, rows }
-    }
-    fn col(&self, name: &str) -> usize {
-        self.header
-            .iter()
-            .position(|h| h == name)
-            .unwrap_or_else(|| panic!("trace.csv has no column {name}"))
-    }
 }
 
 /// Runs `simulate` on a cone with location errors and checks every row of trace.csv against

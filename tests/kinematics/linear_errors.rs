@@ -4,6 +4,7 @@
 //! nothing of mtsim's kinematics), and the squareness ellipse of ISO 230-4.
 
 use crate::common;
+use crate::common::CsvTable as Trace;
 
 use std::path::Path;
 
@@ -157,36 +158,6 @@ fn machine_with(dir: &Path, machine: &str, e: &LinearErrors) -> String {
     let path = dir.join("m.toml");
     std::fs::write(&path, text).unwrap();
     path.display().to_string()
-}
-
-struct Trace {
-    header: Vec<String>,
-    rows: Vec<Vec<f64>>,
-}
-
-impl Trace {
-    fn read(path: &Path) -> Trace {
-        let text = std::fs::read_to_string(path).unwrap();
-        let mut lines = text.lines();
-        let header = lines
-            .next()
-            .unwrap()
-            .split(',')
-            .map(str::to_string)
-            .collect();
-        let rows = lines
-            .map(|l| {
-                l.split(',')
-                    .map(|v| v.parse().unwrap_or(f64::NAN))
-                    .collect()
-            })
-            .collect();
-        Trace { header, rows }
-    }
-    fn col(&self, name: &str) -> usize {
-        let found = self.header.iter().position(|h| h == name);
-        found.unwrap_or_else(|| panic!("trace.csv has no column {name}"))
-    }
 }
 
 /// Runs `simulate` on `body` with `machine`; its trace and summary.

@@ -19,25 +19,12 @@
 //! checks at programmed timing instead of the planner's (`check --programmed`).
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use mtsim::check::{check, CheckOptions};
 use mtsim::input::scenario::Scenario;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// CPU time of the calling thread, s (`/proc/thread-self/schedstat`, ns on the CPU); falls
-/// back to wall time where that file does not exist.
-fn cpu_now() -> f64 {
-    static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|t| t.split_whitespace().next()?.parse::<f64>().ok())
-        .map(|ns| ns * 1e-9)
-        .unwrap_or_else(|| START.get_or_init(Instant::now).elapsed().as_secs_f64())
-}
+mod common;
+use common::{cpu_now, root};
 
 /// CPU time one measurement spans at least, s (`MTSIM_BENCH_MIN_CPU_S` overrides it): the
 /// clock advances in scheduler ticks of 4 ms, so 0.1 s reads to about ±4 %.

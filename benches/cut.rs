@@ -9,25 +9,11 @@
 //! issue's goal: `cut` at most 2x `simulate`). It asserts nothing (timing is not a test).
 //! `MTSIM_BENCH_RUNS=N` sets the runs of each (default 9); `MTSIM_BENCH_SMOKE=1` runs each once.
 
-use std::path::PathBuf;
-use std::time::Instant;
-
 use mtsim::input::scenario::Scenario;
 use mtsim::measure::cut::CutOptions;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// CPU time of the calling thread, s; wall time where schedstat does not exist.
-fn cpu_now() -> f64 {
-    static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|t| t.split_whitespace().next()?.parse::<f64>().ok())
-        .map(|ns| ns * 1e-9)
-        .unwrap_or_else(|| START.get_or_init(Instant::now).elapsed().as_secs_f64())
-}
+mod common;
+use common::{cpu_now, root};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);

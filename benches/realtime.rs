@@ -36,18 +36,7 @@ use mtsim::input::scenario::Scenario;
 use mtsim::study::simulate::{simulate, simulate_with};
 
 mod common;
-use common::process_cpu_s;
-
-/// CPU time of the calling thread, s (`/proc/thread-self/schedstat`, ns on the CPU); falls
-/// back to wall time where that file does not exist.
-fn cpu_now() -> f64 {
-    static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|t| t.split_whitespace().next()?.parse::<f64>().ok())
-        .map(|ns| ns * 1e-9)
-        .unwrap_or_else(|| START.get_or_init(Instant::now).elapsed().as_secs_f64())
-}
+use common::{cpu_now, process_cpu_s, root};
 
 /// Median and best real-time factor of `runs` simulations of `scenario` (CPU time).
 fn simulate_rtf(scenario: &Path, out: &Path, runs: usize) -> (f64, f64, f64) {
@@ -79,10 +68,6 @@ fn budget_cost(scenario: &Path, out: &Path, runs: usize) -> (f64, f64, f64) {
     }
     let (with, without) = (median(with), median(without));
     (without * 1e3, with * 1e3, with / without.max(1e-9))
-}
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 fn scratch(name: &str) -> PathBuf {

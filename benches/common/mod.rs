@@ -1,4 +1,26 @@
-//! What the benches share: the CPU time of child processes.
+//! What the benches share: the CPU time of this thread and of child processes, and the
+//! project's root. Each bench uses a part of it.
+
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The project's root folder (where `scenarios/` and `machines/` are).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// CPU time of the calling thread, s (`/proc/thread-self/schedstat`, ns on the CPU); falls
+/// back to wall time where that file does not exist.
+pub fn cpu_now() -> f64 {
+    static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|t| t.split_whitespace().next()?.parse::<f64>().ok())
+        .map(|ns| ns * 1e-9)
+        .unwrap_or_else(|| START.get_or_init(Instant::now).elapsed().as_secs_f64())
+}
 
 /// CPU time (user + system) of this process's waited-for children, s (`getrusage`, to the
 /// microsecond: `/proc/self/stat` counts 10 ms ticks, too coarse for one 40 ms run).

@@ -93,7 +93,7 @@ pub use chain::{Chain, Link, Side, ToolPose};
 pub use chain_inverse::unwrap_near;
 pub use cradle_table::CradleTablePoses;
 pub use layout::{Branch, Layout, RotarySinCos};
-pub use location::{AxisLine, LocationErrors, LocationParam};
+pub use location::{AxisLine, ErrorPart, LocationErrors, LocationParam};
 
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Vector3};
 

@@ -97,6 +97,24 @@ impl ComponentErrors {
         self.tables.iter().all(Option::is_none)
     }
 
+    /// The linear axes that have a table, in the order X, Y, Z.
+    pub fn axes(&self) -> Vec<Axis> {
+        [Axis::X, Axis::Y, Axis::Z]
+            .into_iter()
+            .filter(|a| slot(*a).is_some_and(|i| self.tables[i].is_some()))
+            .collect()
+    }
+
+    /// `axis`'s table and reference point alone (empty when it has none).
+    pub fn only(&self, axis: Axis) -> ComponentErrors {
+        let mut one = ComponentErrors::default();
+        if let Some(i) = slot(axis) {
+            one.tables[i] = self.tables[i].clone();
+            one.reference_mm[i] = self.reference_mm[i];
+        }
+        one
+    }
+
     /// The one shared copy of these tables (equal sets share one).
     pub fn interned(self) -> &'static ComponentErrors {
         let mut all = INTERNED.lock().unwrap_or_else(|e| e.into_inner());

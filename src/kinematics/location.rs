@@ -208,6 +208,17 @@ impl LocationParam {
     }
 }
 
+/// A cause among a machine's geometric errors ([`LocationErrors::parts`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrorPart {
+    /// The location errors of the rotary axes.
+    Rotaries,
+    /// The squareness of the linear axes (`EC0Y`, `EB0Z`, `EA0Z`).
+    Squareness,
+    /// One linear axis's component errors (positioning, straightness, angular).
+    Components(Axis),
+}
+
 /// The location errors of a machine's rotary axes, with the squareness and the component
 /// errors of its linear axes ([`super::linear_errors`]): every error the actual chain
 /// carries; zero for a perfect machine.
@@ -251,6 +262,34 @@ impl LocationErrors {
     pub fn with_components(mut self, components: ComponentErrors) -> LocationErrors {
         self.components = (!components.is_empty()).then(|| components.interned());
         self
+    }
+
+    /// The errors split by cause, each alone (the rest zero), for the error budget's
+    /// counterfactual runs: the rotaries' location errors, the squareness of the linear
+    /// axes, and each linear axis's component errors; the parts that are zero are left out.
+    pub fn parts(&self) -> Vec<(ErrorPart, LocationErrors)> {
+        let mut parts = Vec::new();
+        let mut rotaries = LocationErrors::default();
+        for p in LocationParam::EVERY {
+            rotaries.set(p, self.get(p));
+        }
+        if !rotaries.is_zero() {
+            parts.push((ErrorPart::Rotaries, rotaries));
+        }
+        let mut squareness = LocationErrors::default();
+        for p in LocationParam::SQUARENESS {
+            squareness.set(p, self.get(p));
+        }
+        if !squareness.is_zero() {
+            parts.push((ErrorPart::Squareness, squareness));
+        }
+        if let Some(tables) = self.components {
+            for axis in tables.axes() {
+                let one = LocationErrors::default().with_components(tables.only(axis));
+                parts.push((ErrorPart::Components(axis), one));
+            }
+        }
+        parts
     }
 
     /// The component-error tables of X, Y and Z, if any.

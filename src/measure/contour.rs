@@ -230,11 +230,16 @@ impl<'a> ContourGauge<'a> {
 
     /// The contour error vector (mm) at sample `s` (read already) of axis positions `q`
     /// other than the actual ones (an error budget's run), through the chain with the
-    /// location errors when `location_errors`, else the nominal one.
-    pub fn error_at(&self, s: &Sample, q: &AxisVec, location_errors: bool) -> Option<Vector3<f64>> {
-        let pose = match location_errors {
-            true => actual_tool(&self.actual, q),
-            false => self.nominal.forward(q),
+    /// geometric `errors` (a part of the machine's), or through the nominal one for None.
+    pub fn error_at(
+        &self,
+        s: &Sample,
+        q: &AxisVec,
+        errors: Option<&LocationErrors>,
+    ) -> Option<Vector3<f64>> {
+        let pose = match errors {
+            Some(e) => actual_tool(&self.actual.with_location_errors(*e), q),
+            None => self.nominal.forward(q),
         };
         self.nearest(s, &pose).map(|(e, _)| e)
     }

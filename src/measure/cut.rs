@@ -159,6 +159,12 @@ impl CutSurface {
         actual_tool(&self.kinematics, &s.actual)
     }
 
+    /// Cuts with the actual positions through the chain with the geometric `errors` alone
+    /// (an error budget's run of one part of the machine's errors).
+    pub fn read_through(&mut self, errors: LocationErrors) {
+        self.kinematics = self.kinematics.with_location_errors(errors);
+    }
+
     /// Each axis's reversal angles, deg, for the marks.
     pub fn set_reversals(&mut self, reversals: Vec<(Axis, Vec<f64>)>) {
         self.reversals = reversals;

@@ -86,7 +86,14 @@ fn advice(row: &BudgetRow) -> String {
         BudgetMechanism::ErrorTable => {
             format!("check the {axis} axis's pitch or worm-gear compensation")
         }
-        BudgetMechanism::Squareness => "check the squareness of the linear axes".to_string(),
+        BudgetMechanism::Squareness => {
+            "measure the squareness of the linear axes (ball-bar circles in XY, YZ and ZX, \
+             mtsim fit) and compensate it"
+                .to_string()
+        }
+        BudgetMechanism::ComponentErrors => format!(
+            "measure the {axis} axis's straightness and angular errors (laser) and compensate them"
+        ),
     }
 }
 

@@ -132,8 +132,10 @@ pub enum BudgetMechanism {
     Geometric,
     /// One axis's position-error table.
     ErrorTable,
-    /// The squareness of the linear axes (no machine file sets it yet).
+    /// The squareness of the linear axes (`EC0Y`, `EB0Z`, `EA0Z`).
     Squareness,
+    /// One linear axis's component errors (ISO 230-1: positioning, straightness, angular).
+    ComponentErrors,
 }
 
 impl BudgetMechanism {
@@ -147,6 +149,7 @@ impl BudgetMechanism {
             BudgetMechanism::Geometric => "geometric (location) errors",
             BudgetMechanism::ErrorTable => "position-error table",
             BudgetMechanism::Squareness => "squareness",
+            BudgetMechanism::ComponentErrors => "positioning, straightness and angular errors",
         }
     }
 }

@@ -14,7 +14,7 @@
 //! | servo of axis a | the common lag's, with q_a from a's linear twin (no backlash, no dry friction) | common lag |
 //! | backlash of a | the same, q_a from a's drive with its backlash and no dry friction | servo of a |
 //! | friction of a | the same, q_a from a's drive with its dry friction (and pre-sliding), no backlash | servo of a |
-//! | geometric | s, read through the chain with the location errors | program |
+//! | geometric (rotaries), squareness, component errors of a | s, read through the chain with that part of the geometric errors alone | program |
 //! | error table of a | s, with `q_a = s_a + e_a(s_a, direction)` | program |
 //!
 //! `τ̄` is the mean of the axes' velocity lags `τ_a = (1 − k_vff,a)/Kv_a` over the axes the
@@ -26,8 +26,9 @@
 //! own curve seen a lag later). Friction and backlash ride on their axis's servo, as they do
 //! on the machine: a row is the run's curve minus its servo's. Rows are built only for mechanisms the machine has
 //! (a drive with backlash, dry friction on a cascade drive, location errors, a table) on
-//! axes the program moves; the machine file has no squareness of the linear axes, so no
-//! squareness row is ever made.
+//! axes the program moves. The geometric errors are split by cause
+//! ([`LocationErrors::parts`]): the rotaries' location errors, the squareness of the
+//! linear axes, and each linear axis's component-error table, a run each.
 //!
 //! The cut (`study::cut_budget`) runs the same plan: it takes each run's positions
 //! ([`BudgetRun::measured_positions`]) and cuts them on its grid instead of reading the bar.
@@ -79,6 +80,7 @@ use crate::error::Result;
 use crate::input::drive::AxisDrive;
 use crate::input::scenario::Scenario;
 use crate::kinematics::error_table::{DirectionState, ErrorTable};
+use crate::kinematics::{ErrorPart, LocationErrors};
 use crate::measure::attribution::ReversalSite;
 use crate::measure::ballbar::{deviation_mm, BallbarResult, N_BINS};
 use crate::measure::{BallbarRun, BarGeometry, BarReading, Direction};
@@ -106,8 +108,8 @@ enum Source {
     Servo(usize),
     /// The commanded positions with the given table's axis moved by its error.
     Table(usize),
-    /// The commanded positions through the chain with the location errors.
-    Geometric,
+    /// The commanded positions through the chain with the plan's geometric errors part.
+    Geometric(usize),
 }
 
 /// One counterfactual run.
@@ -136,10 +138,11 @@ pub struct BudgetPlan {
     drives: Vec<(AxisDrive, bool)>,
     tables: Vec<(Axis, ErrorTable)>,
     lost_motion: Vec<LostMotion>,
-    /// The bar on the nominal chain, and on the actual one (location errors).
-    /// The bar on the nominal chain, and on the actual one (location errors); None for a
+    /// The geometric errors split by cause ([`LocationErrors::parts`]), one run each.
+    geometric: Vec<LocationErrors>,
+    /// The bar on the nominal chain, and on the chain with each of `geometric`; None for a
     /// plan whose runs are read as positions only ([`BudgetPlan::for_positions`]).
-    bar: Option<(BarGeometry, BarGeometry)>,
+    bar: Option<(BarGeometry, Vec<BarGeometry>)>,
     period_s: f64,
     /// The common servo of every axis (see [`common_lag_s`]); none without a common lag.
     common: Vec<AxisDrive>,
@@ -160,10 +163,15 @@ impl BudgetPlan {
 
     fn build(scenario: &Scenario, geometry: Option<BarGeometry>) -> Result<BudgetPlan> {
         let machine = &scenario.machine;
+        let parts = machine.kinematics.location_errors.parts();
         let bar = geometry.map(|actual| {
-            let mut ideal = actual;
-            ideal.kinematics.location_errors = Default::default();
-            (ideal, actual)
+            let with = |errors: LocationErrors| {
+                let mut g = actual;
+                g.kinematics.location_errors = errors;
+                g
+            };
+            let each = parts.iter().map(|(_, e)| with(*e)).collect();
+            (with(LocationErrors::default()), each)
         });
         let period_s = machine.interpolation_period_s;
         let delay_s = common_lag_s(scenario)?;
@@ -177,6 +185,7 @@ impl BudgetPlan {
             drives: Vec::new(),
             tables: Vec::new(),
             lost_motion: Vec::new(),
+            geometric: Vec::new(),
             bar,
             period_s,
             common: Vec::new(),
@@ -233,13 +242,19 @@ impl BudgetPlan {
                 });
             }
         }
-        if !machine.kinematics.location_errors.is_zero() {
+        for (part, errors) in parts {
+            let (mechanism, axis) = match part {
+                ErrorPart::Rotaries => (BudgetMechanism::Geometric, None),
+                ErrorPart::Squareness => (BudgetMechanism::Squareness, None),
+                ErrorPart::Components(a) => (BudgetMechanism::ComponentErrors, Some(a)),
+            };
             plan.cases.push(Case {
-                mechanism: BudgetMechanism::Geometric,
-                axis: None,
-                source: Source::Geometric,
+                mechanism,
+                axis,
+                source: Source::Geometric(plan.geometric.len()),
                 base: Some(0),
             });
+            plan.geometric.push(errors);
         }
         for (&axis, table) in &machine.geometry.tables {
             plan.cases.push(Case {
@@ -412,7 +427,7 @@ impl BudgetRun<'_> {
         }
         let plan = self.plan;
         // Readings come from the bar's sink alone, which a plan without a bar never has.
-        let Some((ideal, actual)) = &plan.bar else {
+        let Some((ideal, geometric)) = &plan.bar else {
             return;
         };
         let cmd = s.commanded;
@@ -436,8 +451,8 @@ impl BudgetRun<'_> {
                     let q = self.positions_of(case.source, &cmd, &delayed);
                     reading.at(&q, plan.tables[i].0.is_rotary())
                 }
-                Source::Geometric => {
-                    let g = actual;
+                Source::Geometric(i) => {
+                    let g = &geometric[i];
                     deviation_mm(&g.kinematics, &cmd, &g.pivot_table_mm, g.length_mm) * 1e3
                 }
             };
@@ -489,7 +504,7 @@ impl BudgetRun<'_> {
     /// The geometric run's are the setpoint: its errors are in the chain it is read through.
     fn positions_of(&self, source: Source, cmd: &AxisVec, delayed: &AxisVec) -> AxisVec {
         match source {
-            Source::Ideal | Source::Geometric => *cmd,
+            Source::Ideal | Source::Geometric(_) => *cmd,
             Source::Common => *delayed,
             Source::Servo(i) => {
                 let mut q = *delayed;
@@ -612,15 +627,15 @@ impl BudgetDirection {
 }
 
 /// One run of a plan as another measurement sees it: the mechanism and axis it adds, the
-/// run it is measured against (None: the program's own, against nothing) and whether its
-/// positions are read through the chain with the location errors (the geometric run) or
-/// through the nominal one (every other).
+/// run it is measured against (None: the program's own, against nothing) and the geometric
+/// errors its positions are read through (a geometric run's part of them), or None for the
+/// nominal chain (every other run).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CaseInfo {
     pub mechanism: BudgetMechanism,
     pub axis: Option<Axis>,
     pub base: Option<usize>,
-    pub location_errors: bool,
+    pub errors: Option<LocationErrors>,
 }
 
 impl BudgetPlan {
@@ -632,7 +647,10 @@ impl BudgetPlan {
                 mechanism: c.mechanism,
                 axis: c.axis,
                 base: c.base,
-                location_errors: matches!(c.source, Source::Geometric),
+                errors: match c.source {
+                    Source::Geometric(i) => Some(self.geometric[i]),
+                    _ => None,
+                },
             })
             .collect()
     }

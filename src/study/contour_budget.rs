@@ -116,7 +116,7 @@ impl<'a, 'p> ContourBudgetRuns<'a, 'p> {
             return;
         }
         for (k, (case, q)) in self.cases.iter().zip(&self.positions).enumerate() {
-            match gauge.error_at(s, q, case.location_errors) {
+            match gauge.error_at(s, q, case.errors.as_ref()) {
                 Some(e) => self.errors[k] = e,
                 None => {
                     self.incomplete = true;

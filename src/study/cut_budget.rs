@@ -75,10 +75,14 @@ impl<'a, 'p> CutBudgetRuns<'a, 'p> {
             .iter()
             .map(|c| {
                 let options = CutOptions {
-                    commanded: !c.location_errors,
+                    commanded: c.errors.is_none(),
                     ..options.clone()
                 };
-                CutSurface::new(scenario, cone, options, Vec::new())
+                let mut surface = CutSurface::new(scenario, cone, options, Vec::new())?;
+                if let Some(errors) = c.errors {
+                    surface.read_through(errors);
+                }
+                Ok(surface)
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(CutBudgetRuns {

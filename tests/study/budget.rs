@@ -22,7 +22,7 @@ fn load(name: &str, text: &str) -> (Scenario, PathBuf) {
 }
 
 /// Runs `simulate` on a scenario; its summary and output folder.
-fn run(name: &str, text: &str) -> (SimulationSummary, PathBuf) {
+pub(super) fn run(name: &str, text: &str) -> (SimulationSummary, PathBuf) {
     let (scenario, dir) = load(name, text);
     let out = dir.join("out");
     let summary = simulate(&scenario, &out, false, &|_| {}).unwrap();
@@ -31,7 +31,7 @@ fn run(name: &str, text: &str) -> (SimulationSummary, PathBuf) {
 
 /// Overrides that leave every axis of `axes` (linear, rotary) without dry friction, with
 /// `kv` (1/s) each and `extra` TOML lines appended.
-fn clean(linear: &[&str], rotary: &[&str], kv: &[(&str, f64)], extra: &str) -> String {
+pub(super) fn clean(linear: &[&str], rotary: &[&str], kv: &[(&str, f64)], extra: &str) -> String {
     let mut s = String::new();
     for a in linear.iter().chain(rotary) {
         let k = kv.iter().find(|(b, _)| b == a).map_or(30.0, |(_, k)| *k);
@@ -48,10 +48,10 @@ fn clean(linear: &[&str], rotary: &[&str], kv: &[(&str, f64)], extra: &str) -> S
     s + extra
 }
 
-const CONE_AXES: (&[&str], &[&str]) = (&["X", "Y", "Z"], &["A", "C"]);
+pub(super) const CONE_AXES: (&[&str], &[&str]) = (&["X", "Y", "Z"], &["A", "C"]);
 
 /// The bundled 15/10 cone (both directions) with `overrides`.
-fn cone(overrides: &str) -> String {
+pub(super) fn cone(overrides: &str) -> String {
     scenario_text(
         &trt_ac(),
         &format!(
@@ -62,7 +62,7 @@ fn cone(overrides: &str) -> String {
 }
 
 /// An ISO 230-4 circle on the three-axis machine (r 50, F1000, both directions).
-fn circle(overrides: &str) -> String {
+pub(super) fn circle(overrides: &str) -> String {
     scenario_text(
         &machine("vmc-3axis"),
         &format!(
@@ -72,16 +72,16 @@ fn circle(overrides: &str) -> String {
     )
 }
 
-fn budget(s: &SimulationSummary) -> &ErrorBudget {
+pub(super) fn budget(s: &SimulationSummary) -> &ErrorBudget {
     s.error_budget.as_ref().expect("an error budget")
 }
 
-fn rows<'b>(b: &'b ErrorBudget, m: BudgetMechanism) -> Vec<&'b BudgetRow> {
+pub(super) fn rows<'b>(b: &'b ErrorBudget, m: BudgetMechanism) -> Vec<&'b BudgetRow> {
     b.rows.iter().filter(|r| r.mechanism == m).collect()
 }
 
 /// The direction whose revolution gives G (the first of equals).
-fn g_direction(s: &SimulationSummary) -> (usize, Direction) {
+pub(super) fn g_direction(s: &SimulationSummary) -> (usize, Direction) {
     let runs = &s.ballbar.as_ref().unwrap().runs;
     let k = (0..runs.len()).fold(0, |best, i| {
         if runs[i].circular_deviation_um > runs[best].circular_deviation_um {
@@ -95,7 +95,7 @@ fn g_direction(s: &SimulationSummary) -> (usize, Direction) {
 
 /// Checks what must hold of any budget: the shares and the interplay add to 1, G is the
 /// run's, and lost motion is told only of the axes that have it.
-fn assert_consistent(s: &SimulationSummary, lost_motion_axes: &[&str]) {
+pub(super) fn assert_consistent(s: &SimulationSummary, lost_motion_axes: &[&str]) {
     let b = budget(s);
     let sum: f64 = b.rows.iter().map(|r| r.share).sum::<f64>() + b.interaction_share;
     assert!((sum - 1.0).abs() < 1e-9, "{b:?}");
@@ -156,7 +156,7 @@ fn assert_study_b_clean_but(b: &[(String, Option<f64>)], lost: Option<&str>) {
 }
 
 /// The trace's rows of one direction: θ (deg) and the commanded X Y Z A C.
-fn commanded_rows(out: &Path, direction: Direction) -> Vec<(f64, [f64; 5])> {
+pub(super) fn commanded_rows(out: &Path, direction: Direction) -> Vec<(f64, [f64; 5])> {
     let mut r = csv::Reader::from_path(out.join("trace.csv")).unwrap();
     let h = r.headers().unwrap().clone();
     let col = |name: &str| h.iter().position(|c| c == name).unwrap();
@@ -184,7 +184,7 @@ fn commanded_rows(out: &Path, direction: Direction) -> Vec<(f64, [f64; 5])> {
 /// The bar's reading of commanded positions on trt-ac, written out: the table ball
 /// `p = (0, 0, 200)` (table frame) goes to `Rx(A) Rz(C) p` (the pivot at the origin), the
 /// tool ball is at X Y Z, and `dL = |tool − ball| − L`, µm.
-fn trt_ac_reading([x, y, z, a, c]: [f64; 5], length_mm: f64) -> f64 {
+pub(super) fn trt_ac_reading([x, y, z, a, c]: [f64; 5], length_mm: f64) -> f64 {
     let (p_x, p_y, p_z) = (0.0, 0.0, 200.0);
     let (sc, cc) = c.to_radians().sin_cos();
     let (sa, ca) = a.to_radians().sin_cos();
@@ -197,7 +197,7 @@ fn trt_ac_reading([x, y, z, a, c]: [f64; 5], length_mm: f64) -> f64 {
 
 /// Peak-to-valley of `(θ deg, dL µm)` samples after removing their least-squares circle
 /// centre `r0 + a cos θ + b sin θ`, over bins of 0.05°.
-fn centred_peak_to_valley(samples: &[(f64, f64)]) -> f64 {
+pub(super) fn centred_peak_to_valley(samples: &[(f64, f64)]) -> f64 {
     // Normal equations of (1, cos, sin).
     let mut m = [[0.0f64; 3]; 3];
     let mut v = [0.0f64; 3];

@@ -5,6 +5,7 @@
 mod common;
 
 mod budget;
+mod budget_geometry;
 mod circle_feed;
 mod cone_reference;
 mod cut_budget;

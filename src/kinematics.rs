@@ -184,6 +184,40 @@ impl Kinematics {
         )
     }
 
+    /// The chain's geometry in words, a line per axis from the bed outward on each side
+    /// ("C on the table: turns about (0, 0, 1) through (0, 0, 0) mm"), then the spindle's
+    /// gauge point and tool direction at home (machine frame, mm); empty for a layout
+    /// without a chain.
+    pub fn chain_geometry(&self) -> Vec<String> {
+        let Some(chain) = self.nominal else {
+            return Vec::new();
+        };
+        let mut lines: Vec<String> = chain
+            .links()
+            .map(|(side, l)| {
+                let on = match side {
+                    Side::Table => "on the table",
+                    Side::Head => "on the head",
+                };
+                match l.axis.is_rotary() {
+                    true => format!(
+                        "{} {on}: turns about {} through {} mm",
+                        l.axis,
+                        triple(&l.direction),
+                        triple(&l.point_mm)
+                    ),
+                    false => format!("{} {on}: moves along {}", l.axis, triple(&l.direction)),
+                }
+            })
+            .collect();
+        lines.push(format!(
+            "gauge point {} mm, tool along {}",
+            triple(&chain.gauge_point_mm),
+            triple(&chain.tool_direction)
+        ));
+        lines
+    }
+
     /// The machine's chain (the kinematic-chains spec): its own, or its named
     /// layout's written out; `None` for layouts whose rotaries or U V W have no place in
     /// the tool pose (xyzabc, xyuv, xyzabcuvw).
@@ -617,3 +651,14 @@ fn small_angle_added<T: LaneOps>(d: T, sin_r: T, cos_r: T) -> (T, T) {
 
 /// The first C value of a path: the spec's `atan2` range (-180, 180].
 pub const C_START_REFERENCE_DEG: f64 = 0.0;
+
+/// `(x, y, z)` to 4 decimals, without trailing zeros or a negative zero.
+fn triple(v: &Vector3<f64>) -> String {
+    let one = |x: f64| {
+        let r = (x * 1e4).round() / 1e4 + 0.0;
+        let t = format!("{r:.4}");
+        let t = t.trim_end_matches('0').trim_end_matches('.');
+        t.to_string()
+    };
+    format!("({}, {}, {})", one(v.x), one(v.y), one(v.z))
+}

@@ -272,6 +272,9 @@ fn test_table(folder: &RunFolder, date: Option<&str>) -> String {
                 "Machine",
                 &format!("{} ({})", t.machine, t.kinematics),
             );
+            if !t.chain_geometry.is_empty() {
+                row(&mut out, "Chain", &t.chain_geometry.join("; "));
+            }
             row(&mut out, "Machine file", &t.machine_file);
             row(&mut out, "Test", &t.test);
             row(&mut out, "Scenario", &t.scenario);

@@ -27,6 +27,10 @@ pub struct TestParameters {
     pub machine_file: String,
     /// Kinematic layout ("trt-ac", ...).
     pub kinematics: String,
+    /// The chain's geometry, a line per axis and the gauge point
+    /// ([`crate::kinematics::Kinematics::chain_geometry`]); empty for folders written before it.
+    #[serde(default)]
+    pub chain_geometry: Vec<String>,
     /// "cone frustum (ISO 10791-6 / NAS 979)", "circular test (ISO 230-4)" or "G-code file".
     pub test: String,
     /// The scenario file.
@@ -187,6 +191,7 @@ impl TestParameters {
             machine: machine.name.clone(),
             machine_file: machine.path.display().to_string(),
             kinematics,
+            chain_geometry: machine.kinematics.chain_geometry(),
             test,
             scenario: scenario.path.display().to_string(),
             program_file,

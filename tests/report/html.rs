@@ -1047,3 +1047,36 @@ fn test_json_names_the_machine_file_under_machine_overrides() {
     let (_, after) = hash(&dir);
     assert_ne!(before, after, "the scenario hash reads the machine file");
 }
+
+/// Beside the machine's name the page gives its chain's geometry: each axis's line as the
+/// machine file writes it (here the head-table machine's nutating B at 45° through
+/// (0, 0, 150) mm and its C table), and the gauge point.
+#[test]
+fn the_report_shows_the_chain_s_axis_lines_and_gauge_point() {
+    let dir = scratch("report", "chain-geometry");
+    let scenario = common::write_scenario(
+        &dir,
+        &common::machine("head-table-b45-c"),
+        "[program.circle]\nplane = \"XY\"\nradius_mm = 50.0\nfeed_mm_min = 1000.0\n\
+         center_mm = [0.0, 0.0, 100.0]\n[check]\ncollisions = false\n",
+    );
+    let out = dir.join("out");
+    simulate_with_report(scenario.to_str().unwrap(), &out);
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    // From the machine file: B along (0, 0.7071068, 0.7071068) through (0, 0, 150), C along Z
+    // through the origin, gauge point at the origin with the tool along +Z.
+    let b = (0.7071068f64 / (2.0f64 * 0.7071068 * 0.7071068).sqrt() * 1e4).round() / 1e4;
+    for want in [
+        format!("B on the head: turns about (0, {b}, {b}) through (0, 0, 150) mm"),
+        "C on the table: turns about (0, 0, 1) through (0, 0, 0) mm".to_string(),
+        "gauge point (0, 0, 0) mm, tool along (0, 0, 1)".to_string(),
+    ] {
+        assert!(html.contains(&want), "the page lacks {want:?}");
+    }
+    let test: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("test.json")).unwrap()).unwrap();
+    assert!(
+        test["chain_geometry"].as_array().unwrap().len() >= 6,
+        "{test}"
+    );
+}

@@ -70,8 +70,10 @@ pub(crate) enum GCode {
     /// look-ahead, P): accepted, no effect on the canonical moves. Haas G187 (P accuracy
     /// level, E corner tolerance) sets the blending tolerance.
     Control(u32),
-    /// Fanuc G68.2 (true, tilted work plane) and G69 (false, cancel).
+    /// Fanuc G68.2 (true, tilted work plane) and G69 (false, cancel; it cancels G68 too).
     Tilt(bool),
+    /// Fanuc and Haas G68: 2-D coordinate rotation in the selected plane (X Y centre, R).
+    Rotate2d,
     /// Fanuc G53.1: rotary axes to the tilted plane.
     AlignRotary,
     /// Haas G254 (true, dynamic work offset) and G255 (false).
@@ -121,7 +123,7 @@ impl GCode {
             GCode::Path(_) => Group::Path,
             GCode::Retract(_) => Group::Retract,
             GCode::Control(_) => Group::Control,
-            GCode::Tilt(_) => Group::Tilt,
+            GCode::Tilt(_) | GCode::Rotate2d => Group::Tilt,
             GCode::AlignRotary => Group::AlignRotary,
             GCode::Dwo(_) => Group::Dwo,
             GCode::Diameter(_) => Group::Diameter,

@@ -41,6 +41,7 @@ pub(super) fn g_code(code: u32) -> Option<GCode> {
         440 => GCode::ToolLength(4),
         50 | 51 | 80 | 500 => GCode::Control(code),
         740 | 760 | 840 | 870 | 880 => GCode::Motion(Some(MotionMode::Cycle(code))),
+        680 => GCode::Rotate2d,
         682 => GCode::Tilt(true),
         690 => GCode::Tilt(false),
         531 => GCode::AlignRotary,

@@ -152,9 +152,13 @@ pub(crate) fn common_g_code(code: u32) -> Option<GCode> {
 /// Refusals every dialect shares, after its own: why, and what to do.
 pub(crate) fn common_refusal(code: u32) -> Option<(&'static str, &'static str)> {
     Some(match code {
-        680..=689 => (
-            " (2D coordinate rotation G68 and other G68.x are not supported; G68.2 is)",
-            "post-process the program without G68",
+        680 => (
+            " (2D coordinate rotation G68 is a Fanuc and Haas code; LinuxCNC turns a work system with G10 L2 R)",
+            "set dialect = \"fanuc\" or \"haas\", or rotate with G10 L2 R",
+        ),
+        681..=689 => (
+            " (G68.x other than G68.2 are not supported: G68.1 is a lathe's rotation, G68.3 and G68.4 tilt the plane by the tool axis)",
+            "post-process the program with G68.2 or without the rotation",
         ),
         740 | 840 | 870 | 880 => (
             " (this canned cycle is not supported in this dialect; G73 G81 G82 G83 G85 G86 G89 are, and G74 G76 G84 G87 G88 in the fanuc and haas dialects)",

@@ -156,6 +156,9 @@ pub struct Interp {
     /// LinuxCNC rotation of the active work system about Z (G10 L2 R), deg, cached, with
     /// its work offset and the G92 offset in X Y, mm: machine = rot(program + g92) + g5x.
     rotation: Option<(f64, [f64; 2], [f64; 2])>,
+    /// Fanuc and Haas G68: the angle (deg) and the centre (work coordinates, mm); it makes
+    /// `rotation` ([`Interp::rotate_on`]).
+    rotation_2d: Option<(f64, [f64; 2])>,
     path: PathControl,
     retract_r: bool,
     cycle_r: Option<f64>,
@@ -269,6 +272,7 @@ impl Interp {
             coord: 1,
             offset: AxisVec::ZERO,
             rotation: None,
+            rotation_2d: None,
             path: PathControl::BLEND,
             retract_r: o.dialect.table().start_retract_r,
             cycle_r: None,
@@ -332,6 +336,11 @@ impl Interp {
             let g92 = |k: usize| if g92_on { n[5211 + k] } else { 0.0 };
             (r, [n[base], n[base + 1]], [g92(0), g92(1)])
         });
+        if let Some((deg, c)) = self.rotation_2d {
+            // G68: machine = rot(p − c) + offset + c, in the tuple's form rot(p + g92) + g5x.
+            let o = [self.offset[Axis::X], self.offset[Axis::Y]];
+            self.rotation = Some((deg, [o[0] + c[0], o[1] + c[1]], [-c[0], -c[1]]));
+        }
     }
 
     /// LinuxCNC stdglue's `change_prolog` parameters: tool in the spindle, selected tool,

@@ -83,7 +83,12 @@ impl Interp {
         }
         for &(c, w) in b.g.iter() {
             match c {
-                GCode::Plane(p) => self.plane = p,
+                GCode::Plane(p) => {
+                    if self.rotation_2d.is_some() && p != self.plane {
+                        return Err(LineError::new(w.span(), format!("`{}` while G68 rotates the coordinates: the plane may not change in a rotation", &b.line[w.span()]), "plane change under G68").help("cancel the rotation with G69 first"));
+                    }
+                    self.plane = p
+                }
                 GCode::Units(inch) => self.inch = inch,
                 GCode::CutterComp(0) => {
                     self.comp_exit(queue)
@@ -130,7 +135,13 @@ impl Interp {
                     };
                 }
                 GCode::Tilt(true) => self.tilt_on(b)?,
-                GCode::Tilt(false) => self.tilt = None,
+                GCode::Tilt(false) => {
+                    self.tilt = None;
+                    if self.rotation_2d.take().is_some() {
+                        self.parameters_changed();
+                    }
+                }
+                GCode::Rotate2d => self.rotate_on(b, w)?,
                 GCode::Dwo(on) => {
                     if on && self.table.is_none() {
                         return Err(LineError::new(w.span(), "G254 on a machine without a rotary table: expected a table-table AC or BC machine", "no rotary table"));
@@ -347,9 +358,76 @@ impl Interp {
         Ok(())
     }
 
+    /// G68 X Y R (Fanuc and Haas): the program's X Y turn by R degrees (counter-clockwise
+    /// seen from +Z) about the centre (X, Y), given absolute in the work system, the current
+    /// position where a word is left out:
+    ///
+    /// ```text
+    /// machine X Y = offset + c + Rot(R) (p − c)
+    /// ```
+    ///
+    /// R is absolute (Fanuc parameter 5400 bit RIN at its default 0); an incremental
+    /// move turns its increment by R (the manual: about the tool position of the G68
+    /// block until the first absolute move, which is the same map). Only the G17 plane is
+    /// read; G69 cancels.
+    pub(super) fn rotate_on(&mut self, b: &Block, w: Word) -> LineResult<()> {
+        let line = b.line;
+        let refuse = |at: std::ops::Range<usize>, what: String, label: &str| {
+            Err(LineError::new(at, what, label))
+        };
+        if let Some((_, mw)) =
+            b.g.iter()
+                .find(|(c, _)| matches!(c, GCode::Motion(Some(_))))
+        {
+            return refuse(mw.span(), format!("`{}` in a G68 block: expected G68 in a block of its own (its X Y are the centre of rotation)", &line[mw.span()]), "motion with G68");
+        }
+        if let Some(x) = ['I', 'J', 'K'].into_iter().find_map(|l| b.get(l)) {
+            return refuse(x.span(), format!("`{}` in a G68 block: G68 with I J K is Fanuc's three-dimensional coordinate conversion, which mtsim does not read (G68.2 is)", &line[x.span()]), "3-D coordinate conversion");
+        }
+        if self.plane != Plane::XY {
+            return refuse(
+                w.span(),
+                "G68 outside the G17 plane: only a rotation in XY (G17) is read".to_string(),
+                "rotation plane",
+            );
+        }
+        if self.tilt.is_some() || self.dwo || self.rotation.is_some() {
+            return refuse(w.span(), "G68 with a tilted plane, a dynamic work offset or a rotation already active: expected G69 (or G255, G10 L2 R0) first".to_string(), "rotation on a rotation");
+        }
+        if let Some(x) = ['Z', 'A', 'B', 'C', 'U', 'V', 'W']
+            .into_iter()
+            .find_map(|l| b.get(l))
+        {
+            return refuse(
+                x.span(),
+                format!(
+                    "`{}` in a G68 block: in G17 the centre is X Y",
+                    &line[x.span()]
+                ),
+                "not a G68 word",
+            );
+        }
+        let Some(r) = b.get('R') else {
+            return refuse(w.span(), "G68 without R: the angle then comes from the control's parameter 5410, which a program does not carry".to_string(), "no angle").map_err(|e: LineError| e.help("write the angle as R, in degrees"));
+        };
+        let here = self.program_position();
+        let scale = self.scale();
+        let centre = |l: char, a: Axis| b.get(l).map_or(here[a], |w| w.value) * scale;
+        self.rotation_2d = Some((r.value, [centre('X', Axis::X), centre('Y', Axis::Y)]));
+        self.parameters_changed();
+        Ok(())
+    }
+
     /// G68.2 X Y Z I J K: the tilted work plane's origin and Euler angles (Z-X-Z).
     pub(super) fn tilt_on(&mut self, b: &Block) -> LineResult<()> {
         let line = b.line;
+        if self.rotation_2d.is_some() {
+            return Err(LineError::new(
+                0..line.len(),
+                "G68.2 while G68 rotates the coordinates: expected G69 first",
+                "tilt on a rotation",
+            ));
+        }
         if let Some((_, mw)) =
             b.g.iter()
                 .find(|(c, _)| matches!(c, GCode::Motion(Some(_))))

@@ -267,10 +267,10 @@ impl Interp {
         {
             return Err(LineError::new(
                 at,
-                "canned cycle, or arc outside G17, in a rotated work system (G10 L2 R): not supported yet",
+                "canned cycle, or arc outside G17, in a rotated work system (G68, or G10 L2 R): not supported yet",
                 "rotated work system",
             )
-            .help("cancel the rotation with G10 L2 P0 R0 first"));
+            .help("cancel the rotation first (G69, or G10 L2 P0 R0)"));
         }
         if self.frame().is_some()
             && matches!(mode, MotionMode::Cycle(_) | MotionMode::SpindleSync(_))

@@ -63,8 +63,14 @@ impl Interp {
         line_no: usize,
         queue: &mut VecDeque<Move>,
     ) -> LineResult<()> {
-        // G43.1 takes its Z as the tool length, G68.2 its X Y Z as the origin: not a move.
-        b.axes_used = b.has_g(|c| matches!(c, GCode::ToolLength(1) | GCode::Tilt(true)));
+        // G43.1 takes its Z as the tool length, G68.2 its X Y Z as the origin, G68 its X Y
+        // as the centre: not a move.
+        b.axes_used = b.has_g(|c| {
+            matches!(
+                c,
+                GCode::ToolLength(1) | GCode::Tilt(true) | GCode::Rotate2d
+            )
+        });
         let Some((nm, w)) = b.nonmodal() else {
             return Ok(());
         };

@@ -399,7 +399,12 @@ fn unsupported_constructs_are_reported_at_their_word() {
             1,
             "unsupported code `G12`",
         ),
-        ("G17 G68 X0 Y0 R30\n", 1, 5, "`G68` (2D coordinate rotation"),
+        (
+            "G17 G68.3 X0 Y0 R30\n",
+            1,
+            5,
+            "`G68.3` (G68.x other than G68.2",
+        ),
         (
             "G68.2 X0 Y0 Z0 I0 J45 K0\nG53.1\n",
             2,

@@ -238,3 +238,82 @@ fn an_arc_in_an_oblique_plane_runs_as_chords_on_its_circle() {
         assert!(10.0 - r <= 1e-3 + 1e-12, "sagitta {}", 10.0 - r);
     }
 }
+
+// G68: 2-D coordinate rotation (Fanuc and Haas). machine X Y = offset + c + Rot(R)(p − c),
+// Rot(R) counter-clockwise seen from +Z: Rot(90)(x, y) = (−y, x), Rot(180)(x, y) = (−x, −y).
+
+#[test]
+fn g68_turns_program_x_y_about_its_centre_and_g69_cancels() {
+    let m = moves(
+        "G90 G17 G54\nG0 X1 Y1\nG68 X10 Y0 R90\nG1 X20 Y0 F100\nG91 X5\nG90 X10 Y10\nG69\nG1 X3 Y4\n",
+        &opts(Dialect::Fanuc, None),
+    );
+    // X20 Y0: p − c = (10, 0) → (0, 10) → + c = (10, 10).
+    assert_eq!(end(&m[1]), [10.0, 10.0, 0.0, 0.0, 0.0, 0.0]);
+    // G91 X5: the increment (5, 0) turns to (0, 5).
+    assert_eq!(end(&m[2]), [10.0, 15.0, 0.0, 0.0, 0.0, 0.0]);
+    // X10 Y10: p − c = (0, 10) → (−10, 0) → (0, 0).
+    assert_eq!(end(&m[3]), [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    // After G69 program and machine coordinates agree again.
+    assert_eq!(end(&m[4]), [3.0, 4.0, 0.0, 0.0, 0.0, 0.0]);
+}
+
+#[test]
+fn g68_without_a_centre_turns_about_the_current_position_in_the_work_system() {
+    // G55 is X100 Y50 (G10 L2 P2). At program (10, 10), R180: X20 Y10 is p − c = (10, 0)
+    // → (−10, 0) → c + that = (0, 10) program → (100, 60) machine.
+    let m = moves(
+        "G10 L2 P2 X100 Y50\nG55 G0 X10 Y10\nG68 R180\nG1 X20 Y10 F100\n",
+        &opts(Dialect::Haas, None),
+    );
+    assert_eq!(end(&m[0]), [110.0, 60.0, 0.0, 0.0, 0.0, 0.0]);
+    assert_eq!(end(&m[1]), [100.0, 60.0, 0.0, 0.0, 0.0, 0.0]);
+}
+
+#[test]
+fn g68_turns_arcs_and_reads_inches() {
+    // R90 about the origin: X10 Y0 → (0, 10); the quarter arc to X0 Y10 (centre I-10 J0
+    // from (10, 0), the origin) ends at Rot(90)(0, 10) = (−10, 0).
+    let m = moves(
+        "G21 G90 G17\nG68 X0 Y0 R90\nG0 X10 Y0\nG3 X0 Y10 I-10 J0 F100\n",
+        &opts(Dialect::Fanuc, None),
+    );
+    assert_eq!(end(&m[0]), [0.0, 10.0, 0.0, 0.0, 0.0, 0.0]);
+    assert_eq!(end(&m[1]), [-10.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    // Inches: the centre X1 is 25.4 mm; X2 Y0 is p − c = (25.4, 0) → (0, 25.4) → (25.4, 25.4).
+    let m = moves(
+        "G20 G90 G17\nG68 X1 Y0 R90\nG1 X2 Y0 F10\n",
+        &opts(Dialect::Fanuc, None),
+    );
+    assert_eq!(end(&m[0]), [25.4, 25.4, 0.0, 0.0, 0.0, 0.0]);
+}
+
+#[test]
+fn what_g68_cannot_mean_here_is_refused_with_its_reason() {
+    let o = opts(Dialect::Fanuc, None);
+    for (text, line, says) in [
+        ("G68 X0 Y0\n", 1, "G68 without R"),
+        (
+            "G68 X0 Y0 I0 J0 K1 R10\n",
+            1,
+            "three-dimensional coordinate conversion",
+        ),
+        ("G18\nG68 X0 Z0 R10\n", 2, "outside the G17 plane"),
+        ("G68 X0 Y0 R10\nG19\n", 2, "the plane may not change"),
+        (
+            "G68 X0 Y0 R10\nG81 X1 Y1 Z-1 R1 F100\n",
+            2,
+            "rotated work system (G68",
+        ),
+        (
+            "G68 X0 Y0 R10\nG68.2 X0 Y0 Z0 I0 J30 K0\n",
+            2,
+            "G68.2 while G68",
+        ),
+        ("G1 G68 X0 Y0 R10 F100\n", 1, "in a G68 block"),
+    ] {
+        let (l, message) = error(text, &o);
+        assert_eq!(l, line, "{text:?}: {message}");
+        assert!(message.contains(says), "{text:?}: {message}");
+    }
+}

@@ -46,6 +46,10 @@ pub(crate) enum NonModal {
     G92_1,
     G92_2,
     G92_3,
+    /// Haas mill G70: bolt-hole circle (the active cycle at L holes on a circle).
+    BoltCircle,
+    /// Haas mill G71: bolt-hole arc (L holes K degrees apart).
+    BoltArc,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -2,7 +2,7 @@
 //! dynamic work offsets, G154 P extended offsets, G103/G187; dwell P in s with a decimal
 //! point, ms without.
 
-use crate::code::{GCode, MotionMode};
+use crate::code::{GCode, MotionMode, NonModal};
 use crate::dialect::fanuc;
 use crate::dialect::table::{DwellUnit, Table};
 
@@ -26,9 +26,7 @@ fn refusal(code: u32) -> Option<(&'static str, &'static str)> {
     const HELP: &str =
         "post the holes as a canned cycle at each position, the turning as G00/G01 moves";
     Some(match code {
-        700 => (" (Haas lathe: finishing cycle; Haas mill: bolt hole circle) is not supported by mtsim", HELP),
-        710 => (" (Haas lathe: O.D./I.D. stock removal cycle; Haas mill: bolt hole arc) is not supported by mtsim", HELP),
-        720 => (" (Haas lathe: end face stock removal cycle; Haas mill: bolt holes along an angle) is not supported by mtsim", HELP),
+        720 => (" (Haas lathe: end face stock removal cycle; Haas mill: bolt holes along an angle, whose first hole's place the sources mtsim follows do not state) is not supported by mtsim", HELP),
         _ => return fanuc::refusal(code),
     })
 }
@@ -41,6 +39,8 @@ fn g_code(code: u32) -> Option<GCode> {
         2540 => GCode::Dwo(true),
         2550 => GCode::Dwo(false),
         770 => GCode::Motion(Some(MotionMode::Cycle(770))),
+        700 => GCode::NonModal(NonModal::BoltCircle),
+        710 => GCode::NonModal(NonModal::BoltArc),
         _ => return fanuc::g_code(code),
     })
 }

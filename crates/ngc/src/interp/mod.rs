@@ -56,6 +56,7 @@ use crate::options::{Dialect, Distance, Options, StartFeed, Tool, Units, UserM};
 use crate::spline;
 
 mod arcs;
+mod bolt;
 mod coords;
 mod cycles;
 mod emit;

@@ -167,6 +167,9 @@ impl Interp {
                 self.params.numbered[5210] = 1.0;
                 self.parameters_changed();
             }
+            NonModal::BoltCircle | NonModal::BoltArc => {
+                self.bolt_pattern(b, nm, w, line_no, queue)?
+            }
             NonModal::Dwell | NonModal::G53 => {}
         }
         Ok(())

@@ -19,6 +19,7 @@ impl Interp {
             }
         }
         b.halve_x = self.diameter;
+        super::bolt::refuse_lathe_cycle(b)?;
         let line = b.line;
         if let Some(w) = b.spindle_select {
             if b.get('S').is_none() && !b.m.iter().any(|(c, _)| matches!(c, 3 | 4 | 5 | 19)) {
@@ -122,14 +123,17 @@ impl Interp {
         let arc_turns =
             self.dialect.table().arc_turns && matches!(motion, Some(MotionMode::Arc { .. }));
         let g10 = has_g(&|c| matches!(c, GCode::NonModal(NonModal::G10)));
+        // Haas G70/G71: L holes; P Q name the lathe's cycle, which the pattern refuses.
+        let bolt =
+            has_g(&|c| matches!(c, GCode::NonModal(NonModal::BoltCircle | NonModal::BoltArc)));
         // LinuxCNC passes P and Q to user M codes (M100-M199 programs, mapped codes).
         let user = m
             .iter()
             .any(|(c, _)| (100..=199).contains(c) || self.user_m.contains_key(c));
         let checks: [(char, bool, &str); 5] = [
-            ('P', cubic || nurbs || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 97, 98, 99]) || user || arc_turns, "`P` with no code that uses it: expected P only with G02/G03 (turns), G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89 (and G74/G76/G84/G87/G88 in the fanuc and haas dialects), M19, M50-M53, M62-M66, M98 or a user M code"),
-            ('Q', has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || shift_cycle || cubic || has_m(&[19, 61, 66, 67, 68]) || user, "`Q` with no code that uses it: expected Q only with G5, G64, G73/G83 (and G76/G87, Haas G77), M19, M61, M66-M68 or a user M code"),
-            ('L', g10 || cycle || nurbs || has_m(&[66, 97, 98]) || has_g(&|c| matches!(c, GCode::CutterComp(3 | 4))), "`L` with no code that uses it: expected L only with G10, G5.2, a canned cycle, G41.1/G42.1, M66 or M98"),
+            ('P', bolt || cubic || nurbs || has_g(&|c| matches!(c, GCode::NonModal(NonModal::Dwell) | GCode::Path(4) | GCode::CoordExtended | GCode::Control(80 | 1030 | 1870))) || g10 || dwell_cycle || has_m(&[19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 97, 98, 99]) || user || arc_turns, "`P` with no code that uses it: expected P only with G02/G03 (turns), G04, G5, G5.2, G10, G64, G54.1, G82/G86/G89 (and G74/G76/G84/G87/G88 in the fanuc and haas dialects), M19, M50-M53, M62-M66, M98 or a user M code"),
+            ('Q', bolt || has_g(&|c| matches!(c, GCode::Path(4) | GCode::Control(51))) || peck || shift_cycle || cubic || has_m(&[19, 61, 66, 67, 68]) || user, "`Q` with no code that uses it: expected Q only with G5, G64, G73/G83 (and G76/G87, Haas G77), M19, M61, M66-M68 or a user M code"),
+            ('L', bolt || g10 || cycle || nurbs || has_m(&[66, 97, 98]) || has_g(&|c| matches!(c, GCode::CutterComp(3 | 4))), "`L` with no code that uses it: expected L only with G10, G5.2, a canned cycle, G41.1/G42.1, M66 or M98"),
             ('E', has_m(&[66, 67, 68]) || has_g(&|c| matches!(c, GCode::Control(1870))), "`E` with no code that uses it: expected E only with M66-M68 or G187"),
             ('D', table.offset_words_alone || has_g(&|c| matches!(c, GCode::CutterComp(1..=4) | GCode::Control(960))), "`D` with no code that uses it: expected D only with G41, G42, G41.1, G42.1 or G96 (in the fanuc and haas dialects, D also stands alone)"),
         ];

@@ -115,11 +115,16 @@ fn each_dropped_lathe_cycle_is_refused_with_its_name() {
                 .find_map(Result::err)
                 .unwrap()
                 .to_string();
-            // Haas names both of its meanings (lathe cycle, mill bolt pattern).
+            // Haas names both of its meanings (lathe cycle, mill bolt pattern): G70 and G71
+            // with P Q are refused as the lathe's cycle, G72 by both names.
             let code = name.split(' ').next().unwrap();
             let named = match dialect {
-                Dialect::Haas if ["G70", "G71", "G72"].contains(&code) => {
-                    e.contains(&format!("`{code}` (Haas lathe:")) && e.contains("Haas mill: bolt")
+                Dialect::Haas if ["G70", "G71"].contains(&code) => {
+                    e.contains(&format!("on a Haas lathe {code} P Q is the"))
+                        && e.contains("bolt-hole pattern")
+                }
+                Dialect::Haas if code == "G72" => {
+                    e.contains("`G72` (Haas lathe:") && e.contains("Haas mill: bolt")
                 }
                 _ => e.contains(name),
             };

@@ -2,6 +2,7 @@
 //! codes, the secondary axes U V W, tilted work planes, and LinuxCNC remaps with their
 //! stdglue handlers.
 
+mod bolt_patterns;
 mod interpreter;
 mod lathe;
 mod remap_glue;

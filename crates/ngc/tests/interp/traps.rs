@@ -267,11 +267,26 @@ fn repeat_counts_repeat() {
     assert_eq!(xs, [10.0, 20.0, 30.0, 40.0]);
 }
 
+/// G70 I20 J0 L4 after `G81 Z-5 R2 L0` at the origin: G81 at (20, 0), (0, 20), (−20, 0),
+/// (0, −20), each down to Z−5.
 #[test]
-fn haas_g70_is_refused_naming_the_bolt_hole_circle() {
-    let (line, message) = refused("haas-bolt-circle.nc", true);
-    assert_eq!(line, 6);
-    assert!(message.contains("Haas mill: bolt hole circle"), "{message}");
+fn haas_g70_drills_the_bolt_hole_circle() {
+    let m = right("haas-bolt-circle.nc");
+    let bottoms: Vec<[f64; 3]> = m
+        .iter()
+        .filter(|m| m.motion == ngc::Motion::Linear)
+        .map(|m| xyz(&m.end))
+        .collect();
+    let want = [
+        [20.0, 0.0, -5.0],
+        [0.0, 20.0, -5.0],
+        [-20.0, 0.0, -5.0],
+        [0.0, -20.0, -5.0],
+    ];
+    assert_eq!(bottoms.len(), want.len(), "{bottoms:?}");
+    for (got, want) in bottoms.iter().zip(want) {
+        assert!(near(*got, want), "{got:?} against {want:?}");
+    }
 }
 
 /// Every file of the folder is one of the traps above, so none is left unchecked.

@@ -1,4 +1,4 @@
-(trap: Haas mill G70 is a bolt hole circle, not a lathe cycle: refused by that name)
+(trap: Haas mill G70 is a bolt hole circle, not a lathe cycle: its holes drilled by the active cycle)
 G21 G90 G17
 T1 M6
 G0 X0 Y0 Z20

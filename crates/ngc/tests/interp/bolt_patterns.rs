@@ -27,16 +27,13 @@ fn error(text: &str) -> (usize, String) {
     }
 }
 
+/// `v` to 1e-9 mm, without a negative zero.
+fn r(v: f64) -> f64 {
+    (v * 1e9).round() / 1e9 + 0.0
+}
+
 /// The hole bottoms (X Y of every feed move that ends at Z = `bottom`), to 1e-9 mm.
 fn bottoms(m: &[ngc::Move], bottom: f64) -> Vec<[f64; 2]> {
-    let r = |v: f64| {
-        let r = (v * 1e9).round() / 1e9;
-        if r == 0.0 {
-            0.0
-        } else {
-            r
-        }
-    };
     m.iter()
         .filter(|m| m.motion == Motion::Linear && (m.end[Axis::Z] - bottom).abs() < 1e-9)
         .map(|m| [r(m.end[Axis::X]), r(m.end[Axis::Y])])
@@ -45,14 +42,6 @@ fn bottoms(m: &[ngc::Move], bottom: f64) -> Vec<[f64; 2]> {
 
 /// Holes about `c` at radius `i` and the angles `deg`, to 1e-9 mm.
 fn holes(c: [f64; 2], i: f64, deg: &[f64]) -> Vec<[f64; 2]> {
-    let r = |v: f64| {
-        let r = (v * 1e9).round() / 1e9;
-        if r == 0.0 {
-            0.0
-        } else {
-            r
-        }
-    };
     deg.iter()
         .map(|a| {
             let a = a.to_radians();

@@ -26,6 +26,8 @@ const NOTED: &[&str] = &[
     "CFTCP",
     "CFIN",
     "STOPRE",
+    // The blank's shape and size for the control's simulation display.
+    "WORKPIECE",
     "SPATH",
     "UPATH",
     "ORIWKS",

@@ -429,14 +429,15 @@ fn trailing_comments_block_numbers_and_lower_case_read_in_plain_and_translated_b
 }
 
 /// `CALL "/_N_SPF_DIR/_N_HOLE_SPF"` runs HOLE.SPF (the path's last part in the control's
-/// internal form); `DEF STRING[20] NAME` is accepted with a notice; a system variable is
+/// internal form); `DEF STRING[20] NAME` and the blank's `WORKPIECE(…)` (for the control's
+/// simulation display) are accepted with a notice; a system variable is
 /// refused naming what it is.
 #[test]
 fn an_indirect_call_and_display_only_definitions_are_read() {
     let dir = std::env::temp_dir().join(format!("ngc-siemens-call-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("HOLE.SPF"), "G91 G1 Z-2 F100\nZ2\nG90\nM17\n").unwrap();
-    let program = "DEF STRING[20] NAME=\"PART 1\"\nG0 X10 Y5 Z3\nCALL \"/_N_SPF_DIR/_N_HOLE_SPF\"\nG0 X20\nM30\n";
+    let program = "DEF STRING[20] NAME=\"PART 1\"\nWORKPIECE(,\"\",,\"BOX\",112,0,-50,-80,-50,-50,50,50)\nG0 X10 Y5 Z3\nCALL \"/_N_SPF_DIR/_N_HOLE_SPF\"\nG0 X20\nM30\n";
     let m: Vec<Move> = read_str_with(
         Path::new("t.mpf"),
         program,

@@ -178,6 +178,24 @@ pub fn lex_with<'l>(
             let w = lex_word(line, i, params, fanuc)?;
             i = w.span.1;
             words.push(w);
+        } else if c == b','
+            && matches!(
+                bytes.get(i + 1).map(u8::to_ascii_uppercase),
+                Some(b'R' | b'C')
+            )
+        {
+            // Fanuc and Haas `,R` / `,C` after a G01: corner rounding or chamfer to the
+            // next move.
+            let what = match bytes[i + 1].to_ascii_uppercase() {
+                b'R' => "corner rounding (,R: an arc of that radius)",
+                _ => "chamfer (,C: a straight cut of that length)",
+            };
+            return Err(LineError::new(
+                i..i + 2,
+                format!("`{}`: Fanuc's {what} between this move and the next, which mtsim does not read", &line[i..i + 2]),
+                "corner rounding or chamfer",
+            )
+            .help("write the rounding as a G02/G03 arc, or the chamfer as a G01 move"));
         } else {
             let (ch, span) = char_at(line, i);
             return Err(LineError::new(

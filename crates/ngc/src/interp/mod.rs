@@ -160,6 +160,8 @@ pub struct Interp {
     /// Fanuc and Haas G68: the angle (deg) and the centre (work coordinates, mm); it makes
     /// `rotation` ([`Interp::rotate_on`]).
     rotation_2d: Option<(f64, [f64; 2])>,
+    /// Fanuc G43.5 is active: I J K are the tool-axis vector, which mtsim refuses.
+    tool_vector: bool,
     path: PathControl,
     retract_r: bool,
     cycle_r: Option<f64>,
@@ -274,6 +276,7 @@ impl Interp {
             offset: AxisVec::ZERO,
             rotation: None,
             rotation_2d: None,
+            tool_vector: false,
             path: PathControl::BLEND,
             retract_r: o.dialect.table().start_retract_r,
             cycle_r: None,

@@ -20,6 +20,7 @@ impl Interp {
         }
         b.halve_x = self.diameter;
         super::bolt::refuse_lathe_cycle(b)?;
+        self.refuse_tool_vector(b)?;
         let line = b.line;
         if let Some(w) = b.spindle_select {
             if b.get('S').is_none() && !b.m.iter().any(|(c, _)| matches!(c, 3 | 4 | 5 | 19)) {
@@ -149,5 +150,40 @@ impl Interp {
             }
         }
         Ok(())
+    }
+}
+
+impl Interp {
+    /// Fanuc G43.5 programs the tool axis as a vector I J K in its blocks (tool-centre point
+    /// type 2), which mtsim does not read: its I J K are refused by that meaning, not as arc
+    /// words. G43.4, G49 and the TCP cancels end the mode.
+    fn refuse_tool_vector(&mut self, b: &Block) -> LineResult<()> {
+        for (c, w) in b.g.iter() {
+            match c {
+                GCode::Tcp(true) => self.tool_vector = (w.value - 43.5).abs() < 1e-9,
+                GCode::Tcp(false) | GCode::ToolLength(_) => self.tool_vector = false,
+                _ => {}
+            }
+        }
+        if !self.tool_vector {
+            return Ok(());
+        }
+        let arc = |m: Option<MotionMode>| matches!(m, Some(MotionMode::Arc { .. }));
+        let motion = b.g.iter().find_map(|(c, _)| match c {
+            GCode::Motion(m) => Some(*m),
+            _ => None,
+        });
+        if arc(motion.unwrap_or(self.motion)) {
+            return Ok(());
+        }
+        match ['I', 'J', 'K'].into_iter().find_map(|l| b.get(l)) {
+            Some(w) => Err(LineError::new(
+                w.span(),
+                format!("`{}` under G43.5: Fanuc's tool-axis direction vector (I J K), which mtsim does not read", &b.line[w.span()]),
+                "tool direction vector",
+            )
+            .help("post the tool direction as rotary-axis angles under G43.4")),
+            None => Ok(()),
+        }
     }
 }

@@ -586,6 +586,17 @@ impl Reader {
                 w.cr = Some((expr(sc, &self.vars)?, at..sc.at));
                 return Ok(());
             }
+            "ADIS" | "ADISPOS" if sc.peek() == Some(b'=') => {
+                // The rounding distance of G641/G642 path blending: the planner does not
+                // blend by it (docs/interpolation.md).
+                sc.eat(b'=');
+                expr(sc, &self.vars)?;
+                self.notice(
+                    line_no,
+                    format!("`{name}=` (the rounding distance of G641/G642 blending) accepted and not simulated"),
+                );
+                return Ok(());
+            }
             "SUPA" => {
                 w.other.push(("G53".into(), at..sc.at));
                 return Ok(());

@@ -391,3 +391,34 @@ fn m73_and_m74_are_the_tool_air_blast_on_haas_and_save_the_modal_state_only_in_l
     let (m, _) = read(&text, &opts(Dialect::Linuxcnc));
     assert_eq!(xyz(m.last().unwrap())[0], 1.0);
 }
+
+/// Refusals name what the construct is in a Fanuc: G43.5's I J K are the tool-axis vector
+/// (not arc words), `,R` and `,C` the corner rounding and chamfer (not stray characters).
+#[test]
+fn refusals_name_the_fanuc_meaning_of_the_construct() {
+    let o = opts(Dialect::Fanuc);
+    for (text, line, says) in [
+        (
+            "G21 G90\nG43.5 H1 I0 J0 K1\n",
+            2,
+            "under G43.5: Fanuc's tool-axis direction vector",
+        ),
+        (
+            "G21 G90\nG43.5 H1\nG1 X10 I0 J0.5 K0.8 F100\n",
+            3,
+            "tool-axis direction vector",
+        ),
+        ("G21 G90\nG1 X10 Y0 ,R2 F100\n", 2, "corner rounding (,R"),
+        ("G21 G90\nG1 X10 Y0 ,C1 F100\n", 2, "chamfer (,C"),
+    ] {
+        let (l, message) = error_with(text, &o);
+        assert_eq!(l, line, "{text:?}: {message}");
+        assert!(message.contains(says), "{text:?}: {message}");
+    }
+    // After G49 I J K are arc words again: a G02 with I J reads.
+    let (m, _) = read(
+        "G21 G90\nG43.5 H1\nG49\nG0 X10 Y0\nG2 X0 Y-10 I-10 J0 F100\n",
+        &o,
+    );
+    assert_eq!(xyz(&m[1]), [0.0, -10.0, 0.0]);
+}

@@ -472,3 +472,22 @@ fn a_feed_move_with_no_feed_in_effect_is_an_error_at_its_line() {
         (ngc::Feed::None, ngc::Feed::PerMinute(300.0))
     );
 }
+
+/// `G641 ADIS=0.1` (the rounding distance of path blending) and `WORKPIECE(…)` are read with
+/// a notice each and no motion of their own: the move after them is the program's own.
+#[test]
+fn blending_distances_and_the_blank_are_read_with_notices() {
+    let o = options(Dialect::Siemens, Path::new("."));
+    let mut r = read_str_with(
+        Path::new("t.mpf"),
+        "WORKPIECE(,\"\",,\"BOX\",112,0,-50,-80,-50,-50,50,50)\nG641 ADIS=0.1 ADISPOS=R1+0.2\nG1 X10 F100\nM30\n",
+        &o,
+    );
+    let ms: Vec<Move> = r.by_ref().collect::<Result<_, _>>().unwrap();
+    assert_eq!(ms.len(), 1);
+    assert_eq!(ms[0].end[ngc::Axis::X], 10.0);
+    let notes: Vec<&str> = r.notices().iter().map(|n| n.message.as_str()).collect();
+    for name in ["WORKPIECE", "ADIS=", "ADISPOS="] {
+        assert!(notes.iter().any(|n| n.contains(name)), "{name}: {notes:?}");
+    }
+}

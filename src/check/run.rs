@@ -14,7 +14,9 @@ use std::rc::Rc;
 use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::check::limits::{AxisUsage, LimitsMonitor, Violation, ViolationKind};
-use crate::check::scene::{EngagementSummary, EventKind, Scene, SceneMonitor, ToolConfig};
+use crate::check::scene::{
+    DepthTolerance, EngagementSummary, EventKind, Scene, SceneMonitor, ToolConfig,
+};
 use crate::error::Result;
 use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
@@ -65,6 +67,11 @@ pub struct CheckReport {
     /// Smallest clearance between bodies that must not touch, mm, and the pair.
     pub min_clearance_mm: Option<f64>,
     pub min_clearance_bodies: Option<[String; 2]>,
+    /// A collision's `worst` (its deepest penetration `W`, mm) is the depth at one of its
+    /// samples, and no sample of it is deeper than `W + mm + relative · W` (`[scene]
+    /// depth_tolerance_mm` and `depth_tolerance_relative`; null without a scene).
+    #[serde(default)]
+    pub collision_depth_tolerance: Option<DepthTolerance>,
     /// Whether the samples were the actual (servo) positions.
     pub dynamics: bool,
     /// How the samples were timed.
@@ -372,9 +379,11 @@ pub fn check_observed(
     let mut scene_queries = None;
     let mut engagement = Vec::new();
     let (mut min_clearance_mm, mut min_clearance_bodies) = (None, None);
+    let mut collision_depth_tolerance = None;
     if let Some(scene) = scene {
         let report = scene.finish();
         scene_queries = Some(report.queries);
+        collision_depth_tolerance = Some(report.depth_tolerance);
         engagement = report.engagement;
         min_clearance_mm = report
             .min_clearance_mm
@@ -412,6 +421,7 @@ pub fn check_observed(
         engagement,
         min_clearance_mm,
         min_clearance_bodies,
+        collision_depth_tolerance,
         dynamics: options.dynamics,
         timing: check_timing,
         feed_reductions,

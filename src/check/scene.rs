@@ -37,8 +37,8 @@ use rapier3d_f64::geometry::{
 use serde::Serialize;
 
 pub use crate::input::scene::{
-    ConeSetup, CradleBox, SceneConfig, SpindleConfig, SpindleShape, TableAxis, TableConfig,
-    ToolConfig, WorkpieceConfig, WorkpieceKind,
+    ConeSetup, CradleBox, DepthTolerance, SceneConfig, SpindleConfig, SpindleShape, TableAxis,
+    TableConfig, ToolConfig, WorkpieceConfig, WorkpieceKind,
 };
 pub use monitor::{EngagementSummary, EventKind, SceneEvent, SceneMonitor, SceneReport};
 pub use shapes::{signed_distance, z_cylinder, Circle, CircleHull};
@@ -220,6 +220,9 @@ pub struct Scene {
     bar: Option<BarEnds>,
     near_miss_mm: f64,
     engagement_resolution_mm: f64,
+    /// A collision's reported depth `W` is within `mm + relative · W` of its deepest
+    /// sample's.
+    depth_tolerance: DepthTolerance,
 }
 
 impl Scene {
@@ -248,12 +251,29 @@ impl Scene {
         builder.add_table(machine, workpiece, all_tool)?;
         builder.add_tool_stack(machine, tool, workpiece);
         let bar = builder.add_workpiece(machine, tool, workpiece, all_tool)?;
-        Ok(builder.finish(bar, near_miss_mm, scene.engagement_resolution_mm))
+        let mut built = builder.finish(bar, near_miss_mm, scene.engagement_resolution_mm);
+        built.depth_tolerance = DepthTolerance {
+            mm: scene.depth_tolerance_mm,
+            relative: scene.depth_tolerance_relative,
+        };
+        Ok(built)
     }
 
     /// The near-miss threshold, mm.
     pub fn near_miss_mm(&self) -> f64 {
         self.near_miss_mm
+    }
+
+    /// The tolerance of a collision's reported depth (`[scene] depth_tolerance_mm` and
+    /// `depth_tolerance_relative`).
+    pub fn depth_tolerance(&self) -> DepthTolerance {
+        self.depth_tolerance
+    }
+
+    /// Sets the tolerance of a collision's reported depth ([`DepthTolerance::EXACT`]
+    /// measures every sample that could be deeper).
+    pub fn set_depth_tolerance(&mut self, tolerance: DepthTolerance) {
+        self.depth_tolerance = tolerance;
     }
 
     /// Names of the monitored pairs, in the order [`Scene::clearances`] reports them.
@@ -736,6 +756,10 @@ impl Builder {
             bar,
             near_miss_mm,
             engagement_resolution_mm,
+            depth_tolerance: DepthTolerance {
+                mm: crate::input::scene::DEFAULT_DEPTH_TOLERANCE_MM,
+                relative: crate::input::scene::DEFAULT_DEPTH_TOLERANCE_RELATIVE,
+            },
             linked: self.linked,
         };
         scene.set_axes(&AxisVec::ZERO);

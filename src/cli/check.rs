@@ -128,6 +128,19 @@ pub fn check_table(report: &CheckReport, name: &str) -> String {
             b[0], b[1]
         ));
     }
+    let collided = report
+        .violations
+        .iter()
+        .any(|v| v.kind == ViolationKind::Collision);
+    if let (true, Some(t)) = (collided, report.collision_depth_tolerance) {
+        out.push_str(&format!(
+            "collision depths: each is a sample's, and no sample of the collision is deeper \
+             by more than {} mm + {} % of it ([scene] depth_tolerance_mm, \
+             depth_tolerance_relative)\n",
+            t.mm,
+            100.0 * t.relative
+        ));
+    }
     for e in &report.engagement {
         out.push_str(&format!(
             "cutting: {} in {}, deepest {:.4} mm (expected, not a violation: the test cuts the \

@@ -32,7 +32,45 @@ pub struct SceneConfig {
     /// Resolution of the reported cutter engagement depth, mm: the monitor re-measures the
     /// cutter/workpiece pair once the bodies could have moved this far.
     pub engagement_resolution_mm: f64,
+    /// Tolerance of a collision's reported deepest penetration `W`, mm, with
+    /// `depth_tolerance_relative`: `W` is the depth at one of the event's samples, and no
+    /// sample of the event is deeper than `W + depth_tolerance_mm + depth_tolerance_relative
+    /// · W` (both 0: every sample that could be deeper is measured).
+    pub depth_tolerance_mm: f64,
+    /// The share of the depth itself in a collision's depth tolerance (0.01: 1 %).
+    pub depth_tolerance_relative: f64,
 }
+
+/// The tolerance of a collision's reported deepest penetration `W`: no sample of the event
+/// is deeper than `W + mm + relative · W`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DepthTolerance {
+    pub mm: f64,
+    pub relative: f64,
+}
+
+impl DepthTolerance {
+    /// Measure every sample that could be deeper.
+    pub const EXACT: DepthTolerance = DepthTolerance {
+        mm: 0.0,
+        relative: 0.0,
+    };
+
+    /// How much deeper than `worst_mm` (>= 0) a sample of the event may be, mm.
+    #[inline]
+    pub fn at(&self, worst_mm: f64) -> f64 {
+        self.mm + self.relative * worst_mm.max(0.0)
+    }
+}
+
+/// `[scene] depth_tolerance_mm` when absent, mm: a hundredth of a millimetre, below what a
+/// collision's depth says about the program (how far the parts run into each other).
+pub const DEFAULT_DEPTH_TOLERANCE_MM: f64 = 0.01;
+
+/// `[scene] depth_tolerance_relative` when absent: 1 % of the depth, so that a part pushed
+/// deeper sample by sample is measured about once per 1 % of growth (a few hundred times
+/// from 0.01 mm to 100 mm deep) instead of at every sample (docs/scene.md).
+pub const DEFAULT_DEPTH_TOLERANCE_RELATIVE: f64 = 0.01;
 
 impl Default for SceneConfig {
     fn default() -> Self {
@@ -62,6 +100,8 @@ impl Default for SceneConfig {
             spindle: SpindleConfig::default(),
             near_miss_mm: 2.0,
             engagement_resolution_mm: 1.0,
+            depth_tolerance_mm: DEFAULT_DEPTH_TOLERANCE_MM,
+            depth_tolerance_relative: DEFAULT_DEPTH_TOLERANCE_RELATIVE,
         }
     }
 }
@@ -390,6 +430,28 @@ impl SceneConfig {
                 "near_miss_mm",
                 format!("must be a clearance >= 0 mm, got {}", self.near_miss_mm),
             ));
+        }
+        for (key, v, what) in [
+            (
+                "depth_tolerance_mm",
+                self.depth_tolerance_mm,
+                "a length >= 0 mm",
+            ),
+            (
+                "depth_tolerance_relative",
+                self.depth_tolerance_relative,
+                "a share >= 0",
+            ),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(value_error(
+                    path,
+                    text,
+                    "scene",
+                    key,
+                    format!("must be {what}, got {v}"),
+                ));
+            }
         }
         positive(
             path,

@@ -593,6 +593,20 @@ fn check_section(check: &CheckReport) -> String {
             esc(b)
         );
     }
+    let collided = check
+        .violations
+        .iter()
+        .any(|v| v.kind == crate::check::limits::ViolationKind::Collision);
+    if let (true, Some(t)) = (collided, check.collision_depth_tolerance) {
+        let _ = writeln!(
+            out,
+            "<li>Collision depths: each is a sample's, and no sample of the collision is deeper \
+             by more than {} mm + {} % of it ([scene] depth_tolerance_mm, \
+             depth_tolerance_relative).</li>",
+            t.mm,
+            100.0 * t.relative
+        );
+    }
     for e in &check.engagement {
         let _ = writeln!(
             out,

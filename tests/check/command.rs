@@ -235,6 +235,39 @@ fn a_short_tool_drives_the_holder_into_the_frustum() {
     );
 }
 
+/// The depth tolerance of the collisions is in the output: `collision_depth_tolerance` in
+/// the JSON (the documented defaults, 0.01 mm + 1 %, or the machine's `[scene]` values) and
+/// a line of the text when there is a collision; 0 and 0 give exact depths.
+#[test]
+fn the_collision_depth_tolerance_is_reported() {
+    let body = format!(
+        "{CONE_15_10}[workpiece]\nkind = \"cone-frustum\"\ntop_height_mm = 45.0\n\
+         [tool]\ncutter_diameter_mm = 20.0\nflute_length_mm = 8.0\nshank_diameter_mm = 20.0\nshank_length_mm = 2.0\nholder_diameter_mm = 50.0\nholder_length_mm = 30.0\ngauge_length_mm = 40.0\n"
+    );
+    let (_, v) = check("tolerance-default", &body, None, &[]);
+    assert_eq!(v["collision_depth_tolerance"]["mm"], 0.01, "{v}");
+    assert_eq!(v["collision_depth_tolerance"]["relative"], 0.01, "{v}");
+    let exact = format!(
+        "{body}[machine_overrides.scene]\ndepth_tolerance_mm = 0.0\ndepth_tolerance_relative = 0.0\n"
+    );
+    let (_, w) = check("tolerance-exact", &exact, None, &[]);
+    assert_eq!(w["collision_depth_tolerance"]["mm"], 0.0, "{w}");
+    assert_eq!(w["collision_depth_tolerance"]["relative"], 0.0, "{w}");
+    let dir = scratch("check", "tolerance-text");
+    let path = write_scenario(&dir, &trt_ac(), &body);
+    let text =
+        String::from_utf8_lossy(&mtsim(&["check", path.to_str().unwrap()]).stdout).into_owned();
+    assert!(
+        text.contains("no sample of the collision is deeper by more than 0.01 mm + 1 % of it"),
+        "{text}"
+    );
+    // A clean check says nothing of it.
+    let path = write_scenario(&dir, &trt_ac(), CONE_15_10);
+    let text =
+        String::from_utf8_lossy(&mtsim(&["check", path.to_str().unwrap()]).stdout).into_owned();
+    assert!(!text.contains("collision depths"), "{text}");
+}
+
 #[test]
 fn dynamics_catches_an_overshoot_that_the_commanded_path_does_not_have() {
     // A fast move ends exactly at the X limit; full velocity feedforward with a slow velocity

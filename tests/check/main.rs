@@ -11,4 +11,5 @@ mod equivalence;
 mod prism;
 mod scene;
 mod streamed;
+mod tilted;
 mod tool_change;

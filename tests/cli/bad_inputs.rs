@@ -113,6 +113,8 @@ max_jerk = 120000.0
 [scene]
 near_miss_mm = 2.0
 engagement_resolution_mm = 1.0
+depth_tolerance_mm = 0.01
+depth_tolerance_relative = 0.01
 
 [scene.table]
 top_z_mm = 0.0

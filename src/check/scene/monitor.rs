@@ -18,7 +18,11 @@
 //! ([`super::plane`]): a part held in a collision while the program runs on is measured
 //! again only when its event could end. The samples in between are in the event, so its
 //! span and worst value are those of measuring every sample (the worst to 1e-9 mm and the
-//! query's own accuracy). The cutter/workpiece pair is re-measured once the bound reaches
+//! query's own accuracy). A collision's "new worst" margin and plane floor are widened by its
+//! depth tolerance `τ(W) = mm + relative · W` ([`super::DepthTolerance`]): a sample not
+//! measured is at most `W + τ(W)` deep, so a part pushed deeper sample by sample is measured
+//! once per `τ` of growth, and the reported depth `W` (a measured sample's) is within `τ(W)`
+//! of the deepest sample's. The cutter/workpiece pair is re-measured once the bound reaches
 //! `max(d, engagement resolution)`, so its reported depth is within that
 //! resolution of the true maximum.
 //!
@@ -99,6 +103,10 @@ pub struct SceneReport {
     pub events: Vec<SceneEvent>,
     pub engagement: Vec<EngagementSummary>,
     pub near_miss_mm: f64,
+    /// A collision's `worst_mm` is the depth at one of its samples, and no sample of it is
+    /// deeper than `worst_mm + tolerance.at(worst_mm)` (`[scene] depth_tolerance_mm` and
+    /// `depth_tolerance_relative`).
+    pub depth_tolerance: super::DepthTolerance,
     /// Smallest clearance measured between any collision pair, mm (negative: penetration).
     /// Queries come more often the closer a pair gets, so below `near_miss_mm` it is the
     /// clearance at a sample; above it, the true minimum lies between `near_miss_mm` and it.
@@ -634,8 +642,10 @@ impl SceneMonitor {
         if state.moved >= state.exit_slack {
             return false;
         }
+        // A collision's floor is its worst depth less the depth tolerance: a sample within
+        // the tolerance of the worst adds nothing the report must show.
         let floor = match open.kind {
-            EventKind::Collision => -open.worst_mm,
+            EventKind::Collision => -open.worst_mm - self.scene.depth_tolerance().at(open.worst_mm),
             EventKind::NearMiss => open.worst_mm,
         };
         let lower = self.scene.plane_lower(i, poses, plane);
@@ -674,6 +684,7 @@ impl SceneMonitor {
             events: self.events,
             engagement: self.engagement,
             near_miss_mm: self.scene.near_miss_mm,
+            depth_tolerance: self.scene.depth_tolerance(),
             min_clearance_mm: self.min_clearance_mm,
             min_clearance_bodies: self
                 .min_clearance_pair
@@ -834,7 +845,10 @@ impl SceneMonitor {
         let state = &mut self.states[i];
         if let Some(open) = &state.open {
             let (exit, worst) = match open.kind {
-                EventKind::Collision => (-d, open.worst_mm + d),
+                EventKind::Collision => {
+                    let tolerance = self.scene.depth_tolerance().at(open.worst_mm);
+                    (-d, open.worst_mm + d + tolerance)
+                }
                 EventKind::NearMiss => ((threshold - d).min(d), d - open.worst_mm),
             };
             state.exit_slack = exit;

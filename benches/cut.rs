@@ -1,6 +1,6 @@
 //! Release-mode benchmark of `cut` beside `simulate`, run by `cargo bench --bench cut`.
 //!
-//! The 15/10 cone of `scenarios/cone-15-10.toml` in 720 segments: `study::cut::run_cut` at
+//! The 15/10 cone of `scenarios/cone-15-10.toml` in 720 segments: `study::cut::cut_into` at
 //! the default grid with its files (`surface.csv`, `surface.parquet`, `cut.json`, the
 //! SVGs, `cut.html`) without and with its error budget (`study::cut_budget`), against
 //! `study::simulate::simulate_with` without and with its error budget (its trace, summary,
@@ -20,16 +20,18 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// `cut` with its files into `out`, with its error budget or without (`--no-budget`).
+/// `cut` with its files into `out`, with its error budget or without (`--no-budget`): the
+/// command's own path (`study::cut::cut_into`).
 fn cut_with_files(scenario: &Scenario, out: &std::path::Path, budget: bool) {
-    let run = mtsim::study::cut::run_cut(scenario, CutOptions::default(), budget, &|_| {}).unwrap();
     std::fs::create_dir_all(out).unwrap();
-    let beside = mtsim::report::cut::CutBeside {
-        budget: run.budget.as_ref(),
-        ballbar_um: run.ballbar_um.as_deref(),
-    };
-    let figures = run.surface.figures();
-    mtsim::report::cut::write_cut_files(out, "cut", &run.surface, &figures, beside).unwrap();
+    mtsim::study::cut::cut_into(
+        scenario,
+        CutOptions::default(),
+        budget,
+        (out, "cut"),
+        &|_| {},
+    )
+    .unwrap();
 }
 
 fn main() {

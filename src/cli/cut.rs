@@ -7,7 +7,7 @@ use crate::error::Result;
 use crate::input::program::Direction;
 use crate::measure::cut::{CutOptions, DEFAULT_HEIGHT_STEP_MM, DEFAULT_THETA_STEP_DEG};
 use crate::report::budget_table::mechanism_label;
-use crate::report::cut::{cut_json, write_cut_files, CutBeside};
+use crate::report::cut::cut_json;
 use crate::report::cut_budget::CutBudget;
 use crate::report::RunDir;
 
@@ -76,25 +76,23 @@ pub fn run(args: &CutArgs) -> Result<i32> {
     };
     let run_dir = RunDir::begin(&args.output)?.reads(&[&args.scenario]);
     let bar = spinner("cutting");
-    let cut = crate::study::cut::run_cut(&scenario, options, !args.no_budget, &|t| {
-        bar.set_message(format!("{t:.1} s of machine time"))
-    })?;
-    bar.finish_and_clear();
-    for w in &cut.warnings {
-        warn(w);
-    }
-    let figures = cut.surface.figures();
     let name = args
         .scenario
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let title = format!("Cut cone: {name}");
-    let beside = CutBeside {
-        budget: cut.budget.as_ref(),
-        ballbar_um: cut.ballbar_um.as_deref(),
-    };
-    write_cut_files(run_dir.path(), &title, &cut.surface, &figures, beside)?;
+    let (cut, figures) = crate::study::cut::cut_into(
+        &scenario,
+        options,
+        !args.no_budget,
+        (run_dir.path(), &title),
+        &|t| bar.set_message(format!("{t:.1} s of machine time")),
+    )?;
+    bar.finish_and_clear();
+    for w in &cut.warnings {
+        warn(w);
+    }
     run_dir.commit()?;
     if args.json {
         print_stdout(&cut_json(&figures, cut.budget.as_ref()));
@@ -171,8 +169,13 @@ fn summary_text(scenario: &Path, f: &crate::measure::cut::CutFigures, sim_time_s
     });
     for m in &f.marks {
         out.push_str(&format!(
-            "mark: {} reversal at θ = {:.2}°: step {:+.3} µm\n",
-            m.axis, m.theta_deg, m.step_um
+            "mark: {} reversal at θ = {:.2}°: step {:+.3} µm (lost motion {} µm, rotary arcsec; read outside θ {:.2} to {:.2}°)\n",
+            m.axis,
+            m.theta_deg,
+            m.step_um,
+            m.lost_motion_text(),
+            m.take_up_deg[0],
+            m.take_up_deg[1]
         ));
     }
     if f.not_cut_points > 0 {

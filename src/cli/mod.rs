@@ -212,9 +212,11 @@ pub enum Command {
         /// B per axis from them): faster, and summary.json has no `error_budget`.
         #[arg(long)]
         no_budget: bool,
-        /// Also predict the cut cone (`mtsim cut` at its default grid, the first run's
-        /// piece): its figures go into summary.json under `measurements.cut` (without
-        /// reversal marks; `mtsim cut` gives them and the surface files).
+        /// Also predict the cut cone, as `mtsim cut` at its default grid does (the first
+        /// direction's piece, with its reversal marks and, unless --no-budget, its error
+        /// budget): cut.json's document goes into summary.json under `measurements.cut`, the
+        /// cut's files (surface, pictures, cut.html) into the output folder, and its
+        /// section onto the report page.
         #[arg(long)]
         cut: bool,
     },

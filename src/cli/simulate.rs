@@ -26,16 +26,20 @@ pub fn run(
     if let Some(format) = trace_format {
         scenario.simulate.trace_format = format;
     }
-    scenario.simulate.cut = cut;
     // Everything goes into a staging folder, put in place of `out_dir` when complete.
     let run_dir = RunDir::begin(out_dir)?.reads(&[path]);
     let target = out_dir;
     let out_dir = run_dir.path();
     let bar = spinner("simulating");
-    let summary =
-        crate::study::simulate::simulate_with(&scenario, out_dir, timing, with_budget, &|t| {
-            bar.set_message(format!("{t:.1} s of machine time"))
-        })?;
+    let progress = |t: f64| bar.set_message(format!("{t:.1} s of machine time"));
+    let beside = |dir: &Path| crate::study::cut::cut_beside(&scenario, dir, with_budget, &progress);
+    let summary = crate::study::simulate::simulate_beside(
+        &scenario,
+        out_dir,
+        (timing, with_budget),
+        cut.then_some(&beside as crate::study::simulate::BesideRun<'_>),
+        &progress,
+    )?;
     bar.finish_and_clear();
     stages.simulate_s = started.elapsed().as_secs_f64() - stages.read_s;
     for w in &summary.warnings {

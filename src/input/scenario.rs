@@ -132,10 +132,6 @@ pub struct SimulateSection {
     /// before it starts, and stopped when its trace passes it. About 210 bytes a row in
     /// `trace.csv` with five axes, as much again in the temporary file while it is written.
     pub max_trace_rows: u64,
-    /// Also predict the cut cone (`measure::cut`) at its default grid, beside the ball bar
-    /// (set by the command line, not a scenario key).
-    #[serde(skip)]
-    pub cut: bool,
 }
 
 impl Default for SimulateSection {
@@ -148,7 +144,6 @@ impl Default for SimulateSection {
             lead_in: None,
             measure_lines: None,
             max_samples: DEFAULT_MAX_SAMPLES,
-            cut: false,
             max_trace_rows: DEFAULT_MAX_TRACE_ROWS,
         }
     }

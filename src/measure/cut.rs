@@ -1,5 +1,5 @@
 //! **measure/cut** — the cut cone: the machined test piece as a CMM will measure it.
-//! Inputs: samples (actual or commanded axis positions), the cone's geometry, the cutter (radius, flute length), each axis's reversal angles.
+//! Inputs: samples (actual or commanded axis positions, the linear twins'), the cone's geometry, the cutter (radius, flute length), each axis's reversal angles.
 //! Outputs: the deviation d(θ, z) on a fixed θ × height grid, the least-squares circle per height, the cone angle error and the reversal marks.
 //!
 //! Each measured sample's axis positions go through the machine's chain, with its location
@@ -11,6 +11,7 @@
 pub mod envelope;
 pub mod figures;
 pub mod geometry;
+pub mod take_up;
 
 use serde::{Deserialize, Serialize};
 
@@ -23,8 +24,9 @@ use crate::pipeline::{Sample, Sink};
 use crate::{Axis, AxisVec};
 
 use envelope::Envelope;
-use figures::{HeightFigures, Mark};
+use figures::{HeightFigures, Mark, MarkInputs};
 use geometry::{CutGeometry, Row};
+use take_up::LostMotion;
 
 /// Default θ step of the grid, deg.
 pub const DEFAULT_THETA_STEP_DEG: f64 = 0.1;
@@ -99,6 +101,8 @@ pub struct CutSurface {
     pub envelope: Envelope,
     /// Each axis's reversal angles, deg, for the marks.
     reversals: Vec<(Axis, Vec<f64>)>,
+    /// Each axis's lost motion along the cut (actual less linear twin), for the marks.
+    lost_motion: LostMotion,
     /// This run cuts; its measured lines; the direction that cut (once a run has).
     cutting: bool,
     measured: Option<MeasuredLines>,
@@ -133,6 +137,7 @@ impl CutSurface {
         }
         let (rows, evaluation_rows) = grid_rows(&geometry, &options)?;
         let envelope = Envelope::new(&geometry, step, rows);
+        let lost_motion = LostMotion::new(scenario.machine.axes(), envelope.column_count());
         Ok(CutSurface {
             geometry,
             kinematics: scenario.machine.kinematics,
@@ -140,6 +145,7 @@ impl CutSurface {
             evaluation_rows,
             envelope,
             reversals,
+            lost_motion,
             cutting: false,
             measured: None,
             cut_direction: None,
@@ -218,7 +224,17 @@ impl CutSurface {
             flute_end_height_mm: self.geometry.flute_end_height_mm(),
             heights,
             cone_angle_error_urad: angle.is_finite().then_some(angle),
-            marks: figures::marks(&self.envelope, middle, &self.reversals, self.sense()),
+            marks: figures::marks(
+                &self.envelope,
+                middle,
+                &self.reversals,
+                self.sense(),
+                &MarkInputs {
+                    lost_motion: &self.lost_motion,
+                    clearance_per_column2_um: self.envelope.clearance_per_column2_um(),
+                    lever_mm: self.geometry.length_mm,
+                },
+            ),
             not_cut_points: not_cut,
             grid_points: self.envelope.values.len(),
             samples: self.samples,
@@ -328,6 +344,10 @@ impl Sink for CutSurface {
         }
         let pose = self.pose(s);
         let line = self.geometry.line_of(&pose.tip, &pose.axis);
+        // The commanded cut has no lost motion (and its samples no twin to read it from).
+        if !self.options.commanded {
+            self.lost_motion.record(line.contact_rad(), s);
+        }
         self.envelope.push(&self.geometry, line);
         self.samples += 1;
         Ok(())

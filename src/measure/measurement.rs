@@ -16,8 +16,10 @@
 //! `simulate` builds every registered measurement that applies, feeds it beside the ball bar
 //! (inside the settle gate of a file program, as the ball bar), and writes each one's document
 //! under its name in `summary.json`'s `measurements` (left out when none applies). A new
-//! measurement (the cut surface of issue 40) is one file in `measure/` implementing
-//! [`Measurement`] and one line in [`REGISTRY`]; the pipeline and `simulate` do not change.
+//! measurement is one file in `measure/` implementing [`Measurement`] and one line in
+//! [`REGISTRY`]; the pipeline and `simulate` do not change. The cut cone (`measure::cut`)
+//! is not one of them: its marks need the reversal analysis and its error budget the
+//! budget's own runs, so `simulate --cut` runs `cut`'s own path (`study::cut::cut_into`).
 //!
 //! The ball bar is a measurement too ([`BallbarSink`]); `simulate` builds it itself rather than
 //! through the registry, because the trace, the diagnostics and the report are all read from
@@ -27,7 +29,6 @@ use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::Scenario;
 use crate::measure::ballbar::analyse;
-use crate::measure::cut::{CutOptions, CutSurface};
 use crate::measure::sink::BallbarSink;
 use crate::pipeline::Sink;
 use crate::program::TestProgram;
@@ -54,7 +55,7 @@ pub trait Measurement: Sink {
 pub type Build = fn(&Scenario, &dyn TestProgram) -> Option<Box<dyn Measurement>>;
 
 /// Every measurement `simulate` takes beside the ball bar, by name: one line each.
-pub const REGISTRY: &[(&str, Build)] = &[("cut", build_cut)];
+pub const REGISTRY: &[(&str, Build)] = &[];
 
 /// The registered measurements that apply to `scenario`'s test, in the registry's order.
 pub fn for_scenario(scenario: &Scenario, test: &dyn TestProgram) -> Vec<Box<dyn Measurement>> {
@@ -75,40 +76,4 @@ impl Measurement for BallbarSink {
         let figures = analyse(std::slice::from_ref(&self.run), &[])?.runs;
         serde_json::to_value(figures).map_err(|e| Error::usage(e.to_string()))
     }
-}
-
-/// The cut cone (`measure::cut`): one piece, cut by the first run (or the one its options
-/// name). Its trait methods live here, beside the registry, so that `cut.rs` does not import
-/// this file back.
-impl Measurement for CutSurface {
-    fn name(&self) -> &'static str {
-        "cut"
-    }
-
-    fn start_run(&mut self, direction: Direction, measured: Option<MeasuredLines>) {
-        CutSurface::start_run(self, direction, measured);
-    }
-
-    fn end_run(&mut self) -> Result<()> {
-        CutSurface::end_run(self);
-        Ok(())
-    }
-
-    fn finish(&self) -> Result<serde_json::Value> {
-        serde_json::to_value(self.figures()).map_err(|e| Error::usage(e.to_string()))
-    }
-}
-
-/// The cut of a scenario's test at the default grid, where the test has a cone and the
-/// scenario asks for the cut (`scenario.simulate.cut`). Its marks need each axis's reversal
-/// angles, which the study layer finds (`study::cut` gives them with
-/// [`CutSurface::set_reversals`]); built here, it reports none.
-fn build_cut(scenario: &Scenario, test: &dyn TestProgram) -> Option<Box<dyn Measurement>> {
-    if !scenario.simulate.cut {
-        return None;
-    }
-    let cone = test.cone()?;
-    CutSurface::new(scenario, cone, CutOptions::default(), Vec::new())
-        .ok()
-        .map(|c| Box::new(c) as Box<dyn Measurement>)
 }

@@ -99,19 +99,10 @@ fn tip_section(tip: Option<&str>) -> String {
     }
 }
 
-/// The page.
-pub fn cut_html(
-    title: &str,
-    surface: &CutSurface,
-    figures: &CutFigures,
-    pictures: &Pictures<'_>,
-    budget: Option<&CutBudget>,
-) -> String {
-    let (map_svg, polar_svg) = (pictures.map, pictures.polar);
-    let tip = tip_section(pictures.tip);
-    let budget = budget_section(budget);
-    let (mesh, largest) = mesh_json(surface);
-    let k = exaggeration(surface, largest);
+/// What a CMM reports of the cut as HTML tables: the least-squares circle per height, the
+/// cone angle error and the reversal marks (each with its axis's lost motion and the take-up
+/// the levels were read outside of).
+pub fn cmm_tables(figures: &CutFigures) -> String {
     let rows: String = figures
         .heights
         .iter()
@@ -131,16 +122,59 @@ pub fn cut_html(
         .iter()
         .map(|m| {
             format!(
-                "<tr><td>{}</td><td>{:.2}</td><td>{:+.3}</td></tr>",
+                "<tr><td>{}</td><td>{:.2}</td><td>{:+.3}</td><td>{}</td><td>{:.2} to {:.2}</td></tr>",
                 esc(&m.axis),
                 m.theta_deg,
-                m.step_um
+                m.step_um,
+                m.lost_motion_text(),
+                m.take_up_deg[0],
+                m.take_up_deg[1]
             )
         })
         .collect();
+    let marks = if marks.is_empty() {
+        "<p>No reversal marks: no axis's lost motion swings across its reversals.</p>\n".to_string()
+    } else {
+        format!(
+            "<table><tr><th>axis</th><th>reversal θ (deg)</th><th>step (µm)</th>\
+             <th>lost motion (µm, rotary arcsec)</th><th>take-up θ (deg)</th></tr>{marks}</table>\n"
+        )
+    };
     let angle = figures
         .cone_angle_error_urad
         .map_or("not measured".to_string(), |a| format!("{a:+.2} µrad"));
+    format!(
+        "<table><tr><th>z (mm)</th><th>roundness (µm)</th><th>centre x, y (µm)</th>\
+         <th>diameter error (µm)</th></tr>{rows}</table>\n<p>Cone angle error: {angle}.</p>\n{marks}"
+    )
+}
+
+/// The cut's section of a `simulate --cut` run's report page: the CMM's tables, the error
+/// budget and a link to the cut's own page beside it.
+pub fn run_section(figures: &CutFigures, budget: Option<&CutBudget>) -> String {
+    format!(
+        "<h2 id=\"cut\">The cut cone</h2>\n<p>The piece the run cuts, as a CMM measures it \
+         (<a href=\"{CUT_HTML}\">{CUT_HTML}</a>: the map, the roundness plots and the 3D view). \
+         Definitions: docs/cut.md.</p>\n{}{}",
+        cmm_tables(figures),
+        budget_section(budget)
+    )
+}
+
+/// The page.
+pub fn cut_html(
+    title: &str,
+    surface: &CutSurface,
+    figures: &CutFigures,
+    pictures: &Pictures<'_>,
+    budget: Option<&CutBudget>,
+) -> String {
+    let (map_svg, polar_svg) = (pictures.map, pictures.polar);
+    let tip = tip_section(pictures.tip);
+    let budget = budget_section(budget);
+    let (mesh, largest) = mesh_json(surface);
+    let k = exaggeration(surface, largest);
+    let cmm = cmm_tables(figures);
     format!(
         r#"<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{title}</title>
@@ -150,10 +184,7 @@ td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}#view{{border:1px
 <h1>{title}</h1>
 <p>Cutter radius {r:.3} mm, flutes {fl:.1} mm; {how}. Definitions: docs/cut.md.</p>
 <h2>What a CMM reports</h2>
-<table><tr><th>z (mm)</th><th>roundness (µm)</th><th>centre x, y (µm)</th><th>diameter error (µm)</th></tr>{rows}</table>
-<p>Cone angle error: {angle}.</p>
-<table><tr><th>axis</th><th>reversal θ (deg)</th><th>step (µm)</th></tr>{marks}</table>
-{budget}{tip}<h2>The surface, unrolled</h2>
+{cmm}{budget}{tip}<h2>The surface, unrolled</h2>
 {map_svg}
 <h2>Roundness per height</h2>
 {polar_svg}

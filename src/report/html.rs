@@ -839,6 +839,18 @@ pub fn render(folder: &RunFolder, diagnosis: &Diagnosis, date: Option<&str>) -> 
     }
     h.push_str("<h2 id=\"marks\">Marks</h2>\n");
     h.push_str(&marks_table(&diagnosis.marks));
+    if let Some(cut) = &folder.cut {
+        let cut: super::cut::CutJson = serde_json::from_value(cut.clone()).map_err(|e| {
+            crate::error::Error::invalid(
+                &folder.dir.join(super::cut::CUT_JSON),
+                format!("unexpected contents: {e}"),
+            )
+        })?;
+        h.push_str(&super::cut_html::run_section(
+            &cut.figures,
+            cut.budget.as_ref(),
+        ));
+    }
     h.push_str("<h2 id=\"diagnoses\">Diagnoses</h2>\n<ul class=\"diagnoses\">\n");
     for finding in &diagnosis.findings {
         let _ = writeln!(h, "<li>{}</li>", esc(&finding_text(finding)));

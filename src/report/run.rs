@@ -194,6 +194,9 @@ pub struct RunFolder {
     pub svgs: Vec<(String, String)>,
     /// Every CSV, JSON, SVG, NC and Parquet file in the folder (for the links).
     pub files: Vec<String>,
+    /// The cut cone of a `simulate --cut` run (`cut.json`, read by `report::html` as
+    /// `report::cut::CutJson`); None without.
+    pub cut: Option<serde_json::Value>,
 }
 
 /// The JSON file at `path` as a `T`; None when there is no such file.
@@ -264,6 +267,7 @@ impl RunFolder {
             trace: read_trace(dir)?,
             svgs,
             files,
+            cut: read_json(&dir.join("cut.json"))?,
         })
     }
 }

@@ -12,9 +12,11 @@ use std::cell::RefCell;
 use crate::error::{Error, Result};
 use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
+use crate::measure::cut::CutFigures;
 use crate::measure::cut::{CutOptions, CutSurface};
 use crate::pipeline::{Sink, Timing};
 use crate::program::{self, test_of};
+use crate::report::cut::{write_cut_files, CutBeside};
 use crate::report::cut_budget::CutBudget;
 use crate::study::budget::{BudgetPlan, BudgetStepper};
 use crate::study::cut_budget::{assemble, CutBudgetRuns};
@@ -90,8 +92,9 @@ pub fn run_cut(
     run_options.timing = if commanded {
         Timing::Setpoints
     } else {
+        // The linear twins give each axis's lost motion, which the marks are read across.
         Timing::Planned {
-            twins: false,
+            twins: true,
             settle: false,
         }
     };
@@ -157,5 +160,68 @@ pub fn run_cut(
         sim_time_s: stats.end_time_s,
         setpoints: stats.samples,
         warnings,
+    })
+}
+
+/// Cuts `scenario`'s cone ([`run_cut`]) and writes the cut's files into `dir`
+/// (`report::cut`, the page titled `title`): what `mtsim cut` and `simulate --cut` both do.
+pub fn cut_into(
+    scenario: &Scenario,
+    options: CutOptions,
+    with_budget: bool,
+    (dir, title): (&std::path::Path, &str),
+    progress: &dyn Fn(f64),
+) -> Result<(CutRun, CutFigures)> {
+    let cut = run_cut(scenario, options, with_budget, progress)?;
+    let figures = cut.surface.figures();
+    let beside = CutBeside {
+        budget: cut.budget.as_ref(),
+        ballbar_um: cut.ballbar_um.as_deref(),
+    };
+    write_cut_files(dir, title, &cut.surface, &figures, beside)?;
+    Ok((cut, figures))
+}
+
+/// `simulate --cut`: the cut of the scenario's cone by `cut`'s own path ([`cut_into`], the
+/// default grid, the error budget `with_budget`), its files written into the run's folder
+/// `dir`, its document (cut.json's) under `measurements.cut`. It is a pass of its own over
+/// the first direction (the same program, interpolator and servos as the run's, so the same
+/// samples): its marks read the linear twins and its budget its own counterfactual runs. A
+/// scenario without a cone has nothing to cut: a warning.
+pub fn cut_beside(
+    scenario: &Scenario,
+    dir: &std::path::Path,
+    with_budget: bool,
+    progress: &dyn Fn(f64),
+) -> Result<crate::study::simulate::Beside> {
+    let name = "cut".to_string();
+    if test_of(scenario).cone().is_none() {
+        return Ok(crate::study::simulate::Beside {
+            name,
+            json: None,
+            warnings: vec!["--cut: the scenario has no cone to cut ([program.cone])".into()],
+        });
+    }
+    let stem = scenario
+        .path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let title = format!("Cut cone: {stem}");
+    let (cut, figures) = cut_into(
+        scenario,
+        CutOptions::default(),
+        with_budget,
+        (dir, &title),
+        progress,
+    )?;
+    let doc = crate::report::cut::CutJson {
+        figures,
+        budget: cut.budget,
+    };
+    Ok(crate::study::simulate::Beside {
+        name,
+        json: Some(serde_json::to_value(doc).expect("plain data serializes")),
+        warnings: cut.warnings,
     })
 }

@@ -137,6 +137,7 @@ impl Sink for CutBudgetRuns<'_, '_> {
             let x = Sample {
                 commanded: *q,
                 actual: *q,
+                linear: *q,
                 ..*s
             };
             surface.push(&x)?;

@@ -566,6 +566,18 @@ pub fn simulate_with(
     with_budget: bool,
     progress: &dyn Fn(f64),
 ) -> Result<SimulationSummary> {
+    simulate_beside(scenario, out_dir, (timing, with_budget), None, progress)
+}
+
+/// [`simulate_with`], with a measurement made `beside` the run (`simulate --cut`), its
+/// document under `measurements` and its files in `out_dir`.
+pub fn simulate_beside(
+    scenario: &Scenario,
+    out_dir: &Path,
+    (timing, with_budget): (bool, bool),
+    beside: Option<BesideRun<'_>>,
+    progress: &dyn Fn(f64),
+) -> Result<SimulationSummary> {
     create_dir(out_dir)?;
     // What a killed run into this folder left behind.
     crate::report::files::remove_stale_temporaries(
@@ -580,6 +592,13 @@ pub fn simulate_with(
             crate::report::html::REPORT_FILE,
             crate::report::contour::CONTOUR_FILE,
             crate::report::contour::CONTOUR_PLOT_FILE,
+            crate::report::cut::CUT_JSON,
+            crate::report::cut::SURFACE_CSV,
+            crate::report::cut::SURFACE_PARQUET,
+            crate::report::cut_html::CUT_HTML,
+            crate::report::cut_plots::SURFACE_SVG,
+            crate::report::cut_plots::ROUNDNESS_SVG,
+            crate::report::cut_tip::TIP_SVG,
         ],
     )?;
     work::check_trace_up_front(scenario, scenario.simulate.lead_deg)?;
@@ -639,6 +658,12 @@ pub fn simulate_with(
         _ => {}
     }
     write_contour_plot(scenario, &study, out_dir)?;
+    let mut measurements = study.measurements.clone();
+    if let Some(beside) = beside {
+        let made = beside(out_dir)?;
+        warnings.extend(made.warnings);
+        measurements.extend(made.json.map(|j| (made.name, j)));
+    }
     if let Some(result) = &ballbar {
         let title = plot_title(scenario);
         crate::report::polar::write_polar_svg(
@@ -649,20 +674,7 @@ pub fn simulate_with(
             &title,
         )?;
     }
-    // One spot that makes most of G (a transient, a spike) is worth a word.
-    for run in runs {
-        let dev = run.trace_um(true)?;
-        let theta: Vec<f64> = (0..dev.len())
-            .map(|i| (i as f64 + 0.5) * crate::measure::ballbar::BIN_DEG)
-            .collect();
-        if let Some((g, rest, spot)) = crate::study::diagnose::dominant_spot(&theta, &dev) {
-            warnings.push(format!(
-                "one spot dominates G in the {} run: G = {g:.2} µm, {:.2} µm without ±5° around θ = {spot:.1}°",
-                format!("{:?}", run.direction()).to_uppercase(),
-                rest
-            ));
-        }
-    }
+    warnings.extend(dominant_spots(runs)?);
     let wall = started.elapsed().as_secs_f64();
     let sim_time_s = study.sim_time_s;
     let summary = SimulationSummary {
@@ -689,7 +701,7 @@ pub fn simulate_with(
             }),
             ..lead
         }),
-        measurements: study.measurements.clone(),
+        measurements,
     };
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
     crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;
@@ -706,6 +718,38 @@ pub fn simulate_with(
     )?;
     Ok(summary)
 }
+
+/// One spot that makes most of G (a transient, a spike) is worth a word: a warning per run
+/// where one does.
+fn dominant_spots(runs: &[crate::measure::BallbarRun]) -> Result<Vec<String>> {
+    let mut warnings = Vec::new();
+    for run in runs {
+        let dev = run.trace_um(true)?;
+        let theta: Vec<f64> = (0..dev.len())
+            .map(|i| (i as f64 + 0.5) * crate::measure::ballbar::BIN_DEG)
+            .collect();
+        if let Some((g, rest, spot)) = crate::study::diagnose::dominant_spot(&theta, &dev) {
+            warnings.push(format!(
+                "one spot dominates G in the {} run: G = {g:.2} µm, {:.2} µm without ±5° around θ = {spot:.1}°",
+                format!("{:?}", run.direction()).to_uppercase(),
+                rest
+            ));
+        }
+    }
+    Ok(warnings)
+}
+
+/// A measurement made beside the run by a path of its own (`simulate --cut`: the cut,
+/// `study::cut::cut_beside`): its name under `measurements`, its document (None: nothing
+/// to measure) and what the user should know.
+pub struct Beside {
+    pub name: String,
+    pub json: Option<serde_json::Value>,
+    pub warnings: Vec<String>,
+}
+
+/// Makes a [`Beside`] measurement, its files written into the run's folder (given).
+pub type BesideRun<'a> = &'a dyn Fn(&Path) -> Result<Beside>;
 
 /// The ball bar, the trace of its readings and the error budget's runs, as one sink: the
 /// bar reads each sample once, and the budget takes the samples the bar takes.

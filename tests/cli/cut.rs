@@ -89,20 +89,21 @@ fn cut_refuses_a_scenario_without_a_cone_and_heights_off_the_flank() {
     assert!(!dir.join("cut").exists(), "nothing is written on bad input");
 }
 
-/// `simulate --cut` cuts the same piece as `cut` (the same run, the same samples): its
-/// figures in summary.json are `cut`'s, to the bit (the marks aside: `cut` reads them).
+/// `simulate --cut` cuts the same piece as `cut`, by `cut`'s own path: its cut in
+/// summary.json is `cut`'s cut.json to the bit (figures, marks, error budget), the cut's
+/// files are in the run folder and the run's report page has the cut's section.
 #[test]
-fn simulate_with_cut_reports_the_figures_cut_reports() {
+fn simulate_with_cut_reports_what_cut_reports() {
     let dir = common::scratch("cut-cli", "simulate");
-    let sim = dir.join("sim").display().to_string();
+    let sim = dir.join("sim");
     let cut = dir.join("cut").display().to_string();
     let s = common::stdout_json(&common::mtsim(&[
         "simulate",
         "scenarios/cone-15-10.toml",
         "-o",
-        &sim,
+        &sim.display().to_string(),
         "--cut",
-        "--no-budget",
+        "--html",
         "--json",
     ]));
     let c = common::stdout_json(&common::mtsim(&[
@@ -113,11 +114,29 @@ fn simulate_with_cut_reports_the_figures_cut_reports() {
         "--json",
     ]));
     let from_simulate = &s["measurements"]["cut"];
-    assert_eq!(from_simulate["heights"], c["heights"]);
-    assert_eq!(from_simulate["samples"], c["samples"]);
-    assert_eq!(
-        from_simulate["cone_angle_error_urad"],
-        c["cone_angle_error_urad"]
+    assert_eq!(from_simulate, &c);
+    let marks = c["marks"].as_array().unwrap();
+    assert!(
+        !marks.is_empty(),
+        "trt-ac's friction wind-up marks the cone"
     );
-    assert_eq!(from_simulate["marks"], serde_json::json!([]));
+    assert!(c["budget"]["rows"]
+        .as_array()
+        .is_some_and(|r| !r.is_empty()));
+    for f in [
+        "cut.json",
+        "surface.csv",
+        "surface.parquet",
+        "cut.html",
+        "surface.svg",
+        "roundness.svg",
+    ] {
+        assert!(sim.join(f).exists(), "{f} in the run folder");
+    }
+    let page = std::fs::read_to_string(sim.join("report.html")).unwrap();
+    assert!(
+        page.contains("id=\"cut\""),
+        "the report has the cut's section"
+    );
+    assert!(page.contains("href=\"cut.html\""));
 }

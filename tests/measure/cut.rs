@@ -284,7 +284,10 @@ fn a_step_of_x_at_its_reversal_leaves_a_step_of_b_times_the_normals_x() {
             if (reversals[0]..reversals[1]).contains(&theta) {
                 actual[Axis::X] += b_mm;
             }
-            sample(k as u64, q.commanded, actual)
+            // The step is X's lost motion: its linear twin follows the command.
+            let mut x = sample(k as u64, q.commanded, actual);
+            x.linear = q.commanded;
+            x
         })
         .collect();
     let surface = cut(

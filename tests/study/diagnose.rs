@@ -358,6 +358,7 @@ fn a_run_folder_is_diagnosed_from_its_typed_summary() {
         trace: None,
         svgs: Vec::new(),
         files: Vec::new(),
+        cut: None,
     };
     let d = mtsim::study::diagnose::diagnose_run(&folder);
     assert_eq!(d.marks.len(), 2);

@@ -9,6 +9,7 @@ mod budget_geometry;
 mod circle_feed;
 mod cone_reference;
 mod cut_budget;
+mod cut_marks;
 mod diagnose;
 mod fit;
 mod fit_chain;

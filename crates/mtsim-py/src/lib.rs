@@ -20,7 +20,7 @@ use mtsim::cli::{block_rows, AnalyzeFindings};
 use mtsim::error::Error;
 use mtsim::input::scenario::TraceFormat;
 use mtsim::measure::cut::CutOptions;
-use mtsim::report::cut::{write_cut_files, CutBeside, CutJson, SURFACE_PARQUET};
+use mtsim::report::cut::{CutJson, SURFACE_PARQUET};
 use mtsim::study::fit::{FitOptions, MeasuredTrace};
 use mtsim::study::param::{write_outputs, Study};
 use mtsim::study::simulate::TRACE_PARQUET_FILE;
@@ -107,14 +107,14 @@ fn cut<'py>(
             commanded,
             direction: None,
         };
-        let cut = mtsim::study::cut::run_cut(&scenario, options, budget, &|_| {})?;
-        let figures = cut.surface.figures();
         let dir = Scratch::begin(output.as_deref())?;
-        let beside = CutBeside {
-            budget: cut.budget.as_ref(),
-            ballbar_um: cut.ballbar_um.as_deref(),
-        };
-        write_cut_files(dir.path(), "Cut cone", &cut.surface, &figures, beside)?;
+        let (cut, figures) = mtsim::study::cut::cut_into(
+            &scenario,
+            options,
+            budget,
+            (dir.path(), "Cut cone"),
+            &|_| {},
+        )?;
         let batches = Batches::read_parquet(&dir.path().join(SURFACE_PARQUET))?;
         let doc = CutJson {
             figures,

@@ -102,6 +102,11 @@ impl Envelope {
         }
     }
 
+    /// The cutter's least clearance per column² away from its own θ, um (κ Δθ²).
+    pub fn clearance_per_column2_um(&self) -> f64 {
+        self.clearance_per_column2_um
+    }
+
     pub fn column_count(&self) -> usize {
         self.columns.len()
     }

@@ -14,18 +14,23 @@
 //! diameter error `2 (r₀ − ρ(z))`. The cone angle error is the change of the half apex angle
 //! the least-squares radii give across the heights: `atan(−dr₀/dz) − α` with `dr₀/dz` the
 //! slope of the line fitted to (z, r₀). A reversal mark is the step of d across the
-//! reversal's θ: lines fitted to d over [`MARK_FIT_DEG`] either side, leaving out
-//! [`MARK_GAP_DEG`] about it, each taken at the reversal (as the ball bar's step).
+//! reversal's θ, read outside the whole take-up of the axis's lost motion
+//! ([`super::take_up`]): lines fitted to d over [`MARK_FIT_DEG`] on the nearest windows
+//! either side where the axis's lost motion has settled (at least [`MARK_GAP_DEG`] from the
+//! reversal, and the cutter's reach past the take-up), each taken at the reversal (as the
+//! ball bar's step), after less before in the direction of travel. A reversal across which
+//! the axis's lost motion does not swing leaves no mark.
 
 use serde::{Deserialize, Serialize};
 
 use super::envelope::Envelope;
 use super::geometry::CutGeometry;
+use super::take_up::{settled_windows, swing, LostMotion, TakeUp, LEVEL_DEG};
 use crate::Axis;
 
-/// Each side's fit of a reversal mark spans this much θ, deg.
+/// Each side's fit of a reversal mark spans this much θ, deg, where the lost motion has settled.
 pub const MARK_FIT_DEG: f64 = 3.0;
-/// θ left out either side of the reversal, deg: the transition itself.
+/// θ left out either side of the reversal at least, deg (more where the take-up is longer).
 pub const MARK_GAP_DEG: f64 = 0.3;
 
 /// The least-squares circle at one height.
@@ -48,12 +53,31 @@ pub struct HeightFigures {
 /// The step a reversal leaves on the surface.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Mark {
+    /// The axis that reverses there, or the axes joined by `+` (X, Y, Z, A, B, C order)
+    /// where several reverse within [`COINCIDENT_DEG`].
     pub axis: String,
     pub theta_deg: f64,
     /// d after the reversal less d before it (in the cut's direction of travel), um, at
     /// `z_mm`.
     pub step_um: f64,
     pub z_mm: f64,
+    /// Each named axis's lost motion taken up across the reversal, in the order of `axis`:
+    /// µm for a linear axis, arcsec for a rotary one (`take_up::LostMotion`).
+    pub lost_motion_um_or_arcsec: Vec<f64>,
+    /// θ where the surface's level before the reversal was last read and where the level
+    /// after it was first read, deg, in the direction of travel: the take-up between them.
+    pub take_up_deg: [f64; 2],
+}
+
+impl Mark {
+    /// Each named axis's lost motion, 3 decimals, comma-separated (µm, rotary arcsec).
+    pub fn lost_motion_text(&self) -> String {
+        self.lost_motion_um_or_arcsec
+            .iter()
+            .map(|v| format!("{v:.3}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 }
 
 /// A profile's least-squares circle (limaçon form): `(r₀, a, b)` and the peak-to-valley
@@ -160,18 +184,26 @@ fn line_fit(points: &[(f64, f64)]) -> Option<(f64, f64)> {
     (sxx > 0.0).then(|| (my, sxy / sxx))
 }
 
-/// The step of row `i` across `theta_deg`, um, `sense` +1 when the cut ran to higher θ;
-/// None when a side has fewer than 3 cut points.
-pub fn step_at(envelope: &Envelope, i: usize, theta_deg: f64, sense: f64) -> Option<f64> {
+/// The step of row `i` of `envelope` across the reversal at `theta_deg` whose take-up is
+/// `take_up` (columns along the direction of travel `sense` from column `r`), um: a line
+/// fitted to d over each settled window, both taken at the reversal, after less before.
+/// None when a window has fewer than 3 cut points.
+fn step_across(
+    envelope: &Envelope,
+    i: usize,
+    theta_deg: f64,
+    (r, sense): (i64, i64),
+    take_up: &TakeUp,
+) -> Option<f64> {
     let count = envelope.column_count() as i64;
-    let step = envelope.step_deg;
-    let side = |from: f64, to: f64| -> Option<f64> {
-        let lo = ((theta_deg + from) / step).ceil() as i64;
-        let hi = ((theta_deg + to) / step).floor() as i64;
-        let points: Vec<(f64, f64)> = (lo..=hi)
-            .filter_map(|j| {
-                let d = envelope.depth_um(j.rem_euclid(count) as usize, i);
-                d.is_finite().then(|| (j as f64 * step - theta_deg, d))
+    // The reversal's own θ, in columns along the travel from column r.
+    let t0 = sense as f64 * (theta_deg / envelope.step_deg - r as f64);
+    let level = |(from, to): (i64, i64)| -> Option<f64> {
+        let points: Vec<(f64, f64)> = (from..=to)
+            .filter_map(|t| {
+                let j = (r + sense * t).rem_euclid(count) as usize;
+                let d = envelope.depth_um(j, i);
+                d.is_finite().then_some((t as f64 - t0, d))
             })
             .collect();
         if points.len() < 3 {
@@ -181,34 +213,152 @@ pub fn step_at(envelope: &Envelope, i: usize, theta_deg: f64, sense: f64) -> Opt
         let (at_mean, slope) = line_fit(&points)?;
         Some(at_mean - slope * mx)
     };
-    let below = side(-MARK_FIT_DEG, -MARK_GAP_DEG)?;
-    let above = side(MARK_GAP_DEG, MARK_FIT_DEG)?;
-    Some(sense * (above - below))
+    Some(level(take_up.after)? - level(take_up.before)?)
 }
 
-/// Every reversal's mark at row `i`.
+/// What the marks are read with: each axis's lost motion along the cut, the cutter's
+/// clearance per column² (um, its reach past a take-up) and a length that turns a rotary
+/// axis's lost motion into um on the surface (the bar's length L, mm).
+pub struct MarkInputs<'a> {
+    pub lost_motion: &'a LostMotion,
+    pub clearance_per_column2_um: f64,
+    pub lever_mm: f64,
+}
+
+/// Reversals of different axes closer than this, deg, make one mark: their take-ups overlap,
+/// and the surface shows one step.
+pub const COINCIDENT_DEG: f64 = 2.0;
+
+/// One axis's reversal that takes up lost motion: its column, its take-up and its swing.
+struct Reversal {
+    axis: Axis,
+    theta_deg: f64,
+    r: i64,
+    take_up: TakeUp,
+}
+
+/// Every reversal's mark at row `i`, `sense` +1 when the cut ran to higher θ: the reversals
+/// whose axis's lost motion swings across them ([`swing`]), each the step of d between the
+/// levels either side of the whole take-up ([`settled_windows`]). Reversals of several axes
+/// within [`COINCIDENT_DEG`] make one mark, named by all of them, read outside all their
+/// take-ups.
 pub fn marks(
     envelope: &Envelope,
     i: usize,
     reversals: &[(Axis, Vec<f64>)],
     sense: f64,
+    inputs: &MarkInputs<'_>,
 ) -> Vec<Mark> {
-    let mut marks: Vec<Mark> = reversals
-        .iter()
-        .flat_map(|(axis, angles)| angles.iter().map(move |&theta| (*axis, theta)))
-        .filter_map(|(axis, theta_deg)| {
-            step_at(envelope, i, theta_deg, sense).map(|step_um| Mark {
-                axis: axis.to_string(),
-                theta_deg,
-                step_um,
-                z_mm: envelope.rows[i].z_mm,
-            })
-        })
-        .collect();
-    marks.sort_by(|a, b| {
-        a.theta_deg
-            .total_cmp(&b.theta_deg)
-            .then(a.axis.cmp(&b.axis))
-    });
+    let step = envelope.step_deg;
+    let columns = |deg: f64| (deg / step).round() as i64;
+    let sense = if sense < 0.0 { -1 } else { 1 };
+    let window = columns(MARK_FIT_DEG);
+    let mut found: Vec<Reversal> = Vec::new();
+    for (axis, angles) in reversals {
+        for &theta_deg in angles {
+            // Half the way to the axis's nearest other reversal, at most LEVEL_DEG.
+            let nearest = angles
+                .iter()
+                .filter(|&&o| o != theta_deg)
+                .map(|&o| {
+                    let d = (o - theta_deg).rem_euclid(360.0);
+                    d.min(360.0 - d)
+                })
+                .fold(2.0 * LEVEL_DEG, f64::min);
+            let level_columns = columns(0.5 * nearest);
+            let r = columns(theta_deg);
+            let Some(swing) = swing(inputs.lost_motion, *axis, r, sense, level_columns) else {
+                continue;
+            };
+            // The cutter's reach past a take-up of this size: κ m² = the step's bound.
+            let lever_um = if axis.is_rotary() {
+                1e3 * inputs.lever_mm * std::f64::consts::PI / 180.0
+            } else {
+                1e3
+            };
+            let margin = match inputs.clearance_per_column2_um {
+                k if k > 0.0 => (swing.abs() * lever_um / k).sqrt().ceil() as i64,
+                _ => 0,
+            };
+            let windows = (columns(MARK_GAP_DEG).max(1), window, margin);
+            let lost = inputs.lost_motion;
+            if let Some(take_up) =
+                settled_windows(lost, *axis, (r, sense), (level_columns, swing), windows)
+            {
+                found.push(Reversal {
+                    axis: *axis,
+                    theta_deg,
+                    r,
+                    take_up,
+                });
+            }
+        }
+    }
+    found.sort_by(|a, b| a.theta_deg.total_cmp(&b.theta_deg));
+    let mut marks = Vec::new();
+    for group in coincident(&found) {
+        let first = &found[group[0]];
+        let r = first.r;
+        // Each take-up's windows about the group's column: the levels are read outside all.
+        let before_end = group
+            .iter()
+            .map(|&k| found[k].take_up.before.1 + sense * (found[k].r - r))
+            .min()
+            .unwrap_or(0);
+        let after_start = group
+            .iter()
+            .map(|&k| found[k].take_up.after.0 + sense * (found[k].r - r))
+            .max()
+            .unwrap_or(0);
+        let take_up = TakeUp {
+            before: (before_end - window, before_end),
+            after: (after_start, after_start + window),
+            swing: first.take_up.swing,
+        };
+        let Some(step_um) = step_across(envelope, i, first.theta_deg, (r, sense), &take_up) else {
+            continue;
+        };
+        let theta_at = |t: i64| ((r + sense * t) as f64 * step).rem_euclid(360.0);
+        let mut axes: Vec<&Reversal> = group.iter().map(|&k| &found[k]).collect();
+        axes.sort_by_key(|v| v.axis as usize);
+        marks.push(Mark {
+            axis: axes
+                .iter()
+                .map(|v| v.axis.to_string())
+                .collect::<Vec<_>>()
+                .join("+"),
+            theta_deg: first.theta_deg,
+            step_um,
+            z_mm: envelope.rows[i].z_mm,
+            lost_motion_um_or_arcsec: axes
+                .iter()
+                .map(|v| v.take_up.swing.abs() * if v.axis.is_rotary() { 3600.0 } else { 1e3 })
+                .collect(),
+            take_up_deg: [theta_at(before_end), theta_at(after_start)],
+        });
+    }
     marks
+}
+
+/// The reversals of `found` (sorted by θ) in groups whose neighbours lie within
+/// [`COINCIDENT_DEG`] (round the circle too), as indices.
+fn coincident(found: &[Reversal]) -> Vec<Vec<usize>> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (k, v) in found.iter().enumerate() {
+        match groups.last_mut() {
+            Some(g) if v.theta_deg - found[*g.last().unwrap()].theta_deg <= COINCIDENT_DEG => {
+                g.push(k)
+            }
+            _ => groups.push(vec![k]),
+        }
+    }
+    // The last group joins the first across 360°.
+    if groups.len() > 1 {
+        let (first, last) = (groups[0][0], *groups.last().unwrap().last().unwrap());
+        if found[first].theta_deg + 360.0 - found[last].theta_deg <= COINCIDENT_DEG {
+            let tail = groups.pop().unwrap();
+            groups[0].splice(0..0, tail);
+        }
+    }
+    groups
 }

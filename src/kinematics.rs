@@ -87,6 +87,7 @@ pub mod layout;
 pub mod layout_chain;
 pub mod linear_errors;
 pub mod location;
+pub mod pole;
 
 pub use axis_set::AxisSet;
 pub use chain::{Chain, Link, Side, ToolPose};
@@ -94,6 +95,7 @@ pub use chain_inverse::unwrap_near;
 pub use cradle_table::CradleTablePoses;
 pub use layout::{Branch, Layout, RotarySinCos};
 pub use location::{AxisLine, ErrorPart, LocationErrors, LocationParam};
+pub use pole::{Pole, DEFAULT_POLE_TOLERANCE_DEG};
 
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Vector3};
 
@@ -117,6 +119,8 @@ pub struct Kinematics {
     /// chain (xyzabc, xyuv, xyzabcuvw). A named layout's closed forms
     /// ([`Layout::rotation_matrix`], [`Layout::solve_rotaries`]) are this chain's fast path.
     nominal: Option<Chain>,
+    /// Within this angle of the pole (deg) the inner rotary holds ([`pole`]).
+    pub pole_tolerance_deg: f64,
 }
 
 impl Kinematics {
@@ -127,6 +131,7 @@ impl Kinematics {
             location_errors: LocationErrors::default(),
             general: None,
             nominal: layout_chain::of_layout(layout, pivot_mm),
+            pole_tolerance_deg: DEFAULT_POLE_TOLERANCE_DEG,
         }
     }
 
@@ -141,6 +146,7 @@ impl Kinematics {
                 location_errors: LocationErrors::default(),
                 general: Some(chain),
                 nominal: Some(chain),
+                pole_tolerance_deg: DEFAULT_POLE_TOLERANCE_DEG,
             },
         }
     }
@@ -255,6 +261,38 @@ impl Kinematics {
             actual.with_line(link.axis, direction, point)
         });
         Some(actual.with_components(errors.components()))
+    }
+
+    /// The same machine with its pole tolerance `deg` (machine file `[kinematics]`).
+    pub fn with_pole_tolerance(mut self, deg: f64) -> Kinematics {
+        self.pole_tolerance_deg = deg;
+        self
+    }
+
+    /// The pole of the nominal chain when it has two rotaries ([`Pole`]).
+    pub fn pole(&self) -> Option<Pole> {
+        self.nominal.as_ref().and_then(Pole::of)
+    }
+
+    /// Axis positions `q` with the linear axes set so that the tool tip (tool length 0)
+    /// meets the workpiece point `tip`, the rotaries as given: `pivot + R(q) tip` on a
+    /// named layout, [`chain_inverse::solve_linear`] on a general chain (unchanged where it
+    /// cannot place the tip).
+    pub fn with_tip_at(&self, tip: &Point3<f64>, q: &AxisVec) -> AxisVec {
+        let mut out = *q;
+        if let Some(chain) = &self.general {
+            let pose = ToolPose {
+                tip: *tip,
+                axis: Vector3::z(),
+            };
+            if chain_inverse::solve_linear(chain, &pose, 0.0, &mut out).is_err() {
+                return *q;
+            }
+            return out;
+        }
+        let m = self.table_to_machine(q, tip);
+        (out[Axis::X], out[Axis::Y], out[Axis::Z]) = (m.x, m.y, m.z);
+        out
     }
 
     /// The same machine with location errors on its rotary axes.

@@ -20,7 +20,7 @@ pub fn run(path: &Path, output: Option<&Path>, g93: bool, tcp: bool) -> Result<i
             "--g93 with --tcp (or [program.cone] inverse_time with tcp): the G43.4 program feeds the tool tip in mm/min (G94) and writes no G93; choose one",
         ));
     }
-    let cone_path = ConePath::new(cone, &scenario.machine);
+    let cone_path = ConePath::new(cone, &scenario.machine).refusing_a_swing(path)?;
     let (text, _) = write_program(&cone_path, &scenario.machine.name, &nc);
     match output {
         Some(out) => {

@@ -16,6 +16,7 @@ use crate::input::exact;
 use crate::input::geometry_errors::{self, GeometryErrors};
 use crate::input::scene::{SceneConfig, ToolConfig};
 use crate::input::toml_text::{self, value_error};
+use crate::kinematics::pole::MAX_POLE_TOLERANCE_DEG;
 use crate::kinematics::{Chain, Kinematics, Layout, Link};
 use crate::Axis;
 
@@ -59,6 +60,11 @@ pub struct ChainFile {
     /// Unit vector from the tool tip toward the spindle, all axes at 0.
     #[serde(default = "default_tool_direction", deserialize_with = "exact::array")]
     pub tool_direction: [f64; 3],
+    /// Within this angle of the pole the inner rotary holds, deg (the kinematic-chains
+    /// spec, "Poles, as controls handle them"); default
+    /// [`crate::kinematics::DEFAULT_POLE_TOLERANCE_DEG`].
+    #[serde(default)]
+    pub pole_tolerance_deg: Option<f64>,
 }
 
 fn default_tool_direction() -> [f64; 3] {
@@ -549,6 +555,7 @@ fn kinematics_of(path: &Path, text: &str, file: &MachineFile) -> Result<Kinemati
         }
         KinematicsSpec::Chain(chain) => chain,
     };
+    let tolerance = pole_tolerance_deg(path, text, chain.pole_tolerance_deg)?;
     if file.pivot_mm != [0.0; 3] {
         return Err(value_error(
             path,
@@ -613,7 +620,27 @@ fn kinematics_of(path: &Path, text: &str, file: &MachineFile) -> Result<Kinemati
         Vector3::from(chain.tool_direction),
     )
     .map_err(|e| value_error(path, text, "kinematics", "head", e.0))?;
-    Ok(Kinematics::from_chain(chain))
+    Ok(Kinematics::from_chain(chain).with_pole_tolerance(tolerance))
+}
+
+/// `[kinematics] pole_tolerance_deg`, checked once: finite, above 0, at most
+/// [`MAX_POLE_TOLERANCE_DEG`]; the default when not given.
+fn pole_tolerance_deg(path: &Path, text: &str, given: Option<f64>) -> Result<f64> {
+    let Some(deg) = given else {
+        return Ok(crate::kinematics::DEFAULT_POLE_TOLERANCE_DEG);
+    };
+    if deg.is_finite() && deg > 0.0 && deg <= MAX_POLE_TOLERANCE_DEG {
+        return Ok(deg);
+    }
+    Err(value_error(
+        path,
+        text,
+        "kinematics",
+        "pole_tolerance_deg",
+        format!(
+            "must be an angle in deg above 0 and at most {MAX_POLE_TOLERANCE_DEG} (the tool direction may deviate by it near the pole), got {deg}"
+        ),
+    ))
 }
 
 fn axis_list(layout: Layout) -> String {

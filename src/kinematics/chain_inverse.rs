@@ -316,10 +316,12 @@ fn independent(chosen: &[(Axis, Vector3<f64>)], col: &Vector3<f64>) -> bool {
 /// [`PoleWatch`](super::chain_events::PoleWatch)).
 #[derive(Clone, Debug, PartialEq)]
 pub enum PathEvent {
-    /// The tool direction passed a pole at `line`: `axis` was free there and swings by
-    /// `swing_deg` on the way to the next pose (a C swing at the pole).
+    /// The tool direction passed a pole from `line` to `last_line` (block ends within the
+    /// pole tolerance): `axis` was free there and moves by `swing_deg` from the block end
+    /// before the passage to the one after (a C swing at the pole, or C holding).
     Pole {
         line: usize,
+        last_line: usize,
         axis: Axis,
         swing_deg: f64,
     },

@@ -9,29 +9,39 @@ use std::fmt::Write as _;
 use crate::input::machine::Machine;
 use crate::input::program::{ConePoses, ConeTest, MeasuredLines, NcOptions};
 use crate::kinematics::{Branch, Kinematics};
+use crate::program::cone_pole::PolePassage;
 use crate::program::{Feed, Motion, Move};
-use crate::AxisVec;
+use crate::{Axis, AxisVec};
 
-/// The cone path on one machine: axis positions as functions of θ on one IK branch.
+/// The cone path on one machine: axis positions as functions of θ on one IK branch, or,
+/// through the pole, on the other branch after it ([`PolePassage`]).
 #[derive(Clone, Copy, Debug)]
 pub struct ConePath {
     pub cone: ConeTest,
     pub kinematics: Kinematics,
+    /// The IK branch at θ = 0.
     pub branch: Branch,
+    /// Where the path passes within the pole tolerance of the pole, if it does.
+    pub passage: Option<PolePassage>,
     /// `cone`'s constants, for its poses.
     poses: ConePoses,
 }
 
 impl ConePath {
     /// Chooses the IK branch: the spec's (tilt >= 0) unless the machine's tilt limits
-    /// exclude it and the other branch fits.
+    /// exclude it and the other branch fits. Through the pole, the path goes on the other
+    /// branch after it when the limits allow (the inner rotary holds), else it keeps its
+    /// branch (the inner rotary swings: [`ConePath::pole_swing`]).
     pub fn new(cone: ConeTest, machine: &Machine) -> ConePath {
         let kinematics = machine.kinematics;
-        let mut path = ConePath {
+        let poses = cone.poses();
+        let passage = PolePassage::find(&poses, &kinematics);
+        let path = ConePath {
             cone,
             kinematics,
             branch: Branch::Primary,
-            poses: cone.poses(),
+            passage,
+            poses,
         };
         // The rotaries the branch must keep within travel: a general chain's all, else the tilt.
         // (A named layout's tilt is a function of the tool axis alone: the same whichever
@@ -46,33 +56,103 @@ impl ConePath {
                     .all(|&a| machine.axis(a).within_travel(q[a]))
             })
         };
-        if !fits(&path) {
-            let other = ConePath {
-                branch: Branch::Secondary,
-                ..path
-            };
-            if fits(&other) {
-                path = other;
-            }
+        let with = |branch: Branch, flip: bool| ConePath {
+            branch,
+            passage: passage.map(|p| PolePassage { flip, ..p }),
+            ..path
+        };
+        let mut candidates = vec![with(Branch::Primary, true), with(Branch::Secondary, true)];
+        if passage.is_some() {
+            candidates.extend([with(Branch::Primary, false), with(Branch::Secondary, false)]);
         }
-        path
+        candidates.into_iter().find(fits).unwrap_or(path)
+    }
+
+    /// The pole passage the path cannot take on the other branch (the travel limits forbid
+    /// it), with the inner rotary's swing there, deg.
+    pub fn pole_swing(&self) -> Option<(PolePassage, f64)> {
+        let p = self.passage.filter(|p| !p.flip)?;
+        let at = |t: f64, b: Branch, prev: &AxisVec| self.on_branch(t, b, prev);
+        Some((p, p.swing_deg(&at, self.branch)))
+    }
+
+    /// This path, or a refusal naming the pole when it passes it with the inner rotary
+    /// swinging ([`ConePath::pole_swing`]): a joint-space block would move the linear axes
+    /// in a straight line while the rotary turns, and the tool tip would leave the path.
+    pub fn refusing_a_swing(
+        self,
+        scenario_path: &std::path::Path,
+    ) -> crate::error::Result<ConePath> {
+        let Some((p, swing)) = self.pole_swing() else {
+            return Ok(self);
+        };
+        Err(crate::error::Error::invalid(
+            scenario_path,
+            format!(
+                "[program.cone] passes the pole of {} (tool along {}, {:.4} deg from it at θ = {:.3} deg) and no IK branch within the travel limits avoids the swing: {} would turn {:.3} deg with the tool standing on the pole",
+                p.pole.outer,
+                p.pole.inner,
+                p.angle_deg,
+                p.theta_pole.to_degrees(),
+                p.pole.inner,
+                swing
+            ),
+        )
+        .with_help(format!(
+            "a cone whose tool direction keeps more than the pole tolerance ({} deg) from the pole, or {} travel on both sides of 0, lets the test run",
+            self.kinematics.pole_tolerance_deg, p.pole.outer
+        )))
     }
 
     /// Axis positions at `theta_rad`, with C unwrapped nearest `reference_c_deg`.
     pub fn axes_near(&self, theta_rad: f64, reference_c_deg: f64) -> AxisVec {
-        self.kinematics
-            .inverse(&self.poses.pose(theta_rad), self.branch, reference_c_deg)
+        if self.passage.is_none() {
+            return self.kinematics.inverse(
+                &self.poses.pose(theta_rad),
+                self.branch,
+                reference_c_deg,
+            );
+        }
+        // As `Kinematics::inverse` unwraps: every rotary near the reference.
+        let mut previous = AxisVec::ZERO;
+        for axis in [Axis::A, Axis::B, Axis::C] {
+            previous[axis] = reference_c_deg;
+        }
+        self.axes_after(theta_rad, &previous)
     }
 
     /// Axis positions at `theta_rad`, each rotary unwrapped nearest its value in
     /// `previous` ([`Kinematics::inverse_after`]).
     pub fn axes_after(&self, theta_rad: f64, previous: &AxisVec) -> AxisVec {
+        let Some(p) = self.passage else {
+            return self.on_branch(theta_rad, self.branch, previous);
+        };
+        let at = |t: f64, b: Branch, prev: &AxisVec| self.on_branch(t, b, prev);
+        match p.zone_of(theta_rad) {
+            Some(zone) => p.axes_in_zone(
+                &self.kinematics,
+                &self.poses,
+                zone,
+                theta_rad,
+                &at,
+                self.branch,
+                previous,
+            ),
+            None => self.on_branch(theta_rad, p.branch_at(theta_rad, self.branch), previous),
+        }
+    }
+
+    /// Axis positions at `theta_rad` on `branch`, each rotary unwrapped nearest `previous`.
+    fn on_branch(&self, theta_rad: f64, branch: Branch, previous: &AxisVec) -> AxisVec {
         self.kinematics
-            .inverse_after(&self.poses.pose(theta_rad), self.branch, previous)
+            .inverse_after(&self.poses.pose(theta_rad), branch, previous)
     }
 
     /// Axis positions at θ = 0, with C in the spec's atan2 range.
     pub fn start(&self) -> AxisVec {
+        if self.passage.is_some() {
+            return self.axes_after(0.0, &AxisVec::ZERO);
+        }
         self.kinematics
             .inverse_first(&self.poses.pose(0.0), self.branch)
     }

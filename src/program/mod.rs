@@ -4,6 +4,7 @@
 
 pub mod circle;
 pub mod cone;
+pub mod cone_pole;
 pub mod file;
 pub mod moves;
 pub mod tests;

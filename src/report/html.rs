@@ -467,6 +467,14 @@ fn summary_section(folder: &RunFolder) -> String {
         b.hysteresis_um
             .map_or("– (one direction)".to_string(), |h| format!("{h:.2} µm")),
     );
+    for pole in &s.poles {
+        // The pole is named before the figures are read (a swing there makes G).
+        let _ = writeln!(
+            out,
+            "<p class=\"warning\" data-warning=\"pole\">Pole passed: {}</p>",
+            esc(pole)
+        );
+    }
     if let Some(w) = super::circle_figures::feed_warning(b) {
         let _ = writeln!(
             out,

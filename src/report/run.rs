@@ -56,6 +56,9 @@ pub struct RunSummary {
     /// folder.
     #[serde(default)]
     pub diagnostics: Option<RunDiagnostics>,
+    /// The program's pole passages (their messages); empty when it passes none.
+    #[serde(default)]
+    pub poles: Vec<String>,
 }
 
 /// The part of `summary.json`'s `diagnostics` the report reads.

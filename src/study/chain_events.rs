@@ -20,15 +20,23 @@ pub struct ChainEvent {
 }
 
 impl ChainEvent {
-    /// `{"line", "kind": "pole"|"switch", "axis", "swing_deg" | "from", "to", "message"}`.
+    /// `{"line", "kind": "pole"|"switch", "axis", "swing_deg" | "from", "to", "message"}`,
+    /// and `last_line` for a pole passage over more than one block end.
     pub fn to_json(&self) -> Value {
         match &self.event {
             PathEvent::Pole {
                 line,
+                last_line,
                 axis,
                 swing_deg,
-            } => json!({"line": line, "kind": "pole", "axis": axis.to_string(),
-                        "swing_deg": swing_deg, "message": self.message}),
+            } => {
+                let mut v = json!({"line": line, "kind": "pole", "axis": axis.to_string(),
+                        "swing_deg": swing_deg, "message": self.message});
+                if last_line != line {
+                    v["last_line"] = json!(last_line);
+                }
+                v
+            }
             PathEvent::Switch { line, from, to } => json!({"line": line, "kind": "switch",
                         "from": from, "to": to, "message": self.message}),
         }
@@ -43,7 +51,7 @@ pub fn chain_events(scenario: &Scenario) -> Result<Option<Vec<ChainEvent>>> {
     let Some(&chain) = kin.own_chain() else {
         return Ok(None);
     };
-    let Some(mut watch) = PoleWatch::new(&chain) else {
+    let Some(mut watch) = PoleWatch::new(&chain, kin.pole_tolerance_deg) else {
         return Ok(None);
     };
     let run = crate::program::scenario_run(scenario, Direction::Ccw, scenario.simulate.lead_deg)?;

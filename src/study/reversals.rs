@@ -265,7 +265,10 @@ pub fn analyse_scenario(scenario: &Scenario) -> Result<Analysis> {
     let test = test_of(scenario);
     let machine = &scenario.machine;
     if let Some((cone, nc)) = test.generated_cone() {
-        return Ok(analyse_cone(&ConePath::new(*cone, machine), nc.feed_mm_min));
+        let path = ConePath::new(*cone, machine);
+        if is_smooth(&path) {
+            return Ok(analyse_cone(&path, nc.feed_mm_min));
+        }
     }
     if let Some(circle) = test.circle() {
         return Ok(analyse_circle(circle, machine.axes()));
@@ -287,9 +290,37 @@ pub fn has_closed_form(test: &dyn TestProgram) -> bool {
 /// for a generated cone without the ranges and peak speeds.
 pub fn scenario_reversals_deg(scenario: &Scenario) -> Result<Vec<(Axis, Vec<f64>)>> {
     match test_of(scenario).generated_cone() {
-        Some((cone, _)) => Ok(cone_reversals_deg(&ConePath::new(*cone, &scenario.machine))),
-        None => Ok(reversals_deg(analyse_scenario(scenario)?)),
+        Some((cone, _)) if is_smooth(&ConePath::new(*cone, &scenario.machine)) => {
+            Ok(cone_reversals_deg(&ConePath::new(*cone, &scenario.machine)))
+        }
+        _ => Ok(reversals_deg(analyse_scenario(scenario)?)),
     }
+}
+
+/// Largest move of a rotary between two points of the 0.5-deg grid on a smooth cone path,
+/// deg: a 15-deg cone 5 deg from the pole turns C by about 1.5 deg there.
+const SMOOTH_STEP_DEG: f64 = 5.0;
+
+/// Whether the exact analysis of [`analyse_cone`] holds for `path`: every axis a smooth
+/// function of θ (extremes at the roots of dq/dθ, speeds from it). Not so where the path
+/// passes the pole (its rotaries interpolated across the pole's zone, or on the other
+/// branch after it) or turns a rotary by more than [`SMOOTH_STEP_DEG`] between grid points
+/// (the pole passed just outside its tolerance, a swing): then the written program is
+/// analysed, block by block ([`analyse_moves`]).
+pub fn is_smooth(path: &ConePath) -> bool {
+    if path.passage.is_some() {
+        return false;
+    }
+    let mut previous: Option<AxisVec> = None;
+    path.sampled(0.0, TAU, GRID_STEPS).all(|(_, q)| {
+        let smooth = previous.is_none_or(|p| {
+            [Axis::A, Axis::B, Axis::C]
+                .iter()
+                .all(|&a| (q[a] - p[a]).abs() <= SMOOTH_STEP_DEG)
+        });
+        previous = Some(q);
+        smooth && q.0.iter().all(|v| v.is_finite())
+    })
 }
 
 /// Each axis's reversal angles of an analysis, deg.

@@ -89,6 +89,11 @@ pub struct SimulationSummary {
     /// by name; left out when none applies.
     #[serde(skip_serializing_if = "BTreeMap::is_empty", default)]
     pub measurements: BTreeMap<String, serde_json::Value>,
+    /// The pole passages of the program on a chain with two rotaries, each once with its
+    /// line(s) and the inner rotary's move (`study::chain_events`); left out when the
+    /// program passes none.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub poles: Vec<String>,
 }
 
 /// Files a simulation writes into its output folder.
@@ -702,6 +707,7 @@ pub fn simulate_beside(
             ..lead
         }),
         measurements,
+        poles: pole_passages(scenario)?,
     };
     let json = serde_json::to_string_pretty(&summary).expect("plain data serializes");
     crate::report::write_atomic(&out_dir.join(SUMMARY_FILE), format!("{json}\n").as_bytes())?;
@@ -926,4 +932,20 @@ fn plot_title(scenario: &Scenario) -> String {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     test_of(scenario).title(&name)
+}
+
+/// The messages of the program's pole passages ([`crate::study::chain_events`]), for the
+/// summary and the report.
+fn pole_passages(scenario: &Scenario) -> Result<Vec<String>> {
+    let events = crate::study::chain_events::chain_events(scenario)?.unwrap_or_default();
+    Ok(events
+        .into_iter()
+        .filter(|e| {
+            matches!(
+                e.event,
+                crate::kinematics::chain_inverse::PathEvent::Pole { .. }
+            )
+        })
+        .map(|e| e.message)
+        .collect())
 }

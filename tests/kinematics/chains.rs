@@ -292,7 +292,7 @@ fn at_origin(directions: &[(usize, Vector3<f64>)]) -> Vec<(usize, ToolPose)> {
 /// axes at 0), and the events the pole watch finds on them.
 fn follow(m: &Machine, poses: &[(usize, ToolPose)]) -> (Vec<AxisVec>, Vec<PathEvent>) {
     let chain = chain_of(m);
-    let mut watch = PoleWatch::new(&chain).expect("two rotaries");
+    let mut watch = PoleWatch::new(&chain, 0.1).expect("two rotaries");
     let mut joints: Vec<AxisVec> = Vec::new();
     for (line, pose) in poses {
         let previous = joints.last().copied().unwrap_or(AxisVec::ZERO);
@@ -321,10 +321,11 @@ fn a_path_through_the_pole_reports_the_c_swing_and_a_path_over_it_a_switch() {
     match events[0] {
         PathEvent::Pole {
             line,
+            last_line,
             axis,
             swing_deg,
         } => {
-            assert_eq!((line, axis), (2, Axis::C));
+            assert_eq!((line, last_line, axis), (2, 2, Axis::C));
             assert!((swing_deg.abs() - 90.0).abs() < 1e-9, "{swing_deg}");
         }
         ref e => panic!("{e:?}"),

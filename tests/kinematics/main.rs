@@ -13,6 +13,7 @@ mod fast_path;
 mod geometric_errors;
 mod linear_errors;
 mod linuxcnc_samples;
+mod pole_passage;
 mod reading;
 mod round_trips;
 mod trivial;

@@ -64,7 +64,7 @@ impl TestProgram for Cone<'_> {
         lead_deg: f64,
     ) -> Result<Run<'static>> {
         let machine = &scenario.machine;
-        let path = ConePath::new(*self.cone, machine);
+        let path = ConePath::new(*self.cone, machine).refusing_a_swing(&scenario.path)?;
         let options = NcOptions {
             lead_deg,
             clockwise: direction == Direction::Cw,

@@ -12,3 +12,4 @@ mod prism;
 mod scene;
 mod streamed;
 mod tool_change;
+mod views;

@@ -128,7 +128,7 @@ fn max5_places_the_tip_as_maxkins_does() {
 }
 
 /// `mtsim blocks`' machine coordinates (columns `cols`) of each move of `moves` under TCP.
-fn tcp_joints(machine: &str, moves: &[String], cols: &[&str]) -> Vec<Vec<f64>> {
+pub(crate) fn tcp_joints(machine: &str, moves: &[String], cols: &[&str]) -> Vec<Vec<f64>> {
     let dir = scratch(
         "linuxcnc-formulas",
         Path::new(machine).file_stem().unwrap().to_str().unwrap(),

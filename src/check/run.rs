@@ -14,6 +14,7 @@ use std::rc::Rc;
 use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::check::limits::{AxisUsage, LimitsMonitor, Violation, ViolationKind};
+use crate::check::scene::snapshot::{CollisionViews, TipPath};
 use crate::check::scene::{
     DepthTolerance, EngagementSummary, EventKind, Scene, SceneMonitor, ToolConfig,
 };
@@ -40,6 +41,9 @@ pub struct CheckOptions {
     pub programmed: bool,
     /// Near-miss clearance, mm; the scenario's (or the machine's) when `None`.
     pub near_miss_mm: Option<f64>,
+    /// Keep the scene at the deepest sample of this many of the deepest collisions, and the
+    /// tool tip's path, for a picture ([`CheckReport::views`]); 0: none (the default).
+    pub collision_poses: usize,
 }
 
 /// What `check` found.
@@ -81,6 +85,10 @@ pub struct CheckReport {
     /// there is none, and at programmed timing).
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub feed_reductions: Vec<FeedReduction>,
+    /// The scene at the deepest collisions and the tool tip's path, for `check --html`
+    /// (only with [`CheckOptions::collision_poses`] and a collision scene; not in JSON).
+    #[serde(skip)]
+    pub views: Option<CollisionViews>,
 }
 
 /// How `check` timed its samples.
@@ -158,6 +166,8 @@ struct SceneSink {
     /// The scenario's `[tool]`: tool 0 and tools not in the table.
     reference: ToolConfig,
     active: u32,
+    /// The tool tip's path, when a picture is asked for.
+    path: Option<TipPath>,
     /// The block index whose tool changes were applied last (`u64::MAX`: none yet). Move
     /// `k` is read before any sample of block `k`, so no change at or before `k` can arrive
     /// once the samples of `k` have begun: the queue is looked at once per block.
@@ -172,6 +182,11 @@ impl Sink for SceneSink {
             self.apply_tool_changes(s.block_index);
         }
         self.monitor.push_at(s.time_s, s.line, &s.actual);
+        if let Some(path) = self.path.as_mut() {
+            if path.wants_next() {
+                path.push(self.monitor.tip_mm(&s.actual));
+            }
+        }
         Ok(())
     }
 }
@@ -304,34 +319,7 @@ pub fn check_observed(
     }
     let theta_of = move |q: &AxisVec| frame.map(|f| f.theta_deg(&kin.forward(q).tip));
     let mut limits = LimitsMonitor::new(machine, &theta_of);
-    let scene = match scenario.check.collisions {
-        false => None,
-        true => {
-            let near_miss = options.near_miss_mm.unwrap_or(scenario.check.near_miss_mm);
-            Some(SceneSink {
-                monitor: SceneMonitor::new(
-                    Scene::new(machine, &scenario.tool, &scenario.workpiece, near_miss)?,
-                    machine,
-                )
-                .with_theta(Box::new(theta_of)),
-                changes,
-                stacks: tool_stacks(scenario)?,
-                reference: scenario.tool.clone(),
-                active: 0,
-                changes_applied_at: u64::MAX,
-            })
-            .map(|mut sink| {
-                match queries {
-                    SceneQueries::Bounded => {}
-                    SceneQueries::BoundedRelative => {
-                        sink.monitor = sink.monitor.with_relative_bounds(true)
-                    }
-                    SceneQueries::Every => sink.monitor = sink.monitor.exhaustive(),
-                }
-                sink
-            })
-        }
-    };
+    let scene = scene_sink(scenario, options, queries, changes, Box::new(theta_of))?;
     let (timing, check_timing) = if options.dynamics {
         let t = Timing::Planned {
             twins: false,
@@ -364,7 +352,11 @@ pub fn check_observed(
     let (samples, last_time) = (stats.samples, stats.end_time_s);
     let feed_reductions = stats.feed_reductions;
     let Monitors { limits, scene } = monitors;
-    let scene = scene.map(|s| s.monitor);
+    let (scene, path) = match scene {
+        Some(s) => (Some(s.monitor), s.path),
+        None => (None, None),
+    };
+    let mut views = None;
     let (usage, mut violations) = limits.finish();
     if violations.iter().any(|v| v.kind == ViolationKind::Travel) {
         if let Some(note) = crate::check::units::other_unit_note(scenario, &usage) {
@@ -390,6 +382,14 @@ pub fn check_observed(
             .is_finite()
             .then_some(report.min_clearance_mm);
         min_clearance_bodies = report.min_clearance_bodies;
+        if let Some(path) = path {
+            let (tip_path_mm, path_stride) = path.finish();
+            views = Some(CollisionViews {
+                collisions: report.collision_poses,
+                tip_path_mm,
+                path_stride,
+            });
+        }
         for e in report.events {
             let (kind, limit) = match e.kind {
                 EventKind::Collision => (ViolationKind::Collision, None),
@@ -425,7 +425,44 @@ pub fn check_observed(
         dynamics: options.dynamics,
         timing: check_timing,
         feed_reductions,
+        views,
     })
+}
+
+/// The collision scene as a sink for `check_observed` (None when collisions are off), its
+/// tool changes read from `changes`, θ from `theta_of`.
+fn scene_sink(
+    scenario: &Scenario,
+    options: &CheckOptions,
+    queries: SceneQueries,
+    changes: ToolChanges,
+    theta_of: crate::check::scene::monitor::ThetaFn,
+) -> Result<Option<SceneSink>> {
+    if !scenario.check.collisions {
+        return Ok(None);
+    }
+    let machine = &scenario.machine;
+    let near_miss = options.near_miss_mm.unwrap_or(scenario.check.near_miss_mm);
+    let mut monitor = SceneMonitor::new(
+        Scene::new(machine, &scenario.tool, &scenario.workpiece, near_miss)?,
+        machine,
+    )
+    .with_theta(theta_of)
+    .with_collision_poses(options.collision_poses);
+    match queries {
+        SceneQueries::Bounded => {}
+        SceneQueries::BoundedRelative => monitor = monitor.with_relative_bounds(true),
+        SceneQueries::Every => monitor = monitor.exhaustive(),
+    }
+    Ok(Some(SceneSink {
+        monitor,
+        changes,
+        stacks: tool_stacks(scenario)?,
+        reference: scenario.tool.clone(),
+        active: 0,
+        path: (options.collision_poses > 0).then(TipPath::default),
+        changes_applied_at: u64::MAX,
+    }))
 }
 
 /// `moves` with the first move replaced by a standstill at its end (a dwell of 0 s at the

@@ -26,6 +26,7 @@ pub mod monitor;
 mod plane;
 pub mod prism;
 pub mod shapes;
+pub mod snapshot;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 use parry3d_f64::math::{Pose, Rotation, Vector};

@@ -46,7 +46,8 @@ pub fn run(path: &Path, as_json: bool, options: CheckOptions, html: Option<&Path
         EXIT_VIOLATIONS
     };
     if let Some(file) = html {
-        let page = crate::report::html::render_check_page(&path.display().to_string(), &report);
+        let page =
+            crate::report::check_html::render_check_page(&path.display().to_string(), &report);
         crate::report::write_atomic(file, page.as_bytes())?;
     }
     let chain_events = crate::study::chain_events::chain_events(&scenario)?;

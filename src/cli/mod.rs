@@ -347,6 +347,11 @@ fn run(cli: Cli) -> Result<i32> {
                 dynamics,
                 programmed,
                 near_miss_mm: near_miss,
+                collision_poses: if html.is_some() {
+                    crate::check::scene::snapshot::SHOWN_DEFAULT
+                } else {
+                    0
+                },
             },
             html.as_deref(),
         ),

@@ -66,6 +66,7 @@ pub fn run(
             dynamics: false,
             programmed: false,
             near_miss_mm: None,
+            collision_poses: 0,
         },
     )?;
     let json = serde_json::to_string_pretty(&checked).expect("plain data serializes");

@@ -556,7 +556,7 @@ fn reversal_b_table(
     out
 }
 
-fn check_section(check: &CheckReport) -> String {
+pub(crate) fn check_section(check: &CheckReport) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -767,19 +767,6 @@ tr.total{font-weight:bold}figure{margin:.5em 0}svg.plot{width:100%;height:auto;d
 .axes{display:grid;grid-template-columns:repeat(3,1fr);gap:.5em}.axes figure{margin:0}\
 li.violation{color:#b00}.note{color:#555;font-size:.95em}\
 div.wide{overflow-x:auto;max-width:100%}pre{white-space:pre-wrap;overflow-wrap:anywhere;background:#f7f7f7;padding:.5em}";
-
-/// A page with the limits and collision summary of `mtsim check` alone.
-pub fn render_check_page(name: &str, check: &CheckReport) -> String {
-    format!(
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
-         <title>mtsim check: {0}</title>\n<style>{CSS}</style>\n</head>\n<body>\n\
-         <h1>mtsim check: {0}</h1>\n<h2 id=\"check\">Limits and collisions</h2>\n{1}\
-         <p class=\"note\">Made by mtsim {2}.</p>\n</body>\n</html>\n",
-        esc(name),
-        check_section(check),
-        env!("CARGO_PKG_VERSION")
-    )
-}
 
 /// The HTML text of the report of `folder` with its `diagnosis`; `date` (YYYY-MM-DD)
 /// overrides the recorded one.

@@ -10,6 +10,7 @@
 //! into those types ([`run::RunFolder`]), traces through [`trace::read_trace`].
 
 pub mod budget_table;
+pub mod check_html;
 pub mod circle_figures;
 pub mod contour;
 pub mod cut;

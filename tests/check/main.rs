@@ -13,3 +13,4 @@ mod scene;
 mod streamed;
 mod tilted;
 mod tool_change;
+mod views;

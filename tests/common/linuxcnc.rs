@@ -4,9 +4,11 @@
 //! and the programmed position LinuxCNC's own kinematics module gives.
 //!
 //! What makes a sample run headless, learnt by running it (not from its source): the
-//! display is replaced by a script that waits for a `stop` file; the vismach model
-//! (`loadusr -W …-gui`), PyVCP panel, post-GUI HAL file and the program to open are left
-//! out, with the nets to the model's pins; `HOME` is the run's folder (LinuxCNC writes its
+//! display is replaced by a script that waits for a `stop` file (in the ini and the files it
+//! includes); the vismach model (`loadusr -W …gui`), PyVCP panel, post-GUI HAL file, intro
+//! graphic and the program to open are left out, with the nets to the model's pins (in the
+//! ini's HALCMD lines and in the sample's HAL files; what the model wrote, a test may set
+//! with extra HALCMD lines); `HOME` is the run's folder (LinuxCNC writes its
 //! logs there on failure); as root, `rtapi_app` needs a fallback user (`RTAPI_UID`, not 0)
 //! and a FIFO path it can write.
 
@@ -62,12 +64,17 @@ for cmd in sys.argv[1:]:
     print("POSE", j, "|", p, flush=True)
 "#;
 
+/// LinuxCNC runs one at a time (it keeps a lock file): held by each run.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// A LinuxCNC run, stopped (display told to exit, then killed) when dropped.
 pub struct Headless {
     dir: PathBuf,
     child: Child,
     /// `RTAPI_UID` when run as root.
     fallback_uid: Option<String>,
+    /// Released (after the drop's stop) for the next run.
+    _turn: std::sync::MutexGuard<'static, ()>,
 }
 
 impl Drop for Headless {
@@ -124,7 +131,14 @@ fn headless_ini(text: &str) -> String {
     for line in text.lines() {
         let t = line.trim_start();
         let key = t.split('=').next().unwrap_or("").trim();
-        if ["PYVCP", "POSTGUI_HALFILE", "OPEN_FILE"].contains(&key) || t.contains("loadusr -W") {
+        let dropped = [
+            "PYVCP",
+            "POSTGUI_HALFILE",
+            "OPEN_FILE",
+            "INTRO_GRAPHIC",
+            "INTRO_TIME",
+        ];
+        if dropped.contains(&key) || t.contains("loadusr -W") {
             continue;
         }
         if key == "DISPLAY" {
@@ -144,6 +158,49 @@ fn headless_ini(text: &str) -> String {
         out.push('\n');
     }
     out
+}
+
+/// A sample's HAL file made headless: the vismach model's `loadusr -W`, and its pins (words
+/// with `gui.`) left out of `setp` and `net` lines, with an arrow left pointing at nothing.
+fn headless_hal(text: &str) -> String {
+    let mut out = String::new();
+    for line in text.lines() {
+        let t = line.trim_start();
+        if t.starts_with("loadusr -W") || (t.starts_with("setp") && t.contains("gui.")) {
+            continue;
+        }
+        if t.starts_with("net") && t.contains("gui.") {
+            let mut kept: Vec<&str> = t
+                .split_whitespace()
+                .filter(|w| !w.contains("gui."))
+                .collect();
+            while kept.last().is_some_and(|w| *w == "<=" || *w == "=>") {
+                kept.pop();
+            }
+            if kept.len() > 2 {
+                out.push_str(&kept.join(" "));
+                out.push('\n');
+            }
+            continue;
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    out
+}
+
+/// The sample's HAL files and included ini parts in `dir` made headless, in place.
+fn headless_files(dir: &Path) {
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let path = e.path();
+        let edit: fn(&str) -> String = match path.extension().and_then(|x| x.to_str()) {
+            Some("hal") => headless_hal,
+            Some("inc") => headless_ini,
+            _ => continue,
+        };
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::write(&path, edit(&text)).unwrap();
+    }
 }
 
 fn copy_tree(from: &Path, to: &Path) {
@@ -176,11 +233,23 @@ fn open_to_all(path: &Path) {
 /// Starts the sample `config` (a folder below [`SAMPLES`]) with its `ini` in a fresh copy
 /// under `dir`.
 pub fn start(config: &str, ini: &str, dir: &Path) -> Headless {
+    start_with(config, ini, dir, &[])
+}
+
+/// [`start`], with `halcmds` run after the sample's own HAL setup (`[HAL] HALCMD` lines).
+pub fn start_with(config: &str, ini: &str, dir: &Path, halcmds: &[&str]) -> Headless {
+    let turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let _ = std::fs::remove_dir_all(dir);
     copy_tree(&Path::new(SAMPLES).join(config), dir);
+    headless_files(dir);
     let text = std::fs::read_to_string(dir.join(ini)).unwrap();
     let ini_path = dir.join(format!("headless-{ini}"));
-    std::fs::write(&ini_path, headless_ini(&text)).unwrap();
+    let mut headless = headless_ini(&text);
+    if !halcmds.is_empty() {
+        let extra: String = halcmds.iter().map(|c| format!("HALCMD = {c}\n")).collect();
+        headless = headless.replacen("[HAL]\n", &format!("[HAL]\n{extra}"), 1);
+    }
+    std::fs::write(&ini_path, headless).unwrap();
     std::fs::write(dir.join("idle_display"), IDLE_DISPLAY).unwrap();
     {
         use std::os::unix::fs::PermissionsExt;
@@ -210,6 +279,7 @@ pub fn start(config: &str, ini: &str, dir: &Path) -> Headless {
         dir: dir.to_path_buf(),
         child,
         fallback_uid,
+        _turn: turn,
     };
     // Up when its display is; a start that fails ends the script first.
     let end = Instant::now() + Duration::from_secs(90);

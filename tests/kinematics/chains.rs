@@ -99,55 +99,7 @@ fn a_45_degree_nutating_head_turned_180_degrees_holds_the_tool_horizontal() {
     assert!((t + Vector3::y()).norm() < 1e-12, "{t:?}");
 }
 
-#[test]
-fn max5_with_its_zero_pivot_length_tilts_about_the_tool_tip() {
-    // B_PIVOT_LENGTH = 0: the B line passes through the gauge point, so B alone never moves
-    // the tip of a zero-length tool, and C turns the workpiece about the machine's Z.
-    let chain = chain_of(&load("machines/linuxcnc/max5.toml"));
-    for b in [-90.0, -30.0, 45.0, 90.0] {
-        let q = joints(&[
-            (Axis::X, 12.0),
-            (Axis::Y, -7.0),
-            (Axis::Z, -40.0),
-            (Axis::B, b),
-        ]);
-        let (tip, t) = chain.tool_in_machine(&q, 0.0);
-        assert!((tip.coords - Vector3::new(12.0, -7.0, -40.0)).norm() < 1e-12);
-        let (sb, cb) = sin_cos(b);
-        assert!((t - Vector3::new(sb, 0.0, cb)).norm() < 1e-14, "Ry(B) z");
-    }
-    // C = 90: the machine point (12, −7, −40) is the workpiece point Rz(−90) of it = (−7, −12, −40).
-    let q = joints(&[
-        (Axis::X, 12.0),
-        (Axis::Y, -7.0),
-        (Axis::Z, -40.0),
-        (Axis::C, 90.0),
-    ]);
-    let (tip, _) = chain.tool_in_workpiece(&q, 0.0);
-    assert!(
-        (tip.coords - Vector3::new(-7.0, -12.0, -40.0)).norm() < 1e-12,
-        "{tip:?}"
-    );
-}
-
-#[test]
-fn the_bridgemill_w_quill_moves_the_tool_along_its_own_direction() {
-    // 5axiskins folds W into X Y Z: with the head tilted, W moves the tip along the tool.
-    let chain = chain_of(&load("machines/linuxcnc/bridgemill.toml"));
-    let q = joints(&[(Axis::B, 45.0), (Axis::C, 30.0)]);
-    let mut qw = q;
-    qw[Axis::W] = 10.0;
-    let (tip, t) = chain.tool_in_machine(&q, 100.0);
-    let (tip_w, _) = chain.tool_in_machine(&qw, 100.0);
-    assert!((tip_w - tip - 10.0 * t).norm() < 1e-12);
-    // The tip of a 100 mm tool hangs 350 mm from the pivot (0, 0, 250) along −t, and
-    // t = Rz(30) Ry(45) z = (sin45 cos30, sin45 sin30, cos45).
-    let (s45, c45) = sin_cos(45.0);
-    let (s30, c30) = sin_cos(30.0);
-    let expected_t = Vector3::new(s45 * c30, s45 * s30, c45);
-    assert!((t - expected_t).norm() < 1e-14);
-    assert!((tip.coords - (Vector3::new(0.0, 0.0, 250.0) - 350.0 * expected_t)).norm() < 1e-12);
-}
+// max5's and bridgemill's tips against maxkins' and 5axiskins' formulas: linuxcnc_formulas.rs.
 
 #[test]
 fn named_layouts_and_their_chains_agree() {

@@ -12,6 +12,7 @@ mod chains;
 mod fast_path;
 mod geometric_errors;
 mod linear_errors;
+mod linuxcnc_formulas;
 mod linuxcnc_samples;
 mod pole_passage;
 mod reading;

@@ -4,6 +4,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod check_html;
 mod cut_html;
 mod html;
 mod trace_parquet;

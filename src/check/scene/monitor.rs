@@ -53,6 +53,7 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use super::plane::PlaneBound;
+use super::snapshot::{CollisionPose, DeepestCollisions};
 use super::{BodyPoses, Carrier, PairKind, Scene, Warm};
 use crate::input::machine::Machine;
 use crate::{Axis, AxisVec};
@@ -116,6 +117,9 @@ pub struct SceneReport {
     pub samples: u64,
     /// Geometric (signed-distance) queries made.
     pub queries: u64,
+    /// The scene at the deepest sample of the deepest collisions, deepest first (none
+    /// unless asked for with [`SceneMonitor::with_collision_poses`]).
+    pub collision_poses: Vec<CollisionPose>,
 }
 
 impl SceneReport {
@@ -174,6 +178,8 @@ struct PairState {
     /// θ of the last sample of the open event, with its axis positions (resolved when it
     /// closes).
     open_end: (Theta, AxisVec),
+    /// In a collision: the time (s) and axis positions of its deepest measured sample.
+    deepest_sample: (f64, AxisVec),
     /// Index into the engagement summaries for a cutting pair.
     engagement: Option<usize>,
 }
@@ -217,6 +223,8 @@ pub struct SceneMonitor {
     /// Indices into the axis vector of the tilt axis and the table (C) axis.
     tilt_index: Option<usize>,
     table_index: Option<usize>,
+    /// The scene at the deepest collisions so far (kept only when asked for).
+    deepest: DeepestCollisions,
 }
 
 /// What every pair visited at one sample shares: the motion over the last interval (|dXYZ|
@@ -289,6 +297,7 @@ impl SceneMonitor {
                 warm: Warm::default(),
                 open: None,
                 open_end: (Theta::Known(None), AxisVec::ZERO),
+                deepest_sample: (0.0, AxisVec::ZERO),
                 engagement: (pair.kind == PairKind::Cutting).then(|| {
                     engagement.push(EngagementSummary {
                         bodies: scene.pair_bodies(pair),
@@ -336,7 +345,44 @@ impl SceneMonitor {
             hot,
             tilt_index,
             table_index,
+            deepest: DeepestCollisions::new(0),
         }
+    }
+
+    /// Keeps the scene (every body's shape and pose) at the deepest sample of the `n`
+    /// deepest collisions, for a picture of them ([`super::snapshot`]).
+    pub fn with_collision_poses(mut self, n: usize) -> SceneMonitor {
+        self.deepest = DeepestCollisions::new(n);
+        self
+    }
+
+    /// The tool tip in the machine frame at `q`, mm ([`Scene::tip_mm`]).
+    pub fn tip_mm(&self, q: &AxisVec) -> [f64; 3] {
+        self.scene.tip_mm(q)
+    }
+
+    /// Offers the collision `event` with its deepest sample to the kept pictures.
+    fn offer_collision(&mut self, event: &SceneEvent, time_s: f64, q: &AxisVec) {
+        if event.kind != EventKind::Collision || !self.deepest.admits(event.worst_mm, time_s) {
+            return;
+        }
+        let axes = self
+            .scene
+            .kinematics
+            .layout
+            .axes()
+            .iter()
+            .map(|a| (a.to_string(), q[*a]))
+            .collect();
+        self.deepest.offer(CollisionPose {
+            bodies: event.bodies.clone(),
+            depth_mm: event.worst_mm,
+            time_s,
+            line: event.line,
+            axes,
+            tip_mm: self.scene.tip_mm(q),
+            bodies_placed: self.scene.placed_bodies(q),
+        });
     }
 
     /// Whether tool/table pairs use the relative-motion bound as well: fewer queries for two
@@ -691,6 +737,7 @@ impl SceneMonitor {
                 .map(|i| self.scene.pair_bodies(&self.scene.pairs[i])),
             samples: self.samples,
             queries: self.queries,
+            collision_poses: self.deepest.into_vec(),
         }
     }
 
@@ -748,7 +795,7 @@ impl SceneMonitor {
         };
         let bodies = self.scene.pair_bodies(&self.scene.pairs[i]);
         self.close_open(i);
-        self.events.push(SceneEvent {
+        let event = SceneEvent {
             kind: EventKind::Collision,
             bodies,
             time_start_s: time,
@@ -757,7 +804,9 @@ impl SceneMonitor {
             theta_end_deg: theta,
             line: now.line,
             worst_mm: 0.0,
-        });
+        };
+        self.offer_collision(&event, time, &(prev.q + (now.q - prev.q) * s));
+        self.events.push(event);
     }
 
     /// Ends pair `i`'s open event, if any, resolving its last θ. The samples the pair was
@@ -772,6 +821,8 @@ impl SceneMonitor {
                 (theta, q) = (prev.theta, prev.q);
             }
             event.theta_end_deg = self.theta(theta, &q);
+            let (time, q) = self.states[i].deepest_sample;
+            self.offer_collision(&event, time, &q);
             self.events.push(event);
         }
     }
@@ -815,6 +866,9 @@ impl SceneMonitor {
             (Some(open), Some(k)) if open.kind == k => {
                 open.time_end_s = now.time_s;
                 state.open_end = (now.theta, now.q);
+                if k == EventKind::Collision && -d > open.worst_mm {
+                    state.deepest_sample = (now.time_s, now.q);
+                }
                 open.worst_mm = match k {
                     EventKind::Collision => open.worst_mm.max(-d),
                     EventKind::NearMiss => open.worst_mm.min(d),
@@ -825,6 +879,7 @@ impl SceneMonitor {
                 let theta = self.theta(now.theta, &now.q);
                 let state = &mut self.states[i];
                 state.open_end = (Theta::Known(theta), now.q);
+                state.deepest_sample = (now.time_s, now.q);
                 state.open = kind.map(|k| SceneEvent {
                     kind: k,
                     bodies: self.scene.pair_bodies(&self.scene.pairs[i]),

@@ -21,6 +21,9 @@ use mtsim::check::scene::snapshot::{BodyShape, PATH_POINTS};
 use mtsim::check::{check, CheckOptions, CheckReport};
 use mtsim::input::scenario::Scenario;
 
+/// `check` of `program` on the fork head, keeping the `shown` deepest collisions' scenes.
+/// Collision depths are measured exactly (no depth tolerance, docs/scene.md), so that the
+/// pictured sample is the deepest one the hand computation places.
 fn fork_head(name: &str, program: &str, shown: usize) -> CheckReport {
     let dir = scratch("check-views", name);
     std::fs::write(dir.join("p.ngc"), program).unwrap();
@@ -29,7 +32,8 @@ fn fork_head(name: &str, program: &str, shown: usize) -> CheckReport {
         dir.join("s.toml"),
         format!(
             "machine = {:?}\n[program]\nfile = \"p.ngc\"\n[reader]\ndialect = \"linuxcnc\"\n\
-             [workpiece]\nkind = \"none\"\n",
+             [workpiece]\nkind = \"none\"\n\
+             [machine_overrides.scene]\ndepth_tolerance_mm = 0.0\ndepth_tolerance_relative = 0.0\n",
             machine.display().to_string()
         ),
     )

@@ -43,7 +43,8 @@ fn the_collision_page_shows_the_fork_head_in_the_table_in_3d() {
         work.join("s.toml"),
         format!(
             "machine = {:?}\n[program]\nfile = \"p.ngc\"\n[reader]\ndialect = \"linuxcnc\"\n\
-             [workpiece]\nkind = \"none\"\n",
+             [workpiece]\nkind = \"none\"\n\
+             [machine_overrides.scene]\ndepth_tolerance_mm = 0.0\ndepth_tolerance_relative = 0.0\n",
             machine.display().to_string()
         ),
     )

@@ -14,8 +14,6 @@
 
 use crate::common;
 
-use std::path::Path;
-
 use common::scratch;
 use mtsim::check::scene::snapshot::{BodyShape, PATH_POINTS};
 use mtsim::check::{check, CheckOptions, CheckReport};
@@ -26,19 +24,7 @@ use mtsim::input::scenario::Scenario;
 /// pictured sample is the deepest one the hand computation places.
 fn fork_head(name: &str, program: &str, shown: usize) -> CheckReport {
     let dir = scratch("check-views", name);
-    std::fs::write(dir.join("p.ngc"), program).unwrap();
-    let machine = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/fork-head-ca.toml");
-    std::fs::write(
-        dir.join("s.toml"),
-        format!(
-            "machine = {:?}\n[program]\nfile = \"p.ngc\"\n[reader]\ndialect = \"linuxcnc\"\n\
-             [workpiece]\nkind = \"none\"\n\
-             [machine_overrides.scene]\ndepth_tolerance_mm = 0.0\ndepth_tolerance_relative = 0.0\n",
-            machine.display().to_string()
-        ),
-    )
-    .unwrap();
-    let scenario = Scenario::load(&dir.join("s.toml")).unwrap();
+    let scenario = Scenario::load(&common::fork_head_scenario(&dir, program)).unwrap();
     let options = CheckOptions {
         collision_poses: shown,
         ..CheckOptions::default()

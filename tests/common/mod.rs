@@ -94,6 +94,20 @@ pub fn scenario_text(machine: &str, body: &str) -> String {
     format!("machine = {machine:?}\n{body}")
 }
 
+/// Writes `dir/p.ngc` (LinuxCNC) and `dir/s.toml` running it on the bundled fork head with
+/// no workpiece and exact collision depths (no depth tolerance: the deepest sample is the
+/// one a hand computation places); returns the scenario's path.
+pub fn fork_head_scenario(dir: &Path, program: &str) -> PathBuf {
+    std::fs::write(dir.join("p.ngc"), program).unwrap();
+    write_scenario(
+        dir,
+        &machine("fork-head-ca"),
+        "[program]\nfile = \"p.ngc\"\n[reader]\ndialect = \"linuxcnc\"\n\
+         [workpiece]\nkind = \"none\"\n\
+         [machine_overrides.scene]\ndepth_tolerance_mm = 0.0\ndepth_tolerance_relative = 0.0\n",
+    )
+}
+
 /// Writes `dir/s.toml` with `machine = "<machine>"` followed by `body`; returns its path.
 pub fn write_scenario(dir: &Path, machine: &str, body: &str) -> PathBuf {
     let path = dir.join("s.toml");

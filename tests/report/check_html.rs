@@ -36,19 +36,7 @@ fn the_collision_page_shows_the_fork_head_in_the_table_in_3d() {
         return;
     };
     let work = common::scratch("check-html", "fork-head");
-    std::fs::write(work.join("p.ngc"), PROGRAM).unwrap();
-    let machine =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/fork-head-ca.toml");
-    std::fs::write(
-        work.join("s.toml"),
-        format!(
-            "machine = {:?}\n[program]\nfile = \"p.ngc\"\n[reader]\ndialect = \"linuxcnc\"\n\
-             [workpiece]\nkind = \"none\"\n\
-             [machine_overrides.scene]\ndepth_tolerance_mm = 0.0\ndepth_tolerance_relative = 0.0\n",
-            machine.display().to_string()
-        ),
-    )
-    .unwrap();
+    common::fork_head_scenario(&work, PROGRAM);
     let page = work.join("check.html");
     let run = common::mtsim(&[
         "-q",

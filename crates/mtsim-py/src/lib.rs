@@ -151,6 +151,8 @@ fn check<'py>(
             dynamics,
             programmed,
             near_miss_mm,
+            // The Python result is the JSON document, which holds no pictures.
+            collision_poses: 0,
         };
         Ok(to_json(&mtsim::check::check(&input.load()?, &options)?))
     })?;

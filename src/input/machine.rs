@@ -36,6 +36,60 @@ pub struct StartSection {
     pub feed_mode: Option<ngc::StartFeed>,
 }
 
+/// `[control]`: the control's parameters that change a program's moves, set by the machine
+/// builder where a program cannot see them (docs/machine-format.md); what is not given is
+/// the dialect's rule, with a notice where that rule is a setting of the control.
+#[derive(Clone, Copy, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ControlSection {
+    /// G73 retract after each peck, mm (Fanuc parameter 5114, Haas Setting 22).
+    pub g73_retract_mm: Option<f64>,
+    /// G83 clearance above each peck's depth where the rapid down stops, mm (Fanuc
+    /// parameter 5115).
+    pub g83_clearance_mm: Option<f64>,
+    /// G83 retract height above R, mm (Haas Setting 52).
+    pub g83_above_r_mm: Option<f64>,
+    /// G28/G30 without axis words: `"all"` axes return, or `"none"`.
+    pub g28_without_axes: Option<ReferenceWithoutAxes>,
+}
+
+/// What G28/G30 without axis words move.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ReferenceWithoutAxes {
+    All,
+    None,
+}
+
+/// Longest peck retract or clearance accepted, mm (Haas Setting 22's range is 0 to 29.9999 in).
+const MAX_PECK_SETTING_MM: f64 = 760.0;
+
+impl ControlSection {
+    /// The section's values checked (each in [0, 760] mm), as the reader takes them.
+    fn validate(&self, path: &Path, text: &str) -> Result<ngc::ControlParameters> {
+        let keys = [
+            ("g73_retract_mm", self.g73_retract_mm),
+            ("g83_clearance_mm", self.g83_clearance_mm),
+            ("g83_above_r_mm", self.g83_above_r_mm),
+        ];
+        for (key, value) in keys {
+            if let Some(v) = value.filter(|v| !(0.0..=MAX_PECK_SETTING_MM).contains(v)) {
+                let message =
+                    format!("{key} = {v}: expected a distance in [0, {MAX_PECK_SETTING_MM}] mm");
+                return Err(value_error(path, text, "control", key, message));
+            }
+        }
+        Ok(ngc::ControlParameters {
+            g73_retract_mm: self.g73_retract_mm,
+            g83_clearance_mm: self.g83_clearance_mm,
+            g83_above_r_mm: self.g83_above_r_mm.unwrap_or(0.0),
+            reference_all_without_axes: self
+                .g28_without_axes
+                .map(|r| r == ReferenceWithoutAxes::All),
+        })
+    }
+}
+
 /// The `kinematics` key: a named layout (`"trt-ac"`) or a `[kinematics]` chain table
 /// (the kinematic-chains spec).
 #[derive(Clone, Debug)]
@@ -128,6 +182,9 @@ pub struct MachineFile {
     /// The modal state the control powers up in.
     #[serde(default)]
     pub start: StartSection,
+    /// The control's parameters that change a program's moves.
+    #[serde(default)]
+    pub control: ControlSection,
     /// G28 reference position, machine X Y Z A B C (mm, deg; U V W: 0). Absent: a
     /// program that uses G28 is refused, naming this key.
     #[serde(default, deserialize_with = "exact::option_array")]
@@ -242,6 +299,8 @@ pub struct Machine {
     pub dialect: ngc::Dialect,
     /// The modal state the control powers up in, as far as the file gives it.
     pub start: StartSection,
+    /// The control's parameters, validated (`[control]`).
+    pub control: ngc::ControlParameters,
     /// G28 and G30 reference positions, machine X Y Z A B C (mm, deg); U V W at 0;
     /// `None` where the file gives none.
     pub reference_mm: [Option<[f64; 6]>; 2],
@@ -354,6 +413,7 @@ impl Machine {
                 "must be three finite numbers (mm)".into(),
             ));
         }
+        let control = file.control.validate(path, text)?;
         let scene_given = file.scene.is_some();
         let scene = file.scene.unwrap_or_default();
         crate::input::scene::validate_machine_tables(path, text, &scene, &file.tool)?;
@@ -388,6 +448,7 @@ impl Machine {
             tool: file.tool,
             dialect: file.dialect,
             start: file.start,
+            control,
             reference_mm: [file.g28_mm, file.g30_mm],
         })
     }

@@ -308,3 +308,49 @@ fn a_tcp_cancel_takes_the_machines_axis_positions() {
     );
     assert_eq!(last[2], 20.0);
 }
+
+/// The machine file's `[control]` reaches the reader: the bundled VMC with Fanuc parameter
+/// 5115 set to 1.5 mm brings G83 back down to 1.5 mm above each peck (R2 Q3: pecks at -1
+/// and -4, so rapids down to 0.5 and -2.5); a value out of range is refused at its line.
+#[test]
+fn the_machine_files_control_section_sets_the_g83_clearance() {
+    let dir = scratch("reader", "control");
+    std::fs::write(
+        dir.join("p.nc"),
+        "G21 G90 G17\nG0 X0 Y0 Z50\nG98 G83 X5 Y0 Z-7 R2 Q3 F100\nG80\nM30\n",
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(common::machine("vmc-3axis")).unwrap();
+    let machine = dir.join("m.toml");
+    std::fs::write(
+        &machine,
+        format!("{text}\n[control]\ng83_clearance_mm = 1.5\n"),
+    )
+    .unwrap();
+    let body = "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"fanuc\"\n";
+    let scenario =
+        Scenario::load(&write_scenario(&dir, &machine.display().to_string(), body)).unwrap();
+    let z: Vec<f64> = ends(&scenario, &dir.join("p.nc"))
+        .unwrap()
+        .iter()
+        .map(|e| (e[2] * 1e9).round() / 1e9)
+        .collect();
+    let after_r = z.iter().position(|&z| z == 2.0).unwrap();
+    assert_eq!(
+        z[after_r + 1..after_r + 7],
+        [-1.0, 2.0, 0.5, -4.0, 2.0, -2.5]
+    );
+    std::fs::write(
+        &machine,
+        format!("{text}\n[control]\ng73_retract_mm = -0.5\n"),
+    )
+    .unwrap();
+    let err = Scenario::load(&write_scenario(&dir, &machine.display().to_string(), body))
+        .unwrap_err()
+        .to_string();
+    let line = text.lines().count() + 3;
+    assert!(
+        err.contains(&format!("m.toml:{line}:")) && err.contains("g73_retract_mm = -0.5"),
+        "{err}"
+    );
+}

@@ -73,8 +73,8 @@ pub use ini::{scale_parameter_lengths, Ini, IniEntry, IniError, LinuxcncConfig};
 pub use notice::Notice;
 pub use options::{
     parse_tool_orientations, parse_tool_table, parse_var_file, tool_pockets, work_offset_parameter,
-    Dialect, Distance, Options, StartFeed, StartState, TcpAxes, Tool, Units, UserM, G28_PARAMETER,
-    G30_PARAMETER, MAX_BLOCKS, MAX_CALL_DEPTH,
+    ControlParameters, Dialect, Distance, Options, StartFeed, StartState, TcpAxes, Tool, Units,
+    UserM, G28_PARAMETER, G30_PARAMETER, MAX_BLOCKS, MAX_CALL_DEPTH, PECK_CLEARANCE_MM,
 };
 pub use reader::{read_file, read_file_with, read_str, read_str_with, Moves};
 pub use remap::{parse_remap, Remap, RemapCode};

@@ -194,7 +194,32 @@ pub struct Options {
     /// current point; `None`: the interpreter refuses a TCP cancel with the rotaries
     /// turned off zero, where it cannot say where the axes are.
     pub tcp_axes: Option<TcpAxes>,
+    /// The control's parameters that change a program's moves (a machine file's
+    /// `[control]`); what is not given is the dialect's rule.
+    pub control: ControlParameters,
 }
+
+/// The control's parameters that change what a program does, in mm: the machine builder's
+/// settings, which a program cannot see (docs/gcode.md, "Control parameters").
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ControlParameters {
+    /// G73: how far the tool backs off after each peck to break the chip (Fanuc parameter
+    /// 5114, Haas Setting 22). `None`: [`PECK_CLEARANCE_MM`], with a notice where the
+    /// control takes it from a setting.
+    pub g73_retract_mm: Option<f64>,
+    /// G83: how far above the previous peck's depth the rapid back down stops (Fanuc
+    /// parameter 5115). `None`: [`PECK_CLEARANCE_MM`], with a notice as for G73.
+    pub g83_clearance_mm: Option<f64>,
+    /// G83: how far above R each peck's retract rises (Haas Setting 52); 0 by default.
+    pub g83_above_r_mm: f64,
+    /// G28/G30 without axis words: every axis returns (`Some(true)`) or none
+    /// (`Some(false)`); `None`: the dialect's rule (LinuxCNC and Haas all, Fanuc none).
+    pub reference_all_without_axes: Option<bool>,
+}
+
+/// LinuxCNC's fixed G73 retract and G83 clearance (0.010 in; its G-code manual), the
+/// reader's value where another control's setting is not given.
+pub const PECK_CLEARANCE_MM: f64 = 0.254;
 
 /// See [`Options::tcp_axes`].
 #[derive(Clone)]
@@ -239,6 +264,7 @@ impl Default for Options {
             pockets: Vec::new(),
             reference_missing: [None, None],
             tcp_axes: None,
+            control: ControlParameters::default(),
         }
     }
 }

@@ -31,6 +31,8 @@ pub(super) const TABLE: Table = Table {
     leader_before_percent: true,
     g87_back_bore: true,
     modal_state_m70_m73: false,
+    peck_settings: Some(("parameter 5114", "parameter 5115")),
+    reference_all_without_axes: false,
     macro_b: true,
 };
 

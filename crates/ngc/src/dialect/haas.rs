@@ -15,6 +15,8 @@ pub(super) const TABLE: Table = Table {
     m16_tool_change: true,
     g53_absolute_in_g91: true,
     g87_back_bore: false,
+    peck_settings: Some(("Setting 22", "its G83 clearance")),
+    reference_all_without_axes: true,
     refusal,
     ..fanuc::TABLE
 };

@@ -33,6 +33,8 @@ pub(super) const TABLE: Table = Table {
     leader_before_percent: false,
     g87_back_bore: false,
     modal_state_m70_m73: true,
+    peck_settings: None,
+    reference_all_without_axes: true,
     macro_b: false,
 };
 

@@ -70,6 +70,13 @@ pub(crate) struct Table {
     /// M70-M73 save and restore the modal state (LinuxCNC); otherwise they are the
     /// builder's machine codes (Haas M73/M74: tool air blast on/off).
     pub modal_state_m70_m73: bool,
+    /// The control's settings for the G73 chip-breaking retract and the G83 re-approach
+    /// clearance, named in the notice when the machine file gives neither (Fanuc parameters
+    /// 5114 and 5115); `None`: fixed by the control (LinuxCNC: 0.010 in, its G-code manual).
+    pub peck_settings: Option<(&'static str, &'static str)>,
+    /// G28/G30 without axis words send every axis to the reference position (LinuxCNC,
+    /// Haas); otherwise they move no axis (Fanuc: only the axes named return).
+    pub reference_all_without_axes: bool,
 
     // Parameter and subprogram syntax.
     /// Fanuc macro B: `#1`-`#33` locals per call, `IF [..] GOTO`, `WHILE [..] DO`, `O`

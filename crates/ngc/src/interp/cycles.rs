@@ -10,8 +10,8 @@ use super::Interp;
 use crate::axis::{Axis, AxisVec};
 use crate::canon::{Motion, Move, PathControl};
 use crate::lex::{LineError, LineResult, Word};
+use crate::options::PECK_CLEARANCE_MM;
 use crate::polar::Polar;
-use crate::units::MM_PER_INCH;
 
 impl Interp {
     /// Canned cycle in the current plane, its moves as LinuxCNC's G-code manual describes
@@ -276,7 +276,8 @@ impl Interp {
     ) {
         let (r, bottom, delta) = (h.r, h.bottom, h.delta);
         let dwell = self.cycle_p.unwrap_or(0.0);
-        let rapid_delta = 0.010 * MM_PER_INCH; // LinuxCNC's G73/G83 clearance, 0.010 in.
+        let peck_clearance = |given: Option<f64>| given.unwrap_or(PECK_CLEARANCE_MM);
+        let control = self.control;
         match h.code {
             810 => {
                 pen.go(self, queue, Motion::Linear, pu, pv, bottom);
@@ -288,13 +289,27 @@ impl Interp {
                 pen.go(self, queue, Motion::Rapid, pu, pv, clear);
             }
             830 | 730 => {
+                // G73 backs off by the retract; G83 rises to R (plus Haas Setting 52) and
+                // comes back down to the clearance above the depth reached.
+                let back = if h.code == 830 {
+                    peck_clearance(control.g83_clearance_mm)
+                } else {
+                    peck_clearance(control.g73_retract_mm)
+                };
                 let mut depth = r - delta;
                 while depth > bottom {
                     pen.go(self, queue, Motion::Linear, pu, pv, depth);
                     if h.code == 830 {
-                        pen.go(self, queue, Motion::Rapid, pu, pv, r);
+                        pen.go(
+                            self,
+                            queue,
+                            Motion::Rapid,
+                            pu,
+                            pv,
+                            r + control.g83_above_r_mm,
+                        );
                     }
-                    pen.go(self, queue, Motion::Rapid, pu, pv, depth + rapid_delta);
+                    pen.go(self, queue, Motion::Rapid, pu, pv, depth + back);
                     depth -= delta;
                 }
                 pen.go(self, queue, Motion::Linear, pu, pv, bottom);

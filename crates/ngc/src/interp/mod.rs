@@ -26,6 +26,7 @@
 //! | - | the motion mode, polar and axis words | `motion.rs`, `polar_words.rs` |
 //! | 6 | G10, G28/G30, G28.1/G30.1, G52, G92 family | `non_modal.rs` |
 //! | 7 | motion: G0-G3, G5.x, G33/G33.1, G38.x, canned cycles, as modified by G53 | `motion.rs`, `arcs.rs`, `splines.rs`, `spindle_sync.rs`, `probing.rs`, `cycles.rs` |
+//! | - | notices of the control's settings assumed (G73/G83 pecks, G28 without axes) | `control.rs` |
 //! | 8 | stops and program flow: M2/M30, M98/M99 (G65 before phase 0) | `flow.rs` |
 //!
 //! The order is that of the NIST RS274/NGC interpreter report (version 3, section 3.8,
@@ -57,6 +58,7 @@ use crate::spline;
 
 mod arcs;
 mod bolt;
+mod control;
 mod coords;
 mod cycles;
 mod emit;
@@ -202,6 +204,8 @@ pub struct Interp {
     reference_missing: [Option<String>; 2],
     /// The axes' positions at a TCP position ([`Options::tcp_axes`]), for a TCP cancel.
     tcp_axes: Option<crate::options::TcpAxes>,
+    /// The control's parameters ([`Options::control`]).
+    control: crate::options::ControlParameters,
 }
 
 /// Parameter of extended work offset P n (G54.1 Pn, G154 Pn), axis X.
@@ -311,6 +315,7 @@ impl Interp {
                 o.reference_missing[k].clone().filter(|_| !given)
             }),
             tcp_axes: o.tcp_axes.clone(),
+            control: o.control,
         };
         i.parameters_changed();
         i.refuse_unmodelled_system_variables();
@@ -482,6 +487,7 @@ impl Interp {
         if !self.units_stated && queue.len() > queued {
             self.warn_units_assumed(line_no, notices, path);
         }
+        self.control_notices(&b, line_no, notices, path);
         // 8. Stops and program flow.
         self.program_flow(&b, queue, stop)
     }

@@ -128,6 +128,10 @@ impl Interp {
                     G30_PARAMETER
                 } as usize;
                 let k = usize::from(nm == NonModal::G30);
+                if axis_words.is_empty() && !self.reference_all_without_axes() {
+                    // No axis returns (a notice says so, `control_notices`).
+                    return Ok(());
+                }
                 if let Some(setting) = &self.reference_missing[k] {
                     return Err(LineError::new(
                         w.span(),
@@ -173,6 +177,15 @@ impl Interp {
             NonModal::Dwell | NonModal::G53 => {}
         }
         Ok(())
+    }
+
+    /// Whether G28/G30 without axis words send every axis home ([`ControlParameters`]).
+    ///
+    /// [`ControlParameters`]: crate::options::ControlParameters
+    pub(super) fn reference_all_without_axes(&self) -> bool {
+        self.control
+            .reference_all_without_axes
+            .unwrap_or(self.dialect.table().reference_all_without_axes)
     }
 
     /// G28/G30: a rapid through the axis words' point (when there are any) to the position

@@ -3,6 +3,7 @@
 //! stdglue handlers.
 
 mod bolt_patterns;
+mod control_parameters;
 mod interpreter;
 mod lathe;
 mod remap_glue;

@@ -36,8 +36,6 @@ const REFUSED: &[(&str, Why, &str)] = &[
         Why::Fault,
         "unsupported code `M451`",
     ),
-    // A lathe program: mtsim leaves out the lathe cycles G70-G72 and G76.
-    ("haas_lathe_o58214.nc", Why::Gap, "on a Haas lathe G71 P Q"),
     // Not text: the file in the repository is binary.
     ("haas_mc_o78238.nc", Why::Fault, "unexpected character"),
     // Heidenhain conversational listed as Fanuc, read as Klartext: a circle around CC

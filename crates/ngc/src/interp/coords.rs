@@ -8,7 +8,7 @@ use crate::lex::Word;
 use crate::units::MM_PER_INCH;
 
 impl Interp {
-    pub(super) fn scale(&self) -> f64 {
+    pub(crate) fn scale(&self) -> f64 {
         if self.inch {
             MM_PER_INCH
         } else {

@@ -71,9 +71,12 @@ mod polar_words;
 mod probing;
 mod spindle_sync;
 mod splines;
+mod stock_removal;
 mod system_vars;
 mod tool;
 mod words;
+
+pub(crate) use stock_removal::StockRemoval;
 
 /// What the reader must do after a block.
 pub enum Stop {
@@ -111,6 +114,7 @@ pub struct Saved {
 }
 
 /// The modal state of the controller between blocks.
+#[derive(Clone)]
 pub struct Interp {
     pub params: Params,
     dialect: Dialect,

@@ -28,6 +28,7 @@
 mod calls;
 mod flow;
 mod language;
+mod lathe;
 mod oword;
 mod remap;
 mod state;

@@ -198,6 +198,9 @@ pub(crate) struct IsoReader {
     pub(super) modal_remap: Option<usize>,
     /// stdglue cycle_prolog's sticky words.
     pub(super) sticky: crate::stdglue::Sticky,
+    /// Lathe stock removal: the depth and retract of the two-block G71/G72 format's first
+    /// block, and the last rough cycle's start and direction (for G70's return).
+    pub(super) lathe: super::lathe::LatheState,
 }
 
 impl IsoReader {

@@ -58,6 +58,7 @@ impl IsoReader {
             commit: None,
             modal_remap: None,
             sticky: Default::default(),
+            lathe: Default::default(),
         }
     }
 
@@ -268,6 +269,11 @@ impl IsoReader {
         here: Cursor,
         next: Cursor,
     ) -> LineResult<()> {
+        if self.dialect.table().macro_b {
+            if let Some(cycle) = super::lathe::LatheCycle::of(words) {
+                return self.lathe_cycle(cycle, line, words, here);
+            }
+        }
         let stop = self.interp.block(
             line,
             words,

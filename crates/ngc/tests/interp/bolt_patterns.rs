@@ -120,8 +120,9 @@ fn what_a_pattern_cannot_mean_here_is_refused_with_its_reason() {
             3,
             "whole number of holes",
         ),
-        ("G71 P10 Q20 D1\n", 1, "O.D./I.D. stock removal cycle"),
-        ("G70 P10 Q20\n", 1, "finishing cycle"),
+        // With P and Q they are the lathe's cycles, run about the shape N10-N20.
+        ("G71 P10 Q20 D1\n", 1, "no block N10 for P10"),
+        ("G70 P10 Q20\n", 1, "no block N10 for P10"),
         (
             "G0 X0 Y0 Z50\nG81 Z-5 R2 F100 L0\nG72 I10 J30 L3\n",
             3,

@@ -6,6 +6,7 @@ mod bolt_patterns;
 mod control_parameters;
 mod interpreter;
 mod lathe;
+mod lathe_cycles;
 mod remap_glue;
 mod secondary_axes;
 mod tilted;

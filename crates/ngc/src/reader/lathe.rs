@@ -26,17 +26,6 @@ pub(super) enum LatheCycle {
     Finish,
 }
 
-/// The two-block format's depth and retract, and the last rough cycle's start point.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct LatheState {
-    depth_mm: Option<f64>,
-    retract_mm: Option<f64>,
-    /// The last G71/G72 was G72 (its return goes along Z first).
-    facing: bool,
-    /// The warning that lathe codes are read with the mill's meanings was given.
-    warned: bool,
-}
-
 /// Retract e when neither the block nor the machine gives it, mm: LinuxCNC's peck
 /// clearance (the Fanuc parameter 5133 and Haas Setting 73 are the builder's).
 const DEFAULT_RETRACT_MM: f64 = crate::options::PECK_CLEARANCE_MM;

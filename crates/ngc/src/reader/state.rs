@@ -152,6 +152,18 @@ pub(super) struct Resume {
     pub(super) words: Vec<(char, f64, std::ops::Range<usize>, (usize, usize))>,
 }
 
+/// Lathe stock removal (`lathe.rs`): the two-block format's depth and retract, and how the
+/// last rough cycle returns.
+#[derive(Clone, Debug, Default)]
+pub(super) struct LatheState {
+    pub(super) depth_mm: Option<f64>,
+    pub(super) retract_mm: Option<f64>,
+    /// The last G71/G72 was G72 (its return goes along Z first).
+    pub(super) facing: bool,
+    /// The warning that lathe codes are read with the mill's meanings was given.
+    pub(super) warned: bool,
+}
+
 /// The ISO G-code family's front end (LinuxCNC, Fanuc, Haas): the canonical moves of a
 /// program, in order. Yields `Err` at most once, then `None`; stops after M02, M30 or a
 /// closing `%`.
@@ -200,7 +212,7 @@ pub(crate) struct IsoReader {
     pub(super) sticky: crate::stdglue::Sticky,
     /// Lathe stock removal: the depth and retract of the two-block G71/G72 format's first
     /// block, and the last rough cycle's start and direction (for G70's return).
-    pub(super) lathe: super::lathe::LatheState,
+    pub(super) lathe: LatheState,
 }
 
 impl IsoReader {

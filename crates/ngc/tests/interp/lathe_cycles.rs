@@ -62,22 +62,18 @@ fn g71_roughs_in_layers_then_follows_the_shape_and_g70_finishes() {
             (R, 2.0, x + 2.0),
         ]);
     }
-    // The shape, then back across to X50 and along to Z2.
-    expected.extend([
+    // The shape, then back across to X50 and along to Z2; then G70 runs the shape's blocks
+    // as written, the same moves, and comes back the same way.
+    let shape_and_back = [
         (R, 2.0, 20.0),
         (F, -10.0, 20.0),
         (F, -20.0, 40.0),
         (F, -30.0, 40.0),
-    ]);
-    expected.extend([(R, -30.0, 50.0), (R, 2.0, 50.0)]);
-    // G70: the shape's blocks as written, then back.
-    expected.extend([
-        (R, 2.0, 20.0),
-        (F, -10.0, 20.0),
-        (F, -20.0, 40.0),
-        (F, -30.0, 40.0),
-    ]);
-    expected.extend([(R, -30.0, 50.0), (R, 2.0, 50.0)]);
+        (R, -30.0, 50.0),
+        (R, 2.0, 50.0),
+    ];
+    expected.extend(shape_and_back);
+    expected.extend(shape_and_back);
     assert_eq!(zx(&program, Dialect::Fanuc), expected);
 }
 

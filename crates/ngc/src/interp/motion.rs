@@ -66,7 +66,15 @@ impl Interp {
         let dwell_x = self.dialect.table().dwell_x_seconds
             && matches!(b.nonmodal(), Some((NonModal::Dwell, _)));
         let mut axis: Small<(Axis, Word), 9> = Small::new();
+        let increments = self.lathe_increments(b)?;
         for a in Axis::ALL {
+            if let Some(w) = increments[a.index()] {
+                axis.push_axis(a, &w, false);
+                continue;
+            }
+            if self.lathe_increment(a).is_some() {
+                continue;
+            }
             let mut halve = false;
             let k = slot(a.letter());
             let w = match (a, &b.polar) {
@@ -85,6 +93,41 @@ impl Interp {
         }
         b.axis = axis;
         Ok(())
+    }
+
+    /// A Fanuc-family lathe's U and W words (incremental X and Z, [`Interp::lathe_increment`])
+    /// as the X and Z words they stand for: `X = x + U` under G90, `X = U` under G91, with x
+    /// the program position; an error beside an X (Z) word of the same block.
+    fn lathe_increments<'l>(&self, b: &Block<'l>) -> LineResult<[Option<Word<'l>>; 9]> {
+        let mut out = [None; 9];
+        for inc in [Axis::U, Axis::W] {
+            let (Some(axis), Some(w)) = (self.lathe_increment(inc), b.get(inc.letter())) else {
+                continue;
+            };
+            if let Some(x) = b.get(axis.letter()) {
+                return Err(LineError::new(
+                    x.span(),
+                    format!(
+                        "`{}` beside `{}` (its increment on a lathe): expected one of them",
+                        &b.line[x.span()],
+                        &b.line[w.span()]
+                    ),
+                    "both",
+                ));
+            }
+            let value = if self.absolute {
+                self.program_position()[axis] + w.value
+            } else {
+                w.value
+            };
+            out[axis.index()] = Some(Word {
+                letter: axis.letter(),
+                value,
+                number: "",
+                ..w
+            });
+        }
+        Ok(out)
     }
 
     /// Phase 7: NURBS control points, then the move of the motion mode when the block has

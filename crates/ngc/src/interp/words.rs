@@ -57,6 +57,17 @@ impl Interp {
     }
 
     /// A word for an axis the machine has not is refused, never dropped.
+    /// The axis a Fanuc-family lathe's incremental address moves: U is X and W is Z
+    /// (G-code system A), on a machine without U or W axes; `None` otherwise.
+    pub(super) fn lathe_increment(&self, a: Axis) -> Option<Axis> {
+        let on = self.dialect.table().macro_b && !self.axes[a.index()];
+        match a {
+            Axis::U if on => Some(Axis::X),
+            Axis::W if on => Some(Axis::Z),
+            _ => None,
+        }
+    }
+
     pub(super) fn check_machine_axes(&self, b: &Block) -> LineResult<()> {
         let line = b.line;
         let missing_axes = Axis::ALL
@@ -67,7 +78,7 @@ impl Interp {
             return Ok(());
         }
         for a in Axis::ALL {
-            if self.axes[a.index()] {
+            if self.axes[a.index()] || self.lathe_increment(a).is_some() {
                 continue;
             }
             if let Some(w) = b.get(a.letter()) {

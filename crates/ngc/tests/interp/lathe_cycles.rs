@@ -171,3 +171,38 @@ fn a_shape_that_turns_back_or_a_missing_block_is_refused_by_name() {
     let e = error("G21 G18\nG0 X50 Z2\nG71 P10 Q20 F100\nN10 G0 X20\nN20 Z-20\nM30\n");
     assert!(e.contains("depth of cut"), "{e}");
 }
+
+#[test]
+fn u_and_w_are_increments_of_x_and_z_on_a_machine_without_those_axes() {
+    // G-code system A: W-12 from Z2 is Z-10, U6 from X20 is X26, also under G90; beside X
+    // it is an error; G28 U0 W0 returns X and Z through the current point.
+    let mut o = options(Dialect::Fanuc);
+    o.axes = vec![Axis::X, Axis::Z];
+    o.set_reference(
+        false,
+        ngc::AxisVec::xyzabc([100.0, 0.0, 300.0, 0.0, 0.0, 0.0]),
+    );
+    let ends: Vec<(f64, f64)> = read_str_with(
+        Path::new("t.nc"),
+        "G21 G18 G90\nG0 X20 Z2\nG1 W-12 F100\nU6\nG28 U0 W0\nM30\n",
+        &o,
+    )
+    .map(|m| m.unwrap())
+    .map(|m| (m.end[Axis::Z], m.end[Axis::X]))
+    .collect();
+    assert_eq!(
+        ends,
+        [
+            (2.0, 20.0),
+            (-10.0, 20.0),
+            (-10.0, 26.0),
+            (-10.0, 26.0),
+            (300.0, 100.0)
+        ]
+    );
+    let e = read_str_with(Path::new("t.nc"), "G21\nG0 X20 U5\n", &o)
+        .find_map(Result::err)
+        .unwrap()
+        .to_string();
+    assert!(e.contains("beside `U5`"), "{e}");
+}

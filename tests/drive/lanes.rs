@@ -8,6 +8,18 @@ use mtsim::drive::{AxisServo, DriveLanes, Drives};
 use mtsim::input::Machine;
 use mtsim::{Axis, AxisVec};
 
+/// The axes at `phase` (rad) of the path: X and Y on a circle of 25 mm, Z, A and C
+/// moving with it.
+fn at_phase(phase: f64) -> AxisVec {
+    let mut q = AxisVec::ZERO;
+    q[Axis::X] = 25.0 * phase.cos() - 25.0;
+    q[Axis::Y] = 25.0 * phase.sin();
+    q[Axis::Z] = 3.0 * (0.5 * phase).sin();
+    q[Axis::A] = -10.0 * (0.5 * phase).sin();
+    q[Axis::C] = 40.0 * phase;
+    q
+}
+
 /// A setpoint stream: the axes' positions (mm, deg) at `t` s.
 type Path = fn(f64) -> AxisVec;
 
@@ -25,13 +37,7 @@ fn trt_ac() -> Machine {
 fn setpoint(t: f64) -> AxisVec {
     // ω = 1 rad/s reached at 0.5 s: the phase is ∫ω dt.
     let phase = if t < 0.5 { t * t } else { t - 0.25 };
-    let mut q = AxisVec::ZERO;
-    q[Axis::X] = 25.0 * phase.cos() - 25.0;
-    q[Axis::Y] = 25.0 * phase.sin();
-    q[Axis::Z] = 3.0 * (0.5 * phase).sin();
-    q[Axis::A] = -10.0 * (0.5 * phase).sin();
-    q[Axis::C] = 40.0 * phase;
-    q
+    at_phase(phase)
 }
 
 /// `n` points that differ in X's and Y's kv (so every X and Y twin is distinct) and, with
@@ -306,11 +312,5 @@ fn stop_and_go(t: f64) -> AxisVec {
         phase += 0.5 * (w0 + w_end) * (end - t0);
     }
     phase += (t - 4.7).max(0.0);
-    let mut q = AxisVec::ZERO;
-    q[Axis::X] = 25.0 * phase.cos() - 25.0;
-    q[Axis::Y] = 25.0 * phase.sin();
-    q[Axis::Z] = 3.0 * (0.5 * phase).sin();
-    q[Axis::A] = -10.0 * (0.5 * phase).sin();
-    q[Axis::C] = 40.0 * phase;
-    q
+    at_phase(phase)
 }

@@ -21,13 +21,16 @@
 //! substeps' own velocities needed, a failure) runs that period through the
 //! scalar [`AxisServo::advance`] instead, its whole state (the carried regime and the
 //! friction-bound cache included) scattered to it and gathered back. The friction bound at
-//! the period's end is the scalar [`stribeck_bound_decay`] per lane (its `exp` the same
-//! `libm::exp`). The stepping itself is [`super::lane_step`]'s, which both lane kinds share.
+//! the period's end follows `servo::stribeck_bound_decay` case for case, as masks (its
+//! `exp` the same `libm::exp`, in the lanes that need it). Every check is computed for all
+//! lanes at once ([`super::simd`]'s vectors and masks): the regime a lane ends in (backlash
+//! side or gap, slipping or at rest) is a mask and a select, not a branch. The stepping
+//! itself is [`super::lane_step`]'s, which both lane kinds share.
 
 use super::lane_step::{self, lane_product, LaneKind, LaneMaps, LaneState, Lanes, LANES};
 use super::period_map::{Regime, N_INPUT, N_STATE};
-use super::product::all_finite;
-use super::servo::{stribeck_bound_decay, AxisServo};
+use super::servo::AxisServo;
+use super::simd::{M, V};
 use crate::error::Result;
 use crate::{Axis, AxisVec};
 use libm::exp;
@@ -56,16 +59,37 @@ pub struct DriveLaneGroup {
 /// friction-bound cache `(v, g, exp)`, beyond the common [`LaneState`].
 #[derive(Default)]
 pub(super) struct RegimeLanes {
-    has: [bool; LANES],
+    has: M,
     side: Lanes,
     offset: Lanes,
-    dry: [bool; LANES],
+    dry: M,
     speed: Lanes,
     push: Lanes,
     bound: Lanes,
     decay: Lanes,
     mt_over_h: Lanes,
-    cache: [(f64, f64, f64); LANES],
+    cache: [Lanes; 3],
+}
+
+/// A regime per lane (the fields of [`Regime`]), as [`DriveLaneGroup::end_regime`] finds it.
+struct RegimeV {
+    side: V,
+    offset: V,
+    dry: M,
+    speed: V,
+    push: V,
+    bound: V,
+    decay: V,
+    mt_over_h: V,
+}
+
+impl RegimeV {
+    /// [`Regime::admits`] per lane.
+    #[inline(always)]
+    fn admits(&self, dv_margin: V) -> M {
+        !self.dry
+            | !(self.speed.le(dv_margin) | self.push.le(self.bound + self.mt_over_h * dv_margin))
+    }
 }
 
 /// The lanes' carried state over one block.
@@ -133,126 +157,160 @@ impl DriveLaneGroup {
         lane_step::step_block(self, all, axis, setpoints, times_s, actual, fe, completed)
     }
 
-    /// Lane `l`'s checks after the product `y`: finite, the tolerance at k = 2 where it is
-    /// asked, the margin of the period's own velocity change, the regime at its end (then
-    /// carried in `st`), the following errors. The same decisions as `try_exact_period`
-    /// and `end_period` in the same order of operations.
+    /// The lanes' checks after the product `y` (`s`: the slope at v₀, the velocity change the
+    /// setpoints ask for and the new setpoint), as masks, in the lanes of `start`: finite, the tolerance at k = 2
+    /// where it is asked (then at the sharper k), the margin of the period's own velocity
+    /// change, the regime at its end (the same as the carried one, admitting the change),
+    /// the following errors. The same decisions as `try_exact_period` and `end_period`,
+    /// each lane's by the same operations; the regime's of the lanes that pass are carried
+    /// in `st`.
     #[inline(always)]
-    // `!(a <= b)`: a NaN fails the test, as in the scalar period.
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    fn period_ok(
-        &self,
-        st: &mut State,
-        l: usize,
-        y: &[Lanes; N_STATE],
-        slope: &Lanes,
-        dv_guess: &Lanes,
-        s_new: f64,
-    ) -> bool {
-        if !all_finite(&std::array::from_fn(|r| y[r][l])) {
-            return false;
-        }
-        let v0 = st.x[3][l];
-        let dv = 2.0 * (y[3][l] - v0).abs().max(dv_guess[l]);
-        if self.slope_step[l] > 0.0 && (v0.abs() - dv) * self.inv_stribeck[l] <= 40f64.sqrt() {
-            // e_F at k = 2, then at the sharper k of `try_exact_period` (the same `exp`);
-            // the substeps' own velocities are left to the scalar servo.
-            let error = |k: f64| {
-                let curvature =
-                    self.delta_friction[l] * self.inv_stribeck[l] * self.inv_stribeck[l] * k;
-                let grid_slope = 0.0 * self.slope_step[l];
-                (slope[l] - grid_slope).abs() * dv + 0.5 * curvature * dv * dv
-            };
-            if !(error(2.0) <= self.tolerance[l]) {
-                let u_low = (v0.abs() - dv).max(0.0) * self.inv_stribeck[l];
-                let sharp = u_low >= 1.23
-                    && error((4.0 * u_low * u_low - 2.0) * exp(-(u_low * u_low)))
-                        <= self.tolerance[l];
-                if !sharp {
-                    return false;
-                }
-            }
-        }
-        if dv > 2.0 * dv_guess[l] && !admits(&st.extra, l, dv) {
-            return false;
-        }
-        let Some((end, cache)) = self.end_regime(l, y) else {
-            return false;
+    fn period_ok(&self, st: &mut State, start: M, y: &[V; N_STATE], s: [V; 3]) -> M {
+        let [slope, dv_guess, s_new] = s;
+        let finite = (0..6).fold(start, |f, r| f & y[r].is_finite());
+        let v0 = V::load(&st.x[3]);
+        let two = V::splat(2.0);
+        let dv = two * (y[3] - v0).abs().max(dv_guess);
+        let ok = finite & self.tolerance_ok(v0, dv, slope);
+        let carried = RegimeV {
+            side: V::load(&st.extra.side),
+            offset: V::load(&st.extra.offset),
+            dry: st.extra.dry,
+            speed: V::load(&st.extra.speed),
+            push: V::load(&st.extra.push),
+            bound: V::load(&st.extra.bound),
+            decay: V::load(&st.extra.decay),
+            mt_over_h: V::load(&st.extra.mt_over_h),
         };
-        let same = end.side == st.extra.side[l] && end.offset == st.extra.offset[l];
-        let end_admits =
-            !end.dry || !(end.speed <= dv || end.push <= end.bound + end.mt_over_h * dv);
-        if !(same && end_admits) {
-            return false;
-        }
-        let s_old = st.setpoint[l];
-        let fe = s_new - (y[2][l] + s_old);
-        let fe_motor = s_new - (y[0][l] + s_old);
-        if fe.abs() > self.maps.fe_limit[l] || fe_motor.abs() > self.maps.fe_limit[l] {
-            return false;
-        }
-        st.extra.side[l] = end.side;
-        st.extra.offset[l] = end.offset;
-        st.extra.dry[l] = end.dry;
-        st.extra.speed[l] = end.speed;
-        st.extra.push[l] = end.push;
-        st.extra.bound[l] = end.bound;
-        st.extra.decay[l] = end.decay;
-        st.extra.mt_over_h[l] = end.mt_over_h;
-        if let Some(cache) = cache {
-            st.extra.cache[l] = cache;
-        }
-        true
+        let ok = ok & (!dv.gt(two * dv_guess) | carried.admits(dv));
+        let (end, end_ok, friction) = self.end_regime(y, ok);
+        let same = end.side.eq(carried.side) & end.offset.eq(carried.offset);
+        let ok = ok & end_ok & same & end.admits(dv);
+        let s_old = V::load(&st.setpoint);
+        let fe_limit = V::load(&self.maps.fe_limit);
+        let fe = s_new - (y[2] + s_old);
+        let fe_motor = s_new - (y[0] + s_old);
+        let ok = ok & !fe.abs().gt(fe_limit) & !fe_motor.abs().gt(fe_limit);
+        let e = &mut st.extra;
+        let keep = |to: &mut Lanes, new: V, m: M| *to = m.select(new, V::load(to)).lanes();
+        keep(&mut e.side, end.side, ok);
+        keep(&mut e.offset, end.offset, ok);
+        e.dry = (ok & end.dry) | (!ok & e.dry);
+        keep(&mut e.speed, end.speed, ok);
+        keep(&mut e.push, end.push, ok);
+        keep(&mut e.bound, end.bound, ok);
+        keep(&mut e.decay, end.decay, ok);
+        keep(&mut e.mt_over_h, end.mt_over_h, ok);
+        let cached = ok & friction;
+        keep(&mut e.cache[0], y[3], cached);
+        keep(&mut e.cache[1], end.bound, cached);
+        keep(&mut e.cache[2], end.decay, cached);
+        ok
     }
 
-    /// `linear_regime` of lane `l` at `y` (positions relative to the previous setpoint),
-    /// with the friction bound's cache entry it computed.
+    /// Per lane, the friction linearisation's force error `e_F(Δv, k)` within tolerance
+    /// where it is asked (a Stribeck zone that the velocity change `dv` may reach from `v0`):
+    /// at `k = 2`, else at the sharper `k = (4u² − 2) exp(−u²)` of `try_exact_period`, its
+    /// `exp` the scalar `libm::exp` of the lanes that need it. The substeps' own
+    /// velocities are left to the scalar servo.
     #[inline(always)]
-    #[allow(clippy::type_complexity)]
-    fn end_regime(
-        &self,
-        l: usize,
-        y: &[Lanes; N_STATE],
-    ) -> Option<(Regime, Option<(f64, f64, f64)>)> {
-        let [x_m, v_m, x_t, v_t, force] = [y[0][l], y[1][l], y[2][l], y[3][l], y[4][l]];
-        if force.abs() > self.maps.half_limit[l] {
-            return None;
+    fn tolerance_ok(&self, v0: V, dv: V, slope: V) -> M {
+        let inv_vs = V::load(&self.inv_stribeck);
+        let slope_step = V::load(&self.slope_step);
+        let tolerance = V::load(&self.tolerance);
+        let asked =
+            slope_step.gt(V::splat(0.0)) & ((v0.abs() - dv) * inv_vs).le(V::splat(40f64.sqrt()));
+        let base = V::load(&self.delta_friction) * inv_vs * inv_vs;
+        let grid_slope = V::splat(0.0) * slope_step;
+        let error = |k: V| {
+            let curvature = base * k;
+            (slope - grid_slope).abs() * dv + V::splat(0.5) * curvature * dv * dv
+        };
+        let coarse = error(V::splat(2.0)).le(tolerance);
+        let u_low = (v0.abs() - dv).max(V::splat(0.0)) * inv_vs;
+        let sharper = asked & !coarse & u_low.ge(V::splat(1.23));
+        let mut sharp = M::default();
+        if sharper.any() {
+            let bits = sharper.bits();
+            let u = u_low.lanes();
+            let decay: Lanes = std::array::from_fn(|l| match bits >> l & 1 {
+                1 => exp(-(u[l] * u[l])),
+                _ => 0.0,
+            });
+            let k = (V::splat(4.0) * u_low * u_low - V::splat(2.0)) * V::load(&decay);
+            sharp = sharper & error(k).le(tolerance);
         }
-        let (k, c) = (self.stiffness[l], self.damping[l]);
+        !asked | coarse | sharp
+    }
+
+    /// `linear_regime` per lane at `y` (positions relative to the previous setpoint): the
+    /// regime, whether there is one (beyond half the force limit, inside the backlash gap
+    /// or pulling back in it, or at rest with dry friction there is none), and whether the
+    /// lane has dry friction (its bound then cached). `exp` only in the lanes of `asked`.
+    #[inline(always)]
+    fn end_regime(&self, y: &[V; N_STATE], asked: M) -> (RegimeV, M, M) {
+        let [x_m, v_m, x_t, v_t, force] = [y[0], y[1], y[2], y[3], y[4]];
+        let zero = V::splat(0.0);
+        let (one, minus_one) = (V::splat(1.0), V::splat(-1.0));
+        let force_ok = !force.abs().gt(V::load(&self.maps.half_limit));
+        let (k, c) = (V::load(&self.stiffness), V::load(&self.damping));
         let d = x_m - x_t;
-        let hb = self.half_backlash[l];
-        let offset = if hb > 0.0 {
-            let side = if d < 0.0 { -1.0 } else { 1.0 };
-            let f_spring = k * (d - side * hb) + c * (v_m - v_t);
-            if d.abs() <= hb || side * f_spring <= 0.0 {
-                return None;
-            }
-            side * hb
-        } else {
-            0.0
-        };
-        let (fc, fs) = (self.coulomb[l], self.static_friction[l]);
-        if fc == 0.0 && fs == 0.0 {
-            let regime = Regime::without_friction(offset);
-            return Some((regime, None));
-        }
-        if v_t == 0.0 {
-            return None;
-        }
+        let hb = V::load(&self.half_backlash);
+        // Backlash: in contact on the side the motor is, and pushing there.
+        let play = hb.gt(zero);
+        let gap_side = d.lt(zero).select(minus_one, one);
+        let f_gap = k * (d - gap_side * hb) + c * (v_m - v_t);
+        let in_contact = !(d.abs().le(hb) | (gap_side * f_gap).le(zero));
+        let offset = play.select(gap_side * hb, zero);
+        let (fc, fs) = (V::load(&self.coulomb), V::load(&self.static_friction));
+        let frictionless = fc.eq(zero) & fs.eq(zero);
+        // Dry friction: slipping (at rest it sticks, which the map does not model).
         let f_spring = k * (d - offset) + c * (v_m - v_t);
-        let side = if v_t < 0.0 { -1.0 } else { 1.0 };
-        let (bound, decay) = stribeck_bound_decay(v_t, fc, fs, self.stribeck[l]);
-        let regime = Regime {
-            side,
+        let side = v_t.lt(zero).select(minus_one, one);
+        let mt_over_h = V::load(&self.mt_over_h);
+        let (bound, decay) = self.bound_decay(v_t, asked & !frictionless);
+        let dry = !frictionless;
+        let regime = RegimeV {
+            side: dry.select(side, zero),
             offset,
-            dry: true,
-            speed: v_t.abs(),
-            push: side * (self.mt_over_h[l] * v_t + f_spring),
-            bound,
-            decay,
-            mt_over_h: self.mt_over_h[l],
+            dry,
+            speed: dry.select(v_t.abs(), zero),
+            push: dry.select(side * (mt_over_h * v_t + f_spring), zero),
+            bound: dry.select(bound, zero),
+            decay: dry.select(decay, zero),
+            mt_over_h: dry.select(mt_over_h, zero),
         };
-        Some((regime, Some((v_t, bound, decay))))
+        let ok = force_ok & (!play | in_contact) & (frictionless | !v_t.eq(zero));
+        (regime, ok, dry)
+    }
+
+    /// `stribeck_bound_decay` per lane at the table's velocity `v`: the friction bound
+    /// `g(v) = Fc + (Fs − Fc) exp(−(v/vs)²)` and its decay, by the same cases and operations
+    /// (no decay at `Fs = Fc` or at rest, none left beyond `(v/vs)² > 40` or without a
+    /// Stribeck velocity); the `exp` only in the lanes of `asked` that need it.
+    #[inline(always)]
+    fn bound_decay(&self, v: V, asked: M) -> (V, V) {
+        let (fc, fs) = (V::load(&self.coulomb), V::load(&self.static_friction));
+        let vs = V::load(&self.stribeck);
+        let (zero, one) = (V::splat(0.0), V::splat(1.0));
+        let flat = fs.eq(fc) | v.eq(zero);
+        let u = v / vs;
+        let u2 = u * u;
+        let beyond = !flat & (vs.le(zero) | u2.gt(V::splat(40.0)));
+        let within = !flat & !beyond;
+        let mut decay = zero;
+        let needed = within & asked;
+        if needed.any() {
+            let bits = needed.bits();
+            let u2 = u2.lanes();
+            let e: Lanes = std::array::from_fn(|l| match bits >> l & 1 {
+                1 => exp(-u2[l]),
+                _ => 0.0,
+            });
+            decay = V::load(&e);
+        }
+        let bound = flat.select(fs, beyond.select(fc, fc + (fs - fc) * decay));
+        (bound, flat.select(one, beyond.select(zero, decay)))
     }
 }
 
@@ -268,62 +326,46 @@ impl LaneKind for DriveLaneGroup {
     }
 
     /// One period by the lanes' slope-0 maps where every lane's checks pass (state
-    /// updated); per lane, whether it was taken.
+    /// updated); per lane, whether it was taken. Every check is a lane mask.
     #[inline(always)]
-    fn mapped_period(&self, st: &mut State, q: f64) -> [bool; LANES] {
+    fn mapped_period(&self, st: &mut State, q: f64) -> M {
         let step = self.maps.step(st, q);
-        let dv_guess: Lanes = std::array::from_fn(|l| (step.v_ff[l] - st.v_ff[l]).abs());
-        let v0 = st.x[3];
+        let dv_guess = (step.v_ff - V::load(&st.v_ff)).abs();
+        let v0 = V::load(&st.x[3]);
+        let zero = V::splat(0.0);
+        let (inv_vs, slope_step) = (V::load(&self.inv_stribeck), V::load(&self.slope_step));
         // The slope at v₀ and the friction input, as `try_exact_period` forms them.
-        let mut slope = [0.0; LANES];
-        let mut friction = [0.0; LANES];
-        let mut start_ok = [false; LANES];
-        for l in 0..LANES {
-            let side = st.extra.side[l];
-            let f0 = if side == 0.0 {
-                0.0
-            } else {
-                -side * st.extra.bound[l]
-            };
-            let u = v0[l].abs() * self.inv_stribeck[l];
-            let c = 2.0 * self.delta_friction[l] * u * self.inv_stribeck[l] * st.extra.decay[l];
-            slope[l] = if side == 0.0 || self.slope_step[l] == 0.0 {
-                0.0
-            } else {
-                c
-            };
-            let grid_slope = 0.0 * self.slope_step[l];
-            friction[l] = f0 - grid_slope * v0[l];
-            let margin = 2.0 * dv_guess[l];
-            start_ok[l] = st.live[l]
-                & st.extra.has[l]
-                & admits(&st.extra, l, margin)
-                & (slope[l] * self.inv_slope_step[l] < 0.5 || slope[l] == 0.0);
-        }
+        let side = V::load(&st.extra.side);
+        let no_side = side.eq(zero);
+        let f0 = no_side.select(zero, -side * V::load(&st.extra.bound));
+        let u = v0.abs() * inv_vs;
+        let c =
+            V::splat(2.0) * V::load(&self.delta_friction) * u * inv_vs * V::load(&st.extra.decay);
+        let slope = (no_side | slope_step.eq(zero)).select(zero, c);
+        let grid_slope = zero * slope_step;
+        let friction = f0 - grid_slope * v0;
+        let margin = V::splat(2.0) * dv_guess;
+        let carried = RegimeV {
+            side,
+            offset: zero,
+            dry: st.extra.dry,
+            speed: V::load(&st.extra.speed),
+            push: V::load(&st.extra.push),
+            bound: V::load(&st.extra.bound),
+            decay: zero,
+            mt_over_h: V::load(&st.extra.mt_over_h),
+        };
+        let start_ok = st.live
+            & st.extra.has
+            & carried.admits(margin)
+            & ((slope * V::load(&self.inv_slope_step)).lt(V::splat(0.5)) | slope.eq(zero))
+            & M::splat(q.is_finite());
         let [u0, u1, u2, u3, u4, u5, u6, u7, u8] = step.state_inputs(st);
-        let u: [Lanes; N_INPUT] = [
-            u0,
-            u1,
-            u2,
-            u3,
-            u4,
-            u5,
-            u6,
-            u7,
-            u8,
-            friction,
-            st.extra.offset,
-        ];
+        let offset = V::load(&st.extra.offset);
+        let u = [u0, u1, u2, u3, u4, u5, u6, u7, u8, friction, offset];
         let y = lane_product(&self.maps.cols, &u);
-        let mut ok = [false; LANES];
-        for l in 0..LANES {
-            ok[l] = start_ok[l]
-                && q.is_finite()
-                && self.period_ok(st, l, &y, &slope, &dv_guess, step.s_new[l]);
-        }
-        for l in 0..LANES {
-            step.take(st, l, ok[l], &y);
-        }
+        let ok = self.period_ok(st, start_ok, &y, [slope, dv_guess, step.s_new]);
+        step.take(st, ok, &y);
         ok
     }
 
@@ -332,17 +374,18 @@ impl LaneKind for DriveLaneGroup {
     fn put(servo: &mut AxisServo, st: &State, l: usize) {
         servo.set_twin_state(&st.twin_state(l));
         let r = &st.extra;
-        let regime = r.has[l].then_some(Regime {
+        let regime = r.has.get(l).then_some(Regime {
             side: r.side[l],
             offset: r.offset[l],
-            dry: r.dry[l],
+            dry: r.dry.get(l),
             speed: r.speed[l],
             push: r.push[l],
             bound: r.bound[l],
             decay: r.decay[l],
             mt_over_h: r.mt_over_h[l],
         });
-        servo.set_regime_state(regime, r.cache[l]);
+        let cache = (r.cache[0][l], r.cache[1][l], r.cache[2][l]);
+        servo.set_regime_state(regime, cache);
     }
 
     /// `servo`'s state to lane `l`.
@@ -350,26 +393,20 @@ impl LaneKind for DriveLaneGroup {
         st.set_twin_state(l, &servo.twin_state());
         let (regime, cache) = servo.regime_state();
         let e = &mut st.extra;
-        e.has[l] = regime.is_some();
+        e.has.set(l, regime.is_some());
         let r = regime.unwrap_or(Regime::without_friction(0.0));
         e.side[l] = r.side;
         e.offset[l] = r.offset;
-        e.dry[l] = r.dry;
+        e.dry.set(l, r.dry);
         e.speed[l] = r.speed;
         e.push[l] = r.push;
         e.bound[l] = r.bound;
         e.decay[l] = r.decay;
         e.mt_over_h[l] = r.mt_over_h;
-        e.cache[l] = cache;
+        (e.cache[0][l], e.cache[1][l], e.cache[2][l]) = cache;
     }
 
     fn advance(servo: &mut AxisServo, setpoint: f64, time_s: f64) -> Result<()> {
         servo.advance(setpoint, time_s)
     }
-}
-
-/// [`Regime::admits`] of lane `l`'s carried regime.
-#[inline(always)]
-fn admits(r: &RegimeLanes, l: usize, dv_margin: f64) -> bool {
-    !r.dry[l] || !(r.speed[l] <= dv_margin || r.push[l] <= r.bound[l] + r.mt_over_h[l] * dv_margin)
 }

@@ -23,8 +23,8 @@
 
 use super::lane_step::{self, lane_product, LaneKind, LaneMaps, LaneState, Lanes, LANES};
 use super::period_map::N_TWIN_INPUT;
-use super::product::all_finite;
 use super::servo::AxisServo;
+use super::simd::{M, V};
 use crate::error::Result;
 use crate::{Axis, AxisVec};
 
@@ -83,29 +83,28 @@ impl LaneKind for TwinLanes {
     }
 
     /// One period by the lanes' maps; per lane, whether it was taken (state updated) or the
-    /// lane must run it scalar (state untouched).
+    /// lane must run it scalar (state untouched). Every check is a lane mask: a lane's
+    /// choice is a select, not a branch.
     #[inline(always)]
-    // `!(a > b)`: the scalar period's test, which a NaN passes (the finite test catches it).
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    fn mapped_period(&self, st: &mut LaneState<()>, q: f64) -> [bool; LANES] {
+    fn mapped_period(&self, st: &mut LaneState<()>, q: f64) -> M {
         let m = &self.maps;
         let step = m.step(st, q);
         let (s_new, s_old) = (step.s_new, step.s_old);
         let y = lane_product(&m.cols, &step.state_inputs(st));
-        let mut ok = [false; LANES];
-        for l in 0..LANES {
-            let x_m = y[0][l] + s_old[l];
-            let x_t = y[2][l] + s_old[l];
-            // `&` rather than `&&`: every condition is computed, without branches.
-            ok[l] = st.live[l]
-                & q.is_finite()
-                & (st.x[4][l].abs() <= m.half_limit[l])
-                & !(y[4][l].abs() > m.half_limit[l])
-                & all_finite(&std::array::from_fn(|r| y[r][l]))
-                & !((s_new[l] - x_t).abs() > m.fe_limit[l])
-                & !((s_new[l] - x_m).abs() > m.fe_limit[l]);
-            step.take(st, l, ok[l], &y);
-        }
+        let (half_limit, fe_limit) = (V::load(&m.half_limit), V::load(&m.fe_limit));
+        let x_m = y[0] + s_old;
+        let x_t = y[2] + s_old;
+        // The scalar period's `!(a > b)`, which a NaN passes (the finite test catches it);
+        // `all_finite` over the first six rows.
+        let finite = (0..6).fold(M::all_true(), |f, r| f & y[r].is_finite());
+        let ok = st.live
+            & M::splat(q.is_finite())
+            & V::load(&st.x[4]).abs().le(half_limit)
+            & !y[4].abs().gt(half_limit)
+            & finite
+            & !(s_new - x_t).abs().gt(fe_limit)
+            & !(s_new - x_m).abs().gt(fe_limit);
+        step.take(st, ok, &y);
         ok
     }
 

@@ -24,17 +24,15 @@
 
 use super::period_map::{MappedPeriod, TwinState, N_STATE, N_TWIN_INPUT};
 use super::servo::AxisServo;
+use super::simd::{M, V};
 use crate::error::Result;
 use crate::{Axis, AxisVec};
 
 /// Setpoints stepped at a time (a lane group's outputs: [`BLOCK`] per servo).
 pub const BLOCK: usize = 256;
 
-/// Servos per lane group: one AVX-512 register of f64 (two AVX ones).
-pub const LANES: usize = 8;
-
-/// One value per lane.
-pub(super) type Lanes = [f64; LANES];
+pub(super) use super::simd::Lanes;
+pub use super::simd::LANES;
 
 /// The period maps of a lane group's servos in lanes: the first `C` columns, `cols[j][r][l]`
 /// (column `j`, row `r`, lane `l`), and the constants of the period's inputs and checks
@@ -83,12 +81,11 @@ impl<const C: usize> LaneMaps<C> {
     /// The period's setpoint step to the axis position `q` (mm, deg), per lane.
     #[inline(always)]
     pub fn step<E>(&self, st: &LaneState<E>, q: f64) -> SetpointStep {
-        let s_new: Lanes = std::array::from_fn(|l| q * self.scale[l]);
-        let s_old = st.setpoint;
-        let v_ff: Lanes = std::array::from_fn(|l| (s_new[l] - s_old[l]) * self.inv_t_ipo[l]);
-        let f_ff = std::array::from_fn(|l| {
-            self.aff_mass[l] * ((v_ff[l] - st.v_ff[l]) * self.inv_t_ipo[l])
-        });
+        let inv_t_ipo = V::load(&self.inv_t_ipo);
+        let s_new = V::splat(q) * V::load(&self.scale);
+        let s_old = V::load(&st.setpoint);
+        let v_ff = (s_new - s_old) * inv_t_ipo;
+        let f_ff = V::load(&self.aff_mass) * ((v_ff - V::load(&st.v_ff)) * inv_t_ipo);
         SetpointStep {
             s_new,
             s_old,
@@ -101,49 +98,52 @@ impl<const C: usize> LaneMaps<C> {
 /// One period's setpoint step per lane, SI: the new setpoint `s⁺`, the previous `s`, the
 /// feedforward velocity `v_ff = (s⁺ - s) / T_ipo` and force `F_ff`.
 pub(super) struct SetpointStep {
-    pub s_new: Lanes,
-    pub s_old: Lanes,
-    pub v_ff: Lanes,
-    pub f_ff: Lanes,
+    pub s_new: V,
+    pub s_old: V,
+    pub v_ff: V,
+    pub f_ff: V,
 }
 
 impl SetpointStep {
     /// The map inputs both kinds share: the state with its positions relative to the
     /// previous setpoint, `Δs = s⁺ - s` and `F_ff`.
     #[inline(always)]
-    pub fn state_inputs<E>(&self, st: &LaneState<E>) -> [Lanes; N_TWIN_INPUT] {
+    pub fn state_inputs<E>(&self, st: &LaneState<E>) -> [V; N_TWIN_INPUT] {
+        let x = |r: usize| V::load(&st.x[r]);
         let s_old = self.s_old;
-        let relative = |x: &Lanes| std::array::from_fn(|l| x[l] - s_old[l]);
         [
-            relative(&st.x[0]),
-            st.x[1],
-            relative(&st.x[2]),
-            st.x[3],
-            st.x[4],
-            st.x[5],
-            relative(&st.x[6]),
-            std::array::from_fn(|l| self.s_new[l] - s_old[l]),
+            x(0) - s_old,
+            x(1),
+            x(2) - s_old,
+            x(3),
+            x(4),
+            x(5),
+            x(6) - s_old,
+            self.s_new - s_old,
             self.f_ff,
         ]
     }
 
-    /// Lane `l`'s state after the period: the map's result `y` (positions relative to the
-    /// previous setpoint) where `ok`, its state unchanged where not.
+    /// The lanes' state after the period: the map's result `y` (positions relative to the
+    /// previous setpoint) where `ok`, their state unchanged where not.
     #[inline(always)]
-    pub fn take<E>(&self, st: &mut LaneState<E>, l: usize, ok: bool, y: &[Lanes; N_STATE]) {
+    pub fn take<E>(&self, st: &mut LaneState<E>, ok: M, y: &[V; N_STATE]) {
         let s_old = self.s_old;
-        let take = |new: f64, old: f64| if ok { new } else { old };
-        st.x[0][l] = take(y[0][l] + s_old[l], st.x[0][l]);
-        st.x[1][l] = take(y[1][l], st.x[1][l]);
-        st.x[2][l] = take(y[2][l] + s_old[l], st.x[2][l]);
-        st.x[3][l] = take(y[3][l], st.x[3][l]);
-        st.x[4][l] = take(y[4][l], st.x[4][l]);
-        st.x[5][l] = take(y[5][l], st.x[5][l]);
-        st.x[6][l] = take(y[6][l] + s_old[l], st.x[6][l]);
-        st.velocity[l] = take(y[3][l], st.velocity[l]);
-        st.setpoint[l] = take(self.s_new[l], s_old[l]);
-        st.v_ff[l] = take(self.v_ff[l], st.v_ff[l]);
-        st.periods_exact[l] += u64::from(ok);
+        let take = |to: &mut Lanes, new: V| *to = ok.select(new, V::load(to)).lanes();
+        take(&mut st.x[0], y[0] + s_old);
+        take(&mut st.x[1], y[1]);
+        take(&mut st.x[2], y[2] + s_old);
+        take(&mut st.x[3], y[3]);
+        take(&mut st.x[4], y[4]);
+        take(&mut st.x[5], y[5]);
+        take(&mut st.x[6], y[6] + s_old);
+        take(&mut st.velocity, y[3]);
+        st.setpoint = ok.select(self.s_new, s_old).lanes();
+        take(&mut st.v_ff, self.v_ff);
+        let bits = ok.bits();
+        for (l, n) in st.periods_exact.iter_mut().enumerate() {
+            *n += u64::from(bits >> l & 1);
+        }
     }
 }
 
@@ -159,7 +159,7 @@ pub(super) struct LaneState<E> {
     pub velocity: Lanes,
     pub periods_exact: [u64; LANES],
     /// The lane steps a servo that has not failed.
-    pub live: [bool; LANES],
+    pub live: M,
     pub extra: E,
 }
 
@@ -198,7 +198,7 @@ pub(super) trait LaneKind {
     fn inv_scale(&self) -> &Lanes;
     /// One period by the lanes' maps to the axis position `q`; per lane, whether it was
     /// taken (state updated) or the lane must run it scalar (state untouched).
-    fn mapped_period(&self, st: &mut LaneState<Self::Extra>, q: f64) -> [bool; LANES];
+    fn mapped_period(&self, st: &mut LaneState<Self::Extra>, q: f64) -> M;
     /// Lane `l`'s whole state to `servo`.
     fn put(servo: &mut AxisServo, st: &LaneState<Self::Extra>, l: usize);
     /// `servo`'s whole state to lane `l`.
@@ -234,19 +234,28 @@ pub(super) fn step_block<K: LaneKind>(
     for (j, (q, &t)) in setpoints.iter().zip(times_s).enumerate() {
         let q = q[axis];
         let ok = group.mapped_period(&mut st, q);
-        for (l, &s) in group.servos().iter().enumerate() {
-            if st.live[l] && !ok[l] {
-                handed_back += 1;
-                if !scalar_period(group, all, &mut st, l, q, t) {
-                    completed[s] = j;
+        let scalar = st.live & !ok;
+        if scalar.any() {
+            for (l, &s) in group.servos().iter().enumerate() {
+                if scalar.get(l) {
+                    handed_back += 1;
+                    if !scalar_period(group, all, &mut st, l, q, t) {
+                        completed[s] = j;
+                    }
                 }
             }
-            if st.live[l] {
+        }
+        let live = st.live.bits();
+        let x_t = V::load(&st.x[2]);
+        let inv_scale = V::load(inv_scale);
+        let position = (x_t * inv_scale).lanes();
+        let error = ((V::load(&st.setpoint) - x_t) * inv_scale).lanes();
+        for (l, &s) in group.servos().iter().enumerate() {
+            if live >> l & 1 == 1 {
                 stepped += 1;
-                let x_t = st.x[2][l];
-                actual[s * BLOCK + j] = x_t * inv_scale[l];
+                actual[s * BLOCK + j] = position[l];
                 if let Some(fe) = following_error.as_deref_mut() {
-                    fe[s * BLOCK + j] = (st.setpoint[l] - x_t) * inv_scale[l];
+                    fe[s * BLOCK + j] = error[l];
                 }
             }
         }
@@ -272,7 +281,7 @@ fn scalar_period<K: LaneKind>(
     K::put(servo, st, l);
     if K::advance(servo, q, t).is_err() {
         all[s] = None;
-        st.live[l] = false;
+        st.live.set(l, false);
         return false;
     }
     K::get(servo, st, l);
@@ -285,7 +294,7 @@ fn gather<K: LaneKind>(group: &K, all: &[Option<AxisServo>]) -> LaneState<K::Ext
     for (l, &s) in group.servos().iter().enumerate() {
         if let Some(servo) = all[s].as_ref() {
             K::get(servo, &mut st, l);
-            st.live[l] = true;
+            st.live.set(l, true);
         }
     }
     st
@@ -294,26 +303,34 @@ fn gather<K: LaneKind>(group: &K, all: &[Option<AxisServo>]) -> LaneState<K::Ext
 /// The live lanes' state back to their servos.
 fn scatter<K: LaneKind>(group: &K, all: &mut [Option<AxisServo>], st: &LaneState<K::Extra>) {
     for (l, &s) in group.servos().iter().enumerate() {
-        if let (true, Some(servo)) = (st.live[l], all[s].as_mut()) {
+        if let (true, Some(servo)) = (st.live.get(l), all[s].as_mut()) {
             K::put(servo, st, l);
         }
     }
 }
 
 /// `y_r = Σ_j cols[j][r] u_j` per lane, from 0 in column order: per lane the scalar
-/// period map's product, one vector multiplication and one addition per column and row.
+/// period map's product, one multiplication and one addition per column, row and lane.
+///
+/// Written over plain arrays, not [`V`]: the compiler vectorises the loop at the width of
+/// the function it is inlined into (`DriveLanes::step_block` is compiled for AVX-512 or
+/// AVX at run time: one register a row), where `wide`'s vectors, picked when that crate
+/// is compiled, are pairs of SSE2 registers; measured, the product in [`V`] made the
+/// tolerance study about 15 % slower (docs/performance.md). The order of operations,
+/// hence every bit, is the same either way.
 #[inline(always)]
 pub(super) fn lane_product<const N: usize>(
     cols: &[[Lanes; N_STATE]; N],
-    u: &[Lanes; N],
-) -> [Lanes; N_STATE] {
+    u: &[V; N],
+) -> [V; N_STATE] {
+    let u: [Lanes; N] = std::array::from_fn(|j| u[j].lanes());
     let mut y = [[0.0; LANES]; N_STATE];
-    for (col, u_j) in cols.iter().zip(u) {
+    for (col, u_j) in cols.iter().zip(&u) {
         for (y_r, m_r) in y.iter_mut().zip(col) {
             for l in 0..LANES {
                 y_r[l] += m_r[l] * u_j[l];
             }
         }
     }
-    y
+    y.map(|y_r| V::load(&y_r))
 }

@@ -11,6 +11,7 @@ mod period_map;
 pub mod presliding;
 mod product;
 pub mod servo;
+mod simd;
 
 pub use drives::{Drives, DrivesState};
 pub use lanes::DriveLanes;

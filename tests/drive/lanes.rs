@@ -4,17 +4,31 @@
 //! ragged one), with and without dry friction and backlash, with a point whose drives fail
 //! mid-block and one whose twin leaves the map (force beyond half its limit) for a while.
 
-use std::path::Path;
-
 use mtsim::drive::{AxisServo, DriveLanes, Drives};
 use mtsim::input::Machine;
 use mtsim::{Axis, AxisVec};
+
+/// The axes at `phase` (rad) of the path: X and Y on a circle of 25 mm, Z, A and C
+/// moving with it.
+fn at_phase(phase: f64) -> AxisVec {
+    let mut q = AxisVec::ZERO;
+    q[Axis::X] = 25.0 * phase.cos() - 25.0;
+    q[Axis::Y] = 25.0 * phase.sin();
+    q[Axis::Z] = 3.0 * (0.5 * phase).sin();
+    q[Axis::A] = -10.0 * (0.5 * phase).sin();
+    q[Axis::C] = 40.0 * phase;
+    q
+}
+
+/// A setpoint stream: the axes' positions (mm, deg) at `t` s.
+type Path = fn(f64) -> AxisVec;
 
 /// Interpolation periods of the run (the bundled machine's period is 1 ms): 6 s.
 const PERIODS: usize = 6_000;
 
 fn trt_ac() -> Machine {
-    Machine::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/trt-ac.toml")).unwrap()
+    Machine::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/trt-ac.toml"))
+        .unwrap()
 }
 
 /// A cone-like path of the five axes at `t` s: X and Y on a circle of 25 mm at about
@@ -23,13 +37,7 @@ fn trt_ac() -> Machine {
 fn setpoint(t: f64) -> AxisVec {
     // ω = 1 rad/s reached at 0.5 s: the phase is ∫ω dt.
     let phase = if t < 0.5 { t * t } else { t - 0.25 };
-    let mut q = AxisVec::ZERO;
-    q[Axis::X] = 25.0 * phase.cos() - 25.0;
-    q[Axis::Y] = 25.0 * phase.sin();
-    q[Axis::Z] = 3.0 * (0.5 * phase).sin();
-    q[Axis::A] = -10.0 * (0.5 * phase).sin();
-    q[Axis::C] = 40.0 * phase;
-    q
+    at_phase(phase)
 }
 
 /// `n` points that differ in X's and Y's kv (so every X and Y twin is distinct) and, with
@@ -67,13 +75,13 @@ const FORCE_LIMIT_N: f64 = 60.0;
 
 /// One point alone: per setpoint, each axis's actual position and following error of its
 /// drive and its twin's actual position, until the first of them fails.
-fn single(machine: &Machine, q0: &AxisVec) -> Vec<Vec<(Axis, f64, f64, f64)>> {
+fn single(machine: &Machine, q0: &AxisVec, path: Path) -> Vec<Vec<(Axis, f64, f64, f64)>> {
     let mut drives = Drives::new(machine, q0, false).unwrap();
     let mut twins = Drives::new(machine, q0, true).unwrap();
     let mut out = Vec::new();
     for k in 1..=PERIODS {
         let t = k as f64 * 1e-3;
-        let q = setpoint(t);
+        let q = path(t);
         let (Ok(d), Ok(linear)) = (drives.step(&q, t), twins.step_actual(&q, t)) else {
             break;
         };
@@ -88,7 +96,7 @@ fn single(machine: &Machine, q0: &AxisVec) -> Vec<Vec<(Axis, f64, f64, f64)>> {
 
 /// The same points in lanes, block by block: each point's outputs until it stops.
 fn in_lanes(machines: &[Machine], q0: &AxisVec) -> Vec<Vec<Vec<(Axis, f64, f64, f64)>>> {
-    in_lanes_counted(machines, q0).0
+    in_lanes_counted(machines, q0, setpoint).0
 }
 
 /// [`in_lanes`] with [`DriveLanes::lane_periods`] at the end.
@@ -96,6 +104,7 @@ fn in_lanes(machines: &[Machine], q0: &AxisVec) -> Vec<Vec<Vec<(Axis, f64, f64, 
 fn in_lanes_counted(
     machines: &[Machine],
     q0: &AxisVec,
+    path: Path,
 ) -> (Vec<Vec<Vec<(Axis, f64, f64, f64)>>>, [(u64, u64); 2]) {
     let refs: Vec<&Machine> = machines.iter().collect();
     let mut lanes = DriveLanes::new(&refs, q0).unwrap();
@@ -104,7 +113,7 @@ fn in_lanes_counted(
     // Blocks of 256 and a ragged last one.
     let times: Vec<f64> = (1..=PERIODS).map(|k| k as f64 * 1e-3).collect();
     for block_t in times.chunks(mtsim::drive::lanes::BLOCK) {
-        let block_q: Vec<AxisVec> = block_t.iter().map(|&t| setpoint(t)).collect();
+        let block_q: Vec<AxisVec> = block_t.iter().map(|&t| path(t)).collect();
         lanes.step_block(&block_q, block_t);
         for (i, point) in out.iter_mut().enumerate() {
             if !alive[i] {
@@ -146,7 +155,7 @@ fn lane_groups_of_1_to_9_points_give_each_points_own_drives_bit_for_bit() {
             let machines = machines(n, nonlinear);
             let lanes = in_lanes(&machines, &q0);
             for (i, (machine, lane)) in machines.iter().zip(&lanes).enumerate() {
-                let single = single(machine, &q0);
+                let single = single(machine, &q0, setpoint);
                 let what = format!("{n} points, nonlinear {nonlinear}, point {i}");
                 // Point 2's following error passes its limit within the first turn, in
                 // the middle of a block; the others run to the end.
@@ -170,7 +179,7 @@ fn lane_groups_of_1_to_9_points_give_each_points_own_drives_bit_for_bit() {
 fn the_lane_groups_step_most_periods_themselves() {
     let q0 = setpoint(0.0);
     let machines = machines(8, true);
-    let (_, [drives, twins]) = in_lanes_counted(&machines, &q0);
+    let (_, [drives, twins]) = in_lanes_counted(&machines, &q0, setpoint);
     for (what, (stepped, handed_back)) in [("drives", drives), ("twins", twins)] {
         // Two groups (X and Y) of 8 lanes over the periods, less the failing point's.
         assert!(
@@ -205,4 +214,103 @@ fn the_force_limited_twin_leaves_the_map_for_some_periods() {
         substepped > 10 && mapped > 2 * substepped,
         "{mapped} {substepped}"
     );
+}
+
+/// Per-lane regime switches on random drives: 16 points (two lane groups of X and two of
+/// Y drives) whose X and Y drives differ in kv, backlash (0-8 µm, some none), Coulomb
+/// friction (0-300 N, some none), static over Coulomb friction (1-1.6) and Stribeck
+/// velocity (0.5-5 mm/s), on a path that stops and dwells (the table sticks), creeps at
+/// 1.25 mm/s inside the Stribeck zone and reverses (the backlash is taken up). Each point
+/// in lanes gives its single run's bits, and the lanes step most periods themselves (on
+/// this path about two thirds: periods inside the Stribeck zone, sticking or in the gap go
+/// to the scalar servo).
+#[test]
+fn random_drives_switching_regimes_in_lanes_give_their_single_runs_bit_for_bit() {
+    let q0 = stop_and_go(0.0);
+    let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+    let mut uniform = |lo: f64, hi: f64| {
+        // xorshift64*: a fixed, reproducible draw.
+        seed ^= seed >> 12;
+        seed ^= seed << 25;
+        seed ^= seed >> 27;
+        let r = seed.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
+        lo + (hi - lo) * (r as f64 / (1u64 << 53) as f64)
+    };
+    let machines: Vec<Machine> = (0..16)
+        .map(|i| {
+            let mut m = trt_ac();
+            for a in [Axis::X, Axis::Y] {
+                let backlash_mm = if i % 5 == 0 { 0.0 } else { uniform(0.0, 0.008) };
+                let d = m.drive(a).with_kv_per_s(uniform(20.0, 40.0)).unwrap();
+                let mut d = d.with_backlash_mm_or_deg(backlash_mm).unwrap();
+                d.coulomb_n_or_nm = if i % 7 == 3 {
+                    0.0
+                } else {
+                    uniform(20.0, 300.0)
+                };
+                d.static_ratio = uniform(1.0, 1.6);
+                d.stribeck_m_or_rad_per_s = uniform(0.5e-3, 5e-3);
+                m.axis_mut(a).drive = d;
+            }
+            m
+        })
+        .collect();
+    let (lanes, [drives, _]) = in_lanes_counted(&machines, &q0, stop_and_go);
+    let (mut stuck, mut rest) = (0, Vec::new());
+    for (i, (machine, lane)) in machines.iter().zip(&lanes).enumerate() {
+        let single = single(machine, &q0, stop_and_go);
+        assert_eq!(single.len(), PERIODS, "point {i}");
+        assert_eq!(lane.len(), single.len(), "point {i}: setpoints completed");
+        assert!(bits(lane) == bits(&single), "point {i}: outputs differ");
+        // X's table at rest (within 0.1 nm a period: the pre-sliding bristle creeps) over
+        // ten periods of the dwell while friction holds it.
+        let x = |k: usize| single[k].iter().find(|o| o.0 == Axis::X).unwrap().1;
+        let resting = (2000..2400)
+            .filter(|&k| (x(k) - x(k - 1)).abs() < 1e-7)
+            .count();
+        rest.push(resting);
+        if machine.drive(Axis::X).coulomb_n_or_nm > 0.0 && resting >= 10 {
+            stuck += 1;
+        }
+    }
+    assert!(
+        stuck >= 5,
+        "{stuck} points' X tables stuck in the dwell: {rest:?}"
+    );
+    let (stepped, handed_back) = drives;
+    assert!(
+        handed_back > 0 && handed_back * 2 < stepped,
+        "{handed_back} of {stepped} lane periods handed to the scalar servo"
+    );
+}
+
+/// The cone-like path of [`setpoint`] with its angular speed ω (rad/s) piecewise linear
+/// through `(t, ω)`: from rest to 1 by 0.5 s, to rest at 2.0 s, a dwell to 2.4 s, back to
+/// 1 at 2.6 s, down to 0.05 (X and Y at 1.25 mm/s) from 3.7 to 4.5 s, and 1 from 4.7 s.
+/// The phase is ∫ω dt, exact by the trapezoids of the linear pieces.
+fn stop_and_go(t: f64) -> AxisVec {
+    const KNOTS: [(f64, f64); 10] = [
+        (0.0, 0.0),
+        (0.5, 1.0),
+        (1.8, 1.0),
+        (2.0, 0.0),
+        (2.4, 0.0),
+        (2.6, 1.0),
+        (3.5, 1.0),
+        (3.7, 0.05),
+        (4.5, 0.05),
+        (4.7, 1.0),
+    ];
+    let mut phase = 0.0;
+    for w in KNOTS.windows(2) {
+        let ((t0, w0), (t1, w1)) = (w[0], w[1]);
+        let end = t.min(t1);
+        if end <= t0 {
+            break;
+        }
+        let w_end = w0 + (w1 - w0) * (end - t0) / (t1 - t0);
+        phase += 0.5 * (w0 + w_end) * (end - t0);
+    }
+    phase += (t - 4.7).max(0.0);
+    at_phase(phase)
 }

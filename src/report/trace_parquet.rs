@@ -34,7 +34,7 @@ use std::path::PathBuf;
 use arrow::datatypes::ToByteSlice;
 
 use super::thrift_compact::Compact;
-use super::trace::{RunCentring, CENTRING_KEY};
+use super::trace_centring::{RunCentring, CENTRING_KEY};
 use super::trace_rows::{write_all_vectored, write_error, Block, AXES, LINE, THETA, TIME};
 use crate::error::Result;
 use crate::input::program::Direction;

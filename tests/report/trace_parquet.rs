@@ -122,6 +122,8 @@ fn the_parquet_trace_holds_the_csv_trace_s_values_unrounded() {
     assert!(rows > 10_000, "a whole trace: {rows} rows");
     let (_, text, _) = parquet_columns(&pq_dir.join("trace.parquet"));
     assert!(text[0].iter().any(|d| d == "cw") && text[0].iter().any(|d| d == "ccw"));
+    // The ISO circle is centred on its pivot: its centre is tiny, the runs two.
+    assert_read_back_centred_by_an_independent_fit(&csv_dir, &pq_dir, 0.0);
 }
 
 /// The least-squares centre `(a, b)` of `dL = r0 + a cos θ + b sin θ` over rows of
@@ -182,16 +184,6 @@ fn assert_read_back_centred_by_an_independent_fit(csv_dir: &Path, pq_dir: &Path,
             }
         }
     }
-}
-
-#[test]
-fn the_reader_centres_each_run_as_an_independent_fit_does() {
-    let dir = scratch("trace-parquet", "centre");
-    let (csv_dir, pq_dir) = (dir.join("csv"), dir.join("parquet"));
-    run(&csv_dir, TraceFormat::Csv);
-    run(&pq_dir, TraceFormat::Parquet);
-    // The ISO circle is centred on its pivot: its centre is tiny, the runs two.
-    assert_read_back_centred_by_an_independent_fit(&csv_dir, &pq_dir, 0.0);
 }
 
 /// A long trace (eleven revolutions of the bundled cone file in one run, about 400,000 rows,

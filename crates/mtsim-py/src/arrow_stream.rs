@@ -14,7 +14,7 @@ use arrow::datatypes::{DataType, Field, Float64Type, Schema, SchemaRef};
 use arrow::ffi_stream::FFI_ArrowArrayStream;
 use mtsim::error::Error;
 use mtsim::input::program::Direction;
-use mtsim::report::trace::{
+use mtsim::report::trace_centring::{
     centred_deviation_um, centring_per_run, parquet_centrings, CENTRED_COLUMN,
 };
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
@@ -78,11 +78,11 @@ impl Batches {
     }
 
     /// A trace's batches with `deviation_centred_um` appended: each row's dL less its
-    /// run's centring (`mtsim::report::trace::centred_deviation_um`; a run is a stretch of
+    /// run's centring (`mtsim::report::trace_centring::centred_deviation_um`; a run is a stretch of
     /// rows of one direction).
     fn with_centred_column(
         self,
-        centrings: &[mtsim::report::trace::RunCentring],
+        centrings: &[mtsim::report::trace_centring::RunCentring],
     ) -> Result<Batches, String> {
         let mut fields: Vec<Field> = self
             .schema

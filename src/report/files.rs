@@ -5,6 +5,10 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
+/// The summary a simulation leaves in its folder (with each ball-bar run's centring, which
+/// a reader of `trace.csv` applies).
+pub const SUMMARY_FILE: &str = "summary.json";
+
 /// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename, so a
 /// reader never sees a partial file and a failure leaves no partial file behind.
 ///

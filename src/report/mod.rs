@@ -31,6 +31,7 @@ pub mod run_dir;
 pub mod test_info;
 mod thrift_compact;
 pub mod trace;
+pub mod trace_centring;
 pub mod trace_parquet;
 mod trace_rows;
 

@@ -17,6 +17,7 @@ use arrow::datatypes::{DataType, Field, Schema};
 use arrow::record_batch::RecordBatch;
 use parquet::arrow::ArrowWriter;
 use parquet::basic::Compression;
+use parquet::file::metadata::KeyValue;
 use parquet::file::properties::{EnabledStatistics, WriterProperties};
 
 use crate::error::{Error, Result};
@@ -105,6 +106,14 @@ impl Table {
     /// Reads the columns of the Parquet file at `path` whose names `keep` accepts (the
     /// others are not decoded), in the file's order, every row group after the other.
     pub fn read_parquet(path: &Path, keep: &dyn Fn(&str) -> bool) -> Result<Table> {
+        Table::read_parquet_with_metadata(path, keep).map(|(table, _)| table)
+    }
+
+    /// [`Table::read_parquet`], with the file's key-value metadata.
+    pub fn read_parquet_with_metadata(
+        path: &Path,
+        keep: &dyn Fn(&str) -> bool,
+    ) -> Result<(Table, Option<Vec<KeyValue>>)> {
         use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
         use parquet::arrow::ProjectionMask;
 
@@ -119,6 +128,11 @@ impl Table {
             .filter(|(_, f)| keep(f.name()))
             .map(|(i, _)| i)
             .collect();
+        let key_value = builder
+            .metadata()
+            .file_metadata()
+            .key_value_metadata()
+            .cloned();
         let mask = ProjectionMask::roots(builder.parquet_schema(), wanted);
         let reader = builder
             .with_projection(mask)
@@ -143,7 +157,7 @@ impl Table {
                     .ok_or_else(|| bad(format!("column `{name}` changes its type")))?;
             }
         }
-        Ok(table)
+        Ok((table, key_value))
     }
 
     /// Rows in the table (0 without columns).

@@ -25,8 +25,7 @@ use crate::error::{Error, Result};
 use crate::measure::ballbar::TraceEvent;
 use crate::measure::BallbarResult;
 
-/// The summary a simulation leaves in its folder.
-pub const SUMMARY_FILE: &str = "summary.json";
+pub use super::files::SUMMARY_FILE;
 /// The limits and collision summary a simulation leaves beside its trace.
 pub const CHECK_FILE: &str = "check.json";
 

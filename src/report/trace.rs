@@ -1,33 +1,38 @@
 //! `trace.csv` (or `trace.parquet`): one row per traced sample, as a pipeline sink.
 //!
 //! Columns: direction, time, line, θ, then per axis the commanded and actual position and
-//! the following error, then the nonlinear signature, the deviation dL and the centred
-//! deviation `dL - (a cos θ + b sin θ)`. The centring is the least-squares fit of a whole
-//! run, known only at its end ([`TraceSink::end_run`]), so rows are gathered in blocks
-//! ([`Block`], column by column) and each format keeps what it needs until then:
-//! `trace.csv` holds the run's blocks (`CsvRuns`); `trace.parquet` writes each full block
-//! as a row group and holds only each row's `(dL, sin θ, cos θ)` (`ParquetRuns`). Past
-//! [`RAW_IN_MEMORY`] bytes, what is held moves to a binary temporary file (`SpillFile`)
-//! and is read back at the run's end: memory stays bounded. Blocks are reused by the next
-//! run (their memory is mapped once). The trace file appears, by a rename, only when
-//! complete; a run that fails leaves no temporary file.
+//! the following error, then the nonlinear signature and the deviation dL. Rows are
+//! gathered in blocks ([`Block`], column by column) and each full block is written at once:
+//! nothing is held until a run ends, so memory stays flat in the program's length.
+//!
+//! **The centre is metadata, not a column.** The centred deviation
+//! `dL - (a cos θ + b sin θ)` needs the run's least-squares centring `(a, b)`, known only
+//! at the run's end ([`TraceSink::end_run`]). The trace keeps dL, and the centring of each
+//! run goes beside it: in `trace.parquet`'s key-value metadata under [`CENTRING_KEY`] (a
+//! JSON list of `{direction, a_um, b_um, r0_um}` in run order), and for `trace.csv` in the
+//! run folder's `summary.json` (`ballbar.runs[k].centring`, the same numbers). Every reader
+//! applies it ([`centred_deviation_um`]): [`read_trace`], the Python package, the report.
+//! The trace file appears, by a rename, only when complete; a run that fails leaves no
+//! temporary file.
 //!
 //! [`read_trace`] reads a run folder's trace back (`trace.csv` or `trace.parquet`, the
-//! columns the report plots) into one [`Trace`] per format: the one reader of trace files.
+//! columns the report plots, the centred deviation applied) into one [`Trace`] per format:
+//! the one reader of trace files.
 
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Write};
 
-use arrow::datatypes::ToByteSlice;
 use std::path::{Path, PathBuf};
 
 use super::contour::ContourFile;
 use super::files::temporary_path;
-use super::trace_parquet::ParquetTrace;
-use super::trace_rows::{
-    centred_from_inputs, read_f64s_into, write_error, Block, SpillFile, AXES, BLOCK_ROWS,
-    FIXED_COLUMNS, LINE, THETA, TIME,
+use super::trace_centring::summary_centrings;
+pub use super::trace_centring::{
+    centred_deviation_um, centring_per_run, parquet_centrings, RunCentring, CENTRED_COLUMN,
+    CENTRING_KEY,
 };
+use super::trace_parquet::ParquetTrace;
+use super::trace_rows::{write_error, Block, AXES, FIXED_COLUMNS, LINE, THETA, TIME};
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::TraceFormat;
@@ -38,15 +43,11 @@ use crate::numeric::push_fixed_bytes_const;
 use crate::pipeline::{Sample, Sink};
 use crate::Axis;
 
-/// What one run holds in memory, at most, before it spills to the temporary file, bytes (the
-/// CSV trace's full blocks: about twelve of 4,096 rows; the Parquet trace's centring inputs).
-pub const RAW_IN_MEMORY: usize = 8 << 20;
-
 /// Writes the trace of every run of a simulation.
 pub struct TraceSink {
     /// The block being filled with the current run's rows.
-    filling: Option<Block>,
-    /// The rows of the run's earlier blocks and the trace file, as the format keeps them.
+    filling: Block,
+    /// The trace file being written.
     format: Format,
     trace_path: PathBuf,
     axes: &'static [Axis],
@@ -59,14 +60,18 @@ pub struct TraceSink {
     /// Rows recorded, and the most the run may record (`[simulate] max_trace_rows`).
     rows: u64,
     max_rows: u64,
+    /// Each ended run's centring, in run order (the Parquet trace's metadata).
+    centrings: Vec<RunCentring>,
     /// A program's trace (no ball bar): `contour.csv` beside it ([`super::contour`]).
     contour: Option<ContourFile>,
 }
 
-/// Each format's state between a run's blocks, its trace file opened at its first rows.
+/// The trace file being written, in its format.
 enum Format {
-    Csv(CsvRuns),
-    Parquet(ParquetRuns),
+    Csv(CsvTrace),
+    Parquet(ParquetTrace),
+    /// Finished or failed: nothing open.
+    Closed,
 }
 
 impl TraceSink {
@@ -84,33 +89,9 @@ impl TraceSink {
         let (tmp, names) = (temporary_path(trace_path), column_names(axes));
         // Columns of a block: the fixed ones and three per axis.
         let width = FIXED_COLUMNS + 3 * axes.len();
-        let spill = SpillFile::new(trace_path.with_extension("csv.raw.tmp"));
         let format = match format {
-            TraceFormat::Csv => Format::Csv(CsvRuns {
-                direct: geometry.is_none(),
-                width,
-                held: Vec::new(),
-                spare: Vec::new(),
-                spill,
-                spilled: 0,
-                centred: Vec::new(),
-                tmp,
-                header: names.join(","),
-                out: None,
-            }),
-            TraceFormat::Parquet => Format::Parquet(ParquetRuns {
-                direct: geometry.is_none(),
-                width,
-                spare: None,
-                inputs: Vec::new(),
-                spill,
-                inputs_spilled: 0,
-                run_first_group: 0,
-                centred: Vec::new(),
-                tmp,
-                names,
-                out: None,
-            }),
+            TraceFormat::Csv => Format::Csv(CsvTrace::create(tmp, &names.join(","))?),
+            TraceFormat::Parquet => Format::Parquet(ParquetTrace::create(tmp, names)?),
         };
         let contour = match geometry {
             None => Some(ContourFile::create(
@@ -120,7 +101,7 @@ impl TraceSink {
         };
         Ok(TraceSink {
             contour,
-            filling: None,
+            filling: Block::new(width),
             format,
             trace_path: trace_path.to_path_buf(),
             axes,
@@ -131,6 +112,7 @@ impl TraceSink {
             measured: None,
             rows: 0,
             max_rows,
+            centrings: Vec::new(),
         })
     }
 
@@ -140,49 +122,63 @@ impl TraceSink {
         self.measured = measured;
     }
 
-    /// Ends the current run: its rows are written to the trace, centred with `centring`
-    /// (the fit of the run's ball bar; dL as it is without one).
+    /// Ends the current run: its last rows are written, and its `centring` (the fit of the
+    /// run's ball bar; None without one) noted for the trace's metadata.
     pub fn end_run(&mut self, centring: Option<Centring>) -> Result<()> {
-        let last = self.filling.take();
-        match &mut self.format {
-            Format::Csv(csv) => csv.end_run(last, self.direction, centring),
-            Format::Parquet(parquet) => parquet.end_run(last, self.direction, centring),
+        self.write_block()?;
+        if let Some(c) = centring {
+            self.centrings.push(RunCentring {
+                direction: self.direction,
+                a_um: c.a_um,
+                b_um: c.b_um,
+                r0_um: c.r0_um,
+            });
         }
+        Ok(())
     }
 
-    /// Puts the trace file in place; every run's rows were written by
-    /// [`TraceSink::end_run`], the only place that knows their centring.
+    /// Puts the trace file in place (its rows were written as their blocks filled).
     pub fn finish(mut self) -> Result<()> {
-        // Rows of a run not ended (none from `run_ballbar`): written as they are, not lost.
-        if self.filling.is_some() {
-            self.end_run(None)?;
-        }
-        let closed = match &mut self.format {
-            Format::Csv(csv) => csv.finish(),
-            Format::Parquet(parquet) => parquet.finish(),
-        };
+        // Rows of a run not ended (none from `run_ballbar`): written, not lost.
+        let closed = self.write_block().and_then(|()| {
+            match std::mem::replace(&mut self.format, Format::Closed) {
+                Format::Csv(csv) => csv.finish(),
+                Format::Parquet(parquet) => parquet.finish(&self.centrings),
+                Format::Closed => Ok(()),
+            }
+        });
+        let tmp = temporary_path(&self.trace_path);
         if let Err(e) = closed {
-            let _ = std::fs::remove_file(temporary_path(&self.trace_path));
+            let _ = std::fs::remove_file(&tmp);
             return Err(e);
         }
-        let tmp = temporary_path(&self.trace_path);
         std::fs::rename(&tmp, &self.trace_path).map_err(write_error(&self.trace_path))?;
         match self.contour.take() {
             Some(contour) => contour.finish(),
             None => Ok(()),
         }
     }
+
+    /// Writes the rows of the block being filled (if any) and empties it.
+    fn write_block(&mut self) -> Result<()> {
+        if self.filling.rows() == 0 {
+            return Ok(());
+        }
+        let written = match &mut self.format {
+            Format::Csv(csv) => csv.write_block(&self.filling, self.direction),
+            Format::Parquet(parquet) => parquet.write_block(&self.filling, self.direction),
+            Format::Closed => Ok(()),
+        };
+        self.filling.clear();
+        written
+    }
 }
 
 impl Drop for TraceSink {
     fn drop(&mut self) {
-        // Finished or failed, an unfinished trace is not kept (nor the spill file, which
-        // removes itself).
-        let open = match &mut self.format {
-            Format::Csv(csv) => csv.out.take().is_some(),
-            Format::Parquet(parquet) => parquet.out.take().is_some(),
-        };
-        if open {
+        // Finished or failed, an unfinished trace is not kept.
+        if !matches!(self.format, Format::Closed) {
+            self.format = Format::Closed;
             let _ = std::fs::remove_file(temporary_path(&self.trace_path));
         }
     }
@@ -216,13 +212,11 @@ impl TraceSink {
             return Ok(());
         }
         self.count_row(s)?;
-        if self.filling.as_ref().is_none_or(Block::is_full) {
-            self.next_block()?;
+        if self.filling.is_full() {
+            self.write_block()?;
         }
-        let (sin, cos) = r.theta_sin_cos;
-        let block = self.filling.as_mut().expect("a block with room");
-        block.push(
-            [s.time_s, s.line as f64, r.theta_deg, sin, cos],
+        self.filling.push(
+            [s.time_s, s.line as f64, r.theta_deg],
             self.axes,
             [&s.commanded, &s.actual, &s.following_error],
             [r.nonlinear_um, r.deviation_um],
@@ -238,13 +232,12 @@ impl TraceSink {
             return Ok(());
         }
         self.count_row(s)?;
-        if self.filling.as_ref().is_none_or(Block::is_full) {
-            self.next_block()?;
+        if self.filling.is_full() {
+            self.write_block()?;
         }
         let nan = f64::NAN;
-        let block = self.filling.as_mut().expect("a block with room");
-        block.push(
-            [s.time_s, s.line as f64, nan, nan, nan],
+        self.filling.push(
+            [s.time_s, s.line as f64, nan],
             self.axes,
             [&s.commanded, &s.actual, &s.following_error],
             [nan, nan],
@@ -268,268 +261,10 @@ impl TraceSink {
         self.rows += 1;
         Ok(())
     }
-
-    /// Hands the full block (if any) to the format and takes an empty one for the next rows.
-    fn next_block(&mut self) -> Result<()> {
-        let full = self.filling.take();
-        self.filling = Some(match &mut self.format {
-            Format::Csv(csv) => csv.next_block(full, self.direction)?,
-            Format::Parquet(parquet) => parquet.next_block(full, self.direction)?,
-        });
-        Ok(())
-    }
-}
-
-/// `trace.csv`'s state: the run's full blocks, held until its centring is known (past
-/// [`RAW_IN_MEMORY`], moved to the spill file), then written row by row.
-struct CsvRuns {
-    /// A program's trace (no ball bar): nothing to centre, so each full block is written at
-    /// once and nothing is held.
-    direct: bool,
-    /// Columns of a block.
-    width: usize,
-    held: Vec<Block>,
-    /// Emptied blocks, for the next rows.
-    spare: Vec<Block>,
-    /// The spill file, and how many blocks of the current run it holds.
-    spill: SpillFile,
-    spilled: usize,
-    /// The centred deviations of the block being written.
-    centred: Vec<f64>,
-    /// The trace's temporary file and header, and the file once opened.
-    tmp: PathBuf,
-    header: String,
-    out: Option<CsvTrace>,
-}
-
-impl CsvRuns {
-    /// Holds the `full` block (when the held blocks pass [`RAW_IN_MEMORY`], they move to
-    /// the spill file), and gives an empty one.
-    fn next_block(&mut self, full: Option<Block>, direction: Direction) -> Result<Block> {
-        if self.direct {
-            if let Some(mut full) = full {
-                self.write_now(&mut full, direction)?;
-                self.spare.push(full);
-            }
-            return Ok(self.spare.pop().unwrap_or_else(|| Block::new(self.width)));
-        }
-        if let Some(full) = full {
-            self.held.push(full);
-            if self.held.len() * 8 * BLOCK_ROWS * self.width > RAW_IN_MEMORY {
-                self.spill()?;
-            }
-        }
-        Ok(self.spare.pop().unwrap_or_else(|| Block::new(self.width)))
-    }
-
-    /// Writes `block` (of a program's trace: nothing to centre) and empties it.
-    fn write_now(&mut self, block: &mut Block, direction: Direction) -> Result<()> {
-        if self.out.is_none() {
-            self.out = Some(CsvTrace::create(self.tmp.clone(), &self.header)?);
-        }
-        let out = self.out.as_mut().expect("opened above");
-        block.centred_into(None, &mut self.centred);
-        out.write_block(block, direction, &self.centred)?;
-        block.clear();
-        Ok(())
-    }
-
-    /// Moves the held (full) blocks to the spill file.
-    fn spill(&mut self) -> Result<()> {
-        for mut block in std::mem::take(&mut self.held) {
-            block
-                .write_raw(self.spill.writer()?)
-                .map_err(write_error(self.spill.path()))?;
-            block.clear();
-            self.spare.push(block);
-            self.spilled += 1;
-        }
-        Ok(())
-    }
-
-    /// Writes the run's rows (the spilled blocks, the held ones, then `last`), centred with
-    /// `centring`, and empties them.
-    fn end_run(
-        &mut self,
-        last: Option<Block>,
-        direction: Direction,
-        centring: Option<Centring>,
-    ) -> Result<()> {
-        if self.direct {
-            if let Some(mut last) = last {
-                self.write_now(&mut last, direction)?;
-                self.spare.push(last);
-            }
-            return Ok(());
-        }
-        self.held.extend(last);
-        if self.held.is_empty() && self.spilled == 0 {
-            return Ok(());
-        }
-        if self.out.is_none() {
-            self.out = Some(CsvTrace::create(self.tmp.clone(), &self.header)?);
-        }
-        let out = self.out.as_mut().expect("opened above");
-        if self.spilled > 0 {
-            let path = self.spill.path().to_path_buf();
-            let mut block = self.spare.pop().unwrap_or_else(|| Block::new(self.width));
-            let mut reader = self.spill.reader()?;
-            for _ in 0..self.spilled {
-                block.read_raw(&mut reader).map_err(write_error(&path))?;
-                block.centred_into(centring, &mut self.centred);
-                out.write_block(&block, direction, &self.centred)?;
-            }
-            self.spill.clear()?;
-            block.clear();
-            self.spare.push(block);
-            self.spilled = 0;
-        }
-        for mut block in std::mem::take(&mut self.held) {
-            block.centred_into(centring, &mut self.centred);
-            out.write_block(&block, direction, &self.centred)?;
-            block.clear();
-            self.spare.push(block);
-        }
-        Ok(())
-    }
-
-    /// Flushes the trace file (with its header only when no run had rows); the caller
-    /// renames it.
-    fn finish(&mut self) -> Result<()> {
-        match self.out.take() {
-            Some(out) => out.finish(),
-            None => CsvTrace::create(self.tmp.clone(), &self.header)?.finish(),
-        }
-    }
-}
-
-/// `trace.parquet`'s state: each full block is written at once as a row group, and each
-/// row's `(dL, sin θ, cos θ)` kept (past [`RAW_IN_MEMORY`], in the spill file) for the
-/// run's centred deviations, written at its end.
-struct ParquetRuns {
-    /// A program's trace (no ball bar): no centring inputs are kept, the centred column is
-    /// dL (NaN) as it is.
-    direct: bool,
-    /// Columns of a block.
-    width: usize,
-    /// The block written last, emptied for the next rows.
-    spare: Option<Block>,
-    /// The current run's centring inputs in memory, and how many went to the spill file.
-    inputs: Vec<f64>,
-    spill: SpillFile,
-    inputs_spilled: usize,
-    /// The current run's first row group.
-    run_first_group: usize,
-    /// The centred deviations of the row group being written.
-    centred: Vec<f64>,
-    /// The trace's temporary file and columns, and the file once opened.
-    tmp: PathBuf,
-    names: Vec<String>,
-    out: Option<ParquetTrace>,
-}
-
-impl ParquetRuns {
-    /// Writes the `full` block (if any) of the run `direction`, and gives an empty one.
-    fn next_block(&mut self, full: Option<Block>, direction: Direction) -> Result<Block> {
-        match full {
-            Some(block) => self.write(block, direction),
-            None => Ok(self.spare.take().unwrap_or_else(|| Block::new(self.width))),
-        }
-    }
-
-    /// Writes the columns of `block` as a row group and keeps what its centred deviations
-    /// need; gives the block back emptied.
-    fn write(&mut self, mut block: Block, direction: Direction) -> Result<Block> {
-        if block.rows() > 0 {
-            if self.out.is_none() {
-                self.out = Some(ParquetTrace::create(self.tmp.clone(), self.names.clone())?);
-            }
-            let out = self.out.as_mut().expect("opened above");
-            out.write_block(&block, direction)?;
-            if self.direct {
-                // Nothing to centre: the centred column is dL (NaN) as it is.
-                block.centred_into(None, &mut self.centred);
-                out.write_centred(out.groups() - 1, &self.centred)?;
-                block.clear();
-                return Ok(block);
-            }
-            block.centring_inputs_into(&mut self.inputs);
-            if 8 * self.inputs.len() > RAW_IN_MEMORY {
-                self.spill
-                    .writer()?
-                    .write_all(self.inputs.to_byte_slice())
-                    .map_err(write_error(self.spill.path()))?;
-                self.inputs_spilled += self.inputs.len();
-                self.inputs.clear();
-            }
-        }
-        block.clear();
-        Ok(block)
-    }
-
-    /// Writes the columns of `last` (the block being filled), then the centred deviations
-    /// of every row group of the run.
-    fn end_run(
-        &mut self,
-        last: Option<Block>,
-        direction: Direction,
-        centring: Option<Centring>,
-    ) -> Result<()> {
-        if let Some(block) = last {
-            self.spare = Some(self.write(block, direction)?);
-        }
-        let direct = self.direct;
-        let Some(out) = self.out.as_mut().filter(|_| !direct) else {
-            return Ok(());
-        };
-        let path = self.spill.path().to_path_buf();
-        let mut spilled = match self.inputs_spilled {
-            0 => None,
-            _ => Some(self.spill.reader()?),
-        };
-        let (mut from_file, mut at) = (self.inputs_spilled, 0);
-        let mut read = Vec::new();
-        for group in self.run_first_group..out.groups() {
-            let need = 3 * out.group_rows(group);
-            let inputs = match spilled.as_mut().filter(|_| from_file > 0) {
-                Some(reader) => {
-                    let n = need.min(from_file);
-                    read.clear();
-                    read.resize(n, 0.0);
-                    read_f64s_into(reader, &mut read).map_err(write_error(&path))?;
-                    read.extend_from_slice(&self.inputs[at..at + need - n]);
-                    (from_file, at) = (from_file - n, at + need - n);
-                    &read[..]
-                }
-                None => {
-                    at += need;
-                    &self.inputs[at - need..at]
-                }
-            };
-            centred_from_inputs(inputs, centring, &mut self.centred);
-            out.write_centred(group, &self.centred)?;
-        }
-        if spilled.is_some() {
-            self.spill.clear()?;
-        }
-        self.inputs.clear();
-        self.inputs_spilled = 0;
-        self.run_first_group = out.groups();
-        Ok(())
-    }
-
-    /// Writes the footer (a trace without rows: the schema only); the caller renames the
-    /// file.
-    fn finish(&mut self) -> Result<()> {
-        match self.out.take() {
-            Some(out) => out.finish(),
-            None => ParquetTrace::create(self.tmp.clone(), self.names.clone())?.finish(),
-        }
-    }
 }
 
 /// The trace's columns: direction, time, line, θ, per axis the commanded and actual
-/// position and the following error, the nonlinear signature, dL and the centred dL.
+/// position and the following error, the nonlinear signature and dL.
 fn column_names(axes: &[Axis]) -> Vec<String> {
     let mut names: Vec<String> = ["direction", "time_s", "line", "theta_deg"]
         .map(String::from)
@@ -542,7 +277,7 @@ fn column_names(axes: &[Axis]) -> Vec<String> {
             format!("{a}_ferr_{u}"),
         ]);
     }
-    names.extend(["nonlinear_um", "deviation_um", "deviation_centred_um"].map(String::from));
+    names.extend(["nonlinear_um", "deviation_um"].map(String::from));
     names
 }
 
@@ -567,8 +302,8 @@ impl CsvTrace {
         })
     }
 
-    /// Appends the rows of `block`, of the run `direction`, with their `centred` deviations.
-    fn write_block(&mut self, block: &Block, direction: Direction, centred: &[f64]) -> Result<()> {
+    /// Appends the rows of `block`, of the run `direction`.
+    fn write_block(&mut self, block: &Block, direction: Direction) -> Result<()> {
         let width = block.width();
         let [time, line_no, theta] = [TIME, LINE, THETA].map(|k| block.column(k));
         let axes: Vec<&[f64]> = (AXES..width - 2).map(|k| block.column(k)).collect();
@@ -598,7 +333,7 @@ impl CsvTrace {
                 field!(axis[1][r], 6);
                 field!(axis[2][r], 7);
             }
-            for value in [nonlinear[r], dev[r], centred[r]] {
+            for value in [nonlinear[r], dev[r]] {
                 field!(value, 4);
             }
             line.push(b'\n');
@@ -664,8 +399,9 @@ impl Trace {
         }
     }
 
-    /// Appends one row: its direction, time, θ, centred deviation, and per axis the actual
-    /// position and following error. A row of another direction than the last starts a run.
+    /// Appends one row: its direction, time, θ, deviation dL (centred by
+    /// [`Trace::centre`]), and per axis the actual position and following error. A row of
+    /// another direction than the last starts a run.
     fn push_row(
         &mut self,
         direction: &str,
@@ -691,6 +427,23 @@ impl Trace {
     }
 }
 
+impl Trace {
+    /// Centres each run's deviations with its entry of `centrings` ([`centring_per_run`]):
+    /// `deviation_centred_um` held dL until now.
+    fn centre(&mut self, centrings: &[RunCentring]) {
+        let directions = self.runs.iter().map(|r| match r.direction.as_str() {
+            "cw" => Direction::Cw,
+            _ => Direction::Ccw,
+        });
+        let per_run = centring_per_run(directions, centrings);
+        for (run, centring) in self.runs.iter_mut().zip(per_run) {
+            for (dev, &theta) in run.deviation_centred_um.iter_mut().zip(&run.theta_deg) {
+                *dev = centred_deviation_um(*dev, theta, centring);
+            }
+        }
+    }
+}
+
 /// The columns of each axis the reader takes: actual position and following error.
 fn axis_column_names(axis: Axis) -> [String; 2] {
     let u = axis.unit();
@@ -698,14 +451,18 @@ fn axis_column_names(axis: Axis) -> [String; 2] {
 }
 
 /// The columns besides the axes' that the reader takes.
-const READ_COLUMNS: [&str; 4] = ["direction", "time_s", "theta_deg", "deviation_centred_um"];
+const READ_COLUMNS: [&str; 4] = ["direction", "time_s", "theta_deg", "deviation_um"];
 
 /// Reads the trace of the run folder `dir`: `trace.csv`, or else `trace.parquet`; None when
-/// the folder has neither. Values that are missing or not numbers read as NaN.
+/// the folder has neither. Values that are missing or not numbers read as NaN. Each run's
+/// deviation is centred with its centring (`summary.json` beside `trace.csv`, the Parquet
+/// trace's own metadata).
 pub fn read_trace(dir: &Path) -> Result<Option<Trace>> {
     let csv = dir.join(TraceFormat::Csv.file_name());
     if csv.exists() {
-        return read_csv(&csv).map(Some);
+        let mut trace = read_csv(&csv)?;
+        trace.centre(&summary_centrings(dir)?);
+        return Ok(Some(trace));
     }
     let parquet = dir.join(TraceFormat::Parquet.file_name());
     if parquet.exists() {
@@ -714,7 +471,7 @@ pub fn read_trace(dir: &Path) -> Result<Option<Trace>> {
     Ok(None)
 }
 
-/// Reads `trace.csv` (the columns [`read_trace`] takes).
+/// Reads `trace.csv` (the columns [`read_trace`] takes), uncentred.
 fn read_csv(path: &Path) -> Result<Trace> {
     let bad = |what: String| Error::invalid(path, what);
     let file = File::open(path).map_err(|source| Error::Read {
@@ -759,15 +516,17 @@ fn read_csv(path: &Path) -> Result<Trace> {
 }
 
 /// Reads `trace.parquet` (`[simulate] trace_format = "parquet"`): the columns of
-/// `trace.csv` as f64, through [`Table::read_parquet`](super::parquet::Table::read_parquet).
+/// `trace.csv` as f64, through [`Table::read_parquet`](super::parquet::Table::read_parquet),
+/// centred with the file's own metadata.
 fn read_parquet(path: &Path) -> Result<Trace> {
     use super::parquet::{Column, Table};
 
     let wanted = |name: &str| {
         READ_COLUMNS.contains(&name) || name.contains("_act_") || name.contains("_ferr_")
     };
-    let table = Table::read_parquet(path, &wanted)?;
+    let (table, key_value) = Table::read_parquet_with_metadata(path, &wanted)?;
     let bad = |what: String| Error::invalid(path, what);
+    let centrings = parquet_centrings(key_value.as_ref()).map_err(bad)?;
     let floats = |name: &str| match table.column(name) {
         Some(Column::F64(v)) => Ok(v),
         _ => Err(bad(format!("no f64 column `{name}`"))),
@@ -778,7 +537,7 @@ fn read_parquet(path: &Path) -> Result<Trace> {
     let [time, theta, dev] = [
         floats("time_s")?,
         floats("theta_deg")?,
-        floats("deviation_centred_um")?,
+        floats("deviation_um")?,
     ];
     let (mut axes, mut axis_cols) = (Vec::new(), Vec::new());
     for axis in Axis::ALL {
@@ -797,5 +556,6 @@ fn read_parquet(path: &Path) -> Result<Trace> {
             axis_cols.iter().map(|(a, f)| (value(a, i), value(f, i))),
         );
     }
+    trace.centre(&centrings);
     Ok(trace)
 }

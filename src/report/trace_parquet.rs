@@ -1,7 +1,7 @@
 //! `trace.parquet`: the columns of `trace.csv` as the f64 the run computed, one row group per
 //! block of a run's rows ([`Block`]), its column chunks written straight from the block as
-//! it fills; the centred deviations of a run's row groups follow the run (its centring is
-//! known only at its end).
+//! it fills; each run's centring goes into the footer's key-value metadata
+//! ([`super::trace::CENTRING_KEY`]), where readers find it.
 //!
 //! The format is simple enough for a trace to be written without a Parquet writer in between
 //! (which copied every value three times): the file is `PAR1`, then per row group and column
@@ -14,6 +14,11 @@
 //! compressing them costs more CPU than the file's whole encoding (docs/performance.md).
 //! Min/max statistics on `time_s` and `line` (unsigned), which a reader filters rows by.
 //! The same rows give the same bytes (fixed `created_by`, no timestamps).
+//!
+//! Why by hand: the parquet crate's `SerializedFileWriter` with its column writers (from the
+//! block's slices, the same file for pyarrow) cost about 11 % of a whole `simulate` more
+//! (docs/performance.md, issue 43 item 4), above the 10 % the issue allows; DuckDB and Polars
+//! read this file as pyarrow does (`tests/python/test_trace_readers.py`).
 
 // Parquet's plain encoding is little-endian, and the columns are written from memory as
 // they are.
@@ -29,6 +34,7 @@ use std::path::PathBuf;
 use arrow::datatypes::ToByteSlice;
 
 use super::thrift_compact::Compact;
+use super::trace_centring::{RunCentring, CENTRING_KEY};
 use super::trace_rows::{write_all_vectored, write_error, Block, AXES, LINE, THETA, TIME};
 use crate::error::Result;
 use crate::input::program::Direction;
@@ -113,10 +119,7 @@ impl ParquetTrace {
         Ok(())
     }
 
-    /// Writes the rows of `block`, of the run `direction`, as one row group: every column
-    /// but the centred deviation, which [`ParquetTrace::write_centred`] adds once the run's
-    /// centring is known (after the run's last row group: a column chunk is found by its
-    /// offset, wherever it lies in the file).
+    /// Writes the rows of `block`, of the run `direction`, as one row group.
     pub fn write_block(&mut self, block: &Block, direction: Direction) -> Result<()> {
         let rows = block.rows();
         let mut chunks = Vec::with_capacity(self.names.len());
@@ -165,28 +168,11 @@ impl ParquetTrace {
         Ok(())
     }
 
-    /// Row groups written so far.
-    pub fn groups(&self) -> usize {
-        self.groups.len()
-    }
-
-    /// The rows of row group `group`.
-    pub fn group_rows(&self, group: usize) -> usize {
-        self.groups[group].0
-    }
-
-    /// Writes the centred deviations of row group `group`, its last column.
-    pub fn write_centred(&mut self, group: usize, centred: &[f64]) -> Result<()> {
-        let mut g = self.gather();
-        let chunk = g.plain(DOUBLE, centred.len(), centred.to_byte_slice(), None);
-        self.flush(g)?;
-        self.groups[group].1.push(chunk);
-        Ok(())
-    }
-
-    /// Writes the footer and flushes the file (the caller renames it).
-    pub fn finish(mut self) -> Result<()> {
-        let footer = self.footer();
+    /// Writes the footer, with each run's `centrings` as key-value metadata, and flushes the
+    /// file (the caller renames it).
+    pub fn finish(mut self, centrings: &[RunCentring]) -> Result<()> {
+        let centrings = serde_json::to_string(centrings).expect("plain data serializes");
+        let footer = self.footer(&centrings);
         let length = (footer.len() as u32).to_le_bytes();
         let mut g = self.gather();
         for bytes in [&footer[..], &length, b"PAR1"] {
@@ -195,8 +181,9 @@ impl ParquetTrace {
         self.flush(g)
     }
 
-    /// The file metadata (parquet.thrift's FileMetaData).
-    fn footer(&self) -> Vec<u8> {
+    /// The file metadata (parquet.thrift's FileMetaData), `centrings` (JSON) under
+    /// [`CENTRING_KEY`].
+    fn footer(&self, centrings: &str) -> Vec<u8> {
         let mut f = Compact::new();
         f.i32(1, 1);
         // The schema: the root, then every column, required.
@@ -237,6 +224,12 @@ impl ParquetTrace {
         for (rows, chunks) in &self.groups {
             self.row_group(&mut f, *rows, chunks);
         }
+        // key_value_metadata: one KeyValue (key, value).
+        f.struct_list(5, 1);
+        f.open();
+        f.binary(1, CENTRING_KEY.as_bytes());
+        f.binary(2, centrings.as_bytes());
+        f.end();
         f.binary(6, format!("mtsim {}", env!("CARGO_PKG_VERSION")).as_bytes());
         // Column orders: every column by its type's order (what makes min/max usable).
         f.struct_list(7, self.names.len());

@@ -257,10 +257,13 @@ fn simulate_writes_the_trace_summary_and_plot_and_repeats_byte_for_byte() {
         .next()
         .unwrap()
         .to_string();
-    for col in ["theta_deg", "deviation_um", "deviation_centred_um"] {
+    for col in ["theta_deg", "deviation_um"] {
         assert!(header.split(',').any(|c| c == col), "{header}");
     }
-    assert!(!a.join("trace.csv.tmp").exists() && !a.join("trace.csv.raw.tmp").exists());
+    // The centre is in summary.json, not a column (docs/simulation.md, "Outputs").
+    assert!(!header.contains("deviation_centred_um"), "{header}");
+    assert!(bb["runs"][0]["centring"]["a_um"].is_f64());
+    assert!(!a.join("trace.csv.tmp").exists());
 }
 
 #[test]

@@ -277,13 +277,20 @@ fn squareness_alone_is_the_iso_230_4_ellipse_and_is_diagnosed() {
     let body = "[program.circle]\nplane = \"XY\"\nradius_mm = 150.0\nfeed_mm_min = 500.0\n\
                 directions = [\"ccw\", \"cw\"]\ncenter_mm = [0.0, 0.0, 100.0]\n";
     let (trace, summary) = simulate(&dir, &machine.display().to_string(), body);
-    // Least squares of deviation_centred on (1, sin 2θ, cos 2θ), each row.
-    let (ct, cd) = (trace.col("theta_deg"), trace.col("deviation_centred_um"));
-    let mut ata = nalgebra::Matrix3::<f64>::zeros();
-    let mut aty = nalgebra::Vector3::<f64>::zeros();
+    // Least squares of the deviation dL on (1, sin 2θ, cos 2θ, sin θ, cos θ), each row: the
+    // first harmonic is the set-up offset the centring removes.
+    let (ct, cd) = (trace.col("theta_deg"), trace.col("deviation_um"));
+    let mut ata = nalgebra::SMatrix::<f64, 5, 5>::zeros();
+    let mut aty = nalgebra::SVector::<f64, 5>::zeros();
     for r in &trace.rows {
-        let t = 2.0 * r[ct].to_radians();
-        let a = nalgebra::Vector3::new(1.0, t.sin(), t.cos());
+        let t = r[ct].to_radians();
+        let a = nalgebra::SVector::<f64, 5>::from([
+            1.0,
+            (2.0 * t).sin(),
+            (2.0 * t).cos(),
+            t.sin(),
+            t.cos(),
+        ]);
         ata += a * a.transpose();
         aty += a * r[cd];
     }

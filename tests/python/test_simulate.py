@@ -4,6 +4,7 @@ import csv
 import json
 import math
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
@@ -60,7 +61,9 @@ def test_the_trace_has_the_csv_trace_columns_and_rows(mtsim_bin, tmp_path, root)
     header, rows = rows[0], rows[1:]
     _, trace = mtsim.simulate(scenario)
     assert isinstance(trace, pa.Table)
-    assert trace.column_names == header
+    # The CSV's columns, then the centred deviation the package adds from the file's
+    # metadata (the CSV keeps its centre in summary.json).
+    assert trace.column_names == header + ["deviation_centred_um"]
     assert trace.num_rows == len(rows)
     assert pa.types.is_floating(trace.schema.field("deviation_um").type)
     # The CSV rounds; the table holds full f64: the same figures to the CSV's digits.
@@ -76,3 +79,26 @@ def test_output_keeps_the_run_files(tmp_path, root):
                                     output=tmp_path / "run")
     assert json.loads((tmp_path / "run" / "summary.json").read_text()) == summary
     assert pq.read_table(tmp_path / "run" / "trace.parquet").num_rows == trace.num_rows
+
+
+def test_the_centred_deviation_is_dl_less_an_independently_fitted_centre(tmp_path, root):
+    summary, trace = mtsim.simulate(root / "scenarios" / "circle-iso230-4.toml",
+                                    output=tmp_path / "run")
+    meta = pq.read_schema(tmp_path / "run" / "trace.parquet").metadata
+    runs = json.loads(meta[b"mtsim.centring"])
+    assert [r["direction"] for r in runs] == [r["direction"] for r in summary["ballbar"]["runs"]]
+    direction = trace.column("direction").to_pylist()
+    theta = trace.column("theta_deg").to_pylist()
+    dev = trace.column("deviation_um").to_pylist()
+    centred = trace.column("deviation_centred_um").to_pylist()
+    for run in ("ccw", "cw"):
+        rows = [i for i, d in enumerate(direction) if d == run]
+        assert len(rows) > 1000
+        # Least squares of dL on (1, cos θ, sin θ): the normal equations by hand.
+        t = np.radians([theta[i] for i in rows])
+        a = np.column_stack([np.ones_like(t), np.cos(t), np.sin(t)])
+        y = np.array([dev[i] for i in rows])
+        _, ca, cb = np.linalg.solve(a.T @ a, a.T @ y)
+        want = y - (ca * np.cos(t) + cb * np.sin(t))
+        got = np.array([centred[i] for i in rows])
+        assert np.abs(got - want).max() < 1e-6, (run, np.abs(got - want).max())

@@ -43,8 +43,18 @@ fn circle(feed: f64, directions: &str, overrides: &str) -> String {
     )
 }
 
-/// (direction, θ deg, centred deviation um) rows of a trace.
+/// (direction, θ deg, deviation um, centred deviation um) rows of a trace: `trace.csv` holds
+/// dL, and each run's centring is in `summary.json` (`ballbar.runs[k].centring`), applied
+/// here as `dL - (a cos θ + b sin θ)`.
 fn trace(out: &Path) -> Vec<(String, f64, f64, f64)> {
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let centring = |direction: &str| {
+        let runs = summary["ballbar"]["runs"].as_array().unwrap();
+        let run = runs.iter().find(|r| r["direction"] == direction).unwrap();
+        let c = &run["centring"];
+        (c["a_um"].as_f64().unwrap(), c["b_um"].as_f64().unwrap())
+    };
     let mut r = csv::Reader::from_path(out.join("trace.csv")).unwrap();
     let h = r.headers().unwrap().clone();
     let col = |name: &str| {
@@ -52,21 +62,15 @@ fn trace(out: &Path) -> Vec<(String, f64, f64, f64)> {
             .position(|c| c == name)
             .unwrap_or_else(|| panic!("column {name}"))
     };
-    let (d, t, raw, c) = (
-        col("direction"),
-        col("theta_deg"),
-        col("deviation_um"),
-        col("deviation_centred_um"),
-    );
+    assert!(col("deviation_um") > 0 && !h.iter().any(|c| c == "deviation_centred_um"));
+    let (d, t, raw) = (col("direction"), col("theta_deg"), col("deviation_um"));
     r.records()
         .map(|rec| {
             let rec = rec.unwrap();
-            (
-                rec[d].to_string(),
-                rec[t].parse().unwrap(),
-                rec[raw].parse().unwrap(),
-                rec[c].parse().unwrap(),
-            )
+            let (theta, dev): (f64, f64) = (rec[t].parse().unwrap(), rec[raw].parse().unwrap());
+            let (a, b) = centring(&rec[d]);
+            let centred = dev - (a * theta.to_radians().cos() + b * theta.to_radians().sin());
+            (rec[d].to_string(), theta, dev, centred)
         })
         .collect()
 }

@@ -5,10 +5,18 @@
 use std::ffi::CString;
 use std::path::Path;
 
-use arrow::array::{RecordBatch, RecordBatchIterator, RecordBatchReader};
-use arrow::datatypes::SchemaRef;
+use std::sync::Arc;
+
+use arrow::array::{
+    Array, AsArray, Float64Array, RecordBatch, RecordBatchIterator, RecordBatchReader,
+};
+use arrow::datatypes::{DataType, Field, Float64Type, Schema, SchemaRef};
 use arrow::ffi_stream::FFI_ArrowArrayStream;
 use mtsim::error::Error;
+use mtsim::input::program::Direction;
+use mtsim::report::trace_centring::{
+    centred_deviation_um, centring_per_run, parquet_centrings, CENTRED_COLUMN,
+};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
@@ -21,8 +29,11 @@ pub struct Batches {
 }
 
 impl Batches {
-    /// The table of a Parquet file, read as one batch (one chunk per column).
-    pub fn read_parquet(path: &Path) -> mtsim::Result<Batches> {
+    /// The table of a Parquet file, read as one batch (one chunk per column), and the file's
+    /// key-value metadata.
+    fn read_with_metadata(
+        path: &Path,
+    ) -> mtsim::Result<(Batches, Option<Vec<parquet::file::metadata::KeyValue>>)> {
         let read_error = |e: &dyn std::fmt::Display| Error::Read {
             path: path.to_path_buf(),
             source: std::io::Error::other(e.to_string()),
@@ -33,6 +44,11 @@ impl Batches {
         })?;
         let builder = ParquetRecordBatchReaderBuilder::try_new(file).map_err(|e| read_error(&e))?;
         let rows = builder.metadata().file_metadata().num_rows().max(1) as usize;
+        let key_value = builder
+            .metadata()
+            .file_metadata()
+            .key_value_metadata()
+            .cloned();
         let reader = builder
             .with_batch_size(rows)
             .build()
@@ -41,6 +57,87 @@ impl Batches {
         let batches = reader
             .collect::<Result<Vec<_>, _>>()
             .map_err(|e| read_error(&e))?;
+        Ok((Batches { schema, batches }, key_value))
+    }
+
+    /// The table of a Parquet file, read as one batch (one chunk per column).
+    pub fn read_parquet(path: &Path) -> mtsim::Result<Batches> {
+        Batches::read_with_metadata(path).map(|(batches, _)| batches)
+    }
+
+    /// `simulate`'s `trace.parquet`, with the centred deviation added from the file's
+    /// centrings, as every reader of the trace does.
+    pub fn read_trace_parquet(path: &Path) -> mtsim::Result<Batches> {
+        let (read, key_value) = Batches::read_with_metadata(path)?;
+        let read_error = |e: String| Error::Read {
+            path: path.to_path_buf(),
+            source: std::io::Error::other(e),
+        };
+        let centrings = parquet_centrings(key_value.as_ref()).map_err(read_error)?;
+        read.with_centred_column(&centrings).map_err(read_error)
+    }
+
+    /// A trace's batches with `deviation_centred_um` appended: each row's dL less its
+    /// run's centring (`mtsim::report::trace_centring::centred_deviation_um`; a run is a stretch of
+    /// rows of one direction).
+    fn with_centred_column(
+        self,
+        centrings: &[mtsim::report::trace_centring::RunCentring],
+    ) -> Result<Batches, String> {
+        let mut fields: Vec<Field> = self
+            .schema
+            .fields()
+            .iter()
+            .map(|f| f.as_ref().clone())
+            .collect();
+        fields.push(Field::new(CENTRED_COLUMN, DataType::Float64, false));
+        let schema: SchemaRef = Arc::new(Schema::new_with_metadata(
+            fields,
+            self.schema.metadata().clone(),
+        ));
+        let mut batches = Vec::with_capacity(self.batches.len());
+        let mut previous: Option<Direction> = None;
+        let mut runs = Vec::new();
+        for batch in &self.batches {
+            let column = |name: &str| {
+                let c = batch
+                    .column_by_name(name)
+                    .ok_or(format!("no column `{name}`"))?;
+                arrow::compute::cast(c, &DataType::Float64).map_err(|e| e.to_string())
+            };
+            let (theta, dev) = (column("theta_deg")?, column("deviation_um")?);
+            let direction = batch
+                .column_by_name("direction")
+                .ok_or("no column `direction`")?;
+            let direction =
+                arrow::compute::cast(direction, &DataType::Utf8).map_err(|e| e.to_string())?;
+            let direction = direction.as_string::<i32>();
+            let (theta, dev) = (
+                theta.as_primitive::<Float64Type>(),
+                dev.as_primitive::<Float64Type>(),
+            );
+            let mut run_of_row = Vec::with_capacity(batch.num_rows());
+            for i in 0..batch.num_rows() {
+                let d = if direction.value(i) == "cw" {
+                    Direction::Cw
+                } else {
+                    Direction::Ccw
+                };
+                if previous != Some(d) {
+                    runs.push(d);
+                    previous = Some(d);
+                }
+                run_of_row.push(runs.len() - 1);
+            }
+            let per_run = centring_per_run(runs.iter().copied(), centrings);
+            let centred: Float64Array = (0..batch.num_rows())
+                .map(|i| centred_deviation_um(dev.value(i), theta.value(i), per_run[run_of_row[i]]))
+                .collect::<Vec<f64>>()
+                .into();
+            let mut columns = batch.columns().to_vec();
+            columns.push(Arc::new(centred));
+            batches.push(RecordBatch::try_new(schema.clone(), columns).map_err(|e| e.to_string())?);
+        }
         Ok(Batches { schema, batches })
     }
 }

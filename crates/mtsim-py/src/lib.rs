@@ -75,7 +75,7 @@ fn simulate<'py>(
         scenario.simulate.trace_format = TraceFormat::Parquet;
         let dir = Scratch::begin(output.as_deref())?;
         let summary = mtsim::study::simulate::simulate(&scenario, dir.path(), timing, &|_| {})?;
-        let batches = Batches::read_parquet(&dir.path().join(TRACE_PARQUET_FILE))?;
+        let batches = Batches::read_trace_parquet(&dir.path().join(TRACE_PARQUET_FILE))?;
         Ok((to_json(&summary), batches))
     })?;
     Ok((json::to_py(py, &summary)?, ArrowStream::new(batches)))

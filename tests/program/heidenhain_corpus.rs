@@ -91,6 +91,9 @@ fn corpus_klartext_programs_are_read_or_refused_by_name() {
                     failures.push(format!("{name}: {command} panicked"))
                 }
                 Some(0) | Some(1) => outcome.push(None),
+                // Read to its end, but nothing moves (a tool-table utility): analyze and
+                // check have no motion to judge.
+                Some(2) if flat.contains("has no motion") => outcome.push(None),
                 Some(2) => {
                     // Refused: by a construct it names, at a line of the program.
                     let named =
@@ -116,17 +119,18 @@ fn corpus_klartext_programs_are_read_or_refused_by_name() {
     }
     let _ = std::fs::remove_dir_all(&work);
     eprintln!(
-        "heidenhain corpus: {} programs, {read} read by analyze and check, {} refused by name:\n  {}",
+        "heidenhain corpus: {} programs, {read} read (by analyze and check, or to its end with no motion), {} refused by name:\n  {}",
         programs.len(),
         refused.len(),
         refused.join("\n  ")
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    // 12 of the 19 filed as Heidenhain read (FN 18 SYSREAD, cycle 1 PECKING, `LBL1`,
-    // `REP n/n`); the others are refused for a file not given, a fault of the program, or
-    // a construct named (docs/gcode.md, "HEIDENHAIN Klartext").
+    // 14 of the 19 filed as Heidenhain read (FN 18 SYSREAD, cycle 1 PECKING, `LBL1`,
+    // `REP n/n`, Fusion's `CC X Z` circle in the plane Z X, FN 17 of the tool table); the
+    // others are refused for a file not given, a fault of the program, or a tool-measuring
+    // utility's tool table column (docs/gcode.md, "HEIDENHAIN Klartext").
     assert!(
-        read >= 12,
-        "{read} Klartext programs of the corpus read, 12 expected"
+        read >= 14,
+        "{read} Klartext programs of the corpus read, 14 expected"
     );
 }

@@ -39,14 +39,10 @@ const REFUSED: &[(&str, Why, &str)] = &[
     // Not text: the file in the repository is binary.
     ("haas_mc_o78238.nc", Why::Fault, "unexpected character"),
     // Heidenhain conversational listed as Fanuc, read as Klartext: a circle around CC
-    // from a start the operator sets by hand (the program reads it with FN 18), and a
-    // blank between a coordinate's sign and its Q parameter (`Z + Q13`).
+    // from a start the operator sets by hand (the program reads it with FN 18), and the
+    // approach `APPR LT` (its `Z + Q13`, a blank between sign and Q parameter, is read).
     ("hdh_cirstud.h", Why::Fault, "is on CC"),
-    (
-        "hdh_profile.h",
-        Why::Fault,
-        "expected a number such as +10.5",
-    ),
+    ("hdh_profile.h", Why::Gap, "`APPR LT`"),
     // The subroutine files these programs call are not in their repository's folder.
     (
         "lcnc_lagun_HEMA-P017.ngc",

@@ -1,5 +1,6 @@
 //! Path contours: `L`, `LP`, `CC`, `C`, `CR`, `CT`, `CP`, `RND`, `CHF`, with `R0/RL/RR`,
-//! `F/FMAX/FAUTO` and M functions, as G0-G3 words (working plane XY, tool axis Z).
+//! `F/FMAX/FAUTO` and M functions, as G0-G3 words (working plane XY, tool axis Z; circles
+//! also in the planes Z X and Y Z that `CC` or `CR`'s coordinates name).
 //!
 //! HEIDENHAIN TNC 640 Klartext programming manual, "Programming contours": "Path contours -
 //! Cartesian coordinates" (L, CHF, CC, C, CR, CT, RND) and "Path contours - Polar
@@ -7,6 +8,7 @@
 //!
 //! ```text
 //! C  about the pole c from p to q:      G2/G3 q, I J = c - p      (DR- CW, DR+ CCW)
+//!    (CC X Z / CC Y Z: the plane Z X / Y Z, angle 0 on Z / Y, as G18 I K / G19 J K)
 //! CT from p tangent to t, to q:          c = p + n s, n ⟂ t (left), s = |q-p|² / (2 (q-p)·n)
 //! CHF s at corner k (lines u in, v out): k - u s → k + v s
 //! RND r at corner k:                     tangent points k ∓ u, v · r tan(φ/2), φ = ∠(u, v)
@@ -250,13 +252,14 @@ fn line(r: &mut Reader, b: &Block, polar: bool) -> LineResult<()> {
     )?;
     if polar {
         let c = pole_of(r, b)?;
+        let [u, v] = r.path.pole_plane;
         let p = r.path.pos;
-        let (r0, a0) = polar_of(c, [p[X], p[Y]]);
+        let (r0, a0) = polar_of(c, [p[u], p[v]]);
         let pr = pp[0].map_or(r0, |(v, inc)| if inc { r0 + v } else { v });
         let pa = pp[1].map_or(a0, |(v, inc)| if inc { a0 + v } else { v });
-        target[X] = c[0] + pr * pa.to_radians().cos();
-        target[Y] = c[1] + pr * pa.to_radians().sin();
-        mask |= 3;
+        target[u] = c[0] + pr * pa.to_radians().cos();
+        target[v] = c[1] + pr * pa.to_radians().sin();
+        mask |= (1 << u) | (1 << v);
     }
     if r.shortest && !e.m91 {
         for a in 3..6 {
@@ -328,9 +331,16 @@ fn motion(
     if e.tcp == Some(true) {
         frames::tcp(r, b, true);
     }
+    let other_plane = centre.map(|c| c.plane()).filter(|p| *p != [X, Y]);
     if mask != 0 || centre.is_some() {
         if e.m91 {
             r.gword("53", key.clone());
+        }
+        // An arc outside X Y: its plane for this block (G18 Z X, G19 Y Z), X Y again after.
+        match other_plane {
+            Some([Z, X]) => r.gword("18", key.clone()),
+            Some(_) => r.gword("19", key.clone()),
+            None => {}
         }
         r.gword(g, key.clone());
         for (a, l) in LETTERS.iter().enumerate() {
@@ -338,12 +348,13 @@ fn motion(
                 r.word(*l, target[a], key.clone());
             }
         }
+        const CENTRE_WORDS: [char; 3] = ['I', 'J', 'K'];
         match centre {
-            Some(Centre::Offset(i, j)) => {
-                r.word('I', i, key.clone());
-                r.word('J', j, key.clone());
+            Some(Centre::Offset(d, [u, v])) => {
+                r.word(CENTRE_WORDS[u.min(v)], d[usize::from(v < u)], key.clone());
+                r.word(CENTRE_WORDS[u.max(v)], d[usize::from(u < v)], key.clone());
             }
-            Some(Centre::Radius(rad)) => r.word('R', rad, key.clone()),
+            Some(Centre::Radius(rad, _)) => r.word('R', rad, key.clone()),
             None => {}
         }
         if g != "0" {
@@ -369,6 +380,10 @@ fn motion(
         r.word('M', *m, span.clone());
     }
     r.end_block(b.line);
+    if other_plane.is_some() {
+        r.gword("17", key.clone());
+        r.end_block(b.line);
+    }
     run_extras(r, b, e, Some(()))
 }
 
@@ -432,8 +447,17 @@ fn retract(r: &mut Reader, b: &Block, mb: Option<f64>) -> LineResult<()> {
 /// An arc's centre as the interpreter reads it.
 #[derive(Clone, Copy)]
 enum Centre {
-    Offset(f64, f64),
-    Radius(f64),
+    /// From the start to the centre along the plane's first and second axes.
+    Offset([f64; 2], [usize; 2]),
+    Radius(f64, [usize; 2]),
+}
+
+impl Centre {
+    fn plane(&self) -> [usize; 2] {
+        match self {
+            Centre::Offset(_, p) | Centre::Radius(_, p) => *p,
+        }
+    }
 }
 
 /// `CC`: the pole, absolute, incremental from the position, or the position itself.
@@ -442,9 +466,14 @@ fn pole(r: &mut Reader, b: &Block) -> LineResult<()> {
     let mut e = Extras::default();
     let (mut d, mut rad) = (None, None);
     let mask = words(r, b, &mut t, &mut e, None, &mut d, &mut rad)?;
-    if mask & !3 != 0 {
-        return Err(LineError::new(b.span(1), format!("`{}` with a coordinate other than X Y: circles outside the working plane XY are not supported (tool axis Z)", b.text[b.spans(0, b.toks.len() - 1)].trim()), "not the XY plane"));
-    }
+    // TNC 640 manual, "Circle center CC" and "Circular paths in other planes": the two
+    // coordinates given name the circle's plane.
+    let plane = match mask {
+        0..=3 => [X, Y],
+        5 => [Z, X],
+        6 => [Y, Z],
+        _ => return Err(LineError::new(b.span(1), format!("`{}`: expected the centre's two coordinates in one plane (X Y, X Z or Y Z; A B C are not read)", b.text[b.spans(0, b.toks.len() - 1)].trim()), "not a plane")),
+    };
     if !e.plain() || e.feed.is_some() {
         return Err(LineError::new(
             b.span(1),
@@ -452,8 +481,19 @@ fn pole(r: &mut Reader, b: &Block) -> LineResult<()> {
             "unexpected word",
         ));
     }
-    r.path.pole = Some([t[X], t[Y]]);
+    r.path.pole = Some([t[plane[0]], t[plane[1]]]);
+    r.path.pole_plane = plane;
     Ok(())
+}
+
+/// The plane of a `CR` or `CT` from the coordinates it names: X Z or Y Z alone name
+/// another plane than X Y.
+fn plane_of(mask: u8) -> [usize; 2] {
+    match mask & 7 {
+        5 => [Z, X],
+        6 => [Y, Z],
+        _ => [X, Y],
+    }
 }
 
 fn pole_of(r: &Reader, b: &Block) -> LineResult<[f64; 2]> {
@@ -472,7 +512,8 @@ fn polar_of(c: [f64; 2], p: [f64; 2]) -> (f64, f64) {
     (d[0].hypot(d[1]), d[1].atan2(d[0]).to_degrees())
 }
 
-/// `C`, `CR`, `CT`, `CP`.
+/// `C`, `CR`, `CT`, `CP`: in the pole's plane (`C`, `CP`) or the plane of the coordinates
+/// given (`CR`, `CT`), with the third axis of that plane as a helix's linear axis.
 fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
     let mut target = r.path.pos;
     let mut e = Extras::default();
@@ -491,7 +532,14 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
     if let Some(f) = e.feed {
         r.path.feed = Some(f);
     }
-    let p = r.path.xy();
+    let [u, v] = match key {
+        "C" | "CP" => r.path.pole_plane,
+        _ => plane_of(mask),
+    };
+    if [u, v] != [X, Y] && (key == "CT" || r.path.comp != 0 || e.comp.is_some_and(|c| c != 0)) {
+        return Err(LineError::new(b.span(0), format!("`{key}` outside the plane X Y with {}: mtsim reads circles in the planes X Z and Y Z only as C, CP and CR without radius compensation", if key == "CT" { "a tangent" } else { "radius compensation" }), "not the XY plane"));
+    }
+    let p = [r.path.pos[u], r.path.pos[v]];
     let need_dir = || {
         LineError::new(
             b.span(0),
@@ -508,8 +556,8 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
                 return Err(LineError::new(
                     b.span(0),
                     format!(
-                        "`C` (circular path around the pole CC): the start point X{:+} Y{:+} is on CC, so the circle has radius zero; the program expects the tool placed away from CC before it (by hand, or a position mtsim does not know)",
-                        p[0], p[1]
+                        "`C` (circular path around the pole CC): the start point {}{:+} {}{:+} is on CC, so the circle has radius zero; the program expects the tool placed away from CC before it (by hand, or a position mtsim does not know)",
+                        LETTERS[u], p[0], LETTERS[v], p[1]
                     ),
                     "start on CC",
                 ));
@@ -526,7 +574,7 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
             })?;
             let ccw = ccw.ok_or_else(need_dir)?;
             (
-                radius_centre(p, [target[X], target[Y]], rad, ccw).ok_or_else(|| {
+                radius_centre(p, [target[u], target[v]], rad, ccw).ok_or_else(|| {
                     LineError::new(
                         b.span(0),
                         format!(
@@ -570,53 +618,74 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
                 Some((v, false)) => (v, 0),
                 None => (a0, 0),
             };
-            target[X] = c[0] + r0 * end.to_radians().cos();
-            target[Y] = c[1] + r0 * end.to_radians().sin();
+            target[u] = c[0] + r0 * end.to_radians().cos();
+            target[v] = c[1] + r0 * end.to_radians().sin();
             (c, ccw, turns)
         }
     };
     let g = if ccw { "3" } else { "2" };
-    let z0 = r.path.pos[Z];
-    // A helix of more than one turn: one block per full turn, Z in proportion.
+    let plane_bits = (1u8 << u) | (1 << v);
     if turns > 0 {
-        let total = match pp[1] {
-            Some((v, _)) => v.abs(),
-            None => 360.0,
+        let total = pp[1].map_or(360.0, |(v, _)| v.abs());
+        let helix = Helix {
+            g,
+            plane: [u, v],
+            centre,
+            turns,
+            total,
+            mask,
         };
-        let mut at = p;
-        for k in 0..turns {
-            let mut t = r.path.pos;
-            t[X] = at[0];
-            t[Y] = at[1];
-            t[Z] = z0 + (target[Z] - z0) * 360.0 * f64::from(k + 1) / total;
-            let off = Centre::Offset(centre[0] - at[0], centre[1] - at[1]);
-            motion(
-                r,
-                b,
-                g,
-                &t,
-                3 | (mask & 4) | if target[Z] != z0 { 4 } else { 0 },
-                Some(off),
-                &Extras::default(),
-            )?;
-            r.path.pos = t;
-            at = [t[X], t[Y]];
-        }
+        full_turns(r, b, &helix, &target)?;
     }
-    let start = r.path.xy();
+    let start = [r.path.pos[u], r.path.pos[v]];
     let c = match (key, radius) {
-        ("CR", Some(rad)) => Centre::Radius(rad),
-        _ => Centre::Offset(centre[0] - start[0], centre[1] - start[1]),
+        ("CR", Some(rad)) => Centre::Radius(rad, [u, v]),
+        _ => Centre::Offset([centre[0] - start[0], centre[1] - start[1]], [u, v]),
     };
-    motion(r, b, g, &target, mask | 3, Some(c), &e)?;
-    let rv = [target[X] - centre[0], target[Y] - centre[1]];
+    motion(r, b, g, &target, mask | plane_bits, Some(c), &e)?;
+    let rv = [target[u] - centre[0], target[v] - centre[1]];
     let n = rv[0].hypot(rv[1]).max(1e-300);
-    r.path.dir = Some(if ccw {
-        [-rv[1] / n, rv[0] / n]
-    } else {
-        [rv[1] / n, -rv[0] / n]
+    // The tangent CT and RND/CHF follow lies in the plane X Y.
+    r.path.dir = ([u, v] == [X, Y]).then(|| {
+        if ccw {
+            [-rv[1] / n, rv[0] / n]
+        } else {
+            [rv[1] / n, -rv[0] / n]
+        }
     });
     r.path.pos = target;
+    Ok(())
+}
+
+/// A helix of more than one turn about `centre` in `plane`, `total` degrees in all.
+struct Helix {
+    g: &'static str,
+    plane: [usize; 2],
+    centre: [f64; 2],
+    turns: u32,
+    total: f64,
+    mask: u8,
+}
+
+/// A helix's full turns before its last part: one block per turn, the linear axis (the
+/// plane's third) in proportion to the angle turned.
+fn full_turns(r: &mut Reader, b: &Block, h: &Helix, target: &[f64; 6]) -> LineResult<()> {
+    let [u, v] = h.plane;
+    let w = 3 - u - v;
+    let w0 = r.path.pos[w];
+    let mut at = [r.path.pos[u], r.path.pos[v]];
+    for k in 0..h.turns {
+        let mut t = r.path.pos;
+        t[u] = at[0];
+        t[v] = at[1];
+        t[w] = w0 + (target[w] - w0) * 360.0 * f64::from(k + 1) / h.total;
+        let off = Centre::Offset([h.centre[0] - at[0], h.centre[1] - at[1]], h.plane);
+        let helix = if target[w] != w0 { 1 << w } else { 0 };
+        let bits = (1u8 << u) | (1 << v) | (h.mask & (1 << w)) | helix;
+        motion(r, b, h.g, &t, bits, Some(off), &Extras::default())?;
+        r.path.pos = t;
+        at = [t[u], t[v]];
+    }
     Ok(())
 }
 

@@ -1,4 +1,4 @@
-//! `CYCL DEF` and `CYCL CALL`: the drilling cycles 200, 201, 203 and 205 as G0/G1/G4
+//! `CYCL DEF` and `CYCL CALL`: the drilling cycles 200-203, 205-207, 209 and 240 as G0/G1/G4
 //! words along the tool axis, and the coordinate transformation cycles 7 (datum shift),
 //! 10 (rotation) and 19 (working plane) through `frames`.
 //!
@@ -15,7 +15,9 @@
 //! ```
 //!
 //! 203 makes each plunge Q212 shorter down to Q205 and retracts at Q208; 205 approaches to
-//! Q258 above the depth reached.
+//! Q258 above the depth reached. 240 CENTERING and 206 TAPPING (floating holder) go to the
+//! depth in one plunge (206 back at F Q206); 202 BORING and 209 TAPPING WITH CHIP BREAKING
+//! are written out below.
 
 use crate::lex::{LineError, LineResult};
 
@@ -39,8 +41,18 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
     })?;
     let minor: u32 = minor.parse().unwrap_or(0);
     match major {
-        200 | 201 | 203 | 205 | 207 => define(r, b, major),
-        1 => pecking_value(r, b, minor),
+        200..=203 | 205..=207 | 209 | 240 => define(r, b, major),
+        1 | 2 | 17 => old_cycle_value(r, b, major, minor),
+        // Oriented spindle stop: the spindle turns to an angle, the axes stay.
+        13 => {
+            if minor == 0 {
+                r.note(
+                    b,
+                    "cycle 13 ORIENTATION (oriented spindle stop) accepted: no axis moves",
+                );
+            }
+            Ok(())
+        }
         7 | 10 | 19 if minor == 0 => Ok(()),
         7 => frames::datum_shift(r, b),
         10 => frames::rotation(r, b),
@@ -72,17 +84,38 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
                 .map(|k| b.tok(k))
                 .take_while(|t| !t.contains('='))
                 .collect();
-            Err(LineError::new(b.spans(0, 2), format!("the Heidenhain cycle `CYCL DEF {id}{}{}` is not supported by mtsim: it reads the drilling cycles 1, 200, 201, 203, 205, 207 and the cycles 7, 9, 10, 19, 32", if name.is_empty() { "" } else { " " }, name.join(" ")), "Heidenhain cycle not supported")
+            let name = if name.is_empty() {
+                String::new()
+            } else {
+                format!(" {}", name.join(" "))
+            };
+            Err(LineError::new(b.spans(0, 2), format!("`CYCL DEF {id}{name}`: not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-207, 209, 240 and 7, 9, 10, 13, 19, 32", manual(major)), "Heidenhain cycle not supported")
                 .help("post the cycle as L moves, or see docs/gcode.md"))
         }
     }
 }
 
-/// `CYCL DEF 1.0 PECKING` (defines the cycle) and `1.1 DIST 2` … `1.5 F80` (its set-up
-/// clearance, depth, plunging depth, dwell and feed): the value after the word.
-fn pecking_value(r: &mut Reader, b: &Block, minor: u32) -> LineResult<()> {
+/// The HEIDENHAIN manual that defines cycle `n`.
+fn manual(n: u32) -> &'static str {
+    match n {
+        1..=29 => "TNC 426/430 User's Manual, \"Fixed cycles\"",
+        _ => "TNC 640 cycle programming manual",
+    }
+}
+
+/// The cycles of the TNC 426/430 written line by line: `CYCL DEF 1.0 PECKING` (defines
+/// the cycle) and `1.1 DIST 2` … `1.5 F80` (set-up clearance, depth, plunging depth, dwell,
+/// feed); `2.0 TAPPING`, `2.1` … `2.4` (set-up clearance, depth, dwell, feed); `17.0
+/// RIGID TAPPING`, `17.1` … `17.3` (set-up clearance, depth, pitch): the value after the
+/// word, kept in line order.
+fn old_cycle_value(r: &mut Reader, b: &Block, major: u32, minor: u32) -> LineResult<()> {
+    let lines = match major {
+        1 => 5,
+        2 => 4,
+        _ => 3,
+    };
     if minor == 0 {
-        r.cycle.number = Some(1);
+        r.cycle.number = Some(major);
         r.cycle.pecking = [0.0; 5];
         r.modal_cycle = false;
         return Ok(());
@@ -90,7 +123,7 @@ fn pecking_value(r: &mut Reader, b: &Block, minor: u32) -> LineResult<()> {
     let (Some(first), Some(last)) = (b.toks.get(3), b.toks.last()) else {
         return Err(LineError::new(
             b.span(2),
-            format!("`CYCL DEF 1.{minor}` without a value"),
+            format!("`CYCL DEF {major}.{minor}` without a value"),
             "no value",
         ));
     };
@@ -100,12 +133,19 @@ fn pecking_value(r: &mut Reader, b: &Block, minor: u32) -> LineResult<()> {
         .unwrap_or(text.len());
     let span = first.start + at..last.end;
     let v = value(text[at..].trim(), &r.q, span.clone())?;
-    match minor {
-        1..=5 => r.cycle.pecking[minor as usize - 1] = v,
+    if r.cycle.number != Some(major) {
+        return Err(LineError::new(
+            b.spans(0, 2),
+            format!("`CYCL DEF {major}.{minor}` without `CYCL DEF {major}.0` before it"),
+            "cycle not defined",
+        ));
+    }
+    match minor as usize {
+        k @ 1.. if k <= lines => r.cycle.pecking[k - 1] = v,
         _ => {
             return Err(LineError::new(
                 b.spans(0, 2),
-                format!("`CYCL DEF 1.{minor}`: cycle 1 PECKING has the lines 1.1 to 1.5"),
+                format!("`CYCL DEF {major}.{minor}`: cycle {major} has the lines {major}.1 to {major}.{lines}"),
                 "no such line",
             ))
         }
@@ -127,6 +167,9 @@ fn define(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
         let v = value(v, &r.q, span.clone())?;
         r.q.set_ref(name, v, span)?;
     }
+    if n == 240 && r.q.q(343) != 0.0 {
+        return Err(LineError::new(b.spans(0, 2), "cycle 240 CENTERING with Q343 = 1 (depth from the diameter Q344 and the tool's point angle T-ANGLE) is not supported (TNC 640 cycle programming manual, \"Cycle 240\"): expected Q343 = 0 and the depth Q201", "centering by diameter"));
+    }
     r.cycle.number = Some(n);
     r.modal_cycle = false;
     Ok(())
@@ -137,12 +180,14 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
     let Some(n) = r.cycle.number else {
         return Err(LineError::new(
             b.span(0),
-            "cycle call with no cycle defined: expected CYCL DEF 200, 201, 203, 205 or 207 before it",
+            "cycle call with no cycle defined: expected CYCL DEF 1, 2, 17, 200-203, 205-207, 209 or 240 before it",
             "no cycle",
         ));
     };
-    if n == 1 {
-        return pecking(r, b);
+    match n {
+        1 => return pecking(r, b),
+        2 | 17 => return old_tapping(r, b, n),
+        _ => {}
     }
     let q = |k| r.q.q(k);
     let mut p = Params {
@@ -159,7 +204,7 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
         min_plunge: q(205),
     };
     let span = b.span(0);
-    if n == 207 {
+    if n == 207 || n == 209 {
         // Rigid tapping: in and out at the pitch times the spindle speed.
         p.feed = q(239).abs() * r.spindle_rpm;
         (p.dwell_top, p.dwell_depth) = (0.0, 0.0);
@@ -181,7 +226,8 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
         ));
     }
     let plan = match n {
-        207 => Plan {
+        209 => return tap_chip_breaking(r, b, &p),
+        206 | 207 => Plan {
             plunge: -p.depth,
             decrement: 0.0,
             min: 0.0,
@@ -194,6 +240,17 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
             min: 0.0,
             approach: p.clearance,
             retract_feed: Some(if p.retract_feed > 0.0 {
+                p.retract_feed
+            } else {
+                p.feed
+            }),
+        },
+        202 | 240 => Plan {
+            plunge: -p.depth,
+            decrement: 0.0,
+            min: 0.0,
+            approach: p.clearance,
+            retract_feed: (n == 202).then_some(if p.retract_feed > 0.0 {
                 p.retract_feed
             } else {
                 p.feed
@@ -252,6 +309,9 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
     if n == 207 {
         r.note(b, "cycle 207 taps at F = pitch Q239 × S; the spindle reversal at the bottom is not simulated");
     }
+    if n == 202 {
+        return boring(r, b, &p, &plan);
+    }
     drill(r, b, &p, &plan);
     r.path.set_z(
         p.surface
@@ -262,6 +322,145 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
             },
     );
     Ok(())
+}
+
+/// Cycle 202 BORING (TNC 640 cycle programming manual, "Cycle 202"): FMAX to s + a, F Q206
+/// to the depth, dwell Q211, the spindle oriented to Q336, the cutting edge moved off the
+/// wall by 0.2 mm as Q214 gives (1 −X, 2 −Y, 3 +X, 4 +Y; 0 stays), F Q208 (Q208 = 0: Q206)
+/// up to s + a, FMAX to s + Q204 when Q204 > Q200, FMAX back over the hole's centre.
+fn boring(r: &mut Reader, b: &Block, p: &Params, plan: &Plan) -> LineResult<()> {
+    const DISENGAGE_MM: f64 = 0.2;
+    let way = r.q.q(214);
+    let off = match way as i64 {
+        _ if way.fract() != 0.0 => None,
+        0 => Some([0.0, 0.0]),
+        1 => Some([-1.0, 0.0]),
+        2 => Some([0.0, -1.0]),
+        3 => Some([1.0, 0.0]),
+        4 => Some([0.0, 1.0]),
+        _ => None,
+    };
+    let Some(off) = off else {
+        return Err(LineError::new(
+            b.span(0),
+            format!(
+                "cycle 202: Q214 = {way}: expected 0-4 (the direction the tool leaves the wall)"
+            ),
+            "bad Q214",
+        ));
+    };
+    let span = b.span(0);
+    let unit = if r.inch { 25.4 } else { 1.0 };
+    let centre = [r.path.pos[0], r.path.pos[1]];
+    let xy_rapid = |r: &mut Reader, xy: [f64; 2]| {
+        r.gword("0", span.clone());
+        r.word('X', xy[0], span.clone());
+        r.word('Y', xy[1], span.clone());
+        r.end_block(b.line);
+    };
+    let top = p.surface + p.clearance;
+    z_move(r, b, "0", top, None);
+    z_move(r, b, "1", p.surface + p.depth, Some(p.feed));
+    dwell(r, b, p.dwell_depth);
+    let moved = off != [0.0, 0.0];
+    if moved {
+        let d = DISENGAGE_MM / unit;
+        xy_rapid(r, [centre[0] + off[0] * d, centre[1] + off[1] * d]);
+    }
+    z_move(r, b, "1", top, plan.retract_feed);
+    let end = second_clearance(r, b, p);
+    if moved {
+        xy_rapid(r, centre);
+    }
+    r.path.set_z(end);
+    Ok(())
+}
+
+/// Cycle 209 TAPPING WITH CHIP BREAKING (TNC 640 cycle programming manual, "Cycle 209"):
+/// FMAX to s + a; at F = pitch Q239 × S down by the infeed Q257 at a time (Q257 = 0: the
+/// whole depth), after each infeed back by Q256 × pitch (Q256 = 0: to s + a) at F × Q403
+/// and on to the next infeed depth at F; at the depth back to s + a at F × Q403, then FMAX
+/// to s + Q204 when Q204 > Q200.
+fn tap_chip_breaking(r: &mut Reader, b: &Block, p: &Params) -> LineResult<()> {
+    let span = b.span(0);
+    let infeed = r.q.q(257);
+    let back = r.q.q(256) * r.q.q(239).abs();
+    let factor = match r.q.q(403) {
+        f if f == 0.0 => 1.0,
+        f if f > 0.0 => f,
+        f => {
+            return Err(LineError::new(
+                span,
+                format!("cycle 209: RPM factor Q403 = {f}: expected a positive factor"),
+                "bad Q403",
+            ))
+        }
+    };
+    if infeed < 0.0 || back < 0.0 {
+        return Err(LineError::new(
+            span,
+            "cycle 209: Q257 and Q256 must not be negative",
+            "negative infeed",
+        ));
+    }
+    let top = p.surface + p.clearance;
+    let bottom = p.surface + p.depth;
+    let step = if infeed > 0.0 { infeed } else { -p.depth };
+    z_move(r, b, "0", top, None);
+    let mut reached = p.surface;
+    loop {
+        let next = (reached - step).max(bottom);
+        z_move(r, b, "1", next, Some(p.feed));
+        if next <= bottom {
+            break;
+        }
+        let up = if back > 0.0 {
+            (next + back).min(top)
+        } else {
+            top
+        };
+        z_move(r, b, "1", up, Some(p.feed * factor));
+        reached = next;
+    }
+    z_move(r, b, "1", top, Some(p.feed * factor));
+    let end = second_clearance(r, b, p);
+    r.note(
+        b,
+        "cycle 209 taps at F = pitch Q239 × S; the spindle reversals are not simulated",
+    );
+    r.path.set_z(end);
+    Ok(())
+}
+
+/// One move along the tool axis: G0 (rapid) or G1 at `f`.
+fn z_move(r: &mut Reader, b: &Block, g: &'static str, z: f64, f: Option<f64>) {
+    let span = b.span(0);
+    r.gword(g, span.clone());
+    r.word('Z', z, span.clone());
+    if let Some(f) = f {
+        r.word('F', f, span);
+    }
+    r.end_block(b.line);
+}
+
+/// A dwell of `t` s (none when `t` is 0).
+fn dwell(r: &mut Reader, b: &Block, t: f64) {
+    if t > 0.0 {
+        r.gword("4", b.span(0));
+        r.word('P', t, b.span(0));
+        r.end_block(b.line);
+    }
+}
+
+/// FMAX to the 2nd set-up clearance s + Q204 when it lies above s + Q200; where the
+/// tool ends.
+fn second_clearance(r: &mut Reader, b: &Block, p: &Params) -> f64 {
+    if p.second > p.clearance {
+        z_move(r, b, "0", p.surface + p.second, None);
+        p.surface + p.second
+    } else {
+        p.surface + p.clearance
+    }
 }
 
 struct Params {
@@ -289,52 +488,83 @@ struct Plan {
 }
 
 fn drill(r: &mut Reader, b: &Block, p: &Params, plan: &Plan) {
-    let span = b.span(0);
     let top = p.surface + p.clearance;
     let bottom = p.surface + p.depth;
-    let z_move = |r: &mut Reader, g: &'static str, z: f64, f: Option<f64>| {
-        r.gword(g, span.clone());
-        r.word('Z', z, span.clone());
-        if let Some(f) = f {
-            r.word('F', f, span.clone());
-        }
-        r.end_block(b.line);
-    };
-    let dwell = |r: &mut Reader, t: f64| {
-        if t > 0.0 {
-            r.gword("4", span.clone());
-            r.word('P', t, span.clone());
-            r.end_block(b.line);
-        }
-    };
-    z_move(r, "0", top, None);
+    z_move(r, b, "0", top, None);
     let mut reached = p.surface;
     let mut plunge = plan.plunge;
     loop {
         let next = (reached - plunge).max(bottom);
         if reached < p.surface {
-            z_move(r, "0", reached + plan.approach, None);
+            z_move(r, b, "0", reached + plan.approach, None);
         }
-        z_move(r, "1", next, Some(p.feed));
+        z_move(r, b, "1", next, Some(p.feed));
         if next <= bottom {
             break;
         }
         match plan.retract_feed {
-            Some(f) => z_move(r, "1", top, Some(f)),
-            None => z_move(r, "0", top, None),
+            Some(f) => z_move(r, b, "1", top, Some(f)),
+            None => z_move(r, b, "0", top, None),
         }
-        dwell(r, p.dwell_top);
+        dwell(r, b, p.dwell_top);
         reached = next;
         plunge = (plunge - plan.decrement).max(plan.min.max(1e-3));
     }
-    dwell(r, p.dwell_depth);
+    dwell(r, b, p.dwell_depth);
     match plan.retract_feed {
-        Some(f) => z_move(r, "1", top, Some(f)),
-        None => z_move(r, "0", top, None),
+        Some(f) => z_move(r, b, "1", top, Some(f)),
+        None => z_move(r, b, "0", top, None),
     }
-    if p.second > p.clearance {
-        z_move(r, "0", p.surface + p.second, None);
+    second_clearance(r, b, p);
+}
+
+/// Cycle 2 TAPPING (floating tap holder) and 17 RIGID TAPPING at the current position
+/// (TNC 426/430 User's Manual, "TAPPING with a floating tap holder (Cycle 2)", "RIGID
+/// TAPPING (Cycle 17)"): the tool stands at the set-up clearance a above the surface; it
+/// feeds to the depth in one movement, dwells (cycle 2), and feeds back to where it
+/// started. The feed is cycle 2's F, or cycle 17's pitch × the `TOOL CALL`'s S.
+fn old_tapping(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
+    let [clearance, depth, third, fourth, _] = r.cycle.pecking;
+    let (dwell, feed) = if n == 2 {
+        (third, fourth)
+    } else {
+        (0.0, third.abs() * r.spindle_rpm)
+    };
+    let span = b.span(0);
+    if depth > 0.0 {
+        return Err(LineError::new(span, format!("cycle {n}: depth {depth} is positive: mtsim taps down the tool axis Z only (expected a negative depth)"), "positive depth"));
     }
+    if depth == 0.0 {
+        return Ok(());
+    }
+    if feed <= 0.0 {
+        return Err(LineError::new(span, format!("cycle {n}: feed {feed} (cycle 2: {n}.4 F; cycle 17: the pitch {n}.3 × S): expected a positive feed"), "no feed"));
+    }
+    let start = r.path.pos[2];
+    let p = Params {
+        clearance: clearance.abs(),
+        depth,
+        feed,
+        plunge: -depth,
+        dwell_top: 0.0,
+        surface: start - clearance.abs(),
+        second: 0.0,
+        dwell_depth: dwell,
+        retract_feed: feed,
+        decrement: 0.0,
+        min_plunge: 0.0,
+    };
+    let plan = Plan {
+        plunge: -depth,
+        decrement: 0.0,
+        min: 0.0,
+        approach: 0.0,
+        retract_feed: Some(feed),
+    };
+    r.note(b, &format!("cycle {n} taps in and out at F {feed}; the spindle reversal at the depth is not simulated"));
+    drill(r, b, &p, &plan);
+    r.path.set_z(start);
+    Ok(())
 }
 
 /// Cycle 1 PECKING at the current position (TNC 426/430 User's Manual, "PECKING (Cycle

@@ -66,6 +66,7 @@ impl Reader {
             frames_state: Frames::default(),
             cycle: Cycle::default(),
             tools: options.tools.clone(),
+            rewritten: Vec::new(),
             table: options.table,
             chain_rotaries: match options.aligner {
                 Some(_) => options
@@ -400,6 +401,7 @@ impl Reader {
             }
         }
         if let Some(n) = number {
+            sysread::unchanged(self, n, b.span(2))?;
             self.tool = (n, dl, dr);
             if n > 0 {
                 self.word('T', n as f64, b.span(0));
@@ -476,8 +478,9 @@ impl Reader {
             9..=12 => self.fn_jump(b, n, rest, rest_at, here),
             14 => Err(LineError::new(b.span(0), format!("the program raises an error: {}", rest.trim()), "FN 14 error")),
             15 | 16 => Ok(()),
+            17 => sysread::write(self, b, rest, rest_at),
             18 => sysread::read(self, b, rest, rest_at),
-            _ => Err(LineError::new(b.spans(0, 1), format!("`FN {n}` is not supported: mtsim reads FN 0-16 (arithmetic, trigonometry, jumps, error and print) and FN 18 (system data); FN 17 SYSWRITE, FN 19 PLC, FN 20 WAIT FOR, FN 26-28 tables and the others are refused"), "FN not supported")
+            _ => Err(LineError::new(b.spans(0, 1), format!("`FN {n}` is not supported: mtsim reads FN 0-16 (arithmetic, trigonometry, jumps, error and print), FN 17 (the tool table, ID50) and FN 18 (system data); FN 17 of other data, FN 19 PLC, FN 20 WAIT FOR, FN 26-28 tables and the others are refused"), "FN not supported")
                 .help("docs/gcode.md lists the Heidenhain constructs mtsim reads")),
         }
     }

@@ -56,6 +56,9 @@ pub(crate) struct Reader {
     pub(super) frames_state: Frames,
     pub(super) cycle: Cycle,
     pub(super) tools: Vec<Tool>,
+    /// Tools whose geometry `FN 17: SYSWRITE ID50` changed: number and line (a later call
+    /// or read of one is refused: the tool table is not changed during a run).
+    pub(super) rewritten: Vec<(u32, usize)>,
     /// The machine's rotary table, for `PLANE … TURN`.
     pub(super) table: Option<crate::frame::RotaryTable>,
     /// Without a table: the rotaries a caller's inverse kinematics turns for `PLANE … TURN`
@@ -93,8 +96,11 @@ pub(crate) struct Reader {
 pub(super) struct Contour {
     /// Program position X Y Z A B C (mm or inch, deg).
     pub(super) pos: [f64; 6],
-    /// The pole `CC` (circle centre).
+    /// The pole `CC` (circle centre), in the plane of its two axes.
     pub(super) pole: Option<[f64; 2]>,
+    /// The axes of the pole's plane, first and second (X Y, Z X or Y Z: the angle 0 lies
+    /// on the first, DR+ turns from the first towards the second, as ISO's G17/G18/G19).
+    pub(super) pole_plane: [usize; 2],
     /// Unit tangent at the end of the last contour element.
     pub(super) dir: Option<[f64; 2]>,
     /// The modal feed (`FMAX` leaves it).
@@ -159,6 +165,7 @@ impl Contour {
         let mut c = Contour {
             pos: [0.0; 6],
             pole: None,
+            pole_plane: [0, 1],
             dir: None,
             feed: None,
             tool_feed: None,
@@ -207,8 +214,10 @@ pub(super) struct Frames {
 #[derive(Default)]
 pub(super) struct Cycle {
     pub(super) number: Option<u32>,
-    /// Cycle 1 PECKING's values as `CYCL DEF 1.1`-`1.5` give them: set-up clearance,
-    /// depth, plunging depth, dwell (s), feed.
+    /// The line-by-line cycle's values in line order: cycle 1 PECKING's `1.1`-`1.5`
+    /// (set-up clearance, depth, plunging depth, dwell (s), feed), cycle 2's `2.1`-`2.4`
+    /// (set-up clearance, depth, dwell, feed), cycle 17's `17.1`-`17.3` (set-up clearance,
+    /// depth, pitch).
     pub(super) pecking: [f64; 5],
 }
 

@@ -5,20 +5,36 @@
 //! one without IDX), ID 240 (nominal position in the REF system, axis IDX 1-6 = X Y Z A B
 //! C) and ID 270 (current position in the active coordinate system, axis IDX). Every other
 //! ID or NR is refused, naming it and the manual's section, never read as 0.
+//!
+//! `FN 17: SYSWRITE ID50 NR m IDX k = v` (same manual, "FN 17: SYSWRITE – Write system
+//! data") writes the tool table: a column that does not move the axes (NR 7 and up: tool
+//! life, cutting data, tolerances, type …) is accepted with a notice; the geometry (NR1-6: L,
+//! R, R2, DL, DR, DR2) marks the tool as changed, and a later `TOOL CALL` or `FN 18` of it
+//! is refused, since mtsim's tool table stays as the run began.
 
+use super::qparam::Qparams;
 use super::state::Block;
 use super::Reader;
 use crate::axis::Axis;
 use crate::lex::{LineError, LineResult};
 
-/// The ID, NR and IDX numbers of `ID270 NR1 IDX3` (NR and IDX absent: `None`).
-fn numbers(text: &str) -> Option<(u32, Option<u32>, Option<u32>)> {
+/// The ID, NR and IDX numbers of `ID270 NR1 IDX3` or `IDXQ8` (a Q parameter holding a
+/// whole number; NR and IDX absent: `None`).
+fn numbers(text: &str, q: &Qparams) -> Option<(u32, Option<u32>, Option<u32>)> {
     let upper = text.to_ascii_uppercase();
     let after = |key: &str| -> Option<u32> {
-        let at = upper
-            .split_whitespace()
-            .find(|w| w.starts_with(key) && w[key.len()..].bytes().all(|c| c.is_ascii_digit()))?;
-        at[key.len()..].parse().ok()
+        let word = upper.split_whitespace().find(|w| {
+            let rest = &w[key.len().min(w.len())..];
+            w.starts_with(key)
+                && !rest.is_empty()
+                && (rest.bytes().all(|c| c.is_ascii_digit()) || rest.starts_with('Q'))
+        })?;
+        let rest = &word[key.len()..];
+        let v = match rest.parse::<u32>() {
+            Ok(v) => f64::from(v),
+            Err(_) => q.get_ref(rest, 0..0).ok()?,
+        };
+        (v >= 0.0 && v.fract() == 0.0 && v < 1e9).then_some(v as u32)
     };
     Some((after("ID")?, after("NR"), after("IDX")))
 }
@@ -38,7 +54,7 @@ pub(super) fn read(r: &mut Reader, b: &Block, rest: &str, at: usize) -> LineResu
     };
     let target = rest[..eq].trim()["SYSREAD".len()..].trim().to_string();
     let span = at + eq + 1..b.text.len();
-    let Some((id, nr, idx)) = numbers(&rest[eq + 1..]) else {
+    let Some((id, nr, idx)) = numbers(&rest[eq + 1..], &r.q) else {
         return Err(LineError::new(
             span,
             "FN 18: expected `ID` and a number after `=`",
@@ -64,6 +80,13 @@ pub(super) fn read(r: &mut Reader, b: &Block, rest: &str, at: usize) -> LineResu
             _ => Err(refuse("an axis index other than IDX1-6 (X Y Z A B C)")),
         }
     };
+    if let Some(&(tool, line)) = r
+        .rewritten
+        .iter()
+        .find(|(t, _)| id == 50 && *t == idx.unwrap_or(r.tool.0))
+    {
+        return Err(LineError::new(span, format!("`FN 18: SYSREAD` ID50 reads tool {tool}, whose geometry FN 17 changed at line {line}: mtsim's tool table stays as the run began"), "tool table changed"));
+    }
     let value = match (id, nr.unwrap_or(1)) {
         (20, 1) => r.tool.0 as f64,
         // Tool axis: 2 = Z, the only one mtsim reads (TOOL CALL … Z).
@@ -109,4 +132,41 @@ pub(super) fn read(r: &mut Reader, b: &Block, rest: &str, at: usize) -> LineResu
         _ => return Err(refuse("system data mtsim does not keep")),
     };
     r.q.set_ref(&target, value, at..at + eq)
+}
+
+/// Runs `FN 17: SYSWRITE ID50 NR… IDX… = value`; `rest` is the text after `FN 17:`.
+pub(super) fn write(r: &mut Reader, b: &Block, rest: &str, at: usize) -> LineResult<()> {
+    let upper = rest.to_ascii_uppercase();
+    let eq = rest.find('=');
+    let (Some(eq), true) = (eq, upper.trim_start().starts_with("SYSWRITE")) else {
+        return Err(LineError::new(
+            at..b.text.len(),
+            "FN 17: expected `FN 17: SYSWRITE ID… NR… IDX… = value`",
+            "bad FN 17",
+        ));
+    };
+    let span = at..at + eq;
+    let numbers = numbers(&rest["SYSWRITE".len().min(eq)..eq], &r.q);
+    let value_span = at + eq + 1..b.text.len();
+    super::text::value(rest[eq + 1..].trim(), &r.q, value_span)?;
+    match numbers {
+        Some((50, Some(nr), idx)) => {
+            let tool = idx.unwrap_or(r.tool.0);
+            if nr <= 6 {
+                r.rewritten.push((tool, b.line));
+            } else {
+                r.note(b, &format!("`FN 17: SYSWRITE` ID50 NR{nr} (a tool table column that does not move the axes) of tool {tool} accepted and not kept"));
+            }
+            Ok(())
+        }
+        _ => Err(LineError::new(span, "`FN 17: SYSWRITE` of data other than the tool table (ID50 NR…) is not supported (TNC 640 User's Manual, \"FN 17: SYSWRITE\")", "system datum not modelled")),
+    }
+}
+
+/// Refuses a `TOOL CALL` of a tool whose geometry `FN 17` changed.
+pub(super) fn unchanged(r: &Reader, tool: u32, span: std::ops::Range<usize>) -> LineResult<()> {
+    match r.rewritten.iter().find(|(t, _)| *t == tool) {
+        Some((_, line)) => Err(LineError::new(span, format!("`TOOL CALL {tool}`: FN 17 changed this tool's geometry at line {line}; mtsim's tool table stays as the run began"), "tool table changed")),
+        None => Ok(()),
+    }
 }

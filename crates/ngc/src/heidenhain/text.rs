@@ -102,7 +102,17 @@ pub(super) fn tokens(text: &str, from: usize, out: &mut Vec<Range<usize>>) {
                 && matches!(rest.trim(), "" | "+" | "-")
         };
         let first = b[start];
-        if matches!(first, b'+' | b'-' | b'.') || first.is_ascii_digit() {
+        // `Z + Q13`: a Q parameter after a sign that stands alone joins it too.
+        let after_sign = out.last().is_some_and(|p| {
+            matches!(
+                text[p.clone()].trim_end().as_bytes().last(),
+                Some(b'+' | b'-')
+            )
+        });
+        if matches!(first, b'+' | b'-' | b'.')
+            || first.is_ascii_digit()
+            || (after_sign && matches!(first, b'Q' | b'q'))
+        {
             if let Some(prev) = out.last_mut() {
                 if joins(&text[prev.clone()]) {
                     prev.end = k;

@@ -3,13 +3,18 @@
 //! names and calls (Fundamentals, "Structure of an NC program"; Job planning, "Flexible NC
 //! programming").
 
-use super::expr::{expr, r_parameter, system_variable_kind, Scan};
+use super::expr::{
+    element, element_key, expr, indices, r_parameter, system_variable_kind, undefined, Scan,
+};
 use super::flow::skip_number_and_label;
 use super::frame::{rotation_zyx, Instruction};
 use super::state::{Structure, Var};
 use super::words::Words;
 use super::Reader;
 use crate::lex::LineResult;
+
+/// Most variables (array elements counted) one program level holds.
+const MAX_VARIABLES: usize = 10_000;
 
 /// Keywords accepted anywhere in a block that do not change the path mtsim reads
 /// (dynamics, compressors, look-ahead, orientation reference): noted once.
@@ -372,12 +377,11 @@ impl Reader {
         if let Some(Some(k)) = r_parameter(name) {
             return Ok(Var::R(k as usize));
         }
+        if sc.peek() == Some(b'[') {
+            return Ok(Var::Named(element(sc, &self.vars, name, n_at)?));
+        }
         if self.vars.get(name).is_none() {
-            return Err(sc.err(
-                n_at,
-                format!("`{name}` is not a defined variable"),
-                "undefined variable",
-            ));
+            return Err(undefined(sc, n_at, name));
         }
         Ok(Var::Named(name.to_string()))
     }
@@ -411,39 +415,125 @@ impl Reader {
             let Some((name, n_at)) = sc.ident() else {
                 return Err(sc.err(sc.at, "expected a variable name", "no name"));
             };
-            if sc.peek() == Some(b'[') {
-                return Err(sc.err(
-                    n_at,
-                    format!("array `{name}[..]`: mtsim reads scalar variables only"),
-                    "array",
-                ));
-            }
+            let dims = if sc.peek() == Some(b'[') {
+                indices(sc, &self.vars, n_at)?
+            } else {
+                Vec::new()
+            };
             let reserved = (name.len() == 1 && name.as_bytes()[0].is_ascii_uppercase())
                 || r_parameter(name).is_some()
                 || NOTED.contains(&name);
             if reserved {
                 return Err(sc.err(n_at, format!("`{name}` is an address or keyword: expected a variable name of two or more characters that is not one"), "reserved name"));
             }
-            let mut v = 0.0;
-            if sc.eat(b'=') {
-                v = expr(sc, &self.vars)?;
-                if integer {
-                    v = v.round();
-                }
-            }
+            let name = name.to_string();
+            let values = self.def_values(sc, n_at, &name, &dims, integer)?;
             let level = self.vars.levels.last_mut().expect("a variable level");
-            if level.len() >= 10_000 {
+            if level.len() + values.len() > MAX_VARIABLES {
                 return Err(sc.err(
                     n_at,
-                    "more than 10000 variables in one program",
+                    format!("more than {MAX_VARIABLES} variables (array elements counted) in one program"),
                     "too many variables",
                 ));
             }
-            level.insert(name.to_string(), v);
+            level.extend(values);
             if !sc.eat(b',') {
                 return Ok(());
             }
         }
+    }
+
+    /// A `DEF`'s variable and its starting value, or an array's elements (Sinumerik
+    /// programming manual, "Definition and initialization of array variables"): `=v`,
+    /// `=(v0, v1 …)` or `=SET(v0, v1 …)` in row-major order with the rest 0, `=REP(v)`
+    /// for every element; elements start at 0.
+    fn def_values(
+        &mut self,
+        sc: &mut Scan,
+        at: usize,
+        name: &str,
+        dims: &[usize],
+        integer: bool,
+    ) -> LineResult<Vec<(String, f64)>> {
+        let count = dims.iter().try_fold(1usize, |n, d| n.checked_mul(*d));
+        let count = match count {
+            Some(n) if n <= MAX_VARIABLES => n,
+            _ => {
+                return Err(sc.err(
+                    at,
+                    format!("array `{name}` of more than {MAX_VARIABLES} elements"),
+                    "array too large",
+                ))
+            }
+        };
+        let whole = |v: f64| if integer { v.round() } else { v };
+        let mut first = Vec::new();
+        let mut repeat = false;
+        if sc.eat(b'=') {
+            let list = if dims.is_empty() {
+                false
+            } else if sc.keyword("REP") {
+                repeat = true;
+                true
+            } else {
+                sc.keyword("SET");
+                sc.peek() == Some(b'(')
+            };
+            if list {
+                sc.eat(b'(');
+                loop {
+                    first.push(whole(expr(sc, &self.vars)?));
+                    if sc.eat(b')') {
+                        break;
+                    }
+                    if !sc.eat(b',') {
+                        return Err(sc.err(
+                            at,
+                            format!("expected `,` or `)` in the values of `{name}`"),
+                            "unclosed list",
+                        ));
+                    }
+                }
+            } else {
+                first.push(whole(expr(sc, &self.vars)?));
+                repeat = !dims.is_empty();
+            }
+        }
+        if dims.is_empty() {
+            return Ok(vec![(
+                name.to_string(),
+                first.first().copied().unwrap_or(0.0),
+            )]);
+        }
+        if first.len() > count {
+            return Err(sc.err(
+                at,
+                format!(
+                    "{} values for the {count} elements of `{name}`",
+                    first.len()
+                ),
+                "too many values",
+            ));
+        }
+        let mut out = Vec::with_capacity(count);
+        let mut index = vec![0usize; dims.len()];
+        for k in 0..count {
+            let v = match (repeat, first.get(k)) {
+                (true, _) => first.first().copied().unwrap_or(0.0),
+                (false, Some(v)) => *v,
+                (false, None) => 0.0,
+            };
+            out.push((element_key(name, &index), v));
+            // Row-major: the last index runs fastest.
+            for d in (0..dims.len()).rev() {
+                index[d] += 1;
+                if index[d] < dims[d] {
+                    break;
+                }
+                index[d] = 0;
+            }
+        }
+        Ok(out)
     }
 
     /// `PROC name(REAL a, INT b ...)`: the call's values bound to the parameters.
@@ -642,7 +732,7 @@ impl Reader {
             return Err(sc.err(
                 at,
                 format!(
-                    "system variable `{name}` ({}) is not supported by mtsim",
+                    "system variable `{name}` ({}) is not supported by mtsim: its value is the control's, and neither the machine file nor the scenario gives it",
                     system_variable_kind(name)
                 ),
                 "system variable",
@@ -652,8 +742,11 @@ impl Reader {
             Some(b'=') if self.vars.get(name).is_some() => {
                 return self.assign(sc, Var::Named(name.to_string()), at);
             }
-            Some(b'=') => return Err(sc.err(at, format!("`{name}` is not a defined variable: expected `DEF REAL {name}` (or INT, BOOL) before it is set (global user data, GUD, is not read)"), "undefined variable")),
-            Some(b'[') => return Err(sc.err(at, format!("array element `{name}[..]`: mtsim reads scalar variables only"), "array")),
+            Some(b'=') => return Err(undefined(sc, at, name)),
+            Some(b'[') => {
+                let key = element(sc, &self.vars, name, at)?;
+                return self.assign(sc, Var::Named(key), at);
+            }
             _ => {}
         }
         if name.starts_with("CYCLE") {

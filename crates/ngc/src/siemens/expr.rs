@@ -30,10 +30,81 @@ impl Vars {
         }
     }
 
-    /// The running level's variable `name`.
+    /// The running level's variable `name` (an array element is held under its key
+    /// `NAME[i]` or `NAME[i,j]`, see [`element_key`]).
     pub fn get(&self, name: &str) -> Option<f64> {
         self.levels.last().and_then(|l| l.get(name)).copied()
     }
+
+    /// Whether `name` is an array of the running level (its first element exists).
+    pub fn is_array(&self, name: &str) -> bool {
+        (1..=MAX_DIMS).any(|n| self.get(&element_key(name, &[0; MAX_DIMS][..n])).is_some())
+    }
+}
+
+/// Most dimensions of a `DEF` array (Sinumerik: up to three).
+pub(super) const MAX_DIMS: usize = 3;
+
+/// The key an array element is held under: `NAME[i]`, `NAME[i,j]`, `NAME[i,j,k]`.
+pub(super) fn element_key(name: &str, index: &[usize]) -> String {
+    let list: Vec<String> = index.iter().map(usize::to_string).collect();
+    format!("{name}[{}]", list.join(","))
+}
+
+/// The indices `[i, j …]` after an array's name (the cursor on `[`): each a whole number
+/// from 0, at most [`MAX_DIMS`] of them.
+pub(super) fn indices(sc: &mut Scan, vars: &Vars, at: usize) -> LineResult<Vec<usize>> {
+    sc.eat(b'[');
+    let mut out = Vec::new();
+    loop {
+        let k = expr(sc, vars)?;
+        if !(k >= 0.0 && k.fract() == 0.0 && k < 1e9) {
+            return Err(sc.err(
+                at,
+                format!("array index {k}: expected a whole number from 0"),
+                "bad index",
+            ));
+        }
+        out.push(k as usize);
+        if sc.eat(b']') {
+            break;
+        }
+        if out.len() == MAX_DIMS || !sc.eat(b',') {
+            return Err(sc.err(
+                at,
+                format!("expected `]` (or `,` and the next of at most {MAX_DIMS} indices)"),
+                "unclosed `[`",
+            ));
+        }
+    }
+    Ok(out)
+}
+
+/// The refusal of a name the program reads or sets without defining it.
+pub(super) fn undefined(sc: &Scan, at: usize, name: &str) -> LineError {
+    sc.err(
+        at,
+        format!("`{name}` is not defined in this program: a global user variable (GUD) or a name from a definition file, which is not given (mtsim reads no GUD files); expected `DEF REAL {name}` (or INT, BOOL) before it is used"),
+        "undefined variable",
+    )
+}
+
+/// An array element the program reads or sets: its key, or the refusal (the name is no
+/// array of the program, or the index lies outside it).
+pub(super) fn element(sc: &mut Scan, vars: &Vars, name: &str, at: usize) -> LineResult<String> {
+    let index = indices(sc, vars, at)?;
+    let key = element_key(name, &index);
+    if vars.get(&key).is_some() {
+        return Ok(key);
+    }
+    if !vars.is_array(name) {
+        return Err(undefined(sc, at, name));
+    }
+    Err(sc.err(
+        at,
+        format!("`{key}`: the index lies outside the array `{name}` as DEF gives it"),
+        "index out of range",
+    ))
 }
 
 /// A cursor over one upper-cased block.
@@ -355,10 +426,13 @@ impl Eval<'_> {
             ));
         };
         if name.starts_with('$') {
+            if let Some(v) = system_value(name) {
+                return Ok(v);
+            }
             return Err(sc.err(
                 at,
                 format!(
-                    "system variable `{name}` ({}) is not supported by mtsim",
+                    "system variable `{name}` ({}) is not supported by mtsim: its value is the control's, and neither the machine file nor the scenario gives it",
                     system_variable_kind(name)
                 ),
                 "system variable",
@@ -388,15 +462,56 @@ impl Eval<'_> {
             return self.function(sc, name, at);
         }
         if sc.peek() == Some(b'[') {
-            return Err(sc.err(
-                at,
-                format!("array element `{name}[..]`: mtsim reads scalar variables only"),
-                "array",
-            ));
+            let key = element(sc, self.vars, name, at)?;
+            return Ok(self.vars.get(&key).unwrap_or(0.0));
         }
-        self.vars.get(name).ok_or_else(|| {
-            sc.err(at, format!("`{name}` is not a defined variable: expected `DEF REAL {name}` (or INT, BOOL) before it is read"), "undefined variable")
-        })
+        self.vars.get(name).ok_or_else(|| undefined(sc, at, name))
+    }
+
+    /// `ISVAR("NAME")`: TRUE when the program has defined the variable (mtsim reads no GUD
+    /// files, so a global user variable is not one); `GETT(…)`: the T number of a named
+    /// tool, refused (tool management is not modelled), after its argument is read so that
+    /// an undefined name is named first.
+    fn special(&mut self, sc: &mut Scan, name: &str, at: usize) -> LineResult<f64> {
+        sc.eat(b'(');
+        sc.blanks();
+        let text = if sc.eat(b'"') {
+            let from = sc.at;
+            while sc.s.get(sc.at).is_some_and(|c| *c != b'"') {
+                sc.at += 1;
+            }
+            let text = String::from_utf8_lossy(&sc.s[from..sc.at])
+                .trim()
+                .to_string();
+            if !sc.eat(b'"') {
+                return Err(sc.err(at, "expected `\"` to close the text", "unclosed text"));
+            }
+            Some(text)
+        } else {
+            None
+        };
+        if text.is_none() {
+            self.nested(sc, at)?;
+        }
+        while sc.eat(b',') {
+            self.nested(sc, at)?;
+        }
+        close(sc, at)?;
+        match (name, text) {
+            ("ISVAR", Some(v)) => Ok(truth(
+                self.vars.get(&v).is_some() || self.vars.is_array(&v) || r_parameter(&v).is_some(),
+            )),
+            ("ISVAR", None) => Err(sc.err(
+                at,
+                "`ISVAR` takes the variable's name as text: expected ISVAR(\"NAME\")",
+                "ISVAR",
+            )),
+            _ => Err(sc.err(
+                at,
+                "`GETT` (the T number of a tool given by name, Sinumerik tool management) is not supported by mtsim: the control's tool list is not given",
+                "tool management",
+            )),
+        }
     }
 
     fn r_value(&self, sc: &Scan, k: Option<f64>, at: usize) -> LineResult<f64> {
@@ -415,6 +530,9 @@ impl Eval<'_> {
             "SIN", "COS", "TAN", "ASIN", "ACOS", "ATAN2", "SQRT", "ABS", "POT", "TRUNC", "ROUND",
             "ROUNDUP", "LN", "EXP", "MINVAL", "MAXVAL",
         ];
+        if name == "ISVAR" || name == "GETT" {
+            return self.special(sc, name, at);
+        }
         if !NAMES.contains(&name) {
             return Err(sc.err(
                 at,
@@ -512,6 +630,18 @@ fn close(sc: &mut Scan, at: usize) -> LineResult<()> {
     }
 }
 
+/// The system variables mtsim gives a value (SINUMERIK 840D sl "System variables" list
+/// manual): `$MN_SCALING_SYSTEM_IS_METRIC` (MD10240) is 1, as every mtsim machine file is
+/// in mm (docs/machine-format.md); `$P_SEARCH` (block search active) is 0, as mtsim runs
+/// a program from its first block.
+fn system_value(name: &str) -> Option<f64> {
+    match name {
+        "$MN_SCALING_SYSTEM_IS_METRIC" => Some(1.0),
+        "$P_SEARCH" => Some(0.0),
+        _ => None,
+    }
+}
+
 /// What a Sinumerik system variable is, by its prefix (SINUMERIK 840D sl "System
 /// variables" list manual: `$M…` machine data, `$S…` setting data, `$P…` program
 /// variables read at preprocessing, `$A…` main-run variables, `$T…` tool data), for the
@@ -525,10 +655,7 @@ pub(super) fn system_variable_kind(name: &str) -> &'static str {
         ("$SN_", "general setting data"),
         ("$SC_", "channel setting data"),
         ("$SA_", "axis setting data"),
-        (
-            "$P_UIFR",
-            "a settable zero offset frame (G54 …), which the machine file does not give",
-        ),
+        ("$P_UIFR", "a settable zero offset frame (G54 …)"),
         ("$P_", "a program variable read at preprocessing"),
         ("$AA_", "an axis main-run variable"),
         ("$A_DB", "PLC data (a data block byte, word or double word)"),

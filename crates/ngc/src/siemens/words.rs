@@ -300,7 +300,7 @@ impl Reader {
                 let level = self.vars.levels.last_mut().expect("a variable level");
                 match level.get_mut(&n) {
                     Some(slot) => *slot = v,
-                    None => return Err(sc.err(at, format!("`{n}` is not a defined variable: expected `DEF REAL {n}` (or INT, BOOL) before it is set"), "undefined variable")),
+                    None => return Err(super::expr::undefined(sc, at, &n)),
                 }
             }
         }

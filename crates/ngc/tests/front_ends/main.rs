@@ -9,4 +9,5 @@ mod budget;
 mod fanuc_haas;
 mod heidenhain;
 mod lent_moves;
+mod posts;
 mod siemens;

@@ -244,7 +244,7 @@ fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
         ("G0 X1\nCYCLE83(10,0,1,-20)\n", 2, 1, "`CYCLE83`"),
         ("N10 G33 Z-10 K1\n", 1, 5, "`G33`"),
         ("DEF POINT PT\n", 1, 5, "DEF POINT"),
-        ("R1=ISVAR(\"A\")\n", 1, 4, "`ISVAR`"),
+        ("R1=GETT(\"A\")\n", 1, 4, "`GETT`"),
         (
             "G1 X1 F1\nCYCLE800(1,\"TC1\",0,27,0,0,0,0,30,0,0,0,0,-1)\n",
             2,
@@ -450,7 +450,7 @@ fn an_indirect_call_and_display_only_definitions_are_read() {
     assert_eq!(m[3].end[ngc::Axis::X], 20.0);
     let err = read_str_with(
         Path::new("t.mpf"),
-        "R1=$MN_SCALING_SYSTEM_IS_METRIC\nM30\n",
+        "R1=$MN_USER_DATA_INT[0]\nM30\n",
         &options(Dialect::Siemens, &dir),
     )
     .find_map(|m| m.err())

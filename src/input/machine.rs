@@ -36,6 +36,28 @@ pub struct StartSection {
     pub feed_mode: Option<ngc::StartFeed>,
 }
 
+/// `[control]`: how the control's planner runs the moves (docs/interpolation.md).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ControlSection {
+    /// Share of each axis's `max_acceleration` a rapid (G00) may use, in (0, 1]. LinuxCNC
+    /// 2.9 runs its G0 at 0.5 (measured, black box: docs/interpolation.md); default 1.
+    pub rapid_acceleration_share: f64,
+    /// The path tolerance (mm) of blending when a program sets none (a G64 without P, or a
+    /// dialect's blending mode without its tolerance word); absent: the smallest blend that
+    /// keeps the programmed speed.
+    pub path_tolerance_mm: Option<f64>,
+}
+
+impl Default for ControlSection {
+    fn default() -> Self {
+        ControlSection {
+            rapid_acceleration_share: 1.0,
+            path_tolerance_mm: None,
+        }
+    }
+}
+
 /// The `kinematics` key: a named layout (`"trt-ac"`) or a `[kinematics]` chain table
 /// (the kinematic-chains spec).
 #[derive(Clone, Debug)]
@@ -128,6 +150,9 @@ pub struct MachineFile {
     /// The modal state the control powers up in.
     #[serde(default)]
     pub start: StartSection,
+    /// How the control's planner runs the moves.
+    #[serde(default)]
+    pub control: ControlSection,
     /// G28 reference position, machine X Y Z A B C (mm, deg; U V W: 0). Absent: a
     /// program that uses G28 is refused, naming this key.
     #[serde(default, deserialize_with = "exact::option_array")]
@@ -242,6 +267,8 @@ pub struct Machine {
     pub dialect: ngc::Dialect,
     /// The modal state the control powers up in, as far as the file gives it.
     pub start: StartSection,
+    /// How the control's planner runs the moves (`[control]`).
+    pub control: ControlSection,
     /// G28 and G30 reference positions, machine X Y Z A B C (mm, deg); U V W at 0;
     /// `None` where the file gives none.
     pub reference_mm: [Option<[f64; 6]>; 2],
@@ -345,6 +372,27 @@ impl Machine {
                 ),
             ));
         }
+        let share = file.control.rapid_acceleration_share;
+        if !(share > 0.0 && share <= 1.0) {
+            return Err(value_error(
+                path,
+                text,
+                "control",
+                "rapid_acceleration_share",
+                format!("must be in (0, 1], got {share}"),
+            ));
+        }
+        if let Some(tol) = file.control.path_tolerance_mm {
+            if !(tol.is_finite() && tol >= 0.0) {
+                return Err(value_error(
+                    path,
+                    text,
+                    "control",
+                    "path_tolerance_mm",
+                    format!("must be a finite tolerance >= 0 mm, got {tol}"),
+                ));
+            }
+        }
         if !file.pivot_mm.iter().all(|v| v.is_finite()) {
             return Err(value_error(
                 path,
@@ -388,6 +436,7 @@ impl Machine {
             tool: file.tool,
             dialect: file.dialect,
             start: file.start,
+            control: file.control,
             reference_mm: [file.g28_mm, file.g30_mm],
         })
     }

@@ -37,11 +37,19 @@ pub struct StartSection {
 }
 
 /// `[control]`: the control's parameters that change a program's moves, set by the machine
-/// builder where a program cannot see them (docs/machine-format.md); what is not given is
-/// the dialect's rule, with a notice where that rule is a setting of the control.
-#[derive(Clone, Copy, Debug, Default, Deserialize)]
+/// builder where a program cannot see them: how its planner runs the moves
+/// (docs/interpolation.md) and the reader's settings (docs/machine-format.md); what is not
+/// given is the dialect's rule, with a notice where that rule is a setting of the control.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ControlSection {
+    /// Share of each axis's `max_acceleration` a rapid (G00) may use, in (0, 1]. LinuxCNC
+    /// 2.9 runs its G0 at 0.5 (measured, black box: docs/interpolation.md); default 1.
+    pub rapid_acceleration_share: f64,
+    /// The path tolerance (mm) of blending when a program sets none (a G64 without P, or a
+    /// dialect's blending mode without its tolerance word); absent: the smallest blend that
+    /// keeps the programmed speed.
+    pub path_tolerance_mm: Option<f64>,
     /// G73 retract after each peck, mm (Fanuc parameter 5114, Haas Setting 22).
     pub g73_retract_mm: Option<f64>,
     /// G83 clearance above each peck's depth where the rapid down stops, mm (Fanuc
@@ -51,6 +59,19 @@ pub struct ControlSection {
     pub g83_above_r_mm: Option<f64>,
     /// G28/G30 without axis words: `"all"` axes return, or `"none"`.
     pub g28_without_axes: Option<ReferenceWithoutAxes>,
+}
+
+impl Default for ControlSection {
+    fn default() -> Self {
+        ControlSection {
+            rapid_acceleration_share: 1.0,
+            path_tolerance_mm: None,
+            g73_retract_mm: None,
+            g83_clearance_mm: None,
+            g83_above_r_mm: None,
+            g28_without_axes: None,
+        }
+    }
 }
 
 /// What G28/G30 without axis words move.
@@ -299,8 +320,10 @@ pub struct Machine {
     pub dialect: ngc::Dialect,
     /// The modal state the control powers up in, as far as the file gives it.
     pub start: StartSection,
-    /// The control's parameters, validated (`[control]`).
-    pub control: ngc::ControlParameters,
+    /// The control's parameters (`[control]`), validated.
+    pub control: ControlSection,
+    /// The reader's part of them.
+    pub reader_control: ngc::ControlParameters,
     /// G28 and G30 reference positions, machine X Y Z A B C (mm, deg); U V W at 0;
     /// `None` where the file gives none.
     pub reference_mm: [Option<[f64; 6]>; 2],
@@ -404,6 +427,27 @@ impl Machine {
                 ),
             ));
         }
+        let share = file.control.rapid_acceleration_share;
+        if !(share > 0.0 && share <= 1.0) {
+            return Err(value_error(
+                path,
+                text,
+                "control",
+                "rapid_acceleration_share",
+                format!("must be in (0, 1], got {share}"),
+            ));
+        }
+        if let Some(tol) = file.control.path_tolerance_mm {
+            if !(tol.is_finite() && tol >= 0.0) {
+                return Err(value_error(
+                    path,
+                    text,
+                    "control",
+                    "path_tolerance_mm",
+                    format!("must be a finite tolerance >= 0 mm, got {tol}"),
+                ));
+            }
+        }
         if !file.pivot_mm.iter().all(|v| v.is_finite()) {
             return Err(value_error(
                 path,
@@ -413,7 +457,7 @@ impl Machine {
                 "must be three finite numbers (mm)".into(),
             ));
         }
-        let control = file.control.validate(path, text)?;
+        let reader_control = file.control.validate(path, text)?;
         let scene_given = file.scene.is_some();
         let scene = file.scene.unwrap_or_default();
         crate::input::scene::validate_machine_tables(path, text, &scene, &file.tool)?;
@@ -448,7 +492,8 @@ impl Machine {
             tool: file.tool,
             dialect: file.dialect,
             start: file.start,
-            control,
+            control: file.control,
+            reader_control,
             reference_mm: [file.g28_mm, file.g30_mm],
         })
     }

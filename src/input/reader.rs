@@ -188,7 +188,7 @@ fn machine_options(r: &ReaderSection, machine: &Machine) -> ngc::Options {
                 pivot_mm: machine.kinematics.pivot_mm.into(),
             }),
         aligner: tool_aligner(machine),
-        control: machine.control,
+        control: machine.reader_control,
         ..ngc::Options::default()
     };
     let m = &machine.start;

@@ -96,8 +96,9 @@ use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 use crate::error::{Error, Result};
-use crate::input::machine::Machine;
+use crate::input::machine::{ControlSection, Machine};
 use crate::kinematics::Kinematics;
+use crate::motion::blend::{self, Bend};
 pub use crate::motion::feed_held::{FeedLimit, LimitKind};
 use crate::motion::feed_held::{FeedReduction, FeedReductions};
 use crate::motion::profile::{reach, Profile};
@@ -180,6 +181,8 @@ struct BlockPath {
     start: AxisVec,
     delta: AxisVec,
     arc: Option<ArcGeometry>,
+    /// A corner's blend arc ([`blend`]): `q(u) = start + bend.offset(u)` (`delta` is zero).
+    bend: Option<Bend>,
     /// X Y Z of `start + u delta` (or of the arc) are the tool tip in the table frame of the
     /// interpolator's kinematics (passed to the methods that need it: a block is copied
     /// several times on its way and holds no copy of them).
@@ -200,6 +203,9 @@ impl BlockPath {
             q.0[arc.i0] = arc.c0 + r * cos;
             q.0[arc.i1] = arc.c1 + r * sin;
         }
+        if let Some(bend) = &self.bend {
+            q = q + bend.offset(u);
+        }
         if self.tcp {
             return kinematics.tcp_axes_per_sample(&q, self.tool_length_mm);
         }
@@ -208,7 +214,9 @@ impl BlockPath {
 
     /// True when `q(u)` is a straight line in axis space.
     fn is_straight(&self) -> bool {
-        self.arc.is_none() && (!self.tcp || (3..6).all(|i| self.delta.0[i] == 0.0))
+        self.arc.is_none()
+            && self.bend.is_none()
+            && (!self.tcp || (3..6).all(|i| self.delta.0[i] == 0.0))
     }
 
     /// `dq/ds` at `u` for a block of length `length` (central difference, exact for lines).
@@ -306,8 +314,22 @@ struct JunctionEnd {
     cap: f64,
     dwell: bool,
     curved: bool,
+    /// A blend arc held below its programmed speed (by its centripetal term): it joins both
+    /// its neighbours tangentially, at one path speed.
+    slow_bend: bool,
     /// The block's path-control mode: how it joins the next.
     path: PathControl,
+}
+
+/// The last block planned, held back until the next one arrives so that the corner between
+/// them can be blended ([`Interpolator::hold`]): the block, its end tangents, and the half of
+/// its planned length that a blend at its end may take.
+#[derive(Clone, Copy, Debug)]
+struct Held {
+    planned: Planned,
+    start: AxisVec,
+    end: AxisVec,
+    half: f64,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -356,6 +378,8 @@ pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     limits: [Option<AxisLimits>; 9],
     kinematics: Kinematics,
     period_s: f64,
+    /// The machine's `[control]`: rapids' acceleration share, default path tolerance.
+    control: ControlSection,
     options: InterpolationOptions,
     window: VecDeque<Planned>,
     /// Blocks appended since the last backward pass.
@@ -364,6 +388,7 @@ pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     /// Every block held below its F word, summarised (always kept: bounded memory).
     reductions: FeedReductions,
     last_end: Option<JunctionEnd>,
+    held: Option<Held>,
     next_index: u64,
     active: Option<Active>,
     /// Exit speed committed for the active block.
@@ -402,12 +427,14 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             limits,
             kinematics: machine.kinematics,
             period_s: machine.interpolation_period_s,
+            control: machine.control,
             window: VecDeque::with_capacity(options.lookahead_blocks + pass_batch(&options) + 1),
             unpassed: 0,
             feed_limits: options.record_feed_limits.then(Vec::new),
             reductions: FeedReductions::default(),
             options,
             last_end: None,
+            held: None,
             next_index: 0,
             active: None,
             last_exit: 0.0,
@@ -453,11 +480,16 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                         }
                         Ok(Some((planned, start, end))) => {
                             self.record(&planned);
-                            self.push(planned, start, end)
+                            self.hold(planned, start, end)
                         }
                         Ok(None) => {}
                     }
                 }
+            }
+        }
+        if self.input_done {
+            if let Some(last) = self.held.take() {
+                self.push(last.planned, last.start, last.end);
             }
         }
         if self.unpassed > 0 && (self.input_done || self.unpassed >= batch) {
@@ -551,6 +583,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             start: b.start,
             delta: b.end - b.start,
             arc: None,
+            bend: None,
             tcp: tcp.is_some(),
             tool_length_mm: b.tool_length_mm,
         };
@@ -646,7 +679,11 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         }
         let programmed = self.programmed_speed(b, length)?;
         let (start, end) = path.end_tangents(length, &self.kinematics);
-        let limits = self.limits(&path, length, programmed, start);
+        let mut limits = self.limits(&path, length, programmed, start);
+        if matches!(b.motion, Motion::Rapid) {
+            // The control's rule for rapids ([control] rapid_acceleration_share).
+            limits.accel *= self.control.rapid_acceleration_share;
+        }
         if !(limits.cap.is_finite() && limits.cap > 0.0 && limits.accel > 0.0 && limits.jerk > 0.0)
             || !(limits.accel.is_finite() && limits.jerk.is_finite())
         {
@@ -800,13 +837,21 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             // The cruise speed is bounded by what each axis sees at constant speed (a = j = 0:
             // velocity q' v, acceleration q'' v², jerk q''' v³); the path acceleration and
             // jerk of a speed change then get what that leaves of each axis's budget.
-            let (d1, d2, d3) = self.derivative_bounds(path, length);
+            // A blend arc's derivatives are known exactly, and its budget is LinuxCNC's.
+            let ((d1, d2, d3), normal, tangential) = match &path.bend {
+                Some(b) => (
+                    b.derivative_bounds(),
+                    blend::NORMAL_SHARE,
+                    blend::TANGENTIAL_SHARE,
+                ),
+                None => (self.derivative_bounds(path, length), 0.5, 0.5),
+            };
             for (i, l) in (0..9).filter_map(present) {
                 if d1[i] > 0.0 {
                     lower(&mut cap, l.velocity / d1[i], i, LimitKind::Velocity);
                 }
                 if d2[i] > 0.0 {
-                    let centripetal = (0.5 * l.acceleration / d2[i]).sqrt();
+                    let centripetal = (normal * l.acceleration / d2[i]).sqrt();
                     lower(&mut cap, centripetal, i, LimitKind::Acceleration);
                 }
                 if d3[i] > 0.0 {
@@ -817,7 +862,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             // with `a ≤ ⅓ jmax / (3 |q''| cap)`.
             for (i, l) in (0..9).filter_map(present) {
                 if d1[i] > 0.0 {
-                    accel = accel.min(0.5 * l.acceleration / d1[i]);
+                    accel = accel.min(tangential * l.acceleration / d1[i]);
                     jerk = jerk.min(l.jerk / (3.0 * d1[i]));
                 }
                 if d2[i] > 0.0 && cap.is_finite() {
@@ -875,7 +920,11 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             if !prev.dwell {
                 let share = if curved || prev.curved { 0.5 } else { 1.0 }
                     * self.options.corner_acceleration_share;
-                let rho = p.cap / prev.cap;
+                // Into and out of a blend held below its feed the path speed is continuous
+                // (a speed ratio would make the step at its far end as large as the drop).
+                let slow = p.path.bend.is_some() && p.cap < p.programmed * (1.0 - 1e-9);
+                let smooth = prev.slow_bend || slow;
+                let rho = if smooth { 1.0 } else { p.cap / prev.cap };
                 let mut mu = prev.cap;
                 for (i, l) in self.limits.iter().enumerate() {
                     let Some(l) = l else { continue };
@@ -919,6 +968,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             cap: p.cap,
             dwell,
             curved,
+            slow_bend: p.path.bend.is_some() && p.cap < p.programmed * (1.0 - 1e-9),
             path: p.path_control,
         });
         p.entry_max = if dwell {
@@ -930,6 +980,90 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         self.unpassed += 1;
         if self.unpassed >= pass_batch(&self.options) {
             self.backward_pass();
+        }
+    }
+
+    /// Takes the next planned block: the one held before it is pushed, its corner with this
+    /// one blended when both allow it ([`blend::corner`]: the end of the held block and the
+    /// start of this one trimmed, the arc pushed between them), and this one is held.
+    fn hold(&mut self, mut next: Planned, start: AxisVec, end: AxisVec) {
+        let half = 0.5 * next.length;
+        if let Some(mut prev) = self.held.take() {
+            let blendable = |p: &Planned| p.length > 0.0 && p.path.is_straight() && !p.path.tcp;
+            let tolerance = match prev.planned.path_control {
+                // Blended where a tolerance is given (G64 P, or the machine's default); G64
+                // without one keeps the junction rule (see docs/interpolation.md).
+                PathControl::Blend { tolerance_mm, .. } => {
+                    tolerance_mm.or(self.control.path_tolerance_mm).map(Some)
+                }
+                _ => None,
+            };
+            let normal_limit = self
+                .limits
+                .map(|l| l.map_or(f64::INFINITY, |l| blend::NORMAL_SHARE * l.acceleration));
+            let jerk_limit = self
+                .limits
+                .map(|l| l.map_or(f64::INFINITY, |l| l.jerk / 3.0));
+            let speed = prev.planned.cap;
+            let corner = match tolerance {
+                Some(tol) if blendable(&prev.planned) && blendable(&next) => {
+                    let limits = (&normal_limit, &jerk_limit);
+                    blend::corner(prev.end, start, prev.half, half, tol, speed, limits)
+                }
+                _ => None,
+            };
+            if let Some(c) = corner {
+                let a = &mut prev.planned;
+                a.path.delta = a.path.delta * ((a.length - c.trim) / a.length);
+                a.length -= c.trim;
+                let arc_start = a.path.start + a.path.delta;
+                next.path.start = next.path.start + start * c.trim;
+                next.path.delta = next.path.delta * ((next.length - c.trim) / next.length);
+                next.length -= c.trim;
+                let arc = self.blend_block(&prev.planned, arc_start, c);
+                if prev.planned.length > 1e-9 {
+                    self.push(prev.planned, prev.start, prev.end);
+                }
+                self.push(arc, prev.end, start);
+            } else {
+                // (A start trimmed by a blend leaves at least half the block.)
+                self.push(prev.planned, prev.start, prev.end);
+            }
+        }
+        self.held = Some(Held {
+            planned: next,
+            start,
+            end,
+            half,
+        });
+    }
+
+    /// The blend arc of corner `c` after `prev` (trimmed), from `arc_start`: a
+    /// curved block at `prev`'s programmed speed (the corner's speed ratio, when the feed
+    /// changes, stays at its far end), limited as any curved block.
+    fn blend_block(&self, prev: &Planned, arc_start: AxisVec, c: blend::Corner) -> Planned {
+        let path = BlockPath {
+            start: arc_start,
+            delta: AxisVec::ZERO,
+            arc: None,
+            bend: Some(c.bend),
+            tcp: false,
+            tool_length_mm: prev.path.tool_length_mm,
+        };
+        let programmed = prev.programmed;
+        let limits = self.limits(&path, c.length, programmed, c.bend.along);
+        Planned {
+            path,
+            length: c.length,
+            programmed,
+            limited_by: limits.by,
+            cap: limits.cap,
+            accel: limits.accel,
+            jerk: limits.jerk,
+            entry_cap: 0.0,
+            rho: 1.0,
+            entry_max: 0.0,
+            ..*prev
         }
     }
 

@@ -2,6 +2,7 @@
 //! Inputs: a stream of [`crate::program::Move`]s and the machine's axis limits.
 //! Outputs: commanded axis positions every interpolation period — planned (jerk-limited look-ahead) or at programmed timing.
 
+pub mod blend;
 pub mod feed_held;
 pub mod interpolation;
 mod profile;

@@ -64,6 +64,80 @@ for cmd in sys.argv[1:]:
     print("POSE", j, "|", p, flush=True)
 "#;
 
+/// Homes every joint, then runs the program file `argv[1]` in auto mode while `halsampler`
+/// writes the sampler's rows (the joints' commanded positions every servo period) to
+/// `argv[2]`, and stops recording once motion has been still for 0.5 s.
+const RUN_PROGRAM: &str = r#"
+import linuxcnc, sys, time, subprocess
+s = linuxcnc.stat(); c = linuxcnc.command()
+def poll():
+    global s
+    for _ in range(300):
+        try:
+            s.poll(); return
+        except Exception as e:
+            err = e; time.sleep(0.1); s = linuxcnc.stat()
+    raise err
+def wait(): c.wait_complete(20)
+poll()
+c.state(linuxcnc.STATE_ESTOP_RESET); wait()
+c.state(linuxcnc.STATE_ON); wait()
+c.mode(linuxcnc.MODE_MANUAL); wait()
+c.home(-1); wait()
+for _ in range(300):
+    poll()
+    if all(s.homed[:s.joints]): break
+    time.sleep(0.1)
+else:
+    raise SystemExit("not homed")
+c.mode(linuxcnc.MODE_AUTO); wait()
+out = open(sys.argv[2], "w")
+rec = subprocess.Popen(["halsampler", "-c", "0"], stdout=out)
+time.sleep(0.5)
+c.program_open(sys.argv[1]); wait()
+c.auto(linuxcnc.AUTO_RUN, 0); wait()
+time.sleep(0.5)
+for _ in range(6000):
+    poll()
+    if s.interp_state == linuxcnc.INTERP_IDLE and s.queue == 0 and s.inpos: break
+    time.sleep(0.05)
+else:
+    raise SystemExit("the program did not end")
+time.sleep(0.5)
+rec.terminate(); rec.wait(); out.close()
+poll()
+if s.task_state != linuxcnc.STATE_ON: raise SystemExit("machine left ON")
+print("DONE", flush=True)
+"#;
+
+/// HAL commands that record the signals `signals` (the joints' commanded positions, e.g.
+/// `J0:pos-cmd` in LinuxCNC's `basic_sim`) every servo period with a `sampler`, in order,
+/// in thousandths (a `mult2` by 1000 before each, named `recorded-<n>`: `halsampler` prints
+/// six decimals, so 1 nm; the samples' `basic_sim` has its own `scale`s, hence not those).
+pub fn recording(signals: &[&str]) -> Vec<String> {
+    let n = signals.len();
+    let mut cmds = vec![
+        format!(
+            "loadrt mult2 names={}",
+            (0..n)
+                .map(|j| format!("recorded-{j}"))
+                .collect::<Vec<_>>()
+                .join(",")
+        ),
+        format!("loadrt sampler depth=4000 cfg={}", "f".repeat(n)),
+    ];
+    for (j, signal) in signals.iter().enumerate() {
+        cmds.push(format!("addf recorded-{j} servo-thread"));
+        cmds.push(format!("setp recorded-{j}.in1 1000"));
+        cmds.push(format!("net {signal} => recorded-{j}.in0"));
+        cmds.push(format!(
+            "net recorded-{j} recorded-{j}.out => sampler.0.pin.{j}"
+        ));
+    }
+    cmds.push("addf sampler.0 servo-thread".to_string());
+    cmds
+}
+
 /// LinuxCNC runs one at a time (it keeps a lock file): held by each run.
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
@@ -141,6 +215,12 @@ fn headless_ini(text: &str) -> String {
         if dropped.contains(&key) || t.contains("loadusr -W") {
             continue;
         }
+        // An ini of the old format asks a GUI to update it; the samples' are already in the
+        // new one (joints and axes), whatever they say.
+        if key == "VERSION" {
+            out.push_str("VERSION = 1.1\n");
+            continue;
+        }
         if key == "DISPLAY" {
             out.push_str("DISPLAY = ./idle_display\n");
             continue;
@@ -160,20 +240,26 @@ fn headless_ini(text: &str) -> String {
     out
 }
 
-/// A sample's HAL file made headless: the vismach model's `loadusr -W`, and its pins (words
-/// with `gui.`) left out of `setp` and `net` lines, with an arrow left pointing at nothing.
+/// A sample's HAL file made headless: the user-space components it waits for (`loadusr -W`:
+/// the vismach model, a tool-change dialog), and their pins (words with `gui.` or
+/// `<component>.`) left out of `setp` and `net` lines, with an arrow left pointing at nothing.
 fn headless_hal(text: &str) -> String {
+    let waited: Vec<String> = text
+        .lines()
+        .filter_map(|l| l.trim_start().strip_prefix("loadusr -W"))
+        .filter_map(|rest| rest.split_whitespace().next())
+        .map(|c| format!("{}.", c.rsplit('/').next().unwrap_or(c)))
+        .collect();
+    let theirs = |w: &str| w.contains("gui.") || waited.iter().any(|c| w.starts_with(c.as_str()));
     let mut out = String::new();
     for line in text.lines() {
         let t = line.trim_start();
-        if t.starts_with("loadusr -W") || (t.starts_with("setp") && t.contains("gui.")) {
+        let pins = t.split_whitespace().any(theirs);
+        if t.starts_with("loadusr -W") || (t.starts_with("setp") && pins) {
             continue;
         }
-        if t.starts_with("net") && t.contains("gui.") {
-            let mut kept: Vec<&str> = t
-                .split_whitespace()
-                .filter(|w| !w.contains("gui."))
-                .collect();
+        if t.starts_with("net") && pins {
+            let mut kept: Vec<&str> = t.split_whitespace().filter(|w| !theirs(w)).collect();
             while kept.last().is_some_and(|w| *w == "<=" || *w == "=>") {
                 kept.pop();
             }
@@ -257,6 +343,7 @@ pub fn start_with(config: &str, ini: &str, dir: &Path, halcmds: &[&str]) -> Head
         std::fs::set_permissions(dir.join("idle_display"), exec).unwrap();
     }
     std::fs::write(dir.join("probe.py"), PROBE).unwrap();
+    std::fs::write(dir.join("run_program.py"), RUN_PROGRAM).unwrap();
     open_to_all(dir);
     let root = Command::new("id")
         .arg("-u")
@@ -303,20 +390,58 @@ pub struct Pose {
 }
 
 impl Headless {
-    /// Homes, runs `commands` by MDI, and returns the pose after each.
-    pub fn mdi(&self, commands: &[&str]) -> Vec<Pose> {
-        // The same environment as LinuxCNC's own programs (its status buffer and tool
-        // data are shared with the fallback user's processes).
+    /// `script` of the run's folder by the system Python, in LinuxCNC's environment (its
+    /// status buffer and tool data are shared with the fallback user's processes).
+    fn python(&self, script: &str, args: &[&str]) -> std::process::Output {
         let mut c = Command::new("/usr/bin/python3");
-        c.arg(self.dir.join("probe.py"))
-            .args(commands)
+        c.arg(self.dir.join(script))
+            .args(args)
             .current_dir(&self.dir)
             .env("HOME", &self.dir)
             .env("RTAPI_FIFO_PATH", self.dir.join(".fifo"));
         if let Some(uid) = &self.fallback_uid {
             c.env("RTAPI_UID", uid);
         }
-        let out = c.output().expect("python3 runs");
+        c.output().expect("python3 runs")
+    }
+
+    /// Homes, runs `program` (G-code text) in auto mode, and returns the joints' commanded
+    /// positions every servo period while it ran (a run started with [`recording`]
+    /// commands), from 0.5 s before the start to 0.5 s after motion stopped.
+    pub fn run_program(&self, name: &str, program: &str) -> Vec<Vec<f64>> {
+        let ngc = self.dir.join(format!("{name}.ngc"));
+        let rows = self.dir.join(format!("{name}.samples"));
+        std::fs::write(&ngc, program).unwrap();
+        open_to_all(&self.dir);
+        let out = self.python(
+            "run_program.py",
+            &[&ngc.display().to_string(), &rows.display().to_string()],
+        );
+        assert!(
+            out.status.success() && String::from_utf8_lossy(&out.stdout).contains("DONE"),
+            "{name}: {}\n{}",
+            String::from_utf8_lossy(&out.stderr),
+            std::fs::read_to_string(self.dir.join("linuxcnc.err")).unwrap_or_default()
+        );
+        // In thousandths (see [`recording`]); the last row may be cut short when recording stops.
+        let text = std::fs::read_to_string(&rows).unwrap();
+        let parsed: Vec<Vec<f64>> = text
+            .lines()
+            .filter_map(|l| {
+                let row: Option<Vec<f64>> = l
+                    .split_whitespace()
+                    .map(|v| v.parse::<f64>().ok().map(|v| v / 1000.0))
+                    .collect();
+                row
+            })
+            .collect();
+        let width = parsed.first().map_or(0, Vec::len);
+        parsed.into_iter().filter(|r| r.len() == width).collect()
+    }
+
+    /// Homes, runs `commands` by MDI, and returns the pose after each.
+    pub fn mdi(&self, commands: &[&str]) -> Vec<Pose> {
+        let out = self.python("probe.py", commands);
         let text = String::from_utf8_lossy(&out.stdout);
         let log = || {
             let read = |n: &str| std::fs::read_to_string(self.dir.join(n)).unwrap_or_default();

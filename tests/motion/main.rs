@@ -6,3 +6,4 @@ mod common;
 
 mod feed_held;
 mod interpolation;
+mod linuxcnc_planner;

@@ -1,0 +1,344 @@
+//! The planner against LinuxCNC 2.9's own (issue 44): each program runs on LinuxCNC, started
+//! headless (`common::linuxcnc`) with a `sampler` recording its joints' commanded positions
+//! every 1 ms servo period, and through mtsim's interpolator on a machine file with the same
+//! limits. LinuxCNC is a black box here: only its commanded stream is read.
+//!
+//! Compared, per program: the total motion time (first to last sample that moves, within
+//! 1 %), at each blended corner the commanded path's distance from the programmed corner
+//! (within 5 um of LinuxCNC's) and the path speed there (within 10 %), every axis reversal
+//! (within 20 ms), and no axis over its limits in mtsim's stream.
+
+use crate::common::{linuxcnc, scratch};
+
+use mtsim::input::machine::Machine;
+use mtsim::motion::interpolation::{InterpolationOptions, Interpolator};
+use mtsim::Axis;
+
+/// One LinuxCNC sample configuration and the mtsim machine file with its limits.
+struct Config {
+    /// Folder of the configuration (below `linuxcnc::SAMPLES`, or absolute) and its ini.
+    folder: &'static str,
+    ini: &'static str,
+    /// The HAL signals holding the joints' commanded positions, in joint order.
+    signals: &'static [&'static str],
+    /// mtsim's machine file for the same limits (path from the crate root).
+    machine: &'static str,
+}
+
+const XYZAC_TRT: Config = Config {
+    folder: "table-rotary-tilting",
+    ini: "xyzac-trt.ini",
+    signals: &[
+        "J0:pos-cmd",
+        "J1:pos-cmd",
+        "J2:pos-cmd",
+        "J3:pos-cmd",
+        "J4:pos-cmd",
+    ],
+    machine: "machines/linuxcnc/xyzac-trt.toml",
+};
+
+const THREE_AXIS: Config = Config {
+    folder: "/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis/vismach/3axis-tutorial",
+    ini: "3axis-tutorial.ini",
+    signals: &["Xpos", "Ypos", "Zpos"],
+    machine: "machines/linuxcnc/3axis-tutorial.toml",
+};
+
+/// The programs run on xyzac-trt (name, text).
+const FIVE_AXIS_PROGRAMS: &[(&str, &str)] = &[
+    (
+        "hexagon_p005",
+        "G21 G90 G17 G64 P0.05\nG0 X0 Y0 Z0\nG1 X20 F900\nG1 X30 Y17.3205\nG1 X20 Y34.641\nG1 X0\nG1 X-10 Y17.3205\nG1 X0 Y0\nM2\n",
+    ),
+    (
+        "hexagon_p001",
+        "G21 G90 G17 G64 P0.01\nG0 X0 Y0 Z0\nG1 X20 F900\nG1 X30 Y17.3205\nG1 X20 Y34.641\nG1 X0\nG1 X-10 Y17.3205\nG1 X0 Y0\nM2\n",
+    ),
+    (
+        "hexagon_p02",
+        "G21 G90 G17 G64 P0.2\nG0 X0 Y0 Z0\nG1 X20 F900\nG1 X30 Y17.3205\nG1 X20 Y34.641\nG1 X0\nG1 X-10 Y17.3205\nG1 X0 Y0\nM2\n",
+    ),
+    (
+        "square_g61",
+        "G21 G90 G17 G61\nG0 X0 Y0 Z0\nG1 X20 F1000\nG1 Y20\nG1 X0\nG1 Y0\nM2\n",
+    ),
+    (
+        "square_g64",
+        "G21 G90 G17 G64\nG0 X0 Y0 Z0\nG1 X20 F1000\nG1 Y20\nG1 X0\nG1 Y0\nM2\n",
+    ),
+    (
+        "arcs",
+        "G21 G90 G17 G64 P0.02\nG0 X0 Y0 Z0\nG1 X10 F600\nG3 X20 Y10 I0 J10\nG2 X30 Y20 I10 J0\nG1 X30 Y30\nG3 X10 Y30 I-10 J0\nG1 X0 Y0\nM2\n",
+    ),
+    (
+        "line_into_arc",
+        "G21 G90 G17 G64 P0.05\nG0 X0 Y0 Z0\nG1 X10 Y5 F800\nG2 X30 Y5 I10 J-5\nG1 X30 Y-10\nG3 X10 Y-10 I-10 J0\nG1 X0 Y0\nM2\n",
+    ),
+    (
+        "five_axis_g93",
+        "G21 G90 G17 G64 P0.05\nG0 X0 Y0 Z0 A0 C0\nG93\nG1 X10 Y5 A-10 C30 F60\nG1 X20 Y0 Z-5 A-20 C90 F40\nG1 X10 Y-10 A-5 C120 F50\nG94\nG1 X0 Y0 Z0 A0 C120 F900\nM2\n",
+    ),
+    (
+        "rapids",
+        "G21 G90 G17 G64\nG0 X0 Y0 Z0 A0 C0\nG0 X40 Y10\nG0 Z-20 C45\nG0 X-20 Y-30 A-30\nG0 X0 Y0 Z0 A0 C0\nM2\n",
+    ),
+    (
+        "zigzag_p01",
+        "G21 G90 G17 G64 P0.1\nG0 X0 Y0 Z0\nG1 X10 Y3 F1200\nG1 X20 Y0\nG1 X30 Y3\nG1 X40 Y0\nG1 X40 Y10\nG1 X0 Y10 Z-2\nM2\n",
+    ),
+];
+
+/// The programs run on the three-axis sample.
+const THREE_AXIS_PROGRAMS: &[(&str, &str)] = &[
+    (
+        "hexagon_p005",
+        "G21 G90 G17 G64 P0.05\nG0 X0 Y0 Z0\nG1 X20 F900\nG1 X30 Y17.3205\nG1 X20 Y34.641\nG1 X0\nG1 X-10 Y17.3205\nG1 X0 Y0\nM2\n",
+    ),
+    (
+        "pocket_p002",
+        "G21 G90 G17 G64 P0.02\nG0 X0 Y0 Z0\nG1 Z-2 F300\nG1 X30 F1500\nG1 Y20\nG3 X20 Y30 I-10 J0\nG1 X0\nG1 Y0\nG0 Z0\nM2\n",
+    ),
+    (
+        "rapids",
+        "G21 G90 G17 G64\nG0 X0 Y0 Z0\nG0 X50 Y20\nG0 Z-30\nG0 X-20 Y-40 Z-10\nG0 X0 Y0 Z0\nM2\n",
+    ),
+];
+
+/// LinuxCNC's commanded joint stream for each program on `config`, recorded once into
+/// `<scratch>/<ini>/<program>.samples` (one row per servo period).
+fn linuxcnc_streams(config: &Config, programs: &[(&str, &str)]) -> Vec<Vec<Vec<f64>>> {
+    let dir = scratch("linuxcnc-planner", config.ini);
+    let cmds = linuxcnc::recording(config.signals);
+    let refs: Vec<&str> = cmds.iter().map(String::as_str).collect();
+    let run = linuxcnc::start_with(config.folder, config.ini, &dir.join("lcnc"), &refs);
+    programs
+        .iter()
+        .map(|(name, text)| run.run_program(name, text))
+        .collect()
+}
+
+/// The programmed corners of a program where LinuxCNC blends (XYZ, mm), compared one by one.
+fn corners(name: &str) -> Vec<[f64; 3]> {
+    let hexagon = vec![
+        [20.0, 0.0, 0.0],
+        [30.0, 17.3205, 0.0],
+        [20.0, 34.641, 0.0],
+        [0.0, 34.641, 0.0],
+        [-10.0, 17.3205, 0.0],
+    ];
+    match name {
+        "hexagon_p005" | "hexagon_p001" | "hexagon_p02" => hexagon,
+        "square_g64" => vec![[20.0, 0.0, 0.0], [20.0, 20.0, 0.0], [0.0, 20.0, 0.0]],
+        "zigzag_p01" => vec![
+            [10.0, 3.0, 0.0],
+            [20.0, 0.0, 0.0],
+            [30.0, 3.0, 0.0],
+            [40.0, 0.0, 0.0],
+        ],
+        _ => vec![],
+    }
+}
+
+/// mtsim's setpoints (one row of axis positions per period, the joints of `config` in order)
+/// for `program` on the config's machine file, with the jerk limits raised to 1e9 (LinuxCNC
+/// 2.9's planner has none), started where LinuxCNC's run started (`start`).
+fn mtsim_stream(config: &Config, program: &str, start: &[f64]) -> Vec<Vec<f64>> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join(config.machine)).unwrap();
+    let text: String = text
+        .lines()
+        .map(|l| {
+            if l.trim_start().starts_with("max_jerk") {
+                "max_jerk = 1e9".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let machine = Machine::from_toml(&root.join(config.machine), &text, None).unwrap();
+    let axes: Vec<Axis> = machine.axes().to_vec();
+    let mut options = ngc::Options {
+        dialect: ngc::Dialect::Linuxcnc,
+        ..ngc::Options::default()
+    };
+    for (k, &axis) in axes.iter().enumerate() {
+        options.start[axis] = start[k];
+    }
+    let path = std::path::PathBuf::from("p.ngc");
+    let moves =
+        ngc::read_str_with(&path, program, &options).map(|m| m.map_err(mtsim::error::Error::from));
+    let setpoints = Interpolator::new(moves, &machine, InterpolationOptions::default()).unwrap();
+    setpoints
+        .map(|s| {
+            let s = s.unwrap();
+            axes.iter().map(|&a| s.q[a]).collect()
+        })
+        .collect()
+}
+
+/// The rows from the first that moves to the last that moves (rest before and after cut).
+fn motion(rows: &[Vec<f64>]) -> &[Vec<f64>] {
+    let moves = |k: usize| {
+        rows[k]
+            .iter()
+            .zip(&rows[k + 1])
+            .any(|(a, b)| (a - b).abs() > 1e-9)
+    };
+    let first = (0..rows.len() - 1).find(|&k| moves(k)).unwrap_or(0);
+    let last = (0..rows.len() - 1).rev().find(|&k| moves(k)).unwrap_or(0);
+    &rows[first..=last + 1]
+}
+
+/// At each corner, the least XYZ distance of the stream from it (mm) and the XYZ path speed
+/// there (mm/s, central difference over ±1 period).
+fn at_corners(rows: &[Vec<f64>], corners: &[[f64; 3]]) -> Vec<(f64, f64)> {
+    corners
+        .iter()
+        .map(|c| {
+            let dist = |r: &Vec<f64>| (0..3).map(|i| (r[i] - c[i]).powi(2)).sum::<f64>().sqrt();
+            let k = (1..rows.len() - 1)
+                .min_by(|&a, &b| dist(&rows[a]).total_cmp(&dist(&rows[b])))
+                .unwrap();
+            let v = (0..3)
+                .map(|i| ((rows[k + 1][i] - rows[k - 1][i]) / (2.0 * PERIOD_S)).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            (dist(&rows[k]), v)
+        })
+        .collect()
+}
+
+/// Every axis's reversals: times (s from the stream's start) where its velocity changes
+/// sign, counting only speeds above 0.01 units/s (the midpoint between the two periods).
+fn reversals(rows: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    (0..rows[0].len())
+        .map(|j| {
+            let mut out = vec![];
+            let mut last: Option<(f64, usize)> = None;
+            for k in 0..rows.len() - 1 {
+                let v = (rows[k + 1][j] - rows[k][j]) / PERIOD_S;
+                if v.abs() < 0.01 {
+                    continue;
+                }
+                if let Some((s, kk)) = last {
+                    if s != v.signum() {
+                        out.push(0.5 * (kk + k) as f64 * PERIOD_S);
+                    }
+                }
+                last = Some((v.signum(), k));
+            }
+            out
+        })
+        .collect()
+}
+
+/// The largest sampled velocity and acceleration of each joint over its limit, as `check`
+/// measures them (finite differences of the samples), as ratios.
+fn over_limits(rows: &[Vec<f64>], machine: &Machine) -> Vec<(f64, f64)> {
+    machine
+        .axes()
+        .iter()
+        .enumerate()
+        .map(|(j, &a)| {
+            let c = machine.axis(a);
+            let (mut v_max, mut a_max) = (0.0f64, 0.0f64);
+            for k in 1..rows.len() - 1 {
+                let v = (rows[k + 1][j] - rows[k][j]) / PERIOD_S;
+                let acc = (rows[k + 1][j] - 2.0 * rows[k][j] + rows[k - 1][j]) / PERIOD_S.powi(2);
+                v_max = v_max.max(v.abs());
+                a_max = a_max.max(acc.abs());
+            }
+            (v_max * 60.0 / c.max_velocity, a_max / c.max_acceleration)
+        })
+        .collect()
+}
+
+const PERIOD_S: f64 = 1e-3;
+
+/// Runs `programs` on LinuxCNC and mtsim and holds mtsim to the issue's figures; prints
+/// every figure, and fails listing those that do not hold.
+fn compare(config: &Config, programs: &[(&str, &str)]) {
+    let streams = linuxcnc_streams(config, programs);
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let machine = Machine::load(&root.join(config.machine)).unwrap();
+    let mut failures = vec![];
+    for ((name, program), lcnc) in programs.iter().zip(&streams) {
+        let start = lcnc[0].clone();
+        let ours = mtsim_stream(config, program, &start);
+        let (l, m) = (motion(lcnc), motion(&ours));
+        let (tl, tm) = (
+            (l.len() - 1) as f64 * PERIOD_S,
+            (m.len() - 1) as f64 * PERIOD_S,
+        );
+        let dt = (tm - tl) / tl;
+        eprintln!(
+            "{} {name}: motion time LinuxCNC {tl:.3} s, mtsim {tm:.3} s ({:+.2} %)",
+            config.ini,
+            dt * 100.0
+        );
+        if dt.abs() > 0.01 {
+            failures.push(format!(
+                "{name}: motion time {tm:.3} s vs LinuxCNC {tl:.3} s ({:+.2} %)",
+                dt * 100.0
+            ));
+        }
+        let cs = corners(name);
+        for (k, ((dl, vl), (dm, vm))) in at_corners(l, &cs)
+            .into_iter()
+            .zip(at_corners(m, &cs))
+            .enumerate()
+        {
+            eprintln!("  corner {k}: distance LinuxCNC {:.1} um, mtsim {:.1} um; speed {vl:.3} vs {vm:.3} mm/s", dl * 1e3, dm * 1e3);
+            if (dl - dm).abs() > 5e-3 || (vm - vl).abs() > 0.1 * vl {
+                failures.push(format!("{name} corner {k}: distance {:.1} um vs LinuxCNC {:.1} um, speed {vm:.3} vs {vl:.3} mm/s", dm * 1e3, dl * 1e3));
+            }
+        }
+        for (j, (rl, rm)) in reversals(l).iter().zip(reversals(m)).enumerate() {
+            let worst = rl
+                .iter()
+                .zip(&rm)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            eprintln!(
+                "  joint {j}: {} reversals LinuxCNC, {} mtsim, worst {:.1} ms apart",
+                rl.len(),
+                rm.len(),
+                worst * 1e3
+            );
+            if rl.len() != rm.len() || worst > 0.020 {
+                failures.push(format!(
+                    "{name} joint {j}: reversals {rl:?} vs LinuxCNC {rm:?}"
+                ));
+            }
+        }
+        for (j, (v, a)) in over_limits(m, &machine).into_iter().enumerate() {
+            if v > 1.0 + 1e-9 || a > 1.0 + 1e-6 {
+                failures.push(format!("{name} joint {j}: mtsim at {v:.4} of its velocity and {a:.4} of its acceleration limit"));
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} against LinuxCNC:\n{}",
+        config.ini,
+        failures.join("\n")
+    );
+}
+
+#[test]
+#[ignore = "not all figures hold yet (measured 2026-12-02): hexagons at P0.01/P0.05/P0.2 and the zigzag at P0.1 hold (corners within 0.5 um and 0.1 % of LinuxCNC's, time -0.3 to -1.0 %); G64 without P is not blended (LinuxCNC: 703 um off at 16.67 mm/s), line-arc corners are not blended (line_into_arc +1.95 %, reversals 110-170 ms late, acceleration 1.23 of the limit at a junction), LinuxCNC's parabolic blends at half acceleration between moves with rotary axes and between rapids are not modelled (five_axis_g93 -3.25 %, rapids -1.54 %, reversals 70-220 ms early)"]
+fn five_axis_sample_as_linuxcnc_plans_it() {
+    if linuxcnc::require("five_axis_sample_as_linuxcnc_plans_it") {
+        compare(&XYZAC_TRT, FIVE_AXIS_PROGRAMS);
+    }
+}
+
+#[test]
+#[ignore = "the 3axis-tutorial sample does not home headless (no HOME_SEQUENCE: `home all` is refused); not yet compared"]
+fn three_axis_sample_as_linuxcnc_plans_it() {
+    if linuxcnc::require("three_axis_sample_as_linuxcnc_plans_it") {
+        compare(&THREE_AXIS, THREE_AXIS_PROGRAMS);
+    }
+}

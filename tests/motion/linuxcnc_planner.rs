@@ -46,7 +46,8 @@ const THREE_AXIS: Config = Config {
 };
 
 /// The programs run on xyzac-trt (name, text).
-const FIVE_AXIS_PROGRAMS: &[(&str, &str)] = &[
+/// Corners of straight blocks under G64 P on xyzac-trt: the figures the issue asks for hold.
+const BLENDED_PROGRAMS: &[(&str, &str)] = &[
     (
         "hexagon_p005",
         "G21 G90 G17 G64 P0.05\nG0 X0 Y0 Z0\nG1 X20 F900\nG1 X30 Y17.3205\nG1 X20 Y34.641\nG1 X0\nG1 X-10 Y17.3205\nG1 X0 Y0\nM2\n",
@@ -59,6 +60,15 @@ const FIVE_AXIS_PROGRAMS: &[(&str, &str)] = &[
         "hexagon_p02",
         "G21 G90 G17 G64 P0.2\nG0 X0 Y0 Z0\nG1 X20 F900\nG1 X30 Y17.3205\nG1 X20 Y34.641\nG1 X0\nG1 X-10 Y17.3205\nG1 X0 Y0\nM2\n",
     ),
+    (
+        "zigzag_p01",
+        "G21 G90 G17 G64 P0.1\nG0 X0 Y0 Z0\nG1 X10 Y3 F1200\nG1 X20 Y0\nG1 X30 Y3\nG1 X40 Y0\nG1 X40 Y10\nG1 X0 Y10 Z-2\nM2\n",
+    ),
+];
+
+/// The rest of the five-axis set: G61 against G64 without P, arcs, a G93 five-axis move,
+/// rapids (see the ignored test for what does not hold yet).
+const FIVE_AXIS_PROGRAMS: &[(&str, &str)] = &[
     (
         "square_g61",
         "G21 G90 G17 G61\nG0 X0 Y0 Z0\nG1 X20 F1000\nG1 Y20\nG1 X0\nG1 Y0\nM2\n",
@@ -82,10 +92,6 @@ const FIVE_AXIS_PROGRAMS: &[(&str, &str)] = &[
     (
         "rapids",
         "G21 G90 G17 G64\nG0 X0 Y0 Z0 A0 C0\nG0 X40 Y10\nG0 Z-20 C45\nG0 X-20 Y-30 A-30\nG0 X0 Y0 Z0 A0 C0\nM2\n",
-    ),
-    (
-        "zigzag_p01",
-        "G21 G90 G17 G64 P0.1\nG0 X0 Y0 Z0\nG1 X10 Y3 F1200\nG1 X20 Y0\nG1 X30 Y3\nG1 X40 Y0\nG1 X40 Y10\nG1 X0 Y10 Z-2\nM2\n",
     ),
 ];
 
@@ -327,8 +333,18 @@ fn compare(config: &Config, programs: &[(&str, &str)]) {
     );
 }
 
+/// Blended corners of straight moves at three tolerances and a zigzag: total time within
+/// 1 %, each corner's distance within 5 um and its speed within 10 % of LinuxCNC's,
+/// reversals within 20 ms, no axis over its limits.
 #[test]
-#[ignore = "not all figures hold yet (measured 2026-12-02): hexagons at P0.01/P0.05/P0.2 and the zigzag at P0.1 hold (corners within 0.5 um and 0.1 % of LinuxCNC's, time -0.3 to -1.0 %); G64 without P is not blended (LinuxCNC: 703 um off at 16.67 mm/s), line-arc corners are not blended (line_into_arc +1.95 %, reversals 110-170 ms late, acceleration 1.23 of the limit at a junction), LinuxCNC's parabolic blends at half acceleration between moves with rotary axes and between rapids are not modelled (five_axis_g93 -3.25 %, rapids -1.54 %, reversals 70-220 ms early)"]
+fn g64_p_corners_blend_as_linuxcnc_blends_them() {
+    if linuxcnc::require("g64_p_corners_blend_as_linuxcnc_blends_them") {
+        compare(&XYZAC_TRT, BLENDED_PROGRAMS);
+    }
+}
+
+#[test]
+#[ignore = "not all figures hold yet (measured 2026-12-02; the G64 P corners hold, the test above): G64 without P is not blended (LinuxCNC: 703 um off at 16.67 mm/s), line-arc corners are not blended (line_into_arc +1.95 %, reversals 110-170 ms late, acceleration 1.23 of the limit at a junction), LinuxCNC's parabolic blends at half acceleration between moves with rotary axes and between rapids are not modelled (five_axis_g93 -3.25 %, rapids -1.54 %, reversals 70-220 ms early)"]
 fn five_axis_sample_as_linuxcnc_plans_it() {
     if linuxcnc::require("five_axis_sample_as_linuxcnc_plans_it") {
         compare(&XYZAC_TRT, FIVE_AXIS_PROGRAMS);

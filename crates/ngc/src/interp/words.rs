@@ -58,9 +58,14 @@ impl Interp {
 
     /// A word for an axis the machine has not is refused, never dropped.
     /// The axis a Fanuc-family lathe's incremental address moves: U is X and W is Z
-    /// (G-code system A), on a machine without U or W axes; `None` otherwise.
+    /// (G-code system A), on a lathe (a machine with X and Z but no Y, U or W); `None`
+    /// otherwise (on a mill a U or W word for a missing axis stays an error).
     pub(super) fn lathe_increment(&self, a: Axis) -> Option<Axis> {
-        let on = self.dialect.table().macro_b && !self.axes[a.index()];
+        let on = self.dialect.table().macro_b
+            && !self.axes[a.index()]
+            && !self.axes[Axis::Y.index()]
+            && self.axes[Axis::X.index()]
+            && self.axes[Axis::Z.index()];
         match a {
             Axis::U if on => Some(Axis::X),
             Axis::W if on => Some(Axis::Z),
@@ -88,7 +93,7 @@ impl Interp {
                     .map(|b| b.letter().to_string())
                     .collect();
                 return Err(LineError::new(w.span(), format!("`{}`: this machine has no {} axis (it has {})", &line[w.span()], a.letter(), has.join(" ")), "axis not on this machine")
-                    .help(format!("run the program with a machine whose layout has a {} axis, or check the program is for this machine (a six-axis robot pose X Y Z A B C fits no machine mtsim models); a word for a missing axis is never dropped", a.letter())));
+                    .help(format!("run the program with a machine whose layout has a {} axis, or check the program is for this machine (a six-axis robot pose X Y Z A B C fits no machine mtsim models); a word for a missing axis is never dropped{}", a.letter(), if matches!(a, Axis::U | Axis::W) && self.dialect.table().macro_b { "; on a Fanuc or Haas lathe U and W are X and Z increments: run a lathe program with a lathe machine file (X and Z, no Y)" } else { "" })));
             }
         }
         Ok(())

@@ -16,7 +16,9 @@
 //! defined by `CYCL DEF`. The file is streamed (jumps seek to byte offsets; the label index
 //! keeps offsets), and calls nest at most `max_call_depth` deep.
 
+mod approach;
 mod contour;
+mod cycle_pos;
 mod cycles;
 mod frames;
 mod front;
@@ -169,7 +171,9 @@ impl Reader {
                 toks: &[],
                 line: here.line,
             };
-            contour::release(self, &b).map_err(|e| self.error_at(here, e))?;
+            approach::unfinished(self)
+                .and_then(|()| contour::release(self, &b))
+                .map_err(|e| self.error_at(here, e))?;
             return self.run_words(here);
         };
         self.cursor = next;
@@ -266,6 +270,7 @@ impl Reader {
             *u = c.to_ascii_uppercase();
         }
         let key = std::str::from_utf8(&upper[..n]).unwrap_or("");
+        approach::pending_refused(self, b, key)?;
         // Everything but a corner element releases the held line.
         if !matches!(key, "RND" | "CHF" | "L" | "LP") {
             self.release_held(b)?;
@@ -274,6 +279,8 @@ impl Reader {
             "L" | "LP" | "CC" | "C" | "CR" | "CT" | "CP" | "RND" | "CHF" => {
                 contour::block(self, b, key)
             }
+            "APPR" => approach::appr(self, b),
+            "DEP" => approach::dep(self, b),
             "BEGIN" => self.begin_pgm(b),
             "END" if b.is(1, "PGM") => {
                 if !self.ret_from_program() {
@@ -849,8 +856,11 @@ impl Reader {
 
     /// `CYCL CALL [F] [M…]`: the defined cycle here.
     fn cycle_call(&mut self, b: &Block) -> LineResult<()> {
-        if b.is(2, "PAT") || b.is(2, "POS") {
-            return Err(LineError::new(b.spans(0, 2), format!("`CYCL CALL {}` (points from a pattern or table) is not supported: expected CYCL CALL or M99 at each position", b.tok(2).to_ascii_uppercase()), "Heidenhain construct not supported"));
+        if b.is(2, "POS") {
+            return cycle_pos::call(self, b);
+        }
+        if b.is(2, "PAT") {
+            return Err(LineError::new(b.spans(0, 2), "`CYCL CALL PAT` (the cycle at the points of a PATTERN DEF or a point table; CP \"Calling cycles\", KP \"Pattern definition PATTERN DEF\") is not supported: expected CYCL CALL POS or M99 at each position", "Heidenhain construct not supported"));
         }
         let mut e = Extras::default();
         for k in 2..b.toks.len() {

@@ -111,6 +111,10 @@ pub(super) struct Contour {
     pub(super) comp: u8,
     pub(super) held: Option<Held>,
     pub(super) corner: Option<Corner>,
+    /// An `APPR` waiting for the first contour element (its tangent).
+    pub(super) appr: Option<super::approach::Approach>,
+    /// The last positioning was `FMAX` (`APPR` runs to its auxiliary point at rapid).
+    pub(super) rapid: bool,
 }
 
 /// A straight feed line in the plane, not yet run.
@@ -172,6 +176,8 @@ impl Contour {
             comp: 0,
             held: None,
             corner: None,
+            appr: None,
+            rapid: false,
         };
         c.set_position(start);
         c

@@ -1,0 +1,109 @@
+//! `CYCL CALL POS X Y Z [F|FMAX] [M…]`: the defined cycle at a position given in the call
+//! (TNC 640 cycle programming manual, "Calling cycles": "Calling a cycle with CYCL CALL
+//! POS").
+//!
+//! The block names all three coordinates. The control reaches the position with its
+//! positioning logic, without radius compensation, at the block's feed (FMAX when it gives
+//! none): with the tool above the workpiece surface s it moves in the working plane first;
+//! below it, first up the tool axis to the set-up clearance, then in the plane. The
+//! tool-axis coordinate is, in the manual's words, an additional datum shift: for the
+//! 200-series cycles the surface is s = Q203 + Z (the cycle then makes its own FMAX move
+//! to s + Q200); the old cycles 1, 2 and 17, which start where the tool stands, start at
+//! the position X Y Z.
+//!
+//! ```text
+//! z > s:  (X, Y, z) ─► [(X, Y, Z) for 1, 2, 17] ─► the cycle
+//! z ≤ s:  (x, y, s + Q200 | Z) ─► (X, Y, …) ─► the cycle
+//! ```
+
+use crate::lex::{LineError, LineResult};
+
+use super::contour;
+use super::cycles;
+use super::state::{self, Block, Extras, Reader};
+use super::text::split_word;
+
+/// `CYCL CALL POS …`.
+pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
+    let mut at = r.path.pos;
+    let mut given = 0u8;
+    let mut e = Extras::default();
+    let mut feed = None;
+    for k in 3..b.toks.len() {
+        let (name, rest) = split_word(b.tok(k));
+        let upper = name.to_ascii_uppercase();
+        let (inc, axis) = match upper.strip_prefix('I') {
+            Some(a) if a.len() == 1 => (true, a),
+            _ => (false, upper.as_str()),
+        };
+        if let (Some(a), false) = (
+            ["X", "Y", "Z"].iter().position(|l| *l == axis),
+            rest.is_empty(),
+        ) {
+            let v = b.value(k, name.len(), &r.q)?;
+            at[a] = if inc { at[a] + v } else { v };
+            given |= 1 << a;
+        } else if upper == "FMAX" || upper == "MAX" && b.is(k - 1, "F") {
+            feed = None;
+        } else if upper == "F" && b.is(k + 1, "MAX") {
+        } else if upper == "F" {
+            feed = Some(b.value(k, 1, &r.q)?);
+        } else if !contour::m_word(r, b, k, &mut e)? {
+            return Err(state::unexpected(
+                b,
+                k,
+                "CYCL CALL POS",
+                "X Y Z, F or FMAX, and M functions",
+            ));
+        }
+    }
+    if given != 7 {
+        return Err(LineError::new(
+            b.spans(0, 2),
+            "CYCL CALL POS names all three coordinates: expected X, Y and Z",
+            "coordinates",
+        ));
+    }
+    let Some(n) = r.cycle.number else {
+        return cycles::call(r, b);
+    };
+    let old = matches!(n, 1 | 2 | 17);
+    let shift = at[2];
+    let surface = if old { shift } else { r.q.q(203) + shift };
+    // The modal cycle (M89) must not run at the positioning moves.
+    let modal = std::mem::replace(&mut r.modal_cycle, false);
+    let saved_feed = r.path.feed;
+    if feed.is_some() {
+        r.path.feed = feed;
+    }
+    let g = if feed.is_some() { "1" } else { "0" };
+    let mut p = r.path.pos;
+    let positioned: LineResult<()> = (|| {
+        if p[2] <= surface {
+            p[2] = if old { shift } else { surface + r.q.q(200) };
+            contour::motion(r, b, g, &p, 4, None, &Extras::default())?;
+        }
+        p[0] = at[0];
+        p[1] = at[1];
+        contour::motion(r, b, g, &p, 3, None, &Extras::default())?;
+        if old && p[2] != shift {
+            p[2] = shift;
+            contour::motion(r, b, g, &p, 4, None, &Extras::default())?;
+        }
+        Ok(())
+    })();
+    r.modal_cycle = modal;
+    r.path.feed = saved_feed;
+    positioned?;
+    r.path.pos = p;
+    if old {
+        cycles::call(r, b)?;
+    } else {
+        let q203 = r.q.q(203);
+        r.q.set_ref("Q203", surface, b.span(0))?;
+        let run = cycles::call(r, b);
+        r.q.set_ref("Q203", q203, b.span(0))?;
+        run?;
+    }
+    contour::run_extras(r, b, &e, None)
+}

@@ -64,6 +64,18 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
             "coordinates",
         ));
     }
+    call_at(r, b, [at[0], at[1], at[2]], feed)?;
+    contour::run_extras(r, b, &e, None)
+}
+
+/// The defined cycle at `at` (X Y, and Z the shift of the surface), reached at `feed`
+/// (rapid when `None`).
+pub(super) fn call_at(
+    r: &mut Reader,
+    b: &Block,
+    at: [f64; 3],
+    feed: Option<f64>,
+) -> LineResult<()> {
     let Some(n) = r.cycle.number else {
         return cycles::call(r, b);
     };
@@ -97,13 +109,11 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
     positioned?;
     r.path.pos = p;
     if old {
-        cycles::call(r, b)?;
-    } else {
-        let q203 = r.q.q(203);
-        r.q.set_ref("Q203", surface, b.span(0))?;
-        let run = cycles::call(r, b);
-        r.q.set_ref("Q203", q203, b.span(0))?;
-        run?;
+        return cycles::call(r, b);
     }
-    contour::run_extras(r, b, &e, None)
+    let q203 = r.q.q(203);
+    r.q.set_ref("Q203", surface, b.span(0))?;
+    let run = cycles::call(r, b);
+    r.q.set_ref("Q203", q203, b.span(0))?;
+    run
 }

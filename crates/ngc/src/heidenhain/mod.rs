@@ -22,6 +22,7 @@ mod cycle_pos;
 mod cycles;
 mod frames;
 mod front;
+mod pattern;
 mod qparam;
 mod state;
 mod sysread;
@@ -67,6 +68,7 @@ impl Reader {
             path: Contour::new(start),
             frames_state: Frames::default(),
             cycle: Cycle::default(),
+            pattern: Vec::new(),
             tools: options.tools.clone(),
             rewritten: Vec::new(),
             table: options.table,
@@ -289,6 +291,7 @@ impl Reader {
                 Ok(())
             }
             "BLK" | "TOOL" if b.is(1, "FORM") || b.is(1, "DEF") => Ok(()),
+            "PATTERN" if b.is(1, "DEF") => pattern::define(self, b),
             "TOOL" if b.is(1, "CALL") => self.tool_call(b),
             "FN" => self.fn_block(b, here, 1),
             _ if key.starts_with("FN")
@@ -860,7 +863,7 @@ impl Reader {
             return cycle_pos::call(self, b);
         }
         if b.is(2, "PAT") {
-            return Err(LineError::new(b.spans(0, 2), "`CYCL CALL PAT` (the cycle at the points of a PATTERN DEF or a point table; CP \"Calling cycles\", KP \"Pattern definition PATTERN DEF\") is not supported: expected CYCL CALL POS or M99 at each position", "Heidenhain construct not supported"));
+            return pattern::call(self, b);
         }
         let mut e = Extras::default();
         for k in 2..b.toks.len() {

@@ -55,6 +55,8 @@ pub(crate) struct Reader {
     pub(super) path: Contour,
     pub(super) frames_state: Frames,
     pub(super) cycle: Cycle,
+    /// The last `PATTERN DEF`, as written (its points are made at `CYCL CALL PAT`).
+    pub(super) pattern: Vec<super::pattern::Item>,
     pub(super) tools: Vec<Tool>,
     /// Tools whose geometry `FN 17: SYSWRITE ID50` changed: number and line (a later call
     /// or read of one is refused: the tool table is not changed during a run).

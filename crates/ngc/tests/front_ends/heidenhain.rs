@@ -614,3 +614,77 @@ fn cycl_call_pos_runs_the_cycle_at_the_position_with_its_positioning_logic() {
     let (line, _, msg) = error("2 CYCL DEF 200 DRILLING\n3 CYCL CALL POS X+1 Y+2");
     assert!(line == 4 && msg.contains("X, Y and Z"), "{msg}");
 }
+
+/// The bottom of each hole cycle 200 drills (its feed moves' ends) for `pattern`.
+fn holes(pattern: &str) -> Vec<[f64; 3]> {
+    let m = moves(&format!(
+        "2 L X+0 Y+0 Z+20 R0 FMAX\n3 CYCL DEF 200 DRILLING ~\n Q200=+2 ~\n Q201=-5 ~\n \
+         Q206=+100 ~\n Q202=+5 ~\n Q210=+0 ~\n Q203=+0 ~\n Q204=+10 ~\n Q211=+0\n\
+         4 PATTERN DEF ~\n{pattern}\n5 CYCL CALL PAT FMAX"
+    ));
+    m.iter()
+        .filter(|m| m.motion == Motion::Linear)
+        .map(|m| [m.end[Axis::X], m.end[Axis::Y], m.end[Axis::Z]])
+        .collect()
+}
+
+fn same(got: &[[f64; 3]], want: &[[f64; 3]]) -> bool {
+    got.len() == want.len()
+        && got
+            .iter()
+            .zip(want)
+            .all(|(g, w)| (0..3).all(|k| (g[k] - w[k]).abs() < 1e-9))
+}
+
+/// PATTERN DEF with CYCL CALL PAT: the cycle at every point, in order (KP "Pattern
+/// definition PATTERN DEF"), the pattern's Z an added shift of the surface.
+#[test]
+fn cycl_call_pat_drills_at_every_point_of_the_pattern() {
+    // POS (10, 10); ROW from (0, 50) spaced 20 turned 90°: x stays 0, y 50, 70, 90; CIRC
+    // about (100, 0), Ø40 from 90° in 4: (100, 20), (80, 0), (100, −20), (120, 0), its
+    // surface −2 so its depth −7.
+    let got = holes(
+        " POS1 (X+10 Y+10 Z+0) ~\n ROW1 (X+0 Y+50 D+20 NUMX3 ROT+90 Z+0) ~\n \
+         CIRC1 (X+100 Y+0 D40 START+90 NUM4 Z-2)",
+    );
+    let want = [
+        [10.0, 10.0, -5.0],
+        [0.0, 50.0, -5.0],
+        [0.0, 70.0, -5.0],
+        [0.0, 90.0, -5.0],
+        [100.0, 20.0, -7.0],
+        [80.0, 0.0, -7.0],
+        [100.0, -20.0, -7.0],
+        [120.0, 0.0, -7.0],
+    ];
+    assert!(same(&got, &want), "{got:?}");
+    // FRAME: a 3 × 3 grid's border, row by row; PITCHCIRC: 30° steps from 0 on Ø20.
+    let got = holes(
+        " FRAME1 (X+0 Y+0 DX+10 DY+10 NUMX3 NUMY3 ROT+0 ROTX+0 ROTY+0 Z+0) ~\n \
+         PITCHCIRC1 (X+0 Y+0 D20 START+0 STEP30 NUM2 Z+0)",
+    );
+    let want = [
+        [0.0, 0.0, -5.0],
+        [10.0, 0.0, -5.0],
+        [20.0, 0.0, -5.0],
+        [0.0, 10.0, -5.0],
+        [20.0, 10.0, -5.0],
+        [0.0, 20.0, -5.0],
+        [10.0, 20.0, -5.0],
+        [20.0, 20.0, -5.0],
+        [10.0, 0.0, -5.0],
+        [5.0 * 3f64.sqrt(), 5.0, -5.0],
+    ];
+    assert!(same(&got, &want), "{got:?}");
+    // PAT 2 × 2 turned 90° about its start.
+    let got = holes(" PAT1 (X+0 Y+0 DX+10 DY+5 NUMX2 NUMY2 ROT+90 Z+0)");
+    let want = [
+        [0.0, 0.0, -5.0],
+        [0.0, 10.0, -5.0],
+        [-5.0, 0.0, -5.0],
+        [-5.0, 10.0, -5.0],
+    ];
+    assert!(same(&got, &want), "{got:?}");
+    let (_, _, msg) = error("2 PATTERN DEF ~\n PAT1 (X+0 Y+0 DX+1 DY+1 NUMX2 NUMY2 ROTX+5)");
+    assert!(msg.contains("ROTX"), "{msg}");
+}

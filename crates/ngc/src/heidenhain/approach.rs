@@ -31,43 +31,11 @@
 use crate::lex::{LineError, LineResult};
 
 use super::contour::{self, Centre};
-use super::state::{self, Block, Extras, Reader};
+use super::state::{self, Approach, Block, Extras, Kind, Reader};
 use super::text::split_word;
 
 const X: usize = 0;
 const Y: usize = 1;
-
-/// The four paths, approach or departure.
-#[derive(Clone, Copy, PartialEq, Debug)]
-pub(super) enum Kind {
-    /// Straight line, tangential.
-    Lt,
-    /// Straight line, normal.
-    Ln,
-    /// Circular arc, tangential.
-    Ct,
-    /// Straight line and arc, tangential to both.
-    Lct,
-}
-
-/// An `APPR` read, waiting for the first contour element that gives its tangent.
-pub(super) struct Approach {
-    kind: Kind,
-    /// P_S, the position before the block.
-    start: [f64; 6],
-    /// P_A (Z as the block gives it).
-    end: [f64; 6],
-    z_given: bool,
-    len: f64,
-    radius: f64,
-    cca_deg: f64,
-    comp: u8,
-    feed: Option<f64>,
-    /// The block before `APPR` was `FMAX`: P_S → P_H at rapid.
-    rapid: bool,
-    m: Vec<(f64, std::ops::Range<usize>)>,
-    line: usize,
-}
 
 /// What an `APPR`/`DEP` block gives.
 #[derive(Default)]
@@ -107,20 +75,12 @@ fn read_words(r: &mut Reader, b: &Block, from: [f64; 6]) -> LineResult<Words> {
         ..Words::default()
     };
     for k in 2..b.toks.len() {
+        if let Some(a) = xyz_word(r, b, k, &mut w.target)? {
+            w.mask |= 1 << a;
+            continue;
+        }
         let (name, rest) = split_word(b.tok(k));
         let upper = name.to_ascii_uppercase();
-        let (inc, axis) = match upper.strip_prefix('I') {
-            Some(a) if a.len() == 1 => (true, a),
-            _ => (false, upper.as_str()),
-        };
-        if let Some(a) = ["X", "Y", "Z"].iter().position(|l| *l == axis) {
-            if !rest.is_empty() {
-                let v = b.value(k, name.len(), &r.q)?;
-                w.target[a] = if inc { w.target[a] + v } else { v };
-                w.mask |= 1 << a;
-                continue;
-            }
-        }
         let slot = match upper.as_str() {
             "LEN" => Some(&mut w.len),
             "CCA" => Some(&mut w.cca),
@@ -143,19 +103,42 @@ fn read_words(r: &mut Reader, b: &Block, from: [f64; 6]) -> LineResult<Words> {
     Ok(w)
 }
 
+/// Token `k` as a coordinate `X Y Z` (`IX IY IZ` from `target`) into `target`: its axis,
+/// or `None` when it is no coordinate.
+pub(super) fn xyz_word(
+    r: &Reader,
+    b: &Block,
+    k: usize,
+    target: &mut [f64; 6],
+) -> LineResult<Option<usize>> {
+    let (name, rest) = split_word(b.tok(k));
+    let upper = name.to_ascii_uppercase();
+    let (inc, axis) = match upper.strip_prefix('I') {
+        Some(a) if a.len() == 1 => (true, a),
+        _ => (false, upper.as_str()),
+    };
+    let Some(a) = ["X", "Y", "Z"].iter().position(|l| *l == axis) else {
+        return Ok(None);
+    };
+    if rest.is_empty() {
+        return Ok(None);
+    }
+    let v = b.value(k, name.len(), &r.q)?;
+    target[a] = if inc { target[a] + v } else { v };
+    Ok(Some(a))
+}
+
+/// An error at the block's construct, named before `what` (`APPR CT` …).
+fn named(b: &Block, what: &str, label: &'static str) -> LineError {
+    let (key, kind) = (b.tok(0).to_ascii_uppercase(), b.tok(1).to_ascii_uppercase());
+    LineError::new(b.spans(0, 1), format!("`{key} {kind}` {what}"), label)
+}
+
 /// A positive value the path needs, or an error naming it.
 fn need(b: &Block, v: Option<f64>, what: &str, rule: &str) -> LineResult<f64> {
     match v {
         Some(v) if v > 0.0 => Ok(v),
-        _ => Err(LineError::new(
-            b.spans(0, 1),
-            format!(
-                "`{} {}` needs {what}: {rule}",
-                b.tok(0).to_ascii_uppercase(),
-                b.tok(1).to_ascii_uppercase()
-            ),
-            "missing value",
-        )),
+        _ => Err(named(b, &format!("needs {what}: {rule}"), "missing value")),
     }
 }
 
@@ -173,15 +156,7 @@ fn need_nonzero(b: &Block, v: Option<f64>) -> LineResult<f64> {
 /// The values each kind needs (LEN; CCA and R; R), checked as the manual states them.
 fn check(b: &Block, kind: Kind, w: &Words, comp: u8) -> LineResult<(f64, f64, f64)> {
     if kind != Kind::Lt && comp == 0 {
-        return Err(LineError::new(
-            b.spans(0, 1),
-            format!(
-                "`{} {}` with R0: the path's side comes from the radius compensation; expected RL or RR (the TNC 640 stops with an error here too)",
-                b.tok(0).to_ascii_uppercase(),
-                b.tok(1).to_ascii_uppercase()
-            ),
-            "no compensation side",
-        ));
+        return Err(named(b, "with R0: the path's side comes from the radius compensation; expected RL or RR (the TNC 640 stops with an error here too)", "no compensation side"));
     }
     Ok(match kind {
         Kind::Lt | Kind::Ln => (need(b, w.len, "LEN", "a positive distance")?, 0.0, 0.0),
@@ -312,47 +287,42 @@ fn tangent_arc(p: [f64; 2], t: [f64; 2], radius: f64, comp: u8) -> ([f64; 2], bo
     (c, (c[0] - p[0]) * n[0] + (c[1] - p[1]) * n[1] > 0.0)
 }
 
-/// The auxiliary point P_H and the approach's arc (centre, ccw) if it has one.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn approach_points(
-    kind: Kind,
-    ps: [f64; 2],
-    pa: [f64; 2],
+/// The auxiliary point P_H of `a` and its arc (centre, ccw) if it has one, for the
+/// first element's tangent `t` at P_A and the tool radius `rho`.
+fn approach_points(
+    a: &Approach,
     t: [f64; 2],
-    len: f64,
-    radius: f64,
-    cca_deg: f64,
-    comp: u8,
-    tool_radius: f64,
+    rho: f64,
 ) -> Option<([f64; 2], Option<([f64; 2], bool)>)> {
-    Some(match kind {
-        Kind::Lt => (add(pa, t, -len), None),
-        Kind::Ln => (add(pa, side(t, comp), len + tool_radius), None),
+    let (ps, pa) = ([a.start[X], a.start[Y]], [a.end[X], a.end[Y]]);
+    Some(match a.kind {
+        Kind::Lt => (add(pa, t, -a.len), None),
+        Kind::Ln => (add(pa, side(t, a.comp), a.len + rho), None),
         Kind::Ct => {
-            let (c, ccw) = tangent_arc(pa, t, radius, comp);
-            let back = if ccw { -cca_deg } else { cca_deg };
+            let (c, ccw) = tangent_arc(pa, t, a.radius, a.comp);
+            let back = if ccw { -a.cca_deg } else { a.cca_deg };
             let v = rot([pa[0] - c[0], pa[1] - c[1]], back);
             ([c[0] + v[0], c[1] + v[1]], Some((c, ccw)))
         }
         Kind::Lct => {
-            let (c, ccw) = tangent_arc(pa, t, radius, comp);
-            (touch(c, radius, ps, ccw, true)?, Some((c, ccw)))
+            let (c, ccw) = tangent_arc(pa, t, a.radius, a.comp);
+            (touch(c, a.radius, ps, ccw, true)?, Some((c, ccw)))
         }
     })
 }
 
 /// The first contour element, with tangent `t` at P_A, is being read: the approach's
 /// moves now.
-pub(super) fn run(r: &mut Reader, b: &Block, t: [f64; 2]) -> LineResult<()> {
+pub(super) fn run(r: &mut Reader, b: &Block, t: Option<[f64; 2]>) -> LineResult<()> {
+    let Some(t) = t else {
+        return Err(LineError::new(b.span(0), "the first contour element after APPR is an arc outside the plane X Y: mtsim approaches in X Y only", "not the XY plane"));
+    };
     let Some(a) = r.path.appr.take() else {
         return Ok(());
     };
-    let ps = [a.start[X], a.start[Y]];
-    let pa = [a.end[X], a.end[Y]];
     let rho = r.comp_diameter() / 2.0;
-    let (kind, len, radius, cca, comp) = (a.kind, a.len, a.radius, a.cca_deg, a.comp);
-    let points = approach_points(kind, ps, pa, t, len, radius, cca, comp, rho);
-    let Some((ph, arc)) = points else {
+    let (kind, radius, comp) = (a.kind, a.radius, a.comp);
+    let Some((ph, arc)) = approach_points(&a, t, rho) else {
         return Err(LineError::new(
             b.span(0),
             format!(
@@ -485,14 +455,30 @@ mod tests {
     }
 
     // The first contour element runs +X from P_A (10, 20).
-    const PA: [f64; 2] = [10.0, 20.0];
     const T: [f64; 2] = [1.0, 0.0];
+
+    fn appr(kind: Kind, ps: [f64; 2], len: f64, radius: f64, cca_deg: f64, comp: u8) -> Approach {
+        Approach {
+            kind,
+            start: [ps[0], ps[1], 0.0, 0.0, 0.0, 0.0],
+            end: [10.0, 20.0, 0.0, 0.0, 0.0, 0.0],
+            z_given: false,
+            len,
+            radius,
+            cca_deg,
+            comp,
+            feed: None,
+            rapid: false,
+            m: Vec::new(),
+            line: 1,
+        }
+    }
 
     #[test]
     fn ln_puts_the_auxiliary_point_len_plus_the_tool_radius_off_the_contour() {
         // RR: the tool's side of +X is −Y; 15 + 5 below P_A.
-        let (ph, arc) =
-            approach_points(Kind::Ln, [0.0; 2], PA, T, 15.0, 0.0, 0.0, 2, 5.0).expect("a point");
+        let a = appr(Kind::Ln, [0.0; 2], 15.0, 0.0, 0.0, 2);
+        let (ph, arc) = approach_points(&a, T, 5.0).expect("a point");
         assert!(near(ph, [10.0, 0.0]) && arc.is_none(), "{ph:?}");
     }
 
@@ -500,16 +486,16 @@ mod tests {
     fn ct_quarter_arc_ends_tangent_at_the_contour_point() {
         // RL, R+10: centre (10, 30) left of +X, counter-clockwise; 90° back from P_A is
         // (0, 30).
-        let (ph, arc) =
-            approach_points(Kind::Ct, [0.0; 2], PA, T, 0.0, 10.0, 90.0, 1, 0.0).expect("a point");
+        let a = appr(Kind::Ct, [0.0; 2], 0.0, 10.0, 90.0, 1);
+        let (ph, arc) = approach_points(&a, T, 0.0).expect("a point");
         let (c, ccw) = arc.expect("an arc");
         assert!(
             near(c, [10.0, 30.0]) && ccw && near(ph, [0.0, 30.0]),
             "{ph:?} {c:?}"
         );
         // R-10 under RL: centre (10, 10), clockwise; 90° back is (0, 10).
-        let (ph, arc) =
-            approach_points(Kind::Ct, [0.0; 2], PA, T, 0.0, -10.0, 90.0, 1, 0.0).expect("a point");
+        let a = appr(Kind::Ct, [0.0; 2], 0.0, -10.0, 90.0, 1);
+        let (ph, arc) = approach_points(&a, T, 0.0).expect("a point");
         let (c, ccw) = arc.expect("an arc");
         assert!(
             near(c, [10.0, 10.0]) && !ccw && near(ph, [0.0, 10.0]),
@@ -522,8 +508,8 @@ mod tests {
         // RR, R10: centre (10, 10), clockwise. From P_S (10, −10), 20 below the centre:
         // α = acos(10/20) = 60° from the direction −90°; clockwise onto the circle turns
         // to −150°: P_H = (10 − 5√3, 5).
-        let (ph, _) = approach_points(Kind::Lct, [10.0, -10.0], PA, T, 0.0, 10.0, 0.0, 2, 0.0)
-            .expect("a point");
+        let a = appr(Kind::Lct, [10.0, -10.0], 0.0, 10.0, 0.0, 2);
+        let (ph, _) = approach_points(&a, T, 0.0).expect("a point");
         assert!(near(ph, [10.0 - 5.0 * 3f64.sqrt(), 5.0]), "{ph:?}");
         // The line P_S → P_H is perpendicular to the radius at P_H (a tangent).
         let (d, rad) = ([ph[0] - 10.0, ph[1] + 10.0], [ph[0] - 10.0, ph[1] - 10.0]);

@@ -24,7 +24,7 @@ use crate::lex::{LineError, LineResult};
 
 use super::state::{self, Block, Corner, Extras, Held, Reader};
 use super::text::{split_word, value};
-use super::{approach, cycles, frames};
+use super::{cycles, frames};
 
 const X: usize = 0;
 const Y: usize = 1;
@@ -278,7 +278,7 @@ fn line(r: &mut Reader, b: &Block, polar: bool) -> LineResult<()> {
         if n < 1e-12 {
             return Err(LineError::new(b.span(0), "the first contour element after APPR does not move in the plane X Y: expected its end point", "no tangent"));
         }
-        approach::run(r, b, [d[0] / n, d[1] / n])?;
+        r.approach(b, Some([d[0] / n, d[1] / n]))?;
     }
     r.path.rapid = e.rapid;
     let in_plane =
@@ -633,17 +633,7 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
         }
     };
     if r.path.appr.is_some() {
-        if [u, v] != [X, Y] {
-            return Err(LineError::new(b.span(0), "the first contour element after APPR is an arc outside the plane X Y: mtsim approaches in X Y only", "not the XY plane"));
-        }
-        let rv = [p[0] - centre[0], p[1] - centre[1]];
-        let n = rv[0].hypot(rv[1]).max(1e-300);
-        let t = if ccw {
-            [-rv[1] / n, rv[0] / n]
-        } else {
-            [rv[1] / n, -rv[0] / n]
-        };
-        approach::run(r, b, t)?;
+        r.approach(b, ([u, v] == [X, Y]).then(|| tangent_at(centre, p, ccw)))?;
     }
     r.path.rapid = false;
     let g = if ccw { "3" } else { "2" };
@@ -666,18 +656,21 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
         _ => Centre::Offset([centre[0] - start[0], centre[1] - start[1]], [u, v]),
     };
     motion(r, b, g, &target, mask | plane_bits, Some(c), &e)?;
-    let rv = [target[u] - centre[0], target[v] - centre[1]];
-    let n = rv[0].hypot(rv[1]).max(1e-300);
     // The tangent CT and RND/CHF follow lies in the plane X Y.
-    r.path.dir = ([u, v] == [X, Y]).then(|| {
-        if ccw {
-            [-rv[1] / n, rv[0] / n]
-        } else {
-            [rv[1] / n, -rv[0] / n]
-        }
-    });
+    r.path.dir = ([u, v] == [X, Y]).then(|| tangent_at(centre, [target[u], target[v]], ccw));
     r.path.pos = target;
     Ok(())
+}
+
+/// The unit tangent at `p` of a circle about `c` run counter-clockwise (`ccw`) or not.
+fn tangent_at(c: [f64; 2], p: [f64; 2], ccw: bool) -> [f64; 2] {
+    let rv = [p[0] - c[0], p[1] - c[1]];
+    let n = rv[0].hypot(rv[1]).max(1e-300);
+    if ccw {
+        [-rv[1] / n, rv[0] / n]
+    } else {
+        [rv[1] / n, -rv[0] / n]
+    }
 }
 
 /// A helix of more than one turn about `centre` in `plane`, `total` degrees in all.

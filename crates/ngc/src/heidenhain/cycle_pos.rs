@@ -18,10 +18,9 @@
 
 use crate::lex::{LineError, LineResult};
 
-use super::contour;
-use super::cycles;
 use super::state::{self, Block, Extras, Reader};
 use super::text::split_word;
+use super::{approach, contour, cycles};
 
 /// `CYCL CALL POS …`.
 pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
@@ -30,25 +29,11 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
     let mut e = Extras::default();
     let mut feed = None;
     for k in 3..b.toks.len() {
-        let (name, rest) = split_word(b.tok(k));
-        let upper = name.to_ascii_uppercase();
-        let (inc, axis) = match upper.strip_prefix('I') {
-            Some(a) if a.len() == 1 => (true, a),
-            _ => (false, upper.as_str()),
-        };
-        if let (Some(a), false) = (
-            ["X", "Y", "Z"].iter().position(|l| *l == axis),
-            rest.is_empty(),
-        ) {
-            let v = b.value(k, name.len(), &r.q)?;
-            at[a] = if inc { at[a] + v } else { v };
+        if let Some(a) = approach::xyz_word(r, b, k, &mut at)? {
             given |= 1 << a;
-        } else if upper == "FMAX" || upper == "MAX" && b.is(k - 1, "F") {
-            feed = None;
-        } else if upper == "F" && b.is(k + 1, "MAX") {
-        } else if upper == "F" {
-            feed = Some(b.value(k, 1, &r.q)?);
-        } else if !contour::m_word(r, b, k, &mut e)? {
+            continue;
+        }
+        if !feed_or_m(r, b, k, &mut feed, &mut e)? {
             return Err(state::unexpected(
                 b,
                 k,
@@ -66,6 +51,26 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
     }
     call_at(r, b, [at[0], at[1], at[2]], feed)?;
     contour::run_extras(r, b, &e, None)
+}
+
+/// Token `k` of a cycle call as its feed (`F…`; `FMAX`, `F MAX`: rapid) or an M function;
+/// false when it is neither.
+pub(super) fn feed_or_m(
+    r: &mut Reader,
+    b: &Block,
+    k: usize,
+    feed: &mut Option<f64>,
+    e: &mut Extras,
+) -> LineResult<bool> {
+    let (name, rest) = split_word(b.tok(k));
+    match name.to_ascii_uppercase().as_str() {
+        "FMAX" => *feed = None,
+        "F" if b.is(k + 1, "MAX") => {}
+        "MAX" if b.is(k - 1, "F") => *feed = None,
+        "F" if !rest.is_empty() => *feed = Some(b.value(k, 1, &r.q)?),
+        _ => return contour::m_word(r, b, k, e),
+    }
+    Ok(true)
 }
 
 /// The defined cycle at `at` (X Y, and Z the shift of the surface), reached at `feed`

@@ -890,6 +890,12 @@ impl Reader {
         contour::run_extras(self, b, &m, None)
     }
 
+    /// The approach held by `APPR`, now that the first element's tangent `t` at P_A is
+    /// known (`None`: an element outside the plane X Y); contour elements call it.
+    fn approach(&mut self, b: &Block, t: Option<[f64; 2]>) -> LineResult<()> {
+        approach::run(self, b, t)
+    }
+
     /// Runs the rest of the words of a held line, if any.
     fn release_held(&mut self, b: &Block) -> LineResult<()> {
         contour::release(self, b)

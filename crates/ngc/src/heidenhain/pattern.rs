@@ -24,33 +24,9 @@ use std::ops::Range;
 
 use crate::lex::{LineError, LineResult};
 
-use super::state::{unexpected, Block, Extras, Reader};
+use super::state::{unexpected, Block, Extras, Item, Reader};
 use super::text::{split_word, value};
 use super::{contour, cycle_pos};
-
-/// One element of a pattern definition.
-#[derive(Clone, Copy, Debug)]
-pub(super) enum Item {
-    Point([f64; 3]),
-    /// Start, spacing (x, y), counts (x, y), rotation (deg), surface; border only.
-    Grid {
-        at: [f64; 2],
-        d: [f64; 2],
-        n: [u32; 2],
-        rot_deg: f64,
-        z: f64,
-        border: bool,
-    },
-    /// Centre, diameter, first angle, step (deg), count, surface.
-    Circle {
-        at: [f64; 2],
-        diameter: f64,
-        start_deg: f64,
-        step_deg: f64,
-        n: u32,
-        z: f64,
-    },
-}
 
 /// The most points one `CYCL CALL PAT` may run: its moves are made in one step, so this
 /// bounds the queue (a real pattern holds far fewer).
@@ -258,21 +234,13 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
     let mut feed = None;
     let mut e = Extras::default();
     for k in 3..b.toks.len() {
-        let (name, rest) = split_word(b.tok(k));
-        match name.to_ascii_uppercase().as_str() {
-            "FMAX" => feed = None,
-            "F" if b.is(k + 1, "MAX") => {}
-            "MAX" if b.is(k - 1, "F") => feed = None,
-            "F" if !rest.is_empty() => feed = Some(b.value(k, 1, &r.q)?),
-            _ if contour::m_word(r, b, k, &mut e)? => {}
-            _ => {
-                return Err(unexpected(
-                    b,
-                    k,
-                    "CYCL CALL PAT",
-                    "F or FMAX, and M functions",
-                ))
-            }
+        if !cycle_pos::feed_or_m(r, b, k, &mut feed, &mut e)? {
+            return Err(unexpected(
+                b,
+                k,
+                "CYCL CALL PAT",
+                "F or FMAX, and M functions",
+            ));
         }
     }
     let items = r.pattern.clone();

@@ -688,3 +688,18 @@ fn cycl_call_pat_drills_at_every_point_of_the_pattern() {
     let (_, _, msg) = error("2 PATTERN DEF ~\n PAT1 (X+0 Y+0 DX+1 DY+1 NUMX2 NUMY2 ROTX+5)");
     assert!(msg.contains("ROTX"), "{msg}");
 }
+
+/// With a Ø10 tool under RR (entered on the move P_S (0, 30) → P_H (0, 20), longer than the
+/// radius, as the interpreter's entry move needs) the contour and the departure run 5 right of
+/// the programmed path: the element +X along y = 20 at y = 15, to (30, 15), and DEP LT's
+/// tangent extension to (42.5, 15).
+#[test]
+fn appr_and_dep_run_compensated_by_the_tool_radius() {
+    let m = moves(
+        "2 L X+0 Y+30 R0 F300\n3 APPR LT X+10 Y+20 LEN10 RR F100\n4 L X+30 Y+20\n\
+         5 DEP LT LEN12.5 R0 F200\n6 L Z+50 R0 FMAX",
+    );
+    let ends: Vec<[f64; 2]> = m.iter().map(xy).collect();
+    assert!(ends.iter().any(|p| near(*p, [30.0, 15.0])), "{ends:?}");
+    assert!(ends.iter().any(|p| near(*p, [42.5, 15.0])), "{ends:?}");
+}

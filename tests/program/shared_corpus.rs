@@ -39,10 +39,9 @@ const REFUSED: &[(&str, Why, &str)] = &[
     // Not text: the file in the repository is binary.
     ("haas_mc_o78238.nc", Why::Fault, "unexpected character"),
     // Heidenhain conversational listed as Fanuc, read as Klartext: a circle around CC
-    // from a start the operator sets by hand (the program reads it with FN 18), and the
-    // approach `APPR LT` (its `Z + Q13`, a blank between sign and Q parameter, is read).
+    // from a start the operator sets by hand (the program reads it with FN 18). Its twin
+    // hdh_profile.h (`APPR LT` … `DEP LT`) reads.
     ("hdh_cirstud.h", Why::Fault, "is on CC"),
-    ("hdh_profile.h", Why::Gap, "`APPR LT`"),
     // The subroutine files these programs call are not in their repository's folder.
     (
         "lcnc_lagun_HEMA-P017.ngc",

@@ -45,7 +45,7 @@ pub(super) fn block(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
 }
 
 /// Parses token `k` as a word besides coordinates (R0/RL/RR, F, M); false if it is none.
-fn extra(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> LineResult<bool> {
+pub(super) fn extra(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> LineResult<bool> {
     let t = b.tok(k);
     let (name, rest) = split_word(t);
     let span = b.span(k);
@@ -272,6 +272,15 @@ fn line(r: &mut Reader, b: &Block, polar: bool) -> LineResult<()> {
     if let Some(f) = e.feed {
         r.path.feed = Some(f);
     }
+    if r.path.appr.is_some() {
+        let d = [target[X] - r.path.pos[X], target[Y] - r.path.pos[Y]];
+        let n = d[0].hypot(d[1]);
+        if n < 1e-12 {
+            return Err(LineError::new(b.span(0), "the first contour element after APPR does not move in the plane X Y: expected its end point", "no tangent"));
+        }
+        r.approach(b, Some([d[0] / n, d[1] / n]))?;
+    }
+    r.path.rapid = e.rapid;
     let in_plane =
         mask & !3 == 0 || (mask & 4 != 0 && target[Z] == r.path.pos[Z] && mask & !7 == 0);
     if let Some(c) = r.path.corner.take() {
@@ -318,7 +327,7 @@ fn line(r: &mut Reader, b: &Block, polar: bool) -> LineResult<()> {
 
 /// Emits one move block: the motion words, compensation, feed and M functions (TCP on
 /// before the move, off after it; M140 and a cycle call after it).
-fn motion(
+pub(super) fn motion(
     r: &mut Reader,
     b: &Block,
     g: &'static str,
@@ -446,7 +455,7 @@ fn retract(r: &mut Reader, b: &Block, mb: Option<f64>) -> LineResult<()> {
 
 /// An arc's centre as the interpreter reads it.
 #[derive(Clone, Copy)]
-enum Centre {
+pub(super) enum Centre {
     /// From the start to the centre along the plane's first and second axes.
     Offset([f64; 2], [usize; 2]),
     Radius(f64, [usize; 2]),
@@ -623,6 +632,10 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
             (c, ccw, turns)
         }
     };
+    if r.path.appr.is_some() {
+        r.approach(b, ([u, v] == [X, Y]).then(|| tangent_at(centre, p, ccw)))?;
+    }
+    r.path.rapid = false;
     let g = if ccw { "3" } else { "2" };
     let plane_bits = (1u8 << u) | (1 << v);
     if turns > 0 {
@@ -643,18 +656,21 @@ fn arc(r: &mut Reader, b: &Block, key: &str) -> LineResult<()> {
         _ => Centre::Offset([centre[0] - start[0], centre[1] - start[1]], [u, v]),
     };
     motion(r, b, g, &target, mask | plane_bits, Some(c), &e)?;
-    let rv = [target[u] - centre[0], target[v] - centre[1]];
-    let n = rv[0].hypot(rv[1]).max(1e-300);
     // The tangent CT and RND/CHF follow lies in the plane X Y.
-    r.path.dir = ([u, v] == [X, Y]).then(|| {
-        if ccw {
-            [-rv[1] / n, rv[0] / n]
-        } else {
-            [rv[1] / n, -rv[0] / n]
-        }
-    });
+    r.path.dir = ([u, v] == [X, Y]).then(|| tangent_at(centre, [target[u], target[v]], ccw));
     r.path.pos = target;
     Ok(())
+}
+
+/// The unit tangent at `p` of a circle about `c` run counter-clockwise (`ccw`) or not.
+fn tangent_at(c: [f64; 2], p: [f64; 2], ccw: bool) -> [f64; 2] {
+    let rv = [p[0] - c[0], p[1] - c[1]];
+    let n = rv[0].hypot(rv[1]).max(1e-300);
+    if ccw {
+        [-rv[1] / n, rv[0] / n]
+    } else {
+        [rv[1] / n, -rv[0] / n]
+    }
 }
 
 /// A helix of more than one turn about `centre` in `plane`, `total` degrees in all.

@@ -16,10 +16,13 @@
 //! defined by `CYCL DEF`. The file is streamed (jumps seek to byte offsets; the label index
 //! keeps offsets), and calls nest at most `max_call_depth` deep.
 
+mod approach;
 mod contour;
+mod cycle_pos;
 mod cycles;
 mod frames;
 mod front;
+mod pattern;
 mod qparam;
 mod state;
 mod sysread;
@@ -65,6 +68,7 @@ impl Reader {
             path: Contour::new(start),
             frames_state: Frames::default(),
             cycle: Cycle::default(),
+            pattern: Vec::new(),
             tools: options.tools.clone(),
             rewritten: Vec::new(),
             table: options.table,
@@ -169,7 +173,9 @@ impl Reader {
                 toks: &[],
                 line: here.line,
             };
-            contour::release(self, &b).map_err(|e| self.error_at(here, e))?;
+            approach::unfinished(self)
+                .and_then(|()| contour::release(self, &b))
+                .map_err(|e| self.error_at(here, e))?;
             return self.run_words(here);
         };
         self.cursor = next;
@@ -266,6 +272,7 @@ impl Reader {
             *u = c.to_ascii_uppercase();
         }
         let key = std::str::from_utf8(&upper[..n]).unwrap_or("");
+        approach::pending_refused(self, b, key)?;
         // Everything but a corner element releases the held line.
         if !matches!(key, "RND" | "CHF" | "L" | "LP") {
             self.release_held(b)?;
@@ -274,6 +281,8 @@ impl Reader {
             "L" | "LP" | "CC" | "C" | "CR" | "CT" | "CP" | "RND" | "CHF" => {
                 contour::block(self, b, key)
             }
+            "APPR" => approach::appr(self, b),
+            "DEP" => approach::dep(self, b),
             "BEGIN" => self.begin_pgm(b),
             "END" if b.is(1, "PGM") => {
                 if !self.ret_from_program() {
@@ -282,6 +291,7 @@ impl Reader {
                 Ok(())
             }
             "BLK" | "TOOL" if b.is(1, "FORM") || b.is(1, "DEF") => Ok(()),
+            "PATTERN" if b.is(1, "DEF") => pattern::define(self, b),
             "TOOL" if b.is(1, "CALL") => self.tool_call(b),
             "FN" => self.fn_block(b, here, 1),
             _ if key.starts_with("FN")
@@ -849,8 +859,11 @@ impl Reader {
 
     /// `CYCL CALL [F] [M…]`: the defined cycle here.
     fn cycle_call(&mut self, b: &Block) -> LineResult<()> {
-        if b.is(2, "PAT") || b.is(2, "POS") {
-            return Err(LineError::new(b.spans(0, 2), format!("`CYCL CALL {}` (points from a pattern or table) is not supported: expected CYCL CALL or M99 at each position", b.tok(2).to_ascii_uppercase()), "Heidenhain construct not supported"));
+        if b.is(2, "POS") {
+            return cycle_pos::call(self, b);
+        }
+        if b.is(2, "PAT") {
+            return pattern::call(self, b);
         }
         let mut e = Extras::default();
         for k in 2..b.toks.len() {
@@ -875,6 +888,12 @@ impl Reader {
             }
         }
         contour::run_extras(self, b, &m, None)
+    }
+
+    /// The approach held by `APPR`, now that the first element's tangent `t` at P_A is
+    /// known (`None`: an element outside the plane X Y); contour elements call it.
+    fn approach(&mut self, b: &Block, t: Option<[f64; 2]>) -> LineResult<()> {
+        approach::run(self, b, t)
     }
 
     /// Runs the rest of the words of a held line, if any.

@@ -55,6 +55,8 @@ pub(crate) struct Reader {
     pub(super) path: Contour,
     pub(super) frames_state: Frames,
     pub(super) cycle: Cycle,
+    /// The last `PATTERN DEF`, as written (its points are made at `CYCL CALL PAT`).
+    pub(super) pattern: Vec<Item>,
     pub(super) tools: Vec<Tool>,
     /// Tools whose geometry `FN 17: SYSWRITE ID50` changed: number and line (a later call
     /// or read of one is refused: the tool table is not changed during a run).
@@ -111,6 +113,10 @@ pub(super) struct Contour {
     pub(super) comp: u8,
     pub(super) held: Option<Held>,
     pub(super) corner: Option<Corner>,
+    /// An `APPR` waiting for the first contour element (its tangent).
+    pub(super) appr: Option<Approach>,
+    /// The last positioning was `FMAX` (`APPR` runs to its auxiliary point at rapid).
+    pub(super) rapid: bool,
 }
 
 /// A straight feed line in the plane, not yet run.
@@ -172,6 +178,8 @@ impl Contour {
             comp: 0,
             held: None,
             corner: None,
+            appr: None,
+            rapid: false,
         };
         c.set_position(start);
         c
@@ -296,4 +304,60 @@ pub(super) fn unexpected(b: &Block, k: usize, what: &str, expected: &str) -> Lin
         format!("`{}` in {what}: expected {expected}", b.tok(k)),
         "unexpected word",
     )
+}
+
+/// The four paths, approach or departure.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub(super) enum Kind {
+    /// Straight line, tangential.
+    Lt,
+    /// Straight line, normal.
+    Ln,
+    /// Circular arc, tangential.
+    Ct,
+    /// Straight line and arc, tangential to both.
+    Lct,
+}
+
+/// An `APPR` read, waiting for the first contour element that gives its tangent.
+pub(super) struct Approach {
+    pub(super) kind: Kind,
+    /// P_S, the position before the block.
+    pub(super) start: [f64; 6],
+    /// P_A (Z as the block gives it).
+    pub(super) end: [f64; 6],
+    pub(super) z_given: bool,
+    pub(super) len: f64,
+    pub(super) radius: f64,
+    pub(super) cca_deg: f64,
+    pub(super) comp: u8,
+    pub(super) feed: Option<f64>,
+    /// The block before `APPR` was `FMAX`: P_S → P_H at rapid.
+    pub(super) rapid: bool,
+    pub(super) m: Vec<(f64, std::ops::Range<usize>)>,
+    pub(super) line: usize,
+}
+
+/// One element of a pattern definition.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Item {
+    Point([f64; 3]),
+    /// Start, spacing (x, y), counts (x, y), rotation (deg), surface; border only.
+    Grid {
+        at: [f64; 2],
+        d: [f64; 2],
+        n: [u32; 2],
+        rot_deg: f64,
+        z: f64,
+        border: bool,
+    },
+    /// Centre, diameter, first angle, step (deg), count, surface.
+    Circle {
+        at: [f64; 2],
+        diameter: f64,
+        start_deg: f64,
+        step_deg: f64,
+        n: u32,
+        z: f64,
+    },
 }

@@ -125,9 +125,9 @@ pub(super) fn tokens(text: &str, from: usize, out: &mut Vec<Range<usize>>) {
 }
 
 /// Address letters whose value may follow after blanks.
-const JOINED: [&str; 22] = [
+const JOINED: [&str; 24] = [
     "X", "Y", "Z", "A", "B", "C", "IX", "IY", "IZ", "IA", "IB", "IC", "PR", "PA", "IPR", "IPA",
-    "R", "F", "S", "DL", "DR", "ROT",
+    "R", "F", "S", "DL", "DR", "ROT", "LEN", "CCA",
 ];
 
 /// A token's leading letters and the rest: `IX+10` → (`IX`, `+10`), `DR-` → (`DR`, `-`).

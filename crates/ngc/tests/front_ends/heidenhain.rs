@@ -273,7 +273,7 @@ fn plane_spatial_euler_and_vector_give_the_same_tilt() {
 #[test]
 fn unsupported_constructs_are_refused_by_name_at_their_line() {
     for (body, name) in [
-        ("2 APPR LT X+10 Y+10 LEN 5 RL", "APPR LT"),
+        ("2 APPR PLT PR+10 PA+10 LEN 5 RL", "APPR PLT"),
         ("2 TCH PROBE 400", "TCH PROBE"),
         (
             "2 CYCL DEF 251 RECTANGULAR POCKET",
@@ -422,4 +422,284 @@ fn a_feed_move_with_no_feed_in_effect_is_an_error_at_its_line() {
     assert_eq!(m[0].feed, ngc::Feed::None);
     assert_eq!(m[1].feed, ngc::Feed::PerMinute(250.0));
     assert_eq!(m[2].feed, ngc::Feed::PerMinute(250.0));
+}
+
+/// Options with a tool of diameter 0: the compensated path is the programmed one, so the
+/// approach and departure points are the tool's.
+fn zero_radius() -> Options {
+    Options {
+        tools: vec![Tool {
+            number: 1,
+            length_mm: 0.0,
+            diameter_mm: 0.0,
+        }],
+        ..opts()
+    }
+}
+
+/// The TNC 640 manual's approach paths ("Contour approach and departure"), each from
+/// P_S to the auxiliary point P_H and on to the first contour point P_A (10, 20), whose
+/// element runs +X (the tool's side under RR is −Y).
+#[test]
+fn appr_lt_ln_ct_lct_reach_the_contour_through_the_auxiliary_point() {
+    let o = zero_radius();
+    // LT: P_H 15 back along the first element's tangent (+X): (−5, 20). P_S → P_H at the
+    // feed before (300), P_H → P_A at F100 with Z.
+    let m = moves_with(
+        "2 L X+40 Y+10 Z+0 R0 F300\n3 APPR LT X+10 Y+20 Z-10 LEN15 RR F100\n4 L X+30 Y+20",
+        &o,
+    );
+    assert!(near(xy(&m[1]), [-5.0, 20.0]), "{:?}", m[1].end);
+    assert_eq!(m[1].feed, ngc::Feed::PerMinute(300.0));
+    assert!(near(xy(&m[2]), [10.0, 20.0]) && (m[2].end[Axis::Z] + 10.0).abs() < 1e-9);
+    assert_eq!(m[2].feed, ngc::Feed::PerMinute(100.0));
+    assert!(near(xy(&m[3]), [30.0, 20.0]));
+    // LN: P_H LEN + tool radius (0) off the contour on the tool's side: (10, 5).
+    let m = moves_with(
+        "2 L X+40 Y+10 R0 F300\n3 APPR LN X+10 Y+20 LEN15 RR F100\n4 L X+30 Y+20",
+        &o,
+    );
+    assert!(near(xy(&m[1]), [10.0, 5.0]) && near(xy(&m[2]), [10.0, 20.0]));
+    // CT, R+10 under RR: centre (10, 10) on the tool's side, clockwise; CCA 180 back from
+    // P_A: P_H = (10, 0). After FMAX, P_S → P_H is rapid.
+    let m = moves_with(
+        "2 L X+40 Y+10 R0 FMAX\n3 APPR CT X+10 Y+20 CCA180 R+10 RR F100\n4 L X+30 Y+20",
+        &o,
+    );
+    assert_eq!(m[1].motion, Motion::Rapid);
+    assert!(near(xy(&m[1]), [10.0, 0.0]), "{:?}", m[1].end);
+    let (clockwise, centre) = arc(&m[2]);
+    assert!(clockwise && near(centre, [10.0, 10.0]) && near(xy(&m[2]), [10.0, 20.0]));
+    // LCT, R10 under RR: centre (10, 10), clockwise. From P_S (10, −10), 20 below the
+    // centre, the tangent touches at −90° − acos(10/20) = −150°: (10 − 5√3, 5).
+    let m = moves_with(
+        "2 L X+10 Y-10 R0 F300\n3 APPR LCT X+10 Y+20 R10 RR F100\n4 L X+30 Y+20",
+        &o,
+    );
+    assert!(
+        near(xy(&m[1]), [10.0 - 5.0 * 3f64.sqrt(), 5.0]),
+        "{:?}",
+        m[1].end
+    );
+    assert_eq!(m[1].feed, ngc::Feed::PerMinute(100.0));
+    let (clockwise, centre) = arc(&m[2]);
+    assert!(clockwise && near(centre, [10.0, 10.0]) && near(xy(&m[2]), [10.0, 20.0]));
+    // The first element an arc: C about (10, 30) counter-clockwise from P_A heads +X.
+    let m = moves_with(
+        "2 L X+40 Y+10 R0 F300\n3 APPR LT X+10 Y+20 LEN15 RR F100\n4 CC X+10 Y+30\n5 C X+20 Y+30 DR+",
+        &o,
+    );
+    assert!(near(xy(&m[1]), [-5.0, 20.0]), "{:?}", m[1].end);
+}
+
+/// Departure from the last contour point P_E (30, 20), the last element running +X under
+/// RR (the tool's side −Y).
+#[test]
+fn dep_lt_ln_ct_lct_leave_the_contour_as_the_manual_draws_them() {
+    let o = zero_radius();
+    let body = |dep: &str| {
+        format!("2 L X+0 Y+20 R0 F300\n3 APPR LT X+10 Y+20 LEN10 RR F100\n4 L X+30 Y+20\n5 {dep}\n6 L Z+50 R0 FMAX")
+    };
+    // LT: LEN 12.5 on along +X.
+    let m = moves_with(&body("DEP LT LEN12.5 R0 F200"), &o);
+    assert!(near(xy(&m[4]), [42.5, 20.0]), "{:?}", m[4].end);
+    assert_eq!(m[4].feed, ngc::Feed::PerMinute(200.0));
+    // LN: LEN 20 (+ radius 0) to the tool's side: (30, 0).
+    let m = moves_with(&body("DEP LN LEN+20 F200"), &o);
+    assert!(near(xy(&m[4]), [30.0, 0.0]), "{:?}", m[4].end);
+    // CT, R+8: centre (30, 12), clockwise 180°: (30, 4).
+    let m = moves_with(&body("DEP CT CCA180 R+8 F200"), &o);
+    let (clockwise, centre) = arc(&m[4]);
+    assert!(clockwise && near(centre, [30.0, 12.0]) && near(xy(&m[4]), [30.0, 4.0]));
+    // LCT to (46, 12), 16 right of the centre (30, 12): the arc leaves at 60° (acos(8/16)),
+    // (34, 12 + 4√3), then a line to P_N.
+    let m = moves_with(&body("DEP LCT X+46 Y+12 R8 R0 F200"), &o);
+    let (clockwise, centre) = arc(&m[4]);
+    assert!(clockwise && near(centre, [30.0, 12.0]), "{centre:?}");
+    assert!(
+        near(xy(&m[4]), [34.0, 12.0 + 4.0 * 3f64.sqrt()]),
+        "{:?}",
+        m[4].end
+    );
+    assert!(near(xy(&m[5]), [46.0, 12.0]) && m[5].motion == Motion::Linear);
+}
+
+#[test]
+fn appr_and_dep_refuse_what_the_manual_does_not_allow() {
+    for (body, said) in [
+        (
+            "2 L X+0 Y+0 R0 F100\n3 APPR CT X+10 Y+20 CCA90 R+5 R0\n4 L X+20",
+            "with R0",
+        ),
+        (
+            "2 L X+0 Y+0 R0 F100\n3 APPR LT X+10 Y+20 RL\n4 L X+20",
+            "LEN",
+        ),
+        (
+            "2 L X+0 Y+0 R0 F100\n3 APPR LT X+10 Y+20 LEN5 RL\n4 M3",
+            "after APPR",
+        ),
+        ("2 DEP LT LEN5", "no contour element"),
+        (
+            "2 L X+0 Y+0 R0 F100\n3 APPR LT X+10 Y+20 LEN5 RL\n4 END PGM T MM",
+            "`END` after APPR",
+        ),
+        // A file that ends without END PGM, its APPR waiting.
+        (
+            "0 BEGIN PGM T MM\n1 APPR LT X+10 Y+20 LEN5 RL",
+            "ends after the APPR",
+        ),
+        (
+            "2 L X+0 Y+0 R0 F100\n3 APPR CT X+10 Y+20 CCA400 R+5 RL\n4 L X+20",
+            "360",
+        ),
+    ] {
+        let text = match body.starts_with("0 BEGIN") {
+            true => format!("{body}\n"),
+            false => program(body),
+        };
+        let e = read_str_with(Path::new("t.h"), &text, &zero_radius())
+            .find_map(Result::err)
+            .expect("an error");
+        assert!(e.to_string().contains(said), "{body}: {e}");
+    }
+}
+
+/// `CYCL CALL POS`: cycle 200 at each position, its Z an added shift of the surface
+/// Q203 (CP "Calling cycles"); above the surface the plane first, below it up the tool
+/// axis to the set-up clearance first.
+#[test]
+fn cycl_call_pos_runs_the_cycle_at_the_position_with_its_positioning_logic() {
+    let m = moves(
+        "2 L X+5 Y+5 Z+20 R0 FMAX\n3 CYCL DEF 200 DRILLING ~\n Q200=+2 ~\n Q201=-7 ~\n \
+         Q206=+100 ~\n Q202=+7 ~\n Q210=+0 ~\n Q203=+0 ~\n Q204=+10 ~\n Q211=+0\n\
+         4 CYCL CALL POS X+30 Y+40 Z+1 FMAX\n5 CYCL CALL POS X+50 Y+40 Z-5 FMAX\n\
+         6 L Z-20 FMAX\n7 CYCL CALL POS X+70 Y+40 Z+0 FMAX",
+    );
+    let mut path: Vec<(bool, [f64; 3])> = Vec::new();
+    for mv in &m[1..] {
+        let p = [mv.end[Axis::X], mv.end[Axis::Y], mv.end[Axis::Z]];
+        if path.last().map_or(true, |l| l.1 != p) && mv.motion != (Motion::Dwell { seconds: 0.0 }) {
+            path.push((mv.motion == Motion::Rapid, p));
+        }
+    }
+    // Surface 0 + 1: the plane first at Z 20, then clearance 3, depth 1 - 7, back to 3,
+    // second clearance 1 + 10.
+    // Surface −5: the plane at 11, then −3, −12, −3, 5. Then down to −20: below the
+    // surface 0, up to its clearance 2 first, then the plane, depth −7, 2, 10.
+    let want = [
+        (true, [30.0, 40.0, 20.0]),
+        (true, [30.0, 40.0, 3.0]),
+        (false, [30.0, 40.0, -6.0]),
+        (true, [30.0, 40.0, 3.0]),
+        (true, [30.0, 40.0, 11.0]),
+        (true, [50.0, 40.0, 11.0]),
+        (true, [50.0, 40.0, -3.0]),
+        (false, [50.0, 40.0, -12.0]),
+        (true, [50.0, 40.0, -3.0]),
+        (true, [50.0, 40.0, 5.0]),
+        (true, [50.0, 40.0, -20.0]),
+        (true, [50.0, 40.0, 2.0]),
+        (true, [70.0, 40.0, 2.0]),
+        (false, [70.0, 40.0, -7.0]),
+        (true, [70.0, 40.0, 2.0]),
+        (true, [70.0, 40.0, 10.0]),
+    ];
+    assert_eq!(path.len(), want.len(), "{path:?}");
+    for (got, want) in path.iter().zip(want) {
+        let close = (0..3).all(|k| (got.1[k] - want.1[k]).abs() < 1e-9);
+        assert!(got.0 == want.0 && close, "{path:?}");
+    }
+    // All three coordinates are required.
+    let (line, _, msg) = error("2 CYCL DEF 200 DRILLING\n3 CYCL CALL POS X+1 Y+2");
+    assert!(line == 4 && msg.contains("X, Y and Z"), "{msg}");
+}
+
+/// The bottom of each hole cycle 200 drills (its feed moves' ends) for `pattern`.
+fn holes(pattern: &str) -> Vec<[f64; 3]> {
+    let m = moves(&format!(
+        "2 L X+0 Y+0 Z+20 R0 FMAX\n3 CYCL DEF 200 DRILLING ~\n Q200=+2 ~\n Q201=-5 ~\n \
+         Q206=+100 ~\n Q202=+5 ~\n Q210=+0 ~\n Q203=+0 ~\n Q204=+10 ~\n Q211=+0\n\
+         4 PATTERN DEF ~\n{pattern}\n5 CYCL CALL PAT FMAX"
+    ));
+    m.iter()
+        .filter(|m| m.motion == Motion::Linear)
+        .map(|m| [m.end[Axis::X], m.end[Axis::Y], m.end[Axis::Z]])
+        .collect()
+}
+
+fn same(got: &[[f64; 3]], want: &[[f64; 3]]) -> bool {
+    got.len() == want.len()
+        && got
+            .iter()
+            .zip(want)
+            .all(|(g, w)| (0..3).all(|k| (g[k] - w[k]).abs() < 1e-9))
+}
+
+/// PATTERN DEF with CYCL CALL PAT: the cycle at every point, in order (KP "Pattern
+/// definition PATTERN DEF"), the pattern's Z an added shift of the surface.
+#[test]
+fn cycl_call_pat_drills_at_every_point_of_the_pattern() {
+    // POS (10, 10); ROW from (0, 50) spaced 20 turned 90°: x stays 0, y 50, 70, 90; CIRC
+    // about (100, 0), Ø40 from 90° in 4: (100, 20), (80, 0), (100, −20), (120, 0), its
+    // surface −2 so its depth −7.
+    let got = holes(
+        " POS1 (X+10 Y+10 Z+0) ~\n ROW1 (X+0 Y+50 D+20 NUMX3 ROT+90 Z+0) ~\n \
+         CIRC1 (X+100 Y+0 D40 START+90 NUM4 Z-2)",
+    );
+    let want = [
+        [10.0, 10.0, -5.0],
+        [0.0, 50.0, -5.0],
+        [0.0, 70.0, -5.0],
+        [0.0, 90.0, -5.0],
+        [100.0, 20.0, -7.0],
+        [80.0, 0.0, -7.0],
+        [100.0, -20.0, -7.0],
+        [120.0, 0.0, -7.0],
+    ];
+    assert!(same(&got, &want), "{got:?}");
+    // FRAME: a 3 × 3 grid's border, row by row; PITCHCIRC: 30° steps from 0 on Ø20.
+    let got = holes(
+        " FRAME1 (X+0 Y+0 DX+10 DY+10 NUMX3 NUMY3 ROT+0 ROTX+0 ROTY+0 Z+0) ~\n \
+         PITCHCIRC1 (X+0 Y+0 D20 START+0 STEP30 NUM2 Z+0)",
+    );
+    let want = [
+        [0.0, 0.0, -5.0],
+        [10.0, 0.0, -5.0],
+        [20.0, 0.0, -5.0],
+        [0.0, 10.0, -5.0],
+        [20.0, 10.0, -5.0],
+        [0.0, 20.0, -5.0],
+        [10.0, 20.0, -5.0],
+        [20.0, 20.0, -5.0],
+        [10.0, 0.0, -5.0],
+        [5.0 * 3f64.sqrt(), 5.0, -5.0],
+    ];
+    assert!(same(&got, &want), "{got:?}");
+    // PAT 2 × 2 turned 90° about its start.
+    let got = holes(" PAT1 (X+0 Y+0 DX+10 DY+5 NUMX2 NUMY2 ROT+90 Z+0)");
+    let want = [
+        [0.0, 0.0, -5.0],
+        [0.0, 10.0, -5.0],
+        [-5.0, 0.0, -5.0],
+        [-5.0, 10.0, -5.0],
+    ];
+    assert!(same(&got, &want), "{got:?}");
+    let (_, _, msg) = error("2 PATTERN DEF ~\n PAT1 (X+0 Y+0 DX+1 DY+1 NUMX2 NUMY2 ROTX+5)");
+    assert!(msg.contains("ROTX"), "{msg}");
+}
+
+/// With a Ø10 tool under RR (entered on the move P_S (0, 30) → P_H (0, 20), longer than the
+/// radius, as the interpreter's entry move needs) the contour and the departure run 5 right of
+/// the programmed path: the element +X along y = 20 at y = 15, to (30, 15), and DEP LT's
+/// tangent extension to (42.5, 15).
+#[test]
+fn appr_and_dep_run_compensated_by_the_tool_radius() {
+    let m = moves(
+        "2 L X+0 Y+30 R0 F300\n3 APPR LT X+10 Y+20 LEN10 RR F100\n4 L X+30 Y+20\n\
+         5 DEP LT LEN12.5 R0 F200\n6 L Z+50 R0 FMAX",
+    );
+    let ends: Vec<[f64; 2]> = m.iter().map(xy).collect();
+    assert!(ends.iter().any(|p| near(*p, [30.0, 15.0])), "{ends:?}");
+    assert!(ends.iter().any(|p| near(*p, [42.5, 15.0])), "{ends:?}");
 }

@@ -25,49 +25,9 @@ const IDLE_DISPLAY: &str = "#!/bin/sh\n# Shows nothing: LinuxCNC runs until this
     here=\"$(dirname \"$0\")\"\ntouch \"$here/ready\"\n\
     while [ ! -e \"$here/stop\" ]; do sleep 0.1; done\n";
 
-/// Homes every joint, then runs each argument as an MDI command and prints, once motion has
-/// stopped, `POSE <joints> | <position>` (mm and deg).
-const PROBE: &str = r#"
-import linuxcnc, sys, time
-s = linuxcnc.stat(); c = linuxcnc.command()
-def poll():
-    global s
-    for _ in range(300):
-        try:
-            s.poll(); return
-        except Exception as e:
-            err = e; time.sleep(0.1); s = linuxcnc.stat()
-    raise err
-def wait(): c.wait_complete(20)
-def still():
-    for _ in range(600):
-        poll()
-        if s.interp_state == linuxcnc.INTERP_IDLE and s.queue == 0 and s.inpos: return
-        time.sleep(0.05)
-    raise SystemExit("motion did not stop")
-poll()
-c.state(linuxcnc.STATE_ESTOP_RESET); wait()
-c.state(linuxcnc.STATE_ON); wait()
-c.mode(linuxcnc.MODE_MANUAL); wait()
-c.home(-1); wait()
-for _ in range(300):
-    poll()
-    if all(s.homed[:s.joints]): break
-    time.sleep(0.1)
-else:
-    raise SystemExit("not homed")
-c.mode(linuxcnc.MODE_MDI); wait()
-for cmd in sys.argv[1:]:
-    c.mdi(cmd); wait(); time.sleep(0.2); still()
-    j = " ".join(repr(v) for v in s.joint_actual_position[:s.joints])
-    p = " ".join(repr(v) for v in s.actual_position[:9])
-    print("POSE", j, "|", p, flush=True)
-"#;
-
-/// Homes every joint, then runs the program file `argv[1]` in auto mode while `halsampler`
-/// writes the sampler's rows (the joints' commanded positions every servo period) to
-/// `argv[2]`, and stops recording once motion has been still for 0.5 s.
-const RUN_PROGRAM: &str = r#"
+/// The scripts' start: the `linuxcnc` module's status and command channels (`poll` retries
+/// until the status buffer is valid), then out of E-stop, on, and every joint homed.
+const HOME_ALL: &str = r#"
 import linuxcnc, sys, time, subprocess
 s = linuxcnc.stat(); c = linuxcnc.command()
 def poll():
@@ -90,6 +50,29 @@ for _ in range(300):
     time.sleep(0.1)
 else:
     raise SystemExit("not homed")
+"#;
+
+/// Homes every joint, then runs each argument as an MDI command and prints, once motion has
+/// stopped, `POSE <joints> | <position>` (mm and deg).
+const PROBE: &str = r#"
+def still():
+    for _ in range(600):
+        poll()
+        if s.interp_state == linuxcnc.INTERP_IDLE and s.queue == 0 and s.inpos: return
+        time.sleep(0.05)
+    raise SystemExit("motion did not stop")
+c.mode(linuxcnc.MODE_MDI); wait()
+for cmd in sys.argv[1:]:
+    c.mdi(cmd); wait(); time.sleep(0.2); still()
+    j = " ".join(repr(v) for v in s.joint_actual_position[:s.joints])
+    p = " ".join(repr(v) for v in s.actual_position[:9])
+    print("POSE", j, "|", p, flush=True)
+"#;
+
+/// Homes every joint, then runs the program file `argv[1]` in auto mode while `halsampler`
+/// writes the sampler's rows (the joints' commanded positions every servo period) to
+/// `argv[2]`, and stops recording once motion has been still for 0.5 s.
+const RUN_PROGRAM: &str = r#"
 c.mode(linuxcnc.MODE_AUTO); wait()
 out = open(sys.argv[2], "w")
 rec = subprocess.Popen(["halsampler", "-c", "0"], stdout=out)
@@ -342,8 +325,12 @@ pub fn start_with(config: &str, ini: &str, dir: &Path, halcmds: &[&str]) -> Head
         let exec = std::fs::Permissions::from_mode(0o777);
         std::fs::set_permissions(dir.join("idle_display"), exec).unwrap();
     }
-    std::fs::write(dir.join("probe.py"), PROBE).unwrap();
-    std::fs::write(dir.join("run_program.py"), RUN_PROGRAM).unwrap();
+    std::fs::write(dir.join("probe.py"), format!("{HOME_ALL}{PROBE}")).unwrap();
+    std::fs::write(
+        dir.join("run_program.py"),
+        format!("{HOME_ALL}{RUN_PROGRAM}"),
+    )
+    .unwrap();
     open_to_all(dir);
     let root = Command::new("id")
         .arg("-u")

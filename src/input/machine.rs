@@ -59,6 +59,10 @@ pub struct ControlSection {
     pub g83_above_r_mm: Option<f64>,
     /// G28/G30 without axis words: `"all"` axes return, or `"none"`.
     pub g28_without_axes: Option<ReferenceWithoutAxes>,
+    /// Dimension words without a decimal point (`Z50`): `"increments"` (0.001 mm, 0.0001
+    /// in, 0.001 deg: Fanuc parameter 3401#0 = 0, Haas Setting 162 off) or `"units"` (DPI
+    /// = 1, Setting 162 on). Absent: the dialect's default (Fanuc, Haas: increments).
+    pub whole_numbers: Option<WholeNumbersKey>,
 }
 
 impl Default for ControlSection {
@@ -70,6 +74,7 @@ impl Default for ControlSection {
             g83_clearance_mm: None,
             g83_above_r_mm: None,
             g28_without_axes: None,
+            whole_numbers: None,
         }
     }
 }
@@ -80,6 +85,14 @@ impl Default for ControlSection {
 pub enum ReferenceWithoutAxes {
     All,
     None,
+}
+
+/// The `whole_numbers` key's values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WholeNumbersKey {
+    Increments,
+    Units,
 }
 
 /// Longest peck retract or clearance accepted, mm (Haas Setting 22's range is 0 to 29.9999 in).
@@ -107,6 +120,10 @@ impl ControlSection {
             reference_all_without_axes: self
                 .g28_without_axes
                 .map(|r| r == ReferenceWithoutAxes::All),
+            whole_numbers: self.whole_numbers.map(|w| match w {
+                WholeNumbersKey::Increments => ngc::WholeNumbers::Increments,
+                WholeNumbersKey::Units => ngc::WholeNumbers::Units,
+            }),
         })
     }
 }
@@ -199,7 +216,7 @@ pub struct MachineFile {
     /// G-code dialect of this machine's control, the default for its scenarios:
     /// "linuxcnc", "fanuc" (default), "haas", "heidenhain" or "siemens".
     #[serde(default)]
-    pub dialect: ngc::Dialect,
+    pub dialect: Option<ngc::Dialect>,
     /// The modal state the control powers up in.
     #[serde(default)]
     pub start: StartSection,
@@ -318,6 +335,11 @@ pub struct Machine {
     pub tool: ToolConfig,
     /// Default G-code dialect of the control.
     pub dialect: ngc::Dialect,
+    /// The machine file names its control's dialect (`dialect`): the control's factory
+    /// settings then hold where `[control]` is silent (a Fanuc's whole numbers in the
+    /// least input increment); a machine that names none is a generic control that reads
+    /// `Z50` as 50 mm.
+    pub dialect_named: bool,
     /// The modal state the control powers up in, as far as the file gives it.
     pub start: StartSection,
     /// The control's parameters (`[control]`), validated.
@@ -490,7 +512,8 @@ impl Machine {
             scene,
             scene_given,
             tool: file.tool,
-            dialect: file.dialect,
+            dialect: file.dialect.unwrap_or_default(),
+            dialect_named: file.dialect.is_some(),
             start: file.start,
             control: file.control,
             reader_control,

@@ -188,7 +188,17 @@ fn machine_options(r: &ReaderSection, machine: &Machine) -> ngc::Options {
                 pivot_mm: machine.kinematics.pivot_mm.into(),
             }),
         aligner: tool_aligner(machine),
-        control: machine.reader_control,
+        control: ngc::ControlParameters {
+            // A generic machine (no dialect named by the machine or the scenario) reads a
+            // dimension without a decimal point in whole units; a named Fanuc or Haas, in
+            // its factory setting's increments (docs/gcode.md).
+            whole_numbers: machine
+                .reader_control
+                .whole_numbers
+                .or((r.dialect.is_none() && !machine.dialect_named)
+                    .then_some(ngc::WholeNumbers::Units)),
+            ..machine.reader_control
+        },
         ..ngc::Options::default()
     };
     let m = &machine.start;

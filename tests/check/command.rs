@@ -459,7 +459,7 @@ fn an_inch_program_read_as_mm_that_leaves_the_travel_is_told_it_would_fit_in_inc
     // Written in inches, no G20: read in mm (the start unit), Y runs 3..6 mm, below the
     // lowered Y minimum of 50 mm. Read in inches, Y runs 76.2..152.4 mm, X 25.4..101.6,
     // Z 12.7..50.8: all within the travel (X ±400, Y 50..350, Z -150..450).
-    let nc = "G90 G94 G17\nG00 X1 Y3 Z2\nG01 Z0.5 F20\nG01 X4 Y6\nG00 Z2\nM30\n";
+    let nc = "G90 G94 G17\nG00 X1. Y3. Z2.\nG01 Z0.5 F20\nG01 X4. Y6.\nG00 Z2.\nM30\n";
     let body = "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"fanuc\"\n\
                 [machine_overrides.axes.Y]\nmin = 50.0\n";
     let (code, v) = check("inch_as_mm", body, Some(nc), &[]);
@@ -487,7 +487,7 @@ fn an_inch_program_read_as_mm_that_leaves_the_travel_is_told_it_would_fit_in_inc
     // An mm program read as inches (the control starts in inch): X 10..20 reads as
     // 254..508 mm, past X's 400 mm maximum; read in mm X 10..20, Y 2, Z 5 fit, and the
     // note says ÷25.4.
-    let nc = "G90 G94 G17\nG00 X10 Y2 Z5\nG01 X20 F20\nM30\n";
+    let nc = "G90 G94 G17\nG00 X10. Y2. Z5.\nG01 X20. F20\nM30\n";
     let body =
         "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"fanuc\"\nstart_units = \"inch\"\n";
     let (code, v) = check("mm_as_inch", body, Some(nc), &[]);

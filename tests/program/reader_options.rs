@@ -119,7 +119,11 @@ fn tilted_planes_and_dynamic_work_offsets_use_the_machine_kinematics() {
     let kin = common::load_trt_ac().kinematics;
     // Haas G254 on the trt-ac machine: the programmed point (10, 5, 2) rides on the table,
     // so after A30 C90 it is where mtsim's own forward chain puts that table point.
-    std::fs::write(dir.join("g254.nc"), "G254\nG0 X10 Y5 Z2\nA30 C90\nM30\n").unwrap();
+    std::fs::write(
+        dir.join("g254.nc"),
+        "G254\nG0 X10. Y5. Z2.\nA30. C90.\nM30\n",
+    )
+    .unwrap();
     let scenario = Scenario::load(&write_scenario(
         &dir,
         &trt_ac(),
@@ -139,7 +143,7 @@ fn tilted_planes_and_dynamic_work_offsets_use_the_machine_kinematics() {
     // kinematics positions A and C for that tool axis.
     std::fs::write(
         dir.join("g682.nc"),
-        "G68.2 X0 Y0 Z0 I30 J40 K0\nG53.1\nM30\n",
+        "G68.2 X0 Y0 Z0 I30. J40. K0\nG53.1\nM30\n",
     )
     .unwrap();
     let scenario = Scenario::load(&write_scenario(
@@ -253,7 +257,7 @@ fn g28_takes_the_machine_files_reference_or_is_refused_naming_the_key() {
     let dir = scratch("reader", "g28");
     std::fs::write(
         dir.join("p.nc"),
-        "G21 G90\nG0 X10 Y20 Z5\nG91 G28 Z0\nG90\nM30\n",
+        "G21 G90\nG0 X10. Y20. Z5.\nG91 G28 Z0\nG90\nM30\n",
     )
     .unwrap();
     let body = "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"fanuc\"\n";
@@ -285,7 +289,7 @@ fn a_tcp_cancel_takes_the_machines_axis_positions() {
     let dir = scratch("reader", "tcp-cancel");
     std::fs::write(
         dir.join("p.nc"),
-        "G21 G90\nG0 X0 Y0 Z50 A0 C0\nG43.4\nG1 X5 Y10 Z2 A30 C40 F500\nG49\nG1 Z20\nM30\n",
+        "G21 G90\nG0 X0 Y0 Z50. A0 C0\nG43.4\nG1 X5. Y10. Z2. A30. C40. F500\nG49\nG1 Z20.\nM30\n",
     )
     .unwrap();
     let scenario = Scenario::load(&write_scenario(
@@ -317,7 +321,7 @@ fn the_machine_files_control_section_sets_the_g83_clearance() {
     let dir = scratch("reader", "control");
     std::fs::write(
         dir.join("p.nc"),
-        "G21 G90 G17\nG0 X0 Y0 Z50\nG98 G83 X5 Y0 Z-7 R2 Q3 F100\nG80\nM30\n",
+        "G21 G90 G17\nG0 X0 Y0 Z50.\nG98 G83 X5. Y0 Z-7. R2. Q3. F100\nG80\nM30\n",
     )
     .unwrap();
     let text = std::fs::read_to_string(common::machine("vmc-3axis")).unwrap();
@@ -353,4 +357,33 @@ fn the_machine_files_control_section_sets_the_g83_clearance() {
         err.contains(&format!("m.toml:{line}:")) && err.contains("g73_retract_mm = -0.5"),
         "{err}"
     );
+}
+
+/// `Z50` (no decimal point): on the bundled VMC, whose file names no dialect, 50 mm; with
+/// the scenario naming the fanuc dialect, 0.050 mm (parameter 3401#0 = 0, the manual's
+/// default); with the machine file's `[control] whole_numbers = "units"`, 50 mm again.
+#[test]
+fn a_whole_number_is_a_least_increment_only_where_a_fanuc_is_named() {
+    let dir = scratch("reader", "whole-numbers");
+    std::fs::write(dir.join("p.nc"), "G21 G90\nG0 X10 Y20. Z50\nM30\n").unwrap();
+    let vmc = common::machine("vmc-3axis");
+    let z = |machine: &str, body: &str| {
+        let scenario = Scenario::load(&write_scenario(&dir, machine, body)).unwrap();
+        let got = ends(&scenario, &dir.join("p.nc")).unwrap();
+        (got[0][0], got[0][1], got[0][2])
+    };
+    let generic = "[program]\nfile = \"p.nc\"\n";
+    let fanuc = "[program]\nfile = \"p.nc\"\n[reader]\ndialect = \"fanuc\"\n";
+    assert_eq!(z(&vmc, generic), (10.0, 20.0, 50.0));
+    let (x, y, zz) = z(&vmc, fanuc);
+    assert!((x - 0.010).abs() < 1e-12 && y == 20.0 && (zz - 0.050).abs() < 1e-12);
+    let text = std::fs::read_to_string(&vmc).unwrap();
+    let units = if text.contains("[control]") {
+        text.replace("[control]", "[control]\nwhole_numbers = \"units\"")
+    } else {
+        format!("{text}\n[control]\nwhole_numbers = \"units\"\n")
+    };
+    std::fs::write(dir.join("m.toml"), units).unwrap();
+    let machine = dir.join("m.toml").display().to_string();
+    assert_eq!(z(&machine, fanuc), (10.0, 20.0, 50.0));
 }

@@ -215,6 +215,10 @@ pub struct ControlParameters {
     /// G28/G30 without axis words: every axis returns (`Some(true)`) or none
     /// (`Some(false)`); `None`: the dialect's rule (LinuxCNC and Haas all, Fanuc none).
     pub reference_all_without_axes: Option<bool>,
+    /// Dimension words written without a decimal point (`Z50`): in the least input
+    /// increment or in whole units (Fanuc parameter 3401#0, Haas Setting 162). `None`: the
+    /// dialect's default (Fanuc and Haas: increments, with a warning), crate::decimal_point.
+    pub whole_numbers: Option<crate::WholeNumbers>,
 }
 
 /// LinuxCNC's fixed G73 retract and G83 clearance (0.010 in; its G-code manual), the
@@ -264,7 +268,13 @@ impl Default for Options {
             pockets: Vec::new(),
             reference_missing: [None, None],
             tcp_axes: None,
-            control: ControlParameters::default(),
+            // The library's plain reader takes `Z50` as 50 mm in every dialect (a Fanuc
+            // with parameter 3401#0 = 1); a machine file's `[control]` (crate mtsim) leaves
+            // it to the dialect's default, the manuals' least input increment.
+            control: ControlParameters {
+                whole_numbers: Some(crate::WholeNumbers::Units),
+                ..ControlParameters::default()
+            },
         }
     }
 }

@@ -18,6 +18,7 @@ pub(super) const TABLE: Table = Table {
     arc_turns: false,
     arc_radius: ArcRadiusRule::Absolute(FANUC_ARC_RADIUS_TOLERANCE_MM),
     zero_off_plane_offset: true,
+    arc_r_over_offsets: true,
     polar_words: false,
     rotated_work_systems: false,
     machine_m,
@@ -33,6 +34,7 @@ pub(super) const TABLE: Table = Table {
     modal_state_m70_m73: false,
     peck_settings: Some(("parameter 5114", "parameter 5115")),
     reference_all_without_axes: false,
+    whole_numbers_are_increments: true,
     macro_b: true,
 };
 

@@ -17,6 +17,7 @@ pub(super) const TABLE: Table = Table {
     g87_back_bore: false,
     peck_settings: Some(("Setting 22", "its G83 clearance")),
     reference_all_without_axes: true,
+    whole_numbers_are_increments: true,
     refusal,
     ..fanuc::TABLE
 };

@@ -20,6 +20,7 @@ pub(super) const TABLE: Table = Table {
     arc_turns: true,
     arc_radius: ArcRadiusRule::Linuxcnc,
     zero_off_plane_offset: false,
+    arc_r_over_offsets: false,
     polar_words: true,
     rotated_work_systems: true,
     machine_m: no_machine_m,
@@ -35,6 +36,7 @@ pub(super) const TABLE: Table = Table {
     modal_state_m70_m73: true,
     peck_settings: None,
     reference_all_without_axes: true,
+    whole_numbers_are_increments: false,
     macro_b: false,
 };
 

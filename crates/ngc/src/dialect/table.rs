@@ -33,6 +33,9 @@ pub(crate) struct Table {
     pub arc_turns: bool,
     /// How far the radii at the start and the end of an I J K arc may differ.
     pub arc_radius: ArcRadiusRule,
+    /// An arc with both R and I J K takes R and ignores I J K (Fanuc 0i, Haas); otherwise
+    /// an error (LinuxCNC).
+    pub arc_r_over_offsets: bool,
     /// An off-plane centre offset of zero (`K0` in G17) is accepted.
     pub zero_off_plane_offset: bool,
     /// Polar coordinates `@` `^` (LinuxCNC).
@@ -77,6 +80,9 @@ pub(crate) struct Table {
     /// G28/G30 without axis words send every axis to the reference position (LinuxCNC,
     /// Haas); otherwise they move no axis (Fanuc: only the axes named return).
     pub reference_all_without_axes: bool,
+    /// A dimension word without a decimal point is in the least input increment (Fanuc
+    /// parameter 3401#0 = 0, Haas Setting 162 off: their defaults); otherwise whole units.
+    pub whole_numbers_are_increments: bool,
 
     // Parameter and subprogram syntax.
     /// Fanuc macro B: `#1`-`#33` locals per call, `IF [..] GOTO`, `WHILE [..] DO`, `O`

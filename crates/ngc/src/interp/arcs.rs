@@ -128,7 +128,11 @@ impl Interp {
         let (su, sv) = (start[u], start[v]);
         let (eu, ev) = (end[u], end[v]);
         let mut center = [start[Axis::X], start[Axis::Y], start[Axis::Z]];
-        let offsets = (get(letter(u)), get(letter(v)));
+        let mut offsets = (get(letter(u)), get(letter(v)));
+        if self.dialect.table().arc_r_over_offsets && get('R').is_some() {
+            // Fanuc and Haas: "the arc specified by address R takes precedence".
+            offsets = (None, None);
+        }
         match (get('R'), offsets) {
             (Some(r), (Some(w), _) | (_, Some(w))) => {
                 let first = if r.span.0 < w.span.0 { w } else { r };

@@ -581,6 +581,35 @@ impl Interp {
     }
 
     /// The end of the program: the queued compensated moves end as at G40.
+    /// The modal state a block's words without a decimal point are scaled in
+    /// (crate::decimal_point): the units (the block's own G20/G21 first) and whether a
+    /// drilling cycle is in effect.
+    pub(crate) fn whole_number_context(
+        &self,
+        words: &[Word],
+    ) -> crate::decimal_point::BlockContext {
+        let units = words.iter().rev().find_map(|w| match (w.letter, w.value) {
+            ('G', v) if v == 20.0 => Some(true),
+            ('G', v) if v == 21.0 => Some(false),
+            _ => None,
+        });
+        crate::decimal_point::BlockContext {
+            inch: units.unwrap_or(self.inch),
+            cycle_modal: matches!(self.motion, Some(MotionMode::Cycle(_))),
+        }
+    }
+
+    /// The modal state the mirror image and scaling map a block's words in
+    /// (crate::mirror_scale); the block's own G90/G91 and plane are the map's to read.
+    pub(crate) fn mirror_scale_context(&self) -> crate::mirror_scale::Context {
+        crate::mirror_scale::Context {
+            absolute: self.absolute,
+            plane: self.plane,
+            arc_modal: matches!(self.motion, Some(MotionMode::Arc { .. })),
+            cycle_modal: matches!(self.motion, Some(MotionMode::Cycle(_))),
+        }
+    }
+
     pub fn finish(&mut self, queue: &mut VecDeque<Move>) {
         // As LinuxCNC's M2: the queue ends at the compensated point; a gouge found there
         // was already reported with the move that made it.

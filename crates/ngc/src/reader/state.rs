@@ -213,6 +213,12 @@ pub(crate) struct IsoReader {
     /// Lathe stock removal: the depth and retract of the two-block G71/G72 format's first
     /// block, and the last rough cycle's start and direction (for G70's return).
     pub(super) lathe: LatheState,
+    /// Dimension words without a decimal point are in the least input increment
+    /// (crate::decimal_point), and whether the warning has been given.
+    pub(super) whole_increments: bool,
+    pub(super) whole_warned: bool,
+    /// Fanuc G51.1 / Haas G101 mirror image and G51 scaling (crate::mirror_scale).
+    pub(super) mirror_scale: crate::mirror_scale::MirrorScale,
 }
 
 impl IsoReader {

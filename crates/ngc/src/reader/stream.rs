@@ -59,6 +59,12 @@ impl IsoReader {
             modal_remap: None,
             sticky: Default::default(),
             lathe: Default::default(),
+            whole_increments: match options.control.whole_numbers {
+                Some(w) => w == crate::WholeNumbers::Increments,
+                None => options.dialect.table().whole_numbers_are_increments,
+            },
+            whole_warned: false,
+            mirror_scale: Default::default(),
         }
     }
 
@@ -217,7 +223,10 @@ impl IsoReader {
                 }
                 Ok(())
             }
-            Lexed::Words { words, assigns } => {
+            Lexed::Words { mut words, assigns } => {
+                if self.whole_increments {
+                    self.scale_whole_numbers(line, &mut words, here);
+                }
                 if !assigns.is_empty() {
                     for (p, v) in &assigns {
                         self.interp.check_assign(line, p, *v)?;
@@ -226,6 +235,10 @@ impl IsoReader {
                     self.interp.parameters_changed();
                 }
                 if words.is_empty() {
+                    self.words = reuse(words);
+                    return Ok(());
+                }
+                if self.dialect.table().macro_b && self.mirror_scale_block(line, &mut words)? {
                     self.words = reuse(words);
                     return Ok(());
                 }
@@ -259,6 +272,43 @@ impl IsoReader {
                 Ok(())
             }
         }
+    }
+
+    /// Dimension words written without a decimal point, in the least input increment
+    /// (crate::decimal_point); a warning at the first nonzero one.
+    fn scale_whole_numbers(&mut self, line: &str, words: &mut [Word], here: Cursor) {
+        let context = self.interp.whole_number_context(words);
+        let first = crate::decimal_point::scale_whole_numbers(words, context);
+        if let (Some(word), false) = (first, self.whole_warned) {
+            self.whole_warned = true;
+            self.notices.push(crate::notice::Notice {
+                path: self.programs[here.file].path.clone(),
+                line: here.line,
+                message: crate::decimal_point::warning(&word, line, context),
+                warning: true,
+            });
+        }
+    }
+
+    /// The mirror image and scaling (crate::mirror_scale): true when the block set or
+    /// cancelled them (nothing more to do), else its words mapped where they are in effect.
+    fn mirror_scale_block(&mut self, line: &str, words: &mut [Word]) -> LineResult<bool> {
+        let haas = self.dialect == crate::options::Dialect::Haas;
+        let interp = &self.interp;
+        let here = || {
+            let p = interp.program_position();
+            [p[crate::Axis::X], p[crate::Axis::Y], p[crate::Axis::Z]]
+        };
+        if self.mirror_scale.command(line, words, haas, here)? {
+            return Ok(true);
+        }
+        if self.mirror_scale.active() {
+            let context = self.interp.mirror_scale_context();
+            self.mirror_scale.apply(line, words, context)?;
+        } else {
+            self.mirror_scale.note_unmapped(words);
+        }
+        Ok(false)
     }
 
     /// Interprets one block's words and follows its stop (end, call, return).

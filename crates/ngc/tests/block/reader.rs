@@ -539,7 +539,6 @@ fn inconsistent_arcs_are_errors_naming_the_line() {
             18,
             "`K1` is not in the arc plane G17 (XY)",
         ),
-        ("F100\nG2 X10 Y0 I5 R5\n", 2, 14, "both R and I J K"),
         (
             "F100\nG2 X10 Y0 R4.9\n",
             2,
@@ -555,6 +554,35 @@ fn inconsistent_arcs_are_errors_naming_the_line() {
     // Within the 1e-3 mm tolerance the arc is accepted.
     assert_eq!(read("F100 G2 X10.0009 Y0 I5 J0").len(), 1);
     assert_eq!(read("F100 G2 X10.0019 R5").len(), 1);
+}
+
+/// An arc with both R and I J K: Fanuc and Haas take R ("the arc specified by address R
+/// takes precedence, the other addresses are ignored"), LinuxCNC refuses it.
+#[test]
+fn an_arc_with_r_and_i_j_k_takes_r_on_fanuc_and_haas_and_is_an_error_on_linuxcnc() {
+    // From (0, 0) to (10, 0) with R5: the centre is (5, 0) whatever I5 J3 would say.
+    let text = "F100\nG2 X10 Y0 I5 J3 R5\n";
+    for dialect in [ngc::Dialect::Fanuc, ngc::Dialect::Haas] {
+        let options = ngc::Options {
+            dialect,
+            ..ngc::Options::default()
+        };
+        let moves: Vec<Move> = ngc::read_str_with(Path::new(PATH), text, &options)
+            .collect::<Result<_, _>>()
+            .unwrap();
+        match moves[0].motion {
+            Motion::Arc { center_mm, .. } => assert_eq!((center_mm[0], center_mm[1]), (5.0, 0.0)),
+            ref m => panic!("{dialect:?}: expected an arc, got {m:?}"),
+        }
+    }
+    let options = ngc::Options {
+        dialect: ngc::Dialect::Linuxcnc,
+        ..ngc::Options::default()
+    };
+    let err = ngc::read_str_with(Path::new(PATH), text, &options)
+        .find_map(|m| m.err())
+        .unwrap();
+    assert!(err.to_string().contains("both R and I J K"), "{err}");
 }
 
 #[test]

@@ -34,7 +34,7 @@ fn run(text: &str, o: &Options) -> (Vec<(Motion, f64)>, Vec<String>) {
 }
 
 /// A 3-peck hole from R2 to Z-7 with Q3: its Z levels after the approach to R.
-const HOLE: &str = "G21 G90 G17\nG0 X0 Y0 Z50\nG98 G{c} X5 Y0 Z-7 R2 Q3 F100\nG80\n";
+const HOLE: &str = "G21 G90 G17\nG0 X0 Y0 Z50.\nG98 G{c} X5. Y0 Z-7. R2. Q3. F100\nG80\n";
 
 fn hole(code: u32, o: &Options) -> (Vec<(Motion, f64)>, Vec<String>) {
     let (z, notes) = run(&HOLE.replace("{c}", &code.to_string()), o);
@@ -140,7 +140,7 @@ fn linuxcnc_pecks_at_its_fixed_clearance_without_a_notice() {
 
 #[test]
 fn g28_without_axis_words_moves_nothing_on_a_fanuc_and_everything_on_a_haas() {
-    let program = "G21 G90\nG0 X1 Y2 Z3\nG28\nG0 X4\n";
+    let program = "G21 G90\nG0 X1. Y2. Z3.\nG28\nG0 X4.\n";
     let ends = |o: &Options| -> Vec<[f64; 3]> {
         read_str_with(Path::new("t.nc"), program, o)
             .map(|m| m.unwrap())

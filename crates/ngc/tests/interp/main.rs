@@ -7,6 +7,7 @@ mod control_parameters;
 mod interpreter;
 mod lathe;
 mod lathe_cycles;
+mod mirror_scale;
 mod remap_glue;
 mod secondary_axes;
 mod tilted;

@@ -289,6 +289,47 @@ fn haas_g70_drills_the_bolt_hole_circle() {
     }
 }
 
+/// `Z-5` on a Fanuc (parameter 3401#0 = 0) or a Haas (Setting 162 off) is -0.005 mm: a
+/// dimension without a decimal point is in the least input increment (0.001 mm, 0.0001 in
+/// under G20), `G4 X1500` is 1,500 ms, and the first word so scaled is named in a warning;
+/// with the machine set to whole units (`[control] whole_numbers = "units"`) the same
+/// words are mm, in and s, with no warning.
+#[test]
+fn dimensions_without_a_decimal_point_are_read_in_the_controls_increment() {
+    for name in ["fanuc-no-decimal-point.nc", "haas-no-decimal-point.nc"] {
+        for (whole, z, x, dwell_s, x_inch) in [
+            (ngc::WholeNumbers::Increments, -0.005, 25.0, 1.5, 0.1),
+            (ngc::WholeNumbers::Units, -5.0, 25000.0, 1500.0, 1000.0),
+        ] {
+            let mut o = options(name, true);
+            o.control.whole_numbers = (whole == ngc::WholeNumbers::Units).then_some(whole);
+            let mut it = ngc::read_file_with(&trap(name), &o).unwrap();
+            let moves: Vec<Move> = it.by_ref().map(|m| m.unwrap()).collect();
+            let at = |line: usize| moves.iter().find(|m| m.line == line).unwrap();
+            assert!((at(5).end[Axis::Z] - z).abs() < TOL, "{name} {whole:?}");
+            assert!((at(6).end[Axis::X] - x).abs() < TOL, "{name} {whole:?}");
+            assert!(
+                matches!(at(7).motion, ngc::Motion::Dwell { seconds } if (seconds - dwell_s).abs() < TOL),
+                "{name} {whole:?}: {:?}",
+                at(7).motion
+            );
+            assert!(
+                (at(9).end[Axis::X] - x_inch * 25.4).abs() < TOL,
+                "{name} {whole:?}"
+            );
+            let warned = it.notices().iter().any(|n| {
+                n.warning && n.line == 5 && n.message.contains("`Z-5` has no decimal point")
+            });
+            assert_eq!(
+                warned,
+                whole == ngc::WholeNumbers::Increments,
+                "{name} {whole:?}: {:?}",
+                it.notices()
+            );
+        }
+    }
+}
+
 /// Every file of the folder is one of the traps above, so none is left unchecked.
 #[test]
 fn every_trap_file_is_checked() {

@@ -19,6 +19,7 @@ pub(super) const TABLE: Table = Table {
     arc_radius: ArcRadiusRule::Absolute(FANUC_ARC_RADIUS_TOLERANCE_MM),
     zero_off_plane_offset: true,
     arc_r_over_offsets: true,
+    m98_repeats_in_p: true,
     polar_words: false,
     rotated_work_systems: false,
     machine_m,

@@ -12,6 +12,7 @@ pub(super) const TABLE: Table = Table {
     machine_m,
     no_motion_g,
     local_subprogram_m97: true,
+    m98_repeats_in_p: false,
     m16_tool_change: true,
     g53_absolute_in_g91: true,
     g87_back_bore: false,

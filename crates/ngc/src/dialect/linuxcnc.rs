@@ -21,6 +21,7 @@ pub(super) const TABLE: Table = Table {
     arc_radius: ArcRadiusRule::Linuxcnc,
     zero_off_plane_offset: false,
     arc_r_over_offsets: false,
+    m98_repeats_in_p: false,
     polar_words: true,
     rotated_work_systems: true,
     machine_m: no_machine_m,

@@ -52,6 +52,10 @@ pub(crate) struct Table {
     pub local_subprogram_m97: bool,
     /// M16 changes the tool as M06 does (Haas mills' alternative tool-change code).
     pub m16_tool_change: bool,
+    /// `M98 P` of more than 4 digits holds the repeat count before the 4-digit program
+    /// number (Fanuc); otherwise P is the program number alone (Haas: 5-digit numbers, L
+    /// repeats).
+    pub m98_repeats_in_p: bool,
     /// D and H words stand on their own (Fanuc family): D selects the cutter offset a later
     /// G41/G42 uses, H the length offset (applied at once while G43/G44 is in effect).
     pub offset_words_alone: bool,

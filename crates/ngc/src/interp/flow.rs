@@ -69,9 +69,20 @@ impl Interp {
                         )
                         .help("set dialect = \"fanuc\" for Fanuc programs"));
                     }
-                    let repeats = b.get('L').map_or(1, |l| l.value.round() as u64);
+                    let mut program = p.value.round() as u64;
+                    let mut repeats = b.get('L').map_or(1, |l| l.value.round() as u64);
+                    let digits = p.number.trim_start_matches(['+', '-']).len();
+                    if self.dialect.table().m98_repeats_in_p
+                        && b.get('L').is_none()
+                        && (digits > 4 || program > 9999)
+                    {
+                        // Fanuc `M98 Prrrrpppp`: the repeat count, then the 4-digit program
+                        // number (0i-MD "Subprogram": `M98 P30100` runs O0100 three times).
+                        repeats = (program / 10_000).max(1);
+                        program %= 10_000;
+                    }
                     return Ok(Stop::Call {
-                        label: format!("{}", p.value.round() as u64),
+                        label: format!("{program}"),
                         repeats,
                         args: Vec::new(),
                         locals: false,

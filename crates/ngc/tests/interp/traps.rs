@@ -330,6 +330,19 @@ fn dimensions_without_a_decimal_point_are_read_in_the_controls_increment() {
     }
 }
 
+/// Fanuc `M98 P30100` runs O0100 three times (the repeat count, then the 4-digit
+/// program number): X steps 1, 2, 3 mm.
+#[test]
+fn fanuc_m98_p_holds_the_repeat_count_before_the_program_number() {
+    let moves = right("fanuc-m98-repeats.nc");
+    let xs: Vec<f64> = moves
+        .iter()
+        .filter(|m| m.line == 8)
+        .map(|m| m.end[Axis::X])
+        .collect();
+    assert_eq!(xs, [1.0, 2.0, 3.0]);
+}
+
 /// Every file of the folder is one of the traps above, so none is left unchecked.
 #[test]
 fn every_trap_file_is_checked() {

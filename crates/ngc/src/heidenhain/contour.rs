@@ -163,6 +163,14 @@ pub(super) fn m_word(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> Lin
                 &format!("M{n} (Heidenhain) is accepted and not simulated"),
             );
         }
+        92 => {
+            return Err(LineError::new(
+                span,
+                "`M92`: the block's coordinates are relative to the machine datum M92, a position the machine tool builder sets in the control's machine parameters, which mtsim's machine file does not carry (KP \"Miscellaneous functions for coordinate data: M91/M92\")",
+                "Heidenhain M92 not supported",
+            )
+            .help("post the move with M91 (machine coordinates) or in the workpiece frame"))
+        }
         _ => {
             return Err(LineError::new(
                 span,

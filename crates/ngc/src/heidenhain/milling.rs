@@ -1,5 +1,5 @@
-//! The milling cycles posts write for holes and pockets: 208 BORE MILLING and 252 CIRCULAR
-//! POCKET, as G0/G1/G2/G3 words about the position the cycle is called at (our design, from
+//! The milling cycles posts write for holes and pockets: 208 BORE MILLING, 251 RECTANGULAR
+//! POCKET and 252 CIRCULAR POCKET, as G0/G1/G2/G3 words about the position the cycle is called at (our design, from
 //! the geometry the TNC 640 cycle programming manual gives, "Cycles: drilling" and "Cycles:
 //! pocket milling"; the iTNC 530 manual's sections are the same).
 //!
@@ -18,6 +18,11 @@
 //!      on a line out from the one before, at F Q207, then back to c ─► walls: circle
 //!      of radius Q223/2 − ρ, per finishing infeed Q338 (0: one, at Q201), at F Q385 ─►
 //!      floor (Q369 > 0): circles k, 2k, … to Q223/2 − ρ at Q201 ─► FMAX to s + a, Q204
+//! 251: as 252 about the pocket's centre (Q367: the call position is the centre or a
+//!      corner; Q224 turns the pocket about the call position) with rounded rectangles
+//!      for circles: the wall path has half sides Q218/2 − ρ, Q219/2 − ρ and corner radius
+//!      max(Q220 − ρ, 0); the clearing rectangles lie k, 2k, … inside it, innermost first,
+//!      each from the middle of its +X side
 //! ```
 //!
 //! Our simplifications, which keep every move inside the finished pocket: the tool
@@ -34,7 +39,7 @@ use super::state::{Block, Reader};
 /// one step): a real cycle makes far fewer.
 const MAX_PASSES: f64 = 10_000.0;
 
-/// One call of cycle `n` (208 or 252) at the current position.
+/// One call of cycle `n` (208, 251 or 252) at the current position.
 pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
     let q = |k| r.q.q(k);
     let depth = q(201);
@@ -66,7 +71,7 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
             "no tool radius",
         );
     }
-    let g = Geometry {
+    let mut g = Geometry {
         c: r.path.xy(),
         s: q(203),
         top: q(203) + q(200),
@@ -77,7 +82,14 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
     };
     match n {
         208 => bore_milling(r, b, &g),
-        _ => circular_pocket(r, b, &g),
+        251 => {
+            let shape = rectangle(r, b, &mut g)?;
+            pocket(r, b, &g, 251, shape)
+        }
+        _ => {
+            let shape = Shape::Circle(r.q.q(223) / 2.0 - g.rho);
+            pocket(r, b, &g, 252, shape)
+        }
     }?;
     rapid_z(r, b, g.top);
     if g.second > g.top {
@@ -161,29 +173,28 @@ fn bore_milling(r: &mut Reader, b: &Block, g: &Geometry) -> LineResult<()> {
 /// Q369 the side and floor allowances, Q202 the plunging depth, Q338 the finishing infeed,
 /// Q370 the path overlap (stepover Q370 ρ), Q206 / Q207 / Q385 the plunging, milling and
 /// finishing feeds.
-fn circular_pocket(r: &mut Reader, b: &Block, g: &Geometry) -> LineResult<()> {
+fn pocket(r: &mut Reader, b: &Block, g: &Geometry, n: u32, shape: Shape) -> LineResult<()> {
     let q = |k| r.q.q(k);
     let err = |m: String, label: &str| Err(LineError::new(b.span(0), m, label));
     let op = q(215);
     if op != 0.0 && op != 1.0 && op != 2.0 {
         return err(
-            format!("cycle 252: Q215 = {op}: expected 0 (roughing and finishing), 1 (roughing) or 2 (finishing)"),
+            format!("cycle {n}: Q215 = {op}: expected 0 (roughing and finishing), 1 (roughing) or 2 (finishing)"),
             "bad Q215",
         );
     }
     if q(366) != 0.0 {
-        return err(format!("cycle 252 with plunging strategy Q366 = {} (helical or reciprocating): not supported, it needs the tool table's plunge angle ANGLE, which mtsim's tool table does not carry (TNC 640 cycle programming manual, \"Cycle 252\", Q366): expected Q366 = 0 (vertical plunge)", q(366)), "plunging strategy");
+        return err(format!("cycle {n} with plunging strategy Q366 = {} (helical or reciprocating): not supported, it needs the tool table's plunge angle ANGLE, which mtsim's tool table does not carry (TNC 640 cycle programming manual, \"Cycle {n}\", Q366): expected Q366 = 0 (vertical plunge)", q(366)), "plunging strategy");
     }
     let (side, floor) = (q(368).max(0.0), q(369).max(0.0));
     let (f_plunge, f_mill) = (q(206), q(207));
     let f_finish = if q(385) > 0.0 { q(385) } else { f_mill };
     if f_plunge <= 0.0 || f_mill <= 0.0 {
-        return err(format!("cycle 252: plunging feed Q206 = {f_plunge}, milling feed Q207 = {f_mill}: expected both positive"), "no feed");
+        return err(format!("cycle {n}: plunging feed Q206 = {f_plunge}, milling feed Q207 = {f_mill}: expected both positive"), "no feed");
     }
-    let outer = q(223) / 2.0 - g.rho;
-    let rough = outer - side;
-    if rough <= 0.0 {
-        return err(format!("cycle 252: pocket diameter Q223 = {} less the side allowance Q368 is not wider than the tool (Ø{}): expected a larger pocket", q(223), 2.0 * g.rho), "pocket smaller than the tool");
+    let outer = shape.half_width();
+    if outer - side <= 0.0 {
+        return err(format!("cycle {n}: the pocket less the side allowance Q368 = {side} is not wider than the tool (Ø{}): expected a larger pocket", 2.0 * g.rho), "pocket smaller than the tool");
     }
     let overlap = if q(370) > 0.0 { q(370) } else { 1.0 };
     let step = (overlap * g.rho).min(2.0 * g.rho);
@@ -202,7 +213,7 @@ fn circular_pocket(r: &mut Reader, b: &Block, g: &Geometry) -> LineResult<()> {
     };
     if outer / step > MAX_PASSES {
         return err(
-            format!("cycle 252: path overlap Q370 = {overlap}: more than {MAX_PASSES} circles"),
+            format!("cycle {n}: path overlap Q370 = {overlap}: more than {MAX_PASSES} circles"),
             "bad Q370",
         );
     }
@@ -210,11 +221,11 @@ fn circular_pocket(r: &mut Reader, b: &Block, g: &Geometry) -> LineResult<()> {
     let c = g.c;
     if op != 2.0 {
         let Some(zs) = levels(g.s, g.bottom + floor, plunge) else {
-            return err(format!("cycle 252: plunging depth Q202 = {plunge}: expected a positive depth, at most {MAX_PASSES} levels"), "bad Q202");
+            return err(format!("cycle {n}: plunging depth Q202 = {plunge}: expected a positive depth, at most {MAX_PASSES} levels"), "bad Q202");
         };
         for z in zs {
             line(r, b, [c[0], c[1], z], f_plunge);
-            rings(r, b, g, z, rough, step, f_mill);
+            shape.rings(r, b, g, z, side, step, f_mill);
         }
     }
     let finishing = op == 2.0 || (op == 0.0 && (side > 0.0 || floor > 0.0));
@@ -227,20 +238,167 @@ fn circular_pocket(r: &mut Reader, b: &Block, g: &Geometry) -> LineResult<()> {
         let Some(zs) = levels(g.s, g.bottom, by) else {
             return err(
                 format!(
-                    "cycle 252: finishing infeed Q338 = {fin_infeed}: at most {MAX_PASSES} levels"
+                    "cycle {n}: finishing infeed Q338 = {fin_infeed}: at most {MAX_PASSES} levels"
                 ),
                 "bad Q338",
             );
         };
         for z in zs {
             line(r, b, [c[0], c[1], z], f_plunge);
-            rings(r, b, g, z, outer, 2.0 * outer, f_finish);
+            shape.rings(r, b, g, z, 0.0, 2.0 * outer, f_finish);
         }
         if op == 2.0 || floor > 0.0 {
-            rings(r, b, g, g.bottom, outer, step, f_finish);
+            shape.rings(r, b, g, g.bottom, 0.0, step, f_finish);
         }
     }
     Ok(())
+}
+
+/// A pocket's wall as the tool centre runs along it (no allowance): a circle of radius
+/// Q223/2 − ρ, or a rectangle of half sides `a` (along the pocket's X), `b`, corner radius
+/// `corner`, turned by `rot_deg` about the centre.
+enum Shape {
+    Circle(f64),
+    Rect {
+        a: f64,
+        b: f64,
+        corner: f64,
+        rot_deg: f64,
+    },
+}
+
+impl Shape {
+    /// Half the narrowest width of the tool centre's area.
+    fn half_width(&self) -> f64 {
+        match *self {
+            Shape::Circle(radius) => radius,
+            Shape::Rect { a, b, .. } => a.min(b),
+        }
+    }
+
+    /// The clearing at `z` of the area `allow` inside the wall path, at stepover `step`,
+    /// from the centre out and back to the centre.
+    fn rings(
+        &self,
+        r: &mut Reader,
+        b: &Block,
+        g: &Geometry,
+        z: f64,
+        allow: f64,
+        step: f64,
+        f: f64,
+    ) {
+        match *self {
+            Shape::Circle(radius) => rings(r, b, g, z, radius - allow, step, f),
+            Shape::Rect {
+                a,
+                b: half_b,
+                corner,
+                rot_deg,
+            } => {
+                let (a, hb) = (a - allow, half_b - allow);
+                let corner = (corner - allow).max(0.0);
+                let rot = rot_deg.to_radians();
+                let world = |u: f64, v: f64| {
+                    let (s, c) = rot.sin_cos();
+                    [g.c[0] + c * u - s * v, g.c[1] + s * u + c * v]
+                };
+                let m = a.min(hb);
+                let last = ((m - 1e-9) / step).floor().max(0.0) as u64;
+                for j in (0..=last).rev() {
+                    let d = j as f64 * step;
+                    rounded_rect(
+                        r,
+                        b,
+                        g,
+                        z,
+                        [a - d, hb - d, (corner - d).max(0.0)],
+                        &world,
+                        f,
+                    );
+                }
+                line(r, b, [g.c[0], g.c[1], z], f);
+            }
+        }
+    }
+}
+
+/// One rounded rectangle of half sides `s[0]`, `s[1]` and corner radius `s[2]` at `z`,
+/// from the middle of its +X side around (counter-clockwise when `g.ccw`) and back there,
+/// reached on a line from where the tool is; `world` maps the pocket's (u, v) to X Y.
+fn rounded_rect(
+    r: &mut Reader,
+    b: &Block,
+    g: &Geometry,
+    z: f64,
+    s: [f64; 3],
+    world: &dyn Fn(f64, f64) -> [f64; 2],
+    f: f64,
+) {
+    let [a, hb, rc] = s;
+    // Clockwise: the same path mirrored in v.
+    let m = if g.ccw { 1.0 } else { -1.0 };
+    let to = |r: &mut Reader, u: f64, v: f64| {
+        let p = world(u, m * v);
+        let here = r.path.pos;
+        if (p[0] - here[0]).hypot(p[1] - here[1]) > 1e-9 || (z - here[2]).abs() > 1e-9 {
+            line(r, b, [p[0], p[1], z], f);
+        }
+    };
+    let round = |r: &mut Reader, u: f64, v: f64, cu: f64, cv: f64| {
+        if rc > 1e-9 {
+            let p = world(u, m * v);
+            arc(r, b, g.ccw, [p[0], p[1], z], world(cu, m * cv), f);
+        }
+    };
+    to(r, a, 0.0);
+    for (su, sv) in [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)] {
+        // Along the side to the corner's arc, then the arc (quarter turn) about its centre.
+        let (cu, cv) = (su * (a - rc), sv * (hb - rc));
+        if su * sv > 0.0 {
+            to(r, su * a, cv);
+            round(r, cu, sv * hb, cu, cv);
+        } else {
+            to(r, cu, sv * hb);
+            round(r, su * a, cv, cu, cv);
+        }
+    }
+    to(r, a, 0.0);
+}
+
+/// Cycle 251 RECTANGULAR POCKET (TNC 640 cycle programming manual, "Cycle 251"): Q218
+/// and Q219 the sides along X and Y, Q220 the corner radius, Q224 the rotation about the
+/// call position, Q367 where the call position lies (0 the centre, 1 the lower left, 2 the
+/// lower right, 3 the upper right, 4 the upper left corner). Moves `g.c` to the centre.
+fn rectangle(r: &mut Reader, b: &Block, g: &mut Geometry) -> LineResult<Shape> {
+    let q = |k| r.q.q(k);
+    let (len, wid, rot_deg) = (q(218), q(219), q(224));
+    let at = match q(367) {
+        p if p == 0.0 => [0.0, 0.0],
+        p if p == 1.0 => [1.0, 1.0],
+        p if p == 2.0 => [-1.0, 1.0],
+        p if p == 3.0 => [-1.0, -1.0],
+        p if p == 4.0 => [1.0, -1.0],
+        p => {
+            return Err(LineError::new(
+                b.span(0),
+                format!(
+                    "cycle 251: pocket position Q367 = {p}: expected 0 (centre) or 1-4 (a corner)"
+                ),
+                "bad Q367",
+            ))
+        }
+    };
+    let (u, v) = (at[0] * len / 2.0, at[1] * wid / 2.0);
+    let (s, c) = rot_deg.to_radians().sin_cos();
+    g.c = [g.c[0] + c * u - s * v, g.c[1] + s * u + c * v];
+    let corner = q(220).max(g.rho) - g.rho;
+    Ok(Shape::Rect {
+        a: len / 2.0 - g.rho,
+        b: wid / 2.0 - g.rho,
+        corner: corner.min(len.min(wid) / 2.0 - g.rho).max(0.0),
+        rot_deg,
+    })
 }
 
 /// At height `z` from the centre: circles of radius `step`, 2 `step`, … and `max` last,

@@ -2,7 +2,7 @@
 //! TNC posts, and hand-written ones): `BLK FORM`, `TOOL CALL … DL DR`, M91, FMAX, M3/M8,
 //! `M140 MB MAX`, `CYCL DEF 32`, `LBL`/`CALL LBL REP`, FN 9-12 jumps, `PLANE SPATIAL …
 //! TURN`/`MOVE`/`PLANE RESET STAY`, `FUNCTION TCPM`/M128, cycles 200, 208, 252 with
-//! `CYCL CALL`, `M99` and `CYCL CALL PAT`, `STOP`, `;` comments, `*` and `/` lines (the
+//! `CYCL CALL`, `M99` and `CYCL CALL PAT`, 251, `STOP`, `;` comments, `*` and `/` lines (the
 //! programs in tests/data/klartext_posts/). Each is read with the moves worked out by hand
 //! in its test, or refused by name at its line.
 
@@ -316,4 +316,33 @@ fn mastercam_skip_stop_rnd_and_chf() {
     assert!(same(&feed_ends(&m), &want), "{:?}", feed_ends(&m));
     let a = arcs(&m);
     assert!(a.len() == 1 && a[0].0 && near([a[0].1[0], a[0].1[1], a[0].2], [20.0, 5.0, 5.0]));
+}
+
+#[test]
+fn a_coordinate_written_nan_is_refused_as_a_fault_of_the_post() {
+    let text =
+        "0 BEGIN PGM P MM\n1 TOOL CALL 1 Z S1000\n2 L Xnan Ynan Znan FMAX M9\n3 END PGM P MM\n";
+    let (line, msg) = read(text, &opts()).unwrap_err();
+    assert_eq!(line, 3);
+    assert!(
+        msg.contains("`Xnan`") && msg.contains("fault of the post"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn mastercam_rectangular_pocket_251_up_cut_is_clockwise() {
+    let m = read(post!("14_mastercam_pocket_251"), &opts()).unwrap();
+    // 40 × 30 about (50, 50), corner radius 5 = the tool's radius: a sharp wall path of
+    // half sides 15 × 10; stepover 5: the rectangle 10 × 5 first; Q351 = -1: clockwise,
+    // so from the middle of the +X side down first. One level at -3 (roughing only).
+    let mut want = vec![[50.0, 50.0, -3.0]];
+    for (a, b) in [(10.0, 5.0), (15.0, 10.0)] {
+        for (u, v) in [(a, 0.0), (a, -b), (-a, -b), (-a, b), (a, b), (a, 0.0)] {
+            want.push([50.0 + u, 50.0 + v, -3.0]);
+        }
+    }
+    want.push([50.0, 50.0, -3.0]);
+    assert!(same(&feed_ends(&m), &want), "{:?}", feed_ends(&m));
+    assert!(arcs(&m).is_empty());
 }

@@ -1,8 +1,10 @@
-//! The Klartext milling cycles 208 BORE MILLING and 252 CIRCULAR POCKET against the
+//! The Klartext milling cycles 208 BORE MILLING, 251 RECTANGULAR POCKET and 252 CIRCULAR
+//! POCKET against the
 //! geometry the TNC 640 cycle programming manual gives, worked out by hand: a tool Ø10
 //! (radius ρ = 5) runs on circles of radius (diameter)/2 − ρ about the call position; a
 //! 208 helix drops Q334 per turn and ends at Q201; a 252 pocket's last pass is the circle
-//! Q223/2 − ρ at the depth Q201. And the cycles still refused, each by its name and manual
+//! Q223/2 − ρ at the depth Q201, a 251 pocket's the rectangle of half sides Q218/2 − ρ,
+//! Q219/2 − ρ with corner radius Q220 − ρ. And the cycles still refused, each by its name and manual
 //! section.
 
 use std::path::Path;
@@ -216,7 +218,7 @@ fn cycle_208_with_the_bore_the_tool_size_plunges_and_a_smaller_bore_is_refused()
 #[test]
 fn pocket_and_thread_cycles_not_read_are_refused_by_name_and_manual_section() {
     for (n, title, section) in [
-        (251, "RECTANGULAR POCKET", "pocket milling"),
+        (254, "CIRCULAR SLOT", "slot milling"),
         (253, "SLOT MILLING", "slot milling"),
         (256, "RECTANGULAR STUD", "stud milling"),
         (262, "THREAD MILLING", "thread milling"),
@@ -245,4 +247,87 @@ fn pocket_and_thread_cycles_not_read_are_refused_by_name_and_manual_section() {
     let (line, msg) = run(&helical).unwrap_err();
     assert_eq!(line, line_of(&helical, "CYCL CALL"));
     assert!(msg.contains("Q366") && msg.contains("ANGLE"), "{msg}");
+}
+
+const RECT: &str = "2 L X+{x} Y+{y} Z+20 R0 FMAX\n3 CYCL DEF 251 RECTANGULAR POCKET ~\n \
+    Q215=+0 ~\n Q218=+60 ;FIRST SIDE LENGTH ~\n Q219=+40 ;SECOND SIDE LENGTH ~\n \
+    Q220=+8 ;CORNER RADIUS ~\n Q368=+0 ~\n Q224=+{rot} ;ANGLE OF ROTATION ~\n \
+    Q367=+{pos} ;POCKET POSITION ~\n Q207=+500 ~\n Q351=+1 ~\n Q201=-4 ~\n Q202=+4 ~\n \
+    Q369=+0 ~\n Q206=+150 ~\n Q338=+0 ~\n Q200=+2 ~\n Q203=+0 ~\n Q204=+50 ~\n Q370=+1 ~\n \
+    Q366=+0 ~\n Q385=+500\n4 CYCL CALL";
+
+fn rect(x: f64, y: f64, rot: f64, pos: u32) -> Vec<Move> {
+    run(&RECT
+        .replace("{x}", &x.to_string())
+        .replace("{y}", &y.to_string())
+        .replace("{rot}", &rot.to_string())
+        .replace("{pos}", &pos.to_string()))
+    .unwrap()
+}
+
+#[test]
+fn cycle_251_clears_in_rounded_rectangles_and_ends_on_the_wall() {
+    // 60 × 40, corner radius 8, tool Ø10: the wall path has half sides 25, 15 and corner
+    // radius 8 − 5 = 3; stepover 5: rectangles 10 and 5 inside it (half sides 15 × 5 and
+    // 20 × 10, sharp), then the wall path, counter-clockwise from the middle of the +X side.
+    let m = rect(0.0, 0.0, 0.0, 0);
+    let ends: Vec<[f64; 2]> = m
+        .iter()
+        .filter(|m| matches!(m.motion, Motion::Linear | Motion::Arc { .. }))
+        .map(|m| [m.end[Axis::X], m.end[Axis::Y]])
+        .collect();
+    let mut want = vec![[0.0, 0.0]];
+    for (a, b) in [(15.0, 5.0), (20.0, 10.0)] {
+        want.extend([[a, 0.0], [a, b], [-a, b], [-a, -b], [a, -b], [a, 0.0]]);
+    }
+    want.extend([
+        [25.0, 0.0],
+        [25.0, 12.0],
+        [22.0, 15.0],
+        [-22.0, 15.0],
+        [-25.0, 12.0],
+        [-25.0, -12.0],
+        [-22.0, -15.0],
+        [22.0, -15.0],
+        [25.0, -12.0],
+        [25.0, 0.0],
+        [0.0, 0.0],
+    ]);
+    assert_eq!(ends.len(), want.len(), "{ends:?}");
+    for (e, w) in ends.iter().zip(&want) {
+        assert!(close(e[0], w[0]) && close(e[1], w[1]), "{ends:?}");
+    }
+    // The four corner arcs: radius 3 about (±22, ±12), counter-clockwise, at the depth.
+    let a = arcs(&m);
+    assert_eq!(a.len(), 4);
+    for (k, c) in [[22.0, 12.0], [-22.0, 12.0], [-22.0, -12.0], [22.0, -12.0]]
+        .iter()
+        .enumerate()
+    {
+        let (ccw, centre, r, z, _) = a[k];
+        assert!(
+            ccw && close(centre[0], c[0]) && close(centre[1], c[1]),
+            "{a:?}"
+        );
+        assert!(close(r, 3.0) && close(z, -4.0));
+    }
+}
+
+#[test]
+fn cycle_251_from_a_corner_and_turned_about_the_call_position() {
+    // Called at (100, 50) as the lower left corner (Q367 = 1), turned 90°: the centre is
+    // (100, 50) + rot90 (30, 20) = (80, 80); the corner arcs' centres rot90 (±22, ±12) from
+    // it: X 80 ∓ 12, Y 80 ± 22.
+    let m = rect(100.0, 50.0, 90.0, 1);
+    let a = arcs(&m);
+    assert_eq!(a.len(), 4);
+    for (k, c) in [[68.0, 102.0], [68.0, 58.0], [92.0, 58.0], [92.0, 102.0]]
+        .iter()
+        .enumerate()
+    {
+        assert!(close(a[k].1[0], c[0]) && close(a[k].1[1], c[1]), "{a:?}");
+    }
+    let last = m.last().unwrap();
+    assert!(close(last.end[Axis::X], 80.0) && close(last.end[Axis::Y], 80.0));
+    assert!(close(last.end[Axis::Z], 50.0));
 }

@@ -79,6 +79,12 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
         }
         // Tolerance and dynamic tuning: no motion.
         32 | 332 | 392 => Ok(()),
+        247 => Err(LineError::new(
+            b.spans(0, 2),
+            "`CYCL DEF 247 DATUM SETTING`: the Heidenhain cycle 247 activates a preset (Q339) of the control's preset table (PRESET.PR), a file mtsim is not given (TNC 640 cycle programming manual, \"Coordinate transformation cycles\", \"Cycle 247\")",
+            "preset table not given",
+        )
+        .help("drop the block and place the workpiece with the scenario's work offsets, or shift the datum with CYCL DEF 7")),
         _ => Err(not_supported(b, id, major)),
     }
 }

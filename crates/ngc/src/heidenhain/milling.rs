@@ -19,10 +19,11 @@
 //!      of radius Q223/2 − ρ, per finishing infeed Q338 (0: one, at Q201), at F Q385 ─►
 //!      floor (Q369 > 0): circles k, 2k, … to Q223/2 − ρ at Q201 ─► FMAX to s + a, Q204
 //! 251: as 252 about the pocket's centre (Q367: the call position is the centre or a
-//!      corner; Q224 turns the pocket about the call position) with rounded rectangles
-//!      for circles: the wall path has half sides Q218/2 − ρ, Q219/2 − ρ and corner radius
-//!      max(Q220 − ρ, 0); the clearing rectangles lie k, 2k, … inside it, innermost first,
-//!      each from the middle of its +X side
+//!      corner, the centre then reached first at FMAX at s + a; Q224 turns the pocket
+//!      about the call position) with rounded rectangles for circles: the wall path has
+//!      half sides Q218/2 − ρ, Q219/2 − ρ and corner radius max(Q220 − ρ, 0); the
+//!      clearing rectangles lie k, 2k, … inside it, innermost first, each from the middle
+//!      of its +X side
 //! ```
 //!
 //! Our simplifications, which keep every move inside the finished pocket: the tool
@@ -64,6 +65,12 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
             )
         }
     };
+    if r.path.comp != 0 {
+        return err(
+            format!("cycle {n} called with radius compensation RL/RR in effect: the cycle mills about the tool's centre, pre-positioned with R0 (TNC 640 cycle programming manual, \"Cycle {n}\")"),
+            "radius compensation on",
+        );
+    }
     let rho = r.comp_diameter() / 2.0;
     if rho <= 0.0 {
         return err(
@@ -219,6 +226,17 @@ fn pocket(r: &mut Reader, b: &Block, g: &Geometry, n: u32, shape: Shape) -> Line
     }
     rapid_z(r, b, g.top);
     let c = g.c;
+    let here = r.path.xy();
+    if here != c {
+        // Called at a corner (251, Q367): over the centre at the set-up clearance first.
+        let span = b.span(0);
+        r.gword("0", span.clone());
+        r.word('X', c[0], span.clone());
+        r.word('Y', c[1], span);
+        r.end_block(b.line);
+        r.path.pos[0] = c[0];
+        r.path.pos[1] = c[1];
+    }
     if op != 2.0 {
         let Some(zs) = levels(g.s, g.bottom + floor, plunge) else {
             return err(format!("cycle {n}: plunging depth Q202 = {plunge}: expected a positive depth, at most {MAX_PASSES} levels"), "bad Q202");

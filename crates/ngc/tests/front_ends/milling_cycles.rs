@@ -329,5 +329,38 @@ fn cycle_251_from_a_corner_and_turned_about_the_call_position() {
     }
     let last = m.last().unwrap();
     assert!(close(last.end[Axis::X], 80.0) && close(last.end[Axis::Y], 80.0));
+    // From the corner to the centre at rapid at s + Q200 = 2, before any feed move.
+    let first = m.iter().position(|m| m.motion != Motion::Rapid).unwrap();
+    let over = &m[first - 1];
+    assert_eq!(over.motion, Motion::Rapid);
+    assert!(close(over.end[Axis::X], 80.0) && close(over.end[Axis::Y], 80.0));
+    assert!(close(over.end[Axis::Z], 2.0));
     assert!(close(last.end[Axis::Z], 50.0));
+}
+
+#[test]
+fn cycle_247_is_refused_naming_the_preset_table_it_needs() {
+    let (line, msg) =
+        run("2 CYCL DEF 247 DATUM SETTING ~\n Q339=+1 ;DATUM NUMBER\n3 L X+0 Y+0 R0 FMAX")
+            .unwrap_err();
+    assert_eq!(line, 3);
+    assert!(
+        msg.contains("PRESET.PR") && msg.contains("Cycle 247"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn a_milling_cycle_under_radius_compensation_is_refused() {
+    let body = POCKET
+        .replace("{side}", "0")
+        .replace("{floor}", "0")
+        .replace("{fin}", "0")
+        .replace(
+            "2 L X+50 Y+40 Z+20 R0 FMAX",
+            "2 L X+0 Y+40 Z+20 R0 FMAX\n2 L X+50 Y+40 RL F100",
+        );
+    let (line, msg) = run(&body).unwrap_err();
+    assert_eq!(line, line_of(&body, "CYCL CALL"));
+    assert!(msg.contains("radius compensation RL/RR"), "{msg}");
 }

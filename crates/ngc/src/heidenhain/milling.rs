@@ -30,7 +30,8 @@
 //! reaches each circle on a line from the centre (the TNC approaches tangentially), and the
 //! clearing is concentric circles (the TNC spirals). Helical (Q366 = 1) and reciprocating
 //! plunging need the tool table's plunge angle, which mtsim's tool table does not carry:
-//! refused.
+//! refused. Feed reference Q439: 0 and 1 (at the cutting edge; run at the tool centre, a
+//! notice says so) mm/min, 3 mm/rev (× the `TOOL CALL`'s S); 2, per tooth, refused.
 
 use crate::lex::{LineError, LineResult};
 
@@ -78,14 +79,31 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
             "no tool radius",
         );
     }
+    let q439 = q(439);
+    let (s203, q200, q204) = (q(203), q(200), q(204));
+    let per = match q439 {
+        k if k == 0.0 => 1.0,
+        k if k == 1.0 => {
+            r.note(b, "Q439 = 1 (feed at the cutting edge): mtsim runs the cycle's feeds at the tool centre; on the cycle's circles the TNC's centre feed is lower by R/(R + tool radius)");
+            1.0
+        }
+        k if k == 3.0 && r.spindle_rpm > 0.0 => r.spindle_rpm,
+        k => {
+            return err(
+                format!("cycle {n}: feed reference Q439 = {k}: mtsim reads 0 and 1 (mm/min) and 3 (mm/rev, with the TOOL CALL's S); 2, a feed per tooth, needs the tool table's number of teeth CUT, which mtsim's tool table does not carry (TNC 640 cycle programming manual, \"Cycle {n}\", Q439)"),
+                "feed reference",
+            )
+        }
+    };
     let mut g = Geometry {
         c: r.path.xy(),
-        s: q(203),
-        top: q(203) + q(200),
-        bottom: q(203) + depth,
-        second: q(203) + q(204).max(q(200)),
+        s: s203,
+        top: s203 + q200,
+        bottom: s203 + depth,
+        second: s203 + q204.max(q200),
         rho,
         ccw,
+        per,
     };
     match n {
         208 => bore_milling(r, b, &g),
@@ -118,12 +136,14 @@ struct Geometry {
     second: f64,
     rho: f64,
     ccw: bool,
+    /// The feeds' unit as Q439 gives it: mm/min × this (S for a feed per revolution).
+    per: f64,
 }
 
 /// Cycle 208 BORE MILLING (TNC 640 cycle programming manual, "Cycle 208"): Q335 the bore's
 /// diameter, Q334 the infeed per helix turn, Q206 the feed.
 fn bore_milling(r: &mut Reader, b: &Block, g: &Geometry) -> LineResult<()> {
-    let (dia, pitch, feed) = (r.q.q(335), r.q.q(334), r.q.q(206));
+    let (dia, pitch, feed) = (r.q.q(335), r.q.q(334), r.q.q(206) * g.per);
     let err = |m: String, label: &str| Err(LineError::new(b.span(0), m, label));
     if feed <= 0.0 {
         return err(
@@ -194,8 +214,8 @@ fn pocket(r: &mut Reader, b: &Block, g: &Geometry, n: u32, shape: Shape) -> Line
         return err(format!("cycle {n} with plunging strategy Q366 = {} (helical or reciprocating): not supported, it needs the tool table's plunge angle ANGLE, which mtsim's tool table does not carry (TNC 640 cycle programming manual, \"Cycle {n}\", Q366): expected Q366 = 0 (vertical plunge)", q(366)), "plunging strategy");
     }
     let (side, floor) = (q(368).max(0.0), q(369).max(0.0));
-    let (f_plunge, f_mill) = (q(206), q(207));
-    let f_finish = if q(385) > 0.0 { q(385) } else { f_mill };
+    let (f_plunge, f_mill) = (q(206) * g.per, q(207) * g.per);
+    let f_finish = if q(385) > 0.0 { q(385) * g.per } else { f_mill };
     if f_plunge <= 0.0 || f_mill <= 0.0 {
         return err(format!("cycle {n}: plunging feed Q206 = {f_plunge}, milling feed Q207 = {f_mill}: expected both positive"), "no feed");
     }

@@ -364,3 +364,24 @@ fn a_milling_cycle_under_radius_compensation_is_refused() {
     assert_eq!(line, line_of(&body, "CYCL CALL"));
     assert!(msg.contains("radius compensation RL/RR"), "{msg}");
 }
+
+#[test]
+fn feed_reference_q439_per_revolution_scales_by_s_and_per_tooth_is_refused() {
+    // Q439 = 3: Q206 0.1 and Q207 0.2 mm/rev at S1000 are 100 and 200 mm/min.
+    let body = |k: u32| {
+        POCKET
+            .replace("{side}", "0")
+            .replace("{floor}", "0")
+            .replace("{fin}", "0")
+            .replace("Q206=+150", "Q206=+0.1")
+            .replace("Q207=+500", "Q207=+0.2")
+            .replace("Q385=+200", &format!("Q385=+0 ~\n Q439=+{k}"))
+    };
+    let m = run(&body(3)).unwrap();
+    let plunge = m.iter().find(|m| m.motion == Motion::Linear).unwrap();
+    assert_eq!(plunge.feed, Feed::PerMinute(100.0));
+    assert!(arcs(&m).iter().all(|a| a.4 == Feed::PerMinute(200.0)));
+    let (line, msg) = run(&body(2)).unwrap_err();
+    assert_eq!(line, line_of(&body(2), "CYCL CALL"));
+    assert!(msg.contains("Q439") && msg.contains("CUT"), "{msg}");
+}

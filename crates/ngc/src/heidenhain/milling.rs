@@ -230,13 +230,19 @@ fn pocket(r: &mut Reader, b: &Block, g: &Geometry, n: u32, shape: Shape) -> Line
         if by <= 0.0 || (from - to) / by > MAX_PASSES {
             return None;
         }
-        let mut out = Vec::new();
-        let mut z = from;
-        while z > to + 1e-9 {
-            z = (z - by).max(to);
-            out.push(z);
-        }
-        Some(out)
+        // Counted, not stepped until reached: far from 0, z - by may round to z.
+        let n = ((from - to) / by - 1e-9).ceil().max(0.0) as u64;
+        Some(
+            (1..=n)
+                .map(|i| {
+                    if i == n {
+                        to
+                    } else {
+                        (from - i as f64 * by).max(to)
+                    }
+                })
+                .collect(),
+        )
     };
     if outer / step > MAX_PASSES {
         return err(

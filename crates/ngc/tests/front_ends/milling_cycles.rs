@@ -385,3 +385,19 @@ fn feed_reference_q439_per_revolution_scales_by_s_and_per_tooth_is_refused() {
     assert_eq!(line, line_of(&body(2), "CYCL CALL"));
     assert!(msg.contains("Q439") && msg.contains("CUT"), "{msg}");
 }
+
+#[test]
+fn a_pocket_far_from_zero_ends_read_or_refused() {
+    // At Z 1e17 a step of 3 mm is below the last digit: the levels are counted, so the
+    // read ends (here refused or read, never a hang).
+    let body = POCKET
+        .replace("{side}", "0")
+        .replace("{floor}", "0")
+        .replace("{fin}", "0")
+        .replace("Q203=+0", "Q203=+100000000000000000");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(run(&body).is_ok());
+    });
+    assert!(rx.recv_timeout(std::time::Duration::from_secs(20)).is_ok());
+}

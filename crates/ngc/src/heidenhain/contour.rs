@@ -163,6 +163,14 @@ pub(super) fn m_word(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> Lin
                 &format!("M{n} (Heidenhain) is accepted and not simulated"),
             );
         }
+        92 => {
+            return Err(LineError::new(
+                span,
+                "`M92`: the block's coordinates are relative to the machine datum M92, a position the machine tool builder sets in the control's machine parameters, which mtsim's machine file does not carry (KP \"Miscellaneous functions for coordinate data: M91/M92\")",
+                "Heidenhain M92 not supported",
+            )
+            .help("post the move with M91 (machine coordinates) or in the workpiece frame"))
+        }
         _ => {
             return Err(LineError::new(
                 span,
@@ -225,6 +233,9 @@ fn words(
             continue;
         }
         if !extra(r, b, k, e)? {
+            if let Some(err) = not_a_number(b, k) {
+                return Err(err);
+            }
             let what = match axis_name.to_ascii_uppercase().as_str() {
                 "U" | "V" | "W" => "the axes X Y Z A B C (U V W are not read)",
                 _ => "coordinates X Y Z A B C (I for incremental), R0/RL/RR, F, FMAX, FAUTO or M functions",
@@ -233,6 +244,25 @@ fn words(
         }
     }
     Ok(mask)
+}
+
+/// A coordinate written `Xnan`, `Y-inf`: a fault of the post that wrote the program (a
+/// value it could not compute), named as such.
+fn not_a_number(b: &Block, k: usize) -> Option<LineError> {
+    let t = b.tok(k);
+    let letter = t.chars().next()?;
+    if !LETTERS.contains(&letter.to_ascii_uppercase()) {
+        return None;
+    }
+    let v = t[1..].trim_start_matches(['+', '-']).to_ascii_lowercase();
+    matches!(v.as_str(), "nan" | "inf" | "infinity").then(|| {
+        LineError::new(
+            b.span(k),
+            format!("`{t}`: the coordinate {letter} has no value (`{}`, not a number): a fault of the post that wrote the program, which could not compute this point", &t[1..]),
+            "coordinate without a value",
+        )
+        .help("post the program again; check the CAM operation that makes this block")
+    })
 }
 
 /// `L` and `LP`: a straight line.

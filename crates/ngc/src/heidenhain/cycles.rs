@@ -21,9 +21,9 @@
 
 use crate::lex::{LineError, LineResult};
 
-use super::frames;
 use super::state::{self, Block, Reader};
 use super::text::value;
+use super::{frames, milling};
 
 /// `CYCL DEF …`.
 pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
@@ -41,7 +41,7 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
     })?;
     let minor: u32 = minor.parse().unwrap_or(0);
     match major {
-        200..=203 | 205..=207 | 209 | 240 => define(r, b, major),
+        200..=203 | 205..=209 | 240 | 251 | 252 => define(r, b, major),
         1 | 2 | 17 => old_cycle_value(r, b, major, minor),
         // Oriented spindle stop: the spindle turns to an angle, the axes stay.
         13 => {
@@ -79,26 +79,68 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
         }
         // Tolerance and dynamic tuning: no motion.
         32 | 332 | 392 => Ok(()),
-        _ => {
-            let name: Vec<&str> = (3..b.toks.len())
-                .map(|k| b.tok(k))
-                .take_while(|t| !t.contains('='))
-                .collect();
-            let name = if name.is_empty() {
-                String::new()
-            } else {
-                format!(" {}", name.join(" "))
-            };
-            Err(LineError::new(b.spans(0, 2), format!("`CYCL DEF {id}{name}`: not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-207, 209, 240 and 7, 9, 10, 13, 19, 32", manual(major)), "Heidenhain cycle not supported")
-                .help("post the cycle as L moves, or see docs/gcode.md"))
-        }
+        247 => Err(LineError::new(
+            b.spans(0, 2),
+            "`CYCL DEF 247 DATUM SETTING`: the Heidenhain cycle 247 activates a preset (Q339) of the control's preset table (PRESET.PR), a file mtsim is not given (TNC 640 cycle programming manual, \"Coordinate transformation cycles\", \"Cycle 247\")",
+            "preset table not given",
+        )
+        .help("drop the block and place the workpiece with the scenario's work offsets, or shift the datum with CYCL DEF 7")),
+        _ => Err(not_supported(b, id, major)),
     }
+}
+
+/// The refusal of cycle `major`: its number, the title the post wrote, the cycle's title
+/// and its manual section.
+fn not_supported(b: &Block, id: &str, major: u32) -> LineError {
+    let name: Vec<&str> = (3..b.toks.len())
+        .map(|k| b.tok(k))
+        .take_while(|t| !t.contains('=') && !t.starts_with(';'))
+        .collect();
+    let name = if name.is_empty() {
+        title(major).map_or(String::new(), |t| format!(" {t}"))
+    } else {
+        format!(" {}", name.join(" "))
+    };
+    let what = match title(major) {
+        Some(t) => format!("the Heidenhain cycle {major} {t}"),
+        None => format!("the Heidenhain cycle {major}"),
+    };
+    LineError::new(
+        b.spans(0, 2),
+        format!("`CYCL DEF {id}{name}`: {what} is not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-209, 240, 251, 252 and 7, 9, 10, 13, 19, 32", manual(major)),
+        "Heidenhain cycle not supported",
+    )
+    .help("post the cycle as L moves, or see docs/gcode.md")
+}
+
+/// The title of the cycles posts write, as the cycle manual heads them.
+fn title(n: u32) -> Option<&'static str> {
+    Some(match n {
+        204 => "BACK BORING",
+        241 => "SINGLE-LIP DEEP-HOLE DRILLING",
+        251 => "RECTANGULAR POCKET",
+        253 => "SLOT MILLING",
+        254 => "CIRCULAR SLOT",
+        256 => "RECTANGULAR STUD",
+        257 => "CIRCULAR STUD",
+        262 => "THREAD MILLING",
+        263 => "THREAD MILLING/COUNTERSINKING",
+        264 => "THREAD DRILLING/MILLING",
+        265 => "HELICAL THREAD DRILLING/MILLING",
+        267 => "OUTSIDE THREAD MILLING",
+        14 | 20..=25 | 270..=276 => "(SL contour cycle)",
+        230 | 231 | 232 | 233 => "(multipass milling)",
+        _ => return None,
+    })
 }
 
 /// The HEIDENHAIN manual that defines cycle `n`.
 fn manual(n: u32) -> &'static str {
     match n {
         1..=29 => "TNC 426/430 User's Manual, \"Fixed cycles\"",
+        204 | 241 => "TNC 640 cycle programming manual, \"Cycles: drilling\"",
+        251..=257 => "TNC 640 cycle programming manual, \"Cycles: pocket milling, stud milling and slot milling\"",
+        262..=267 => "TNC 640 cycle programming manual, \"Cycles: tapping / thread milling\"",
         _ => "TNC 640 cycle programming manual",
     }
 }
@@ -180,13 +222,14 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
     let Some(n) = r.cycle.number else {
         return Err(LineError::new(
             b.span(0),
-            "cycle call with no cycle defined: expected CYCL DEF 1, 2, 17, 200-203, 205-207, 209 or 240 before it",
+            "cycle call with no cycle defined: expected CYCL DEF 1, 2, 17, 200-203, 205-209, 240, 251 or 252 before it",
             "no cycle",
         ));
     };
     match n {
         1 => return pecking(r, b),
         2 | 17 => return old_tapping(r, b, n),
+        208 | 251 | 252 => return milling::call(r, b, n),
         _ => {}
     }
     let q = |k| r.q.q(k);

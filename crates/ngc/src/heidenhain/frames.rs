@@ -19,7 +19,9 @@
 //!
 //! A program point p is at `d + R Rz(rot) p` in work coordinates (d the datum shift): the
 //! interpreter's G68.2 with origin d and the ZXZ Euler angles of `R Rz(rot)`. Without a
-//! tilt or rotation the shift is G52 (with `DL` of the tool call on Z).
+//! tilt or rotation the shift is G52 (with `DL` of the tool call on Z); with one, `DL`
+//! moves the origin along the plane's tool axis, d + DL R ẑ (KP "Tool length compensation":
+//! the length acts in the tool axis, in the tilted plane the tilted one).
 
 use crate::frame::{mul, rot_x, rot_y, rot_z, Mat3, IDENTITY};
 use crate::lex::{LineError, LineResult};
@@ -38,13 +40,6 @@ pub(super) fn apply(r: &mut Reader, b: &Block) -> LineResult<()> {
         r.end_block(b.line);
     }
     if rotated {
-        if dl != 0.0 {
-            return Err(LineError::new(
-                span,
-                "a tool length delta DL with a tilted or rotated plane is not supported",
-                "DL in a tilted plane",
-            ));
-        }
         if shifted {
             g52(r, b, [0.0; 3]);
         }
@@ -52,6 +47,13 @@ pub(super) fn apply(r: &mut Reader, b: &Block) -> LineResult<()> {
             &r.frames_state.plane.unwrap_or(IDENTITY),
             &rot_z(r.frames_state.rot_deg),
         );
+        // DL along the tilted tool axis (the plane's Z, m's third column): the TNC
+        // compensates the length in the tool axis of the working plane.
+        let d = [
+            d[0] + m[0][2] * dl,
+            d[1] + m[1][2] * dl,
+            d[2] + m[2][2] * dl,
+        ];
         let (i, j, k) = euler_zxz(&m);
         r.gword("68.2", span.clone());
         for (l, v) in [

@@ -22,6 +22,7 @@ mod cycle_pos;
 mod cycles;
 mod frames;
 mod front;
+mod milling;
 mod pattern;
 mod qparam;
 mod state;

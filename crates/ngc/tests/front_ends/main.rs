@@ -8,6 +8,8 @@ mod common;
 mod budget;
 mod fanuc_haas;
 mod heidenhain;
+mod klartext_posts;
 mod lent_moves;
+mod milling_cycles;
 mod posts;
 mod siemens;

@@ -493,7 +493,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         }
         if self.input_done {
             if let Some(last) = self.held.take() {
-                self.push_into_stop(last);
+                self.push_last(last);
             }
         }
         if self.unpassed > 0 && (self.input_done || self.unpassed >= batch) {
@@ -1014,11 +1014,6 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                     self.push(prev.planned, prev.start, prev.end);
                 }
                 self.push(arc, prev.end, start);
-            } else if self.control.max_feed_override.is_some()
-                && prev.planned.programmed.is_finite() != next.programmed.is_finite()
-            {
-                // LinuxCNC's stop between a rapid and a feed move (see `push`).
-                self.push_into_stop(prev);
             } else {
                 // (A start trimmed by a blend leaves at least half the block.)
                 self.push(prev.planned, prev.start, prev.end);
@@ -1032,37 +1027,21 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         });
     }
 
-    /// Pushes `held`, a block that ends at rest. Under LinuxCNC's rules (`[control]
-    /// max_feed_override`) a straight G64 block slows into that stop at half its
-    /// acceleration (measured: 150 of 300 mm/s² at a program's end and before a G0 after a
-    /// G1, 300 where it starts; docs/interpolation.md): its last `v²/a` (the stop from its
-    /// cruise speed `v` at `a/2`) is pushed as a block of its own at half the acceleration.
-    fn push_into_stop(&mut self, held: Held) {
+    /// Pushes `held`, the program's last block. Under LinuxCNC's rules (`[control]
+    /// max_feed_override`) a straight G64 block runs at half its acceleration there
+    /// (measured: 150 of 300 mm/s² where the last move of a program starts from rest and
+    /// where it stops, 300 everywhere else; docs/interpolation.md).
+    fn push_last(&mut self, held: Held) {
         let mut p = held.planned;
         let halves = self.control.max_feed_override.is_some()
             && matches!(p.path_control, PathControl::Blend { .. })
-            && p.length > 0.0
             && p.path.arc.is_none()
             && p.path.bend.is_none()
             && !p.path.tcp;
-        if !halves {
-            self.push(p, held.start, held.end);
-            return;
+        if halves {
+            p.accel *= 0.5;
         }
-        let tail_length = (p.cap * p.cap / p.accel).min(p.length);
-        let mut tail = p;
-        tail.accel *= 0.5;
-        if tail_length < p.length * (1.0 - 1e-9) {
-            let share = (p.length - tail_length) / p.length;
-            let delta = p.path.delta;
-            p.path.delta = delta * share;
-            p.length -= tail_length;
-            tail.path.start = p.path.start + p.path.delta;
-            tail.path.delta = delta * (1.0 - share);
-            tail.length = tail_length;
-            self.push(p, held.start, held.end);
-        }
-        self.push(tail, held.start, held.end);
+        self.push(p, held.start, held.end);
     }
 
     /// The blend of the corner between the held block `prev` and `next` (starting along

@@ -403,7 +403,7 @@ fn g64_corners_blend_as_linuxcnc_blends_them() {
 }
 
 #[test]
-#[ignore = "not all figures hold yet (measured 2026-12-02; the straight corners hold, the tests above): arcs +0.48 %, a reversal 23 ms late, 1.10 of the Y acceleration limit; line-arc corners are not blended (line_into_arc +1.95 %, reversals 111-168 ms late, 1.23 of the acceleration limit at a junction); LinuxCNC's blends between moves with rotary axes (parabolic) are not modelled (five_axis_g93 -0.66 %, reversals 56-89 ms early, C at 1.43 of its acceleration limit at a junction; rapids with A and C +1.85 %, reversals 195-271 ms late, 1.50 of the limit)"]
+#[ignore = "not all figures hold yet (measured 2026-12-02; the straight corners hold, the tests above): arcs +0.74 %, a reversal 23 ms late, 1.10 of the Y acceleration limit; line-arc corners are not blended (line_into_arc +2.37 %, reversals 111-168 ms late, 1.22 of the acceleration limit at a junction); LinuxCNC's blends between moves with rotary axes are not modelled (five_axis_g93 -0.11 %, reversals 56-89 ms early, C at 1.43 of its acceleration limit at a junction; rapids with A and C +2.66 %, reversals 31-271 ms late, 1.50 of the limit)"]
 fn five_axis_sample_as_linuxcnc_plans_it() {
     if linuxcnc::require("five_axis_sample_as_linuxcnc_plans_it") {
         compare(&XYZAC_TRT, FIVE_AXIS_PROGRAMS);
@@ -420,7 +420,7 @@ fn three_axis_sample_as_linuxcnc_plans_it() {
 }
 
 #[test]
-#[ignore = "not all figures hold yet (measured 2026-12-02): pocket_p002 +1.12 %, reversals 49-89 ms late (its tangent arc and the plunge), 1.08 of the X acceleration limit; rapids_3d: corners between 3D diagonal rapids larger in LinuxCNC (571 vs 554 um, 2663 vs 1603 um; it passes at 28.1 mm/s, above the axes' 25: its arc is not sized from the slowest axis there), reversals 27-38 ms"]
+#[ignore = "not all figures hold yet (measured 2026-12-02): pocket_p002 +1.75 %, reversals 49-89 ms late (its tangent arc and the plunge), 1.08 of the X acceleration limit; rapids_3d +0.96 %: corners between 3D diagonal rapids larger in LinuxCNC (571 vs 554 um, 2663 vs 1603 um; it passes at 28.1 mm/s, above the axes' 25: its arc is not sized from the slowest axis there), reversals 27-38 ms late"]
 fn three_axis_arcs_and_3d_rapids_as_linuxcnc_plans_them() {
     if linuxcnc::require("three_axis_arcs_and_3d_rapids_as_linuxcnc_plans_them") {
         compare(&THREE_AXIS, THREE_AXIS_REST);

@@ -47,9 +47,15 @@ pub struct ControlSection {
     /// 2.9 runs its G0 at 0.5 (measured, black box: docs/interpolation.md); default 1.
     pub rapid_acceleration_share: f64,
     /// The path tolerance (mm) of blending when a program sets none (a G64 without P, or a
-    /// dialect's blending mode without its tolerance word); absent: the smallest blend that
-    /// keeps the programmed speed.
+    /// dialect's blending mode without its tolerance word); absent: no tolerance bound (the
+    /// corner keeps the junction rule unless `max_feed_override` is given).
     pub path_tolerance_mm: Option<f64>,
+    /// The control's highest feed override (LinuxCNC: `[DISPLAY] MAX_FEED_OVERRIDE`), > 0.
+    /// When given, the planner blends as LinuxCNC 2.9 does: a G64 corner without a tolerance
+    /// is blended too, each blend arc at most as long as the feed times this override needs
+    /// ([`crate::motion::blend::arc_length_for_speed`], docs/interpolation.md); absent: a
+    /// corner without a tolerance keeps the junction rule.
+    pub max_feed_override: Option<f64>,
     /// G73 retract after each peck, mm (Fanuc parameter 5114, Haas Setting 22).
     pub g73_retract_mm: Option<f64>,
     /// G83 clearance above each peck's depth where the rapid down stops, mm (Fanuc
@@ -70,6 +76,7 @@ impl Default for ControlSection {
         ControlSection {
             rapid_acceleration_share: 1.0,
             path_tolerance_mm: None,
+            max_feed_override: None,
             g73_retract_mm: None,
             g83_clearance_mm: None,
             g83_above_r_mm: None,
@@ -467,6 +474,17 @@ impl Machine {
                     "control",
                     "path_tolerance_mm",
                     format!("must be a finite tolerance >= 0 mm, got {tol}"),
+                ));
+            }
+        }
+        if let Some(ovr) = file.control.max_feed_override {
+            if !(ovr.is_finite() && ovr > 0.0) {
+                return Err(value_error(
+                    path,
+                    text,
+                    "control",
+                    "max_feed_override",
+                    format!("must be a finite override > 0 (1 = 100 %), got {ovr}"),
                 ));
             }
         }

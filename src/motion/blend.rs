@@ -13,18 +13,21 @@
 //! With `n = (u2 − (u1·u2) u1)/sin θ` (the inward normal at the arc's start `T1 = P − d u1`),
 //! the arc at angle `φ ∈ [0, θ]` is `T1 + R sin φ u1 + R (1 − cos φ) n`; its length is `R θ`.
 //!
-//! The size is the largest that keeps the deviation within the programmed tolerance (G64 P)
-//! and takes at most half of either block (so that two blends never overlap, whatever the
-//! order of the corners): `d = min(P tan(θ/2)/(1/cos(θ/2) − 1), L1/2, L2/2)`. Without P
-//! (LinuxCNC's "G64 without P: the best speed possible, no matter how far from the
-//! programmed point", its G-code reference) the arc is the smallest that keeps the blocks'
-//! speed, `R = v²/a_n`. Speeds through the arc follow from the axis limits (`interpolation`):
-//! the centripetal term `q'' v²` within [`NORMAL_SHARE`] of each axis's acceleration, the path
-//! acceleration within [`TANGENTIAL_SHARE`], both measured on LinuxCNC.
+//! The size is the largest that keeps the deviation within the programmed tolerance (G64 P),
+//! the arc within the length LinuxCNC gives it for the feed ([`arc_length_for_speed`], on a
+//! machine whose `[control] max_feed_override` is set), and takes at most half of either
+//! block (so that two blends never overlap, whatever the order of the corners):
+//! `d = min(P tan(θ/2)/(1/cos(θ/2) − 1), (ℓ/θ) tan(θ/2), L1/2, L2/2)` with `ℓ` that length.
+//! Without P (LinuxCNC's "G64 without P: the best speed possible, no matter how far from the
+//! programmed point", its G-code reference) only the feed's length and the halves bound it.
+//! Speeds through the arc follow from the axis limits (`interpolation`): the centripetal term
+//! `q'' v²` within [`NORMAL_SHARE`] of each axis's acceleration, the path acceleration within
+//! [`TANGENTIAL_SHARE`], both measured on LinuxCNC.
 //!
 //! Not blended (the junction rule of `interpolation` applies): a corner that does not turn
 //! (`θ` below 1e-9 rad: it needs nothing) or turns back (`θ` within 1e-6 rad of π: the arc
-//! would have no size), and every corner next to an arc or a tool-centre-point block.
+//! would have no size), and every corner next to an arc, a tool-centre-point block, a rapid
+//! or a move of an axis besides X Y Z (LinuxCNC blends those otherwise: measured, not modelled).
 
 use crate::AxisVec;
 
@@ -70,6 +73,18 @@ pub const NORMAL_SHARE: f64 = 0.866_025_403_784_438_6;
 /// Share of an axis's acceleration the path acceleration may use on a blend arc.
 pub const TANGENTIAL_SHARE: f64 = 0.5;
 
+/// The longest blend arc LinuxCNC 2.9 lays at a corner (measured, black box,
+/// `tests/motion/linuxcnc_planner.rs`): `v_s² / (½ a)`, with `v_s` the programmed feed at the
+/// control's highest feed override, held to the slowest velocity limit `v_max` of the axes
+/// the corner's plane moves, and `a` their smallest acceleration limit (units/s, units/s²).
+/// On xyzac-trt (20 mm/s, 300 mm/s², override 2): every G64 corner of XY lines at F600 and
+/// above is an arc 2.667 mm long (90°: 703.2 um off, 60°: 394.0, 8.53°: 49.8), at F300 one
+/// 0.667 mm long (90°: 175.8 um), whatever the lines' lengths (5 to 50 mm) and P5 alike.
+pub fn arc_length_for_speed(feed: f64, max_feed_override: f64, v_max: f64, a: f64) -> f64 {
+    let v = (feed * max_feed_override).min(v_max);
+    v * v / (TANGENTIAL_SHARE * a)
+}
+
 /// The largest `|a cos φ + b sin φ|` for `φ ∈ [0, θ]` (θ ≤ π): `hypot(a, b)` when the peak
 /// `φ0 = atan2(b, a)` (or `φ0 ± π`) falls inside, else the larger end.
 fn peak_over_sweep(a: f64, b: f64, theta: f64) -> f64 {
@@ -100,21 +115,16 @@ impl Bend {
 
 /// The blend at the corner between a straight block along `u1` (unit) and one along `u2`
 /// (unit), each of which may give up to `half1` / `half2` (mm, half its length), with the
-/// tolerance `tolerance_mm`. Without a tolerance the arc is the smallest that keeps `speed`
-/// (the first block's cruise speed, path units/s, at which the arc is programmed) within `normal_limit` (per axis,
-/// [`NORMAL_SHARE`] of its acceleration) and `jerk_limit` (per axis, the third of its jerk
-/// the curved-block rule gives `q''' v³`; both infinite for an axis the machine does not
-/// have): `R = max(v²/a_n, sqrt(v³/j_n))` with `a_n = min_i(normal_limit_i/max|q''_i| R)` and
-/// `j_n = min_i(jerk_limit_i/max|q'_i|)`. `None` when the corner needs no blend or cannot have
-/// one (see the module's doc).
+/// tolerance `tolerance_mm` (none: no bound from it) and an arc at most `max_arc_mm` long
+/// ([`arc_length_for_speed`]; infinite: no bound from it). `None` when the corner needs no
+/// blend or cannot have one (see the module's doc), or when nothing bounds it.
 pub fn corner(
     u1: AxisVec,
     u2: AxisVec,
     half1: f64,
     half2: f64,
     tolerance_mm: Option<f64>,
-    speed: f64,
-    (normal_limit, jerk_limit): (&[f64; 9], &[f64; 9]),
+    max_arc_mm: f64,
 ) -> Option<Corner> {
     let dot: f64 = (0..9).map(|i| u1.0[i] * u2.0[i]).sum();
     let across = u2 - u1 * dot;
@@ -129,16 +139,13 @@ pub fn corner(
     let half_cos = (0.5 * theta).cos();
     let per_radius = (1.0 - half_cos) / half_cos;
     let mut trim = half1.min(half2);
-    match tolerance_mm {
-        Some(tol) => trim = trim.min(tol.max(0.0) / per_radius * half_tan),
-        None => {
-            let least = |f: &dyn Fn(usize) -> f64| (0..9).map(f).fold(f64::INFINITY, f64::min);
-            let normal = least(&|i| normal_limit[i] / peak_over_sweep(n.0[i], -u1.0[i], theta));
-            let jerk = least(&|i| jerk_limit[i] / peak_over_sweep(u1.0[i], n.0[i], theta));
-            // (A relative 1e-9 more, so that rounding leaves the arc at the blocks' speed.)
-            let radius = (speed * speed / normal).max((speed.powi(3) / jerk).sqrt()) * (1.0 + 1e-9);
-            trim = trim.min(radius * half_tan);
-        }
+    if let Some(tol) = tolerance_mm {
+        trim = trim.min(tol.max(0.0) / per_radius * half_tan);
+    }
+    // An arc of length R θ ≤ max_arc: R ≤ max_arc/θ.
+    trim = trim.min(max_arc_mm.max(0.0) / theta * half_tan);
+    if !trim.is_finite() {
+        return None;
     }
     if !(trim > 1e-9) {
         return None;

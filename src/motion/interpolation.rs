@@ -86,8 +86,10 @@
 //! `reach` is in closed form, so planning is amortised O(1) per block even when the stopping
 //! distance spans the whole window (fine segments). Memory is bounded by the window.
 //!
-//! Not modelled: corner blending (corners are passed at a limited speed, with a velocity
-//! step of bounded size in one period; the jerk at that step is not limited), acceleration
+//! Corner blending: under G64 the corner between two straight blocks may be replaced by an
+//! arc ([`blend`], LinuxCNC's rules, docs/interpolation.md). Not modelled: blending of other
+//! corners (they are passed at a limited speed, with a velocity step of bounded size in one
+//! period; the jerk at that step is not limited), acceleration
 //! carried across block boundaries (each block's speed changes start and end at zero path
 //! acceleration), travel limits (checked downstream).
 
@@ -319,6 +321,8 @@ struct JunctionEnd {
     slow_bend: bool,
     /// The block's path-control mode: how it joins the next.
     path: PathControl,
+    /// A rapid (or a blend between rapids): unbounded programmed speed.
+    rapid: bool,
 }
 
 /// The last block planned, held back until the next one arrives so that the corner between
@@ -489,7 +493,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         }
         if self.input_done {
             if let Some(last) = self.held.take() {
-                self.push(last.planned, last.start, last.end);
+                self.push_last(last);
             }
         }
         if self.unpassed > 0 && (self.input_done || self.unpassed >= batch) {
@@ -959,6 +963,12 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                     }
                     PathControl::Blend { .. } => {}
                 }
+                // LinuxCNC's planner (`[control] max_feed_override` given) stops between a
+                // rapid and a feed move (measured: 0.06 and 0.13 mm/s there, blend.rs).
+                let rapid = p.programmed == f64::INFINITY;
+                if self.control.max_feed_override.is_some() && prev.rapid != rapid {
+                    mu = 0.0;
+                }
                 p.rho = rho;
                 p.entry_cap = rho * mu;
             }
@@ -970,6 +980,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             curved,
             slow_bend: p.path.bend.is_some() && p.cap < p.programmed * (1.0 - 1e-9),
             path: p.path_control,
+            rapid: p.programmed == f64::INFINITY,
         });
         p.entry_max = if dwell {
             0.0
@@ -989,29 +1000,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     fn hold(&mut self, mut next: Planned, start: AxisVec, end: AxisVec) {
         let half = 0.5 * next.length;
         if let Some(mut prev) = self.held.take() {
-            let blendable = |p: &Planned| p.length > 0.0 && p.path.is_straight() && !p.path.tcp;
-            let tolerance = match prev.planned.path_control {
-                // Blended where a tolerance is given (G64 P, or the machine's default); G64
-                // without one keeps the junction rule (see docs/interpolation.md).
-                PathControl::Blend { tolerance_mm, .. } => {
-                    tolerance_mm.or(self.control.path_tolerance_mm).map(Some)
-                }
-                _ => None,
-            };
-            let normal_limit = self
-                .limits
-                .map(|l| l.map_or(f64::INFINITY, |l| blend::NORMAL_SHARE * l.acceleration));
-            let jerk_limit = self
-                .limits
-                .map(|l| l.map_or(f64::INFINITY, |l| l.jerk / 3.0));
-            let speed = prev.planned.cap;
-            let corner = match tolerance {
-                Some(tol) if blendable(&prev.planned) && blendable(&next) => {
-                    let limits = (&normal_limit, &jerk_limit);
-                    blend::corner(prev.end, start, prev.half, half, tol, speed, limits)
-                }
-                _ => None,
-            };
+            let corner = self.corner(&prev, &next, start, half);
             if let Some(c) = corner {
                 let a = &mut prev.planned;
                 a.path.delta = a.path.delta * ((a.length - c.trim) / a.length);
@@ -1036,6 +1025,69 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             end,
             half,
         });
+    }
+
+    /// Pushes `held`, the program's last block. Under LinuxCNC's rules (`[control]
+    /// max_feed_override`) a straight G64 block runs at half its acceleration there
+    /// (measured: 150 of 300 mm/s² where the last move of a program starts from rest and
+    /// where it stops, 300 everywhere else; docs/interpolation.md).
+    fn push_last(&mut self, held: Held) {
+        let mut p = held.planned;
+        let halves = self.control.max_feed_override.is_some()
+            && matches!(p.path_control, PathControl::Blend { .. })
+            && p.path.arc.is_none()
+            && p.path.bend.is_none()
+            && !p.path.tcp;
+        if halves {
+            p.accel *= 0.5;
+        }
+        self.push(p, held.start, held.end);
+    }
+
+    /// The blend of the corner between the held block `prev` and `next` (starting along
+    /// `start`, half of it `half` mm), if both are blendable (straight moves of X Y Z only,
+    /// no TCP, both rapids or both feed moves: LinuxCNC stops between a G1 and a G0 and blends
+    /// the others otherwise) and something bounds it: the
+    /// tolerance (G64 P, or the machine's default), or, with `[control] max_feed_override`,
+    /// the arc length LinuxCNC gives the feed ([`blend::arc_length_for_speed`]).
+    fn corner(
+        &self,
+        prev: &Held,
+        next: &Planned,
+        start: AxisVec,
+        half: f64,
+    ) -> Option<blend::Corner> {
+        let blendable = |p: &Planned| {
+            p.length > 0.0
+                && p.path.is_straight()
+                && !p.path.tcp
+                && (3..9).all(|i| p.path.delta.0[i] == 0.0)
+        };
+        let PathControl::Blend { tolerance_mm, .. } = prev.planned.path_control else {
+            return None;
+        };
+        let rapid = |p: &Planned| p.programmed == f64::INFINITY;
+        if !(blendable(&prev.planned) && blendable(next)) || rapid(&prev.planned) != rapid(next) {
+            return None;
+        }
+        let tolerance = tolerance_mm.or(self.control.path_tolerance_mm);
+        let max_arc = match self.control.max_feed_override {
+            Some(ovr) => {
+                // The axes the corner's plane moves: their slowest velocity and acceleration.
+                let (mut v_max, mut a) = (f64::INFINITY, f64::INFINITY);
+                for (i, l) in self.limits.iter().enumerate() {
+                    let moves = prev.end.0[i].abs() > 1e-12 || start.0[i].abs() > 1e-12;
+                    if let (Some(l), true) = (l, moves) {
+                        v_max = v_max.min(l.velocity);
+                        a = a.min(l.acceleration);
+                    }
+                }
+                blend::arc_length_for_speed(prev.planned.programmed, ovr, v_max, a)
+            }
+            None if tolerance.is_some() => f64::INFINITY,
+            None => return None,
+        };
+        blend::corner(prev.end, start, prev.half, half, tolerance, max_arc)
     }
 
     /// The blend arc of corner `c` after `prev` (trimmed), from `arc_start`: a

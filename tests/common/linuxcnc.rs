@@ -8,9 +8,9 @@
 //! includes); the vismach model (`loadusr -W …gui`), PyVCP panel, post-GUI HAL file, intro
 //! graphic and the program to open are left out, with the nets to the model's pins (in the
 //! ini's HALCMD lines and in the sample's HAL files; what the model wrote, a test may set
-//! with extra HALCMD lines); `HOME` is the run's folder (LinuxCNC writes its
-//! logs there on failure); as root, `rtapi_app` needs a fallback user (`RTAPI_UID`, not 0)
-//! and a FIFO path it can write.
+//! with extra HALCMD lines); a sample without a home sequence gets one; `HOME` is the run's
+//! folder (LinuxCNC writes its logs there on failure); as root, `rtapi_app` needs a fallback
+//! user (`RTAPI_UID`, not 0) and a FIFO path it can write.
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -182,11 +182,19 @@ pub fn require(test: &str) -> bool {
     }
 }
 
-/// The sample's ini text made headless (see the module's doc).
+/// The sample's ini text made headless (see the module's doc). A sample without a home
+/// sequence (3axis-tutorial: its display homes each joint) gets `HOME_SEQUENCE = 0` on every
+/// joint, so that `home all` homes them together (refused otherwise, learnt by running it).
 fn headless_ini(text: &str) -> String {
+    let sequence = !text.contains("HOME_SEQUENCE");
     let mut out = String::new();
     for line in text.lines() {
         let t = line.trim_start();
+        if sequence && t.starts_with("[JOINT_") {
+            out.push_str(line);
+            out.push_str("\nHOME_SEQUENCE = 0\n");
+            continue;
+        }
         let key = t.split('=').next().unwrap_or("").trim();
         let dropped = [
             "PYVCP",

@@ -381,3 +381,69 @@ fn planning_without_sampling_stops_at_a_block_it_cannot_plan() {
     assert!(e.contains("line 701") && e.contains("feed rate"), "{e}");
     assert_eq!(by_reference.map(|e| e.to_string()), Some(e));
 }
+
+/// The least distance from the point (x, y) of the lines between consecutive setpoints (the
+/// command the servo follows), mm.
+fn passes_from(s: &[Setpoint], x: f64, y: f64) -> f64 {
+    let mut deviation = f64::INFINITY;
+    for w in s.windows(2) {
+        let (p0, p1) = (w[0].q, w[1].q);
+        let (dx, dy) = (p1[Axis::X] - p0[Axis::X], p1[Axis::Y] - p0[Axis::Y]);
+        let len2 = dx * dx + dy * dy;
+        if len2 > 0.0 {
+            let t = (((x - p0[Axis::X]) * dx + (y - p0[Axis::Y]) * dy) / len2).clamp(0.0, 1.0);
+            deviation = deviation.min((p0[Axis::X] + t * dx - x).hypot(p0[Axis::Y] + t * dy - y));
+        }
+    }
+    deviation
+}
+
+/// LinuxCNC's rule for G64 (`[control] max_feed_override`, docs/interpolation.md): a 90°
+/// corner of X and Y at 20 mm/s and 300 mm/s² becomes an arc `ℓ = v_s²/(½ a)` long with
+/// `v_s = min(F · override, 20 mm/s)`, i.e. `R = ℓ/(π/2)`, passing `R (√2 − 1)` from the
+/// corner: 0.70319 mm at F1000 (v_s held to 20), 0.17580 mm at F300 (v_s 10); under G64
+/// P0.1 the tolerance binds (0.1 mm); without the override G64 keeps the junction rule.
+#[test]
+fn g64_without_p_blends_an_arc_as_long_as_the_feed_at_its_override_needs() {
+    let control = |ovr: &str| {
+        let mut text =
+            "name = \"test\"\nkinematics = \"trt-ac\"\ninterpolation_period_ms = 1.0\n".to_string();
+        text += ovr;
+        for axis in ["X", "Y", "Z", "A", "C"] {
+            text += &format!(
+                "[axes.{axis}]\nmin = -10000\nmax = 10000\nmax_velocity = 1200\nmax_acceleration = 300\nmax_jerk = 1e9\n"
+            );
+        }
+        Machine::from_toml(Path::new("test.toml"), &text, None).expect("test machine is valid")
+    };
+    let linuxcnc = control("[control]\nmax_feed_override = 2.0\n");
+    let (a, b, c) = (q(&[0.0]), q(&[20.0]), q(&[20.0, 20.0]));
+    let corner = |path: PathControl, feed: f64, m: &Machine| {
+        let first = Move {
+            path,
+            ..g01(1, a, b, feed)
+        };
+        let (s, _) = run(vec![first, g01(2, b, c, feed)], m);
+        passes_from(&s, 20.0, 0.0)
+    };
+    let quarter = std::f64::consts::FRAC_PI_2;
+    for (feed, v_s) in [(1000.0, 20.0), (300.0, 10.0)] {
+        let radius = v_s * v_s / (0.5 * 300.0) / quarter;
+        let expected = radius * (2f64.sqrt() - 1.0);
+        // The lines between setpoints are chords, a sagitta (vT)²/(8R) inside the arc.
+        let sagitta = (feed / 60.0 * PERIOD).powi(2) / (8.0 * radius);
+        let dev = corner(PathControl::BLEND, feed, &linuxcnc);
+        assert!(
+            (dev - expected).abs() <= sagitta + 1e-9,
+            "F{feed}: {dev} mm from the corner, expected {expected} mm"
+        );
+    }
+    let tight = PathControl::Blend {
+        tolerance_mm: Some(0.1),
+        naive_cam_mm: None,
+    };
+    let dev = corner(tight, 1000.0, &linuxcnc);
+    assert!((dev - 0.1).abs() < 1e-4, "G64 P0.1: {dev} mm");
+    let dev = corner(PathControl::BLEND, 1000.0, &control(""));
+    assert!(dev < 1e-3, "G64 without the override: {dev} mm");
+}

@@ -8,8 +8,21 @@ use crate::interp::Stop;
 use crate::lex::{LineError, LineResult};
 
 impl Reader {
-    /// Runs the collected block; `Ok(false)` when the program ends.
-    pub(super) fn emit(&mut self, mut w: Words, up: &str, line_no: usize) -> LineResult<bool> {
+    /// Runs the collected block; `Ok(false)` when the program ends. `G53`, `G153` and
+    /// `SUPA` suppress the settable and programmable frames for their block (Fundamentals,
+    /// "Settable zero offset (G54 to G57, G505 to G599, G53, G500, SUPA, G153)"): the
+    /// block's coordinates are machine coordinates, not turned or shifted by the frames.
+    pub(super) fn emit(&mut self, w: Words, up: &str, line_no: usize) -> LineResult<bool> {
+        if w.other.iter().any(|(t, _)| t == "G53") && !self.frame.is_identity() {
+            let frame = std::mem::take(&mut self.frame);
+            let result = self.emit_block(w, up, line_no);
+            self.frame = frame;
+            return result;
+        }
+        self.emit_block(w, up, line_no)
+    }
+
+    fn emit_block(&mut self, mut w: Words, up: &str, line_no: usize) -> LineResult<bool> {
         for iso in std::mem::take(&mut w.before) {
             self.iso.push_str(&iso);
             self.run_iso(line_no)?;

@@ -26,8 +26,11 @@ mod emit;
 mod expr;
 mod flow;
 mod frame;
+mod keywords;
+mod macros;
 mod plain;
 mod repeat;
+mod settable;
 mod source;
 mod state;
 mod words;
@@ -79,7 +82,15 @@ pub(crate) struct Reader {
     vars: Vars,
     queue: VecDeque<Move>,
     notices: Vec<Notice>,
+    /// The frame programmed points go through: the active settable frame's rotation,
+    /// scale and mirror, then the programmable frame `prog` (settable.rs).
     frame: ProgFrame,
+    prog: ProgFrame,
+    /// Settable frames the program wrote (`$P_UIFR[n]`), and the active one's matrix.
+    settable: [Option<settable::Components>; settable::SETTABLE],
+    settable_matrix: crate::frame::Mat3,
+    /// `DEFINE name AS text` macros, in order of definition (macro.rs).
+    macros: Vec<(String, String)>,
     /// G90 as the Siemens program has it, and as the interpreter was last given.
     absolute: bool,
     interp_absolute: bool,
@@ -157,6 +168,10 @@ impl Reader {
             queue: VecDeque::new(),
             notices: Vec::new(),
             frame: ProgFrame::default(),
+            prog: ProgFrame::default(),
+            settable: [None; settable::SETTABLE],
+            settable_matrix: crate::frame::IDENTITY,
+            macros: Vec::new(),
             absolute: true,
             interp_absolute: true,
             motion: u8::MAX,
@@ -238,6 +253,11 @@ impl Reader {
         upper.clear();
         upper.push_str(&line);
         upper.make_ascii_uppercase();
+        if let Some(expanded) = self.expand(&upper) {
+            // The block as read: errors quote the expanded text.
+            line.clone_from(&expanded);
+            upper = expanded;
+        }
         let result = self.block(&upper, line_no);
         self.upper = upper;
         self.line = line;

@@ -342,9 +342,16 @@ impl Reader {
             41 => "G41",
             42 => "G42",
             53 | 153 => "G53",
-            54..=57 => ["G54", "G55", "G56", "G57"][code as usize - 54],
-            500 => "G54.1 P96",
+            54..=57 => {
+                self.select_settable(code as usize - 53);
+                ["G54", "G55", "G56", "G57"][code as usize - 54]
+            }
+            500 => {
+                self.select_settable(0);
+                "G54.1 P96"
+            }
             505..=599 => {
+                self.select_settable(code as usize - 500);
                 w.other.push((format!("G54.1 P{}", code - 504), span));
                 return Ok(());
             }

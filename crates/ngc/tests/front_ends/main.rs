@@ -11,3 +11,4 @@ mod heidenhain;
 mod lent_moves;
 mod posts;
 mod siemens;
+mod siemens_posts;

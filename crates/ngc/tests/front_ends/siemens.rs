@@ -236,9 +236,9 @@ fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
             "`A3` (orientation vector)",
         ),
         (
-            "G0 X1\nN20 $P_UIFR[1]=CTRANS(X,10)\n",
+            "G0 X1\nN20 R1=$P_UIFR[1,X,TR]\n",
             2,
-            5,
+            8,
             "system variable `$P_UIFR`",
         ),
         ("G0 X1\nCYCLE83(10,0,1,-20)\n", 2, 1, "`CYCLE83`"),

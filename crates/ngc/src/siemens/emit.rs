@@ -43,6 +43,8 @@ impl Reader {
         }
         let computed = moves
             && (!self.frame.is_identity()
+                || self.motion == super::cip::CIP
+                || w.turn.is_some()
                 || w.axes
                     .iter()
                     .chain(&w.centres)
@@ -67,7 +69,7 @@ impl Reader {
             self.plane_code(self.normal, 0..0);
         } else {
             if computed {
-                self.computed_words(&w)?;
+                self.computed_words(&w, line_no)?;
             } else {
                 self.written_words(&w, up);
             }
@@ -119,7 +121,7 @@ impl Reader {
     }
 
     /// The plane code for normal axis `k`, when the interpreter's plane differs.
-    fn plane_code(&mut self, k: usize, span: std::ops::Range<usize>) {
+    pub(super) fn plane_code(&mut self, k: usize, span: std::ops::Range<usize>) {
         if k != self.interp_normal {
             self.push(["G19", "G18", "G17"][k], span);
             self.interp_normal = k;
@@ -151,8 +153,14 @@ impl Reader {
     }
 
     /// The words resolved through the frame and AC/IC to absolute work targets.
-    fn computed_words(&mut self, w: &Words) -> LineResult<()> {
+    fn computed_words(&mut self, w: &Words, line_no: usize) -> LineResult<()> {
         let span = first_span(w);
+        if self.motion == super::cip::CIP {
+            return self.cip_words(w, span);
+        }
+        if w.turn.is_some() {
+            return self.turn_words(w, line_no);
+        }
         let p = self.interp.program_position();
         let work = [p[Axis::X], p[Axis::Y], p[Axis::Z]];
         let here = self.frame.frame_point(work);

@@ -143,6 +143,55 @@ fn inverse(a: &Mat3) -> Mat3 {
     ]
 }
 
+/// Settable frames (settable.rs): `$P_UIFR[0]` (G500) to `$P_UIFR[99]` (G599).
+pub(super) const SETTABLE: usize = 100;
+
+/// A frame by its components, program units and deg.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Components {
+    pub coarse: [f64; 3],
+    pub fine: [f64; 3],
+    pub angles: [f64; 3],
+    pub scale: [f64; 3],
+    pub mirror: [bool; 3],
+}
+
+impl Default for Components {
+    fn default() -> Components {
+        Components {
+            coarse: [0.0; 3],
+            fine: [0.0; 3],
+            angles: [0.0; 3],
+            scale: [1.0; 3],
+            mirror: [false; 3],
+        }
+    }
+}
+
+impl Components {
+    /// Rotation × scale × mirror.
+    pub fn matrix(&self) -> crate::frame::Mat3 {
+        let [x, y, z] = self.angles;
+        let d: [f64; 3] =
+            std::array::from_fn(|k| self.scale[k] * if self.mirror[k] { -1.0 } else { 1.0 });
+        let diag = [[d[0], 0.0, 0.0], [0.0, d[1], 0.0], [0.0, 0.0, d[2]]];
+        mul(&rotation_zyx(x, y, z), &diag)
+    }
+
+    /// The offset, coarse and fine.
+    pub fn offset(&self) -> [f64; 3] {
+        std::array::from_fn(|k| self.coarse[k] + self.fine[k])
+    }
+
+    /// As a programmable frame (`o + A p`).
+    pub fn as_frame(&self) -> ProgFrame {
+        ProgFrame {
+            origin: self.offset(),
+            matrix: self.matrix(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

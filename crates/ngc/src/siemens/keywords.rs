@@ -63,34 +63,9 @@ pub(super) const REFUSED: &[(&str, &str, &str)] = &[
         "Fundamentals, \"Circular interpolation with opening angle and center point (AR)\"",
     ),
     (
-        "TURN",
-        "full turns of a helix",
-        "Fundamentals, \"Helical interpolation (G2/G3, TURN)\"",
-    ),
-    (
-        "CIP",
-        "circle through an intermediate point",
-        "Fundamentals, \"Circular interpolation with intermediate and end points (CIP)\"",
-    ),
-    (
         "CT",
         "tangential circle",
         "Fundamentals, \"Circular interpolation with tangential transition (CT)\"",
-    ),
-    (
-        "I1",
-        "intermediate point of CIP",
-        "Fundamentals, \"Circular interpolation with intermediate and end points (CIP)\"",
-    ),
-    (
-        "J1",
-        "intermediate point of CIP",
-        "Fundamentals, \"Circular interpolation with intermediate and end points (CIP)\"",
-    ),
-    (
-        "K1",
-        "intermediate point of CIP",
-        "Fundamentals, \"Circular interpolation with intermediate and end points (CIP)\"",
     ),
     (
         "CHF",

@@ -21,6 +21,7 @@
 //! head, is an error at its opening line.
 
 mod block;
+mod cip;
 mod cycles;
 mod emit;
 mod expr;
@@ -33,6 +34,7 @@ mod repeat;
 mod settable;
 mod source;
 mod state;
+mod turn;
 mod words;
 
 use std::collections::VecDeque;
@@ -87,7 +89,7 @@ pub(crate) struct Reader {
     frame: ProgFrame,
     prog: ProgFrame,
     /// Settable frames the program wrote (`$P_UIFR[n]`), and the active one's matrix.
-    settable: [Option<settable::Components>; settable::SETTABLE],
+    settable: [Option<frame::Components>; frame::SETTABLE],
     settable_matrix: crate::frame::Mat3,
     /// `DEFINE name AS text` macros, in order of definition (macro.rs).
     macros: Vec<(String, String)>,
@@ -169,7 +171,7 @@ impl Reader {
             notices: Vec::new(),
             frame: ProgFrame::default(),
             prog: ProgFrame::default(),
-            settable: [None; settable::SETTABLE],
+            settable: [None; frame::SETTABLE],
             settable_matrix: crate::frame::IDENTITY,
             macros: Vec::new(),
             absolute: true,

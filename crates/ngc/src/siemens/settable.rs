@@ -19,59 +19,10 @@
 //! is refused (its components would not be the control's).
 
 use super::expr::{expr, Scan};
-use super::frame::{rotation_zyx, Instruction, ProgFrame};
+use super::frame::{Components, Instruction, ProgFrame, SETTABLE};
 use super::Reader;
 use crate::frame::{apply, mul, IDENTITY};
 use crate::lex::LineResult;
-
-/// Settable frames: `$P_UIFR[0]` (G500) to `$P_UIFR[99]` (G599).
-pub(super) const SETTABLE: usize = 100;
-
-/// A frame by its components, program units and deg.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Components {
-    pub coarse: [f64; 3],
-    pub fine: [f64; 3],
-    pub angles: [f64; 3],
-    pub scale: [f64; 3],
-    pub mirror: [bool; 3],
-}
-
-impl Default for Components {
-    fn default() -> Components {
-        Components {
-            coarse: [0.0; 3],
-            fine: [0.0; 3],
-            angles: [0.0; 3],
-            scale: [1.0; 3],
-            mirror: [false; 3],
-        }
-    }
-}
-
-impl Components {
-    /// Rotation × scale × mirror.
-    pub fn matrix(&self) -> crate::frame::Mat3 {
-        let [x, y, z] = self.angles;
-        let d: [f64; 3] =
-            std::array::from_fn(|k| self.scale[k] * if self.mirror[k] { -1.0 } else { 1.0 });
-        let diag = [[d[0], 0.0, 0.0], [0.0, d[1], 0.0], [0.0, 0.0, d[2]]];
-        mul(&rotation_zyx(x, y, z), &diag)
-    }
-
-    /// The offset, coarse and fine.
-    pub fn offset(&self) -> [f64; 3] {
-        std::array::from_fn(|k| self.coarse[k] + self.fine[k])
-    }
-
-    /// As a programmable frame (`o + A p`).
-    pub fn as_frame(&self) -> ProgFrame {
-        ProgFrame {
-            origin: self.offset(),
-            matrix: self.matrix(),
-        }
-    }
-}
 
 /// The frame axis `X`, `Y` or `Z` at the cursor.
 fn axis(sc: &mut Scan, what: &str) -> LineResult<usize> {
@@ -315,7 +266,9 @@ impl Reader {
             let base = crate::interp::coord_parameter(settable_coord(n));
             let scale = self.interp.scale();
             for (k, o) in c.offset().iter().enumerate() {
-                self.interp.params.numbered[base + k] = o * scale;
+                if let Some(slot) = self.interp.params.numbered.get_mut(base + k) {
+                    *slot = o * scale;
+                }
             }
             self.settable_matrix = c.matrix();
         } else {

@@ -45,6 +45,10 @@ const CENTRES: &[u8; 3] = b"IJK";
 pub(super) struct Words {
     pub axes: [Option<Coordinate>; 9],
     pub centres: [Option<Coordinate>; 3],
+    /// CIP's intermediate point `I1= J1= K1=`.
+    pub cip: [Option<Coordinate>; 3],
+    /// `TURN=n`: full turns of a helix.
+    pub turn: Option<(u32, std::ops::Range<usize>)>,
     pub cr: Option<(f64, std::ops::Range<usize>)>,
     /// G0-G3 given in the block.
     pub motion: Option<u8>,
@@ -67,6 +71,7 @@ impl Words {
     pub fn has_motion_words(&self) -> bool {
         self.axes.iter().any(Option::is_some)
             || self.centres.iter().any(Option::is_some)
+            || self.cip.iter().any(Option::is_some)
             || self.cr.is_some()
     }
 }
@@ -107,6 +112,31 @@ impl Reader {
             self.named(name, at, sc, w, line_no)?;
         }
         Ok(())
+    }
+
+    /// `I1=`, `J1=`, `K1=` (CIP's intermediate point; the cursor after the name).
+    pub(super) fn cip_point(
+        &mut self,
+        k: usize,
+        at: usize,
+        sc: &mut Scan,
+        w: &mut Words,
+    ) -> LineResult<()> {
+        if !sc.eat(b'=') {
+            return Err(sc.err(
+                at,
+                "expected `I1=value` (CIP's intermediate point)",
+                "CIP point",
+            ));
+        }
+        let (value, mode) = self.value(sc)?;
+        let c = Coordinate {
+            value,
+            mode,
+            raw: None,
+            span: at..sc.at,
+        };
+        put(&mut w.cip[k], c, sc, at)
     }
 
     /// A single-letter address with a number or `=expr`: `G1`, `X-5`, `X=AC(R1)`, `R1=..`.

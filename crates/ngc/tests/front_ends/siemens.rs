@@ -228,7 +228,12 @@ fn tools_by_name_cycle800_reset_and_machine_m_codes_read_with_notices() {
 fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
     let cases: [(&str, usize, usize, &str); 10] = [
         ("G1 X1 F1\nG2 X10 AR=90\n", 2, 8, "`AR` (arc opening angle)"),
-        ("G1 X1 F1\nCIP X10 Y5 I1=5 J1=2\n", 2, 1, "`CIP`"),
+        (
+            "G1 X1 F1\nCIP X10 Y0 I1=5 J1=0\n",
+            2,
+            5,
+            "CIP with its start, intermediate and end points on one line",
+        ),
         (
             "G1 X1 A3=0 B3=0 C3=1 F1\n",
             1,

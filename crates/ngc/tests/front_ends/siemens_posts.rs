@@ -228,13 +228,18 @@ fn unsimulated_constructs_are_refused_by_name_at_line_and_column() {
             "`DC(..)` (a rotary axis position",
         ),
         ("G0 X1\nG1 AP=45 RP=10 F100\n", 2, 4, "Polar coordinates"),
-        ("G0 X0 Y0\nG1 F100\nCIP X10 Y0 I1=5 J1=5\n", 3, 1, "`CIP`"),
+        (
+            "G0 X0 Y0 Z0\nG1 F100\nCIP X10 Y0 Z10 I1=5 J1=5 K1=5\n",
+            3,
+            5,
+            "CIP through points whose circle lies in a plane other",
+        ),
         ("G0 X0 Y0\nG1 X10 F100\nCT X20 Y10\n", 3, 1, "`CT`"),
         (
-            "G0 X10 Y0\nG2 X10 Y0 Z-3 I-10 J0 TURN=2 F100\n",
+            "G0 X10 Y0\nG2 X10 Y0 Z-3 CR=5 TURN=2 F100\n",
             2,
-            23,
-            "`TURN`",
+            20,
+            "without I J K (or with CR=)",
         ),
         (
             "G0 X1 Y1 Z20\nCYCLE83(10,0,1,-20,,-5,,2,1,1,1,0)\n",
@@ -287,4 +292,82 @@ fn g53_and_supa_blocks_are_machine_coordinates_under_frames() {
             [13.0, 0.0, 0.0]
         ]
     );
+}
+
+/// `CIP` (Fundamentals, "Circular interpolation with intermediate and end points"): from
+/// (0,0,0) through (5,5) to (10,0) is the upper half of the circle about (5,0) of radius 5,
+/// clockwise seen from +Z (G2); in G18 through (X5,Z5) to (X10,Z0) the circle about
+/// (5,0,0) turns counter-clockwise seen from +Y (Z to the right, X up: (0,0) → (5,5) →
+/// (0,10)); under G91 the intermediate point is incremental from the start.
+#[test]
+fn cip_is_the_circle_through_the_three_points() {
+    let arc = |m: &Move| match m.motion {
+        Motion::Arc {
+            clockwise,
+            center_mm,
+            ..
+        } => (clockwise, center_mm.map(|v| (v * 1e9).round() / 1e9 + 0.0)),
+        other => panic!("expected an arc, got {other:?}"),
+    };
+    let ms =
+        moves("G17 G0 X0 Y0 Z0\nG1 F100\nCIP X10 Y0 I1=5 J1=5\nX0 Y0 I1=5 J1=-5\nG1 X1\nM30\n");
+    assert_eq!(
+        ends(&ms),
+        vec![
+            [0.0, 0.0, 0.0],
+            [10.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0]
+        ]
+    );
+    assert_eq!(arc(&ms[1]), (true, [5.0, 0.0, 0.0]));
+    // CIP is modal: the next block, through (5,-5) back to (0,0), is the lower half.
+    assert_eq!(arc(&ms[2]), (true, [5.0, 0.0, 0.0]));
+    assert!(matches!(ms[3].motion, Motion::Linear));
+    let ms = moves("G0 X0 Y0 Z0\nG18 G1 F100\nCIP X10 Z0 I1=5 K1=5\nM30\n");
+    assert_eq!(ends(&ms)[1], [10.0, 0.0, 0.0]);
+    assert_eq!(arc(&ms[1]), (false, [5.0, 0.0, 0.0]));
+    let ms = moves("G0 X20 Y0 Z0\nG91 G1 F100\nCIP X10 Y0 I1=5 J1=5\nM30\n");
+    assert_eq!(ends(&ms)[1], [30.0, 0.0, 0.0]);
+    assert_eq!(arc(&ms[1]), (true, [25.0, 0.0, 0.0]));
+}
+
+/// `TURN=n` (Fundamentals, "Helical interpolation"): n full circles, then the arc to the
+/// end, the helix axis moving with the angle. From (10,0,0) about (0,0), `G2 X10 Y0 Z-3
+/// TURN=2` is three full circles of 1 mm each; `G3 X0 Y10 Z-5 TURN=1` turns 2π + π/2, so
+/// the full circle ends at Z = -5 · 2π / 2.5π = -4 and the quarter at (0,10,-5).
+#[test]
+fn turn_adds_full_circles_to_a_helix() {
+    let ms = moves("G17 G0 X10 Y0 Z0\nG2 X10 Y0 Z-3 I-10 J0 TURN=2 F100\nM30\n");
+    assert_eq!(
+        ends(&ms),
+        vec![
+            [10.0, 0.0, 0.0],
+            [10.0, 0.0, -1.0],
+            [10.0, 0.0, -2.0],
+            [10.0, 0.0, -3.0]
+        ]
+    );
+    for m in &ms[1..] {
+        match m.motion {
+            Motion::Arc {
+                clockwise,
+                center_mm,
+                ..
+            } => assert!(clockwise && center_mm[0].abs() < 1e-9 && center_mm[1].abs() < 1e-9),
+            other => panic!("expected an arc, got {other:?}"),
+        }
+    }
+    let ms = moves("G17 G0 X10 Y0 Z0\nG3 X0 Y10 Z-5 I-10 J0 TURN=1 F100\nM30\n");
+    assert_eq!(
+        ends(&ms),
+        vec![[10.0, 0.0, 0.0], [10.0, 0.0, -4.0], [0.0, 10.0, -5.0]]
+    );
+    assert!(matches!(
+        ms[2].motion,
+        Motion::Arc {
+            clockwise: false,
+            ..
+        }
+    ));
 }

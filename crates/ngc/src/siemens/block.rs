@@ -645,6 +645,7 @@ impl Reader {
                 return Ok(());
             }
             "TURN" => return self.turn_word(at, sc, w),
+            "AP" | "RP" => return self.polar_word(usize::from(name == "RP"), at, sc, w),
             "I1" | "J1" | "K1" => {
                 let k = (name.as_bytes()[0] - b'I') as usize;
                 return self.cip_point(k, at, sc, w);

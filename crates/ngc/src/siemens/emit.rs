@@ -27,6 +27,9 @@ impl Reader {
             self.iso.push_str(&iso);
             self.run_iso(line_no)?;
         }
+        if self.polar(&mut w)? {
+            return Ok(true);
+        }
         if let Some(m) = w.motion {
             self.motion = m;
         }

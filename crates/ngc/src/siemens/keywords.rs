@@ -48,16 +48,6 @@ pub(super) const NOTED: &[&str] = &[
 /// SINUMERIK 840D sl programming manual section that describes them.
 pub(super) const REFUSED: &[(&str, &str, &str)] = &[
     (
-        "AP",
-        "polar angle",
-        "Fundamentals, \"Polar coordinates (G110, G111, G112, AP, RP)\"",
-    ),
-    (
-        "RP",
-        "polar radius",
-        "Fundamentals, \"Polar coordinates (G110, G111, G112, AP, RP)\"",
-    ),
-    (
         "AR",
         "arc opening angle",
         "Fundamentals, \"Circular interpolation with opening angle and center point (AR)\"",

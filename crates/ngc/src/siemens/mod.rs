@@ -30,6 +30,7 @@ mod frame;
 mod keywords;
 mod macros;
 mod plain;
+mod polar;
 mod repeat;
 mod settable;
 mod source;
@@ -91,6 +92,9 @@ pub(crate) struct Reader {
     /// Settable frames the program wrote (`$P_UIFR[n]`), and the active one's matrix.
     settable: [Option<frame::Components>; frame::SETTABLE],
     settable_matrix: crate::frame::Mat3,
+    /// The pole of polar coordinates (frame coordinates) and the modal AP=, RP= (polar.rs).
+    pole: [f64; 3],
+    polar_values: [f64; 2],
     /// `DEFINE name AS text` macros, in order of definition (macro.rs).
     macros: Vec<(String, String)>,
     /// G90 as the Siemens program has it, and as the interpreter was last given.
@@ -174,6 +178,8 @@ impl Reader {
             settable: [None; frame::SETTABLE],
             settable_matrix: crate::frame::IDENTITY,
             macros: Vec::new(),
+            pole: [0.0; 3],
+            polar_values: [0.0; 2],
             absolute: true,
             interp_absolute: true,
             motion: u8::MAX,

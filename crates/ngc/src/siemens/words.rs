@@ -47,6 +47,9 @@ pub(super) struct Words {
     pub centres: [Option<Coordinate>; 3],
     /// CIP's intermediate point `I1= J1= K1=`.
     pub cip: [Option<Coordinate>; 3],
+    /// `AP=`, `RP=` (polar angle and radius) as given, and a pole code G110-G112.
+    pub polar: [Option<Coordinate>; 2],
+    pub pole: Option<(u32, std::ops::Range<usize>)>,
     /// `TURN=n`: full turns of a helix.
     pub turn: Option<(u32, std::ops::Range<usize>)>,
     pub cr: Option<(f64, std::ops::Range<usize>)>,
@@ -72,6 +75,7 @@ impl Words {
         self.axes.iter().any(Option::is_some)
             || self.centres.iter().any(Option::is_some)
             || self.cip.iter().any(Option::is_some)
+            || self.polar.iter().any(Option::is_some)
             || self.cr.is_some()
     }
 }
@@ -112,6 +116,27 @@ impl Reader {
             self.named(name, at, sc, w, line_no)?;
         }
         Ok(())
+    }
+
+    /// `AP=` (k = 0) or `RP=` (k = 1), the cursor after the name.
+    pub(super) fn polar_word(
+        &mut self,
+        k: usize,
+        at: usize,
+        sc: &mut Scan,
+        w: &mut Words,
+    ) -> LineResult<()> {
+        if !sc.eat(b'=') {
+            return Err(sc.err(at, "expected `AP=angle` or `RP=radius`", "polar coordinate"));
+        }
+        let (value, mode) = self.value(sc)?;
+        let c = Coordinate {
+            value,
+            mode,
+            raw: None,
+            span: at..sc.at,
+        };
+        put(&mut w.polar[k], c, sc, at)
     }
 
     /// `I1=`, `J1=`, `K1=` (CIP's intermediate point; the cursor after the name).
@@ -417,6 +442,10 @@ impl Reader {
             // Exact stop non-modal, exact-stop windows, corner behaviour, speed limits:
             // no effect on the path mtsim reads.
             450 | 451 | 601 | 602 | 603 | 97 => return Ok(()),
+            110..=112 => {
+                w.pole = Some((code, span));
+                return Ok(());
+            }
             _ => {
                 let text = std::str::from_utf8(&sc.s[span.clone()]).unwrap_or("G");
                 return Err(LineError::new(span, format!("`{text}` is not supported by mtsim's Siemens reader (docs/gcode.md lists the Sinumerik G codes it reads)"), "unsupported G code"));

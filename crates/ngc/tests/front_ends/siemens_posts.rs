@@ -227,7 +227,12 @@ fn unsimulated_constructs_are_refused_by_name_at_line_and_column() {
             6,
             "`DC(..)` (a rotary axis position",
         ),
-        ("G0 X1\nG1 AP=45 RP=10 F100\n", 2, 4, "Polar coordinates"),
+        (
+            "G0 X1\nG91 G1 AP=45 RP=10 F100\n",
+            2,
+            8,
+            "AP=/RP= under G91",
+        ),
         (
             "G0 X0 Y0 Z0\nG1 F100\nCIP X10 Y0 Z10 I1=5 J1=5 K1=5\n",
             3,
@@ -370,4 +375,39 @@ fn turn_adds_full_circles_to_a_helix() {
             ..
         }
     ));
+}
+
+/// Polar coordinates (Fundamentals, "Polar coordinates"): with no pole the zero point is
+/// the pole, `G1 AP=90 RP=10` is (0,10); `G111 X10 Y10` sets the pole, `AP=0 RP=5` is
+/// (15,10); `G3 AP=90` (RP=5 kept) turns about the pole to (10,15); `AP=IC(90)` adds 90°:
+/// (5,10); `G112 X5` puts the pole at (15,10) and `RP=2` (AP=180 kept) is (13,10); in G18
+/// the angle runs from Z towards X: pole (0,0), `AP=90 RP=4` is X4 Z0.
+#[test]
+fn polar_coordinates_about_the_pole() {
+    let ms = moves(
+        "G17 G90 G0 X0 Y0 Z0\nG1 AP=90 RP=10 F100\nG111 X10 Y10\nG1 AP=0 RP=5\nG3 AP=90\n\
+         G1 AP=IC(90)\nG112 X5\nRP=2\nG18\nG111 Z0 X0\nG1 AP=90 RP=4\nM30\n",
+    );
+    assert_eq!(
+        ends(&ms),
+        vec![
+            [0.0, 0.0, 0.0],
+            [0.0, 10.0, 0.0],
+            [15.0, 10.0, 0.0],
+            [10.0, 15.0, 0.0],
+            [5.0, 10.0, 0.0],
+            [13.0, 10.0, 0.0],
+            [4.0, 10.0, 0.0],
+        ]
+    );
+    match ms[3].motion {
+        Motion::Arc {
+            clockwise,
+            center_mm,
+            ..
+        } => assert!(
+            !clockwise && (center_mm[0] - 10.0).abs() < 1e-9 && (center_mm[1] - 10.0).abs() < 1e-9
+        ),
+        other => panic!("expected an arc, got {other:?}"),
+    }
 }

@@ -376,7 +376,9 @@ fn deep_or_overflowing_expressions_and_garbage_are_errors_not_crashes() {
     // Every byte sequence of a few kinds of garbage reads or fails, never panics.
     let pieces = [
         "G1", "X", "=", "AC(", ")", "R1", "IF", "ENDIF", "WHILE", "ENDFOR", "\"", ";", "é", "[",
-        "$", "N", ":", "-", "1.", "CR=", "TRANS", "MCALL", "CYCLE81(", ",",
+        "$", "N", ":", "-", "1.", "CR=", "TRANS", "MCALL", "CYCLE81(", ",", "CIP", "I1=", "TURN=",
+        "AP=", "RP=", "G111", "G2", "DEFINE", "AS", "$P_UIFR[", "CTRANS(", "CROT(", "CASE", "OF",
+        "GOTOF", "G54",
     ];
     let mut state: u64 = 7;
     for _ in 0..3000 {

@@ -640,15 +640,8 @@ impl Reader {
                 return Ok(());
             }
             "MSG" => return skip_call(sc, at),
-            "CIP" => {
-                w.motion = Some(super::cip::CIP);
-                return Ok(());
-            }
-            "TURN" => return self.turn_word(at, sc, w),
-            "AP" | "RP" => return self.polar_word(usize::from(name == "RP"), at, sc, w),
-            "I1" | "J1" | "K1" => {
-                let k = (name.as_bytes()[0] - b'I') as usize;
-                return self.cip_point(k, at, sc, w);
+            "CT" | "CIP" | "TURN" | "AP" | "RP" | "I1" | "J1" | "K1" => {
+                return self.geometry_word(name, at, sc, w)
             }
             n if REFUSED.iter().any(|(k, _, _)| *k == n) => {
                 let (what, section) = REFUSED

@@ -9,14 +9,14 @@
 //! canonical arc lies in XY, ZX or YZ), and the arc runs counter-clockwise about `+n`'s
 //! axis when `n` points along it (G3), clockwise otherwise (G2). Its centre is the
 //! circumcentre of the three points in that plane.
+//!
+//! `CT X.. Y..` (motion code 6, modal too): the arc from the start, tangent there to the
+//! direction the path had at the end of the move before, to the end point.
 
 use super::words::{number, Coordinate, Mode, Words};
 use super::Reader;
 use crate::axis::Axis;
 use crate::lex::{LineError, LineResult};
-
-/// The motion code the front end keeps for CIP.
-pub(super) const CIP: u8 = 5;
 
 impl Reader {
     /// The ISO words of a CIP block (see the module doc).
@@ -101,6 +101,91 @@ impl Reader {
         for (i, l) in ["I", "J", "K"].iter().enumerate() {
             if i != k {
                 self.push(&format!("{l}{}", number(centre[i])), span.clone());
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Reader {
+    /// The ISO words of a CT block: the arc from the start, tangent there to the path
+    /// before, to the end point. Its centre lies on the start's normal to the tangent
+    /// `n = e_k × t` (k the plane's normal axis) at `λ = |d|² / (2 d·n)`, `d` the chord;
+    /// `λ > 0` puts it on the left of the path: counter-clockwise (G3).
+    pub(super) fn ct_words(&mut self, w: &Words, span: std::ops::Range<usize>) -> LineResult<()> {
+        let refuse = |m: &str, label: &str| {
+            Err(LineError::new(span.clone(), format!("{m} (Fundamentals, \"Circular interpolation with tangential transition (CT)\")"), label))
+        };
+        if self.tcp || self.interp.frame().is_some() {
+            return refuse("CT under TRAORI or a swivelled plane: not supported", "CT");
+        }
+        let Some(t) = self.tangent else {
+            return refuse(
+                "CT with no path before it to be tangent to",
+                "CT without a tangent",
+            );
+        };
+        let Some((k, _, _)) = self.frame.arc_plane(self.normal) else {
+            return refuse(
+                "CT in a frame that tilts its plane off the work axes",
+                "arc in a tilted frame",
+            );
+        };
+        let p = self.interp.program_position();
+        let start = [p[Axis::X], p[Axis::Y], p[Axis::Z]];
+        let here = self.frame.frame_point(start);
+        let mut q = here;
+        for (i, q) in q.iter_mut().enumerate() {
+            *q = match &w.axes[i] {
+                None => here[i],
+                Some(c) => match c.mode {
+                    Mode::Absolute => c.value,
+                    Mode::Incremental => here[i] + c.value,
+                    Mode::Modal if self.absolute => c.value,
+                    Mode::Modal => here[i] + c.value,
+                },
+            };
+        }
+        let end = self.frame.work_point(q);
+        let mut tp = t;
+        tp[k] = 0.0;
+        let len = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if len(tp) <= 1e-9 * len(t) {
+            return refuse(
+                "CT after a move along the plane's normal: no tangent in the plane",
+                "CT without a tangent",
+            );
+        }
+        let mut e_k = [0.0; 3];
+        e_k[k] = 1.0;
+        let n = [
+            e_k[1] * tp[2] - e_k[2] * tp[1],
+            e_k[2] * tp[0] - e_k[0] * tp[2],
+            e_k[0] * tp[1] - e_k[1] * tp[0],
+        ];
+        let n = n.map(|x| x / len(tp));
+        let mut d = [end[0] - start[0], end[1] - start[1], end[2] - start[2]];
+        d[k] = 0.0;
+        let dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+        if dn.abs() <= 1e-9 * len(d) || len(d) == 0.0 {
+            return refuse(
+                "CT to an end point on the tangent's line (or at the start): no circle",
+                "CT end on the tangent",
+            );
+        }
+        let lambda = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / (2.0 * dn);
+        self.push("G90", span.clone());
+        self.interp_absolute = true;
+        self.plane_code(k, span.clone());
+        let code = if lambda > 0.0 { 3 } else { 2 };
+        self.push(&format!("G{code}"), span.clone());
+        self.interp_motion = code;
+        for (i, l) in ["X", "Y", "Z"].iter().enumerate() {
+            self.push(&format!("{l}{}", number(end[i])), span.clone());
+        }
+        for (i, l) in ["I", "J", "K"].iter().enumerate() {
+            if i != k {
+                self.push(&format!("{l}{}", number(lambda * n[i])), span.clone());
             }
         }
         Ok(())

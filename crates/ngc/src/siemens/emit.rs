@@ -46,7 +46,8 @@ impl Reader {
         }
         let computed = moves
             && (!self.frame.is_identity()
-                || self.motion == super::cip::CIP
+                || self.motion == super::state::CIP
+                || self.motion == super::state::CT
                 || w.turn.is_some()
                 || w.axes
                     .iter()
@@ -158,8 +159,11 @@ impl Reader {
     /// The words resolved through the frame and AC/IC to absolute work targets.
     fn computed_words(&mut self, w: &Words, line_no: usize) -> LineResult<()> {
         let span = first_span(w);
-        if self.motion == super::cip::CIP {
+        if self.motion == super::state::CIP {
             return self.cip_words(w, span);
+        }
+        if self.motion == super::state::CT {
+            return self.ct_words(w, span);
         }
         if w.turn.is_some() {
             return self.turn_words(w, line_no);

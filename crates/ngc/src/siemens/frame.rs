@@ -192,6 +192,32 @@ impl Components {
     }
 }
 
+/// The direction a move leaves its end point in (X Y Z, any length), or `None` for a
+/// dwell or a move of no length (Fundamentals, "Circular interpolation with tangential
+/// transition (CT)": the circle continues the path's direction).
+pub(super) fn end_tangent(m: &crate::canon::Move) -> Option<[f64; 3]> {
+    let (s, e) = (m.start.0, m.end.0);
+    let t = match m.motion {
+        crate::canon::Motion::Rapid | crate::canon::Motion::Linear => {
+            [e[0] - s[0], e[1] - s[1], e[2] - s[2]]
+        }
+        crate::canon::Motion::Arc {
+            clockwise,
+            plane,
+            center_mm,
+        } => {
+            let (u, v, _) = plane.axes();
+            let (u, v) = (u.index(), v.index());
+            let (ru, rv) = (e[u] - center_mm[u], e[v] - center_mm[v]);
+            let mut t = [0.0; 3];
+            (t[u], t[v]) = if clockwise { (rv, -ru) } else { (-rv, ru) };
+            t
+        }
+        crate::canon::Motion::Dwell { .. } => return None,
+    };
+    (t.iter().any(|x| x.abs() > 1e-12) && t.iter().all(|x| x.is_finite())).then_some(t)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

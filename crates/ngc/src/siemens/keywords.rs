@@ -53,11 +53,6 @@ pub(super) const REFUSED: &[(&str, &str, &str)] = &[
         "Fundamentals, \"Circular interpolation with opening angle and center point (AR)\"",
     ),
     (
-        "CT",
-        "tangential circle",
-        "Fundamentals, \"Circular interpolation with tangential transition (CT)\"",
-    ),
-    (
         "CHF",
         "chamfer",
         "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM)\"",

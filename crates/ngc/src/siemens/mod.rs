@@ -94,6 +94,8 @@ pub(crate) struct Reader {
     settable_matrix: crate::frame::Mat3,
     /// The pole of polar coordinates (frame coordinates) and the modal AP=, RP= (polar.rs).
     pole: [f64; 3],
+    /// The direction the last move left its end point in (machine X Y Z), for CT.
+    tangent: Option<[f64; 3]>,
     polar_values: [f64; 2],
     /// `DEFINE name AS text` macros, in order of definition (macro.rs).
     macros: Vec<(String, String)>,
@@ -179,6 +181,7 @@ impl Reader {
             settable_matrix: crate::frame::IDENTITY,
             macros: Vec::new(),
             pole: [0.0; 3],
+            tangent: None,
             polar_values: [0.0; 2],
             absolute: true,
             interp_absolute: true,
@@ -320,6 +323,9 @@ impl Reader {
                     &level.path,
                 );
                 self.words = reuse(words);
+                if let Some(t) = self.queue.back().and_then(frame::end_tangent) {
+                    self.tangent = Some(t);
+                }
                 r
             }
             _ => Ok(Stop::None),

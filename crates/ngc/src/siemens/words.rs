@@ -118,6 +118,28 @@ impl Reader {
         Ok(())
     }
 
+    /// The named words of the path's geometry: `CT`, `CIP` (motion codes), `TURN=`,
+    /// `AP=`, `RP=`, `I1= J1= K1=`.
+    pub(super) fn geometry_word(
+        &mut self,
+        name: &str,
+        at: usize,
+        sc: &mut Scan,
+        w: &mut Words,
+    ) -> LineResult<()> {
+        match name {
+            "CT" => w.motion = Some(super::state::CT),
+            "CIP" => w.motion = Some(super::state::CIP),
+            "TURN" => return self.turn_word(at, sc, w),
+            "AP" | "RP" => return self.polar_word(usize::from(name == "RP"), at, sc, w),
+            _ => {
+                let k = usize::from(name.as_bytes()[0].saturating_sub(b'I')).min(2);
+                return self.cip_point(k, at, sc, w);
+            }
+        }
+        Ok(())
+    }
+
     /// `AP=` (k = 0) or `RP=` (k = 1), the cursor after the name.
     pub(super) fn polar_word(
         &mut self,

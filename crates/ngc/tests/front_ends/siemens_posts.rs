@@ -239,7 +239,12 @@ fn unsimulated_constructs_are_refused_by_name_at_line_and_column() {
             5,
             "CIP through points whose circle lies in a plane other",
         ),
-        ("G0 X0 Y0\nG1 X10 F100\nCT X20 Y10\n", 3, 1, "`CT`"),
+        (
+            "G0 X0 Y0\nG1 X10 F100\nCT X20 Y0\n",
+            3,
+            4,
+            "CT to an end point on the tangent's line",
+        ),
         (
             "G0 X10 Y0\nG2 X10 Y0 Z-3 CR=5 TURN=2 F100\n",
             2,
@@ -410,4 +415,46 @@ fn polar_coordinates_about_the_pole() {
         ),
         other => panic!("expected an arc, got {other:?}"),
     }
+}
+
+/// `CT` (Fundamentals, "Circular interpolation with tangential transition"): after G1
+/// along +X to (10,0), `CT X20 Y10` is the quarter circle about (10,10) of radius 10,
+/// counter-clockwise (the end lies to the left); CT is modal, and the next block leaves
+/// (20,10) along +Y: chord d = (-10,10), normal n = (-1,0), λ = |d|²/(2 d·n) = 200/20 = 10,
+/// so the centre is (10,10) again, counter-clockwise.
+#[test]
+fn ct_continues_the_path_tangentially() {
+    let ms = moves("G17 G0 X0 Y0 Z0\nG1 X10 F100\nCT X20 Y10\nX10 Y20\nG1 X0\nM30\n");
+    assert_eq!(
+        ends(&ms),
+        vec![
+            [0.0, 0.0, 0.0],
+            [10.0, 0.0, 0.0],
+            [20.0, 10.0, 0.0],
+            [10.0, 20.0, 0.0],
+            [0.0, 20.0, 0.0]
+        ]
+    );
+    for m in &ms[2..4] {
+        match m.motion {
+            Motion::Arc {
+                clockwise,
+                center_mm,
+                ..
+            } => assert!(
+                !clockwise
+                    && (center_mm[0] - 10.0).abs() < 1e-9
+                    && (center_mm[1] - 10.0).abs() < 1e-9,
+                "{m:?}"
+            ),
+            other => panic!("expected an arc, got {other:?}"),
+        }
+    }
+    // Turning right: after G1 along +X, CT X20 Y-10 is clockwise about (10,-10).
+    let ms = moves("G17 G0 X0 Y0 Z0\nG1 X10 F100\nCT X20 Y-10\nM30\n");
+    assert!(matches!(
+        ms[2].motion,
+        Motion::Arc { clockwise: true, center_mm, .. }
+            if (center_mm[0] - 10.0).abs() < 1e-9 && (center_mm[1] + 10.0).abs() < 1e-9
+    ));
 }

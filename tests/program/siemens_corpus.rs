@@ -139,7 +139,7 @@ fn siemens_corpus_programs_are_read_or_refused_by_name_without_panics_or_hangs()
         "only {read} Siemens programs read, floor {READ_FLOOR}"
     );
     // Every program of the corpus is read or refused for what is not given (issue 41:
-    // 4 subprograms, 4 global user data files, 5 values of the control, 1 travel).
+    // 5 subprograms, 4 global user data files, 4 values of the control, 1 travel).
     assert_eq!(
         read + rightly,
         names.len(),

@@ -77,7 +77,7 @@ impl Interp {
     }
 
     /// The program-to-machine map while G68.2 or G254 is active.
-    pub(super) fn frame(&self) -> Option<Frame> {
+    pub(crate) fn frame(&self) -> Option<Frame> {
         if self.tilt.is_none() && !self.dwo {
             return None;
         }

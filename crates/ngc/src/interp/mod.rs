@@ -218,7 +218,7 @@ fn extended_parameter(n: u32) -> usize {
     7001 + 20 * (n as usize - 1)
 }
 
-fn coord_parameter(coord: u32) -> usize {
+pub(crate) fn coord_parameter(coord: u32) -> usize {
     if coord <= 9 {
         5201 + 20 * coord as usize
     } else {

@@ -8,6 +8,7 @@ use super::expr::{
 };
 use super::flow::skip_number_and_label;
 use super::frame::{rotation_zyx, Instruction};
+use super::keywords::{NOTED, REFUSED};
 use super::state::{Structure, Var};
 use super::words::Words;
 use super::Reader;
@@ -15,84 +16,6 @@ use crate::lex::LineResult;
 
 /// Most variables (array elements counted) one program level holds.
 const MAX_VARIABLES: usize = 10_000;
-
-/// Keywords accepted anywhere in a block that do not change the path mtsim reads
-/// (dynamics, compressors, look-ahead, orientation reference): noted once.
-const NOTED: &[&str] = &[
-    "SOFT",
-    "BRISK",
-    "FFWON",
-    "FFWOF",
-    "COMPOF",
-    "COMPON",
-    "COMPCAD",
-    "COMPCURV",
-    "CFC",
-    "CFTCP",
-    "CFIN",
-    "STOPRE",
-    // The blank's shape and size for the control's simulation display.
-    "WORKPIECE",
-    "SPATH",
-    "UPATH",
-    "ORIWKS",
-    "ORIMKS",
-    "ORIAXES",
-    "ORIVECT",
-    "SETMS",
-    "DIAMOF",
-    "ACN",
-    "ACP",
-    "DC",
-    "G64",
-    "WAITM",
-    "PTP",
-    "CP",
-    "DRIVE",
-    "FGROUP",
-    "GROUP_BEGIN",
-    "GROUP_END",
-    "DISPLOF",
-    "DISPLON",
-    "SAVE",
-    "FIFOCTRL",
-];
-
-/// Sinumerik words mtsim knows and does not read: refused with what they are.
-const REFUSED: &[(&str, &str)] = &[
-    ("AP", "polar angle"),
-    ("RP", "polar radius"),
-    ("AR", "arc opening angle"),
-    ("TURN", "full turns of a helix"),
-    ("CIP", "circle through an intermediate point"),
-    ("CT", "tangential circle"),
-    ("I1", "intermediate point of CIP"),
-    ("J1", "intermediate point of CIP"),
-    ("K1", "intermediate point of CIP"),
-    ("CHF", "chamfer"),
-    ("CHR", "chamfer"),
-    ("RND", "rounding"),
-    ("RNDM", "modal rounding"),
-    ("OFFN", "contour offset"),
-    ("SPOS", "spindle positioning"),
-    ("SPOSA", "spindle positioning"),
-    ("POLY", "polynomial interpolation"),
-    ("ASPLINE", "spline"),
-    ("BSPLINE", "spline"),
-    ("CSPLINE", "spline"),
-    ("TRANSMIT", "face transformation"),
-    ("TRACYL", "cylinder transformation"),
-    ("TRAANG", "inclined-axis transformation"),
-    ("TOFRAME", "tool frame"),
-    ("TCARR", "tool carrier"),
-    ("PAROT", "workpiece-aligned frame"),
-    ("A3", "orientation vector"),
-    ("B3", "orientation vector"),
-    ("C3", "orientation vector"),
-    ("A2", "orientation angle"),
-    ("B2", "orientation angle"),
-    ("C2", "orientation angle"),
-];
 
 impl Reader {
     /// Runs one upper-cased line; `Ok(false)` when the program ends.
@@ -175,6 +98,7 @@ impl Reader {
                 self.jump(kw, target, t_at..sc.at)?;
             }
             "DEF" => self.def(sc, at, line_no)?,
+            "DEFINE" => self.define(sc, at)?,
             "PROC" => self.proc(sc, at)?,
             "RET" => return self.end_of_level().map(Some),
             "EXTERN" => {}
@@ -204,8 +128,9 @@ impl Reader {
                     .to_string();
                 self.call(&name, Vec::new(), 1, at..sc.at)?;
             }
-            "CALL" | "PCALL" | "EXECUTE" | "EXECTAB" | "CASE" | "SETAL" | "STOPRE_" | "WHEN"
-            | "EVERY" | "ID" | "IDS" => {
+            "CASE" => self.case_statement(sc, at)?,
+            "CALL" | "PCALL" | "EXECUTE" | "EXECTAB" | "SETAL" | "STOPRE_" | "WHEN" | "EVERY"
+            | "ID" | "IDS" => {
                 return Err(sc.err(
                     at,
                     format!("`{kw}` is not supported by mtsim's Siemens reader"),
@@ -639,7 +564,7 @@ impl Reader {
             }
             _ => Instruction::Mirror(v.map(|x| x.is_some())),
         };
-        self.frame.apply(instruction, additive);
+        self.programmable(instruction, additive);
         Ok(())
     }
 
@@ -715,9 +640,15 @@ impl Reader {
                 return Ok(());
             }
             "MSG" => return skip_call(sc, at),
-            n if REFUSED.iter().any(|(k, _)| *k == n) => {
-                let what = REFUSED.iter().find(|(k, _)| *k == n).map_or("", |(_, w)| w);
-                return Err(sc.err(at, format!("`{n}` ({what}) is not supported by mtsim's Siemens reader (docs/gcode.md lists what it reads)"), "unsupported Sinumerik word"));
+            "CT" | "CIP" | "TURN" | "AP" | "RP" | "I1" | "J1" | "K1" => {
+                return self.geometry_word(name, at, sc, w)
+            }
+            n if REFUSED.iter().any(|(k, _, _)| *k == n) => {
+                let (what, section) = REFUSED
+                    .iter()
+                    .find(|(k, _, _)| *k == n)
+                    .map_or(("", ""), |(_, w, s)| (*w, *s));
+                return Err(sc.err(at, format!("`{n}` ({what}) is not supported by mtsim's Siemens reader (SINUMERIK 840D sl programming manual {section}; docs/gcode.md lists what it reads)"), "unsupported Sinumerik word"));
             }
             n if NOTED.contains(&n) => {
                 if sc.peek() == Some(b'(') {
@@ -727,6 +658,12 @@ impl Reader {
                 return Ok(());
             }
             _ => {}
+        }
+        if name == "$P_UIFR" && sc.peek() == Some(b'[') {
+            return self.settable_write(sc, at);
+        }
+        if name == "$P_PFRAME" {
+            return self.programmable_write(sc, at);
         }
         if name.starts_with('$') {
             return Err(sc.err(
@@ -792,7 +729,7 @@ impl Reader {
 }
 
 /// Skips `( ... )` with strings inside, after a name.
-fn skip_call(sc: &mut Scan, at: usize) -> LineResult<()> {
+pub(super) fn skip_call(sc: &mut Scan, at: usize) -> LineResult<()> {
     if !sc.eat(b'(') {
         return Ok(());
     }

@@ -39,10 +39,13 @@ impl Reader {
             return Ok(());
         }
         if name == "CYCLE832" {
-            self.arguments(sc, at)?;
+            // Tolerance and machining type (`_FINISH`, `_ORI_ROUGH` … name macros of the
+            // control's cycle definitions): settings of the control's compressor and
+            // smoothing, which the path mtsim reads does not depend on.
+            super::block::skip_call(sc, at)?;
             self.notice(
                 line_no,
-                "CYCLE832 (high-speed settings) accepted and not simulated".into(),
+                "CYCLE832 (high-speed settings: tolerance and machining type) accepted and not simulated".into(),
             );
             return Ok(());
         }
@@ -95,7 +98,7 @@ impl Reader {
     pub(super) fn cycle(&mut self, name: &str, at: usize, sc: &mut Scan) -> LineResult<Cycle> {
         let span = at..sc.at;
         if !matches!(name, "CYCLE81" | "CYCLE82") {
-            return Err(LineError::new(span, format!("`{name}` is not supported by mtsim's Siemens reader: it reads the drilling cycles CYCLE81 and CYCLE82"), "unsupported cycle"));
+            return Err(LineError::new(span, format!("`{name}` ({}) is not supported by mtsim's Siemens reader: it reads the drilling cycles CYCLE81 and CYCLE82", cycle_kind(name)), "unsupported cycle"));
         }
         let a = self.arguments(sc, at)?;
         let get = |k: usize| a.get(k).copied().flatten();
@@ -286,4 +289,27 @@ fn euler_zxz_angles(r: &Mat3) -> [f64; 3] {
         j.to_degrees(),
         r[2][0].atan2(r[2][1]).to_degrees(),
     ]
+}
+
+/// What a standard cycle the reader refuses is, with its section of the SINUMERIK 840D sl
+/// "Cycles" (milling) programming manual.
+fn cycle_kind(name: &str) -> &'static str {
+    match name {
+        "CYCLE83" => "deep-hole drilling; Cycles, \"Deep-hole drilling (CYCLE83)\"",
+        "CYCLE84" => "rigid tapping; Cycles, \"Tapping without compensating chuck (CYCLE84)\"",
+        "CYCLE840" => "tapping with a compensating chuck; Cycles, \"Tapping with compensating chuck (CYCLE840)\"",
+        "CYCLE85" | "CYCLE86" | "CYCLE87" | "CYCLE88" | "CYCLE89" => {
+            "boring; Cycles, \"Boring (CYCLE85 to CYCLE89)\""
+        }
+        "CYCLE71" => "face milling; Cycles, \"Face milling (CYCLE71)\"",
+        "CYCLE72" => "contour milling; Cycles, \"Contour milling (CYCLE72)\"",
+        "CYCLE76" | "CYCLE77" => "spigot milling; Cycles, \"Rectangular/circular spigot milling (CYCLE76, CYCLE77)\"",
+        "CYCLE61" => "face milling; Cycles, \"Face milling (CYCLE61)\"",
+        "CYCLE62" | "CYCLE63" | "CYCLE64" => "contour pocket milling; Cycles, \"Contour milling\"",
+        "CYCLE78" => "drill thread milling; Cycles, \"Drill thread milling (CYCLE78)\"",
+        "CYCLE90" => "thread milling; Cycles, \"Thread milling (CYCLE90)\"",
+        "CYCLE899" => "open slot milling; Cycles, \"Open slot (CYCLE899)\"",
+        n if n.starts_with("CYCLE9") => "a measuring cycle; Measuring cycles manual",
+        _ => "a standard or machine-builder cycle; SINUMERIK Cycles manual",
+    }
 }

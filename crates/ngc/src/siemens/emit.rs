@@ -8,11 +8,27 @@ use crate::interp::Stop;
 use crate::lex::{LineError, LineResult};
 
 impl Reader {
-    /// Runs the collected block; `Ok(false)` when the program ends.
-    pub(super) fn emit(&mut self, mut w: Words, up: &str, line_no: usize) -> LineResult<bool> {
+    /// Runs the collected block; `Ok(false)` when the program ends. `G53`, `G153` and
+    /// `SUPA` suppress the settable and programmable frames for their block (Fundamentals,
+    /// "Settable zero offset (G54 to G57, G505 to G599, G53, G500, SUPA, G153)"): the
+    /// block's coordinates are machine coordinates, not turned or shifted by the frames.
+    pub(super) fn emit(&mut self, w: Words, up: &str, line_no: usize) -> LineResult<bool> {
+        if w.other.iter().any(|(t, _)| t == "G53") && !self.frame.is_identity() {
+            let frame = std::mem::take(&mut self.frame);
+            let result = self.emit_block(w, up, line_no);
+            self.frame = frame;
+            return result;
+        }
+        self.emit_block(w, up, line_no)
+    }
+
+    fn emit_block(&mut self, mut w: Words, up: &str, line_no: usize) -> LineResult<bool> {
         for iso in std::mem::take(&mut w.before) {
             self.iso.push_str(&iso);
             self.run_iso(line_no)?;
+        }
+        if self.polar(&mut w)? {
+            return Ok(true);
         }
         if let Some(m) = w.motion {
             self.motion = m;
@@ -30,6 +46,9 @@ impl Reader {
         }
         let computed = moves
             && (!self.frame.is_identity()
+                || self.motion == super::state::CIP
+                || self.motion == super::state::CT
+                || w.turn.is_some()
                 || w.axes
                     .iter()
                     .chain(&w.centres)
@@ -54,7 +73,7 @@ impl Reader {
             self.plane_code(self.normal, 0..0);
         } else {
             if computed {
-                self.computed_words(&w)?;
+                self.computed_words(&w, line_no)?;
             } else {
                 self.written_words(&w, up);
             }
@@ -106,7 +125,7 @@ impl Reader {
     }
 
     /// The plane code for normal axis `k`, when the interpreter's plane differs.
-    fn plane_code(&mut self, k: usize, span: std::ops::Range<usize>) {
+    pub(super) fn plane_code(&mut self, k: usize, span: std::ops::Range<usize>) {
         if k != self.interp_normal {
             self.push(["G19", "G18", "G17"][k], span);
             self.interp_normal = k;
@@ -138,8 +157,17 @@ impl Reader {
     }
 
     /// The words resolved through the frame and AC/IC to absolute work targets.
-    fn computed_words(&mut self, w: &Words) -> LineResult<()> {
+    fn computed_words(&mut self, w: &Words, line_no: usize) -> LineResult<()> {
         let span = first_span(w);
+        if self.motion == super::state::CIP {
+            return self.cip_words(w, span);
+        }
+        if self.motion == super::state::CT {
+            return self.ct_words(w, span);
+        }
+        if w.turn.is_some() {
+            return self.turn_words(w, line_no);
+        }
         let p = self.interp.program_position();
         let work = [p[Axis::X], p[Axis::Y], p[Axis::Z]];
         let here = self.frame.frame_point(work);

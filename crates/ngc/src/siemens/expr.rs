@@ -533,6 +533,16 @@ impl Eval<'_> {
         if name == "ISVAR" || name == "GETT" {
             return self.special(sc, name, at);
         }
+        if matches!(
+            name,
+            "DC" | "ACP" | "ACN" | "CAC" | "CIC" | "CACP" | "CACN" | "CDC"
+        ) {
+            return Err(sc.err(
+                at,
+                format!("`{name}(..)` (a rotary axis position approached the shortest way, or in the positive or negative direction, as a modulo axis; Fundamentals, \"Absolute dimensions for rotary axes (DC, ACP, ACN)\") is not supported by mtsim: its rotary axes are not modulo axes, so the way round is not known"),
+                "rotary axis positioning",
+            ));
+        }
         if !NAMES.contains(&name) {
             return Err(sc.err(
                 at,

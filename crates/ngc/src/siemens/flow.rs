@@ -235,4 +235,50 @@ impl Reader {
         self.label_line(target, from, line, before, before.is_some())
             .map(|(offset, line, _)| (offset, line))
     }
+
+    /// `CASE expr OF c1 GOTOF l1 c2 GOTOB l2 … DEFAULT GOTOF l` (Job planning, "Program
+    /// branch (CASE ... OF ... DEFAULT ...)"): jumps to the label of the first constant
+    /// equal to the expression, else to DEFAULT's; with neither, the next block runs.
+    pub(super) fn case_statement(&mut self, sc: &mut Scan, at: usize) -> LineResult<()> {
+        let v = super::expr::expr(sc, &self.vars)?;
+        if !sc.keyword("OF") {
+            return Err(sc.err(
+                at,
+                "expected `CASE expression OF constant GOTOF label …`",
+                "CASE",
+            ));
+        }
+        let mut chosen = None;
+        while !sc.done() {
+            let matches = if sc.keyword("DEFAULT") {
+                true
+            } else {
+                let neg = sc.eat(b'-');
+                let Some((_, c)) = sc.number() else {
+                    return Err(sc.err(sc.at, "expected a numeric constant, or DEFAULT, in CASE (a string constant is not supported)", "CASE"));
+                };
+                (if neg { -c } else { c }) == v
+            };
+            let Some((kind, k_at)) = sc
+                .ident()
+                .filter(|(k, _)| matches!(*k, "GOTOF" | "GOTOB" | "GOTO" | "GOTOC"))
+            else {
+                return Err(sc.err(
+                    sc.at,
+                    "expected GOTOF or GOTOB and a label after a CASE constant",
+                    "CASE",
+                ));
+            };
+            let Some((target, t_at)) = sc.ident() else {
+                return Err(sc.err(k_at, format!("{kind} without a target"), "no target"));
+            };
+            if matches && chosen.is_none() {
+                chosen = Some((kind.to_string(), target.to_string(), t_at..sc.at));
+            }
+        }
+        if let Some((kind, target, span)) = chosen {
+            self.jump(&kind, &target, span)?;
+        }
+        Ok(())
+    }
 }

@@ -143,6 +143,81 @@ fn inverse(a: &Mat3) -> Mat3 {
     ]
 }
 
+/// Settable frames (settable.rs): `$P_UIFR[0]` (G500) to `$P_UIFR[99]` (G599).
+pub(super) const SETTABLE: usize = 100;
+
+/// A frame by its components, program units and deg.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Components {
+    pub coarse: [f64; 3],
+    pub fine: [f64; 3],
+    pub angles: [f64; 3],
+    pub scale: [f64; 3],
+    pub mirror: [bool; 3],
+}
+
+impl Default for Components {
+    fn default() -> Components {
+        Components {
+            coarse: [0.0; 3],
+            fine: [0.0; 3],
+            angles: [0.0; 3],
+            scale: [1.0; 3],
+            mirror: [false; 3],
+        }
+    }
+}
+
+impl Components {
+    /// Rotation × scale × mirror.
+    pub fn matrix(&self) -> crate::frame::Mat3 {
+        let [x, y, z] = self.angles;
+        let d: [f64; 3] =
+            std::array::from_fn(|k| self.scale[k] * if self.mirror[k] { -1.0 } else { 1.0 });
+        let diag = [[d[0], 0.0, 0.0], [0.0, d[1], 0.0], [0.0, 0.0, d[2]]];
+        mul(&rotation_zyx(x, y, z), &diag)
+    }
+
+    /// The offset, coarse and fine.
+    pub fn offset(&self) -> [f64; 3] {
+        std::array::from_fn(|k| self.coarse[k] + self.fine[k])
+    }
+
+    /// As a programmable frame (`o + A p`).
+    pub fn as_frame(&self) -> ProgFrame {
+        ProgFrame {
+            origin: self.offset(),
+            matrix: self.matrix(),
+        }
+    }
+}
+
+/// The direction a move leaves its end point in (X Y Z, any length), or `None` for a
+/// dwell or a move of no length (Fundamentals, "Circular interpolation with tangential
+/// transition (CT)": the circle continues the path's direction).
+pub(super) fn end_tangent(m: &crate::canon::Move) -> Option<[f64; 3]> {
+    let (s, e) = (m.start.0, m.end.0);
+    let t = match m.motion {
+        crate::canon::Motion::Rapid | crate::canon::Motion::Linear => {
+            [e[0] - s[0], e[1] - s[1], e[2] - s[2]]
+        }
+        crate::canon::Motion::Arc {
+            clockwise,
+            plane,
+            center_mm,
+        } => {
+            let (u, v, _) = plane.axes();
+            let (u, v) = (u.index(), v.index());
+            let (ru, rv) = (e[u] - center_mm[u], e[v] - center_mm[v]);
+            let mut t = [0.0; 3];
+            (t[u], t[v]) = if clockwise { (rv, -ru) } else { (-rv, ru) };
+            t
+        }
+        crate::canon::Motion::Dwell { .. } => return None,
+    };
+    (t.iter().any(|x| x.abs() > 1e-12) && t.iter().all(|x| x.is_finite())).then_some(t)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

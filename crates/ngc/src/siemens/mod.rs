@@ -21,15 +21,21 @@
 //! head, is an error at its opening line.
 
 mod block;
+mod cip;
 mod cycles;
 mod emit;
 mod expr;
 mod flow;
 mod frame;
+mod keywords;
+mod macros;
 mod plain;
+mod polar;
 mod repeat;
+mod settable;
 mod source;
 mod state;
+mod turn;
 mod words;
 
 use std::collections::VecDeque;
@@ -79,7 +85,20 @@ pub(crate) struct Reader {
     vars: Vars,
     queue: VecDeque<Move>,
     notices: Vec<Notice>,
+    /// The frame programmed points go through: the active settable frame's rotation,
+    /// scale and mirror, then the programmable frame `prog` (settable.rs).
     frame: ProgFrame,
+    prog: ProgFrame,
+    /// Settable frames the program wrote (`$P_UIFR[n]`), and the active one's matrix.
+    settable: [Option<frame::Components>; frame::SETTABLE],
+    settable_matrix: crate::frame::Mat3,
+    /// The pole of polar coordinates (frame coordinates) and the modal AP=, RP= (polar.rs).
+    pole: [f64; 3],
+    /// The direction the last move left its end point in (machine X Y Z), for CT.
+    tangent: Option<[f64; 3]>,
+    polar_values: [f64; 2],
+    /// `DEFINE name AS text` macros, in order of definition (macro.rs).
+    macros: Vec<(String, String)>,
     /// G90 as the Siemens program has it, and as the interpreter was last given.
     absolute: bool,
     interp_absolute: bool,
@@ -157,6 +176,13 @@ impl Reader {
             queue: VecDeque::new(),
             notices: Vec::new(),
             frame: ProgFrame::default(),
+            prog: ProgFrame::default(),
+            settable: [None; frame::SETTABLE],
+            settable_matrix: crate::frame::IDENTITY,
+            macros: Vec::new(),
+            pole: [0.0; 3],
+            tangent: None,
+            polar_values: [0.0; 2],
             absolute: true,
             interp_absolute: true,
             motion: u8::MAX,
@@ -238,6 +264,11 @@ impl Reader {
         upper.clear();
         upper.push_str(&line);
         upper.make_ascii_uppercase();
+        if let Some(expanded) = self.expand(&upper) {
+            // The block as read: errors quote the expanded text.
+            line.clone_from(&expanded);
+            upper = expanded;
+        }
         let result = self.block(&upper, line_no);
         self.upper = upper;
         self.line = line;
@@ -292,6 +323,9 @@ impl Reader {
                     &level.path,
                 );
                 self.words = reuse(words);
+                if let Some(t) = self.queue.back().and_then(frame::end_tangent) {
+                    self.tangent = Some(t);
+                }
                 r
             }
             _ => Ok(Stop::None),

@@ -15,6 +15,7 @@ impl Reader {
     /// translation; `None` otherwise (nothing done).
     pub(super) fn plain(&mut self, line: &str, line_no: usize) -> Option<LineResult<bool>> {
         if !self.frame.is_identity()
+            || !self.macros.is_empty()
             || self.feed_in_mm
             || self.modal_call.is_some()
             || self.absolute != self.interp_absolute
@@ -30,7 +31,9 @@ impl Reader {
                 0..=3 => motion = g as u8,
                 90 | 91 => absolute = g == 90,
                 17..=19 => normal = (19 - g) as usize,
-                40..=42 | 94 | 95 | 54..=57 => {}
+                40..=42 | 94 | 95 => {}
+                // A settable frame the program wrote is selected by `words`.
+                54..=57 if self.settable.iter().all(Option::is_none) => {}
                 _ => return None,
             }
         }

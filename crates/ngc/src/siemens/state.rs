@@ -4,6 +4,10 @@
 
 use std::ops::Range;
 
+/// The motion codes the front end keeps for CIP and CT (after G0-G3), modal as they are.
+pub(super) const CIP: u8 = 5;
+pub(super) const CT: u8 = 6;
+
 /// An open control structure of a program level.
 pub(super) enum Structure {
     If,

@@ -45,6 +45,13 @@ const CENTRES: &[u8; 3] = b"IJK";
 pub(super) struct Words {
     pub axes: [Option<Coordinate>; 9],
     pub centres: [Option<Coordinate>; 3],
+    /// CIP's intermediate point `I1= J1= K1=`.
+    pub cip: [Option<Coordinate>; 3],
+    /// `AP=`, `RP=` (polar angle and radius) as given, and a pole code G110-G112.
+    pub polar: [Option<Coordinate>; 2],
+    pub pole: Option<(u32, std::ops::Range<usize>)>,
+    /// `TURN=n`: full turns of a helix.
+    pub turn: Option<(u32, std::ops::Range<usize>)>,
     pub cr: Option<(f64, std::ops::Range<usize>)>,
     /// G0-G3 given in the block.
     pub motion: Option<u8>,
@@ -67,6 +74,8 @@ impl Words {
     pub fn has_motion_words(&self) -> bool {
         self.axes.iter().any(Option::is_some)
             || self.centres.iter().any(Option::is_some)
+            || self.cip.iter().any(Option::is_some)
+            || self.polar.iter().any(Option::is_some)
             || self.cr.is_some()
     }
 }
@@ -107,6 +116,74 @@ impl Reader {
             self.named(name, at, sc, w, line_no)?;
         }
         Ok(())
+    }
+
+    /// The named words of the path's geometry: `CT`, `CIP` (motion codes), `TURN=`,
+    /// `AP=`, `RP=`, `I1= J1= K1=`.
+    pub(super) fn geometry_word(
+        &mut self,
+        name: &str,
+        at: usize,
+        sc: &mut Scan,
+        w: &mut Words,
+    ) -> LineResult<()> {
+        match name {
+            "CT" => w.motion = Some(super::state::CT),
+            "CIP" => w.motion = Some(super::state::CIP),
+            "TURN" => return self.turn_word(at, sc, w),
+            "AP" | "RP" => return self.polar_word(usize::from(name == "RP"), at, sc, w),
+            _ => {
+                let k = usize::from(name.as_bytes()[0].saturating_sub(b'I')).min(2);
+                return self.cip_point(k, at, sc, w);
+            }
+        }
+        Ok(())
+    }
+
+    /// `AP=` (k = 0) or `RP=` (k = 1), the cursor after the name.
+    pub(super) fn polar_word(
+        &mut self,
+        k: usize,
+        at: usize,
+        sc: &mut Scan,
+        w: &mut Words,
+    ) -> LineResult<()> {
+        if !sc.eat(b'=') {
+            return Err(sc.err(at, "expected `AP=angle` or `RP=radius`", "polar coordinate"));
+        }
+        let (value, mode) = self.value(sc)?;
+        let c = Coordinate {
+            value,
+            mode,
+            raw: None,
+            span: at..sc.at,
+        };
+        put(&mut w.polar[k], c, sc, at)
+    }
+
+    /// `I1=`, `J1=`, `K1=` (CIP's intermediate point; the cursor after the name).
+    pub(super) fn cip_point(
+        &mut self,
+        k: usize,
+        at: usize,
+        sc: &mut Scan,
+        w: &mut Words,
+    ) -> LineResult<()> {
+        if !sc.eat(b'=') {
+            return Err(sc.err(
+                at,
+                "expected `I1=value` (CIP's intermediate point)",
+                "CIP point",
+            ));
+        }
+        let (value, mode) = self.value(sc)?;
+        let c = Coordinate {
+            value,
+            mode,
+            raw: None,
+            span: at..sc.at,
+        };
+        put(&mut w.cip[k], c, sc, at)
     }
 
     /// A single-letter address with a number or `=expr`: `G1`, `X-5`, `X=AC(R1)`, `R1=..`.
@@ -342,9 +419,16 @@ impl Reader {
             41 => "G41",
             42 => "G42",
             53 | 153 => "G53",
-            54..=57 => ["G54", "G55", "G56", "G57"][code as usize - 54],
-            500 => "G54.1 P96",
+            54..=57 => {
+                self.select_settable(code as usize - 53);
+                ["G54", "G55", "G56", "G57"][code as usize - 54]
+            }
+            500 => {
+                self.select_settable(0);
+                "G54.1 P96"
+            }
             505..=599 => {
+                self.select_settable(code as usize - 500);
                 w.other.push((format!("G54.1 P{}", code - 504), span));
                 return Ok(());
             }
@@ -380,6 +464,10 @@ impl Reader {
             // Exact stop non-modal, exact-stop windows, corner behaviour, speed limits:
             // no effect on the path mtsim reads.
             450 | 451 | 601 | 602 | 603 | 97 => return Ok(()),
+            110..=112 => {
+                w.pole = Some((code, span));
+                return Ok(());
+            }
             _ => {
                 let text = std::str::from_utf8(&sc.s[span.clone()]).unwrap_or("G");
                 return Err(LineError::new(span, format!("`{text}` is not supported by mtsim's Siemens reader (docs/gcode.md lists the Sinumerik G codes it reads)"), "unsupported G code"));

@@ -13,3 +13,4 @@ mod lent_moves;
 mod milling_cycles;
 mod posts;
 mod siemens;
+mod siemens_posts;

@@ -228,7 +228,12 @@ fn tools_by_name_cycle800_reset_and_machine_m_codes_read_with_notices() {
 fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
     let cases: [(&str, usize, usize, &str); 10] = [
         ("G1 X1 F1\nG2 X10 AR=90\n", 2, 8, "`AR` (arc opening angle)"),
-        ("G1 X1 F1\nCIP X10 Y5 I1=5 J1=2\n", 2, 1, "`CIP`"),
+        (
+            "G1 X1 F1\nCIP X10 Y0 I1=5 J1=0\n",
+            2,
+            5,
+            "CIP with its start, intermediate and end points on one line",
+        ),
         (
             "G1 X1 A3=0 B3=0 C3=1 F1\n",
             1,
@@ -236,9 +241,9 @@ fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
             "`A3` (orientation vector)",
         ),
         (
-            "G0 X1\nN20 $P_UIFR[1]=CTRANS(X,10)\n",
+            "G0 X1\nN20 R1=$P_UIFR[1,X,TR]\n",
             2,
-            5,
+            8,
             "system variable `$P_UIFR`",
         ),
         ("G0 X1\nCYCLE83(10,0,1,-20)\n", 2, 1, "`CYCLE83`"),
@@ -371,7 +376,9 @@ fn deep_or_overflowing_expressions_and_garbage_are_errors_not_crashes() {
     // Every byte sequence of a few kinds of garbage reads or fails, never panics.
     let pieces = [
         "G1", "X", "=", "AC(", ")", "R1", "IF", "ENDIF", "WHILE", "ENDFOR", "\"", ";", "é", "[",
-        "$", "N", ":", "-", "1.", "CR=", "TRANS", "MCALL", "CYCLE81(", ",",
+        "$", "N", ":", "-", "1.", "CR=", "TRANS", "MCALL", "CYCLE81(", ",", "CIP", "I1=", "TURN=",
+        "AP=", "RP=", "G111", "G2", "DEFINE", "AS", "$P_UIFR[", "CTRANS(", "CROT(", "CASE", "OF",
+        "GOTOF", "G54",
     ];
     let mut state: u64 = 7;
     for _ in 0..3000 {

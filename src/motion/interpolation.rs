@@ -376,6 +376,9 @@ pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     input_done: bool,
     pending_error: Option<Error>,
     limits: [Option<AxisLimits>; 9],
+    /// Each axis's normal acceleration and jerk limits of a corner's blend ([`blend::corner`]),
+    /// from `limits` (infinite for an axis the machine lacks): the same for every corner.
+    blend_limits: ([f64; 9], [f64; 9]),
     kinematics: Kinematics,
     period_s: f64,
     /// The machine's `[control]`: rapids' acceleration share, default path tolerance.
@@ -418,6 +421,10 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 jerk: c.max_jerk,
             });
         }
+        let blend_limits = (
+            limits.map(|l| l.map_or(f64::INFINITY, |l| blend::NORMAL_SHARE * l.acceleration)),
+            limits.map(|l| l.map_or(f64::INFINITY, |l| l.jerk / 3.0)),
+        );
         let mut interpolator = Interpolator {
             blocks,
             read_ahead: VecDeque::with_capacity(pass_batch(&options)),
@@ -425,6 +432,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             input_done: false,
             pending_error: None,
             limits,
+            blend_limits,
             kinematics: machine.kinematics,
             period_s: machine.interpolation_period_s,
             control: machine.control,
@@ -998,16 +1006,11 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 }
                 _ => None,
             };
-            let normal_limit = self
-                .limits
-                .map(|l| l.map_or(f64::INFINITY, |l| blend::NORMAL_SHARE * l.acceleration));
-            let jerk_limit = self
-                .limits
-                .map(|l| l.map_or(f64::INFINITY, |l| l.jerk / 3.0));
+            let (normal_limit, jerk_limit) = &self.blend_limits;
             let speed = prev.planned.cap;
             let corner = match tolerance {
                 Some(tol) if blendable(&prev.planned) && blendable(&next) => {
-                    let limits = (&normal_limit, &jerk_limit);
+                    let limits = (normal_limit, jerk_limit);
                     blend::corner(prev.end, start, prev.half, half, tol, speed, limits)
                 }
                 _ => None,
@@ -1080,8 +1083,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         let fresh_from = self.window.len().saturating_sub(self.unpassed + 1);
         self.unpassed = 0;
         for k in (0..self.window.len().saturating_sub(1)).rev() {
-            let next = self.window[k + 1];
-            let exit = next.entry_max / next.rho;
+            // Two numbers of the next block, not a copy of it (hundreds of bytes).
+            let (next_entry_max, next_rho) = (self.window[k + 1].entry_max, self.window[k + 1].rho);
+            let exit = next_entry_max / next_rho;
             let b = &mut self.window[k];
             let entry = if b.length == 0.0 {
                 0.0

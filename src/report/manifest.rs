@@ -120,7 +120,10 @@ impl Manifest {
                 } else if kind.is_file() {
                     // A file hashed as it was written (the trace) is not read back.
                     let record = match super::written::known_record(&path) {
-                        Some(record) => record,
+                        Some(w) => FileRecord {
+                            bytes: w.bytes,
+                            xxh64: format!("{:016x}", w.xxh64),
+                        },
                         None => record_of(&path).map_err(read_error(&path))?,
                     };
                     manifest.files.insert(rel_name, record);

@@ -26,7 +26,6 @@ use std::path::{Path, PathBuf};
 
 use super::contour::ContourFile;
 use super::files::temporary_path;
-use super::manifest::FileRecord;
 use super::trace_centring::summary_centrings;
 pub use super::trace_centring::{
     centred_deviation_um, centring_per_run, parquet_centrings, RunCentring, CENTRED_COLUMN,
@@ -34,7 +33,7 @@ pub use super::trace_centring::{
 };
 use super::trace_parquet::ParquetTrace;
 use super::trace_rows::{write_error, Block, AXES, FIXED_COLUMNS, LINE, THETA, TIME};
-use super::written::Hashing;
+use super::written::{Hashing, Written};
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::TraceFormat;
@@ -352,7 +351,7 @@ impl CsvTrace {
     }
 
     /// Flushes the file (the caller renames it); the record of the bytes written.
-    fn finish(mut self) -> Result<FileRecord> {
+    fn finish(mut self) -> Result<Written> {
         self.out.flush().map_err(write_error(&self.tmp))?;
         Ok(self.out.get_ref().record())
     }

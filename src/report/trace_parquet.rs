@@ -33,11 +33,10 @@ use std::path::PathBuf;
 
 use arrow::datatypes::ToByteSlice;
 
-use super::manifest::FileRecord;
 use super::thrift_compact::Compact;
 use super::trace_centring::{RunCentring, CENTRING_KEY};
 use super::trace_rows::{write_all_vectored, write_error, Block, AXES, LINE, THETA, TIME};
-use super::written::Hashing;
+use super::written::{Hashing, Written};
 use crate::error::Result;
 use crate::input::program::Direction;
 
@@ -173,7 +172,7 @@ impl ParquetTrace {
 
     /// Writes the footer, with each run's `centrings` as key-value metadata, and flushes the
     /// file (the caller renames it); the record of the bytes written.
-    pub fn finish(mut self, centrings: &[RunCentring]) -> Result<FileRecord> {
+    pub fn finish(mut self, centrings: &[RunCentring]) -> Result<Written> {
         let centrings = serde_json::to_string(centrings).expect("plain data serializes");
         let footer = self.footer(&centrings);
         let length = (footer.len() as u32).to_le_bytes();

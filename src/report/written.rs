@@ -5,7 +5,7 @@
 //! [`note`] lists a finished file's record in this process, under its path, with the size
 //! and modification time the file had then; [`known_record`] gives it back for as long as
 //! the file still has them (any later write changes the size or the time, and the file is
-//! then hashed again from its bytes by [`super::manifest::record_of`]).
+//! then hashed again from its bytes by the manifest's `record_of`).
 
 use std::collections::BTreeMap;
 use std::io::{IoSlice, Write};
@@ -15,7 +15,13 @@ use std::time::SystemTime;
 
 use xxhash_rust::xxh64::Xxh64;
 
-use super::manifest::FileRecord;
+/// What was written to a file: its size and the XXH64 (seed 0) of its bytes (the manifest's
+/// `FileRecord`, which this module does not import: the manifest imports it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Written {
+    pub bytes: u64,
+    pub xxh64: u64,
+}
 
 /// A writer that hashes (XXH64, seed 0) and counts the bytes it passes on.
 pub struct Hashing<W> {
@@ -34,10 +40,10 @@ impl<W> Hashing<W> {
     }
 
     /// The record of the bytes passed on so far.
-    pub fn record(&self) -> FileRecord {
-        FileRecord {
+    pub fn record(&self) -> Written {
+        Written {
             bytes: self.bytes,
-            xxh64: format!("{:016x}", self.hash.digest()),
+            xxh64: self.hash.digest(),
         }
     }
 
@@ -77,7 +83,7 @@ impl<W: Write> Write for Hashing<W> {
 
 /// A noted file: its record, and the size and modification time it had when noted.
 struct Noted {
-    record: FileRecord,
+    record: Written,
     len: u64,
     modified: SystemTime,
 }
@@ -86,7 +92,7 @@ static NOTED: Mutex<BTreeMap<PathBuf, Noted>> = Mutex::new(BTreeMap::new());
 
 /// Notes `record` as that of the finished file at `path` (its bytes all written, renamed in
 /// place). Nothing is noted when the file's size is not the record's.
-pub fn note(path: &Path, record: FileRecord) {
+pub fn note(path: &Path, record: Written) {
     let Ok(meta) = std::fs::metadata(path) else {
         return;
     };
@@ -110,12 +116,12 @@ pub fn note(path: &Path, record: FileRecord) {
 
 /// The record noted for the file at `path`, if it still has the size and modification
 /// time it had when noted.
-pub fn known_record(path: &Path) -> Option<FileRecord> {
+pub fn known_record(path: &Path) -> Option<Written> {
     let meta = std::fs::metadata(path).ok()?;
     let modified = meta.modified().ok()?;
     let noted = NOTED.lock().ok()?;
     let n = noted.get(path)?;
-    (n.len == meta.len() && n.modified == modified).then(|| n.record.clone())
+    (n.len == meta.len() && n.modified == modified).then_some(n.record)
 }
 
 #[cfg(test)]
@@ -143,10 +149,15 @@ mod tests {
         w.flush().unwrap();
         let record = w.record();
         drop(w);
-        let read = super::super::manifest::record_of(&path).unwrap();
+        // The file's bytes read back, hashed at once.
+        let bytes = std::fs::read(&path).unwrap();
+        let read = Written {
+            bytes: bytes.len() as u64,
+            xxh64: xxhash_rust::xxh64::xxh64(&bytes, 0),
+        };
         assert_eq!(record, read);
         assert_eq!(read.bytes, 100_004);
-        note(&path, record.clone());
+        note(&path, record);
         assert_eq!(known_record(&path), Some(record));
         // Rewritten since: no longer known.
         std::thread::sleep(std::time::Duration::from_millis(20));

@@ -1132,8 +1132,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         let fresh_from = self.window.len().saturating_sub(self.unpassed + 1);
         self.unpassed = 0;
         for k in (0..self.window.len().saturating_sub(1)).rev() {
-            let next = self.window[k + 1];
-            let exit = next.entry_max / next.rho;
+            // Two numbers of the next block, not a copy of it (hundreds of bytes).
+            let (next_entry_max, next_rho) = (self.window[k + 1].entry_max, self.window[k + 1].rho);
+            let exit = next_entry_max / next_rho;
             let b = &mut self.window[k];
             let entry = if b.length == 0.0 {
                 0.0

@@ -34,6 +34,7 @@ pub mod trace;
 pub mod trace_centring;
 pub mod trace_parquet;
 mod trace_rows;
+pub mod written;
 
 pub use files::{create_dir, temporary_path, write_atomic};
 pub use run_dir::RunDir;

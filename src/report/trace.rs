@@ -33,6 +33,7 @@ pub use super::trace_centring::{
 };
 use super::trace_parquet::ParquetTrace;
 use super::trace_rows::{write_error, Block, AXES, FIXED_COLUMNS, LINE, THETA, TIME};
+use super::written::{Hashing, Written};
 use crate::error::{Error, Result};
 use crate::input::program::{Direction, MeasuredLines};
 use crate::input::scenario::TraceFormat;
@@ -142,17 +143,23 @@ impl TraceSink {
         // Rows of a run not ended (none from `run_ballbar`): written, not lost.
         let closed = self.write_block().and_then(|()| {
             match std::mem::replace(&mut self.format, Format::Closed) {
-                Format::Csv(csv) => csv.finish(),
-                Format::Parquet(parquet) => parquet.finish(&self.centrings),
-                Format::Closed => Ok(()),
+                Format::Csv(csv) => csv.finish().map(Some),
+                Format::Parquet(parquet) => parquet.finish(&self.centrings).map(Some),
+                Format::Closed => Ok(None),
             }
         });
         let tmp = temporary_path(&self.trace_path);
-        if let Err(e) = closed {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(e);
-        }
+        let record = match closed {
+            Ok(record) => record,
+            Err(e) => {
+                let _ = std::fs::remove_file(&tmp);
+                return Err(e);
+            }
+        };
         std::fs::rename(&tmp, &self.trace_path).map_err(write_error(&self.trace_path))?;
+        if let Some(record) = record {
+            super::written::note(&self.trace_path, record);
+        }
         match self.contour.take() {
             Some(contour) => contour.finish(),
             None => Ok(()),
@@ -284,7 +291,8 @@ fn column_names(axes: &[Axis]) -> Vec<String> {
 /// `trace.csv` being written: its temporary file and one reused line buffer.
 struct CsvTrace {
     tmp: PathBuf,
-    out: BufWriter<File>,
+    /// Hashed as written (the manifest's record without reading the file back).
+    out: BufWriter<Hashing<File>>,
     line: Vec<u8>,
 }
 
@@ -293,7 +301,7 @@ impl CsvTrace {
     fn create(tmp: PathBuf, header: &str) -> Result<CsvTrace> {
         let file = File::create(&tmp).map_err(write_error(&tmp))?;
         // Large writes: a 7 MB trace in a few dozen system calls instead of one per 8 kB.
-        let mut out = BufWriter::with_capacity(1 << 18, file);
+        let mut out = BufWriter::with_capacity(1 << 18, Hashing::new(file));
         writeln!(out, "{header}").map_err(write_error(&tmp))?;
         Ok(CsvTrace {
             tmp,
@@ -342,9 +350,10 @@ impl CsvTrace {
         Ok(())
     }
 
-    /// Flushes the file (the caller renames it).
-    fn finish(mut self) -> Result<()> {
-        self.out.flush().map_err(write_error(&self.tmp))
+    /// Flushes the file (the caller renames it); the record of the bytes written.
+    fn finish(mut self) -> Result<Written> {
+        self.out.flush().map_err(write_error(&self.tmp))?;
+        Ok(self.out.get_ref().record())
     }
 }
 

@@ -36,6 +36,7 @@ use arrow::datatypes::ToByteSlice;
 use super::thrift_compact::Compact;
 use super::trace_centring::{RunCentring, CENTRING_KEY};
 use super::trace_rows::{write_all_vectored, write_error, Block, AXES, LINE, THETA, TIME};
+use super::written::{Hashing, Written};
 use crate::error::Result;
 use crate::input::program::Direction;
 
@@ -70,7 +71,8 @@ struct Chunk {
 /// footer will say of every row group written.
 pub(super) struct ParquetTrace {
     tmp: PathBuf,
-    file: File,
+    /// The file, hashed as written (the manifest's record without reading it back).
+    file: Hashing<File>,
     /// Bytes not yet written (the file's magic before the first pages; the spare buffer
     /// of [`Gather`] otherwise), and the file's length with them.
     pending: Vec<u8>,
@@ -88,7 +90,7 @@ impl ParquetTrace {
         let file = File::create(&tmp).map_err(write_error(&tmp))?;
         Ok(ParquetTrace {
             tmp,
-            file,
+            file: Hashing::new(file),
             pending: b"PAR1".to_vec(),
             offset: 4,
             names,
@@ -169,8 +171,8 @@ impl ParquetTrace {
     }
 
     /// Writes the footer, with each run's `centrings` as key-value metadata, and flushes the
-    /// file (the caller renames it).
-    pub fn finish(mut self, centrings: &[RunCentring]) -> Result<()> {
+    /// file (the caller renames it); the record of the bytes written.
+    pub fn finish(mut self, centrings: &[RunCentring]) -> Result<Written> {
         let centrings = serde_json::to_string(centrings).expect("plain data serializes");
         let footer = self.footer(&centrings);
         let length = (footer.len() as u32).to_le_bytes();
@@ -178,7 +180,8 @@ impl ParquetTrace {
         for bytes in [&footer[..], &length, b"PAR1"] {
             g.push(bytes);
         }
-        self.flush(g)
+        self.flush(g)?;
+        Ok(self.file.record())
     }
 
     /// The file metadata (parquet.thrift's FileMetaData), `centrings` (JSON) under

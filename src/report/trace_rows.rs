@@ -5,7 +5,6 @@
 //! A [`Block`] holds up to [`BLOCK_ROWS`] rows, each column a slice of that many values, so
 //! that a block is a row group of `trace.parquet` as it stands (a column chunk is a slice).
 
-use std::fs::File;
 use std::io::{IoSlice, Write};
 use std::path::Path;
 
@@ -115,7 +114,7 @@ impl Block {
 
 /// Writes every byte of `slices` to `file`, in as few system calls as it takes.
 pub(super) fn write_all_vectored(
-    file: &mut File,
+    file: &mut impl Write,
     mut slices: &mut [IoSlice<'_>],
 ) -> std::io::Result<()> {
     IoSlice::advance_slices(&mut slices, 0);

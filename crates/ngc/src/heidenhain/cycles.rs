@@ -77,7 +77,17 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
             r.end_block(b.line);
             Ok(())
         }
-        // Tolerance and dynamic tuning: no motion.
+        // CYCL DEF 32.1 T: the contour tolerance (mm), the planner's path tolerance as
+        // LinuxCNC's G64 P; 32.1 without T: the machine's default again (G64).
+        32 if minor == 1 => {
+            r.gword("64", b.span(0));
+            if let Some(t) = tolerance_t(r, b) {
+                r.word('P', t?, b.span(0));
+            }
+            r.end_block(b.line);
+            Ok(())
+        }
+        // The rest of cycle 32 (HSC mode, TA) and dynamic tuning: no motion.
         32 | 332 | 392 => Ok(()),
         247 => Err(LineError::new(
             b.spans(0, 2),
@@ -87,6 +97,32 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
         .help("drop the block and place the workpiece with the scenario's work offsets, or shift the datum with CYCL DEF 7")),
         _ => Err(not_supported(b, id, major)),
     }
+}
+
+/// `T0.05` (or `T 0.05`, `T+Q10`) of `CYCL DEF 32.1`: the tolerance, mm; `TA` (the rotary
+/// axes' tolerance) is not it.
+fn tolerance_t(r: &Reader, b: &Block) -> Option<LineResult<f64>> {
+    let k = (3..b.toks.len()).find(|&k| {
+        let t = b.tok(k);
+        t.starts_with('T') && !t.starts_with("TA")
+    })?;
+    let tok = b.tok(k);
+    let (text, span) = if tok.len() > 1 {
+        (&tok[1..], b.span(k))
+    } else {
+        (b.tok(k + 1), b.span(k + 1))
+    };
+    Some(value(text, &r.q, span.clone()).and_then(|t| {
+        if t >= 0.0 && t.is_finite() {
+            Ok(t)
+        } else {
+            Err(LineError::new(
+                span,
+                format!("CYCL DEF 32.1 T{t}: expected a tolerance of 0 mm or more"),
+                "negative tolerance",
+            ))
+        }
+    }))
 }
 
 /// The refusal of cycle `major`: its number, the title the post wrote, the cycle's title

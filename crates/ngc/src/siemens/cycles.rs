@@ -39,18 +39,46 @@ impl Reader {
             return Ok(());
         }
         if name == "CYCLE832" {
-            // Tolerance and machining type (`_FINISH`, `_ORI_ROUGH` … name macros of the
-            // control's cycle definitions): settings of the control's compressor and
-            // smoothing, which the path mtsim reads does not depend on.
+            // `CYCLE832(_TOL, _TOLM, ..)`: the tolerance the path may leave the contour by,
+            // which the planner blends corners within (as G64 P); the machining type
+            // (`_FINISH`, `_ORI_ROUGH` … macros of the control's cycle definitions) and the
+            // compressor's settings are not simulated. `CYCLE832()` or a tolerance of 0
+            // deselects it.
+            let open = sc.at;
             super::block::skip_call(sc, at)?;
+            let args = std::str::from_utf8(&sc.s[open..sc.at]).unwrap_or("");
+            let first = args
+                .trim_start_matches('(')
+                .split([',', ')'])
+                .next()
+                .unwrap_or("");
+            self.path_tolerance_mm = first
+                .trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|t| *t > 0.0 && t.is_finite());
+            if !self.exact_stop {
+                self.iso.clear();
+                let g64 = self.continuous_path();
+                self.push(&g64, at..sc.at);
+                self.run_iso(line_no)?;
+            }
             self.notice(
                 line_no,
-                "CYCLE832 (high-speed settings: tolerance and machining type) accepted and not simulated".into(),
+                "CYCLE832: its tolerance bounds the corners' blending (as G64 P); the machining type and the compressor's settings are not simulated".into(),
             );
             return Ok(());
         }
         let cycle = self.cycle(name, at, sc)?;
         self.run_cycle(Some(cycle), line_no)
+    }
+
+    /// The ISO words of continuous-path mode: G64, with CYCLE832's tolerance as P.
+    pub(super) fn continuous_path(&self) -> String {
+        match self.path_tolerance_mm {
+            Some(t) => format!("G64 P{t}"),
+            None => "G64".to_string(),
+        }
     }
 
     /// `CYCLE800(_FR, _TC, _ST, _MODE, _X0, _Y0, _Z0, _A, _B, _C, _X1, _Y1, _Z1, _DIR, ..)`

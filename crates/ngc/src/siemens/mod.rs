@@ -113,6 +113,9 @@ pub(crate) struct Reader {
     tcp: bool,
     /// G60 (exact stop) in effect; G64 otherwise.
     exact_stop: bool,
+    /// CYCLE832's tolerance (mm), which the continuous-path modes G64/G641-G645 blend
+    /// within (the planner's G64 P); `None`: the machine's default.
+    path_tolerance_mm: Option<f64>,
     /// G70: inch geometry with the feed in mm/min.
     feed_in_mm: bool,
     /// The active plane's normal axis: 0 X (G19), 1 Y (G18), 2 Z (G17).
@@ -195,6 +198,7 @@ impl Reader {
             interp_normal: 2,
             feed_in_mm: false,
             exact_stop: false,
+            path_tolerance_mm: None,
             line_start: (0, 1),
             modal_call: None,
             search_path,

@@ -438,13 +438,14 @@ impl Reader {
             }
             64 | 641..=645 => {
                 self.exact_stop = false;
-                "G64"
+                w.other.push((self.continuous_path(), span));
+                return Ok(());
             }
             // Exact stop for this block only: G61 now, G64 again after it.
             9 => {
                 if !self.exact_stop {
                     w.other.push(("G61".into(), span));
-                    w.after.push("G64".into());
+                    w.after.push(self.continuous_path());
                 }
                 return Ok(());
             }

@@ -703,3 +703,30 @@ fn appr_and_dep_run_compensated_by_the_tool_radius() {
     assert!(ends.iter().any(|p| near(*p, [30.0, 15.0])), "{ends:?}");
     assert!(ends.iter().any(|p| near(*p, [42.5, 15.0])), "{ends:?}");
 }
+
+/// `CYCL DEF 32.1 T0.05` is the contour tolerance the planner blends corners within (as
+/// LinuxCNC's G64 P0.05); `TA` (the rotary axes' tolerance) is not it; `32.1` without T
+/// hands the corners back to the machine's default.
+#[test]
+fn cycle_32_sets_the_path_tolerance() {
+    let m = moves(
+        "2 L X+0 Y+0 Z+10 R0 FMAX\n3 CYCL DEF 32.0 TOLERANCE\n4 CYCL DEF 32.1 T0.05 HSC-MODE:1 TA0.5\n\
+         5 L X+10 F500\n6 CYCL DEF 32.0 TOLERANCE\n7 CYCL DEF 32.1\n8 L Y+10",
+    );
+    let at = |line: usize| m.iter().find(|m| m.line == line).unwrap().path;
+    // File lines: the body's block 5 is line 6 (BEGIN PGM and TOOL CALL come first).
+    assert_eq!(
+        at(6),
+        ngc::PathControl::Blend {
+            tolerance_mm: Some(0.05),
+            naive_cam_mm: None
+        }
+    );
+    assert_eq!(at(9), ngc::PathControl::BLEND);
+    let (line, _, message) = error("2 CYCL DEF 32.0 TOLERANCE\n3 CYCL DEF 32.1 T-1");
+    assert_eq!(line, 4);
+    assert!(
+        message.contains("expected a tolerance of 0 mm or more"),
+        "{message}"
+    );
+}

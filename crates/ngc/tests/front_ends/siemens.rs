@@ -498,3 +498,23 @@ fn blending_distances_and_the_blank_are_read_with_notices() {
         assert!(notes.iter().any(|n| n.contains(name)), "{name}: {notes:?}");
     }
 }
+
+/// `CYCLE832(0.01, _FINISH, 1)`: the corners of the continuous-path modes are blended
+/// within 0.01 mm (the planner's G64 P0.01), through a later G642 too; G60 stops;
+/// `CYCLE832()` deselects the tolerance (the machine's default again).
+#[test]
+fn cycle832_gives_the_blending_tolerance() {
+    let m = moves(
+        "G17 G90 G54 G71\nG0 X0 Y0 Z10\nCYCLE832(0.01,_FINISH,1)\nG1 X10 F500\n\
+         G642\nG1 Y10\nG60\nG1 X0\nG64\nCYCLE832()\nG1 Y0\nM30\n",
+    );
+    let at = |line: usize| m.iter().find(|m| m.line == line).unwrap().path;
+    let tol = ngc::PathControl::Blend {
+        tolerance_mm: Some(0.01),
+        naive_cam_mm: None,
+    };
+    assert_eq!(at(4), tol);
+    assert_eq!(at(6), tol);
+    assert_eq!(at(8), ngc::PathControl::ExactPath);
+    assert_eq!(at(11), ngc::PathControl::BLEND);
+}

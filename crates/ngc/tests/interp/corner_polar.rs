@@ -194,3 +194,14 @@ fn whole_numbers_are_increments_for_corner_sizes_and_polar_angles() {
     let m = read("G20 G90 G17\nG0 X0 Y0 Z0\nG16\nG1 X10000 Y90000 F20\nM30\n");
     close(xy(m[1].end), [0.0, 25.4]);
 }
+
+#[test]
+fn a_corner_word_in_a_lathe_cycle_shape_is_refused_not_a_crash() {
+    let text = "G21 G18 G90\nG0 X50 Z2\nG71 U5 R1\nG71 P10 Q20 U0 W0 F100\nN10 G0 X20\n\
+                G1 Z-10 ,C1.\nX40 Z-20\nN20 Z-30\nG70 P10 Q20\nM30\n";
+    let e = read(Dialect::Fanuc, text).unwrap_err();
+    assert!(
+        e.contains("`,C1.` here: corner rounding and chamfer are read only"),
+        "{e}"
+    );
+}

@@ -85,6 +85,19 @@ impl<'l> Block<'l> {
                         "misplaced O",
                     ));
                 }
+                crate::lex::CORNER_ROUND | crate::lex::CORNER_CHAMFER => {
+                    // Read by the reader's stream only (crate::corner), not in a lathe
+                    // cycle's shape or a block another front end builds.
+                    return Err(LineError::new(
+                        word.span(),
+                        format!(
+                            "`{}` here: corner rounding and chamfer are read only between two G01 blocks of the program itself",
+                            &line[word.span()]
+                        ),
+                        "corner rounding or chamfer",
+                    )
+                    .help("write the rounding as a G02/G03 arc, or the chamfer as a G01 move"));
+                }
                 letter => {
                     let slot = &mut b.single[slot(letter)];
                     if let Some(first) = words.get(*slot as usize) {

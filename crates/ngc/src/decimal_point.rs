@@ -47,6 +47,8 @@ pub(crate) struct BlockContext {
     pub inch: bool,
     /// A drilling cycle is in effect (modal) before this block.
     pub cycle_modal: bool,
+    /// Under Fanuc G16 (crate::fanuc_polar): the letter of the angle word, in 0.001°.
+    pub polar_angle: Option<char>,
 }
 
 /// Scales `words`' dimension words that were written as whole numbers (no decimal point,
@@ -94,9 +96,12 @@ pub(crate) fn scale_whole_numbers<'l>(
             'A' | 'B' | 'C' => INCREMENT_DEG,
             'I' | 'J' | 'K' if scaling => continue,
             'I' | 'J' | 'K' | 'R' if rotation => INCREMENT_DEG,
+            c if Some(c) == context.polar_angle => INCREMENT_DEG,
             'K' if drilling => continue,
             'Q' | 'P' if lathe_cycle => continue,
             'X' | 'Y' | 'Z' | 'U' | 'V' | 'W' | 'I' | 'J' | 'K' | 'R' | 'Q' => length,
+            // `,R` and `,C` (crate::corner): lengths.
+            crate::lex::CORNER_ROUND | crate::lex::CORNER_CHAMFER => length,
             _ => continue,
         };
         if w.value != 0.0 && first.is_none() {

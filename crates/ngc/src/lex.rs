@@ -11,6 +11,11 @@ use crate::expr::{function_at, Eval, ExprError, Param, Params};
 /// Word letters the reader knows.
 pub const EXPECTED_WORDS: &str = "G M N F S T X Y Z A B C U V W I J K R P Q L H D E @ ^";
 
+/// The letter a Fanuc/Haas `,R` (corner rounding, crate::corner) is lexed as.
+pub const CORNER_ROUND: char = 'r';
+/// The letter a Fanuc/Haas `,C` (chamfer, crate::corner) is lexed as.
+pub const CORNER_CHAMFER: char = 'c';
+
 /// An error on one line; `span` is a byte range in that line.
 #[derive(Debug)]
 pub struct LineError {
@@ -185,17 +190,15 @@ pub fn lex_with<'l>(
             )
         {
             // Fanuc and Haas `,R` / `,C` after a G01: corner rounding or chamfer to the
-            // next move.
-            let what = match bytes[i + 1].to_ascii_uppercase() {
-                b'R' => "corner rounding (,R: an arc of that radius)",
-                _ => "chamfer (,C: a straight cut of that length)",
+            // next move (crate::corner), lexed as [`CORNER_ROUND`] and [`CORNER_CHAMFER`].
+            let mut w = lex_word(line, i + 1, params, fanuc)?;
+            w.letter = match w.letter {
+                'R' => CORNER_ROUND,
+                _ => CORNER_CHAMFER,
             };
-            return Err(LineError::new(
-                i..i + 2,
-                format!("`{}`: Fanuc's {what} between this move and the next, which mtsim does not read", &line[i..i + 2]),
-                "corner rounding or chamfer",
-            )
-            .help("write the rounding as a G02/G03 arc, or the chamfer as a G01 move"));
+            w.span.0 = i;
+            i = w.span.1;
+            words.push(w);
         } else {
             let (ch, span) = char_at(line, i);
             return Err(LineError::new(

@@ -94,6 +94,11 @@ impl MirrorScale {
         self.axes.iter().any(|a| !a.is_identity())
     }
 
+    /// A scaling (a factor other than 1 on an axis) is in effect.
+    pub(crate) fn scaling(&self) -> bool {
+        self.axes.iter().any(|a| a.scale != 1.0)
+    }
+
     /// Reads a block that sets or cancels the mirror image or the scaling (G51.1 / G50.1,
     /// Haas G101 / G100; G51 / G50 without S) into the state: `Ok(true)` when the block was
     /// one (it moves nothing), `Ok(false)` otherwise.

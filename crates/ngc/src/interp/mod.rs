@@ -596,6 +596,7 @@ impl Interp {
         crate::decimal_point::BlockContext {
             inch: units.unwrap_or(self.inch),
             cycle_modal: matches!(self.motion, Some(MotionMode::Cycle(_))),
+            polar_angle: None,
         }
     }
 

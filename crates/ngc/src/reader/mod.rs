@@ -26,6 +26,8 @@
 //! `budget`).
 
 mod calls;
+mod corner;
+mod fanuc_polar;
 mod flow;
 mod language;
 mod lathe;

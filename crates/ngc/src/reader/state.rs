@@ -219,6 +219,10 @@ pub(crate) struct IsoReader {
     pub(super) whole_warned: bool,
     /// Fanuc G51.1 / Haas G101 mirror image and G51 scaling (crate::mirror_scale).
     pub(super) mirror_scale: crate::mirror_scale::MirrorScale,
+    /// A G01 line with `,R` / `,C`, held until the next block's move (crate::corner).
+    pub(super) corner: Option<crate::corner::Pending>,
+    /// Fanuc and Haas G16 polar coordinates (crate::fanuc_polar).
+    pub(super) fanuc_polar: crate::fanuc_polar::FanucPolar,
 }
 
 impl IsoReader {

@@ -65,6 +65,8 @@ impl IsoReader {
             },
             whole_warned: false,
             mirror_scale: Default::default(),
+            corner: None,
+            fanuc_polar: Default::default(),
         }
     }
 
@@ -227,6 +229,7 @@ impl IsoReader {
                 if self.whole_increments {
                     self.scale_whole_numbers(line, &mut words, here);
                 }
+                let corner = self.corner_word(line, &mut words)?;
                 if !assigns.is_empty() {
                     for (p, v) in &assigns {
                         self.interp.check_assign(line, p, *v)?;
@@ -235,6 +238,10 @@ impl IsoReader {
                     self.interp.parameters_changed();
                 }
                 if words.is_empty() {
+                    self.words = reuse(words);
+                    return Ok(());
+                }
+                if self.dialect.table().macro_b && self.fanuc_polar_block(line, &mut words)? {
                     self.words = reuse(words);
                     return Ok(());
                 }
@@ -262,6 +269,7 @@ impl IsoReader {
                     }
                     crate::remap::split(&self.remaps, &words, line, &busy, self.modal_remap)?
                 };
+                let before = self.queue.len();
                 let result = match remap {
                     Some(s) => self.run_remap(line, &words, s, here, next),
                     None => self.run_block(line, &words, here, next),
@@ -269,6 +277,9 @@ impl IsoReader {
                 self.words = reuse(words);
                 // Not `result`: that copied the whole (large) result on every block.
                 result?;
+                if corner.is_some() || self.corner.is_some() {
+                    self.corner_after(line, corner, before, here)?;
+                }
                 Ok(())
             }
         }
@@ -277,7 +288,8 @@ impl IsoReader {
     /// Dimension words written without a decimal point, in the least input increment
     /// (crate::decimal_point); a warning at the first nonzero one.
     fn scale_whole_numbers(&mut self, line: &str, words: &mut [Word], here: Cursor) {
-        let context = self.interp.whole_number_context(words);
+        let mut context = self.interp.whole_number_context(words);
+        context.polar_angle = self.polar_angle_letter(words);
         let first = crate::decimal_point::scale_whole_numbers(words, context);
         if let (Some(word), false) = (first, self.whole_warned) {
             self.whole_warned = true;
@@ -372,6 +384,12 @@ impl IsoReader {
     pub(super) fn fill_queue(&mut self) -> Result<()> {
         while self.queue.is_empty() {
             if self.finished {
+                if let Some(e) = self.corner_unfinished() {
+                    self.queue.clear();
+                    self.interp.discard();
+                    self.flushed = true;
+                    return Err(e);
+                }
                 if self.flushed {
                     return Ok(());
                 }
@@ -382,6 +400,7 @@ impl IsoReader {
             }
             if let Err(e) = self.step() {
                 self.queue.clear();
+                self.corner = None;
                 self.interp.discard();
                 self.flushed = true;
                 return Err(e);

@@ -393,7 +393,8 @@ fn m73_and_m74_are_the_tool_air_blast_on_haas_and_save_the_modal_state_only_in_l
 }
 
 /// Refusals name what the construct is in a Fanuc: G43.5's I J K are the tool-axis vector
-/// (not arc words), `,R` and `,C` the corner rounding and chamfer (not stray characters).
+/// (not arc words), `,R` and `,C` the corner rounding and chamfer (not stray characters),
+/// refused where the next block has no line to round or chamfer to.
 #[test]
 fn refusals_name_the_fanuc_meaning_of_the_construct() {
     let o = opts(Dialect::Fanuc);
@@ -408,8 +409,16 @@ fn refusals_name_the_fanuc_meaning_of_the_construct() {
             3,
             "tool-axis direction vector",
         ),
-        ("G21 G90\nG1 X10 Y0 ,R2 F100\n", 2, "corner rounding (,R"),
-        ("G21 G90\nG1 X10 Y0 ,C1 F100\n", 2, "chamfer (,C"),
+        (
+            "G21 G90\nG1 X10 Y0 ,R2 F100\n",
+            2,
+            "corner rounding `,R2` (line 2): the program ends",
+        ),
+        (
+            "G21 G90\nG1 X10 Y0 ,C1 F100\nM30\n",
+            3,
+            "chamfer `,C1` (line 2)",
+        ),
     ] {
         let (l, message) = error_with(text, &o);
         assert_eq!(l, line, "{text:?}: {message}");

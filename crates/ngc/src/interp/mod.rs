@@ -611,6 +611,11 @@ impl Interp {
         }
     }
 
+    /// F as programmed (program units per minute or per revolution), when one is.
+    pub(crate) fn programmed_feed(&self) -> Option<f64> {
+        self.feed
+    }
+
     pub fn finish(&mut self, queue: &mut VecDeque<Move>) {
         // As LinuxCNC's M2: the queue ends at the compensated point; a gouge found there
         // was already reported with the move that made it.

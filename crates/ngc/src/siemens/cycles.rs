@@ -125,8 +125,11 @@ impl Reader {
     /// Reads the cycle `name`'s values (its parentheses follow).
     pub(super) fn cycle(&mut self, name: &str, at: usize, sc: &mut Scan) -> LineResult<Cycle> {
         let span = at..sc.at;
-        if !matches!(name, "CYCLE81" | "CYCLE82") {
-            return Err(LineError::new(span, format!("`{name}` ({}) is not supported by mtsim's Siemens reader: it reads the drilling cycles CYCLE81 and CYCLE82", cycle_kind(name)), "unsupported cycle"));
+        if !matches!(
+            name,
+            "CYCLE81" | "CYCLE82" | "CYCLE84" | "CYCLE85" | "CYCLE89"
+        ) {
+            return Err(LineError::new(span, format!("`{name}` ({}) is not supported by mtsim's Siemens reader: it reads the drilling, tapping and boring cycles CYCLE81, CYCLE82, CYCLE84, CYCLE85 and CYCLE89", cycle_kind(name)), "unsupported cycle"));
         }
         let a = self.arguments(sc, at)?;
         let get = |k: usize| a.get(k).copied().flatten();
@@ -151,15 +154,47 @@ impl Reader {
                 ))
             }
         };
+        let (feed_in, feed_out) = match name {
+            // CYCLE85(.., DTB, FFR, RFF): in at FFR, out at RFF.
+            "CYCLE85" => {
+                let (Some(ffr), Some(rff)) = (get(6), get(7)) else {
+                    return Err(sc.err(at, "CYCLE85 without FFR and RFF: expected CYCLE85(RTP, RFP, SDIS, DP, DPR, DTB, FFR, RFF)", "no boring feeds"));
+                };
+                (Some(ffr), Some(rff))
+            }
+            // CYCLE89(.., DTB): in and out at the programmed F.
+            "CYCLE89" => (None, Some(self.interp.programmed_feed().unwrap_or(0.0))),
+            // CYCLE84(.., DTB, SDAC, MPIT, PIT, POSS, SST, SST1): in at SST, out at SST1,
+            // one pitch a turn.
+            "CYCLE84" => {
+                let pitch = match (get(8), get(7)) {
+                    (Some(p), _) if p != 0.0 => p.abs(),
+                    (_, Some(m)) => metric_coarse_pitch(m).ok_or_else(|| sc.err(at, format!("CYCLE84 MPIT {m}: expected a metric thread size 3-48 (M3-M48) or the pitch PIT"), "thread size"))?,
+                    _ => return Err(sc.err(at, "CYCLE84 without MPIT or PIT: expected the thread's size or pitch", "no pitch")),
+                };
+                let Some(sst) = get(10).filter(|v| *v > 0.0) else {
+                    return Err(sc.err(
+                        at,
+                        "CYCLE84 without SST: expected the tapping speed (rev/min)",
+                        "no speed",
+                    ));
+                };
+                let sst1 = get(11).filter(|v| *v > 0.0).unwrap_or(sst);
+                (Some(pitch * sst), Some(pitch * sst1))
+            }
+            _ => (None, None),
+        };
         Ok(Cycle {
             retract,
             approach: reference + get(2).unwrap_or(0.0).abs(),
             depth,
-            dwell_s: if name == "CYCLE82" {
-                get(5).unwrap_or(0.0)
-            } else {
+            dwell_s: if name == "CYCLE81" {
                 0.0
+            } else {
+                get(5).unwrap_or(0.0)
             },
+            feed_in,
+            feed_out,
         })
     }
 
@@ -210,21 +245,29 @@ impl Reader {
         let p = self.interp.program_position();
         let here = self.frame.frame_point([p[Axis::X], p[Axis::Y], p[Axis::Z]]);
         let axis = self.normal;
-        let mut steps = vec![(0u8, c.approach), (1, c.depth)];
+        // (motion, level, feed): G0 to RFP + SDIS, in to the depth, the dwell, out at the
+        // cycle's feed (CYCLE84/85/89), G0 to RTP; the programmed F again after a cycle
+        // that feeds at its own.
+        let mut steps = vec![(0u8, c.approach, None), (1, c.depth, c.feed_in)];
         if c.dwell_s > 0.0 {
-            steps.push((4, c.dwell_s));
+            steps.push((4, c.dwell_s, None));
         }
-        steps.push((0, c.retract));
-        for (motion, v) in steps {
+        if let Some(f) = c.feed_out {
+            steps.push((1, c.approach, Some(f)));
+        }
+        steps.push((0, c.retract, None));
+        let programmed = self.interp.programmed_feed();
+        for (motion, v, feed) in steps {
             if motion == 4 {
                 self.push(&format!("G4 X{}", number(v)), 0..0);
             } else {
                 let mut q = here;
                 q[axis] = v;
                 let t = self.frame.work_point(q);
+                let f = feed.map_or(String::new(), |f| format!(" F{}", number(f)));
                 self.push(
                     &format!(
-                        "G90 G{motion} X{} Y{} Z{}",
+                        "G90 G{motion} X{} Y{} Z{}{f}",
                         number(t[0]),
                         number(t[1]),
                         number(t[2])
@@ -234,6 +277,10 @@ impl Reader {
                 self.interp_absolute = true;
                 self.interp_motion = motion;
             }
+            self.run_iso(line_no)?;
+        }
+        if let (Some(f), true) = (programmed, c.feed_in.is_some() || c.feed_out.is_some()) {
+            self.push(&format!("F{}", number(f)), 0..0);
             self.run_iso(line_no)?;
         }
         Ok(())
@@ -340,4 +387,29 @@ fn cycle_kind(name: &str) -> &'static str {
         n if n.starts_with("CYCLE9") => "a measuring cycle; Measuring cycles manual",
         _ => "a standard or machine-builder cycle; SINUMERIK Cycles manual",
     }
+}
+
+/// The coarse pitch (mm) of metric thread `M size` (ISO 261), as CYCLE84's MPIT gives it.
+fn metric_coarse_pitch(size: f64) -> Option<f64> {
+    const TABLE: [(f64, f64); 15] = [
+        (3.0, 0.5),
+        (4.0, 0.7),
+        (5.0, 0.8),
+        (6.0, 1.0),
+        (8.0, 1.25),
+        (10.0, 1.5),
+        (12.0, 1.75),
+        (14.0, 2.0),
+        (16.0, 2.0),
+        (20.0, 2.5),
+        (24.0, 3.0),
+        (30.0, 3.5),
+        (36.0, 4.0),
+        (42.0, 4.5),
+        (48.0, 5.0),
+    ];
+    TABLE
+        .iter()
+        .find(|(m, _)| *m == size.abs())
+        .map(|&(_, p)| p)
 }

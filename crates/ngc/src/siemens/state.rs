@@ -48,6 +48,11 @@ pub(super) struct Cycle {
     pub approach: f64,
     pub depth: f64,
     pub dwell_s: f64,
+    /// The feed down to the depth (mm/min); `None`: the programmed F.
+    pub feed_in: Option<f64>,
+    /// Back up to RFP + SDIS at this feed (mm/min) before the rapid to RTP; `None`: the
+    /// rapid from the depth.
+    pub feed_out: Option<f64>,
 }
 
 /// A section being repeated.

@@ -518,3 +518,66 @@ fn cycle832_gives_the_blending_tolerance() {
     assert_eq!(at(8), ngc::PathControl::ExactPath);
     assert_eq!(at(11), ngc::PathControl::BLEND);
 }
+
+/// The Z levels and feeds of the moves of `line`: (Z, F or None for a rapid or dwell).
+fn z_feeds(m: &[Move], line: usize) -> Vec<(f64, Option<f64>)> {
+    m.iter()
+        .filter(|m| m.line == line && !matches!(m.motion, Motion::Dwell { .. }))
+        .map(|m| ((m.end[ngc::Axis::Z] * 1e9).round() / 1e9, m.feed.rate()))
+        .collect()
+}
+
+/// CYCLE85 bores in at FFR and out at RFF; CYCLE89 in and out at F; CYCLE84 taps in at
+/// pitch × SST and out at pitch × SST1 (MPIT 10: the M10 coarse pitch 1.5 mm); each then
+/// rises to RTP at rapid, and the programmed F holds again after it (Siemens Cycles
+/// manual, CYCLE84, CYCLE85, CYCLE89: RTP 10, RFP 0, SDIS 2, DP −20).
+#[test]
+fn boring_and_tapping_cycles_feed_in_and_out_at_their_own_feeds() {
+    let m = moves(
+        "G17 G90 G54 G71\nG0 X10 Y10 Z50\nF250\n\
+         CYCLE85(10,0,2,-20,,1,100,300)\nCYCLE89(10,0,2,-15,,0.5)\n\
+         CYCLE84(10,0,2,-20,,0,3,10,,0,200,400)\nCYCLE84(10,0,2,-20,,0,3,,1.25,0,200)\n\
+         G1 X20\nM30\n",
+    );
+    assert_eq!(
+        z_feeds(&m, 4),
+        [
+            (2.0, None),
+            (-20.0, Some(100.0)),
+            (2.0, Some(300.0)),
+            (10.0, None)
+        ]
+    );
+    assert_eq!(
+        z_feeds(&m, 5),
+        [
+            (2.0, None),
+            (-15.0, Some(250.0)),
+            (2.0, Some(250.0)),
+            (10.0, None)
+        ]
+    );
+    assert_eq!(
+        z_feeds(&m, 6),
+        [
+            (2.0, None),
+            (-20.0, Some(300.0)),
+            (2.0, Some(600.0)),
+            (10.0, None)
+        ]
+    );
+    assert_eq!(
+        z_feeds(&m, 7),
+        [
+            (2.0, None),
+            (-20.0, Some(250.0)),
+            (2.0, Some(250.0)),
+            (10.0, None)
+        ]
+    );
+    assert_eq!(z_feeds(&m, 8), [(10.0, Some(250.0))]);
+    let dwell = m
+        .iter()
+        .find(|m| m.line == 4 && matches!(m.motion, Motion::Dwell { .. }));
+    assert!(matches!(dwell.unwrap().motion, Motion::Dwell { seconds } if seconds == 1.0));
+}

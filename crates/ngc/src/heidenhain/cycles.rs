@@ -23,7 +23,7 @@ use crate::lex::{LineError, LineResult};
 
 use super::state::{self, Block, Reader};
 use super::text::value;
-use super::{frames, milling};
+use super::{frames, milling, transform};
 
 /// `CYCL DEF …`.
 pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
@@ -53,7 +53,10 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
             }
             Ok(())
         }
-        7 | 10 | 19 if minor == 0 => Ok(()),
+        7 | 8 | 10 | 11 | 19 | 26 if minor == 0 => Ok(()),
+        8 => transform::mirror(r, b),
+        11 => transform::scaling(r, b),
+        26 => transform::axis_scaling(r, b),
         7 => frames::datum_shift(r, b),
         10 => frames::rotation(r, b),
         19 => frames::working_plane(r, b, minor),
@@ -107,7 +110,7 @@ fn not_supported(b: &Block, id: &str, major: u32) -> LineError {
     };
     LineError::new(
         b.spans(0, 2),
-        format!("`CYCL DEF {id}{name}`: {what} is not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-209, 240, 251, 252 and 7, 9, 10, 13, 19, 32", manual(major)),
+        format!("`CYCL DEF {id}{name}`: {what} is not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-209, 240, 251, 252 and 7, 8, 9, 10, 11, 13, 19, 26, 32", manual(major)),
         "Heidenhain cycle not supported",
     )
     .help("post the cycle as L moves, or see docs/gcode.md")

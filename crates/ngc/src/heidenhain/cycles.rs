@@ -1,10 +1,11 @@
 //! `CYCL DEF` and `CYCL CALL`: the drilling cycles 200-203, 205-207, 209 and 240 as G0/G1/G4
 //! words along the tool axis, and the coordinate transformation cycles 7 (datum shift),
-//! 10 (rotation) and 19 (working plane) through `frames`.
+//! 10 (rotation) and 19 (working plane) through `frames`, 8 (mirror image), 11 (scaling)
+//! and 26 (axis-specific scaling) through `transform`.
 //!
 //! HEIDENHAIN TNC 640 cycle programming manual, "Cycles: drilling" (200 DRILLING, 201
 //! REAMING, 203 UNIVERSAL DRILLING, 205 UNIVERSAL PECKING, 207 RIGID TAPPING) and "Cycles: coordinate
-//! transformations" (7, 10, 19). With the surface s = Q203, set-up clearance a = Q200,
+//! transformations" (7, 8, 10, 11, 19, 26). With the surface s = Q203, set-up clearance a = Q200,
 //! depth Q201 (< 0), plunging depth Q202, second set-up clearance Q204, a drilling cycle
 //! at the current X Y runs:
 //!

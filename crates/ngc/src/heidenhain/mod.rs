@@ -29,6 +29,7 @@ mod state;
 mod sysread;
 mod text;
 mod transform;
+mod word_map;
 
 use std::collections::{HashMap, VecDeque};
 use std::ops::Range;

@@ -165,6 +165,16 @@ pub(super) fn axis_scaling(r: &mut Reader, b: &Block) -> LineResult<()> {
             map.centre[target - 3] = v;
         }
     }
+    if let Some(a) = pending {
+        return Err(LineError::new(
+            b.span(b.toks.len().saturating_sub(1)),
+            format!(
+                "cycle 26: the axis {} without its factor",
+                ["X", "Y", "Z"][a]
+            ),
+            "no factor",
+        ));
+    }
     if map.factor != [1.0; 3] && map.scl != 1.0 {
         return Err(both(b));
     }

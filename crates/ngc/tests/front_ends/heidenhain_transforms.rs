@@ -238,6 +238,7 @@ fn transformations_mtsim_does_not_read_are_refused_by_rule() {
         ("2 CYCL DEF 8.0 MIRROR IMAGE\n3 CYCL DEF 8.1 Z", "spindle axis"),
         ("2 CYCL DEF 8.0 MIRROR IMAGE\n3 CYCL DEF 8.1 X C", "rotary"),
         ("2 CYCL DEF 11.0 SCALING\n3 CYCL DEF 11.1 SCL 0", "0.000001"),
+        ("2 CYCL DEF 26.0 AXIS-SPECIFIC SCALING\n3 CYCL DEF 26.1 X", "without its factor"),
         (
             "2 CYCL DEF 11.0 SCALING\n3 CYCL DEF 11.1 SCL 2\n4 CYCL DEF 26.0 AXIS-SPECIFIC SCALING\n\
              5 CYCL DEF 26.1 X2",

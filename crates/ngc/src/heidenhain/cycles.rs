@@ -1,10 +1,11 @@
 //! `CYCL DEF` and `CYCL CALL`: the drilling cycles 200-203, 205-207, 209 and 240 as G0/G1/G4
 //! words along the tool axis, and the coordinate transformation cycles 7 (datum shift),
-//! 10 (rotation) and 19 (working plane) through `frames`.
+//! 10 (rotation) and 19 (working plane) through `frames`, 8 (mirror image), 11 (scaling)
+//! and 26 (axis-specific scaling) through `transform`.
 //!
 //! HEIDENHAIN TNC 640 cycle programming manual, "Cycles: drilling" (200 DRILLING, 201
 //! REAMING, 203 UNIVERSAL DRILLING, 205 UNIVERSAL PECKING, 207 RIGID TAPPING) and "Cycles: coordinate
-//! transformations" (7, 10, 19). With the surface s = Q203, set-up clearance a = Q200,
+//! transformations" (7, 8, 10, 11, 19, 26). With the surface s = Q203, set-up clearance a = Q200,
 //! depth Q201 (< 0), plunging depth Q202, second set-up clearance Q204, a drilling cycle
 //! at the current X Y runs:
 //!
@@ -23,7 +24,7 @@ use crate::lex::{LineError, LineResult};
 
 use super::state::{self, Block, Reader};
 use super::text::value;
-use super::{frames, milling};
+use super::{frames, milling, transform};
 
 /// `CYCL DEF …`.
 pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
@@ -53,7 +54,10 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
             }
             Ok(())
         }
-        7 | 10 | 19 if minor == 0 => Ok(()),
+        7 | 8 | 10 | 11 | 19 | 26 if minor == 0 => Ok(()),
+        8 => transform::mirror(r, b),
+        11 => transform::scaling(r, b),
+        26 => transform::axis_scaling(r, b),
         7 => frames::datum_shift(r, b),
         10 => frames::rotation(r, b),
         19 => frames::working_plane(r, b, minor),
@@ -143,7 +147,7 @@ fn not_supported(b: &Block, id: &str, major: u32) -> LineError {
     };
     LineError::new(
         b.spans(0, 2),
-        format!("`CYCL DEF {id}{name}`: {what} is not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-209, 240, 251, 252 and 7, 9, 10, 13, 19, 32", manual(major)),
+        format!("`CYCL DEF {id}{name}`: {what} is not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-209, 240, 251, 252 and 7, 8, 9, 10, 11, 13, 19, 26, 32", manual(major)),
         "Heidenhain cycle not supported",
     )
     .help("post the cycle as L moves, or see docs/gcode.md")

@@ -35,6 +35,7 @@ pub(super) fn apply(r: &mut Reader, b: &Block) -> LineResult<()> {
     let f = &r.frames_state;
     let rotated = f.plane.is_some() || f.rot_deg != 0.0;
     let (d, dl, tilted, shifted) = (f.datum, f.dl, f.tilted, f.shifted);
+    let flip = f.map.flips_xy();
     if tilted {
         r.gword("69", span.clone());
         r.end_block(b.line);
@@ -43,9 +44,11 @@ pub(super) fn apply(r: &mut Reader, b: &Block) -> LineResult<()> {
         if shifted {
             g52(r, b, [0.0; 3]);
         }
+        // Under a mirror of one of X Y the rotation turns the other way (`transform`).
+        let sign = if flip { -1.0 } else { 1.0 };
         let m = mul(
             &r.frames_state.plane.unwrap_or(IDENTITY),
-            &rot_z(r.frames_state.rot_deg),
+            &rot_z(sign * r.frames_state.rot_deg),
         );
         // DL along the tilted tool axis (the plane's Z, m's third column): the TNC
         // compensates the length in the tool axis of the working plane.

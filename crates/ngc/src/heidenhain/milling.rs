@@ -72,7 +72,12 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
             "radius compensation on",
         );
     }
-    let rho = r.comp_diameter() / 2.0;
+    // Under a scaling the cycle's dimensions scale, the tool does not: its radius in the
+    // program's (unscaled) coordinates is ρ / s (`transform`).
+    let Some(s) = r.frames_state.map.xy_factor() else {
+        return err(format!("cycle {n} under an axis-specific scaling (cycle 26) with different factors for X and Y: the cycle's arcs would be ellipses; expected equal factors"), "arc under unequal scaling");
+    };
+    let rho = r.comp_diameter() / 2.0 / s;
     if rho <= 0.0 {
         return err(
             format!("cycle {n} mills at the tool's radius: tool {} has no diameter in the machine's tool table", r.tool.0),

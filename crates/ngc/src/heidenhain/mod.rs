@@ -28,6 +28,8 @@ mod qparam;
 mod state;
 mod sysread;
 mod text;
+mod transform;
+mod word_map;
 
 use std::collections::{HashMap, VecDeque};
 use std::ops::Range;
@@ -216,6 +218,10 @@ impl Reader {
         let mut start = 0;
         let mut result = Ok(());
         for &(end, line_no) in &self.ends {
+            if let Err(e) = self.frames_state.map.apply(&mut self.words[start..end]) {
+                result = Err(e);
+                break;
+            }
             let stop = self.interp.block(
                 &text,
                 &self.words[start..end],
@@ -959,9 +965,22 @@ impl Reader {
             offset: 0,
             line: b.line,
         })?;
-        let p = self.interp.program_position();
+        let p = self.program_position();
         self.path.set_position(p);
         Ok(())
+    }
+
+    /// The interpreter's program position in the program's coordinates (before the
+    /// mirror image and scaling, `transform`).
+    fn program_position(&self) -> crate::axis::AxisVec {
+        use crate::axis::Axis;
+        let mut p = self.interp.program_position();
+        let q = self
+            .frames_state
+            .map
+            .inverse([p[Axis::X], p[Axis::Y], p[Axis::Z]]);
+        (p[Axis::X], p[Axis::Y], p[Axis::Z]) = (q[0], q[1], q[2]);
+        p
     }
 }
 

@@ -216,6 +216,8 @@ pub(super) struct Frames {
     pub(super) tilted: bool,
     /// G52 is not zero in the interpreter.
     pub(super) shifted: bool,
+    /// Cycles 8, 11 and 26: the map of the emitted words (`word_map`).
+    pub(super) map: super::word_map::Map,
 }
 
 /// The cycle `CYCL DEF` defined last (its parameters are the Q parameters it set).

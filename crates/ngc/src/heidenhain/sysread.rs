@@ -125,7 +125,7 @@ pub(super) fn read(r: &mut Reader, b: &Block, rest: &str, at: usize) -> LineResu
         }
         (270, 1) => {
             r.sync_position(b)?;
-            r.interp.program_position()[axis(idx)?]
+            r.program_position()[axis(idx)?]
         }
         (20, _) => return Err(refuse("active tool data other than its number and axis")),
         (50, _) => return Err(refuse("tool table data other than L, R, DL, DR and DR2")),

@@ -8,6 +8,7 @@ mod common;
 mod budget;
 mod fanuc_haas;
 mod heidenhain;
+mod heidenhain_transforms;
 mod klartext_posts;
 mod lent_moves;
 mod milling_cycles;

@@ -127,7 +127,7 @@ fn g53_1_takes_the_solution_nearest_the_rotaries_where_they_stand() {
     let program = dir.join("p.nc");
     std::fs::write(
         &program,
-        "G21 G90 G94 G17\nG00 X0 Y0 Z50 A0 C170\nG68.2 X0 Y0 Z0 I0 J30 K0\nG53.1\nG69\nM30\n",
+        "G21 G90 G94 G17\nG00 X0 Y0 Z50. A0 C170.\nG68.2 X0 Y0 Z0 I0 J30. K0\nG53.1\nG69\nM30\n",
     )
     .unwrap();
     let rows = blocks(&dir, &program, "fanuc");
@@ -153,7 +153,7 @@ fn g43_4_on_a_fork_head_places_the_tip_of_a_50_mm_tool() {
     let program = dir.join("p.nc");
     std::fs::write(
         &program,
-        "G21 G90 G94 G17\nG43.4 H1\nG01 X0 Y0 Z0 A30 C0 F500\nG01 X10\nM30\n",
+        "G21 G90 G94 G17\nG43.4 H1\nG01 X0 Y0 Z0 A30. C0 F500\nG01 X10.\nM30\n",
     )
     .unwrap();
     let rows = blocks_with_tool(&dir, &program, "fanuc", 50.0);

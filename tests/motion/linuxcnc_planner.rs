@@ -153,7 +153,10 @@ const THREE_AXIS_REST: &[(&str, &str)] = &[
 /// LinuxCNC's commanded joint stream for each program on `config`, recorded once into
 /// `<scratch>/<ini>/<program>.samples` (one row per servo period).
 fn linuxcnc_streams(config: &Config, programs: &[(&str, &str)]) -> Vec<Vec<Vec<f64>>> {
-    let dir = scratch("linuxcnc-planner", config.ini);
+    // One folder per test (its first program names it): tests on the same sample run side
+    // by side, and one's clean-up must not remove another's running copy.
+    let first = programs.first().map_or("none", |p| p.0);
+    let dir = scratch("linuxcnc-planner", &format!("{}-{first}", config.ini));
     let cmds = linuxcnc::recording(config.signals);
     let refs: Vec<&str> = cmds.iter().map(String::as_str).collect();
     let run = linuxcnc::start_with(config.folder, config.ini, &dir.join("lcnc"), &refs);

@@ -24,15 +24,6 @@ impl Reader {
         let p = self.interp.program_position();
         let start = [p[Axis::X], p[Axis::Y], p[Axis::Z]];
         let here = self.frame.frame_point(start);
-        let resolve = |c: &Option<Coordinate>, from: f64, absolute: bool| match c {
-            None => from,
-            Some(c) => match c.mode {
-                Mode::Absolute => c.value,
-                Mode::Incremental => from + c.value,
-                Mode::Modal if absolute => c.value,
-                Mode::Modal => from + c.value,
-            },
-        };
         if w.cip.iter().all(Option::is_none) {
             return Err(LineError::new(
                 span,
@@ -42,8 +33,8 @@ impl Reader {
         }
         let (mut m, mut e) = (here, here);
         for k in 0..3 {
-            m[k] = resolve(&w.cip[k], here[k], self.absolute);
-            e[k] = resolve(&w.axes[k], here[k], self.absolute);
+            m[k] = Coordinate::resolve(&w.cip[k], here[k], self.absolute);
+            e[k] = Coordinate::resolve(&w.axes[k], here[k], self.absolute);
         }
         let (m, e) = (self.frame.work_point(m), self.frame.work_point(e));
         let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -91,7 +82,7 @@ impl Reader {
         }
         for (i, axis) in Axis::ALL.iter().enumerate().skip(3) {
             if w.axes[i].is_some() {
-                let val = resolve(&w.axes[i], p[*axis], self.absolute);
+                let val = Coordinate::resolve(&w.axes[i], p[*axis], self.absolute);
                 self.push(&format!("{}{}", axis.letter(), number(val)), span.clone());
             }
         }

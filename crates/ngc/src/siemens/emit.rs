@@ -184,19 +184,10 @@ impl Reader {
         self.interp_absolute = true;
         self.plane_code(plane, span.clone());
         self.motion_code(true, flip, span.clone());
-        let resolve = |c: &Option<Coordinate>, from: f64, absolute: bool| match c {
-            None => from,
-            Some(c) => match c.mode {
-                Mode::Absolute => c.value,
-                Mode::Incremental => from + c.value,
-                Mode::Modal if absolute => c.value,
-                Mode::Modal => from + c.value,
-            },
-        };
         if w.axes[..3].iter().any(Option::is_some) {
             let mut q = here;
             for k in 0..3 {
-                q[k] = resolve(&w.axes[k], here[k], self.absolute);
+                q[k] = Coordinate::resolve(&w.axes[k], here[k], self.absolute);
             }
             let t = self.frame.work_point(q);
             for (k, l) in ["X", "Y", "Z"].iter().enumerate() {
@@ -205,7 +196,7 @@ impl Reader {
         }
         for (k, axis) in Axis::ALL.iter().enumerate().skip(3) {
             if w.axes[k].is_some() {
-                let v = resolve(&w.axes[k], p[*axis], self.absolute);
+                let v = Coordinate::resolve(&w.axes[k], p[*axis], self.absolute);
                 self.push(&format!("{}{}", axis.letter(), number(v)), span.clone());
             }
         }
@@ -213,7 +204,7 @@ impl Reader {
             // Centres are incremental from the start unless AC().
             let mut c = here;
             for k in 0..3 {
-                c[k] = resolve(&w.centres[k], here[k], false);
+                c[k] = Coordinate::resolve(&w.centres[k], here[k], false);
             }
             let c = self.frame.work_point(c);
             for (k, l) in ["I", "J", "K"].iter().enumerate() {

@@ -4,7 +4,7 @@
 //! moves are `n` full circles (each back to the start in the plane, rising by its share)
 //! and then the arc to the end. TURN is read with the centre by I J K (not with CR=).
 
-use super::words::{number, Coordinate, Mode, Words};
+use super::words::{number, Coordinate, Words};
 use super::Reader;
 use crate::axis::Axis;
 use crate::lex::{LineError, LineResult};
@@ -63,19 +63,10 @@ impl Reader {
         let (plane, _, flip) = self.frame.arc_plane(self.normal).ok_or_else(|| {
             LineError::new(span.clone(), "a helix in a frame that tilts its plane off the work axes or stretches it unevenly", "arc in a tilted frame")
         })?;
-        let resolve = |c: &Option<Coordinate>, from: f64, absolute: bool| match c {
-            None => from,
-            Some(c) => match c.mode {
-                Mode::Absolute => c.value,
-                Mode::Incremental => from + c.value,
-                Mode::Modal if absolute => c.value,
-                Mode::Modal => from + c.value,
-            },
-        };
         let (mut q, mut c) = (here, here);
         for k in 0..3 {
-            q[k] = resolve(&w.axes[k], here[k], self.absolute);
-            c[k] = resolve(&w.centres[k], here[k], false);
+            q[k] = Coordinate::resolve(&w.axes[k], here[k], self.absolute);
+            c[k] = Coordinate::resolve(&w.centres[k], here[k], false);
         }
         let (end, c) = (self.frame.work_point(q), self.frame.work_point(c));
         let clockwise = (self.motion == 2) != flip;

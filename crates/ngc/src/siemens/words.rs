@@ -36,6 +36,22 @@ pub(super) struct Coordinate {
     pub span: std::ops::Range<usize>,
 }
 
+impl Coordinate {
+    /// The coordinate `c` from `from` (its value where the block has none): absolute as
+    /// written (`=AC(..)`, or plain under G90), else an increment (`=IC(..)`, plain under G91).
+    pub(super) fn resolve(c: &Option<Coordinate>, from: f64, absolute: bool) -> f64 {
+        match c {
+            None => from,
+            Some(c) => match c.mode {
+                Mode::Absolute => c.value,
+                Mode::Incremental => from + c.value,
+                Mode::Modal if absolute => c.value,
+                Mode::Modal => from + c.value,
+            },
+        }
+    }
+}
+
 /// The axis letters, in the order of `Axis::ALL`, then the centres.
 const AXES: &[u8; 9] = b"XYZABCUVW";
 const CENTRES: &[u8; 3] = b"IJK";
@@ -148,17 +164,34 @@ impl Reader {
         sc: &mut Scan,
         w: &mut Words,
     ) -> LineResult<()> {
+        let c = self.assigned(
+            sc,
+            at,
+            "expected `AP=angle` or `RP=radius`",
+            "polar coordinate",
+        )?;
+        put(&mut w.polar[k], c, sc, at)
+    }
+
+    /// `=value` after a name at `at` (the cursor after the name), as a coordinate; `expected`
+    /// and `label` make the error where `=` is missing.
+    fn assigned(
+        &mut self,
+        sc: &mut Scan,
+        at: usize,
+        expected: &str,
+        label: &'static str,
+    ) -> LineResult<Coordinate> {
         if !sc.eat(b'=') {
-            return Err(sc.err(at, "expected `AP=angle` or `RP=radius`", "polar coordinate"));
+            return Err(sc.err(at, expected, label));
         }
         let (value, mode) = self.value(sc)?;
-        let c = Coordinate {
+        Ok(Coordinate {
             value,
             mode,
             raw: None,
             span: at..sc.at,
-        };
-        put(&mut w.polar[k], c, sc, at)
+        })
     }
 
     /// `I1=`, `J1=`, `K1=` (CIP's intermediate point; the cursor after the name).
@@ -169,20 +202,12 @@ impl Reader {
         sc: &mut Scan,
         w: &mut Words,
     ) -> LineResult<()> {
-        if !sc.eat(b'=') {
-            return Err(sc.err(
-                at,
-                "expected `I1=value` (CIP's intermediate point)",
-                "CIP point",
-            ));
-        }
-        let (value, mode) = self.value(sc)?;
-        let c = Coordinate {
-            value,
-            mode,
-            raw: None,
-            span: at..sc.at,
-        };
+        let c = self.assigned(
+            sc,
+            at,
+            "expected `I1=value` (CIP's intermediate point)",
+            "CIP point",
+        )?;
         put(&mut w.cip[k], c, sc, at)
     }
 

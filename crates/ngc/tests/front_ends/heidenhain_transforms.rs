@@ -4,45 +4,16 @@
 //! S: x' = s x, or cc + f (x − cc) for cycle 26), arcs and compensation turned over by a
 //! mirror of one axis, and the refusals.
 
-use std::path::Path;
+use ngc::{Motion, Move};
 
-use ngc::{read_str_with, Axis, Dialect, Error, Motion, Move, Options, Tool};
-
-fn opts() -> Options {
-    Options {
-        dialect: Dialect::Heidenhain,
-        tools: vec![Tool {
-            number: 1,
-            length_mm: 0.0,
-            diameter_mm: 10.0,
-        }],
-        ..Options::default()
-    }
-}
-
-fn program(body: &str) -> String {
-    format!("0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S1000\n{body}\n99 END PGM T MM\n")
-}
+use super::klartext_setup::{in_program, klartext_options, near, read_named, xyz};
 
 fn run(body: &str) -> Result<Vec<Move>, (usize, String)> {
-    read_str_with(Path::new("t.h"), &program(body), &opts())
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| match e {
-            Error::Syntax(s) => (s.line, s.message),
-            other => panic!("{other}"),
-        })
+    read_named("t.h", &in_program(body), &klartext_options())
 }
 
 fn moves(body: &str) -> Vec<Move> {
     run(body).unwrap_or_else(|e| panic!("{e:?}"))
-}
-
-fn xyz(m: &Move) -> [f64; 3] {
-    [m.end[Axis::X], m.end[Axis::Y], m.end[Axis::Z]]
-}
-
-fn near(a: [f64; 3], b: [f64; 3]) -> bool {
-    a.iter().zip(b).all(|(a, b)| (a - b).abs() < 1e-9)
 }
 
 /// An arc's direction (clockwise) and centre X Y.

@@ -6,21 +6,9 @@
 //! programs in tests/data/klartext_posts/). Each is read with the moves worked out by hand
 //! in its test, or refused by name at its line.
 
-use std::path::Path;
+use ngc::{Axis, Feed, Motion, Move, Options, RotaryTable};
 
-use ngc::{read_str_with, Axis, Dialect, Error, Feed, Motion, Move, Options, RotaryTable, Tool};
-
-fn opts() -> Options {
-    Options {
-        dialect: Dialect::Heidenhain,
-        tools: vec![Tool {
-            number: 1,
-            length_mm: 0.0,
-            diameter_mm: 10.0,
-        }],
-        ..Options::default()
-    }
-}
+use super::klartext_setup::{klartext_options, near, read_named, xyz};
 
 fn table() -> Options {
     Options {
@@ -28,25 +16,12 @@ fn table() -> Options {
             tilt: Axis::A,
             pivot_mm: [0.0; 3],
         }),
-        ..opts()
+        ..klartext_options()
     }
 }
 
 fn read(text: &str, o: &Options) -> Result<Vec<Move>, (usize, String)> {
-    read_str_with(Path::new("post.h"), text, o)
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| match e {
-            Error::Syntax(s) => (s.line, s.message),
-            other => panic!("{other}"),
-        })
-}
-
-fn xyz(m: &Move) -> [f64; 3] {
-    [m.end[Axis::X], m.end[Axis::Y], m.end[Axis::Z]]
-}
-
-fn near(a: [f64; 3], b: [f64; 3]) -> bool {
-    a.iter().zip(b).all(|(p, q)| (p - q).abs() < 1e-9)
+    read_named("post.h", text, o)
 }
 
 /// The end points of the feed moves (lines and arcs).
@@ -88,7 +63,7 @@ macro_rules! post {
 
 #[test]
 fn fusion_contour_with_m91_tolerance_cycle_and_comments() {
-    let m = read(post!("01_fusion_contour"), &opts()).unwrap();
+    let m = read(post!("01_fusion_contour"), &klartext_options()).unwrap();
     // Plunge at F300 to Z-2, then the square ±30 at F1000.
     let want = [
         [-30.0, -30.0, -2.0],
@@ -109,7 +84,7 @@ fn fusion_contour_with_m91_tolerance_cycle_and_comments() {
 
 #[test]
 fn fusion_helix_ramp_about_cc_with_ipa_and_iz() {
-    let m = read(post!("02_fusion_helix_ramp"), &opts()).unwrap();
+    let m = read(post!("02_fusion_helix_ramp"), &klartext_options()).unwrap();
     // Three turns of radius 10 about (0, 0), 1 mm down each from Z 1, one flat turn.
     let a = arcs(&m);
     assert_eq!(a.len(), 4, "{a:?}");
@@ -122,7 +97,7 @@ fn fusion_helix_ramp_about_cc_with_ipa_and_iz() {
 
 #[test]
 fn mastercam_section_repeat_runs_the_section_three_times() {
-    let m = read(post!("03_mastercam_section_repeat"), &opts()).unwrap();
+    let m = read(post!("03_mastercam_section_repeat"), &klartext_options()).unwrap();
     // REP 2: the section LBL 1 … CALL LBL 1 once as read and twice more: Z -2, -4, -6,
     // each a 20 × 20 square from (0, 0).
     let f = feed_ends(&m);
@@ -142,7 +117,7 @@ fn mastercam_section_repeat_runs_the_section_three_times() {
 
 #[test]
 fn nx_subprogram_called_twice_and_the_program_ends_at_m30() {
-    let m = read(post!("04_nx_subprogram"), &opts()).unwrap();
+    let m = read(post!("04_nx_subprogram"), &klartext_options()).unwrap();
     // LBL 10: IZ-8 from Z 5 to -3, back up; at (10, 10) and (40, 10). M30 ends the program
     // before the subprogram's text.
     assert!(same(
@@ -154,7 +129,7 @@ fn nx_subprogram_called_twice_and_the_program_ends_at_m30() {
 
 #[test]
 fn hand_written_fn_9_to_12_jumps() {
-    let m = read(post!("05_hand_fn_jumps"), &opts()).unwrap();
+    let m = read(post!("05_hand_fn_jumps"), &klartext_options()).unwrap();
     // FN 12 loops while Q1 < 30: X 10, 20, 30; FN 9 (Q1 = 30) jumps over X 999; FN 10
     // (Q1 ≠ 30) does not jump: Y 10; FN 11 (Q1 > 0) jumps over Y 999.
     let want = [
@@ -206,7 +181,7 @@ fn nx_function_tcpm_and_m128_move_with_the_tool_centre_point() {
 
 #[test]
 fn fusion_drilling_cycle_200_called_by_m99_at_two_holes() {
-    let m = read(post!("08_fusion_drill_200"), &opts()).unwrap();
+    let m = read(post!("08_fusion_drill_200"), &klartext_options()).unwrap();
     // Per hole from Z 20: FMAX to 2, pecks of 4 to -12 with FMAX back to 2 and down to 2
     // above the depth reached, FMAX to 2, then to the 2nd set-up clearance 20.
     let want = [
@@ -235,7 +210,7 @@ fn fusion_drilling_cycle_200_called_by_m99_at_two_holes() {
 
 #[test]
 fn tool_call_dl_and_dr_shift_the_depth_and_the_compensated_path() {
-    let m = read(post!("09_comp_dl_dr"), &opts()).unwrap();
+    let m = read(post!("09_comp_dl_dr"), &klartext_options()).unwrap();
     // DL-0.2: every Z 0.2 lower (a shorter tool); DR-0.5: radius 5 − 0.5 = 4.5. Along
     // Y 0 towards +X under RL the tool runs at Y +4.5; the inside corner at (40, 0) turning
     // to +Y puts it at (40 − 4.5, 4.5).
@@ -246,7 +221,7 @@ fn tool_call_dl_and_dr_shift_the_depth_and_the_compensated_path() {
 
 #[test]
 fn hypermill_circular_pocket_252_ends_on_the_wall_at_the_depth() {
-    let m = read(post!("10_hypermill_pocket_252"), &opts()).unwrap();
+    let m = read(post!("10_hypermill_pocket_252"), &klartext_options()).unwrap();
     // Ø40, tool Ø10: wall circle radius 15; stepover 5: circles 5, 10, 15 at Z -4 and -8,
     // counter-clockwise (climb) about (50, 40).
     let a = arcs(&m);
@@ -271,7 +246,7 @@ fn hypermill_circular_pocket_252_ends_on_the_wall_at_the_depth() {
 
 #[test]
 fn bore_milling_208_at_each_point_of_a_pattern() {
-    let m = read(post!("11_bore_208_pattern"), &opts()).unwrap();
+    let m = read(post!("11_bore_208_pattern"), &klartext_options()).unwrap();
     // Ø16 bore, tool Ø10: helix radius 3; from 2 to -10 at 3 per turn: four turns, the
     // fourth ending at -10, then a full circle there; at (20, 20) and (60, 20).
     let a = arcs(&m);
@@ -290,7 +265,7 @@ fn bore_milling_208_at_each_point_of_a_pattern() {
 
 #[test]
 fn m92_is_refused_naming_the_machine_builders_datum() {
-    let (line, msg) = read(post!("12_hypermill_m92"), &opts()).unwrap_err();
+    let (line, msg) = read(post!("12_hypermill_m92"), &klartext_options()).unwrap_err();
     assert_eq!(line, 3);
     assert!(
         msg.contains("M92") && msg.contains("machine tool builder"),
@@ -300,7 +275,7 @@ fn m92_is_refused_naming_the_machine_builders_datum() {
 
 #[test]
 fn mastercam_skip_stop_rnd_and_chf() {
-    let m = read(post!("13_mastercam_skip_stop"), &opts()).unwrap();
+    let m = read(post!("13_mastercam_skip_stop"), &klartext_options()).unwrap();
     // The `/` block is skipped (no move to 500, 500). RND R5 at (25, 0): the line stops
     // 5 tan 45° = 5 short, the arc about (20, 5) to (25, 5); CHF 3 at (25, 25): (25, 22)
     // to (22, 25), then to (0, 25).
@@ -322,7 +297,7 @@ fn mastercam_skip_stop_rnd_and_chf() {
 fn a_coordinate_written_nan_is_refused_as_a_fault_of_the_post() {
     let text =
         "0 BEGIN PGM P MM\n1 TOOL CALL 1 Z S1000\n2 L Xnan Ynan Znan FMAX M9\n3 END PGM P MM\n";
-    let (line, msg) = read(text, &opts()).unwrap_err();
+    let (line, msg) = read(text, &klartext_options()).unwrap_err();
     assert_eq!(line, 3);
     assert!(
         msg.contains("`Xnan`") && msg.contains("fault of the post"),
@@ -332,7 +307,7 @@ fn a_coordinate_written_nan_is_refused_as_a_fault_of_the_post() {
 
 #[test]
 fn mastercam_rectangular_pocket_251_up_cut_is_clockwise() {
-    let m = read(post!("14_mastercam_pocket_251"), &opts()).unwrap();
+    let m = read(post!("14_mastercam_pocket_251"), &klartext_options()).unwrap();
     // 40 × 30 about (50, 50), corner radius 5 = the tool's radius: a sharp wall path of
     // half sides 15 × 10; stepover 5: the rectangle 10 × 5 first; Q351 = -1: clockwise,
     // so from the middle of the +X side down first. One level at -3 (roughing only).

@@ -10,6 +10,7 @@ mod fanuc_haas;
 mod heidenhain;
 mod heidenhain_transforms;
 mod klartext_posts;
+mod klartext_setup;
 mod lent_moves;
 mod milling_cycles;
 mod posts;

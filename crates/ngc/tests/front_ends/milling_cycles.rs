@@ -7,30 +7,12 @@
 //! Q219/2 − ρ with corner radius Q220 − ρ. And the cycles still refused, each by its name and manual
 //! section.
 
-use std::path::Path;
+use ngc::{Axis, Feed, Motion, Move};
 
-use ngc::{read_str_with, Axis, Dialect, Error, Feed, Motion, Move, Options, Tool};
-
-fn opts() -> Options {
-    Options {
-        dialect: Dialect::Heidenhain,
-        tools: vec![Tool {
-            number: 1,
-            length_mm: 0.0,
-            diameter_mm: 10.0,
-        }],
-        ..Options::default()
-    }
-}
+use super::klartext_setup::{in_program, klartext_options, read_named};
 
 fn run(body: &str) -> Result<Vec<Move>, (usize, String)> {
-    let text = format!("0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S1000\n{body}\n99 END PGM T MM\n");
-    read_str_with(Path::new("t.h"), &text, &opts())
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| match e {
-            Error::Syntax(s) => (s.line, s.message),
-            other => panic!("{other}"),
-        })
+    read_named("t.h", &in_program(body), &klartext_options())
 }
 
 /// An arc's (counter-clockwise, centre X Y, radius of its start, Z of its end, feed).

@@ -4,30 +4,12 @@
 //! not given (a GUD variable, tool management, a cycle with its manual section). Every
 //! position is worked out by hand in the comments.
 
-use std::path::Path;
+use ngc::{Axis, Dialect, Feed, Motion, Move, Options, Plane};
 
-use ngc::{read_str_with, Axis, Dialect, Error, Feed, Motion, Move, Options, Plane, Tool};
-
-fn klartext_options() -> Options {
-    Options {
-        dialect: Dialect::Heidenhain,
-        tools: vec![Tool {
-            number: 1,
-            length_mm: 0.0,
-            diameter_mm: 10.0,
-        }],
-        ..Options::default()
-    }
-}
+use super::klartext_setup::{in_program, klartext_options, near, read_named, xyz};
 
 fn klartext(body: &str) -> Result<Vec<Move>, (usize, String)> {
-    let text = format!("0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S1000\n{body}\n99 END PGM T MM\n");
-    read_str_with(Path::new("t.h"), &text, &klartext_options())
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| match e {
-            Error::Syntax(s) => (s.line, s.message),
-            other => panic!("{other}"),
-        })
+    read_named("t.h", &in_program(body), &klartext_options())
 }
 
 fn sinumerik(text: &str) -> Result<Vec<Move>, (usize, String)> {
@@ -35,20 +17,7 @@ fn sinumerik(text: &str) -> Result<Vec<Move>, (usize, String)> {
         dialect: Dialect::Siemens,
         ..Options::default()
     };
-    read_str_with(Path::new("t.mpf"), text, &o)
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| match e {
-            Error::Syntax(s) => (s.line, s.message),
-            other => panic!("{other}"),
-        })
-}
-
-fn xyz(m: &Move) -> [f64; 3] {
-    [m.end[Axis::X], m.end[Axis::Y], m.end[Axis::Z]]
-}
-
-fn near(a: [f64; 3], b: [f64; 3]) -> bool {
-    a.iter().zip(b).all(|(p, q)| (p - q).abs() < 1e-9)
+    read_named("t.mpf", text, &o)
 }
 
 /// Feed moves and rapids along Z alone: (rapid, Z, feed).

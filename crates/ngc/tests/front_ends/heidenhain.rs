@@ -3,23 +3,9 @@
 
 use std::path::Path;
 
-use ngc::{read_str_with, Axis, Dialect, Error, Motion, Move, Options, RotaryTable, Tool};
+use ngc::{read_str_with, Axis, Error, Motion, Move, Options, RotaryTable, Tool};
 
-fn opts() -> Options {
-    Options {
-        dialect: Dialect::Heidenhain,
-        tools: vec![Tool {
-            number: 1,
-            length_mm: 0.0,
-            diameter_mm: 10.0,
-        }],
-        ..Options::default()
-    }
-}
-
-fn program(body: &str) -> String {
-    format!("0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S1000\n{body}\n99 END PGM T MM\n")
-}
+use super::klartext_setup::{in_program as program, klartext_options as opts};
 
 fn moves_with(body: &str, o: &Options) -> Vec<Move> {
     read_str_with(Path::new("t.h"), &program(body), o)

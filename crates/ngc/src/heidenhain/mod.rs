@@ -26,6 +26,7 @@ mod milling;
 mod pattern;
 mod qparam;
 mod state;
+mod surface_normal;
 mod sysread;
 mod text;
 mod transform;
@@ -288,6 +289,7 @@ impl Reader {
             "L" | "LP" | "CC" | "C" | "CR" | "CT" | "CP" | "RND" | "CHF" => {
                 contour::block(self, b, key)
             }
+            "LN" => surface_normal::ln(self, b),
             "APPR" => approach::appr(self, b),
             "DEP" => approach::dep(self, b),
             "BEGIN" => self.begin_pgm(b),

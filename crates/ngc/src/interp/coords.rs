@@ -76,6 +76,37 @@ impl Interp {
         self.tilt.is_some() || self.dwo
     }
 
+    /// Tool-centre-point control (G43.4, G234, and the front ends' M128, `FUNCTION TCPM`,
+    /// `TRAORI`) is on: X Y Z are the tool tip in the workpiece frame.
+    pub(crate) fn tcp_active(&self) -> bool {
+        self.tcp
+    }
+
+    /// The axis positions with the rotaries turned so that the tool lies along the unit
+    /// direction `t` of the workpiece frame (Heidenhain `LN … TX TY TZ`, Sinumerik
+    /// `A3= B3= C3=`), the other axes as they are; or why it cannot be reached. On a
+    /// table-table machine this is [`RotaryTable::align`](crate::frame::RotaryTable::align)
+    /// (the solution with a positive tilt, C next to its current value), on a kinematic chain
+    /// the caller's [`ToolAligner`](crate::frame::ToolAligner).
+    pub(crate) fn rotaries_for_direction(&self, t: [f64; 3]) -> Result<AxisVec, String> {
+        let n = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+        if !(n > 1e-9) || !n.is_finite() {
+            return Err("the tool direction is the zero vector".into());
+        }
+        let t = t.map(|c| c / n);
+        if let Some(table) = self.table {
+            let (tilt, c) = table.align(t, self.pos[Axis::C]);
+            let mut q = self.pos;
+            q[table.tilt] = tilt;
+            q[Axis::C] = c;
+            return Ok(q);
+        }
+        match &self.aligner {
+            Some(aligner) => (aligner.0)(t, &self.pos),
+            None => Err("the machine has no rotary axes mtsim can turn to a direction (a table-table AC or BC machine, or a kinematic chain with two rotaries)".into()),
+        }
+    }
+
     /// The program-to-machine map while G68.2 or G254 is active.
     pub(crate) fn frame(&self) -> Option<Frame> {
         if self.tilt.is_none() && !self.dwo {

@@ -64,9 +64,9 @@ impl Input {
 pub(crate) struct Registration {
     /// True for the dialects this front end reads (the options' `dialect`).
     pub(crate) dialect: fn(Dialect) -> bool,
-    /// True when the program's first line with more than blanks opens a program of this
-    /// language, whatever the dialect named (`None`: no such sign).
-    pub(crate) first_line: Option<fn(&str) -> bool>,
+    /// True when the program's file name or its first line with more than blanks opens a
+    /// program of this language, whatever the dialect named (`None`: no such sign).
+    pub(crate) first_line: Option<fn(&Path, &str) -> bool>,
     /// The front end reading the program at `path`.
     pub(crate) open: fn(&Path, Input, &Options) -> std::io::Result<Box<dyn FrontEnd>>,
 }

@@ -25,7 +25,7 @@ pub(crate) const FRONT_END: Registration = Registration {
 
 /// True when `line`, the first line with more than blanks, opens a Klartext program:
 /// `BEGIN PGM`, with or without a block number.
-fn opens_program(line: &str) -> bool {
+fn opens_program(_path: &std::path::Path, line: &str) -> bool {
     let rest = &line[text::after_block_number(line)..];
     rest.len() >= 9 && rest.as_bytes()[..9].eq_ignore_ascii_case(b"BEGIN PGM")
 }

@@ -94,8 +94,8 @@ pub fn read_str_with(path: &Path, text: &str, options: &Options) -> Moves {
 }
 
 /// The program at `path` read by the first of [`FRONT_ENDS`] that claims it: by the
-/// dialect named, or else by its first line with more than blanks (read once, only when a
-/// front end asks).
+/// dialect named, or else by its file name and first line with more than blanks (read once,
+/// only when a front end asks).
 fn read_with(path: &Path, input: Input, options: &Options) -> std::io::Result<Moves> {
     let mut input = input;
     let mut first: Option<Option<String>> = None;
@@ -110,7 +110,7 @@ fn read_with(path: &Path, input: Input, options: &Options) -> std::io::Result<Mo
             }
             claimed = first
                 .as_ref()
-                .is_some_and(|l| l.as_deref().is_some_and(opens));
+                .is_some_and(|l| l.as_deref().is_some_and(|l| opens(path, l)));
         }
         if claimed {
             return Ok(Moves {

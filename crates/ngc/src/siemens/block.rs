@@ -640,6 +640,11 @@ impl Reader {
                 return Ok(());
             }
             "MSG" => return skip_call(sc, at),
+            "A3" | "B3" | "C3" => return self.orientation_word(name, at, sc, w),
+            "ORIMKS" | "ORIWKS" => {
+                self.ori_machine = name == "ORIMKS";
+                return Ok(());
+            }
             "CT" | "CIP" | "TURN" | "AP" | "RP" | "I1" | "J1" | "K1" => {
                 return self.geometry_word(name, at, sc, w)
             }

@@ -27,6 +27,7 @@ impl Reader {
             self.iso.push_str(&iso);
             self.run_iso(line_no)?;
         }
+        self.orientation_to_axes(&mut w, line_no)?;
         if self.polar(&mut w)? {
             return Ok(true);
         }

@@ -21,8 +21,6 @@ pub(super) const NOTED: &[&str] = &[
     "WORKPIECE",
     "SPATH",
     "UPATH",
-    "ORIWKS",
-    "ORIMKS",
     "ORIAXES",
     "ORIVECT",
     "SETMS",
@@ -136,21 +134,6 @@ pub(super) const REFUSED: &[(&str, &str, &str)] = &[
         "PAROT",
         "workpiece-aligned frame",
         "Job planning, \"Frames: workpiece-aligned frame (PAROT)\"",
-    ),
-    (
-        "A3",
-        "orientation vector",
-        "Job planning, \"Orientation programming: direction vectors (A3, B3, C3)\"",
-    ),
-    (
-        "B3",
-        "orientation vector",
-        "Job planning, \"Orientation programming: direction vectors (A3, B3, C3)\"",
-    ),
-    (
-        "C3",
-        "orientation vector",
-        "Job planning, \"Orientation programming: direction vectors (A3, B3, C3)\"",
     ),
     (
         "A2",

@@ -29,6 +29,7 @@ mod flow;
 mod frame;
 mod keywords;
 mod macros;
+mod orientation;
 mod plain;
 mod polar;
 mod repeat;
@@ -111,6 +112,9 @@ pub(crate) struct Reader {
     /// Tools called by name (`T="DRILL 8.5"`): numbered 1001, 1002 ... in order of call.
     tool_names: Vec<String>,
     tcp: bool,
+    /// `ORIMKS`: orientation in the machine coordinate system (`ORIWKS`, the default: in
+    /// the workpiece's).
+    ori_machine: bool,
     /// G60 (exact stop) in effect; G64 otherwise.
     exact_stop: bool,
     /// CYCLE832's tolerance (mm), which the continuous-path modes G64/G641-G645 blend
@@ -194,6 +198,7 @@ impl Reader {
             tool: 0,
             tool_names: Vec::new(),
             tcp: options.tcp,
+            ori_machine: false,
             normal: 2,
             interp_normal: 2,
             feed_in_mm: false,
@@ -469,10 +474,12 @@ impl Reader {
 }
 
 /// The Sinumerik front end's entry in `reader::FRONT_ENDS`: it reads a program of the
-/// `siemens` dialect (a program in memory as its text, a file streamed its own way).
+/// `siemens` dialect, and any program that is a Sinumerik part program or subprogram by its
+/// file name or first line ([`is_sinumerik_program`]), whatever the dialect named (a
+/// program in memory as its text, a file streamed its own way).
 pub(crate) const FRONT_END: Registration = Registration {
     dialect: |d| d == Dialect::Siemens,
-    first_line: None,
+    first_line: Some(is_sinumerik_program),
     open: |path, input, options| {
         let text = match &input {
             Input::Source(crate::source::Source::Text(text)) => Some(&**text),
@@ -481,6 +488,30 @@ pub(crate) const FRONT_END: Registration = Registration {
         Ok(Box::new(Reader::new(path, text, options)?))
     },
 };
+
+/// A Sinumerik main program or subprogram: the file's extension is the control's `MPF` or
+/// `SPF` (any case), or its first line is the control's file header `%_N_<name>_MPF` /
+/// `_SPF` (as the control writes it on export, also behind `;`). Sinumerik 840D sl
+/// "Fundamentals", "File and program management: program memory" (the `_N_…_MPF` names).
+fn is_sinumerik_program(path: &Path, first_line: &str) -> bool {
+    let by_name = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("mpf") || e.eq_ignore_ascii_case("spf"));
+    let header = first_line
+        .trim_start_matches(['\u{feff}', ' ', '\t', ';'])
+        .trim_start();
+    let by_header = header.len() > 4
+        && header.as_bytes()[..4].eq_ignore_ascii_case(b"%_N_")
+        && header
+            .split_whitespace()
+            .next()
+            .and_then(|h| h.get(h.len().saturating_sub(4)..))
+            .is_some_and(|end| {
+                end.eq_ignore_ascii_case("_MPF") || end.eq_ignore_ascii_case("_SPF")
+            });
+    by_name || by_header
+}
 
 impl FrontEnd for Reader {
     fn next_move(&mut self) -> Option<Result<Move>> {

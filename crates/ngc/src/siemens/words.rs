@@ -63,6 +63,8 @@ pub(super) struct Words {
     pub centres: [Option<Coordinate>; 3],
     /// CIP's intermediate point `I1= J1= K1=`.
     pub cip: [Option<Coordinate>; 3],
+    /// The tool's direction vector `A3= B3= C3=` (orientation.rs).
+    pub orientation: [Option<Coordinate>; 3],
     /// `AP=`, `RP=` (polar angle and radius) as given, and a pole code G110-G112.
     pub polar: [Option<Coordinate>; 2],
     pub pole: Option<(u32, std::ops::Range<usize>)>,
@@ -175,7 +177,7 @@ impl Reader {
 
     /// `=value` after a name at `at` (the cursor after the name), as a coordinate; `expected`
     /// and `label` make the error where `=` is missing.
-    fn assigned(
+    pub(super) fn assigned(
         &mut self,
         sc: &mut Scan,
         at: usize,

@@ -15,5 +15,6 @@ mod lent_moves;
 mod milling_cycles;
 mod posts;
 mod siemens;
+mod siemens_orientation;
 mod siemens_posts;
 mod surface_normal;

@@ -238,7 +238,7 @@ fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
             "G1 X1 A3=0 B3=0 C3=1 F1\n",
             1,
             7,
-            "`A3` (orientation vector)",
+            "A3= B3= C3= (the tool's direction vector) without TRAORI",
         ),
         (
             "G0 X1\nN20 R1=$P_UIFR[1,X,TR]\n",

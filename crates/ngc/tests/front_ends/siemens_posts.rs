@@ -269,7 +269,12 @@ fn unsimulated_constructs_are_refused_by_name_at_line_and_column() {
             1,
             "`CYCLE72`",
         ),
-        ("TRAORI\nG1 X1 A3=0 B3=0 C3=1 F100\n", 2, 7, "`A3`"),
+        (
+            "TRAORI\nG1 X1 A3=0 B3=0 C3=1 F100\n",
+            2,
+            7,
+            "no rotary axes mtsim can turn",
+        ),
         (
             "$P_UIFR[1]=CTRANS(X,10):CSCALE(X,2):CROT(Z,30)\n",
             1,

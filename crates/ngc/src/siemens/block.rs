@@ -641,6 +641,30 @@ impl Reader {
             }
             "MSG" => return skip_call(sc, at),
             "A3" | "B3" | "C3" => return self.orientation_word(name, at, sc, w),
+            _ if self.fixed_point_word(name, at, sc, w)? => return Ok(()),
+            // Spindle positioning: the spindle turns to an angle; no axis of the path moves.
+            "SPOS" | "SPOSA" => {
+                if sc.eat(b'[') {
+                    expr(sc, &self.vars)?;
+                    if !sc.eat(b']') {
+                        return Err(sc.err(
+                            at,
+                            format!("expected `{name}[spindle]=angle`"),
+                            "spindle positioning",
+                        ));
+                    }
+                }
+                if !sc.eat(b'=') {
+                    return Err(sc.err(
+                        at,
+                        format!("expected `{name}=angle`"),
+                        "spindle positioning",
+                    ));
+                }
+                self.value(sc)?;
+                self.notice(line_no, format!("`{name}` (spindle positioning, Fundamentals \"Spindle positioning (SPOS, SPOSA, M19)\") accepted: no axis of the path moves; its time is not simulated"));
+                return Ok(());
+            }
             "ORIMKS" | "ORIWKS" => {
                 self.ori_machine = name == "ORIMKS";
                 return Ok(());

@@ -87,6 +87,7 @@ impl Reader {
         if matches!(stop, Stop::End) {
             return Ok(false);
         }
+        self.approach_fixed_point(&mut w, line_no)?;
         for iso in std::mem::take(&mut w.after) {
             self.iso.push_str(&iso);
             self.run_iso(line_no)?;

@@ -76,11 +76,6 @@ pub(super) const REFUSED: &[(&str, &str, &str)] = &[
         "Fundamentals, \"Tool radius compensation (G40, G41, G42, OFFN)\"",
     ),
     (
-        "SPOS",
-        "spindle positioning",
-        "Fundamentals, \"Spindle positioning (SPOS, SPOSA, M19)\"",
-    ),
-    (
         "SPOSA",
         "spindle positioning",
         "Fundamentals, \"Spindle positioning (SPOS, SPOSA, M19)\"",

@@ -25,6 +25,7 @@ mod cip;
 mod cycles;
 mod emit;
 mod expr;
+mod fixed_point;
 mod flow;
 mod frame;
 mod keywords;

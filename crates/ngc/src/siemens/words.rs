@@ -65,6 +65,8 @@ pub(super) struct Words {
     pub cip: [Option<Coordinate>; 3],
     /// The tool's direction vector `A3= B3= C3=` (orientation.rs).
     pub orientation: [Option<Coordinate>; 3],
+    /// `G75 FP=n X1=0 …` (fixed_point.rs).
+    pub fixed_point: Option<FixedPoint>,
     /// `AP=`, `RP=` (polar angle and radius) as given, and a pole code G110-G112.
     pub polar: [Option<Coordinate>; 2],
     pub pole: Option<(u32, std::ops::Range<usize>)>,
@@ -86,6 +88,17 @@ pub(super) struct Words {
     /// A subprogram call: name, arguments, span (the repeats are `repeats`).
     pub call: Option<(String, Vec<f64>, std::ops::Range<usize>)>,
     pub repeats: Option<u64>,
+}
+
+/// A G75 in the block being read (fixed_point.rs).
+#[derive(Default)]
+pub(super) struct FixedPoint {
+    /// The span of `G75`.
+    pub span: std::ops::Range<usize>,
+    /// `FP=n` and its span.
+    pub number: Option<(f64, std::ops::Range<usize>)>,
+    /// The axes named, as the ISO reader's letters.
+    pub axes: Vec<char>,
 }
 
 impl Words {
@@ -363,7 +376,7 @@ impl Reader {
     }
 
     /// `expr`, `AC(expr)` or `IC(expr)` after an `=`.
-    fn value(&mut self, sc: &mut Scan) -> LineResult<(f64, Mode)> {
+    pub(super) fn value(&mut self, sc: &mut Scan) -> LineResult<(f64, Mode)> {
         let save = sc.at;
         for (k, mode) in [("AC", Mode::Absolute), ("IC", Mode::Incremental)] {
             if sc.keyword(k) && sc.eat(b'(') {
@@ -485,6 +498,16 @@ impl Reader {
             71 | 710 => {
                 self.feed_in_mm = false;
                 "G21"
+            }
+            75 => {
+                w.fixed_point = Some(FixedPoint {
+                    span,
+                    ..Default::default()
+                });
+                return Ok(());
+            }
+            74 => {
+                return Err(LineError::new(span, "`G74` (reference point approach: the axes go to the reference point the homing sets) is not supported: mtsim's machine file gives no home position", "reference point approach").help("approach a fixed point with `G75 FP=1 …` (the machine file's g28_mm)"));
             }
             93 => "G93",
             94 => "G94",

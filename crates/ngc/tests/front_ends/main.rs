@@ -15,6 +15,7 @@ mod lent_moves;
 mod milling_cycles;
 mod posts;
 mod siemens;
+mod siemens_machine_words;
 mod siemens_orientation;
 mod siemens_posts;
 mod surface_normal;

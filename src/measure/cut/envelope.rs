@@ -261,7 +261,7 @@ impl Envelope {
         let kappa = self.clearance_per_column2_um;
         self.local.fill(NOT_CUT);
         let order = self.run.order();
-        let buffer: &[Buffered] = self.run.buffer.make_contiguous();
+        let buffer = &self.run.buffer;
         let nearest = match order {
             Some(sign) => nearest_sorted(buffer, jf, reach, sign),
             None => buffer
@@ -341,17 +341,14 @@ impl Envelope {
 /// `reach`. Below `jf` the distance never rises along the buffer, above it it never falls
 /// (a subtraction of `jf` is monotone in u), so the nearest is the first of the last equals
 /// below or the first above.
-fn nearest_sorted(buffer: &[Buffered], jf: f64, reach: f64, sign: f64) -> Option<usize> {
-    let du = |b: &Buffered| (b.u - jf).abs();
-    let p = buffer.partition_point(|b| sign * b.u < sign * jf);
+fn nearest_sorted(buffer: &VecDeque<Buffered>, jf: f64, reach: f64, sign: f64) -> Option<usize> {
+    let du = |k: usize| (buffer[k].u - jf).abs();
+    let p = first_false(0, buffer.len(), |k| sign * buffer[k].u < sign * jf);
     let below = (p > 0).then(|| {
-        let d = du(&buffer[p - 1]);
-        (
-            buffer[..p].partition_point(|b| du(b).total_cmp(&d).is_gt()),
-            d,
-        )
+        let d = du(p - 1);
+        (first_false(0, p, |k| du(k).total_cmp(&d).is_gt()), d)
     });
-    let above = (p < buffer.len()).then(|| (p, du(&buffer[p])));
+    let above = (p < buffer.len()).then(|| (p, du(p)));
     let (k, d) = match (below, above) {
         (Some(lo), Some(hi)) if lo.1.total_cmp(&hi.1).is_le() => lo,
         (Some(lo), None) => lo,
@@ -365,13 +362,28 @@ fn nearest_sorted(buffer: &[Buffered], jf: f64, reach: f64, sign: f64) -> Option
 /// the run at its end for which `outside` holds; `outside` is monotone in `|u − jf|`, which
 /// falls to `jf` and rises after it.
 fn pruned_range(
-    buffer: &[Buffered],
+    buffer: &VecDeque<Buffered>,
     jf: f64,
     sign: f64,
     outside: impl Fn(&Buffered) -> bool,
 ) -> std::ops::Range<usize> {
-    let p = buffer.partition_point(|b| sign * b.u < sign * jf);
-    let start = buffer[..p].partition_point(&outside);
-    let end = p + buffer[p..].partition_point(|b| !outside(b));
+    let n = buffer.len();
+    let p = first_false(0, n, |k| sign * buffer[k].u < sign * jf);
+    let start = first_false(0, p, |k| outside(&buffer[k]));
+    let end = first_false(p, n, |k| !outside(&buffer[k]));
     start..end
+}
+
+/// The first k in `lo..hi` where `pred` is false (`hi` if none), `pred` true then false over
+/// the range: a binary search, as `slice::partition_point`, by index (the buffer is a ring).
+fn first_false(mut lo: usize, mut hi: usize, pred: impl Fn(usize) -> bool) -> usize {
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        if pred(mid) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
 }

@@ -95,6 +95,8 @@ pub struct CutFigures {
 pub struct CutSurface {
     pub geometry: CutGeometry,
     kinematics: Kinematics,
+    /// `kinematics` without its location errors (the commanded cut's chain), made once.
+    nominal: Kinematics,
     options: CutOptions,
     /// The grid's rows that are evaluation heights.
     evaluation_rows: Vec<usize>,
@@ -141,6 +143,10 @@ impl CutSurface {
         Ok(CutSurface {
             geometry,
             kinematics: scenario.machine.kinematics,
+            nominal: scenario
+                .machine
+                .kinematics
+                .with_location_errors(LocationErrors::default()),
             options,
             evaluation_rows,
             envelope,
@@ -157,10 +163,7 @@ impl CutSurface {
     /// commanded ones through the nominal chain.
     fn pose(&self, s: &Sample) -> ToolPose {
         if self.options.commanded {
-            let nominal = self
-                .kinematics
-                .with_location_errors(LocationErrors::default());
-            return nominal.forward(&s.commanded);
+            return self.nominal.forward(&s.commanded);
         }
         actual_tool(&self.kinematics, &s.actual)
     }
@@ -169,6 +172,9 @@ impl CutSurface {
     /// (an error budget's run of one part of the machine's errors).
     pub fn read_through(&mut self, errors: LocationErrors) {
         self.kinematics = self.kinematics.with_location_errors(errors);
+        self.nominal = self
+            .kinematics
+            .with_location_errors(LocationErrors::default());
     }
 
     /// Each axis's reversal angles, deg, for the marks.

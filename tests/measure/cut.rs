@@ -16,7 +16,7 @@ use nalgebra::{Rotation3, Unit, Vector3};
 use crate::common;
 
 /// A scenario of `cone_body` on trt-ac with a cutter of `diameter_mm` and `flute_mm`.
-fn scenario(name: &str, cone_body: &str, diameter_mm: f64, flute_mm: f64) -> Scenario {
+pub(crate) fn scenario(name: &str, cone_body: &str, diameter_mm: f64, flute_mm: f64) -> Scenario {
     let dir = common::scratch("cut", name);
     let machine = std::fs::read_to_string(common::trt_ac()).unwrap();
     let machine_path = dir.join("m.toml");
@@ -31,14 +31,14 @@ fn scenario(name: &str, cone_body: &str, diameter_mm: f64, flute_mm: f64) -> Sce
     Scenario::load(Path::new(&path)).unwrap()
 }
 
-fn cone_body(alpha: f64, beta: f64, length: f64) -> String {
+pub(crate) fn cone_body(alpha: f64, beta: f64, length: f64) -> String {
     format!(
         "[program.cone]\nhalf_apex_deg = {alpha}\ninclination_deg = {beta}\n\
          center_mm = [0.0, 0.0, 200.0]\nballbar_length_mm = {length}\n"
     )
 }
 
-fn the_cone(s: &Scenario) -> ConeTest {
+pub(crate) fn the_cone(s: &Scenario) -> ConeTest {
     *mtsim::program::test_of(s).cone().unwrap()
 }
 

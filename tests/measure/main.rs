@@ -8,5 +8,6 @@ mod attribution;
 mod ballbar;
 mod contour;
 mod cut;
+mod cut_envelope;
 mod measurement;
 mod shared;

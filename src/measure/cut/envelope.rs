@@ -70,6 +70,52 @@ struct RunState {
     /// The next column to compute (unwrapped), and the farthest contact so far.
     next_column: i64,
     front_u: f64,
+    /// The buffer's order in u: broken once a position came below (above) the one before.
+    not_ascending: bool,
+    not_descending: bool,
+    /// The buffer's least `e_min_um`, as a sliding minimum: (sequence number, e_min) with
+    /// e_min rising, the front the buffer's least; positions pushed and popped so far.
+    floor: VecDeque<(u64, f64)>,
+    pushed: u64,
+    popped: u64,
+}
+
+impl RunState {
+    /// Buffers `b` behind the others.
+    fn push(&mut self, b: Buffered) {
+        if let Some(last) = self.buffer.back() {
+            self.not_ascending |= b.u < last.u;
+            self.not_descending |= b.u > last.u;
+        }
+        if b.u.is_nan() {
+            (self.not_ascending, self.not_descending) = (true, true);
+        }
+        while self.floor.back().is_some_and(|&(_, e)| e >= b.e_min_um) {
+            self.floor.pop_back();
+        }
+        self.floor.push_back((self.pushed, b.e_min_um));
+        self.pushed += 1;
+        self.buffer.push_back(b);
+    }
+
+    /// Drops the first buffered position.
+    fn pop(&mut self) {
+        if self.buffer.pop_front().is_some() {
+            if self.floor.front().is_some_and(|&(k, _)| k == self.popped) {
+                self.floor.pop_front();
+            }
+            self.popped += 1;
+        }
+    }
+
+    /// +1 (−1) when the buffered contacts never fall (rise) from one to the next, else None.
+    fn order(&self) -> Option<f64> {
+        match (self.not_ascending, self.not_descending) {
+            (false, _) => Some(1.0),
+            (true, false) => Some(-1.0),
+            (true, true) => None,
+        }
+    }
 }
 
 impl Envelope {
@@ -150,7 +196,7 @@ impl Envelope {
             self.apply_to_done(geometry, &buffered);
         }
         let run = &mut self.run;
-        run.buffer.push_back(buffered);
+        run.push(buffered);
         if run.sense != 0 && (run.sense as f64) * (u - run.front_u) > 0.0 {
             run.front_u = u;
         }
@@ -190,7 +236,7 @@ impl Envelope {
         let keep = (self.reach + 1) as f64;
         while let Some(b) = run.buffer.front() {
             if (run.sense as f64) * (run.next_column as f64 - b.u) > keep {
-                run.buffer.pop_front();
+                run.pop();
             } else {
                 break;
             }
@@ -198,39 +244,62 @@ impl Envelope {
     }
 
     /// The envelope at unwrapped column `j` of the buffered positions, folded into the grid.
+    ///
+    /// The nearest position first, so that the bound prunes the others, then the others in
+    /// the buffer's order: a position is skipped when `e_min + κ du² ≥ deepest_row` (the
+    /// deepest row of the column so far, which only falls). With the buffer ordered in u
+    /// ([`RunState::order`]), `e_floor + κ du² ≥ deepest_row` after the nearest one (e_floor
+    /// the buffer's least e_min) holds on a run of positions at each end, which the loop
+    /// would skip one by one: they are left out of it ([`pruned_range`]), and the
+    /// same positions are taken in the same order, so the column's bits are the same.
     fn compute_column(&mut self, geometry: &CutGeometry, j: i64) {
         let count = self.columns.len() as i64;
         let column = j.rem_euclid(count) as usize;
         let theta = self.columns[column];
         let jf = j as f64;
         let reach = self.reach as f64;
+        let kappa = self.clearance_per_column2_um;
         self.local.fill(NOT_CUT);
-        // The nearest position first, so that the bound prunes the others.
-        let nearest = self
-            .run
-            .buffer
-            .iter()
-            .enumerate()
-            .filter(|(_, b)| (b.u - jf).abs() <= reach)
-            .min_by(|(_, a), (_, b)| (a.u - jf).abs().total_cmp(&(b.u - jf).abs()))
-            .map(|(k, _)| k);
+        let order = self.run.order();
+        let buffer = &self.run.buffer;
+        let nearest = match order {
+            Some(sign) => nearest_sorted(buffer, jf, reach, sign),
+            None => buffer
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| (b.u - jf).abs() <= reach)
+                .min_by(|(_, a), (_, b)| (a.u - jf).abs().total_cmp(&(b.u - jf).abs()))
+                .map(|(k, _)| k),
+        };
         let Some(nearest) = nearest else {
             return;
         };
+        let (rows, scratch, local) = (&self.rows, &mut self.scratch, &mut self.local);
         let mut deepest_row = NOT_CUT;
-        for k in
-            std::iter::once(nearest).chain((0..self.run.buffer.len()).filter(|&k| k != nearest))
-        {
-            let b = &self.run.buffer[k];
+        let mut take = |b: &Buffered, deepest_row: &mut f64| {
             let du = (b.u - jf).abs();
-            if du > reach || b.e_min_um + self.clearance_per_column2_um * du * du >= deepest_row {
-                continue;
+            if du > reach || b.e_min_um + kappa * du * du >= *deepest_row {
+                return;
             }
-            geometry.depths_um(theta, &self.rows, &b.line, &mut self.scratch);
-            for (l, &d) in self.local.iter_mut().zip(&self.scratch) {
+            geometry.depths_um(theta, rows, &b.line, scratch);
+            for (l, &d) in local.iter_mut().zip(scratch.iter()) {
                 *l = l.min(d);
             }
-            deepest_row = self.local.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            *deepest_row = local.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        };
+        take(&buffer[nearest], &mut deepest_row);
+        let range = match (order, self.run.floor.front()) {
+            (Some(sign), Some(&(_, floor))) => {
+                let outside = |b: &Buffered| {
+                    let du = (b.u - jf).abs();
+                    du > reach || floor + kappa * du * du >= deepest_row
+                };
+                pruned_range(buffer, jf, sign, outside)
+            }
+            _ => 0..buffer.len(),
+        };
+        for k in range.filter(|&k| k != nearest) {
+            take(&buffer[k], &mut deepest_row);
         }
         let h = self.rows.len();
         for (v, &l) in self.values[column * h..(column + 1) * h]
@@ -248,11 +317,13 @@ impl Envelope {
         let h = self.rows.len();
         let lo = (b.u - self.reach as f64).ceil() as i64;
         let hi = (b.u + self.reach as f64).floor() as i64;
+        // Computed columns lie behind `next_column`: those of lo..=hi, in the same order.
+        let next = self.run.next_column;
+        let (lo, hi) = match sense {
+            1 => (lo, hi.min(next - 1)),
+            _ => (lo.max(next + 1), hi),
+        };
         for j in lo..=hi {
-            // Computed columns lie behind `next_column`.
-            if sense * (self.run.next_column - j) <= 0 {
-                continue;
-            }
             let column = j.rem_euclid(count) as usize;
             geometry.depths_um(self.columns[column], &self.rows, &b.line, &mut self.scratch);
             for (v, &d) in self.values[column * h..(column + 1) * h]
@@ -263,4 +334,56 @@ impl Envelope {
             }
         }
     }
+}
+
+/// In `buffer` ordered by `sign · u` (rising), the first of the positions nearest to column
+/// `jf` (least `|u − jf|`, the first of equals as `Iterator::min_by` takes it), if within
+/// `reach`. Below `jf` the distance never rises along the buffer, above it it never falls
+/// (a subtraction of `jf` is monotone in u), so the nearest is the first of the last equals
+/// below or the first above.
+fn nearest_sorted(buffer: &VecDeque<Buffered>, jf: f64, reach: f64, sign: f64) -> Option<usize> {
+    let du = |k: usize| (buffer[k].u - jf).abs();
+    let p = first_false(0, buffer.len(), |k| sign * buffer[k].u < sign * jf);
+    let below = (p > 0).then(|| {
+        let d = du(p - 1);
+        (first_false(0, p, |k| du(k).total_cmp(&d).is_gt()), d)
+    });
+    let above = (p < buffer.len()).then(|| (p, du(p)));
+    let (k, d) = match (below, above) {
+        (Some(lo), Some(hi)) if lo.1.total_cmp(&hi.1).is_le() => lo,
+        (Some(lo), None) => lo,
+        (_, Some(hi)) => hi,
+        (None, None) => return None,
+    };
+    (d <= reach).then_some(k)
+}
+
+/// In `buffer` ordered by `sign · u` (rising), the positions between the run at its start and
+/// the run at its end for which `outside` holds; `outside` is monotone in `|u − jf|`, which
+/// falls to `jf` and rises after it.
+fn pruned_range(
+    buffer: &VecDeque<Buffered>,
+    jf: f64,
+    sign: f64,
+    outside: impl Fn(&Buffered) -> bool,
+) -> std::ops::Range<usize> {
+    let n = buffer.len();
+    let p = first_false(0, n, |k| sign * buffer[k].u < sign * jf);
+    let start = first_false(0, p, |k| outside(&buffer[k]));
+    let end = first_false(p, n, |k| !outside(&buffer[k]));
+    start..end
+}
+
+/// The first k in `lo..hi` where `pred` is false (`hi` if none), `pred` true then false over
+/// the range: a binary search, as `slice::partition_point`, by index (the buffer is a ring).
+fn first_false(mut lo: usize, mut hi: usize, pred: impl Fn(usize) -> bool) -> usize {
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        if pred(mid) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
 }

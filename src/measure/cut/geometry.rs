@@ -33,6 +33,9 @@ use crate::input::program::ConeTest;
 /// Depth of a grid point no cutter position reaches.
 pub const NOT_CUT: f64 = f64::INFINITY;
 
+/// Rows [`CutGeometry::depths_um`] takes side by side: one AVX register of f64.
+pub const ROW_CHUNK: usize = 4;
+
 /// A cutter position in the cone frame: tip (mm) and unit axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CutterLine {
@@ -115,8 +118,46 @@ impl CutGeometry {
 
     /// The unit direction of θ (cos θ, sin θ) and the rows' heights and radii: the depth of
     /// `line` at every row, um ([`NOT_CUT`] where it does not cut), into `out`.
-    #[inline]
-    pub fn depths_um(&self, (c, s): (f64, f64), rows: &[Row], line: &CutterLine, out: &mut [f64]) {
+    ///
+    /// Compiled for AVX where the CPU has it (checked at run time), so that the rows go
+    /// [`ROW_CHUNK`] at a time; Rust fuses no multiplication and addition, so the bits are
+    /// the plain build's whatever the width.
+    pub fn depths_um(&self, theta: (f64, f64), rows: &[Row], line: &CutterLine, out: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX, checked at run time just above.
+            return unsafe { self.depths_um_avx(theta, rows, line, out) };
+        }
+        self.depths_um_inline(theta, rows, line, out)
+    }
+
+    /// [`CutGeometry::depths_um`] compiled for AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn depths_um_avx(
+        &self,
+        theta: (f64, f64),
+        rows: &[Row],
+        line: &CutterLine,
+        out: &mut [f64],
+    ) {
+        self.depths_um_inline(theta, rows, line, out)
+    }
+
+    /// The rows [`ROW_CHUNK`] at a time, the last chunk filled up with its last row (whose
+    /// depths are dropped), so that no row is left to a scalar tail. Without branches: every
+    /// row's root is taken and the rows that do not cut are masked after (a negative
+    /// discriminant's NaN root, like every other NaN, fails the flute test). Each expression
+    /// is nalgebra's `dot` and `norm_squared` in their order ((x + y) + z; the `0 + ` before
+    /// a square's sum changes no bit), so the depths are the per-row formula's bits.
+    #[inline(always)]
+    fn depths_um_inline(
+        &self,
+        (c, s): (f64, f64),
+        rows: &[Row],
+        line: &CutterLine,
+        out: &mut [f64],
+    ) {
         let n = Vector3::new(self.cos_a * c, self.cos_a * s, self.sin_a);
         let t = &line.axis;
         let nt = n.dot(t);
@@ -127,21 +168,37 @@ impl CutGeometry {
         }
         let inv_a = 1.0 / a;
         let r2 = self.cutter_radius_mm * self.cutter_radius_mm;
-        for (row, d_out) in rows.iter().zip(out.iter_mut()) {
-            let w = Vector3::new(row.radius_mm * c, row.radius_mm * s, row.z_mm) - line.tip;
-            let wt = w.dot(t);
-            let b = w.dot(&n) - wt * nt;
-            let cc = w.norm_squared() - wt * wt - r2;
+        let flute = self.flute_length_mm;
+        let (tip, (nx, ny, nz)) = (&line.tip, (n.x, n.y, n.z));
+        let (tx, ty, tz) = (t.x, t.y, t.z);
+        let depth = |radius: f64, z: f64| {
+            let (wx, wy, wz) = (radius * c - tip.x, radius * s - tip.y, z - tip.z);
+            let wt = wx * tx + wy * ty + wz * tz;
+            let b = (wx * nx + wy * ny + wz * nz) - wt * nt;
+            let cc = (wx * wx + wy * wy + wz * wz) - wt * wt - r2;
             let disc = b * b - a * cc;
-            *d_out = NOT_CUT;
-            if disc < 0.0 || b >= 0.0 {
-                continue;
-            }
             let d = (-b - disc.sqrt()) * inv_a;
             let along = wt + d * nt;
-            if (0.0..=self.flute_length_mm).contains(&along) {
-                *d_out = d * 1e3;
+            let cuts = (disc >= 0.0) & (b < 0.0) & (along >= 0.0) & (along <= flute);
+            if cuts {
+                d * 1e3
+            } else {
+                NOT_CUT
             }
+        };
+        let count = rows.len().min(out.len());
+        let mut k = 0;
+        while k < count {
+            let taken = (count - k).min(ROW_CHUNK);
+            let row = |i: usize| rows[k + i.min(taken - 1)];
+            let radius: [f64; ROW_CHUNK] = std::array::from_fn(|i| row(i).radius_mm);
+            let z: [f64; ROW_CHUNK] = std::array::from_fn(|i| row(i).z_mm);
+            let mut d = [0.0; ROW_CHUNK];
+            for i in 0..ROW_CHUNK {
+                d[i] = depth(radius[i], z[i]);
+            }
+            out[k..k + taken].copy_from_slice(&d[..taken]);
+            k += taken;
         }
     }
 

@@ -63,6 +63,7 @@ mod coords;
 mod cycles;
 mod emit;
 mod flow;
+mod lathe_codes;
 mod modal;
 mod motion;
 mod non_modal;
@@ -72,6 +73,7 @@ mod probing;
 mod spindle_sync;
 mod splines;
 mod stock_removal;
+mod surface_speed;
 mod system_vars;
 mod tool;
 mod words;
@@ -140,6 +142,16 @@ pub struct Interp {
     /// F as programmed (program units per minute or per revolution, or 1/min).
     feed: Option<f64>,
     spindle_rpm: f64,
+    /// G96: the surface speed S stands for ([`surface_speed`]); `None` under G97.
+    surface_speed: Option<surface_speed::SurfaceSpeed>,
+    /// The spindle speed limit of constant surface speed (G50 S, G92 S, G96 D), rev/min.
+    spindle_limit_rpm: Option<f64>,
+    /// A feed move of this block needs an endless spindle speed (G96 at X 0, no limit):
+    /// the block's refusal.
+    surface_speed_fault: Option<String>,
+    /// A Fanuc-family lathe's G90, G92 or G94 selected without axis words (its single
+    /// cycle, in the motion group): named when a block would run it.
+    lathe_cycle: Option<String>,
     /// M3 or M4 in effect (M5, M6, M2/M30 stop it, as rs274 does by default).
     spindle_turning: bool,
     /// G7: X words are diameters (LinuxCNC lathe mode); G8 (default): radii.
@@ -271,6 +283,10 @@ impl Interp {
             start_units_setting: o.start_units_setting,
             feed: None,
             spindle_rpm: 0.0,
+            surface_speed: None,
+            spindle_limit_rpm: None,
+            surface_speed_fault: None,
+            lathe_cycle: None,
             spindle_turning: false,
             diameter: false,
             tcp: o.tcp,
@@ -468,6 +484,7 @@ impl Interp {
         }
         // 0. The block's words, typed and checked.
         let mut b = Block::read(line, words, self.dialect)?;
+        self.lathe_codes(&mut b)?;
         self.check_words(&mut b)?;
         // 1. Feed mode, units for F, F, S.
         self.feed_and_speed(&mut b)?;
@@ -488,6 +505,13 @@ impl Interp {
         self.non_modal(&mut b, line_no, queue)?;
         // 7. Motion.
         self.motion(&mut b, previous_motion, line_no, queue)?;
+        if let Some(fault) = self.surface_speed_fault.take() {
+            return Err(crate::lex::LineError::new(
+                0..line.len(),
+                fault,
+                "spindle speed unbounded",
+            ));
+        }
         if !self.units_stated && queue.len() > queued {
             self.warn_units_assumed(line_no, notices, path);
         }

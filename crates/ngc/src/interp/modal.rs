@@ -63,8 +63,8 @@ impl Interp {
                     "negative",
                 ));
             }
-            self.spindle_rpm = s.value;
         }
+        self.spindle_mode(b)?;
         Ok(())
     }
 

@@ -306,6 +306,11 @@ impl IsoReader {
     /// cancelled them (nothing more to do), else its words mapped where they are in effect.
     fn mirror_scale_block(&mut self, line: &str, words: &mut [Word]) -> LineResult<bool> {
         let haas = self.dialect == crate::options::Dialect::Haas;
+        if self.interp.is_lathe() && words.iter().any(|w| w.letter == 'G' && w.value == 50.0) {
+            // A lathe's G50 sets the work coordinate system or the spindle speed limit
+            // (crate::interp, `lathe_codes`): no scaling there.
+            return Ok(false);
+        }
         let interp = &self.interp;
         let here = || {
             let p = interp.program_position();

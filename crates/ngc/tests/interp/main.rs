@@ -8,6 +8,7 @@ mod corner_polar;
 mod interpreter;
 mod lathe;
 mod lathe_cycles;
+mod lathe_feed;
 mod mirror_scale;
 mod remap_glue;
 mod secondary_axes;

@@ -42,6 +42,7 @@ mod canon;
 mod code;
 mod comp;
 mod corner;
+mod corner_arc;
 mod decimal_point;
 mod dialect;
 mod error;

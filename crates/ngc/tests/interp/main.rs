@@ -4,6 +4,7 @@
 
 mod bolt_patterns;
 mod control_parameters;
+mod corner_arcs;
 mod corner_polar;
 mod interpreter;
 mod lathe;

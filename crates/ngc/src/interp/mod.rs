@@ -62,6 +62,7 @@ mod control;
 mod coords;
 mod cycles;
 mod emit;
+mod fanuc_g10;
 mod flow;
 mod lathe_codes;
 mod modal;
@@ -158,6 +159,9 @@ pub struct Interp {
     diameter: bool,
     tcp: bool,
     tools: HashMap<u32, Tool>,
+    /// Fanuc and Haas tool length wear (G10 L11) by offset number, mm: part of the tool's
+    /// length in `tools`, kept apart so G10 L10 can set the geometry alone.
+    length_wear: HashMap<u32, f64>,
     /// Lathe tool orientations by tool number (tool table Q).
     orientations: HashMap<u32, u32>,
     table_given: bool,
@@ -291,6 +295,7 @@ impl Interp {
             diameter: false,
             tcp: o.tcp,
             tools: o.tools.iter().map(|t| (t.number, *t)).collect(),
+            length_wear: HashMap::new(),
             orientations: o.tool_orientations.iter().copied().collect(),
             table_given: !o.tools.is_empty(),
             tool: 0,

@@ -364,8 +364,18 @@ impl IsoReader {
             Stop::Return { span } => {
                 if !self.ret(None) {
                     if self.dialect.table().macro_b {
-                        // M99 in the main program: end (a real control would restart it).
+                        // M99 in the main program: one pass, said so (the control restarts
+                        // it, from N<P> with a P word, until the operator stops it).
                         self.finished = true;
+                        self.notices.push(crate::notice::Notice {
+                            path: self.programs[here.file].path.clone(),
+                            line: here.line,
+                            message: "M99 in the main program: the control runs it again (from \
+                                      the N of its P word, or the start) until stopped; mtsim \
+                                      simulates one pass and ends here"
+                                .to_string(),
+                            warning: true,
+                        });
                     } else {
                         return Err(LineError::new(
                             span,

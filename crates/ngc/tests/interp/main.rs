@@ -15,3 +15,4 @@ mod remap_glue;
 mod secondary_axes;
 mod tilted;
 mod traps;
+mod traps_iso;

@@ -66,6 +66,7 @@ mod siemens;
 mod source;
 mod spline;
 mod stdglue;
+mod surface_speed;
 mod turns;
 mod units;
 

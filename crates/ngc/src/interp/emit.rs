@@ -90,7 +90,7 @@ impl Interp {
 
     /// The feed of a move of `motion`, resolved once here: none for a rapid or a dwell;
     /// for a feed move the F in effect as the feed mode reads it (G95: F × S, mm/min; under
-    /// G96 the feed of the same time, crate `interp::surface_speed`). The modal checks
+    /// G96 the feed of the same time, crate `surface_speed`). The modal checks
     /// ([`Interp::feed_in_effect`]) have refused a feed move without one.
     pub(super) fn feed_of(&mut self, motion: &Motion, start: &AxisVec, end: &AxisVec) -> Feed {
         if matches!(motion, Motion::Rapid | Motion::Dwell { .. }) {

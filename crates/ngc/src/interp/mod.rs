@@ -71,10 +71,10 @@ mod non_modal;
 mod params;
 mod polar_words;
 mod probing;
+mod spindle_mode;
 mod spindle_sync;
 mod splines;
 mod stock_removal;
-mod surface_speed;
 mod system_vars;
 mod tool;
 mod words;
@@ -143,8 +143,8 @@ pub struct Interp {
     /// F as programmed (program units per minute or per revolution, or 1/min).
     feed: Option<f64>,
     spindle_rpm: f64,
-    /// G96: the surface speed S stands for ([`surface_speed`]); `None` under G97.
-    surface_speed: Option<surface_speed::SurfaceSpeed>,
+    /// G96: the surface speed S stands for (crate `surface_speed`); `None` under G97.
+    surface_speed: Option<crate::surface_speed::SurfaceSpeed>,
     /// The spindle speed limit of constant surface speed (G50 S, G92 S, G96 D), rev/min.
     spindle_limit_rpm: Option<f64>,
     /// A feed move of this block needs an endless spindle speed (G96 at X 0, no limit):

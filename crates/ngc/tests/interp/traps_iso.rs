@@ -130,11 +130,24 @@ fn a_lathe_feeds_per_revolution_under_g99_and_at_the_surface_speed_under_g96() {
 }
 
 #[test]
+fn a_lathe_t_word_indexes_the_turret_to_its_leading_digits() {
+    // T0202 with no M6: the moves after it are tool 2's (a mill would take tool 202 at M6).
+    let m = read("lathe-t-word.nc", true).unwrap_err();
+    assert_eq!(m.0, 7, "{m:?}");
+    let it =
+        ngc::read_file_with(&trap("lathe-t-word.nc"), &options("lathe-t-word.nc", true)).unwrap();
+    let tools: Vec<u32> = it.map_while(Result::ok).map(|m| m.tool).collect();
+    assert_eq!(tools, [2, 2], "{tools:?}");
+}
+
+#[test]
 fn lathe_codes_that_would_read_silently_wrong_are_refused() {
     for (name, line, says) in [
         ("lathe-g90-cycle.nc", 6, "turning cycle"),
         ("lathe-g50-s-only.nc", 7, "spindle speed zero"),
         ("lathe-g96-no-limit.nc", 6, "X 0"),
+        // T3 on a lathe: tool 0 offset 3 or tool 3? Two digits each are expected.
+        ("lathe-t-word.nc", 7, "four digits"),
     ] {
         let (at, message) = refused(name, true);
         assert_eq!(at, line, "{name}: {message}");

@@ -153,6 +153,9 @@ pub struct Interp {
     /// A Fanuc-family lathe's G90, G92 or G94 selected without axis words (its single
     /// cycle, in the motion group): named when a block would run it.
     lathe_cycle: Option<String>,
+    /// A feed mode code (G93-G95, a lathe's G98/G99) has been read, or the warning that
+    /// a lathe feeds in the start state's mode was given.
+    feed_mode_stated: bool,
     /// M3 or M4 in effect (M5, M6, M2/M30 stop it, as rs274 does by default).
     spindle_turning: bool,
     /// G7: X words are diameters (LinuxCNC lathe mode); G8 (default): radii.
@@ -291,6 +294,7 @@ impl Interp {
             spindle_limit_rpm: None,
             surface_speed_fault: None,
             lathe_cycle: None,
+            feed_mode_stated: false,
             spindle_turning: false,
             diameter: false,
             tcp: o.tcp,
@@ -520,6 +524,9 @@ impl Interp {
         if !self.units_stated && queue.len() > queued {
             self.warn_units_assumed(line_no, notices, path);
         }
+        if !self.feed_mode_stated && self.is_lathe() {
+            self.warn_lathe_feed_mode(queue.iter().skip(queued), line_no, notices, path);
+        }
         self.control_notices(&b, line_no, notices, path);
         // 8. Stops and program flow.
         self.program_flow(&b, queue, stop)
@@ -604,6 +611,41 @@ impl Interp {
                  {other} is read 25.4 times off: set the scenario's [reader] start_units or \
                  the machine file's [start] units",
                 self.start_units_setting
+            ),
+            warning: true,
+        });
+    }
+
+    /// A lathe program feeds before it states G98/G99: warn once that F is read in the
+    /// start state's mode (a lathe control may power up in G99, Fanuc parameter 3402#4).
+    fn warn_lathe_feed_mode<'m>(
+        &mut self,
+        mut moves: impl Iterator<Item = &'m Move>,
+        line_no: usize,
+        notices: &mut Vec<Notice>,
+        path: &Path,
+    ) {
+        if !moves.any(|m| {
+            matches!(
+                m.motion,
+                crate::canon::Motion::Linear | crate::canon::Motion::Arc { .. }
+            )
+        }) {
+            return;
+        }
+        self.feed_mode_stated = true;
+        let mode = match self.feed_mode {
+            FeedRead::PerRevolution => "per revolution (G99)",
+            FeedRead::InverseTime => "inverse time (G93)",
+            FeedRead::PerMinute => "per minute (G98)",
+        };
+        notices.push(Notice {
+            path: path.to_path_buf(),
+            line: line_no,
+            message: format!(
+                "a lathe program feeds before it states G98 or G99: F is read {mode}, the \
+                 mode the control starts in (the machine file's [start] feed_mode); a lathe \
+                 that powers up in the other mode (Fanuc parameter 3402#4) reads F otherwise"
             ),
             warning: true,
         });

@@ -463,6 +463,7 @@ impl Interp {
         if self.comp.is_some()
             || self.surface_speed.is_some()
             || self.lathe_cycle.is_some()
+            || (!self.feed_mode_stated && self.is_lathe())
             || self.diameter
             || self.rotation.is_some()
             || self.tilt.is_some()

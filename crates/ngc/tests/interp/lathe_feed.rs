@@ -216,3 +216,19 @@ fn the_lathe_single_cycles_and_g95_are_refused_as_what_they_are() {
     let m = moves("G21 G18 G90 G40\nG0 X40 Z2\nM30\n");
     assert_eq!((m[0].end[Axis::X], m[0].end[Axis::Z]), (40.0, 2.0));
 }
+
+#[test]
+fn a_lathe_program_that_feeds_before_g98_or_g99_is_warned_once() {
+    let warned = |text: &str| {
+        let mut it = read_str_with(Path::new("t.nc"), text, &lathe(Dialect::Fanuc));
+        assert!(it.by_ref().all(|m| m.is_ok()));
+        it.notices()
+            .iter()
+            .filter(|n| n.warning && n.message.contains("before it states G98 or G99"))
+            .map(|n| n.line)
+            .collect::<Vec<_>>()
+    };
+    let program = "G21 G18\nG97 S500 M3\nG0 X40 Z2\nG1 Z-10 F100\nZ-20\nM30\n";
+    assert_eq!(warned(program), [4]);
+    assert!(warned(&program.replace("G18", "G18 G98")).is_empty());
+}

@@ -1,5 +1,5 @@
 //! Fanuc and Haas optional chamfer `,C` and corner rounding `,R` between two G01 lines in
-//! the active plane (Fanuc 0i-MF operator's manual, "Optional chamfering and corner R";
+//! the active plane (corner rounding next to an arc: crate `corner_arc`) (Fanuc 0i-MF operator's manual, "Optional chamfering and corner R";
 //! Haas mill operator's manual, "Corner rounding and chamfering").
 //!
 //! ```text
@@ -16,8 +16,9 @@
 //! (machine coordinates, mm): work offsets, G68 rotation and mirror images keep lengths and
 //! angles, so the tangent points are where the control puts them. The inserted move takes
 //! the first line's feed and line number. Refused, naming the rule: a next move that is
-//! not a G01 line in the same plane (an arc, a rapid, a block without a move), a line with
-//! motion off the plane, a chamfer or radius longer than either line, a reversal.
+//! not a G01 line or G02/G03 arc in the same plane (a rapid, a block without a move), a
+//! move off the plane (a helix), a chamfer next to an arc, a chamfer or radius longer than
+//! either line, a reversal.
 
 use crate::axis::{Axis, Plane};
 use crate::canon::{Feed, Motion, Move};
@@ -60,14 +61,14 @@ impl Pending {
 /// point; `None` in the middle when the lines are collinear (nothing to cut).
 pub(crate) fn join(p: &Pending, next: &Move) -> Result<(Move, Option<Move>, Move), String> {
     let name = p.name();
-    if next.motion != Motion::Linear {
-        let kind = match next.motion {
-            Motion::Rapid => "a rapid (G00)",
-            Motion::Arc { .. } => "an arc (G02/G03), which mtsim does not round to",
-            _ => "a dwell",
-        };
+    let kind = match next.motion {
+        Motion::Rapid => Some("a rapid (G00)"),
+        Motion::Dwell { .. } => Some("a dwell"),
+        _ => None,
+    };
+    if let Some(kind) = kind {
         return Err(format!(
-            "{name}: the next move is {kind}; expected a G01 line in the same plane (Fanuc: the block after `,C`/`,R` must be a G01 or G02/G03 move)"
+            "{name}: the next move is {kind}; expected a G01 line or a G02/G03 arc in the same plane (Fanuc: the block after `,C`/`,R` must be a G01 or G02/G03 move)"
         ));
     }
     let (u, v, _) = p.plane.axes();
@@ -87,6 +88,17 @@ pub(crate) fn join(p: &Pending, next: &Move) -> Result<(Move, Option<Move>, Move
         return Err(format!(
             "{name} under inverse-time feed (G93): not read; expected G94 or G95"
         ));
+    }
+    let arcs = [first, next]
+        .iter()
+        .any(|m| matches!(m.motion, Motion::Arc { .. }));
+    if arcs && !p.round {
+        return Err(format!(
+            "{name} next to an arc: not read (the manuals do not say whether the chamfer length is measured along the arc or its chord); expected `,C` between two G01 lines, or `,R`"
+        ));
+    }
+    if arcs {
+        return crate::corner_arc::round(first, next, p.plane, p.size_mm, &name);
     }
     let d1 = [first.end[u] - first.start[u], first.end[v] - first.start[v]];
     let d2 = [next.end[u] - next.start[u], next.end[v] - next.start[v]];

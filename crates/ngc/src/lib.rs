@@ -42,6 +42,7 @@ mod canon;
 mod code;
 mod comp;
 mod corner;
+mod corner_arc;
 mod decimal_point;
 mod dialect;
 mod error;
@@ -65,6 +66,7 @@ mod siemens;
 mod source;
 mod spline;
 mod stdglue;
+mod surface_speed;
 mod turns;
 mod units;
 

@@ -24,7 +24,7 @@ impl Interp {
         end: AxisVec,
         path: PathControl,
     ) {
-        let feed = self.feed_of(&motion);
+        let feed = self.feed_of(&motion, &start, &end);
         self.emit_with_feed(queue, line, motion, start, end, path, feed);
     }
 
@@ -89,11 +89,30 @@ impl Interp {
     }
 
     /// The feed of a move of `motion`, resolved once here: none for a rapid or a dwell;
-    /// for a feed move the F in effect as the feed mode reads it (G95: F × S, mm/min).
-    /// The modal checks ([`Interp::feed_in_effect`]) have refused a feed move without one.
-    pub(super) fn feed_of(&self, motion: &Motion) -> Feed {
+    /// for a feed move the F in effect as the feed mode reads it (G95: F × S, mm/min; under
+    /// G96 the feed of the same time, crate `surface_speed`). The modal checks
+    /// ([`Interp::feed_in_effect`]) have refused a feed move without one.
+    pub(super) fn feed_of(&mut self, motion: &Motion, start: &AxisVec, end: &AxisVec) -> Feed {
         if matches!(motion, Motion::Rapid | Motion::Dwell { .. }) {
             return Feed::None;
+        }
+        match (self.feed_mode, self.feed, self.surface_speed) {
+            (FeedRead::PerRevolution, Some(f), Some(css)) => {
+                let mv = Move {
+                    motion: *motion,
+                    start: *start,
+                    end: *end,
+                    ..Move::default()
+                };
+                match self.surface_speed_feed(css, f, &mv) {
+                    Ok(feed) => return Feed::PerMinute(feed),
+                    Err(fault) => {
+                        self.surface_speed_fault.get_or_insert(fault);
+                        return Feed::PerMinute(f);
+                    }
+                }
+            }
+            _ => {}
         }
         match (self.feed_mode, self.feed) {
             (_, None) => Feed::None,
@@ -126,7 +145,7 @@ impl Interp {
         start: AxisVec,
         target: AxisVec,
     ) -> Result<(), String> {
-        let feed = self.feed_of(&motion);
+        let feed = self.feed_of(&motion, &start, &target);
         let mv = Move {
             line: line_no,
             motion,

@@ -127,11 +127,15 @@ impl Interp {
 
     /// Fanuc `G65 P<program> [L<count>] <arguments>`: a macro call with its own locals;
     /// argument specification I (A→#1, B→#2, C→#3, I→#4, J→#5, K→#6, D→#7, E→#8, F→#9,
-    /// H→#11, M→#13, Q→#17, R→#18, S→#19, T→#20, U→#21, V→#22, W→#23, X→#24, Y→#25, Z→#26).
+    /// H→#11, M→#13, Q→#17, R→#18, S→#19, T→#20, U→#21, V→#22, W→#23, X→#24, Y→#25, Z→#26)
+    /// and II (A B C, then up to ten I J K sets, #4-#33), mixed: a variable given twice
+    /// takes the later word (Fanuc 0i operator's manual, "Custom macro": "Argument
+    /// specification").
     pub(super) fn g65(&mut self, line: &str, words: &[Word], g65: Word) -> LineResult<Stop> {
         let mut args = vec![0.0; 33];
         let mut program = None;
         let mut repeats = 1;
+        let (mut ijk_set, mut ijk_last) = (0, None);
         for w in words {
             let slot = match w.letter {
                 'P' => {
@@ -147,9 +151,20 @@ impl Interp {
                 'A' => 1,
                 'B' => 2,
                 'C' => 3,
-                'I' => 4,
-                'J' => 5,
-                'K' => 6,
+                'I' | 'J' | 'K' => {
+                    // Argument specification II: the n-th I J K set is #(4+3(n−1)) to
+                    // #(6+3(n−1)); a letter not after the last one of its set starts the
+                    // next set (`I1 J2 K3 I4`: #4 #5 #6 #7).
+                    let at = (w.letter as u8 - b'I') as usize;
+                    if ijk_last.is_some_and(|last| at <= last) {
+                        ijk_set += 1;
+                    }
+                    ijk_last = Some(at);
+                    if ijk_set >= 10 {
+                        return Err(LineError::new(w.span(), format!("`{}` in a G65 block: an eleventh I J K set; expected at most ten (#4 to #33)", &line[w.span()]), "too many arguments"));
+                    }
+                    4 + 3 * ijk_set + at
+                }
                 'D' => 7,
                 'E' => 8,
                 'F' => 9,

@@ -62,13 +62,16 @@ mod control;
 mod coords;
 mod cycles;
 mod emit;
+mod fanuc_g10;
 mod flow;
+mod lathe_codes;
 mod modal;
 mod motion;
 mod non_modal;
 mod params;
 mod polar_words;
 mod probing;
+mod spindle_mode;
 mod spindle_sync;
 mod splines;
 mod stock_removal;
@@ -140,12 +143,28 @@ pub struct Interp {
     /// F as programmed (program units per minute or per revolution, or 1/min).
     feed: Option<f64>,
     spindle_rpm: f64,
+    /// G96: the surface speed S stands for (crate `surface_speed`); `None` under G97.
+    surface_speed: Option<crate::surface_speed::SurfaceSpeed>,
+    /// The spindle speed limit of constant surface speed (G50 S, G92 S, G96 D), rev/min.
+    spindle_limit_rpm: Option<f64>,
+    /// A feed move of this block needs an endless spindle speed (G96 at X 0, no limit):
+    /// the block's refusal.
+    surface_speed_fault: Option<String>,
+    /// A Fanuc-family lathe's G90, G92 or G94 selected without axis words (its single
+    /// cycle, in the motion group): named when a block would run it.
+    lathe_cycle: Option<String>,
+    /// A feed mode code (G93-G95, a lathe's G98/G99) has been read, or the warning that
+    /// a lathe feeds in the start state's mode was given.
+    feed_mode_stated: bool,
     /// M3 or M4 in effect (M5, M6, M2/M30 stop it, as rs274 does by default).
     spindle_turning: bool,
     /// G7: X words are diameters (LinuxCNC lathe mode); G8 (default): radii.
     diameter: bool,
     tcp: bool,
     tools: HashMap<u32, Tool>,
+    /// Fanuc and Haas tool length wear (G10 L11) by offset number, mm: part of the tool's
+    /// length in `tools`, kept apart so G10 L10 can set the geometry alone.
+    length_wear: HashMap<u32, f64>,
     /// Lathe tool orientations by tool number (tool table Q).
     orientations: HashMap<u32, u32>,
     table_given: bool,
@@ -271,10 +290,16 @@ impl Interp {
             start_units_setting: o.start_units_setting,
             feed: None,
             spindle_rpm: 0.0,
+            surface_speed: None,
+            spindle_limit_rpm: None,
+            surface_speed_fault: None,
+            lathe_cycle: None,
+            feed_mode_stated: false,
             spindle_turning: false,
             diameter: false,
             tcp: o.tcp,
             tools: o.tools.iter().map(|t| (t.number, *t)).collect(),
+            length_wear: HashMap::new(),
             orientations: o.tool_orientations.iter().copied().collect(),
             table_given: !o.tools.is_empty(),
             tool: 0,
@@ -468,6 +493,7 @@ impl Interp {
         }
         // 0. The block's words, typed and checked.
         let mut b = Block::read(line, words, self.dialect)?;
+        self.lathe_codes(&mut b)?;
         self.check_words(&mut b)?;
         // 1. Feed mode, units for F, F, S.
         self.feed_and_speed(&mut b)?;
@@ -488,8 +514,18 @@ impl Interp {
         self.non_modal(&mut b, line_no, queue)?;
         // 7. Motion.
         self.motion(&mut b, previous_motion, line_no, queue)?;
+        if let Some(fault) = self.surface_speed_fault.take() {
+            return Err(crate::lex::LineError::new(
+                0..line.len(),
+                fault,
+                "spindle speed unbounded",
+            ));
+        }
         if !self.units_stated && queue.len() > queued {
             self.warn_units_assumed(line_no, notices, path);
+        }
+        if !self.feed_mode_stated && self.is_lathe() {
+            self.warn_lathe_feed_mode(queue.iter().skip(queued), line_no, notices, path);
         }
         self.control_notices(&b, line_no, notices, path);
         // 8. Stops and program flow.
@@ -575,6 +611,41 @@ impl Interp {
                  {other} is read 25.4 times off: set the scenario's [reader] start_units or \
                  the machine file's [start] units",
                 self.start_units_setting
+            ),
+            warning: true,
+        });
+    }
+
+    /// A lathe program feeds before it states G98/G99: warn once that F is read in the
+    /// start state's mode (a lathe control may power up in G99, Fanuc parameter 3402#4).
+    fn warn_lathe_feed_mode<'m>(
+        &mut self,
+        mut moves: impl Iterator<Item = &'m Move>,
+        line_no: usize,
+        notices: &mut Vec<Notice>,
+        path: &Path,
+    ) {
+        if !moves.any(|m| {
+            matches!(
+                m.motion,
+                crate::canon::Motion::Linear | crate::canon::Motion::Arc { .. }
+            )
+        }) {
+            return;
+        }
+        self.feed_mode_stated = true;
+        let mode = match self.feed_mode {
+            FeedRead::PerRevolution => "per revolution (G99)",
+            FeedRead::InverseTime => "inverse time (G93)",
+            FeedRead::PerMinute => "per minute (G98)",
+        };
+        notices.push(Notice {
+            path: path.to_path_buf(),
+            line: line_no,
+            message: format!(
+                "a lathe program feeds before it states G98 or G99: F is read {mode}, the \
+                 mode the control starts in (the machine file's [start] feed_mode); a lathe \
+                 that powers up in the other mode (Fanuc parameter 3402#4) reads F otherwise"
             ),
             warning: true,
         });

@@ -28,6 +28,7 @@ impl Interp {
         }
         for &(c, _) in b.g.iter() {
             if let GCode::Feed(mode) = c {
+                self.feed_mode_stated = true;
                 if mode != self.feed_mode {
                     self.feed = None;
                 }
@@ -63,8 +64,8 @@ impl Interp {
                     "negative",
                 ));
             }
-            self.spindle_rpm = s.value;
         }
+        self.spindle_mode(b)?;
         Ok(())
     }
 

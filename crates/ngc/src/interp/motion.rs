@@ -272,8 +272,8 @@ impl Interp {
             FeedRead::InverseTime if b.feed_word.is_none() => {
                 Err(LineError::new(at, "feed move in G93 (inverse time) without F: expected an F word in every G01/G02/G03 block", "no F in this block").help("add F = 1 / (block time in minutes) to this block"))
             }
-            FeedRead::PerRevolution if self.spindle_rpm == 0.0 => {
-                Err(LineError::new(at, "feed per revolution (G95) with the spindle speed zero: expected an S word", "no S"))
+            FeedRead::PerRevolution if !self.turns_per_minute_known() => {
+                Err(LineError::new(at, "feed per revolution (G95; G99 on a Fanuc or Haas lathe) with the spindle speed zero: expected an S word", "no S"))
             }
             _ if self.feed.is_none() || self.feed == Some(0.0) => {
                 Err(LineError::new(at, "feed move with no feed programmed (or F0): expected a positive F word (mm/min) in this or an earlier block", "no F in effect").help("add F, e.g. `F1000` for 1000 mm/min"))
@@ -461,6 +461,9 @@ impl Interp {
         queue: &mut VecDeque<Move>,
     ) -> bool {
         if self.comp.is_some()
+            || self.surface_speed.is_some()
+            || self.lathe_cycle.is_some()
+            || (!self.feed_mode_stated && self.is_lathe())
             || self.diameter
             || self.rotation.is_some()
             || self.tilt.is_some()

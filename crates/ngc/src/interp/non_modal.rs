@@ -354,6 +354,9 @@ impl Interp {
                 "bad P",
             ));
         }
+        if self.dialect.table().macro_b {
+            return self.g10_fanuc(line, get, axis_words, l, p);
+        }
         let scale = self.scale();
         let value = |a: Axis, wd: &Word| {
             if a.is_rotary() {

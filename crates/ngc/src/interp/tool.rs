@@ -21,10 +21,33 @@ impl Interp {
     ) -> LineResult<()> {
         if let Some(t) = b.get('T') {
             let n = t.value.round() as u32;
+            if self.is_lathe() {
+                // A Fanuc or Haas lathe's T: the turret indexes to the tool of the leading
+                // digits at once, the last two select its offset (T0101, parameter 5028 at 2).
+                if (1..100).contains(&n) {
+                    return Err(LineError::new(t.span(), format!("`{}` on a {} lathe: T is the tool and its offset number, two digits each (T0101: tool 1, offset 1); expected four digits", &b.line[t.span()], self.dialect.name()), "lathe T word"));
+                }
+                let tool = n / 100;
+                self.tool_entry(tool, &t)?;
+                self.next_tool = tool;
+                self.tool = tool;
+                return self.spindle_and_m(b, line_no, notices, path);
+            }
             self.tool_entry(n, &t)?;
             self.next_tool = n;
             self.tool_selected = true;
         }
+        self.spindle_and_m(b, line_no, notices, path)
+    }
+
+    /// The block's M codes: tool change, user M codes, spindle, the control's own codes.
+    fn spindle_and_m(
+        &mut self,
+        b: &Block,
+        line_no: usize,
+        notices: &mut Vec<Notice>,
+        path: &Path,
+    ) -> LineResult<()> {
         let mut tcp_m = None;
         let machine_m = self.dialect.table().machine_m;
         let m16_tool_change = self.dialect.table().m16_tool_change;

@@ -1,5 +1,5 @@
 //! Fanuc and Haas `,R` / `,C` in the reader's stream (the geometry is crate::corner): the
-//! word is taken out of its block, the block's G01 line is held off the queue, and the next
+//! word is taken out of its block, the block's G01 line or G02/G03 arc is held off the queue, and the next
 //! block's first move decides the corner: the held line shortened, the chamfer or arc, and
 //! that move from the tangent point go to the queue in order.
 
@@ -34,7 +34,7 @@ impl IsoReader {
         let err = |m: String| LineError::new(w.span(), m, "corner rounding or chamfer");
         if words.is_empty() {
             return Err(err(format!(
-                "`{text}` alone: expected it after a G01 move in the same block"
+                "`{text}` alone: expected it after a G01 or G02/G03 move in the same block"
             )));
         }
         if let Some(other) = words.iter().find(|w| is_corner(w)) {
@@ -93,7 +93,7 @@ impl IsoReader {
                 return Err(LineError::new(
                     0..line.len(),
                     format!(
-                        "{}: the next block must move along a G01 line to round or chamfer to; this block does not move",
+                        "{}: the next block must move along a G01 line or a G02/G03 arc to round or chamfer to; this block does not move",
                         p.name()
                     ),
                     "no move",
@@ -120,10 +120,12 @@ impl IsoReader {
         }
         let last = self.queue.back().filter(|_| new > 0);
         match last {
-            Some(m) if m.motion == crate::Motion::Linear && new == 1 => {}
+            Some(m)
+                if matches!(m.motion, crate::Motion::Linear | crate::Motion::Arc { .. })
+                    && new == 1 => {}
             _ => {
                 return Err(err(format!(
-                    "`{name}` in a block without a G01 move: expected a G01 line to round or chamfer to the next move"
+                    "`{name}` in a block without a G01 or G02/G03 move: expected a line or an arc to round or chamfer to the next move"
                 )))
             }
         }
@@ -150,7 +152,7 @@ impl IsoReader {
         let err = LineError::new(
             p.span.clone(),
             format!(
-                "{}: the program ends after this move; expected a G01 line in the next block to round or chamfer to",
+                "{}: the program ends after this move; expected a G01 line or G02/G03 arc in the next block to round or chamfer to",
                 p.name()
             ),
             "no next move",

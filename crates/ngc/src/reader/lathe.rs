@@ -74,12 +74,21 @@ impl IsoReader {
             self.notices.push(crate::notice::Notice {
                 path: self.programs[here.file].path.clone(),
                 line: here.line,
-                message: format!(
-                    "a lathe cycle: this program is read with the {} mill's codes, so X is \
-                     read as written (not a diameter), G98/G99 as the mill's return levels \
-                     and F per minute unless G95 (docs/gcode.md, \"Lathe stock removal\")",
-                    self.dialect.name()
-                ),
+                message: if self.interp.is_lathe() {
+                    "a lathe cycle: X is read as written (a diameter moves the machine's X by \
+                     the diameter, not the radius); G98/G99 are the lathe's feed modes \
+                     (docs/gcode.md, \"Lathe stock removal\")"
+                        .to_string()
+                } else {
+                    format!(
+                        "a lathe cycle on a machine with a Y axis: this program is read with \
+                         the {} mill's codes, so X is read as written (not a diameter), \
+                         G98/G99 as the mill's return levels and F per minute unless G95; a \
+                         machine file with X and Z only reads them as a lathe's \
+                         (docs/gcode.md, \"Lathe stock removal\")",
+                        self.dialect.name()
+                    )
+                },
                 warning: true,
             });
         }

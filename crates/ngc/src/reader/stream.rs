@@ -306,6 +306,11 @@ impl IsoReader {
     /// cancelled them (nothing more to do), else its words mapped where they are in effect.
     fn mirror_scale_block(&mut self, line: &str, words: &mut [Word]) -> LineResult<bool> {
         let haas = self.dialect == crate::options::Dialect::Haas;
+        if self.interp.is_lathe() && words.iter().any(|w| w.letter == 'G' && w.value == 50.0) {
+            // A lathe's G50 sets the work coordinate system or the spindle speed limit
+            // (crate::interp, `lathe_codes`): no scaling there.
+            return Ok(false);
+        }
         let interp = &self.interp;
         let here = || {
             let p = interp.program_position();
@@ -359,8 +364,18 @@ impl IsoReader {
             Stop::Return { span } => {
                 if !self.ret(None) {
                     if self.dialect.table().macro_b {
-                        // M99 in the main program: end (a real control would restart it).
+                        // M99 in the main program: one pass, said so (the control restarts
+                        // it, from N<P> with a P word, until the operator stops it).
                         self.finished = true;
+                        self.notices.push(crate::notice::Notice {
+                            path: self.programs[here.file].path.clone(),
+                            line: here.line,
+                            message: "M99 in the main program: the control runs it again (from \
+                                      the N of its P word, or the start) until stopped; mtsim \
+                                      simulates one pass and ends here"
+                                .to_string(),
+                            warning: true,
+                        });
                     } else {
                         return Err(LineError::new(
                             span,

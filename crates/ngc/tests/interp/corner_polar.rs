@@ -1,4 +1,4 @@
-//! Fanuc and Haas `,R` / `,C` between two G01 lines, and G16 / G15 polar coordinates. The
+//! Fanuc and Haas `,R` / `,C` between two G01 lines (next to arcs: corner_arcs.rs), and G16 / G15 polar coordinates. The
 //! expected points are worked by hand: a corner of turn θ rounded with r touches each
 //! line r·tan(θ/2) from the corner, the arc's centre r off the first line on the inside;
 //! a chamfer's ends are c from the corner along each line; a polar point is
@@ -102,14 +102,22 @@ fn corner_words_are_refused_where_the_rule_does_not_hold() {
     let head = "G21 G90 G17\nG0 X0. Y0. Z0.\n";
     for (tail, line, says) in [
         ("G1 X10. ,R2. F500\nG0 Y10.\nM30\n", 4, "rapid"),
-        ("G1 X10. ,R2. F500\nG3 X0. Y10. R10.\nM30\n", 4, "arc"),
+        (
+            "G1 X10. ,C2. F500\nG3 X0. Y10. R10.\nM30\n",
+            4,
+            "next to an arc",
+        ),
         ("G1 X10. ,R2. F500\nM8\nY10.\nM30\n", 4, "does not move"),
         ("G1 X3. ,R5. F500\nY10.\nM30\n", 4, "does not fit"),
         ("G1 X10. ,C11. F500\nY10.\nM30\n", 4, "does not fit"),
         ("G1 X10. ,R2. F500\nZ-5.\nM30\n", 4, "off the"),
         ("G1 X10. ,R2. F500\nX20. Z-5.\nM30\n", 4, "off the"),
         ("G1 X10. ,R2. ,C1. F500\nY10.\nM30\n", 3, "in one block"),
-        ("G0 X10. ,R2.\nG1 Y10. F500\nM30\n", 3, "without a G01 move"),
+        (
+            "G0 X10. ,R2.\nG1 Y10. F500\nM30\n",
+            3,
+            "without a G01 or G02/G03 move",
+        ),
         (
             "G41 D1 G1 X10. ,R2. F500\nY10.\nM30\n",
             3,

@@ -4,12 +4,15 @@
 
 mod bolt_patterns;
 mod control_parameters;
+mod corner_arcs;
 mod corner_polar;
 mod interpreter;
 mod lathe;
 mod lathe_cycles;
+mod lathe_feed;
 mod mirror_scale;
 mod remap_glue;
 mod secondary_axes;
 mod tilted;
 mod traps;
+mod traps_iso;

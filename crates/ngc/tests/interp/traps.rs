@@ -3,7 +3,8 @@
 //! after a TCP cancel, a rotary-only block under a tilted plane, macro system variables, a
 //! repeat count), in every dialect that has them. Each is either right, its moves checked
 //! against positions worked out by hand below, or refused with a message that names what
-//! is missing; none reads silently wrong.
+//! is missing; none reads silently wrong. The Fanuc, Haas and lathe traps of programmable
+//! data input, macro arguments, corner rounding and feed per revolution: traps_iso.rs.
 //!
 //! The machine: axes X Y Z A B C, a table-table AC with its pivot at the origin. Under TCP
 //! its axes are `m = R_x(A) R_z(C) (x, y, z − L) + (0, 0, L)` (the table turns the part;
@@ -20,7 +21,7 @@ use ngc::{
 
 const TOL: f64 = 1e-9;
 
-fn trap(name: &str) -> PathBuf {
+pub(super) fn trap(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/data/traps")
         .join(name)
@@ -40,7 +41,7 @@ fn tcp_axes(table: RotaryTable) -> TcpAxes {
     }))
 }
 
-fn options(name: &str, references: bool) -> Options {
+pub(super) fn options(name: &str, references: bool) -> Options {
     let dialect = match Path::new(name).extension().and_then(|e| e.to_str()) {
         Some("ngc") => Dialect::Linuxcnc,
         Some("h") => Dialect::Heidenhain,
@@ -48,6 +49,14 @@ fn options(name: &str, references: bool) -> Options {
         _ if name.starts_with("haas") => Dialect::Haas,
         _ => Dialect::Fanuc,
     };
+    if name.starts_with("lathe-") {
+        // A Fanuc lathe: X and Z, no Y (traps_iso.rs).
+        return Options {
+            dialect,
+            axes: vec![Axis::X, Axis::Z],
+            ..Options::default()
+        };
+    }
     let table = RotaryTable {
         tilt: Axis::A,
         pivot_mm: [0.0; 3],
@@ -78,7 +87,7 @@ fn options(name: &str, references: bool) -> Options {
     o
 }
 
-fn read(name: &str, references: bool) -> Result<Vec<Move>, (usize, String)> {
+pub(super) fn read(name: &str, references: bool) -> Result<Vec<Move>, (usize, String)> {
     let moves = ngc::read_file_with(&trap(name), &options(name, references))
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     let mut out = Vec::new();
@@ -92,24 +101,24 @@ fn read(name: &str, references: bool) -> Result<Vec<Move>, (usize, String)> {
     Ok(out)
 }
 
-fn right(name: &str) -> Vec<Move> {
+pub(super) fn right(name: &str) -> Vec<Move> {
     read(name, true).unwrap_or_else(|(line, e)| panic!("{name}:{line}: {e}"))
 }
 
 /// The refusal of `name` (without reference positions when `references` is false): its
 /// line and message.
-fn refused(name: &str, references: bool) -> (usize, String) {
+pub(super) fn refused(name: &str, references: bool) -> (usize, String) {
     match read(name, references) {
         Ok(m) => panic!("{name}: read ({} moves), expected a refusal", m.len()),
         Err(e) => e,
     }
 }
 
-fn xyz(p: &AxisVec) -> [f64; 3] {
+pub(super) fn xyz(p: &AxisVec) -> [f64; 3] {
     [p[Axis::X], p[Axis::Y], p[Axis::Z]]
 }
 
-fn near(a: [f64; 3], b: [f64; 3]) -> bool {
+pub(super) fn near(a: [f64; 3], b: [f64; 3]) -> bool {
     (0..3).all(|k| (a[k] - b[k]).abs() < TOL)
 }
 
@@ -346,7 +355,7 @@ fn fanuc_m98_p_holds_the_repeat_count_before_the_program_number() {
 /// Every file of the folder is one of the traps above, so none is left unchecked.
 #[test]
 fn every_trap_file_is_checked() {
-    let this = include_str!("traps.rs");
+    let this = [include_str!("traps.rs"), include_str!("traps_iso.rs")].concat();
     for e in std::fs::read_dir(trap("")).unwrap() {
         let name = e.unwrap().file_name().to_string_lossy().into_owned();
         assert!(

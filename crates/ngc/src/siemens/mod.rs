@@ -21,8 +21,10 @@
 //! head, is an error at its opening line.
 
 mod block;
+mod boring;
 mod cip;
 mod cycles;
+mod deep_hole;
 mod emit;
 mod expr;
 mod flow;

@@ -40,19 +40,40 @@ pub(super) enum Var {
     Named(String),
 }
 
-/// A drilling cycle's values, program units and s.
-#[derive(Clone, Copy, Debug)]
+/// The feed of a cycle's feed move, resolved when the cycle runs (an `MCALL` cycle runs
+/// at the F in effect at each hole).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum CycleFeed {
+    /// The F programmed before the call.
+    Programmed,
+    /// The programmed F times this factor (CYCLE83's FRF on its first stroke).
+    Factor(f64),
+    /// This feed, mm/min (CYCLE84's pitch × speed, CYCLE85's FFR and RFF).
+    Rate(f64),
+}
+
+/// One step of a drilling cycle at the drilling position, in program units and s.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum CycleStep {
+    /// G0 (`feed` `None`) or G1 to `level` on the tool axis, `aside` off the drilling
+    /// position along the plane's first and second axes (CYCLE86's lift-off).
+    Move {
+        level: f64,
+        aside: [f64; 2],
+        feed: Option<CycleFeed>,
+    },
+    /// A dwell, s.
+    Dwell(f64),
+    /// An M code the cycle outputs (M5 spindle stop, M0 program stop, M19 oriented
+    /// spindle stop, M3/M4 the spindle on again).
+    M(u8),
+}
+
+/// A drilling cycle: its steps from the drilling position, as its manual section lists
+/// them.
+#[derive(Clone, Debug)]
 pub(super) struct Cycle {
-    pub retract: f64,
-    /// RFP + SDIS.
-    pub approach: f64,
-    pub depth: f64,
-    pub dwell_s: f64,
-    /// The feed down to the depth (mm/min); `None`: the programmed F.
-    pub feed_in: Option<f64>,
-    /// Back up to RFP + SDIS at this feed (mm/min) before the rapid to RTP; `None`: the
-    /// rapid from the depth.
-    pub feed_out: Option<f64>,
+    pub steps: Vec<CycleStep>,
 }
 
 /// A section being repeated.

@@ -15,4 +15,5 @@ mod lent_moves;
 mod milling_cycles;
 mod posts;
 mod siemens;
+mod siemens_cycles;
 mod siemens_posts;

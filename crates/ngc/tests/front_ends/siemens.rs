@@ -246,7 +246,12 @@ fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
             8,
             "system variable `$P_UIFR`",
         ),
-        ("G0 X1\nCYCLE83(10,0,1,-20)\n", 2, 1, "`CYCLE83`"),
+        (
+            "G0 X1\nCYCLE83(10,0,1,-20)\n",
+            2,
+            1,
+            "CYCLE83 without a first drilling depth",
+        ),
         ("N10 G33 Z-10 K1\n", 1, 5, "`G33`"),
         ("DEF POINT PT\n", 1, 5, "DEF POINT"),
         ("R1=GETT(\"A\")\n", 1, 4, "`GETT`"),

@@ -3,6 +3,7 @@
 //! names and calls (Fundamentals, "Structure of an NC program"; Job planning, "Flexible NC
 //! programming").
 
+use super::corner::{CornerKind, CornerWord};
 use super::expr::{
     element, element_key, expr, indices, r_parameter, system_variable_kind, undefined, Scan,
 };
@@ -599,6 +600,51 @@ impl Reader {
                     return Err(sc.err(at, "expected `CR=radius`", "CR"));
                 }
                 w.cr = Some((expr(sc, &self.vars)?, at..sc.at));
+                return Ok(());
+            }
+            "AR" | "ANG" => {
+                let c =
+                    self.assigned(sc, at, &format!("expected `{name}=angle`"), "contour angle")?;
+                let slot = if name == "AR" { &mut w.ar } else { &mut w.ang };
+                if slot.replace(c).is_some() {
+                    return Err(sc.err(
+                        at,
+                        format!("`{name}=` twice in one block"),
+                        "contour angle",
+                    ));
+                }
+                return Ok(());
+            }
+            "CHF" | "CHR" | "RND" | "RNDM" => {
+                if !sc.eat(b'=') {
+                    return Err(sc.err(
+                        at,
+                        format!("expected `{name}=value`"),
+                        "chamfer or rounding",
+                    ));
+                }
+                let size = expr(sc, &self.vars)?;
+                let kind = match name {
+                    "CHF" => CornerKind::Chf,
+                    "CHR" => CornerKind::Chr,
+                    "RND" => CornerKind::Rnd,
+                    _ => CornerKind::Rndm,
+                };
+                if size < 0.0 || !size.is_finite() || (size == 0.0 && kind != CornerKind::Rndm) {
+                    return Err(sc.err(
+                        at,
+                        format!("`{name}={size}`: expected a length over 0"),
+                        "chamfer or rounding",
+                    ));
+                }
+                if w.corner.is_some() {
+                    return Err(sc.err(at, "a second chamfer or rounding word in one block: expected one of CHF= CHR= RND= RNDM=", "chamfer or rounding"));
+                }
+                w.corner = Some(CornerWord {
+                    kind,
+                    size,
+                    span: at..sc.at,
+                });
                 return Ok(());
             }
             "ADIS" | "ADISPOS" if sc.peek() == Some(b'=') => {

@@ -48,31 +48,6 @@ pub(super) const NOTED: &[&str] = &[
 /// SINUMERIK 840D sl programming manual section that describes them.
 pub(super) const REFUSED: &[(&str, &str, &str)] = &[
     (
-        "AR",
-        "arc opening angle",
-        "Fundamentals, \"Circular interpolation with opening angle and center point (AR)\"",
-    ),
-    (
-        "CHF",
-        "chamfer",
-        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM)\"",
-    ),
-    (
-        "CHR",
-        "chamfer",
-        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM)\"",
-    ),
-    (
-        "RND",
-        "rounding",
-        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM)\"",
-    ),
-    (
-        "RNDM",
-        "modal rounding",
-        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM)\"",
-    ),
-    (
         "OFFN",
         "contour offset",
         "Fundamentals, \"Tool radius compensation (G40, G41, G42, OFFN)\"",

@@ -69,6 +69,11 @@ pub(super) struct Words {
     /// `TURN=n`: full turns of a helix.
     pub turn: Option<(u32, std::ops::Range<usize>)>,
     pub cr: Option<(f64, std::ops::Range<usize>)>,
+    /// `AR=` (an arc's opening angle) and `ANG=` (a line's angle), deg (contour.rs).
+    pub ar: Option<Coordinate>,
+    pub ang: Option<Coordinate>,
+    /// `CHF= CHR= RND= RNDM=` (corner.rs).
+    pub corner: Option<super::corner::CornerWord>,
     /// G0-G3 given in the block.
     pub motion: Option<u8>,
     pub dwell: Option<std::ops::Range<usize>>,
@@ -93,6 +98,8 @@ impl Words {
             || self.cip.iter().any(Option::is_some)
             || self.polar.iter().any(Option::is_some)
             || self.cr.is_some()
+            || self.ar.is_some()
+            || self.ang.is_some()
     }
 }
 
@@ -175,7 +182,7 @@ impl Reader {
 
     /// `=value` after a name at `at` (the cursor after the name), as a coordinate; `expected`
     /// and `label` make the error where `=` is missing.
-    fn assigned(
+    pub(super) fn assigned(
         &mut self,
         sc: &mut Scan,
         at: usize,

@@ -15,5 +15,6 @@ mod lent_moves;
 mod milling_cycles;
 mod posts;
 mod siemens;
+mod siemens_contour;
 mod siemens_cycles;
 mod siemens_posts;

@@ -602,6 +602,14 @@ impl Reader {
                 w.cr = Some((expr(sc, &self.vars)?, at..sc.at));
                 return Ok(());
             }
+            "HOLES1" | "HOLES2" => return self.hole_pattern(name, at, sc, line_no),
+            n if super::patterns::UNREAD_CYCLES.iter().any(|(k, _)| *k == n) => {
+                let what = super::patterns::UNREAD_CYCLES
+                    .iter()
+                    .find(|(k, _)| *k == n)
+                    .map_or("", |(_, w)| *w);
+                return Err(sc.err(at, format!("`{n}` ({what}) is not supported by mtsim's Siemens reader: it reads the hole patterns HOLES1 and HOLES2 and the drilling cycles CYCLE81 to CYCLE89"), "unsupported cycle"));
+            }
             "AR" | "ANG" => {
                 let c =
                     self.assigned(sc, at, &format!("expected `{name}=angle`"), "contour angle")?;

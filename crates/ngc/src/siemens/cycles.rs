@@ -181,7 +181,7 @@ impl Reader {
     }
 
     /// `( v, , v ...)`: each value, `None` where left out.
-    fn arguments(&mut self, sc: &mut Scan, at: usize) -> LineResult<Vec<Option<f64>>> {
+    pub(super) fn arguments(&mut self, sc: &mut Scan, at: usize) -> LineResult<Vec<Option<f64>>> {
         let mut out = Vec::new();
         if !sc.eat(b'(') {
             return Ok(out);
@@ -417,6 +417,12 @@ fn euler_zxz_angles(r: &Mat3) -> [f64; 3] {
 /// What a standard cycle the reader refuses is, with its section of the SINUMERIK 840D sl
 /// "Cycles" (milling) programming manual.
 fn cycle_kind(name: &str) -> &'static str {
+    if let Some((_, what)) = super::patterns::UNREAD_CYCLES
+        .iter()
+        .find(|(n, _)| *n == name)
+    {
+        return what;
+    }
     match name {
         "CYCLE840" => "tapping with a compensating chuck; Cycles, \"Tapping with compensating chuck (CYCLE840)\"",
         "CYCLE71" => "face milling; Cycles, \"Face milling (CYCLE71)\"",

@@ -33,6 +33,7 @@ mod flow;
 mod frame;
 mod keywords;
 mod macros;
+mod patterns;
 mod plain;
 mod polar;
 mod repeat;

@@ -277,3 +277,93 @@ fn a_dpr_of_zero_leaves_the_depth_to_dp() {
     let z: Vec<f64> = steps(&m, 3).iter().map(|s| s.1[2]).collect();
     assert_eq!(z, [2.0, -5.0, 10.0]);
 }
+
+/// The positioning moves (rapids in the plane) of `line`: X Y Z rounded to 1e-9.
+fn positions(m: &[Move], line: usize) -> Vec<[f64; 3]> {
+    let s = steps(m, line);
+    // Each hole: the G0 in the plane, then CYCLE81's G0, G1, G0.
+    s.chunks(4).map(|c| c[0].1).collect()
+}
+
+/// HOLES1(SPCA 10, SPCO 20, STA1 30°, FDIS 5, DBH 10, NUM 3) with MCALL CYCLE81: holes at
+/// (10, 20) + (5, 15, 25)·(cos 30°, sin 30°) = (14.330127019, 22.5), (22.990381057, 27.5),
+/// (31.650635095, 32.5); from (0, 0) the first hole is nearer, from (40, 40) the last, and
+/// the row runs from there. Each hole after the first is reached at RTP 10. HOLES2(CPA 0,
+/// CPO 0, RAD 10, STA1 90°, INDA −45°, NUM 3): (0, 10), (7.0710678, 7.0710678), (10, 0);
+/// INDA 0 with NUM 4: 90° apart from STA1 0.
+#[test]
+fn holes1_and_holes2_drill_by_the_modal_call_at_each_position() {
+    let c = 30f64.to_radians().cos();
+    let row = [
+        [10.0 + 5.0 * c, 22.5],
+        [10.0 + 15.0 * c, 27.5],
+        [10.0 + 25.0 * c, 32.5],
+    ];
+    let r = |v: f64| (v * 1e9).round() / 1e9 + 0.0;
+    for (start, order) in [([0.0, 0.0], [0, 1, 2]), ([40.0, 40.0], [2, 1, 0])] {
+        let m = moves(&format!(
+            "G17 G90 F100\nG0 X{} Y{} Z20\nMCALL CYCLE81(10,0,2,-5)\nHOLES1(10,20,30,5,10,3)\nMCALL\nM30\n",
+            start[0], start[1]
+        ));
+        let want: Vec<[f64; 3]> = order
+            .iter()
+            .enumerate()
+            .map(|(k, &h)| [r(row[h][0]), r(row[h][1]), if k == 0 { 20.0 } else { 10.0 }])
+            .collect();
+        assert_eq!(positions(&m, 4), want, "from {start:?}");
+        assert_eq!(steps(&m, 4).len(), 12);
+        assert!(steps(&m, 4)
+            .iter()
+            .filter(|s| s.0 == 'f')
+            .all(|s| s.1[2] == -5.0));
+    }
+    let h = r(10.0 / 2f64.sqrt());
+    let m = moves(
+        "G17 G90 F100\nG0 X0 Y0 Z20\nMCALL CYCLE81(10,0,2,-5)\nHOLES2(0,0,10,90,-45,3)\nMCALL\n\
+         HOLES2(0,0,10,0,0,4)\nM30\n",
+    );
+    assert_eq!(
+        positions(&m, 4),
+        [[0.0, 10.0, 20.0], [h, h, 10.0], [10.0, 0.0, 10.0]]
+    );
+    // Without a modal call the holes are only approached.
+    let only: Vec<[f64; 3]> = steps(&m, 6).iter().map(|s| s.1).collect();
+    assert_eq!(
+        only,
+        [
+            [10.0, 0.0, 10.0],
+            [0.0, 10.0, 10.0],
+            [-10.0, 0.0, 10.0],
+            [0.0, -10.0, 10.0]
+        ]
+    );
+}
+
+/// Pattern and milling cycles mtsim does not read are refused naming what they are and
+/// their manual section.
+#[test]
+fn pattern_and_pocket_cycles_not_read_are_named_with_their_section() {
+    for (text, words) in [
+        ("HOLES1(10,20,30,5,10,0)", &["HOLES1 NUM 0"][..]),
+        (
+            "CYCLE801(0,0,0,10,10,3,2)",
+            &["`CYCLE801`", "grid of holes", "Cycles"],
+        ),
+        (
+            "POCKET3(10,0,2,-5,40,30,5)",
+            &["`POCKET3`", "rectangular pocket", "POCKET3)"],
+        ),
+        (
+            "MCALL CYCLE801(0,0,0,10,10,3,2)",
+            &["`CYCLE801`", "grid of holes"],
+        ),
+        ("LONGHOLE(10,0,2,-5)", &["`LONGHOLE`", "elongated holes"]),
+        ("SLOT2(10,0,2,-5)", &["`SLOT2`", "circumferential slots"]),
+    ] {
+        let (line, msg) = refusal(&format!("G17 G90 F100\nG0 X0 Y0 Z20\n{text}\nM30\n"));
+        assert_eq!(line, 3, "{text}: {msg}");
+        for w in words {
+            assert!(msg.contains(w), "{text}: {msg:?} does not name {w}");
+        }
+    }
+}

@@ -3,7 +3,6 @@
 //! names and calls (Fundamentals, "Structure of an NC program"; Job planning, "Flexible NC
 //! programming").
 
-use super::corner::{CornerKind, CornerWord};
 use super::expr::{
     element, element_key, expr, indices, r_parameter, system_variable_kind, undefined, Scan,
 };
@@ -604,57 +603,10 @@ impl Reader {
             }
             "HOLES1" | "HOLES2" => return self.hole_pattern(name, at, sc, line_no),
             n if super::patterns::UNREAD_CYCLES.iter().any(|(k, _)| *k == n) => {
-                let what = super::patterns::UNREAD_CYCLES
-                    .iter()
-                    .find(|(k, _)| *k == n)
-                    .map_or("", |(_, w)| *w);
-                return Err(sc.err(at, format!("`{n}` ({what}) is not supported by mtsim's Siemens reader: it reads the hole patterns HOLES1 and HOLES2 and the drilling cycles CYCLE81 to CYCLE89"), "unsupported cycle"));
+                return Err(super::patterns::unread_cycle(n, sc, at))
             }
-            "AR" | "ANG" => {
-                let c =
-                    self.assigned(sc, at, &format!("expected `{name}=angle`"), "contour angle")?;
-                let slot = if name == "AR" { &mut w.ar } else { &mut w.ang };
-                if slot.replace(c).is_some() {
-                    return Err(sc.err(
-                        at,
-                        format!("`{name}=` twice in one block"),
-                        "contour angle",
-                    ));
-                }
-                return Ok(());
-            }
-            "CHF" | "CHR" | "RND" | "RNDM" => {
-                if !sc.eat(b'=') {
-                    return Err(sc.err(
-                        at,
-                        format!("expected `{name}=value`"),
-                        "chamfer or rounding",
-                    ));
-                }
-                let size = expr(sc, &self.vars)?;
-                let kind = match name {
-                    "CHF" => CornerKind::Chf,
-                    "CHR" => CornerKind::Chr,
-                    "RND" => CornerKind::Rnd,
-                    _ => CornerKind::Rndm,
-                };
-                if size < 0.0 || !size.is_finite() || (size == 0.0 && kind != CornerKind::Rndm) {
-                    return Err(sc.err(
-                        at,
-                        format!("`{name}={size}`: expected a length over 0"),
-                        "chamfer or rounding",
-                    ));
-                }
-                if w.corner.is_some() {
-                    return Err(sc.err(at, "a second chamfer or rounding word in one block: expected one of CHF= CHR= RND= RNDM=", "chamfer or rounding"));
-                }
-                w.corner = Some(CornerWord {
-                    kind,
-                    size,
-                    span: at..sc.at,
-                });
-                return Ok(());
-            }
+            "AR" | "ANG" => return self.angle_word(name, at, sc, w),
+            "CHF" | "CHR" | "RND" | "RNDM" => return self.corner_word(name, at, sc, w),
             "ADIS" | "ADISPOS" if sc.peek() == Some(b'=') => {
                 // The rounding distance of G641/G642 path blending: the planner does not
                 // blend by it (docs/interpolation.md).

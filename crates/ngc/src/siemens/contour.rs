@@ -17,12 +17,29 @@
 //! * `G2/G3 I.. J.. AR=α` (centre and opening angle): E is S turned about C by +α (G3) or
 //!   −α (G2).
 
+use super::expr::Scan;
 use super::words::{Coordinate, Mode, Words};
 use super::Reader;
 use crate::axis::Axis;
 use crate::lex::{LineError, LineResult};
 
 impl Reader {
+    /// `AR=` or `ANG=` (`name`) at `at`, the cursor after the name.
+    pub(super) fn angle_word(
+        &mut self,
+        name: &str,
+        at: usize,
+        sc: &mut Scan,
+        w: &mut Words,
+    ) -> LineResult<()> {
+        let c = self.assigned(sc, at, &format!("expected `{name}=angle`"), "contour angle")?;
+        let slot = if name == "AR" { &mut w.ar } else { &mut w.ang };
+        if slot.replace(c).is_some() {
+            return Err(sc.err(at, format!("`{name}=` twice in one block"), "contour angle"));
+        }
+        Ok(())
+    }
+
     /// Resolves `ANG=` and `AR=` of the block into absolute plane coordinates (end point,
     /// centre); nothing when the block has neither.
     pub(super) fn contour_words(&mut self, w: &mut Words) -> LineResult<()> {

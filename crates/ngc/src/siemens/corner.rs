@@ -17,48 +17,52 @@
 //! than either line, a frame that scales the plane unevenly or tilts it, cutter radius
 //! compensation on, and a program that ends before the next move.
 
+use super::expr::{expr, Scan};
+use super::state::{CornerKind, CornerWord, Held};
+use super::words::Words;
 use super::Reader;
 use crate::axis::{Axis, Plane};
 use crate::corner::{join, Pending};
 use crate::lex::{LineError, LineResult};
 
-/// A chamfer or rounding word: the kind and its value (program units).
-#[derive(Clone, Debug)]
-pub(super) struct CornerWord {
-    pub kind: CornerKind,
-    pub size: f64,
-    pub span: std::ops::Range<usize>,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum CornerKind {
-    Rnd,
-    Rndm,
-    Chr,
-    Chf,
-}
-
-impl CornerKind {
-    pub(super) fn name(self) -> &'static str {
-        match self {
-            CornerKind::Rnd => "RND",
-            CornerKind::Rndm => "RNDM",
-            CornerKind::Chr => "CHR",
-            CornerKind::Chf => "CHF",
-        }
-    }
-}
-
-/// A line held for the element at its end.
-pub(super) struct Held {
-    pub pending: Pending,
-    /// CHF's length (the legs follow from the corner's angle once the next line is known).
-    pub chamfer_length: Option<f64>,
-    /// Set in the block that holds the line; the next block's moves join it.
-    pub fresh: bool,
-}
-
 impl Reader {
+    /// `CHF=`, `CHR=`, `RND=` or `RNDM=` (`name`) at `at`, the cursor after the name.
+    pub(super) fn corner_word(
+        &mut self,
+        name: &str,
+        at: usize,
+        sc: &mut Scan,
+        w: &mut Words,
+    ) -> LineResult<()> {
+        let label = "chamfer or rounding";
+        if !sc.eat(b'=') {
+            return Err(sc.err(at, format!("expected `{name}=value`"), label));
+        }
+        let size = expr(sc, &self.vars)?;
+        let kind = match name {
+            "CHF" => CornerKind::Chf,
+            "CHR" => CornerKind::Chr,
+            "RND" => CornerKind::Rnd,
+            _ => CornerKind::Rndm,
+        };
+        if size < 0.0 || !size.is_finite() || (size == 0.0 && kind != CornerKind::Rndm) {
+            return Err(sc.err(
+                at,
+                format!("`{name}={size}`: expected a length over 0"),
+                label,
+            ));
+        }
+        if w.corner.is_some() {
+            return Err(sc.err(at, "a second chamfer or rounding word in one block: expected one of CHF= CHR= RND= RNDM=", label));
+        }
+        w.corner = Some(CornerWord {
+            kind,
+            size,
+            span: at..sc.at,
+        });
+        Ok(())
+    }
+
     /// After a block's moves: join a held line to the block's first move, then hold the
     /// block's last line when it has a chamfer or rounding word (or RNDM is on).
     pub(super) fn corner_after_block(

@@ -145,6 +145,9 @@ impl Reader {
         }
         let a = self.arguments(sc, at)?;
         let get = |k: usize| a.get(k).copied().flatten();
+        if let Some(m) = operate_modes_refused(name, &a) {
+            return Err(sc.err(at, m, "cycle values"));
+        }
         let (Some(retract), Some(reference)) = (get(0), get(1)) else {
             return Err(sc.err(
                 at,
@@ -397,6 +400,50 @@ fn simple_steps(name: &str, a: &[Option<f64>], p: Planes) -> Result<Vec<CycleSte
     }
     steps.push(at(p.retract, None));
     Ok(steps)
+}
+
+/// The refusal of the later (SINUMERIK Operate) arguments of drilling cycle `name` that
+/// change what its values mean, when one is not 0: `_GMODE` (geometry mode) and `_AMODE`
+/// (alternative mode: its digits switch depths between absolute and incremental, dwells
+/// between seconds and revolutions ...), the last three values with `_DMODE` (display
+/// only, not read) between them; and CYCLE84's `_AXN` (tool axis), `_PTAB` (pitch unit
+/// other than the program's or mm) and `_VARI` (deep-hole tapping with pecks).
+fn operate_modes_refused(name: &str, a: &[Option<f64>]) -> Option<String> {
+    let gmode = match name {
+        "CYCLE81" => 5,
+        "CYCLE82" | "CYCLE87" | "CYCLE89" => 6,
+        "CYCLE88" => 7,
+        "CYCLE85" => 8,
+        "CYCLE86" => 11,
+        "CYCLE83" => 17,
+        "CYCLE84" => 21,
+        _ => return None,
+    };
+    let zero = |k: usize| a.get(k).copied().flatten().unwrap_or(0.0);
+    let mut checks = vec![
+        (gmode, "_GMODE", "the geometry mode"),
+        (
+            gmode + 2,
+            "_AMODE",
+            "the alternative mode, whose digits change how depths and dwells are read",
+        ),
+    ];
+    if name == "CYCLE84" {
+        checks.extend([
+            (
+                12,
+                "_AXN",
+                "the tool axis; mtsim taps along the plane's normal",
+            ),
+            (15, "_VARI", "deep-hole tapping with pecks"),
+        ]);
+        if zero(13) > 1.0 {
+            return Some(format!("CYCLE84 _PTAB {}: a thread pitch in TPI or inch is not read by mtsim; expected 0 (the program's unit) or 1 (mm)", zero(13)));
+        }
+    }
+    checks.into_iter().find(|(k, _, _)| zero(*k) != 0.0).map(|(k, what, means)| {
+        format!("{name} {what} {}: {means} (a SINUMERIK Operate cycle argument) is not read by mtsim; expected 0 or nothing", zero(k))
+    })
 }
 
 /// The Z-X-Z Euler angles (deg) of rotation `r = Rz(i) Rx(j) Rz(k)`: `cos j = r₂₂`,

@@ -23,7 +23,7 @@
 //!   final one; G0 to RTP.
 //!
 //! A dwell given in spindle revolutions (negative), a drilling axis `_AXN` other than the
-//! plane's normal, and the later Operate arguments (`_GMODE`, `_AMODE`) are refused.
+//! plane's normal, and (cycles.rs) the later Operate arguments `_GMODE`, `_AMODE` are refused.
 
 use super::state::{CycleFeed, CycleStep};
 
@@ -79,11 +79,6 @@ pub(super) fn deep_hole_steps(
     let axn_ok = axn == 0.0 || (normal == 2 && axn == 3.0);
     if !axn_ok {
         return Err(format!("CYCLE83 _AXN {axn}: mtsim drills along the active plane's normal (_AXN 0, or 3 under G17); select the plane (G17/G18/G19) instead"));
-    }
-    for (k, name) in [(17, "_GMODE"), (19, "_AMODE")] {
-        if zero(k) != 0.0 {
-            return Err(format!("CYCLE83 {name} {}: the Operate cycle's alternative modes are not read by mtsim (they change what the depths and DAM mean); expected 0 or nothing", zero(k)));
-        }
     }
     let [dtb, dts, dtd] = [zero(8), zero(9), zero(15)];
     if let Some((name, v)) = [("DTB", dtb), ("DTS", dts), ("_DTD", dtd)]

@@ -132,7 +132,7 @@ pub(crate) struct Reader {
     /// `MCALL CYCLE8x(..)`: the cycle called after each positioning block.
     modal_call: Option<state::Cycle>,
     /// A G1 line held for the chamfer or rounding at its end (corner.rs).
-    held: Option<corner::Held>,
+    held: Option<state::Held>,
     /// `RNDM=r`: the modal rounding radius, program units.
     rounding_modal: Option<f64>,
     search_path: Vec<PathBuf>,

@@ -62,6 +62,15 @@ pub(super) const UNREAD_CYCLES: &[(&str, &str)] = &[
     ),
 ];
 
+/// The refusal of `name`, one of [`UNREAD_CYCLES`], at `at`.
+pub(super) fn unread_cycle(name: &str, sc: &Scan, at: usize) -> LineError {
+    let what = UNREAD_CYCLES
+        .iter()
+        .find(|(k, _)| *k == name)
+        .map_or("", |(_, w)| *w);
+    sc.err(at, format!("`{name}` ({what}) is not supported by mtsim's Siemens reader: it reads the hole patterns HOLES1 and HOLES2 and the drilling cycles CYCLE81 to CYCLE89"), "unsupported cycle")
+}
+
 impl Reader {
     /// `HOLES1(..)` or `HOLES2(..)` at `at` (the cursor after the name): the positions,
     /// each approached with G0 and drilled by the modal call.

@@ -1,6 +1,6 @@
 //! The state types the front end's files share, in a leaf of their own: the open control
 //! structures, the sections being repeated, the variables a block assigns, a drilling
-//! cycle's values.
+//! cycle's steps, a chamfer or rounding word and the line held for it.
 
 use std::ops::Range;
 
@@ -88,4 +88,40 @@ pub(super) struct Section {
     pub(super) back: (usize, usize),
     /// The `REPEAT` line (offset, number) and the statement's span.
     pub(super) site: (usize, usize, Range<usize>),
+}
+
+/// A chamfer or rounding word: the kind and its value (program units).
+#[derive(Clone, Debug)]
+pub(super) struct CornerWord {
+    pub kind: CornerKind,
+    pub size: f64,
+    pub span: std::ops::Range<usize>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum CornerKind {
+    Rnd,
+    Rndm,
+    Chr,
+    Chf,
+}
+
+impl CornerKind {
+    pub(super) fn name(self) -> &'static str {
+        match self {
+            CornerKind::Rnd => "RND",
+            CornerKind::Rndm => "RNDM",
+            CornerKind::Chr => "CHR",
+            CornerKind::Chf => "CHF",
+        }
+    }
+}
+
+/// A line held for the element at its end.
+pub(super) struct Held {
+    pub pending: crate::corner::Pending,
+    /// CHF's length (the legs follow from the corner's angle once the next line is known).
+    pub chamfer_length: Option<f64>,
+    /// Set in the block that holds the line; the next block's moves join it.
+    pub fresh: bool,
 }

@@ -73,7 +73,7 @@ pub(super) struct Words {
     pub ar: Option<Coordinate>,
     pub ang: Option<Coordinate>,
     /// `CHF= CHR= RND= RNDM=` (corner.rs).
-    pub corner: Option<super::corner::CornerWord>,
+    pub corner: Option<super::state::CornerWord>,
     /// G0-G3 given in the block.
     pub motion: Option<u8>,
     pub dwell: Option<std::ops::Range<usize>>,

@@ -261,6 +261,24 @@ fn cycle_values_mtsim_does_not_read_are_refused_by_name() {
         ("CYCLE83(10,0,2,-25,,-5,,2,0,0,1.5,1)", &["FRF 1.5"]),
         ("CYCLE86(10,0,2,-20,,0,5,0,0,0,0)", &["SDIR 5", "61102"]),
         ("CYCLE87(10,0,2,-20)", &["SDIR 0"]),
+        // Operate arguments that change the values' meaning (a DMG post's call).
+        (
+            "CYCLE82(-300,-350,5,-400,,0.5,0,1,12)",
+            &["CYCLE82 _AMODE 12", "alternative mode"],
+        ),
+        (
+            "CYCLE84(-300,-350,5,-400,,1,3,,5,3,200,100,0,1,0,1,5,1.4,,,,,1000,1001002)",
+            &["CYCLE84 _AMODE 1001002"],
+        ),
+        (
+            "CYCLE84(10,0,2,-20,,0,3,,0.5,0,200,,,,,1)",
+            &["CYCLE84 _VARI 1", "deep-hole tapping"],
+        ),
+        (
+            "CYCLE84(10,0,2,-20,,0,3,,0.5,0,200,,,2)",
+            &["_PTAB 2", "TPI"],
+        ),
+        ("CYCLE81(10,0,2,-20,,1)", &["CYCLE81 _GMODE 1"]),
     ] {
         let (line, msg) = refusal(&format!("G17 G90 F100\nG0 X0 Y0 Z20\n{text}\nM30\n"));
         assert_eq!(line, 3, "{text}: {msg}");
@@ -366,4 +384,20 @@ fn pattern_and_pocket_cycles_not_read_are_named_with_their_section() {
             assert!(msg.contains(w), "{text}: {msg:?} does not name {w}");
         }
     }
+}
+
+/// `_DMODE` (the display mode, 1 here) changes no move: CYCLE82(RTP 10, RFP 0, SDIS 2,
+/// DP −4, DTB 0.5, _GMODE 0, _DMODE 1, _AMODE 0) drills as CYCLE82 without them.
+#[test]
+fn the_display_mode_of_an_operate_cycle_call_changes_nothing() {
+    let m = moves("G17 G90 F100\nG0 X0 Y0 Z20\nCYCLE82(10,0,2,-4,,0.5,0,1,0)\nM30\n");
+    assert_eq!(
+        steps(&m, 3),
+        [
+            ('r', [0.0, 0.0, 2.0], 0.0),
+            ('f', [0.0, 0.0, -4.0], 100.0),
+            ('d', [0.5, 0.0, 0.0], 0.0),
+            ('r', [0.0, 0.0, 10.0], 0.0),
+        ]
+    );
 }

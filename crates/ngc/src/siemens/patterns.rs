@@ -21,6 +21,9 @@ use super::Reader;
 use crate::axis::Axis;
 use crate::lex::{LineError, LineResult};
 
+/// The most holes one pattern may have.
+const MAX_HOLES: f64 = 100_000.0;
+
 /// Pattern and milling cycles mtsim does not read, with what each is and its section of
 /// the SINUMERIK 840D sl Cycles manual.
 pub(super) const UNREAD_CYCLES: &[(&str, &str)] = &[
@@ -87,8 +90,8 @@ impl Reader {
         let get = |k: usize| a.get(k).copied().flatten();
         let zero = |k: usize| get(k).unwrap_or(0.0);
         let num = zero(5);
-        if num < 1.0 || num.fract() != 0.0 {
-            return Err(refuse(format!("{name} NUM {num}: expected the number of holes, a whole number of at least 1 (the 6th value)")));
+        if !(1.0..=MAX_HOLES).contains(&num) || num.fract() != 0.0 {
+            return Err(refuse(format!("{name} NUM {num}: expected the number of holes, a whole number from 1 to {MAX_HOLES} (the 6th value)")));
         }
         let (Some(pa), Some(po)) = (get(0), get(1)) else {
             return Err(refuse(format!("{name} without its reference point: expected the plane's first and second coordinates as the 1st and 2nd values")));

@@ -209,3 +209,29 @@ fn contour_words_mtsim_does_not_read_are_refused_by_name() {
         assert!(!msg.contains("Fanuc"), "{text}: {msg}");
     }
 }
+
+/// The element is part of the programmed contour, so the frame maps it with the lines:
+/// under ROT Z90 the corner (10, 0) → (10, 10) becomes (0, 0) → (0, 10) → (−10, 10), RND=2
+/// touching at (0, 8) and (−2, 10) about (−2, 8); under SCALE X2 Y2 the corner is at (20, 0)
+/// and the radius 4: (16, 0), (20, 4) about (16, 4).
+#[test]
+fn a_rotating_or_scaling_frame_maps_the_rounding_with_the_contour() {
+    let rot = moves("G17 G90 F100\nG0 X0 Y0 Z0\nROT Z90\nG1 X10 Y0 RND=2\nY10\nM30\n");
+    assert_path(
+        &path(&rot)[1..],
+        &[
+            ('l', [0.0, 8.0, 0.0], [0.0; 3]),
+            ('a', [-2.0, 10.0, 0.0], [-2.0, 8.0, 0.0]),
+            ('l', [-10.0, 10.0, 0.0], [0.0; 3]),
+        ],
+    );
+    let scaled = moves("G17 G90 F100\nG0 X0 Y0 Z0\nSCALE X2 Y2\nG1 X10 Y0 RND=2\nY10\nM30\n");
+    assert_path(
+        &path(&scaled)[1..],
+        &[
+            ('l', [16.0, 0.0, 0.0], [0.0; 3]),
+            ('a', [20.0, 4.0, 0.0], [16.0, 4.0, 0.0]),
+            ('l', [20.0, 20.0, 0.0], [0.0; 3]),
+        ],
+    );
+}

@@ -48,6 +48,16 @@ pub(super) const NOTED: &[&str] = &[
 /// SINUMERIK 840D sl programming manual section that describes them.
 pub(super) const REFUSED: &[(&str, &str, &str)] = &[
     (
+        "FRC",
+        "feed of a chamfer or rounding",
+        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM, FRC, FRCM)\"",
+    ),
+    (
+        "FRCM",
+        "modal feed of chamfers and roundings",
+        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM, FRC, FRCM)\"",
+    ),
+    (
         "OFFN",
         "contour offset",
         "Fundamentals, \"Tool radius compensation (G40, G41, G42, OFFN)\"",

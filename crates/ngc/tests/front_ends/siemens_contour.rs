@@ -200,6 +200,11 @@ fn contour_words_mtsim_does_not_read_are_refused_by_name() {
         ("G0 X10 RND=2\nG1 Y5", 3, &["RND=2", "not a G1 line"]),
         ("G1 X10 RND=20\nY5", 4, &["RND=20", "does not fit"]),
         ("G1 X10 CHF=0\nY5", 3, &["CHF=0", "over 0"]),
+        (
+            "G1 X10 CHF=1 FRC=50\nY5",
+            3,
+            &["`FRC`", "feed of a chamfer"],
+        ),
     ] {
         let (at, msg) = refusal(&format!("G17 G90 F100\nG0 X0 Y0 Z0\n{text}\nM30\n"));
         assert_eq!(at, line, "{text}: {msg}");

@@ -682,6 +682,11 @@ impl Interp {
         }
     }
 
+    /// Cutter radius compensation (G41/G42) is on.
+    pub(crate) fn compensating(&self) -> bool {
+        self.comp.is_some()
+    }
+
     /// F as programmed (program units per minute or per revolution), when one is.
     pub(crate) fn programmed_feed(&self) -> Option<f64> {
         self.feed

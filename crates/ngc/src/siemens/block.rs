@@ -601,6 +601,12 @@ impl Reader {
                 w.cr = Some((expr(sc, &self.vars)?, at..sc.at));
                 return Ok(());
             }
+            "HOLES1" | "HOLES2" => return self.hole_pattern(name, at, sc, line_no),
+            n if super::patterns::UNREAD_CYCLES.iter().any(|(k, _)| *k == n) => {
+                return Err(super::patterns::unread_cycle(n, sc, at))
+            }
+            "AR" | "ANG" => return self.angle_word(name, at, sc, w),
+            "CHF" | "CHR" | "RND" | "RNDM" => return self.corner_word(name, at, sc, w),
             "ADIS" | "ADISPOS" if sc.peek() == Some(b'=') => {
                 // The rounding distance of G641/G642 path blending: the planner does not
                 // blend by it (docs/interpolation.md).

@@ -1,18 +1,22 @@
-//! Drilling cycles `CYCLE81` (drilling, centring) and `CYCLE82` (with a dwell at depth),
-//! called once or modally (`MCALL`), `CYCLE800()` (swivel plane reset), and subprogram
-//! calls (`L10 P3`, a program called by name).
+//! Drilling cycles `CYCLE81` to `CYCLE89` as steps at the drilling position, called once
+//! or modally (`MCALL`); `CYCLE800` (swivel plane), `CYCLE832` (high-speed settings); and
+//! subprogram calls (`L10 P3`, a program called by name).
 //!
 //! CYCLE81(RTP, RFP, SDIS, DP, DPR) and CYCLE82(.., DTB) (Siemens, "Cycles" programming
 //! manual, "Drilling, centering - CYCLE81", "Drilling, counterboring - CYCLE82"): from the
 //! drilling position, G0 to the reference plane brought forward by the safety distance
-//! (`RFP + SDIS` on the tool axis), G1 at the programmed feed to the depth (`RFP - DPR`
-//! when DPR is given, else `DP`), dwell DTB s (CYCLE82), G0 to the retraction plane RTP.
+//! (`RFP + SDIS` on the tool axis), G1 at the programmed feed to the depth (`RFP - |DPR|`
+//! when DPR is not 0, else `DP`: a left-out value is 0 on the control), dwell DTB s
+//! (CYCLE82), G0 to the retraction plane RTP. CYCLE83 is in `deep_hole.rs`, CYCLE86-88 in
+//! `boring.rs`; each cycle is a list of steps (`state::CycleStep`) run here.
 
 use std::path::PathBuf;
 
+use super::boring::boring_steps;
+use super::deep_hole::{deep_hole_steps, Planes};
 use super::expr::{expr, Scan};
 use super::source::Source;
-use super::state::Cycle;
+use super::state::{Cycle, CycleFeed, CycleStep};
 use super::words::number;
 use super::{Level, Reader};
 use crate::axis::Axis;
@@ -122,28 +126,38 @@ impl Reader {
         Ok(())
     }
 
-    /// Reads the cycle `name`'s values (its parentheses follow).
+    /// Reads the cycle `name`'s values (its parentheses follow) into its steps.
     pub(super) fn cycle(&mut self, name: &str, at: usize, sc: &mut Scan) -> LineResult<Cycle> {
         let span = at..sc.at;
         if !matches!(
             name,
-            "CYCLE81" | "CYCLE82" | "CYCLE84" | "CYCLE85" | "CYCLE89"
+            "CYCLE81"
+                | "CYCLE82"
+                | "CYCLE83"
+                | "CYCLE84"
+                | "CYCLE85"
+                | "CYCLE86"
+                | "CYCLE87"
+                | "CYCLE88"
+                | "CYCLE89"
         ) {
-            return Err(LineError::new(span, format!("`{name}` ({}) is not supported by mtsim's Siemens reader: it reads the drilling, tapping and boring cycles CYCLE81, CYCLE82, CYCLE84, CYCLE85 and CYCLE89", cycle_kind(name)), "unsupported cycle"));
+            return Err(LineError::new(span, format!("`{name}` ({}) is not supported by mtsim's Siemens reader: it reads the drilling, tapping and boring cycles CYCLE81 to CYCLE89", cycle_kind(name)), "unsupported cycle"));
         }
         let a = self.arguments(sc, at)?;
         let get = |k: usize| a.get(k).copied().flatten();
+        if let Some(m) = operate_modes_refused(name, &a) {
+            return Err(sc.err(at, m, "cycle values"));
+        }
         let (Some(retract), Some(reference)) = (get(0), get(1)) else {
             return Err(sc.err(
                 at,
-                format!(
-                    "{name} without RTP and RFP: expected {name}(RTP, RFP, SDIS, DP, DPR{})",
-                    if name == "CYCLE82" { ", DTB" } else { "" }
-                ),
+                format!("{name} without RTP and RFP: expected {name}(RTP, RFP, SDIS, DP, DPR, ..)"),
                 "cycle values",
             ));
         };
-        let depth = match (get(4), get(3)) {
+        // DPR acts when it is not 0 (a left-out value of a cycle is 0 on the control),
+        // else DP.
+        let depth = match (get(4).filter(|v| *v != 0.0), get(3)) {
             (Some(dpr), _) => reference - dpr.abs(),
             (None, Some(dp)) => dp,
             (None, None) => {
@@ -154,52 +168,23 @@ impl Reader {
                 ))
             }
         };
-        let (feed_in, feed_out) = match name {
-            // CYCLE85(.., DTB, FFR, RFF): in at FFR, out at RFF.
-            "CYCLE85" => {
-                let (Some(ffr), Some(rff)) = (get(6), get(7)) else {
-                    return Err(sc.err(at, "CYCLE85 without FFR and RFF: expected CYCLE85(RTP, RFP, SDIS, DP, DPR, DTB, FFR, RFF)", "no boring feeds"));
-                };
-                (Some(ffr), Some(rff))
-            }
-            // CYCLE89(.., DTB): in and out at the programmed F.
-            "CYCLE89" => (None, Some(self.interp.programmed_feed().unwrap_or(0.0))),
-            // CYCLE84(.., DTB, SDAC, MPIT, PIT, POSS, SST, SST1): in at SST, out at SST1,
-            // one pitch a turn.
-            "CYCLE84" => {
-                let pitch = match (get(8), get(7)) {
-                    (Some(p), _) if p != 0.0 => p.abs(),
-                    (_, Some(m)) => metric_coarse_pitch(m).ok_or_else(|| sc.err(at, format!("CYCLE84 MPIT {m}: expected a metric thread size 3-48 (M3-M48) or the pitch PIT"), "thread size"))?,
-                    _ => return Err(sc.err(at, "CYCLE84 without MPIT or PIT: expected the thread's size or pitch", "no pitch")),
-                };
-                let Some(sst) = get(10).filter(|v| *v > 0.0) else {
-                    return Err(sc.err(
-                        at,
-                        "CYCLE84 without SST: expected the tapping speed (rev/min)",
-                        "no speed",
-                    ));
-                };
-                let sst1 = get(11).filter(|v| *v > 0.0).unwrap_or(sst);
-                (Some(pitch * sst), Some(pitch * sst1))
-            }
-            _ => (None, None),
-        };
-        Ok(Cycle {
+        let planes = Planes {
             retract,
+            reference,
             approach: reference + get(2).unwrap_or(0.0).abs(),
             depth,
-            dwell_s: if name == "CYCLE81" {
-                0.0
-            } else {
-                get(5).unwrap_or(0.0)
-            },
-            feed_in,
-            feed_out,
-        })
+        };
+        let steps = match name {
+            "CYCLE83" => deep_hole_steps(&a, planes, self.normal),
+            "CYCLE86" | "CYCLE87" | "CYCLE88" => boring_steps(name, &a, planes),
+            _ => simple_steps(name, &a, planes),
+        }
+        .map_err(|m| sc.err(at, m, "cycle values"))?;
+        Ok(Cycle { steps })
     }
 
     /// `( v, , v ...)`: each value, `None` where left out.
-    fn arguments(&mut self, sc: &mut Scan, at: usize) -> LineResult<Vec<Option<f64>>> {
+    pub(super) fn arguments(&mut self, sc: &mut Scan, at: usize) -> LineResult<Vec<Option<f64>>> {
         let mut out = Vec::new();
         if !sc.eat(b'(') {
             return Ok(out);
@@ -239,47 +224,57 @@ impl Reader {
 
     /// Runs `cycle` (or the modal call) at the current position, along the tool axis.
     pub(super) fn run_cycle(&mut self, cycle: Option<Cycle>, line_no: usize) -> LineResult<()> {
-        let Some(c) = cycle.or(self.modal_call) else {
+        let Some(c) = cycle.or_else(|| self.modal_call.clone()) else {
             return Ok(());
         };
         let p = self.interp.program_position();
         let here = self.frame.frame_point([p[Axis::X], p[Axis::Y], p[Axis::Z]]);
         let axis = self.normal;
-        // (motion, level, feed): G0 to RFP + SDIS, in to the depth, the dwell, out at the
-        // cycle's feed (CYCLE84/85/89), G0 to RTP; the programmed F again after a cycle
-        // that feeds at its own.
-        let mut steps = vec![(0u8, c.approach, None), (1, c.depth, c.feed_in)];
-        if c.dwell_s > 0.0 {
-            steps.push((4, c.dwell_s, None));
-        }
-        if let Some(f) = c.feed_out {
-            steps.push((1, c.approach, Some(f)));
-        }
-        steps.push((0, c.retract, None));
+        // The plane's first and second axes: G17 X Y, G18 Z X, G19 Y Z.
+        let [first, second] = [(axis + 1) % 3, (axis + 2) % 3];
         let programmed = self.interp.programmed_feed();
-        for (motion, v, feed) in steps {
-            if motion == 4 {
-                self.push(&format!("G4 X{}", number(v)), 0..0);
-            } else {
-                let mut q = here;
-                q[axis] = v;
-                let t = self.frame.work_point(q);
-                let f = feed.map_or(String::new(), |f| format!(" F{}", number(f)));
-                self.push(
-                    &format!(
-                        "G90 G{motion} X{} Y{} Z{}{f}",
-                        number(t[0]),
-                        number(t[1]),
-                        number(t[2])
-                    ),
-                    0..0,
-                );
-                self.interp_absolute = true;
-                self.interp_motion = motion;
+        // The programmed F is written again once a step has fed at a feed of its own.
+        let mut own_feed = false;
+        for step in c.steps {
+            match step {
+                CycleStep::Dwell(s) => self.push(&format!("G4 X{}", number(s)), 0..0),
+                CycleStep::M(code) => {
+                    if code == 0 {
+                        self.notice(line_no, "a boring cycle's program stop (M0): mtsim runs on as the control does after NC start; what the operator does by hand in the stop is not simulated".into());
+                    }
+                    self.push(&format!("M{code}"), 0..0);
+                }
+                CycleStep::Move { level, aside, feed } => {
+                    let mut q = here;
+                    q[axis] = level;
+                    q[first] += aside[0];
+                    q[second] += aside[1];
+                    let t = self.frame.work_point(q);
+                    let rate = match (feed, programmed) {
+                        (Some(CycleFeed::Rate(f)), _) => Some(f),
+                        (Some(CycleFeed::Factor(k)), Some(f)) => Some(k * f),
+                        (Some(_), Some(f)) if own_feed => Some(f),
+                        _ => None,
+                    };
+                    own_feed |= matches!(feed, Some(CycleFeed::Rate(_) | CycleFeed::Factor(_)));
+                    let f = rate.map_or(String::new(), |f| format!(" F{}", number(f)));
+                    let motion = u8::from(feed.is_some());
+                    self.push(
+                        &format!(
+                            "G90 G{motion} X{} Y{} Z{}{f}",
+                            number(t[0]),
+                            number(t[1]),
+                            number(t[2])
+                        ),
+                        0..0,
+                    );
+                    self.interp_absolute = true;
+                    self.interp_motion = motion;
+                }
             }
             self.run_iso(line_no)?;
         }
-        if let (Some(f), true) = (programmed, c.feed_in.is_some() || c.feed_out.is_some()) {
+        if let (Some(f), true) = (programmed, own_feed) {
             self.push(&format!("F{}", number(f)), 0..0);
             self.run_iso(line_no)?;
         }
@@ -351,6 +346,106 @@ impl Reader {
     }
 }
 
+/// The steps of CYCLE81, 82, 84, 85 and 89 (module doc): G0 to RFP + SDIS, in to the
+/// depth (CYCLE84 at pitch × SST, CYCLE85 at FFR, the others at F), the dwell DTB (not
+/// CYCLE81), out at the cycle's feed (CYCLE84 pitch × SST1, CYCLE85 RFF, CYCLE89 F), G0 to
+/// RTP.
+fn simple_steps(name: &str, a: &[Option<f64>], p: Planes) -> Result<Vec<CycleStep>, String> {
+    let get = |k: usize| a.get(k).copied().flatten();
+    let (feed_in, feed_out) = match name {
+        // CYCLE85(.., DTB, FFR, RFF): in at FFR, out at RFF.
+        "CYCLE85" => {
+            let (Some(ffr), Some(rff)) = (get(6), get(7)) else {
+                return Err("CYCLE85 without FFR and RFF: expected CYCLE85(RTP, RFP, SDIS, DP, DPR, DTB, FFR, RFF)".into());
+            };
+            (CycleFeed::Rate(ffr), Some(CycleFeed::Rate(rff)))
+        }
+        // CYCLE89(.., DTB): in and out at the programmed F.
+        "CYCLE89" => (CycleFeed::Programmed, Some(CycleFeed::Programmed)),
+        // CYCLE84(.., DTB, SDAC, MPIT, PIT, POSS, SST, SST1): in at SST, out at SST1,
+        // one pitch a turn.
+        "CYCLE84" => {
+            let pitch = match (get(8), get(7)) {
+                (Some(p), _) if p != 0.0 => p.abs(),
+                (_, Some(m)) => metric_coarse_pitch(m).ok_or_else(|| format!("CYCLE84 MPIT {m}: expected a metric thread size 3-48 (M3-M48) or the pitch PIT"))?,
+                _ => return Err("CYCLE84 without MPIT or PIT: expected the thread's size or pitch".into()),
+            };
+            let Some(sst) = get(10).filter(|v| *v > 0.0) else {
+                return Err("CYCLE84 without SST: expected the tapping speed (rev/min)".into());
+            };
+            let sst1 = get(11).filter(|v| *v > 0.0).unwrap_or(sst);
+            (
+                CycleFeed::Rate(pitch * sst),
+                Some(CycleFeed::Rate(pitch * sst1)),
+            )
+        }
+        _ => (CycleFeed::Programmed, None),
+    };
+    let at = |level: f64, feed: Option<CycleFeed>| CycleStep::Move {
+        level,
+        aside: [0.0; 2],
+        feed,
+    };
+    let mut steps = vec![at(p.approach, None), at(p.depth, Some(feed_in))];
+    let dwell = if name == "CYCLE81" {
+        0.0
+    } else {
+        get(5).unwrap_or(0.0)
+    };
+    if dwell > 0.0 {
+        steps.push(CycleStep::Dwell(dwell));
+    }
+    if feed_out.is_some() {
+        steps.push(at(p.approach, feed_out));
+    }
+    steps.push(at(p.retract, None));
+    Ok(steps)
+}
+
+/// The refusal of the later (SINUMERIK Operate) arguments of drilling cycle `name` that
+/// change what its values mean, when one is not 0: `_GMODE` (geometry mode) and `_AMODE`
+/// (alternative mode: its digits switch depths between absolute and incremental, dwells
+/// between seconds and revolutions ...), the last three values with `_DMODE` (display
+/// only, not read) between them; and CYCLE84's `_AXN` (tool axis), `_PTAB` (pitch unit
+/// other than the program's or mm) and `_VARI` (deep-hole tapping with pecks).
+fn operate_modes_refused(name: &str, a: &[Option<f64>]) -> Option<String> {
+    let gmode = match name {
+        "CYCLE81" => 5,
+        "CYCLE82" | "CYCLE87" | "CYCLE89" => 6,
+        "CYCLE88" => 7,
+        "CYCLE85" => 8,
+        "CYCLE86" => 11,
+        "CYCLE83" => 17,
+        "CYCLE84" => 21,
+        _ => return None,
+    };
+    let zero = |k: usize| a.get(k).copied().flatten().unwrap_or(0.0);
+    let mut checks = vec![
+        (gmode, "_GMODE", "the geometry mode"),
+        (
+            gmode + 2,
+            "_AMODE",
+            "the alternative mode, whose digits change how depths and dwells are read",
+        ),
+    ];
+    if name == "CYCLE84" {
+        checks.extend([
+            (
+                12,
+                "_AXN",
+                "the tool axis; mtsim taps along the plane's normal",
+            ),
+            (15, "_VARI", "deep-hole tapping with pecks"),
+        ]);
+        if zero(13) > 1.0 {
+            return Some(format!("CYCLE84 _PTAB {}: a thread pitch in TPI or inch is not read by mtsim; expected 0 (the program's unit) or 1 (mm)", zero(13)));
+        }
+    }
+    checks.into_iter().find(|(k, _, _)| zero(*k) != 0.0).map(|(k, what, means)| {
+        format!("{name} {what} {}: {means} (a SINUMERIK Operate cycle argument) is not read by mtsim; expected 0 or nothing", zero(k))
+    })
+}
+
 /// The Z-X-Z Euler angles (deg) of rotation `r = Rz(i) Rx(j) Rz(k)`: `cos j = r₂₂`,
 /// `i = atan2(r₀₂, -r₁₂)`, `k = atan2(r₂₀, r₂₁)`; when `sin j = 0`, `k = 0` and
 /// `i = atan2(r₁₀, r₀₀)`.
@@ -369,13 +464,14 @@ fn euler_zxz_angles(r: &Mat3) -> [f64; 3] {
 /// What a standard cycle the reader refuses is, with its section of the SINUMERIK 840D sl
 /// "Cycles" (milling) programming manual.
 fn cycle_kind(name: &str) -> &'static str {
+    if let Some((_, what)) = super::patterns::UNREAD_CYCLES
+        .iter()
+        .find(|(n, _)| *n == name)
+    {
+        return what;
+    }
     match name {
-        "CYCLE83" => "deep-hole drilling; Cycles, \"Deep-hole drilling (CYCLE83)\"",
-        "CYCLE84" => "rigid tapping; Cycles, \"Tapping without compensating chuck (CYCLE84)\"",
         "CYCLE840" => "tapping with a compensating chuck; Cycles, \"Tapping with compensating chuck (CYCLE840)\"",
-        "CYCLE85" | "CYCLE86" | "CYCLE87" | "CYCLE88" | "CYCLE89" => {
-            "boring; Cycles, \"Boring (CYCLE85 to CYCLE89)\""
-        }
         "CYCLE71" => "face milling; Cycles, \"Face milling (CYCLE71)\"",
         "CYCLE72" => "contour milling; Cycles, \"Contour milling (CYCLE72)\"",
         "CYCLE76" | "CYCLE77" => "spigot milling; Cycles, \"Rectangular/circular spigot milling (CYCLE76, CYCLE77)\"",

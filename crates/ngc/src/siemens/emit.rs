@@ -31,6 +31,7 @@ impl Reader {
         if self.polar(&mut w)? {
             return Ok(true);
         }
+        self.contour_words(&mut w)?;
         if let Some(m) = w.motion {
             self.motion = m;
         }
@@ -86,6 +87,13 @@ impl Reader {
         };
         if matches!(stop, Stop::End) {
             return Ok(false);
+        }
+        let corner = w.corner.take();
+        if corner.is_some() || (self.rounding_modal.is_some() && moves) || self.held.is_some() {
+            if let Some(c) = corner.as_ref().filter(|_| self.modal_call.is_some()) {
+                return Err(LineError::new(c.span.clone(), "a chamfer or rounding under a modal cycle call (MCALL): not read by mtsim; expected MCALL alone before the contour", "chamfer or rounding"));
+            }
+            self.corner_after_block(corner, moves, line_no)?;
         }
         self.approach_fixed_point(&mut w, line_no)?;
         for iso in std::mem::take(&mut w.after) {

@@ -46,29 +46,14 @@ pub(super) const NOTED: &[&str] = &[
 /// SINUMERIK 840D sl programming manual section that describes them.
 pub(super) const REFUSED: &[(&str, &str, &str)] = &[
     (
-        "AR",
-        "arc opening angle",
-        "Fundamentals, \"Circular interpolation with opening angle and center point (AR)\"",
+        "FRC",
+        "feed of a chamfer or rounding",
+        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM, FRC, FRCM)\"",
     ),
     (
-        "CHF",
-        "chamfer",
-        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM)\"",
-    ),
-    (
-        "CHR",
-        "chamfer",
-        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM)\"",
-    ),
-    (
-        "RND",
-        "rounding",
-        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM)\"",
-    ),
-    (
-        "RNDM",
-        "modal rounding",
-        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM)\"",
+        "FRCM",
+        "modal feed of chamfers and roundings",
+        "Fundamentals, \"Chamfer, rounding (CHF, CHR, RND, RNDM, FRC, FRCM)\"",
     ),
     (
         "OFFN",

@@ -21,8 +21,12 @@
 //! head, is an error at its opening line.
 
 mod block;
+mod boring;
 mod cip;
+mod contour;
+mod corner;
 mod cycles;
+mod deep_hole;
 mod emit;
 mod expr;
 mod fixed_point;
@@ -31,6 +35,7 @@ mod frame;
 mod keywords;
 mod macros;
 mod orientation;
+mod patterns;
 mod plain;
 mod polar;
 mod repeat;
@@ -131,6 +136,10 @@ pub(crate) struct Reader {
     line_start: (usize, usize),
     /// `MCALL CYCLE8x(..)`: the cycle called after each positioning block.
     modal_call: Option<state::Cycle>,
+    /// A G1 line held for the chamfer or rounding at its end (corner.rs).
+    held: Option<state::Held>,
+    /// `RNDM=r`: the modal rounding radius, program units.
+    rounding_modal: Option<f64>,
     search_path: Vec<PathBuf>,
     user_m: Vec<u32>,
     max_depth: usize,
@@ -207,6 +216,8 @@ impl Reader {
             path_tolerance_mm: None,
             line_start: (0, 1),
             modal_call: None,
+            held: None,
+            rounding_modal: None,
             search_path,
             user_m: options.user_m.keys().copied().collect(),
             max_depth: options.max_call_depth,
@@ -448,6 +459,36 @@ impl Reader {
         self.syntax_at(e, line)
     }
 
+    /// After a line ran: the line held for a chamfer or rounding joins the first move a
+    /// later line made; a program that ends with one held is refused.
+    fn join_after_step(&mut self, go_on: bool) -> Result<bool> {
+        if let Some(h) = self.held.as_mut() {
+            if h.fresh {
+                h.fresh = false;
+            } else if let Err(m) = self.join_held() {
+                return Err(self.syntax(LineError::new(
+                    0..self.line.len(),
+                    m,
+                    "chamfer or rounding",
+                )));
+            }
+        }
+        if !go_on {
+            if let Some(h) = self.held.take() {
+                let m = format!(
+                    "{}: the program ends before the next line; expected a G1 line after it",
+                    h.pending.name()
+                );
+                return Err(self.syntax(LineError::new(
+                    0..self.line.len(),
+                    m,
+                    "chamfer or rounding",
+                )));
+            }
+        }
+        Ok(go_on)
+    }
+
     /// The next move, or the error that ends the program.
     pub fn next_move(&mut self) -> Option<Result<Move>> {
         loop {
@@ -457,7 +498,7 @@ impl Reader {
             if self.finished {
                 return None;
             }
-            match self.step() {
+            match self.step().and_then(|go_on| self.join_after_step(go_on)) {
                 Ok(true) => {}
                 Ok(false) => {
                     self.finished = true;
@@ -465,6 +506,7 @@ impl Reader {
                 }
                 Err(e) => {
                     self.finished = true;
+                    self.held = None;
                     self.queue.clear();
                     self.interp.discard();
                     return Some(Err(e));

@@ -18,6 +18,8 @@ impl Reader {
             || !self.macros.is_empty()
             || self.feed_in_mm
             || self.modal_call.is_some()
+            || self.held.is_some()
+            || self.rounding_modal.is_some()
             || self.absolute != self.interp_absolute
             || self.motion != self.interp_motion
             || self.normal != self.interp_normal

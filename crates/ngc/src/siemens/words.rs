@@ -73,6 +73,11 @@ pub(super) struct Words {
     /// `TURN=n`: full turns of a helix.
     pub turn: Option<(u32, std::ops::Range<usize>)>,
     pub cr: Option<(f64, std::ops::Range<usize>)>,
+    /// `AR=` (an arc's opening angle) and `ANG=` (a line's angle), deg (contour.rs).
+    pub ar: Option<Coordinate>,
+    pub ang: Option<Coordinate>,
+    /// `CHF= CHR= RND= RNDM=` (corner.rs).
+    pub corner: Option<super::state::CornerWord>,
     /// G0-G3 given in the block.
     pub motion: Option<u8>,
     pub dwell: Option<std::ops::Range<usize>>,
@@ -108,6 +113,8 @@ impl Words {
             || self.cip.iter().any(Option::is_some)
             || self.polar.iter().any(Option::is_some)
             || self.cr.is_some()
+            || self.ar.is_some()
+            || self.ang.is_some()
     }
 }
 

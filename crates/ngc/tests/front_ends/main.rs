@@ -17,5 +17,7 @@ mod posts;
 mod siemens;
 mod siemens_machine_words;
 mod siemens_orientation;
+mod siemens_contour;
+mod siemens_cycles;
 mod siemens_posts;
 mod surface_normal;

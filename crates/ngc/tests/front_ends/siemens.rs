@@ -227,7 +227,7 @@ fn tools_by_name_cycle800_reset_and_machine_m_codes_read_with_notices() {
 #[test]
 fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
     let cases: [(&str, usize, usize, &str); 10] = [
-        ("G1 X1 F1\nG2 X10 AR=90\n", 2, 8, "`AR` (arc opening angle)"),
+        ("G1 X1 F1\nG2 X10 AR=90 CR=5\n", 2, 8, "AR=90 with CR="),
         (
             "G1 X1 F1\nCIP X10 Y0 I1=5 J1=0\n",
             2,
@@ -246,7 +246,12 @@ fn what_is_not_read_is_refused_with_line_column_and_the_construct_named() {
             8,
             "system variable `$P_UIFR`",
         ),
-        ("G0 X1\nCYCLE83(10,0,1,-20)\n", 2, 1, "`CYCLE83`"),
+        (
+            "G0 X1\nCYCLE83(10,0,1,-20)\n",
+            2,
+            1,
+            "CYCLE83 without a first drilling depth",
+        ),
         ("N10 G33 Z-10 K1\n", 1, 5, "`G33`"),
         ("DEF POINT PT\n", 1, 5, "DEF POINT"),
         ("R1=GETT(\"A\")\n", 1, 4, "`GETT`"),

@@ -252,10 +252,10 @@ fn unsimulated_constructs_are_refused_by_name_at_line_and_column() {
             "without I J K (or with CR=)",
         ),
         (
-            "G0 X1 Y1 Z20\nCYCLE83(10,0,1,-20,,-5,,2,1,1,1,0)\n",
+            "G0 X1 Y1 Z20\nCYCLE78(10,0,2,-20,,5,1.5,0,100,500,0,0)\n",
             2,
             1,
-            "`CYCLE83`",
+            "`CYCLE78`",
         ),
         (
             "CYCLE71(10,0,2,-5,0,0,100,50,0,2,50,5,0,200,11,5)\n",

@@ -36,12 +36,13 @@
 use crate::lex::{LineError, LineResult};
 
 use super::state::{Block, Reader};
+use super::{slots, studs};
 
 /// The most circles, levels or helix turns one cycle call may make (its moves are made in
 /// one step): a real cycle makes far fewer.
-const MAX_PASSES: f64 = 10_000.0;
+pub(super) const MAX_PASSES: f64 = 10_000.0;
 
-/// One call of cycle `n` (208, 251 or 252) at the current position.
+/// One call of cycle `n` (208, 251-254, 256 or 257) at the current position.
 pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
     let q = |k| r.q.q(k);
     let depth = q(201);
@@ -84,7 +85,13 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
             "no tool radius",
         );
     }
-    let q439 = q(439);
+    // Q439 is not among the parameters of the stud cycles' older versions: read only when
+    // their block wrote it, never a value a pocket cycle left.
+    let q439 = if matches!(n, 256 | 257) && !r.cycle.written.contains(&439) {
+        0.0
+    } else {
+        q(439)
+    };
     let (s203, q200, q204) = (q(203), q(200), q(204));
     let per = match q439 {
         k if k == 0.0 => 1.0,
@@ -116,10 +123,22 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
             let shape = rectangle(r, b, &mut g)?;
             pocket(r, b, &g, 251, shape)
         }
-        _ => {
+        252 => {
             let shape = Shape::Circle(r.q.q(223) / 2.0 - g.rho);
             pocket(r, b, &g, 252, shape)
         }
+        253 => {
+            let slot = slots::straight(r, b, &mut g)?;
+            pocket(r, b, &g, 253, Shape::Slot(slot))
+        }
+        254 => {
+            for k in 0..slots::repetitions(r, b)? {
+                let slot = slots::circular(r, b, &mut g, k)?;
+                pocket(r, b, &g, 254, Shape::Slot(slot))?;
+            }
+            Ok(())
+        }
+        _ => studs::stud(r, b, &mut g, n),
     }?;
     rapid_z(r, b, g.top);
     if g.second > g.top {
@@ -131,18 +150,18 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
     Ok(())
 }
 
-struct Geometry {
-    /// The centre X Y (the position at the call).
-    c: [f64; 2],
+pub(super) struct Geometry {
+    /// The centre X Y (the position at the call); where the tool ends.
+    pub(super) c: [f64; 2],
     /// Surface, set-up clearance, depth and 2nd set-up clearance, as Z.
-    s: f64,
-    top: f64,
-    bottom: f64,
-    second: f64,
-    rho: f64,
-    ccw: bool,
+    pub(super) s: f64,
+    pub(super) top: f64,
+    pub(super) bottom: f64,
+    pub(super) second: f64,
+    pub(super) rho: f64,
+    pub(super) ccw: bool,
     /// The feeds' unit as Q439 gives it: mm/min × this (S for a feed per revolution).
-    per: f64,
+    pub(super) per: f64,
 }
 
 /// Cycle 208 BORE MILLING (TNC 640 cycle programming manual, "Cycle 208"): Q335 the bore's
@@ -225,30 +244,19 @@ fn pocket(r: &mut Reader, b: &Block, g: &Geometry, n: u32, shape: Shape) -> Line
         return err(format!("cycle {n}: plunging feed Q206 = {f_plunge}, milling feed Q207 = {f_mill}: expected both positive"), "no feed");
     }
     let outer = shape.half_width();
-    if outer - side <= 0.0 {
+    // A slot may be as wide as the tool (the centre line alone); a pocket may not.
+    let slot = matches!(shape, Shape::Slot(_));
+    if outer - side < -1e-9 || (outer - side <= 0.0 && !slot) {
         return err(format!("cycle {n}: the pocket less the side allowance Q368 = {side} is not wider than the tool (Ø{}): expected a larger pocket", 2.0 * g.rho), "pocket smaller than the tool");
     }
-    let overlap = if q(370) > 0.0 { q(370) } else { 1.0 };
+    // The slots have no path overlap Q370: a stepover of one tool radius.
+    let overlap = if n <= 252 && q(370) > 0.0 {
+        q(370)
+    } else {
+        1.0
+    };
     let step = (overlap * g.rho).min(2.0 * g.rho);
     let (plunge, fin_infeed) = (q(202), q(338));
-    let levels = |from: f64, to: f64, by: f64| -> Option<Vec<f64>> {
-        if by <= 0.0 || (from - to) / by > MAX_PASSES {
-            return None;
-        }
-        // Counted, not stepped until reached: far from 0, z - by may round to z.
-        let n = ((from - to) / by - 1e-9).ceil().max(0.0) as u64;
-        Some(
-            (1..=n)
-                .map(|i| {
-                    if i == n {
-                        to
-                    } else {
-                        (from - i as f64 * by).max(to)
-                    }
-                })
-                .collect(),
-        )
-    };
     if outer / step > MAX_PASSES {
         return err(
             format!("cycle {n}: path overlap Q370 = {overlap}: more than {MAX_PASSES} circles"),
@@ -259,14 +267,9 @@ fn pocket(r: &mut Reader, b: &Block, g: &Geometry, n: u32, shape: Shape) -> Line
     let c = g.c;
     let here = r.path.xy();
     if here != c {
-        // Called at a corner (251, Q367): over the centre at the set-up clearance first.
-        let span = b.span(0);
-        r.gword("0", span.clone());
-        r.word('X', c[0], span.clone());
-        r.word('Y', c[1], span);
-        r.end_block(b.line);
-        r.path.pos[0] = c[0];
-        r.path.pos[1] = c[1];
+        // Called at a corner (251, Q367), or a slot (253, 254): over the centre (a slot's
+        // start) at the set-up clearance first.
+        rapid_xy(r, b, c);
     }
     if op != 2.0 {
         let Some(zs) = levels(g.s, g.bottom + floor, plunge) else {
@@ -303,11 +306,33 @@ fn pocket(r: &mut Reader, b: &Block, g: &Geometry, n: u32, shape: Shape) -> Line
     Ok(())
 }
 
+/// The levels from `from` down to `to`, `by` apart (the last at `to`); None for a step
+/// that is not positive or more than `MAX_PASSES` levels.
+pub(super) fn levels(from: f64, to: f64, by: f64) -> Option<Vec<f64>> {
+    if by <= 0.0 || (from - to) / by > MAX_PASSES {
+        return None;
+    }
+    // Counted, not stepped until reached: far from 0, z - by may round to z.
+    let n = ((from - to) / by - 1e-9).ceil().max(0.0) as u64;
+    Some(
+        (1..=n)
+            .map(|i| {
+                if i == n {
+                    to
+                } else {
+                    (from - i as f64 * by).max(to)
+                }
+            })
+            .collect(),
+    )
+}
+
 /// A pocket's wall as the tool centre runs along it (no allowance): a circle of radius
-/// Q223/2 − ρ, or a rectangle of half sides `a` (along the pocket's X), `b`, corner radius
-/// `corner`, turned by `rot_deg` about the centre.
+/// Q223/2 − ρ, a rectangle of half sides `a` (along the pocket's X), `b`, corner radius
+/// `corner`, turned by `rot_deg` about the centre, or a slot (253, 254).
 enum Shape {
     Circle(f64),
+    Slot(slots::Slot),
     Rect {
         a: f64,
         b: f64,
@@ -322,6 +347,7 @@ impl Shape {
         match *self {
             Shape::Circle(radius) => radius,
             Shape::Rect { a, b, .. } => a.min(b),
+            Shape::Slot(ref s) => s.half,
         }
     }
 
@@ -339,6 +365,7 @@ impl Shape {
     ) {
         match *self {
             Shape::Circle(radius) => rings(r, b, g, z, radius - allow, step, f),
+            Shape::Slot(ref s) => s.rings(r, b, z, s.half - allow, step, f),
             Shape::Rect {
                 a,
                 b: half_b,
@@ -375,7 +402,7 @@ impl Shape {
 /// One rounded rectangle of half sides `s[0]`, `s[1]` and corner radius `s[2]` at `z`,
 /// from the middle of its +X side around (counter-clockwise when `g.ccw`) and back there,
 /// reached on a line from where the tool is; `world` maps the pocket's (u, v) to X Y.
-fn rounded_rect(
+pub(super) fn rounded_rect(
     r: &mut Reader,
     b: &Block,
     g: &Geometry,
@@ -464,7 +491,7 @@ fn rings(r: &mut Reader, b: &Block, g: &Geometry, z: f64, max: f64, step: f64, f
     line(r, b, [c[0], c[1], z], f);
 }
 
-fn rapid_z(r: &mut Reader, b: &Block, z: f64) {
+pub(super) fn rapid_z(r: &mut Reader, b: &Block, z: f64) {
     let span = b.span(0);
     r.gword("0", span.clone());
     r.word('Z', z, span);
@@ -472,8 +499,19 @@ fn rapid_z(r: &mut Reader, b: &Block, z: f64) {
     r.path.set_z(z);
 }
 
+/// G0 in the plane to `xy`.
+pub(super) fn rapid_xy(r: &mut Reader, b: &Block, xy: [f64; 2]) {
+    let span = b.span(0);
+    r.gword("0", span.clone());
+    r.word('X', xy[0], span.clone());
+    r.word('Y', xy[1], span);
+    r.end_block(b.line);
+    r.path.pos[0] = xy[0];
+    r.path.pos[1] = xy[1];
+}
+
 /// G1 to `p` at `f`.
-fn line(r: &mut Reader, b: &Block, p: [f64; 3], f: f64) {
+pub(super) fn line(r: &mut Reader, b: &Block, p: [f64; 3], f: f64) {
     let span = b.span(0);
     r.gword("1", span.clone());
     for (l, v) in ['X', 'Y', 'Z'].into_iter().zip(p) {
@@ -486,7 +524,7 @@ fn line(r: &mut Reader, b: &Block, p: [f64; 3], f: f64) {
 
 /// G3 (`ccw`) or G2 from where the tool is to `p` about the centre `c` (X Y), at `f`; end
 /// on the start: a full circle.
-fn arc(r: &mut Reader, b: &Block, ccw: bool, p: [f64; 3], c: [f64; 2], f: f64) {
+pub(super) fn arc(r: &mut Reader, b: &Block, ccw: bool, p: [f64; 3], c: [f64; 2], f: f64) {
     let span = b.span(0);
     let from = r.path.xy();
     r.gword(if ccw { "3" } else { "2" }, span.clone());

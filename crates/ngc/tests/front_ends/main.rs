@@ -16,3 +16,4 @@ mod milling_cycles;
 mod posts;
 mod siemens;
 mod siemens_posts;
+mod slot_stud_cycles;

@@ -36,13 +36,14 @@
 use crate::lex::{LineError, LineResult};
 
 use super::state::{Block, Reader};
-use super::{slots, studs};
+use super::{slots, studs, threads};
 
 /// The most circles, levels or helix turns one cycle call may make (its moves are made in
 /// one step): a real cycle makes far fewer.
 pub(super) const MAX_PASSES: f64 = 10_000.0;
 
-/// One call of cycle `n` (208, 251-254, 256 or 257) at the current position.
+/// One call of cycle `n` (208, 251-254, 256, 257, 262, 263, 265 or 267) at the current
+/// position.
 pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
     let q = |k| r.q.q(k);
     let depth = q(201);
@@ -57,7 +58,9 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
         // The manual: depth 0, the cycle is not run.
         return Ok(());
     }
+    // 265 has no Q351: its direction is the thread's hand (`threads`).
     let ccw = match q(351) {
+        _ if n == 265 => true,
         d if d == 1.0 => true,
         d if d == -1.0 => false,
         d => {
@@ -87,7 +90,7 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
     }
     // Q439 is not among the parameters of the stud cycles' older versions: read only when
     // their block wrote it, never a value a pocket cycle left.
-    let q439 = if matches!(n, 256 | 257) && !r.cycle.written.contains(&439) {
+    let q439 = if matches!(n, 256 | 257 | 262..=267) && !r.cycle.written.contains(&439) {
         0.0
     } else {
         q(439)
@@ -138,7 +141,8 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
             }
             Ok(())
         }
-        _ => studs::stud(r, b, &mut g, n),
+        256 | 257 => studs::stud(r, b, &mut g, n),
+        _ => threads::thread(r, b, &mut g, n),
     }?;
     rapid_z(r, b, g.top);
     if g.second > g.top {

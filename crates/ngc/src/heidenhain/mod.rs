@@ -30,6 +30,7 @@ mod state;
 mod studs;
 mod sysread;
 mod text;
+mod threads;
 mod transform;
 mod word_map;
 

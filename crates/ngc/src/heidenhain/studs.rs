@@ -180,21 +180,22 @@ fn rectangle(
     if blank_len <= len || blank_wid <= wid {
         return err(b, format!("cycle 256: the blank Q424 × Q425 = {blank_len} × {blank_wid} is not larger than the stud Q218 × Q219 = {len} × {wid}: expected Q424 > Q218 and Q425 > Q219"), "blank not larger than the stud");
     }
-    let at =
-        match q(367) {
-            p if p == 0.0 => [0.0, 0.0],
-            p if p == 1.0 => [1.0, 1.0],
-            p if p == 2.0 => [-1.0, 1.0],
-            p if p == 3.0 => [-1.0, -1.0],
-            p if p == 4.0 => [1.0, -1.0],
-            p => return err(
+    let at = match q(367) {
+        p if p == 0.0 => [0.0, 0.0],
+        p if p == 1.0 => [1.0, 1.0],
+        p if p == 2.0 => [-1.0, 1.0],
+        p if p == 3.0 => [-1.0, -1.0],
+        p if p == 4.0 => [1.0, -1.0],
+        p => {
+            return err(
                 b,
                 format!(
                     "cycle 256: stud position Q367 = {p}: expected 0 (centre) or 1-4 (a corner)"
                 ),
                 "bad Q367",
-            ),
-        };
+            )
+        }
+    };
     let (s, c) = rot_deg.to_radians().sin_cos();
     let world = |o: [f64; 2], u: f64, v: f64| [o[0] + c * u - s * v, o[1] + s * u + c * v];
     g.c = world(g.c, at[0] * len / 2.0, at[1] * wid / 2.0);

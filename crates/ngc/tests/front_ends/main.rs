@@ -17,3 +17,4 @@ mod posts;
 mod siemens;
 mod siemens_posts;
 mod slot_stud_cycles;
+mod thread_cycles;

@@ -42,9 +42,7 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
     })?;
     let minor: u32 = minor.parse().unwrap_or(0);
     match major {
-        200..=203 | 205..=209 | 240 | 251..=254 | 256 | 257 | 262 | 263 | 265 | 267 => {
-            define(r, b, major)
-        }
+        200..=203 | 205..=209 | 240 | 251..=254 | 256 | 257 | 262..=265 | 267 => define(r, b, major),
         1 | 2 | 17 => old_cycle_value(r, b, major, minor),
         // Oriented spindle stop: the spindle turns to an angle, the axes stay.
         13 => {
@@ -149,7 +147,7 @@ fn not_supported(b: &Block, id: &str, major: u32) -> LineError {
     };
     LineError::new(
         b.spans(0, 2),
-        format!("`CYCL DEF {id}{name}`: {what} is not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-209, 240, 251-254, 256, 257, 262, 263, 265, 267 and 7, 8, 9, 10, 11, 13, 19, 26, 32", manual(major)),
+        format!("`CYCL DEF {id}{name}`: {what} is not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-209, 240, 251-254, 256, 257, 262-265, 267 and 7, 8, 9, 10, 11, 13, 19, 26, 32", manual(major)),
         "Heidenhain cycle not supported",
     )
     .help("post the cycle as L moves, or see docs/gcode.md")
@@ -268,14 +266,14 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
     let Some(n) = r.cycle.number else {
         return Err(LineError::new(
             b.span(0),
-            "cycle call with no cycle defined: expected CYCL DEF 1, 2, 17, 200-203, 205-209, 240, 251-254, 256, 257, 262, 263, 265 or 267 before it",
+            "cycle call with no cycle defined: expected CYCL DEF 1, 2, 17, 200-203, 205-209, 240, 251-254, 256, 257, 262-265 or 267 before it",
             "no cycle",
         ));
     };
     match n {
         1 => return pecking(r, b),
         2 | 17 => return old_tapping(r, b, n),
-        208 | 251..=254 | 256 | 257 | 262 | 263 | 265 | 267 => return milling::call(r, b, n),
+        208 | 251..=254 | 256 | 257 | 262..=265 | 267 => return milling::call(r, b, n),
         _ => {}
     }
     let q = |k| r.q.q(k);

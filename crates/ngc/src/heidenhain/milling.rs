@@ -42,8 +42,7 @@ use super::{slots, studs, threads};
 /// one step): a real cycle makes far fewer.
 pub(super) const MAX_PASSES: f64 = 10_000.0;
 
-/// One call of cycle `n` (208, 251-254, 256, 257, 262, 263, 265 or 267) at the current
-/// position.
+/// One call of cycle `n` (208, 251-254, 256, 257, 262-265 or 267) at the current position.
 pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
     let q = |k| r.q.q(k);
     let depth = q(201);

@@ -1,6 +1,7 @@
-//! The thread milling cycles 262 THREAD MILLING, 263 THREAD MILLING/COUNTERSINKING, 265
-//! HELICAL THREAD DRILLING/MILLING and 267 OUTSIDE THREAD MILLING as helices about the call
-//! position (TNC 640 cycle programming manual, "Cycles: tapping / thread milling").
+//! The thread milling cycles 262 THREAD MILLING, 263 THREAD MILLING/COUNTERSINKING, 264
+//! THREAD DRILLING/MILLING, 265 HELICAL THREAD DRILLING/MILLING and 267 OUTSIDE THREAD
+//! MILLING as helices about the call position (TNC 640 cycle programming manual, "Cycles:
+//! tapping / thread milling").
 //!
 //! The manual's rules: Q335 the nominal diameter, Q239 the pitch (+ right-hand, −
 //! left-hand), Q201 the thread depth, Q351 climb (+1) or up-cut (−1), Q355 the threads
@@ -18,7 +19,11 @@
 //!   left,  +1  Z−                       Z+
 //! ```
 //!
-//! 265 drills from solid: always down from the surface, clockwise for a right-hand thread.
+//! 263 and 264 mill one 360° helix (as Q355 = 0). 264 drills the hole first: at Q206 down
+//! by the plunging depth Q202 at a time to the total hole depth Q356, FMAX up to s + Q200
+//! after each infeed and down to Q258 above the depth reached (chip breaking, Q257 > 0,
+//! refused). 265 drills from solid: always down from the surface, clockwise for a
+//! right-hand thread.
 //! The run: FMAX to s + Q200 (267: first beside the stud, 2 mm + ρ outside Q335), at Q253
 //! to the starting plane (the lower or upper end of the thread, as the table says), a
 //! semicircle onto the helix tangentially, the helix (r = Q335/2 ∓ ρ from the centre, ρ
@@ -108,6 +113,9 @@ pub(super) fn thread(r: &mut Reader, b: &Block, g: &mut Geometry, n: u32) -> Lin
     let unit = if r.inch { 25.4 } else { 1.0 };
     let out = dia / 2.0 + g.rho + 2.0 / unit;
     rapid_z(r, b, g.top);
+    if n == 264 {
+        drill(r, b, g, &section)?;
+    }
     let start = if outside { [c[0] + out, c[1]] } else { c };
     if outside {
         rapid_xy(r, b, start);
@@ -130,6 +138,37 @@ pub(super) fn thread(r: &mut Reader, b: &Block, g: &mut Geometry, n: u32) -> Lin
     arc(r, b, turn, [off[0], off[1], to], mid, approach);
     g.c = off;
     Ok(())
+}
+
+/// Cycle 264's hole: Q206 down by Q202 to s + Q356, FMAX to s + Q200 after each infeed
+/// and back to Q258 above the depth reached.
+fn drill(r: &mut Reader, b: &Block, g: &Geometry, section: &str) -> LineResult<()> {
+    let q = |k| r.q.q(k);
+    let (hole, plunge, stop, feed) = (q(356), q(202), q(258), q(206) * g.per);
+    if q(257) != 0.0 {
+        return err(b, format!("cycle 264 with chip breaking Q257 = {}: not supported ({section}, Q257, Q256): expected Q257 = 0", q(257)), "chip breaking");
+    }
+    if hole > q(201) || hole >= 0.0 {
+        return err(b, format!("cycle 264: total hole depth Q356 = {hole} is not below the thread depth Q201 = {}: expected Q356 ≤ Q201 < 0", q(201)), "hole shallower than the thread");
+    }
+    if plunge <= 0.0 || feed <= 0.0 || -hole / plunge > MAX_PASSES {
+        return err(b, format!("cycle 264: plunging depth Q202 = {plunge}, plunging feed Q206 = {feed}: expected both positive, at most {MAX_PASSES} infeeds"), "bad Q202");
+    }
+    let c = g.c;
+    let bottom = g.s + hole;
+    let mut reached = g.s;
+    loop {
+        let next = (reached - plunge).max(bottom);
+        if reached < g.s {
+            rapid_z(r, b, reached + stop);
+        }
+        line(r, b, [c[0], c[1], next], feed);
+        if next <= bottom {
+            return Ok(());
+        }
+        rapid_z(r, b, g.top);
+        reached = next;
+    }
 }
 
 /// The helix about `c` of radius `radius` from the angle 0 at Z `z[0]` to `z[1]`, `pitch`

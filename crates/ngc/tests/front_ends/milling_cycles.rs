@@ -201,7 +201,7 @@ fn cycle_208_with_the_bore_the_tool_size_plunges_and_a_smaller_bore_is_refused()
 fn cycles_not_read_are_refused_by_name_and_manual_section() {
     for (n, title, section) in [
         (204, "BACK BORING", "drilling"),
-        (264, "THREAD DRILLING/MILLING", "thread milling"),
+        (241, "SINGLE-LIP DEEP-HOLE DRILLING", "drilling"),
     ] {
         let (line, msg) = run(&format!(
             "2 L X+0 Y+0 Z+20 R0 FMAX\n3 CYCL DEF {n} ~\n Q200=+2 ~\n Q201=-5\n4 CYCL CALL"

@@ -267,3 +267,49 @@ fn thread_options_not_modelled_are_refused_naming_the_q_parameter() {
         );
     }
 }
+
+#[test]
+fn cycle_264_drills_the_hole_in_infeeds_then_mills_one_turn() {
+    // Hole to −12 by 5 (Q206 150): −5, FMAX up to 2, FMAX to −5 + Q258 0.5, −10, up, −9.5,
+    // −12. Then at Q253 up to the thread's start plane −8 (right-hand, climb: Z+) and one
+    // 360° turn of radius 5 to −6.
+    let m = run(&thread(
+        264,
+        "X+0 Y+0",
+        "Q335=+20 ~\n Q239=+2 ~\n Q201=-8 ~\n Q356=-12 ~\n Q351=+1 ~\n Q202=+5 ~\n \
+         Q258=+0.5 ~\n Q257=+0 ~\n Q256=+0.2 ~\n Q358=+0 ~\n Q359=+0 ~\n Q206=+150",
+    ))
+    .unwrap();
+    let c = [0.0, 0.0];
+    let z = |k: char, z: f64| (k, [0.0, 0.0, z], c);
+    same(
+        &path(&m[1..]),
+        &[
+            z('R', 2.0),
+            z('L', -5.0),
+            z('R', 2.0),
+            z('R', -4.5),
+            z('L', -10.0),
+            z('R', 2.0),
+            z('R', -9.5),
+            z('L', -12.0),
+            z('L', -8.0),
+            ('A', [5.0, 0.0, -8.0], [2.5, 0.0]),
+            ('A', [5.0, 0.0, -6.0], c),
+            ('A', [0.0, 0.0, -6.0], [2.5, 0.0]),
+            z('R', 2.0),
+            z('R', 20.0),
+        ],
+    );
+    assert_eq!(m[2].feed, Feed::PerMinute(150.0));
+    assert_eq!(m[9].feed, Feed::PerMinute(750.0));
+    // Chip breaking is refused by name.
+    let body = thread(
+        264,
+        "X+0 Y+0",
+        "Q335=+20 ~\n Q239=+2 ~\n Q201=-8 ~\n Q356=-12 ~\n Q351=+1 ~\n Q202=+5 ~\n \
+         Q258=+0.5 ~\n Q257=+2 ~\n Q256=+0.2 ~\n Q358=+0 ~\n Q359=+0 ~\n Q206=+150",
+    );
+    let (_, msg) = run(&body).unwrap_err();
+    assert!(msg.contains("Q257") && msg.contains("Cycle 264"), "{msg}");
+}

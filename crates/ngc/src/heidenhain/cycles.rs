@@ -150,7 +150,11 @@ fn not_supported(b: &Block, id: &str, major: u32) -> LineError {
         format!("`CYCL DEF {id}{name}`: {what} is not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-209, 240, 251-254, 256, 257, 262-265, 267 and 7, 8, 9, 10, 11, 13, 19, 26, 32", manual(major)),
         "Heidenhain cycle not supported",
     )
-    .help("post the cycle as L moves, or see docs/gcode.md")
+    .help(if matches!(major, 220 | 221) {
+        "give the points with PATTERN DEF and call the cycle with CYCL CALL PAT (or CYCL CALL POS at each point)"
+    } else {
+        "post the cycle as L moves, or see docs/gcode.md"
+    })
 }
 
 /// The title of the cycles posts write, as the cycle manual heads them.
@@ -158,6 +162,8 @@ fn title(n: u32) -> Option<&'static str> {
     Some(match n {
         204 => "BACK BORING",
         241 => "SINGLE-LIP DEEP-HOLE DRILLING",
+        220 => "POLAR PATTERN",
+        221 => "CARTESIAN PATTERN",
         251 => "RECTANGULAR POCKET",
         253 => "SLOT MILLING",
         254 => "CIRCULAR SLOT",
@@ -179,6 +185,7 @@ fn manual(n: u32) -> &'static str {
     match n {
         1..=29 => "TNC 426/430 User's Manual, \"Fixed cycles\"",
         204 | 241 => "TNC 640 cycle programming manual, \"Cycles: drilling\"",
+        220 | 221 => "TNC 640 cycle programming manual, \"Cycles: pattern definitions\"",
         251..=257 => "TNC 640 cycle programming manual, \"Cycles: pocket milling, stud milling and slot milling\"",
         262..=267 => "TNC 640 cycle programming manual, \"Cycles: tapping / thread milling\"",
         _ => "TNC 640 cycle programming manual",

@@ -9,6 +9,7 @@ mod budget;
 mod fanuc_haas;
 mod heidenhain;
 mod heidenhain_transforms;
+mod klartext_constructs;
 mod klartext_posts;
 mod klartext_setup;
 mod lent_moves;

@@ -18,6 +18,7 @@
 
 mod approach;
 mod contour;
+mod cycle_moves;
 mod cycle_pos;
 mod cycles;
 mod frames;

@@ -33,7 +33,7 @@
 
 use crate::lex::{LineError, LineResult};
 
-use super::milling::{arc, line, Geometry, MAX_PASSES};
+use super::cycle_moves::{arc, line, Geometry, MAX_PASSES};
 use super::state::{Block, Reader};
 
 /// A slot's centre line and how far from it the tool centre may go.

@@ -32,7 +32,9 @@
 
 use crate::lex::{LineError, LineResult};
 
-use super::milling::{arc, levels, line, rapid_xy, rapid_z, rounded_rect, Geometry, MAX_PASSES};
+use super::cycle_moves::{
+    arc, levels, line, rapid_xy, rapid_z, rounded_rect, Geometry, MAX_PASSES,
+};
 use super::state::{Block, Reader};
 
 /// The stud's finished outline about the centre `g.c`.

@@ -40,7 +40,7 @@ use std::f64::consts::TAU;
 
 use crate::lex::{LineError, LineResult};
 
-use super::milling::{arc, line, rapid_xy, rapid_z, Geometry, MAX_PASSES};
+use super::cycle_moves::{arc, line, rapid_xy, rapid_z, Geometry, MAX_PASSES};
 use super::state::{Block, Reader};
 
 fn err<T>(b: &Block, message: String, label: &str) -> LineResult<T> {

@@ -281,9 +281,14 @@ impl Block<'_> {
 /// The construct at token `k` (and the next, for two-word constructs) is not supported.
 pub(super) fn refusal(b: &Block, k: usize) -> LineError {
     let name = construct_name(b, k);
+    // What the construct is, where posts write it often.
+    let what = match name.as_str() {
+        "LN" => " (a straight line with the surface normal vector NX NY NZ, for 3-D tool compensation: KP \"Three-dimensional tool compensation\")",
+        _ => "",
+    };
     LineError::new(
         b.span(k).start..b.span((k + 1).min(b.toks.len().saturating_sub(1))).end,
-        format!("the Heidenhain construct `{name}` is not supported by mtsim"),
+        format!("the Heidenhain construct `{name}`{what} is not supported by mtsim"),
         "Heidenhain construct not supported",
     )
     .help("docs/gcode.md lists the Heidenhain (Klartext) constructs mtsim reads")

@@ -138,3 +138,14 @@ fn sym_minus_plane_axial_and_the_pattern_cycles_are_refused_by_name() {
         );
     }
 }
+
+#[test]
+fn ln_with_surface_normals_is_refused_saying_what_it_is() {
+    let (line, msg) =
+        run("2 L X+0 Y+0 Z+5 R0 FMAX\n3 LN X+10 Y+0 Z+0 NX+0 NY+0 NZ+1 F1000").unwrap_err();
+    assert_eq!(line, 4);
+    assert!(
+        msg.contains("`LN`") && msg.contains("3-D tool compensation"),
+        "{msg}"
+    );
+}

@@ -60,15 +60,11 @@ pub(super) fn extra(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> Line
         "RR" if rest.is_empty() => e.comp = Some(2),
         "FMAX" if rest.is_empty() => e.rapid = true,
         "MAX" if rest.is_empty() && b.is(k.wrapping_sub(1), "F") => e.rapid = true,
-        "F" if rest.is_empty() && b.is(k + 1, "MAX") => {}
-        "FAUTO" if rest.is_empty() => {
-            e.feed = Some(r.path.tool_feed.ok_or_else(|| {
-                LineError::new(
-                    span,
-                    "FAUTO with no feed in the TOOL CALL: expected `TOOL CALL … F`",
-                    "no tool feed",
-                )
-            })?)
+        "F" if rest.is_empty() && (b.is(k + 1, "MAX") || b.is(k + 1, "AUTO")) => {}
+        // `FAUTO`, or `F AUTO` as some posts space it: the TOOL CALL's feed.
+        "FAUTO" if rest.is_empty() => e.feed = Some(tool_feed(r, span)?),
+        "AUTO" if rest.is_empty() && b.is(k.wrapping_sub(1), "F") => {
+            e.feed = Some(tool_feed(r, span)?)
         }
         "FU" | "FZ" => {
             return Err(LineError::new(
@@ -96,6 +92,17 @@ pub(super) fn extra(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> Line
     Ok(true)
 }
 
+/// The `TOOL CALL`'s feed, for `FAUTO`.
+fn tool_feed(r: &Reader, span: std::ops::Range<usize>) -> LineResult<f64> {
+    r.path.tool_feed.ok_or_else(|| {
+        LineError::new(
+            span,
+            "FAUTO with no feed in the TOOL CALL: expected `TOOL CALL … F`",
+            "no tool feed",
+        )
+    })
+}
+
 /// Parses token `k` as an M function (and `MB` after M140); false if it is none.
 pub(super) fn m_word(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> LineResult<bool> {
     let t = b.tok(k);
@@ -110,18 +117,32 @@ pub(super) fn m_word(r: &mut Reader, b: &Block, k: usize, e: &mut Extras) -> Lin
                 "MB alone",
             ));
         }
-        e.m140 = Some(
-            if rest.is_empty() && b.is(k + 1, "MAX") || rest.eq_ignore_ascii_case("MAX") {
-                None
-            } else if rest.is_empty() {
-                None
-            } else {
-                Some(value(rest, &r.q, span)?)
-            },
-        );
+        // `MB MAX`, `MBMAX`; `MB 20`, `MB+20`, `MB20`: the distance.
+        let next = b.tok(k + 1);
+        let distance = if rest.eq_ignore_ascii_case("MAX") {
+            None
+        } else if !rest.is_empty() {
+            Some(value(rest, &r.q, span)?)
+        } else if b.is(k + 1, "MAX") {
+            None
+        } else if next
+            .starts_with(|c: char| c.is_ascii_digit() || matches!(c, '+' | '-' | '.' | 'Q' | 'q'))
+        {
+            Some(value(next, &r.q, b.span(k + 1))?)
+        } else {
+            return Err(LineError::new(
+                span,
+                "`M140 MB` without a distance: expected `MB MAX` or `MB` and the retraction distance",
+                "MB without a distance",
+            ));
+        };
+        e.m140 = Some(distance);
         return Ok(true);
     }
-    if upper == "MAX" && b.is(k.wrapping_sub(1), "MB") {
+    if b.is(k.wrapping_sub(1), "MB")
+        && (upper == "MAX" || name.is_empty() || upper.starts_with('Q'))
+    {
+        // The `MAX` or distance after `MB`, read with it.
         return Ok(true);
     }
     if upper != "M" || rest.is_empty() || !rest.bytes().all(|c| c.is_ascii_digit()) {

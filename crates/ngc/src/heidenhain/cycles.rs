@@ -42,7 +42,7 @@ pub(super) fn block(r: &mut Reader, b: &Block) -> LineResult<()> {
     })?;
     let minor: u32 = minor.parse().unwrap_or(0);
     match major {
-        200..=203 | 205..=209 | 240 | 251 | 252 => define(r, b, major),
+        200..=203 | 205..=209 | 240 | 251..=254 | 256 | 257 | 262..=265 | 267 => define(r, b, major),
         1 | 2 | 17 => old_cycle_value(r, b, major, minor),
         // Oriented spindle stop: the spindle turns to an angle, the axes stay.
         13 => {
@@ -147,10 +147,14 @@ fn not_supported(b: &Block, id: &str, major: u32) -> LineError {
     };
     LineError::new(
         b.spans(0, 2),
-        format!("`CYCL DEF {id}{name}`: {what} is not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-209, 240, 251, 252 and 7, 8, 9, 10, 11, 13, 19, 26, 32", manual(major)),
+        format!("`CYCL DEF {id}{name}`: {what} is not supported ({}, \"Cycle {major}\"): mtsim reads the cycles 1, 2, 17, 200-203, 205-209, 240, 251-254, 256, 257, 262-265, 267 and 7, 8, 9, 10, 11, 13, 19, 26, 32", manual(major)),
         "Heidenhain cycle not supported",
     )
-    .help("post the cycle as L moves, or see docs/gcode.md")
+    .help(if matches!(major, 220 | 221) {
+        "give the points with PATTERN DEF and call the cycle with CYCL CALL PAT (or CYCL CALL POS at each point)"
+    } else {
+        "post the cycle as L moves, or see docs/gcode.md"
+    })
 }
 
 /// The title of the cycles posts write, as the cycle manual heads them.
@@ -158,6 +162,8 @@ fn title(n: u32) -> Option<&'static str> {
     Some(match n {
         204 => "BACK BORING",
         241 => "SINGLE-LIP DEEP-HOLE DRILLING",
+        220 => "POLAR PATTERN",
+        221 => "CARTESIAN PATTERN",
         251 => "RECTANGULAR POCKET",
         253 => "SLOT MILLING",
         254 => "CIRCULAR SLOT",
@@ -179,6 +185,7 @@ fn manual(n: u32) -> &'static str {
     match n {
         1..=29 => "TNC 426/430 User's Manual, \"Fixed cycles\"",
         204 | 241 => "TNC 640 cycle programming manual, \"Cycles: drilling\"",
+        220 | 221 => "TNC 640 cycle programming manual, \"Cycles: pattern definitions\"",
         251..=257 => "TNC 640 cycle programming manual, \"Cycles: pocket milling, stud milling and slot milling\"",
         262..=267 => "TNC 640 cycle programming manual, \"Cycles: tapping / thread milling\"",
         _ => "TNC 640 cycle programming manual",
@@ -237,6 +244,7 @@ fn old_cycle_value(r: &mut Reader, b: &Block, major: u32, minor: u32) -> LineRes
 
 /// `CYCL DEF 2xx … Q200=+2 ;… Q201=-10 …`: sets the Q parameters, remembers the cycle.
 fn define(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
+    r.cycle.written.clear();
     for k in 3..b.toks.len() {
         let t = b.tok(k);
         let Some((name, v)) = t.split_once('=') else {
@@ -248,6 +256,9 @@ fn define(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
         let span = b.span(k);
         let v = value(v, &r.q, span.clone())?;
         r.q.set_ref(name, v, span)?;
+        if let Ok(q) = name[1..].parse::<u32>() {
+            r.cycle.written.push(q);
+        }
     }
     if n == 240 && r.q.q(343) != 0.0 {
         return Err(LineError::new(b.spans(0, 2), "cycle 240 CENTERING with Q343 = 1 (depth from the diameter Q344 and the tool's point angle T-ANGLE) is not supported (TNC 640 cycle programming manual, \"Cycle 240\"): expected Q343 = 0 and the depth Q201", "centering by diameter"));
@@ -262,14 +273,14 @@ pub(super) fn call(r: &mut Reader, b: &Block) -> LineResult<()> {
     let Some(n) = r.cycle.number else {
         return Err(LineError::new(
             b.span(0),
-            "cycle call with no cycle defined: expected CYCL DEF 1, 2, 17, 200-203, 205-209, 240, 251 or 252 before it",
+            "cycle call with no cycle defined: expected CYCL DEF 1, 2, 17, 200-203, 205-209, 240, 251-254, 256, 257, 262-265 or 267 before it",
             "no cycle",
         ));
     };
     match n {
         1 => return pecking(r, b),
         2 | 17 => return old_tapping(r, b, n),
-        208 | 251 | 252 => return milling::call(r, b, n),
+        208 | 251..=254 | 256 | 257 | 262..=265 | 267 => return milling::call(r, b, n),
         _ => {}
     }
     let q = |k| r.q.q(k);

@@ -204,9 +204,11 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
         let name = name.to_ascii_uppercase();
         match name.as_str() {
             "MOVE" | "TURN" | "STAY" => how = Some(name.clone()),
-            "SEQ" => seq_minus = rest.starts_with('-'),
+            // SYM± (the TNC 640's choice of solution by the master axis's symmetry point)
+            // as SEQ±: the negative one is refused when the plane is tilted.
+            "SEQ" | "SYM" => seq_minus = rest.starts_with('-'),
             "TABLE" | "COORD" | "ROT" if rest.is_empty() => {}
-            "DIST" | "ABST" | "F" | "FMAX" | "MB" | "SYM" | "MAX" => {}
+            "DIST" | "ABST" | "F" | "FMAX" | "MB" | "MAX" => {}
             _ if !rest.is_empty() => {
                 v.insert(name.clone(), value(rest, &r.q, b.span(k))?);
             }
@@ -275,6 +277,7 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
             };
             f.plane = Some(mul(&f.plane.unwrap_or(IDENTITY), &turn));
         }
+        "AXIAL" => return Err(LineError::new(b.spans(0, 1), "`PLANE AXIAL`: the working plane given by the rotary axes' angles (KP \"PLANE AXIAL\") is not supported: mtsim tilts the plane from its spatial angles", "PLANE AXIAL").help("post the plane as PLANE SPATIAL (or CYCL DEF 19) with TURN, or move the rotary axes with L blocks")),
         _ => return Err(state::refusal(b, 0)),
     }
     let how = how.ok_or_else(|| {
@@ -286,7 +289,7 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
     })?;
     apply(r, b)?;
     if how == "STAY" {
-        return Ok(());
+        return stay_angles(r, b, kind == "RESET");
     }
     // The rotaries TURN positions: the table's tilt and C, or a kinematic chain's.
     let rotaries = match r.table {
@@ -319,8 +322,45 @@ pub(super) fn plane(r: &mut Reader, b: &Block) -> LineResult<()> {
     r.sync_position(b)
 }
 
-/// `FUNCTION TCPM …` (TCP on) and `FUNCTION RESET TCPM` (off).
+/// `PLANE … STAY`: the rotary axes stay; the angles that would put the tool normal to the
+/// plane go to Q120 (A), Q121 (B), Q122 (C), which posts then move to with `L A+Q120
+/// C+Q122` (KP "Automatic positioning: MOVE/TURN/STAY"). On a table-table machine, as
+/// G53.1 would turn it (`RESET`: 0); without a table the three have no value, and a block
+/// that reads one is refused (the angles are the caller's inverse kinematics, which the
+/// front end does not run).
+fn stay_angles(r: &mut Reader, b: &Block, reset: bool) -> LineResult<()> {
+    let Some(table) = r.table else {
+        for n in 120..=122 {
+            r.q.unknown(n);
+        }
+        return Ok(());
+    };
+    let (tilt, c) = if reset {
+        (0.0, 0.0)
+    } else {
+        let m = r.frames_state.plane.unwrap_or(IDENTITY);
+        table.align([m[0][2], m[1][2], m[2][2]], r.path.pos[5])
+    };
+    let span = b.span(0);
+    let tilt_q = if table.tilt == crate::axis::Axis::B {
+        "Q121"
+    } else {
+        "Q120"
+    };
+    r.q.set_ref(tilt_q, tilt, span.clone())?;
+    r.q.set_ref("Q122", c, span)
+}
+
+/// `FUNCTION MODE MILL` (the milling mode a mill is in: a notice), `FUNCTION TCPM …` (TCP
+/// on) and `FUNCTION RESET TCPM` (off).
 pub(super) fn function(r: &mut Reader, b: &Block) -> LineResult<()> {
+    if b.is(1, "MODE") {
+        if b.is(2, "MILL") {
+            r.note(b, "FUNCTION MODE MILL: milling mode, as mtsim always runs");
+            return Ok(());
+        }
+        return Err(LineError::new(b.spans(0, b.toks.len() - 1), format!("`FUNCTION MODE {}`: a mill-turn control's switch to turning (KP \"Switching between milling and turning mode\") is not supported: mtsim simulates milling", b.tok(2)), "turning mode"));
+    }
     if b.is(1, "TCPM") {
         tcp(r, b, true);
     } else if b.is(1, "RESET") && b.is(2, "TCPM") {

@@ -35,13 +35,13 @@
 
 use crate::lex::{LineError, LineResult};
 
+use super::cycle_moves::{
+    arc, levels, line, rapid_xy, rapid_z, rounded_rect, Geometry, MAX_PASSES,
+};
 use super::state::{Block, Reader};
+use super::{slots, studs, threads};
 
-/// The most circles, levels or helix turns one cycle call may make (its moves are made in
-/// one step): a real cycle makes far fewer.
-const MAX_PASSES: f64 = 10_000.0;
-
-/// One call of cycle `n` (208, 251 or 252) at the current position.
+/// One call of cycle `n` (208, 251-254, 256, 257, 262-265 or 267) at the current position.
 pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
     let q = |k| r.q.q(k);
     let depth = q(201);
@@ -56,7 +56,9 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
         // The manual: depth 0, the cycle is not run.
         return Ok(());
     }
+    // 265 has no Q351: its direction is the thread's hand (`threads`).
     let ccw = match q(351) {
+        _ if n == 265 => true,
         d if d == 1.0 => true,
         d if d == -1.0 => false,
         d => {
@@ -84,7 +86,13 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
             "no tool radius",
         );
     }
-    let q439 = q(439);
+    // Q439 is not among the parameters of the stud cycles' older versions: read only when
+    // their block wrote it, never a value a pocket cycle left.
+    let q439 = if matches!(n, 256 | 257 | 262..=267) && !r.cycle.written.contains(&439) {
+        0.0
+    } else {
+        q(439)
+    };
     let (s203, q200, q204) = (q(203), q(200), q(204));
     let per = match q439 {
         k if k == 0.0 => 1.0,
@@ -116,10 +124,23 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
             let shape = rectangle(r, b, &mut g)?;
             pocket(r, b, &g, 251, shape)
         }
-        _ => {
+        252 => {
             let shape = Shape::Circle(r.q.q(223) / 2.0 - g.rho);
             pocket(r, b, &g, 252, shape)
         }
+        253 => {
+            let slot = slots::straight(r, b, &mut g)?;
+            pocket(r, b, &g, 253, Shape::Slot(slot))
+        }
+        254 => {
+            for k in 0..slots::repetitions(r, b)? {
+                let slot = slots::circular(r, b, &mut g, k)?;
+                pocket(r, b, &g, 254, Shape::Slot(slot))?;
+            }
+            Ok(())
+        }
+        256 | 257 => studs::stud(r, b, &mut g, n),
+        _ => threads::thread(r, b, &mut g, n),
     }?;
     rapid_z(r, b, g.top);
     if g.second > g.top {
@@ -129,20 +150,6 @@ pub(super) fn call(r: &mut Reader, b: &Block, n: u32) -> LineResult<()> {
     r.path.pos[1] = g.c[1];
     r.path.set_z(g.second);
     Ok(())
-}
-
-struct Geometry {
-    /// The centre X Y (the position at the call).
-    c: [f64; 2],
-    /// Surface, set-up clearance, depth and 2nd set-up clearance, as Z.
-    s: f64,
-    top: f64,
-    bottom: f64,
-    second: f64,
-    rho: f64,
-    ccw: bool,
-    /// The feeds' unit as Q439 gives it: mm/min × this (S for a feed per revolution).
-    per: f64,
 }
 
 /// Cycle 208 BORE MILLING (TNC 640 cycle programming manual, "Cycle 208"): Q335 the bore's
@@ -225,30 +232,19 @@ fn pocket(r: &mut Reader, b: &Block, g: &Geometry, n: u32, shape: Shape) -> Line
         return err(format!("cycle {n}: plunging feed Q206 = {f_plunge}, milling feed Q207 = {f_mill}: expected both positive"), "no feed");
     }
     let outer = shape.half_width();
-    if outer - side <= 0.0 {
+    // A slot may be as wide as the tool (the centre line alone); a pocket may not.
+    let slot = matches!(shape, Shape::Slot(_));
+    if outer - side < -1e-9 || (outer - side <= 0.0 && !slot) {
         return err(format!("cycle {n}: the pocket less the side allowance Q368 = {side} is not wider than the tool (Ø{}): expected a larger pocket", 2.0 * g.rho), "pocket smaller than the tool");
     }
-    let overlap = if q(370) > 0.0 { q(370) } else { 1.0 };
+    // The slots have no path overlap Q370: a stepover of one tool radius.
+    let overlap = if n <= 252 && q(370) > 0.0 {
+        q(370)
+    } else {
+        1.0
+    };
     let step = (overlap * g.rho).min(2.0 * g.rho);
     let (plunge, fin_infeed) = (q(202), q(338));
-    let levels = |from: f64, to: f64, by: f64| -> Option<Vec<f64>> {
-        if by <= 0.0 || (from - to) / by > MAX_PASSES {
-            return None;
-        }
-        // Counted, not stepped until reached: far from 0, z - by may round to z.
-        let n = ((from - to) / by - 1e-9).ceil().max(0.0) as u64;
-        Some(
-            (1..=n)
-                .map(|i| {
-                    if i == n {
-                        to
-                    } else {
-                        (from - i as f64 * by).max(to)
-                    }
-                })
-                .collect(),
-        )
-    };
     if outer / step > MAX_PASSES {
         return err(
             format!("cycle {n}: path overlap Q370 = {overlap}: more than {MAX_PASSES} circles"),
@@ -259,14 +255,9 @@ fn pocket(r: &mut Reader, b: &Block, g: &Geometry, n: u32, shape: Shape) -> Line
     let c = g.c;
     let here = r.path.xy();
     if here != c {
-        // Called at a corner (251, Q367): over the centre at the set-up clearance first.
-        let span = b.span(0);
-        r.gword("0", span.clone());
-        r.word('X', c[0], span.clone());
-        r.word('Y', c[1], span);
-        r.end_block(b.line);
-        r.path.pos[0] = c[0];
-        r.path.pos[1] = c[1];
+        // Called at a corner (251, Q367), or a slot (253, 254): over the centre (a slot's
+        // start) at the set-up clearance first.
+        rapid_xy(r, b, c);
     }
     if op != 2.0 {
         let Some(zs) = levels(g.s, g.bottom + floor, plunge) else {
@@ -304,10 +295,11 @@ fn pocket(r: &mut Reader, b: &Block, g: &Geometry, n: u32, shape: Shape) -> Line
 }
 
 /// A pocket's wall as the tool centre runs along it (no allowance): a circle of radius
-/// Q223/2 − ρ, or a rectangle of half sides `a` (along the pocket's X), `b`, corner radius
-/// `corner`, turned by `rot_deg` about the centre.
+/// Q223/2 − ρ, a rectangle of half sides `a` (along the pocket's X), `b`, corner radius
+/// `corner`, turned by `rot_deg` about the centre, or a slot (253, 254).
 enum Shape {
     Circle(f64),
+    Slot(slots::Slot),
     Rect {
         a: f64,
         b: f64,
@@ -322,6 +314,7 @@ impl Shape {
         match *self {
             Shape::Circle(radius) => radius,
             Shape::Rect { a, b, .. } => a.min(b),
+            Shape::Slot(ref s) => s.half,
         }
     }
 
@@ -339,6 +332,7 @@ impl Shape {
     ) {
         match *self {
             Shape::Circle(radius) => rings(r, b, g, z, radius - allow, step, f),
+            Shape::Slot(ref s) => s.rings(r, b, z, s.half - allow, step, f),
             Shape::Rect {
                 a,
                 b: half_b,
@@ -370,49 +364,6 @@ impl Shape {
             }
         }
     }
-}
-
-/// One rounded rectangle of half sides `s[0]`, `s[1]` and corner radius `s[2]` at `z`,
-/// from the middle of its +X side around (counter-clockwise when `g.ccw`) and back there,
-/// reached on a line from where the tool is; `world` maps the pocket's (u, v) to X Y.
-fn rounded_rect(
-    r: &mut Reader,
-    b: &Block,
-    g: &Geometry,
-    z: f64,
-    s: [f64; 3],
-    world: &dyn Fn(f64, f64) -> [f64; 2],
-    f: f64,
-) {
-    let [a, hb, rc] = s;
-    // Clockwise: the same path mirrored in v.
-    let m = if g.ccw { 1.0 } else { -1.0 };
-    let to = |r: &mut Reader, u: f64, v: f64| {
-        let p = world(u, m * v);
-        let here = r.path.pos;
-        if (p[0] - here[0]).hypot(p[1] - here[1]) > 1e-9 || (z - here[2]).abs() > 1e-9 {
-            line(r, b, [p[0], p[1], z], f);
-        }
-    };
-    let round = |r: &mut Reader, u: f64, v: f64, cu: f64, cv: f64| {
-        if rc > 1e-9 {
-            let p = world(u, m * v);
-            arc(r, b, g.ccw, [p[0], p[1], z], world(cu, m * cv), f);
-        }
-    };
-    to(r, a, 0.0);
-    for (su, sv) in [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)] {
-        // Along the side to the corner's arc, then the arc (quarter turn) about its centre.
-        let (cu, cv) = (su * (a - rc), sv * (hb - rc));
-        if su * sv > 0.0 {
-            to(r, su * a, cv);
-            round(r, cu, sv * hb, cu, cv);
-        } else {
-            to(r, cu, sv * hb);
-            round(r, su * a, cv, cu, cv);
-        }
-    }
-    to(r, a, 0.0);
 }
 
 /// Cycle 251 RECTANGULAR POCKET (TNC 640 cycle programming manual, "Cycle 251"): Q218
@@ -462,40 +413,4 @@ fn rings(r: &mut Reader, b: &Block, g: &Geometry, z: f64, max: f64, step: f64, f
         arc(r, b, g.ccw, p, c, f);
     }
     line(r, b, [c[0], c[1], z], f);
-}
-
-fn rapid_z(r: &mut Reader, b: &Block, z: f64) {
-    let span = b.span(0);
-    r.gword("0", span.clone());
-    r.word('Z', z, span);
-    r.end_block(b.line);
-    r.path.set_z(z);
-}
-
-/// G1 to `p` at `f`.
-fn line(r: &mut Reader, b: &Block, p: [f64; 3], f: f64) {
-    let span = b.span(0);
-    r.gword("1", span.clone());
-    for (l, v) in ['X', 'Y', 'Z'].into_iter().zip(p) {
-        r.word(l, v, span.clone());
-    }
-    r.word('F', f, span);
-    r.end_block(b.line);
-    r.path.pos[..3].copy_from_slice(&p);
-}
-
-/// G3 (`ccw`) or G2 from where the tool is to `p` about the centre `c` (X Y), at `f`; end
-/// on the start: a full circle.
-fn arc(r: &mut Reader, b: &Block, ccw: bool, p: [f64; 3], c: [f64; 2], f: f64) {
-    let span = b.span(0);
-    let from = r.path.xy();
-    r.gword(if ccw { "3" } else { "2" }, span.clone());
-    for (l, v) in ['X', 'Y', 'Z'].into_iter().zip(p) {
-        r.word(l, v, span.clone());
-    }
-    r.word('I', c[0] - from[0], span.clone());
-    r.word('J', c[1] - from[1], span.clone());
-    r.word('F', f, span);
-    r.end_block(b.line);
-    r.path.pos[..3].copy_from_slice(&p);
 }

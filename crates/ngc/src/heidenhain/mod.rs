@@ -18,6 +18,7 @@
 
 mod approach;
 mod contour;
+mod cycle_moves;
 mod cycle_pos;
 mod cycles;
 mod frames;
@@ -25,10 +26,13 @@ mod front;
 mod milling;
 mod pattern;
 mod qparam;
+mod slots;
 mod state;
 mod surface_normal;
+mod studs;
 mod sysread;
 mod text;
+mod threads;
 mod transform;
 mod word_map;
 
@@ -892,6 +896,15 @@ impl Reader {
     fn m_only(&mut self, b: &Block, from: usize) -> LineResult<()> {
         let mut m = Extras::default();
         for k in from..b.toks.len() {
+            let (name, _) = text::split_word(b.tok(k));
+            if m.m140.is_some() && name.eq_ignore_ascii_case("F") {
+                // `M140 MB 50 F750`: the retraction's feed.
+                self.note(
+                    b,
+                    "M140 … F: mtsim retracts at rapid, not at the block's feed",
+                );
+                continue;
+            }
             if !contour::m_word(self, b, k, &mut m)? {
                 return Err(unexpected(b, k, "an M block", "M functions"));
             }

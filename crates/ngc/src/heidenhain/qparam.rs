@@ -61,8 +61,23 @@ impl Qparams {
 
     /// The value of the reference `name` (`Q12`, `QL3`, `QR4`).
     pub(super) fn get_ref(&self, name: &str, span: Range<usize>) -> LineResult<f64> {
-        let (k, n) = Self::slot(name, span)?;
-        Ok(self.values[k][n])
+        let (k, n) = Self::slot(name, span.clone())?;
+        let v = self.values[k][n];
+        if v.is_nan() {
+            // Only `unknown` stores NaN (`set_ref` refuses it).
+            return Err(LineError::new(
+                span,
+                format!("`{name}` has no value here: the `PLANE … STAY` before it stores the rotary axes' angles in Q120-Q122 from the machine's kinematics, which mtsim's Klartext reader computes for table-table AC and BC machines only (KP \"Automatic positioning: MOVE/TURN/STAY\")"),
+                "rotary angle not computed",
+            )
+            .help("use PLANE … TURN, or move the rotary axes by angles of your own"));
+        }
+        Ok(v)
+    }
+
+    /// Marks the global parameter `Qn` as having no known value: reading it is refused.
+    pub(super) fn unknown(&mut self, n: usize) {
+        self.values[2][n] = f64::NAN;
     }
 
     /// Sets the parameter `name` to `v`.

@@ -229,6 +229,10 @@ pub(super) struct Cycle {
     /// (set-up clearance, depth, dwell, feed), cycle 17's `17.1`-`17.3` (set-up clearance,
     /// depth, pitch).
     pub(super) pecking: [f64; 5],
+    /// The Q parameters the last `CYCL DEF` of a 200-series cycle wrote (a cycle reads an
+    /// optional parameter of its own, say Q439, only when its block wrote it, never a
+    /// value another cycle left).
+    pub(super) written: Vec<u32>,
 }
 
 /// A parsed block: its text and tokens.

@@ -261,10 +261,7 @@ fn unsupported_constructs_are_refused_by_name_at_their_line() {
     for (body, name) in [
         ("2 APPR PLT PR+10 PA+10 LEN 5 RL", "APPR PLT"),
         ("2 TCH PROBE 400", "TCH PROBE"),
-        (
-            "2 CYCL DEF 256 RECTANGULAR STUD",
-            "CYCL DEF 256 RECTANGULAR STUD",
-        ),
+        ("2 CYCL DEF 204 BACK BORING", "CYCL DEF 204 BACK BORING"),
         ("2 FN 18: SYSREAD Q1 = ID270", "FN 18"),
         ("2 FL X+10", "FL"),
         ("2 L X+10 M92", "M92"),

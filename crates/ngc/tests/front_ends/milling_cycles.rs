@@ -198,13 +198,10 @@ fn cycle_208_with_the_bore_the_tool_size_plunges_and_a_smaller_bore_is_refused()
 }
 
 #[test]
-fn pocket_and_thread_cycles_not_read_are_refused_by_name_and_manual_section() {
+fn cycles_not_read_are_refused_by_name_and_manual_section() {
     for (n, title, section) in [
-        (254, "CIRCULAR SLOT", "slot milling"),
-        (253, "SLOT MILLING", "slot milling"),
-        (256, "RECTANGULAR STUD", "stud milling"),
-        (262, "THREAD MILLING", "thread milling"),
-        (265, "HELICAL THREAD DRILLING/MILLING", "thread milling"),
+        (204, "BACK BORING", "drilling"),
+        (241, "SINGLE-LIP DEEP-HOLE DRILLING", "drilling"),
     ] {
         let (line, msg) = run(&format!(
             "2 L X+0 Y+0 Z+20 R0 FMAX\n3 CYCL DEF {n} ~\n Q200=+2 ~\n Q201=-5\n4 CYCL CALL"

@@ -268,11 +268,10 @@ fn fn_17_writes_the_tool_table_and_a_changed_tool_is_not_used() {
 
 #[test]
 fn a_cycle_not_read_is_refused_with_its_manual_section() {
-    let (line, msg) =
-        klartext("2 CYCL DEF 254 CIRCULAR SLOT ~\n Q200=+2 ~\n Q201=-10").unwrap_err();
+    let (line, msg) = klartext("2 CYCL DEF 204 BACK BORING ~\n Q200=+2 ~\n Q249=+5").unwrap_err();
     assert_eq!(line, 3);
     assert!(
-        msg.contains("`CYCL DEF 254 CIRCULAR SLOT`: the Heidenhain cycle 254 CIRCULAR SLOT is not supported (TNC 640 cycle programming manual, \"Cycles: pocket milling, stud milling and slot milling\", \"Cycle 254\")"),
+        msg.contains("`CYCL DEF 204 BACK BORING`: the Heidenhain cycle 204 BACK BORING is not supported (TNC 640 cycle programming manual, \"Cycles: drilling\", \"Cycle 204\")"),
         "{msg}"
     );
 }

@@ -94,7 +94,7 @@ pub(crate) fn join(p: &Pending, next: &Move) -> Result<(Move, Option<Move>, Move
         .any(|m| matches!(m.motion, Motion::Arc { .. }));
     if arcs && !p.round {
         return Err(format!(
-            "{name} next to an arc: not read (the manuals do not say whether the chamfer length is measured along the arc or its chord); expected `,C` between two G01 lines, or `,R`"
+            "{name} next to an arc: not read (the manuals do not say whether the chamfer length is measured along the arc or its chord); expected the chamfer between two G01 lines, or a rounding (Fanuc: `,C` only between two G01 lines; `,R` next to an arc)"
         ));
     }
     if arcs {

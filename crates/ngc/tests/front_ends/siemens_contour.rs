@@ -195,7 +195,11 @@ fn contour_words_mtsim_does_not_read_are_refused_by_name() {
         ("G2 X10 Y0 CR=5 AR=90", 3, &["AR=90", "CR="]),
         ("G3 X10 Y0 AR=0", 3, &["AR=0", "opening angle"]),
         ("G1 X10 AR=90", 3, &["AR=90", "G2 or G3"]),
-        ("G1 X10 RND=2\nG2 X20 Y0 CR=5", 4, &["RND=2", "arc"]),
+        (
+            "G1 X10 CHF=1\nG2 X20 Y0 CR=5",
+            4,
+            &["CHF=1", "next to an arc", "chord"],
+        ),
         ("G1 X10 RND=2", 4, &["RND=2", "program ends"]),
         ("G0 X10 RND=2\nG1 Y5", 3, &["RND=2", "not a G1 line"]),
         ("G1 X10 RND=20\nY5", 4, &["RND=20", "does not fit"]),
@@ -211,7 +215,10 @@ fn contour_words_mtsim_does_not_read_are_refused_by_name() {
         for w in words {
             assert!(msg.contains(w), "{text}: {msg:?} does not name {w}");
         }
-        assert!(!msg.contains("Fanuc"), "{text}: {msg}");
+        assert!(
+            !msg.contains("Fanuc") && !msg.contains("`,"),
+            "{text}: {msg}"
+        );
     }
 }
 
@@ -237,6 +244,28 @@ fn a_rotating_or_scaling_frame_maps_the_rounding_with_the_contour() {
             ('l', [16.0, 0.0, 0.0], [0.0; 3]),
             ('a', [20.0, 4.0, 0.0], [16.0, 4.0, 0.0]),
             ('l', [20.0, 20.0, 0.0], [0.0; 3]),
+        ],
+    );
+}
+
+/// RND= between a line and an arc (Fundamentals, "Chamfer, rounding (CHF, CHR, RND, RNDM)":
+/// a rounding between any two contour elements). The line along +X to (10, 0), then G2 to
+/// (20, 0) with CR=5 (centre (15, 0), the path turning left onto it): the rounding circle of
+/// radius 2 lies left of the path, outside the arc's circle, so its centre c = (x, 2) is
+/// 5 + 2 from (15, 0): x = 15 − √45. It touches the line at (15 − √45, 0) and the arc at
+/// (15, 0) + 5 (c − (15, 0))/7.
+#[test]
+fn rnd_between_a_line_and_an_arc_rounds_tangent_to_both() {
+    let m = moves("G17 G90 F100\nG0 X0 Y0 Z0\nG1 X10 RND=2\nG2 X20 Y0 CR=5\nM30\n");
+    let x = 15.0 - 45f64.sqrt();
+    let on_arc = [15.0 + 5.0 * (x - 15.0) / 7.0, 5.0 * 2.0 / 7.0, 0.0];
+    assert_path(
+        &path(&m),
+        &[
+            ('r', [0.0; 3], [0.0; 3]),
+            ('l', [x, 0.0, 0.0], [0.0; 3]),
+            ('a', on_arc, [x, 2.0, 0.0]),
+            ('c', [20.0, 0.0, 0.0], [15.0, 0.0, 0.0]),
         ],
     );
 }

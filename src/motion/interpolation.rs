@@ -109,6 +109,9 @@ use crate::Plane;
 use crate::{Axis, AxisVec};
 use libm::cbrt;
 
+#[path = "arc_corner.rs"]
+mod arc_corner;
+
 /// One commanded position of all axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Setpoint {
@@ -842,13 +845,17 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             // velocity q' v, acceleration q'' v², jerk q''' v³); the path acceleration and
             // jerk of a speed change then get what that leaves of each axis's budget.
             // A blend arc's derivatives are known exactly, and its budget is LinuxCNC's.
-            let ((d1, d2, d3), normal, tangential) = match &path.bend {
-                Some(b) => (
+            // So are a circle's, whose budget is LinuxCNC's under its rules (arc_corner).
+            let linuxcnc = self.control.max_feed_override.is_some();
+            let circle = linuxcnc.then(|| path.circle_bounds(length)).flatten();
+            let ((d1, d2, d3), normal, tangential) = match (&path.bend, circle) {
+                (Some(b), _) => (
                     b.derivative_bounds(),
                     blend::NORMAL_SHARE,
                     blend::TANGENTIAL_SHARE,
                 ),
-                None => (self.derivative_bounds(path, length), 0.5, 0.5),
+                (None, Some(bounds)) => (bounds, blend::NORMAL_SHARE, blend::TANGENTIAL_SHARE),
+                (None, None) => (self.derivative_bounds(path, length), 0.5, 0.5),
             };
             for (i, l) in (0..9).filter_map(present) {
                 if d1[i] > 0.0 {
@@ -866,7 +873,16 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             // with `a ≤ ⅓ jmax / (3 |q''| cap)`.
             for (i, l) in (0..9).filter_map(present) {
                 if d1[i] > 0.0 {
-                    accel = accel.min(tangential * l.acceleration / d1[i]);
+                    // A circle under LinuxCNC's rules: what the centripetal term leaves at
+                    // the cruise speed, `sqrt(a² − (q'' cap²)²)` (arc_corner).
+                    let share = match circle {
+                        Some(_) if path.bend.is_none() && cap.is_finite() => (1.0
+                            - (d2[i] * cap * cap / l.acceleration).powi(2))
+                        .max(0.0)
+                        .sqrt(),
+                        _ => tangential,
+                    };
+                    accel = accel.min(share * l.acceleration / d1[i]);
                     jerk = jerk.min(l.jerk / (3.0 * d1[i]));
                 }
                 if d2[i] > 0.0 && cap.is_finite() {
@@ -928,7 +944,14 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 // (a speed ratio would make the step at its far end as large as the drop).
                 let slow = p.path.bend.is_some() && p.cap < p.programmed * (1.0 - 1e-9);
                 let smooth = prev.slow_bend || slow;
-                let rho = if smooth { 1.0 } else { p.cap / prev.cap };
+                // Under LinuxCNC's rules the path speed is continuous at every junction
+                // (measured: X10 at F600 then X20 at F1200 passes X10 at 10.16 mm/s).
+                let linuxcnc = self.control.max_feed_override.is_some();
+                let rho = if smooth || linuxcnc {
+                    1.0
+                } else {
+                    p.cap / prev.cap
+                };
                 let mut mu = prev.cap;
                 for (i, l) in self.limits.iter().enumerate() {
                     let Some(l) = l else { continue };
@@ -969,6 +992,14 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 if self.control.max_feed_override.is_some() && prev.rapid != rapid {
                     mu = 0.0;
                 }
+                // Under its rules a corner next to an arc that is not blended (an arc curving
+                // the same way as the turn, a reversal: arc_corner) stops: the junction rule's
+                // step beside the arc's acceleration would exceed the axis's limit.
+                let unit = |t: AxisVec| t * (1.0 / t.mixed_norm().max(f64::MIN_POSITIVE));
+                let turns = (unit(tangent_start) - unit(prev.tangent)).mixed_norm() > 1e-6;
+                if self.control.max_feed_override.is_some() && (curved || prev.curved) && turns {
+                    mu = 0.0;
+                }
                 p.rho = rho;
                 p.entry_cap = rho * mu;
             }
@@ -1001,6 +1032,20 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         let half = 0.5 * next.length;
         if let Some(mut prev) = self.held.take() {
             let corner = self.corner(&prev, &next, start, half);
+            if corner.is_none() && (prev.planned.path.arc.is_some() || next.path.arc.is_some()) {
+                match self.blend_line_arc(prev, next, start, half) {
+                    Ok((trimmed, new_start)) => {
+                        self.held = Some(Held {
+                            planned: trimmed,
+                            start: new_start,
+                            end,
+                            half,
+                        });
+                        return;
+                    }
+                    Err((p, n)) => (prev, next) = (p, n),
+                }
+            }
             if let Some(c) = corner {
                 let a = &mut prev.planned;
                 a.path.delta = a.path.delta * ((a.length - c.trim) / a.length);
@@ -1041,6 +1086,17 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         if halves {
             p.accel *= 0.5;
         }
+        // A last arc: a quarter of the acceleration (arc_corner).
+        let circle = p.path.circle_bounds(p.length);
+        if let (Some((d1, ..)), Some(_), PathControl::Blend { .. }) =
+            (circle, self.control.max_feed_override, p.path_control)
+        {
+            for (i, l) in self.limits.iter().enumerate() {
+                if let (Some(l), true) = (l, d1[i] > 0.0) {
+                    p.accel = p.accel.min(0.25 * l.acceleration / d1[i]);
+                }
+            }
+        }
         self.push(p, held.start, held.end);
     }
 
@@ -1072,22 +1128,27 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         }
         let tolerance = tolerance_mm.or(self.control.path_tolerance_mm);
         let max_arc = match self.control.max_feed_override {
-            Some(ovr) => {
-                // The axes the corner's plane moves: their slowest velocity and acceleration.
-                let (mut v_max, mut a) = (f64::INFINITY, f64::INFINITY);
-                for (i, l) in self.limits.iter().enumerate() {
-                    let moves = prev.end.0[i].abs() > 1e-12 || start.0[i].abs() > 1e-12;
-                    if let (Some(l), true) = (l, moves) {
-                        v_max = v_max.min(l.velocity);
-                        a = a.min(l.acceleration);
-                    }
-                }
-                blend::arc_length_for_speed(prev.planned.programmed, ovr, v_max, a)
-            }
+            Some(_) => self.max_blend_arc(prev, start),
             None if tolerance.is_some() => f64::INFINITY,
             None => return None,
         };
         blend::corner(prev.end, start, prev.half, half, tolerance, max_arc)
+    }
+
+    /// The longest blend arc LinuxCNC lays after `prev` into a block starting along `start`
+    /// ([`blend::arc_length_for_speed`]) from the slowest velocity and acceleration limits of
+    /// the axes the corner's plane moves (`[control] max_feed_override` given).
+    fn max_blend_arc(&self, prev: &Held, start: AxisVec) -> f64 {
+        let ovr = self.control.max_feed_override.unwrap_or(1.0);
+        let (mut v_max, mut a) = (f64::INFINITY, f64::INFINITY);
+        for (i, l) in self.limits.iter().enumerate() {
+            let moves = prev.end.0[i].abs() > 1e-12 || start.0[i].abs() > 1e-12;
+            if let (Some(l), true) = (l, moves) {
+                v_max = v_max.min(l.velocity);
+                a = a.min(l.acceleration);
+            }
+        }
+        blend::arc_length_for_speed(prev.planned.programmed, ovr, v_max, a)
     }
 
     /// The blend arc of corner `c` after `prev` (trimmed), from `arc_start`: a

@@ -47,6 +47,9 @@ pub struct ReaderSection {
     pub linuxcnc_ini: Option<String>,
     /// HAL pin values for `#<_hal[pin.name]>`: `{ "plasmac.cut-feed-rate" = 3000.0 }`.
     pub hal_pins: std::collections::BTreeMap<String, f64>,
+    /// Sinumerik system variables' values (machine data, PLC data the program reads):
+    /// `{ "$MN_USER_DATA_HEX[0]" = 0.0 }`.
+    pub system_variables: std::collections::BTreeMap<String, f64>,
 }
 
 /// One inline tool of `[reader] tools`: the tool table's number, length offset (mm, the
@@ -357,6 +360,24 @@ fn section_keys(
             ));
         }
         o.hal_pins.push((pin.clone(), *v));
+    }
+    for (name, v) in &r.system_variables {
+        let upper = name.to_ascii_uppercase();
+        let well_formed = upper.starts_with('$')
+            && upper.len() > 1
+            && upper[1..]
+                .bytes()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, b'_' | b'[' | b']' | b','));
+        if !v.is_finite() || !well_formed {
+            return Err(value_error(
+                path,
+                text,
+                "reader.system_variables",
+                name,
+                "expected a Sinumerik system variable with its indices (`$MN_USER_DATA_HEX[0]`) and a finite number".into(),
+            ));
+        }
+        o.system_variables.push((upper, *v));
     }
     if let Some(file) = &r.var_file {
         let (p, t) = read("var_file", file)?;

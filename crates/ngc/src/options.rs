@@ -174,6 +174,10 @@ pub struct Options {
     pub remaps: Vec<crate::remap::Remap>,
     /// HAL pin values read by `#<_hal[pin.name]>`.
     pub hal_pins: Vec<(String, f64)>,
+    /// Sinumerik system variables the program reads, with the values the control holds:
+    /// name as written with its indices, upper case (`$MN_USER_DATA_HEX[0]`,
+    /// `$A_DBB[10]`); a variable not given is refused by name.
+    pub system_variables: Vec<(String, f64)>,
     /// Folders of LinuxCNC user M programs (`M100`-`M199` files); when not empty, a user M
     /// code with no file there is an error, as in LinuxCNC.
     pub user_m_path: Vec<PathBuf>,
@@ -263,6 +267,7 @@ impl Default for Options {
             aligner: None,
             remaps: Vec::new(),
             hal_pins: Vec::new(),
+            system_variables: Vec::new(),
             user_m_path: Vec::new(),
             ini_values: Vec::new(),
             pockets: Vec::new(),

@@ -618,63 +618,10 @@ impl Reader {
                 );
                 return Ok(());
             }
-            "SUPA" => {
-                w.other.push(("G53".into(), at..sc.at));
-                return Ok(());
-            }
-            "FNORM" => {
-                w.other.push(("G94".into(), at..sc.at));
-                return Ok(());
-            }
-            "TRAORI" => {
-                self.tcp = true;
-                w.before.push(if self.d_active {
-                    "G43.4 H".to_string() + &self.tool.to_string()
-                } else {
-                    "G43.4".into()
-                });
-                return Ok(());
-            }
-            "TRAFOOF" => {
-                if self.tcp {
-                    w.before.push("G49".into());
-                    if self.d_active {
-                        w.before.push("G43".into());
-                    }
-                }
-                self.tcp = false;
-                return Ok(());
-            }
             "MSG" => return skip_call(sc, at),
             "A3" | "B3" | "C3" => return self.orientation_word(name, at, sc, w),
+            _ if self.machine_word(name, at, sc, w, line_no)? => return Ok(()),
             _ if self.fixed_point_word(name, at, sc, w)? => return Ok(()),
-            // Spindle positioning: the spindle turns to an angle; no axis of the path moves.
-            "SPOS" | "SPOSA" => {
-                if sc.eat(b'[') {
-                    expr(sc, &self.vars)?;
-                    if !sc.eat(b']') {
-                        return Err(sc.err(
-                            at,
-                            format!("expected `{name}[spindle]=angle`"),
-                            "spindle positioning",
-                        ));
-                    }
-                }
-                if !sc.eat(b'=') {
-                    return Err(sc.err(
-                        at,
-                        format!("expected `{name}=angle`"),
-                        "spindle positioning",
-                    ));
-                }
-                self.value(sc)?;
-                self.notice(line_no, format!("`{name}` (spindle positioning, Fundamentals \"Spindle positioning (SPOS, SPOSA, M19)\") accepted: no axis of the path moves; its time is not simulated"));
-                return Ok(());
-            }
-            "ORIMKS" | "ORIWKS" => {
-                self.ori_machine = name == "ORIMKS";
-                return Ok(());
-            }
             "CT" | "CIP" | "TURN" | "AP" | "RP" | "I1" | "J1" | "K1" => {
                 return self.geometry_word(name, at, sc, w)
             }

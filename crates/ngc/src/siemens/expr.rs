@@ -19,6 +19,8 @@ const MAX_DEPTH: usize = 32;
 /// of each program level (the last map is the running level's).
 pub(super) struct Vars {
     pub r: Vec<f64>,
+    /// The system variables' values the options give (`Options::system_variables`).
+    pub system: Vec<(String, f64)>,
     pub levels: Vec<HashMap<String, f64>>,
 }
 
@@ -26,6 +28,7 @@ impl Vars {
     pub fn new() -> Vars {
         Vars {
             r: vec![0.0; R_COUNT],
+            system: Vec::new(),
             levels: vec![HashMap::new()],
         }
     }
@@ -426,17 +429,7 @@ impl Eval<'_> {
             ));
         };
         if name.starts_with('$') {
-            if let Some(v) = system_value(name) {
-                return Ok(v);
-            }
-            return Err(sc.err(
-                at,
-                format!(
-                    "system variable `{name}` ({}) is not supported by mtsim: its value is the control's, and neither the machine file nor the scenario gives it",
-                    system_variable_kind(name)
-                ),
-                "system variable",
-            ));
+            return self.system_variable(sc, name, at);
         }
         if let Some(v) = r_parameter(name) {
             return self.r_value(sc, v, at);
@@ -637,6 +630,39 @@ fn close(sc: &mut Scan, at: usize) -> LineResult<()> {
         Ok(())
     } else {
         Err(sc.err(at, "expected `)` to close this `(`", "unclosed `(`"))
+    }
+}
+
+impl Eval<'_> {
+    /// A system variable's value (the cursor after its name): one the options give (with
+    /// its indices, `$A_DBB[10]`), one mtsim knows ([`system_value`]), or a refusal that
+    /// names it and says where its value goes.
+    fn system_variable(&mut self, sc: &mut Scan, name: &str, at: usize) -> LineResult<f64> {
+        let mut key = name.to_string();
+        if sc.peek() == Some(b'[') {
+            // Indices that are numbers make the key; others (`[1,X,TR]`: an axis and a
+            // component) leave the variable named as a whole.
+            let before = sc.at;
+            match indices(sc, self.vars, at) {
+                Ok(index) => key = element_key(name, &index),
+                Err(_) => sc.at = before,
+            }
+        }
+        if let Some((_, v)) = self.vars.system.iter().find(|(k, _)| *k == key) {
+            return Ok(*v);
+        }
+        if let Some(v) = system_value(&key) {
+            return Ok(v);
+        }
+        Err(sc.err(
+            at,
+            format!(
+                "system variable `{key}` ({}): its value is the control's, and the scenario does not give it",
+                system_variable_kind(name)
+            ),
+            "system variable",
+        )
+        .help(format!("give the value the control holds in the scenario's [reader] system_variables, e.g. {{ \"{key}\" = 0.0 }} (docs/scenario-format.md)")))
     }
 }
 

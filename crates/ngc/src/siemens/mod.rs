@@ -33,6 +33,7 @@ mod fixed_point;
 mod flow;
 mod frame;
 mod keywords;
+mod machine_words;
 mod macros;
 mod orientation;
 mod patterns;
@@ -189,7 +190,10 @@ impl Reader {
                 sections: Vec::new(),
                 args: Vec::new(),
             }],
-            vars: Vars::new(),
+            vars: Vars {
+                system: options.system_variables.clone(),
+                ..Vars::new()
+            },
             queue: VecDeque::new(),
             notices: Vec::new(),
             frame: ProgFrame::default(),

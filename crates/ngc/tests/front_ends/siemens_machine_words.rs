@@ -100,3 +100,24 @@ fn spos_turns_the_spindle_and_moves_no_axis() {
     assert_eq!(ends(&with), ends(&without));
     assert_eq!(ends(&with), [[10.0, 5.0, 20.0], [0.0, 5.0, 20.0]]);
 }
+
+/// System variables the program reads take the values the options (the scenario's
+/// `[reader] system_variables`) give, with their indices; one not given is refused by name.
+#[test]
+fn system_variables_read_the_values_given_and_are_refused_by_name_otherwise() {
+    let text = "N10 R1=$MN_USER_DATA_HEX[0]+$A_DBB[10]*2\nN20 IF $MN_SCALING_SYSTEM_IS_METRIC==1\nN30 G0 X=R1\nN40 ENDIF\nN50 M30\n";
+    let mut o = options(true);
+    o.system_variables = vec![
+        ("$MN_USER_DATA_HEX[0]".into(), 3.0),
+        ("$A_DBB[10]".into(), 4.5),
+    ];
+    let m = read(text, &o).unwrap();
+    assert_eq!(m.last().unwrap().end[Axis::X], 12.0);
+    o.system_variables.pop();
+    let (line, msg) = read(text, &o).unwrap_err();
+    assert_eq!(line, 1);
+    assert!(
+        msg.contains("`$A_DBB[10]`") && msg.contains("PLC data"),
+        "{msg}"
+    );
+}

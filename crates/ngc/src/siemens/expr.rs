@@ -657,7 +657,7 @@ impl Eval<'_> {
         Err(sc.err(
             at,
             format!(
-                "system variable `{key}` ({}): its value is the control's, and the scenario does not give it",
+                "system variable `{key}` ({}): its value is the control's, and it is not given",
                 system_variable_kind(name)
             ),
             "system variable",
@@ -669,11 +669,12 @@ impl Eval<'_> {
 /// The system variables mtsim gives a value (SINUMERIK 840D sl "System variables" list
 /// manual): `$MN_SCALING_SYSTEM_IS_METRIC` (MD10240) is 1, as every mtsim machine file is
 /// in mm (docs/machine-format.md); `$P_SEARCH` (block search active) is 0, as mtsim runs
-/// a program from its first block.
+/// a program from its first block; `$P_MC` (a subprogram runs as a macro call, an M
+/// function's replacement) is 0, as mtsim replaces no M function by a subprogram.
 fn system_value(name: &str) -> Option<f64> {
     match name {
         "$MN_SCALING_SYSTEM_IS_METRIC" => Some(1.0),
-        "$P_SEARCH" => Some(0.0),
+        "$P_SEARCH" | "$P_MC" => Some(0.0),
         _ => None,
     }
 }

@@ -15,8 +15,9 @@ use common::{machine, rs274, scratch};
 /// Longest a single `analyze` or `check` may take before it counts as a hang.
 const TIMEOUT: Duration = Duration::from_secs(60);
 
-/// Programs read through to the end, at least (CAM_TEST.MPF; raise it as the reader grows).
-const READ_FLOOR: usize = 1;
+/// Programs read through to the end, at least (CAM_TEST.MPF, and DM_MILL.SPF, which moves
+/// nothing; raise it as the reader grows).
+const READ_FLOOR: usize = 2;
 
 /// The corpus folder: `shared/corpus` in a folder above the checkout.
 fn corpus() -> Option<PathBuf> {
@@ -93,6 +94,18 @@ fn siemens_corpus_programs_are_read_or_refused_by_name_without_panics_or_hangs()
             report.push(format!("{name}: read"));
             continue;
         }
+        // Read to its end, with no move (a machine maker's cycle that only sets modes):
+        // `analyze` says there is nothing to analyse.
+        let a_flat = a_err
+            .replace('│', " ")
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
+        if analyze == Some(2) && a_flat.contains("the program has no motion") {
+            read += 1;
+            report.push(format!("{name}: read, no motion"));
+            continue;
+        }
         // Refused: exit code 2, the program's file and line named with what is not read
         // (a construct in backquotes, or a move the machine cannot make).
         let err = a_err.replace('│', " ");
@@ -139,7 +152,7 @@ fn siemens_corpus_programs_are_read_or_refused_by_name_without_panics_or_hangs()
         "only {read} Siemens programs read, floor {READ_FLOOR}"
     );
     // Every program of the corpus is read or refused for what is not given (issue 41:
-    // 5 subprograms, 4 global user data files, 4 values of the control, 1 travel).
+    // 5 subprograms, 4 global user data files, 3 values of the control, 1 travel).
     assert_eq!(
         read + rightly,
         names.len(),

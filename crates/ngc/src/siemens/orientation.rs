@@ -18,7 +18,7 @@
 //! coordinates), in a frame that turns, scales or mirrors, or beside rotary axis words.
 
 use super::expr::Scan;
-use super::words::{Coordinate, Mode, Words};
+use super::words::{put, Coordinate, Mode, Words};
 use super::Reader;
 use crate::axis::Axis;
 use crate::lex::{LineError, LineResult};
@@ -39,11 +39,7 @@ impl Reader {
             "expected `A3=value` (a component of the tool's direction vector)",
             "orientation vector",
         )?;
-        if w.orientation[k].is_some() {
-            return Err(sc.err(at, format!("`{name}` twice in a block"), "repeated word"));
-        }
-        w.orientation[k] = Some(c);
-        Ok(())
+        put(&mut w.orientation[k], c, sc, at)
     }
 
     /// The block's orientation vector, if it has one, as its rotary axis words.

@@ -573,7 +573,12 @@ impl Reader {
     }
 }
 
-fn put(slot: &mut Option<Coordinate>, c: Coordinate, sc: &Scan, at: usize) -> LineResult<()> {
+pub(super) fn put(
+    slot: &mut Option<Coordinate>,
+    c: Coordinate,
+    sc: &Scan,
+    at: usize,
+) -> LineResult<()> {
     if slot.is_some() {
         return Err(sc.err(
             at,

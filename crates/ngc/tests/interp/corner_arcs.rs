@@ -5,40 +5,12 @@
 //! tangent points are the centre's foot on a line and `C + R (F − C)/|F − C|` on an arc.
 //! Every figure below is worked by hand from that rule.
 
-use std::path::Path;
+use super::corner_polar::{centre, close, read as read_in, xy};
+use ngc::{Axis, Dialect, Move};
 
-use ngc::{read_str_with, Axis, Dialect, Motion, Move, Options};
-
+/// A Fanuc program's moves (the helpers are `corner_polar`'s).
 fn read(text: &str) -> Result<Vec<Move>, String> {
-    let options = Options {
-        dialect: Dialect::Fanuc,
-        ..Options::default()
-    };
-    read_str_with(Path::new("t.nc"), text, &options)
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| e.to_string())
-}
-
-fn xy(p: ngc::AxisVec) -> [f64; 2] {
-    [p[Axis::X], p[Axis::Y]]
-}
-
-fn close(a: [f64; 2], b: [f64; 2]) {
-    assert!(
-        (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9,
-        "{a:?} != {b:?}"
-    );
-}
-
-fn centre(m: &Move) -> ([f64; 2], bool) {
-    match m.motion {
-        Motion::Arc {
-            clockwise,
-            center_mm,
-            ..
-        } => ([center_mm[0], center_mm[1]], clockwise),
-        ref other => panic!("expected an arc, got {other:?}"),
-    }
+    read_in(Dialect::Fanuc, text)
 }
 
 const HEAD: &str = "G21 G90 G17\nG0 X0. Y0. Z0.\n";

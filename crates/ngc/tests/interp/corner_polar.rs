@@ -8,7 +8,7 @@ use std::path::Path;
 
 use ngc::{read_str_with, Axis, Dialect, Motion, Move, Options};
 
-fn read(dialect: Dialect, text: &str) -> Result<Vec<Move>, String> {
+pub(super) fn read(dialect: Dialect, text: &str) -> Result<Vec<Move>, String> {
     let options = Options {
         dialect,
         ..Options::default()
@@ -18,18 +18,18 @@ fn read(dialect: Dialect, text: &str) -> Result<Vec<Move>, String> {
         .map_err(|e| e.to_string())
 }
 
-fn xy(p: ngc::AxisVec) -> [f64; 2] {
+pub(super) fn xy(p: ngc::AxisVec) -> [f64; 2] {
     [p[Axis::X], p[Axis::Y]]
 }
 
-fn close(a: [f64; 2], b: [f64; 2]) {
+pub(super) fn close(a: [f64; 2], b: [f64; 2]) {
     assert!(
         (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9,
         "{a:?} != {b:?}"
     );
 }
 
-fn centre(m: &Move) -> ([f64; 2], bool) {
+pub(super) fn centre(m: &Move) -> ([f64; 2], bool) {
     match m.motion {
         Motion::Arc {
             clockwise,

@@ -3,6 +3,7 @@
 //! rectangle, the levels of a roughing, and the geometry of one cycle call.
 
 use super::state::{Block, Reader};
+use crate::lex::{LineError, LineResult};
 
 /// The most circles, levels or helix turns one cycle call may make (its moves are made in
 /// one step): a real cycle makes far fewer.
@@ -22,6 +23,29 @@ pub(super) struct Geometry {
     pub(super) ccw: bool,
     /// The feeds' unit as Q439 gives it: mm/min × this (S for a feed per revolution).
     pub(super) per: f64,
+}
+
+/// The depths of a cycle's finishing passes: from the surface to the bottom, Q338
+/// (`fin_infeed`) apart, or all at once where Q338 is 0; cycle `n` named when they are too
+/// many.
+pub(super) fn finishing_levels(
+    b: &Block,
+    g: &Geometry,
+    n: u32,
+    fin_infeed: f64,
+) -> LineResult<Vec<f64>> {
+    let by = if fin_infeed > 0.0 {
+        fin_infeed
+    } else {
+        g.s - g.bottom
+    };
+    levels(g.s, g.bottom, by).ok_or_else(|| {
+        LineError::new(
+            b.span(0),
+            format!("cycle {n}: finishing infeed Q338 = {by}: at most {MAX_PASSES} levels"),
+            "bad Q338",
+        )
+    })
 }
 
 /// The levels from `from` down to `to`, `by` apart (the last at `to`); None for a step

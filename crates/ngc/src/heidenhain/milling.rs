@@ -36,7 +36,7 @@
 use crate::lex::{LineError, LineResult};
 
 use super::cycle_moves::{
-    arc, levels, line, rapid_xy, rapid_z, rounded_rect, Geometry, MAX_PASSES,
+    arc, finishing_levels, levels, line, rapid_xy, rapid_z, rounded_rect, Geometry, MAX_PASSES,
 };
 use super::state::{Block, Reader};
 use super::{slots, studs, threads};
@@ -270,19 +270,7 @@ fn pocket(r: &mut Reader, b: &Block, g: &Geometry, n: u32, shape: Shape) -> Line
     }
     let finishing = op == 2.0 || (op == 0.0 && (side > 0.0 || floor > 0.0));
     if finishing {
-        let by = if fin_infeed > 0.0 {
-            fin_infeed
-        } else {
-            g.s - g.bottom
-        };
-        let Some(zs) = levels(g.s, g.bottom, by) else {
-            return err(
-                format!(
-                    "cycle {n}: finishing infeed Q338 = {fin_infeed}: at most {MAX_PASSES} levels"
-                ),
-                "bad Q338",
-            );
-        };
+        let zs = finishing_levels(b, g, n, fin_infeed)?;
         for z in zs {
             line(r, b, [c[0], c[1], z], f_plunge);
             shape.rings(r, b, g, z, 0.0, 2.0 * outer, f_finish);

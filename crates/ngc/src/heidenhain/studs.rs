@@ -33,7 +33,7 @@
 use crate::lex::{LineError, LineResult};
 
 use super::cycle_moves::{
-    arc, levels, line, rapid_xy, rapid_z, rounded_rect, Geometry, MAX_PASSES,
+    arc, finishing_levels, levels, line, rapid_xy, rapid_z, rounded_rect, Geometry, MAX_PASSES,
 };
 use super::state::{Block, Reader};
 
@@ -129,18 +129,7 @@ pub(super) fn stud(r: &mut Reader, b: &Block, g: &mut Geometry, n: u32) -> LineR
         }
     }
     if op == 2.0 || (op == 0.0 && (side > 0.0 || floor > 0.0)) {
-        let by = if fin_infeed > 0.0 {
-            fin_infeed
-        } else {
-            g.s - g.bottom
-        };
-        let Some(zs) = levels(g.s, g.bottom, by) else {
-            return err(
-                b,
-                format!("cycle {n}: finishing infeed Q338 = {by}: at most {MAX_PASSES} levels"),
-                "bad Q338",
-            );
-        };
+        let zs = finishing_levels(b, g, n, fin_infeed)?;
         let roughing = stud.passes;
         stud.passes = 1;
         for z in zs {

@@ -121,6 +121,21 @@ pub fn recording(signals: &[&str]) -> Vec<String> {
     cmds
 }
 
+/// LinuxCNC runs one at a time on a machine (its real-time module and shared memory are
+/// global): this lock file, held by each run, makes other test processes wait for their turn.
+fn machine_turn() -> std::fs::File {
+    let path = std::env::temp_dir().join("mtsim-tests-linuxcnc.lock");
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .unwrap_or_else(|e| panic!("cannot open the lock file {}: {e}", path.display()));
+    file.lock()
+        .unwrap_or_else(|e| panic!("cannot lock {}: {e}", path.display()));
+    file
+}
+
 /// LinuxCNC runs one at a time (it keeps a lock file): held by each run.
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
@@ -132,6 +147,8 @@ pub struct Headless {
     fallback_uid: Option<String>,
     /// Released (after the drop's stop) for the next run.
     _turn: std::sync::MutexGuard<'static, ()>,
+    /// The machine-wide turn: other test processes (a second `cargo test`, say) wait on it.
+    _machine_turn: std::fs::File,
 }
 
 impl Drop for Headless {
@@ -316,6 +333,7 @@ pub fn start(config: &str, ini: &str, dir: &Path) -> Headless {
 /// [`start`], with `halcmds` run after the sample's own HAL setup (`[HAL] HALCMD` lines).
 pub fn start_with(config: &str, ini: &str, dir: &Path, halcmds: &[&str]) -> Headless {
     let turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let machine_turn = machine_turn();
     let _ = std::fs::remove_dir_all(dir);
     copy_tree(&Path::new(SAMPLES).join(config), dir);
     headless_files(dir);
@@ -362,6 +380,7 @@ pub fn start_with(config: &str, ini: &str, dir: &Path, halcmds: &[&str]) -> Head
         child,
         fallback_uid,
         _turn: turn,
+        _machine_turn: machine_turn,
     };
     // Up when its display is; a start that fails ends the script first.
     let end = Instant::now() + Duration::from_secs(90);

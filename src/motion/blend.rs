@@ -28,7 +28,7 @@
 //! (`θ` below 1e-9 rad: it needs nothing) or turns back (`θ` within 1e-6 rad of π: the arc
 //! would have no size), and every corner next to an arc (but a line and an arc curving away
 //! from the turn: `arc_corner`), a tool-centre-point block, a rapid or a move of an axis
-//! besides X Y Z (LinuxCNC blends those otherwise: measured, not modelled).
+//! besides X Y Z (under LinuxCNC's rules straight ones are overlapped instead: `overlap`).
 
 use crate::AxisVec;
 

@@ -9,7 +9,8 @@
 //! - **G01 / G00 in joint space**: `q(u) = q0 + u d`, `L = |d|` with deg counted as mm
 //!   (the mixed-unit length of a controller without tool-centre-point control,
 //!   [`AxisVec::mixed_norm`]). The programmed feed F (mm/min) is the rate of `s`, so the block
-//!   time at F is `L / F`.
+//!   time at F is `L / F`. Under LinuxCNC's rules (`[control] max_feed_override`) a G01 that
+//!   moves X Y Z has `L = |d_xyz|`: F is the X Y Z speed, the other axes follow.
 //! - **G93** (inverse time): the block time is `1 / F` min, i.e. a path speed `F L`.
 //! - **G00**: no F; the path speed is capped by the axis velocity limits only, so the axis
 //!   with the largest `|d_i| / vmax_i` runs at its `vmax_i` and all axes arrive together
@@ -87,14 +88,15 @@
 //! distance spans the whole window (fine segments). Memory is bounded by the window.
 //!
 //! Corner blending: under G64 the corner between two straight blocks may be replaced by an
-//! arc ([`blend`], LinuxCNC's rules, docs/interpolation.md). Not modelled: blending of other
+//! arc ([`blend`], LinuxCNC's rules, docs/interpolation.md); under LinuxCNC's rules two
+//! straight moves where either moves a rotary axis overlap instead ([`overlap`]: the next
+//! starts while the first slows down, their velocities add). Not modelled: blending of other
 //! corners (they are passed at a limited speed, with a velocity step of bounded size in one
 //! period; the jerk at that step is not limited), acceleration
 //! carried across block boundaries (each block's speed changes start and end at zero path
 //! acceleration), travel limits (checked downstream).
 
 use std::collections::VecDeque;
-use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 use crate::error::{Error, Result};
@@ -105,12 +107,17 @@ pub use crate::motion::feed_held::{FeedLimit, LimitKind};
 use crate::motion::feed_held::{FeedReduction, FeedReductions};
 use crate::motion::profile::{reach, Profile};
 use crate::program::{Feed, Motion, Move, PathControl};
-use crate::Plane;
 use crate::{Axis, AxisVec};
 use libm::cbrt;
 
 #[path = "arc_corner.rs"]
 mod arc_corner;
+#[path = "arc_path.rs"]
+mod arc_path;
+#[path = "overlap.rs"]
+pub mod overlap;
+
+use arc_path::ArcGeometry;
 
 /// One commanded position of all axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -162,22 +169,6 @@ struct AxisLimits {
     velocity: f64,
     acceleration: f64,
     jerk: f64,
-}
-
-/// Arc geometry in the plane axes `(i0, i1)`; angle measured from i0 toward i1.
-#[derive(Clone, Copy, Debug)]
-struct ArcGeometry {
-    i0: usize,
-    i1: usize,
-    /// Centre, mm.
-    c0: f64,
-    c1: f64,
-    /// Start radius and its change over the block, mm.
-    r0: f64,
-    dr: f64,
-    /// Start angle and signed sweep, rad.
-    theta0: f64,
-    sweep: f64,
 }
 
 /// The geometric path of a block, `q(u)` for `u ∈ [0, 1]` (formulas extend beyond).
@@ -286,6 +277,11 @@ struct Planned {
     rho: f64,
     /// Largest entry speed from which the rest of the window is feasible.
     entry_max: f64,
+    /// Starts in an overlap with the block before ([`overlap`]): the path length left on that
+    /// one when this may start by the tolerance.
+    overlap: Option<f64>,
+    /// Acceleration and jerk limits halved (for an overlap, or as a program's last move).
+    halved: bool,
 }
 
 /// A block's speed limits from the axis limits (see [`Planned`]), path units/s, /s², /s³.
@@ -345,6 +341,9 @@ struct Active {
     profile: Profile,
     /// Start time of the block, s.
     t0: f64,
+    /// When the next block starts, s after `t0`: the profile's end, or earlier when the next
+    /// overlaps this one ([`overlap`]).
+    handover: f64,
 }
 
 impl Active {
@@ -352,7 +351,7 @@ impl Active {
     /// `u = s(t - t₀) / L`, clamped to `[0, 1]` (0 for a block of no length).
     #[inline(always)]
     fn setpoint_at(&self, t: f64, kinematics: &Kinematics) -> Option<Setpoint> {
-        if !(t < self.t0 + self.profile.duration) {
+        if !(t < self.t0 + self.handover) {
             return None;
         }
         let p = &self.planned;
@@ -398,6 +397,10 @@ pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     held: Option<Held>,
     next_index: u64,
     active: Option<Active>,
+    /// The block before the active one while it still runs beside it ([`overlap`]), and the
+    /// next block's profile when it will overlap the active one (with its exit speed).
+    trailing: Option<Active>,
+    queued: Option<(Profile, f64)>,
     /// Exit speed committed for the active block.
     last_exit: f64,
     step: u64,
@@ -444,6 +447,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             held: None,
             next_index: 0,
             active: None,
+            trailing: None,
+            queued: None,
             last_exit: 0.0,
             step: 0,
             done: false,
@@ -609,6 +614,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             entry_cap: 0.0,
             rho: 1.0,
             entry_max: 0.0,
+            overlap: None,
+            halved: false,
         };
         // A B C (deg counted as mm) and U V W (mm): the axes besides the tool tip's X Y Z.
         let rotary_norm = (3..9).map(|i| path.delta.0[i].powi(2)).sum::<f64>().sqrt();
@@ -652,7 +659,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 length = path.delta.mixed_norm();
             }
             Motion::Linear => {
-                length = if tcp.is_some() {
+                // LinuxCNC's F is the X Y Z speed when X Y Z move (measured: overlap).
+                let xyz_feed = self.control.max_feed_override.is_some();
+                length = if tcp.is_some() || xyz_feed {
                     tip_or_mixed(linear_norm)
                 } else {
                     mixed(linear_norm)
@@ -663,7 +672,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 plane,
                 center_mm,
             } => {
-                let arc = self.arc_geometry(b, clockwise, plane, center_mm)?;
+                let arc = arc_path::arc_geometry(b, clockwise, plane, center_mm)
+                    .map_err(|why| self.block_error(b.line, why))?;
                 let i2 = 3 - arc.i0 - arc.i1;
                 let arc_len = arc.sweep.abs() * (arc.r0 + 0.5 * arc.dr).abs();
                 let helix = arc_len.hypot(path.delta.0[i2]);
@@ -751,63 +761,6 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 };
                 return Err(self.block_error(b.line, format!("the move needs {what}")));
             }
-        })
-    }
-
-    fn arc_geometry(
-        &self,
-        b: &Move,
-        clockwise: bool,
-        plane: Plane,
-        c: [f64; 3],
-    ) -> Result<ArcGeometry> {
-        if !c.iter().all(|v| v.is_finite()) {
-            return Err(self.block_error(b.line, "the arc centre is not a finite number"));
-        }
-        let (i0, i1) = match plane {
-            Plane::XY => (0, 1),
-            Plane::ZX => (2, 0),
-            Plane::YZ => (1, 2),
-        };
-        let (s0, s1) = (b.start.0[i0] - c[i0], b.start.0[i1] - c[i1]);
-        let (e0, e1) = (b.end.0[i0] - c[i0], b.end.0[i1] - c[i1]);
-        let (r0, r1) = (s0.hypot(s1), e0.hypot(e1));
-        if r0 <= 1e-9 || r1 <= 1e-9 {
-            return Err(self.block_error(
-                b.line,
-                "the arc has zero radius: the centre is on its start or end point",
-            ));
-        }
-        // The reader already held the radii to its dialect's rule (LinuxCNC under G20: up to
-        // 0.002·√2 in or 0.1 % of the radius, docs/gcode.md); this only refuses what no
-        // dialect accepts, so `analyze` and `check` agree on what they read.
-        if (r0 - r1).abs() > (std::f64::consts::SQRT_2 * 0.002 * 25.4).max(1e-3 * r0) {
-            return Err(self.block_error(
-                b.line,
-                format!(
-                    "the arc end is not on the circle: start radius {r0:.6} mm, end radius {r1:.6} mm; check I J K or R"
-                ),
-            ));
-        }
-        // Sweep in (0, 2π] in the arc's own direction; start = end is a full circle.
-        let theta0 = s1.atan2(s0);
-        let ccw = e1.atan2(e0) - theta0;
-        let mut sweep = if clockwise { -ccw } else { ccw }.rem_euclid(TAU);
-        if sweep <= 1e-12 * TAU {
-            sweep = TAU;
-        }
-        if clockwise {
-            sweep = -sweep;
-        }
-        Ok(ArcGeometry {
-            i0,
-            i1,
-            c0: c[i0],
-            c1: c[i1],
-            r0,
-            dr: r1 - r0,
-            theta0,
-            sweep,
         })
     }
 
@@ -1000,6 +953,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 if self.control.max_feed_override.is_some() && (curved || prev.curved) && turns {
                     mu = 0.0;
                 }
+                if p.overlap.is_some() {
+                    mu = 0.0;
+                }
                 p.rho = rho;
                 p.entry_cap = rho * mu;
             }
@@ -1031,6 +987,11 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     fn hold(&mut self, mut next: Planned, start: AxisVec, end: AxisVec) {
         let half = 0.5 * next.length;
         if let Some(mut prev) = self.held.take() {
+            if let Some(travel) = self.overlap_travel(&prev.planned, &next) {
+                self.halve_for_overlap(&mut prev.planned);
+                self.halve_for_overlap(&mut next);
+                next.overlap = Some(travel);
+            }
             let corner = self.corner(&prev, &next, start, half);
             if corner.is_none() && (prev.planned.path.arc.is_some() || next.path.arc.is_some()) {
                 match self.blend_line_arc(prev, next, start, half) {
@@ -1082,7 +1043,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             && matches!(p.path_control, PathControl::Blend { .. })
             && p.path.arc.is_none()
             && p.path.bend.is_none()
-            && !p.path.tcp;
+            && !p.path.tcp
+            && !p.halved;
         if halves {
             p.accel *= 0.5;
         }
@@ -1176,6 +1138,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             entry_cap: 0.0,
             rho: 1.0,
             entry_max: 0.0,
+            overlap: None,
             ..*prev
         }
     }
@@ -1228,6 +1191,10 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 duration: p.dwell_s,
                 ..Profile::default()
             }
+        } else if let Some((profile, exit)) = self.queued.take() {
+            // Planned from rest when the block before handed over to it (`plan_handover`).
+            self.last_exit = exit;
+            profile
         } else {
             let entry = (p.rho * self.last_exit).min(p.entry_max);
             let exit_max = self
@@ -1243,7 +1210,11 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             planned: *p,
             profile,
             t0,
+            handover: profile.duration,
         });
+        if self.window.get(1).is_some_and(|n| n.overlap.is_some()) {
+            self.plan_handover();
+        }
         self.window.pop_front();
         true
     }
@@ -1260,9 +1231,11 @@ impl<I: Iterator<Item = Result<Move>>> Iterator for Interpolator<I> {
             return None;
         }
         let t = self.step as f64 * self.period_s;
-        if let Some(setpoint) = self.active_setpoint(t) {
-            self.step += 1;
-            return Some(Ok(setpoint));
+        if self.trailing.is_none() {
+            if let Some(setpoint) = self.active_setpoint(t) {
+                self.step += 1;
+                return Some(Ok(setpoint));
+            }
         }
         self.next_after_block(t)
     }
@@ -1277,19 +1250,29 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             .and_then(|a| a.setpoint_at(t, &self.kinematics))
     }
 
-    /// [`Iterator::next`] where the active block has ended at time `t`: activates the next
-    /// one (its first setpoint), or ends at rest at the last end point.
+    /// [`Iterator::next`] where the active block has ended at time `t`, or where the block
+    /// before it still runs beside it ([`overlap`]: what is left of that one added, until it
+    /// ends): activates the next one (its first setpoint), or ends at rest at the last end
+    /// point.
     #[inline(never)]
     fn next_after_block(&mut self, t: f64) -> Option<Result<Setpoint>> {
         loop {
-            if let Some(setpoint) = self.active_setpoint(t) {
+            if let Some(mut setpoint) = self.active_setpoint(t) {
+                if let Some(trailing) = &self.trailing {
+                    setpoint.q = setpoint.q + trailing.left_at(t, &self.kinematics);
+                    if !(t < trailing.t0 + trailing.profile.duration) {
+                        self.trailing = None;
+                    }
+                }
                 self.step += 1;
                 return Some(Ok(setpoint));
             }
-            let t0 = self
+            let t0 = self.active.as_ref().map_or(0.0, |a| a.t0 + a.handover);
+            // The block that hands over early runs on beside the next ([`overlap`]).
+            self.trailing = self
                 .active
-                .as_ref()
-                .map_or(0.0, |a| a.t0 + a.profile.duration);
+                .filter(|a| a.handover < a.profile.duration)
+                .or(self.trailing.filter(|a| t0 < a.t0 + a.profile.duration));
             let started = self.activate(t0);
             if let Some(e) = self.pending_error.take() {
                 self.done = true;

@@ -10,5 +10,5 @@ pub mod sampling;
 pub mod work;
 
 pub use feed_held::{FeedReduction, FeedReductions};
-pub use interpolation::{InterpolationOptions, Interpolator, Setpoint};
+pub use interpolation::{overlap, InterpolationOptions, Interpolator, Setpoint};
 pub use sampling::NominalSampler;

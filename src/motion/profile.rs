@@ -85,6 +85,26 @@ impl SpeedChange {
     }
 }
 
+impl SpeedChange {
+    /// Speed `tau` s into the change (the derivative of [`SpeedChange::position`]):
+    /// `v0 + j τ²/2`, then `v0 + j t1²/2 + j t1 (τ − t1)`, then `v1 − j r²/2` with `r` the
+    /// time left.
+    pub(super) fn speed(&self, tau: f64) -> f64 {
+        let j = self.jerk;
+        if self.duration == 0.0 {
+            return self.v0;
+        }
+        if tau < self.t1 {
+            self.v0 + 0.5 * j * tau * tau
+        } else if tau < self.t1 + self.t2 {
+            self.v0 + 0.5 * j * self.t1 * self.t1 + j * self.t1 * (tau - self.t1)
+        } else {
+            let r = (self.duration - tau).clamp(0.0, self.t1);
+            self.v1 - 0.5 * j * r * r
+        }
+    }
+}
+
 /// Speed profile of one block: change to `vp`, cruise, change to the exit speed.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Profile {
@@ -142,6 +162,39 @@ impl Profile {
             + self
                 .down
                 .position((tau - self.cruise_time).min(self.down.duration))
+    }
+}
+
+impl Profile {
+    /// Path speed `tau` s into the block (0 outside it).
+    pub(super) fn speed(&self, tau: f64) -> f64 {
+        if !(0.0..=self.duration).contains(&tau) {
+            return 0.0;
+        }
+        if tau < self.up.duration {
+            return self.up.speed(tau);
+        }
+        let tau = tau - self.up.duration;
+        if tau < self.cruise_time {
+            return self.cruise_speed;
+        }
+        self.down
+            .speed((tau - self.cruise_time).min(self.down.duration))
+    }
+
+    /// When the last speed change starts (s into the block): the end of the cruise.
+    pub(super) fn down_start(&self) -> f64 {
+        self.up.duration + self.cruise_time
+    }
+
+    /// When the block has travelled `distance` (s into it; its duration when it never does):
+    /// bisection of the increasing [`Profile::position`].
+    pub(super) fn time_at(&self, distance: f64) -> f64 {
+        if !(self.position(self.duration) > distance) {
+            return self.duration;
+        }
+        let before = bisect(0.0, self.duration, |t| self.position(t) <= distance);
+        before.min(self.duration)
     }
 }
 

@@ -7,3 +7,4 @@ mod common;
 mod feed_held;
 mod interpolation;
 mod linuxcnc_planner;
+mod overlap;

@@ -280,7 +280,7 @@ struct Planned {
     /// Starts in an overlap with the block before ([`overlap`]): the path length left on that
     /// one when this may start by the tolerance.
     overlap: Option<f64>,
-    /// Acceleration and jerk limits halved (for an overlap, or as a program's last move).
+    /// Acceleration and jerk limits halved for an overlap ([`overlap`]), once.
     halved: bool,
 }
 

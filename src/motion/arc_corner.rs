@@ -72,8 +72,9 @@ pub(super) const PAD_LINE_INTO_ARC: f64 = 1.0 / 6.0;
 pub(super) const PAD_ARC_INTO_LINE: f64 = 1.0 / 3.0;
 
 /// The arc a line meets at a corner (plane coordinates): centre `o`, radius `r`,
-/// counter-clockwise or not, its whole sweep (rad, ≥ 0) and the share of it a same-way blend
-/// pads its turn with ([`PAD_LINE_INTO_ARC`], [`PAD_ARC_INTO_LINE`]).
+/// counter-clockwise or not, its sweep (rad, ≥ 0: what a blend at its other end left of it;
+/// measured, docs/interpolation.md) and the share of it a same-way blend pads its turn with
+/// ([`PAD_LINE_INTO_ARC`], [`PAD_ARC_INTO_LINE`]).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct CornerArc {
     pub o: V2,
@@ -236,14 +237,21 @@ fn to_plane(v: AxisVec, i0: usize, i1: usize) -> AxisVec {
     out
 }
 
-/// The arc of `p` if it can be blended with a line: a circle in its plane (no spiral, no
-/// helix or other axis moving), no TCP.
+/// The largest change of radius (mm) along an arc still taken as a circle here: a program's
+/// end point rounded to its last digit (X17.071068 Y7.071068 on a circle of radius 10 about
+/// the origin ends 3e-7 mm off it), which LinuxCNC blends as a circle (measured: a 45° arc so
+/// written between two same-way corners, 250.1 and 426.4 µm off).
+const CIRCLE_SLACK_MM: f64 = 1e-6;
+
+/// The arc of `p` if it can be blended with a line: a circle in its plane (no spiral beyond
+/// [`CIRCLE_SLACK_MM`], no helix or other axis moving), no TCP.
 fn plain_arc(p: &Planned) -> Option<ArcGeometry> {
     let arc = p.path.arc?;
     let still = (0..9)
         .filter(|&i| i != arc.i0 && i != arc.i1)
         .all(|i| p.path.delta.0[i] == 0.0);
-    (arc.dr.abs() <= 1e-9 && still && !p.path.tcp && p.path.bend.is_none()).then_some(arc)
+    (arc.dr.abs() <= CIRCLE_SLACK_MM && still && !p.path.tcp && p.path.bend.is_none())
+        .then_some(arc)
 }
 
 /// A straight block of `p` in the plane `i0`, `i1` only, its unit direction there.
@@ -419,7 +427,7 @@ impl BlockPath {
     pub(super) fn circle_bounds(&self, length: f64) -> Option<([f64; 9], [f64; 9], [f64; 9])> {
         let path = self;
         let arc = path.arc?;
-        if path.tcp || path.bend.is_some() || arc.dr.abs() > 1e-9 || !(length > 0.0) {
+        if path.tcp || path.bend.is_some() || arc.dr.abs() > CIRCLE_SLACK_MM || !(length > 0.0) {
             return None;
         }
         let k = arc.sweep.abs() / length;

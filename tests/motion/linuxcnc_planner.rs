@@ -147,6 +147,10 @@ const ARC_PROGRAMS: &[(&str, &str)] = &[
         "same_way_p005",
         "G21 G90 G17 G64 P0.05\nG0 X0 Y0 Z0\nG1 X20 F800\nG3 X10 Y10 I-10 J0\nG1 X10 Y-5\nM2\n",
     ),
+    (
+        "same_way_short_g2",
+        "G21 G90 G17 G64\nG0 X0 Y0 Z0\nG1 X20 F800\nG2 X17.071068 Y-7.071068 I-10 J0\nG1 X10 Y0\nM2\n",
+    ),
 ];
 
 /// The rest of the five-axis set: a G93 five-axis move, rapids with rotary axes (see the
@@ -239,6 +243,9 @@ fn corners(name: &str) -> Vec<[f64; 3]> {
         // (Not the reversal at X30 Y-10: neither blends it.)
         "line_into_arc" => vec![[10.0, 5.0, 0.0], [30.0, 5.0, 0.0], [10.0, -10.0, 0.0]],
         "same_way_g64" | "same_way_p005" => vec![[20.0, 0.0, 0.0], [10.0, 10.0, 0.0]],
+        // (A 45° arc, its end rounded: the second pad is a third of what the first blend
+        // left of the arc.)
+        "same_way_short_g2" => vec![[20.0, 0.0, 0.0], [17.071068, -7.071068, 0.0]],
         // (150° turns: the second's blend held to a quarter of its 8 mm block.)
         "sharp_g64" => vec![[40.0, 0.0, 0.0], [14.0192, 15.0, 0.0]],
         "tilted_3d" => vec![[28.2843, 28.2843, 0.0]],

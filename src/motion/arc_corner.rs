@@ -116,7 +116,6 @@ fn same_way_radius(
 /// radius of [`same_way_radius`] and it touches the circle from inside:
 /// `|B − O| = r − R`, `d = w·u − sqrt((w·u)² − |w|² + (r − R)²)`. `None` where the corner
 /// does not turn or turns back, or nothing fits.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn line_into_arc(
     u: V2,
     c: V2,

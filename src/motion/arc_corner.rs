@@ -18,9 +18,13 @@
 //! on xyzac-trt): a 90° turn into arcs of radius 5, 10 and 20 mm at P0.05 passes 49.1,
 //! 49.6, 49.9 um from the corner at 5.596 mm/s (this rule: 49.2, 49.6, 49.8 um, 5.600
 //! mm/s), at P0.01 10.1 um at 2.495 mm/s, without P 553.9, 617.3, 656.7 um at 13.333.
-//! Where the arc curves the same way as the turn the blend is smaller by a rule not yet
-//! found (docs/interpolation.md): those corners, and arcs with a helix, a spiral, rotary
-//! motion or under TCP, are not blended, and under LinuxCNC's rules the planner stops there.
+//! Where the arc curves the same way as the turn, the blend lies inside the arc's circle
+//! (touching it from inside, `|B − O| = r − R`) with a radius of its own
+//! ([`same_way_radius`]): the turn is padded by a share of the arc's sweep, 1/6 into an arc
+//! and 1/3 out of one. Measured: 90° turns into quarter arcs of radius 5 and 10 mm at F800
+//! without P 227.5 and 455.0 um off (this rule: 227.3, 454.9), P0.05 32.5 um, line_into_arc's
+//! arc into a line (26.6°, P0.05) 7.6 um at 8.373 mm/s. Arcs with a helix, a spiral, rotary
+//! motion or under TCP are not blended, and under LinuxCNC's rules the planner stops there.
 //!
 //! Also measured, and applied by `interpolation` under LinuxCNC's rules: a circle's speed
 //! holds `v²/r` within `√3/2` of the acceleration (circles of radius 0.2-2 mm peak at 259.7
@@ -62,64 +66,123 @@ fn arc_tangent(rho: V2, ccw: bool) -> V2 {
     [-s * rho[1], s * rho[0]]
 }
 
+/// The share of an arc's sweep a same-way line-arc blend may pad its turn with, line into
+/// arc and arc into line (measured, docs/interpolation.md).
+pub(super) const PAD_LINE_INTO_ARC: f64 = 1.0 / 6.0;
+pub(super) const PAD_ARC_INTO_LINE: f64 = 1.0 / 3.0;
+
+/// The arc a line meets at a corner (plane coordinates): centre `o`, radius `r`,
+/// counter-clockwise or not, its sweep (rad, ≥ 0: what a blend at its other end left of it;
+/// measured, docs/interpolation.md) and the share of it a same-way blend pads its turn with
+/// ([`PAD_LINE_INTO_ARC`], [`PAD_ARC_INTO_LINE`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct CornerArc {
+    pub o: V2,
+    pub r: f64,
+    pub ccw: bool,
+    pub sweep: f64,
+    pub pad_share: f64,
+}
+
+/// The radius of a same-way line-arc blend (the arc curving the same way as the turn `θ`
+/// between the line and its tangent at the corner), LinuxCNC's rule found black box: the
+/// turn is padded by part of the arc, `pad = min(k · sweep, (π − θ)/4)`, the blend sized
+/// for the turn `θe = θ + pad` (the tolerance, `P/(1/cos(θe/2) − 1)`; the speed,
+/// [`blend::SpeedSizing::radius`]) and at most `r sin(pad/2)/tan(θe/2)`.
+fn same_way_radius(
+    theta: f64,
+    arc: &CornerArc,
+    tolerance: Option<f64>,
+    speed: Option<(&blend::SpeedSizing, AxisVec, AxisVec)>,
+) -> f64 {
+    let pad = (arc.pad_share * arc.sweep).min(0.25 * (std::f64::consts::PI - theta));
+    let turn = theta + pad;
+    let mut radius = arc.r * (0.5 * pad).sin() / (0.5 * turn).tan();
+    if let Some(tol) = tolerance {
+        let half_cos = (0.5 * turn).cos();
+        radius = radius.min(tol.max(0.0) * half_cos / (1.0 - half_cos));
+    }
+    if let Some((speed, u, n)) = speed {
+        radius = radius.min(speed.radius(turn, u, n));
+    }
+    radius
+}
+
 /// The blend where a line along `u` (unit, plane coordinates) reaches the corner `c` at
-/// which an arc of centre `o`, radius `r` starts (`ccw`: counter-clockwise), taking at most
-/// `half_line` of the line and `half_arc` (mm) of the arc, with the line-line rule's bounds
-/// (`tolerance`, `max_arc`). `None` where the arc curves the same way as the turn, the
-/// corner does not turn or turns back, or nothing fits.
-#[allow(clippy::too_many_arguments)]
+/// which `arc` starts, taking at most `half_line` of the line and `half_arc` (mm) of the
+/// arc, within `tolerance` and LinuxCNC's bound for speed (`speed`, its axes those of the
+/// plane). Where the arc curves away from the turn, the blend has the line-line rule's
+/// radius and touches the arc's circle from outside; where it curves the same way, the
+/// radius of [`same_way_radius`] and it touches the circle from inside:
+/// `|B − O| = r − R`, `d = w·u − sqrt((w·u)² − |w|² + (r − R)²)`. `None` where the corner
+/// does not turn or turns back, or nothing fits.
 pub(super) fn line_into_arc(
     u: V2,
     c: V2,
-    o: V2,
-    r: f64,
-    ccw: bool,
+    arc: &CornerArc,
     half_line: f64,
     half_arc: f64,
     tolerance: Option<f64>,
-    max_arc: f64,
+    speed: Option<&blend::SpeedSizing>,
 ) -> Option<LineArc> {
+    let (o, r, ccw) = (arc.o, arc.r, arc.ccw);
     let rho = [(c[0] - o[0]) / r, (c[1] - o[1]) / r];
     let t = arc_tangent(rho, ccw);
     let turn = cross(u, t);
-    // Away: the arc curves against the turn (left turn into a clockwise arc).
-    if turn == 0.0 || (turn > 0.0) == ccw {
+    if turn == 0.0 || speed.is_none() && tolerance.is_none() {
         return None;
     }
+    // Away: the arc curves against the turn (left turn into a clockwise arc).
+    let away = (turn > 0.0) != ccw;
     let to_axes = |v: V2| {
         let mut a = AxisVec::ZERO;
         a.0[0] = v[0];
         a.0[1] = v[1];
         a
     };
-    let straight = blend::corner(
-        to_axes(u),
-        to_axes(t),
-        f64::INFINITY,
-        f64::INFINITY,
-        tolerance,
-        max_arc,
-    )?;
+    let (theta, normal) = blend::turn(to_axes(u), to_axes(t))?;
     let side = turn.signum();
     let n = [-side * u[1], side * u[0]];
+    let mut radius = if away {
+        let straight = blend::corner(
+            to_axes(u),
+            to_axes(t),
+            f64::INFINITY,
+            f64::INFINITY,
+            tolerance,
+            speed,
+        )?;
+        straight.bend.along.mixed_norm()
+    } else {
+        let speed = speed.map(|s| (s, to_axes(u), normal));
+        same_way_radius(theta, arc, tolerance, speed)
+    };
+    if !(radius.is_finite() && radius > 1e-9) || !away && radius >= r {
+        return None;
+    }
+    // The blend circle's centre B touches the arc's circle at |B − O| = r ± R.
+    let sign = if away { 1.0 } else { -1.0 };
     let fit = |radius: f64| -> Option<(f64, f64, V2, V2)> {
         let w = [c[0] + radius * n[0] - o[0], c[1] + radius * n[1] - o[1]];
         let wu = dot(w, u);
-        let disc = wu * wu - dot(w, w) + (r + radius).powi(2);
-        let d = wu + disc.max(0.0).sqrt();
+        let centre_distance = r + sign * radius;
+        let disc = wu * wu - dot(w, w) + centre_distance.powi(2);
+        if !away && disc < 0.0 {
+            return None;
+        }
+        let d = wu + sign * disc.max(0.0).sqrt();
         let b = [
             c[0] - d * u[0] + radius * n[0],
             c[1] - d * u[1] + radius * n[1],
         ];
         let ob = [b[0] - o[0], b[1] - o[1]];
-        let rho_k = [ob[0] / (r + radius), ob[1] / (r + radius)];
+        let rho_k = [ob[0] / centre_distance, ob[1] / centre_distance];
         let beta = cross(rho, rho_k).atan2(dot(rho, rho_k)).abs();
         (d > 0.0).then_some((d, beta, rho_k, b))
     };
     let fits = |radius: f64| {
         fit(radius).is_some_and(|(d, beta, ..)| d <= half_line && r * beta <= half_arc)
     };
-    let mut radius = straight.bend.along.mixed_norm();
     if !fits(radius) {
         // Halve until it fits, then grow back by bisection to within 1e-9 relative.
         let mut hi = radius;
@@ -157,6 +220,14 @@ pub(super) fn line_into_arc(
     })
 }
 
+/// `speed` with the axes of the plane `i0`, `i1` as its first two (plane coordinates).
+fn in_plane(speed: &blend::SpeedSizing, i0: usize, i1: usize) -> blend::SpeedSizing {
+    let mut axes = [None; 9];
+    axes[0] = speed.axes[i0];
+    axes[1] = speed.axes[i1];
+    blend::SpeedSizing { axes, ..*speed }
+}
+
 /// Moves the plane components of `v` (axes 0, 1 of a `LineArc`) to axes `i0`, `i1`.
 fn to_plane(v: AxisVec, i0: usize, i1: usize) -> AxisVec {
     let mut out = AxisVec::ZERO;
@@ -165,14 +236,21 @@ fn to_plane(v: AxisVec, i0: usize, i1: usize) -> AxisVec {
     out
 }
 
-/// The arc of `p` if it can be blended with a line: a circle in its plane (no spiral, no
-/// helix or other axis moving), no TCP.
+/// The largest change of radius (mm) along an arc still taken as a circle here: a program's
+/// end point rounded to its last digit (X17.071068 Y7.071068 on a circle of radius 10 about
+/// the origin ends 3e-7 mm off it), which LinuxCNC blends as a circle (measured: a 45° arc so
+/// written between two same-way corners, 250.1 and 426.4 µm off).
+const CIRCLE_SLACK_MM: f64 = 1e-6;
+
+/// The arc of `p` if it can be blended with a line: a circle in its plane (no spiral beyond
+/// [`CIRCLE_SLACK_MM`], no helix or other axis moving), no TCP.
 fn plain_arc(p: &Planned) -> Option<ArcGeometry> {
     let arc = p.path.arc?;
     let still = (0..9)
         .filter(|&i| i != arc.i0 && i != arc.i1)
         .all(|i| p.path.delta.0[i] == 0.0);
-    (arc.dr.abs() <= 1e-9 && still && !p.path.tcp && p.path.bend.is_none()).then_some(arc)
+    (arc.dr.abs() <= CIRCLE_SLACK_MM && still && !p.path.tcp && p.path.bend.is_none())
+        .then_some(arc)
 }
 
 /// A straight block of `p` in the plane `i0`, `i1` only, its unit direction there.
@@ -205,11 +283,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         if !(feed(&prev.planned) && feed(&next)) {
             return Err((prev, next));
         }
-        let max_arc = match self.control.max_feed_override {
-            Some(_) => self.max_blend_arc(&prev, start),
-            None if tolerance.is_some() => f64::INFINITY,
-            None => return Err((prev, next)),
-        };
+        let speed = self.speed_sizing(&prev.planned);
         // Line into arc.
         if let (Some(arc), None) = (plain_arc(&next), prev.planned.path.arc) {
             let Some(u) = plane_line(&prev.planned, prev.end, arc.i0, arc.i1) else {
@@ -217,18 +291,23 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             };
             let c = prev.planned.path.start + prev.planned.path.delta;
             let corner = [c.0[arc.i0], c.0[arc.i1]];
-            let ccw = arc.sweep > 0.0;
             let r = arc.r0;
+            let corner_arc = CornerArc {
+                o: [arc.c0, arc.c1],
+                r,
+                ccw: arc.sweep > 0.0,
+                sweep: arc.sweep.abs(),
+                pad_share: PAD_LINE_INTO_ARC,
+            };
+            let speed = speed.map(|s| in_plane(&s, arc.i0, arc.i1));
             let Some(b) = line_into_arc(
                 u,
                 corner,
-                [arc.c0, arc.c1],
-                r,
-                ccw,
+                &corner_arc,
                 prev.half,
                 half,
                 tolerance,
-                max_arc,
+                speed.as_ref(),
             ) else {
                 return Err((prev, next));
             };
@@ -264,19 +343,24 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             };
             let c = next.path.start;
             let corner = [c.0[arc.i0], c.0[arc.i1]];
-            let ccw = arc.sweep > 0.0;
             let r = arc.r0;
             let back = [-u2[0], -u2[1]];
+            let corner_arc = CornerArc {
+                o: [arc.c0, arc.c1],
+                r,
+                ccw: arc.sweep < 0.0,
+                sweep: arc.sweep.abs(),
+                pad_share: PAD_ARC_INTO_LINE,
+            };
+            let speed = speed.map(|s| in_plane(&s, arc.i0, arc.i1));
             let Some(b) = line_into_arc(
                 back,
                 corner,
-                [arc.c0, arc.c1],
-                r,
-                !ccw,
+                &corner_arc,
                 half,
                 prev.half,
                 tolerance,
-                max_arc,
+                speed.as_ref(),
             ) else {
                 return Err((prev, next));
             };
@@ -342,7 +426,7 @@ impl BlockPath {
     pub(super) fn circle_bounds(&self, length: f64) -> Option<([f64; 9], [f64; 9], [f64; 9])> {
         let path = self;
         let arc = path.arc?;
-        if path.tcp || path.bend.is_some() || arc.dr.abs() > 1e-9 || !(length > 0.0) {
+        if path.tcp || path.bend.is_some() || arc.dr.abs() > CIRCLE_SLACK_MM || !(length > 0.0) {
             return None;
         }
         let k = arc.sweep.abs() / length;

@@ -14,20 +14,24 @@
 //! the arc at angle `φ ∈ [0, θ]` is `T1 + R sin φ u1 + R (1 − cos φ) n`; its length is `R θ`.
 //!
 //! The size is the largest that keeps the deviation within the programmed tolerance (G64 P),
-//! the arc within the length LinuxCNC gives it for the feed ([`arc_length_for_speed`], on a
-//! machine whose `[control] max_feed_override` is set), and takes at most half of either
-//! block (so that two blends never overlap, whatever the order of the corners):
-//! `d = min(P tan(θ/2)/(1/cos(θ/2) − 1), (ℓ/θ) tan(θ/2), L1/2, L2/2)` with `ℓ` that length.
+//! the radius within what LinuxCNC lays for the feed ([`SpeedSizing::radius`], on a machine
+//! whose `[control] max_feed_override` is set: the arc of [`arc_length_for_speed`], or for a
+//! turn above 99° the arc that passes at that speed, from the limits of the corner's plane),
+//! and takes at most half of either block (so that two blends never overlap, whatever the
+//! order of the corners), and under LinuxCNC's rules passes at most a quarter of either
+//! block from the corner:
+//! `d = min(P tan(θ/2)/(1/cos(θ/2) − 1), R_speed tan(θ/2), L1/2, L2/2,
+//!          min(L1, L2)/4 · tan(θ/2)/(1/cos(θ/2) − 1))`.
 //! Without P (LinuxCNC's "G64 without P: the best speed possible, no matter how far from the
-//! programmed point", its G-code reference) only the feed's length and the halves bound it.
+//! programmed point", its G-code reference) only the speed's radius and the halves bound it.
 //! Speeds through the arc follow from the axis limits (`interpolation`): the centripetal term
 //! `q'' v²` within [`NORMAL_SHARE`] of each axis's acceleration, the path acceleration within
 //! [`TANGENTIAL_SHARE`], both measured on LinuxCNC.
 //!
 //! Not blended (the junction rule of `interpolation` applies): a corner that does not turn
 //! (`θ` below 1e-9 rad: it needs nothing) or turns back (`θ` within 1e-6 rad of π: the arc
-//! would have no size), and every corner next to an arc (but a line and an arc curving away
-//! from the turn: `arc_corner`), a tool-centre-point block, a rapid or a move of an axis
+//! would have no size), and every corner next to an arc (but a line and a circle in its
+//! plane: `arc_corner`), a tool-centre-point block, a rapid or a move of an axis
 //! besides X Y Z (under LinuxCNC's rules straight ones are overlapped instead: `overlap`).
 
 use crate::AxisVec;
@@ -114,19 +118,60 @@ impl Bend {
     }
 }
 
-/// The blend at the corner between a straight block along `u1` (unit) and one along `u2`
-/// (unit), each of which may give up to `half1` / `half2` (mm, half its length), with the
-/// tolerance `tolerance_mm` (none: no bound from it) and an arc at most `max_arc_mm` long
-/// ([`arc_length_for_speed`]; infinite: no bound from it). `None` when the corner needs no
-/// blend or cannot have one (see the module's doc), or when nothing bounds it.
-pub fn corner(
-    u1: AxisVec,
-    u2: AxisVec,
-    half1: f64,
-    half2: f64,
-    tolerance_mm: Option<f64>,
-    max_arc_mm: f64,
-) -> Option<Corner> {
+/// How LinuxCNC 2.9 sizes a blend for speed (`[control] max_feed_override` given): the feed
+/// the blend is laid for and the axes' limits, from which those of the blend's plane follow.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpeedSizing {
+    /// The programmed feed (mm/s; infinite for a rapid) and the control's highest override.
+    pub feed: f64,
+    pub max_feed_override: f64,
+    /// Each axis's velocity and acceleration limits (units/s, units/s²); `None`: absent.
+    pub axes: [Option<(f64, f64)>; 9],
+}
+
+impl SpeedSizing {
+    /// The velocity and acceleration limits of the plane spanned by `u1` and `n`
+    /// (orthonormal): a direction `cos φ u1 + sin φ n` of that plane moves axis `i` by at
+    /// most `w_i = sqrt(u1_i² + n_i²)` per unit, so the plane's limits are
+    /// `min_i v_i / w_i` and `min_i a_i / w_i` over the axes it moves. For a plane of two
+    /// axes (`w` = 1 on both) these are the slower axis's limits; for a plane tilted across
+    /// three axes they are above every axis's own (measured: a corner between 3D rapids on
+    /// 3axis-tutorial passes at 28.14 mm/s, axes at 25 mm/s, Y peaking at 25.00).
+    pub fn plane_limits(&self, u1: AxisVec, n: AxisVec) -> (f64, f64) {
+        let (mut v, mut a) = (f64::INFINITY, f64::INFINITY);
+        for (i, limits) in self.axes.iter().enumerate() {
+            let w = u1.0[i].hypot(n.0[i]);
+            if let (Some((vi, ai)), true) = (limits, w > 1e-12) {
+                v = v.min(vi / w);
+                a = a.min(ai / w);
+            }
+        }
+        (v, a)
+    }
+
+    /// The largest blend radius LinuxCNC lays for speed at a turn of `theta` (rad) in the
+    /// plane of `u1`, `n`: with the plane's limits `v_max`, `a` and `v_s = min(F · override,
+    /// v_max)`,
+    ///
+    /// ```text
+    /// R_speed = max( ℓmax / θ,  v_s² / (√3/2 · a) ),   ℓmax = v_s² / (½ a)
+    /// ```
+    ///
+    /// the arc of [`arc_length_for_speed`], or, where the turn exceeds `√3` rad (99.2°) and
+    /// that arc would be tighter, the one that passes at `v_s` with its centripetal term at
+    /// [`NORMAL_SHARE`] of `a` (measured: 102° and 146° turns between rapids, 570.9 and
+    /// 2662.9 um off; same-way line-arc blends, docs/interpolation.md).
+    pub fn radius(&self, theta: f64, u1: AxisVec, n: AxisVec) -> f64 {
+        let (v_max, a) = self.plane_limits(u1, n);
+        let v = (self.feed * self.max_feed_override).min(v_max);
+        let length = arc_length_for_speed(self.feed, self.max_feed_override, v_max, a);
+        (length / theta).max(v * v / (NORMAL_SHARE * a))
+    }
+}
+
+/// The turn from `u1` to `u2` (unit): its angle `θ` and the unit normal `n` toward `u2`,
+/// `None` where it does not turn (θ below 1e-9 rad) or turns back (within 1e-6 rad of π).
+pub fn turn(u1: AxisVec, u2: AxisVec) -> Option<(f64, AxisVec)> {
     let dot: f64 = (0..9).map(|i| u1.0[i] * u2.0[i]).sum();
     let across = u2 - u1 * dot;
     let sin = across.mixed_norm();
@@ -134,7 +179,23 @@ pub fn corner(
     if !(theta > 1e-9 && theta < std::f64::consts::PI - 1e-6) {
         return None;
     }
-    let n = across * (1.0 / sin);
+    Some((theta, across * (1.0 / sin)))
+}
+
+/// The blend at the corner between a straight block along `u1` (unit) and one along `u2`
+/// (unit), each of which may give up to `half1` / `half2` (mm, half its length), with the
+/// tolerance `tolerance_mm` (none: no bound from it) and LinuxCNC's bound for speed
+/// ([`SpeedSizing::radius`]; none: no bound from it). `None` when the corner needs no
+/// blend or cannot have one (see the module's doc), or when nothing bounds it.
+pub fn corner(
+    u1: AxisVec,
+    u2: AxisVec,
+    half1: f64,
+    half2: f64,
+    tolerance_mm: Option<f64>,
+    speed: Option<&SpeedSizing>,
+) -> Option<Corner> {
+    let (theta, n) = turn(u1, u2)?;
     let half_tan = (0.5 * theta).tan();
     // Deviation per unit radius: 1/cos(θ/2) − 1, written without cancellation.
     let half_cos = (0.5 * theta).cos();
@@ -143,8 +204,12 @@ pub fn corner(
     if let Some(tol) = tolerance_mm {
         trim = trim.min(tol.max(0.0) / per_radius * half_tan);
     }
-    // An arc of length R θ ≤ max_arc: R ≤ max_arc/θ.
-    trim = trim.min(max_arc_mm.max(0.0) / theta * half_tan);
+    if let Some(speed) = speed {
+        trim = trim.min(speed.radius(theta, u1, n).max(0.0) * half_tan);
+        // LinuxCNC's: the deviation at most a quarter of either block, `R (1/cos(θ/2) − 1)
+        // ≤ L/4`; it binds before the halves past `θ = 4 atan(½)` (106.3°).
+        trim = trim.min(0.5 * half1.min(half2) / per_radius * half_tan);
+    }
     if !trim.is_finite() {
         return None;
     }

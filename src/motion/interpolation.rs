@@ -1067,7 +1067,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     /// no TCP, both rapids or both feed moves: LinuxCNC stops between a G1 and a G0 and blends
     /// the others otherwise) and something bounds it: the
     /// tolerance (G64 P, or the machine's default), or, with `[control] max_feed_override`,
-    /// the arc length LinuxCNC gives the feed ([`blend::arc_length_for_speed`]).
+    /// the radius LinuxCNC gives the feed ([`blend::SpeedSizing`]).
     fn corner(
         &self,
         prev: &Held,
@@ -1089,28 +1089,26 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             return None;
         }
         let tolerance = tolerance_mm.or(self.control.path_tolerance_mm);
-        let max_arc = match self.control.max_feed_override {
-            Some(_) => self.max_blend_arc(prev, start),
-            None if tolerance.is_some() => f64::INFINITY,
-            None => return None,
-        };
-        blend::corner(prev.end, start, prev.half, half, tolerance, max_arc)
+        let speed = self.speed_sizing(&prev.planned);
+        if speed.is_none() && tolerance.is_none() {
+            return None;
+        }
+        blend::corner(prev.end, start, prev.half, half, tolerance, speed.as_ref())
     }
 
-    /// The longest blend arc LinuxCNC lays after `prev` into a block starting along `start`
-    /// ([`blend::arc_length_for_speed`]) from the slowest velocity and acceleration limits of
-    /// the axes the corner's plane moves (`[control] max_feed_override` given).
-    fn max_blend_arc(&self, prev: &Held, start: AxisVec) -> f64 {
-        let ovr = self.control.max_feed_override.unwrap_or(1.0);
-        let (mut v_max, mut a) = (f64::INFINITY, f64::INFINITY);
+    /// How LinuxCNC sizes a blend after `prev` for speed ([`blend::SpeedSizing`]: its feed,
+    /// the control's highest override, the axes' limits), `[control] max_feed_override` given.
+    fn speed_sizing(&self, prev: &Planned) -> Option<blend::SpeedSizing> {
+        let ovr = self.control.max_feed_override?;
+        let mut axes = [None; 9];
         for (i, l) in self.limits.iter().enumerate() {
-            let moves = prev.end.0[i].abs() > 1e-12 || start.0[i].abs() > 1e-12;
-            if let (Some(l), true) = (l, moves) {
-                v_max = v_max.min(l.velocity);
-                a = a.min(l.acceleration);
-            }
+            axes[i] = l.map(|l| (l.velocity, l.acceleration));
         }
-        blend::arc_length_for_speed(prev.planned.programmed, ovr, v_max, a)
+        Some(blend::SpeedSizing {
+            feed: prev.programmed,
+            max_feed_override: ovr,
+            axes,
+        })
     }
 
     /// The blend arc of corner `c` after `prev` (trimmed), from `arc_start`: a

@@ -4,6 +4,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod blend_sizing;
 mod feed_held;
 mod interpolation;
 mod linuxcnc_planner;

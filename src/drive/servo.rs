@@ -663,6 +663,19 @@ impl AxisServo {
         })
     }
 
+    /// The columns of the period map of grid slope index `index` (`index · slope_step`,
+    /// [`ExactMaps`]) for a lane servo, built where it was not yet as the first period
+    /// needing it would build it (the same map); None for a drive without slope maps.
+    pub(super) fn slope_columns(&self, index: usize) -> Option<[[f64; N_STATE]; N_INPUT]> {
+        let exact = self.exact.as_deref().filter(|e| !e.lti)?;
+        let grid_slope = index as f64 * exact.slope_step;
+        let map = exact
+            .maps
+            .get(index)?
+            .get_or_init(|| self.period_map(grid_slope, true));
+        Some(map.first_columns())
+    }
+
     /// The carried regime and the friction-bound cache, what [`AxisServo::advance`] carries
     /// beyond [`AxisServo::twin_state`].
     pub(super) fn regime_state(&self) -> (Option<Regime>, (f64, f64, f64)) {

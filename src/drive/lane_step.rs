@@ -317,12 +317,13 @@ fn scatter<K: LaneKind>(group: &K, all: &mut [Option<AxisServo>], st: &LaneState
 /// `y_r = Σ_j cols[j][r] u_j` per lane, from 0 in column order: per lane the scalar
 /// period map's product, one multiplication and one addition per column, row and lane.
 ///
-/// Written over plain arrays, not [`V`]: the compiler vectorises the loop at the width of
-/// the function it is inlined into (`DriveLanes::step_block` is compiled for AVX-512 or
-/// AVX at run time: one register a row), where `wide`'s vectors, picked when that crate
-/// is compiled, are pairs of SSE2 registers; measured, the product in [`V`] made the
-/// tolerance study about 15 % slower (docs/performance.md). The order of operations,
-/// hence every bit, is the same either way.
+/// Written over plain arrays: the compiler vectorises the loop at the width of the function
+/// it is inlined into (`DriveLanes::step_block` is compiled for AVX-512 or AVX at run
+/// time: one register a row). Measured (callgrind, session 25), the same product in
+/// [`V`]'s operations took 10 % more instructions in the lanes, and with its result
+/// written out instead of `y.map(..)` (a call, with a copy of `y`) 8 % more: the loop
+/// as it is keeps the fewest values live in the large inlined function
+/// (docs/performance.md). The order of operations, hence every bit, is the same either way.
 #[inline(always)]
 pub(super) fn lane_product<const N: usize>(
     cols: &[[Lanes; N_STATE]; N],

@@ -164,21 +164,35 @@ impl DriveLaneGroup {
         lane_step::step_block(self, all, axis, setpoints, times_s, actual, fe, completed)
     }
 
-    /// The lanes' checks after the product `y` (`s`: the slope at v₀, the velocity change the
-    /// setpoints ask for and the new setpoint), as masks, in the lanes of `start`: finite, the tolerance at k = 2
-    /// where it is asked (then at the sharper k), the margin of the period's own velocity
+    /// The lanes' checks after the product `y` (`s`: the slope at v₀, the grid slope, the
+    /// velocity change the setpoints ask for and the new setpoint), as masks, in the lanes
+    /// of `start`: finite, the tolerance at k = 2 where it is asked (then at the sharper k,
+    /// then over the substeps' own velocity changes by `by_substeps`, per lane), the margin of the period's own velocity
     /// change, the regime at its end (the same as the carried one, admitting the change),
     /// the following errors. The same decisions as `try_exact_period` and `end_period`,
     /// each lane's by the same operations; the regime's of the lanes that pass are carried
     /// in `st`.
     #[inline(always)]
-    fn period_ok(&self, st: &mut State, start: M, y: &[V; N_STATE], s: [V; 4]) -> M {
+    fn period_ok(
+        &self,
+        st: &mut State,
+        (start, y): (M, &[V; N_STATE]),
+        s: [V; 4],
+        by_substeps: impl Fn(&State, M) -> M,
+    ) -> M {
         let [slope, grid_slope, dv_guess, s_new] = s;
         let finite = (0..6).fold(start, |f, r| f & y[r].is_finite());
         let v0 = V::load(&st.x[3]);
         let two = V::splat(2.0);
         let dv = two * (y[3] - v0).abs().max(dv_guess);
-        let ok = finite & self.tolerance_ok(v0, dv, slope, grid_slope);
+        let (within, retry) = self.tolerance_ok(v0, dv, slope, grid_slope);
+        let retry = finite & retry;
+        let within = if retry.any() {
+            within | by_substeps(st, retry)
+        } else {
+            within
+        };
+        let ok = finite & within;
         let carried = RegimeV {
             side: V::load(&st.extra.side),
             offset: V::load(&st.extra.offset),
@@ -255,13 +269,62 @@ impl DriveLaneGroup {
         asked & !failed
     }
 
+    /// Per lane of `lanes`, [`AxisServo::within_by_substeps`] of its servo at the period's
+    /// inputs (to the axis position `q`, formed again from `st` as [`LaneKind::mapped_period`]
+    /// forms them: the same operations), slope index `index` and `[slope, grid slope]`: the
+    /// friction error over the substeps' own velocity changes, as the scalar period checks
+    /// it where the bound from the end points is not enough (the lane's map is that
+    /// index's, loaded this period).
+    #[cold]
+    #[inline(never)]
+    fn within_by_substeps(
+        &self,
+        st: &State,
+        (lanes, q): (M, f64),
+        index: V,
+        slopes: [V; 2],
+        all: &[Option<AxisServo>],
+    ) -> M {
+        let u = self.inputs(st, q, slopes[1]);
+        let (index, slope, grid_slope) = (index.lanes(), slopes[0].lanes(), slopes[1].lanes());
+        let mut pass = M::default();
+        for (l, &s) in self.servos.iter().enumerate() {
+            if !lanes.get(l) {
+                continue;
+            }
+            let input: [f64; N_INPUT] = std::array::from_fn(|j| u[j].lanes()[l]);
+            let at = (slope[l], grid_slope[l]);
+            let within = all[s]
+                .as_ref()
+                .and_then(|servo| servo.within_by_substeps(index[l] as usize, &input, at));
+            pass.set(l, within == Some(true));
+        }
+        pass
+    }
+
+    /// The period map's inputs per lane to the axis position `q` at the grid slope
+    /// `grid_slope`: the state relative to the previous setpoint, `Δs`, `F_ff`, the friction
+    /// `F_fr = -side g(v₀) - cᵢ v₀` and the contact offset, as `try_exact_period` forms them.
+    #[inline(always)]
+    fn inputs(&self, st: &State, q: f64, grid_slope: V) -> [V; N_INPUT] {
+        let step = self.maps.step(st, q);
+        let v0 = V::load(&st.x[3]);
+        let zero = V::splat(0.0);
+        let side = V::load(&st.extra.side);
+        let f0 = side.eq(zero).select(zero, -side * V::load(&st.extra.bound));
+        let friction = f0 - grid_slope * v0;
+        let [u0, u1, u2, u3, u4, u5, u6, u7, u8] = step.state_inputs(st);
+        let offset = V::load(&st.extra.offset);
+        [u0, u1, u2, u3, u4, u5, u6, u7, u8, friction, offset]
+    }
+
     /// Per lane, the friction linearisation's force error `e_F(Δv, k)` within tolerance
     /// where it is asked (a Stribeck zone that the velocity change `dv` may reach from `v0`):
     /// at `k = 2`, else at the sharper `k = (4u² − 2) exp(−u²)` of `try_exact_period`, its
-    /// `exp` the scalar `libm::exp` of the lanes that need it. The substeps' own
-    /// velocities are left to the scalar servo.
+    /// `exp` the scalar `libm::exp` of the lanes that need it; and the lanes where neither
+    /// bound is enough (to be tried over the substeps' own velocity changes).
     #[inline(always)]
-    fn tolerance_ok(&self, v0: V, dv: V, slope: V, grid_slope: V) -> M {
+    fn tolerance_ok(&self, v0: V, dv: V, slope: V, grid_slope: V) -> (M, M) {
         let inv_vs = V::load(&self.inv_stribeck);
         let slope_step = V::load(&self.slope_step);
         let tolerance = V::load(&self.tolerance);
@@ -286,7 +349,7 @@ impl DriveLaneGroup {
             let k = (V::splat(4.0) * u_low * u_low - V::splat(2.0)) * V::load(&decay);
             sharp = sharper & error(k).le(tolerance);
         }
-        !asked | coarse | sharp
+        (!asked | coarse | sharp, asked & !coarse & !sharp)
     }
 
     /// `linear_regime` per lane at `y` (positions relative to the previous setpoint): the
@@ -414,7 +477,11 @@ impl LaneKind for DriveLaneGroup {
         let u = [u0, u1, u2, u3, u4, u5, u6, u7, u8, friction, offset];
         let y = lane_product(&self.maps.cols, &u);
         let s = [slope, grid_slope, dv_guess, step.s_new];
-        let ok = self.period_ok(st, start_ok, &y, s);
+        let this = &*self;
+        let by_substeps = |st: &State, lanes: M| {
+            this.within_by_substeps(st, (lanes, q), index, [slope, grid_slope], all)
+        };
+        let ok = self.period_ok(st, (start_ok, &y), s, by_substeps);
         step.take(st, ok, &y);
         ok
     }

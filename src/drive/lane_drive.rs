@@ -21,8 +21,11 @@
 //! period). Each lane keeps the map of one slope index in the group's columns; when a
 //! period asks for another, that index's map is loaded from the lane's own servo (built
 //! there as the scalar period builds it: the scalar servo and the lane use the same map).
-//! A lane whose period fails any of these (no carried regime, the substeps' own velocities
-//! needed, a failure) runs that period through the scalar [`AxisServo::advance`] instead,
+//! Where neither tolerance bound admits a lane's period, its servo computes the bound over
+//! the substeps' own velocity changes at the lane's inputs
+//! ([`AxisServo::within_by_substeps`], the scalar period's own functions). A lane whose
+//! period fails any of these (no carried regime, the substeps' bound too, a failure) runs
+//! that period through the scalar [`AxisServo::advance`] instead,
 //! its whole state (the carried regime and the friction-bound cache included) scattered to
 //! it and gathered back. The friction bound at the period's end follows
 //! `servo::stribeck_bound_decay` case for case, as masks (its `exp` the same `libm::exp`,

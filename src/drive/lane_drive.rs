@@ -1,34 +1,41 @@
 //! Up to [`LANES`] distinct nonlinear drives (dry friction, backlash) of one axis stepped
-//! side by side: the period map of friction slope 0 of [`AxisServo::advance`] in
-//! structure-of-arrays form, with its regime checks as lane masks.
+//! side by side: the period maps of [`AxisServo::advance`] in structure-of-arrays form, each
+//! lane by its own friction slope's map, with the regime checks as lane masks.
 //!
-//! The bulk of a drive's periods is one regime: the table slips beyond its Stribeck zone
-//! (`exp(-(v/vs)²) = 0`, the friction `-Fc sign(v_t)` constant) while one side of the
-//! backlash is in contact, or slips without backlash. Each lane takes such a period exactly
-//! where the scalar servo would take it, by the same operations in the same order:
+//! The bulk of a drive's periods is one regime: the table slips (beyond its Stribeck zone,
+//! the friction `-Fc sign(v_t)` constant, or inside it, where the friction's slope picks a
+//! map of the slope grid) while one side of the backlash is in contact, or slips without
+//! backlash. Each lane takes such a period exactly where the scalar servo would take it,
+//! by the same operations in the same order:
 //!
 //! ```text
 //! regime r carried from the last period's end (none: scalar)
 //! Δv_g = |v_ff - v_ff⁻|,   r admits 2 Δv_g            (slip margin, Regime::admits)
-//! c = 2 (Fs - Fc) |v₀| / vs² · exp(-(v₀/vs)²),   c / Δc < ½      (grid slope index 0)
-//! u = (x - s, Δs, F_ff, -side·g(v₀) - 0·v₀, off),   y_r = Σ_j M_l[r,j] u_j  (from 0)
+//! c = 2 (Fs - Fc) |v₀| / vs² · exp(-(v₀/vs)²),   i = round(c / Δc) ≤ 64   (grid slope index)
+//! u = (x - s, Δs, F_ff, -side·g(v₀) - i Δc·v₀, off),   y_r = Σ_j M_l,i[r,j] u_j  (from 0)
 //! y finite;   Δv = 2 max(|y_v_t - v₀|, Δv_g);   e_F(Δv, k) ≤ tol where it is asked
 //! Δv ≤ 2 Δv_g or r admits Δv;   the regime at y is r's and admits Δv;   |fe| ≤ limit
 //! ```
 //!
 //! (`e_F` with `k = 2`, then with the sharper `k` and its `exp`, as in [`AxisServo`]'s
-//! period). A lane whose period fails any of these (another slope, no carried regime, the
-//! substeps' own velocities needed, a failure) runs that period through the
-//! scalar [`AxisServo::advance`] instead, its whole state (the carried regime and the
-//! friction-bound cache included) scattered to it and gathered back. The friction bound at
-//! the period's end follows `servo::stribeck_bound_decay` case for case, as masks (its
-//! `exp` the same `libm::exp`, in the lanes that need it). Every check is computed for all
-//! lanes at once ([`super::simd`]'s vectors and masks): the regime a lane ends in (backlash
-//! side or gap, slipping or at rest) is a mask and a select, not a branch. The stepping
-//! itself is [`super::lane_step`]'s, which both lane kinds share.
+//! period). Each lane keeps the map of one slope index in the group's columns; when a
+//! period asks for another, that index's map is loaded from the lane's own servo (built
+//! there as the scalar period builds it: the scalar servo and the lane use the same map).
+//! Where neither tolerance bound admits a lane's period, its servo computes the bound over
+//! the substeps' own velocity changes at the lane's inputs
+//! ([`AxisServo::within_by_substeps`], the scalar period's own functions). A lane whose
+//! period fails any of these (no carried regime, the substeps' bound too, a failure) runs
+//! that period through the scalar [`AxisServo::advance`] instead,
+//! its whole state (the carried regime and the friction-bound cache included) scattered to
+//! it and gathered back. The friction bound at the period's end follows
+//! `servo::stribeck_bound_decay` case for case, as masks (its `exp` the same `libm::exp`,
+//! in the lanes that need it). Every check is computed for all lanes at once
+//! ([`super::simd`]'s vectors and masks): the regime a lane ends in (backlash side or gap,
+//! slipping or at rest) is a mask and a select, not a branch. The stepping itself is
+//! [`super::lane_step`]'s, which both lane kinds share.
 
 use super::lane_step::{self, lane_product, LaneKind, LaneMaps, LaneState, Lanes, LANES};
-use super::period_map::{Regime, N_INPUT, N_STATE};
+use super::period_map::{Regime, N_INPUT, N_STATE, SLOPE_STEPS};
 use super::servo::AxisServo;
 use super::simd::{M, V};
 use crate::error::Result;
@@ -39,8 +46,10 @@ use libm::exp;
 #[derive(Clone, Debug)]
 pub struct DriveLaneGroup {
     servos: Vec<usize>,
-    /// The slope-0 period maps.
+    /// Each lane's period map, of its grid slope index `slope_index` (its own slope's map,
+    /// loaded from its servo when the index a period asks for changes).
     maps: LaneMaps<N_INPUT>,
+    slope_index: Lanes,
     stiffness: Lanes,
     damping: Lanes,
     half_backlash: Lanes,
@@ -104,6 +113,7 @@ impl DriveLaneGroup {
         let mut g = DriveLaneGroup {
             servos: servos.to_vec(),
             maps: LaneMaps::zero(),
+            slope_index: z,
             stiffness: z,
             damping: z,
             half_backlash: z,
@@ -144,7 +154,7 @@ impl DriveLaneGroup {
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     pub fn step_block(
-        &self,
+        &mut self,
         all: &mut [Option<AxisServo>],
         axis: Axis,
         setpoints: &[AxisVec],
@@ -157,21 +167,35 @@ impl DriveLaneGroup {
         lane_step::step_block(self, all, axis, setpoints, times_s, actual, fe, completed)
     }
 
-    /// The lanes' checks after the product `y` (`s`: the slope at v₀, the velocity change the
-    /// setpoints ask for and the new setpoint), as masks, in the lanes of `start`: finite, the tolerance at k = 2
-    /// where it is asked (then at the sharper k), the margin of the period's own velocity
+    /// The lanes' checks after the product `y` (`s`: the slope at v₀, the grid slope, the
+    /// velocity change the setpoints ask for and the new setpoint), as masks, in the lanes
+    /// of `start`: finite, the tolerance at k = 2 where it is asked (then at the sharper k,
+    /// then over the substeps' own velocity changes by `by_substeps`, per lane), the margin of the period's own velocity
     /// change, the regime at its end (the same as the carried one, admitting the change),
     /// the following errors. The same decisions as `try_exact_period` and `end_period`,
     /// each lane's by the same operations; the regime's of the lanes that pass are carried
     /// in `st`.
     #[inline(always)]
-    fn period_ok(&self, st: &mut State, start: M, y: &[V; N_STATE], s: [V; 3]) -> M {
-        let [slope, dv_guess, s_new] = s;
+    fn period_ok(
+        &self,
+        st: &mut State,
+        (start, y): (M, &[V; N_STATE]),
+        s: [V; 4],
+        by_substeps: impl Fn(&State, M) -> M,
+    ) -> M {
+        let [slope, grid_slope, dv_guess, s_new] = s;
         let finite = (0..6).fold(start, |f, r| f & y[r].is_finite());
         let v0 = V::load(&st.x[3]);
         let two = V::splat(2.0);
         let dv = two * (y[3] - v0).abs().max(dv_guess);
-        let ok = finite & self.tolerance_ok(v0, dv, slope);
+        let (within, retry) = self.tolerance_ok(v0, dv, slope, grid_slope);
+        let retry = finite & retry;
+        let within = if retry.any() {
+            within | by_substeps(st, retry)
+        } else {
+            within
+        };
+        let ok = finite & within;
         let carried = RegimeV {
             side: V::load(&st.extra.side),
             offset: V::load(&st.extra.offset),
@@ -208,20 +232,108 @@ impl DriveLaneGroup {
         ok
     }
 
+    /// The maps of grid slope `index` into the lanes of `asked` whose map is another
+    /// slope's, from their servos in `all` (built there as the scalar period builds them);
+    /// the lanes of `asked` whose map is now `index`'s.
+    #[inline(always)]
+    fn load_maps(&mut self, asked: M, index: V, all: &[Option<AxisServo>]) -> M {
+        let other = asked & !index.eq(V::load(&self.slope_index));
+        if !other.any() {
+            return asked;
+        }
+        self.load_maps_cold(asked, other, index, all)
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn load_maps_cold(&mut self, asked: M, other: M, index: V, all: &[Option<AxisServo>]) -> M {
+        let mut failed = M::default();
+        let index = index.lanes();
+        for l in 0..self.servos.len() {
+            if !other.get(l) {
+                continue;
+            }
+            let i = index[l] as usize; // a whole number in [0, SLOPE_STEPS]
+            match all[self.servos[l]]
+                .as_ref()
+                .and_then(|s| s.slope_columns(i))
+            {
+                Some(cols) => {
+                    for (col, lane_col) in cols.iter().zip(self.maps.cols.iter_mut()) {
+                        for (&m, row) in col.iter().zip(lane_col.iter_mut()) {
+                            row[l] = m;
+                        }
+                    }
+                    self.slope_index[l] = index[l];
+                }
+                None => failed.set(l, true),
+            }
+        }
+        asked & !failed
+    }
+
+    /// Per lane of `lanes`, [`AxisServo::within_by_substeps`] of its servo at the period's
+    /// inputs (to the axis position `q`, formed again from `st` as [`LaneKind::mapped_period`]
+    /// forms them: the same operations), slope index `index` and `[slope, grid slope]`: the
+    /// friction error over the substeps' own velocity changes, as the scalar period checks
+    /// it where the bound from the end points is not enough (the lane's map is that
+    /// index's, loaded this period).
+    #[cold]
+    #[inline(never)]
+    fn within_by_substeps(
+        &self,
+        st: &State,
+        (lanes, q): (M, f64),
+        index: V,
+        slopes: [V; 2],
+        all: &[Option<AxisServo>],
+    ) -> M {
+        let u = self.inputs(st, q, slopes[1]);
+        let (index, slope, grid_slope) = (index.lanes(), slopes[0].lanes(), slopes[1].lanes());
+        let mut pass = M::default();
+        for (l, &s) in self.servos.iter().enumerate() {
+            if !lanes.get(l) {
+                continue;
+            }
+            let input: [f64; N_INPUT] = std::array::from_fn(|j| u[j].lanes()[l]);
+            let at = (slope[l], grid_slope[l]);
+            let within = all[s]
+                .as_ref()
+                .and_then(|servo| servo.within_by_substeps(index[l] as usize, &input, at));
+            pass.set(l, within == Some(true));
+        }
+        pass
+    }
+
+    /// The period map's inputs per lane to the axis position `q` at the grid slope
+    /// `grid_slope`: the state relative to the previous setpoint, `Δs`, `F_ff`, the friction
+    /// `F_fr = -side g(v₀) - cᵢ v₀` and the contact offset, as `try_exact_period` forms them.
+    #[inline(always)]
+    fn inputs(&self, st: &State, q: f64, grid_slope: V) -> [V; N_INPUT] {
+        let step = self.maps.step(st, q);
+        let v0 = V::load(&st.x[3]);
+        let zero = V::splat(0.0);
+        let side = V::load(&st.extra.side);
+        let f0 = side.eq(zero).select(zero, -side * V::load(&st.extra.bound));
+        let friction = f0 - grid_slope * v0;
+        let [u0, u1, u2, u3, u4, u5, u6, u7, u8] = step.state_inputs(st);
+        let offset = V::load(&st.extra.offset);
+        [u0, u1, u2, u3, u4, u5, u6, u7, u8, friction, offset]
+    }
+
     /// Per lane, the friction linearisation's force error `e_F(Δv, k)` within tolerance
     /// where it is asked (a Stribeck zone that the velocity change `dv` may reach from `v0`):
     /// at `k = 2`, else at the sharper `k = (4u² − 2) exp(−u²)` of `try_exact_period`, its
-    /// `exp` the scalar `libm::exp` of the lanes that need it. The substeps' own
-    /// velocities are left to the scalar servo.
+    /// `exp` the scalar `libm::exp` of the lanes that need it; and the lanes where neither
+    /// bound is enough (to be tried over the substeps' own velocity changes).
     #[inline(always)]
-    fn tolerance_ok(&self, v0: V, dv: V, slope: V) -> M {
+    fn tolerance_ok(&self, v0: V, dv: V, slope: V, grid_slope: V) -> (M, M) {
         let inv_vs = V::load(&self.inv_stribeck);
         let slope_step = V::load(&self.slope_step);
         let tolerance = V::load(&self.tolerance);
         let asked =
             slope_step.gt(V::splat(0.0)) & ((v0.abs() - dv) * inv_vs).le(V::splat(40f64.sqrt()));
         let base = V::load(&self.delta_friction) * inv_vs * inv_vs;
-        let grid_slope = V::splat(0.0) * slope_step;
         let error = |k: V| {
             let curvature = base * k;
             (slope - grid_slope).abs() * dv + V::splat(0.5) * curvature * dv * dv
@@ -240,7 +352,7 @@ impl DriveLaneGroup {
             let k = (V::splat(4.0) * u_low * u_low - V::splat(2.0)) * V::load(&decay);
             sharp = sharper & error(k).le(tolerance);
         }
-        !asked | coarse | sharp
+        (!asked | coarse | sharp, asked & !coarse & !sharp)
     }
 
     /// `linear_regime` per lane at `y` (positions relative to the previous setpoint): the
@@ -325,10 +437,10 @@ impl LaneKind for DriveLaneGroup {
         &self.maps.inv_scale
     }
 
-    /// One period by the lanes' slope-0 maps where every lane's checks pass (state
+    /// One period by the lanes' maps, each of its own slope, where every lane's checks pass (state
     /// updated); per lane, whether it was taken. Every check is a lane mask.
     #[inline(always)]
-    fn mapped_period(&self, st: &mut State, q: f64) -> M {
+    fn mapped_period(&mut self, st: &mut State, q: f64, all: &[Option<AxisServo>]) -> M {
         let step = self.maps.step(st, q);
         let dv_guess = (step.v_ff - V::load(&st.v_ff)).abs();
         let v0 = V::load(&st.x[3]);
@@ -342,7 +454,9 @@ impl LaneKind for DriveLaneGroup {
         let c =
             V::splat(2.0) * V::load(&self.delta_friction) * u * inv_vs * V::load(&st.extra.decay);
         let slope = (no_side | slope_step.eq(zero)).select(zero, c);
-        let grid_slope = zero * slope_step;
+        let at = slope * V::load(&self.inv_slope_step);
+        let index = round_index(at);
+        let grid_slope = index * slope_step;
         let friction = f0 - grid_slope * v0;
         let margin = V::splat(2.0) * dv_guess;
         let carried = RegimeV {
@@ -358,13 +472,19 @@ impl LaneKind for DriveLaneGroup {
         let start_ok = st.live
             & st.extra.has
             & carried.admits(margin)
-            & ((slope * V::load(&self.inv_slope_step)).lt(V::splat(0.5)) | slope.eq(zero))
+            & at.is_finite()
             & M::splat(q.is_finite());
+        let start_ok = self.load_maps(start_ok, index, all);
         let [u0, u1, u2, u3, u4, u5, u6, u7, u8] = step.state_inputs(st);
         let offset = V::load(&st.extra.offset);
         let u = [u0, u1, u2, u3, u4, u5, u6, u7, u8, friction, offset];
         let y = lane_product(&self.maps.cols, &u);
-        let ok = self.period_ok(st, start_ok, &y, [slope, dv_guess, step.s_new]);
+        let s = [slope, grid_slope, dv_guess, step.s_new];
+        let this = &*self;
+        let by_substeps = |st: &State, lanes: M| {
+            this.within_by_substeps(st, (lanes, q), index, [slope, grid_slope], all)
+        };
+        let ok = self.period_ok(st, (start_ok, &y), s, by_substeps);
         step.take(st, ok, &y);
         ok
     }
@@ -409,4 +529,21 @@ impl LaneKind for DriveLaneGroup {
     fn advance(servo: &mut AxisServo, setpoint: f64, time_s: f64) -> Result<()> {
         servo.advance(setpoint, time_s)
     }
+}
+
+/// `period_map::round_index(x, SLOPE_STEPS)` per lane for finite `x` (a lane whose `x` is
+/// not finite hands its period to the scalar servo): `x` clamped to `[0, SLOPE_STEPS + 1]`,
+/// its whole part `i` (`floor`, as `(x + 2⁵²) − 2⁵²` rounds to an integer, less one where
+/// that rounded up: every step exact), `i + 1` where `x − i ≥ ½`, at most `SLOPE_STEPS`.
+#[inline(always)]
+fn round_index(x: V) -> V {
+    let (zero, one) = (V::splat(0.0), V::splat(1.0));
+    let top = V::splat(SLOPE_STEPS as f64);
+    let x = x.gt(top + one).select(top + one, x);
+    let x = x.lt(zero).select(zero, x);
+    let big = V::splat(4_503_599_627_370_496.0); // 2⁵²
+    let r = (x + big) - big;
+    let i = r.gt(x).select(r - one, r);
+    let i = (x - i).ge(V::splat(0.5)).select(i + one, i);
+    i.gt(top).select(top, i)
 }

@@ -59,7 +59,7 @@ impl TwinLanes {
     /// were handed to the scalar servo.
     #[inline(always)]
     pub fn step_block(
-        &self,
+        &mut self,
         all: &mut [Option<AxisServo>],
         axis: Axis,
         setpoints: &[AxisVec],
@@ -86,7 +86,7 @@ impl LaneKind for TwinLanes {
     /// lane must run it scalar (state untouched). Every check is a lane mask: a lane's
     /// choice is a select, not a branch.
     #[inline(always)]
-    fn mapped_period(&self, st: &mut LaneState<()>, q: f64) -> M {
+    fn mapped_period(&mut self, st: &mut LaneState<()>, q: f64, _: &[Option<AxisServo>]) -> M {
         let m = &self.maps;
         let step = m.step(st, q);
         let (s_new, s_old) = (step.s_new, step.s_old);

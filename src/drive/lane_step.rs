@@ -197,8 +197,14 @@ pub(super) trait LaneKind {
     /// SI units per interface unit, inverted, per lane.
     fn inv_scale(&self) -> &Lanes;
     /// One period by the lanes' maps to the axis position `q`; per lane, whether it was
-    /// taken (state updated) or the lane must run it scalar (state untouched).
-    fn mapped_period(&self, st: &mut LaneState<Self::Extra>, q: f64) -> M;
+    /// taken (state updated) or the lane must run it scalar (state untouched). `all` are
+    /// the axis's servos (a lane may load another of its servo's maps from them).
+    fn mapped_period(
+        &mut self,
+        st: &mut LaneState<Self::Extra>,
+        q: f64,
+        all: &[Option<AxisServo>],
+    ) -> M;
     /// Lane `l`'s whole state to `servo`.
     fn put(servo: &mut AxisServo, st: &LaneState<Self::Extra>, l: usize);
     /// `servo`'s whole state to lane `l`.
@@ -216,7 +222,7 @@ pub(super) trait LaneKind {
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(super) fn step_block<K: LaneKind>(
-    group: &K,
+    group: &mut K,
     all: &mut [Option<AxisServo>],
     axis: Axis,
     setpoints: &[AxisVec],
@@ -229,11 +235,10 @@ pub(super) fn step_block<K: LaneKind>(
     for &s in group.servos() {
         completed[s] = if all[s].is_some() { setpoints.len() } else { 0 };
     }
-    let inv_scale = group.inv_scale();
     let (mut stepped, mut handed_back) = (0, 0);
     for (j, (q, &t)) in setpoints.iter().zip(times_s).enumerate() {
         let q = q[axis];
-        let ok = group.mapped_period(&mut st, q);
+        let ok = group.mapped_period(&mut st, q, all);
         let scalar = st.live & !ok;
         if scalar.any() {
             for (l, &s) in group.servos().iter().enumerate() {
@@ -247,7 +252,7 @@ pub(super) fn step_block<K: LaneKind>(
         }
         let live = st.live.bits();
         let x_t = V::load(&st.x[2]);
-        let inv_scale = V::load(inv_scale);
+        let inv_scale = V::load(group.inv_scale());
         let position = (x_t * inv_scale).lanes();
         let error = ((V::load(&st.setpoint) - x_t) * inv_scale).lanes();
         for (l, &s) in group.servos().iter().enumerate() {
@@ -312,12 +317,13 @@ fn scatter<K: LaneKind>(group: &K, all: &mut [Option<AxisServo>], st: &LaneState
 /// `y_r = Σ_j cols[j][r] u_j` per lane, from 0 in column order: per lane the scalar
 /// period map's product, one multiplication and one addition per column, row and lane.
 ///
-/// Written over plain arrays, not [`V`]: the compiler vectorises the loop at the width of
-/// the function it is inlined into (`DriveLanes::step_block` is compiled for AVX-512 or
-/// AVX at run time: one register a row), where `wide`'s vectors, picked when that crate
-/// is compiled, are pairs of SSE2 registers; measured, the product in [`V`] made the
-/// tolerance study about 15 % slower (docs/performance.md). The order of operations,
-/// hence every bit, is the same either way.
+/// Written over plain arrays: the compiler vectorises the loop at the width of the function
+/// it is inlined into (`DriveLanes::step_block` is compiled for AVX-512 or AVX at run
+/// time: one register a row). Measured (callgrind, session 25), the same product in
+/// [`V`]'s operations took 10 % more instructions in the lanes, and with its result
+/// written out instead of `y.map(..)` (a call, with a copy of `y`) 8 % more: the loop
+/// as it is keeps the fewest values live in the large inlined function
+/// (docs/performance.md). The order of operations, hence every bit, is the same either way.
 #[inline(always)]
 pub(super) fn lane_product<const N: usize>(
     cols: &[[Lanes; N_STATE]; N],

@@ -108,7 +108,7 @@ impl AxisLanes {
     fn step_block_inline(&mut self, setpoints: &[AxisVec], times_s: &[f64], linear: bool) {
         let a = self.axis;
         let mut counts = (0, 0);
-        for group in &self.groups {
+        for group in &mut self.groups {
             let (stepped, handed_back) = group.step_block(
                 &mut self.servos,
                 a,
@@ -119,7 +119,7 @@ impl AxisLanes {
             );
             counts = (counts.0 + stepped, counts.1 + handed_back);
         }
-        for group in &self.drive_groups {
+        for group in &mut self.drive_groups {
             let (stepped, handed_back) = group.step_block(
                 &mut self.servos,
                 a,

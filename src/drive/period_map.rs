@@ -5,6 +5,8 @@
 
 use std::cell::OnceCell;
 
+use libm::exp;
+
 use super::product::{ColumnProduct, Portable};
 
 /// Number of state variables of the cascade model: `x_m v_m x_t v_t F ∫ x_m,tick`.
@@ -206,6 +208,33 @@ pub(super) struct ExactMaps {
     /// No dry friction, backlash or pre-sliding (a linear twin): the single map applies
     /// whenever the force stays within half its limit at both ends of the period.
     pub(super) lti: bool,
+}
+
+impl ExactMaps {
+    /// Whether the friction linearisation's force error over a velocity change `dv` from
+    /// `v0` is within tolerance, for the slope `slope` at `v0` and the map's `grid_slope`:
+    /// `e_F = |c - cᵢ| Δv + ½ max|f''| Δv²` with `k = max|f''| vs² / (Fs - Fc) ≤ 2`, first
+    /// with `k = 2` (`e_F` grows with `k`, in floating point too), the `exp` of the sharper
+    /// `k = (4u² − 2) e^{-u²}` only when that bound is not enough (`u ≥ 1.23`).
+    #[inline(always)]
+    pub(super) fn friction_error_within(
+        &self,
+        slope: f64,
+        grid_slope: f64,
+        v0: f64,
+        dv: f64,
+    ) -> bool {
+        let error = |k: f64| {
+            let curvature = self.delta_friction * self.inv_stribeck * self.inv_stribeck * k;
+            (slope - grid_slope).abs() * dv + 0.5 * curvature * dv * dv
+        };
+        if error(2.0) <= self.tolerance {
+            return true;
+        }
+        let u_low = (v0.abs() - dv).max(0.0) * self.inv_stribeck;
+        u_low >= 1.23
+            && error((4.0 * u_low * u_low - 2.0) * exp(-(u_low * u_low))) <= self.tolerance
+    }
 }
 
 /// Slope grid intervals of [`ExactMaps`].

@@ -569,22 +569,8 @@ impl AxisServo {
         }
         let dv = 2.0 * (y[3] - x[3]).abs().max(dv_guess);
         if exact.slope_step > 0.0 && (v0.abs() - dv) * exact.inv_stribeck <= 40f64.sqrt() {
-            // e_F = |c - cᵢ| Δv + ½ max|f''| Δv², with k = max|f''| vs² / (Fs - Fc) ≤ 2:
-            // first with k = 2 (e_F grows with k, in floating point too), the exp of the
-            // sharper k only when that bound is not enough.
-            let within = |dv: f64| {
-                let error = |k: f64| {
-                    let curvature =
-                        exact.delta_friction * exact.inv_stribeck * exact.inv_stribeck * k;
-                    (slope - grid_slope).abs() * dv + 0.5 * curvature * dv * dv
-                };
-                if error(2.0) <= exact.tolerance {
-                    return true;
-                }
-                let u_low = (v0.abs() - dv).max(0.0) * exact.inv_stribeck;
-                u_low >= 1.23
-                    && error((4.0 * u_low * u_low - 2.0) * exp(-(u_low * u_low))) <= exact.tolerance
-            };
+            // e_F = |c - cᵢ| Δv + ½ max|f''| Δv² within tolerance (ExactMaps).
+            let within = |dv: f64| exact.friction_error_within(slope, grid_slope, v0, dv);
             // First with Δv bounded from the end points and the command; where that is not
             // enough (a command whose velocity jumps from period to period, such as the
             // rounded positions of a fine-segment file), with the substeps' own velocities.
@@ -661,6 +647,35 @@ impl AxisServo {
             inv_stribeck: exact.inv_stribeck,
             tolerance: exact.tolerance,
         })
+    }
+
+    /// The columns of the period map of grid slope index `index` (`index · slope_step`,
+    /// [`ExactMaps`]) for a lane servo, built where it was not yet as the first period
+    /// needing it would build it (the same map); None for a drive without slope maps.
+    pub(super) fn slope_columns(&self, index: usize) -> Option<[[f64; N_STATE]; N_INPUT]> {
+        let exact = self.exact.as_deref().filter(|e| !e.lti)?;
+        let grid_slope = index as f64 * exact.slope_step;
+        let map = exact
+            .maps
+            .get(index)?
+            .get_or_init(|| self.period_map(grid_slope, true));
+        Some(map.first_columns())
+    }
+
+    /// Whether the friction error is within tolerance over the substeps' own velocity
+    /// changes ([`PeriodMap::largest_substep_velocity_change`]) of the map of grid slope
+    /// index `index` at `input`, as [`AxisServo::advance`]'s period asks where the bound
+    /// from the end points is not enough; None without that map (not built).
+    pub(super) fn within_by_substeps(
+        &self,
+        index: usize,
+        input: &[f64; N_INPUT],
+        (slope, grid_slope): (f64, f64),
+    ) -> Option<bool> {
+        let exact = self.exact.as_deref()?;
+        let map = exact.maps.get(index)?.get()?;
+        let dv = map.largest_substep_velocity_change(input);
+        Some(exact.friction_error_within(slope, grid_slope, input[3], dv))
     }
 
     /// The carried regime and the friction-bound cache, what [`AxisServo::advance`] carries

@@ -1,23 +1,26 @@
-//! The lane groups' vectors: [`LANES`] f64 as two `wide::f64x4`, and their masks.
+//! The lane groups' vectors: [`LANES`] f64 as one array, and their masks.
 //!
-//! The one place the crate touches a SIMD library. [`V`] holds one value per lane and does
+//! The one place the crate defines its lane vectors. [`V`] holds one value per lane and does
 //! IEEE 754 arithmetic lane by lane, each operation rounded as the scalar one is (a
 //! multiplication and an addition are never fused), so a lane's result is the scalar
 //! model's bits whatever the vector width (a NaN's sign and payload aside, which are the
-//! instruction's: a lane that is not finite fails its period's checks anyway). [`M`] is a lane mask (all bits set: true), the
-//! result of a comparison: with NaN, `a.lt(b)`, `a.le(b)`, `a.gt(b)` and `a.eq(b)` are false
-//! as the scalar comparisons are, so `!(a <= b)` is written `!a.le(b)`. A per-lane choice
-//! (a regime, a check) is a mask and a [`M::select`], not a branch.
+//! instruction's: a lane that is not finite fails its period's checks anyway). [`M`] is a
+//! lane mask (all bits set: true), the result of a comparison: with NaN, `a.lt(b)`,
+//! `a.le(b)`, `a.gt(b)` and `a.eq(b)` are false as the scalar comparisons are, so
+//! `!(a <= b)` is written `!a.le(b)`. A per-lane choice (a regime, a check) is a mask and a
+//! [`M::select`], not a branch.
 //!
-//! `wide` picks its instructions when it is compiled (SSE2 pairs without `-C target-feature`);
-//! the callers are compiled for AVX or AVX-512 at run time (`DriveLanes::step_block`), which
-//! the inlined vector code takes on.
+//! Each operation is a loop over the [`LANES`] lanes of plain arrays, always inlined: the
+//! compiler turns it into vector instructions of the width of the function it is inlined
+//! into (`DriveLanes::step_block` is compiled for AVX-512 or AVX at run time: one or two
+//! registers a vector). `wide::f64x4`, which these vectors were before, picks its
+//! instructions when that crate is compiled (SSE2 pairs without `-C target-feature`), so
+//! its operations ran as four 128-bit instructions each even inside the AVX-512 function
+//! (docs/performance.md, session 25).
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
-use wide::f64x4;
-
-/// Servos per lane group: one AVX-512 register of f64, two `f64x4`.
+/// Servos per lane group: one AVX-512 register of f64.
 pub const LANES: usize = 8;
 
 /// One value per lane, as the lanes' state is stored.
@@ -25,96 +28,92 @@ pub type Lanes = [f64; LANES];
 
 /// One f64 per lane.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct V([f64x4; 2]);
+pub(super) struct V(Lanes);
 
 /// One truth value per lane (a lane's bits all set, or all clear).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct M([f64x4; 2]);
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct M([i64; LANES]);
+
+/// `f` lane by lane.
+#[inline(always)]
+fn each<U>(f: impl Fn(usize) -> U) -> [U; LANES] {
+    std::array::from_fn(f)
+}
 
 impl V {
     /// The lanes of `a`.
     #[inline(always)]
     pub fn load(a: &Lanes) -> V {
-        V([
-            f64x4::from([a[0], a[1], a[2], a[3]]),
-            f64x4::from([a[4], a[5], a[6], a[7]]),
-        ])
+        V(*a)
     }
 
     /// `x` in every lane.
     #[inline(always)]
     pub fn splat(x: f64) -> V {
-        V([f64x4::splat(x); 2])
+        V([x; LANES])
     }
 
     /// The lanes as an array.
     #[inline(always)]
     pub fn lanes(self) -> Lanes {
-        let (a, b) = (self.0[0].to_array(), self.0[1].to_array());
-        [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+        self.0
     }
 
     /// `|x|` (the sign bit cleared, as `f64::abs`).
     #[inline(always)]
     pub fn abs(self) -> V {
-        V(self.0.map(f64x4::abs))
+        V(each(|l| self.0[l].abs()))
     }
 
     /// `max(x, y)` as `f64::max`: a NaN in one operand gives the other.
     #[inline(always)]
     pub fn max(self, y: V) -> V {
-        V([self.0[0].max(y.0[0]), self.0[1].max(y.0[1])])
+        V(each(|l| self.0[l].max(y.0[l])))
     }
 
     /// `x` finite per lane.
     #[inline(always)]
     pub fn is_finite(self) -> M {
-        M(self.0.map(f64x4::is_finite))
+        M(each(|l| -i64::from(self.0[l].is_finite())))
     }
 }
 
 /// The comparisons, `x.lt(y)` for `x < y` per lane and so on.
 macro_rules! lane_cmp {
-    ($($f:ident $simd:ident),*) => {
+    ($($f:ident $op:tt),*) => {
         impl V {
             $(
                 #[inline(always)]
                 pub fn $f(self, y: V) -> M {
-                    M([self.0[0].$simd(y.0[0]), self.0[1].$simd(y.0[1])])
+                    M(each(|l| -i64::from(self.0[l] $op y.0[l])))
                 }
             )*
         }
     };
 }
-lane_cmp!(lt simd_lt, le simd_le, gt simd_gt, ge simd_ge, eq simd_eq);
+lane_cmp!(lt <, le <=, gt >, ge >=, eq ==);
 
 macro_rules! lane_op {
-    ($trait:ident, $f:ident) => {
+    ($trait:ident, $f:ident, $op:tt) => {
         impl $trait for V {
             type Output = V;
             #[inline(always)]
             fn $f(self, y: V) -> V {
-                V([self.0[0].$f(y.0[0]), self.0[1].$f(y.0[1])])
+                V(each(|l| self.0[l] $op y.0[l]))
             }
         }
     };
 }
-lane_op!(Add, add);
-lane_op!(Sub, sub);
-lane_op!(Mul, mul);
-lane_op!(Div, div);
+lane_op!(Add, add, +);
+lane_op!(Sub, sub, -);
+lane_op!(Mul, mul, *);
+lane_op!(Div, div, /);
 
 impl Neg for V {
     type Output = V;
     #[inline(always)]
     fn neg(self) -> V {
-        V(self.0.map(|x| -x))
-    }
-}
-
-impl Default for M {
-    fn default() -> M {
-        M([f64x4::ZERO; 2])
+        V(each(|l| -self.0[l]))
     }
 }
 
@@ -122,33 +121,25 @@ impl M {
     /// True in every lane.
     #[inline(always)]
     pub fn all_true() -> M {
-        let ones = f64x4::splat(f64::from_bits(u64::MAX));
-        M([ones; 2])
+        M([-1; LANES])
     }
 
     /// `b` in every lane.
     #[inline(always)]
     pub fn splat(b: bool) -> M {
-        if b {
-            M::all_true()
-        } else {
-            M::default()
-        }
+        M([-i64::from(b); LANES])
     }
 
     /// Per lane, `t` where true and `f` where false.
     #[inline(always)]
     pub fn select(self, t: V, f: V) -> V {
-        V([
-            self.0[0].select(t.0[0], f.0[0]),
-            self.0[1].select(t.0[1], f.0[1]),
-        ])
+        V(each(|l| if self.0[l] != 0 { t.0[l] } else { f.0[l] }))
     }
 
     /// One bit per lane, lane `l` at bit `l`.
     #[inline(always)]
     pub fn bits(self) -> u32 {
-        self.0[0].to_bitmask() | self.0[1].to_bitmask() << 4
+        (0..LANES).fold(0, |b, l| b | u32::from(self.0[l] != 0) << l)
     }
 
     /// True in some lane.
@@ -160,39 +151,35 @@ impl M {
     /// Lane `l`.
     #[inline(always)]
     pub fn get(self, l: usize) -> bool {
-        self.bits() >> l & 1 == 1
+        self.0[l] != 0
     }
 
     /// Lane `l` set to `b`.
     #[inline(always)]
     pub fn set(&mut self, l: usize, b: bool) {
-        let mut half = self.0[l / 4].to_array();
-        half[l % 4] = f64::from_bits(if b { u64::MAX } else { 0 });
-        self.0[l / 4] = f64x4::from(half);
+        self.0[l] = -i64::from(b);
     }
 }
 
-impl BitAnd for M {
-    type Output = M;
-    #[inline(always)]
-    fn bitand(self, y: M) -> M {
-        M([self.0[0] & y.0[0], self.0[1] & y.0[1]])
-    }
+macro_rules! mask_op {
+    ($trait:ident, $f:ident, $op:tt) => {
+        impl $trait for M {
+            type Output = M;
+            #[inline(always)]
+            fn $f(self, y: M) -> M {
+                M(each(|l| self.0[l] $op y.0[l]))
+            }
+        }
+    };
 }
-
-impl BitOr for M {
-    type Output = M;
-    #[inline(always)]
-    fn bitor(self, y: M) -> M {
-        M([self.0[0] | y.0[0], self.0[1] | y.0[1]])
-    }
-}
+mask_op!(BitAnd, bitand, &);
+mask_op!(BitOr, bitor, |);
 
 impl Not for M {
     type Output = M;
     #[inline(always)]
     fn not(self) -> M {
-        M([!self.0[0], !self.0[1]])
+        M(each(|l| !self.0[l]))
     }
 }
 

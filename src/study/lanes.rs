@@ -29,6 +29,7 @@ use crate::measure::shared::{SharedBallbar, SharedReadings};
 use crate::measure::BallbarSink;
 use crate::pipeline::{self, Sample, Sink};
 use crate::program;
+use crate::study::lost_motion::SharedRegressors;
 use crate::study::simulate::{
     analysed_along, analyses, assemble, ballbar_sink, bar_geometry, directions_of, gates_transient,
     merge_reductions, run_ballbar, run_options, transient_warning, BallbarStudy, SharedRuns,
@@ -340,6 +341,8 @@ fn run_pass(
         setpoints,
         feed_reductions,
     );
+    // The points on the pass's common maps share the reversal-value fit's regressors.
+    let regressors = SharedRegressors::default();
     Ok(points
         .iter()
         .zip(ballbars)
@@ -351,7 +354,16 @@ fn run_pass(
             }
             let own = bars.first_mut().and_then(|b| b.maps.take());
             let maps = own.as_ref().or(common_maps.as_ref());
-            assemble(&scenarios[i], bars, maps, warnings, &shared).ok()
+            let shared_regressors = own.is_none().then_some(&regressors);
+            assemble(
+                &scenarios[i],
+                bars,
+                maps,
+                warnings,
+                &shared,
+                shared_regressors,
+            )
+            .ok()
         })
         .collect())
 }

@@ -33,7 +33,9 @@
 //! bar does not see (normalised sensitivity below [`B_SENSITIVITY_MIN`] at all of them) has
 //! a term, which keeps its lost motion out of the others' B, and no B.
 
+use std::cell::RefCell;
 use std::f64::consts::PI;
+use std::rc::Rc;
 
 use nalgebra::{DMatrix, DVector};
 
@@ -51,21 +53,49 @@ fn has_lost_motion(d: &AxisDrive) -> bool {
     d.backlash_m_or_rad > 0.0 || d.has_dry_friction()
 }
 
+/// Per bin of the first direction, the regressors `sgn(v_a) S_a` of the lost-motion axes
+/// (in their order) where every one of them moves fast, None elsewhere.
+type Regressors = Vec<Option<Vec<f64>>>;
+
+/// The [`Regressors`] of the points of a study's pass, which share their command maps and
+/// bar (the same setpoints and kinematics; only the drives differ): computed once per set
+/// of lost-motion axes and shared, the same values each point would compute.
+#[derive(Default)]
+pub struct SharedRegressors(RefCell<Vec<(Vec<Axis>, Rc<Regressors>)>>);
+
+impl SharedRegressors {
+    /// The regressors of `lost` on `maps` with `geometry` (the pass's), computed at the
+    /// first point that asks.
+    fn get(&self, maps: &CommandMaps, geometry: &BarGeometry, lost: &[Axis]) -> Rc<Regressors> {
+        if let Some((_, r)) = self.0.borrow().iter().find(|(axes, _)| axes == lost) {
+            return Rc::clone(r);
+        }
+        let r = Rc::new(regressors(maps, geometry, lost));
+        self.0.borrow_mut().push((lost.to_vec(), Rc::clone(&r)));
+        r
+    }
+}
+
 /// Each of `drives`' axes' B from the `signatures` (one per direction, the first the
-/// direction of `maps`), with the bar's `geometry` and the reversal `sites`.
+/// direction of `maps`), with the bar's `geometry` and the reversal `sites`; the
+/// regressors from `shared` where the caller's points share `maps` and `geometry`.
 pub fn reversal_b(
     signatures: &[BallbarRun],
-    maps: &CommandMaps,
-    geometry: &BarGeometry,
+    (maps, geometry): (&CommandMaps, &BarGeometry),
     drives: &[AxisDrive],
     sites: &[ReversalSite],
+    shared: Option<&SharedRegressors>,
 ) -> Result<Vec<AxisReversal>> {
     let lost: Vec<Axis> = drives
         .iter()
         .filter(|d| has_lost_motion(d))
         .map(|d| d.axis)
         .collect();
-    let delta = fitted_lost_motion(signatures, maps, geometry, &lost)?;
+    let regressors = || match shared {
+        Some(shared) => shared.get(maps, geometry, &lost),
+        None => Rc::new(regressors(maps, geometry, &lost)),
+    };
+    let delta = fitted_lost_motion(signatures, regressors, lost.len())?;
     let length_mm = geometry.length_mm;
     Ok(drives
         .iter()
@@ -99,51 +129,22 @@ pub fn reversal_b(
         .collect())
 }
 
-/// δ_a (mm or deg) of each axis of `lost`, by the joint least-squares fit of the module's
-/// doc: None for an axis the bar does not see in the fitted bins; None as a whole when
-/// there are no maps or no lost motion.
+/// δ_a (mm or deg) of each of the `m` lost-motion axes, by the joint least-squares fit of
+/// the module's doc on their `regressors`: None for an axis the bar does not see in the
+/// fitted bins; None as a whole when there are no signatures or no lost motion.
 fn fitted_lost_motion(
     signatures: &[BallbarRun],
-    maps: &CommandMaps,
-    geometry: &BarGeometry,
-    lost: &[Axis],
+    regressors: impl FnOnce() -> Rc<Regressors>,
+    m: usize,
 ) -> Result<Option<Vec<Option<f64>>>> {
     let Some(first) = signatures.first() else {
         return Ok(None);
     };
-    if lost.is_empty() {
+    if m == 0 {
         return Ok(None);
     }
-    // Per bin: each lost axis's regressor sgn(v_a) S_a, where every lost axis moves fast.
-    let poses: Vec<Option<(crate::AxisVec, crate::AxisVec)>> = (0..N_BINS)
-        .map(|i| Some((maps.commanded.bin(i)?, maps.speed.bin(i)?)))
-        .collect();
-    let top: Vec<f64> = lost
-        .iter()
-        .map(|&a| {
-            poses
-                .iter()
-                .flatten()
-                .map(|(_, v)| v[a].abs())
-                .fold(0.0, f64::max)
-        })
-        .collect();
-    let regressors: Vec<Option<Vec<f64>>> = poses
-        .iter()
-        .map(|pose| {
-            let (q, v) = pose.as_ref()?;
-            let fast = lost
-                .iter()
-                .zip(&top)
-                .all(|(&a, &top)| v[a].abs() >= B_SPEED_FRACTION * top);
-            fast.then(|| {
-                let s = geometry.sensitivity_at(q);
-                lost.iter().map(|&a| v[a].signum() * s[a]).collect()
-            })
-        })
-        .collect();
+    let regressors = regressors();
     // Normal equations over every direction's fitted bins, y in µm.
-    let m = lost.len();
     let (mut xtx, mut xty) = (DMatrix::<f64>::zeros(m, m), DVector::<f64>::zeros(m));
     for run in signatures {
         let sign = if run.direction() == first.direction() {
@@ -164,6 +165,43 @@ fn fitted_lost_motion(
             }
         }
     }
+    solve_deltas(&xtx, &xty)
+}
+
+/// Per bin: each lost axis's regressor sgn(v_a) S_a, where every lost axis moves fast.
+fn regressors(maps: &CommandMaps, geometry: &BarGeometry, lost: &[Axis]) -> Regressors {
+    let poses: Vec<Option<(crate::AxisVec, crate::AxisVec)>> = (0..N_BINS)
+        .map(|i| Some((maps.commanded.bin(i)?, maps.speed.bin(i)?)))
+        .collect();
+    let top: Vec<f64> = lost
+        .iter()
+        .map(|&a| {
+            poses
+                .iter()
+                .flatten()
+                .map(|(_, v)| v[a].abs())
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    poses
+        .iter()
+        .map(|pose| {
+            let (q, v) = pose.as_ref()?;
+            let fast = lost
+                .iter()
+                .zip(&top)
+                .all(|(&a, &top)| v[a].abs() >= B_SPEED_FRACTION * top);
+            fast.then(|| {
+                let s = geometry.sensitivity_at(q);
+                lost.iter().map(|&a| v[a].signum() * s[a]).collect()
+            })
+        })
+        .collect()
+}
+
+/// δ_a (mm or deg) from the normal equations `xtx β = xty` (y in µm) of the fit.
+fn solve_deltas(xtx: &DMatrix<f64>, xty: &DVector<f64>) -> Result<Option<Vec<Option<f64>>>> {
+    let m = xty.len();
     // An axis the bar does not see in these bins has no column: its δ is not told.
     let largest = (0..m).map(|j| xtx[(j, j)]).fold(0.0, f64::max);
     let seen: Vec<usize> = (0..m)

@@ -319,7 +319,7 @@ pub fn run_ballbar_budget(
         feed_reductions,
     );
     let maps = sinks.first_mut().and_then(|b| b.maps.take());
-    let mut study = assemble(scenario, sinks, maps.as_ref(), warnings, &shared)?;
+    let mut study = assemble(scenario, sinks, maps.as_ref(), warnings, &shared, None)?;
     for m in &measurements {
         study.measurements.insert(m.name().to_string(), m.finish()?);
     }
@@ -498,6 +498,7 @@ pub(crate) fn assemble(
     maps: Option<&CommandMaps>,
     warnings: Vec<String>,
     shared: &SharedRuns,
+    regressors: Option<&crate::study::lost_motion::SharedRegressors>,
 ) -> Result<BallbarStudy> {
     let machine = &scenario.machine;
     let geometry = bar_geometry(scenario);
@@ -535,7 +536,8 @@ pub(crate) fn assemble(
     };
     let lost_motion_b = match (maps, geometry) {
         (Some(maps), Some(g)) => {
-            crate::study::lost_motion::reversal_b(&signatures, maps, &g, &drives, &sites)?
+            let (bar, r) = ((maps, &g), regressors);
+            crate::study::lost_motion::reversal_b(&signatures, bar, &drives, &sites, r)?
         }
         _ => Vec::new(),
     };

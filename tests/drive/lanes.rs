@@ -314,3 +314,49 @@ fn stop_and_go(t: f64) -> AxisVec {
     phase += (t - 4.7).max(0.0);
     at_phase(phase)
 }
+
+/// Creeping drives inside their Stribeck zones, where each lane's friction slope (hence its
+/// period map on the slope grid) is its own: 8 points whose X and Y drives differ in kv,
+/// Coulomb friction (50-300 N), static over Coulomb friction (1.2-2) and Stribeck velocity
+/// (2-5 mm/s), on a path that creeps at 3 mm/s along X and -2.5 mm/s along Y for 6 s
+/// (`|v|/vs` from 0.5 to 1.5: slopes from about a fifth to all of the grid's largest).
+/// Each point in lanes gives its single run's bits, and the lanes step almost every period
+/// themselves, at their own slopes: a lane that took a period by another slope's map, or by
+/// another lane's map, would give other bits; one that handed every period off the slope-0
+/// map to the scalar servo would hand back most of them.
+#[test]
+fn creeping_drives_step_in_lanes_by_their_own_slopes_maps_bit_for_bit() {
+    fn creep(t: f64) -> AxisVec {
+        let mut q = AxisVec::ZERO;
+        q[Axis::X] = 3.0 * t; // 3 mm/s
+        q[Axis::Y] = -2.5 * t; // -2.5 mm/s
+        q
+    }
+    let q0 = creep(0.0);
+    let machines: Vec<Machine> = (0..8)
+        .map(|i| {
+            let mut m = trt_ac();
+            let f = i as f64 / 7.0;
+            for (a, g) in [(Axis::X, f), (Axis::Y, 1.0 - f)] {
+                let mut d = m.drive(a).with_kv_per_s(25.0 + 10.0 * g).unwrap();
+                d.coulomb_n_or_nm = 50.0 + 250.0 * (1.0 - g);
+                d.static_ratio = 1.2 + 0.8 * g;
+                d.stribeck_m_or_rad_per_s = (2.0 + 3.0 * g) * 1e-3;
+                m.axis_mut(a).drive = d;
+            }
+            m
+        })
+        .collect();
+    let (lanes, [drives, _]) = in_lanes_counted(&machines, &q0, creep);
+    for (i, (machine, lane)) in machines.iter().zip(&lanes).enumerate() {
+        let single = single(machine, &q0, creep);
+        assert_eq!(single.len(), PERIODS, "point {i}");
+        assert_eq!(lane.len(), single.len(), "point {i}: setpoints completed");
+        assert!(bits(lane) == bits(&single), "point {i}: outputs differ");
+    }
+    let (stepped, handed_back) = drives;
+    assert!(
+        stepped >= 16 * PERIODS as u64 && handed_back * 50 < stepped,
+        "{handed_back} of {stepped} lane periods handed to the scalar servo"
+    );
+}

@@ -47,12 +47,15 @@ fn axis(a: &str, backlash_mm: f64, coulomb_n: f64, kv: f64, vff: f64) -> String 
     )
 }
 
-/// The figures of a study that `result()` and the sites give, in full precision.
+/// The figures of a study that `result()` and the sites give, in full precision, with each
+/// axis's reversal value B (`study::lost_motion`: in lanes, its fit's regressors are shared
+/// by the points of a pass with the same lost-motion axes).
 fn figures(s: &BallbarStudy) -> String {
     let traces: Vec<_> = s.runs.iter().map(|r| r.trace_um(false).unwrap()).collect();
     format!(
-        "{:?}\n{:?}\n{:?}\n{:?}\n{:?} {:?} {:?}\n{:?}",
+        "{:?}\n{:?}\n{:?}\n{:?}\n{:?}\n{:?} {:?} {:?}\n{:?}",
         s.result().unwrap(),
+        s.lost_motion_b,
         s.sites,
         s.reversals,
         s.warnings,

@@ -117,9 +117,11 @@ pub fn groups(
     out
 }
 
-/// Points per thread run before their figures are taken: 16 points of the 15/10 cone hold
-/// about 50 MB of traces; a longer chunk saves little (docs/performance.md).
-const POINTS_PER_CHUNK_PER_THREAD: usize = 16;
+/// Points per thread run before their figures are taken: a full pass
+/// ([`crate::study::lanes::POINTS_PER_PASS`]) each, so that a random study's drives fill
+/// their lane groups and the pass's shared work spreads over 64 points (the 15/10 cone's
+/// 128 points on 2 threads hold about 170 MB of traces; docs/performance.md).
+const POINTS_PER_CHUNK_PER_THREAD: usize = 64;
 
 /// The figures of one group of points, in its order: the ball-bar studies of
 /// [`run_ballbar_lanes`] (each equal to its point's single run), and `check` once for each

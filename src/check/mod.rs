@@ -3,7 +3,6 @@
 //! Outputs: a [`CheckReport`]: travel, velocity and acceleration per axis, collisions and near misses in the rapier/parry scene.
 
 pub mod limits;
-pub mod of_run;
 pub mod run;
 pub mod scene;
 pub mod units;

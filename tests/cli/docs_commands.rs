@@ -262,6 +262,8 @@ const SHOWN: &[(&str, Shown)] = &[
         Skip("needs Python with dask.distributed; the sweep's run of the same script is tested in tests/cli/dask_example.rs"),
     ),
     ("mtsim study", Names),
+    ("mtsim study --samples 128", Names),
+    ("mtsim study -q", Names),
     ("mtsim <version>", Skip("the Parquet files' `created_by` text, not a command")),
     ("mtsim analyze", Names),
     ("mtsim batch", Names),

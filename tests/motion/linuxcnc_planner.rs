@@ -531,7 +531,6 @@ fn rotary_moves_overlap_as_linuxcnc_plans_them() {
     }
 }
 
-
 /// The three-axis sample, homed headless with a home sequence of its own (the harness's):
 /// corners under G64 P and G64 as LinuxCNC blends them, at its override of 1.2, and a pocket
 /// (a plunge at F300, then F1500: the path speed continuous at the feed change).

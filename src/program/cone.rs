@@ -25,7 +25,16 @@ pub struct ConePath {
     pub passage: Option<PolePassage>,
     /// `cone`'s constants, for its poses.
     poses: ConePoses,
+    /// Travel of A, B and C, deg: (min, max), unbounded for a continuous rotary or one the
+    /// machine does not have ([`ConePath::start_within_travel`]).
+    rotary_travel_deg: [(f64, f64); 3],
 }
+
+/// The rotaries, in the order of [`ConePath`]'s `rotary_travel_deg`.
+const ROTARIES: [Axis; 3] = [Axis::A, Axis::B, Axis::C];
+
+/// Grid step of the sweep that [`ConePath::start_within_travel`] follows, rad (0.5 deg).
+const SWEEP_STEP_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
 
 impl ConePath {
     /// Chooses the IK branch: the spec's (tilt >= 0) unless the machine's tilt limits
@@ -36,12 +45,20 @@ impl ConePath {
         let kinematics = machine.kinematics;
         let poses = cone.poses();
         let passage = PolePassage::find(&poses, &kinematics);
+        let rotary_travel_deg = ROTARIES.map(|a| {
+            let axis = machine.has_axis(a).then(|| machine.axis(a));
+            match axis {
+                Some(axis) if !axis.continuous => (axis.min, axis.max),
+                _ => (f64::NEG_INFINITY, f64::INFINITY),
+            }
+        });
         let path = ConePath {
             cone,
             kinematics,
             branch: Branch::Primary,
             passage,
             poses,
+            rotary_travel_deg,
         };
         // The rotaries the branch must keep within travel: a general chain's all, else the tilt.
         // (A named layout's tilt is a function of the tool axis alone: the same whichever
@@ -166,14 +183,59 @@ impl ConePath {
         n: usize,
     ) -> impl Iterator<Item = (f64, AxisVec)> {
         // Each pose continuous from the one before (on a named layout: its table axis, C or
-        // trt-ab's A, from the spec's atan2 range at the start).
-        let mut previous = self.axes_after(theta0_rad, &AxisVec::ZERO);
+        // trt-ab's A, from the spec's atan2 range at the start, turned by whole turns where
+        // that keeps the sweep within travel).
+        let mut previous = self.start_within_travel(theta0_rad, span_rad);
         (0..=n).map(move |k| {
             let theta = theta0_rad + span_rad * k as f64 / n as f64;
             let q = self.axes_after(theta, &previous);
             previous = q;
             (theta, q)
         })
+    }
+
+    /// The first pose of the sweep from `theta0_rad` over `span_rad` (either sign): each
+    /// rotary from zero as [`ConePath::axes_after`] unwraps it, then turned by the whole
+    /// turns `n` (360 deg) that bring the sweep's range `[lo, hi]` within its travel
+    /// `[min, max]` where it is not already: `n` from `⌈(min − lo)/360⌉ ..= ⌊(max − hi)/360⌋`,
+    /// the one nearest zero. This is what a post does for a rotary of limited travel: C of
+    /// ±360 deg turns a clockwise revolution that starts at θ = 0 from 270 deg down to
+    /// −90 deg, not from −90 deg to −450 deg. A sweep wider than the travel keeps its start
+    /// (the check reports it). The range is followed on a 0.5 deg grid of θ, its ends
+    /// included (a rotary's extreme between two grid points exceeds the grid's by at most
+    /// its curvature times (0.25 deg)²/2: the margin that a whole turn leaves is far wider).
+    fn start_within_travel(&self, theta0_rad: f64, span_rad: f64) -> AxisVec {
+        let start = self.axes_after(theta0_rad, &AxisVec::ZERO);
+        let bounded: Vec<usize> = (0..ROTARIES.len())
+            .filter(|&i| {
+                let (min, max) = self.rotary_travel_deg[i];
+                min.is_finite() || max.is_finite()
+            })
+            .collect();
+        if bounded.is_empty() {
+            return start;
+        }
+        let steps = ((span_rad.abs() / SWEEP_STEP_RAD).ceil() as usize).max(1);
+        let (mut lo, mut hi) = (ROTARIES.map(|a| start[a]), ROTARIES.map(|a| start[a]));
+        let mut q = start;
+        for k in 1..=steps {
+            q = self.axes_after(theta0_rad + span_rad * k as f64 / steps as f64, &q);
+            for &i in &bounded {
+                lo[i] = lo[i].min(q[ROTARIES[i]]);
+                hi[i] = hi[i].max(q[ROTARIES[i]]);
+            }
+        }
+        let mut shifted = start;
+        for &i in &bounded {
+            let (min, max) = self.rotary_travel_deg[i];
+            let least = ((min - lo[i]) / 360.0).ceil();
+            let most = ((max - hi[i]) / 360.0).floor();
+            if least <= most && !(least..=most).contains(&0.0) {
+                let turns = if least > 0.0 { least } else { most };
+                shifted[ROTARIES[i]] += 360.0 * turns;
+            }
+        }
+        shifted
     }
 
     /// dq/dθ at `theta_rad` (mm/rad and deg/rad), by the fourth-order central difference

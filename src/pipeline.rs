@@ -52,7 +52,7 @@ pub struct Sample {
 impl Sample {
     /// A sample at time `t0` (s) with every position zero, to be written in place.
     #[inline(always)]
-    fn blank(t0: f64) -> Sample {
+    pub(crate) fn blank(t0: f64) -> Sample {
         Sample {
             index: 0,
             time_s: t0,

@@ -506,8 +506,24 @@ impl<'a> LimitsMonitor<'a> {
         }
     }
 
-    /// The per-axis usage and the violations, in the order they started.
-    pub fn finish(mut self) -> (Vec<AxisUsage>, Vec<Violation>) {
+    /// Starts another run on its own clock: the violations open are closed, and the next
+    /// sample has no earlier one (no velocity, acceleration or jerk across the runs' seam).
+    /// Extremes and peaks carry on.
+    pub fn restart(&mut self) {
+        self.close_open();
+        self.difference_afresh();
+    }
+
+    /// The next sample has no earlier one: no velocity, acceleration or jerk is taken across
+    /// the gap before it (the violations open stay open).
+    pub fn difference_afresh(&mut self) {
+        self.previous.valid = false;
+        self.previous.has_v = false;
+        self.previous.has_a = false;
+    }
+
+    /// Closes every violation still open.
+    fn close_open(&mut self) {
         for track in &mut self.tracks {
             for (k, open) in track.open.iter_mut().enumerate() {
                 if let Some(open) = open.take() {
@@ -516,6 +532,12 @@ impl<'a> LimitsMonitor<'a> {
                 }
             }
         }
+        self.open = 0;
+    }
+
+    /// The per-axis usage and the violations, in the order they started.
+    pub fn finish(mut self) -> (Vec<AxisUsage>, Vec<Violation>) {
+        self.close_open();
         self.violations
             .sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
         let usage = self

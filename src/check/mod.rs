@@ -3,6 +3,7 @@
 //! Outputs: a [`CheckReport`]: travel, velocity and acceleration per axis, collisions and near misses in the rapier/parry scene.
 
 pub mod limits;
+pub mod of_run;
 pub mod run;
 pub mod scene;
 pub mod units;

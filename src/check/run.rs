@@ -103,6 +103,10 @@ pub enum CheckTiming {
     Programmed,
     /// The servo models' actual positions on the planner's setpoints.
     Dynamics,
+    /// The commanded positions of `simulate`'s own run (every direction, the lead arcs),
+    /// from each run's first move's end, each run on its own clock
+    /// ([`crate::check::of_run`]).
+    Run,
 }
 
 impl CheckTiming {
@@ -114,6 +118,9 @@ impl CheckTiming {
                 "commanded positions at programmed timing (accelerations at junctions between blocks are not measured)"
             }
             CheckTiming::Dynamics => "actual (servo) positions",
+            CheckTiming::Run => {
+                "commanded positions of the simulated run itself (every direction, the lead arcs) at the planner's timing"
+            }
         }
     }
 }
@@ -137,9 +144,21 @@ fn usage_by_axis<'de, D: Deserializer<'de>>(
 
 /// The limits monitor and the collision scene as one sink: each sample to both, in that
 /// order, with one call per sample.
-struct Monitors<'a> {
-    limits: LimitsMonitor<'a>,
-    scene: Option<SceneSink>,
+pub(crate) struct Monitors<'a> {
+    pub(crate) limits: LimitsMonitor<'a>,
+    pub(crate) scene: Option<SceneSink>,
+}
+
+impl Monitors<'_> {
+    /// Starts another run on its own clock ([`LimitsMonitor::restart`],
+    /// [`SceneMonitor::restart`]); its block indices count from 0 again.
+    pub(crate) fn restart(&mut self) {
+        self.limits.restart();
+        if let Some(scene) = self.scene.as_mut() {
+            scene.monitor.restart();
+            scene.changes_applied_at = u64::MAX;
+        }
+    }
 }
 
 impl Sink for Monitors<'_> {
@@ -154,11 +173,11 @@ impl Sink for Monitors<'_> {
 }
 
 /// Tool changes read from the move stream ahead of the samples: (block index, tool number).
-type ToolChanges = Rc<RefCell<VecDeque<(u64, u32)>>>;
+pub(crate) type ToolChanges = Rc<RefCell<VecDeque<(u64, u32)>>>;
 
 /// The collision scene as a sink: each sample's axis positions (θ computed where reported),
 /// with the tool in the spindle changed when the samples reach the block that changed it.
-struct SceneSink {
+pub(crate) struct SceneSink {
     monitor: SceneMonitor,
     changes: ToolChanges,
     /// Stack and tip offset below the Z point (mm) of each tool-table tool.
@@ -237,7 +256,10 @@ fn tool_stacks(scenario: &Scenario) -> Result<BTreeMap<u32, (ToolConfig, f64)>> 
 
 /// `moves` unchanged, noting in `changes` the index of each move whose tool differs from
 /// the one before (the first move's tool when it is not 0).
-fn note_tool_changes<'a>(moves: program::Moves<'a>, changes: ToolChanges) -> program::Moves<'a> {
+pub(crate) fn note_tool_changes<'a>(
+    moves: program::Moves<'a>,
+    changes: ToolChanges,
+) -> program::Moves<'a> {
     let (mut index, mut active) = (0u64, 0u32);
     Box::new(moves.inspect(move |m| {
         if let Ok(m) = m {
@@ -349,8 +371,21 @@ pub fn check_observed(
         &mut [&mut monitors],
         &progress,
     )?;
+    let mut report = report_of(scenario, monitors, &stats);
+    report.dynamics = options.dynamics;
+    report.timing = check_timing;
+    Ok(report)
+}
+
+/// The report of what `monitors` saw over a run (or runs) of `stats`; timed as planned,
+/// not dynamics (the caller says otherwise).
+pub(crate) fn report_of(
+    scenario: &Scenario,
+    monitors: Monitors<'_>,
+    stats: &pipeline::RunStats,
+) -> CheckReport {
     let (samples, last_time) = (stats.samples, stats.end_time_s);
-    let feed_reductions = stats.feed_reductions;
+    let feed_reductions = stats.feed_reductions.clone();
     let Monitors { limits, scene } = monitors;
     let (scene, path) = match scene {
         Some(s) => (Some(s.monitor), s.path),
@@ -411,7 +446,7 @@ pub fn check_observed(
         }
         violations.sort_by(|a, b| a.time_start_s.total_cmp(&b.time_start_s));
     }
-    Ok(CheckReport {
+    CheckReport {
         violations,
         axes: usage.into_iter().map(|u| (u.axis.to_string(), u)).collect(),
         samples,
@@ -422,16 +457,16 @@ pub fn check_observed(
         min_clearance_mm,
         min_clearance_bodies,
         collision_depth_tolerance,
-        dynamics: options.dynamics,
-        timing: check_timing,
+        dynamics: false,
+        timing: CheckTiming::Planned,
         feed_reductions,
         views,
-    })
+    }
 }
 
 /// The collision scene as a sink for `check_observed` (None when collisions are off), its
 /// tool changes read from `changes`, θ from `theta_of`.
-fn scene_sink(
+pub(crate) fn scene_sink(
     scenario: &Scenario,
     options: &CheckOptions,
     queries: SceneQueries,

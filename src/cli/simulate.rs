@@ -4,7 +4,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use super::{print_stdout, spinner};
-use crate::check::{check, CheckOptions};
+use crate::check::of_run::{self, RunCheck};
 use crate::error::{Result, EXIT_VIOLATIONS};
 use crate::input::scenario::TraceFormat;
 use crate::report::html::CHECK_FILE;
@@ -33,11 +33,18 @@ pub fn run(
     let bar = spinner("simulating");
     let progress = |t: f64| bar.set_message(format!("{t:.1} s of machine time"));
     let beside = |dir: &Path| crate::study::cut::cut_beside(&scenario, dir, with_budget, &progress);
+    // Travel, velocity, acceleration and collisions of the run's own setpoints, checked as
+    // they are made (`check.json`, for the report; no second plan of the program).
+    let theta = of_run::theta_of(&scenario);
+    let mut run_check = RunCheck::new(&scenario, &theta)?;
     let summary = crate::study::simulate::simulate_beside(
         &scenario,
         out_dir,
         (timing, with_budget),
-        cut.then_some(&beside as crate::study::simulate::BesideRun<'_>),
+        (
+            cut.then_some(&beside as crate::study::simulate::BesideRun<'_>),
+            Some(&mut run_check),
+        ),
         &progress,
     )?;
     bar.finish_and_clear();
@@ -58,17 +65,8 @@ pub fn run(
             CHECK_FILE
         ),
     );
-    // Travel, velocity, acceleration and collisions, as `check` finds them (commanded
-    // positions at the planner's timing): written beside the trace for the report, and told on stderr.
-    let checked = check(
-        &scenario,
-        &CheckOptions {
-            dynamics: false,
-            programmed: false,
-            near_miss_mm: None,
-            collision_poses: 0,
-        },
-    )?;
+    // Written beside the trace for the report, and told on stderr.
+    let checked = run_check.finish(summary.feed_reductions.clone());
     let json = serde_json::to_string_pretty(&checked).expect("plain data serializes");
     write_atomic(&out_dir.join(CHECK_FILE), format!("{json}\n").as_bytes())?;
     stages.check_s = started.elapsed().as_secs_f64() - stages.read_s - stages.simulate_s;

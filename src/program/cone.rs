@@ -363,15 +363,18 @@ impl ConeProgram {
         };
         // The program's words: X Y Z are the tool tip under TCP (a W quill keeps its own value),
         // else the machine axes.
+        // The cone's poses once, not per block; the tip only when the words are the tip.
+        let poses = cone.poses();
         let words = move |q: &AxisVec, theta: f64| {
-            let tip = cone.point(theta);
             let mut end = AxisVec::ZERO;
             for &axis in axes {
-                end[axis] = if options.tcp && axis.index() < 3 {
-                    tip[axis.index()]
-                } else {
-                    q[axis]
-                };
+                end[axis] = q[axis];
+            }
+            if options.tcp {
+                let tip = poses.point(theta);
+                for &axis in axes.iter().filter(|a| a.index() < 3) {
+                    end[axis] = tip[axis.index()];
+                }
             }
             end
         };

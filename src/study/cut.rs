@@ -119,7 +119,7 @@ pub fn run_cut(
             run.moves,
             &run_options,
             sinks,
-            stepper,
+            stepper.into_iter().collect(),
             &mut warnings,
             progress,
         )?

@@ -16,6 +16,7 @@ use std::time::Instant;
 use nalgebra::Point3;
 use serde::Serialize;
 
+use crate::check::of_run::RunCheck;
 use crate::error::Result;
 use crate::input::drive::si_per_unit;
 use crate::input::lead_in::LeadIn;
@@ -187,14 +188,14 @@ pub fn run_ballbar(
     trace: Option<&mut TraceSink>,
     progress: &dyn Fn(f64),
 ) -> Result<BallbarStudy> {
-    run_ballbar_budget(scenario, trace, None, progress).map(|(study, _)| study)
+    run_ballbar_budget(scenario, (trace, None), None, progress).map(|(study, _)| study)
 }
 
 /// [`run_ballbar`] with the error budget's runs of `budget` beside it (`study::budget`):
-/// each direction's, or why they failed.
+/// each direction's, or why they failed; and `check`, when given, fed with every sample.
 pub fn run_ballbar_budget(
     scenario: &Scenario,
-    mut trace: Option<&mut TraceSink>,
+    (mut trace, mut check): (Option<&mut TraceSink>, Option<&mut RunCheck<'_>>),
     budget: Option<&BudgetPlan>,
     progress: &dyn Fn(f64),
 ) -> Result<(BallbarStudy, BudgetRuns)> {
@@ -214,6 +215,9 @@ pub fn run_ballbar_budget(
         let mut run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
         if let Some(along) = &along {
             run.moves = analysed_along(run.moves, along);
+        }
+        if let Some(c) = check.as_deref_mut() {
+            run.moves = c.start_run(run.moves);
         }
         if let Some(t) = trace.as_deref_mut() {
             t.start_run(direction, run.measured);
@@ -269,16 +273,21 @@ pub fn run_ballbar_budget(
             for m in &mut measurements {
                 sinks.push(&mut **m);
             }
-            // The budget's servos take every setpoint, before any settle gate.
+            // The budget's servos and the check take every setpoint, before any settle gate.
             let mut stepper = budget_run.as_ref().map(BudgetStepper);
-            let stepper = stepper.as_mut().map(|s| s as &mut dyn Sink);
+            let mut front: Vec<&mut dyn Sink> = Vec::with_capacity(2);
+            front.extend(stepper.as_mut().map(|s| s as &mut dyn Sink));
+            front.extend(check.as_deref_mut().map(|c| c as &mut dyn Sink));
             let gate = Gate {
                 scenario,
                 measured: run.measured,
                 geometry,
             };
-            gate.run(run.moves, &options, sinks, stepper, &mut warnings, progress)?
+            gate.run(run.moves, &options, sinks, front, &mut warnings, progress)?
         };
+        if let Some(c) = check.as_deref_mut() {
+            c.end_run()?;
+        }
         let contour_sums = contour_runs.and_then(ContourBudgetRuns::finish);
         let finished = budget_run.map(|b| b.into_inner().finish());
         if let Some(gauge) = gauge {
@@ -573,16 +582,23 @@ pub fn simulate_with(
     with_budget: bool,
     progress: &dyn Fn(f64),
 ) -> Result<SimulationSummary> {
-    simulate_beside(scenario, out_dir, (timing, with_budget), None, progress)
+    simulate_beside(
+        scenario,
+        out_dir,
+        (timing, with_budget),
+        (None, None),
+        progress,
+    )
 }
 
 /// [`simulate_with`], with a measurement made `beside` the run (`simulate --cut`), its
-/// document under `measurements` and its files in `out_dir`.
+/// document under `measurements` and its files in `out_dir`, and `check` fed with the run's
+/// samples ([`RunCheck`]), when given.
 pub fn simulate_beside(
     scenario: &Scenario,
     out_dir: &Path,
     (timing, with_budget): (bool, bool),
-    beside: Option<BesideRun<'_>>,
+    (beside, check): (Option<BesideRun<'_>>, Option<&mut RunCheck<'_>>),
     progress: &dyn Fn(f64),
 ) -> Result<SimulationSummary> {
     create_dir(out_dir)?;
@@ -626,7 +642,7 @@ pub fn simulate_beside(
         (_, false) => None,
     };
     let (study, budget_runs) =
-        run_ballbar_budget(scenario, Some(&mut trace), plan.as_ref(), progress)?;
+        run_ballbar_budget(scenario, (Some(&mut trace), check), plan.as_ref(), progress)?;
     let ballbar = study.result()?;
     let (runs, reversals) = (&study.runs, &study.reversals);
     let mut warnings = study.warnings.clone();
@@ -830,15 +846,15 @@ pub(crate) struct Gate<'s> {
 }
 
 impl Gate<'_> {
-    /// Runs `moves` with `options` into `sinks`, the error budget's `stepper` (if any) in
-    /// front of every sample (its servos take every setpoint, before any gate); the gate's
-    /// warning goes to `warnings`.
+    /// Runs `moves` with `options` into `sinks`, the `front` sinks (the error budget's
+    /// stepper, whose servos take every setpoint, the run's check) before any gate; the
+    /// gate's warning goes to `warnings`.
     pub(crate) fn run<'a>(
         &self,
         moves: crate::program::Moves<'_>,
         options: &RunOptions,
         mut sinks: Vec<&'a mut dyn Sink>,
-        stepper: Option<&mut dyn Sink>,
+        mut front: Vec<&mut dyn Sink>,
         warnings: &mut Vec<String>,
         progress: &dyn Fn(f64),
     ) -> Result<crate::pipeline::RunStats> {
@@ -847,9 +863,9 @@ impl Gate<'_> {
             .geometry
             .filter(|_| gates_transient(self.scenario) && !sinks.is_empty());
         let Some(g) = gated else {
-            let mut all: Vec<&mut dyn Sink> = Vec::with_capacity(sinks.len() + 1);
-            if let Some(s) = stepper {
-                all.push(s);
+            let mut all: Vec<&mut dyn Sink> = Vec::with_capacity(sinks.len() + front.len());
+            for s in front.iter_mut() {
+                all.push(&mut **s);
             }
             for s in sinks.iter_mut() {
                 all.push(&mut **s);
@@ -862,9 +878,9 @@ impl Gate<'_> {
             Box::new(move |s| g.read_commanded(&s.commanded).theta_deg),
         );
         let stats = {
-            let mut outer: Vec<&mut dyn Sink> = Vec::with_capacity(2);
-            if let Some(s) = stepper {
-                outer.push(s);
+            let mut outer: Vec<&mut dyn Sink> = Vec::with_capacity(front.len() + 1);
+            for s in front.iter_mut() {
+                outer.push(&mut **s);
             }
             outer.push(&mut gate);
             pipeline::run(moves, machine, options, &mut outer, progress)?

@@ -8,6 +8,7 @@ mod common;
 mod chain_scene;
 mod command;
 mod equivalence;
+mod of_run;
 mod prism;
 mod scene;
 mod streamed;

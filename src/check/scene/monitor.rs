@@ -465,6 +465,13 @@ impl SceneMonitor {
         self.queries
     }
 
+    /// Starts another run: its first sample has no earlier one, so every pair is queried
+    /// there and no motion is assumed across the seam between the runs.
+    pub fn restart(&mut self) {
+        self.prev = None;
+        self.prev_relative = None;
+    }
+
     /// One sample: time (s), angle on the nominal path (deg) if any, program line, axis
     /// positions (mm, deg). Samples with non-finite positions are ignored.
     #[inline]

@@ -278,6 +278,7 @@ const SHOWN: &[(&str, Shown)] = &[
     ("mtsim report", Names),
     ("mtsim simulate", Names),
     ("mtsim simulate --no-timing", Names),
+    ("mtsim simulate --no-budget -q --no-timing", Names),
 ];
 
 fn repo() -> &'static Path {

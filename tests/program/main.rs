@@ -13,6 +13,7 @@ mod cross_dialect;
 mod file_analysis;
 mod heidenhain_corpus;
 mod reader_options;
+mod rotary_travel;
 mod shared_corpus;
 mod siemens_corpus;
 mod test_programs;

@@ -17,7 +17,7 @@
 //! with a standstill at its end). Each run is differenced on its own clock: no velocity
 //! across the seam between two runs ([`Monitors::restart`]).
 //!
-//! What differs from `mtsim check` alone: that check plans one counter-clockwise revolution
+//! What differs from `mtsim check` alone: that check plans each direction's revolution
 //! without lead arcs from time 0, while this one checks the samples the run took, on the
 //! run's clock (`"timing": "run"`); `docs/check.md` says which figures agree.
 

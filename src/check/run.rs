@@ -19,7 +19,6 @@ use crate::check::scene::{
     DepthTolerance, EngagementSummary, EventKind, Scene, SceneMonitor, ToolConfig,
 };
 use crate::error::Result;
-use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
 use crate::kinematics::Kinematics;
 use crate::measure::CircleFrame;
@@ -329,19 +328,16 @@ pub fn check_observed(
     let machine = &scenario.machine;
     let kin = machine.kinematics;
     let frame = theta_frame(scenario);
-    let run = program::scenario_run(scenario, Direction::Ccw, 0.0)?;
-    // The position before the program is unknown (the reader assumes zero), so the path of
-    // the first move, which brings the machine to the program's start, is not checked:
-    // sampling starts at its end, which must lie within the machine's reach like every
-    // other point. A reader error, wherever it comes, passes through and ends the check.
     let changes = ToolChanges::default();
-    let mut moves = from_first_end(run.moves, kin);
-    if scenario.check.collisions {
-        moves = note_tool_changes(moves, changes.clone());
-    }
     let theta_of = move |q: &AxisVec| frame.map(|f| f.theta_deg(&kin.forward(q).tip));
     let mut limits = LimitsMonitor::new(machine, &theta_of);
-    let scene = scene_sink(scenario, options, queries, changes, Box::new(theta_of))?;
+    let scene = scene_sink(
+        scenario,
+        options,
+        queries,
+        changes.clone(),
+        Box::new(theta_of),
+    )?;
     let (timing, check_timing) = if options.dynamics {
         let t = Timing::Planned {
             twins: false,
@@ -355,22 +351,49 @@ pub fn check_observed(
         (Timing::Setpoints, CheckTiming::Planned)
     };
     let (max_samples, least_s) = work::check_up_front_timed(scenario, 0.0)?;
-    let run_options = RunOptions {
-        timing,
-        force_tcp: scenario.simulate.tcp,
-        start_time_s: 0.0,
-        program_path: scenario.path.clone(),
-        max_samples,
-    };
     let mut monitors = Monitors { limits, scene };
+    // Every direction the scenario runs (a generated test's planned ones; a file once), one
+    // after the other, each on its own clock from where the one before ended.
+    let directions = test_of(scenario).directions();
+    let least_s = least_s * directions.len() as f64;
     let progress = |t: f64| progress(t, least_s);
-    let stats = pipeline::run(
-        moves,
-        machine,
-        &run_options,
-        &mut [&mut monitors],
-        &progress,
-    )?;
+    let mut stats = pipeline::RunStats {
+        samples: 0,
+        end_time_s: 0.0,
+        feed_reductions: Vec::new(),
+    };
+    for (k, &direction) in directions.iter().enumerate() {
+        let run = program::scenario_run(scenario, direction, 0.0)?;
+        // The position before the program is unknown (the reader assumes zero), so the path
+        // of the first move, which brings the machine to the program's start, is not
+        // checked: sampling starts at its end, which must lie within the machine's reach
+        // like every other point. A reader error, wherever it comes, passes through and ends
+        // the check.
+        let mut moves = from_first_end(run.moves, kin);
+        if scenario.check.collisions {
+            moves = note_tool_changes(moves, changes.clone());
+        }
+        if k > 0 {
+            monitors.restart();
+        }
+        let run_options = RunOptions {
+            timing,
+            force_tcp: scenario.simulate.tcp,
+            start_time_s: stats.end_time_s,
+            program_path: scenario.path.clone(),
+            max_samples,
+        };
+        let run_stats = pipeline::run(
+            moves,
+            machine,
+            &run_options,
+            &mut [&mut monitors],
+            &progress,
+        )?;
+        stats.samples += run_stats.samples;
+        stats.end_time_s = run_stats.end_time_s;
+        stats.feed_reductions.extend(run_stats.feed_reductions);
+    }
     let mut report = report_of(scenario, monitors, &stats);
     report.dynamics = options.dynamics;
     report.timing = check_timing;

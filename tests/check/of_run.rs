@@ -165,3 +165,64 @@ fn both_directions_of_a_cone_test_are_checked_each_on_its_own_clock() {
     );
     assert_eq!(summary["directions"].as_array().unwrap().len(), 2);
 }
+
+/// The fork head's 15/10 cone at O = 0, both directions, written into `dir`.
+fn fork_head_cone(dir: &std::path::Path, directions: &str) -> String {
+    let path = dir.join("fork.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "machine = {:?}\n[program.cone]\nhalf_apex_deg = 15.0\ninclination_deg = 10.0\ncenter_mm = [0.0, 0.0, 0.0]\nballbar_length_mm = 100.0\nfeed_mm_min = 2000.0\ndirections = {directions}\n[check]\ncollisions = false\n",
+            common::machine("fork-head-ca")
+        ),
+    )
+    .unwrap();
+    path.display().to_string()
+}
+
+#[test]
+fn a_clockwise_revolution_keeps_c_within_its_travel_in_the_run_and_in_check() {
+    // C of ±360 deg turns one whole revolution a direction, from −90 deg at θ = 0: the
+    // clockwise run starts a turn up (270 → −90 deg), so the run's C stays within
+    // −90 − lead .. 270 + lead and both checks are clean. (Started at −90 deg, it reached
+    // −462 deg with its lead arc.)
+    let dir = scratch("of-run", "fork-cw");
+    let s = fork_head_cone(&dir, "[\"ccw\", \"cw\"]");
+    let (code, v) = simulate_check(&dir, &s);
+    assert_eq!(code, 0, "{v}");
+    let (min, max) = (axis(&v, "C", "min"), axis(&v, "C", "max"));
+    assert!(min > -120.0 && max < 300.0, "C {min}..{max}");
+    let checked = stdout_json(&mtsim(&["check", &s, "--json"]));
+    assert_eq!(checked["violations"].as_array().unwrap().len(), 0);
+    // `check` plans each direction's revolution without leads: −90 .. 270 deg exactly.
+    assert!(
+        (axis(&checked, "C", "min") + 90.0).abs() < 1e-6,
+        "{checked}"
+    );
+    assert!(
+        (axis(&checked, "C", "max") - 270.0).abs() < 1e-6,
+        "{checked}"
+    );
+}
+
+#[test]
+fn check_plans_every_direction_the_scenario_runs() {
+    // The clockwise revolution mirrors the counter-clockwise one, at the same planner's
+    // timing: checked in both directions, twice the samples of one (within a sample each).
+    let dir = scratch("of-run", "check-dirs");
+    let both = fork_head_cone(&dir, "[\"ccw\", \"cw\"]");
+    let two = stdout_json(&mtsim(&["check", &both, "--json"]));
+    let dir1 = scratch("of-run", "check-dirs1");
+    let ccw = fork_head_cone(&dir1, "[\"ccw\"]");
+    let one = stdout_json(&mtsim(&["check", &ccw, "--json"]));
+    let (n2, n1) = (
+        two["samples"].as_u64().unwrap(),
+        one["samples"].as_u64().unwrap(),
+    );
+    assert!(n2.abs_diff(2 * n1) <= 2, "{n2} against 2 x {n1}");
+    let (t2, t1) = (
+        two["sim_time_s"].as_f64().unwrap(),
+        one["sim_time_s"].as_f64().unwrap(),
+    );
+    assert!((t2 - 2.0 * t1).abs() < 0.005, "{t2} against 2 x {t1}");
+}

@@ -413,6 +413,33 @@ mod signals {
         unsafe { libc::write(fd, (&byte as *const u8).cast(), 1) };
     }
 
+    /// Milliseconds the staging folder must stay gone before the process ends.
+    const QUIET_MS: u32 = 20;
+
+    /// [`super::recover`] of `target`, again whenever the run, which goes on writing until
+    /// the process ends, creates its staging folder anew (a run that had not yet reached
+    /// its first file creates the folder it writes into), until the folder has stayed gone
+    /// for [`QUIET_MS`] (at most a second in all).
+    fn recover_while_the_run_goes_on(target: &Path) {
+        let staging = super::sibling(target, "new");
+        let (mut quiet, mut waited) = (0, 0);
+        while quiet < QUIET_MS && waited < 1000 {
+            if super::exists(&staging) || waited == 0 {
+                // A file the run is creating meanwhile can make one pass fail.
+                for _ in 0..3 {
+                    if super::recover(target).is_ok() {
+                        break;
+                    }
+                }
+                quiet = 0;
+            } else {
+                quiet += 1;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(1));
+            waited += 1;
+        }
+    }
+
     fn install() {
         let mut fds = [0 as libc::c_int; 2];
         // SAFETY: pipe(2) fills the two descriptors of the array it is given.
@@ -429,12 +456,7 @@ mod signals {
                 while unsafe { libc::read(read_fd, (&mut byte as *mut u8).cast(), 1) } != 1 {}
                 let targets = TARGETS.lock().unwrap_or_else(|e| e.into_inner());
                 for target in targets.iter() {
-                    // A file the run is creating meanwhile can make one pass fail.
-                    for _ in 0..3 {
-                        if super::recover(target).is_ok() {
-                            break;
-                        }
-                    }
+                    recover_while_the_run_goes_on(target);
                     let _ = std::fs::remove_file(super::sibling(target, "lock"));
                 }
                 // SAFETY: back to the default action, then the signal again: the process

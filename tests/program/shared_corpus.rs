@@ -21,9 +21,8 @@ const TIMEOUT: Duration = Duration::from_secs(60);
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Why {
     /// The program is at fault: a real control (or rs274) refuses it too.
+    /// (No documented gap of mtsim remains among these programs.)
     Fault,
-    /// A documented gap of mtsim (docs/gcode.md).
-    Gap,
 }
 
 /// The programs not read: file name, why, and a piece of the error each must give.

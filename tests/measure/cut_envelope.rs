@@ -276,3 +276,46 @@ fn the_contacts_wrap_is_rem_euclid() {
         );
     }
 }
+
+/// Positions that come back to columns already computed (every 97th returns twice the
+/// reach behind, 6 µm deeper than its neighbours: the envelope applies it to those columns
+/// directly), both senses: every grid point the brute force's bits, and the returns did
+/// lower the surface.
+#[test]
+fn positions_coming_back_to_computed_columns_are_applied_to_them() {
+    let g = geometry();
+    let rows = rows(&g, &[23.4, 30.0, 42.6, 55.0, 61.8]);
+    // The reach, in columns of 0.5° (`Envelope::new`): twice it behind is computed.
+    let per_column2 = Envelope::new(&g, 0.5, rows.clone()).clearance_per_column2_um();
+    let reach = (200.0 / per_column2).sqrt().ceil().clamp(2.0, 400.0);
+    let back_steps = 2.0 * reach * 4.0;
+    assert!(back_steps * 0.125 < 180.0, "reach {reach} columns");
+    for step_deg in [0.125, -0.125] {
+        let mut state = 3;
+        let mut theta_deg: f64 = 3.0;
+        let lines: Vec<CutterLine> = (0..3744)
+            .map(|k| {
+                theta_deg += step_deg;
+                let jitter_mm = 1e-3 * jitter(&mut state);
+                match k % 97 == 96 {
+                    true => cutter(&g, (theta_deg - back_steps * step_deg).to_radians(), -6e-3),
+                    false => cutter(&g, theta_deg.to_radians(), jitter_mm),
+                }
+            })
+            .collect();
+        let mut envelope = Envelope::new(&g, 0.5, rows.clone());
+        for line in &lines {
+            envelope.push(&g, *line);
+        }
+        envelope.end_run(&g);
+        let expected = brute_force(&g, &envelope, &lines);
+        assert!(expected.iter().filter(|d| **d < -3.0).count() > 100);
+        for (p, (got, want)) in envelope.values.iter().zip(&expected).enumerate() {
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "step {step_deg}°: point {p}: {got} against {want} um"
+            );
+        }
+    }
+}

@@ -342,6 +342,36 @@ impl CutSurface {
     }
 }
 
+impl CutSurface {
+    /// Cuts with a measured sample whose commanded, actual and linear-twin positions are all
+    /// `q` (an error budget's run): what [`Sink::push`] does with such a sample, without one.
+    #[inline]
+    pub fn push_positions(&mut self, q: &AxisVec) {
+        if !self.cutting {
+            return;
+        }
+        let pose = if self.options.commanded {
+            self.nominal.forward(q)
+        } else {
+            actual_tool(&self.kinematics, q)
+        };
+        self.cut_with(pose, q, q);
+    }
+
+    /// Cuts with the cutter at `pose`, of a sample of `actual` and `linear` positions.
+    #[inline(always)]
+    fn cut_with(&mut self, pose: ToolPose, actual: &AxisVec, linear: &AxisVec) {
+        let line = self.geometry.line_of(&pose.tip, &pose.axis);
+        // The commanded cut has no lost motion (and its samples no twin to read it from).
+        if !self.options.commanded {
+            self.lost_motion
+                .record_positions(line.contact_rad(), actual, linear);
+        }
+        self.envelope.push(&self.geometry, line);
+        self.samples += 1;
+    }
+}
+
 impl Sink for CutSurface {
     #[inline]
     fn push(&mut self, s: &Sample) -> Result<()> {
@@ -349,13 +379,7 @@ impl Sink for CutSurface {
             return Ok(());
         }
         let pose = self.pose(s);
-        let line = self.geometry.line_of(&pose.tip, &pose.axis);
-        // The commanded cut has no lost motion (and its samples no twin to read it from).
-        if !self.options.commanded {
-            self.lost_motion.record(line.contact_rad(), s);
-        }
-        self.envelope.push(&self.geometry, line);
-        self.samples += 1;
+        self.cut_with(pose, &s.actual, &s.linear);
         Ok(())
     }
 }

@@ -132,15 +132,10 @@ impl Sink for CutBudgetRuns<'_, '_> {
         {
             return Ok(());
         }
-        // A nominal-chain cut reads `commanded`, the geometric one `actual`: both are q_k.
+        // A nominal-chain cut reads `commanded`, the geometric one `actual`: both are q_k
+        // (and so is the linear twin's: no lost motion of its own).
         for (surface, q) in self.surfaces.iter_mut().zip(&self.positions) {
-            let x = Sample {
-                commanded: *q,
-                actual: *q,
-                linear: *q,
-                ..*s
-            };
-            surface.push(&x)?;
+            surface.push_positions(q);
         }
         Ok(())
     }

@@ -1,7 +1,8 @@
 //! The cut's depths and its streamed envelope (`measure::cut::geometry`, `measure::cut::envelope`)
 //! against a closed form and against a brute-force envelope: a cutter moved off the nominal
 //! cut cone along the surface normal by δ leaves δ at every row on its flutes, whatever the
-//! number of rows (the rows go four at a time, the last chunk filled up); and the envelope
+//! number of rows (the rows go four at a time, the last chunk ending at the last row), and
+//! bit for bit the row-by-row formula at any width; and the envelope
 //! streamed with its pruning (the clearance bound, and the buffer's order in θ) is, bit for
 //! bit, the least depth of every position at every grid point computed without pruning.
 
@@ -154,6 +155,166 @@ fn the_streamed_envelope_is_the_least_depth_of_every_position() {
                 got.to_bits(),
                 want.to_bits(),
                 "step {step_deg}°, {back} back: point {p}: {got} against {want} um"
+            );
+        }
+    }
+}
+
+/// The depth of `line` at one row by the module's formula (`measure::cut::geometry`), row
+/// by row: `A = 1 − (n·t)²`, `B = w·n − (w·t)(n·t)`, `C = |w|² − (w·t)² − R²`,
+/// `d = (−B − √(B² − A C)) / A` (as a product with 1/A), cut where the discriminant is not
+/// negative, `B < 0` and the entry lies on the flutes; [`NOT_CUT`] otherwise.
+fn depth_of_row(g: &CutGeometry, (c, s): (f64, f64), row: Row, line: &CutterLine) -> f64 {
+    let (sa, ca) = g.alpha_rad.sin_cos();
+    let n = Vector3::new(ca * c, ca * s, sa);
+    let t = line.axis;
+    let nt = n.dot(&t);
+    let a = 1.0 - nt * nt;
+    if a < 1e-12 {
+        return NOT_CUT;
+    }
+    let w = Vector3::new(row.radius_mm * c, row.radius_mm * s, row.z_mm) - line.tip;
+    let wt = w.dot(&t);
+    let b = w.dot(&n) - wt * nt;
+    let cc = w.norm_squared() - wt * wt - g.cutter_radius_mm * g.cutter_radius_mm;
+    let disc = b * b - a * cc;
+    let d = (-b - disc.sqrt()) * (1.0 / a);
+    let along = wt + d * nt;
+    if disc >= 0.0 && b < 0.0 && along >= 0.0 && along <= g.flute_length_mm {
+        d * 1e3
+    } else {
+        NOT_CUT
+    }
+}
+
+/// Every row's depth is the row-by-row formula's, bit for bit, whatever the number of rows
+/// (1 to 30: below a chunk, whole chunks, and a last chunk overlapping the one before) and
+/// however many rows go side by side (1, 2, 3, 4 as `depths_um` takes them, 8): cutters
+/// tilted and moved off the nominal by a few µm, with rows above the flutes' end (not cut).
+#[test]
+fn the_depths_are_each_rows_formula_whatever_the_rows_side_by_side() {
+    let g = geometry();
+    let mut state = 11;
+    let mut cut = 0;
+    for case in 0..40 {
+        let theta = f64::to_radians(9.0 * case as f64 + 0.3);
+        let mut line = cutter(&g, theta, 5e-3 * jitter(&mut state));
+        line.axis = (line.axis + Vector3::new(jitter(&mut state), jitter(&mut state), 0.0) * 2e-4)
+            .normalize();
+        let column = (theta + 1e-3 * jitter(&mut state)).sin_cos().rev2();
+        for count in 1..=30 {
+            let z: Vec<f64> = (0..count)
+                .map(|i| 23.4 + 44.0 * i as f64 / count as f64)
+                .collect();
+            let rows = rows(&g, &z);
+            let want: Vec<f64> = rows
+                .iter()
+                .map(|&r| depth_of_row(&g, column, r, &line))
+                .collect();
+            cut += want.iter().filter(|d| d.is_finite()).count();
+            let mut got = vec![-1.0; count];
+            let check = |width: &str, got: &[f64]| {
+                for (i, (d, w)) in got.iter().zip(&want).enumerate() {
+                    assert_eq!(
+                        d.to_bits(),
+                        w.to_bits(),
+                        "case {case}, {count} rows, {width}: row {i}: {d} against {w} um"
+                    );
+                }
+            };
+            g.depths_um(column, &rows, &line, &mut got);
+            check("depths_um", &got);
+            g.depths_um_by::<1>(column, &rows, &line, &mut got);
+            check("1 a time", &got);
+            g.depths_um_by::<2>(column, &rows, &line, &mut got);
+            check("2 a time", &got);
+            g.depths_um_by::<3>(column, &rows, &line, &mut got);
+            check("3 a time", &got);
+            g.depths_um_by::<8>(column, &rows, &line, &mut got);
+            check("8 a time", &got);
+        }
+    }
+    // Rows cut and rows not cut (above the flutes' end, 61.93 mm) both.
+    let all = 40 * (1..=30).sum::<usize>();
+    assert!(cut > all / 2 && cut < all, "{cut} of {all} rows cut");
+}
+
+/// `wrap_euclid(x, n)` is `x.rem_euclid(n)` bit for bit: inside (−n, 2n), at its edges,
+/// signed zeros, far outside, infinities and NaN.
+#[test]
+fn the_contacts_wrap_is_rem_euclid() {
+    use mtsim::measure::cut::envelope::wrap_euclid;
+    let n = 3600.0;
+    let mut xs = vec![
+        0.0,
+        -0.0,
+        n,
+        -n,
+        2.0 * n,
+        -2.0 * n,
+        n / 2.0,
+        1e-300,
+        -1e-300,
+        n - 1e-12,
+        2.0 * n - 1e-12,
+        -n + 1e-12,
+        -n - 1e-12,
+        1e9,
+        -1e9,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+    ];
+    let mut state = 5;
+    xs.extend((0..10_000).map(|_| 3.0 * n * jitter(&mut state)));
+    for x in xs {
+        let (got, want) = (wrap_euclid(x, n), x.rem_euclid(n));
+        assert_eq!(
+            got.to_bits(),
+            want.to_bits(),
+            "x = {x:e}: {got:e} against {want:e}"
+        );
+    }
+}
+
+/// Positions that come back to columns already computed (every 97th returns twice the
+/// reach behind, 6 µm deeper than its neighbours: the envelope applies it to those columns
+/// directly), both senses: every grid point the brute force's bits, and the returns did
+/// lower the surface.
+#[test]
+fn positions_coming_back_to_computed_columns_are_applied_to_them() {
+    let g = geometry();
+    let rows = rows(&g, &[23.4, 30.0, 42.6, 55.0, 61.8]);
+    // The reach, in columns of 0.5° (`Envelope::new`): twice it behind is computed.
+    let per_column2 = Envelope::new(&g, 0.5, rows.clone()).clearance_per_column2_um();
+    let reach = (200.0 / per_column2).sqrt().ceil().clamp(2.0, 400.0);
+    let back_steps = 2.0 * reach * 4.0;
+    assert!(back_steps * 0.125 < 180.0, "reach {reach} columns");
+    for step_deg in [0.125, -0.125] {
+        let mut state = 3;
+        let mut theta_deg: f64 = 3.0;
+        let lines: Vec<CutterLine> = (0..3744)
+            .map(|k| {
+                theta_deg += step_deg;
+                let jitter_mm = 1e-3 * jitter(&mut state);
+                match k % 97 == 96 {
+                    true => cutter(&g, (theta_deg - back_steps * step_deg).to_radians(), -6e-3),
+                    false => cutter(&g, theta_deg.to_radians(), jitter_mm),
+                }
+            })
+            .collect();
+        let mut envelope = Envelope::new(&g, 0.5, rows.clone());
+        for line in &lines {
+            envelope.push(&g, *line);
+        }
+        envelope.end_run(&g);
+        let expected = brute_force(&g, &envelope, &lines);
+        assert!(expected.iter().filter(|d| **d < -3.0).count() > 100);
+        for (p, (got, want)) in envelope.values.iter().zip(&expected).enumerate() {
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "step {step_deg}°: point {p}: {got} against {want} um"
             );
         }
     }

@@ -167,7 +167,7 @@ impl Envelope {
         let contact = line.contact_rad();
         let (s, c) = contact.sin_cos();
         geometry.depths_um((c, s), &self.rows, &line, &mut self.scratch);
-        let e_min_um = self.scratch.iter().copied().fold(NOT_CUT, f64::min);
+        let e_min_um = least(&self.scratch);
         if !e_min_um.is_finite() {
             // It cuts no row at its own θ, so none anywhere (the clearance only adds).
             return;
@@ -181,7 +181,7 @@ impl Envelope {
                 run.front_u = raw;
                 raw
             }
-            Some(_) => run.last_u + (raw - run.last_u + n / 2.0).rem_euclid(n) - n / 2.0,
+            Some(_) => run.last_u + wrap_euclid(raw - run.last_u + n / 2.0, n) - n / 2.0,
         };
         run.last_u = u;
         let buffered = Buffered { u, line, e_min_um };
@@ -282,10 +282,7 @@ impl Envelope {
                 return;
             }
             geometry.depths_um(theta, rows, &b.line, scratch);
-            for (l, &d) in local.iter_mut().zip(scratch.iter()) {
-                *l = l.min(d);
-            }
-            *deepest_row = local.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            *deepest_row = lower_to(local, scratch);
         };
         take(&buffer[nearest], &mut deepest_row);
         let range = match (order, self.run.floor.front()) {
@@ -315,10 +312,16 @@ impl Envelope {
         let sense = self.run.sense;
         let count = self.columns.len() as i64;
         let h = self.rows.len();
-        let lo = (b.u - self.reach as f64).ceil() as i64;
-        let hi = (b.u + self.reach as f64).floor() as i64;
-        // Computed columns lie behind `next_column`: those of lo..=hi, in the same order.
         let next = self.run.next_column;
+        // None of lo..=hi computed (the usual case, a position just ahead of the computed
+        // columns): `ceil(v) > m` exactly when `v > m`, for an integer m.
+        let (below, above) = (b.u - self.reach as f64, b.u + self.reach as f64);
+        if (sense == 1 && below > (next - 1) as f64) || (sense != 1 && above < (next + 1) as f64) {
+            return;
+        }
+        let lo = below.ceil() as i64;
+        let hi = above.floor() as i64;
+        // Computed columns lie behind `next_column`: those of lo..=hi, in the same order.
         let (lo, hi) = match sense {
             1 => (lo, hi.min(next - 1)),
             _ => (lo.max(next + 1), hi),
@@ -333,6 +336,86 @@ impl Envelope {
                 *v = v.min(d);
             }
         }
+    }
+}
+
+/// Lanes of [`least`] and [`lower_to`]: the minima and maxima are taken four side by side.
+const LANES: usize = 4;
+
+/// The lesser of `a` and `x`: `f64::min` for depths, which are never NaN nor −0 (a root is
+/// NaN only where it does not cut, and `x − x` is +0), so a plain comparison (one `minpd`)
+/// gives its bits, and the order of the minima changes none.
+#[inline(always)]
+fn lesser(a: f64, x: f64) -> f64 {
+    if x < a {
+        x
+    } else {
+        a
+    }
+}
+
+/// The greater of `a` and `x`, as [`lesser`].
+#[inline(always)]
+fn greater(a: f64, x: f64) -> f64 {
+    if x > a {
+        x
+    } else {
+        a
+    }
+}
+
+/// The least of the depths `v` ([`NOT_CUT`] for none), [`LANES`] side by side.
+fn least(v: &[f64]) -> f64 {
+    let mut acc = [NOT_CUT; LANES];
+    let mut chunks = v.chunks_exact(LANES);
+    for c in &mut chunks {
+        for (a, &x) in acc.iter_mut().zip(c) {
+            *a = lesser(*a, x);
+        }
+    }
+    let rest = chunks
+        .remainder()
+        .iter()
+        .fold(NOT_CUT, |a, &x| lesser(a, x));
+    acc.iter().fold(rest, |a, &x| lesser(a, x))
+}
+
+/// Lowers `local` to the depths `d` where they are less (row by row); the deepest row of
+/// `local` after (−∞ for none), as [`least`].
+#[inline(always)]
+fn lower_to(local: &mut [f64], d: &[f64]) -> f64 {
+    let mut acc = [f64::NEG_INFINITY; LANES];
+    let n = local.len().min(d.len());
+    let (local, d) = (&mut local[..n], &d[..n]);
+    let mut lc = local.chunks_exact_mut(LANES);
+    let mut dc = d.chunks_exact(LANES);
+    for (l, x) in (&mut lc).zip(&mut dc) {
+        for ((a, l), &x) in acc.iter_mut().zip(l.iter_mut()).zip(x) {
+            *l = lesser(*l, x);
+            *a = greater(*a, *l);
+        }
+    }
+    let mut deepest = f64::NEG_INFINITY;
+    for (l, &x) in lc.into_remainder().iter_mut().zip(dc.remainder()) {
+        *l = lesser(*l, x);
+        deepest = greater(deepest, *l);
+    }
+    acc.iter().fold(deepest, |a, &x| greater(a, x))
+}
+
+/// `x.rem_euclid(n)` for `n > 0`, bit for bit, without `fmod` where `x` lies in `(−n, 2n)`
+/// (a contact's step from the last one, plus n/2): there the remainder is `x`, `x − n`
+/// (exact, Sterbenz) or `x + n` (as `rem_euclid` rounds it).
+#[inline(always)]
+pub fn wrap_euclid(x: f64, n: f64) -> f64 {
+    if (0.0..n).contains(&x) {
+        x
+    } else if x >= n && x < 2.0 * n {
+        x - n
+    } else if x < 0.0 && x > -n {
+        x + n
+    } else {
+        x.rem_euclid(n)
     }
 }
 

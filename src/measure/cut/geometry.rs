@@ -121,14 +121,15 @@ impl CutGeometry {
     ///
     /// Compiled for AVX where the CPU has it (checked at run time), so that the rows go
     /// [`ROW_CHUNK`] at a time; Rust fuses no multiplication and addition, so the bits are
-    /// the plain build's whatever the width.
+    /// the plain build's whatever the width. (Eight rows a register with AVX-512 took as
+    /// long: the square roots bound it, and they cost as much per row.)
     pub fn depths_um(&self, theta: (f64, f64), rows: &[Row], line: &CutterLine, out: &mut [f64]) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU has AVX, checked at run time just above.
             return unsafe { self.depths_um_avx(theta, rows, line, out) };
         }
-        self.depths_um_inline(theta, rows, line, out)
+        self.depths_um_inline::<ROW_CHUNK>(theta, rows, line, out)
     }
 
     /// [`CutGeometry::depths_um`] compiled for AVX.
@@ -141,17 +142,30 @@ impl CutGeometry {
         line: &CutterLine,
         out: &mut [f64],
     ) {
-        self.depths_um_inline(theta, rows, line, out)
+        self.depths_um_inline::<ROW_CHUNK>(theta, rows, line, out)
     }
 
-    /// The rows [`ROW_CHUNK`] at a time, the last chunk filled up with its last row (whose
-    /// depths are dropped), so that no row is left to a scalar tail. Without branches: every
+    /// [`CutGeometry::depths_um`] with `CHUNK` rows side by side (any width, the same bits):
+    /// for tests that compare the widths.
+    pub fn depths_um_by<const CHUNK: usize>(
+        &self,
+        theta: (f64, f64),
+        rows: &[Row],
+        line: &CutterLine,
+        out: &mut [f64],
+    ) {
+        self.depths_um_inline::<CHUNK>(theta, rows, line, out)
+    }
+
+    /// The rows `CHUNK` at a time, the last chunk ending at the last row (below `CHUNK`
+    /// rows, filled up with the last row, whose depths are dropped), so that no row is left
+    /// to a scalar tail. Without branches: every
     /// row's root is taken and the rows that do not cut are masked after (a negative
     /// discriminant's NaN root, like every other NaN, fails the flute test). Each expression
     /// is nalgebra's `dot` and `norm_squared` in their order ((x + y) + z; the `0 + ` before
     /// a square's sum changes no bit), so the depths are the per-row formula's bits.
     #[inline(always)]
-    fn depths_um_inline(
+    fn depths_um_inline<const CHUNK: usize>(
         &self,
         (c, s): (f64, f64),
         rows: &[Row],
@@ -187,18 +201,26 @@ impl CutGeometry {
             }
         };
         let count = rows.len().min(out.len());
+        // Full chunks only, each stored as one fixed-size copy (a copy of fewer rows is a
+        // call of `memcpy`): the last one ends at the last row, overlapping the one before,
+        // whose rows it computes again to the same bits. Below `CHUNK` rows, one chunk
+        // filled up with the last row.
         let mut k = 0;
         while k < count {
-            let taken = (count - k).min(ROW_CHUNK);
-            let row = |i: usize| rows[k + i.min(taken - 1)];
-            let radius: [f64; ROW_CHUNK] = std::array::from_fn(|i| row(i).radius_mm);
-            let z: [f64; ROW_CHUNK] = std::array::from_fn(|i| row(i).z_mm);
-            let mut d = [0.0; ROW_CHUNK];
-            for i in 0..ROW_CHUNK {
+            let start = k.min(count.saturating_sub(CHUNK));
+            let row = |i: usize| rows[(start + i).min(count - 1)];
+            let radius: [f64; CHUNK] = std::array::from_fn(|i| row(i).radius_mm);
+            let z: [f64; CHUNK] = std::array::from_fn(|i| row(i).z_mm);
+            let mut d = [0.0; CHUNK];
+            for i in 0..CHUNK {
                 d[i] = depth(radius[i], z[i]);
             }
-            out[k..k + taken].copy_from_slice(&d[..taken]);
-            k += taken;
+            if count >= CHUNK {
+                out[start..start + CHUNK].copy_from_slice(&d);
+            } else {
+                out[..count].copy_from_slice(&d[..count]);
+            }
+            k += CHUNK;
         }
     }
 

@@ -20,7 +20,7 @@
 //! wind-up) has no lost motion there and leaves no mark.
 
 use crate::pipeline::Sample;
-use crate::Axis;
+use crate::{Axis, AxisVec};
 
 /// A reversal's lost motion below this (mm or deg) is none: no mark.
 pub const LOST_MOTION_MIN: f64 = 1e-4;
@@ -55,11 +55,17 @@ impl LostMotion {
     /// Sample `s`, whose cutter's contact is at θ `contact_rad`: its δ of every axis.
     #[inline]
     pub fn record(&mut self, contact_rad: f64, s: &Sample) {
+        self.record_positions(contact_rad, &s.actual, &s.linear);
+    }
+
+    /// [`LostMotion::record`] of the `actual` and `linear` positions of a sample.
+    #[inline]
+    pub fn record_positions(&mut self, contact_rad: f64, actual: &AxisVec, linear: &AxisVec) {
         let j = (contact_rad.to_degrees() / self.step_deg).round() as i64;
         let j = j.rem_euclid(self.columns as i64) as usize;
         let n = self.axes.len();
         for (k, &a) in self.axes.iter().enumerate() {
-            self.values[j * n + k] = s.actual[a] - s.linear[a];
+            self.values[j * n + k] = actual[a] - linear[a];
         }
     }
 

@@ -279,7 +279,12 @@ fn run_pass(
             Some(g) => {
                 // The points' bars read each setpoint (and each table ball their rotaries
                 // share) once for all.
-                let readings = SharedReadings::new(g);
+                // Without a settle gate every bar takes every sample: their θ sums and feed
+                // too are kept once for all (`SharedReadings::with_theta_sums`).
+                let readings = match gated {
+                    true => SharedReadings::new(g),
+                    false => SharedReadings::new(g).with_theta_sums(direction),
+                };
                 let readings = RefCell::new(match k == 0 && !gated {
                     true => readings.with_maps(),
                     false => readings,
@@ -317,8 +322,13 @@ fn run_pass(
                     pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?
                 };
                 drop(shared);
+                let readings = readings.into_inner();
+                // A bar with a deviation of its own not finite runs alone.
+                for (f, bar) in failed.iter_mut().zip(&mut bars) {
+                    *f |= !readings.complete(bar);
+                }
                 if k == 0 {
-                    common_maps = readings.into_inner().into_maps();
+                    common_maps = readings.into_maps();
                 }
                 ran
             }

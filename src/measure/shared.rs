@@ -117,11 +117,17 @@ impl SharedReadings {
 
     /// Hands sample `s` to the kept maps and θ sums if none of the bars has yet (`r`: its
     /// reading when it is measured).
-    #[inline]
+    #[inline(always)]
     fn advance(&mut self, s: &Sample, r: Option<&BarReading>) {
-        if s.index != self.next {
-            return;
+        if s.index == self.next {
+            self.take_next(s, r);
         }
+    }
+
+    /// [`SharedReadings::advance`] of the next sample (out of line: one bar a pass takes
+    /// each sample).
+    #[inline(never)]
+    fn take_next(&mut self, s: &Sample, r: Option<&BarReading>) {
         self.next += 1;
         if let Some(maps) = &mut self.maps {
             maps.take(s, r.map(BarReading::bin));

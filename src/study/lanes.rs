@@ -50,7 +50,20 @@ pub fn run_ballbar_lanes(
     if let [scenario] = scenarios {
         return vec![run_ballbar(scenario, None, progress)];
     }
-    let passes = passes(scenarios, rayon::current_num_threads());
+    run_ballbar_lanes_keyed(scenarios, &share_keys(scenarios), progress)
+}
+
+/// [`run_ballbar_lanes`] with each scenario's [`share_key`] made by the caller (`keys[i]`
+/// is `share_key(&scenarios[i])`'s), for a caller that needs them too.
+pub fn run_ballbar_lanes_keyed(
+    scenarios: &[Scenario],
+    keys: &[String],
+    progress: &dyn Fn(f64),
+) -> Vec<Result<BallbarStudy>> {
+    if let [scenario] = scenarios {
+        return vec![run_ballbar(scenario, None, progress)];
+    }
+    let passes = passes_keyed(scenarios, keys, rayon::current_num_threads());
     let (sender, receiver) = mpsc::channel::<f64>();
     // The passes run on a pool as wide as the caller's, from a thread of their own, so
     // that this thread can hand their progress to `progress` (which need not be `Sync`).
@@ -120,9 +133,17 @@ pub fn share_key(scenario: &Scenario) -> String {
 /// grid of 100 points per kv runs in passes of 50 that each hold one kv, not of 62 or 63
 /// of which half straddle two.
 pub fn passes(scenarios: &[Scenario], threads: usize) -> Vec<Vec<usize>> {
-    // The keys (a scenario's debug form each) in parallel: made one by one, they were the
-    // study's only serial work of note.
-    let keys: Vec<String> = scenarios.par_iter().map(share_key).collect();
+    passes_keyed(scenarios, &share_keys(scenarios), threads)
+}
+
+/// Every scenario's [`share_key`], made in parallel (a scenario's debug form each: made one
+/// by one, they were the study's only serial work of note).
+pub fn share_keys(scenarios: &[Scenario]) -> Vec<String> {
+    scenarios.par_iter().map(share_key).collect()
+}
+
+/// [`passes`] with the scenarios' [`share_key`]s given.
+fn passes_keyed(scenarios: &[Scenario], keys: &[String], threads: usize) -> Vec<Vec<usize>> {
     let mut group_of: HashMap<&str, usize> = HashMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (i, key) in keys.iter().enumerate() {

@@ -115,22 +115,23 @@ impl SharedReadings {
         }
     }
 
-    /// Hands sample `s` to the kept maps and θ sums if none of the bars has yet (`r`: its
-    /// reading when it is measured).
+    /// Hands sample `s` to the kept maps and θ sums if none of the bars has yet (`measured`:
+    /// whether the bars read it).
     #[inline(always)]
-    fn advance(&mut self, s: &Sample, r: Option<&BarReading>) {
+    fn advance(&mut self, s: &Sample, measured: bool) {
         if s.index == self.next {
-            self.take_next(s, r);
+            self.take_next(s, measured);
         }
     }
 
     /// [`SharedReadings::advance`] of the next sample (out of line: one bar a pass takes
-    /// each sample).
+    /// each sample), with what the bar read of its setpoint.
     #[inline(never)]
-    fn take_next(&mut self, s: &Sample, r: Option<&BarReading>) {
+    fn take_next(&mut self, s: &Sample, measured: bool) {
         self.next += 1;
+        let r = measured.then(|| self.read_commanded(s));
         if let Some(maps) = &mut self.maps {
-            maps.take(s, r.map(BarReading::bin));
+            maps.take(s, r.as_ref().map(CommandedReading::bin));
         }
         if let (Some((run, feed)), Some(r)) = (&mut self.theta, r) {
             // As `BallbarSink::take` forms them: the feed, then the run's terms.
@@ -238,12 +239,12 @@ impl Sink for SharedBallbar<'_> {
         if readings.theta.is_some() {
             for s in samples {
                 let r = self.bar.take_deviations_with(s, |_, s| readings.read(s));
-                readings.advance(s, r.as_ref());
+                readings.advance(s, r.is_some());
             }
         } else {
             for s in samples {
                 let r = self.bar.take_with(s, |_, s| readings.read(s));
-                readings.advance(s, r.as_ref());
+                readings.advance(s, r.is_some());
             }
         }
         Ok(())

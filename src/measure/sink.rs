@@ -171,6 +171,12 @@ impl BarReading {
 }
 
 impl CommandedReading {
+    /// θ's map bin, as [`BarReading::bin`] gives it.
+    #[inline]
+    pub fn bin(&self) -> usize {
+        self.terms.map_or(0, |t| t.bin)
+    }
+
     /// The whole reading, with dL and the linear twin's dL (um).
     #[inline]
     pub fn with_deviations(&self, deviation_um: f64, linear_um: f64) -> BarReading {

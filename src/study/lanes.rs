@@ -24,6 +24,7 @@ use rayon::prelude::*;
 use crate::error::Result;
 use crate::input::scenario::Scenario;
 use crate::input::Machine;
+use crate::measure::attribution::SharedSites;
 use crate::measure::settle::SettleGate;
 use crate::measure::shared::{SharedBallbar, SharedReadings};
 use crate::measure::BallbarSink;
@@ -374,6 +375,8 @@ fn run_pass(
     );
     // The points on the pass's common maps share the reversal-value fit's regressors.
     let regressors = SharedRegressors::default();
+    // And their reversal sites, for each set of slow-zone limits.
+    let sites = SharedSites::default();
     Ok(points
         .iter()
         .zip(ballbars)
@@ -385,14 +388,14 @@ fn run_pass(
             }
             let own = bars.first_mut().and_then(|b| b.maps.take());
             let maps = own.as_ref().or(common_maps.as_ref());
-            let shared_regressors = own.is_none().then_some(&regressors);
+            let pass = own.is_none().then_some((&regressors, &sites));
             assemble(
                 &scenarios[i],
                 bars,
                 maps,
                 warnings,
                 &shared,
-                shared_regressors,
+                (pass.map(|p| p.0), pass.map(|p| p.1)),
             )
             .ok()
         })

@@ -11,8 +11,9 @@
 //! sites. Memory holds the state of the points in one pass, never the setpoint stream.
 //!
 //! A group runs in passes of at most [`POINTS_PER_PASS`] points; passes run in parallel on
-//! the rayon pool. A point whose drives diverge, or a pass that fails as a whole, is run
-//! alone by [`run_ballbar`] for its error: every result is the single run's.
+//! the rayon pool. A point whose drives diverge (or whose bar reads a deviation that is not
+//! finite: it cannot take the θ sums its pass keeps once), or a pass that fails as a whole,
+//! is run alone by [`run_ballbar`]: every result is the single run's.
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;

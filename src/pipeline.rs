@@ -69,6 +69,12 @@ impl Sample {
 /// A consumer of samples: the ball bar, the limits monitor, the collision scene, the trace.
 pub trait Sink {
     fn push(&mut self, sample: &Sample) -> Result<()>;
+
+    /// [`Sink::push`] of each of `samples` in order (a sink may take them in one call: the
+    /// points of [`run_lanes`] take a few samples at a time).
+    fn push_many(&mut self, samples: &[Sample]) -> Result<()> {
+        samples.iter().try_for_each(|s| self.push(s))
+    }
 }
 
 /// How samples are timed.
@@ -354,8 +360,8 @@ pub fn run_lanes(
                 for sample in samples.iter_mut() {
                     errors[i].apply_in_place(&mut sample.actual);
                     errors[i].apply_mean_in_place(&mut sample.linear);
-                    sink.push(sample)?;
                 }
+                sink.push_many(samples)?;
             }
         }
         if k / 4096 != (k + block.len() as u64) / 4096 || k == 0 {

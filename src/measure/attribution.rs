@@ -412,6 +412,36 @@ pub fn sites_from_map(
     sites
 }
 
+/// The reversal sites of the points of a study pass, which share the reversals, the
+/// command maps and the bar: [`sites_from_map`] once for each set of slow-zone limits
+/// (`slow` of each reversing axis, by its bits; a point's friction sets its own), the same
+/// sites as each point's own call gives.
+#[derive(Default)]
+pub struct SharedSites(std::cell::RefCell<Vec<(Vec<u64>, Vec<ReversalSite>)>>);
+
+impl SharedSites {
+    /// [`sites_from_map`] with `speed`, made at the first point with its limits.
+    pub fn get(
+        &self,
+        reversals: &[(Axis, Vec<f64>)],
+        commanded: &ThetaMap,
+        sensitivity_at: &dyn Fn(&AxisVec) -> AxisVec,
+        length_mm: f64,
+        speed: (&ThetaMap, &dyn Fn(Axis) -> f64),
+    ) -> Vec<ReversalSite> {
+        let key: Vec<u64> = reversals
+            .iter()
+            .map(|(a, _)| speed.1(*a).to_bits())
+            .collect();
+        if let Some((_, sites)) = self.0.borrow().iter().find(|(k, _)| *k == key) {
+            return sites.clone();
+        }
+        let sites = sites_from_map(reversals, commanded, sensitivity_at, length_mm, Some(speed));
+        self.0.borrow_mut().push((key, sites.clone()));
+        sites
+    }
+}
+
 /// Largest extent of a slow zone on either side of its reversal, deg.
 pub const MAX_ZONE_DEG: f64 = 15.0;
 

@@ -6,14 +6,24 @@
 //! positions (drives alike on the rotaries), the table ball
 //! ([`BarGeometry::table_ball_mm`]) is the same too. [`SharedReadings`] keeps them per
 //! sample, in a slot chosen by the sample's index, and reuses a value only when its inputs
-//! are the same bits: the setpoint for the commanded reading, the rotaries of `q` (and that
-//! setpoint) for the ball. A reused value is the one [`BarGeometry::read`] computes, so a
+//! are the same: the sample's index for the commanded reading (a [`SharedReadings`] reads
+//! the samples of one run, where an index names one setpoint), the bits of the rotaries of
+//! `q` (and that setpoint) for the ball. A reused value is the one [`BarGeometry::read`] computes, so a
 //! point's readings are its single run's bit for bit, whatever is shared.
+//!
+//! Where every bar takes every sample (no settle gate), what a bar sums of θ alone (each
+//! bin's count and sums of cos θ and sin θ, the centring's normal matrix `Σ φ φᵀ` with
+//! `φ = (1, cos θ, sin θ)`) and its feed meter are the same for all of them:
+//! [`SharedReadings::with_theta_sums`] keeps them once, from whichever bar pushes a sample
+//! first, and each bar sums only its deviations (`Σ dL` per bin, `Σ φ dL`) until
+//! [`SharedReadings::complete`] hands it the rest.
 
 use std::cell::RefCell;
 
 use nalgebra::Point3;
 
+use super::ballbar::BallbarRun;
+use super::feed::FeedMeter;
 use super::sink::{BallbarSink, BarGeometry, BarReading, CommandMaps, CommandedReading};
 use crate::error::Result;
 use crate::pipeline::{Sample, Sink};
@@ -23,16 +33,13 @@ use crate::{Axis, AxisVec};
 /// lane block), so that a block's setpoints are read once for all.
 pub const SLOTS: usize = crate::drive::lanes::BLOCK;
 
-/// Bits of every value of an axis vector: the key of exact equality (NaN included).
-type Bits = [u64; 9];
-
 /// The table balls of one slot: one for the actual positions, one for the twin's.
 const BALLS: usize = 2;
 
 #[derive(Clone, Copy)]
 struct Slot {
-    /// The setpoint read here.
-    commanded: Bits,
+    /// The index of the sample read here: within one run, it names one setpoint.
+    index: u64,
     reading: CommandedReading,
     /// Table balls at this setpoint, keyed by the bits of the tilt and table angles.
     balls: [Option<([u64; 2], Point3<f64>)>; BALLS],
@@ -47,12 +54,17 @@ pub struct SharedReadings {
     /// [`BarGeometry::needs_full_chain`]: no table balls kept then.
     full_chain: bool,
     slots: Vec<Option<Slot>>,
-    /// The bars' [`CommandMaps`], kept once for all, and the index of the next sample they
-    /// take (see [`SharedReadings::with_maps`]).
-    maps: Option<(CommandMaps, u64)>,
+    /// The bars' [`CommandMaps`], kept once for all (see [`SharedReadings::with_maps`]).
+    maps: Option<CommandMaps>,
+    /// The bars' θ sums (a run with every deviation 0) and feed meter, kept once for all
+    /// (see [`SharedReadings::with_theta_sums`]).
+    theta: Option<(BallbarRun, FeedMeter)>,
+    /// The index of the next sample the maps and θ sums take.
+    next: u64,
 }
 
 impl SharedReadings {
+    /// Readings of the samples of one run (a sample's index names its setpoint).
     pub fn new(geometry: BarGeometry) -> SharedReadings {
         let layout = geometry.kinematics.layout;
         SharedReadings {
@@ -61,6 +73,8 @@ impl SharedReadings {
             full_chain: geometry.needs_full_chain(),
             slots: vec![None; SLOTS],
             maps: None,
+            theta: None,
+            next: 0,
         }
     }
 
@@ -71,24 +85,58 @@ impl SharedReadings {
     /// from whichever bar pushes it first. A bar that stops early (its drives failed)
     /// leaves the samples after its last to the next bar.
     pub fn with_maps(mut self) -> SharedReadings {
-        self.maps = Some((CommandMaps::default(), 0));
+        self.maps = Some(CommandMaps::default());
+        self
+    }
+
+    /// The same, keeping the θ sums and feed meter of its bars once for all (a bar then
+    /// sums only its deviations: [`BallbarSink::take_deviations_with`]), for bars in
+    /// `direction` that each take every sample of a run, in order, from index 0, as
+    /// [`SharedReadings::with_maps`]'s do. [`SharedReadings::complete`] hands each bar its
+    /// sums at the run's end.
+    pub fn with_theta_sums(mut self, direction: crate::input::program::Direction) -> Self {
+        self.theta = Some((BallbarRun::new(direction), FeedMeter::default()));
         self
     }
 
     /// The maps kept by [`SharedReadings::with_maps`].
     pub fn into_maps(self) -> Option<CommandMaps> {
-        self.maps.map(|(maps, _)| maps)
+        self.maps
     }
 
-    /// Hands sample `s` to the kept maps if none of the bars has yet (`bin`: its θ bin
-    /// when it is measured).
-    #[inline]
-    fn map(&mut self, s: &Sample, bin: Option<usize>) {
-        if let Some((maps, next)) = &mut self.maps {
-            if s.index == *next {
-                maps.take(s, bin);
-                *next += 1;
-            }
+    /// Completes `bar`, fed through these readings, with the θ sums and feed meter kept
+    /// by [`SharedReadings::with_theta_sums`] ([`BallbarSink::take_shared`]); true without
+    /// them (the bar summed everything itself). False when the bar cannot take them (one
+    /// of its deviations was not finite): its point must run alone.
+    pub fn complete(&self, bar: &mut BallbarSink) -> bool {
+        match &self.theta {
+            Some((run, feed)) => bar.take_shared(run, feed),
+            None => true,
+        }
+    }
+
+    /// Hands sample `s` to the kept maps and θ sums if none of the bars has yet (`measured`:
+    /// whether the bars read it).
+    #[inline(always)]
+    fn advance(&mut self, s: &Sample, measured: bool) {
+        if s.index == self.next {
+            self.take_next(s, measured);
+        }
+    }
+
+    /// [`SharedReadings::advance`] of the next sample (out of line: one bar a pass takes
+    /// each sample), with what the bar read of its setpoint.
+    #[inline(never)]
+    fn take_next(&mut self, s: &Sample, measured: bool) {
+        self.next += 1;
+        let r = measured.then(|| self.read_commanded(s));
+        if let Some(maps) = &mut self.maps {
+            maps.take(s, r.as_ref().map(CommandedReading::bin));
+        }
+        if let (Some((run, feed)), Some(r)) = (&mut self.theta, r) {
+            // As `BallbarSink::take` forms them: the feed, then the run's terms.
+            feed.take(s.time_s, r.theta_deg);
+            run.push_terms(r.terms.as_ref(), 0.0);
         }
     }
 
@@ -99,7 +147,7 @@ impl SharedReadings {
     }
 
     /// [`BarGeometry::read`] of `s`.
-    #[inline]
+    #[inline(always)]
     pub fn read(&mut self, s: &Sample) -> BarReading {
         let SharedReadings {
             geometry,
@@ -116,49 +164,62 @@ impl SharedReadings {
             let linear_um = geometry.deviation_on(true, &s.linear, &s.commanded, c);
             return c.with_deviations(deviation_um, linear_um);
         }
-        let mut deviation = |k: usize, q: &AxisVec| {
-            let key = rotaries.map(|a| a.map_or(0, |a| q[a].to_bits()));
-            let ball = match &balls[k] {
-                Some((held, ball)) if *held == key => *ball,
-                _ => {
-                    let ball = geometry.table_ball_mm(q, &s.commanded, &c.at_command);
-                    balls[k] = Some((key, ball));
-                    ball
-                }
-            };
-            geometry.deviation_to_ball_um(q, &ball)
-        };
-        let deviation_um = deviation(0, &s.actual);
-        let linear_um = deviation(1, &s.linear);
+        let deviation_um = deviation(geometry, rotaries, &mut balls[0], &s.actual, s, c);
+        let linear_um = deviation(geometry, rotaries, &mut balls[1], &s.linear, s, c);
         c.with_deviations(deviation_um, linear_um)
     }
 }
 
+/// dL at positions `q` of sample `s` (whose setpoint reads `c`), um, with the table ball
+/// kept in `ball` (keyed by the bits of `q`'s `rotaries`) or made there.
+#[inline(always)]
+fn deviation(
+    geometry: &BarGeometry,
+    rotaries: &[Option<Axis>; 2],
+    ball: &mut Option<([u64; 2], Point3<f64>)>,
+    q: &AxisVec,
+    s: &Sample,
+    c: &CommandedReading,
+) -> f64 {
+    let key = rotaries.map(|a| a.map_or(0, |a| q[a].to_bits()));
+    let at = match ball {
+        Some((held, at)) if *held == key => *at,
+        _ => new_ball(geometry, ball, key, q, s, c),
+    };
+    geometry.deviation_to_ball_um(q, &at)
+}
+
+/// The table ball at `q` of sample `s`, kept in `ball` with its key (out of line: a pass's
+/// points mostly share their rotaries).
+#[cold]
+#[inline(never)]
+fn new_ball(
+    geometry: &BarGeometry,
+    ball: &mut Option<([u64; 2], Point3<f64>)>,
+    key: [u64; 2],
+    q: &AxisVec,
+    s: &Sample,
+    c: &CommandedReading,
+) -> Point3<f64> {
+    let at = geometry.table_ball_mm(q, &s.commanded, &c.at_command);
+    *ball = Some((key, at));
+    at
+}
+
 /// The slot of sample `s` in `slots`, holding its setpoint's reading (read now if it holds
-/// another setpoint).
+/// another sample's).
 #[inline(always)]
 fn slot_of<'s>(slots: &'s mut [Option<Slot>], geometry: &BarGeometry, s: &Sample) -> &'s mut Slot {
     let slot = &mut slots[s.index as usize % SLOTS];
-    let held = slot
-        .as_ref()
-        .is_some_and(|held| same_bits(&held.commanded, &s.commanded));
+    let held = slot.as_ref().is_some_and(|held| held.index == s.index);
     if !held {
         *slot = Some(Slot {
-            commanded: s.commanded.0.map(f64::to_bits),
+            index: s.index,
             reading: geometry.read_commanded(&s.commanded),
             balls: [None; BALLS],
         });
     }
     slot.as_mut().expect("filled just above")
-}
-
-/// Whether `q`'s values have the bits `key` (without a branch per value).
-#[inline]
-fn same_bits(key: &Bits, q: &AxisVec) -> bool {
-    key.iter()
-        .zip(&q.0)
-        .fold(0, |differ, (k, v)| differ | (k ^ v.to_bits()))
-        == 0
 }
 
 /// A point's ball bar reading through the [`SharedReadings`] of its pass.
@@ -170,9 +231,22 @@ pub struct SharedBallbar<'a> {
 impl Sink for SharedBallbar<'_> {
     #[inline]
     fn push(&mut self, s: &Sample) -> Result<()> {
+        self.push_many(std::slice::from_ref(s))
+    }
+
+    fn push_many(&mut self, samples: &[Sample]) -> Result<()> {
         let mut readings = self.readings.borrow_mut();
-        let r = self.bar.take_with(s, |_, s| readings.read(s));
-        readings.map(s, r.as_ref().map(BarReading::bin));
+        if readings.theta.is_some() {
+            for s in samples {
+                let r = self.bar.take_deviations_with(s, |_, s| readings.read(s));
+                readings.advance(s, r.is_some());
+            }
+        } else {
+            for s in samples {
+                let r = self.bar.take_with(s, |_, s| readings.read(s));
+                readings.advance(s, r.is_some());
+            }
+        }
         Ok(())
     }
 }

@@ -171,6 +171,12 @@ impl BarReading {
 }
 
 impl CommandedReading {
+    /// θ's map bin, as [`BarReading::bin`] gives it.
+    #[inline]
+    pub fn bin(&self) -> usize {
+        self.terms.map_or(0, |t| t.bin)
+    }
+
     /// The whole reading, with dL and the linear twin's dL (um).
     #[inline]
     pub fn with_deviations(&self, deviation_um: f64, linear_um: f64) -> BarReading {
@@ -293,6 +299,38 @@ impl BallbarSink {
             maps.take(s, r.as_ref().map(BarReading::bin));
         }
         r
+    }
+
+    /// [`BallbarSink::take_with`] for a bar whose θ sums and feed are kept once for the
+    /// points of a pass ([`crate::measure::shared::SharedReadings::with_theta_sums`]): only
+    /// the deviations go into its runs ([`BallbarRun::add_deviation`]); the rest comes with
+    /// [`BallbarSink::take_shared`] once the run is over.
+    #[inline]
+    pub fn take_deviations_with(
+        &mut self,
+        s: &Sample,
+        read: impl FnOnce(&BarGeometry, &Sample) -> BarReading,
+    ) -> Option<BarReading> {
+        let r = is_measured(s, self.measured).then(|| read(&self.geometry, s));
+        // A non-finite θ: rejected by every bar alike, counted in the shared θ sums.
+        if let Some((r, terms)) = r.as_ref().and_then(|r| Some((r, r.terms.as_ref()?))) {
+            self.run.add_deviation(terms, r.deviation_um);
+            self.signature.add_deviation(terms, r.nonlinear_um);
+        }
+        if let Some(maps) = &mut self.maps {
+            maps.take(s, r.as_ref().map(BarReading::bin));
+        }
+        r
+    }
+
+    /// Completes a bar fed by [`BallbarSink::take_deviations_with`] with the θ sums
+    /// `theta` and the feed `feed` kept for it (each of a run that took every measured
+    /// sample this bar did, in order, with every deviation 0): the same bits as the bar's
+    /// own [`BallbarSink::take`] of the same samples. False when one of its deviations was
+    /// not finite: its runs' θ sums are then its own, and the point must run alone.
+    pub fn take_shared(&mut self, theta: &BallbarRun, feed: &FeedMeter) -> bool {
+        self.feed = *feed;
+        self.run.take_theta_sums(theta) && self.signature.take_theta_sums(theta)
     }
 
     /// [`BallbarSink::take_with`] without the maps.

@@ -11,8 +11,9 @@
 //! sites. Memory holds the state of the points in one pass, never the setpoint stream.
 //!
 //! A group runs in passes of at most [`POINTS_PER_PASS`] points; passes run in parallel on
-//! the rayon pool. A point whose drives diverge, or a pass that fails as a whole, is run
-//! alone by [`run_ballbar`] for its error: every result is the single run's.
+//! the rayon pool. A point whose drives diverge (or whose bar reads a deviation that is not
+//! finite: it cannot take the θ sums its pass keeps once), or a pass that fails as a whole,
+//! is run alone by [`run_ballbar`]: every result is the single run's.
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
@@ -24,6 +25,7 @@ use rayon::prelude::*;
 use crate::error::Result;
 use crate::input::scenario::Scenario;
 use crate::input::Machine;
+use crate::measure::attribution::SharedSites;
 use crate::measure::settle::SettleGate;
 use crate::measure::shared::{SharedBallbar, SharedReadings};
 use crate::measure::BallbarSink;
@@ -50,7 +52,20 @@ pub fn run_ballbar_lanes(
     if let [scenario] = scenarios {
         return vec![run_ballbar(scenario, None, progress)];
     }
-    let passes = passes(scenarios, rayon::current_num_threads());
+    run_ballbar_lanes_keyed(scenarios, &share_keys(scenarios), progress)
+}
+
+/// [`run_ballbar_lanes`] with each scenario's [`share_key`] made by the caller (`keys[i]`
+/// is `share_key(&scenarios[i])`'s), for a caller that needs them too.
+pub fn run_ballbar_lanes_keyed(
+    scenarios: &[Scenario],
+    keys: &[String],
+    progress: &dyn Fn(f64),
+) -> Vec<Result<BallbarStudy>> {
+    if let [scenario] = scenarios {
+        return vec![run_ballbar(scenario, None, progress)];
+    }
+    let passes = passes_keyed(scenarios, keys, rayon::current_num_threads());
     let (sender, receiver) = mpsc::channel::<f64>();
     // The passes run on a pool as wide as the caller's, from a thread of their own, so
     // that this thread can hand their progress to `progress` (which need not be `Sync`).
@@ -120,9 +135,17 @@ pub fn share_key(scenario: &Scenario) -> String {
 /// grid of 100 points per kv runs in passes of 50 that each hold one kv, not of 62 or 63
 /// of which half straddle two.
 pub fn passes(scenarios: &[Scenario], threads: usize) -> Vec<Vec<usize>> {
-    // The keys (a scenario's debug form each) in parallel: made one by one, they were the
-    // study's only serial work of note.
-    let keys: Vec<String> = scenarios.par_iter().map(share_key).collect();
+    passes_keyed(scenarios, &share_keys(scenarios), threads)
+}
+
+/// Every scenario's [`share_key`], made in parallel (a scenario's debug form each: made one
+/// by one, they were the study's only serial work of note).
+pub fn share_keys(scenarios: &[Scenario]) -> Vec<String> {
+    scenarios.par_iter().map(share_key).collect()
+}
+
+/// [`passes`] with the scenarios' [`share_key`]s given.
+fn passes_keyed(scenarios: &[Scenario], keys: &[String], threads: usize) -> Vec<Vec<usize>> {
     let mut group_of: HashMap<&str, usize> = HashMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (i, key) in keys.iter().enumerate() {
@@ -279,7 +302,12 @@ fn run_pass(
             Some(g) => {
                 // The points' bars read each setpoint (and each table ball their rotaries
                 // share) once for all.
-                let readings = SharedReadings::new(g);
+                // Without a settle gate every bar takes every sample: their θ sums and feed
+                // too are kept once for all (`SharedReadings::with_theta_sums`).
+                let readings = match gated {
+                    true => SharedReadings::new(g),
+                    false => SharedReadings::new(g).with_theta_sums(direction),
+                };
                 let readings = RefCell::new(match k == 0 && !gated {
                     true => readings.with_maps(),
                     false => readings,
@@ -317,8 +345,13 @@ fn run_pass(
                     pipeline::run_lanes(run.moves, &machines, &options, &mut sinks, progress)?
                 };
                 drop(shared);
+                let readings = readings.into_inner();
+                // A bar with a deviation of its own not finite runs alone.
+                for (f, bar) in failed.iter_mut().zip(&mut bars) {
+                    *f |= !readings.complete(bar);
+                }
                 if k == 0 {
-                    common_maps = readings.into_inner().into_maps();
+                    common_maps = readings.into_maps();
                 }
                 ran
             }
@@ -343,6 +376,8 @@ fn run_pass(
     );
     // The points on the pass's common maps share the reversal-value fit's regressors.
     let regressors = SharedRegressors::default();
+    // And their reversal sites, for each set of slow-zone limits.
+    let sites = SharedSites::default();
     Ok(points
         .iter()
         .zip(ballbars)
@@ -354,14 +389,14 @@ fn run_pass(
             }
             let own = bars.first_mut().and_then(|b| b.maps.take());
             let maps = own.as_ref().or(common_maps.as_ref());
-            let shared_regressors = own.is_none().then_some(&regressors);
+            let pass = own.is_none().then_some((&regressors, &sites));
             assemble(
                 &scenarios[i],
                 bars,
                 maps,
                 warnings,
                 &shared,
-                shared_regressors,
+                (pass.map(|p| p.0), pass.map(|p| p.1)),
             )
             .ok()
         })

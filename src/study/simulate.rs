@@ -41,7 +41,7 @@ use crate::study::contour_budget::ContourBudgetRuns;
 use crate::study::reversals::{
     has_closed_form, reversals_deg, scenario_reversals_deg, MoveAnalysis,
 };
-use crate::Axis;
+use crate::{Axis, AxisVec};
 
 /// What a simulation found.
 #[derive(Clone, Debug, Serialize)]
@@ -319,7 +319,14 @@ pub fn run_ballbar_budget(
         feed_reductions,
     );
     let maps = sinks.first_mut().and_then(|b| b.maps.take());
-    let mut study = assemble(scenario, sinks, maps.as_ref(), warnings, &shared, None)?;
+    let mut study = assemble(
+        scenario,
+        sinks,
+        maps.as_ref(),
+        warnings,
+        &shared,
+        (None, None),
+    )?;
     for m in &measurements {
         study.measurements.insert(m.name().to_string(), m.finish()?);
     }
@@ -498,7 +505,10 @@ pub(crate) fn assemble(
     maps: Option<&CommandMaps>,
     warnings: Vec<String>,
     shared: &SharedRuns,
-    regressors: Option<&crate::study::lost_motion::SharedRegressors>,
+    (regressors, shared_sites): (
+        Option<&crate::study::lost_motion::SharedRegressors>,
+        Option<&crate::measure::attribution::SharedSites>,
+    ),
 ) -> Result<BallbarStudy> {
     let machine = &scenario.machine;
     let geometry = bar_geometry(scenario);
@@ -525,13 +535,15 @@ pub(crate) fn assemble(
         }
     };
     let sites = match (maps, geometry) {
-        (Some(maps), Some(g)) => sites_from_map(
-            &reversals,
-            &maps.commanded,
-            &|q| g.sensitivity_at(q),
-            g.length_mm,
-            Some((&maps.speed, &stribeck as &dyn Fn(Axis) -> f64)),
-        ),
+        (Some(maps), Some(g)) => {
+            let sensitivity = |q: &AxisVec| g.sensitivity_at(q);
+            let speed = (&maps.speed, &stribeck as &dyn Fn(Axis) -> f64);
+            let (commanded, length) = (&maps.commanded, g.length_mm);
+            match shared_sites {
+                Some(shared) => shared.get(&reversals, commanded, &sensitivity, length, speed),
+                None => sites_from_map(&reversals, commanded, &sensitivity, length, Some(speed)),
+            }
+        }
         _ => ReversalSite::unweighted(&reversals),
     };
     let lost_motion_b = match (maps, geometry) {

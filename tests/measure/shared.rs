@@ -206,3 +206,78 @@ fn maps_kept_once_are_every_bars_own() {
     assert!(filled(&own.commanded) > 10 && filled(&own.speed) > 10);
     assert_eq!(format!("{kept:?}"), format!("{own:?}"));
 }
+
+/// The θ sums and feed kept once for the bars of a pass complete each bar to its single
+/// run bit for bit (every bin, sum, count and the feed meter): with samples before the
+/// measured lines, a setpoint whose θ is not finite (rejected by every bar alike), and the
+/// first bar stopping early (its drives failed) so that the next one takes over the sums.
+#[test]
+fn theta_sums_kept_once_complete_every_bar_to_its_own() {
+    let g = geometry(Kinematics::new(Layout::TrtAc, Vector3::zeros()));
+    let measured = Some(MeasuredLines { first: 2, last: 2 });
+    let sample_at = |k: u64, point: usize| {
+        let mut s = Sample {
+            line: if k < 300 { 1 } else { 2 },
+            ..sample(k, point)
+        };
+        if k == 2000 {
+            s.commanded[Axis::X] = f64::NAN;
+        }
+        s
+    };
+    let readings = RefCell::new(SharedReadings::new(g).with_theta_sums(Direction::Ccw));
+    let mut bars: Vec<BallbarSink> = (0..3)
+        .map(|_| BallbarSink::new(g, Direction::Ccw, measured).without_maps())
+        .collect();
+    let mut alone: Vec<BallbarSink> = (0..3)
+        .map(|_| BallbarSink::new(g, Direction::Ccw, measured).without_maps())
+        .collect();
+    let stop = 1000;
+    for start in (0..6300u64).step_by(256) {
+        for (point, (bar, single)) in bars.iter_mut().zip(&mut alone).enumerate() {
+            let mut sink = SharedBallbar {
+                bar,
+                readings: &readings,
+            };
+            let end = (start + 256).min(if point == 0 { stop } else { 6300 });
+            let samples: Vec<Sample> = (start..end).map(|k| sample_at(k, point)).collect();
+            sink.push_many(&samples).unwrap();
+            for s in &samples {
+                single.push(s).unwrap();
+            }
+        }
+    }
+    let readings = readings.into_inner();
+    for (point, (bar, single)) in bars.iter_mut().zip(&alone).enumerate().skip(1) {
+        assert!(readings.complete(bar), "point {point}");
+        assert!(bar.run.samples() > 5000 && bar.run.rejected() == 1);
+        assert_eq!(format!("{bar:?}"), format!("{single:?}"), "point {point}");
+    }
+}
+
+/// A bar one of whose deviations is not finite where θ is (its own runs reject a sample
+/// the others take) cannot take the shared θ sums: its point must run alone.
+#[test]
+fn a_bar_with_a_deviation_not_finite_is_not_completed() {
+    let g = geometry(Kinematics::new(Layout::TrtAc, Vector3::zeros()));
+    let readings = RefCell::new(SharedReadings::new(g).with_theta_sums(Direction::Ccw));
+    let mut bars: Vec<BallbarSink> = (0..3)
+        .map(|_| BallbarSink::new(g, Direction::Ccw, None).without_maps())
+        .collect();
+    for (point, bar) in bars.iter_mut().enumerate() {
+        let mut sink = SharedBallbar {
+            bar,
+            readings: &readings,
+        };
+        for k in 0..2000u64 {
+            let mut s = sample(k, point);
+            if point == 1 && k == 700 {
+                s.actual[Axis::Y] = f64::INFINITY;
+            }
+            sink.push(&s).unwrap();
+        }
+    }
+    let readings = readings.into_inner();
+    let completed: Vec<bool> = bars.iter_mut().map(|b| readings.complete(b)).collect();
+    assert_eq!(completed, [true, false, true]);
+}

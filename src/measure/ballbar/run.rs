@@ -199,6 +199,42 @@ impl BallbarRun {
         self.samples += 1;
     }
 
+    /// Adds only the deviation of a sample at θ with `terms`, for a run whose θ sums a run
+    /// of the same samples keeps for many ([`BallbarRun::take_theta_sums`]): the bin's sum
+    /// of dL and `sum phi dL`, each as [`BallbarRun::add`] forms it. A non-finite deviation
+    /// is counted in [`BallbarRun::rejected`], and the θ sums are then not that run's.
+    #[inline]
+    pub fn add_deviation(&mut self, terms: &ThetaTerms, deviation_um: f64) {
+        if !deviation_um.is_finite() {
+            self.rejected += 1;
+            return;
+        }
+        self.bins[terms.bin].sum_um += deviation_um;
+        self.rhs[0] += deviation_um;
+        self.rhs[1] += terms.cos * deviation_um;
+        self.rhs[2] += terms.sin * deviation_um;
+    }
+
+    /// Completes a run fed by [`BallbarRun::add_deviation`] with the θ sums of `theta`, a
+    /// run that took every sample this one did (its bins' counts and sums of cos θ and
+    /// sin θ, the normal matrix, the counts): the same sums in the same order, so the same
+    /// bits as had this run added every sample itself. False, and nothing taken, when this
+    /// run rejected a deviation of its own (its θ sums are then not `theta`'s).
+    pub fn take_theta_sums(&mut self, theta: &BallbarRun) -> bool {
+        if self.rejected > 0 || self.bins.len() != theta.bins.len() {
+            return false;
+        }
+        for (mine, t) in self.bins.iter_mut().zip(&theta.bins) {
+            mine.n = t.n;
+            mine.sum_cos = t.sum_cos;
+            mine.sum_sin = t.sum_sin;
+        }
+        self.normal = theta.normal;
+        self.samples = theta.samples;
+        self.rejected = theta.rejected;
+        true
+    }
+
     /// Samples accepted so far.
     pub fn samples(&self) -> u64 {
         self.samples

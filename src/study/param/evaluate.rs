@@ -14,7 +14,7 @@ use crate::error::Result;
 use crate::input::overrides::{KeyPath, ScenarioTree, Step};
 use crate::input::scenario::Scenario;
 use crate::study::diagnose::{marks, AxisMark};
-use crate::study::lanes::{run_ballbar_lanes, share_key};
+use crate::study::lanes::{run_ballbar_lanes_keyed, share_keys};
 use crate::study::simulate::BallbarStudy;
 
 /// One point's row: the varied values, the ball-bar figures, per axis the reversal value B
@@ -124,9 +124,10 @@ pub fn groups(
 const POINTS_PER_CHUNK_PER_THREAD: usize = 64;
 
 /// The figures of one group of points, in its order: the ball-bar studies of
-/// [`run_ballbar_lanes`] (each equal to its point's single run), and `check` once for each
-/// set of points with the same setpoints ([`share_key`]: `check` sees the commanded motion
-/// and the axis limits, which the drive keys do not change). `done` is called once per point.
+/// [`crate::study::lanes::run_ballbar_lanes`] (each equal to its point's single run), and
+/// `check` once for each set of points with the same setpoints
+/// ([`crate::study::lanes::share_key`]: `check` sees the commanded motion and the axis
+/// limits, which the drive keys do not change). `done` is called once per point.
 pub fn evaluate_group(scenarios: &[Scenario], done: &(dyn Fn() + Sync)) -> Vec<Result<Figures>> {
     // A failed check is not kept: each of its points runs it again and carries its error.
     let mut checked: std::collections::HashMap<String, u64> = Default::default();
@@ -135,8 +136,9 @@ pub fn evaluate_group(scenarios: &[Scenario], done: &(dyn Fn() + Sync)) -> Vec<R
     let chunk = POINTS_PER_CHUNK_PER_THREAD * rayon::current_num_threads().max(1);
     let mut out = Vec::with_capacity(scenarios.len());
     for part in scenarios.chunks(chunk) {
-        let studies = run_ballbar_lanes(part, &|_| {});
-        let keys: Vec<String> = part.par_iter().map(share_key).collect();
+        // The keys group the points into passes and their checks: made once for both.
+        let keys = share_keys(part);
+        let studies = run_ballbar_lanes_keyed(part, &keys, &|_| {});
         let violations: Vec<Result<u64>> = part
             .iter()
             .zip(keys)

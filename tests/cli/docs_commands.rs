@@ -273,6 +273,7 @@ const SHOWN: &[(&str, Shown)] = &[
     ("mtsim check", Names),
     ("mtsim check --json", Names),
     ("mtsim cone", Names),
+    ("mtsim cut", Names),
     ("mtsim fit", Names),
     ("mtsim merge", Names),
     ("mtsim report", Names),

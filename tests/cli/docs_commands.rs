@@ -264,6 +264,7 @@ const SHOWN: &[(&str, Shown)] = &[
     ("mtsim study", Names),
     ("mtsim study --samples 128", Names),
     ("mtsim study -q", Names),
+    ("mtsim study scenarios/studies/tolerance-cone-15-10.toml -q", Names),
     ("mtsim <version>", Skip("the Parquet files' `created_by` text, not a command")),
     ("mtsim analyze", Names),
     ("mtsim batch", Names),

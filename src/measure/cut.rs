@@ -161,11 +161,11 @@ impl CutSurface {
 
     /// The cutter position of sample `s`: actual positions through the actual chain, or
     /// commanded ones through the nominal chain.
-    fn pose(&self, s: &Sample) -> ToolPose {
+    fn pose(&self, commanded: &AxisVec, actual: &AxisVec) -> ToolPose {
         if self.options.commanded {
-            return self.nominal.forward(&s.commanded);
+            return self.nominal.forward(commanded);
         }
-        actual_tool(&self.kinematics, &s.actual)
+        actual_tool(&self.kinematics, actual)
     }
 
     /// Cuts with the actual positions through the chain with the geometric `errors` alone
@@ -350,12 +350,7 @@ impl CutSurface {
         if !self.cutting {
             return;
         }
-        let pose = if self.options.commanded {
-            self.nominal.forward(q)
-        } else {
-            actual_tool(&self.kinematics, q)
-        };
-        self.cut_with(pose, q, q);
+        self.cut_with(self.pose(q, q), q, q);
     }
 
     /// Cuts with the cutter at `pose`, of a sample of `actual` and `linear` positions.
@@ -378,7 +373,7 @@ impl Sink for CutSurface {
         if !self.cutting || !is_measured(s, self.measured) {
             return Ok(());
         }
-        let pose = self.pose(s);
+        let pose = self.pose(&s.commanded, &s.actual);
         self.cut_with(pose, &s.actual, &s.linear);
         Ok(())
     }

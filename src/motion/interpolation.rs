@@ -105,7 +105,7 @@ use crate::kinematics::Kinematics;
 use crate::motion::blend::{self, Bend};
 pub use crate::motion::feed_held::{FeedLimit, LimitKind};
 use crate::motion::feed_held::{FeedReduction, FeedReductions};
-use crate::motion::profile::{reach, Profile};
+use crate::motion::profile::{change_distance_bound, reach, Profile};
 use crate::program::{Feed, Motion, Move, PathControl};
 use crate::{Axis, AxisVec};
 use libm::cbrt;
@@ -282,6 +282,36 @@ struct Planned {
     overlap: Option<f64>,
     /// Acceleration and jerk limits halved for an overlap ([`overlap`]), once.
     halved: bool,
+    /// Appended and not yet passed: `entry_max` stands for [`Planned::rest_entry`], which
+    /// the backward pass computes only where it can matter ([`Planned::entry_limit`]).
+    rest_entry_due: bool,
+}
+
+impl Planned {
+    /// Largest entry speed from which the block can stop at its own end (what a block not
+    /// yet passed assumes): `reach(0, L, min(entry cap, cap))`.
+    fn rest_entry(&self) -> f64 {
+        if self.length == 0.0 {
+            return 0.0;
+        }
+        reach(
+            0.0,
+            self.length,
+            self.entry_cap.min(self.cap),
+            self.accel,
+            self.jerk,
+        )
+    }
+
+    /// Largest entry speed from which the rest of the window is feasible: `entry_max`, or
+    /// the stop at its own end for a block appended since the last backward pass.
+    fn entry_limit(&self) -> f64 {
+        if self.rest_entry_due {
+            self.rest_entry()
+        } else {
+            self.entry_max
+        }
+    }
 }
 
 /// A block's speed limits from the axis limits (see [`Planned`]), path units/s, /s², /s³.
@@ -304,9 +334,6 @@ impl Limits {
         jerk: 0.0,
     };
 }
-
-/// A block planned on its own, with `dq/ds` at its start and at its end.
-type PlannedBlock = (Planned, AxisVec, AxisVec);
 
 /// The end of the last planned block, for the next junction.
 #[derive(Clone, Copy, Debug)]
@@ -375,9 +402,11 @@ impl Active {
 /// `lookahead_blocks` blocks are already returned by [`Interpolator::new`].
 pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     blocks: I,
-    /// Blocks read from `blocks` and not yet planned, read [`pass_batch`] at a time (see
-    /// [`Interpolator::next_block`]); `blocks_done` once `blocks` has ended or failed.
-    read_ahead: VecDeque<Result<Move>>,
+    /// Blocks read from `blocks`, [`pass_batch`] at a time (see
+    /// [`Interpolator::read_more`]), planned up to `read_at` (each read where it is stored);
+    /// `blocks_done` once `blocks` has ended or failed.
+    read_ahead: Vec<Result<Move>>,
+    read_at: usize,
     blocks_done: bool,
     input_done: bool,
     pending_error: Option<Error>,
@@ -394,7 +423,11 @@ pub struct Interpolator<I: Iterator<Item = Result<Move>>> {
     /// Every block held below its F word, summarised (always kept: bounded memory).
     reductions: FeedReductions,
     last_end: Option<JunctionEnd>,
-    held: Option<Held>,
+    /// The held block ([`Interpolator::hold`]), and the place the next block is planned in
+    /// (`None` only while it is planned): boxed so that the next one takes the held one's
+    /// place by swapping the two, not by copying hundreds of bytes.
+    held: Box<Option<Held>>,
+    incoming: Option<Box<Option<Held>>>,
     next_index: u64,
     active: Option<Active>,
     /// The block before the active one while it still runs beside it ([`overlap`]), and the
@@ -430,7 +463,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         }
         let mut interpolator = Interpolator {
             blocks,
-            read_ahead: VecDeque::with_capacity(pass_batch(&options)),
+            read_ahead: Vec::with_capacity(pass_batch(&options)),
+            read_at: 0,
             blocks_done: false,
             input_done: false,
             pending_error: None,
@@ -444,7 +478,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             reductions: FeedReductions::default(),
             options,
             last_end: None,
-            held: None,
+            held: Box::new(None),
+            incoming: Some(Box::new(None)),
             next_index: 0,
             active: None,
             trailing: None,
@@ -474,30 +509,44 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     fn fill(&mut self) {
         let batch = pass_batch(&self.options);
         while !self.input_done && self.window.len() <= self.options.lookahead_blocks + batch - 1 {
-            // One match per outcome, with no enum between reading and planning: each level
-            // of one copied the block (hundreds of bytes) once more.
-            match self.next_block(batch) {
-                None => self.input_done = true,
-                Some(Err(e)) => {
+            // The block is planned where it was read, into the box it is held in (each copy
+            // of one costs a few dozen instructions, and a fine segment's whole planning a few
+            // thousand).
+            self.read_more(batch);
+            let at = self.read_at;
+            self.read_at += 1;
+            match self.read_ahead.get(at) {
+                None => {
+                    self.input_done = true;
+                    continue;
+                }
+                Some(Err(_)) => {
+                    let failed = std::mem::replace(&mut self.read_ahead[at], Ok(Move::default()));
+                    self.pending_error = failed.err();
+                    self.input_done = true;
+                    continue;
+                }
+                Some(Ok(_)) => {}
+            }
+            let Some(Ok(block)) = self.read_ahead.get(at) else {
+                continue;
+            };
+            let index = self.next_index;
+            self.next_index += 1;
+            let mut next = self.incoming.take().unwrap_or_default();
+            match self.plan(block, index, &mut next) {
+                Err(e) => {
                     self.pending_error = Some(e);
                     self.input_done = true;
                 }
-                Some(Ok(block)) => {
-                    let index = self.next_index;
-                    self.next_index += 1;
-                    match self.plan(&block, index) {
-                        Err(e) => {
-                            self.pending_error = Some(e);
-                            self.input_done = true;
-                        }
-                        Ok(Some((planned, start, end))) => {
-                            self.record(&planned);
-                            self.hold(planned, start, end)
-                        }
-                        Ok(None) => {}
+                Ok(()) => {
+                    if let Some(held) = next.as_ref() {
+                        self.record(&held.planned);
+                        next = self.hold_next(next);
                     }
                 }
             }
+            self.incoming = Some(next);
         }
         if self.input_done {
             if let Some(last) = self.held.take() {
@@ -509,28 +558,30 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         }
     }
 
-    /// The next block of the program, read `batch` at a time. With short blocks one is
-    /// needed per interpolation period or so, between the drives' samples; read one at a
-    /// time, the reader's code (interpreter, validation) found the instruction cache cold
-    /// on every block. Reading stops at the first error, where the interpolator stops. Only
-    /// when blocks are read changes (at most `batch` blocks early), not what is planned: the
-    /// window and its backward passes are the same.
-    fn next_block(&mut self, batch: usize) -> Option<Result<Move>> {
-        if self.read_ahead.is_empty() && !self.blocks_done {
-            for _ in 0..batch {
-                let Some(block) = self.blocks.next() else {
-                    self.blocks_done = true;
-                    break;
-                };
-                let failed = block.is_err();
-                self.read_ahead.push_back(block);
-                if failed {
-                    self.blocks_done = true;
-                    break;
-                }
+    /// Reads the next `batch` blocks of the program once those read are all planned. With
+    /// short blocks one is needed per interpolation period or so, between the drives'
+    /// samples; read one at a time, the reader's code (interpreter, validation) found the
+    /// instruction cache cold on every block. Reading stops at the first error, where the
+    /// interpolator stops. Only when blocks are read changes (at most `batch` blocks early),
+    /// not what is planned: the window and its backward passes are the same.
+    fn read_more(&mut self, batch: usize) {
+        if self.read_at < self.read_ahead.len() || self.blocks_done {
+            return;
+        }
+        self.read_ahead.clear();
+        self.read_at = 0;
+        for _ in 0..batch {
+            let Some(block) = self.blocks.next() else {
+                self.blocks_done = true;
+                break;
+            };
+            let failed = block.is_err();
+            self.read_ahead.push(block);
+            if failed {
+                self.blocks_done = true;
+                break;
             }
         }
-        self.read_ahead.pop_front()
     }
 
     /// Notes a feed block held below its F word (when recording).
@@ -576,17 +627,19 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         self.done = true;
         let index = self.next_index;
         self.next_index += 1;
-        if let Some((planned, _, _)) = self.plan(block, index)? {
-            self.record(&planned);
+        let mut planned = None;
+        self.plan(block, index, &mut planned)?;
+        if let Some(held) = &planned {
+            self.record(&held.planned);
         }
         Ok(())
     }
 
-    /// Geometry and limits of one block; `None` for a block without motion.
-    /// Also returns the tangents `dq/ds` at its start and end. Inlined: its result is large,
-    /// and each caller keeps a part of it.
+    /// Geometry and limits of one block, with the tangents `dq/ds` at its start and end,
+    /// written to `out` ready to be held; `None` for a block without motion. Inlined: its
+    /// result is large, and each caller keeps a part of it.
     #[inline(always)]
-    fn plan(&self, b: &Move, index: u64) -> Result<Option<PlannedBlock>> {
+    fn plan(&self, b: &Move, index: u64, out: &mut Option<Held>) -> Result<()> {
         let tcp = (b.tcp || self.options.force_tcp).then_some(&self.kinematics);
         self.check_block(b, tcp.is_some())?;
         // The block's `Planned` is assembled last, from its parts: built early and filled in,
@@ -616,6 +669,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             entry_max: 0.0,
             overlap: None,
             halved: false,
+            rest_entry_due: false,
         };
         // A B C (deg counted as mm) and U V W (mm): the axes besides the tool tip's X Y Z.
         let rotary_norm = (3..9).map(|i| path.delta.0[i].powi(2)).sum::<f64>().sqrt();
@@ -646,7 +700,13 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                     dwell_s: seconds,
                     ..planned(path, 0.0, Limits::NONE)
                 };
-                return Ok(Some((dwell, AxisVec::ZERO, AxisVec::ZERO)));
+                *out = Some(Held {
+                    planned: dwell,
+                    start: AxisVec::ZERO,
+                    end: AxisVec::ZERO,
+                    half: 0.0,
+                });
+                return Ok(());
             }
             Motion::Rapid => {
                 // G00 runs in joint space even under TCP: convert tip to machine coordinates.
@@ -686,7 +746,8 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             }
         }
         if length <= 1e-12 {
-            return Ok(None);
+            *out = None;
+            return Ok(());
         }
         if !length.is_finite() {
             return Err(self.block_error(
@@ -709,7 +770,13 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 "the move has no finite speed: check the axis positions and the feed",
             ));
         }
-        Ok(Some((planned(path, length, limits), start, end)))
+        *out = Some(Held {
+            planned: planned(path, length, limits),
+            start,
+            end,
+            half: 0.5 * length,
+        });
+        Ok(())
     }
 
     /// The block's positions are finite, it moves only axes the machine has, and it asks
@@ -886,7 +953,28 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
     }
 
     /// Appends a planned block: junction limit, then the backward pass.
-    fn push(&mut self, mut p: Planned, tangent_start: AxisVec, tangent_end: AxisVec) {
+    fn push(&mut self, p: Planned, tangent_start: AxisVec, tangent_end: AxisVec) {
+        self.window.push_back(p);
+        self.finish_push(tangent_start, tangent_end);
+    }
+
+    /// Appends the held block ([`Interpolator::hold`]) as [`Interpolator::push`] does, copied
+    /// once, from where it is held into the window (taken out first, it was copied twice more).
+    fn push_held(&mut self) {
+        let Some(held) = &*self.held else {
+            return;
+        };
+        self.window.push_back(held.planned);
+        let (start, end) = (held.start, held.end);
+        self.finish_push(start, end);
+    }
+
+    /// The junction limit of the block just appended to the window (its back), with `dq/ds`
+    /// at its start and end, computed in place; then the backward pass when one is due.
+    fn finish_push(&mut self, tangent_start: AxisVec, tangent_end: AxisVec) {
+        let Some(p) = self.window.back_mut() else {
+            return;
+        };
         let dwell = p.length == 0.0;
         let curved = !p.path.is_straight();
         if let (Some(prev), false) = (self.last_end, dwell) {
@@ -969,16 +1057,44 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             path: p.path_control,
             rapid: p.programmed == f64::INFINITY,
         });
-        p.entry_max = if dwell {
-            0.0
-        } else {
-            reach(0.0, p.length, p.entry_cap.min(p.cap), p.accel, p.jerk)
-        };
-        self.window.push_back(p);
+        // Its limit from a stop at its own end ([`Planned::rest_entry`]) is left to the
+        // backward pass, which often finds it cannot matter.
+        p.entry_max = 0.0;
+        p.rest_entry_due = !dwell;
         self.unpassed += 1;
         if self.unpassed >= pass_batch(&self.options) {
             self.backward_pass();
         }
+    }
+
+    /// Takes the next planned block, `next` (`Some`), as [`Interpolator::hold`] does, and
+    /// returns a box to plan the following one in. At a plain junction (no overlap, no blend)
+    /// the held block goes to the window from where it is held and `next` is held by swapping
+    /// the boxes: one copy of the block where `hold` took three.
+    fn hold_next(&mut self, mut next: Box<Option<Held>>) -> Box<Option<Held>> {
+        let Some(n) = next.as_ref() else {
+            return next;
+        };
+        let plain = match self.held.as_ref() {
+            None => true,
+            Some(prev) => self.plain_junction(prev, &n.planned, n.start, n.half),
+        };
+        if plain {
+            self.push_held();
+            std::mem::swap(&mut self.held, &mut next);
+        } else if let Some(n) = next.take() {
+            self.hold(n.planned, n.start, n.end);
+        }
+        next
+    }
+
+    /// The held block `prev` joins `next` (starting along `start`, half of it `half` mm) with
+    /// neither an overlap nor a blend ([`Interpolator::hold`]'s other cases).
+    fn plain_junction(&self, prev: &Held, next: &Planned, start: AxisVec, half: f64) -> bool {
+        prev.planned.path.arc.is_none()
+            && next.path.arc.is_none()
+            && self.overlap_travel(&prev.planned, next).is_none()
+            && self.corner(prev, next, start, half).is_none()
     }
 
     /// Takes the next planned block: the one held before it is pushed, its corner with this
@@ -996,7 +1112,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             if corner.is_none() && (prev.planned.path.arc.is_some() || next.path.arc.is_some()) {
                 match self.blend_line_arc(prev, next, start, half) {
                     Ok((trimmed, new_start)) => {
-                        self.held = Some(Held {
+                        *self.held = Some(Held {
                             planned: trimmed,
                             start: new_start,
                             end,
@@ -1025,7 +1141,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 self.push(prev.planned, prev.start, prev.end);
             }
         }
-        self.held = Some(Held {
+        *self.held = Some(Held {
             planned: next,
             start,
             end,
@@ -1137,8 +1253,18 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             rho: 1.0,
             entry_max: 0.0,
             overlap: None,
+            rest_entry_due: false,
             ..*prev
         }
+    }
+
+    /// The block's limit from a stop at its own end (any appended block's, until it is passed)
+    /// is certainly below `v`: the monotone bound of the speed change from rest to `v` exceeds
+    /// the length by more than a relative 1e-9. [`reach`] returns its cap or a speed whose
+    /// computed bound is at most the length, and the bound is computed to a few ulps, so then
+    /// `rest_entry < v ≤ reach(v, ..)` and it cannot raise the block's limit.
+    fn rest_entry_below(b: &Planned, v: f64) -> bool {
+        change_distance_bound(0.0, v, b.accel, b.jerk) > b.length * (1.0 + 1e-9)
     }
 
     /// Raises the entry limits that the blocks appended since the last pass allow, from the
@@ -1153,22 +1279,31 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         // always recomputed; earlier ones only while the limits keep rising.
         let fresh_from = self.window.len().saturating_sub(self.unpassed + 1);
         self.unpassed = 0;
+        // The last block stops at its own end.
+        if let Some(last) = self.window.back_mut() {
+            last.entry_max = last.entry_limit();
+            last.rest_entry_due = false;
+        }
         for k in (0..self.window.len().saturating_sub(1)).rev() {
             // Two numbers of the next block, not a copy of it (hundreds of bytes).
             let (next_entry_max, next_rho) = (self.window[k + 1].entry_max, self.window[k + 1].rho);
             let exit = next_entry_max / next_rho;
             let b = &mut self.window[k];
+            let v = exit.min(b.cap);
             let entry = if b.length == 0.0 {
                 0.0
             } else {
-                reach(
-                    exit.min(b.cap),
-                    b.length,
-                    b.entry_cap.min(b.cap),
-                    b.accel,
-                    b.jerk,
-                )
+                reach(v, b.length, b.entry_cap.min(b.cap), b.accel, b.jerk)
             };
+            if b.rest_entry_due {
+                b.rest_entry_due = false;
+                b.entry_max = if k >= fresh_from && Self::rest_entry_below(b, v) {
+                    // `entry ≥ v > rest_entry`: the max below is `entry`, bit for bit.
+                    0.0
+                } else {
+                    b.rest_entry()
+                };
+            }
             if entry <= b.entry_max * (1.0 + 1e-12) && k < fresh_from {
                 break;
             }
@@ -1194,22 +1329,33 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             self.last_exit = exit;
             profile
         } else {
-            let entry = (p.rho * self.last_exit).min(p.entry_max);
+            let entry = (p.rho * self.last_exit).min(p.entry_limit());
             let exit_max = self
                 .window
                 .get(1)
-                .map_or(0.0, |n| n.entry_max / n.rho)
+                .map_or(0.0, |n| n.entry_limit() / n.rho)
                 .min(p.cap);
             let exit = reach(entry, p.length, exit_max, p.accel, p.jerk);
             self.last_exit = exit;
             Profile::new(entry, exit, p.cap, p.length, p.accel, p.jerk)
         };
-        self.active = Some(Active {
-            planned: *p,
-            profile,
-            t0,
-            handover: profile.duration,
-        });
+        // Written over the last active block in place (a new `Active` was copied twice).
+        match &mut self.active {
+            Some(a) => {
+                a.planned = *p;
+                a.profile = profile;
+                a.t0 = t0;
+                a.handover = profile.duration;
+            }
+            None => {
+                self.active = Some(Active {
+                    planned: *p,
+                    profile,
+                    t0,
+                    handover: profile.duration,
+                })
+            }
+        }
         if self.window.get(1).is_some_and(|n| n.overlap.is_some()) {
             self.plan_handover();
         }
@@ -1267,10 +1413,20 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             }
             let t0 = self.active.as_ref().map_or(0.0, |a| a.t0 + a.handover);
             // The block that hands over early runs on beside the next ([`overlap`]).
-            self.trailing = self
+            // (Copied only then: an `Option` chain copied the block four times.)
+            if self
                 .active
-                .filter(|a| a.handover < a.profile.duration)
-                .or(self.trailing.filter(|a| t0 < a.t0 + a.profile.duration));
+                .as_ref()
+                .is_some_and(|a| a.handover < a.profile.duration)
+            {
+                self.trailing = self.active;
+            } else if !self
+                .trailing
+                .as_ref()
+                .is_some_and(|a| t0 < a.t0 + a.profile.duration)
+            {
+                self.trailing = None;
+            }
             let started = self.activate(t0);
             if let Some(e) = self.pending_error.take() {
                 self.done = true;

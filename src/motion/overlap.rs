@@ -132,7 +132,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         let exit_max = self
             .window
             .get(2)
-            .map_or(0.0, |n| n.entry_max / n.rho)
+            .map_or(0.0, |n| n.entry_limit() / n.rho)
             .min(next.cap);
         let exit = reach(0.0, next.length, exit_max, next.accel, next.jerk);
         let profile = Profile::new(0.0, exit, next.cap, next.length, next.accel, next.jerk);

@@ -105,7 +105,7 @@ use crate::kinematics::Kinematics;
 use crate::motion::blend::{self, Bend};
 pub use crate::motion::feed_held::{FeedLimit, LimitKind};
 use crate::motion::feed_held::{FeedReduction, FeedReductions};
-use crate::motion::profile::{change_distance_bound, reach, Profile};
+use crate::motion::profile::{reach, rest_reach_below, Profile};
 use crate::program::{Feed, Motion, Move, PathControl};
 use crate::{Axis, AxisVec};
 use libm::cbrt;
@@ -1002,8 +1002,6 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                         mu = allowed / jump;
                     }
                 }
-                let jump = tangent_start * rho - prev.tangent;
-                let xyz_jump = (jump.0[0].powi(2) + jump.0[1].powi(2) + jump.0[2].powi(2)).sqrt();
                 match prev.path {
                     // G61.1: every move ends at rest.
                     PathControl::ExactStop => mu = 0.0,
@@ -1020,6 +1018,9 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                         tolerance_mm: Some(tol),
                         ..
                     } if tol.is_finite() && tol >= 0.0 => {
+                        let jump = tangent_start * rho - prev.tangent;
+                        let xyz_jump =
+                            (jump.0[0].powi(2) + jump.0[1].powi(2) + jump.0[2].powi(2)).sqrt();
                         let allowed = 4.0 * tol / self.period_s;
                         if xyz_jump * mu > allowed {
                             mu = allowed / xyz_jump;
@@ -1036,9 +1037,10 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 // Under its rules a corner next to an arc that is not blended (an arc curving
                 // the same way as the turn, a reversal: arc_corner) stops: the junction rule's
                 // step beside the arc's acceleration would exceed the axis's limit.
+                // (The turn only then: two norms and a difference of the tangents.)
                 let unit = |t: AxisVec| t * (1.0 / t.mixed_norm().max(f64::MIN_POSITIVE));
-                let turns = (unit(tangent_start) - unit(prev.tangent)).mixed_norm() > 1e-6;
-                if self.control.max_feed_override.is_some() && (curved || prev.curved) && turns {
+                let turns = || (unit(tangent_start) - unit(prev.tangent)).mixed_norm() > 1e-6;
+                if self.control.max_feed_override.is_some() && (curved || prev.curved) && turns() {
                     mu = 0.0;
                 }
                 if p.overlap.is_some() {
@@ -1258,15 +1260,6 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         }
     }
 
-    /// The block's limit from a stop at its own end (any appended block's, until it is passed)
-    /// is certainly below `v`: the monotone bound of the speed change from rest to `v` exceeds
-    /// the length by more than a relative 1e-9. [`reach`] returns its cap or a speed whose
-    /// computed bound is at most the length, and the bound is computed to a few ulps, so then
-    /// `rest_entry < v ≤ reach(v, ..)` and it cannot raise the block's limit.
-    fn rest_entry_below(b: &Planned, v: f64) -> bool {
-        change_distance_bound(0.0, v, b.accel, b.jerk) > b.length * (1.0 + 1e-9)
-    }
-
     /// Raises the entry limits that the blocks appended since the last pass allow, from the
     /// end of the window back. It stops at the first block whose limit rises by less than a
     /// relative 1e-12 (including one already at its own cap, which cannot rise) once it is
@@ -1279,16 +1272,18 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
         // always recomputed; earlier ones only while the limits keep rising.
         let fresh_from = self.window.len().saturating_sub(self.unpassed + 1);
         self.unpassed = 0;
-        // The last block stops at its own end.
-        if let Some(last) = self.window.back_mut() {
-            last.entry_max = last.entry_limit();
-            last.rest_entry_due = false;
-        }
-        for k in (0..self.window.len().saturating_sub(1)).rev() {
-            // Two numbers of the next block, not a copy of it (hundreds of bytes).
-            let (next_entry_max, next_rho) = (self.window[k + 1].entry_max, self.window[k + 1].rho);
+        // The last block stops at its own end. The blocks walked back in one sweep of the
+        // window, each next block's two numbers carried over (not indexed again).
+        let len = self.window.len();
+        let mut blocks = self.window.iter_mut().rev();
+        let Some(last) = blocks.next() else {
+            return;
+        };
+        last.entry_max = last.entry_limit();
+        last.rest_entry_due = false;
+        let (mut next_entry_max, mut next_rho) = (last.entry_max, last.rho);
+        for (k, b) in (0..len - 1).rev().zip(blocks) {
             let exit = next_entry_max / next_rho;
-            let b = &mut self.window[k];
             let v = exit.min(b.cap);
             let entry = if b.length == 0.0 {
                 0.0
@@ -1297,7 +1292,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
             };
             if b.rest_entry_due {
                 b.rest_entry_due = false;
-                b.entry_max = if k >= fresh_from && Self::rest_entry_below(b, v) {
+                b.entry_max = if k >= fresh_from && rest_reach_below(v, b.length, b.accel, b.jerk) {
                     // `entry ≥ v > rest_entry`: the max below is `entry`, bit for bit.
                     0.0
                 } else {
@@ -1308,6 +1303,7 @@ impl<I: Iterator<Item = Result<Move>>> Interpolator<I> {
                 break;
             }
             b.entry_max = entry.max(b.entry_max);
+            (next_entry_max, next_rho) = (b.entry_max, b.rho);
         }
     }
 

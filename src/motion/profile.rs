@@ -319,6 +319,17 @@ pub(super) fn reach(v: f64, length: f64, cap: f64, a: f64, j: f64) -> f64 {
     x
 }
 
+/// `v` is above `reach(0, length, cap, a, j)` for certain, whatever the cap: the monotone
+/// bound of the speed change from rest to `v` exceeds `length` by more than a relative 1e-9.
+/// [`reach`] from rest returns its cap when that cap's bound is within `length` (or the cap is
+/// not above 0), else a speed `x` whose computed bound is at most `length` (or 0); the bound
+/// `x T(x)` is increasing and computed to a few ulps, so `bound(v) > length (1 + 1e-9)`
+/// puts `v` above any of them. Then `reach(v, ..) ≥ min(v, cap) ≥ reach(0, ..)`: the limit
+/// from rest cannot raise a block's limit from `v` (the backward pass skips it).
+pub(super) fn rest_reach_below(v: f64, length: f64, a: f64, j: f64) -> bool {
+    change_distance_bound(0.0, v, a, j) > length * (1.0 + 1e-9)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -395,6 +406,35 @@ mod tests {
             let want = bisect(floor, cap, |x| total(x) <= length);
             let got = largest_feasible(floor, cap, total(cap) - length, |x| total(x) - length);
             proptest::prop_assert_eq!(got.to_bits(), want.to_bits(), "got {} want {}", got, want);
+        }
+
+        /// Where [`rest_reach_below`] says so, the limit from rest is below `v` and below the
+        /// limit from `v`, so the larger of the two is the latter bit for bit; `v` is drawn
+        /// around the limit from rest (a relative 1e-15 to 1e-3 either side), where the
+        /// margin is tested, and far from it.
+        #[test]
+        fn a_speed_above_the_limit_from_rest_by_the_bound_is_above_it(
+            length_exp in -6.0..2.0f64,
+            cap_exp in -3.0..3.0f64,
+            a in 10.0..5000.0f64,
+            j in 100.0..1e6f64,
+            offset_exp in -15.0..-3.0f64,
+            side in -1.0..1.0f64,
+            far in proptest::bool::ANY,
+        ) {
+            let (length, cap) = (10f64.powf(length_exp), 10f64.powf(cap_exp));
+            let rest = reach(0.0, length, cap, a, j);
+            let rest_uncapped = reach(0.0, length, 1e9, a, j);
+            let scale = if far { 1.0 + 10.0 * side.abs() } else { 1.0 + side * 10f64.powf(offset_exp) };
+            let v = rest_uncapped * scale;
+            if rest_reach_below(v, length, a, j) {
+                proptest::prop_assert!(rest < v, "rest {} v {}", rest, v);
+                let from_v = reach(v, length, cap, a, j);
+                proptest::prop_assert!(from_v >= rest, "from v {} rest {}", from_v, rest);
+                proptest::prop_assert_eq!(from_v.max(rest).to_bits(), from_v.to_bits());
+            }
+            // It is not vacuous: a speed a tenth above the limit from rest qualifies.
+            proptest::prop_assert!(rest_reach_below(rest_uncapped * 1.1, length, a, j));
         }
 
         /// `reach` is the largest speed its bound allows, to 1e-12 of bisection, and

@@ -9,8 +9,9 @@ use std::rc::Rc;
 use crate::budget::Budget;
 use crate::canon::Move;
 use crate::error::{Error, Result};
+use crate::expr::Params;
 use crate::interp::{Interp, Stop};
-use crate::lex::{lex_with, Lexed, LineError, LineResult, Word};
+use crate::lex::{lex_with, Lexed, LineError, LineResult, ParamSource, Word};
 use crate::notice::Notice;
 use crate::options::Options;
 use crate::source::Source;
@@ -205,16 +206,14 @@ impl IsoReader {
             }
             _ => {}
         }
-        if has_hash_or_bracket(b) {
-            self.interp.refresh_system_parameters();
-        }
         let words = reuse(std::mem::take(&mut self.words));
-        let lexed = lex_with(
-            line,
-            &self.interp.params,
-            self.dialect.table().macro_b,
-            words,
-        )?;
+        // The system parameters are brought up to date only for a line that holds `#` or
+        // `[` (crate::lex::ParamSource), found as the lexer meets it.
+        let params = Refreshing {
+            interp: &mut self.interp,
+            fresh: false,
+        };
+        let lexed = lex_with(line, params, self.dialect.table().macro_b, words)?;
         match lexed {
             Lexed::Nothing => Ok(()),
             Lexed::Percent => {
@@ -438,20 +437,25 @@ pub(super) enum LineOwner {
     Buffer(String),
 }
 
-pub(super) fn has_hash_or_bracket(bytes: &[u8]) -> bool {
-    const ONES: u64 = 0x0101_0101_0101_0101;
-    const HIGHS: u64 = 0x8080_8080_8080_8080;
-    let zero = |v: u64| v.wrapping_sub(ONES) & !v & HIGHS;
-    let mut chunks = bytes.chunks_exact(8);
-    for chunk in &mut chunks {
-        let mut word = [0u8; 8];
-        word.copy_from_slice(chunk);
-        let w = u64::from_le_bytes(word);
-        if zero(w ^ (ONES * b'#' as u64)) | zero(w ^ (ONES * b'[' as u64)) != 0 {
-            return true;
+/// The interpreter's parameters for the lexer, its system parameters brought up to date at
+/// the lexer's first need of them (crate::lex::ParamSource).
+struct Refreshing<'a> {
+    interp: &'a mut Interp,
+    fresh: bool,
+}
+
+impl ParamSource for Refreshing<'_> {
+    fn params(&mut self) -> &Params {
+        self.mentioned();
+        &self.interp.params
+    }
+
+    fn mentioned(&mut self) {
+        if !self.fresh {
+            self.fresh = true;
+            self.interp.refresh_system_parameters();
         }
     }
-    chunks.remainder().iter().any(|&c| c == b'#' || c == b'[')
 }
 
 /// The ISO G-code family reads every dialect no other front end claims: it is the last of
@@ -491,28 +495,5 @@ impl FrontEnd for IsoReader {
 
     fn notices(&self) -> &[Notice] {
         &self.notices
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::has_hash_or_bracket;
-
-    #[test]
-    fn a_hash_or_bracket_is_found_at_every_place_of_every_short_line() {
-        // Bytes next to `#` (0x23) and `[` (0x5b), and ones whose difference from them
-        // borrows across bytes in the 8-byte test.
-        let filler = b"G1X-0.5\"$ZZ\\\x01\xff";
-        for len in 0..=24 {
-            let line: Vec<u8> = (0..len).map(|k| filler[k % filler.len()]).collect();
-            assert!(!has_hash_or_bracket(&line), "{len}: none in {line:?}");
-            for at in 0..len {
-                for c in [b'#', b'['] {
-                    let mut with = line.clone();
-                    with[at] = c;
-                    assert!(has_hash_or_bracket(&with), "{} at {at} of {len}", c as char);
-                }
-            }
-        }
     }
 }

@@ -45,7 +45,7 @@ pub(crate) struct FanucPolar {
 
 /// The G code of a word ×10, when written as a number.
 fn code(w: &Word) -> Option<u32> {
-    (w.letter == 'G' && !w.computed() && w.value >= 0.0).then(|| (w.value * 10.0).round() as u32)
+    w.g_tenths()
 }
 
 /// Codes whose axis words are not polar (×10).

@@ -78,6 +78,23 @@ impl Word<'_> {
     pub fn computed(&self) -> bool {
         self.number.is_empty()
     }
+
+    /// A G word's code in tenths (`G51.1` is 511), `(value · 10).round() as u32`; `None`
+    /// for another letter, a computed value or a negative one.
+    ///
+    /// `f64::round` without its library call: with `x = 10 · value ≥ 0` and `t` its
+    /// truncation (`x as u64`, exact below 2^64, saturated beyond), `x - t` is exact (the
+    /// fraction of `x`), and the result is `t + 1` from one half up (half away from zero).
+    /// Beyond `u32::MAX` both saturate.
+    #[inline]
+    pub fn g_tenths(&self) -> Option<u32> {
+        if self.letter != 'G' || self.computed() || !(self.value >= 0.0) {
+            return None;
+        }
+        let x = self.value * 10.0;
+        let t = x as u64 as f64;
+        Some((if x - t >= 0.5 { t + 1.0 } else { t }) as u32)
+    }
 }
 
 /// What a source line holds.
@@ -268,6 +285,10 @@ pub fn lex_with<'l, P: ParamSource>(
             let w = lex_word(line, i, &mut params, fanuc)?;
             i = w.span.1;
             words.push(w);
+            // The blank after a word, skipped here rather than by a turn of the loop.
+            if bytes.get(i) == Some(&b' ') {
+                i += 1;
+            }
         } else if c == b','
             && matches!(
                 bytes.get(i + 1).map(u8::to_ascii_uppercase),
@@ -588,7 +609,41 @@ pub fn is_decimal(s: &str) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::{comment_end, has_hash_or_bracket, scan_number};
+    use super::{comment_end, has_hash_or_bracket, scan_number, Word};
+
+    /// A G word's tenths are `(value · 10).round() as u32` at and around every half, for
+    /// small and huge values, infinity and the signed zeros.
+    #[test]
+    fn g_tenths_round_as_the_library_round() {
+        let mut values = vec![0.0, -0.0, 0.049_999_999_999_999_996, 0.05, 51.1, 68.2, 1e15];
+        values.extend([
+            4.294_967_295e8,
+            4.294_967_295_5e8,
+            1e19,
+            1e20,
+            f64::MAX,
+            f64::INFINITY,
+        ]);
+        for k in 0..4000 {
+            let half = (k as f64 + 0.5) / 10.0;
+            values.extend([half, half.next_up(), half.next_down(), k as f64 / 10.0]);
+        }
+        for v in values {
+            let w = Word {
+                letter: 'G',
+                value: v,
+                number: "1",
+                span: (0, 1),
+            };
+            let expected = (v >= 0.0).then(|| (v * 10.0).round() as u32);
+            assert_eq!(w.g_tenths(), expected, "{v:e}");
+        }
+        let m = Word {
+            letter: 'M',
+            ..Word::EMPTY
+        };
+        assert_eq!(m.g_tenths(), None);
+    }
 
     /// The first `)` of every short text of `)`, `#`, `[` and filler, and whether a `#` or
     /// `[` comes before it, as a byte loop finds them.

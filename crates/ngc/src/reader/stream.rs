@@ -16,7 +16,7 @@ use crate::notice::Notice;
 use crate::options::Options;
 use crate::source::Source;
 
-use super::oword::{after_line_number, macro_line, oline};
+use super::oword::{after_line_number, macro_line_at, oline};
 use super::state::{Cursor, IsoReader, Program};
 use crate::front_end::{FrontEnd, Registration};
 
@@ -200,7 +200,7 @@ impl IsoReader {
             }
             Some(b'/') => return Ok(()),
             Some(c) if self.dialect.table().macro_b && c.is_ascii_alphabetic() => {
-                if let Some((m, at, rest)) = macro_line(line) {
+                if let Some((m, at, rest)) = macro_line_at(line, first) {
                     return self.macro_statement(line, m, at, rest, here, next);
                 }
             }

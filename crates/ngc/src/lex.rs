@@ -82,18 +82,22 @@ impl Word<'_> {
     /// A G word's code in tenths (`G51.1` is 511), `(value · 10).round() as u32`; `None`
     /// for another letter, a computed value or a negative one.
     ///
-    /// `f64::round` without its library call: with `x = 10 · value ≥ 0` and `t` its
-    /// truncation (`x as u64`, exact below 2^64, saturated beyond), `x - t` is exact (the
-    /// fraction of `x`), and the result is `t + 1` from one half up (half away from zero).
-    /// Beyond `u32::MAX` both saturate.
+    /// `f64::round` without its library call: with `x = 10 · value ≥ 0` below 2^32 and `t`
+    /// its truncation (`x as i64`, exact), `x - t` is exact (the fraction of `x`), and the
+    /// result is `t + 1` from one half up (half away from zero). From 2^32 - 1/2 on, both
+    /// saturate to `u32::MAX`.
     #[inline]
     pub fn g_tenths(&self) -> Option<u32> {
         if self.letter != 'G' || self.computed() || !(self.value >= 0.0) {
             return None;
         }
         let x = self.value * 10.0;
-        let t = x as u64 as f64;
-        Some((if x - t >= 0.5 { t + 1.0 } else { t }) as u32)
+        if !(x < 4_294_967_296.0) {
+            return Some(u32::MAX);
+        }
+        let t = x as i64;
+        let rounded = t + i64::from(x - t as f64 >= 0.5);
+        Some(rounded.min(u32::MAX as i64) as u32)
     }
 }
 

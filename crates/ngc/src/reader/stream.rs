@@ -225,10 +225,17 @@ impl IsoReader {
                 Ok(())
             }
             Lexed::Words { mut words, assigns } => {
+                // No step below adds a corner word or one of these G codes (docs/performance.md
+                // "Session 27"): what the block lacks now it lacks there.
+                let rare = rare_words(&words);
                 if self.whole_increments {
                     self.scale_whole_numbers(line, &mut words, here);
                 }
-                let corner = self.corner_word(line, &mut words)?;
+                let corner = if rare.corner {
+                    self.corner_word(line, &mut words)?
+                } else {
+                    None
+                };
                 if !assigns.is_empty() {
                     for (p, v) in &assigns {
                         self.interp.check_assign(line, p, *v)?;
@@ -240,11 +247,15 @@ impl IsoReader {
                     self.words = reuse(words);
                     return Ok(());
                 }
-                if self.dialect.table().macro_b && self.fanuc_polar_block(line, &mut words)? {
+                if self.dialect.table().macro_b
+                    && self.fanuc_polar_block(line, &mut words, rare.polar)?
+                {
                     self.words = reuse(words);
                     return Ok(());
                 }
-                if self.dialect.table().macro_b && self.mirror_scale_block(line, &mut words)? {
+                if self.dialect.table().macro_b
+                    && self.mirror_scale_block(line, &mut words, rare.mirror_scale)?
+                {
                     self.words = reuse(words);
                     return Ok(());
                 }
@@ -303,7 +314,13 @@ impl IsoReader {
 
     /// The mirror image and scaling (crate::mirror_scale): true when the block set or
     /// cancelled them (nothing more to do), else its words mapped where they are in effect.
-    fn mirror_scale_block(&mut self, line: &str, words: &mut [Word]) -> LineResult<bool> {
+    /// `codes`: the block may set or cancel them ([`RareWords::mirror_scale`]).
+    fn mirror_scale_block(
+        &mut self,
+        line: &str,
+        words: &mut [Word],
+        codes: bool,
+    ) -> LineResult<bool> {
         let haas = self.dialect == crate::options::Dialect::Haas;
         if self.interp.is_lathe() && words.iter().any(|w| w.letter == 'G' && w.value == 50.0) {
             // A lathe's G50 sets the work coordinate system or the spindle speed limit
@@ -315,7 +332,7 @@ impl IsoReader {
             let p = interp.program_position();
             [p[crate::Axis::X], p[crate::Axis::Y], p[crate::Axis::Z]]
         };
-        if self.mirror_scale.command(line, words, haas, here)? {
+        if codes && self.mirror_scale.command(line, words, haas, here)? {
             return Ok(true);
         }
         if self.mirror_scale.active() {
@@ -422,6 +439,35 @@ impl IsoReader {
         }
         Ok(())
     }
+}
+
+/// What a block's words hold that the reader's rarer steps look for, found in one pass
+/// (each step looked through the words again, about 200 instructions a block).
+#[derive(Clone, Copy, Debug, Default)]
+struct RareWords {
+    /// A corner rounding or chamfer word (crate::corner).
+    corner: bool,
+    /// G15 or G16 (crate::fanuc_polar).
+    polar: bool,
+    /// A code that sets or cancels the mirror image or scaling (crate::mirror_scale:
+    /// G50, G51, G50.1, G51.1, G100, G101).
+    mirror_scale: bool,
+}
+
+fn rare_words(words: &[Word]) -> RareWords {
+    let mut rare = RareWords::default();
+    for w in words {
+        match w.letter {
+            'G' => match w.g_tenths() {
+                Some(150 | 160) => rare.polar = true,
+                Some(500 | 501 | 510 | 511 | 1000 | 1010) => rare.mirror_scale = true,
+                _ => {}
+            },
+            crate::lex::CORNER_ROUND | crate::lex::CORNER_CHAMFER => rare.corner = true,
+            _ => {}
+        }
+    }
+    rare
 }
 
 /// An emptied vector of words, its allocation kept, for words that borrow another line.

@@ -45,7 +45,7 @@ pub(crate) struct FanucPolar {
 
 /// The G code of a word ×10, when written as a number.
 fn code(w: &Word) -> Option<u32> {
-    (w.letter == 'G' && !w.computed() && w.value >= 0.0).then(|| (w.value * 10.0).round() as u32)
+    w.g_tenths()
 }
 
 /// Codes whose axis words are not polar (×10).
@@ -56,6 +56,10 @@ const NOT_MAPPED: [u32; 14] = [
 impl FanucPolar {
     /// Takes G15 / G16 out of `words` and sets the state (the last one written wins).
     pub(crate) fn command(&mut self, words: &mut Vec<Word>) {
+        // Nearly every block has neither: then nothing to take out.
+        if !words.iter().any(|w| matches!(code(w), Some(150 | 160))) {
+            return;
+        }
         words.retain(|w| match code(w) {
             Some(150) => {
                 self.on = false;

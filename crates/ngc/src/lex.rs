@@ -78,6 +78,27 @@ impl Word<'_> {
     pub fn computed(&self) -> bool {
         self.number.is_empty()
     }
+
+    /// A G word's code in tenths (`G51.1` is 511), `(value · 10).round() as u32`; `None`
+    /// for another letter, a computed value or a negative one.
+    ///
+    /// `f64::round` without its library call: with `x = 10 · value ≥ 0` below 2^32 and `t`
+    /// its truncation (`x as i64`, exact), `x - t` is exact (the fraction of `x`), and the
+    /// result is `t + 1` from one half up (half away from zero). From 2^32 - 1/2 on, both
+    /// saturate to `u32::MAX`.
+    #[inline]
+    pub fn g_tenths(&self) -> Option<u32> {
+        if self.letter != 'G' || self.computed() || !(self.value >= 0.0) {
+            return None;
+        }
+        let x = self.value * 10.0;
+        if !(x < 4_294_967_296.0) {
+            return Some(u32::MAX);
+        }
+        let t = x as i64;
+        let rounded = t + i64::from(x - t as f64 >= 0.5);
+        Some(rounded.min(u32::MAX as i64) as u32)
+    }
 }
 
 /// What a source line holds.
@@ -90,6 +111,83 @@ pub enum Lexed<'l> {
         words: Vec<Word<'l>>,
         assigns: Vec<(Param, f64)>,
     },
+}
+
+/// Where the lexer reads parameter values: a store as it stands (`&Params`), or one the
+/// reader brings up to date only when a line asks for it (its system parameters,
+/// `#5420` and `#<_x>`, docs/performance.md "Session 27").
+///
+/// Every read of a parameter or value on a line needs a `#` or a `[` there (a function
+/// name counts only before `[`), so the lexer asks for the store exactly at the first one
+/// it evaluates, and calls [`ParamSource::mentioned`] for one in a comment or after `;`:
+/// a store brought up to date at either is the store brought up to date before a line that
+/// holds `#` or `[` anywhere (lexing reads parameters and changes none).
+pub trait ParamSource {
+    /// The store, up to date.
+    fn params(&mut self) -> &Params;
+    /// The line holds `#` or `[` where the lexer evaluates nothing.
+    fn mentioned(&mut self) {}
+}
+
+impl ParamSource for &Params {
+    fn params(&mut self) -> &Params {
+        self
+    }
+}
+
+/// True when `bytes` holds a `#` or a `[`, 8 bytes at a time: with `v` a word XOR eight
+/// `#`s (or `[`s), a byte of `(v - 0x01…01) & !v & 0x80…80` is set at every zero byte of `v`
+/// and can be set falsely only above one, so the word holds one when the result is nonzero.
+/// On lines this short a vectorised fold spent more in its set-up and reduction than in
+/// the search.
+pub(crate) fn has_hash_or_bracket(bytes: &[u8]) -> bool {
+    const ONES: u64 = 0x0101_0101_0101_0101;
+    const HIGHS: u64 = 0x8080_8080_8080_8080;
+    let zero = |v: u64| v.wrapping_sub(ONES) & !v & HIGHS;
+    let mut chunks = bytes.chunks_exact(8);
+    for chunk in &mut chunks {
+        let mut word = [0u8; 8];
+        word.copy_from_slice(chunk);
+        let w = u64::from_le_bytes(word);
+        if zero(w ^ (ONES * b'#' as u64)) | zero(w ^ (ONES * b'[' as u64)) != 0 {
+            return true;
+        }
+    }
+    chunks.remainder().iter().any(|&c| c == b'#' || c == b'[')
+}
+
+/// The index of the first `)` in `bytes` (the rest of a line after a comment's `(`), and
+/// whether a `#` or a `[` comes before it; `None` without one. 8 bytes at a time as
+/// [`has_hash_or_bracket`]: the lowest set byte of the `)` test is the first `)`, and a set
+/// byte of the `#`/`[` test below it, false or not, means a true one below it.
+#[inline(always)]
+fn comment_end(bytes: &[u8]) -> Option<(usize, bool)> {
+    const ONES: u64 = 0x0101_0101_0101_0101;
+    const HIGHS: u64 = 0x8080_8080_8080_8080;
+    let zero = |v: u64| v.wrapping_sub(ONES) & !v & HIGHS;
+    let mut chunks = bytes.chunks_exact(8);
+    let (mut at, mut marked) = (0, false);
+    for chunk in &mut chunks {
+        let mut word = [0u8; 8];
+        word.copy_from_slice(chunk);
+        let w = u64::from_le_bytes(word);
+        let close = zero(w ^ (ONES * b')' as u64));
+        let marks = zero(w ^ (ONES * b'#' as u64)) | zero(w ^ (ONES * b'[' as u64));
+        if close != 0 {
+            let first = close & close.wrapping_neg();
+            let k = (close.trailing_zeros() / 8) as usize;
+            return Some((at + k, marked || marks & (first - 1) != 0));
+        }
+        marked |= marks != 0;
+        at += 8;
+    }
+    for (k, &c) in chunks.remainder().iter().enumerate() {
+        if c == b')' {
+            return Some((at + k, marked));
+        }
+        marked |= c == b'#' || c == b'[';
+    }
+    None
 }
 
 pub fn is_blank(c: u8) -> bool {
@@ -105,9 +203,9 @@ pub fn lex<'l>(line: &'l str, params: &Params, fanuc: bool) -> LineResult<Lexed<
 /// same buffer back for every block, so that a block costs no allocation. Inlined into the
 /// reader (docs/performance.md).
 #[inline(always)]
-pub fn lex_with<'l>(
+pub fn lex_with<'l, P: ParamSource>(
     line: &'l str,
-    params: &Params,
+    mut params: P,
     fanuc: bool,
     mut words: Vec<Word<'l>>,
 ) -> LineResult<Lexed<'l>> {
@@ -131,8 +229,13 @@ pub fn lex_with<'l>(
             i += 1;
         } else if c == b'(' {
             // A byte search: `)` is ASCII, so it cannot sit inside a multi-byte character.
-            match bytes[i + 1..].iter().position(|&b| b == b')') {
-                Some(close) => i += close + 2,
+            match comment_end(&bytes[i + 1..]) {
+                Some((close, marked)) => {
+                    if marked {
+                        params.mentioned();
+                    }
+                    i += close + 2
+                }
                 None => {
                     return Err(LineError::new(
                         i..line.len(),
@@ -143,6 +246,9 @@ pub fn lex_with<'l>(
                 }
             }
         } else if c == b';' {
+            if has_hash_or_bracket(&bytes[i + 1..]) {
+                params.mentioned();
+            }
             break;
         } else if c == b'/' {
             return Err(LineError::new(
@@ -158,7 +264,7 @@ pub fn lex_with<'l>(
                 "unexpected `%`",
             ));
         } else if c == b'#' {
-            let mut e = Eval::new(line, i, params, fanuc);
+            let mut e = Eval::new(line, i, params.params(), fanuc);
             let p = e.param()?;
             e.skip_blanks();
             if line.as_bytes().get(e.i) != Some(&b'=') {
@@ -180,9 +286,13 @@ pub fn lex_with<'l>(
             i = e.i;
         } else if c.is_ascii_alphabetic() || c == b'@' || c == b'^' || (c == b'$' && !fanuc) {
             // `@` and `^`: LinuxCNC polar radius and angle; `$`: its spindle selector.
-            let w = lex_word(line, i, params, fanuc)?;
+            let w = lex_word(line, i, &mut params, fanuc)?;
             i = w.span.1;
             words.push(w);
+            // The blank after a word, skipped here rather than by a turn of the loop.
+            if bytes.get(i) == Some(&b' ') {
+                i += 1;
+            }
         } else if c == b','
             && matches!(
                 bytes.get(i + 1).map(u8::to_ascii_uppercase),
@@ -191,7 +301,7 @@ pub fn lex_with<'l>(
         {
             // Fanuc and Haas `,R` / `,C` after a G01: corner rounding or chamfer to the
             // next move (crate::corner), lexed as [`CORNER_ROUND`] and [`CORNER_CHAMFER`].
-            let mut w = lex_word(line, i + 1, params, fanuc)?;
+            let mut w = lex_word(line, i + 1, &mut params, fanuc)?;
             w.letter = match w.letter {
                 'R' => CORNER_ROUND,
                 _ => CORNER_CHAMFER,
@@ -238,7 +348,12 @@ pub fn char_at(line: &str, i: usize) -> (char, Range<usize>) {
 /// are allowed; the number is `[+-]digits[.digits]` with at least one digit, or a value.
 /// Inlined: its result is large (docs/performance.md).
 #[inline(always)]
-fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> LineResult<Word<'l>> {
+fn lex_word<'l, P: ParamSource>(
+    line: &'l str,
+    start: usize,
+    params: &mut P,
+    fanuc: bool,
+) -> LineResult<Word<'l>> {
     let bytes = line.as_bytes();
     // An ASCII letter, `@`, `^` or `$` (the caller's test).
     let letter = bytes[start].to_ascii_uppercase() as char;
@@ -249,7 +364,9 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let number_start = i;
     let (end, fast) = scan_number(bytes, i);
     i = end;
-    let number = &line[number_start..i];
+    // SAFETY: `number_start` follows ASCII bytes (the letter, blanks) and `i` a run of the
+    // ASCII bytes `0-9 . + -` from it (or is it): both are character boundaries.
+    let number = unsafe { line.get_unchecked(number_start..i) };
     // The common case, a plain decimal number (so not a computed value), read and checked
     // in one pass: nothing more to look at.
     if let (Some(value), true) = (fast, known_letter(letter)) {
@@ -276,7 +393,7 @@ fn lex_word<'l>(line: &'l str, start: usize, params: &Params, fanuc: bool) -> Li
     let computed = (number.is_empty() && (sign_then(number_start)))
         || ((number == "-" || number == "+") && sign_then(i));
     if computed {
-        let mut e = Eval::new(line, number_start, params, fanuc);
+        let mut e = Eval::new(line, number_start, params.params(), fanuc);
         let value = e.value()?;
         return Ok(Word {
             letter,
@@ -365,7 +482,7 @@ const POW10: [f64; 23] = [
 /// `m / 10^f`. When `m ≤ 2^53` and `f ≤ 22`, both `m` and `10^f` are exact f64, and IEEE
 /// division rounds their exact quotient correctly (Clinger's fast path), so the result is
 /// the same f64 as `str::parse` gives: the correctly rounded value of the decimal.
-#[inline]
+#[inline(always)]
 pub(crate) fn scan_number(b: &[u8], start: usize) -> (usize, Option<f64>) {
     let mut i = start;
     let negative = b.get(i) == Some(&b'-');
@@ -404,7 +521,8 @@ pub(crate) fn scan_number(b: &[u8], start: usize) -> (usize, Option<f64>) {
     if m > 1 << 53 || fraction > 22 {
         return (end, None);
     }
-    let v = m as f64 / POW10[fraction];
+    // (m ≤ 2^53: as an i64, one conversion instruction, the same exact value.)
+    let v = m as i64 as f64 / POW10[fraction];
     (end, Some(if negative { -v } else { v }))
 }
 
@@ -438,9 +556,11 @@ fn scan_short_decimal(b: &[u8], i: usize) -> Option<(usize, f64)> {
             }
             let m = digits_value(w, n_int) * POW10_INT[n_frac] + digits_value(w2, n_frac);
             // (m < 10^14 < 2^53: exact.)
-            Some((end, m as f64 / POW10[n_frac]))
+            Some((end, m as i64 as f64 / POW10[n_frac]))
         }
-        c if n_int > 0 && !continues_number(c) => Some((after, digits_value(w, n_int) as f64)),
+        c if n_int > 0 && !continues_number(c) => {
+            Some((after, digits_value(w, n_int) as i64 as f64))
+        }
         _ => None,
     }
 }
@@ -493,7 +613,84 @@ pub fn is_decimal(s: &str) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::scan_number;
+    use super::{comment_end, has_hash_or_bracket, scan_number, Word};
+
+    /// A G word's tenths are `(value · 10).round() as u32` at and around every half, for
+    /// small and huge values, infinity and the signed zeros.
+    #[test]
+    fn g_tenths_round_as_the_library_round() {
+        let mut values = vec![0.0, -0.0, 0.049_999_999_999_999_996, 0.05, 51.1, 68.2, 1e15];
+        values.extend([
+            4.294_967_295e8,
+            4.294_967_295_5e8,
+            1e19,
+            1e20,
+            f64::MAX,
+            f64::INFINITY,
+        ]);
+        for k in 0..4000 {
+            let half = (k as f64 + 0.5) / 10.0;
+            values.extend([half, half.next_up(), half.next_down(), k as f64 / 10.0]);
+        }
+        for v in values {
+            let w = Word {
+                letter: 'G',
+                value: v,
+                number: "1",
+                span: (0, 1),
+            };
+            let expected = (v >= 0.0).then(|| (v * 10.0).round() as u32);
+            assert_eq!(w.g_tenths(), expected, "{v:e}");
+        }
+        let m = Word {
+            letter: 'M',
+            ..Word::EMPTY
+        };
+        assert_eq!(m.g_tenths(), None);
+    }
+
+    /// The first `)` of every short text of `)`, `#`, `[` and filler, and whether a `#` or
+    /// `[` comes before it, as a byte loop finds them.
+    #[test]
+    fn a_comment_ends_at_its_first_close_with_its_marks_before_it() {
+        let alphabet = [b')', b'#', b'[', b'x', b'(', b'\xff', b'\x22', b'\x5a'];
+        for len in 0..=19 {
+            // Every text of up to 3 special bytes at any places, the rest filler.
+            for a in 0..len.max(1) {
+                for b in a..len.max(1) {
+                    for (ca, cb) in [(0, 1), (1, 0), (0, 2), (2, 0), (1, 1), (0, 0), (5, 0)] {
+                        let mut text: Vec<u8> = (0..len).map(|k| alphabet[3 + k % 5]).collect();
+                        if len > 0 {
+                            text[a] = alphabet[ca];
+                            text[b] = alphabet[cb];
+                        }
+                        let close = text.iter().position(|&c| c == b')');
+                        let expected =
+                            close.map(|k| (k, text[..k].iter().any(|&c| c == b'#' || c == b'[')));
+                        assert_eq!(comment_end(&text), expected, "{text:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_hash_or_bracket_is_found_at_every_place_of_every_short_line() {
+        // Bytes next to `#` (0x23) and `[` (0x5b), and ones whose difference from them
+        // borrows across bytes in the 8-byte test.
+        let filler = b"G1X-0.5\"$ZZ\\\x01\xff";
+        for len in 0..=24 {
+            let line: Vec<u8> = (0..len).map(|k| filler[k % filler.len()]).collect();
+            assert!(!has_hash_or_bracket(&line), "{len}: none in {line:?}");
+            for at in 0..len {
+                for c in [b'#', b'['] {
+                    let mut with = line.clone();
+                    with[at] = c;
+                    assert!(has_hash_or_bracket(&with), "{} at {at} of {len}", c as char);
+                }
+            }
+        }
+    }
 
     /// Every plain decimal of 0-9 digits before and after the point, each with a sign or
     /// not, followed by what may end a number (or continue it): the end is the end of the

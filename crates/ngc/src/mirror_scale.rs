@@ -83,7 +83,7 @@ impl Default for MirrorScale {
 
 /// The G code of a word, ×10 (`G51.1` is 511), when it is written as a number.
 fn code(w: &Word) -> Option<u32> {
-    (w.letter == 'G' && !w.computed() && w.value >= 0.0).then(|| (w.value * 10.0).round() as u32)
+    w.g_tenths()
 }
 
 const XYZ: [char; 3] = ['X', 'Y', 'Z'];

@@ -118,7 +118,7 @@ impl FileLines {
         // and the bytes read are checked (or replaced) below.
         let bytes = unsafe { buf.as_mut_vec() };
         bytes.clear();
-        let mut n = 0;
+        let (mut n, mut ascii) = (0, true);
         loop {
             let available = match self.reader.fill_buf() {
                 Ok(available) => available,
@@ -130,7 +130,9 @@ impl FileLines {
             if available.is_empty() {
                 break;
             }
-            let (take, end) = match newline(available) {
+            let (found, ascii_before) = newline_ascii(available);
+            ascii &= ascii_before;
+            let (take, end) = match found {
                 Some(k) => (k + 1, true),
                 None => (available.len(), false),
             };
@@ -155,9 +157,8 @@ impl FileLines {
                 bytes.pop();
             }
         }
-        // ASCII is UTF-8; a G-code line nearly always is, and this word-at-a-time test is a
-        // fraction of the general validation's cost on short lines.
-        if !bytes.is_ascii() && std::str::from_utf8(bytes).is_err() {
+        // ASCII is UTF-8; a G-code line nearly always is, found in the newline's search.
+        if !ascii && std::str::from_utf8(bytes).is_err() {
             let valid = String::from_utf8_lossy(bytes).into_owned();
             *buf = valid;
         }
@@ -190,6 +191,37 @@ pub(crate) fn newline(bytes: &[u8]) -> Option<usize> {
         .iter()
         .position(|&b| b == b'\n')
         .map(|k| i + k)
+}
+
+/// [`newline`], and whether the bytes before the `\n` (all of them, without one) are
+/// ASCII: their high bits, read from the same words (exact, no borrow).
+#[inline]
+pub(crate) fn newline_ascii(bytes: &[u8]) -> (Option<usize>, bool) {
+    const ONES: u64 = 0x0101_0101_0101_0101;
+    const HIGHS: u64 = 0x8080_8080_8080_8080;
+    let mut chunks = bytes.chunks_exact(8);
+    let (mut i, mut high) = (0, 0u64);
+    for chunk in &mut chunks {
+        let mut word = [0u8; 8];
+        word.copy_from_slice(chunk);
+        let w = u64::from_le_bytes(word);
+        let v = w ^ (ONES * b'\n' as u64);
+        let zero = v.wrapping_sub(ONES) & !v & HIGHS;
+        if zero != 0 {
+            let first = zero & zero.wrapping_neg();
+            let before = high | (w & HIGHS & (first - 1));
+            return (Some(i + (zero.trailing_zeros() / 8) as usize), before == 0);
+        }
+        high |= w & HIGHS;
+        i += 8;
+    }
+    for (k, &b) in chunks.remainder().iter().enumerate() {
+        if b == b'\n' {
+            return (Some(i + k), high == 0);
+        }
+        high |= (b & 0x80) as u64;
+    }
+    (None, high == 0)
 }
 
 /// True when `bytes` holds a `#` or a `[`, 8 bytes at a time as in [`newline`] (a zero
@@ -244,6 +276,34 @@ pub(crate) fn quoted_at(text: Option<String>, line: usize, line_text: &str) -> (
             let start = text.len();
             text.push_str(line_text);
             (text, start)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::newline_ascii;
+
+    /// The first `\n` of every short text of a `\n`, a byte above 0x7f and filler (bytes
+    /// next to them), and whether all before it are ASCII, as a byte loop finds them.
+    #[test]
+    fn a_line_ends_at_its_first_newline_with_its_ascii_test_before_it() {
+        let filler = [b'\x0b', b'\x09', b'X', b'\x7f', b'0'];
+        for len in 0..=20 {
+            for a in 0..len.max(1) {
+                for b in 0..len.max(1) {
+                    for (ca, cb) in [(b'\n', 0x80), (0x80, b'\n'), (b'\n', b'\n'), (0xff, 0xc3)] {
+                        let mut text: Vec<u8> = (0..len).map(|k| filler[k % 5]).collect();
+                        if len > 0 {
+                            text[a] = ca;
+                            text[b] = cb;
+                        }
+                        let end = text.iter().position(|&c| c == b'\n');
+                        let ascii = text[..end.unwrap_or(len)].is_ascii();
+                        assert_eq!(newline_ascii(&text), (end, ascii), "{text:?}");
+                    }
+                }
+            }
         }
     }
 }

@@ -24,13 +24,15 @@ impl IsoReader {
         on.then(|| v.letter())
     }
 
-    /// Reads G15 / G16 and maps the block: true when nothing is left of it.
+    /// Reads G15 / G16 (`codes`: the block may hold one) and maps the block: true when
+    /// nothing is left of it.
     pub(super) fn fanuc_polar_block(
         &mut self,
         line: &str,
         words: &mut Vec<Word>,
+        codes: bool,
     ) -> LineResult<bool> {
-        if words.iter().any(|w| w.letter == 'G') {
+        if codes {
             self.fanuc_polar.command(words);
         }
         if words.is_empty() {

@@ -41,7 +41,7 @@ impl LatheCycle {
     pub(super) fn of(words: &[Word]) -> Option<LatheCycle> {
         let g = words
             .iter()
-            .find(|w| w.letter == 'G' && matches!(w.number, "70" | "71" | "72"))?;
+            .find(|w| w.letter == 'G' && matches!(w.number.as_bytes(), [b'7', b'0'..=b'2']))?;
         let has = |l: char| words.iter().any(|w| w.letter == l);
         let facing = g.number == "72";
         match (g.number, has('P') && has('Q')) {

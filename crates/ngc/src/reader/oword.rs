@@ -109,8 +109,12 @@ pub(super) fn oline(line: &str) -> LineResult<Option<OLine>> {
 }
 
 pub(super) fn macro_line(line: &str) -> Option<(Macro, usize, usize)> {
+    macro_line_at(line, after_line_number(line.as_bytes()))
+}
+
+/// [`macro_line`], with the index after the line number already known (`after_line_number`).
+pub(super) fn macro_line_at(line: &str, i: usize) -> Option<(Macro, usize, usize)> {
     let b = line.as_bytes();
-    let i = after_line_number(b);
     let mut k = i;
     while k < b.len() && b[k].is_ascii_alphabetic() {
         k += 1;

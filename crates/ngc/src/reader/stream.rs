@@ -9,13 +9,14 @@ use std::rc::Rc;
 use crate::budget::Budget;
 use crate::canon::Move;
 use crate::error::{Error, Result};
+use crate::expr::Params;
 use crate::interp::{Interp, Stop};
-use crate::lex::{lex_with, Lexed, LineError, LineResult, Word};
+use crate::lex::{lex_with, Lexed, LineError, LineResult, ParamSource, Word};
 use crate::notice::Notice;
 use crate::options::Options;
 use crate::source::Source;
 
-use super::oword::{after_line_number, macro_line, oline};
+use super::oword::{after_line_number, macro_line_at, oline};
 use super::state::{Cursor, IsoReader, Program};
 use crate::front_end::{FrontEnd, Registration};
 
@@ -199,22 +200,20 @@ impl IsoReader {
             }
             Some(b'/') => return Ok(()),
             Some(c) if self.dialect.table().macro_b && c.is_ascii_alphabetic() => {
-                if let Some((m, at, rest)) = macro_line(line) {
+                if let Some((m, at, rest)) = macro_line_at(line, first) {
                     return self.macro_statement(line, m, at, rest, here, next);
                 }
             }
             _ => {}
         }
-        if has_hash_or_bracket(b) {
-            self.interp.refresh_system_parameters();
-        }
         let words = reuse(std::mem::take(&mut self.words));
-        let lexed = lex_with(
-            line,
-            &self.interp.params,
-            self.dialect.table().macro_b,
-            words,
-        )?;
+        // The system parameters are brought up to date only for a line that holds `#` or
+        // `[` (crate::lex::ParamSource), found as the lexer meets it.
+        let params = Refreshing {
+            interp: &mut self.interp,
+            fresh: false,
+        };
+        let lexed = lex_with(line, params, self.dialect.table().macro_b, words)?;
         match lexed {
             Lexed::Nothing => Ok(()),
             Lexed::Percent => {
@@ -226,10 +225,17 @@ impl IsoReader {
                 Ok(())
             }
             Lexed::Words { mut words, assigns } => {
+                // No step below adds a corner word or one of these G codes (docs/performance.md
+                // "Session 27"): what the block lacks now it lacks there.
+                let rare = rare_words(&words);
                 if self.whole_increments {
                     self.scale_whole_numbers(line, &mut words, here);
                 }
-                let corner = self.corner_word(line, &mut words)?;
+                let corner = if rare.corner {
+                    self.corner_word(line, &mut words)?
+                } else {
+                    None
+                };
                 if !assigns.is_empty() {
                     for (p, v) in &assigns {
                         self.interp.check_assign(line, p, *v)?;
@@ -241,11 +247,15 @@ impl IsoReader {
                     self.words = reuse(words);
                     return Ok(());
                 }
-                if self.dialect.table().macro_b && self.fanuc_polar_block(line, &mut words)? {
+                if self.dialect.table().macro_b
+                    && self.fanuc_polar_block(line, &mut words, rare.polar)?
+                {
                     self.words = reuse(words);
                     return Ok(());
                 }
-                if self.dialect.table().macro_b && self.mirror_scale_block(line, &mut words)? {
+                if self.dialect.table().macro_b
+                    && self.mirror_scale_block(line, &mut words, rare.mirror_scale)?
+                {
                     self.words = reuse(words);
                     return Ok(());
                 }
@@ -304,7 +314,13 @@ impl IsoReader {
 
     /// The mirror image and scaling (crate::mirror_scale): true when the block set or
     /// cancelled them (nothing more to do), else its words mapped where they are in effect.
-    fn mirror_scale_block(&mut self, line: &str, words: &mut [Word]) -> LineResult<bool> {
+    /// `codes`: the block may set or cancel them ([`RareWords::mirror_scale`]).
+    fn mirror_scale_block(
+        &mut self,
+        line: &str,
+        words: &mut [Word],
+        codes: bool,
+    ) -> LineResult<bool> {
         let haas = self.dialect == crate::options::Dialect::Haas;
         if self.interp.is_lathe() && words.iter().any(|w| w.letter == 'G' && w.value == 50.0) {
             // A lathe's G50 sets the work coordinate system or the spindle speed limit
@@ -316,7 +332,7 @@ impl IsoReader {
             let p = interp.program_position();
             [p[crate::Axis::X], p[crate::Axis::Y], p[crate::Axis::Z]]
         };
-        if self.mirror_scale.command(line, words, haas, here)? {
+        if codes && self.mirror_scale.command(line, words, haas, here)? {
             return Ok(true);
         }
         if self.mirror_scale.active() {
@@ -425,6 +441,35 @@ impl IsoReader {
     }
 }
 
+/// What a block's words hold that the reader's rarer steps look for, found in one pass
+/// (each step looked through the words again, about 200 instructions a block).
+#[derive(Clone, Copy, Debug, Default)]
+struct RareWords {
+    /// A corner rounding or chamfer word (crate::corner).
+    corner: bool,
+    /// G15 or G16 (crate::fanuc_polar).
+    polar: bool,
+    /// A code that sets or cancels the mirror image or scaling (crate::mirror_scale:
+    /// G50, G51, G50.1, G51.1, G100, G101).
+    mirror_scale: bool,
+}
+
+fn rare_words(words: &[Word]) -> RareWords {
+    let mut rare = RareWords::default();
+    for w in words {
+        match w.letter {
+            'G' => match w.g_tenths() {
+                Some(150 | 160) => rare.polar = true,
+                Some(500 | 501 | 510 | 511 | 1000 | 1010) => rare.mirror_scale = true,
+                _ => {}
+            },
+            crate::lex::CORNER_ROUND | crate::lex::CORNER_CHAMFER => rare.corner = true,
+            _ => {}
+        }
+    }
+    rare
+}
+
 /// An emptied vector of words, its allocation kept, for words that borrow another line.
 /// (Collecting a vector's own `into_iter` into the same layout reuses its allocation.)
 pub(super) fn reuse<'a, 'b>(mut words: Vec<Word<'a>>) -> Vec<Word<'b>> {
@@ -438,20 +483,25 @@ pub(super) enum LineOwner {
     Buffer(String),
 }
 
-pub(super) fn has_hash_or_bracket(bytes: &[u8]) -> bool {
-    const ONES: u64 = 0x0101_0101_0101_0101;
-    const HIGHS: u64 = 0x8080_8080_8080_8080;
-    let zero = |v: u64| v.wrapping_sub(ONES) & !v & HIGHS;
-    let mut chunks = bytes.chunks_exact(8);
-    for chunk in &mut chunks {
-        let mut word = [0u8; 8];
-        word.copy_from_slice(chunk);
-        let w = u64::from_le_bytes(word);
-        if zero(w ^ (ONES * b'#' as u64)) | zero(w ^ (ONES * b'[' as u64)) != 0 {
-            return true;
+/// The interpreter's parameters for the lexer, its system parameters brought up to date at
+/// the lexer's first need of them (crate::lex::ParamSource).
+struct Refreshing<'a> {
+    interp: &'a mut Interp,
+    fresh: bool,
+}
+
+impl ParamSource for Refreshing<'_> {
+    fn params(&mut self) -> &Params {
+        self.mentioned();
+        &self.interp.params
+    }
+
+    fn mentioned(&mut self) {
+        if !self.fresh {
+            self.fresh = true;
+            self.interp.refresh_system_parameters();
         }
     }
-    chunks.remainder().iter().any(|&c| c == b'#' || c == b'[')
 }
 
 /// The ISO G-code family reads every dialect no other front end claims: it is the last of
@@ -491,28 +541,5 @@ impl FrontEnd for IsoReader {
 
     fn notices(&self) -> &[Notice] {
         &self.notices
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::has_hash_or_bracket;
-
-    #[test]
-    fn a_hash_or_bracket_is_found_at_every_place_of_every_short_line() {
-        // Bytes next to `#` (0x23) and `[` (0x5b), and ones whose difference from them
-        // borrows across bytes in the 8-byte test.
-        let filler = b"G1X-0.5\"$ZZ\\\x01\xff";
-        for len in 0..=24 {
-            let line: Vec<u8> = (0..len).map(|k| filler[k % filler.len()]).collect();
-            assert!(!has_hash_or_bracket(&line), "{len}: none in {line:?}");
-            for at in 0..len {
-                for c in [b'#', b'['] {
-                    let mut with = line.clone();
-                    with[at] = c;
-                    assert!(has_hash_or_bracket(&with), "{} at {at} of {len}", c as char);
-                }
-            }
-        }
     }
 }

@@ -24,8 +24,9 @@
 //! own fraction. Beside it, on five-axis moves, the tool-axis error: the angle between the
 //! actual tool axis and the programmed one at the nearest point, µrad.
 //!
-//! The gauge reads the program a second time, in step with the samples (`block_index`), and
-//! holds three moves: memory does not grow with the program.
+//! The gauge takes the program's moves as the run reads them (a tee of the run's stream,
+//! `program::moves::tee`), in step with the samples (`block_index`), and holds three moves:
+//! memory does not grow with the program.
 
 use std::collections::VecDeque;
 
@@ -153,7 +154,7 @@ pub struct ContourGauge<'a> {
 }
 
 impl<'a> ContourGauge<'a> {
-    /// A gauge of a run of `moves` (the same program the pipeline runs, read again) on
+    /// A gauge of a run of `moves` (the same moves the pipeline runs) on
     /// `machine`, starting at machine time `start_s`.
     pub fn new(machine: &'a Machine, moves: Moves<'a>, force_tcp: bool, start_s: f64) -> Self {
         let actual = machine.kinematics.clone();

@@ -213,6 +213,15 @@ pub fn run_ballbar_budget(
     let mut contour = None;
     for (k, &direction) in directions.iter().enumerate() {
         let mut run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
+        let mut ballbar = geometry.map(|g| ballbar_sink(g, direction, run.measured, k));
+        // A program without a measured circle: its contour error, the program's moves read
+        // once for the run and for the gauge, in step with the samples.
+        let mut gauge = None;
+        if ballbar.is_none() && k == 0 {
+            let (moves, gauge_moves) = program::moves::tee(run.moves);
+            run.moves = moves;
+            gauge = Some(contour_gauge(scenario, gauge_moves, sim_time_s));
+        }
         if let Some(along) = &along {
             run.moves = analysed_along(run.moves, along);
         }
@@ -222,13 +231,6 @@ pub fn run_ballbar_budget(
         if let Some(t) = trace.as_deref_mut() {
             t.start_run(direction, run.measured);
         }
-        let mut ballbar = geometry.map(|g| ballbar_sink(g, direction, run.measured, k));
-        // A program without a measured circle: its contour error, the program read again in
-        // step with the samples.
-        let mut gauge = match (&ballbar, k) {
-            (None, 0) => Some(contour_gauge(scenario, direction, sim_time_s)?),
-            _ => None,
-        };
         for m in &mut measurements {
             m.start_run(direction, run.measured);
         }
@@ -833,20 +835,14 @@ pub fn contour_figures(
     }
 }
 
-/// The contour gauge of a program without a measured circle, on its run in `direction`
-/// starting at machine time `start_s`: the program read a second time, in step with the run.
-fn contour_gauge(
-    scenario: &Scenario,
-    direction: Direction,
+/// The contour gauge of a program without a measured circle, on its run's `moves` (a tee of
+/// the run's own, [`program::moves::tee`]) starting at machine time `start_s`.
+fn contour_gauge<'s>(
+    scenario: &'s Scenario,
+    moves: program::Moves<'s>,
     start_s: f64,
-) -> Result<ContourGauge<'_>> {
-    let again = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
-    Ok(ContourGauge::new(
-        &scenario.machine,
-        again.moves,
-        scenario.simulate.tcp,
-        start_s,
-    ))
+) -> ContourGauge<'s> {
+    ContourGauge::new(&scenario.machine, moves, scenario.simulate.tcp, start_s)
 }
 
 /// How one run of a scenario reaches its sinks: for a file program measured from where it

@@ -177,6 +177,13 @@ impl CutSurface {
             .with_location_errors(LocationErrors::default());
     }
 
+    /// Cuts with the commanded positions through the nominal chain (`commanded`) or the
+    /// actual ones through the machine's: [`CutOptions::commanded`], which nothing else that
+    /// [`CutSurface::new`] makes depends on.
+    pub fn set_commanded(&mut self, commanded: bool) {
+        self.options.commanded = commanded;
+    }
+
     /// Each axis's reversal angles, deg, for the marks.
     pub fn set_reversals(&mut self, reversals: Vec<(Axis, Vec<f64>)>) {
         self.reversals = reversals;
@@ -357,12 +364,12 @@ impl CutSurface {
     #[inline(always)]
     fn cut_with(&mut self, pose: ToolPose, actual: &AxisVec, linear: &AxisVec) {
         let line = self.geometry.line_of(&pose.tip, &pose.axis);
+        let contact = line.contact_rad();
         // The commanded cut has no lost motion (and its samples no twin to read it from).
         if !self.options.commanded {
-            self.lost_motion
-                .record_positions(line.contact_rad(), actual, linear);
+            self.lost_motion.record_positions(contact, actual, linear);
         }
-        self.envelope.push(&self.geometry, line);
+        self.envelope.push_at(&self.geometry, line, contact);
         self.samples += 1;
     }
 }

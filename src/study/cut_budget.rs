@@ -71,20 +71,19 @@ impl<'a, 'p> CutBudgetRuns<'a, 'p> {
         run: &'a RefCell<BudgetRun<'p>>,
     ) -> Result<CutBudgetRuns<'a, 'p>> {
         let cases = plan.cases();
+        // One grid (its columns' sin and cos, the clearance, the rows) made once, copied.
+        let blank = CutSurface::new(scenario, cone, options.clone(), Vec::new())?;
         let surfaces = cases
             .iter()
             .map(|c| {
-                let options = CutOptions {
-                    commanded: c.errors.is_none(),
-                    ..options.clone()
-                };
-                let mut surface = CutSurface::new(scenario, cone, options, Vec::new())?;
+                let mut surface = blank.clone();
+                surface.set_commanded(c.errors.is_none());
                 if let Some(errors) = c.errors {
                     surface.read_through(errors);
                 }
-                Ok(surface)
+                surface
             })
-            .collect::<Result<Vec<_>>>()?;
+            .collect();
         Ok(CutBudgetRuns {
             run,
             cases,
@@ -144,15 +143,26 @@ impl Sink for CutBudgetRuns<'_, '_> {
 /// The budget from the runs' cuts beside the `full` one, with the axes
 /// the program `moved` (rows are made only for those); see the module's doc.
 pub fn assemble(runs: BudgetCuts, full: &CutSurface, moved: &[Axis]) -> CutBudget {
-    let values = |s: &CutSurface| s.envelope.values.clone();
-    let d = values(full);
-    let runs_d: Vec<Vec<f64>> = runs.surfaces.iter().map(values).collect();
+    let d: &[f64] = &full.envelope.values;
+    let runs_d: Vec<&[f64]> = runs
+        .surfaces
+        .iter()
+        .map(|s| &s.envelope.values[..])
+        .collect();
     // The points every run cut.
     let used: Vec<usize> = (0..d.len())
         .filter(|&p| d[p].is_finite() && runs_d.iter().all(|v| v[p].is_finite()))
         .collect();
-    let pick = |v: &[f64]| -> Vec<f64> { used.iter().map(|&p| v[p]).collect() };
-    let d_used = pick(&d);
+    // Those points of `v`: `v` itself when they are all of them (no copy), else into `out`.
+    let pick = |v: &'_ [f64], out: &'_ mut Vec<f64>| {
+        if used.len() != v.len() {
+            out.clear();
+            out.extend(used.iter().map(|&p| v[p]));
+        }
+    };
+    let (mut d_picked, mut c_picked) = (Vec::new(), Vec::new());
+    pick(d, &mut d_picked);
+    let d_used: &[f64] = if used.len() == d.len() { d } else { &d_picked };
     let rows_n = full.envelope.rows.len();
     let mut rows = Vec::new();
     for (k, case) in runs.cases.iter().enumerate() {
@@ -160,14 +170,15 @@ pub fn assemble(runs: BudgetCuts, full: &CutSurface, moved: &[Axis]) -> CutBudge
             continue;
         }
         let c: Vec<f64> = match case.base {
-            None => runs_d[k].clone(),
+            None => runs_d[k].to_vec(),
             Some(b) => runs_d[k]
                 .iter()
-                .zip(&runs_d[b])
+                .zip(runs_d[b])
                 .map(|(v, w)| v - w)
                 .collect(),
         };
-        let c_used = pick(&c);
+        pick(&c, &mut c_picked);
+        let c_used: &[f64] = if used.len() == c.len() { &c } else { &c_picked };
         let height_change_um = (0..full.envelope.column_count())
             .map(|j| c[j * rows_n + rows_n - 1] - c[j * rows_n])
             .filter(|v| v.is_finite())
@@ -175,16 +186,16 @@ pub fn assemble(runs: BudgetCuts, full: &CutSurface, moved: &[Axis]) -> CutBudge
         rows.push(CutBudgetRow {
             mechanism: case.mechanism,
             axis: case.axis.map(|a| a.to_string()),
-            rms_um: rms(&c_used),
-            pv_um: peak_to_valley(&c_used),
-            share: projection_share(&c_used, &d_used, false),
+            rms_um: rms(c_used),
+            pv_um: peak_to_valley(c_used),
+            share: projection_share(c_used, d_used, false),
             height_change_um,
             contribution_um: c,
         });
     }
     CutBudget {
-        rms_um: rms(&d_used),
-        pv_um: peak_to_valley(&d_used),
+        rms_um: rms(d_used),
+        pv_um: peak_to_valley(d_used),
         points: used.len(),
         interaction_share: 1.0 - rows.iter().map(|r| r.share).sum::<f64>(),
         rows,

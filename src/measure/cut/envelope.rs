@@ -164,7 +164,11 @@ impl Envelope {
 
     /// Takes one cutter position of the run.
     pub fn push(&mut self, geometry: &CutGeometry, line: CutterLine) {
-        let contact = line.contact_rad();
+        self.push_at(geometry, line, line.contact_rad());
+    }
+
+    /// [`Envelope::push`] of a position whose contact θ `line.contact_rad()` is known.
+    pub fn push_at(&mut self, geometry: &CutGeometry, line: CutterLine, contact: f64) {
         let (s, c) = contact.sin_cos();
         geometry.depths_um((c, s), &self.rows, &line, &mut self.scratch);
         let e_min_um = least(&self.scratch);

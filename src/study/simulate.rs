@@ -214,14 +214,9 @@ pub fn run_ballbar_budget(
     for (k, &direction) in directions.iter().enumerate() {
         let mut run = program::scenario_run(scenario, direction, scenario.simulate.lead_deg)?;
         let mut ballbar = geometry.map(|g| ballbar_sink(g, direction, run.measured, k));
-        // A program without a measured circle: its contour error, the program's moves read
-        // once for the run and for the gauge, in step with the samples.
-        let mut gauge = None;
-        if ballbar.is_none() && k == 0 {
-            let (moves, gauge_moves) = program::moves::tee(run.moves);
-            run.moves = moves;
-            gauge = Some(contour_gauge(scenario, gauge_moves, sim_time_s));
-        }
+        // A program without a measured circle: its contour error, on the run's own moves.
+        let mut gauge = (ballbar.is_none() && k == 0)
+            .then(|| contour_gauge(scenario, &mut run.moves, sim_time_s));
         if let Some(along) = &along {
             run.moves = analysed_along(run.moves, along);
         }
@@ -835,14 +830,17 @@ pub fn contour_figures(
     }
 }
 
-/// The contour gauge of a program without a measured circle, on its run's `moves` (a tee of
-/// the run's own, [`program::moves::tee`]) starting at machine time `start_s`.
+/// The contour gauge of a program without a measured circle, on its run starting at machine
+/// time `start_s`: the run's `moves` become one side of a tee ([`program::moves::tee`]), the
+/// gauge reads the other in step with the samples.
 fn contour_gauge<'s>(
     scenario: &'s Scenario,
-    moves: program::Moves<'s>,
+    moves: &mut program::Moves<'s>,
     start_s: f64,
 ) -> ContourGauge<'s> {
-    ContourGauge::new(&scenario.machine, moves, scenario.simulate.tcp, start_s)
+    let (run, gauge) = program::moves::tee(std::mem::replace(moves, Box::new(std::iter::empty())));
+    *moves = run;
+    ContourGauge::new(&scenario.machine, gauge, scenario.simulate.tcp, start_s)
 }
 
 /// How one run of a scenario reaches its sinks: for a file program measured from where it

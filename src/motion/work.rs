@@ -27,7 +27,7 @@ use crate::input::budget;
 use crate::input::program::Direction;
 use crate::input::scenario::Scenario;
 use crate::motion::sampling::block_duration_s;
-use crate::program::test_of;
+use crate::program::{file, test_of, validate, Move};
 
 /// What the read-ahead of a file program found.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -40,29 +40,66 @@ pub struct FileWork {
 
 /// Reads `scenario`'s file program ahead of its run and adds up its least machine time,
 /// stopping with an error as soon as that passes the sample budget.
+///
+/// A file's moves are lent by the reader and checked in place ([`validate::move_checker`],
+/// the checks `program::scenario_run` makes as its moves stream): the same moves and the
+/// same first error, without copying each move through the run's iterator layers
+/// (docs/performance.md "Session 27: the fine file below 1.5").
 pub fn read_ahead(scenario: &Scenario) -> Result<FileWork> {
+    let mut work = WorkSum::new(scenario);
+    let test = test_of(scenario);
+    let Some(path) = test.file() else {
+        let run = crate::program::scenario_run(scenario, Direction::Ccw, 0.0)?;
+        for m in run.moves {
+            work.add(&m?)?;
+        }
+        return Ok(work.work);
+    };
     let machine = &scenario.machine;
-    let period_s = machine.interpolation_period_s;
-    let max_samples = scenario.simulate.max_samples;
-    let run = crate::program::scenario_run(scenario, Direction::Ccw, 0.0)?;
-    let mut work = FileWork::default();
-    for m in run.moves {
+    let mut reader = file::read_moves(path, &scenario.reader)?;
+    let mut checker = validate::move_checker(path, machine, scenario.simulate.tcp);
+    while let Some(m) = reader.next_ref() {
         let m = m?;
+        checker.check(m)?;
+        work.add(m)?;
+    }
+    checker.end()?;
+    Ok(work.work)
+}
+
+/// The read-ahead's running sum of [`read_ahead`], refused once past the sample budget.
+struct WorkSum<'a> {
+    scenario: &'a Scenario,
+    work: FileWork,
+}
+
+impl<'a> WorkSum<'a> {
+    fn new(scenario: &'a Scenario) -> Self {
+        WorkSum {
+            scenario,
+            work: FileWork::default(),
+        }
+    }
+
+    /// Adds move `m`'s least duration; an error once the sum passes the budget.
+    fn add(&mut self, m: &Move) -> Result<()> {
+        let machine = &self.scenario.machine;
+        let work = &mut self.work;
         // The first move only places the machine: its start is unknown, and no run samples
         // the path to it.
         let t = if work.moves == 0 {
             0.0
         } else {
-            block_duration_s(&m, machine)?
+            block_duration_s(m, machine)?
         };
         work.moves += 1;
         work.machine_time_s += t;
-        let samples = work.machine_time_s / period_s;
-        if samples > max_samples as f64 {
-            return Err(over_budget(scenario, &work, m.line, samples));
+        let samples = work.machine_time_s / machine.interpolation_period_s;
+        if samples > self.scenario.simulate.max_samples as f64 {
+            return Err(over_budget(self.scenario, work, m.line, samples));
         }
+        Ok(())
     }
-    Ok(work)
 }
 
 fn over_budget(scenario: &Scenario, work: &FileWork, line: usize, samples: f64) -> Error {

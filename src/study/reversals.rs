@@ -408,15 +408,7 @@ impl<'m> MoveAnalysis<'m> {
             1
         };
         let step_s = seconds.filter(|t| *t > 0.0).map(|t| t / steps as f64);
-        let mut previous = *start;
-        for k in 1..=steps {
-            let inside;
-            let q = if k == steps {
-                end
-            } else {
-                inside = position_in_block(block, machine, k as f64 / steps as f64);
-                &inside
-            };
+        let follow = |acc: &mut [BlockAxisState], previous: &AxisVec, q: &AxisVec| {
             for (s, &axis) in acc.iter_mut().zip(axes) {
                 let x = q[axis];
                 let d = x - previous[axis];
@@ -434,6 +426,22 @@ impl<'m> MoveAnalysis<'m> {
                     }
                 }
             }
+        };
+        if steps == 1 {
+            // A straight block, one step from its start: no copy of either end (most blocks).
+            follow(acc, start, end);
+            return Ok(());
+        }
+        let mut previous = *start;
+        for k in 1..=steps {
+            let inside;
+            let q = if k == steps {
+                end
+            } else {
+                inside = position_in_block(block, machine, k as f64 / steps as f64);
+                &inside
+            };
+            follow(acc, &previous, q);
             previous = *q;
         }
         Ok(())

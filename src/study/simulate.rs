@@ -402,10 +402,13 @@ pub(crate) fn analysed_along<'a>(
     along: &Rc<RefCell<MoveAnalysis<'a>>>,
 ) -> crate::program::Moves<'a> {
     let along = Rc::clone(along);
+    // The move is looked at where it lies in the result, not moved out and back in (two
+    // copies of a large move fewer: docs/performance.md "Session 27: the fine file below 1.5").
     Box::new(moves.map(move |m| {
-        let m = m?;
-        along.borrow_mut().push(&m)?;
-        Ok(m)
+        if let Ok(m) = &m {
+            along.borrow_mut().push(m)?;
+        }
+        m
     }))
 }
 

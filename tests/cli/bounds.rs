@@ -271,6 +271,26 @@ fn a_file_program_past_the_budget_is_refused_by_reading_ahead_or_stopped_where_i
     }
 }
 
+/// The read-ahead checks each move as the run does, before adding its time: a move beyond
+/// the travel envelope (X 100 m on a machine of under 1 m) is refused as such, not as the
+/// 100 min at F1000 that would pass a budget of 1000 samples on that same line.
+#[test]
+fn a_bad_move_is_refused_by_the_read_ahead_before_its_time_counts() {
+    let dir = scratch("bounds", "file-bad-move-budget");
+    std::fs::write(
+        dir.join("bad.nc"),
+        "G21 G90 G94\nG1 X0 Y0 Z0 F1000\nG1 X100000\nM30\n",
+    )
+    .unwrap();
+    let body = "[program]\nfile = \"bad.nc\"\n[check]\ncollisions = false\n[simulate]\nmax_samples = 1000\n";
+    write_scenario(&dir, &trt_ac(), body);
+    let (code, err) = refused(&dir, &args("simulate", "s.toml"));
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("bad.nc:3:"), "{err}");
+    assert!(err.contains("beyond the travel envelope"), "{err}");
+    assert!(!err.contains("budget"), "{err}");
+}
+
 /// A program that loops without end is refused by the read-ahead, not sampled for hours:
 /// each pass of `o100 while [1]` moves 10 mm and back at F10 (120 s), so 10⁹ samples at
 /// 1 ms (10⁶ s) are passed after 8,334 passes, 16,668 moves with the first rapid, long

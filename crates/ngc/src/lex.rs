@@ -181,6 +181,23 @@ fn comment_end(bytes: &[u8]) -> Option<(usize, bool)> {
         marked |= marks != 0;
         at += 8;
     }
+    let rest = chunks.remainder().len();
+    if rest > 0 && bytes.len() >= 8 {
+        // The last 8 bytes, the `8 - rest` already looked at shifted out: they hold no `)`
+        // (so no false close byte above them), and a false mark above a mark of theirs
+        // comes with `marked` already set.
+        let mut word = [0u8; 8];
+        word.copy_from_slice(&bytes[bytes.len() - 8..]);
+        let w = u64::from_le_bytes(word) >> (8 * (8 - rest));
+        let close = zero(w ^ (ONES * b')' as u64)) & (u64::MAX >> (8 * (8 - rest)));
+        let marks = zero(w ^ (ONES * b'#' as u64)) | zero(w ^ (ONES * b'[' as u64));
+        if close == 0 {
+            return None;
+        }
+        let first = close & close.wrapping_neg();
+        let k = (close.trailing_zeros() / 8) as usize;
+        return Some((at + k, marked || marks & (first - 1) != 0));
+    }
     for (k, &c) in chunks.remainder().iter().enumerate() {
         if c == b')' {
             return Some((at + k, marked));

@@ -282,7 +282,7 @@ impl IsoReader {
                 let before = self.queue.len();
                 let result = match remap {
                     Some(s) => self.run_remap(line, &words, s, here, next),
-                    None => self.run_block(line, &words, here, next),
+                    None => self.run_block_of(line, &words, here, next, rare.lathe_cycle),
                 };
                 self.words = reuse(words);
                 // Not `result`: that copied the whole (large) result on every block.
@@ -352,7 +352,20 @@ impl IsoReader {
         here: Cursor,
         next: Cursor,
     ) -> LineResult<()> {
-        if self.dialect.table().macro_b {
+        self.run_block_of(line, words, here, next, true)
+    }
+
+    /// [`IsoReader::run_block`], told whether the block may be a lathe cycle
+    /// ([`RareWords::lathe_cycle`]): when it cannot, its words are not looked through again.
+    fn run_block_of(
+        &mut self,
+        line: &str,
+        words: &[Word],
+        here: Cursor,
+        next: Cursor,
+        may_be_lathe_cycle: bool,
+    ) -> LineResult<()> {
+        if may_be_lathe_cycle && self.dialect.table().macro_b {
             if let Some(cycle) = super::lathe::LatheCycle::of(words) {
                 return self.lathe_cycle(cycle, line, words, here);
             }
@@ -442,7 +455,8 @@ impl IsoReader {
 }
 
 /// What a block's words hold that the reader's rarer steps look for, found in one pass
-/// (each step looked through the words again, about 200 instructions a block).
+/// (each step looked through the words again, about 200 instructions a block; the lathe
+/// cycle's test about 50 more).
 #[derive(Clone, Copy, Debug, Default)]
 struct RareWords {
     /// A corner rounding or chamfer word (crate::corner).
@@ -452,6 +466,9 @@ struct RareWords {
     /// A code that sets or cancels the mirror image or scaling (crate::mirror_scale:
     /// G50, G51, G50.1, G51.1, G100, G101).
     mirror_scale: bool,
+    /// G70, G71 or G72 (a lathe cycle's code, `reader::lathe::LatheCycle::of`, which reads
+    /// only `G70`-`G72` as written: in tenths 700, 710, 720).
+    lathe_cycle: bool,
 }
 
 fn rare_words(words: &[Word]) -> RareWords {
@@ -461,6 +478,7 @@ fn rare_words(words: &[Word]) -> RareWords {
             'G' => match w.g_tenths() {
                 Some(150 | 160) => rare.polar = true,
                 Some(500 | 501 | 510 | 511 | 1000 | 1010) => rare.mirror_scale = true,
+                Some(700 | 710 | 720) => rare.lathe_cycle = true,
                 _ => {}
             },
             crate::lex::CORNER_ROUND | crate::lex::CORNER_CHAMFER => rare.corner = true,

@@ -6,6 +6,7 @@
 
 use std::ops::Range;
 
+use crate::byte_words::{below_first, bytes_equal, first_byte, load, ONES};
 use crate::expr::{function_at, Eval, ExprError, Param, Params};
 
 /// Word letters the reader knows.
@@ -135,50 +136,41 @@ impl ParamSource for &Params {
     }
 }
 
-/// True when `bytes` holds a `#` or a `[`, 8 bytes at a time: with `v` a word XOR eight
-/// `#`s (or `[`s), a byte of `(v - 0x01…01) & !v & 0x80…80` is set at every zero byte of `v`
-/// and can be set falsely only above one, so the word holds one when the result is nonzero.
-/// On lines this short a vectorised fold spent more in its set-up and reduction than in
-/// the search.
+/// True when `bytes` holds a `#` or a `[`, 8 bytes at a time ([`crate::byte_words`]).
 pub(crate) fn has_hash_or_bracket(bytes: &[u8]) -> bool {
-    const ONES: u64 = 0x0101_0101_0101_0101;
-    const HIGHS: u64 = 0x8080_8080_8080_8080;
-    let zero = |v: u64| v.wrapping_sub(ONES) & !v & HIGHS;
     let mut chunks = bytes.chunks_exact(8);
     for chunk in &mut chunks {
-        let mut word = [0u8; 8];
-        word.copy_from_slice(chunk);
-        let w = u64::from_le_bytes(word);
-        if zero(w ^ (ONES * b'#' as u64)) | zero(w ^ (ONES * b'[' as u64)) != 0 {
+        if marks(load(chunk)) != 0 {
             return true;
         }
     }
     chunks.remainder().iter().any(|&c| c == b'#' || c == b'[')
 }
 
+/// The `#`s and `[`s of word `w` ([`bytes_equal`]).
+#[inline(always)]
+fn marks(w: u64) -> u64 {
+    bytes_equal(w, b'#') | bytes_equal(w, b'[')
+}
+
 /// The index of the first `)` in `bytes` (the rest of a line after a comment's `(`), and
-/// whether a `#` or a `[` comes before it; `None` without one. 8 bytes at a time as
-/// [`has_hash_or_bracket`]: the lowest set byte of the `)` test is the first `)`, and a set
+/// whether a `#` or a `[` comes before it; `None` without one. 8 bytes at a time
+/// ([`crate::byte_words`]): the lowest set byte of the `)` test is the first `)`, and a set
 /// byte of the `#`/`[` test below it, false or not, means a true one below it.
 #[inline(always)]
 fn comment_end(bytes: &[u8]) -> Option<(usize, bool)> {
-    const ONES: u64 = 0x0101_0101_0101_0101;
-    const HIGHS: u64 = 0x8080_8080_8080_8080;
-    let zero = |v: u64| v.wrapping_sub(ONES) & !v & HIGHS;
     let mut chunks = bytes.chunks_exact(8);
     let (mut at, mut marked) = (0, false);
     for chunk in &mut chunks {
-        let mut word = [0u8; 8];
-        word.copy_from_slice(chunk);
-        let w = u64::from_le_bytes(word);
-        let close = zero(w ^ (ONES * b')' as u64));
-        let marks = zero(w ^ (ONES * b'#' as u64)) | zero(w ^ (ONES * b'[' as u64));
+        let w = load(chunk);
+        let close = bytes_equal(w, b')');
         if close != 0 {
-            let first = close & close.wrapping_neg();
-            let k = (close.trailing_zeros() / 8) as usize;
-            return Some((at + k, marked || marks & (first - 1) != 0));
+            return Some((
+                at + first_byte(close),
+                marked || below_first(marks(w), close) != 0,
+            ));
         }
-        marked |= marks != 0;
+        marked |= marks(w) != 0;
         at += 8;
     }
     let rest = chunks.remainder().len();
@@ -186,17 +178,15 @@ fn comment_end(bytes: &[u8]) -> Option<(usize, bool)> {
         // The last 8 bytes, the `8 - rest` already looked at shifted out: they hold no `)`
         // (so no false close byte above them), and a false mark above a mark of theirs
         // comes with `marked` already set.
-        let mut word = [0u8; 8];
-        word.copy_from_slice(&bytes[bytes.len() - 8..]);
-        let w = u64::from_le_bytes(word) >> (8 * (8 - rest));
-        let close = zero(w ^ (ONES * b')' as u64)) & (u64::MAX >> (8 * (8 - rest)));
-        let marks = zero(w ^ (ONES * b'#' as u64)) | zero(w ^ (ONES * b'[' as u64));
+        let w = load(&bytes[bytes.len() - 8..]) >> (8 * (8 - rest));
+        let close = bytes_equal(w, b')') & (u64::MAX >> (8 * (8 - rest)));
         if close == 0 {
             return None;
         }
-        let first = close & close.wrapping_neg();
-        let k = (close.trailing_zeros() / 8) as usize;
-        return Some((at + k, marked || marks & (first - 1) != 0));
+        return Some((
+            at + first_byte(close),
+            marked || below_first(marks(w), close) != 0,
+        ));
     }
     for (k, &c) in chunks.remainder().iter().enumerate() {
         if c == b')' {
@@ -598,7 +588,6 @@ fn window(b: &[u8], i: usize) -> Option<u64> {
 /// How many of the first bytes of `w` are the digits `0`-`9` (0-8).
 #[inline(always)]
 fn leading_digits(w: u64) -> usize {
-    const ONES: u64 = 0x0101_0101_0101_0101;
     // Digit bytes become 0-9. A byte of `a` is above 9 when its high bit is set, or its
     // low 7 bits plus 0x76 reach 0x80 (at most 0xf5: no carry into the next byte).
     let a = w ^ (ONES * b'0' as u64);

@@ -38,6 +38,7 @@
 mod axis;
 mod block;
 mod budget;
+mod byte_words;
 mod canon;
 mod code;
 mod comp;

@@ -6,6 +6,7 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::rc::Rc;
 
+use crate::byte_words::{below_first, bytes_equal, first_byte, load, HIGHS};
 use crate::error::{line_column, Error, Syntax};
 use crate::lex::LineError;
 
@@ -166,23 +167,16 @@ impl FileLines {
     }
 }
 
-/// The index of the first `\n` in `bytes`, 8 bytes at a time (lines are short; see
-/// docs/performance.md for `memchr`). With `v` the word XOR eight `\n`s, a byte
-/// of `(v - 0x01…01) & !v & 0x80…80` is set at every zero byte of `v` and can be set falsely
-/// only above one, so the lowest set byte is the first `\n`.
+/// The index of the first `\n` in `bytes`, 8 bytes at a time ([`crate::byte_words`]; see
+/// docs/performance.md for `memchr`).
 #[inline]
 pub(crate) fn newline(bytes: &[u8]) -> Option<usize> {
-    const ONES: u64 = 0x0101_0101_0101_0101;
-    const HIGHS: u64 = 0x8080_8080_8080_8080;
     let mut chunks = bytes.chunks_exact(8);
     let mut i = 0;
     for chunk in &mut chunks {
-        let mut word = [0u8; 8];
-        word.copy_from_slice(chunk);
-        let v = u64::from_le_bytes(word) ^ (ONES * b'\n' as u64);
-        let zero = v.wrapping_sub(ONES) & !v & HIGHS;
-        if zero != 0 {
-            return Some(i + (zero.trailing_zeros() / 8) as usize);
+        let found = bytes_equal(load(chunk), b'\n');
+        if found != 0 {
+            return Some(i + first_byte(found));
         }
         i += 8;
     }
@@ -197,20 +191,14 @@ pub(crate) fn newline(bytes: &[u8]) -> Option<usize> {
 /// ASCII: their high bits, read from the same words (exact, no borrow).
 #[inline]
 pub(crate) fn newline_ascii(bytes: &[u8]) -> (Option<usize>, bool) {
-    const ONES: u64 = 0x0101_0101_0101_0101;
-    const HIGHS: u64 = 0x8080_8080_8080_8080;
     let mut chunks = bytes.chunks_exact(8);
     let (mut i, mut high) = (0, 0u64);
     for chunk in &mut chunks {
-        let mut word = [0u8; 8];
-        word.copy_from_slice(chunk);
-        let w = u64::from_le_bytes(word);
-        let v = w ^ (ONES * b'\n' as u64);
-        let zero = v.wrapping_sub(ONES) & !v & HIGHS;
-        if zero != 0 {
-            let first = zero & zero.wrapping_neg();
-            let before = high | (w & HIGHS & (first - 1));
-            return (Some(i + (zero.trailing_zeros() / 8) as usize), before == 0);
+        let w = load(chunk);
+        let found = bytes_equal(w, b'\n');
+        if found != 0 {
+            let before = high | below_first(w & HIGHS, found);
+            return (Some(i + first_byte(found)), before == 0);
         }
         high |= w & HIGHS;
         i += 8;
@@ -224,10 +212,6 @@ pub(crate) fn newline_ascii(bytes: &[u8]) -> (Option<usize>, bool) {
     (None, high == 0)
 }
 
-/// True when `bytes` holds a `#` or a `[`, 8 bytes at a time as in [`newline`] (a zero
-/// byte of the word XOR eight `#`s, or of the word XOR eight `[`s). On lines this short a
-/// vectorised fold spent more in its set-up and reduction than in the search.
-#[inline]
 /// A syntax error at `err.span` of the line starting at byte `start` of `text`, the text of
 /// the program at `path`.
 pub(crate) fn syntax_error(path: &Path, text: String, start: usize, err: LineError) -> Error {

@@ -34,13 +34,13 @@
 //! slipping or at rest) is a mask and a select, not a branch. The stepping itself is
 //! [`super::lane_step`]'s, which both lane kinds share.
 
+use super::exp::exp_lanes;
 use super::lane_step::{self, lane_product, LaneKind, LaneMaps, LaneState, Lanes, LANES};
 use super::period_map::{Regime, N_INPUT, N_STATE, SLOPE_STEPS};
 use super::servo::AxisServo;
 use super::simd::{M, V};
 use crate::error::Result;
 use crate::{Axis, AxisVec};
-use libm::exp;
 
 /// A group of up to [`LANES`] nonlinear drives of one axis, in structure-of-arrays form.
 #[derive(Clone, Debug)]
@@ -343,13 +343,8 @@ impl DriveLaneGroup {
         let sharper = asked & !coarse & u_low.ge(V::splat(1.23));
         let mut sharp = M::default();
         if sharper.any() {
-            let bits = sharper.bits();
-            let u = u_low.lanes();
-            let decay: Lanes = std::array::from_fn(|l| match bits >> l & 1 {
-                1 => exp(-(u[l] * u[l])),
-                _ => 0.0,
-            });
-            let k = (V::splat(4.0) * u_low * u_low - V::splat(2.0)) * V::load(&decay);
+            let decay = sharper.select(exp_lanes(-(u_low * u_low)), V::splat(0.0));
+            let k = (V::splat(4.0) * u_low * u_low - V::splat(2.0)) * decay;
             sharp = sharper & error(k).le(tolerance);
         }
         (!asked | coarse | sharp, asked & !coarse & !sharp)
@@ -413,13 +408,7 @@ impl DriveLaneGroup {
         let mut decay = zero;
         let needed = within & asked;
         if needed.any() {
-            let bits = needed.bits();
-            let u2 = u2.lanes();
-            let e: Lanes = std::array::from_fn(|l| match bits >> l & 1 {
-                1 => exp(-u2[l]),
-                _ => 0.0,
-            });
-            decay = V::load(&e);
+            decay = needed.select(exp_lanes(-u2), zero);
         }
         let bound = flat.select(fs, beyond.select(fc, fc + (fs - fc) * decay));
         (bound, flat.select(one, beyond.select(zero, decay)))

@@ -28,8 +28,9 @@
 //! that period through the scalar [`AxisServo::advance`] instead,
 //! its whole state (the carried regime and the friction-bound cache included) scattered to
 //! it and gathered back. The friction bound at the period's end follows
-//! `servo::stribeck_bound_decay` case for case, as masks (its `exp` the same `libm::exp`,
-//! in the lanes that need it). Every check is computed for all lanes at once
+//! `servo::stribeck_bound_decay` case for case, as masks (its `exp` the scalar one's
+//! formula, [`super::exp`], computed for all lanes at once and kept in the lanes that need
+//! it). Every check is computed for all lanes at once
 //! ([`super::simd`]'s vectors and masks): the regime a lane ends in (backlash side or gap,
 //! slipping or at rest) is a mask and a select, not a branch. The stepping itself is
 //! [`super::lane_step`]'s, which both lane kinds share.
@@ -324,8 +325,9 @@ impl DriveLaneGroup {
     /// Per lane, the friction linearisation's force error `e_F(Δv, k)` within tolerance
     /// where it is asked (a Stribeck zone that the velocity change `dv` may reach from `v0`):
     /// at `k = 2`, else at the sharper `k = (4u² − 2) exp(−u²)` of `try_exact_period`, its
-    /// `exp` the scalar `libm::exp` of the lanes that need it; and the lanes where neither
-    /// bound is enough (to be tried over the substeps' own velocity changes).
+    /// `exp` the scalar one's bits (computed for all lanes, kept where needed); and the
+    /// lanes where neither bound is enough (to be tried over the substeps' own velocity
+    /// changes).
     #[inline(always)]
     fn tolerance_ok(&self, v0: V, dv: V, slope: V, grid_slope: V) -> (M, M) {
         let inv_vs = V::load(&self.inv_stribeck);

@@ -28,19 +28,20 @@
 //! that period through the scalar [`AxisServo::advance`] instead,
 //! its whole state (the carried regime and the friction-bound cache included) scattered to
 //! it and gathered back. The friction bound at the period's end follows
-//! `servo::stribeck_bound_decay` case for case, as masks (its `exp` the same `libm::exp`,
-//! in the lanes that need it). Every check is computed for all lanes at once
+//! `servo::stribeck_bound_decay` case for case, as masks (its `exp` the scalar one's
+//! formula, [`super::exp`], computed for all lanes at once and kept in the lanes that need
+//! it). Every check is computed for all lanes at once
 //! ([`super::simd`]'s vectors and masks): the regime a lane ends in (backlash side or gap,
 //! slipping or at rest) is a mask and a select, not a branch. The stepping itself is
 //! [`super::lane_step`]'s, which both lane kinds share.
 
+use super::exp::exp_lanes;
 use super::lane_step::{self, lane_product, LaneKind, LaneMaps, LaneState, Lanes, LANES};
 use super::period_map::{Regime, N_INPUT, N_STATE, SLOPE_STEPS};
 use super::servo::AxisServo;
 use super::simd::{M, V};
 use crate::error::Result;
 use crate::{Axis, AxisVec};
-use libm::exp;
 
 /// A group of up to [`LANES`] nonlinear drives of one axis, in structure-of-arrays form.
 #[derive(Clone, Debug)]
@@ -324,8 +325,9 @@ impl DriveLaneGroup {
     /// Per lane, the friction linearisation's force error `e_F(Δv, k)` within tolerance
     /// where it is asked (a Stribeck zone that the velocity change `dv` may reach from `v0`):
     /// at `k = 2`, else at the sharper `k = (4u² − 2) exp(−u²)` of `try_exact_period`, its
-    /// `exp` the scalar `libm::exp` of the lanes that need it; and the lanes where neither
-    /// bound is enough (to be tried over the substeps' own velocity changes).
+    /// `exp` the scalar one's bits (computed for all lanes, kept where needed); and the
+    /// lanes where neither bound is enough (to be tried over the substeps' own velocity
+    /// changes).
     #[inline(always)]
     fn tolerance_ok(&self, v0: V, dv: V, slope: V, grid_slope: V) -> (M, M) {
         let inv_vs = V::load(&self.inv_stribeck);
@@ -343,13 +345,8 @@ impl DriveLaneGroup {
         let sharper = asked & !coarse & u_low.ge(V::splat(1.23));
         let mut sharp = M::default();
         if sharper.any() {
-            let bits = sharper.bits();
-            let u = u_low.lanes();
-            let decay: Lanes = std::array::from_fn(|l| match bits >> l & 1 {
-                1 => exp(-(u[l] * u[l])),
-                _ => 0.0,
-            });
-            let k = (V::splat(4.0) * u_low * u_low - V::splat(2.0)) * V::load(&decay);
+            let decay = sharper.select(exp_lanes(-(u_low * u_low)), V::splat(0.0));
+            let k = (V::splat(4.0) * u_low * u_low - V::splat(2.0)) * decay;
             sharp = sharper & error(k).le(tolerance);
         }
         (!asked | coarse | sharp, asked & !coarse & !sharp)
@@ -413,13 +410,7 @@ impl DriveLaneGroup {
         let mut decay = zero;
         let needed = within & asked;
         if needed.any() {
-            let bits = needed.bits();
-            let u2 = u2.lanes();
-            let e: Lanes = std::array::from_fn(|l| match bits >> l & 1 {
-                1 => exp(-u2[l]),
-                _ => 0.0,
-            });
-            decay = V::load(&e);
+            decay = needed.select(exp_lanes(-u2), zero);
         }
         let bound = flat.select(fs, beyond.select(fc, fc + (fs - fc) * decay));
         (bound, flat.select(one, beyond.select(zero, decay)))

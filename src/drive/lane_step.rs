@@ -317,26 +317,22 @@ fn scatter<K: LaneKind>(group: &K, all: &mut [Option<AxisServo>], st: &LaneState
 /// `y_r = Σ_j cols[j][r] u_j` per lane, from 0 in column order: per lane the scalar
 /// period map's product, one multiplication and one addition per column, row and lane.
 ///
-/// Written over plain arrays: the compiler vectorises the loop at the width of the function
-/// it is inlined into (`DriveLanes::step_block` is compiled for AVX-512 or AVX at run
-/// time: one register a row). Measured (callgrind, session 25), the same product in
-/// [`V`]'s operations took 10 % more instructions in the lanes, and with its result
-/// written out instead of `y.map(..)` (a call, with a copy of `y`) 8 % more: the loop
-/// as it is keeps the fewest values live in the large inlined function
-/// (docs/performance.md). The order of operations, hence every bit, is the same either way.
+/// In [`V`]'s operations, the rows returned as they are summed (in registers where the
+/// function it is inlined into has them: `DriveLanes::step_block` is compiled for AVX-512 or
+/// AVX at run time, one or two registers a row), with no copy of the rows out of an array
+/// of arrays (`y.map(..)` was an out-of-line call that copied them; docs/performance.md,
+/// session 28, for how the two compare). The order of operations, hence every bit, is the
+/// same either way.
 #[inline(always)]
 pub(super) fn lane_product<const N: usize>(
     cols: &[[Lanes; N_STATE]; N],
     u: &[V; N],
 ) -> [V; N_STATE] {
-    let u: [Lanes; N] = std::array::from_fn(|j| u[j].lanes());
-    let mut y = [[0.0; LANES]; N_STATE];
-    for (col, u_j) in cols.iter().zip(&u) {
+    let mut y = [V::splat(0.0); N_STATE];
+    for (col, &u_j) in cols.iter().zip(u) {
         for (y_r, m_r) in y.iter_mut().zip(col) {
-            for l in 0..LANES {
-                y_r[l] += m_r[l] * u_j[l];
-            }
+            *y_r = *y_r + V::load(m_r) * u_j;
         }
     }
-    y.map(|y_r| V::load(&y_r))
+    y
 }

@@ -3,6 +3,7 @@
 //! Outputs: the table-side (actual) position and following error of every axis, from per-axis servo models.
 
 pub mod drives;
+mod exp;
 pub mod lane_drive;
 pub mod lane_servo;
 pub mod lane_step;

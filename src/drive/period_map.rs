@@ -5,7 +5,7 @@
 
 use std::cell::OnceCell;
 
-use libm::exp;
+use super::exp::exp;
 
 use super::product::{ColumnProduct, Portable};
 

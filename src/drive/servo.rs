@@ -63,6 +63,7 @@ use std::cell::{Cell, OnceCell};
 use std::f64::consts::PI;
 use std::path::Path;
 
+use super::exp::exp;
 use super::period_map::{
     map_input, round_index, DrivePeriod, ExactMaps, MappedPeriod, PeriodMap, Regime, TwinPeriod,
     TwinState, N_INPUT, N_STATE, SLOPE_STEPS,
@@ -72,7 +73,6 @@ use super::product::{all_finite, ColumnProduct, Portable};
 use crate::error::{Error, Result};
 use crate::input::drive::{si_per_unit, AxisDrive, Model};
 use crate::Axis;
-use libm::exp;
 
 /// The state of one axis at the end of an interpolation period.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -153,7 +153,8 @@ fn bounds_inline(
     // D over the chord, from its values and slopes 2q at the ends.
     let (d_floor, _) = tangent_floor((e0.disc, 2.0 * q0), (e1.disc, 2.0 * q1), length)?;
     let d_low = d_floor - 2.0 * err_disc - 2.0 * err_q * length;
-    if !(d_low > 0.0) {
+    // Not shown positive (NaN included).
+    if d_low.is_nan() || d_low <= 0.0 {
         return None;
     }
     let inv_root_low = 1.0 / d_low.sqrt();

@@ -11,6 +11,7 @@
 pub mod envelope;
 pub mod figures;
 pub mod geometry;
+pub mod least_bound;
 pub mod take_up;
 
 use serde::{Deserialize, Serialize};

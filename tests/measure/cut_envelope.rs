@@ -8,7 +8,8 @@
 
 use mtsim::measure::cut::envelope::Envelope;
 use mtsim::measure::cut::geometry::{CutGeometry, CutterLine, Row, NOT_CUT};
-use nalgebra::Vector3;
+use mtsim::measure::cut::least_bound::{least_depth_bounds_um, Chord};
+use nalgebra::{Rotation3, Vector3};
 
 use crate::cut::{cone_body, scenario, the_cone};
 
@@ -310,6 +311,133 @@ fn positions_coming_back_to_computed_columns_are_applied_to_them() {
         envelope.end_run(&g);
         let expected = brute_force(&g, &envelope, &lines);
         assert!(expected.iter().filter(|d| **d < -3.0).count() > 100);
+        for (p, (got, want)) in envelope.values.iter().zip(&expected).enumerate() {
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "step {step_deg}°: point {p}: {got} against {want} um"
+            );
+        }
+    }
+}
+
+/// The cutter at θ moved by δ along n(θ), then turned about a point 20 mm up its axis by
+/// `tangential` rad about n (its axis then skew to the generatrix: the depth along the
+/// height is least inside, a convex curve) and by `radial` rad about the tangent
+/// `n × axis` (the depth rising or falling along the height).
+fn tilted(g: &CutGeometry, theta: f64, delta_mm: f64, tangential: f64, radial: f64) -> CutterLine {
+    let line = cutter(g, theta, delta_mm);
+    let (sa, ca) = g.alpha_rad.sin_cos();
+    let (st, ct) = theta.sin_cos();
+    let n = Vector3::new(ca * ct, ca * st, sa);
+    let side = n.cross(&line.axis);
+    let turn = Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(n), tangential)
+        * Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(side), radial);
+    let pivot = line.tip + line.axis * 20.0;
+    let axis = turn * line.axis;
+    CutterLine {
+        tip: pivot - axis * 20.0,
+        axis,
+    }
+}
+
+/// The grid's rows of the bundled cone's cut: every 2 mm from 0.1 mm above the tip height
+/// to 0.1 mm below the flutes' end, with three more heights between.
+fn grid(g: &CutGeometry) -> Vec<Row> {
+    let (bottom, top) = (g.tip_height_mm() + 0.1, g.flute_end_height_mm() - 0.1);
+    let mut z: Vec<f64> = (0..)
+        .map(|k| bottom + 2.0 * k as f64)
+        .take_while(|z| *z <= top)
+        .collect();
+    z.extend([
+        bottom + 0.25 * (top - bottom),
+        bottom + 0.5 * (top - bottom),
+        41.3,
+    ]);
+    z.sort_by(f64::total_cmp);
+    rows(g, &z)
+}
+
+/// The bounds of a position's least depth at its own θ (`least_bound`) hold it: for
+/// cutters tilted about n and about the tangent by up to 2 mrad and moved along n by up to
+/// ±50 µm, lower ≤ the least of every row's depth (`depths_um`, then the plain minimum) ≤
+/// upper. They are tight (within 10⁻⁴ µm where the least row is an end row, within 1 µm
+/// elsewhere), they say something for nearly every position, and some least rows lie
+/// inside (the tangents' crossing, which a bound from the end rows alone would miss).
+#[test]
+fn the_least_depths_bounds_hold_it() {
+    let g = geometry();
+    let rows = grid(&g);
+    let chord = Chord::of(&rows).expect("rows on a chord");
+    assert!(chord.offset_mm < 1e-9, "offset {}", chord.offset_mm);
+    let mut state = 5;
+    let (mut said, mut inside, mut all) = (0, 0, 0);
+    let mut out = vec![0.0; rows.len()];
+    for case in 0..4000 {
+        let theta = f64::to_radians(0.09 * case as f64 + 0.01);
+        let delta_mm = 0.05 * jitter(&mut state);
+        let tangential = 2e-3 * jitter(&mut state);
+        let radial = match case % 3 {
+            0 => 0.0,
+            _ => 2e-3 * jitter(&mut state),
+        };
+        let line = tilted(&g, theta, delta_mm, tangential, radial);
+        let contact = line.tip.y.atan2(line.tip.x);
+        let at = contact.sin_cos().rev2();
+        g.depths_um(at, &rows, &line, &mut out);
+        let least = out.iter().fold(NOT_CUT, |m, &d| m.min(d));
+        let row = out.iter().position(|&d| d == least).expect("a least row");
+        all += 1;
+        let Some((lower, upper)) = least_depth_bounds_um(&g, at, &rows, &chord, &line) else {
+            continue;
+        };
+        said += 1;
+        assert!(
+            lower <= least && least <= upper,
+            "case {case}: {lower} <= {least} <= {upper} um (row {row})"
+        );
+        let interior =
+            row > 0 && row + 1 < rows.len() && out[0] > least && out[rows.len() - 1] > least;
+        inside += interior as usize;
+        let slack = if interior { 1.0 } else { 1e-4 };
+        assert!(
+            upper - lower < slack,
+            "case {case}: {lower}..{upper} um (row {row})"
+        );
+    }
+    assert!(said * 100 >= all * 99, "{said} of {all} said");
+    assert!(inside > 100, "{inside} least rows inside");
+}
+
+/// Tilted cutters (their least depth at their own θ inside the rows or at either end, so
+/// that the bounds decide most takes and e_min itself the rest) with the bundled cone's
+/// rows: the streamed envelope is the brute force's, bit for bit, both senses.
+#[test]
+fn the_streamed_envelope_of_tilted_cutters_is_the_least_depth_of_every_position() {
+    let g = geometry();
+    let rows = grid(&g);
+    for step_deg in [0.125, -0.125] {
+        let mut state = 9;
+        let lines: Vec<CutterLine> = (0..3744)
+            .map(|k| {
+                let theta = (3.0 + step_deg * k as f64).to_radians();
+                let delta_mm = 3e-3 * (5.0 * theta).sin() + 1e-3 * jitter(&mut state);
+                tilted(
+                    &g,
+                    theta,
+                    delta_mm,
+                    1e-3 * (3.0 * theta).cos(),
+                    5e-4 * jitter(&mut state),
+                )
+            })
+            .collect();
+        let mut envelope = Envelope::new(&g, 0.5, rows.clone());
+        for line in &lines {
+            envelope.push(&g, *line);
+        }
+        envelope.end_run(&g);
+        let expected = brute_force(&g, &envelope, &lines);
+        assert!(expected.iter().all(|d| d.is_finite()));
         for (p, (got, want)) in envelope.values.iter().zip(&expected).enumerate() {
             assert_eq!(
                 got.to_bits(),

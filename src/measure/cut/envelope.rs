@@ -19,9 +19,11 @@
 //! on (as on a test's measured revolution); a position that comes back to columns already
 //! computed is applied to them directly, so nothing is lost either way.
 
+use std::cell::Cell;
 use std::collections::VecDeque;
 
 use super::geometry::{CutGeometry, CutterLine, Row, NOT_CUT};
+use super::least_bound::{least_depth_bounds_um, Chord};
 
 /// Clearance at which a cutter position stops being tested on other columns, um: a position
 /// deeper than the surface its neighbours leave by more than this, this far away, is not
@@ -32,13 +34,54 @@ pub const REACH_UM: f64 = 200.0;
 const MAX_REACH_COLUMNS: usize = 400;
 
 /// A cutter position waiting for its columns.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Buffered {
-    /// θ of the contact, in columns, unwrapped over the run.
+    /// θ of the contact, in columns, unwrapped over the run, and `(cos θ, sin θ)` of it.
     u: f64,
+    theta: (f64, f64),
     line: CutterLine,
-    /// Least depth it cuts at its own θ, um.
-    e_min_um: f64,
+    /// Bounds of `e_min`, the least depth it cuts at its own θ, um
+    /// ([`least_depth_bounds_um`]), and e_min itself once computed (NaN before).
+    e_min_lower_um: f64,
+    e_min_upper_um: f64,
+    e_min_um: Cell<f64>,
+}
+
+impl Buffered {
+    /// e_min, um: the least of its depths at its own θ, computed (into `scratch`) the first
+    /// time it is asked for.
+    fn e_min_um(&self, geometry: &CutGeometry, rows: &[Row], scratch: &mut [f64]) -> f64 {
+        let known = self.e_min_um.get();
+        if !known.is_nan() {
+            return known;
+        }
+        geometry.depths_um(self.theta, rows, &self.line, scratch);
+        let e = least(scratch);
+        self.e_min_um.set(e);
+        e
+    }
+
+    /// Whether `e_min + clearance_um ≥ deepest_row_um` (the position cannot lower a row of
+    /// the column): from the bounds when they decide it (`fl(x + c)` rises with x, so
+    /// `lower + c ≥ deepest` implies it and `upper + c < deepest` its contrary), else from
+    /// e_min computed.
+    #[inline(always)]
+    fn cleared(
+        &self,
+        clearance_um: f64,
+        deepest_row_um: f64,
+        geometry: &CutGeometry,
+        rows: &[Row],
+        scratch: &mut [f64],
+    ) -> bool {
+        if self.e_min_lower_um + clearance_um >= deepest_row_um {
+            return true;
+        }
+        if self.e_min_upper_um + clearance_um < deepest_row_um {
+            return false;
+        }
+        self.e_min_um(geometry, rows, scratch) + clearance_um >= deepest_row_um
+    }
 }
 
 /// The lower envelope on the grid, and the run that feeds it.
@@ -54,6 +97,8 @@ pub struct Envelope {
     reach: i64,
     clearance_per_column2_um: f64,
     run: RunState,
+    /// The rows' chord ([`Chord::of`]); None: e_min is always computed.
+    chord: Option<Chord>,
     /// Scratch rows: one position's depths, and a column's envelope.
     scratch: Vec<f64>,
     local: Vec<f64>,
@@ -73,8 +118,9 @@ struct RunState {
     /// The buffer's order in u: broken once a position came below (above) the one before.
     not_ascending: bool,
     not_descending: bool,
-    /// The buffer's least `e_min_um`, as a sliding minimum: (sequence number, e_min) with
-    /// e_min rising, the front the buffer's least; positions pushed and popped so far.
+    /// The buffer's least `e_min_lower_um` (a lower bound of its least e_min), as a sliding
+    /// minimum: (sequence number, bound) with the bound rising, the front the buffer's
+    /// least; positions pushed and popped so far.
     floor: VecDeque<(u64, f64)>,
     pushed: u64,
     popped: u64,
@@ -90,10 +136,14 @@ impl RunState {
         if b.u.is_nan() {
             (self.not_ascending, self.not_descending) = (true, true);
         }
-        while self.floor.back().is_some_and(|&(_, e)| e >= b.e_min_um) {
+        while self
+            .floor
+            .back()
+            .is_some_and(|&(_, e)| e >= b.e_min_lower_um)
+        {
             self.floor.pop_back();
         }
-        self.floor.push_back((self.pushed, b.e_min_um));
+        self.floor.push_back((self.pushed, b.e_min_lower_um));
         self.pushed += 1;
         self.buffer.push_back(b);
     }
@@ -140,6 +190,7 @@ impl Envelope {
             values: vec![NOT_CUT; count * rows.len()],
             scratch: vec![0.0; rows.len()],
             local: vec![0.0; rows.len()],
+            chord: Chord::of(&rows),
             rows,
             columns,
             reach: reach as i64,
@@ -170,9 +221,19 @@ impl Envelope {
     /// [`Envelope::push`] of a position whose contact θ `line.contact_rad()` is known.
     pub fn push_at(&mut self, geometry: &CutGeometry, line: CutterLine, contact: f64) {
         let (s, c) = contact.sin_cos();
-        geometry.depths_um((c, s), &self.rows, &line, &mut self.scratch);
-        let e_min_um = least(&self.scratch);
-        if !e_min_um.is_finite() {
+        let theta = (c, s);
+        let bounds = self
+            .chord
+            .and_then(|chord| least_depth_bounds_um(geometry, theta, &self.rows, &chord, &line));
+        let (e_min_lower_um, e_min_upper_um, known) = match bounds {
+            Some((lower, upper)) => (lower, upper, f64::NAN),
+            None => {
+                geometry.depths_um(theta, &self.rows, &line, &mut self.scratch);
+                let e = least(&self.scratch);
+                (e, e, e)
+            }
+        };
+        if !e_min_upper_um.is_finite() {
             // It cuts no row at its own θ, so none anywhere (the clearance only adds).
             return;
         }
@@ -188,7 +249,14 @@ impl Envelope {
             Some(_) => run.last_u + wrap_euclid(raw - run.last_u + n / 2.0, n) - n / 2.0,
         };
         run.last_u = u;
-        let buffered = Buffered { u, line, e_min_um };
+        let buffered = Buffered {
+            u,
+            theta,
+            line,
+            e_min_lower_um,
+            e_min_upper_um,
+            e_min_um: Cell::new(known),
+        };
         if run.sense == 0 {
             let first = run.first_u.expect("set above");
             if (u - first).abs() >= 1.0 {
@@ -282,7 +350,7 @@ impl Envelope {
         let mut deepest_row = NOT_CUT;
         let mut take = |b: &Buffered, deepest_row: &mut f64| {
             let du = (b.u - jf).abs();
-            if du > reach || b.e_min_um + kappa * du * du >= *deepest_row {
+            if du > reach || b.cleared(kappa * du * du, *deepest_row, geometry, rows, scratch) {
                 return;
             }
             geometry.depths_um(theta, rows, &b.line, scratch);

@@ -161,9 +161,8 @@ impl CutGeometry {
     /// rows, filled up with the last row, whose depths are dropped), so that no row is left
     /// to a scalar tail. Without branches: every
     /// row's root is taken and the rows that do not cut are masked after (a negative
-    /// discriminant's NaN root, like every other NaN, fails the flute test). Each expression
-    /// is nalgebra's `dot` and `norm_squared` in their order ((x + y) + z; the `0 + ` before
-    /// a square's sum changes no bit), so the depths are the per-row formula's bits.
+    /// discriminant's NaN root, like every other NaN, fails the flute test); each row by
+    /// [`RowFrame::depth_um`], the per-row formula's bits.
     #[inline(always)]
     fn depths_um_inline<const CHUNK: usize>(
         &self,
@@ -172,34 +171,11 @@ impl CutGeometry {
         line: &CutterLine,
         out: &mut [f64],
     ) {
-        let n = Vector3::new(self.cos_a * c, self.cos_a * s, self.sin_a);
-        let t = &line.axis;
-        let nt = n.dot(t);
-        let a = 1.0 - nt * nt;
-        if a < 1e-12 {
+        let Some(frame) = RowFrame::new(self, (c, s), line) else {
             out.fill(NOT_CUT);
             return;
-        }
-        let inv_a = 1.0 / a;
-        let r2 = self.cutter_radius_mm * self.cutter_radius_mm;
-        let flute = self.flute_length_mm;
-        let (tip, (nx, ny, nz)) = (&line.tip, (n.x, n.y, n.z));
-        let (tx, ty, tz) = (t.x, t.y, t.z);
-        let depth = |radius: f64, z: f64| {
-            let (wx, wy, wz) = (radius * c - tip.x, radius * s - tip.y, z - tip.z);
-            let wt = wx * tx + wy * ty + wz * tz;
-            let b = (wx * nx + wy * ny + wz * nz) - wt * nt;
-            let cc = (wx * wx + wy * wy + wz * wz) - wt * wt - r2;
-            let disc = b * b - a * cc;
-            let d = (-b - disc.sqrt()) * inv_a;
-            let along = wt + d * nt;
-            let cuts = (disc >= 0.0) & (b < 0.0) & (along >= 0.0) & (along <= flute);
-            if cuts {
-                d * 1e3
-            } else {
-                NOT_CUT
-            }
         };
+        let depth = |radius: f64, z: f64| frame.depth_um(radius, z);
         let count = rows.len().min(out.len());
         // Full chunks only, each stored as one fixed-size copy (a copy of fewer rows is a
         // call of `memcpy`): the last one ends at the last row, overlapping the one before,
@@ -250,6 +226,101 @@ impl CutGeometry {
             }
         }
         0.8 * kappa.max(0.0)
+    }
+}
+
+/// The quantities of the depth formula shared by every row at one θ for one cutter line:
+/// n(θ), the axis t, `n·t`, `A = 1 − (n·t)²` and `1/A`, R², the flute length, the tip.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct RowFrame {
+    pub c: f64,
+    pub s: f64,
+    pub n: (f64, f64, f64),
+    pub t: (f64, f64, f64),
+    pub tip: (f64, f64, f64),
+    pub nt: f64,
+    pub a: f64,
+    pub inv_a: f64,
+    r2: f64,
+    flute: f64,
+}
+
+/// One row's formula before the cut test: `w = S − p`, `w·t`, B, the discriminant
+/// `B² − A C` and its root, the smaller root d (mm; NaN for a negative discriminant) and
+/// whether it cuts.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct RowTerms {
+    pub w: (f64, f64, f64),
+    pub wt: f64,
+    pub b: f64,
+    pub disc: f64,
+    pub root: f64,
+    pub d: f64,
+    pub cuts: bool,
+}
+
+impl RowFrame {
+    /// The frame at `(cos θ, sin θ)` for `line`; None where `A < 10⁻¹²` (the axis along
+    /// n: no row is cut).
+    #[inline(always)]
+    pub fn new(geometry: &CutGeometry, (c, s): (f64, f64), line: &CutterLine) -> Option<RowFrame> {
+        let n = Vector3::new(geometry.cos_a * c, geometry.cos_a * s, geometry.sin_a);
+        let t = &line.axis;
+        let nt = n.dot(t);
+        let a = 1.0 - nt * nt;
+        if a < 1e-12 {
+            return None;
+        }
+        Some(RowFrame {
+            c,
+            s,
+            n: (n.x, n.y, n.z),
+            t: (t.x, t.y, t.z),
+            tip: (line.tip.x, line.tip.y, line.tip.z),
+            nt,
+            a,
+            inv_a: 1.0 / a,
+            r2: geometry.cutter_radius_mm * geometry.cutter_radius_mm,
+            flute: geometry.flute_length_mm,
+        })
+    }
+
+    /// The formula at the row of radius ρ and height z, mm. Each expression is nalgebra's
+    /// `dot` and `norm_squared` in their order ((x + y) + z; the `0 + ` before a square's
+    /// sum changes no bit), so the depths are the per-row formula's bits.
+    #[inline(always)]
+    pub fn terms(&self, radius: f64, z: f64) -> RowTerms {
+        let (c, s, nt) = (self.c, self.s, self.nt);
+        let ((nx, ny, nz), (tx, ty, tz), (px, py, pz)) = (self.n, self.t, self.tip);
+        let (wx, wy, wz) = (radius * c - px, radius * s - py, z - pz);
+        let wt = wx * tx + wy * ty + wz * tz;
+        let b = (wx * nx + wy * ny + wz * nz) - wt * nt;
+        let cc = (wx * wx + wy * wy + wz * wz) - wt * wt - self.r2;
+        let disc = b * b - self.a * cc;
+        let root = disc.sqrt();
+        let d = (-b - root) * self.inv_a;
+        let along = wt + d * nt;
+        let cuts = (disc >= 0.0) & (b < 0.0) & (along >= 0.0) & (along <= self.flute);
+        RowTerms {
+            w: (wx, wy, wz),
+            wt,
+            b,
+            disc,
+            root,
+            d,
+            cuts,
+        }
+    }
+
+    /// The row's depth, um ([`NOT_CUT`] where it is not cut).
+    #[inline(always)]
+    pub fn depth_um(&self, radius: f64, z: f64) -> f64 {
+        let r = self.terms(radius, z);
+        if r.cuts {
+            r.d * 1e3
+        } else {
+            NOT_CUT
+        }
     }
 }
 

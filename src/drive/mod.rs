@@ -6,6 +6,7 @@ pub mod drives;
 pub mod lane_drive;
 pub mod lane_servo;
 pub mod lane_step;
+mod lane_substep;
 pub mod lanes;
 mod period_map;
 pub mod presliding;

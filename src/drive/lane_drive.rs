@@ -23,9 +23,15 @@
 //! there as the scalar period builds it: the scalar servo and the lane use the same map).
 //! Where neither tolerance bound admits a lane's period, its servo computes the bound over
 //! the substeps' own velocity changes at the lane's inputs
-//! ([`AxisServo::within_by_substeps`], the scalar period's own functions). A lane whose
-//! period fails any of these (no carried regime, the substeps' bound too, a failure) runs
-//! that period through the scalar [`AxisServo::advance`] instead,
+//! ([`AxisServo::within_by_substeps`], the scalar period's own functions). A lane without
+//! a carried regime (the last period went by substeps) finds it at the period's start, as
+//! the scalar period does (`linear_regime`, the same operations as at a period's end).
+//! Where the scalar period would step by substeps (no regime at the start, or a regime or
+//! tolerance check fails), the lanes step those substeps themselves
+//! ([`super::lane_substep`]). A lane whose period fails otherwise (its product or slope not
+//! finite, a following error beyond its limit, a substep period that fails its end checks,
+//! or a group whose lanes differ in their substeps) runs that period through the scalar
+//! [`AxisServo::advance`] instead,
 //! its whole state (the carried regime and the friction-bound cache included) scattered to
 //! it and gathered back. The friction bound at the period's end follows
 //! `servo::stribeck_bound_decay` case for case, as masks (its `exp` the scalar one's
@@ -37,6 +43,7 @@
 
 use super::exp::exp_lanes;
 use super::lane_step::{self, lane_product, LaneKind, LaneMaps, LaneState, Lanes, LANES};
+use super::lane_substep::SubstepLanes;
 use super::period_map::{Regime, N_INPUT, N_STATE, SLOPE_STEPS};
 use super::servo::AxisServo;
 use super::simd::{M, V};
@@ -63,6 +70,11 @@ pub struct DriveLaneGroup {
     delta_friction: Lanes,
     inv_stribeck: Lanes,
     tolerance: Lanes,
+    /// The constants of the lanes' substep periods (None: the lanes differ in their ticks
+    /// or substeps, and hand those periods to the scalar servo).
+    substeps: Option<SubstepLanes>,
+    /// Lane periods stepped by substeps in the lanes so far.
+    substep_periods: u64,
 }
 
 /// A lane's carried regime ([`Regime`], field by field; `has` false: none) and
@@ -79,6 +91,8 @@ pub(super) struct RegimeLanes {
     decay: Lanes,
     mt_over_h: Lanes,
     cache: [Lanes; 3],
+    /// Periods the lane's servo advanced by substeps so far (its count, carried).
+    substepped: [u64; LANES],
 }
 
 /// A regime per lane (the fields of [`Regime`]), as [`DriveLaneGroup::end_regime`] finds it.
@@ -127,9 +141,14 @@ impl DriveLaneGroup {
             delta_friction: z,
             inv_stribeck: z,
             tolerance: z,
+            substeps: None,
+            substep_periods: 0,
         };
+        let mut constants = Vec::with_capacity(servos.len());
         for (l, &s) in servos.iter().enumerate() {
-            let p = all[s].as_ref()?.drive_period()?;
+            let servo = all[s].as_ref()?;
+            let p = servo.drive_period()?;
+            constants.extend(servo.substep_constants());
             g.maps.set_lane(l, &p.map);
             g.stiffness[l] = p.stiffness;
             g.damping[l] = p.damping;
@@ -143,6 +162,9 @@ impl DriveLaneGroup {
             g.delta_friction[l] = p.delta_friction;
             g.inv_stribeck[l] = p.inv_stribeck;
             g.tolerance[l] = p.tolerance;
+        }
+        if constants.len() == servos.len() {
+            g.substeps = SubstepLanes::new(&constants);
         }
         Some(g)
     }
@@ -168,6 +190,12 @@ impl DriveLaneGroup {
         lane_step::step_block(self, all, axis, setpoints, times_s, actual, fe, completed)
     }
 
+    /// Lane periods the group stepped by substeps in its lanes so far (of those
+    /// [`DriveLaneGroup::step_block`] counts as stepped, none handed to the scalar servo).
+    pub fn substep_periods(&self) -> u64 {
+        self.substep_periods
+    }
+
     /// The lanes' checks after the product `y` (`s`: the slope at v₀, the grid slope, the
     /// velocity change the setpoints ask for and the new setpoint), as masks, in the lanes
     /// of `start`: finite, the tolerance at k = 2 where it is asked (then at the sharper k,
@@ -175,7 +203,8 @@ impl DriveLaneGroup {
     /// change, the regime at its end (the same as the carried one, admitting the change),
     /// the following errors. The same decisions as `try_exact_period` and `end_period`,
     /// each lane's by the same operations; the regime's of the lanes that pass are carried
-    /// in `st`.
+    /// in `st`. Returns the lanes that pass, and those whose product is finite but fail a
+    /// regime or tolerance check (where the scalar period steps by substeps).
     #[inline(always)]
     fn period_ok(
         &self,
@@ -183,7 +212,7 @@ impl DriveLaneGroup {
         (start, y): (M, &[V; N_STATE]),
         s: [V; 4],
         by_substeps: impl Fn(&State, M) -> M,
-    ) -> M {
+    ) -> (M, M) {
         let [slope, grid_slope, dv_guess, s_new] = s;
         let finite = (0..6).fold(start, |f, r| f & y[r].is_finite());
         let v0 = V::load(&st.x[3]);
@@ -211,6 +240,7 @@ impl DriveLaneGroup {
         let (end, end_ok, friction) = self.end_regime(y, ok);
         let same = end.side.eq(carried.side) & end.offset.eq(carried.offset);
         let ok = ok & end_ok & same & end.admits(dv);
+        let regime_fails = finite & !ok;
         let s_old = V::load(&st.setpoint);
         let fe_limit = V::load(&self.maps.fe_limit);
         let fe = s_new - (y[2] + s_old);
@@ -230,7 +260,28 @@ impl DriveLaneGroup {
         keep(&mut e.cache[0], y[3], cached);
         keep(&mut e.cache[1], end.bound, cached);
         keep(&mut e.cache[2], end.decay, cached);
-        ok
+        (ok, regime_fails)
+    }
+
+    /// `linear_regime` at the period's start `x` (positions relative to the previous
+    /// setpoint, as `try_exact_period` forms them) into the lanes of `fresh` (which carry
+    /// none) where there is one, carried from here as the scalar period carries the regime
+    /// it finds at its start; `exp` only in the lanes of `fresh`.
+    #[inline(always)]
+    fn regime_at_start(&self, st: &mut State, x: &[V; N_STATE], fresh: M) {
+        let (r, exists, _) = self.end_regime(x, fresh);
+        let found = fresh & exists;
+        let e = &mut st.extra;
+        let keep = |to: &mut Lanes, new: V| *to = found.select(new, V::load(to)).lanes();
+        keep(&mut e.side, r.side);
+        keep(&mut e.offset, r.offset);
+        e.dry = (found & r.dry) | (!found & e.dry);
+        keep(&mut e.speed, r.speed);
+        keep(&mut e.push, r.push);
+        keep(&mut e.bound, r.bound);
+        keep(&mut e.decay, r.decay);
+        keep(&mut e.mt_over_h, r.mt_over_h);
+        e.has = e.has | found;
     }
 
     /// The maps of grid slope `index` into the lanes of `asked` whose map is another
@@ -433,6 +484,12 @@ impl LaneKind for DriveLaneGroup {
     #[inline(always)]
     fn mapped_period(&mut self, st: &mut State, q: f64, all: &[Option<AxisServo>]) -> M {
         let step = self.maps.step(st, q);
+        let [u0, u1, u2, u3, u4, u5, u6, u7, u8] = step.state_inputs(st);
+        let carried_before = st.extra.has;
+        let fresh = st.live & !carried_before;
+        if fresh.any() {
+            self.regime_at_start(st, &[u0, u1, u2, u3, u4, u5, u6], fresh);
+        }
         let dv_guess = (step.v_ff - V::load(&st.v_ff)).abs();
         let v0 = V::load(&st.x[3]);
         let zero = V::splat(0.0);
@@ -460,13 +517,10 @@ impl LaneKind for DriveLaneGroup {
             decay: zero,
             mt_over_h: V::load(&st.extra.mt_over_h),
         };
-        let start_ok = st.live
-            & st.extra.has
-            & carried.admits(margin)
-            & at.is_finite()
-            & M::splat(q.is_finite());
+        let q_finite = M::splat(q.is_finite());
+        let regime_ok = st.extra.has & carried.admits(margin);
+        let start_ok = st.live & regime_ok & at.is_finite() & q_finite;
         let start_ok = self.load_maps(start_ok, index, all);
-        let [u0, u1, u2, u3, u4, u5, u6, u7, u8] = step.state_inputs(st);
         let offset = V::load(&st.extra.offset);
         let u = [u0, u1, u2, u3, u4, u5, u6, u7, u8, friction, offset];
         let y = lane_product(&self.maps.cols, &u);
@@ -475,9 +529,29 @@ impl LaneKind for DriveLaneGroup {
         let by_substeps = |st: &State, lanes: M| {
             this.within_by_substeps(st, (lanes, q), index, [slope, grid_slope], all)
         };
-        let ok = self.period_ok(st, (start_ok, &y), s, by_substeps);
+        let (ok, regime_fails) = self.period_ok(st, (start_ok, &y), s, by_substeps);
         step.take(st, ok, &y);
-        ok
+        // Where the scalar period would step by substeps: no linear regime at the start, or
+        // one the period's checks reject (not a product that is not finite, a slope that
+        // is not, a map that could not be had: those lanes go to the scalar servo).
+        let by_substeps = st.live & q_finite & (!regime_ok | regime_fails);
+        let substepped = match self.substeps.as_ref() {
+            Some(c) if by_substeps.any() => {
+                let bound = |v: V, lanes: M| self.bound_decay(v, lanes).0;
+                c.period(st, &step, by_substeps, bound)
+            }
+            _ => M::default(),
+        };
+        let bits = substepped.bits();
+        for (l, n) in st.extra.substepped.iter_mut().enumerate() {
+            *n += u64::from(bits >> l & 1);
+        }
+        // The scalar period takes its carried regime: only a mapped period leaves one. A
+        // lane handed to the scalar servo gives it the regime it had (none for a lane whose
+        // regime was found at this start).
+        st.extra.has = ok | (carried_before & !substepped);
+        self.substep_periods += u64::from(substepped.bits().count_ones());
+        ok | substepped
     }
 
     /// Lane `l`'s state to `servo`: its [`TwinState`](super::period_map::TwinState), carried
@@ -497,6 +571,7 @@ impl LaneKind for DriveLaneGroup {
         });
         let cache = (r.cache[0][l], r.cache[1][l], r.cache[2][l]);
         servo.set_regime_state(regime, cache);
+        servo.set_periods_substepped(r.substepped[l]);
     }
 
     /// `servo`'s state to lane `l`.
@@ -515,6 +590,7 @@ impl LaneKind for DriveLaneGroup {
         e.decay[l] = r.decay;
         e.mt_over_h[l] = r.mt_over_h;
         (e.cache[0][l], e.cache[1][l], e.cache[2][l]) = cache;
+        e.substepped[l] = servo.periods_substepped();
     }
 
     fn advance(servo: &mut AxisServo, setpoint: f64, time_s: f64) -> Result<()> {

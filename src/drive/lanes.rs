@@ -272,6 +272,14 @@ impl DriveLanes {
         [sum(&self.drives), sum(&self.twins)]
     }
 
+    /// Periods the drives' lane groups stepped by substeps in their lanes so far (of the
+    /// drives' periods [`DriveLanes::lane_periods`] counts, none of those handed to the
+    /// scalar servo).
+    pub fn lane_substep_periods(&self) -> u64 {
+        let groups = self.drives.iter().flat_map(|l| &l.drive_groups);
+        groups.map(DriveLaneGroup::substep_periods).sum()
+    }
+
     /// Steps every distinct drive and twin through `setpoints` (at most [`BLOCK`]), the
     /// `j`-th reached at `times_s[j]`; read each point's outputs with
     /// [`DriveLanes::write_point`]. A servo that fails stops there, and with it every point

@@ -7,6 +7,7 @@ mod exp;
 pub mod lane_drive;
 pub mod lane_servo;
 pub mod lane_step;
+mod lane_substep;
 pub mod lanes;
 mod period_map;
 pub mod presliding;

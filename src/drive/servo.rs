@@ -678,6 +678,47 @@ impl AxisServo {
         Some(exact.friction_error_within(slope, grid_slope, input[3], dv))
     }
 
+    /// The constants of [`AxisServo::substep_period`] for a lane group that steps it in
+    /// lanes ([`super::lane_drive`]); None for a drive whose substeps have their own state
+    /// (pre-sliding) or that is not a cascade drive with period maps.
+    pub(super) fn substep_constants(&self) -> Option<SubstepConstants> {
+        if self.presliding.is_some() || self.exact.is_none() {
+            return None;
+        }
+        Some(SubstepConstants {
+            n_servo: self.n_servo,
+            n_sub: self.n_sub,
+            inv_t_servo: 1.0 / self.t_servo,
+            fully_closed: self.fully_closed,
+            kv: self.kv,
+            kvff: self.kvff,
+            kp: self.kp,
+            ki_ts: self.ki_ts,
+            force_limit: self.force_limit,
+            current_alpha: self.current_alpha,
+            h: self.h,
+            h_over_mm: self.h_over_mm,
+            mt: self.mt,
+            inv_mt_plus_h_fv: self.inv_mt_plus_h_fv,
+            mt_over_h: self.mt_over_h,
+            stiffness: self.stiffness,
+            damping: self.damping,
+            half_backlash: self.half_backlash,
+            fe_limit: self.fe_limit,
+        })
+    }
+
+    /// Interpolation periods advanced by substeps so far (what [`AxisServo::period_counts`]
+    /// gives second), for a lane group that steps some of them in lanes.
+    pub(super) fn periods_substepped(&self) -> u64 {
+        self.periods_substepped
+    }
+
+    /// Sets what [`AxisServo::periods_substepped`] gives.
+    pub(super) fn set_periods_substepped(&mut self, n: u64) {
+        self.periods_substepped = n;
+    }
+
     /// The carried regime and the friction-bound cache, what [`AxisServo::advance`] carries
     /// beyond [`AxisServo::twin_state`].
     pub(super) fn regime_state(&self) -> (Option<Regime>, (f64, f64, f64)) {
@@ -1058,6 +1099,37 @@ impl AxisServo {
     fn friction_bound(&self, v: f64) -> f64 {
         stribeck_bound(v, self.coulomb, self.static_friction, self.stribeck)
     }
+}
+
+/// The constants of one cascade servo's substep period ([`AxisServo::substep_period`],
+/// [`AxisServo::substep`]) beyond those of its regime checks ([`DrivePeriod`]), SI: what a
+/// lane group needs to step that period in lanes by the same operations.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct SubstepConstants {
+    /// Servo periods per interpolation period, mechanics substeps per servo period.
+    pub n_servo: usize,
+    pub n_sub: usize,
+    /// `1 / T_servo`, 1/s.
+    pub inv_t_servo: f64,
+    pub fully_closed: bool,
+    pub kv: f64,
+    pub kvff: f64,
+    pub kp: f64,
+    pub ki_ts: f64,
+    pub force_limit: f64,
+    /// `1 - exp(-h/τ)`, `h`, `h / m_m`, `m_t`, `1 / (m_t + h Fv)`.
+    pub current_alpha: f64,
+    pub h: f64,
+    pub h_over_mm: f64,
+    pub mt: f64,
+    pub inv_mt_plus_h_fv: f64,
+    /// `m_t / h`, the spring's `k` and `c`, half the backlash and the following errors'
+    /// limit.
+    pub mt_over_h: f64,
+    pub stiffness: f64,
+    pub damping: f64,
+    pub half_backlash: f64,
+    pub fe_limit: f64,
 }
 
 /// `Fc + (Fs - Fc) exp(-(v/vs)^2)`; with `vs = 0`, `Fs` at rest and `Fc` in motion.

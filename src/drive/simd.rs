@@ -71,6 +71,12 @@ impl V {
         V(each(|l| self.0[l].max(y.0[l])))
     }
 
+    /// `min(x, y)` as `f64::min`: a NaN in one operand gives the other.
+    #[inline(always)]
+    pub fn min(self, y: V) -> V {
+        V(each(|l| self.0[l].min(y.0[l])))
+    }
+
     /// `x` finite per lane.
     #[inline(always)]
     pub fn is_finite(self) -> M {
@@ -221,6 +227,7 @@ mod tests {
             if !(x == 0.0 && y == 0.0) {
                 // `f64::max` of two zeros may give either.
                 assert!(same(a.max(b), l, x.max(y)), "lane {l}");
+                assert!(same(a.min(b), l, x.min(y)), "lane {l}");
             }
         }
     }

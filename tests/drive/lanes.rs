@@ -99,13 +99,14 @@ fn in_lanes(machines: &[Machine], q0: &AxisVec) -> Vec<Vec<Vec<(Axis, f64, f64, 
     in_lanes_counted(machines, q0, setpoint).0
 }
 
-/// [`in_lanes`] with [`DriveLanes::lane_periods`] at the end.
+/// [`in_lanes`] with [`DriveLanes::lane_periods`] and
+/// [`DriveLanes::lane_substep_periods`] at the end.
 #[allow(clippy::type_complexity)]
 fn in_lanes_counted(
     machines: &[Machine],
     q0: &AxisVec,
     path: Path,
-) -> (Vec<Vec<Vec<(Axis, f64, f64, f64)>>>, [(u64, u64); 2]) {
+) -> (Vec<Vec<Vec<(Axis, f64, f64, f64)>>>, [(u64, u64); 2], u64) {
     let refs: Vec<&Machine> = machines.iter().collect();
     let mut lanes = DriveLanes::new(&refs, q0).unwrap();
     let mut out = vec![Vec::new(); machines.len()];
@@ -134,7 +135,7 @@ fn in_lanes_counted(
         }
     }
     let counts = lanes.lane_periods();
-    (out, counts)
+    (out, counts, lanes.lane_substep_periods())
 }
 
 fn bits(run: &[Vec<(Axis, f64, f64, f64)>]) -> Vec<Vec<(Axis, u64, u64, u64)>> {
@@ -179,7 +180,7 @@ fn lane_groups_of_1_to_9_points_give_each_points_own_drives_bit_for_bit() {
 fn the_lane_groups_step_most_periods_themselves() {
     let q0 = setpoint(0.0);
     let machines = machines(8, true);
-    let (_, [drives, twins]) = in_lanes_counted(&machines, &q0, setpoint);
+    let (_, [drives, twins], _) = in_lanes_counted(&machines, &q0, setpoint);
     for (what, (stepped, handed_back)) in [("drives", drives), ("twins", twins)] {
         // Two groups (X and Y) of 8 lanes over the periods, less the failing point's.
         assert!(
@@ -221,9 +222,8 @@ fn the_force_limited_twin_leaves_the_map_for_some_periods() {
 /// friction (0-300 N, some none), static over Coulomb friction (1-1.6) and Stribeck
 /// velocity (0.5-5 mm/s), on a path that stops and dwells (the table sticks), creeps at
 /// 1.25 mm/s inside the Stribeck zone and reverses (the backlash is taken up). Each point
-/// in lanes gives its single run's bits, and the lanes step most periods themselves (on
-/// this path about two thirds: periods inside the Stribeck zone, sticking or in the gap go
-/// to the scalar servo).
+/// in lanes gives its single run's bits, and the lanes step every period themselves: by
+/// their maps, or where no map applies (sticking, in the gap) by substeps in the lanes.
 #[test]
 fn random_drives_switching_regimes_in_lanes_give_their_single_runs_bit_for_bit() {
     let q0 = stop_and_go(0.0);
@@ -255,7 +255,7 @@ fn random_drives_switching_regimes_in_lanes_give_their_single_runs_bit_for_bit()
             m
         })
         .collect();
-    let (lanes, [drives, _]) = in_lanes_counted(&machines, &q0, stop_and_go);
+    let (lanes, [drives, _], substepped) = in_lanes_counted(&machines, &q0, stop_and_go);
     let (mut stuck, mut rest) = (0, Vec::new());
     for (i, (machine, lane)) in machines.iter().zip(&lanes).enumerate() {
         let single = single(machine, &q0, stop_and_go);
@@ -279,8 +279,9 @@ fn random_drives_switching_regimes_in_lanes_give_their_single_runs_bit_for_bit()
     );
     let (stepped, handed_back) = drives;
     assert!(
-        handed_back > 0 && handed_back * 2 < stepped,
-        "{handed_back} of {stepped} lane periods handed to the scalar servo"
+        handed_back == 0 && substepped * 20 > stepped && substepped * 2 < stepped,
+        "{handed_back} of {stepped} lane periods handed to the scalar servo, \
+         {substepped} by substeps in the lanes"
     );
 }
 
@@ -347,7 +348,7 @@ fn creeping_drives_step_in_lanes_by_their_own_slopes_maps_bit_for_bit() {
             m
         })
         .collect();
-    let (lanes, [drives, _]) = in_lanes_counted(&machines, &q0, creep);
+    let (lanes, [drives, _], _) = in_lanes_counted(&machines, &q0, creep);
     for (i, (machine, lane)) in machines.iter().zip(&lanes).enumerate() {
         let single = single(machine, &q0, creep);
         assert_eq!(single.len(), PERIODS, "point {i}");
@@ -358,5 +359,76 @@ fn creeping_drives_step_in_lanes_by_their_own_slopes_maps_bit_for_bit() {
     assert!(
         stepped >= 16 * PERIODS as u64 && handed_back * 50 < stepped,
         "{handed_back} of {stepped} lane periods handed to the scalar servo"
+    );
+}
+
+/// The substep periods in lanes (`drive::lane_drive`'s substeps) through every branch of
+/// the scalar substep period: 16 points whose X and Y drives differ in kv, backlash (some
+/// none), dry friction (some none), semi- or fully-closed loops, and force limits low
+/// enough that the force command saturates (the clamp and the anti-windup act) when the
+/// stop-and-go path accelerates (point 5's, at 90 N, long enough for the integral to
+/// wind up); point 7's force limit is too low for the path and its following error limit
+/// tight, so that its drives fail. The second lane group of each
+/// axis has a drive of 3 substeps among drives of 2: it cannot step its substeps in lanes
+/// and hands those periods to the scalar servo. Every point in lanes gives its single run's
+/// bits, and the first groups step all their periods themselves, thousands by substeps.
+#[test]
+fn substep_periods_in_lanes_give_the_scalar_servos_periods_bit_for_bit() {
+    let q0 = stop_and_go(0.0);
+    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut uniform = |lo: f64, hi: f64| {
+        seed ^= seed >> 12;
+        seed ^= seed << 25;
+        seed ^= seed >> 27;
+        let r = seed.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
+        lo + (hi - lo) * (r as f64 / (1u64 << 53) as f64)
+    };
+    let machines: Vec<Machine> = (0..16)
+        .map(|i| {
+            let mut m = trt_ac();
+            for a in [Axis::X, Axis::Y] {
+                let backlash_mm = if i % 4 == 1 { 0.0 } else { uniform(0.0, 0.008) };
+                let d = m.drive(a).with_kv_per_s(uniform(20.0, 40.0)).unwrap();
+                let mut d = d.with_backlash_mm_or_deg(backlash_mm).unwrap();
+                d.coulomb_n_or_nm = if i % 6 == 2 {
+                    0.0
+                } else {
+                    uniform(50.0, 250.0)
+                };
+                d.static_ratio = uniform(1.0, 1.6);
+                d.fully_closed = i % 3 == 0;
+                d.force_limit_n_or_nm = uniform(400.0, 900.0);
+                if i == 5 {
+                    d.coulomb_n_or_nm = 40.0;
+                    d.force_limit_n_or_nm = 90.0;
+                }
+                if i == 7 {
+                    d.force_limit_n_or_nm = 120.0;
+                    d.following_error_limit_m_or_rad = 0.05e-3;
+                }
+                if i == 12 {
+                    d.substeps = 3;
+                }
+                m.axis_mut(a).drive = d;
+            }
+            m
+        })
+        .collect();
+    let (lanes, [drives, _], substepped) = in_lanes_counted(&machines, &q0, stop_and_go);
+    for (i, (machine, lane)) in machines.iter().zip(&lanes).enumerate() {
+        let single = single(machine, &q0, stop_and_go);
+        if i == 7 {
+            assert!(single.len() < PERIODS, "point 7 fails");
+        } else {
+            assert_eq!(single.len(), PERIODS, "point {i}");
+        }
+        assert_eq!(lane.len(), single.len(), "point {i}: setpoints completed");
+        assert!(bits(lane) == bits(&single), "point {i}: outputs differ");
+    }
+    let (stepped, handed_back) = drives;
+    assert!(
+        substepped > 2_000 && handed_back > 0,
+        "{handed_back} of {stepped} lane periods handed to the scalar servo, \
+         {substepped} by substeps in the lanes"
     );
 }

@@ -22,7 +22,7 @@
 use std::cell::Cell;
 use std::collections::VecDeque;
 
-use super::geometry::{CutGeometry, CutterLine, Row, NOT_CUT};
+use super::geometry::{greater, lesser, CutGeometry, CutterLine, Row, NOT_CUT};
 use super::least_bound::{least_depth_bounds_um, Chord};
 
 /// Clearance at which a cutter position stops being tested on other columns, um: a position
@@ -413,28 +413,6 @@ impl Envelope {
 
 /// Lanes of [`least`] and [`lower_to`]: the minima and maxima are taken four side by side.
 const LANES: usize = 4;
-
-/// The lesser of `a` and `x`: `f64::min` for depths, which are never NaN nor −0 (a root is
-/// NaN only where it does not cut, and `x − x` is +0), so a plain comparison (one `minpd`)
-/// gives its bits, and the order of the minima changes none.
-#[inline(always)]
-fn lesser(a: f64, x: f64) -> f64 {
-    if x < a {
-        x
-    } else {
-        a
-    }
-}
-
-/// The greater of `a` and `x`, as [`lesser`].
-#[inline(always)]
-fn greater(a: f64, x: f64) -> f64 {
-    if x > a {
-        x
-    } else {
-        a
-    }
-}
 
 /// The least of the depths `v` ([`NOT_CUT`] for none), [`LANES`] side by side.
 fn least(v: &[f64]) -> f64 {

@@ -341,3 +341,25 @@ impl Rev for (f64, f64) {
         (self.1, self.0)
     }
 }
+
+/// The lesser of `a` and `x`: `f64::min` for depths, which are never NaN nor −0 (a root is
+/// NaN only where it does not cut, and `x − x` is +0), so a plain comparison (one `minpd`)
+/// gives its bits, and the order of the minima changes none.
+#[inline(always)]
+pub(super) fn lesser(a: f64, x: f64) -> f64 {
+    if x < a {
+        x
+    } else {
+        a
+    }
+}
+
+/// The greater of `a` and `x`, as [`lesser`].
+#[inline(always)]
+pub(super) fn greater(a: f64, x: f64) -> f64 {
+    if x > a {
+        x
+    } else {
+        a
+    }
+}

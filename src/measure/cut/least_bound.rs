@@ -40,7 +40,7 @@
 //! about the tangents' crossing. Where the bound cannot say (D not shown positive, no such
 //! row cut, fewer than 3 rows), None: the caller computes every row.
 
-use super::geometry::{CutGeometry, CutterLine, Row, RowFrame, RowTerms, NOT_CUT};
+use super::geometry::{greater, lesser, CutGeometry, CutterLine, Row, RowFrame, RowTerms, NOT_CUT};
 
 /// The unit roundoff of f64, 2⁻⁵³.
 const U: f64 = f64::EPSILON / 2.0;
@@ -220,25 +220,4 @@ fn dot(x: (f64, f64, f64), y: (f64, f64, f64)) -> f64 {
 #[inline(always)]
 fn l1(x: (f64, f64, f64)) -> f64 {
     x.0.abs() + x.1.abs() + x.2.abs()
-}
-
-/// The lesser of a and b, by one comparison (its inputs are never NaN here, or a NaN
-/// fails the caller's finiteness tests after).
-#[inline(always)]
-fn lesser(a: f64, b: f64) -> f64 {
-    if b < a {
-        b
-    } else {
-        a
-    }
-}
-
-/// The greater of a and b, as [`lesser`].
-#[inline(always)]
-fn greater(a: f64, b: f64) -> f64 {
-    if b > a {
-        b
-    } else {
-        a
-    }
 }

@@ -168,7 +168,7 @@ pub fn run(
             &mut stats,
         )?,
         Timing::Setpoints => {
-            let mut setpoints = Interpolator::new(moves, machine, interpolation(options))?;
+            let mut setpoints = Interpolator::new(moves, machine, interpolation(options, machine))?;
             let mut sample = Sample::blank(t0);
             let mut k = 0u64;
             while let Some(sp) = setpoints.next().transpose()? {
@@ -186,7 +186,7 @@ pub fn run(
         Timing::Planned { twins, settle } => {
             // One setpoint at a time, moved as little as possible (no `Peekable` or
             // `Enumerate` layers: each is another copy of the setpoint and its `Result`).
-            let mut setpoints = Interpolator::new(moves, machine, interpolation(options))?;
+            let mut setpoints = Interpolator::new(moves, machine, interpolation(options, machine))?;
             let Some(first) = setpoints.next().transpose()? else {
                 return Ok(stats);
             };
@@ -272,7 +272,7 @@ pub fn run_lanes(
         feed_reductions: Vec::new(),
     };
     let machine = machines[0];
-    let mut setpoints = Interpolator::new(moves, machine, interpolation(options))?;
+    let mut setpoints = Interpolator::new(moves, machine, interpolation(options, machine))?;
     let Some(first) = setpoints.next().transpose()? else {
         return Ok((stats, vec![false; machines.len()]));
     };
@@ -382,12 +382,12 @@ const LANE_BLOCK: usize = crate::drive::lanes::BLOCK;
 /// a whole block (82 kB), written axis by axis, did not.
 const SINK_CHUNK: usize = 32;
 
-/// The interpolator's options for a run.
-fn interpolation(options: &RunOptions) -> InterpolationOptions {
+/// The interpolator's options for a run on `machine` (its control's look-ahead depth).
+fn interpolation(options: &RunOptions, machine: &Machine) -> InterpolationOptions {
     InterpolationOptions {
         force_tcp: options.force_tcp,
         program_path: options.program_path.clone(),
-        ..InterpolationOptions::default()
+        ..InterpolationOptions::for_machine(machine)
     }
 }
 

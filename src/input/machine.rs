@@ -36,6 +36,10 @@ pub struct StartSection {
     pub feed_mode: Option<ngc::StartFeed>,
 }
 
+/// The deepest look-ahead `[control] lookahead_blocks` takes: the planner holds about 1.5
+/// times it in blocks, so this bounds its memory (a few MB) whatever the program's length.
+pub const MAX_LOOKAHEAD_BLOCKS: usize = 10_000;
+
 /// `[control]`: the control's parameters that change a program's moves, set by the machine
 /// builder where a program cannot see them: how its planner runs the moves
 /// (docs/interpolation.md) and the reader's settings (docs/machine-format.md); what is not
@@ -69,6 +73,12 @@ pub struct ControlSection {
     /// in, 0.001 deg: Fanuc parameter 3401#0 = 0, Haas Setting 162 off) or `"units"` (DPI
     /// = 1, Setting 162 on). Absent: the dialect's default (Fanuc, Haas: increments).
     pub whole_numbers: Option<WholeNumbersKey>,
+    /// How many blocks the control's planner looks ahead (Fanuc's AI contour control, the
+    /// Heidenhain look-ahead, Sinumerik's LookAhead buffer), in [1, 10,000]; absent: 256.
+    /// The planner keeps the machine able to stop within them, so a program of tiny blocks
+    /// runs below its F when their sum is shorter than the stopping distance
+    /// (docs/interpolation.md, "Look-ahead").
+    pub lookahead_blocks: Option<usize>,
 }
 
 impl Default for ControlSection {
@@ -82,6 +92,7 @@ impl Default for ControlSection {
             g83_above_r_mm: None,
             g28_without_axes: None,
             whole_numbers: None,
+            lookahead_blocks: None,
         }
     }
 }
@@ -474,6 +485,19 @@ impl Machine {
                     "control",
                     "path_tolerance_mm",
                     format!("must be a finite tolerance >= 0 mm, got {tol}"),
+                ));
+            }
+        }
+        if let Some(blocks) = file.control.lookahead_blocks {
+            if !(1..=MAX_LOOKAHEAD_BLOCKS).contains(&blocks) {
+                return Err(value_error(
+                    path,
+                    text,
+                    "control",
+                    "lookahead_blocks",
+                    format!(
+                        "must be a number of blocks in [1, {MAX_LOOKAHEAD_BLOCKS}], got {blocks}"
+                    ),
                 ));
             }
         }

@@ -141,6 +141,8 @@ pub struct InterpolationOptions {
     pub force_tcp: bool,
     /// Blocks planned ahead of the one executing (at least 1). The machine must be able to
     /// stop within this many blocks, so long, fast moves split into tiny blocks need more.
+    /// Default 256; [`InterpolationOptions::for_machine`] takes the machine's
+    /// `[control] lookahead_blocks`.
     pub lookahead_blocks: usize,
     /// Allowed per-axis velocity step at a block junction, as a fraction of
     /// `max_acceleration × period` (> 0; default 1: the step takes the full acceleration
@@ -151,6 +153,20 @@ pub struct InterpolationOptions {
     /// Keep a [`FeedLimit`] for every feed block that runs slower than its F word
     /// ([`Interpolator::take_feed_limits`]); off by default (memory would grow with them).
     pub record_feed_limits: bool,
+}
+
+impl InterpolationOptions {
+    /// The defaults, with the look-ahead depth of `machine`'s control where it gives one.
+    pub fn for_machine(machine: &Machine) -> InterpolationOptions {
+        let default = InterpolationOptions::default();
+        InterpolationOptions {
+            lookahead_blocks: machine
+                .control
+                .lookahead_blocks
+                .unwrap_or(default.lookahead_blocks),
+            ..default
+        }
+    }
 }
 
 impl Default for InterpolationOptions {

@@ -114,7 +114,7 @@ fn planner_options(scenario: &Scenario) -> InterpolationOptions {
         force_tcp: scenario.simulate.tcp,
         program_path: scenario.path.clone(),
         record_feed_limits: true,
-        ..InterpolationOptions::default()
+        ..InterpolationOptions::for_machine(&scenario.machine)
     }
 }
 

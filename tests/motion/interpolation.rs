@@ -873,3 +873,81 @@ fn an_arc_whose_end_is_off_the_circle_is_an_error() {
         "{message}"
     );
 }
+
+/// An X-only machine (vmax 6000 mm/min, amax 200 mm/s², jmax 2000 mm/s³) whose control
+/// looks `lookahead` blocks ahead, or the default when `None`.
+fn machine_looking_ahead(lookahead: Option<usize>) -> Result<Machine> {
+    let control = lookahead.map_or(String::new(), |n| {
+        format!("[control]\nlookahead_blocks = {n}\n")
+    });
+    let text = format!(
+        "name = \"test\"\nkinematics = \"xyz\"\ninterpolation_period_ms = 1.0\n{control}\
+         [axes.X]\nmin = -10000\nmax = 10000\nmax_velocity = 6000\nmax_acceleration = 200\nmax_jerk = 2000\n\
+         [axes.Y]\nmin = -10\nmax = 10\nmax_velocity = 6000\nmax_acceleration = 200\nmax_jerk = 2000\n\
+         [axes.Z]\nmin = -10\nmax = 10\nmax_velocity = 6000\nmax_acceleration = 200\nmax_jerk = 2000\n"
+    );
+    Machine::from_toml(Path::new("test.toml"), &text, None)
+}
+
+/// The highest X speed of a run, mm/s (finite differences of the setpoints).
+fn peak_x_speed(s: &[Setpoint]) -> f64 {
+    (1..s.len())
+        .map(|n| velocity(s, n, Axis::X))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn the_controls_lookahead_depth_caps_the_speed_on_tiny_blocks() {
+    // 2,000 collinear blocks of 0.1 mm at F6000 (100 mm/s). A planner that looks W blocks
+    // ahead holds at most 1.5 W + 1 planned blocks beyond the one running, and the machine
+    // must be able to stop within them: the fastest stop from v (at rest acceleration, jerk
+    // j, acceleration a, v ≥ a²/j = 20 mm/s) takes S(v) = v (v/a + a/j) / 2. With W = 16,
+    // S(v) ≤ (1.5·16 + 2) · 0.1 mm = 2.6 mm gives v² + 20 v − 1040 ≤ 0:
+    // v ≤ −10 + √1140 = 23.76 mm/s, whatever the planner's own margins.
+    let points: Vec<AxisVec> = (0..=2000).map(|k| q(&[0.1 * k as f64])).collect();
+    let program = || chain(&points, &[6000.0; 2000]);
+    let cap = -10.0 + 1140f64.sqrt();
+
+    let shallow = machine_looking_ahead(Some(16)).expect("valid machine");
+    let options = InterpolationOptions::for_machine(&shallow);
+    assert_eq!(options.lookahead_blocks, 16);
+    let s_shallow = run_with(program(), &shallow, options);
+    assert_stream_shape(&s_shallow, points[0], points[2000]);
+    let v_shallow = peak_x_speed(&s_shallow);
+    assert!(
+        v_shallow <= cap,
+        "16 blocks ahead: {v_shallow} mm/s > {cap} mm/s"
+    );
+
+    // A control that sees the whole program is not held by the window: it goes past what
+    // 16 blocks could ever allow, and finishes sooner.
+    let deep = machine_looking_ahead(Some(4000)).expect("valid machine");
+    let s_deep = run_with(program(), &deep, InterpolationOptions::for_machine(&deep));
+    assert_stream_shape(&s_deep, points[0], points[2000]);
+    let v_deep = peak_x_speed(&s_deep);
+    assert!(v_deep > cap, "4,000 blocks ahead: only {v_deep} mm/s");
+    let end = |s: &[Setpoint]| s.last().unwrap().time_s;
+    assert!(end(&s_deep) < end(&s_shallow));
+
+    // Without the key, the default depth (256 blocks).
+    let default = machine_looking_ahead(None).expect("valid machine");
+    assert_eq!(
+        InterpolationOptions::for_machine(&default).lookahead_blocks,
+        256
+    );
+}
+
+#[test]
+fn a_lookahead_depth_out_of_range_names_its_line() {
+    for n in [0, 10_001] {
+        let message = match machine_looking_ahead(Some(n)) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("lookahead_blocks = {n} was taken"),
+        };
+        assert!(
+            message.contains("test.toml:5:") && message.contains("lookahead_blocks"),
+            "{message}"
+        );
+        assert!(message.contains("[1, 10000]"), "{message}");
+    }
+}

@@ -217,6 +217,17 @@ fn the_force_limited_twin_leaves_the_map_for_some_periods() {
     );
 }
 
+/// Uniform draws in `[lo, hi)` from xorshift64* seeded with `seed`: fixed and reproducible.
+fn uniform_draws(mut seed: u64) -> impl FnMut(f64, f64) -> f64 {
+    move |lo, hi| {
+        seed ^= seed >> 12;
+        seed ^= seed << 25;
+        seed ^= seed >> 27;
+        let r = seed.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
+        lo + (hi - lo) * (r as f64 / (1u64 << 53) as f64)
+    }
+}
+
 /// Per-lane regime switches on random drives: 16 points (two lane groups of X and two of
 /// Y drives) whose X and Y drives differ in kv, backlash (0-8 µm, some none), Coulomb
 /// friction (0-300 N, some none), static over Coulomb friction (1-1.6) and Stribeck
@@ -227,15 +238,7 @@ fn the_force_limited_twin_leaves_the_map_for_some_periods() {
 #[test]
 fn random_drives_switching_regimes_in_lanes_give_their_single_runs_bit_for_bit() {
     let q0 = stop_and_go(0.0);
-    let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-    let mut uniform = |lo: f64, hi: f64| {
-        // xorshift64*: a fixed, reproducible draw.
-        seed ^= seed >> 12;
-        seed ^= seed << 25;
-        seed ^= seed >> 27;
-        let r = seed.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
-        lo + (hi - lo) * (r as f64 / (1u64 << 53) as f64)
-    };
+    let mut uniform = uniform_draws(0x2545_f491_4f6c_dd1d);
     let machines: Vec<Machine> = (0..16)
         .map(|i| {
             let mut m = trt_ac();
@@ -375,14 +378,7 @@ fn creeping_drives_step_in_lanes_by_their_own_slopes_maps_bit_for_bit() {
 #[test]
 fn substep_periods_in_lanes_give_the_scalar_servos_periods_bit_for_bit() {
     let q0 = stop_and_go(0.0);
-    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-    let mut uniform = |lo: f64, hi: f64| {
-        seed ^= seed >> 12;
-        seed ^= seed << 25;
-        seed ^= seed >> 27;
-        let r = seed.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
-        lo + (hi - lo) * (r as f64 / (1u64 << 53) as f64)
-    };
+    let mut uniform = uniform_draws(0x9e37_79b9_7f4a_7c15);
     let machines: Vec<Machine> = (0..16)
         .map(|i| {
             let mut m = trt_ac();

@@ -138,26 +138,47 @@ fn brute_force(g: &CutGeometry, envelope: &Envelope, lines: &[CutterLine]) -> Ve
 /// Counter-clockwise, clockwise, and with positions stepping back (the buffer out of order,
 /// its unpruned scan), 1.3 revolutions at 0.5° a column and 4 positions a column: every grid
 /// point the same bits as the brute force, and every point cut.
+/// The envelope of `lines` streamed over `rows`, and [`brute_force`]'s least depths of the
+/// same positions.
+fn streamed_and_brute_force(
+    g: &CutGeometry,
+    rows: &[Row],
+    lines: &[CutterLine],
+) -> (Envelope, Vec<f64>) {
+    let mut envelope = Envelope::new(g, 0.5, rows.to_vec());
+    for line in lines {
+        envelope.push(g, *line);
+    }
+    envelope.end_run(g);
+    let expected = brute_force(g, &envelope, lines);
+    (envelope, expected)
+}
+
+/// Every point of `got` has the bits of `want`'s.
+fn assert_same_bits(got: &[f64], want: &[f64], case: &str) {
+    assert_eq!(got.len(), want.len(), "{case}: point counts");
+    for (p, (got, want)) in got.iter().zip(want).enumerate() {
+        assert_eq!(
+            got.to_bits(),
+            want.to_bits(),
+            "{case}: point {p}: {got} against {want} um"
+        );
+    }
+}
+
 #[test]
 fn the_streamed_envelope_is_the_least_depth_of_every_position() {
     let g = geometry();
     let rows = rows(&g, &[23.4, 30.0, 42.6, 55.0, 61.8]);
     for (step_deg, back) in [(0.125, 0), (-0.125, 0), (0.125, 40)] {
         let lines = positions(&g, 3744, step_deg, back);
-        let mut envelope = Envelope::new(&g, 0.5, rows.clone());
-        for line in &lines {
-            envelope.push(&g, *line);
-        }
-        envelope.end_run(&g);
-        let expected = brute_force(&g, &envelope, &lines);
+        let (envelope, expected) = streamed_and_brute_force(&g, &rows, &lines);
         assert!(expected.iter().all(|d| d.is_finite() && d.abs() < 5.0));
-        for (p, (got, want)) in envelope.values.iter().zip(&expected).enumerate() {
-            assert_eq!(
-                got.to_bits(),
-                want.to_bits(),
-                "step {step_deg}°, {back} back: point {p}: {got} against {want} um"
-            );
-        }
+        assert_same_bits(
+            &envelope.values,
+            &expected,
+            &format!("step {step_deg}°, {back} back"),
+        );
     }
 }
 
@@ -304,20 +325,9 @@ fn positions_coming_back_to_computed_columns_are_applied_to_them() {
                 }
             })
             .collect();
-        let mut envelope = Envelope::new(&g, 0.5, rows.clone());
-        for line in &lines {
-            envelope.push(&g, *line);
-        }
-        envelope.end_run(&g);
-        let expected = brute_force(&g, &envelope, &lines);
+        let (envelope, expected) = streamed_and_brute_force(&g, &rows, &lines);
         assert!(expected.iter().filter(|d| **d < -3.0).count() > 100);
-        for (p, (got, want)) in envelope.values.iter().zip(&expected).enumerate() {
-            assert_eq!(
-                got.to_bits(),
-                want.to_bits(),
-                "step {step_deg}°: point {p}: {got} against {want} um"
-            );
-        }
+        assert_same_bits(&envelope.values, &expected, &format!("step {step_deg}°"));
     }
 }
 
@@ -431,19 +441,8 @@ fn the_streamed_envelope_of_tilted_cutters_is_the_least_depth_of_every_position(
                 )
             })
             .collect();
-        let mut envelope = Envelope::new(&g, 0.5, rows.clone());
-        for line in &lines {
-            envelope.push(&g, *line);
-        }
-        envelope.end_run(&g);
-        let expected = brute_force(&g, &envelope, &lines);
+        let (envelope, expected) = streamed_and_brute_force(&g, &rows, &lines);
         assert!(expected.iter().all(|d| d.is_finite()));
-        for (p, (got, want)) in envelope.values.iter().zip(&expected).enumerate() {
-            assert_eq!(
-                got.to_bits(),
-                want.to_bits(),
-                "step {step_deg}°: point {p}: {got} against {want} um"
-            );
-        }
+        assert_same_bits(&envelope.values, &expected, &format!("step {step_deg}°"));
     }
 }

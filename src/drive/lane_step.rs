@@ -319,7 +319,7 @@ fn scatter<K: LaneKind>(group: &K, all: &mut [Option<AxisServo>], st: &LaneState
 ///
 /// In [`V`]'s operations, the rows returned as they are summed (in registers where the
 /// function it is inlined into has them: `DriveLanes::step_block` is compiled for AVX-512 or
-/// AVX at run time, one or two registers a row), with no copy of the rows out of an array
+/// AVX at run time, two or four registers a row), with no copy of the rows out of an array
 /// of arrays (`y.map(..)` was an out-of-line call that copied them; docs/performance.md,
 /// session 28, for how the two compare). The order of operations, hence every bit, is the
 /// same either way.

@@ -12,8 +12,8 @@
 //! run steps, on the same setpoints in the same order: a point's figures are the single
 //! run's, bit for bit.
 //!
-//! The setpoints come a block at a time ([`BLOCK`]); each lane group of servos (up to 8
-//! stepped side by side in SIMD lanes: [`super::lane_servo`], [`super::lane_drive`]) or servo
+//! The setpoints come a block at a time ([`BLOCK`]); each lane group of servos (up to
+//! [`LANES`], 16, stepped side by side in SIMD lanes: [`super::lane_servo`], [`super::lane_drive`]) or servo
 //! stepped alone runs through the block before the next one starts (its state stays in
 //! cache), writing its outputs to a buffer of one block, which the points then read.
 //! Memory: one block per distinct servo.
@@ -300,7 +300,7 @@ impl DriveLanes {
     }
 
     /// [`DriveLanes::step_block`] compiled for AVX-512: a lane group's vectors of
-    /// [`LANES`] f64 in one register (Rust never fuses a multiplication and an addition,
+    /// [`LANES`] f64 in two registers (Rust never fuses a multiplication and an addition,
     /// so the arithmetic is still the same whatever the vector width).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]

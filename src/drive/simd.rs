@@ -12,7 +12,7 @@
 //!
 //! Each operation is a loop over the [`LANES`] lanes of plain arrays, always inlined: the
 //! compiler turns it into vector instructions of the width of the function it is inlined
-//! into (`DriveLanes::step_block` is compiled for AVX-512 or AVX at run time: one or two
+//! into (`DriveLanes::step_block` is compiled for AVX-512 or AVX at run time: two or four
 //! registers a vector). `wide::f64x4`, which these vectors were before, picks its
 //! instructions when that crate is compiled (SSE2 pairs without `-C target-feature`), so
 //! its operations ran as four 128-bit instructions each even inside the AVX-512 function
@@ -20,8 +20,10 @@
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
-/// Servos per lane group: one AVX-512 register of f64.
-pub const LANES: usize = 8;
+/// Servos per lane group: two AVX-512 registers of f64 (four AVX ones), so that a period's
+/// dependent operations (the map's product, row by row) have two independent chains to
+/// overlap (docs/performance.md, session 29).
+pub const LANES: usize = 16;
 
 /// One value per lane, as the lanes' state is stored.
 pub type Lanes = [f64; LANES];
@@ -195,19 +197,23 @@ impl Not for M {
 mod tests {
     use super::*;
 
-    const VALUES: Lanes = [1.5, -0.0, f64::NAN, 3.0, -2.25, f64::INFINITY, 0.0, 1e-300];
-    const OTHERS: Lanes = [1.5, 0.0, 2.0, f64::NAN, -3.0, 1.0, -0.0, 7.0];
+    const VALUES: [f64; 8] = [1.5, -0.0, f64::NAN, 3.0, -2.25, f64::INFINITY, 0.0, 1e-300];
+    const OTHERS: [f64; 8] = [1.5, 0.0, 2.0, f64::NAN, -3.0, 1.0, -0.0, 7.0];
 
     #[test]
     fn lanes_compute_as_the_scalar_operations() {
-        let (a, b) = (V::load(&VALUES), V::load(&OTHERS));
+        // VALUES in each eight lanes, paired with OTHERS shifted by one more lane in each
+        // eight after the first (so that every lane of a wider vector is checked too).
+        let values: Lanes = each(|l| VALUES[l % 8]);
+        let others: Lanes = each(|l| OTHERS[(l + l / 8) % 8]);
+        let (a, b) = (V::load(&values), V::load(&others));
         // The same bits, or both NaN (a NaN's sign and payload are the instruction's).
         let same = |v: V, l: usize, r: f64| {
             let x = v.lanes()[l];
             x.to_bits() == r.to_bits() || (x.is_nan() && r.is_nan())
         };
         for l in 0..LANES {
-            let (x, y) = (VALUES[l], OTHERS[l]);
+            let (x, y) = (values[l], others[l]);
             assert!(same(a + b, l, x + y), "lane {l}");
             assert!(same(a - b, l, x - y), "lane {l}");
             assert!(same(a * b, l, x * y), "lane {l}");
@@ -242,7 +248,8 @@ mod tests {
         assert_eq!(m.bits(), 0b10_0000);
         assert!(m.get(5) && !m.get(2));
         assert_eq!((m | M::splat(false)).bits(), 0b10_0000);
-        assert_eq!((!m & M::all_true()).bits(), 0b1101_1111);
+        let all = u32::MAX >> (32 - LANES);
+        assert_eq!((!m & M::all_true()).bits(), all & !0b10_0000);
         assert!(m.any() && !M::default().any());
     }
 }

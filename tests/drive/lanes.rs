@@ -4,6 +4,7 @@
 //! ragged one), with and without dry friction and backlash, with a point whose drives fail
 //! mid-block and one whose twin leaves the map (force beyond half its limit) for a while.
 
+use mtsim::drive::lane_step::LANES;
 use mtsim::drive::{AxisServo, DriveLanes, Drives};
 use mtsim::input::Machine;
 use mtsim::{Axis, AxisVec};
@@ -149,10 +150,12 @@ fn bits(run: &[Vec<(Axis, f64, f64, f64)>]) -> Vec<Vec<(Axis, u64, u64, u64)>> {
 }
 
 #[test]
-fn lane_groups_of_1_to_9_points_give_each_points_own_drives_bit_for_bit() {
+fn lane_groups_of_1_point_to_more_than_a_group_give_each_points_own_drives_bit_for_bit() {
     let q0 = setpoint(0.0);
     for nonlinear in [false, true] {
-        for n in 1..=9 {
+        // Groups too small to be groups, ragged ones, a full one and a full one with a
+        // ragged one (or a servo alone) beside it.
+        for n in (1..=9).chain([LANES - 1, LANES, LANES + 1, LANES + 3]) {
             let machines = machines(n, nonlinear);
             let lanes = in_lanes(&machines, &q0);
             for (i, (machine, lane)) in machines.iter().zip(&lanes).enumerate() {
@@ -182,7 +185,7 @@ fn the_lane_groups_step_most_periods_themselves() {
     let machines = machines(8, true);
     let (_, [drives, twins], _) = in_lanes_counted(&machines, &q0, setpoint);
     for (what, (stepped, handed_back)) in [("drives", drives), ("twins", twins)] {
-        // Two groups (X and Y) of 8 lanes over the periods, less the failing point's.
+        // Two groups (X and Y) of 8 live lanes over the periods, less the failing point's.
         assert!(
             stepped > 8 * PERIODS as u64,
             "{what}: {stepped} lane periods"
@@ -366,7 +369,8 @@ fn creeping_drives_step_in_lanes_by_their_own_slopes_maps_bit_for_bit() {
 }
 
 /// The substep periods in lanes (`drive::lane_drive`'s substeps) through every branch of
-/// the scalar substep period: 16 points whose X and Y drives differ in kv, backlash (some
+/// the scalar substep period: two lane groups' points (2 × [`LANES`]) whose X and Y drives
+/// differ in kv, backlash (some
 /// none), dry friction (some none), semi- or fully-closed loops, and force limits low
 /// enough that the force command saturates (the clamp and the anti-windup act) when the
 /// stop-and-go path accelerates (point 5's, at 90 N, long enough for the integral to
@@ -379,7 +383,7 @@ fn creeping_drives_step_in_lanes_by_their_own_slopes_maps_bit_for_bit() {
 fn substep_periods_in_lanes_give_the_scalar_servos_periods_bit_for_bit() {
     let q0 = stop_and_go(0.0);
     let mut uniform = uniform_draws(0x9e37_79b9_7f4a_7c15);
-    let machines: Vec<Machine> = (0..16)
+    let machines: Vec<Machine> = (0..2 * LANES)
         .map(|i| {
             let mut m = trt_ac();
             for a in [Axis::X, Axis::Y] {
@@ -402,7 +406,7 @@ fn substep_periods_in_lanes_give_the_scalar_servos_periods_bit_for_bit() {
                     d.force_limit_n_or_nm = 120.0;
                     d.following_error_limit_m_or_rad = 0.05e-3;
                 }
-                if i == 12 {
+                if i == LANES + 4 {
                     d.substeps = 3;
                 }
                 m.axis_mut(a).drive = d;

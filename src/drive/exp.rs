@@ -110,21 +110,21 @@ impl ExpArith for f64 {
     }
 }
 
-impl ExpArith for V {
+impl<const W: usize> ExpArith for V<W> {
     #[inline(always)]
-    fn constant(c: f64) -> V {
+    fn constant(c: f64) -> V<W> {
         V::splat(c)
     }
 
     #[inline(always)]
-    fn clamp_keep_nan(self, lo: f64, hi: f64) -> V {
+    fn clamp_keep_nan(self, lo: f64, hi: f64) -> V<W> {
         let (lo, hi) = (V::splat(lo), V::splat(hi));
         let x = self.lt(lo).select(lo, self);
         x.gt(hi).select(hi, x)
     }
 
     #[inline(always)]
-    fn pow2_halves(self) -> (V, V) {
+    fn pow2_halves(self) -> (V<W>, V<W>) {
         let halves = self.lanes().map(pow2_halves_of);
         (V::load(&halves.map(|h| h.0)), V::load(&halves.map(|h| h.1)))
     }
@@ -160,7 +160,7 @@ pub(super) fn exp(x: f64) -> f64 {
 
 /// [`exp`] of every lane.
 #[inline(always)]
-pub(super) fn exp_lanes(x: V) -> V {
+pub(super) fn exp_lanes<const W: usize>(x: V<W>) -> V<W> {
     exp_of(x)
 }
 
@@ -170,7 +170,7 @@ pub(super) fn exp_lanes(x: V) -> V {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::drive::simd::{Lanes, LANES};
+    use crate::drive::simd::{Lanes, LANES, NARROW_LANES};
 
     /// An unevaluated sum `hi + lo`, `|lo| ≤ ulp(hi)/2`.
     #[derive(Clone, Copy)]
@@ -336,22 +336,47 @@ mod tests {
             special in proptest::collection::vec(0usize..8, LANES),
             mask in 0u32..=(u32::MAX >> (32 - LANES)),
         ) {
-            let specials =
-                [f64::NAN, f64::INFINITY, -f64::INFINITY, -0.0, 1e308, -1e308, 5e-324, 0.0];
-            let x: Lanes =
-                std::array::from_fn(|l| if special[l] == 0 { specials[l % 8] } else { -u2[l] });
-            let lanes = exp_lanes(V::load(&x)).lanes();
-            let mut m = crate::drive::simd::M::default();
-            (0..LANES).for_each(|l| m.set(l, mask >> l & 1 == 1));
-            let picked = m.select(exp_lanes(V::load(&x)), V::splat(0.0)).lanes();
-            for l in 0..LANES {
-                let s = exp(x[l]);
-                let same = lanes[l].to_bits() == s.to_bits() || (s.is_nan() && lanes[l].is_nan());
-                proptest::prop_assert!(same, "lane {}: {:e}", l, x[l]);
-                let want = if m.get(l) { s } else { 0.0 };
-                let kept = picked[l].to_bits() == want.to_bits();
-                proptest::prop_assert!(kept || (want.is_nan() && picked[l].is_nan()));
-            }
+            lanes_match::<LANES>(&u2, &special, mask)?;
+            lanes_match::<NARROW_LANES>(&u2, &special, mask)?;
         }
+    }
+
+    /// [`exp_lanes`] of `W` lanes (`-u2`, or a special value where `special` is 0) against
+    /// [`exp`] lane by lane, and selected by `mask`.
+    fn lanes_match<const W: usize>(
+        u2: &[f64],
+        special: &[usize],
+        mask: u32,
+    ) -> Result<(), proptest::test_runner::TestCaseError> {
+        let specials = [
+            f64::NAN,
+            f64::INFINITY,
+            -f64::INFINITY,
+            -0.0,
+            1e308,
+            -1e308,
+            5e-324,
+            0.0,
+        ];
+        let x: Lanes<W> = std::array::from_fn(|l| {
+            if special[l] == 0 {
+                specials[l % 8]
+            } else {
+                -u2[l]
+            }
+        });
+        let lanes = exp_lanes(V::load(&x)).lanes();
+        let mut m = crate::drive::simd::M::<W>::default();
+        (0..W).for_each(|l| m.set(l, mask >> l & 1 == 1));
+        let picked = m.select(exp_lanes(V::load(&x)), V::splat(0.0)).lanes();
+        for l in 0..W {
+            let s = exp(x[l]);
+            let same = lanes[l].to_bits() == s.to_bits() || (s.is_nan() && lanes[l].is_nan());
+            proptest::prop_assert!(same, "lane {}: {:e}", l, x[l]);
+            let want = if m.get(l) { s } else { 0.0 };
+            let kept = picked[l].to_bits() == want.to_bits();
+            proptest::prop_assert!(kept || (want.is_nan() && picked[l].is_nan()));
+        }
+        Ok(())
     }
 }

@@ -1,4 +1,4 @@
-//! Up to [`LANES`] distinct nonlinear drives (dry friction, backlash) of one axis stepped
+//! Up to `W` distinct nonlinear drives (dry friction, backlash) of one axis stepped
 //! side by side: the period maps of [`AxisServo::advance`] in structure-of-arrays form, each
 //! lane by its own friction slope's map, with the regime checks as lane masks.
 //!
@@ -42,7 +42,7 @@
 //! [`super::lane_step`]'s, which both lane kinds share.
 
 use super::exp::exp_lanes;
-use super::lane_step::{self, lane_product, LaneKind, LaneMaps, LaneState, Lanes, LANES};
+use super::lane_step::{self, lane_product, LaneKind, LaneMaps, LaneState, Lanes};
 use super::lane_substep::SubstepLanes;
 use super::period_map::{Regime, N_INPUT, N_STATE, SLOPE_STEPS};
 use super::servo::AxisServo;
@@ -50,81 +50,99 @@ use super::simd::{M, V};
 use crate::error::Result;
 use crate::{Axis, AxisVec};
 
-/// A group of up to [`LANES`] nonlinear drives of one axis, in structure-of-arrays form.
+/// A group of up to `W` nonlinear drives of one axis, in structure-of-arrays form.
 #[derive(Clone, Debug)]
-pub struct DriveLaneGroup {
+pub struct DriveLaneGroup<const W: usize> {
     servos: Vec<usize>,
     /// Each lane's period map, of its grid slope index `slope_index` (its own slope's map,
     /// loaded from its servo when the index a period asks for changes).
-    maps: LaneMaps<N_INPUT>,
-    slope_index: Lanes,
-    stiffness: Lanes,
-    damping: Lanes,
-    half_backlash: Lanes,
-    coulomb: Lanes,
-    static_friction: Lanes,
-    stribeck: Lanes,
-    mt_over_h: Lanes,
-    slope_step: Lanes,
-    inv_slope_step: Lanes,
-    delta_friction: Lanes,
-    inv_stribeck: Lanes,
-    tolerance: Lanes,
+    maps: LaneMaps<N_INPUT, W>,
+    slope_index: Lanes<W>,
+    stiffness: Lanes<W>,
+    damping: Lanes<W>,
+    half_backlash: Lanes<W>,
+    coulomb: Lanes<W>,
+    static_friction: Lanes<W>,
+    stribeck: Lanes<W>,
+    mt_over_h: Lanes<W>,
+    slope_step: Lanes<W>,
+    inv_slope_step: Lanes<W>,
+    delta_friction: Lanes<W>,
+    inv_stribeck: Lanes<W>,
+    tolerance: Lanes<W>,
     /// The constants of the lanes' substep periods (None: the lanes differ in their ticks
     /// or substeps, and hand those periods to the scalar servo).
-    substeps: Option<SubstepLanes>,
+    substeps: Option<SubstepLanes<W>>,
     /// Lane periods stepped by substeps in the lanes so far.
     substep_periods: u64,
 }
 
 /// A lane's carried regime ([`Regime`], field by field; `has` false: none) and
 /// friction-bound cache `(v, g, exp)`, beyond the common [`LaneState`].
-#[derive(Default)]
-pub(super) struct RegimeLanes {
-    has: M,
-    side: Lanes,
-    offset: Lanes,
-    dry: M,
-    speed: Lanes,
-    push: Lanes,
-    bound: Lanes,
-    decay: Lanes,
-    mt_over_h: Lanes,
-    cache: [Lanes; 3],
+pub(super) struct RegimeLanes<const W: usize> {
+    has: M<W>,
+    side: Lanes<W>,
+    offset: Lanes<W>,
+    dry: M<W>,
+    speed: Lanes<W>,
+    push: Lanes<W>,
+    bound: Lanes<W>,
+    decay: Lanes<W>,
+    mt_over_h: Lanes<W>,
+    cache: [Lanes<W>; 3],
     /// Periods the lane's servo advanced by substeps so far (its count, carried).
-    substepped: [u64; LANES],
+    substepped: [u64; W],
+}
+
+impl<const W: usize> Default for RegimeLanes<W> {
+    fn default() -> Self {
+        let z = [0.0; W];
+        RegimeLanes {
+            has: M::default(),
+            side: z,
+            offset: z,
+            dry: M::default(),
+            speed: z,
+            push: z,
+            bound: z,
+            decay: z,
+            mt_over_h: z,
+            cache: [z; 3],
+            substepped: [0; W],
+        }
+    }
 }
 
 /// A regime per lane (the fields of [`Regime`]), as [`DriveLaneGroup::end_regime`] finds it.
-struct RegimeV {
-    side: V,
-    offset: V,
-    dry: M,
-    speed: V,
-    push: V,
-    bound: V,
-    decay: V,
-    mt_over_h: V,
+struct RegimeV<const W: usize> {
+    side: V<W>,
+    offset: V<W>,
+    dry: M<W>,
+    speed: V<W>,
+    push: V<W>,
+    bound: V<W>,
+    decay: V<W>,
+    mt_over_h: V<W>,
 }
 
-impl RegimeV {
+impl<const W: usize> RegimeV<W> {
     /// [`Regime::admits`] per lane.
     #[inline(always)]
-    fn admits(&self, dv_margin: V) -> M {
+    fn admits(&self, dv_margin: V<W>) -> M<W> {
         !self.dry
             | !(self.speed.le(dv_margin) | self.push.le(self.bound + self.mt_over_h * dv_margin))
     }
 }
 
 /// The lanes' carried state over one block.
-type State = LaneState<RegimeLanes>;
+type State<const W: usize> = LaneState<RegimeLanes<W>, W>;
 
-impl DriveLaneGroup {
-    /// The group of `servos` (indices into `all`, at most [`LANES`]), or None when one of
+impl<const W: usize> DriveLaneGroup<W> {
+    /// The group of `servos` (indices into `all`, at most `W`), or None when one of
     /// them has no slope-0 map ([`AxisServo::drive_period`]).
-    pub fn new(all: &[Option<AxisServo>], servos: &[usize]) -> Option<DriveLaneGroup> {
-        assert!(servos.len() <= LANES);
-        let z = [0.0; LANES];
+    pub fn new(all: &[Option<AxisServo>], servos: &[usize]) -> Option<DriveLaneGroup<W>> {
+        assert!(servos.len() <= W);
+        let z = [0.0; W];
         let mut g = DriveLaneGroup {
             servos: servos.to_vec(),
             maps: LaneMaps::zero(),
@@ -208,11 +226,11 @@ impl DriveLaneGroup {
     #[inline(always)]
     fn period_ok(
         &self,
-        st: &mut State,
-        (start, y): (M, &[V; N_STATE]),
-        s: [V; 4],
-        by_substeps: impl Fn(&State, M) -> M,
-    ) -> (M, M) {
+        st: &mut State<W>,
+        (start, y): (M<W>, &[V<W>; N_STATE]),
+        s: [V<W>; 4],
+        by_substeps: impl Fn(&State<W>, M<W>) -> M<W>,
+    ) -> (M<W>, M<W>) {
         let [slope, grid_slope, dv_guess, s_new] = s;
         let finite = (0..6).fold(start, |f, r| f & y[r].is_finite());
         let v0 = V::load(&st.x[3]);
@@ -247,7 +265,7 @@ impl DriveLaneGroup {
         let fe_motor = s_new - (y[0] + s_old);
         let ok = ok & !fe.abs().gt(fe_limit) & !fe_motor.abs().gt(fe_limit);
         let e = &mut st.extra;
-        let keep = |to: &mut Lanes, new: V, m: M| *to = m.select(new, V::load(to)).lanes();
+        let keep = |to: &mut Lanes<W>, new: V<W>, m: M<W>| *to = m.select(new, V::load(to)).lanes();
         keep(&mut e.side, end.side, ok);
         keep(&mut e.offset, end.offset, ok);
         e.dry = (ok & end.dry) | (!ok & e.dry);
@@ -268,11 +286,11 @@ impl DriveLaneGroup {
     /// none) where there is one, carried from here as the scalar period carries the regime
     /// it finds at its start; `exp` only in the lanes of `fresh`.
     #[inline(always)]
-    fn regime_at_start(&self, st: &mut State, x: &[V; N_STATE], fresh: M) {
+    fn regime_at_start(&self, st: &mut State<W>, x: &[V<W>; N_STATE], fresh: M<W>) {
         let (r, exists, _) = self.end_regime(x, fresh);
         let found = fresh & exists;
         let e = &mut st.extra;
-        let keep = |to: &mut Lanes, new: V| *to = found.select(new, V::load(to)).lanes();
+        let keep = |to: &mut Lanes<W>, new: V<W>| *to = found.select(new, V::load(to)).lanes();
         keep(&mut e.side, r.side);
         keep(&mut e.offset, r.offset);
         e.dry = (found & r.dry) | (!found & e.dry);
@@ -288,7 +306,7 @@ impl DriveLaneGroup {
     /// slope's, from their servos in `all` (built there as the scalar period builds them);
     /// the lanes of `asked` whose map is now `index`'s.
     #[inline(always)]
-    fn load_maps(&mut self, asked: M, index: V, all: &[Option<AxisServo>]) -> M {
+    fn load_maps(&mut self, asked: M<W>, index: V<W>, all: &[Option<AxisServo>]) -> M<W> {
         let other = asked & !index.eq(V::load(&self.slope_index));
         if !other.any() {
             return asked;
@@ -298,7 +316,13 @@ impl DriveLaneGroup {
 
     #[cold]
     #[inline(never)]
-    fn load_maps_cold(&mut self, asked: M, other: M, index: V, all: &[Option<AxisServo>]) -> M {
+    fn load_maps_cold(
+        &mut self,
+        asked: M<W>,
+        other: M<W>,
+        index: V<W>,
+        all: &[Option<AxisServo>],
+    ) -> M<W> {
         let mut failed = M::default();
         let index = index.lanes();
         for l in 0..self.servos.len() {
@@ -334,12 +358,12 @@ impl DriveLaneGroup {
     #[inline(never)]
     fn within_by_substeps(
         &self,
-        st: &State,
-        (lanes, q): (M, f64),
-        index: V,
-        slopes: [V; 2],
+        st: &State<W>,
+        (lanes, q): (M<W>, f64),
+        index: V<W>,
+        slopes: [V<W>; 2],
         all: &[Option<AxisServo>],
-    ) -> M {
+    ) -> M<W> {
         let u = self.inputs(st, q, slopes[1]);
         let (index, slope, grid_slope) = (index.lanes(), slopes[0].lanes(), slopes[1].lanes());
         let mut pass = M::default();
@@ -361,7 +385,7 @@ impl DriveLaneGroup {
     /// `grid_slope`: the state relative to the previous setpoint, `Δs`, `F_ff`, the friction
     /// `F_fr = -side g(v₀) - cᵢ v₀` and the contact offset, as `try_exact_period` forms them.
     #[inline(always)]
-    fn inputs(&self, st: &State, q: f64, grid_slope: V) -> [V; N_INPUT] {
+    fn inputs(&self, st: &State<W>, q: f64, grid_slope: V<W>) -> [V<W>; N_INPUT] {
         let step = self.maps.step(st, q);
         let v0 = V::load(&st.x[3]);
         let zero = V::splat(0.0);
@@ -380,14 +404,14 @@ impl DriveLaneGroup {
     /// lanes where neither bound is enough (to be tried over the substeps' own velocity
     /// changes).
     #[inline(always)]
-    fn tolerance_ok(&self, v0: V, dv: V, slope: V, grid_slope: V) -> (M, M) {
+    fn tolerance_ok(&self, v0: V<W>, dv: V<W>, slope: V<W>, grid_slope: V<W>) -> (M<W>, M<W>) {
         let inv_vs = V::load(&self.inv_stribeck);
         let slope_step = V::load(&self.slope_step);
         let tolerance = V::load(&self.tolerance);
         let asked =
             slope_step.gt(V::splat(0.0)) & ((v0.abs() - dv) * inv_vs).le(V::splat(40f64.sqrt()));
         let base = V::load(&self.delta_friction) * inv_vs * inv_vs;
-        let error = |k: V| {
+        let error = |k: V<W>| {
             let curvature = base * k;
             (slope - grid_slope).abs() * dv + V::splat(0.5) * curvature * dv * dv
         };
@@ -408,7 +432,7 @@ impl DriveLaneGroup {
     /// or pulling back in it, or at rest with dry friction there is none), and whether the
     /// lane has dry friction (its bound then cached). `exp` only in the lanes of `asked`.
     #[inline(always)]
-    fn end_regime(&self, y: &[V; N_STATE], asked: M) -> (RegimeV, M, M) {
+    fn end_regime(&self, y: &[V<W>; N_STATE], asked: M<W>) -> (RegimeV<W>, M<W>, M<W>) {
         let [x_m, v_m, x_t, v_t, force] = [y[0], y[1], y[2], y[3], y[4]];
         let zero = V::splat(0.0);
         let (one, minus_one) = (V::splat(1.0), V::splat(-1.0));
@@ -449,7 +473,7 @@ impl DriveLaneGroup {
     /// (no decay at `Fs = Fc` or at rest, none left beyond `(v/vs)² > 40` or without a
     /// Stribeck velocity); the `exp` only in the lanes of `asked` that need it.
     #[inline(always)]
-    fn bound_decay(&self, v: V, asked: M) -> (V, V) {
+    fn bound_decay(&self, v: V<W>, asked: M<W>) -> (V<W>, V<W>) {
         let (fc, fs) = (V::load(&self.coulomb), V::load(&self.static_friction));
         let vs = V::load(&self.stribeck);
         let (zero, one) = (V::splat(0.0), V::splat(1.0));
@@ -468,21 +492,21 @@ impl DriveLaneGroup {
     }
 }
 
-impl LaneKind for DriveLaneGroup {
-    type Extra = RegimeLanes;
+impl<const W: usize> LaneKind<W> for DriveLaneGroup<W> {
+    type Extra = RegimeLanes<W>;
 
     fn servos(&self) -> &[usize] {
         &self.servos
     }
 
-    fn inv_scale(&self) -> &Lanes {
+    fn inv_scale(&self) -> &Lanes<W> {
         &self.maps.inv_scale
     }
 
     /// One period by the lanes' maps, each of its own slope, where every lane's checks pass (state
     /// updated); per lane, whether it was taken. Every check is a lane mask.
     #[inline(always)]
-    fn mapped_period(&mut self, st: &mut State, q: f64, all: &[Option<AxisServo>]) -> M {
+    fn mapped_period(&mut self, st: &mut State<W>, q: f64, all: &[Option<AxisServo>]) -> M<W> {
         let step = self.maps.step(st, q);
         let [u0, u1, u2, u3, u4, u5, u6, u7, u8] = step.state_inputs(st);
         let carried_before = st.extra.has;
@@ -526,7 +550,7 @@ impl LaneKind for DriveLaneGroup {
         let y = lane_product(&self.maps.cols, &u);
         let s = [slope, grid_slope, dv_guess, step.s_new];
         let this = &*self;
-        let by_substeps = |st: &State, lanes: M| {
+        let by_substeps = |st: &State<W>, lanes: M<W>| {
             this.within_by_substeps(st, (lanes, q), index, [slope, grid_slope], all)
         };
         let (ok, regime_fails) = self.period_ok(st, (start_ok, &y), s, by_substeps);
@@ -537,7 +561,7 @@ impl LaneKind for DriveLaneGroup {
         let by_substeps = st.live & q_finite & (!regime_ok | regime_fails);
         let substepped = match self.substeps.as_ref() {
             Some(c) if by_substeps.any() => {
-                let bound = |v: V, lanes: M| self.bound_decay(v, lanes).0;
+                let bound = |v: V<W>, lanes: M<W>| self.bound_decay(v, lanes).0;
                 c.period(st, &step, by_substeps, bound)
             }
             _ => M::default(),
@@ -556,7 +580,7 @@ impl LaneKind for DriveLaneGroup {
 
     /// Lane `l`'s state to `servo`: its [`TwinState`](super::period_map::TwinState), carried
     /// regime and friction-bound cache.
-    fn put(servo: &mut AxisServo, st: &State, l: usize) {
+    fn put(servo: &mut AxisServo, st: &State<W>, l: usize) {
         servo.set_twin_state(&st.twin_state(l));
         let r = &st.extra;
         let regime = r.has.get(l).then_some(Regime {
@@ -575,7 +599,7 @@ impl LaneKind for DriveLaneGroup {
     }
 
     /// `servo`'s state to lane `l`.
-    fn get(servo: &AxisServo, st: &mut State, l: usize) {
+    fn get(servo: &AxisServo, st: &mut State<W>, l: usize) {
         st.set_twin_state(l, &servo.twin_state());
         let (regime, cache) = servo.regime_state();
         let e = &mut st.extra;
@@ -603,7 +627,7 @@ impl LaneKind for DriveLaneGroup {
 /// its whole part `i` (`floor`, as `(x + 2⁵²) − 2⁵²` rounds to an integer, less one where
 /// that rounded up: every step exact), `i + 1` where `x − i ≥ ½`, at most `SLOPE_STEPS`.
 #[inline(always)]
-fn round_index(x: V) -> V {
+fn round_index<const W: usize>(x: V<W>) -> V<W> {
     let (zero, one) = (V::splat(0.0), V::splat(1.0));
     let top = V::splat(SLOPE_STEPS as f64);
     let x = x.gt(top + one).select(top + one, x);

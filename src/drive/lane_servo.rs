@@ -1,4 +1,4 @@
-//! Up to [`LANES`] distinct linear twins of one axis stepped side by side, one per SIMD
+//! Up to `W` distinct linear twins of one axis stepped side by side, one per SIMD
 //! lane: the period map of [`AxisServo::advance_twin`] in structure-of-arrays form.
 //!
 //! Each lane is its own servo (its own drive configuration, so its own period map), on the
@@ -21,27 +21,27 @@
 //! scalar servo then decides, counts and reports exactly as in a single run. Every lane's
 //! positions are therefore the single run's, bit for bit, whatever the vector width.
 
-use super::lane_step::{self, lane_product, LaneKind, LaneMaps, LaneState, Lanes, LANES};
+use super::lane_step::{self, lane_product, LaneKind, LaneMaps, LaneState, Lanes};
 use super::period_map::N_TWIN_INPUT;
 use super::servo::AxisServo;
 use super::simd::{M, V};
 use crate::error::Result;
 use crate::{Axis, AxisVec};
 
-/// A group of up to [`LANES`] linear twins of one axis, in structure-of-arrays form.
+/// A group of up to `W` linear twins of one axis, in structure-of-arrays form.
 #[derive(Clone, Debug)]
-pub struct TwinLanes {
+pub struct TwinLanes<const W: usize> {
     /// Which of the axis's servos each lane steps (the first `servos.len()` lanes).
     servos: Vec<usize>,
     /// The period maps.
-    maps: LaneMaps<N_TWIN_INPUT>,
+    maps: LaneMaps<N_TWIN_INPUT, W>,
 }
 
-impl TwinLanes {
-    /// The group of `servos` (indices into `all`, at most [`LANES`]), or None when one of
+impl<const W: usize> TwinLanes<W> {
+    /// The group of `servos` (indices into `all`, at most `W`), or None when one of
     /// them has no twin map ([`AxisServo::twin_period`]).
-    pub fn new(all: &[Option<AxisServo>], servos: &[usize]) -> Option<TwinLanes> {
-        assert!(servos.len() <= LANES);
+    pub fn new(all: &[Option<AxisServo>], servos: &[usize]) -> Option<TwinLanes<W>> {
+        assert!(servos.len() <= W);
         let mut maps = LaneMaps::zero();
         for (l, &s) in servos.iter().enumerate() {
             maps.set_lane(l, &all[s].as_ref()?.twin_period()?);
@@ -71,14 +71,14 @@ impl TwinLanes {
     }
 }
 
-impl LaneKind for TwinLanes {
+impl<const W: usize> LaneKind<W> for TwinLanes<W> {
     type Extra = ();
 
     fn servos(&self) -> &[usize] {
         &self.servos
     }
 
-    fn inv_scale(&self) -> &Lanes {
+    fn inv_scale(&self) -> &Lanes<W> {
         &self.maps.inv_scale
     }
 
@@ -86,7 +86,12 @@ impl LaneKind for TwinLanes {
     /// lane must run it scalar (state untouched). Every check is a lane mask: a lane's
     /// choice is a select, not a branch.
     #[inline(always)]
-    fn mapped_period(&mut self, st: &mut LaneState<()>, q: f64, _: &[Option<AxisServo>]) -> M {
+    fn mapped_period(
+        &mut self,
+        st: &mut LaneState<(), W>,
+        q: f64,
+        _: &[Option<AxisServo>],
+    ) -> M<W> {
         let m = &self.maps;
         let step = m.step(st, q);
         let (s_new, s_old) = (step.s_new, step.s_old);
@@ -108,11 +113,11 @@ impl LaneKind for TwinLanes {
         ok
     }
 
-    fn put(servo: &mut AxisServo, st: &LaneState<()>, l: usize) {
+    fn put(servo: &mut AxisServo, st: &LaneState<(), W>, l: usize) {
         servo.set_twin_state(&st.twin_state(l));
     }
 
-    fn get(servo: &AxisServo, st: &mut LaneState<()>, l: usize) {
+    fn get(servo: &AxisServo, st: &mut LaneState<(), W>, l: usize) {
         st.set_twin_state(l, &servo.twin_state());
     }
 

@@ -1,4 +1,4 @@
-//! The lane stepping both lane kinds share: up to [`LANES`] servos of one axis, one per SIMD
+//! The lane stepping both lane kinds share: up to `W` servos of one axis, one per SIMD
 //! lane, stepped through a block of setpoints by their period maps, a lane handing a period
 //! its map cannot take to its scalar servo ([`super::lane_servo`] for the linear twins,
 //! [`super::lane_drive`] for the nonlinear drives).
@@ -38,20 +38,20 @@ pub use super::simd::LANES;
 /// (column `j`, row `r`, lane `l`), and the constants of the period's inputs and checks
 /// ([`MappedPeriod`]).
 #[derive(Clone, Debug)]
-pub(super) struct LaneMaps<const C: usize> {
-    pub cols: [[Lanes; N_STATE]; C],
-    pub scale: Lanes,
-    pub inv_scale: Lanes,
-    pub inv_t_ipo: Lanes,
-    pub aff_mass: Lanes,
-    pub half_limit: Lanes,
-    pub fe_limit: Lanes,
+pub(super) struct LaneMaps<const C: usize, const W: usize> {
+    pub cols: [[Lanes<W>; N_STATE]; C],
+    pub scale: Lanes<W>,
+    pub inv_scale: Lanes<W>,
+    pub inv_t_ipo: Lanes<W>,
+    pub aff_mass: Lanes<W>,
+    pub half_limit: Lanes<W>,
+    pub fe_limit: Lanes<W>,
 }
 
-impl<const C: usize> LaneMaps<C> {
+impl<const C: usize, const W: usize> LaneMaps<C, W> {
     /// All lanes zero (padding lanes stay so).
-    pub fn zero() -> LaneMaps<C> {
-        let z = [0.0; LANES];
+    pub fn zero() -> LaneMaps<C, W> {
+        let z = [0.0; W];
         LaneMaps {
             cols: [[z; N_STATE]; C],
             scale: z,
@@ -80,7 +80,7 @@ impl<const C: usize> LaneMaps<C> {
 
     /// The period's setpoint step to the axis position `q` (mm, deg), per lane.
     #[inline(always)]
-    pub fn step<E>(&self, st: &LaneState<E>, q: f64) -> SetpointStep {
+    pub fn step<E>(&self, st: &LaneState<E, W>, q: f64) -> SetpointStep<W> {
         let inv_t_ipo = V::load(&self.inv_t_ipo);
         let s_new = V::splat(q) * V::load(&self.scale);
         let s_old = V::load(&st.setpoint);
@@ -97,18 +97,18 @@ impl<const C: usize> LaneMaps<C> {
 
 /// One period's setpoint step per lane, SI: the new setpoint `s⁺`, the previous `s`, the
 /// feedforward velocity `v_ff = (s⁺ - s) / T_ipo` and force `F_ff`.
-pub(super) struct SetpointStep {
-    pub s_new: V,
-    pub s_old: V,
-    pub v_ff: V,
-    pub f_ff: V,
+pub(super) struct SetpointStep<const W: usize> {
+    pub s_new: V<W>,
+    pub s_old: V<W>,
+    pub v_ff: V<W>,
+    pub f_ff: V<W>,
 }
 
-impl SetpointStep {
+impl<const W: usize> SetpointStep<W> {
     /// The map inputs both kinds share: the state with its positions relative to the
     /// previous setpoint, `Δs = s⁺ - s` and `F_ff`.
     #[inline(always)]
-    pub fn state_inputs<E>(&self, st: &LaneState<E>) -> [V; N_TWIN_INPUT] {
+    pub fn state_inputs<E>(&self, st: &LaneState<E, W>) -> [V<W>; N_TWIN_INPUT] {
         let x = |r: usize| V::load(&st.x[r]);
         let s_old = self.s_old;
         [
@@ -127,9 +127,9 @@ impl SetpointStep {
     /// The lanes' state after the period: the map's result `y` (positions relative to the
     /// previous setpoint) where `ok`, their state unchanged where not.
     #[inline(always)]
-    pub fn take<E>(&self, st: &mut LaneState<E>, ok: M, y: &[V; N_STATE]) {
+    pub fn take<E>(&self, st: &mut LaneState<E, W>, ok: M<W>, y: &[V<W>; N_STATE]) {
         let s_old = self.s_old;
-        let take = |to: &mut Lanes, new: V| *to = ok.select(new, V::load(to)).lanes();
+        let take = |to: &mut Lanes<W>, new: V<W>| *to = ok.select(new, V::load(to)).lanes();
         take(&mut st.x[0], y[0] + s_old);
         take(&mut st.x[1], y[1]);
         take(&mut st.x[2], y[2] + s_old);
@@ -150,20 +150,34 @@ impl SetpointStep {
 /// The lanes' carried state over one block (gathered from the servos at its start and
 /// scattered back at its end, so that the servos hold it between blocks): what
 /// [`TwinState`] holds, per lane, and what the kind carries beyond it (`extra`).
-#[derive(Default)]
-pub(super) struct LaneState<E> {
-    pub setpoint: Lanes,
-    pub v_ff: Lanes,
+pub(super) struct LaneState<E, const W: usize> {
+    pub setpoint: Lanes<W>,
+    pub v_ff: Lanes<W>,
     /// `x_m v_m x_t v_t F ∫ x_m,tick`, positions absolute.
-    pub x: [Lanes; N_STATE],
-    pub velocity: Lanes,
-    pub periods_exact: [u64; LANES],
+    pub x: [Lanes<W>; N_STATE],
+    pub velocity: Lanes<W>,
+    pub periods_exact: [u64; W],
     /// The lane steps a servo that has not failed.
-    pub live: M,
+    pub live: M<W>,
     pub extra: E,
 }
 
-impl<E> LaneState<E> {
+impl<E: Default, const W: usize> Default for LaneState<E, W> {
+    fn default() -> Self {
+        let z = [0.0; W];
+        LaneState {
+            setpoint: z,
+            v_ff: z,
+            x: [z; N_STATE],
+            velocity: z,
+            periods_exact: [0; W],
+            live: M::default(),
+            extra: E::default(),
+        }
+    }
+}
+
+impl<E, const W: usize> LaneState<E, W> {
     /// `state` into lane `l` (its liveness and the kind's extra aside).
     pub fn set_twin_state(&mut self, l: usize, state: &TwinState) {
         self.setpoint[l] = state.setpoint;
@@ -189,26 +203,26 @@ impl<E> LaneState<E> {
 
 /// One kind of lane group: how its lanes take a period by their maps and how a lane's state
 /// goes to and from its scalar servo, which takes the periods the map cannot.
-pub(super) trait LaneKind {
+pub(super) trait LaneKind<const W: usize> {
     /// What a lane carries beyond [`LaneState`]'s common part.
     type Extra: Default;
     /// The servos the lanes step (indices into the axis's servos; the first lanes).
     fn servos(&self) -> &[usize];
     /// SI units per interface unit, inverted, per lane.
-    fn inv_scale(&self) -> &Lanes;
+    fn inv_scale(&self) -> &Lanes<W>;
     /// One period by the lanes' maps to the axis position `q`; per lane, whether it was
     /// taken (state updated) or the lane must run it scalar (state untouched). `all` are
     /// the axis's servos (a lane may load another of its servo's maps from them).
     fn mapped_period(
         &mut self,
-        st: &mut LaneState<Self::Extra>,
+        st: &mut LaneState<Self::Extra, W>,
         q: f64,
         all: &[Option<AxisServo>],
-    ) -> M;
+    ) -> M<W>;
     /// Lane `l`'s whole state to `servo`.
-    fn put(servo: &mut AxisServo, st: &LaneState<Self::Extra>, l: usize);
+    fn put(servo: &mut AxisServo, st: &LaneState<Self::Extra, W>, l: usize);
     /// `servo`'s whole state to lane `l`.
-    fn get(servo: &AxisServo, st: &mut LaneState<Self::Extra>, l: usize);
+    fn get(servo: &AxisServo, st: &mut LaneState<Self::Extra, W>, l: usize);
     /// The scalar period of `servo` to `setpoint` at `time_s`.
     fn advance(servo: &mut AxisServo, setpoint: f64, time_s: f64) -> Result<()>;
 }
@@ -221,7 +235,7 @@ pub(super) trait LaneKind {
 /// the scalar servo.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(super) fn step_block<K: LaneKind>(
+pub(super) fn step_block<K: LaneKind<W>, const W: usize>(
     group: &mut K,
     all: &mut [Option<AxisServo>],
     axis: Axis,
@@ -273,10 +287,10 @@ pub(super) fn step_block<K: LaneKind>(
 /// failed (the servo is then dropped, the lane no longer live).
 #[cold]
 #[inline(never)]
-fn scalar_period<K: LaneKind>(
+fn scalar_period<K: LaneKind<W>, const W: usize>(
     group: &K,
     all: &mut [Option<AxisServo>],
-    st: &mut LaneState<K::Extra>,
+    st: &mut LaneState<K::Extra, W>,
     l: usize,
     q: f64,
     t: f64,
@@ -294,7 +308,10 @@ fn scalar_period<K: LaneKind>(
 }
 
 /// The servos' state in lanes (padding lanes and failed servos not live).
-fn gather<K: LaneKind>(group: &K, all: &[Option<AxisServo>]) -> LaneState<K::Extra> {
+fn gather<K: LaneKind<W>, const W: usize>(
+    group: &K,
+    all: &[Option<AxisServo>],
+) -> LaneState<K::Extra, W> {
     let mut st = LaneState::default();
     for (l, &s) in group.servos().iter().enumerate() {
         if let Some(servo) = all[s].as_ref() {
@@ -306,7 +323,11 @@ fn gather<K: LaneKind>(group: &K, all: &[Option<AxisServo>]) -> LaneState<K::Ext
 }
 
 /// The live lanes' state back to their servos.
-fn scatter<K: LaneKind>(group: &K, all: &mut [Option<AxisServo>], st: &LaneState<K::Extra>) {
+fn scatter<K: LaneKind<W>, const W: usize>(
+    group: &K,
+    all: &mut [Option<AxisServo>],
+    st: &LaneState<K::Extra, W>,
+) {
     for (l, &s) in group.servos().iter().enumerate() {
         if let (true, Some(servo)) = (st.live.get(l), all[s].as_mut()) {
             K::put(servo, st, l);
@@ -317,22 +338,24 @@ fn scatter<K: LaneKind>(group: &K, all: &mut [Option<AxisServo>], st: &LaneState
 /// `y_r = Σ_j cols[j][r] u_j` per lane, from 0 in column order: per lane the scalar
 /// period map's product, one multiplication and one addition per column, row and lane.
 ///
-/// In [`V`]'s operations, the rows returned as they are summed (in registers where the
-/// function it is inlined into has them: `DriveLanes::step_block` is compiled for AVX-512 or
-/// AVX at run time, two or four registers a row), with no copy of the rows out of an array
-/// of arrays (`y.map(..)` was an out-of-line call that copied them; docs/performance.md,
-/// session 28, for how the two compare). The order of operations, hence every bit, is the
-/// same either way.
+/// Row by row: one row's sum (two registers of [`V`]: `DriveLanes::step_block` is
+/// compiled for AVX-512 with 16 lanes or AVX with 8) is live at a time, so none is spilled
+/// to the stack between its columns. Summed column by column, all rows at once, two of the
+/// 14 registers of sums went to the stack and back in every column, as register allocation
+/// chose, and the period ran 6-10 % slower (docs/performance.md, session 29). The order of
+/// operations per lane, hence every bit, is the same either way.
 #[inline(always)]
-pub(super) fn lane_product<const N: usize>(
-    cols: &[[Lanes; N_STATE]; N],
-    u: &[V; N],
-) -> [V; N_STATE] {
+pub(super) fn lane_product<const N: usize, const W: usize>(
+    cols: &[[Lanes<W>; N_STATE]; N],
+    u: &[V<W>; N],
+) -> [V<W>; N_STATE] {
     let mut y = [V::splat(0.0); N_STATE];
-    for (col, &u_j) in cols.iter().zip(u) {
-        for (y_r, m_r) in y.iter_mut().zip(col) {
-            *y_r = *y_r + V::load(m_r) * u_j;
+    for (r, y_r) in y.iter_mut().enumerate() {
+        let mut acc = V::splat(0.0);
+        for (col, &u_j) in cols.iter().zip(u) {
+            acc = acc + V::load(&col[r]) * u_j;
         }
+        *y_r = acc;
     }
     y
 }

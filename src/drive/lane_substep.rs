@@ -27,40 +27,40 @@
 //! same way and reports it. So a lane's state after the period is the scalar servo's, bit
 //! for bit.
 
-use super::lane_step::{LaneState, Lanes, SetpointStep, LANES};
+use super::lane_step::{LaneState, Lanes, SetpointStep};
 use super::servo::SubstepConstants;
 use super::simd::{M, V};
 
 /// The substep constants of a lane group's servos ([`SubstepConstants`]) in lanes; all
 /// lanes have the same numbers of ticks and substeps.
 #[derive(Clone, Debug)]
-pub(super) struct SubstepLanes {
+pub(super) struct SubstepLanes<const W: usize> {
     n_servo: usize,
     n_sub: usize,
-    inv_t_servo: Lanes,
-    fully_closed: M,
-    kv: Lanes,
-    kvff: Lanes,
-    kp: Lanes,
-    ki_ts: Lanes,
-    force_limit: Lanes,
-    current_alpha: Lanes,
-    h: Lanes,
-    h_over_mm: Lanes,
-    mt: Lanes,
-    inv_mt_plus_h_fv: Lanes,
-    mt_over_h: Lanes,
-    stiffness: Lanes,
-    damping: Lanes,
-    half_backlash: Lanes,
-    fe_limit: Lanes,
+    inv_t_servo: Lanes<W>,
+    fully_closed: M<W>,
+    kv: Lanes<W>,
+    kvff: Lanes<W>,
+    kp: Lanes<W>,
+    ki_ts: Lanes<W>,
+    force_limit: Lanes<W>,
+    current_alpha: Lanes<W>,
+    h: Lanes<W>,
+    h_over_mm: Lanes<W>,
+    mt: Lanes<W>,
+    inv_mt_plus_h_fv: Lanes<W>,
+    mt_over_h: Lanes<W>,
+    stiffness: Lanes<W>,
+    damping: Lanes<W>,
+    half_backlash: Lanes<W>,
+    fe_limit: Lanes<W>,
 }
 
-impl SubstepLanes {
-    /// The lanes of `constants` (at most [`LANES`]), or None when they are none or differ
+impl<const W: usize> SubstepLanes<W> {
+    /// The lanes of `constants` (at most `W`), or None when they are none or differ
     /// in their numbers of ticks or substeps (such a group hands its substep periods to the
     /// scalar servos).
-    pub(super) fn new(constants: &[SubstepConstants]) -> Option<SubstepLanes> {
+    pub(super) fn new(constants: &[SubstepConstants]) -> Option<SubstepLanes<W>> {
         let first = constants.first()?;
         let (n_servo, n_sub) = (first.n_servo, first.n_sub);
         if constants
@@ -69,11 +69,11 @@ impl SubstepLanes {
         {
             return None;
         }
-        let lanes = |f: fn(&SubstepConstants) -> f64| -> Lanes {
+        let lanes = |f: fn(&SubstepConstants) -> f64| -> Lanes<W> {
             std::array::from_fn(|l| constants.get(l).map_or(0.0, f))
         };
         let mut fully_closed = M::default();
-        for (l, c) in constants.iter().enumerate().take(LANES) {
+        for (l, c) in constants.iter().enumerate().take(W) {
             fully_closed.set(l, c.fully_closed);
         }
         Some(SubstepLanes {
@@ -101,17 +101,17 @@ impl SubstepLanes {
 }
 
 /// The state a substep period advances: `x_m v_m x_t v_t F ∫ x_m,tick`, absolute positions.
-type Mechanics = [V; 7];
+type Mechanics<const W: usize> = [V<W>; 7];
 
 /// `x.clamp(lo, hi)` per lane as `f64::clamp` (`lo ≤ hi`): `lo` below it, `hi` above it,
 /// else `x` (a NaN stays).
 #[inline(always)]
-fn clamp(x: V, lo: V, hi: V) -> V {
+fn clamp<const W: usize>(x: V<W>, lo: V<W>, hi: V<W>) -> V<W> {
     let x = x.lt(lo).select(lo, x);
     x.gt(hi).select(hi, x)
 }
 
-impl SubstepLanes {
+impl<const W: usize> SubstepLanes<W> {
     /// The period to the setpoint step `step` by substeps in the lanes of `lanes`, the
     /// friction bound `g(v)` by `bound` (its `exp` asked only in the lanes it is given);
     /// returns the lanes that took it (their state and new setpoint updated), the others of
@@ -119,13 +119,13 @@ impl SubstepLanes {
     #[inline(always)]
     pub(super) fn period<E>(
         &self,
-        st: &mut LaneState<E>,
-        step: &SetpointStep,
-        lanes: M,
-        bound: impl Fn(V, M) -> V,
-    ) -> M {
+        st: &mut LaneState<E, W>,
+        step: &SetpointStep<W>,
+        lanes: M<W>,
+        bound: impl Fn(V<W>, M<W>) -> V<W>,
+    ) -> M<W> {
         let c = self;
-        let mut x: Mechanics = std::array::from_fn(|r| V::load(&st.x[r]));
+        let mut x: Mechanics<W> = std::array::from_fn(|r| V::load(&st.x[r]));
         let n = c.n_servo as f64;
         let force_limit = V::load(&c.force_limit);
         let zero = V::splat(0.0);
@@ -155,7 +155,7 @@ impl SubstepLanes {
         let fe = step.s_new - x_t;
         let fe_motor = step.s_new - x_m;
         let took = finite & !fe.abs().gt(fe_limit) & !fe_motor.abs().gt(fe_limit);
-        let take = |to: &mut Lanes, new: V| *to = took.select(new, V::load(to)).lanes();
+        let take = |to: &mut Lanes<W>, new: V<W>| *to = took.select(new, V::load(to)).lanes();
         for (row, &new) in st.x.iter_mut().zip(&x) {
             take(row, new);
         }
@@ -168,7 +168,7 @@ impl SubstepLanes {
     /// One substep of the current loop and the two masses under the held force command
     /// `f_cmd` (`AxisServo::substep`), the friction bound `g(v)` by `bound`.
     #[inline(always)]
-    fn substep(&self, x: &mut Mechanics, f_cmd: V, bound: impl Fn(V) -> V) {
+    fn substep(&self, x: &mut Mechanics<W>, f_cmd: V<W>, bound: impl Fn(V<W>) -> V<W>) {
         let c = self;
         let [x_m, v_m, x_t, v_t, force, _, _] = *x;
         let zero = V::splat(0.0);

@@ -13,15 +13,16 @@
 //! run's, bit for bit.
 //!
 //! The setpoints come a block at a time ([`BLOCK`]); each lane group of servos (up to
-//! [`LANES`], 16, stepped side by side in SIMD lanes: [`super::lane_servo`], [`super::lane_drive`]) or servo
+//! [`WIDE_LANES`], 16, where the host has AVX-512, else [`NARROW_LANES`], 8, stepped side
+//! by side in SIMD lanes: [`super::lane_servo`], [`super::lane_drive`]) or servo
 //! stepped alone runs through the block before the next one starts (its state stays in
 //! cache), writing its outputs to a buffer of one block, which the points then read.
 //! Memory: one block per distinct servo.
 
 use super::lane_drive::DriveLaneGroup;
 use super::lane_servo::TwinLanes;
-use super::lane_step::LANES;
 use super::servo::AxisServo;
+use super::simd::{NARROW_LANES, WIDE_LANES};
 use crate::error::Result;
 use crate::input::machine::Machine;
 use crate::{Axis, AxisVec};
@@ -35,9 +36,10 @@ struct AxisLanes {
     /// The distinct servos; None once one has failed (diverged).
     servos: Vec<Option<AxisServo>>,
     /// The linear twins with a period map and the nonlinear drives with a slope-0 map,
-    /// [`LANES`] to a lane group; the servos stepped one by one (those of no group).
-    groups: Vec<TwinLanes>,
-    drive_groups: Vec<DriveLaneGroup>,
+    /// [`WIDE_LANES`] to a lane group where the host has AVX-512, else [`NARROW_LANES`] (the
+    /// other width's groups empty); the servos stepped one by one (those of no group).
+    wide: Groups<WIDE_LANES>,
+    narrow: Groups<NARROW_LANES>,
     alone: Vec<usize>,
     /// Which servo each point has.
     servo_of: Vec<usize>,
@@ -52,10 +54,75 @@ struct AxisLanes {
     lane_periods: (u64, u64),
 }
 
+/// One width's lane groups of an axis: twins or drives (the other kind's list empty).
+#[derive(Clone, Debug)]
+struct Groups<const W: usize> {
+    twins: Vec<TwinLanes<W>>,
+    drives: Vec<DriveLaneGroup<W>>,
+}
+
+impl<const W: usize> Groups<W> {
+    /// The groups of `servos` (the linear twins with `linear`), `W` lanes to a group (none
+    /// without `make`), and the servos that step alone.
+    fn new(servos: &[Option<AxisServo>], linear: bool, make: bool) -> (Groups<W>, Vec<usize>) {
+        let none = Groups {
+            twins: Vec::new(),
+            drives: Vec::new(),
+        };
+        if !make {
+            return (none, Vec::new());
+        }
+        if linear {
+            let (twins, alone) = lane_groups::<W, _>(servos, TwinLanes::new);
+            (Groups { twins, ..none }, alone)
+        } else {
+            let (drives, alone) = lane_groups::<W, _>(servos, DriveLaneGroup::new);
+            (Groups { drives, ..none }, alone)
+        }
+    }
+
+    /// Steps the groups' live servos of `all` through `setpoints` (at `times_s`), their
+    /// outputs to `out`; the lane periods stepped and those handed to the scalar servo.
+    #[inline(always)]
+    fn step_block(
+        &mut self,
+        all: &mut [Option<AxisServo>],
+        axis: Axis,
+        (setpoints, times_s): (&[AxisVec], &[f64]),
+        out: (&mut [f64], &mut [f64], &mut [usize]),
+    ) -> (u64, u64) {
+        let (actual, following_error, completed) = out;
+        let mut counts = (0, 0);
+        for group in &mut self.twins {
+            let (stepped, handed_back) =
+                group.step_block(all, axis, setpoints, times_s, actual, completed);
+            counts = (counts.0 + stepped, counts.1 + handed_back);
+        }
+        for group in &mut self.drives {
+            let (stepped, handed_back) = group.step_block(
+                all,
+                axis,
+                setpoints,
+                times_s,
+                actual,
+                following_error,
+                completed,
+            );
+            counts = (counts.0 + stepped, counts.1 + handed_back);
+        }
+        counts
+    }
+}
+
 impl AxisLanes {
     /// The servos of `axis` for `machines`, at rest at `position` (mm, deg); with `linear`,
-    /// their linear twins.
-    fn new(machines: &[&Machine], axis: Axis, position: f64, linear: bool) -> Result<AxisLanes> {
+    /// their linear twins; in lane groups of [`WIDE_LANES`] with `wide`.
+    fn new(
+        machines: &[&Machine],
+        (axis, position): (Axis, f64),
+        linear: bool,
+        wide: bool,
+    ) -> Result<AxisLanes> {
         let mut keys: Vec<String> = Vec::new();
         let mut servos = Vec::new();
         let mut servo_of = Vec::with_capacity(machines.len());
@@ -76,19 +143,14 @@ impl AxisLanes {
             servo_of.push(index);
         }
         let n = servos.len();
-        let (groups, drive_groups, alone) = if linear {
-            let (groups, alone) = lane_groups(&servos, TwinLanes::new);
-            (groups, Vec::new(), alone)
-        } else {
-            let (groups, alone) = lane_groups(&servos, DriveLaneGroup::new);
-            (Vec::new(), groups, alone)
-        };
+        let (wide_groups, wide_alone) = Groups::new(&servos, linear, wide);
+        let (narrow, narrow_alone) = Groups::new(&servos, linear, !wide);
         Ok(AxisLanes {
             axis,
             servos,
-            groups,
-            drive_groups,
-            alone,
+            wide: wide_groups,
+            narrow,
+            alone: if wide { wide_alone } else { narrow_alone },
             servo_of,
             actual: vec![0.0; n * BLOCK],
             following_error: if linear {
@@ -103,34 +165,26 @@ impl AxisLanes {
 
     /// Steps every live servo through `setpoints` (at most [`BLOCK`]), reached at `times_s`,
     /// servo after servo: the nonlinear drives with [`AxisServo::advance`], the twins with
-    /// [`AxisServo::advance_twin`], as [`super::Drives`] steps them.
+    /// [`AxisServo::advance_twin`], as [`super::Drives`] steps them; the lane groups of
+    /// `W` lanes (`W` the width the groups were made with).
     #[inline(always)]
-    fn step_block_inline(&mut self, setpoints: &[AxisVec], times_s: &[f64], linear: bool) {
+    fn step_block_inline<const W: usize>(
+        &mut self,
+        setpoints: &[AxisVec],
+        times_s: &[f64],
+        linear: bool,
+    ) {
         let a = self.axis;
-        let mut counts = (0, 0);
-        for group in &mut self.groups {
-            let (stepped, handed_back) = group.step_block(
-                &mut self.servos,
-                a,
-                setpoints,
-                times_s,
-                &mut self.actual,
-                &mut self.completed,
-            );
-            counts = (counts.0 + stepped, counts.1 + handed_back);
-        }
-        for group in &mut self.drive_groups {
-            let (stepped, handed_back) = group.step_block(
-                &mut self.servos,
-                a,
-                setpoints,
-                times_s,
-                &mut self.actual,
-                &mut self.following_error,
-                &mut self.completed,
-            );
-            counts = (counts.0 + stepped, counts.1 + handed_back);
-        }
+        let block = (setpoints, times_s);
+        let out = (
+            &mut self.actual[..],
+            &mut self.following_error[..],
+            &mut self.completed[..],
+        );
+        let counts = match W {
+            WIDE_LANES => self.wide.step_block(&mut self.servos, a, block, out),
+            _ => self.narrow.step_block(&mut self.servos, a, block, out),
+        };
         self.lane_periods = (
             self.lane_periods.0 + counts.0,
             self.lane_periods.1 + counts.1,
@@ -176,16 +230,16 @@ impl AxisLanes {
 /// so one or two servos step faster on their own.
 const MIN_LANES: usize = 3;
 
-/// The servos of `servos` that `group` takes, in lane groups of [`LANES`] (the last one
+/// The servos of `servos` that `group` takes, in lane groups of `W` (the last one
 /// ragged, of at least [`MIN_LANES`]), and the others.
-fn lane_groups<G>(
+fn lane_groups<const W: usize, G>(
     servos: &[Option<AxisServo>],
     group: impl Fn(&[Option<AxisServo>], &[usize]) -> Option<G>,
 ) -> (Vec<G>, Vec<usize>) {
     let (taken, mut alone): (Vec<usize>, Vec<usize>) =
         (0..servos.len()).partition(|&s| group(servos, &[s]).is_some());
     let mut groups = Vec::new();
-    for lanes in taken.chunks(LANES) {
+    for lanes in taken.chunks(W) {
         if lanes.len() < MIN_LANES {
             alone.extend_from_slice(lanes);
         } else {
@@ -199,6 +253,8 @@ fn lane_groups<G>(
 #[derive(Clone, Debug)]
 pub struct DriveLanes {
     points: usize,
+    /// Lane groups of [`WIDE_LANES`] (stepped by the AVX-512 code), else [`NARROW_LANES`].
+    wide: bool,
     /// Per machine axis, the points' drives and their twins.
     drives: Vec<AxisLanes>,
     twins: Vec<AxisLanes>,
@@ -217,11 +273,22 @@ struct Slot {
 
 impl DriveLanes {
     /// The drives of `machines` (one per point, all with the same axes) at rest at `q`.
+    /// In lane groups of [`WIDE_LANES`] where the host has AVX-512, else [`NARROW_LANES`].
     pub fn new(machines: &[&Machine], q: &AxisVec) -> Result<DriveLanes> {
+        DriveLanes::with_width(machines, q, wide_host())
+    }
+
+    /// The same in lane groups of [`NARROW_LANES`] whatever the host (the width and code of
+    /// a host without AVX-512; for tests of both widths on one host).
+    pub fn narrow(machines: &[&Machine], q: &AxisVec) -> Result<DriveLanes> {
+        DriveLanes::with_width(machines, q, false)
+    }
+
+    fn with_width(machines: &[&Machine], q: &AxisVec, wide: bool) -> Result<DriveLanes> {
         let axes = machines.first().map_or(&[][..], |m| m.axes());
         let lanes = |linear| {
             axes.iter()
-                .map(|&a| AxisLanes::new(machines, a, q[a], linear))
+                .map(|&a| AxisLanes::new(machines, (a, q[a]), linear, wide))
                 .collect::<Result<Vec<_>>>()
         };
         let (drives, twins) = (lanes(false)?, lanes(true)?);
@@ -236,10 +303,20 @@ impl DriveLanes {
             .collect();
         Ok(DriveLanes {
             points: machines.len(),
+            wide,
             drives,
             twins,
             slots,
         })
+    }
+
+    /// Servos a lane group steps side by side: [`WIDE_LANES`] or [`NARROW_LANES`].
+    pub fn lane_width(&self) -> usize {
+        if self.wide {
+            WIDE_LANES
+        } else {
+            NARROW_LANES
+        }
     }
 
     /// Number of points.
@@ -276,8 +353,10 @@ impl DriveLanes {
     /// drives' periods [`DriveLanes::lane_periods`] counts, none of those handed to the
     /// scalar servo).
     pub fn lane_substep_periods(&self) -> u64 {
-        let groups = self.drives.iter().flat_map(|l| &l.drive_groups);
-        groups.map(DriveLaneGroup::substep_periods).sum()
+        let wide = self.drives.iter().flat_map(|l| &l.wide.drives);
+        let narrow = self.drives.iter().flat_map(|l| &l.narrow.drives);
+        wide.map(DriveLaneGroup::substep_periods).sum::<u64>()
+            + narrow.map(DriveLaneGroup::substep_periods).sum::<u64>()
     }
 
     /// Steps every distinct drive and twin through `setpoints` (at most [`BLOCK`]), the
@@ -287,8 +366,8 @@ impl DriveLanes {
     pub fn step_block(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
         assert!(setpoints.len() <= BLOCK && times_s.len() == setpoints.len());
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F, checked at run time just above.
+        if self.wide {
+            // SAFETY: the groups are wide only where the CPU has AVX-512F (`wide_host`).
             return unsafe { self.step_block_avx512(setpoints, times_s) };
         }
         #[cfg(target_arch = "x86_64")]
@@ -300,29 +379,35 @@ impl DriveLanes {
     }
 
     /// [`DriveLanes::step_block`] compiled for AVX-512: a lane group's vectors of
-    /// [`LANES`] f64 in two registers (Rust never fuses a multiplication and an addition,
-    /// so the arithmetic is still the same whatever the vector width).
+    /// [`WIDE_LANES`] f64 in two registers (Rust never fuses a multiplication and an
+    /// addition, so the arithmetic is still the same whatever the vector width).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
     unsafe fn step_block_avx512(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
-        self.step_block_inline(setpoints, times_s)
+        self.step_groups::<WIDE_LANES>(setpoints, times_s)
     }
 
     /// [`DriveLanes::step_block`] compiled for AVX, as [`super::Drives::step_into`] is (no
-    /// FMA: the arithmetic is the same whatever the vector width).
+    /// FMA: the arithmetic is the same whatever the vector width), [`NARROW_LANES`] lanes.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     unsafe fn step_block_avx(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
-        self.step_block_inline(setpoints, times_s)
+        self.step_groups::<NARROW_LANES>(setpoints, times_s)
     }
 
-    #[inline(always)]
+    /// [`DriveLanes::step_block`] without AVX, [`NARROW_LANES`] lanes.
     fn step_block_inline(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
+        self.step_groups::<NARROW_LANES>(setpoints, times_s)
+    }
+
+    /// Every axis's drives, then twins, through the block, by their groups of `W` lanes.
+    #[inline(always)]
+    fn step_groups<const W: usize>(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
         for lanes in &mut self.drives {
-            lanes.step_block_inline(setpoints, times_s, false);
+            lanes.step_block_inline::<W>(setpoints, times_s, false);
         }
         for lanes in &mut self.twins {
-            lanes.step_block_inline(setpoints, times_s, true);
+            lanes.step_block_inline::<W>(setpoints, times_s, true);
         }
     }
 
@@ -356,4 +441,15 @@ impl DriveLanes {
                 )
             })
     }
+}
+
+/// Whether this host steps lane groups of [`WIDE_LANES`]: it has AVX-512F. With AVX alone,
+/// 16 lanes (four registers a vector) ran 8-9 % slower than 8 (docs/performance.md,
+/// session 29).
+fn wide_host() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        return true;
+    }
+    false
 }

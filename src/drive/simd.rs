@@ -1,4 +1,5 @@
-//! The lane groups' vectors: [`LANES`] f64 as one array, and their masks.
+//! The lane groups' vectors: `W` f64 as one array ([`WIDE_LANES`] or [`NARROW_LANES`]), and
+//! their masks.
 //!
 //! The one place the crate defines its lane vectors. [`V`] holds one value per lane and does
 //! IEEE 754 arithmetic lane by lane, each operation rounded as the scalar one is (a
@@ -10,78 +11,93 @@
 //! `!(a <= b)` is written `!a.le(b)`. A per-lane choice (a regime, a check) is a mask and a
 //! [`M::select`], not a branch.
 //!
-//! Each operation is a loop over the [`LANES`] lanes of plain arrays, always inlined: the
+//! Each operation is a loop over the `W` lanes of plain arrays, always inlined: the
 //! compiler turns it into vector instructions of the width of the function it is inlined
-//! into (`DriveLanes::step_block` is compiled for AVX-512 or AVX at run time: two or four
-//! registers a vector). `wide::f64x4`, which these vectors were before, picks its
+//! into (`DriveLanes::step_block` is compiled for AVX-512, with 16 lanes, or AVX, with 8, at run
+//! time: two registers a vector). `wide::f64x4`, which these vectors were before, picks its
 //! instructions when that crate is compiled (SSE2 pairs without `-C target-feature`), so
 //! its operations ran as four 128-bit instructions each even inside the AVX-512 function
 //! (docs/performance.md, session 25).
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
-/// Servos per lane group: two AVX-512 registers of f64 (four AVX ones), so that a period's
-/// dependent operations (the map's product, row by row) have two independent chains to
-/// overlap (docs/performance.md, session 29).
-pub const LANES: usize = 16;
+/// Servos per lane group where the host has AVX-512: two registers of f64, so that a
+/// period's dependent operations (the map's product, row by row) run as two independent
+/// chains side by side (docs/performance.md, session 29).
+pub const WIDE_LANES: usize = 16;
 
-/// One value per lane, as the lanes' state is stored.
-pub type Lanes = [f64; LANES];
+/// Servos per lane group elsewhere: two AVX registers (16 lanes, four AVX registers a
+/// vector, ran 8-9 % slower there: docs/performance.md, session 29).
+pub const NARROW_LANES: usize = 8;
 
-/// One f64 per lane.
+/// The widest lane group, [`WIDE_LANES`].
+pub const LANES: usize = WIDE_LANES;
+
+/// One value per lane, as the lanes' state is stored, `W` lanes.
+pub type Lanes<const W: usize> = [f64; W];
+
+/// One f64 per lane, `W` lanes.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct V(Lanes);
+pub(super) struct V<const W: usize>([f64; W]);
 
-/// One truth value per lane (a lane's bits all set, or all clear).
-#[derive(Clone, Copy, Debug, Default)]
-pub(super) struct M([i64; LANES]);
+/// One truth value per lane (a lane's bits all set, or all clear), `W` lanes (at most 32).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct M<const W: usize>([i64; W]);
+
+impl<const W: usize> Default for M<W> {
+    /// False in every lane.
+    #[inline(always)]
+    fn default() -> M<W> {
+        M([0; W])
+    }
+}
 
 /// `f` lane by lane.
 #[inline(always)]
-fn each<U>(f: impl Fn(usize) -> U) -> [U; LANES] {
+fn each<U, const W: usize>(f: impl Fn(usize) -> U) -> [U; W] {
     std::array::from_fn(f)
 }
 
-impl V {
+impl<const W: usize> V<W> {
     /// The lanes of `a`.
     #[inline(always)]
-    pub fn load(a: &Lanes) -> V {
+    pub fn load(a: &[f64; W]) -> V<W> {
         V(*a)
     }
 
     /// `x` in every lane.
     #[inline(always)]
-    pub fn splat(x: f64) -> V {
-        V([x; LANES])
+    pub fn splat(x: f64) -> V<W> {
+        V([x; W])
     }
 
     /// The lanes as an array.
     #[inline(always)]
-    pub fn lanes(self) -> Lanes {
+    pub fn lanes(self) -> [f64; W] {
         self.0
     }
 
     /// `|x|` (the sign bit cleared, as `f64::abs`).
     #[inline(always)]
-    pub fn abs(self) -> V {
+    pub fn abs(self) -> V<W> {
         V(each(|l| self.0[l].abs()))
     }
 
     /// `max(x, y)` as `f64::max`: a NaN in one operand gives the other.
     #[inline(always)]
-    pub fn max(self, y: V) -> V {
+    pub fn max(self, y: V<W>) -> V<W> {
         V(each(|l| self.0[l].max(y.0[l])))
     }
 
     /// `min(x, y)` as `f64::min`: a NaN in one operand gives the other.
     #[inline(always)]
-    pub fn min(self, y: V) -> V {
+    pub fn min(self, y: V<W>) -> V<W> {
         V(each(|l| self.0[l].min(y.0[l])))
     }
 
     /// `x` finite per lane.
     #[inline(always)]
-    pub fn is_finite(self) -> M {
+    pub fn is_finite(self) -> M<W> {
         M(each(|l| -i64::from(self.0[l].is_finite())))
     }
 }
@@ -89,10 +105,10 @@ impl V {
 /// The comparisons, `x.lt(y)` for `x < y` per lane and so on.
 macro_rules! lane_cmp {
     ($($f:ident $op:tt),*) => {
-        impl V {
+        impl<const W: usize> V<W> {
             $(
                 #[inline(always)]
-                pub fn $f(self, y: V) -> M {
+                pub fn $f(self, y: V<W>) -> M<W> {
                     M(each(|l| -i64::from(self.0[l] $op y.0[l])))
                 }
             )*
@@ -103,10 +119,10 @@ lane_cmp!(lt <, le <=, gt >, ge >=, eq ==);
 
 macro_rules! lane_op {
     ($trait:ident, $f:ident, $op:tt) => {
-        impl $trait for V {
-            type Output = V;
+        impl<const W: usize> $trait for V<W> {
+            type Output = V<W>;
             #[inline(always)]
-            fn $f(self, y: V) -> V {
+            fn $f(self, y: V<W>) -> V<W> {
                 V(each(|l| self.0[l] $op y.0[l]))
             }
         }
@@ -117,37 +133,37 @@ lane_op!(Sub, sub, -);
 lane_op!(Mul, mul, *);
 lane_op!(Div, div, /);
 
-impl Neg for V {
-    type Output = V;
+impl<const W: usize> Neg for V<W> {
+    type Output = V<W>;
     #[inline(always)]
-    fn neg(self) -> V {
+    fn neg(self) -> V<W> {
         V(each(|l| -self.0[l]))
     }
 }
 
-impl M {
+impl<const W: usize> M<W> {
     /// True in every lane.
     #[inline(always)]
-    pub fn all_true() -> M {
-        M([-1; LANES])
+    pub fn all_true() -> M<W> {
+        M([-1; W])
     }
 
     /// `b` in every lane.
     #[inline(always)]
-    pub fn splat(b: bool) -> M {
-        M([-i64::from(b); LANES])
+    pub fn splat(b: bool) -> M<W> {
+        M([-i64::from(b); W])
     }
 
     /// Per lane, `t` where true and `f` where false.
     #[inline(always)]
-    pub fn select(self, t: V, f: V) -> V {
+    pub fn select(self, t: V<W>, f: V<W>) -> V<W> {
         V(each(|l| if self.0[l] != 0 { t.0[l] } else { f.0[l] }))
     }
 
     /// One bit per lane, lane `l` at bit `l`.
     #[inline(always)]
     pub fn bits(self) -> u32 {
-        (0..LANES).fold(0, |b, l| b | u32::from(self.0[l] != 0) << l)
+        (0..W).fold(0, |b, l| b | u32::from(self.0[l] != 0) << l)
     }
 
     /// True in some lane.
@@ -171,10 +187,10 @@ impl M {
 
 macro_rules! mask_op {
     ($trait:ident, $f:ident, $op:tt) => {
-        impl $trait for M {
-            type Output = M;
+        impl<const W: usize> $trait for M<W> {
+            type Output = M<W>;
             #[inline(always)]
-            fn $f(self, y: M) -> M {
+            fn $f(self, y: M<W>) -> M<W> {
                 M(each(|l| self.0[l] $op y.0[l]))
             }
         }
@@ -183,10 +199,10 @@ macro_rules! mask_op {
 mask_op!(BitAnd, bitand, &);
 mask_op!(BitOr, bitor, |);
 
-impl Not for M {
-    type Output = M;
+impl<const W: usize> Not for M<W> {
+    type Output = M<W>;
     #[inline(always)]
-    fn not(self) -> M {
+    fn not(self) -> M<W> {
         M(each(|l| !self.0[l]))
     }
 }
@@ -202,17 +218,22 @@ mod tests {
 
     #[test]
     fn lanes_compute_as_the_scalar_operations() {
+        compute_as_the_scalar_operations::<NARROW_LANES>();
+        compute_as_the_scalar_operations::<WIDE_LANES>();
+    }
+
+    fn compute_as_the_scalar_operations<const W: usize>() {
         // VALUES in each eight lanes, paired with OTHERS shifted by one more lane in each
         // eight after the first (so that every lane of a wider vector is checked too).
-        let values: Lanes = each(|l| VALUES[l % 8]);
-        let others: Lanes = each(|l| OTHERS[(l + l / 8) % 8]);
+        let values: [f64; W] = each(|l| VALUES[l % 8]);
+        let others: [f64; W] = each(|l| OTHERS[(l + l / 8) % 8]);
         let (a, b) = (V::load(&values), V::load(&others));
         // The same bits, or both NaN (a NaN's sign and payload are the instruction's).
-        let same = |v: V, l: usize, r: f64| {
+        let same = |v: V<W>, l: usize, r: f64| {
             let x = v.lanes()[l];
             x.to_bits() == r.to_bits() || (x.is_nan() && r.is_nan())
         };
-        for l in 0..LANES {
+        for l in 0..W {
             let (x, y) = (values[l], others[l]);
             assert!(same(a + b, l, x + y), "lane {l}");
             assert!(same(a - b, l, x - y), "lane {l}");
@@ -240,7 +261,12 @@ mod tests {
 
     #[test]
     fn masks_set_and_combine_lane_by_lane() {
-        let mut m = M::default();
+        masks_set_and_combine::<NARROW_LANES>();
+        masks_set_and_combine::<WIDE_LANES>();
+    }
+
+    fn masks_set_and_combine<const W: usize>() {
+        let mut m = M::<W>::default();
         m.set(2, true);
         m.set(5, true);
         assert_eq!(m.bits(), 0b10_0100);
@@ -248,8 +274,8 @@ mod tests {
         assert_eq!(m.bits(), 0b10_0000);
         assert!(m.get(5) && !m.get(2));
         assert_eq!((m | M::splat(false)).bits(), 0b10_0000);
-        let all = u32::MAX >> (32 - LANES);
+        let all = u32::MAX >> (32 - W);
         assert_eq!((!m & M::all_true()).bits(), all & !0b10_0000);
-        assert!(m.any() && !M::default().any());
+        assert!(m.any() && !M::<W>::default().any());
     }
 }

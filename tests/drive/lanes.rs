@@ -4,7 +4,6 @@
 //! ragged one), with and without dry friction and backlash, with a point whose drives fail
 //! mid-block and one whose twin leaves the map (force beyond half its limit) for a while.
 
-use mtsim::drive::lane_step::LANES;
 use mtsim::drive::{AxisServo, DriveLanes, Drives};
 use mtsim::input::Machine;
 use mtsim::{Axis, AxisVec};
@@ -100,8 +99,15 @@ fn in_lanes(machines: &[Machine], q0: &AxisVec) -> Vec<Vec<Vec<(Axis, f64, f64, 
     in_lanes_counted(machines, q0, setpoint).0
 }
 
+/// Servos a lane group of this host steps side by side (16 with AVX-512, else 8).
+fn host_width() -> usize {
+    DriveLanes::new(&[], &AxisVec::ZERO).unwrap().lane_width()
+}
+
 /// [`in_lanes`] with [`DriveLanes::lane_periods`] and
-/// [`DriveLanes::lane_substep_periods`] at the end.
+/// [`DriveLanes::lane_substep_periods`] at the end, in this host's lane groups; the same
+/// points in lane groups of 8 ([`DriveLanes::narrow`], the groups and code of a host
+/// without AVX-512) give the same outputs, bit for bit.
 #[allow(clippy::type_complexity)]
 fn in_lanes_counted(
     machines: &[Machine],
@@ -109,9 +115,30 @@ fn in_lanes_counted(
     path: Path,
 ) -> (Vec<Vec<Vec<(Axis, f64, f64, f64)>>>, [(u64, u64); 2], u64) {
     let refs: Vec<&Machine> = machines.iter().collect();
-    let mut lanes = DriveLanes::new(&refs, q0).unwrap();
-    let mut out = vec![Vec::new(); machines.len()];
-    let mut alive = vec![true; machines.len()];
+    let host = step_in_lanes(DriveLanes::new(&refs, q0).unwrap(), path);
+    let narrow = step_in_lanes(DriveLanes::narrow(&refs, q0).unwrap(), path);
+    assert_eq!(narrow.1, 8, "narrow lane groups");
+    for (i, (a, b)) in host.0.iter().zip(&narrow.0).enumerate() {
+        assert!(bits(a) == bits(b), "point {i}: 8-lane groups differ");
+    }
+    (host.0, host.2, host.3)
+}
+
+/// Each point's outputs from `lanes` until it stops, with the lane width and the counts of
+/// [`in_lanes_counted`].
+#[allow(clippy::type_complexity)]
+fn step_in_lanes(
+    mut lanes: DriveLanes,
+    path: Path,
+) -> (
+    Vec<Vec<Vec<(Axis, f64, f64, f64)>>>,
+    usize,
+    [(u64, u64); 2],
+    u64,
+) {
+    let points = lanes.len();
+    let mut out = vec![Vec::new(); points];
+    let mut alive = vec![true; points];
     // Blocks of 256 and a ragged last one.
     let times: Vec<f64> = (1..=PERIODS).map(|k| k as f64 * 1e-3).collect();
     for block_t in times.chunks(mtsim::drive::lanes::BLOCK) {
@@ -136,7 +163,8 @@ fn in_lanes_counted(
         }
     }
     let counts = lanes.lane_periods();
-    (out, counts, lanes.lane_substep_periods())
+    let width = lanes.lane_width();
+    (out, width, counts, lanes.lane_substep_periods())
 }
 
 fn bits(run: &[Vec<(Axis, f64, f64, f64)>]) -> Vec<Vec<(Axis, u64, u64, u64)>> {
@@ -155,7 +183,8 @@ fn lane_groups_of_1_point_to_more_than_a_group_give_each_points_own_drives_bit_f
     for nonlinear in [false, true] {
         // Groups too small to be groups, ragged ones, a full one and a full one with a
         // ragged one (or a servo alone) beside it.
-        for n in (1..=9).chain([LANES - 1, LANES, LANES + 1, LANES + 3]) {
+        let w = host_width();
+        for n in (1..=9).chain([w - 1, w, w + 1, w + 3]) {
             let machines = machines(n, nonlinear);
             let lanes = in_lanes(&machines, &q0);
             for (i, (machine, lane)) in machines.iter().zip(&lanes).enumerate() {
@@ -369,7 +398,7 @@ fn creeping_drives_step_in_lanes_by_their_own_slopes_maps_bit_for_bit() {
 }
 
 /// The substep periods in lanes (`drive::lane_drive`'s substeps) through every branch of
-/// the scalar substep period: two lane groups' points (2 × [`LANES`]) whose X and Y drives
+/// the scalar substep period: two lane groups' points (twice the host's width) whose X and Y drives
 /// differ in kv, backlash (some
 /// none), dry friction (some none), semi- or fully-closed loops, and force limits low
 /// enough that the force command saturates (the clamp and the anti-windup act) when the
@@ -383,7 +412,8 @@ fn creeping_drives_step_in_lanes_by_their_own_slopes_maps_bit_for_bit() {
 fn substep_periods_in_lanes_give_the_scalar_servos_periods_bit_for_bit() {
     let q0 = stop_and_go(0.0);
     let mut uniform = uniform_draws(0x9e37_79b9_7f4a_7c15);
-    let machines: Vec<Machine> = (0..2 * LANES)
+    let w = host_width();
+    let machines: Vec<Machine> = (0..2 * w)
         .map(|i| {
             let mut m = trt_ac();
             for a in [Axis::X, Axis::Y] {
@@ -406,7 +436,7 @@ fn substep_periods_in_lanes_give_the_scalar_servos_periods_bit_for_bit() {
                     d.force_limit_n_or_nm = 120.0;
                     d.following_error_limit_m_or_rad = 0.05e-3;
                 }
-                if i == LANES + 4 {
+                if i == w + 4 {
                     d.substeps = 3;
                 }
                 m.axis_mut(a).drive = d;

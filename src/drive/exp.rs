@@ -43,8 +43,8 @@ use std::ops::{Add, Mul, Sub};
 const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fefa_3800);
 /// `ln2 − LN2_HI`, rounded.
 const LN2_LO: f64 = f64::from_bits(0x3d2e_f357_93c7_6730);
-/// `1/ln2`, rounded.
-const INV_LN2: f64 = 1.442_695_040_888_963_4;
+/// `1/ln2 = log₂ e`, rounded.
+const INV_LN2: f64 = std::f64::consts::LOG2_E;
 /// `1.5·2⁵²`: `y + SHIFTER` rounds `y` (|y| < 2⁵¹) to an integer, held in the sum's low bits.
 const SHIFTER: f64 = 6_755_399_441_055_744.0;
 /// Below this, `eˣ` rounds to 0.

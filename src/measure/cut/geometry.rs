@@ -48,6 +48,18 @@ impl CutterLine {
     pub fn contact_rad(&self) -> f64 {
         self.tip.y.atan2(self.tip.x)
     }
+
+    /// θ's direction `(cos θ, sin θ) = (x, y) / √(x² + y²)` of the tip `(x, y, z)`, without
+    /// the angle; `(1, 0)` on the cone axis, where [`CutterLine::contact_rad`] is 0.
+    pub fn contact_direction(&self) -> (f64, f64) {
+        let (x, y) = (self.tip.x, self.tip.y);
+        let r = (x * x + y * y).sqrt();
+        if r > 0.0 && r.is_finite() {
+            (x / r, y / r)
+        } else {
+            (1.0, 0.0)
+        }
+    }
 }
 
 /// The nominal cut cone of a test and the cutter that machines it.

@@ -446,3 +446,36 @@ fn the_streamed_envelope_of_tilted_cutters_is_the_least_depth_of_every_position(
         assert_same_bits(&envelope.values, &expected, &format!("step {step_deg}°"));
     }
 }
+
+/// A position's own θ direction, its tip's `(x, y)` scaled to 1, is `(cos θ, sin θ)` of the
+/// tip's `atan2` within 2 ulp over every quadrant and radii from 10⁻¹⁰ mm to 10 m; on the
+/// cone axis, where `atan2` gives 0, it is `(1, 0)`.
+#[test]
+fn a_positions_own_direction_is_the_cosine_and_sine_of_its_contact_angle() {
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    for k in 0..20_000 {
+        let theta = -std::f64::consts::PI + 2.0 * std::f64::consts::PI * jitter(&mut state);
+        let r = 10f64.powf(-3.0 + 7.0 * jitter(&mut state));
+        let line = CutterLine {
+            tip: Vector3::new(r * theta.cos(), r * theta.sin(), 5.0),
+            axis: Vector3::z(),
+        };
+        let (c, s) = line.contact_direction();
+        let (want_s, want_c) = line.contact_rad().sin_cos();
+        let ulp = f64::EPSILON;
+        assert!(
+            (c - want_c).abs() <= 2.0 * ulp,
+            "{k}: cos {c} against {want_c}"
+        );
+        assert!(
+            (s - want_s).abs() <= 2.0 * ulp,
+            "{k}: sin {s} against {want_s}"
+        );
+    }
+    let on_axis = CutterLine {
+        tip: Vector3::new(0.0, 0.0, 5.0),
+        axis: Vector3::z(),
+    };
+    assert_eq!(on_axis.contact_direction(), (1.0, 0.0));
+    assert_eq!(on_axis.contact_rad(), 0.0);
+}

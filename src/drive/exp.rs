@@ -170,7 +170,7 @@ pub(super) fn exp_lanes<const W: usize>(x: V<W>) -> V<W> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::drive::simd::{Lanes, LANES, NARROW_LANES};
+    use crate::drive::simd::{Lanes, NARROW_LANES, WIDE_LANES};
 
     /// An unevaluated sum `hi + lo`, `|lo| ≤ ulp(hi)/2`.
     #[derive(Clone, Copy)]
@@ -332,11 +332,11 @@ mod tests {
         /// the drive lanes select them.
         #[test]
         fn lanes_are_the_scalar_bits(
-            u2 in proptest::collection::vec(-50.0..=800.0f64, LANES),
-            special in proptest::collection::vec(0usize..8, LANES),
-            mask in 0u32..=(u32::MAX >> (32 - LANES)),
+            u2 in proptest::collection::vec(-50.0..=800.0f64, WIDE_LANES),
+            special in proptest::collection::vec(0usize..8, WIDE_LANES),
+            mask in 0u32..=(u32::MAX >> (32 - WIDE_LANES)),
         ) {
-            lanes_match::<LANES>(&u2, &special, mask)?;
+            lanes_match::<WIDE_LANES>(&u2, &special, mask)?;
             lanes_match::<NARROW_LANES>(&u2, &special, mask)?;
         }
     }

@@ -32,7 +32,6 @@ use crate::{Axis, AxisVec};
 pub const BLOCK: usize = 256;
 
 pub(super) use super::simd::Lanes;
-pub use super::simd::LANES;
 
 /// The period maps of a lane group's servos in lanes: the first `C` columns, `cols[j][r][l]`
 /// (column `j`, row `r`, lane `l`), and the constants of the period's inputs and checks

@@ -30,9 +30,6 @@ pub const WIDE_LANES: usize = 16;
 /// vector, ran 8-9 % slower there: docs/performance.md, session 29).
 pub const NARROW_LANES: usize = 8;
 
-/// The widest lane group, [`WIDE_LANES`].
-pub const LANES: usize = WIDE_LANES;
-
 /// One value per lane, as the lanes' state is stored, `W` lanes.
 pub type Lanes<const W: usize> = [f64; W];
 

@@ -22,7 +22,7 @@
 use super::lane_drive::DriveLaneGroup;
 use super::lane_servo::TwinLanes;
 use super::servo::AxisServo;
-use super::simd::{NARROW_LANES, WIDE_LANES};
+pub use super::simd::{NARROW_LANES, WIDE_LANES};
 use crate::error::Result;
 use crate::input::machine::Machine;
 use crate::{Axis, AxisVec};
@@ -361,7 +361,7 @@ impl DriveLanes {
 
     /// Steps every distinct drive and twin through `setpoints` (at most [`BLOCK`]), the
     /// `j`-th reached at `times_s[j]`; read each point's outputs with
-    /// [`DriveLanes::write_point`]. A servo that fails stops there, and with it every point
+    /// [`DriveLanes::outputs`]. A servo that fails stops there, and with it every point
     /// that has it.
     pub fn step_block(&mut self, setpoints: &[AxisVec], times_s: &[f64]) {
         assert!(setpoints.len() <= BLOCK && times_s.len() == setpoints.len());

@@ -62,16 +62,18 @@ struct Groups<const W: usize> {
 }
 
 impl<const W: usize> Groups<W> {
-    /// The groups of `servos` (the linear twins with `linear`), `W` lanes to a group (none
-    /// without `make`), and the servos that step alone.
-    fn new(servos: &[Option<AxisServo>], linear: bool, make: bool) -> (Groups<W>, Vec<usize>) {
-        let none = Groups {
+    /// No groups (the width the host does not step).
+    fn none() -> Groups<W> {
+        Groups {
             twins: Vec::new(),
             drives: Vec::new(),
-        };
-        if !make {
-            return (none, Vec::new());
         }
+    }
+
+    /// The groups of `servos` (the linear twins with `linear`), `W` lanes to a group, and
+    /// the servos that step alone.
+    fn new(servos: &[Option<AxisServo>], linear: bool) -> (Groups<W>, Vec<usize>) {
+        let none = Groups::none();
         if linear {
             let (twins, alone) = lane_groups::<W, _>(servos, TwinLanes::new);
             (Groups { twins, ..none }, alone)
@@ -143,14 +145,19 @@ impl AxisLanes {
             servo_of.push(index);
         }
         let n = servos.len();
-        let (wide_groups, wide_alone) = Groups::new(&servos, linear, wide);
-        let (narrow, narrow_alone) = Groups::new(&servos, linear, !wide);
+        let (wide_groups, narrow, alone) = if wide {
+            let (groups, alone) = Groups::new(&servos, linear);
+            (groups, Groups::none(), alone)
+        } else {
+            let (groups, alone) = Groups::new(&servos, linear);
+            (Groups::none(), groups, alone)
+        };
         Ok(AxisLanes {
             axis,
             servos,
             wide: wide_groups,
             narrow,
-            alone: if wide { wide_alone } else { narrow_alone },
+            alone,
             servo_of,
             actual: vec![0.0; n * BLOCK],
             following_error: if linear {

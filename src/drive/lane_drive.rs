@@ -189,7 +189,7 @@ impl<const W: usize> DriveLaneGroup<W> {
 
     /// Steps the group's live drives of `all` through `setpoints` (at `times_s`): actual
     /// positions and following errors (mm, deg) to `actual` and `following_error` at
-    /// `s * BLOCK + j`, the setpoints completed to `completed[s]`; a drive that fails
+    /// `s * SLOT + j`, the setpoints completed to `completed[s]`; a drive that fails
     /// becomes None. Returns the lane periods stepped and how many of them were handed to
     /// the scalar servo.
     #[inline(always)]

@@ -54,7 +54,7 @@ impl<const W: usize> TwinLanes<W> {
 
     /// Steps the group's live servos of `all` (the axis `axis`'s) through `setpoints`,
     /// reached at `times_s`: each servo's actual positions (mm, deg) go to
-    /// `actual[s * BLOCK + j]` and the setpoints it completed to `completed[s]`; a servo
+    /// `actual[s * SLOT + j]` and the setpoints it completed to `completed[s]`; a servo
     /// that fails becomes None there. Returns the lane periods stepped and how many of them
     /// were handed to the scalar servo.
     #[inline(always)]

@@ -31,6 +31,14 @@ use crate::{Axis, AxisVec};
 /// Setpoints stepped at a time (a lane group's outputs: [`BLOCK`] per servo).
 pub const BLOCK: usize = 256;
 
+/// The distance between two servos' outputs in an axis's output arrays: servo `s`'s
+/// [`BLOCK`] entries start at `s · SLOT`. Not `BLOCK` itself: a lane group writes one entry
+/// per lane and period, `W` servos apart, and at a stride of 256 × 8 bytes (a power of two)
+/// all of them fall into two sets of the L1 cache, which then evicts the lines it is still
+/// filling (`perf`: 9 % of a random study's samples on those stores, docs/performance.md,
+/// session 30). Eight more entries move each servo to its own sets.
+pub const SLOT: usize = BLOCK + 8;
+
 pub(super) use super::simd::Lanes;
 
 /// The period maps of a lane group's servos in lanes: the first `C` columns, `cols[j][r][l]`
@@ -228,7 +236,7 @@ pub(super) trait LaneKind<const W: usize> {
 
 /// Steps the live servos of `all` (the axis `axis`'s) in `group` through `setpoints`,
 /// reached at `times_s`: each servo's actual positions (mm, deg) go to
-/// `actual[s * BLOCK + j]`, and its following errors to `following_error` there when that
+/// `actual[s * SLOT + j]`, and its following errors to `following_error` there when that
 /// is asked for, and the setpoints it completed to `completed[s]`; a servo that fails
 /// becomes None there. Returns the lane periods stepped and how many of them were handed to
 /// the scalar servo.
@@ -271,9 +279,9 @@ pub(super) fn step_block<K: LaneKind<W>, const W: usize>(
         for (l, &s) in group.servos().iter().enumerate() {
             if live >> l & 1 == 1 {
                 stepped += 1;
-                actual[s * BLOCK + j] = position[l];
+                actual[s * SLOT + j] = position[l];
                 if let Some(fe) = following_error.as_deref_mut() {
-                    fe[s * BLOCK + j] = error[l];
+                    fe[s * SLOT + j] = error[l];
                 }
             }
         }

@@ -28,6 +28,7 @@ use crate::input::machine::Machine;
 use crate::{Axis, AxisVec};
 
 pub use super::lane_step::BLOCK;
+use super::lane_step::SLOT;
 
 /// The distinct servos of one axis over the points, and their outputs over the last block.
 #[derive(Clone, Debug)]
@@ -43,8 +44,8 @@ struct AxisLanes {
     alone: Vec<usize>,
     /// Which servo each point has.
     servo_of: Vec<usize>,
-    /// Per servo, [`BLOCK`] entries: actual position (mm, deg) and following error after each
-    /// setpoint of the last block (the following errors only for the nonlinear drives).
+    /// Per servo `s`, [`BLOCK`] entries from `s · SLOT`: actual position (mm, deg) and
+    /// following error after each setpoint of the last block (the following errors only for the nonlinear drives).
     actual: Vec<f64>,
     following_error: Vec<f64>,
     /// Per servo, the setpoints of the last block it completed (fewer than the block's when
@@ -159,11 +160,11 @@ impl AxisLanes {
             narrow,
             alone,
             servo_of,
-            actual: vec![0.0; n * BLOCK],
+            actual: vec![0.0; n * SLOT],
             following_error: if linear {
                 Vec::new()
             } else {
-                vec![0.0; n * BLOCK]
+                vec![0.0; n * SLOT]
             },
             completed: vec![0; n],
             lane_periods: (0, 0),
@@ -202,7 +203,7 @@ impl AxisLanes {
                 self.completed[s] = 0;
                 continue;
             };
-            let actual = &mut self.actual[s * BLOCK..(s + 1) * BLOCK];
+            let actual = &mut self.actual[s * SLOT..s * SLOT + BLOCK];
             let mut done = 0;
             for (j, (q, &t)) in setpoints.iter().zip(times_s).enumerate() {
                 let stepped = if linear {
@@ -215,7 +216,7 @@ impl AxisLanes {
                 }
                 actual[j] = servo.actual();
                 if !linear {
-                    self.following_error[s * BLOCK + j] = servo.following_error();
+                    self.following_error[s * SLOT + j] = servo.following_error();
                 }
                 done = j + 1;
             }
@@ -303,8 +304,8 @@ impl DriveLanes {
             .flat_map(|i| {
                 drives.iter().zip(&twins).map(move |(d, t)| Slot {
                     axis: d.axis,
-                    drive: d.servo_of[i] * BLOCK,
-                    twin: t.servo_of[i] * BLOCK,
+                    drive: d.servo_of[i] * SLOT,
+                    twin: t.servo_of[i] * SLOT,
                 })
             })
             .collect();

@@ -566,10 +566,7 @@ impl<const W: usize> LaneKind<W> for DriveLaneGroup<W> {
             }
             _ => M::default(),
         };
-        let bits = substepped.bits();
-        for (l, n) in st.extra.substepped.iter_mut().enumerate() {
-            *n += u64::from(bits >> l & 1);
-        }
+        substepped.count_into(&mut st.extra.substepped);
         // The scalar period takes its carried regime: only a mapped period leaves one. A
         // lane handed to the scalar servo gives it the regime it had (none for a lane whose
         // regime was found at this start).

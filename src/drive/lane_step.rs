@@ -147,10 +147,7 @@ impl<const W: usize> SetpointStep<W> {
         take(&mut st.velocity, y[3]);
         st.setpoint = ok.select(self.s_new, s_old).lanes();
         take(&mut st.v_ff, self.v_ff);
-        let bits = ok.bits();
-        for (l, n) in st.periods_exact.iter_mut().enumerate() {
-            *n += u64::from(bits >> l & 1);
-        }
+        ok.count_into(&mut st.periods_exact);
     }
 }
 
@@ -256,7 +253,7 @@ pub(super) fn step_block<K: LaneKind<W>, const W: usize>(
     for &s in group.servos() {
         completed[s] = if all[s].is_some() { setpoints.len() } else { 0 };
     }
-    let (mut stepped, mut handed_back) = (0, 0);
+    let mut handed_back = 0;
     for (j, (q, &t)) in setpoints.iter().zip(times_s).enumerate() {
         let q = q[axis];
         let ok = group.mapped_period(&mut st, q, all);
@@ -271,22 +268,24 @@ pub(super) fn step_block<K: LaneKind<W>, const W: usize>(
                 }
             }
         }
-        let live = st.live.bits();
         let x_t = V::load(&st.x[2]);
         let inv_scale = V::load(group.inv_scale());
+        // Every lane's, live or not (no branch a lane): a servo's entries beyond those it
+        // completed are never read.
         let position = (x_t * inv_scale).lanes();
-        let error = ((V::load(&st.setpoint) - x_t) * inv_scale).lanes();
         for (l, &s) in group.servos().iter().enumerate() {
-            if live >> l & 1 == 1 {
-                stepped += 1;
-                actual[s * SLOT + j] = position[l];
-                if let Some(fe) = following_error.as_deref_mut() {
-                    fe[s * SLOT + j] = error[l];
-                }
+            actual[s * SLOT + j] = position[l];
+        }
+        if let Some(fe) = following_error.as_deref_mut() {
+            let error = ((V::load(&st.setpoint) - x_t) * inv_scale).lanes();
+            for (l, &s) in group.servos().iter().enumerate() {
+                fe[s * SLOT + j] = error[l];
             }
         }
     }
     scatter(group, all, &st);
+    // A lane steps every setpoint its servo completed (the one where it failed is not).
+    let stepped = group.servos().iter().map(|&s| completed[s] as u64).sum();
     (stepped, handed_back)
 }
 

@@ -410,6 +410,11 @@ impl<const W: usize> DriveLaneGroup<W> {
         let tolerance = V::load(&self.tolerance);
         let asked =
             slope_step.gt(V::splat(0.0)) & ((v0.abs() - dv) * inv_vs).le(V::splat(40f64.sqrt()));
+        if !asked.any() {
+            // Every lane beyond its Stribeck zone (three periods in four of a random study):
+            // nothing to bound.
+            return (M::all_true(), M::default());
+        }
         let base = V::load(&self.delta_friction) * inv_vs * inv_vs;
         let error = |k: V<W>| {
             let curvature = base * k;

@@ -7,7 +7,9 @@ use std::cell::OnceCell;
 
 use super::exp::exp;
 
-use super::product::{ColumnProduct, Portable};
+#[cfg(target_arch = "x86_64")]
+use super::product::Avx2;
+use super::product::{ColumnProduct, Portable, Width};
 
 /// Number of state variables of the cascade model: `x_m v_m x_t v_t F ∫ x_m,tick`.
 pub(super) const N_STATE: usize = 7;
@@ -282,11 +284,34 @@ impl PeriodMap {
     /// period (`v₀ = input[3]`, the first), for the map's inputs ([`map_input`]): the
     /// largest velocity change at which the substep model evaluates the friction in this
     /// period. Out of line: only periods whose cheap bound fails ask for it.
+    /// At the CPU's widest product ([`Width`]: the same bits at every width); a study's
+    /// lanes ask it for about one drive period in nine (docs/performance.md, session 30).
     #[inline(never)]
     pub(super) fn largest_substep_velocity_change(&self, input: &[f64; N_INPUT]) -> f64 {
+        #[cfg(target_arch = "x86_64")]
+        if let Width::Avx2(k) = Width::detect() {
+            // SAFETY: the CPU has AVX2, as the token says.
+            return unsafe { self.largest_substep_velocity_change_avx2(k, input) };
+        }
+        self.largest_substep_velocity_change_with(Portable, input)
+    }
+
+    /// [`PeriodMap::largest_substep_velocity_change`] compiled for AVX2, its products inlined.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2")]
+    unsafe fn largest_substep_velocity_change_avx2(&self, k: Avx2, input: &[f64; N_INPUT]) -> f64 {
+        self.largest_substep_velocity_change_with(k, input)
+    }
+
+    #[inline(always)]
+    fn largest_substep_velocity_change_with<K: ColumnProduct>(
+        &self,
+        k: K,
+        input: &[f64; N_INPUT],
+    ) -> f64 {
         let mut largest = 0.0f64;
         for cols in &self.substep_velocities {
-            for v in Portable.product(cols, input) {
+            for v in k.product(cols, input) {
                 largest = largest.max((v - input[3]).abs());
             }
         }

@@ -411,7 +411,7 @@ impl<const W: usize> DriveLaneGroup<W> {
         let asked =
             slope_step.gt(V::splat(0.0)) & ((v0.abs() - dv) * inv_vs).le(V::splat(40f64.sqrt()));
         if !asked.any() {
-            // Every lane beyond its Stribeck zone (three periods in four of a random study):
+            // Every lane beyond its Stribeck zone (most periods away from a reversal):
             // nothing to bound.
             return (M::all_true(), M::default());
         }

@@ -35,8 +35,8 @@ pub const BLOCK: usize = 256;
 /// [`BLOCK`] entries start at `s · SLOT`. Not `BLOCK` itself: a lane group writes one entry
 /// per lane and period, `W` servos apart, and at a stride of 256 × 8 bytes (a power of two)
 /// all of them fall into two sets of the L1 cache, which then evicts the lines it is still
-/// filling (`perf`: 9 % of a random study's samples on those stores, docs/performance.md,
-/// session 30). Eight more entries move each servo to its own sets.
+/// filling (docs/performance.md, session 30). Eight more entries move each servo to its
+/// own sets.
 pub const SLOT: usize = BLOCK + 8;
 
 pub(super) use super::simd::Lanes;

@@ -170,8 +170,7 @@ impl<const W: usize> M<W> {
     }
 
     /// One more in `counts[l]` for each lane `l` that is true: a true lane's bits are -1,
-    /// subtracted (one vector subtraction, where a loop over [`M::bits`] took three
-    /// instructions a lane).
+    /// subtracted (one vector subtraction, not a loop over [`M::bits`]).
     #[inline(always)]
     pub fn count_into(self, counts: &mut [u64; W]) {
         for (n, &m) in counts.iter_mut().zip(&self.0) {

@@ -45,7 +45,8 @@ struct AxisLanes {
     /// Which servo each point has.
     servo_of: Vec<usize>,
     /// Per servo `s`, [`BLOCK`] entries from `s · SLOT`: actual position (mm, deg) and
-    /// following error after each setpoint of the last block (the following errors only for the nonlinear drives).
+    /// following error after each setpoint of the last block (the following errors only
+    /// for the nonlinear drives).
     actual: Vec<f64>,
     following_error: Vec<f64>,
     /// Per servo, the setpoints of the last block it completed (fewer than the block's when

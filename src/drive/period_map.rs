@@ -284,6 +284,7 @@ impl PeriodMap {
     /// period (`v₀ = input[3]`, the first), for the map's inputs ([`map_input`]): the
     /// largest velocity change at which the substep model evaluates the friction in this
     /// period. Out of line: only periods whose cheap bound fails ask for it.
+    ///
     /// At the CPU's widest product ([`Width`]: the same bits at every width), since a
     /// study's lanes ask it wherever neither cheap bound decides (docs/performance.md,
     /// session 30).

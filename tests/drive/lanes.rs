@@ -214,9 +214,11 @@ fn the_lane_groups_step_most_periods_themselves() {
     let machines = machines(8, true);
     let (_, [drives, twins], _) = in_lanes_counted(&machines, &q0, setpoint);
     for (what, (stepped, handed_back)) in [("drives", drives), ("twins", twins)] {
-        // Two groups (X and Y) of 8 live lanes over the periods, less the failing point's.
+        // Two groups (X and Y) of 8 live lanes over the periods, less the failing point's
+        // (its servo of one axis or both stops after more than 100 setpoints).
+        let periods = PERIODS as u64;
         assert!(
-            stepped > 8 * PERIODS as u64,
+            (14 * periods + 200..=16 * periods).contains(&stepped),
             "{what}: {stepped} lane periods"
         );
         assert!(

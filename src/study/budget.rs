@@ -30,6 +30,12 @@
 //! ([`LocationErrors::parts`]): the rotaries' location errors, the squareness of the
 //! linear axes, and each linear axis's component-error table, a run each.
 //!
+//! A run's servo that the full run steps too (the machine's own drive, with no backlash to
+//! take out for a friction run, or its linear twin) is not stepped again: its positions are
+//! the full run's samples' own ([`Sample::actual`], [`Sample::linear`]), the same model on
+//! the same setpoints from the same start, so the same bits. Not on an axis with a
+//! position-error table, whose samples carry the table's errors.
+//!
 //! The cut (`study::cut_budget`) runs the same plan: it takes each run's positions
 //! ([`BudgetRun::measured_positions`]) and cuts them on its grid instead of reading the bar.
 //!
@@ -78,13 +84,14 @@ use nalgebra::Point3;
 use crate::drive::AxisServo;
 use crate::error::Result;
 use crate::input::drive::AxisDrive;
+use crate::input::machine::Machine;
 use crate::input::scenario::Scenario;
 use crate::kinematics::error_table::{DirectionState, ErrorTable};
 use crate::kinematics::{ErrorPart, LocationErrors};
 use crate::measure::attribution::ReversalSite;
 use crate::measure::ballbar::{deviation_mm, BallbarResult, N_BINS};
 use crate::measure::{BallbarRun, BarGeometry, BarReading, Direction};
-use crate::pipeline::{Sample, Sink};
+use crate::pipeline::{Sample, Sink, Timing};
 use crate::report::run::{AxisReversal, BudgetMechanism, BudgetRow, ErrorBudget};
 use crate::{Axis, AxisVec};
 
@@ -130,12 +137,26 @@ struct LostMotion {
     cases: Vec<usize>,
 }
 
+/// A servo of the budget that the full run steps too, on the same setpoints from the same
+/// start: its actual positions are the samples' own, bit for bit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum InRun {
+    /// The axis's drive ([`Sample::actual`]).
+    Drive,
+    /// The axis's linear twin ([`Sample::linear`]).
+    Twin,
+}
+
 /// The runs of a scenario's budget: which mechanisms, on which axes.
 #[derive(Clone, Debug)]
 pub struct BudgetPlan {
     cases: Vec<Case>,
     /// The servos the runs drive, with whether each is a linear twin.
     drives: Vec<(AxisDrive, bool)>,
+    /// Per servo of `drives`, whether the full run steps it too: the machine's own drive or
+    /// its linear twin, on an axis without a position-error table (whose errors the samples'
+    /// positions carry).
+    in_run: Vec<Option<InRun>>,
     tables: Vec<(Axis, ErrorTable)>,
     lost_motion: Vec<LostMotion>,
     /// The geometric errors split by cause ([`LocationErrors::parts`]), one run each.
@@ -183,6 +204,7 @@ impl BudgetPlan {
                 base: None,
             }],
             drives: Vec::new(),
+            in_run: Vec::new(),
             tables: Vec::new(),
             lost_motion: Vec::new(),
             geometric: Vec::new(),
@@ -265,6 +287,7 @@ impl BudgetPlan {
             });
             plan.tables.push((axis, table.clone()));
         }
+        plan.note_in_run(machine);
         Ok(plan)
     }
 
@@ -286,11 +309,40 @@ impl BudgetPlan {
         self.cases.len() - 1
     }
 
-    /// The runs of one direction, from rest at its first setpoint.
-    pub fn start(&self, direction: Direction) -> BudgetRun<'_> {
+    /// Marks the servos the full run steps too ([`InRun`]) on `machine`.
+    fn note_in_run(&mut self, machine: &Machine) {
+        self.in_run = (self.drives.iter())
+            .map(|&(drive, linear)| {
+                let own = machine.drive(drive.axis);
+                if machine.geometry.tables.contains_key(&drive.axis) {
+                    None
+                } else if !linear && drive == own {
+                    Some(InRun::Drive)
+                } else if linear && drive == own.linear_twin() {
+                    Some(InRun::Twin)
+                } else {
+                    None
+                }
+            })
+            .collect();
+    }
+
+    /// The runs of one direction, from rest at its first setpoint, fed the samples of a
+    /// full run timed by `timing`: under planned timing with the twins, the servos it steps
+    /// too ([`InRun`]) are read from its samples rather than stepped again.
+    pub fn start(&self, direction: Direction, timing: Timing) -> BudgetRun<'_> {
+        let samples_have = match timing {
+            Timing::Planned { twins, .. } => [Some(InRun::Drive), twins.then_some(InRun::Twin)],
+            Timing::Programmed | Timing::Setpoints => [None, None],
+        };
         BudgetRun {
             plan: self,
             servos: Vec::new(),
+            in_run: (self.in_run.iter())
+                .map(|&r| r.filter(|r| samples_have.contains(&Some(*r))))
+                .collect(),
+            actual: vec![0.0; self.drives.len()],
+            started: false,
             table_state: vec![(DirectionState::default(), 0.0); self.tables.len()],
             runs: self
                 .cases
@@ -351,8 +403,15 @@ struct LostBin {
 /// ([`BudgetRun::record`]).
 pub struct BudgetRun<'p> {
     plan: &'p BudgetPlan,
-    /// The plan's servos, made at the first sample (at rest there, as the full run's).
-    servos: Vec<AxisServo>,
+    /// The plan's servos the full run does not step, made at the first sample (at rest
+    /// there, as the full run's), each with its index in the plan's.
+    servos: Vec<(usize, AxisServo)>,
+    /// Per servo of the plan, whether its positions are the samples' ([`InRun`]).
+    in_run: Vec<Option<InRun>>,
+    /// Per servo of the plan, its actual position at the current sample, mm or deg.
+    actual: Vec<f64>,
+    /// Whether the servos were made (at the first sample).
+    started: bool,
     /// Each table's direction of motion and its error at the current sample, mm or deg.
     table_state: Vec<(DirectionState, f64)>,
     runs: Vec<BallbarRun>,
@@ -380,25 +439,17 @@ impl BudgetRun<'_> {
         }
         let q = &s.commanded;
         let plan = self.plan;
-        if self.servos.is_empty() && !plan.drives.is_empty() {
-            let make = |drives: &mut dyn Iterator<Item = &AxisDrive>| -> Result<Vec<AxisServo>> {
-                drives
-                    .map(|d| AxisServo::new(d, plan.period_s, q[d.axis]))
-                    .collect()
-            };
-            let made = make(&mut plan.drives.iter().map(|(d, _)| d))
-                .and_then(|servos| Ok((servos, make(&mut plan.common.iter())?)));
-            match made {
-                Ok((servos, common)) => (self.servos, self.common) = (servos, common),
-                Err(e) => {
-                    self.failed = Some(e.to_string());
-                    return;
-                }
+        if !self.started {
+            self.started = true;
+            if let Err(e) = self.make_servos(q) {
+                self.failed = Some(e.to_string());
+                return;
             }
         }
-        let own = self.servos.iter_mut().zip(plan.drives.iter().copied());
-        let common = (self.common.iter_mut()).zip(plan.common.iter().map(|d| (*d, true)));
-        for (servo, (drive, linear)) in own.chain(common) {
+        let own = (self.servos.iter_mut()).map(|(i, servo)| (Some(*i), servo, plan.drives[*i]));
+        let common = (self.common.iter_mut()).zip(&plan.common);
+        let common = common.map(|(servo, drive)| (None, servo, (*drive, true)));
+        for (i, servo, (drive, linear)) in own.chain(common) {
             let setpoint = q[drive.axis];
             let stepped = match linear {
                 true => servo.advance_twin(setpoint, s.time_s),
@@ -407,6 +458,18 @@ impl BudgetRun<'_> {
             if let Err(e) = stepped {
                 self.failed = Some(e.to_string());
                 return;
+            }
+            if let Some(i) = i {
+                self.actual[i] = servo.actual();
+            }
+        }
+        for ((actual, in_run), (drive, _)) in
+            self.actual.iter_mut().zip(&self.in_run).zip(&plan.drives)
+        {
+            match in_run {
+                Some(InRun::Drive) => *actual = s.actual[drive.axis],
+                Some(InRun::Twin) => *actual = s.linear[drive.axis],
+                None => {}
             }
         }
         for ((axis, table), (direction, error)) in plan.tables.iter().zip(&mut self.table_state) {
@@ -418,6 +481,20 @@ impl BudgetRun<'_> {
                 self.velocity = (*q - q0) * (1.0 / (s.time_s - t0));
             }
         }
+    }
+
+    /// The servos the run steps itself, at rest at the first setpoint `q`.
+    fn make_servos(&mut self, q: &AxisVec) -> Result<()> {
+        let plan = self.plan;
+        let period_s = plan.period_s;
+        self.servos = (plan.drives.iter().enumerate())
+            .filter(|&(i, _)| self.in_run[i].is_none())
+            .map(|(i, (d, _))| Ok((i, AxisServo::new(d, period_s, q[d.axis])?)))
+            .collect::<Result<_>>()?;
+        self.common = (plan.common.iter())
+            .map(|d| AxisServo::new(d, period_s, q[d.axis]))
+            .collect::<Result<_>>()?;
+        Ok(())
     }
 
     /// Takes the bar's reading `r` of sample `s` (stepped already) into every run.
@@ -473,7 +550,7 @@ impl BudgetRun<'_> {
             let b = &mut bins[bin];
             if b.n == 0 {
                 let mut q = delayed;
-                q[a] = self.servos[i].actual();
+                q[a] = self.actual[i];
                 let (mut up, mut down) = (q, q);
                 up[a] += DIFF_STEP;
                 down[a] -= DIFF_STEP;
@@ -508,7 +585,7 @@ impl BudgetRun<'_> {
             Source::Common => *delayed,
             Source::Servo(i) => {
                 let mut q = *delayed;
-                q[self.plan.drives[i].0.axis] = self.servos[i].actual();
+                q[self.plan.drives[i].0.axis] = self.actual[i];
                 q
             }
             Source::Table(i) => {

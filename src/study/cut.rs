@@ -73,7 +73,17 @@ pub fn run_cut(
         Some(g) => Some(BudgetPlan::new(scenario, g)?),
         None => None,
     };
-    let budget_run = plan.as_ref().map(|p| RefCell::new(p.start(direction)));
+    let mut run_options = run_options(scenario, 0.0)?;
+    run_options.timing = if commanded {
+        Timing::Setpoints
+    } else {
+        // The linear twins give each axis's lost motion, which the marks are read across.
+        Timing::Planned {
+            twins: true,
+            settle: false,
+        }
+    };
+    let budget_run = (plan.as_ref()).map(|p| RefCell::new(p.start(direction, run_options.timing)));
     let mut budget_cuts = match (&plan, &budget_run) {
         (Some(plan), Some(run)) => Some(CutBudgetRuns::new(scenario, &cone, plan, &options, run)?),
         _ => None,
@@ -88,16 +98,6 @@ pub fn run_cut(
         b.start_run(direction, run.measured);
     }
     let mut ballbar = geometry.map(|g| ballbar_sink(g, direction, run.measured, 1));
-    let mut run_options = run_options(scenario, 0.0)?;
-    run_options.timing = if commanded {
-        Timing::Setpoints
-    } else {
-        // The linear twins give each axis's lost motion, which the marks are read across.
-        Timing::Planned {
-            twins: true,
-            settle: false,
-        }
-    };
     let mut warnings = Vec::new();
     let stats = {
         let mut sinks: Vec<&mut dyn Sink> = vec![&mut surface];

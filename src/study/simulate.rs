@@ -232,7 +232,7 @@ pub fn run_ballbar_budget(
         let options = run_options(scenario, sim_time_s)?;
         let budget_run = budget
             .filter(|_| ballbar.is_some() || gauge.is_some())
-            .map(|plan| RefCell::new(plan.start(direction)));
+            .map(|plan| RefCell::new(plan.start(direction, options.timing)));
         // A part program's budget reads each run's positions through the contour gauge.
         let mut contour_runs = match (&gauge, &budget_run, budget) {
             (Some(_), Some(run), Some(plan)) => Some(ContourBudgetRuns::new(plan, run)),

@@ -498,3 +498,99 @@ fn a_study_s_b_on_a_cone_with_lost_motion_on_every_axis_is_the_budget_s() {
         );
     }
 }
+
+/// The budget runs whose servo the full run steps too (the machine's own drive, or its
+/// linear twin, on an axis without a position-error table) read it from the run's samples.
+/// Every run's positions are those of a budget that steps each servo itself, bit for bit:
+/// on a machine with backlash and friction on X (whose friction run, without the backlash,
+/// is not the machine's drive) and a position-error table on C (whose samples carry the
+/// table's errors).
+#[test]
+fn the_servos_the_full_run_steps_are_read_from_its_samples() {
+    use std::cell::RefCell;
+
+    use mtsim::pipeline::{self, RunOptions, Sample, Sink, Timing};
+    use mtsim::study::budget::{BudgetPlan, BudgetRun, BudgetStepper};
+
+    let dir = scratch("budget", "in-run-machine");
+    std::fs::write(dir.join("c.comp"), "0 0 0\n180 0.018 0.009\n360 0 0\n").unwrap();
+    let machine = std::fs::read_to_string(trt_ac()).unwrap() + "\n[error_tables]\nC = \"c.comp\"\n";
+    let machine_path = dir.join("m.toml");
+    std::fs::write(&machine_path, machine).unwrap();
+    let text = cone("[machine_overrides.axes.X.drive]\nbacklash_mm = 0.010\n").replacen(
+        &format!("machine = {:?}", trt_ac()),
+        &format!("machine = {:?}", machine_path.display().to_string()),
+        1,
+    );
+    let (scenario, _) = load("in-run", &text);
+    assert!(scenario
+        .machine
+        .geometry
+        .tables
+        .contains_key(&mtsim::Axis::C));
+    let plan = BudgetPlan::for_positions(&scenario).unwrap();
+    let options = RunOptions {
+        timing: Timing::Planned {
+            twins: true,
+            settle: false,
+        },
+        force_tcp: false,
+        start_time_s: 0.0,
+        program_path: scenario.path.clone(),
+        max_samples: u64::MAX,
+    };
+    let read = RefCell::new(plan.start(Direction::Ccw, options.timing));
+    // Told that the samples carry no servo, it steps every one itself.
+    let stepped = RefCell::new(plan.start(Direction::Ccw, Timing::Setpoints));
+
+    struct Compare<'a, 'p> {
+        runs: [&'a RefCell<BudgetRun<'p>>; 2],
+        positions: [Vec<mtsim::AxisVec>; 2],
+        samples: usize,
+        /// Largest |actual - setpoint| over the runs, mm or deg: the runs move.
+        lag: f64,
+    }
+    impl Sink for Compare<'_, '_> {
+        fn push(&mut self, s: &Sample) -> mtsim::error::Result<()> {
+            for (run, out) in self.runs.iter().zip(&mut self.positions) {
+                run.borrow_mut()
+                    .measured_positions(&s.commanded, out)
+                    .unwrap();
+            }
+            let [a, b] = &self.positions;
+            for (k, (a, b)) in a.iter().zip(b).enumerate() {
+                for axis in mtsim::Axis::ALL {
+                    assert_eq!(
+                        a[axis].to_bits(),
+                        b[axis].to_bits(),
+                        "sample {}, run {k}, axis {axis:?}: {} read, {} stepped",
+                        s.index,
+                        a[axis],
+                        b[axis]
+                    );
+                    self.lag = self.lag.max((a[axis] - s.commanded[axis]).abs());
+                }
+            }
+            self.samples += 1;
+            Ok(())
+        }
+    }
+    let mut compare = Compare {
+        runs: [&read, &stepped],
+        positions: [Vec::new(), Vec::new()],
+        samples: 0,
+        lag: 0.0,
+    };
+    let run = mtsim::program::scenario_run(&scenario, Direction::Ccw, 0.0).unwrap();
+    let (mut step_read, mut step_stepped) = (BudgetStepper(&read), BudgetStepper(&stepped));
+    let mut sinks: Vec<&mut dyn Sink> = vec![&mut step_read, &mut step_stepped, &mut compare];
+    pipeline::run(run.moves, &scenario.machine, &options, &mut sinks, &|_| {}).unwrap();
+    drop(sinks);
+    assert!(compare.samples > 10_000, "{} samples", compare.samples);
+    assert!(
+        compare.lag > 1e-3,
+        "the runs' largest lag {} is not a servo's",
+        compare.lag
+    );
+    assert_eq!(compare.positions[0].len(), plan.cases().len());
+}

@@ -104,6 +104,9 @@ pub struct AxisServo {
     /// Servo periods per interpolation period, and the servo period, s.
     n_servo: usize,
     t_servo: f64,
+    /// `j / n_servo` for each tick `j` in `0..=n_servo`: where the interpolated command is
+    /// at each servo tick, computed once rather than divided out every period.
+    tick_fractions: Box<[f64]>,
     n_sub: usize,
     /// Mechanics substep, s.
     h: f64,
@@ -215,6 +218,7 @@ impl AxisServo {
             inv_t_ipo: 1.0 / t_ipo,
             n_servo,
             t_servo,
+            tick_fractions: (0..=n_servo).map(|j| j as f64 / n_servo as f64).collect(),
             n_sub,
             h,
             kv: d.kv_per_s,
@@ -373,11 +377,10 @@ impl AxisServo {
         velocities: &mut Vec<f64>,
     ) -> [f64; N_STATE] {
         let [mut x_m, mut v_m, mut x_t, mut v_t, mut force, mut integral, mut x_m_tick] = x;
-        let n = self.n_servo as f64;
         let inv_ts = 1.0 / self.t_servo;
         let v_ff = ds * self.inv_t_ipo;
-        for j in 0..self.n_servo {
-            let x_cmd = ds * (j as f64 / n);
+        for &fraction in &self.tick_fractions[..self.n_servo] {
+            let x_cmd = ds * fraction;
             let x_fb = if self.fully_closed { x_t } else { x_m };
             let v_meas = (x_m - x_m_tick) * inv_ts;
             x_m_tick = x_m;
@@ -973,7 +976,6 @@ impl AxisServo {
     /// With a fully-closed loop and backlash the loop closes over the play, which is not
     /// linear: it is then integrated with explicit Euler substeps.
     fn step_first_order(&mut self, s_old: f64, s_new: f64, v_ff: f64) {
-        let n = self.n_servo as f64;
         if self.fully_closed && self.half_backlash > 0.0 {
             let steps = self.n_servo * self.n_sub;
             for i in 0..steps {
@@ -985,8 +987,8 @@ impl AxisServo {
             return;
         }
         let e_inf = (1.0 - self.kvff) * v_ff / self.kv;
-        for j in 1..=self.n_servo {
-            let x_cmd = s_old + (s_new - s_old) * (j as f64 / n);
+        for &fraction in &self.tick_fractions[1..] {
+            let x_cmd = s_old + (s_new - s_old) * fraction;
             let e0 = x_cmd - v_ff * self.t_servo - self.x_m;
             let e1 = e_inf + (e0 - e_inf) * self.decay;
             self.x_m = x_cmd - e1;
@@ -1021,11 +1023,10 @@ impl AxisServo {
     #[inline(never)]
     fn substep_period(&mut self, s_old: f64, s_new: f64, v_ff: f64, f_ff: f64) {
         self.periods_substepped += 1;
-        let n = self.n_servo as f64;
         let inv_ts = 1.0 / self.t_servo;
         for j in 0..self.n_servo {
             // Controller, sampled at the start of the servo period.
-            let x_cmd = s_old + (s_new - s_old) * (j as f64 / n);
+            let x_cmd = s_old + (s_new - s_old) * self.tick_fractions[j];
             let x_fb = if self.fully_closed {
                 self.x_t
             } else {

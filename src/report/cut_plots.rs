@@ -67,23 +67,29 @@ pub fn surface_svg(surface: &CutSurface, reversals: &[(Axis, Vec<f64>)]) -> Resu
             } else {
                 0.5 * (e.rows[i].z_mm + e.rows[i + 1].z_mm)
             };
-            for b in 0..bins {
-                let cut: Vec<f64> = (b * per_bin..(b + 1) * per_bin)
-                    .map(|j| e.depth_um(j, i))
-                    .filter(|d| d.is_finite())
-                    .collect();
-                let colour = if cut.is_empty() {
-                    RGBColor(190, 190, 190)
-                } else {
-                    diverging(cut.iter().sum::<f64>() / cut.len() as f64 / scale)
+            // A bin's colour, and neighbours of one colour drawn as one rectangle (the same
+            // picture in a third of the rectangles).
+            let colour_of = |b: usize| {
+                let cut = || {
+                    (b * per_bin..(b + 1) * per_bin)
+                        .map(|j| e.depth_um(j, i))
+                        .filter(|d| d.is_finite())
                 };
-                let theta0 = (b * per_bin) as f64 * e.step_deg;
-                let theta1 = ((b + 1) * per_bin) as f64 * e.step_deg;
+                match cut().count() {
+                    0 => RGBColor(190, 190, 190),
+                    n => diverging(cut().sum::<f64>() / n as f64 / scale),
+                }
+            };
+            let x_of_bin = |b: usize| x_of((b * per_bin) as f64 * e.step_deg);
+            let draw = |(start, end), colour: RGBColor| {
                 root.draw(&Rectangle::new(
-                    [(x_of(theta0), y_of(hi)), (x_of(theta1), y_of(lo))],
+                    [(x_of_bin(start), y_of(hi)), (x_of_bin(end), y_of(lo))],
                     colour.filled(),
                 ))
-                .map_err(draw_error)?;
+                .map_err(draw_error)
+            };
+            for (bins, colour) in runs_of((0..bins).map(colour_of)) {
+                draw((bins.start, bins.end), colour)?;
             }
         }
         for theta in (0..=360).step_by(30) {
@@ -174,6 +180,18 @@ pub fn surface_svg(surface: &CutSurface, reversals: &[(Axis, Vec<f64>)]) -> Resu
         root.present().map_err(draw_error)?;
     }
     Ok(svg)
+}
+
+/// The runs of equal items of `items`: each run's index range and its item, in order.
+fn runs_of<T: PartialEq>(items: impl Iterator<Item = T>) -> Vec<(std::ops::Range<usize>, T)> {
+    let mut runs: Vec<(std::ops::Range<usize>, T)> = Vec::new();
+    for (k, item) in items.enumerate() {
+        match runs.last_mut() {
+            Some((range, last)) if *last == item => range.end = k + 1,
+            _ => runs.push((k..k + 1, item)),
+        }
+    }
+    runs
 }
 
 /// The roundness plots, one polar panel per evaluation height, as SVG text.
@@ -273,4 +291,20 @@ pub fn roundness_svg(surface: &CutSurface, figures: &CutFigures) -> Result<Strin
         root.present().map_err(draw_error)?;
     }
     Ok(svg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::runs_of;
+
+    #[test]
+    fn equal_neighbours_make_one_run_and_a_repeat_after_another_a_new_one() {
+        let runs = runs_of("aabaaac".chars());
+        assert_eq!(
+            runs,
+            vec![(0..2, 'a'), (2..3, 'b'), (3..6, 'a'), (6..7, 'c')]
+        );
+        assert!(runs_of(std::iter::empty::<u8>()).is_empty());
+        assert_eq!(runs_of([7].into_iter()), vec![(0..1, 7)]);
+    }
 }

@@ -81,15 +81,18 @@ pub fn surface_svg(surface: &CutSurface, reversals: &[(Axis, Vec<f64>)]) -> Resu
                 }
             };
             let x_of_bin = |b: usize| x_of((b * per_bin) as f64 * e.step_deg);
-            let draw = |(start, end), colour: RGBColor| {
+            let draw = |run: std::ops::Range<usize>, colour: RGBColor| {
                 root.draw(&Rectangle::new(
-                    [(x_of_bin(start), y_of(hi)), (x_of_bin(end), y_of(lo))],
+                    [
+                        (x_of_bin(run.start), y_of(hi)),
+                        (x_of_bin(run.end), y_of(lo)),
+                    ],
                     colour.filled(),
                 ))
                 .map_err(draw_error)
             };
-            for (bins, colour) in runs_of((0..bins).map(colour_of)) {
-                draw((bins.start, bins.end), colour)?;
+            for (run, colour) in runs_of((0..bins).map(colour_of)) {
+                draw(run, colour)?;
             }
         }
         for theta in (0..=360).step_by(30) {

@@ -331,18 +331,18 @@ impl BudgetPlan {
     /// full run timed by `timing`: under planned timing with the twins, the servos it steps
     /// too ([`InRun`]) are read from its samples rather than stepped again.
     pub fn start(&self, direction: Direction, timing: Timing) -> BudgetRun<'_> {
-        let samples_have = match timing {
-            Timing::Planned { twins, .. } => [Some(InRun::Drive), twins.then_some(InRun::Twin)],
-            Timing::Programmed | Timing::Setpoints => [None, None],
+        let samples_carry = |r: &InRun| match (r, timing) {
+            (InRun::Drive, Timing::Planned { .. }) => true,
+            (InRun::Twin, Timing::Planned { twins, .. }) => twins,
+            (_, Timing::Programmed | Timing::Setpoints) => false,
         };
         BudgetRun {
             plan: self,
             servos: Vec::new(),
             in_run: (self.in_run.iter())
-                .map(|&r| r.filter(|r| samples_have.contains(&Some(*r))))
+                .map(|&r| r.filter(samples_carry))
                 .collect(),
             actual: vec![0.0; self.drives.len()],
-            started: false,
             table_state: vec![(DirectionState::default(), 0.0); self.tables.len()],
             runs: self
                 .cases
@@ -410,8 +410,6 @@ pub struct BudgetRun<'p> {
     in_run: Vec<Option<InRun>>,
     /// Per servo of the plan, its actual position at the current sample, mm or deg.
     actual: Vec<f64>,
-    /// Whether the servos were made (at the first sample).
-    started: bool,
     /// Each table's direction of motion and its error at the current sample, mm or deg.
     table_state: Vec<(DirectionState, f64)>,
     runs: Vec<BallbarRun>,
@@ -439,8 +437,8 @@ impl BudgetRun<'_> {
         }
         let q = &s.commanded;
         let plan = self.plan;
-        if !self.started {
-            self.started = true;
+        // The first sample (none before it): the servos start at rest there.
+        if self.previous.is_none() {
             if let Err(e) = self.make_servos(q) {
                 self.failed = Some(e.to_string());
                 return;
